@@ -1,0 +1,111 @@
+"""The body-model interface every parametric body implements.
+
+Frame (fixed for the whole project): metres, +Z up, the body faces -Y, +X is
+the body's left. Models convert their native frame once, at this boundary.
+
+Shape is a ``dict[str, float]`` of named parameters (Anny phenotypes, SMPL
+``beta0..``), pose is a preset name (``"A"``, ``"T"``, ``"P1"``, ``"P2"``,
+``"P3"``) or a ``dict[str, array(3)]`` of joint name -> axis-angle rotation
+(radians, in the joint's local frame, applied on top of the A-pose), or None
+for the reference A-pose.
+"""
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from typing import Dict, Mapping, Optional, Union
+
+import numpy as np
+
+Shape = Mapping[str, float]
+Pose = Union[str, Mapping[str, np.ndarray], None]
+
+POSE_PRESETS = ("A", "T", "P1", "P2", "P3")
+
+REQUIRED_LANDMARKS = (
+    "neck_front", "neck_back", "neck_left", "neck_right",
+    "shoulder_left", "shoulder_right",
+    "armpit_left", "armpit_right",
+    "bust_left", "bust_right",
+    "waist_front", "waist_back", "waist_left", "waist_right",
+    "hip_left", "hip_right",
+    "crotch", "navel",
+    "elbow_left", "elbow_right",
+    "wrist_left", "wrist_right",
+    "knee_left", "knee_right",
+    "ankle_left", "ankle_right",
+)
+
+REQUIRED_REGIONS = ("head", "hands", "feet")
+
+
+@dataclass(frozen=True)
+class SurfacePoint:
+    """A point on the template surface: a triangle id and barycentric weights.
+
+    Holds for every shape and pose of the model, since the topology is fixed.
+    """
+    triangle: int
+    bary: tuple  # (3,) floats summing to 1
+
+    def position(self, vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+        """3D position (3,) on a body instance ``vertices`` (V, 3)."""
+        tri = faces[self.triangle]
+        return np.asarray(self.bary, dtype=float) @ vertices[tri]
+
+    def to_json(self) -> dict:
+        return {"triangle": int(self.triangle), "bary": [float(b) for b in self.bary]}
+
+    @staticmethod
+    def from_json(obj: Mapping) -> "SurfacePoint":
+        return SurfacePoint(int(obj["triangle"]), tuple(float(b) for b in obj["bary"]))
+
+
+class BodyModel(ABC):
+    """A fixed-topology parametric body.
+
+    Attributes
+    ----------
+    name : str
+    faces : (F, 3) int array, triangles of the template (consistently oriented, outward).
+    joint_names : list[str]
+    symmetry : (V,) int array, the left<->right mirror of every vertex.
+    landmarks : dict[str, SurfacePoint], at least :data:`REQUIRED_LANDMARKS`.
+    regions : dict[str, (k,) int array of vertex ids], at least :data:`REQUIRED_REGIONS`
+        (never covered by a garment), plus body parts used for grain
+        (``"torso"``, ``"arm_left"``, ``"arm_right"``, ``"leg_left"``, ``"leg_right"``)
+        where the model knows them.
+    """
+
+    name: str
+    faces: np.ndarray
+    joint_names: list
+    symmetry: np.ndarray
+    landmarks: Dict[str, SurfacePoint]
+    regions: Dict[str, np.ndarray]
+
+    @abstractmethod
+    def default_shape(self) -> Dict[str, float]:
+        """The reference shape (size M for the default body)."""
+
+    @abstractmethod
+    def shape_parameters(self) -> Dict[str, tuple]:
+        """Allowed shape parameters: name -> (min, max, default)."""
+
+    @abstractmethod
+    def vertices(self, shape: Optional[Shape] = None, pose: Pose = None) -> np.ndarray:
+        """Posed vertices (V, 3) in metres. ``None`` means reference shape / A-pose."""
+
+    @abstractmethod
+    def joints(self, shape: Optional[Shape] = None, pose: Pose = None) -> np.ndarray:
+        """Posed joint positions (J, 3) in metres, ordered as :attr:`joint_names`."""
+
+    @property
+    def n_vertices(self) -> int:
+        return int(self.symmetry.shape[0])
+
+    def landmark_position(self, name: str, vertices: np.ndarray) -> np.ndarray:
+        from ..errors import BodyError
+        if name not in self.landmarks:
+            raise BodyError(f"unknown landmark {name!r}; known: {', '.join(sorted(self.landmarks))}")
+        return self.landmarks[name].position(vertices, self.faces)
