@@ -1,0 +1,289 @@
+"""SMPL loader, restricted unpickler and skinning, on SMPL-format files made here."""
+import pickle
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from scipy.spatial.transform import Rotation
+
+from core.body.lbs import forward_kinematics, rodrigues, skin
+from core.body.smpl import SMPL_JOINT_NAMES, SMPL_TO_OURS, load_smpl
+from core.body.unpickle import safe_load
+from core.errors import BodyError
+
+C = SMPL_TO_OURS
+
+
+def tube_model(seed=0, n_ring=8, n_rows=6, J=4, n_betas=3):
+    """A small SMPL-format model in SMPL's frame (Y up): a tube along Y, J joints."""
+    rng = np.random.default_rng(seed)
+    ang = np.linspace(0, 2 * np.pi, n_ring, endpoint=False)
+    rows = np.linspace(0.0, 1.0, n_rows)
+    v = np.array([[0.1 * np.cos(a), y, 0.1 * np.sin(a)] for y in rows for a in ang])
+    faces = []
+    for r in range(n_rows - 1):
+        for k in range(n_ring):
+            a, b = r * n_ring + k, r * n_ring + (k + 1) % n_ring
+            faces += [[a, b, b + n_ring], [a, b + n_ring, a + n_ring]]
+    V = len(v)
+    parents = np.array([-1] + [max(0, j - 1 - (j % 2)) for j in range(1, J)])
+    kintree = np.stack([np.where(parents < 0, 4294967295, parents), np.arange(J)]).astype(np.int64)
+    weights = rng.random((V, J)) ** 4
+    weights /= weights.sum(1, keepdims=True)
+    jreg = rng.random((J, V)) * (rng.random((J, V)) < 0.3)
+    jreg[:, 0] += 1e-3
+    jreg /= jreg.sum(1, keepdims=True)
+    return {
+        "v_template": v,
+        "f": np.array(faces, dtype=np.uint32),
+        "weights": weights,
+        "kintree_table": kintree,
+        "J_regressor": jreg,
+        "shapedirs": rng.normal(scale=0.01, size=(V, 3, n_betas)),
+        "posedirs": rng.normal(scale=0.01, size=(V, 3, 9 * (J - 1))),
+    }
+
+
+def reference_lbs(m, betas, aa_smpl):
+    """Straightforward SMPL in SMPL's own frame, vertex by vertex, with scipy rotations."""
+    v = m["v_template"] + np.einsum("vck,k->vc", m["shapedirs"], betas)
+    jr = m["J_regressor"].toarray() if sp.issparse(m["J_regressor"]) else m["J_regressor"]
+    joints = jr @ v
+    R = Rotation.from_rotvec(aa_smpl).as_matrix()
+    feat = np.concatenate([(R[j] - np.eye(3)).ravel() for j in range(1, len(R))])
+    v = v + np.einsum("vck,k->vc", m["posedirs"], feat)
+    parents = m["kintree_table"][0].astype(np.int64)
+    parents[0] = -1
+    world = []
+    for j in range(len(R)):
+        T = np.eye(4)
+        T[:3, :3] = R[j]
+        T[:3, 3] = joints[j] - (joints[parents[j]] if j else 0)
+        world.append(T if j == 0 else world[parents[j]] @ T)
+    out = np.zeros_like(v)
+    for i in range(len(v)):
+        acc = np.zeros(3)
+        for j in range(len(R)):
+            p = world[j] @ np.append(v[i] - joints[j], 1.0)
+            acc += m["weights"][i, j] * p[:3]
+        out[i] = acc
+    return out
+
+
+def test_rodrigues_matches_scipy():
+    aa = np.random.default_rng(1).normal(size=(10, 3))
+    aa[0] = 0.0
+    np.testing.assert_allclose(rodrigues(aa), Rotation.from_rotvec(aa).as_matrix(), atol=1e-12)
+
+
+def test_npz_load_and_lbs_against_reference(tmp_path):
+    m = tube_model()
+    path = tmp_path / "toy.npz"
+    np.savez(path, **m)
+    body = load_smpl(path)
+    assert body.n_vertices == len(m["v_template"]) and body.faces.shape == (len(m["f"]), 3)
+    assert list(body.shape_parameters()) == ["beta0", "beta1", "beta2"]
+    # Frame: SMPL's +Y (up) becomes our +Z, SMPL's +Z (front) our -Y.
+    rest = body.vertices({"beta0": 0.0}, {"joint1": np.zeros(3)})
+    np.testing.assert_allclose(rest, m["v_template"] @ C.T, atol=1e-12)
+    betas = np.array([0.5, -1.0, 2.0])
+    aa_ours = np.random.default_rng(2).normal(scale=0.5, size=(4, 3))
+    pose = {f"joint{j}": aa_ours[j] for j in range(4)}
+    got = body.vertices({f"beta{i}": b for i, b in enumerate(betas)}, pose)
+    aa_smpl = aa_ours @ C  # the same rotations seen in SMPL's frame: C^T a
+    expected = reference_lbs(m, betas, aa_smpl) @ C.T
+    np.testing.assert_allclose(got, expected, atol=1e-10)
+    joints = body.joints({f"beta{i}": b for i, b in enumerate(betas)}, pose)
+    assert joints.shape == (4, 3)
+
+
+def test_skin_identity_is_rest():
+    v = np.random.default_rng(3).normal(size=(20, 3))
+    w = np.full((20, 2), 0.5)
+    _, G = forward_kinematics(np.stack([np.eye(3)] * 2), np.array([[0, 0, 0], [0, 0, 1.0]]), np.array([-1, 0]))
+    np.testing.assert_allclose(skin(v, w, G), v, atol=1e-14)
+
+
+def test_bad_shape_and_pose_are_named(tmp_path):
+    np.savez(tmp_path / "toy.npz", **tube_model())
+    body = load_smpl(tmp_path / "toy.npz")
+    with pytest.raises(BodyError, match="beta7.*allowed: beta0"):
+        body.vertices({"beta7": 1.0})
+    with pytest.raises(BodyError, match=r"out of range \[-5, 5\]"):
+        body.vertices({"beta0": 9.0})
+    with pytest.raises(BodyError, match="unknown joint 'elbow'"):
+        body.vertices(None, {"elbow": np.zeros(3)})
+    with pytest.raises(BodyError, match="allowed: A, T, P1, P2, P3"):
+        body.vertices(None, "Q")
+    with pytest.raises(BodyError, match="landmarks are not known"):
+        body.landmark_position("navel", body.vertices())
+
+
+@pytest.mark.parametrize("key", ["posedirs", "kintree_table", "f"])
+def test_missing_key_is_named(tmp_path, key):
+    m = tube_model()
+    del m[key]
+    np.savez(tmp_path / "m.npz", **m)
+    with pytest.raises(BodyError, match=f"missing key '{key}'"):
+        load_smpl(tmp_path / "m.npz")
+    with open(tmp_path / "m.pkl", "wb") as f:
+        pickle.dump(m, f, protocol=2)
+    with pytest.raises(BodyError, match=f"missing key '{key}'"):
+        load_smpl(tmp_path / "m.pkl")
+
+
+def test_wrong_shape_is_named(tmp_path):
+    m = tube_model()
+    m["posedirs"] = m["posedirs"][:, :, :5]
+    np.savez(tmp_path / "m.npz", **m)
+    with pytest.raises(BodyError, match="'posedirs' has shape"):
+        load_smpl(tmp_path / "m.npz")
+
+
+@pytest.fixture
+def fake_chumpy(tmp_path, monkeypatch):
+    """A stand-in ``chumpy`` package, as SMPL's py2-era files reference."""
+    pkg = tmp_path / "fakemods" / "chumpy"
+    pkg.mkdir(parents=True)
+    (pkg / "__init__.py").write_text("from .ch import Ch\n")
+    (pkg / "ch.py").write_text(textwrap.dedent("""
+        class Ch(object):
+            def __init__(self, x):
+                self.x = x
+                self._dirty_vars = set()
+    """))
+    monkeypatch.syspath_prepend(str(tmp_path / "fakemods"))
+    yield
+    for name in [n for n in sys.modules if n == "chumpy" or n.startswith("chumpy.")]:
+        del sys.modules[name]
+
+
+def test_pkl_with_chumpy_and_sparse(tmp_path, fake_chumpy):
+    import chumpy
+    m = tube_model(seed=5)
+    pk = dict(m)
+    pk["shapedirs"] = chumpy.Ch(m["shapedirs"])
+    pk["v_template"] = chumpy.Ch(m["v_template"])
+    pk["posedirs"] = chumpy.Ch(m["posedirs"])
+    pk["J_regressor"] = sp.csc_matrix(m["J_regressor"])
+    pk["bs_style"] = "lbs"
+    path = tmp_path / "model.pkl"
+    with open(path, "wb") as f:
+        pickle.dump(pk, f, protocol=2)
+    body = load_smpl(path)
+    np.savez(tmp_path / "model.npz", **m)
+    ref = load_smpl(tmp_path / "model.npz")
+    pose = {"joint2": np.array([0.3, -0.2, 0.1])}
+    np.testing.assert_allclose(body.vertices({"beta1": 1.5}, pose), ref.vertices({"beta1": 1.5}, pose), atol=1e-12)
+    for protocol in (0, 1):  # py2 default protocols go through copy_reg._reconstructor
+        with open(path, "wb") as f:
+            pickle.dump(pk, f, protocol=protocol)
+        np.testing.assert_allclose(load_smpl(path).vertices(), ref.vertices(), atol=1e-12)
+
+
+class _SystemPayload:
+    def __init__(self, cmd):
+        self.cmd = cmd
+
+    def __reduce__(self):
+        import os
+        return (os.system, (self.cmd,))
+
+
+class _EvalPayload:
+    def __reduce__(self):
+        return (eval, ("open('/nonexistent/x', 'w')",))
+
+
+def test_os_system_payload_is_refused_and_never_runs(tmp_path):
+    marker = tmp_path / "pwned"
+    m = tube_model()
+    m["v_template"] = _SystemPayload(f"touch {marker}")
+    path = tmp_path / "evil.pkl"
+    with open(path, "wb") as f:
+        pickle.dump(m, f, protocol=2)
+    with pytest.raises(BodyError, match=r"refused.*(posix|os|nt)\.system"):
+        load_smpl(path)
+    assert not marker.exists()
+
+
+def test_other_callables_are_refused(tmp_path):
+    with pytest.raises(BodyError, match=r"_?_?builtins?_?_?\.eval"):
+        safe_load(pickle.dumps({"f": _EvalPayload()}, protocol=2))
+    import subprocess
+
+    class Sub:
+        def __reduce__(self):
+            return (subprocess.call, (["true"],))
+    with pytest.raises(BodyError, match=r"subprocess\.call"):
+        safe_load(pickle.dumps(Sub(), protocol=4))
+    with pytest.raises(BodyError, match="not a readable model pickle"):
+        safe_load(b"\x80\x02garbage")
+
+
+def test_latin1_py2_pickle_with_bytes_strings():
+    # A py2 str holding a non-ASCII byte (SHORT_BINSTRING) decodes as latin1.
+    data = b"\x80\x02}q\x00U\x04name\x55\x02\xe9eq\x01s."
+    assert safe_load(data) == {"name": "\xe9e"}
+
+
+def stick_smpl(n_betas=2):
+    """An SMPL-layout skeleton (24 joints, SMPL frame, metres) with one vertex per bone."""
+    J = {
+        "pelvis": (0, 0.9, 0), "left_hip": (0.09, 0.82, 0), "right_hip": (-0.09, 0.82, 0),
+        "spine1": (0, 1.0, 0), "left_knee": (0.1, 0.48, 0), "right_knee": (-0.1, 0.48, 0),
+        "spine2": (0, 1.12, 0), "left_ankle": (0.1, 0.08, 0), "right_ankle": (-0.1, 0.08, 0),
+        "spine3": (0, 1.2, 0), "left_foot": (0.1, 0.02, 0.1), "right_foot": (-0.1, 0.02, 0.1),
+        "neck": (0, 1.45, 0), "left_collar": (0.08, 1.38, 0), "right_collar": (-0.08, 1.38, 0),
+        "head": (0, 1.55, 0), "left_shoulder": (0.18, 1.4, 0), "right_shoulder": (-0.18, 1.4, 0),
+        "left_elbow": (0.45, 1.4, 0), "right_elbow": (-0.45, 1.4, 0),
+        "left_wrist": (0.7, 1.4, 0), "right_wrist": (-0.7, 1.4, 0),
+        "left_hand": (0.78, 1.4, 0), "right_hand": (-0.78, 1.4, 0),
+    }
+    parents = [-1, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 9, 9, 12, 13, 14, 16, 17, 18, 19, 20, 21]
+    joints = np.array([J[n] for n in SMPL_JOINT_NAMES], dtype=float)
+    # Vertices: each joint position itself, skinned to its parent (so it follows the bone).
+    v = joints.copy()
+    weights = np.zeros((24, 24))
+    for j in range(24):
+        weights[j, max(parents[j], 0)] = 1.0
+    return {
+        "v_template": v, "f": np.array([[0, 1, 2], [3, 4, 5]]), "weights": weights,
+        "kintree_table": np.array([[4294967295] + parents[1:], list(range(24))], dtype=np.int64),
+        "J_regressor": np.eye(24), "shapedirs": np.zeros((24, 3, n_betas)),
+        "posedirs": np.zeros((24, 3, 207)),
+    }
+
+
+def test_pose_presets_on_smpl_skeleton(tmp_path):
+    np.savez(tmp_path / "stick.npz", **stick_smpl())
+    body = load_smpl(tmp_path / "stick.npz")
+    assert body.joint_names[16] == "left_shoulder"
+    idx = {n: i for i, n in enumerate(body.joint_names)}
+    vt = body.vertices(None, "T")
+    va = body.vertices()  # reference A-pose
+    sh, wr = idx["left_shoulder"], idx["left_wrist"]
+    # T: arm horizontal along +X (body's left); A: ~45 deg below horizontal.
+    d = vt[wr] - vt[sh]
+    assert d[0] > 0.5 and abs(d[2]) < 1e-9
+    d = va[wr] - va[sh]
+    assert np.degrees(np.arctan2(-d[2], d[0])) == pytest.approx(45, abs=1)
+    dr = va[idx["right_wrist"]] - va[idx["right_shoulder"]]
+    assert np.degrees(np.arctan2(-dr[2], -dr[0])) == pytest.approx(45, abs=1)
+    # P1: arms forward (-Y); P2: arms up; P3: knees in front of hips, forearm forward.
+    p1 = body.vertices(None, "P1")
+    assert (p1[wr] - p1[sh])[1] < -0.5
+    p2 = body.vertices(None, "P2")
+    assert (p2[wr] - p2[sh])[2] > 0.45
+    assert p2[idx["left_knee"]][1] < -0.1 and p2[idx["right_knee"]][1] > 0.1  # scissored
+    p3 = body.vertices(None, "P3")
+    assert p3[idx["left_knee"]][1] < -0.3 and abs(p3[idx["left_knee"]][2] - p3[idx["left_hip"]][2]) < 0.02
+    assert p3[idx["left_ankle"]][2] < p3[idx["left_knee"]][2] - 0.3  # shin hangs down
+    assert (p3[wr] - p3[idx["left_elbow"]])[1] < -0.2
+    # Mirror map pairs left and right joints.
+    assert body.symmetry[idx["left_knee"]] == idx["right_knee"]
+    # Custom rotation applies on top of the A-pose.
+    bent = body.vertices(None, {"left_elbow": np.array([0, 0, -np.pi / 2])})
+    assert (bent[wr] - bent[idx["left_elbow"]])[1] < -0.2
