@@ -1,0 +1,222 @@
+"""Sizes from measurements: fit a body's shape parameters to tailor's targets.
+
+:data:`SIZE_CHART` defines XS..XL (cm) around the default body (Anny's
+reference shape is M); :func:`fit_measurements` fits any model's shape
+parameters to target height/chest/waist/hip with bounded least squares and
+says, per target, whether it landed within :data:`TOLERANCE_CM` or is not
+reachable by this model. :func:`size_shape` returns the shape of a chart size
+for a body: the stored fit for the default body (:data:`FITTED_SHAPES`, made
+by :func:`fit_measurements` and checked by the tests), otherwise a fit made
+once per process.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Dict, Mapping, Optional, Sequence
+
+import numpy as np
+
+from ..errors import BodyError, Cancelled
+from ..progress import Progress, report
+from .measure import MEASUREMENTS, measure
+
+TOLERANCE_CM = 1.0
+
+SIZES = ("XS", "S", "M", "L", "XL")
+
+# Size chart in cm. M = the default Anny body measured by core.body.measure;
+# girths step ~4-6 cm per size at similar height (the chest/waist/hip
+# differences of the usual unisex charts).
+SIZE_CHART: Dict[str, Dict[str, float]] = {
+    "XS": {"height": 170.0, "chest": 84.0, "waist": 70.0, "hip": 90.0},
+    "S": {"height": 171.0, "chest": 89.0, "waist": 75.0, "hip": 94.0},
+    "M": {"height": 172.0, "chest": 94.0, "waist": 80.0, "hip": 98.0},
+    "L": {"height": 173.0, "chest": 100.0, "waist": 86.0, "hip": 103.0},
+    "XL": {"height": 174.0, "chest": 106.0, "waist": 92.0, "hip": 108.0},
+}
+
+# Shape parameters per size, fitted with fit_measurements on the model named
+# by the key (fitted once, stored so the CLI and the add-on need not re-fit).
+FITTED_SHAPES: Dict[str, Dict[str, Dict[str, float]]] = {}
+
+# Plausible target ranges (cm): anything outside is a typo, not a body.
+TARGET_RANGES = {"height": (50.0, 250.0), "chest": (40.0, 200.0), "waist": (30.0, 200.0), "hip": (40.0, 200.0)}
+
+# Shape parameters that change size (not gender, age, ethnicity) where the model has them.
+PREFERRED_FIT_PARAMETERS = ("height", "weight", "muscle", "proportions")
+
+
+@dataclass
+class FitResult:
+    """Outcome of :func:`fit_measurements`.
+
+    Attributes
+    ----------
+    shape : full shape dict of the fitted body.
+    targets : the targets (cm).
+    achieved : the measurements of the fitted body (cm), all of :data:`MEASUREMENTS`.
+    status : target name -> ``"within 1 cm"`` or ``"not reachable by this model"``.
+    evaluations : number of body evaluations the fit used.
+    """
+    shape: Dict[str, float]
+    targets: Dict[str, float]
+    achieved: Dict[str, float]
+    status: Dict[str, str]
+    evaluations: int = 0
+    parameters: list = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return all(s == "within 1 cm" for s in self.status.values())
+
+    def summary(self) -> str:
+        """One line per measurement: target, achieved, status."""
+        lines = []
+        for name in MEASUREMENTS:
+            got = self.achieved.get(name)
+            if name in self.targets:
+                lines.append(f"{name:>6}: {got:6.1f} cm (target {self.targets[name]:.1f}: {self.status[name]})")
+            elif got is not None:
+                lines.append(f"{name:>6}: {got:6.1f} cm")
+        return "\n".join(lines)
+
+
+def check_targets(targets: Mapping[str, float]) -> Dict[str, float]:
+    """Validate measurement targets (cm); ``bust`` is accepted for ``chest``."""
+    if not targets:
+        raise BodyError(f"no measurement targets given; allowed: {', '.join(MEASUREMENTS)}")
+    out = {}
+    for key, value in targets.items():
+        name = "chest" if key == "bust" else key
+        if name not in MEASUREMENTS:
+            raise BodyError(f"unknown measurement {key!r}; allowed: {', '.join(MEASUREMENTS)} (cm)")
+        try:
+            value = float(value)
+        except (TypeError, ValueError):
+            raise BodyError(f"measurement {key!r} must be a number of cm, got {value!r}") from None
+        lo, hi = TARGET_RANGES[name]
+        if not (lo <= value <= hi):
+            raise BodyError(f"measurement {key}={value:g} cm is out of range [{lo:g}, {hi:g}] cm")
+        out[name] = value
+    return out
+
+
+def fit_parameters(body) -> list:
+    """Shape parameters a size fit moves: the size-related ones where the model has
+    them (Anny: height, weight, muscle, proportions), else its first ten (SMPL betas)."""
+    own = getattr(body, "fit_parameters", None)
+    names = list(body.shape_parameters())
+    if own:
+        return list(own() if callable(own) else own)
+    preferred = [n for n in PREFERRED_FIT_PARAMETERS if n in names]
+    return preferred if len(preferred) >= 2 else names[:10]
+
+
+def fit_measurements(body, targets: Mapping[str, float], progress: Optional[Progress] = None,
+                     parameters: Optional[Sequence[str]] = None,
+                     start: Optional[Mapping[str, float]] = None) -> FitResult:
+    """Fit ``body``'s shape to target measurements (cm) by bounded least squares.
+
+    Parameters
+    ----------
+    body : BodyModel.
+    targets : subset of {height, chest (or bust), waist, hip} -> cm.
+    progress : optional callback; may raise Cancelled.
+    parameters : shape parameters to move (default :func:`fit_parameters`);
+        the others stay at ``start`` (default the model's reference shape).
+    start : initial shape.
+
+    Returns
+    -------
+    FitResult. A target that the model cannot reach within 1 cm is reported as
+    ``"not reachable by this model"`` with its achieved value; that is not an error.
+    """
+    from scipy.optimize import least_squares
+
+    targets = check_targets(targets)
+    allowed = body.shape_parameters()
+    names = list(parameters) if parameters is not None else fit_parameters(body)
+    for n in names:
+        if n not in allowed:
+            raise BodyError(f"cannot fit unknown shape parameter {n!r}; allowed: {', '.join(allowed)}")
+    base = dict(body.default_shape())
+    if start:
+        base.update({k: float(v) for k, v in start.items()})
+    lo = np.array([allowed[n][0] for n in names], dtype=float)
+    hi = np.array([allowed[n][1] for n in names], dtype=float)
+    span = np.where(hi > lo, hi - lo, 1.0)
+    keys = sorted(targets)
+    want = np.array([targets[k] for k in keys])
+    count = [0]
+
+    def shape_of(u):
+        s = dict(base)
+        s.update({n: float(np.clip(lo[i] + u[i] * span[i], lo[i], hi[i])) for i, n in enumerate(names)})
+        return s
+
+    def residual(u):
+        count[0] += 1
+        if count[0] % 5 == 1:
+            report(progress, min(0.95, count[0] / 150.0), f"fitting {', '.join(keys)} ({count[0]} evaluations)")
+        got = measure(body, body.vertices(shape_of(u)), keys)
+        return np.array([got[k] for k in keys]) - want
+
+    u0 = np.clip((np.array([base[n] for n in names], dtype=float) - lo) / span, 0.0, 1.0)
+    # Finite differences of 1e-3 of the range: the slices' polygon noise stays below it.
+    sol = least_squares(residual, u0, bounds=(0.0, 1.0), diff_step=1e-3, x_scale=1.0,
+                        ftol=1e-8, xtol=1e-8, gtol=1e-10, max_nfev=200 * max(1, len(names)) // 4 + 40)
+    shape = shape_of(sol.x)
+    achieved = measure(body, body.vertices(shape))
+    status = {k: ("within 1 cm" if abs(achieved[k] - targets[k]) <= TOLERANCE_CM
+                  else "not reachable by this model") for k in keys}
+    report(progress, 1.0, "fit done")
+    return FitResult(shape=shape, targets=targets, achieved=achieved, status=status,
+                     evaluations=count[0], parameters=names)
+
+
+_CACHE: Dict[tuple, Dict[str, float]] = {}
+
+
+def check_size(size: str) -> str:
+    key = str(size).upper()
+    if key not in SIZE_CHART:
+        raise BodyError(f"unknown size {size!r}; allowed: {', '.join(SIZES)}")
+    return key
+
+
+def size_shape(body, size: str, progress: Optional[Progress] = None) -> Dict[str, float]:
+    """Shape dict of chart size ``size`` (XS..XL) for ``body``.
+
+    The default body's sizes are stored (:data:`FITTED_SHAPES`); other models
+    are fitted to :data:`SIZE_CHART` once per process.
+    """
+    key = check_size(size)
+    params = body.shape_parameters()
+    stored = FITTED_SHAPES.get(getattr(body, "name", ""), {}).get(key)
+    if stored is not None and all(k in params for k in stored):
+        shape = dict(body.default_shape())
+        shape.update(stored)
+        return shape
+    cache_key = (getattr(body, "name", ""), body.n_vertices, key)
+    if cache_key not in _CACHE:
+        _CACHE[cache_key] = fit_measurements(body, SIZE_CHART[key], progress=progress).shape
+    return dict(_CACHE[cache_key])
+
+
+def parse_assignments(text: str, what: str) -> Dict[str, float]:
+    """``"a=1,b=2.5"`` -> ``{"a": 1.0, "b": 2.5}``; a clear error naming ``what`` otherwise."""
+    out = {}
+    for item in str(text).split(","):
+        item = item.strip()
+        if not item:
+            continue
+        if "=" not in item:
+            raise BodyError(f"{what}: expected name=value pairs separated by commas, got {item!r}")
+        k, v = item.split("=", 1)
+        try:
+            out[k.strip()] = float(v)
+        except ValueError:
+            raise BodyError(f"{what}: value of {k.strip()!r} must be a number, got {v.strip()!r}") from None
+    if not out:
+        raise BodyError(f"{what}: no name=value pairs given")
+    return out
