@@ -1,0 +1,179 @@
+"""Per-panel initialisation: LSCM flattening, orientation, grain alignment.
+
+Small functions on plain arrays. A panel's 3D positions ``xyz`` (n, 3) and
+faces (f, 3) (oriented outward) give a 2D ``uv`` (n, 2), counter-clockwise as
+seen from outside the body, scaled to the 3D area and rotated so that the
+panel's grain (the 3D warp field mapped to 2D) is +y.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import PatternError
+from ..metrics.pattern import signed_areas_2d, areas_3d
+
+#: Edges or triangle images shorter than this (relative to the panel's mean
+#: edge length) are treated as degenerate and skip the grain vote.
+DEGENERATE = 1e-8
+
+
+def boundary_loops(faces: np.ndarray) -> list:
+    """Closed boundary loops (list of (k,) int) of a triangle mesh, longest first."""
+    import igl
+    loops = igl.boundary_loop_all(np.ascontiguousarray(faces, dtype=np.int64)) \
+        if hasattr(igl, "boundary_loop_all") else [igl.boundary_loop(faces)]
+    loops = [np.asarray(l, dtype=np.int64) for l in loops if len(l) > 0]
+    return sorted(loops, key=len, reverse=True)
+
+
+def _far_pair(xyz: np.ndarray, candidates: np.ndarray) -> tuple:
+    """Two candidate vertices roughly farthest apart (two sweeps)."""
+    p = candidates[0]
+    a = candidates[np.argmax(np.linalg.norm(xyz[candidates] - xyz[p], axis=1))]
+    b = candidates[np.argmax(np.linalg.norm(xyz[candidates] - xyz[a], axis=1))]
+    return int(a), int(b)
+
+
+def lscm(xyz: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """LSCM flattening (n, 2) of a disk-like panel, two far boundary vertices fixed.
+
+    The result is scaled so its area equals the 3D area and made
+    counter-clockwise (positive majority of signed areas).
+    """
+    import igl
+    xyz = np.ascontiguousarray(xyz, dtype=np.float64)
+    F = np.ascontiguousarray(faces, dtype=np.int64)
+    loops = boundary_loops(F)
+    cand = loops[0] if loops else np.arange(len(xyz))
+    a, b = _far_pair(xyz, cand)
+    d = float(np.linalg.norm(xyz[a] - xyz[b]))
+    out = igl.lscm(xyz, F, np.array([a, b], dtype=np.int64), np.array([[0.0, 0.0], [d, 0.0]]))
+    uv = np.asarray(out[0] if isinstance(out, tuple) else out, dtype=np.float64)
+    return normalise_orientation_and_scale(uv, xyz, F)
+
+
+def tutte(xyz: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Tutte-style harmonic flattening onto a circle: flip-free for disk panels."""
+    import igl
+    xyz = np.ascontiguousarray(xyz, dtype=np.float64)
+    F = np.ascontiguousarray(faces, dtype=np.int64)
+    loops = boundary_loops(F)
+    if len(loops) != 1:
+        raise PatternError(f"a flip-free fallback flattening needs a disk-like panel, got {len(loops)} boundary loops")
+    bnd = loops[0]
+    seg = np.linalg.norm(np.diff(xyz[np.r_[bnd, bnd[:1]]], axis=0), axis=1)
+    t = 2 * np.pi * np.r_[0.0, np.cumsum(seg)[:-1]] / seg.sum()
+    bc = np.c_[np.cos(t), np.sin(t)]
+    # uniform (Tutte) weights guarantee an embedding for convex boundaries
+    n = len(xyz)
+    E = np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]
+    A = sp.coo_matrix((np.ones(len(E)), (E[:, 0], E[:, 1])), shape=(n, n)).tocsr()
+    A = ((A + A.T) > 0).astype(float)
+    L = sp.diags(np.asarray(A.sum(axis=1)).ravel()) - A
+    free = np.setdiff1d(np.arange(n), bnd)
+    uv = np.zeros((n, 2))
+    uv[bnd] = bc
+    if free.size:
+        Lff = L[free][:, free].tocsc()
+        rhs = -L[free][:, bnd] @ bc
+        from scipy.sparse.linalg import splu
+        uv[free] = splu(Lff).solve(np.asarray(rhs))
+    return normalise_orientation_and_scale(uv, xyz, F)
+
+
+def normalise_orientation_and_scale(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Mirror ``uv`` if clockwise, then scale it to the 3D area (about its centroid)."""
+    s = signed_areas_2d(uv, faces)
+    if np.sum(s > 0) < np.sum(s < 0):
+        uv = uv * np.array([-1.0, 1.0])
+        s = -s
+    a2 = float(np.sum(np.abs(s)))
+    a3 = float(areas_3d(xyz, faces).sum())
+    if not (a2 > 0 and a3 > 0):
+        raise PatternError("panel has zero area")
+    c = uv.mean(axis=0)
+    return (uv - c) * np.sqrt(a3 / a2)
+
+
+def gradient_operators(uv: np.ndarray, faces: np.ndarray) -> tuple:
+    """Per-triangle gradient operators of the 2D domain ``uv``.
+
+    Returns
+    -------
+    G : (f, 3, 2) float, for a per-vertex function with values ``v`` (3,) on a
+        triangle, ``v @ G[t]`` is its constant 2D gradient; ``X_t.T @ G[t]``
+        (3x2) is the Jacobian of the 2D->3D map. ``G[t][:, 0]`` are the
+        barycentric offsets of a unit step along +x from the centroid.
+    area : (f,) float, 2D triangle areas (0 and ``G = 0`` for degenerate ones).
+    """
+    F = np.asarray(faces, int)
+    e1 = uv[F[:, 1]] - uv[F[:, 0]]
+    e2 = uv[F[:, 2]] - uv[F[:, 0]]
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    area = 0.5 * det
+    scale = np.mean(np.abs(det)) if det.size else 0.0
+    ok = np.abs(det) > DEGENERATE * scale
+    inv = np.zeros((len(F), 2, 2))
+    inv[ok, 0, 0] = e2[ok, 1] / det[ok]
+    inv[ok, 0, 1] = -e2[ok, 0] / det[ok]
+    inv[ok, 1, 0] = -e1[ok, 1] / det[ok]
+    inv[ok, 1, 1] = e1[ok, 0] / det[ok]
+    # value(u) = v0 + [v1-v0, v2-v0] . inv @ (u - u0): rows of B map (v0,v1,v2) to d/dx, d/dy
+    G = np.zeros((len(F), 3, 2))
+    G[:, 1, :] = inv[:, 0, :]
+    G[:, 2, :] = inv[:, 1, :]
+    G[:, 0, :] = -inv[:, 0, :] - inv[:, 1, :]
+    area = np.where(ok, area, 0.0)
+    return G, area
+
+
+def grain_angle(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray, warp_dir: np.ndarray) -> float:
+    """Area-weighted vote (radians) of the angle from +y to the 2D image of the 3D warp.
+
+    Per triangle the 3D warp direction is mapped to 2D through the inverse of
+    the triangle's 2D->3D Jacobian; its angle from +y is voted with weight
+    equal to the 3D area (as a unit vector, so angles average on the circle).
+    Degenerate triangles (tiny 2D or 3D extent) do not vote.
+    """
+    G, a2 = gradient_operators(uv, faces)
+    F = np.asarray(faces, int)
+    J = np.einsum("tkd,tke->tde", xyz[F], G)  # (f, 3, 2): 2D -> 3D
+    # 2D image of a 3D tangent vector: least-squares preimage through J
+    JtJ = np.einsum("tdi,tdj->tij", J, J)
+    rhs = np.einsum("tdi,td->ti", J, warp_dir)
+    det = JtJ[:, 0, 0] * JtJ[:, 1, 1] - JtJ[:, 0, 1] ** 2
+    ok = (np.abs(det) > DEGENERATE * max(np.mean(np.abs(det)), 1e-300)) & (a2 != 0)
+    img = np.zeros((len(F), 2))
+    img[ok, 0] = (JtJ[ok, 1, 1] * rhs[ok, 0] - JtJ[ok, 0, 1] * rhs[ok, 1]) / det[ok]
+    img[ok, 1] = (JtJ[ok, 0, 0] * rhs[ok, 1] - JtJ[ok, 0, 1] * rhs[ok, 0]) / det[ok]
+    norm = np.linalg.norm(img, axis=1)
+    ok &= norm > DEGENERATE * max(np.mean(norm), 1e-300)
+    if not np.any(ok):
+        return 0.0  # no usable triangle: keep the flattening's own orientation
+    w = areas_3d(xyz, faces)[ok]
+    unit = img[ok] / norm[ok, None]
+    # angle measured from +y, counter-clockwise: atan2(-x, y)
+    v = np.sum(w[:, None] * unit, axis=0)
+    return float(np.arctan2(-v[0], v[1]))
+
+
+def rotation(theta: float) -> np.ndarray:
+    c, s = np.cos(theta), np.sin(theta)
+    return np.array([[c, -s], [s, c]])
+
+
+def align_grain(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray, warp_dir: np.ndarray) -> np.ndarray:
+    """Rotate ``uv`` about its centroid so the voted grain is +y."""
+    theta = grain_angle(uv, xyz, faces, warp_dir)
+    c = uv.mean(axis=0)
+    return (uv - c) @ rotation(-theta).T + c
+
+
+def initial_flattening(xyz: np.ndarray, faces: np.ndarray, warp_dir: np.ndarray) -> np.ndarray:
+    """LSCM (Tutte where LSCM folds), counter-clockwise, area-matched, grain along +y."""
+    uv = lscm(xyz, faces)
+    s = signed_areas_2d(uv, faces)
+    if np.any(s <= DEGENERATE * np.mean(np.abs(s))):
+        uv = tutte(xyz, faces)
+    return align_grain(uv, xyz, faces, warp_dir)

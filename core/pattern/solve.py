@@ -1,0 +1,664 @@
+"""The ease-driven local-global pattern optimizer (paper: "Parameterization -- Optimizing Ease").
+
+Unknowns: the 2D positions of every panel vertex (seam vertices are
+duplicated, one copy per panel), stacked over all panels; one sparse
+least-squares system couples them.
+
+Everything is expressed on the panel's initial flattening ``U0`` (LSCM,
+area-matched, grain along +y). Per triangle ``t`` its gradient operator
+``G_t`` (3x2, :func:`init.gradient_operators`) gives
+
+- the 2D Jacobian of the current pattern w.r.t. the initial one,
+  ``M_t = U_t^T G_t`` (2x2); its columns are ``sigma_2D`` of the paper (the 2D
+  weft and warp offsets of a unit step from the centroid, barycentric offsets
+  ``G_t[:, 0]`` and ``G_t[:, 1]`` fixed at the initialisation);
+- the 3D offsets ``sigma_3D = X_t^T G_t`` (3x2) on any body instance ``X``;
+  their intrinsic 2D coordinates ``K_t`` (2x2, the warp offset along the
+  second axis) carry the triangle's metric.
+
+Targets: ``T_t = K_t diag(c_weft, c_warp)`` with ``c = |sigma*_2D| / |sigma_3D|``
+(paper Eqs. ref-scale, transfer-scale, adapt-scale, material-scale), so the
+target 2D offsets have the lengths the paper asks for.
+
+Energy, every term normalised to be dimensionless and independent of the mesh
+resolution and the garment size (a relative strain squared, integrated over
+area and divided by the garment's total area; seam terms integrate over a band
+of one mean edge length ``h`` along the seam, residuals relative to the edge
+length)::
+
+    E = lambda_ease sum_t a_t |(M_t - T_t) W|^2            (E_weft + E_warp, axes fixed:
+                                                             weft along x, warp along y)
+      + lambda_reg  sum_t a_t |(M_t - R_t T_reg,t) W|^2   (ARAP, R_t from the local step)
+      + lambda_len  sum_i h/(l_i A) |e_i - Lbar_i d_i|^2  (seam length, linearised)
+      + lambda_straight sum_i h/(l_i A) |D2 u_i|^2        (seam straightness)
+      + lambda_curve sum_i h/(l_i A) |D2 u_i - C_i|^2     (matched seam curvature)
+
+with ``a_t = area_t / A``, ``W = diag(1, warp_weight)``. ``T_reg`` is the
+isometric rest shape ``K_t`` in the paper-default configuration (taken
+literally the regulariser then fights the ease term) and the pre-stretched
+``T_t`` in the improved one (no competition: both terms agree on the target
+shape, the regulariser only adds rotation freedom against curvature).
+The seam-length term keeps the system matrix fixed by targeting the whole edge
+vector: the direction ``d_i`` is the ARAP prediction ``R_t T_t e0_i`` of the
+edge's triangle, the length ``Lbar_i`` the mean of the two sides' current
+lengths. The curvature target ``C_i`` is the mean of this side's second
+difference and the other side's, rotated by the best rigid fit of the two
+seam polylines. Thus the matrix never changes (factorised once per solver and
+configuration, reused by the reference, transfer and adaptation solves); only
+the right-hand side does. One soft pin per panel fixes the translation gauge;
+rotation is fixed by the ease term's axes and the grain re-alignment after
+every iteration. A step that would flip a triangle is shortened (per panel
+backtracking from the previous, flip-free iterate).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.linalg import splu
+
+from ..errors import PatternError
+from ..progress import Progress, report
+from ..metrics.pattern import signed_areas_2d, scales, areas_3d
+from . import init as _init
+from .types import Pattern, PatternPanel, PatternSeam
+
+
+@dataclass(frozen=True)
+class SolverConfig:
+    """Weights and options of the optimizer (see module docstring for the normalisation).
+
+    ``reg_rest``: ``"isometric"`` (paper: ARAP towards the body triangle) or
+    ``"prestretch"`` (ARAP towards the triangle pre-stretched by the targets).
+    ``warp_weight``: relative weight of the warp column in the ease and
+    regulariser terms (< 1 lets warp give way to the weft target: the
+    "stretch" configuration). ``seam_length``: False switches E_len off
+    (gathered designs).
+    """
+    lambda_ease: float = 0.1
+    lambda_reg: float = 1.0
+    lambda_len: float = 100.0
+    lambda_straight: float = 5.0
+    lambda_curve: float = 10.0
+    iterations: int = 20
+    reg_rest: str = "prestretch"
+    warp_weight: float = 1.0
+    seam_length: bool = True
+    realign_grain: bool = True
+
+    @classmethod
+    def paper(cls, **kw) -> "SolverConfig":
+        """The paper's weights taken literally (isometric ARAP regulariser)."""
+        return replace(cls(reg_rest="isometric"), **kw)
+
+    @classmethod
+    def improved(cls, **kw) -> "SolverConfig":
+        """Our default: pre-stretched ARAP rest shape, paper weights otherwise."""
+        return replace(cls(), **kw)
+
+    @classmethod
+    def stretch(cls, **kw) -> "SolverConfig":
+        """Improved, with a lighter warp term: better weft compliance for a little more shear."""
+        return replace(cls(warp_weight=0.5), **kw)
+
+    @classmethod
+    def named(cls, name: str, **kw) -> "SolverConfig":
+        table = {"paper": cls.paper, "improved": cls.improved, "stretch": cls.stretch}
+        if name not in table:
+            raise PatternError(f"solver configuration: expected one of {', '.join(table)}, got {name!r}")
+        return table[name](**kw)
+
+    def check(self) -> None:
+        for k in ("lambda_ease", "lambda_reg", "lambda_len", "lambda_straight", "lambda_curve", "warp_weight"):
+            v = getattr(self, k)
+            if not np.isfinite(v) or v < 0:
+                raise PatternError(f"solver configuration {k}: expected a finite value >= 0, got {v}")
+        if self.lambda_ease + self.lambda_reg <= 0:
+            raise PatternError("solver configuration: lambda_ease + lambda_reg must be > 0")
+        if self.warp_weight <= 0:
+            raise PatternError("solver configuration warp_weight: expected > 0")
+        if int(self.iterations) < 1:
+            raise PatternError(f"solver configuration iterations: expected >= 1, got {self.iterations}")
+        if self.reg_rest not in ("isometric", "prestretch"):
+            raise PatternError(f"solver configuration reg_rest: expected 'isometric' or 'prestretch', got {self.reg_rest!r}")
+
+
+# ----------------------------------------------------------------------------- validation
+
+def validate_cut(cut) -> None:
+    """Raise :class:`PatternError` naming the first invalid element of a GarmentCut."""
+    if not cut.panels:
+        raise PatternError("cut has no panels")
+    N = cut.n_vertices
+    names = set()
+    for p in cut.panels:
+        if p.name in names:
+            raise PatternError(f"panel {p.name!r}: duplicate name")
+        names.add(p.name)
+        F = np.asarray(p.faces)
+        vids = np.asarray(p.vertex_ids)
+        if F.ndim != 2 or F.shape[0] == 0 or F.shape[1] != 3:
+            raise PatternError(f"panel {p.name!r}: empty panel (faces must be a non-empty (f, 3) array, got shape {F.shape})")
+        if vids.ndim != 1 or vids.size < 3:
+            raise PatternError(f"panel {p.name!r}: vertex_ids must list >= 3 vertices")
+        if F.min() < 0 or F.max() >= vids.size:
+            raise PatternError(f"panel {p.name!r}: faces index outside [0, {vids.size})")
+        if vids.min() < 0 or vids.max() >= N:
+            raise PatternError(f"panel {p.name!r}: vertex_ids outside the embedding's {N} rows")
+        ease = np.asarray(p.ease, float)
+        if ease.shape != (F.shape[0],):
+            raise PatternError(f"panel {p.name!r}: ease must have one value per triangle ({F.shape[0]}), got shape {ease.shape}")
+        bad = ~np.isfinite(ease) | (ease <= 0)
+        if np.any(bad):
+            t = int(np.argmax(bad))
+            raise PatternError(f"panel {p.name!r}: ease of triangle {t} is {ease[t]}; expected a finite weft scale > 0")
+        wd = np.asarray(p.warp_dir, float)
+        if wd.shape != (F.shape[0], 3) or not np.all(np.isfinite(wd)):
+            raise PatternError(f"panel {p.name!r}: warp_dir must be a finite (f, 3) array, got shape {wd.shape}")
+    for s in cut.seams:
+        for side in ("panel_a", "panel_b"):
+            if getattr(s, side) not in names:
+                raise PatternError(f"seam {s.name!r}: {side} {getattr(s, side)!r} is not a panel of the cut")
+        va, vb = np.asarray(s.verts_a), np.asarray(s.verts_b)
+        if va.ndim != 1 or va.shape != vb.shape or va.size < 2:
+            raise PatternError(f"seam {s.name!r}: verts_a and verts_b must be equally long polylines of >= 2 "
+                               f"vertices, got {va.shape} and {vb.shape}")
+        for side, v in (("a", va), ("b", vb)):
+            n = len(cut.panel(getattr(s, f"panel_{side}")).vertex_ids)
+            if v.min() < 0 or v.max() >= n:
+                raise PatternError(f"seam {s.name!r}: verts_{side} outside [0, {n})")
+
+
+def _check_eps(name: str, eps: float) -> float:
+    eps = float(eps)
+    if not np.isfinite(eps) or eps < 1.0:
+        raise PatternError(f"{name}: a stretch tolerance must be >= 1 (1.1 = 10 % stretch), got {eps}")
+    return eps
+
+
+# ----------------------------------------------------------------------------- geometry helpers
+
+def intrinsic_offsets(X_t: np.ndarray, G: np.ndarray) -> tuple:
+    """3D weft/warp offsets and their intrinsic 2D coordinates.
+
+    Parameters
+    ----------
+    X_t : (f, 3, 3) triangle vertex positions on a body instance.
+    G : (f, 3, 2) gradient operators of the initial flattening.
+
+    Returns
+    -------
+    K : (f, 2, 2) columns: the weft and warp offsets in an orthonormal tangent
+        frame whose second axis is the warp offset (lower-triangular).
+    len_weft, len_warp : (f,) lengths |sigma_3D| (metres per unit 2D step).
+    """
+    S = np.einsum("tkd,tke->tde", X_t, G)  # (f, 3, 2)
+    sw, sg = S[:, :, 0], S[:, :, 1]
+    lw = np.linalg.norm(sw, axis=1)
+    lg = np.linalg.norm(sg, axis=1)
+    safe = np.where(lg > 0, lg, 1.0)
+    along = np.sum(sw * sg, axis=1) / safe
+    across = np.linalg.norm(np.cross(sw, sg), axis=1) / safe
+    K = np.zeros((len(G), 2, 2))
+    K[:, 0, 0] = across
+    K[:, 1, 0] = along
+    K[:, 1, 1] = lg
+    return K, lw, lg
+
+
+def _polar2(A: np.ndarray) -> np.ndarray:
+    """Closest rotations (f, 2, 2) to 2x2 matrices A (maximise tr(R^T A))."""
+    th = np.arctan2(A[:, 1, 0] - A[:, 0, 1], A[:, 0, 0] + A[:, 1, 1])
+    c, s = np.cos(th), np.sin(th)
+    R = np.empty_like(A)
+    R[:, 0, 0] = c
+    R[:, 0, 1] = -s
+    R[:, 1, 0] = s
+    R[:, 1, 1] = c
+    return R
+
+
+def _kabsch2(P: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    """Proper rotation (2, 2) best mapping centred Q onto centred P."""
+    Pc = P - P.mean(axis=0)
+    Qc = Q - Q.mean(axis=0)
+    H = Qc.T @ Pc
+    return _polar2(H.T[None])[0]
+
+
+# ----------------------------------------------------------------------------- solver
+
+@dataclass
+class _PanelData:
+    name: str
+    offset: int
+    n: int
+    faces: np.ndarray      # local
+    gfaces: np.ndarray     # global unknown ids
+    vertex_ids: np.ndarray
+    warp_dir: np.ndarray
+    ease: np.ndarray
+    uv0: np.ndarray
+    G: np.ndarray
+    area0: np.ndarray      # initial 2D areas (= 3D areas up to LSCM distortion)
+
+
+@dataclass
+class _SeamSide:
+    seam: int
+    gids: np.ndarray       # global unknown ids along the polyline
+    l0: np.ndarray         # initial 2D edge lengths (k-1,)
+    edge_face: np.ndarray  # (k-1,) global face index of each edge's triangle
+    edge_local: np.ndarray  # (k-1, 2) which corners (0..2) of that face the edge runs from/to
+
+
+@dataclass
+class SolveResult:
+    """The outcome of one solve: per panel ``uv`` and per-triangle targets."""
+    uv: Dict[str, np.ndarray]
+    target_weft: Dict[str, np.ndarray]
+    target_warp: Dict[str, np.ndarray]
+    xyz: Dict[str, np.ndarray]
+    seconds: float
+    iterations: int
+    backtracks: int
+    energy: List[float] = field(default_factory=list)
+
+
+class PatternSolver:
+    """Local-global ease optimizer over all panels of a cut, factorised once.
+
+    Parameters
+    ----------
+    cut : GarmentCut
+    body_vertices : (V, 3) the reference body instance the cut was made on.
+    config : SolverConfig (default :meth:`SolverConfig.improved`).
+    """
+
+    def __init__(self, cut, body_vertices: np.ndarray, config: Optional[SolverConfig] = None,
+                 progress: Optional[Progress] = None):
+        validate_cut(cut)
+        self.cut = cut
+        self.config = config or SolverConfig.improved()
+        self.config.check()
+        t0 = time.perf_counter()
+        self.ref_positions = self._positions(body_vertices, "reference body")
+        self.panels: List[_PanelData] = []
+        offset = 0
+        for k, p in enumerate(cut.panels):
+            report(progress, 0.8 * k / len(cut.panels), f"flattening panel {p.name}")
+            xyz = self.ref_positions[np.asarray(p.vertex_ids, int)]
+            F = np.asarray(p.faces, np.int64)
+            if np.all(areas_3d(xyz, F) <= 0):
+                raise PatternError(f"panel {p.name!r}: all triangles are degenerate on the reference body")
+            uv0 = _init.initial_flattening(xyz, F, np.asarray(p.warp_dir, float))
+            G, a0 = _init.gradient_operators(uv0, F)
+            self.panels.append(_PanelData(p.name, offset, len(p.vertex_ids), F, F + offset,
+                                          np.asarray(p.vertex_ids, int), np.asarray(p.warp_dir, float),
+                                          np.asarray(p.ease, float), uv0, G, a0))
+            offset += len(p.vertex_ids)
+        self.n = offset
+        self.gfaces = np.concatenate([pd.gfaces for pd in self.panels])
+        self.G = np.concatenate([pd.G for pd in self.panels])
+        self.a = np.concatenate([pd.area0 for pd in self.panels])
+        self.total_area = float(self.a.sum())
+        self.a = self.a / self.total_area
+        self.uv0 = np.concatenate([pd.uv0 for pd in self.panels])
+        el = np.linalg.norm(self.uv0[self.gfaces[:, [1, 2, 0]]] - self.uv0[self.gfaces], axis=2)
+        self.h = float(np.mean(el))
+        self._build_seams()
+        # scatter of per-triangle corner contributions into the unknowns
+        f = len(self.gfaces)
+        self._scatter = sp.csr_matrix((np.ones(3 * f), (self.gfaces.ravel(), np.arange(3 * f))), shape=(self.n, 3 * f))
+        self._factor = None
+        self._factor_key = None
+        self.timings = {"init": time.perf_counter() - t0}
+        report(progress, 1.0, "flattened")
+
+    # ------------------------------------------------------------------ setup
+    def _positions(self, body_vertices, what) -> np.ndarray:
+        X = np.asarray(body_vertices, float)
+        if X.ndim != 2 or X.shape[1] != 3 or not np.all(np.isfinite(X)):
+            raise PatternError(f"{what}: expected finite body vertices (V, 3), got shape {X.shape}")
+        if X.shape[0] != self.cut.embedding.shape[1]:
+            raise PatternError(f"{what}: has {X.shape[0]} vertices, the cut's embedding expects "
+                               f"{self.cut.embedding.shape[1]}")
+        return self.cut.positions(X)
+
+    def _build_seams(self) -> None:
+        by_name = {pd.name: pd for pd in self.panels}
+        face_base, base = {}, 0
+        for pd in self.panels:
+            face_base[pd.name] = base
+            base += len(pd.faces)
+        self.sides: List[_SeamSide] = []
+        self.seam_pairs = []
+        for si, s in enumerate(self.cut.seams):
+            pair = []
+            for pname, verts in ((s.panel_a, s.verts_a), (s.panel_b, s.verts_b)):
+                pd = by_name[pname]
+                v = np.asarray(verts, int)
+                emap = {}
+                for fi, tri in enumerate(pd.faces):
+                    for c in range(3):
+                        emap[(int(tri[c]), int(tri[(c + 1) % 3]))] = (fi, c, (c + 1) % 3)
+                ef, el = [], []
+                for i in range(len(v) - 1):
+                    key = (int(v[i]), int(v[i + 1]))
+                    if key in emap:
+                        fi, c0, c1 = emap[key]
+                    elif key[::-1] in emap:
+                        fi, c1, c0 = emap[key[::-1]]
+                    else:
+                        raise PatternError(f"seam {s.name!r}: vertices {key} of panel {pname!r} are not joined by an edge")
+                    ef.append(face_base[pname] + fi)
+                    el.append((c0, c1))
+                g = v + pd.offset
+                l0 = np.linalg.norm(np.diff(self.uv0[g], axis=0), axis=1)
+                self.sides.append(_SeamSide(si, g, l0, np.array(ef, int), np.array(el, int).reshape(-1, 2)))
+                pair.append(len(self.sides) - 1)
+            self.seam_pairs.append(tuple(pair))
+
+    def _matrix(self) -> sp.csc_matrix:
+        cfg = self.config
+        W2 = np.array([1.0, cfg.warp_weight ** 2])
+        w = (cfg.lambda_ease + cfg.lambda_reg) * self.a
+        # per triangle: sum_c w_c G[:, c] G[:, c]^T
+        B = np.einsum("tic,tjc,c->tij", self.G, self.G, W2) * w[:, None, None]
+        rows = np.repeat(self.gfaces, 3, axis=1).ravel()
+        cols = np.tile(self.gfaces, (1, 3)).ravel()
+        L = sp.coo_matrix((B.ravel(), (rows, cols)), shape=(self.n, self.n)).tocsr()
+        extra_r, extra_c, extra_v = [], [], []
+        for side in self.sides:
+            g = side.gids
+            if cfg.seam_length and cfg.lambda_len > 0:
+                c = cfg.lambda_len * self.h / (np.maximum(side.l0, 1e-12) * self.total_area)
+                for a_, b_, s_ in ((g[:-1], g[:-1], c), (g[1:], g[1:], c), (g[:-1], g[1:], -c), (g[1:], g[:-1], -c)):
+                    extra_r.append(a_), extra_c.append(b_), extra_v.append(s_)
+            lam = cfg.lambda_straight + cfg.lambda_curve
+            if lam > 0 and len(g) >= 3:
+                D, cc = self._second_difference(side)
+                DtD = (D.T @ sp.diags(lam * cc) @ D).tocoo()
+                extra_r.append(DtD.row), extra_c.append(DtD.col), extra_v.append(DtD.data)
+        if extra_r:
+            L = L + sp.coo_matrix((np.concatenate(extra_v), (np.concatenate(extra_r), np.concatenate(extra_c))),
+                                  shape=(self.n, self.n)).tocsr()
+        # translation gauge: one soft pin per panel, tiny against the diagonal
+        d = L.diagonal()
+        pin = np.zeros(self.n)
+        for pd in self.panels:
+            pin[pd.offset] = 1e-6 * float(np.mean(d[pd.offset:pd.offset + pd.n]))
+        self._pin = pin
+        return (L + sp.diags(pin)).tocsc()
+
+    def _second_difference(self, side: _SeamSide):
+        g = side.gids
+        k = len(g)
+        i = np.arange(1, k - 1)
+        rows = np.repeat(np.arange(k - 2), 3)
+        cols = np.stack([g[i - 1], g[i], g[i + 1]], axis=1).ravel()
+        vals = np.tile([1.0, -2.0, 1.0], k - 2)
+        D = sp.csr_matrix((vals, (rows, cols)), shape=(k - 2, self.n))
+        lmid = 0.5 * (side.l0[:-1] + side.l0[1:])
+        cc = self.h / (np.maximum(lmid, 1e-12) * self.total_area)
+        return D, cc
+
+    def _solver(self):
+        cfg = self.config
+        key = (cfg.lambda_ease, cfg.lambda_reg, cfg.lambda_len, cfg.lambda_straight, cfg.lambda_curve,
+               cfg.warp_weight, cfg.seam_length)
+        if self._factor is None or self._factor_key != key:
+            t0 = time.perf_counter()
+            self._factor = splu(self._matrix())
+            self._factor_key = key
+            self.timings["factorise"] = time.perf_counter() - t0
+            self.n_factorisations = getattr(self, "n_factorisations", 0) + 1
+            self._D = [self._second_difference(s) if len(s.gids) >= 3 else None for s in self.sides]
+        return self._factor
+
+    # ------------------------------------------------------------------ targets
+    def _offsets(self, positions: np.ndarray):
+        X = np.concatenate([positions[pd.vertex_ids][pd.faces] for pd in self.panels])
+        return intrinsic_offsets(X, self.G)
+
+    def targets_reference(self, positions: Optional[np.ndarray] = None):
+        """Targets of Eq. ref-scale (or transfer-scale on other ``positions``): c = (rho_weft, 1)."""
+        K, lw, lg = self._offsets(self.ref_positions if positions is None else positions)
+        ease = np.concatenate([pd.ease for pd in self.panels])
+        return K, ease.copy(), np.ones_like(ease)
+
+    def targets_adapt(self, pose_positions: Sequence[np.ndarray], eps_weft: float, eps_warp: float):
+        """Targets of Eq. material-scale: per direction max(rho sigma_ref, max_i sigma_i / eps)."""
+        eps_weft = _check_eps("eps_weft", eps_weft)
+        eps_warp = _check_eps("eps_warp", eps_warp)
+        K, lw, lg = self._offsets(self.ref_positions)
+        ease = np.concatenate([pd.ease for pd in self.panels])
+        want_w = ease * lw
+        want_g = 1.0 * lg
+        for P in pose_positions:
+            _, lwi, lgi = self._offsets(P)
+            want_w = np.maximum(want_w, lwi / eps_weft)
+            want_g = np.maximum(want_g, lgi / eps_warp)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cw = np.where(lw > 0, want_w / lw, ease)
+            cg = np.where(lg > 0, want_g / lg, 1.0)
+        return K, cw, cg
+
+    # ------------------------------------------------------------------ iterations
+    def solve(self, K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray, start: Optional[np.ndarray] = None,
+              positions: Optional[np.ndarray] = None, progress: Optional[Progress] = None) -> SolveResult:
+        """Run the local-global iterations towards targets ``T = K diag(c_weft, c_warp)``."""
+        cfg = self.config
+        t0 = time.perf_counter()
+        lu = self._solver()
+        T = K * np.stack([c_weft, c_warp], axis=1)[:, None, :]        # (f, 2, 2)
+        T_reg = T if cfg.reg_rest == "prestretch" else K
+        W2 = np.array([1.0, cfg.warp_weight ** 2])
+        U = (self.uv0 if start is None else start).copy()
+        Ft = self.gfaces
+        # fixed part of the right-hand side: the ease term with axes fixed
+        ease_part = cfg.lambda_ease * self.a[:, None, None] * np.einsum("tkc,c,tdc->tkd", self.G, W2, T)
+        energies = []
+        backtracks = 0
+        n_it = int(cfg.iterations)
+        for it in range(n_it):
+            report(progress, it / n_it, f"optimizing pattern: iteration {it + 1}/{n_it}")
+            M = np.einsum("tkd,tkc->tdc", U[Ft], self.G)               # (f, 2, 2) current Jacobian
+            R = _polar2(np.einsum("tdc,c,tec->tde", M, W2, T_reg))    # local step
+            RT = R @ T_reg
+            contrib = ease_part + cfg.lambda_reg * self.a[:, None, None] * np.einsum("tkc,c,tdc->tkd", self.G, W2, RT)
+            rhs = self._scatter @ contrib.reshape(-1, 2)
+            rhs += self._seam_rhs(U, R @ T)
+            rhs += self._pin[:, None] * U
+            U_new = np.column_stack([lu.solve(rhs[:, 0]), lu.solve(rhs[:, 1])])
+            U, nb = self._safeguard(U, U_new)
+            backtracks += nb
+            if cfg.realign_grain:
+                U = self._realign(U, positions if positions is not None else self.ref_positions)
+            energies.append(float(np.sum(self.a * np.sum(((M - RT) * np.sqrt(W2)) ** 2, axis=(1, 2)))))
+        report(progress, 1.0, "pattern optimized")
+        out_uv, tw, tg, xyz = {}, {}, {}, {}
+        pos = self.ref_positions if positions is None else positions
+        fb = 0
+        for pd in self.panels:
+            out_uv[pd.name] = U[pd.offset:pd.offset + pd.n].copy()
+            tw[pd.name] = np.asarray(c_weft[fb:fb + len(pd.faces)], float).copy()
+            tg[pd.name] = np.asarray(c_warp[fb:fb + len(pd.faces)], float).copy()
+            xyz[pd.name] = pos[pd.vertex_ids]
+            fb += len(pd.faces)
+        return SolveResult(out_uv, tw, tg, xyz, time.perf_counter() - t0, n_it, backtracks, energies)
+
+    def _seam_rhs(self, U: np.ndarray, RT: np.ndarray) -> np.ndarray:
+        cfg = self.config
+        rhs = np.zeros((self.n, 2))
+        # current edges and second differences of every side
+        cur_len, d2 = {}, {}
+        for k, side in enumerate(self.sides):
+            cur_len[k] = np.linalg.norm(np.diff(U[side.gids], axis=0), axis=1)
+        for ka, kb in self.seam_pairs:
+            for k, other in ((ka, kb), (kb, ka)):
+                side = self.sides[k]
+                g = side.gids
+                if cfg.seam_length and cfg.lambda_len > 0:
+                    lbar = 0.5 * (cur_len[k] + cur_len[other])
+                    # ARAP-predicted direction of the edge: R_t T_t (u0_j - u0_i)
+                    f = side.edge_face
+                    corners = self.gfaces[f]
+                    i0 = corners[np.arange(len(f)), side.edge_local[:, 0]]
+                    i1 = corners[np.arange(len(f)), side.edge_local[:, 1]]
+                    # edges run along the polyline; keep the polyline's direction
+                    e0 = self.uv0[g[1:]] - self.uv0[g[:-1]]
+                    pred = np.einsum("tij,tj->ti", RT[f], e0)
+                    nrm = np.linalg.norm(pred, axis=1)
+                    cur = U[g[1:]] - U[g[:-1]]
+                    dirn = np.where(nrm[:, None] > 0, pred / np.maximum(nrm, 1e-300)[:, None], cur)
+                    dirn /= np.maximum(np.linalg.norm(dirn, axis=1), 1e-300)[:, None]
+                    c = cfg.lambda_len * self.h / (np.maximum(side.l0, 1e-12) * self.total_area)
+                    tgt = (c * lbar)[:, None] * dirn
+                    np.add.at(rhs, g[1:], tgt)
+                    np.add.at(rhs, g[:-1], -tgt)
+                if cfg.lambda_curve > 0 and self._D[k] is not None and len(self.sides[other].gids) == len(g):
+                    D, cc = self._D[k]
+                    Do, _ = self._D[other]
+                    Q = _kabsch2(U[g], U[self.sides[other].gids])
+                    target = 0.5 * (D @ U + (Do @ U) @ Q.T)
+                    rhs += D.T @ ((cfg.lambda_curve * cc)[:, None] * target)
+        return rhs
+
+    def _safeguard(self, U_old: np.ndarray, U_new: np.ndarray):
+        """Shorten the step per panel until no triangle flips; returns (U, number of halvings)."""
+        U = U_new.copy()
+        halvings = 0
+        for pd in self.panels:
+            sl = slice(pd.offset, pd.offset + pd.n)
+            ref = np.abs(signed_areas_2d(self.uv0[sl], pd.faces))
+            floor = 1e-6 * ref
+            alpha = 1.0
+            for _ in range(30):
+                cand = U_old[sl] + alpha * (U_new[sl] - U_old[sl])
+                if np.all(signed_areas_2d(cand, pd.faces) > floor):
+                    U[sl] = cand
+                    break
+                alpha *= 0.5
+                halvings += 1
+            else:
+                U[sl] = U_old[sl]
+        return U, halvings
+
+    def _realign(self, U: np.ndarray, positions: np.ndarray) -> np.ndarray:
+        U = U.copy()
+        for pd in self.panels:
+            sl = slice(pd.offset, pd.offset + pd.n)
+            U[sl] = _init.align_grain(U[sl], positions[pd.vertex_ids], pd.faces, pd.warp_dir)
+        return U
+
+
+# ----------------------------------------------------------------------------- patterns
+
+def _layout(uv: Dict[str, np.ndarray], order: Sequence[str], gap: float = 0.05) -> Dict[str, np.ndarray]:
+    """Translate the pieces into one row (left to right, bottoms aligned), gap in metres."""
+    out, x = {}, 0.0
+    for name in order:
+        p = uv[name]
+        lo, hi = p.min(axis=0), p.max(axis=0)
+        out[name] = p - lo + np.array([x, 0.0])
+        x += (hi - lo)[0] + gap
+    return out
+
+
+def build_pattern(cut, result: SolveResult, style: str = "", body: Optional[dict] = None,
+                  mode: str = "reference", materials: Optional[dict] = None) -> Pattern:
+    """Assemble a :class:`Pattern` from a solve; checks it has no flipped triangle."""
+    order = [p.name for p in cut.panels]
+    uv = _layout(result.uv, order)
+    panels = []
+    for p in cut.panels:
+        xyz = result.xyz[p.name]
+        grain = np.array([0.0, 1.0])
+        rw, rg, _ = scales(uv[p.name], xyz, p.faces, grain)
+        s = signed_areas_2d(uv[p.name], p.faces)
+        if np.any(s <= 0):
+            raise PatternError(f"panel {p.name!r}: {int(np.sum(s <= 0))} flipped triangles in the optimized pattern")
+        panels.append(PatternPanel(
+            name=p.name, garment=p.garment, uv=uv[p.name], faces=np.asarray(p.faces, int),
+            vertex_ids=np.asarray(p.vertex_ids, int), xyz=np.asarray(xyz, float), grain=grain,
+            target_weft=result.target_weft[p.name], target_warp=result.target_warp[p.name],
+            achieved_weft=rw, achieved_warp=rg,
+            boundary=[np.asarray(b, int) for b in (p.boundary or _init.boundary_loops(p.faces))],
+            hems=[np.asarray(h, int) for h in cut.hems.get(p.name, [])], mirror_of=p.mirror_of))
+    seams = [PatternSeam(s.name, s.panel_a, s.panel_b, np.asarray(s.verts_a, int), np.asarray(s.verts_b, int))
+             for s in cut.seams]
+    body = dict(body if body is not None else cut.body)
+    return Pattern(style=style, body=body, garments=dict(cut.garments), panels=panels, seams=seams,
+                   pins={g: np.asarray(v, int) for g, v in cut.pins.items()},
+                   materials=dict(materials if materials is not None else cut.materials), mode=mode,
+                   report={"optimize_seconds": result.seconds, "iterations": result.iterations,
+                           "backtracks": result.backtracks})
+
+
+def solve_pattern(cut, body_vertices, config: Optional[SolverConfig] = None, style: str = "",
+                  progress: Optional[Progress] = None, solver: Optional[PatternSolver] = None) -> Pattern:
+    """Reference pattern (paper Eq. ref-scale) of ``cut`` on the body instance it was cut on."""
+    from ..progress import sub
+    solver = solver or PatternSolver(cut, body_vertices, config, progress=sub(progress, 0.0, 0.3))
+    K, cw, cg = solver.targets_reference()
+    res = solver.solve(K, cw, cg, progress=sub(progress, 0.3, 1.0))
+    pat = build_pattern(cut, res, style=style, mode="reference")
+    pat.report["init_seconds"] = solver.timings.get("init", 0.0)
+    return pat
+
+
+def transfer_pattern(cut, ref_vertices, target_vertices, config: Optional[SolverConfig] = None,
+                     style: str = "", body: Optional[dict] = None, progress: Optional[Progress] = None,
+                     solver: Optional[PatternSolver] = None, start: Optional[Pattern] = None) -> Pattern:
+    """Shape transfer (paper Eq. transfer-scale): the ease field kept on the target body.
+
+    The reference flattening and factorisation are reused; the solve starts
+    from the reference pattern when ``start`` is given.
+    """
+    from ..progress import sub
+    solver = solver or PatternSolver(cut, ref_vertices, config, progress=sub(progress, 0.0, 0.3))
+    tgt = solver._positions(target_vertices, "target body")
+    K, cw, cg = solver.targets_reference(tgt)
+    U0 = _start_from(solver, start)
+    res = solver.solve(K, cw, cg, start=U0, positions=tgt, progress=sub(progress, 0.3, 1.0))
+    return build_pattern(cut, res, style=style, body=body, mode="transfer")
+
+
+def adapt_pattern(cut, ref_vertices, pose_vertices: Sequence[np.ndarray], eps_weft: float = 1.1,
+                  eps_warp: Optional[float] = None, config: Optional[SolverConfig] = None, style: str = "",
+                  body: Optional[dict] = None, progress: Optional[Progress] = None,
+                  solver: Optional[PatternSolver] = None, start: Optional[Pattern] = None) -> Pattern:
+    """Pose adaptation (paper Eqs. adapt-scale, material-scale) for one or more target poses.
+
+    The pattern is solved for the reference body with targets raised to what
+    every pose demands, divided by the stretch tolerances ``eps_weft`` and
+    ``eps_warp`` (default: ``eps_weft``), each >= 1.
+    """
+    from ..progress import sub
+    eps_weft = _check_eps("eps_weft", eps_weft)
+    eps_warp = _check_eps("eps_warp", eps_weft if eps_warp is None else eps_warp)
+    if not len(pose_vertices):
+        raise PatternError("adaptation needs at least one target pose")
+    solver = solver or PatternSolver(cut, ref_vertices, config, progress=sub(progress, 0.0, 0.3))
+    poses = [solver._positions(P, f"pose {i + 1}") for i, P in enumerate(pose_vertices)]
+    K, cw, cg = solver.targets_adapt(poses, eps_weft, eps_warp)
+    res = solver.solve(K, cw, cg, start=_start_from(solver, start), progress=sub(progress, 0.3, 1.0))
+    mats = dict(cut.materials)
+    mats.update({"eps_weft": eps_weft, "eps_warp": eps_warp})
+    return build_pattern(cut, res, style=style, body=body, mode="adapt", materials=mats)
+
+
+def _start_from(solver: PatternSolver, start: Optional[Pattern]) -> Optional[np.ndarray]:
+    if start is None:
+        return None
+    U = np.concatenate([start.panel(pd.name).uv for pd in solver.panels])
+    # the start is flip-free (every reported pattern is); re-centre each piece on its initial position
+    out = U.copy()
+    for pd in solver.panels:
+        sl = slice(pd.offset, pd.offset + pd.n)
+        out[sl] = U[sl] - U[sl].mean(axis=0) + solver.uv0[sl].mean(axis=0)
+    return out
