@@ -1,0 +1,164 @@
+"""Pattern files a cutting room can use: SVG, DXF (ASTM D6673/AAMA), 1:1 PDF, and the draped garment.
+
+:func:`export_pattern` validates the pattern, builds every piece (sew line,
+cut line with seam allowance, notches, grain line, label), lays the pieces
+out, renders each requested format in memory and only then writes the files,
+all at once, through :func:`core.fileio.output_dir`; an invalid pattern or a
+failure in any format leaves the output directory untouched.
+
+Files (under ``out_dir``):
+
+========= =====================================================================
+format    files
+========= =====================================================================
+``svg``   ``pattern.svg`` (1:1, mm)
+``dxf``   ``pattern_astm.dxf`` (ASTM D6673/AAMA, R2000, $INSUNITS mm),
+          ``pattern_astm_r12.dxf`` (same, R12 for Gerber), ``pattern_plain.dxf``
+``pdf``   ``pattern_a4.pdf``, ``pattern_letter.pdf`` (tiled 1:1),
+          ``pattern_plotter.pdf`` (one sheet, 914 mm roll)
+``glb``   ``garment.glb`` (needs the drape)
+``obj``   ``garment.obj`` (needs the drape)
+========= =====================================================================
+
+plus ``export.json``: per piece sew-line length, allowance, notch count, and
+the page counts.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Iterable, List, Optional, Union
+
+import numpy as np
+
+from ..errors import ExportError
+from ..fileio import dumps_json, output_dir, write_bytes, write_text
+from ..pattern.types import Pattern
+from ..progress import report, sub
+from .pieces import (DEFAULT_ALLOWANCE, DEFAULT_HEM, DEFAULT_NOTCH_SPACING, Layout, PieceDrawing,
+                     build_pieces, layout_pieces, polyline_length, resolve_allowance)
+from .validate import validate_drape, validate_pattern
+
+FORMATS = ("svg", "dxf", "pdf", "glb", "obj")
+SHEET_WIDTH = 0.88      # m: with the PDF margins the plotter sheet is 900 mm, inside a 914 mm roll
+LAYOUT_MARGIN = 0.02    # m between pieces
+
+__all__ = ["export_pattern", "FORMATS", "validate_pattern", "build_pieces", "layout_pieces",
+           "resolve_allowance", "DEFAULT_ALLOWANCE", "DEFAULT_HEM", "DEFAULT_NOTCH_SPACING"]
+
+
+def parse_formats(formats: Union[str, Iterable[str]]) -> List[str]:
+    """Normalised, de-duplicated format list; ``"all"`` means every format."""
+    if isinstance(formats, str):
+        formats = formats.split(",")
+    out = []
+    for f in formats:
+        f = str(f).strip().lower()
+        if not f:
+            continue
+        if f == "all":
+            return list(FORMATS)
+        if f not in FORMATS:
+            raise ExportError(f"format {f!r}: expected some of {', '.join(FORMATS)} (or all)")
+        if f not in out:
+            out.append(f)
+    if not out:
+        raise ExportError(f"formats: none given; expected some of {', '.join(FORMATS)}")
+    return out
+
+
+def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb"), allowance=None,
+                   drape_positions: Optional[np.ndarray] = None, progress=None,
+                   notch_spacing: Optional[float] = None) -> List[Path]:
+    """Write the pattern's cutting-room files and the draped garment.
+
+    Parameters
+    ----------
+    pattern : :class:`core.pattern.types.Pattern`.
+    out_dir : directory to write into (created; existing unrelated files kept).
+    formats : iterable of ``"svg"``, ``"dxf"``, ``"pdf"``, ``"glb"``, ``"obj"``
+        (or a comma-separated string).
+    allowance : None, metres for every seam, or ``{"default": 0.01, "hem": 0.02,
+        "<seam name>": ...}``; None takes ``pattern.materials["export"]["allowance"]``
+        and falls back to 1 cm seams and 2 cm hems.
+    drape_positions : (N, 3) float, draped garment positions by global vertex id
+        (``drape.npz["positions"]``); needed for ``glb``/``obj``.
+    progress : ``progress(fraction, message)`` callback, may raise Cancelled.
+    notch_spacing : m between notches along a seam (default 10 cm, or
+        ``materials["export"]["notch_spacing"]``).
+
+    Returns
+    -------
+    list of Path, the files written (final locations).
+
+    Raises
+    ------
+    ExportError before any file is written when the pattern, the allowance, the
+    formats or the drape are invalid.
+    """
+    formats = parse_formats(formats)
+    validate_pattern(pattern)
+    widths = resolve_allowance(allowance, pattern)
+    positions = None
+    if "glb" in formats or "obj" in formats:
+        positions = validate_drape(pattern, drape_positions)
+    report(progress, 0.0, "building pattern pieces")
+    pieces = build_pieces(pattern, widths, notch_spacing, progress=sub(progress, 0.0, 0.3))
+    boxes = [p.bbox for p in pieces]
+    title = pattern.style or "pattern"
+    size = str((pattern.body or {}).get("size") or (pattern.body or {}).get("shape") or "-")
+    files = {}   # relative name -> bytes, rendered fully before anything is written
+    summary = {"style": title, "size": size, "unit": "mm", "allowance_mm": {k: v * 1000 for k, v in widths.items()},
+               "pieces": [_piece_summary(p, pattern) for p in pieces]}
+    steps = len(formats)
+    for k, fmt in enumerate(formats):
+        report(progress, 0.3 + 0.65 * k / steps, f"rendering {fmt.upper()}")
+        if fmt == "svg":
+            from .svg import svg_document
+            lay = layout_pieces(boxes, SHEET_WIDTH, LAYOUT_MARGIN)
+            files["pattern.svg"] = svg_document(pieces, lay, title).encode("utf-8")
+            summary["sheet_mm"] = (lay.size * 1000).round(1).tolist()
+        elif fmt == "dxf":
+            from . import dxf
+            lay = layout_pieces(boxes, SHEET_WIDTH, LAYOUT_MARGIN)
+            files["pattern_astm.dxf"] = dxf.astm_text(pieces, lay, title, size).encode("ascii", "replace")
+            files["pattern_astm_r12.dxf"] = dxf.astm_r12_text(pieces, lay, title, size).encode("ascii", "replace")
+            files["pattern_plain.dxf"] = dxf.plain_text(pieces, lay, title).encode("utf-8")
+        elif fmt == "pdf":
+            from . import pdf
+            lay = layout_pieces(boxes, SHEET_WIDTH, LAYOUT_MARGIN, reserve=pdf.TEST_RESERVE)
+            pages = {}
+            for paper in ("a4", "letter"):
+                files[f"pattern_{paper}.pdf"] = pdf.tiled_pdf(pieces, lay, paper, title)
+                rows, cols, _ = pdf.tile_grid(lay.size, paper)
+                pages[paper] = {"rows": rows, "columns": cols, "pages": rows * cols}
+            files["pattern_plotter.pdf"] = pdf.plotter_pdf(pieces, lay, title)
+            pages["plotter_mm"] = ((lay.size + 2 * pdf.PAGE_MARGIN) * 1000).round(1).tolist()
+            summary["pdf"] = pages
+        elif fmt in ("glb", "obj"):
+            from . import mesh
+            meshes = mesh.piece_meshes(pattern, positions, [p.rotation for p in pieces])
+            if fmt == "glb":
+                files["garment.glb"] = mesh.glb_bytes(meshes)
+            else:
+                files["garment.obj"] = mesh.obj_text(meshes, title).encode("utf-8")
+    summary["files"] = sorted(files)
+    files["export.json"] = (dumps_json(summary) + "\n").encode("utf-8")
+    report(progress, 0.95, "writing files")
+    out_dir = Path(out_dir)
+    with output_dir(out_dir) as tmp:
+        for name, data in files.items():
+            write_bytes(tmp / name, data)
+    report(progress, 1.0, f"wrote {len(files)} files to {out_dir}")
+    return [out_dir / name for name in files]
+
+
+def _piece_summary(piece: PieceDrawing, pattern: Pattern) -> dict:
+    seams = {}
+    for n in piece.notches:
+        seams.setdefault(n.seam, []).append(round(n.s * 1000, 2))
+    return {"name": piece.name, "garment": piece.garment, "quantity": piece.quantity,
+            "sew_line_mm": round(sum(polyline_length(l, closed=True) for l in piece.sew) * 1000, 2),
+            "cut_line_mm": round(sum(polyline_length(l, closed=True) for l in piece.cut) * 1000, 2),
+            "allowance_mm": sorted({round(float(w) * 1000, 2) for e in piece.edge_allowance for w in e}),
+            "notches_mm": seams,
+            "size_mm": ((piece.bbox[1] - piece.bbox[0]) * 1000).round(1).tolist()}

@@ -1,0 +1,110 @@
+"""``ease export``: cutting-room files (SVG, DXF, PDF) and the draped garment (GLB, OBJ)."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+FORMATS_HELP = "svg,dxf,pdf,glb,obj or all"
+
+
+def _metres(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a width in metres (e.g. 0.01), got {text!r}") from None
+    return v
+
+
+def load_drape_positions(drape_dir: Path):
+    """``positions`` (N, 3) from ``drape_dir/drape.npz`` (or the .npz file itself)."""
+    import numpy as np
+
+    from ..errors import ExportError
+
+    path = Path(drape_dir)
+    if path.is_dir():
+        path = path / "drape.npz"
+    if not path.is_file():
+        raise ExportError(f"--drape: no draped garment at {path} (run `ease drape PATTERN_DIR --out DIR` first)")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            for key in ("positions", "vertices", "x"):
+                if key in data.files:
+                    return np.asarray(data[key], float)
+            keys = ", ".join(data.files)
+    except (OSError, ValueError) as exc:
+        raise ExportError(f"--drape: cannot read {path}: {exc}") from exc
+    raise ExportError(f"--drape: {path} has no 'positions' array (it holds: {keys})")
+
+
+def _run(args) -> int:
+    from ..pattern.io import load_pattern
+    from ..progress import ConsoleProgress
+    from . import export_pattern, parse_formats
+    from .pieces import DEFAULT_ALLOWANCE, DEFAULT_HEM
+    from ..errors import ExportError
+
+    guess = Path(args.pattern_dir).resolve()
+    guess = (guess.parent if guess.is_file() else guess).parent / "drape"
+    if args.format is None:
+        # the 2D files always; the draped garment when there is a drape to export
+        have_drape = args.drape is not None or (guess / "drape.npz").is_file()
+        args.format = "svg,dxf,pdf" + (",glb,obj" if have_drape else "")
+    formats = parse_formats(args.format)
+    pattern = load_pattern(args.pattern_dir)
+    allowance = None
+    if args.allowance is not None or args.hem is not None:
+        base = ((pattern.materials or {}).get("export") or {}).get("allowance")
+        if isinstance(base, dict):
+            allowance = dict(base)
+        elif isinstance(base, (int, float)) and not isinstance(base, bool):
+            allowance = {"default": float(base)}
+        else:
+            allowance = {"default": DEFAULT_ALLOWANCE, "hem": DEFAULT_HEM}
+        if args.allowance is not None:
+            allowance["default"] = args.allowance
+        if args.hem is not None:
+            allowance["hem"] = args.hem
+    positions = None
+    if "glb" in formats or "obj" in formats:
+        drape = Path(args.drape) if args.drape else None
+        if drape is None:
+            if not (guess / "drape.npz").is_file():
+                raise ExportError(f"GLB/OBJ export needs the draped garment: pass --drape DIR (no {guess}/drape.npz); "
+                                  f"or leave glb/obj out of --format")
+            drape = guess
+        positions = load_drape_positions(drape)
+    files = export_pattern(pattern, args.out, formats=formats, allowance=allowance,
+                           drape_positions=positions, progress=None if args.quiet else ConsoleProgress(),
+                           notch_spacing=args.notch_spacing)
+    for f in files:
+        print(f)
+    return 0
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser(
+        "export",
+        help="write cutting-room files (SVG, DXF ASTM/AAMA, 1:1 PDF) and the draped garment (GLB, OBJ)",
+        description="Export a pattern written by `ease pattern` as files a cutting room can use: SVG at 1:1 "
+                    "in mm; DXF in ASTM D6673/AAMA layers (one block per piece; R2000 and R12) and plain DXF; "
+                    "PDF at 1:1 tiled on A4 and US Letter (join marks, page grid, 10 cm test square) and one "
+                    "plotter sheet (914 mm roll); the draped garment as GLB and OBJ with the pattern uv. Every "
+                    "piece has its cut line (seam allowance), sew line, notches, grain line and label.",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("pattern_dir", metavar="PATTERN_DIR", help="folder holding pattern.json (or the file itself)")
+    p.add_argument("--format", default=None,
+                   help=f"comma-separated formats: {FORMATS_HELP} (default: svg,dxf,pdf, plus glb,obj when a "
+                        f"drape is given or found)")
+    p.add_argument("--out", required=True, help="output folder (filled atomically)")
+    p.add_argument("--allowance", type=_metres, default=None,
+                   help="seam allowance in metres for every seam (default: the design's, else 0.01)")
+    p.add_argument("--hem", type=_metres, default=None,
+                   help="hem allowance in metres (default: the design's, else 0.02)")
+    p.add_argument("--notch-spacing", type=_metres, default=None,
+                   help="metres between notches along a seam, besides the seam ends (default 0.10)")
+    p.add_argument("--drape", default=None,
+                   help="folder with drape.npz from `ease drape` (default: PATTERN_DIR/../drape when present); "
+                        "needed for glb/obj")
+    p.add_argument("--quiet", action="store_true", help="no progress line")
+    p.set_defaults(func=_run)

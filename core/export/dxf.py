@@ -1,0 +1,179 @@
+"""DXF: ASTM D6673 / AAMA pattern exchange files and a plain DXF for general CAD.
+
+ASTM D6673 (the AAMA DXF) stores one BLOCK per piece and gives each layer a
+meaning; this module writes
+
+====== ==========================================================
+layer  content
+====== ==========================================================
+1      piece boundary = the cut line; piece and style system text
+4      notches (slit notches, LINE from the boundary inward)
+6      mirror line (a fold edge)
+7      grain line (LINE, pointing along the warp)
+14     sew line
+15     annotation text (cut on fold, mirror, allowance, units)
+====== ==========================================================
+
+in millimetres. :func:`astm_document` is DXF R2000 with ``$INSUNITS = 4``
+(mm); the same content as DXF R12 through ezdxf's ``gerber_D6673`` add-on
+(:func:`astm_r12_text`) suits Gerber and other strict R12 readers, which take
+the units from the style system text ``Units: METRIC``. :func:`plain_document`
+has named layers (CUT, SEW, NOTCH, GRAIN, FOLD, LABEL) and no blocks.
+ezdxf is imported here only, so the rest of the core loads without it.
+"""
+from __future__ import annotations
+
+import contextlib
+import io
+import re
+from typing import Dict, List, Sequence
+
+import numpy as np
+
+from .pieces import Layout, PieceDrawing, ascii_text
+
+ASTM_LAYERS = {"boundary": "1", "notch": "4", "mirror": "6", "grain": "7", "sew": "14", "annotation": "15"}
+PLAIN_LAYERS = {"CUT": 1, "SEW": 5, "NOTCH": 3, "GRAIN": 7, "FOLD": 6, "LABEL": 7}  # ACI colours
+INSUNITS_MM = 4
+
+
+def _mm(points, offset=None) -> List[tuple]:
+    q = np.asarray(points, float)
+    if offset is not None:
+        q = q + offset
+    return [(float(x) * 1000.0, float(y) * 1000.0) for x, y in q]
+
+
+def block_names(pieces: Sequence[PieceDrawing]) -> List[str]:
+    """ASCII block names, one per piece, unique (DXF R12 allows letters, digits, ``_-$``)."""
+    names, seen = [], set()
+    for p in pieces:
+        base = re.sub(r"[^A-Za-z0-9_\-$]", "_", ascii_text(p.name)) or "PIECE"
+        name, k = base, 2
+        while name.upper() in seen:
+            name, k = f"{base}_{k}", k + 1
+        seen.add(name.upper())
+        names.append(name)
+    return names
+
+
+def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, size: str,
+                  dxfversion: str = "R2000"):
+    """An ezdxf document with ASTM D6673 content: one block per piece, inserted at its layout place.
+
+    Parameters
+    ----------
+    pieces, layout : the drawings and their placement (metres; written in mm).
+    style, size : the style system text.
+    dxfversion : ``"R2000"`` (carries ``$INSUNITS``) or ``"R12"``.
+    """
+    import ezdxf
+
+    # R12 has no $INSUNITS; its readers take the units from "Units: METRIC"
+    doc = ezdxf.new(dxfversion, units=None if dxfversion == "R12" else INSUNITS_MM)
+    if dxfversion != "R12":
+        doc.header["$MEASUREMENT"] = 1
+    for name in ASTM_LAYERS.values():
+        if name not in doc.layers:
+            doc.layers.add(name)
+    msp = doc.modelspace()
+    L = ASTM_LAYERS
+    h_style = 5.0
+    style_text = [f"Style Name: {ascii_text(style)}", f"Sample Size: {ascii_text(size)}",
+                  "Grading Rule Table: none", "Units: METRIC", "Author: EASE"]
+    top = float(layout.size[1]) * 1000.0
+    for k, text in enumerate(style_text):
+        msp.add_text(text, dxfattribs={"layer": L["boundary"], "height": h_style,
+                                       "insert": (0.0, top + (len(style_text) - k) * 1.5 * h_style)})
+    for piece, name, off in zip(pieces, block_names(pieces), layout.offsets):
+        blk = doc.blocks.new(name=name)
+        for loop in piece.cut:
+            blk.add_polyline2d(_mm(loop), close=True, dxfattribs={"layer": L["boundary"]})
+        for loop in piece.sew:
+            blk.add_polyline2d(_mm(loop), close=True, dxfattribs={"layer": L["sew"]})
+        for n in piece.notches:
+            a, b = _mm(n.segment)
+            blk.add_line(a, b, dxfattribs={"layer": L["notch"]})
+        for f in piece.fold:
+            blk.add_polyline2d(_mm(f), dxfattribs={"layer": L["mirror"]})
+        g0, g1 = _mm(piece.grain)
+        blk.add_line(g0, g1, dxfattribs={"layer": L["grain"]})
+        h = piece.text_height * 1000.0
+        x, y = _mm(piece.label_at[None])[0]
+        system = [f"Piece Name: {ascii_text(piece.name)}", f"Size: {ascii_text(size)}",
+                  f"Quantity: {piece.quantity}", f"Category: {ascii_text(piece.garment)}"]
+        notes = [t for t in piece.label[3:]]
+        for k, text in enumerate(system + notes):
+            layer = L["boundary"] if k < len(system) else L["annotation"]
+            blk.add_text(text, dxfattribs={"layer": layer, "height": h, "insert": (x, y - (k + 1) * 1.5 * h)})
+        msp.add_blockref(name, (float(off[0]) * 1000.0, float(off[1]) * 1000.0),
+                         dxfattribs={"layer": L["boundary"]})
+    return doc
+
+
+@contextlib.contextmanager
+def _fixed_metadata():
+    # ezdxf stamps creation time and random GUIDs into every file; its fixed
+    # metadata mode keeps the output a function of the pattern alone
+    import ezdxf
+
+    before = ezdxf.options.write_fixed_meta_data_for_testing
+    ezdxf.options.write_fixed_meta_data_for_testing = True
+    try:
+        yield
+    finally:
+        ezdxf.options.write_fixed_meta_data_for_testing = before
+
+
+def astm_text(pieces, layout, style, size) -> str:
+    """ASTM D6673 DXF (R2000, ``$INSUNITS`` = mm) as text."""
+    stream = io.StringIO()
+    with _fixed_metadata():
+        astm_document(pieces, layout, style, size, "R2000").write(stream)
+    return stream.getvalue()
+
+
+def astm_r12_text(pieces, layout, style, size) -> str:
+    """ASTM D6673 DXF R12 in the strict form Gerber readers accept (ezdxf gerber_D6673 add-on)."""
+    from ezdxf.addons import gerber_D6673
+
+    stream = io.StringIO()
+    with _fixed_metadata():
+        gerber_D6673.export_stream(astm_document(pieces, layout, style, size, "R12"), stream)
+    return stream.getvalue()
+
+
+def plain_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str):
+    """A plain DXF (R2010, mm): the laid-out pieces as polylines on named layers."""
+    import ezdxf
+
+    doc = ezdxf.new("R2010", units=INSUNITS_MM)
+    doc.header["$MEASUREMENT"] = 1
+    for name, colour in PLAIN_LAYERS.items():
+        doc.layers.add(name, color=colour)
+    msp = doc.modelspace()
+    for piece, off in zip(pieces, layout.offsets):
+        for loop in piece.cut:
+            msp.add_lwpolyline(_mm(loop, off), close=True, dxfattribs={"layer": "CUT"})
+        for loop in piece.sew:
+            msp.add_lwpolyline(_mm(loop, off), close=True, dxfattribs={"layer": "SEW"})
+        for n in piece.notches:
+            a, b = _mm(n.segment, off)
+            msp.add_line(a, b, dxfattribs={"layer": "NOTCH"})
+        for f in piece.fold:
+            msp.add_lwpolyline(_mm(f, off), dxfattribs={"layer": "FOLD"})
+        msp.add_lwpolyline(_mm(piece.grain, off), dxfattribs={"layer": "GRAIN"})
+        for a in piece.arrows:
+            msp.add_lwpolyline(_mm(a, off), dxfattribs={"layer": "GRAIN"})
+        h = piece.text_height * 1000.0
+        x, y = _mm(piece.label_at[None], off)[0]
+        for k, text in enumerate(piece.label):
+            msp.add_text(text, dxfattribs={"layer": "LABEL", "height": h, "insert": (x, y - (k + 1) * 1.5 * h)})
+    return doc
+
+
+def plain_text(pieces, layout, style) -> str:
+    stream = io.StringIO()
+    with _fixed_metadata():
+        plain_document(pieces, layout, style).write(stream)
+    return stream.getvalue()
