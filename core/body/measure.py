@@ -32,7 +32,13 @@ GIRTH_LANDMARKS = {
 EXCLUDED_REGIONS = ("arm_left", "arm_right", "hands")
 
 
-def plane_crossings(vertices: np.ndarray, faces: np.ndarray, height: float) -> np.ndarray:
+def mesh_edges(faces: np.ndarray) -> np.ndarray:
+    """Unique undirected edges (E, 2) of triangles (F, 3)."""
+    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    return np.unique(np.sort(edges, axis=1), axis=0)
+
+
+def plane_crossings(vertices: np.ndarray, faces: np.ndarray, height: float, edges=None) -> np.ndarray:
     """Points where the mesh edges cross the plane ``z = height``.
 
     Parameters
@@ -40,13 +46,14 @@ def plane_crossings(vertices: np.ndarray, faces: np.ndarray, height: float) -> n
     vertices : (V, 3) metres.
     faces : (F, 3) triangles (only their edges are used).
     height : float, metres.
+    edges : optional (E, 2) precomputed :func:`mesh_edges` of ``faces``.
 
     Returns
     -------
     (n, 3) crossing points (each edge once).
     """
-    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    edges = np.unique(np.sort(edges, axis=1), axis=0)
+    if edges is None:
+        edges = mesh_edges(faces)
     d = vertices[:, 2] - height
     da, db = d[edges[:, 0]], d[edges[:, 1]]
     cross = (da * db < 0) | ((da == 0) & (db != 0))
@@ -68,9 +75,9 @@ def hull_perimeter(points_2d: np.ndarray) -> float:
     return float(np.linalg.norm(ring - np.roll(ring, 1, axis=0), axis=1).sum())
 
 
-def torso_faces(body) -> np.ndarray:
-    """Triangles of ``body`` that touch none of :data:`EXCLUDED_REGIONS`, (F', 3)."""
-    cached = getattr(body, "_ease_torso_faces", None)
+def torso_edges(body) -> np.ndarray:
+    """Edges (E, 2) of the triangles of ``body`` that touch none of :data:`EXCLUDED_REGIONS`."""
+    cached = getattr(body, "_ease_torso_edges", None)
     if cached is not None:
         return cached
     excluded = np.zeros(body.n_vertices, dtype=bool)
@@ -78,17 +85,17 @@ def torso_faces(body) -> np.ndarray:
         ids = body.regions.get(name)
         if ids is not None:
             excluded[np.asarray(ids, dtype=np.int64)] = True
-    faces = body.faces[~excluded[body.faces].any(axis=1)]
-    try:
-        body._ease_torso_faces = faces
+    edges = mesh_edges(body.faces[~excluded[body.faces].any(axis=1)])
+    try:  # the topology is fixed: compute once per model
+        body._ease_torso_edges = edges
     except AttributeError:  # pragma: no cover - frozen model objects
         pass
-    return faces
+    return edges
 
 
-def girth_at(vertices: np.ndarray, faces: np.ndarray, height: float) -> float:
+def girth_at(vertices: np.ndarray, faces: np.ndarray, height: float, edges=None) -> float:
     """Tape-measure girth (metres) of the mesh ``faces`` in the plane ``z = height``."""
-    pts = plane_crossings(vertices, faces, height)
+    pts = plane_crossings(vertices, faces, height, edges)
     return hull_perimeter(pts[:, :2])
 
 
@@ -115,14 +122,14 @@ def measure(body, vertices: Optional[np.ndarray] = None, which: Iterable[str] = 
     if v.shape != (body.n_vertices, 3):
         raise BodyError(f"measure: vertices have shape {v.shape}, expected ({body.n_vertices}, 3)")
     out = {}
-    faces = None
+    edges = None
     for name in which:
         if name == "height":
             out[name] = 100.0 * float(v[:, 2].max() - v[:, 2].min())
         elif name in GIRTH_LANDMARKS:
-            faces = torso_faces(body) if faces is None else faces
+            edges = torso_edges(body) if edges is None else edges
             h = landmark_height(body, v, GIRTH_LANDMARKS[name])
-            out[name] = 100.0 * girth_at(v, faces, h)
+            out[name] = 100.0 * girth_at(v, None, h, edges)
         else:
             raise BodyError(f"unknown measurement {name!r}; allowed: {', '.join(MEASUREMENTS)}")
     return out
