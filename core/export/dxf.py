@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import logging
 import re
 from typing import Dict, List, Sequence
 
@@ -69,8 +70,18 @@ def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, si
     """
     import ezdxf
 
-    # R12 has no $INSUNITS; its readers take the units from "Units: METRIC"
-    doc = ezdxf.new(dxfversion, units=None if dxfversion == "R12" else INSUNITS_MM)
+    if dxfversion == "R12":
+        # R12 has no $INSUNITS (its readers take the units from "Units: METRIC");
+        # ezdxf.new sets units anyway and warns, which would only confuse users
+        log = logging.getLogger("ezdxf")
+        level = log.level
+        log.setLevel(logging.ERROR)
+        try:
+            doc = ezdxf.new(dxfversion, units=0)
+        finally:
+            log.setLevel(level)
+    else:
+        doc = ezdxf.new(dxfversion, units=INSUNITS_MM)
     if dxfversion != "R12":
         doc.header["$MEASUREMENT"] = 1
     for name in ASTM_LAYERS.values():

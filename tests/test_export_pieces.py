@@ -1,0 +1,184 @@
+"""core.export.pieces: cut line offset, allowance widths, notches, grain, labels, layout."""
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from export_synth import make_pattern  # noqa: E402
+
+from core.errors import ExportError  # noqa: E402
+from core.export.pieces import (build_pieces, distance_to_polyline, layout_pieces, notch_positions,  # noqa: E402
+                                offset_loop, point_at_arclength, polyline_length, resolve_allowance,
+                                segments_cross, signed_area)
+
+
+def test_offset_square_mitres_and_steps():
+    sq = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
+    cut = offset_loop(sq, np.full(4, 0.01))
+    np.testing.assert_allclose(cut, [[-0.01, -0.01], [1.01, -0.01], [1.01, 1.01], [-0.01, 1.01]], atol=1e-12)
+    # bottom edge a 2 cm hem: the mitre keeps each allowance to its own edge width
+    cut = offset_loop(sq, np.array([0.02, 0.01, 0.01, 0.01]))
+    np.testing.assert_allclose(cut[0], [-0.01, -0.02], atol=1e-12)
+    np.testing.assert_allclose(cut[1], [1.01, -0.02], atol=1e-12)
+    # collinear edges with different widths: a step joins them
+    line = np.array([[0, 0], [0.5, 0], [1, 0], [1, 1], [0, 1]], float)
+    cut = offset_loop(line, np.array([0.01, 0.02, 0.01, 0.01, 0.01]))
+    assert any(np.allclose(q, [0.5, -0.01]) for q in cut) and any(np.allclose(q, [0.5, -0.02]) for q in cut)
+
+
+def test_offset_sharp_corner_is_squared():
+    tri = np.array([[0, 0], [1, 0], [0.5, 0.05]], float)  # two very sharp corners
+    cut = offset_loop(tri, np.full(3, 0.01), mitre_limit=3.0)
+    assert len(cut) > 3
+    # an unlimited mitre would reach 0.01 / sin(2.9 deg) = 20 cm beyond the corner
+    assert distance_to_polyline(cut, tri).max() <= 0.035
+    assert distance_to_polyline(cut, tri).min() >= 0.01 - 1e-9
+
+
+def test_offset_concave_noisy_curve_has_no_loops():
+    # a star-ish outline with many short edges in concave stretches
+    t = np.linspace(0, 2 * np.pi, 400, endpoint=False)
+    r = 0.2 + 0.05 * np.cos(5 * t) + 0.0015 * np.sin(97 * t)
+    loop = np.column_stack([r * np.cos(t), r * np.sin(t)])
+    assert signed_area(loop) > 0 and segments_cross(loop) is None
+    cut = offset_loop(loop, np.full(len(loop), 0.015))
+    assert segments_cross(cut) is None
+    assert distance_to_polyline(cut, loop).min() >= 0.015 - 1e-6
+
+
+def test_allowance_width_measured_on_every_edge():
+    pat = make_pattern()
+    pieces = build_pieces(pat, allowance={"default": 0.012, "hem": 0.025, "side_right": 0.015})
+    for p in pieces:
+        sew, cut, w = p.sew[0], p.cut[0], p.edge_allowance[0]
+        mid = 0.5 * (sew + np.roll(sew, -1, axis=0))
+        np.testing.assert_allclose(distance_to_polyline(mid, cut), w, atol=1e-9)
+        # the cut line is nowhere nearer to the sew line than the smallest allowance
+        assert distance_to_polyline(cut, sew).min() >= w.min() - 1e-9
+        assert sorted(set(np.round(w, 6))) == [0.012, 0.015, 0.025]
+        assert signed_area(cut) > signed_area(sew) > 0
+
+
+def test_seam_and_hem_edges_get_their_widths():
+    pat = make_pattern()
+    p = build_pieces(pat, allowance={"side_left": 0.017})[0]
+    loop = p.sew_ids[0]
+    front = pat.panel("front")
+    hem_edges = {frozenset(e) for e in zip(front.hems[0][:-1], front.hems[0][1:])}
+    seam = pat.seams[0]
+    seam_edges = {frozenset(e) for e in zip(seam.verts_a[:-1], seam.verts_a[1:])}
+    for i in range(len(loop)):
+        e = frozenset((loop[i], loop[(i + 1) % len(loop)]))
+        want = 0.02 if e in hem_edges else 0.017 if e in seam_edges else 0.01
+        assert p.edge_allowance[0][i] == pytest.approx(want)
+
+
+def test_notches_match_on_both_sides_of_every_seam():
+    pat = make_pattern()
+    pieces = {p.name: p for p in build_pieces(pat)}
+    for seam in pat.seams:
+        na = [n for n in pieces[seam.panel_a].notches if n.seam == seam.name]
+        nb = [n for n in pieces[seam.panel_b].notches if n.seam == seam.name]
+        assert len(na) == len(nb) == 7  # ends + every 10 cm (not 60: 2 mm from the end) on a 60.2 cm seam
+        sa, sb = np.array([n.s for n in na]), np.array([n.s for n in nb])
+        np.testing.assert_allclose(sa, sb, atol=1e-12)
+        np.testing.assert_allclose(sa[1:-1], 0.1 * np.arange(1, 6))
+        # each notch lies on its sew line at arc length s from the seam's first vertex
+        for side, notches in (("a", na), ("b", nb)):
+            piece = pieces[getattr(seam, f"panel_{side}")]
+            ids = getattr(seam, f"verts_{side}")
+            xy = pat.panel(piece.name).uv[ids] @ piece.rotation.T
+            want, _ = point_at_arclength(xy, [n.s for n in notches])
+            np.testing.assert_allclose([n.point for n in notches], want, atol=1e-12)
+            for n in notches:  # the slit starts on the cut line and points inward
+                assert distance_to_polyline(n.segment[:1], piece.cut[0])[0] < 1e-9
+                assert np.dot(n.segment[1] - n.segment[0], n.normal) < 0
+
+
+def test_notch_positions_rules():
+    sa, sb = notch_positions(0.32, 0.32, 0.1)
+    # 0.30 is only 2 cm (< spacing / 4) from the end: dropped
+    np.testing.assert_allclose(sa, [0, 0.1, 0.2, 0.32])
+    sa, _ = notch_positions(0.33, 0.33, 0.1)
+    np.testing.assert_allclose(sa, [0, 0.1, 0.2, 0.3, 0.33])
+    sa, sb = notch_positions(0.31, 0.312, 0.1)
+    np.testing.assert_allclose(sa, [0, 0.1, 0.2, 0.31])
+    np.testing.assert_allclose(sb, [0, 0.1, 0.2, 0.312])
+    sa, _ = notch_positions(0.5, 0.5, 0.0)
+    np.testing.assert_allclose(sa, [0, 0.5])
+
+
+def test_grain_rotation_keeps_lengths_and_points_up():
+    pat = make_pattern(rotate_back_deg=37.0)
+    back = build_pieces(pat)[1]
+    np.testing.assert_allclose(back.rotation @ pat.panel("back").grain, [0, 1], atol=1e-12)
+    loop = pat.panel("back").boundary[0]
+    assert polyline_length(back.sew[0], True) == pytest.approx(polyline_length(pat.panel("back").uv[loop], True))
+    g = back.grain
+    assert abs(g[1, 0] - g[0, 0]) < 1e-12 and g[1, 1] > g[0, 1]
+    assert len(back.arrows) == 2
+
+
+def test_labels_carry_style_size_quantity_and_mirror():
+    pat = make_pattern()
+    pat.panels[1].mirror_of = "front"
+    front, back = build_pieces(pat)
+    assert front.label[0] == "test shirt" and "size: M" in front.label
+    assert any("mirrored by back" in s for s in front.label)
+    assert any(s.startswith("cut 1") and "mirror of front" in s for s in back.label)
+    assert any("units: mm" in s for s in back.label)
+
+
+def test_fold_edge_gets_no_allowance_and_label():
+    pat = make_pattern()
+    front = pat.panel("front")
+    front.fold = np.array([front.boundary[0][-1], front.boundary[0][0]])  # optional attribute
+    p = build_pieces(pat)[0]
+    assert p.fold and any("cut on fold" in s for s in p.label)
+    assert np.isclose(p.edge_allowance[0][-1], 0.0)
+
+
+def test_resolve_allowance_errors_and_materials():
+    pat = make_pattern()
+    assert resolve_allowance(0.015, pat)["default"] == 0.015
+    pat.materials = {"export": {"allowance": {"hem": 0.03}}}
+    assert resolve_allowance(None, pat)["hem"] == 0.03
+    with pytest.raises(ExportError, match="nosuch"):
+        resolve_allowance({"nosuch": 0.01}, pat)
+    with pytest.raises(ExportError, match="hem"):
+        resolve_allowance({"hem": -0.01}, pat)
+    with pytest.raises(ExportError, match="default"):
+        resolve_allowance({"default": float("nan")}, pat)
+
+
+def test_layout_has_no_overlaps_and_reserves_the_corner():
+    rng = np.random.default_rng(0)
+    boxes = []
+    for _ in range(12):
+        lo = rng.uniform(-1, 1, 2)
+        boxes.append(np.stack([lo, lo + rng.uniform(0.05, 0.6, 2)]))
+    lay = layout_pieces(boxes, width=0.9, margin=0.02, reserve=(0.11, 0.12))
+    placed = [b + off for b, off in zip(boxes, lay.offsets)] + [lay.reserved]
+    for i, a in enumerate(placed):
+        assert a[0, 0] >= 0.02 - 1e-12 and a[0, 1] >= 0.02 - 1e-12
+        assert a[1, 0] <= lay.size[0] - 0.02 + 1e-12 and a[1, 1] <= lay.size[1] - 0.02 + 1e-12
+        for b in placed[i + 1:]:
+            sep = (a[1, 0] + 0.02 <= b[0, 0] + 1e-12 or b[1, 0] + 0.02 <= a[0, 0] + 1e-12 or
+                   a[1, 1] + 0.02 <= b[0, 1] + 1e-12 or b[1, 1] + 0.02 <= a[0, 1] + 1e-12)
+            assert sep
+    # the reserved box is at the top-left corner
+    assert lay.reserved[0, 0] == pytest.approx(0.02) and lay.reserved[1, 1] == pytest.approx(lay.size[1] - 0.02)
+    # a piece wider than the sheet widens it
+    wide = layout_pieces([np.array([[0, 0], [1.5, 0.2]])], width=0.9, margin=0.02)
+    assert wide.size[0] == pytest.approx(1.54)
+
+
+def test_build_pieces_is_deterministic():
+    a = build_pieces(make_pattern())
+    b = build_pieces(make_pattern())
+    for p, q in zip(a, b):
+        np.testing.assert_array_equal(p.cut[0], q.cut[0])
+        assert p.label == q.label
