@@ -76,7 +76,14 @@ class SolverConfig:
     ``warp_weight``: relative weight of the warp column in the ease and
     regulariser terms (< 1 lets warp give way to the weft target: the
     "stretch" configuration). ``seam_length``: False switches E_len off
-    (gathered designs).
+    (gathered designs). ``adapt_margin``: pose demands are raised by this
+    fraction before the tolerance applies, so that the optimizer's own
+    compliance error (~1-2 %) does not leave triangles just above the
+    tolerance (the paper's Eq. material-scale aims exactly at the tolerance;
+    ``paper()`` sets 0). ``feedback``: gain of a per-iteration correction of
+    the weft targets by the ratio target / achieved scale (SPEC rho-hat), so
+    that curvature error moves out of the weft into warp and shear (0 = off,
+    the paper); ``feedback_warp`` the same for the warp targets.
     """
     lambda_ease: float = 0.1
     lambda_reg: float = 1.0
@@ -88,11 +95,15 @@ class SolverConfig:
     warp_weight: float = 1.0
     seam_length: bool = True
     realign_grain: bool = True
+    adapt_margin: float = 0.03
+    feedback: float = 0.0
+    feedback_warp: float = 0.0
+
 
     @classmethod
     def paper(cls, **kw) -> "SolverConfig":
         """The paper's weights taken literally (isometric ARAP regulariser)."""
-        return replace(cls(reg_rest="isometric"), **kw)
+        return replace(cls(reg_rest="isometric", adapt_margin=0.0), **kw)
 
     @classmethod
     def improved(cls, **kw) -> "SolverConfig":
@@ -101,8 +112,8 @@ class SolverConfig:
 
     @classmethod
     def stretch(cls, **kw) -> "SolverConfig":
-        """Improved, with a lighter warp term: better weft compliance for a little more shear."""
-        return replace(cls(warp_weight=0.5), **kw)
+        """Improved, with weft and warp target feedback: compliance bought with shear."""
+        return replace(cls(feedback=0.5, feedback_warp=0.5), **kw)
 
     @classmethod
     def named(cls, name: str, **kw) -> "SolverConfig":
@@ -112,7 +123,8 @@ class SolverConfig:
         return table[name](**kw)
 
     def check(self) -> None:
-        for k in ("lambda_ease", "lambda_reg", "lambda_len", "lambda_straight", "lambda_curve", "warp_weight"):
+        for k in ("lambda_ease", "lambda_reg", "lambda_len", "lambda_straight", "lambda_curve", "warp_weight",
+                  "adapt_margin"):
             v = getattr(self, k)
             if not np.isfinite(v) or v < 0:
                 raise PatternError(f"solver configuration {k}: expected a finite value >= 0, got {v}")
@@ -438,10 +450,11 @@ class PatternSolver:
         ease = np.concatenate([pd.ease for pd in self.panels])
         want_w = ease * lw
         want_g = 1.0 * lg
+        m = 1.0 + self.config.adapt_margin
         for P in pose_positions:
             _, lwi, lgi = self._offsets(P)
-            want_w = np.maximum(want_w, lwi / eps_weft)
-            want_g = np.maximum(want_g, lgi / eps_warp)
+            want_w = np.maximum(want_w, m * lwi / eps_weft)
+            want_g = np.maximum(want_g, m * lgi / eps_warp)
         with np.errstate(divide="ignore", invalid="ignore"):
             cw = np.where(lw > 0, want_w / lw, ease)
             cg = np.where(lg > 0, want_g / lg, 1.0)
@@ -461,11 +474,29 @@ class PatternSolver:
         Ft = self.gfaces
         # fixed part of the right-hand side: the ease term with axes fixed
         ease_part = cfg.lambda_ease * self.a[:, None, None] * np.einsum("tkc,c,tdc->tkd", self.G, W2, T)
+        pos = self.ref_positions if positions is None else positions
+        Xu = np.concatenate([pos[pd.vertex_ids] for pd in self.panels])
+        corr_w = np.ones(len(Ft))
+        corr_g = np.ones(len(Ft))
         energies = []
         backtracks = 0
         n_it = int(cfg.iterations)
         for it in range(n_it):
             report(progress, it / n_it, f"optimizing pattern: iteration {it + 1}/{n_it}")
+            if (cfg.feedback > 0 or cfg.feedback_warp > 0) and it >= 2:
+                # move the targets by the achieved/target ratio: the linear solve then
+                # lands on the wanted rho-hat wherever curvature allows it
+                rw, rg, _ = scales(U, Xu, Ft, np.array([0.0, 1.0]))
+                ok = np.isfinite(rw) & np.isfinite(rg) & (rw > 0) & (rg > 0)
+                if cfg.feedback > 0:
+                    corr_w[ok] *= np.clip((c_weft[ok] / rw[ok]) ** cfg.feedback, 0.97, 1.03)
+                if cfg.feedback_warp > 0:
+                    corr_g[ok] *= np.clip((c_warp[ok] / rg[ok]) ** cfg.feedback_warp, 0.97, 1.03)
+                np.clip(corr_w, 0.8, 1.25, out=corr_w)
+                np.clip(corr_g, 0.8, 1.25, out=corr_g)
+                T = K * np.stack([c_weft * corr_w, c_warp * corr_g], axis=1)[:, None, :]
+                T_reg = T if cfg.reg_rest == "prestretch" else K
+                ease_part = cfg.lambda_ease * self.a[:, None, None] * np.einsum("tkc,c,tdc->tkd", self.G, W2, T)
             M = np.einsum("tkd,tkc->tdc", U[Ft], self.G)               # (f, 2, 2) current Jacobian
             R = _polar2(np.einsum("tdc,c,tec->tde", M, W2, T_reg))    # local step
             RT = R @ T_reg
@@ -481,7 +512,6 @@ class PatternSolver:
             energies.append(float(np.sum(self.a * np.sum(((M - RT) * np.sqrt(W2)) ** 2, axis=(1, 2)))))
         report(progress, 1.0, "pattern optimized")
         out_uv, tw, tg, xyz = {}, {}, {}, {}
-        pos = self.ref_positions if positions is None else positions
         fb = 0
         for pd in self.panels:
             out_uv[pd.name] = U[pd.offset:pd.offset + pd.n].copy()
