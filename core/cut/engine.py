@@ -1,0 +1,498 @@
+"""The cutting engine: a :class:`CutSpec` on a body -> :class:`GarmentCut`.
+
+Pipeline (paper, "Cutting the Body Surface"):
+
+1. optional skirt topology (:mod:`.skirt`): inter-leg faces removed, legs bridged;
+2. keypoints inserted as vertices, one edge-flip geodesic solver, geodesic
+   paths between consecutive keypoints (:mod:`.geodesic`);
+3. per garment, its cut lines inserted exactly by splitting edges/triangles
+   (:mod:`.split`); panels by flood fill from their seeds, never across a cut;
+4. optional refinement to a target edge length (:mod:`.refine`);
+5. per-panel meshes (vertices duplicated where a cut runs inside a panel),
+   boundary loops, seams, hems, pins and grain (:mod:`.grain`).
+
+Every garment vertex is a fixed linear combination of body vertices (the
+sparse ``embedding``), so the cut evaluates on any shape and pose. A cut line
+applies to the garment named by :attr:`CutLine.garment`, or by its name's
+prefix (``"shirt.side_left"`` -> garment ``"shirt"``), or to every garment;
+garments are cut separately so overlapping garments do not cut each other.
+"""
+from __future__ import annotations
+
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+
+from ..errors import CutError
+from ..progress import report
+from .geodesic import GeodesicPaths, check_surface_point, insert_keypoints, surface_point_position
+from .grain import body_part_axis, warp_directions
+from .spec import CutLine, CutSpec, PanelSpec
+from .split import CutMesh
+from .types import GarmentCut, Panel, Seam
+
+FORBIDDEN_REGIONS = ("head", "hands", "feet")
+
+
+# --------------------------------------------------------------------------------------------
+# validation
+# --------------------------------------------------------------------------------------------
+def _validate(spec: CutSpec, n_faces: int) -> None:
+    if not spec.panels:
+        raise CutError("the cut spec has no panels")
+    garments = {g.name for g in spec.garments}
+    names = set()
+    for line in spec.lines:
+        if line.name in names:
+            raise CutError(f"cut line {line.name!r} is defined twice")
+        names.add(line.name)
+        if line.role not in ("seam", "opening"):
+            raise CutError(f"cut line {line.name!r}: role must be 'seam' or 'opening', got {line.role!r}")
+        need = 3 if line.closed else 2
+        if len(line.points) < need:
+            raise CutError(f"cut line {line.name!r}: needs at least {need} keypoints"
+                           f"{' (it is closed)' if line.closed else ''}, got {len(line.points)}")
+        for k, p in enumerate(line.points):
+            check_surface_point(p, n_faces, f"cut line {line.name!r} point {k}")
+        g = getattr(line, "garment", None)
+        if g is not None and g not in garments:
+            raise CutError(f"cut line {line.name!r}: unknown garment {g!r}")
+    pnames = set()
+    for p in spec.panels:
+        if p.name in pnames:
+            raise CutError(f"panel {p.name!r} is defined twice")
+        pnames.add(p.name)
+        if p.garment not in garments:
+            raise CutError(f"panel {p.name!r}: unknown garment {p.garment!r}; garments: {', '.join(sorted(garments))}")
+        if p.body_part not in ("torso", "arm", "leg"):
+            raise CutError(f"panel {p.name!r}: body_part must be 'torso', 'arm' or 'leg', got {p.body_part!r}")
+        check_surface_point(p.seed, n_faces, f"panel {p.name!r} seed")
+    for g in spec.garments:
+        if g.pin_line is not None and g.pin_line not in names:
+            raise CutError(f"garment {g.name!r}: pin_line {g.pin_line!r} is not a cut line")
+    if spec.refine_edge_length is not None and not (spec.refine_edge_length > 0):
+        raise CutError(f"refine_edge_length must be > 0 metres or None, got {spec.refine_edge_length!r}")
+
+
+def line_garments(line: CutLine, garments: Sequence[str]) -> List[str]:
+    """Garments a cut line cuts: its ``garment`` field, its name prefix, or all."""
+    g = getattr(line, "garment", None)
+    if g is not None:
+        return [g]
+    prefix = line.name.split(".", 1)[0] if "." in line.name else None
+    if prefix in garments:
+        return [prefix]
+    return list(garments)
+
+
+def forbidden_body_faces(body, n_faces: int) -> np.ndarray:
+    """(F,) bool: body triangles in the head, hands or feet regions (>= 2 corners inside)."""
+    faces = np.asarray(body.faces)
+    nv = int(faces.max()) + 1
+    mark = np.zeros(nv, dtype=bool)
+    for r in FORBIDDEN_REGIONS:
+        ids = np.asarray(body.regions.get(r, []), dtype=np.int64)
+        mark[ids[(ids >= 0) & (ids < nv)]] = True
+    return mark[faces].sum(1) >= 2
+
+
+# --------------------------------------------------------------------------------------------
+# main entry
+# --------------------------------------------------------------------------------------------
+def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None) -> GarmentCut:
+    """Cut the body surface into garment panels.
+
+    Parameters
+    ----------
+    body : BodyModel (faces, regions, landmarks, joint_names, joints()).
+    body_vertices : (V, 3) float, the reference body the design is made on (metres).
+    spec : CutSpec, lines, panels and garments (see :mod:`core.cut.spec`).
+    progress : optional ``progress(fraction, message)`` callback.
+
+    Returns
+    -------
+    GarmentCut with ``ease`` = 1 everywhere (filled by the design stage).
+    """
+    X = np.asarray(body_vertices, dtype=float)
+    BF = np.asarray(body.faces, dtype=np.int64)
+    if X.ndim != 2 or X.shape[1] != 3 or not np.all(np.isfinite(X)):
+        raise CutError("body vertices must be a finite (V, 3) array")
+    if BF.max() >= len(X):
+        raise CutError(f"body vertices ({len(X)}) do not match the body's faces")
+    _validate(spec, len(BF))
+    report(progress, 0.0, "cutting: preparing the body mesh")
+    mesh = CutMesh(X, BF)
+    forbidden = forbidden_body_faces(body, len(BF))
+    if spec.skirt:
+        from .skirt import make_skirt
+        make_skirt(mesh, body, X)
+        forbidden = np.concatenate([forbidden, np.zeros(mesh._ptri_count() - len(BF), dtype=bool)])
+
+    # keypoints of every line as vertices; one geodesic solver on that mesh
+    report(progress, 0.1, "cutting: inserting keypoints")
+    flat = [p for line in spec.lines for p in line.points]
+    kv = insert_keypoints(mesh, flat, BF, X)
+    line_kv, k = [], 0
+    for line in spec.lines:
+        line_kv.append(kv[k:k + len(line.points)])
+        k += len(line.points)
+    report(progress, 0.2, "cutting: geodesic paths")
+    geo = GeodesicPaths(mesh.X, mesh.F)
+    paths: List[List[np.ndarray]] = []
+    for line, ids in zip(spec.lines, line_kv):
+        seq = list(ids) + ([ids[0]] if line.closed else [])
+        segs = []
+        for a, b in zip(seq[:-1], seq[1:]):
+            if a == b:
+                continue
+            segs.append(geo.path(a, b))
+        if not segs:
+            raise CutError(f"cut line {line.name!r}: all its keypoints coincide")
+        paths.append(segs)
+
+    axes = _axes(body, X, spec)
+    gnames = [g.name for g in spec.garments]
+    garment_lines = {g: [i for i, l in enumerate(spec.lines) if g in line_garments(l, gnames)] for g in gnames}
+    panels: List[Panel] = []
+    seams: List[Seam] = []
+    hems: Dict[str, List[np.ndarray]] = {}
+    pins: Dict[str, np.ndarray] = {}
+    rows: List[sp.csr_matrix] = []
+    offset = 0
+    names = [l.name for l in spec.lines]
+    for gi, g in enumerate(spec.garments):
+        gpanels = [p for p in spec.panels if p.garment == g.name]
+        if not gpanels:
+            continue
+        base = 0.3 + 0.65 * gi / len(spec.garments)
+        report(progress, base, f"cutting garment {g.name}: inserting cut lines")
+        gm = mesh.copy() if len(spec.garments) > 1 else mesh
+        seqs = {}
+        for li in garment_lines[g.name]:
+            seqs[li] = _insert_line(gm, li, line_kv[li], paths[li], spec.lines[li].closed, names)
+        report(progress, base + 0.2 / len(spec.garments), f"cutting garment {g.name}: panels")
+        out = _garment_panels(gm, spec, g, gpanels, seqs, forbidden, BF, X, axes, offset)
+        panels += out["panels"]
+        seams += out["seams"]
+        hems.update(out["hems"])
+        if out["pins"] is not None:
+            pins[g.name] = out["pins"]
+        rows.append(out["W"])
+        offset += out["W"].shape[0]
+    W = sp.vstack(rows).tocsr() if rows else sp.csr_matrix((0, len(X)))
+    W.sort_indices()
+    report(progress, 1.0, "cutting: done")
+    return GarmentCut(body=dict(spec.body), embedding=W, panels=panels, seams=seams,
+                      garments={g.name: g.kind for g in spec.garments}, pins=pins, hems=hems,
+                      materials=dict(spec.materials))
+
+
+def _axes(body, X, spec):
+    joints = None
+    jn = getattr(body, "joint_names", None)
+    if jn:
+        try:
+            joints = np.asarray(body.joints(spec.body.get("shape"), spec.body.get("pose")), float)
+            if joints.shape != (len(jn), 3):
+                joints = None
+        except Exception:
+            joints = None
+    lm = getattr(body, "landmarks", None)
+    out = {}
+    for part in ("torso", "arm", "leg"):
+        for side in ("left", "right"):
+            out[(part, side)] = body_part_axis(part, side, jn, joints, lm, np.asarray(body.faces), X)
+    return out
+
+
+def _insert_line(mesh: CutMesh, li: int, kv: List[int], segs: List[np.ndarray],
+                 closed: bool, names) -> np.ndarray:
+    """Trace a line's geodesic segments into the mesh; its ordered vertex sequence."""
+    allowed = set(kv)
+    seq_k = list(kv) + ([kv[0]] if closed else [])
+    seq_k = [a for i, a in enumerate(seq_k) if i == 0 or a != seq_k[i - 1]]
+    out = [seq_k[0]]
+    for s, (a, b) in enumerate(zip(seq_k[:-1], seq_k[1:])):
+        pts = segs[s]
+        cur = a
+        for q in pts[1:-1]:
+            got = mesh.trace(cur, q, li, allowed, names=names)
+            out += got
+            if got:
+                cur = got[-1]
+        got = mesh.trace(cur, mesh.X[b].copy(), li, allowed, target_vertex=b, names=names)
+        out += got
+        if out[-1] != b:
+            raise CutError(f"cut line {names[li]!r}: could not reach keypoint {s + 1}")
+    return np.asarray(out, dtype=np.int64)
+
+
+# --------------------------------------------------------------------------------------------
+# panels, seams, hems
+# --------------------------------------------------------------------------------------------
+def _halfedges(F: np.ndarray, n: int):
+    """Directed half-edge keys (3f,), their undirected keys, and the twin index (-1 if none)."""
+    a = F.reshape(-1)
+    b = np.roll(F, -1, axis=1).reshape(-1)
+    key = a * n + b
+    rkey = b * n + a
+    order = np.argsort(key, kind="stable")
+    pos = np.clip(np.searchsorted(key[order], rkey), 0, len(key) - 1)
+    twin = np.where(key[order][pos] == rkey, order[pos], -1)
+    ukey = np.minimum(a, b) * n + np.maximum(a, b)
+    return key, ukey, twin, order
+
+
+def face_components(F: np.ndarray, n: int, cut_ukeys: np.ndarray):
+    """Connected components of faces across edges that are not cut."""
+    key, ukey, twin, _ = _halfedges(F, n)
+    ok = (twin >= 0) & ~np.isin(ukey, cut_ukeys)
+    i = np.nonzero(ok)[0]
+    A = sp.coo_matrix((np.ones(len(i)), (i // 3, twin[i] // 3)), shape=(len(F), len(F)))
+    return connected_components(A, directed=False)[1]
+
+
+def _seed_face(mesh: CutMesh, p: PanelSpec, BF, X) -> int:
+    pos = surface_point_position(p.seed, BF, X)
+    try:
+        f, _ = mesh.locate_in_parent(int(p.seed.triangle), pos)
+    except KeyError:
+        raise CutError(f"panel {p.name!r}: its seed lies on a removed part of the body "
+                       f"(between the legs, removed for the skirt topology)")
+    return f
+
+
+def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], seqs: Dict[int, np.ndarray],
+                    forbidden: np.ndarray, BF, X, axes, offset: int):
+    F = mesh.F.copy()
+    n = mesh.nv
+    cut_ukeys = np.array(sorted(a * n + b for (a, b) in mesh.cut), dtype=np.int64)
+    comp = face_components(F, n, cut_ukeys)
+    bad_comp = np.zeros(comp.max() + 1, dtype=bool)
+    bad_comp[comp[forbidden[mesh.parent]]] = True
+    label = np.full(len(F), -1, dtype=np.int64)
+    owner: Dict[int, str] = {}
+    for pi, p in enumerate(gpanels):
+        c = comp[_seed_face(mesh, p, BF, X)]
+        if c in owner:
+            raise CutError(f"panels {owner[c]!r} and {p.name!r} are in one region: a seamline between "
+                           f"them is missing or does not close")
+        if bad_comp[c]:
+            raise CutError(f"panel {p.name!r} reaches the head, hands or feet: a seamline around it "
+                           f"does not close")
+        owner[c] = p.name
+        label[comp == c] = pi
+    keep = label >= 0
+    if not keep.any():
+        raise CutError(f"garment {g.name!r}: no panel has faces")
+    # compact the garment's vertices
+    Fg = F[keep]
+    lab = label[keep]
+    used = np.unique(Fg)
+    remap = np.full(n, -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    Fg = remap[Fg]
+    Xg = mesh.X[used]
+    W = _weights(mesh, used, len(X))
+    lines_li = sorted(seqs)
+    lines = [remap[seqs[li]] for li in lines_li]
+    if spec.refine_edge_length is not None:
+        from .refine import refine
+        # lines may leave the garment (-1 ids): refine only their in-garment stretches
+        pieces, owners = [], []
+        for k, l in enumerate(lines):
+            for s in _runs(l):
+                pieces.append(s)
+                owners.append(k)
+        Xg, Fg, lab, W, pieces = refine(Xg, Fg, lab, W, pieces, spec.refine_edge_length)
+        lines = [[pieces[j] for j in range(len(pieces)) if owners[j] == k] for k in range(len(lines))]
+    else:
+        lines = [_runs(l) for l in lines]
+    out = _build_panels(spec, gpanels, Xg, Fg, lab, lines, lines_li, axes, offset)
+    pins = None
+    if g.pin_line is not None:
+        li = [l.name for l in spec.lines].index(g.pin_line)
+        if li in lines_li:
+            runs = lines[lines_li.index(li)]
+            if runs:
+                seq = np.concatenate(runs)
+                _, first = np.unique(seq, return_index=True)
+                pins = seq[np.sort(first)] + offset
+        if pins is None or len(pins) == 0:
+            raise CutError(f"garment {g.name!r}: its pin line {g.pin_line!r} does not touch its panels")
+    out["pins"] = pins
+    out["W"] = W
+    return out
+
+
+def _runs(seq: np.ndarray) -> List[np.ndarray]:
+    """Maximal stretches of a vertex sequence with valid (>= 0) ids, length >= 2."""
+    ok = seq >= 0
+    out, start = [], None
+    for i, v in enumerate(ok.tolist() + [False]):
+        if v and start is None:
+            start = i
+        elif not v and start is not None:
+            if i - start >= 2:
+                out.append(seq[start:i])
+            start = None
+    return out
+
+
+def _weights(mesh: CutMesh, used: np.ndarray, V: int) -> sp.csr_matrix:
+    rows, cols, vals = [], [], []
+    for r, v in enumerate(used.tolist()):
+        c, w = mesh.vertex_weights(v)
+        rows.append(np.full(len(c), r))
+        cols.append(c)
+        vals.append(w)
+    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                         shape=(len(used), V))
+
+
+def _build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset):
+    n = len(X)
+    key, ukey, twin, order = _halfedges(F, n)
+    # cut edges: every edge on a cut line
+    cut = []
+    for runs in lines:
+        for s in runs:
+            cut.append(np.minimum(s[:-1], s[1:]) * n + np.maximum(s[:-1], s[1:]))
+    cut = np.unique(np.concatenate(cut)) if cut else np.zeros(0, np.int64)
+    i = np.arange(len(key))
+    join = (twin >= 0) & ~np.isin(ukey, cut)
+    join &= lab[i // 3] == lab[np.maximum(twin, 0) // 3]
+    i = i[join]
+    j = twin[join]
+    # corner (f, k) ~ twin's corners: half-edge i = corner i -> corner next(i)
+    nxt = lambda h: (h // 3) * 3 + (h % 3 + 1) % 3
+    ca = np.concatenate([i, nxt(i)])
+    cb = np.concatenate([nxt(j), j])
+    C = sp.coo_matrix((np.ones(len(ca)), (ca, cb)), shape=(3 * len(F), 3 * len(F)))
+    _, corner_vert = connected_components(C, directed=False)
+    # deterministic local vertex numbering: by (panel, global vertex, component)
+    panels, hems_local = [], {}
+    local_of_corner = np.full(3 * len(F), -1, dtype=np.int64)
+    gv_of_corner = F.reshape(-1)
+    panel_names = [p.name for p in gpanels]
+    for pi, p in enumerate(gpanels):
+        fids = np.nonzero(lab == pi)[0]
+        if len(fids) == 0:
+            raise CutError(f"panel {p.name!r} has no faces")
+        corners = (fids[:, None] * 3 + np.arange(3)[None]).reshape(-1)
+        cv = corner_vert[corners]
+        gv = gv_of_corner[corners]
+        # order local vertices by global id then component id
+        pairs = np.stack([gv, cv], 1)
+        uniq, inv = np.unique(pairs, axis=0, return_inverse=True)
+        inv = inv.reshape(-1)
+        local_of_corner[corners] = inv
+        faces = inv.reshape(-1, 3)
+        vids = uniq[:, 0] + offset
+        Xl = X[uniq[:, 0]]
+        side = "left" if Xl[:, 0].mean() >= 0 else "right"
+        axis = axes[(p.body_part, "left" if p.body_part == "torso" else side)]
+        warp = warp_directions(Xl, faces, axis)
+        boundary = _boundary_loops(faces, p.name)
+        panels.append(Panel(name=p.name, garment=p.garment, vertex_ids=vids.astype(np.int64),
+                            faces=faces.astype(np.int64), warp_dir=warp, ease=np.ones(len(faces)),
+                            boundary=boundary, body_part=p.body_part, mirror_of=p.mirror_of))
+    # seams and hems along the lines: faces left/right of each line edge
+    hkey_order = order
+    skey = key[hkey_order]
+
+    def halfedge(a, b):
+        k = a * n + b
+        pos = np.clip(np.searchsorted(skey, k), 0, len(skey) - 1)
+        return np.where(skey[pos] == k, hkey_order[pos], -1)
+
+    seams, hems = [], {}
+    for runs, li in zip(lines, lines_li):
+        line = spec.lines[li]
+        stretches = []
+        for s in runs:
+            a, b = s[:-1], s[1:]
+            hl = halfedge(a, b)             # left face has a -> b
+            hr = halfedge(b, a)
+            pl = np.where(hl >= 0, lab[np.maximum(hl, 0) // 3], -1)
+            pr = np.where(hr >= 0, lab[np.maximum(hr, 0) // 3], -1)
+            la0 = np.where(hl >= 0, local_of_corner[np.maximum(hl, 0)], -1)
+            la1 = np.where(hl >= 0, local_of_corner[nxt(np.maximum(hl, 0))], -1)
+            lb0 = np.where(hr >= 0, local_of_corner[nxt(np.maximum(hr, 0))], -1)
+            lb1 = np.where(hr >= 0, local_of_corner[np.maximum(hr, 0)], -1)
+            closed_run = len(s) > 2 and s[0] == s[-1]
+            if line.role == "seam":
+                both = (pl >= 0) & (pr >= 0)
+                key = np.where(both, pl * (len(gpanels) + 1) + pr, -1)
+                for sel in _stretches(key, closed_run):
+                    if key[sel[0]] >= 0:
+                        stretches.append((int(pl[sel[0]]), int(pr[sel[0]]), np.append(la0[sel], la1[sel[-1]]),
+                                          np.append(lb0[sel], lb1[sel[-1]])))
+                one_l = np.where(~both, pl, -1)
+                one_r = np.where(~both, pr, -1)
+            else:
+                one_l, one_r = pl, pr
+            # open edges: hems per side
+            for side, l0, l1 in ((one_l, la0, la1), (one_r, lb0, lb1)):
+                for sel in _stretches(side, closed_run):
+                    if side[sel[0]] >= 0:
+                        verts = np.append(l0[sel], l1[sel[-1]])
+                        if side is one_r:
+                            verts = verts[::-1]   # keep the panel on the left of the polyline
+                        hems.setdefault(panel_names[int(side[sel[0]])], []).append(verts.astype(np.int64))
+        for k, (pa, pb, va, vb) in enumerate(stretches):
+            nm = line.name if len(stretches) == 1 else f"{line.name}#{k}"
+            seams.append(Seam(name=nm, panel_a=panel_names[pa], panel_b=panel_names[pb],
+                              verts_a=np.asarray(va, np.int64), verts_b=np.asarray(vb, np.int64)))
+    return {"panels": panels, "seams": seams, "hems": hems}
+
+
+def _stretches(key: np.ndarray, closed: bool) -> List[np.ndarray]:
+    """Edge index runs of constant ``key`` along a line run (wrapping if closed)."""
+    m = len(key)
+    if m == 0:
+        return []
+    start = 0
+    if closed:
+        change = np.nonzero(key != np.roll(key, 1))[0]
+        if len(change) == 0:
+            return [np.arange(m)]
+        start = int(change[0])
+    idx = (np.arange(m) + start) % m if closed else np.arange(m)
+    k_ = key[idx]
+    cuts = np.nonzero(k_[1:] != k_[:-1])[0] + 1
+    return np.split(idx, cuts)
+
+
+def _boundary_loops(faces: np.ndarray, name: str) -> List[np.ndarray]:
+    """Closed boundary loops (local ids) of a panel mesh, longest first."""
+    a = faces.reshape(-1)
+    b = np.roll(faces, -1, axis=1).reshape(-1)
+    n = int(faces.max()) + 1
+    key = a * n + b
+    rkey = b * n + a
+    bnd = ~np.isin(key, rkey)
+    nxt = {}
+    for u, v in zip(a[bnd].tolist(), b[bnd].tolist()):
+        if u in nxt:
+            raise CutError(f"panel {name!r} is not a manifold surface (its boundary touches itself)")
+        nxt[u] = v
+    loops = []
+    seen = set()
+    for s in sorted(nxt):
+        if s in seen:
+            continue
+        loop = [s]
+        seen.add(s)
+        v = nxt[s]
+        while v != s:
+            if v in seen or v not in nxt:
+                raise CutError(f"panel {name!r}: its boundary does not form closed loops")
+            loop.append(v)
+            seen.add(v)
+            v = nxt[v]
+        loops.append(np.asarray(loop, dtype=np.int64))
+    loops.sort(key=lambda l: -len(l))
+    return loops

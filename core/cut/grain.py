@@ -1,0 +1,97 @@
+"""Fabric grain on the cut: a unit warp direction per triangle.
+
+The warp (lengthwise grain) follows the long axis of the body part a panel
+covers (SPEC "Frames and grain"): the torso axis (pelvis -> neck), the arm
+(wrist -> shoulder) or the leg (ankle -> hip) of the panel's side. All axes
+are oriented to point *up* the body part (towards the neck / the shoulder /
+the hip), so the grain of every panel points to the garment's top. Per
+triangle the axis is projected into the triangle plane and normalised.
+"""
+from __future__ import annotations
+
+from typing import Dict, Optional, Sequence
+
+import numpy as np
+
+_JOINTS = {
+    # (lower, upper) candidates; "{s}" is the side tag
+    "torso": (("pelvis", "root", "spine05", "hips", "hip"), ("neck01", "neck", "neck_01", "spine3")),
+    "arm": (("wrist.{S}", "{side}_wrist", "{s}_wrist", "wrist_{s}", "lowerarm02.{S}"),
+            ("upperarm01.{S}", "{side}_shoulder", "{s}_shoulder", "shoulder_{s}", "shoulder01.{S}")),
+    "leg": (("foot.{S}", "{side}_ankle", "{s}_ankle", "ankle_{s}", "lowerleg02.{S}"),
+            ("upperleg01.{S}", "{side}_hip", "{s}_hip", "hip_{s}", "pelvis.{S}")),
+}
+_LANDMARKS = {
+    "torso": (("waist_front", "waist_back"), ("neck_front", "neck_back")),
+    "arm": (("wrist_{side}",), ("shoulder_{side}",)),
+    "leg": (("ankle_{side}",), ("hip_{side}",)),
+}
+
+
+def _find_joint(names: Sequence[str], candidates, side: str) -> Optional[int]:
+    low = {n.lower(): i for i, n in enumerate(names)}
+    for c in candidates:
+        key = c.format(S="L" if side == "left" else "R", side=side, s=side[0]).lower()
+        if key in low:
+            return low[key]
+    return None
+
+
+def body_part_axis(part: str, side: str, joint_names=None, joints=None,
+                   landmarks=None, faces=None, X=None) -> np.ndarray:
+    """Unit long axis (3,) of a body part, pointing up the part.
+
+    Parameters
+    ----------
+    part : "torso", "arm" or "leg".
+    side : "left" or "right" (ignored for the torso).
+    joint_names, joints : the model's joint names and positions (J, 3) on the
+        reference body, used when the names are recognised.
+    landmarks, faces, X : fallback: SurfacePoint landmarks on vertices X.
+    """
+    axis = None
+    if joints is not None and joint_names is not None and part in _JOINTS:
+        lo = _find_joint(joint_names, _JOINTS[part][0], side)
+        hi = _find_joint(joint_names, _JOINTS[part][1], side)
+        if lo is not None and hi is not None:
+            axis = np.asarray(joints[hi], float) - np.asarray(joints[lo], float)
+    if axis is None and landmarks is not None and part in _LANDMARKS:
+        try:
+            pts = []
+            for group in _LANDMARKS[part]:
+                names = [n.format(side=side) for n in group]
+                pts.append(np.mean([np.asarray(landmarks[n].bary, float) @ X[faces[landmarks[n].triangle]]
+                                    for n in names], axis=0))
+            axis = pts[1] - pts[0]
+        except KeyError:
+            axis = None
+    if axis is None or np.linalg.norm(axis) < 1e-9:
+        axis = np.array([0.0, 0.0, 1.0])
+    if axis[2] < 0:
+        axis = -axis
+    return axis / np.linalg.norm(axis)
+
+
+def warp_directions(X: np.ndarray, F: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """Per-triangle unit warp (f, 3): ``axis`` projected into each triangle's plane.
+
+    Where the axis is (nearly) normal to a triangle the projection is
+    meaningless; there the body's horizontal ``+X`` turned into the plane,
+    rotated a quarter turn about the normal, is used (a fixed tangent).
+    """
+    e1 = X[F[:, 1]] - X[F[:, 0]]
+    e2 = X[F[:, 2]] - X[F[:, 0]]
+    n = np.cross(e1, e2)
+    n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
+    w = axis[None] - (n @ axis)[:, None] * n
+    norm = np.linalg.norm(w, axis=1)
+    bad = norm < 0.05
+    if bad.any():
+        ref = np.array([1.0, 0.0, 0.0])
+        t = ref[None] - (n[bad] @ ref)[:, None] * n[bad]
+        alt = np.cross(n[bad], t)
+        small = np.linalg.norm(alt, axis=1) < 1e-6
+        alt[small] = np.cross(n[bad][small], np.array([0.0, 1.0, 0.0]))
+        w[bad] = alt
+        norm = np.linalg.norm(w, axis=1)
+    return w / np.maximum(norm, 1e-300)[:, None]

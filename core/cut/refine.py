@@ -1,0 +1,128 @@
+"""Conforming refinement of the cut panels to a target edge length.
+
+Every edge longer than ``h`` (at the reference body) is split at its
+midpoint; each triangle is then re-split by the number of its split edges
+(1 -> 2, 2 -> 3 with the shorter diagonal, 3 -> 4, "red-green"). An edge is
+split once for both its triangles, so the mesh stays conforming and both sides
+of every seam get the same new vertices. Rounds repeat until no edge exceeds
+``h``. New vertices are midpoints, i.e. averages of two embedding rows, so the
+refinement applies to every body instance.
+"""
+from __future__ import annotations
+
+from typing import List, Tuple
+
+import numpy as np
+import scipy.sparse as sp
+
+
+def _edges(F: np.ndarray):
+    """Unique undirected edges (e, 2) and per-face edge ids (f, 3), edge k = (F[k], F[k+1])."""
+    he = np.stack([F, np.roll(F, -1, axis=1)], axis=2).reshape(-1, 2)
+    und = np.sort(he, axis=1)
+    E, inv = np.unique(und, axis=0, return_inverse=True)
+    return E, inv.reshape(-1, 3)
+
+
+def refine(X: np.ndarray, F: np.ndarray, labels: np.ndarray, W: sp.csr_matrix,
+           lines: List[np.ndarray], h: float, max_rounds: int = 12):
+    """Refine triangles ``F`` until no edge is longer than ``h``.
+
+    Parameters
+    ----------
+    X : (n, 3) float, reference positions.
+    F : (f, 3) int triangles (orientation is kept).
+    labels : (f,) int, carried to the children (panel index).
+    W : (n, V) sparse, embedding rows of the vertices (body weights).
+    lines : list of (k,) int vertex sequences along cut lines; midpoints of
+        their edges are inserted in order.
+    h : float, target edge length in metres.
+
+    Returns
+    -------
+    X, F, labels, W, lines : refined arrays of the same meaning.
+    """
+    X = np.asarray(X, float)
+    F = np.asarray(F, np.int64)
+    labels = np.asarray(labels)
+    W = sp.csr_matrix(W)
+    lines = [np.asarray(l, np.int64) for l in lines]
+    for _ in range(max_rounds):
+        if len(F) == 0:
+            break
+        E, fe = _edges(F)
+        length = np.linalg.norm(X[E[:, 0]] - X[E[:, 1]], axis=1)
+        split = length > h
+        if not split.any():
+            break
+        n = len(X)
+        ids = np.full(len(E), -1, dtype=np.int64)
+        ids[split] = n + np.arange(split.sum())
+        Es = E[split]
+        X = np.concatenate([X, 0.5 * (X[Es[:, 0]] + X[Es[:, 1]])])
+        m = len(Es)
+        S = sp.csr_matrix((np.full(2 * m, 0.5), (np.repeat(np.arange(m), 2), Es.reshape(-1))),
+                          shape=(m, n))
+        W = sp.vstack([W, S @ W]).tocsr()
+        F, labels = _split_faces(F, labels, ids[fe], X)
+        lines = [_split_line(l, E, ids, n) for l in lines]
+    return X, F, labels, W, lines
+
+
+def _split_faces(F, labels, mid, X):
+    """Re-triangulate faces given per-edge midpoint ids ``mid`` (f, 3), -1 = unsplit."""
+    cnt = (mid >= 0).sum(1)
+    outF = [F[cnt == 0]]
+    outL = [labels[cnt == 0]]
+    for r in range(3):
+        # rotate so that the pattern is canonical: edge k = (v_k, v_{k+1})
+        Fr = np.roll(F, -r, axis=1)
+        Mr = np.roll(mid, -r, axis=1)
+        one = (cnt == 1) & (Mr[:, 0] >= 0)
+        if one.any():
+            v, m = Fr[one], Mr[one]
+            outF += [np.stack([v[:, 0], m[:, 0], v[:, 2]], 1), np.stack([m[:, 0], v[:, 1], v[:, 2]], 1)]
+            outL += [labels[one]] * 2
+        two = (cnt == 2) & (Mr[:, 2] < 0)
+        if two.any():
+            v, m = Fr[two], Mr[two]
+            outF.append(np.stack([m[:, 0], v[:, 1], m[:, 1]], 1))
+            # quad v0, m0, m1, v2: take the shorter diagonal
+            d1 = np.linalg.norm(X[v[:, 0]] - X[m[:, 1]], axis=1)
+            d2 = np.linalg.norm(X[m[:, 0]] - X[v[:, 2]], axis=1)
+            a = d1 <= d2
+            t1 = np.where(a[:, None], np.stack([v[:, 0], m[:, 0], m[:, 1]], 1), np.stack([v[:, 0], m[:, 0], v[:, 2]], 1))
+            t2 = np.where(a[:, None], np.stack([v[:, 0], m[:, 1], v[:, 2]], 1), np.stack([m[:, 0], m[:, 1], v[:, 2]], 1))
+            outF += [t1, t2]
+            outL += [labels[two]] * 3
+    three = cnt == 3
+    if three.any():
+        v, m = F[three], mid[three]
+        outF += [np.stack([v[:, 0], m[:, 0], m[:, 2]], 1), np.stack([m[:, 0], v[:, 1], m[:, 1]], 1),
+                 np.stack([m[:, 2], m[:, 1], v[:, 2]], 1), np.stack([m[:, 0], m[:, 1], m[:, 2]], 1)]
+        outL += [labels[three]] * 4
+    # keep a deterministic order: children grouped by pattern, parents in order
+    return np.concatenate(outF).astype(np.int64), np.concatenate(outL)
+
+
+def _split_line(line: np.ndarray, E: np.ndarray, ids: np.ndarray, n: int) -> np.ndarray:
+    if len(line) < 2:
+        return line
+    a, b = line[:-1], line[1:]
+    und = np.sort(np.stack([a, b], 1), axis=1)
+    key_e = E[:, 0] * n + E[:, 1]
+    key_l = und[:, 0] * n + und[:, 1]
+    pos = np.searchsorted(key_e, key_l)
+    pos = np.clip(pos, 0, len(E) - 1)
+    found = key_e[pos] == key_l
+    mid = np.where(found, ids[pos], -1)
+    out = np.empty(len(line) + (mid >= 0).sum(), dtype=np.int64)
+    # interleave: vertex, [midpoint], vertex, ...
+    seq = []
+    for i in range(len(a)):
+        seq.append(a[i])
+        if mid[i] >= 0:
+            seq.append(mid[i])
+    seq.append(line[-1])
+    out[:] = seq
+    return out

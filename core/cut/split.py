@@ -1,0 +1,419 @@
+"""A mutable triangle mesh that cut lines are inserted into by splitting.
+
+:class:`CutMesh` starts as the body mesh (optionally with the skirt bridge)
+and only ever grows: edges are split at a parameter ``t`` and triangles at a
+barycentric point, so original vertex ids stay valid. Every vertex keeps its
+weights over body vertices (the row of the cut's embedding), and every face
+keeps its *parent*: the body triangle (or skirt bridge triangle) it lies in.
+All sub-faces of a parent are coplanar with it at the reference shape, which
+makes tracing a straight segment across them a planar problem.
+
+Tolerances are relative: a crossing within :data:`SNAP` of an edge end (as a
+fraction of the edge) is snapped to that vertex, which avoids slivers and
+zero-length edges without moving the line by more than ``SNAP`` x edge length.
+"""
+from __future__ import annotations
+
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from ..errors import CutError
+
+SNAP = 1e-3          # relative snap distance on an edge / in a triangle
+_INSIDE = 1e-9       # barycentric slack for "point lies in this triangle"
+_MAX_STEPS = 100000  # guard against a walk that does not progress
+
+
+class CutMesh:
+    """Growing triangle mesh with per-vertex body weights and per-face parents.
+
+    Parameters
+    ----------
+    X : (V, 3) float, reference vertex positions (metres).
+    F : (F, 3) int, triangles.
+    parent_tris : (P, 3, 3) float, corner positions of every parent triangle;
+        ``parent[f]`` indexes it. Defaults to the faces themselves.
+    parent : (F,) int, parent triangle of each face (default ``arange(F)``).
+    weights : dict vertex id -> (cols, vals) body weights for vertices that are
+        not body vertices (ids ``>= n_body``).
+    n_body : int, number of body vertices (identity rows).
+    """
+
+    def __init__(self, X, F, parent_tris=None, parent=None, weights=None, n_body=None):
+        X = np.asarray(X, dtype=float)
+        F = np.asarray(F, dtype=np.int64)
+        self.n_body = int(X.shape[0] if n_body is None else n_body)
+        self._X = np.zeros((max(2 * len(X), 16), 3))
+        self._X[: len(X)] = X
+        self.nv = len(X)
+        self._F = np.zeros((max(2 * len(F), 16), 3), dtype=np.int64)
+        self._F[: len(F)] = F
+        self.nf = len(F)
+        self._parent = np.zeros(self._F.shape[0], dtype=np.int64)
+        self._parent[: len(F)] = np.arange(len(F)) if parent is None else parent
+        if parent_tris is None:
+            parent_tris = X[F]
+        self._set_parents(np.asarray(parent_tris, dtype=float))
+        self.weights: Dict[int, Tuple[np.ndarray, np.ndarray]] = dict(weights or {})
+        # half-edge (a, b) -> face, and vertex -> incident faces
+        he = F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+        fid = np.repeat(np.arange(len(F)), 3)
+        self.he: Dict[Tuple[int, int], int] = dict(zip(map(tuple, he.tolist()), fid.tolist()))
+        self.vf: List[set] = [set() for _ in range(len(X))]
+        for f, tri in enumerate(F.tolist()):
+            for v in tri:
+                self.vf[v].add(f)
+        self.cut: Dict[Tuple[int, int], int] = {}     # undirected edge -> line index
+        self.cut_verts: Dict[int, set] = {}            # vertex -> line indices through it
+
+    # -- storage ---------------------------------------------------------------------------
+    def _set_parents(self, tris: np.ndarray) -> None:
+        p0 = tris[:, 0]
+        e1 = tris[:, 1] - p0
+        n = np.cross(e1, tris[:, 2] - p0)
+        nn = np.linalg.norm(n, axis=1)
+        e1 /= np.maximum(np.linalg.norm(e1, axis=1), 1e-300)[:, None]
+        n /= np.maximum(nn, 1e-300)[:, None]
+        self._p0, self._e1, self._n = p0, e1, n
+        self._e2 = np.cross(n, e1)
+        self._scale = np.sqrt(np.maximum(nn, 1e-300))   # ~ edge length of the parent
+        self._ptri2 = np.stack([self._to2d_all(tris[:, k]) for k in range(3)], axis=1)
+
+    def _to2d_all(self, q: np.ndarray) -> np.ndarray:
+        d = q - self._p0
+        return np.stack([(d * self._e1).sum(1), (d * self._e2).sum(1)], axis=1)
+
+    def copy(self) -> "CutMesh":
+        other = object.__new__(CutMesh)
+        other.__dict__.update(self.__dict__)
+        other._X = self._X.copy()
+        other._F = self._F.copy()
+        other._parent = self._parent.copy()
+        other.weights = dict(self.weights)
+        other.he = dict(self.he)
+        other.vf = [set(s) for s in self.vf]
+        other.cut = dict(self.cut)
+        other.cut_verts = {k: set(v) for k, v in self.cut_verts.items()}
+        return other
+
+    @property
+    def X(self) -> np.ndarray:
+        return self._X[: self.nv]
+
+    @property
+    def F(self) -> np.ndarray:
+        return self._F[: self.nf]
+
+    @property
+    def parent(self) -> np.ndarray:
+        return self._parent[: self.nf]
+
+    def _add_vertex(self, pos: np.ndarray, cols: np.ndarray, vals: np.ndarray) -> int:
+        if self.nv == self._X.shape[0]:
+            self._X = np.concatenate([self._X, np.zeros_like(self._X)])
+        v = self.nv
+        self._X[v] = pos
+        self.nv += 1
+        self.weights[v] = (cols, vals)
+        self.vf.append(set())
+        return v
+
+    def _add_face(self, tri, parent: int) -> int:
+        if self.nf == self._F.shape[0]:
+            self._F = np.concatenate([self._F, np.zeros_like(self._F)])
+            self._parent = np.concatenate([self._parent, np.zeros_like(self._parent)])
+        f = self.nf
+        self._F[f] = tri
+        self._parent[f] = parent
+        self.nf += 1
+        return f
+
+    def vertex_weights(self, v: int) -> Tuple[np.ndarray, np.ndarray]:
+        """Body weights (cols, vals) of vertex ``v``."""
+        if v < self.n_body:
+            return np.array([v]), np.array([1.0])
+        return self.weights[v]
+
+    def _combine(self, verts: Sequence[int], coef: Sequence[float]):
+        cols, vals = [], []
+        for v, c in zip(verts, coef):
+            cv, vv = self.vertex_weights(v)
+            cols.append(cv)
+            vals.append(vv * c)
+        cols = np.concatenate(cols)
+        vals = np.concatenate(vals)
+        u, inv = np.unique(cols, return_inverse=True)
+        out = np.zeros(len(u))
+        np.add.at(out, inv, vals)
+        keep = np.abs(out) > 1e-15
+        return u[keep], out[keep]
+
+    # -- topology edits ---------------------------------------------------------------------
+    def _set_face(self, f: int, tri) -> None:
+        self._F[f] = tri
+        a, b, c = tri
+        self.he[(a, b)] = f
+        self.he[(b, c)] = f
+        self.he[(c, a)] = f
+
+    def split_edge(self, a: int, b: int, t: float) -> int:
+        """Split edge (a, b) at ``(1-t) a + t b``; returns the new vertex id."""
+        f1 = self.he.get((a, b))
+        f2 = self.he.get((b, a))
+        if f1 is None and f2 is None:
+            raise CutError(f"internal: edge ({a}, {b}) is not in the mesh")
+        pos = (1.0 - t) * self._X[a] + t * self._X[b]
+        m = self._add_vertex(pos, *self._combine((a, b), (1.0 - t, t)))
+        for f, (p, q) in ((f1, (a, b)), (f2, (b, a))):
+            if f is None:
+                continue
+            tri = self._F[f].tolist()
+            k = tri.index(p)
+            c = tri[(k + 2) % 3]
+            assert tri[(k + 1) % 3] == q
+            par = int(self._parent[f])
+            del self.he[(p, q)]
+            self._set_face(f, (p, m, c))
+            g = self._add_face((m, q, c), par)
+            self._set_face(g, (m, q, c))
+            self.vf[q].discard(f)
+            self.vf[q].add(g)
+            self.vf[c].add(g)
+            self.vf[m].update((f, g))
+        key = (a, b) if a < b else (b, a)
+        line = self.cut.pop(key, None)
+        if line is not None:
+            self.cut[(min(a, m), max(a, m))] = line
+            self.cut[(min(b, m), max(b, m))] = line
+            self.cut_verts.setdefault(m, set()).add(line)
+        return m
+
+    def split_face(self, f: int, bary) -> int:
+        """Split triangle ``f`` at barycentric ``bary`` into three; returns the new vertex."""
+        a, b, c = self._F[f].tolist()
+        bary = np.asarray(bary, dtype=float)
+        pos = bary @ self._X[[a, b, c]]
+        p = self._add_vertex(pos, *self._combine((a, b, c), bary))
+        par = int(self._parent[f])
+        self._set_face(f, (a, b, p))
+        g1 = self._add_face((b, c, p), par)
+        self._set_face(g1, (b, c, p))
+        g2 = self._add_face((c, a, p), par)
+        self._set_face(g2, (c, a, p))
+        self.vf[c].discard(f)
+        self.vf[a].add(g2)
+        self.vf[b].add(g1)
+        self.vf[c].update((g1, g2))
+        self.vf[p].update((f, g1, g2))
+        return p
+
+    def remove_faces(self, faces: np.ndarray) -> None:
+        """Delete faces (compacts the face array; vertex ids are unchanged)."""
+        keep = np.ones(self.nf, dtype=bool)
+        keep[np.asarray(faces, dtype=np.int64)] = False
+        F = self.F[keep].copy()
+        par = self.parent[keep].copy()
+        self.nf = 0
+        self._F[: len(F)] = F
+        self._parent[: len(F)] = par
+        self.nf = len(F)
+        self._rebuild_adjacency()
+
+    def add_faces(self, F: np.ndarray, parent_tris: np.ndarray) -> None:
+        """Append faces, each its own new parent triangle (corner positions given)."""
+        base = self._ptri_count()
+        tris = np.concatenate([self._parent_corners(), parent_tris])
+        for k, tri in enumerate(np.asarray(F, dtype=np.int64).tolist()):
+            f = self._add_face(tri, base + k)
+        self._set_parents(tris)
+        self._rebuild_adjacency()
+
+    def _ptri_count(self) -> int:
+        return int(self._p0.shape[0])
+
+    def _parent_corners(self) -> np.ndarray:
+        # reconstruct corner positions from the stored frame (exact for corners 0 and 2D coords)
+        p2 = self._ptri2
+        return (self._p0[:, None, :] + p2[:, :, :1] * self._e1[:, None, :]
+                + p2[:, :, 1:] * self._e2[:, None, :])
+
+    def _rebuild_adjacency(self) -> None:
+        F = self.F
+        he = F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+        fid = np.repeat(np.arange(len(F)), 3)
+        self.he = dict(zip(map(tuple, he.tolist()), fid.tolist()))
+        self.vf = [set() for _ in range(self.nv)]
+        for f, tri in enumerate(F.tolist()):
+            for v in tri:
+                self.vf[v].add(f)
+
+    # -- geometry ---------------------------------------------------------------------------
+    def _to2d(self, P: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """2D coords of points q (k, 3) in the frames of parents P (k,)."""
+        d = q - self._p0[P]
+        return np.stack([(d * self._e1[P]).sum(-1), (d * self._e2[P]).sum(-1)], axis=-1)
+
+    def parent_contains(self, P: np.ndarray, q: np.ndarray, tol: float = 1e-6) -> np.ndarray:
+        """Whether point ``q`` (3,) lies on each parent triangle P (k,) (relative tol)."""
+        P = np.asarray(P)
+        d = q[None] - self._p0[P]
+        off = np.abs((d * self._n[P]).sum(-1)) <= tol * self._scale[P]
+        b = _bary2(self._to2d(P, np.broadcast_to(q, (len(P), 3))), self._ptri2[P])
+        return off & (b.min(axis=1) >= -tol)
+
+    def locate_in_parent(self, P: int, q: np.ndarray) -> Tuple[int, np.ndarray]:
+        """The face (child of parent ``P``) containing point ``q`` and its barycentrics."""
+        faces = np.nonzero(self.parent == P)[0]
+        if len(faces) == 0:
+            raise KeyError(P)
+        tri = self.F[faces]
+        Pv = np.full(len(faces), P)
+        c2 = np.stack([self._to2d(Pv, self._X[tri[:, k]]) for k in range(3)], axis=1)
+        b = _bary2(self._to2d(Pv, np.broadcast_to(q, (len(faces), 3))), c2)
+        k = int(np.argmax(b.min(axis=1)))
+        return int(faces[k]), b[k]
+
+    def insert_point(self, f: int, bary: np.ndarray) -> int:
+        """Make the point ``bary`` of face ``f`` a vertex (snap, split an edge or the face)."""
+        bary = np.clip(np.asarray(bary, dtype=float), 0.0, None)
+        bary = bary / bary.sum()
+        tri = self._F[f].tolist()
+        k = int(np.argmax(bary))
+        if bary[k] >= 1.0 - SNAP:
+            return tri[k]
+        small = bary < SNAP
+        if small.sum() == 1:
+            j = int(np.nonzero(small)[0][0])
+            a, b = tri[(j + 1) % 3], tri[(j + 2) % 3]
+            wa, wb = bary[(j + 1) % 3], bary[(j + 2) % 3]
+            return self.split_edge(a, b, wb / (wa + wb))
+        return self.split_face(f, bary)
+
+    # -- tracing ----------------------------------------------------------------------------
+    def trace(self, A: int, target: np.ndarray, line: int, allowed: set,
+              target_vertex: Optional[int] = None, names=None) -> List[int]:
+        """Insert the straight (in-parent) segment from vertex ``A`` to point ``target``.
+
+        Edges crossed are split (or the crossing snapped to a nearby vertex);
+        the segment's vertices are returned (without ``A``), and its edges are
+        marked as cut by ``line``. ``allowed``: vertices where the line may
+        meet other lines (its keypoints). Raises :class:`CutError` where the
+        line meets another line (or itself) elsewhere.
+        """
+        out: List[int] = []
+        cur = A
+        for _ in range(_MAX_STEPS):
+            if target_vertex is not None and (cur == target_vertex):
+                return out
+            if target_vertex is not None and ((cur, target_vertex) in self.he or (target_vertex, cur) in self.he):
+                self._mark(cur, target_vertex, line, allowed, names)
+                out.append(target_vertex)
+                return out
+            faces = np.fromiter(self.vf[cur], dtype=np.int64)
+            if len(faces) == 0:
+                raise CutError(f"internal: vertex {cur} has no faces")
+            P = self._parent[faces]
+            ok = self.parent_contains(P, target)
+            if not ok.any():
+                raise CutError(f"{_name(names, line)}: could not trace the geodesic across the mesh")
+            faces, P = faces[ok], P[ok]
+            tri = self._F[faces]
+            # rotate each face so that `cur` comes first
+            k = np.argmax(tri == cur, axis=1)
+            idx = (k[:, None] + np.arange(3)[None]) % 3
+            tri = np.take_along_axis(tri, idx, axis=1)
+            c2 = np.stack([self._to2d(P, self._X[tri[:, j]]) for j in range(3)], axis=1)
+            b = _bary2(self._to2d(P, np.broadcast_to(target, (len(P), 3))), c2)
+            score = np.minimum(b[:, 1], b[:, 2])
+            i = int(np.argmax(score))
+            _, u, w = tri[i].tolist()
+            bA, bu, bw = b[i]
+            if bA >= -_INSIDE:
+                # target is in this triangle's closure: finish here
+                nxt = self._finish(int(faces[i]), cur, u, w, np.array([bA, bu, bw]), line, allowed, names)
+                if nxt != cur:
+                    self._mark(cur, nxt, line, allowed, names)
+                    out.append(nxt)
+                    if target_vertex is not None and nxt != target_vertex:
+                        cur = nxt
+                        continue
+                return out
+            s = 1.0 / (1.0 - bA)
+            t = float(np.clip(s * bw, 0.0, 1.0))
+            if t < SNAP:
+                nxt = u
+            elif t > 1.0 - SNAP:
+                nxt = w
+            else:
+                key = (u, w) if u < w else (w, u)
+                if key in self.cut:
+                    raise CutError(f"cut lines {_name(names, line)} and {_name(names, self.cut[key])} cross")
+                nxt = self.split_edge(u, w, t)
+            self._mark(cur, nxt, line, allowed, names)
+            out.append(nxt)
+            cur = nxt
+        raise CutError(f"{_name(names, line)}: tracing the geodesic did not terminate")
+
+    def _finish(self, f, cur, u, w, b, line, allowed, names) -> int:
+        b = np.clip(b, 0.0, None)
+        b = b / b.sum()
+        bA, bu, bw = b
+        if bA >= 1.0 - SNAP:
+            return cur
+        if bu >= 1.0 - SNAP:
+            return u
+        if bw >= 1.0 - SNAP:
+            return w
+        if bA < SNAP:
+            a0, a1, t = u, w, bw / (bu + bw)
+        elif bu < SNAP:
+            a0, a1, t = cur, w, bw / (bA + bw)
+        elif bw < SNAP:
+            a0, a1, t = cur, u, bu / (bA + bu)
+        else:
+            tri = self._F[f].tolist()
+            k = tri.index(cur)
+            order = [cur, u, w]
+            bb = np.zeros(3)
+            for j in range(3):
+                bb[(k + j) % 3] = b[j]
+            assert [tri[(k + j) % 3] for j in range(3)] == order
+            return self.split_face(f, bb)
+        key = (a0, a1) if a0 < a1 else (a1, a0)
+        if key in self.cut:
+            raise CutError(f"cut lines {_name(names, line)} and {_name(names, self.cut[key])} cross")
+        return self.split_edge(a0, a1, t)
+
+    def _mark(self, a: int, b: int, line: int, allowed: set, names) -> None:
+        key = (a, b) if a < b else (b, a)
+        prev = self.cut.get(key)
+        if prev is not None:
+            raise CutError(f"cut lines {_name(names, line)} and {_name(names, prev)} overlap")
+        others = self.cut_verts.get(b)
+        if others and b not in allowed:
+            if line in others:
+                raise CutError(f"cut line {_name(names, line)} crosses itself")
+            raise CutError(f"cut lines {_name(names, line)} and {_name(names, min(others))} cross")
+        self.cut[key] = line
+        self.cut_verts.setdefault(a, set()).add(line)
+        self.cut_verts.setdefault(b, set()).add(line)
+
+
+def _name(names, line) -> str:
+    if names is None:
+        return f"#{line}"
+    return repr(names[line])
+
+
+def _bary2(q: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Barycentric coordinates (k, 3) of 2D points q (k, 2) in triangles tri (k, 3, 2)."""
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    v0 = b - a
+    v1 = c - a
+    v2 = q - a
+    den = v0[:, 0] * v1[:, 1] - v1[:, 0] * v0[:, 1]
+    den = np.where(np.abs(den) < 1e-300, 1e-300, den)
+    l1 = (v2[:, 0] * v1[:, 1] - v1[:, 0] * v2[:, 1]) / den
+    l2 = (v0[:, 0] * v2[:, 1] - v2[:, 0] * v0[:, 1]) / den
+    return np.stack([1.0 - l1 - l2, l1, l2], axis=1)
