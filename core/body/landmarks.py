@@ -55,6 +55,31 @@ def symmetry_map(vertices: np.ndarray, tol: float = 1e-4) -> np.ndarray:
     return idx.astype(np.int64)
 
 
+class _RayMesh:
+    """Per-triangle data of one mesh, kept across the many rays cast at it."""
+
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray):
+        self.vertices, self.faces = vertices, faces
+        self.a = vertices[faces[:, 0]]
+        self.e1 = vertices[faces[:, 1]] - self.a
+        self.e2 = vertices[faces[:, 2]] - self.a
+        self.centre = self.a + (self.e1 + self.e2) / 3.0
+        corners = np.stack([self.a, self.a + self.e1, self.a + self.e2], axis=1)
+        self.radius = np.linalg.norm(corners - self.centre[:, None], axis=2).max(axis=1) + 1e-9
+
+
+_RAY_MESH = {}
+
+
+def _ray_mesh(vertices, faces) -> _RayMesh:
+    key = (id(vertices), id(faces))
+    rm = _RAY_MESH.get(key)
+    if rm is None or rm.vertices is not vertices or rm.faces is not faces:
+        _RAY_MESH.clear()
+        rm = _RAY_MESH[key] = _RayMesh(vertices, faces)
+    return rm
+
+
 def ray_cast(vertices: np.ndarray, faces: np.ndarray, origin, direction, all_hits: bool = False):
     """Intersections of a ray with a triangle mesh (Moller-Trumbore, vectorised).
 
@@ -63,11 +88,16 @@ def ray_cast(vertices: np.ndarray, faces: np.ndarray, origin, direction, all_hit
     If ``all_hits``: (t (k,), triangle (k,), bary (k, 3)) sorted by distance t > 0.
     Else the first hit as (t, triangle, bary) or None.
     """
+    rm = _ray_mesh(vertices, faces)
     o = np.asarray(origin, dtype=float)
     dvec = np.asarray(direction, dtype=float)
     dvec = dvec / np.linalg.norm(dvec)
-    a, b, c = vertices[faces[:, 0]], vertices[faces[:, 1]], vertices[faces[:, 2]]
-    e1, e2 = b - a, c - a
+    # Only triangles whose bounding sphere meets the ray can be hit.
+    rel = rm.centre - o
+    along = rel @ dvec
+    perp = np.linalg.norm(rel - along[:, None] * dvec, axis=1)
+    cand = np.nonzero((perp <= rm.radius) & (along >= -rm.radius))[0]
+    a, e1, e2 = rm.a[cand], rm.e1[cand], rm.e2[cand]
     p = np.cross(dvec, e2)
     det = np.einsum("ij,ij->i", e1, p)
     ok = np.abs(det) > 1e-14
@@ -78,15 +108,15 @@ def ray_cast(vertices: np.ndarray, faces: np.ndarray, origin, direction, all_hit
     w = (q @ dvec) * inv
     t = np.einsum("ij,ij->i", e2, q) * inv
     hit = ok & (u >= 0) & (w >= 0) & (u + w <= 1) & (t > 1e-9)
-    ids = np.nonzero(hit)[0]
-    order = np.argsort(t[ids], kind="stable")
-    ids = ids[order]
-    bary = np.stack([1 - u[ids] - w[ids], u[ids], w[ids]], axis=1)
+    sub = np.nonzero(hit)[0]
+    sub = sub[np.argsort(t[sub], kind="stable")]
+    ids = cand[sub]
+    bary = np.stack([1 - u[sub] - w[sub], u[sub], w[sub]], axis=1)
     if all_hits:
-        return t[ids], ids, bary
+        return t[sub], ids, bary
     if ids.size == 0:
         return None
-    return float(t[ids[0]]), int(ids[0]), bary[0]
+    return float(t[sub[0]]), int(ids[0]), bary[0]
 
 
 def _surface_point(tri: int, bary) -> SurfacePoint:
