@@ -1,0 +1,244 @@
+"""Warp kernels of the drape and of its fit measurements (one module: one compile).
+
+XPBD (Macklin et al. 2016) with small steps (Macklin et al. 2019): each
+substep predicts positions, projects every constraint once, Gauss-Seidel
+style, colour by colour (no two constraints of a colour share a particle, so
+a colour runs in parallel without atomics and a run is bitwise repeatable),
+resolves body contact, and derives velocities from the position change.
+
+Constraints on a triangle with pattern (rest) edge matrix D_m in its grain
+frame and current edges D_s = [x1-x0, x2-x0]: F = D_s D_m^-1 (3x2), whose
+columns are the images of the unit weft and warp. Weft and warp stretch are
+C = |F_i| - 1, shear is C = F_0 . F_1; each has compliance 1/(k A).
+Bending is the dihedral angle of two triangles (rest: flat, as cut), with the
+discrete-shell weight 3|e|^2/(A_a+A_b).
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+# The kernel cache lives in the project so only the first run compiles.
+os.environ.setdefault("WARP_CACHE_PATH", str(Path(__file__).resolve().parents[2] / ".cache" / "warp"))
+
+import warp as wp  # noqa: E402
+
+wp.config.quiet = True
+
+
+@wp.kernel
+def predict(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
+            inv_mass: wp.array(dtype=float), gravity: wp.vec3, dt: float, keep: float):
+    i = wp.tid()
+    x_prev[i] = x[i]
+    if inv_mass[i] == 0.0:
+        v[i] = wp.vec3(0.0, 0.0, 0.0)
+        return
+    vel = (v[i] + gravity * dt) * keep
+    v[i] = vel
+    x[i] = x[i] + vel * dt
+
+
+@wp.func
+def _project(x: wp.array(dtype=wp.vec3), i: int, j: int, k: int, wi: float, wj: float, wk: float,
+             c: float, gj: wp.vec3, gk: wp.vec3, alpha: float):
+    gi = -(gj + gk)
+    denom = wi * wp.dot(gi, gi) + wj * wp.dot(gj, gj) + wk * wp.dot(gk, gk) + alpha
+    if denom > 0.0:
+        dl = -c / denom
+        x[i] = x[i] + gi * (wi * dl)
+        x[j] = x[j] + gj * (wj * dl)
+        x[k] = x[k] + gk * (wk * dl)
+
+
+@wp.kernel
+def solve_stretch(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
+                  tri: wp.array2d(dtype=int), rest_inv: wp.array(dtype=wp.mat22),
+                  area: wp.array(dtype=float), k_weft: float, k_warp: float, k_shear: float,
+                  inv_dt2: float, offset: int):
+    t = wp.tid() + offset
+    i = tri[t, 0]
+    j = tri[t, 1]
+    k = tri[t, 2]
+    wi = inv_mass[i]
+    wj = inv_mass[j]
+    wk = inv_mass[k]
+    d = rest_inv[t]
+    a = area[t]
+    # weft
+    e1 = x[j] - x[i]
+    e2 = x[k] - x[i]
+    fa = e1 * d[0, 0] + e2 * d[1, 0]
+    la = wp.length(fa)
+    if la > 1.0e-12:
+        n = fa / la
+        _project(x, i, j, k, wi, wj, wk, la - 1.0, n * d[0, 0], n * d[1, 0], inv_dt2 / (k_weft * a))
+    # warp
+    e1 = x[j] - x[i]
+    e2 = x[k] - x[i]
+    fb = e1 * d[0, 1] + e2 * d[1, 1]
+    lb = wp.length(fb)
+    if lb > 1.0e-12:
+        n = fb / lb
+        _project(x, i, j, k, wi, wj, wk, lb - 1.0, n * d[0, 1], n * d[1, 1], inv_dt2 / (k_warp * a))
+    # shear: weft and warp images stay orthogonal
+    e1 = x[j] - x[i]
+    e2 = x[k] - x[i]
+    fa = e1 * d[0, 0] + e2 * d[1, 0]
+    fb = e1 * d[0, 1] + e2 * d[1, 1]
+    _project(x, i, j, k, wi, wj, wk, wp.dot(fa, fb),
+             fb * d[0, 0] + fa * d[0, 1], fb * d[1, 0] + fa * d[1, 1], inv_dt2 / (k_shear * a))
+
+
+@wp.kernel
+def solve_bending(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
+                  bend: wp.array2d(dtype=int), weight: wp.array(dtype=float),
+                  k_bend: float, inv_dt2: float, offset: int):
+    b = wp.tid() + offset
+    i = bend[b, 0]
+    j = bend[b, 1]
+    k = bend[b, 2]
+    l = bend[b, 3]
+    x1 = x[i]
+    x2 = x[j]
+    x3 = x[k]
+    x4 = x[l]
+    n1 = wp.cross(x3 - x1, x4 - x1)
+    n2 = wp.cross(x4 - x2, x3 - x2)
+    e = x4 - x3
+    l1 = wp.length_sq(n1)
+    l2 = wp.length_sq(n2)
+    le = wp.length(e)
+    if l1 < 1.0e-20 or l2 < 1.0e-20 or le < 1.0e-10:
+        return
+    eh = e / le
+    n1h = n1 / wp.sqrt(l1)
+    n2h = n2 / wp.sqrt(l2)
+    theta = wp.atan2(wp.dot(wp.cross(n1h, n2h), eh), wp.dot(n1h, n2h))
+    # exact dihedral-angle gradients (Bridson et al. 2003), signed to match theta
+    g1 = n1 * (-le / l1)
+    g2 = n2 * (-le / l2)
+    g3 = n1 * (wp.dot(x4 - x1, eh) / l1) + n2 * (wp.dot(x4 - x2, eh) / l2)
+    g4 = n1 * (wp.dot(x1 - x3, eh) / l1) + n2 * (wp.dot(x2 - x3, eh) / l2)
+    w1 = inv_mass[i]
+    w2 = inv_mass[j]
+    w3 = inv_mass[k]
+    w4 = inv_mass[l]
+    denom = (w1 * wp.dot(g1, g1) + w2 * wp.dot(g2, g2) + w3 * wp.dot(g3, g3) + w4 * wp.dot(g4, g4)
+             + inv_dt2 / (k_bend * weight[b]))
+    if denom <= 0.0:
+        return
+    dl = -theta / denom
+    x[i] = x1 + g1 * (w1 * dl)
+    x[j] = x2 + g2 * (w2 * dl)
+    x[k] = x3 + g3 * (w3 * dl)
+    x[l] = x4 + g4 * (w4 * dl)
+
+
+@wp.kernel
+def solve_tethers(x: wp.array(dtype=wp.vec3), anchor: wp.array(dtype=int), length: wp.array(dtype=float),
+                  slack: float):
+    """Long-range attachments: a particle stays within its fabric distance of its pin.
+
+    The anchor is pinned (never moves), so particles are independent: no colouring.
+    """
+    i = wp.tid()
+    a = anchor[i]
+    if a < 0:
+        return
+    d = x[i] - x[a]
+    l = wp.length(d)
+    lmax = length[i] * slack
+    if l > lmax:
+        x[i] = x[a] + d * (lmax / l)
+
+
+@wp.kernel
+def find_contacts(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float), body: wp.uint64,
+                  max_dist: float, point: wp.array(dtype=wp.vec3), normal: wp.array(dtype=wp.vec3),
+                  active: wp.array(dtype=int)):
+    """Closest body point and the plane of its triangle, for particles within max_dist.
+
+    Substeps then resolve contact against this plane (refreshed every few
+    substeps): the body is smooth on the scale the cloth moves in between.
+    """
+    i = wp.tid()
+    active[i] = 0
+    if inv_mass[i] == 0.0:
+        return
+    q = wp.mesh_query_point_sign_normal(body, x[i], max_dist)
+    if not q.result:
+        return
+    point[i] = wp.mesh_eval_position(body, q.face, q.u, q.v)
+    normal[i] = wp.mesh_eval_face_normal(body, q.face)
+    active[i] = 1
+
+
+@wp.kernel
+def collide_body(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
+                 point: wp.array(dtype=wp.vec3), normal: wp.array(dtype=wp.vec3),
+                 active: wp.array(dtype=int), thickness: float, friction: float):
+    """Keep particles ``thickness`` outside the contact plane; Coulomb friction."""
+    i = wp.tid()
+    if active[i] == 0:
+        return
+    n = normal[i]
+    p = x[i]
+    depth = thickness - wp.dot(p - point[i], n)
+    if depth <= 0.0:
+        return
+    p = p + n * depth
+    # cancel the tangential motion of this substep up to mu * depth
+    dx = p - x_prev[i]
+    dt_ = dx - n * wp.dot(dx, n)
+    lt = wp.length(dt_)
+    if lt > 1.0e-12:
+        p = p - dt_ * wp.min(friction * depth / lt, 1.0)
+    x[i] = p
+
+
+@wp.kernel
+def update_velocity(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
+                    v: wp.array(dtype=wp.vec3), inv_dt: float):
+    i = wp.tid()
+    v[i] = (x[i] - x_prev[i]) * inv_dt
+
+
+# --- measurements -----------------------------------------------------------
+
+@wp.kernel
+def ray_gap(origins: wp.array(dtype=wp.vec3), dirs: wp.array(dtype=wp.vec3), mesh: wp.uint64,
+            max_t: float, gap: wp.array(dtype=float)):
+    i = wp.tid()
+    q = wp.mesh_query_ray(mesh, origins[i], dirs[i], max_t)
+    if q.result:
+        gap[i] = q.t
+    else:
+        gap[i] = 0.0
+
+
+@wp.kernel
+def signed_distance(points: wp.array(dtype=wp.vec3), mesh: wp.uint64, max_dist: float,
+                    out: wp.array(dtype=float)):
+    """Signed distance to ``mesh`` (negative inside), +max_dist when farther."""
+    i = wp.tid()
+    p = points[i]
+    q = wp.mesh_query_point_sign_normal(mesh, p, max_dist)
+    if q.result:
+        c = wp.mesh_eval_position(mesh, q.face, q.u, q.v)
+        out[i] = wp.length(p - c) * q.sign
+    else:
+        out[i] = max_dist
+
+
+@wp.kernel
+def unsigned_distance(points: wp.array(dtype=wp.vec3), mesh: wp.uint64, max_dist: float,
+                      out: wp.array(dtype=float)):
+    """Distance to ``mesh``, +max_dist when farther."""
+    i = wp.tid()
+    p = points[i]
+    q = wp.mesh_query_point_no_sign(mesh, p, max_dist)
+    if q.result:
+        out[i] = wp.length(p - wp.mesh_eval_position(mesh, q.face, q.u, q.v))
+    else:
+        out[i] = max_dist

@@ -1,0 +1,140 @@
+"""Fabric presets for the drape, in physical units.
+
+Membrane stiffnesses are per unit width (N/m: force per metre of fabric edge
+for a strain of 1), bending stiffness is a moment per unit width per unit
+curvature (N*m), density is areal (kg/m^2). The values sit in the ranges
+Kawabata-type measurements give for each fabric; what matters for the drape is
+their order: woven cotton barely stretches (< 5 % under its own weight and
+handling loads), jersey knit stretches easily across the courses (weft).
+
+A design selects a preset by name (``materials.fabric``), the CLI with
+``--material``. Unknown names raise :class:`core.errors.DrapeError`.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, replace
+from typing import Mapping, Optional, Union
+
+import numpy as np
+
+from ..errors import DrapeError
+
+
+@dataclass(frozen=True)
+class Material:
+    """Cloth material for the XPBD drape.
+
+    Attributes
+    ----------
+    name : str
+    density : float, areal density in kg/m^2.
+    stretch_weft, stretch_warp : float, membrane stiffness along the weft and
+        the warp (grain line) in N/m.
+    shear : float, in-plane shear stiffness in N/m.
+    bending : float, bending stiffness in N*m.
+    friction : float, Coulomb friction coefficient against the body.
+    thickness : float, collision offset from the body surface in metres.
+    max_stretch : float, the stretch (fraction) the fabric takes in wear; documents
+        the preset and is checked by the tests, not used by the solver.
+    """
+    name: str
+    density: float
+    stretch_weft: float
+    stretch_warp: float
+    shear: float
+    bending: float
+    friction: float
+    thickness: float
+    max_stretch: float
+
+    def to_json(self) -> dict:
+        return asdict(self)
+
+
+PRESETS = {
+    # Shirting poplin: stiff in both grains, warp a little stiffer than weft.
+    "cotton": Material("cotton", density=0.13, stretch_weft=2.0e3, stretch_warp=3.0e3, shear=30.0,
+                       bending=5.0e-6, friction=0.4, thickness=0.003, max_stretch=0.05),
+    # Single jersey knit: stretchy across the courses (weft), firmer along the wales.
+    "jersey": Material("jersey", density=0.18, stretch_weft=60.0, stretch_warp=200.0, shear=15.0,
+                       bending=2.0e-6, friction=0.5, thickness=0.003, max_stretch=0.4),
+    # Heavy twill: stiff and heavy, bends little.
+    "denim": Material("denim", density=0.40, stretch_weft=4.0e3, stretch_warp=6.0e3, shear=80.0,
+                      bending=3.0e-5, friction=0.5, thickness=0.004, max_stretch=0.03),
+    # Light silk charmeuse: light, slippery, floppy.
+    "silk": Material("silk", density=0.07, stretch_weft=800.0, stretch_warp=1.2e3, shear=5.0,
+                     bending=5.0e-7, friction=0.2, thickness=0.002, max_stretch=0.08),
+}
+
+DEFAULT = "cotton"
+
+_POSITIVE = ("density", "stretch_weft", "stretch_warp", "shear", "thickness")
+# Upper bounds far beyond any textile: above them the input is a unit mistake.
+_LIMITS = {"density": 10.0, "stretch_weft": 1.0e6, "stretch_warp": 1.0e6, "shear": 1.0e6,
+           "bending": 1.0, "friction": 5.0, "thickness": 0.05}
+
+
+def names() -> list:
+    """Names of the presets."""
+    return sorted(PRESETS)
+
+
+def validate(material: Material) -> Material:
+    """Check every field is finite and in its physical range.
+
+    Raises
+    ------
+    DrapeError naming the material field and the expected range.
+    """
+    for key, hi in _LIMITS.items():
+        value = getattr(material, key)
+        if not np.isfinite(value):
+            raise DrapeError(f"material {material.name!r}: {key} = {value} is not a finite number")
+        lo_ok = value > 0 if key in _POSITIVE else value >= 0
+        if not lo_ok or value > hi:
+            lo = "> 0" if key in _POSITIVE else ">= 0"
+            raise DrapeError(f"material {material.name!r}: {key} = {value:g} is outside the physical range "
+                             f"({lo} and <= {hi:g})")
+    return material
+
+
+def get_material(spec: Union[None, str, Material, Mapping] = None,
+                 overrides: Optional[Mapping] = None) -> Material:
+    """Resolve a material: a preset name, a :class:`Material`, or a dict.
+
+    Parameters
+    ----------
+    spec : None (the default preset), a preset name, a Material, or a mapping
+        with ``"fabric"`` (preset name) and/or any Material field to override.
+    overrides : optional mapping of Material fields to override.
+
+    Returns
+    -------
+    Material, validated.
+    """
+    if spec is None:
+        mat = PRESETS[DEFAULT]
+    elif isinstance(spec, Material):
+        mat = spec
+    elif isinstance(spec, str):
+        key = spec.strip().lower()
+        if key not in PRESETS:
+            raise DrapeError(f"unknown material {spec!r}; presets: {', '.join(names())}")
+        mat = PRESETS[key]
+    elif isinstance(spec, Mapping):
+        spec = dict(spec)
+        base = spec.pop("fabric", None) or spec.pop("name", None)
+        mat = get_material(base)
+        overrides = {**spec, **(overrides or {})}
+    else:
+        raise DrapeError(f"material must be a preset name, a Material or a dict, not {type(spec).__name__}")
+    if overrides:
+        fields = set(Material.__dataclass_fields__)
+        unknown = sorted(set(overrides) - fields)
+        if unknown:
+            raise DrapeError(f"unknown material field(s) {', '.join(unknown)}; fields: {', '.join(sorted(fields))}")
+        try:
+            mat = replace(mat, **{k: (str(v) if k == "name" else float(v)) for k, v in overrides.items()})
+        except (TypeError, ValueError) as exc:
+            raise DrapeError(f"material override: {exc}") from None
+    return validate(mat)
