@@ -128,7 +128,15 @@ def test_all_writes_sizes_poses_and_picture(anny_available, tmp_path):
 
 
 def test_measure_fits_anny(anny_available, tmp_path, capsys):
+    from core.body.measure import measure
+    # Targets measured on a known Anny shape are reachable by construction.
+    m = measure(anny_available, anny_available.vertices({"weight": 0.7, "height": 0.6}))
+    arg = ",".join(f"{k}={v:.1f}" for k, v in m.items())
     out = tmp_path / "me.obj"
-    assert ease_body(["--measure", "chest=100,waist=86,hip=103,height=173", "--out", str(out)]) == 0
+    assert ease_body(["--measure", arg, "--pose", "P3", "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert text.count("within 1 cm") == 4, text
+    assert len(read_obj_vertices(out)) == anny_available.n_vertices
+    assert ease_body(["--measure", "chest=150,height=160", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "chest" in text and "not reachable by this model" in text

@@ -24,20 +24,32 @@ TOLERANCE_CM = 1.0
 
 SIZES = ("XS", "S", "M", "L", "XL")
 
-# Size chart in cm. M = the default Anny body measured by core.body.measure;
-# girths step ~4-6 cm per size at similar height (the chest/waist/hip
-# differences of the usual unisex charts).
+# Size chart in cm. M is the default Anny body (its reference phenotypes)
+# as measured by core.body.measure; the other sizes are measured Anny bodies
+# of increasing girth at similar height, rounded to 0.5 cm. Above M girths step
+# 4-5 cm per size; below M Anny's weight range (weight = 0 at size XS, with
+# gender and age held at the reference) limits the steps to 2-3 cm.
 SIZE_CHART: Dict[str, Dict[str, float]] = {
-    "XS": {"height": 170.0, "chest": 84.0, "waist": 70.0, "hip": 90.0},
-    "S": {"height": 171.0, "chest": 89.0, "waist": 75.0, "hip": 94.0},
-    "M": {"height": 172.0, "chest": 94.0, "waist": 80.0, "hip": 98.0},
-    "L": {"height": 173.0, "chest": 100.0, "waist": 86.0, "hip": 103.0},
-    "XL": {"height": 174.0, "chest": 106.0, "waist": 92.0, "hip": 108.0},
+    "XS": {"height": 160.0, "chest": 79.5, "waist": 72.5, "hip": 82.5},
+    "S": {"height": 161.0, "chest": 81.5, "waist": 74.5, "hip": 85.0},
+    "M": {"height": 162.5, "chest": 83.4, "waist": 77.7, "hip": 88.1},
+    "L": {"height": 164.0, "chest": 87.5, "waist": 83.0, "hip": 93.0},
+    "XL": {"height": 165.0, "chest": 91.5, "waist": 88.0, "hip": 97.0},
 }
 
-# Shape parameters per size, fitted with fit_measurements on the model named
-# by the key (fitted once, stored so the CLI and the add-on need not re-fit).
-FITTED_SHAPES: Dict[str, Dict[str, Dict[str, float]]] = {}
+# Shape parameters per size, fitted with fit_measurements to SIZE_CHART on the
+# model named by the key, stored so the CLI and the add-on need not re-fit
+# (tests/test_body_sizes.py re-fits and checks both land within 1 cm). M is
+# the reference shape itself. Parameters not listed keep their reference value.
+FITTED_SHAPES: Dict[str, Dict[str, Dict[str, float]]] = {
+    "anny": {
+        "XS": {"height": 0.4743, "weight": 0.0, "muscle": 0.7665, "proportions": 0.4371},
+        "S": {"height": 0.4851, "weight": 0.2013, "muscle": 0.5886, "proportions": 0.5022},
+        "M": {},
+        "L": {"height": 0.5145, "weight": 0.8145, "muscle": 0.4563, "proportions": 0.4836},
+        "XL": {"height": 0.5242, "weight": 0.9719, "muscle": 0.406, "proportions": 0.4547},
+    },
+}
 
 # Plausible target ranges (cm): anything outside is a typo, not a body.
 TARGET_RANGES = {"height": (50.0, 250.0), "chest": (40.0, 200.0), "waist": (30.0, 200.0), "hip": (40.0, 200.0)}
