@@ -1,0 +1,18 @@
+"""Garment designs: the versioned JSON design format, keypoint resolution on a
+body, mirroring, ease fields and the garment templates.
+
+>>> design = load_design("examples/designs/shirt_long_sleeve.json")
+>>> spec = resolve(design, body)            # -> core.cut.spec.CutSpec
+>>> cut = core.cut.cut_design(design)       # resolve + cut + ease
+
+Heavy dependencies (igl, potpourri3d) are imported when a design is resolved,
+not when this package is imported.
+"""
+from .format import (Design, Garment, Line, Panel, Parameter, EASE_MIN, EASE_MAX, FORMAT, VERSION,
+                     load_design, parse_design, save_design)
+from .resolve import Resolver, instance_vertices, resolve
+from .ease import apply_ease, panel_ease
+
+__all__ = ["Design", "Garment", "Line", "Panel", "Parameter", "EASE_MIN", "EASE_MAX", "FORMAT",
+           "VERSION", "load_design", "parse_design", "save_design", "Resolver", "instance_vertices",
+           "resolve", "apply_ease", "panel_ease"]

@@ -1,0 +1,123 @@
+"""Ease fields: the target weft scale rho per cut triangle (warp is 1.0 at design time).
+
+Kinds (per panel, in the design's ``ease``):
+
+- uniform ``{"value": 1.2}``;
+- linear gradient between two keypoints ``{"from": 1.0, "to": 1.6, "between": [a, b]}``:
+  rho = from at ``a``, to at ``b``, linear in the projection of each triangle's
+  centroid on the segment a -> b, constant beyond its ends;
+- linear gradient along an axis ``{"from": 1.0, "to": 1.6, "axis": "-z"}``:
+  ramps over the panel's own extent along the axis (``from`` where the
+  coordinate along the axis is smallest: ``"-z"`` runs top -> bottom);
+- per body-template triangle ``{"per_triangle": {"triangles": [...], "values":
+  [...], "default": 1.0}}`` (or ``{"values": [...]}`` with one value per
+  template triangle): each cut triangle takes the value of the template
+  triangle it lies on, so the field survives re-cuts and parameter changes;
+  triangles not listed take ``default``. This is what the Blender add-on's
+  ease painting writes.
+
+Gradients and triangle lookups are evaluated on the reference instance (the
+one the design is cut on), so the same field transfers to every shape and pose.
+"""
+from __future__ import annotations
+
+from typing import Optional
+
+import numpy as np
+
+from ..errors import DesignError
+from .format import EASE_MAX, EASE_MIN, Design, load_design
+from .mirror import mirror_ease
+from .resolve import AXIS_VECTORS, Resolver
+
+
+def _centroids(cut, panel, vertices) -> np.ndarray:
+    X = cut.panel_positions(panel, vertices)
+    return X[panel.faces].mean(axis=1)
+
+
+def panel_ease(cut, panel, ease: dict, resolver: Resolver, path: str) -> np.ndarray:
+    """Target weft scale (f,) for the triangles of one cut ``panel``.
+
+    Parameters
+    ----------
+    cut : GarmentCut
+    panel : core.cut.types.Panel
+    ease : dict, a validated ease field (see module docs)
+    resolver : Resolver on the reference instance
+    path : JSON path of the field, for errors
+    """
+    nf = len(panel.faces)
+    if "value" in ease:
+        rho = np.full(nf, float(ease["value"]))
+    elif "from" in ease:
+        c = _centroids(cut, panel, resolver.vertices)
+        if "between" in ease:
+            a = resolver.position(resolver.ref(ease["between"][0], f"{path}.between[0]"))
+            b = resolver.position(resolver.ref(ease["between"][1], f"{path}.between[1]"))
+            ab = b - a
+            if ab @ ab < 1e-12:
+                raise DesignError(f"{path}.between", "the two keypoints coincide")
+            t = (c - a) @ ab / (ab @ ab)
+        else:
+            proj = c @ np.asarray(AXIS_VECTORS[ease["axis"]], dtype=float)
+            span = proj.max() - proj.min() if nf else 0.0
+            t = (proj - proj.min()) / span if span > 0 else np.zeros(nf)
+        t = np.clip(t, 0.0, 1.0)
+        rho = ease["from"] + t * (ease["to"] - ease["from"])
+    elif "per_triangle" in ease:
+        pt = ease["per_triangle"]
+        nbody = len(resolver.faces)
+        c = _centroids(cut, panel, resolver.vertices)
+        _, tri, _ = resolver.locator.closest(c) if nf else (None, np.zeros(0, dtype=np.int64), None)
+        if pt.get("mirrored"):
+            # the field is painted for the *_left panel: read it at the mirror triangle
+            tri = np.where(resolver.face_sym[tri] >= 0, resolver.face_sym[tri], tri)
+        if "triangles" in pt:
+            tris = np.asarray(pt["triangles"], dtype=np.int64)
+            bad = np.flatnonzero(tris >= nbody)
+            if bad.size:
+                raise DesignError(f"{path}.per_triangle.triangles[{bad[0]}]",
+                                  f"triangle {tris[bad[0]]} does not exist (the body has {nbody} triangles)")
+            table = np.full(nbody, float(pt.get("default", 1.0)))
+            table[tris] = np.asarray(pt["values"], dtype=float)
+        else:
+            if len(pt["values"]) != nbody:
+                raise DesignError(f"{path}.per_triangle.values",
+                                  f"expected {nbody} values (one per body template triangle), got {len(pt['values'])}")
+            table = np.asarray(pt["values"], dtype=float)
+        rho = table[tri]
+    else:  # pragma: no cover - validated on load
+        raise DesignError(path, "unknown ease field")
+    rho = np.asarray(rho, dtype=np.float64)
+    bad = ~np.isfinite(rho) | (rho < EASE_MIN - 1e-12) | (rho > EASE_MAX + 1e-12)
+    if bad.any():
+        raise DesignError(path, f"panel {panel.name!r}: ease must be finite and within "
+                                f"{EASE_MIN}..{EASE_MAX}, got {rho[bad][0]}")
+    return rho
+
+
+def apply_ease(cut, design, body, body_vertices: np.ndarray, resolver: Optional[Resolver] = None):
+    """Fill ``Panel.ease`` of every panel of ``cut`` from the design's ease fields.
+
+    Parameters
+    ----------
+    cut : GarmentCut, cut from ``design`` (panel names ``garment.panel``)
+    design : Design | dict | path
+    body : BodyModel
+    body_vertices : (V, 3) float, the reference instance the design was cut on
+
+    Returns
+    -------
+    cut : the same GarmentCut, with ``ease`` (f,) set on each panel.
+    """
+    design = load_design(design)
+    if resolver is None:
+        resolver = Resolver(design, body, body_vertices)
+    for panel in cut.panels:
+        g, p, i, mirrored = design.find_panel(panel.name)
+        gi = design.garments.index(g)
+        ease = mirror_ease(p.ease) if mirrored else p.ease
+        path = f"garments[{gi}].panels[{i}].ease"
+        panel.ease = panel_ease(cut, panel, ease, resolver, path)
+    return cut

@@ -1,0 +1,217 @@
+"""Surface geometry used to resolve keypoints: point location, geodesic paths,
+walking a polyline by arc length, and plane sections (rings) of the body.
+
+All positions are metres on one body instance ``vertices`` (V, 3) with the
+template ``faces`` (F, 3).
+"""
+from __future__ import annotations
+
+from typing import List, Optional, Tuple
+
+import numpy as np
+
+from ..body.model import SurfacePoint
+
+
+class SurfaceLocator:
+    """Closest-point queries on a body instance (an AABB tree, built once)."""
+
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray):
+        import igl
+        self.vertices = np.ascontiguousarray(vertices, dtype=np.float64)
+        self.faces = np.ascontiguousarray(faces, dtype=np.int64)
+        self._tree = igl.AABB()
+        self._tree.init(self.vertices, self.faces)
+
+    def closest(self, points: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Squared distances (n,), triangles (n,) and barycentric weights (n, 3)
+        of the closest surface points to ``points`` (n, 3)."""
+        import igl
+        P = np.ascontiguousarray(np.atleast_2d(points), dtype=np.float64)
+        d2, tri, c = self._tree.squared_distance(self.vertices, self.faces, P)
+        T = self.faces[tri]
+        bary = igl.barycentric_coordinates(np.ascontiguousarray(c), self.vertices[T[:, 0]],
+                                           self.vertices[T[:, 1]], self.vertices[T[:, 2]])
+        bary = np.clip(np.nan_to_num(bary, nan=1.0 / 3.0), 0.0, 1.0)
+        bary /= bary.sum(axis=1, keepdims=True)
+        return d2, tri.astype(np.int64), bary
+
+    def locate(self, points: np.ndarray) -> List[SurfacePoint]:
+        _, tri, bary = self.closest(points)
+        return [SurfacePoint(int(t), tuple(float(x) for x in b)) for t, b in zip(tri, bary)]
+
+
+class Geodesics:
+    """Geodesic paths between surface points (potpourri3d edge flips).
+
+    Endpoints are snapped to the nearest vertex of their triangle for the
+    edge-flip solver, and the exact endpoints are put back on the polyline;
+    the error this leaves is below half an edge length near the ends only.
+    """
+
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray):
+        self.vertices = np.ascontiguousarray(vertices, dtype=np.float64)
+        self.faces = np.ascontiguousarray(faces, dtype=np.int64)
+        self._solver = None
+
+    @property
+    def solver(self):
+        if self._solver is None:
+            import potpourri3d as pp3d
+            self._solver = pp3d.EdgeFlipGeodesicSolver(self.vertices, self.faces)
+        return self._solver
+
+    def nearest_vertex(self, sp: SurfacePoint) -> int:
+        tri = self.faces[sp.triangle]
+        p = sp.position(self.vertices, self.faces)
+        return int(tri[np.argmin(np.linalg.norm(self.vertices[tri] - p, axis=1))])
+
+    def path(self, a: SurfacePoint, b: SurfacePoint) -> np.ndarray:
+        """Polyline (k, 3) on the surface from ``a`` to ``b``."""
+        pa = a.position(self.vertices, self.faces)
+        pb = b.position(self.vertices, self.faces)
+        va, vb = self.nearest_vertex(a), self.nearest_vertex(b)
+        if va == vb:
+            return np.stack([pa, pb])
+        mid = np.asarray(self.solver.find_geodesic_path(va, vb), dtype=np.float64)
+        return _dedup(np.vstack([pa[None], mid, pb[None]]))
+
+
+def _dedup(poly: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+    keep = np.ones(len(poly), dtype=bool)
+    keep[1:] = np.linalg.norm(np.diff(poly, axis=0), axis=1) > tol
+    return poly[keep]
+
+
+def polyline_length(poly: np.ndarray) -> float:
+    return float(np.linalg.norm(np.diff(poly, axis=0), axis=1).sum()) if len(poly) > 1 else 0.0
+
+
+def point_at_length(poly: np.ndarray, s: float) -> Tuple[np.ndarray, np.ndarray]:
+    """Point at arc length ``s`` along ``poly`` (k, 3) and the unit tangent there."""
+    seg = np.diff(poly, axis=0)
+    L = np.linalg.norm(seg, axis=1)
+    cum = np.concatenate([[0.0], np.cumsum(L)])
+    s = min(max(s, 0.0), cum[-1])
+    i = int(np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(L) - 1))
+    f = (s - cum[i]) / L[i] if L[i] > 0 else 0.0
+    return poly[i] + f * seg[i], seg[i] / max(L[i], 1e-12)
+
+
+def trace_straight(vertices, faces, sp: SurfacePoint, direction: np.ndarray, length: float) -> np.ndarray:
+    """Straightest geodesic (k, 3) from ``sp`` starting along ``direction``
+    (projected to the tangent plane) for ``length`` metres; shorter when it
+    runs off a mesh boundary."""
+    import potpourri3d as pp3d
+    tracer = pp3d.GeodesicTracer(np.ascontiguousarray(vertices, dtype=np.float64),
+                                 np.ascontiguousarray(faces, dtype=np.int64))
+    d = np.asarray(direction, dtype=np.float64)
+    d = d / np.linalg.norm(d) * length
+    path = np.asarray(tracer.trace_geodesic_from_face(int(sp.triangle), np.asarray(sp.bary, dtype=np.float64), d))
+    start = sp.position(vertices, faces)
+    return _dedup(np.vstack([start[None], path]))
+
+
+# ---------------------------------------------------------------- plane sections
+
+def _edge_faces(faces: np.ndarray):
+    """Unique undirected edges (E, 2) and for each face its 3 edge ids
+    (edge k of a face joins its corners k and k+1)."""
+    faces = np.asarray(faces, dtype=np.int64)
+    F = len(faces)
+    nv = int(faces.max()) + 1
+    he = np.stack([faces, np.roll(faces, -1, axis=1)], axis=2).reshape(-1, 2)
+    key = np.sort(he, axis=1)
+    code, inv = np.unique(key[:, 0] * nv + key[:, 1], return_inverse=True)
+    edges = np.stack([code // nv, code % nv], axis=1)
+    return edges, inv.reshape(F, 3)
+
+
+def plane_section_loop(vertices: np.ndarray, faces: np.ndarray, point: np.ndarray, normal: np.ndarray,
+                       start_face: int, handed: int = 1, edge_table=None
+                       ) -> Tuple[np.ndarray, List[SurfacePoint], List[int]]:
+    """The closed curve where the plane through ``point`` with ``normal`` cuts
+    the surface, following the connected component through ``start_face``.
+
+    Returns
+    -------
+    poly : (k, 3) loop positions (not repeating the first), running counter-clockwise about
+        ``normal`` (clockwise when ``handed`` is -1).
+    points : list of k SurfacePoints (each on an edge, in one adjacent face).
+    faces_between : (k,) int, the face containing the segment from point i to i+1.
+    edge_table : optional ``_edge_faces(faces)``, to reuse between calls.
+
+    Raises
+    ------
+    ValueError : when the section through ``start_face`` does not close
+        (it runs into a mesh boundary) or does not pass through that face.
+    """
+    V = np.asarray(vertices, dtype=np.float64)
+    n = np.asarray(normal, dtype=np.float64)
+    n = n / np.linalg.norm(n)
+    d = (V - point) @ n
+    # A vertex exactly on the plane would make a crossing degenerate.
+    d = np.where(np.abs(d) < 1e-12, 1e-12, d)
+    edges, fe = edge_table if edge_table is not None else _edge_faces(faces)
+    crossed = (d[edges[:, 0]] > 0) != (d[edges[:, 1]] > 0)
+    fcross = crossed[fe]                                   # (F, 3)
+    if fcross[start_face].sum() != 2:
+        raise ValueError("the plane does not cross the start triangle")
+    # Crossing edge -> the (up to two) faces it links.
+    cf = np.flatnonzero(fcross.sum(axis=1) == 2)
+    edge_links = {}
+    for f in cf:
+        a, b = fe[f][fcross[f]]
+        edge_links.setdefault(int(a), []).append((int(f), int(b)))
+        edge_links.setdefault(int(b), []).append((int(f), int(a)))
+    e0, e1 = fe[start_face][fcross[start_face]]
+    order, seg_faces = [int(e0)], []
+    prev_face, cur = int(start_face), int(e1)
+    seg_faces.append(int(start_face))
+    for _ in range(len(cf) + 1):
+        order.append(cur)
+        if cur == order[0]:
+            break
+        nxt = [x for x in edge_links.get(cur, []) if x[0] != prev_face]
+        if not nxt:
+            raise ValueError("the plane section runs into a mesh boundary (it does not close)")
+        prev_face, cur = nxt[0]
+        seg_faces.append(prev_face)
+    else:
+        raise ValueError("the plane section does not close")
+    order = order[:-1]                                      # drop the repeated first edge
+    E = edges[order]
+    w = d[E[:, 0]] / (d[E[:, 0]] - d[E[:, 1]])              # weight of the second vertex
+    poly = (1 - w)[:, None] * V[E[:, 0]] + w[:, None] * V[E[:, 1]]
+    # Orientation: signed area about the normal.
+    c = poly.mean(axis=0)
+    area = np.cross(poly - c, np.roll(poly, -1, axis=0) - c).sum(axis=0) @ n
+    if (area > 0) != (handed > 0):
+        poly = poly[::-1].copy()
+        E = E[::-1]
+        w = w[::-1]
+        k = len(seg_faces)
+        # reversed point j is original point k-1-j; its segment to j+1 is original segment k-2-j
+        seg_faces = [seg_faces[(k - 2 - j) % k] for j in range(k)]
+    pts = []
+    for (a, b), wi, f in zip(E, w, seg_faces):
+        tri = list(faces[f])
+        bary = [0.0, 0.0, 0.0]
+        if a in tri and b in tri:
+            bary[tri.index(a)] = 1 - wi
+            bary[tri.index(b)] = wi
+            pts.append(SurfacePoint(int(f), tuple(bary)))
+        else:  # pragma: no cover - every crossing edge belongs to its segment face
+            raise ValueError("inconsistent plane section")
+    return poly, pts, seg_faces
+
+
+def segment_point(vertices, faces, face: int, p: np.ndarray) -> SurfacePoint:
+    """Barycentric SurfacePoint of ``p`` (on triangle ``face``)."""
+    T = vertices[faces[face]]
+    A = np.column_stack([T[1] - T[0], T[2] - T[0]])
+    uv, *_ = np.linalg.lstsq(A, p - T[0], rcond=None)
+    b = np.array([1 - uv.sum(), uv[0], uv[1]])
+    b = np.clip(b, 0.0, 1.0)
+    b /= b.sum()
+    return SurfacePoint(int(face), tuple(float(x) for x in b))

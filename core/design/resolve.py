@@ -1,0 +1,394 @@
+"""Resolve a design on one body instance into a :class:`core.cut.spec.CutSpec`.
+
+Keypoints become :class:`core.body.model.SurfacePoint` s of the body template
+(triangle + barycentric weights), so the cut made from them holds for every
+shape and pose. Keypoint kinds:
+
+- a landmark of the body, by name;
+- ``{"triangle", "bary"}``, a surface point of the template;
+- ``{"between": [a, b], "t"}``, the point at fraction t of the geodesic a -> b;
+- ``{"trace": {"from", "along", "length"}}``, the point at a geodesic length
+  from ``from`` down a body part: ``arm_*`` towards the wrist, ``leg_*``
+  towards the ankle (pose-dependent: the geodesic follows the limb as posed),
+  ``torso_down``/``torso_up`` straight down/up the torso. A length beyond the
+  body part (past the wrist, ankle, crotch or neck) is a DesignError naming
+  the parameter.
+
+A line is either a list of keypoints joined by geodesics, or a *ring*: the
+closed plane section of a limb or the torso through a keypoint, with the plane
+normal given by an axis or by two keypoints (a limb's direction), sampled at
+``points`` positions; a ring can name points on itself (``"named": {"hem_left":
+"+x", "cuff_under_left": 0.5}``: the extreme point along an axis, or the point
+at a fraction of the ring's length from ``through``, counter-clockwise about
+the normal) for other lines to end on.
+"""
+from __future__ import annotations
+
+from typing import Dict, List, Optional, Tuple
+
+import numpy as np
+
+from ..body.model import SurfacePoint
+from ..errors import BodyError, DesignError
+from .format import Design, Line, load_design, parameter_value
+from .geometry import (_edge_faces, Geodesics, SurfaceLocator, plane_section_loop, point_at_length,
+                       polyline_length, segment_point, trace_straight)
+from .mirror import face_symmetry, mirror_line, mirror_panel, mirror_surface_point, mirrored_name, swap_side
+
+AXIS_VECTORS = {
+    "x": (1, 0, 0), "+x": (1, 0, 0), "-x": (-1, 0, 0),
+    "y": (0, 1, 0), "+y": (0, 1, 0), "-y": (0, -1, 0),
+    "z": (0, 0, 1), "+z": (0, 0, 1), "-z": (0, 0, -1),
+}
+
+# Where a trace along a body part heads (landmarks), and its limit.
+TRACE_TARGET = {"arm_left": "wrist_left", "arm_right": "wrist_right",
+                "leg_left": "ankle_left", "leg_right": "ankle_right"}
+
+
+def instance_shape(design: Design, body, shape=None):
+    """The shape dict of the instance to cut on (``shape`` overrides the design's)."""
+    shape = design.body.get("shape") if shape is None else shape
+    if isinstance(shape, str):
+        try:
+            from ..body.sizes import size_shape
+        except ImportError:  # pragma: no cover - sizes land with the body stage
+            if shape == "M":
+                return body.default_shape()
+            raise
+        return size_shape(body, shape)
+    return shape
+
+
+def instance_pose(design: Design, pose=None):
+    pose = design.body.get("pose") if pose is None else pose
+    if isinstance(pose, dict):
+        return {k: np.asarray(v, dtype=float) for k, v in pose.items()}
+    return pose
+
+
+def instance_vertices(design: Design, body, shape=None, pose=None) -> np.ndarray:
+    """Vertices (V, 3) of the body instance a design is resolved on."""
+    return np.asarray(body.vertices(instance_shape(design, body, shape), instance_pose(design, pose)),
+                      dtype=np.float64)
+
+
+class Resolver:
+    """Resolves keypoints, lines and seeds of a design on one body instance.
+
+    Parameters
+    ----------
+    design : Design
+    body : BodyModel
+    vertices : (V, 3) float, the body instance (metres)
+    """
+
+    def __init__(self, design: Design, body, vertices: np.ndarray):
+        self.design = design
+        self.body = body
+        self.faces = np.asarray(body.faces, dtype=np.int64)
+        self.vertices = np.asarray(vertices, dtype=np.float64)
+        if self.vertices.shape != (int(self.faces.max()) + 1, 3) and self.vertices.shape[0] < self.faces.max() + 1:
+            raise BodyError(f"body vertices {self.vertices.shape} do not match the template's faces")
+        self.geodesics = Geodesics(self.vertices, self.faces)
+        self._locator = None
+        self._face_sym = None
+        self._edges = None
+        self._points: Dict[str, SurfacePoint] = {}
+        self._stack: List[str] = []
+        self._rings: Dict[str, List[SurfacePoint]] = {}
+        self._build_tables()
+
+    # ------------------------------------------------------------ tables
+    def _build_tables(self):
+        d = self.design
+        # lines: (full name, path, Line, garment name or None, mirror source path or None)
+        self.lines: List[Tuple[str, str, Line, Optional[str]]] = []
+        groups = [(None, "lines", d.lines)] + [(g.name, f"garments[{gi}].lines", g.lines)
+                                               for gi, g in enumerate(d.garments)]
+        for gname, prefix, lines in groups:
+            own = {l.name for l in lines}
+            for li, line in enumerate(lines):
+                full = f"{gname}.{line.name}" if gname else line.name
+                self.lines.append((full, f"{prefix}[{li}]", line, gname))
+            if d.mirror:
+                for li, line in enumerate(lines):
+                    m = mirrored_name(line.name)
+                    if m and m not in own:
+                        full = f"{gname}.{m}" if gname else m
+                        self.lines.append((full, f"{prefix}[{li}] (mirrored)", mirror_line(line), gname))
+        # names defined by the design: keypoints and ring-named points
+        self.ring_named: Dict[str, int] = {}
+        for i, (_, _, line, _) in enumerate(self.lines):
+            if line.ring is not None:
+                for k in line.ring["named"]:
+                    if k not in d.keypoints and k not in self.ring_named:
+                        self.ring_named[k] = i
+
+    @property
+    def locator(self) -> SurfaceLocator:
+        if self._locator is None:
+            self._locator = SurfaceLocator(self.vertices, self.faces)
+        return self._locator
+
+    @property
+    def face_sym(self) -> np.ndarray:
+        if self._face_sym is None:
+            self._face_sym = face_symmetry(self.faces, np.asarray(self.body.symmetry))
+        return self._face_sym
+
+    def position(self, sp: SurfacePoint) -> np.ndarray:
+        return sp.position(self.vertices, self.faces)
+
+    def mirror(self, sp: SurfacePoint) -> SurfacePoint:
+        return mirror_surface_point(sp, self.faces, np.asarray(self.body.symmetry), self.face_sym, self.locator)
+
+    def defines(self, name: str) -> bool:
+        return name in self.design.keypoints or name in self.ring_named
+
+    # ------------------------------------------------------------ keypoints
+    def point(self, name: str, path: str) -> SurfacePoint:
+        """The surface point of a keypoint reference ``name`` (used at ``path``)."""
+        if name in self._points:
+            return self._points[name]
+        if name in self._stack:
+            raise DesignError(path, f"keypoint {name!r} depends on itself ({' -> '.join(self._stack + [name])})")
+        self._stack.append(name)
+        try:
+            d = self.design
+            if name in d.keypoints:
+                sp = self.resolve_def(d.keypoints[name], f"keypoints.{name}")
+            elif name in self.ring_named:
+                self.ring_points(self.ring_named[name])
+                sp = self._points[name]
+            elif d.mirror and (name.endswith("_right") or "_right_" in name) and self.defines(swap_side(name)):
+                sp = self.mirror(self.point(swap_side(name), path))
+            else:
+                sp = self.landmark(name, path)
+        finally:
+            self._stack.pop()
+        self._points[name] = sp
+        return sp
+
+    def landmark(self, name: str, path: str) -> SurfacePoint:
+        lm = self.body.landmarks
+        if name not in lm:
+            known = sorted(self.design.keypoints) + sorted(self.ring_named)
+            raise DesignError(path, f"unknown keypoint or landmark {name!r}; design keypoints: "
+                                    f"{', '.join(known) or 'none'}; landmarks of body {self.body.name!r}: "
+                                    f"{', '.join(sorted(lm))}")
+        return lm[name]
+
+    def ref(self, x, path: str) -> SurfacePoint:
+        if isinstance(x, str):
+            return self.point(x, path)
+        return self.resolve_def(x, path)
+
+    def resolve_def(self, kp: dict, path: str) -> SurfacePoint:
+        if "landmark" in kp:
+            return self.landmark(kp["landmark"], f"{path}.landmark" if not path.endswith(".landmark") else path)
+        if "triangle" in kp:
+            nf = len(self.faces)
+            if kp["triangle"] >= nf:
+                raise DesignError(f"{path}.triangle", f"keypoint off the body: triangle {kp['triangle']} does not "
+                                                      f"exist (body {self.body.name!r} has {nf} triangles)")
+            return SurfacePoint(int(kp["triangle"]), tuple(float(b) for b in kp["bary"]))
+        if "mirror_of" in kp:
+            return self.mirror(self.resolve_def(kp["mirror_of"], path))
+        if "between" in kp:
+            a = self.ref(kp["between"][0], f"{path}.between[0]")
+            b = self.ref(kp["between"][1], f"{path}.between[1]")
+            t = parameter_value(kp["t"], self.design.parameters)
+            poly = self.geodesics.path(a, b)
+            p, _ = point_at_length(poly, t * polyline_length(poly))
+            return self.locator.locate(p[None])[0]
+        if "trace" in kp:
+            return self._trace(kp["trace"], f"{path}.trace")
+        raise DesignError(path, "unknown keypoint kind")  # pragma: no cover - validated on load
+
+    def _trace(self, tr: dict, path: str) -> SurfacePoint:
+        start = self.ref(tr["from"], f"{path}.from")
+        length = parameter_value(tr["length"], self.design.parameters)
+        lpath = f"parameters.{tr['length'][1:]}" if isinstance(tr["length"], str) else f"{path}.length"
+        along = tr["along"]
+        from_name = tr["from"] if isinstance(tr["from"], str) else "the start point"
+        if along in TRACE_TARGET:
+            target = self.landmark(TRACE_TARGET[along], f"{path}.along")
+            poly = self.geodesics.path(start, target)
+            avail = polyline_length(poly)
+            if length > avail:
+                raise DesignError(lpath, f"a length of {length:.3f} m from {from_name} along {along} leaves the "
+                                         f"body part: it is {avail:.3f} m from there to {TRACE_TARGET[along]}")
+            p, _ = point_at_length(poly, length)
+            return self.locator.locate(p[None])[0]
+        down = along == "torso_down"
+        poly = trace_straight(self.vertices, self.faces, start, np.array([0.0, 0.0, -1.0 if down else 1.0]), length)
+        got = polyline_length(poly)
+        end = poly[-1]
+        limit_name = "crotch" if down else "neck_back"
+        limit = self.position(self.landmark(limit_name, f"{path}.along"))[2]
+        if got < length - 1e-3 or (down and end[2] < limit) or (not down and end[2] > limit):
+            raise DesignError(lpath, f"a length of {length:.3f} m from {from_name} along {along} leaves the "
+                                     f"torso (past the {limit_name} level)")
+        return self.locator.locate(end[None])[0]
+
+    # ------------------------------------------------------------ lines
+    def line_points(self, index: int) -> List[SurfacePoint]:
+        full, path, line, _ = self.lines[index]
+        if line.ring is not None:
+            return self.ring_points(index)
+        pts = [self.ref(r, f"{path}.points[{i}]") for i, r in enumerate(line.points)]
+        for i in range(len(pts) - 1 + int(line.closed)):
+            a, b = pts[i], pts[(i + 1) % len(pts)]
+            if np.linalg.norm(self.position(a) - self.position(b)) < 1e-6:
+                raise DesignError(f"{path}.points[{(i + 1) % len(pts)}]",
+                                  f"line {full!r}: consecutive keypoints coincide")
+        return pts
+
+    def _axis(self, spec, path) -> np.ndarray:
+        if isinstance(spec, str):
+            return np.asarray(AXIS_VECTORS[spec], dtype=float)
+        a = self.position(self.ref(spec[0], f"{path}[0]"))
+        b = self.position(self.ref(spec[1], f"{path}[1]"))
+        v = b - a
+        n = np.linalg.norm(v)
+        if n < 1e-6:
+            raise DesignError(path, "the two keypoints coincide; they cannot give a direction")
+        return v / n
+
+    def ring_points(self, index: int) -> List[SurfacePoint]:
+        full, path, line, _ = self.lines[index]
+        if full in self._rings:
+            return self._rings[full]
+        r = line.ring
+        through = self.ref(r["through"], f"{path}.ring.through")
+        p0 = self.position(through)
+        n = self._axis(r["normal"], f"{path}.ring.normal")
+        try:
+            if self._edges is None:
+                self._edges = _edge_faces(self.faces)
+            poly, pts, segf = plane_section_loop(self.vertices, self.faces, p0, n, through.triangle,
+                                                 int(r.get("handed", 1)), self._edges)
+        except ValueError as exc:
+            raise DesignError(f"{path}.ring", f"line {full!r}: {exc}") from None
+        k = len(poly)
+        j = next(i for i in range(k) if segf[i] == through.triangle)
+        # Put the through point first: it lies on segment j (in its own triangle).
+        order = [(j + 1 + i) % k for i in range(k)]
+        P = np.vstack([p0[None], poly[order]])
+        S = [through] + [pts[i] for i in order]
+        seg_face = [through.triangle] + [segf[i] for i in order[:-1]] + [through.triangle]
+        closed = np.vstack([P, P[:1]])
+        L = np.linalg.norm(np.diff(closed, axis=0), axis=1)
+        cum = np.concatenate([[0.0], np.cumsum(L)])
+        total = cum[-1]
+
+        def at(s):
+            s = s % total
+            m = int(np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(L) - 1))
+            f = (s - cum[m]) / L[m] if L[m] > 0 else 0.0
+            if f < 1e-9:
+                return S[m]
+            return segment_point(self.vertices, self.faces, seg_face[m], closed[m] + f * (closed[m + 1] - closed[m]))
+
+        entries = []  # (arc length, SurfacePoint, name or None)
+        for name, v in r["named"].items():
+            if isinstance(v, str):
+                i = int(np.argmax(P @ np.asarray(AXIS_VECTORS[v], dtype=float)))
+                entries.append((cum[i], S[i], name))
+            else:
+                s = v * total
+                entries.append((s % total, at(s), name))
+        named_s = [e[0] for e in entries]
+        N = int(r["points"])
+        gap = 0.35 * total / N
+        for i in range(N):
+            s = i * total / N
+            if i == 0 or all(min(abs(s - x), total - abs(s - x)) > gap for x in named_s):
+                entries.append((s, at(s) if i else through, None))
+        entries.sort(key=lambda e: (e[0], e[2] is None))
+        out: List[SurfacePoint] = []
+        last = None
+        for s, sp, name in entries:
+            if name is not None and name not in self.design.keypoints and self.ring_named.get(name) == index:
+                self._points[name] = sp
+            if last is not None and abs(s - last) < 1e-6:
+                continue
+            out.append(sp)
+            last = s
+        self._rings[full] = out
+        return out
+
+    # ------------------------------------------------------------ everything
+    def all_keypoints(self) -> Dict[str, SurfacePoint]:
+        """Every design keypoint and ring-named point (with mirrors), by name."""
+        names = list(self.design.keypoints) + list(self.ring_named)
+        if self.design.mirror:
+            names += [mirrored_name(n) for n in names if mirrored_name(n)]
+        out = {}
+        for n in names:
+            out[n] = self.point(n, f"keypoints.{n}")
+        return out
+
+
+def _panels(design: Design):
+    """``(garment, path, Panel, mirror_of full name or None)`` incl. generated mirrors."""
+    for gi, g in enumerate(design.garments):
+        own = {p.name for p in g.panels}
+        for pi, p in enumerate(g.panels):
+            left = swap_side(p.name) if p.name.endswith("_right") else None
+            mirror_of = f"{g.name}.{left}" if left and left in own else None
+            yield g, f"garments[{gi}].panels[{pi}]", p, mirror_of
+        if design.mirror:
+            for pi, p in enumerate(g.panels):
+                m = mirrored_name(p.name)
+                if m and m not in own:
+                    yield g, f"garments[{gi}].panels[{pi}] (mirrored)", mirror_panel(p), f"{g.name}.{p.name}"
+
+
+def resolve(design, body, shape=None, pose=None, vertices: Optional[np.ndarray] = None,
+            resolver: Optional[Resolver] = None):
+    """Resolve ``design`` on a body instance into a :class:`core.cut.spec.CutSpec`.
+
+    Parameters
+    ----------
+    design : Design | dict | path
+    body : BodyModel
+    shape, pose : override the design's body shape (size name or dict) and pose.
+    vertices : (V, 3) float, the instance itself (skips evaluating the body).
+
+    Raises
+    ------
+    DesignError : naming the JSON path of the element that cannot be resolved.
+    """
+    from ..cut.spec import CutLine, CutSpec, GarmentSpec, PanelSpec
+
+    design = load_design(design)
+    if resolver is None:
+        if vertices is None:
+            vertices = instance_vertices(design, body, shape, pose)
+        resolver = Resolver(design, body, vertices)
+    lines = []
+    for i, (full, path, line, gname) in enumerate(resolver.lines):
+        pts = resolver.line_points(i)
+        if line.role == "guide":
+            continue
+        lines.append(CutLine(full, pts, closed=line.closed, role=line.role))
+    names = {l.name for l in lines}
+    panels = []
+    for g, path, p, mirror_of in _panels(design):
+        seed = resolver.ref(p.seed, f"{path}.seed")
+        panels.append(PanelSpec(f"{g.name}.{p.name}", g.name, seed, p.body_part, mirror_of))
+    garments = []
+    for gi, g in enumerate(design.garments):
+        pin = None
+        if g.pin is not None:
+            pin = f"{g.name}.{g.pin}" if f"{g.name}.{g.pin}" in names else g.pin
+        garments.append(GarmentSpec(g.name, g.kind, pin))
+    shape_used = design.body.get("shape") if shape is None else shape
+    pose_used = design.body.get("pose") if pose is None else pose
+    if isinstance(pose_used, dict):
+        pose_used = {k: [float(x) for x in np.asarray(v).ravel()] for k, v in pose_used.items()}
+    return CutSpec(lines=lines, panels=panels, garments=garments, skirt=bool(design.skirt),
+                   refine_edge_length=design.refine_edge_length, materials=dict(design.materials),
+                   body={"model": design.body.get("model", "anny"), "shape": shape_used, "pose": pose_used})

@@ -1,0 +1,344 @@
+"""The garment templates shipped in ``examples/designs/``, built in code.
+
+Each builder returns a design dict (the JSON format); the files in
+``examples/designs/`` are written from them by :func:`write_templates` (tests
+check they are current). Templates are made of landmarks, traced lengths and
+rings only, so they hold on any body model with the standard landmarks.
+
+Construction (all mirrored left -> right):
+
+- tops: neckline loop through the four neck landmarks (opening); hem ring
+  (opening) a traced length below the front waist; armhole rings (seams) a
+  little down the arm from the armpit, across the upper arm; shoulder seams
+  neck -> armhole top; side seams armhole bottom -> hem side; sleeves end in
+  cuff rings (openings) a traced sleeve length from the armhole top, split
+  front/back by a seam on top and one underneath. Pinned at the neckline.
+- pants/shorts: waist ring (opening, pinned); centre front and centre back
+  seams waist -> crotch; side seams waist side -> leg hem; inseams crotch ->
+  leg hem; leg hem rings (openings) across the leg at a traced length.
+- skirt/dress: the skirt topology (``"skirt": true``): the hem is a loop of
+  points on both legs, joined across the bridged inter-leg surface.
+"""
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+from typing import Callable, Dict
+
+REPO = Path(__file__).resolve().parent.parent.parent
+TEMPLATE_DIR = REPO / "examples" / "designs"
+
+
+def _design(name, description, garments, parameters, keypoints, lines=None, skirt=False, fabric="cotton"):
+    d = {
+        "format": "ease-design",
+        "version": 1,
+        "name": name,
+        "description": description,
+        "body": {"model": "anny", "shape": "M", "pose": "A"},
+        "materials": {"fabric": fabric, "eps_weft": 1.1, "eps_warp": 1.1},
+        "mirror": True,
+        "skirt": skirt,
+        "refine_edge_length": 0.01,
+        "parameters": parameters,
+        "keypoints": keypoints,
+    }
+    if lines:
+        d["lines"] = lines
+    d["garments"] = garments
+    return d
+
+
+# ---------------------------------------------------------------- upper body parts
+
+def _top_parts(sleeves: str = "long", hem: str = "hem", ease=None):
+    """Parameters, keypoints, lines and panels of a top.
+
+    sleeves : "long" | "short" | "none"; hem : name of the hem line (the
+    teaser shares the waist line instead).
+    """
+    ease = ease or {}
+    params = {
+        "armhole_drop": {"value": 0.03, "kind": "length", "min": 0.0, "max": 0.08},
+    }
+    kps = {
+        "armhole_under_left": {"trace": {"from": "armpit_left", "along": "arm_left", "length": "$armhole_drop"}},
+        "chest_front": {"between": ["neck_front", "waist_front"], "t": 0.45},
+        "chest_back": {"between": ["neck_back", "waist_back"], "t": 0.45},
+    }
+    lines = [
+        {"name": "neckline", "points": ["neck_front", "neck_left", "neck_back", "neck_right"],
+         "closed": True, "role": "opening"},
+        {"name": "armhole_left", "ring": {"through": "armhole_under_left", "normal": ["shoulder_left", "elbow_left"],
+                                           "points": 12, "named": {"armhole_top_left": "+z",
+                                                                   "armhole_front_left": "-y",
+                                                                   "armhole_back_left": "+y"}},
+         "role": "seam" if sleeves != "none" else "opening"},
+        {"name": "shoulder_left", "points": ["neck_left", "armhole_top_left"], "role": "seam"},
+        {"name": "side_left", "points": ["armhole_under_left", "hem_side_left"], "role": "seam"},
+    ]
+    panels = [
+        {"name": "front", "seed": "chest_front", "body_part": "torso", "ease": ease.get("front", {"value": 1.2})},
+        {"name": "back", "seed": "chest_back", "body_part": "torso", "ease": ease.get("back", {"value": 1.2})},
+    ]
+    if sleeves != "none":
+        if sleeves == "long":
+            params["sleeve_length"] = {"value": 0.37, "kind": "length", "min": 0.2, "max": 0.45}
+            normal = ["elbow_left", "wrist_left"]
+        else:
+            params["sleeve_length"] = {"value": 0.12, "kind": "length", "min": 0.06, "max": 0.2}
+            normal = ["shoulder_left", "elbow_left"]
+        kps["cuff_top_left"] = {"trace": {"from": "armhole_top_left", "along": "arm_left",
+                                          "length": "$sleeve_length"}}
+        kps["sleeve_front_mid_left"] = {"between": ["armhole_front_left", "cuff_front_left"], "t": 0.5}
+        kps["sleeve_back_mid_left"] = {"between": ["armhole_back_left", "cuff_back_left"], "t": 0.5}
+        lines += [
+            {"name": "cuff_left", "ring": {"through": "cuff_top_left", "normal": normal, "points": 12,
+                                           "named": {"cuff_under_left": 0.5, "cuff_front_left": "-y",
+                                                     "cuff_back_left": "+y"}},
+             "role": "opening"},
+            {"name": "sleeve_top_left", "points": ["armhole_top_left", "cuff_top_left"], "role": "seam"},
+            {"name": "sleeve_under_left", "points": ["armhole_under_left", "cuff_under_left"], "role": "seam"},
+        ]
+        panels += [
+            {"name": "sleeve_front_left", "seed": "sleeve_front_mid_left", "body_part": "arm",
+             "ease": ease.get("sleeve_front_left", {"value": 1.2})},
+            {"name": "sleeve_back_left", "seed": "sleeve_back_mid_left", "body_part": "arm",
+             "ease": ease.get("sleeve_back_left", {"value": 1.2})},
+        ]
+    return params, kps, lines, panels
+
+
+def _hem_ring(through="hem_front"):
+    return {"name": "hem", "ring": {"through": through, "normal": "z", "points": 16,
+                                    "named": {"hem_side_left": "+x", "hem_side_right": "-x"}},
+            "role": "opening"}
+
+
+def _top(name, description, sleeves, hem_length=0.10, ease=None):
+    params, kps, lines, panels = _top_parts(sleeves, ease=ease)
+    params["hem_length"] = {"value": hem_length, "kind": "length", "min": 0.0, "max": 0.16}
+    kps["hem_front"] = {"trace": {"from": "waist_front", "along": "torso_down", "length": "$hem_length"}}
+    lines.insert(1, _hem_ring())
+    garment = {"name": "shirt" if sleeves == "long" else "top", "kind": "upper", "pin": "neckline",
+               "lines": lines, "panels": panels}
+    return _design(name, description, [garment], params, kps)
+
+
+def shirt_long_sleeve():
+    return _top("long-sleeve shirt", "Front, back, and each sleeve split front/back (6 panels); ease 1.2.",
+                "long")
+
+
+def top_short_sleeve():
+    return _top("short-sleeve top", "Front, back and short sleeves split front/back; ease 1.2.", "short")
+
+
+def top_sleeveless():
+    return _top("sleeveless top", "Front and back; the armholes are openings; ease 1.2.", "none")
+
+
+def jacket():
+    d = _top("jacket", "The long-sleeve shirt with one extra cut down the front centre: "
+                       "front_left / front_right open at the front; ease 1.3.", "long",
+             ease={k: {"value": 1.3} for k in ("front", "back", "sleeve_front_left", "sleeve_back_left")})
+    g = d["garments"][0]
+    g["name"] = "jacket"
+    g["lines"].append({"name": "center_front", "points": ["neck_front", "hem_front"], "role": "opening"})
+    front = next(p for p in g["panels"] if p["name"] == "front")
+    front["name"] = "front_left"
+    front["seed"] = "bust_left"
+    return d
+
+
+# ---------------------------------------------------------------- lower body
+
+def _pants_parts(length_value, length_range, ease=None, name="pants"):
+    ease = ease or {}
+    params = {"leg_length": {"value": length_value, "kind": "length",
+                             "min": length_range[0], "max": length_range[1]}}
+    kps = {
+        "leg_hem_out_left": {"trace": {"from": "waist_side_left", "along": "leg_left", "length": "$leg_length"}},
+        "thigh_front_left": {"between": ["waist_front", "leg_hem_front_left"], "t": 0.45},
+        "thigh_back_left": {"between": ["waist_back", "leg_hem_back_left"], "t": 0.45},
+    }
+    lines = [
+        {"name": "center_front", "points": ["waist_front", "crotch"], "role": "seam"},
+        {"name": "center_back", "points": ["waist_back", "crotch"], "role": "seam"},
+        {"name": "side_left", "points": ["waist_side_left", "leg_hem_out_left"], "role": "seam"},
+        {"name": "leg_hem_left", "ring": {"through": "leg_hem_out_left", "normal": "z", "points": 12,
+                                          "named": {"leg_hem_in_left": "-x", "leg_hem_front_left": "-y",
+                                                    "leg_hem_back_left": "+y"}},
+         "role": "opening"},
+        {"name": "inseam_left", "points": ["crotch", "leg_hem_in_left"], "role": "seam"},
+    ]
+    panels = [
+        {"name": "front_left", "seed": "thigh_front_left", "body_part": "leg",
+         "ease": ease.get("front_left", {"value": 1.2})},
+        {"name": "back_left", "seed": "thigh_back_left", "body_part": "leg",
+         "ease": ease.get("back_left", {"value": 1.2})},
+    ]
+    return params, kps, lines, panels
+
+
+def _waist_ring(name="waist", role="opening"):
+    return {"name": name, "ring": {"through": "waist_front", "normal": "z", "points": 16,
+                                   "named": {"waist_side_left": "+x", "waist_side_right": "-x"}},
+            "role": role}
+
+
+def _lower(name, description, length_value, length_range, garment_name):
+    params, kps, lines, panels = _pants_parts(length_value, length_range)
+    lines.insert(0, _waist_ring())
+    g = {"name": garment_name, "kind": "lower", "pin": "waist", "lines": lines, "panels": panels}
+    return _design(name, description, [g], params, kps)
+
+
+def pants():
+    return _lower("pants", "Four panels (front/back, left/right); ease 1.2.", 0.88, (0.5, 0.95), "pants")
+
+
+def shorts():
+    return _lower("shorts", "Four panels (front/back, left/right), legs ending mid-thigh; ease 1.2.",
+                  0.38, (0.25, 0.5), "shorts")
+
+
+def teaser_shirt_pants():
+    """The paper's teaser: a shirt and pants, each panel with its own ease."""
+    shirt_ease = {"front": {"value": 1.15}, "back": {"value": 1.3},
+                  "sleeve_front_left": {"value": 1.45}, "sleeve_back_left": {"value": 1.6}}
+    params, kps, lines, panels = _top_parts("long", ease=shirt_ease)
+    # The shirt ends at the waist, where the pants begin: one shared line.
+    for l in lines:
+        if l["name"] == "side_left":
+            l["points"] = ["armhole_under_left", "waist_side_left"]
+    shirt = {"name": "shirt", "kind": "upper", "pin": "neckline", "lines": lines, "panels": panels}
+    pparams, pkps, plines, ppanels = _pants_parts(0.88, (0.5, 0.95), ease={
+        "front_left": {"value": 1.1}, "back_left": {"value": 1.25}})
+    params.update(pparams)
+    kps.update(pkps)
+    pants_g = {"name": "pants", "kind": "lower", "pin": "waist", "lines": plines, "panels": ppanels}
+    return _design("teaser shirt + pants",
+                   "The paper's teaser: long-sleeve shirt and pants sharing the waist line, "
+                   "a different uniform ease per panel.",
+                   [shirt, pants_g], params, kps, lines=[_waist_ring()])
+
+
+# ---------------------------------------------------------------- skirt topology
+
+def _skirt_hem_parts(length_value, length_range):
+    params = {"skirt_length": {"value": length_value, "kind": "length",
+                               "min": length_range[0], "max": length_range[1]}}
+    kps = {
+        "hem_out_left": {"trace": {"from": "waist_side_left", "along": "leg_left", "length": "$skirt_length"}},
+    }
+    lines = [
+        {"name": "thigh_left", "ring": {"through": "hem_out_left", "normal": "z", "points": 8,
+                                        "named": {"hem_front_left": "-y", "hem_back_left": "+y",
+                                                  }},
+         "role": "guide"},
+    ]
+    return params, kps, lines
+
+
+def _skirt_lines(top_point_front="waist_front"):
+    """Side seams and the hem loop across both legs (on the skirt topology)."""
+    hem = {"name": "hem", "points": ["hem_out_left", "hem_front_left", "hem_front_right", "hem_out_right",
+                                     "hem_back_right", "hem_back_left"], "closed": True, "role": "opening"}
+    side = {"name": "side_left", "points": ["waist_side_left", "hem_out_left"], "role": "seam"}
+    return [hem, side]
+
+
+def skirt():
+    params, kps, guides = _skirt_hem_parts(0.45, (0.2, 0.7))
+    kps["skirt_front_mid"] = {"between": ["waist_front", "crotch"], "t": 0.5}
+    kps["skirt_back_mid"] = {"between": ["waist_back", "crotch"], "t": 0.5}
+    lines = [_waist_ring()] + _skirt_lines() + guides
+    g = {"name": "skirt", "kind": "lower", "pin": "waist", "lines": lines, "panels": [
+        {"name": "front", "seed": "skirt_front_mid", "body_part": "torso", "ease": {"value": 1.3}},
+        {"name": "back", "seed": "skirt_back_mid", "body_part": "torso", "ease": {"value": 1.3}},
+    ]}
+    return _design("skirt", "A two-panel skirt on the skirt topology; ease 1.3.", [g], params, kps, skirt=True)
+
+
+def _dress(name, description, ease):
+    params, kps, lines, panels = _top_parts("none")
+    sparams, skps, guides = _skirt_hem_parts(0.55, (0.2, 0.8))
+    params.update(sparams)
+    kps.update(skps)
+    kps["skirt_front_mid"] = {"between": ["waist_front", "crotch"], "t": 0.5}
+    kps["skirt_back_mid"] = {"between": ["waist_back", "crotch"], "t": 0.5}
+    for l in lines:
+        if l["name"] == "side_left":
+            l["points"] = ["armhole_under_left", "waist_side_left"]
+    skirt_lines = _skirt_lines()
+    skirt_lines[1]["name"] = "skirt_side_left"
+    lines = lines + [_waist_ring(role="seam")] + skirt_lines + guides
+    panels = [
+        {"name": "bodice_front", "seed": "chest_front", "body_part": "torso", "ease": ease["bodice_front"]},
+        {"name": "bodice_back", "seed": "chest_back", "body_part": "torso", "ease": ease["bodice_back"]},
+        {"name": "skirt_front", "seed": "skirt_front_mid", "body_part": "torso", "ease": ease["skirt_front"]},
+        {"name": "skirt_back", "seed": "skirt_back_mid", "body_part": "torso", "ease": ease["skirt_back"]},
+    ]
+    g = {"name": "dress", "kind": "dress", "pin": "waist", "lines": lines, "panels": panels}
+    return _design(name, description, [g], params, kps, skirt=True)
+
+
+def dress():
+    return _dress("dress", "Sleeveless dress: bodice and skirt, front and back, joined by a waist seam "
+                           "(pinned); skirt topology; ease 1.15 bodice, 1.4 skirt.",
+                  {"bodice_front": {"value": 1.15}, "bodice_back": {"value": 1.15},
+                   "skirt_front": {"value": 1.4}, "skirt_back": {"value": 1.4}})
+
+
+def dress_gradient():
+    """The paper's simple dress with ease rising linearly from top to hem."""
+    grad = {"from": 1.0, "to": 1.8, "between": ["neck_front", "hem_front_left"]}
+    return _dress("dress with linear ease", "The paper's non-uniform dress: ease rising linearly from "
+                                            "1.0 at the neckline to 1.8 at the hem.",
+                  {k: copy.deepcopy(grad) for k in ("bodice_front", "bodice_back", "skirt_front", "skirt_back")})
+
+
+TEMPLATES: Dict[str, Callable[[], dict]] = {
+    "shirt_long_sleeve": shirt_long_sleeve,
+    "top_short_sleeve": top_short_sleeve,
+    "top_sleeveless": top_sleeveless,
+    "pants": pants,
+    "shorts": shorts,
+    "skirt": skirt,
+    "dress": dress,
+    "jacket": jacket,
+    "teaser_shirt_pants": teaser_shirt_pants,
+    "dress_gradient": dress_gradient,
+}
+
+
+def template_names():
+    return list(TEMPLATES)
+
+
+def template_path(name: str) -> Path:
+    """Path of ``examples/designs/<name>.json`` (source checkout)."""
+    from ..errors import DesignError
+    if name not in TEMPLATES:
+        raise DesignError("", f"unknown template {name!r}; templates: {', '.join(TEMPLATES)}")
+    return TEMPLATE_DIR / f"{name}.json"
+
+
+def template(name: str):
+    """The template ``name`` as a validated :class:`core.design.Design` (built in code,
+    so it works where ``examples/`` is not shipped, e.g. the installed extension)."""
+    from .format import load_design
+    from ..errors import DesignError
+    if name not in TEMPLATES:
+        raise DesignError("", f"unknown template {name!r}; templates: {', '.join(TEMPLATES)}")
+    return load_design(TEMPLATES[name]())
+
+
+def write_templates(directory=TEMPLATE_DIR) -> list:
+    """(Re)write every template's JSON into ``directory``; returns the paths."""
+    from .format import load_design, save_design
+    out = []
+    for name, build in TEMPLATES.items():
+        out.append(save_design(load_design(build()), Path(directory) / f"{name}.json"))
+    return out
