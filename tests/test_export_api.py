@@ -1,0 +1,94 @@
+"""core.export.export_pattern: all formats, atomic output, failures before any file is written."""
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from export_synth import drape_positions, make_pattern  # noqa: E402
+
+from core.errors import Cancelled, ExportError  # noqa: E402
+from core.export import FORMATS, export_pattern, parse_formats  # noqa: E402
+
+ALL_FILES = {"pattern.svg", "pattern_astm.dxf", "pattern_astm_r12.dxf", "pattern_plain.dxf", "pattern_a4.pdf",
+             "pattern_letter.pdf", "pattern_plotter.pdf", "garment.glb", "garment.obj", "export.json"}
+
+
+def test_exports_every_format(tmp_path):
+    pat = make_pattern()
+    calls = []
+    files = export_pattern(pat, tmp_path / "out", formats="all", drape_positions=drape_positions(pat),
+                           progress=lambda f, m: calls.append(f))
+    assert {f.name for f in files} == ALL_FILES
+    assert {f.name for f in (tmp_path / "out").iterdir()} == ALL_FILES
+    assert calls and calls[-1] == 1.0 and calls == sorted(calls)
+    summary = json.loads((tmp_path / "out" / "export.json").read_text())
+    assert [p["name"] for p in summary["pieces"]] == ["front", "back"]
+    assert summary["pdf"]["a4"]["pages"] == summary["pdf"]["a4"]["rows"] * summary["pdf"]["a4"]["columns"]
+    assert summary["pieces"][0]["notches_mm"]["side_left"] == summary["pieces"][1]["notches_mm"]["side_left"]
+
+
+def test_same_input_same_bytes(tmp_path):
+    pat = make_pattern()
+    a = export_pattern(pat, tmp_path / "a", formats="svg,dxf,pdf")
+    b = export_pattern(pat, tmp_path / "b", formats="svg,dxf,pdf")
+    for fa, fb in zip(a, b):
+        assert fa.read_bytes() == fb.read_bytes(), fa.name
+
+
+def test_allowance_from_the_design_materials(tmp_path):
+    pat = make_pattern()
+    pat.materials = {"export": {"allowance": {"default": 0.015, "hem": 0.03}, "notch_spacing": 0.2}}
+    export_pattern(pat, tmp_path, formats="svg")
+    s = json.loads((tmp_path / "export.json").read_text())
+    assert s["allowance_mm"]["default"] == 15 and s["pieces"][0]["allowance_mm"] == [15, 30]
+    assert s["pieces"][0]["notches_mm"]["side_left"][1] == 200
+
+
+@pytest.mark.parametrize("kwargs,words", [
+    ({"formats": "svg,tiff"}, "tiff"),
+    ({"formats": "glb"}, "drape"),
+    ({"allowance": {"sidee": 0.01}}, "sidee"),
+    ({"allowance": {"hem": 1.0}}, "hem"),
+])
+def test_bad_arguments_fail_before_writing(tmp_path, kwargs, words):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "keep.txt").write_text("old")
+    with pytest.raises(ExportError, match=words):
+        export_pattern(make_pattern(), out, **kwargs)
+    assert [f.name for f in out.iterdir()] == ["keep.txt"]
+
+
+def test_invalid_pattern_writes_nothing(tmp_path):
+    pat = make_pattern()
+    pat.panel("front").uv[0, 0] = np.nan
+    with pytest.raises(ExportError, match="front"):
+        export_pattern(pat, tmp_path / "out", formats="all", drape_positions=drape_positions(make_pattern()))
+    assert not (tmp_path / "out").exists()
+    assert not list(tmp_path.iterdir())  # no temporary folder left either
+
+
+def test_cancel_leaves_previous_output(tmp_path):
+    pat = make_pattern()
+    export_pattern(pat, tmp_path, formats="svg")
+    before = (tmp_path / "pattern.svg").read_bytes()
+
+    def stop(fraction, message):
+        if "PDF" in message:
+            raise Cancelled()
+
+    pat.style = "changed"
+    with pytest.raises(Cancelled):
+        export_pattern(pat, tmp_path, formats="svg,pdf", progress=stop)
+    assert (tmp_path / "pattern.svg").read_bytes() == before
+    assert not (tmp_path / "pattern_a4.pdf").exists()
+
+
+def test_parse_formats():
+    assert parse_formats("SVG, dxf,svg") == ["svg", "dxf"]
+    assert parse_formats("all") == list(FORMATS)
+    with pytest.raises(ExportError):
+        parse_formats("")

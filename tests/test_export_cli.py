@@ -1,0 +1,82 @@
+"""core.export.cli: `ease export PATTERN_DIR --format ... --out DIR [--drape DIR]`."""
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from export_synth import drape_positions, make_pattern  # noqa: E402
+
+from core.errors import EaseError  # noqa: E402
+from core.export import cli  # noqa: E402
+from core.pattern.io import save_pattern  # noqa: E402
+
+
+def run(argv):
+    """Like core.cli.main, with only the export subcommand (the other stages are not needed)."""
+    parser = argparse.ArgumentParser(prog="ease")
+    cli.add_parser(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except EaseError as exc:
+        return str(exc)
+
+
+@pytest.fixture()
+def job(tmp_path):
+    pat = make_pattern()
+    save_pattern(pat, tmp_path / "pattern")
+    return tmp_path, pat
+
+
+def test_export_2d_formats(job, capsys):
+    root, pat = job
+    assert run(["export", str(root / "pattern"), "--format", "svg,dxf", "--out", str(root / "x"),
+                "--allowance", "0.012", "--hem", "0.03", "--quiet"]) == 0
+    names = sorted(p.name for p in (root / "x").iterdir())
+    assert names == ["export.json", "pattern.svg", "pattern_astm.dxf", "pattern_astm_r12.dxf", "pattern_plain.dxf"]
+    assert "pattern.svg" in capsys.readouterr().out
+    import json
+    s = json.loads((root / "x" / "export.json").read_text())
+    assert s["allowance_mm"]["default"] == 12 and s["allowance_mm"]["hem"] == 30
+
+
+def test_glb_needs_a_drape(job):
+    root, pat = job
+    msg = run(["export", str(root / "pattern"), "--format", "glb", "--out", str(root / "x"), "--quiet"])
+    assert isinstance(msg, str) and "--drape" in msg
+    assert not (root / "x").exists()
+
+
+def test_drape_found_next_to_the_pattern(job):
+    root, pat = job
+    (root / "drape").mkdir()
+    np.savez(root / "drape" / "drape.npz", positions=drape_positions(pat), faces=np.zeros((0, 3), int))
+    # default formats: 2D files plus the garment, since a drape is there
+    assert run(["export", str(root / "pattern"), "--out", str(root / "x"), "--quiet"]) == 0
+    names = {p.name for p in (root / "x").iterdir()}
+    assert {"garment.glb", "garment.obj", "pattern_a4.pdf", "pattern.svg", "pattern_astm.dxf"} <= names
+
+
+def test_explicit_drape_dir_and_bad_npz(job, tmp_path):
+    root, pat = job
+    d = tmp_path / "elsewhere"
+    d.mkdir()
+    np.savez(d / "drape.npz", wrong=np.zeros(3))
+    msg = run(["export", str(root / "pattern"), "--format", "obj", "--drape", str(d), "--out", str(root / "x")])
+    assert isinstance(msg, str) and "positions" in msg
+    np.savez(d / "drape.npz", positions=drape_positions(pat))
+    assert run(["export", str(root / "pattern"), "--format", "obj", "--drape", str(d), "--out", str(root / "x"),
+                "--quiet"]) == 0
+    assert (root / "x" / "garment.obj").is_file()
+
+
+def test_missing_pattern_and_help(tmp_path, capsys):
+    msg = run(["export", str(tmp_path / "nothing"), "--out", str(tmp_path / "x")])
+    assert isinstance(msg, str) and "pattern" in msg
+    with pytest.raises(SystemExit):
+        run(["export", "--help"])
+    assert "ASTM" in capsys.readouterr().out

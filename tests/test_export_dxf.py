@@ -1,0 +1,87 @@
+"""core.export.dxf: ASTM D6673/AAMA blocks and layers, plain DXF, read back with ezdxf."""
+import io
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from export_synth import make_pattern  # noqa: E402
+
+ezdxf = pytest.importorskip("ezdxf")
+
+from core.export import dxf  # noqa: E402
+from core.export.pieces import build_pieces, layout_pieces, polyline_length  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def made():
+    pat = make_pattern(rotate_back_deg=30.0)
+    pat.panels[1].mirror_of = "front"
+    pieces = build_pieces(pat, allowance={"default": 0.01, "hem": 0.02})
+    lay = layout_pieces([p.bbox for p in pieces], 0.88, 0.02)
+    return pat, pieces, lay
+
+
+def _piece_blocks(doc):
+    return [b for b in doc.blocks if not b.name.startswith("*")]
+
+
+def _poly_points(e):
+    if e.dxftype() == "LWPOLYLINE":
+        return np.array([p[:2] for p in e.get_points()])
+    return np.array([tuple(v.dxf.location)[:2] for v in e.vertices])
+
+
+@pytest.mark.parametrize("writer", ["astm_text", "astm_r12_text"])
+def test_astm_blocks_layers_and_sew_lengths(made, writer):
+    pat, pieces, lay = made
+    doc = ezdxf.read(io.StringIO(getattr(dxf, writer)(pieces, lay, pat.style, "M")))
+    blocks = _piece_blocks(doc)
+    assert [b.name for b in blocks] == [p.name for p in pat.panels]  # one block per piece
+    if writer == "astm_text":
+        assert doc.header["$INSUNITS"] == 4  # millimetres
+    inserts = list(doc.modelspace().query("INSERT"))
+    assert sorted(i.dxf.name for i in inserts) == sorted(b.name for b in blocks)
+    style_text = [t.dxf.text for t in doc.modelspace().query("TEXT")]
+    assert "Units: METRIC" in style_text and "Style Name: test shirt" in style_text
+    for blk, piece in zip(blocks, pieces):
+        panel = pat.panel(blk.name)
+        layers = {e.dxf.layer for e in blk}
+        assert layers >= {"1", "4", "7", "14"}
+        sew = [e for e in blk if e.dxf.layer == "14"]
+        assert len(sew) == 1 and sew[0].is_closed
+        pts = _poly_points(sew[0])
+        want = polyline_length(panel.uv[panel.boundary[0]], closed=True) * 1000.0
+        assert polyline_length(pts, closed=True) == pytest.approx(want, abs=1e-6)
+        cut = [e for e in blk if e.dxf.layer == "1" and e.dxftype() in ("POLYLINE", "LWPOLYLINE")]
+        assert len(cut) == 1 and polyline_length(_poly_points(cut[0]), closed=True) > want + 8 * 10
+        assert len([e for e in blk if e.dxf.layer == "4"]) == len(piece.notches)
+        grain = [e for e in blk if e.dxf.layer == "7"]
+        assert len(grain) == 1 and grain[0].dxf.end[1] > grain[0].dxf.start[1]
+        assert abs(grain[0].dxf.end[0] - grain[0].dxf.start[0]) < 1e-9  # grain line along +y
+        texts = [e.dxf.text for e in blk if e.dxftype() == "TEXT"]
+        assert f"Piece Name: {panel.name}" in texts and "Size: M" in texts and "Quantity: 1" in texts
+    back_texts = [e.dxf.text for e in blocks[1] if e.dxftype() == "TEXT" and e.dxf.layer == "15"]
+    assert any("mirror of front" in t for t in back_texts)
+
+
+def test_plain_dxf(made):
+    pat, pieces, lay = made
+    doc = ezdxf.read(io.StringIO(dxf.plain_text(pieces, lay, pat.style)))
+    assert doc.header["$INSUNITS"] == 4
+    assert not _piece_blocks(doc)
+    msp = doc.modelspace()
+    sew = msp.query('LWPOLYLINE[layer=="SEW"]')
+    assert len(sew) == len(pieces)
+    got = sorted(polyline_length(_poly_points(e), closed=True) for e in sew)
+    want = sorted(polyline_length(p.uv[p.boundary[0]], closed=True) * 1000 for p in pat.panels)
+    np.testing.assert_allclose(got, want, atol=1e-6)
+    assert len(msp.query('LINE[layer=="NOTCH"]')) == sum(len(p.notches) for p in pieces)
+    assert len(msp.query('LWPOLYLINE[layer=="CUT"]')) == len(pieces)
+
+
+def test_dxf_is_deterministic(made):
+    pat, pieces, lay = made
+    assert dxf.astm_text(pieces, lay, pat.style, "M") == dxf.astm_text(pieces, lay, pat.style, "M")

@@ -1,0 +1,111 @@
+"""core.export.validate: invalid patterns and drapes are refused with errors naming the culprit."""
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from export_synth import drape_positions, make_pattern  # noqa: E402
+
+from core.errors import ExportError  # noqa: E402
+from core.export.validate import validate_drape, validate_pattern  # noqa: E402
+
+
+def _nan_uv(p):
+    p.panel("back").uv[3] = np.nan
+
+
+def _flat_piece(p):
+    p.panel("front").uv[:, 1] = 0.0
+
+
+def _tangled(p):
+    uv = p.panel("front").uv
+    loop = p.panel("front").boundary[0]
+    uv[loop[2]], uv[loop[20]] = uv[loop[20]].copy(), uv[loop[2]].copy()
+
+
+def _seam_piece(p):
+    p.seams[0].panel_b = "sleeve"
+
+
+def _seam_range(p):
+    p.seams[1].verts_a = p.seams[1].verts_a.copy()
+    p.seams[1].verts_a[-1] = 10_000
+
+
+def _seam_inside(p):
+    p.seams[0].verts_a = np.array([0, 10, 20])
+    p.seams[0].verts_b = p.seams[0].verts_b[:3]
+
+
+def _seam_lengths(p):
+    p.seams[0].verts_b = p.seams[0].verts_b[:-1]
+
+
+def _faces(p):
+    p.panel("front").faces[0, 0] = 999
+
+
+def _grain(p):
+    p.panel("front").grain = np.zeros(2)
+
+
+def _dup(p):
+    p.panels[1].name = "front"
+
+
+def _mirror(p):
+    p.panels[1].mirror_of = "nobody"
+
+
+def _hem(p):
+    p.panel("front").hems = [np.array([-1, 0])]
+
+
+@pytest.mark.parametrize("breaker,words", [
+    (_nan_uv, ["back", "uv", "not finite"]),
+    (_flat_piece, ["front", "degenerate"]),
+    (_tangled, ["front", "crosses itself"]),
+    (_seam_piece, ["side_left", "panel_b", "sleeve"]),
+    (_seam_range, ["side_right", "verts_a"]),
+    (_seam_inside, ["side_left", "boundary"]),
+    (_seam_lengths, ["side_left", "equally long"]),
+    (_faces, ["front", "faces"]),
+    (_grain, ["front", "grain"]),
+    (_dup, ["duplicate", "front"]),
+    (_mirror, ["mirror_of", "nobody"]),
+    (_hem, ["front", "hems[0]"]),
+])
+def test_invalid_pattern_names_the_culprit(breaker, words):
+    pat = make_pattern()
+    validate_pattern(pat)  # fine before breaking it
+    breaker(pat)
+    with pytest.raises(ExportError) as err:
+        validate_pattern(pat)
+    for w in words:
+        assert w in str(err.value)
+
+
+def test_boundary_is_derived_from_faces_when_missing():
+    pat = make_pattern()
+    for p in pat.panels:
+        p.boundary = []
+    validate_pattern(pat)
+
+
+def test_drape_checks():
+    pat = make_pattern()
+    pos = drape_positions(pat)
+    assert validate_drape(pat, pos).shape == pos.shape
+    with pytest.raises(ExportError, match="needs the draped garment"):
+        validate_drape(pat, None)
+    with pytest.raises(ExportError, match=r"\(N, 3\)"):
+        validate_drape(pat, pos[:, :2])
+    with pytest.raises(ExportError, match="vertex ids"):
+        validate_drape(pat, pos[:10])
+    bad = pos.copy()
+    bad[5] = np.inf
+    with pytest.raises(ExportError, match="NaN or infinite"):
+        validate_drape(pat, bad)
