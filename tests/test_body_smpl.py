@@ -287,3 +287,47 @@ def test_pose_presets_on_smpl_skeleton(tmp_path):
     # Custom rotation applies on top of the A-pose.
     bent = body.vertices(None, {"left_elbow": np.array([0, 0, -np.pi / 2])})
     assert (bent[wr] - bent[idx["left_elbow"]])[1] < -0.2
+
+
+def test_smpl_topology_gets_all_landmarks(tmp_path):
+    """A 6890-vertex SMPL-layout model (points scattered around the bones) gets every
+    required landmark from the stated vertex ids and rules, left ones on the left."""
+    from core.body.model import REQUIRED_LANDMARKS, REQUIRED_REGIONS
+    m = stick_smpl()
+    joints = m["v_template"]
+    parents = m["kintree_table"][0].astype(np.int64)
+    parents[0] = -1
+    rng = np.random.default_rng(7)
+    V = 6890
+    bone = rng.integers(1, 24, size=V)
+    t = rng.random(V)[:, None]
+    a = rng.random(V) * 2 * np.pi
+    radius = np.where(np.isin(bone, [3, 6, 9]), 0.14, 0.05)[:, None]
+    ring = np.stack([np.cos(a), np.zeros(V), np.sin(a)], 1) * radius  # around SMPL's Y (up)
+    v = joints[parents[bone]] * (1 - t) + joints[bone] * t + ring
+    v[:24] = joints  # the regressor picks these
+    weights = np.zeros((V, 24))
+    weights[np.arange(V), parents[bone]] = 1.0
+    weights[:24] = np.eye(24)
+    faces = np.array([[i, i + 1, i + 2] for i in range(0, V - 2)])
+    np.savez(tmp_path / "smpl6890.npz", v_template=v, f=faces, weights=weights,
+             kintree_table=m["kintree_table"], J_regressor=np.eye(24, V),
+             shapedirs=np.zeros((V, 3, 10)), posedirs=np.zeros((V, 3, 207)))
+    body = load_smpl(tmp_path / "smpl6890.npz")
+    assert set(REQUIRED_LANDMARKS) <= set(body.landmarks)
+    assert set(REQUIRED_REGIONS) <= set(body.regions)
+    verts = body.vertices()
+    from core.body.smpl import SMPL_VERTEX_IDS
+    for name in REQUIRED_LANDMARKS:
+        p = body.landmark_position(name, verts)
+        if name in SMPL_VERTEX_IDS or name == "ankle_right":
+            continue  # literature ids: random points on this synthetic mesh
+        if name.endswith("_left"):
+            assert p[0] > 0, name
+        if name.endswith("_right"):
+            assert p[0] < 0, name
+    for name, vid in SMPL_VERTEX_IDS.items():
+        if name in body.landmarks:
+            np.testing.assert_allclose(body.landmark_position(name, verts), verts[vid])
+    knee = body.landmark_position("knee_left", verts)
+    assert knee[1] < body.joints()[4][1]  # on the front of the knee
