@@ -177,7 +177,7 @@ def test_pkl_with_chumpy_and_sparse(tmp_path, fake_chumpy):
     ref = load_smpl(tmp_path / "model.npz")
     pose = {"joint2": np.array([0.3, -0.2, 0.1])}
     np.testing.assert_allclose(body.vertices({"beta1": 1.5}, pose), ref.vertices({"beta1": 1.5}, pose), atol=1e-12)
-    for protocol in (0, 1):  # py2 default protocols go through copy_reg._reconstructor
+    for protocol in (0, 1, 4, 5):  # 0/1 (py2 defaults) go through copy_reg._reconstructor
         with open(path, "wb") as f:
             pickle.dump(pk, f, protocol=protocol)
         np.testing.assert_allclose(load_smpl(path).vertices(), ref.vertices(), atol=1e-12)

@@ -103,19 +103,20 @@ _SPARSE.update({f"{fmt}_array": _SPARSE[f"{fmt}_matrix"] for fmt in ("csc", "csr
 
 
 def _numpy_allowed():
-    from numpy.core import multiarray
+    # numpy>=2 (as bundled with some Blender versions) moved numpy.core to numpy._core.
+    try:
+        from numpy._core import multiarray, numeric
+    except ImportError:
+        from numpy.core import multiarray, numeric
     table = {
         ("numpy.core.multiarray", "_reconstruct"): multiarray._reconstruct,
         ("numpy.core.multiarray", "scalar"): multiarray.scalar,
         ("numpy", "ndarray"): np.ndarray,
         ("numpy", "dtype"): np.dtype,
     }
-    try:
-        from numpy.core.numeric import _frombuffer
-        table[("numpy.core.numeric", "_frombuffer")] = _frombuffer
-    except ImportError:  # pragma: no cover - numpy layout without it
-        pass
-    # numpy>=2 writes numpy._core; py2 numpy wrote the same names.
+    if hasattr(numeric, "_frombuffer"):
+        table[("numpy.core.numeric", "_frombuffer")] = numeric._frombuffer
+    # py2-era and numpy<2 pickles name numpy.core, numpy>=2 pickles numpy._core.
     for (mod, name), fn in list(table.items()):
         if mod.startswith("numpy.core"):
             table[(mod.replace("numpy.core", "numpy._core"), name)] = fn
