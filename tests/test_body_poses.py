@@ -145,10 +145,18 @@ def test_arbitrary_rotation_turns_the_child_about_the_joint(body):
 
 
 def test_rotation_on_top_of_preset(body):
-    J = _joints(body, {"preset": "T", "upperarm01.L": [0.0, 0.0, np.pi / 2]})
-    # A quarter turn about +Z swings the horizontal left arm from +X to +Y (backwards).
-    arm = _upper_arm(J, ".L")
-    assert _angle(arm, [0, 1, 0]) < 3
+    J = _joints(body, {"preset": "T", "upperleg01.L": [np.pi / 2, 0.0, 0.0]})
+    # A quarter turn about +X swings the left thigh from down to +Y (backwards) ...
+    assert _angle(_thigh(J, ".L"), [0, 1, 0]) < 8
+    # ... and the preset still holds.
+    assert abs(_angle(_upper_arm(J, ".L"), _torso_down(J)) - 90) < 3
+
+
+def test_shoulder_girdle_shares_arm_raise(body):
+    J0, J = _joints(body, "A"), _joints(body, "P2")
+    # Raising the arms lifts the shoulder joint a little (scapula/clavicle), not the neck.
+    assert 0.005 < J["upperarm01.L"][2] - J0["upperarm01.L"][2] < 0.08
+    assert np.allclose(J["neck01"], J0["neck01"])
 
 
 def test_bad_pose_names_list_allowed(body):

@@ -53,9 +53,23 @@ def rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return rodrigues(axis / s * np.arctan2(s, c))
 
 
+def _axis_angle(R: np.ndarray) -> np.ndarray:
+    """Axis-angle (3,) of a rotation matrix with angle < pi."""
+    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    s = np.linalg.norm(w) / 2.0
+    c = (np.trace(R) - 1.0) / 2.0
+    angle = np.arctan2(s, c)
+    return w / (2.0 * s) * angle if s > 1e-12 else np.zeros(3)
+
+
 def _unit(v) -> np.ndarray:
     v = np.asarray(v, dtype=float)
     return v / np.linalg.norm(v)
+
+
+# Share of an arm raise taken by the shoulder girdle (scapula/clavicle lift), the rest
+# by the shoulder joint; roughly the scapulohumeral rhythm (1:2).
+SHOULDER_GIRDLE_SHARE = 1.0 / 3.0
 
 
 class _Aimer:
@@ -75,8 +89,21 @@ class _Aimer:
             p = self.parents[p]
         return np.eye(3)
 
-    def aim(self, bone: str, child: str, target) -> None:
-        """Rotate ``bone`` so that its segment to joint ``child`` points along ``target``."""
+    def aim(self, bone: str, child: str, target, share: float = 0.0, helper: str = None) -> None:
+        """Rotate ``bone`` so that its segment to joint ``child`` points along ``target``.
+
+        With ``helper`` (an ancestor of ``bone``), that bone first takes ``share`` of the
+        rotation about the same axis - e.g. the shoulder girdle lifting with a raised
+        arm, which spares the armpit the whole turn - and ``bone`` completes it.
+        """
+        if helper is not None and share > 0:
+            Gh = self._parent_world(helper)
+            seg = self.heads[self.names.index(child)] - self.heads[self.names.index(bone)]
+            full = rotation_between(self._parent_world(bone) @ seg, target)
+            axis_angle = _axis_angle(full)
+            world_h = rodrigues(share * axis_angle) @ Gh
+            self.local[helper] = Gh.T @ world_h
+            self.world[helper] = world_h
         G = self._parent_world(bone)
         seg = self.heads[self.names.index(child)] - self.heads[self.names.index(bone)]
         cur = G @ seg
@@ -92,14 +119,17 @@ def _preset(name: str, names, parents, heads) -> Dict[str, np.ndarray]:
         return {}
     for sx, s in ((1.0, ".L"), (-1.0, ".R")):
         if name == "T":
-            a.aim("upperarm01" + s, "lowerarm01" + s, (sx, 0.0, 0.0))
+            a.aim("upperarm01" + s, "lowerarm01" + s, (sx, 0.0, 0.0),
+                  share=SHOULDER_GIRDLE_SHARE, helper="shoulder01" + s)
         elif name == "P1":
-            a.aim("upperarm01" + s, "lowerarm01" + s, (0.0, -1.0, 0.0))
+            a.aim("upperarm01" + s, "lowerarm01" + s, (0.0, -1.0, 0.0),
+                  share=SHOULDER_GIRDLE_SHARE, helper="shoulder01" + s)
             a.aim("upperleg01" + s, "lowerleg01" + s, (sx * np.sin(np.radians(20)), 0.0,
                                                         -np.cos(np.radians(20))))
         elif name == "P2":
             t = np.radians(160)
-            a.aim("upperarm01" + s, "lowerarm01" + s, (sx * np.sin(t), 0.0, -np.cos(t)))
+            a.aim("upperarm01" + s, "lowerarm01" + s, (sx * np.sin(t), 0.0, -np.cos(t)),
+                  share=SHOULDER_GIRDLE_SHARE, helper="shoulder01" + s)
             h = np.radians(30) * (1.0 if s == ".L" else -1.0)   # left flexed, right extended
             spread = np.radians(5)
             a.aim("upperleg01" + s, "lowerleg01" + s,
