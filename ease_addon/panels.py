@@ -1,0 +1,192 @@
+"""The "EASE" tab of the 3D view sidebar: one panel per workflow stage."""
+from __future__ import annotations
+
+import json
+
+import bpy
+
+
+class _EasePanel:
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "EASE"
+
+
+def _figures(layout, text: str) -> None:
+    """Key figures of a JSON report as label rows."""
+    if not text:
+        return
+    try:
+        data = json.loads(text)
+    except ValueError:
+        layout.label(text=text)
+        return
+    col = layout.column(align=True)
+    for k, v in data.items():
+        if isinstance(v, float):
+            v = f"{v:.4g}"
+        col.label(text=f"{k}: {v}")
+
+
+class EASE_PT_body(_EasePanel, bpy.types.Panel):
+    bl_label = "Body"
+    bl_idname = "EASE_PT_body"
+
+    def draw(self, context):
+        s = context.scene.ease
+        layout = self.layout
+        row = layout.row(align=True)
+        row.operator("ease.add_body", text="Default Body", icon="OUTLINER_OB_ARMATURE").source = "DEFAULT"
+        row.operator("ease.add_body", text="From File", icon="FILE").source = "FILE"
+        layout.prop(s, "body_file")
+        layout.prop(s, "body")
+        if s.body is None:
+            return
+        box = layout.box()
+        box.label(text="Phenotype")
+        for item in s.shape:
+            box.prop(item, "value", text=item.name, slider=False)
+        row = layout.row(align=True)
+        row.prop(s, "size", expand=True)
+        layout.operator("ease.set_size")
+        box = layout.box()
+        box.label(text="Measurements (cm)")
+        for name in ("height_cm", "chest_cm", "waist_cm", "hip_cm"):
+            box.prop(s, name)
+        row = box.row(align=True)
+        row.operator("ease.fit_measurements")
+        row.operator("ease.measure")
+        if s.measurements_report:
+            for part in s.measurements_report.split(", "):
+                box.label(text=part)
+        row = layout.row(align=True)
+        row.prop(s, "pose", expand=True)
+        layout.operator("ease.set_pose")
+
+
+class EASE_PT_design(_EasePanel, bpy.types.Panel):
+    bl_label = "Design"
+    bl_idname = "EASE_PT_design"
+
+    def draw(self, context):
+        s = context.scene.ease
+        layout = self.layout
+        layout.prop(s, "template")
+        layout.operator("ease.load_template")
+        layout.prop(s, "design_file")
+        row = layout.row(align=True)
+        row.operator("ease.load_design_file")
+        row.operator("ease.save_design")
+        if not s.design_json:
+            return
+        box = layout.box()
+        box.label(text="Parameters")
+        box.prop(s, "live_recut")
+        for item in s.design_params:
+            box.prop(item, "value", text=item.name)
+        box.operator("ease.recut")
+        box = layout.box()
+        box.label(text="Keypoints")
+        box.prop(s, "keypoint_name")
+        box.operator("ease.assign_keypoint")
+
+
+class EASE_PT_ease(_EasePanel, bpy.types.Panel):
+    bl_label = "Ease"
+    bl_idname = "EASE_PT_ease"
+
+    def draw(self, context):
+        s = context.scene.ease
+        layout = self.layout
+        row = layout.row(align=True)
+        row.prop(s, "ease_min")
+        row.prop(s, "ease_max")
+        legend = layout.row(align=True)
+        for item in s.legend:
+            col = legend.column(align=True)
+            col.prop(item, "color", text="")
+            col.label(text=f"{item.ease:.2f}")
+        layout.prop(s, "ease_value")
+        row = layout.row(align=True)
+        row.operator("ease.paint_ease", icon="BRUSH_DATA")
+        row.operator("ease.brush_ease")
+        box = layout.box()
+        box.prop(s, "ease_panel")
+        box.operator("ease.ease_uniform")
+        row = box.row(align=True)
+        row.prop(s, "ease_from")
+        row.prop(s, "ease_to")
+        box.prop(s, "gradient_axis")
+        box.operator("ease.ease_gradient")
+        row = layout.row(align=True)
+        row.operator("ease.ease_to_design")
+        row.operator("ease.ease_from_design")
+
+
+class EASE_PT_pattern(_EasePanel, bpy.types.Panel):
+    bl_label = "Pattern"
+    bl_idname = "EASE_PT_pattern"
+
+    def draw(self, context):
+        s = context.scene.ease
+        self.layout.operator("ease.optimize_pattern", icon="MESH_GRID")
+        _figures(self.layout, s.pattern_json)
+
+
+class EASE_PT_fit(_EasePanel, bpy.types.Panel):
+    bl_label = "Fit"
+    bl_idname = "EASE_PT_fit"
+
+    def draw(self, context):
+        s = context.scene.ease
+        layout = self.layout
+        row = layout.row(align=True)
+        row.prop(s, "fit_size", expand=True)
+        layout.operator("ease.transfer_size")
+        row = layout.row(align=True)
+        for p in ("T", "P1", "P2", "P3"):
+            row.prop(s, f"adapt_{p}", toggle=True)
+        layout.prop(s, "tolerance")
+        layout.operator("ease.adapt_poses")
+        _figures(layout, s.fit_json)
+
+
+class EASE_PT_drape(_EasePanel, bpy.types.Panel):
+    bl_label = "Drape"
+    bl_idname = "EASE_PT_drape"
+
+    def draw(self, context):
+        s = context.scene.ease
+        layout = self.layout
+        layout.prop(s, "drape_frames")
+        layout.operator("ease.drape", icon="MOD_CLOTH")
+        if s.drape_status:
+            layout.label(text=s.drape_status)
+        row = layout.row(align=True)
+        row.prop(s, "fitmap", expand=True)
+        _figures(layout, s.drape_json)
+
+
+class EASE_PT_render(_EasePanel, bpy.types.Panel):
+    bl_label = "Render & Export"
+    bl_idname = "EASE_PT_render"
+
+    def draw(self, context):
+        s = context.scene.ease
+        layout = self.layout
+        layout.operator("ease.studio_setup", icon="LIGHT_AREA")
+        row = layout.row(align=True)
+        row.prop(s, "render_samples")
+        row.prop(s, "render_resolution")
+        layout.prop(s, "render_path")
+        layout.operator("ease.render", icon="RENDER_STILL")
+        layout.separator()
+        layout.prop(s, "export_dir")
+        row = layout.row(align=True)
+        for f in ("svg", "dxf", "pdf", "glb"):
+            row.prop(s, f"export_{f}", toggle=True)
+        layout.operator("ease.export_pattern", icon="EXPORT")
+
+
+CLASSES = (EASE_PT_body, EASE_PT_design, EASE_PT_ease, EASE_PT_pattern, EASE_PT_fit,
+           EASE_PT_drape, EASE_PT_render)

@@ -1,0 +1,142 @@
+"""Scene properties of the add-on (saved in the .blend).
+
+What must survive a save lives here or in custom properties of the body
+object: the design JSON (with its ease field), the ease layer on the body
+mesh, keypoint layers, the last pattern/fit/drape reports as JSON.
+"""
+from __future__ import annotations
+
+import bpy
+from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProperty,
+                       FloatVectorProperty, IntProperty, PointerProperty, StringProperty)
+
+SIZES = [(s, s, f"size {s} of the size chart") for s in ("XS", "S", "M", "L", "XL")]
+POSES = [("A", "A", "reference A-pose"), ("T", "T", "T-pose"),
+         ("P1", "P1", "arms forward, legs spread"), ("P2", "P2", "arms up, scissored legs"),
+         ("P3", "P3", "sitting, elbows bent")]
+
+
+def _shape_value_update(self, context):
+    # Slider moved: update the body in place (no-op while the add-on itself fills the list).
+    from . import body_ops
+    if not body_ops.SYNCING:
+        body_ops.apply_shape_from_props(context, report=None)
+
+
+class EASE_PG_shape_param(bpy.types.PropertyGroup):
+    value: FloatProperty(name="Value", update=_shape_value_update, precision=3)
+    min: FloatProperty()
+    max: FloatProperty()
+
+
+def _param_update(self, context):
+    from . import design_ops
+    design_ops.param_update(self, context)
+
+
+class EASE_PG_design_param(bpy.types.PropertyGroup):
+    """One placement (0..1) or length (metres) parameter of the loaded design."""
+    path: StringProperty(description="JSON path of the parameter in the design")
+    kind: StringProperty()
+    value: FloatProperty(name="Value", precision=3, update=_param_update)
+    min: FloatProperty()
+    max: FloatProperty()
+
+
+class EASE_PG_legend(bpy.types.PropertyGroup):
+    ease: FloatProperty(precision=2)
+    color: FloatVectorProperty(subtype="COLOR", size=4, min=0.0, max=1.0)
+
+
+def _ramp_update(self, context):
+    from . import ease_ops
+    ease_ops.refresh_legend(context.scene)
+
+
+def _fitmap_update(self, context):
+    from . import drape_ops
+    drape_ops.apply_fitmap(context.scene)
+
+
+def _template_items(self, context):
+    from . import design_ops
+    return design_ops.template_items()
+
+
+class EASE_PG_scene(bpy.types.PropertyGroup):
+    # Body
+    body: PointerProperty(type=bpy.types.Object, name="Body",
+                          description="The body object the design is attached to")
+    body_file: StringProperty(name="Body file", subtype="FILE_PATH",
+                              description="SMPL/SMPL-X .npz/.pkl or template .obj the user owns")
+    shape: CollectionProperty(type=EASE_PG_shape_param)
+    size: EnumProperty(name="Size", items=SIZES, default="M")
+    pose: EnumProperty(name="Pose", items=POSES, default="A")
+    height_cm: FloatProperty(name="Height", default=170.0, min=100.0, max=230.0, unit="NONE",
+                             description="Target body height (cm)")
+    chest_cm: FloatProperty(name="Chest/bust", default=92.0, min=50.0, max=180.0,
+                            description="Target chest/bust circumference (cm)")
+    waist_cm: FloatProperty(name="Waist", default=76.0, min=40.0, max=180.0,
+                            description="Target waist circumference (cm)")
+    hip_cm: FloatProperty(name="Hip", default=98.0, min=50.0, max=180.0,
+                          description="Target hip circumference (cm)")
+    measurements_report: StringProperty(name="Achieved measurements")
+    # Design
+    template: EnumProperty(name="Template", items=_template_items,
+                           description="Design templates shipped in examples/designs")
+    design_file: StringProperty(name="Design file", subtype="FILE_PATH")
+    design_json: StringProperty(name="Design", description="The current design (JSON)")
+    design_params: CollectionProperty(type=EASE_PG_design_param)
+    live_recut: BoolProperty(name="Live re-cut", default=True,
+                             description="Re-cut the design when a parameter changes")
+    keypoint_name: StringProperty(name="Keypoint", description="Keypoint to place on the selected vertex")
+    # Ease
+    ease_min: FloatProperty(name="Ramp min", default=0.9, min=0.5, max=4.0, update=_ramp_update)
+    ease_max: FloatProperty(name="Ramp max", default=2.0, min=0.5, max=4.0, update=_ramp_update)
+    ease_value: FloatProperty(name="Ease", default=1.3, min=0.5, max=4.0,
+                              description="Ease the brush paints (weft scale; 1.0 lies on the body)")
+    ease_panel: StringProperty(name="Panel", description="Panel whose ease the operators set")
+    ease_from: FloatProperty(name="From", default=1.1, min=0.5, max=4.0)
+    ease_to: FloatProperty(name="To", default=1.6, min=0.5, max=4.0)
+    gradient_axis: EnumProperty(name="Axis", items=[("Z", "Top to bottom", ""), ("X", "Right to left", ""),
+                                                    ("Y", "Front to back", "")], default="Z")
+    legend: CollectionProperty(type=EASE_PG_legend)
+    # Pattern / fit
+    pattern_json: StringProperty(name="Pattern report", description="Key figures of the last pattern (JSON)")
+    fit_size: EnumProperty(name="Target size", items=SIZES, default="L")
+    adapt_P1: BoolProperty(name="P1", default=True)
+    adapt_P2: BoolProperty(name="P2", default=False)
+    adapt_P3: BoolProperty(name="P3", default=False)
+    adapt_T: BoolProperty(name="T", default=False)
+    tolerance: FloatProperty(name="Tolerance", default=1.1, min=1.0, max=2.0,
+                             description="Material stretch tolerance (epsilon_weft)")
+    fit_json: StringProperty(name="Fit report", description="Before/after residual stretch (JSON)")
+    # Drape
+    drape_status: StringProperty(name="Drape status")
+    drape_json: StringProperty(name="Drape report")
+    drape_frames: IntProperty(name="Max frames", default=200, min=10, max=5000)
+    fitmap: EnumProperty(name="Fit map", items=[("NONE", "Fabric", "plain fabric material"),
+                                                ("STRAIN", "Strain", "colour by weft strain"),
+                                                ("GAP", "Gap", "colour by body-garment gap")],
+                         default="NONE", update=_fitmap_update)
+    # Render / export
+    render_path: StringProperty(name="Render to", subtype="FILE_PATH", default="//ease_render.png")
+    render_samples: IntProperty(name="Samples", default=16, min=1, max=4096)
+    render_resolution: IntProperty(name="Resolution %", default=50, min=5, max=100)
+    export_dir: StringProperty(name="Export to", subtype="DIR_PATH", default="//ease_export")
+    export_svg: BoolProperty(name="SVG", default=True)
+    export_dxf: BoolProperty(name="DXF", default=True)
+    export_pdf: BoolProperty(name="PDF", default=False)
+    export_glb: BoolProperty(name="GLB", default=False)
+
+
+CLASSES = (EASE_PG_shape_param, EASE_PG_design_param, EASE_PG_legend, EASE_PG_scene)
+
+
+def register_props():
+    bpy.types.Scene.ease = PointerProperty(type=EASE_PG_scene)
+
+
+def unregister_props():
+    if hasattr(bpy.types.Scene, "ease"):
+        del bpy.types.Scene.ease

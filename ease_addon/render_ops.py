@@ -1,0 +1,127 @@
+"""Render stage: a studio preset (camera framing the body, three-point
+lights, Cycles on the CPU with few samples) and a PNG render."""
+from __future__ import annotations
+
+import math
+import os
+
+import bpy
+import numpy as np
+from mathutils import Vector
+
+from . import state
+from .operators_base import EaseOperator
+
+STUDIO = "EASE Studio"
+
+
+def scene_bounds(scene) -> tuple:
+    """(min, max) world corners of the visible EASE meshes (body, garment, pattern)."""
+    pts = []
+    for o in scene.objects:
+        if o.type == "MESH" and o.get("ease_role") in ("body", "garment", "pattern_panel") and not o.hide_render:
+            pts.extend(o.matrix_world @ Vector(c) for c in o.bound_box)
+    if not pts:
+        return np.array([-0.5, -0.3, 0.0]), np.array([0.5, 0.3, 1.8])
+    a = np.array([tuple(p) for p in pts])
+    return a.min(axis=0), a.max(axis=0)
+
+
+def _studio_object(scene, name, data):
+    coll = state.collection(scene)
+    obj = bpy.data.objects.get(name)
+    if obj is None:
+        obj = bpy.data.objects.new(name, data)
+        coll.objects.link(obj)
+    obj["ease_role"] = "studio"
+    return obj
+
+
+def setup_studio(scene, samples: int = 16, resolution_pct: int = 50) -> None:
+    """Camera in front of the body (-Y), key/fill/rim lights, grey world,
+    Cycles CPU with ``samples`` samples at ``resolution_pct`` % of 1080x1350."""
+    lo, hi = scene_bounds(scene)
+    centre = (lo + hi) / 2
+    size = float(max(hi[2] - lo[2], hi[0] - lo[0], 0.5))
+    cam_data = bpy.data.cameras.get(STUDIO + " Camera") or bpy.data.cameras.new(STUDIO + " Camera")
+    cam_data.lens = 50.0
+    cam = _studio_object(scene, STUDIO + " Camera", cam_data)
+    # 50 mm lens on 36 mm sensor: vertical view of a 4:5 frame; keep the garment filling ~85 %.
+    fov = 2 * math.atan(36.0 / 2 / 50.0)
+    dist = 0.5 * size / 0.85 / math.tan(fov / 2)
+    cam.location = (float(centre[0]), float(centre[1] - dist), float(centre[2]))
+    cam.rotation_euler = (math.pi / 2, 0.0, 0.0)
+    scene.camera = cam
+    for name, energy, loc, rot in (("Key", 400.0, (-1.5, -2.5, 2.6), (math.radians(55), 0, math.radians(-30))),
+                                   ("Fill", 150.0, (2.0, -2.0, 1.6), (math.radians(65), 0, math.radians(45))),
+                                   ("Rim", 250.0, (0.5, 2.5, 2.4), (math.radians(-55), 0, math.radians(170)))):
+        ld = bpy.data.lights.get(f"{STUDIO} {name}") or bpy.data.lights.new(f"{STUDIO} {name}", "AREA")
+        ld.energy = energy
+        ld.size = 1.5
+        lo_obj = _studio_object(scene, f"{STUDIO} {name}", ld)
+        lo_obj.location = (centre[0] + loc[0], centre[1] + loc[1], loc[2])
+        lo_obj.rotation_euler = rot
+    world = scene.world or bpy.data.worlds.new(STUDIO + " World")
+    scene.world = world
+    world.use_nodes = True
+    bg = world.node_tree.nodes.get("Background")
+    if bg is not None:
+        bg.inputs["Color"].default_value = (0.6, 0.6, 0.62, 1.0)
+        bg.inputs["Strength"].default_value = 0.6
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = int(samples)
+    scene.cycles.use_denoising = False
+    if hasattr(scene.cycles, "use_adaptive_sampling"):
+        scene.cycles.use_adaptive_sampling = False
+    scene.render.resolution_x = 1080
+    scene.render.resolution_y = 1350
+    scene.render.resolution_percentage = int(resolution_pct)
+    scene.render.image_settings.file_format = "PNG"
+    scene.render.film_transparent = False
+
+
+def render_png(scene, path: str) -> str:
+    """Render the scene's camera to ``path`` (PNG); the file appears only when complete."""
+    path = bpy.path.abspath(path)
+    if not path.lower().endswith(".png"):
+        path += ".png"
+    os.makedirs(os.path.dirname(os.path.abspath(path)) or ".", exist_ok=True)
+    tmp = os.path.join(os.path.dirname(os.path.abspath(path)), ".ease_render_tmp.png")
+    old = scene.render.filepath
+    scene.render.filepath = tmp
+    try:
+        bpy.ops.render.render(write_still=True, scene=scene.name)
+    finally:
+        scene.render.filepath = old
+    if not os.path.exists(tmp):
+        raise state.AddonError(f"render wrote no image to {path}")
+    os.replace(tmp, path)
+    return path
+
+
+class EASE_OT_studio_setup(EaseOperator):
+    """Set up the studio: camera framing the body, lights, Cycles CPU with few samples"""
+    bl_idname = "ease.studio_setup"
+    bl_label = "Studio Preset"
+
+    def run(self, context):
+        s = context.scene.ease
+        setup_studio(context.scene, s.render_samples, s.render_resolution)
+
+
+class EASE_OT_render(EaseOperator):
+    """Render the studio camera to a PNG file"""
+    bl_idname = "ease.render"
+    bl_label = "Render PNG"
+    bl_options = {"REGISTER"}   # writes a file, changes nothing to undo
+
+    def run(self, context):
+        s = context.scene.ease
+        if context.scene.camera is None or STUDIO not in context.scene.camera.name:
+            setup_studio(context.scene, s.render_samples, s.render_resolution)
+        path = render_png(context.scene, s.render_path)
+        self.report({"INFO"}, f"rendered {path}")
+
+
+CLASSES = (EASE_OT_studio_setup, EASE_OT_render)
