@@ -10,7 +10,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from export_synth import make_pattern  # noqa: E402
 
 from core.errors import ExportError  # noqa: E402
-from core.export.pieces import (build_pieces, distance_to_polyline, layout_pieces, notch_positions,  # noqa: E402
+from core.export.pieces import (build_pieces, cut_line, distance_to_polyline, layout_pieces,  # noqa: E402
+                                notch_positions, points_in_polygon, remove_loops,
                                 offset_loop, point_at_arclength, polyline_length, resolve_allowance,
                                 segments_cross, signed_area)
 
@@ -182,3 +183,53 @@ def test_build_pieces_is_deterministic():
     for p, q in zip(a, b):
         np.testing.assert_array_equal(p.cut[0], q.cut[0])
         assert p.label == q.label
+
+
+def test_remove_loops_keeps_the_outline():
+    # a ccw square with a small cw "ear" loop at one corner (what offsetting a tight spot makes)
+    poly = np.array([[0, 0], [1, 0], [1, 1.1], [1.1, 1.0], [0.9, 1.0], [0, 1]], float)
+    assert segments_cross(poly) is not None
+    out = remove_loops(poly)
+    assert segments_cross(out) is None
+    np.testing.assert_allclose(out, [[0, 0], [1, 0], [1, 1], [0.9, 1], [0, 1]], atol=1e-12)
+
+
+def test_narrow_slit_is_refused_with_a_clear_error():
+    corners = np.array([[0, 0], [0.4, 0], [0.4, 0.1925], [0.2, 0.1925], [0.2, 0.2075], [0.4, 0.2075],
+                        [0.4, 0.4], [0, 0.4]])
+    pts = []
+    for i in range(len(corners)):
+        a, b = corners[i], corners[(i + 1) % len(corners)]
+        n = max(2, int(np.linalg.norm(b - a) / 0.01))
+        pts += [a + (b - a) * t for t in np.arange(n) / n]
+    slit = np.array(pts)
+    with pytest.raises(ExportError, match="lower the allowance"):
+        cut_line(slit, np.full(len(slit), 0.01))
+    cut = cut_line(slit, np.full(len(slit), 0.005))  # 1.5 cm slit, 2 x 5 mm allowance: fits
+    assert points_in_polygon(slit[[0, 10, 40]], cut).all()
+
+
+def test_piece_with_a_hole():
+    # an annulus: outer radius 20 cm, hole of 8 cm (a neck opening cut into a cape)
+    na, nr = 48, 5
+    th = 2 * np.pi * np.arange(na) / na
+    r = np.linspace(0.08, 0.2, nr)
+    uv = np.array([[rr * np.cos(t), rr * np.sin(t)] for rr in r for t in th])
+    faces = []
+    for j in range(nr - 1):
+        for i in range(na):
+            a, b = j * na + i, j * na + (i + 1) % na
+            faces += [[a, b, b + na], [a, b + na, a + na]]
+    from core.pattern.types import Pattern, PatternPanel
+    f = len(faces)
+    panel = PatternPanel("cape", "cape", uv, np.array(faces), np.arange(len(uv)), np.zeros((len(uv), 3)),
+                         np.array([0.0, 1.0]), np.ones(f), np.ones(f), np.ones(f), np.ones(f))
+    pat = Pattern("cape", {"size": "M"}, {"cape": "upper"}, [panel], [])
+    piece = build_pieces(pat, allowance=0.01)[0]
+    assert len(piece.sew) == 2 and len(piece.cut) == 2
+    assert signed_area(piece.sew[0]) > 0 > signed_area(piece.sew[1])
+    # the hole's cut line lies inside the hole, 1 cm in from its sew line
+    d_hole = distance_to_polyline(0.5 * (piece.sew[1] + np.roll(piece.sew[1], -1, 0)), piece.cut[1])
+    np.testing.assert_allclose(d_hole, 0.01, atol=1e-9)
+    assert abs(signed_area(piece.cut[1])) < abs(signed_area(piece.sew[1]))
+    assert abs(signed_area(piece.cut[0])) > abs(signed_area(piece.sew[0]))

@@ -205,6 +205,80 @@ def offset_loop(loop: np.ndarray, widths: np.ndarray, mitre_limit: float = MITRE
     return np.asarray(out, float)
 
 
+def remove_loops(poly: np.ndarray, orientation: float = 1.0, max_iter: int = 1000) -> np.ndarray:
+    """Cut the loops out of a self-crossing closed polygon.
+
+    At each crossing the polygon splits in two closed parts; the one with the
+    larger signed area times ``orientation`` (+1: keep the counter-clockwise
+    outline, -1: a clockwise hole) is kept. Offsetting a curve whose parts come
+    closer than twice the offset makes such loops.
+
+    Parameters
+    ----------
+    poly : (k, 2) float closed polygon (last != first).
+
+    Returns
+    -------
+    (m, 2) float, a polygon without crossings (m <= k + number of crossings).
+    """
+    p = np.asarray(poly, float)
+    for _ in range(max_iter):
+        hit = segments_cross(p)
+        if hit is None:
+            return p
+        i, j = hit
+        a0, a1 = p[i], p[(i + 1) % len(p)]
+        b0, b1 = p[j], p[(j + 1) % len(p)]
+        x = _line_intersection(a0, a1 - a0, b0, b1 - b0)
+        if x is None:  # pragma: no cover - segments_cross found a proper crossing
+            return p
+        outer = np.vstack([p[:i + 1], x[None], p[j + 1:]])
+        inner = np.vstack([x[None], p[i + 1:j + 1]])
+        p = outer if orientation * signed_area(outer) >= orientation * signed_area(inner) else inner
+    return p
+
+
+def points_in_polygon(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
+    """(m,) bool: each point (m, 2) strictly inside the closed polygon (k, 2), by crossing number."""
+    q = np.asarray(points, float)
+    a = np.asarray(poly, float)
+    b = np.roll(a, -1, axis=0)
+    x, y = q[:, 0:1], q[:, 1:2]
+    straddle = (a[None, :, 1] > y) != (b[None, :, 1] > y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xc = a[None, :, 0] + (y - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0]) / (b[None, :, 1] - a[None, :, 1])
+    return (np.sum(straddle & (x < xc), axis=1) % 2) == 1
+
+
+def cut_line(sew: np.ndarray, widths: np.ndarray, mitre_limit: float = MITRE_LIMIT,
+             hole: bool = False) -> np.ndarray:
+    """The cut line around one sew-line loop: :func:`offset_loop`, loops removed, checked.
+
+    Parameters
+    ----------
+    sew : (k, 2) float, the loop with the material on its left (outline ccw, hole cw).
+    widths : (k,) float, allowance of each edge (m).
+    hole : bool, the loop is a hole of the piece.
+
+    Raises
+    ------
+    ExportError when the allowance cannot go around the loop (two parts of the
+    outline closer than the sum of their allowances, e.g. a narrow slit).
+    """
+    c = remove_loops(offset_loop(sew, widths, mitre_limit), -1.0 if hole else 1.0)
+    # every sew vertex with allowance on both sides must lie inside the cut line
+    # (outside it for a hole); vertices on a fold lie on it and are skipped
+    w = np.asarray(widths, float)
+    keep = (w > 0) & (np.roll(w, 1) > 0)
+    inside = points_in_polygon(sew[keep], c)
+    bad = inside if hole else ~inside
+    if np.any(bad) or segments_cross(c) is not None:
+        q = (sew[keep][np.argmax(bad)] if np.any(bad) else c[0]) * 1000
+        raise ExportError(f"the seam allowance does not fit around the sew line near ({q[0]:.0f}, {q[1]:.0f}) mm "
+                          f"(parts of the outline closer than twice the allowance); lower the allowance there")
+    return c
+
+
 def distance_to_polyline(points: np.ndarray, poly: np.ndarray, closed: bool = True) -> np.ndarray:
     """Distance (m) from each point (m, 2) to a polyline (k, 2)."""
     q = np.asarray(points, float)[:, None, :]
@@ -512,12 +586,11 @@ def build_piece(pattern: Pattern, panel: PatternPanel, widths: Dict[str, float],
     for li in range(len(loops)):
         # the outline is ccw and holes cw, so the material is always on the
         # left and offsetting to the right puts the allowance outside it
-        cut.append(offset_loop(sew[li], edge_w[li], mitre_limit))
-        hit = segments_cross(cut[-1])
-        if hit is not None:
-            q = cut[-1][hit[0]] * 1000
-            raise ExportError(f"piece {panel.name!r}: the cut line (sew line + seam allowance) crosses itself "
-                              f"near ({q[0]:.0f}, {q[1]:.0f}) mm; lower the allowance there")
+        try:
+            c = cut_line(sew[li], edge_w[li], mitre_limit, hole=li > 0)
+        except ExportError as exc:
+            raise ExportError(f"piece {panel.name!r}: {exc}") from None
+        cut.append(c)
 
     # outward normal of every boundary edge, for the notches
     notches: List[Notch] = []
