@@ -22,13 +22,20 @@ from .measure import MEASUREMENTS, measure
 
 TOLERANCE_CM = 1.0
 
+# Strength of the pull towards the start shape in fit_measurements, cm per full parameter range.
+REGULARIZATION_CM = 0.5
+
 SIZES = ("XS", "S", "M", "L", "XL")
 
 # Size chart in cm. M is the default Anny body (its reference phenotypes)
 # as measured by core.body.measure; the other sizes are measured Anny bodies
 # of increasing girth at similar height, rounded to 0.5 cm. Above M girths step
 # 4-5 cm per size; below M Anny's weight range (weight = 0 at size XS, with
-# gender and age held at the reference) limits the steps to 2-3 cm.
+# gender and age held at the reference) limits the steps to 2-3 cm. The
+# measured bodies: XS weight 0, muscle 0.75, proportions 0.45, height 0.475;
+# S weight 0.2, muscle 0.6, height 0.4875; L weight 0.8, muscle 0.45, height
+# 0.5125; XL weight 0.95, muscle 0.4, proportions 0.45, height 0.525 (others
+# at the reference).
 SIZE_CHART: Dict[str, Dict[str, float]] = {
     "XS": {"height": 160.0, "chest": 79.5, "waist": 72.5, "hip": 82.5},
     "S": {"height": 161.0, "chest": 81.5, "waist": 74.5, "hip": 85.0},
@@ -43,11 +50,11 @@ SIZE_CHART: Dict[str, Dict[str, float]] = {
 # the reference shape itself. Parameters not listed keep their reference value.
 FITTED_SHAPES: Dict[str, Dict[str, Dict[str, float]]] = {
     "anny": {
-        "XS": {"height": 0.4743, "weight": 0.0, "muscle": 0.7665, "proportions": 0.4371},
-        "S": {"height": 0.4851, "weight": 0.2013, "muscle": 0.5886, "proportions": 0.5022},
+        "XS": {"height": 0.4742, "weight": 0.0, "muscle": 0.7641, "proportions": 0.4379},
+        "S": {"height": 0.485, "weight": 0.2024, "muscle": 0.5888, "proportions": 0.5015},
         "M": {},
-        "L": {"height": 0.5145, "weight": 0.8145, "muscle": 0.4563, "proportions": 0.4836},
-        "XL": {"height": 0.5242, "weight": 0.9719, "muscle": 0.406, "proportions": 0.4547},
+        "L": {"height": 0.5145, "weight": 0.8037, "muscle": 0.4521, "proportions": 0.4818},
+        "XL": {"height": 0.5242, "weight": 0.9565, "muscle": 0.4003, "proportions": 0.4523},
     },
 }
 
@@ -166,14 +173,18 @@ def fit_measurements(body, targets: Mapping[str, float], progress: Optional[Prog
         s.update({n: float(np.clip(lo[i] + u[i] * span[i], lo[i], hi[i])) for i, n in enumerate(names)})
         return s
 
+    u0 = np.clip((np.array([base[n] for n in names], dtype=float) - lo) / span, 0.0, 1.0)
+
     def residual(u):
         count[0] += 1
         if count[0] % 5 == 1:
             report(progress, min(0.95, count[0] / 150.0), f"fitting {', '.join(keys)} ({count[0]} evaluations)")
         got = measure(body, body.vertices(shape_of(u)), keys)
-        return np.array([got[k] for k in keys]) - want
+        # A weak pull to the start shape (cm per parameter range) makes the answer unique where
+        # the targets leave directions free (fewer targets than parameters, or near-parallel
+        # parameters); against girth slopes of 10-30 cm per range it moves a fit by < 0.05 cm.
+        return np.concatenate([np.array([got[k] for k in keys]) - want, REGULARIZATION_CM * (u - u0)])
 
-    u0 = np.clip((np.array([base[n] for n in names], dtype=float) - lo) / span, 0.0, 1.0)
     # Finite differences of 1e-3 of the range: the slices' polygon noise stays below it.
     sol = least_squares(residual, u0, bounds=(0.0, 1.0), diff_step=1e-3, x_scale=1.0,
                         ftol=1e-8, xtol=1e-8, gtol=1e-10, max_nfev=200 * max(1, len(names)) // 4 + 40)
