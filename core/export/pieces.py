@@ -186,22 +186,33 @@ def offset_loop(loop: np.ndarray, widths: np.ndarray, mitre_limit: float = MITRE
                 pts.append(base[e] + s * t[e])
         return pts
 
-    active = list(range(n))
-    for _ in range(n):
-        k = len(active)
-        corners = [corner(active[i - 1], active[i]) for i in range(k)]
-        # offset segment of active[i]: from the last point of corners[i]
-        # to the first point of corners[i + 1]
-        worst, worst_i = -1e-12, -1
-        for i in range(k):
-            s0, s1 = corners[i][-1], corners[(i + 1) % k][0]
-            proj = float(np.dot(s1 - s0, t[active[i]]))
-            if proj < worst:
-                worst, worst_i = proj, i
-        if worst_i < 0 or k <= 3:
+    # doubly linked ring of the edges still on the cut line; corners[e] are
+    # the points where the offset of e starts (shared with its predecessor)
+    prev = np.roll(np.arange(n), 1)
+    nxt = np.roll(np.arange(n), -1)
+    corners = [corner(int(prev[e]), e) for e in range(n)]
+
+    def proj(e: int) -> float:
+        # signed length of the offset segment of e along e: < 0 when it turned over
+        return float(np.dot(corners[nxt[e]][0] - corners[e][-1], t[e]))
+
+    length = np.array([proj(e) for e in range(n)])
+    alive = n
+    while alive > 3:
+        e = int(np.argmin(length))
+        if length[e] >= -1e-12:
             break
-        del active[worst_i]
-    out = [q for c in corners for q in c]
+        p_, n_ = int(prev[e]), int(nxt[e])
+        nxt[p_], prev[n_] = n_, p_
+        length[e] = np.inf
+        alive -= 1
+        corners[n_] = corner(p_, n_)
+        length[p_], length[n_] = proj(p_), proj(n_)
+    start = int(np.argmin(np.where(np.isfinite(length), np.arange(n), n)))
+    out, e = [], start
+    for _ in range(alive):
+        out.extend(corners[e])
+        e = int(nxt[e])
     return np.asarray(out, float)
 
 
