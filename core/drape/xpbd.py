@@ -46,6 +46,7 @@ class DrapeOptions:
         fabric distance from the nearest pin (0.01 = 1 %); None disables them.
     max_speed : m/s, an RMS speed above this is a diverged (exploding) simulation.
     max_extent : m, a garment bounding box larger than this is a diverged (runaway) one.
+    max_strain : a triangle stretched more than this fraction (3 = 300 %) is a diverged drape.
     """
     device: str = "cpu"
     fps: float = 30.0
@@ -63,6 +64,7 @@ class DrapeOptions:
     contact_interval: int = 5
     max_speed: float = 30.0
     max_extent: float = 6.0
+    max_strain: float = 3.0
 
     @staticmethod
     def coerce(options: Union[None, "DrapeOptions", Mapping]) -> "DrapeOptions":
@@ -88,7 +90,7 @@ class DrapeOptions:
             if not ok or not np.isfinite(value) or value <= 0:
                 kind = "a positive integer" if integer else "a positive number"
                 raise DrapeError(f"drape option {name} = {value!r}: expected {kind}")
-        for name in ("fps", "settle_speed", "search_distance", "max_speed", "max_extent"):
+        for name in ("fps", "settle_speed", "search_distance", "max_speed", "max_extent", "max_strain"):
             positive(name)
         for name in ("substeps", "max_frames", "settle_frames", "contact_interval"):
             positive(name, integer=True)
@@ -269,6 +271,13 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
     t_compile = time.perf_counter()
 
     dt = 1.0 / (opts.fps * opts.substeps)
+    fall = float(opts.gravity) * dt * dt
+    if fall > thickness:
+        # XPBD stays bounded at any step, but a step this long lets the cloth pass
+        # through the body between contact checks and stalls its constraints: refuse it.
+        raise DrapeError(f"time step {dt * 1e3:.3g} ms ({opts.substeps} substeps at {opts.fps:g} fps) is too "
+                         f"large: gravity alone moves a particle {fall * 1e3:.2f} mm per substep, more than the "
+                         f"{thickness * 1e3:.1f} mm contact thickness; use more substeps or a higher fps")
     inv_dt2 = 1.0 / (dt * dt)
     keep = float(np.exp(-opts.damping * dt))
     gravity = wp.vec3(0.0, 0.0, -float(opts.gravity))
@@ -305,7 +314,7 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
                 cmd.launch()
         xs = x.numpy()
         vs = v.numpy()
-        _check_divergence(frame, xs, vs[free], opts, mat, dt)
+        _check_divergence(frame, xs, vs[free], opts, mat, dt, cloth)
         rms = float(np.sqrt(np.mean(np.sum(vs[free].astype(float) ** 2, axis=1)))) if free.any() else 0.0
         speeds.append(rms)
         still = still + 1 if rms < opts.settle_speed else 0
@@ -340,7 +349,7 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
 
 
 def _check_divergence(frame: int, xs: np.ndarray, vs: np.ndarray, opts: DrapeOptions, mat: Material,
-                      dt: float) -> None:
+                      dt: float, cloth: Optional[Cloth] = None) -> None:
     """Raise DrapeError naming the frame and the likely cause when the state blew up."""
     step = f"time step {dt * 1e3:.3g} ms ({opts.substeps} substeps at {opts.fps:g} fps)"
     if not np.all(np.isfinite(xs)) or not np.all(np.isfinite(vs)):
@@ -357,3 +366,10 @@ def _check_divergence(frame: int, xs: np.ndarray, vs: np.ndarray, opts: DrapeOpt
             raise DrapeError(f"drape diverged at frame {frame}: kinetic energy exploded (RMS speed "
                              f"{rms:.1f} m/s > {opts.max_speed:g} m/s); likely cause: {step} too large "
                              f"for the stiffness of {mat.name!r}")
+    if cloth is not None and len(cloth.faces):
+        fw, fg, _ = face_strains(xs.astype(float), cloth)
+        worst = float(max(np.abs(fw).max(), np.abs(fg).max()))
+        if worst > opts.max_strain:
+            raise DrapeError(f"drape diverged at frame {frame}: the fabric is stretched {worst * 100:.0f} % "
+                             f"(limit {opts.max_strain * 100:.0f} %); likely cause: {step} too large, a "
+                             f"pattern far too small for the body, or pins far from their pattern places")

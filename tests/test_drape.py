@@ -1,0 +1,156 @@
+"""The XPBD drape on a body of revolution with a two-panel tube skirt (core.drape.xpbd)."""
+import numpy as np
+import pytest
+
+from core.drape import DrapeOptions, drape
+from core.drape.mesh import build_cloth, rest_edges
+from core.drape.synthetic import HIP_RADIUS, radius, revolution_body, tube_skirt
+from core.drape.xpbd import _check_divergence
+from core.drape.materials import get_material
+from core.errors import DrapeError
+from core.metrics.drape import penetration, seam_side_distance
+
+
+@pytest.fixture(scope="module")
+def body():
+    return revolution_body(48, 60)
+
+
+@pytest.fixture(scope="module")
+def skirt():
+    return tube_skirt(1.2)
+
+
+@pytest.fixture(scope="module")
+def draped(body, skirt):
+    return drape(skirt, *body)
+
+
+def test_hangs_without_penetrating(body, draped):
+    share, sd = penetration(draped.positions, *body)
+    assert share == 0.0
+    assert sd.min() > -0.002
+    # analytic check on the body of revolution: every particle outside the surface
+    x = draped.positions
+    clearance = np.hypot(x[:, 0], x[:, 1]) - radius(x[:, 2])
+    assert clearance.min() > -0.002
+    assert draped.settled and draped.settle_reason == "settled"
+
+
+def test_relaxes_from_skintight_to_pattern_size(draped):
+    # the 1.2-ease skirt starts on the hips and billows out to about 1.2 x the hip radius
+    x = draped.positions
+    hem = x[:, 2] < 0.7
+    r_hem = np.hypot(x[hem, 0], x[hem, 1]).mean()
+    assert 1.08 * HIP_RADIUS < r_hem < 1.25 * HIP_RADIUS
+    start = np.hypot(draped.start_positions[:, 0], draped.start_positions[:, 1])
+    assert np.allclose(start, HIP_RADIUS, atol=1e-6)
+
+
+def test_keeps_pattern_rest_lengths(skirt, draped):
+    cloth = build_cloth(skirt)
+    x = draped.positions[np.argsort(cloth.particle_of)]  # particle order
+    edges, rest = rest_edges(cloth.faces, cloth.rest_inv)
+    ratio = np.linalg.norm(x[edges[:, 0]] - x[edges[:, 1]], axis=1) / rest
+    # the waistband is pinned at the skintight size (1/1.2 of its pattern width):
+    # judge the fabric that hangs free of the pins
+    free = ~cloth.pinned[edges].any(axis=1)
+    dev = np.abs(ratio[free] - 1.0)
+    assert dev.mean() < 0.02
+    assert np.median(dev) < 0.02
+    assert dev.max() < 0.10
+
+
+def test_closes_its_seams(skirt, draped):
+    sides = seam_side_distance(skirt, draped.positions)
+    assert set(sides) == {"side_left", "side_right"}
+    assert max(sides.values()) < 1e-3
+
+
+def test_unwelded_seam_is_sewn(body):
+    # give the front panel's seam columns their own ids: the seams must still close
+    p = tube_skirt(1.2, n_rows=6, n_cols=6)
+    front = p.panel("front")
+    n = int(max(q.vertex_ids.max() for q in p.panels)) + 1
+    for s in p.seams:
+        side = s.verts_b if s.panel_b == "front" else s.verts_a
+        front.vertex_ids[side] = n + np.arange(len(side))
+        n += len(side)
+    p.pins = {"skirt": np.concatenate([p.panel("back").vertex_ids[:7], front.vertex_ids[:7]])}
+    r = drape(p, *body, options={"max_frames": 30})
+    assert max(seam_side_distance(p, r.positions).values()) < 1e-3
+    assert r.positions.shape == (n, 3)
+
+
+def test_two_cpu_runs_are_identical(body, skirt, draped):
+    again = drape(skirt, *body)
+    assert again.frames == draped.frames
+    assert np.array_equal(again.positions, draped.positions)
+
+
+def test_result_layout(skirt, draped):
+    n = int(max(p.vertex_ids.max() for p in skirt.panels)) + 1
+    assert draped.positions.shape == (n, 3)
+    assert draped.faces.shape == (sum(len(p.faces) for p in skirt.panels), 3)
+    assert draped.strain_weft.shape == (n,) and draped.strain_warp.shape == (n,)
+    assert set(draped.timings) == {"prepare", "compile", "simulate", "total"}
+    assert draped.garment_names == ["skirt"]
+    assert draped.material["name"] == "cotton"  # from the pattern's materials.fabric
+    assert not draped.self_collision
+
+
+def test_woven_cotton_barely_stretches_jersey_gives(body):
+    # a heavy load (5 g) without tethers: the warp carries the skirt's weight
+    p = tube_skirt(1.0, n_rows=8, n_cols=8)
+    opts = {"gravity": 50.0, "tether_slack": None, "substeps": 80, "max_frames": 20}
+    cotton = drape(p, *body, material="cotton", options=opts)
+    jersey = drape(p, *body, material="jersey", options=opts)
+    assert np.abs(cotton.face_strain_warp).mean() < 0.05
+    assert jersey.face_strain_warp.mean() > cotton.face_strain_warp.mean() + 0.004
+    assert get_material("cotton").max_stretch <= 0.05 < get_material("jersey").max_stretch
+
+
+def test_absurd_time_step_is_refused(body, skirt):
+    with pytest.raises(DrapeError, match="time step"):
+        drape(skirt, *body, options={"fps": 0.5, "substeps": 1})
+
+
+def test_absurd_stiffness_is_refused(body, skirt):
+    with pytest.raises(DrapeError, match="stretch_weft"):
+        drape(skirt, *body, material={"fabric": "cotton", "stretch_weft": 1e12})
+    with pytest.raises(DrapeError, match="shear"):
+        drape(skirt, *body, material={"fabric": "cotton", "shear": -1.0})
+
+
+def test_divergence_detector_names_frame_and_cause():
+    opts = DrapeOptions()
+    mat = get_material("cotton")
+    x = np.zeros((4, 3))
+    v = np.zeros((4, 3))
+    _check_divergence(3, x, v, opts, mat, 1e-3)  # a still state passes
+    with pytest.raises(DrapeError, match="frame 7.*NaN"):
+        _check_divergence(7, np.array([[np.nan, 0, 0]]), v[:1], opts, mat, 1e-3)
+    with pytest.raises(DrapeError, match="frame 8.*bounding box"):
+        _check_divergence(8, np.array([[0, 0, 0], [100.0, 0, 0]]), v[:2], opts, mat, 1e-3)
+    with pytest.raises(DrapeError, match="frame 9.*kinetic energy"):
+        _check_divergence(9, x, np.full((4, 3), 100.0), opts, mat, 1e-3)
+
+
+def test_stretch_blowup_is_divergence(skirt):
+    cloth = build_cloth(skirt)
+    torn = cloth.x0 * np.array([1.0, 1.0, 5.0])  # stretched 5x along the warp
+    with pytest.raises(DrapeError, match="frame 2.*stretched"):
+        _check_divergence(2, torn, np.zeros_like(torn), DrapeOptions(), get_material("cotton"), 1e-3, cloth)
+
+
+def test_bad_inputs(body, skirt):
+    with pytest.raises(DrapeError, match="unknown drape option"):
+        drape(skirt, *body, options={"frams": 3})
+    with pytest.raises(DrapeError, match="substeps"):
+        drape(skirt, *body, options={"substeps": 0})
+    with pytest.raises(DrapeError, match="body vertices"):
+        drape(skirt, np.zeros((3, 2)), body[1])
+    with pytest.raises(DrapeError, match="device"):
+        drape(skirt, *body, options={"device": "cuda:7"})
+    with pytest.raises(DrapeError, match="unknown material"):
+        drape(skirt, *body, material="tweed-ish")
