@@ -49,7 +49,10 @@ def test_astm_blocks_layers_and_sew_lengths(made, writer):
     for blk, piece in zip(blocks, pieces):
         panel = pat.panel(blk.name)
         layers = {e.dxf.layer for e in blk}
-        assert layers >= {"1", "4", "7", "14"}
+        assert layers >= {"1", "2", "4", "7", "14"}
+        # turn points: the 4 corners of the sew line and of the cut line (mitred, so also 4)
+        turns = [tuple(e.dxf.location)[:2] for e in blk if e.dxf.layer == "2"]
+        assert len(turns) == 8 and all(e.dxftype() == "POINT" for e in blk if e.dxf.layer == "2")
         sew = [e for e in blk if e.dxf.layer == "14"]
         assert len(sew) == 1 and sew[0].is_closed
         pts = _poly_points(sew[0])
@@ -85,3 +88,9 @@ def test_plain_dxf(made):
 def test_dxf_is_deterministic(made):
     pat, pieces, lay = made
     assert dxf.astm_text(pieces, lay, pat.style, "M") == dxf.astm_text(pieces, lay, pat.style, "M")
+
+
+def test_turn_points_find_corners_not_curve_points():
+    t = np.linspace(0, np.pi / 2, 30)
+    quarter = np.vstack([[0, 0], np.column_stack([np.cos(t), np.sin(t)])])  # a pie slice: 3 corners
+    np.testing.assert_array_equal(dxf.turn_points(quarter), [0, 1, 30])

@@ -7,6 +7,7 @@ meaning; this module writes
 layer  content
 ====== ==========================================================
 1      piece boundary = the cut line; piece and style system text
+2      turn points (POINT at the corners of the cut and sew lines)
 4      notches (slit notches, LINE from the boundary inward)
 6      mirror line (a fold edge)
 7      grain line (LINE, pointing along the warp)
@@ -33,7 +34,9 @@ import numpy as np
 
 from .pieces import Layout, PieceDrawing, ascii_text
 
-ASTM_LAYERS = {"boundary": "1", "notch": "4", "mirror": "6", "grain": "7", "sew": "14", "annotation": "15"}
+ASTM_LAYERS = {"boundary": "1", "turn": "2", "notch": "4", "mirror": "6", "grain": "7", "sew": "14",
+               "annotation": "15"}
+TURN_DEG = 20.0  # a polyline vertex turning more than this is a corner (turn point), else a curve point
 PLAIN_LAYERS = {"CUT": 1, "SEW": 5, "NOTCH": 3, "GRAIN": 7, "FOLD": 6, "LABEL": 7}  # ACI colours
 INSUNITS_MM = 4
 
@@ -43,6 +46,15 @@ def _mm(points, offset=None) -> List[tuple]:
     if offset is not None:
         q = q + offset
     return [(float(x) * 1000.0, float(y) * 1000.0) for x, y in q]
+
+
+def turn_points(loop: np.ndarray, degrees: float = TURN_DEG) -> np.ndarray:
+    """Indices of the corners of a closed polyline (k, 2): vertices turning more than ``degrees``."""
+    p = np.asarray(loop, float)
+    a = p - np.roll(p, 1, axis=0)
+    b = np.roll(p, -1, axis=0) - p
+    cos = np.sum(a * b, axis=1) / np.maximum(np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1), 1e-300)
+    return np.flatnonzero(cos < np.cos(np.radians(degrees)))
 
 
 def block_names(pieces: Sequence[PieceDrawing]) -> List[str]:
@@ -102,6 +114,10 @@ def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, si
             blk.add_polyline2d(_mm(loop), close=True, dxfattribs={"layer": L["boundary"]})
         for loop in piece.sew:
             blk.add_polyline2d(_mm(loop), close=True, dxfattribs={"layer": L["sew"]})
+        # turn points tell pattern CAD which vertices are corners (the rest are curve points)
+        for loop in piece.cut + piece.sew:
+            for q in _mm(loop[turn_points(loop)]):
+                blk.add_point(q, dxfattribs={"layer": L["turn"]})
         for n in piece.notches:
             a, b = _mm(n.segment)
             blk.add_line(a, b, dxfattribs={"layer": L["notch"]})
