@@ -1,0 +1,60 @@
+"""Cutting the body surface into garment panels.
+
+:func:`cut_design` is the entry point: design -> keypoints resolved on the
+reference body instance -> :func:`core.cut.engine.cut_surface` -> ease fields.
+The result (:class:`core.cut.types.GarmentCut`) gives the panels' 3D vertices
+on any shape and pose through its embedding. Imports stay light here; the
+engine and its dependencies load when a cut is made.
+"""
+from __future__ import annotations
+
+from typing import Optional
+
+from ..progress import Progress, report, sub
+
+
+def cut_design(design, body=None, shape=None, pose=None, progress: Optional[Progress] = None):
+    """Cut ``design`` on a body instance.
+
+    Parameters
+    ----------
+    design : core.design.Design | dict | path of a design JSON
+    body : BodyModel, or None to load ``design.body["model"]``
+    shape : size name (``"XS"``..``"XL"``) or shape dict; None: the design's
+    pose : pose preset or dict; None: the design's (the reference pose)
+    progress : callback ``progress(fraction, message)``, may raise Cancelled
+
+    Returns
+    -------
+    GarmentCut with ``Panel.ease`` filled from the design's ease fields and
+    ``materials`` from the design.
+
+    Raises
+    ------
+    DesignError : an invalid design element (named by its JSON path)
+    CutError : the engine cannot cut a named line or panel
+    """
+    from ..design import apply_ease, load_design
+    from ..design.resolve import Resolver, instance_vertices, resolve
+    from .engine import cut_surface
+
+    design = load_design(design)
+    report(progress, 0.0, f"resolving design {design.name!r}")
+    if body is None:
+        from ..body import load_body
+        body = load_body(design.body.get("model", "anny"))
+    vertices = instance_vertices(design, body, shape, pose)
+    resolver = Resolver(design, body, vertices)
+    spec = resolve(design, body, shape=shape, pose=pose, resolver=resolver)
+    report(progress, 0.15, "cutting the body surface")
+    cut = cut_surface(body, vertices, spec, progress=sub(progress, 0.15, 0.95))
+    report(progress, 0.95, "applying ease fields")
+    apply_ease(cut, design, body, vertices, resolver=resolver)
+    cut.materials = {**dict(cut.materials or {}), **design.materials}
+    if not cut.body:
+        cut.body = dict(spec.body)
+    report(progress, 1.0, f"cut {len(cut.panels)} panels")
+    return cut
+
+
+__all__ = ["cut_design"]

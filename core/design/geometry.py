@@ -105,7 +105,14 @@ def trace_straight(vertices, faces, sp: SurfacePoint, direction: np.ndarray, len
     import potpourri3d as pp3d
     tracer = pp3d.GeodesicTracer(np.ascontiguousarray(vertices, dtype=np.float64),
                                  np.ascontiguousarray(faces, dtype=np.int64))
+    # The tracer walks |d projected on the start triangle| metres: project first, then scale.
+    T = np.asarray(vertices)[np.asarray(faces)[sp.triangle]]
+    n = np.cross(T[1] - T[0], T[2] - T[0])
+    n /= np.linalg.norm(n)
     d = np.asarray(direction, dtype=np.float64)
+    d = d - (d @ n) * n
+    if np.linalg.norm(d) < 1e-9:
+        raise ValueError("the direction is normal to the surface")
     d = d / np.linalg.norm(d) * length
     path = np.asarray(tracer.trace_geodesic_from_face(int(sp.triangle), np.asarray(sp.bary, dtype=np.float64), d))
     start = sp.position(vertices, faces)

@@ -60,21 +60,28 @@ def _top_parts(sleeves: str = "long", hem: str = "hem", ease=None):
     ease = ease or {}
     params = {
         "armhole_drop": {"value": 0.03, "kind": "length", "min": 0.0, "max": 0.08},
+        "neck_drop_front": {"value": 0.03, "kind": "length", "min": 0.015, "max": 0.15},
+        "neck_drop": {"value": 0.015, "kind": "length", "min": 0.01, "max": 0.06},
     }
     kps = {
         "armhole_under_left": {"trace": {"from": "armpit_left", "along": "arm_left", "length": "$armhole_drop"}},
+        # the neckline sits below the neck landmarks (the head region starts there)
+        "neckline_front": {"trace": {"from": "neck_front", "along": "torso_down", "length": "$neck_drop_front"}},
+        "neckline_back": {"trace": {"from": "neck_back", "along": "torso_down", "length": "$neck_drop"}},
+        "neckline_side_left": {"trace": {"from": "neck_left", "along": "torso_down", "length": "$neck_drop"}},
         "chest_front": {"between": ["neck_front", "waist_front"], "t": 0.45},
         "chest_back": {"between": ["neck_back", "waist_back"], "t": 0.45},
     }
     lines = [
-        {"name": "neckline", "points": ["neck_front", "neck_left", "neck_back", "neck_right"],
+        {"name": "neckline", "points": ["neckline_front", "neckline_side_left", "neckline_back",
+                                        "neckline_side_right"],
          "closed": True, "role": "opening"},
         {"name": "armhole_left", "ring": {"through": "armhole_under_left", "normal": ["shoulder_left", "elbow_left"],
                                            "points": 12, "named": {"armhole_top_left": "+z",
                                                                    "armhole_front_left": "-y",
                                                                    "armhole_back_left": "+y"}},
          "role": "seam" if sleeves != "none" else "opening"},
-        {"name": "shoulder_left", "points": ["neck_left", "armhole_top_left"], "role": "seam"},
+        {"name": "shoulder_left", "points": ["neckline_side_left", "armhole_top_left"], "role": "seam"},
         {"name": "side_left", "points": ["armhole_under_left", "hem_side_left"], "role": "seam"},
     ]
     panels = [
@@ -88,13 +95,15 @@ def _top_parts(sleeves: str = "long", hem: str = "hem", ease=None):
         else:
             params["sleeve_length"] = {"value": 0.12, "kind": "length", "min": 0.06, "max": 0.2}
             normal = ["shoulder_left", "elbow_left"]
-        kps["cuff_top_left"] = {"trace": {"from": "armhole_top_left", "along": "arm_left",
-                                          "length": "$sleeve_length"}}
+        # the cuff ring is placed by a traced length; its top/under points split the sleeve
+        kps["cuff_level_left"] = {"trace": {"from": "armhole_top_left", "along": "arm_left",
+                                            "length": "$sleeve_length"}}
         kps["sleeve_front_mid_left"] = {"between": ["armhole_front_left", "cuff_front_left"], "t": 0.5}
         kps["sleeve_back_mid_left"] = {"between": ["armhole_back_left", "cuff_back_left"], "t": 0.5}
         lines += [
-            {"name": "cuff_left", "ring": {"through": "cuff_top_left", "normal": normal, "points": 12,
-                                           "named": {"cuff_under_left": 0.5, "cuff_front_left": "-y",
+            {"name": "cuff_left", "ring": {"through": "cuff_level_left", "normal": normal, "points": 12,
+                                           "named": {"cuff_top_left": "+z", "cuff_under_left": "-z",
+                                                     "cuff_front_left": "-y",
                                                      "cuff_back_left": "+y"}},
              "role": "opening"},
             {"name": "sleeve_top_left", "points": ["armhole_top_left", "cuff_top_left"], "role": "seam"},
@@ -144,7 +153,7 @@ def jacket():
              ease={k: {"value": 1.3} for k in ("front", "back", "sleeve_front_left", "sleeve_back_left")})
     g = d["garments"][0]
     g["name"] = "jacket"
-    g["lines"].append({"name": "center_front", "points": ["neck_front", "hem_front"], "role": "opening"})
+    g["lines"].append({"name": "center_front", "points": ["neckline_front", "hem_front"], "role": "opening"})
     front = next(p for p in g["panels"] if p["name"] == "front")
     front["name"] = "front_left"
     front["seed"] = "bust_left"

@@ -1,0 +1,158 @@
+"""``ease cut``: cut a design's panels out of the body surface and write them.
+
+Writes (atomically, all or nothing) into ``--out``:
+``panels.obj`` (one ``g`` group per panel, on the instance cut), ``cut.json`` +
+``cut_embedding.npz`` (reloadable with :func:`core.cut.io.load_cut`),
+``design.json`` (the validated design) and ``cut.png`` (the body with its
+panels coloured, front and back views).
+"""
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+
+def obj_text(cut, positions: np.ndarray) -> str:
+    """Wavefront OBJ of all panels: shared garment vertices, one ``g`` per panel."""
+    lines = ["# EASE cut: garment panels embedded on the body (metres, +Z up, body faces -Y)"]
+    lines += [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in positions]
+    for p in cut.panels:
+        lines.append(f"g {p.name.replace(' ', '_')}")
+        F = np.asarray(p.vertex_ids)[np.asarray(p.faces)] + 1
+        lines += [f"f {a} {b} {c}" for a, b, c in F]
+    return "\n".join(lines) + "\n"
+
+
+def _view_polys(X, F, view):
+    """2D polygons, depth and shading of triangles facing the viewer.
+
+    view : +1 looks at the front (from -Y), -1 at the back (from +Y).
+    """
+    T = X[F]
+    n = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+    nn = np.linalg.norm(n, axis=1)
+    nn[nn == 0] = 1
+    facing = -view * n[:, 1] / nn              # cosine to the view direction
+    keep = facing > 0
+    xs = T[:, :, 0] * view                      # mirror the back view so left/right read naturally
+    poly = np.stack([xs, T[:, :, 2]], axis=2)
+    depth = view * T[:, :, 1].mean(axis=1)      # larger = farther from the viewer
+    return poly[keep], depth[keep], facing[keep], keep
+
+
+def render_png(cut, body_faces, body_vertices, path, title=""):
+    """Front and back views of the body (grey) with its panels coloured."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import PolyCollection
+    from ..fileio import write_bytes
+    import io
+
+    from ..design.geometry import SurfaceLocator
+
+    X = cut.positions(body_vertices)
+    cmap = plt.get_cmap("tab10" if len(cut.panels) <= 10 else "tab20")
+    ncol = 10 if len(cut.panels) <= 10 else 20
+    body_faces = np.asarray(body_faces)
+    covered = np.zeros(len(body_faces), dtype=bool)
+    if cut.panels:
+        loc = SurfaceLocator(body_vertices, body_faces)
+        C = np.concatenate([X[np.asarray(p.vertex_ids)[np.asarray(p.faces)]].mean(axis=1) for p in cut.panels])
+        _, tri, _ = loc.closest(C)
+        covered[tri] = True
+    fig, axes = plt.subplots(1, 2, figsize=(10, 8), dpi=110)
+    for ax, view, label in zip(axes, (1, -1), ("front", "back")):
+        polys, depths, shades, colors = [], [], [], []
+        for part, push in ((~covered, 0.0), (covered, 8e-3)):
+            # body triangles under a panel are pushed back: they only show where the panel ends
+            bp, bd, bs, _ = _view_polys(body_vertices, body_faces[part], view)
+            polys.append(bp); depths.append(bd + push); shades.append(bs)
+            colors.append(np.tile([0.78, 0.78, 0.78], (len(bp), 1)))
+        for i, p in enumerate(cut.panels):
+            F = np.asarray(p.vertex_ids)[np.asarray(p.faces)]
+            pp, pd, ps, _ = _view_polys(X, F, view)
+            polys.append(pp); depths.append(pd - 3e-3); shades.append(ps)   # in front of the body it lies on
+            colors.append(np.tile(cmap(i % ncol)[:3], (len(pp), 1)))
+        P = np.concatenate(polys); D = np.concatenate(depths)
+        S = np.concatenate(shades); C = np.concatenate(colors)
+        order = np.argsort(-D, kind="stable")
+        C = C * (0.35 + 0.65 * S)[:, None]
+        ax.add_collection(PolyCollection(P[order], facecolors=C[order], edgecolors="none", antialiased=False))
+        ax.autoscale_view()
+        ax.set_aspect("equal")
+        ax.set_axis_off()
+        ax.set_title(label)
+    handles = [plt.Rectangle((0, 0), 1, 1, color=cmap(i % ncol)) for i in range(len(cut.panels))]
+    fig.legend(handles, [p.name for p in cut.panels], loc="lower center", ncol=4, fontsize=8, frameon=False)
+    if title:
+        fig.suptitle(title)
+    fig.subplots_adjust(left=0.02, right=0.98, top=0.93, bottom=0.12, wspace=0.02)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
+    plt.close(fig)
+    return write_bytes(path, buf.getvalue())
+
+
+def run_cut(design_path, out, size=None, pose=None, body_name=None, progress=None, png=True) -> dict:
+    """Cut ``design_path`` and write the cut directory ``out``; returns a summary."""
+    from ..body import load_body
+    from ..design import load_design
+    from ..design.resolve import instance_vertices
+    from ..fileio import output_dir, write_json, write_text
+    from . import cut_design
+    from .io import save_cut
+
+    design = load_design(design_path)
+    body = load_body(body_name or design.body.get("model", "anny"))
+    t0 = time.perf_counter()
+    cut = cut_design(design, body=body, shape=size, pose=pose, progress=progress)
+    seconds = time.perf_counter() - t0
+    vertices = instance_vertices(design, body, size, pose)
+    X = cut.positions(vertices)
+    with output_dir(out) as tmp:
+        write_text(tmp / "panels.obj", obj_text(cut, X))
+        save_cut(cut, tmp)
+        write_json(tmp / "design.json", design.to_json())
+        if png:
+            render_png(cut, body.faces, vertices, tmp / "cut.png",
+                       title=f"{design.name} on {body.name} ({size or design.body.get('shape')}, "
+                             f"pose {pose or design.body.get('pose')})")
+    return {"design": design.name, "panels": [p.name for p in cut.panels], "seams": len(cut.seams),
+            "vertices": cut.n_vertices, "triangles": int(sum(len(p.faces) for p in cut.panels)),
+            "seconds": seconds}
+
+
+def _cmd(args) -> int:
+    from ..progress import ConsoleProgress
+    summary = run_cut(args.design, args.out, size=args.size, pose=args.pose, body_name=args.body,
+                      progress=None if args.quiet else ConsoleProgress(), png=not args.no_png)
+    print(f"cut {summary['design']!r}: {len(summary['panels'])} panels ({', '.join(summary['panels'])}), "
+          f"{summary['seams']} seams, {summary['triangles']} triangles in {summary['seconds']:.2f} s")
+    print(f"wrote {Path(args.out) / 'panels.obj'}, cut.json, cut_embedding.npz, design.json"
+          f"{'' if args.no_png else ', cut.png'}")
+    return 0
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser(
+        "cut",
+        help="cut a design's panels out of the body surface",
+        description="Resolve a design (examples/designs/*.json) on the body, cut its seamlines into the "
+                    "body mesh and write the panels: panels.obj (one group per panel), cut.json + "
+                    "cut_embedding.npz (seams, grain, ease, pins; reloadable), design.json and cut.png "
+                    "(front/back views). Nothing is written if the design is invalid.",
+    )
+    p.add_argument("design", help="design JSON file")
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--size", choices=("XS", "S", "M", "L", "XL"), default=None,
+                   help="cut on this size instead of the design's body shape")
+    p.add_argument("--pose", choices=("A", "T", "P1", "P2", "P3"), default=None,
+                   help="cut on this pose instead of the design's (reference) pose")
+    p.add_argument("--body", default=None, help="body model (default: the design's, e.g. anny)")
+    p.add_argument("--no-png", action="store_true", help="skip the PNG picture")
+    p.add_argument("--quiet", action="store_true", help="no progress line")
+    p.set_defaults(func=_cmd)
