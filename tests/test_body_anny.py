@@ -40,12 +40,27 @@ def test_matches_anny_reference_evaluations():
     assert (spread[1:] > 0.05).all()
 
 
-def test_body_model_matches_reference_rest_case(body):
-    """AnnyBody with the default shape and A-pose is Anny's default evaluation (frame = Anny's)."""
+def test_body_model_matches_anny(body):
+    """AnnyBody (shape dict, pose dict) reproduces Anny's own evaluations; frame = Anny's."""
     ref = np.load(REFERENCE)
-    i = list(ref["names"]).index("default_rest")
+    names = list(ref["names"])
+    labels = [str(s) for s in ref["phenotype_labels"]]
+    i = names.index("ease_reference")
+    assert dict(zip(labels, ref["phenotypes"][i])) == body.default_shape()
     assert np.abs(body.vertices() - ref["vertices"][i]).max() < 1e-5
     assert np.abs(body.joints() - ref["joints"][i]).max() < 1e-5
+    checked = 0
+    for i, name in enumerate(names):
+        if np.any(ref["root_translation"][i] != 0):
+            continue  # AnnyBody poses rotate joints only
+        aa = ref["pose_axis_angle"][i]
+        pose = {body.joint_names[j]: aa[j] for j in np.nonzero(np.any(aa != 0, axis=1))[0]}
+        shape = dict(zip(labels, ref["phenotypes"][i]))
+        v, j = body.vertices_and_joints(shape, pose)
+        assert np.abs(v - ref["vertices"][i]).max() < 1e-5, name
+        assert np.abs(j - ref["joints"][i]).max() < 1e-5, name
+        checked += 1
+    assert checked >= 3
 
 
 def test_load_body_is_cached_and_named(body):

