@@ -34,6 +34,7 @@ from .split import CutMesh
 from .types import GarmentCut, Panel, Seam
 
 FORBIDDEN_REGIONS = ("head", "hands", "feet")
+ERODE = 2   # rings of vertices a garment may overlap a forbidden region's border by
 
 
 # --------------------------------------------------------------------------------------------
@@ -88,14 +89,21 @@ def line_garments(line: CutLine, garments: Sequence[str]) -> List[str]:
 
 
 def forbidden_body_faces(body, n_faces: int) -> np.ndarray:
-    """(F,) bool: body triangles in the head, hands or feet regions (>= 2 corners inside)."""
+    """(F,) int: per body triangle, 1 + index into FORBIDDEN_REGIONS of the region it lies
+    in, or 0. The regions are eroded by ``ERODE`` rings of vertices first: a garment may
+    run along (or slightly over) a region's border, e.g. a neckline at the neck landmarks,
+    while a panel whose seamline does not close floods the whole region anyway."""
     faces = np.asarray(body.faces)
     nv = int(faces.max()) + 1
-    mark = np.zeros(nv, dtype=bool)
-    for r in FORBIDDEN_REGIONS:
+    out = np.zeros(len(faces), dtype=np.int64)
+    for k, r in enumerate(FORBIDDEN_REGIONS):
+        mark = np.zeros(nv, dtype=bool)
         ids = np.asarray(body.regions.get(r, []), dtype=np.int64)
         mark[ids[(ids >= 0) & (ids < nv)]] = True
-    return mark[faces].sum(1) >= 2
+        for _ in range(ERODE):
+            mark[faces[~mark[faces].all(1)].reshape(-1)] = False
+        out[(out == 0) & mark[faces].all(1)] = k + 1
+    return out
 
 
 # --------------------------------------------------------------------------------------------
@@ -128,7 +136,7 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None) -
     if spec.skirt:
         from .skirt import make_skirt
         make_skirt(mesh, body, X)
-        forbidden = np.concatenate([forbidden, np.zeros(mesh._ptri_count() - len(BF), dtype=bool)])
+        forbidden = np.concatenate([forbidden, np.zeros(mesh._ptri_count() - len(BF), dtype=np.int64)])
 
     # keypoints of every line as vertices; one geodesic solver on that mesh
     report(progress, 0.1, "cutting: inserting keypoints")
@@ -270,8 +278,9 @@ def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], s
     n = mesh.nv
     cut_ukeys = np.array(sorted(a * n + b for (a, b) in mesh.cut), dtype=np.int64)
     comp = face_components(F, n, cut_ukeys)
-    bad_comp = np.zeros(comp.max() + 1, dtype=bool)
-    bad_comp[comp[forbidden[mesh.parent]]] = True
+    fb = forbidden[mesh.parent]
+    bad_comp = np.zeros(comp.max() + 1, dtype=np.int64)
+    bad_comp[comp[fb > 0]] = fb[fb > 0]
     label = np.full(len(F), -1, dtype=np.int64)
     owner: Dict[int, str] = {}
     for pi, p in enumerate(gpanels):
@@ -280,8 +289,8 @@ def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], s
             raise CutError(f"panels {owner[c]!r} and {p.name!r} are in one region: a seamline between "
                            f"them is missing or does not close")
         if bad_comp[c]:
-            raise CutError(f"panel {p.name!r} reaches the head, hands or feet: a seamline around it "
-                           f"does not close")
+            raise CutError(f"panel {p.name!r} reaches the {FORBIDDEN_REGIONS[bad_comp[c] - 1]} region: "
+                           f"a seamline around it does not close")
         owner[c] = p.name
         label[comp == c] = pi
     keep = label >= 0
@@ -385,13 +394,14 @@ def _build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset):
         cv = corner_vert[corners]
         gv = gv_of_corner[corners]
         # order local vertices by global id then component id
-        pairs = np.stack([gv, cv], 1)
-        uniq, inv = np.unique(pairs, axis=0, return_inverse=True)
+        ncv = np.int64(corner_vert.max()) + 1
+        uk, inv = np.unique(gv * ncv + cv, return_inverse=True)
         inv = inv.reshape(-1)
         local_of_corner[corners] = inv
         faces = inv.reshape(-1, 3)
-        vids = uniq[:, 0] + offset
-        Xl = X[uniq[:, 0]]
+        ugv = uk // ncv
+        vids = ugv + offset
+        Xl = X[ugv]
         side = "left" if Xl[:, 0].mean() >= 0 else "right"
         axis = axes[(p.body_part, "left" if p.body_part == "torso" else side)]
         warp = warp_directions(Xl, faces, axis)

@@ -18,9 +18,12 @@ import scipy.sparse as sp
 
 def _edges(F: np.ndarray):
     """Unique undirected edges (e, 2) and per-face edge ids (f, 3), edge k = (F[k], F[k+1])."""
-    he = np.stack([F, np.roll(F, -1, axis=1)], axis=2).reshape(-1, 2)
-    und = np.sort(he, axis=1)
-    E, inv = np.unique(und, axis=0, return_inverse=True)
+    a = F.reshape(-1)
+    b = np.roll(F, -1, axis=1).reshape(-1)
+    n = np.int64(F.max()) + 1
+    key = np.minimum(a, b) * n + np.maximum(a, b)
+    uk, inv = np.unique(key, return_inverse=True)
+    E = np.stack([uk // n, uk % n], axis=1)
     return E, inv.reshape(-1, 3)
 
 

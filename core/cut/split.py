@@ -56,14 +56,7 @@ class CutMesh:
             parent_tris = X[F]
         self._set_parents(np.asarray(parent_tris, dtype=float))
         self.weights: Dict[int, Tuple[np.ndarray, np.ndarray]] = dict(weights or {})
-        # half-edge (a, b) -> face, and vertex -> incident faces
-        he = F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-        fid = np.repeat(np.arange(len(F)), 3)
-        self.he: Dict[Tuple[int, int], int] = dict(zip(map(tuple, he.tolist()), fid.tolist()))
-        self.vf: List[set] = [set() for _ in range(len(X))]
-        for f, tri in enumerate(F.tolist()):
-            for v in tri:
-                self.vf[v].add(f)
+        self._rebuild_adjacency()
         self.cut: Dict[Tuple[int, int], int] = {}     # undirected edge -> line index
         self.cut_verts: Dict[int, set] = {}            # vertex -> line indices through it
 
@@ -136,31 +129,26 @@ class CutMesh:
         return self.weights[v]
 
     def _combine(self, verts: Sequence[int], coef: Sequence[float]):
-        cols, vals = [], []
+        acc: Dict[int, float] = {}
         for v, c in zip(verts, coef):
             cv, vv = self.vertex_weights(v)
-            cols.append(cv)
-            vals.append(vv * c)
-        cols = np.concatenate(cols)
-        vals = np.concatenate(vals)
-        u, inv = np.unique(cols, return_inverse=True)
-        out = np.zeros(len(u))
-        np.add.at(out, inv, vals)
-        keep = np.abs(out) > 1e-15
-        return u[keep], out[keep]
+            for j, w in zip(cv.tolist(), vv.tolist()):
+                acc[j] = acc.get(j, 0.0) + w * float(c)
+        keys = sorted(k for k, w in acc.items() if abs(w) > 1e-15)
+        return np.array(keys, dtype=np.int64), np.array([acc[k] for k in keys])
 
     # -- topology edits ---------------------------------------------------------------------
     def _set_face(self, f: int, tri) -> None:
         self._F[f] = tri
         a, b, c = tri
-        self.he[(a, b)] = f
-        self.he[(b, c)] = f
-        self.he[(c, a)] = f
+        self.he[(a << 32) | b] = f
+        self.he[(b << 32) | c] = f
+        self.he[(c << 32) | a] = f
 
     def split_edge(self, a: int, b: int, t: float) -> int:
         """Split edge (a, b) at ``(1-t) a + t b``; returns the new vertex id."""
-        f1 = self.he.get((a, b))
-        f2 = self.he.get((b, a))
+        f1 = self.he.get((a << 32) | b)
+        f2 = self.he.get((b << 32) | a)
         if f1 is None and f2 is None:
             raise CutError(f"internal: edge ({a}, {b}) is not in the mesh")
         pos = (1.0 - t) * self._X[a] + t * self._X[b]
@@ -173,7 +161,7 @@ class CutMesh:
             c = tri[(k + 2) % 3]
             assert tri[(k + 1) % 3] == q
             par = int(self._parent[f])
-            del self.he[(p, q)]
+            del self.he[(p << 32) | q]
             self._set_face(f, (p, m, c))
             g = self._add_face((m, q, c), par)
             self._set_face(g, (m, q, c))
@@ -239,14 +227,16 @@ class CutMesh:
                 + p2[:, :, 1:] * self._e2[:, None, :])
 
     def _rebuild_adjacency(self) -> None:
+        # half-edge key (a << 32 | b) -> face, and vertex -> incident faces
         F = self.F
         he = F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
         fid = np.repeat(np.arange(len(F)), 3)
-        self.he = dict(zip(map(tuple, he.tolist()), fid.tolist()))
-        self.vf = [set() for _ in range(self.nv)]
-        for f, tri in enumerate(F.tolist()):
-            for v in tri:
-                self.vf[v].add(f)
+        self.he: Dict[int, int] = dict(zip(((he[:, 0] << 32) | he[:, 1]).tolist(), fid.tolist()))
+        flat = F.reshape(-1)
+        order = np.argsort(flat, kind="stable")
+        bounds = np.searchsorted(flat[order], np.arange(self.nv + 1))
+        fo = (order // 3).tolist()
+        self.vf = [set(fo[bounds[v]:bounds[v + 1]]) for v in range(self.nv)]
 
     # -- geometry ---------------------------------------------------------------------------
     def _to2d(self, P: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -291,6 +281,25 @@ class CutMesh:
         return self.split_face(f, bary)
 
     # -- tracing ----------------------------------------------------------------------------
+    def _wedges(self, cur: int, faces: np.ndarray, target: np.ndarray):
+        """Faces around ``cur`` whose parent holds ``target``, rotated to start at ``cur``,
+        and the barycentrics (k, 3) of ``target`` in each (in the parent's plane)."""
+        P = self._parent[faces]
+        p0, e1, e2 = self._p0[P], self._e1[P], self._e2[P]
+        d = target[None] - p0
+        q = np.stack([np.einsum("ij,ij->i", d, e1), np.einsum("ij,ij->i", d, e2)], axis=1)
+        off = np.abs(np.einsum("ij,ij->i", d, self._n[P])) <= 1e-6 * self._scale[P]
+        inside = _bary2(q, self._ptri2[P]).min(axis=1) >= -1e-6
+        ok = off & inside
+        faces, P, q, p0, e1, e2 = faces[ok], P[ok], q[ok], p0[ok], e1[ok], e2[ok]
+        tri = self._F[faces]
+        k = np.argmax(tri == cur, axis=1)
+        idx = (k[:, None] + np.arange(3)[None]) % 3
+        tri = np.take_along_axis(tri, idx, axis=1)
+        D = self._X[tri] - p0[:, None, :]
+        c2 = np.stack([np.einsum("ijk,ik->ij", D, e1), np.einsum("ijk,ik->ij", D, e2)], axis=2)
+        return faces, tri, _bary2(q, c2)
+
     def trace(self, A: int, target: np.ndarray, line: int, allowed: set,
               target_vertex: Optional[int] = None, names=None) -> List[int]:
         """Insert the straight (in-parent) segment from vertex ``A`` to point ``target``.
@@ -306,25 +315,16 @@ class CutMesh:
         for _ in range(_MAX_STEPS):
             if target_vertex is not None and (cur == target_vertex):
                 return out
-            if target_vertex is not None and ((cur, target_vertex) in self.he or (target_vertex, cur) in self.he):
+            if target_vertex is not None and (((cur << 32) | target_vertex) in self.he or ((target_vertex << 32) | cur) in self.he):
                 self._mark(cur, target_vertex, line, allowed, names)
                 out.append(target_vertex)
                 return out
-            faces = np.fromiter(self.vf[cur], dtype=np.int64)
+            faces = np.sort(np.fromiter(self.vf[cur], dtype=np.int64))
             if len(faces) == 0:
                 raise CutError(f"internal: vertex {cur} has no faces")
-            P = self._parent[faces]
-            ok = self.parent_contains(P, target)
-            if not ok.any():
+            faces, tri, b = self._wedges(cur, faces, target)
+            if len(faces) == 0:
                 raise CutError(f"{_name(names, line)}: could not trace the geodesic across the mesh")
-            faces, P = faces[ok], P[ok]
-            tri = self._F[faces]
-            # rotate each face so that `cur` comes first
-            k = np.argmax(tri == cur, axis=1)
-            idx = (k[:, None] + np.arange(3)[None]) % 3
-            tri = np.take_along_axis(tri, idx, axis=1)
-            c2 = np.stack([self._to2d(P, self._X[tri[:, j]]) for j in range(3)], axis=1)
-            b = _bary2(self._to2d(P, np.broadcast_to(target, (len(P), 3))), c2)
             score = np.minimum(b[:, 1], b[:, 2])
             i = int(np.argmax(score))
             _, u, w = tri[i].tolist()
