@@ -1,0 +1,58 @@
+"""The GLB and OBJ of core.export.mesh read back by Blender's own importers (bpy)."""
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from export_synth import drape_positions, make_pattern  # noqa: E402
+
+os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="ease-blender-"))
+bpy = pytest.importorskip("bpy")
+
+from core.export import export_pattern  # noqa: E402
+
+
+def _mesh_arrays(obj):
+    me = obj.data
+    co = np.zeros(len(me.vertices) * 3)
+    me.vertices.foreach_get("co", co)
+    m = np.array(obj.matrix_world)
+    co = co.reshape(-1, 3) @ m[:3, :3].T + m[:3, 3]
+    uvl = me.uv_layers[0]
+    uv = np.zeros(len(uvl.data) * 2)
+    uvl.data.foreach_get("uv", uv)
+    loops = np.zeros(len(me.loops), int)
+    me.loops.foreach_get("vertex_index", loops)
+    return co, uv.reshape(-1, 2), loops
+
+
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory):
+    pat = make_pattern(rotate_back_deg=0.0)
+    pos = drape_positions(pat)
+    out = tmp_path_factory.mktemp("mesh")
+    export_pattern(pat, out, formats="glb,obj", drape_positions=pos)
+    return pat, pos, out
+
+
+@pytest.mark.parametrize("fmt", ["glb", "obj"])
+def test_blender_imports_positions_and_pattern_uvs(exported, fmt):
+    pat, pos, out = exported
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    if fmt == "glb":
+        bpy.ops.import_scene.gltf(filepath=str(out / "garment.glb"))
+    else:
+        bpy.ops.wm.obj_import(filepath=str(out / "garment.obj"))
+    meshes = {o.name: o for o in bpy.data.objects if o.type == "MESH"}
+    assert sorted(meshes) == sorted(p.name for p in pat.panels)
+    for panel in pat.panels:
+        co, uv, loops = _mesh_arrays(meshes[panel.name])
+        assert len(co) == len(panel.uv) and len(meshes[panel.name].data.polygons) == len(panel.faces)
+        # back in Blender's Z-up frame at the draped positions, vertex order kept
+        np.testing.assert_allclose(co, pos[panel.vertex_ids], atol=1e-5)
+        # the UV map is the pattern uv (metres; grain along +v)
+        np.testing.assert_allclose(uv, panel.uv[loops], atol=1e-5)
