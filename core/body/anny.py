@@ -106,6 +106,9 @@ class AnnyData:
         dense = np.zeros((V, J))
         np.add.at(dense, (np.repeat(np.arange(V), idx.shape[1]), idx.ravel()), w.ravel())
         self.weights = dense
+        from scipy.sparse import csr_matrix
+        # Each vertex hangs on a few bones: a sparse product skins in well under a millisecond.
+        self.sparse_weights = csr_matrix(dense)
         self.mask = z["stacked_phenotype_blend_shapes_mask"].astype(bool)
         self.projection = z["phenotype_blendshape_projection"].astype(float)
         self.phenotype_labels = [str(s) for s in z["phenotype_labels"]]
@@ -200,7 +203,7 @@ def forward_kinematics_local_ref(data: AnnyData, heads: np.ndarray, R: np.ndarra
 
 def skin(data: AnnyData, rest_vertices: np.ndarray, T: np.ndarray) -> np.ndarray:
     """Linear blend skinning: (V, 3) posed vertices from (J, 3, 4) transforms."""
-    blend = (data.weights @ T.reshape(T.shape[0], 12)).reshape(-1, 3, 4)
+    blend = (data.sparse_weights @ T.reshape(T.shape[0], 12)).reshape(-1, 3, 4)
     return np.einsum("vab,vb->va", blend[:, :, :3], rest_vertices) + blend[:, :, 3]
 
 
@@ -311,20 +314,20 @@ class AnnyBody(BodyModel):
         heads = self.rest(shape)[1]
         return pose_rotations(self, pose, heads @ ANNY_TO_EASE.T, to_native=ANNY_TO_EASE.T)
 
-    def _evaluate(self, shape, pose):
+    def _evaluate(self, shape, pose, with_vertices: bool = True):
         verts, heads, R = self.rest(shape)
         D = self.pose_rotations(pose, shape)
         d = np.zeros((heads.shape[0], 3))
         T, W = forward_kinematics_local_ref(self.data, heads, R, D, d)
-        v = skin(self.data, verts, T) @ ANNY_TO_EASE.T
         j = W[:, :, 3] @ ANNY_TO_EASE.T
+        v = skin(self.data, verts, T) @ ANNY_TO_EASE.T if with_vertices else None
         return v, j
 
     def vertices(self, shape: Optional[Shape] = None, pose: Pose = None) -> np.ndarray:
         return self._evaluate(shape, pose)[0]
 
     def joints(self, shape: Optional[Shape] = None, pose: Pose = None) -> np.ndarray:
-        return self._evaluate(shape, pose)[1]
+        return self._evaluate(shape, pose, with_vertices=False)[1]
 
     def vertices_and_joints(self, shape: Optional[Shape] = None, pose: Pose = None):
         """Both at once (one skinning pass): (V, 3), (J, 3)."""
