@@ -160,6 +160,16 @@ def test_landmarks_mirror_left_right(body, ref_v):
         assert np.linalg.norm(p - q) < 0.003, name
 
 
+def test_mirror_surface_point(body, ref_v):
+    from core.body.landmarks import mirror_surface_point
+    for name in ("bust_left", "elbow_left", "navel", "armpit_right"):
+        sp = body.landmarks[name]
+        m = mirror_surface_point(sp, body.faces, body.symmetry)
+        p = body.landmark_position(name, ref_v) * np.array([-1.0, 1.0, 1.0])
+        assert np.linalg.norm(m.position(ref_v, body.faces) - p) < 0.003
+        assert mirror_surface_point(m, body.faces, body.symmetry) == sp
+
+
 def _positions(body, v):
     return {n: body.landmark_position(n, v) for n in REQUIRED_LANDMARKS}
 

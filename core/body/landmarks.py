@@ -80,6 +80,24 @@ def _ray_mesh(vertices, faces) -> _RayMesh:
     return rm
 
 
+def mirror_surface_point(point: SurfacePoint, faces: np.ndarray, symmetry: np.ndarray) -> SurfacePoint:
+    """The mirror image of a surface point through the left/right ``symmetry`` map (V,).
+
+    The mirrored triangle is the face on the mirrored vertices (its winding is
+    reversed by the mirror); the barycentric weights follow their vertices.
+    """
+    tri = faces[point.triangle]
+    image = symmetry[tri]
+    target = set(image.tolist())
+    cand = np.nonzero(np.isin(faces, image).all(axis=1))[0]
+    for c in cand:
+        if set(faces[c].tolist()) == target:
+            bary = [point.bary[int(np.nonzero(image == vid)[0][0])] for vid in faces[c]]
+            return SurfacePoint(int(c), tuple(float(b) for b in bary))
+    raise BodyError(f"triangle {point.triangle} has no mirror triangle; the symmetry map "
+                    "does not match the faces")
+
+
 def ray_cast(vertices: np.ndarray, faces: np.ndarray, origin, direction, all_hits: bool = False):
     """Intersections of a ray with a triangle mesh (Moller-Trumbore, vectorised).
 
@@ -294,8 +312,8 @@ def anny_landmarks(body, ref_vertices: np.ndarray, ref_joints: np.ndarray) -> Di
     hips = 0.5 * (J["upperleg01.L"] + J["upperleg01.R"])
     ys = np.linspace(hips[1] - 0.08, hips[1] + 0.08, 81)
     z, tri, bary = _lowest_apex(v, f, np.zeros_like(ys), ys, J["lowerleg01.L"][2], "crotch")
-    # The lowest hit over the gap is the trunk's underside; keep the highest of those
-    # near it to avoid the open space in front of/behind the body (no hit there).
+    # Rays in front of / behind the body hit nothing (or the chin, higher up), so the
+    # lowest first hit is the underside of the trunk between the legs.
     lm["crotch"] = _surface_point(tri, bary)
     crotch_z = z
 
