@@ -27,21 +27,19 @@ REGULARIZATION_CM = 0.5
 
 SIZES = ("XS", "S", "M", "L", "XL")
 
-# Size chart in cm. M is the default Anny body (its reference phenotypes)
-# as measured by core.body.measure; the other sizes are measured Anny bodies
-# of increasing girth at similar height, rounded to 0.5 cm. Above M girths step
-# 4-5 cm per size; below M Anny's weight range (weight = 0 at size XS, with
-# gender and age held at the reference) limits the steps to 2-3 cm. The
-# measured bodies: XS weight 0, muscle 0.75, proportions 0.45, height 0.475;
-# S weight 0.2, muscle 0.6, height 0.4875; L weight 0.8, muscle 0.45, height
-# 0.5125; XL weight 0.95, muscle 0.4, proportions 0.45, height 0.525 (others
-# at the reference).
+# Size chart in cm. M is the default Anny body (its reference phenotypes:
+# gender 0.5, young adult age 0.7, the rest 0.5) as measured by
+# core.body.measure; the other sizes are measured Anny bodies of increasing
+# girth at similar height, rounded to 0.5 cm: XS weight 0, muscle 1, height
+# 0.48; S weight 0.2, muscle 0.85, height 0.49; L weight 0.75, muscle 0.55,
+# height 0.51; XL weight 1, muscle 0.6, height 0.52 (others at the reference).
+# Girths step 1.5-6 cm per size (Anny's weight range bounds the small end).
 SIZE_CHART: Dict[str, Dict[str, float]] = {
-    "XS": {"height": 160.0, "chest": 79.5, "waist": 72.5, "hip": 82.5},
-    "S": {"height": 161.0, "chest": 81.5, "waist": 74.5, "hip": 85.0},
-    "M": {"height": 162.5, "chest": 83.4, "waist": 77.7, "hip": 88.1},
-    "L": {"height": 164.0, "chest": 87.5, "waist": 83.0, "hip": 93.0},
-    "XL": {"height": 165.0, "chest": 91.5, "waist": 88.0, "hip": 97.0},
+    "XS": {"height": 181.0, "chest": 88.5, "waist": 73.0, "hip": 91.5},
+    "S": {"height": 182.5, "chest": 92.0, "waist": 74.5, "hip": 94.0},
+    "M": {"height": 183.5, "chest": 95.6, "waist": 78.3, "hip": 99.8},
+    "L": {"height": 184.5, "chest": 99.0, "waist": 82.5, "hip": 103.0},
+    "XL": {"height": 186.0, "chest": 103.5, "waist": 86.5, "hip": 105.5},
 }
 
 # Shape parameters per size, fitted with fit_measurements to SIZE_CHART on the
@@ -50,11 +48,11 @@ SIZE_CHART: Dict[str, Dict[str, float]] = {
 # the reference shape itself. Parameters not listed keep their reference value.
 FITTED_SHAPES: Dict[str, Dict[str, Dict[str, float]]] = {
     "anny": {
-        "XS": {"height": 0.4742, "weight": 0.0, "muscle": 0.7641, "proportions": 0.4379},
-        "S": {"height": 0.485, "weight": 0.2024, "muscle": 0.5888, "proportions": 0.5015},
+        "XS": {"height": 0.4792, "weight": 0.0082, "muscle": 0.9788, "proportions": 0.5058},
+        "S": {"height": 0.4921, "weight": 0.21, "muscle": 0.8769, "proportions": 0.483},
         "M": {},
-        "L": {"height": 0.5145, "weight": 0.8037, "muscle": 0.4521, "proportions": 0.4818},
-        "XL": {"height": 0.5242, "weight": 0.9565, "muscle": 0.4003, "proportions": 0.4523},
+        "L": {"height": 0.5074, "weight": 0.5935, "muscle": 0.3827, "proportions": 0.3121},
+        "XL": {"height": 0.5186, "weight": 0.7571, "muscle": 0.3839, "proportions": 0.1331},
     },
 }
 
