@@ -23,7 +23,9 @@ os.environ.setdefault("WARP_CACHE_PATH", str(Path(__file__).resolve().parents[2]
 
 import warp as wp  # noqa: E402
 
-wp.config.quiet = True
+# Keep the CLI output to our own lines: Warp's init banner and module-load notes are info-level.
+if getattr(wp.config, "log_level", None) == getattr(wp, "LOG_INFO", 20):
+    wp.config.log_level = getattr(wp, "LOG_WARNING", 30)
 
 
 @wp.kernel

@@ -1,0 +1,182 @@
+"""Files of a drape: OBJ, PLY (strain and gap per vertex), NPZ, report, preview PNG.
+
+Every writer returns bytes or writes through :mod:`core.fileio`, so a folder
+is filled atomically by :func:`write_drape`.
+"""
+from __future__ import annotations
+
+import io
+from pathlib import Path
+import numpy as np
+
+from ..fileio import output_dir, write_bytes, write_json, write_text
+
+FILES = ("garment.obj", "garment.ply", "drape.npz", "drape_report.json", "preview.png")
+
+
+def body_of_pattern(pattern) -> tuple:
+    """The body instance a pattern was solved on: (vertices (V, 3), faces (F, 3)).
+
+    ``pattern.body["model"] == "revolution"`` is the synthetic test body of
+    :mod:`core.drape.synthetic`; anything else goes through :func:`core.body.load_body`.
+    """
+    spec = dict(pattern.body or {})
+    model = spec.get("model") or "anny"
+    if model == "revolution":
+        from .synthetic import revolution_body
+        return revolution_body()
+    from ..body import load_body
+    body = load_body(model)
+    pose = spec.get("pose")
+    if isinstance(pose, dict):
+        pose = {k: np.asarray(v, dtype=float) for k, v in pose.items()}
+    v = np.asarray(body.vertices(spec.get("shape") or None, pose), dtype=float)
+    return v, np.asarray(body.faces, dtype=np.int64)
+
+
+def obj_text(result) -> str:
+    """Wavefront OBJ: vertex k is global garment vertex id k (1-based in the file); one group per garment."""
+    out = io.StringIO()
+    out.write("# EASE drape: vertex k = global garment vertex id k-1; metres, +Z up\n")
+    np.savetxt(out, result.positions, fmt="v %.6f %.6f %.6f")
+    for g, name in enumerate(result.garment_names):
+        out.write(f"g {name}\n")
+        np.savetxt(out, result.faces[np.asarray(result.face_garment) == g] + 1, fmt="f %d %d %d")
+    return out.getvalue()
+
+
+def ply_bytes(result, vertex_gap: np.ndarray) -> bytes:
+    """Binary little-endian PLY with per-vertex ``strain_weft``, ``strain_warp`` (fractions) and ``gap`` (m)."""
+    n = len(result.positions)
+    vert = np.zeros(n, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("strain_weft", "<f4"),
+                              ("strain_warp", "<f4"), ("gap", "<f4")])
+    vert["x"], vert["y"], vert["z"] = result.positions.T
+    vert["strain_weft"] = result.strain_weft
+    vert["strain_warp"] = result.strain_warp
+    vert["gap"] = vertex_gap
+    faces = np.zeros(len(result.faces), dtype=[("n", "u1"), ("v", "<i4", (3,))])
+    faces["n"] = 3
+    faces["v"] = result.faces
+    header = "\n".join([
+        "ply", "format binary_little_endian 1.0",
+        "comment EASE drape: vertex k = global garment vertex id k; metres; strain = stretch vs pattern; "
+        "gap = distance outside the body",
+        f"element vertex {n}", "property float x", "property float y", "property float z",
+        "property float strain_weft", "property float strain_warp", "property float gap",
+        f"element face {len(result.faces)}", "property list uchar int vertex_indices", "end_header", ""])
+    return header.encode("ascii") + vert.tobytes() + faces.tobytes()
+
+
+def npz_bytes(result, metrics: dict) -> bytes:
+    """``drape.npz``: positions (N, 3) by global vertex id, faces (T, 3) and the per-vertex maps."""
+    buf = io.BytesIO()
+    np.savez_compressed(
+        buf, positions=result.positions, faces=result.faces, used=result.used,
+        start_positions=result.start_positions, strain_weft=result.strain_weft, strain_warp=result.strain_warp,
+        gap=metrics["vertex_gap"], face_garment=result.face_garment,
+        garment_names=np.asarray(result.garment_names), seam_pairs=result.seam_pairs)
+    return buf.getvalue()
+
+
+def report_dict(result, metrics: dict, pattern=None) -> dict:
+    """The JSON report: times, settling, material, and the fit metrics (no per-vertex arrays)."""
+    from ..metrics.drape import summary
+    m = summary(metrics)
+    return {
+        "style": getattr(pattern, "style", ""),
+        "body": getattr(pattern, "body", {}),
+        "garments": list(result.garment_names),
+        "vertices": int(result.used.sum()), "triangles": int(len(result.faces)),
+        "device": result.device, "material": result.material, "options": result.options,
+        "frames": int(result.frames), "settled": bool(result.settled), "settle_reason": result.settle_reason,
+        "settle_frame": int(result.frames) if result.settled else None,
+        "timings": result.timings, "self_collision": bool(result.self_collision),
+        "gap_mm": m["all"]["gap_mm"], "penetration_pct": m["all"]["penetration_pct"],
+        "seam_gap_mm": m["all"]["seam_gap_mm"], "metrics": m,
+    }
+
+
+def preview_png(result, body_vertices: np.ndarray, body_faces: np.ndarray, path, title: str = "") -> None:
+    """Front and side views of the body (grey) and the garment coloured by weft strain."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import PolyCollection
+
+    bv = np.asarray(body_vertices, float)
+    bf = np.asarray(body_faces)
+    gv = np.asarray(result.positions, float)
+    gf = np.asarray(result.faces)
+    strain = np.clip(result.face_strain_weft * 100.0, -10.0, 10.0)
+    cmap = plt.get_cmap("coolwarm")
+    fig, axes = plt.subplots(1, 2, figsize=(9, 7), dpi=110)
+    light = np.array([0.3, -0.8, 0.5]) / np.linalg.norm([0.3, -0.8, 0.5])
+    # (horizontal axis, depth axis, depth sign toward the viewer): front looks along +Y, side along -X
+    for ax, (h, d, towards), name in ((axes[0], (0, 1, -1.0), "front"), (axes[1], (1, 0, 1.0), "left side")):
+        polys, colours, depth = [], [], []
+        for v, f, col in ((bv, bf, None), (gv, gf, strain)):
+            tri = v[f]
+            n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+            n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+            shade = 0.35 + 0.65 * np.abs(n @ light)
+            if col is None:
+                c = np.column_stack([shade * 0.8] * 3 + [np.ones(len(f))])
+            else:
+                c = cmap((col + 10.0) / 20.0)
+                c[:, :3] *= shade[:, None]
+            polys.append(tri[:, :, [h, 2]])
+            colours.append(c)
+            depth.append(tri[:, :, d].mean(axis=1) * towards)
+        polys = np.concatenate(polys)
+        colours = np.concatenate(colours)
+        order = np.argsort(np.concatenate(depth), kind="stable")  # far first (painter's algorithm)
+        ax.add_collection(PolyCollection(polys[order], facecolors=colours[order], edgecolors="none"))
+        allv = np.concatenate([bv, gv[result.used]])
+        ax.set_xlim(allv[:, h].min() - 0.05, allv[:, h].max() + 0.05)
+        ax.set_ylim(allv[:, 2].min() - 0.05, allv[:, 2].max() + 0.05)
+        ax.set_aspect("equal")
+        ax.set_title(name)
+        ax.set_xticks([])
+        ax.set_yticks([])
+    sm = plt.cm.ScalarMappable(cmap=cmap, norm=plt.Normalize(-10, 10))
+    fig.colorbar(sm, ax=axes, shrink=0.6, label="weft strain vs pattern (%)")
+    fig.suptitle(title)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
+    plt.close(fig)
+    write_bytes(path, buf.getvalue())
+
+
+def write_drape(out, result, metrics: dict, body_vertices, body_faces, pattern=None,
+                preview: bool = True) -> Path:
+    """Write every drape file into ``out`` atomically; returns the folder."""
+    report = report_dict(result, metrics, pattern)
+    with output_dir(out) as tmp:
+        write_text(tmp / "garment.obj", obj_text(result))
+        write_bytes(tmp / "garment.ply", ply_bytes(result, metrics["vertex_gap"]))
+        write_bytes(tmp / "drape.npz", npz_bytes(result, metrics))
+        write_json(tmp / "drape_report.json", report)
+        if preview:
+            title = f"{report['style']}: {result.material['name']}, {result.frames} frames ({result.settle_reason})"
+            preview_png(result, body_vertices, body_faces, tmp / "preview.png", title)
+    return Path(out)
+
+
+def read_ply_vertices(path) -> dict:
+    """Read back the vertex properties of a PLY written by :func:`ply_bytes` (for tests and tools)."""
+    data = Path(path).read_bytes()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    header = data[:end].decode("ascii").splitlines()
+    n = int(next(line.split()[2] for line in header if line.startswith("element vertex")))
+    names = []
+    for line in header:
+        if line.startswith("element face"):
+            break
+        if line.startswith("property float"):
+            names.append(line.split()[2])
+    arr = np.frombuffer(data[end:end + n * 4 * len(names)], dtype="<f4").reshape(n, len(names))
+    return {k: arr[:, i] for i, k in enumerate(names)}
+
+
+__all__ = ["FILES", "body_of_pattern", "obj_text", "ply_bytes", "npz_bytes", "report_dict", "preview_png",
+           "write_drape", "read_ply_vertices"]

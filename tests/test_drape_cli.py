@@ -1,0 +1,78 @@
+"""``ease drape`` end to end on the synthetic skirt (core.drape.cli, core.drape.output)."""
+import json
+
+import numpy as np
+import pytest
+
+from core.cli import main
+from core.drape.output import FILES, read_ply_vertices
+from core.drape.synthetic import tube_skirt
+from core.pattern.io import save_pattern
+
+
+@pytest.fixture(scope="module")
+def pattern_dir(tmp_path_factory):
+    d = tmp_path_factory.mktemp("pattern")
+    save_pattern(tube_skirt(1.2, n_rows=8, n_cols=10), d)
+    return d
+
+
+@pytest.fixture(scope="module")
+def drape_dir(pattern_dir, tmp_path_factory):
+    out = tmp_path_factory.mktemp("drape") / "out"
+    assert main(["drape", str(pattern_dir), "--out", str(out), "--quiet", "--frames", "60"]) == 0
+    return out
+
+
+def test_writes_every_file(drape_dir):
+    for name in FILES:
+        assert (drape_dir / name).is_file() and (drape_dir / name).stat().st_size > 0, name
+    assert (drape_dir / "preview.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_report(drape_dir):
+    rep = json.loads((drape_dir / "drape_report.json").read_text())
+    assert rep["settle_reason"] in ("settled", "frame limit")
+    assert rep["settled"] == (rep["settle_reason"] == "settled")
+    assert rep["material"]["name"] == "cotton"
+    assert set(rep["timings"]) >= {"simulate", "total"}
+    assert rep["gap_mm"]["mean"] > 0 and rep["gap_mm"]["std"] >= 0
+    assert rep["penetration_pct"] == 0.0
+    assert rep["seam_gap_mm"]["max"] < 1.0
+    assert rep["self_collision"] is False
+
+
+def test_npz_obj_ply_agree(drape_dir):
+    npz = np.load(drape_dir / "drape.npz")
+    x, f = npz["positions"], npz["faces"]
+    assert x.shape[1] == 3 and f.shape[1] == 3 and f.max() < len(x)
+    obj = (drape_dir / "garment.obj").read_text().splitlines()
+    v = np.array([[float(t) for t in line.split()[1:]] for line in obj if line.startswith("v ")])
+    faces = np.array([[int(t) for t in line.split()[1:]] for line in obj if line.startswith("f ")]) - 1
+    assert np.allclose(v, x, atol=1e-6)
+    assert np.array_equal(np.sort(faces, axis=0), np.sort(f, axis=0))
+    ply = read_ply_vertices(drape_dir / "garment.ply")
+    assert set(ply) == {"x", "y", "z", "strain_weft", "strain_warp", "gap"}
+    assert np.allclose(ply["x"], x[:, 0], atol=1e-6)
+    assert np.allclose(ply["strain_weft"], npz["strain_weft"], atol=1e-6)
+    assert np.allclose(ply["gap"], npz["gap"], atol=1e-6)
+    assert ply["gap"].max() > 0.005  # the 1.2-ease skirt stands off the hips
+
+
+def test_bad_material_writes_nothing(pattern_dir, tmp_path, capsys):
+    out = tmp_path / "never"
+    assert main(["drape", str(pattern_dir), "--out", str(out), "--quiet", "--material", "chainmail"]) == 2
+    assert "unknown material" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_bad_frames(pattern_dir, tmp_path):
+    assert main(["drape", str(pattern_dir), "--out", str(tmp_path / "x"), "--frames", "0"]) == 2
+
+
+def test_help(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["drape", "--help"])
+    assert exc.value.code == 0
+    text = capsys.readouterr().out
+    assert "--material" in text and "--device" in text and "--frames" in text
