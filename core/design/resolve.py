@@ -227,7 +227,7 @@ class Resolver:
         end = poly[-1]
         limit_name = "crotch" if down else "neck_back"
         limit = self.position(self.landmark(limit_name, f"{path}.along"))[2]
-        if got < length - 1e-3 or (down and end[2] < limit) or (not down and end[2] > limit):
+        if got < length - 1e-3 or (down and poly[:, 2].min() < limit) or (not down and poly[:, 2].max() > limit):
             raise DesignError(lpath, f"a length of {length:.3f} m from {from_name} along {along} leaves the "
                                      f"torso (past the {limit_name} level)")
         return self.locator.locate(end[None])[0]
