@@ -92,13 +92,15 @@ def render_bodies(rows, faces: np.ndarray, path, title: str = "") -> Path:
 
     light = np.array([-0.4, -1.0, 0.6])
     light /= np.linalg.norm(light)
-    ncol = max(len(r) for r in rows)
-    fig, axes = plt.subplots(len(rows), 1, figsize=(2.2 * ncol, 4.6 * len(rows)), squeeze=False)
-    for ax, row in zip(axes[:, 0], rows):
-        polys, colors, depth = [], [], []
-        gap = 0.0
-        for label, v in row:
-            v = v - [0.5 * (v[:, 0].max() + v[:, 0].min()) - gap, 0.0, v[:, 2].min()]
+    laid = []  # per row: polygons (n, 3, 2), colours, depth, labels, (xmin, xmax, zmin, zmax)
+    for row in rows:
+        polys, colors, depth, labels = [], [], [], []
+        x = 0.0
+        for i, (label, v) in enumerate(row):
+            width = v[:, 0].max() - v[:, 0].min()
+            if i:
+                x += 0.5 * width + 0.12
+            v = v - [0.5 * (v[:, 0].max() + v[:, 0].min()) - x, 0.0, v[:, 2].min()]
             tri = v[faces]
             n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
             n /= np.linalg.norm(n, axis=1, keepdims=True) + 1e-20
@@ -107,13 +109,25 @@ def render_bodies(rows, faces: np.ndarray, path, title: str = "") -> Path:
             polys.append(tri[front][:, :, [0, 2]])
             colors.append(np.outer(shade, [0.93, 0.78, 0.66]))
             depth.append(tri[front][:, :, 1].mean(axis=1))
-            ax.text(gap, -0.08, label, ha="center", va="top", fontsize=11)
-            gap += max(0.75, 1.15 * (v[:, 0].max() - v[:, 0].min()))
-        polys, colors, depth = np.concatenate(polys), np.concatenate(colors), np.concatenate(depth)
+            labels.append((x, label))
+            x += 0.5 * width
+        polys = np.concatenate(polys)
+        bounds = (polys[..., 0].min(), polys[..., 0].max(), -0.25, polys[..., 1].max())
+        laid.append((polys, np.concatenate(colors), np.concatenate(depth), labels, bounds))
+    widths = [b[1] - b[0] for *_, b in laid]
+    heights = [b[3] - b[2] for *_, b in laid]
+    fig_w = min(16.0, 2.0 * max(len(r) for r in rows) + 1.0)
+    fig_h = fig_w * sum(heights) / max(widths) + 0.6
+    fig, axes = plt.subplots(len(rows), 1, figsize=(fig_w, fig_h), squeeze=False,
+                             gridspec_kw={"height_ratios": heights})
+    for ax, (polys, colors, depth, labels, (x0, x1, z0, z1)) in zip(axes[:, 0], laid):
         order = np.argsort(-depth)  # painter's algorithm: far (large y) first
         ax.add_collection(PolyCollection(polys[order], facecolors=colors[order], edgecolors="none",
                                          antialiased=False))
-        ax.autoscale_view()
+        for x, label in labels:
+            ax.text(x, -0.03, label, ha="center", va="top", fontsize=9)
+        ax.set_xlim(x0 - 0.05, x0 + max(widths) + 0.05)
+        ax.set_ylim(z0, z1 + 0.05)
         ax.set_aspect("equal")
         ax.axis("off")
     if title:
@@ -148,7 +162,8 @@ def _write_all(body, out: Path, progress) -> int:
             m = safe_measure(body, v)
             write_obj(tmp / f"size_{size}.obj", v, body.faces, f"size {size}, A-pose\n{_fmt(m)}")
             summary["sizes"][size] = {"shape": shape, "measured_cm": m, "chart_cm": SIZE_CHART[size]}
-            sizes.append((f"{size}\nchest {m.get('chest', float('nan')):.0f}", v))
+            girths = "/".join(f"{m[k]:.0f}" for k in ("chest", "waist", "hip") if k in m)
+            sizes.append((f"{size}\n{girths}" if girths else size, v))
             print(f"size {size:>2}: {_fmt(m)}")
         shape_m = size_shape(body, "M")
         for i, pose in enumerate(POSE_PRESETS):
@@ -159,7 +174,7 @@ def _write_all(body, out: Path, progress) -> int:
             poses.append((pose, v))
         report(progress, 0.85, "rendering bodies.png")
         render_bodies([sizes, poses], body.faces, tmp / "bodies.png",
-                      title=f"{body.name}: sizes XS-XL (A-pose), poses A, T, P1, P2, P3 (size M)")
+                      title=f"{body.name}: sizes XS-XL in A-pose (chest/waist/hip cm); poses A, T, P1, P2, P3 at size M")
         write_json(tmp / "bodies.json", summary)
     report(progress, 1.0, "done")
     for p in sorted(out.iterdir()):
