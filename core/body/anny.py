@@ -27,6 +27,7 @@ crosses it). Anny's root-bone convention places the pelvis root at the origin.
 from __future__ import annotations
 
 import os
+import threading
 from collections import OrderedDict
 from typing import Dict, Mapping, Optional
 
@@ -259,6 +260,7 @@ class AnnyBody(BodyModel):
         self.joint_names = list(self.data.bone_labels)
         self._cache_size = cache_size
         self._rest_cache: "OrderedDict[tuple, tuple]" = OrderedDict()
+        self._lock = threading.Lock()  # the add-on may evaluate from a worker thread
         ref_v, ref_j = self._evaluate(self.default_shape(), "A")
         # The template (before blend shapes) is exactly symmetric; shaped bodies only nearly.
         self.symmetry = lm.symmetry_map(self.data.template)
@@ -297,14 +299,19 @@ class AnnyBody(BodyModel):
         in Anny's frame, before any pose (Anny's rest pose)."""
         full = self._check_shape(shape)
         key = tuple(round(full[k], 12) for k in sorted(full))
-        hit = self._rest_cache.get(key)
-        if hit is None:
-            hit = rest_model(self.data, blendshape_coefficients(self.data, full))
-            self._rest_cache[key] = hit
-            if len(self._rest_cache) > self._cache_size:
-                self._rest_cache.popitem(last=False)
-        else:
+        with self._lock:
+            hit = self._rest_cache.get(key)
+            if hit is not None:
+                self._rest_cache.move_to_end(key)
+                return hit
+        hit = rest_model(self.data, blendshape_coefficients(self.data, full))
+        for a in hit:
+            a.flags.writeable = False  # shared through the cache
+        with self._lock:
+            hit = self._rest_cache.setdefault(key, hit)
             self._rest_cache.move_to_end(key)
+            while len(self._rest_cache) > self._cache_size:
+                self._rest_cache.popitem(last=False)
         return hit
 
     # -- pose --------------------------------------------------------------------------------
