@@ -331,3 +331,19 @@ def test_smpl_topology_gets_all_landmarks(tmp_path):
             np.testing.assert_allclose(body.landmark_position(name, verts), verts[vid])
     knee = body.landmark_position("knee_left", verts)
     assert knee[1] < body.joints()[4][1]  # on the front of the knee
+
+
+def test_smplx_layout_body_part(tmp_path):
+    """SMPL-X files: 55 joints, shape and expression directions stored together (10 + 10)."""
+    m = tube_model(J=55, n_betas=20)
+    np.savez(tmp_path / "SMPLX_TOY.npz", **m)
+    body = load_smpl(tmp_path / "SMPLX_TOY.npz")
+    assert len(body.shape_parameters()) == 10  # expression directions are not shape
+    assert body.joint_names[22] == "jaw" and body.joint_names[-1] == "right_thumb3"
+    # The A-pose (SMPL joint names known) seen in SMPL's frame, for the reference.
+    R = body.rotations({"jaw": np.zeros(3)})
+    aa_smpl = Rotation.from_matrix(np.einsum("ba,jbc,cd->jad", C, R, C)).as_rotvec()
+    assert np.count_nonzero(np.abs(aa_smpl).sum(1) > 0.01) == 4  # shoulders and hips
+    np.testing.assert_allclose(body.vertices({"beta9": 1.0}, {"jaw": np.zeros(3)}),
+                               reference_lbs({**m, "shapedirs": m["shapedirs"][:, :, :10]},
+                                             np.eye(10)[9], aa_smpl) @ C.T, atol=1e-10)
