@@ -85,15 +85,23 @@ class GeodesicPaths:
 
     def __init__(self, X: np.ndarray, F: np.ndarray):
         import potpourri3d as pp3d
+        # the solver wants every vertex referenced (the skirt topology leaves some unused)
+        F = np.asarray(F, dtype=np.int64)
+        used = np.unique(F)
+        self.index = np.full(len(X), -1, dtype=np.int64)
+        self.index[used] = np.arange(len(used))
         try:
-            self.solver = pp3d.EdgeFlipGeodesicSolver(np.ascontiguousarray(X, dtype=float),
-                                                      np.ascontiguousarray(F, dtype=np.int64))
+            self.solver = pp3d.EdgeFlipGeodesicSolver(np.ascontiguousarray(X[used], dtype=float),
+                                                      np.ascontiguousarray(self.index[F]))
         except Exception as e:  # potpourri raises RuntimeError on non-manifold input
             raise CutError(f"the body mesh cannot be cut (geodesic solver: {e})")
 
     def path(self, i: int, j: int) -> np.ndarray:
         """Geodesic polyline (k, 3) from vertex i to vertex j (both ends included)."""
-        return np.asarray(self.solver.find_geodesic_path(int(i), int(j)), dtype=float)
+        a, b = int(self.index[i]), int(self.index[j])
+        if a < 0 or b < 0:
+            raise CutError(f"internal: keypoint vertex {i if a < 0 else j} is not on the surface")
+        return np.asarray(self.solver.find_geodesic_path(a, b), dtype=float)
 
 
 def polyline_length(P: np.ndarray) -> float:

@@ -1,0 +1,130 @@
+"""Skirt topology (core.cut.skirt) on Anny, and a two-panel skirt cut on it."""
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+
+from core.cut.engine import cut_surface
+from core.cut.skirt import inter_leg_faces, make_skirt
+from core.cut.spec import CutLine, CutSpec, GarmentSpec, PanelSpec
+from core.cut.split import CutMesh
+
+from test_cut_anny_shirt import ray_point
+from test_cut_synth import triangle_areas
+
+
+@pytest.fixture(scope="module")
+def anny():
+    from core.body import load_body
+    body = load_body("anny")
+    X, J = body.vertices_and_joints()
+    return body, X, J
+
+
+def section_loops(X, F, z0):
+    """Number of closed curves in which the plane z = z0 cuts the mesh."""
+    s = X[:, 2] - z0
+    a = F.reshape(-1)
+    b = np.roll(F, -1, 1).reshape(-1)
+    crossed = np.sign(s[a]) != np.sign(s[b])
+    fid = np.arange(len(a)) // 3
+    n = len(X)
+    key = np.minimum(a, b) * n + np.maximum(a, b)
+    sel = np.nonzero(crossed)[0]
+    order = np.argsort(key[sel], kind="stable")
+    k = key[sel][order]
+    same = k[1:] == k[:-1]
+    i, j = fid[sel][order][:-1][same], fid[sel][order][1:][same]
+    faces = np.unique(fid[sel])
+    idx = {f: t for t, f in enumerate(faces.tolist())}
+    A = sp.coo_matrix((np.ones(len(i)), ([idx[x] for x in i.tolist()], [idx[x] for x in j.tolist()])),
+                      shape=(len(faces), len(faces)))
+    return connected_components(A, directed=False)[0]
+
+
+def test_skirt_topology_is_one_closed_tube(anny):
+    body, X, _ = anny
+    F = np.asarray(body.faces)
+    mesh = CutMesh(X, F)
+    make_skirt(mesh, body, X)
+    Fm = mesh.F
+    nv = mesh.nv
+    a = Fm.reshape(-1)
+    b = np.roll(Fm, -1, 1).reshape(-1)
+    key = a * nv + b
+    assert len(np.unique(key)) == len(key)                     # oriented manifold
+    assert np.isin(key, b * nv + a).all()                      # closed: no boundary edge
+    used = np.unique(Fm)
+    E = len(np.unique(np.minimum(a, b) * nv + np.maximum(a, b)))
+    assert len(used) - E + len(Fm) == 2                        # still a sphere
+    crotch = body.landmarks["crotch"].position(X, F)[2]
+    knee = body.landmarks["knee_left"].position(X, F)[2]
+    for t in (0.3, 0.6):
+        z0 = crotch + t * (knee - crotch)
+        assert section_loops(X, np.asarray(F), z0) == 2        # two legs on the body
+        assert section_loops(mesh.X, Fm, z0) == 1              # one tube around both legs
+    # the bridge follows any shape and pose: its corners are body vertices
+    assert mesh.nv == len(X)
+
+
+def test_inter_leg_band_is_symmetric(anny):
+    body, X, _ = anny
+    H = inter_leg_faces(body, X)
+    assert 50 < H.sum() < 0.1 * len(H)
+    F = np.asarray(body.faces)
+    c = X[F[H]].mean(1)
+    assert abs(c[:, 0].mean()) < 0.01
+
+
+def skirt_spec(body, X, J, refine=0.01):
+    lm = body.landmarks
+    F = np.asarray(body.faces)
+    jn = body.joint_names
+    pos = {k: v.position(X, F) for k, v in lm.items()}
+    hem = []
+    for S, out in (("L", 1.0), ("R", -1.0)):
+        k = J[jn.index(f"lowerleg01.{S}")] + [0, 0, 0.08]          # just above the knee
+        hem.append([ray_point(body, X, k, d) for d in ([out, 0, 0], [0, -1, 0], [0, 1, 0])])
+    (lo, lf, lb), (ro, rf, rb) = hem
+    centre = np.array([0.0, 0.5 * (pos["waist_front"][1] + pos["waist_back"][1]), pos["hip_left"][2]])
+    lines = [
+        CutLine("skirt.waist", [lm["waist_front"], lm["waist_left"], lm["waist_back"], lm["waist_right"]],
+                closed=True, role="opening"),
+        CutLine("skirt.hem", [lo, lb, rb, ro, rf, lf], closed=True, role="opening"),
+        CutLine("skirt.side_left", [lm["waist_left"], lo]),
+        CutLine("skirt.side_right", [lm["waist_right"], ro]),
+    ]
+    panels = [PanelSpec("skirt.front", "skirt", ray_point(body, X, centre, [0, -1, 0])),
+              PanelSpec("skirt.back", "skirt", ray_point(body, X, centre, [0, 1, 0]))]
+    return CutSpec(lines, panels, [GarmentSpec("skirt", "lower", pin_line="skirt.waist")], skirt=True,
+                   refine_edge_length=refine, body={"model": "anny"})
+
+
+def test_skirt_cut(anny):
+    body, X, J = anny
+    spec = skirt_spec(body, X, J)
+    cut = cut_surface(body, X, spec)
+    assert [p.name for p in cut.panels] == ["skirt.front", "skirt.back"]
+    G = cut.positions(X)
+    for p in cut.panels:
+        assert len(p.boundary) == 1
+        # front/back panels span both legs: their hem goes across the bridge
+        P = G[p.vertex_ids]
+        assert P[:, 0].min() < -0.1 and P[:, 0].max() > 0.1
+        h = np.concatenate(cut.hems[p.name])
+        assert np.ptp(P[h][:, 0]) > 0.2
+    assert {s.name for s in cut.seams} == {"skirt.side_left", "skirt.side_right"}
+    for s in cut.seams:
+        a, b = cut.panel(s.panel_a), cut.panel(s.panel_b)
+        np.testing.assert_array_equal(a.vertex_ids[s.verts_a], b.vertex_ids[s.verts_b])
+    # the hem of front and back together is one closed loop around both legs
+    hem = np.concatenate([cut.panel(n).vertex_ids[h] for n in ("skirt.front", "skirt.back")
+                          for h in cut.hems[n] if G[cut.panel(n).vertex_ids[h]][:, 2].mean() < -0.2])
+    ends, counts = np.unique(hem, return_counts=True)
+    assert (counts <= 2).all()
+    # transfers to poses with the same topology and non-degenerate triangles
+    for pose in ("P1", "P3"):
+        V = body.vertices(None, pose)
+        Gp = cut.positions(V)
+        for p in cut.panels:
+            assert triangle_areas(Gp[p.vertex_ids], p.faces).min() > 0
