@@ -92,3 +92,19 @@ def test_parse_formats():
     assert parse_formats("all") == list(FORMATS)
     with pytest.raises(ExportError):
         parse_formats("")
+
+
+def test_lenient_export_of_a_tangled_piece_lists_warnings(tmp_path):
+    pat = make_pattern()
+    uv = pat.panel("front").uv
+    loop = pat.panel("front").boundary[0]
+    uv[loop[2]], uv[loop[20]] = uv[loop[20]].copy(), uv[loop[2]].copy()
+    with pytest.raises(ExportError, match="crosses itself"):
+        export_pattern(pat, tmp_path / "strict", formats="svg")
+    assert not (tmp_path / "strict").exists()
+    found = []
+    files = export_pattern(pat, tmp_path / "lenient", formats="svg,dxf", strict=False, warnings=found)
+    assert found and all("front" in w for w in found)
+    summary = json.loads((tmp_path / "lenient" / "export.json").read_text())
+    assert summary["warnings"] == found
+    assert {f.name for f in files} >= {"pattern.svg", "pattern_astm.dxf"}

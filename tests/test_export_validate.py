@@ -109,3 +109,13 @@ def test_drape_checks():
     bad[5] = np.inf
     with pytest.raises(ExportError, match="NaN or infinite"):
         validate_drape(pat, bad)
+
+
+def test_lenient_validation_returns_geometry_warnings():
+    pat = make_pattern()
+    _tangled(pat)
+    warnings = validate_pattern(pat, strict=False)
+    assert len(warnings) == 1 and "crosses itself" in warnings[0]
+    _nan_uv(pat)  # data errors stay errors
+    with pytest.raises(ExportError, match="not finite"):
+        validate_pattern(pat, strict=False)

@@ -68,7 +68,8 @@ def parse_formats(formats: Union[str, Iterable[str]]) -> List[str]:
 
 def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb"), allowance=None,
                    drape_positions: Optional[np.ndarray] = None, progress=None,
-                   notch_spacing: Optional[float] = None) -> List[Path]:
+                   notch_spacing: Optional[float] = None, strict: bool = True,
+                   warnings: Optional[list] = None) -> List[Path]:
     """Write the pattern's cutting-room files and the draped garment.
 
     Parameters
@@ -85,6 +86,10 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
     progress : ``progress(fraction, message)`` callback, may raise Cancelled.
     notch_spacing : m between notches along a seam (default 10 cm, or
         ``materials["export"]["notch_spacing"]``).
+    strict : bool. True (default): a piece whose sew line crosses itself, or
+        whose seam allowance does not fit around it, is an error. False: such
+        pieces are exported as they are and the problems are listed in
+        ``export.json["warnings"]`` (and appended to ``warnings`` if given).
 
     Returns
     -------
@@ -96,19 +101,22 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
     formats or the drape are invalid.
     """
     formats = parse_formats(formats)
-    validate_pattern(pattern)
+    found = validate_pattern(pattern, strict=strict)
     widths = resolve_allowance(allowance, pattern)
     positions = None
     if "glb" in formats or "obj" in formats:
         positions = validate_drape(pattern, drape_positions)
     report(progress, 0.0, "building pattern pieces")
-    pieces = build_pieces(pattern, widths, notch_spacing, progress=sub(progress, 0.0, 0.3))
+    pieces = build_pieces(pattern, widths, notch_spacing, progress=sub(progress, 0.0, 0.3),
+                          warnings=None if strict else found)
+    if warnings is not None:
+        warnings.extend(found)
     boxes = [p.bbox for p in pieces]
     title = pattern.style or "pattern"
     size = str((pattern.body or {}).get("size") or (pattern.body or {}).get("shape") or "-")
     files = {}   # relative name -> bytes, rendered fully before anything is written
     summary = {"style": title, "size": size, "unit": "mm", "allowance_mm": {k: v * 1000 for k, v in widths.items()},
-               "pieces": [_piece_summary(p, pattern) for p in pieces]}
+               "pieces": [_piece_summary(p, pattern) for p in pieces], "warnings": found}
     steps = len(formats)
     for k, fmt in enumerate(formats):
         report(progress, 0.3 + 0.65 * k / steps, f"rendering {fmt.upper()}")

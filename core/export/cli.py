@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 FORMATS_HELP = "svg,dxf,pdf,glb,obj or all"
@@ -74,9 +75,12 @@ def _run(args) -> int:
                                   f"or leave glb/obj out of --format")
             drape = guess
         positions = load_drape_positions(drape)
+    warnings: list = []
     files = export_pattern(pattern, args.out, formats=formats, allowance=allowance,
                            drape_positions=positions, progress=None if args.quiet else ConsoleProgress(),
-                           notch_spacing=args.notch_spacing)
+                           notch_spacing=args.notch_spacing, strict=not args.lenient, warnings=warnings)
+    for w in warnings:
+        print(f"ease export: warning: {w}", file=sys.stderr)
     for f in files:
         print(f)
     return 0
@@ -106,5 +110,8 @@ def add_parser(sub) -> None:
     p.add_argument("--drape", default=None,
                    help="folder with drape.npz from `ease drape` (default: PATTERN_DIR/../drape when present); "
                         "needed for glb/obj")
+    p.add_argument("--lenient", action="store_true",
+                   help="export pieces whose sew line crosses itself or whose allowance does not fit, with a "
+                        "warning (listed in export.json) instead of failing")
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.set_defaults(func=_run)

@@ -91,22 +91,27 @@ def segments_cross(loop: np.ndarray, closed: bool = True, tol: float = 1e-12) ->
         return None
     d = b - a
     lo, hi = np.minimum(a, b), np.maximum(a, b)
-    for i in range(m - 2):
-        j = np.arange(i + 2, m if (i > 0 or not closed) else m - 1)
-        if j.size == 0:
+    jj = np.arange(m)
+    # blocks of rows keep the pair arrays small while staying vectorised
+    for i0 in range(0, m - 2, 128):
+        ii = np.arange(i0, min(i0 + 128, m - 2))[:, None]
+        cand = (jj[None, :] >= ii + 2)
+        if closed:
+            cand &= ~((ii == 0) & (jj[None, :] == m - 1))
+        cand &= ((lo[None, :, 0] <= hi[ii, 0]) & (hi[None, :, 0] >= lo[ii, 0]) &
+                 (lo[None, :, 1] <= hi[ii, 1]) & (hi[None, :, 1] >= lo[ii, 1]))
+        ci, cj = np.nonzero(cand)
+        if ci.size == 0:
             continue
-        box = ((lo[j, 0] <= hi[i, 0]) & (hi[j, 0] >= lo[i, 0]) &
-               (lo[j, 1] <= hi[i, 1]) & (hi[j, 1] >= lo[i, 1]))
-        j = j[box]
-        if j.size == 0:
-            continue
+        i, j = ci + i0, cj
         c1 = _cross(d[i], a[j] - a[i])
         c2 = _cross(d[i], b[j] - a[i])
         c3 = _cross(d[j], a[i] - a[j])
         c4 = _cross(d[j], b[i] - a[j])
-        hit = (c1 * c2 < -tol) & (c3 * c4 < -tol)
-        if np.any(hit):
-            return i, int(j[np.argmax(hit)])
+        hit = np.flatnonzero((c1 * c2 < -tol) & (c3 * c4 < -tol))
+        if hit.size:
+            k = hit[0]  # np.nonzero is row-major: the smallest i, then j
+            return int(i[k]), int(j[k])
     return None
 
 
@@ -262,7 +267,7 @@ def points_in_polygon(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
 
 
 def cut_line(sew: np.ndarray, widths: np.ndarray, mitre_limit: float = MITRE_LIMIT,
-             hole: bool = False) -> np.ndarray:
+             hole: bool = False, warnings: Optional[List[str]] = None) -> np.ndarray:
     """The cut line around one sew-line loop: :func:`offset_loop`, loops removed, checked.
 
     Parameters
@@ -270,6 +275,8 @@ def cut_line(sew: np.ndarray, widths: np.ndarray, mitre_limit: float = MITRE_LIM
     sew : (k, 2) float, the loop with the material on its left (outline ccw, hole cw).
     widths : (k,) float, allowance of each edge (m).
     hole : bool, the loop is a hole of the piece.
+    warnings : list or None; when given, a cut line that fails the checks is
+        returned anyway and the problem appended here instead of raised.
 
     Raises
     ------
@@ -285,8 +292,11 @@ def cut_line(sew: np.ndarray, widths: np.ndarray, mitre_limit: float = MITRE_LIM
     bad = inside if hole else ~inside
     if np.any(bad) or segments_cross(c) is not None:
         q = (sew[keep][np.argmax(bad)] if np.any(bad) else c[0]) * 1000
-        raise ExportError(f"the seam allowance does not fit around the sew line near ({q[0]:.0f}, {q[1]:.0f}) mm "
-                          f"(parts of the outline closer than twice the allowance); lower the allowance there")
+        msg = (f"the seam allowance does not fit around the sew line near ({q[0]:.0f}, {q[1]:.0f}) mm "
+               f"(parts of the outline closer than twice the allowance); lower the allowance there")
+        if warnings is None:
+            raise ExportError(msg)
+        warnings.append(msg)
     return c
 
 
@@ -556,7 +566,7 @@ def _allowance_text(edge_w: List[np.ndarray]) -> str:
 
 def build_piece(pattern: Pattern, panel: PatternPanel, widths: Dict[str, float],
                 notch_spacing: float = DEFAULT_NOTCH_SPACING,
-                mitre_limit: float = MITRE_LIMIT) -> PieceDrawing:
+                mitre_limit: float = MITRE_LIMIT, warnings: Optional[List[str]] = None) -> PieceDrawing:
     """The drawing of one piece: sew and cut lines, notches, grain line, label.
 
     Parameters
@@ -565,6 +575,8 @@ def build_piece(pattern: Pattern, panel: PatternPanel, widths: Dict[str, float],
     panel : the piece.
     widths : from :func:`resolve_allowance`.
     notch_spacing : float, m between interior notches along a seam (0: ends only).
+    warnings : list or None; when given, a cut line that does not fit is drawn
+        anyway and the problem appended here (see :func:`cut_line`).
     """
     rot = _rotation_to_y(panel.grain)
     xy = np.asarray(panel.uv, float) @ rot.T
@@ -597,10 +609,14 @@ def build_piece(pattern: Pattern, panel: PatternPanel, widths: Dict[str, float],
     for li in range(len(loops)):
         # the outline is ccw and holes cw, so the material is always on the
         # left and offsetting to the right puts the allowance outside it
+        found: List[str] = []
         try:
-            c = cut_line(sew[li], edge_w[li], mitre_limit, hole=li > 0)
+            c = cut_line(sew[li], edge_w[li], mitre_limit, hole=li > 0,
+                         warnings=None if warnings is None else found)
         except ExportError as exc:
             raise ExportError(f"piece {panel.name!r}: {exc}") from None
+        if warnings is not None:
+            warnings.extend(f"piece {panel.name!r}: {m}" for m in found)
         cut.append(c)
 
     # outward normal of every boundary edge, for the notches
@@ -659,8 +675,12 @@ def build_piece(pattern: Pattern, panel: PatternPanel, widths: Dict[str, float],
 
 
 def build_pieces(pattern: Pattern, allowance=None, notch_spacing: Optional[float] = None,
-                 progress=None) -> List[PieceDrawing]:
-    """:func:`build_piece` for every piece of a validated pattern, in pattern order."""
+                 progress=None, warnings: Optional[List[str]] = None) -> List[PieceDrawing]:
+    """:func:`build_piece` for every piece of a validated pattern, in pattern order.
+
+    ``warnings``: None raises on a cut line that does not fit; a list collects
+    the problems instead (lenient export).
+    """
     from ..progress import report
     widths = resolve_allowance(allowance, pattern)
     if notch_spacing is None:
@@ -674,7 +694,7 @@ def build_pieces(pattern: Pattern, allowance=None, notch_spacing: Optional[float
     out = []
     for i, panel in enumerate(pattern.panels):
         report(progress, i / max(len(pattern.panels), 1), f"piece {panel.name}")
-        out.append(build_piece(pattern, panel, widths, notch_spacing))
+        out.append(build_piece(pattern, panel, widths, notch_spacing, warnings=warnings))
     return out
 
 

@@ -5,7 +5,7 @@ seam and the field at fault, raised before a single file is written.
 """
 from __future__ import annotations
 
-from typing import Optional
+from typing import List, Optional
 
 import numpy as np
 
@@ -32,8 +32,12 @@ def _ids(a, n: int, where: str) -> np.ndarray:
     return a
 
 
-def validate_pattern(pattern: Pattern) -> None:
+def validate_pattern(pattern: Pattern, strict: bool = True) -> List[str]:
     """Raise :class:`ExportError` unless ``pattern`` can be exported.
+
+    With ``strict=False`` a sew line that crosses itself (a tangled piece,
+    which cannot be cut as it is) is reported in the returned warnings
+    instead; everything else still raises.
 
     Checks: at least one piece; unique piece names; per piece finite uv (n, 2)
     with n >= 3, faces (f, 3) indexing uv, non-negative vertex ids, a finite
@@ -46,6 +50,7 @@ def validate_pattern(pattern: Pattern) -> None:
         raise ExportError(f"pattern: expected a core.pattern.types.Pattern, got {type(pattern).__name__}")
     if not pattern.panels:
         raise ExportError("pattern.panels: the pattern has no pieces")
+    warnings: List[str] = []
     names = [p.name for p in pattern.panels]
     for name in names:
         if not isinstance(name, str) or not name:
@@ -94,8 +99,11 @@ def validate_pattern(pattern: Pattern) -> None:
             hit = segments_cross(uv[loop].astype(float))
             if hit is not None:
                 q = uv[loop][hit[0]] * 1000
-                raise ExportError(f"{where}.uv: the sew line crosses itself near ({q[0]:.0f}, {q[1]:.0f}) mm "
-                                  f"(a folded-over or tangled piece)")
+                msg = (f"{where}.uv: the sew line crosses itself near ({q[0]:.0f}, {q[1]:.0f}) mm "
+                       f"(a folded-over or tangled piece)")
+                if strict:
+                    raise ExportError(msg)
+                warnings.append(msg)
         tables[panel.name] = _edge_table(loops)
     for k, seam in enumerate(pattern.seams):
         where = f"seam {seam.name!r}"
@@ -116,6 +124,7 @@ def validate_pattern(pattern: Pattern) -> None:
                 if (int(u), int(w)) not in tables[pname]:
                     raise ExportError(f"{where}.verts_{side}: vertices {u} -> {w} of piece {pname!r} are not "
                                       f"consecutive boundary vertices (a seam must run along the piece outline)")
+    return warnings
 
 
 def validate_drape(pattern: Pattern, positions: Optional[np.ndarray]) -> np.ndarray:
