@@ -217,6 +217,11 @@ def run(args) -> int:
     return 0
 
 
+def _chart_text() -> str:
+    from .sizes import SIZE_CHART
+    return "; ".join(f"{k} " + "/".join(f"{v:g}" for v in row.values()) for k, row in SIZE_CHART.items())
+
+
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         "body",
@@ -225,7 +230,7 @@ def add_parser(subparsers) -> None:
                     "(height, chest, waist, hip in cm). --all writes sizes XS..XL and poses A, T, P1, P2, P3 "
                     "and a PNG of them side by side.",
         formatter_class=argparse.RawDescriptionHelpFormatter,
-        epilog=__doc__.split("Examples::", 1)[1],
+        epilog="examples:" + __doc__.split("Examples::", 1)[1].rstrip() + "\n\nsizes (cm, height/chest/waist/hip): " + _chart_text(),
     )
     p.add_argument("--model", default="anny",
                    help="body model: 'anny' (default body) or a path to an SMPL/SMPL-X .npz/.pkl or an OBJ template")
