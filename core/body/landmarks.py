@@ -66,6 +66,9 @@ class _RayMesh:
         self.centre = self.a + (self.e1 + self.e2) / 3.0
         corners = np.stack([self.a, self.a + self.e1, self.a + self.e2], axis=1)
         self.radius = np.linalg.norm(corners - self.centre[:, None], axis=2).max(axis=1) + 1e-9
+        eps = 1e-9
+        self.lo = corners.min(axis=1) - eps
+        self.hi = corners.max(axis=1) + eps
 
 
 _RAY_MESH = {}
@@ -110,11 +113,18 @@ def ray_cast(vertices: np.ndarray, faces: np.ndarray, origin, direction, all_hit
     o = np.asarray(origin, dtype=float)
     dvec = np.asarray(direction, dtype=float)
     dvec = dvec / np.linalg.norm(dvec)
-    # Only triangles whose bounding sphere meets the ray can be hit.
-    rel = rm.centre - o
-    along = rel @ dvec
-    perp = np.linalg.norm(rel - along[:, None] * dvec, axis=1)
-    cand = np.nonzero((perp <= rm.radius) & (along >= -rm.radius))[0]
+    axis = np.nonzero(np.abs(dvec) > 1.0 - 1e-12)[0]
+    if axis.size == 1:
+        # Axis-aligned ray: only triangles whose bounding box spans it across can be hit.
+        a0, a1 = [k for k in range(3) if k != axis[0]]
+        ok = (rm.lo[:, a0] <= o[a0]) & (rm.hi[:, a0] >= o[a0]) & (rm.lo[:, a1] <= o[a1]) & (rm.hi[:, a1] >= o[a1])
+        cand = np.nonzero(ok)[0]
+    else:
+        # Only triangles whose bounding sphere meets the ray can be hit.
+        rel = rm.centre - o
+        along = rel @ dvec
+        perp = np.linalg.norm(rel - along[:, None] * dvec, axis=1)
+        cand = np.nonzero((perp <= rm.radius) & (along >= -rm.radius))[0]
     a, e1, e2 = rm.a[cand], rm.e1[cand], rm.e2[cand]
     p = np.cross(dvec, e2)
     det = np.einsum("ij,ij->i", e1, p)
