@@ -90,7 +90,7 @@ def _top_parts(sleeves: str = "long", hem: str = "hem", ease=None):
     ]
     if sleeves != "none":
         if sleeves == "long":
-            params["sleeve_length"] = {"value": 0.37, "kind": "length", "min": 0.2, "max": 0.45}
+            params["sleeve_length"] = {"value": 0.42, "kind": "length", "min": 0.2, "max": 0.45}
             normal = ["elbow_left", "wrist_left"]
         else:
             params["sleeve_length"] = {"value": 0.12, "kind": "length", "min": 0.06, "max": 0.2}
@@ -126,7 +126,7 @@ def _hem_ring(through="hem_front"):
 
 def _top(name, description, sleeves, hem_length=0.10, ease=None):
     params, kps, lines, panels = _top_parts(sleeves, ease=ease)
-    params["hem_length"] = {"value": hem_length, "kind": "length", "min": 0.0, "max": 0.16}
+    params["hem_length"] = {"value": hem_length, "kind": "length", "min": 0.0, "max": 0.2}
     kps["hem_front"] = {"trace": {"from": "waist_front", "along": "torso_down", "length": "$hem_length"}}
     lines.insert(1, _hem_ring())
     garment = {"name": "shirt" if sleeves == "long" else "top", "kind": "upper", "pin": "neckline",
@@ -204,12 +204,12 @@ def _lower(name, description, length_value, length_range, garment_name):
 
 
 def pants():
-    return _lower("pants", "Four panels (front/back, left/right); ease 1.2.", 0.88, (0.5, 0.95), "pants")
+    return _lower("pants", "Four panels (front/back, left/right); ease 1.2.", 0.98, (0.5, 1.05), "pants")
 
 
 def shorts():
     return _lower("shorts", "Four panels (front/back, left/right), legs ending mid-thigh; ease 1.2.",
-                  0.38, (0.25, 0.5), "shorts")
+                  0.42, (0.25, 0.6), "shorts")
 
 
 def teaser_shirt_pants():
@@ -222,7 +222,7 @@ def teaser_shirt_pants():
         if l["name"] == "side_left":
             l["points"] = ["armhole_under_left", "waist_side_left"]
     shirt = {"name": "shirt", "kind": "upper", "pin": "neckline", "lines": lines, "panels": panels}
-    pparams, pkps, plines, ppanels = _pants_parts(0.88, (0.5, 0.95), ease={
+    pparams, pkps, plines, ppanels = _pants_parts(0.98, (0.5, 1.05), ease={
         "front_left": {"value": 1.1}, "back_left": {"value": 1.25}})
     params.update(pparams)
     kps.update(pkps)
