@@ -153,6 +153,10 @@ def fake_chumpy(tmp_path, monkeypatch):
             def __init__(self, x):
                 self.x = x
                 self._dirty_vars = set()
+
+        class ChReduced(Ch):
+            def __reduce__(self):
+                return (ChReduced, (self.x,))
     """))
     monkeypatch.syspath_prepend(str(tmp_path / "fakemods"))
     yield
@@ -167,6 +171,7 @@ def test_pkl_with_chumpy_and_sparse(tmp_path, fake_chumpy):
     pk["shapedirs"] = chumpy.Ch(m["shapedirs"])
     pk["v_template"] = chumpy.Ch(m["v_template"])
     pk["posedirs"] = chumpy.Ch(m["posedirs"])
+    pk["weights"] = chumpy.ch.ChReduced(m["weights"])
     pk["J_regressor"] = sp.csc_matrix(m["J_regressor"])
     pk["bs_style"] = "lbs"
     path = tmp_path / "model.pkl"

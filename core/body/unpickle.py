@@ -23,7 +23,11 @@ class ChumpyStandIn:
     """Stands in for any chumpy class; keeps the pickled ``__dict__`` only."""
 
     def __init__(self, *args, **kwargs):
-        pass
+        # chumpy.Ch(x) rebuilt by a REDUCE call: its first argument is the array.
+        if args:
+            self.x = args[0]
+        elif "x" in kwargs:
+            self.x = kwargs["x"]
 
     def __setstate__(self, state):
         if isinstance(state, tuple) and len(state) == 2:
