@@ -21,17 +21,19 @@ Targets: ``T_t = K_t diag(c_weft, c_warp)`` with ``c = |sigma*_2D| / |sigma_3D|`
 target 2D offsets have the lengths the paper asks for.
 
 Energy, every term normalised to be dimensionless and independent of the mesh
-resolution and the garment size (a relative strain squared, integrated over
-area and divided by the garment's total area; seam terms integrate over a band
-of one mean edge length ``h`` along the seam, residuals relative to the edge
-length)::
+resolution and the garment size: a relative strain squared, integrated over
+area and divided by the garment's total area ``A``. Seam terms integrate over
+a band one mean edge length ``h`` wide along the seam (an edge of length
+``l_i`` stands for the area ``l_i h``) with residuals relative to ``h``, so a
+seam residual of one edge length weighs like a strain of 1 over that band,
+and tiny edges (slivers at seam ends) do not stiffen the system::
 
     E = lambda_ease sum_t a_t |(M_t - T_t) W|^2            (E_weft + E_warp, axes fixed:
                                                              weft along x, warp along y)
       + lambda_reg  sum_t a_t |(M_t - R_t T_reg,t) W|^2   (ARAP, R_t from the local step)
-      + lambda_len  sum_i h/(l_i A) |e_i - Lbar_i d_i|^2  (seam length, linearised)
-      + lambda_straight sum_i h/(l_i A) |D2 u_i|^2        (seam straightness)
-      + lambda_curve sum_i h/(l_i A) |D2 u_i - C_i|^2     (matched seam curvature)
+      + lambda_len  sum_i l_i/(h A) |e_i - Lbar_i d_i|^2  (seam length, linearised)
+      + lambda_straight sum_i l_i/(h A) |D2 u_i - S_i|^2  (seam straightness)
+      + lambda_curve sum_i l_i/(h A) |D2 u_i - C_i|^2     (matched seam curvature)
 
 with ``a_t = area_t / A``, ``W = diag(1, warp_weight)``. ``T_reg`` is the
 isometric rest shape ``K_t`` in the paper-default configuration (taken
@@ -84,12 +86,16 @@ class SolverConfig:
     the weft targets by the ratio target / achieved scale (SPEC rho-hat), so
     that curvature error moves out of the weft into warp and shear (0 = off,
     the paper); ``feedback_warp`` the same for the warp targets.
+    ``straight_target``: ``"zero"`` (paper: second differences of seams
+    towards 0, which also straightens seams that must be curved -- crotch,
+    armholes) or ``"smooth"`` (towards the mean of the neighbouring second
+    differences of the current seam: only oscillations are damped).
     """
     lambda_ease: float = 0.1
     lambda_reg: float = 1.0
     lambda_len: float = 100.0
-    lambda_straight: float = 5.0
-    lambda_curve: float = 10.0
+    lambda_straight: float = 0.5
+    lambda_curve: float = 1.0
     iterations: int = 20
     reg_rest: str = "prestretch"
     warp_weight: float = 1.0
@@ -97,17 +103,20 @@ class SolverConfig:
     realign_grain: bool = True
     adapt_margin: float = 0.03
     feedback: float = 0.0
+    straight_target: str = "smooth"
+    len_direction: str = "current"
     feedback_warp: float = 0.0
 
 
     @classmethod
     def paper(cls, **kw) -> "SolverConfig":
         """The paper's weights taken literally (isometric ARAP regulariser)."""
-        return replace(cls(reg_rest="isometric", adapt_margin=0.0), **kw)
+        return replace(cls(reg_rest="isometric", adapt_margin=0.0, straight_target="zero",
+                           lambda_straight=5.0, lambda_curve=10.0), **kw)
 
     @classmethod
     def improved(cls, **kw) -> "SolverConfig":
-        """Our default: pre-stretched ARAP rest shape, paper weights otherwise."""
+        """Our default: pre-stretched ARAP rest shape, lighter seam-shape terms."""
         return replace(cls(), **kw)
 
     @classmethod
@@ -134,6 +143,8 @@ class SolverConfig:
             raise PatternError("solver configuration warp_weight: expected > 0")
         if int(self.iterations) < 1:
             raise PatternError(f"solver configuration iterations: expected >= 1, got {self.iterations}")
+        if self.straight_target not in ("zero", "smooth"):
+            raise PatternError(f"solver configuration straight_target: expected 'zero' or 'smooth', got {self.straight_target!r}")
         if self.reg_rest not in ("isometric", "prestretch"):
             raise PatternError(f"solver configuration reg_rest: expected 'isometric' or 'prestretch', got {self.reg_rest!r}")
 
@@ -207,7 +218,7 @@ def intrinsic_offsets(X_t: np.ndarray, G: np.ndarray) -> tuple:
         frame whose second axis is the warp offset (lower-triangular).
     len_weft, len_warp : (f,) lengths |sigma_3D| (metres per unit 2D step).
     """
-    S = np.einsum("tkd,tke->tde", X_t, G)  # (f, 3, 2)
+    S = _jac(X_t, G)  # (f, 3, 2)
     sw, sg = S[:, :, 0], S[:, :, 1]
     lw = np.linalg.norm(sw, axis=1)
     lg = np.linalg.norm(sg, axis=1)
@@ -219,6 +230,22 @@ def intrinsic_offsets(X_t: np.ndarray, G: np.ndarray) -> tuple:
     K[:, 1, 0] = along
     K[:, 1, 1] = lg
     return K, lw, lg
+
+
+def _jac(Ut: np.ndarray, G: np.ndarray) -> np.ndarray:
+    """``M[t] = Ut[t]^T G[t]`` for Ut (f, 3, d), G (f, 3, 2) -> (f, d, 2) (explicit sums: fast)."""
+    return (Ut[:, 0, :, None] * G[:, 0, None, :] + Ut[:, 1, :, None] * G[:, 1, None, :]
+            + Ut[:, 2, :, None] * G[:, 2, None, :])
+
+
+def _abt(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """``A[t] @ B[t]^T`` for A (f, m, 2), B (f, n, 2) -> (f, m, n)."""
+    return A[:, :, None, 0] * B[:, None, :, 0] + A[:, :, None, 1] * B[:, None, :, 1]
+
+
+def _ab(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """``A[t] @ B[t]`` for 2x2 stacks."""
+    return A[:, :, 0, None] * B[:, None, 0, :] + A[:, :, 1, None] * B[:, None, 1, :]
 
 
 def _polar2(A: np.ndarray) -> np.ndarray:
@@ -256,6 +283,7 @@ class _PanelData:
     uv0: np.ndarray
     G: np.ndarray
     area0: np.ndarray      # initial 2D areas (= 3D areas up to LSCM distortion)
+    face_offset: int = 0
 
 
 @dataclass
@@ -300,6 +328,7 @@ class PatternSolver:
         self.ref_positions = self._positions(body_vertices, "reference body")
         self.panels: List[_PanelData] = []
         offset = 0
+        face_offset = 0
         for k, p in enumerate(cut.panels):
             report(progress, 0.8 * k / len(cut.panels), f"flattening panel {p.name}")
             xyz = self.ref_positions[np.asarray(p.vertex_ids, int)]
@@ -310,12 +339,16 @@ class PatternSolver:
             G, a0 = _init.gradient_operators(uv0, F)
             self.panels.append(_PanelData(p.name, offset, len(p.vertex_ids), F, F + offset,
                                           np.asarray(p.vertex_ids, int), np.asarray(p.warp_dir, float),
-                                          np.asarray(p.ease, float), uv0, G, a0))
+                                          np.asarray(p.ease, float), uv0, G, a0, face_offset))
             offset += len(p.vertex_ids)
+            face_offset += len(F)
         self.n = offset
         self.gfaces = np.concatenate([pd.gfaces for pd in self.panels])
         self.G = np.concatenate([pd.G for pd in self.panels])
         self.a = np.concatenate([pd.area0 for pd in self.panels])
+        self._area_floor = 1e-6 * np.abs(self.a)
+        self.face_panel = np.concatenate([np.full(len(pd.faces), k) for k, pd in enumerate(self.panels)])
+        self._warp0, self._warp_w = self._warp_in_initial_domain()
         self.total_area = float(self.a.sum())
         self.a = self.a / self.total_area
         self.uv0 = np.concatenate([pd.uv0 for pd in self.panels])
@@ -324,7 +357,13 @@ class PatternSolver:
         self._build_seams()
         # scatter of per-triangle corner contributions into the unknowns
         f = len(self.gfaces)
-        self._scatter = sp.csr_matrix((np.ones(3 * f), (self.gfaces.ravel(), np.arange(3 * f))), shape=(self.n, 3 * f))
+        rows = np.repeat(np.arange(f), 3)
+        cols = self.gfaces.ravel()
+        # gradient operators as sparse (f, n) matrices: (Gx @ U)[t] = M_t[:, 0], (Gy @ U)[t] = M_t[:, 1]
+        self._Gx = sp.csr_matrix((self.G[:, :, 0].ravel(), (rows, cols)), shape=(f, self.n))
+        self._Gy = sp.csr_matrix((self.G[:, :, 1].ravel(), (rows, cols)), shape=(f, self.n))
+        self._GxT = self._Gx.T.tocsr()
+        self._GyT = self._Gy.T.tocsr()
         self._factor = None
         self._factor_key = None
         self.timings = {"init": time.perf_counter() - t0}
@@ -387,7 +426,7 @@ class PatternSolver:
         for side in self.sides:
             g = side.gids
             if cfg.seam_length and cfg.lambda_len > 0:
-                c = cfg.lambda_len * self.h / (np.maximum(side.l0, 1e-12) * self.total_area)
+                c = cfg.lambda_len * side.l0 / (self.h * self.total_area)
                 for a_, b_, s_ in ((g[:-1], g[:-1], c), (g[1:], g[1:], c), (g[:-1], g[1:], -c), (g[1:], g[:-1], -c)):
                     extra_r.append(a_), extra_c.append(b_), extra_v.append(s_)
             lam = cfg.lambda_straight + cfg.lambda_curve
@@ -415,7 +454,7 @@ class PatternSolver:
         vals = np.tile([1.0, -2.0, 1.0], k - 2)
         D = sp.csr_matrix((vals, (rows, cols)), shape=(k - 2, self.n))
         lmid = 0.5 * (side.l0[:-1] + side.l0[1:])
-        cc = self.h / (np.maximum(lmid, 1e-12) * self.total_area)
+        cc = lmid / (self.h * self.total_area)
         return D, cc
 
     def _solver(self):
@@ -473,7 +512,7 @@ class PatternSolver:
         U = (self.uv0 if start is None else start).copy()
         Ft = self.gfaces
         # fixed part of the right-hand side: the ease term with axes fixed
-        ease_part = cfg.lambda_ease * self.a[:, None, None] * np.einsum("tkc,c,tdc->tkd", self.G, W2, T)
+        ease_part = self._rhs_of(T, cfg.lambda_ease * self.a, W2)
         pos = self.ref_positions if positions is None else positions
         Xu = np.concatenate([pos[pd.vertex_ids] for pd in self.panels])
         corr_w = np.ones(len(Ft))
@@ -496,13 +535,12 @@ class PatternSolver:
                 np.clip(corr_g, 0.8, 1.25, out=corr_g)
                 T = K * np.stack([c_weft * corr_w, c_warp * corr_g], axis=1)[:, None, :]
                 T_reg = T if cfg.reg_rest == "prestretch" else K
-                ease_part = cfg.lambda_ease * self.a[:, None, None] * np.einsum("tkc,c,tdc->tkd", self.G, W2, T)
-            M = np.einsum("tkd,tkc->tdc", U[Ft], self.G)               # (f, 2, 2) current Jacobian
-            R = _polar2(np.einsum("tdc,c,tec->tde", M, W2, T_reg))    # local step
-            RT = R @ T_reg
-            contrib = ease_part + cfg.lambda_reg * self.a[:, None, None] * np.einsum("tkc,c,tdc->tkd", self.G, W2, RT)
-            rhs = self._scatter @ contrib.reshape(-1, 2)
-            rhs += self._seam_rhs(U, R @ T)
+                ease_part = self._rhs_of(T, cfg.lambda_ease * self.a, W2)
+            M = self._jacobians(U)                         # (f, 2, 2) current Jacobian
+            R = _polar2(_abt(M * W2, T_reg))               # local step
+            RT = _ab(R, T_reg)
+            rhs = ease_part + self._rhs_of(RT, cfg.lambda_reg * self.a, W2)
+            rhs += self._seam_rhs(U, _ab(R, T))
             rhs += self._pin[:, None] * U
             U_new = np.column_stack([lu.solve(rhs[:, 0]), lu.solve(rhs[:, 1])])
             U, nb = self._safeguard(U, U_new)
@@ -532,26 +570,28 @@ class PatternSolver:
             for k, other in ((ka, kb), (kb, ka)):
                 side = self.sides[k]
                 g = side.gids
+                # ARAP prediction of every seam edge: R_t T_t (u0_j - u0_i) of the edge's triangle
+                e0 = self.uv0[g[1:]] - self.uv0[g[:-1]]
+                pred = np.sum(RT[side.edge_face] * e0[:, None, :], axis=2)
                 if cfg.seam_length and cfg.lambda_len > 0:
                     lbar = 0.5 * (cur_len[k] + cur_len[other])
-                    # ARAP-predicted direction of the edge: R_t T_t (u0_j - u0_i)
-                    f = side.edge_face
-                    corners = self.gfaces[f]
-                    i0 = corners[np.arange(len(f)), side.edge_local[:, 0]]
-                    i1 = corners[np.arange(len(f)), side.edge_local[:, 1]]
-                    # edges run along the polyline; keep the polyline's direction
-                    e0 = self.uv0[g[1:]] - self.uv0[g[:-1]]
-                    pred = np.einsum("tij,tj->ti", RT[f], e0)
-                    nrm = np.linalg.norm(pred, axis=1)
                     cur = U[g[1:]] - U[g[:-1]]
-                    dirn = np.where(nrm[:, None] > 0, pred / np.maximum(nrm, 1e-300)[:, None], cur)
-                    dirn /= np.maximum(np.linalg.norm(dirn, axis=1), 1e-300)[:, None]
-                    c = cfg.lambda_len * self.h / (np.maximum(side.l0, 1e-12) * self.total_area)
+                    dirn = cur if cfg.len_direction == "current" else pred
+                    dirn = dirn / np.maximum(np.linalg.norm(dirn, axis=1), 1e-300)[:, None]
+                    c = cfg.lambda_len * side.l0 / (self.h * self.total_area)
                     tgt = (c * lbar)[:, None] * dirn
                     np.add.at(rhs, g[1:], tgt)
                     np.add.at(rhs, g[:-1], -tgt)
-                if cfg.lambda_curve > 0 and self._D[k] is not None and len(self.sides[other].gids) == len(g):
-                    D, cc = self._D[k]
+                if self._D[k] is None:
+                    continue
+                D, cc = self._D[k]
+                if cfg.lambda_straight > 0 and cfg.straight_target == "smooth" and D.shape[0] >= 3:
+                    # damp oscillations only: towards the neighbours' mean second difference
+                    d2 = D @ U
+                    sm = d2.copy()
+                    sm[1:-1] = 0.5 * (d2[:-2] + d2[2:])
+                    rhs += D.T @ ((cfg.lambda_straight * cc)[:, None] * sm)
+                if cfg.lambda_curve > 0 and len(self.sides[other].gids) == len(g):
                     Do, _ = self._D[other]
                     Q = _kabsch2(U[g], U[self.sides[other].gids])
                     target = 0.5 * (D @ U + (Do @ U) @ Q.T)
@@ -559,30 +599,89 @@ class PatternSolver:
         return rhs
 
     def _safeguard(self, U_old: np.ndarray, U_new: np.ndarray):
-        """Shorten the step per panel until no triangle flips; returns (U, number of halvings)."""
+        """Keep the step flip-free: vertices of triangles that would flip step back locally.
+
+        Every vertex starts with the full step; the step of the vertices of
+        each flipped (or collapsing) triangle is halved until none is left.
+        As a vertex's step goes to 0 it returns to the previous, flip-free
+        iterate, so this terminates; a panel that cannot be fixed in 40 rounds
+        keeps its previous iterate. Returns (U, number of halvings).
+        """
+        alpha = np.ones(self.n)
         U = U_new.copy()
         halvings = 0
+        F = self.gfaces
+        for _ in range(40):
+            s = signed_areas_2d(U, F)
+            bad = s <= self._area_floor
+            if not np.any(bad):
+                return U, halvings
+            verts = np.unique(F[bad])
+            alpha[verts] *= 0.5
+            halvings += 1
+            U[verts] = U_old[verts] + alpha[verts, None] * (U_new[verts] - U_old[verts])
+        s = signed_areas_2d(U, F)
         for pd in self.panels:
             sl = slice(pd.offset, pd.offset + pd.n)
-            ref = np.abs(signed_areas_2d(self.uv0[sl], pd.faces))
-            floor = 1e-6 * ref
-            alpha = 1.0
-            for _ in range(30):
-                cand = U_old[sl] + alpha * (U_new[sl] - U_old[sl])
-                if np.all(signed_areas_2d(cand, pd.faces) > floor):
-                    U[sl] = cand
-                    break
-                alpha *= 0.5
-                halvings += 1
-            else:
+            fs = slice(pd.face_offset, pd.face_offset + len(pd.faces))
+            if np.any(s[fs] <= self._area_floor[fs]):
                 U[sl] = U_old[sl]
         return U, halvings
 
-    def _realign(self, U: np.ndarray, positions: np.ndarray) -> np.ndarray:
-        U = U.copy()
+    def _jacobians(self, U: np.ndarray) -> np.ndarray:
+        """Per-triangle 2x2 Jacobians (f, 2, 2) of ``U`` w.r.t. the initial flattening."""
+        return np.stack([self._Gx @ U, self._Gy @ U], axis=2)
+
+    def _rhs_of(self, B: np.ndarray, w: np.ndarray, W2: np.ndarray) -> np.ndarray:
+        """Right-hand side (n, 2) of sum_t w_t |(M_t - B_t) W|^2."""
+        return (self._GxT @ ((w * W2[0])[:, None] * B[:, :, 0])
+                + self._GyT @ ((w * W2[1])[:, None] * B[:, :, 1]))
+
+    def _warp_in_initial_domain(self):
+        """Per triangle the 3D warp direction pulled back to the initial flattening (unit) and its vote weight.
+
+        The warp is a material direction: once pulled back it is carried by
+        the pattern's own Jacobian, whatever body the pattern is solved on.
+        Degenerate triangles get weight 0 (they do not vote).
+        """
+        X = self.ref_positions
+        img = np.zeros((len(self.gfaces), 2))
+        w = np.zeros(len(self.gfaces))
         for pd in self.panels:
+            fs = slice(pd.face_offset, pd.face_offset + len(pd.faces))
+            J = _jac(X[pd.vertex_ids][pd.faces], pd.G)  # (f, 3, 2): initial 2D -> 3D
+            JtJ = np.einsum("tdi,tdj->tij", J, J)
+            rhs = np.einsum("tdi,td->ti", J, pd.warp_dir)
+            det = JtJ[:, 0, 0] * JtJ[:, 1, 1] - JtJ[:, 0, 1] ** 2
+            ok = np.abs(det) > _init.DEGENERATE * max(float(np.mean(np.abs(det))), 1e-300)
+            v = np.zeros((len(pd.faces), 2))
+            v[ok, 0] = (JtJ[ok, 1, 1] * rhs[ok, 0] - JtJ[ok, 0, 1] * rhs[ok, 1]) / det[ok]
+            v[ok, 1] = (JtJ[ok, 0, 0] * rhs[ok, 1] - JtJ[ok, 0, 1] * rhs[ok, 0]) / det[ok]
+            nrm = np.linalg.norm(v, axis=1)
+            ok &= nrm > _init.DEGENERATE * max(float(np.mean(nrm)), 1e-300)
+            img[fs][ok] = v[ok] / nrm[ok, None]
+            img[fs] = np.where(ok[:, None], v / np.maximum(nrm, 1e-300)[:, None], 0.0)
+            w[fs] = np.where(ok, areas_3d(X[pd.vertex_ids], pd.faces), 0.0)
+        return img, w
+
+    def _realign(self, U: np.ndarray, positions: np.ndarray) -> np.ndarray:
+        """Rotate every panel about its centroid so its area-weighted grain vote is +y."""
+        M = self._jacobians(U)
+        img = np.sum(M * self._warp0[:, None, :], axis=2)  # current 2D image of the warp
+        nrm = np.linalg.norm(img, axis=1)
+        unit = img / np.maximum(nrm, 1e-300)[:, None]
+        w = np.where(nrm > 0, self._warp_w, 0.0)
+        k = len(self.panels)
+        vx = np.bincount(self.face_panel, w * unit[:, 0], minlength=k)
+        vy = np.bincount(self.face_panel, w * unit[:, 1], minlength=k)
+        U = U.copy()
+        for i, pd in enumerate(self.panels):
+            if vx[i] == 0 and vy[i] == 0:
+                continue
+            theta = np.arctan2(-vx[i], vy[i])
             sl = slice(pd.offset, pd.offset + pd.n)
-            U[sl] = _init.align_grain(U[sl], positions[pd.vertex_ids], pd.faces, pd.warp_dir)
+            c = U[sl].mean(axis=0)
+            U[sl] = (U[sl] - c) @ _init.rotation(-theta).T + c
         return U
 
 
