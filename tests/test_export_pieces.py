@@ -233,3 +233,13 @@ def test_piece_with_a_hole():
     np.testing.assert_allclose(d_hole, 0.01, atol=1e-9)
     assert abs(signed_area(piece.cut[1])) < abs(signed_area(piece.sew[1]))
     assert abs(signed_area(piece.cut[0])) > abs(signed_area(piece.sew[0]))
+
+
+def test_layout_fills_beside_tall_pieces():
+    tall = np.array([[0, 0], [0.4, 0.8]])
+    small = [np.array([[0, 0], [0.4, 0.17]])] * 4
+    lay = layout_pieces([tall] + small, width=0.86, margin=0.02)
+    # the four small pieces stack beside the tall one: one tall piece deep
+    assert lay.size[1] == pytest.approx(0.84)
+    lay = layout_pieces([np.array([[0, 0], [0.4, 0.4]])] * 4, width=0.86, margin=0.02)
+    np.testing.assert_allclose(lay.size, [0.86, 0.86])

@@ -133,12 +133,13 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
             files["pattern_plain.dxf"] = dxf.plain_text(pieces, lay, title).encode("utf-8")
         elif fmt == "pdf":
             from . import pdf
-            lay = layout_pieces(boxes, SHEET_WIDTH, LAYOUT_MARGIN, reserve=pdf.TEST_RESERVE)
             pages = {}
             for paper in ("a4", "letter"):
+                lay = _fewest_pages(boxes, paper)
                 files[f"pattern_{paper}.pdf"] = pdf.tiled_pdf(pieces, lay, paper, title)
                 rows, cols, _ = pdf.tile_grid(lay.size, paper)
                 pages[paper] = {"rows": rows, "columns": cols, "pages": rows * cols}
+            lay = layout_pieces(boxes, SHEET_WIDTH, LAYOUT_MARGIN, reserve=pdf.TEST_RESERVE)
             files["pattern_plotter.pdf"] = pdf.plotter_pdf(pieces, lay, title)
             pages["plotter_mm"] = ((lay.size + 2 * pdf.PAGE_MARGIN) * 1000).round(1).tolist()
             summary["pdf"] = pages
@@ -158,6 +159,20 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
             write_bytes(tmp / name, data)
     report(progress, 1.0, f"wrote {len(files)} files to {out_dir}")
     return [out_dir / name for name in files]
+
+
+def _fewest_pages(boxes, paper: str) -> Layout:
+    """The shelf layout, a whole number of pages wide, that needs the fewest pages of ``paper``."""
+    from . import pdf
+    tile_w = pdf.PAPERS[paper][0] - 2 * pdf.PAGE_MARGIN
+    widest = max([float(b[1, 0] - b[0, 0]) for b in boxes] + [pdf.TEST_RESERVE[0]]) + 2 * LAYOUT_MARGIN
+    best = None
+    for cols in range(max(1, int(np.ceil(widest / tile_w - 1e-9))), 9):
+        lay = layout_pieces(boxes, cols * tile_w, LAYOUT_MARGIN, reserve=pdf.TEST_RESERVE)
+        rows, ncols, _ = pdf.tile_grid(lay.size, paper)
+        if best is None or rows * ncols < best[0]:
+            best = (rows * ncols, lay)
+    return best[1]
 
 
 def _piece_summary(piece: PieceDrawing, pattern: Pattern) -> dict:

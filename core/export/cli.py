@@ -94,8 +94,7 @@ def add_parser(sub) -> None:
                     "in mm; DXF in ASTM D6673/AAMA layers (one block per piece; R2000 and R12) and plain DXF; "
                     "PDF at 1:1 tiled on A4 and US Letter (join marks, page grid, 10 cm test square) and one "
                     "plotter sheet (914 mm roll); the draped garment as GLB and OBJ with the pattern uv. Every "
-                    "piece has its cut line (seam allowance), sew line, notches, grain line and label.",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+                    "piece has its cut line (seam allowance), sew line, notches, grain line and label.")
     p.add_argument("pattern_dir", metavar="PATTERN_DIR", help="folder holding pattern.json (or the file itself)")
     p.add_argument("--format", default=None,
                    help=f"comma-separated formats: {FORMATS_HELP} (default: svg,dxf,pdf, plus glb,obj when a "

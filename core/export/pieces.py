@@ -719,7 +719,7 @@ class Layout:
 
 def layout_pieces(boxes: Sequence[np.ndarray], width: float = 0.9, margin: float = 0.02,
                   reserve: Optional[Tuple[float, float]] = None) -> Layout:
-    """Shelf packing of bounding boxes: tallest first, left to right, top to bottom.
+    """Skyline packing of bounding boxes: tallest first, each where it reaches least far down, then leftmost.
 
     Parameters
     ----------
@@ -740,15 +740,41 @@ def layout_pieces(boxes: Sequence[np.ndarray], width: float = 0.9, margin: float
     entries = ([("reserve", np.asarray(reserve, float))] if reserve is not None else []) + \
               [(i, sizes[i]) for i in order]
     sheet_w = max([width] + [s[0] + 2 * margin for _, s in entries])
-    # place with y measured downward from the top edge
-    pos, x, y, shelf_h = {}, margin, margin, 0.0
+    # skyline packing, y measured downward from the top edge: the skyline is
+    # the fill depth of each x interval; a box goes where its top would be
+    # shallowest (then leftmost), spanning the intervals it covers
+    xs = [margin, sheet_w - margin]          # interval boundaries
+    depth = [margin]                          # fill depth of each interval
+    pos = {}
     for key, s in entries:
-        if x > margin and x + s[0] + margin > sheet_w + 1e-12:
-            x, y, shelf_h = margin, y + shelf_h + margin, 0.0
-        pos[key] = (x, y)
-        x += s[0] + margin
-        shelf_h = max(shelf_h, s[1])
-    sheet_h = y + shelf_h + margin
+        w = float(s[0])
+        best = None
+        for k in range(len(depth)):
+            x = xs[k]
+            if x + w > sheet_w - margin + 1e-12:
+                break
+            end = x + w
+            top = max(d for d, x0 in zip(depth, xs) if x0 < end - 1e-12 and x0 >= x - 1e-12)
+            if best is None or top < best[0] - 1e-12:
+                best = (top, x)
+        top, x = best
+        pos[key] = (x, top)
+        # raise the skyline under the box (plus a margin below it)
+        new_depth = top + float(s[1]) + margin
+        x1 = min(x + w + margin, sheet_w - margin)
+        bounds = sorted(set(xs + [x, x1]))
+        fill = []
+        for x0, x_end in zip(bounds[:-1], bounds[1:]):
+            k = max(i for i in range(len(depth)) if xs[i] <= x0 + 1e-12)
+            fill.append(new_depth if (x0 >= x - 1e-12 and x_end <= x1 + 1e-12) else depth[k])
+        # merge equal neighbours so the skyline stays short
+        xs, depth = [bounds[0]], [fill[0]]
+        for x0, d in zip(bounds[1:-1], fill[1:]):
+            if abs(d - depth[-1]) > 1e-12:
+                xs.append(x0)
+                depth.append(d)
+        xs.append(bounds[-1])
+    sheet_h = max(py + float(s[1]) for (key, s), (px, py) in zip(entries, [pos[k] for k, _ in entries])) + margin
     offsets = np.zeros((len(boxes), 2))
     for i in range(len(boxes)):
         px, py = pos[i]
