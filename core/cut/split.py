@@ -72,6 +72,7 @@ class CutMesh:
         self._e2 = np.cross(n, e1)
         self._scale = np.sqrt(np.maximum(nn, 1e-300))   # ~ edge length of the parent
         self._ptri2 = np.stack([self._to2d_all(tris[:, k]) for k in range(3)], axis=1)
+        self._frames = {}
 
     def _to2d_all(self, q: np.ndarray) -> np.ndarray:
         d = q - self._p0
@@ -85,7 +86,7 @@ class CutMesh:
         other._parent = self._parent.copy()
         other.weights = dict(self.weights)
         other.he = dict(self.he)
-        other.vf = [set(s) for s in self.vf]
+        other.vf = self.vf.copy()
         other.cut = dict(self.cut)
         other.cut_verts = {k: set(v) for k, v in self.cut_verts.items()}
         return other
@@ -232,11 +233,7 @@ class CutMesh:
         he = F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
         fid = np.repeat(np.arange(len(F)), 3)
         self.he: Dict[int, int] = dict(zip(((he[:, 0] << 32) | he[:, 1]).tolist(), fid.tolist()))
-        flat = F.reshape(-1)
-        order = np.argsort(flat, kind="stable")
-        bounds = np.searchsorted(flat[order], np.arange(self.nv + 1))
-        fo = (order // 3).tolist()
-        self.vf = [set(fo[bounds[v]:bounds[v + 1]]) for v in range(self.nv)]
+        self.vf = _VertexFaces(F, self.nv)
 
     # -- geometry ---------------------------------------------------------------------------
     def _to2d(self, P: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -281,6 +278,59 @@ class CutMesh:
         return self.split_face(f, bary)
 
     # -- tracing ----------------------------------------------------------------------------
+    def _frame(self, P: int):
+        fr = self._frames.get(P)
+        if fr is None:
+            fr = (self._p0[P].tolist(), self._e1[P].tolist(), self._e2[P].tolist(), self._n[P].tolist(),
+                  float(self._scale[P]), self._ptri2[P].tolist())
+            self._frames[P] = fr
+        return fr
+
+    def _best_wedge(self, cur: int, target: np.ndarray):
+        """The face around ``cur`` (in a parent that holds ``target``) whose wedge at
+        ``cur`` contains the direction to ``target``: (face, u, w, bA, bu, bw) with the
+        barycentrics of ``target`` in (cur, u, w), or None. Plain floats: it runs per step."""
+        tx, ty, tz = target.tolist()
+        X = self._X
+        par = self._parent
+        Fa = self._F
+        pq = {}
+        best = None
+        for f in sorted(self.vf[cur]):
+            P = int(par[f])
+            q = pq.get(P)
+            if q is None:
+                (ox, oy, oz), (ax, ay, az), (bx, by, bz), (nx, ny, nz), sc, T = self._frame(P)
+                dx, dy, dz = tx - ox, ty - oy, tz - oz
+                qx = dx * ax + dy * ay + dz * az
+                qy = dx * bx + dy * by + dz * bz
+                ok = abs(dx * nx + dy * ny + dz * nz) <= 1e-6 * sc
+                if ok:
+                    b = _bary2py(qx, qy, T[0], T[1], T[2])
+                    ok = min(b) >= -1e-6
+                q = (qx, qy, ok)
+                pq[P] = q
+            if not q[2]:
+                continue
+            a, b_, c = Fa[f].tolist()
+            if a == cur:
+                u, w = b_, c
+            elif b_ == cur:
+                u, w = c, a
+            else:
+                u, w = a, b_
+            (ox, oy, oz), (ax, ay, az), (bx, by, bz), _, _, _ = self._frame(P)
+            pts = []
+            for v in (cur, u, w):
+                x, y, z = X[v].tolist()
+                dx, dy, dz = x - ox, y - oy, z - oz
+                pts.append((dx * ax + dy * ay + dz * az, dx * bx + dy * by + dz * bz))
+            bA, bu, bw = _bary2py(q[0], q[1], *pts)
+            score = min(bu, bw)
+            if best is None or score > best[0]:
+                best = (score, f, u, w, bA, bu, bw)
+        return None if best is None else best[1:]
+
     def _wedges(self, cur: int, faces: np.ndarray, target: np.ndarray):
         """Faces around ``cur`` whose parent holds ``target``, rotated to start at ``cur``,
         and the barycentrics (k, 3) of ``target`` in each (in the parent's plane)."""
@@ -319,19 +369,17 @@ class CutMesh:
                 self._mark(cur, target_vertex, line, allowed, names)
                 out.append(target_vertex)
                 return out
-            faces = np.sort(np.fromiter(self.vf[cur], dtype=np.int64))
-            if len(faces) == 0:
+            if not self.vf[cur]:
                 raise CutError(f"internal: vertex {cur} has no faces")
-            faces, tri, b = self._wedges(cur, faces, target)
-            if len(faces) == 0:
+            best = self._best_wedge(cur, target)
+            if best is None:
                 raise CutError(f"{_name(names, line)}: could not trace the geodesic across the mesh")
-            score = np.minimum(b[:, 1], b[:, 2])
-            i = int(np.argmax(score))
-            _, u, w = tri[i].tolist()
-            bA, bu, bw = b[i]
+            f, u, w, bA, bu, bw = best
+            faces = [f]
+            i = 0
             if bA >= -_INSIDE:
                 # target is in this triangle's closure: finish here
-                nxt = self._finish(int(faces[i]), cur, u, w, np.array([bA, bu, bw]), line, allowed, names)
+                nxt = self._finish(f, cur, u, w, np.array([bA, bu, bw]), line, allowed, names)
                 if nxt != cur:
                     self._mark(cur, nxt, line, allowed, names)
                     out.append(nxt)
@@ -400,10 +448,54 @@ class CutMesh:
         self.cut_verts.setdefault(b, set()).add(line)
 
 
+class _VertexFaces:
+    """vertex -> set of incident faces, materialised per vertex on first use.
+
+    Every change of a vertex's incidence goes through ``self[v]``, so a set made
+    later from the initial arrays is still correct."""
+
+    def __init__(self, F: np.ndarray, nv: int):
+        flat = F.reshape(-1)
+        order = np.argsort(flat, kind="stable")
+        self._bounds = np.searchsorted(flat[order], np.arange(nv + 1))
+        self._faces = order // 3
+        self._n0 = nv
+        self._sets: Dict[int, set] = {}
+
+    def __getitem__(self, v: int) -> set:
+        s = self._sets.get(v)
+        if s is None:
+            s = set(self._faces[self._bounds[v]:self._bounds[v + 1]].tolist()) if v < self._n0 else set()
+            self._sets[v] = s
+        return s
+
+    def append(self, s: set) -> None:
+        pass    # new vertices start empty (made on first use)
+
+    def copy(self) -> "_VertexFaces":
+        other = object.__new__(_VertexFaces)
+        other.__dict__.update(self.__dict__)
+        other._sets = {k: set(v) for k, v in self._sets.items()}
+        return other
+
+
 def _name(names, line) -> str:
     if names is None:
         return f"#{line}"
     return repr(names[line])
+
+
+def _bary2py(qx, qy, a, b, c):
+    """Barycentric coordinates of the 2D point (qx, qy) in triangle a, b, c (plain floats)."""
+    v0x, v0y = b[0] - a[0], b[1] - a[1]
+    v1x, v1y = c[0] - a[0], c[1] - a[1]
+    v2x, v2y = qx - a[0], qy - a[1]
+    den = v0x * v1y - v1x * v0y
+    if abs(den) < 1e-300:
+        den = 1e-300
+    l1 = (v2x * v1y - v1x * v2y) / den
+    l2 = (v0x * v2y - v2x * v0y) / den
+    return 1.0 - l1 - l2, l1, l2
 
 
 def _bary2(q: np.ndarray, tri: np.ndarray) -> np.ndarray:
