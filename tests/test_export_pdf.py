@@ -92,6 +92,28 @@ def test_tiled_pdf_pages_scale_and_test_square(made, paper, size_mm):
     assert b"page A1" in text and b"join A2" in text and b"join B1" in text
 
 
+@pytest.mark.parametrize("paper", ["a4", "letter"])
+def test_every_piece_lands_on_the_pages_it_covers(made, paper):
+    pat, pieces, lay = made
+    pg = pages(parse_pdf(pdf.tiled_pdf(pieces, lay, paper, pat.style)))
+    rows, cols, tile = pdf.tile_grid(lay.size, paper)
+    m = pdf.PAGE_MARGIN
+    for r in range(rows):
+        for c in range(cols):
+            content = pg[r * cols + c][1]
+            drawn = {int(k): (float(x), float(y)) for x, y, k in
+                     re.findall(rb"1 0 0 1 (-?[\d.]+) (-?[\d.]+) cm\s*/FormXob\.piece(\d+) Do", content)}
+            x0, y0 = c * tile[0], lay.size[1] - (r + 1) * tile[1]  # the sheet window of this page
+            for k, (piece, off) in enumerate(zip(pieces, lay.offsets)):
+                box = piece.bbox + off
+                covers = not (box[1, 0] < x0 or box[0, 0] > x0 + tile[0] or box[1, 1] < y0 or box[0, 1] > y0 + tile[1])
+                assert (k in drawn) == covers
+                if covers:  # piece frame -> page: + layout offset - window corner + margin, in points
+                    want = (np.array([m - x0, m - y0]) + off) * 1000 * MM
+                    np.testing.assert_allclose(drawn[k], want, atol=0.01)
+    assert sum(len(re.findall(rb"Do", c)) for _, c in pg) >= len(pieces)
+
+
 def test_piece_forms_are_drawn_at_one_to_one(made):
     pat, pieces, lay = made
     objs = parse_pdf(pdf.tiled_pdf(pieces, lay, "a4", pat.style))

@@ -149,11 +149,11 @@ def tiled_pdf(pieces: Sequence[PieceDrawing], layout: Layout, paper: str = "a4",
             p = c.beginPath()
             p.rect(m * PT_PER_M, m * PT_PER_M, tile[0] * PT_PER_M, tile[1] * PT_PER_M)
             c.clipPath(p, stroke=0, fill=0)
-            for name, box in zip(forms, boxes):
+            for name, box, off in zip(forms, boxes, layout.offsets):
                 if box[1, 0] < x0 or box[0, 0] > x1 or box[1, 1] < y0 or box[0, 1] > y1:
                     continue
                 c.saveState()
-                c.translate((m - x0) * PT_PER_M, (m - y0) * PT_PER_M)
+                c.translate((m - x0 + off[0]) * PT_PER_M, (m - y0 + off[1]) * PT_PER_M)
                 c.doForm(name)
                 c.restoreState()
             if r == 0 and col == 0 and layout.reserved is not None:
