@@ -1,0 +1,40 @@
+"""core.cut.grain: warp per triangle along the body part's long axis."""
+import numpy as np
+
+from core.cut.grain import body_part_axis, warp_directions
+
+
+def test_axes_from_joint_names_point_up_the_part():
+    names = ["root", "neck01", "upperarm01.L", "wrist.L", "upperarm01.R", "wrist.R",
+             "upperleg01.L", "foot.L", "upperleg01.R", "foot.R"]
+    J = np.array([[0, 0, 0], [0, 0, 0.5], [0.2, 0, 0.45], [0.5, 0, 0.1], [-0.2, 0, 0.45], [-0.5, 0, 0.1],
+                  [0.1, 0, 0], [0.12, 0, -0.8], [-0.1, 0, 0], [-0.12, 0, -0.8]], float)
+    np.testing.assert_allclose(body_part_axis("torso", "left", names, J), [0, 0, 1])
+    arm = body_part_axis("arm", "left", names, J)
+    np.testing.assert_allclose(arm, np.array([-0.3, 0, 0.35]) / np.hypot(0.3, 0.35))
+    assert body_part_axis("arm", "right", names, J)[0] > 0       # right arm: mirror
+    leg = body_part_axis("leg", "left", names, J)
+    assert leg[2] > 0.99
+    # SMPL-style names work too
+    smpl = ["pelvis", "neck", "left_shoulder", "left_wrist"]
+    Js = np.array([[0, 0, 0], [0, 0, 0.5], [0.2, 0, 0.4], [0.6, 0, 0.4]], float)
+    np.testing.assert_allclose(body_part_axis("arm", "left", smpl, Js), [-1, 0, 0])
+    # nothing known: vertical
+    np.testing.assert_allclose(body_part_axis("leg", "left"), [0, 0, 1])
+
+
+def test_warp_is_unit_tangent_projection():
+    rng = np.random.RandomState(0)
+    X = rng.normal(size=(30, 3))
+    F = np.array([[i, i + 1, i + 2] for i in range(0, 27, 3)])
+    axis = np.array([0.0, 0.0, 1.0])
+    w = warp_directions(X, F, axis)
+    n = np.cross(X[F[:, 1]] - X[F[:, 0]], X[F[:, 2]] - X[F[:, 0]])
+    np.testing.assert_allclose(np.linalg.norm(w, axis=1), 1.0)
+    np.testing.assert_allclose((w * n).sum(1), 0.0, atol=1e-12)
+    assert np.all(w @ axis > 0)
+    # a triangle facing along the axis gets a fixed tangent, still unit and in-plane
+    Xh = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
+    wh = warp_directions(Xh, np.array([[0, 1, 2]]), axis)
+    np.testing.assert_allclose(np.linalg.norm(wh), 1.0)
+    assert abs(wh[0, 2]) < 1e-12

@@ -1,0 +1,47 @@
+"""core.cut.refine: conforming red-green refinement to a target edge length."""
+import numpy as np
+import scipy.sparse as sp
+
+from core.cut.refine import refine
+
+from test_cut_split import grid
+from test_cut_synth import triangle_areas
+
+
+def test_refine_edge_length_area_and_embedding():
+    X, F = grid(3, size=0.1)
+    X = X + np.random.RandomState(1).uniform(-0.003, 0.003, X.shape) * [1, 1, 0]
+    labels = np.arange(len(F)) % 2
+    W = sp.identity(len(X), format="csr")
+    line = np.array([0, 1, 2, 3])                       # along the bottom edge
+    h = 0.01
+    X2, F2, L2, W2, (line2,) = refine(X, F, labels, W, [line], h)
+    e = np.linalg.norm(X2[F2] - X2[np.roll(F2, -1, 1)], axis=2)
+    assert e.max() <= h
+    np.testing.assert_allclose(triangle_areas(X2, F2).sum(), triangle_areas(X, F).sum(), rtol=1e-12)
+    # labels are carried: per label the area is unchanged
+    for k in (0, 1):
+        np.testing.assert_allclose(triangle_areas(X2, F2[L2 == k]).sum(), triangle_areas(X, F[labels == k]).sum())
+    # new vertices are linear combinations of the original ones
+    np.testing.assert_allclose(W2 @ X, X2, atol=1e-15)
+    np.testing.assert_allclose(np.asarray(W2.sum(1)).ravel(), 1.0)
+    # conforming: every interior edge has two faces, orientation kept (+z)
+    key = F2.reshape(-1) * len(X2) + np.roll(F2, -1, 1).reshape(-1)
+    assert len(np.unique(key)) == len(key)
+    n = np.cross(X2[F2[:, 1]] - X2[F2[:, 0]], X2[F2[:, 2]] - X2[F2[:, 0]])
+    assert (n[:, 2] > 0).all()
+    # the line gets the midpoints of its edges, in order, and stays straight
+    assert line2[0] == 0 and line2[-1] == 3
+    np.testing.assert_allclose(X2[line2, 1], X2[line2, 1].mean(), atol=0.003)
+    assert np.all(np.diff(X2[line2, 0]) > 0)
+    for a, b in zip(line2[:-1], line2[1:]):
+        assert np.any(np.all(np.sort(np.stack([F2, np.roll(F2, -1, 1)], 2), axis=2).reshape(-1, 2)
+                             == sorted((a, b)), axis=1))
+
+
+def test_refine_noop_when_short_enough():
+    X, F = grid(2, size=0.01)
+    W = sp.identity(len(X), format="csr")
+    X2, F2, L2, W2, _ = refine(X, F, np.zeros(len(F), int), W, [], 0.1)
+    np.testing.assert_array_equal(F2, F)
+    assert W2.shape == W.shape
