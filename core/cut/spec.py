@@ -23,11 +23,16 @@ class CutLine:
     closed : True for a loop (neckline, cuff, hem, armhole).
     role : ``"seam"`` (two panels are sewn along it) or ``"opening"`` (the
         garment ends there: neckline, hem, cuff, waistband).
+    garment : the garment this line cuts. None: the garment named by the
+        line name's prefix (``"shirt.side_left"`` -> ``"shirt"``) if there is
+        one, else every garment. Garments are cut separately, so the lines of
+        one garment never cut another (overlapping shirt and pants).
     """
     name: str
     points: List[SurfacePoint]
     closed: bool = False
     role: str = "seam"
+    garment: Optional[str] = None
 
 
 @dataclass
