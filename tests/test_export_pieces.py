@@ -1,5 +1,4 @@
 """core.export.pieces: cut line offset, allowance widths, notches, grain, labels, layout."""
-import math
 import sys
 from pathlib import Path
 

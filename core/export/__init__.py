@@ -31,7 +31,7 @@ from typing import Iterable, List, Optional, Union
 import numpy as np
 
 from ..errors import ExportError
-from ..fileio import dumps_json, output_dir, write_bytes, write_text
+from ..fileio import dumps_json, output_dir, write_bytes
 from ..pattern.types import Pattern
 from ..progress import report, sub
 from .pieces import (DEFAULT_ALLOWANCE, DEFAULT_HEM, DEFAULT_NOTCH_SPACING, Layout, PieceDrawing,

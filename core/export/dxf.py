@@ -28,7 +28,7 @@ import contextlib
 import io
 import logging
 import re
-from typing import Dict, List, Sequence
+from typing import List, Sequence
 
 import numpy as np
 

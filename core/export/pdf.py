@@ -14,7 +14,7 @@ from __future__ import annotations
 import io
 import math
 import string
-from typing import Dict, List, Sequence, Tuple
+from typing import List, Sequence, Tuple
 
 import numpy as np
 
