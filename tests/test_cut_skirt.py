@@ -128,3 +128,26 @@ def test_skirt_cut(anny):
         Gp = cut.positions(V)
         for p in cut.panels:
             assert triangle_areas(Gp[p.vertex_ids], p.faces).min() > 0
+
+
+def test_overlapping_garments_are_cut_separately(anny):
+    """A shirt whose hem is below the skirt's waistband: each garment keeps its panels."""
+    from test_cut_anny_shirt import shirt_spec
+    body, X, J = anny
+    shirt = shirt_spec(body, X, J, refine=None)
+    skirt = skirt_spec(body, X, J, refine=None)
+    both = CutSpec(shirt.lines + skirt.lines, shirt.panels + skirt.panels, shirt.garments + skirt.garments,
+                   skirt=True, refine_edge_length=None)
+    cut = cut_surface(body, X, both)
+    alone = {"shirt": cut_surface(body, X, shirt), "skirt": cut_surface(body, X, skirt)}
+    G = cut.positions(X)
+    assert cut.garments == {"shirt": "upper", "skirt": "lower"}
+    for name, ref in alone.items():
+        Gr = ref.positions(X)
+        for p in ref.panels:
+            q = cut.panel(p.name)
+            np.testing.assert_allclose(triangle_areas(G[q.vertex_ids], q.faces).sum(),
+                                       triangle_areas(Gr[p.vertex_ids], p.faces).sum(), rtol=1e-9)
+    ids = {g: np.concatenate([p.vertex_ids for p in cut.panels if p.garment == g]) for g in ("shirt", "skirt")}
+    assert not set(ids["shirt"].tolist()) & set(ids["skirt"].tolist())
+    assert set(cut.pins) == {"shirt", "skirt"}
