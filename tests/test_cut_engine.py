@@ -172,3 +172,18 @@ def test_bad_keypoint_and_names(body):
     spec.panels[0] = PanelSpec("shirt.front", "nope", spec.panels[0].seed)
     with pytest.raises(CutError, match="shirt.front.*unknown garment"):
         cut_surface(body, body.V, spec)
+
+
+def test_self_seam_opens_a_tube_panel(body):
+    """One panel around the tube with one seam: the panel is cut open (a disk) and sewn to itself."""
+    spec = tube_spec(body, refine=0.01)
+    spec.lines = [l for l in spec.lines if l.name != "shirt.side_right"]
+    spec.panels = spec.panels[:1]
+    cut = cut_surface(body, body.V, spec)
+    (p,) = cut.panels
+    assert len(p.boundary) == 1
+    (s,) = cut.seams
+    assert s.panel_a == s.panel_b == "shirt.front"
+    np.testing.assert_array_equal(p.vertex_ids[s.verts_a], p.vertex_ids[s.verts_b])
+    assert np.all(s.verts_a != s.verts_b)
+    assert len(p.vertex_ids) - len(np.unique(p.vertex_ids)) == len(s.verts_a)
