@@ -1,0 +1,161 @@
+"""Export benchmark: time per format and the geometric accuracy of the files.
+
+Patterns: the pattern stage's synthetic front/back tube (solved by the real
+optimizer) and, when the pipeline runs, the teaser shirt + pants design on the
+default body. For each: milliseconds to build the pieces and to render each
+format, and what the files say read back: SVG piece sizes vs the pattern (mm),
+DXF sew-line lengths vs the pattern (mm), the PDF test square (mm), measured
+allowance width vs requested (mm), notch arc-length mismatch across seams (mm).
+Writes ``bench_export.md`` and ``bench_export.json`` into ``out_dir``.
+"""
+from __future__ import annotations
+
+import io
+import re
+import time
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+def _patterns():
+    from core.pattern.solve import solve_pattern
+    from core.pattern.synthetic import two_panels
+
+    cut, body = two_panels()
+    yield "synthetic front/back tube", solve_pattern(cut, body, style="synthetic tube"), None
+    try:
+        from core.pattern.cli import prepare
+        design, body, cut, ref, _ = prepare(REPO / "examples" / "designs" / "teaser_shirt_pants.json")
+        yield "teaser shirt + pants (Anny)", solve_pattern(cut, ref, style=design.name), None
+    except Exception as exc:  # the benchmark reports what it could not run
+        yield "teaser shirt + pants (Anny)", None, f"{type(exc).__name__}: {exc}"
+
+
+def _accuracy(pattern, pieces, texts: dict) -> dict:
+    import ezdxf
+
+    from core.export.pieces import distance_to_polyline, polyline_length
+    out = {}
+    # allowance: distance from each sew edge midpoint to the cut line vs its width
+    err = []
+    for p in pieces:
+        for sew, cut, w in zip(p.sew, p.cut, p.edge_allowance):
+            mid = 0.5 * (sew + np.roll(sew, -1, axis=0))
+            err.append(np.abs(distance_to_polyline(mid, cut) - w))
+    out["allowance_err_mm_p95"] = float(np.percentile(np.concatenate(err), 95) * 1000)
+    out["allowance_err_mm_max"] = float(np.concatenate(err).max() * 1000)
+    # notches: same count and arc lengths on both sides of every seam
+    by = {p.name: p for p in pieces}
+    worst, count_ok = 0.0, True
+    for s in pattern.seams:
+        a = [n.s for n in by[s.panel_a].notches if n.seam == s.name and n.side == "a"]
+        b = [n.s for n in by[s.panel_b].notches if n.seam == s.name and n.side == "b"]
+        count_ok &= len(a) == len(b)
+        if len(a) == len(b) and len(a) > 2:
+            worst = max(worst, float(np.abs(np.array(a[:-1]) - np.array(b[:-1])).max()))
+    out["notch_counts_match"] = bool(count_ok)
+    out["notch_arclength_mismatch_mm"] = worst * 1000
+    # SVG: piece sizes (mm) vs the pattern's
+    root = ET.fromstring(texts["svg"])
+    ns = {"svg": "http://www.w3.org/2000/svg"}
+    size_err = 0.0
+    for g, p in zip(root.findall("svg:g", ns), pieces):
+        d = g.find("svg:path[@class='sew']", ns).get("d")
+        pts = np.array([[float(x), float(y)] for x, y in re.findall(r"(-?[\d.]+),(-?[\d.]+)", d)])
+        panel = pattern.panel(p.name)
+        want = np.ptp(panel.uv[p.sew_ids[0]] @ p.rotation.T, axis=0) * 1000
+        size_err = max(size_err, float(np.abs(np.ptp(pts, axis=0) - want).max()))
+    out["svg_size_err_mm"] = size_err
+    # DXF (ASTM): sew-line lengths read back vs the pattern's
+    doc = ezdxf.read(io.StringIO(texts["dxf"]))
+    len_err = 0.0
+    for blk, p in zip([b for b in doc.blocks if not b.name.startswith("*")], pieces):
+        sew = [e for e in blk if e.dxf.layer == "14"][0]
+        pts = np.array([q[:2] for q in sew.get_points()])
+        want = polyline_length(pattern.panel(p.name).uv[p.sew_ids[0]], closed=True) * 1000
+        len_err = max(len_err, abs(polyline_length(pts, closed=True) - want))
+    out["dxf_sew_length_err_mm"] = len_err
+    return out
+
+
+def run(out_dir) -> dict:
+    from core.export import dxf, pdf, svg
+    from core.export.pieces import build_pieces, layout_pieces
+    from core.export.validate import validate_pattern
+    from core.fileio import write_json, write_text
+
+    out_dir = Path(out_dir)
+    results = []
+    for name, pattern, error in _patterns():
+        if pattern is None:
+            results.append({"pattern": name, "error": error})
+            continue
+        row = {"pattern": name, "pieces": len(pattern.panels),
+               "boundary_vertices": int(sum(len(b) for p in pattern.panels for b in p.boundary))}
+        warnings = validate_pattern(pattern, strict=False)
+        t = time.perf_counter()
+        pieces = build_pieces(pattern, warnings=warnings)
+        row["build_ms"] = (time.perf_counter() - t) * 1000
+        row["warnings"] = len(warnings)
+        lay = layout_pieces([p.bbox for p in pieces], 0.88, 0.02)
+        lay_pdf = layout_pieces([p.bbox for p in pieces], 0.88, 0.02, reserve=pdf.TEST_RESERVE)
+        texts = {}
+        for fmt, fn in (("svg", lambda: svg.svg_document(pieces, lay, pattern.style)),
+                        ("dxf", lambda: dxf.astm_text(pieces, lay, pattern.style, "M")),
+                        ("dxf_r12", lambda: dxf.astm_r12_text(pieces, lay, pattern.style, "M")),
+                        ("pdf_a4", lambda: pdf.tiled_pdf(pieces, lay_pdf, "a4", pattern.style)),
+                        ("pdf_plotter", lambda: pdf.plotter_pdf(pieces, lay_pdf, pattern.style))):
+            t = time.perf_counter()
+            texts[fmt] = fn()
+            row[f"{fmt}_ms"] = (time.perf_counter() - t) * 1000
+        row["a4_pages"] = int(np.prod(pdf.tile_grid(lay_pdf.size, "a4")[:2]))
+        rects = re.findall(rb"(-?[\d.]+) (-?[\d.]+) re", _page_one(texts["pdf_a4"]))
+        squares = [float(w) for w, h in rects if abs(float(w) - float(h)) < 1e-3 and float(w) > 100]
+        row["pdf_test_square_mm"] = squares[0] * 25.4 / 72 if squares else None
+        row.update(_accuracy(pattern, pieces, texts))
+        results.append(row)
+
+    lines = ["# Export benchmark", "",
+             "Time to build the pieces (sew/cut lines, notches, grain, labels) and to render each format; "
+             "accuracy of the files read back (mm).", ""]
+    keys = ["pieces", "boundary_vertices", "warnings", "build_ms", "svg_ms", "dxf_ms", "dxf_r12_ms", "pdf_a4_ms",
+            "pdf_plotter_ms", "a4_pages", "pdf_test_square_mm", "allowance_err_mm_p95", "allowance_err_mm_max",
+            "notch_counts_match", "notch_arclength_mismatch_mm", "svg_size_err_mm", "dxf_sew_length_err_mm"]
+    lines.append("| pattern | " + " | ".join(keys) + " |")
+    lines.append("|---" * (len(keys) + 1) + "|")
+    for r in results:
+        if "error" in r:
+            lines.append(f"| {r['pattern']} | not run: {r['error']} |")
+            continue
+        cells = [f"{r[k]:.3g}" if isinstance(r[k], float) else str(r[k]) for k in keys]
+        lines.append(f"| {r['pattern']} | " + " | ".join(cells) + " |")
+    write_text(out_dir / "bench_export.md", "\n".join(lines) + "\n")
+    summary = {"results": results}
+    write_json(out_dir / "bench_export.json", summary)
+    return summary
+
+
+def _page_one(data: bytes) -> bytes:
+    """Decoded content stream of the first page of a reportlab PDF."""
+    import base64
+    import zlib
+    kids = re.search(rb"/Kids \[\s*(\d+) 0 R", data)
+    page = re.search(rb"\n" + kids.group(1) + rb" 0 obj(.*?)endobj", data, re.S).group(1)
+    cref = re.search(rb"/Contents (\d+) 0 R", page).group(1)
+    obj = re.search(rb"\n" + cref + rb" 0 obj(.*?)endobj", data, re.S).group(1)
+    length = int(re.search(rb"/Length (\d+)", obj).group(1))
+    start = re.search(rb"stream\r?\n", obj).end()
+    raw = obj[start:start + length]
+    if b"ASCII85Decode" in obj[:start]:
+        raw = base64.a85decode(raw.strip().removesuffix(b"~>"), adobe=False)
+    return zlib.decompress(raw) if b"FlateDecode" in obj[:start] else raw
+
+
+if __name__ == "__main__":
+    import json
+    import sys
+    print(json.dumps(run(sys.argv[1] if len(sys.argv) > 1 else "bench_out"), indent=1, default=str))
