@@ -38,3 +38,12 @@ def test_warp_is_unit_tangent_projection():
     wh = warp_directions(Xh, np.array([[0, 1, 2]]), axis)
     np.testing.assert_allclose(np.linalg.norm(wh), 1.0)
     assert abs(wh[0, 2]) < 1e-12
+
+
+def test_axis_from_region_points():
+    t = np.linspace(0, 1, 50)[:, None]
+    rng = np.random.RandomState(2)
+    d = np.array([0.6, 0.0, -0.8])
+    P = t * d + 0.02 * rng.normal(size=(50, 3))
+    a = body_part_axis("arm", "left", region_points=P)
+    assert a[2] > 0 and abs(a @ d) > 0.98

@@ -198,20 +198,35 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None) -
 
 
 def _axes(body, X, spec):
+    """Long axes of torso, arms and legs on the reference body ``X``.
+
+    Joints are used when the model can evaluate them for the spec's shape and
+    pose and its vertices there are ``X`` (checked); otherwise the principal
+    axis of the body-part region, then landmarks, then the vertical."""
     joints = None
     jn = getattr(body, "joint_names", None)
     if jn:
         try:
-            joints = np.asarray(body.joints(spec.body.get("shape"), spec.body.get("pose")), float)
-            if joints.shape != (len(jn), 3):
-                joints = None
-        except Exception:
+            shape, pose = spec.body.get("shape"), spec.body.get("pose")
+            if hasattr(body, "vertices_and_joints"):
+                V, J = body.vertices_and_joints(shape, pose)
+            else:
+                V, J = body.vertices(shape, pose), body.joints(shape, pose)
+            V, J = np.asarray(V, float), np.asarray(J, float)
+            if V.shape == X.shape and np.abs(V - X).max() < 1e-6 and J.shape == (len(jn), 3):
+                joints = J
+        except Exception:   # e.g. a size name the model does not evaluate directly
             joints = None
     lm = getattr(body, "landmarks", None)
+    regions = getattr(body, "regions", None) or {}
     out = {}
     for part in ("torso", "arm", "leg"):
         for side in ("left", "right"):
-            out[(part, side)] = body_part_axis(part, side, jn, joints, lm, np.asarray(body.faces), X)
+            name = "torso" if part == "torso" else f"{part}_{side}"
+            ids = np.asarray(regions.get(name, []), dtype=np.int64)
+            pts = X[ids] if len(ids) >= 10 else None
+            out[(part, side)] = body_part_axis(part, side, jn, joints, lm, np.asarray(body.faces), X,
+                                               region_points=pts)
     return out
 
 

@@ -38,7 +38,7 @@ def _find_joint(names: Sequence[str], candidates, side: str) -> Optional[int]:
 
 
 def body_part_axis(part: str, side: str, joint_names=None, joints=None,
-                   landmarks=None, faces=None, X=None) -> np.ndarray:
+                   landmarks=None, faces=None, X=None, region_points=None) -> np.ndarray:
     """Unit long axis (3,) of a body part, pointing up the part.
 
     Parameters
@@ -47,7 +47,9 @@ def body_part_axis(part: str, side: str, joint_names=None, joints=None,
     side : "left" or "right" (ignored for the torso).
     joint_names, joints : the model's joint names and positions (J, 3) on the
         reference body, used when the names are recognised.
-    landmarks, faces, X : fallback: SurfacePoint landmarks on vertices X.
+    region_points : (k, 3) vertices of the part's region: fallback, their
+        principal axis (the long axis of a limb or the torso).
+    landmarks, faces, X : last fallback: SurfacePoint landmarks on vertices X.
     """
     axis = None
     if joints is not None and joint_names is not None and part in _JOINTS:
@@ -55,6 +57,10 @@ def body_part_axis(part: str, side: str, joint_names=None, joints=None,
         hi = _find_joint(joint_names, _JOINTS[part][1], side)
         if lo is not None and hi is not None:
             axis = np.asarray(joints[hi], float) - np.asarray(joints[lo], float)
+    if axis is None and region_points is not None and len(region_points) >= 10:
+        P = np.asarray(region_points, float)
+        _, _, vt = np.linalg.svd(P - P.mean(0), full_matrices=False)
+        axis = vt[0]
     if axis is None and landmarks is not None and part in _LANDMARKS:
         try:
             pts = []
