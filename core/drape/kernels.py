@@ -93,6 +93,27 @@ def solve_stretch(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
 
 
 @wp.kernel
+def solve_distance(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
+                   edge: wp.array2d(dtype=int), rest: wp.array(dtype=float), k: float, inv_dt2: float,
+                   offset: int):
+    """Edge length constraints (the edges of pattern slivers), compliance 1/k."""
+    e = wp.tid() + offset
+    i = edge[e, 0]
+    j = edge[e, 1]
+    d = x[j] - x[i]
+    l = wp.length(d)
+    wi = inv_mass[i]
+    wj = inv_mass[j]
+    denom = wi + wj + inv_dt2 / k
+    if l < 1.0e-12 or denom <= 0.0:
+        return
+    n = d / l
+    dl = -(l - rest[e]) / denom
+    x[i] = x[i] - n * (wi * dl)
+    x[j] = x[j] + n * (wj * dl)
+
+
+@wp.kernel
 def solve_bending(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
                   bend: wp.array2d(dtype=int), weight: wp.array(dtype=float),
                   k_bend: float, inv_dt2: float, offset: int):

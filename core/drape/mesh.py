@@ -43,6 +43,9 @@ class Cloth:
     garment_of_particle : (P,) int, index into ``garment_names``.
     tether_anchor : (P,) int, the nearest pinned particle along the fabric (-1: none, or pinned).
     tether_length : (P,) float, pattern (rest) distance to it along mesh edges, metres.
+    sliver : (T,) bool, pattern triangles too thin for a deformation-gradient constraint
+        (quality below :data:`SLIVER_QUALITY`); their edges are kept as distance constraints.
+    edges : (E, 2) int, the sliver edges (particles); edge_rest : (E,) float, their pattern lengths.
     """
     n_global: int
     particle_of: np.ndarray
@@ -63,10 +66,39 @@ class Cloth:
     garment_of_particle: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     tether_anchor: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     tether_length: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    sliver: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), int))
+    edge_rest: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def n_particles(self) -> int:
         return int(self.x0.shape[0])
+
+
+# Triangle quality 4*sqrt(3)*A / sum(l^2): 1 equilateral, 0 degenerate. Below this the
+# inverse rest matrix is so ill-conditioned that a tiny 3D error reads as a huge strain.
+SLIVER_QUALITY = 0.05
+
+
+def inv22(m: np.ndarray) -> np.ndarray:
+    """Inverse of a stack of 2x2 matrices (n, 2, 2) (closed form: numpy's batched inv is slow here)."""
+    det = m[:, 0, 0] * m[:, 1, 1] - m[:, 0, 1] * m[:, 1, 0]
+    out = np.empty_like(m)
+    out[:, 0, 0] = m[:, 1, 1] / det
+    out[:, 1, 1] = m[:, 0, 0] / det
+    out[:, 0, 1] = -m[:, 0, 1] / det
+    out[:, 1, 0] = -m[:, 1, 0] / det
+    return out
+
+
+def pattern_quality(rest_inv: np.ndarray, rest_area: np.ndarray) -> np.ndarray:
+    """Shape quality (T,) of the pattern triangles, 1 for equilateral, 0 for degenerate."""
+    if len(rest_inv) == 0:
+        return np.zeros(0)
+    dm = inv22(rest_inv)
+    a, b = dm[:, :, 0], dm[:, :, 1]
+    l2 = np.sum(a * a, axis=1) + np.sum(b * b, axis=1) + np.sum((b - a) ** 2, axis=1)
+    return 4.0 * np.sqrt(3.0) * rest_area / np.maximum(l2, 1e-300)
 
 
 def grain_frame(grain) -> np.ndarray:
@@ -263,6 +295,15 @@ def build_cloth(pattern) -> Cloth:
     rest_area = np.concatenate(area_l)
     mass_area = np.zeros(n_part)
     np.add.at(mass_area, faces.ravel(), np.repeat(rest_area / 3.0, 3))
+    # a vertex held only by slivers would weigh nothing and take every correction:
+    # give it a floor of a tenth of the typical vertex mass
+    if n_part:
+        mass_area = np.maximum(mass_area, 0.1 * float(np.median(mass_area)))
+    inv_all = np.concatenate(inv_l)
+    bends, bend_faces = interior_edges(faces)
+    sliver = pattern_quality(inv_all, rest_area) < SLIVER_QUALITY
+    edges, edge_rest = rest_edges(faces[sliver], inv_all[sliver]) if sliver.any() else \
+        (np.zeros((0, 2), np.int64), np.zeros(0))
 
     pinned = np.zeros(n_part, bool)
     for garment, ids in (pattern.pins or {}).items():
@@ -271,21 +312,21 @@ def build_cloth(pattern) -> Cloth:
             raise DrapeError(f"pins[{garment!r}]: ids must be global vertex ids of the pattern")
         pinned[particle_of[ids]] = True
 
-    bends, bend_faces = interior_edges(faces)
-    dm = np.linalg.inv(np.concatenate(inv_l))  # rest edges x1-x0, x2-x0 per triangle
+    dm = inv22(np.concatenate(inv_l))  # rest edges x1-x0, x2-x0 per triangle
     rest_xy = np.zeros((len(faces), 3, 2))
     rest_xy[:, 1], rest_xy[:, 2] = dm[:, :, 0], dm[:, :, 1]
     corner = lambda v, t: rest_xy[t, np.argmax(faces[t] == v[:, None], axis=1)]  # noqa: E731
     if len(bends):
         e = corner(bends[:, 3], bend_faces[:, 0]) - corner(bends[:, 2], bend_faces[:, 0])
         bend_weight = 3.0 * np.sum(e * e, axis=1) / np.maximum(rest_area[bend_faces].sum(axis=1), 1e-16)
+        # slivers give huge weights (tiny areas): cap at ten times the equilateral value
+        bend_weight = np.minimum(bend_weight, 10 * 2 * np.sqrt(3.0))
     else:
         bend_weight = np.zeros(0)
 
-    inv_all = np.concatenate(inv_l)
-    anchor, length = tethers(faces, inv_all, pinned)
+    anchor, length = tethers(faces, inv_all, pinned, bends, bend_faces)
     return Cloth(
-        tether_anchor=anchor, tether_length=length,
+        tether_anchor=anchor, tether_length=length, sliver=sliver, edges=edges, edge_rest=edge_rest,
         n_global=n_global, particle_of=particle_of, x0=x0, faces=faces,
         faces_global=np.concatenate(faces_g), face_panel=np.concatenate(fpanel),
         face_garment=np.concatenate(fgarm), panel_names=[p.name for p in panels],
@@ -304,7 +345,7 @@ def rest_edges(faces: np.ndarray, rest_inv: np.ndarray) -> tuple:
     edges : (E, 2) int sorted pairs, length : (E,) float metres (mean over the
     triangles that share the edge: seam copies agree up to the seam mismatch).
     """
-    dm = np.linalg.inv(rest_inv)  # columns: rest edges x1-x0, x2-x0
+    dm = inv22(rest_inv)  # columns: rest edges x1-x0, x2-x0
     e01 = np.linalg.norm(dm[:, :, 0], axis=1)
     e02 = np.linalg.norm(dm[:, :, 1], axis=1)
     e12 = np.linalg.norm(dm[:, :, 1] - dm[:, :, 0], axis=1)
@@ -318,15 +359,64 @@ def rest_edges(faces: np.ndarray, rest_inv: np.ndarray) -> tuple:
     return edges, total / count
 
 
-def tethers(faces: np.ndarray, rest_inv: np.ndarray, pinned: np.ndarray) -> tuple:
+def _rest_corners(faces: np.ndarray, rest_inv: np.ndarray) -> np.ndarray:
+    """(T, 3, 2) pattern corner positions of each triangle in its grain frame (corner 0 at the origin)."""
+    dm = inv22(rest_inv)
+    out = np.zeros((len(faces), 3, 2))
+    out[:, 1], out[:, 2] = dm[:, :, 0], dm[:, :, 1]
+    return out
+
+
+def across_lengths(faces: np.ndarray, rest_inv: np.ndarray, bends: np.ndarray,
+                   bend_faces: np.ndarray) -> np.ndarray:
+    """Shortest pattern distance between the two opposite vertices of each interior edge.
+
+    The two triangles are unfolded about their shared edge; the straight line
+    between the opposite vertices counts where it crosses the edge, else the
+    path bends at the nearer edge end. Added to the edge graph, these
+    shortcuts bring shortest paths close to true fabric geodesics.
+    """
+    if len(bends) == 0:
+        return np.zeros(0)
+    corners = _rest_corners(faces, rest_inv)
+
+    def local(v, t):
+        return corners[t, np.argmax(faces[t] == v[:, None], axis=1)]
+
+    a, b, e0, e1 = bends.T
+    ta, tb = bend_faces[:, 0], bend_faces[:, 1]
+    # edge frame per side: origin at e0, x along the edge; opposite vertex height |y|
+    pa0, pa1, pa = local(e0, ta), local(e1, ta), local(a, ta)
+    pb0, pb1, pb = local(e0, tb), local(e1, tb), local(b, tb)
+    ea, eb = pa1 - pa0, pb1 - pb0
+    la = np.maximum(np.linalg.norm(ea, axis=1), 1e-30)
+    lb = np.maximum(np.linalg.norm(eb, axis=1), 1e-30)
+    ua, ub = ea / la[:, None], eb / lb[:, None]
+    cross = lambda u, w: u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0]  # noqa: E731
+    xa = np.einsum("ij,ij->i", pa - pa0, ua)
+    ya = np.abs(cross(ua, pa - pa0))
+    xb = np.einsum("ij,ij->i", pb - pb0, ub)
+    yb = np.abs(cross(ub, pb - pb0))
+    length = 0.5 * (la + lb)
+    straight = np.hypot(xa - xb, ya + yb)
+    t = xa + (xb - xa) * ya / np.maximum(ya + yb, 1e-30)
+    via0 = np.hypot(xa, ya) + np.hypot(xb, yb)
+    via1 = np.hypot(xa - length, ya) + np.hypot(xb - length, yb)
+    inside = (t >= 0) & (t <= length)
+    return np.where(inside, straight, np.minimum(via0, via1))
+
+
+def tethers(faces: np.ndarray, rest_inv: np.ndarray, pinned: np.ndarray, bends: np.ndarray = None,
+            bend_faces: np.ndarray = None) -> tuple:
     """Long-range attachments (Kim et al. 2012): each free particle's nearest pin.
 
     A particle may never be farther (in 3D) from its nearest pinned particle than
     the fabric distance between them in the pattern; that bound holds for any
     inextensible drape, and enforcing it lets a hanging garment carry its weight
     without the slow stretch of Gauss-Seidel on long chains. Fabric distance is
-    the shortest path along rest mesh edges (never shorter than the geodesic,
-    so the tether is never tighter than the true bound).
+    the shortest path along rest mesh edges and the unfolded diagonals across
+    them (never shorter than the geodesic, so the tether is never tighter than
+    the true bound; a few percent longer on irregular meshes).
 
     Returns
     -------
@@ -341,7 +431,11 @@ def tethers(faces: np.ndarray, rest_inv: np.ndarray, pinned: np.ndarray) -> tupl
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import dijkstra
     edges, lens = rest_edges(faces, rest_inv)
-    graph = coo_matrix((lens, (edges[:, 0], edges[:, 1])), shape=(n, n)).tocsr()
+    if bends is not None and len(bends):
+        edges = np.concatenate([edges, bends[:, :2]])
+        lens = np.concatenate([lens, across_lengths(faces, rest_inv, bends, bend_faces)])
+    keep = lens > 0
+    graph = coo_matrix((lens[keep], (edges[keep, 0], edges[keep, 1])), shape=(n, n)).tocsr()
     dist, _, source = dijkstra(graph, directed=False, indices=pins, min_only=True,
                                return_predecessors=True)
     ok = np.isfinite(dist) & ~pinned & (source >= 0)

@@ -27,10 +27,14 @@ def body_of_pattern(pattern) -> tuple:
         return revolution_body()
     from ..body import load_body
     body = load_body(model)
+    shape = spec.get("shape") or None
+    if isinstance(shape, str):  # a size name (XS..XL)
+        from ..body.sizes import size_shape
+        shape = size_shape(body, shape)
     pose = spec.get("pose")
     if isinstance(pose, dict):
         pose = {k: np.asarray(v, dtype=float) for k, v in pose.items()}
-    v = np.asarray(body.vertices(spec.get("shape") or None, pose), dtype=float)
+    v = np.asarray(body.vertices(shape, pose), dtype=float)
     return v, np.asarray(body.faces, dtype=np.int64)
 
 

@@ -260,10 +260,12 @@ def _pairs_of(pairs: np.ndarray, verts: np.ndarray) -> np.ndarray:
 
 
 def _face_areas(result) -> np.ndarray:
-    """Areas (m^2) of the draped triangles, the weights of the strain statistics."""
+    """Areas (m^2) of the draped triangles, the weights of the strain statistics (0 for slivers)."""
     x = np.asarray(result.positions, dtype=float)
     f = np.asarray(result.faces)
-    return 0.5 * np.linalg.norm(np.cross(x[f[:, 1]] - x[f[:, 0]], x[f[:, 2]] - x[f[:, 0]]), axis=1)
+    area = 0.5 * np.linalg.norm(np.cross(x[f[:, 1]] - x[f[:, 0]], x[f[:, 2]] - x[f[:, 0]]), axis=1)
+    valid = getattr(result, "face_valid", None)
+    return area if valid is None else area * np.asarray(valid, bool)
 
 
 def summary(metrics: dict) -> dict:
