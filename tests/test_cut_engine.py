@@ -187,3 +187,18 @@ def test_self_seam_opens_a_tube_panel(body):
     np.testing.assert_array_equal(p.vertex_ids[s.verts_a], p.vertex_ids[s.verts_b])
     assert np.all(s.verts_a != s.verts_b)
     assert len(p.vertex_ids) - len(np.unique(p.vertex_ids)) == len(s.verts_a)
+
+
+def test_progress_and_cancel(body):
+    from core.errors import Cancelled
+    seen = []
+    cut_surface(body, body.V, tube_spec(body), progress=lambda f, m: seen.append((f, m)))
+    fr = [f for f, _ in seen]
+    assert fr[0] == 0.0 and fr[-1] == 1.0 and all(b >= a for a, b in zip(fr, fr[1:]))
+    assert any("shirt.hem" in m for _, m in seen)
+
+    def stop(f, m):
+        if f > 0.3:
+            raise Cancelled()
+    with pytest.raises(Cancelled):
+        cut_surface(body, body.V, tube_spec(body), progress=stop)

@@ -16,6 +16,18 @@ sparse ``embedding``), so the cut evaluates on any shape and pose. A cut line
 applies to the garment named by :attr:`CutLine.garment`, or by its name's
 prefix (``"shirt.side_left"`` -> garment ``"shirt"``), or to every garment;
 garments are cut separately so overlapping garments do not cut each other.
+
+Output conventions: global garment vertex ids are grouped per garment (in
+the order of ``spec.garments``); a panel's ``vertex_ids`` may repeat a global
+id where a seam runs inside the panel (sewn to itself, e.g. a one-piece
+sleeve). A seam is one stretch of a "seam" line with the same two panels on
+its sides (``panel_a`` on the left of the line's direction; named
+``line.name``, or ``line.name#k`` when the line has several stretches). Hems
+are the open stretches (opening lines, and seam lines with no panel on one
+side), each with its panel on the left. A stretch that goes all around a
+closed line repeats its first vertex at the end. Pins are the garment's
+vertices on its ``pin_line``, in line order. ``warp_dir`` points up the body
+part (see :mod:`.grain`).
 """
 from __future__ import annotations
 
@@ -178,7 +190,10 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None) -
         report(progress, base, f"cutting garment {g.name}: inserting cut lines")
         gm = mesh.copy() if len(spec.garments) > 1 else mesh
         seqs = {}
-        for li in garment_lines[g.name]:
+        todo = garment_lines[g.name]
+        for k, li in enumerate(todo):
+            report(progress, base + 0.2 * k / max(len(todo), 1) / len(spec.garments),
+                   f"cutting garment {g.name}: line {names[li]}")
             seqs[li] = _insert_line(gm, li, line_kv[li], paths[li], spec.lines[li].closed, names)
         report(progress, base + 0.2 / len(spec.garments), f"cutting garment {g.name}: panels")
         out = _garment_panels(gm, spec, g, gpanels, seqs, forbidden, BF, X, axes, offset)
