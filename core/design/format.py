@@ -64,20 +64,24 @@ class Parameter:
 class Line:
     """A cut line of a garment (or shared by garments).
 
-    Either ``points`` (keypoint references or inline keypoints, joined by
-    geodesics) or ``ring`` (a closed plane section of a limb or the torso, see
-    :mod:`core.design.keypoints`).
+    One of ``points`` (keypoint references or inline keypoints, joined by
+    geodesics), ``ring`` (a closed plane section of a limb or the torso) or
+    ``section`` (the plane section from one keypoint to another, e.g. a centre
+    seam along the body's midline); see :mod:`core.design.resolve`.
     """
     name: str
     points: List[Any] = field(default_factory=list)
     closed: bool = False
     role: str = "seam"
     ring: Optional[dict] = None
+    section: Optional[dict] = None
 
     def to_json(self):
         out: Dict[str, Any] = {"name": self.name}
         if self.ring is not None:
             out["ring"] = copy.deepcopy(self.ring)
+        elif self.section is not None:
+            out["section"] = copy.deepcopy(self.section)
         else:
             out["points"] = copy.deepcopy(self.points)
             out["closed"] = self.closed
@@ -415,17 +419,35 @@ def _parse_ring(path, ring, params):
     return out
 
 
+def _parse_section(path, sec, params):
+    _expect_dict(path, sec, "a section {from, to, normal, spacing}")
+    _expect_keys(path, sec, ("from", "to", "normal", "spacing"))
+    for k in ("from", "to", "normal"):
+        if k not in sec:
+            raise DesignError(f"{path}.{k}", "missing")
+    out = {"from": _ref(f"{path}.from", sec["from"], params), "to": _ref(f"{path}.to", sec["to"], params),
+           "normal": _parse_axis_or_pair(f"{path}.normal", sec["normal"], params)}
+    out["spacing"] = _number(f"{path}.spacing", sec.get("spacing", 0.03), 0.005, 0.2,
+                             what="a point spacing in metres")
+    return out
+
+
 def _parse_line(path, obj, params) -> Line:
-    _expect_dict(path, obj, "a line {name, points | ring, closed, role}")
-    _expect_keys(path, obj, ("name", "points", "closed", "role", "ring"))
+    _expect_dict(path, obj, "a line {name, points | ring | section, closed, role}")
+    _expect_keys(path, obj, ("name", "points", "closed", "role", "ring", "section"))
     if "name" not in obj:
         raise DesignError(f"{path}.name", "missing")
     _check_name(f"{path}.name", obj["name"])
     role = obj.get("role", "seam")
     if role not in LINE_ROLES:
         raise DesignError(f"{path}.role", f"expected one of {', '.join(LINE_ROLES)}, got {_fmt(role)}")
-    if ("ring" in obj) == ("points" in obj):
-        raise DesignError(path, "expected exactly one of points (a keypoint list) or ring (a plane section)")
+    if sum(k in obj for k in ("ring", "points", "section")) != 1:
+        raise DesignError(path, "expected exactly one of points (a keypoint list), ring (a closed plane "
+                                "section) or section (a plane section between two keypoints)")
+    if "section" in obj:
+        if obj.get("closed", False) is not False:
+            raise DesignError(f"{path}.closed", "a section is always open")
+        return Line(obj["name"], [], False, role, None, _parse_section(f"{path}.section", obj["section"], params))
     if "ring" in obj:
         if obj.get("closed", True) is not True:
             raise DesignError(f"{path}.closed", "a ring is always closed")

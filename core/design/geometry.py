@@ -98,27 +98,6 @@ def point_at_length(poly: np.ndarray, s: float) -> Tuple[np.ndarray, np.ndarray]
     return poly[i] + f * seg[i], seg[i] / max(L[i], 1e-12)
 
 
-def trace_straight(vertices, faces, sp: SurfacePoint, direction: np.ndarray, length: float) -> np.ndarray:
-    """Straightest geodesic (k, 3) from ``sp`` starting along ``direction``
-    (projected to the tangent plane) for ``length`` metres; shorter when it
-    runs off a mesh boundary."""
-    import potpourri3d as pp3d
-    tracer = pp3d.GeodesicTracer(np.ascontiguousarray(vertices, dtype=np.float64),
-                                 np.ascontiguousarray(faces, dtype=np.int64))
-    # The tracer walks |d projected on the start triangle| metres: project first, then scale.
-    T = np.asarray(vertices)[np.asarray(faces)[sp.triangle]]
-    n = np.cross(T[1] - T[0], T[2] - T[0])
-    n /= np.linalg.norm(n)
-    d = np.asarray(direction, dtype=np.float64)
-    d = d - (d @ n) * n
-    if np.linalg.norm(d) < 1e-9:
-        raise ValueError("the direction is normal to the surface")
-    d = d / np.linalg.norm(d) * length
-    path = np.asarray(tracer.trace_geodesic_from_face(int(sp.triangle), np.asarray(sp.bary, dtype=np.float64), d))
-    start = sp.position(vertices, faces)
-    return _dedup(np.vstack([start[None], path]))
-
-
 # ---------------------------------------------------------------- plane sections
 
 def _edge_faces(faces: np.ndarray):
@@ -163,7 +142,13 @@ def plane_section_loop(vertices: np.ndarray, faces: np.ndarray, point: np.ndarra
     crossed = (d[edges[:, 0]] > 0) != (d[edges[:, 1]] > 0)
     fcross = crossed[fe]                                   # (F, 3)
     if fcross[start_face].sum() != 2:
-        raise ValueError("the plane does not cross the start triangle")
+        # The point sits on an edge or vertex of the plane (e.g. on the midline): start
+        # from the nearest crossed triangle instead.
+        cand = np.flatnonzero(fcross.sum(axis=1) == 2)
+        if cand.size == 0:
+            raise ValueError("the plane does not cut the surface")
+        C = V[faces[cand]].mean(axis=1)
+        start_face = int(cand[np.argmin(np.linalg.norm(C - point, axis=1))])
     # Crossing edge -> the (up to two) faces it links.
     cf = np.flatnonzero(fcross.sum(axis=1) == 2)
     edge_links = {}
@@ -211,6 +196,15 @@ def plane_section_loop(vertices: np.ndarray, faces: np.ndarray, point: np.ndarra
         else:  # pragma: no cover - every crossing edge belongs to its segment face
             raise ValueError("inconsistent plane section")
     return poly, pts, seg_faces
+
+
+def nearest_segment(poly: np.ndarray, p: np.ndarray) -> int:
+    """Index i of the segment poly[i] -> poly[i+1] (closed loop) nearest to ``p``."""
+    a = poly
+    b = np.roll(poly, -1, axis=0)
+    ab = b - a
+    t = np.clip(np.einsum("ij,ij->i", p - a, ab) / np.maximum((ab * ab).sum(1), 1e-18), 0, 1)
+    return int(np.argmin(np.linalg.norm(a + t[:, None] * ab - p, axis=1)))
 
 
 def segment_point(vertices, faces, face: int, p: np.ndarray) -> SurfacePoint:

@@ -74,6 +74,11 @@ def mirror_line(line):
         # then land on mirrored positions.
         r["handed"] = -int(r.get("handed", 1))
         return Line(mirrored_name(line.name), [], True, line.role, r)
+    if line.section is not None:
+        c = copy.deepcopy(line.section)
+        c["from"], c["to"] = _mirror_ref(c["from"]), _mirror_ref(c["to"])
+        c["normal"] = mirror_axis(c["normal"]) if isinstance(c["normal"], str) else [_mirror_ref(x) for x in c["normal"]]
+        return Line(mirrored_name(line.name), [], False, line.role, None, c)
     return Line(mirrored_name(line.name), [_mirror_ref(p) for p in line.points], line.closed, line.role, None)
 
 

@@ -31,8 +31,8 @@ import numpy as np
 from ..body.model import SurfacePoint
 from ..errors import BodyError, DesignError
 from .format import Design, Line, load_design, parameter_value
-from .geometry import (_edge_faces, Geodesics, SurfaceLocator, plane_section_loop, point_at_length,
-                       polyline_length, segment_point, trace_straight)
+from .geometry import (_edge_faces, nearest_segment, Geodesics, SurfaceLocator, plane_section_loop, point_at_length,
+                       polyline_length, segment_point)
 from .mirror import face_symmetry, mirror_line, mirror_panel, mirror_surface_point, mirrored_name, swap_side
 
 AXIS_VECTORS = {
@@ -222,21 +222,72 @@ class Resolver:
             p, _ = point_at_length(poly, length)
             return self.locator.locate(p[None])[0]
         down = along == "torso_down"
-        poly = trace_straight(self.vertices, self.faces, start, np.array([0.0, 0.0, -1.0 if down else 1.0]), length)
+        poly, end = self._vertical_walk(start, length, down, path)
         got = polyline_length(poly)
-        end = poly[-1]
         limit_name = "crotch" if down else "neck_back"
         limit = self.position(self.landmark(limit_name, f"{path}.along"))[2]
         if got < length - 1e-3 or (down and poly[:, 2].min() < limit) or (not down and poly[:, 2].max() > limit):
             raise DesignError(lpath, f"a length of {length:.3f} m from {from_name} along {along} leaves the "
                                      f"torso (past the {limit_name} level)")
-        return self.locator.locate(end[None])[0]
+        return end
+
+    def _vertical_walk(self, start: SurfacePoint, length: float, down: bool, path: str):
+        """Walk ``length`` metres down (or up) the surface from ``start`` along the
+        vertical normal section (the plane holding the surface normal and +Z).
+
+        A start on the body's midline walks the symmetry plane itself, so
+        midline keypoints stay exactly on the midline (and mirror onto themselves).
+        Returns the walked polyline (k, 3) and the end SurfacePoint.
+        """
+        p0 = self.position(start)
+        T = self.vertices[self.faces[start.triangle]]
+        nrm = np.cross(T[1] - T[0], T[2] - T[0])
+        if abs(p0[0]) < 1e-3:
+            m = np.array([1.0, 0.0, 0.0])
+        else:
+            m = np.cross(nrm / np.linalg.norm(nrm), [0.0, 0.0, 1.0])
+            if np.linalg.norm(m) < 1e-6:
+                raise DesignError(path, "the surface is horizontal there: no direction down the torso")
+            m /= np.linalg.norm(m)
+        if self._edges is None:
+            self._edges = _edge_faces(self.faces)
+        try:
+            poly, pts, segf = plane_section_loop(self.vertices, self.faces, p0, m, start.triangle, 1, self._edges)
+        except ValueError as exc:
+            raise DesignError(path, f"cannot walk down the torso: {exc}") from None
+        k = len(poly)
+        j = nearest_segment(poly, p0)
+        fwd = [(j + 1 + i) % k for i in range(k)]
+        bwd = [(j - i) % k for i in range(k)]
+        # segment faces along each direction (face of segment p_i -> p_i+1 is segf[i])
+        seqs = []
+        for order, faces in ((fwd, [segf[j]] + [segf[i] for i in fwd[:-1]]),
+                             (bwd, [segf[j]] + [segf[(i - 1) % k] for i in bwd[:-1]])):
+            P = np.vstack([p0[None], poly[order]])
+            seqs.append((P, faces))
+        sign = -1.0 if down else 1.0
+
+        def drift(P):  # vertical progress over the first 2 cm
+            q, _ = point_at_length(P, min(0.02, polyline_length(P)))
+            return sign * (q[2] - P[0, 2])
+
+        P, faces = max(seqs, key=lambda x: drift(x[0]))
+        L = np.linalg.norm(np.diff(P, axis=0), axis=1)
+        cum = np.concatenate([[0.0], np.cumsum(L)])
+        if length >= cum[-1]:
+            return P, start
+        i = int(np.searchsorted(cum, length, side="right") - 1)
+        q = P[i] + (length - cum[i]) / L[i] * (P[i + 1] - P[i])
+        walked = np.vstack([P[:i + 1], q[None]])
+        return walked, segment_point(self.vertices, self.faces, faces[i], q)
 
     # ------------------------------------------------------------ lines
     def line_points(self, index: int) -> List[SurfacePoint]:
         full, path, line, _ = self.lines[index]
         if line.ring is not None:
             return self.ring_points(index)
+        if line.section is not None:
+            return self.section_points(index)
         pts = [self.ref(r, f"{path}.points[{i}]") for i, r in enumerate(line.points)]
         for i in range(len(pts) - 1 + int(line.closed)):
             a, b = pts[i], pts[(i + 1) % len(pts)]
@@ -272,12 +323,14 @@ class Resolver:
         except ValueError as exc:
             raise DesignError(f"{path}.ring", f"line {full!r}: {exc}") from None
         k = len(poly)
-        j = next(i for i in range(k) if segf[i] == through.triangle)
+        j = nearest_segment(poly, p0)
+        if np.linalg.norm(poly[j] - p0) > 0.05 and np.linalg.norm(poly[(j + 1) % k] - p0) > 0.05:
+            raise DesignError(f"{path}.ring", f"line {full!r}: the section misses its through point")
         # Put the through point first: it lies on segment j (in its own triangle).
         order = [(j + 1 + i) % k for i in range(k)]
         P = np.vstack([p0[None], poly[order]])
         S = [through] + [pts[i] for i in order]
-        seg_face = [through.triangle] + [segf[i] for i in order[:-1]] + [through.triangle]
+        seg_face = [segf[j]] + [segf[i] for i in order[:-1]] + [segf[j]]
         closed = np.vstack([P, P[:1]])
         L = np.linalg.norm(np.diff(closed, axis=0), axis=1)
         cum = np.concatenate([[0.0], np.cumsum(L)])
@@ -317,6 +370,65 @@ class Resolver:
             out.append(sp)
             last = s
         self._rings[full] = out
+        return out
+
+    def section_points(self, index: int) -> List[SurfacePoint]:
+        """Points every ``spacing`` metres along the plane section from ``from`` to ``to``
+        (the shorter way round); the plane passes through ``from`` with the given normal."""
+        full, path, line, _ = self.lines[index]
+        c = line.section
+        a = self.ref(c["from"], f"{path}.section.from")
+        b = self.ref(c["to"], f"{path}.section.to")
+        pa, pb = self.position(a), self.position(b)
+        n = self._axis(c["normal"], f"{path}.section.normal")
+        # tilt the plane (slightly) so that it contains both ends
+        u = pb - pa
+        if np.linalg.norm(u) < 1e-6:
+            raise DesignError(f"{path}.section.to", f"line {full!r}: from and to coincide")
+        u /= np.linalg.norm(u)
+        m_ = n - (n @ u) * u
+        if np.linalg.norm(m_) < np.cos(np.radians(10.0)):
+            raise DesignError(f"{path}.section.normal", f"line {full!r}: {c['to']!r} is more than 10 degrees "
+                                                        f"off the section plane through {c['from']!r}")
+        n = m_ / np.linalg.norm(m_)
+        if self._edges is None:
+            self._edges = _edge_faces(self.faces)
+        try:
+            poly, pts, segf = plane_section_loop(self.vertices, self.faces, pa, n, a.triangle, 1, self._edges)
+        except ValueError as exc:
+            raise DesignError(f"{path}.section", f"line {full!r}: {exc}") from None
+        k = len(poly)
+        ja = nearest_segment(poly, pa)
+        order = [(ja + 1 + i) % k for i in range(k)]
+        P = np.vstack([pa[None], poly[order]])
+        S = [a] + [pts[i] for i in order]
+        seg_face = [segf[ja]] + [segf[i] for i in order[:-1]] + [segf[ja]]
+        closed = np.vstack([P, P[:1]])
+        L = np.linalg.norm(np.diff(closed, axis=0), axis=1)
+        cum = np.concatenate([[0.0], np.cumsum(L)])
+        # where ``to`` sits on the loop: the nearest point of the section polyline
+        seg = closed[1:] - closed[:-1]
+        f = np.clip(np.einsum("ij,ij->i", pb - closed[:-1], seg) / np.maximum((seg * seg).sum(1), 1e-18), 0, 1)
+        dist = np.linalg.norm(closed[:-1] + f[:, None] * seg - pb, axis=1)
+        m = int(np.argmin(dist))
+        if dist[m] > 5e-3:
+            raise DesignError(f"{path}.section.to", f"line {full!r}: the section through {c['from']!r} "
+                                                    f"does not pass within 5 mm of {c['to']!r}")
+        sb = cum[m] + f[m] * L[m]
+        total = cum[-1]
+        forward = sb <= total - sb
+        length = sb if forward else total - sb
+        count = max(1, int(round(length / c["spacing"])))
+        out = [a]
+        for i in range(1, count):
+            s = i * length / count
+            s = s if forward else total - s
+            mm = int(np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(L) - 1))
+            ff = (s - cum[mm]) / L[mm] if L[mm] > 0 else 0.0
+            out.append(S[mm] if ff < 1e-9 else
+                       segment_point(self.vertices, self.faces, seg_face[mm],
+                                     closed[mm] + ff * (closed[mm + 1] - closed[mm])))
+        out.append(b)
         return out
 
     # ------------------------------------------------------------ everything

@@ -153,7 +153,8 @@ def jacket():
              ease={k: {"value": 1.3} for k in ("front", "back", "sleeve_front_left", "sleeve_back_left")})
     g = d["garments"][0]
     g["name"] = "jacket"
-    g["lines"].append({"name": "center_front", "points": ["neckline_front", "hem_front"], "role": "opening"})
+    g["lines"].append({"name": "center_front", "section": {"from": "neckline_front", "to": "hem_front",
+                                                             "normal": "x"}, "role": "opening"})
     front = next(p for p in g["panels"] if p["name"] == "front")
     front["name"] = "front_left"
     front["seed"] = "bust_left"
@@ -172,8 +173,11 @@ def _pants_parts(length_value, length_range, ease=None, name="pants"):
         "thigh_back_left": {"between": ["waist_back", "leg_hem_back_left"], "t": 0.45},
     }
     lines = [
-        {"name": "center_front", "points": ["waist_front", "crotch"], "role": "seam"},
-        {"name": "center_back", "points": ["waist_back", "crotch"], "role": "seam"},
+        # centre seams follow the midline (a geodesic there is not unique in the concave crotch)
+        {"name": "center_front", "section": {"from": "waist_front", "to": "crotch", "normal": "x"},
+         "role": "seam"},
+        {"name": "center_back", "section": {"from": "waist_back", "to": "crotch", "normal": "x"},
+         "role": "seam"},
         {"name": "side_left", "points": ["waist_side_left", "leg_hem_out_left"], "role": "seam"},
         {"name": "leg_hem_left", "ring": {"through": "leg_hem_out_left", "normal": "z", "points": 12,
                                           "named": {"leg_hem_in_left": "-x", "leg_hem_front_left": "-y",

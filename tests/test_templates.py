@@ -1,0 +1,249 @@
+"""Every template in examples/designs/ cuts on the default body (Anny) and on all five sizes.
+
+Each template is cut once on M; its embedding is then evaluated on XS, S, L,
+XL and on poses P1-P3 (identical topology by construction; checked for
+degenerate or flipped triangles). The shirt is also re-cut from scratch on XS
+and XL. Checks: panels partition the garment region (manifold union, no
+triangle doubled, its only boundary is the openings, genus 0 with the expected
+number of openings), both sides of every seam have the same 3D length,
+left/right panels mirror each other within 2 mm, ease is filled in range.
+"""
+import numpy as np
+import pytest
+
+from core.body import load_body
+from core.body.sizes import size_shape
+from core.cut import cut_design
+from core.design import load_design
+from core.design.templates import TEMPLATES, TEMPLATE_DIR
+
+# garment -> number of openings (boundary loops of the sewn garment)
+OPENINGS = {
+    "shirt_long_sleeve": {"shirt": 4},           # neckline, hem, two cuffs
+    "top_short_sleeve": {"top": 4},
+    "top_sleeveless": {"top": 4},                # neckline, hem, two armholes
+    "pants": {"pants": 3},                       # waist, two leg hems
+    "shorts": {"shorts": 3},
+    "skirt": {"skirt": 2},                       # waist, hem
+    "dress": {"dress": 4},                       # neckline, two armholes, hem
+    "dress_gradient": {"dress": 4},
+    "jacket": {"jacket": 3},                     # neckline + front opening + hem is one loop; two cuffs
+    "teaser_shirt_pants": {"shirt": 4, "pants": 3},
+}
+PANELS = {"shirt_long_sleeve": 6, "top_short_sleeve": 6, "top_sleeveless": 2, "pants": 4, "shorts": 4,
+          "skirt": 2, "dress": 4, "dress_gradient": 4, "jacket": 7, "teaser_shirt_pants": 10}
+
+
+@pytest.fixture(scope="module")
+def body():
+    return load_body("anny")
+
+
+@pytest.fixture(scope="module")
+def instances(body):
+    out = {"M": np.asarray(body.vertices(), float)}
+    for s in ("XS", "S", "L", "XL"):
+        out[s] = np.asarray(body.vertices(size_shape(body, s)), float)
+    for p in ("P1", "P2", "P3"):
+        out[p] = np.asarray(body.vertices(None, p), float)
+    return out
+
+
+_CUTS = {}
+
+
+def cut_of(name, body):
+    if name not in _CUTS:
+        _CUTS[name] = cut_design(load_design(TEMPLATE_DIR / f"{name}.json"), body=body)
+    return _CUTS[name]
+
+
+def test_every_template_is_tested():
+    assert set(TEMPLATES) == set(OPENINGS) == set(PANELS)
+    assert sorted(p.stem for p in TEMPLATE_DIR.glob("*.json")) == sorted(TEMPLATES)
+
+
+def _areas(X, F):
+    return 0.5 * np.linalg.norm(np.cross(X[F[:, 1]] - X[F[:, 0]], X[F[:, 2]] - X[F[:, 0]]), axis=1)
+
+
+def _boundary_loops(edges):
+    """Number of loops formed by undirected boundary edges (each vertex of degree 2)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    if len(edges) == 0:
+        return 0
+    v, inv = np.unique(edges, return_inverse=True)
+    inv = inv.reshape(-1, 2)
+    deg = np.bincount(inv.ravel(), minlength=len(v))
+    assert np.all(deg == 2), "the garment boundary is not a set of simple loops"
+    A = coo_matrix((np.ones(len(inv)), (inv[:, 0], inv[:, 1])), shape=(len(v), len(v)))
+    return connected_components(A, directed=False)[0]
+
+
+def _sewn(cut, panels):
+    """Triangles (F, 3) of the garment sewn along its seams only: panel-local
+    vertices are merged where a seam joins them (not where global ids agree,
+    which they also do along an opening between two panels)."""
+    base, start = {}, 0
+    for p in panels:
+        base[p.name] = start
+        start += len(p.vertex_ids)
+    parent = np.arange(start)
+
+    def find(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for s in cut.seams:
+        if s.panel_a in base and s.panel_b in base:
+            for a, b in zip(s.verts_a, s.verts_b):
+                ra, rb = find(base[s.panel_a] + int(a)), find(base[s.panel_b] + int(b))
+                parent[max(ra, rb)] = min(ra, rb)
+    root = np.array([find(i) for i in range(start)])
+    F = np.concatenate([root[base[p.name] + np.asarray(p.faces)] for p in panels])
+    hems = set()
+    for p in panels:
+        for h in cut.hems.get(p.name, []):
+            g = root[base[p.name] + np.asarray(h)]
+            hems |= {tuple(sorted(x)) for x in zip(g[:-1].tolist(), g[1:].tolist())}
+    return F, hems
+
+
+def check_partition(cut, garment, n_openings, X):
+    panels = [p for p in cut.panels if p.garment == garment]
+    G = np.concatenate([np.asarray(p.vertex_ids)[np.asarray(p.faces)] for p in panels])
+    # no body-surface triangle is in two panels
+    assert len(np.unique(np.sort(G, axis=1), axis=0)) == len(G)
+    # sewn along its seams the garment is one manifold genus-0 surface whose only
+    # boundary is its openings: nothing lost inside, no opening where a seam should be
+    F, hem_edges = _sewn(cut, panels)
+    e = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+    ue, count = np.unique(e, axis=0, return_counts=True)
+    assert count.max() <= 2, "an edge is shared by more than two garment triangles"
+    boundary = ue[count == 1]
+    bset = {tuple(x) for x in boundary.tolist()}
+    assert hem_edges <= bset, "a hem edge is inside the sewn garment"
+    assert len(bset - hem_edges) <= 2 * n_openings, "garment boundary edges that are no opening (a hole)"
+    assert _boundary_loops(boundary) == n_openings
+    nv = len(np.unique(F))
+    assert nv - len(ue) + len(F) == 2 - n_openings, "the garment is not one genus-0 surface"
+    # areas: the panels' areas sum to the area of the garment surface
+    area = _areas(cut.positions(X), G).sum()
+    assert np.isclose(sum(_areas(cut.panel_positions(p, X), np.asarray(p.faces)).sum() for p in panels), area)
+    assert area > 0.05
+
+
+def check_seams(cut, X):
+    for s in cut.seams:
+        a, b = cut.panel(s.panel_a), cut.panel(s.panel_b)
+        ga, gb = np.asarray(a.vertex_ids)[s.verts_a], np.asarray(b.vertex_ids)[s.verts_b]
+        assert len(ga) == len(gb) >= 2
+        Pa, Pb = cut.positions(X)[ga], cut.positions(X)[gb]
+        La = np.linalg.norm(np.diff(Pa, axis=0), axis=1).sum()
+        Lb = np.linalg.norm(np.diff(Pb, axis=0), axis=1).sum()
+        assert La > 0.01
+        assert abs(La - Lb) < 1e-9, f"seam {s.name}: {La} vs {Lb}"
+
+
+def check_mirrors(cut, X, tol=2e-3):
+    import igl
+    for p in cut.panels:
+        if not p.mirror_of:
+            continue
+        q = cut.panel(p.mirror_of)
+        P = cut.panel_positions(p, X)
+        Q = cut.panel_positions(q, X) * [-1.0, 1.0, 1.0]
+        d1 = igl.point_mesh_squared_distance(P, Q, np.asarray(q.faces, dtype=np.int64))[0]
+        d2 = igl.point_mesh_squared_distance(Q, P, np.asarray(p.faces, dtype=np.int64))[0]
+        assert np.sqrt(max(d1.max(), d2.max())) < tol, f"{p.name} vs mirrored {q.name}"
+        assert np.isclose(_areas(P, np.asarray(p.faces)).sum(), _areas(Q, np.asarray(q.faces)).sum(), rtol=0.01)
+
+
+def check_transfer(cut, instances):
+    ref_area = {}
+    for key, V in instances.items():
+        X = cut.positions(V)
+        assert np.all(np.isfinite(X))
+        for p in cut.panels:
+            F = np.asarray(p.faces)
+            a = _areas(X[np.asarray(p.vertex_ids)], F)
+            assert a.min() > 1e-12, f"{p.name} has a degenerate triangle on {key}"
+            ref_area.setdefault(p.name, {})[key] = a.sum()
+    for name, by in ref_area.items():
+        for key, a in by.items():
+            assert 0.5 < a / by["M"] < 2.0, f"{name} on {key}: area ratio {a / by['M']:.2f}"
+    total = {k: sum(by[k] for by in ref_area.values()) for k in instances}
+    assert total["XS"] < total["M"] < total["XL"]
+
+
+@pytest.mark.parametrize("name", list(TEMPLATES))
+def test_template_cuts_on_all_sizes_and_poses(name, body, instances):
+    design = load_design(TEMPLATE_DIR / f"{name}.json")
+    cut = cut_of(name, body)
+    X = instances["M"]
+    assert len(cut.panels) == PANELS[name]
+    assert sorted(p.name for p in cut.panels) == sorted(design.panel_names())
+    for p in cut.panels:
+        assert len(p.faces) > 0 and len(p.ease) == len(p.faces)
+        assert np.all((p.ease >= 0.5) & (p.ease <= 4.0))
+        assert np.allclose(np.linalg.norm(p.warp_dir, axis=1), 1.0, atol=1e-6)
+    for g, n in OPENINGS[name].items():
+        assert cut.garments[g] == next(x.kind for x in design.garments if x.name == g)
+        assert len(cut.pins[g]) > 0
+        check_partition(cut, g, n, X)
+    check_seams(cut, X)
+    check_mirrors(cut, X)
+    check_transfer(cut, instances)
+
+
+def test_per_panel_ease_in_the_teaser(body):
+    cut = cut_of("teaser_shirt_pants", body)
+    ease = {p.name: float(np.unique(p.ease)[0]) for p in cut.panels}
+    assert all(len(np.unique(p.ease)) == 1 for p in cut.panels)
+    assert ease["shirt.front"] == 1.15 and ease["shirt.sleeve_back_right"] == 1.6
+    assert ease["pants.front_left"] == 1.1 and ease["pants.back_right"] == 1.25
+    assert len(set(ease.values())) >= 5
+
+
+def test_gradient_dress_rises_from_top_to_hem(body, instances):
+    cut = cut_of("dress_gradient", body)
+    X = instances["M"]
+    z, e = [], []
+    for p in cut.panels:
+        P = cut.panel_positions(p, X)
+        z.append(P[np.asarray(p.faces)].mean(axis=1)[:, 2])
+        e.append(p.ease)
+    z, e = np.concatenate(z), np.concatenate(e)
+    assert e.min() >= 1.0 - 1e-9 and e.max() <= 1.8 + 1e-9
+    assert np.corrcoef(z, e)[0, 1] < -0.95
+    assert e[np.argmax(z)] < 1.1 and e[np.argmin(z)] > 1.7
+
+
+def test_jacket_is_the_shirt_opened_at_the_front(body, instances):
+    shirt, jacket = cut_of("shirt_long_sleeve", body), cut_of("jacket", body)
+    X = instances["M"]
+    area = lambda c: sum(_areas(c.panel_positions(p, X), np.asarray(p.faces)).sum() for p in c.panels)
+    assert abs(area(shirt) - area(jacket)) / area(shirt) < 0.02
+    names = {p.name for p in jacket.panels}
+    assert {"jacket.front_left", "jacket.front_right"} <= names and "jacket.front" not in names
+    assert not any({s.panel_a, s.panel_b} == {"jacket.front_left", "jacket.front_right"} for s in jacket.seams)
+
+
+@pytest.mark.parametrize("size", ["XS", "XL"])
+def test_shirt_recut_on_other_sizes(size, body, instances):
+    ref = cut_of("shirt_long_sleeve", body)
+    cut = cut_design(load_design(TEMPLATE_DIR / "shirt_long_sleeve.json"), body=body, shape=size)
+    V = instances[size]
+    assert [p.name for p in cut.panels] == [p.name for p in ref.panels]
+    assert len(cut.seams) == len(ref.seams)
+    assert cut.body["shape"] == size
+    check_partition(cut, "shirt", 4, V)
+    check_seams(cut, V)
+    check_mirrors(cut, V)
+    # the re-cut on the size and the M cut carried to the size cover about the same surface
+    a_new = sum(_areas(cut.panel_positions(p, V), np.asarray(p.faces)).sum() for p in cut.panels)
+    a_tr = sum(_areas(ref.panel_positions(p, V), np.asarray(p.faces)).sum() for p in ref.panels)
+    assert abs(a_new - a_tr) / a_tr < 0.05
