@@ -93,7 +93,7 @@ class SolverConfig:
     """
     lambda_ease: float = 0.1
     lambda_reg: float = 1.0
-    lambda_len: float = 100.0
+    lambda_len: float = 30.0
     lambda_straight: float = 0.5
     lambda_curve: float = 1.0
     iterations: int = 20
@@ -105,14 +105,15 @@ class SolverConfig:
     feedback: float = 0.0
     straight_target: str = "smooth"
     len_direction: str = "current"
+    len_target: str = "current"
     feedback_warp: float = 0.0
 
 
     @classmethod
     def paper(cls, **kw) -> "SolverConfig":
         """The paper's weights taken literally (isometric ARAP regulariser)."""
-        return replace(cls(reg_rest="isometric", adapt_margin=0.0, straight_target="zero",
-                           lambda_straight=5.0, lambda_curve=10.0), **kw)
+        return replace(cls(reg_rest="isometric", adapt_margin=0.0, straight_target="zero", len_target="current",
+                           lambda_len=100.0, lambda_straight=5.0, lambda_curve=10.0), **kw)
 
     @classmethod
     def improved(cls, **kw) -> "SolverConfig":
@@ -475,10 +476,19 @@ class PatternSolver:
         X = np.concatenate([positions[pd.vertex_ids][pd.faces] for pd in self.panels])
         return intrinsic_offsets(X, self.G)
 
-    def targets_reference(self, positions: Optional[np.ndarray] = None):
-        """Targets of Eq. ref-scale (or transfer-scale on other ``positions``): c = (rho_weft, 1)."""
+    def targets_reference(self, positions: Optional[np.ndarray] = None, ease=None):
+        """Targets of Eq. ref-scale (or transfer-scale on other ``positions``): c = (rho_weft, 1).
+
+        ``ease``: optional override of the cut's weft ease, a scalar or one
+        value per triangle of all panels in order (benchmarks sweep it).
+        """
         K, lw, lg = self._offsets(self.ref_positions if positions is None else positions)
-        ease = np.concatenate([pd.ease for pd in self.panels])
+        if ease is None:
+            ease = np.concatenate([pd.ease for pd in self.panels])
+        else:
+            ease = np.broadcast_to(np.asarray(ease, float), (len(self.gfaces),)).copy()
+            if not np.all(np.isfinite(ease) & (ease > 0)):
+                raise PatternError("ease override: expected finite weft scales > 0")
         return K, ease.copy(), np.ones_like(ease)
 
     def targets_adapt(self, pose_positions: Sequence[np.ndarray], eps_weft: float, eps_warp: float):
@@ -564,8 +574,11 @@ class PatternSolver:
         rhs = np.zeros((self.n, 2))
         # current edges and second differences of every side
         cur_len, d2 = {}, {}
+        pred_len = {}
         for k, side in enumerate(self.sides):
             cur_len[k] = np.linalg.norm(np.diff(U[side.gids], axis=0), axis=1)
+            e0 = self.uv0[side.gids[1:]] - self.uv0[side.gids[:-1]]
+            pred_len[k] = np.linalg.norm(np.sum(RT[side.edge_face] * e0[:, None, :], axis=2), axis=1)
         for ka, kb in self.seam_pairs:
             for k, other in ((ka, kb), (kb, ka)):
                 side = self.sides[k]
@@ -574,7 +587,10 @@ class PatternSolver:
                 e0 = self.uv0[g[1:]] - self.uv0[g[:-1]]
                 pred = np.sum(RT[side.edge_face] * e0[:, None, :], axis=2)
                 if cfg.seam_length and cfg.lambda_len > 0:
-                    lbar = 0.5 * (cur_len[k] + cur_len[other])
+                    if cfg.len_target == "current":
+                        lbar = 0.5 * (cur_len[k] + cur_len[other])
+                    else:
+                        lbar = 0.5 * (pred_len[k] + pred_len[other])
                     cur = U[g[1:]] - U[g[:-1]]
                     dirn = cur if cfg.len_direction == "current" else pred
                     dirn = dirn / np.maximum(np.linalg.norm(dirn, axis=1), 1e-300)[:, None]
