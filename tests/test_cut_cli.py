@@ -1,0 +1,138 @@
+"""``ease cut``: writes its files (atomically), reloads, is deterministic; bad designs write nothing."""
+import argparse
+import json
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from core.cut.cli import add_parser, obj_text
+from core.cut.io import load_cut, save_cut
+from core.cut.types import GarmentCut, Panel, Seam
+from core.design.templates import TEMPLATE_DIR, TEMPLATES
+from core.errors import CutError, DesignError
+
+SHIRT = TEMPLATE_DIR / "shirt_long_sleeve.json"
+
+
+def ease_cut(*argv):
+    parser = argparse.ArgumentParser(prog="ease")
+    add_parser(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(["cut", *map(str, argv)])
+    return args.func(args)
+
+
+def test_help_lists_the_options(capsys):
+    with pytest.raises(SystemExit):
+        ease_cut("--help")
+    out = capsys.readouterr().out
+    for opt in ("--out", "--size", "--pose", "--body", "--no-png"):
+        assert opt in out
+
+
+def test_cut_writes_its_files_and_reloads(tmp_path):
+    out = tmp_path / "cut"
+    assert ease_cut(SHIRT, "--out", out, "--quiet") == 0
+    names = sorted(p.name for p in out.iterdir())
+    assert names == ["cut.json", "cut.png", "cut_embedding.npz", "design.json", "panels.obj"]
+    assert (out / "cut.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]        # no temp dirs left
+    cut = load_cut(out)
+    assert len(cut.panels) == 6 and len(cut.seams) == 12
+    assert cut.garments == {"shirt": "upper"} and len(cut.pins["shirt"]) > 0
+    assert cut.materials["eps_weft"] == 1.1 and cut.body["shape"] == "M"
+    assert all(np.allclose(p.ease, 1.2) for p in cut.panels)
+    # OBJ: every garment vertex, one group per panel, faces matching the cut
+    text = (out / "panels.obj").read_text()
+    groups = [l.split()[1] for l in text.splitlines() if l.startswith("g ")]
+    assert groups == [p.name for p in cut.panels]
+    assert sum(l.startswith("v ") for l in text.splitlines()) == cut.n_vertices
+    assert sum(l.startswith("f ") for l in text.splitlines()) == sum(len(p.faces) for p in cut.panels)
+    design = json.loads((out / "design.json").read_text())
+    assert design["format"] == "ease-design" and design["name"] == "long-sleeve shirt"
+    # same inputs, same outputs
+    again = tmp_path / "again"
+    assert ease_cut(SHIRT, "--out", again, "--quiet", "--no-png") == 0
+    assert (again / "cut.json").read_bytes() == (out / "cut.json").read_bytes()
+    assert (again / "panels.obj").read_bytes() == (out / "panels.obj").read_bytes()
+
+
+def test_cut_on_another_size_and_pose(tmp_path):
+    out = tmp_path / "xl"
+    assert ease_cut(TEMPLATE_DIR / "skirt.json", "--out", out, "--size", "XL", "--pose", "A",
+                    "--quiet", "--no-png") == 0
+    cut = load_cut(out)
+    assert cut.body["shape"] == "XL" and [p.name for p in cut.panels] == ["skirt.front", "skirt.back"]
+
+
+def test_bad_design_writes_nothing(tmp_path):
+    d = TEMPLATES["shirt_long_sleeve"]()
+    d["garments"][0]["panels"][0]["ease"] = {"value": 7}
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(d))
+    out = tmp_path / "out"
+    with pytest.raises(DesignError) as e:
+        ease_cut(bad, "--out", out)
+    assert e.value.path == "garments[0].panels[0].ease.value"
+    assert not out.exists()
+    # an existing output folder is left exactly as it was
+    out.mkdir()
+    (out / "keep.txt").write_text("old")
+    d = TEMPLATES["shirt_long_sleeve"]()
+    d["garments"][0]["lines"][0]["points"][0] = "nek_front"
+    bad.write_text(json.dumps(d))
+    with pytest.raises(DesignError):
+        ease_cut(bad, "--out", out)
+    assert sorted(p.name for p in out.iterdir()) == ["keep.txt"]
+
+
+def test_cut_error_writes_nothing(tmp_path):
+    # without side seams front and back are one region: the engine refuses
+    d = TEMPLATES["top_sleeveless"]()
+    g = d["garments"][0]
+    g["lines"] = [l for l in g["lines"] if l["name"] != "side_left"]
+    bad = tmp_path / "open.json"
+    bad.write_text(json.dumps(d))
+    out = tmp_path / "out"
+    with pytest.raises(CutError):
+        ease_cut(bad, "--out", out)
+    assert not out.exists()
+
+
+def _synthetic_cut():
+    E = sp.csr_matrix(np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0]]))
+    a = Panel(name="g.a", garment="g", vertex_ids=np.array([0, 1, 2]), faces=np.array([[0, 1, 2]]),
+              warp_dir=np.array([[0, 0, 1.0]]), ease=np.array([1.3]), boundary=[np.array([0, 1, 2])])
+    b = Panel(name="g.b", garment="g", vertex_ids=np.array([1, 2, 3]), faces=np.array([[0, 2, 1]]),
+              warp_dir=np.array([[0, 0, 1.0]]), ease=np.array([2.0]), boundary=[np.array([0, 2, 1])],
+              body_part="arm", mirror_of="g.a")
+    return GarmentCut(body={"model": "anny", "shape": {"weight": 0.7}, "pose": "P1"}, embedding=E,
+                      panels=[a, b], seams=[Seam("g.s", "g.a", "g.b", np.array([1, 2]), np.array([0, 1]))],
+                      garments={"g": "upper"}, pins={"g": np.array([0, 1])},
+                      hems={"g.a": [np.array([2, 0])]}, materials={"fabric": "cotton", "eps_weft": 1.2})
+
+
+def test_io_round_trip(tmp_path):
+    cut = _synthetic_cut()
+    save_cut(cut, tmp_path)
+    back = load_cut(tmp_path)
+    assert (back.embedding != cut.embedding).nnz == 0
+    for p, q in zip(cut.panels, back.panels):
+        for f in ("vertex_ids", "faces", "warp_dir", "ease"):
+            assert np.array_equal(getattr(p, f), getattr(q, f))
+        assert p.name == q.name and p.body_part == q.body_part and p.mirror_of == q.mirror_of
+        assert all(np.array_equal(x, y) for x, y in zip(p.boundary, q.boundary))
+    assert np.array_equal(back.seams[0].verts_b, cut.seams[0].verts_b)
+    assert back.body == cut.body and back.materials == cut.materials and back.garments == cut.garments
+    assert np.array_equal(back.pins["g"], cut.pins["g"]) and np.array_equal(back.hems["g.a"][0], [2, 0])
+    text = obj_text(cut, cut.positions(np.eye(4)[:, :3]))
+    assert text.count("\ng ") == 2 and text.count("\nf ") == 2
+
+
+def test_load_cut_errors(tmp_path):
+    with pytest.raises(CutError, match="missing"):
+        load_cut(tmp_path)
+    save_cut(_synthetic_cut(), tmp_path)
+    (tmp_path / "cut.json").write_text('{"format": "ease-pattern", "version": 1}')
+    with pytest.raises(CutError, match="ease-cut"):
+        load_cut(tmp_path)
