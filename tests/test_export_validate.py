@@ -119,3 +119,15 @@ def test_lenient_validation_returns_geometry_warnings():
     _nan_uv(pat)  # data errors stay errors
     with pytest.raises(ExportError, match="not finite"):
         validate_pattern(pat, strict=False)
+
+
+def test_sliver_loops_are_warnings_even_when_strict():
+    pat = make_pattern()
+    front = pat.panel("front")
+    loop = front.boundary[0]  # starts along the bottom edge, 6.25 cm between vertices
+    x1, x2 = front.uv[loop[1], 0], front.uv[loop[2], 0]
+    # swap two bottom vertices a hair above the edge: a bow-tie of ~0.2 cm^2
+    front.uv[loop[1]] = (x2, 0.001)
+    front.uv[loop[2]] = (x1, 0.0008)
+    warnings = validate_pattern(pat)
+    assert len(warnings) == 1 and "small slivers" in warnings[0] and "front" in warnings[0]

@@ -221,7 +221,8 @@ def offset_loop(loop: np.ndarray, widths: np.ndarray, mitre_limit: float = MITRE
     return np.asarray(out, float)
 
 
-def remove_loops(poly: np.ndarray, orientation: float = 1.0, max_iter: int = 1000) -> np.ndarray:
+def remove_loops(poly: np.ndarray, orientation: float = 1.0, max_iter: int = 1000,
+                 return_removed: bool = False):
     """Cut the loops out of a self-crossing closed polygon.
 
     At each crossing the polygon splits in two closed parts; the one with the
@@ -235,23 +236,29 @@ def remove_loops(poly: np.ndarray, orientation: float = 1.0, max_iter: int = 100
 
     Returns
     -------
-    (m, 2) float, a polygon without crossings (m <= k + number of crossings).
+    (m, 2) float, a polygon without crossings (m <= k + number of crossings);
+    with ``return_removed`` also the total unsigned area (m^2) of the parts cut away.
     """
     p = np.asarray(poly, float)
+    removed = 0.0
     for _ in range(max_iter):
         hit = segments_cross(p)
         if hit is None:
-            return p
+            break
         i, j = hit
         a0, a1 = p[i], p[(i + 1) % len(p)]
         b0, b1 = p[j], p[(j + 1) % len(p)]
         x = _line_intersection(a0, a1 - a0, b0, b1 - b0)
         if x is None:  # pragma: no cover - segments_cross found a proper crossing
-            return p
+            break
         outer = np.vstack([p[:i + 1], x[None], p[j + 1:]])
         inner = np.vstack([x[None], p[i + 1:j + 1]])
-        p = outer if orientation * signed_area(outer) >= orientation * signed_area(inner) else inner
-    return p
+        if orientation * signed_area(outer) >= orientation * signed_area(inner):
+            p, cut_away = outer, inner
+        else:
+            p, cut_away = inner, outer
+        removed += abs(signed_area(cut_away))
+    return (p, removed) if return_removed else p
 
 
 def points_in_polygon(points: np.ndarray, poly: np.ndarray) -> np.ndarray:

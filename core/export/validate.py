@@ -11,9 +11,14 @@ import numpy as np
 
 from ..errors import ExportError
 from ..pattern.types import Pattern
-from .pieces import _edge_table, piece_loops, segments_cross, signed_area
+from .pieces import _edge_table, piece_loops, remove_loops, segments_cross, signed_area
 
 MIN_AREA = 1e-6  # m^2 (1 cm^2): smaller pieces are degenerate for a cutting room
+# A sew line whose self-crossings enclose at most this much (m^2, or this
+# fraction of the piece) has sliver loops a cutter cannot follow anyway: it is
+# exported with a warning; larger tangles are errors.
+TANGLE_AREA = 1e-4
+TANGLE_FRACTION = 0.005
 
 
 def _ids(a, n: int, where: str) -> np.ndarray:
@@ -35,9 +40,10 @@ def _ids(a, n: int, where: str) -> np.ndarray:
 def validate_pattern(pattern: Pattern, strict: bool = True) -> List[str]:
     """Raise :class:`ExportError` unless ``pattern`` can be exported.
 
-    With ``strict=False`` a sew line that crosses itself (a tangled piece,
-    which cannot be cut as it is) is reported in the returned warnings
-    instead; everything else still raises.
+    A sew line whose self-crossings only make sliver loops (at most 1 cm^2 or
+    0.5 % of the piece) is reported in the returned warnings; one that is
+    tangled beyond that raises, or with ``strict=False`` is reported in the
+    warnings too. Everything else always raises.
 
     Checks: at least one piece; unique piece names; per piece finite uv (n, 2)
     with n >= 3, faces (f, 3) indexing uv, non-negative vertex ids, a finite
@@ -99,11 +105,16 @@ def validate_pattern(pattern: Pattern, strict: bool = True) -> List[str]:
             hit = segments_cross(uv[loop].astype(float))
             if hit is not None:
                 q = uv[loop][hit[0]] * 1000
-                msg = (f"{where}.uv: the sew line crosses itself near ({q[0]:.0f}, {q[1]:.0f}) mm "
-                       f"(a folded-over or tangled piece)")
-                if strict:
-                    raise ExportError(msg)
-                warnings.append(msg)
+                _, loops_area = remove_loops(uv[loop].astype(float), 1.0 if k == 0 else -1.0,
+                                             return_removed=True)
+                msg = (f"{where}.uv: the sew line crosses itself near ({q[0]:.0f}, {q[1]:.0f}) mm, "
+                       f"enclosing {loops_area * 1e4:.2g} cm^2 in loops")
+                if loops_area <= max(TANGLE_AREA, TANGLE_FRACTION * area):
+                    warnings.append(msg + " (small slivers, exported as they are)")
+                elif strict:
+                    raise ExportError(msg + " (a folded-over or tangled piece)")
+                else:
+                    warnings.append(msg + " (a folded-over or tangled piece, exported as it is)")
         tables[panel.name] = _edge_table(loops)
     for k, seam in enumerate(pattern.seams):
         where = f"seam {seam.name!r}"
