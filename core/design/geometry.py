@@ -6,6 +6,8 @@ template ``faces`` (F, 3).
 """
 from __future__ import annotations
 
+import hashlib
+from collections import OrderedDict
 from typing import List, Optional, Tuple
 
 import numpy as np
@@ -216,3 +218,48 @@ def segment_point(vertices, faces, face: int, p: np.ndarray) -> SurfacePoint:
     b = np.clip(b, 0.0, 1.0)
     b /= b.sum()
     return SurfacePoint(int(face), tuple(float(x) for x in b))
+
+
+class SurfaceTools:
+    """Per-instance helpers, built lazily: closest points, geodesics, edge table."""
+
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray):
+        self.vertices = np.ascontiguousarray(vertices, dtype=np.float64)
+        self.faces = np.ascontiguousarray(faces, dtype=np.int64)
+        self.geodesics = Geodesics(self.vertices, self.faces)
+        self._locator = None
+        self._edges = None
+
+    @property
+    def locator(self) -> SurfaceLocator:
+        if self._locator is None:
+            self._locator = SurfaceLocator(self.vertices, self.faces)
+        return self._locator
+
+    @property
+    def edges(self):
+        if self._edges is None:
+            self._edges = _edge_faces(self.faces)
+        return self._edges
+
+
+_TOOLS: "OrderedDict[bytes, SurfaceTools]" = OrderedDict()
+
+
+def surface_tools(vertices: np.ndarray, faces: np.ndarray, cache: int = 4) -> SurfaceTools:
+    """:class:`SurfaceTools` for a body instance, reused while the same instance
+    comes back (a live re-cut after a parameter edit re-resolves on it)."""
+    V = np.ascontiguousarray(vertices, dtype=np.float64)
+    F = np.ascontiguousarray(faces, dtype=np.int64)
+    h = hashlib.blake2b(V.tobytes(), digest_size=16)
+    h.update(F.tobytes())
+    key = h.digest()
+    tools = _TOOLS.get(key)
+    if tools is None:
+        tools = SurfaceTools(V, F)
+        _TOOLS[key] = tools
+        while len(_TOOLS) > cache:
+            _TOOLS.popitem(last=False)
+    else:
+        _TOOLS.move_to_end(key)
+    return tools

@@ -31,7 +31,7 @@ import numpy as np
 from ..body.model import SurfacePoint
 from ..errors import BodyError, DesignError
 from .format import Design, Line, load_design, parameter_value
-from .geometry import (_edge_faces, nearest_segment, Geodesics, SurfaceLocator, plane_section_loop, point_at_length,
+from .geometry import (nearest_segment, surface_tools, plane_section_loop, point_at_length,
                        polyline_length, segment_point)
 from .mirror import face_symmetry, mirror_line, mirror_panel, mirror_surface_point, mirrored_name, swap_side
 
@@ -73,6 +73,19 @@ def instance_vertices(design: Design, body, shape=None, pose=None) -> np.ndarray
                       dtype=np.float64)
 
 
+_FACE_SYM = {}
+
+
+def _face_symmetry_cached(body, faces):
+    key = id(body)
+    hit = _FACE_SYM.get(key)
+    if hit is None or hit[0] is not body:
+        hit = (body, face_symmetry(faces, np.asarray(body.symmetry)))
+        _FACE_SYM.clear()
+        _FACE_SYM[key] = hit
+    return hit[1]
+
+
 class Resolver:
     """Resolves keypoints, lines and seeds of a design on one body instance.
 
@@ -90,10 +103,9 @@ class Resolver:
         self.vertices = np.asarray(vertices, dtype=np.float64)
         if self.vertices.shape != (int(self.faces.max()) + 1, 3) and self.vertices.shape[0] < self.faces.max() + 1:
             raise BodyError(f"body vertices {self.vertices.shape} do not match the template's faces")
-        self.geodesics = Geodesics(self.vertices, self.faces)
-        self._locator = None
+        self.tools = surface_tools(self.vertices, self.faces)
+        self.geodesics = self.tools.geodesics
         self._face_sym = None
-        self._edges = None
         self._points: Dict[str, SurfacePoint] = {}
         self._stack: List[str] = []
         self._rings: Dict[str, List[SurfacePoint]] = {}
@@ -126,15 +138,13 @@ class Resolver:
                         self.ring_named[k] = i
 
     @property
-    def locator(self) -> SurfaceLocator:
-        if self._locator is None:
-            self._locator = SurfaceLocator(self.vertices, self.faces)
-        return self._locator
+    def locator(self):
+        return self.tools.locator
 
     @property
     def face_sym(self) -> np.ndarray:
         if self._face_sym is None:
-            self._face_sym = face_symmetry(self.faces, np.asarray(self.body.symmetry))
+            self._face_sym = _face_symmetry_cached(self.body, self.faces)
         return self._face_sym
 
     def position(self, sp: SurfacePoint) -> np.ndarray:
@@ -249,10 +259,8 @@ class Resolver:
             if np.linalg.norm(m) < 1e-6:
                 raise DesignError(path, "the surface is horizontal there: no direction down the torso")
             m /= np.linalg.norm(m)
-        if self._edges is None:
-            self._edges = _edge_faces(self.faces)
         try:
-            poly, pts, segf = plane_section_loop(self.vertices, self.faces, p0, m, start.triangle, 1, self._edges)
+            poly, pts, segf = plane_section_loop(self.vertices, self.faces, p0, m, start.triangle, 1, self.tools.edges)
         except ValueError as exc:
             raise DesignError(path, f"cannot walk down the torso: {exc}") from None
         k = len(poly)
@@ -316,10 +324,8 @@ class Resolver:
         p0 = self.position(through)
         n = self._axis(r["normal"], f"{path}.ring.normal")
         try:
-            if self._edges is None:
-                self._edges = _edge_faces(self.faces)
             poly, pts, segf = plane_section_loop(self.vertices, self.faces, p0, n, through.triangle,
-                                                 int(r.get("handed", 1)), self._edges)
+                                                 int(r.get("handed", 1)), self.tools.edges)
         except ValueError as exc:
             raise DesignError(f"{path}.ring", f"line {full!r}: {exc}") from None
         k = len(poly)
@@ -391,10 +397,8 @@ class Resolver:
             raise DesignError(f"{path}.section.normal", f"line {full!r}: {c['to']!r} is more than 10 degrees "
                                                         f"off the section plane through {c['from']!r}")
         n = m_ / np.linalg.norm(m_)
-        if self._edges is None:
-            self._edges = _edge_faces(self.faces)
         try:
-            poly, pts, segf = plane_section_loop(self.vertices, self.faces, pa, n, a.triangle, 1, self._edges)
+            poly, pts, segf = plane_section_loop(self.vertices, self.faces, pa, n, a.triangle, 1, self.tools.edges)
         except ValueError as exc:
             raise DesignError(f"{path}.section", f"line {full!r}: {exc}") from None
         k = len(poly)
