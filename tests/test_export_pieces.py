@@ -242,3 +242,14 @@ def test_layout_fills_beside_tall_pieces():
     assert lay.size[1] == pytest.approx(0.84)
     lay = layout_pieces([np.array([[0, 0], [0.4, 0.4]])] * 4, width=0.86, margin=0.02)
     np.testing.assert_allclose(lay.size, [0.86, 0.86])
+
+
+def test_duplicate_boundary_vertex_on_a_seam_still_gets_notches():
+    pat = make_pattern()
+    front = pat.panel("front")
+    seam = pat.seams[1]  # side_right runs up the front's right side
+    front.uv[seam.verts_a[3]] = front.uv[seam.verts_a[2]]  # a zero-length seam edge
+    p = build_pieces(pat)[0]
+    notches = [n for n in p.notches if n.seam == seam.name]
+    assert len(notches) == 7
+    assert all(np.isfinite(n.segment).all() and abs(np.linalg.norm(n.normal) - 1) < 1e-9 for n in notches)

@@ -638,8 +638,12 @@ def build_piece(pattern: Pattern, panel: PatternPanel, widths: Dict[str, float],
         for s, q, e in zip(s_here, pts, edges):
             li, ei = table[(int(ids[e]), int(ids[e + 1]))]
             b = loops[li]
-            d = xy[b[(ei + 1) % len(b)]] - xy[b[ei]]
-            nrm = np.array([d[1], -d[0]]) / np.linalg.norm(d)
+            # the edge's outward normal; a zero-length edge borrows its neighbour's
+            for k in (0, 1, -1, 2, -2):
+                d = xy[b[(ei + k + 1) % len(b)]] - xy[b[(ei + k) % len(b)]]
+                if np.linalg.norm(d) > 1e-12:
+                    break
+            nrm = np.array([d[1], -d[0]]) / max(np.linalg.norm(d), 1e-300)
             t_cut = ray_hit(q, nrm, cut[li])
             t_cut = edge_w[li][ei] if t_cut is None else t_cut
             a0 = q + t_cut * nrm
