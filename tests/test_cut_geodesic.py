@@ -18,8 +18,15 @@ def test_keypoints_inserted_at_their_positions():
     ids = insert_keypoints(m, pts, body.faces, body.V)
     assert ids[-1] == ids[0]
     assert ids[3] == body.faces[5][0]                    # a corner is the existing vertex
+    # exact, or moved onto a nearby vertex/edge (< SNAP_ABS) to avoid sliver triangles
+    from core.cut.split import SNAP_ABS
     for v, p in zip(ids, pts):
-        np.testing.assert_allclose(m.X[v], p.position(body.V, body.faces), atol=1e-12)
+        assert np.linalg.norm(m.X[v] - p.position(body.V, body.faces)) <= SNAP_ABS
+    far = body.ring(0.5, [0.1])[0]
+    m2 = CutMesh(body.V, body.faces)
+    (v,) = insert_keypoints(m2, [SurfacePoint(far.triangle, (0.3, 0.3, 0.4))], body.faces, body.V)
+    np.testing.assert_allclose(m2.X[v], SurfacePoint(far.triangle, (0.3, 0.3, 0.4)).position(body.V, body.faces),
+                               atol=1e-15)
 
 
 def test_geodesic_on_tube_is_the_helix_or_circle():

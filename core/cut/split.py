@@ -9,8 +9,12 @@ All sub-faces of a parent are coplanar with it at the reference shape, which
 makes tracing a straight segment across them a planar problem.
 
 Tolerances are relative: a crossing within :data:`SNAP` of an edge end (as a
-fraction of the edge) is snapped to that vertex, which avoids slivers and
-zero-length edges without moving the line by more than ``SNAP`` x edge length.
+fraction of the edge) is snapped to that vertex, which avoids zero-length
+edges. To avoid sliver triangles a crossing is also snapped to a vertex that is
+no more than :data:`SNAP_SLIVER` of the edge and :data:`SNAP_ABS` metres away,
+unless that vertex lies on another cut line; the line then passes through the
+vertex, off the exact geodesic by at most ``SNAP_ABS`` (not a zig-zag: it still
+crosses the triangles, it does not follow mesh edges).
 """
 from __future__ import annotations
 
@@ -20,7 +24,9 @@ import numpy as np
 
 from ..errors import CutError
 
-SNAP = 1e-3          # relative snap distance on an edge / in a triangle
+SNAP = 1e-3          # relative snap distance on an edge / in a triangle (always)
+SNAP_SLIVER = 0.05   # a crossing this close to a free vertex (relative to the edge) snaps to it...
+SNAP_ABS = 5e-4      # ...if it is also within this many metres: no sliver triangles
 _INSIDE = 1e-9       # barycentric slack for "point lies in this triangle"
 _MAX_STEPS = 100000  # guard against a walk that does not progress
 
@@ -269,9 +275,18 @@ class CutMesh:
         k = int(np.argmax(bary))
         if bary[k] >= 1.0 - SNAP:
             return tri[k]
-        small = bary < SNAP
-        if small.sum() == 1:
-            j = int(np.nonzero(small)[0][0])
+        near = self._near_corner(tri, bary, set())
+        if near is not None:
+            return near
+        # distance to each edge (opposite corner j) = bary_j x height_j
+        P = self._X[tri]
+        el = np.linalg.norm(np.roll(P, -1, axis=0) - np.roll(P, 1, axis=0), axis=1)   # edge opposite j
+        area2 = np.linalg.norm(np.cross(P[1] - P[0], P[2] - P[0]))
+        dist = bary * area2 / np.maximum(el, 1e-300)
+        lim = np.minimum(SNAP_SLIVER * el, SNAP_ABS)
+        small = (bary < SNAP) | (dist < lim)
+        if small.sum() >= 1:
+            j = int(np.argmin(np.where(small, dist, np.inf)))
             a, b = tri[(j + 1) % 3], tri[(j + 2) % 3]
             wa, wb = bary[(j + 1) % 3], bary[(j + 2) % 3]
             return self.split_edge(a, b, wb / (wa + wb))
@@ -389,9 +404,10 @@ class CutMesh:
                 return out
             s = 1.0 / (1.0 - bA)
             t = float(np.clip(s * bw, 0.0, 1.0))
-            if t < SNAP:
+            tol = self._snap_tol(u, w)
+            if t < SNAP or (t < tol and self._free(u, allowed)):
                 nxt = u
-            elif t > 1.0 - SNAP:
+            elif t > 1.0 - SNAP or (t > 1.0 - tol and self._free(w, allowed)):
                 nxt = w
             else:
                 key = (u, w) if u < w else (w, u)
@@ -402,6 +418,31 @@ class CutMesh:
             out.append(nxt)
             cur = nxt
         raise CutError(f"{_name(names, line)}: tracing the geodesic did not terminate")
+
+    def _snap_tol(self, u: int, w: int) -> float:
+        """Edge-parameter distance within which a crossing of edge (u, w) snaps to its end:
+        :data:`SNAP_SLIVER` of the edge, at most :data:`SNAP_ABS` metres."""
+        L = float(np.linalg.norm(self._X[u] - self._X[w]))
+        return min(SNAP_SLIVER, SNAP_ABS / max(L, 1e-300))
+
+    def _near_corner(self, tri, b, allowed, first_free=False):
+        """A corner of triangle ``tri`` within the sliver snap distance of the point with
+        barycentrics ``b`` (and free to snap to), or None."""
+        P = self._X[list(tri)]
+        pos = np.asarray(b) @ P
+        L = np.linalg.norm(P - np.roll(P, 1, axis=0), axis=1).max()
+        lim = min(SNAP_SLIVER * L, SNAP_ABS)
+        d = np.linalg.norm(P - pos, axis=1)
+        for k in np.argsort(d, kind="stable").tolist():
+            if d[k] >= lim:
+                break
+            if (first_free and k == 0) or self._free(tri[k], allowed):
+                return tri[k]
+        return None
+
+    def _free(self, v: int, allowed: set) -> bool:
+        """A vertex a line may snap to: not on another cut line (unless a keypoint of this one)."""
+        return v in allowed or not self.cut_verts.get(v)
 
     def _finish(self, f, cur, u, w, b, line, allowed, names) -> int:
         b = np.clip(b, 0.0, None)
@@ -428,6 +469,13 @@ class CutMesh:
                 bb[(k + j) % 3] = b[j]
             assert [tri[(k + j) % 3] for j in range(3)] == order
             return self.split_face(f, bb)
+        # a point very close to an end of its edge snaps to it (no sliver); only ends of the
+        # same edge, so the snapped vertex still lies on both triangles of the body edge
+        tol = self._snap_tol(a0, a1)
+        if t < tol and (a0 == cur or self._free(a0, allowed)):
+            return a0
+        if t > 1.0 - tol and (a1 == cur or self._free(a1, allowed)):
+            return a1
         key = (a0, a1) if a0 < a1 else (a1, a0)
         if key in self.cut:
             raise CutError(f"cut lines {_name(names, line)} and {_name(names, self.cut[key])} cross")
