@@ -253,3 +253,21 @@ def test_duplicate_boundary_vertex_on_a_seam_still_gets_notches():
     notches = [n for n in p.notches if n.seam == seam.name]
     assert len(notches) == 7
     assert all(np.isfinite(n.segment).all() and abs(np.linalg.norm(n.normal) - 1) < 1e-9 for n in notches)
+
+
+def test_label_stays_inside_narrow_pieces():
+    from export_synth import grid_piece, _panel
+    from core.export.pieces import CHAR_WIDTH
+    from core.pattern.types import Pattern
+    panels = []
+    for k, w in enumerate((0.5, 0.12, 0.07)):
+        uv, faces, loop, _ = grid_piece(5, 9, lambda s, t, w=w: ((s - 0.5) * w, t * 0.6))
+        panels.append(_panel(f"strip{k}", uv, faces, loop, [0.0, 1.0]))
+    pat = Pattern("strips", {"size": "M"}, {"shirt": "upper"}, panels, [])
+    for p in build_pieces(pat):
+        h = p.text_height
+        tw, th = max(len(s) for s in p.label) * CHAR_WIDTH * h, len(p.label) * 1.5 * h
+        x, y = p.label_at
+        box = np.array([[x + a * tw, y - b * th] for a in np.linspace(0, 1, 5) for b in np.linspace(0, 1, 5)])
+        assert points_in_polygon(box, p.sew[0]).all(), p.name
+        assert 0.0025 <= h <= 0.008

@@ -568,7 +568,48 @@ def _allowance_text(edge_w: List[np.ndarray]) -> str:
     vals = sorted({round(float(v) * 1000, 1) for w in edge_w for v in w if v > 0})
     if not vals:
         return "no seam allowance"
-    return "seam allowance " + "/".join(f"{v:g}" for v in vals) + " mm incl."
+    return "allowance " + "/".join(f"{v:g}" for v in vals) + " incl."
+
+
+CHAR_WIDTH = 0.6   # Helvetica's mean advance is ~0.55 em: a safe width estimate per character
+TEXT_MIN = 0.0025  # m, smallest label text
+
+
+def _room(sew: List[np.ndarray], y: np.ndarray, x: float, direction: float) -> float:
+    """Smallest distance (m) from (x, y_k) along +-x to the sew line, over the rows y_k."""
+    d = np.array([direction, 0.0])
+    hits = []
+    for yk in y:
+        h = [t for t in (ray_hit(np.array([x, yk]), d, loop) for loop in sew) if t is not None]
+        hits.append(min(h) if h else 0.0)
+    return float(min(hits))
+
+
+def _place_label(sew: List[np.ndarray], grain: np.ndarray, label: List[str], text_h: float):
+    """Top-left corner and text height of the label, kept inside the sew line.
+
+    Beside the grain line (1 cm to its right) where the piece is wide enough,
+    else centred across it with smaller text (down to ``TEXT_MIN``).
+    """
+    gx = float(grain[0, 0])
+    mid = 0.5 * float(grain[0, 1] + grain[1, 1])
+    chars = max(len(s) for s in label)
+
+    def rows(h):
+        top = mid + 0.5 * len(label) * 1.5 * h
+        return np.linspace(top, top - len(label) * 1.5 * h, 4)
+
+    right = _room(sew, rows(text_h), gx + 0.01, 1.0)
+    h = min(text_h, 0.9 * right / (CHAR_WIDTH * chars))
+    if h >= 0.7 * text_h or h >= TEXT_MIN * 1.6:
+        h = max(h, TEXT_MIN)
+        return np.array([gx + 0.01, mid + 0.5 * len(label) * 1.5 * h]), float(h)
+    left = _room(sew, rows(text_h), gx, -1.0)
+    right = _room(sew, rows(text_h), gx, 1.0)
+    h = float(np.clip(0.9 * (left + right) / (CHAR_WIDTH * chars), TEXT_MIN, text_h))
+    width = CHAR_WIDTH * chars * h
+    x0 = gx - left + 0.5 * max(left + right - width, 0.0)
+    return np.array([x0, mid + 0.5 * len(label) * 1.5 * h]), h
 
 
 def build_piece(pattern: Pattern, panel: PatternPanel, widths: Dict[str, float],
@@ -664,20 +705,21 @@ def build_piece(pattern: Pattern, panel: PatternPanel, widths: Dict[str, float],
     if twins:
         notes.append(f"mirrored by {', '.join(twins)}")
     label = [ascii_text(pattern.style or "pattern"),
-             ascii_text(f"piece: {panel.name}" + (f" ({panel.garment})" if panel.garment else "")),
+             ascii_text(f"piece: {panel.name}" + (f" ({panel.garment})" if panel.garment and
+                                                  not panel.name.startswith(panel.garment) else "")),
              ascii_text(f"size: {size}"),
              ascii_text(f"cut {quantity}" + ("".join(f", {n}" for n in notes))),
-             ascii_text(f"units: mm; {_allowance_text(edge_w)}")]
+             ascii_text(f"units: mm, {_allowance_text(edge_w)}")]
     lo = np.min([c.min(0) for c in cut], axis=0)
     hi = np.max([c.max(0) for c in cut], axis=0)
     extent = hi - lo
     text_h = float(np.clip(min(extent) / (len(label) * 3.0), 0.003, 0.008))
-    label_at = np.array([grain[0, 0] + 0.01, 0.5 * (grain[0, 1] + grain[1, 1]) + 0.5 * len(label) * 1.5 * text_h])
+    label_at, text_h = _place_label(sew, grain, label, text_h)
     piece = PieceDrawing(name=panel.name, garment=panel.garment, rotation=rot, sew=sew, sew_ids=loops,
                          cut=cut, edge_allowance=edge_w, fold=folds, notches=notches, grain=grain,
                          arrows=arrows, label=label, label_at=label_at, text_height=text_h,
                          quantity=quantity)
-    tw = max(len(s) for s in label) * 0.6 * text_h
+    tw = max(len(s) for s in label) * CHAR_WIDTH * text_h
     th = len(label) * 1.5 * text_h
     lo = np.minimum(lo, [label_at[0], label_at[1] - th])
     hi = np.maximum(hi, [label_at[0] + tw, label_at[1]])
