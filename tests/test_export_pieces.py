@@ -271,3 +271,21 @@ def test_label_stays_inside_narrow_pieces():
         box = np.array([[x + a * tw, y - b * th] for a in np.linspace(0, 1, 5) for b in np.linspace(0, 1, 5)])
         assert points_in_polygon(box, p.sew[0]).all(), p.name
         assert 0.0025 <= h <= 0.008
+
+
+def test_self_seam_closing_a_tube():
+    from export_synth import grid_piece, _panel
+    from core.pattern.types import Pattern, PatternSeam
+    uv, faces, loop, sides = grid_piece(9, 7, lambda s, t: (s * 0.8, t * 0.45))
+    panel = _panel("tube", uv, faces, loop, [0.0, 1.0], hems=[sides["bottom"]])
+    seam = PatternSeam("back_seam", "tube", "tube", sides["left"][::-1], sides["right"])
+    pat = Pattern("tube", {"size": "M"}, {"tube": "lower"}, [panel], [seam])
+    p = build_pieces(pat, allowance={"back_seam": 0.015})[0]
+    a = [n for n in p.notches if n.side == "a"]
+    b = [n for n in p.notches if n.side == "b"]
+    assert len(a) == len(b) == 6  # 0, 10, 20, 30, 40 (5 cm before the end), 45 cm
+    np.testing.assert_allclose([n.s for n in a], [n.s for n in b])
+    np.testing.assert_allclose([n.point[1] for n in a], [n.point[1] for n in b])  # same heights
+    assert all(n.normal[0] < 0 for n in a) and all(n.normal[0] > 0 for n in b)  # each points off its edge
+    widths = sorted(set(np.round(p.edge_allowance[0], 6)))
+    assert widths == [0.01, 0.015, 0.02]
