@@ -73,7 +73,8 @@ def test_tiled_pdf_pages_scale_and_test_square(made, paper, size_mm):
     # page count = the tiling of the layout by the printable area of the paper
     tile = (size_mm[0] - 20) / 1000, (size_mm[1] - 20) / 1000
     want = math.ceil(lay.size[0] / tile[0]) * math.ceil(lay.size[1] / tile[1])
-    assert len(pg) == want == np.prod(pdf.tile_grid(lay.size, paper)[:2])
+    rows, cols, _ = pdf.tile_grid(lay.size, paper)
+    assert len(pg) == want == rows * cols
     for head, _ in pg:
         assert mediabox(head) == pytest.approx([0, 0, size_mm[0] * MM, size_mm[1] * MM], abs=1e-3)
     # the 10 cm test square is on page 1 (and only there)
@@ -87,6 +88,11 @@ def test_tiled_pdf_pages_scale_and_test_square(made, paper, size_mm):
     for _, c in pg:
         for a, b, cc, d in re.findall(rb"(-?[\d.]+) (-?[\d.]+) (-?[\d.]+) (-?[\d.]+) -?[\d.]+ -?[\d.]+ cm", c):
             assert (float(a), float(b), float(cc), float(d)) == (1, 0, 0, 1)
+    # page 1 carries the assembly map: every page's name in its grid
+    assert b"assembly map" in pg[0][1]
+    for r in range(rows):
+        for col in range(cols):
+            assert f"({pdf.row_name(r)}{col + 1}) Tj".encode() in pg[0][1]
     # page labels: row letter + column number, and join marks naming the neighbour
     text = b"".join(c for _, c in pg)
     assert b"page A1" in text and b"join A2" in text and b"join B1" in text

@@ -24,7 +24,8 @@ PT_PER_M = 72.0 / 0.0254
 PAPERS = {"a4": (0.210, 0.297), "letter": (0.2159, 0.2794), "a0": (0.841, 1.189)}
 PAGE_MARGIN = 0.010           # m of white border around the tile frame
 TEST_SQUARE = 0.100           # m
-TEST_RESERVE = (0.110, 0.118)  # m, layout box kept free for the test square and its caption
+MAP_SIZE = 0.100              # m, largest side of the assembly map under the test square
+TEST_RESERVE = (0.110, 0.232)  # m, layout box kept free for the test square and the assembly map
 COLOURS = {"cut": (1, 0, 0), "sew": (0, 0, 1), "notch": (0, 0.63, 0), "grain": (0, 0, 0),
            "fold": (1, 0, 1), "text": (0, 0, 0), "mark": (0.45, 0.45, 0.45)}
 LINE_PT = 0.25e-3 * PT_PER_M
@@ -115,6 +116,53 @@ def _test_square(c, corner: np.ndarray) -> None:
     c.drawCentredString(x + side / 2, y + side / 2 - 8, "print at 100% / actual size")
 
 
+def _assembly_map(c, top_left: np.ndarray, pieces, layout: Layout, rows: int, cols: int, tile: np.ndarray) -> None:
+    """A small map of the whole sheet: the page grid with its labels and the pieces' cut lines.
+
+    ``top_left`` is the map's top-left corner in page metres; the map fits in
+    ``MAP_SIZE`` x ``MAP_SIZE``.
+    """
+    H = float(layout.size[1])
+    grid_w, grid_h = cols * tile[0], rows * tile[1]
+    scale = MAP_SIZE / max(grid_w, grid_h)
+    x0, y0 = float(top_left[0]), float(top_left[1]) - grid_h * scale   # bottom-left of the map
+
+    def to_page(pts):  # sheet metres (y up, top edge at H) -> page points
+        q = np.asarray(pts, float)
+        return [((x0 + x * scale) * PT_PER_M, (y0 + (y - (H - grid_h)) * scale) * PT_PER_M) for x, y in q]
+
+    c.setFillColorRGB(0, 0, 0)
+    c.setFont("Helvetica", 7)
+    c.drawString(x0 * PT_PER_M, (top_left[1] + 0.002) * PT_PER_M, "assembly map: pages by row and column")
+    c.setLineWidth(0.3)
+    c.setStrokeColorRGB(*COLOURS["cut"])
+    for piece, off in zip(pieces, layout.offsets):
+        loop = piece.cut[0] + off
+        step = max(1, len(loop) // 200)  # a map needs no more detail than this
+        pts = to_page(loop[::step])
+        p = c.beginPath()
+        p.moveTo(*pts[0])
+        for q in pts[1:]:
+            p.lineTo(*q)
+        p.close()
+        c.drawPath(p, stroke=1, fill=0)
+    c.setStrokeColorRGB(*COLOURS["mark"])
+    c.setFillColorRGB(*COLOURS["mark"])
+    size = max(3.0, min(7.0, 0.35 * tile[1] * scale * PT_PER_M))
+    c.setFont("Helvetica", size)
+    top = H  # the grid hangs from the sheet's top edge
+    for k in range(cols + 1):
+        (xa, ya), (xb, yb) = to_page([[k * tile[0], top], [k * tile[0], top - grid_h]])
+        c.line(xa, ya, xb, yb)
+    for k in range(rows + 1):
+        (xa, ya), (xb, yb) = to_page([[0, top - k * tile[1]], [grid_w, top - k * tile[1]]])
+        c.line(xa, ya, xb, yb)
+    for r in range(rows):
+        for col in range(cols):
+            (x, y), = to_page([[(col + 0.5) * tile[0], top - (r + 0.5) * tile[1]]])
+            c.drawCentredString(x, y - size / 3, f"{row_name(r)}{col + 1}")
+
+
 def _piece_boxes(pieces, layout) -> np.ndarray:
     return np.array([p.bbox + off for p, off in zip(pieces, layout.offsets)]).reshape(-1, 2, 2)
 
@@ -159,6 +207,7 @@ def tiled_pdf(pieces: Sequence[PieceDrawing], layout: Layout, paper: str = "a4",
             if r == 0 and col == 0 and layout.reserved is not None:
                 corner = np.array([layout.reserved[0, 0] - x0 + m, layout.reserved[1, 1] - y0 + m - TEST_SQUARE])
                 _test_square(c, corner)
+                _assembly_map(c, corner - np.array([0.0, 0.012]), pieces, layout, rows, cols, tile)
             c.restoreState()
             _page_marks(c, r, col, rows, cols, tile, title, paper)
             c.showPage()
