@@ -5,8 +5,8 @@ Every piece is drawn once as a form XObject in its own frame (1 PDF point =
 pure translation. Tiled pages carry a frame (the trim line), join marks on
 every edge shared with a neighbour (half diamonds that make a whole one when
 the pages are butted, labelled with the neighbour's page), the page's row
-letter and column number, and page 1 a 10 x 10 cm test square to check the
-printer's scale. The plotter PDF is one page, as wide as a 914 mm roll (or
+letter and column number; page 1 also has a 10 x 10 cm test square to check
+the printer's scale and an assembly map (the page grid with the pieces). The plotter PDF is one page, as wide as a 914 mm roll (or
 the widest piece) and as long as the layout.
 """
 from __future__ import annotations
