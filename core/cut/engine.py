@@ -405,6 +405,8 @@ def _build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset):
     join &= lab[i // 3] == lab[np.maximum(twin, 0) // 3]
     i = i[join]
     j = twin[join]
+    join = join.copy()
+    join[j] = True     # (symmetric already; kept explicit: a joined half-edge is not boundary)
     # corner (f, k) ~ twin's corners: half-edge i = corner i -> corner next(i)
     nxt = lambda h: (h // 3) * 3 + (h % 3 + 1) % 3
     ca = np.concatenate([i, nxt(i)])
@@ -435,7 +437,9 @@ def _build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset):
         side = "left" if Xl[:, 0].mean() >= 0 else "right"
         axis = axes[(p.body_part, "left" if p.body_part == "torso" else side)]
         warp = warp_directions(Xl, faces, axis)
-        boundary = _boundary_loops(faces, p.name)
+        # boundary half-edges: those not joined to a twin in the same panel
+        hb = corners[~join[corners]]
+        boundary = _boundary_loops(local_of_corner[hb], local_of_corner[nxt(hb)], p.name)
         panels.append(Panel(name=p.name, garment=p.garment, vertex_ids=vids.astype(np.int64),
                             faces=faces.astype(np.int64), warp_dir=warp, ease=np.ones(len(faces)),
                             boundary=boundary, body_part=p.body_part, mirror_of=p.mirror_of))
@@ -506,16 +510,10 @@ def _stretches(key: np.ndarray, closed: bool) -> List[np.ndarray]:
     return np.split(idx, cuts)
 
 
-def _boundary_loops(faces: np.ndarray, name: str) -> List[np.ndarray]:
-    """Closed boundary loops (local ids) of a panel mesh, longest first."""
-    a = faces.reshape(-1)
-    b = np.roll(faces, -1, axis=1).reshape(-1)
-    n = int(faces.max()) + 1
-    key = a * n + b
-    rkey = b * n + a
-    bnd = ~np.isin(key, rkey)
+def _boundary_loops(a: np.ndarray, b: np.ndarray, name: str) -> List[np.ndarray]:
+    """Closed boundary loops (local ids), longest first, from boundary half-edges a -> b."""
     nxt = {}
-    for u, v in zip(a[bnd].tolist(), b[bnd].tolist()):
+    for u, v in zip(a.tolist(), b.tolist()):
         if u in nxt:
             raise CutError(f"panel {name!r} is not a manifold surface (its boundary touches itself)")
         nxt[u] = v

@@ -227,5 +227,4 @@ def make_skirt(mesh: CutMesh, body, X: np.ndarray) -> None:
     tris = np.asarray(tris, dtype=np.int64)
     if np.any(tris[:, 0] == tris[:, 2]) or np.any(tris[:, 1] == tris[:, 2]):
         raise CutError("skirt topology: degenerate bridge between the legs")
-    mesh.remove_faces(np.nonzero(H)[0])
-    mesh.add_faces(tris, X[tris])
+    mesh.replace_faces(np.nonzero(H)[0], tris, X[tris])

@@ -68,6 +68,7 @@ class CutMesh:
 
     # -- storage ---------------------------------------------------------------------------
     def _set_parents(self, tris: np.ndarray) -> None:
+        self._ptris = tris
         p0 = tris[:, 0]
         e1 = tris[:, 1] - p0
         n = np.cross(e1, tris[:, 2] - p0)
@@ -203,24 +204,23 @@ class CutMesh:
         self.vf[p].update((f, g1, g2))
         return p
 
-    def remove_faces(self, faces: np.ndarray) -> None:
-        """Delete faces (compacts the face array; vertex ids are unchanged)."""
+    def replace_faces(self, remove: np.ndarray, F_new: np.ndarray, parent_tris: np.ndarray) -> None:
+        """Delete faces ``remove`` and append faces ``F_new``, each its own new parent
+        triangle with corner positions ``parent_tris`` (k, 3, 3). Face ids are compacted;
+        vertex ids are unchanged."""
         keep = np.ones(self.nf, dtype=bool)
-        keep[np.asarray(faces, dtype=np.int64)] = False
-        F = self.F[keep].copy()
-        par = self.parent[keep].copy()
-        self.nf = 0
+        keep[np.asarray(remove, dtype=np.int64)] = False
+        F_new = np.asarray(F_new, dtype=np.int64).reshape(-1, 3)
+        base = self._ptri_count()
+        F = np.concatenate([self.F[keep], F_new])
+        par = np.concatenate([self.parent[keep], base + np.arange(len(F_new))])
+        tris = np.concatenate([self._parent_corners(), np.asarray(parent_tris, float).reshape(-1, 3, 3)])
+        if len(F) > self._F.shape[0]:
+            self._F = np.zeros((2 * len(F), 3), dtype=np.int64)
+            self._parent = np.zeros(2 * len(F), dtype=np.int64)
         self._F[: len(F)] = F
         self._parent[: len(F)] = par
         self.nf = len(F)
-        self._rebuild_adjacency()
-
-    def add_faces(self, F: np.ndarray, parent_tris: np.ndarray) -> None:
-        """Append faces, each its own new parent triangle (corner positions given)."""
-        base = self._ptri_count()
-        tris = np.concatenate([self._parent_corners(), parent_tris])
-        for k, tri in enumerate(np.asarray(F, dtype=np.int64).tolist()):
-            f = self._add_face(tri, base + k)
         self._set_parents(tris)
         self._rebuild_adjacency()
 
@@ -228,10 +228,7 @@ class CutMesh:
         return int(self._p0.shape[0])
 
     def _parent_corners(self) -> np.ndarray:
-        # reconstruct corner positions from the stored frame (exact for corners 0 and 2D coords)
-        p2 = self._ptri2
-        return (self._p0[:, None, :] + p2[:, :, :1] * self._e1[:, None, :]
-                + p2[:, :, 1:] * self._e2[:, None, :])
+        return self._ptris
 
     def _rebuild_adjacency(self) -> None:
         # half-edge key (a << 32 | b) -> face, and vertex -> incident faces
