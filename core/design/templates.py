@@ -59,7 +59,7 @@ def _top_parts(sleeves: str = "long", hem: str = "hem", ease=None):
     """
     ease = ease or {}
     params = {
-        "armhole_drop": {"value": 0.03, "kind": "length", "min": 0.0, "max": 0.08},
+        "armhole_drop": {"value": 0.01, "kind": "length", "min": 0.005, "max": 0.05},
         "neck_drop_front": {"value": 0.03, "kind": "length", "min": 0.015, "max": 0.15},
         "neck_drop": {"value": 0.015, "kind": "length", "min": 0.01, "max": 0.06},
     }
@@ -76,7 +76,9 @@ def _top_parts(sleeves: str = "long", hem: str = "hem", ease=None):
         {"name": "neckline", "points": ["neckline_front", "neckline_side_left", "neckline_back",
                                         "neckline_side_right"],
          "closed": True, "role": "opening"},
-        {"name": "armhole_left", "ring": {"through": "armhole_under_left", "normal": ["shoulder_left", "elbow_left"],
+        # a set-in armhole: the body's section by the sagittal plane just outside the armpit,
+        # over the shoulder tip
+        {"name": "armhole_left", "ring": {"through": "armhole_under_left", "normal": "x",
                                            "points": 12, "named": {"armhole_top_left": "+z",
                                                                    "armhole_front_left": "-y",
                                                                    "armhole_back_left": "+y"}},
@@ -90,10 +92,10 @@ def _top_parts(sleeves: str = "long", hem: str = "hem", ease=None):
     ]
     if sleeves != "none":
         if sleeves == "long":
-            params["sleeve_length"] = {"value": 0.42, "kind": "length", "min": 0.2, "max": 0.45}
+            params["sleeve_length"] = {"value": 0.54, "kind": "length", "min": 0.3, "max": 0.57}
             normal = ["elbow_left", "wrist_left"]
         else:
-            params["sleeve_length"] = {"value": 0.12, "kind": "length", "min": 0.06, "max": 0.2}
+            params["sleeve_length"] = {"value": 0.2, "kind": "length", "min": 0.1, "max": 0.3}
             normal = ["shoulder_left", "elbow_left"]
         # the cuff ring is placed by a traced length; its top/under points split the sleeve
         kps["cuff_level_left"] = {"trace": {"from": "armhole_top_left", "along": "arm_left",
@@ -109,6 +111,13 @@ def _top_parts(sleeves: str = "long", hem: str = "hem", ease=None):
             {"name": "sleeve_top_left", "points": ["armhole_top_left", "cuff_top_left"], "role": "seam"},
             {"name": "sleeve_under_left", "points": ["armhole_under_left", "cuff_under_left"], "role": "seam"},
         ]
+        if sleeves == "long":
+            # the forearm turns forward: the sleeve seams pass the elbow on its top and underside
+            lines += [{"name": "elbow_guide_left", "ring": {
+                "through": "elbow_left", "normal": ["shoulder_left", "elbow_left"], "points": 8,
+                "named": {"elbow_top_left": "+z", "elbow_under_left": "-z"}}, "role": "guide"}]
+            lines[-3]["points"] = ["armhole_top_left", "elbow_top_left", "cuff_top_left"]
+            lines[-2]["points"] = ["armhole_under_left", "elbow_under_left", "cuff_under_left"]
         panels += [
             {"name": "sleeve_front_left", "seed": "sleeve_front_mid_left", "body_part": "arm",
              "ease": ease.get("sleeve_front_left", {"value": 1.2})},
