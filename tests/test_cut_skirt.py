@@ -151,3 +151,25 @@ def test_overlapping_garments_are_cut_separately(anny):
     ids = {g: np.concatenate([p.vertex_ids for p in cut.panels if p.garment == g]) for g in ("shirt", "skirt")}
     assert not set(ids["shirt"].tolist()) & set(ids["skirt"].tolist())
     assert set(cut.pins) == {"shirt", "skirt"}
+
+
+def test_points_on_the_removed_band(anny):
+    """A keypoint on a removed triangle goes to the closest point of the bridged surface;
+    a panel seed there is an error naming the panel."""
+    from core.body.model import SurfacePoint
+    from core.errors import CutError
+    body, X, J = anny
+    removed = np.nonzero(inter_leg_faces(body, X))[0]
+    F = np.asarray(body.faces)
+    c = X[F[removed]].mean(1)
+    k = removed[np.argmin(np.abs(c[:, 2] - (c[:, 2].max() - 0.15)) + 10 * (c[:, 1] > c[:, 1].mean()))]
+    sp_ = SurfacePoint(int(k), (1 / 3, 1 / 3, 1 / 3))
+    spec = skirt_spec(body, X, J, refine=None)
+    # hem through a point on the inner thigh band (front): still one loop, still cuts
+    hem = spec.lines[1]
+    hem.points = hem.points[:5] + [sp_] + hem.points[5:]
+    cut = cut_surface(body, X, spec)
+    assert [p.name for p in cut.panels] == ["skirt.front", "skirt.back"]
+    spec.panels[0] = PanelSpec("skirt.front", "skirt", sp_)
+    with pytest.raises(CutError, match="skirt.front.*removed"):
+        cut_surface(body, X, spec)
