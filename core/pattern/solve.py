@@ -106,6 +106,7 @@ class SolverConfig:
     straight_target: str = "smooth"
     len_direction: str = "current"
     len_target: str = "current"
+    len_integral: float = 1.0
     feedback_warp: float = 0.0
 
 
@@ -113,7 +114,7 @@ class SolverConfig:
     def paper(cls, **kw) -> "SolverConfig":
         """The paper's weights taken literally (isometric ARAP regulariser)."""
         return replace(cls(reg_rest="isometric", adapt_margin=0.0, straight_target="zero", len_target="current",
-                           lambda_len=100.0, lambda_straight=5.0, lambda_curve=10.0), **kw)
+                           lambda_len=100.0, lambda_straight=5.0, lambda_curve=10.0, len_integral=0.0), **kw)
 
     @classmethod
     def improved(cls, **kw) -> "SolverConfig":
@@ -519,7 +520,7 @@ class PatternSolver:
         T = K * np.stack([c_weft, c_warp], axis=1)[:, None, :]        # (f, 2, 2)
         T_reg = T if cfg.reg_rest == "prestretch" else K
         W2 = np.array([1.0, cfg.warp_weight ** 2])
-        U = (self.uv0 if start is None else start).copy()
+        U = self._scaled_start(c_weft, c_warp) if start is None else start.copy()
         Ft = self.gfaces
         # fixed part of the right-hand side: the ease term with axes fixed
         ease_part = self._rhs_of(T, cfg.lambda_ease * self.a, W2)
@@ -550,7 +551,7 @@ class PatternSolver:
             R = _polar2(_abt(M * W2, T_reg))               # local step
             RT = _ab(R, T_reg)
             rhs = ease_part + self._rhs_of(RT, cfg.lambda_reg * self.a, W2)
-            rhs += self._seam_rhs(U, _ab(R, T))
+            rhs += self._seam_rhs(U, _ab(R, T), reset=(it == 0))
             rhs += self._pin[:, None] * U
             U_new = np.column_stack([lu.solve(rhs[:, 0]), lu.solve(rhs[:, 1])])
             U, nb = self._safeguard(U, U_new)
@@ -569,12 +570,14 @@ class PatternSolver:
             fb += len(pd.faces)
         return SolveResult(out_uv, tw, tg, xyz, time.perf_counter() - t0, n_it, backtracks, energies)
 
-    def _seam_rhs(self, U: np.ndarray, RT: np.ndarray) -> np.ndarray:
+    def _seam_rhs(self, U: np.ndarray, RT: np.ndarray, reset: bool = False) -> np.ndarray:
         cfg = self.config
         rhs = np.zeros((self.n, 2))
         # current edges and second differences of every side
         cur_len, d2 = {}, {}
         pred_len = {}
+        if not hasattr(self, "_len_int") or reset:
+            self._len_int = {k: np.zeros(len(sd.gids) - 1) for k, sd in enumerate(self.sides)}
         for k, side in enumerate(self.sides):
             cur_len[k] = np.linalg.norm(np.diff(U[side.gids], axis=0), axis=1)
             e0 = self.uv0[side.gids[1:]] - self.uv0[side.gids[:-1]]
@@ -591,6 +594,11 @@ class PatternSolver:
                         lbar = 0.5 * (cur_len[k] + cur_len[other])
                     else:
                         lbar = 0.5 * (pred_len[k] + pred_len[other])
+                    if cfg.len_integral > 0 and len(cur_len[other]) == len(cur_len[k]):
+                        # integral action: what the proximal pull leaves of the mismatch is
+                        # accumulated into this side's target until both sides agree
+                        self._len_int[k] -= cfg.len_integral * 0.5 * (cur_len[k] - cur_len[other])
+                        lbar = lbar + self._len_int[k]
                     cur = U[g[1:]] - U[g[:-1]]
                     dirn = cur if cfg.len_direction == "current" else pred
                     dirn = dirn / np.maximum(np.linalg.norm(dirn, axis=1), 1e-300)[:, None]
@@ -643,6 +651,24 @@ class PatternSolver:
             if np.any(s[fs] <= self._area_floor[fs]):
                 U[sl] = U_old[sl]
         return U, halvings
+
+    def _scaled_start(self, c_weft: np.ndarray, c_warp: np.ndarray) -> np.ndarray:
+        """The initial flattening stretched by each panel's area-weighted mean targets.
+
+        A flip-free affine image of a flip-free flattening, already close to a
+        uniform-ease solution: the first global steps stay small, so the flip
+        safeguard rarely has to act even at rho = 2.
+        """
+        U = self.uv0.copy()
+        for pd in self.panels:
+            fs = slice(pd.face_offset, pd.face_offset + len(pd.faces))
+            w = np.abs(pd.area0)
+            sx = float(np.sum(w * c_weft[fs]) / np.sum(w))
+            sy = float(np.sum(w * c_warp[fs]) / np.sum(w))
+            sl = slice(pd.offset, pd.offset + pd.n)
+            c = U[sl].mean(axis=0)
+            U[sl] = (U[sl] - c) * np.array([sx, sy]) + c
+        return U
 
     def _jacobians(self, U: np.ndarray) -> np.ndarray:
         """Per-triangle 2x2 Jacobians (f, 2, 2) of ``U`` w.r.t. the initial flattening."""
