@@ -2,13 +2,55 @@
 
 A design is plain JSON. Loading validates every element and raises
 :class:`core.errors.DesignError` whose ``path`` is the JSON path of the
-offending element (``garments[0].panels[2].ease.value``). Everything that
-depends on a body (landmark names, whether a length fits on a limb) is checked
-later, by :func:`core.design.resolve.resolve`, with the same kind of path.
+offending element (``garments[0].panels[2].ease.value: expected a number in
+0.5..4.0, got 7``). Everything that depends on a body (landmark names, whether
+a length fits on a limb) is checked when the design is resolved
+(:func:`core.design.resolve.resolve`), with the same kind of path.
+
+Fields (metres, the body frame of :mod:`core`: +Z up, body faces -Y, +X = body's left)
+
+=====================  ==========================================================
+``format``, ``version``  ``"ease-design"``, ``1``
+``name``               non-empty string; ``description`` optional
+``body``               ``{"model": "anny", "shape": "XS".."XL" | {param: value},
+                       "pose": "A" | "T" | "P1".."P3" | {joint: [rx, ry, rz]}}``:
+                       the reference instance the design is made on
+``materials``          ``{"fabric": preset, "eps_weft": >= 1, "eps_warp": >= 1}``
+``mirror``             true: every ``*_left`` keypoint / line / panel gets its
+                       ``*_right`` counterpart through the body's symmetry map
+``skirt``              true: cut on the skirt topology (dresses, skirts)
+``refine_edge_length`` target edge length of the cut panels (m) or null
+``parameters``         ``{name: number | {"value", "kind": "placement" (0..1) |
+                       "length" (m) | "number", "min", "max"}}``; used as
+                       ``"$name"`` wherever a number is expected
+``keypoints``          ``{name: keypoint}``; a keypoint is a landmark name,
+                       ``{"landmark"}``, ``{"triangle", "bary"}`` (template surface
+                       point), ``{"between": [a, b], "t"}`` (fraction t along the
+                       geodesic a -> b) or ``{"trace": {"from", "along": "arm_left" |
+                       "arm_right" | "leg_left" | "leg_right" | "torso_down" |
+                       "torso_up", "length"}}`` (geodesic length down a body part)
+``lines``              lines shared by all garments (e.g. the waist of shirt+pants)
+``garments``           ``[{"name", "kind": "upper" | "lower" | "dress", "pin": line
+                       name, "lines": [...], "panels": [...]}]``
+line                   ``{"name", "role": "seam" | "opening" | "guide"}`` plus one of
+                       ``"points": [keypoint, ...], "closed"`` (joined by geodesics);
+                       ``"ring": {"through", "normal": axis | [a, b], "points",
+                       "named": {name: fraction | axis}}`` (closed plane section;
+                       names points on itself: the extreme along an axis, or the
+                       point at a fraction of its length); ``"section": {"from",
+                       "to", "normal", "spacing"}`` (plane section between two
+                       keypoints, e.g. a centre seam on the midline). A ``guide``
+                       line is not cut; it only names points.
+panel                  ``{"name", "seed": keypoint inside it, "body_part": "torso" |
+                       "arm" | "leg", "ease": field}``
+ease field             ``{"value"}`` | ``{"from", "to", "between": [a, b]}`` |
+                       ``{"from", "to", "axis"}`` | ``{"per_triangle": {"triangles",
+                       "values", "default"}}`` (body template triangles) -- every
+                       value finite and in 0.5..4.0 (see :mod:`core.design.ease`)
+=====================  ==========================================================
 
 Keypoint references are strings: the name of a design keypoint, of a point
-named on a ring line, or of a body landmark. Numbers may be given as
-``"$name"``, a reference to an entry of ``parameters``.
+named on a ring line, of a generated ``*_right`` mirror, or of a body landmark.
 """
 from __future__ import annotations
 
