@@ -108,3 +108,11 @@ def test_lenient_export_of_a_tangled_piece_lists_warnings(tmp_path):
     summary = json.loads((tmp_path / "lenient" / "export.json").read_text())
     assert summary["warnings"] == found
     assert {f.name for f in files} >= {"pattern.svg", "pattern_astm.dxf"}
+
+
+@pytest.mark.parametrize("fmt,module", [("dxf", "ezdxf"), ("pdf", "reportlab.pdfgen")])
+def test_missing_writer_package_is_a_clear_error(tmp_path, monkeypatch, fmt, module):
+    monkeypatch.setitem(sys.modules, module, None)  # import now fails, as in a bare Blender
+    with pytest.raises(ExportError, match=module.split(".")[0]):
+        export_pattern(make_pattern(), tmp_path / "out", formats=f"svg,{fmt}")
+    assert not (tmp_path / "out").exists()

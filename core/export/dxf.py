@@ -32,6 +32,7 @@ from typing import List, Sequence
 
 import numpy as np
 
+from ..errors import ExportError
 from .pieces import Layout, PieceDrawing, ascii_text
 
 ASTM_LAYERS = {"boundary": "1", "turn": "2", "notch": "4", "mirror": "6", "grain": "7", "sew": "14",
@@ -39,6 +40,15 @@ ASTM_LAYERS = {"boundary": "1", "turn": "2", "notch": "4", "mirror": "6", "grain
 TURN_DEG = 20.0  # a polyline vertex turning more than this is a corner (turn point), else a curve point
 PLAIN_LAYERS = {"CUT": 1, "SEW": 5, "NOTCH": 3, "GRAIN": 7, "FOLD": 6, "LABEL": 7}  # ACI colours
 INSUNITS_MM = 4
+
+
+def _ezdxf():
+    try:
+        import ezdxf
+    except ImportError as exc:  # e.g. a Blender install without the bundled wheel
+        raise ExportError(f"DXF export needs the ezdxf package ({exc}); install it or leave dxf out of the formats") \
+            from None
+    return ezdxf
 
 
 def _mm(points, offset=None) -> List[tuple]:
@@ -80,8 +90,7 @@ def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, si
     style, size : the style system text.
     dxfversion : ``"R2000"`` (carries ``$INSUNITS``) or ``"R12"``.
     """
-    import ezdxf
-
+    ezdxf = _ezdxf()
     if dxfversion == "R12":
         # R12 has no $INSUNITS (its readers take the units from "Units: METRIC");
         # ezdxf.new sets units anyway and warns, which would only confuse users
@@ -149,7 +158,7 @@ def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, si
 def _fixed_metadata():
     # ezdxf stamps creation time and random GUIDs into every file; its fixed
     # metadata mode keeps the output a function of the pattern alone
-    import ezdxf
+    ezdxf = _ezdxf()
 
     before = ezdxf.options.write_fixed_meta_data_for_testing
     ezdxf.options.write_fixed_meta_data_for_testing = True
@@ -169,6 +178,7 @@ def astm_text(pieces, layout, style, size) -> str:
 
 def astm_r12_text(pieces, layout, style, size) -> str:
     """ASTM D6673 DXF R12 in the strict form Gerber readers accept (ezdxf gerber_D6673 add-on)."""
+    _ezdxf()
     from ezdxf.addons import gerber_D6673
 
     stream = io.StringIO()
@@ -179,8 +189,7 @@ def astm_r12_text(pieces, layout, style, size) -> str:
 
 def plain_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str):
     """A plain DXF (R2010, mm): the laid-out pieces as polylines on named layers."""
-    import ezdxf
-
+    ezdxf = _ezdxf()
     doc = ezdxf.new("R2010", units=INSUNITS_MM)
     doc.header["$MEASUREMENT"] = 1
     for name, colour in PLAIN_LAYERS.items():

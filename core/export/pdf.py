@@ -18,6 +18,7 @@ from typing import List, Sequence, Tuple
 
 import numpy as np
 
+from ..errors import ExportError
 from .pieces import Layout, PieceDrawing, ascii_text
 
 PT_PER_M = 72.0 / 0.0254
@@ -29,6 +30,15 @@ TEST_RESERVE = (0.110, 0.232)  # m, layout box kept free for the test square and
 COLOURS = {"cut": (1, 0, 0), "sew": (0, 0, 1), "notch": (0, 0.63, 0), "grain": (0, 0, 0),
            "fold": (1, 0, 1), "text": (0, 0, 0), "mark": (0.45, 0.45, 0.45)}
 LINE_PT = 0.25e-3 * PT_PER_M
+
+
+def _reportlab():
+    try:
+        from reportlab.pdfgen import canvas
+    except ImportError as exc:  # e.g. a Blender install without the bundled wheel
+        raise ExportError(f"PDF export needs the reportlab package ({exc}); install it or leave pdf out of the "
+                          f"formats") from None
+    return canvas
 
 
 def row_name(r: int) -> str:
@@ -177,7 +187,7 @@ def tiled_pdf(pieces: Sequence[PieceDrawing], layout: Layout, paper: str = "a4",
     -------
     bytes, the PDF; ``rows * cols`` pages (see :func:`tile_grid`).
     """
-    from reportlab.pdfgen import canvas as rl_canvas
+    rl_canvas = _reportlab()
 
     pw, ph = PAPERS[paper]
     rows, cols, tile = tile_grid(layout.size, paper)
@@ -258,7 +268,7 @@ def _page_marks(c, r, col, rows, cols, tile, title, paper) -> None:
 
 def plotter_pdf(pieces: Sequence[PieceDrawing], layout: Layout, title: str = "pattern") -> bytes:
     """One page holding the whole layout at 1:1 (for A0 or roll plotters), test square included."""
-    from reportlab.pdfgen import canvas as rl_canvas
+    rl_canvas = _reportlab()
 
     m = PAGE_MARGIN
     W, H = float(layout.size[0]), float(layout.size[1])
