@@ -85,7 +85,11 @@ class SolverConfig:
     ``paper()`` sets 0). ``feedback``: gain of a per-iteration correction of
     the weft targets by the ratio target / achieved scale (SPEC rho-hat), so
     that curvature error moves out of the weft into warp and shear (0 = off,
-    the paper); ``feedback_warp`` the same for the warp targets.
+    the paper); ``feedback_warp`` the same for the warp targets;
+    ``adapt_feedback`` the weft and warp feedback used by adaptation solves
+    (pose demands are local, hence incompatible in 2D without shear).
+    ``len_integral``: gain of the integral action on seam-edge length
+    mismatch (0 = the paper's proximal linearisation only).
     ``straight_target``: ``"zero"`` (paper: second differences of seams
     towards 0, which also straightens seams that must be curved -- crotch,
     armholes) or ``"smooth"`` (towards the mean of the neighbouring second
@@ -107,6 +111,7 @@ class SolverConfig:
     len_direction: str = "current"
     len_target: str = "current"
     len_integral: float = 1.0
+    adapt_feedback: float = 0.5
     feedback_warp: float = 0.0
 
 
@@ -114,7 +119,8 @@ class SolverConfig:
     def paper(cls, **kw) -> "SolverConfig":
         """The paper's weights taken literally (isometric ARAP regulariser)."""
         return replace(cls(reg_rest="isometric", adapt_margin=0.0, straight_target="zero", len_target="current",
-                           lambda_len=100.0, lambda_straight=5.0, lambda_curve=10.0, len_integral=0.0), **kw)
+                           lambda_len=100.0, lambda_straight=5.0, lambda_curve=10.0, len_integral=0.0,
+                           adapt_feedback=0.0), **kw)
 
     @classmethod
     def improved(cls, **kw) -> "SolverConfig":
@@ -817,7 +823,15 @@ def adapt_pattern(cut, ref_vertices, pose_vertices: Sequence[np.ndarray], eps_we
     solver = solver or PatternSolver(cut, ref_vertices, config, progress=sub(progress, 0.0, 0.3))
     poses = [solver._positions(P, f"pose {i + 1}") for i, P in enumerate(pose_vertices)]
     K, cw, cg = solver.targets_adapt(poses, eps_weft, eps_warp)
-    res = solver.solve(K, cw, cg, start=_start_from(solver, start), progress=sub(progress, 0.3, 1.0))
+    cfg = solver.config
+    if cfg.adapt_feedback > 0:
+        # feedback only moves right-hand sides: the factorisation is kept
+        solver.config = replace(cfg, feedback=max(cfg.feedback, cfg.adapt_feedback),
+                                feedback_warp=max(cfg.feedback_warp, cfg.adapt_feedback))
+    try:
+        res = solver.solve(K, cw, cg, start=_start_from(solver, start), progress=sub(progress, 0.3, 1.0))
+    finally:
+        solver.config = cfg
     mats = dict(cut.materials)
     mats.update({"eps_weft": eps_weft, "eps_warp": eps_warp})
     return build_pattern(cut, res, style=style, body=body, mode="adapt", materials=mats)
