@@ -76,7 +76,24 @@ class Geodesics:
         if va == vb:
             return np.stack([pa, pb])
         mid = np.asarray(self.solver.find_geodesic_path(va, vb), dtype=np.float64)
-        return _dedup(np.vstack([pa[None], mid, pb[None]]))
+        # Join the exact ends to the path where it passes nearest, not at the snapped
+        # vertex: that would add a detour of up to an edge length at each end.
+        mid = _join_start(pa, mid)
+        mid = _join_start(pb, mid[::-1])[::-1]
+        return _dedup(mid)
+
+
+def _join_start(p: np.ndarray, poly: np.ndarray, near: int = 6) -> np.ndarray:
+    """``poly`` starting at ``p``: joined to the nearest point of its first ``near`` segments."""
+    k = min(near, len(poly) - 1)
+    if k < 1:
+        return np.vstack([p[None], poly])
+    a, b = poly[:k], poly[1:k + 1]
+    ab = b - a
+    t = np.clip(np.einsum("ij,ij->i", p - a, ab) / np.maximum((ab * ab).sum(1), 1e-18), 0, 1)
+    q = a + t[:, None] * ab
+    i = int(np.argmin(np.linalg.norm(q - p, axis=1)))
+    return np.vstack([p[None], q[i][None], poly[i + 1:]])
 
 
 def _dedup(poly: np.ndarray, tol: float = 1e-9) -> np.ndarray:

@@ -436,6 +436,20 @@ class Resolver:
         return out
 
     # ------------------------------------------------------------ everything
+    def line_polylines(self) -> Dict[str, np.ndarray]:
+        """Every cut line (guides excluded) as a 3D polyline (k, 3) on this
+        instance: consecutive points joined by geodesics, closed lines
+        repeating their first point. For drawing seamlines before cutting."""
+        out = {}
+        for i, (full, _, line, _) in enumerate(self.lines):
+            if line.role == "guide":
+                continue
+            pts = self.line_points(i)
+            seq = pts + ([pts[0]] if line.closed else [])
+            parts = [self.geodesics.path(a, b) for a, b in zip(seq[:-1], seq[1:])]
+            out[full] = np.vstack([parts[0]] + [p[1:] for p in parts[1:]])
+        return out
+
     def all_keypoints(self) -> Dict[str, SurfacePoint]:
         """Every design keypoint and ring-named point (with mirrors), by name."""
         names = list(self.design.keypoints) + list(self.ring_named)
