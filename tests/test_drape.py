@@ -52,13 +52,14 @@ def test_keeps_pattern_rest_lengths(skirt, draped):
     x = draped.positions[np.argsort(cloth.particle_of)]  # particle order
     edges, rest = rest_edges(cloth.faces, cloth.rest_inv)
     ratio = np.linalg.norm(x[edges[:, 0]] - x[edges[:, 1]], axis=1) / rest
-    # the waistband is pinned at the skintight size (1/1.2 of its pattern width):
-    # judge the fabric that hangs free of the pins
-    free = ~cloth.pinned[edges].any(axis=1)
-    dev = np.abs(ratio[free] - 1.0)
+    # the waistband is pinned at the skintight size (1/1.2 of its pattern width) and
+    # gathers the fabric just below it: judge the fabric 5 cm and more below the pins
+    below = (cloth.tether_length[edges] >= 0.05).all(axis=1)
+    dev = np.abs(ratio[below] - 1.0)
+    assert below.sum() > len(edges) / 2
     assert dev.mean() < 0.02
-    assert np.median(dev) < 0.02
-    assert dev.max() < 0.10
+    assert np.percentile(dev, 95) < 0.02
+    assert dev.max() < 0.08  # a single edge at a fold
 
 
 def test_closes_its_seams(skirt, draped):

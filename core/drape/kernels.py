@@ -10,7 +10,8 @@ Constraints on a triangle with pattern (rest) edge matrix D_m in its grain
 frame and current edges D_s = [x1-x0, x2-x0]: F = D_s D_m^-1 (3x2), whose
 columns are the images of the unit weft and warp. Weft and warp stretch are
 C = |F_i| - 1, shear is C = F_0 . F_1; each has compliance 1/(k A).
-Bending is the dihedral angle of two triangles (rest: flat, as cut), with the
+Bending is the dihedral angle of two triangles (rest: flat inside a panel, the
+sewn fold across a seam), with the
 discrete-shell weight 3|e|^2/(A_a+A_b).
 """
 from __future__ import annotations
@@ -115,7 +116,7 @@ def solve_distance(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
 
 @wp.kernel
 def solve_bending(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
-                  bend: wp.array2d(dtype=int), weight: wp.array(dtype=float),
+                  bend: wp.array2d(dtype=int), weight: wp.array(dtype=float), rest: wp.array(dtype=float),
                   k_bend: float, inv_dt2: float, offset: int):
     b = wp.tid() + offset
     i = bend[b, 0]
@@ -151,7 +152,13 @@ def solve_bending(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
              + inv_dt2 / (k_bend * weight[b]))
     if denom <= 0.0:
         return
-    dl = -theta / denom
+    c = theta - rest[b]
+    # the shorter way round: no jump when a fold passes through +-pi
+    if c > wp.pi:
+        c = c - 2.0 * wp.pi
+    if c < -wp.pi:
+        c = c + 2.0 * wp.pi
+    dl = -c / denom
     x[i] = x1 + g1 * (w1 * dl)
     x[j] = x2 + g2 * (w2 * dl)
     x[k] = x3 + g3 * (w3 * dl)

@@ -45,6 +45,7 @@ class Cloth:
     tether_length : (P,) float, pattern (rest) distance to it along mesh edges, metres.
     sliver : (T,) bool, pattern triangles too thin for a deformation-gradient constraint
         (quality below :data:`SLIVER_QUALITY`); their edges are kept as distance constraints.
+    bend_rest : (B,) float, rest dihedral angle (radians): 0 inside a panel, the skintight angle across a seam.
     edges : (E, 2) int, the sliver edges (particles); edge_rest : (E,) float, their pattern lengths.
     """
     n_global: int
@@ -67,6 +68,7 @@ class Cloth:
     tether_anchor: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     tether_length: np.ndarray = field(default_factory=lambda: np.zeros(0))
     sliver: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    bend_rest: np.ndarray = field(default_factory=lambda: np.zeros(0))
     edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), int))
     edge_rest: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
@@ -78,6 +80,8 @@ class Cloth:
 # Triangle quality 4*sqrt(3)*A / sum(l^2): 1 equilateral, 0 degenerate. Below this the
 # inverse rest matrix is so ill-conditioned that a tiny 3D error reads as a huge strain.
 SLIVER_QUALITY = 0.05
+# Bending needs better-shaped triangles still: the dihedral-angle gradient scales with 1/height.
+BEND_QUALITY = 0.2
 
 
 def inv22(m: np.ndarray) -> np.ndarray:
@@ -177,6 +181,23 @@ def colour_order(elements: np.ndarray, n_vertices: int) -> tuple:
     order = np.argsort(colours, kind="stable")
     counts = np.bincount(colours)
     return order, np.concatenate([[0], np.cumsum(counts)])
+
+
+def dihedral_angles(x: np.ndarray, bends: np.ndarray) -> np.ndarray:
+    """Signed dihedral angle (B,) radians of each bending stencil (a, b, e0, e1), 0 when flat.
+
+    The same convention as the solver's bending kernel.
+    """
+    if len(bends) == 0:
+        return np.zeros(0)
+    x1, x2, x3, x4 = (x[bends[:, k]] for k in range(4))
+    n1 = np.cross(x3 - x1, x4 - x1)
+    n2 = np.cross(x4 - x2, x3 - x2)
+    e = x4 - x3
+    eh = e / np.maximum(np.linalg.norm(e, axis=1, keepdims=True), 1e-30)
+    n1 /= np.maximum(np.linalg.norm(n1, axis=1, keepdims=True), 1e-30)
+    n2 /= np.maximum(np.linalg.norm(n2, axis=1, keepdims=True), 1e-30)
+    return np.arctan2(np.einsum("ij,ij->i", np.cross(n1, n2), eh), np.einsum("ij,ij->i", n1, n2))
 
 
 def interior_edges(faces: np.ndarray) -> tuple:
@@ -325,8 +346,16 @@ def build_cloth(pattern) -> Cloth:
         bend_weight = np.zeros(0)
 
     anchor, length = tethers(faces, inv_all, pinned, bends, bend_faces)
+    # the dihedral angle of a thin triangle is ill-defined (it flips with any tiny motion): no bending there
+    thin = pattern_quality(inv_all, rest_area) < BEND_QUALITY
+    flat_ok = ~thin[bend_faces].any(axis=1) if len(bends) else np.zeros(0, bool)
+    bends, bend_weight, bend_faces = bends[flat_ok], bend_weight[flat_ok], bend_faces[flat_ok]
+    # a seam holds the fold it is sewn with (the skintight angle); inside a panel the rest is flat
+    panel_of_face = np.concatenate(fpanel)
+    across = panel_of_face[bend_faces[:, 0]] != panel_of_face[bend_faces[:, 1]]
+    bend_rest = np.where(across, dihedral_angles(x0, bends), 0.0)
     return Cloth(
-        tether_anchor=anchor, tether_length=length, sliver=sliver, edges=edges, edge_rest=edge_rest,
+        tether_anchor=anchor, tether_length=length, sliver=sliver, bend_rest=bend_rest, edges=edges, edge_rest=edge_rest,
         n_global=n_global, particle_of=particle_of, x0=x0, faces=faces,
         faces_global=np.concatenate(faces_g), face_panel=np.concatenate(fpanel),
         face_garment=np.concatenate(fgarm), panel_names=[p.name for p in panels],

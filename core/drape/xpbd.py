@@ -34,6 +34,9 @@ class DrapeOptions:
     max_frames : frame limit.
     min_frames : frames simulated before settling may be declared.
     settle_speed : m/s, the root-mean-square particle speed under which a frame counts as still.
+    settle_trim : fraction of the fastest particles left out of that RMS: a few particles
+        caught between body parts (armpit, crotch) chatter against the contact planes
+        and would otherwise hold a visibly still drape from settling.
     settle_frames : consecutive still frames that mean settled.
     damping : 1/s, velocity decay rate (air drag and internal friction).
     gravity : m/s^2, along -Z.
@@ -55,13 +58,14 @@ class DrapeOptions:
     min_frames: int = 10
     settle_speed: float = 0.01
     settle_frames: int = 5
+    settle_trim: float = 0.02
     damping: float = 3.0
     gravity: float = 9.81
     thickness: Optional[float] = None
     friction: Optional[float] = None
-    search_distance: float = 0.05
+    search_distance: float = 0.03
     tether_slack: Optional[float] = 0.01
-    contact_interval: int = 5
+    contact_interval: int = 10
     max_speed: float = 30.0
     max_extent: float = 6.0
     max_strain: float = 3.0
@@ -94,6 +98,8 @@ class DrapeOptions:
             positive(name)
         for name in ("substeps", "max_frames", "settle_frames", "contact_interval"):
             positive(name, integer=True)
+        if not (0.0 <= self.settle_trim < 0.5):
+            raise DrapeError(f"drape option settle_trim = {self.settle_trim!r}: expected a fraction in [0, 0.5)")
         for name in ("damping", "gravity", "min_frames"):
             value = getattr(self, name)
             if not np.isfinite(value) or value < 0:
@@ -124,10 +130,12 @@ class DrapeResult:
     seam_pairs : (S, 2) int, global ids sewn together.
     frames : int, frames simulated.
     settled : bool; settle_reason : ``"settled"`` or ``"frame limit"``.
-    speed_history : (frames,) float, RMS particle speed per frame (m/s).
+    speed_history : (frames,) float, RMS particle speed per frame (m/s), fastest
+        ``options.settle_trim`` share left out.
     timings : dict of seconds: ``prepare``, ``compile``, ``simulate``, ``total``.
     material : dict, the material used; options : dict, the options used; device : str.
     self_collision : bool, always False (not handled).
+    speed : (N,) float, m/s, each vertex's speed at the last frame (where it still moves).
     face_valid : (T,) bool, False for pattern slivers (held by edge constraints; their
         strain is not meaningful and reads 0).
     """
@@ -153,6 +161,7 @@ class DrapeResult:
     device: str
     self_collision: bool = False
     face_valid: Optional[np.ndarray] = None
+    speed: Optional[np.ndarray] = None
 
 
 def face_deformation(x: np.ndarray, faces: np.ndarray, rest_inv: np.ndarray) -> np.ndarray:
@@ -267,6 +276,7 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
     edges = wp.array(cloth.edges[edge_order].astype(np.int32).reshape(-1, 2), dtype=int, device=dev)
     edge_rest = wp.array(cloth.edge_rest[edge_order].astype(f32), dtype=float, device=dev)
     bend_w = wp.array(cloth.bend_weight[bend_order].astype(f32), dtype=float, device=dev)
+    bend_rest = wp.array(cloth.bend_rest[bend_order].astype(f32), dtype=float, device=dev)
     anchor = wp.array(cloth.tether_anchor.astype(np.int32), dtype=int, device=dev)
     tether_len = wp.array(cloth.tether_length.astype(f32), dtype=float, device=dev)
     c_point = wp.zeros(cloth.n_particles, dtype=wp.vec3, device=dev)
@@ -303,7 +313,8 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
     if mat.bending > 0:
         for c in range(len(bend_off) - 1):
             cmds.append(wp.launch(K.solve_bending, int(bend_off[c + 1] - bend_off[c]),
-                                  inputs=[x, w, bends, bend_w, mat.bending, inv_dt2, int(bend_off[c])],
+                                  inputs=[x, w, bends, bend_w, bend_rest, mat.bending, inv_dt2,
+                                          int(bend_off[c])],
                                   device=dev, record_cmd=True))
     if opts.tether_slack is not None and np.any(cloth.tether_anchor >= 0):
         cmds.append(wp.launch(K.solve_tethers, n, inputs=[x, anchor, tether_len, 1.0 + float(opts.tether_slack)],
@@ -328,7 +339,7 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
         xs = x.numpy()
         vs = v.numpy()
         _check_divergence(frame, xs, vs[free], opts, mat, dt, cloth)
-        rms = float(np.sqrt(np.mean(np.sum(vs[free].astype(float) ** 2, axis=1)))) if free.any() else 0.0
+        rms = settle_speed(vs[free], opts.settle_trim)
         speeds.append(rms)
         still = still + 1 if rms < opts.settle_speed else 0
         report(progress, frame / opts.max_frames, f"drape: frame {frame}, rms speed {rms * 1000:.1f} mm/s")
@@ -339,6 +350,7 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
     t_sim = time.perf_counter()
 
     xp = x.numpy().astype(float)
+    vp = np.linalg.norm(v.numpy().astype(float), axis=1)
     valid = ~cloth.sliver if len(cloth.sliver) else np.ones(len(cloth.faces), bool)
     fw, fg, fs = (np.where(valid, a, 0.0) for a in face_strains(xp, cloth))
     weight = cloth.rest_area * valid
@@ -354,6 +366,7 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
         positions=positions, faces=cloth.faces_global.copy(), used=used,
         strain_weft=np.where(used, sw[src], 0.0), strain_warp=np.where(used, sg[src], 0.0),
         face_strain_weft=fw, face_strain_warp=fg, face_shear=fs, face_valid=valid,
+        speed=np.where(used, vp[src], 0.0),
         face_garment=cloth.face_garment.copy(), garment_names=list(cloth.garment_names),
         start_positions=start, seam_pairs=cloth.seam_pairs.copy(), frames=frame, settled=settled,
         settle_reason="settled" if settled else "frame limit", speed_history=np.asarray(speeds),
@@ -361,6 +374,17 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
                  "total": t_end - t_start},
         material=mat.to_json(), options=asdict(opts), device=str(dev),
     )
+
+
+def settle_speed(velocities: np.ndarray, trim: float = 0.0) -> float:
+    """RMS speed (m/s) of the particles, leaving out the fastest ``trim`` fraction."""
+    if len(velocities) == 0:
+        return 0.0
+    sq = np.sum(np.asarray(velocities, dtype=float) ** 2, axis=1)
+    keep = len(sq) - int(np.floor(trim * len(sq)))
+    if keep < len(sq):
+        sq = np.partition(sq, keep - 1)[:keep]
+    return float(np.sqrt(np.mean(sq)))
 
 
 def _check_divergence(frame: int, xs: np.ndarray, vs: np.ndarray, opts: DrapeOptions, mat: Material,
