@@ -67,13 +67,13 @@ def test_panels_partition_the_garment_region(shirt, anny):
     G = cut.positions(X)
     tris = np.concatenate([np.sort(p.vertex_ids[p.faces], axis=1) for p in cut.panels])
     assert len(np.unique(tris, axis=0)) == len(tris)
-    # refinement keeps the area: the refined panels have the area of the unrefined ones
+    # refinement keeps the area (up to Delaunay flips between nearly coplanar triangles)
     spec = shirt_spec(body, X, anny[2], refine=None)
     coarse = cut_surface(body, X, spec)
     Gc = coarse.positions(X)
     for p, q in zip(cut.panels, coarse.panels):
         np.testing.assert_allclose(triangle_areas(G[p.vertex_ids], p.faces).sum(),
-                                   triangle_areas(Gc[q.vertex_ids], q.faces).sum(), rtol=1e-9)
+                                   triangle_areas(Gc[q.vertex_ids], q.faces).sum(), rtol=1e-4)  # < one 1 cm^2 triangle
     # the unrefined panels are made of whole or split body triangles: their area plus the
     # area of the rest of the body (the other flood-fill regions) is the body's area
     area = sum(triangle_areas(Gc[q.vertex_ids], q.faces).sum() for q in coarse.panels)

@@ -122,7 +122,7 @@ def test_refined_cut(body):
         e = np.linalg.norm(P[p.faces] - P[np.roll(p.faces, -1, 1)], axis=2)
         assert e.max() <= h + 1e-12
         a = triangle_areas(P, p.faces).sum()
-        np.testing.assert_allclose(a, triangle_areas(Xc[q.vertex_ids], q.faces).sum(), rtol=1e-9)
+        np.testing.assert_allclose(a, triangle_areas(Xc[q.vertex_ids], q.faces).sum(), rtol=1e-6)  # Delaunay flips: nearly coplanar
         assert len(p.boundary) == 1
     for s in cut.seams:
         a, b = cut.panel(s.panel_a), cut.panel(s.panel_b)

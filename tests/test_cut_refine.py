@@ -45,3 +45,38 @@ def test_refine_noop_when_short_enough():
     X2, F2, L2, W2, _ = refine(X, F, np.zeros(len(F), int), W, [], 0.1)
     np.testing.assert_array_equal(F2, F)
     assert W2.shape == W.shape
+
+
+def test_delaunay_flips_fix_bad_triangles_and_keep_fixed_edges():
+    from core.cut.refine import delaunay_flips
+    # a strip of skinny triangles: two rows of points, triangulated with long diagonals
+    xs = np.linspace(0, 1, 11)
+    X = np.concatenate([np.stack([xs, np.zeros(11), np.zeros(11)], 1),
+                        np.stack([xs + 0.3, np.full(11, 0.1), np.zeros(11)], 1)])
+    F = []
+    for i in range(10):
+        F += [[i, i + 1, 11 + i], [i + 1, 12 + i, 11 + i]]
+    F = np.array(F)
+    # a deliberately bad triangulation of one quad
+    n = len(X)
+    labels = np.zeros(len(F), int)
+    fixed = np.array([0 * n + 1])
+    F2 = delaunay_flips(X, F, labels, fixed)
+    assert F2.shape == F.shape
+    np.testing.assert_allclose(triangle_areas(X, F2).sum(), triangle_areas(X, F).sum())
+    def min_angle(F):
+        P = X[F]
+        ang = []
+        for k in range(3):
+            u, v = P[:, (k + 1) % 3] - P[:, k], P[:, (k + 2) % 3] - P[:, k]
+            ang.append(np.arccos((u * v).sum(1) / np.linalg.norm(u, axis=1) / np.linalg.norm(v, axis=1)))
+        return np.min(ang)
+    assert min_angle(F2) > min_angle(F)
+    n2 = np.cross(X[F2[:, 1]] - X[F2[:, 0]], X[F2[:, 2]] - X[F2[:, 0]])
+    assert (n2[:, 2] > 0).all()
+    # the fixed edge 0-1 is still there
+    E = np.sort(np.stack([F2, np.roll(F2, -1, 1)], 2).reshape(-1, 2), axis=1)
+    assert np.any(np.all(E == [0, 1], axis=1))
+    # different labels: nothing flips across them
+    F3 = delaunay_flips(X, F, np.arange(len(F)), np.zeros(0, np.int64))
+    np.testing.assert_array_equal(F3, F)

@@ -7,7 +7,8 @@ Pipeline (paper, "Cutting the Body Surface"):
    paths between consecutive keypoints (:mod:`.geodesic`);
 3. per garment, its cut lines inserted exactly by splitting edges/triangles
    (:mod:`.split`); panels by flood fill from their seeds, never across a cut;
-4. optional refinement to a target edge length (:mod:`.refine`);
+4. optional refinement to a target edge length, then Delaunay edge flips
+   inside panels for better triangles (:mod:`.refine`);
 5. per-panel meshes (vertices duplicated where a cut runs inside a panel),
    boundary loops, seams, hems, pins and grain (:mod:`.grain`).
 
@@ -338,7 +339,7 @@ def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], s
     lines_li = sorted(seqs)
     lines = [remap[seqs[li]] for li in lines_li]
     if spec.refine_edge_length is not None:
-        from .refine import refine
+        from .refine import delaunay_flips, refine
         # lines may leave the garment (-1 ids): refine only their in-garment stretches
         pieces, owners = [], []
         for k, l in enumerate(lines):
@@ -346,6 +347,10 @@ def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], s
                 pieces.append(s)
                 owners.append(k)
         Xg, Fg, lab, W, pieces = refine(Xg, Fg, lab, W, pieces, spec.refine_edge_length)
+        ng = np.int64(len(Xg))
+        fixed = [np.minimum(q[:-1], q[1:]) * ng + np.maximum(q[:-1], q[1:]) for q in pieces]
+        Fg = delaunay_flips(Xg, Fg, lab, np.concatenate(fixed) if fixed else np.zeros(0, np.int64),
+                            max_length=spec.refine_edge_length)
         lines = [[pieces[j] for j in range(len(pieces)) if owners[j] == k] for k in range(len(lines))]
     else:
         lines = [_runs(l) for l in lines]

@@ -129,3 +129,86 @@ def _split_line(line: np.ndarray, E: np.ndarray, ids: np.ndarray, n: int) -> np.
     seq.append(line[-1])
     out[:] = seq
     return out
+
+
+def delaunay_flips(X: np.ndarray, F: np.ndarray, labels: np.ndarray, fixed: np.ndarray,
+                   max_length: float = np.inf, max_rounds: int = 8,
+                   max_dihedral_deg: float = 10.0) -> np.ndarray:
+    """Improve triangle shapes by flipping edges to the (extrinsic) Delaunay criterion.
+
+    An interior edge is flipped when the two angles opposite it sum to more
+    than pi, both its triangles carry the same label (panel), it is not in
+    ``fixed`` (cut lines), the triangles are nearly coplanar (dihedral below
+    ``max_dihedral_deg``, so the surface barely changes) and the flipped
+    triangles keep their orientation. No vertex moves or is added, so the
+    embedding is unchanged. Flips are applied in rounds of independent edges.
+
+    Parameters
+    ----------
+    X : (n, 3) float; F : (f, 3) int; labels : (f,) int.
+    fixed : (k,) int64 undirected edge keys ``min * n + max`` never flipped.
+    max_length : no flip makes an edge longer than this (keeps a refinement's bound).
+
+    Returns
+    -------
+    F : (f, 3) int, same faces count and face order, labels unchanged.
+    """
+    F = np.array(F, dtype=np.int64, copy=True)
+    n = np.int64(len(X))
+    cos_max = np.cos(np.deg2rad(max_dihedral_deg))
+    fixed = np.asarray(fixed, dtype=np.int64)
+    for _ in range(max_rounds):
+        a = F.reshape(-1)
+        b = np.roll(F, -1, axis=1).reshape(-1)
+        o = np.roll(F, -2, axis=1).reshape(-1)
+        key = a * n + b
+        order = np.argsort(key, kind="stable")
+        rkey = b * n + a
+        pos = np.clip(np.searchsorted(key[order], rkey), 0, len(key) - 1)
+        twin = np.where(key[order][pos] == rkey, order[pos], -1)
+        h = np.nonzero((twin > np.arange(len(key))))[0]       # each interior edge once
+        t = twin[h]
+        fh, ft = h // 3, t // 3
+        ukey = np.minimum(a[h], b[h]) * n + np.maximum(a[h], b[h])
+        ok = (labels[fh] == labels[ft]) & ~np.isin(ukey, fixed)
+        h, t, fh, ft = h[ok], t[ok], fh[ok], ft[ok]
+        A, B, O1, O2 = X[a[h]], X[b[h]], X[o[h]], X[o[t]]
+
+        def angle(p, q, r):   # angle at p between q and r
+            u, v = q - p, r - p
+            c = (u * v).sum(1) / np.maximum(np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1), 1e-300)
+            return np.arccos(np.clip(c, -1.0, 1.0))
+        viol = angle(O1, A, B) + angle(O2, A, B) - np.pi
+        n1 = np.cross(B - A, O1 - A)
+        n2 = np.cross(A - B, O2 - B)
+        nn = lambda v: v / np.maximum(np.linalg.norm(v, axis=1), 1e-300)[:, None]
+        n1, n2 = nn(n1), nn(n2)
+        m1 = nn(np.cross(O2 - A, O1 - A))     # new face (a, o2, o1)
+        m2 = nn(np.cross(O1 - B, O2 - B))     # new face (b, o1, o2)
+        good = (viol > 1e-6) & ((n1 * n2).sum(1) > cos_max) & (o[h] != o[t])
+        good &= np.linalg.norm(O1 - O2, axis=1) <= max_length
+        good &= ((m1 * n1).sum(1) > 0.5) & ((m1 * n2).sum(1) > 0.5) & ((m2 * n1).sum(1) > 0.5) & ((m2 * n2).sum(1) > 0.5)
+        # the new edge must not exist already
+        okey = np.minimum(o[h], o[t]) * n + np.maximum(o[h], o[t])
+        allu = np.minimum(a, b) * n + np.maximum(a, b)
+        good &= ~np.isin(okey, allu)
+        idx = np.nonzero(good)[0]
+        if len(idx) == 0:
+            break
+        idx = idx[np.argsort(-viol[idx], kind="stable")]
+        used = np.zeros(len(F), dtype=bool)
+        done = 0
+        new_edges = set()
+        for i in idx.tolist():
+            f1, f2 = int(fh[i]), int(ft[i])
+            if used[f1] or used[f2] or int(okey[i]) in new_edges:
+                continue
+            used[f1] = used[f2] = True
+            new_edges.add(int(okey[i]))
+            va, vb, v1, v2 = int(a[h[i]]), int(b[h[i]]), int(o[h[i]]), int(o[t[i]])
+            F[f1] = (va, v2, v1)
+            F[f2] = (vb, v1, v2)
+            done += 1
+        if done == 0:
+            break
+    return F
