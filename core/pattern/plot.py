@@ -17,7 +17,9 @@ def render_png(pattern, path, title: str = "", dpi: int = 110) -> Path:
     from matplotlib.collections import PolyCollection, LineCollection
 
     allw = np.concatenate([p.achieved_weft for p in pattern.panels])
-    lo, hi = float(np.nanmin(allw)), float(np.nanmax(allw))
+    allw = allw[np.isfinite(allw)]
+    # robust colour range: a few slivers must not wash out the picture
+    lo, hi = (float(np.percentile(allw, 1)), float(np.percentile(allw, 99))) if allw.size else (0.9, 1.1)
     if hi - lo < 0.05:
         lo, hi = lo - 0.025, hi + 0.025
     uv_all = np.concatenate([p.uv for p in pattern.panels])
@@ -28,7 +30,7 @@ def render_png(pattern, path, title: str = "", dpi: int = 110) -> Path:
     coll = None
     for p in pattern.panels:
         tris = p.uv[p.faces]
-        coll = PolyCollection(tris, array=p.achieved_weft, cmap="viridis", edgecolors="none")
+        coll = PolyCollection(tris, array=np.nan_to_num(p.achieved_weft), cmap="viridis", edgecolors="none")
         coll.set_clim(lo, hi)
         ax.add_collection(coll)
         for b in p.boundary:
