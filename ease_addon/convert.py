@@ -167,7 +167,10 @@ def write_keypoints(me: bpy.types.Mesh, keypoints: dict) -> None:
         if not 0 <= tri < nf:
             raise ValueError(f"keypoint {name!r}: triangle {tri} is not on the body (0..{nf - 1})")
         if kp[tri]:
-            raise ValueError(f"keypoints {names[kp[tri] - 1]!r} and {name!r} share triangle {tri}")
+            # one keypoint per triangle (about 1 cm^2): the first one keeps it
+            print(f"[ease] keypoints {names[kp[tri] - 1]!r} and {name!r} share triangle {tri}; "
+                  f"the layer keeps {names[kp[tri] - 1]!r}")
+            continue
         names.append(name)
         kp[tri] = len(names)
         bary[3 * tri:3 * tri + 3] = np.asarray(b, dtype=np.float32)

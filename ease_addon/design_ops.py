@@ -141,17 +141,13 @@ def refresh_attachments(context, obj, verts) -> None:
             convert.set_vertices(o.data, pts)
 
 
-def resolved_keypoints(design, model) -> dict:
-    """``{name: (triangle, bary)}`` of the design keypoints that are surface
-    points (explicit triangles, or landmarks of the model)."""
-    out = {}
-    for name, kp in design.keypoints.items():
-        if "triangle" in kp:
-            out[name] = (int(kp["triangle"]), tuple(kp["bary"]))
-        elif "landmark" in kp and kp["landmark"] in model.landmarks:
-            sp = model.landmarks[kp["landmark"]]
-            out[name] = (int(sp.triangle), tuple(sp.bary))
-    return out
+def resolved_keypoints(design, model, verts) -> dict:
+    """``{name: (triangle, bary)}`` of every design keypoint (landmarks,
+    surface points, placements, traced lengths, ring points) resolved on the
+    body instance ``verts`` by the core's resolver."""
+    from ..core.design.resolve import Resolver
+    pts = Resolver(design, model, verts).all_keypoints()
+    return {n: (int(sp.triangle), tuple(float(b) for b in sp.bary)) for n, sp in pts.items()}
 
 
 def _fill_params(scene, design) -> None:
@@ -182,12 +178,12 @@ def set_design(context, design, recut: bool = True) -> None:
     obj = body_object(context)
     cut = cut_for(design, obj) if recut else None
     model = state.body_model(body_spec(obj)["model"])
-    kps = resolved_keypoints(design, model)
+    verts = convert.get_vertices(obj.data)
+    kps = resolved_keypoints(design, model, verts)
     # -- the scene changes from here on
     scene = context.scene
     scene.ease.design_json = json.dumps(design.to_json(), sort_keys=True)
     _fill_params(scene, design)
-    verts = convert.get_vertices(obj.data)
     convert.write_keypoints(obj.data, kps)
     _draw_keypoints(context, obj, verts)
     if cut is not None:

@@ -187,14 +187,14 @@ class EASE_OT_ease_uniform(EaseOperator):
     bl_idname = "ease.ease_uniform"
     bl_label = "Uniform Ease"
 
-    panel: bpy.props.StringProperty(default="", description="panel name; empty: the panel field of the scene, "
-                                                            "or the whole body if that is empty too")
+    panel: bpy.props.StringProperty(default="", description="panel name; empty: the panel field of the scene")
     ease: bpy.props.FloatProperty(default=0.0, description="ease; 0 takes the scene's ease value")
+    whole_body: bpy.props.BoolProperty(default=False, description="set the whole body, not one panel")
 
     def run(self, context):
         s = context.scene.ease
         obj = body_object(context)
-        panel = self.panel or s.ease_panel
+        panel = "" if self.whole_body else (self.panel or s.ease_panel)
         e = self.ease or s.ease_value
         mask = panel_vertex_mask(context, panel) if panel else None
         write_vertex_ease(obj, context.scene, float(e), mask)
@@ -207,11 +207,12 @@ class EASE_OT_ease_gradient(EaseOperator):
     bl_label = "Gradient Ease"
 
     panel: bpy.props.StringProperty(default="")
+    whole_body: bpy.props.BoolProperty(default=False, description="set the whole body, not one panel")
 
     def run(self, context):
         s = context.scene.ease
         obj = body_object(context)
-        panel = self.panel or s.ease_panel
+        panel = "" if self.whole_body else (self.panel or s.ease_panel)
         verts = convert.get_vertices(obj.data)
         mask = panel_vertex_mask(context, panel) if panel else np.ones(len(verts), dtype=bool)
         axis = "XYZ".index(s.gradient_axis)

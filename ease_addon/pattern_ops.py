@@ -13,32 +13,33 @@ from . import convert, ramp, state
 from .body_ops import body_object
 from .operators_base import EaseOperator
 
-PATTERN_TEXT = "EASE pattern.json"
-ACHIEVED = "achieved_ease"     # FACE colour layer of the pattern panels
+PATTERN_KEY = "ease_pattern_json"   # scene property holding pattern.json
+ACHIEVED = "achieved_ease"     # CORNER colour layer of the pattern panels (per triangle)
 GAP = 0.08                     # metres between laid-out panels
 
 
 # ----------------------------------------------------------------------------- pattern <-> scene
 
-def store_pattern(scene, pattern, name: str = PATTERN_TEXT) -> None:
+def store_pattern(scene, pattern, key: str = PATTERN_KEY) -> None:
+    """Keep the whole pattern (pattern.json) in a scene property (saved in the .blend)."""
     from ..core.pattern.io import pattern_to_json
     from ..core.fileio import dumps_json
-    text = bpy.data.texts.get(name) or bpy.data.texts.new(name)
-    text.from_string(dumps_json(pattern_to_json(pattern), indent=None))
-    scene["ease_pattern_text"] = text.name
+    text = dumps_json(pattern_to_json(pattern), indent=None)
+    scene[key] = text
+    state.PATTERNS[(scene.name, key)] = (text, pattern)
 
 
-def stored_pattern(scene, name: str = PATTERN_TEXT):
+def stored_pattern(scene, key: str = PATTERN_KEY):
     """The pattern kept in the scene (None if there is none)."""
     from ..core.pattern.io import pattern_from_json
-    cached = state.PATTERNS.get((scene.name, name))
-    if cached is not None:
-        return cached
-    text = bpy.data.texts.get(name)
-    if text is None or not text.as_string().strip():
+    text = scene.get(key)
+    if not text:
         return None
-    p = pattern_from_json(json.loads(text.as_string()))
-    state.PATTERNS[(scene.name, name)] = p
+    cached = state.PATTERNS.get((scene.name, key))
+    if cached is not None and cached[0] == text:
+        return cached[1]
+    p = pattern_from_json(json.loads(text))
+    state.PATTERNS[(scene.name, key)] = (text, p)
     return p
 
 
@@ -112,8 +113,12 @@ def pattern_objects(context, pattern, lo: float, hi: float, role: str = "pattern
         uv = np.asarray(p.uv, dtype=np.float64)
         v3 = np.stack([uv[:, 0], np.zeros(len(uv)), uv[:, 1]], axis=1)
         me = convert.mesh_from_arrays(f"EASE piece {p.name}", v3, p.faces)
-        col = me.color_attributes.new(ACHIEVED, "FLOAT_COLOR", "FACE")
-        col.data.foreach_set("color", ramp.ease_to_color(np.clip(p.achieved_weft, lo, hi), lo, hi).ravel())
+        # colour layers live on points or corners: every corner of a triangle gets its achieved ease
+        col = me.color_attributes.new(ACHIEVED, "FLOAT_COLOR", "CORNER")
+        rgba = ramp.ease_to_color(np.clip(p.achieved_weft, lo, hi), lo, hi)
+        col.data.foreach_set("color", np.repeat(rgba, 3, axis=0).ravel())
+        me.attributes.new("achieved_weft", "FLOAT", "FACE").data.foreach_set(
+            "value", np.asarray(p.achieved_weft, dtype=np.float32))
         me.materials.append(mat)
         obj = convert.new_object(f"EASE piece {p.name}", me, coll)
         obj.location = (ox, 0.0, oz)
@@ -179,14 +184,15 @@ def _progress_for(context):
     return progress
 
 
-def show_pattern(context, pattern, store_as: str = PATTERN_TEXT) -> None:
+def show_pattern(context, pattern, store_as: str = PATTERN_KEY) -> None:
     from .ease_ops import ramp_range
     lo, hi = ramp_range(context.scene)
-    lo = min(lo, float(min(np.min(p.achieved_weft) for p in pattern.panels)))
-    hi = max(hi, float(max(np.max(p.achieved_weft) for p in pattern.panels)))
+    # widen the display range to the achieved scales (robust percentiles; degenerate slivers aside)
+    w = np.concatenate([np.asarray(p.achieved_weft, dtype=float) for p in pattern.panels])
+    lo = max(ramp.EASE_LIMITS[0], min(lo, float(np.percentile(w, 1))))
+    hi = min(ramp.EASE_LIMITS[1], max(hi, float(np.percentile(w, 99))))
     pattern_objects(context, pattern, lo, hi)
     store_pattern(context.scene, pattern, store_as)
-    state.PATTERNS[(context.scene.name, store_as)] = pattern
     context.scene.ease.pattern_json = json.dumps(key_figures(pattern))
 
 

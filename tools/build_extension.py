@@ -1,0 +1,184 @@
+#!/usr/bin/env python3
+"""Build the EASE Blender extension zip(s) with the core's wheels bundled.
+
+    python tools/build_extension.py                      # Linux x64, macOS arm64, Windows x64
+    python tools/build_extension.py --platform linux-x64 --out dist
+
+Steps: download the binary wheels of the core's dependencies for each
+platform (``pip download --only-binary=:all: --platform ... --python-version
+3.11``; pins from ``requirements.txt``; cached in ``.cache/wheels``); drop
+numpy (Blender ships its own); stage the extension (``__init__.py``,
+``blender_manifest.toml``, ``ease_addon/``, ``core/``, ``examples/designs/``)
+in ``build/extension`` with a generated manifest that lists the wheels and
+the platforms; then ``blender_ext.py build`` (``--split-platforms`` when
+building for several platforms: one zip per platform, each with only its
+wheels). The repository's own manifest is never rewritten.
+"""
+from __future__ import annotations
+
+import argparse
+import glob
+import importlib.util
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+# Blender platform -> pip --platform tags (newest first; pip accepts several).
+PLATFORM_TAGS = {
+    "linux-x64": ["manylinux_2_28_x86_64", "manylinux_2_27_x86_64", "manylinux_2_17_x86_64",
+                  "manylinux2014_x86_64", "manylinux1_x86_64", "linux_x86_64"],
+    "macos-arm64": ["macosx_14_0_arm64", "macosx_13_0_arm64", "macosx_12_0_arm64", "macosx_11_0_arm64",
+                    "macosx_10_9_universal2"],
+    "windows-x64": ["win_amd64"],
+}
+# Not bundled: Blender ships numpy; bpy is Blender itself; pytest is for tests.
+NOT_BUNDLED = {"numpy", "bpy", "pytest"}
+SOURCES = ("__init__.py", "blender_manifest.toml", "ease_addon", "core", "examples/designs")
+SKIP = shutil.ignore_patterns("__pycache__", "*.pyc", "*.pyo", ".DS_Store", "*.egg-info", "cli.py.orig")
+
+
+def requirements(path: Path = ROOT / "requirements.txt") -> tuple:
+    """(bundled requirement lines, numpy constraint line) from requirements.txt."""
+    bundled, numpy = [], "numpy<2"
+    for line in path.read_text().splitlines():
+        line = line.split("#", 1)[0].strip()
+        if not line:
+            continue
+        name = re.split(r"[<>=!~\[; ]", line, 1)[0].lower()
+        if name == "numpy":
+            numpy = line
+        elif name not in NOT_BUNDLED:
+            bundled.append(line)
+    return bundled, numpy
+
+
+def download_wheels(platform: str, reqs: list, numpy: str, cache: Path) -> list:
+    """Wheels (paths) for ``platform``, numpy excluded; cached per platform."""
+    dest = cache / platform
+    dest.mkdir(parents=True, exist_ok=True)
+    cmd = [sys.executable, "-m", "pip", "download", "--quiet", "--only-binary=:all:",
+           "--python-version", "3.11", "--implementation", "cp", "--dest", str(dest)]
+    for tag in PLATFORM_TAGS[platform]:
+        cmd += ["--platform", tag]
+    # numpy resolves with the others (so they fit Blender's numpy) but is not bundled.
+    cmd += reqs + [numpy]
+    print(f"[build] downloading wheels for {platform} ...", file=sys.stderr, flush=True)
+    subprocess.run(cmd, check=True)
+    wheels = sorted(dest.glob("*.whl"))
+    keep = []
+    for w in wheels:
+        dist = w.name.split("-", 1)[0].lower().replace("_", "-")
+        if dist in NOT_BUNDLED:
+            continue
+        keep.append(w)
+    return _newest_per_dist(keep)
+
+
+def _newest_per_dist(wheels: list) -> list:
+    """One wheel per distribution (a cache may hold several versions): the last by name order
+    of versions is not reliable, so prefer the one pip would pick again = the newest mtime."""
+    by = {}
+    for w in wheels:
+        dist = w.name.split("-", 1)[0].lower()
+        if dist not in by or w.stat().st_mtime > by[dist].stat().st_mtime:
+            by[dist] = w
+    return [by[k] for k in sorted(by)]
+
+
+def blender_ext_script() -> Path:
+    """``blender_ext.py`` shipped inside the bpy wheel."""
+    spec = importlib.util.find_spec("bpy")
+    if spec is None or not spec.submodule_search_locations:
+        raise SystemExit("bpy is not installed in this Python: run ./ease.sh once (it builds .venv)")
+    for loc in spec.submodule_search_locations:
+        hits = sorted(glob.glob(os.path.join(loc, "*", "scripts", "addons_core", "bl_pkg", "cli", "blender_ext.py")))
+        if hits:
+            return Path(hits[-1])
+    raise SystemExit("blender_ext.py not found in the bpy package")
+
+
+def generated_manifest(platforms: list, wheel_names: list) -> str:
+    """The repo manifest with ``platforms`` and ``wheels`` filled in (build copy only)."""
+    text = (ROOT / "blender_manifest.toml").read_text()
+    plat = "platforms = [" + ", ".join(f'"{p}"' for p in platforms) + "]"
+    text, n = re.subn(r"(?m)^platforms\s*=.*$", plat, text)
+    if n != 1:
+        raise SystemExit("blender_manifest.toml: expected one top-level 'platforms = [...]' line")
+    if wheel_names:
+        wl = "wheels = [\n" + "".join(f'  "./wheels/{w}",\n' for w in wheel_names) + "]"
+        text = text.replace(plat, plat + "\n\n" + wl, 1)
+    return text
+
+
+def stage(build: Path, platforms: list, wheels: list) -> Path:
+    src = build / "extension"
+    if src.exists():
+        shutil.rmtree(src)
+    src.mkdir(parents=True)
+    for rel in SOURCES:
+        p = ROOT / rel
+        if p.is_dir():
+            shutil.copytree(p, src / rel, ignore=SKIP)
+        elif p.is_file():
+            (src / rel).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(p, src / rel)
+    if wheels:
+        (src / "wheels").mkdir()
+        for w in wheels:
+            shutil.copy2(w, src / "wheels" / w.name)
+    (src / "blender_manifest.toml").write_text(generated_manifest(platforms, [w.name for w in wheels]))
+    return src
+
+
+def build(platforms: list, out: Path, cache: Path, with_wheels: bool = True, build_dir: Path = None) -> list:
+    """Build the zip(s); returns their paths."""
+    for p in platforms:
+        if p not in PLATFORM_TAGS:
+            raise SystemExit(f"unknown platform {p!r}; known: {', '.join(PLATFORM_TAGS)}")
+    wheels = []
+    if with_wheels:
+        reqs, numpy = requirements()
+        seen = set()
+        for p in platforms:
+            for w in download_wheels(p, reqs, numpy, cache):
+                if w.name not in seen:   # pure-Python wheels are the same file for every platform
+                    seen.add(w.name)
+                    wheels.append(w)
+    build_dir = build_dir or (ROOT / "build")
+    src = stage(build_dir, platforms, wheels)
+    script = blender_ext_script()
+    out.mkdir(parents=True, exist_ok=True)
+    before = set(out.glob("*.zip"))
+    subprocess.run([sys.executable, str(script), "validate", str(src)], check=True)
+    cmd = [sys.executable, str(script), "build", "--source-dir", str(src), "--output-dir", str(out)]
+    if len(platforms) > 1:
+        cmd.append("--split-platforms")
+    subprocess.run(cmd, check=True)
+    zips = sorted(z for z in out.glob("*.zip") if z not in before or z.stat().st_mtime >= src.stat().st_mtime)
+    return zips
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--platform", action="append", choices=sorted(PLATFORM_TAGS),
+                    help="platform to build for (repeat; default: all three)")
+    ap.add_argument("--out", default=str(ROOT / "dist"), help="output folder for the zip(s) (default dist/)")
+    ap.add_argument("--cache", default=str(ROOT / ".cache" / "wheels"), help="wheel download cache")
+    ap.add_argument("--no-wheels", action="store_true",
+                    help="build without bundled wheels (for a Python that already has the dependencies)")
+    args = ap.parse_args(argv)
+    platforms = args.platform or list(PLATFORM_TAGS)
+    zips = build(platforms, Path(args.out), Path(args.cache), with_wheels=not args.no_wheels)
+    for z in zips:
+        print(f"{z}  ({z.stat().st_size / 2**20:.1f} MiB)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
