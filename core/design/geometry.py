@@ -168,13 +168,21 @@ def plane_section_loop(vertices: np.ndarray, faces: np.ndarray, point: np.ndarra
             raise ValueError("the plane does not cut the surface")
         C = V[faces[cand]].mean(axis=1)
         start_face = int(cand[np.argmin(np.linalg.norm(C - point, axis=1))])
-    # Crossing edge -> the (up to two) faces it links.
+    # Crossing edge -> the (up to two) faces it links and the edge across each face.
     cf = np.flatnonzero(fcross.sum(axis=1) == 2)
-    edge_links = {}
-    for f in cf:
-        a, b = fe[f][fcross[f]]
-        edge_links.setdefault(int(a), []).append((int(f), int(b)))
-        edge_links.setdefault(int(b), []).append((int(f), int(a)))
+    pairs = fe[cf][fcross[cf]].reshape(-1, 2)
+    src = np.concatenate([pairs[:, 0], pairs[:, 1]])
+    dst = np.concatenate([pairs[:, 1], pairs[:, 0]])
+    via = np.concatenate([cf, cf])
+    order_ = np.argsort(src, kind="stable")
+    src, dst, via = src[order_], dst[order_], via[order_]
+    first = np.ones(len(src), dtype=bool)
+    first[1:] = src[1:] != src[:-1]
+    nE = len(edges)
+    f1 = np.full(nE, -1, dtype=np.int64); d1 = f1.copy(); f2 = f1.copy(); d2 = f1.copy()
+    f1[src[first]], d1[src[first]] = via[first], dst[first]
+    f2[src[~first]], d2[src[~first]] = via[~first], dst[~first]
+    f1, d1, f2, d2 = f1.tolist(), d1.tolist(), f2.tolist(), d2.tolist()
     e0, e1 = fe[start_face][fcross[start_face]]
     order, seg_faces = [int(e0)], []
     prev_face, cur = int(start_face), int(e1)
@@ -183,10 +191,12 @@ def plane_section_loop(vertices: np.ndarray, faces: np.ndarray, point: np.ndarra
         order.append(cur)
         if cur == order[0]:
             break
-        nxt = [x for x in edge_links.get(cur, []) if x[0] != prev_face]
-        if not nxt:
+        if f1[cur] != prev_face:
+            prev_face, cur = f1[cur], d1[cur]
+        else:
+            prev_face, cur = f2[cur], d2[cur]
+        if prev_face < 0:
             raise ValueError("the plane section runs into a mesh boundary (it does not close)")
-        prev_face, cur = nxt[0]
         seg_faces.append(prev_face)
     else:
         raise ValueError("the plane section does not close")
