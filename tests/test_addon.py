@@ -44,8 +44,14 @@ def bpy_session():
     assert bpy.ops.preferences.addon_enable(module=module) == {"FINISHED"}
     bpy.ops.wm.read_homefile(use_empty=True)
     yield {"bpy": bpy, "module": module, "tmp": Path(tmp)}
-    bpy.ops.preferences.addon_disable(module=module)
-    bpy.context.preferences.extensions.repos.remove(repo)
+    import addon_utils
+    if addon_utils.check(module)[1]:
+        bpy.ops.preferences.addon_disable(module=module)
+    elif module in sys.modules:  # preferences reloaded with a file: unregister directly
+        sys.modules[module].unregister()
+    for r in list(bpy.context.preferences.extensions.repos):
+        if r.module == "ease_test":
+            bpy.context.preferences.extensions.repos.remove(r)
 
 
 @pytest.fixture(scope="module")
@@ -429,22 +435,52 @@ def test_cycles_render_is_not_empty(bpy_session):
 
 # ----------------------------------------------------------------------------- undo, save/reopen
 
+def _fingerprint(bpy, ease_ops):
+    """What an operator may change: objects, body vertices, ease layer, design, pattern, studio."""
+    sc = _scene(bpy)
+    s = sc.ease
+    fp = {"objects": sorted(o.name for o in bpy.data.objects), "design": s.design_json,
+          "pattern": sc.get("ease_pattern_json", ""), "engine": sc.render.engine,
+          "camera": sc.camera.name if sc.camera else None}
+    if s.body is not None:
+        fp["verts"] = float(np.round(_verts(s.body).astype(np.float64).sum(), 5))
+        fp["ease"] = float(np.round(ease_ops.vertex_ease(s.body, sc).sum(), 5))
+        fp["kp"] = json.dumps(_addon_convert.read_keypoints(s.body.data), sort_keys=True)
+    return fp
+
+
+_addon_convert = None
+
+
 def test_undo_restores_the_scene(bpy_session):
+    """Every operator's changes live in Blender data, so undo brings the scene back.
+
+    Headless, operators called from Python push no undo step of their own; the
+    test pushes the steps the UI would push around each call, then undoes.
+    """
+    global _addon_convert
     bpy = bpy_session["bpy"]
-    s = _scene(bpy).ease
     ease_ops = _addon(bpy_session, "ease_ops")
-    before = ease_ops.vertex_ease(s.body, _scene(bpy)).copy()
-    bpy.ops.ed.undo_push(message="before")
-    assert bpy.ops.ease.ease_uniform(whole_body=True, ease=1.9) == {"FINISHED"}
-    assert np.allclose(ease_ops.vertex_ease(_scene(bpy).ease.body, _scene(bpy)), 1.9, atol=1e-5)
-    assert bpy.ops.ed.undo() == {"FINISHED"}
-    assert np.allclose(ease_ops.vertex_ease(_scene(bpy).ease.body, _scene(bpy)), before, atol=1e-6)
-    n = len(bpy.data.objects)
-    bpy.ops.ed.undo_push(message="before size")
-    v0 = _verts(_scene(bpy).ease.body).copy()
-    assert bpy.ops.ease.set_size(size="S") == {"FINISHED"}
-    assert bpy.ops.ed.undo() == {"FINISHED"}
-    assert np.allclose(_verts(_scene(bpy).ease.body), v0) and len(bpy.data.objects) == n
+    _addon_convert = _addon(bpy_session, "convert")
+    names = [p.name for p in _addon(bpy_session, "design_ops").current_cut(bpy.context).panels]
+    _scene(bpy).render.engine = "BLENDER_EEVEE" if "BLENDER_EEVEE" in \
+        [i.identifier for i in _scene(bpy).render.bl_rna.properties["engine"].enum_items] else "BLENDER_WORKBENCH"
+    calls = [(bpy.ops.ease.ease_uniform, dict(whole_body=True, ease=1.9)),
+             (bpy.ops.ease.ease_gradient, dict(panel=names[0])),
+             (bpy.ops.ease.set_size, dict(size="S")),
+             (bpy.ops.ease.set_pose, dict(pose="P3")),
+             (bpy.ops.ease.assign_keypoint, dict(name="undo_point", vertex=100)),
+             (bpy.ops.ease.ease_to_design, {}),
+             (bpy.ops.ease.add_body, dict(source="DEFAULT")),
+             (bpy.ops.ease.studio_setup, {})]
+    for op, kw in calls:
+        bpy.ops.ed.undo_push(message="before")
+        before = _fingerprint(bpy, ease_ops)
+        assert op(**kw) == {"FINISHED"}, op
+        bpy.ops.ed.undo_push(message=op.idname())
+        assert _fingerprint(bpy, ease_ops) != before, f"{op.idname()} changed nothing"
+        assert bpy.ops.ed.undo() == {"FINISHED"}
+        assert _fingerprint(bpy, ease_ops) == before, f"undo after {op.idname()}"
 
 
 def test_save_reopen_round_trip(bpy_session):
