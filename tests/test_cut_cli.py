@@ -57,12 +57,20 @@ def test_cut_writes_its_files_and_reloads(tmp_path):
     assert (again / "panels.obj").read_bytes() == (out / "panels.obj").read_bytes()
 
 
-def test_cut_on_another_size_and_pose(tmp_path):
+def test_cut_on_another_size_shown_on_a_pose(tmp_path):
+    from core.body import load_body
+    from core.body.sizes import size_shape
     out = tmp_path / "xl"
-    assert ease_cut(TEMPLATE_DIR / "skirt.json", "--out", out, "--size", "XL", "--pose", "A",
+    assert ease_cut(TEMPLATE_DIR / "skirt.json", "--out", out, "--size", "XL", "--pose", "P3",
                     "--quiet", "--no-png") == 0
     cut = load_cut(out)
-    assert cut.body["shape"] == "XL" and [p.name for p in cut.panels] == ["skirt.front", "skirt.back"]
+    assert cut.body["shape"] == "XL" and cut.body["pose"] == "A"          # cut on the reference pose
+    assert [p.name for p in cut.panels] == ["skirt.front", "skirt.back"]
+    body = load_body("anny")
+    X = cut.positions(body.vertices(size_shape(body, "XL"), "P3"))        # ... shown sitting
+    V = np.array([[float(x) for x in l.split()[1:]] for l in (out / "panels.obj").read_text().splitlines()
+                  if l.startswith("v ")])
+    assert np.allclose(V, X, atol=1e-6)
 
 
 def test_bad_design_writes_nothing(tmp_path):

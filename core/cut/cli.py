@@ -1,5 +1,8 @@
 """``ease cut``: cut a design's panels out of the body surface and write them.
 
+``--size`` re-cuts the design on that size (keypoints resolved on it);
+``--pose`` shows the cut (made on the design's reference pose) on a pose.
+
 Writes (atomically, all or nothing) into ``--out``:
 ``panels.obj`` (one ``g`` group per panel, on the instance cut), ``cut.json`` +
 ``cut_embedding.npz`` (reloadable with :func:`core.cut.io.load_cut`),
@@ -109,7 +112,9 @@ def run_cut(design_path, out, size=None, pose=None, body_name=None, progress=Non
     design = load_design(design_path)
     body = load_body(body_name or design.body.get("model", "anny"))
     t0 = time.perf_counter()
-    cut = cut_design(design, body=body, shape=size, pose=pose, progress=progress)
+    # The design is defined (its lengths traced) on its reference pose; the cut is
+    # pose-independent, so a requested pose only changes where the panels are shown.
+    cut = cut_design(design, body=body, shape=size, progress=progress)
     seconds = time.perf_counter() - t0
     vertices = instance_vertices(design, body, size, pose)
     X = cut.positions(vertices)
@@ -151,7 +156,8 @@ def add_parser(sub) -> None:
     p.add_argument("--size", choices=("XS", "S", "M", "L", "XL"), default=None,
                    help="cut on this size instead of the design's body shape")
     p.add_argument("--pose", choices=("A", "T", "P1", "P2", "P3"), default=None,
-                   help="cut on this pose instead of the design's (reference) pose")
+                   help="write the panels (OBJ, PNG) on this pose; the cut is made on the design's "
+                        "reference pose and holds for every pose")
     p.add_argument("--body", default=None, help="body model (default: the design's, e.g. anny)")
     p.add_argument("--no-png", action="store_true", help="skip the PNG picture")
     p.add_argument("--quiet", action="store_true", help="no progress line")
