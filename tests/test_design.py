@@ -365,14 +365,28 @@ def test_ease_fields(body, ref):
     assert (right.ease == 2.5).sum() == (left.ease == 2.5).sum()
 
 
-def test_gradient_between_keypoints_and_full_array(body, ref):
-    d = TEMPLATES["dress_gradient"]()
-    d["skirt"] = False
-    regions = {"dress.bodice_front": body.regions["torso"]}
-    design = load_design(d)
-    cut = apply_ease(_body_cut(body, ref, regions), design, body, ref)
+def test_gradient_between_keypoints_and_over_the_garment(body, ref):
+    d = shirt()
+    d["garments"][0]["panels"][0]["ease"] = {"from": 1.0, "to": 1.8, "between": ["neck_front", "waist_front"]}
+    regions = {"shirt.front": body.regions["torso"]}
+    cut = apply_ease(_body_cut(body, ref, regions), d, body, ref)
     e = cut.panels[0].ease
-    assert e.min() >= 1.0 - 1e-12 and e.max() <= 1.8 + 1e-12 and e.max() > e.min()
+    assert e.min() == 1.0 and e.max() == 1.8                  # clamped beyond both ends
+    c = cut.panel_positions(cut.panels[0], ref)[cut.panels[0].faces].mean(axis=1)
+    zn, zw = body.landmark_position("neck_front", ref)[2], body.landmark_position("waist_front", ref)[2]
+    mid = np.abs(c[:, 2] - (zn + zw) / 2) < 0.01
+    assert np.all(np.abs(e[mid] - 1.4) < 0.1)
+    # over the garment: one ramp across both panels, not one per panel
+    d = shirt()
+    for p in d["garments"][0]["panels"]:
+        p["ease"] = {"from": 1.0, "to": 2.0, "axis": "-z", "over": "garment"}
+    regions = {"shirt.front": body.regions["torso"], "shirt.sleeve_front_left": body.regions["arm_left"]}
+    cut = apply_ease(_body_cut(body, ref, regions), d, body, ref)
+    torso, arm = cut.panel("shirt.front"), cut.panel("shirt.sleeve_front_left")
+    assert torso.ease.min() == 1.0 and torso.ease.max() == 2.0      # the torso spans the garment's height
+    assert arm.ease.min() > 1.0 and arm.ease.max() < 2.0
+    d["garments"][0]["panels"][0]["ease"]["over"] = "body"
+    assert error_of(d).path == "garments[0].panels[0].ease.over"
     nf = len(body.faces)
     d = shirt()
     d["garments"][0]["panels"][0]["ease"] = {"per_triangle": {"values": [1.3] * (nf - 1)}}

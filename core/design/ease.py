@@ -8,7 +8,9 @@ Kinds (per panel, in the design's ``ease``):
   centroid on the segment a -> b, constant beyond its ends;
 - linear gradient along an axis ``{"from": 1.0, "to": 1.6, "axis": "-z"}``:
   ramps over the panel's own extent along the axis (``from`` where the
-  coordinate along the axis is smallest: ``"-z"`` runs top -> bottom);
+  coordinate along the axis is smallest: ``"-z"`` runs top -> bottom); with
+  ``"over": "garment"`` over the extent of the whole garment instead (a dress
+  whose ease rises from the neckline to the hem across all its panels);
 - per body-template triangle ``{"per_triangle": {"triangles": [...], "values":
   [...], "default": 1.0}}`` (or ``{"values": [...]}`` with one value per
   template triangle): each cut triangle takes the value of the template
@@ -36,6 +38,12 @@ def _centroids(cut, panel, vertices) -> np.ndarray:
     return X[panel.faces].mean(axis=1)
 
 
+def _garment_extent(cut, garment, direction, vertices):
+    proj = [(_centroids(cut, p, vertices) @ direction) for p in cut.panels if p.garment == garment]
+    proj = np.concatenate(proj) if proj else np.zeros(0)
+    return (float(proj.min()), float(proj.max())) if proj.size else (0.0, 0.0)
+
+
 def panel_ease(cut, panel, ease: dict, resolver: Resolver, path: str) -> np.ndarray:
     """Target weft scale (f,) for the triangles of one cut ``panel``.
 
@@ -60,9 +68,13 @@ def panel_ease(cut, panel, ease: dict, resolver: Resolver, path: str) -> np.ndar
                 raise DesignError(f"{path}.between", "the two keypoints coincide")
             t = (c - a) @ ab / (ab @ ab)
         else:
-            proj = c @ np.asarray(AXIS_VECTORS[ease["axis"]], dtype=float)
-            span = proj.max() - proj.min() if nf else 0.0
-            t = (proj - proj.min()) / span if span > 0 else np.zeros(nf)
+            axis = np.asarray(AXIS_VECTORS[ease["axis"]], dtype=float)
+            proj = c @ axis
+            if ease.get("over") == "garment":
+                lo, hi = _garment_extent(cut, panel.garment, axis, resolver.vertices)
+            else:
+                lo, hi = (float(proj.min()), float(proj.max())) if nf else (0.0, 0.0)
+            t = (proj - lo) / (hi - lo) if hi > lo else np.zeros(nf)
         t = np.clip(t, 0.0, 1.0)
         rho = ease["from"] + t * (ease["to"] - ease["from"])
     elif "per_triangle" in ease:

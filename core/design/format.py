@@ -44,7 +44,8 @@ line                   ``{"name", "role": "seam" | "opening" | "guide"}`` plus o
 panel                  ``{"name", "seed": keypoint inside it, "body_part": "torso" |
                        "arm" | "leg", "ease": field}``
 ease field             ``{"value"}`` | ``{"from", "to", "between": [a, b]}`` |
-                       ``{"from", "to", "axis"}`` | ``{"per_triangle": {"triangles",
+                       ``{"from", "to", "axis", "over": "panel" | "garment"}`` |
+                       ``{"per_triangle": {"triangles",
                        "values", "default"}}`` (body template triangles) -- every
                        value finite and in 0.5..4.0 (see :mod:`core.design.ease`)
 =====================  ==========================================================
@@ -539,7 +540,7 @@ def _parse_ease(path, obj, params) -> dict:
         out["default"] = _parse_ease_value(f"{path}.per_triangle.default", pt.get("default", 1.0))
         return {"per_triangle": out}
     if "from" in obj or "to" in obj:
-        _expect_keys(path, obj, ("from", "to", "between", "axis"))
+        _expect_keys(path, obj, ("from", "to", "between", "axis", "over"))
         for k in ("from", "to"):
             if k not in obj:
                 raise DesignError(f"{path}.{k}", "missing; a gradient needs from and to")
@@ -556,6 +557,11 @@ def _parse_ease(path, obj, params) -> dict:
             if obj["axis"] not in AXES:
                 raise DesignError(f"{path}.axis", f"expected one of {', '.join(AXES)}, got {_fmt(obj['axis'])}")
             out["axis"] = obj["axis"]
+            over = obj.get("over", "panel")
+            if over not in ("panel", "garment"):
+                raise DesignError(f"{path}.over", f"expected \"panel\" or \"garment\", got {_fmt(over)}")
+            if over != "panel":
+                out["over"] = over
         return out
     raise DesignError(path, f"expected an ease field {{value}} | {{from, to, between|axis}} | {{per_triangle}}, got {_fmt(obj)}")
 

@@ -315,7 +315,7 @@ def dress():
 
 def dress_gradient():
     """The paper's simple dress with ease rising linearly from top to hem."""
-    grad = {"from": 1.0, "to": 1.8, "between": ["neck_front", "hem_front_left"]}
+    grad = {"from": 1.0, "to": 1.8, "axis": "-z", "over": "garment"}
     return _dress("dress with linear ease", "The paper's non-uniform dress: ease rising linearly from "
                                             "1.0 at the neckline to 1.8 at the hem.",
                   {k: copy.deepcopy(grad) for k in ("bodice_front", "bodice_back", "skirt_front", "skirt_back")})
