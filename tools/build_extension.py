@@ -68,7 +68,10 @@ def download_wheels(platform: str, reqs: list, numpy: str, cache: Path) -> list:
     # numpy resolves with the others (so they fit Blender's numpy) but is not bundled.
     cmd += reqs + [numpy]
     print(f"[build] downloading wheels for {platform} ...", file=sys.stderr, flush=True)
-    subprocess.run(cmd, check=True)
+    if subprocess.run(cmd).returncode != 0:
+        # offline: resolve from the cache alone
+        print(f"[build] download failed; trying the cache {dest} only", file=sys.stderr, flush=True)
+        subprocess.run(cmd + ["--no-index", "--find-links", str(dest)], check=True)
     wheels = sorted(dest.glob("*.whl"))
     keep = []
     for w in wheels:
