@@ -402,3 +402,19 @@ def test_template_lookup():
     assert template("pants").name == "pants"
     with pytest.raises(DesignError):
         template("kilt")
+
+
+def test_mirror_of_keypoints_and_explicit_mirror_panels(body, ref):
+    d = shirt()
+    d["keypoints"]["spot_left"] = {"triangle": 5000, "bary": [0.2, 0.3, 0.5]}
+    d["keypoints"]["spot_mirror"] = {"mirror_of": "spot_left"}
+    d["garments"][0]["panels"][2]["seed"] = {"between": ["armhole_front_left", "cuff_front_left"], "t": 0.5}
+    design = load_design(d)
+    design.set_ease("shirt.sleeve_front_right", {"value": 1.5})      # the mirrored seed becomes explicit
+    again = load_design(design.to_json())
+    r = Resolver(again, body, ref)
+    p, q = r.position(r.point("spot_left", "")), r.position(r.point("spot_mirror", ""))
+    assert np.linalg.norm(q - p * [-1, 1, 1]) < 2e-3
+    spec = resolve(again, body, vertices=ref)
+    seeds = {s.name: r.position(s.seed) for s in spec.panels}
+    assert np.linalg.norm(seeds["shirt.sleeve_front_right"] - seeds["shirt.sleeve_front_left"] * [-1, 1, 1]) < 2e-3

@@ -29,6 +29,7 @@ Fields (metres, the body frame of :mod:`core`: +Z up, body faces -Y, +X = body's
                        geodesic a -> b) or ``{"trace": {"from", "along": "arm_left" |
                        "arm_right" | "leg_left" | "leg_right" | "torso_down" |
                        "torso_up", "length"}}`` (geodesic length down a body part)
+                       or ``{"mirror_of": keypoint}`` (its mirror image)
 ``lines``              lines shared by all garments (e.g. the waist of shirt+pants)
 ``garments``           ``[{"name", "kind": "upper" | "lower" | "dress", "pin": line
                        name, "lines": [...], "panels": [...]}]``
@@ -77,7 +78,7 @@ BODY_PARTS = ("torso", "arm", "leg")
 TRACE_ALONG = ("arm_left", "arm_right", "leg_left", "leg_right", "torso_down", "torso_up")
 PARAMETER_KINDS = ("placement", "length", "number")
 AXES = ("x", "-x", "+x", "y", "-y", "+y", "z", "-z", "+z")
-KEYPOINT_KINDS = ("landmark", "triangle", "between", "trace")
+KEYPOINT_KINDS = ("landmark", "triangle", "between", "trace", "mirror_of")
 
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
@@ -407,6 +408,10 @@ def _parse_keypoint(path, obj, params):
             raise DesignError(f"{path}.t", "missing; expected a placement 0..1 or \"$parameter\"")
         t = _param_or_number(f"{path}.t", obj["t"], params, "placement", 0.0, 1.0, what="a placement")
         return {"between": refs, "t": t}
+    if kind == "mirror_of":
+        # the mirror image (through the body's symmetry map) of another keypoint
+        _expect_keys(path, obj, ("mirror_of",))
+        return {"mirror_of": _ref(f"{path}.mirror_of", obj["mirror_of"], params)}
     # trace
     _expect_keys(path, obj, ("trace",))
     tr = _expect_dict(f"{path}.trace", obj["trace"], "{from, along, length}")

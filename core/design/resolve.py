@@ -204,7 +204,7 @@ class Resolver:
                                                       f"exist (body {self.body.name!r} has {nf} triangles)")
             return SurfacePoint(int(kp["triangle"]), tuple(float(b) for b in kp["bary"]))
         if "mirror_of" in kp:
-            return self.mirror(self.resolve_def(kp["mirror_of"], path))
+            return self.mirror(self.ref(kp["mirror_of"], f"{path}.mirror_of"))
         if "between" in kp:
             a = self.ref(kp["between"][0], f"{path}.between[0]")
             b = self.ref(kp["between"][1], f"{path}.between[1]")
