@@ -247,3 +247,14 @@ def test_shirt_recut_on_other_sizes(size, body, instances):
     a_new = sum(_areas(cut.panel_positions(p, V), np.asarray(p.faces)).sum() for p in cut.panels)
     a_tr = sum(_areas(ref.panel_positions(p, V), np.asarray(p.faces)).sum() for p in ref.panels)
     assert abs(a_new - a_tr) / a_tr < 0.05
+
+
+@pytest.mark.parametrize("size", ["XS", "S", "L", "XL"])
+def test_every_template_resolves_on_every_size(size, body, instances):
+    """Keypoints, rings and traced lengths of every template fit every size (a full
+    re-cut per size and template is left to the shirt above, for time)."""
+    from core.design import resolve
+    for name in TEMPLATES:
+        d = load_design(TEMPLATE_DIR / f"{name}.json")
+        spec = resolve(d, body, shape=size, vertices=instances[size])
+        assert len(spec.panels) == PANELS[name] and spec.body["shape"] == size
