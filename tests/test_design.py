@@ -3,7 +3,6 @@
 Resolution runs on the real default body (Anny). Ease fields are checked on a
 cut made directly from body triangles (no cutting engine needed here).
 """
-import copy
 import json
 import math
 

@@ -11,7 +11,6 @@ panels coloured, front and back views).
 """
 from __future__ import annotations
 
-import sys
 import time
 from pathlib import Path
 

@@ -8,7 +8,7 @@ are mirrored geometrically through the body's symmetry map.
 from __future__ import annotations
 
 import copy
-from typing import Dict, Optional
+from typing import Optional
 
 import numpy as np
 
