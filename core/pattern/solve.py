@@ -88,6 +88,8 @@ class SolverConfig:
     the paper); ``feedback_warp`` the same for the warp targets;
     ``adapt_feedback`` the weft and warp feedback used by adaptation solves
     (pose demands are local, hence incompatible in 2D without shear).
+    ``sliver_weight``: every triangle weighs at least this fraction of the
+    mean triangle weight (set when the solver is built).
     ``len_integral``: gain of the integral action on seam-edge length
     mismatch (0 = the paper's proximal linearisation only).
     ``straight_target``: ``"zero"`` (paper: second differences of seams
@@ -111,7 +113,9 @@ class SolverConfig:
     len_direction: str = "current"
     len_target: str = "current"
     len_integral: float = 1.0
+    len_integral_cap: float = 1.0
     adapt_feedback: float = 0.5
+    sliver_weight: float = 0.2
     feedback_warp: float = 0.0
 
 
@@ -355,10 +359,17 @@ class PatternSolver:
         self.G = np.concatenate([pd.G for pd in self.panels])
         self.a = np.concatenate([pd.area0 for pd in self.panels])
         self._area_floor = 1e-6 * np.abs(self.a)
+        nf = len(self.gfaces)
+        # vertex -> incident faces, for the flip safeguard's local re-checks
+        self._vf = sp.csr_matrix((np.ones(3 * nf), (self.gfaces.ravel(), np.repeat(np.arange(nf), 3))),
+                                 shape=(self.n, nf))
         self.face_panel = np.concatenate([np.full(len(pd.faces), k) for k, pd in enumerate(self.panels)])
         self._warp0, self._warp_w = self._warp_in_initial_domain()
         self.total_area = float(self.a.sum())
         self.a = self.a / self.total_area
+        # slivers (cut boundaries meet the body mesh at grazing angles) would weigh almost
+        # nothing and fold freely: give every triangle at least a fraction of the mean weight
+        self.a = np.maximum(self.a, self.config.sliver_weight * float(np.mean(self.a)))
         self.uv0 = np.concatenate([pd.uv0 for pd in self.panels])
         el = np.linalg.norm(self.uv0[self.gfaces[:, [1, 2, 0]]] - self.uv0[self.gfaces], axis=2)
         self.h = float(np.mean(el))
@@ -560,6 +571,9 @@ class PatternSolver:
             rhs += self._seam_rhs(U, _ab(R, T), reset=(it == 0))
             rhs += self._pin[:, None] * U
             U_new = np.column_stack([lu.solve(rhs[:, 0]), lu.solve(rhs[:, 1])])
+            # the step's rigid part per panel carries no strain: remove it so that the flip
+            # safeguard only ever pulls back the local part of the step
+            U_new = self._rigid_align(U_new, U)
             U, nb = self._safeguard(U, U_new)
             backtracks += nb
             if cfg.realign_grain:
@@ -604,6 +618,10 @@ class PatternSolver:
                         # integral action: what the proximal pull leaves of the mismatch is
                         # accumulated into this side's target until both sides agree
                         self._len_int[k] -= cfg.len_integral * 0.5 * (cur_len[k] - cur_len[other])
+                        # bounded: where the design itself makes the sides differ (weft ease on a
+                        # sleeve cap sewn to a warp-wise armhole) the seam gives way, not the cloth
+                        cap = cfg.len_integral_cap * lbar
+                        np.clip(self._len_int[k], -cap, cap, out=self._len_int[k])
                         lbar = lbar + self._len_int[k]
                     cur = U[g[1:]] - U[g[:-1]]
                     dirn = cur if cfg.len_direction == "current" else pred
@@ -628,34 +646,85 @@ class PatternSolver:
                     rhs += D.T @ ((cfg.lambda_curve * cc)[:, None] * target)
         return rhs
 
+    def _rigid_align(self, U_new: np.ndarray, U_old: np.ndarray) -> np.ndarray:
+        """``U_new`` moved rigidly per panel onto ``U_old`` (area-free Kabsch)."""
+        out = U_new.copy()
+        for pd in self.panels:
+            sl = slice(pd.offset, pd.offset + pd.n)
+            Q = _kabsch2(U_old[sl], U_new[sl])
+            cn, co = U_new[sl].mean(axis=0), U_old[sl].mean(axis=0)
+            out[sl] = (U_new[sl] - cn) @ Q.T + co
+        return out
+
     def _safeguard(self, U_old: np.ndarray, U_new: np.ndarray):
         """Keep the step flip-free: vertices of triangles that would flip step back locally.
 
         Every vertex starts with the full step; the step of the vertices of
-        each flipped (or collapsing) triangle is halved until none is left.
-        As a vertex's step goes to 0 it returns to the previous, flip-free
-        iterate, so this terminates; a panel that cannot be fixed in 40 rounds
-        keeps its previous iterate. Returns (U, number of halvings).
+        each triangle that would flip (or lose more than half its area when
+        already near-degenerate) is halved, and only the triangles around the
+        moved vertices are checked again. As a vertex's step goes to 0 it
+        returns to the previous, flip-free iterate, so this terminates; a
+        panel not fixed in 40 rounds takes a uniformly shortened step instead
+        (or keeps its previous iterate).
+        Returns (U, number of halvings).
         """
+        F = self.gfaces
+        s_old = signed_areas_2d(U_old, F)
+        floor = np.minimum(self._area_floor, 0.5 * s_old)
         alpha = np.ones(self.n)
         U = U_new.copy()
         halvings = 0
-        F = self.gfaces
+        faces = np.arange(len(F))
+        D = U_new - U_old
         for _ in range(40):
-            s = signed_areas_2d(U, F)
-            bad = s <= self._area_floor
-            if not np.any(bad):
+            s = signed_areas_2d(U, F[faces])
+            bad = faces[s <= floor[faces]]
+            if bad.size == 0:
                 return U, halvings
-            verts = np.unique(F[bad])
-            alpha[verts] *= 0.5
+            # largest common step fraction t of the bad triangle's vertices (their current
+            # fractions scaled by t) keeping its area above the floor: a quadratic in t
+            Fb = F[bad]
+            P0 = U_old[Fb]
+            Dd = alpha[Fb][:, :, None] * D[Fb]
+            e1, e2 = P0[:, 1] - P0[:, 0], P0[:, 2] - P0[:, 0]
+            f1, f2 = Dd[:, 1] - Dd[:, 0], Dd[:, 2] - Dd[:, 0]
+            cr = lambda a, b: a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+            a0 = 0.5 * cr(e1, e2) - floor[bad]
+            a1 = 0.5 * (cr(e1, f2) + cr(f1, e2))
+            a2 = 0.5 * cr(f1, f2)
+            t = np.full(len(bad), 0.5)
+            ts = np.linspace(0.0, 1.0, 33)[1:]
+            # first sample where the area would reach the floor; step back one sample (robust, vectorised)
+            vals = a0[:, None] + a1[:, None] * ts[None, :] + a2[:, None] * ts[None, :] ** 2
+            hit = np.argmax(vals <= 0, axis=1)
+            has = np.any(vals <= 0, axis=1)
+            t[has] = np.where(hit[has] > 0, ts[np.maximum(hit[has] - 1, 0)], 0.0) * 0.9
+            verts_t = np.repeat(t, 3)
+            vids = Fb.ravel()
+            scale = np.ones(self.n)
+            np.minimum.at(scale, vids, np.maximum(verts_t, 0.0))
+            verts = np.unique(vids)
+            # never stall: every vertex of a bad triangle at least halves its step
+            alpha[verts] *= np.minimum(scale[verts], 0.5)
             halvings += 1
-            U[verts] = U_old[verts] + alpha[verts, None] * (U_new[verts] - U_old[verts])
+            U[verts] = U_old[verts] + alpha[verts, None] * D[verts]
+            faces = np.unique(self._vf[verts].indices)
         s = signed_areas_2d(U, F)
         for pd in self.panels:
             sl = slice(pd.offset, pd.offset + pd.n)
             fs = slice(pd.face_offset, pd.face_offset + len(pd.faces))
-            if np.any(s[fs] <= self._area_floor[fs]):
-                U[sl] = U_old[sl]
+            if not np.any(s[fs] <= floor[fs]):
+                continue
+            # fall back to a uniform step of the whole panel towards the locally shortened one
+            beta, Ul = 0.5, U[sl].copy()
+            U[sl] = U_old[sl]
+            for _ in range(30):
+                cand = U_old[sl] + beta * (Ul - U_old[sl])
+                halvings += 1
+                if np.all(signed_areas_2d(cand, pd.faces) > floor[fs]):
+                    U[sl] = cand
+                    break
+                beta *= 0.5
         return U, halvings
 
     def _scaled_start(self, c_weft: np.ndarray, c_warp: np.ndarray) -> np.ndarray:
