@@ -83,6 +83,19 @@ def apply_shape_from_props(context, report=None) -> bool:
     return True
 
 
+def _skin_material():
+    mat = bpy.data.materials.get("EASE Skin")
+    if mat is None:
+        mat = bpy.data.materials.new("EASE Skin")
+        mat.use_nodes = True
+        bsdf = next((n for n in mat.node_tree.nodes if n.type == "BSDF_PRINCIPLED"), None)
+        if bsdf is not None:
+            bsdf.inputs["Base Color"].default_value = (0.78, 0.62, 0.52, 1.0)
+            bsdf.inputs["Roughness"].default_value = 0.6
+        mat.diffuse_color = (0.78, 0.62, 0.52, 1.0)
+    return mat
+
+
 def create_body(context, model_name: str, shape=None, pose: str = "A"):
     """Add a body object (or replace the mesh of the current one) and make it the scene's body."""
     from . import ease_ops
@@ -92,7 +105,11 @@ def create_body(context, model_name: str, shape=None, pose: str = "A"):
     scene = context.scene
     me = convert.mesh_from_arrays("EASE Body", verts, model.faces)
     obj = convert.new_object("EASE Body", me, state.collection(scene))
+    me.materials.append(_skin_material())
+    for poly in me.polygons:
+        poly.use_smooth = True
     obj["ease_model"] = model_name
+    obj["ease_role"] = "body"
     convert.store_json(obj, "ease_shape", shape)
     obj["ease_pose"] = pose
     scene.ease.body = obj

@@ -154,7 +154,7 @@ def pattern_objects(context, pattern, lo: float, hi: float, role: str = "pattern
         _child(coll, f"EASE grain {p.name}", gm, obj, role)
         # piece name
         fd = bpy.data.curves.new(f"EASE label {p.name}", "FONT")
-        fd.body = p.name + (f" (mirror of {p.mirror_of})" if p.mirror_of else "")
+        fd.body = p.name.split(".", 1)[-1] + (" (mirror)" if p.mirror_of else "")
         fd.size = 0.03
         fd.align_x = "CENTER"
         label = _child(coll, f"EASE label {p.name}", fd, obj, role)

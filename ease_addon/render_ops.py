@@ -52,9 +52,9 @@ def setup_studio(scene, samples: int = 16, resolution_pct: int = 50) -> None:
     cam.location = (float(centre[0]), float(centre[1] - dist), float(centre[2]))
     cam.rotation_euler = (math.pi / 2, 0.0, 0.0)
     scene.camera = cam
-    for name, energy, loc, rot in (("Key", 400.0, (-1.5, -2.5, 2.6), (math.radians(55), 0, math.radians(-30))),
-                                   ("Fill", 150.0, (2.0, -2.0, 1.6), (math.radians(65), 0, math.radians(45))),
-                                   ("Rim", 250.0, (0.5, 2.5, 2.4), (math.radians(-55), 0, math.radians(170)))):
+    for name, energy, loc, rot in (("Key", 250.0, (-1.5, -2.5, 2.6), (math.radians(55), 0, math.radians(-30))),
+                                   ("Fill", 90.0, (2.0, -2.0, 1.6), (math.radians(65), 0, math.radians(45))),
+                                   ("Rim", 180.0, (0.5, 2.5, 2.4), (math.radians(-55), 0, math.radians(170)))):
         ld = bpy.data.lights.get(f"{STUDIO} {name}") or bpy.data.lights.new(f"{STUDIO} {name}", "AREA")
         ld.energy = energy
         ld.size = 1.5
@@ -67,7 +67,7 @@ def setup_studio(scene, samples: int = 16, resolution_pct: int = 50) -> None:
     bg = world.node_tree.nodes.get("Background")
     if bg is not None:
         bg.inputs["Color"].default_value = (0.6, 0.6, 0.62, 1.0)
-        bg.inputs["Strength"].default_value = 0.6
+        bg.inputs["Strength"].default_value = 0.45
     scene.render.engine = "CYCLES"
     scene.cycles.device = "CPU"
     scene.cycles.samples = int(samples)
