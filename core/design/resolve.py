@@ -101,8 +101,11 @@ class Resolver:
         self.body = body
         self.faces = np.asarray(body.faces, dtype=np.int64)
         self.vertices = np.asarray(vertices, dtype=np.float64)
-        if self.vertices.shape != (int(self.faces.max()) + 1, 3) and self.vertices.shape[0] < self.faces.max() + 1:
-            raise BodyError(f"body vertices {self.vertices.shape} do not match the template's faces")
+        if self.vertices.ndim != 2 or self.vertices.shape[1] != 3 or len(self.vertices) <= self.faces.max():
+            raise BodyError(f"body vertices {self.vertices.shape} do not match the template of "
+                            f"{getattr(body, 'name', 'the body')!r} ({int(self.faces.max()) + 1} vertices)")
+        if not np.all(np.isfinite(self.vertices)):
+            raise BodyError("body vertices must be finite")
         self.tools = surface_tools(self.vertices, self.faces)
         self.geodesics = self.tools.geodesics
         self._face_sym = None
@@ -114,7 +117,7 @@ class Resolver:
     # ------------------------------------------------------------ tables
     def _build_tables(self):
         d = self.design
-        # lines: (full name, path, Line, garment name or None, mirror source path or None)
+        # lines: (full name, JSON path, Line, garment name or None), generated mirrors included
         self.lines: List[Tuple[str, str, Line, Optional[str]]] = []
         groups = [(None, "lines", d.lines)] + [(g.name, f"garments[{gi}].lines", g.lines)
                                                for gi, g in enumerate(d.garments)]
