@@ -417,3 +417,22 @@ def test_mirror_of_keypoints_and_explicit_mirror_panels(body, ref):
     spec = resolve(again, body, vertices=ref)
     seeds = {s.name: r.position(s.seed) for s in spec.panels}
     assert np.linalg.norm(seeds["shirt.sleeve_front_right"] - seeds["shirt.sleeve_front_left"] * [-1, 1, 1]) < 2e-3
+
+
+def test_ring_fractions_mirror_with_the_ring(body, ref):
+    d = shirt()
+    cuff = next(l for l in d["garments"][0]["lines"] if l["name"] == "cuff_left")
+    cuff["ring"]["named"]["cuff_quarter_left"] = 0.25
+    cuff["ring"]["named"]["cuff_half_left"] = 0.5
+    r = Resolver(load_design(d), body, ref)
+    i = next(k for k, l in enumerate(r.lines) if l[0] == "shirt.cuff_left")
+    pts = r.line_points(i)
+    P = np.array([r.position(p) for p in pts])
+    arc = np.concatenate([[0], np.cumsum(np.linalg.norm(np.diff(np.vstack([P, P[:1]]), axis=0), axis=1))])
+    k = pts.index(r.point("cuff_half_left", ""))
+    assert abs(arc[k] / arc[-1] - 0.5) < 0.02
+    # the mirrored ring turns the other way round, so fractions land on mirrored points
+    for name in ("cuff_quarter_left", "cuff_half_left"):
+        p = r.position(r.point(name, ""))
+        q = r.position(r.point(name.replace("_left", "_right"), ""))
+        assert np.linalg.norm(q - p * [-1, 1, 1]) < 2e-3
