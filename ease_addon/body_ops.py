@@ -87,7 +87,7 @@ def _skin_material():
     mat = bpy.data.materials.get("EASE Skin")
     if mat is None:
         mat = bpy.data.materials.new("EASE Skin")
-        mat.use_nodes = True
+        convert.ensure_nodes(mat)
         bsdf = next((n for n in mat.node_tree.nodes if n.type == "BSDF_PRINCIPLED"), None)
         if bsdf is not None:
             bsdf.inputs["Base Color"].default_value = (0.78, 0.62, 0.52, 1.0)

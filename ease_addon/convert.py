@@ -226,3 +226,9 @@ def store_json(idblock, key: str, obj) -> None:
 def load_json(idblock, key: str, default=None):
     s = idblock.get(key)
     return default if s in (None, "") else json.loads(s)
+
+
+def ensure_nodes(idblock) -> None:
+    """Give a material/world its node tree (always there in Blender 5; ``use_nodes`` before)."""
+    if idblock.node_tree is None or bpy.app.version < (5, 0, 0):
+        idblock.use_nodes = True

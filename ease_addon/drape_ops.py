@@ -53,7 +53,7 @@ def _fabric_material():
     mat = bpy.data.materials.get("EASE Fabric")
     if mat is None:
         mat = bpy.data.materials.new("EASE Fabric")
-        mat.use_nodes = True
+        convert.ensure_nodes(mat)
         bsdf = next((n for n in mat.node_tree.nodes if n.type == "BSDF_PRINCIPLED"), None)
         if bsdf is not None:
             bsdf.inputs["Base Color"].default_value = (0.18, 0.32, 0.55, 1.0)

@@ -62,7 +62,7 @@ def _ease_material(name: str, layer: str):
     if mat is not None:
         return mat
     mat = bpy.data.materials.new(name)
-    mat.use_nodes = True
+    convert.ensure_nodes(mat)
     nt = mat.node_tree
     bsdf = next((n for n in nt.nodes if n.type == "BSDF_PRINCIPLED"), None)
     attr = nt.nodes.new("ShaderNodeAttribute")

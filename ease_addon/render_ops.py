@@ -9,7 +9,7 @@ import bpy
 import numpy as np
 from mathutils import Vector
 
-from . import state
+from . import convert, state
 from .operators_base import EaseOperator
 
 STUDIO = "EASE Studio"
@@ -63,7 +63,7 @@ def setup_studio(scene, samples: int = 16, resolution_pct: int = 50) -> None:
         lo_obj.rotation_euler = rot
     world = scene.world or bpy.data.worlds.new(STUDIO + " World")
     scene.world = world
-    world.use_nodes = True
+    convert.ensure_nodes(world)
     bg = world.node_tree.nodes.get("Background")
     if bg is not None:
         bg.inputs["Color"].default_value = (0.6, 0.6, 0.62, 1.0)
