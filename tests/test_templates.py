@@ -131,9 +131,33 @@ def check_partition(cut, garment, n_openings, X):
     nv = len(np.unique(F))
     assert nv - len(ue) + len(F) == 2 - n_openings, "the garment is not one genus-0 surface"
     # areas: the panels' areas sum to the area of the garment surface
-    area = _areas(cut.positions(X), G).sum()
+    GX = cut.positions(X)
+    area = _areas(GX, G).sum()
     assert np.isclose(sum(_areas(cut.panel_positions(p, X), np.asarray(p.faces)).sum() for p in panels), area)
     assert area > 0.05
+
+
+def check_body_coverage(cut, G, GX, X):
+    """Per body triangle, the garment triangles on it cover it at most once, and exactly
+    once where all its corners are garment vertices (nothing lost, nothing doubled).
+    Needs an unrefined cut: refined triangles may straddle body edges."""
+    from core.design.geometry import SurfaceLocator
+    body_faces = np.asarray(load_body("anny").faces)
+    a = _areas(GX, G)
+    d2, tri, _ = SurfaceLocator(X, body_faces).closest(GX[G].mean(axis=1))
+    on_body = d2 < 1e-8                      # skirt bridge triangles are not on the body
+    cover = np.bincount(tri[on_body], weights=a[on_body], minlength=len(body_faces)) / _areas(X, body_faces)
+    assert cover.max() < 1 + 1e-6, "a body triangle is covered twice"
+    E = cut.embedding.tocsr()
+    single = (np.diff(E.indptr) == 1)
+    rows = np.flatnonzero(single)
+    original = np.zeros(len(X), dtype=bool)
+    used = np.unique(G)
+    rows = np.intersect1d(rows, used)
+    original[E.indices[E.indptr[rows]]] = np.isclose(E.data[E.indptr[rows]], 1.0)
+    inside = original[body_faces].all(axis=1)
+    assert inside.sum() > 50
+    assert np.allclose(cover[inside], 1.0, atol=1e-6), "a body triangle inside the garment is not covered"
 
 
 def check_seams(cut, X):
@@ -258,3 +282,14 @@ def test_every_template_resolves_on_every_size(size, body, instances):
         d = load_design(TEMPLATE_DIR / f"{name}.json")
         spec = resolve(d, body, shape=size, vertices=instances[size])
         assert len(spec.panels) == PANELS[name] and spec.body["shape"] == size
+
+
+@pytest.mark.parametrize("name", ["shirt_long_sleeve", "jacket", "teaser_shirt_pants", "shorts"])
+def test_panels_cover_the_body_region_once(name, body, instances):
+    d = load_design(TEMPLATE_DIR / f"{name}.json")
+    d.refine_edge_length = None
+    cut = cut_design(d, body=body)
+    X = instances["M"]
+    for g in {p.garment for p in cut.panels}:
+        G = np.concatenate([np.asarray(p.vertex_ids)[np.asarray(p.faces)] for p in cut.panels if p.garment == g])
+        check_body_coverage(cut, G, cut.positions(X), X)
