@@ -92,7 +92,7 @@ def _top_parts(sleeves: str = "long", hem: str = "hem", ease=None):
     ]
     if sleeves != "none":
         if sleeves == "long":
-            params["sleeve_length"] = {"value": 0.54, "kind": "length", "min": 0.3, "max": 0.57}
+            params["sleeve_length"] = {"value": 0.52, "kind": "length", "min": 0.3, "max": 0.57}
             normal = ["elbow_left", "wrist_left"]
         else:
             params["sleeve_length"] = {"value": 0.2, "kind": "length", "min": 0.1, "max": 0.3}
