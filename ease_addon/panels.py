@@ -88,7 +88,9 @@ class EASE_PT_design(_EasePanel, bpy.types.Panel):
         box = layout.box()
         box.label(text="Keypoints")
         box.prop(s, "keypoint_name")
-        box.operator("ease.assign_keypoint")
+        row = box.row(align=True)
+        row.operator("ease.assign_keypoint", icon="VERTEXSEL")
+        row.operator("ease.pick_keypoint", icon="RESTRICT_SELECT_OFF")
 
 
 class EASE_PT_ease(_EasePanel, bpy.types.Panel):

@@ -504,3 +504,103 @@ def test_save_reopen_round_trip(bpy_session):
     assert pattern_ops.stored_pattern(_scene(bpy)) is not None
     # the scene keeps working after reopening: ease back into the design, re-cut from the JSON
     assert bpy.ops.ease.ease_to_design() == {"FINISHED"}
+
+
+# ----------------------------------------------------------------------------- the rest of the operators, the panels
+
+def test_measurements_fit_and_manual_shape(bpy_session):
+    bpy = bpy_session["bpy"]
+    s = _scene(bpy).ease
+    assert bpy.ops.ease.measure() == {"FINISHED"}
+    assert "height" in s.measurements_report and "hip" in s.measurements_report
+    s.height_cm, s.chest_cm, s.waist_cm, s.hip_cm = 175.0, 98.0, 84.0, 102.0
+    assert bpy.ops.ease.fit_measurements() == {"FINISHED"}
+    from core.body import load_body
+    from core.body.measure import measure
+    model = load_body("anny")
+    got = measure(model, _verts(s.body).astype(np.float64))
+    for k, want in (("height", 175.0), ("chest", 98.0), ("waist", 84.0), ("hip", 102.0)):
+        if "not reachable" not in s.measurements_report.split(k, 1)[1].split(",", 1)[0]:
+            assert abs(got[k] - want) <= 1.0 + 1e-6, (k, got[k])
+    # sliders -> Apply Shape: the mesh is the model evaluated at the sliders
+    for item in s.shape:
+        if item.name == "muscle":
+            item.value = 0.3
+    assert bpy.ops.ease.apply_shape() == {"FINISHED"}
+    shape = {i.name: i.value for i in s.shape}
+    assert np.allclose(_verts(s.body), model.vertices(shape), atol=1e-5)
+
+
+def test_paint_mode_design_file_save_and_recut(bpy_session):
+    bpy = bpy_session["bpy"]
+    s = _scene(bpy).ease
+    assert bpy.ops.ease.paint_ease() == {"FINISHED"}
+    assert bpy.context.object == s.body and bpy.context.object.mode == "VERTEX_PAINT"
+    assert s.body.data.color_attributes.active_color.name == "ease"
+    bpy.ops.object.mode_set(mode="OBJECT")
+    path = bpy_session["tmp"] / "saved_design.json"
+    assert bpy.ops.ease.save_design(filepath=str(path)) == {"FINISHED"}
+    saved = json.loads(path.read_text())
+    assert saved == json.loads(s.design_json)
+    s.design_json = ""
+    assert bpy.ops.ease.load_design_file(filepath=str(path)) == {"FINISHED"}
+    assert json.loads(s.design_json)["name"] == saved["name"]
+    item = s.design_params[0]
+    s.live_recut = False
+    item.value = item.value            # no live re-cut while switched off
+    assert bpy.ops.ease.recut() == {"FINISHED"}
+    r = _run(bpy, bpy.ops.ease.load_design_file, filepath=str(bpy_session["tmp"] / "missing.json"))
+    assert "ERROR" in r and "missing.json" in r["ERROR"]
+
+
+class _Recorder:
+    """A stand-in for ``UILayout`` that checks every property and operator the panels name."""
+
+    def __init__(self, bpy, seen):
+        self.bpy, self.seen = bpy, seen
+
+    def _sub(self, *a, **k):
+        return self
+
+    row = column = box = split = _sub
+
+    def label(self, **k):
+        self.seen.append(("label", k.get("text")))
+
+    def separator(self, **k):
+        pass
+
+    def prop(self, data, name, **k):
+        assert name in data.bl_rna.properties, f"{type(data).__name__} has no property {name!r}"
+        self.seen.append(("prop", name))
+
+    def operator(self, idname, **k):
+        mod, name = idname.split(".")
+        assert hasattr(getattr(self.bpy.ops, mod), name), f"no operator {idname}"
+        self.seen.append(("op", idname))
+
+        class _Props:
+            def __setattr__(s, key, value):
+                pass
+        return _Props()
+
+
+def test_sidebar_panels_name_real_properties_and_operators(bpy_session):
+    bpy = bpy_session["bpy"]
+    seen = []
+    for cls_name in [c for c in dir(bpy.types) if c.startswith("EASE_PT_")]:
+        cls = getattr(bpy.types, cls_name)
+        assert cls.bl_space_type == "VIEW_3D" and cls.bl_region_type == "UI" and cls.bl_category == "EASE"
+        fake = type("P", (), {"layout": _Recorder(bpy, seen)})()
+        cls.draw(fake, bpy.context)
+    ops = {n for k, n in seen if k == "op"}
+    for op in ("ease.add_body", "ease.set_size", "ease.fit_measurements", "ease.set_pose", "ease.load_template",
+               "ease.assign_keypoint", "ease.paint_ease", "ease.brush_ease", "ease.ease_uniform",
+               "ease.ease_gradient", "ease.ease_to_design", "ease.optimize_pattern", "ease.transfer_size",
+               "ease.adapt_poses", "ease.drape", "ease.studio_setup", "ease.render", "ease.export_pattern"):
+        assert op in ops, f"{op} is not in the sidebar"
+    # every operator is undoable (the render/export/brush ones only write files or tool settings)
+    for name in dir(bpy.ops.ease):
+        cls = getattr(bpy.types, "EASE_OT_" + name, None)
+        if cls is not None and name not in ("render", "export_pattern", "brush_ease", "measure", "save_design"):
+            assert "UNDO" in cls.bl_options and "REGISTER" in cls.bl_options, name
