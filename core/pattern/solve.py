@@ -35,22 +35,39 @@ and tiny edges (slivers at seam ends) do not stiffen the system::
       + lambda_straight sum_i l_i/(h A) |D2 u_i - S_i|^2  (seam straightness)
       + lambda_curve sum_i l_i/(h A) |D2 u_i - C_i|^2     (matched seam curvature)
 
-with ``a_t = area_t / A``, ``W = diag(1, warp_weight)``. ``T_reg`` is the
+with ``a_t = area_t / A`` (at least ``sliver_weight`` times the mean, so
+slivers do not fold for free), ``W = diag(1, warp_weight)``. ``T_reg`` is the
 isometric rest shape ``K_t`` in the paper-default configuration (taken
-literally the regulariser then fights the ease term) and the pre-stretched
-``T_t`` in the improved one (no competition: both terms agree on the target
-shape, the regulariser only adds rotation freedom against curvature).
-The seam-length term keeps the system matrix fixed by targeting the whole edge
-vector: the direction ``d_i`` is the ARAP prediction ``R_t T_t e0_i`` of the
-edge's triangle, the length ``Lbar_i`` the mean of the two sides' current
-lengths. The curvature target ``C_i`` is the mean of this side's second
-difference and the other side's, rotated by the best rigid fit of the two
-seam polylines. Thus the matrix never changes (factorised once per solver and
-configuration, reused by the reference, transfer and adaptation solves); only
-the right-hand side does. One soft pin per panel fixes the translation gauge;
-rotation is fixed by the ease term's axes and the grain re-alignment after
-every iteration. A step that would flip a triangle is shortened (per panel
-backtracking from the previous, flip-free iterate).
+literally the regulariser then fights the ease term: compliance 20-40 %) and
+the pre-stretched ``T_t`` in the improved one (no competition: both terms
+agree on the target shape, the regulariser only adds rotation freedom against
+curvature).
+
+Seam terms keep the system matrix fixed by targeting whole vectors:
+
+- E_len: edge ``e_i`` towards ``Lbar_i d_i``, ``d_i`` its current direction
+  (the paper's linearisation on the current tangent), ``Lbar_i`` the mean of
+  the two sides' current lengths plus an integral action (``len_integral``)
+  that accumulates the remaining mismatch, so both sides end equally long
+  (0.1 % instead of the ~1 % a proximal pull leaves);
+- E_straight: second differences towards 0 (paper) or, improved, towards the
+  mean of their neighbours (damps oscillations, keeps crotch and armhole
+  curves: towards 0 they are pulled straight and panels fold);
+- E_curv: towards the mean of this side's second difference and the other
+  side's, rotated by the best rigid fit of the two seam polylines.
+
+Thus the matrix never changes (factorised once per solver and configuration,
+reused by the reference, transfer and adaptation solves); only the right-hand
+side does. One soft pin per panel fixes the translation gauge; rotation is
+fixed by the ease term's axes and the grain re-alignment (area-weighted vote)
+after every iteration. No triangle ever flips: the rigid part of each step is
+removed per panel, then the vertices of triangles that would flip (or lose
+more than half their area) step back locally (:meth:`PatternSolver._safeguard`)
+from the previous, flip-free iterate.
+
+Optional feedback (``feedback``, ``feedback_warp``) moves the weft/warp
+targets by the achieved/target ratio each iteration: compliance bought with
+shear (the "stretch" configuration, and adaptation solves).
 """
 from __future__ import annotations
 
