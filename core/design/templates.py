@@ -62,13 +62,15 @@ def _top_parts(sleeves: str = "long", hem: str = "hem", ease=None):
         "armhole_drop": {"value": 0.01, "kind": "length", "min": 0.005, "max": 0.05},
         "neck_drop_front": {"value": 0.03, "kind": "length", "min": 0.015, "max": 0.15},
         "neck_drop": {"value": 0.015, "kind": "length", "min": 0.01, "max": 0.06},
+        # the neckline's side point: a placement from the neck towards the shoulder tip
+        "neck_width": {"value": 0.15, "kind": "placement", "min": 0.05, "max": 0.6},
     }
     kps = {
         "armhole_under_left": {"trace": {"from": "armpit_left", "along": "arm_left", "length": "$armhole_drop"}},
         # the neckline sits below the neck landmarks (the head region starts there)
         "neckline_front": {"trace": {"from": "neck_front", "along": "torso_down", "length": "$neck_drop_front"}},
         "neckline_back": {"trace": {"from": "neck_back", "along": "torso_down", "length": "$neck_drop"}},
-        "neckline_side_left": {"trace": {"from": "neck_left", "along": "torso_down", "length": "$neck_drop"}},
+        "neckline_side_left": {"between": ["neck_left", "shoulder_left"], "t": "$neck_width"},
         "chest_front": {"between": ["neck_front", "waist_front"], "t": 0.45},
         "chest_back": {"between": ["neck_back", "waist_back"], "t": 0.45},
     }
