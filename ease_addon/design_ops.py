@@ -54,18 +54,23 @@ def _design_body_spec(design) -> dict:
     return dict(design.body)
 
 
-def cut_for(design, obj):
-    """Cut ``design`` on the scene body's shape (the pose is the design's reference pose)."""
+def cut_on(design, model_name: str, shape: dict):
+    """The cut of ``design`` on body ``model_name`` with ``shape`` (its reference pose); cached."""
     from ..core.cut import cut_design
-    spec = body_spec(obj)
-    key = json.dumps([design.to_json(), spec["model"], spec["shape"]], sort_keys=True)
+    key = json.dumps([design.to_json(), model_name, shape or {}], sort_keys=True)
     cached = state.CUTS.get(key)
     if cached is not None:
         return cached
-    cut = cut_design(design, body=state.body_model(spec["model"]), shape=dict(spec["shape"]) or None)
+    cut = cut_design(design, body=state.body_model(model_name), shape=dict(shape) if shape else None)
     state.CUTS.clear()        # one cut per session is plenty; keeps memory bounded
     state.CUTS[key] = cut
     return cut
+
+
+def cut_for(design, obj):
+    """Cut ``design`` on the scene body's shape (the pose is the design's reference pose)."""
+    spec = body_spec(obj)
+    return cut_on(design, spec["model"], spec["shape"])
 
 
 def current_cut(context):
@@ -194,25 +199,30 @@ def set_design(context, design, recut: bool = True) -> None:
 
 
 def load_design_into_scene(context, source) -> None:
-    """Load a design (path or dict) onto the scene body, shaping the body as the design says."""
+    """Load a design (path or dict) onto the scene body, shaping the body as the design says.
+
+    The design is validated and cut on the body it asks for before anything
+    in the scene changes, so a bad design leaves the scene as it was.
+    """
     from ..core.design.format import load_design
     design = load_design(source)
     obj = body_object(context, required=False)
-    if obj is None:
-        from .body_ops import create_body
-        obj = create_body(context, design.body.get("model", "anny"))
-    model = state.body_model(body_spec(obj)["model"])
+    model_name = body_spec(obj)["model"] if obj is not None else design.body.get("model", "anny")
+    model = state.body_model(model_name)
     shape = design.body.get("shape")
     if isinstance(shape, str):
         shape, _ = state.size_shape(model, shape)
-    if isinstance(shape, dict) and shape:
-        from .body_ops import update_body, _fill_shape_props
-        full = dict(model.default_shape())
-        full.update(shape)
+    full = dict(model.default_shape())
+    full.update({k: float(v) for k, v in (shape or (body_spec(obj)["shape"] if obj is not None else {})).items()})
+    cut_on(design, model_name, full)          # raises (DesignError/CutError) before any change
+    # -- the scene changes from here on
+    from .body_ops import _fill_shape_props, create_body, update_body
+    if obj is None:
+        obj = create_body(context, model_name, shape=full)
+    else:
         update_body(context, obj, shape=full)
         _fill_shape_props(context.scene, model, full)
     set_design(context, design)
-    from . import ease_ops
     bpy.ops.ease.ease_from_design()
 
 

@@ -179,6 +179,15 @@ def test_bad_input_reports_and_leaves_scene(bpy_session):
     assert "ERROR" in r
     r = _run(bpy, bpy.ops.ease.load_template, template="no_such_design.json")
     assert "ERROR" in r and "no_such_design" in r["ERROR"]
+    # a design that fails to resolve on the body: the core's message, nothing changed
+    bad = json.loads((ROOT / "examples" / "designs" / DESIGN).read_text())
+    bad["body"]["shape"] = "XL"      # would reshape the body if it got that far
+    bad["keypoints"]["chest_front"] = {"landmark": "nose_tip"}
+    path = bpy_session["tmp"] / "bad_design.json"
+    path.write_text(json.dumps(bad))
+    r = _run(bpy, bpy.ops.ease.load_design_file, filepath=str(path))
+    assert "ERROR" in r and "nose_tip" in r["ERROR"], r
+    assert _scene(bpy).ease.design_json == ""
     assert np.array_equal(_verts(obj), v0) and len(bpy.data.objects) == n_obj
 
 
