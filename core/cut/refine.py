@@ -131,8 +131,16 @@ def _split_line(line: np.ndarray, E: np.ndarray, ids: np.ndarray, n: int) -> np.
     return out
 
 
+def _member(q: np.ndarray, sorted_keys: np.ndarray) -> np.ndarray:
+    """Whether each of ``q`` is in the sorted array ``sorted_keys``."""
+    if len(sorted_keys) == 0:
+        return np.zeros(len(q), dtype=bool)
+    pos = np.clip(np.searchsorted(sorted_keys, q), 0, len(sorted_keys) - 1)
+    return sorted_keys[pos] == q
+
+
 def delaunay_flips(X: np.ndarray, F: np.ndarray, labels: np.ndarray, fixed: np.ndarray,
-                   max_length: float = np.inf, max_rounds: int = 8,
+                   max_length: float = np.inf, max_rounds: int = 2,
                    max_dihedral_deg: float = 10.0) -> np.ndarray:
     """Improve triangle shapes by flipping edges to the (extrinsic) Delaunay criterion.
 
@@ -156,7 +164,7 @@ def delaunay_flips(X: np.ndarray, F: np.ndarray, labels: np.ndarray, fixed: np.n
     F = np.array(F, dtype=np.int64, copy=True)
     n = np.int64(len(X))
     cos_max = np.cos(np.deg2rad(max_dihedral_deg))
-    fixed = np.asarray(fixed, dtype=np.int64)
+    fixed_sorted = np.sort(np.asarray(fixed, dtype=np.int64))
     for _ in range(max_rounds):
         a = F.reshape(-1)
         b = np.roll(F, -1, axis=1).reshape(-1)
@@ -170,7 +178,7 @@ def delaunay_flips(X: np.ndarray, F: np.ndarray, labels: np.ndarray, fixed: np.n
         t = twin[h]
         fh, ft = h // 3, t // 3
         ukey = np.minimum(a[h], b[h]) * n + np.maximum(a[h], b[h])
-        ok = (labels[fh] == labels[ft]) & ~np.isin(ukey, fixed)
+        ok = (labels[fh] == labels[ft]) & ~_member(ukey, fixed_sorted)
         h, t, fh, ft = h[ok], t[ok], fh[ok], ft[ok]
         A, B, O1, O2 = X[a[h]], X[b[h]], X[o[h]], X[o[t]]
 
@@ -190,25 +198,24 @@ def delaunay_flips(X: np.ndarray, F: np.ndarray, labels: np.ndarray, fixed: np.n
         good &= ((m1 * n1).sum(1) > 0.5) & ((m1 * n2).sum(1) > 0.5) & ((m2 * n1).sum(1) > 0.5) & ((m2 * n2).sum(1) > 0.5)
         # the new edge must not exist already
         okey = np.minimum(o[h], o[t]) * n + np.maximum(o[h], o[t])
-        allu = np.minimum(a, b) * n + np.maximum(a, b)
-        good &= ~np.isin(okey, allu)
         idx = np.nonzero(good)[0]
+        sk = key[order]
+        exists = _member(o[h[idx]] * n + o[t[idx]], sk) | _member(o[t[idx]] * n + o[h[idx]], sk)
+        idx = idx[~exists]
         if len(idx) == 0:
             break
+        # independent flips: each face takes part in at most one, the worst violation wins
         idx = idx[np.argsort(-viol[idx], kind="stable")]
-        used = np.zeros(len(F), dtype=bool)
-        done = 0
-        new_edges = set()
-        for i in idx.tolist():
-            f1, f2 = int(fh[i]), int(ft[i])
-            if used[f1] or used[f2] or int(okey[i]) in new_edges:
-                continue
-            used[f1] = used[f2] = True
-            new_edges.add(int(okey[i]))
-            va, vb, v1, v2 = int(a[h[i]]), int(b[h[i]]), int(o[h[i]]), int(o[t[i]])
-            F[f1] = (va, v2, v1)
-            F[f2] = (vb, v1, v2)
-            done += 1
-        if done == 0:
+        rank = np.arange(len(idx))
+        best = np.full(len(F), len(idx), dtype=np.int64)
+        np.minimum.at(best, fh[idx], rank)
+        np.minimum.at(best, ft[idx], rank)
+        idx = idx[(best[fh[idx]] == rank) & (best[ft[idx]] == rank)]
+        _, first = np.unique(okey[idx], return_index=True)      # one flip per new edge
+        idx = idx[np.sort(first)]
+        if len(idx) == 0:
             break
+        va, vb, v1, v2 = a[h[idx]], b[h[idx]], o[h[idx]], o[t[idx]]
+        F[fh[idx]] = np.stack([va, v2, v1], axis=1)
+        F[ft[idx]] = np.stack([vb, v1, v2], axis=1)
     return F
