@@ -284,7 +284,7 @@ def test_every_template_resolves_on_every_size(size, body, instances):
         assert len(spec.panels) == PANELS[name] and spec.body["shape"] == size
 
 
-@pytest.mark.parametrize("name", ["shirt_long_sleeve", "jacket", "teaser_shirt_pants", "shorts"])
+@pytest.mark.parametrize("name", ["jacket", "teaser_shirt_pants"])
 def test_panels_cover_the_body_region_once(name, body, instances):
     d = load_design(TEMPLATE_DIR / f"{name}.json")
     d.refine_edge_length = None
