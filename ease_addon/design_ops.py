@@ -175,7 +175,7 @@ def _fill_params(scene, design) -> None:
 _SYNC = False
 
 
-def set_design(context, design, recut: bool = True) -> None:
+def set_design(context, design, recut: bool = True, fill_params: bool = True) -> None:
     """Make ``design`` the scene's design: cut it on the body (errors raise
     before anything changes), store its JSON, redraw seamlines and keypoints."""
     from ..core.design.format import load_design
@@ -188,7 +188,8 @@ def set_design(context, design, recut: bool = True) -> None:
     # -- the scene changes from here on
     scene = context.scene
     scene.ease.design_json = json.dumps(design.to_json(), sort_keys=True)
-    _fill_params(scene, design)
+    if fill_params:   # not from a parameter slider's own update: its collection must stay put
+        _fill_params(scene, design)
     convert.write_keypoints(obj.data, kps)
     _draw_keypoints(context, obj, verts)
     if cut is not None:
@@ -353,7 +354,7 @@ def param_update(item, context) -> None:
     try:
         d = current_design(context)
         d.set_parameter(item.name, item.value)
-        set_design(context, d)
+        set_design(context, d, fill_params=False)
     except state.USER_ERRORS as exc:
         context.scene.ease.drape_status = f"re-cut failed: {exc}"
         print(f"[ease] re-cut failed: {exc}")

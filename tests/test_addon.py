@@ -257,6 +257,15 @@ def test_parameter_recut(bpy_session):
     v1 = _verts(seams)
     assert v1.shape != v0.shape or np.abs(v1 - v0).max() > 1e-4
     assert bpy.ops.ease.set_parameter(name=item.name, value=old) == {"FINISHED"}
+    # live re-cut from the slider itself
+    s.live_recut = True
+    item = next(i for i in s.design_params if i.name == item.name)
+    item.value = new
+    assert json.loads(s.design_json)["parameters"][item.name]["value"] == pytest.approx(new)
+    seams = next(o for o in bpy.data.objects if o.get("ease_role") == "seamlines")
+    assert np.abs(_verts(seams) - v1).max() < 1e-6 if _verts(seams).shape == v1.shape else False
+    item.value = old
+    assert json.loads(s.design_json)["parameters"][item.name]["value"] == pytest.approx(old)
 
 
 # ----------------------------------------------------------------------------- ease
