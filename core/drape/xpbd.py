@@ -11,7 +11,7 @@ other); body contact, with thickness and friction, is.
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, fields
 from typing import Mapping, Optional, Union
 
 import numpy as np
