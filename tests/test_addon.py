@@ -401,8 +401,7 @@ def test_transfer_and_adapt_show_figures(bpy_session):
     for k in keys:
         before, after = (float(x) for x in fig[k].split("/"))
         assert after <= before + 1e-6
-    # back to the reference pattern for the drape
-    assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
+    # the drape below uses this adapted pattern (it fits the reference body in every chosen pose)
 
 
 def test_drape_garment_and_fit_map(bpy_session):
