@@ -44,15 +44,20 @@ def stored_pattern(scene, key: str = PATTERN_KEY):
 
 
 def key_figures(pattern) -> dict:
-    """Scalar figures of the pattern report (nested dicts flattened one level)."""
+    """The report's key figures (SPEC metrics) for the Pattern panel."""
     out = {"pieces": len(pattern.panels), "seams": len(pattern.seams), "mode": pattern.mode}
-    for k, v in (pattern.report or {}).items():
-        if isinstance(v, (int, float)) and not isinstance(v, bool):
-            out[k] = v
-        elif isinstance(v, dict):
-            for k2, v2 in v.items():
-                if isinstance(v2, (int, float)) and not isinstance(v2, bool) and len(out) < 24:
-                    out[f"{k}.{k2}"] = v2
+    rep = pattern.report or {}
+    m = rep.get("metrics") or {}
+    c, sm = m.get("compliance") or {}, m.get("seams") or {}
+    for label, d, k in (("ease compliance mean %", c, "mean"), ("ease compliance std %", c, "std"),
+                        ("shear p95 deg", c, "shear_p95"), ("seam mismatch mean %", sm, "mean"),
+                        ("seam mismatch max mm", sm, "max_mm")):
+        if isinstance(d.get(k), (int, float)):
+            out[label] = round(float(d[k]), 3)
+    if "flipped_triangles" in m:
+        out["flipped triangles"] = int(m["flipped_triangles"])
+    if isinstance(rep.get("optimize_seconds"), (int, float)):
+        out["optimize s"] = round(float(rep["optimize_seconds"]), 2)
     return out
 
 

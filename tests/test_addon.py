@@ -380,6 +380,9 @@ def test_pattern_objects_match_pattern_json(bpy_session, tmp_path):
         assert {"CURVE", "MESH", "FONT"} <= kids      # outline, grain arrow, name
     figures = json.loads(s.pattern_json)
     assert figures["pieces"] == len(pattern.panels)
+    assert figures["flipped triangles"] == 0
+    assert figures["ease compliance mean %"] == pytest.approx(pattern.report["metrics"]["compliance"]["mean"], abs=1e-3)
+    assert "seam mismatch max mm" in figures
     # piecewise ease realised: the 1.4 piece is wider per unit body than the 1.2 one
     first = pattern.panels[0] if pattern.panels[0].name == sorted(pieces)[0] else pattern.panel(sorted(pieces)[0])
     assert np.median(first.achieved_weft) > 1.0
