@@ -131,10 +131,10 @@ def drape_report(result, metrics=None) -> dict:
     return out
 
 
-def _compute(pattern, body_v, body_f, frames, progress):
+def _compute(pattern, body_v, body_f, frames, progress, device="cpu"):
     from ..core.drape import drape
     from ..core.progress import sub
-    result = drape(pattern, body_v, body_f, options={"max_frames": int(frames)},
+    result = drape(pattern, body_v, body_f, options={"max_frames": int(frames), "device": device},
                    progress=sub(progress, 0.0, 0.9))
     if progress is not None:
         progress(0.92, "measuring the fit (gap, strain)")
@@ -190,7 +190,7 @@ class EASE_OT_drape(EaseOperator):
         def progress(fraction, message):
             wm.progress_update(int(100 * fraction))
         try:
-            result, gap, metrics = _compute(pattern, body_v, body_f, s.drape_frames, progress)
+            result, gap, metrics = _compute(pattern, body_v, body_f, s.drape_frames, progress, s.drape_device)
         finally:
             wm.progress_end()
         self._finish(context, result, gap, metrics)
@@ -207,6 +207,7 @@ class EASE_OT_drape(EaseOperator):
         self._cancel = threading.Event()
         self._state = {"fraction": 0.0, "message": "starting", "result": None, "error": None}
         frames = context.scene.ease.drape_frames
+        device = context.scene.ease.drape_device
 
         def progress(fraction, message):
             self._state["fraction"], self._state["message"] = fraction, message
@@ -215,7 +216,7 @@ class EASE_OT_drape(EaseOperator):
 
         def work():
             try:
-                self._state["result"] = _compute(pattern, body_v, body_f, frames, progress)
+                self._state["result"] = _compute(pattern, body_v, body_f, frames, progress, device)
             except BaseException as exc:  # handed to the main thread
                 self._state["error"] = exc
 

@@ -160,7 +160,9 @@ class EASE_PT_drape(_EasePanel, bpy.types.Panel):
     def draw(self, context):
         s = context.scene.ease
         layout = self.layout
-        layout.prop(s, "drape_frames")
+        row = layout.row(align=True)
+        row.prop(s, "drape_frames")
+        row.prop(s, "drape_device", text="")
         layout.operator("ease.drape", icon="MOD_CLOTH")
         if s.drape_status:
             layout.label(text=s.drape_status)

@@ -114,7 +114,10 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
     # Drape
     drape_status: StringProperty(name="Drape status")
     drape_json: StringProperty(name="Drape report")
-    drape_frames: IntProperty(name="Max frames", default=200, min=10, max=5000)
+    drape_frames: IntProperty(name="Max frames", default=200, min=1, max=5000)
+    drape_device: EnumProperty(name="Device", items=[("cpu", "CPU", "bitwise repeatable"),
+                                                     ("cuda", "CUDA", "NVIDIA GPU through Warp")],
+                               default="cpu")
     fitmap: EnumProperty(name="Fit map", items=[("NONE", "Fabric", "plain fabric material"),
                                                 ("STRAIN", "Strain", "colour by weft strain"),
                                                 ("GAP", "Gap", "colour by body-garment gap")],

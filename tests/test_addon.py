@@ -411,6 +411,12 @@ def test_drape_garment_and_fit_map(bpy_session):
     bpy = bpy_session["bpy"]
     s = _scene(bpy).ease
     s.drape_frames = 15
+    s.drape_device = "cuda"
+    r = _run(bpy, bpy.ops.ease.drape)
+    if "ERROR" in r:      # no GPU here: the core's message, and no garment made
+        assert "cuda" in r["ERROR"].lower()
+        assert not [o for o in bpy.data.objects if o.get("ease_role") == "garment"]
+    s.drape_device = "cpu"
     assert bpy.ops.ease.drape() == {"FINISHED"}
     garments = [o for o in bpy.data.objects if o.get("ease_role") == "garment"]
     assert len(garments) == 1
