@@ -288,8 +288,8 @@ def _markdown(R) -> str:
          "lambda_curve 1, sliver weight floor 0.2, adaptation margin 3 % and target feedback 0.5 in adaptation "
          "solves. **paper**: the paper's weights taken literally (lambda_ease 0.1, lambda_reg 1 on an isometric "
          "ARAP term, lambda_len 100, lambda_straight 5 towards straight seams, lambda_curve 10, no integral action, "
-         "no margin). **stretch**: improved plus per-iteration feedback (gain 0.5) of the target/achieved weft and "
-         "warp scales: compliance bought with shear. 20 iterations everywhere; one factorisation per garment "
+         "no margin). **stretch**: improved plus per-iteration feedback (gain 0.3) of the target/achieved weft "
+         "scale: compliance bought with shear. 20 iterations everywhere; one factorisation per garment "
          "and configuration, reused by every ease level, transfer and adaptation solve.", ""]
     if R["errors"]:
         L += ["Not measured (errors): " + "; ".join(f"`{k}`: {v}" for k, v in R["errors"].items()), ""]
