@@ -17,7 +17,6 @@ Arrays are plain JSON lists. :func:`load_pattern` checks every field and raises
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import Union
 
