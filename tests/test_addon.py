@@ -630,3 +630,25 @@ def test_sidebar_panels_name_real_properties_and_operators(bpy_session):
         cls = getattr(bpy.types, "EASE_OT_" + name, None)
         if cls is not None and name not in ("render", "export_pattern", "brush_ease", "measure", "save_design"):
             assert "UNDO" in cls.bl_options and "REGISTER" in cls.bl_options, name
+
+
+def test_body_from_a_file_the_user_owns(bpy_session):
+    """From File: a template OBJ (no blend shapes) becomes the scene body, with its ease layer."""
+    bpy = bpy_session["bpy"]
+    from core.body import load_body
+    model = load_body("anny")
+    v = model.vertices()
+    path = bpy_session["tmp"] / "my_body.obj"
+    lines = [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in v] + [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in model.faces]
+    path.write_text("\n".join(lines) + "\n")
+    s = _scene(bpy).ease
+    s.body_file = str(path)
+    assert bpy.ops.ease.add_body(source="FILE") == {"FINISHED"}
+    obj = s.body
+    assert obj["ease_model"] == str(path)
+    assert len(obj.data.vertices) == len(v) and np.allclose(_verts(obj), v, atol=1e-5)
+    assert obj.data.color_attributes.get("ease") is not None
+    assert len([o for o in bpy.data.objects if o.get("ease_role") == "body"]) == 1
+    s.body_file = str(bpy_session["tmp"] / "missing.npz")
+    r = _run(bpy, bpy.ops.ease.add_body, source="FILE")
+    assert "ERROR" in r and s.body == obj
