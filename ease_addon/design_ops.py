@@ -8,14 +8,13 @@ the body mesh as attribute layers (see :func:`.convert.write_keypoints`).
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 import bpy
 import numpy as np
 
 from . import convert, state
-from .body_ops import body_object, body_spec, body_vertices
+from .body_ops import body_object, body_spec
 from .operators_base import EaseOperator
 
 SEAMLINES = "EASE Seamlines"
@@ -48,10 +47,6 @@ def current_design(context):
     if not text:
         raise state.AddonError("no design loaded: load a template or a design file in EASE > Design")
     return load_design(text)
-
-
-def _design_body_spec(design) -> dict:
-    return dict(design.body)
 
 
 def cut_on(design, model_name: str, shape: dict):
@@ -392,7 +387,6 @@ def place_keypoint(context, name, tri, bary, was_edit=False):
     from ..core.body.model import SurfacePoint
     d = current_design(context)
     d.set_keypoint(name, SurfacePoint(int(tri), tuple(float(b) for b in bary)))
-    obj = body_object(context)
     if was_edit:
         bpy.ops.object.mode_set(mode="OBJECT")
     set_design(context, d)

@@ -7,7 +7,6 @@ per-triangle ease in the design.
 """
 from __future__ import annotations
 
-import json
 
 import bpy
 import numpy as np

@@ -148,7 +148,6 @@ def test_add_body_and_shape_in_place(bpy_session):
     assert {i.name for i in s.shape} == set(model.shape_parameters())
     assert np.allclose(_verts(obj), model.vertices(), atol=1e-5)
     # size preset: the vertices move in place, the ease layer stays
-    layer_before = obj.data.color_attributes["ease"]
     assert bpy.ops.ease.set_size(size="XL") == {"FINISHED"}
     from core.body.sizes import size_shape
     assert np.allclose(_verts(obj), model.vertices(size_shape(model, "XL")), atol=1e-5)
@@ -224,7 +223,6 @@ def test_keypoint_on_selected_vertex(bpy_session):
     obj = s.body
     from core.body import load_body
     model = load_body("anny")
-    vid = int(np.flatnonzero(model.faces[:, 0] >= 0)[0])
     vid = int(model.faces[1234, 1])
     sel = np.zeros(len(obj.data.vertices), dtype=bool)
     sel[vid] = True
