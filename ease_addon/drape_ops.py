@@ -19,16 +19,66 @@ GAP_LAYER = "fit_gap"
 STRAIN_RANGE = (0.0, 0.10)    # weft strain 0 .. 10 % mapped blue .. red
 GAP_RANGE = (0.0, 0.05)       # gap 0 .. 5 cm mapped blue .. red
 
-_RUNNING: list = []           # the operators with a worker running (to cancel on unregister)
+_JOBS: list = []              # drape jobs running (cancelled on unregister)
+
+
+class DrapeJob:
+    """The core's drape in a worker thread; the main thread polls it.
+
+    ``progress`` state (fraction, message) is written by the worker and read by
+    the modal operator; :meth:`cancel` makes the worker's next progress call
+    raise ``Cancelled``, so the core stops and nothing is applied.
+    """
+
+    def __init__(self, pattern, body_v, body_f, frames: int, device: str = "cpu"):
+        self.fraction, self.message = 0.0, "starting"
+        self.result = None
+        self.error = None
+        self._cancel = threading.Event()
+        self._args = (pattern, body_v, body_f, frames)
+        self._device = device
+        self._thread = threading.Thread(target=self._work, daemon=True)
+
+    def _progress(self, fraction, message):
+        from ..core.errors import Cancelled
+        self.fraction, self.message = fraction, message
+        if self._cancel.is_set():
+            raise Cancelled("drape cancelled")
+
+    def _work(self):
+        try:
+            self.result = _compute(*self._args, self._progress, self._device)
+        except BaseException as exc:  # handed to the main thread
+            self.error = exc
+        finally:
+            if self in _JOBS:
+                _JOBS.remove(self)
+
+    def start(self) -> "DrapeJob":
+        _JOBS.append(self)
+        self._thread.start()
+        return self
+
+    def cancel(self) -> None:
+        self._cancel.set()
+
+    @property
+    def cancelled(self) -> bool:
+        return self._cancel.is_set()
+
+    def done(self) -> bool:
+        return not self._thread.is_alive()
+
+    def join(self, timeout=None) -> None:
+        self._thread.join(timeout)
 
 
 def cancel_running() -> None:
-    for op in list(_RUNNING):
-        op._cancel.set()
-    for op in list(_RUNNING):
-        if op._thread is not None:
-            op._thread.join(timeout=30)
-    _RUNNING.clear()
+    for job in list(_JOBS):
+        job.cancel()
+    for job in list(_JOBS):
+        job.join(timeout=30)
+    _JOBS.clear()
 
 
 def _pattern_body(pattern):
@@ -147,7 +197,7 @@ class EASE_OT_drape(EaseOperator):
     bl_idname = "ease.drape"
     bl_label = "Drape"
 
-    _thread = None
+    _job = None
     _timer = None
 
     def _prepare(self, context):
@@ -157,28 +207,6 @@ class EASE_OT_drape(EaseOperator):
             raise state.AddonError("no pattern: optimize the pattern first (EASE > Pattern)")
         body_v, body_f = _pattern_body(pattern)
         return pattern, body_v, body_f
-
-    def _finish(self, context, result, gap, metrics):
-        from .body_ops import body_object, body_spec, update_body
-        from .pattern_ops import stored_pattern
-        # show the garment on the body it was draped on
-        obj = body_object(context, required=False)
-        pspec = stored_pattern(context.scene).body or {}
-        if obj is not None:
-            spec = body_spec(obj)
-            shape = pspec.get("shape")
-            if isinstance(shape, str):
-                shape, _ = state.size_shape(state.body_model(spec["model"]), shape)
-            pose = pspec.get("pose") or "A"
-            if (shape and dict(shape) != spec["shape"]) or (isinstance(pose, str) and pose != spec["pose"]):
-                update_body(context, obj, shape=dict(shape) if shape else None,
-                            pose=pose if isinstance(pose, str) else None)
-        garment_object(context, result, gap)
-        state.DRAPES[context.scene.name] = result
-        rep = drape_report(result, metrics)
-        s = context.scene.ease
-        s.drape_json = json.dumps(rep)
-        s.drape_status = f"draped: {rep['frames']} frames, {rep['settled']}"
 
     # -- synchronous (scripts, tests): execute
     def run(self, context):
@@ -193,7 +221,7 @@ class EASE_OT_drape(EaseOperator):
             result, gap, metrics = _compute(pattern, body_v, body_f, s.drape_frames, progress, s.drape_device)
         finally:
             wm.progress_end()
-        self._finish(context, result, gap, metrics)
+        apply_drape(context, result, gap, metrics)
         self.report({"INFO"}, s.drape_status)
 
     # -- interactive: invoke + modal, the core in a worker thread
@@ -203,63 +231,79 @@ class EASE_OT_drape(EaseOperator):
         except state.USER_ERRORS as exc:
             self.report({"ERROR"}, str(exc))
             return {"CANCELLED"}
-        from ..core.errors import Cancelled
-        self._cancel = threading.Event()
-        self._state = {"fraction": 0.0, "message": "starting", "result": None, "error": None}
-        frames = context.scene.ease.drape_frames
-        device = context.scene.ease.drape_device
-
-        def progress(fraction, message):
-            self._state["fraction"], self._state["message"] = fraction, message
-            if self._cancel.is_set():
-                raise Cancelled("drape cancelled")
-
-        def work():
-            try:
-                self._state["result"] = _compute(pattern, body_v, body_f, frames, progress, device)
-            except BaseException as exc:  # handed to the main thread
-                self._state["error"] = exc
-
-        self._thread = threading.Thread(target=work, daemon=True)
+        s = context.scene.ease
+        self._job = DrapeJob(pattern, body_v, body_f, s.drape_frames, s.drape_device).start()
         wm = context.window_manager
         wm.progress_begin(0, 100)
         self._timer = wm.event_timer_add(0.2, window=context.window)
         wm.modal_handler_add(self)
-        _RUNNING.append(self)
-        self._thread.start()
         return {"RUNNING_MODAL"}
 
-    def _end(self, context):
+    def modal(self, context, event):
+        status = step_job(context, self._job, event.type)
+        if status == "RUNNING":
+            return {"RUNNING_MODAL"} if event.type in ("ESC", "TIMER") else {"PASS_THROUGH"}
         wm = context.window_manager
         if self._timer is not None:
             wm.event_timer_remove(self._timer)
         wm.progress_end()
         if context.workspace is not None:
             context.workspace.status_text_set(None)
-        if self in _RUNNING:
-            _RUNNING.remove(self)
-
-    def modal(self, context, event):
         s = context.scene.ease
-        if event.type == "ESC":
-            self._cancel.set()
-            s.drape_status = "cancelling..."
-        if event.type != "TIMER":
-            return {"RUNNING_MODAL"} if event.type == "ESC" else {"PASS_THROUGH"}
-        st = self._state
-        context.window_manager.progress_update(int(100 * st["fraction"]))
-        if context.workspace is not None:
-            context.workspace.status_text_set(f"EASE drape {100 * st['fraction']:.0f}%: {st['message']} (Esc cancels)")
-        if self._thread.is_alive():
-            return {"RUNNING_MODAL"}
-        self._end(context)
-        if st["error"] is not None:
-            s.drape_status = f"drape stopped: {st['error']}"
-            self.report({"ERROR" if not self._cancel.is_set() else "WARNING"}, s.drape_status)
-            return {"CANCELLED"}
-        self._finish(context, *st["result"])
-        self.report({"INFO"}, s.drape_status)
-        return {"FINISHED"}
+        if status == "FINISHED":
+            self.report({"INFO"}, s.drape_status)
+            return {"FINISHED"}
+        self.report({"WARNING" if self._job.cancelled else "ERROR"}, s.drape_status)
+        return {"CANCELLED"}
+
+
+def apply_drape(context, result, gap, metrics) -> None:
+    """Show a finished drape: garment object, fit maps, report (main thread)."""
+    from .body_ops import body_object, body_spec, update_body
+    from .pattern_ops import stored_pattern
+    # show the garment on the body it was draped on
+    obj = body_object(context, required=False)
+    pspec = stored_pattern(context.scene).body or {}
+    if obj is not None:
+        spec = body_spec(obj)
+        shape = pspec.get("shape")
+        if isinstance(shape, str):
+            shape, _ = state.size_shape(state.body_model(spec["model"]), shape)
+        pose = pspec.get("pose") or "A"
+        if (shape and dict(shape) != spec["shape"]) or (isinstance(pose, str) and pose != spec["pose"]):
+            update_body(context, obj, shape=dict(shape) if shape else None,
+                        pose=pose if isinstance(pose, str) else None)
+    garment_object(context, result, gap)
+    state.DRAPES[context.scene.name] = result
+    rep = drape_report(result, metrics)
+    s = context.scene.ease
+    s.drape_json = json.dumps(rep)
+    s.drape_status = f"draped: {rep['frames']} frames, {rep['settled']}"
+
+
+def step_job(context, job: DrapeJob, event_type: str) -> str:
+    """One modal step for ``event_type``: Esc cancels; a timer tick shows the
+    progress and, once the worker is done, applies the result (main thread).
+    Returns ``"RUNNING"``, ``"FINISHED"`` or ``"CANCELLED"``."""
+    s = context.scene.ease
+    if event_type == "ESC":
+        job.cancel()
+        s.drape_status = "cancelling..."
+    if event_type != "TIMER":
+        return "RUNNING"
+    try:
+        context.window_manager.progress_update(int(100 * job.fraction))
+    except Exception:
+        pass
+    if context.workspace is not None:
+        context.workspace.status_text_set(f"EASE drape {100 * job.fraction:.0f}%: {job.message} (Esc cancels)")
+    if not job.done():
+        return "RUNNING"
+    if job.error is not None:
+        s.drape_status = f"drape {'cancelled' if job.cancelled else 'stopped'}: {job.error}"
+        return "CANCELLED"
+    apply_drape(context, *job.result)
+    return "FINISHED"
 
 
 class EASE_OT_fitmap(EaseOperator):

@@ -430,6 +430,36 @@ def test_drape_garment_and_fit_map(bpy_session):
     assert g.data.materials[0].name == "EASE Fabric"
 
 
+def test_drape_modal_progress_and_esc(bpy_session):
+    """The interactive drape: a worker thread runs the core; the modal step
+    shows progress, applies the result on the main thread when done, and Esc
+    cancels leaving the scene as it was. Headless there is no event loop (an
+    INVOKE call falls back to execute), so the test drives the modal step."""
+    bpy = bpy_session["bpy"]
+    s = _scene(bpy).ease
+    drape_ops = _addon(bpy_session, "drape_ops")
+    garment = next(o for o in bpy.data.objects if o.get("ease_role") == "garment")
+    g_name, g_verts = garment.data.name, _verts(garment).copy()
+    pattern = _addon(bpy_session, "pattern_ops").stored_pattern(_scene(bpy))
+    body_v, body_f = drape_ops._pattern_body(pattern)
+    job = drape_ops.DrapeJob(pattern, body_v, body_f, frames=400).start()
+    assert drape_ops.step_job(bpy.context, job, "ESC") == "RUNNING"
+    job.join(120)
+    assert drape_ops.step_job(bpy.context, job, "TIMER") == "CANCELLED"
+    assert "cancelled" in s.drape_status
+    garment = next(o for o in bpy.data.objects if o.get("ease_role") == "garment")
+    assert garment.data.name == g_name and np.array_equal(_verts(garment), g_verts)
+    assert not drape_ops._JOBS
+    # a run to the end
+    job = drape_ops.DrapeJob(pattern, body_v, body_f, frames=4).start()
+    assert drape_ops.step_job(bpy.context, job, "MOUSEMOVE") == "RUNNING"
+    job.join(120)
+    assert job.fraction >= 0.9 and job.error is None
+    assert drape_ops.step_job(bpy.context, job, "TIMER") == "FINISHED"
+    assert json.loads(s.drape_json)["frames"] <= 4
+    assert [o for o in bpy.data.objects if o.get("ease_role") == "garment"]
+
+
 def test_export_pattern(bpy_session):
     bpy = bpy_session["bpy"]
     s = _scene(bpy).ease
