@@ -285,7 +285,7 @@ def _markdown(R) -> str:
          "**improved** (ours, default): ARAP regulariser towards the triangle pre-stretched by the ease targets, "
          "lambda_ease 0.1, lambda_reg 1, lambda_len 30 with an integral action on the remaining seam-edge mismatch, "
          "lambda_straight 0.5 towards the neighbours' mean second difference (damps oscillations only), "
-         "lambda_curve 1, sliver weight floor 0.2, adaptation margin 3 % and target feedback 0.5 in adaptation "
+         "lambda_curve 1, sliver weight floor 0.5, adaptation margin 3 % and target feedback 0.5 in adaptation "
          "solves. **paper**: the paper's weights taken literally (lambda_ease 0.1, lambda_reg 1 on an isometric "
          "ARAP term, lambda_len 100, lambda_straight 5 towards straight seams, lambda_curve 10, no integral action, "
          "no margin). **stretch**: improved plus per-iteration feedback (gain 0.3) of the target/achieved weft "

@@ -132,7 +132,7 @@ class SolverConfig:
     len_integral: float = 1.0
     len_integral_cap: float = 1.0
     adapt_feedback: float = 0.5
-    sliver_weight: float = 0.2
+    sliver_weight: float = 0.5
     feedback_warp: float = 0.0
 
 
