@@ -127,10 +127,14 @@ def refresh_attachments(context, obj, verts) -> None:
         ids = json.loads(o.get("ease_ids", "[]"))
         if not scene.ease.design_json or not ids:
             continue
-        try:
-            cut = current_cut(context)
-        except state.USER_ERRORS:
-            continue
+        # The cut's embedding holds for every shape and pose: move the lines with
+        # the cached cut (no re-cut while a slider is dragged).
+        cut = next(iter(state.CUTS.values()), None)
+        if cut is None:
+            try:
+                cut = current_cut(context)
+            except state.USER_ERRORS:
+                continue
         pos = cut.positions(verts)
         v, _ = convert.polyline_edges([pos[np.asarray(l)] for l in ids], closed=True)
         if len(v) == len(o.data.vertices):

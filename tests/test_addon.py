@@ -211,6 +211,12 @@ def test_load_template_draws_seamlines_and_keypoints(bpy_session):
     from scipy.spatial import cKDTree
     d, _ = cKDTree(body_v).query(seam_v)
     assert d.max() < 0.03
+    # the seamlines stay attached when the body is posed (moved in place)
+    assert bpy.ops.ease.set_pose(pose="P1") == {"FINISHED"}
+    seams = [o for o in bpy.data.objects if o.get("ease_role") == "seamlines"]
+    d, _ = cKDTree(_verts(s.body)).query(_verts(seams[0]))
+    assert d.max() < 0.03 and np.abs(_verts(seams[0]) - seam_v).max() > 0.05
+    assert bpy.ops.ease.set_pose(pose="A") == {"FINISHED"}
     # the cut panels match the design's panels
     design_ops = _addon(bpy_session, "design_ops")
     cut = design_ops.current_cut(bpy.context)
