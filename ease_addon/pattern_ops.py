@@ -160,7 +160,7 @@ def pattern_objects(context, pattern, lo: float, hi: float, role: str = "pattern
         # piece name
         fd = bpy.data.curves.new(f"EASE label {p.name}", "FONT")
         fd.body = p.name.split(".", 1)[-1] + (" (mirror)" if p.mirror_of else "")
-        fd.size = 0.03
+        fd.size = 0.045
         fd.align_x = "CENTER"
         label = _child(coll, f"EASE label {p.name}", fd, obj, role)
         label.location = (float(c[0]), -0.003, float(c[1]) + 0.03)

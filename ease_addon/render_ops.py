@@ -38,18 +38,25 @@ def _studio_object(scene, name, data):
 
 
 def setup_studio(scene, samples: int = 16, resolution_pct: int = 50) -> None:
-    """Camera in front of the body (-Y), key/fill/rim lights, grey world,
-    Cycles CPU with ``samples`` samples at ``resolution_pct`` % of 1080x1350."""
+    """Camera in front of the body (-Y) framing the body, garment and pattern
+    pieces, key/fill/rim lights, grey world, Cycles CPU with ``samples``
+    samples at ``resolution_pct`` % of a 1200-pixel-high frame."""
     lo, hi = scene_bounds(scene)
     centre = (lo + hi) / 2
-    size = float(max(hi[2] - lo[2], hi[0] - lo[0], 0.5))
+    w, h = float(max(hi[0] - lo[0], 0.3)), float(max(hi[2] - lo[2], 0.3))
+    # frame aspect follows the content (portrait for a body, landscape with the pattern beside it)
+    aspect = min(max(w / h, 0.8), 1.8)
+    res_y = 1200
+    res_x = int(round(res_y * aspect / 2) * 2)
     cam_data = bpy.data.cameras.get(STUDIO + " Camera") or bpy.data.cameras.new(STUDIO + " Camera")
     cam_data.lens = 50.0
+    cam_data.sensor_fit = "AUTO"      # the 36 mm sensor spans the larger image side
     cam = _studio_object(scene, STUDIO + " Camera", cam_data)
-    # 50 mm lens on 36 mm sensor: vertical view of a 4:5 frame; keep the garment filling ~85 %.
-    fov = 2 * math.atan(36.0 / 2 / 50.0)
-    dist = 0.5 * size / 0.85 / math.tan(fov / 2)
-    cam.location = (float(centre[0]), float(centre[1] - dist), float(centre[2]))
+    big = 0.5 * 36.0 / 50.0
+    tan_h = big if res_x >= res_y else big * res_x / res_y
+    tan_v = big if res_y >= res_x else big * res_y / res_x
+    dist = 1.08 * max(0.5 * w / tan_h, 0.5 * h / tan_v)
+    cam.location = (float(centre[0]), float(lo[1] - dist), float(centre[2]))
     cam.rotation_euler = (math.pi / 2, 0.0, 0.0)
     scene.camera = cam
     for name, energy, loc, rot in (("Key", 250.0, (-1.5, -2.5, 2.6), (math.radians(55), 0, math.radians(-30))),
@@ -74,8 +81,8 @@ def setup_studio(scene, samples: int = 16, resolution_pct: int = 50) -> None:
     scene.cycles.use_denoising = False
     if hasattr(scene.cycles, "use_adaptive_sampling"):
         scene.cycles.use_adaptive_sampling = False
-    scene.render.resolution_x = 1080
-    scene.render.resolution_y = 1350
+    scene.render.resolution_x = res_x
+    scene.render.resolution_y = res_y
     scene.render.resolution_percentage = int(resolution_pct)
     scene.render.image_settings.file_format = "PNG"
     scene.render.film_transparent = False

@@ -35,7 +35,7 @@ def _args(argv):
     ap.add_argument("out", help="output folder")
     ap.add_argument("--frames", type=int, default=120, help="drape frame limit (default 120)")
     ap.add_argument("--samples", type=int, default=16, help="Cycles samples (default 16)")
-    ap.add_argument("--resolution", type=int, default=40, help="render size, %% of 1080x1350 (default 40)")
+    ap.add_argument("--resolution", type=int, default=40, help="render size, %% of the 1200-pixel-high frame (default 40)")
     ap.add_argument("--no-drape", action="store_true", help="skip the drape")
     return ap.parse_args(argv)
 
