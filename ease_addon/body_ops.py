@@ -187,7 +187,6 @@ class EASE_OT_measure(EaseOperator):
     """Measure the body (height, chest/bust, waist, hip circumferences in cm)"""
     bl_idname = "ease.measure"
     bl_label = "Measure"
-    bl_options = {"REGISTER"}
 
     def run(self, context):
         obj = body_object(context)

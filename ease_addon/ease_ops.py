@@ -151,7 +151,6 @@ class EASE_OT_brush_ease(EaseOperator):
     """Set the paint brush colour to the chosen ease (from the ease ramp)"""
     bl_idname = "ease.brush_ease"
     bl_label = "Set Brush Ease"
-    bl_options = {"REGISTER"}   # tool settings only: nothing to undo
 
     def run(self, context):
         lo, hi = ramp_range(context.scene)

@@ -12,7 +12,6 @@ class EASE_OT_export_pattern(EaseOperator):
     """Export the pattern (SVG, DXF, PDF, GLB) to the export folder"""
     bl_idname = "ease.export_pattern"
     bl_label = "Export Pattern"
-    bl_options = {"REGISTER"}   # writes files only
 
     directory: bpy.props.StringProperty(subtype="DIR_PATH", default="")
 

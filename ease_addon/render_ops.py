@@ -121,7 +121,6 @@ class EASE_OT_render(EaseOperator):
     """Render the studio camera to a PNG file"""
     bl_idname = "ease.render"
     bl_label = "Render PNG"
-    bl_options = {"REGISTER"}   # writes a file, changes nothing to undo
 
     def run(self, context):
         s = context.scene.ease
