@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 
 from core.cut.engine import cut_surface
+from core.cut.refine import SPLIT_RATIO
 from core.cut.geodesic import GeodesicPaths, insert_keypoints, polyline_length
 from core.cut.split import CutMesh
 from core.errors import CutError
@@ -120,7 +121,7 @@ def test_refined_cut(body):
     for p, q in zip(cut.panels, coarse.panels):
         P = X[p.vertex_ids]
         e = np.linalg.norm(P[p.faces] - P[np.roll(p.faces, -1, 1)], axis=2)
-        assert e.max() <= h + 1e-12
+        assert e.max() <= SPLIT_RATIO * h + 1e-12
         a = triangle_areas(P, p.faces).sum()
         np.testing.assert_allclose(a, triangle_areas(Xc[q.vertex_ids], q.faces).sum(), rtol=1e-6)  # Delaunay flips: nearly coplanar
         assert len(p.boundary) == 1

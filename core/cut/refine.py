@@ -1,11 +1,15 @@
 """Conforming refinement of the cut panels to a target edge length.
 
-Every edge longer than ``h`` (at the reference body) is split at its
-midpoint; each triangle is then re-split by the number of its split edges
+``h`` is the target *mean* edge length: every edge longer than
+``SPLIT_RATIO * h`` (at the reference body) is split at its midpoint, so the
+halves are at least ``0.75 h`` long and the mean edge lands near ``h`` (0.92 h
+on the long-sleeve shirt, 21.5k triangles at 1 cm). Splitting every edge longer
+than ``h`` instead would leave a mean of 0.62 h and 2.2x the triangles, which
+every later stage (pattern solve, drape) pays for. Each triangle is then re-split by the number of its split edges
 (1 -> 2, 2 -> 3 with the shorter diagonal, 3 -> 4, "red-green"). An edge is
 split once for both its triangles, so the mesh stays conforming and both sides
 of every seam get the same new vertices. Rounds repeat until no edge exceeds
-``h``. New vertices are midpoints, i.e. averages of two embedding rows, so the
+``SPLIT_RATIO * h``. New vertices are midpoints, i.e. averages of two embedding rows, so the
 refinement applies to every body instance.
 """
 from __future__ import annotations
@@ -14,6 +18,9 @@ from typing import List, Tuple
 
 import numpy as np
 import scipy.sparse as sp
+
+#: edges longer than this multiple of the target length are split
+SPLIT_RATIO = 1.5
 
 
 def _edges(F: np.ndarray):
@@ -29,7 +36,7 @@ def _edges(F: np.ndarray):
 
 def refine(X: np.ndarray, F: np.ndarray, labels: np.ndarray, W: sp.csr_matrix,
            lines: List[np.ndarray], h: float, max_rounds: int = 12):
-    """Refine triangles ``F`` until no edge is longer than ``h``.
+    """Refine triangles ``F`` to a mean edge length near ``h``.
 
     Parameters
     ----------
@@ -39,7 +46,8 @@ def refine(X: np.ndarray, F: np.ndarray, labels: np.ndarray, W: sp.csr_matrix,
     W : (n, V) sparse, embedding rows of the vertices (body weights).
     lines : list of (k,) int vertex sequences along cut lines; midpoints of
         their edges are inserted in order.
-    h : float, target edge length in metres.
+    h : float, target mean edge length in metres (no edge stays longer than
+        ``SPLIT_RATIO * h``).
 
     Returns
     -------
@@ -55,7 +63,7 @@ def refine(X: np.ndarray, F: np.ndarray, labels: np.ndarray, W: sp.csr_matrix,
             break
         E, fe = _edges(F)
         length = np.linalg.norm(X[E[:, 0]] - X[E[:, 1]], axis=1)
-        split = length > h
+        split = length > SPLIT_RATIO * h
         if not split.any():
             break
         n = len(X)
