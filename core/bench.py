@@ -8,13 +8,14 @@ loaded from their files.
 from __future__ import annotations
 
 import importlib.util
+import json
 import sys
 import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
 BENCH_DIR = REPO / "benchmarks"
-ORDER = ("body", "cut", "pattern", "drape")
+ORDER = ("body", "cut", "pattern", "drape", "export")
 
 
 def available() -> list:
@@ -32,7 +33,7 @@ def _load(name: str):
 
 def _cmd(args) -> int:
     from .errors import EaseError
-    from .fileio import write_text
+    from .fileio import write_json, write_text
 
     if not BENCH_DIR.is_dir():
         raise EaseError("benchmarks/ not found: `ease bench` runs from a source checkout")
@@ -43,7 +44,8 @@ def _cmd(args) -> int:
         raise EaseError(f"--only: unknown benchmark(s) {', '.join(unknown)}; available: {', '.join(names)}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    summary = []
+    times_path = out / "bench_times.json"
+    times = json.loads(times_path.read_text()) if times_path.is_file() else {}
     for name in wanted:
         print(f"[ease bench] {name} ...", file=sys.stderr, flush=True)
         t0 = time.perf_counter()
@@ -51,13 +53,22 @@ def _cmd(args) -> int:
         kwargs = {"quick": True} if args.quick and "quick" in module.run.__code__.co_varnames else {}
         module.run(out, **kwargs)
         dt = time.perf_counter() - t0
-        summary.append(f"| {name} | [{name}.md]({name}.md) | {dt:.1f} s |")
+        times[name] = {"seconds": round(dt, 1), "quick": bool(kwargs),
+                       "date": time.strftime("%Y-%m-%d", time.gmtime())}
+        write_json(times_path, times)
         print(f"[ease bench] {name} done in {dt:.1f} s", file=sys.stderr, flush=True)
+    # the index lists every report in the folder, also those of earlier partial runs
+    rows = []
+    for name in names:
+        if (out / f"{name}.md").is_file():
+            t = times.get(name, {})
+            when = f"{t['seconds']:.1f} s on {t['date']}{' (quick)' if t.get('quick') else ''}" if t else "-"
+            rows.append(f"| {name} | [{name}.md]({name}.md) | {when} |")
     index = ["# EASE benchmark results", "",
-             "Regenerate with `./ease.sh bench` (see README). Metric definitions: shared SPEC.md.", "",
-             "| benchmark | report | wall time |", "|---|---|---|", *summary, ""]
-    if not args.only:
-        write_text(out / "README.md", "\n".join(index))
+             "Regenerate with `./ease.sh bench` (all) or `./ease.sh bench --only NAME`; see the README. "
+             "Metric definitions: shared SPEC.md. Times are wall seconds on the machine that ran them.", "",
+             "| benchmark | report | last run |", "|---|---|---|", *rows, ""]
+    write_text(out / "README.md", "\n".join(index))
     for p in sorted(out.iterdir()):
         print(f"  {p}")
     return 0

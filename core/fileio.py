@@ -20,8 +20,28 @@ import numpy as np
 PathLike = Union[str, os.PathLike]
 
 
+def _umask() -> int:
+    # /proc gives the umask without changing it (os.umask is process-wide and racy
+    # while a worker thread, e.g. the add-on's drape job, creates files)
+    try:
+        with open("/proc/self/status", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except OSError:
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 def write_bytes(path: PathLike, data: bytes) -> Path:
-    """Write ``data`` to ``path`` atomically (temp file in the same dir + rename)."""
+    """Write ``data`` to ``path`` atomically (temp file in the same dir + rename).
+
+    The file gets the permissions a plain ``open(path, "w")`` would give
+    (0666 minus the umask): ``mkstemp`` makes it owner-only, which would hide
+    pattern files from the rest of a cutting room's group.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
@@ -30,6 +50,7 @@ def write_bytes(path: PathLike, data: bytes) -> Path:
             f.write(data)
             f.flush()
             os.fsync(f.fileno())
+        os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
@@ -77,6 +98,12 @@ def output_dir(path: PathLike) -> Iterator[Path]:
     tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", suffix=".tmp", dir=final.parent))
     try:
         yield tmp
+        mask = _umask()
+        for src in tmp.rglob("*"):
+            # writers that bypass write_bytes (matplotlib, ezdxf, reportlab) already follow the
+            # umask; sub-folders made by mkdtemp's children are fine too: only fix owner-only files
+            if src.is_file() and (src.stat().st_mode & 0o777) == 0o600:
+                os.chmod(src, 0o666 & ~mask)
         final.mkdir(parents=True, exist_ok=True)
         for src in sorted(tmp.rglob("*")):
             rel = src.relative_to(tmp)

@@ -38,7 +38,7 @@ class ConsoleProgress:
     def __init__(self, stream=None, min_interval: float = 0.2):
         self.stream = stream or sys.stderr
         self.min_interval = min_interval
-        self._last = 0.0
+        self._last = float("-inf")          # the first line always prints
         self._tty = hasattr(self.stream, "isatty") and self.stream.isatty()
 
     def __call__(self, fraction: float, message: str) -> None:

@@ -1,0 +1,71 @@
+"""core.cli, core.bench, core.demo: the `ease` command line."""
+import sys
+
+import pytest
+
+import core.bench
+from core import cli
+from core.demo import _steps
+
+
+def _subcommands():
+    parser = cli.build_parser()
+    action = next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction")
+    return parser, action.choices
+
+
+def test_every_stage_has_a_subcommand_with_help(capsys):
+    _, choices = _subcommands()
+    assert {"body", "cut", "pattern", "transfer", "adapt", "drape", "export", "bench", "demo"} <= set(choices)
+    for name in choices:
+        with pytest.raises(SystemExit) as e:
+            cli.main([name, "--help"])
+        assert e.value.code == 0
+        out = capsys.readouterr().out
+        assert out.startswith(f"usage: ease {name}"), name
+
+
+def test_no_command_prints_help_and_fails(capsys):
+    assert cli.main([]) == 1
+    assert "COMMAND" in capsys.readouterr().out
+
+
+def test_core_errors_exit_2_with_one_clear_line(tmp_path, capsys):
+    rc = cli.main(["cut", str(tmp_path / "missing.json"), "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert rc == 2
+    assert err.startswith("ease cut: error:") and "missing.json" in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_every_demo_step_parses(tmp_path):
+    parser = cli.build_parser()
+    for quick in (False, True):
+        titles = []
+        for title, argv in _steps(tmp_path, quick):
+            args = parser.parse_args(argv)
+            assert callable(args.func), title
+            titles.append(argv[0])
+        assert titles == ["body", "cut", "pattern", "transfer", "adapt", "drape", "export"]
+    export = dict(_steps(tmp_path, False))["export: SVG, DXF, PDF, GLB, OBJ"]
+    assert export[export.index("--format") + 1] == "all"
+
+
+def test_bench_runs_a_benchmark_and_indexes_every_report(tmp_path, monkeypatch, capsys):
+    bench_dir = tmp_path / "benchmarks"
+    bench_dir.mkdir()
+    (bench_dir / "bench_alpha.py").write_text(
+        "def run(out_dir, quick=False):\n"
+        "    (out_dir / 'alpha.md').write_text('quick' if quick else 'full')\n")
+    (bench_dir / "bench_beta.py").write_text(
+        "def run(out_dir):\n    (out_dir / 'beta.md').write_text('b')\n")
+    monkeypatch.setattr(core.bench, "BENCH_DIR", bench_dir)
+    out = tmp_path / "results"
+    assert cli.main(["bench", "--only", "alpha", "--quick", "--out", str(out)]) == 0
+    assert (out / "alpha.md").read_text() == "quick"
+    assert cli.main(["bench", "--only", "beta", "--out", str(out)]) == 0
+    index = (out / "README.md").read_text()
+    assert "[alpha.md](alpha.md)" in index and "(quick)" in index and "[beta.md](beta.md)" in index
+    capsys.readouterr()
+    assert cli.main(["bench", "--only", "gamma", "--out", str(out)]) == 2
+    assert "unknown benchmark(s) gamma; available: alpha, beta" in capsys.readouterr().err

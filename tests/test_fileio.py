@@ -1,0 +1,74 @@
+"""core.fileio: atomic writes and output folders that never leave half-written files."""
+import os
+import stat
+
+import numpy as np
+import pytest
+
+from core.fileio import dumps_json, output_dir, write_bytes, write_json, write_text
+
+
+def _mode(path):
+    return stat.S_IMODE(os.stat(path).st_mode)
+
+
+@pytest.fixture
+def umask_022():
+    old = os.umask(0o022)
+    yield
+    os.umask(old)
+
+
+def test_write_replaces_whole_file_and_leaves_no_temp(tmp_path):
+    p = tmp_path / "sub" / "a.txt"
+    write_text(p, "first")
+    write_text(p, "second")
+    assert p.read_text() == "second"
+    assert sorted(x.name for x in p.parent.iterdir()) == ["a.txt"]
+
+
+def test_written_files_follow_the_umask_not_owner_only(tmp_path, umask_022):
+    p = write_bytes(tmp_path / "piece.svg", b"<svg/>")
+    assert _mode(p) == 0o644
+    with output_dir(tmp_path / "out") as d:
+        write_text(d / "x.json", "{}")
+        fd = os.open(d / "private.bin", os.O_CREAT | os.O_WRONLY, 0o600)   # e.g. a mkstemp'd file
+        os.close(fd)
+    assert _mode(tmp_path / "out" / "x.json") == 0o644
+    assert _mode(tmp_path / "out" / "private.bin") == 0o644
+
+
+def test_failed_write_keeps_the_old_file(tmp_path):
+    p = tmp_path / "report.json"
+    write_json(p, {"ok": 1})
+    with pytest.raises(ValueError):
+        write_json(p, {"bad": float("nan")})                 # NaN is not JSON: nothing written
+    assert p.read_text().strip() == '{\n "ok": 1\n}'
+    assert [x.name for x in tmp_path.iterdir()] == ["report.json"]
+
+
+def test_output_dir_is_all_or_nothing(tmp_path):
+    out = tmp_path / "pattern"
+    with output_dir(out) as d:
+        write_text(d / "pattern.json", "v1")
+        write_text(d / "keep.txt", "kept")
+    with pytest.raises(RuntimeError):
+        with output_dir(out) as d:
+            write_text(d / "pattern.json", "v2")
+            raise RuntimeError("solver failed")
+    assert (out / "pattern.json").read_text() == "v1"
+    with output_dir(out) as d:
+        (d / "plots").mkdir()
+        write_text(d / "plots" / "p.txt", "p")
+        write_text(d / "pattern.json", "v3")
+    assert (out / "pattern.json").read_text() == "v3"
+    assert (out / "keep.txt").read_text() == "kept"          # files the run did not write stay
+    assert (out / "plots" / "p.txt").read_text() == "p"
+    assert not [x for x in tmp_path.iterdir() if x.name.endswith(".tmp")]
+
+
+def test_json_of_numpy_values():
+    s = dumps_json({"a": np.arange(3), "b": np.float32(0.5), "c": np.int64(2), "d": np.bool_(True)}, indent=None)
+    assert s == '{"a": [0, 1, 2], "b": 0.5, "c": 2, "d": true}'
+    with pytest.raises(TypeError, match="not JSON serialisable: object"):
+        dumps_json({"x": object()})
