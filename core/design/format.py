@@ -15,11 +15,19 @@ Fields (metres, the body frame of :mod:`core`: +Z up, body faces -Y, +X = body's
 ``body``               ``{"model": "anny", "shape": "XS".."XL" | {param: value},
                        "pose": "A" | "T" | "P1".."P3" | {joint: [rx, ry, rz]}}``:
                        the reference instance the design is made on
-``materials``          ``{"fabric": preset, "eps_weft": >= 1, "eps_warp": >= 1}``
+``materials``          ``{"fabric": preset, "eps_weft": >= 1, "eps_warp": >= 1,
+                       "export": {"allowance": m | {"default", "hem", "fold",
+                       seam line: m}, "notch_spacing": m}}``; ``export``
+                       (optional) sets the seam allowance (0..0.1 m; default 1 cm,
+                       hems 2 cm, folds 0; a seam line by its name, in every
+                       garment, or as ``garment.line``) and the notch spacing
+                       (default 10 cm) of the pattern files
 ``mirror``             true: every ``*_left`` keypoint / line / panel gets its
                        ``*_right`` counterpart through the body's symmetry map
 ``skirt``              true: cut on the skirt topology (dresses, skirts)
-``refine_edge_length`` target edge length of the cut panels (m) or null
+``refine_edge_length`` target *mean* edge length of the cut panels (m, 0.002..0.1,
+                       default 0.01): every edge longer than 1.5x it is split
+                       (:mod:`core.cut.refine`); null keeps the body's resolution
 ``parameters``         ``{name: number | {"value", "kind": "placement" (0..1) |
                        "length" (m) | "number", "min", "max"}}``; used as
                        ``"$name"`` wherever a number is expected
@@ -178,7 +186,8 @@ class Design:
     garments : list[:class:`Garment`]
     mirror : bool, generate the ``*_right`` counterpart of every ``*_left`` element
     skirt : bool, cut on the skirt topology (dresses, skirts)
-    refine_edge_length : float metres or None
+    refine_edge_length : float metres or None, the target mean edge length of the refined
+        panels (edges longer than 1.5x are split, see :mod:`core.cut.refine`); None: no refinement
     """
     name: str
     body: dict
@@ -655,15 +664,69 @@ def _parse_body(path, obj):
 
 
 def _parse_materials(path, obj):
-    _expect_dict(path, obj, "materials {fabric, eps_weft, eps_warp}")
-    _expect_keys(path, obj, ("fabric", "eps_weft", "eps_warp"))
+    _expect_dict(path, obj, "materials {fabric, eps_weft, eps_warp, export}")
+    _expect_keys(path, obj, ("fabric", "eps_weft", "eps_warp", "export"))
     fabric = obj.get("fabric", "cotton")
     if not isinstance(fabric, str) or not fabric:
         raise DesignError(f"{path}.fabric", f"expected a fabric preset name, got {_fmt(fabric)}")
     out = {"fabric": fabric}
     for k in ("eps_weft", "eps_warp"):
         out[k] = _number(f"{path}.{k}", obj.get(k, 1.1), 1.0, 4.0, what="a tolerance")
+    if "export" in obj:
+        out["export"] = _parse_export(f"{path}.export", obj["export"])
     return out
+
+
+def _parse_export(path, obj):
+    """``materials.export``: seam allowance (m, a number or per seam) and notch spacing (m)."""
+    _expect_dict(path, obj, "an object {allowance, notch_spacing}")
+    _expect_keys(path, obj, ("allowance", "notch_spacing"))
+    out = {}
+    if "allowance" in obj:
+        a = obj["allowance"]
+        if _is_number(a):
+            out["allowance"] = _number(f"{path}.allowance", a, 0.0, 0.1, what="a seam allowance in metres")
+        else:
+            _expect_dict(f"{path}.allowance", a, 'a width in metres or {"default", "hem", "fold", <seam line>: m}')
+            widths = {}
+            for k, v in a.items():
+                if k not in EXPORT_ALLOWANCE_KEYS:
+                    for part in str(k).partition("#")[0].split("."):
+                        _check_name(f"{path}.allowance.{k}", part)
+                widths[k] = _number(f"{path}.allowance.{k}", v, 0.0, 0.1, what="a seam allowance in metres")
+            out["allowance"] = widths
+    if "notch_spacing" in obj:
+        out["notch_spacing"] = _number(f"{path}.notch_spacing", obj["notch_spacing"], 0.0, 1.0,
+                                       what="a notch spacing in metres (0: seam ends only)")
+    return out
+
+
+EXPORT_ALLOWANCE_KEYS = ("default", "hem", "fold")
+
+
+def _check_export_seams(design: "Design") -> None:
+    """Per-seam allowance keys of ``materials.export`` must name seam lines (or their mirrors)."""
+    from .mirror import mirrored_name
+    allowance = (design.materials.get("export") or {}).get("allowance")
+    if not isinstance(allowance, dict):
+        return
+    seams = set()
+    for gname, lines in [(None, design.lines)] + [(g.name, g.lines) for g in design.garments]:
+        for line in lines:
+            if line.role != "seam":
+                continue
+            m = mirrored_name(line.name) if design.mirror else None
+            for n in (line.name, m):
+                if n:
+                    seams.add(n)
+                    if gname:
+                        seams.add(f"{gname}.{n}")
+    for k in allowance:
+        if k in EXPORT_ALLOWANCE_KEYS or k.partition("#")[0] in seams:
+            continue
+        raise DesignError(f"materials.export.allowance.{k}",
+                          f"not a seam line of the design; expected 'default', 'hem', 'fold' or one of: "
+                          f"{', '.join(sorted(seams)) or '(no seam lines)'}")
 
 
 def _parse_parameters(path, obj) -> Dict[str, Parameter]:
@@ -741,6 +804,7 @@ def parse_design(obj: dict) -> Design:
                     lines=shared, garments=garments, mirror=bool(obj.get("mirror", False)), skirt=skirt,
                     refine_edge_length=rel, description=desc)
     _check_names_unique(design)
+    _check_export_seams(design)
     return design
 
 

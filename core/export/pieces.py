@@ -415,7 +415,10 @@ def resolve_allowance(allowance: Union[None, float, Mapping], pattern: Pattern) 
     Parameters
     ----------
     allowance : None, a number (every seam) or a dict ``{"default": 0.01,
-        "hem": 0.02, "<seam name>": ...}`` in metres. None takes
+        "hem": 0.02, "fold": 0, "<seam>": ...}`` in metres; a seam is named
+        as the cut names it (``garment.line``, ``garment.line#k`` for one
+        stretch of a split line) or by its line (``line``: in every garment).
+        None takes
         ``pattern.materials["export"]["allowance"]`` when the design has one.
 
     Raises
@@ -434,10 +437,11 @@ def resolve_allowance(allowance: Union[None, float, Mapping], pattern: Pattern) 
         raise ExportError(f"allowance: expected a number or a dict like "
                           f"{{'default': 0.01, 'hem': 0.02, '<seam>': ...}}, got {type(allowance).__name__}")
     seams = {s.name for s in pattern.seams}
+    lines = {k for n in seams for k in _seam_keys(n)}
     for key, value in allowance.items():
-        if key not in out and key not in seams:
+        if key not in out and key not in lines:
             raise ExportError(f"allowance[{key!r}]: not a seam of the pattern; expected 'default', 'hem', "
-                              f"'fold' or one of: {', '.join(sorted(seams)) or '(no seams)'}")
+                              f"'fold' or one of: {', '.join(sorted(lines)) or '(no seams)'}")
         try:
             v = float(value)
         except (TypeError, ValueError):
@@ -446,6 +450,31 @@ def resolve_allowance(allowance: Union[None, float, Mapping], pattern: Pattern) 
             raise ExportError(f"allowance[{key!r}]: expected a width in [0, 0.1] m, got {value!r}")
         out[key] = v
     return out
+
+
+def _seam_keys(seam: str) -> List[str]:
+    """The allowance keys that name seam ``seam``, most specific first.
+
+    The cut names a seam ``garment.line`` (``line`` for a line shared by
+    garments) and ``garment.line#k`` when the line has several stretches:
+    ``"shorts.side_left#1"`` is set by that name, by ``"shorts.side_left"``
+    or by ``"side_left"`` (that line in every garment).
+    """
+    keys = [seam]
+    line = seam.partition("#")[0]
+    for k in (line, line.partition(".")[2] if "." in line else ""):
+        if k and k not in keys:
+            keys.append(k)
+    return keys
+
+
+def seam_allowance(widths: Mapping[str, float], seam: str) -> float:
+    """Allowance (m) of seam ``seam`` from :func:`resolve_allowance`'s table:
+    the most specific key naming it (see :func:`_seam_keys`), else the default."""
+    for k in _seam_keys(seam):
+        if k in widths:
+            return float(widths[k])
+    return float(widths["default"])
 
 
 def boundary_loops_from_faces(faces: np.ndarray) -> List[np.ndarray]:
@@ -639,7 +668,7 @@ def build_piece(pattern: Pattern, panel: PatternPanel, widths: Dict[str, float],
                 li, ei = table[(int(u), int(v))]
                 edge_w[li][ei] = widths["hem"]
     for seam, side, ids in seam_sides(pattern, panel.name):
-        w = widths.get(seam.name, widths["default"])
+        w = seam_allowance(widths, seam.name)
         for u, v in zip(ids[:-1], ids[1:]):
             li, ei = table[(int(u), int(v))]
             edge_w[li][ei] = w
