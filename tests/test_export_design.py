@@ -163,6 +163,13 @@ def test_allowance_set_in_the_design_reaches_the_files(shorts_pattern):
         # and nowhere is the allowance narrower than asked
         assert np.all(measured >= expect - 0.05), panel.name
     assert seen == {12.0, 15.0, 20.0, 30.0}
+    # labels: the mirrored right pieces say so, the left ones name their twin
+    for panel in pat.panels:
+        texts = [t.text for t in groups[panel.name].findall("svg:text", NS)]
+        want = f"mirror of {panel.mirror_of}" if panel.mirror_of else "mirrored by"
+        assert panel.name.endswith("_right") == bool(panel.mirror_of)
+        assert any(t.startswith("cut 1") and want in t for t in texts), texts
+        assert "units: mm, allowance" in " ".join(texts)
 
     # notches every 8 cm from the design, identical on both sides of each seam
     by_seam = {}
