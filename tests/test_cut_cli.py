@@ -144,3 +144,75 @@ def test_load_cut_errors(tmp_path):
     (tmp_path / "cut.json").write_text('{"format": "ease-pattern", "version": 1}')
     with pytest.raises(CutError, match="ease-cut"):
         load_cut(tmp_path)
+
+
+def _shirt_lines(d):
+    return d["garments"][0]["lines"]
+
+
+def _drop_line(name):
+    def edit(d):
+        d["garments"][0]["lines"] = [l for l in _shirt_lines(d) if l["name"] != name]
+    return edit
+
+
+def _set(getter, key, value):
+    def edit(d):
+        getter(d)[key] = value
+    return edit
+
+
+# issue 3's error list, each through `ease cut` on the long-sleeve shirt: (edit, error, JSON path or
+# None, words the message must contain - the design element it names)
+ERROR_CASES = {
+    "unknown landmark": (_set(lambda d: _shirt_lines(d)[0]["points"], 1, "nek_left"), DesignError,
+                         "garments[0].lines[0].points[1]", ["'nek_left'", "neck_left"]),
+    "seamline does not close (open neckline)": (
+        _set(lambda d: _shirt_lines(d)[0], "closed", False), CutError, None,
+        ["'shirt.front'", "does not close", "'shirt.neckline'"]),
+    "seamline does not close (side seam stops at the waist)": (
+        _set(lambda d: _shirt_lines(d)[4], "points", ["armhole_under_left", "waist_left"]), CutError, None,
+        ["'shirt.front'", "'shirt.back'", "does not close", "'shirt.side_left'"]),
+    "missing seamline": (_drop_line("shoulder_left"), CutError, None, ["'shirt.front'", "'shirt.back'", "missing"]),
+    "seamlines cross": (
+        lambda d: _shirt_lines(d).append({"name": "belt", "points": ["chest_front", "chest_back"], "role": "seam"}),
+        CutError, None, ["'shirt.belt'", "'shirt.side_", "cross"]),
+    "panel with no faces": (
+        lambda d: d["garments"][0]["panels"].append({"name": "pocket", "seed": "navel", "body_part": "torso"}),
+        CutError, None, ["'shirt.pocket'", "no faces", "'shirt.front'"]),
+    "keypoint off the body": (_set(lambda d: d["keypoints"], "chest_front", {"triangle": 10 ** 7, "bary": [1, 0, 0]}),
+                              DesignError, "keypoints.chest_front.triangle", ["off the body"]),
+    "keypoint not on its triangle": (_set(lambda d: d["keypoints"], "chest_front", {"triangle": 5, "bary": [1.5, -0.5, 0]}),
+                                     DesignError, "keypoints.chest_front.bary[0]", ["1.5"]),
+    "length leaves the body part": (_set(lambda d: d["parameters"], "sleeve_length", {"value": 0.9, "kind": "length"}),
+                                    DesignError, "parameters.sleeve_length", ["leaves the body part", "arm_left"]),
+    "ease NaN": (_set(lambda d: d["garments"][0]["panels"][1]["ease"], "value", float("nan")), DesignError,
+                 "garments[0].panels[1].ease.value", ["panel 'back'", "NaN"]),
+    "ease below 0.5": (_set(lambda d: d["garments"][0]["panels"][1]["ease"], "value", 0.3), DesignError,
+                       "garments[0].panels[1].ease.value", ["panel 'back'", "0.5..4.0"]),
+    "ease gradient above 4": (_set(lambda d: d["garments"][0]["panels"], 2,
+                                   {"name": "sleeve_front_left", "seed": "sleeve_front_mid_left", "body_part": "arm",
+                                    "ease": {"from": 1.0, "to": 4.5, "axis": "z"}}),
+                              DesignError, "garments[0].panels[2].ease.to", ["panel 'sleeve_front_left'", "4.5"]),
+    "ease per-triangle value": (_set(lambda d: d["garments"][0]["panels"][0], "ease",
+                                     {"per_triangle": {"triangles": [0, 1], "values": [1.2, float("inf")]}}),
+                                DesignError, "garments[0].panels[0].ease.per_triangle.values[1]", ["panel 'front'"]),
+}
+
+
+@pytest.mark.parametrize("case", list(ERROR_CASES))
+def test_each_bad_input_is_named_and_writes_nothing(case, tmp_path):
+    edit, error, path, words = ERROR_CASES[case]
+    d = TEMPLATES["shirt_long_sleeve"]()
+    edit(d)
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(d))               # NaN / Infinity as JSON extensions
+    out = tmp_path / "out"
+    with pytest.raises(error) as e:
+        ease_cut(bad, "--out", out, "--quiet")
+    if path is not None:
+        assert e.value.path == path
+    for w in words:
+        assert w in str(e.value), (w, str(e.value))
+    assert not out.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.json"]       # no temporary leftovers

@@ -8,12 +8,14 @@ engine and its dependencies load when a cut is made.
 """
 from __future__ import annotations
 
+import time
 from typing import Optional
 
 from ..progress import Progress, report, sub
 
 
-def cut_design(design, body=None, shape=None, pose=None, progress: Optional[Progress] = None):
+def cut_design(design, body=None, shape=None, pose=None, progress: Optional[Progress] = None,
+               timings: Optional[dict] = None):
     """Cut ``design`` on a body instance.
 
     Parameters
@@ -23,6 +25,9 @@ def cut_design(design, body=None, shape=None, pose=None, progress: Optional[Prog
     shape : size name (``"XS"``..``"XL"``) or shape dict; None: the design's
     pose : pose preset or dict; None: the design's (the reference pose)
     progress : callback ``progress(fraction, message)``, may raise Cancelled
+    timings : optional dict, filled with wall seconds per stage: ``resolve`` (keypoints,
+        rings and traced lengths on the body), the engine's stages (see
+        :func:`core.cut.engine.cut_surface`) and ``ease`` (for benchmarks)
 
     Returns
     -------
@@ -43,13 +48,21 @@ def cut_design(design, body=None, shape=None, pose=None, progress: Optional[Prog
     if body is None:
         from ..body import load_body
         body = load_body(design.body.get("model", "anny"))
+    t0 = time.perf_counter()
     vertices = instance_vertices(design, body, shape, pose)
+    t1 = time.perf_counter()
     resolver = Resolver(design, body, vertices)
     spec = resolve(design, body, shape=shape, pose=pose, resolver=resolver)
+    t2 = time.perf_counter()
     report(progress, 0.15, "cutting the body surface")
-    cut = cut_surface(body, vertices, spec, progress=sub(progress, 0.15, 0.95))
+    cut = cut_surface(body, vertices, spec, progress=sub(progress, 0.15, 0.95), timings=timings)
     report(progress, 0.95, "applying ease fields")
+    t3 = time.perf_counter()
     apply_ease(cut, design, body, vertices, resolver=resolver)
+    if timings is not None:
+        timings["body_instance"] = timings.get("body_instance", 0.0) + t1 - t0
+        timings["resolve"] = timings.get("resolve", 0.0) + t2 - t1
+        timings["ease"] = timings.get("ease", 0.0) + time.perf_counter() - t3
     cut.materials = {**dict(cut.materials or {}), **design.materials}
     if not cut.body:
         cut.body = dict(spec.body)

@@ -32,6 +32,7 @@ part (see :mod:`.grain`).
 """
 from __future__ import annotations
 
+import time
 from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -122,7 +123,23 @@ def forbidden_body_faces(body, n_faces: int) -> np.ndarray:
 # --------------------------------------------------------------------------------------------
 # main entry
 # --------------------------------------------------------------------------------------------
-def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None) -> GarmentCut:
+class _Clock:
+    """Accumulates wall seconds per stage into ``timings`` (a dict), if one is given."""
+
+    def __init__(self, timings: Optional[dict]):
+        self.timings = timings
+        self.t = time.perf_counter()
+
+    def lap(self, stage: str) -> None:
+        if self.timings is None:
+            return
+        now = time.perf_counter()
+        self.timings[stage] = self.timings.get(stage, 0.0) + now - self.t
+        self.t = now
+
+
+def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None,
+                timings: Optional[dict] = None) -> GarmentCut:
     """Cut the body surface into garment panels.
 
     Parameters
@@ -131,6 +148,9 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None) -
     body_vertices : (V, 3) float, the reference body the design is made on (metres).
     spec : CutSpec, lines, panels and garments (see :mod:`core.cut.spec`).
     progress : optional ``progress(fraction, message)`` callback.
+    timings : optional dict, filled with wall seconds per stage (``prepare``, ``skirt``,
+        ``keypoints``, ``geodesics``, ``splitting``, ``flood_fill``, ``embedding``,
+        ``refine``, ``delaunay_flips``, ``axes``, ``grain``, ``panels_seams``), for benchmarks.
 
     Returns
     -------
@@ -142,14 +162,17 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None) -
         raise CutError("body vertices must be a finite (V, 3) array")
     if BF.max() >= len(X):
         raise CutError(f"body vertices ({len(X)}) do not match the body's faces")
+    clock = _Clock(timings)
     _validate(spec, len(BF))
     report(progress, 0.0, "cutting: preparing the body mesh")
     mesh = CutMesh(X, BF)
     forbidden = forbidden_body_faces(body, len(BF))
+    clock.lap("prepare")
     if spec.skirt:
         from .skirt import make_skirt
         make_skirt(mesh, body, X)
         forbidden = np.concatenate([forbidden, np.zeros(mesh._ptri_count() - len(BF), dtype=np.int64)])
+        clock.lap("skirt")
 
     # keypoints of every line as vertices; one geodesic solver on that mesh
     report(progress, 0.1, "cutting: inserting keypoints")
@@ -159,6 +182,7 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None) -
     for line in spec.lines:
         line_kv.append(kv[k:k + len(line.points)])
         k += len(line.points)
+    clock.lap("keypoints")
     report(progress, 0.2, "cutting: geodesic paths")
     geo = GeodesicPaths(mesh.X, mesh.F)
     paths: List[List[np.ndarray]] = []
@@ -172,8 +196,10 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None) -
         if not segs:
             raise CutError(f"cut line {line.name!r}: all its keypoints coincide")
         paths.append(segs)
+    clock.lap("geodesics")
 
     axes = _axes(body, X, spec)
+    clock.lap("axes")
     gnames = [g.name for g in spec.garments]
     garment_lines = {g: [i for i, l in enumerate(spec.lines) if g in line_garments(l, gnames)] for g in gnames}
     panels: List[Panel] = []
@@ -196,8 +222,9 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None) -
             report(progress, base + 0.2 * k / max(len(todo), 1) / len(spec.garments),
                    f"cutting garment {g.name}: line {names[li]}")
             seqs[li] = _insert_line(gm, li, line_kv[li], paths[li], spec.lines[li].closed, names)
+        clock.lap("splitting")
         report(progress, base + 0.2 / len(spec.garments), f"cutting garment {g.name}: panels")
-        out = _garment_panels(gm, spec, g, gpanels, seqs, forbidden, BF, X, axes, offset)
+        out = _garment_panels(gm, spec, g, gpanels, seqs, forbidden, BF, X, axes, offset, clock)
         panels += out["panels"]
         seams += out["seams"]
         hems.update(out["hems"])
@@ -304,7 +331,8 @@ def _seed_face(mesh: CutMesh, p: PanelSpec, BF, X) -> int:
 
 
 def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], seqs: Dict[int, np.ndarray],
-                    forbidden: np.ndarray, BF, X, axes, offset: int):
+                    forbidden: np.ndarray, BF, X, axes, offset: int, clock: Optional[_Clock] = None):
+    clock = clock or _Clock(None)
     F = mesh.F.copy()
     n = mesh.nv
     cut_ukeys = np.array(sorted(a * n + b for (a, b) in mesh.cut), dtype=np.int64)
@@ -317,17 +345,19 @@ def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], s
     for pi, p in enumerate(gpanels):
         c = comp[_seed_face(mesh, p, BF, X)]
         if c in owner:
-            raise CutError(f"panels {owner[c]!r} and {p.name!r} are in one region: a seamline between "
-                           f"them is missing or does not close")
+            raise CutError(f"panels {owner[c]!r} and {p.name!r} are in one region, so panel {p.name!r} "
+                           f"has no faces of its own: a seamline between them is missing or does not "
+                           f"close{_open_ends(mesh, spec, seqs, comp, c)}")
         if bad_comp[c]:
             raise CutError(f"panel {p.name!r} reaches the {FORBIDDEN_REGIONS[bad_comp[c] - 1]} region: "
-                           f"a seamline around it does not close")
+                           f"a seamline around it does not close{_open_ends(mesh, spec, seqs, comp, c)}")
         owner[c] = p.name
         label[comp == c] = pi
     keep = label >= 0
     if not keep.any():
         raise CutError(f"garment {g.name!r}: no panel has faces")
     # compact the garment's vertices
+    clock.lap("flood_fill")
     Fg = F[keep]
     lab = label[keep]
     used = np.unique(Fg)
@@ -336,6 +366,7 @@ def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], s
     Fg = remap[Fg]
     Xg = mesh.X[used]
     W = _weights(mesh, used, len(X))
+    clock.lap("embedding")
     lines_li = sorted(seqs)
     lines = [remap[seqs[li]] for li in lines_li]
     if spec.refine_edge_length is not None:
@@ -347,14 +378,16 @@ def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], s
                 pieces.append(s)
                 owners.append(k)
         Xg, Fg, lab, W, pieces = refine(Xg, Fg, lab, W, pieces, spec.refine_edge_length)
+        clock.lap("refine")
         ng = np.int64(len(Xg))
         fixed = [np.minimum(q[:-1], q[1:]) * ng + np.maximum(q[:-1], q[1:]) for q in pieces]
         Fg = delaunay_flips(Xg, Fg, lab, np.concatenate(fixed) if fixed else np.zeros(0, np.int64),
                             max_length=spec.refine_edge_length)
+        clock.lap("delaunay_flips")
         lines = [[pieces[j] for j in range(len(pieces)) if owners[j] == k] for k in range(len(lines))]
     else:
         lines = [_runs(l) for l in lines]
-    out = _build_panels(spec, gpanels, Xg, Fg, lab, lines, lines_li, axes, offset)
+    out = _build_panels(spec, gpanels, Xg, Fg, lab, lines, lines_li, axes, offset, clock)
     pins = None
     if g.pin_line is not None:
         li = [l.name for l in spec.lines].index(g.pin_line)
@@ -369,6 +402,27 @@ def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], s
     out["pins"] = pins
     out["W"] = W
     return out
+
+
+def _open_ends(mesh: CutMesh, spec: CutSpec, seqs: Dict[int, np.ndarray], comp: np.ndarray, c: int) -> str:
+    """Text naming the open lines whose loose end (a point on no other cut line) touches
+    region ``c``: where a region leaks through a seamline that does not close."""
+    out = []
+    for li in sorted(seqs):
+        line = spec.lines[li]
+        seq = seqs[li]
+        if line.closed or len(seq) < 2:
+            continue
+        for end, v in (("first", int(seq[0])), ("last", int(seq[-1]))):
+            if mesh.cut_verts.get(v, set()) - {li}:
+                continue            # it meets another line there
+            if any(comp[f] == c for f in mesh.vf[v]):
+                out.append(f"{line.name!r} ({end} keypoint)")
+    if not out:
+        return ""
+    if len(out) == 1:
+        return f"; the open end of cut line {out[0]} meets no other line"
+    return "; the open ends of cut lines " + ", ".join(out) + " meet no other line"
 
 
 def _runs(seq: np.ndarray) -> List[np.ndarray]:
@@ -396,7 +450,8 @@ def _weights(mesh: CutMesh, used: np.ndarray, V: int) -> sp.csr_matrix:
                          shape=(len(used), V))
 
 
-def _build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset):
+def _build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset, clock=None):
+    clock = clock or _Clock(None)
     n = len(X)
     key, ukey, twin, order = _halfedges(F, n)
     # cut edges: every edge on a cut line
@@ -441,7 +496,9 @@ def _build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset):
         Xl = X[ugv]
         side = "left" if Xl[:, 0].mean() >= 0 else "right"
         axis = axes[(p.body_part, "left" if p.body_part == "torso" else side)]
+        clock.lap("panels_seams")
         warp = warp_directions(Xl, faces, axis)
+        clock.lap("grain")
         # boundary half-edges: those not joined to a twin in the same panel
         hb = corners[~join[corners]]
         boundary = _boundary_loops(local_of_corner[hb], local_of_corner[nxt(hb)], p.name)
@@ -495,6 +552,7 @@ def _build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset):
             nm = line.name if len(stretches) == 1 else f"{line.name}#{k}"
             seams.append(Seam(name=nm, panel_a=panel_names[pa], panel_b=panel_names[pb],
                               verts_a=np.asarray(va, np.int64), verts_b=np.asarray(vb, np.int64)))
+    clock.lap("panels_seams")
     return {"panels": panels, "seams": seams, "hems": hems}
 
 

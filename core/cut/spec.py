@@ -60,6 +60,6 @@ class CutSpec:
     panels: List[PanelSpec]
     garments: List[GarmentSpec]
     skirt: bool = False
-    refine_edge_length: Optional[float] = 0.01   # metres; None keeps the cut resolution
+    refine_edge_length: Optional[float] = 0.01   # target mean edge, metres (split above 1.5x); None: no refinement
     materials: dict = field(default_factory=dict)
     body: dict = field(default_factory=dict)      # {"model", "shape", "pose"} for the record

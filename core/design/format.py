@@ -591,7 +591,12 @@ def _parse_panel(path, obj, params) -> Panel:
     part = obj.get("body_part", "torso")
     if part not in BODY_PARTS:
         raise DesignError(f"{path}.body_part", f"expected one of {', '.join(BODY_PARTS)}, got {_fmt(part)}")
-    ease = _parse_ease(f"{path}.ease", obj.get("ease", {"value": 1.0}), params)
+    try:
+        ease = _parse_ease(f"{path}.ease", obj.get("ease", {"value": 1.0}), params)
+    except DesignError as exc:
+        # name the panel, not only its JSON path
+        message = str(exc)[len(exc.path) + 2:] if exc.path else str(exc)
+        raise DesignError(exc.path, f"panel {obj['name']!r}: {message}") from None
     return Panel(obj["name"], seed, part, ease)
 
 
