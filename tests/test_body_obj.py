@@ -156,3 +156,16 @@ def test_bad_inputs_are_named(horse_files, tmp_path):
     (tmp_path / "broken.obj").write_text("v 0 0 0\nv 1 0 0\nf 1 2 7\n")
     with pytest.raises(BodyError, match="broken.obj:3: face refers to a vertex"):
         load_obj_body(tmp_path / "broken.obj")
+
+
+def test_pose_axes_are_reference_axes_carried_by_the_parent(horse_files):
+    """core.body.model's convention on a template's skeleton: G_leg = G_root @ R(aa)."""
+    from core.body.lbs import rodrigues
+    path, v, owner = horse_files
+    body = load_obj_body(path / "horse.obj", blendshapes=path / "horse_rig.npz")
+    J0 = body.joints()
+    a1, a2 = np.array([0.0, 0.0, 0.3]), np.array([-0.6, 0.2, 0.0])
+    posed = body.vertices(None, {"root": a1, "fl": a2})
+    J = body.joints(None, {"root": a1, "fl": a2})
+    leg = owner == "leg_fl"
+    np.testing.assert_allclose(posed[leg] - J[1], (v[leg] - J0[1]) @ (rodrigues(a1) @ rodrigues(a2)).T, atol=1e-9)

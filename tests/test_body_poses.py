@@ -168,3 +168,22 @@ def test_bad_pose_names_list_allowed(body):
         body.vertices(None, {"lowerarm01.L": [0, 1]})
     with pytest.raises(BodyError, match="preset"):
         body.vertices(None, 42)
+
+
+def test_rotation_axes_are_reference_axes_carried_by_the_parent(body):
+    """The convention of core.body.model: G_bone = G_parent @ R(aa), axes of the reference
+    pose's world frame - not the bone's own local frame (which differs: Anny's forearm
+    bones are not aligned with the world axes)."""
+    J0 = _joints(body, None)
+    a1, a2 = np.array([0.3, -0.5, 0.4]), np.array([0.0, 0.7, -0.2])
+    J = _joints(body, {"upperarm02.L": a1, "lowerarm01.L": a2})
+    R1, R2 = rodrigues(a1), rodrigues(a2)
+    np.testing.assert_allclose(J["lowerarm01.L"] - J["upperarm02.L"],
+                               R1 @ (J0["lowerarm01.L"] - J0["upperarm02.L"]), atol=1e-9)
+    np.testing.assert_allclose(J["wrist.L"] - J["lowerarm01.L"],
+                               R1 @ R2 @ (J0["wrist.L"] - J0["lowerarm01.L"]), atol=1e-9)
+    # the bone's local frame is not the world frame, so the two conventions differ here
+    U = body.data.reference_orientations[body.joint_names.index("lowerarm01.L")]
+    assert np.abs(U - np.eye(3)).max() > 0.1
+    J_local = R1 @ U.T @ R2 @ U @ (J0["wrist.L"] - J0["lowerarm01.L"])
+    assert np.linalg.norm(J_local - (J["wrist.L"] - J["lowerarm01.L"])) > 0.01

@@ -291,7 +291,7 @@ def test_pose_presets_on_smpl_skeleton(tmp_path):
     assert body.symmetry[idx["left_knee"]] == idx["right_knee"]
     # Custom rotation applies on top of the A-pose.
     bent = body.vertices(None, {"left_elbow": np.array([0, 0, -np.pi / 2])})
-    assert (bent[wr] - bent[idx["left_elbow"]])[1] < -0.2
+    assert (bent[wr] - bent[idx["left_elbow"]])[1] < -0.15    # about world Z: the forearm swings forward
 
 
 def test_smpl_topology_gets_all_landmarks(tmp_path):
@@ -352,3 +352,30 @@ def test_smplx_layout_body_part(tmp_path):
     np.testing.assert_allclose(body.vertices({"beta9": 1.0}, {"jaw": np.zeros(3)}),
                                reference_lbs({**m, "shapedirs": m["shapedirs"][:, :, :10]},
                                              np.eye(10)[9], aa_smpl) @ C.T, atol=1e-10)
+
+
+def test_pose_dict_axes_are_reference_axes_carried_by_the_parent(tmp_path):
+    """Same convention as Anny (core.body.model): on top of the A-pose, about the
+    reference pose's world axes, carried by the parent's rotation - although SMPL's
+    shoulder is already rotated (45 deg) in the A-pose."""
+    from core.body.lbs import rodrigues
+    np.savez(tmp_path / "stick.npz", **stick_smpl())
+    body = load_smpl(tmp_path / "stick.npz")
+    idx = {n: i for i, n in enumerate(body.joint_names)}
+    sh, el, wr = idx["left_shoulder"], idx["left_elbow"], idx["left_wrist"]
+    J0 = body.joints()
+    a1, a2 = np.array([0.2, 0.4, -0.3]), np.array([0.0, 0.0, -np.pi / 2])
+    J = body.joints(None, {"left_elbow": a2})
+    np.testing.assert_allclose(J[wr] - J[el], rodrigues(a2) @ (J0[wr] - J0[el]), atol=1e-9)
+    J = body.joints(None, {"left_shoulder": a1, "left_elbow": a2})
+    np.testing.assert_allclose(J[el] - J[sh], rodrigues(a1) @ (J0[el] - J0[sh]), atol=1e-9)
+    np.testing.assert_allclose(J[wr] - J[el], rodrigues(a1) @ rodrigues(a2) @ (J0[wr] - J0[el]), atol=1e-9)
+    # a preset under "preset", extra rotations on top of it
+    # (the axes are carried by the parent: T turns the shoulder by G = -45 deg about Y from A)
+    JT = body.joints(None, "T")
+    G = rodrigues(np.array([0.0, -np.pi / 4, 0.0]))
+    np.testing.assert_allclose(JT[wr] - JT[el], G @ (J0[wr] - J0[el]), atol=1e-9)
+    J = body.joints(None, {"preset": "T", "left_elbow": a2})
+    np.testing.assert_allclose(J[wr] - J[el], G @ rodrigues(a2) @ (J0[wr] - J0[el]), atol=1e-9)
+    with pytest.raises(BodyError, match="P3"):
+        body.joints(None, {"preset": "sitting"})

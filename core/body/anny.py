@@ -247,8 +247,9 @@ class AnnyBody(BodyModel):
     ``age`` (0 baby ~1 year, 1/3 child ~11 years, 2/3 young adult ~25 years, 1 old
     ~90 years; default 0.7), ``muscle``, ``weight``, ``height``, ``proportions``
     (0.5 = average). Pose: a preset of
-    :mod:`core.body.poses` or a dict joint -> axis-angle (radians, axes of our
-    frame at the parent's reference orientation) applied after the A-pose.
+    :mod:`core.body.poses` or a dict joint -> axis-angle (radians, about our
+    frame's axes as they stand at the reference A-pose, carried along by the
+    parent's rotation; see :mod:`core.body.model`) applied on top of the A-pose.
     """
 
     name = "anny"

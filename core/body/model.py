@@ -5,9 +5,19 @@ the body's left. Models convert their native frame once, at this boundary.
 
 Shape is a ``dict[str, float]`` of named parameters (Anny phenotypes, SMPL
 ``beta0..``), pose is a preset name (``"A"``, ``"T"``, ``"P1"``, ``"P2"``,
-``"P3"``) or a ``dict[str, array(3)]`` of joint name -> axis-angle rotation
-(radians, in the joint's local frame, applied on top of the A-pose), or None
-for the reference A-pose.
+``"P3"``) or a ``dict[str, array(3)]`` of joint name -> axis-angle rotation,
+or None for the reference A-pose.
+
+Joint rotations (radians) are applied on top of the reference pose, about axes
+of the project frame (+X body's left, +Y back, +Z up) as they stand at the
+reference pose, carried along by the parent's rotation: a bone's rotation
+relative to the reference pose is ``G_bone = G_parent @ R(axis_angle)``. So a
+joint whose ancestors are not rotated turns about the world axes of the
+reference pose (``{"lowerarm01.L": [0, 0, 1.2]}`` swings the forearm 1.2 rad
+about +Z), and a joint below a rotated one turns about those axes rotated with
+its parent. The axes are not the bone's own local (bone-aligned) frame. Every
+model uses this convention (Anny: its ``local-ref`` parameterisation; SMPL and
+skinned OBJ templates: their rest joint frames are the world axes).
 """
 from __future__ import annotations
 

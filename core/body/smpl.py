@@ -198,8 +198,9 @@ class SMPLBody(BodyModel):
     """An SMPL-family body (SMPL, SMPL+H, SMPL-X body part) behind :class:`BodyModel`.
 
     Shape is ``{"beta0": b0, ...}`` (range :data:`BETA_RANGE`), pose a preset
-    name or ``{joint_name: axis-angle (3,)}`` in our frame applied on top of
-    the A-pose (``R = R_A @ R_user`` per joint).
+    name or ``{joint_name: axis-angle (3,)}`` (optionally with ``"preset"``)
+    applied on top of the A-pose (or the preset) about our frame's axes at the
+    reference pose, carried by the parent's rotation (:mod:`core.body.model`).
     """
 
     def __init__(self, arrays: Mapping[str, np.ndarray], name: str = "smpl", source: str = ""):
@@ -296,7 +297,18 @@ class SMPLBody(BodyModel):
         if not isinstance(pose, Mapping):
             raise BodyError(f"pose must be a preset name ({', '.join(POSE_PRESETS)}), a dict "
                             f"joint -> axis-angle, or None; got {type(pose).__name__}")
-        R = self.rotations(None)
+        pose = dict(pose)
+        preset = pose.pop("preset", None)
+        if preset is not None and preset not in POSE_PRESETS:
+            raise BodyError(f"unknown pose preset {preset!r}; allowed: {', '.join(POSE_PRESETS)}")
+        R = self.rotations(preset)
+        # The axes are those of the reference (A) pose, carried by the parent's rotation
+        # (see core.body.model): R_j <- (W_p^T r W_p) R_j with W_p the parent's world
+        # rotation at the reference pose, so that G_j = G_parent @ r relative to it.
+        RA = self.rotations(None)
+        WA = np.empty_like(RA)
+        for j, p in enumerate(self.parents):
+            WA[j] = RA[j] if p < 0 else WA[p] @ RA[j]
         for name, r in pose.items():
             if name not in self._joint_index:
                 raise BodyError(f"{self.name}: unknown joint {name!r} in pose; joints: {', '.join(self.joint_names)}")
@@ -304,7 +316,9 @@ class SMPLBody(BodyModel):
             if r.shape != (3,) or not np.all(np.isfinite(r)):
                 raise BodyError(f"{self.name}: pose[{name!r}] must be a finite axis-angle (3,), got shape {r.shape}")
             j = self._joint_index[name]
-            R[j] = R[j] @ rodrigues(r)
+            p = self.parents[j]
+            Wp = WA[p] if p >= 0 else np.eye(3)
+            R[j] = Wp.T @ rodrigues(r) @ Wp @ R[j]
         return R
 
     def rest_joints(self, betas: np.ndarray) -> np.ndarray:
