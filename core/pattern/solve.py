@@ -16,9 +16,19 @@ area-matched, grain along +y). Per triangle ``t`` its gradient operator
   their intrinsic 2D coordinates ``K_t`` (2x2, the warp offset along the
   second axis) carry the triangle's metric.
 
-Targets: ``T_t = K_t diag(c_weft, c_warp)`` with ``c = |sigma*_2D| / |sigma_3D|``
-(paper Eqs. ref-scale, transfer-scale, adapt-scale, material-scale), so the
-target 2D offsets have the lengths the paper asks for.
+Targets, with ``c = |sigma*_2D| / |sigma_3D|`` (paper Eqs. ref-scale,
+transfer-scale, adapt-scale, material-scale) and ``D_t = diag(c_weft, c_warp)``:
+
+- improved (``stretch_frame="pattern"``): ``T_t = D_t K_t``. The scales act
+  along the pattern's own axes, so any rotation ``R`` of the body frame keeps
+  them: ``M = D R K`` gives the 2D->3D map ``J = Q R^T D^-1`` (SPEC weft
+  scale exactly ``c_weft``, no shear). The regulariser's rest shapes are
+  ``D_t R_t K_t``.
+- paper, literal (``stretch_frame="initial"``): ``T_t = K_t D_t``, the 2D
+  offsets of the initial barycentric steps scaled by ``c``. A locally rotated
+  rest shape ``R T`` then carries its stretch off the weft (at rho = 2 a 5
+  degree rotation costs 1 % compliance and 7 degrees of shear): compliance and
+  shear grow with rho.
 
 Energy, every term normalised to be dimensionless and independent of the mesh
 resolution and the garment size: a relative strain squared, integrated over
@@ -30,18 +40,20 @@ and tiny edges (slivers at seam ends) do not stiffen the system::
 
     E = lambda_ease sum_t a_t |(M_t - T_t) W|^2            (E_weft + E_warp, axes fixed:
                                                              weft along x, warp along y)
-      + lambda_reg  sum_t a_t |(M_t - R_t T_reg,t) W|^2   (ARAP, R_t from the local step)
+      + lambda_reg  sum_t a_t |(M_t - D_t R_t K_t) W|^2   (ARAP, R_t from the local step)
       + lambda_len  sum_i l_i/(h A) |e_i - Lbar_i d_i|^2  (seam length, linearised)
       + lambda_straight sum_i l_i/(h A) |D2 u_i - S_i|^2  (seam straightness)
       + lambda_curve sum_i l_i/(h A) |D2 u_i - C_i|^2     (matched seam curvature)
 
 with ``a_t = area_t / A`` (at least ``sliver_weight`` times the mean, so
-slivers do not fold for free), ``W = diag(1, warp_weight)``. ``T_reg`` is the
-isometric rest shape ``K_t`` in the paper-default configuration (taken
-literally the regulariser then fights the ease term: compliance 20-40 %) and
-the pre-stretched ``T_t`` in the improved one (no competition: both terms
-agree on the target shape, the regulariser only adds rotation freedom against
-curvature).
+slivers do not fold for free), ``W = diag(1, warp_weight)``. The regulariser's
+rest shape is the isometric ``R_t K_t`` in the paper-default configuration
+(taken literally the regulariser then fights the ease term: compliance
+20-40 %) and the pre-stretched ``D_t R_t K_t`` in the improved one (no
+competition: both terms agree on the target shape, the regulariser only adds
+rotation freedom against curvature). ``warp_slack`` > 0 also lets the local
+step scale the rest shape's warp row freely within ``1 +- slack`` (curvature
+then goes into warp length rather than weft and shear).
 
 Seam terms keep the system matrix fixed by targeting whole vectors:
 
@@ -113,6 +125,11 @@ class SolverConfig:
     towards 0, which also straightens seams that must be curved -- crotch,
     armholes) or ``"smooth"`` (towards the mean of the neighbouring second
     differences of the current seam: only oscillations are damped).
+    ``stretch_frame``: ``"pattern"`` (targets ``diag(c) K``: the scales act
+    along the pattern's weft/warp after the local rotation) or ``"initial"``
+    (the paper literally: ``K diag(c)``, the initial flattening's barycentric
+    offsets scaled). ``warp_slack``: the local step may scale the rest
+    shape's warp by a factor within ``[1/(1+slack), 1+slack]`` (0 = off).
     """
     lambda_ease: float = 0.1
     lambda_reg: float = 1.0
@@ -134,13 +151,15 @@ class SolverConfig:
     adapt_feedback: float = 0.5
     sliver_weight: float = 0.5
     feedback_warp: float = 0.0
+    stretch_frame: str = "pattern"
+    warp_slack: float = 0.0
 
 
     @classmethod
     def paper(cls, **kw) -> "SolverConfig":
         """The paper's weights taken literally (isometric ARAP regulariser)."""
         return replace(cls(reg_rest="isometric", adapt_margin=0.0, straight_target="zero", len_target="current",
-                           lambda_len=100.0, lambda_straight=5.0, lambda_curve=10.0, len_integral=0.0,
+                           stretch_frame="initial", lambda_len=100.0, lambda_straight=5.0, lambda_curve=10.0, len_integral=0.0,
                            adapt_feedback=0.0), **kw)
 
     @classmethod
@@ -174,6 +193,10 @@ class SolverConfig:
             raise PatternError(f"solver configuration iterations: expected >= 1, got {self.iterations}")
         if self.straight_target not in ("zero", "smooth"):
             raise PatternError(f"solver configuration straight_target: expected 'zero' or 'smooth', got {self.straight_target!r}")
+        if self.stretch_frame not in ("pattern", "initial"):
+            raise PatternError(f"solver configuration stretch_frame: expected 'pattern' or 'initial', got {self.stretch_frame!r}")
+        if not np.isfinite(self.warp_slack) or self.warp_slack < 0:
+            raise PatternError(f"solver configuration warp_slack: expected a finite value >= 0, got {self.warp_slack}")
         if self.reg_rest not in ("isometric", "prestretch"):
             raise PatternError(f"solver configuration reg_rest: expected 'isometric' or 'prestretch', got {self.reg_rest!r}")
 
@@ -267,34 +290,29 @@ def _jac(Ut: np.ndarray, G: np.ndarray) -> np.ndarray:
             + Ut[:, 2, :, None] * G[:, 2, None, :])
 
 
-def _abt(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """``A[t] @ B[t]^T`` for A (f, m, 2), B (f, n, 2) -> (f, m, n)."""
-    return A[:, :, None, 0] * B[:, None, :, 0] + A[:, :, None, 1] * B[:, None, :, 1]
+def _rotate_about(P: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Rows of ``P`` (n, 2) turned counter-clockwise by per-row angles ``theta`` (n,)."""
+    c, s = np.cos(theta), np.sin(theta)
+    return np.stack([c * P[:, 0] - s * P[:, 1], s * P[:, 0] + c * P[:, 1]], axis=1)
 
 
-def _ab(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """``A[t] @ B[t]`` for 2x2 stacks."""
-    return A[:, :, 0, None] * B[:, None, 0, :] + A[:, :, 1, None] * B[:, None, 1, :]
+def _components(A: np.ndarray) -> list:
+    """A (f, 2, 2) as 4 contiguous (f,) arrays a00, a01, a10, a11."""
+    return [np.ascontiguousarray(A[:, i, j]) for i in range(2) for j in range(2)]
 
 
-def _polar2(A: np.ndarray) -> np.ndarray:
-    """Closest rotations (f, 2, 2) to 2x2 matrices A (maximise tr(R^T A))."""
-    th = np.arctan2(A[:, 1, 0] - A[:, 0, 1], A[:, 0, 0] + A[:, 1, 1])
-    c, s = np.cos(th), np.sin(th)
-    R = np.empty_like(A)
-    R[:, 0, 0] = c
-    R[:, 0, 1] = -s
-    R[:, 1, 0] = s
-    R[:, 1, 1] = c
-    return R
+def _achieved(M: list, Kc: list):
+    """SPEC rho-hat weft and warp (f,) of pattern Jacobians ``M`` on a body with intrinsic offsets ``Kc``.
 
-
-def _kabsch2(P: np.ndarray, Q: np.ndarray) -> np.ndarray:
-    """Proper rotation (2, 2) best mapping centred Q onto centred P."""
-    Pc = P - P.mean(axis=0)
-    Qc = Q - Q.mean(axis=0)
-    H = Qc.T @ Pc
-    return _polar2(H.T[None])[0]
+    ``J = Q K M^-1`` (Q orthonormal): ``|J w| = |K M^-1 e_x|``, ``|J g| = |K M^-1 e_y|``.
+    """
+    det = M[0] * M[3] - M[1] * M[2]
+    wx, wy = M[3], -M[2]        # det * M^-1 e_x
+    gx, gy = -M[1], M[0]        # det * M^-1 e_y
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rw = np.abs(det) / np.hypot(Kc[0] * wx + Kc[1] * wy, Kc[2] * wx + Kc[3] * wy)
+        rg = np.abs(det) / np.hypot(Kc[0] * gx + Kc[1] * gy, Kc[2] * gx + Kc[3] * gy)
+    return rw, rg
 
 
 # ----------------------------------------------------------------------------- solver
@@ -390,6 +408,8 @@ class PatternSolver:
         self.uv0 = np.concatenate([pd.uv0 for pd in self.panels])
         el = np.linalg.norm(self.uv0[self.gfaces[:, [1, 2, 0]]] - self.uv0[self.gfaces], axis=2)
         self.h = float(np.mean(el))
+        self._vpanel = np.repeat(np.arange(len(self.panels)), [pd.n for pd in self.panels])
+        self._vcount = np.array([pd.n for pd in self.panels], float)
         self._build_seams()
         # scatter of per-triangle corner contributions into the unknowns
         f = len(self.gfaces)
@@ -417,37 +437,101 @@ class PatternSolver:
 
     def _build_seams(self) -> None:
         by_name = {pd.name: pd for pd in self.panels}
-        face_base, base = {}, 0
-        for pd in self.panels:
-            face_base[pd.name] = base
-            base += len(pd.faces)
         self.sides: List[_SeamSide] = []
         self.seam_pairs = []
+        edge_tables = {}
         for si, s in enumerate(self.cut.seams):
             pair = []
             for pname, verts in ((s.panel_a, s.verts_a), (s.panel_b, s.verts_b)):
                 pd = by_name[pname]
                 v = np.asarray(verts, int)
-                emap = {}
-                for fi, tri in enumerate(pd.faces):
-                    for c in range(3):
-                        emap[(int(tri[c]), int(tri[(c + 1) % 3]))] = (fi, c, (c + 1) % 3)
-                ef, el = [], []
-                for i in range(len(v) - 1):
-                    key = (int(v[i]), int(v[i + 1]))
-                    if key in emap:
-                        fi, c0, c1 = emap[key]
-                    elif key[::-1] in emap:
-                        fi, c1, c0 = emap[key[::-1]]
-                    else:
-                        raise PatternError(f"seam {s.name!r}: vertices {key} of panel {pname!r} are not joined by an edge")
-                    ef.append(face_base[pname] + fi)
-                    el.append((c0, c1))
+                if pname not in edge_tables:
+                    # directed half-edges (i -> j) of the panel, sorted by key i * n + j
+                    F = pd.faces
+                    keys = np.concatenate([F[:, c] * pd.n + F[:, (c + 1) % 3] for c in range(3)])
+                    order = np.argsort(keys, kind="stable")
+                    edge_tables[pname] = (keys[order], order)
+                keys, order = edge_tables[pname]
+                nf = len(pd.faces)
+                ef, el = np.zeros(len(v) - 1, int), np.zeros((len(v) - 1, 2), int)
+                found = np.zeros(len(v) - 1, bool)
+                for fwd, (x, y) in ((True, (v[:-1], v[1:])), (False, (v[1:], v[:-1]))):
+                    q = x * pd.n + y
+                    pos = np.minimum(np.searchsorted(keys, q), len(keys) - 1)
+                    hit = (keys[pos] == q) & ~found
+                    h = order[pos[hit]]
+                    fi, c = h % nf, h // nf
+                    ef[hit] = pd.face_offset + fi
+                    el[hit] = np.stack([c, (c + 1) % 3], axis=1) if fwd else np.stack([(c + 1) % 3, c], axis=1)
+                    found |= hit
+                if not np.all(found):
+                    i = int(np.argmin(found))
+                    raise PatternError(f"seam {s.name!r}: vertices {(int(v[i]), int(v[i + 1]))} of panel {pname!r} "
+                                       "are not joined by an edge")
                 g = v + pd.offset
                 l0 = np.linalg.norm(np.diff(self.uv0[g], axis=0), axis=1)
-                self.sides.append(_SeamSide(si, g, l0, np.array(ef, int), np.array(el, int).reshape(-1, 2)))
+                self.sides.append(_SeamSide(si, g, l0, ef, el))
                 pair.append(len(self.sides) - 1)
             self.seam_pairs.append(tuple(pair))
+        self._stack_seams()
+
+    def _stack_seams(self) -> None:
+        """All seam sides concatenated, so that the seam right-hand side is a few array operations.
+
+        Edges: ``_E0``/``_E1`` (global ids of each seam edge's ends), ``_Eo``
+        (index of the sewn edge on the other side), ``_El0`` (initial
+        lengths), ``_Ef`` (the edge's triangle). Second differences: one
+        sparse ``_Dall`` (rows: interior seam vertices of sides with >= 3
+        vertices), ``_Ro`` (the sewn row on the other side), ``_Rcc`` (band
+        weights), ``_Rsmooth`` (rows that have both neighbours on a side with
+        >= 3 rows), ``_Rend`` (rows whose side has >= 3 rows: they get the
+        straightness term). Vertices: ``_Vg``, ``_Vo``, ``_Vside`` for the
+        per-side rigid fit of the matched-curvature term.
+        """
+        sides = self.sides
+        other = {}
+        for ka, kb in self.seam_pairs:
+            other[ka], other[kb] = kb, ka
+        e_start = np.cumsum([0] + [len(sd.gids) - 1 for sd in sides])
+        v_start = np.cumsum([0] + [len(sd.gids) for sd in sides])
+        self._E0 = np.concatenate([sd.gids[:-1] for sd in sides]) if sides else np.zeros(0, int)
+        self._E1 = np.concatenate([sd.gids[1:] for sd in sides]) if sides else np.zeros(0, int)
+        self._El0 = np.concatenate([sd.l0 for sd in sides]) if sides else np.zeros(0)
+        self._Ef = np.concatenate([sd.edge_face for sd in sides]) if sides else np.zeros(0, int)
+        self._Eo = np.concatenate([e_start[other[k]] + np.arange(len(sd.gids) - 1) for k, sd in enumerate(sides)]) \
+            if sides else np.zeros(0, int)
+        self._Vg = np.concatenate([sd.gids for sd in sides]) if sides else np.zeros(0, int)
+        self._Vo = np.concatenate([v_start[other[k]] + np.arange(len(sd.gids)) for k, sd in enumerate(sides)]) \
+            if sides else np.zeros(0, int)
+        self._Vside = np.concatenate([np.full(len(sd.gids), k) for k, sd in enumerate(sides)]) if sides else np.zeros(0, int)
+        self._Vcount = np.array([len(sd.gids) for sd in sides], float)
+        rows, prev, mid, nxt, cc, ro, smooth, straight = [], [], [], [], [], [], [], []
+        r_start = np.cumsum([0] + [max(len(sd.gids) - 2, 0) for sd in sides])
+        for k, sd in enumerate(sides):
+            g, m = sd.gids, len(sd.gids) - 2
+            if m < 1:
+                continue
+            prev.append(g[:-2]), mid.append(g[1:-1]), nxt.append(g[2:])
+            cc.append(0.5 * (sd.l0[:-1] + sd.l0[1:]) / (self.h * self.total_area))
+            ro.append(r_start[other[k]] + np.arange(m))
+            sm = np.zeros(m, bool)
+            if m >= 3:
+                sm[1:-1] = True
+            smooth.append(sm)
+            straight.append(np.full(m, m >= 3))
+        nr = int(r_start[-1]) if len(r_start) else 0
+        if nr:
+            prev, mid, nxt = np.concatenate(prev), np.concatenate(mid), np.concatenate(nxt)
+            r = np.arange(nr)
+            self._Dall = sp.csr_matrix((np.tile([1.0, -2.0, 1.0], nr),
+                                        (np.repeat(r, 3), np.stack([prev, mid, nxt], axis=1).ravel())),
+                                       shape=(nr, self.n))
+            self._DallT = self._Dall.T.tocsr()
+            self._Rcc, self._Ro = np.concatenate(cc), np.concatenate(ro)
+            self._Rsmooth, self._Rstraight = np.concatenate(smooth), np.concatenate(straight)
+            self._Rside = np.repeat(np.arange(len(sides)), [max(len(sd.gids) - 2, 0) for sd in sides])
+        else:
+            self._Dall = None
 
     def _matrix(self) -> sp.csc_matrix:
         cfg = self.config
@@ -503,7 +587,6 @@ class PatternSolver:
             self._factor_key = key
             self.timings["factorise"] = time.perf_counter() - t0
             self.n_factorisations = getattr(self, "n_factorisations", 0) + 1
-            self._D = [self._second_difference(s) if len(s.gids) >= 3 else None for s in self.sides]
         return self._factor
 
     # ------------------------------------------------------------------ targets
@@ -547,30 +630,37 @@ class PatternSolver:
     # ------------------------------------------------------------------ iterations
     def solve(self, K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray, start: Optional[np.ndarray] = None,
               positions: Optional[np.ndarray] = None, progress: Optional[Progress] = None) -> SolveResult:
-        """Run the local-global iterations towards targets ``T = K diag(c_weft, c_warp)``."""
+        """Run the local-global iterations towards targets ``diag(c_weft, c_warp) K`` (module docstring).
+
+        Per iteration: the local step (closed-form rotations, all triangles at
+        once), one right-hand side, one back-substitution of the factorised
+        matrix for both coordinates, the per-panel rigid fit, the flip
+        safeguard and the grain re-alignment; the Jacobians of the next
+        iterate are carried through the re-alignment's rotation, so only two
+        sparse products per iteration touch the triangles.
+        """
         cfg = self.config
         t0 = time.perf_counter()
         lu = self._solver()
-        T = K * np.stack([c_weft, c_warp], axis=1)[:, None, :]        # (f, 2, 2)
-        T_reg = T if cfg.reg_rest == "prestretch" else K
         W2 = np.array([1.0, cfg.warp_weight ** 2])
         U = self._scaled_start(c_weft, c_warp) if start is None else start.copy()
-        Ft = self.gfaces
-        # fixed part of the right-hand side: the ease term with axes fixed
-        ease_part = self._rhs_of(T, cfg.lambda_ease * self.a, W2)
         pos = self.ref_positions if positions is None else positions
-        Xu = np.concatenate([pos[pd.vertex_ids] for pd in self.panels])
-        corr_w = np.ones(len(Ft))
-        corr_g = np.ones(len(Ft))
+        nf = len(self.gfaces)
+        corr_w = np.ones(nf)
+        corr_g = np.ones(nf)
         energies = []
         backtracks = 0
         n_it = int(cfg.iterations)
+        tg = self._target_parts(K, c_weft, c_warp)
+        Kc = _components(K)
+        aw = (self.a * W2[0], self.a * W2[1])
+        M = self._jac4(U)
         for it in range(n_it):
             report(progress, it / n_it, f"optimizing pattern: iteration {it + 1}/{n_it}")
             if (cfg.feedback > 0 or cfg.feedback_warp > 0) and it >= 2:
                 # move the targets by the achieved/target ratio: the linear solve then
                 # lands on the wanted rho-hat wherever curvature allows it
-                rw, rg, _ = scales(U, Xu, Ft, np.array([0.0, 1.0]))
+                rw, rg = _achieved(M, Kc)
                 ok = np.isfinite(rw) & np.isfinite(rg) & (rw > 0) & (rg > 0)
                 if cfg.feedback > 0:
                     corr_w[ok] *= np.clip((c_weft[ok] / rw[ok]) ** cfg.feedback, 0.97, 1.03)
@@ -578,100 +668,195 @@ class PatternSolver:
                     corr_g[ok] *= np.clip((c_warp[ok] / rg[ok]) ** cfg.feedback_warp, 0.97, 1.03)
                 np.clip(corr_w, 0.8, 1.25, out=corr_w)
                 np.clip(corr_g, 0.8, 1.25, out=corr_g)
-                T = K * np.stack([c_weft * corr_w, c_warp * corr_g], axis=1)[:, None, :]
-                T_reg = T if cfg.reg_rest == "prestretch" else K
-                ease_part = self._rhs_of(T, cfg.lambda_ease * self.a, W2)
-            M = self._jacobians(U)                         # (f, 2, 2) current Jacobian
-            R = _polar2(_abt(M * W2, T_reg))               # local step
-            RT = _ab(R, T_reg)
-            rhs = ease_part + self._rhs_of(RT, cfg.lambda_reg * self.a, W2)
-            rhs += self._seam_rhs(U, _ab(R, T), reset=(it == 0))
+                tg = self._target_parts(K, c_weft * corr_w, c_warp * corr_g)
+            RT, Te = self._local_step(M, tg, W2)
+            energies.append(float(np.sum(self.a * sum(W2[k % 2] * (M[k] - RT[k]) ** 2 for k in range(4)))))
+            # B = lambda_ease T + lambda_reg R T: one right-hand side for both terms (same weights)
+            B = [cfg.lambda_ease * Te[k] + cfg.lambda_reg * RT[k] for k in range(4)]
+            rhs = np.empty((self.n, 2))
+            rhs[:, 0] = self._GxT @ (aw[0] * B[0]) + self._GyT @ (aw[1] * B[1])
+            rhs[:, 1] = self._GxT @ (aw[0] * B[2]) + self._GyT @ (aw[1] * B[3])
+            RTs = None
+            if cfg.len_target != "current" or cfg.len_direction != "current":
+                Dt, Kt = tg["seam"]
+                _, RTs = self._local_step(M, {"T": tg["T"], "reg": (Dt, Kt)}, W2, slack=False)
+                RTs = np.stack(RTs, axis=1).reshape(-1, 2, 2)
+            rhs += self._seam_rhs(U, RTs, reset=(it == 0))
             rhs += self._pin[:, None] * U
-            U_new = np.column_stack([lu.solve(rhs[:, 0]), lu.solve(rhs[:, 1])])
+            U_new = lu.solve(rhs)
             # the step's rigid part per panel carries no strain: remove it so that the flip
             # safeguard only ever pulls back the local part of the step
             U_new = self._rigid_align(U_new, U)
             U, nb = self._safeguard(U, U_new)
             backtracks += nb
+            M = self._jac4(U)
             if cfg.realign_grain:
-                U = self._realign(U, positions if positions is not None else self.ref_positions)
-            energies.append(float(np.sum(self.a * np.sum(((M - RT) * np.sqrt(W2)) ** 2, axis=(1, 2)))))
+                U, M = self._realign(U, M)
         report(progress, 1.0, "pattern optimized")
-        out_uv, tw, tg, xyz = {}, {}, {}, {}
+        out_uv, tw, tgw, xyz = {}, {}, {}, {}
         fb = 0
         for pd in self.panels:
             out_uv[pd.name] = U[pd.offset:pd.offset + pd.n].copy()
             tw[pd.name] = np.asarray(c_weft[fb:fb + len(pd.faces)], float).copy()
-            tg[pd.name] = np.asarray(c_warp[fb:fb + len(pd.faces)], float).copy()
+            tgw[pd.name] = np.asarray(c_warp[fb:fb + len(pd.faces)], float).copy()
             xyz[pd.name] = pos[pd.vertex_ids]
             fb += len(pd.faces)
-        return SolveResult(out_uv, tw, tg, xyz, time.perf_counter() - t0, n_it, backtracks, energies)
+        return SolveResult(out_uv, tw, tgw, xyz, time.perf_counter() - t0, n_it, backtracks, energies)
 
-    def _seam_rhs(self, U: np.ndarray, RT: np.ndarray, reset: bool = False) -> np.ndarray:
+    def _jac4(self, U: np.ndarray) -> list:
+        """Jacobians of ``U`` w.r.t. the initial flattening as 4 contiguous (f,) arrays m00, m01, m10, m11.
+
+        ``m_ij``: derivative of pattern coordinate ``i`` (u, v) along initial axis ``j`` (x, y).
+        """
+        u, v = np.ascontiguousarray(U[:, 0]), np.ascontiguousarray(U[:, 1])
+        return [self._Gx @ u, self._Gy @ u, self._Gx @ v, self._Gy @ v]
+
+    def _local_step(self, M: list, tg: dict, W2: np.ndarray, slack: bool = True):
+        """Rest shapes ``D R K'`` of the regulariser (closed-form 2x2 rotations) and the ease target.
+
+        ``M``: the current Jacobians (:meth:`_jac4`). With ``warp_slack`` the
+        rest shape's warp row is also scaled by the best factor within
+        ``[1/(1+slack), 1+slack]`` (free warp stretch), and so is the ease target.
+        Returns (RT, T) as component lists (m00, m01, m10, m11).
+        """
+        cfg = self.config
+        D, Kr = tg["reg"]
+        k = _components(Kr)
+        d0, d1 = D[:, 0], D[:, 1]
+        free = slack and cfg.warp_slack > 0
+        sw = np.ones(len(d0))
+        lo, hi = 1.0 / (1.0 + cfg.warp_slack), 1.0 + cfg.warp_slack
+        for _ in range(2 if free else 1):
+            e0, e1 = W2[0] / d0, W2[1] / d0
+            f0, f1 = W2[0] / (d1 * sw), W2[1] / (d1 * sw)
+            a00 = M[0] * e0 * k[0] + M[1] * e1 * k[1]          # (M' K^T)_00
+            a11 = M[2] * f0 * k[2] + M[3] * f1 * k[3]          # (M' K^T)_11
+            a10 = M[2] * f0 * k[0] + M[3] * f1 * k[1]
+            a01 = M[0] * e0 * k[2] + M[1] * e1 * k[3]
+            x, y = a00 + a11, a10 - a01
+            r = np.hypot(x, y)
+            ok = r > 0
+            c = np.where(ok, x / np.where(ok, r, 1.0), 1.0)
+            sn = np.where(ok, y / np.where(ok, r, 1.0), 0.0)
+            rk = [c * k[0] - sn * k[2], c * k[1] - sn * k[3], sn * k[0] + c * k[2], sn * k[1] + c * k[3]]
+            if free:
+                p0, p1 = d1 * rk[2], d1 * rk[3]
+                sw = np.clip((W2[0] * M[2] * p0 + W2[1] * M[3] * p1)
+                             / np.maximum(W2[0] * p0 * p0 + W2[1] * p1 * p1, 1e-300), lo, hi)
+        RT = [d0 * rk[0], d0 * rk[1], d1 * sw * rk[2], d1 * sw * rk[3]]
+        T = _components(tg["T"])
+        if free:
+            se = np.clip((W2[0] * M[2] * T[2] + W2[1] * M[3] * T[3])
+                         / np.maximum(W2[0] * T[2] ** 2 + W2[1] * T[3] ** 2, 1e-300), lo, hi)
+            T = [T[0], T[1], T[2] * se, T[3] * se]
+        return RT, T
+
+    def _target_parts(self, K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray) -> dict:
+        """Ease target ``T`` (f, 2, 2) and the rest shapes ``D R K'`` of the regulariser and seam prediction.
+
+        ``stretch_frame == "pattern"`` (improved): ``T = diag(c) K``, the
+        scales act along the pattern's weft/warp axes after the rotation
+        (``J = Q R^T diag(1/c)``: exact weft scale and no shear for any local
+        rotation ``R``). ``"initial"`` (paper, literal): ``T = K diag(c)``,
+        the scales act on the initial flattening's barycentric offsets, so a
+        local rotation of a stretched triangle turns its stretch off the weft
+        (shear and compliance error that grow with rho).
+        Returns ``{"T": T, "reg": (D, K'), "seam": (D, K')}``: rest shapes ``diag(D) R K'``.
+        """
+        c = np.stack([c_weft, c_warp], axis=1)
+        one = np.ones_like(c)
+        if self.config.stretch_frame == "pattern":
+            T = c[:, :, None] * K
+            stretched = (c, K)
+        else:
+            T = K * c[:, None, :]
+            stretched = (one, T)
+        reg = stretched if self.config.reg_rest == "prestretch" else (one, K)
+        return {"T": T, "reg": reg, "seam": stretched}
+
+    def _seam_rhs(self, U: np.ndarray, RT: Optional[np.ndarray], reset: bool = False) -> np.ndarray:
+        """Right-hand side (n, 2) of the seam terms at the current iterate ``U``.
+
+        ``RT``: the per-triangle rest shapes ``R_t T_t`` of this iteration,
+        needed only by the predicted-length variants (``len_target`` or
+        ``len_direction`` ``"predicted"``).
+        """
         cfg = self.config
         rhs = np.zeros((self.n, 2))
-        # current edges and second differences of every side
-        cur_len, d2 = {}, {}
-        pred_len = {}
+        if not self.sides:
+            return rhs
         if not hasattr(self, "_len_int") or reset:
-            self._len_int = {k: np.zeros(len(sd.gids) - 1) for k, sd in enumerate(self.sides)}
-        for k, side in enumerate(self.sides):
-            cur_len[k] = np.linalg.norm(np.diff(U[side.gids], axis=0), axis=1)
-            e0 = self.uv0[side.gids[1:]] - self.uv0[side.gids[:-1]]
-            pred_len[k] = np.linalg.norm(np.sum(RT[side.edge_face] * e0[:, None, :], axis=2), axis=1)
-        for ka, kb in self.seam_pairs:
-            for k, other in ((ka, kb), (kb, ka)):
-                side = self.sides[k]
-                g = side.gids
+            self._len_int = np.zeros(len(self._E0))
+        cur = U[self._E1] - U[self._E0]
+        cur_len = np.sqrt(cur[:, 0] ** 2 + cur[:, 1] ** 2)
+        if cfg.seam_length and cfg.lambda_len > 0:
+            pred = None
+            if cfg.len_target != "current" or cfg.len_direction != "current":
                 # ARAP prediction of every seam edge: R_t T_t (u0_j - u0_i) of the edge's triangle
-                e0 = self.uv0[g[1:]] - self.uv0[g[:-1]]
-                pred = np.sum(RT[side.edge_face] * e0[:, None, :], axis=2)
-                if cfg.seam_length and cfg.lambda_len > 0:
-                    if cfg.len_target == "current":
-                        lbar = 0.5 * (cur_len[k] + cur_len[other])
-                    else:
-                        lbar = 0.5 * (pred_len[k] + pred_len[other])
-                    if cfg.len_integral > 0 and len(cur_len[other]) == len(cur_len[k]):
-                        # integral action: what the proximal pull leaves of the mismatch is
-                        # accumulated into this side's target until both sides agree
-                        self._len_int[k] -= cfg.len_integral * 0.5 * (cur_len[k] - cur_len[other])
-                        # bounded: where the design itself makes the sides differ (weft ease on a
-                        # sleeve cap sewn to a warp-wise armhole) the seam gives way, not the cloth
-                        cap = cfg.len_integral_cap * lbar
-                        np.clip(self._len_int[k], -cap, cap, out=self._len_int[k])
-                        lbar = lbar + self._len_int[k]
-                    cur = U[g[1:]] - U[g[:-1]]
-                    dirn = cur if cfg.len_direction == "current" else pred
-                    dirn = dirn / np.maximum(np.linalg.norm(dirn, axis=1), 1e-300)[:, None]
-                    c = cfg.lambda_len * side.l0 / (self.h * self.total_area)
-                    tgt = (c * lbar)[:, None] * dirn
-                    np.add.at(rhs, g[1:], tgt)
-                    np.add.at(rhs, g[:-1], -tgt)
-                if self._D[k] is None:
-                    continue
-                D, cc = self._D[k]
-                if cfg.lambda_straight > 0 and cfg.straight_target == "smooth" and D.shape[0] >= 3:
-                    # damp oscillations only: towards the neighbours' mean second difference
-                    d2 = D @ U
-                    sm = d2.copy()
-                    sm[1:-1] = 0.5 * (d2[:-2] + d2[2:])
-                    rhs += D.T @ ((cfg.lambda_straight * cc)[:, None] * sm)
-                if cfg.lambda_curve > 0 and len(self.sides[other].gids) == len(g):
-                    Do, _ = self._D[other]
-                    Q = _kabsch2(U[g], U[self.sides[other].gids])
-                    target = 0.5 * (D @ U + (Do @ U) @ Q.T)
-                    rhs += D.T @ ((cfg.lambda_curve * cc)[:, None] * target)
+                e0 = self.uv0[self._E1] - self.uv0[self._E0]
+                pred = np.sum(RT[self._Ef] * e0[:, None, :], axis=2)
+            if cfg.len_target == "current":
+                lbar = 0.5 * (cur_len + cur_len[self._Eo])
+            else:
+                pl = np.linalg.norm(pred, axis=1)
+                lbar = 0.5 * (pl + pl[self._Eo])
+            if cfg.len_integral > 0:
+                # integral action: what the proximal pull leaves of the mismatch is
+                # accumulated into this side's target until both sides agree
+                self._len_int -= cfg.len_integral * 0.5 * (cur_len - cur_len[self._Eo])
+                # bounded: where the design itself makes the sides differ (weft ease on a
+                # sleeve cap sewn to a warp-wise armhole) the seam gives way, not the cloth
+                cap = cfg.len_integral_cap * lbar
+                np.clip(self._len_int, -cap, cap, out=self._len_int)
+                lbar = lbar + self._len_int
+            if cfg.len_direction == "current":
+                dirn = cur / np.maximum(cur_len, 1e-300)[:, None]
+            else:
+                dirn = pred / np.maximum(np.linalg.norm(pred, axis=1), 1e-300)[:, None]
+            c = cfg.lambda_len * self._El0 / (self.h * self.total_area)
+            tgt = (c * lbar)[:, None] * dirn
+            n = self.n
+            for d in range(2):
+                rhs[:, d] += np.bincount(self._E1, tgt[:, d], minlength=n) - np.bincount(self._E0, tgt[:, d], minlength=n)
+        if self._Dall is None:
+            return rhs
+        d2 = self._Dall @ U
+        acc = np.zeros_like(d2)
+        if cfg.lambda_straight > 0 and cfg.straight_target == "smooth":
+            # damp oscillations only: towards the neighbours' mean second difference
+            sm = d2.copy()
+            i = np.flatnonzero(self._Rsmooth)
+            sm[i] = 0.5 * (d2[i - 1] + d2[i + 1])
+            acc += (cfg.lambda_straight * self._Rcc * self._Rstraight)[:, None] * sm
+        if cfg.lambda_curve > 0:
+            # towards the mean of both sides' second differences, the other side's turned by the
+            # best rigid fit of the two polylines (per side, vectorised Kabsch)
+            k = len(self.sides)
+            P = U[self._Vg]
+            Q = P[self._Vo]
+            cnt = self._Vcount
+            Pm = np.stack([np.bincount(self._Vside, P[:, d], minlength=k) for d in range(2)], axis=1) / cnt[:, None]
+            Qm = np.stack([np.bincount(self._Vside, Q[:, d], minlength=k) for d in range(2)], axis=1) / cnt[:, None]
+            Pc, Qc = P - Pm[self._Vside], Q - Qm[self._Vside]
+            # H = Qc^T Pc per side; rotation = polar(H^T)
+            h = {(i, j): np.bincount(self._Vside, Qc[:, i] * Pc[:, j], minlength=k) for i in range(2) for j in range(2)}
+            th = np.arctan2(h[(0, 1)] - h[(1, 0)], h[(0, 0)] + h[(1, 1)])
+            c_, s_ = np.cos(th)[self._Rside], np.sin(th)[self._Rside]
+            do = d2[self._Ro]
+            rot = np.stack([c_ * do[:, 0] - s_ * do[:, 1], s_ * do[:, 0] + c_ * do[:, 1]], axis=1)
+            acc += (cfg.lambda_curve * self._Rcc)[:, None] * (0.5 * (d2 + rot))
+        rhs += self._DallT @ acc
         return rhs
 
     def _rigid_align(self, U_new: np.ndarray, U_old: np.ndarray) -> np.ndarray:
-        """``U_new`` moved rigidly per panel onto ``U_old`` (area-free Kabsch)."""
-        out = U_new.copy()
-        for pd in self.panels:
-            sl = slice(pd.offset, pd.offset + pd.n)
-            Q = _kabsch2(U_old[sl], U_new[sl])
-            cn, co = U_new[sl].mean(axis=0), U_old[sl].mean(axis=0)
-            out[sl] = (U_new[sl] - cn) @ Q.T + co
-        return out
+        """``U_new`` moved rigidly per panel onto ``U_old`` (area-free Kabsch, all panels at once)."""
+        vp, cnt, k = self._vpanel, self._vcount, len(self.panels)
+        cn = np.stack([np.bincount(vp, U_new[:, d], minlength=k) for d in range(2)], axis=1) / cnt[:, None]
+        co = np.stack([np.bincount(vp, U_old[:, d], minlength=k) for d in range(2)], axis=1) / cnt[:, None]
+        Pc, Qc = U_old - co[vp], U_new - cn[vp]
+        h = {(i, j): np.bincount(vp, Qc[:, i] * Pc[:, j], minlength=k) for i in range(2) for j in range(2)}
+        th = np.arctan2(h[(0, 1)] - h[(1, 0)], h[(0, 0)] + h[(1, 1)])
+        return _rotate_about(Qc, th[vp]) + co[vp]
 
     def _safeguard(self, U_old: np.ndarray, U_new: np.ndarray):
         """Keep the step flip-free: vertices of triangles that would flip step back locally.
@@ -762,15 +947,6 @@ class PatternSolver:
             U[sl] = (U[sl] - c) * np.array([sx, sy]) + c
         return U
 
-    def _jacobians(self, U: np.ndarray) -> np.ndarray:
-        """Per-triangle 2x2 Jacobians (f, 2, 2) of ``U`` w.r.t. the initial flattening."""
-        return np.stack([self._Gx @ U, self._Gy @ U], axis=2)
-
-    def _rhs_of(self, B: np.ndarray, w: np.ndarray, W2: np.ndarray) -> np.ndarray:
-        """Right-hand side (n, 2) of sum_t w_t |(M_t - B_t) W|^2."""
-        return (self._GxT @ ((w * W2[0])[:, None] * B[:, :, 0])
-                + self._GyT @ ((w * W2[1])[:, None] * B[:, :, 1]))
-
     def _warp_in_initial_domain(self):
         """Per triangle the 3D warp direction pulled back to the initial flattening (unit) and its vote weight.
 
@@ -798,25 +974,26 @@ class PatternSolver:
             w[fs] = np.where(ok, areas_3d(X[pd.vertex_ids], pd.faces), 0.0)
         return img, w
 
-    def _realign(self, U: np.ndarray, positions: np.ndarray) -> np.ndarray:
-        """Rotate every panel about its centroid so its area-weighted grain vote is +y."""
-        M = self._jacobians(U)
-        img = np.sum(M * self._warp0[:, None, :], axis=2)  # current 2D image of the warp
-        nrm = np.linalg.norm(img, axis=1)
-        unit = img / np.maximum(nrm, 1e-300)[:, None]
-        w = np.where(nrm > 0, self._warp_w, 0.0)
+    def _realign(self, U: np.ndarray, M: list):
+        """Rotate every panel about its centroid so its area-weighted grain vote is +y.
+
+        ``M``: the Jacobians of ``U`` (:meth:`_jac4`); returns the rotated
+        ``U`` and its Jacobians (the same rotation applied to the rows).
+        """
+        wx, wy = self._warp0[:, 0], self._warp0[:, 1]
+        ix, iy = M[0] * wx + M[1] * wy, M[2] * wx + M[3] * wy  # current 2D image of the warp
+        nrm = np.hypot(ix, iy)
+        w = np.where(nrm > 0, self._warp_w, 0.0) / np.maximum(nrm, 1e-300)
         k = len(self.panels)
-        vx = np.bincount(self.face_panel, w * unit[:, 0], minlength=k)
-        vy = np.bincount(self.face_panel, w * unit[:, 1], minlength=k)
-        U = U.copy()
-        for i, pd in enumerate(self.panels):
-            if vx[i] == 0 and vy[i] == 0:
-                continue
-            theta = np.arctan2(-vx[i], vy[i])
-            sl = slice(pd.offset, pd.offset + pd.n)
-            c = U[sl].mean(axis=0)
-            U[sl] = (U[sl] - c) @ _init.rotation(-theta).T + c
-        return U
+        vx = np.bincount(self.face_panel, w * ix, minlength=k)
+        vy = np.bincount(self.face_panel, w * iy, minlength=k)
+        theta = -np.where((vx == 0) & (vy == 0), 0.0, np.arctan2(-vx, vy))
+        vp = self._vpanel
+        c = np.stack([np.bincount(vp, U[:, d], minlength=k) for d in range(2)], axis=1) / self._vcount[:, None]
+        U = _rotate_about(U - c[vp], theta[vp]) + c[vp]
+        ct, st = np.cos(theta)[self.face_panel], np.sin(theta)[self.face_panel]
+        M = [ct * M[0] - st * M[2], ct * M[1] - st * M[3], st * M[0] + ct * M[2], st * M[1] + ct * M[3]]
+        return U, M
 
 
 # ----------------------------------------------------------------------------- patterns
