@@ -137,6 +137,27 @@ def check_partition(cut, garment, n_openings, X):
     assert area > 0.05
 
 
+def check_global_ids(cut, garment, n_openings):
+    """Global garment ids are shared exactly where panels are sewn (seams), never across an
+    opening: welding by global id alone - as the drape does - gives the sewn garment with
+    all its openings (a jacket's front stays open)."""
+    panels = [p for p in cut.panels if p.garment == garment]
+    for s in cut.seams:
+        if s.panel_a in {p.name for p in panels}:
+            ga = np.asarray(cut.panel(s.panel_a).vertex_ids)[s.verts_a]
+            gb = np.asarray(cut.panel(s.panel_b).vertex_ids)[s.verts_b]
+            assert np.array_equal(ga, gb), f"seam {s.name}: sides have different global ids"
+    F_seam, _ = _sewn(cut, panels)
+    F_ids = np.concatenate([np.asarray(p.vertex_ids)[np.asarray(p.faces)] for p in panels])
+    # the same surface: a global id <-> a vertex of the seam-sewn garment, one to one
+    pairs = np.unique(np.stack([F_seam.ravel(), F_ids.ravel()], 1), axis=0)
+    assert len(np.unique(pairs[:, 0])) == len(np.unique(pairs[:, 1])) == len(pairs), \
+        "global ids weld panels where no seam joins them (or split a seam)"
+    e = np.sort(np.concatenate([F_ids[:, [0, 1]], F_ids[:, [1, 2]], F_ids[:, [2, 0]]]), axis=1)
+    ue, count = np.unique(e, axis=0, return_counts=True)
+    assert _boundary_loops(ue[count == 1]) == n_openings
+
+
 def check_body_coverage(cut, G, GX, X):
     """Per body triangle, the garment triangles on it cover it at most once, and exactly
     once where all its corners are garment vertices (nothing lost, nothing doubled).
@@ -218,6 +239,7 @@ def test_template_cuts_on_all_sizes_and_poses(name, body, instances):
         assert cut.garments[g] == next(x.kind for x in design.garments if x.name == g)
         assert len(cut.pins[g]) > 0
         check_partition(cut, g, n, X)
+        check_global_ids(cut, g, n)
     check_seams(cut, X)
     check_mirrors(cut, X)
     check_transfer(cut, instances)
@@ -254,6 +276,18 @@ def test_jacket_is_the_shirt_opened_at_the_front(body, instances):
     names = {p.name for p in jacket.panels}
     assert {"jacket.front_left", "jacket.front_right"} <= names and "jacket.front" not in names
     assert not any({s.panel_a, s.panel_b} == {"jacket.front_left", "jacket.front_right"} for s in jacket.seams)
+    # the two fronts meet on the body along the opening but share no garment vertex, so a
+    # stage that welds by global id (pattern, drape) keeps the front open
+    L, R = jacket.panel("jacket.front_left"), jacket.panel("jacket.front_right")
+    assert not set(np.asarray(L.vertex_ids).tolist()) & set(np.asarray(R.vertex_ids).tolist())
+    GX = jacket.positions(X)
+    PL, PR = GX[np.asarray(L.vertex_ids)], GX[np.asarray(R.vertex_ids)]
+    from scipy.spatial import cKDTree
+    d, _ = cKDTree(PR).query(PL)
+    assert (d < 1e-9).sum() > 20          # ... though they touch there (the opening line)
+    # pinned along the neckline on both sides of the opening
+    pins = set(jacket.pins["jacket"].tolist())
+    assert pins & set(np.asarray(L.vertex_ids).tolist()) and pins & set(np.asarray(R.vertex_ids).tolist())
 
 
 @pytest.mark.parametrize("size", ["XS", "XL"])

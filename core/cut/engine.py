@@ -19,9 +19,12 @@ prefix (``"shirt.side_left"`` -> garment ``"shirt"``), or to every garment;
 garments are cut separately so overlapping garments do not cut each other.
 
 Output conventions: global garment vertex ids are grouped per garment (in
-the order of ``spec.garments``); a panel's ``vertex_ids`` may repeat a global
-id where a seam runs inside the panel (sewn to itself, e.g. a one-piece
-sleeve). A seam is one stretch of a "seam" line with the same two panels on
+the order of ``spec.garments``). Panels share a global id only where they are
+sewn: along seams. The two sides of an opening line get their own ids, also
+where the opening runs between two panels (a jacket's front) or inside one
+(a slit), so later stages that weld by global id never close an opening. A
+panel's ``vertex_ids`` may repeat a global id where a seam runs inside the
+panel (sewn to itself, e.g. a one-piece sleeve). A seam is one stretch of a "seam" line with the same two panels on
 its sides (``panel_a`` on the left of the line's direction; named
 ``line.name``, or ``line.name#k`` when the line has several stretches). Hems
 are the open stretches (opening lines, and seam lines with no panel on one
@@ -388,6 +391,7 @@ def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], s
     else:
         lines = [_runs(l) for l in lines]
     out = _build_panels(spec, gpanels, Xg, Fg, lab, lines, lines_li, axes, offset, clock)
+    vog = out.pop("vertex_of_global")
     pins = None
     if g.pin_line is not None:
         li = [l.name for l in spec.lines].index(g.pin_line)
@@ -396,11 +400,16 @@ def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], s
             if runs:
                 seq = np.concatenate(runs)
                 _, first = np.unique(seq, return_index=True)
-                pins = seq[np.sort(first)] + offset
+                seq = seq[np.sort(first)]
+                # every garment vertex of each pinned mesh vertex (two where an opening splits it)
+                rank = np.full(len(Xg), -1, dtype=np.int64)
+                rank[seq] = np.arange(len(seq))
+                gids = np.nonzero(rank[vog] >= 0)[0]
+                pins = gids[np.argsort(rank[vog[gids]], kind="stable")] + offset
         if pins is None or len(pins) == 0:
             raise CutError(f"garment {g.name!r}: its pin line {g.pin_line!r} does not touch its panels")
     out["pins"] = pins
-    out["W"] = W
+    out["W"] = W[vog] if len(vog) != W.shape[0] or np.any(vog != np.arange(len(vog))) else W
     return out
 
 
@@ -455,24 +464,44 @@ def _build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset, clock
     n = len(X)
     key, ukey, twin, order = _halfedges(F, n)
     # cut edges: every edge on a cut line
-    cut = []
-    for runs in lines:
+    cut, sewn = [], []
+    for runs, li in zip(lines, lines_li):
         for s in runs:
-            cut.append(np.minimum(s[:-1], s[1:]) * n + np.maximum(s[:-1], s[1:]))
+            k = np.minimum(s[:-1], s[1:]) * n + np.maximum(s[:-1], s[1:])
+            cut.append(k)
+            if spec.lines[li].role == "seam":
+                sewn.append(k)
     cut = np.unique(np.concatenate(cut)) if cut else np.zeros(0, np.int64)
+    sewn = np.unique(np.concatenate(sewn)) if sewn else np.zeros(0, np.int64)
     i = np.arange(len(key))
-    join = (twin >= 0) & ~np.isin(ukey, cut)
+    on_cut = np.isin(ukey, cut)
+    join = (twin >= 0) & ~on_cut
     join &= lab[i // 3] == lab[np.maximum(twin, 0) // 3]
-    i = i[join]
-    j = twin[join]
-    join = join.copy()
-    join[j] = True     # (symmetric already; kept explicit: a joined half-edge is not boundary)
     # corner (f, k) ~ twin's corners: half-edge i = corner i -> corner next(i)
     nxt = lambda h: (h // 3) * 3 + (h % 3 + 1) % 3
-    ca = np.concatenate([i, nxt(i)])
-    cb = np.concatenate([nxt(j), j])
-    C = sp.coo_matrix((np.ones(len(ca)), (ca, cb)), shape=(3 * len(F), 3 * len(F)))
-    _, corner_vert = connected_components(C, directed=False)
+
+    def corner_components(joined):
+        a = np.nonzero(joined)[0]
+        b = twin[a]
+        ca = np.concatenate([a, nxt(a)])
+        cb = np.concatenate([nxt(b), b])
+        C = sp.coo_matrix((np.ones(len(ca)), (ca, cb)), shape=(3 * len(F), 3 * len(F)))
+        return connected_components(C, directed=False)[1]
+
+    # panel-local vertices: corners joined across uncut edges inside a panel
+    corner_vert = corner_components(join)
+    # global garment vertices: corners joined across uncut edges and across seams, never
+    # across an opening - the two sides of an opening between panels (a jacket's front)
+    # get their own vertices, so no later stage sews them together
+    gjoin = (twin >= 0) & (~on_cut | np.isin(ukey, sewn))
+    corner_global = corner_components(gjoin)
+    gv_all = F.reshape(-1)
+    ncg = np.int64(corner_global.max()) + 1 if len(F) else np.int64(1)
+    # deterministic numbering by (mesh vertex, component): the mesh vertex order where
+    # nothing is split
+    ug, ginv = np.unique(gv_all * ncg + corner_global, return_inverse=True)
+    global_of_corner = ginv.reshape(-1)
+    vertex_of_global = ug // ncg
     # deterministic local vertex numbering: by (panel, global vertex, component)
     panels, hems_local = [], {}
     local_of_corner = np.full(3 * len(F), -1, dtype=np.int64)
@@ -487,12 +516,12 @@ def _build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset, clock
         gv = gv_of_corner[corners]
         # order local vertices by global id then component id
         ncv = np.int64(corner_vert.max()) + 1
-        uk, inv = np.unique(gv * ncv + cv, return_inverse=True)
+        uk, first, inv = np.unique(gv * ncv + cv, return_index=True, return_inverse=True)
         inv = inv.reshape(-1)
         local_of_corner[corners] = inv
         faces = inv.reshape(-1, 3)
         ugv = uk // ncv
-        vids = ugv + offset
+        vids = global_of_corner[corners[first]] + offset
         Xl = X[ugv]
         side = "left" if Xl[:, 0].mean() >= 0 else "right"
         axis = axes[(p.body_part, "left" if p.body_part == "torso" else side)]
@@ -553,7 +582,7 @@ def _build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset, clock
             seams.append(Seam(name=nm, panel_a=panel_names[pa], panel_b=panel_names[pb],
                               verts_a=np.asarray(va, np.int64), verts_b=np.asarray(vb, np.int64)))
     clock.lap("panels_seams")
-    return {"panels": panels, "seams": seams, "hems": hems}
+    return {"panels": panels, "seams": seams, "hems": hems, "vertex_of_global": vertex_of_global}
 
 
 def _stretches(key: np.ndarray, closed: bool) -> List[np.ndarray]:

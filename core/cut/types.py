@@ -1,7 +1,9 @@
 """Plain data produced by cutting the body surface (the input of the pattern stage).
 
-Garment vertices are shared between panels along seams: a seam vertex has one
-global id and appears in both panels' ``vertex_ids``. Every garment vertex is a
+Garment vertices are shared between panels along seams, and only there: a seam
+vertex has one global id and appears in both panels' ``vertex_ids``, while the
+two sides of an opening (e.g. a jacket's front, between two panels) have
+distinct ids at the same place on the body. Every garment vertex is a
 fixed linear combination of body vertices (``GarmentCut.embedding``), so the
 same cut gives the panels' 3D positions on any shape and pose of the model.
 """
