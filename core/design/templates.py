@@ -14,7 +14,8 @@ Construction (all mirrored left -> right):
   cuff rings (openings) a traced sleeve length from the armhole top, split
   front/back by a seam on top and one underneath. Pinned at the neckline.
 - pants/shorts: waist ring (opening, pinned); centre front and centre back
-  seams waist -> crotch; side seams waist side -> leg hem; inseams crotch ->
+  seams waist -> crotch along the midline (plane sections, from the waist ring's
+  front and back midpoints, so they meet the ring on every size); side seams waist side -> leg hem; inseams crotch ->
   leg hem; leg hem rings (openings) across the leg at a traced length.
 - skirt/dress: the skirt topology (``"skirt": true``): the hem is a loop of
   points on both legs, joined across the bridged inter-leg surface.
@@ -187,7 +188,9 @@ def _pants_parts(length_value, length_range, ease=None, name="pants"):
         # centre seams follow the midline (a geodesic there is not unique in the concave crotch)
         {"name": "center_front", "section": {"from": "waist_front", "to": "crotch", "normal": "x"},
          "role": "seam"},
-        {"name": "center_back", "section": {"from": "waist_back", "to": "crotch", "normal": "x"},
+        # ... from the waist ring's back midpoint (half way round from waist_front), not the
+        # waist_back landmark: on other sizes that landmark is a little off the ring's height
+        {"name": "center_back", "section": {"from": "waist_back_mid", "to": "crotch", "normal": "x"},
          "role": "seam"},
         {"name": "side_left", "points": ["waist_side_left", "leg_hem_out_left"], "role": "seam"},
         {"name": "leg_hem_left", "ring": {"through": "leg_hem_out_left", "normal": "z", "points": 12,
@@ -207,7 +210,8 @@ def _pants_parts(length_value, length_range, ease=None, name="pants"):
 
 def _waist_ring(name="waist", role="opening"):
     return {"name": name, "ring": {"through": "waist_front", "normal": "z", "points": 16,
-                                   "named": {"waist_side_left": "+x", "waist_side_right": "-x"}},
+                                   "named": {"waist_side_left": "+x", "waist_side_right": "-x",
+                                             "waist_back_mid": 0.5}},
             "role": role}
 
 
