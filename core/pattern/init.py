@@ -172,8 +172,53 @@ def align_grain(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray, warp_dir: np
 
 def initial_flattening(xyz: np.ndarray, faces: np.ndarray, warp_dir: np.ndarray) -> np.ndarray:
     """LSCM (Tutte where LSCM folds), counter-clockwise, area-matched, grain along +y."""
-    uv = lscm(xyz, faces)
-    s = signed_areas_2d(uv, faces)
+    return flatten_panel(xyz, faces, warp_dir)["uv"]
+
+
+def pulled_back_warp(xyz: np.ndarray, faces: np.ndarray, G: np.ndarray, warp_dir: np.ndarray) -> tuple:
+    """Per triangle the 3D warp direction pulled back to the 2D domain of ``G`` (least-squares preimage).
+
+    Returns (unit (f, 2), ok (f,) bool); degenerate triangles (tiny 2D or
+    3D extent) are not ok and get 0.
+    """
+    F = np.asarray(faces, int)
+    X = [xyz[F[:, k]] for k in range(3)]
+    Jx = X[0] * G[:, 0, 0, None] + X[1] * G[:, 1, 0, None] + X[2] * G[:, 2, 0, None]   # (f, 3): 2D x -> 3D
+    Jy = X[0] * G[:, 0, 1, None] + X[1] * G[:, 1, 1, None] + X[2] * G[:, 2, 1, None]
+    a, b, c = np.sum(Jx * Jx, axis=1), np.sum(Jx * Jy, axis=1), np.sum(Jy * Jy, axis=1)
+    rx, ry = np.sum(Jx * warp_dir, axis=1), np.sum(Jy * warp_dir, axis=1)
+    det = a * c - b * b
+    ok = np.abs(det) > DEGENERATE * max(float(np.mean(np.abs(det))), 1e-300)
+    sd = np.where(ok, det, 1.0)
+    v = np.where(ok[:, None], np.stack([(c * rx - b * ry) / sd, (a * ry - b * rx) / sd], axis=1), 0.0)
+    nrm = np.hypot(v[:, 0], v[:, 1])
+    ok &= nrm > DEGENERATE * max(float(np.mean(nrm)), 1e-300)
+    return np.where(ok[:, None], v / np.maximum(nrm, 1e-300)[:, None], 0.0), ok
+
+
+def flatten_panel(xyz: np.ndarray, faces: np.ndarray, warp_dir: np.ndarray) -> dict:
+    """The initial flattening and what the optimizer derives from it, in one pass.
+
+    LSCM (Tutte where LSCM folds), counter-clockwise, area-matched, rotated
+    so the area-weighted vote of the pulled-back 3D warp is +y.
+
+    Returns a dict: ``uv`` (n, 2); ``G``, ``area`` as :func:`gradient_operators`
+    of ``uv``; ``warp`` (f, 2) the unit warp pulled back to ``uv`` (0 where
+    degenerate); ``warp_weight`` (f,) its vote weight (3D area, 0 where degenerate).
+    """
+    F = np.asarray(faces, np.int64)
+    warp_dir = np.asarray(warp_dir, float)
+    uv = lscm(xyz, F)
+    s = signed_areas_2d(uv, F)
     if np.any(s <= DEGENERATE * np.mean(np.abs(s))):
-        uv = tutte(xyz, faces)
-    return align_grain(uv, xyz, faces, warp_dir)
+        uv = tutte(xyz, F)
+    G, area = gradient_operators(uv, F)
+    img, ok = pulled_back_warp(xyz, F, G, warp_dir)
+    w = np.where(ok & (area != 0), areas_3d(xyz, F), 0.0)
+    theta = 0.0
+    if np.any(w > 0):
+        theta = float(np.arctan2(-np.sum(w * img[:, 0]), np.sum(w * img[:, 1])))
+    R = rotation(-theta)
+    c = uv.mean(axis=0)
+    # rotating the domain rotates gradients and pulled-back directions alike
+    return {"uv": (uv - c) @ R.T + c, "G": G @ R.T, "area": area, "warp": img @ R.T, "warp_weight": w}

@@ -290,10 +290,12 @@ def _jac(Ut: np.ndarray, G: np.ndarray) -> np.ndarray:
             + Ut[:, 2, :, None] * G[:, 2, None, :])
 
 
-def _rotate_about(P: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    """Rows of ``P`` (n, 2) turned counter-clockwise by per-row angles ``theta`` (n,)."""
-    c, s = np.cos(theta), np.sin(theta)
-    return np.stack([c * P[:, 0] - s * P[:, 1], s * P[:, 0] + c * P[:, 1]], axis=1)
+def _turn(P: np.ndarray, c: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Rows of ``P`` (n, 2) turned counter-clockwise by per-row angles with cosines ``c`` and sines ``s``."""
+    out = np.empty_like(P)
+    out[:, 0] = c * P[:, 0] - s * P[:, 1]
+    out[:, 1] = s * P[:, 0] + c * P[:, 1]
+    return out
 
 
 def _components(A: np.ndarray) -> list:
@@ -376,17 +378,18 @@ class PatternSolver:
         self.panels: List[_PanelData] = []
         offset = 0
         face_offset = 0
+        flat = []
         for k, p in enumerate(cut.panels):
             report(progress, 0.8 * k / len(cut.panels), f"flattening panel {p.name}")
             xyz = self.ref_positions[np.asarray(p.vertex_ids, int)]
             F = np.asarray(p.faces, np.int64)
             if np.all(areas_3d(xyz, F) <= 0):
                 raise PatternError(f"panel {p.name!r}: all triangles are degenerate on the reference body")
-            uv0 = _init.initial_flattening(xyz, F, np.asarray(p.warp_dir, float))
-            G, a0 = _init.gradient_operators(uv0, F)
+            fl = _init.flatten_panel(xyz, F, np.asarray(p.warp_dir, float))
+            flat.append(fl)
             self.panels.append(_PanelData(p.name, offset, len(p.vertex_ids), F, F + offset,
                                           np.asarray(p.vertex_ids, int), np.asarray(p.warp_dir, float),
-                                          np.asarray(p.ease, float), uv0, G, a0, face_offset))
+                                          np.asarray(p.ease, float), fl["uv"], fl["G"], fl["area"], face_offset))
             offset += len(p.vertex_ids)
             face_offset += len(F)
         self.n = offset
@@ -394,12 +397,16 @@ class PatternSolver:
         self.G = np.concatenate([pd.G for pd in self.panels])
         self.a = np.concatenate([pd.area0 for pd in self.panels])
         self._area_floor = 1e-6 * np.abs(self.a)
+        self._Fcols = tuple(np.ascontiguousarray(self.gfaces[:, c]) for c in range(3))
         nf = len(self.gfaces)
         # vertex -> incident faces, for the flip safeguard's local re-checks
         self._vf = sp.csr_matrix((np.ones(3 * nf), (self.gfaces.ravel(), np.repeat(np.arange(nf), 3))),
                                  shape=(self.n, nf))
         self.face_panel = np.concatenate([np.full(len(pd.faces), k) for k, pd in enumerate(self.panels)])
-        self._warp0, self._warp_w = self._warp_in_initial_domain()
+        # the 3D warp pulled back to the initial flattening (a material direction: the pattern's
+        # own Jacobian carries it, whatever body the pattern is solved on) and its vote weight
+        self._warp0 = np.concatenate([fl["warp"] for fl in flat])
+        self._warp_w = np.concatenate([fl["warp_weight"] for fl in flat])
         self.total_area = float(self.a.sum())
         self.a = self.a / self.total_area
         # slivers (cut boundaries meet the body mesh at grazing angles) would weigh almost
@@ -408,8 +415,13 @@ class PatternSolver:
         self.uv0 = np.concatenate([pd.uv0 for pd in self.panels])
         el = np.linalg.norm(self.uv0[self.gfaces[:, [1, 2, 0]]] - self.uv0[self.gfaces], axis=2)
         self.h = float(np.mean(el))
-        self._vpanel = np.repeat(np.arange(len(self.panels)), [pd.n for pd in self.panels])
+        # panels are contiguous blocks of vertices and of faces: per-panel sums are reduceat's
+        self._voff = np.array([pd.offset for pd in self.panels])
         self._vcount = np.array([pd.n for pd in self.panels], float)
+        self._foff = np.array([pd.face_offset for pd in self.panels])
+        self._fcount = np.array([len(pd.faces) for pd in self.panels])
+        counts = np.array([pd.n for pd in self.panels])
+        self._vrep = lambda x: np.repeat(x, counts, axis=0)
         self._build_seams()
         # scatter of per-triangle corner contributions into the unknowns
         f = len(self.gfaces)
@@ -534,48 +546,26 @@ class PatternSolver:
             self._Dall = None
 
     def _matrix(self) -> sp.csc_matrix:
+        """The fixed system matrix: ease + regulariser (same operator), seam length, seam shape, gauge pins."""
         cfg = self.config
         W2 = np.array([1.0, cfg.warp_weight ** 2])
         w = (cfg.lambda_ease + cfg.lambda_reg) * self.a
-        # per triangle: sum_c w_c G[:, c] G[:, c]^T
-        B = np.einsum("tic,tjc,c->tij", self.G, self.G, W2) * w[:, None, None]
-        rows = np.repeat(self.gfaces, 3, axis=1).ravel()
-        cols = np.tile(self.gfaces, (1, 3)).ravel()
-        L = sp.coo_matrix((B.ravel(), (rows, cols)), shape=(self.n, self.n)).tocsr()
-        extra_r, extra_c, extra_v = [], [], []
-        for side in self.sides:
-            g = side.gids
-            if cfg.seam_length and cfg.lambda_len > 0:
-                c = cfg.lambda_len * side.l0 / (self.h * self.total_area)
-                for a_, b_, s_ in ((g[:-1], g[:-1], c), (g[1:], g[1:], c), (g[:-1], g[1:], -c), (g[1:], g[:-1], -c)):
-                    extra_r.append(a_), extra_c.append(b_), extra_v.append(s_)
-            lam = cfg.lambda_straight + cfg.lambda_curve
-            if lam > 0 and len(g) >= 3:
-                D, cc = self._second_difference(side)
-                DtD = (D.T @ sp.diags(lam * cc) @ D).tocoo()
-                extra_r.append(DtD.row), extra_c.append(DtD.col), extra_v.append(DtD.data)
-        if extra_r:
-            L = L + sp.coo_matrix((np.concatenate(extra_v), (np.concatenate(extra_r), np.concatenate(extra_c))),
+        L = (self._GxT @ sp.diags(w * W2[0]) @ self._Gx + self._GyT @ sp.diags(w * W2[1]) @ self._Gy).tocsr()
+        if self.sides and cfg.seam_length and cfg.lambda_len > 0:
+            c = cfg.lambda_len * self._El0 / (self.h * self.total_area)
+            E0, E1 = self._E0, self._E1
+            L = L + sp.coo_matrix((np.concatenate([c, c, -c, -c]),
+                                   (np.concatenate([E0, E1, E0, E1]), np.concatenate([E0, E1, E1, E0]))),
                                   shape=(self.n, self.n)).tocsr()
+        lam = cfg.lambda_straight + cfg.lambda_curve
+        if self.sides and lam > 0 and self._Dall is not None:
+            L = L + self._DallT @ sp.diags(lam * self._Rcc) @ self._Dall
         # translation gauge: one soft pin per panel, tiny against the diagonal
         d = L.diagonal()
         pin = np.zeros(self.n)
-        for pd in self.panels:
-            pin[pd.offset] = 1e-6 * float(np.mean(d[pd.offset:pd.offset + pd.n]))
+        pin[self._voff] = 1e-6 * np.add.reduceat(d, self._voff) / self._vcount
         self._pin = pin
         return (L + sp.diags(pin)).tocsc()
-
-    def _second_difference(self, side: _SeamSide):
-        g = side.gids
-        k = len(g)
-        i = np.arange(1, k - 1)
-        rows = np.repeat(np.arange(k - 2), 3)
-        cols = np.stack([g[i - 1], g[i], g[i + 1]], axis=1).ravel()
-        vals = np.tile([1.0, -2.0, 1.0], k - 2)
-        D = sp.csr_matrix((vals, (rows, cols)), shape=(k - 2, self.n))
-        lmid = 0.5 * (side.l0[:-1] + side.l0[1:])
-        cc = lmid / (self.h * self.total_area)
-        return D, cc
 
     def _solver(self):
         cfg = self.config
@@ -583,7 +573,9 @@ class PatternSolver:
                cfg.warp_weight, cfg.seam_length)
         if self._factor is None or self._factor_key != key:
             t0 = time.perf_counter()
-            self._factor = splu(self._matrix())
+            # symmetric positive definite: a symmetric minimum-degree ordering on A + A^T keeps the
+            # factors ~40 % sparser than the default column ordering (faster factor and solves)
+            self._factor = splu(self._matrix(), permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
             self._factor_key = key
             self.timings["factorise"] = time.perf_counter() - t0
             self.n_factorisations = getattr(self, "n_factorisations", 0) + 1
@@ -655,6 +647,7 @@ class PatternSolver:
         Kc = _components(K)
         aw = (self.a * W2[0], self.a * W2[1])
         M = self._jac4(U)
+        s_cur = None
         for it in range(n_it):
             report(progress, it / n_it, f"optimizing pattern: iteration {it + 1}/{n_it}")
             if (cfg.feedback > 0 or cfg.feedback_warp > 0) and it >= 2:
@@ -687,7 +680,7 @@ class PatternSolver:
             # the step's rigid part per panel carries no strain: remove it so that the flip
             # safeguard only ever pulls back the local part of the step
             U_new = self._rigid_align(U_new, U)
-            U, nb = self._safeguard(U, U_new)
+            U, nb, s_cur = self._safeguard(U, U_new, s_cur)
             backtracks += nb
             M = self._jac4(U)
             if cfg.realign_grain:
@@ -850,15 +843,24 @@ class PatternSolver:
 
     def _rigid_align(self, U_new: np.ndarray, U_old: np.ndarray) -> np.ndarray:
         """``U_new`` moved rigidly per panel onto ``U_old`` (area-free Kabsch, all panels at once)."""
-        vp, cnt, k = self._vpanel, self._vcount, len(self.panels)
-        cn = np.stack([np.bincount(vp, U_new[:, d], minlength=k) for d in range(2)], axis=1) / cnt[:, None]
-        co = np.stack([np.bincount(vp, U_old[:, d], minlength=k) for d in range(2)], axis=1) / cnt[:, None]
-        Pc, Qc = U_old - co[vp], U_new - cn[vp]
-        h = {(i, j): np.bincount(vp, Qc[:, i] * Pc[:, j], minlength=k) for i in range(2) for j in range(2)}
-        th = np.arctan2(h[(0, 1)] - h[(1, 0)], h[(0, 0)] + h[(1, 1)])
-        return _rotate_about(Qc, th[vp]) + co[vp]
+        off, cnt = self._voff, self._vcount[:, None]
+        co, cn = np.add.reduceat(U_old, off) / cnt, np.add.reduceat(U_new, off) / cnt
+        rep = self._vrep
+        Pc, Qc = U_old - rep(co), U_new - rep(cn)
+        h = np.add.reduceat(Qc[:, [0, 0, 1, 1]] * Pc[:, [0, 1, 0, 1]], off)   # H = Qc^T Pc per panel
+        th = np.arctan2(h[:, 1] - h[:, 2], h[:, 0] + h[:, 3])
+        return _turn(Qc, rep(np.cos(th)), rep(np.sin(th))) + rep(co)
 
-    def _safeguard(self, U_old: np.ndarray, U_new: np.ndarray):
+    def _areas(self, U: np.ndarray, faces: Optional[np.ndarray] = None) -> np.ndarray:
+        """Signed 2D areas of all triangles (or of ``faces``), as :func:`signed_areas_2d`, on cached columns."""
+        F0, F1, F2 = self._Fcols if faces is None else (c[faces] for c in self._Fcols)
+        u, v = U[:, 0], U[:, 1]
+        u0, v0 = u[F0], v[F0]
+        ax, ay = u[F1] - u0, v[F1] - v0
+        bx, by = u[F2] - u0, v[F2] - v0
+        return 0.5 * (ax * by - ay * bx)
+
+    def _safeguard(self, U_old: np.ndarray, U_new: np.ndarray, s_old: Optional[np.ndarray] = None):
         """Keep the step flip-free: vertices of triangles that would flip step back locally.
 
         Every vertex starts with the full step; the step of the vertices of
@@ -868,21 +870,30 @@ class PatternSolver:
         returns to the previous, flip-free iterate, so this terminates; a
         panel not fixed in 40 rounds takes a uniformly shortened step instead
         (or keeps its previous iterate).
-        Returns (U, number of halvings).
+        ``s_old``: the signed areas of ``U_old`` when known (they survive
+        rigid motions, so each iteration passes on its own).
+        Returns (U, number of halvings, signed areas of U).
         """
         F = self.gfaces
-        s_old = signed_areas_2d(U_old, F)
+        if s_old is None:
+            s_old = self._areas(U_old)
         floor = np.minimum(self._area_floor, 0.5 * s_old)
         alpha = np.ones(self.n)
         U = U_new.copy()
         halvings = 0
-        faces = np.arange(len(F))
+        faces = None
         D = U_new - U_old
         for _ in range(40):
-            s = signed_areas_2d(U, F[faces])
-            bad = faces[s <= floor[faces]]
-            if bad.size == 0:
-                return U, halvings
+            if faces is None:
+                s_all = self._areas(U)
+                bad = np.flatnonzero(s_all <= floor)
+                if bad.size == 0:
+                    return U, halvings, s_all
+            else:
+                s = self._areas(U, faces)
+                bad = faces[s <= floor[faces]]
+                if bad.size == 0:
+                    return U, halvings, None
             # largest common step fraction t of the bad triangle's vertices (their current
             # fractions scaled by t) keeping its area above the floor: a quadratic in t
             Fb = F[bad]
@@ -927,7 +938,7 @@ class PatternSolver:
                     U[sl] = cand
                     break
                 beta *= 0.5
-        return U, halvings
+        return U, halvings, None
 
     def _scaled_start(self, c_weft: np.ndarray, c_warp: np.ndarray) -> np.ndarray:
         """The initial flattening stretched by each panel's area-weighted mean targets.
@@ -947,33 +958,6 @@ class PatternSolver:
             U[sl] = (U[sl] - c) * np.array([sx, sy]) + c
         return U
 
-    def _warp_in_initial_domain(self):
-        """Per triangle the 3D warp direction pulled back to the initial flattening (unit) and its vote weight.
-
-        The warp is a material direction: once pulled back it is carried by
-        the pattern's own Jacobian, whatever body the pattern is solved on.
-        Degenerate triangles get weight 0 (they do not vote).
-        """
-        X = self.ref_positions
-        img = np.zeros((len(self.gfaces), 2))
-        w = np.zeros(len(self.gfaces))
-        for pd in self.panels:
-            fs = slice(pd.face_offset, pd.face_offset + len(pd.faces))
-            J = _jac(X[pd.vertex_ids][pd.faces], pd.G)  # (f, 3, 2): initial 2D -> 3D
-            JtJ = np.einsum("tdi,tdj->tij", J, J)
-            rhs = np.einsum("tdi,td->ti", J, pd.warp_dir)
-            det = JtJ[:, 0, 0] * JtJ[:, 1, 1] - JtJ[:, 0, 1] ** 2
-            ok = np.abs(det) > _init.DEGENERATE * max(float(np.mean(np.abs(det))), 1e-300)
-            v = np.zeros((len(pd.faces), 2))
-            v[ok, 0] = (JtJ[ok, 1, 1] * rhs[ok, 0] - JtJ[ok, 0, 1] * rhs[ok, 1]) / det[ok]
-            v[ok, 1] = (JtJ[ok, 0, 0] * rhs[ok, 1] - JtJ[ok, 0, 1] * rhs[ok, 0]) / det[ok]
-            nrm = np.linalg.norm(v, axis=1)
-            ok &= nrm > _init.DEGENERATE * max(float(np.mean(nrm)), 1e-300)
-            img[fs][ok] = v[ok] / nrm[ok, None]
-            img[fs] = np.where(ok[:, None], v / np.maximum(nrm, 1e-300)[:, None], 0.0)
-            w[fs] = np.where(ok, areas_3d(X[pd.vertex_ids], pd.faces), 0.0)
-        return img, w
-
     def _realign(self, U: np.ndarray, M: list):
         """Rotate every panel about its centroid so its area-weighted grain vote is +y.
 
@@ -984,14 +968,14 @@ class PatternSolver:
         ix, iy = M[0] * wx + M[1] * wy, M[2] * wx + M[3] * wy  # current 2D image of the warp
         nrm = np.hypot(ix, iy)
         w = np.where(nrm > 0, self._warp_w, 0.0) / np.maximum(nrm, 1e-300)
-        k = len(self.panels)
-        vx = np.bincount(self.face_panel, w * ix, minlength=k)
-        vy = np.bincount(self.face_panel, w * iy, minlength=k)
+        vx = np.add.reduceat(w * ix, self._foff)
+        vy = np.add.reduceat(w * iy, self._foff)
         theta = -np.where((vx == 0) & (vy == 0), 0.0, np.arctan2(-vx, vy))
-        vp = self._vpanel
-        c = np.stack([np.bincount(vp, U[:, d], minlength=k) for d in range(2)], axis=1) / self._vcount[:, None]
-        U = _rotate_about(U - c[vp], theta[vp]) + c[vp]
-        ct, st = np.cos(theta)[self.face_panel], np.sin(theta)[self.face_panel]
+        c, sn = np.cos(theta), np.sin(theta)
+        rep = self._vrep
+        ctr = rep(np.add.reduceat(U, self._voff) / self._vcount[:, None])
+        U = _turn(U - ctr, rep(c), rep(sn)) + ctr
+        ct, st = np.repeat(c, self._fcount), np.repeat(sn, self._fcount)
         M = [ct * M[0] - st * M[2], ct * M[1] - st * M[3], st * M[0] + ct * M[2], st * M[1] + ct * M[3]]
         return U, M
 
