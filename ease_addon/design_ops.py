@@ -223,6 +223,8 @@ def load_design_into_scene(context, source) -> None:
         update_body(context, obj, shape=full)
         _fill_shape_props(context.scene, model, full)
     set_design(context, design)
+    from .export_ops import fill_export_props
+    fill_export_props(context.scene, design)    # the design's seam allowance and notch spacing
     bpy.ops.ease.ease_from_design()
 
 

@@ -1,7 +1,8 @@
 """Drape stage: drape the pattern on the body as a modal operator (progress
 bar, status text, Esc cancels; the core runs in a worker thread and only the
 main thread touches Blender data). The result is a garment object with a
-fabric material and two fit-map colour layers (strain, gap)."""
+fabric material, two fit-map colour layers (strain, gap) and the pattern
+vertex id of each vertex (``ease_vertex_id``, read back by the export)."""
 from __future__ import annotations
 
 import json
@@ -11,7 +12,9 @@ import bpy
 import numpy as np
 
 from . import convert, ramp, state
+from .export_ops import VERTEX_ID, pattern_digest
 from .operators_base import EaseOperator
+from .pattern_ops import PATTERN_KEY
 
 GARMENT = "EASE Garment"
 STRAIN_LAYER = "fit_strain"
@@ -137,6 +140,8 @@ def garment_object(context, result, gap=None):
         attr.data.foreach_set("color", _map_colors(values, lo, hi).ravel())
         me.attributes.new(layer + "_value", "FLOAT", "POINT").data.foreach_set(
             "value", np.asarray(values, dtype=np.float32))
+    # which pattern vertex each garment vertex is: the export reads the garment back by it
+    me.attributes.new(VERTEX_ID, "INT", "POINT").data.foreach_set("value", ids.astype(np.int32))
     me.materials.append(_fabric_material())
     for poly in me.polygons:
         poly.use_smooth = True
@@ -144,6 +149,7 @@ def garment_object(context, result, gap=None):
     old = state.objects_with_role(scene, "garment")
     obj = convert.new_object(GARMENT, me, state.collection(scene))
     obj["ease_role"] = "garment"
+    obj["ease_pattern"] = pattern_digest(scene.get(PATTERN_KEY, ""))   # draped from this pattern
     for o in old:
         state.remove_object(o)
     apply_fitmap(scene)
@@ -274,7 +280,6 @@ def apply_drape(context, result, gap, metrics) -> None:
             update_body(context, obj, shape=dict(shape) if shape else None,
                         pose=pose if isinstance(pose, str) else None)
     garment_object(context, result, gap)
-    state.DRAPES[context.scene.name] = result
     rep = drape_report(result, metrics)
     s = context.scene.ease
     s.drape_json = json.dumps(rep)

@@ -187,8 +187,12 @@ class EASE_PT_render(_EasePanel, bpy.types.Panel):
         layout.separator()
         layout.prop(s, "export_dir")
         row = layout.row(align=True)
-        for f in ("svg", "dxf", "pdf", "glb"):
+        for f in ("svg", "dxf", "pdf", "glb", "obj"):
             row.prop(s, f"export_{f}", toggle=True)
+        col = layout.column(align=True)
+        col.prop(s, "export_allowance_cm")
+        col.prop(s, "export_hem_cm")
+        col.prop(s, "export_notch_cm")
         layout.operator("ease.export_pattern", icon="EXPORT")
 
 

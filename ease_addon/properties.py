@@ -131,6 +131,15 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
     export_dxf: BoolProperty(name="DXF", default=True)
     export_pdf: BoolProperty(name="PDF", default=False)
     export_glb: BoolProperty(name="GLB", default=False)
+    export_obj: BoolProperty(name="OBJ", default=False)
+    # seam allowance and notch spacing: kept in the design (materials.export) by Export Pattern
+    export_allowance_cm: FloatProperty(name="Seam allowance", default=1.0, min=0.0, max=10.0, precision=2,
+                                       description="Seam allowance (cm) of every seam without its own width "
+                                                   "in the design")
+    export_hem_cm: FloatProperty(name="Hem allowance", default=2.0, min=0.0, max=10.0, precision=2,
+                                 description="Hem allowance (cm)")
+    export_notch_cm: FloatProperty(name="Notch spacing", default=10.0, min=0.0, max=100.0, precision=1,
+                                   description="Notches along each seam every this many cm (0: seam ends only)")
 
 
 CLASSES = (EASE_PG_shape_param, EASE_PG_design_param, EASE_PG_legend, EASE_PG_scene)

@@ -21,14 +21,12 @@ USER_ERRORS = (EaseError, Cancelled, KeyError, ValueError, OSError)
 _MODELS: dict = {}
 CUTS: dict = {}       # scene name -> (design json, body spec json, GarmentCut)
 PATTERNS: dict = {}   # scene name -> Pattern
-DRAPES: dict = {}     # scene name -> DrapeResult
 
 
 def clear() -> None:
     _MODELS.clear()
     CUTS.clear()
     PATTERNS.clear()
-    DRAPES.clear()
 
 
 def body_model(name: str):
@@ -186,10 +184,9 @@ def garment_gap(result, pattern, body_vertices, body_faces):
     return m["vertex_gap"], summary(m)
 
 
-def export_pattern(pattern, out_dir: str, formats, drape_result=None) -> list:
+def export_pattern(pattern, out_dir: str, formats, drape_positions=None, allowance=None,
+                   notch_spacing=None) -> list:
+    """The core's exporter (:func:`core.export.export_pattern`); raises ExportError before writing."""
     from ..core.export import export_pattern as _export
-    formats = list(formats)
-    positions = None if drape_result is None else drape_result.positions
-    if positions is None:
-        formats = [f for f in formats if f not in ("glb", "obj")] or formats
-    return _export(pattern, out_dir, formats=formats, drape_positions=positions)
+    return _export(pattern, out_dir, formats=list(formats), drape_positions=drape_positions,
+                   allowance=allowance, notch_spacing=notch_spacing)

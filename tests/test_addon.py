@@ -466,15 +466,56 @@ def test_drape_modal_progress_and_esc(bpy_session):
     assert [o for o in bpy.data.objects if o.get("ease_role") == "garment"]
 
 
+def _obj_vertices(path):
+    return np.array([[float(x) for x in l.split()[1:4]] for l in path.read_text().splitlines() if l.startswith("v ")])
+
+
 def test_export_pattern(bpy_session):
+    """Export calls the core's exporters with the design's allowance; the garment comes from its object."""
     bpy = bpy_session["bpy"]
     s = _scene(bpy).ease
     out = bpy_session["tmp"] / "export"
     s.export_dir = str(out)
-    s.export_svg, s.export_dxf, s.export_pdf, s.export_glb = True, True, False, True
+    s.export_svg, s.export_dxf, s.export_pdf, s.export_glb, s.export_obj = True, True, False, True, True
+    s.export_allowance_cm, s.export_hem_cm, s.export_notch_cm = 1.5, 3.0, 8.0
     assert bpy.ops.ease.export_pattern() == {"FINISHED"}
     names = {p.name for p in out.iterdir()}
-    assert "pattern.svg" in names and any(n.endswith(".dxf") for n in names) and "garment.glb" in names
+    assert {"pattern.svg", "pattern_astm.dxf", "pattern_plain.dxf", "garment.glb", "garment.obj"} <= names
+    assert "pattern_a4.pdf" not in names
+    # the panel's settings are in the design now, and the files were made with them
+    exp = json.loads(s.design_json)["materials"]["export"]
+    assert exp == {"allowance": {"default": 0.015, "hem": 0.03}, "notch_spacing": 0.08}
+    summary = json.loads((out / "export.json").read_text())
+    assert summary["allowance_mm"]["default"] == pytest.approx(15) and summary["allowance_mm"]["hem"] == pytest.approx(30)
+    interior = [n for p in summary["pieces"] for v in p["notches_mm"].values() for n in v[1:-1]]
+    rest = np.mod(np.array(interior), 80.0)
+    assert interior and np.all(np.minimum(rest, 80.0 - rest) < 1e-3)      # every 8 cm
+    # the draped garment written is the garment object's shape
+    garment = next(o for o in bpy.data.objects if o.get("ease_role") == "garment")
+    from scipy.spatial import cKDTree
+    got = _obj_vertices(out / "garment.obj")
+    v = _verts(garment).astype(np.float64)
+    want = np.column_stack([v[:, 0], v[:, 2], -v[:, 1]])          # OBJ is Y-up
+    assert cKDTree(want).query(got)[0].max() < 1e-5 and cKDTree(got).query(want)[0].max() < 1e-5
+
+    # a garment draped from another pattern is not exported as this pattern's
+    export_ops = _addon(bpy_session, "export_ops")
+    digest = garment["ease_pattern"]
+    garment["ease_pattern"] = "an earlier pattern"
+    s.export_glb, s.export_obj = True, False
+    out2 = bpy_session["tmp"] / "export2"
+    s.export_dir = str(out2)
+    assert bpy.ops.ease.export_pattern() == {"FINISHED"}          # the 2D files, GLB skipped with a warning
+    assert "pattern.svg" in {p.name for p in out2.iterdir()} and not (out2 / "garment.glb").exists()
+    s.export_svg, s.export_dxf = False, False
+    out3 = bpy_session["tmp"] / "export3"
+    s.export_dir = str(out3)
+    r = _run(bpy, bpy.ops.ease.export_pattern)
+    assert "ERROR" in r and "drape the current pattern again" in r["ERROR"] and not out3.exists()
+    assert export_ops.garment_positions(_scene(bpy))[0] is None
+    garment["ease_pattern"] = digest
+    s.export_svg, s.export_dxf, s.export_glb = True, True, False
+    s.export_dir = str(out)
 
 
 def test_cycles_render_is_not_empty(bpy_session):
@@ -501,11 +542,23 @@ def _fingerprint(bpy, ease_ops):
     s = sc.ease
     fp = {"objects": sorted(o.name for o in bpy.data.objects), "design": s.design_json,
           "pattern": sc.get("ease_pattern_json", ""), "engine": sc.render.engine,
-          "camera": sc.camera.name if sc.camera else None}
+          "camera": sc.camera.name if sc.camera else None,
+          "reports": [s.pattern_json, s.fit_json, s.drape_json, s.measurements_report],
+          "params": [(i.name, round(i.value, 6)) for i in s.design_params],
+          "brush": [round(c, 6) for c in sc.tool_settings.vertex_paint.unified_paint_settings.color],
+          "ramp": (round(s.ease_min, 6), round(s.ease_max, 6)),
+          "mode": bpy.context.object.mode if bpy.context.object else None}
+    for g in (o for o in bpy.data.objects if o.get("ease_role") == "garment"):
+        fp["garment"] = (float(np.round(_verts(g).astype(np.float64).sum(), 5)),
+                         g.data.materials[0].name if g.data.materials else None)
     if s.body is not None:
         fp["verts"] = float(np.round(_verts(s.body).astype(np.float64).sum(), 5))
         fp["ease"] = float(np.round(ease_ops.vertex_ease(s.body, sc).sum(), 5))
         fp["kp"] = json.dumps(_addon_convert.read_keypoints(s.body.data), sort_keys=True)
+        layer = s.body.data.color_attributes.get("ease")
+        raw = np.empty(len(layer.data) * 4, dtype=np.float32)
+        layer.data.foreach_get("color", raw)
+        fp["layer"] = (float(np.round(raw.astype(np.float64).sum(), 4)), list(s.body.data.get("ease_ramp", [])))
     return fp
 
 
@@ -525,22 +578,86 @@ def test_undo_restores_the_scene(bpy_session):
     names = [p.name for p in _addon(bpy_session, "design_ops").current_cut(bpy.context).panels]
     _scene(bpy).render.engine = "BLENDER_EEVEE" if "BLENDER_EEVEE" in \
         [i.identifier for i in _scene(bpy).render.bl_rna.properties["engine"].enum_items] else "BLENDER_WORKBENCH"
-    calls = [(bpy.ops.ease.ease_uniform, dict(whole_body=True, ease=1.9)),
-             (bpy.ops.ease.ease_gradient, dict(panel=names[0])),
-             (bpy.ops.ease.set_size, dict(size="S")),
-             (bpy.ops.ease.set_pose, dict(pose="P3")),
-             (bpy.ops.ease.assign_keypoint, dict(name="undo_point", vertex=100)),
-             (bpy.ops.ease.ease_to_design, {}),
-             (bpy.ops.ease.add_body, dict(source="DEFAULT")),
-             (bpy.ops.ease.studio_setup, {})]
-    for op, kw in calls:
+    # after an undo Blender rebuilds its data: Python references taken before it dangle,
+    # so every step fetches the scene afresh (E() below)
+    E = lambda: _scene(bpy).ease  # noqa: E731
+    param_name = E().design_params[0].name
+    design_file = bpy_session["tmp"] / "undo_design.json"
+    other = json.loads((ROOT / "examples" / "designs" / DESIGN).read_text())
+    other["materials"]["eps_weft"] = 1.2
+    design_file.write_text(json.dumps(other))
+    E().export_dir = str(bpy_session["tmp"] / "export_undo")
+    E().export_svg, E().export_dxf, E().export_pdf, E().export_glb, E().export_obj = True, False, False, False, False
+
+    def param():
+        return E().design_params[param_name]
+
+    def slider_without_live_update():
+        body_ops = _addon(bpy_session, "body_ops")
+        body_ops.SYNCING = True          # as if the slider moved with live update off
+        try:
+            E().shape["weight"].value = 0.7
+        finally:
+            body_ops.SYNCING = False
+
+    def nudge_param():
+        E().live_recut = False
+        param().value = 0.5 * (param().value + param().max)
+
+    ops = bpy.ops.ease
+    # (operator, arguments, what to set first); every operator that changes the scene
+    calls = [(ops.ease_uniform, lambda: dict(whole_body=True, ease=1.9), None),
+             (ops.ease_gradient, lambda: dict(panel=names[0]), None),
+             (ops.ease_to_design, dict, None),
+             (ops.ease_from_design, dict, lambda: ops.ease_uniform(whole_body=True, ease=1.7)),
+             # a new ramp range: the brush re-encodes the painted layer in it
+             (ops.brush_ease, dict, lambda: setattr(E(), "ease_min", 0.8) or setattr(E(), "ease_value", 1.45)),
+             (ops.set_size, lambda: dict(size="S"), None),
+             (ops.set_pose, lambda: dict(pose="P3"), None),
+             (ops.apply_shape, dict, slider_without_live_update),
+             (ops.fit_measurements, dict, lambda: setattr(E(), "waist_cm", 90.0)),
+             (ops.measure, dict, lambda: setattr(E(), "measurements_report", "")),
+             (ops.assign_keypoint, lambda: dict(name="undo_point", vertex=100), None),
+             (ops.set_parameter, lambda: dict(name=param_name, value=0.5 * (param().value + param().min)), None),
+             (ops.recut, dict, nudge_param),
+             (ops.load_design_file, lambda: dict(filepath=str(design_file)), None),
+             (ops.load_template, lambda: dict(template=DESIGN), None),
+             (ops.optimize_pattern, dict, None),
+             (ops.transfer_size, dict, lambda: setattr(E(), "fit_size", "S")),
+             (ops.adapt_poses, dict, None),
+             (ops.drape, dict, lambda: setattr(E(), "drape_frames", 6)),
+             (ops.fitmap, lambda: dict(mode="GAP"), None),
+             (ops.export_pattern, dict, lambda: setattr(E(), "export_hem_cm", 2.5)),
+             (ops.paint_ease, dict, None),
+             (ops.add_body, lambda: dict(source="DEFAULT"), None),
+             (ops.studio_setup, dict, None)]
+    for op, kw, prepare in calls:
+        if bpy.context.object is not None and bpy.context.object.mode != "OBJECT":
+            bpy.ops.object.mode_set(mode="OBJECT")
+        if prepare is not None:
+            prepare()
         bpy.ops.ed.undo_push(message="before")
         before = _fingerprint(bpy, ease_ops)
-        assert op(**kw) == {"FINISHED"}, op
+        assert op(**kw()) == {"FINISHED"}, op
         bpy.ops.ed.undo_push(message=op.idname())
         assert _fingerprint(bpy, ease_ops) != before, f"{op.idname()} changed nothing"
         assert bpy.ops.ed.undo() == {"FINISHED"}
-        assert _fingerprint(bpy, ease_ops) == before, f"undo after {op.idname()}"
+        after = _fingerprint(bpy, ease_ops)
+        if op.idname() == "EASE_OT_brush_ease":
+            # Blender keeps the paint colour out of its undo history (its own colour
+            # picker is not undone either); the layer it re-encoded is restored
+            assert after["brush"] != before["brush"]
+            after["brush"] = before["brush"]
+        assert after == before, (op.idname(), {k: (before.get(k), after.get(k)) for k in before
+                                               if before.get(k) != after.get(k)})
+        E().live_recut = True
+    # the operators that change no Blender data (files only; the modal picker is a
+    # click in the viewport): nothing to undo, and the scene stays as it was
+    assert ops.export_pattern() == {"FINISHED"}     # the design takes the panel's export settings
+    before = _fingerprint(bpy, ease_ops)
+    assert ops.save_design(filepath=str(bpy_session["tmp"] / "undo_saved.json")) == {"FINISHED"}
+    assert ops.export_pattern() == {"FINISHED"}
+    assert _fingerprint(bpy, ease_ops) == before
 
 
 def test_save_reopen_round_trip(bpy_session):
@@ -562,6 +679,12 @@ def test_save_reopen_round_trip(bpy_session):
     assert convert.read_keypoints(s.body.data) == kps
     pattern_ops = _addon(bpy_session, "pattern_ops")
     assert pattern_ops.stored_pattern(_scene(bpy)) is not None
+    # the draped garment exports from the reopened file (nothing kept only in memory)
+    s.export_dir = str(bpy_session["tmp"] / "export_reopened")
+    s.export_svg, s.export_dxf, s.export_pdf, s.export_glb, s.export_obj = False, False, False, True, False
+    assert bpy.ops.ease.export_pattern() == {"FINISHED"}
+    assert (bpy_session["tmp"] / "export_reopened" / "garment.glb").stat().st_size > 1000
+    s.export_svg, s.export_dxf = True, True
     # the scene keeps working after reopening: ease back into the design, re-cut from the JSON
     assert bpy.ops.ease.ease_to_design() == {"FINISHED"}
 
@@ -602,9 +725,17 @@ def test_paint_mode_design_file_save_and_recut(bpy_session):
     assert bpy.ops.ease.save_design(filepath=str(path)) == {"FINISHED"}
     saved = json.loads(path.read_text())
     assert saved == json.loads(s.design_json)
+    # the seam allowance set at export time is part of the design file, and comes back with it
+    panel = (s.export_allowance_cm, s.export_hem_cm, s.export_notch_cm)
+    exp = saved["materials"]["export"]
+    assert (exp["allowance"]["default"], exp["allowance"]["hem"], exp["notch_spacing"]) == \
+        pytest.approx(tuple(v / 100 for v in panel))
+    assert panel != pytest.approx((1.0, 2.0, 10.0))
     s.design_json = ""
+    s.export_allowance_cm, s.export_hem_cm, s.export_notch_cm = 1.0, 2.0, 10.0
     assert bpy.ops.ease.load_design_file(filepath=str(path)) == {"FINISHED"}
     assert json.loads(s.design_json)["name"] == saved["name"]
+    assert (s.export_allowance_cm, s.export_hem_cm, s.export_notch_cm) == pytest.approx(panel)
     item = s.design_params[0]
     s.live_recut = False
     item.value = item.value            # no live re-cut while switched off
