@@ -436,3 +436,24 @@ def test_ring_fractions_mirror_with_the_ring(body, ref):
         p = r.position(r.point(name, ""))
         q = r.position(r.point(name.replace("_left", "_right"), ""))
         assert np.linalg.norm(q - p * [-1, 1, 1]) < 2e-3
+
+
+@pytest.mark.parametrize("pose", ["A", "T"])
+def test_traced_length_follows_the_limb_in_the_design_pose(body, pose):
+    """A length is traced down the body part in the design's reference pose: from the
+    shoulder tip along the arm it drops steeply in the A-pose and runs out level in the T-pose."""
+    from core.design.resolve import instance_vertices
+    d = shirt()
+    d["body"]["pose"] = pose
+    d["keypoints"]["tr"] = {"trace": {"from": "shoulder_left", "along": "arm_left", "length": 0.25}}
+    design = load_design(d)
+    V = instance_vertices(design, body)
+    r = Resolver(design, body, V)
+    t = r.position(r.point("tr", "tr"))
+    s = body.landmark_position("shoulder_left", V)
+    e = body.landmark_position("elbow_left", V)
+    drop = np.degrees(np.arctan2(s[2] - t[2], t[0] - s[0]))    # below the horizontal, degrees
+    arm = np.degrees(np.arctan2(s[2] - e[2], e[0] - s[0]))
+    assert abs(drop - arm) < 12, (drop, arm)
+    assert (drop > 30) if pose == "A" else (abs(drop) < 15)
+    assert 0.2 < np.linalg.norm(t - s) <= 0.25 + 1e-6
