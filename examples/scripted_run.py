@@ -1,11 +1,13 @@
-"""EASE headless: design -> body -> pattern -> drape -> .blend + Cycles PNG, through the add-on.
+"""EASE headless: design -> body -> pattern -> drape -> .blend + Cycles PNG + pattern files, through the add-on.
 
     blender -b --python examples/scripted_run.py -- DESIGN.json OUT_DIR [--frames N] [--samples N]
     python examples/scripted_run.py DESIGN.json OUT_DIR            # with the bpy module (the venv)
 
 Writes into OUT_DIR: ``scene.blend`` (body, ease layer, design, pattern
 pieces, draped garment, studio), ``render.png`` (Cycles, CPU),
-``pattern.json`` and ``report.json`` (the key figures the panels show).
+``pattern.json``, ``report.json`` (the key figures the panels show) and
+``export/`` (the add-on's Export Pattern: SVG, DXF, PDF, and GLB/OBJ of the
+draped garment).
 
 This is an example script, not add-on code: it enables the add-on straight
 from this checkout (a temporary extension repository pointing at it) and,
@@ -37,6 +39,7 @@ def _args(argv):
     ap.add_argument("--samples", type=int, default=16, help="Cycles samples (default 16)")
     ap.add_argument("--resolution", type=int, default=40, help="render size, %% of the 1200-pixel-high frame (default 40)")
     ap.add_argument("--no-drape", action="store_true", help="skip the drape")
+    ap.add_argument("--no-export", action="store_true", help="skip the pattern files (export/)")
     return ap.parse_args(argv)
 
 
@@ -82,7 +85,7 @@ def _op(bpy, name, **kw):
 
 
 def run(design: str, out: str, frames: int = 120, samples: int = 16, resolution: int = 40,
-        drape: bool = True) -> dict:
+        drape: bool = True, export: bool = True) -> dict:
     bpy = _bpy()
     module = enable_from_checkout(bpy)
     out = Path(out).resolve()
@@ -107,15 +110,23 @@ def run(design: str, out: str, frames: int = 120, samples: int = 16, resolution:
     fileio = sys.modules[module + ".core.fileio"]
     pattern_ops = sys.modules[module + ".ease_addon.pattern_ops"]
     core_io.save_pattern(pattern_ops.stored_pattern(bpy.context.scene), out)
+    files = ["scene.blend", "render.png", "pattern.json"]
+    if export:
+        s.export_dir = str(out / "export")
+        s.export_svg = s.export_dxf = s.export_pdf = True
+        s.export_glb = s.export_obj = drape
+        _op(bpy, "export_pattern")
+        files += sorted(f"export/{p.name}" for p in (out / "export").iterdir())
     report = {"design": str(design), "pattern": json.loads(s.pattern_json or "{}"),
-              "drape": json.loads(s.drape_json or "{}"), "files": ["scene.blend", "render.png", "pattern.json"]}
+              "drape": json.loads(s.drape_json or "{}"), "files": files}
     fileio.write_json(out / "report.json", report)
     return report
 
 
 def main(argv=None) -> int:
     args = _args(sys.argv if argv is None else argv)
-    rep = run(args.design, args.out, args.frames, args.samples, args.resolution, not args.no_drape)
+    rep = run(args.design, args.out, args.frames, args.samples, args.resolution, not args.no_drape,
+              not args.no_export)
     print(json.dumps(rep, indent=1))
     return 0
 

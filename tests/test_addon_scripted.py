@@ -1,5 +1,5 @@
 """examples/scripted_run.py with the bpy module: design -> pattern -> drape ->
-.blend + Cycles PNG, in a subprocess (its own Blender user folder)."""
+.blend + Cycles PNG + pattern files, in a subprocess (its own Blender user folder)."""
 from __future__ import annotations
 
 import json
@@ -26,6 +26,11 @@ def test_scripted_run_writes_blend_render_and_pattern(tmp_path):
         assert (out / name).is_file() and (out / name).stat().st_size > 0, name
     rep = json.loads((out / "report.json").read_text())
     assert rep["pattern"]["pieces"] == 2 and rep["drape"]["frames"] >= 1
+    # the add-on's export: every format, the draped garment included
+    want = {"pattern.svg", "pattern_astm.dxf", "pattern_astm_r12.dxf", "pattern_plain.dxf", "pattern_a4.pdf",
+            "pattern_letter.pdf", "pattern_plotter.pdf", "garment.glb", "garment.obj", "export.json"}
+    assert {p.name for p in (out / "export").iterdir()} == want
+    assert {f"export/{n}" for n in want} <= set(rep["files"])
     from core.pattern.io import load_pattern
     assert len(load_pattern(out / "pattern.json").panels) == 2
     # the PNG is a real picture (not one flat colour): decode it with matplotlib
