@@ -429,26 +429,34 @@ class EASE_OT_pick_keypoint(bpy.types.Operator):
 
     def _pick(self, context, event):
         from bpy_extras import view3d_utils
-        obj = body_object(context)
-        name = context.scene.ease.keypoint_name
-        if not name:
-            raise state.AddonError("type the keypoint's name first")
         region, rv3d = context.region, context.region_data
         co = (event.mouse_region_x, event.mouse_region_y)
         origin = view3d_utils.region_2d_to_origin_3d(region, rv3d, co)
         direction = view3d_utils.region_2d_to_vector_3d(region, rv3d, co)
-        inv = obj.matrix_world.inverted()
-        hit, loc, _n, face = obj.ray_cast(inv @ origin, inv.to_3x3() @ direction)
-        if not hit:
-            raise state.AddonError("no body under the mouse")
-        faces = convert.get_triangles(obj.data)
-        verts = convert.get_vertices(obj.data)
-        a, b, c = verts[faces[face]]
-        p = np.asarray(loc)
-        m = np.stack([b - a, c - a], axis=1)
-        uv, *_ = np.linalg.lstsq(m, p - a, rcond=None)
-        bary = (1 - uv.sum(), uv[0], uv[1])
-        place_keypoint(context, name, face, bary)
+        pick_on_surface(context, context.scene.ease.keypoint_name, origin, direction)
+
+
+def pick_on_surface(context, name, origin, direction):
+    """Place keypoint ``name`` where the ray ``origin + t * direction`` (world space) first
+    meets the body: the clicked surface point as (triangle, barycentric weights).
+    Returns the triangle index."""
+    from mathutils import Vector
+    obj = body_object(context)
+    if not name:
+        raise state.AddonError("type the keypoint's name first")
+    inv = obj.matrix_world.inverted()
+    hit, loc, _n, face = obj.ray_cast(inv @ Vector(origin), inv.to_3x3() @ Vector(direction))
+    if not hit:
+        raise state.AddonError("no body under the mouse")
+    faces = convert.get_triangles(obj.data)
+    verts = convert.get_vertices(obj.data)
+    a, b, c = verts[faces[face]]
+    p = np.asarray(loc)
+    m = np.stack([b - a, c - a], axis=1)
+    uv, *_ = np.linalg.lstsq(m, p - a, rcond=None)
+    bary = (1 - uv.sum(), uv[0], uv[1])
+    place_keypoint(context, name, face, bary)
+    return int(face)
 
 
 CLASSES = (EASE_OT_load_template, EASE_OT_load_design_file, EASE_OT_save_design, EASE_OT_set_parameter,

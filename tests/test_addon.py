@@ -73,6 +73,13 @@ def _verts(obj):
     return co.reshape(-1, 3)
 
 
+def _world_box(obj):
+    """Min and max corner of an object's world-space bounding box."""
+    m = np.array(obj.matrix_world)
+    c = np.array([list(v) for v in obj.bound_box]) @ m[:3, :3].T + m[:3, 3]
+    return c.min(0), c.max(0)
+
+
 def _run(bpy, op, **kw):
     """Call an operator; return its result set (failures come back as CANCELLED + report)."""
     try:
@@ -101,6 +108,8 @@ def test_enable_disable_twice_leaves_nothing(bpy_session):
     bpy, module = bpy_session["bpy"], bpy_session["module"]
     base_ops = set(dir(bpy.ops.ease))
     assert "add_body" in base_ops and hasattr(bpy.types.Scene, "ease")
+    handlers = {k: len(getattr(bpy.app.handlers, k)) for k in dir(bpy.app.handlers)
+                if isinstance(getattr(bpy.app.handlers, k), list)}
     for _ in range(2):
         bpy.ops.preferences.addon_disable(module=module)
         assert not hasattr(bpy.types.Scene, "ease")
@@ -110,6 +119,8 @@ def test_enable_disable_twice_leaves_nothing(bpy_session):
         assert bpy.ops.preferences.addon_enable(module=module) == {"FINISHED"}
         assert hasattr(bpy.types.Scene, "ease") and hasattr(bpy.types, "EASE_PT_ease")
     assert set(dir(bpy.ops.ease)) == base_ops
+    # no handler added by enabling twice
+    assert {k: len(getattr(bpy.app.handlers, k)) for k in handlers} == handlers
     panels = [c for c in dir(bpy.types) if c.startswith("EASE_PT_")]
     assert {getattr(bpy.types, p).bl_category for p in panels} == {"EASE"}
 
@@ -243,6 +254,35 @@ def test_keypoint_on_selected_vertex(bpy_session):
     assert convert.read_keypoints(obj.data)["test_point"][0] == tri
 
 
+def test_keypoint_clicked_on_the_surface(bpy_session):
+    """Pick Keypoint: the ray under the mouse meets the body; the keypoint is that surface point.
+    Headless there is no viewport to click in: the test casts the ray the click would."""
+    bpy = bpy_session["bpy"]
+    s = _scene(bpy).ease
+    design_ops = _addon(bpy_session, "design_ops")
+    v = _verts(s.body).astype(np.float64)
+    chest_z = v[:, 2].min() + 0.72 * np.ptp(v[:, 2])
+    origin, direction = (0.03, -3.0, chest_z), (0.0, 1.0, 0.0)      # from in front (the body faces -Y)
+    tri = design_ops.pick_on_surface(bpy.context, "clicked_point", origin, direction)
+    kp = json.loads(s.design_json)["keypoints"]["clicked_point"]
+    assert kp["triangle"] == tri and sum(kp["bary"]) == pytest.approx(1.0)
+    faces = np.array([p.vertices[:] for p in s.body.data.polygons])
+    hit = np.asarray(kp["bary"]) @ v[faces[tri]]
+    # on the ray, and on the front of the body: nothing of the body lies between
+    assert abs(hit[0] - 0.03) < 1e-5 and abs(hit[2] - chest_z) < 1e-5
+    near = v[(np.abs(v[:, 0] - 0.03) < 0.01) & (np.abs(v[:, 2] - chest_z) < 0.01)]
+    assert hit[1] <= near[:, 1].min() + 0.01
+    convert = _addon(bpy_session, "convert")
+    assert convert.read_keypoints(s.body.data)["clicked_point"][0] == tri
+    # a click beside the body: the add-on's message, the design unchanged
+    before = s.design_json
+    with pytest.raises(Exception, match="no body under the mouse"):
+        design_ops.pick_on_surface(bpy.context, "missed", (3.0, -3.0, chest_z), direction)
+    with pytest.raises(Exception, match="name"):
+        design_ops.pick_on_surface(bpy.context, "", origin, direction)
+    assert s.design_json == before
+
+
 def test_parameter_recut(bpy_session):
     bpy = bpy_session["bpy"]
     s = _scene(bpy).ease
@@ -371,6 +411,7 @@ def test_pattern_objects_match_pattern_json(bpy_session, tmp_path):
     (tmp_path / "pattern.json").write_text(text)
     pattern = load_pattern(tmp_path / "pattern.json")
     pieces = {o["ease_panel"]: o for o in bpy.data.objects if o.get("ease_role") == "pattern_panel"}
+    body_lo, body_hi = _world_box(s.body)
     assert sorted(pieces) == sorted(p.name for p in pattern.panels)
     for p in pattern.panels:
         o = pieces[p.name]
@@ -382,6 +423,9 @@ def test_pattern_objects_match_pattern_json(bpy_session, tmp_path):
         assert o.data.color_attributes.get("achieved_ease") is not None
         kids = {c.type for c in o.children}
         assert {"CURVE", "MESH", "FONT"} <= kids      # outline, grain arrow, name
+        # laid out beside the body, not through it
+        lo, hi = _world_box(o)
+        assert hi[0] < body_lo[0] or lo[0] > body_hi[0] or hi[1] < body_lo[1] or lo[1] > body_hi[1], p.name
     figures = json.loads(s.pattern_json)
     assert figures["pieces"] == len(pattern.panels)
     assert figures["flipped triangles"] == 0
@@ -432,6 +476,20 @@ def test_drape_garment_and_fit_map(bpy_session):
     assert rep["frames"] >= 1
     assert bpy.ops.ease.fitmap(mode="STRAIN") == {"FINISHED"}
     assert g.data.materials[0].name == "EASE Fit Map fit_strain"
+    assert g.data.color_attributes.active_color.name == "fit_strain"
+    assert bpy.ops.ease.fitmap(mode="GAP") == {"FINISHED"}
+    assert g.data.materials[0].name == "EASE Fit Map fit_gap"
+    assert g.data.color_attributes.active_color.name == "fit_gap"
+    gap = np.empty(len(g.data.vertices), dtype=np.float32)
+    g.data.attributes["fit_gap_value"].data.foreach_get("value", gap)
+    assert np.all(gap >= 0) and gap.max() > 0.0
+    # the two maps colour differently: they show different fields
+    cols = {}
+    for layer in ("fit_strain", "fit_gap"):
+        c = np.empty(len(g.data.vertices) * 4, dtype=np.float32)
+        g.data.color_attributes[layer].data.foreach_get("color", c)
+        cols[layer] = c
+    assert not np.allclose(cols["fit_strain"], cols["fit_gap"])
     assert bpy.ops.ease.fitmap(mode="NONE") == {"FINISHED"}
     assert g.data.materials[0].name == "EASE Fabric"
 
