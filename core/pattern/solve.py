@@ -134,8 +134,8 @@ class SolverConfig:
     lambda_ease: float = 0.1
     lambda_reg: float = 1.0
     lambda_len: float = 30.0
-    lambda_straight: float = 0.5
-    lambda_curve: float = 1.0
+    lambda_straight: float = 0.1
+    lambda_curve: float = 0.1
     iterations: int = 20
     reg_rest: str = "prestretch"
     warp_weight: float = 1.0
@@ -152,14 +152,15 @@ class SolverConfig:
     sliver_weight: float = 0.5
     feedback_warp: float = 0.0
     stretch_frame: str = "pattern"
-    warp_slack: float = 0.0
+    warp_slack: float = 0.05
+    warp_row_weight: float = 0.5
 
 
     @classmethod
     def paper(cls, **kw) -> "SolverConfig":
         """The paper's weights taken literally (isometric ARAP regulariser)."""
         return replace(cls(reg_rest="isometric", adapt_margin=0.0, straight_target="zero", len_target="current",
-                           stretch_frame="initial", lambda_len=100.0, lambda_straight=5.0, lambda_curve=10.0, len_integral=0.0,
+                           stretch_frame="initial", warp_slack=0.0, warp_row_weight=1.0, lambda_len=100.0, lambda_straight=5.0, lambda_curve=10.0, len_integral=0.0,
                            adapt_feedback=0.0), **kw)
 
     @classmethod
@@ -169,8 +170,9 @@ class SolverConfig:
 
     @classmethod
     def stretch(cls, **kw) -> "SolverConfig":
-        """Improved, with weft target feedback (gain 0.3): compliance bought with shear."""
-        return replace(cls(feedback=0.3), **kw)
+        """Improved, with weft target feedback (gain 0.15) and a freer warp length (slack 0.1, both rows
+        weighted alike): compliance bought with shear and local warp length."""
+        return replace(cls(feedback=0.15, warp_slack=0.1, warp_row_weight=1.0), **kw)
 
     @classmethod
     def named(cls, name: str, **kw) -> "SolverConfig":
@@ -181,7 +183,7 @@ class SolverConfig:
 
     def check(self) -> None:
         for k in ("lambda_ease", "lambda_reg", "lambda_len", "lambda_straight", "lambda_curve", "warp_weight",
-                  "adapt_margin"):
+                  "adapt_margin", "warp_row_weight"):
             v = getattr(self, k)
             if not np.isfinite(v) or v < 0:
                 raise PatternError(f"solver configuration {k}: expected a finite value >= 0, got {v}")
@@ -189,6 +191,8 @@ class SolverConfig:
             raise PatternError("solver configuration: lambda_ease + lambda_reg must be > 0")
         if self.warp_weight <= 0:
             raise PatternError("solver configuration warp_weight: expected > 0")
+        if self.warp_row_weight <= 0:
+            raise PatternError("solver configuration warp_row_weight: expected > 0")
         if int(self.iterations) < 1:
             raise PatternError(f"solver configuration iterations: expected >= 1, got {self.iterations}")
         if self.straight_target not in ("zero", "smooth"):
@@ -545,11 +549,16 @@ class PatternSolver:
         else:
             self._Dall = None
 
-    def _matrix(self) -> sp.csc_matrix:
-        """The fixed system matrix: ease + regulariser (same operator), seam length, seam shape, gauge pins."""
+    def _matrix(self, row_weight: float = 1.0) -> sp.csc_matrix:
+        """The fixed system matrix of one pattern coordinate.
+
+        Ease + regulariser (one operator, times ``row_weight``: 1 for the weft
+        coordinate u, ``warp_row_weight`` for the warp coordinate v), seam
+        length, seam shape, and the gauge pins (stored in ``self._pins``).
+        """
         cfg = self.config
         W2 = np.array([1.0, cfg.warp_weight ** 2])
-        w = (cfg.lambda_ease + cfg.lambda_reg) * self.a
+        w = row_weight * (cfg.lambda_ease + cfg.lambda_reg) * self.a
         L = (self._GxT @ sp.diags(w * W2[0]) @ self._Gx + self._GyT @ sp.diags(w * W2[1]) @ self._Gy).tocsr()
         if self.sides and cfg.seam_length and cfg.lambda_len > 0:
             c = cfg.lambda_len * self._El0 / (self.h * self.total_area)
@@ -564,18 +573,33 @@ class PatternSolver:
         d = L.diagonal()
         pin = np.zeros(self.n)
         pin[self._voff] = 1e-6 * np.add.reduceat(d, self._voff) / self._vcount
-        self._pin = pin
+        self._pins.append(pin)
         return (L + sp.diags(pin)).tocsc()
 
     def _solver(self):
+        """Back-substitution ``rhs (n, 2) -> U (n, 2)`` with the factorised matrices, built once per configuration.
+
+        One factorisation serves both coordinates when ``warp_row_weight`` is
+        1; otherwise the u and v systems are factorised together, once.
+        """
         cfg = self.config
         key = (cfg.lambda_ease, cfg.lambda_reg, cfg.lambda_len, cfg.lambda_straight, cfg.lambda_curve,
-               cfg.warp_weight, cfg.seam_length)
+               cfg.warp_weight, cfg.seam_length, cfg.warp_row_weight)
         if self._factor is None or self._factor_key != key:
             t0 = time.perf_counter()
             # symmetric positive definite: a symmetric minimum-degree ordering on A + A^T keeps the
             # factors ~40 % sparser than the default column ordering (faster factor and solves)
-            self._factor = splu(self._matrix(), permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
+            lu = lambda A: splu(A, permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
+            self._pins = []
+            if cfg.warp_row_weight == 1.0:
+                f = lu(self._matrix())
+                self._pin = np.stack([self._pins[0], self._pins[0]], axis=1)
+                self._factor = f.solve
+            else:
+                fu, fv = lu(self._matrix()), lu(self._matrix(cfg.warp_row_weight))
+                self._pin = np.stack(self._pins, axis=1)
+                self._factor = lambda rhs: np.stack([fu.solve(np.ascontiguousarray(rhs[:, 0])),
+                                                     fv.solve(np.ascontiguousarray(rhs[:, 1]))], axis=1)
             self._factor_key = key
             self.timings["factorise"] = time.perf_counter() - t0
             self.n_factorisations = getattr(self, "n_factorisations", 0) + 1
@@ -663,20 +687,21 @@ class PatternSolver:
                 np.clip(corr_g, 0.8, 1.25, out=corr_g)
                 tg = self._target_parts(K, c_weft * corr_w, c_warp * corr_g)
             RT, Te = self._local_step(M, tg, W2)
-            energies.append(float(np.sum(self.a * sum(W2[k % 2] * (M[k] - RT[k]) ** 2 for k in range(4)))))
+            energies.append(float(np.sum(self.a * sum(W2[k % 2] * (1.0 if k < 2 else cfg.warp_row_weight)
+                                                      * (M[k] - RT[k]) ** 2 for k in range(4)))))
             # B = lambda_ease T + lambda_reg R T: one right-hand side for both terms (same weights)
             B = [cfg.lambda_ease * Te[k] + cfg.lambda_reg * RT[k] for k in range(4)]
             rhs = np.empty((self.n, 2))
             rhs[:, 0] = self._GxT @ (aw[0] * B[0]) + self._GyT @ (aw[1] * B[1])
-            rhs[:, 1] = self._GxT @ (aw[0] * B[2]) + self._GyT @ (aw[1] * B[3])
+            rhs[:, 1] = cfg.warp_row_weight * (self._GxT @ (aw[0] * B[2]) + self._GyT @ (aw[1] * B[3]))
             RTs = None
             if cfg.len_target != "current" or cfg.len_direction != "current":
                 Dt, Kt = tg["seam"]
                 _, RTs = self._local_step(M, {"T": tg["T"], "reg": (Dt, Kt)}, W2, slack=False)
                 RTs = np.stack(RTs, axis=1).reshape(-1, 2, 2)
             rhs += self._seam_rhs(U, RTs, reset=(it == 0))
-            rhs += self._pin[:, None] * U
-            U_new = lu.solve(rhs)
+            rhs += self._pin * U
+            U_new = lu(rhs)
             # the step's rigid part per panel carries no strain: remove it so that the flip
             # safeguard only ever pulls back the local part of the step
             U_new = self._rigid_align(U_new, U)
@@ -705,7 +730,7 @@ class PatternSolver:
         return [self._Gx @ u, self._Gy @ u, self._Gx @ v, self._Gy @ v]
 
     def _local_step(self, M: list, tg: dict, W2: np.ndarray, slack: bool = True):
-        """Rest shapes ``D R K'`` of the regulariser (closed-form 2x2 rotations) and the ease target.
+        """Rest shapes ``D R K'`` of the regulariser (best 2x2 rotations, all triangles at once) and the ease target.
 
         ``M``: the current Jacobians (:meth:`_jac4`). With ``warp_slack`` the
         rest shape's warp row is also scaled by the best factor within
@@ -719,18 +744,33 @@ class PatternSolver:
         free = slack and cfg.warp_slack > 0
         sw = np.ones(len(d0))
         lo, hi = 1.0 / (1.0 + cfg.warp_slack), 1.0 + cfg.warp_slack
+        # C = K' W K'^T (fixed over the alternation)
+        C00 = W2[0] * k[0] ** 2 + W2[1] * k[1] ** 2
+        C11 = W2[0] * k[2] ** 2 + W2[1] * k[3] ** 2
+        C01 = W2[0] * k[0] * k[2] + W2[1] * k[1] * k[3]
         for _ in range(2 if free else 1):
-            e0, e1 = W2[0] / d0, W2[1] / d0
-            f0, f1 = W2[0] / (d1 * sw), W2[1] / (d1 * sw)
-            a00 = M[0] * e0 * k[0] + M[1] * e1 * k[1]          # (M' K^T)_00
-            a11 = M[2] * f0 * k[2] + M[3] * f1 * k[3]          # (M' K^T)_11
-            a10 = M[2] * f0 * k[0] + M[3] * f1 * k[1]
-            a01 = M[0] * e0 * k[2] + M[1] * e1 * k[3]
+            # |(M - D R K') W^1/2|^2 = const - 2 tr(R^T D M W K'^T) + tr(C R^T D^2 R): with
+            # a = tr-part and b = skew-part of A = D M W K'^T, and Delta = (d0^2 - d1^2) / 2,
+            # f(theta) = -2 (a cos + b sin) + Delta ((C00 - C11) cos 2theta - 2 C01 sin 2theta) + const.
+            # Start at the polar angle of A (exact when D or C is a multiple of I), then Newton.
+            # (the warp row weighs warp_row_weight: A = D Omega M W K'^T, Delta = (d0^2 - omega d1^2) / 2)
+            dw = d1 * sw
+            om = cfg.warp_row_weight
+            a00 = d0 * (W2[0] * M[0] * k[0] + W2[1] * M[1] * k[1])
+            a11 = om * dw * (W2[0] * M[2] * k[2] + W2[1] * M[3] * k[3])
+            a10 = om * dw * (W2[0] * M[2] * k[0] + W2[1] * M[3] * k[1])
+            a01 = d0 * (W2[0] * M[0] * k[2] + W2[1] * M[1] * k[3])
             x, y = a00 + a11, a10 - a01
-            r = np.hypot(x, y)
-            ok = r > 0
-            c = np.where(ok, x / np.where(ok, r, 1.0), 1.0)
-            sn = np.where(ok, y / np.where(ok, r, 1.0), 0.0)
+            th = np.arctan2(y, x)
+            delta = 0.5 * (d0 * d0 - om * dw * dw)
+            if np.any(delta != 0):
+                p, q = delta * (C00 - C11), -2.0 * delta * C01
+                for _ in range(2):
+                    c1, s1, c2, s2 = np.cos(th), np.sin(th), np.cos(2 * th), np.sin(2 * th)
+                    g1 = 2.0 * (x * s1 - y * c1) - 2.0 * p * s2 + 2.0 * q * c2
+                    g2 = 2.0 * (x * c1 + y * s1) - 4.0 * p * c2 - 4.0 * q * s2
+                    th = th - np.where(g2 > 0, g1 / np.where(g2 > 0, g2, 1.0), 0.0)
+            c, sn = np.cos(th), np.sin(th)
             rk = [c * k[0] - sn * k[2], c * k[1] - sn * k[3], sn * k[0] + c * k[2], sn * k[1] + c * k[3]]
             if free:
                 p0, p1 = d1 * rk[2], d1 * rk[3]
