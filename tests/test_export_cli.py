@@ -61,6 +61,48 @@ def test_drape_found_next_to_the_pattern(job):
     assert {"garment.glb", "garment.obj", "pattern_a4.pdf", "pattern.svg", "pattern_astm.dxf"} <= names
 
 
+ALL = {"pattern.svg", "pattern_astm.dxf", "pattern_astm_r12.dxf", "pattern_plain.dxf", "pattern_a4.pdf",
+       "pattern_letter.pdf", "pattern_plotter.pdf", "garment.glb", "garment.obj", "export.json"}
+
+
+@pytest.mark.parametrize("fmt", ["svg,dxf,pdf,glb,obj", "all", "SVG, dxf,pdf,glb,obj,svg"])
+def test_every_format_by_list_or_all(job, tmp_path, fmt):
+    root, pat = job
+    d = tmp_path / "drape_elsewhere"
+    d.mkdir()
+    np.savez(d / "drape.npz", positions=drape_positions(pat))
+    assert run(["export", str(root / "pattern"), "--format", fmt, "--drape", str(d), "--out", str(root / "x"),
+                "--quiet"]) == 0
+    assert {p.name for p in (root / "x").iterdir()} == ALL
+
+
+def test_ease_command_runs_export(job, tmp_path, capsys):
+    """`ease export ...` through the real entry point (core.cli.main), drape found beside the pattern."""
+    from core.cli import main
+    root, pat = job
+    (root / "drape").mkdir()
+    np.savez(root / "drape" / "drape.npz", positions=drape_positions(pat))
+    assert main(["export", str(root / "pattern"), "--format", "all", "--out", str(root / "x"), "--quiet"]) == 0
+    assert {p.name for p in (root / "x").iterdir()} == ALL
+    assert main(["export", str(root / "pattern"), "--format", "tiff", "--out", str(root / "y")]) != 0
+    assert "tiff" in capsys.readouterr().err and not (root / "y").exists()
+
+
+@pytest.mark.parametrize("fmt", ["all", "svg,obj"])
+def test_3d_formats_without_a_drape_fail_clearly(job, fmt):
+    root, pat = job
+    msg = run(["export", str(root / "pattern"), "--format", fmt, "--out", str(root / "x"), "--quiet"])
+    assert isinstance(msg, str) and "needs the draped garment" in msg and "--drape" in msg
+    assert not (root / "x").exists()
+
+
+def test_unknown_format_names_it(job):
+    root, _ = job
+    msg = run(["export", str(root / "pattern"), "--format", "svg,png", "--out", str(root / "x"), "--quiet"])
+    assert isinstance(msg, str) and "'png'" in msg and "all" in msg
+    assert not (root / "x").exists()
+
+
 def test_explicit_drape_dir_and_bad_npz(job, tmp_path):
     root, pat = job
     d = tmp_path / "elsewhere"
