@@ -36,6 +36,7 @@ part (see :mod:`.grain`).
 from __future__ import annotations
 
 import time
+import weakref
 from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -105,7 +106,23 @@ def line_garments(line: CutLine, garments: Sequence[str]) -> List[str]:
     return list(garments)
 
 
+_FORBIDDEN_CACHE: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
 def forbidden_body_faces(body, n_faces: int) -> np.ndarray:
+    """:func:`_forbidden_body_faces`, cached per body model (its regions are fixed)."""
+    try:
+        hit = _FORBIDDEN_CACHE.get(body)
+    except TypeError:           # not weak-referenceable: no cache
+        return _forbidden_body_faces(body, n_faces)
+    if hit is None or len(hit) != n_faces:
+        hit = _forbidden_body_faces(body, n_faces)
+        hit.flags.writeable = False
+        _FORBIDDEN_CACHE[body] = hit
+    return hit
+
+
+def _forbidden_body_faces(body, n_faces: int) -> np.ndarray:
     """(F,) int: per body triangle, 1 + index into FORBIDDEN_REGIONS of the region it lies
     in, or 0. The regions are eroded by ``ERODE`` rings of vertices first: a garment may
     run along (or slightly over) a region's border, e.g. a neckline at the neck landmarks,
@@ -449,9 +466,13 @@ def _runs(seq: np.ndarray) -> List[np.ndarray]:
 
 
 def _weights(mesh: CutMesh, used: np.ndarray, V: int) -> sp.csr_matrix:
-    rows, cols, vals = [], [], []
-    for r, v in enumerate(used.tolist()):
-        c, w = mesh.vertex_weights(v)
+    """Embedding rows of mesh vertices ``used``: identity rows for body vertices, the
+    stored body weights for vertices the cut added."""
+    used = np.asarray(used, dtype=np.int64)
+    body = used < mesh.n_body
+    rows, cols, vals = [np.nonzero(body)[0]], [used[body]], [np.ones(int(body.sum()))]
+    for r in np.nonzero(~body)[0].tolist():
+        c, w = mesh.vertex_weights(int(used[r]))
         rows.append(np.full(len(c), r))
         cols.append(c)
         vals.append(w)
@@ -493,15 +514,21 @@ def _build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset, clock
     # global garment vertices: corners joined across uncut edges and across seams, never
     # across an opening - the two sides of an opening between panels (a jacket's front)
     # get their own vertices, so no later stage sews them together
-    gjoin = (twin >= 0) & (~on_cut | np.isin(ukey, sewn))
-    corner_global = corner_components(gjoin)
     gv_all = F.reshape(-1)
-    ncg = np.int64(corner_global.max()) + 1 if len(F) else np.int64(1)
-    # deterministic numbering by (mesh vertex, component): the mesh vertex order where
-    # nothing is split
-    ug, ginv = np.unique(gv_all * ncg + corner_global, return_inverse=True)
-    global_of_corner = ginv.reshape(-1)
-    vertex_of_global = ug // ncg
+    open_inside = (twin >= 0) & on_cut
+    if len(sewn):
+        open_inside &= ~np.isin(ukey, sewn)
+    if open_inside.any():
+        corner_global = corner_components((twin >= 0) & ~open_inside)
+        ncg = np.int64(corner_global.max()) + 1
+        # deterministic numbering by (mesh vertex, component): the mesh vertex order where
+        # nothing is split
+        ug, ginv = np.unique(gv_all * ncg + corner_global, return_inverse=True)
+        global_of_corner = ginv.reshape(-1)
+        vertex_of_global = ug // ncg
+    else:   # no opening runs between faces: one garment vertex per mesh vertex (all used)
+        global_of_corner = gv_all
+        vertex_of_global = np.arange(n, dtype=np.int64)
     # deterministic local vertex numbering: by (panel, global vertex, component)
     panels, hems_local = [], {}
     local_of_corner = np.full(3 * len(F), -1, dtype=np.int64)
