@@ -150,3 +150,45 @@ def test_deterministic(shirt, anny):
     for p, q in zip(cut.panels, again.panels):
         np.testing.assert_array_equal(p.faces, q.faces)
         np.testing.assert_array_equal(p.warp_dir, q.warp_dir)
+
+
+def _distance_to_polyline(P, Q):
+    """Distance (p,) of points P (p, 3) to the polyline Q (q, 3)."""
+    a, b = Q[:-1], Q[1:]
+    ab = b - a
+    t = np.clip(np.einsum("pij,ij->pi", P[:, None] - a[None], ab) / np.maximum((ab * ab).sum(1), 1e-18), 0, 1)
+    return np.linalg.norm(a[None] + t[..., None] * ab[None] - P[:, None], axis=2).min(axis=1)
+
+
+def test_template_seams_are_the_exact_geodesics(anny):
+    """The shirt template's seamlines, as cut, are potpourri3d's geodesics between their
+    keypoints: every seam vertex within SNAP_ABS (0.5 mm) of the geodesic and the same
+    length to 0.1 % - not snapped to mesh vertices, no zig-zag along mesh edges (which
+    would be several % longer and up to half an edge, ~5 mm, off)."""
+    from core.cut import cut_design
+    from core.cut.geodesic import GeodesicPaths, insert_keypoints
+    from core.cut.split import SNAP_ABS, CutMesh
+    from core.design import load_design, resolve
+    from core.design.templates import TEMPLATE_DIR
+    body, X, _ = anny
+    BF = np.asarray(body.faces)
+    d = load_design(TEMPLATE_DIR / "shirt_long_sleeve.json")
+    spec = resolve(d, body, vertices=X)
+    cut = cut_design(d, body=body)
+    GX = cut.positions(X)
+    checked = 0
+    for line in spec.lines:
+        seams = [s for s in cut.seams if s.name == line.name]
+        if line.closed or len(seams) != 1:
+            continue
+        mesh = CutMesh(X, BF)
+        kv = insert_keypoints(mesh, line.points, BF, X)
+        geo = GeodesicPaths(mesh.X, mesh.F)
+        G = np.vstack([geo.path(a, b) for a, b in zip(kv[:-1], kv[1:])])
+        s = seams[0]
+        P = GX[np.asarray(cut.panel(s.panel_a).vertex_ids)[s.verts_a]]
+        assert len(P) > len(line.points)                       # it crosses the mesh
+        assert _distance_to_polyline(P, G).max() <= SNAP_ABS + 1e-9, line.name
+        assert abs(polyline_length(P) - polyline_length(G)) < 1e-3 * polyline_length(G), line.name
+        checked += 1
+    assert checked >= 8     # shoulders, sides, sleeve tops and undersides
