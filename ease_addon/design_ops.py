@@ -130,10 +130,13 @@ def refresh_attachments(context, obj, verts) -> None:
         # The cut's embedding holds for every shape and pose: move the lines with
         # the cached cut (no re-cut while a slider is dragged).
         cut = next(iter(state.CUTS.values()), None)
-        if cut is None:
+        if cut is None or cut.embedding.shape[1] != len(verts):
+            # no cut yet, or one made on another body model (a body file replaced it)
             try:
                 cut = current_cut(context)
             except state.USER_ERRORS:
+                continue
+            if cut.embedding.shape[1] != len(verts):
                 continue
         pos = cut.positions(verts)
         v, _ = convert.polyline_edges([pos[np.asarray(l)] for l in ids], closed=True)

@@ -876,3 +876,27 @@ def test_body_from_a_file_the_user_owns(bpy_session):
     s.body_file = str(bpy_session["tmp"] / "missing.npz")
     r = _run(bpy, bpy.ops.ease.add_body, source="FILE")
     assert "ERROR" in r and s.body == obj
+
+
+def test_body_from_an_smpl_file(bpy_session):
+    """From File with an SMPL-format .npz the user owns: its betas become the shape sliders, poses apply."""
+    bpy = bpy_session["bpy"]
+    sys.path.insert(0, str(ROOT / "tests"))
+    from test_body_smpl import tube_model        # a small SMPL-format model (24 joints)
+    from core.body import load_body
+    path = bpy_session["tmp"] / "my_smpl.npz"
+    np.savez(path, **tube_model(J=24, n_ring=12, n_rows=30))
+    model = load_body(str(path))
+    s = _scene(bpy).ease
+    s.body_file = str(path)
+    assert bpy.ops.ease.add_body(source="FILE") == {"FINISHED"}
+    obj = s.body
+    assert obj["ease_model"] == str(path) and len(obj.data.vertices) == model.n_vertices
+    assert {i.name for i in s.shape} == set(model.shape_parameters())
+    assert np.allclose(_verts(obj), model.vertices(), atol=1e-5)
+    next(i for i in s.shape if i.name == "beta1").value = 2.0       # a slider: the body follows
+    assert np.allclose(_verts(obj), model.vertices({"beta1": 2.0}), atol=1e-5)
+    assert bpy.ops.ease.set_pose(pose="P1") == {"FINISHED"}
+    assert np.allclose(_verts(obj), model.vertices({"beta1": 2.0}, "P1"), atol=1e-5)
+    assert obj.data.color_attributes.get("ease") is not None
+    assert bpy.ops.ease.add_body(source="DEFAULT") == {"FINISHED"}
