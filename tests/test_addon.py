@@ -573,6 +573,16 @@ def test_export_pattern(bpy_session):
     assert export_ops.garment_positions(_scene(bpy))[0] is None
     garment["ease_pattern"] = digest
     s.export_svg, s.export_dxf, s.export_glb = True, True, False
+    # a folder that cannot be made: the error in the status bar, the design keeps its old settings
+    blocker = bpy_session["tmp"] / "a_file"
+    blocker.write_text("not a folder")
+    s.export_dir = str(blocker / "export")
+    design_before = s.design_json
+    s.export_hem_cm = 4.0
+    r = _run(bpy, bpy.ops.ease.export_pattern)
+    assert "ERROR" in r and "a_file" in r["ERROR"], r
+    assert s.design_json == design_before
+    s.export_hem_cm = 3.0
     s.export_dir = str(out)
 
 
