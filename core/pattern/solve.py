@@ -105,8 +105,8 @@ class SolverConfig:
     ``reg_rest``: ``"isometric"`` (paper: ARAP towards the body triangle) or
     ``"prestretch"`` (ARAP towards the triangle pre-stretched by the targets).
     ``warp_weight``: relative weight of the warp column in the ease and
-    regulariser terms (< 1 lets warp give way to the weft target: the
-    "stretch" configuration). ``seam_length``: False switches E_len off
+    regulariser terms (< 1 lets warp give way to the weft target).
+    ``seam_length``: False switches E_len off
     (gathered designs). ``adapt_margin``: pose demands are raised by this
     fraction before the tolerance applies, so that the optimizer's own
     compliance error (~1-2 %) does not leave triangles just above the
@@ -116,7 +116,8 @@ class SolverConfig:
     that curvature error moves out of the weft into warp and shear (0 = off,
     the paper); ``feedback_warp`` the same for the warp targets;
     ``adapt_feedback`` the weft and warp feedback used by adaptation solves
-    (pose demands are local, hence incompatible in 2D without shear).
+    (pose demands are local, hence incompatible in 2D without shear); there
+    it aims at the poses' demands along the pattern's current weft and warp.
     ``sliver_weight``: every triangle weighs at least this fraction of the
     mean triangle weight (set when the solver is built).
     ``len_integral``: gain of the integral action on seam-edge length
@@ -130,6 +131,13 @@ class SolverConfig:
     (the paper literally: ``K diag(c)``, the initial flattening's barycentric
     offsets scaled). ``warp_slack``: the local step may scale the rest
     shape's warp by a factor within ``[1/(1+slack), 1+slack]`` (0 = off).
+    ``warp_row_weight``: weight of the pattern's warp coordinate (v) rows of
+    the ease and regulariser terms against the weft coordinate (u) rows (< 1:
+    curvature goes into warp length and shear rather than weft; the u and v
+    systems are then factorised separately, once).
+    ``adapt_iterations``, ``adapt_bound``: adaptation solves run at least
+    this many iterations, and their feedback may raise a target up to this
+    factor (the poses' local demands are far from uniform).
     """
     lambda_ease: float = 0.1
     lambda_reg: float = 1.0
@@ -141,7 +149,7 @@ class SolverConfig:
     warp_weight: float = 1.0
     seam_length: bool = True
     realign_grain: bool = True
-    adapt_margin: float = 0.03
+    adapt_margin: float = 0.06
     feedback: float = 0.0
     straight_target: str = "smooth"
     len_direction: str = "current"
@@ -154,6 +162,8 @@ class SolverConfig:
     stretch_frame: str = "pattern"
     warp_slack: float = 0.05
     warp_row_weight: float = 0.5
+    adapt_iterations: int = 40
+    adapt_bound: float = 2.0
 
 
     @classmethod
@@ -183,7 +193,7 @@ class SolverConfig:
 
     def check(self) -> None:
         for k in ("lambda_ease", "lambda_reg", "lambda_len", "lambda_straight", "lambda_curve", "warp_weight",
-                  "adapt_margin", "warp_row_weight"):
+                  "adapt_margin", "warp_row_weight", "adapt_bound"):
             v = getattr(self, k)
             if not np.isfinite(v) or v < 0:
                 raise PatternError(f"solver configuration {k}: expected a finite value >= 0, got {v}")
@@ -193,6 +203,8 @@ class SolverConfig:
             raise PatternError("solver configuration warp_weight: expected > 0")
         if self.warp_row_weight <= 0:
             raise PatternError("solver configuration warp_row_weight: expected > 0")
+        if self.adapt_bound < 1:
+            raise PatternError(f"solver configuration adapt_bound: expected >= 1, got {self.adapt_bound}")
         if int(self.iterations) < 1:
             raise PatternError(f"solver configuration iterations: expected >= 1, got {self.iterations}")
         if self.straight_target not in ("zero", "smooth"):
@@ -643,9 +655,17 @@ class PatternSolver:
             cg = np.where(lg > 0, want_g / lg, 1.0)
         return K, cw, cg
 
+    def pose_demands(self, pose_positions: Sequence[np.ndarray], eps_weft: float, eps_warp: float) -> dict:
+        """What adaptation solves feed back on (see :meth:`solve`): the poses' intrinsic offsets and tolerances."""
+        return {"offsets": [_components(self._offsets(P)[0]) for P in pose_positions],
+                "ease_weft": np.concatenate([pd.ease for pd in self.panels]), "ease_warp": np.ones(len(self.gfaces)),
+                "eps_weft": _check_eps("eps_weft", eps_weft), "eps_warp": _check_eps("eps_warp", eps_warp),
+                "margin": 1.0 + self.config.adapt_margin}
+
     # ------------------------------------------------------------------ iterations
     def solve(self, K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray, start: Optional[np.ndarray] = None,
-              positions: Optional[np.ndarray] = None, progress: Optional[Progress] = None) -> SolveResult:
+              positions: Optional[np.ndarray] = None, progress: Optional[Progress] = None,
+              poses: Optional[dict] = None) -> SolveResult:
         """Run the local-global iterations towards targets ``diag(c_weft, c_warp) K`` (module docstring).
 
         Per iteration: the local step (closed-form rotations, all triangles at
@@ -654,6 +674,12 @@ class PatternSolver:
         safeguard and the grain re-alignment; the Jacobians of the next
         iterate are carried through the re-alignment's rotation, so only two
         sparse products per iteration touch the triangles.
+
+        ``poses`` (adaptation, from :meth:`pose_demands`): the feedback then
+        aims, per triangle, at the larger of the design ease and what every
+        pose demands along the pattern's *current* weft/warp directions
+        (Eq. material-scale evaluated where the metric measures it), so the
+        local rotations of the solve cannot turn a demand off the weft.
         """
         cfg = self.config
         t0 = time.perf_counter()
@@ -666,7 +692,9 @@ class PatternSolver:
         corr_g = np.ones(nf)
         energies = []
         backtracks = 0
-        n_it = int(cfg.iterations)
+        n_it = int(cfg.iterations) if poses is None else max(int(cfg.iterations), int(cfg.adapt_iterations))
+        hi = 1.25 if poses is None else cfg.adapt_bound
+        step = 0.03 if poses is None else 0.06
         tg = self._target_parts(K, c_weft, c_warp)
         Kc = _components(K)
         aw = (self.a * W2[0], self.a * W2[1])
@@ -678,13 +706,23 @@ class PatternSolver:
                 # move the targets by the achieved/target ratio: the linear solve then
                 # lands on the wanted rho-hat wherever curvature allows it
                 rw, rg = _achieved(M, Kc)
-                ok = np.isfinite(rw) & np.isfinite(rg) & (rw > 0) & (rg > 0)
+                goal_w, goal_g = c_weft, c_warp
+                if poses is not None:
+                    goal_w, goal_g = poses["ease_weft"].copy(), poses["ease_warp"].copy()
+                    for Kp in poses["offsets"]:
+                        # stretch of the pose along the current weft/warp: rho-hat on the reference
+                        # over rho-hat on the pose
+                        pw, pg = _achieved(M, Kp)
+                        with np.errstate(divide="ignore", invalid="ignore"):
+                            goal_w = np.fmax(goal_w, poses["margin"] * rw / pw / poses["eps_weft"])
+                            goal_g = np.fmax(goal_g, poses["margin"] * rg / pg / poses["eps_warp"])
+                ok = np.isfinite(rw) & np.isfinite(rg) & (rw > 0) & (rg > 0) & np.isfinite(goal_w) & np.isfinite(goal_g)
                 if cfg.feedback > 0:
-                    corr_w[ok] *= np.clip((c_weft[ok] / rw[ok]) ** cfg.feedback, 0.97, 1.03)
+                    corr_w[ok] *= np.clip((goal_w[ok] / rw[ok]) ** cfg.feedback, 1 - step, 1 + step)
                 if cfg.feedback_warp > 0:
-                    corr_g[ok] *= np.clip((c_warp[ok] / rg[ok]) ** cfg.feedback_warp, 0.97, 1.03)
-                np.clip(corr_w, 0.8, 1.25, out=corr_w)
-                np.clip(corr_g, 0.8, 1.25, out=corr_g)
+                    corr_g[ok] *= np.clip((goal_g[ok] / rg[ok]) ** cfg.feedback_warp, 1 - step, 1 + step)
+                np.clip(corr_w, 0.8, hi, out=corr_w)
+                np.clip(corr_g, 0.8, hi, out=corr_g)
                 tg = self._target_parts(K, c_weft * corr_w, c_warp * corr_g)
             RT, Te = self._local_step(M, tg, W2)
             energies.append(float(np.sum(self.a * sum(W2[k % 2] * (1.0 if k < 2 else cfg.warp_row_weight)
@@ -1116,7 +1154,8 @@ def adapt_pattern(cut, ref_vertices, pose_vertices: Sequence[np.ndarray], eps_we
         solver.config = replace(cfg, feedback=max(cfg.feedback, cfg.adapt_feedback),
                                 feedback_warp=max(cfg.feedback_warp, cfg.adapt_feedback))
     try:
-        res = solver.solve(K, cw, cg, start=_start_from(solver, start), progress=sub(progress, 0.3, 1.0))
+        res = solver.solve(K, cw, cg, start=_start_from(solver, start), progress=sub(progress, 0.3, 1.0),
+                           poses=solver.pose_demands(poses, eps_weft, eps_warp) if cfg.adapt_feedback > 0 else None)
     finally:
         solver.config = cfg
     mats = dict(cut.materials)
