@@ -82,3 +82,40 @@ def test_delaunay_flips_fix_bad_triangles_and_keep_fixed_edges():
     # different labels: nothing flips across them
     F3 = delaunay_flips(X, F, np.arange(len(F)), np.zeros(0, np.int64))
     np.testing.assert_array_equal(F3, F)
+
+
+def test_later_flip_rounds_retest_only_what_can_change():
+    """Rounds after the first test only edges next to a flipped face or held back last
+    round: the same flips as testing every edge again, over several rounds."""
+    from core.cut.refine import delaunay_flips
+    rng = np.random.RandomState(3)
+    X, F = grid(12, size=0.2)
+    X = X + rng.uniform(-0.006, 0.006, X.shape) * [1, 1, 0]
+    X[:, 2] = 0.002 * np.sin(20 * X[:, 0])                 # gently curved
+    labels = (X[F].mean(1)[:, 0] > 0.1).astype(int)        # two panels
+    W = sp.identity(len(X), format="csr")
+    X2, F2, L2, _, _ = refine(X, F, labels, W, [], 0.01)
+    flips = [delaunay_flips(X2, F2, L2, np.zeros(0, np.int64), max_rounds=r) for r in range(1, 5)]
+    for r in range(1, 5):
+        np.testing.assert_array_equal(flips[r - 1], delaunay_flips(X2, F2, L2, np.zeros(0, np.int64),
+                                                                   max_rounds=r, _retest_all=True))
+    assert (flips[0] != F2).any(axis=1).sum() > 20
+    assert (flips[1] != flips[0]).any(axis=1).sum() > 0     # round 2 still flips something
+
+
+def test_flip_rounds_match_full_retesting_on_jittered_grids():
+    from core.cut.refine import delaunay_flips
+    flipped_late = 0
+    for seed in range(20):
+        rng = np.random.RandomState(seed)
+        n = rng.randint(4, 14)
+        X, F = grid(n, size=0.2)
+        X = X + rng.uniform(-0.45, 0.45, X.shape) * (0.2 / n) * [1, 1, 0]
+        labels = (rng.uniform(size=len(F)) < 0.1).astype(int)
+        fixed = np.zeros(0, np.int64)
+        one = delaunay_flips(X, F, labels, fixed, max_rounds=1)
+        for r in (2, 3):
+            got = delaunay_flips(X, F, labels, fixed, max_rounds=r)
+            np.testing.assert_array_equal(got, delaunay_flips(X, F, labels, fixed, max_rounds=r, _retest_all=True))
+        flipped_late += int((got != one).any(axis=1).sum())
+    assert flipped_late > 50

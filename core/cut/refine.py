@@ -149,7 +149,7 @@ def _member(q: np.ndarray, sorted_keys: np.ndarray) -> np.ndarray:
 
 def delaunay_flips(X: np.ndarray, F: np.ndarray, labels: np.ndarray, fixed: np.ndarray,
                    max_length: float = np.inf, max_rounds: int = 2,
-                   max_dihedral_deg: float = 10.0) -> np.ndarray:
+                   max_dihedral_deg: float = 10.0, _retest_all: bool = False) -> np.ndarray:
     """Improve triangle shapes by flipping edges to the (extrinsic) Delaunay criterion.
 
     An interior edge is flipped when the two angles opposite it sum to more
@@ -164,6 +164,7 @@ def delaunay_flips(X: np.ndarray, F: np.ndarray, labels: np.ndarray, fixed: np.n
     X : (n, 3) float; F : (f, 3) int; labels : (f,) int.
     fixed : (k,) int64 undirected edge keys ``min * n + max`` never flipped.
     max_length : no flip makes an edge longer than this (keeps a refinement's bound).
+    _retest_all : test every edge in every round (slower, same result; for tests).
 
     Returns
     -------
@@ -173,6 +174,12 @@ def delaunay_flips(X: np.ndarray, F: np.ndarray, labels: np.ndarray, fixed: np.n
     n = np.int64(len(X))
     cos_max = np.cos(np.deg2rad(max_dihedral_deg))
     fixed_sorted = np.sort(np.asarray(fixed, dtype=np.int64))
+    # After the first round only edges next to a flipped face, or edges that qualified
+    # but were held back (by a neighbour's flip, or an existing edge), can qualify: every
+    # other edge has the same two triangles as before. Testing just those gives the same
+    # flips as testing all.
+    dirty = None            # (f,) bool: faces changed by the last round
+    pending = None          # half-edges that qualified last round but were not flipped
     for _ in range(max_rounds):
         a = F.reshape(-1)
         b = np.roll(F, -1, axis=1).reshape(-1)
@@ -183,6 +190,10 @@ def delaunay_flips(X: np.ndarray, F: np.ndarray, labels: np.ndarray, fixed: np.n
         pos = np.clip(np.searchsorted(key[order], rkey), 0, len(key) - 1)
         twin = np.where(key[order][pos] == rkey, order[pos], -1)
         h = np.nonzero((twin > np.arange(len(key))))[0]       # each interior edge once
+        if dirty is not None and not _retest_all:
+            look = dirty[h // 3] | dirty[twin[h] // 3]
+            look[np.searchsorted(h, pending)] = True           # pending half-edges are still in h
+            h = h[look]
         t = twin[h]
         fh, ft = h // 3, t // 3
         ukey = np.minimum(a[h], b[h]) * n + np.maximum(a[h], b[h])
@@ -207,6 +218,7 @@ def delaunay_flips(X: np.ndarray, F: np.ndarray, labels: np.ndarray, fixed: np.n
         # the new edge must not exist already
         okey = np.minimum(o[h], o[t]) * n + np.maximum(o[h], o[t])
         idx = np.nonzero(good)[0]
+        qualified = h[idx]
         sk = key[order]
         exists = _member(o[h[idx]] * n + o[t[idx]], sk) | _member(o[t[idx]] * n + o[h[idx]], sk)
         idx = idx[~exists]
@@ -226,4 +238,8 @@ def delaunay_flips(X: np.ndarray, F: np.ndarray, labels: np.ndarray, fixed: np.n
         va, vb, v1, v2 = a[h[idx]], b[h[idx]], o[h[idx]], o[t[idx]]
         F[fh[idx]] = np.stack([va, v2, v1], axis=1)
         F[ft[idx]] = np.stack([vb, v1, v2], axis=1)
+        dirty = np.zeros(len(F), dtype=bool)
+        dirty[fh[idx]] = True
+        dirty[ft[idx]] = True
+        pending = qualified[~dirty[qualified // 3]]
     return F
