@@ -38,3 +38,18 @@ def test_scripted_run_writes_blend_render_and_pattern(tmp_path):
     img = mpimg.imread(out / "render.png")
     assert img.shape[0] > 50 and img.shape[1] > 50
     assert np.asarray(img)[..., :3].std() > 0.02
+
+
+def test_arguments_under_blender_and_python():
+    """`blender -b --python scripted_run.py -- DESIGN OUT` and `python scripted_run.py DESIGN OUT`
+    give the script the same arguments (no Blender binary here to run the first for real)."""
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("ease_scripted_run", ROOT / "examples" / "scripted_run.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    blender = mod._args(["blender", "-b", "--python", "examples/scripted_run.py", "--", "d.json", "out",
+                         "--frames", "7", "--no-export"])
+    python = mod._args(["examples/scripted_run.py", "d.json", "out", "--frames", "7", "--no-export"])
+    assert vars(blender) == vars(python)
+    assert (blender.design, blender.out, blender.frames, blender.no_export, blender.no_drape) == \
+        ("d.json", "out", 7, True, False)
