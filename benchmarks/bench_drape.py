@@ -11,9 +11,10 @@
    triangles) on this machine's CPU. Goal <= 10 s.
 3. Side-by-side on the same pattern and body: our XPBD vs Newton's
    ``SolverStyle3D`` (projective dynamics, anisotropic panel-space stretch; the
-   ``newton`` package, installed into the venv on demand) vs Blender's cloth
-   modifier with sewing springs (bpy). Wall time, penetration share, seam gap
-   and mean gap for each; a simulator that cannot run is reported with the reason.
+   ``newton`` package, a benchmark-only dependency, ``newton==1.8.0``) vs Blender's
+   cloth modifier with sewing springs (bpy). Wall time, penetration share, seam
+   gap and mean gap for each; a baseline whose package is not installed is
+   skipped with a note, one that fails is reported with the reason.
 """
 from __future__ import annotations
 
@@ -31,7 +32,8 @@ if str(REPO) not in sys.path:
 
 LEVELS = np.linspace(0.9, 2.4, 17)
 GARMENTS = {"shirt": "shirt_long_sleeve", "pants": "pants"}
-SHIRT_EDGE = 0.02  # refinement edge length (m) that gives the shirt about 10k triangles
+DESIGN_EDGE = 0.01  # the shirt design's own refine_edge_length (about 21.6k triangles)
+SHIRT_EDGE = 0.015  # refinement edge length (m): about 10k triangles (shirt 10.6k, pants 12.1k)
 NEWTON_PIN = "newton==1.8.0"
 
 
@@ -89,21 +91,46 @@ def gap_curve(garment: str, levels, edge: float, body, drape_options: dict) -> l
     return rows
 
 
+def speed_row(pattern, body_v, body_f, edge: float, repeats: int = 3) -> dict:
+    """Wall time to a settled drape with the default options: the best of ``repeats`` runs."""
+    from core.drape import drape
+    best = None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        r = drape(pattern, body_v, body_f, options={"max_frames": 300})
+        total = time.perf_counter() - t0
+        if best is None or total < best[1]:
+            best = (r, total)
+    r, total = best
+    return {"edge_m": edge, "triangles": int(len(r.faces)), "particles": int(r.used.sum()), "frames": r.frames,
+            "settle_reason": r.settle_reason, "simulate_s": r.timings["simulate"], "total_s": total,
+            "prepare_s": r.timings["prepare"], "compile_s": r.timings["compile"], "repeats": repeats,
+            "goal_met": bool(r.settled and total <= 10.0)}
+
+
 def monotonic(values) -> bool:
     return bool(np.all(np.diff(np.asarray(values, float)) > 0))
 
 
 # --- Newton SolverStyle3D -----------------------------------------------------
 
+class Skipped(Exception):
+    """A baseline that cannot run here (its package is missing): reported as skipped, with the reason."""
+
+
 def _import_newton():
     try:
-        import newton  # noqa: F401
+        import newton
     except ImportError:
-        rc = subprocess.call([sys.executable, "-m", "pip", "install", "-q", NEWTON_PIN])
-        if rc != 0:
-            raise RuntimeError(f"`pip install {NEWTON_PIN}` failed (exit {rc})")
-    import newton
+        raise Skipped(f"newton is not installed (a benchmark-only dependency: `pip install {NEWTON_PIN}`, "
+                      f"or the project's `bench` extra)") from None
     return newton
+
+
+def _check_bpy() -> None:
+    import importlib.util
+    if importlib.util.find_spec("bpy") is None:
+        raise Skipped("bpy (Blender as a Python module) is not installed")
 
 
 def drape_newton(pattern, body_v, body_f, material, frames: int, fps: float = 30.0, substeps: int = 10,
@@ -171,6 +198,7 @@ def drape_newton(pattern, body_v, body_f, material, frames: int, fps: float = 30
         raise RuntimeError("SolverStyle3D diverged (NaN positions)")
     positions = x[np.where(cloth.particle_of >= 0, cloth.particle_of, 0)]
     return {"positions": positions, "seconds": t_sim + t_build, "simulate_s": t_sim, "build_s": t_build,
+            "version": getattr(newton, "__version__", "?"),
             "seam_gap_mm": 0.0, "frames": done, "extrapolated_s": t_build + t_sim * frames / max(done, 1)}
 
 
@@ -253,6 +281,7 @@ def drape_blender(pattern, body_v, body_f, material, frames: int, fps: float = 3
     import os
     import tempfile
 
+    _check_bpy()
     verts, faces, rest, ids, off = [], [], [], [], 0
     start = {}
     for p in pattern.panels:
@@ -356,12 +385,14 @@ def side_by_side(pattern, body_v, body_f, frames: int, budget: float = 180.0) ->
                    "seam_gap_mm": out["seam_gap_mm"],
                    "wall_s_for_same_frames": out.get("extrapolated_s", out["seconds"])}
             if fn is drape_newton:
-                row["note"] = (f"build {out['build_s']:.1f} s (incl. first-run kernel compile) + simulate "
+                row["note"] = (f"newton {out['version']}: build {out['build_s']:.1f} s (incl. first-run kernel compile) + simulate "
                                f"{out['simulate_s']:.1f} s; 10 substeps x 4 PD iterations per frame")
             else:
                 row["note"] = (f"simulate {out['seconds']:.1f} s (Blender process {out['process_s']:.1f} s); "
                                "rest = skintight grown by the mean ease (isotropic)")
             row.update(_score(out["positions"], pattern, ours, body_v, body_f))
+        except Skipped as exc:
+            row = {"simulator": name, "skipped": str(exc)}
         except Exception as exc:  # report, never hide, why a baseline could not run
             row = {"simulator": name, "error": f"{type(exc).__name__}: {exc}"[:600]}
         rows.append(row)
@@ -413,10 +444,15 @@ def _markdown(res: dict) -> str:
     sp = res.get("speed")
     if sp:
         lines += ["## Speed: settled drape of the shirt on this CPU (goal <= 10 s)", "",
-                  f"{sp['triangles']} triangles, {sp['particles']} particles, {sp['frames']} frames "
-                  f"({sp['settle_reason']}): simulate {sp['simulate_s']:.2f} s, total {sp['total_s']:.2f} s "
-                  f"(prepare {sp['prepare_s']:.2f} s, kernel load {sp['compile_s']:.2f} s). "
-                  f"Goal met: **{sp['goal_met']}**.", ""]
+                  "Wall time of `drape()` with its default options (best of "
+                  f"{sp.get('repeats', 1)} runs; the machine is shared, so the minimum is the cost).", "",
+                  "| refinement | triangles | particles | frames | stop | simulate (s) | total (s) | goal met |",
+                  "|---|---|---|---|---|---|---|---|"]
+        for row in [sp] + list(sp.get("others", [])):
+            lines.append(f"| {row['edge_m'] * 100:.1f} cm | {row['triangles']} | {row['particles']} | "
+                         f"{row['frames']} | {row['settle_reason']} | {row['simulate_s']:.2f} | "
+                         f"{row['total_s']:.2f} | {row['goal_met']} |")
+        lines.append("")
     if res.get("side_by_side"):
         lines += ["## Side-by-side on the same shirt pattern and body", "",
                   f"Every simulator runs the frames our drape needed to settle ({res['side_by_side'][0]['frames']}); "
@@ -425,7 +461,9 @@ def _markdown(res: dict) -> str:
                   "mean gap (mm) | note |",
                   "|---|---|---|---|---|---|---|---|"]
         for r in res["side_by_side"]:
-            if "error" in r:
+            if "skipped" in r:
+                lines.append(f"| {r['simulator']} | – | – | – | – | – | – | skipped: {r['skipped']} |")
+            elif "error" in r:
                 lines.append(f"| {r['simulator']} | – | – | – | – | – | – | could not run: {r['error']} |")
             else:
                 lines.append(f"| {r['simulator']} | {r['wall_s']:.2f} | {r['frames']} | "
@@ -443,7 +481,6 @@ def run(out_dir, quick: bool = False) -> dict:
     """Run the drape benchmarks; write drape.md, drape.json and drape_gap_curve.png into ``out_dir``."""
     import os
     from core.body import load_body
-    from core.drape import drape
     from core.fileio import write_json, write_text
 
     out = Path(out_dir)
@@ -462,17 +499,16 @@ def run(out_dir, quick: bool = False) -> dict:
         res["monotonic"][garment] = monotonic([r["gap_mean_mm"] for r in rows])
     _plot(res["gap_curve"], out / "drape_gap_curve.png")
 
-    # speed: the shirt at its default ease, about 10k triangles
-    cut, ref = load_cut(GARMENTS["shirt"], SHIRT_EDGE, body)
-    shirt = pattern_at(cut, ref, 1.2, "shirt")
-    t0 = time.perf_counter()
-    r = drape(shirt, ref, body.faces, options={"max_frames": 300})
-    total = time.perf_counter() - t0
-    res["speed"] = {"triangles": int(len(r.faces)), "particles": int(r.used.sum()), "frames": r.frames,
-                    "settle_reason": r.settle_reason, "simulate_s": r.timings["simulate"], "total_s": total,
-                    "prepare_s": r.timings["prepare"], "compile_s": r.timings["compile"],
-                    "goal_met": bool(r.settled and total <= 10.0)}
-    res["side_by_side"] = side_by_side(shirt, ref, body.faces, frames=300, budget=60.0 if quick else 240.0)
+    # speed: the shirt at its default ease, about 10k triangles, and at the design's own refinement
+    rows = []
+    for e in (SHIRT_EDGE, DESIGN_EDGE):
+        cut, ref = load_cut(GARMENTS["shirt"], e, body)
+        pat = pattern_at(cut, ref, 1.2, "shirt")
+        if e == SHIRT_EDGE:
+            shirt, shirt_ref = pat, ref
+        rows.append(speed_row(pat, ref, body.faces, e, repeats=1 if quick else 3))
+    res["speed"] = dict(rows[0], others=rows[1:])
+    res["side_by_side"] = side_by_side(shirt, shirt_ref, body.faces, frames=300, budget=60.0 if quick else 240.0)
     write_json(out / "drape.json", res)
     write_text(out / "drape.md", _markdown(res))
     return res

@@ -97,7 +97,59 @@ def test_result_layout(skirt, draped):
     assert set(draped.timings) == {"prepare", "compile", "simulate", "total"}
     assert draped.garment_names == ["skirt"]
     assert draped.material["name"] == "cotton"  # from the pattern's materials.fabric
-    assert not draped.self_collision
+    assert not draped.self_collision  # optional, off by default
+    # settling is only declared once the fabric has grown to its pattern size
+    assert draped.frames > draped.options["grow_frames"] + draped.options["settle_frames"] - 1
+
+
+def test_growth_starts_from_the_skintight_stretch(body, skirt):
+    # after one frame of a 10-frame growth the 1.2-ease skirt is still near its skintight size;
+    # without growth it has already sprung off the body
+    grown = drape(skirt, *body, options={"max_frames": 1, "min_frames": 1})
+    at_once = drape(skirt, *body, options={"max_frames": 1, "min_frames": 1, "grow_frames": 0})
+    r = lambda res: np.hypot(res.positions[:, 0], res.positions[:, 1]).mean()  # noqa: E731
+    assert r(grown) < r(at_once)
+    assert r(grown) < 1.03 * HIP_RADIUS
+
+
+def _sheets(n=10, size=0.2, drop=0.03):
+    """Two flat square sheets 1 m beside the body: the lower one pinned, the upper one ``drop`` above it."""
+    from core.pattern.types import Pattern, PatternPanel
+    g = np.linspace(0.0, size, n + 1)
+    u, v = (a.ravel() for a in np.meshgrid(g, g, indexing="ij"))
+    faces = []
+    for i in range(n):
+        for j in range(n):
+            a = i * (n + 1) + j
+            faces += [[a, a + n + 1, a + 1], [a + 1, a + n + 1, a + n + 2]]
+    faces = np.asarray(faces)
+    panels = []
+    for k, (name, z) in enumerate((("lower", 0.5), ("upper", 0.5 + drop))):
+        xyz = np.column_stack([1.0 + u, v, np.full(len(u), z)])
+        panels.append(PatternPanel(name=name, garment="sheets", uv=np.column_stack([u, v]), faces=faces,
+                                   vertex_ids=k * len(u) + np.arange(len(u)), xyz=xyz, grain=np.array([0.0, 1.0]),
+                                   target_weft=np.ones(len(faces)), target_warp=np.ones(len(faces)),
+                                   achieved_weft=np.ones(len(faces)), achieved_warp=np.ones(len(faces))))
+    return Pattern(style="sheets", body={"model": "revolution"}, garments={"sheets": "sheets"}, panels=panels,
+                   seams=[], pins={"sheets": np.arange(len(u))}, materials={"fabric": "cotton"})
+
+
+def test_self_collision_stacks_layers(body):
+    # the upper sheet falls onto the pinned lower one: with self-collision it rests on it about
+    # two particle radii up, without it falls through
+    p = _sheets()
+    opts = {"max_frames": 20, "tether_slack": None}
+    on = drape(p, *body, options={**opts, "self_collision": True})
+    assert on.self_collision and on.self_radius == pytest.approx(0.4 * 0.02)
+    upper = p.panel("upper").vertex_ids
+    z_on = on.positions[upper, 2] - 0.5
+    assert z_on.min() > 0.8 * 2 * on.self_radius
+    assert z_on.max() < 1.2 * 2 * on.self_radius
+    off = drape(p, *body, options=opts)
+    assert not off.self_collision
+    assert off.positions[upper, 2].max() < 0.5 - 0.05
+    again = drape(p, *body, options={**opts, "self_collision": True})
+    assert np.array_equal(again.positions, on.positions)  # still bitwise repeatable
 
 
 def test_woven_cotton_barely_stretches_jersey_gives(body):
@@ -155,3 +207,7 @@ def test_bad_inputs(body, skirt):
         drape(skirt, *body, options={"device": "cuda:7"})
     with pytest.raises(DrapeError, match="unknown material"):
         drape(skirt, *body, material="tweed-ish")
+    with pytest.raises(DrapeError, match="self_collision"):
+        drape(skirt, *body, options={"self_collision": "yes"})
+    with pytest.raises(DrapeError, match="grow_frames"):
+        drape(skirt, *body, options={"grow_frames": -1})

@@ -58,8 +58,13 @@ def _project(x: wp.array(dtype=wp.vec3), i: int, j: int, k: int, wi: float, wj: 
 def solve_stretch(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
                   tri: wp.array2d(dtype=int), rest_inv: wp.array(dtype=wp.mat22),
                   area: wp.array(dtype=float), k_weft: float, k_warp: float, k_shear: float,
-                  inv_dt2: float, offset: int):
+                  inv_dt2: float, offset: int, start: wp.array(dtype=wp.vec2), grow: wp.array(dtype=float)):
     t = wp.tid() + offset
+    # rest stretch: from the start's (skintight) stretch to the pattern's (1) as grow goes 0 -> 1
+    s0 = start[t]
+    g = grow[0]
+    rest_a = 1.0 + (s0[0] - 1.0) * (1.0 - g)
+    rest_b = 1.0 + (s0[1] - 1.0) * (1.0 - g)
     i = tri[t, 0]
     j = tri[t, 1]
     k = tri[t, 2]
@@ -75,7 +80,7 @@ def solve_stretch(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
     la = wp.length(fa)
     if la > 1.0e-12:
         n = fa / la
-        _project(x, i, j, k, wi, wj, wk, la - 1.0, n * d[0, 0], n * d[1, 0], inv_dt2 / (k_weft * a))
+        _project(x, i, j, k, wi, wj, wk, la - rest_a, n * d[0, 0], n * d[1, 0], inv_dt2 / (k_weft * a))
     # warp
     e1 = x[j] - x[i]
     e2 = x[k] - x[i]
@@ -83,7 +88,7 @@ def solve_stretch(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
     lb = wp.length(fb)
     if lb > 1.0e-12:
         n = fb / lb
-        _project(x, i, j, k, wi, wj, wk, lb - 1.0, n * d[0, 1], n * d[1, 1], inv_dt2 / (k_warp * a))
+        _project(x, i, j, k, wi, wj, wk, lb - rest_b, n * d[0, 1], n * d[1, 1], inv_dt2 / (k_warp * a))
     # shear: weft and warp images stay orthogonal
     e1 = x[j] - x[i]
     e2 = x[k] - x[i]
@@ -96,8 +101,8 @@ def solve_stretch(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
 @wp.kernel
 def solve_distance(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
                    edge: wp.array2d(dtype=int), rest: wp.array(dtype=float), k: float, inv_dt2: float,
-                   offset: int):
-    """Edge length constraints (the edges of pattern slivers), compliance 1/k."""
+                   offset: int, start: wp.array(dtype=float), grow: wp.array(dtype=float)):
+    """Edge length constraints (the edges of pattern slivers), compliance 1/k; rest grows like the triangles'."""
     e = wp.tid() + offset
     i = edge[e, 0]
     j = edge[e, 1]
@@ -109,9 +114,14 @@ def solve_distance(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
     if l < 1.0e-12 or denom <= 0.0:
         return
     n = d / l
-    dl = -(l - rest[e]) / denom
+    dl = -(l - (rest[e] + (start[e] - rest[e]) * (1.0 - grow[0]))) / denom
     x[i] = x[i] - n * (wi * dl)
     x[j] = x[j] + n * (wj * dl)
+
+
+@wp.kernel
+def advance_grow(grow: wp.array(dtype=float), step: float):
+    grow[0] = wp.min(grow[0] + step, 1.0)
 
 
 @wp.kernel
@@ -181,6 +191,69 @@ def solve_tethers(x: wp.array(dtype=wp.vec3), anchor: wp.array(dtype=int), lengt
     lmax = length[i] * slack
     if l > lmax:
         x[i] = x[a] + d * (lmax / l)
+
+
+@wp.kernel
+def find_self_pairs(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float), x0: wp.array(dtype=wp.vec3),
+                    grid: wp.uint64, search: float, exclude: float, max_pairs: int,
+                    partner: wp.array2d(dtype=int), count: wp.array(dtype=int)):
+    """Self-collision candidates of each particle: the others within ``search`` (at most ``max_pairs``).
+
+    Pairs that started closer than ``exclude`` (fabric neighbours in the skintight
+    start) are left out. The hash grid lists points in a fixed order (a radix
+    sort), so the lists, and a CPU run, are repeatable.
+    """
+    i = wp.tid()
+    count[i] = 0
+    if inv_mass[i] == 0.0:
+        return
+    p = x[i]
+    p0 = x0[i]
+    c = int(0)
+    query = wp.hash_grid_query(grid, p, search)
+    j = int(0)
+    while wp.hash_grid_query_next(query, j):
+        if j != i and c < max_pairs:
+            if wp.length(p - x[j]) < search and wp.length(p0 - x0[j]) > exclude:
+                partner[i, c] = j
+                c += 1
+    count[i] = c
+
+
+@wp.kernel
+def self_collide(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float), partner: wp.array2d(dtype=int),
+                 count: wp.array(dtype=int), radius: float, dx: wp.array(dtype=wp.vec3)):
+    """Self-collision, particle against particle: keep the candidates ``2 radius`` apart.
+
+    Jacobi style: each thread only writes its own correction (the average over
+    its contacts, its inverse-mass share of each overlap), so the result does not
+    depend on the thread order; :func:`apply_delta` adds it.
+    """
+    i = wp.tid()
+    dx[i] = wp.vec3(0.0, 0.0, 0.0)
+    c = count[i]
+    if c == 0:
+        return
+    wi = inv_mass[i]
+    p = x[i]
+    d = 2.0 * radius
+    corr = wp.vec3(0.0, 0.0, 0.0)
+    hits = int(0)
+    for k in range(c):
+        j = partner[i, k]
+        diff = p - x[j]
+        l = wp.length(diff)
+        if l < d and l > 1.0e-9:
+            corr = corr + diff * ((d - l) / l * wi / (wi + inv_mass[j]))
+            hits += 1
+    if hits > 0:
+        dx[i] = corr / float(hits)
+
+
+@wp.kernel
+def apply_delta(x: wp.array(dtype=wp.vec3), dx: wp.array(dtype=wp.vec3)):
+    i = wp.tid()
+    x[i] = x[i] + dx[i]
 
 
 @wp.kernel

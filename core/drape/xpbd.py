@@ -2,11 +2,16 @@
 
 ``drape(pattern, body_vertices, body_faces)`` starts the garment on the body
 (the skintight embedding), lets it relax to its pattern size under gravity,
-pins and body contact, and stops once it has settled (its kinetic energy stays
+pins and body contact (the rest shape grows from the skintight stretch to the
+pattern's over the first ``grow_frames``, so loose fabric unfolds
+quasi-statically and a looser pattern drapes like a continuation of a tighter
+one), and stops once it has settled (its kinetic energy stays
 under a threshold for some frames) or at a frame limit; the result says which.
 
-Self-collision is not handled (garment layers and folds may pass through each
-other); body contact, with thickness and friction, is.
+Body contact has thickness and friction. Self-collision is optional
+(``self_collision=True``): particle against particle, found with a hash grid
+and resolved Jacobi-style, so it stays repeatable; off by default, when garment
+layers and folds may pass through each other.
 """
 from __future__ import annotations
 
@@ -19,7 +24,10 @@ import numpy as np
 from ..errors import DrapeError
 from ..progress import Progress, report
 from .materials import Material, get_material
-from .mesh import Cloth, build_cloth, colour_order
+from .mesh import Cloth, build_cloth, colour_order, rest_edges
+
+# most self-collision candidates a particle keeps (a particle in a fold meets a few of the other layer)
+SELF_PAIRS = 16
 
 
 @dataclass
@@ -50,6 +58,20 @@ class DrapeOptions:
     max_speed : m/s, an RMS speed above this is a diverged (exploding) simulation.
     max_extent : m, a garment bounding box larger than this is a diverged (runaway) one.
     max_strain : a triangle stretched more than this fraction (3 = 300 %) is a diverged drape.
+    grow_frames : frames over which the fabric grows from its skintight start to its pattern size
+        (the rest stretch of every triangle goes linearly from its start value to 1, substep by
+        substep): a loose garment unfolds quasi-statically instead of springing off the body; 0: at once.
+    self_collision : keep the garment's particles apart (folds and layers stack instead of
+        passing through each other). Off by default: it is particle against particle only (a
+        layer can still slip through another between vertices where the mesh is coarser than
+        the radius), roughly doubles the time per frame, and a loose garment squeezed between
+        body parts (armpits) may chatter and settle later.
+    self_radius : m, particle radius of the self-collision (two particles stay twice this apart);
+        None: 0.4 x the median pattern edge, so that a layer cannot slip between the vertices of another.
+    self_exclude : particles that start (skintight) closer than this many self-collision
+        diameters are fabric neighbours and do not collide.
+    self_interval : substeps between searches for self-collision candidates (a hash grid over
+        the particles); every substep resolves the candidates found.
     """
     device: str = "cpu"
     fps: float = 30.0
@@ -69,6 +91,11 @@ class DrapeOptions:
     max_speed: float = 30.0
     max_extent: float = 6.0
     max_strain: float = 3.0
+    grow_frames: int = 10
+    self_collision: bool = False
+    self_radius: Optional[float] = None
+    self_exclude: float = 1.5
+    self_interval: int = 5
 
     @staticmethod
     def coerce(options: Union[None, "DrapeOptions", Mapping]) -> "DrapeOptions":
@@ -96,15 +123,19 @@ class DrapeOptions:
                 raise DrapeError(f"drape option {name} = {value!r}: expected {kind}")
         for name in ("fps", "settle_speed", "search_distance", "max_speed", "max_extent", "max_strain"):
             positive(name)
-        for name in ("substeps", "max_frames", "settle_frames", "contact_interval"):
+        for name in ("substeps", "max_frames", "settle_frames", "contact_interval", "self_interval"):
             positive(name, integer=True)
         if not (0.0 <= self.settle_trim < 0.5):
             raise DrapeError(f"drape option settle_trim = {self.settle_trim!r}: expected a fraction in [0, 0.5)")
-        for name in ("damping", "gravity", "min_frames"):
+        for name in ("damping", "gravity", "min_frames", "grow_frames"):
             value = getattr(self, name)
             if not np.isfinite(value) or value < 0:
                 raise DrapeError(f"drape option {name} = {value!r}: expected a number >= 0")
-        for name in ("thickness", "friction", "tether_slack"):
+        if not isinstance(self.self_collision, (bool, np.bool_)):
+            raise DrapeError(f"drape option self_collision = {self.self_collision!r}: expected true or false")
+        if not np.isfinite(self.self_exclude) or self.self_exclude < 0:
+            raise DrapeError(f"drape option self_exclude = {self.self_exclude!r}: expected a number >= 0")
+        for name in ("thickness", "friction", "tether_slack", "self_radius"):
             value = getattr(self, name)
             if value is not None and (not np.isfinite(value) or value < 0):
                 raise DrapeError(f"drape option {name} = {value!r}: expected a number >= 0 or None")
@@ -134,7 +165,7 @@ class DrapeResult:
         ``options.settle_trim`` share left out.
     timings : dict of seconds: ``prepare``, ``compile``, ``simulate``, ``total``.
     material : dict, the material used; options : dict, the options used; device : str.
-    self_collision : bool, always False (not handled).
+    self_collision : bool, whether particle self-collision was on; self_radius : float, its radius (m).
     speed : (N,) float, m/s, each vertex's speed at the last frame (where it still moves).
     face_valid : (T,) bool, False for pattern slivers (held by edge constraints; their
         strain is not meaningful and reads 0).
@@ -160,6 +191,7 @@ class DrapeResult:
     options: dict
     device: str
     self_collision: bool = False
+    self_radius: float = 0.0
     face_valid: Optional[np.ndarray] = None
     speed: Optional[np.ndarray] = None
 
@@ -279,6 +311,13 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
     bend_rest = wp.array(cloth.bend_rest[bend_order].astype(f32), dtype=float, device=dev)
     anchor = wp.array(cloth.tether_anchor.astype(np.int32), dtype=int, device=dev)
     tether_len = wp.array(cloth.tether_length.astype(f32), dtype=float, device=dev)
+    fw0, fg0, _ = face_strains(cloth.x0, cloth)
+    start_stretch = np.clip(np.stack([fw0, fg0], axis=1) + 1.0, 0.2, 5.0)  # the skintight start's stretch
+    tri_start = wp.array(start_stretch[tri_order].astype(f32), dtype=wp.vec2, device=dev)
+    e_sorted = cloth.edges[edge_order]
+    edge_start = wp.array(np.linalg.norm(cloth.x0[e_sorted[:, 1]] - cloth.x0[e_sorted[:, 0]], axis=1).astype(f32)
+                          if len(e_sorted) else np.zeros(0, f32), dtype=float, device=dev)
+    grow = wp.array([0.0 if opts.grow_frames > 0 else 1.0], dtype=float, device=dev)
     c_point = wp.zeros(cloth.n_particles, dtype=wp.vec3, device=dev)
     c_normal = wp.zeros(cloth.n_particles, dtype=wp.vec3, device=dev)
     c_active = wp.zeros(cloth.n_particles, dtype=int, device=dev)
@@ -287,6 +326,14 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
     body = wp.Mesh(points=body_points, indices=body_idx)
     wp.load_module(K, device=dev)
     t_compile = time.perf_counter()
+
+    self_on = bool(opts.self_collision)
+    if opts.self_radius is not None:
+        self_radius = float(opts.self_radius)
+    else:
+        _, edge_len = rest_edges(cloth.faces, cloth.rest_inv)
+        self_radius = 0.4 * float(np.median(edge_len)) if len(edge_len) else 0.0
+    self_on = self_on and self_radius > 0.0
 
     dt = 1.0 / (opts.fps * opts.substeps)
     fall = float(opts.gravity) * dt * dt
@@ -301,14 +348,18 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
     gravity = wp.vec3(0.0, 0.0, -float(opts.gravity))
     n = cloth.n_particles
     cmds = [wp.launch(K.predict, n, inputs=[x, v, x_prev, w, gravity, dt, keep], device=dev, record_cmd=True)]
+    if opts.grow_frames > 0:
+        cmds.append(wp.launch(K.advance_grow, 1, inputs=[grow, 1.0 / (opts.grow_frames * opts.substeps)],
+                              device=dev, record_cmd=True))
     for c in range(len(tri_off) - 1):
         cmds.append(wp.launch(K.solve_stretch, int(tri_off[c + 1] - tri_off[c]),
                               inputs=[x, w, tri, rest_inv, area, mat.stretch_weft, mat.stretch_warp,
-                                      mat.shear, inv_dt2, int(tri_off[c])], device=dev, record_cmd=True))
+                                      mat.shear, inv_dt2, int(tri_off[c]), tri_start, grow], device=dev,
+                              record_cmd=True))
     k_edge = 0.5 * (mat.stretch_weft + mat.stretch_warp)
     for c in range(len(edge_off) - 1):
         cmds.append(wp.launch(K.solve_distance, int(edge_off[c + 1] - edge_off[c]),
-                              inputs=[x, w, edges, edge_rest, k_edge, inv_dt2, int(edge_off[c])],
+                              inputs=[x, w, edges, edge_rest, k_edge, inv_dt2, int(edge_off[c]), edge_start, grow],
                               device=dev, record_cmd=True))
     if mat.bending > 0:
         for c in range(len(bend_off) - 1):
@@ -319,6 +370,8 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
     if opts.tether_slack is not None and np.any(cloth.tether_anchor >= 0):
         cmds.append(wp.launch(K.solve_tethers, n, inputs=[x, anchor, tether_len, 1.0 + float(opts.tether_slack)],
                               device=dev, record_cmd=True))
+    pre = cmds
+    cmds = []
     cmds.append(wp.launch(K.collide_body, n, inputs=[x, x_prev, c_point, c_normal, c_active, thickness,
                                                      friction], device=dev, record_cmd=True))
     cmds.append(wp.launch(K.update_velocity, n, inputs=[x, x_prev, v, 1.0 / dt], device=dev, record_cmd=True))
@@ -330,10 +383,33 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
     still = 0
     settled = False
     frame = 0
+    if self_on:
+        grid = wp.HashGrid(48, 48, 48, device=dev)
+        self_dx = wp.zeros(n, dtype=wp.vec3, device=dev)
+        partner = wp.zeros((n, SELF_PAIRS), dtype=int, device=dev)
+        n_partner = wp.zeros(n, dtype=int, device=dev)
+        x_start = wp.array(cloth.x0.astype(f32), dtype=wp.vec3, device=dev)
+        search = 3.0 * self_radius  # the contact distance plus a margin for the motion until the next search
+        find_pairs = wp.launch(K.find_self_pairs, n, inputs=[x, w, x_start, grid.id, search,
+                                                             opts.self_exclude * 2.0 * self_radius, SELF_PAIRS,
+                                                             partner, n_partner], device=dev, record_cmd=True)
+        self_cmds = [wp.launch(K.self_collide, n, inputs=[x, w, partner, n_partner, self_radius, self_dx],
+                               device=dev, record_cmd=True),
+                     wp.launch(K.apply_delta, n, inputs=[x, self_dx], device=dev, record_cmd=True)]
+    step = 0
     for frame in range(1, opts.max_frames + 1):
         for sub in range(opts.substeps):
             if sub % opts.contact_interval == 0:
                 contacts.launch()
+            for cmd in pre:
+                cmd.launch()
+            if self_on:
+                if step % opts.self_interval == 0:
+                    grid.build(x, search)
+                    find_pairs.launch()
+                for cmd in self_cmds:
+                    cmd.launch()
+            step += 1
             for cmd in cmds:
                 cmd.launch()
         xs = x.numpy()
@@ -341,9 +417,9 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
         _check_divergence(frame, xs, vs[free], opts, mat, dt, cloth)
         rms = settle_speed(vs[free], opts.settle_trim)
         speeds.append(rms)
-        still = still + 1 if rms < opts.settle_speed else 0
+        still = still + 1 if (rms < opts.settle_speed and frame > opts.grow_frames) else 0
         report(progress, frame / opts.max_frames, f"drape: frame {frame}, rms speed {rms * 1000:.1f} mm/s")
-        if frame >= opts.min_frames and still >= opts.settle_frames:
+        if frame >= max(opts.min_frames, opts.grow_frames) and still >= opts.settle_frames:
             settled = True
             break
     wp.synchronize_device(dev)
@@ -373,6 +449,7 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
         timings={"prepare": t_prep - t_start, "compile": t_compile - t_prep, "simulate": t_sim - t_compile,
                  "total": t_end - t_start},
         material=mat.to_json(), options=asdict(opts), device=str(dev),
+        self_collision=self_on, self_radius=self_radius if self_on else 0.0,
     )
 
 
