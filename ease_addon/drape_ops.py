@@ -33,8 +33,9 @@ class DrapeJob:
     raise ``Cancelled``, so the core stops and nothing is applied.
     """
 
-    def __init__(self, pattern, body_v, body_f, frames: int, device: str = "cpu"):
+    def __init__(self, pattern, body_v, body_f, frames: int, device: str = "cpu", digest=None):
         self.fraction, self.message = 0.0, "starting"
+        self.digest = digest          # the stored pattern's digest when the drape started
         self.result = None
         self.error = None
         self._cancel = threading.Event()
@@ -124,8 +125,9 @@ def _fitmap_material(layer: str):
     return _ease_material(f"EASE Fit Map {layer}", layer)
 
 
-def garment_object(context, result, gap=None):
-    """Build the garment object from a DrapeResult (replacing an earlier one)."""
+def garment_object(context, result, gap=None, digest=None):
+    """Build the garment object from a DrapeResult (replacing an earlier one).
+    ``digest``: the pattern it was draped from (default: the scene's pattern now)."""
     used = np.asarray(result.used, dtype=bool)
     ids = np.flatnonzero(used)
     remap = -np.ones(len(used), dtype=np.int64)
@@ -149,7 +151,7 @@ def garment_object(context, result, gap=None):
     old = state.objects_with_role(scene, "garment")
     obj = convert.new_object(GARMENT, me, state.collection(scene))
     obj["ease_role"] = "garment"
-    obj["ease_pattern"] = pattern_digest(scene.get(PATTERN_KEY, ""))   # draped from this pattern
+    obj["ease_pattern"] = digest or pattern_digest(scene.get(PATTERN_KEY, ""))   # draped from this pattern
     for o in old:
         state.remove_object(o)
     apply_fitmap(scene)
@@ -238,7 +240,9 @@ class EASE_OT_drape(EaseOperator):
             self.report({"ERROR"}, str(exc))
             return {"CANCELLED"}
         s = context.scene.ease
-        self._job = DrapeJob(pattern, body_v, body_f, s.drape_frames, s.drape_device).start()
+        # the pattern may change while the drape runs: the garment records the one it was draped from
+        digest = pattern_digest(context.scene.get(PATTERN_KEY, ""))
+        self._job = DrapeJob(pattern, body_v, body_f, s.drape_frames, s.drape_device, digest).start()
         wm = context.window_manager
         wm.progress_begin(0, 100)
         self._timer = wm.event_timer_add(0.2, window=context.window)
@@ -263,7 +267,7 @@ class EASE_OT_drape(EaseOperator):
         return {"CANCELLED"}
 
 
-def apply_drape(context, result, gap, metrics) -> None:
+def apply_drape(context, result, gap, metrics, digest=None) -> None:
     """Show a finished drape: garment object, fit maps, report (main thread)."""
     from .body_ops import body_object, body_spec, update_body
     from .pattern_ops import stored_pattern
@@ -279,7 +283,7 @@ def apply_drape(context, result, gap, metrics) -> None:
         if (shape and dict(shape) != spec["shape"]) or (isinstance(pose, str) and pose != spec["pose"]):
             update_body(context, obj, shape=dict(shape) if shape else None,
                         pose=pose if isinstance(pose, str) else None)
-    garment_object(context, result, gap)
+    garment_object(context, result, gap, digest)
     rep = drape_report(result, metrics)
     s = context.scene.ease
     s.drape_json = json.dumps(rep)
@@ -307,7 +311,7 @@ def step_job(context, job: DrapeJob, event_type: str) -> str:
     if job.error is not None:
         s.drape_status = f"drape {'cancelled' if job.cancelled else 'stopped'}: {job.error}"
         return "CANCELLED"
-    apply_drape(context, *job.result)
+    apply_drape(context, *job.result, digest=job.digest)
     return "FINISHED"
 
 

@@ -515,13 +515,30 @@ def test_drape_modal_progress_and_esc(bpy_session):
     assert garment.data.name == g_name and np.array_equal(_verts(garment), g_verts)
     assert not drape_ops._JOBS
     # a run to the end
-    job = drape_ops.DrapeJob(pattern, body_v, body_f, frames=4).start()
+    export_ops = _addon(bpy_session, "export_ops")
+    key = _addon(bpy_session, "pattern_ops").PATTERN_KEY
+    digest = export_ops.pattern_digest(_scene(bpy)[key])
+    job = drape_ops.DrapeJob(pattern, body_v, body_f, frames=4, digest=digest).start()
     assert drape_ops.step_job(bpy.context, job, "MOUSEMOVE") == "RUNNING"
     job.join(120)
     assert job.fraction >= 0.9 and job.error is None
     assert drape_ops.step_job(bpy.context, job, "TIMER") == "FINISHED"
     assert json.loads(s.drape_json)["frames"] <= 4
-    assert [o for o in bpy.data.objects if o.get("ease_role") == "garment"]
+    garment = next(o for o in bpy.data.objects if o.get("ease_role") == "garment")
+    assert garment["ease_pattern"] == digest and export_ops.garment_positions(_scene(bpy))[0] is not None
+    # the pattern changed while a drape ran: the garment says which pattern it fits, and
+    # is not exported as the new one's
+    job = drape_ops.DrapeJob(pattern, body_v, body_f, frames=2, digest=digest).start()
+    text = _scene(bpy)[key]
+    _scene(bpy)[key] = json.dumps(dict(json.loads(text), style="re-optimized meanwhile"))
+    job.join(120)
+    assert drape_ops.step_job(bpy.context, job, "TIMER") == "FINISHED"
+    garment = next(o for o in bpy.data.objects if o.get("ease_role") == "garment")
+    assert garment["ease_pattern"] == digest
+    pos, why = export_ops.garment_positions(_scene(bpy))
+    assert pos is None and "another pattern" in why
+    _scene(bpy)[key] = text
+    assert export_ops.garment_positions(_scene(bpy))[0] is not None
 
 
 def _obj_vertices(path):
