@@ -141,7 +141,7 @@ class SolverConfig:
     """
     lambda_ease: float = 0.1
     lambda_reg: float = 1.0
-    lambda_len: float = 30.0
+    lambda_len: float = 15.0
     lambda_straight: float = 0.1
     lambda_curve: float = 0.1
     iterations: int = 20
@@ -700,6 +700,7 @@ class PatternSolver:
         aw = (self.a * W2[0], self.a * W2[1])
         M = self._jac4(U)
         s_cur = None
+        local_state = {}
         for it in range(n_it):
             report(progress, it / n_it, f"optimizing pattern: iteration {it + 1}/{n_it}")
             if (cfg.feedback > 0 or cfg.feedback_warp > 0) and it >= 2:
@@ -724,7 +725,7 @@ class PatternSolver:
                 np.clip(corr_w, 0.8, hi, out=corr_w)
                 np.clip(corr_g, 0.8, hi, out=corr_g)
                 tg = self._target_parts(K, c_weft * corr_w, c_warp * corr_g)
-            RT, Te = self._local_step(M, tg, W2)
+            RT, Te = self._local_step(M, tg, W2, state=local_state)
             energies.append(float(np.sum(self.a * sum(W2[k % 2] * (1.0 if k < 2 else cfg.warp_row_weight)
                                                       * (M[k] - RT[k]) ** 2 for k in range(4)))))
             # B = lambda_ease T + lambda_reg R T: one right-hand side for both terms (same weights)
@@ -767,60 +768,61 @@ class PatternSolver:
         u, v = np.ascontiguousarray(U[:, 0]), np.ascontiguousarray(U[:, 1])
         return [self._Gx @ u, self._Gy @ u, self._Gx @ v, self._Gy @ v]
 
-    def _local_step(self, M: list, tg: dict, W2: np.ndarray, slack: bool = True):
+    def _local_step(self, M: list, tg: dict, W2: np.ndarray, slack: bool = True, state: Optional[dict] = None):
         """Rest shapes ``D R K'`` of the regulariser (best 2x2 rotations, all triangles at once) and the ease target.
 
         ``M``: the current Jacobians (:meth:`_jac4`). With ``warp_slack`` the
-        rest shape's warp row is also scaled by the best factor within
-        ``[1/(1+slack), 1+slack]`` (free warp stretch), and so is the ease target.
+        rest shape's warp row is also scaled by the best factor ``s`` within
+        ``[1/(1+slack), 1+slack]`` (free warp stretch), and so is the ease
+        target; ``s`` alternates with ``R`` across iterations (kept in ``state``).
         Returns (RT, T) as component lists (m00, m01, m10, m11).
+
+        The rotation minimises ``|Omega^1/2 (M - D R K') W^1/2|^2`` (``Omega =
+        diag(1, warp_row_weight)``): ``f(theta) = -2 (x cos + y sin) + p cos 2theta
+        + q sin 2theta + const`` with ``x``, ``y`` the trace and skew parts of
+        ``A = D Omega M W K'^T`` and ``p``, ``q`` from ``Delta = (d0^2 - omega d1^2) / 2``
+        and ``C = K' W K'^T``. The polar angle of ``A`` is exact when ``Delta`` or
+        the anisotropy of ``C`` vanishes; one Newton step refines it otherwise.
         """
         cfg = self.config
         D, Kr = tg["reg"]
-        k = _components(Kr)
-        d0, d1 = D[:, 0], D[:, 1]
+        if "_k" not in tg:
+            k = _components(Kr)
+            tg["_k"] = (k, W2[0] * k[0] ** 2 + W2[1] * k[1] ** 2 - W2[0] * k[2] ** 2 - W2[1] * k[3] ** 2,
+                        W2[0] * k[0] * k[2] + W2[1] * k[1] * k[3], np.ascontiguousarray(D[:, 0]),
+                        np.ascontiguousarray(D[:, 1]), _components(tg["T"]))
+        k, Cdiff, C01, d0, d1, T = tg["_k"]
         free = slack and cfg.warp_slack > 0
-        sw = np.ones(len(d0))
-        lo, hi = 1.0 / (1.0 + cfg.warp_slack), 1.0 + cfg.warp_slack
-        # C = K' W K'^T (fixed over the alternation)
-        C00 = W2[0] * k[0] ** 2 + W2[1] * k[1] ** 2
-        C11 = W2[0] * k[2] ** 2 + W2[1] * k[3] ** 2
-        C01 = W2[0] * k[0] * k[2] + W2[1] * k[1] * k[3]
-        for _ in range(2 if free else 1):
-            # |(M - D R K') W^1/2|^2 = const - 2 tr(R^T D M W K'^T) + tr(C R^T D^2 R): with
-            # a = tr-part and b = skew-part of A = D M W K'^T, and Delta = (d0^2 - d1^2) / 2,
-            # f(theta) = -2 (a cos + b sin) + Delta ((C00 - C11) cos 2theta - 2 C01 sin 2theta) + const.
-            # Start at the polar angle of A (exact when D or C is a multiple of I), then Newton.
-            # (the warp row weighs warp_row_weight: A = D Omega M W K'^T, Delta = (d0^2 - omega d1^2) / 2)
-            dw = d1 * sw
-            om = cfg.warp_row_weight
-            a00 = d0 * (W2[0] * M[0] * k[0] + W2[1] * M[1] * k[1])
-            a11 = om * dw * (W2[0] * M[2] * k[2] + W2[1] * M[3] * k[3])
-            a10 = om * dw * (W2[0] * M[2] * k[0] + W2[1] * M[3] * k[1])
-            a01 = d0 * (W2[0] * M[0] * k[2] + W2[1] * M[1] * k[3])
-            x, y = a00 + a11, a10 - a01
-            th = np.arctan2(y, x)
-            delta = 0.5 * (d0 * d0 - om * dw * dw)
-            if np.any(delta != 0):
-                p, q = delta * (C00 - C11), -2.0 * delta * C01
-                for _ in range(2):
-                    c1, s1, c2, s2 = np.cos(th), np.sin(th), np.cos(2 * th), np.sin(2 * th)
-                    g1 = 2.0 * (x * s1 - y * c1) - 2.0 * p * s2 + 2.0 * q * c2
-                    g2 = 2.0 * (x * c1 + y * s1) - 4.0 * p * c2 - 4.0 * q * s2
-                    th = th - np.where(g2 > 0, g1 / np.where(g2 > 0, g2, 1.0), 0.0)
-            c, sn = np.cos(th), np.sin(th)
-            rk = [c * k[0] - sn * k[2], c * k[1] - sn * k[3], sn * k[0] + c * k[2], sn * k[1] + c * k[3]]
-            if free:
-                p0, p1 = d1 * rk[2], d1 * rk[3]
-                sw = np.clip((W2[0] * M[2] * p0 + W2[1] * M[3] * p1)
-                             / np.maximum(W2[0] * p0 * p0 + W2[1] * p1 * p1, 1e-300), lo, hi)
-        RT = [d0 * rk[0], d0 * rk[1], d1 * sw * rk[2], d1 * sw * rk[3]]
-        T = _components(tg["T"])
+        state = {} if state is None else state
+        sw = state.get("sw") if free else None
+        dw = d1 if sw is None else d1 * sw
+        om = cfg.warp_row_weight
+        m0, m1, m2, m3 = W2[0] * M[0], W2[1] * M[1], W2[0] * M[2], W2[1] * M[3]
+        x = d0 * (m0 * k[0] + m1 * k[1]) + om * dw * (m2 * k[2] + m3 * k[3])
+        y = om * dw * (m2 * k[0] + m3 * k[1]) - d0 * (m0 * k[2] + m1 * k[3])
+        r = np.hypot(x, y)
+        ok = r > 0
+        rs = np.where(ok, r, 1.0)
+        c, sn = np.where(ok, x / rs, 1.0), np.where(ok, y / rs, 0.0)
+        delta = 0.5 * (d0 * d0 - om * dw * dw)
+        if np.any(delta != 0):
+            p, q = delta * Cdiff, -2.0 * delta * C01
+            c2, s2 = c * c - sn * sn, 2.0 * c * sn
+            g1 = 2.0 * (x * sn - y * c) - 2.0 * p * s2 + 2.0 * q * c2
+            g2 = 2.0 * r - 4.0 * p * c2 - 4.0 * q * s2
+            step = np.where(g2 > 0, -g1 / np.where(g2 > 0, g2, 1.0), 0.0)
+            nrm = np.sqrt(1.0 + step * step)
+            c, sn = (c - sn * step) / nrm, (sn + c * step) / nrm
+        rk = [c * k[0] - sn * k[2], c * k[1] - sn * k[3], sn * k[0] + c * k[2], sn * k[1] + c * k[3]]
         if free:
-            se = np.clip((W2[0] * M[2] * T[2] + W2[1] * M[3] * T[3])
-                         / np.maximum(W2[0] * T[2] ** 2 + W2[1] * T[3] ** 2, 1e-300), lo, hi)
-            T = [T[0], T[1], T[2] * se, T[3] * se]
-        return RT, T
+            lo, hi = 1.0 / (1.0 + cfg.warp_slack), 1.0 + cfg.warp_slack
+            p0, p1 = d1 * rk[2], d1 * rk[3]
+            sw = np.clip((m2 * p0 + m3 * p1) / np.maximum(W2[0] * p0 * p0 + W2[1] * p1 * p1, 1e-300), lo, hi)
+            state["sw"] = sw
+            RT = [d0 * rk[0], d0 * rk[1], d1 * sw * rk[2], d1 * sw * rk[3]]
+            se = np.clip((m2 * T[2] + m3 * T[3]) / np.maximum(W2[0] * T[2] ** 2 + W2[1] * T[3] ** 2, 1e-300), lo, hi)
+            return RT, [T[0], T[1], T[2] * se, T[3] * se]
+        return [d0 * rk[0], d0 * rk[1], d1 * rk[2], d1 * rk[3]], T
 
     def _target_parts(self, K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray) -> dict:
         """Ease target ``T`` (f, 2, 2) and the rest shapes ``D R K'`` of the regulariser and seam prediction.
