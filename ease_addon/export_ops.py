@@ -53,6 +53,13 @@ def garment_positions(scene):
     return pos, None
 
 
+def _widths(allowance) -> dict:
+    """A design's ``materials.export.allowance`` (a number or a dict) as a dict."""
+    if allowance is None:
+        return {}
+    return dict(allowance) if isinstance(allowance, dict) else {"default": float(allowance)}
+
+
 def export_settings(scene, design):
     """The design with ``materials.export`` set from the panel's allowance, hem and notch values
     (per-seam widths it already has are kept), and the ``(allowance, notch_spacing)`` to export with."""
@@ -61,19 +68,12 @@ def export_settings(scene, design):
     s = scene.ease
     data = design.to_json()
     exp = copy.deepcopy(data.get("materials", {}).get("export") or {})
-    allowance = exp.get("allowance", {})
-    if not isinstance(allowance, dict):
-        allowance = {"default": float(allowance)}
-    allowance = dict(allowance)
-    allowance["default"] = round(s.export_allowance_cm / 100.0, 6)
-    allowance["hem"] = round(s.export_hem_cm / 100.0, 6)
+    old = _widths(exp.get("allowance"))
+    allowance = dict(old, default=round(s.export_allowance_cm / 100.0, 6), hem=round(s.export_hem_cm / 100.0, 6))
     notch = round(s.export_notch_cm / 100.0, 6)
-    old = exp.get("allowance", {})
-    old = {"default": float(old)} if not isinstance(old, dict) else old
-    unchanged = (allowance["default"] == old.get("default", DEFAULT_ALLOWANCE)
-                 and allowance["hem"] == old.get("hem", DEFAULT_HEM)
-                 and notch == exp.get("notch_spacing", DEFAULT_NOTCH_SPACING))
-    if not unchanged:
+    if (allowance["default"], allowance["hem"], notch) != (old.get("default", DEFAULT_ALLOWANCE),
+                                                          old.get("hem", DEFAULT_HEM),
+                                                          exp.get("notch_spacing", DEFAULT_NOTCH_SPACING)):
         exp["allowance"] = allowance
         exp["notch_spacing"] = notch
         data.setdefault("materials", {})["export"] = exp
@@ -85,8 +85,7 @@ def fill_export_props(scene, design) -> None:
     """Show a design's export settings in the panel (on loading a design)."""
     from ..core.export.pieces import DEFAULT_ALLOWANCE, DEFAULT_HEM, DEFAULT_NOTCH_SPACING
     exp = design.materials.get("export") or {}
-    a = exp.get("allowance", {})
-    a = {"default": float(a)} if not isinstance(a, dict) else a
+    a = _widths(exp.get("allowance"))
     s = scene.ease
     s.export_allowance_cm = 100.0 * a.get("default", DEFAULT_ALLOWANCE)
     s.export_hem_cm = 100.0 * a.get("hem", DEFAULT_HEM)
