@@ -170,11 +170,8 @@ def test_chart_is_ordered():
 # -- on the default body -------------------------------------------------
 @pytest.fixture(scope="module")
 def anny():
-    try:
-        from core.body import load_body
-        return load_body("anny")
-    except (ImportError, FileNotFoundError, NotImplementedError) as exc:  # until Anny lands
-        pytest.skip(f"default body not available: {exc}")
+    from core.body import load_body
+    return load_body("anny")      # the baked asset is committed: a failure here is a real one
 
 
 def test_anny_reference_is_size_m(anny):
@@ -199,3 +196,15 @@ def test_anny_sizes_refit_within_1cm_and_ordered(anny):
             assert abs(stored[k] - v) <= 1.0, (size, k, stored[k], v)
         girths.append(stored["chest"] + stored["waist"] + stored["hip"])
     assert all(a < b for a, b in zip(girths, girths[1:]))
+
+
+def test_measurements_without_a_target_stay_put(anny):
+    """Only a chest girth given: the chest is fitted, the height (and the other girths)
+    stay near the reference body's instead of drifting with the free parameters."""
+    ref = measure(anny)
+    fit = fit_measurements(anny, {"chest": 100.0})
+    assert fit.ok, fit.summary()
+    assert abs(fit.achieved["height"] - ref["height"]) < 1.0, fit.summary()
+    assert abs(fit.achieved["waist"] - ref["waist"]) < 1.5 and abs(fit.achieved["hip"] - ref["hip"]) < 1.5
+    fit = fit_measurements(anny, {"height": 170.0})
+    assert fit.ok and abs(fit.achieved["chest"] - ref["chest"]) < 1.5, fit.summary()

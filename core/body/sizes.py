@@ -25,6 +25,10 @@ TOLERANCE_CM = 1.0
 # Strength of the pull towards the start shape in fit_measurements, cm per full parameter range.
 REGULARIZATION_CM = 0.5
 
+# Weight (per cm) that holds a measurement without a target at the start body's value in
+# fit_measurements, relative to 1 for a target.
+HOLD_WEIGHT = 0.3
+
 SIZES = ("XS", "S", "M", "L", "XL")
 
 # Size chart in cm. M is the default Anny body (its reference phenotypes:
@@ -147,6 +151,7 @@ def fit_measurements(body, targets: Mapping[str, float], progress: Optional[Prog
     -------
     FitResult. A target that the model cannot reach within 1 cm is reported as
     ``"not reachable by this model"`` with its achieved value; that is not an error.
+    Measurements without a target stay near the start body's (weakly held).
     """
     from scipy.optimize import least_squares
 
@@ -172,16 +177,29 @@ def fit_measurements(body, targets: Mapping[str, float], progress: Optional[Prog
         return s
 
     u0 = np.clip((np.array([base[n] for n in names], dtype=float) - lo) / span, 0.0, 1.0)
+    # Measurements without a target are held near the start body's (a tailor giving only a
+    # chest girth means "this body, bigger chest", not a taller one), where the model can
+    # measure them (girths need its landmarks).
+    free = [k for k in MEASUREMENTS if k not in targets]
+    try:
+        held = measure(body, body.vertices(base), free) if free else {}
+    except BodyError:
+        held = measure(body, body.vertices(base), ["height"]) if "height" in free else {}
+    hold_keys = sorted(held)
+    hold = np.array([held[k] for k in hold_keys])
 
     def residual(u):
         count[0] += 1
         if count[0] % 5 == 1:
             report(progress, min(0.95, count[0] / 150.0), f"fitting {', '.join(keys)} ({count[0]} evaluations)")
-        got = measure(body, body.vertices(shape_of(u)), keys)
+        got = measure(body, body.vertices(shape_of(u)), keys + hold_keys)
         # A weak pull to the start shape (cm per parameter range) makes the answer unique where
         # the targets leave directions free (fewer targets than parameters, or near-parallel
         # parameters); against girth slopes of 10-30 cm per range it moves a fit by < 0.05 cm.
-        return np.concatenate([np.array([got[k] for k in keys]) - want, REGULARIZATION_CM * (u - u0)])
+        # The held measurements pull harder, but still far below the targets' weight.
+        return np.concatenate([np.array([got[k] for k in keys]) - want,
+                               HOLD_WEIGHT * (np.array([got[k] for k in hold_keys]) - hold),
+                               REGULARIZATION_CM * (u - u0)])
 
     # Finite differences of 1e-3 of the range: the slices' polygon noise stays below it.
     sol = least_squares(residual, u0, bounds=(0.0, 1.0), diff_step=1e-3, x_scale=1.0,
