@@ -63,6 +63,17 @@ def test_compliance_and_weighting():
     assert s["mean"] == pytest.approx(2.5) and s["std"] == pytest.approx(np.sqrt(18.75))
 
 
+def test_compliance_of_a_panel_subset():
+    uv, F = _square()
+    loose = _panel("a", uv, np.c_[uv[:, 0] / 1.2, np.zeros(len(uv)), uv[:, 1]], F, target=1.0)
+    exact = _panel("b", uv, np.c_[uv[:, 0], np.zeros(len(uv)), uv[:, 1]], F, target=1.0)
+    pat = Pattern(style="s", body={}, garments={"g": "upper"}, panels=[loose, exact], seams=[])
+    assert M.ease_compliance(pat)["mean"] == pytest.approx(20.0 / 2.2)  # weighted by 3D area (1/1.2 and 1)
+    assert M.ease_compliance(pat, panels=["a"])["mean"] == pytest.approx(20.0)
+    assert M.ease_compliance(pat, panels=["b"])["mean"] == pytest.approx(0.0, abs=1e-9)
+    assert M.ease_compliance(pat, panels=[]) == {}
+
+
 def test_seam_mismatch_percent_and_mm():
     uv, F = _square()
     xyz = np.c_[uv[:, 0], np.zeros(len(uv)), uv[:, 1]]

@@ -108,12 +108,14 @@ def compliance_per_triangle(achieved_weft: np.ndarray, target_weft: np.ndarray) 
     return np.abs(np.asarray(achieved_weft, float) - t) / t
 
 
-def _panels(pattern, garment):
-    return [p for p in pattern.panels if garment is None or p.garment == garment]
+def _panels(pattern, garment, names=None):
+    return [p for p in pattern.panels
+            if (garment is None or p.garment == garment) and (names is None or p.name in names)]
 
 
 def ease_compliance(pattern, garment: Optional[str] = None, xyz: Optional[Dict[str, np.ndarray]] = None,
-                    target: Optional[Dict[str, np.ndarray]] = None) -> Dict[str, float]:
+                    target: Optional[Dict[str, np.ndarray]] = None,
+                    panels: Optional[Iterable[str]] = None) -> Dict[str, float]:
     """Ease compliance (SPEC 1 and 3) with shear (SPEC 8), area-weighted, percent / degrees.
 
     Parameters
@@ -123,6 +125,7 @@ def ease_compliance(pattern, garment: Optional[str] = None, xyz: Optional[Dict[s
     xyz : optional dict panel name -> (n, 3) positions of the body to measure on
         (default: each panel's own ``xyz``, the body it was solved for).
     target : optional dict panel name -> (f,) target weft scale (default ``target_weft``).
+    panels : optional panel names to restrict to (e.g. the sleeves).
 
     Returns
     -------
@@ -131,7 +134,7 @@ def ease_compliance(pattern, garment: Optional[str] = None, xyz: Optional[Dict[s
     scale from its target), ``area`` (m^2).
     """
     comp, shear, warp, area = [], [], [], []
-    for p in _panels(pattern, garment):
+    for p in _panels(pattern, garment, None if panels is None else set(panels)):
         X = p.xyz if xyz is None else xyz[p.name]
         rw, rg, sh = scales(p.uv, X, p.faces, p.grain)
         t = p.target_weft if target is None else target[p.name]
