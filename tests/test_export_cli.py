@@ -88,6 +88,19 @@ def test_ease_command_runs_export(job, tmp_path, capsys):
     assert "tiff" in capsys.readouterr().err and not (root / "y").exists()
 
 
+def test_drape_of_another_pattern_is_refused(job, tmp_path):
+    root, pat = job
+    d = tmp_path / "other"
+    d.mkdir()
+    faces = np.concatenate([p.vertex_ids[p.faces] for p in pat.panels])
+    np.savez(d / "drape.npz", positions=drape_positions(pat), faces=faces[::2])
+    msg = run(["export", str(root / "pattern"), "--format", "glb", "--drape", str(d), "--out", str(root / "x")])
+    assert isinstance(msg, str) and "another pattern" in msg and not (root / "x").exists()
+    np.savez(d / "drape.npz", positions=drape_positions(pat), faces=faces)
+    assert run(["export", str(root / "pattern"), "--format", "glb", "--drape", str(d), "--out", str(root / "x"),
+                "--quiet"]) == 0
+
+
 @pytest.mark.parametrize("fmt", ["all", "svg,obj"])
 def test_3d_formats_without_a_drape_fail_clearly(job, fmt):
     root, pat = job

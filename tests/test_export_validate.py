@@ -111,6 +111,24 @@ def test_drape_checks():
         validate_drape(pat, bad)
 
 
+def test_drape_of_another_pattern_is_refused():
+    pat = make_pattern()
+    pos = drape_positions(pat)
+    faces = np.concatenate([p.vertex_ids[p.faces] for p in pat.panels])
+    # the pattern's own triangles, in any order and rotation: accepted
+    rolled = np.roll(faces[::-1], 1, axis=1)
+    assert validate_drape(pat, pos, rolled).shape == pos.shape
+    assert validate_drape(pat, pos, np.zeros((0, 3), int)).shape == pos.shape    # no faces: not checked
+    # another pattern with as many vertices: other triangles (a flipped diagonal), one missing, one extra
+    other = faces.copy()
+    other[0] = [faces[0][0], faces[0][1], faces[1][2]]
+    for wrong in (other, faces[1:], np.vstack([faces, faces[:1] + 1])):
+        with pytest.raises(ExportError, match="another pattern"):
+            validate_drape(pat, pos, wrong)
+    with pytest.raises(ExportError, match="drape.faces"):
+        validate_drape(pat, pos, faces.astype(float))
+
+
 def test_lenient_validation_returns_geometry_warnings():
     pat = make_pattern()
     _tangled(pat)

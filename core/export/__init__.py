@@ -69,7 +69,7 @@ def parse_formats(formats: Union[str, Iterable[str]]) -> List[str]:
 def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb"), allowance=None,
                    drape_positions: Optional[np.ndarray] = None, progress=None,
                    notch_spacing: Optional[float] = None, strict: bool = True,
-                   warnings: Optional[list] = None) -> List[Path]:
+                   warnings: Optional[list] = None, drape_faces: Optional[np.ndarray] = None) -> List[Path]:
     """Write the pattern's cutting-room files and the draped garment.
 
     Parameters
@@ -91,6 +91,9 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
         pieces are exported as they are and the problems are listed in
         ``export.json["warnings"]`` (and appended to ``warnings`` if given).
 
+    drape_faces : (F, 3) int or None, the drape's triangles (``drape.npz["faces"]``):
+        when given they must be the pattern's (a drape of another pattern is refused).
+
     Returns
     -------
     list of Path, the files written (final locations).
@@ -105,7 +108,7 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
     widths = resolve_allowance(allowance, pattern)
     positions = None
     if "glb" in formats or "obj" in formats:
-        positions = validate_drape(pattern, drape_positions)
+        positions = validate_drape(pattern, drape_positions, drape_faces)
     report(progress, 0.0, "building pattern pieces")
     pieces = build_pieces(pattern, widths, notch_spacing, progress=sub(progress, 0.0, 0.3),
                           warnings=None if strict else found)

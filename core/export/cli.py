@@ -16,8 +16,8 @@ def _metres(text: str) -> float:
     return v
 
 
-def load_drape_positions(drape_dir: Path):
-    """``positions`` (N, 3) from ``drape_dir/drape.npz`` (or the .npz file itself)."""
+def load_drape(drape_dir: Path):
+    """``(positions (N, 3), faces (F, 3) or None)`` from ``drape_dir/drape.npz`` (or the .npz file itself)."""
     import numpy as np
 
     from ..errors import ExportError
@@ -29,9 +29,10 @@ def load_drape_positions(drape_dir: Path):
         raise ExportError(f"--drape: no draped garment at {path} (run `ease drape PATTERN_DIR --out DIR` first)")
     try:
         with np.load(path, allow_pickle=False) as data:
+            faces = np.asarray(data["faces"]) if "faces" in data.files else None
             for key in ("positions", "vertices", "x"):
                 if key in data.files:
-                    return np.asarray(data[key], float)
+                    return np.asarray(data[key], float), faces
             keys = ", ".join(data.files)
     except (OSError, ValueError) as exc:
         raise ExportError(f"--drape: cannot read {path}: {exc}") from exc
@@ -66,7 +67,7 @@ def _run(args) -> int:
             allowance["default"] = args.allowance
         if args.hem is not None:
             allowance["hem"] = args.hem
-    positions = None
+    positions = faces = None
     if "glb" in formats or "obj" in formats:
         drape = Path(args.drape) if args.drape else None
         if drape is None:
@@ -74,11 +75,12 @@ def _run(args) -> int:
                 raise ExportError(f"GLB/OBJ export needs the draped garment: pass --drape DIR (no {guess}/drape.npz); "
                                   f"or leave glb/obj out of --format")
             drape = guess
-        positions = load_drape_positions(drape)
+        positions, faces = load_drape(drape)
     warnings: list = []
     files = export_pattern(pattern, args.out, formats=formats, allowance=allowance,
                            drape_positions=positions, progress=None if args.quiet else ConsoleProgress(),
-                           notch_spacing=args.notch_spacing, strict=not args.lenient, warnings=warnings)
+                           notch_spacing=args.notch_spacing, strict=not args.lenient, warnings=warnings,
+                           drape_faces=faces)
     for w in warnings:
         print(f"ease export: warning: {w}", file=sys.stderr)
     for f in files:

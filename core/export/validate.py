@@ -138,8 +138,13 @@ def validate_pattern(pattern: Pattern, strict: bool = True) -> List[str]:
     return warnings
 
 
-def validate_drape(pattern: Pattern, positions: Optional[np.ndarray]) -> np.ndarray:
-    """The drape positions as a float (N, 3) array covering every garment vertex id, or ExportError."""
+def validate_drape(pattern: Pattern, positions: Optional[np.ndarray],
+                   faces: Optional[np.ndarray] = None) -> np.ndarray:
+    """The drape positions as a float (N, 3) array covering every garment vertex id, or ExportError.
+
+    ``faces`` (optional, (F, 3) garment vertex ids, ``drape.npz["faces"]``): the
+    drape's triangles, which must be the pattern's, so that a drape of another
+    pattern (another design, size or pose) is refused instead of exported."""
     if positions is None:
         raise ExportError("drape: GLB/OBJ export needs the draped garment (drape_positions / --drape DIR)")
     p = np.asarray(positions)
@@ -149,6 +154,16 @@ def validate_drape(pattern: Pattern, positions: Optional[np.ndarray]) -> np.ndar
     if p.shape[0] < need:
         raise ExportError(f"drape.positions: {p.shape[0]} vertices, but the pattern uses garment vertex ids "
                           f"up to {need - 1} (was it draped from this pattern?)")
+    if faces is not None and np.size(faces):
+        f = np.asarray(faces)
+        if f.ndim != 2 or f.shape[1] != 3 or f.dtype.kind not in "iu":
+            raise ExportError(f"drape.faces: expected (F, 3) vertex ids, got shape {f.shape}")
+        mine = np.sort(np.concatenate([np.asarray(panel.vertex_ids, int)[np.asarray(panel.faces, int)]
+                                       for panel in pattern.panels]), axis=1)
+        theirs = np.sort(f.astype(np.int64), axis=1)
+        if len(mine) != len(theirs) or not np.array_equal(np.unique(mine, axis=0), np.unique(theirs, axis=0)):
+            raise ExportError(f"drape: its {len(theirs)} triangles are not this pattern's {len(mine)} "
+                              f"(was it draped from another pattern? drape this one again)")
     used = np.concatenate([np.asarray(panel.vertex_ids, int) for panel in pattern.panels])
     if not np.all(np.isfinite(p[used])):
         raise ExportError("drape.positions: holds NaN or infinite values (the drape diverged?)")
