@@ -254,6 +254,37 @@ def test_keypoint_on_selected_vertex(bpy_session):
     assert convert.read_keypoints(obj.data)["test_point"][0] == tri
 
 
+def test_keypoint_on_a_vertex_selected_in_edit_mode(bpy_session):
+    """The designer's way: Edit Mode, select one vertex, Keypoint at Selected Vertex; stays in Edit Mode."""
+    bpy = bpy_session["bpy"]
+    import bmesh
+    s = _scene(bpy).ease
+    obj = s.body
+    bpy.context.view_layer.objects.active = obj
+    bpy.ops.object.mode_set(mode="EDIT")
+    bm = bmesh.from_edit_mesh(obj.data)
+    for v in bm.verts:
+        v.select = False
+    bm.verts.ensure_lookup_table()
+    vid = 4321
+    bm.verts[vid].select = True
+    bmesh.update_edit_mesh(obj.data)
+    assert bpy.ops.ease.assign_keypoint(name="edit_point") == {"FINISHED"}
+    assert obj.mode == "EDIT"
+    bpy.ops.object.mode_set(mode="OBJECT")
+    kp = json.loads(s.design_json)["keypoints"]["edit_point"]
+    faces = np.array([p.vertices[:] for p in obj.data.polygons])
+    assert vid in faces[kp["triangle"]]
+    assert np.allclose(np.asarray(kp["bary"]) @ _verts(obj)[faces[kp["triangle"]]], _verts(obj)[vid], atol=1e-6)
+    # two selected: the add-on says what is wrong, the design unchanged
+    before = s.design_json
+    sel = np.zeros(len(obj.data.vertices), dtype=bool)
+    sel[[10, 20]] = True
+    obj.data.vertices.foreach_set("select", sel)
+    r = _run(bpy, bpy.ops.ease.assign_keypoint, name="two_points")
+    assert "ERROR" in r and "exactly one" in r["ERROR"] and s.design_json == before
+
+
 def test_keypoint_clicked_on_the_surface(bpy_session):
     """Pick Keypoint: the ray under the mouse meets the body; the keypoint is that surface point.
     Headless there is no viewport to click in: the test casts the ray the click would."""
