@@ -199,6 +199,22 @@ def test_bad_input_reports_and_leaves_scene(bpy_session):
     assert "ERROR" in r and "nose_tip" in r["ERROR"], r
     assert _scene(bpy).ease.design_json == ""
     assert np.array_equal(_verts(obj), v0) and len(bpy.data.objects) == n_obj
+    # every later stage, asked too early, says what is missing and changes nothing
+    s = _scene(bpy).ease
+    s.export_dir = str(bpy_session["tmp"] / "too_early")
+    for op, kw, words in ((bpy.ops.ease.optimize_pattern, {}, "design"),
+                          (bpy.ops.ease.ease_to_design, {}, "design"),
+                          (bpy.ops.ease.recut, {}, "design"),
+                          (bpy.ops.ease.transfer_size, {}, "design"),
+                          (bpy.ops.ease.adapt_poses, {}, "design"),
+                          (bpy.ops.ease.drape, {}, "pattern"),
+                          (bpy.ops.ease.export_pattern, {}, "pattern"),
+                          (bpy.ops.ease.fitmap, dict(mode="STRAIN"), "drape")):
+        r = _run(bpy, op, **kw)
+        assert "ERROR" in r and words in r["ERROR"].lower(), (op.idname(), r)
+        assert np.array_equal(_verts(obj), v0) and len(bpy.data.objects) == n_obj, op.idname()
+        assert s.design_json == "" and not s.pattern_json and not s.fit_json and not s.drape_json, op.idname()
+    assert not (bpy_session["tmp"] / "too_early").exists()
 
 
 # ----------------------------------------------------------------------------- design
