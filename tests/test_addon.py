@@ -561,6 +561,23 @@ def test_drape_modal_progress_and_esc(bpy_session):
     garment = next(o for o in bpy.data.objects if o.get("ease_role") == "garment")
     assert garment.data.name == g_name and np.array_equal(_verts(garment), g_verts)
     assert not drape_ops._JOBS
+    # the core fails mid-drape: its message in the status, the garment as it was
+    from core.errors import EaseError
+    real = drape_ops._compute
+
+    def failing(*a, **k):
+        a[4](0.3, "frame 12")
+        raise EaseError("drape diverged at frame 12 (time step too large?)")
+    drape_ops._compute = failing
+    try:
+        job = drape_ops.DrapeJob(pattern, body_v, body_f, frames=400).start()
+        job.join(60)
+        assert drape_ops.step_job(bpy.context, job, "TIMER") == "CANCELLED"
+    finally:
+        drape_ops._compute = real
+    assert "diverged at frame 12" in s.drape_status and "stopped" in s.drape_status
+    garment = next(o for o in bpy.data.objects if o.get("ease_role") == "garment")
+    assert garment.data.name == g_name and np.array_equal(_verts(garment), g_verts)
     # a run to the end
     export_ops = _addon(bpy_session, "export_ops")
     key = _addon(bpy_session, "pattern_ops").PATTERN_KEY
