@@ -53,7 +53,8 @@ rest shape is the isometric ``R_t K_t`` in the paper-default configuration
 competition: both terms agree on the target shape, the regulariser only adds
 rotation freedom against curvature). ``warp_slack`` > 0 also lets the local
 step scale the rest shape's warp row freely within ``1 +- slack`` (curvature
-then goes into warp length rather than weft and shear).
+then goes into warp length rather than weft and shear), and ``warp_row_weight``
+< 1 makes the local step fit each rotation to the current weft first.
 
 Seam terms keep the system matrix fixed by targeting whole vectors:
 
@@ -131,10 +132,11 @@ class SolverConfig:
     (the paper literally: ``K diag(c)``, the initial flattening's barycentric
     offsets scaled). ``warp_slack``: the local step may scale the rest
     shape's warp by a factor within ``[1/(1+slack), 1+slack]`` (0 = off).
-    ``warp_row_weight``: weight of the pattern's warp coordinate (v) rows of
-    the ease and regulariser terms against the weft coordinate (u) rows (< 1:
-    curvature goes into warp length and shear rather than weft; the u and v
-    systems are then factorised separately, once).
+    ``warp_row_weight``: weight of the pattern's warp (v) row against the
+    weft (u) row when the local step fits each triangle's rotation (< 1: the
+    rest shape is turned to match the current weft first, so curvature goes
+    into warp length and shear rather than weft). The global step is not
+    reweighted: one factorisation serves both coordinates.
     ``adapt_iterations``, ``adapt_bound``: adaptation solves run at least
     this many iterations, and their feedback may raise a target up to this
     factor (the poses' local demands are far from uniform).
@@ -561,16 +563,12 @@ class PatternSolver:
         else:
             self._Dall = None
 
-    def _matrix(self, row_weight: float = 1.0) -> sp.csc_matrix:
-        """The fixed system matrix of one pattern coordinate.
-
-        Ease + regulariser (one operator, times ``row_weight``: 1 for the weft
-        coordinate u, ``warp_row_weight`` for the warp coordinate v), seam
-        length, seam shape, and the gauge pins (stored in ``self._pins``).
-        """
+    def _matrix(self) -> sp.csc_matrix:
+        """The fixed system matrix (both pattern coordinates): ease + regulariser (one operator), seam
+        length, seam shape, and the gauge pins (stored in ``self._pin``, (n, 2))."""
         cfg = self.config
         W2 = np.array([1.0, cfg.warp_weight ** 2])
-        w = row_weight * (cfg.lambda_ease + cfg.lambda_reg) * self.a
+        w = (cfg.lambda_ease + cfg.lambda_reg) * self.a
         L = (self._GxT @ sp.diags(w * W2[0]) @ self._Gx + self._GyT @ sp.diags(w * W2[1]) @ self._Gy).tocsr()
         if self.sides and cfg.seam_length and cfg.lambda_len > 0:
             c = cfg.lambda_len * self._El0 / (self.h * self.total_area)
@@ -585,33 +583,20 @@ class PatternSolver:
         d = L.diagonal()
         pin = np.zeros(self.n)
         pin[self._voff] = 1e-6 * np.add.reduceat(d, self._voff) / self._vcount
-        self._pins.append(pin)
+        self._pin = np.stack([pin, pin], axis=1)
         return (L + sp.diags(pin)).tocsc()
 
     def _solver(self):
-        """Back-substitution ``rhs (n, 2) -> U (n, 2)`` with the factorised matrices, built once per configuration.
-
-        One factorisation serves both coordinates when ``warp_row_weight`` is
-        1; otherwise the u and v systems are factorised together, once.
-        """
+        """Back-substitution ``rhs (n, 2) -> U (n, 2)`` with the factorised matrix, built once per configuration."""
         cfg = self.config
         key = (cfg.lambda_ease, cfg.lambda_reg, cfg.lambda_len, cfg.lambda_straight, cfg.lambda_curve,
-               cfg.warp_weight, cfg.seam_length, cfg.warp_row_weight)
+               cfg.warp_weight, cfg.seam_length)
         if self._factor is None or self._factor_key != key:
             t0 = time.perf_counter()
             # symmetric positive definite: a symmetric minimum-degree ordering on A + A^T keeps the
             # factors ~40 % sparser than the default column ordering (faster factor and solves)
-            lu = lambda A: splu(A, permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
-            self._pins = []
-            if cfg.warp_row_weight == 1.0:
-                f = lu(self._matrix())
-                self._pin = np.stack([self._pins[0], self._pins[0]], axis=1)
-                self._factor = f.solve
-            else:
-                fu, fv = lu(self._matrix()), lu(self._matrix(cfg.warp_row_weight))
-                self._pin = np.stack(self._pins, axis=1)
-                self._factor = lambda rhs: np.stack([fu.solve(np.ascontiguousarray(rhs[:, 0])),
-                                                     fv.solve(np.ascontiguousarray(rhs[:, 1]))], axis=1)
+            A = self._matrix()
+            self._factor = splu(A, permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True}).solve
             self._factor_key = key
             self.timings["factorise"] = time.perf_counter() - t0
             self.n_factorisations = getattr(self, "n_factorisations", 0) + 1
@@ -726,13 +711,12 @@ class PatternSolver:
                 np.clip(corr_g, 0.8, hi, out=corr_g)
                 tg = self._target_parts(K, c_weft * corr_w, c_warp * corr_g)
             RT, Te = self._local_step(M, tg, W2, state=local_state)
-            energies.append(float(np.sum(self.a * sum(W2[k % 2] * (1.0 if k < 2 else cfg.warp_row_weight)
-                                                      * (M[k] - RT[k]) ** 2 for k in range(4)))))
+            energies.append(float(np.sum(self.a * sum(W2[k % 2] * (M[k] - RT[k]) ** 2 for k in range(4)))))
             # B = lambda_ease T + lambda_reg R T: one right-hand side for both terms (same weights)
             B = [cfg.lambda_ease * Te[k] + cfg.lambda_reg * RT[k] for k in range(4)]
             rhs = np.empty((self.n, 2))
             rhs[:, 0] = self._GxT @ (aw[0] * B[0]) + self._GyT @ (aw[1] * B[1])
-            rhs[:, 1] = cfg.warp_row_weight * (self._GxT @ (aw[0] * B[2]) + self._GyT @ (aw[1] * B[3]))
+            rhs[:, 1] = self._GxT @ (aw[0] * B[2]) + self._GyT @ (aw[1] * B[3])
             RTs = None
             if cfg.len_target != "current" or cfg.len_direction != "current":
                 Dt, Kt = tg["seam"]
