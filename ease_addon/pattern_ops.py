@@ -124,6 +124,7 @@ def pattern_objects(context, pattern, lo: float, hi: float, role: str = "pattern
         col.data.foreach_set("color", np.repeat(rgba, 3, axis=0).ravel())
         me.attributes.new("achieved_weft", "FLOAT", "FACE").data.foreach_set(
             "value", np.asarray(p.achieved_weft, dtype=np.float32))
+        me["ease_ramp"] = (float(lo), float(hi))     # the colours' ramp range (legend, read-back)
         me.materials.append(mat)
         obj = convert.new_object(f"EASE piece {p.name}", me, coll)
         obj.location = (ox, 0.0, oz)

@@ -448,7 +448,7 @@ def test_ease_layer_to_design(bpy_session):
 
 # ----------------------------------------------------------------------------- pattern, fit, drape
 
-def test_pattern_objects_match_pattern_json(bpy_session, tmp_path):
+def test_pattern_objects_match_pattern_json(bpy_session, tmp_path, ramp):
     bpy = bpy_session["bpy"]
     s = _scene(bpy).ease
     assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
@@ -467,7 +467,15 @@ def test_pattern_objects_match_pattern_json(bpy_session, tmp_path):
         assert o.dimensions.z == pytest.approx(ext[1], abs=1e-4)
         assert o.dimensions.y == pytest.approx(0.0, abs=1e-6)
         assert len(o.data.polygons) == len(p.faces)
-        assert o.data.color_attributes.get("achieved_ease") is not None
+        # coloured by achieved ease: the colours decode (ramp range on the mesh) to the pattern's weft scales
+        col = o.data.color_attributes.get("achieved_ease")
+        assert col is not None and col.domain == "CORNER"
+        rgba = np.empty(len(col.data) * 4, dtype=np.float32)
+        col.data.foreach_get("color", rgba)
+        lo_r, hi_r = o.data["ease_ramp"]
+        got = ramp.color_to_ease(rgba.reshape(-1, 4), lo_r, hi_r).reshape(-1, 3)[:, 0]
+        assert np.allclose(got, np.clip(p.achieved_weft, lo_r, hi_r), atol=1e-4)
+        assert np.mean((p.achieved_weft >= lo_r) & (p.achieved_weft <= hi_r)) > 0.95
         kids = {c.type for c in o.children}
         assert {"CURVE", "MESH", "FONT"} <= kids      # outline, grain arrow, name
         # laid out beside the body, not through it
