@@ -164,10 +164,18 @@ def test_add_body_and_shape_in_place(bpy_session):
     assert np.allclose(_verts(obj), model.vertices(size_shape(model, "XL")), atol=1e-5)
     assert obj.data.color_attributes.get("ease") is not None
     assert "chest" in s.measurements_report
-    # pose
-    assert bpy.ops.ease.set_pose(pose="P1") == {"FINISHED"}
-    assert np.allclose(_verts(obj), model.vertices(size_shape(model, "XL"), "P1"), atol=1e-5)
+    # every pose preset, on the XL body
+    for pose in ("T", "P1", "P2", "P3"):
+        assert bpy.ops.ease.set_pose(pose=pose) == {"FINISHED"}
+        assert np.allclose(_verts(obj), model.vertices(size_shape(model, "XL"), pose), atol=1e-5), pose
     assert bpy.ops.ease.set_pose(pose="A") == {"FINISHED"}
+    # every size preset: girth grows from XS to XL
+    girth = []
+    for size in ("XS", "S", "M", "L", "XL"):
+        assert bpy.ops.ease.set_size(size=size) == {"FINISHED"}
+        assert np.allclose(_verts(obj), model.vertices(size_shape(model, size)), atol=1e-5), size
+        girth.append(float(np.ptp(_verts(obj)[:, 1])))
+    assert girth == sorted(girth)
     assert bpy.ops.ease.set_size(size="M") == {"FINISHED"}
     # sliders update the body live
     item = next(i for i in s.shape if i.name == "weight")
