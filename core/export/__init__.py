@@ -22,6 +22,12 @@ format    files
 
 plus ``export.json``: per piece sew-line length, allowance, notch count, and
 the page counts.
+
+Seam allowance and notch spacing are set in the design (``materials.export``:
+``{"allowance": 0.01 | {"default", "hem", "fold", "<seam line>": m},
+"notch_spacing": m}``), travel with the cut and the pattern (``pattern.json``
+``materials``) and are used here unless the caller (``--allowance``,
+``--hem``, ``--notch-spacing``) overrides them.
 """
 from __future__ import annotations
 
