@@ -619,6 +619,14 @@ def test_drape_modal_progress_and_esc(bpy_session):
     assert pos is None and "another pattern" in why
     _scene(bpy)[key] = text
     assert export_ops.garment_positions(_scene(bpy))[0] is not None
+    # disabling the add-on while a drape runs stops the worker (no thread left behind)
+    module = bpy_session["module"]
+    job = drape_ops.DrapeJob(pattern, body_v, body_f, frames=5000).start()
+    assert job._thread.is_alive()
+    bpy.ops.preferences.addon_disable(module=module)
+    assert job.cancelled and not job._thread.is_alive() and job.result is None
+    assert bpy.ops.preferences.addon_enable(module=module) == {"FINISHED"}
+    assert _scene(bpy).ease.drape_json       # the scene's EASE data is still there
 
 
 def _obj_vertices(path):
