@@ -459,7 +459,7 @@ def _markdown(R) -> str:
                  f"| {_fmt(sp_.get('flatten'))} + {_fmt(sp_.get('factorise'))} + {_fmt(sp_.get('iterations'))} "
                  f"| {_fmt(v['resolve_seconds'])} | {_fmt(arap)} | {_fmt(ratio, 1)} |")
     L += ["", "Optimize: a fresh solver on the design's own ease, each part the minimum of 3 runs (flatten: LSCM, "
-          "grain vote and operators per panel; factorise: the u and v system matrices; 20 iterations: local step, "
+          "grain vote and operators per panel; factorise: the one system matrix of both coordinates; 20 iterations: local step, "
           "right-hand sides, back-substitution, rigid fit, flip safeguard, grain re-alignment). ARAP: libigl, LSCM "
           "start + 20 iterations per panel (the baseline table). Drape time: see the drape benchmark. Times are wall "
           "seconds on this shared 2-core CPU.", "",
