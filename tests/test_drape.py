@@ -103,7 +103,7 @@ def test_result_layout(skirt, draped):
 
 
 def test_growth_starts_from_the_skintight_stretch(body, skirt):
-    # after one frame of a 10-frame growth the 1.2-ease skirt is still near its skintight size;
+    # after one frame of the 20-frame growth the 1.2-ease skirt is still near its skintight size;
     # without growth it has already sprung off the body
     grown = drape(skirt, *body, options={"max_frames": 1, "min_frames": 1})
     at_once = drape(skirt, *body, options={"max_frames": 1, "min_frames": 1, "grow_frames": 0})

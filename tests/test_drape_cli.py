@@ -75,4 +75,31 @@ def test_help(capsys):
         main(["drape", "--help"])
     assert exc.value.code == 0
     text = capsys.readouterr().out
-    assert "--material" in text and "--device" in text and "--frames" in text
+    assert "--material" in text and "--device" in text and "--frames" in text and "--self-collision" in text
+
+
+def test_self_collision_flag(pattern_dir, tmp_path):
+    out = tmp_path / "sc"
+    assert main(["drape", str(pattern_dir), "--out", str(out), "--quiet", "--frames", "15", "--no-preview",
+                 "--self-collision"]) == 0
+    rep = json.loads((out / "drape_report.json").read_text())
+    assert rep["self_collision"] is True and rep["options"]["self_collision"] is True
+    assert rep["self_radius_m"] > 0
+
+
+def test_divergence_names_frame_and_cause_and_writes_nothing(tmp_path, capsys):
+    # a pattern a fifth of the body's girth is torn apart on the first frame
+    d = tmp_path / "pattern"
+    save_pattern(tube_skirt(0.2, n_rows=6, n_cols=8), d)
+    out = tmp_path / "never"
+    assert main(["drape", str(d), "--out", str(out), "--quiet", "--frames", "20"]) == 2
+    err = capsys.readouterr().err
+    assert "diverged at frame 1" in err and "likely cause" in err
+    assert not out.exists()
+
+
+def test_absurd_time_step_writes_nothing(pattern_dir, tmp_path, capsys):
+    out = tmp_path / "never"
+    assert main(["drape", str(pattern_dir), "--out", str(out), "--quiet", "--substeps", "1"]) == 2
+    assert "time step" in capsys.readouterr().err
+    assert not out.exists()

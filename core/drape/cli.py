@@ -24,6 +24,8 @@ def add_parser(sub) -> None:
     p.add_argument("--device", default="cpu", help="cpu (default; bitwise repeatable) or cuda")
     p.add_argument("--frames", type=int, default=None, help="frame limit (default 120 at 30 fps)")
     p.add_argument("--substeps", type=int, default=None, help="XPBD substeps per frame (default 20)")
+    p.add_argument("--self-collision", action="store_true",
+                   help="keep the garment's own layers apart (particle self-collision; slower)")
     p.add_argument("--no-preview", action="store_true", help="skip preview.png")
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.set_defaults(func=_cmd)
@@ -50,6 +52,8 @@ def _cmd(args) -> int:
         options["min_frames"] = min(10, args.frames)
     if args.substeps is not None:
         options["substeps"] = args.substeps
+    if args.self_collision:
+        options["self_collision"] = True
     result = drape(pattern, body_v, body_f, material=args.material, options=options,
                    progress=sub(prog, 0.0, 0.9))
     metrics = drape_metrics(result, body_v, body_f, pattern=pattern)

@@ -95,6 +95,7 @@ def report_dict(result, metrics: dict, pattern=None) -> dict:
         "frames": int(result.frames), "settled": bool(result.settled), "settle_reason": result.settle_reason,
         "settle_frame": int(result.frames) if result.settled else None,
         "timings": result.timings, "self_collision": bool(result.self_collision),
+        "self_radius_m": float(getattr(result, "self_radius", 0.0)),
         "gap_mm": m["all"]["gap_mm"], "penetration_pct": m["all"]["penetration_pct"],
         "seam_gap_mm": m["all"]["seam_gap_mm"], "metrics": m,
     }

@@ -91,7 +91,7 @@ class DrapeOptions:
     max_speed: float = 30.0
     max_extent: float = 6.0
     max_strain: float = 3.0
-    grow_frames: int = 10
+    grow_frames: int = 20
     self_collision: bool = False
     self_radius: Optional[float] = None
     self_exclude: float = 1.5
