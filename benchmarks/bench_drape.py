@@ -34,7 +34,7 @@ if str(REPO) not in sys.path:
 LEVELS = np.linspace(0.9, 2.4, 17)
 GARMENTS = {"shirt": "shirt_long_sleeve", "pants": "pants"}
 DESIGN_EDGE = 0.01  # the shirt design's own refine_edge_length (about 21.6k triangles)
-GAP_EDGE = DESIGN_EDGE  # the gap curve: the designs' own refinement (shirt 21.6k, pants 26.5k triangles)
+GAP_EDGE = 0.015  # the gap curve: about 10k triangles, as the speed run (shirt 10.6k, pants 12.1k)
 SHIRT_EDGE = 0.015  # refinement edge length (m): about 10k triangles (shirt 10.6k, pants 12.1k)
 NEWTON_PIN = "newton==1.8.0"
 
@@ -494,9 +494,6 @@ def run(out_dir, quick: bool = False) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     body = load_body("anny")
     levels = LEVELS[::4] if quick else LEVELS
-    # the gap curve drapes each design at its own refinement (1 cm): on a coarser mesh the folds of
-    # a loose garment are fewer and larger, and their chance arrangement moves the mean gap by
-    # more than one ease step does
     edge = 0.03 if quick else GAP_EDGE
     # the gap is read off a still garment: settle tighter than the default (4 mm/s RMS), since
     # loose fabric keeps sliding into folds slowly and the gap depends on where it stops; with
