@@ -440,7 +440,10 @@ def _markdown(res: dict) -> str:
               f"below {o['settle_speed'] * 1000:.0f} mm/s RMS or stopped at {o['max_frames']} frames).", "",
               "![gap curve](drape_gap_curve.png)", ""]
     for garment, rows in res["gap_curve"].items():
-        lines += [f"### {garment} — mean rises monotonically: **{res['monotonic'][garment]}**", "",
+        steps = np.diff([r["gap_mean_mm"] for r in rows])
+        worst = (f" (smallest step {steps.min():+.2f} mm, at ease {rows[int(np.argmin(steps)) + 1]['ease']:.3f})"
+                 if len(steps) else "")
+        lines += [f"### {garment} — mean rises monotonically: **{res['monotonic'][garment]}**{worst}", "",
                   "| ease | triangles | gap mean (mm) | gap std (mm) | penetration (%) | seam gap (mm) | frames | "
                   "settled | drape (s) |", "|---|---|---|---|---|---|---|---|---|"]
         for r in rows:
