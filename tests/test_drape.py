@@ -211,3 +211,13 @@ def test_bad_inputs(body, skirt):
         drape(skirt, *body, options={"self_collision": "yes"})
     with pytest.raises(DrapeError, match="grow_frames"):
         drape(skirt, *body, options={"grow_frames": -1})
+
+
+def test_two_rings_are_the_fabric_neighbours():
+    from core.drape.xpbd import two_rings
+    # a strip of triangles 0-1-2-3-4-5 (each triangle (k, k+1, k+2))
+    faces = np.array([[k, k + 1, k + 2] for k in range(4)])
+    start, idx = two_rings(faces, 6)
+    ring0 = set(idx[start[0]:start[1]].tolist())
+    assert ring0 == {0, 1, 2, 3, 4}  # 1 and 2 share a triangle with 0; 3 and 4 are one more step away
+    assert 5 not in ring0

@@ -196,12 +196,17 @@ def solve_tethers(x: wp.array(dtype=wp.vec3), anchor: wp.array(dtype=int), lengt
 @wp.kernel
 def find_self_pairs(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float), x0: wp.array(dtype=wp.vec3),
                     grid: wp.uint64, search: float, exclude: float, max_pairs: int,
-                    partner: wp.array2d(dtype=int), count: wp.array(dtype=int)):
+                    partner: wp.array2d(dtype=int), count: wp.array(dtype=int),
+                    ring_start: wp.array(dtype=int), ring: wp.array(dtype=int), touching: float):
     """Self-collision candidates of each particle: the others within ``search`` (at most ``max_pairs``).
 
-    Pairs that started closer than ``exclude`` (fabric neighbours in the skintight
-    start) are left out. The hash grid lists points in a fixed order (a radix
-    sort), so the lists, and a CPU run, are repeatable.
+    Fabric neighbours are left out: pairs that started closer than ``exclude``
+    (skintight) and lie within two mesh rings of each other (``ring[ring_start[i]:
+    ring_start[i + 1]]``), and pairs that started closer than ``touching`` (no room
+    between them on the body). Pairs that start close but are far apart in the
+    fabric (sleeve and side under the arm, the two legs at the crotch) do collide.
+    The hash grid lists points in a fixed order (a radix sort), so the lists, and
+    a CPU run, are repeatable.
     """
     i = wp.tid()
     count[i] = 0
@@ -214,9 +219,18 @@ def find_self_pairs(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
     j = int(0)
     while wp.hash_grid_query_next(query, j):
         if j != i and c < max_pairs:
-            if wp.length(p - x[j]) < search and wp.length(p0 - x0[j]) > exclude:
-                partner[i, c] = j
-                c += 1
+            if wp.length(p - x[j]) < search:
+                d0 = wp.length(p0 - x0[j])
+                ok = int(1)
+                if d0 <= touching:
+                    ok = 0
+                elif d0 <= exclude:
+                    for k in range(ring_start[i], ring_start[i + 1]):
+                        if ring[k] == j:
+                            ok = 0
+                if ok == 1:
+                    partner[i, c] = j
+                    c += 1
     count[i] = c
 
 

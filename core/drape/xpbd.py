@@ -69,7 +69,8 @@ class DrapeOptions:
     self_radius : m, particle radius of the self-collision (two particles stay twice this apart);
         None: 0.4 x the median pattern edge, so that a layer cannot slip between the vertices of another.
     self_exclude : particles that start (skintight) closer than this many self-collision
-        diameters are fabric neighbours and do not collide.
+        diameters and lie within two mesh rings of each other are fabric neighbours and do
+        not collide (nor do particles that start within half a radius of each other).
     self_interval : substeps between searches for self-collision candidates (a hash grid over
         the particles); every substep resolves the candidates found.
     """
@@ -389,10 +390,14 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
         partner = wp.zeros((n, SELF_PAIRS), dtype=int, device=dev)
         n_partner = wp.zeros(n, dtype=int, device=dev)
         x_start = wp.array(cloth.x0.astype(f32), dtype=wp.vec3, device=dev)
+        r_start, r_idx = two_rings(cloth.faces, n)
+        ring_start = wp.array(r_start.astype(np.int32), dtype=int, device=dev)
+        ring_idx = wp.array(r_idx.astype(np.int32), dtype=int, device=dev)
         search = 3.0 * self_radius  # the contact distance plus a margin for the motion until the next search
         find_pairs = wp.launch(K.find_self_pairs, n, inputs=[x, w, x_start, grid.id, search,
                                                              opts.self_exclude * 2.0 * self_radius, SELF_PAIRS,
-                                                             partner, n_partner], device=dev, record_cmd=True)
+                                                             partner, n_partner, ring_start, ring_idx,
+                                                             0.5 * self_radius], device=dev, record_cmd=True)
         self_cmds = [wp.launch(K.self_collide, n, inputs=[x, w, partner, n_partner, self_radius, self_dx],
                                device=dev, record_cmd=True),
                      wp.launch(K.apply_delta, n, inputs=[x, self_dx], device=dev, record_cmd=True)]
@@ -451,6 +456,19 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
         material=mat.to_json(), options=asdict(opts), device=str(dev),
         self_collision=self_on, self_radius=self_radius if self_on else 0.0,
     )
+
+
+def two_rings(faces: np.ndarray, n: int) -> tuple:
+    """CSR lists of the particles within two mesh rings of each particle: (starts (n+1,), indices)."""
+    from scipy.sparse import coo_matrix
+    f = np.asarray(faces, dtype=np.int64)
+    rows = np.concatenate([f[:, 0], f[:, 1], f[:, 2], f[:, 1], f[:, 2], f[:, 0]])
+    cols = np.concatenate([f[:, 1], f[:, 2], f[:, 0], f[:, 0], f[:, 1], f[:, 2]])
+    a = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n)).tocsr()
+    a.data[:] = 1.0
+    r = (a + a @ a).tocsr()
+    r.sort_indices()
+    return r.indptr.astype(np.int64), r.indices.astype(np.int64)
 
 
 def settle_speed(velocities: np.ndarray, trim: float = 0.0) -> float:
