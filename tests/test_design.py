@@ -457,3 +457,36 @@ def test_traced_length_follows_the_limb_in_the_design_pose(body, pose):
     assert abs(drop - arm) < 12, (drop, arm)
     assert (drop > 30) if pose == "A" else (abs(drop) < 15)
     assert 0.2 < np.linalg.norm(t - s) <= 0.25 + 1e-6
+
+
+def test_ring_tilted_to_contain_a_keypoint(body, ref):
+    """``ring.contains``: the plane through ``through`` is turned least from its normal so
+    that it also holds a second keypoint (the templates' armholes: armpit + shoulder tip);
+    it is mirrored with the ring, and checked (saving: the template round trips)."""
+    d = shirt()
+    arm = next(l for l in d["garments"][0]["lines"] if l["name"] == "armhole_left")
+    assert arm["ring"]["contains"] == "armhole_top_left"
+    assert d["keypoints"]["armhole_top_left"] == "shoulder_left"
+    r = Resolver(load_design(d), body, ref)
+    for side in ("left", "right"):
+        i = next(k for k, l in enumerate(r.lines) if l[0] == f"shirt.armhole_{side}")
+        P = np.array([r.position(p) for p in r.line_points(i)])
+        c = P.mean(0)
+        n = np.linalg.svd(P - c)[2][-1]
+        assert np.abs((P - c) @ n).max() < 1e-6
+        assert abs((r.position(r.point(f"shoulder_{side}", "")) - c) @ n) < 1e-6
+        assert r.point(f"armhole_top_{side}", "") in r.line_points(i)     # a vertex of the ring
+        assert abs(n[0]) > 0.99              # the A-pose armhole: (nearly) the sagittal plane
+    # without ``contains`` the plane is across the arm's axis and misses the shoulder tip
+    del arm["ring"]["contains"]
+    r = Resolver(load_design(d), body, ref)
+    i = next(k for k, l in enumerate(r.lines) if l[0] == "shirt.armhole_left")
+    P = np.array([r.position(p) for p in r.line_points(i)])
+    assert np.linalg.norm(P - r.position(r.point("shoulder_left", "")), axis=1).min() > 0.01
+    # bad values name their JSON path
+    arm["ring"]["contains"] = 3
+    assert error_of(d).path == "garments[0].lines[2].ring.contains"
+    arm["ring"]["contains"] = "armhole_under_left"          # the through point itself
+    with pytest.raises(DesignError) as exc:
+        resolve(load_design(d), body, vertices=ref)
+    assert exc.value.path == "garments[0].lines[2].ring.contains"

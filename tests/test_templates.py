@@ -240,6 +240,19 @@ def check_transfer(cut, instances):
     assert total["XS"] < total["M"] < total["XL"]
 
 
+def check_recut(cut, name, V):
+    """A template cut from scratch on instance V: the expected panels, a partition with
+    its openings, equal seam sides, mirrored halves, ease in range."""
+    assert len(cut.panels) == PANELS[name], name
+    for p in cut.panels:
+        assert len(p.faces) > 0 and np.all((p.ease >= 0.5) & (p.ease <= 4.0))
+    for g, n in OPENINGS[name].items():
+        check_partition(cut, g, n, V)
+        check_global_ids(cut, g, n)
+    check_seams(cut, V)
+    check_mirrors(cut, V)
+
+
 @pytest.mark.parametrize("name", list(TEMPLATES))
 def test_template_cuts_on_all_sizes_and_poses(name, body, instances):
     design = load_design(TEMPLATE_DIR / f"{name}.json")
@@ -334,14 +347,7 @@ def test_every_template_cuts_on_every_size(size, body, instances):
         d.refine_edge_length = None     # refinement is body-independent (tested on M); saves time
         cut = cut_design(d, body=body, shape=size)
         assert cut.body["shape"] == size
-        assert len(cut.panels) == PANELS[name], name
-        for p in cut.panels:
-            assert len(p.faces) > 0 and np.all((p.ease >= 0.5) & (p.ease <= 4.0))
-        for g, n in OPENINGS[name].items():
-            check_partition(cut, g, n, V)
-            check_global_ids(cut, g, n)
-        check_seams(cut, V)
-        check_mirrors(cut, V)
+        check_recut(cut, name, V)
         # the re-cut covers about the surface the M cut covers when carried to this size
         ref = cut_of(name, body)
         a_new = sum(_areas(cut.panel_positions(p, V), np.asarray(p.faces)).sum() for p in cut.panels)
@@ -370,3 +376,58 @@ def test_panels_cover_the_body_region_once(name, body, instances):
         a0 = _areas(cut.panel_positions(p, X), np.asarray(p.faces)).sum()
         a1 = _areas(refined.panel_positions(q, X), np.asarray(q.faces)).sum()
         assert abs(a1 - a0) < 1e-4 * a0, (p.name, a0, a1)
+
+
+@pytest.mark.parametrize("pose", ["T", "P1"])
+def test_every_template_cuts_in_other_reference_poses(pose, body):
+    """A designer may pick the T-pose (or P1, arms forward and legs spread) as the
+    reference: every template is cut from scratch there into a valid garment. The
+    armhole rings follow the arm (plane through armpit and shoulder tip, across the
+    upper arm) and sleeve lengths are traced down the arm as posed; a fixed x-normal
+    armhole sliced the raised / forward arm lengthwise ("sleeve length leaves the arm",
+    "shoulder and armhole cross")."""
+    V = np.asarray(body.vertices(None, pose), float)
+    for name in TEMPLATES:
+        d = load_design(TEMPLATE_DIR / f"{name}.json")
+        d.body["pose"] = pose
+        d.refine_edge_length = None
+        cut = cut_design(d, body=body)
+        assert cut.body["pose"] == pose
+        check_recut(cut, name, V)
+
+
+def test_armhole_follows_the_arm_and_keeps_the_a_pose_plane(body):
+    """The armhole plane: the sagittal plane (normal x) in the A-pose, as before; turned
+    with the arm in T and P1, its top on the shoulder tip and the cuff down the arm."""
+    from core.design.resolve import Resolver, instance_vertices
+    for pose in ("A", "T", "P1"):
+        d = load_design(TEMPLATE_DIR / "shirt_long_sleeve.json")
+        d.body["pose"] = pose
+        R = Resolver(d, body, instance_vertices(d, body))
+        ring = next(i for i, l in enumerate(R.lines) if l[0] == "shirt.armhole_left")
+        P = np.array([R.position(sp) for sp in R.line_points(ring)])
+        pos = lambda n: R.position(R.point(n, "test"))
+        # a plane section that holds the armpit side and the shoulder tip
+        c = P.mean(0)
+        normal = np.linalg.svd(P - c)[2][-1]
+        assert np.abs((P - c) @ normal).max() < 1e-6
+        assert abs((pos("shoulder_left") - c) @ normal) < 1e-6
+        if pose == "A":
+            assert abs(normal[0]) > np.cos(np.radians(3)), normal
+        # the armhole top is the shoulder tip, a vertex of the ring, in every pose
+        assert R.point("armhole_top_left", "test") in R.line_points(ring)
+        assert np.linalg.norm(pos("armhole_top_left") - pos("shoulder_left")) < 1e-9
+        # front and back of the armhole (ring fractions) on either side of the plane of
+        # armpit, shoulder tip and elbow: the sleeve halves keep their side of the arm
+        arm = pos("elbow_left") - pos("shoulder_left")
+        side = np.cross(pos("shoulder_left") - pos("armhole_under_left"), arm)
+        o = pos("shoulder_left")
+        assert ((pos("armhole_front_left") - o) @ side) * ((pos("armhole_back_left") - o) @ side) < 0
+        if pose == "A":
+            assert pos("armhole_front_left")[1] < -0.03 < 0.03 < pos("armhole_back_left")[1]
+        # the plane crosses the upper arm: its normal within 60 degrees of the arm's axis
+        # (55 in the A-pose, the arm hanging 45 degrees down; about 45 in T and P1)
+        assert abs(normal @ arm) / np.linalg.norm(arm) > np.cos(np.radians(60)), (pose, normal)
+        # the cuff lies on the forearm, past the elbow
+        assert np.linalg.norm(pos("cuff_level_left") - pos("wrist_left")) < \
+            np.linalg.norm(pos("cuff_level_left") - pos("elbow_left"))

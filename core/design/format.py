@@ -43,9 +43,11 @@ Fields (metres, the body frame of :mod:`core`: +Z up, body faces -Y, +X = body's
                        name, "lines": [...], "panels": [...]}]``
 line                   ``{"name", "role": "seam" | "opening" | "guide"}`` plus one of
                        ``"points": [keypoint, ...], "closed"`` (joined by geodesics);
-                       ``"ring": {"through", "normal": axis | [a, b], "points",
-                       "named": {name: fraction | axis}}`` (closed plane section;
-                       names points on itself: the extreme along an axis, or the
+                       ``"ring": {"through", "normal": axis | [a, b], "contains",
+                       "points", "named": {name: fraction | axis}}`` (closed plane
+                       section; ``contains``, optional: a second keypoint the
+                       plane is tilted to hold, the normal turned least; names
+                       points on itself: the extreme along an axis, or the
                        point at a fraction of its length); ``"section": {"from",
                        "to", "normal", "spacing"}`` (plane section between two
                        keypoints, e.g. a centre seam on the midline). A ``guide``
@@ -448,13 +450,15 @@ def _parse_axis_or_pair(path, x, params):
 
 def _parse_ring(path, ring, params):
     _expect_dict(path, ring, "a ring {through, normal, points, named}")
-    _expect_keys(path, ring, ("through", "normal", "points", "named", "offset"))
+    _expect_keys(path, ring, ("through", "normal", "points", "named", "offset", "contains"))
     if "through" not in ring:
         raise DesignError(f"{path}.through", "missing; expected a keypoint the ring passes through")
     out = {"through": _ref(f"{path}.through", ring["through"], params)}
     if "normal" not in ring:
         raise DesignError(f"{path}.normal", "missing; expected an axis or [keypoint_a, keypoint_b]")
     out["normal"] = _parse_axis_or_pair(f"{path}.normal", ring["normal"], params)
+    if "contains" in ring:
+        out["contains"] = _ref(f"{path}.contains", ring["contains"], params)
     n = ring.get("points", 12)
     if not isinstance(n, int) or isinstance(n, bool) or not 4 <= n <= 64:
         raise DesignError(f"{path}.points", f"expected an integer in 4..64, got {_fmt(n)}")

@@ -69,6 +69,8 @@ def mirror_line(line):
         r = copy.deepcopy(line.ring)
         r["through"] = _mirror_ref(r["through"])
         r["normal"] = mirror_axis(r["normal"]) if isinstance(r["normal"], str) else [_mirror_ref(x) for x in r["normal"]]
+        if "contains" in r:
+            r["contains"] = _mirror_ref(r["contains"])
         r["named"] = {swap_side(k): (mirror_axis(v) if isinstance(v, str) else v) for k, v in r["named"].items()}
         # A reflection reverses the sense of rotation: fractions along the ring
         # then land on mirrored positions.

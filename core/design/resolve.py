@@ -16,7 +16,10 @@ shape and pose. Keypoint kinds:
 
 A line is either a list of keypoints joined by geodesics, or a *ring*: the
 closed plane section of a limb or the torso through a keypoint, with the plane
-normal given by an axis or by two keypoints (a limb's direction), sampled at
+normal given by an axis or by two keypoints (a limb's direction), optionally
+tilted (turned least) so the plane also holds a second keypoint (``contains``:
+an armhole through the armpit and over the shoulder tip, across the arm in any
+pose), sampled at
 ``points`` positions; a ring can name points on itself (``"named": {"hem_left":
 "+x", "cuff_under_left": 0.5}``: the extreme point along an axis, or the point
 at a fraction of the ring's length from ``through``, counter-clockwise about
@@ -71,6 +74,16 @@ def instance_vertices(design: Design, body, shape=None, pose=None) -> np.ndarray
     """Vertices (V, 3) of the body instance a design is resolved on."""
     return np.asarray(body.vertices(instance_shape(design, body, shape), instance_pose(design, pose)),
                       dtype=np.float64)
+
+
+def _arc_position(closed: np.ndarray, cum: np.ndarray, q: np.ndarray):
+    """Where ``q`` sits on the polyline ``closed`` (k, 3) with cumulative lengths ``cum``:
+    (arc length of its nearest point, distance to it)."""
+    seg = closed[1:] - closed[:-1]
+    f = np.clip(np.einsum("ij,ij->i", q - closed[:-1], seg) / np.maximum((seg * seg).sum(1), 1e-18), 0, 1)
+    dist = np.linalg.norm(closed[:-1] + f[:, None] * seg - q, axis=1)
+    m = int(np.argmin(dist))
+    return cum[m] + f[m] * (cum[m + 1] - cum[m]), float(dist[m])
 
 
 _FACE_SYM = {}
@@ -318,6 +331,22 @@ class Resolver:
             raise DesignError(path, "the two keypoints coincide; they cannot give a direction")
         return v / n
 
+    def _tilt_to_contain(self, n: np.ndarray, p0: np.ndarray, ref, path: str, full: str) -> np.ndarray:
+        """The normal ``n`` turned least so that the plane through ``p0`` holds the
+        keypoint ``ref`` too (a ring's ``contains``, then a vertex of the ring): e.g. an
+        armhole through the armpit and the shoulder tip, otherwise across the arm
+        whatever its pose."""
+        q = self.position(self.ref(ref, f"{path}.contains"))
+        u = q - p0
+        if np.linalg.norm(u) < 1e-6:
+            raise DesignError(f"{path}.contains", f"line {full!r}: {ref!r} is the through point itself")
+        u /= np.linalg.norm(u)
+        m = n - (n @ u) * u
+        if np.linalg.norm(m) < 0.2:
+            raise DesignError(f"{path}.contains", f"line {full!r}: {ref!r} lies (nearly) along the normal "
+                                                  f"from the through point; no plane across it holds both")
+        return m / np.linalg.norm(m)
+
     def ring_points(self, index: int) -> List[SurfacePoint]:
         full, path, line, _ = self.lines[index]
         if full in self._rings:
@@ -326,6 +355,8 @@ class Resolver:
         through = self.ref(r["through"], f"{path}.ring.through")
         p0 = self.position(through)
         n = self._axis(r["normal"], f"{path}.ring.normal")
+        if r.get("contains") is not None:
+            n = self._tilt_to_contain(n, p0, r["contains"], f"{path}.ring", full)
         try:
             poly, pts, segf = plane_section_loop(self.vertices, self.faces, p0, n, through.triangle,
                                                  int(r.get("handed", 1)), self.tools.edges)
@@ -361,6 +392,14 @@ class Resolver:
             else:
                 s = v * total
                 entries.append((s % total, at(s), name))
+        if r.get("contains") is not None:
+            # the contained keypoint is a vertex of the ring (other lines may end on it)
+            sp = self.ref(r["contains"], f"{path}.ring.contains")
+            s_q, dist = _arc_position(closed, cum, self.position(sp))
+            if dist > 5e-3:
+                raise DesignError(f"{path}.ring.contains", f"line {full!r}: the section does not pass within "
+                                                           f"5 mm of {r['contains']!r}")
+            entries.append((s_q % total, sp, None))
         named_s = [e[0] for e in entries]
         N = int(r["points"])
         gap = 0.35 * total / N
@@ -414,14 +453,10 @@ class Resolver:
         L = np.linalg.norm(np.diff(closed, axis=0), axis=1)
         cum = np.concatenate([[0.0], np.cumsum(L)])
         # where ``to`` sits on the loop: the nearest point of the section polyline
-        seg = closed[1:] - closed[:-1]
-        f = np.clip(np.einsum("ij,ij->i", pb - closed[:-1], seg) / np.maximum((seg * seg).sum(1), 1e-18), 0, 1)
-        dist = np.linalg.norm(closed[:-1] + f[:, None] * seg - pb, axis=1)
-        m = int(np.argmin(dist))
-        if dist[m] > 5e-3:
+        sb, dist = _arc_position(closed, cum, pb)
+        if dist > 5e-3:
             raise DesignError(f"{path}.section.to", f"line {full!r}: the section through {c['from']!r} "
                                                     f"does not pass within 5 mm of {c['to']!r}")
-        sb = cum[m] + f[m] * L[m]
         total = cum[-1]
         forward = sb <= total - sb
         length = sb if forward else total - sb

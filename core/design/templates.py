@@ -9,8 +9,10 @@ Construction (all mirrored left -> right):
 
 - tops: neckline loop through the four neck landmarks (opening); hem ring
   (opening) a traced length below the front waist; armhole rings (seams) a
-  little down the arm from the armpit, across the upper arm; shoulder seams
-  neck -> armhole top; side seams armhole bottom -> hem side; sleeves end in
+  little down the arm from the armpit, across the upper arm and over the
+  shoulder tip (the plane follows the arm, so the A, T and P1 reference poses
+  cut; the front/back halves are named by ring fractions, not axes); shoulder
+  seams neck -> armhole top; side seams armhole bottom -> hem side; sleeves end in
   cuff rings (openings) a traced sleeve length from the armhole top, split
   front/back by a seam on top and one underneath. Pinned at the neckline.
 - pants/shorts: waist ring (opening, pinned); centre front and centre back
@@ -71,6 +73,12 @@ def _top_parts(sleeves: str = "long", hem: str = "hem", ease=None):
         # the neckline sits below the neck landmarks (the head region starts there)
         "neckline_front": {"trace": {"from": "neck_front", "along": "torso_down", "length": "$neck_drop_front"}},
         "neckline_back": {"trace": {"from": "neck_back", "along": "torso_down", "length": "$neck_drop"}},
+        # a point just below the elbow: the shoulder tip -> here is the upper arm's direction
+        # (the elbow landmark lies on the back of the elbow; this one lies on the arm's axis
+        # seen from above, so in the A-pose the armhole plane stays the sagittal one)
+        "arm_axis_left": {"between": ["elbow_left", "wrist_left"], "t": 0.15},
+        # the armhole's top: the shoulder tip (a vertex of the armhole ring, in every pose)
+        "armhole_top_left": "shoulder_left",
         "neckline_side_left": {"between": ["neck_left", "shoulder_left"], "t": "$neck_width"},
         "chest_front": {"between": ["neck_front", "waist_front"], "t": 0.45},
         "chest_back": {"between": ["neck_back", "waist_back"], "t": 0.45},
@@ -79,12 +87,16 @@ def _top_parts(sleeves: str = "long", hem: str = "hem", ease=None):
         {"name": "neckline", "points": ["neckline_front", "neckline_side_left", "neckline_back",
                                         "neckline_side_right"],
          "closed": True, "role": "opening"},
-        # a set-in armhole: the body's section by the sagittal plane just outside the armpit,
-        # over the shoulder tip
-        {"name": "armhole_left", "ring": {"through": "armhole_under_left", "normal": "x",
-                                           "points": 12, "named": {"armhole_top_left": "+z",
-                                                                   "armhole_front_left": "-y",
-                                                                   "armhole_back_left": "+y"}},
+        # a set-in armhole: the section just outside the armpit, over the shoulder tip and
+        # across the upper arm - the plane through both, turned least from the arm's axis.
+        # It follows the arm in every reference pose (in the A-pose it is the sagittal
+        # plane, normal x; a fixed x would slice a raised or forward arm lengthwise).
+        {"name": "armhole_left", "ring": {"through": "armhole_under_left",
+                                           "normal": ["shoulder_left", "arm_axis_left"],
+                                           # front/back: fractions of the ring from the armpit
+                                           # (in the A-pose its front- and backmost points)
+                                           "contains": "armhole_top_left", "points": 12,
+                                           "named": {"armhole_front_left": 0.81, "armhole_back_left": 0.29}},
          "role": "seam" if sleeves != "none" else "opening"},
         {"name": "shoulder_left", "points": ["neckline_side_left", "armhole_top_left"], "role": "seam"},
         {"name": "side_left", "points": ["armhole_under_left", "hem_side_left"], "role": "seam"},
