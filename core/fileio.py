@@ -99,11 +99,6 @@ def output_dir(path: PathLike) -> Iterator[Path]:
     try:
         yield tmp
         mask = _umask()
-        for src in tmp.rglob("*"):
-            # writers that bypass write_bytes (matplotlib, ezdxf, reportlab) already follow the
-            # umask; sub-folders made by mkdtemp's children are fine too: only fix owner-only files
-            if src.is_file() and (src.stat().st_mode & 0o777) == 0o600:
-                os.chmod(src, 0o666 & ~mask)
         final.mkdir(parents=True, exist_ok=True)
         for src in sorted(tmp.rglob("*")):
             rel = src.relative_to(tmp)
@@ -111,6 +106,10 @@ def output_dir(path: PathLike) -> Iterator[Path]:
             if src.is_dir():
                 dst.mkdir(parents=True, exist_ok=True)
             else:
+                # writers that bypass write_bytes (matplotlib, ezdxf, reportlab) already follow
+                # the umask; only owner-only files (mkstemp's) need fixing
+                if (src.stat().st_mode & 0o777) == 0o600:
+                    os.chmod(src, 0o666 & ~mask)
                 dst.parent.mkdir(parents=True, exist_ok=True)
                 os.replace(src, dst)
     finally:

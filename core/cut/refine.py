@@ -5,12 +5,13 @@
 halves are at least ``0.75 h`` long and the mean edge lands near ``h`` (0.92 h
 on the long-sleeve shirt, 21.5k triangles at 1 cm). Splitting every edge longer
 than ``h`` instead would leave a mean of 0.62 h and 2.2x the triangles, which
-every later stage (pattern solve, drape) pays for. Each triangle is then re-split by the number of its split edges
-(1 -> 2, 2 -> 3 with the shorter diagonal, 3 -> 4, "red-green"). An edge is
-split once for both its triangles, so the mesh stays conforming and both sides
-of every seam get the same new vertices. Rounds repeat until no edge exceeds
-``SPLIT_RATIO * h``. New vertices are midpoints, i.e. averages of two embedding rows, so the
-refinement applies to every body instance.
+every later stage (pattern solve, drape) pays for. Each triangle is then
+re-split by the number of its split edges (1 -> 2, 2 -> 3 with the shorter
+diagonal, 3 -> 4, "red-green"). An edge is split once for both its triangles,
+so the mesh stays conforming and both sides of every seam get the same new
+vertices. Rounds repeat until no edge exceeds ``SPLIT_RATIO * h``. New
+vertices are midpoints, i.e. averages of two embedding rows, so the refinement
+applies to every body instance.
 """
 from __future__ import annotations
 

@@ -599,8 +599,7 @@ def _parse_panel(path, obj, params) -> Panel:
         ease = _parse_ease(f"{path}.ease", obj.get("ease", {"value": 1.0}), params)
     except DesignError as exc:
         # name the panel, not only its JSON path
-        message = str(exc)[len(exc.path) + 2:] if exc.path else str(exc)
-        raise DesignError(exc.path, f"panel {obj['name']!r}: {message}") from None
+        raise DesignError(exc.path, f"panel {obj['name']!r}: {exc.message}") from None
     return Panel(obj["name"], seed, part, ease)
 
 

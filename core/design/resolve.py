@@ -86,6 +86,21 @@ def _arc_position(closed: np.ndarray, cum: np.ndarray, q: np.ndarray):
     return cum[m] + f[m] * (cum[m + 1] - cum[m]), float(dist[m])
 
 
+def _turned_normal(n: np.ndarray, p0: np.ndarray, q: np.ndarray):
+    """The unit normal ``n`` turned least so that the plane through ``p0`` holds ``q``.
+
+    Returns (normal (3,), cosine of the turn): (None, None) when ``q`` is at
+    ``p0``; (None, 0.0) when ``q`` lies along ``n`` from it (no such plane)."""
+    u = q - p0
+    length = np.linalg.norm(u)
+    if length < 1e-6:
+        return None, None
+    u = u / length
+    m = n - (n @ u) * u
+    cos_turn = float(np.linalg.norm(m))
+    return (m / cos_turn if cos_turn > 0 else None), cos_turn
+
+
 _FACE_SYM = {}
 
 
@@ -331,21 +346,19 @@ class Resolver:
             raise DesignError(path, "the two keypoints coincide; they cannot give a direction")
         return v / n
 
-    def _tilt_to_contain(self, n: np.ndarray, p0: np.ndarray, ref, path: str, full: str) -> np.ndarray:
-        """The normal ``n`` turned least so that the plane through ``p0`` holds the
-        keypoint ``ref`` too (a ring's ``contains``, then a vertex of the ring): e.g. an
-        armhole through the armpit and the shoulder tip, otherwise across the arm
+    def _tilt_to_contain(self, n: np.ndarray, p0: np.ndarray, q: np.ndarray, ref, path: str,
+                         full: str) -> np.ndarray:
+        """The normal ``n`` turned least so that the plane through ``p0`` holds the point
+        ``q`` of keypoint ``ref`` too (a ring's ``contains``, then a vertex of the ring):
+        e.g. an armhole through the armpit and the shoulder tip, otherwise across the arm
         whatever its pose."""
-        q = self.position(self.ref(ref, f"{path}.contains"))
-        u = q - p0
-        if np.linalg.norm(u) < 1e-6:
+        m, cos_turn = _turned_normal(n, p0, q)
+        if cos_turn is None:
             raise DesignError(f"{path}.contains", f"line {full!r}: {ref!r} is the through point itself")
-        u /= np.linalg.norm(u)
-        m = n - (n @ u) * u
-        if np.linalg.norm(m) < 0.2:
+        if cos_turn < 0.2:
             raise DesignError(f"{path}.contains", f"line {full!r}: {ref!r} lies (nearly) along the normal "
                                                   f"from the through point; no plane across it holds both")
-        return m / np.linalg.norm(m)
+        return m
 
     def ring_points(self, index: int) -> List[SurfacePoint]:
         full, path, line, _ = self.lines[index]
@@ -355,8 +368,10 @@ class Resolver:
         through = self.ref(r["through"], f"{path}.ring.through")
         p0 = self.position(through)
         n = self._axis(r["normal"], f"{path}.ring.normal")
+        contains = None
         if r.get("contains") is not None:
-            n = self._tilt_to_contain(n, p0, r["contains"], f"{path}.ring", full)
+            contains = self.ref(r["contains"], f"{path}.ring.contains")
+            n = self._tilt_to_contain(n, p0, self.position(contains), r["contains"], f"{path}.ring", full)
         try:
             poly, pts, segf = plane_section_loop(self.vertices, self.faces, p0, n, through.triangle,
                                                  int(r.get("handed", 1)), self.tools.edges)
@@ -392,14 +407,13 @@ class Resolver:
             else:
                 s = v * total
                 entries.append((s % total, at(s), name))
-        if r.get("contains") is not None:
+        if contains is not None:
             # the contained keypoint is a vertex of the ring (other lines may end on it)
-            sp = self.ref(r["contains"], f"{path}.ring.contains")
-            s_q, dist = _arc_position(closed, cum, self.position(sp))
+            s_q, dist = _arc_position(closed, cum, self.position(contains))
             if dist > 5e-3:
                 raise DesignError(f"{path}.ring.contains", f"line {full!r}: the section does not pass within "
                                                            f"5 mm of {r['contains']!r}")
-            entries.append((s_q % total, sp, None))
+            entries.append((s_q % total, contains, None))
         named_s = [e[0] for e in entries]
         N = int(r["points"])
         gap = 0.35 * total / N
@@ -430,15 +444,12 @@ class Resolver:
         pa, pb = self.position(a), self.position(b)
         n = self._axis(c["normal"], f"{path}.section.normal")
         # tilt the plane (slightly) so that it contains both ends
-        u = pb - pa
-        if np.linalg.norm(u) < 1e-6:
+        n, cos_turn = _turned_normal(n, pa, pb)
+        if cos_turn is None:
             raise DesignError(f"{path}.section.to", f"line {full!r}: from and to coincide")
-        u /= np.linalg.norm(u)
-        m_ = n - (n @ u) * u
-        if np.linalg.norm(m_) < np.cos(np.radians(10.0)):
+        if cos_turn < np.cos(np.radians(10.0)):
             raise DesignError(f"{path}.section.normal", f"line {full!r}: {c['to']!r} is more than 10 degrees "
                                                         f"off the section plane through {c['from']!r}")
-        n = m_ / np.linalg.norm(m_)
         try:
             poly, pts, segf = plane_section_loop(self.vertices, self.faces, pa, n, a.triangle, 1, self.tools.edges)
         except ValueError as exc:

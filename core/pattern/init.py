@@ -132,29 +132,21 @@ def grain_angle(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray, warp_dir: np
     """Area-weighted vote (radians) of the angle from +y to the 2D image of the 3D warp.
 
     Per triangle the 3D warp direction is mapped to 2D through the inverse of
-    the triangle's 2D->3D Jacobian; its angle from +y is voted with weight
-    equal to the 3D area (as a unit vector, so angles average on the circle).
-    Degenerate triangles (tiny 2D or 3D extent) do not vote.
+    the triangle's 2D->3D Jacobian (:func:`pulled_back_warp`); its angle from +y
+    is voted with weight equal to the 3D area (as a unit vector, so angles
+    average on the circle). Degenerate triangles (tiny 2D or 3D extent) do not vote.
     """
-    G, a2 = gradient_operators(uv, faces)
-    F = np.asarray(faces, int)
-    J = np.einsum("tkd,tke->tde", xyz[F], G)  # (f, 3, 2): 2D -> 3D
-    # 2D image of a 3D tangent vector: least-squares preimage through J
-    JtJ = np.einsum("tdi,tdj->tij", J, J)
-    rhs = np.einsum("tdi,td->ti", J, warp_dir)
-    det = JtJ[:, 0, 0] * JtJ[:, 1, 1] - JtJ[:, 0, 1] ** 2
-    ok = (np.abs(det) > DEGENERATE * max(np.mean(np.abs(det)), 1e-300)) & (a2 != 0)
-    img = np.zeros((len(F), 2))
-    img[ok, 0] = (JtJ[ok, 1, 1] * rhs[ok, 0] - JtJ[ok, 0, 1] * rhs[ok, 1]) / det[ok]
-    img[ok, 1] = (JtJ[ok, 0, 0] * rhs[ok, 1] - JtJ[ok, 0, 1] * rhs[ok, 0]) / det[ok]
-    norm = np.linalg.norm(img, axis=1)
-    ok &= norm > DEGENERATE * max(np.mean(norm), 1e-300)
-    if not np.any(ok):
-        return 0.0  # no usable triangle: keep the flattening's own orientation
-    w = areas_3d(xyz, faces)[ok]
-    unit = img[ok] / norm[ok, None]
-    # angle measured from +y, counter-clockwise: atan2(-x, y)
-    v = np.sum(w[:, None] * unit, axis=0)
+    G, area = gradient_operators(uv, faces)
+    img, ok = pulled_back_warp(xyz, faces, G, warp_dir)
+    return _vote_angle(img, np.where(ok & (area != 0), areas_3d(xyz, faces), 0.0))
+
+
+def _vote_angle(unit: np.ndarray, weight: np.ndarray) -> float:
+    """Angle from +y (counter-clockwise, ``atan2(-x, y)``) of the weighted sum of ``unit``
+    (f, 2); 0 when nothing votes (keep the flattening's own orientation)."""
+    if not np.any(weight > 0):
+        return 0.0
+    v = np.sum(weight[:, None] * unit, axis=0)
     return float(np.arctan2(-v[0], v[1]))
 
 
@@ -168,11 +160,6 @@ def align_grain(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray, warp_dir: np
     theta = grain_angle(uv, xyz, faces, warp_dir)
     c = uv.mean(axis=0)
     return (uv - c) @ rotation(-theta).T + c
-
-
-def initial_flattening(xyz: np.ndarray, faces: np.ndarray, warp_dir: np.ndarray) -> np.ndarray:
-    """LSCM (Tutte where LSCM folds), counter-clockwise, area-matched, grain along +y."""
-    return flatten_panel(xyz, faces, warp_dir)["uv"]
 
 
 def pulled_back_warp(xyz: np.ndarray, faces: np.ndarray, G: np.ndarray, warp_dir: np.ndarray) -> tuple:
@@ -215,10 +202,7 @@ def flatten_panel(xyz: np.ndarray, faces: np.ndarray, warp_dir: np.ndarray) -> d
     G, area = gradient_operators(uv, F)
     img, ok = pulled_back_warp(xyz, F, G, warp_dir)
     w = np.where(ok & (area != 0), areas_3d(xyz, F), 0.0)
-    theta = 0.0
-    if np.any(w > 0):
-        theta = float(np.arctan2(-np.sum(w * img[:, 0]), np.sum(w * img[:, 1])))
-    R = rotation(-theta)
+    R = rotation(-_vote_angle(img, w))
     c = uv.mean(axis=0)
     # rotating the domain rotates gradients and pulled-back directions alike
     return {"uv": (uv - c) @ R.T + c, "G": G @ R.T, "area": area, "warp": img @ R.T, "warp_weight": w}
