@@ -54,6 +54,8 @@ def key_figures(pattern) -> dict:
                         ("seam mismatch max mm", sm, "max_mm")):
         if isinstance(d.get(k), (int, float)):
             out[label] = round(float(d[k]), 3)
+    if sm.get("gathered"):
+        out["gathered seams"] = len(sm["gathered"])
     if "flipped_triangles" in m:
         out["flipped triangles"] = int(m["flipped_triangles"])
     if isinstance(rep.get("optimize_seconds"), (int, float)):

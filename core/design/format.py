@@ -16,8 +16,13 @@ Fields (metres, the body frame of :mod:`core`: +Z up, body faces -Y, +X = body's
                        "pose": "A" | "T" | "P1".."P3" | {joint: [rx, ry, rz]}}``:
                        the reference instance the design is made on
 ``materials``          ``{"fabric": preset, "eps_weft": >= 1, "eps_warp": >= 1,
+                       "gathered": bool | [seam line], "gather_above": fraction | null,
                        "export": {"allowance": m | {"default", "hem", "fold",
-                       seam line: m}, "notch_spacing": m}}``; ``export``
+                       seam line: m}, "notch_spacing": m}}``; ``gathered``
+                       seams are not sewn flat: the longer side is gathered into
+                       the shorter (true: every seam); ``gather_above`` (default
+                       0.25) gathers any seam whose sides' ease demands differ by
+                       more than that fraction, null never; ``export``
                        (optional) sets the seam allowance (0..0.1 m; default 1 cm,
                        hems 2 cm, folds 0; a seam line by its name, in every
                        garment, or as ``garment.line``) and the notch spacing
@@ -672,8 +677,8 @@ def _parse_body(path, obj):
 
 
 def _parse_materials(path, obj):
-    _expect_dict(path, obj, "materials {fabric, eps_weft, eps_warp, export}")
-    _expect_keys(path, obj, ("fabric", "eps_weft", "eps_warp", "export"))
+    _expect_dict(path, obj, "materials {fabric, eps_weft, eps_warp, export, gathered, gather_above}")
+    _expect_keys(path, obj, ("fabric", "eps_weft", "eps_warp", "export", "gathered", "gather_above"))
     fabric = obj.get("fabric", "cotton")
     if not isinstance(fabric, str) or not fabric:
         raise DesignError(f"{path}.fabric", f"expected a fabric preset name, got {_fmt(fabric)}")
@@ -682,6 +687,22 @@ def _parse_materials(path, obj):
         out[k] = _number(f"{path}.{k}", obj.get(k, 1.1), 1.0, 4.0, what="a tolerance")
     if "export" in obj:
         out["export"] = _parse_export(f"{path}.export", obj["export"])
+    if "gathered" in obj:
+        g = obj["gathered"]
+        if isinstance(g, bool):
+            out["gathered"] = g
+        elif isinstance(g, list) and all(isinstance(x, str) for x in g):
+            for k, x in enumerate(g):
+                for part in x.partition("#")[0].split("."):
+                    _check_name(f"{path}.gathered[{k}]", part)
+            out["gathered"] = list(g)
+        else:
+            raise DesignError(f"{path}.gathered", f"expected true, false or a list of seam line names, got {_fmt(g)}")
+    if "gather_above" in obj:
+        a = obj["gather_above"]
+        out["gather_above"] = None if a is None else _number(
+            f"{path}.gather_above", a, 0.01, 10.0,
+            what="a fraction (0.25: gather a seam whose sides' ease demands differ by more than 25 %) or null")
     return out
 
 
@@ -712,12 +733,9 @@ def _parse_export(path, obj):
 EXPORT_ALLOWANCE_KEYS = ("default", "hem", "fold")
 
 
-def _check_export_seams(design: "Design") -> None:
-    """Per-seam allowance keys of ``materials.export`` must name seam lines (or their mirrors)."""
+def _seam_line_names(design: "Design") -> set:
+    """Every name a seam line answers to: its own, its mirror's, and both as ``garment.line``."""
     from .mirror import mirrored_name
-    allowance = (design.materials.get("export") or {}).get("allowance")
-    if not isinstance(allowance, dict):
-        return
     seams = set()
     for gname, lines in [(None, design.lines)] + [(g.name, g.lines) for g in design.garments]:
         for line in lines:
@@ -729,7 +747,23 @@ def _check_export_seams(design: "Design") -> None:
                     seams.add(n)
                     if gname:
                         seams.add(f"{gname}.{n}")
-    for k in allowance:
+    return seams
+
+
+def _check_export_seams(design: "Design") -> None:
+    """Per-seam allowance keys of ``materials.export`` and the ``materials.gathered`` list must name seam
+    lines (or their mirrors)."""
+    allowance = (design.materials.get("export") or {}).get("allowance")
+    gathered = design.materials.get("gathered")
+    if not isinstance(allowance, dict) and not isinstance(gathered, list):
+        return
+    seams = _seam_line_names(design)
+    for k, name in enumerate(gathered if isinstance(gathered, list) else []):
+        if name.partition("#")[0] not in seams:
+            raise DesignError(f"materials.gathered[{k}]",
+                              f"{name!r} is not a seam line of the design; expected one of: "
+                              f"{', '.join(sorted(seams)) or '(no seam lines)'}")
+    for k in (allowance if isinstance(allowance, dict) else {}):
         if k in EXPORT_ALLOWANCE_KEYS or k.partition("#")[0] in seams:
             continue
         raise DesignError(f"materials.export.allowance.{k}",

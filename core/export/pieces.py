@@ -536,12 +536,16 @@ def seam_sides(pattern: Pattern, panel_name: str):
             yield s, "b", np.asarray(s.verts_b, int)
 
 
-def notch_positions(length_a: float, length_b: float, spacing: float = DEFAULT_NOTCH_SPACING) -> Tuple[np.ndarray, np.ndarray]:
+def notch_positions(length_a: float, length_b: float, spacing: float = DEFAULT_NOTCH_SPACING,
+                    gathered: bool = False) -> Tuple[np.ndarray, np.ndarray]:
     """Arc lengths of the notches on the two sides of a seam.
 
     Both sides get the seam ends and the same interior positions
     ``spacing, 2 spacing, ...`` measured from the seam's first vertex, skipping
-    those closer than ``spacing / 4`` to the shorter side's end.
+    those closer than ``spacing / 4`` to the shorter side's end. On a
+    ``gathered`` seam the interior notches sit at the same *fractions* of each
+    side (spaced ``spacing`` on the shorter one), so each stretch of the
+    longer side is gathered into its own stretch of the shorter.
 
     Returns
     -------
@@ -554,6 +558,10 @@ def notch_positions(length_a: float, length_b: float, spacing: float = DEFAULT_N
         while k * spacing <= lmin - 0.25 * spacing:
             interior.append(k * spacing)
             k += 1
+    if gathered and lmin > 0:
+        f = np.array(interior) / lmin
+        return (np.concatenate([[0.0], f * length_a, [length_a]]),
+                np.concatenate([[0.0], f * length_b, [length_b]]))
     s_a = np.array([0.0] + interior + [length_a])
     s_b = np.array([0.0] + interior + [length_b])
     return s_a, s_b
@@ -703,7 +711,7 @@ def build_piece(pattern: Pattern, panel: PatternPanel, widths: Dict[str, float],
         other_ids = np.asarray(seam.verts_b if side == "a" else seam.verts_a, int)
         la = polyline_length(xy[ids])
         lb = polyline_length(np.asarray(other.uv, float)[other_ids])
-        s_here, _ = notch_positions(la, lb, notch_spacing)
+        s_here, _ = notch_positions(la, lb, notch_spacing, gathered=bool(getattr(seam, "gathered", False)))
         pts, edges = point_at_arclength(xy[ids], s_here)
         for s, q, e in zip(s_here, pts, edges):
             li, ei = table[(int(ids[e]), int(ids[e + 1]))]

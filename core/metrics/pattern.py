@@ -163,23 +163,29 @@ def seam_mismatch(pattern, garment: Optional[str] = None) -> Dict[str, object]:
 
     Returns ``mean``, ``std`` (percent over seams), ``max_mm`` (largest absolute
     difference, millimetres) and ``per_seam`` (name -> {percent, mm}). A seam
-    belongs to a garment when its first panel does.
+    belongs to a garment when its first panel does. Gathered seams are
+    meant to differ: they are left out of the statistics and listed in
+    ``gathered`` (name -> gather ratio, longer side / shorter side).
     """
     names = {p.name for p in _panels(pattern, garment)}
-    per, rel, diff = {}, [], []
+    per, rel, diff, gathered = {}, [], [], {}
     for s in pattern.seams:
         if s.panel_a not in names:
             continue
         pa, pb = pattern.seam_polylines(s)
         la, lb = polyline_length(pa), polyline_length(pb)
+        if getattr(s, "gathered", False):
+            gathered[s.name] = max(la, lb) / max(min(la, lb), 1e-12)
+            continue
         r = abs(la - lb) / max((la + lb) / 2.0, 1e-12)
         per[s.name] = {"percent": 100.0 * r, "mm": 1000.0 * abs(la - lb)}
         rel.append(100.0 * r)
         diff.append(1000.0 * abs(la - lb))
     if not rel:
-        return {"mean": 0.0, "std": 0.0, "max_mm": 0.0, "n": 0, "per_seam": {}}
+        return {"mean": 0.0, "std": 0.0, "max_percent": 0.0, "max_mm": 0.0, "n": 0, "per_seam": {},
+                "gathered": gathered}
     return {"mean": float(np.mean(rel)), "std": float(np.std(rel)), "max_percent": float(np.max(rel)),
-            "max_mm": float(np.max(diff)), "n": len(rel), "per_seam": per}
+            "max_mm": float(np.max(diff)), "n": len(rel), "per_seam": per, "gathered": gathered}
 
 
 def residual_stretch(pattern, body_xyz: Dict[str, np.ndarray], eps_weft: float = 1.10,

@@ -61,8 +61,8 @@ def _config(args, cut):
     kw = {}
     if args.iterations is not None:
         kw["iterations"] = args.iterations
-    if args.no_seam_length or cut.materials.get("gathered") or cut.materials.get("seam_length") is False:
-        kw["seam_length"] = False
+    if args.no_seam_length:
+        kw["gathered"] = ("*",)
     return SolverConfig.named(args.config, **kw)
 
 
@@ -108,7 +108,8 @@ def _summary(pattern) -> str:
     c, s = m["compliance"], m["seams"]
     return (f"{pattern.mode}: {len(pattern.panels)} pieces, ease compliance {c['mean']:.2f} ± {c['std']:.2f} % "
             f"(shear p95 {c['shear_p95']:.1f}°), seam mismatch {s['mean']:.2f} % (max {s['max_mm']:.1f} mm), "
-            f"flipped {m['flipped_triangles']}, optimize {pattern.report['timings']['optimize']:.2f} s")
+            f"flipped {m['flipped_triangles']}, optimize {pattern.report['timings']['optimize']:.2f} s"
+            + (f"; gathered: {', '.join(sorted(s['gathered']))}" if s.get("gathered") else ""))
 
 
 def _cmd_pattern(args) -> int:

@@ -9,7 +9,7 @@ Layout (format ``"ease.pattern"``, version 1)::
                  "vertex_ids", "xyz", "grain": [gx, gy],
                  "target_weft", "target_warp", "achieved_weft", "achieved_warp",
                  "boundary": [[ids]], "hems": [[ids]], "mirror_of"}],
-     "seams": [{"name", "panel_a", "panel_b", "verts_a", "verts_b"}]}
+     "seams": [{"name", "panel_a", "panel_b", "verts_a", "verts_b", "gathered"}]}
 
 Arrays are plain JSON lists. :func:`load_pattern` checks every field and raises
 :class:`core.errors.PatternError` naming the offending one.
@@ -52,7 +52,7 @@ def pattern_to_json(pattern: Pattern) -> dict:
         })
     seams = [{"name": s.name, "panel_a": s.panel_a, "panel_b": s.panel_b,
               "verts_a": np.asarray(s.verts_a, int).tolist(),
-              "verts_b": np.asarray(s.verts_b, int).tolist()} for s in pattern.seams]
+              "verts_b": np.asarray(s.verts_b, int).tolist(), "gathered": bool(s.gathered)} for s in pattern.seams]
     return {
         "format": FORMAT, "version": VERSION, "unit": "m",
         "style": pattern.style, "body": pattern.body, "garments": pattern.garments,
@@ -189,8 +189,11 @@ def pattern_from_json(obj: dict) -> Pattern:
             n = by_name[so[f"panel_{side}"]].uv.shape[0]
             if v.min() < 0 or v.max() >= n:
                 raise PatternError(f"{where}.verts_{side}: vertex ids must lie in [0, {n})")
+        gathered = so.get("gathered", False)
+        if not isinstance(gathered, bool):
+            raise PatternError(f"{where}.gathered: expected true or false, got {gathered!r}")
         seams.append(PatternSeam(name=str(so.get("name", f"seam{k}")), panel_a=so["panel_a"],
-                                 panel_b=so["panel_b"], verts_a=va, verts_b=vb))
+                                 panel_b=so["panel_b"], verts_a=va, verts_b=vb, gathered=gathered))
     pins = {}
     for g, ids in (obj.get("pins") or {}).items():
         pins[str(g)] = np.asarray(ids, dtype=np.int64).reshape(-1)

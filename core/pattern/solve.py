@@ -137,6 +137,15 @@ class SolverConfig:
     rest shape is turned to match the current weft first, so curvature goes
     into warp length and shear rather than weft). The global step is not
     reweighted: one factorisation serves both coordinates.
+    ``gathered``: seams (cut seam names, seam lines, or lines in every
+    garment; ``"*"`` for all) sewn gathered: their length and matched-
+    curvature terms are off, the longer side is gathered into the shorter
+    (the paper's switch for gathered designs, per seam). The design adds its
+    own (``materials.gathered``). ``gather_above``: a seam whose two sides'
+    ease demands (the targets' lengths along it) differ by more than this
+    fraction is gathered too (a set-in sleeve at ease 2 wants about 40 % more
+    cap than the armhole has; sewn flat that goes into shear); None never
+    gathers on its own. The design may override it (``materials.gather_above``).
     ``adapt_iterations``, ``adapt_bound``: adaptation solves run at least
     this many iterations, and their feedback may raise a target up to this
     factor (the poses' local demands are far from uniform).
@@ -152,7 +161,7 @@ class SolverConfig:
     seam_length: bool = True
     realign_grain: bool = True
     adapt_margin: float = 0.06
-    feedback: float = 0.0
+    feedback: float = 0.06
     straight_target: str = "smooth"
     len_direction: str = "current"
     len_target: str = "current"
@@ -162,16 +171,18 @@ class SolverConfig:
     sliver_weight: float = 0.5
     feedback_warp: float = 0.0
     stretch_frame: str = "pattern"
-    warp_slack: float = 0.05
+    warp_slack: float = 0.12
     warp_row_weight: float = 0.5
     adapt_iterations: int = 40
     adapt_bound: float = 2.0
+    gathered: tuple = ()
+    gather_above: Optional[float] = 0.2
 
 
     @classmethod
     def paper(cls, **kw) -> "SolverConfig":
         """The paper's weights taken literally (isometric ARAP regulariser)."""
-        return replace(cls(reg_rest="isometric", adapt_margin=0.0, straight_target="zero", len_target="current",
+        return replace(cls(reg_rest="isometric", adapt_margin=0.0, gather_above=None, feedback=0.0, straight_target="zero", len_target="current",
                            stretch_frame="initial", warp_slack=0.0, warp_row_weight=1.0, lambda_len=100.0, lambda_straight=5.0, lambda_curve=10.0, len_integral=0.0,
                            adapt_feedback=0.0), **kw)
 
@@ -215,11 +226,38 @@ class SolverConfig:
             raise PatternError(f"solver configuration stretch_frame: expected 'pattern' or 'initial', got {self.stretch_frame!r}")
         if not np.isfinite(self.warp_slack) or self.warp_slack < 0:
             raise PatternError(f"solver configuration warp_slack: expected a finite value >= 0, got {self.warp_slack}")
+        if self.gather_above is not None and (not np.isfinite(self.gather_above) or self.gather_above <= 0):
+            raise PatternError(f"solver configuration gather_above: expected a fraction > 0 or None, got {self.gather_above}")
+        if isinstance(self.gathered, str) or not all(isinstance(g, str) for g in self.gathered):
+            raise PatternError(f"solver configuration gathered: expected a tuple of seam names, got {self.gathered!r}")
         if self.reg_rest not in ("isometric", "prestretch"):
             raise PatternError(f"solver configuration reg_rest: expected 'isometric' or 'prestretch', got {self.reg_rest!r}")
 
 
 # ----------------------------------------------------------------------------- validation
+
+def _design_gathered(materials: dict) -> tuple:
+    """The design's own gathered seams (``materials.gathered``: true for all, or seam line names; a
+    ``*_left`` line brings its mirror, as everywhere in a mirrored design)."""
+    from ..design.mirror import mirrored_name
+    g = (materials or {}).get("gathered")
+    if g is True:
+        return ("*",)
+    if not g:
+        return ()
+    names = [str(x) for x in g]
+    return tuple(names + [m for m in (mirrored_name(n.partition("#")[0]) for n in names) if m])
+
+
+def seam_is_gathered(seam: str, gathered: Sequence[str]) -> bool:
+    """Whether the cut seam ``seam`` (``garment.line`` or ``garment.line#k``) is named by ``gathered``.
+
+    An entry names the seam itself, its line (``shirt.armhole_left``) or the
+    line in any garment (``armhole_left``).
+    """
+    line = seam.split("#", 1)[0]
+    return any(g in ("*", seam, line, line.split(".", 1)[-1]) for g in gathered)
+
 
 def validate_cut(cut) -> None:
     """Raise :class:`PatternError` naming the first invalid element of a GarmentCut."""
@@ -373,6 +411,7 @@ class SolveResult:
     iterations: int
     backtracks: int
     energy: List[float] = field(default_factory=list)
+    gathered: tuple = ()
 
 
 class PatternSolver:
@@ -452,6 +491,8 @@ class PatternSolver:
         self._GyT = self._Gy.T.tocsr()
         self._factor = None
         self._factor_key = None
+        self._planned = False
+        self.seam_demand: Dict[str, float] = {}
         self.timings = {"init": time.perf_counter() - t0}
         report(progress, 1.0, "flattened")
 
@@ -563,6 +604,17 @@ class PatternSolver:
         else:
             self._Dall = None
 
+    def _sewn_edges(self):
+        """Per seam edge and per seam second-difference row: 1.0 where the seam is sewn flat, 0.0 on
+        gathered seams (``config.gathered``: their length and matched-curvature terms are off)."""
+        key = self.gathered
+        if getattr(self, "_gathered_key", None) != key:
+            gathered = np.array([seam_is_gathered(self.cut.seams[sd.seam].name, key) for sd in self.sides], bool)
+            self._sewn = (np.repeat(~gathered, [len(sd.gids) - 1 for sd in self.sides]).astype(float),
+                          np.repeat(~gathered, [max(len(sd.gids) - 2, 0) for sd in self.sides]).astype(float))
+            self._gathered_key = key
+        return self._sewn
+
     def _matrix(self) -> sp.csc_matrix:
         """The fixed system matrix (both pattern coordinates): ease + regulariser (one operator), seam
         length, seam shape, and the gauge pins (stored in ``self._pin``, (n, 2))."""
@@ -571,13 +623,14 @@ class PatternSolver:
         w = (cfg.lambda_ease + cfg.lambda_reg) * self.a
         L = (self._GxT @ sp.diags(w * W2[0]) @ self._Gx + self._GyT @ sp.diags(w * W2[1]) @ self._Gy).tocsr()
         if self.sides and cfg.seam_length and cfg.lambda_len > 0:
-            c = cfg.lambda_len * self._El0 / (self.h * self.total_area)
+            c = cfg.lambda_len * self._El0 / (self.h * self.total_area) * self._sewn_edges()[0]
             E0, E1 = self._E0, self._E1
             L = L + sp.coo_matrix((np.concatenate([c, c, -c, -c]),
                                    (np.concatenate([E0, E1, E0, E1]), np.concatenate([E0, E1, E1, E0]))),
                                   shape=(self.n, self.n)).tocsr()
         lam = cfg.lambda_straight + cfg.lambda_curve
         if self.sides and lam > 0 and self._Dall is not None:
+            lam = cfg.lambda_straight + cfg.lambda_curve * self._sewn_edges()[1]
             L = L + self._DallT @ sp.diags(lam * self._Rcc) @ self._Dall
         # translation gauge: one soft pin per panel, tiny against the diagonal
         d = L.diagonal()
@@ -590,7 +643,7 @@ class PatternSolver:
         """Back-substitution ``rhs (n, 2) -> U (n, 2)`` with the factorised matrix, built once per configuration."""
         cfg = self.config
         key = (cfg.lambda_ease, cfg.lambda_reg, cfg.lambda_len, cfg.lambda_straight, cfg.lambda_curve,
-               cfg.warp_weight, cfg.seam_length)
+               cfg.warp_weight, cfg.seam_length, self.gathered)
         if self._factor is None or self._factor_key != key:
             t0 = time.perf_counter()
             # symmetric positive definite: a symmetric minimum-degree ordering on A + A^T keeps the
@@ -601,6 +654,50 @@ class PatternSolver:
             self.timings["factorise"] = time.perf_counter() - t0
             self.n_factorisations = getattr(self, "n_factorisations", 0) + 1
         return self._factor
+
+    # ------------------------------------------------------------------ seam plan
+    @property
+    def gathered(self) -> tuple:
+        """Names of the cut seams sewn gathered in the next solve (sorted)."""
+        explicit = tuple(self.config.gathered) + _design_gathered(self.cut.materials)
+        names = [s.name for s in self.cut.seams if seam_is_gathered(s.name, explicit)]
+        return tuple(sorted(set(names) | set(getattr(self, "_auto_gathered", ()))))
+
+    def plan_seams(self, K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray) -> Dict[str, float]:
+        """Decide which seams are gathered from the ease demands of ``diag(c) K`` (config ``gather_above``).
+
+        A side's demand is the seam's length under its own triangles' targets
+        (each seam edge of the initial flattening mapped by ``diag(c_t) K_t``).
+        Returns seam name -> demand ratio (longer side / shorter side - 1);
+        seams of a line are gathered together when any of them is above the
+        threshold, so an armhole is gathered all round or not at all.
+        """
+        T = np.stack([c_weft, c_warp], axis=1)[:, :, None] * K
+        e0 = self.uv0[self._E1] - self.uv0[self._E0]
+        Te = T[self._Ef]
+        edge = np.hypot(Te[:, 0, 0] * e0[:, 0] + Te[:, 0, 1] * e0[:, 1], Te[:, 1, 0] * e0[:, 0] + Te[:, 1, 1] * e0[:, 1])
+        start = np.cumsum([0] + [len(sd.gids) - 1 for sd in self.sides])
+        side_len = np.add.reduceat(edge, start[:-1]) if len(edge) else np.zeros(0)
+        demand = {}
+        for si, (ka, kb) in enumerate(self.seam_pairs):
+            la, lb = float(side_len[ka]), float(side_len[kb])
+            demand[self.cut.seams[si].name] = max(la, lb) / max(min(la, lb), 1e-300) - 1.0
+        above = self.cut.materials.get("gather_above", self.config.gather_above)
+        auto = ()
+        if above is not None:
+            lines = {n.split("#", 1)[0] for n, r in demand.items() if r > float(above)}
+            auto = tuple(n for n in demand if n.split("#", 1)[0] in lines)
+        self._auto_gathered = auto
+        self._planned = True
+        self.seam_demand = demand
+        return demand
+
+    def _plan_from_design(self) -> None:
+        """Transfer and adaptation keep the reference solve's seam plan; without one, plan it from the design."""
+        if not self._planned:
+            K, lw, lg = self._offsets(self.ref_positions)
+            ease = np.concatenate([pd.ease for pd in self.panels])
+            self.plan_seams(K, ease, np.ones_like(ease))
 
     # ------------------------------------------------------------------ targets
     def _offsets(self, positions: np.ndarray):
@@ -620,12 +717,17 @@ class PatternSolver:
             ease = np.broadcast_to(np.asarray(ease, float), (len(self.gfaces),)).copy()
             if not np.all(np.isfinite(ease) & (ease > 0)):
                 raise PatternError("ease override: expected finite weft scales > 0")
+        if positions is None:
+            self.plan_seams(K, ease, np.ones_like(ease))
+        else:
+            self._plan_from_design()
         return K, ease.copy(), np.ones_like(ease)
 
     def targets_adapt(self, pose_positions: Sequence[np.ndarray], eps_weft: float, eps_warp: float):
         """Targets of Eq. material-scale: per direction max(rho sigma_ref, max_i sigma_i / eps)."""
         eps_weft = _check_eps("eps_weft", eps_weft)
         eps_warp = _check_eps("eps_warp", eps_warp)
+        self._plan_from_design()
         K, lw, lg = self._offsets(self.ref_positions)
         ease = np.concatenate([pd.ease for pd in self.panels])
         want_w = ease * lw
@@ -742,7 +844,7 @@ class PatternSolver:
             tgw[pd.name] = np.asarray(c_warp[fb:fb + len(pd.faces)], float).copy()
             xyz[pd.name] = pos[pd.vertex_ids]
             fb += len(pd.faces)
-        return SolveResult(out_uv, tw, tgw, xyz, time.perf_counter() - t0, n_it, backtracks, energies)
+        return SolveResult(out_uv, tw, tgw, xyz, time.perf_counter() - t0, n_it, backtracks, energies, self.gathered)
 
     def _jac4(self, U: np.ndarray) -> list:
         """Jacobians of ``U`` w.r.t. the initial flattening as 4 contiguous (f,) arrays m00, m01, m10, m11.
@@ -870,7 +972,7 @@ class PatternSolver:
                 dirn = cur / np.maximum(cur_len, 1e-300)[:, None]
             else:
                 dirn = pred / np.maximum(np.linalg.norm(pred, axis=1), 1e-300)[:, None]
-            c = cfg.lambda_len * self._El0 / (self.h * self.total_area)
+            c = cfg.lambda_len * self._El0 / (self.h * self.total_area) * self._sewn_edges()[0]
             tgt = (c * lbar)[:, None] * dirn
             n = self.n
             for d in range(2):
@@ -901,7 +1003,7 @@ class PatternSolver:
             c_, s_ = np.cos(th)[self._Rside], np.sin(th)[self._Rside]
             do = d2[self._Ro]
             rot = np.stack([c_ * do[:, 0] - s_ * do[:, 1], s_ * do[:, 0] + c_ * do[:, 1]], axis=1)
-            acc += (cfg.lambda_curve * self._Rcc)[:, None] * (0.5 * (d2 + rot))
+            acc += (cfg.lambda_curve * self._Rcc * self._sewn_edges()[1])[:, None] * (0.5 * (d2 + rot))
         rhs += self._DallT @ acc
         return rhs
 
@@ -1077,14 +1179,15 @@ def build_pattern(cut, result: SolveResult, style: str = "", body: Optional[dict
             achieved_weft=rw, achieved_warp=rg,
             boundary=[np.asarray(b, int) for b in (p.boundary or _init.boundary_loops(p.faces))],
             hems=[np.asarray(h, int) for h in cut.hems.get(p.name, [])], mirror_of=p.mirror_of))
-    seams = [PatternSeam(s.name, s.panel_a, s.panel_b, np.asarray(s.verts_a, int), np.asarray(s.verts_b, int))
+    seams = [PatternSeam(s.name, s.panel_a, s.panel_b, np.asarray(s.verts_a, int), np.asarray(s.verts_b, int),
+                         gathered=s.name in result.gathered)
              for s in cut.seams]
     body = dict(body if body is not None else cut.body)
     return Pattern(style=style, body=body, garments=dict(cut.garments), panels=panels, seams=seams,
                    pins={g: np.asarray(v, int) for g, v in cut.pins.items()},
                    materials=dict(materials if materials is not None else cut.materials), mode=mode,
                    report={"optimize_seconds": result.seconds, "iterations": result.iterations,
-                           "backtracks": result.backtracks})
+                           "backtracks": result.backtracks, "gathered_seams": list(result.gathered)})
 
 
 def solve_pattern(cut, body_vertices, config: Optional[SolverConfig] = None, style: str = "",

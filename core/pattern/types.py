@@ -49,12 +49,17 @@ class PatternPanel:
 
 @dataclass
 class PatternSeam:
-    """Corresponding 2D polylines: ``panel_a.uv[verts_a[i]]`` sews to ``panel_b.uv[verts_b[i]]``."""
+    """Corresponding 2D polylines: ``panel_a.uv[verts_a[i]]`` sews to ``panel_b.uv[verts_b[i]]``.
+
+    ``gathered``: the sides were not made equally long; the longer one is
+    gathered into the shorter (notches at matching fractions of each side).
+    """
     name: str
     panel_a: str
     panel_b: str
     verts_a: np.ndarray
     verts_b: np.ndarray
+    gathered: bool = False
 
 
 @dataclass
