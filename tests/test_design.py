@@ -104,6 +104,11 @@ def _set(d, dotted, value):
     ("body.pose", "P9", "body.pose"),
     ("materials.eps_weft", 0.9, "materials.eps_weft"),
     ("materials.eps_warp", "stiff", "materials.eps_warp"),
+    ("materials.gathered", "armhole_left", "materials.gathered"),
+    ("materials.gathered", ["armhole_lfet"], "materials.gathered[0]"),
+    ("materials.gathered", ["arm hole"], "materials.gathered[0]"),
+    ("materials.gather_above", 0.0, "materials.gather_above"),
+    ("materials.gather_above", "often", "materials.gather_above"),
     ("parameters.sleeve_length", {"value": -0.1, "kind": "length"}, "parameters.sleeve_length.value"),
     ("parameters.sleeve_length", {"value": 0.5, "kind": "length", "max": 0.45}, "parameters.sleeve_length.value"),
     ("parameters.armhole_drop", {"value": 0.03, "kind": "wobble"}, "parameters.armhole_drop.kind"),
@@ -490,3 +495,15 @@ def test_ring_tilted_to_contain_a_keypoint(body, ref):
     with pytest.raises(DesignError) as exc:
         resolve(load_design(d), body, vertices=ref)
     assert exc.value.path == "garments[0].lines[2].ring.contains"
+
+
+def test_gathered_seams_in_materials():
+    obj = json.loads(json.dumps(load_design(TEMPLATES["shirt_long_sleeve"]()).to_json()))
+    obj["materials"].update(gathered=["armhole_left", "shirt.armhole_right"], gather_above=0.3)
+    d = load_design(obj)
+    assert d.materials["gathered"] == ["armhole_left", "shirt.armhole_right"]
+    assert d.materials["gather_above"] == 0.3
+    assert load_design(d.to_json()).materials == d.materials
+    obj["materials"].update(gathered=True, gather_above=None)
+    d = load_design(obj)
+    assert d.materials["gathered"] is True and d.materials["gather_above"] is None

@@ -109,6 +109,10 @@ def test_notch_positions_rules():
     np.testing.assert_allclose(sb, [0, 0.1, 0.2, 0.312])
     sa, _ = notch_positions(0.5, 0.5, 0.0)
     np.testing.assert_allclose(sa, [0, 0.5])
+    # gathered: the shorter side's notches every spacing, the longer side's at the same fractions
+    sa, sb = notch_positions(0.45, 0.30, 0.1, gathered=True)
+    np.testing.assert_allclose(sb, [0, 0.1, 0.2, 0.3])
+    np.testing.assert_allclose(sa, [0, 0.15, 0.3, 0.45])
 
 
 def test_grain_rotation_keeps_lengths_and_points_up():

@@ -85,6 +85,21 @@ def test_seam_mismatch_percent_and_mm():
     sm = M.seam_mismatch(pat)
     assert sm["mean"] == pytest.approx(100 * 0.02 / 1.01)
     assert sm["max_mm"] == pytest.approx(20.0)
+    assert sm["gathered"] == {}
+
+
+def test_gathered_seams_are_listed_not_counted_as_mismatch():
+    uv, F = _square()
+    xyz = np.c_[uv[:, 0], np.zeros(len(uv)), uv[:, 1]]
+    a = _panel("a", uv, xyz, F)
+    b = _panel("b", uv * np.array([1.0, 1.5]), xyz, F)  # b's left edge half as long again: gathered into a's
+    left, right = np.array([0, 4, 8]), np.array([2, 6, 10])
+    pat = Pattern(style="s", body={}, garments={"g": "upper"}, panels=[a, b],
+                  seams=[PatternSeam("cap", "a", "b", left, left, gathered=True),
+                         PatternSeam("side", "a", "b", right, right)])
+    sm = M.seam_mismatch(pat)
+    assert sm["n"] == 1 and set(sm["per_seam"]) == {"side"}
+    assert sm["gathered"] == {"cap": pytest.approx(1.5)}
 
 
 def test_residual_stretch_area_fraction():

@@ -28,7 +28,14 @@ def test_round_trip(tmp_path, pattern):
         assert len(a.boundary) == len(b.boundary)
     assert [s.name for s in back.seams] == [s.name for s in pattern.seams]
     assert np.array_equal(back.seams[0].verts_a, pattern.seams[0].verts_a)
+    assert [s.gathered for s in back.seams] == [s.gathered for s in pattern.seams]
     assert load_pattern(path).panels[0].name == "front"
+
+
+def test_gathered_flag_round_trips(tmp_path, pattern):
+    pattern.seams[0].gathered = True
+    save_pattern(pattern, tmp_path)
+    assert [s.gathered for s in load_pattern(tmp_path).seams] == [True] + [False] * (len(pattern.seams) - 1)
 
 
 def _write(tmp_path, obj):
@@ -48,6 +55,7 @@ def _write(tmp_path, obj):
     (lambda o: o["seams"][0].update(panel_b="nope"), r"seams\[0\]\.panel_b"),
     (lambda o: o["seams"][0].update(verts_b=[0]), r"seams\[0\]\.verts_a/verts_b"),
     (lambda o: o.update(mode="draft"), "mode"),
+    (lambda o: o["seams"][0].update(gathered="yes"), r"seams\[0\]\.gathered"),
 ])
 def test_validation_names_the_field(tmp_path, pattern, mutate, match):
     obj = json.loads(json.dumps(pattern_to_json(pattern)))

@@ -215,3 +215,82 @@ def test_templates_on_the_default_body(name):
         assert sm["mean"] < 0.5 and sm["max_mm"] < 2.0, (rho, sm)
         comp[rho] = c["mean"]
     assert comp[1.5] < comp[1.0] + 0.25  # not rising with rho
+
+
+def test_seam_names_for_gathering():
+    from core.pattern.solve import seam_is_gathered
+    assert seam_is_gathered("shirt.armhole_left#1", ("armhole_left",))
+    assert seam_is_gathered("shirt.armhole_left#1", ("shirt.armhole_left",))
+    assert seam_is_gathered("shirt.armhole_left#1", ("shirt.armhole_left#1",))
+    assert not seam_is_gathered("shirt.armhole_left#1", ("shirt.armhole_left#0", "armhole_right", "armhole"))
+    assert seam_is_gathered("pants.crotch", ("*",))
+
+
+@pytest.mark.parametrize("kw", [{"gather_above": 0.0}, {"gather_above": -0.1}, {"gather_above": float("nan")},
+                                {"gathered": "armhole_left"}, {"gathered": (1,)}])
+def test_bad_gathering_config_is_refused(kw):
+    cut, body = two_panels()
+    with pytest.raises(PatternError, match="gather"):
+        PatternSolver(cut, body, SolverConfig.improved(**kw))
+
+
+def _solve_at(solver, cut, rho):
+    from core.pattern.solve import build_pattern
+    K, cw, cg = solver.targets_reference(ease=rho)
+    return build_pattern(cut, solver.solve(K, cw, cg))
+
+
+def test_loose_sleeves_are_gathered_into_the_armhole():
+    # a set-in sleeve's cap runs along the sleeve's weft, the bodice's armhole along its warp: at ease 2
+    # the cap wants ~40 % more length than the armhole. Sewn flat that mismatch goes into shear; the
+    # solver gathers the cap instead (gather_above 0.2) and keeps every other seam sewn flat.
+    cut, ref = _real_cut("shirt_long_sleeve")
+    solver = PatternSolver(cut, ref)
+    tight = _solve_at(solver, cut, 1.0)
+    assert not any(s.gathered for s in tight.seams)
+    assert max(solver.seam_demand.values()) < 0.05
+    loose = _solve_at(solver, cut, 2.0)
+    gathered = sorted(s.name for s in loose.seams if s.gathered)
+    assert gathered and all(n.split(".")[1].startswith("armhole_") for n in gathered), gathered
+    assert len(gathered) == len([s for s in cut.seams if ".armhole_" in s.name])
+    assert all(solver.seam_demand[n] > 0.2 for n in gathered if n.endswith("#0"))
+    sm = seam_mismatch(loose)
+    assert set(sm["gathered"]) == set(gathered)
+    for name, ratio in sm["gathered"].items():
+        s = next(x for x in loose.seams if x.name == name)
+        pa, pb = loose.seam_polylines(s)
+        sleeve_side = pa if "sleeve" in s.panel_a else pb
+        body_side = pb if "sleeve" in s.panel_a else pa
+        # the sleeve's side is the longer one: it is gathered into the bodice's armhole
+        assert np.sum(np.linalg.norm(np.diff(sleeve_side, axis=0), axis=1)) > \
+            1.15 * np.sum(np.linalg.norm(np.diff(body_side, axis=0), axis=1)), name
+    # every seam sewn flat still matches; compliance and shear as at ease 1
+    assert sm["mean"] < 0.5 and sm["max_mm"] < 2.0, sm
+    c = ease_compliance(loose)
+    assert c["mean"] < 2.0 and c["shear_p95"] < ease_compliance(tight)["shear_p95"] + 1.0, c
+    assert sum(flipped_count(p.uv, p.faces) for p in loose.panels) == 0
+    # with gathering off, the same solve sews the armhole flat at the price of shear
+    flat = PatternSolver(cut, ref, SolverConfig.improved(gather_above=None))
+    flat_pat = _solve_at(flat, cut, 2.0)
+    assert not any(s.gathered for s in flat_pat.seams)
+    assert ease_compliance(flat_pat)["shear_p95"] > c["shear_p95"]
+
+
+def test_design_names_its_gathered_seams():
+    cut, ref = _real_cut("shirt_long_sleeve")
+    cut.materials = {**cut.materials, "gathered": ["armhole_left"], "gather_above": None}
+    pat = solve_pattern(cut, ref)
+    # the mirror of a *_left line comes with it, as everywhere in a mirrored design
+    assert sorted(s.name for s in pat.seams if s.gathered) == sorted(
+        s.name for s in cut.seams if ".armhole_" in s.name)
+    assert pat.report["gathered_seams"] == sorted(s.name for s in pat.seams if s.gathered)
+    cut.materials = {**cut.materials, "gathered": True}
+    assert all(s.gathered for s in solve_pattern(cut, ref).seams)
+    # transfer and adaptation keep the reference's seam plan (and its factorisation)
+    cut.materials = {k: v for k, v in cut.materials.items() if k not in ("gathered", "gather_above")}
+    solver = PatternSolver(cut, ref)
+    solver.targets_reference(ease=2.0)
+    planned = solver.gathered
+    big = ref * np.array([1.05, 1.05, 1.0])
+    t = transfer_pattern(cut, ref, big, solver=solver)
+    assert tuple(sorted(s.name for s in t.seams if s.gathered)) == planned
