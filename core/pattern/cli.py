@@ -19,7 +19,7 @@ def _common(p) -> None:
                         "weights taken literally), stretch (compliance bought with shear)")
     p.add_argument("--iterations", type=int, default=None, help="local-global iterations (default 20)")
     p.add_argument("--no-seam-length", action="store_true",
-                   help="switch the seam-length term off (gathered designs)")
+                   help="gather every seam: the seam-length term off (the paper's switch for gathered designs)")
     p.add_argument("--quiet", action="store_true", help="no progress line")
 
 

@@ -69,9 +69,16 @@ Seam terms keep the system matrix fixed by targeting whole vectors:
 - E_curv: towards the mean of this side's second difference and the other
   side's, rotated by the best rigid fit of the two seam polylines.
 
-Thus the matrix never changes (factorised once per solver and configuration,
-reused by the reference, transfer and adaptation solves); only the right-hand
-side does. One soft pin per panel fixes the translation gauge; rotation is
+Gathered seams (``SolverConfig.gathered``, the design's ``materials.gathered``,
+and every seam whose two sides' ease demands differ by more than
+``gather_above``) have E_len and E_curv off: the paper's switch for gathered
+designs, per seam. A set-in sleeve at ease 2 wants about 40 % more cap than
+the armhole has (the sleeve's weft runs along it, the bodice's warp does);
+sewn flat, the difference goes into shear on both sides.
+
+Thus the matrix never changes (factorised once per solver, configuration and
+seam plan, reused by the reference, transfer and adaptation solves, which keep
+the reference solve's seam plan); only the right-hand side does. One soft pin per panel fixes the translation gauge; rotation is
 fixed by the ease term's axes and the grain re-alignment (area-weighted vote)
 after every iteration. No triangle ever flips: the rigid part of each step is
 removed per panel, then the vertices of triangles that would flip (or lose
@@ -188,13 +195,14 @@ class SolverConfig:
 
     @classmethod
     def improved(cls, **kw) -> "SolverConfig":
-        """Our default: pre-stretched ARAP rest shape, lighter seam-shape terms."""
+        """Our default: pre-stretched ARAP rest shape, lighter seam-shape terms, free warp length within 12 %,
+        light weft feedback (gain 0.06), seams gathered where their sides' demands differ by > 20 %."""
         return replace(cls(), **kw)
 
     @classmethod
     def stretch(cls, **kw) -> "SolverConfig":
-        """Improved, with weft target feedback (gain 0.15) and a freer warp length (slack 0.1, both rows
-        weighted alike): compliance bought with shear and local warp length."""
+        """Improved, with a stronger weft target feedback (gain 0.15), warp slack 0.1 and both rows weighted
+        alike: compliance bought with shear and local warp length."""
         return replace(cls(feedback=0.15, warp_slack=0.1, warp_row_weight=1.0), **kw)
 
     @classmethod
