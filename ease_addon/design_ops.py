@@ -227,7 +227,9 @@ def load_design_into_scene(context, source) -> None:
         _fill_shape_props(context.scene, model, full)
     set_design(context, design)
     from .export_ops import fill_export_props
+    from .pattern_ops import fill_gather_props
     fill_export_props(context.scene, design)    # the design's seam allowance and notch spacing
+    fill_gather_props(context.scene, design)    # and its seam gathering
     bpy.ops.ease.ease_from_design()
 
 

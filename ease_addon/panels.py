@@ -131,6 +131,11 @@ class EASE_PT_pattern(_EasePanel, bpy.types.Panel):
 
     def draw(self, context):
         s = context.scene.ease
+        row = self.layout.row(align=True)
+        row.prop(s, "gather_auto")
+        sub = row.row(align=True)
+        sub.enabled = s.gather_auto
+        sub.prop(s, "gather_above_pct")
         self.layout.operator("ease.optimize_pattern", icon="MESH_GRID")
         _figures(self.layout, s.pattern_json)
 

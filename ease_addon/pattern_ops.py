@@ -204,6 +204,30 @@ def show_pattern(context, pattern, store_as: str = PATTERN_KEY) -> None:
     context.scene.ease.pattern_json = json.dumps(key_figures(pattern))
 
 
+def gather_settings(scene, design):
+    """The design with ``materials.gather_above`` set from the Pattern panel (None when gathering is
+    off); unchanged when the panel shows what the design already does."""
+    from ..core.design.format import load_design
+    from ..core.pattern.solve import SolverConfig
+    s = scene.ease
+    want = round(s.gather_above_pct / 100.0, 6) if s.gather_auto else None
+    have = design.materials.get("gather_above", SolverConfig().gather_above)
+    if want == have:
+        return design
+    data = design.to_json()
+    data.setdefault("materials", {})["gather_above"] = want
+    return load_design(data)        # validates the value (DesignError names the field)
+
+
+def fill_gather_props(scene, design) -> None:
+    """Show a design's gathering threshold in the Pattern panel (on loading a design)."""
+    from ..core.pattern.solve import SolverConfig
+    above = design.materials.get("gather_above", SolverConfig().gather_above)
+    scene.ease.gather_auto = above is not None
+    if above is not None:
+        scene.ease.gather_above_pct = 100.0 * float(above)
+
+
 class EASE_OT_optimize_pattern(EaseOperator):
     """Optimize the sewing pattern of the design and lay it out beside the body"""
     bl_idname = "ease.optimize_pattern"
@@ -212,7 +236,7 @@ class EASE_OT_optimize_pattern(EaseOperator):
     def run(self, context):
         from . import design_ops
         obj = body_object(context)
-        design = design_ops.current_design(context)
+        design = gather_settings(context.scene, design_ops.current_design(context))
         cut = design_ops.cut_for(design, obj)
         wm = context.window_manager
         wm.progress_begin(0, 100)
@@ -220,6 +244,10 @@ class EASE_OT_optimize_pattern(EaseOperator):
             pattern = state.optimize_pattern(design, cut, obj, progress=_progress_for(context))
         finally:
             wm.progress_end()
+        # -- the scene changes from here on: the design keeps the gathering it was solved with
+        text = json.dumps(design.to_json(), sort_keys=True)
+        if text != context.scene.ease.design_json:
+            context.scene.ease.design_json = text
         show_pattern(context, pattern)
         self.report({"INFO"}, f"pattern: {len(pattern.panels)} pieces")
 

@@ -132,6 +132,14 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
     export_pdf: BoolProperty(name="PDF", default=False)
     export_glb: BoolProperty(name="GLB", default=False)
     export_obj: BoolProperty(name="OBJ", default=False)
+    # seam gathering: kept in the design (materials.gather_above) by Optimize Pattern
+    gather_auto: BoolProperty(name="Gather loose seams", default=True,
+                              description="Gather a seam whose two sides want lengths that differ by more than "
+                                          "the threshold (a loose sleeve cap into its armhole) instead of sewing "
+                                          "it flat at the price of shear")
+    gather_above_pct: FloatProperty(name="Above", default=20.0, min=1.0, max=500.0, precision=0,
+                                    description="Gather a seam when one side wants this many percent more "
+                                                "length than the other")
     # seam allowance and notch spacing: kept in the design (materials.export) by Export Pattern
     export_allowance_cm: FloatProperty(name="Seam allowance", default=1.0, min=0.0, max=10.0, precision=2,
                                        description="Seam allowance (cm) of every seam without its own width "

@@ -499,6 +499,34 @@ def test_pattern_objects_match_pattern_json(bpy_session, tmp_path, ramp):
     assert np.median(first.achieved_weft) > 1.0
 
 
+
+def test_gathering_setting_reaches_the_design_and_the_pattern(bpy_session):
+    """The Pattern panel's gathering threshold is kept in the design and decides which seams are gathered."""
+    bpy = bpy_session["bpy"]
+    scene = _scene(bpy)
+    s = scene.ease
+    pattern_ops = _addon(bpy_session, "pattern_ops")
+
+    def gathered():
+        return [x["name"] for x in json.loads(scene[pattern_ops.PATTERN_KEY])["seams"] if x.get("gathered")]
+
+    try:
+        s.gather_auto = False
+        assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
+        assert json.loads(s.design_json)["materials"]["gather_above"] is None
+        assert gathered() == []
+        # a 1 % threshold gathers seams whose sides differ a little (ease 1.2 against 1.4 across a seam)
+        s.gather_auto, s.gather_above_pct = True, 1.0
+        assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
+        assert json.loads(s.design_json)["materials"]["gather_above"] == pytest.approx(0.01)
+        assert gathered()
+        assert json.loads(s.pattern_json)["gathered seams"] == len(gathered())
+    finally:
+        s.gather_auto, s.gather_above_pct = True, 20.0
+        assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
+    assert json.loads(s.design_json)["materials"]["gather_above"] == pytest.approx(0.2)
+    assert "gathered seams" not in json.loads(s.pattern_json) or gathered()
+
 def test_transfer_and_adapt_show_figures(bpy_session):
     bpy = bpy_session["bpy"]
     s = _scene(bpy).ease
