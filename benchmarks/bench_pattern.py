@@ -49,23 +49,14 @@ def _cut(name, body, coarse):
 def _metrics(pattern, garment=None, cut=None):
     """Table figures of one pattern; with ``cut``, also the sleeves' (arm panels') compliance and shear."""
     from core.metrics.pattern import ease_compliance, flips, seam_mismatch
-    from core.metrics.pattern import areas_3d, scales
     c = ease_compliance(pattern, garment)
     s = seam_mismatch(pattern, garment)
-    # signed warp deviation: local warp length may move, the garment's length should not
-    num = den = 0.0
-    for p in pattern.panels:
-        if garment is None or p.garment == garment:
-            _, rg, _ = scales(p.uv, p.xyz, p.faces, p.grain)
-            a = areas_3d(p.xyz, p.faces)
-            num += float(np.sum(a * (rg / p.target_warp - 1.0)))
-            den += float(np.sum(a))
     fl = sum(v for k, v in flips(pattern).items()
              if garment is None or pattern.panel(k).garment == garment)
     out = {"compliance": c["mean"], "compliance_std": c["std"], "compliance_p95": c["p95"],
            "shear_mean": c["shear_mean"], "shear_p95": c["shear_p95"], "warp_dev": c["warp_mean"],
            "seam_mean": s["mean"], "seam_std": s["std"], "seam_max_mm": s["max_mm"], "flips": int(fl),
-           "warp_signed": 100.0 * num / den if den else 0.0,
+           "warp_signed": c["warp_signed"],
            "gathered": {k: float(v) for k, v in sorted(s.get("gathered", {}).items())}}
     arms = [p.name for p in cut.panels if p.body_part == "arm"] if cut is not None else []
     if arms:

@@ -16,6 +16,23 @@ import numpy as np
 import scipy.sparse as sp
 
 
+def seam_names(seam: str) -> List[str]:
+    """The names that designate the cut seam ``seam``, most specific first.
+
+    The cut names a seam ``garment.line`` (``line`` for a line shared by
+    garments) and ``garment.line#k`` when the line has several stretches:
+    ``"shorts.side_left#1"`` answers to that name, to ``"shorts.side_left"``
+    and to ``"side_left"`` (that line in every garment). Export allowances and
+    gathered seams are looked up by these names.
+    """
+    names = [seam]
+    line = seam.partition("#")[0]
+    for k in (line, line.partition(".")[2] if "." in line else ""):
+        if k and k not in names:
+            names.append(k)
+    return names
+
+
 @dataclass
 class Panel:
     """One garment panel embedded on the body.

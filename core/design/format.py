@@ -21,7 +21,7 @@ Fields (metres, the body frame of :mod:`core`: +Z up, body faces -Y, +X = body's
                        seam line: m}, "notch_spacing": m}}``; ``gathered``
                        seams are not sewn flat: the longer side is gathered into
                        the shorter (true: every seam); ``gather_above`` (default
-                       0.25) gathers any seam whose sides' ease demands differ by
+                       0.2) gathers any seam whose sides' ease demands differ by
                        more than that fraction, null never; ``export``
                        (optional) sets the seam allowance (0..0.1 m; default 1 cm,
                        hems 2 cm, folds 0; a seam line by its name, in every

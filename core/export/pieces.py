@@ -21,6 +21,7 @@ from typing import Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
+from ..cut.types import seam_names
 from ..errors import ExportError
 from ..pattern.types import Pattern, PatternPanel
 
@@ -437,7 +438,7 @@ def resolve_allowance(allowance: Union[None, float, Mapping], pattern: Pattern) 
         raise ExportError(f"allowance: expected a number or a dict like "
                           f"{{'default': 0.01, 'hem': 0.02, '<seam>': ...}}, got {type(allowance).__name__}")
     seams = {s.name for s in pattern.seams}
-    lines = {k for n in seams for k in _seam_keys(n)}
+    lines = {k for n in seams for k in seam_names(n)}
     for key, value in allowance.items():
         if key not in out and key not in lines:
             raise ExportError(f"allowance[{key!r}]: not a seam of the pattern; expected 'default', 'hem', "
@@ -452,26 +453,10 @@ def resolve_allowance(allowance: Union[None, float, Mapping], pattern: Pattern) 
     return out
 
 
-def _seam_keys(seam: str) -> List[str]:
-    """The allowance keys that name seam ``seam``, most specific first.
-
-    The cut names a seam ``garment.line`` (``line`` for a line shared by
-    garments) and ``garment.line#k`` when the line has several stretches:
-    ``"shorts.side_left#1"`` is set by that name, by ``"shorts.side_left"``
-    or by ``"side_left"`` (that line in every garment).
-    """
-    keys = [seam]
-    line = seam.partition("#")[0]
-    for k in (line, line.partition(".")[2] if "." in line else ""):
-        if k and k not in keys:
-            keys.append(k)
-    return keys
-
-
 def seam_allowance(widths: Mapping[str, float], seam: str) -> float:
     """Allowance (m) of seam ``seam`` from :func:`resolve_allowance`'s table:
-    the most specific key naming it (see :func:`_seam_keys`), else the default."""
-    for k in _seam_keys(seam):
+    the most specific key naming it (see :func:`core.cut.types.seam_names`), else the default."""
+    for k in seam_names(seam):
         if k in widths:
             return float(widths[k])
     return float(widths["default"])

@@ -131,7 +131,8 @@ def ease_compliance(pattern, garment: Optional[str] = None, xyz: Optional[Dict[s
     -------
     dict with ``mean``, ``std``, ``p95``, ``max`` (percent), ``shear_mean``,
     ``shear_p95`` (degrees), ``warp_mean`` (percent deviation of the warp
-    scale from its target), ``area`` (m^2).
+    scale from its target), ``warp_signed`` (its signed mean: near 0 when the
+    garment's length is kept), ``area`` (m^2).
     """
     comp, shear, warp, area = [], [], [], []
     for p in _panels(pattern, garment, None if panels is None else set(panels)):
@@ -139,7 +140,7 @@ def ease_compliance(pattern, garment: Optional[str] = None, xyz: Optional[Dict[s
         rw, rg, sh = scales(p.uv, X, p.faces, p.grain)
         t = p.target_weft if target is None else target[p.name]
         comp.append(compliance_per_triangle(rw, t))
-        warp.append(np.abs(rg - p.target_warp) / p.target_warp)
+        warp.append((rg - p.target_warp) / p.target_warp)
         shear.append(sh)
         area.append(areas_3d(X, p.faces))
     if not comp:
@@ -147,10 +148,10 @@ def ease_compliance(pattern, garment: Optional[str] = None, xyz: Optional[Dict[s
     a = np.concatenate(area)
     c = weighted_stats(100.0 * np.concatenate(comp), a)
     s = weighted_stats(np.concatenate(shear), a)
-    w = weighted_stats(100.0 * np.concatenate(warp), a)
+    warp = 100.0 * np.concatenate(warp)
     return {"mean": c["mean"], "std": c["std"], "p95": c["p95"], "max": c["max"],
-            "shear_mean": s["mean"], "shear_p95": s["p95"], "warp_mean": w["mean"],
-            "area": float(a.sum())}
+            "shear_mean": s["mean"], "shear_p95": s["p95"], "warp_mean": weighted_stats(np.abs(warp), a)["mean"],
+            "warp_signed": weighted_stats(warp, a)["mean"], "area": float(a.sum())}
 
 
 def polyline_length(points: np.ndarray) -> float:

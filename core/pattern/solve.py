@@ -78,8 +78,8 @@ sewn flat, the difference goes into shear on both sides.
 
 Thus the matrix never changes (factorised once per solver, configuration and
 seam plan, reused by the reference, transfer and adaptation solves, which keep
-the reference solve's seam plan); only the right-hand side does. One soft pin per panel fixes the translation gauge; rotation is
-fixed by the ease term's axes and the grain re-alignment (area-weighted vote)
+the reference solve's seam plan); only the right-hand side does. One soft pin
+per panel fixes the translation gauge; rotation is fixed by the ease term's axes and the grain re-alignment (area-weighted vote)
 after every iteration. No triangle ever flips: the rigid part of each step is
 removed per panel, then the vertices of triangles that would flip (or lose
 more than half their area) step back locally (:meth:`PatternSolver._safeguard`)
@@ -261,10 +261,11 @@ def seam_is_gathered(seam: str, gathered: Sequence[str]) -> bool:
     """Whether the cut seam ``seam`` (``garment.line`` or ``garment.line#k``) is named by ``gathered``.
 
     An entry names the seam itself, its line (``shirt.armhole_left``) or the
-    line in any garment (``armhole_left``).
+    line in any garment (``armhole_left``), as export allowances do
+    (:func:`core.cut.types.seam_names`); ``"*"`` names every seam.
     """
-    line = seam.split("#", 1)[0]
-    return any(g in ("*", seam, line, line.split(".", 1)[-1]) for g in gathered)
+    from ..cut.types import seam_names
+    return "*" in gathered or any(n in gathered for n in seam_names(seam))
 
 
 def validate_cut(cut) -> None:
@@ -614,7 +615,7 @@ class PatternSolver:
 
     def _sewn_edges(self):
         """Per seam edge and per seam second-difference row: 1.0 where the seam is sewn flat, 0.0 on
-        gathered seams (``config.gathered``: their length and matched-curvature terms are off)."""
+        gathered seams (:attr:`gathered`: their length and matched-curvature terms are off)."""
         key = self.gathered
         if getattr(self, "_gathered_key", None) != key:
             gathered = np.array([seam_is_gathered(self.cut.seams[sd.seam].name, key) for sd in self.sides], bool)
@@ -700,12 +701,14 @@ class PatternSolver:
         self.seam_demand = demand
         return demand
 
-    def _plan_from_design(self) -> None:
-        """Transfer and adaptation keep the reference solve's seam plan; without one, plan it from the design."""
+    def _plan_from_design(self, K_ref: Optional[np.ndarray] = None) -> None:
+        """Transfer and adaptation keep the reference solve's seam plan; without one, plan it from the
+        design's ease on the reference body (intrinsic offsets ``K_ref`` when the caller has them)."""
         if not self._planned:
-            K, lw, lg = self._offsets(self.ref_positions)
+            if K_ref is None:
+                K_ref = self._offsets(self.ref_positions)[0]
             ease = np.concatenate([pd.ease for pd in self.panels])
-            self.plan_seams(K, ease, np.ones_like(ease))
+            self.plan_seams(K_ref, ease, np.ones_like(ease))
 
     # ------------------------------------------------------------------ targets
     def _offsets(self, positions: np.ndarray):
@@ -735,8 +738,8 @@ class PatternSolver:
         """Targets of Eq. material-scale: per direction max(rho sigma_ref, max_i sigma_i / eps)."""
         eps_weft = _check_eps("eps_weft", eps_weft)
         eps_warp = _check_eps("eps_warp", eps_warp)
-        self._plan_from_design()
         K, lw, lg = self._offsets(self.ref_positions)
+        self._plan_from_design(K)
         ease = np.concatenate([pd.ease for pd in self.panels])
         want_w = ease * lw
         want_g = 1.0 * lg
