@@ -8,8 +8,8 @@ from core.cut.refine import SPLIT_RATIO
 from core.cut.engine import cut_surface
 from core.cut.geodesic import polyline_length
 
-from test_cut_anny_shirt import shirt_spec
-from test_cut_synth import surface_distance, triangle_areas
+from cut_anny_shirt import shirt_spec
+from cut_synth import surface_distance, triangle_areas
 
 
 @pytest.fixture(scope="module")

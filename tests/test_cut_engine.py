@@ -8,7 +8,7 @@ from core.cut.geodesic import GeodesicPaths, insert_keypoints, polyline_length
 from core.cut.split import CutMesh
 from core.errors import CutError
 
-from test_cut_synth import (BACK, FRONT, LEFT, RIGHT, R, SynthBody, capsule, surface_distance,
+from cut_synth import (BACK, FRONT, LEFT, RIGHT, R, SynthBody, capsule, surface_distance,
                             triangle_areas, tube_spec)
 from core.cut.spec import CutLine, PanelSpec
 

@@ -7,7 +7,7 @@ from core.cut.geodesic import GeodesicPaths, check_surface_point, insert_keypoin
 from core.cut.split import CutMesh
 from core.errors import CutError
 
-from test_cut_synth import R, SynthBody
+from cut_synth import R, SynthBody
 
 
 def test_keypoints_inserted_at_their_positions():

@@ -6,7 +6,7 @@ from core.cut.engine import cut_surface
 from core.cut.geodesic import polyline_length
 from core.cut.spec import CutLine, CutSpec, GarmentSpec, PanelSpec
 
-from test_cut_anny_shirt import ray_point
+from cut_anny_shirt import ray_point
 
 
 @pytest.fixture(scope="module")

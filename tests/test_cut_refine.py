@@ -5,7 +5,7 @@ import scipy.sparse as sp
 from core.cut.refine import SPLIT_RATIO, refine
 
 from test_cut_split import grid
-from test_cut_synth import triangle_areas
+from cut_synth import triangle_areas
 
 
 def test_refine_edge_length_area_and_embedding():

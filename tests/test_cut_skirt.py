@@ -9,8 +9,8 @@ from core.cut.skirt import inter_leg_faces, make_skirt
 from core.cut.spec import CutLine, CutSpec, GarmentSpec, PanelSpec
 from core.cut.split import CutMesh
 
-from test_cut_anny_shirt import ray_point
-from test_cut_synth import triangle_areas
+from cut_anny_shirt import ray_point
+from cut_synth import triangle_areas
 
 
 @pytest.fixture(scope="module")
@@ -132,7 +132,7 @@ def test_skirt_cut(anny):
 
 def test_overlapping_garments_are_cut_separately(anny):
     """A shirt whose hem is below the skirt's waistband: each garment keeps its panels."""
-    from test_cut_anny_shirt import shirt_spec
+    from cut_anny_shirt import shirt_spec
     body, X, J = anny
     shirt = shirt_spec(body, X, J, refine=None)
     skirt = skirt_spec(body, X, J, refine=None)

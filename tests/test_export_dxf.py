@@ -6,7 +6,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 from export_synth import make_pattern  # noqa: E402
 
 ezdxf = pytest.importorskip("ezdxf")

@@ -7,7 +7,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 from export_synth import make_pattern  # noqa: E402
 
 from core.export.pieces import build_pieces, layout_pieces, polyline_length  # noqa: E402

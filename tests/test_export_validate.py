@@ -5,7 +5,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 from export_synth import drape_positions, make_pattern  # noqa: E402
 
 from core.errors import ExportError  # noqa: E402
