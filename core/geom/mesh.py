@@ -1,0 +1,116 @@
+"""Triangle-mesh basics: areas, normals, boundary loops.
+
+Vertices are ``(V, 3)`` (or ``(V, 2)`` for pattern coordinates) float arrays
+in metres, faces ``(F, 3)`` integer arrays of vertex ids.
+"""
+from __future__ import annotations
+
+from typing import List
+
+import numpy as np
+
+
+def triangle_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Unsigned triangle areas.
+
+    Parameters
+    ----------
+    vertices : (V, 3) float, metres.
+    faces : (F, 3) int.
+
+    Returns
+    -------
+    (F,) float, square metres.
+    """
+    v = np.asarray(vertices, float)
+    f = np.asarray(faces, int)
+    return 0.5 * np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1)
+
+
+def signed_areas_2d(uv: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Signed areas of 2D triangles, positive when counter-clockwise.
+
+    Parameters
+    ----------
+    uv : (V, 2) float, metres.
+    faces : (F, 3) int.
+
+    Returns
+    -------
+    (F,) float, square metres.
+    """
+    uv = np.asarray(uv, float)
+    f = np.asarray(faces, int)
+    a = uv[f[:, 1]] - uv[f[:, 0]]
+    b = uv[f[:, 2]] - uv[f[:, 0]]
+    return 0.5 * (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
+
+
+def face_normals(vertices: np.ndarray, faces: np.ndarray, unit: bool = True) -> np.ndarray:
+    """Face normals by the right-hand rule of each face's corner order.
+
+    Parameters
+    ----------
+    vertices : (V, 3) float.
+    faces : (F, 3) int.
+    unit : bool
+        Unit length (degenerate faces get zero); otherwise the length is twice
+        the face's area.
+
+    Returns
+    -------
+    (F, 3) float.
+    """
+    v = np.asarray(vertices, float)
+    f = np.asarray(faces, int)
+    n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    if not unit:
+        return n
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+
+
+def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Area-weighted unit vertex normals of an outward-oriented mesh.
+
+    Parameters
+    ----------
+    vertices : (V, 3) float.
+    faces : (F, 3) int.
+
+    Returns
+    -------
+    (V, 3) float; a vertex in no face (or only in degenerate ones) gets (0, 0, 0).
+    """
+    v = np.asarray(vertices, float)
+    f = np.asarray(faces, int)
+    fn = face_normals(v, f, unit=False)           # length = 2 * area: the area weighting
+    n = np.zeros_like(v)
+    for k in range(3):
+        np.add.at(n, f[:, k], fn)
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    return n / np.maximum(length, 1e-30)
+
+
+def boundary_loops(faces: np.ndarray) -> List[np.ndarray]:
+    """Closed boundary loops of a triangle mesh (libigl), longest first.
+
+    Each loop follows the faces' orientation (the mesh lies to its left in
+    a counter-clockwise flattening).
+
+    Parameters
+    ----------
+    faces : (F, 3) int.
+
+    Returns
+    -------
+    list of (k,) int64 arrays of vertex ids, each loop listed once, not closed
+    (the last vertex joins the first); empty for a closed mesh.
+    """
+    import igl
+    f = np.ascontiguousarray(faces, dtype=np.int64)
+    if len(f) == 0:
+        return []
+    loops = igl.boundary_loop_all(f) if hasattr(igl, "boundary_loop_all") else [igl.boundary_loop(f)]
+    loops = [np.asarray(loop, dtype=np.int64) for loop in loops if len(loop) > 0]
+    return sorted(loops, key=len, reverse=True)
