@@ -1,0 +1,442 @@
+"""The pipeline, once: prepare → reference → transfer / adapt → drape → export.
+
+The CLI (:mod:`core.cli`), the add-on (``ease_addon``), the benchmarks, batch
+runs and the demo call these functions and nothing below them to run a
+stage, so a design gives the same pattern, figures and files whichever door
+it comes through. Each function returns its result together with the figures
+a user reads (the report records and a flat ``figures`` dict); writing files
+is separate (:func:`write_pattern`, :func:`write_drape`, :func:`export`).
+
+Settings follow one precedence rule: the caller's value, else the design's
+(its ``materials``), else the default (:class:`core.design.materials.Materials`).
+
+Progress: every function takes ``progress(fraction, message)`` for its own
+span 0..1 (compose spans with :func:`core.progress.sub`); the callback may
+raise :class:`core.errors.Cancelled` to stop.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from .progress import Progress, report, sub
+
+#: Solver configurations a user can name (``--config``); see :mod:`core.pattern`.
+CONFIGS = ("improved", "paper", "stretch")
+
+
+# ----------------------------------------------------------------------------- prepare
+
+@dataclass
+class Prepared:
+    """A design cut on its body, ready for pattern solves.
+
+    Attributes
+    ----------
+    design : core.design.Design
+    body : BodyModel, the model the cut was made on.
+    cut : core.cut.types.GarmentCut
+    reference : (V, 3) float64, metres: the body instance the cut was made on
+        (its ``cut.body`` record: shape and pose).
+    timings : dict, wall seconds of ``load`` and ``cut`` (0 for what was given).
+    """
+    design: object
+    body: object
+    cut: object
+    reference: np.ndarray
+    timings: Dict[str, float] = field(default_factory=dict)
+
+
+def prepare(design, body=None, cut=None, progress: Optional[Progress] = None) -> Prepared:
+    """Load a design and its body and cut it (or adopt a cut already made).
+
+    Parameters
+    ----------
+    design : path, JSON text, dict or core.design.Design
+    body : BodyModel or None
+        None loads the design's ``body.model`` (``"anny"`` by default).
+    cut : GarmentCut or None
+        A cut of this design made earlier (the add-on keeps one); None cuts now.
+    progress : callback, optional
+    """
+    from .body import load_body
+    from .body.instance import spec_instance
+    from .design import load_design
+
+    t0 = time.perf_counter()
+    design = load_design(design)
+    if body is None:
+        body = load_body(design.body.get("model", "anny") or "anny")
+    t1 = time.perf_counter()
+    if cut is None:
+        from .cut import cut_design
+        cut = cut_design(design, body=body, progress=sub(progress, 0.0, 0.95))
+    t2 = time.perf_counter()
+    reference, _ = spec_instance(cut.body, model=body)
+    report(progress, 1.0, f"cut {len(cut.panels)} panels")
+    return Prepared(design, body, cut, reference, {"load": t1 - t0, "cut": t2 - t1})
+
+
+# ----------------------------------------------------------------------------- pattern
+
+@dataclass
+class PatternRun:
+    """A solved pattern and what a user reads of it.
+
+    Attributes
+    ----------
+    pattern : core.pattern.Pattern; ``pattern.report`` holds the mode's records
+        (``config``, ``transfer_deviation``, ``residual_stretch`` ...) and
+        ``metrics`` (:func:`core.metrics.pattern.pattern_report`).
+    figures : dict, label -> value: the key figures of this run, rounded for
+        display (CLI summary, add-on panel).
+    timings : dict, wall seconds (``optimize`` plus the preparation's).
+    """
+    pattern: object
+    figures: Dict[str, object] = field(default_factory=dict)
+    timings: Dict[str, float] = field(default_factory=dict)
+
+
+def solver_config(name: str = "improved", iterations: Optional[int] = None, gather_all: bool = False):
+    """The solver configuration ``name`` with the user's overrides.
+
+    Parameters
+    ----------
+    name : one of :data:`CONFIGS`
+    iterations : local-global iterations, None for the configuration's
+    gather_all : every seam gathered (the seam-length term off everywhere:
+        the paper's switch for gathered designs)
+    """
+    from .pattern.solve import SolverConfig
+    overrides = {}
+    if iterations is not None:
+        overrides["iterations"] = iterations
+    if gather_all:
+        overrides["gathered"] = ("*",)
+    return SolverConfig.named(name, **overrides)
+
+
+def make_solver(prep: Prepared, config: str = "improved", iterations: Optional[int] = None,
+                gather_all: bool = False, progress: Optional[Progress] = None):
+    """The pattern solver of ``prep``: one flattening and factorisation, shared by
+    :func:`reference`, :func:`transfer` and :func:`adapt` (and by every body of a batch)."""
+    from .pattern.solve import PatternSolver
+    return PatternSolver(prep.cut, prep.reference, solver_config(config, iterations, gather_all),
+                         progress=progress)
+
+
+def _finish(pattern):
+    """Measure ``pattern`` into its report; a flipped triangle is an error, not a figure."""
+    from .errors import PatternError
+    from .metrics.pattern import pattern_report
+    metrics = pattern_report(pattern)
+    if metrics["flipped_triangles"]:
+        raise PatternError(f"{metrics['flipped_triangles']} flipped triangles; nothing written")
+    pattern.report["metrics"] = metrics
+    return metrics
+
+
+def _figures(pattern) -> Dict[str, object]:
+    m = pattern.report["metrics"]
+    c, s = m["compliance"], m["seams"]
+    return {"pieces": len(pattern.panels),
+            "compliance mean %": round(float(c["mean"]), 2), "compliance std %": round(float(c["std"]), 2),
+            "shear p95 deg": round(float(c["shear_p95"]), 1),
+            "seam mismatch mean %": round(float(s["mean"]), 2), "seam mismatch max mm": round(float(s["max_mm"]), 1),
+            "flipped": int(m["flipped_triangles"]), "gathered seams": len(s.get("gathered") or {})}
+
+
+def _solve_reference(prep, solver, progress):
+    from .pattern.solve import solve_pattern
+    return solve_pattern(prep.cut, prep.reference, solver=solver, style=prep.design.name, progress=progress)
+
+
+def reference(prep: Prepared, config: str = "improved", iterations: Optional[int] = None,
+              gather_all: bool = False, solver=None, progress: Optional[Progress] = None) -> PatternRun:
+    """The design's pattern on its own (reference) body.
+
+    Parameters
+    ----------
+    prep : :class:`Prepared`
+    config, iterations, gather_all : see :func:`solver_config` (ignored when
+        ``solver`` is given, except ``config`` as the name recorded in the report)
+    solver : PatternSolver of ``prep`` to reuse, or None
+    """
+    t0 = time.perf_counter()
+    if solver is None:
+        solver = make_solver(prep, config, iterations, gather_all, progress=sub(progress, 0.0, 0.2))
+    pattern = _solve_reference(prep, solver, sub(progress, 0.2, 1.0))
+    optimize = time.perf_counter() - t0
+    pattern.report["config"] = config
+    _finish(pattern)
+    return PatternRun(pattern, _figures(pattern), {**prep.timings, "optimize": optimize})
+
+
+def transfer(prep: Prepared, size: str, config: str = "improved", iterations: Optional[int] = None,
+             gather_all: bool = False, solver=None, start=None, progress: Optional[Progress] = None) -> PatternRun:
+    """Shape transfer (paper Eq. transfer-scale): the same cut and ease field on the body of chart size ``size``.
+
+    The reference pattern is solved first (or ``start`` is taken as it) and
+    seeds the transfer solve; the report records the transfer deviation (the
+    ease compliance on the target body) beside the reference's own compliance.
+    """
+    from .body.instance import body_instance, instance_shape
+    from .body.sizes import check_size
+    from .metrics.pattern import ease_compliance
+    from .pattern.solve import transfer_pattern
+
+    size = check_size(size)
+    t0 = time.perf_counter()
+    if solver is None:
+        solver = make_solver(prep, config, iterations, gather_all, progress=sub(progress, 0.0, 0.15))
+    ref_pat = start if start is not None else _solve_reference(prep, solver, sub(progress, 0.15, 0.5))
+    pose = prep.cut.body.get("pose")
+    shape = instance_shape(prep.body, size)
+    target = body_instance(prep.body, shape, pose)
+    pattern = transfer_pattern(prep.cut, prep.reference, target, solver=solver, start=ref_pat,
+                               style=prep.design.name,
+                               body={"model": prep.cut.body.get("model", prep.body.name), "shape": shape,
+                                     "pose": pose, "size": size},
+                               progress=sub(progress, 0.5, 1.0))
+    optimize = time.perf_counter() - t0
+    dev, refc = ease_compliance(pattern), ease_compliance(ref_pat)
+    pattern.report.update({"config": config, "size": size, "transfer_deviation": dev,
+                           "reference_compliance": refc})
+    _finish(pattern)
+    figures = {"size": size, **_figures(pattern),
+               "transfer deviation mean %": round(float(dev["mean"]), 3),
+               "transfer deviation std %": round(float(dev["std"]), 3),
+               "reference compliance mean %": round(float(refc["mean"]), 3)}
+    return PatternRun(pattern, figures, {**prep.timings, "optimize": optimize})
+
+
+def tolerances(prep: Prepared, eps_weft: Optional[float] = None,
+               eps_warp: Optional[float] = None) -> Tuple[float, float]:
+    """(eps_weft, eps_warp): the caller's, else the design's materials, else the default.
+
+    A caller's weft tolerance also stands for the warp unless a warp tolerance
+    is given (one ``--tolerance`` means "this much stretch either way").
+    """
+    from .errors import PatternError
+    materials = prep.cut.materials or {}
+    w = eps_weft if eps_weft is not None else float(materials.get("eps_weft", 1.1))
+    g = eps_warp if eps_warp is not None else (eps_weft if eps_weft is not None
+                                               else float(materials.get("eps_warp", w)))
+    for name, v in (("tolerance", w), ("tolerance_warp", g)):
+        if not (isinstance(v, (int, float)) and v >= 1.0):
+            raise PatternError(f"{name}: a stretch tolerance must be >= 1 (1.1 = 10 % stretch), got {v}")
+    return float(w), float(g)
+
+
+def adapt(prep: Prepared, poses: Sequence, eps_weft: Optional[float] = None, eps_warp: Optional[float] = None,
+          config: str = "improved", iterations: Optional[int] = None, gather_all: bool = False, solver=None,
+          start=None, progress: Optional[Progress] = None) -> PatternRun:
+    """Pose adaptation (paper Eqs. adapt-scale, material-scale): the pattern grows
+    where a target pose needs more fabric than the stretch tolerance allows.
+
+    Parameters
+    ----------
+    poses : pose preset names (``"P1"`` ...) or JSON poses, on the reference shape
+    eps_weft, eps_warp : stretch tolerances >= 1 (see :func:`tolerances`)
+
+    The report records, per pose and garment, the residual stretch (percent
+    of area stretched beyond the tolerance) before and after adaptation.
+    """
+    from .body.instance import body_instance
+    from .metrics.pattern import residual_stretch
+    from .pattern.solve import adapt_pattern
+
+    eps_w, eps_g = tolerances(prep, eps_weft, eps_warp)
+    names = [p if isinstance(p, str) else f"pose{i + 1}" for i, p in enumerate(poses)]
+    t0 = time.perf_counter()
+    shape = prep.cut.body.get("shape")
+    pose_vertices = [body_instance(prep.body, shape, p) for p in poses]
+    if solver is None:
+        solver = make_solver(prep, config, iterations, gather_all, progress=sub(progress, 0.0, 0.15))
+    ref_pat = start if start is not None else _solve_reference(prep, solver, sub(progress, 0.15, 0.5))
+    pattern = adapt_pattern(prep.cut, prep.reference, pose_vertices, eps_weft=eps_w, eps_warp=eps_g,
+                            solver=solver, start=ref_pat, style=prep.design.name, progress=sub(progress, 0.5, 1.0))
+    optimize = time.perf_counter() - t0
+    stretch: Dict[str, dict] = {}
+    figures: Dict[str, object] = {"tolerance": round(eps_w, 4), "tolerance warp": round(eps_g, 4)}
+    for name, P in zip(names, pose_vertices):
+        X = prep.cut.positions(P)
+        xyz = {p.name: X[p.vertex_ids] for p in prep.cut.panels}
+        stretch[name] = {}
+        for g in sorted(prep.cut.garments) or [None]:
+            before = residual_stretch(ref_pat, xyz, eps_w, g)
+            after = residual_stretch(pattern, xyz, eps_w, g)
+            stretch[name][g or "all"] = {"before": before, "after": after}
+            figures[f"{name} {g or 'all'} stretched % before/after"] = f"{before:.1f} / {after:.1f}"
+    pattern.report.update({"config": config, "poses": names, "eps_weft": eps_w, "eps_warp": eps_g,
+                           "residual_stretch": stretch})
+    _finish(pattern)
+    figures.update(_figures(pattern))
+    return PatternRun(pattern, figures, {**prep.timings, "optimize": optimize})
+
+
+def write_pattern(out, run: PatternRun) -> None:
+    """``pattern.json``, ``report.json`` (records, metrics, timings) and ``pattern.png`` into ``out``, atomically."""
+    from .fileio import output_dir, write_json
+    from .pattern.io import save_pattern
+    from .pattern.plot import render_png
+
+    pattern = run.pattern
+    pattern.report["timings"] = dict(run.timings)
+    with output_dir(out) as tmp:
+        save_pattern(pattern, tmp)
+        write_json(tmp / "report.json", pattern.report)
+        render_png(pattern, tmp / "pattern.png")
+
+
+def summary(run: PatternRun) -> str:
+    """The one-line summary the CLI prints after a pattern run."""
+    pattern = run.pattern
+    m = pattern.report["metrics"]
+    c, s = m["compliance"], m["seams"]
+    line = (f"{pattern.mode}: {len(pattern.panels)} pieces, ease compliance {c['mean']:.2f} ± {c['std']:.2f} % "
+            f"(shear p95 {c['shear_p95']:.1f}°), seam mismatch {s['mean']:.2f} % (max {s['max_mm']:.1f} mm), "
+            f"flipped {m['flipped_triangles']}, optimize {run.timings.get('optimize', 0.0):.2f} s"
+            + (f"; gathered: {', '.join(sorted(s['gathered']))}" if s.get("gathered") else ""))
+    if "transfer_deviation" in pattern.report:
+        line += f"; transfer deviation {pattern.report['transfer_deviation']['mean']:.2f} %"
+    if "residual_stretch" in pattern.report:
+        worst = max((v["after"] for d in pattern.report["residual_stretch"].values() for v in d.values()),
+                    default=0.0)
+        line += f"; residual stretch after adaptation <= {worst:.2f} %"
+    return line
+
+
+# ----------------------------------------------------------------------------- drape
+
+@dataclass
+class DrapeRun:
+    """A drape and its fit measurements.
+
+    Attributes
+    ----------
+    result : core.drape.DrapeResult
+    metrics : dict, :func:`core.metrics.drape.drape_metrics` (per-vertex
+        arrays included: ``vertex_gap`` ...)
+    body_vertices : (V, 3) float64 m, body_faces : (F, 3) int64: the body draped on.
+    figures : dict, label -> value for display.
+    """
+    result: object
+    metrics: dict
+    body_vertices: np.ndarray
+    body_faces: np.ndarray
+    figures: Dict[str, object] = field(default_factory=dict)
+
+
+def drape(pattern, material=None, options=None, body: Optional[Tuple[np.ndarray, np.ndarray]] = None,
+          progress: Optional[Progress] = None) -> DrapeRun:
+    """Drape ``pattern`` with the project's XPBD (Warp) and measure the fit.
+
+    Parameters
+    ----------
+    pattern : core.pattern.Pattern
+    material : fabric preset name, Material, mapping or None (the design's, else cotton)
+    options : DrapeOptions or mapping (frames, substeps, device ...), see :class:`core.drape.DrapeOptions`
+    body : (vertices (V, 3), faces (F, 3)) or None for the pattern's own body
+        instance (its ``body`` record: model, size or shape, pose)
+    """
+    from .body.instance import spec_instance
+    from .drape import drape as _drape
+    from .metrics.drape import drape_metrics
+
+    if body is None:
+        body_v, body_f = spec_instance(pattern.body or {})
+    else:
+        body_v, body_f = np.asarray(body[0], dtype=np.float64), np.asarray(body[1], dtype=np.int64)
+    result = _drape(pattern, body_v, body_f, material=material, options=options, progress=sub(progress, 0.0, 0.9))
+    report(progress, 0.92, "drape: measuring the fit")
+    metrics = drape_metrics(result, body_v, body_f, pattern=pattern)
+    report(progress, 1.0, "drape: done")
+    return DrapeRun(result, metrics, body_v, body_f, _drape_figures(result, metrics))
+
+
+def _drape_figures(result, metrics) -> Dict[str, object]:
+    out = {"frames": int(result.frames), "settled": result.settle_reason,
+           "time s": round(float(result.timings.get("total", 0.0)), 2),
+           "mean weft strain %": round(100 * float(np.mean(np.asarray(result.strain_weft)[result.used])), 2),
+           "device": result.device}
+    a = (metrics or {}).get("all") or {}
+    if a:
+        out["mean gap mm"] = round(float(a["gap_mm"]["mean"]), 1)
+        out["penetration %"] = round(float(a["penetration_pct"]), 2)
+        out["seam gap max mm"] = round(float(a["seam_gap_mm"]["max"]), 2)
+    return out
+
+
+def write_drape(out, run: DrapeRun, pattern=None, preview: bool = True):
+    """Every drape file into ``out`` atomically (see :func:`core.drape.output.write_drape`); returns the folder."""
+    from .drape.output import write_drape as _write
+    return _write(out, run.result, run.metrics, run.body_vertices, run.body_faces, pattern=pattern, preview=preview)
+
+
+def drape_summary(run: DrapeRun, pattern) -> str:
+    """The one-line summary the CLI prints after a drape."""
+    r, a = run.result, run.metrics["all"]
+    return (f"drape {pattern.style}: {r.material['name']}, {r.frames} frames ({r.settle_reason}), "
+            f"simulate {r.timings['simulate']:.1f} s; gap {a['gap_mm']['mean']:.1f} ± {a['gap_mm']['std']:.1f} mm, "
+            f"penetration {a['penetration_pct']:.2f} %, seam gap max {a['seam_gap_mm']['max']:.2f} mm")
+
+
+# ----------------------------------------------------------------------------- export
+
+def export_allowance(pattern, allowance: Optional[float] = None, hem: Optional[float] = None):
+    """The seam/hem allowance table for an export: the design's (``materials.export.allowance``)
+    with the caller's ``allowance`` (every seam) and ``hem`` over it; None when the caller sets
+    neither (the exporter then reads the design's itself)."""
+    if allowance is None and hem is None:
+        return None
+    from .export import DEFAULT_ALLOWANCE, DEFAULT_HEM
+    base = ((pattern.materials or {}).get("export") or {}).get("allowance")
+    if isinstance(base, dict):
+        table = dict(base)
+    elif isinstance(base, (int, float)) and not isinstance(base, bool):
+        table = {"default": float(base)}
+    else:
+        table = {"default": DEFAULT_ALLOWANCE, "hem": DEFAULT_HEM}
+    if allowance is not None:
+        table["default"] = allowance
+    if hem is not None:
+        table["hem"] = hem
+    return table
+
+
+def export(pattern, out, formats: Union[str, Sequence[str]] = ("svg", "dxf", "pdf"), allowance=None,
+           hem: Optional[float] = None, notch_spacing: Optional[float] = None,
+           drape: Optional[Tuple[np.ndarray, Optional[np.ndarray]]] = None, strict: bool = True,
+           warnings: Optional[List[str]] = None, progress: Optional[Progress] = None) -> list:
+    """Cutting-room files (SVG, DXF, PDF) and the draped garment (GLB, OBJ) into ``out``, atomically.
+
+    Parameters
+    ----------
+    pattern : core.pattern.Pattern
+    formats : comma-separated string or names (see :func:`core.export.parse_formats`)
+    allowance : float (m, every seam) or a table ``{"default": m, "hem": m, seam name: m}``, or None
+    hem : float, m: the hem allowance over the table
+    notch_spacing : float, m between notches along a seam (None: the design's, else the default)
+    drape : (positions (N, 3) by global vertex id, faces or None) for GLB/OBJ
+    strict : refuse pieces whose sew line crosses itself (False: export with a warning)
+    warnings : list to receive the warnings
+
+    Returns
+    -------
+    list of the written paths.
+    """
+    from .export import export_pattern, parse_formats
+    table = allowance if isinstance(allowance, dict) else export_allowance(pattern, allowance, hem)
+    positions, faces = drape if drape is not None else (None, None)
+    return export_pattern(pattern, out, formats=parse_formats(formats), allowance=table,
+                          drape_positions=positions, drape_faces=faces, notch_spacing=notch_spacing,
+                          strict=strict, warnings=warnings if warnings is not None else [], progress=progress)
+
+
+__all__ = ["CONFIGS", "Prepared", "PatternRun", "DrapeRun", "prepare", "solver_config", "make_solver",
+           "reference", "transfer", "adapt", "tolerances", "write_pattern", "summary", "drape", "write_drape",
+           "drape_summary", "export_allowance", "export"]
