@@ -1,8 +1,10 @@
-"""The garment templates shipped in ``examples/designs/``, built in code.
+"""The garment templates, built in code and shipped as package data.
 
-Each builder returns a design dict (the JSON format); the files in
-``examples/designs/`` are written from them by :func:`write_templates` (tests
-check they are current). Templates are made of landmarks, traced lengths and
+Each builder returns a design dict (the JSON format); the files in the
+package's ``core/data/designs/`` (:func:`template_dir`; a source checkout's
+``examples/designs`` links there) are written from them by
+:func:`write_templates` (tests check they are current), so an installed
+wheel or the Blender extension has them too. Templates are made of landmarks, traced lengths and
 rings only, so they hold on any body model with the standard landmarks.
 
 Construction (all mirrored left -> right):
@@ -25,11 +27,21 @@ Construction (all mirrored left -> right):
 from __future__ import annotations
 
 import copy
+from importlib import resources
 from pathlib import Path
-from typing import Callable, Dict
+from typing import Callable, Dict, List
 
-REPO = Path(__file__).resolve().parent.parent.parent
-TEMPLATE_DIR = REPO / "examples" / "designs"
+
+def template_dir() -> Path:
+    """The folder of the template JSON files inside the installed package.
+
+    The package is installed as files (a wheel, an editable install or the
+    extension), so the package data is a real folder.
+    """
+    return Path(str(resources.files("core").joinpath("data", "designs")))
+
+
+TEMPLATE_DIR = template_dir()
 
 
 def _design(name, description, garments, parameters, keypoints, lines=None, skirt=False, fabric="cotton"):
@@ -353,32 +365,35 @@ TEMPLATES: Dict[str, Callable[[], dict]] = {
 }
 
 
-def template_names():
+def list_templates() -> List[str]:
+    """Names of the shipped templates, in the order of :data:`TEMPLATES`."""
     return list(TEMPLATES)
 
 
-def template_path(name: str) -> Path:
-    """Path of ``examples/designs/<name>.json`` (source checkout)."""
-    from ..errors import DesignError
+def _check_name(name: str) -> None:
     if name not in TEMPLATES:
+        from ..errors import DesignError
         raise DesignError("", f"unknown template {name!r}; templates: {', '.join(TEMPLATES)}")
-    return TEMPLATE_DIR / f"{name}.json"
+
+
+def template_path(name: str) -> Path:
+    """Path of the shipped template ``<name>.json`` (package data)."""
+    _check_name(name)
+    return template_dir() / f"{name}.json"
 
 
 def template(name: str):
-    """The template ``name`` as a validated :class:`core.design.Design` (built in code,
-    so it works where ``examples/`` is not shipped, e.g. the installed extension)."""
+    """The template ``name`` as a validated :class:`core.design.Design` (built in code)."""
     from .format import load_design
-    from ..errors import DesignError
-    if name not in TEMPLATES:
-        raise DesignError("", f"unknown template {name!r}; templates: {', '.join(TEMPLATES)}")
+    _check_name(name)
     return load_design(TEMPLATES[name]())
 
 
-def write_templates(directory=TEMPLATE_DIR) -> list:
-    """(Re)write every template's JSON into ``directory``; returns the paths."""
+def write_templates(directory=None) -> list:
+    """(Re)write every template's JSON into ``directory`` (default :func:`template_dir`); returns the paths."""
     from .format import load_design, save_design
+    directory = Path(directory) if directory is not None else template_dir()
     out = []
     for name, build in TEMPLATES.items():
-        out.append(save_design(load_design(build()), Path(directory) / f"{name}.json"))
+        out.append(save_design(load_design(build()), directory / f"{name}.json"))
     return out
