@@ -2,17 +2,19 @@
 body, mirroring, ease fields and the garment templates.
 
 >>> design = load_design("examples/designs/shirt_long_sleeve.json")
->>> spec = resolve(design, body)            # -> core.cut.spec.CutSpec
+>>> spec = resolve(design, body)            # -> core.design.spec.CutSpec
 >>> cut = core.cut.cut_design(design)       # resolve + cut + ease
 
 Heavy dependencies (igl, potpourri3d) are imported when a design is resolved,
 not when this package is imported.
 """
-from .format import (Design, Garment, Line, Panel, Parameter, EASE_MIN, EASE_MAX, FORMAT, VERSION,
-                     load_design, parse_design, save_design)
+from .checks import EASE_MAX, EASE_MIN
+from .materials import Materials
+from .parser import load_design, parse_design, save_design
+from .types import FORMAT, VERSION, Design, Garment, Line, Panel, Parameter
 from .resolve import Resolver, instance_vertices, resolve
 from .ease import apply_ease, panel_ease
 
-__all__ = ["Design", "Garment", "Line", "Panel", "Parameter", "EASE_MIN", "EASE_MAX", "FORMAT",
+__all__ = ["Design", "Garment", "Line", "Panel", "Parameter", "Materials", "EASE_MIN", "EASE_MAX", "FORMAT",
            "VERSION", "load_design", "parse_design", "save_design", "Resolver", "instance_vertices",
            "resolve", "apply_ease", "panel_ease"]

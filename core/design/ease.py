@@ -28,7 +28,8 @@ from typing import Optional
 import numpy as np
 
 from ..errors import DesignError
-from .format import EASE_MAX, EASE_MIN, load_design
+from .checks import EASE_MAX, EASE_MIN
+from .parser import load_design
 from .mirror import mirror_ease
 from .resolve import AXIS_VECTORS, Resolver
 

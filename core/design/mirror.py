@@ -1,6 +1,6 @@
 """Left/right mirroring of design elements and of surface points.
 
-Names: ``*_left`` <-> ``*_right`` (also inside names, e.g. ``arm_left``).
+Names follow :mod:`core.design.naming` (``*_left`` <-> ``*_right``).
 Definitions of lines and panels are mirrored by substituting names (so that a
 mirrored line meets the other lines at exactly the same keypoints); keypoints
 are mirrored geometrically through the body's symmetry map.
@@ -8,40 +8,14 @@ are mirrored geometrically through the body's symmetry map.
 from __future__ import annotations
 
 import copy
+from dataclasses import replace
 from typing import Optional
 
 import numpy as np
 
 from ..body.model import SurfacePoint
-
-
-def mirrored_name(name: str) -> Optional[str]:
-    """``"sleeve_left"`` -> ``"sleeve_right"``; None when the name has no ``_left``."""
-    if name.endswith("_left"):
-        return name[: -len("_left")] + "_right"
-    if "_left_" in name:
-        return name.replace("_left_", "_right_", 1)
-    return None
-
-
-def swap_side(name: str) -> str:
-    """Swap ``_left``/``_right`` in a reference name (midline names are kept)."""
-    if name.endswith("_left"):
-        return name[:-5] + "_right"
-    if name.endswith("_right"):
-        return name[:-6] + "_left"
-    if "_left_" in name:
-        return name.replace("_left_", "_right_", 1)
-    if "_right_" in name:
-        return name.replace("_right_", "_left_", 1)
-    return name
-
-
-_AXIS_FLIP = {"x": "-x", "+x": "-x", "-x": "x"}
-
-
-def mirror_axis(axis: str) -> str:
-    return _AXIS_FLIP.get(axis, axis)
+from ..errors import DesignError
+from .naming import mirror_axis, mirrored_name, swap_side
 
 
 def _mirror_ref(ref):
@@ -64,7 +38,6 @@ def _mirror_ref(ref):
 
 def mirror_line(line):
     """The ``*_right`` counterpart of a ``*_left`` line definition."""
-    from .format import Line
     if line.ring is not None:
         r = copy.deepcopy(line.ring)
         r["through"] = _mirror_ref(r["through"])
@@ -75,13 +48,14 @@ def mirror_line(line):
         # A reflection reverses the sense of rotation: fractions along the ring
         # then land on mirrored positions.
         r["handed"] = -int(r.get("handed", 1))
-        return Line(mirrored_name(line.name), [], True, line.role, r)
+        return replace(line, name=mirrored_name(line.name), points=[], closed=True, ring=r, section=None)
     if line.section is not None:
         c = copy.deepcopy(line.section)
         c["from"], c["to"] = _mirror_ref(c["from"]), _mirror_ref(c["to"])
         c["normal"] = mirror_axis(c["normal"]) if isinstance(c["normal"], str) else [_mirror_ref(x) for x in c["normal"]]
-        return Line(mirrored_name(line.name), [], False, line.role, None, c)
-    return Line(mirrored_name(line.name), [_mirror_ref(p) for p in line.points], line.closed, line.role, None)
+        return replace(line, name=mirrored_name(line.name), points=[], closed=False, ring=None, section=c)
+    return replace(line, name=mirrored_name(line.name), points=[_mirror_ref(p) for p in line.points], ring=None,
+                   section=None)
 
 
 def mirror_ease(ease: dict) -> dict:
@@ -96,8 +70,8 @@ def mirror_ease(ease: dict) -> dict:
 
 
 def mirror_panel(panel):
-    from .format import Panel
-    return Panel(mirrored_name(panel.name), _mirror_ref(panel.seed), panel.body_part, mirror_ease(panel.ease))
+    """The ``*_right`` counterpart of a ``*_left`` panel definition."""
+    return replace(panel, name=mirrored_name(panel.name), seed=_mirror_ref(panel.seed), ease=mirror_ease(panel.ease))
 
 
 # ---------------------------------------------------------------- geometry
@@ -143,7 +117,6 @@ def mirror_surface_point(sp: SurfacePoint, faces: np.ndarray, symmetry: np.ndarr
             bary[dst.index(int(v))] = float(b)
         return SurfacePoint(g, tuple(bary))
     if locator is None:
-        from ..errors import DesignError
         raise DesignError("mirror", f"triangle {sp.triangle} has no mirror triangle on the template")
     p = sp.position(locator.vertices, locator.faces).copy()
     p[0] = -p[0]

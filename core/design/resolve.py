@@ -33,10 +33,13 @@ import numpy as np
 
 from ..body.model import SurfacePoint
 from ..errors import BodyError, DesignError
-from .format import Design, Line, load_design, parameter_value
+from .checks import parameter_value
+from .parser import load_design
+from .types import Design, Line
 from .geometry import (nearest_segment, surface_tools, plane_section_loop, point_at_length,
                        polyline_length, segment_point)
-from .mirror import face_symmetry, mirror_line, mirror_panel, mirror_surface_point, mirrored_name, swap_side
+from .mirror import face_symmetry, mirror_line, mirror_panel, mirror_surface_point
+from .naming import mirrored_name, swap_side
 
 AXIS_VECTORS = {
     "x": (1, 0, 0), "+x": (1, 0, 0), "-x": (-1, 0, 0),

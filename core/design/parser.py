@@ -1,0 +1,312 @@
+"""The EASE design file (``"format": "ease-design", "version": 1``): JSON -> :mod:`core.design.types`, and back.
+
+A design is plain JSON. Loading validates every element
+(:mod:`core.design.checks`, the materials by :mod:`core.design.materials`) and raises
+:class:`core.errors.DesignError` whose ``path`` is the JSON path of the
+offending element (``garments[0].panels[2].ease.value: expected a number in
+0.5..4.0, got 7``). Everything that depends on a body (landmark names, whether
+a length fits on a limb) is checked when the design is resolved
+(:func:`core.design.resolve.resolve`), with the same kind of path.
+
+Fields (metres, the body frame of :mod:`core`: +Z up, body faces -Y, +X = body's left)
+
+=====================  ==========================================================
+``format``, ``version``  ``"ease-design"``, ``1``
+``name``               non-empty string; ``description`` optional
+``body``               ``{"model": "anny", "shape": "XS".."XL" | {param: value},
+                       "pose": "A" | "T" | "P1".."P3" | {joint: [rx, ry, rz]}}``:
+                       the reference instance the design is made on
+``materials``          ``{"fabric", "eps_weft", "eps_warp", "gathered", "gather_above",
+                       "export": {"allowance", "notch_spacing"}}``: fabric, stretch
+                       tolerances, gathered seams, seam allowance and notch
+                       spacing; fields and defaults in :mod:`core.design.materials`
+``mirror``             true: every ``*_left`` keypoint / line / panel gets its
+                       ``*_right`` counterpart through the body's symmetry map
+``skirt``              true: cut on the skirt topology (dresses, skirts)
+``refine_edge_length`` target *mean* edge length of the cut panels (m, 0.002..0.1,
+                       default 0.01): every edge longer than 1.5x it is split
+                       (:mod:`core.cut.refine`); null keeps the body's resolution
+``parameters``         ``{name: number | {"value", "kind": "placement" (0..1) |
+                       "length" (m) | "number", "min", "max"}}``; used as
+                       ``"$name"`` wherever a number is expected
+``keypoints``          ``{name: keypoint}``; a keypoint is a landmark name,
+                       ``{"landmark"}``, ``{"triangle", "bary"}`` (template surface
+                       point), ``{"between": [a, b], "t"}`` (fraction t along the
+                       geodesic a -> b) or ``{"trace": {"from", "along": "arm_left" |
+                       "arm_right" | "leg_left" | "leg_right" | "torso_down" |
+                       "torso_up", "length"}}`` (geodesic length down a body part)
+                       or ``{"mirror_of": keypoint}`` (its mirror image)
+``lines``              lines shared by all garments (e.g. the waist of shirt+pants)
+``garments``           ``[{"name", "kind": "upper" | "lower" | "dress", "pin": line
+                       name, "lines": [...], "panels": [...]}]``
+line                   ``{"name", "role": "seam" | "opening" | "guide"}`` plus one of
+                       ``"points": [keypoint, ...], "closed"`` (joined by geodesics);
+                       ``"ring": {"through", "normal": axis | [a, b], "contains",
+                       "points", "named": {name: fraction | axis}}`` (closed plane
+                       section; ``contains``, optional: a second keypoint the
+                       plane is tilted to hold, the normal turned least; names
+                       points on itself: the extreme along an axis, or the
+                       point at a fraction of its length); ``"section": {"from",
+                       "to", "normal", "spacing"}`` (plane section between two
+                       keypoints, e.g. a centre seam on the midline). A ``guide``
+                       line is not cut; it only names points.
+panel                  ``{"name", "seed": keypoint inside it, "body_part": "torso" |
+                       "arm" | "leg", "ease": field}``
+ease field             ``{"value"}`` | ``{"from", "to", "between": [a, b]}`` |
+                       ``{"from", "to", "axis", "over": "panel" | "garment"}`` |
+                       ``{"per_triangle": {"triangles",
+                       "values", "default"}}`` (body template triangles) -- every
+                       value finite and in 0.5..4.0 (see :mod:`core.design.ease`)
+=====================  ==========================================================
+
+Keypoint references are strings: the name of a design keypoint, of a point
+named on a ring line, of a generated ``*_right`` mirror, or of a body landmark.
+"""
+from __future__ import annotations
+
+import copy
+import json
+from pathlib import Path
+from typing import Dict, Union
+
+from ..body.model import POSE_PRESETS
+from ..body.sizes import SIZES
+from ..errors import DesignError
+from .checks import (BODY_PARTS, GARMENT_KINDS, LINE_ROLES, PARAMETER_KINDS, check_ease, check_name,
+                     check_names_unique, check_number, check_parameter_value, check_ring, check_section,
+                     expect_dict, expect_keys, fmt, is_number, keypoint_ref, check_keypoint)
+from .materials import check_seam_names, parse_materials
+from .types import FORMAT, VERSION, Design, Garment, Line, Panel, Parameter
+
+
+def _parse_line(path, obj, params) -> Line:
+    expect_dict(path, obj, "a line {name, points | ring | section, closed, role}")
+    expect_keys(path, obj, ("name", "points", "closed", "role", "ring", "section"))
+    if "name" not in obj:
+        raise DesignError(f"{path}.name", "missing")
+    check_name(f"{path}.name", obj["name"])
+    role = obj.get("role", "seam")
+    if role not in LINE_ROLES:
+        raise DesignError(f"{path}.role", f"expected one of {', '.join(LINE_ROLES)}, got {fmt(role)}")
+    if sum(k in obj for k in ("ring", "points", "section")) != 1:
+        raise DesignError(path, "expected exactly one of points (a keypoint list), ring (a closed plane "
+                                "section) or section (a plane section between two keypoints)")
+    if "section" in obj:
+        if obj.get("closed", False) is not False:
+            raise DesignError(f"{path}.closed", "a section is always open")
+        return Line(obj["name"], [], False, role, None, check_section(f"{path}.section", obj["section"], params))
+    if "ring" in obj:
+        if obj.get("closed", True) is not True:
+            raise DesignError(f"{path}.closed", "a ring is always closed")
+        return Line(obj["name"], [], True, role, check_ring(f"{path}.ring", obj["ring"], params))
+    closed = obj.get("closed", False)
+    if not isinstance(closed, bool):
+        raise DesignError(f"{path}.closed", f"expected true or false, got {fmt(closed)}")
+    pts = obj["points"]
+    need = 3 if closed else 2
+    if not isinstance(pts, list) or len(pts) < need:
+        raise DesignError(f"{path}.points", f"expected a list of at least {need} keypoints"
+                          f"{' (a closed line)' if closed else ''}, got {fmt(pts)}")
+    refs = [keypoint_ref(f"{path}.points[{i}]", r, params) for i, r in enumerate(pts)]
+    return Line(obj["name"], refs, closed, role, None)
+
+
+def _parse_panel(path, obj, params) -> Panel:
+    expect_dict(path, obj, "a panel {name, seed, body_part, ease}")
+    expect_keys(path, obj, ("name", "seed", "body_part", "ease"))
+    for k in ("name", "seed"):
+        if k not in obj:
+            raise DesignError(f"{path}.{k}", "missing")
+    check_name(f"{path}.name", obj["name"])
+    seed = keypoint_ref(f"{path}.seed", obj["seed"], params)
+    part = obj.get("body_part", "torso")
+    if part not in BODY_PARTS:
+        raise DesignError(f"{path}.body_part", f"expected one of {', '.join(BODY_PARTS)}, got {fmt(part)}")
+    try:
+        ease = check_ease(f"{path}.ease", obj.get("ease", {"value": 1.0}), params)
+    except DesignError as exc:
+        # name the panel, not only its JSON path
+        raise DesignError(exc.path, f"panel {obj['name']!r}: {exc.message}") from None
+    return Panel(obj["name"], seed, part, ease)
+
+
+def _parse_garment(path, obj, params, shared_lines) -> Garment:
+    expect_dict(path, obj, "a garment {name, kind, pin, lines, panels}")
+    expect_keys(path, obj, ("name", "kind", "pin", "lines", "panels"))
+    if "name" not in obj:
+        raise DesignError(f"{path}.name", "missing")
+    check_name(f"{path}.name", obj["name"])
+    kind = obj.get("kind")
+    if kind not in GARMENT_KINDS:
+        raise DesignError(f"{path}.kind", f"expected one of {', '.join(GARMENT_KINDS)}, got {fmt(kind)}")
+    lines_raw = obj.get("lines", [])
+    if not isinstance(lines_raw, list):
+        raise DesignError(f"{path}.lines", f"expected a list of lines, got {fmt(lines_raw)}")
+    lines = []
+    for i, l in enumerate(lines_raw):
+        line = _parse_line(f"{path}.lines[{i}]", l, params)
+        if any(x.name == line.name for x in lines):
+            raise DesignError(f"{path}.lines[{i}].name", f"duplicate line name {line.name!r}")
+        lines.append(line)
+    panels_raw = obj.get("panels")
+    if not isinstance(panels_raw, list) or not panels_raw:
+        raise DesignError(f"{path}.panels", f"expected a non-empty list of panels, got {fmt(panels_raw)}")
+    panels = []
+    for i, p in enumerate(panels_raw):
+        panel = _parse_panel(f"{path}.panels[{i}]", p, params)
+        if any(x.name == panel.name for x in panels):
+            raise DesignError(f"{path}.panels[{i}].name", f"duplicate panel name {panel.name!r}")
+        panels.append(panel)
+    pin = obj.get("pin")
+    if pin is not None:
+        names = [l.name for l in lines] + [l.name for l in shared_lines]
+        if not isinstance(pin, str) or pin not in names:
+            raise DesignError(f"{path}.pin", f"expected the name of one of the garment's (or shared) lines "
+                                             f"({', '.join(names) or 'none'}), got {fmt(pin)}")
+    return Garment(obj["name"], kind, pin, lines, panels)
+
+
+def _parse_body(path, obj):
+    expect_dict(path, obj, "a body {model, shape, pose}")
+    expect_keys(path, obj, ("model", "shape", "pose"))
+    model = obj.get("model", "anny")
+    if not isinstance(model, str) or not model:
+        raise DesignError(f"{path}.model", f"expected a body model name or file path, got {fmt(model)}")
+    shape = obj.get("shape", "M")
+    if isinstance(shape, str):
+        if shape not in SIZES:
+            raise DesignError(f"{path}.shape", f"expected a size ({', '.join(SIZES)}) or an object of shape parameters, got {fmt(shape)}")
+    elif isinstance(shape, dict):
+        for k, v in shape.items():
+            check_number(f"{path}.shape.{k}", v)
+        shape = {k: float(v) for k, v in shape.items()}
+    elif shape is not None:
+        raise DesignError(f"{path}.shape", f"expected a size ({', '.join(SIZES)}) or an object of shape parameters, got {fmt(shape)}")
+    pose = obj.get("pose", "A")
+    if isinstance(pose, str):
+        if pose not in POSE_PRESETS:
+            raise DesignError(f"{path}.pose", f"expected a pose preset ({', '.join(POSE_PRESETS)}) or an object joint -> [rx, ry, rz], got {fmt(pose)}")
+    elif isinstance(pose, dict):
+        for k, v in pose.items():
+            if not isinstance(v, list) or len(v) != 3:
+                raise DesignError(f"{path}.pose.{k}", f"expected an axis-angle [rx, ry, rz] in radians, got {fmt(v)}")
+            for i, x in enumerate(v):
+                check_number(f"{path}.pose.{k}[{i}]", x)
+        pose = {k: [float(x) for x in v] for k, v in pose.items()}
+    elif pose is not None:
+        raise DesignError(f"{path}.pose", f"expected a pose preset ({', '.join(POSE_PRESETS)}) or an object joint -> [rx, ry, rz], got {fmt(pose)}")
+    return {"model": model, "shape": shape, "pose": pose}
+
+
+def _parse_parameters(path, obj) -> Dict[str, Parameter]:
+    expect_dict(path, obj, "an object name -> number | {value, kind, min, max}")
+    out = {}
+    for name, v in obj.items():
+        p = f"{path}.{name}"
+        check_name(p, name)
+        if is_number(v):
+            v = {"value": v}
+        expect_dict(p, v, "a number or {value, kind, min, max}")
+        expect_keys(p, v, ("value", "kind", "min", "max"))
+        kind = v.get("kind", "number")
+        if kind not in PARAMETER_KINDS:
+            raise DesignError(f"{p}.kind", f"expected one of {', '.join(PARAMETER_KINDS)}, got {fmt(kind)}")
+        lo = check_number(f"{p}.min", v["min"]) if "min" in v else None
+        hi = check_number(f"{p}.max", v["max"]) if "max" in v else None
+        if "value" not in v:
+            raise DesignError(f"{p}.value", "missing")
+        check_parameter_value(f"{p}.value", kind, v["value"], lo, hi)
+        out[name] = Parameter(name, float(v["value"]), kind, lo, hi)
+    return out
+
+
+def parse_design(obj: dict) -> Design:
+    """Validate a design object (parsed JSON) and build a :class:`Design`."""
+    expect_dict("", obj, "a design object")
+    top = ("format", "version", "name", "description", "body", "materials", "mirror", "skirt",
+           "refine_edge_length", "parameters", "keypoints", "lines", "garments")
+    expect_keys("", obj, top)
+    if obj.get("format") != FORMAT:
+        raise DesignError("format", f"expected {FORMAT!r}, got {fmt(obj.get('format'))}")
+    if obj.get("version") != VERSION:
+        raise DesignError("version", f"expected {VERSION} (this version of EASE reads design version {VERSION}), got {fmt(obj.get('version'))}")
+    name = obj.get("name")
+    if not isinstance(name, str) or not name.strip():
+        raise DesignError("name", f"expected a non-empty string, got {fmt(name)}")
+    desc = obj.get("description", "")
+    if not isinstance(desc, str):
+        raise DesignError("description", f"expected a string, got {fmt(desc)}")
+    body = _parse_body("body", obj.get("body", {}))
+    materials = parse_materials("materials", obj.get("materials", {}))
+    for k in ("mirror", "skirt"):
+        if not isinstance(obj.get(k, False), bool):
+            raise DesignError(k, f"expected true or false, got {fmt(obj.get(k))}")
+    rel = obj.get("refine_edge_length", 0.01)
+    if rel is not None:
+        rel = check_number("refine_edge_length", rel, 0.002, 0.1, what="an edge length in metres (or null)")
+    params = _parse_parameters("parameters", obj.get("parameters", {}))
+    kps_raw = expect_dict("keypoints", obj.get("keypoints", {}), "an object name -> keypoint")
+    keypoints = {}
+    for k, v in kps_raw.items():
+        check_name(f"keypoints.{k}", k)
+        keypoints[k] = check_keypoint(f"keypoints.{k}", v, params)
+    shared_raw = obj.get("lines", [])
+    if not isinstance(shared_raw, list):
+        raise DesignError("lines", f"expected a list of lines, got {fmt(shared_raw)}")
+    shared = []
+    for i, l in enumerate(shared_raw):
+        line = _parse_line(f"lines[{i}]", l, params)
+        if any(x.name == line.name for x in shared):
+            raise DesignError(f"lines[{i}].name", f"duplicate line name {line.name!r}")
+        shared.append(line)
+    graw = obj.get("garments")
+    if not isinstance(graw, list) or not graw:
+        raise DesignError("garments", f"expected a non-empty list of garments, got {fmt(graw)}")
+    garments = []
+    for i, g in enumerate(graw):
+        garment = _parse_garment(f"garments[{i}]", g, params, shared)
+        if any(x.name == garment.name for x in garments):
+            raise DesignError(f"garments[{i}].name", f"duplicate garment name {garment.name!r}")
+        garments.append(garment)
+    skirt = bool(obj.get("skirt", False))
+    design = Design(name=name, body=body, materials=materials, parameters=params, keypoints=keypoints,
+                    lines=shared, garments=garments, mirror=bool(obj.get("mirror", False)), skirt=skirt,
+                    refine_edge_length=rel, description=desc)
+    check_names_unique(design)
+    check_seam_names(design)
+    return design
+
+
+def load_design(source: Union[str, Path, dict, Design]) -> Design:
+    """Load and validate a design from a path, a JSON string, a dict or a Design.
+
+    Raises
+    ------
+    DesignError : naming the JSON path of the first invalid element.
+    """
+    if isinstance(source, Design):
+        return source
+    if isinstance(source, dict):
+        return parse_design(copy.deepcopy(source))
+    if isinstance(source, str) and source.lstrip().startswith("{"):
+        text = source
+        where = "<string>"
+    else:
+        p = Path(source)
+        if not p.is_file():
+            raise DesignError("", f"design file not found: {p}")
+        text = p.read_text(encoding="utf-8")
+        where = str(p)
+    try:
+        obj = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise DesignError("", f"{where}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})") from None
+    return parse_design(obj)
+
+
+def save_design(design: Design, path: Union[str, Path]) -> Path:
+    """Write ``design`` as JSON atomically (validated again first)."""
+    from ..fileio import write_json
+    obj = design.to_json()
+    parse_design(copy.deepcopy(obj))
+    return write_json(path, obj, indent=1)
