@@ -10,7 +10,7 @@ from core.errors import CutError
 
 from cut_synth import (BACK, FRONT, LEFT, RIGHT, R, SynthBody, capsule, surface_distance,
                             triangle_areas, tube_spec)
-from core.cut.spec import CutLine, PanelSpec
+from core.design.spec import CutLine, PanelSpec
 
 
 @pytest.fixture(scope="module")

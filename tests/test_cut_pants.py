@@ -4,7 +4,7 @@ import pytest
 
 from core.cut.engine import cut_surface
 from core.cut.geodesic import polyline_length
-from core.cut.spec import CutLine, CutSpec, GarmentSpec, PanelSpec
+from core.design.spec import CutLine, CutSpec, GarmentSpec, PanelSpec
 
 from cut_anny_shirt import ray_point
 

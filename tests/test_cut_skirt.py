@@ -6,7 +6,7 @@ from scipy.sparse.csgraph import connected_components
 
 from core.cut.engine import cut_surface
 from core.cut.skirt import inter_leg_faces, make_skirt
-from core.cut.spec import CutLine, CutSpec, GarmentSpec, PanelSpec
+from core.design.spec import CutLine, CutSpec, GarmentSpec, PanelSpec
 from core.cut.split import CutMesh
 
 from cut_anny_shirt import ray_point

@@ -47,7 +47,7 @@ from ..errors import CutError
 from ..progress import report
 from .geodesic import GeodesicPaths, check_surface_point, insert_keypoints, surface_point_position
 from .grain import body_part_axis, warp_directions
-from .spec import CutLine, CutSpec, PanelSpec
+from ..design.spec import CutLine, CutSpec, PanelSpec
 from .split import CutMesh
 from .types import GarmentCut, Panel, Seam
 
@@ -166,7 +166,7 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None,
     ----------
     body : BodyModel (faces, regions, landmarks, joint_names, joints()).
     body_vertices : (V, 3) float, the reference body the design is made on (metres).
-    spec : CutSpec, lines, panels and garments (see :mod:`core.cut.spec`).
+    spec : CutSpec, lines, panels and garments (see :mod:`core.design.spec`).
     progress : optional ``progress(fraction, message)`` callback.
     timings : optional dict, filled with wall seconds per stage (``prepare``, ``skirt``,
         ``keypoints``, ``geodesics``, ``splitting``, ``flood_fill``, ``embedding``,

@@ -1,4 +1,4 @@
-"""Resolve a design on one body instance into a :class:`core.cut.spec.CutSpec`.
+"""Resolve a design on one body instance into a :class:`core.design.spec.CutSpec`.
 
 Keypoints become :class:`core.body.model.SurfacePoint` s of the body template
 (triangle + barycentric weights), so the cut made from them holds for every
@@ -35,6 +35,7 @@ from ..body.model import SurfacePoint
 from ..errors import BodyError, DesignError
 from .checks import parameter_value
 from .parser import load_design
+from .spec import CutLine, CutSpec, GarmentSpec, PanelSpec
 from .types import Design, Line
 from .geometry import (nearest_segment, surface_tools, plane_section_loop, point_at_length,
                        polyline_length, segment_point)
@@ -530,7 +531,7 @@ def _panels(design: Design):
 
 def resolve(design, body, shape=None, pose=None, vertices: Optional[np.ndarray] = None,
             resolver: Optional[Resolver] = None):
-    """Resolve ``design`` on a body instance into a :class:`core.cut.spec.CutSpec`.
+    """Resolve ``design`` on a body instance into a :class:`core.design.spec.CutSpec`.
 
     Parameters
     ----------
@@ -543,8 +544,6 @@ def resolve(design, body, shape=None, pose=None, vertices: Optional[np.ndarray] 
     ------
     DesignError : naming the JSON path of the element that cannot be resolved.
     """
-    from ..cut.spec import CutLine, CutSpec, GarmentSpec, PanelSpec
-
     design = load_design(design)
     if resolver is None:
         if vertices is None:

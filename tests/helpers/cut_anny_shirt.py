@@ -7,21 +7,13 @@ direction (front/back centre, armhole midpoints, cuff ring around the arm).
 import numpy as np
 
 from core.body.model import SurfacePoint
-from core.cut.spec import CutLine, CutSpec, GarmentSpec, PanelSpec
+from core.body.surface import closest_surface_point
+from core.design.spec import CutLine, CutSpec, GarmentSpec, PanelSpec
 
 
 def surface_point(body, X, p):
     """SurfacePoint at the surface point of ``X`` closest to ``p`` (3,)."""
-    import igl
-    F = np.asarray(body.faces, dtype=np.int64)
-    _, fi, c = igl.point_mesh_squared_distance(np.asarray(p, float)[None], X, F)
-    f = int(np.atleast_1d(fi)[0])
-    c = np.atleast_2d(c)[0]
-    T = X[F[f]]
-    M = np.stack([T[1] - T[0], T[2] - T[0]], 1)
-    l, *_ = np.linalg.lstsq(M, c - T[0], rcond=None)
-    b = np.clip(np.array([1 - l.sum(), l[0], l[1]]), 0, None)
-    return SurfacePoint(f, tuple(b / b.sum()))
+    return closest_surface_point(X, body.faces, p)
 
 
 def ray_point(body, X, origin, direction):

@@ -7,7 +7,7 @@ obliquely) with a "head" and "feet" region, helpers to make SurfacePoints at
 import numpy as np
 
 from core.body.model import SurfacePoint
-from core.cut.spec import CutLine, CutSpec, GarmentSpec, PanelSpec
+from core.design.spec import CutLine, CutSpec, GarmentSpec, PanelSpec
 
 R = 0.15
 
