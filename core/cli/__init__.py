@@ -1,0 +1,58 @@
+"""The ``ease`` command line: one subcommand per pipeline stage.
+
+Each module here defines ``add_parser(subparsers)``, which adds its
+subcommands and sets ``func`` (taking the parsed args, returning an exit
+code). The modules parse and check options and print; the work is done by
+:mod:`core.workflows` and the stage packages. Errors of the core
+(:class:`core.errors.EaseError`) print as one clear line and exit with status
+2; nothing half-written is left behind.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .. import __version__
+from ..errors import Cancelled, EaseError
+from ..paths import default_warp_cache
+from . import bench, body, cut, demo, drape, export, pattern, templates
+
+# Order = order in --help = order of the data flow.
+SUBCOMMANDS = (body, templates, cut, pattern, drape, export, bench)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="ease",
+        description="EASE: parametric garment design with explicit, local ease control.",
+    )
+    parser.add_argument("--version", action="version", version=f"ease {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for module in SUBCOMMANDS:
+        module.add_parser(sub)
+    demo.add_parser(sub, run=main)  # the demo runs every step as a user's `ease` would
+    return parser
+
+
+def main(argv=None) -> int:
+    # before Warp is first imported: only the first run compiles the kernels
+    default_warp_cache()
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 1
+    try:
+        return int(args.func(args) or 0)
+    except EaseError as exc:
+        print(f"ease {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except Cancelled:
+        print(f"ease {args.command}: cancelled; nothing was written", file=sys.stderr)
+        return 130
+    except KeyboardInterrupt:
+        print(f"ease {args.command}: interrupted; nothing was written", file=sys.stderr)
+        return 130
+
+
+__all__ = ["build_parser", "main"]

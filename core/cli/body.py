@@ -1,0 +1,130 @@
+"""``ease body``: write a sized and posed body as OBJ, or all sizes and poses with a picture.
+
+Examples::
+
+    ease body --shape XL --pose P3 --out body.obj
+    ease body --measure chest=96,waist=80,hip=100,height=175 --out me.obj
+    ease body --shape height=0.7,weight=0.6 --out tall.obj
+    ease body --model SMPL_NEUTRAL.npz --shape beta0=1.5 --pose T --out smpl.obj
+    ease body --all --out bodies/
+"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..body.model import POSE_PRESETS
+from ..errors import BodyError
+from .common import add_quiet, console_progress, print_files, subcommand
+
+MODEL_SUFFIXES = (".npz", ".pkl", ".pickle", ".obj")
+
+
+def load_model(name: str, blendshapes=None, landmarks=None, up: str = "z"):
+    """Body model from ``--model``: ``anny`` (default body), or a path to an SMPL
+    ``.npz``/``.pkl`` file or an OBJ template."""
+    path = Path(name)
+    suffix = path.suffix.lower()
+    if suffix in (".npz", ".pkl", ".pickle"):
+        from ..body.smpl import load_smpl
+        return load_smpl(path)
+    if suffix == ".obj":
+        from ..body.obj_model import load_obj_body
+        return load_obj_body(path, blendshapes=blendshapes, landmarks=landmarks, up=up)
+    if suffix or "/" in name:
+        raise BodyError(f"--model {name!r}: expected 'anny' or a path to a {', '.join(MODEL_SUFFIXES)} file")
+    from ..body import load_body
+    try:
+        return load_body(name)
+    except (ImportError, FileNotFoundError) as exc:
+        raise BodyError(f"--model {name!r}: the body model is not available ({exc})") from None
+
+
+def resolve_shape(body, text, progress=None):
+    """``--shape`` value: a chart size (XS..XL) or ``name=value,...`` shape parameters."""
+    from ..body.sizes import SIZES, parse_assignments, size_shape
+    from ..body.smpl import check_shape
+    if text is None:
+        return dict(body.default_shape())
+    if str(text).upper() in SIZES:
+        return size_shape(body, text, progress=progress)
+    if "=" not in str(text):
+        params = ", ".join(body.shape_parameters()) or "none"
+        raise BodyError(f"--shape {text!r}: expected a size ({', '.join(SIZES)}) or name=value pairs "
+                        f"of the model's shape parameters ({params})")
+    return check_shape(body.shape_parameters(), parse_assignments(text, "--shape"), f"--shape ({body.name})")
+
+
+def _write_all(body, out: Path, progress) -> int:
+    from ..body.output import measures_text, write_all_bodies
+    summary = write_all_bodies(body, out, progress)
+    for size, rec in summary["sizes"].items():
+        print(f"size {size:>2}: {measures_text(rec['measured_cm'])}")
+    print_files((p for p in sorted(out.iterdir()) if p.name.startswith(("size_", "pose_", "bodies."))),
+                prefix="wrote ")
+    return 0
+
+
+def run(args) -> int:
+    from ..body.output import measures_text, safe_measure, write_obj
+    from ..body.sizes import check_targets, fit_measurements, parse_assignments
+
+    progress = console_progress(args)
+    if args.pose not in (None,) and args.pose not in POSE_PRESETS:
+        raise BodyError(f"--pose {args.pose!r}: unknown pose; allowed: {', '.join(POSE_PRESETS)}")
+    if args.shape is not None and args.measure is not None:
+        raise BodyError("give either --shape or --measure, not both")
+    if args.all and (args.shape is not None or args.measure is not None or args.pose is not None):
+        raise BodyError("--all writes every size and pose; it takes no --shape, --measure or --pose")
+    if args.measure is not None:
+        targets = check_targets(parse_assignments(args.measure, "--measure"))
+    body = load_model(args.model, args.blendshapes, args.landmarks, args.up)
+    out = Path(args.out)
+    if args.all:
+        return _write_all(body, out, progress)
+    if args.measure is not None:
+        fit = fit_measurements(body, targets, progress=progress)
+        shape = fit.shape
+        print(fit.summary())
+    else:
+        shape = resolve_shape(body, args.shape, progress)
+    pose = args.pose or "A"
+    v = body.vertices(shape, pose)
+    m_std = safe_measure(body, body.vertices(shape, None))
+    label = args.shape or args.measure or "reference"
+    write_obj(out, v, body.faces, f"model {body.name}, shape {label}, pose {pose}\n{measures_text(m_std)}")
+    if args.measure is None:
+        print(f"measured (A-pose): {measures_text(m_std)}")
+    print("shape: " + ", ".join(f"{k}={val:.4g}" for k, val in shape.items()))
+    print(f"wrote {out}")
+    return 0
+
+
+def _chart_text() -> str:
+    from ..body.sizes import SIZE_CHART
+    return "; ".join(f"{k} " + "/".join(f"{v:g}" for v in row.values()) for k, row in SIZE_CHART.items())
+
+
+def add_parser(subparsers) -> None:
+    p = subcommand(
+        subparsers, "body", run,
+        help="write a body of a given size/measurements and pose as OBJ",
+        description="Write a posed body as OBJ (metres, +Z up, facing -Y) and print its measurements "
+                    "(height, chest, waist, hip in cm). --all writes sizes XS..XL and poses A, T, P1, P2, P3 "
+                    "and a PNG of them side by side.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="examples:" + __doc__.split("Examples::", 1)[1].rstrip() + "\n\nsizes (cm, height/chest/waist/hip): " + _chart_text(),
+    )
+    p.add_argument("--model", default="anny",
+                   help="body model: 'anny' (default body) or a path to an SMPL/SMPL-X .npz/.pkl or an OBJ template")
+    p.add_argument("--shape", default=None,
+                   help="a chart size XS, S, M, L, XL (M = reference) or name=value,... shape parameters")
+    p.add_argument("--measure", default=None, metavar="chest=96,waist=80,hip=100,height=175",
+                   help="fit the shape to these measurements in cm (any of height, chest/bust, waist, hip)")
+    p.add_argument("--pose", default=None, help=f"pose preset: {', '.join(POSE_PRESETS)} (default A)")
+    p.add_argument("--all", action="store_true", help="write all five sizes and all five poses and bodies.png to --out DIR")
+    p.add_argument("--out", required=True, help="output .obj file (or directory with --all)")
+    p.add_argument("--blendshapes", default=None, help="OBJ models: .npz of blend shapes (names, deltas, optional skeleton)")
+    p.add_argument("--landmarks", default=None, help="OBJ models: landmark JSON")
+    p.add_argument("--up", default="z", choices=("z", "y"), help="OBJ models: up axis of the file (default z)")
+    add_quiet(p, "no progress lines")

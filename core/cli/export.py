@@ -1,0 +1,103 @@
+"""``ease export``: cutting-room files (SVG, DXF, PDF) and the draped garment (GLB, OBJ)."""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .common import add_quiet, console_progress, print_files, subcommand
+
+FORMATS_HELP = "svg,dxf,pdf,glb,obj or all"
+
+
+def _metres(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a width in metres (e.g. 0.01), got {text!r}") from None
+    return v
+
+
+def load_drape(drape_dir: Path):
+    """``(positions (N, 3), faces (F, 3) or None)`` from ``drape_dir/drape.npz`` (or the .npz file itself)."""
+    import numpy as np
+
+    from ..errors import ExportError
+
+    path = Path(drape_dir)
+    if path.is_dir():
+        path = path / "drape.npz"
+    if not path.is_file():
+        raise ExportError(f"--drape: no draped garment at {path} (run `ease drape PATTERN_DIR --out DIR` first)")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            faces = np.asarray(data["faces"]) if "faces" in data.files else None
+            for key in ("positions", "vertices", "x"):
+                if key in data.files:
+                    return np.asarray(data[key], float), faces
+            keys = ", ".join(data.files)
+    except (OSError, ValueError) as exc:
+        raise ExportError(f"--drape: cannot read {path}: {exc}") from exc
+    raise ExportError(f"--drape: {path} has no 'positions' array (it holds: {keys})")
+
+
+def _run(args) -> int:
+    from .. import workflows as wf
+    from ..errors import ExportError
+    from ..export import parse_formats
+    from ..pattern.io import load_pattern
+
+    guess = Path(args.pattern_dir).resolve()
+    guess = (guess.parent if guess.is_file() else guess).parent / "drape"
+    if args.format is None:
+        # the 2D files always; the draped garment when there is a drape to export
+        have_drape = args.drape is not None or (guess / "drape.npz").is_file()
+        args.format = "svg,dxf,pdf" + (",glb,obj" if have_drape else "")
+    formats = parse_formats(args.format)
+    pattern = load_pattern(args.pattern_dir)
+    drape = None
+    if "glb" in formats or "obj" in formats:
+        drape_dir = Path(args.drape) if args.drape else None
+        if drape_dir is None:
+            if not (guess / "drape.npz").is_file():
+                raise ExportError(f"GLB/OBJ export needs the draped garment: pass --drape DIR (no {guess}/drape.npz); "
+                                  f"or leave glb/obj out of --format")
+            drape_dir = guess
+        drape = load_drape(drape_dir)
+    warnings: list = []
+    files = wf.export(pattern, args.out, formats=formats, allowance=args.allowance, hem=args.hem,
+                      notch_spacing=args.notch_spacing, drape=drape, strict=not args.lenient,
+                      warnings=warnings, progress=console_progress(args))
+    for w in warnings:
+        print(f"ease export: warning: {w}", file=sys.stderr)
+    print_files(files)
+    return 0
+
+
+def add_parser(sub) -> None:
+    p = subcommand(
+        sub, "export", _run,
+        help="write cutting-room files (SVG, DXF ASTM/AAMA, 1:1 PDF) and the draped garment (GLB, OBJ)",
+        description="Export a pattern written by `ease pattern` as files a cutting room can use: SVG at 1:1 "
+                    "in mm; DXF in ASTM D6673/AAMA layers (one block per piece; R2000 and R12) and plain DXF; "
+                    "PDF at 1:1 tiled on A4 and US Letter (join marks, page grid, 10 cm test square) and one "
+                    "plotter sheet (914 mm roll); the draped garment as GLB and OBJ with the pattern uv. Every "
+                    "piece has its cut line (seam allowance), sew line, notches, grain line and label.")
+    p.add_argument("pattern_dir", metavar="PATTERN_DIR", help="folder holding pattern.json (or the file itself)")
+    p.add_argument("--format", default=None,
+                   help=f"comma-separated formats: {FORMATS_HELP} (default: svg,dxf,pdf, plus glb,obj when a "
+                        f"drape is given or found)")
+    p.add_argument("--out", required=True, help="output folder (filled atomically)")
+    p.add_argument("--allowance", type=_metres, default=None,
+                   help="seam allowance in metres for every seam (default: the design's, else 0.01)")
+    p.add_argument("--hem", type=_metres, default=None,
+                   help="hem allowance in metres (default: the design's, else 0.02)")
+    p.add_argument("--notch-spacing", type=_metres, default=None,
+                   help="metres between notches along a seam, besides the seam ends (default 0.10)")
+    p.add_argument("--drape", default=None,
+                   help="folder with drape.npz from `ease drape` (default: PATTERN_DIR/../drape when present); "
+                        "needed for glb/obj")
+    p.add_argument("--lenient", action="store_true",
+                   help="export pieces whose sew line crosses itself or whose allowance does not fit, with a "
+                        "warning (listed in export.json) instead of failing")
+    add_quiet(p)
