@@ -6,7 +6,7 @@ import pytest
 
 from core.cut.refine import SPLIT_RATIO
 from core.cut.engine import cut_surface
-from core.cut.geodesic import polyline_length
+from core.geom.polyline import polyline_length
 
 from cut_anny_shirt import shirt_spec
 from cut_synth import surface_distance, triangle_areas

@@ -4,7 +4,8 @@ import pytest
 
 from core.cut.engine import cut_surface
 from core.cut.refine import SPLIT_RATIO
-from core.cut.geodesic import GeodesicPaths, insert_keypoints, polyline_length
+from core.cut.geodesic import GeodesicPaths, insert_keypoints
+from core.geom.polyline import polyline_length
 from core.cut.split import CutMesh
 from core.errors import CutError
 

@@ -3,7 +3,8 @@ import numpy as np
 import pytest
 
 from core.body.model import SurfacePoint
-from core.cut.geodesic import GeodesicPaths, check_surface_point, insert_keypoints, polyline_length
+from core.cut.geodesic import GeodesicPaths, check_surface_point, insert_keypoints
+from core.geom.polyline import polyline_length
 from core.cut.split import CutMesh
 from core.errors import CutError
 

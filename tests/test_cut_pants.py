@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from core.cut.engine import cut_surface
-from core.cut.geodesic import polyline_length
+from core.geom.polyline import polyline_length
 from core.design.spec import CutLine, CutSpec, GarmentSpec, PanelSpec
 
 from cut_anny_shirt import ray_point

@@ -13,7 +13,8 @@ import scipy.sparse as sp
 from core.body import load_body
 from core.cut.types import GarmentCut, Panel
 from core.design import apply_ease, load_design, resolve, save_design, Resolver
-from core.design.mirror import face_symmetry, mirror_surface_point, mirrored_name, swap_side
+from core.design.mirror import face_symmetry, mirror_surface_point
+from core.design.naming import mirrored_name, swap_side
 from core.design.templates import TEMPLATES, TEMPLATE_DIR, template
 from core.errors import DesignError
 

@@ -3,8 +3,9 @@ import numpy as np
 import pytest
 
 from core.body.model import SurfacePoint
-from core.design.geometry import (Geodesics, SurfaceLocator, nearest_segment, plane_section_loop,
-                                  point_at_length, polyline_length, segment_point, surface_tools)
+from core.design.geometry import (Geodesics, SectionLoop, SurfaceLocator, nearest_segment, plane_section_loop,
+                                  segment_point, surface_tools, turned_normal, vertical_walk)
+from core.geom.polyline import point_at_length, polyline_length
 from core.design.mirror import face_symmetry, mirror_surface_point
 
 
@@ -82,9 +83,9 @@ def test_geodesic_path_and_arc_length():
     # between vertices, here half a column spacing, 6.5 mm, off), never backwards
     assert 0.5 - 1e-9 <= L < 0.5 + 2 * 0.0066
     assert np.all(np.diff(path[:, 2]) >= -1e-12)
-    p, t = point_at_length(path, L / 2)
+    p, _, t = point_at_length(path, L / 2)
     assert abs(p[2] - 0.3) < 0.01 and abs(abs(t[2]) - 1) < 1e-3
-    p0, _ = point_at_length(path, -1.0)
+    p0, _, _ = point_at_length(path, -1.0)
     assert np.allclose(p0, path[0])
 
 
@@ -124,3 +125,36 @@ def test_surface_tools_are_reused_per_instance():
     assert surface_tools(V * 1.01, F) is not t1
     e, fe = t1.edges
     assert len(e) == 3 * len(F) // 2 and fe.shape == F.shape          # closed surface: E = 3F/2
+
+
+def test_turned_normal_holds_the_point():
+    n, cos_turn = turned_normal(np.array([0.0, 0.0, 1.0]), np.zeros(3), np.array([1.0, 0.0, 1.0]))
+    assert abs(n @ np.array([1.0, 0.0, 1.0])) < 1e-12 and cos_turn == pytest.approx(np.sqrt(0.5))
+    assert turned_normal(np.array([0.0, 0.0, 1.0]), np.zeros(3), np.zeros(3)) == (None, None)
+    assert turned_normal(np.array([0.0, 0.0, 1.0]), np.zeros(3), np.array([0.0, 0.0, 2.0])) == (None, 0.0)
+
+
+def test_section_loop_from_its_start():
+    V, F = capped_cylinder()
+    loc = SurfaceLocator(V, F)
+    start = loc.locate(np.array([[0.1, 0.0, 0.3]]))[0]
+    p0 = start.position(V, F)
+    poly, pts, segf = plane_section_loop(V, F, p0, np.array([0.0, 0.0, 1.0]), start.triangle)
+    loop = SectionLoop(V, F, poly, pts, segf, p0, start)
+    assert loop.S[0] == start and np.allclose(loop.closed[0], loop.closed[-1])
+    assert loop.total == pytest.approx(polyline_length(poly, closed=True))
+    assert loop.at(0.0) == start and loop.at(loop.total) == start          # modulo the loop length
+    q = loop.at(loop.total / 4).position(V, F)
+    assert abs(q[2] - 0.3) < 1e-9 and np.linalg.norm(q[:2]) == pytest.approx(0.1, abs=1e-3)
+    s, dist = loop.arc_position(q)
+    assert s == pytest.approx(loop.total / 4, abs=1e-9) and dist < 1e-9
+
+
+def test_vertical_walk_goes_down_the_side():
+    V, F = capped_cylinder()
+    start = SurfaceLocator(V, F).locate(np.array([[0.1, 0.0, 0.5]]))[0]
+    walked, end = vertical_walk(V, F, start, 0.2, down=True)
+    assert polyline_length(walked) == pytest.approx(0.2, abs=1e-9)
+    assert end.position(V, F)[2] == pytest.approx(start.position(V, F)[2] - 0.2, abs=1e-6)
+    up, _ = vertical_walk(V, F, start, 0.05, down=False)
+    assert up[-1, 2] > up[0, 2]

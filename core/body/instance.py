@@ -12,6 +12,8 @@ from typing import Mapping, Optional, Tuple, Union
 
 import numpy as np
 
+from .model import REFERENCE_POSE
+
 Shape = Union[None, str, Mapping[str, float]]
 Pose = Union[None, str, Mapping[str, object]]
 
@@ -39,12 +41,14 @@ def instance_shape(model, shape: Shape) -> Optional[dict]:
 def instance_pose(pose: Pose):
     """The pose argument of :meth:`BodyModel.vertices` for ``pose``.
 
-    A preset name stays a name; a JSON pose ``{joint: [rx, ry, rz]}`` (radians,
-    see :mod:`core.body.poses`) becomes arrays; ``None`` is the reference pose.
+    One spelling per pose, so every caller gets the same instance: the
+    reference preset ``"A"`` and ``None`` are both the reference pose (None);
+    another preset name stays a name; a JSON pose ``{joint: [rx, ry, rz]}``
+    (radians, see :mod:`core.body.poses`) becomes arrays.
     """
     if isinstance(pose, Mapping):
         return {k: np.asarray(v, dtype=float) for k, v in pose.items()}
-    return pose
+    return None if pose == REFERENCE_POSE else pose
 
 
 def body_instance(model, shape: Shape = None, pose: Pose = None) -> np.ndarray:

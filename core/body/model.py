@@ -31,6 +31,7 @@ Shape = Mapping[str, float]
 Pose = Union[str, Mapping[str, np.ndarray], None]
 
 POSE_PRESETS = ("A", "T", "P1", "P2", "P3")
+REFERENCE_POSE = "A"   # the preset every model is built in: the same instance as pose None
 
 REQUIRED_LANDMARKS = (
     "neck_front", "neck_back", "neck_left", "neck_right",

@@ -102,8 +102,3 @@ class GeodesicPaths:
         if a < 0 or b < 0:
             raise CutError(f"internal: keypoint vertex {i if a < 0 else j} is not on the surface")
         return np.asarray(self.solver.find_geodesic_path(a, b), dtype=float)
-
-
-def polyline_length(P: np.ndarray) -> float:
-    """Length of a polyline (k, 3)."""
-    return float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum())

@@ -1,5 +1,6 @@
 """Surface geometry used to resolve keypoints: point location, geodesic paths,
-walking a polyline by arc length, and plane sections (rings) of the body.
+and plane sections (rings) of the body; polylines by arc length are in
+:mod:`core.geom.polyline`.
 
 All positions are metres on one body instance ``vertices`` (V, 3) with the
 template ``faces`` (F, 3).
@@ -13,6 +14,7 @@ from typing import List, Tuple
 import numpy as np
 
 from ..body.model import SurfacePoint
+from ..geom.polyline import point_at_length, polyline_length
 
 
 class SurfaceLocator:
@@ -100,21 +102,6 @@ def _dedup(poly: np.ndarray, tol: float = 1e-9) -> np.ndarray:
     keep = np.ones(len(poly), dtype=bool)
     keep[1:] = np.linalg.norm(np.diff(poly, axis=0), axis=1) > tol
     return poly[keep]
-
-
-def polyline_length(poly: np.ndarray) -> float:
-    return float(np.linalg.norm(np.diff(poly, axis=0), axis=1).sum()) if len(poly) > 1 else 0.0
-
-
-def point_at_length(poly: np.ndarray, s: float) -> Tuple[np.ndarray, np.ndarray]:
-    """Point at arc length ``s`` along ``poly`` (k, 3) and the unit tangent there."""
-    seg = np.diff(poly, axis=0)
-    L = np.linalg.norm(seg, axis=1)
-    cum = np.concatenate([[0.0], np.cumsum(L)])
-    s = min(max(s, 0.0), cum[-1])
-    i = int(np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(L) - 1))
-    f = (s - cum[i]) / L[i] if L[i] > 0 else 0.0
-    return poly[i] + f * seg[i], seg[i] / max(L[i], 1e-12)
 
 
 # ---------------------------------------------------------------- plane sections
@@ -245,6 +232,129 @@ def segment_point(vertices, faces, face: int, p: np.ndarray) -> SurfacePoint:
     b = np.clip(b, 0.0, 1.0)
     b /= b.sum()
     return SurfacePoint(int(face), tuple(float(x) for x in b))
+
+
+class SectionLoop:
+    """A closed plane-section loop of the surface, started at a point on it.
+
+    Parameters
+    ----------
+    vertices : (V, 3) float, faces : (F, 3) int, the body instance.
+    poly, points, seg_faces : the loop from :func:`plane_section_loop`.
+    start : (3,) float, a position on the loop (on its segment nearest to it).
+    start_point : SurfacePoint of ``start``.
+
+    Attributes
+    ----------
+    start_segment : int, the segment of ``poly`` nearest to ``start``.
+    P : (k + 1, 3) the loop from ``start`` (not repeating it); ``S`` its SurfacePoints;
+    closed : (k + 2, 3) ``P`` closed (``start`` again at the end);
+    seg_face : (k + 1,) face of each segment of ``closed``;
+    L : (k + 1,) segment lengths, cum : (k + 2,) arc length at each point, total : loop length (m).
+    """
+
+    def __init__(self, vertices, faces, poly, points, seg_faces, start, start_point: SurfacePoint):
+        self.vertices, self.faces = vertices, faces
+        k = len(poly)
+        j = self.start_segment = nearest_segment(poly, start)
+        # the start lies on segment j (in its own triangle): put it first
+        order = [(j + 1 + i) % k for i in range(k)]
+        self.P = np.vstack([start[None], poly[order]])
+        self.S = [start_point] + [points[i] for i in order]
+        self.seg_face = [seg_faces[j]] + [seg_faces[i] for i in order[:-1]] + [seg_faces[j]]
+        self.closed = np.vstack([self.P, self.P[:1]])
+        self.L = np.linalg.norm(np.diff(self.closed, axis=0), axis=1)
+        self.cum = np.concatenate([[0.0], np.cumsum(self.L)])
+        self.total = self.cum[-1]
+
+    def at(self, s: float) -> SurfacePoint:
+        """The surface point at arc length ``s`` (m, taken modulo the loop length) from the start."""
+        s = s % self.total
+        cum, L, closed = self.cum, self.L, self.closed
+        m = int(np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(L) - 1))
+        f = (s - cum[m]) / L[m] if L[m] > 0 else 0.0
+        if f < 1e-9:
+            return self.S[m]
+        return segment_point(self.vertices, self.faces, self.seg_face[m], closed[m] + f * (closed[m + 1] - closed[m]))
+
+    def arc_position(self, q: np.ndarray) -> Tuple[float, float]:
+        """Where ``q`` (3,) sits on the loop: (arc length of its nearest point, distance to it), m."""
+        closed, cum = self.closed, self.cum
+        seg = closed[1:] - closed[:-1]
+        f = np.clip(np.einsum("ij,ij->i", q - closed[:-1], seg) / np.maximum((seg * seg).sum(1), 1e-18), 0, 1)
+        dist = np.linalg.norm(closed[:-1] + f[:, None] * seg - q, axis=1)
+        m = int(np.argmin(dist))
+        return cum[m] + f[m] * (cum[m + 1] - cum[m]), float(dist[m])
+
+
+def turned_normal(n: np.ndarray, p0: np.ndarray, q: np.ndarray):
+    """The unit normal ``n`` turned least so that the plane through ``p0`` holds ``q``.
+
+    Returns (normal (3,), cosine of the turn): (None, None) when ``q`` is at
+    ``p0``; (None, 0.0) when ``q`` lies along ``n`` from it (no such plane)."""
+    u = q - p0
+    length = np.linalg.norm(u)
+    if length < 1e-6:
+        return None, None
+    u = u / length
+    m = n - (n @ u) * u
+    cos_turn = float(np.linalg.norm(m))
+    return (m / cos_turn if cos_turn > 0 else None), cos_turn
+
+
+def vertical_walk(vertices: np.ndarray, faces: np.ndarray, start: SurfacePoint, length: float, down: bool,
+                  edge_table=None):
+    """Walk ``length`` metres down (or up) the surface from ``start`` along the
+    vertical normal section (the plane holding the surface normal and +Z).
+
+    A start on the body's midline walks the symmetry plane itself, so
+    midline keypoints stay exactly on the midline (and mirror onto themselves).
+    Returns the walked polyline (k, 3) and the end SurfacePoint (``start``
+    itself when the section is shorter than ``length``).
+
+    Raises
+    ------
+    ValueError : the surface is horizontal at ``start``, or its section does not close.
+    """
+    p0 = start.position(vertices, faces)
+    T = vertices[faces[start.triangle]]
+    nrm = np.cross(T[1] - T[0], T[2] - T[0])
+    if abs(p0[0]) < 1e-3:
+        m = np.array([1.0, 0.0, 0.0])
+    else:
+        m = np.cross(nrm / np.linalg.norm(nrm), [0.0, 0.0, 1.0])
+        if np.linalg.norm(m) < 1e-6:
+            raise ValueError("the surface is horizontal there: no direction down the torso")
+        m /= np.linalg.norm(m)
+    try:
+        poly, pts, segf = plane_section_loop(vertices, faces, p0, m, start.triangle, 1, edge_table)
+    except ValueError as exc:
+        raise ValueError(f"cannot walk down the torso: {exc}") from None
+    k = len(poly)
+    j = nearest_segment(poly, p0)
+    fwd = [(j + 1 + i) % k for i in range(k)]
+    bwd = [(j - i) % k for i in range(k)]
+    # segment faces along each direction (face of segment p_i -> p_i+1 is segf[i])
+    seqs = []
+    for order, seg in ((fwd, [segf[j]] + [segf[i] for i in fwd[:-1]]),
+                      (bwd, [segf[j]] + [segf[(i - 1) % k] for i in bwd[:-1]])):
+        P = np.vstack([p0[None], poly[order]])
+        seqs.append((P, seg))
+    sign = -1.0 if down else 1.0
+
+    def drift(P):  # vertical progress over the first 2 cm
+        q, _, _ = point_at_length(P, min(0.02, polyline_length(P)))
+        return sign * (q[2] - P[0, 2])
+
+    P, seg = max(seqs, key=lambda x: drift(x[0]))
+    L = np.linalg.norm(np.diff(P, axis=0), axis=1)
+    cum = np.concatenate([[0.0], np.cumsum(L)])
+    if length >= cum[-1]:
+        return P, start
+    i = int(np.searchsorted(cum, length, side="right") - 1)
+    q = P[i] + (length - cum[i]) / L[i] * (P[i + 1] - P[i])
+    walked = np.vstack([P[:i + 1], q[None]])
+    return walked, segment_point(vertices, faces, seg[i], q)
 
 
 class SurfaceTools:

@@ -31,14 +31,17 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
+from ..body.instance import body_instance
+from ..body.instance import instance_pose as body_pose
+from ..body.instance import instance_shape as body_shape
 from ..body.model import SurfacePoint
 from ..errors import BodyError, DesignError
 from .checks import parameter_value
 from .parser import load_design
 from .spec import CutLine, CutSpec, GarmentSpec, PanelSpec
 from .types import Design, Line
-from .geometry import (nearest_segment, surface_tools, plane_section_loop, point_at_length,
-                       polyline_length, segment_point)
+from ..geom.polyline import point_at_length, polyline_length
+from .geometry import SectionLoop, plane_section_loop, surface_tools, turned_normal, vertical_walk
 from .mirror import face_symmetry, mirror_line, mirror_panel, mirror_surface_point
 from .naming import mirrored_name, swap_side
 
@@ -55,54 +58,18 @@ TRACE_TARGET = {"arm_left": "wrist_left", "arm_right": "wrist_right",
 
 def instance_shape(design: Design, body, shape=None):
     """The shape dict of the instance to cut on (``shape`` overrides the design's)."""
-    shape = design.body.get("shape") if shape is None else shape
-    if isinstance(shape, str):
-        try:
-            from ..body.sizes import size_shape
-        except ImportError:  # pragma: no cover - sizes land with the body stage
-            if shape == "M":
-                return body.default_shape()
-            raise
-        return size_shape(body, shape)
-    return shape
+    return body_shape(body, design.body.get("shape") if shape is None else shape)
 
 
 def instance_pose(design: Design, pose=None):
-    pose = design.body.get("pose") if pose is None else pose
-    if isinstance(pose, dict):
-        return {k: np.asarray(v, dtype=float) for k, v in pose.items()}
-    return pose
+    """The pose of the instance to cut on (``pose`` overrides the design's)."""
+    return body_pose(design.body.get("pose") if pose is None else pose)
 
 
 def instance_vertices(design: Design, body, shape=None, pose=None) -> np.ndarray:
-    """Vertices (V, 3) of the body instance a design is resolved on."""
-    return np.asarray(body.vertices(instance_shape(design, body, shape), instance_pose(design, pose)),
-                      dtype=np.float64)
-
-
-def _arc_position(closed: np.ndarray, cum: np.ndarray, q: np.ndarray):
-    """Where ``q`` sits on the polyline ``closed`` (k, 3) with cumulative lengths ``cum``:
-    (arc length of its nearest point, distance to it)."""
-    seg = closed[1:] - closed[:-1]
-    f = np.clip(np.einsum("ij,ij->i", q - closed[:-1], seg) / np.maximum((seg * seg).sum(1), 1e-18), 0, 1)
-    dist = np.linalg.norm(closed[:-1] + f[:, None] * seg - q, axis=1)
-    m = int(np.argmin(dist))
-    return cum[m] + f[m] * (cum[m + 1] - cum[m]), float(dist[m])
-
-
-def _turned_normal(n: np.ndarray, p0: np.ndarray, q: np.ndarray):
-    """The unit normal ``n`` turned least so that the plane through ``p0`` holds ``q``.
-
-    Returns (normal (3,), cosine of the turn): (None, None) when ``q`` is at
-    ``p0``; (None, 0.0) when ``q`` lies along ``n`` from it (no such plane)."""
-    u = q - p0
-    length = np.linalg.norm(u)
-    if length < 1e-6:
-        return None, None
-    u = u / length
-    m = n - (n @ u) * u
-    cos_turn = float(np.linalg.norm(m))
-    return (m / cos_turn if cos_turn > 0 else None), cos_turn
+    """Vertices (V, 3) of the body instance a design is resolved on (``shape``/``pose`` override the design's)."""
+    return body_instance(body, design.body.get("shape") if shape is None else shape,
+                         design.body.get("pose") if pose is None else pose)
 
 
 _FACE_SYM = {}
@@ -245,7 +212,7 @@ class Resolver:
             b = self.ref(kp["between"][1], f"{path}.between[1]")
             t = parameter_value(kp["t"], self.design.parameters)
             poly = self.geodesics.path(a, b)
-            p, _ = point_at_length(poly, t * polyline_length(poly))
+            p, _, _ = point_at_length(poly, t * polyline_length(poly))
             return self.locator.locate(p[None])[0]
         if "trace" in kp:
             return self._trace(kp["trace"], f"{path}.trace")
@@ -264,10 +231,13 @@ class Resolver:
             if length > avail:
                 raise DesignError(lpath, f"a length of {length:.3f} m from {from_name} along {along} leaves the "
                                          f"body part: it is {avail:.3f} m from there to {TRACE_TARGET[along]}")
-            p, _ = point_at_length(poly, length)
+            p, _, _ = point_at_length(poly, length)
             return self.locator.locate(p[None])[0]
         down = along == "torso_down"
-        poly, end = self._vertical_walk(start, length, down, path)
+        try:
+            poly, end = vertical_walk(self.vertices, self.faces, start, length, down, self.tools.edges)
+        except ValueError as exc:
+            raise DesignError(path, str(exc)) from None
         got = polyline_length(poly)
         limit_name = "crotch" if down else "neck_back"
         limit = self.position(self.landmark(limit_name, f"{path}.along"))[2]
@@ -275,54 +245,6 @@ class Resolver:
             raise DesignError(lpath, f"a length of {length:.3f} m from {from_name} along {along} leaves the "
                                      f"torso (past the {limit_name} level)")
         return end
-
-    def _vertical_walk(self, start: SurfacePoint, length: float, down: bool, path: str):
-        """Walk ``length`` metres down (or up) the surface from ``start`` along the
-        vertical normal section (the plane holding the surface normal and +Z).
-
-        A start on the body's midline walks the symmetry plane itself, so
-        midline keypoints stay exactly on the midline (and mirror onto themselves).
-        Returns the walked polyline (k, 3) and the end SurfacePoint.
-        """
-        p0 = self.position(start)
-        T = self.vertices[self.faces[start.triangle]]
-        nrm = np.cross(T[1] - T[0], T[2] - T[0])
-        if abs(p0[0]) < 1e-3:
-            m = np.array([1.0, 0.0, 0.0])
-        else:
-            m = np.cross(nrm / np.linalg.norm(nrm), [0.0, 0.0, 1.0])
-            if np.linalg.norm(m) < 1e-6:
-                raise DesignError(path, "the surface is horizontal there: no direction down the torso")
-            m /= np.linalg.norm(m)
-        try:
-            poly, pts, segf = plane_section_loop(self.vertices, self.faces, p0, m, start.triangle, 1, self.tools.edges)
-        except ValueError as exc:
-            raise DesignError(path, f"cannot walk down the torso: {exc}") from None
-        k = len(poly)
-        j = nearest_segment(poly, p0)
-        fwd = [(j + 1 + i) % k for i in range(k)]
-        bwd = [(j - i) % k for i in range(k)]
-        # segment faces along each direction (face of segment p_i -> p_i+1 is segf[i])
-        seqs = []
-        for order, faces in ((fwd, [segf[j]] + [segf[i] for i in fwd[:-1]]),
-                             (bwd, [segf[j]] + [segf[(i - 1) % k] for i in bwd[:-1]])):
-            P = np.vstack([p0[None], poly[order]])
-            seqs.append((P, faces))
-        sign = -1.0 if down else 1.0
-
-        def drift(P):  # vertical progress over the first 2 cm
-            q, _ = point_at_length(P, min(0.02, polyline_length(P)))
-            return sign * (q[2] - P[0, 2])
-
-        P, faces = max(seqs, key=lambda x: drift(x[0]))
-        L = np.linalg.norm(np.diff(P, axis=0), axis=1)
-        cum = np.concatenate([[0.0], np.cumsum(L)])
-        if length >= cum[-1]:
-            return P, start
-        i = int(np.searchsorted(cum, length, side="right") - 1)
-        q = P[i] + (length - cum[i]) / L[i] * (P[i + 1] - P[i])
-        walked = np.vstack([P[:i + 1], q[None]])
-        return walked, segment_point(self.vertices, self.faces, faces[i], q)
 
     # ------------------------------------------------------------ lines
     def line_points(self, index: int) -> List[SurfacePoint]:
@@ -356,7 +278,7 @@ class Resolver:
         ``q`` of keypoint ``ref`` too (a ring's ``contains``, then a vertex of the ring):
         e.g. an armhole through the armpit and the shoulder tip, otherwise across the arm
         whatever its pose."""
-        m, cos_turn = _turned_normal(n, p0, q)
+        m, cos_turn = turned_normal(n, p0, q)
         if cos_turn is None:
             raise DesignError(f"{path}.contains", f"line {full!r}: {ref!r} is the through point itself")
         if cos_turn < 0.2:
@@ -381,28 +303,11 @@ class Resolver:
                                                  int(r.get("handed", 1)), self.tools.edges)
         except ValueError as exc:
             raise DesignError(f"{path}.ring", f"line {full!r}: {exc}") from None
-        k = len(poly)
-        j = nearest_segment(poly, p0)
+        loop = SectionLoop(self.vertices, self.faces, poly, pts, segf, p0, through)
+        j, k = loop.start_segment, len(poly)
         if np.linalg.norm(poly[j] - p0) > 0.05 and np.linalg.norm(poly[(j + 1) % k] - p0) > 0.05:
             raise DesignError(f"{path}.ring", f"line {full!r}: the section misses its through point")
-        # Put the through point first: it lies on segment j (in its own triangle).
-        order = [(j + 1 + i) % k for i in range(k)]
-        P = np.vstack([p0[None], poly[order]])
-        S = [through] + [pts[i] for i in order]
-        seg_face = [segf[j]] + [segf[i] for i in order[:-1]] + [segf[j]]
-        closed = np.vstack([P, P[:1]])
-        L = np.linalg.norm(np.diff(closed, axis=0), axis=1)
-        cum = np.concatenate([[0.0], np.cumsum(L)])
-        total = cum[-1]
-
-        def at(s):
-            s = s % total
-            m = int(np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(L) - 1))
-            f = (s - cum[m]) / L[m] if L[m] > 0 else 0.0
-            if f < 1e-9:
-                return S[m]
-            return segment_point(self.vertices, self.faces, seg_face[m], closed[m] + f * (closed[m + 1] - closed[m]))
-
+        P, S, cum, total, at = loop.P, loop.S, loop.cum, loop.total, loop.at
         entries = []  # (arc length, SurfacePoint, name or None)
         for name, v in r["named"].items():
             if isinstance(v, str):
@@ -413,7 +318,7 @@ class Resolver:
                 entries.append((s % total, at(s), name))
         if contains is not None:
             # the contained keypoint is a vertex of the ring (other lines may end on it)
-            s_q, dist = _arc_position(closed, cum, self.position(contains))
+            s_q, dist = loop.arc_position(self.position(contains))
             if dist > 5e-3:
                 raise DesignError(f"{path}.ring.contains", f"line {full!r}: the section does not pass within "
                                                            f"5 mm of {r['contains']!r}")
@@ -448,7 +353,7 @@ class Resolver:
         pa, pb = self.position(a), self.position(b)
         n = self._axis(c["normal"], f"{path}.section.normal")
         # tilt the plane (slightly) so that it contains both ends
-        n, cos_turn = _turned_normal(n, pa, pb)
+        n, cos_turn = turned_normal(n, pa, pb)
         if cos_turn is None:
             raise DesignError(f"{path}.section.to", f"line {full!r}: from and to coincide")
         if cos_turn < np.cos(np.radians(10.0)):
@@ -458,33 +363,20 @@ class Resolver:
             poly, pts, segf = plane_section_loop(self.vertices, self.faces, pa, n, a.triangle, 1, self.tools.edges)
         except ValueError as exc:
             raise DesignError(f"{path}.section", f"line {full!r}: {exc}") from None
-        k = len(poly)
-        ja = nearest_segment(poly, pa)
-        order = [(ja + 1 + i) % k for i in range(k)]
-        P = np.vstack([pa[None], poly[order]])
-        S = [a] + [pts[i] for i in order]
-        seg_face = [segf[ja]] + [segf[i] for i in order[:-1]] + [segf[ja]]
-        closed = np.vstack([P, P[:1]])
-        L = np.linalg.norm(np.diff(closed, axis=0), axis=1)
-        cum = np.concatenate([[0.0], np.cumsum(L)])
+        loop = SectionLoop(self.vertices, self.faces, poly, pts, segf, pa, a)
         # where ``to`` sits on the loop: the nearest point of the section polyline
-        sb, dist = _arc_position(closed, cum, pb)
+        sb, dist = loop.arc_position(pb)
         if dist > 5e-3:
             raise DesignError(f"{path}.section.to", f"line {full!r}: the section through {c['from']!r} "
                                                     f"does not pass within 5 mm of {c['to']!r}")
-        total = cum[-1]
+        total = loop.total
         forward = sb <= total - sb
         length = sb if forward else total - sb
         count = max(1, int(round(length / c["spacing"])))
         out = [a]
         for i in range(1, count):
             s = i * length / count
-            s = s if forward else total - s
-            mm = int(np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(L) - 1))
-            ff = (s - cum[mm]) / L[mm] if L[mm] > 0 else 0.0
-            out.append(S[mm] if ff < 1e-9 else
-                       segment_point(self.vertices, self.faces, seg_face[mm],
-                                     closed[mm] + ff * (closed[mm + 1] - closed[mm])))
+            out.append(loop.at(s if forward else total - s))
         out.append(b)
         return out
 

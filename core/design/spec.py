@@ -9,7 +9,7 @@ parameters, mirroring) into a :class:`CutSpec` on one body model; the engine
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional
+from typing import List, Optional
 
 from ..body.model import SurfacePoint
 
