@@ -5,7 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from core.body import cli as body_cli
+from core.body.output import render_bodies
+from core.cli import body as body_cli
 from core.errors import BodyError, EaseError
 
 from test_body_obj import horse, write_obj
@@ -89,7 +90,7 @@ def test_render_bodies_png(tmp_path):
     v, quads, _ = horse()
     write_obj(tmp_path / "horse.obj", v, quads)
     body = load_obj_body(tmp_path / "horse.obj")
-    path = body_cli.render_bodies([[("a", body.vertices()), ("b", body.vertices() * 1.2)]], body.faces,
+    path = render_bodies([[("a", body.vertices()), ("b", body.vertices() * 1.2)]], body.faces,
                                   tmp_path / "pic.png")
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 

@@ -1,11 +1,9 @@
-"""core.cli, core.bench, core.demo: the `ease` command line."""
-import sys
-
+"""core.cli: the `ease` command line (subcommands, errors, bench, demo, templates)."""
 import pytest
 
-import core.bench
 from core import cli
-from core.demo import _steps
+from core.cli.demo import _steps
+from core.design.templates import list_templates, template_path
 
 
 def _subcommands():
@@ -59,13 +57,38 @@ def test_bench_runs_a_benchmark_and_indexes_every_report(tmp_path, monkeypatch, 
         "    (out_dir / 'alpha.md').write_text('quick' if quick else 'full')\n")
     (bench_dir / "bench_beta.py").write_text(
         "def run(out_dir):\n    (out_dir / 'beta.md').write_text('b')\n")
-    monkeypatch.setattr(core.bench, "BENCH_DIR", bench_dir)
-    out = tmp_path / "results"
-    assert cli.main(["bench", "--only", "alpha", "--quick", "--out", str(out)]) == 0
+    out = bench_dir / "results"
+    assert cli.main(["bench", "--only", "alpha", "--quick", "--bench-dir", str(bench_dir)]) == 0
     assert (out / "alpha.md").read_text() == "quick"
-    assert cli.main(["bench", "--only", "beta", "--out", str(out)]) == 0
+    monkeypatch.chdir(tmp_path)  # ./benchmarks is the default
+    assert cli.main(["bench", "--only", "beta"]) == 0
     index = (out / "README.md").read_text()
     assert "[alpha.md](alpha.md)" in index and "(quick)" in index and "[beta.md](beta.md)" in index
     capsys.readouterr()
     assert cli.main(["bench", "--only", "gamma", "--out", str(out)]) == 2
     assert "unknown benchmark(s) gamma; available: alpha, beta" in capsys.readouterr().err
+
+
+def test_bench_outside_a_checkout_is_one_clear_line(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("EASE_BENCH_DIR", raising=False)
+    assert cli.main(["bench"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ease bench: error: no benchmarks folder") and err.count("\n") == 1
+
+
+def test_templates_lists_every_shipped_design(capsys):
+    assert cli.main(["templates"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert [line.split()[0] for line in lines] == list_templates()
+    for line, name in zip(lines, list_templates()):
+        assert line.split()[1] == str(template_path(name)) and template_path(name).is_file()
+
+
+def test_demo_skips_the_render_outside_a_checkout(tmp_path, monkeypatch, capsys):
+    from core.cli.demo import run_demo
+    monkeypatch.chdir(tmp_path)
+    steps = []
+    assert run_demo(tmp_path / "demo", lambda argv: steps.append(argv[0]) or 0) == 0
+    assert steps == ["body", "cut", "pattern", "transfer", "adapt", "drape", "export"]
+    assert "render skipped" in capsys.readouterr().err

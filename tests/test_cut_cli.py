@@ -6,13 +6,14 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from core.cut.cli import add_parser, obj_text
+from core.cli.cut import add_parser
 from core.cut.io import load_cut, save_cut
+from core.cut.output import obj_text
 from core.cut.types import GarmentCut, Panel, Seam
-from core.design.templates import TEMPLATE_DIR, TEMPLATES
+from core.design.templates import TEMPLATES, template_path
 from core.errors import CutError, DesignError
 
-SHIRT = TEMPLATE_DIR / "shirt_long_sleeve.json"
+SHIRT = template_path("shirt_long_sleeve")
 
 
 def ease_cut(*argv):
@@ -61,7 +62,7 @@ def test_cut_on_another_size_shown_on_a_pose(tmp_path):
     from core.body import load_body
     from core.body.sizes import size_shape
     out = tmp_path / "xl"
-    assert ease_cut(TEMPLATE_DIR / "skirt.json", "--out", out, "--size", "XL", "--pose", "P3",
+    assert ease_cut(template_path("skirt"), "--out", out, "--size", "XL", "--pose", "P3",
                     "--quiet", "--no-png") == 0
     cut = load_cut(out)
     assert cut.body["shape"] == "XL" and cut.body["pose"] == "A"          # cut on the reference pose

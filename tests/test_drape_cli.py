@@ -1,4 +1,4 @@
-"""``ease drape`` end to end on the synthetic skirt (core.drape.cli, core.drape.output)."""
+"""``ease drape`` end to end on the synthetic skirt (core.cli.drape, core.workflows.drape)."""
 import json
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""core.export.cli: `ease export PATTERN_DIR --format ... --out DIR [--drape DIR]`."""
+"""core.cli.export: `ease export PATTERN_DIR --format ... --out DIR [--drape DIR]`."""
 import argparse
 import sys
 from pathlib import Path
@@ -9,7 +9,7 @@ import pytest
 from export_synth import drape_positions, make_pattern  # noqa: E402
 
 from core.errors import EaseError  # noqa: E402
-from core.export import cli  # noqa: E402
+from core.cli import export as cli  # noqa: E402
 from core.pattern.io import save_pattern  # noqa: E402
 
 

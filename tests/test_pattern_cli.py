@@ -1,17 +1,16 @@
 """`ease pattern`, `ease transfer`, `ease adapt`: arguments, outputs, errors."""
 import argparse
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
 
+from core.design.templates import template_path
 from core.errors import PatternError
-from core.pattern import cli
+from core.cli import pattern as cli
 from core.pattern.io import load_pattern
 
-REPO = Path(__file__).resolve().parent.parent
-SHORTS = REPO / "examples" / "designs" / "shorts.json"
+SHORTS = template_path("shorts")
 
 
 def _parser():
@@ -41,34 +40,7 @@ def test_adapt_refuses_tolerance_below_one(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
-def test_write_outputs_on_a_synthetic_pattern(tmp_path):
-    from core.pattern.solve import solve_pattern
-    from core.pattern.synthetic import two_panels
-    cut, body = two_panels(n_half=8, n_up=7)
-    pat = solve_pattern(cut, body, style="two")
-    cli.write_outputs(tmp_path / "out", pat, {"timings": {"optimize": 0.1}})
-    names = sorted(p.name for p in (tmp_path / "out").iterdir())
-    assert names == ["pattern.json", "pattern.png", "report.json"]
-    rep = json.loads((tmp_path / "out" / "report.json").read_text())
-    assert rep["metrics"]["flipped_triangles"] == 0 and "compliance" in rep["metrics"]
-    assert load_pattern(tmp_path / "out").panels[0].name == "front"
-
-
-def _real_body_available():
-    try:
-        from core.body import load_body
-        from core.cut import cut_design  # noqa: F401
-        load_body("anny")
-        return True
-    except Exception:
-        return False
-
-
-real = pytest.mark.skipif(not _real_body_available(), reason="default body or cut engine not available")
-
-
-@real
-def test_pattern_and_adapt_on_the_default_body(tmp_path, capsys):
+def test_pattern_and_adapt_on_the_default_body(anny, tmp_path, capsys):
     out = tmp_path / "pattern"
     assert _run(["pattern", str(SHORTS), "--out", str(out), "--quiet"]) == 0
     pat = load_pattern(out)

@@ -15,7 +15,7 @@ from core.body import load_body
 from core.body.sizes import size_shape
 from core.cut import cut_design
 from core.design import load_design
-from core.design.templates import TEMPLATES, TEMPLATE_DIR
+from core.design.templates import TEMPLATES, template_dir, template_path
 
 # garment -> number of openings (boundary loops of the sewn garment)
 OPENINGS = {
@@ -54,13 +54,13 @@ _CUTS = {}
 
 def cut_of(name, body):
     if name not in _CUTS:
-        _CUTS[name] = cut_design(load_design(TEMPLATE_DIR / f"{name}.json"), body=body)
+        _CUTS[name] = cut_design(load_design(template_path(name)), body=body)
     return _CUTS[name]
 
 
 def test_every_template_is_tested():
     assert set(TEMPLATES) == set(OPENINGS) == set(PANELS)
-    assert sorted(p.stem for p in TEMPLATE_DIR.glob("*.json")) == sorted(TEMPLATES)
+    assert sorted(p.stem for p in template_dir().glob("*.json")) == sorted(TEMPLATES)
 
 
 def _areas(X, F):
@@ -255,7 +255,7 @@ def check_recut(cut, name, V):
 
 @pytest.mark.parametrize("name", list(TEMPLATES))
 def test_template_cuts_on_all_sizes_and_poses(name, body, instances):
-    design = load_design(TEMPLATE_DIR / f"{name}.json")
+    design = load_design(template_path(name))
     cut = cut_of(name, body)
     X = instances["M"]
     assert len(cut.panels) == PANELS[name]
@@ -322,7 +322,7 @@ def test_jacket_is_the_shirt_opened_at_the_front(body, instances):
 @pytest.mark.parametrize("size", ["XS", "XL"])
 def test_shirt_recut_on_other_sizes(size, body, instances):
     ref = cut_of("shirt_long_sleeve", body)
-    cut = cut_design(load_design(TEMPLATE_DIR / "shirt_long_sleeve.json"), body=body, shape=size)
+    cut = cut_design(load_design(template_path("shirt_long_sleeve")), body=body, shape=size)
     V = instances[size]
     assert [p.name for p in cut.panels] == [p.name for p in ref.panels]
     assert len(cut.seams) == len(ref.seams)
@@ -343,7 +343,7 @@ def test_every_template_cuts_on_every_size(size, body, instances):
     partition with its openings, equal seam sides, mirrored halves, ease in range."""
     V = instances[size]
     for name in TEMPLATES:
-        d = load_design(TEMPLATE_DIR / f"{name}.json")
+        d = load_design(template_path(name))
         d.refine_edge_length = None     # refinement is body-independent (tested on M); saves time
         cut = cut_design(d, body=body, shape=size)
         assert cut.body["shape"] == size
@@ -362,7 +362,7 @@ def test_panels_cover_the_body_region_once(name, body, instances):
     inside the garment (nothing lost). The refined panels (as shipped) cover the same
     area, panel by panel: refinement loses and adds nothing (its Delaunay flips, across
     edges where the surface bends by less than 10 degrees, change it by < 1e-4)."""
-    d = load_design(TEMPLATE_DIR / f"{name}.json")
+    d = load_design(template_path(name))
     d.refine_edge_length = None
     cut = cut_design(d, body=body)
     X = instances["M"]
@@ -388,7 +388,7 @@ def test_every_template_cuts_in_other_reference_poses(pose, body):
     "shoulder and armhole cross")."""
     V = np.asarray(body.vertices(None, pose), float)
     for name in TEMPLATES:
-        d = load_design(TEMPLATE_DIR / f"{name}.json")
+        d = load_design(template_path(name))
         d.body["pose"] = pose
         d.refine_edge_length = None
         cut = cut_design(d, body=body)
@@ -401,7 +401,7 @@ def test_armhole_follows_the_arm_and_keeps_the_a_pose_plane(body):
     with the arm in T and P1, its top on the shoulder tip and the cuff down the arm."""
     from core.design.resolve import Resolver, instance_vertices
     for pose in ("A", "T", "P1"):
-        d = load_design(TEMPLATE_DIR / "shirt_long_sleeve.json")
+        d = load_design(template_path("shirt_long_sleeve"))
         d.body["pose"] = pose
         R = Resolver(d, body, instance_vertices(d, body))
         ring = next(i for i, l in enumerate(R.lines) if l[0] == "shirt.armhole_left")
