@@ -1,15 +1,14 @@
 """core.export.export_pattern: all formats, atomic output, failures before any file is written."""
 import json
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from export_synth import drape_positions, make_pattern  # noqa: E402
+from export_synth import drape_positions, make_pattern
 
-from core.errors import Cancelled, ExportError  # noqa: E402
-from core.export import FORMATS, export_pattern, parse_formats  # noqa: E402
+from core.errors import Cancelled, ExportError
+from core.export import FORMATS, export_pattern, parse_formats
 
 ALL_FILES = {"pattern.svg", "pattern_astm.dxf", "pattern_astm_r12.dxf", "pattern_plain.dxf", "pattern_a4.pdf",
              "pattern_letter.pdf", "pattern_plotter.pdf", "garment.glb", "garment.obj", "export.json"}

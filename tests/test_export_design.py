@@ -17,7 +17,9 @@ import pytest
 from core.design.format import parse_design
 from core.errors import DesignError, EaseError, ExportError
 from core.export import cli as export_cli
-from core.export.pieces import piece_loops, ray_hit, resolve_allowance, seam_allowance
+from core.export.allowance import resolve_allowance, seam_allowance
+from core.export.boundary import piece_loops
+from core.geom.polygon import ray_hit
 
 REPO = Path(__file__).resolve().parent.parent
 SHORTS = REPO / "examples" / "designs" / "shorts.json"

@@ -1,17 +1,17 @@
 """core.export.dxf: ASTM D6673/AAMA blocks and layers, plain DXF, read back with ezdxf."""
 import io
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from export_synth import make_pattern  # noqa: E402
+from export_synth import make_pattern
 
 ezdxf = pytest.importorskip("ezdxf")
 
-from core.export import dxf  # noqa: E402
-from core.export.pieces import build_pieces, layout_pieces, polyline_length  # noqa: E402
+from core.export import dxf
+from core.export.pieces import build_pieces
+from core.geom.layout import layout_pieces
+from core.geom.polyline import polyline_length
 
 
 @pytest.fixture(scope="module")
@@ -87,9 +87,3 @@ def test_plain_dxf(made):
 def test_dxf_is_deterministic(made):
     pat, pieces, lay = made
     assert dxf.astm_text(pieces, lay, pat.style, "M") == dxf.astm_text(pieces, lay, pat.style, "M")
-
-
-def test_turn_points_find_corners_not_curve_points():
-    t = np.linspace(0, np.pi / 2, 30)
-    quarter = np.vstack([[0, 0], np.column_stack([np.cos(t), np.sin(t)])])  # a pie slice: 3 corners
-    np.testing.assert_array_equal(dxf.turn_points(quarter), [0, 1, 30])

@@ -1,14 +1,11 @@
 """core.export.mesh: GLB (header, chunks, accessors, UVs = pattern uv) and OBJ with vt."""
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-from export_synth import drape_positions, make_pattern  # noqa: E402
+from export_synth import drape_positions, make_pattern
 
-from core.export import mesh  # noqa: E402
-from core.export.pieces import build_pieces  # noqa: E402
+from core.export import mesh
+from core.export.pieces import build_pieces
 
 
 @pytest.fixture(scope="module")

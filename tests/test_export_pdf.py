@@ -2,19 +2,18 @@
 import base64
 import math
 import re
-import sys
 import zlib
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from export_synth import make_pattern  # noqa: E402
+from export_synth import make_pattern
 
 pytest.importorskip("reportlab")
 
-from core.export import pdf  # noqa: E402
-from core.export.pieces import build_pieces, layout_pieces  # noqa: E402
+from core.export import pdf
+from core.export.pieces import build_pieces
+from core.geom.layout import layout_pieces
 
 MM = 72.0 / 25.4  # PDF points per millimetre
 

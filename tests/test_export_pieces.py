@@ -1,51 +1,15 @@
-"""core.export.pieces: cut line offset, allowance widths, notches, grain, labels, layout."""
-import sys
-from pathlib import Path
-
+"""core.export.pieces, allowance, notches: cut lines, allowance widths, notches, grain, labels."""
 import numpy as np
 import pytest
 
-from export_synth import make_pattern  # noqa: E402
+from export_synth import make_pattern
 
-from core.errors import ExportError  # noqa: E402
-from core.export.pieces import (build_pieces, cut_line, distance_to_polyline, layout_pieces,  # noqa: E402
-                                notch_positions, points_in_polygon, remove_loops,
-                                offset_loop, point_at_arclength, polyline_length, resolve_allowance,
-                                segments_cross, signed_area)
-
-
-def test_offset_square_mitres_and_steps():
-    sq = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
-    cut = offset_loop(sq, np.full(4, 0.01))
-    np.testing.assert_allclose(cut, [[-0.01, -0.01], [1.01, -0.01], [1.01, 1.01], [-0.01, 1.01]], atol=1e-12)
-    # bottom edge a 2 cm hem: the mitre keeps each allowance to its own edge width
-    cut = offset_loop(sq, np.array([0.02, 0.01, 0.01, 0.01]))
-    np.testing.assert_allclose(cut[0], [-0.01, -0.02], atol=1e-12)
-    np.testing.assert_allclose(cut[1], [1.01, -0.02], atol=1e-12)
-    # collinear edges with different widths: a step joins them
-    line = np.array([[0, 0], [0.5, 0], [1, 0], [1, 1], [0, 1]], float)
-    cut = offset_loop(line, np.array([0.01, 0.02, 0.01, 0.01, 0.01]))
-    assert any(np.allclose(q, [0.5, -0.01]) for q in cut) and any(np.allclose(q, [0.5, -0.02]) for q in cut)
-
-
-def test_offset_sharp_corner_is_squared():
-    tri = np.array([[0, 0], [1, 0], [0.5, 0.05]], float)  # two very sharp corners
-    cut = offset_loop(tri, np.full(3, 0.01), mitre_limit=3.0)
-    assert len(cut) > 3
-    # an unlimited mitre would reach 0.01 / sin(2.9 deg) = 20 cm beyond the corner
-    assert distance_to_polyline(cut, tri).max() <= 0.035
-    assert distance_to_polyline(cut, tri).min() >= 0.01 - 1e-9
-
-
-def test_offset_concave_noisy_curve_has_no_loops():
-    # a star-ish outline with many short edges in concave stretches
-    t = np.linspace(0, 2 * np.pi, 400, endpoint=False)
-    r = 0.2 + 0.05 * np.cos(5 * t) + 0.0015 * np.sin(97 * t)
-    loop = np.column_stack([r * np.cos(t), r * np.sin(t)])
-    assert signed_area(loop) > 0 and segments_cross(loop) is None
-    cut = offset_loop(loop, np.full(len(loop), 0.015))
-    assert segments_cross(cut) is None
-    assert distance_to_polyline(cut, loop).min() >= 0.015 - 1e-6
+from core.errors import ExportError
+from core.export.allowance import cut_line, resolve_allowance
+from core.export.notches import notch_positions
+from core.export.pieces import build_pieces
+from core.geom.polygon import distance_to_polyline, points_in_polygon, signed_area
+from core.geom.polyline import point_at_length, polyline_length
 
 
 def test_allowance_width_measured_on_every_edge():
@@ -90,7 +54,7 @@ def test_notches_match_on_both_sides_of_every_seam():
             piece = pieces[getattr(seam, f"panel_{side}")]
             ids = getattr(seam, f"verts_{side}")
             xy = pat.panel(piece.name).uv[ids] @ piece.rotation.T
-            want, _ = point_at_arclength(xy, [n.s for n in notches])
+            want, _, _ = point_at_length(xy, [n.s for n in notches])
             np.testing.assert_allclose([n.point for n in notches], want, atol=1e-12)
             for n in notches:  # the slit starts on the cut line and points inward
                 assert distance_to_polyline(n.segment[:1], piece.cut[0])[0] < 1e-9
@@ -157,43 +121,12 @@ def test_resolve_allowance_errors_and_materials():
         resolve_allowance({"default": float("nan")}, pat)
 
 
-def test_layout_has_no_overlaps_and_reserves_the_corner():
-    rng = np.random.default_rng(0)
-    boxes = []
-    for _ in range(12):
-        lo = rng.uniform(-1, 1, 2)
-        boxes.append(np.stack([lo, lo + rng.uniform(0.05, 0.6, 2)]))
-    lay = layout_pieces(boxes, width=0.9, margin=0.02, reserve=(0.11, 0.12))
-    placed = [b + off for b, off in zip(boxes, lay.offsets)] + [lay.reserved]
-    for i, a in enumerate(placed):
-        assert a[0, 0] >= 0.02 - 1e-12 and a[0, 1] >= 0.02 - 1e-12
-        assert a[1, 0] <= lay.size[0] - 0.02 + 1e-12 and a[1, 1] <= lay.size[1] - 0.02 + 1e-12
-        for b in placed[i + 1:]:
-            sep = (a[1, 0] + 0.02 <= b[0, 0] + 1e-12 or b[1, 0] + 0.02 <= a[0, 0] + 1e-12 or
-                   a[1, 1] + 0.02 <= b[0, 1] + 1e-12 or b[1, 1] + 0.02 <= a[0, 1] + 1e-12)
-            assert sep
-    # the reserved box is at the top-left corner
-    assert lay.reserved[0, 0] == pytest.approx(0.02) and lay.reserved[1, 1] == pytest.approx(lay.size[1] - 0.02)
-    # a piece wider than the sheet widens it
-    wide = layout_pieces([np.array([[0, 0], [1.5, 0.2]])], width=0.9, margin=0.02)
-    assert wide.size[0] == pytest.approx(1.54)
-
-
 def test_build_pieces_is_deterministic():
     a = build_pieces(make_pattern())
     b = build_pieces(make_pattern())
     for p, q in zip(a, b):
         np.testing.assert_array_equal(p.cut[0], q.cut[0])
         assert p.label == q.label
-
-
-def test_remove_loops_keeps_the_outline():
-    # a ccw square with a small cw "ear" loop at one corner (what offsetting a tight spot makes)
-    poly = np.array([[0, 0], [1, 0], [1, 1.1], [1.1, 1.0], [0.9, 1.0], [0, 1]], float)
-    assert segments_cross(poly) is not None
-    out = remove_loops(poly)
-    assert segments_cross(out) is None
-    np.testing.assert_allclose(out, [[0, 0], [1, 0], [1, 1], [0.9, 1], [0, 1]], atol=1e-12)
 
 
 def test_narrow_slit_is_refused_with_a_clear_error():
@@ -235,16 +168,6 @@ def test_piece_with_a_hole():
     np.testing.assert_allclose(d_hole, 0.01, atol=1e-9)
     assert abs(signed_area(piece.cut[1])) < abs(signed_area(piece.sew[1]))
     assert abs(signed_area(piece.cut[0])) > abs(signed_area(piece.sew[0]))
-
-
-def test_layout_fills_beside_tall_pieces():
-    tall = np.array([[0, 0], [0.4, 0.8]])
-    small = [np.array([[0, 0], [0.4, 0.17]])] * 4
-    lay = layout_pieces([tall] + small, width=0.86, margin=0.02)
-    # the four small pieces stack beside the tall one: one tall piece deep
-    assert lay.size[1] == pytest.approx(0.84)
-    lay = layout_pieces([np.array([[0, 0], [0.4, 0.4]])] * 4, width=0.86, margin=0.02)
-    np.testing.assert_allclose(lay.size, [0.86, 0.86])
 
 
 def test_duplicate_boundary_vertex_on_a_seam_still_gets_notches():

@@ -1,16 +1,16 @@
 """core.export.svg: 1:1 millimetres, one group per piece, distinct colours."""
 import re
-import sys
 import xml.etree.ElementTree as ET
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from export_synth import make_pattern  # noqa: E402
+from export_synth import make_pattern
 
-from core.export.pieces import build_pieces, layout_pieces, polyline_length  # noqa: E402
-from core.export.svg import COLOURS, svg_document  # noqa: E402
+from core.export.pieces import build_pieces
+from core.geom.layout import layout_pieces
+from core.geom.polyline import polyline_length
+from core.export.svg import COLOURS, svg_document
 
 NS = {"svg": "http://www.w3.org/2000/svg"}
 

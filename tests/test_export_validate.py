@@ -1,14 +1,11 @@
 """core.export.validate: invalid patterns and drapes are refused with errors naming the culprit."""
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-from export_synth import drape_positions, make_pattern  # noqa: E402
+from export_synth import drape_positions, make_pattern
 
-from core.errors import ExportError  # noqa: E402
-from core.export.validate import validate_drape, validate_pattern  # noqa: E402
+from core.errors import ExportError
+from core.export.validate import validate_drape, validate_pattern
 
 
 def _nan_uv(p):

@@ -40,13 +40,14 @@ from ..errors import ExportError
 from ..fileio import dumps_json, output_dir, write_bytes
 from ..pattern.types import Pattern
 from ..progress import report, sub
-from .pieces import (DEFAULT_ALLOWANCE, DEFAULT_HEM, DEFAULT_NOTCH_SPACING, Layout, PieceDrawing,
-                     build_pieces, layout_pieces, polyline_length, resolve_allowance)
+from ..geom.polyline import polyline_length
+from .allowance import DEFAULT_ALLOWANCE, DEFAULT_HEM, resolve_allowance
+from .layout import LAYOUT_MARGIN, SHEET_WIDTH, fewest_pages, layout_pieces
+from .notches import DEFAULT_NOTCH_SPACING
+from .pieces import PieceDrawing, build_pieces
 from .validate import validate_drape, validate_pattern
 
 FORMATS = ("svg", "dxf", "pdf", "glb", "obj")
-SHEET_WIDTH = 0.88      # m: with the PDF margins the plotter sheet is 900 mm, inside a 914 mm roll
-LAYOUT_MARGIN = 0.02    # m between pieces
 
 __all__ = ["export_pattern", "FORMATS", "validate_pattern", "build_pieces", "layout_pieces",
            "resolve_allowance", "DEFAULT_ALLOWANCE", "DEFAULT_HEM", "DEFAULT_NOTCH_SPACING"]
@@ -144,7 +145,7 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
             from . import pdf
             pages = {}
             for paper in ("a4", "letter"):
-                lay = _fewest_pages(boxes, paper)
+                lay = fewest_pages(boxes, paper)
                 files[f"pattern_{paper}.pdf"] = pdf.tiled_pdf(pieces, lay, paper, title)
                 rows, cols, _ = pdf.tile_grid(lay.size, paper)
                 pages[paper] = {"rows": rows, "columns": cols, "pages": rows * cols}
@@ -168,20 +169,6 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
             write_bytes(tmp / name, data)
     report(progress, 1.0, f"wrote {len(files)} files to {out_dir}")
     return [out_dir / name for name in files]
-
-
-def _fewest_pages(boxes, paper: str) -> Layout:
-    """The shelf layout, a whole number of pages wide, that needs the fewest pages of ``paper``."""
-    from . import pdf
-    tile_w = pdf.PAPERS[paper][0] - 2 * pdf.PAGE_MARGIN
-    widest = max([float(b[1, 0] - b[0, 0]) for b in boxes] + [pdf.TEST_RESERVE[0]]) + 2 * LAYOUT_MARGIN
-    best = None
-    for cols in range(max(1, int(np.ceil(widest / tile_w - 1e-9))), 9):
-        lay = layout_pieces(boxes, cols * tile_w, LAYOUT_MARGIN, reserve=pdf.TEST_RESERVE)
-        rows, ncols, _ = pdf.tile_grid(lay.size, paper)
-        if best is None or rows * ncols < best[0]:
-            best = (rows * ncols, lay)
-    return best[1]
 
 
 def _piece_summary(piece: PieceDrawing, pattern: Pattern) -> dict:

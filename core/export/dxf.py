@@ -33,7 +33,9 @@ from typing import List, Sequence
 import numpy as np
 
 from ..errors import ExportError
-from .pieces import Layout, PieceDrawing, ascii_text
+from ..geom.layout import Layout
+from ..geom.polygon import turn_points
+from .pieces import PieceDrawing, ascii_text
 
 ASTM_LAYERS = {"boundary": "1", "turn": "2", "notch": "4", "mirror": "6", "grain": "7", "sew": "14",
                "annotation": "15"}
@@ -56,15 +58,6 @@ def _mm(points, offset=None) -> List[tuple]:
     if offset is not None:
         q = q + offset
     return [(float(x) * 1000.0, float(y) * 1000.0) for x, y in q]
-
-
-def turn_points(loop: np.ndarray, degrees: float = TURN_DEG) -> np.ndarray:
-    """Indices of the corners of a closed polyline (k, 2): vertices turning more than ``degrees``."""
-    p = np.asarray(loop, float)
-    a = p - np.roll(p, 1, axis=0)
-    b = np.roll(p, -1, axis=0) - p
-    cos = np.sum(a * b, axis=1) / np.maximum(np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1), 1e-300)
-    return np.flatnonzero(cos < np.cos(np.radians(degrees)))
 
 
 def block_names(pieces: Sequence[PieceDrawing]) -> List[str]:
@@ -132,7 +125,7 @@ def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, si
             add_poly(blk, _mm(loop), close=True, dxfattribs={"layer": L["sew"]})
         # turn points tell pattern CAD which vertices are corners (the rest are curve points)
         for loop in piece.cut + piece.sew:
-            for q in _mm(loop[turn_points(loop)]):
+            for q in _mm(loop[turn_points(loop, TURN_DEG)]):
                 blk.add_point(q, dxfattribs={"layer": L["turn"]})
         for n in piece.notches:
             a, b = _mm(n.segment)

@@ -21,6 +21,7 @@ from typing import List, Sequence, Tuple
 
 import numpy as np
 
+from ..geom.mesh import vertex_normals
 from ..pattern.types import Pattern
 
 GLB_MAGIC = 0x46546C67  # "glTF"
@@ -28,8 +29,8 @@ CHUNK_JSON = 0x4E4F534A
 CHUNK_BIN = 0x004E4942
 
 
-def vertex_normals(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Area-weighted unit vertex normals.
+def smooth_normals(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Area-weighted unit vertex normals for the files (:func:`core.geom.mesh.vertex_normals`).
 
     Parameters
     ----------
@@ -37,18 +38,12 @@ def vertex_normals(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
     Returns
     -------
-    (n, 3) float; vertices in no face get (0, 0, 1).
+    (n, 3) float; a vertex in no face (or only in degenerate ones) gets
+    (0, 0, 1), since glTF requires unit normals.
     """
-    p = np.asarray(positions, float)
-    f = np.asarray(faces, int)
-    fn = np.cross(p[f[:, 1]] - p[f[:, 0]], p[f[:, 2]] - p[f[:, 0]])
-    vn = np.zeros_like(p)
-    for k in range(3):
-        np.add.at(vn, f[:, k], fn)
-    ln = np.linalg.norm(vn, axis=1)
-    vn[ln < 1e-20] = (0.0, 0.0, 1.0)
-    ln[ln < 1e-20] = 1.0
-    return vn / ln[:, None]
+    vn = vertex_normals(positions, faces)
+    vn[np.linalg.norm(vn, axis=1) < 0.5] = (0.0, 0.0, 1.0)
+    return vn
 
 
 def to_y_up(v: np.ndarray) -> np.ndarray:
@@ -64,7 +59,7 @@ def piece_meshes(pattern: Pattern, positions: np.ndarray, rotations: Sequence[np
         xyz = np.asarray(positions, float)[np.asarray(panel.vertex_ids, int)]
         faces = np.asarray(panel.faces, int)
         uv = np.asarray(panel.uv, float) @ np.asarray(rot, float).T
-        out.append((panel.name, panel.garment, xyz, vertex_normals(xyz, faces), uv, faces))
+        out.append((panel.name, panel.garment, xyz, smooth_normals(xyz, faces), uv, faces))
     return out
 
 

@@ -19,7 +19,8 @@ from typing import List, Sequence, Tuple
 import numpy as np
 
 from ..errors import ExportError
-from .pieces import Layout, PieceDrawing, ascii_text
+from ..geom.layout import Layout
+from .pieces import PieceDrawing, ascii_text
 
 PT_PER_M = 72.0 / 0.0254
 PAPERS = {"a4": (0.210, 0.297), "letter": (0.2159, 0.2794), "a0": (0.841, 1.189)}
@@ -181,7 +182,7 @@ def tiled_pdf(pieces: Sequence[PieceDrawing], layout: Layout, paper: str = "a4",
     """1:1 pattern tiled on ``paper`` pages (``"a4"`` or ``"letter"``), rows top to bottom.
 
     ``layout`` should keep ``TEST_RESERVE`` free at its top-left (see
-    :func:`core.export.pieces.layout_pieces`); the test square is drawn there.
+    :func:`core.geom.layout.layout_pieces`); the test square is drawn there.
 
     Returns
     -------

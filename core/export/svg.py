@@ -13,7 +13,8 @@ from xml.sax.saxutils import escape, quoteattr
 
 import numpy as np
 
-from .pieces import Layout, PieceDrawing
+from ..geom.layout import Layout
+from .pieces import PieceDrawing
 
 COLOURS = {"cut": "#ff0000", "sew": "#0000ff", "notch": "#00a000", "grain": "#000000",
            "fold": "#ff00ff", "text": "#000000", "mark": "#808080"}
@@ -37,7 +38,7 @@ def svg_document(pieces: Sequence[PieceDrawing], layout: Layout, title: str = "p
     Parameters
     ----------
     pieces : the drawings, in the order of ``layout.offsets``.
-    layout : :class:`core.export.pieces.Layout` (metres).
+    layout : :class:`core.geom.layout.Layout` (metres).
     title : str, document title.
     """
     W, H = layout.size * 1000.0

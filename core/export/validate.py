@@ -11,7 +11,8 @@ import numpy as np
 
 from ..errors import ExportError
 from ..pattern.types import Pattern
-from .pieces import _edge_table, piece_loops, remove_loops, segments_cross, signed_area
+from ..geom.polygon import remove_loops, segments_cross, signed_area
+from .boundary import edge_table, piece_loops
 
 MIN_AREA = 1e-6  # m^2 (1 cm^2): smaller pieces are degenerate for a cutting room
 # A sew line whose self-crossings enclose at most this much (m^2, or this
@@ -115,7 +116,7 @@ def validate_pattern(pattern: Pattern, strict: bool = True) -> List[str]:
                     raise ExportError(msg + " (a folded-over or tangled piece)")
                 else:
                     warnings.append(msg + " (a folded-over or tangled piece, exported as it is)")
-        tables[panel.name] = _edge_table(loops)
+        tables[panel.name] = edge_table(loops)
     for k, seam in enumerate(pattern.seams):
         where = f"seam {seam.name!r}"
         for side in ("a", "b"):

@@ -1,4 +1,4 @@
-"""Plane polygons: signed area, outward offset, self-crossings, point in polygon, rays.
+"""Plane polygons: signed area, outward offset, self-crossings, point in polygon, corners, rays.
 
 A polygon is a ``(k, 2)`` float array of points in metres, closed implicitly
 (the last point joins the first; it is not repeated). Counter-clockwise
@@ -273,6 +273,26 @@ def points_in_polygon(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         xc = a[None, :, 0] + (y - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0]) / (b[None, :, 1] - a[None, :, 1])
     return (np.sum(straddle & (x < xc), axis=1) % 2) == 1
+
+
+def turn_points(loop: np.ndarray, degrees: float) -> np.ndarray:
+    """The corners of a closed polyline: the vertices where it turns by more than ``degrees``.
+
+    Parameters
+    ----------
+    loop : (k, 2) float, metres.
+    degrees : float, the smallest turn (between the incoming and the outgoing
+        edge's directions) that makes a corner rather than a curve point.
+
+    Returns
+    -------
+    (c,) int, vertex indices in increasing order.
+    """
+    p = np.asarray(loop, float)
+    a = p - np.roll(p, 1, axis=0)
+    b = np.roll(p, -1, axis=0) - p
+    cos = np.sum(a * b, axis=1) / np.maximum(np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1), 1e-300)
+    return np.flatnonzero(cos < np.cos(np.radians(degrees)))
 
 
 def distance_to_polyline(points: np.ndarray, poly: np.ndarray, closed: bool = True) -> np.ndarray:
