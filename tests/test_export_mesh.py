@@ -70,6 +70,12 @@ def test_normals_point_outward_on_a_cylinder(made):
         assert len(set(np.sign(dots))) == 1
 
 
+def test_vertices_in_no_face_get_a_unit_normal():
+    xyz = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [3, 3, 3]], float)
+    nrm = mesh.smooth_normals(xyz, np.array([[0, 1, 2]]))
+    np.testing.assert_allclose(nrm, [[0, 0, 1]] * 4)
+
+
 def test_obj_has_vertices_uvs_normals_and_faces(made):
     pat, pieces, pos, meshes = made
     text = mesh.obj_text(meshes, pat.style)

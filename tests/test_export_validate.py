@@ -5,6 +5,7 @@ import pytest
 from export_synth import drape_positions, make_pattern
 
 from core.errors import ExportError
+from core.export.boundary import face_loops, piece_loops
 from core.export.validate import validate_drape, validate_pattern
 
 
@@ -86,9 +87,18 @@ def test_invalid_pattern_names_the_culprit(breaker, words):
 
 def test_boundary_is_derived_from_faces_when_missing():
     pat = make_pattern()
+    given = [piece_loops(p) for p in pat.panels]
     for p in pat.panels:
         p.boundary = []
     validate_pattern(pat)
+    # the loops from the faces: the same cycle, started at the smallest vertex id, outline ccw
+    for p, loops in zip(pat.panels, given):
+        derived = face_loops(p.faces)
+        assert [int(b[0]) for b in derived] == sorted(int(b.min()) for b in derived)
+        (b,), (g,) = piece_loops(p), loops
+        assert int(b[0]) == int(b.min()) and len(b) == len(g)
+        k = int(np.flatnonzero(g == b[0])[0])
+        np.testing.assert_array_equal(np.roll(g, -k), b)
 
 
 def test_drape_checks():
