@@ -25,9 +25,6 @@ SYNTHETIC = HERE.parent / "tests" / "helpers" / "synthetic_pattern.py"
 
 def _two_panels():
     """The synthetic tube of the pattern tests, loaded by file path (test helpers are no package)."""
-    if not SYNTHETIC.exists():   # the helper has not moved out of core yet
-        from core.pattern.synthetic import two_panels
-        return two_panels()
     spec = importlib.util.spec_from_file_location("ease_bench_synthetic_pattern", SYNTHETIC)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
