@@ -7,7 +7,7 @@ import pytest
 from core.errors import PatternError
 from core.pattern.io import load_pattern, pattern_to_json, save_pattern
 from core.pattern.solve import solve_pattern
-from core.pattern.synthetic import two_panels
+from synthetic_pattern import two_panels
 
 
 @pytest.fixture(scope="module")

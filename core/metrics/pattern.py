@@ -6,6 +6,9 @@ Per triangle with 3D vertices ``X`` on a body instance and 2D pattern vertices
 achieved weft scale ``1/|J w|``, warp scale ``1/|J g|``; required stretch
 ``|J w|`` on a target body; shear = angle(J w, J g) - 90 degrees. Means and
 standard deviations are area-weighted (3D area on the measured body), in percent.
+The per-triangle geometry is :mod:`core.geom.strain` and :mod:`core.geom.mesh`
+(re-exported here: ``scales``, ``jacobians``, ``weft_of``, ``signed_areas_2d``,
+``areas_3d``).
 """
 from __future__ import annotations
 
@@ -13,44 +16,13 @@ from typing import Dict, Iterable, Optional, Sequence
 
 import numpy as np
 
+from ..geom.mesh import signed_areas_2d, triangle_areas as areas_3d
+from ..geom.polyline import polyline_length
+from ..geom.strain import jacobians, scales, weft_of
 
-def weft_of(grain: np.ndarray) -> np.ndarray:
-    """The 2D weft (2,): the grain turned by +90 degrees."""
-    g = np.asarray(grain, float)
-    return np.array([-g[1], g[0]])
-
-
-def jacobians(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Per-triangle 2D->3D Jacobians (f, 3, 2); NaN for degenerate 2D triangles."""
-    uv = np.asarray(uv, float)
-    xyz = np.asarray(xyz, float)
-    F = np.asarray(faces, int)
-    D2 = np.stack([uv[F[:, 1]] - uv[F[:, 0]], uv[F[:, 2]] - uv[F[:, 0]]], axis=2)  # (f,2,2)
-    D3 = np.stack([xyz[F[:, 1]] - xyz[F[:, 0]], xyz[F[:, 2]] - xyz[F[:, 0]]], axis=2)  # (f,3,2)
-    det = D2[:, 0, 0] * D2[:, 1, 1] - D2[:, 0, 1] * D2[:, 1, 0]
-    inv = np.empty_like(D2)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inv[:, 0, 0] = D2[:, 1, 1] / det
-        inv[:, 1, 1] = D2[:, 0, 0] / det
-        inv[:, 0, 1] = -D2[:, 0, 1] / det
-        inv[:, 1, 0] = -D2[:, 1, 0] / det
-    return D3 @ inv
-
-
-def signed_areas_2d(uv: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Signed 2D triangle areas (f,), positive counter-clockwise."""
-    uv = np.asarray(uv, float)
-    F = np.asarray(faces, int)
-    a = uv[F[:, 1]] - uv[F[:, 0]]
-    b = uv[F[:, 2]] - uv[F[:, 0]]
-    return 0.5 * (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
-
-
-def areas_3d(xyz: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Triangle areas (f,) in square metres."""
-    xyz = np.asarray(xyz, float)
-    F = np.asarray(faces, int)
-    return 0.5 * np.linalg.norm(np.cross(xyz[F[:, 1]] - xyz[F[:, 0]], xyz[F[:, 2]] - xyz[F[:, 0]]), axis=1)
+__all__ = ["jacobians", "scales", "weft_of", "signed_areas_2d", "areas_3d", "flipped_count", "required_stretch",
+           "weighted_stats", "compliance_per_triangle", "ease_compliance", "seam_mismatch", "residual_stretch",
+           "flips", "pattern_report"]
 
 
 def flipped_count(uv: np.ndarray, faces: np.ndarray) -> int:
@@ -58,26 +30,6 @@ def flipped_count(uv: np.ndarray, faces: np.ndarray) -> int:
     s = signed_areas_2d(uv, faces)
     major = 1.0 if np.sum(s > 0) >= np.sum(s < 0) else -1.0
     return int(np.sum(s * major <= 0))
-
-
-def scales(uv, xyz, faces, grain):
-    """Achieved weft/warp scales and shear per triangle.
-
-    Returns
-    -------
-    rho_weft, rho_warp : (f,) float, ``1/|J w|`` and ``1/|J g|``.
-    shear_deg : (f,) float, ``|angle(J w, J g) - 90|`` in degrees.
-    """
-    J = jacobians(uv, xyz, faces)
-    g = np.asarray(grain, float) / np.linalg.norm(grain)
-    jw = J @ weft_of(g)
-    jg = J @ g
-    lw = np.linalg.norm(jw, axis=1)
-    lg = np.linalg.norm(jg, axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cosang = np.sum(jw * jg, axis=1) / (lw * lg)
-        shear = np.abs(np.degrees(np.arccos(np.clip(cosang, -1.0, 1.0))) - 90.0)
-        return 1.0 / lw, 1.0 / lg, shear
 
 
 def required_stretch(uv, xyz_body, faces, grain):
@@ -152,11 +104,6 @@ def ease_compliance(pattern, garment: Optional[str] = None, xyz: Optional[Dict[s
     return {"mean": c["mean"], "std": c["std"], "p95": c["p95"], "max": c["max"],
             "shear_mean": s["mean"], "shear_p95": s["p95"], "warp_mean": weighted_stats(np.abs(warp), a)["mean"],
             "warp_signed": weighted_stats(warp, a)["mean"], "area": float(a.sum())}
-
-
-def polyline_length(points: np.ndarray) -> float:
-    """Length of a polyline (k, d)."""
-    return float(np.sum(np.linalg.norm(np.diff(np.asarray(points, float), axis=0), axis=1)))
 
 
 def seam_mismatch(pattern, garment: Optional[str] = None) -> Dict[str, object]:

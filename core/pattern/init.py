@@ -11,20 +11,11 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import PatternError
-from ..metrics.pattern import signed_areas_2d, areas_3d
+from ..geom.mesh import boundary_loops, signed_areas_2d, triangle_areas
 
 #: Edges or triangle images shorter than this (relative to the panel's mean
 #: edge length) are treated as degenerate and skip the grain vote.
 DEGENERATE = 1e-8
-
-
-def boundary_loops(faces: np.ndarray) -> list:
-    """Closed boundary loops (list of (k,) int) of a triangle mesh, longest first."""
-    import igl
-    loops = igl.boundary_loop_all(np.ascontiguousarray(faces, dtype=np.int64)) \
-        if hasattr(igl, "boundary_loop_all") else [igl.boundary_loop(faces)]
-    loops = [np.asarray(l, dtype=np.int64) for l in loops if len(l) > 0]
-    return sorted(loops, key=len, reverse=True)
 
 
 def _far_pair(xyz: np.ndarray, candidates: np.ndarray) -> tuple:
@@ -89,7 +80,7 @@ def normalise_orientation_and_scale(uv: np.ndarray, xyz: np.ndarray, faces: np.n
         uv = uv * np.array([-1.0, 1.0])
         s = -s
     a2 = float(np.sum(np.abs(s)))
-    a3 = float(areas_3d(xyz, faces).sum())
+    a3 = float(triangle_areas(xyz, faces).sum())
     if not (a2 > 0 and a3 > 0):
         raise PatternError("panel has zero area")
     c = uv.mean(axis=0)
@@ -138,7 +129,7 @@ def grain_angle(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray, warp_dir: np
     """
     G, area = gradient_operators(uv, faces)
     img, ok = pulled_back_warp(xyz, faces, G, warp_dir)
-    return _vote_angle(img, np.where(ok & (area != 0), areas_3d(xyz, faces), 0.0))
+    return _vote_angle(img, np.where(ok & (area != 0), triangle_areas(xyz, faces), 0.0))
 
 
 def _vote_angle(unit: np.ndarray, weight: np.ndarray) -> float:
@@ -201,7 +192,7 @@ def flatten_panel(xyz: np.ndarray, faces: np.ndarray, warp_dir: np.ndarray) -> d
         uv = tutte(xyz, F)
     G, area = gradient_operators(uv, F)
     img, ok = pulled_back_warp(xyz, F, G, warp_dir)
-    w = np.where(ok & (area != 0), areas_3d(xyz, F), 0.0)
+    w = np.where(ok & (area != 0), triangle_areas(xyz, F), 0.0)
     R = rotation(-_vote_angle(img, w))
     c = uv.mean(axis=0)
     # rotating the domain rotates gradients and pulled-back directions alike

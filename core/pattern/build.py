@@ -1,0 +1,73 @@
+"""Assemble a :class:`~core.pattern.types.Pattern` from a solve: pieces laid out in a row, achieved scales."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+
+from ..errors import PatternError
+from ..geom.mesh import boundary_loops, signed_areas_2d
+from ..geom.strain import scales
+from .types import Pattern, PatternPanel, PatternSeam
+
+#: Gap between laid-out pieces, metres.
+PIECE_GAP = 0.05
+
+
+@dataclass
+class SolveResult:
+    """The outcome of one solve: per panel ``uv`` (n, 2), per-triangle targets (f,), the body positions
+    ``xyz`` (n, 3) it was solved on, the solve's time, iterations, flip-guard backtracks, energies and
+    gathered seam names."""
+    uv: Dict[str, np.ndarray]
+    target_weft: Dict[str, np.ndarray]
+    target_warp: Dict[str, np.ndarray]
+    xyz: Dict[str, np.ndarray]
+    seconds: float
+    iterations: int
+    backtracks: int
+    energy: List[float] = field(default_factory=list)
+    gathered: tuple = ()
+
+
+def row_layout(uv: Dict[str, np.ndarray], order: Sequence[str], gap: float = PIECE_GAP) -> Dict[str, np.ndarray]:
+    """Translate the pieces into one row (left to right, bottoms aligned), gap in metres."""
+    out, x = {}, 0.0
+    for name in order:
+        p = uv[name]
+        lo, hi = p.min(axis=0), p.max(axis=0)
+        out[name] = p - lo + np.array([x, 0.0])
+        x += (hi - lo)[0] + gap
+    return out
+
+
+def build_pattern(cut, result: SolveResult, style: str = "", body: Optional[dict] = None,
+                  mode: str = "reference", materials: Optional[dict] = None) -> Pattern:
+    """Assemble a :class:`Pattern` from a solve; checks it has no flipped triangle."""
+    order = [p.name for p in cut.panels]
+    uv = row_layout(result.uv, order)
+    panels = []
+    for p in cut.panels:
+        xyz = result.xyz[p.name]
+        grain = np.array([0.0, 1.0])
+        rw, rg, _ = scales(uv[p.name], xyz, p.faces, grain)
+        s = signed_areas_2d(uv[p.name], p.faces)
+        if np.any(s <= 0):
+            raise PatternError(f"panel {p.name!r}: {int(np.sum(s <= 0))} flipped triangles in the optimized pattern")
+        panels.append(PatternPanel(
+            name=p.name, garment=p.garment, uv=uv[p.name], faces=np.asarray(p.faces, int),
+            vertex_ids=np.asarray(p.vertex_ids, int), xyz=np.asarray(xyz, float), grain=grain,
+            target_weft=result.target_weft[p.name], target_warp=result.target_warp[p.name],
+            achieved_weft=rw, achieved_warp=rg,
+            boundary=[np.asarray(b, int) for b in (p.boundary or boundary_loops(p.faces))],
+            hems=[np.asarray(h, int) for h in cut.hems.get(p.name, [])], mirror_of=p.mirror_of))
+    seams = [PatternSeam(s.name, s.panel_a, s.panel_b, np.asarray(s.verts_a, int), np.asarray(s.verts_b, int),
+                         gathered=s.name in result.gathered)
+             for s in cut.seams]
+    body = dict(body if body is not None else cut.body)
+    return Pattern(style=style, body=body, garments=dict(cut.garments), panels=panels, seams=seams,
+                   pins={g: np.asarray(v, int) for g, v in cut.pins.items()},
+                   materials=dict(materials if materials is not None else cut.materials), mode=mode,
+                   report={"optimize_seconds": result.seconds, "iterations": result.iterations,
+                           "backtracks": result.backtracks, "gathered_seams": list(result.gathered)})

@@ -1,0 +1,309 @@
+"""Settings of the pattern optimizer, grouped by what they act on, with the three presets.
+
+Every energy term is normalised to be dimensionless and independent of the
+mesh resolution and the garment's size (:mod:`.solve`), so the weights are
+plain numbers. Groups:
+
+- :class:`Weights` -- the terms' weights (paper Eqs. ease, ARAP, seam length / straightness / curvature);
+- :class:`RestShape` -- the regulariser's rest shape and the local step;
+- :class:`SeamOptions` -- the seam terms' targets and which seams are sewn gathered;
+- :class:`Feedback` -- the per-iteration correction of the targets by the achieved scales;
+- :class:`Adaptation` -- what pose adaptation solves do differently.
+
+Precedence, for every setting the design can also give (``materials``): the
+caller's value over the design's over the default. Only the gathering
+threshold is such a setting here (the design's gathered seams add to the
+caller's); the stretch tolerances are the adaptation's arguments
+(:func:`core.pattern.solve.adapt_pattern`).
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field, fields, replace
+from typing import Mapping, Optional, Tuple
+
+import numpy as np
+
+from ..design.materials import EPS_WEFT, GATHER_ABOVE
+from ..errors import PatternError
+
+#: A gathering threshold left to the design: its ``materials.gather_above``, else the
+#: :class:`core.design.materials.Materials` default (0.2).
+FROM_DESIGN = "design"
+
+
+@dataclass(frozen=True)
+class Weights:
+    """Weights of the energy terms (dimensionless: each term is a relative strain squared over the area).
+
+    ``ease``: the ease term (lambda_ease: the pattern's Jacobian towards the
+    targets). ``regulariser``: the ARAP term (lambda_reg: towards the rotated
+    rest shape). ``seam_length``, ``seam_straight``, ``seam_curve``: the seam
+    terms (lambda_len, lambda_straight, lambda_curve); 0 removes a term from
+    every seam (to sew one seam without its length term, gather it:
+    :attr:`SeamOptions.gathered`). ``warp_column``: relative weight of the
+    warp column in the ease and regulariser terms (< 1 lets warp give way to
+    the weft target). ``sliver``: every triangle weighs at least this
+    fraction of the mean triangle weight, so slivers do not fold for free.
+    """
+    ease: float = 0.1
+    regulariser: float = 1.0
+    seam_length: float = 15.0
+    seam_straight: float = 0.1
+    seam_curve: float = 0.1
+    warp_column: float = 1.0
+    sliver: float = 0.5
+
+
+@dataclass(frozen=True)
+class RestShape:
+    """The regulariser's rest shape and how the local step fits it.
+
+    ``model``: ``"prestretch"`` (ours: targets ``diag(c) K``, the scales act
+    along the pattern's own weft/warp after the local rotation, and the ARAP
+    rest shape is the pre-stretched ``diag(c) R K``) or ``"isometric"`` (the
+    paper literally: targets ``K diag(c)``, the initial flattening's
+    barycentric offsets scaled, and the ARAP rest shape the isometric ``R K``).
+    ``warp_slack``: the local step may scale the rest shape's warp by a factor
+    within ``[1/(1+slack), 1+slack]`` (0 = off; curvature then goes into warp
+    length rather than weft and shear). ``warp_row``: weight of the pattern's
+    warp (v) row against the weft (u) row when the local step fits each
+    triangle's rotation (< 1: the rest shape turns to the current weft first).
+    """
+    model: str = "prestretch"
+    warp_slack: float = 0.12
+    warp_row: float = 0.5
+
+
+@dataclass(frozen=True)
+class SeamOptions:
+    """Targets of the seam terms and the gathered seams.
+
+    ``straight_target``: ``"smooth"`` (second differences of each seam towards
+    the mean of their neighbours: damps oscillations, keeps crotch and
+    armhole curves) or ``"zero"`` (the paper: towards 0, which straightens
+    seams that must be curved). ``length_integral``: gain of the integral
+    action on seam-edge length mismatch (0 = the paper's proximal
+    linearisation only); ``length_integral_cap``: its bound, as a fraction of
+    the edge's length. ``gathered``: seams sewn gathered (cut seam names,
+    seam lines, or lines in every garment; ``"*"`` for all): their length and
+    matched-curvature terms are off, the longer side is gathered into the
+    shorter. The design's ``materials.gathered`` adds to them.
+    ``gather_above``: a seam whose two sides' ease demands differ by more
+    than this fraction is gathered too; None never gathers on its own;
+    :data:`FROM_DESIGN` takes the design's ``materials.gather_above``, else
+    the
+    :class:`core.design.materials.Materials` default (0.2).
+    """
+    straight_target: str = "smooth"
+    length_integral: float = 1.0
+    length_integral_cap: float = 1.0
+    gathered: Tuple[str, ...] = ()
+    gather_above: object = FROM_DESIGN
+
+
+@dataclass(frozen=True)
+class Feedback:
+    """Per-iteration correction of the targets by the ratio target / achieved scale (SPEC rho-hat).
+
+    ``weft``, ``warp``: the gains (exponents of the ratio; 0 = off, the
+    paper): compliance bought with shear. ``from_iteration``: the first
+    iteration (0-based) that corrects. ``step``: bound of one iteration's
+    correction factor, ``1 +- step``. ``floor``, ``ceiling``: bounds of the
+    accumulated correction factor (adaptation solves use their own ceiling
+    and step, :class:`Adaptation`).
+    """
+    weft: float = 0.06
+    warp: float = 0.0
+    from_iteration: int = 2
+    step: float = 0.03
+    floor: float = 0.8
+    ceiling: float = 1.25
+
+
+@dataclass(frozen=True)
+class Adaptation:
+    """What pose adaptation solves do differently (paper Eqs. adapt-scale, material-scale).
+
+    ``margin``: pose demands are raised by this fraction before the tolerance
+    applies, so that the optimizer's own compliance error (~1-2 %) does not
+    leave triangles just above the tolerance (the paper aims exactly at it:
+    0). ``gain``: the weft and warp feedback gain of adaptation solves (at
+    least the :class:`Feedback` gains; pose demands are local, hence
+    incompatible in 2D without shear): it aims at the poses' demands along the
+    pattern's current weft and warp (0 = no feedback, the paper).
+    ``min_iterations``: adaptation solves run at least this many iterations.
+    ``ceiling``, ``step``: bounds of the feedback's accumulated and
+    per-iteration correction factors (the poses' local demands are far from
+    uniform).
+    """
+    margin: float = 0.06
+    gain: float = 0.5
+    min_iterations: int = 40
+    ceiling: float = 2.0
+    step: float = 0.06
+
+
+_GROUPS = {"weights": Weights, "rest_shape": RestShape, "seams": SeamOptions, "feedback": Feedback,
+           "adaptation": Adaptation}
+
+
+@dataclass(frozen=True)
+class SolverConfig:
+    """All settings of one solve: ``iterations`` (local-global iterations), ``realign_grain`` (turn every
+    piece so its voted grain is +y after each iteration) and the groups (module docstring).
+
+    Build one from a preset with overrides: ``SolverConfig.named("improved", iterations=5,
+    gathered=("*",))``. An override is a top-level field, a group (an instance, or a dict of the
+    fields to change), or a field of exactly one group by its own name.
+    """
+    iterations: int = 20
+    realign_grain: bool = True
+    weights: Weights = field(default_factory=Weights)
+    rest_shape: RestShape = field(default_factory=RestShape)
+    seams: SeamOptions = field(default_factory=SeamOptions)
+    feedback: Feedback = field(default_factory=Feedback)
+    adaptation: Adaptation = field(default_factory=Adaptation)
+
+    @classmethod
+    def paper(cls, **overrides) -> "SolverConfig":
+        """The paper's weights taken literally (isometric ARAP regulariser, no feedback, no gathering)."""
+        base = cls(weights=Weights(seam_length=100.0, seam_straight=5.0, seam_curve=10.0),
+                   rest_shape=RestShape(model="isometric", warp_slack=0.0, warp_row=1.0),
+                   seams=SeamOptions(straight_target="zero", length_integral=0.0, gather_above=None),
+                   feedback=Feedback(weft=0.0), adaptation=Adaptation(margin=0.0, gain=0.0))
+        return base.with_overrides(**overrides)
+
+    @classmethod
+    def improved(cls, **overrides) -> "SolverConfig":
+        """Our default: pre-stretched ARAP rest shape, lighter seam-shape terms, free warp length within 12 %,
+        light weft feedback (gain 0.06), seams gathered where their sides' demands differ by > 20 %."""
+        return cls().with_overrides(**overrides)
+
+    @classmethod
+    def stretch(cls, **overrides) -> "SolverConfig":
+        """Improved, with a stronger weft target feedback (gain 0.15), warp slack 0.1 and both rows weighted
+        alike: compliance bought with shear and local warp length."""
+        base = cls(rest_shape=RestShape(warp_slack=0.1, warp_row=1.0), feedback=Feedback(weft=0.15))
+        return base.with_overrides(**overrides)
+
+    @classmethod
+    def named(cls, name: str, **overrides) -> "SolverConfig":
+        """The preset ``name`` (``paper``, ``improved``, ``stretch``) with ``overrides``."""
+        table = {"paper": cls.paper, "improved": cls.improved, "stretch": cls.stretch}
+        if name not in table:
+            raise PatternError(f"solver configuration: expected one of {', '.join(table)}, got {name!r}")
+        return table[name](**overrides)
+
+    def with_overrides(self, **overrides) -> "SolverConfig":
+        """This configuration with ``overrides`` (class docstring); unknown or ambiguous names are refused."""
+        top, changes = {}, {}
+        for key, value in overrides.items():
+            if key in _GROUPS:
+                if isinstance(value, _GROUPS[key]):
+                    top[key] = value
+                elif isinstance(value, Mapping):
+                    changes.setdefault(key, {}).update(value)
+                else:
+                    raise PatternError(f"solver configuration {key}: expected a {_GROUPS[key].__name__} or a dict "
+                                       f"of its fields, got {value!r}")
+            elif key in ("iterations", "realign_grain"):
+                top[key] = value
+            else:
+                owners = [g for g, kind in _GROUPS.items() if key in {f.name for f in fields(kind)}]
+                if len(owners) != 1:
+                    why = f"in {' and '.join(owners)}: name the group" if owners else "no such setting"
+                    raise PatternError(f"solver configuration {key}: {why}")
+                changes.setdefault(owners[0], {})[key] = value
+        for group, change in changes.items():
+            known = {f.name for f in fields(_GROUPS[group])}
+            for key in change:
+                if key not in known:
+                    raise PatternError(f"solver configuration {group}.{key}: no such setting")
+            top[group] = replace(top.get(group, getattr(self, group)), **change)
+        return replace(self, **top)
+
+    @property
+    def gather_above(self) -> Optional[float]:
+        """The gathering threshold of a design that gives none (for callers showing the default)."""
+        return gather_threshold(self, None)
+
+    def to_dict(self) -> dict:
+        """Plain nested dict of every setting (JSON-ready)."""
+        return dataclasses.asdict(self)
+
+    def check(self) -> None:
+        """Raise :class:`PatternError` naming the first invalid setting."""
+        w, r, s, fb, ad = self.weights, self.rest_shape, self.seams, self.feedback, self.adaptation
+        nonneg = [("weights", w, ("ease", "regulariser", "seam_length", "seam_straight", "seam_curve", "sliver")),
+                  ("rest_shape", r, ("warp_slack",)),
+                  ("seams", s, ("length_integral", "length_integral_cap")),
+                  ("feedback", fb, ("weft", "warp", "step")),
+                  ("adaptation", ad, ("margin", "gain", "step"))]
+        for group, obj, names in nonneg:
+            for k in names:
+                _finite(f"{group}.{k}", getattr(obj, k), 0.0, ">=")
+        if w.ease + w.regulariser <= 0:
+            raise PatternError("solver configuration weights: ease + regulariser must be > 0")
+        _finite("weights.warp_column", w.warp_column, 0.0, ">")
+        _finite("rest_shape.warp_row", r.warp_row, 0.0, ">")
+        _finite("feedback.floor", fb.floor, 0.0, ">")
+        if fb.floor > 1:
+            raise PatternError(f"solver configuration feedback.floor: expected <= 1, got {fb.floor}")
+        _finite("feedback.ceiling", fb.ceiling, 1.0, ">=")
+        _finite("adaptation.ceiling", ad.ceiling, 1.0, ">=")
+        for name, v in (("iterations", self.iterations), ("adaptation.min_iterations", ad.min_iterations)):
+            if int(v) < 1:
+                raise PatternError(f"solver configuration {name}: expected >= 1, got {v}")
+        if int(fb.from_iteration) < 0:
+            raise PatternError(f"solver configuration feedback.from_iteration: expected >= 0, got {fb.from_iteration}")
+        if s.straight_target not in ("zero", "smooth"):
+            raise PatternError(f"solver configuration seams.straight_target: expected 'zero' or 'smooth', "
+                               f"got {s.straight_target!r}")
+        if r.model not in ("prestretch", "isometric"):
+            raise PatternError(f"solver configuration rest_shape.model: expected 'prestretch' or 'isometric', "
+                               f"got {r.model!r}")
+        a = s.gather_above
+        if a != FROM_DESIGN and a is not None and (isinstance(a, str) or not np.isfinite(a) or a <= 0):
+            raise PatternError(f"solver configuration seams.gather_above: expected a fraction > 0, None or "
+                               f"{FROM_DESIGN!r}, got {a!r}")
+        if isinstance(s.gathered, str) or not all(isinstance(g, str) for g in s.gathered):
+            raise PatternError(f"solver configuration seams.gathered: expected a tuple of seam names, got {s.gathered!r}")
+
+
+def _finite(name: str, value, bound: float, op: str) -> None:
+    ok = isinstance(value, (int, float, np.number)) and not isinstance(value, bool) and np.isfinite(value) and (
+        value >= bound if op == ">=" else value > bound)
+    if not ok:
+        raise PatternError(f"solver configuration {name}: expected a finite value {op} {bound:g}, got {value!r}")
+
+
+def gather_threshold(config: SolverConfig, materials: Optional[Mapping]) -> Optional[float]:
+    """The gathering threshold of a solve: the caller's, else the design's ``materials.gather_above``,
+    else the :class:`core.design.materials.Materials` default (None: no seam is gathered on its own)."""
+    a = config.seams.gather_above
+    if a == FROM_DESIGN:
+        a = (materials or {}).get("gather_above", GATHER_ABOVE)
+    return None if a is None else float(a)
+
+
+def tolerances(materials: Optional[Mapping], eps_weft: Optional[float] = None,
+               eps_warp: Optional[float] = None) -> Tuple[float, float]:
+    """Stretch tolerances (weft, warp) of an adaptation, each >= 1.
+
+    Weft: the caller's ``eps_weft``, else the design's ``materials.eps_weft``,
+    else the :class:`core.design.materials.Materials` default (1.1). Warp: the caller's ``eps_warp``, else the
+    caller's ``eps_weft``, else the design's ``materials.eps_warp``, else the weft's.
+    """
+    m = materials or {}
+    weft = eps_weft if eps_weft is not None else m.get("eps_weft", EPS_WEFT)
+    warp = eps_warp if eps_warp is not None else eps_weft if eps_weft is not None else m.get("eps_warp", weft)
+    return check_tolerance("eps_weft", weft), check_tolerance("eps_warp", warp)
+
+
+def check_tolerance(name: str, eps) -> float:
+    """``eps`` as a float; :class:`PatternError` naming ``name`` unless it is a finite value >= 1."""
+    eps = float(eps)
+    if not np.isfinite(eps) or eps < 1.0:
+        raise PatternError(f"{name}: a stretch tolerance must be >= 1 (1.1 = 10 % stretch), got {eps}")
+    return eps

@@ -1,0 +1,337 @@
+"""The seam system of the optimizer: seam topology, the seam plan, the seam terms.
+
+- :func:`seam_layout`: every seam side's vertices and edges stacked over all
+  seams (:class:`SeamLayout`), so the seam terms are a few array operations.
+- :func:`plan_seams`: which seams are sewn gathered (:class:`SeamPlan`, a
+  value passed into each solve).
+- :func:`seam_matrix` and :func:`seam_rhs`: the seam terms' part of the fixed
+  system matrix and of each iteration's right-hand side.
+
+Seam terms integrate over a band one mean edge length ``h`` wide along the
+seam (an edge of length ``l_i`` stands for the area ``l_i h``) with residuals
+relative to ``h``::
+
+    lambda_len      sum_i l_i/(h A) |e_i - Lbar_i d_i|^2   (length: edge e_i towards the mean length Lbar_i
+                                                             of both sides along its current direction d_i)
+    lambda_straight sum_i l_i/(h A) |D2 u_i - S_i|^2        (straightness: second differences towards S_i)
+    lambda_curve    sum_i l_i/(h A) |D2 u_i - C_i|^2        (matched curvature with the other side)
+
+Gathered seams have the length and matched-curvature terms off (the paper's
+switch for gathered designs, per seam).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Dict, List, Mapping, Optional, Sequence, Tuple
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..design.naming import mirrored_name
+from ..errors import PatternError
+from .config import SolverConfig, gather_threshold
+
+
+def seam_is_gathered(seam: str, gathered: Sequence[str]) -> bool:
+    """Whether the cut seam ``seam`` (``garment.line`` or ``garment.line#k``) is named by ``gathered``.
+
+    An entry names the seam itself, its line (``shirt.armhole_left``) or the
+    line in any garment (``armhole_left``), as export allowances do
+    (:func:`core.cut.types.seam_names`); ``"*"`` names every seam.
+    """
+    from ..cut.types import seam_names
+    return "*" in gathered or any(n in gathered for n in seam_names(seam))
+
+
+def design_gathered(materials: Optional[Mapping]) -> tuple:
+    """The design's own gathered seams (``materials.gathered``: true for all, or seam line names; a
+    ``*_left`` line brings its mirror, as everywhere in a mirrored design)."""
+    g = (materials or {}).get("gathered")
+    if g is True:
+        return ("*",)
+    if not g:
+        return ()
+    names = [str(x) for x in g]
+    return tuple(names + [m for m in (mirrored_name(n.partition("#")[0]) for n in names) if m])
+
+
+@dataclass(frozen=True)
+class SeamSide:
+    """One side of a seam: ``seam`` (index in the cut), ``gids`` (k,) global unknown ids along the
+    polyline, ``rest_lengths`` (k-1,) its edges' lengths in the initial flattening (metres),
+    ``edge_face`` (k-1,) the global index of each edge's triangle."""
+    seam: int
+    gids: np.ndarray
+    rest_lengths: np.ndarray
+    edge_face: np.ndarray
+
+
+@dataclass(frozen=True)
+class SeamLayout:
+    """All seam sides stacked (built once per solver by :func:`seam_layout`).
+
+    Edges (one per seam-side edge, ``E``): ``edge_start``/``edge_end`` (global
+    ids of the ends), ``edge_partner`` (index of the sewn edge on the other
+    side), ``edge_rest`` (initial lengths, metres), ``edge_face`` (the edge's
+    triangle). Vertices (``V``): ``vertex_ids``, ``vertex_partner`` (the sewn
+    vertex on the other side), ``vertex_side``, ``side_vertex_count`` (per
+    side), for the per-side rigid fit of the matched-curvature term. Second
+    differences (rows ``R``: interior vertices of sides with >= 3 vertices):
+    ``second_diff`` (sparse (R, n), None when R = 0), ``row_band`` (band
+    weights ``l/(h A)``), ``row_partner``, ``row_smooth`` (rows with both
+    neighbours on a side with >= 3 rows), ``row_straight`` (1 on sides with >= 3
+    rows: they get the straightness term), ``row_side``. ``band`` is
+    ``1/(h A)``, ``h`` the mean edge length and ``A`` the total area.
+    """
+    sides: List[SeamSide]
+    pairs: List[Tuple[int, int]]
+    edge_start: np.ndarray
+    edge_end: np.ndarray
+    edge_partner: np.ndarray
+    edge_rest: np.ndarray
+    edge_face: np.ndarray
+    vertex_ids: np.ndarray
+    vertex_partner: np.ndarray
+    vertex_side: np.ndarray
+    side_vertex_count: np.ndarray
+    second_diff: Optional[sp.csr_matrix]
+    second_diff_T: Optional[sp.csr_matrix]
+    row_band: np.ndarray
+    row_partner: np.ndarray
+    row_smooth: np.ndarray
+    row_straight: np.ndarray
+    row_side: np.ndarray
+    mean_edge: float
+    total_area: float
+
+
+@dataclass(frozen=True)
+class SeamPlan:
+    """Which seams a solve sews gathered: ``gathered`` (sorted cut seam names), ``demand`` (seam name ->
+    ease demand ratio, longer side / shorter side - 1), and per seam edge / second-difference row
+    ``sewn_edges`` (E,) and ``sewn_rows`` (R,): 1.0 where the seam is sewn flat, 0.0 where gathered."""
+    gathered: Tuple[str, ...]
+    demand: Dict[str, float]
+    sewn_edges: np.ndarray
+    sewn_rows: np.ndarray
+
+
+def _side_edges(name: str, pd, v: np.ndarray, table) -> np.ndarray:
+    """Global face index of each edge of the polyline ``v`` (panel-local ids) in panel ``pd``."""
+    keys, order = table
+    nf = len(pd.faces)
+    ef = np.zeros(len(v) - 1, int)
+    found = np.zeros(len(v) - 1, bool)
+    for x, y in ((v[:-1], v[1:]), (v[1:], v[:-1])):
+        q = x * pd.n + y
+        pos = np.minimum(np.searchsorted(keys, q), len(keys) - 1)
+        hit = (keys[pos] == q) & ~found
+        ef[hit] = pd.face_offset + order[pos[hit]] % nf
+        found |= hit
+    if not np.all(found):
+        i = int(np.argmin(found))
+        raise PatternError(f"seam {name!r}: vertices {(int(v[i]), int(v[i + 1]))} of panel {pd.name!r} "
+                           "are not joined by an edge")
+    return ef
+
+
+def seam_layout(cut, panels, uv0: np.ndarray, n: int, mean_edge: float, total_area: float) -> SeamLayout:
+    """Stack the seams of ``cut`` over the solver's panels (``_PanelData``) and initial flattening ``uv0`` (n, 2)."""
+    by_name = {pd.name: pd for pd in panels}
+    sides: List[SeamSide] = []
+    pairs = []
+    edge_tables = {}
+    for si, s in enumerate(cut.seams):
+        pair = []
+        for pname, verts in ((s.panel_a, s.verts_a), (s.panel_b, s.verts_b)):
+            pd = by_name[pname]
+            v = np.asarray(verts, int)
+            if pname not in edge_tables:
+                # directed half-edges (i -> j) of the panel, sorted by key i * n + j
+                F = pd.faces
+                keys = np.concatenate([F[:, c] * pd.n + F[:, (c + 1) % 3] for c in range(3)])
+                order = np.argsort(keys, kind="stable")
+                edge_tables[pname] = (keys[order], order)
+            ef = _side_edges(s.name, pd, v, edge_tables[pname])
+            g = v + pd.offset
+            sides.append(SeamSide(si, g, np.linalg.norm(np.diff(uv0[g], axis=0), axis=1), ef))
+            pair.append(len(sides) - 1)
+        pairs.append(tuple(pair))
+    return _stack(sides, pairs, n, mean_edge, total_area)
+
+
+def _stack(sides: List[SeamSide], pairs, n: int, h: float, total_area: float) -> SeamLayout:
+    other = {}
+    for ka, kb in pairs:
+        other[ka], other[kb] = kb, ka
+    e_start = np.cumsum([0] + [len(sd.gids) - 1 for sd in sides])
+    v_start = np.cumsum([0] + [len(sd.gids) for sd in sides])
+    cat = lambda parts, dtype: np.concatenate(parts) if sides else np.zeros(0, dtype)
+    edges = dict(
+        edge_start=cat([sd.gids[:-1] for sd in sides], int), edge_end=cat([sd.gids[1:] for sd in sides], int),
+        edge_rest=cat([sd.rest_lengths for sd in sides], float), edge_face=cat([sd.edge_face for sd in sides], int),
+        edge_partner=cat([e_start[other[k]] + np.arange(len(sd.gids) - 1) for k, sd in enumerate(sides)], int),
+        vertex_ids=cat([sd.gids for sd in sides], int),
+        vertex_partner=cat([v_start[other[k]] + np.arange(len(sd.gids)) for k, sd in enumerate(sides)], int),
+        vertex_side=cat([np.full(len(sd.gids), k) for k, sd in enumerate(sides)], int),
+        side_vertex_count=np.array([len(sd.gids) for sd in sides], float))
+    prev, mid, nxt, band, partner, smooth, straight = [], [], [], [], [], [], []
+    r_start = np.cumsum([0] + [max(len(sd.gids) - 2, 0) for sd in sides])
+    for k, sd in enumerate(sides):
+        g, m = sd.gids, len(sd.gids) - 2
+        if m < 1:
+            continue
+        prev.append(g[:-2]), mid.append(g[1:-1]), nxt.append(g[2:])
+        band.append(0.5 * (sd.rest_lengths[:-1] + sd.rest_lengths[1:]) / (h * total_area))
+        partner.append(r_start[other[k]] + np.arange(m))
+        sm = np.zeros(m, bool)
+        if m >= 3:
+            sm[1:-1] = True
+        smooth.append(sm)
+        straight.append(np.full(m, m >= 3))
+    nr = int(r_start[-1]) if len(r_start) else 0
+    rows = dict(second_diff=None, second_diff_T=None, row_band=np.zeros(0), row_partner=np.zeros(0, int),
+                row_smooth=np.zeros(0, bool), row_straight=np.zeros(0, bool), row_side=np.zeros(0, int))
+    if nr:
+        prev, mid, nxt = np.concatenate(prev), np.concatenate(mid), np.concatenate(nxt)
+        r = np.arange(nr)
+        D = sp.csr_matrix((np.tile([1.0, -2.0, 1.0], nr), (np.repeat(r, 3), np.stack([prev, mid, nxt], axis=1).ravel())),
+                          shape=(nr, n))
+        rows = dict(second_diff=D, second_diff_T=D.T.tocsr(), row_band=np.concatenate(band),
+                    row_partner=np.concatenate(partner), row_smooth=np.concatenate(smooth),
+                    row_straight=np.concatenate(straight),
+                    row_side=np.repeat(np.arange(len(sides)), [max(len(sd.gids) - 2, 0) for sd in sides]))
+    return SeamLayout(sides=sides, pairs=list(pairs), mean_edge=h, total_area=total_area, **edges, **rows)
+
+
+def plan_seams(cut, layout: SeamLayout, uv0: np.ndarray, K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray,
+               config: SolverConfig) -> SeamPlan:
+    """Decide which seams are gathered, from the ease demands of the targets ``diag(c) K``.
+
+    A side's demand is the seam's length under its own triangles' targets
+    (each seam edge of the initial flattening ``uv0`` mapped by ``diag(c_t) K_t``).
+    Gathered: the seams named by the configuration or the design
+    (``materials.gathered``), and the seams of every line where any seam's
+    demand ratio (longer side / shorter side - 1) is above the gathering
+    threshold (:func:`core.pattern.config.gather_threshold`), so an armhole is
+    gathered all round or not at all.
+
+    Parameters
+    ----------
+    K : (f, 2, 2) float, intrinsic offsets on the reference body.
+    c_weft, c_warp : (f,) float, the target scales.
+    """
+    T = np.stack([c_weft, c_warp], axis=1)[:, :, None] * K
+    e0 = uv0[layout.edge_end] - uv0[layout.edge_start]
+    Te = T[layout.edge_face]
+    edge = np.hypot(Te[:, 0, 0] * e0[:, 0] + Te[:, 0, 1] * e0[:, 1], Te[:, 1, 0] * e0[:, 0] + Te[:, 1, 1] * e0[:, 1])
+    start = np.cumsum([0] + [len(sd.gids) - 1 for sd in layout.sides])
+    side_len = np.add.reduceat(edge, start[:-1]) if len(edge) else np.zeros(0)
+    demand = {}
+    for si, (ka, kb) in enumerate(layout.pairs):
+        la, lb = float(side_len[ka]), float(side_len[kb])
+        demand[cut.seams[si].name] = max(la, lb) / max(min(la, lb), 1e-300) - 1.0
+    above = gather_threshold(config, cut.materials)
+    auto = ()
+    if above is not None:
+        lines = {n.split("#", 1)[0] for n, r in demand.items() if r > above}
+        auto = tuple(n for n in demand if n.split("#", 1)[0] in lines)
+    explicit = tuple(config.seams.gathered) + design_gathered(cut.materials)
+    named = [s.name for s in cut.seams if seam_is_gathered(s.name, explicit)]
+    gathered = tuple(sorted(set(named) | set(auto)))
+    side_gathered = np.array([seam_is_gathered(cut.seams[sd.seam].name, gathered) for sd in layout.sides], bool)
+    return SeamPlan(gathered=gathered, demand=demand,
+                    sewn_edges=np.repeat(~side_gathered, [len(sd.gids) - 1 for sd in layout.sides]).astype(float),
+                    sewn_rows=np.repeat(~side_gathered, [max(len(sd.gids) - 2, 0) for sd in layout.sides]).astype(float))
+
+
+def seam_matrix(layout: SeamLayout, config: SolverConfig, plan: SeamPlan, L: sp.csr_matrix) -> sp.csr_matrix:
+    """``L`` (n, n) plus the seam terms' part of the fixed system matrix (length, then shape)."""
+    w = config.weights
+    n = L.shape[0]
+    if layout.sides and w.seam_length > 0:
+        c = w.seam_length * layout.edge_rest / (layout.mean_edge * layout.total_area) * plan.sewn_edges
+        E0, E1 = layout.edge_start, layout.edge_end
+        L = L + sp.coo_matrix((np.concatenate([c, c, -c, -c]),
+                               (np.concatenate([E0, E1, E0, E1]), np.concatenate([E0, E1, E1, E0]))),
+                              shape=(n, n)).tocsr()
+    if layout.sides and w.seam_straight + w.seam_curve > 0 and layout.second_diff is not None:
+        lam = w.seam_straight + w.seam_curve * plan.sewn_rows
+        L = L + layout.second_diff_T @ sp.diags(lam * layout.row_band) @ layout.second_diff
+    return L
+
+
+def seam_rhs(layout: SeamLayout, U: np.ndarray, config: SolverConfig, plan: SeamPlan,
+             integral: np.ndarray) -> np.ndarray:
+    """Right-hand side (n, 2) of the seam terms at the current iterate ``U`` (n, 2).
+
+    ``integral`` (E,): the length term's integral action of this solve,
+    updated in place (zeros at the first iteration).
+
+    - length: edge ``e_i`` towards ``Lbar_i d_i``, ``d_i`` its current direction
+      (the paper's linearisation on the current tangent), ``Lbar_i`` the mean
+      of the two sides' current lengths plus the integral of the remaining
+      mismatch, so both sides end equally long (0.1 % instead of the ~1 % a
+      proximal pull leaves);
+    - straightness: second differences towards 0 (``"zero"``) or the mean of
+      their neighbours (``"smooth"``: damps oscillations, keeps curves);
+    - matched curvature: towards the mean of this side's second difference
+      and the other side's, rotated by the best rigid fit of the two polylines.
+    """
+    w, s = config.weights, config.seams
+    n = len(U)
+    rhs = np.zeros((n, 2))
+    if not layout.sides:
+        return rhs
+    E0, E1, Eo = layout.edge_start, layout.edge_end, layout.edge_partner
+    cur = U[E1] - U[E0]
+    cur_len = np.sqrt(cur[:, 0] ** 2 + cur[:, 1] ** 2)
+    if w.seam_length > 0:
+        lbar = 0.5 * (cur_len + cur_len[Eo])
+        if s.length_integral > 0:
+            # integral action: what the proximal pull leaves of the mismatch is
+            # accumulated into this side's target until both sides agree
+            integral -= s.length_integral * 0.5 * (cur_len - cur_len[Eo])
+            # bounded: where the design itself makes the sides differ (weft ease on a
+            # sleeve cap sewn to a warp-wise armhole) the seam gives way, not the cloth
+            cap = s.length_integral_cap * lbar
+            np.clip(integral, -cap, cap, out=integral)
+            lbar = lbar + integral
+        dirn = cur / np.maximum(cur_len, 1e-300)[:, None]
+        c = w.seam_length * layout.edge_rest / (layout.mean_edge * layout.total_area) * plan.sewn_edges
+        tgt = (c * lbar)[:, None] * dirn
+        for d in range(2):
+            rhs[:, d] += np.bincount(E1, tgt[:, d], minlength=n) - np.bincount(E0, tgt[:, d], minlength=n)
+    if layout.second_diff is None:
+        return rhs
+    d2 = layout.second_diff @ U
+    acc = np.zeros_like(d2)
+    if w.seam_straight > 0 and s.straight_target == "smooth":
+        # damp oscillations only: towards the neighbours' mean second difference
+        sm = d2.copy()
+        i = np.flatnonzero(layout.row_smooth)
+        sm[i] = 0.5 * (d2[i - 1] + d2[i + 1])
+        acc += (w.seam_straight * layout.row_band * layout.row_straight)[:, None] * sm
+    if w.seam_curve > 0:
+        acc += (w.seam_curve * layout.row_band * plan.sewn_rows)[:, None] * (0.5 * (d2 + _fitted_partner(layout, U, d2)))
+    rhs += layout.second_diff_T @ acc
+    return rhs
+
+
+def _fitted_partner(layout: SeamLayout, U: np.ndarray, d2: np.ndarray) -> np.ndarray:
+    """The other side's second differences (R, 2), turned by the best rigid fit of the two seam
+    polylines (per side, vectorised Kabsch)."""
+    k = len(layout.sides)
+    side = layout.vertex_side
+    P = U[layout.vertex_ids]
+    Q = P[layout.vertex_partner]
+    cnt = layout.side_vertex_count
+    Pm = np.stack([np.bincount(side, P[:, d], minlength=k) for d in range(2)], axis=1) / cnt[:, None]
+    Qm = np.stack([np.bincount(side, Q[:, d], minlength=k) for d in range(2)], axis=1) / cnt[:, None]
+    Pc, Qc = P - Pm[side], Q - Qm[side]
+    # H = Qc^T Pc per side; rotation = polar(H^T)
+    h = {(i, j): np.bincount(side, Qc[:, i] * Pc[:, j], minlength=k) for i in range(2) for j in range(2)}
+    th = np.arctan2(h[(0, 1)] - h[(1, 0)], h[(0, 0)] + h[(1, 1)])
+    c_, s_ = np.cos(th)[layout.row_side], np.sin(th)[layout.row_side]
+    do = d2[layout.row_partner]
+    return np.stack([c_ * do[:, 0] - s_ * do[:, 1], s_ * do[:, 0] + c_ * do[:, 1]], axis=1)

@@ -1,0 +1,322 @@
+"""The local-global ease optimizer over all panels of a cut, factorised once (:class:`PatternSolver`).
+
+Unknowns: the 2D positions of every panel vertex (seam vertices duplicated,
+one copy per panel, :mod:`.panels`), one sparse least-squares system for all.
+Everything is expressed on the panel's initial flattening ``U0`` (LSCM,
+area-matched, grain along +y) through per-triangle gradient operators ``G_t``:
+the pattern's Jacobian w.r.t. ``U0`` is ``M_t = U_t^T G_t`` (its columns the
+paper's ``sigma_2D``), the body's 3D offsets ``X_t^T G_t`` with intrinsic
+2D coordinates ``K_t`` (:func:`core.geom.strain.intrinsic_offsets`).
+
+Energy, every term a relative strain squared integrated over area and
+divided by the garment's total area ``A`` (dimensionless, independent of the
+mesh resolution and the garment's size)::
+
+    E = lambda_ease sum_t a_t |(M_t - T_t) W|^2          (ease: towards the targets, .targets)
+      + lambda_reg  sum_t a_t |(M_t - D_t R_t K'_t) W|^2 (ARAP, R_t from the local step, .steps)
+      + seam terms (length, straightness, matched curvature; .seams)
+
+with ``a_t = area_t / A`` (at least ``weights.sliver`` times the mean) and
+``W = diag(1, weights.warp_column)``. The matrix never changes for a
+configuration's weights and a seam plan: it is factorised once and reused by
+the reference, transfer and adaptation solves; only the right-hand side
+changes. One soft pin per panel fixes the translation gauge; rotation is
+fixed by the ease term's axes and the grain re-alignment after every
+iteration. No triangle ever flips (:func:`.steps.flip_guard`).
+
+The solver keeps only what it precomputed from the cut and the reference
+body, and a cache of factorisations keyed by the weights and the seam plan;
+every call takes its configuration (default: the solver's) and seam plan, so
+no call changes a later one's result.
+"""
+from __future__ import annotations
+
+import time
+from typing import Callable, Dict, Optional, Sequence, Tuple
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.linalg import splu
+
+from ..geom.strain import components, intrinsic_offsets, scales_of_offsets
+from ..progress import Progress, report
+from .build import SolveResult
+from .config import SolverConfig, check_tolerance
+from .panels import flatten_panels
+from .seams import SeamPlan, plan_seams, seam_layout, seam_matrix, seam_rhs
+from .steps import flip_guard, local_step, realign_grain, rigid_align, scaled_start
+from .targets import adaptation_scales, reference_ease, rest_targets
+from .validate import body_positions, validate_cut
+
+#: Weight of each panel's translation pin, relative to its mean diagonal entry.
+PIN_WEIGHT = 1e-6
+
+
+class PatternSolver:
+    """Local-global ease optimizer over all panels of a cut, factorised once.
+
+    Parameters
+    ----------
+    cut : GarmentCut
+    body_vertices : (V, 3) the reference body instance the cut was made on, metres.
+    config : SolverConfig, the default of every call (:meth:`SolverConfig.improved`).
+    progress : optional progress callback of the flattening.
+    """
+
+    def __init__(self, cut, body_vertices: np.ndarray, config: Optional[SolverConfig] = None,
+                 progress: Optional[Progress] = None):
+        validate_cut(cut)
+        self.cut = cut
+        self.config = config or SolverConfig.improved()
+        self.config.check()
+        t0 = time.perf_counter()
+        self.ref_positions = self.positions(body_vertices, "reference body")
+        self.blocks = flatten_panels(cut, self.ref_positions, progress)
+        b = self.blocks
+        self.panels = b.panels
+        self.n = b.n
+        self.gfaces = b.faces
+        self.uv0 = b.uv0
+        self.total_area = float(b.area0.sum())
+        #: each triangle's share of the garment's area (before the sliver floor of :meth:`area_weights`)
+        self.area_fraction = b.area0 / self.total_area
+        el = np.linalg.norm(self.uv0[self.gfaces[:, [1, 2, 0]]] - self.uv0[self.gfaces], axis=2)
+        self.mean_edge = float(np.mean(el))
+        self.design_ease = np.concatenate([pd.ease for pd in self.panels])
+        self.seams = seam_layout(cut, self.panels, self.uv0, self.n, self.mean_edge, self.total_area)
+        # gradient operators as sparse (f, n) matrices: (Gx @ U)[t] = M_t[:, 0], (Gy @ U)[t] = M_t[:, 1]
+        f = len(self.gfaces)
+        rows = np.repeat(np.arange(f), 3)
+        cols = self.gfaces.ravel()
+        self._Gx = sp.csr_matrix((b.G[:, :, 0].ravel(), (rows, cols)), shape=(f, self.n))
+        self._Gy = sp.csr_matrix((b.G[:, :, 1].ravel(), (rows, cols)), shape=(f, self.n))
+        self._GxT = self._Gx.T.tocsr()
+        self._GyT = self._Gy.T.tocsr()
+        self._factors: Dict[tuple, Tuple[Callable, np.ndarray]] = {}
+        self.n_factorisations = 0
+        self.timings = {"init": time.perf_counter() - t0}
+        report(progress, 1.0, "flattened")
+
+    # ------------------------------------------------------------------ bodies and targets
+    def positions(self, body_vertices, what: str) -> np.ndarray:
+        """The cut's positions (N, 3) on a body instance (V, 3), checked (``what`` names it in errors)."""
+        return body_positions(self.cut, body_vertices, what)
+
+    def offsets(self, positions: np.ndarray):
+        """Intrinsic offsets ``K`` (f, 2, 2) and the 3D weft/warp offset lengths (f,) on ``positions``."""
+        X = np.concatenate([positions[pd.vertex_ids][pd.faces] for pd in self.panels])
+        return intrinsic_offsets(X, self.blocks.G)
+
+    def targets_reference(self, positions: Optional[np.ndarray] = None, ease=None):
+        """Targets of Eq. ref-scale (or transfer-scale on other ``positions``): (K, c_weft, c_warp).
+
+        ``c = (rho_weft, 1)``; ``ease``: optional override of the cut's weft
+        ease, a scalar or one value per triangle of all panels in order
+        (benchmarks sweep it).
+        """
+        K, _, _ = self.offsets(self.ref_positions if positions is None else positions)
+        ease = reference_ease(self.design_ease, ease)
+        return K, ease.copy(), np.ones_like(ease)
+
+    def targets_adapt(self, pose_positions: Sequence[np.ndarray], eps_weft: float, eps_warp: float,
+                      config: Optional[SolverConfig] = None):
+        """Targets of Eq. material-scale: per direction max(rho sigma_ref, max_i sigma_i / eps)."""
+        cfg = config or self.config
+        eps_weft = check_tolerance("eps_weft", eps_weft)
+        eps_warp = check_tolerance("eps_warp", eps_warp)
+        K, lw, lg = self.offsets(self.ref_positions)
+        poses = [self.offsets(P)[1:] for P in pose_positions]
+        cw, cg = adaptation_scales(self.design_ease, lw, lg, poses, eps_weft, eps_warp, cfg.adaptation.margin)
+        return K, cw, cg
+
+    def pose_demands(self, pose_positions: Sequence[np.ndarray], eps_weft: float, eps_warp: float,
+                     config: Optional[SolverConfig] = None) -> dict:
+        """What adaptation solves feed back on (see :meth:`solve`): the poses' intrinsic offsets and tolerances."""
+        cfg = config or self.config
+        return {"offsets": [components(self.offsets(P)[0]) for P in pose_positions],
+                "ease_weft": self.design_ease.copy(), "ease_warp": np.ones(len(self.gfaces)),
+                "eps_weft": check_tolerance("eps_weft", eps_weft), "eps_warp": check_tolerance("eps_warp", eps_warp),
+                "margin": 1.0 + cfg.adaptation.margin}
+
+    # ------------------------------------------------------------------ seam plan
+    def plan_seams(self, K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray,
+                   config: Optional[SolverConfig] = None) -> SeamPlan:
+        """The seam plan of targets ``diag(c) K`` (:func:`core.pattern.seams.plan_seams`)."""
+        return plan_seams(self.cut, self.seams, self.uv0, K, c_weft, c_warp, config or self.config)
+
+    def design_plan(self, config: Optional[SolverConfig] = None) -> SeamPlan:
+        """The seam plan of the design's own ease on the reference body: what transfer and adaptation
+        solves sew (the reference pattern's plan)."""
+        K = self.offsets(self.ref_positions)[0]
+        return self.plan_seams(K, self.design_ease, np.ones_like(self.design_ease), config)
+
+    # ------------------------------------------------------------------ the system
+    def area_weights(self, config: Optional[SolverConfig] = None) -> np.ndarray:
+        """Per-triangle weights ``a_t`` (f,): area fractions, at least ``weights.sliver`` times the mean.
+
+        Slivers (cut boundaries meet the body mesh at grazing angles) would
+        weigh almost nothing and fold freely.
+        """
+        a = self.area_fraction
+        return np.maximum(a, (config or self.config).weights.sliver * float(np.mean(a)))
+
+    def factorisation(self, config: Optional[SolverConfig], plan: SeamPlan) -> Tuple[Callable, np.ndarray]:
+        """(back-substitution ``rhs (n, 2) -> U (n, 2)``, gauge pins (n, 2)) of the fixed system matrix of
+        ``config``'s weights and ``plan``; factorised on first use and kept."""
+        cfg = config or self.config
+        w = cfg.weights
+        key = (w.ease, w.regulariser, w.seam_length, w.seam_straight, w.seam_curve, w.warp_column, w.sliver,
+               plan.gathered)
+        if key not in self._factors:
+            t0 = time.perf_counter()
+            A, pin = self._matrix(cfg, plan)
+            # symmetric positive definite: a symmetric minimum-degree ordering on A + A^T keeps the
+            # factors ~40 % sparser than the default column ordering (faster factor and solves)
+            lu = splu(A, permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True}).solve
+            self._factors[key] = (lu, pin)
+            self.timings["factorise"] = time.perf_counter() - t0
+            self.n_factorisations += 1
+        return self._factors[key]
+
+    def _matrix(self, cfg: SolverConfig, plan: SeamPlan):
+        """The fixed system matrix (both pattern coordinates): ease + regulariser (one operator), the seam
+        terms, and the gauge pins (returned apart, (n, 2): they also enter every right-hand side)."""
+        w = cfg.weights
+        W2 = np.array([1.0, w.warp_column ** 2])
+        a = (w.ease + w.regulariser) * self.area_weights(cfg)
+        L = (self._GxT @ sp.diags(a * W2[0]) @ self._Gx + self._GyT @ sp.diags(a * W2[1]) @ self._Gy).tocsr()
+        L = seam_matrix(self.seams, cfg, plan, L)
+        # translation gauge: one soft pin per panel, tiny against the diagonal
+        d = L.diagonal()
+        off = self.blocks.vertex_offsets
+        pin = np.zeros(self.n)
+        pin[off] = PIN_WEIGHT * np.add.reduceat(d, off) / self.blocks.vertex_counts
+        return (L + sp.diags(pin)).tocsc(), np.stack([pin, pin], axis=1)
+
+    def jacobians(self, U: np.ndarray) -> list:
+        """Jacobians of ``U`` (n, 2) w.r.t. the initial flattening as 4 contiguous (f,) arrays m00, m01, m10, m11.
+
+        ``m_ij``: derivative of pattern coordinate ``i`` (u, v) along initial axis ``j`` (x, y).
+        """
+        u, v = np.ascontiguousarray(U[:, 0]), np.ascontiguousarray(U[:, 1])
+        return [self._Gx @ u, self._Gy @ u, self._Gx @ v, self._Gy @ v]
+
+    def start_from(self, pattern) -> np.ndarray:
+        """The unknowns (n, 2) of a flip-free ``pattern`` of this cut, each piece re-centred on its initial position."""
+        U = np.concatenate([pattern.panel(pd.name).uv for pd in self.panels])
+        out = U.copy()
+        for pd in self.panels:
+            sl = slice(pd.offset, pd.offset + pd.n)
+            out[sl] = U[sl] - U[sl].mean(axis=0) + self.uv0[sl].mean(axis=0)
+        return out
+
+    # ------------------------------------------------------------------ iterations
+    def solve(self, K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray, start: Optional[np.ndarray] = None,
+              positions: Optional[np.ndarray] = None, progress: Optional[Progress] = None,
+              poses: Optional[dict] = None, plan: Optional[SeamPlan] = None,
+              config: Optional[SolverConfig] = None) -> SolveResult:
+        """Run the local-global iterations towards targets ``diag(c_weft, c_warp) K`` (module docstring).
+
+        Per iteration: the local step (closed-form rotations, all triangles at
+        once), one right-hand side, one back-substitution of the factorised
+        matrix for both coordinates, the per-panel rigid fit, the flip guard
+        and the grain re-alignment; the Jacobians of the next iterate are
+        carried through the re-alignment's rotation, so only two sparse
+        products per iteration touch the triangles.
+
+        Parameters
+        ----------
+        K : (f, 2, 2) intrinsic offsets of the targets; c_weft, c_warp : (f,) target scales.
+        start : (n, 2) first iterate (default: the flattening stretched by the targets).
+        positions : (N, 3) the body the result is reported on (default: the reference).
+        poses : adaptation (from :meth:`pose_demands`): the feedback then aims, per
+            triangle, at the larger of the design ease and what every pose demands
+            along the pattern's *current* weft/warp directions (Eq. material-scale
+            evaluated where the metric measures it), with the :class:`~.config.Adaptation`
+            gain, iterations and bounds.
+        plan : the seam plan (default: :meth:`plan_seams` of these targets).
+        config : this call's configuration (default: the solver's).
+        """
+        cfg = config or self.config
+        if config is not None:
+            cfg.check()
+        fb, ad = cfg.feedback, cfg.adaptation
+        plan = plan if plan is not None else self.plan_seams(K, c_weft, c_warp, cfg)
+        t0 = time.perf_counter()
+        lu, pin = self.factorisation(cfg, plan)
+        a = self.area_weights(cfg)
+        W2 = np.array([1.0, cfg.weights.warp_column ** 2])
+        U = scaled_start(self.blocks, c_weft, c_warp) if start is None else start.copy()
+        pos = self.ref_positions if positions is None else positions
+        nf = len(self.gfaces)
+        corr_w = np.ones(nf)
+        corr_g = np.ones(nf)
+        energies = []
+        backtracks = 0
+        adapting = poses is not None
+        gain_w = max(fb.weft, ad.gain) if adapting else fb.weft
+        gain_g = max(fb.warp, ad.gain) if adapting else fb.warp
+        n_it = max(int(cfg.iterations), int(ad.min_iterations)) if adapting else int(cfg.iterations)
+        hi = ad.ceiling if adapting else fb.ceiling
+        step = ad.step if adapting else fb.step
+        model = cfg.rest_shape.model
+        tg = rest_targets(K, c_weft, c_warp, model)
+        Kc = components(K)
+        aw = (a * W2[0], a * W2[1])
+        M = self.jacobians(U)
+        s_cur = None
+        local_state = {}
+        integral = np.zeros(len(self.seams.edge_start))
+        lam_ease, lam_reg = cfg.weights.ease, cfg.weights.regulariser
+        for it in range(n_it):
+            report(progress, it / n_it, f"optimizing pattern: iteration {it + 1}/{n_it}")
+            if (gain_w > 0 or gain_g > 0) and it >= fb.from_iteration:
+                # move the targets by the achieved/target ratio: the linear solve then
+                # lands on the wanted rho-hat wherever curvature allows it
+                rw, rg = scales_of_offsets(M, Kc)
+                goal_w, goal_g = c_weft, c_warp
+                if adapting:
+                    goal_w, goal_g = poses["ease_weft"].copy(), poses["ease_warp"].copy()
+                    for Kp in poses["offsets"]:
+                        # stretch of the pose along the current weft/warp: rho-hat on the reference
+                        # over rho-hat on the pose
+                        pw, pg = scales_of_offsets(M, Kp)
+                        with np.errstate(divide="ignore", invalid="ignore"):
+                            goal_w = np.fmax(goal_w, poses["margin"] * rw / pw / poses["eps_weft"])
+                            goal_g = np.fmax(goal_g, poses["margin"] * rg / pg / poses["eps_warp"])
+                ok = np.isfinite(rw) & np.isfinite(rg) & (rw > 0) & (rg > 0) & np.isfinite(goal_w) & np.isfinite(goal_g)
+                if gain_w > 0:
+                    corr_w[ok] *= np.clip((goal_w[ok] / rw[ok]) ** gain_w, 1 - step, 1 + step)
+                if gain_g > 0:
+                    corr_g[ok] *= np.clip((goal_g[ok] / rg[ok]) ** gain_g, 1 - step, 1 + step)
+                np.clip(corr_w, fb.floor, hi, out=corr_w)
+                np.clip(corr_g, fb.floor, hi, out=corr_g)
+                tg = rest_targets(K, c_weft * corr_w, c_warp * corr_g, model)
+            RT, Te = local_step(cfg, M, tg, W2, local_state)
+            energies.append(float(np.sum(a * sum(W2[k % 2] * (M[k] - RT[k]) ** 2 for k in range(4)))))
+            # B = lambda_ease T + lambda_reg R T: one right-hand side for both terms (same weights)
+            B = [lam_ease * Te[k] + lam_reg * RT[k] for k in range(4)]
+            rhs = np.empty((self.n, 2))
+            rhs[:, 0] = self._GxT @ (aw[0] * B[0]) + self._GyT @ (aw[1] * B[1])
+            rhs[:, 1] = self._GxT @ (aw[0] * B[2]) + self._GyT @ (aw[1] * B[3])
+            rhs += seam_rhs(self.seams, U, cfg, plan, integral)
+            rhs += pin * U
+            U_new = lu(rhs)
+            # the step's rigid part per panel carries no strain: remove it so that the flip
+            # guard only ever pulls back the local part of the step
+            U_new = rigid_align(self.blocks, U_new, U)
+            U, nb, s_cur = flip_guard(self.blocks, U, U_new, s_cur)
+            backtracks += nb
+            M = self.jacobians(U)
+            if cfg.realign_grain:
+                U, M = realign_grain(self.blocks, U, M)
+        report(progress, 1.0, "pattern optimized")
+        out_uv, tw, tgw, xyz = {}, {}, {}, {}
+        f0 = 0
+        for pd in self.panels:
+            out_uv[pd.name] = U[pd.offset:pd.offset + pd.n].copy()
+            tw[pd.name] = np.asarray(c_weft[f0:f0 + len(pd.faces)], float).copy()
+            tgw[pd.name] = np.asarray(c_warp[f0:f0 + len(pd.faces)], float).copy()
+            xyz[pd.name] = pos[pd.vertex_ids]
+            f0 += len(pd.faces)
+        return SolveResult(out_uv, tw, tgw, xyz, time.perf_counter() - t0, n_it, backtracks, energies, plan.gathered)

@@ -1,0 +1,236 @@
+"""The pieces of one local-global iteration, on the stacked panels (:class:`.panels.PanelBlocks`).
+
+- :func:`local_step`: the regulariser's rest shapes (best rotation per triangle, closed form).
+- :func:`rigid_align`: a step's rigid part removed per panel.
+- :func:`flip_guard`: vertices of triangles that would flip step back locally.
+- :func:`realign_grain`: every panel turned so its voted grain is +y.
+- :func:`scaled_start`: the initial flattening stretched by each panel's mean targets.
+
+Jacobians ``M`` are 4 (f,) arrays m00, m01, m10, m11 (pattern coordinate
+``i`` along initial axis ``j``); 2x2 targets likewise (:func:`core.geom.strain.components`).
+"""
+from __future__ import annotations
+
+from typing import List, Optional, Tuple
+
+import numpy as np
+
+from ..geom.mesh import signed_areas_2d
+from ..geom.strain import components
+from .config import SolverConfig
+from .panels import PanelBlocks
+
+#: Rounds of local step-halving before a panel takes a uniformly shortened step (flip guard).
+GUARD_ROUNDS = 40
+#: Halvings of that uniform step before the panel keeps its previous iterate.
+GUARD_UNIFORM_ROUNDS = 30
+#: Samples of the step fraction along which the guard looks for the first area below the floor.
+GUARD_SAMPLES = 32
+
+
+def turn(P: np.ndarray, c: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Rows of ``P`` (n, 2) turned counter-clockwise by per-row angles with cosines ``c`` and sines ``s``."""
+    out = np.empty_like(P)
+    out[:, 0] = c * P[:, 0] - s * P[:, 1]
+    out[:, 1] = s * P[:, 0] + c * P[:, 1]
+    return out
+
+
+def local_step(config: SolverConfig, M: list, tg: dict, W2: np.ndarray, state: dict) -> Tuple[list, list]:
+    """Rest shapes ``D R K'`` of the regulariser (best 2x2 rotations, all triangles at once) and the ease target.
+
+    ``tg``: :func:`core.pattern.targets.rest_targets` (its derived products
+    are cached in it under ``"_k"``). ``W2`` (2,): the column weights. With
+    ``rest_shape.warp_slack`` the rest shape's warp row is also scaled by the
+    best factor ``s`` within ``[1/(1+slack), 1+slack]`` (free warp stretch),
+    and so is the ease target; ``s`` alternates with ``R`` across iterations
+    (kept in ``state``, one per solve). Returns (RT, T) as component lists.
+
+    The rotation minimises ``|Omega^1/2 (M - D R K') W^1/2|^2`` (``Omega =
+    diag(1, warp_row)``): ``f(theta) = -2 (x cos + y sin) + p cos 2theta
+    + q sin 2theta + const`` with ``x``, ``y`` the trace and skew parts of
+    ``A = D Omega M W K'^T`` and ``p``, ``q`` from ``Delta = (d0^2 - omega d1^2) / 2``
+    and ``C = K' W K'^T``. The polar angle of ``A`` is exact when ``Delta`` or
+    the anisotropy of ``C`` vanishes; one Newton step refines it otherwise.
+    """
+    rest = config.rest_shape
+    D, Kr = tg["reg"]
+    if "_k" not in tg:
+        k = components(Kr)
+        tg["_k"] = (k, W2[0] * k[0] ** 2 + W2[1] * k[1] ** 2 - W2[0] * k[2] ** 2 - W2[1] * k[3] ** 2,
+                    W2[0] * k[0] * k[2] + W2[1] * k[1] * k[3], np.ascontiguousarray(D[:, 0]),
+                    np.ascontiguousarray(D[:, 1]), components(tg["T"]))
+    k, Cdiff, C01, d0, d1, T = tg["_k"]
+    free = rest.warp_slack > 0
+    sw = state.get("sw") if free else None
+    dw = d1 if sw is None else d1 * sw
+    om = rest.warp_row
+    m0, m1, m2, m3 = W2[0] * M[0], W2[1] * M[1], W2[0] * M[2], W2[1] * M[3]
+    x = d0 * (m0 * k[0] + m1 * k[1]) + om * dw * (m2 * k[2] + m3 * k[3])
+    y = om * dw * (m2 * k[0] + m3 * k[1]) - d0 * (m0 * k[2] + m1 * k[3])
+    r = np.hypot(x, y)
+    ok = r > 0
+    rs = np.where(ok, r, 1.0)
+    c, sn = np.where(ok, x / rs, 1.0), np.where(ok, y / rs, 0.0)
+    delta = 0.5 * (d0 * d0 - om * dw * dw)
+    if np.any(delta != 0):
+        p, q = delta * Cdiff, -2.0 * delta * C01
+        c2, s2 = c * c - sn * sn, 2.0 * c * sn
+        g1 = 2.0 * (x * sn - y * c) - 2.0 * p * s2 + 2.0 * q * c2
+        g2 = 2.0 * r - 4.0 * p * c2 - 4.0 * q * s2
+        step = np.where(g2 > 0, -g1 / np.where(g2 > 0, g2, 1.0), 0.0)
+        nrm = np.sqrt(1.0 + step * step)
+        c, sn = (c - sn * step) / nrm, (sn + c * step) / nrm
+    rk = [c * k[0] - sn * k[2], c * k[1] - sn * k[3], sn * k[0] + c * k[2], sn * k[1] + c * k[3]]
+    if free:
+        lo, hi = 1.0 / (1.0 + rest.warp_slack), 1.0 + rest.warp_slack
+        p0, p1 = d1 * rk[2], d1 * rk[3]
+        sw = np.clip((m2 * p0 + m3 * p1) / np.maximum(W2[0] * p0 * p0 + W2[1] * p1 * p1, 1e-300), lo, hi)
+        state["sw"] = sw
+        RT = [d0 * rk[0], d0 * rk[1], d1 * sw * rk[2], d1 * sw * rk[3]]
+        se = np.clip((m2 * T[2] + m3 * T[3]) / np.maximum(W2[0] * T[2] ** 2 + W2[1] * T[3] ** 2, 1e-300), lo, hi)
+        return RT, [T[0], T[1], T[2] * se, T[3] * se]
+    return [d0 * rk[0], d0 * rk[1], d1 * rk[2], d1 * rk[3]], T
+
+
+def rigid_align(blocks: PanelBlocks, U_new: np.ndarray, U_old: np.ndarray) -> np.ndarray:
+    """``U_new`` (n, 2) moved rigidly per panel onto ``U_old`` (area-free Kabsch, all panels at once)."""
+    off, cnt = blocks.vertex_offsets, blocks.vertex_counts[:, None]
+    co, cn = np.add.reduceat(U_old, off) / cnt, np.add.reduceat(U_new, off) / cnt
+    rep = blocks.per_vertex
+    Pc, Qc = U_old - rep(co), U_new - rep(cn)
+    h = np.add.reduceat(Qc[:, [0, 0, 1, 1]] * Pc[:, [0, 1, 0, 1]], off)   # H = Qc^T Pc per panel
+    th = np.arctan2(h[:, 1] - h[:, 2], h[:, 0] + h[:, 3])
+    return turn(Qc, rep(np.cos(th)), rep(np.sin(th))) + rep(co)
+
+
+def face_areas(blocks: PanelBlocks, U: np.ndarray, faces: Optional[np.ndarray] = None) -> np.ndarray:
+    """Signed 2D areas of all triangles (or of ``faces``), as :func:`core.geom.mesh.signed_areas_2d`,
+    on the cached face columns."""
+    F0, F1, F2 = blocks.face_columns if faces is None else (c[faces] for c in blocks.face_columns)
+    u, v = U[:, 0], U[:, 1]
+    u0, v0 = u[F0], v[F0]
+    ax, ay = u[F1] - u0, v[F1] - v0
+    bx, by = u[F2] - u0, v[F2] - v0
+    return 0.5 * (ax * by - ay * bx)
+
+
+def flip_guard(blocks: PanelBlocks, U_old: np.ndarray, U_new: np.ndarray, s_old: Optional[np.ndarray] = None):
+    """Keep the step flip-free: vertices of triangles that would flip step back locally.
+
+    Every vertex starts with the full step; the step of the vertices of
+    each triangle that would flip (or lose more than half its area when
+    already near-degenerate) is cut, and only the triangles around the
+    moved vertices are checked again. As a vertex's step goes to 0 it
+    returns to the previous, flip-free iterate, so this terminates; a
+    panel not fixed in :data:`GUARD_ROUNDS` rounds takes a uniformly
+    shortened step instead (or keeps its previous iterate).
+    ``s_old``: the signed areas of ``U_old`` when known (they survive
+    rigid motions, so each iteration passes on its own).
+    Returns (U, number of halvings, signed areas of U or None).
+    """
+    F = blocks.faces
+    n = blocks.n
+    if s_old is None:
+        s_old = face_areas(blocks, U_old)
+    floor = np.minimum(blocks.area_floor, 0.5 * s_old)
+    alpha = np.ones(n)
+    U = U_new.copy()
+    halvings = 0
+    faces = None
+    D = U_new - U_old
+    for _ in range(GUARD_ROUNDS):
+        if faces is None:
+            s_all = face_areas(blocks, U)
+            bad = np.flatnonzero(s_all <= floor)
+            if bad.size == 0:
+                return U, halvings, s_all
+        else:
+            s = face_areas(blocks, U, faces)
+            bad = faces[s <= floor[faces]]
+            if bad.size == 0:
+                return U, halvings, None
+        # largest common step fraction t of the bad triangle's vertices (their current
+        # fractions scaled by t) keeping its area above the floor: a quadratic in t
+        Fb = F[bad]
+        P0 = U_old[Fb]
+        Dd = alpha[Fb][:, :, None] * D[Fb]
+        e1, e2 = P0[:, 1] - P0[:, 0], P0[:, 2] - P0[:, 0]
+        f1, f2 = Dd[:, 1] - Dd[:, 0], Dd[:, 2] - Dd[:, 0]
+        cr = lambda a, b: a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+        a0 = 0.5 * cr(e1, e2) - floor[bad]
+        a1 = 0.5 * (cr(e1, f2) + cr(f1, e2))
+        a2 = 0.5 * cr(f1, f2)
+        t = np.full(len(bad), 0.5)
+        ts = np.linspace(0.0, 1.0, GUARD_SAMPLES + 1)[1:]
+        # first sample where the area would reach the floor; step back one sample (robust, vectorised)
+        vals = a0[:, None] + a1[:, None] * ts[None, :] + a2[:, None] * ts[None, :] ** 2
+        hit = np.argmax(vals <= 0, axis=1)
+        has = np.any(vals <= 0, axis=1)
+        t[has] = np.where(hit[has] > 0, ts[np.maximum(hit[has] - 1, 0)], 0.0) * 0.9
+        verts_t = np.repeat(t, 3)
+        vids = Fb.ravel()
+        scale = np.ones(n)
+        np.minimum.at(scale, vids, np.maximum(verts_t, 0.0))
+        verts = np.unique(vids)
+        # never stall: every vertex of a bad triangle at least halves its step
+        alpha[verts] *= np.minimum(scale[verts], 0.5)
+        halvings += 1
+        U[verts] = U_old[verts] + alpha[verts, None] * D[verts]
+        faces = np.unique(blocks.vertex_faces[verts].indices)
+    s = signed_areas_2d(U, F)
+    for pd in blocks.panels:
+        sl, fs = blocks.panel_slices(pd)
+        if not np.any(s[fs] <= floor[fs]):
+            continue
+        # fall back to a uniform step of the whole panel towards the locally shortened one
+        beta, Ul = 0.5, U[sl].copy()
+        U[sl] = U_old[sl]
+        for _ in range(GUARD_UNIFORM_ROUNDS):
+            cand = U_old[sl] + beta * (Ul - U_old[sl])
+            halvings += 1
+            if np.all(signed_areas_2d(cand, pd.faces) > floor[fs]):
+                U[sl] = cand
+                break
+            beta *= 0.5
+    return U, halvings, None
+
+
+def scaled_start(blocks: PanelBlocks, c_weft: np.ndarray, c_warp: np.ndarray) -> np.ndarray:
+    """The initial flattening stretched by each panel's area-weighted mean targets (n, 2).
+
+    A flip-free affine image of a flip-free flattening, already close to a
+    uniform-ease solution: the first global steps stay small, so the flip
+    guard rarely has to act even at rho = 2.
+    """
+    U = blocks.uv0.copy()
+    for pd in blocks.panels:
+        sl, fs = blocks.panel_slices(pd)
+        w = np.abs(pd.area0)
+        sx = float(np.sum(w * c_weft[fs]) / np.sum(w))
+        sy = float(np.sum(w * c_warp[fs]) / np.sum(w))
+        c = U[sl].mean(axis=0)
+        U[sl] = (U[sl] - c) * np.array([sx, sy]) + c
+    return U
+
+
+def realign_grain(blocks: PanelBlocks, U: np.ndarray, M: List[np.ndarray]):
+    """Rotate every panel about its centroid so its area-weighted grain vote is +y.
+
+    ``M``: the Jacobians of ``U``; returns the rotated ``U`` and its
+    Jacobians (the same rotation applied to the rows).
+    """
+    wx, wy = blocks.warp0[:, 0], blocks.warp0[:, 1]
+    ix, iy = M[0] * wx + M[1] * wy, M[2] * wx + M[3] * wy  # current 2D image of the warp
+    nrm = np.hypot(ix, iy)
+    w = np.where(nrm > 0, blocks.warp_vote, 0.0) / np.maximum(nrm, 1e-300)
+    vx = np.add.reduceat(w * ix, blocks.face_offsets)
+    vy = np.add.reduceat(w * iy, blocks.face_offsets)
+    theta = -np.where((vx == 0) & (vy == 0), 0.0, np.arctan2(-vx, vy))
+    c, sn = np.cos(theta), np.sin(theta)
+    rep = blocks.per_vertex
+    ctr = rep(np.add.reduceat(U, blocks.vertex_offsets) / blocks.vertex_counts[:, None])
+    U = turn(U - ctr, rep(c), rep(sn)) + ctr
+    ct, st = np.repeat(c, blocks.face_counts), np.repeat(sn, blocks.face_counts)
+    M = [ct * M[0] - st * M[2], ct * M[1] - st * M[3], st * M[0] + ct * M[2], st * M[1] + ct * M[3]]
+    return U, M

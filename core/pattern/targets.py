@@ -1,0 +1,70 @@
+"""Per-triangle targets of the optimizer (paper Eqs. ref-scale, transfer-scale, adapt-scale, material-scale).
+
+With ``K`` (f, 2, 2) the intrinsic 2D coordinates of a body's 3D weft/warp
+offsets (:func:`core.geom.strain.intrinsic_offsets`) and target scales
+``c = |sigma*_2D| / |sigma_3D|``, ``D = diag(c_weft, c_warp)``:
+
+- reference / transfer: ``c = (rho_weft, 1)`` on the reference or the target body;
+- adaptation: per direction ``max(rho sigma_ref, max_i (1 + margin) sigma_i / eps)`` over the poses.
+"""
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from ..errors import PatternError
+
+
+def rest_targets(K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray, model: str) -> dict:
+    """Ease target ``T`` (f, 2, 2) and the regulariser's rest shape ``diag(D) R K'``.
+
+    ``model == "prestretch"`` (improved): ``T = diag(c) K``, the scales act
+    along the pattern's weft/warp axes after the rotation (``J = Q R^T
+    diag(1/c)``: exact weft scale and no shear for any local rotation
+    ``R``), and the rest shape is the pre-stretched ``diag(c) R K``.
+    ``"isometric"`` (paper, literal): ``T = K diag(c)``, the scales act on the
+    initial flattening's barycentric offsets, so a local rotation of a
+    stretched triangle turns its stretch off the weft (shear and compliance
+    error that grow with rho); the rest shape is the isometric ``R K``.
+    Returns ``{"T": T, "reg": (D (f, 2), K' (f, 2, 2))}``.
+    """
+    c = np.stack([c_weft, c_warp], axis=1)
+    if model == "prestretch":
+        return {"T": c[:, :, None] * K, "reg": (c, K)}
+    return {"T": K * c[:, None, :], "reg": (np.ones_like(c), K)}
+
+
+def reference_ease(design_ease: np.ndarray, ease=None) -> np.ndarray:
+    """The weft targets (f,) of a reference or transfer solve: the design's ``design_ease`` (f,), or
+    ``ease`` (a scalar or (f,): benchmarks sweep it) when given."""
+    if ease is None:
+        return design_ease.copy()
+    ease = np.broadcast_to(np.asarray(ease, float), design_ease.shape).copy()
+    if not np.all(np.isfinite(ease) & (ease > 0)):
+        raise PatternError("ease override: expected finite weft scales > 0")
+    return ease
+
+
+def adaptation_scales(ease: np.ndarray, len_weft: np.ndarray, len_warp: np.ndarray,
+                      pose_lengths: Sequence[tuple], eps_weft: float, eps_warp: float, margin: float):
+    """Target scales (c_weft, c_warp) (f,) of Eq. material-scale.
+
+    Parameters
+    ----------
+    ease : (f,) the design's weft ease.
+    len_weft, len_warp : (f,) the reference body's offset lengths |sigma_ref|.
+    pose_lengths : per pose the pair (len_weft, len_warp) (f,) on that pose.
+    eps_weft, eps_warp : the stretch tolerances (>= 1).
+    margin : fraction the pose demands are raised by before the tolerance applies.
+    """
+    want_w = ease * len_weft
+    want_g = 1.0 * len_warp
+    m = 1.0 + margin
+    for lwi, lgi in pose_lengths:
+        want_w = np.maximum(want_w, m * lwi / eps_weft)
+        want_g = np.maximum(want_g, m * lgi / eps_warp)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cw = np.where(len_weft > 0, want_w / len_weft, ease)
+        cg = np.where(len_warp > 0, want_g / len_warp, 1.0)
+    return cw, cg
