@@ -23,6 +23,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import numpy as np
 
 from ..errors import CutError
+from .incidence import VertexFaces, bary2, bary2_scalar
 
 SNAP = 1e-3          # relative snap distance on an edge / in a triangle (always)
 SNAP_SLIVER = 0.05   # a crossing this close to a free vertex (relative to the edge) snaps to it...
@@ -236,7 +237,7 @@ class CutMesh:
         he = F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
         fid = np.repeat(np.arange(len(F)), 3)
         self.he: Dict[int, int] = dict(zip(((he[:, 0] << 32) | he[:, 1]).tolist(), fid.tolist()))
-        self.vf = _VertexFaces(F, self.nv)
+        self.vf = VertexFaces(F, self.nv)
 
     # -- geometry ---------------------------------------------------------------------------
     def _to2d(self, P: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -249,7 +250,7 @@ class CutMesh:
         P = np.asarray(P)
         d = q[None] - self._p0[P]
         off = np.abs((d * self._n[P]).sum(-1)) <= tol * self._scale[P]
-        b = _bary2(self._to2d(P, np.broadcast_to(q, (len(P), 3))), self._ptri2[P])
+        b = bary2(self._to2d(P, np.broadcast_to(q, (len(P), 3))), self._ptri2[P])
         return off & (b.min(axis=1) >= -tol)
 
     def locate_in_parent(self, P: int, q: np.ndarray) -> Tuple[int, np.ndarray]:
@@ -260,7 +261,7 @@ class CutMesh:
         tri = self.F[faces]
         Pv = np.full(len(faces), P)
         c2 = np.stack([self._to2d(Pv, self._X[tri[:, k]]) for k in range(3)], axis=1)
-        b = _bary2(self._to2d(Pv, np.broadcast_to(q, (len(faces), 3))), c2)
+        b = bary2(self._to2d(Pv, np.broadcast_to(q, (len(faces), 3))), c2)
         k = int(np.argmax(b.min(axis=1)))
         return int(faces[k]), b[k]
 
@@ -318,7 +319,7 @@ class CutMesh:
                 qy = dx * bx + dy * by + dz * bz
                 ok = abs(dx * nx + dy * ny + dz * nz) <= 1e-6 * sc
                 if ok:
-                    b = _bary2py(qx, qy, T[0], T[1], T[2])
+                    b = bary2_scalar(qx, qy, T[0], T[1], T[2])
                     ok = min(b) >= -1e-6
                 q = (qx, qy, ok)
                 pq[P] = q
@@ -337,7 +338,7 @@ class CutMesh:
                 x, y, z = X[v].tolist()
                 dx, dy, dz = x - ox, y - oy, z - oz
                 pts.append((dx * ax + dy * ay + dz * az, dx * bx + dy * by + dz * bz))
-            bA, bu, bw = _bary2py(q[0], q[1], *pts)
+            bA, bu, bw = bary2_scalar(q[0], q[1], *pts)
             score = min(bu, bw)
             if best is None or score > best[0]:
                 best = (score, f, u, w, bA, bu, bw)
@@ -351,7 +352,7 @@ class CutMesh:
         d = target[None] - p0
         q = np.stack([np.einsum("ij,ij->i", d, e1), np.einsum("ij,ij->i", d, e2)], axis=1)
         off = np.abs(np.einsum("ij,ij->i", d, self._n[P])) <= 1e-6 * self._scale[P]
-        inside = _bary2(q, self._ptri2[P]).min(axis=1) >= -1e-6
+        inside = bary2(q, self._ptri2[P]).min(axis=1) >= -1e-6
         ok = off & inside
         faces, P, q, p0, e1, e2 = faces[ok], P[ok], q[ok], p0[ok], e1[ok], e2[ok]
         tri = self._F[faces]
@@ -360,7 +361,7 @@ class CutMesh:
         tri = np.take_along_axis(tri, idx, axis=1)
         D = self._X[tri] - p0[:, None, :]
         c2 = np.stack([np.einsum("ijk,ik->ij", D, e1), np.einsum("ijk,ik->ij", D, e2)], axis=2)
-        return faces, tri, _bary2(q, c2)
+        return faces, tri, bary2(q, c2)
 
     def trace(self, A: int, target: np.ndarray, line: int, allowed: set,
               target_vertex: Optional[int] = None, names=None) -> List[int]:
@@ -493,64 +494,7 @@ class CutMesh:
         self.cut_verts.setdefault(b, set()).add(line)
 
 
-class _VertexFaces:
-    """vertex -> set of incident faces, materialised per vertex on first use.
-
-    Every change of a vertex's incidence goes through ``self[v]``, so a set made
-    later from the initial arrays is still correct."""
-
-    def __init__(self, F: np.ndarray, nv: int):
-        flat = F.reshape(-1)
-        order = np.argsort(flat, kind="stable")
-        self._bounds = np.searchsorted(flat[order], np.arange(nv + 1))
-        self._faces = order // 3
-        self._n0 = nv
-        self._sets: Dict[int, set] = {}
-
-    def __getitem__(self, v: int) -> set:
-        s = self._sets.get(v)
-        if s is None:
-            s = set(self._faces[self._bounds[v]:self._bounds[v + 1]].tolist()) if v < self._n0 else set()
-            self._sets[v] = s
-        return s
-
-    def append(self, s: set) -> None:
-        pass    # new vertices start empty (made on first use)
-
-    def copy(self) -> "_VertexFaces":
-        other = object.__new__(_VertexFaces)
-        other.__dict__.update(self.__dict__)
-        other._sets = {k: set(v) for k, v in self._sets.items()}
-        return other
-
-
 def _name(names, line) -> str:
     if names is None:
         return f"#{line}"
     return repr(names[line])
-
-
-def _bary2py(qx, qy, a, b, c):
-    """Barycentric coordinates of the 2D point (qx, qy) in triangle a, b, c (plain floats)."""
-    v0x, v0y = b[0] - a[0], b[1] - a[1]
-    v1x, v1y = c[0] - a[0], c[1] - a[1]
-    v2x, v2y = qx - a[0], qy - a[1]
-    den = v0x * v1y - v1x * v0y
-    if abs(den) < 1e-300:
-        den = 1e-300
-    l1 = (v2x * v1y - v1x * v2y) / den
-    l2 = (v0x * v2y - v2x * v0y) / den
-    return 1.0 - l1 - l2, l1, l2
-
-
-def _bary2(q: np.ndarray, tri: np.ndarray) -> np.ndarray:
-    """Barycentric coordinates (k, 3) of 2D points q (k, 2) in triangles tri (k, 3, 2)."""
-    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
-    v0 = b - a
-    v1 = c - a
-    v2 = q - a
-    den = v0[:, 0] * v1[:, 1] - v1[:, 0] * v0[:, 1]
-    den = np.where(np.abs(den) < 1e-300, 1e-300, den)
-    l1 = (v2[:, 0] * v1[:, 1] - v1[:, 0] * v2[:, 1]) / den
-    l2 = (v0[:, 0] * v2[:, 1] - v2[:, 0] * v0[:, 1]) / den
-    return np.stack([1.0 - l1 - l2, l1, l2], axis=1)
