@@ -8,9 +8,10 @@ Steps: download the binary wheels of the core's dependencies for each
 platform (``pip download --only-binary=:all: --platform ... --python-version
 3.11``; pins from ``requirements.txt``; cached in ``.cache/wheels``); drop
 numpy (Blender ships its own); stage the extension (``__init__.py``,
-``blender_manifest.toml``, ``ease_addon/``, ``core/``, ``examples/designs/``)
-in ``build/extension`` with a generated manifest that lists the wheels and
-the platforms; then ``blender_ext.py build`` (``--split-platforms`` when
+``blender_manifest.toml``, ``ease_addon/``, ``core/`` with its package
+data: the body model and the design templates in ``core/data/``) in
+``build/extension`` with a generated manifest that lists the wheels and the
+platforms; then ``blender_ext.py build`` (``--split-platforms`` when
 building for several platforms: one zip per platform, each with only its
 wheels). The repository's own manifest is never rewritten.
 """
@@ -36,9 +37,10 @@ PLATFORM_TAGS = {
                     "macosx_10_9_universal2"],
     "windows-x64": ["win_amd64"],
 }
-# Not bundled: Blender ships numpy; bpy is Blender itself; pytest is for tests.
-NOT_BUNDLED = {"numpy", "bpy", "pytest"}
-SOURCES = ("__init__.py", "blender_manifest.toml", "ease_addon", "core", "examples/designs")
+# Not bundled: Blender ships numpy; bpy is Blender itself; pytest and setuptools are for tests and builds.
+NOT_BUNDLED = {"numpy", "bpy", "pytest", "setuptools"}
+# examples/designs is a link to core/data/designs in the checkout: the templates ship once, as package data.
+SOURCES = ("__init__.py", "blender_manifest.toml", "ease_addon", "core")
 SKIP = shutil.ignore_patterns("__pycache__", "*.pyc", "*.pyo", ".DS_Store", "*.egg-info", "cli.py.orig")
 
 
