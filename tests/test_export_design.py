@@ -4,7 +4,6 @@
 (``pattern.json``) to ``ease export``, which uses it when no ``--allowance`` is
 given. The end-to-end test measures the allowance in the written SVG.
 """
-import argparse
 import copy
 import json
 import re
@@ -16,7 +15,6 @@ import pytest
 
 from core.design.format import parse_design
 from core.errors import DesignError, EaseError, ExportError
-from core.export import cli as export_cli
 from core.export.allowance import resolve_allowance, seam_allowance
 from core.export.boundary import piece_loops
 from core.geom.polygon import ray_hit
@@ -77,17 +75,9 @@ def test_seam_keys_pick_the_most_specific_entry():
     assert seam_allowance(w, "shorts.inseam") == 0.01
 
 
-def _parser():
-    from core.pattern import cli as pattern_cli
-    p = argparse.ArgumentParser(prog="ease")
-    sub = p.add_subparsers(dest="command")
-    pattern_cli.add_parser(sub)
-    export_cli.add_parser(sub)
-    return p
-
-
 def _run(argv):
-    args = _parser().parse_args(argv)
+    from core.cli import build_parser
+    args = build_parser().parse_args(argv)
     return args.func(args)
 
 
