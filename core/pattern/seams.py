@@ -27,6 +27,7 @@ from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 import numpy as np
 import scipy.sparse as sp
 
+from ..cut.types import seam_names
 from ..design.naming import mirrored_name
 from ..errors import PatternError
 from .config import SolverConfig, gather_threshold
@@ -39,7 +40,6 @@ def seam_is_gathered(seam: str, gathered: Sequence[str]) -> bool:
     line in any garment (``armhole_left``), as export allowances do
     (:func:`core.cut.types.seam_names`); ``"*"`` names every seam.
     """
-    from ..cut.types import seam_names
     return "*" in gathered or any(n in gathered for n in seam_names(seam))
 
 
