@@ -26,9 +26,7 @@ from ..geom.layout import grain_arrows, grain_line, grain_rotation
 from ..geom.polygon import MITRE_LIMIT, ray_hit
 from ..pattern.types import Pattern, PatternPanel
 from ..progress import report
-# DEFAULT_ALLOWANCE and DEFAULT_HEM are re-exported for callers that still import them from here
-from .allowance import (DEFAULT_ALLOWANCE, DEFAULT_HEM, allowance_text, edge_allowances,  # noqa: F401
-                        fold_ids, piece_cut_lines, resolve_allowance)
+from .allowance import allowance_text, edge_allowances, fold_ids, piece_cut_lines, resolve_allowance
 from .boundary import edge_table, piece_loops
 from .notches import DEFAULT_NOTCH_SPACING, Notch, piece_notches
 
