@@ -6,7 +6,7 @@ import pytest
 
 from core.cli import main
 from core.drape.output import FILES, read_ply_vertices
-from core.drape.synthetic import tube_skirt
+from drape_synth import tube_skirt
 from core.pattern.io import save_pattern
 
 

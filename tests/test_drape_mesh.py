@@ -2,9 +2,10 @@
 import numpy as np
 import pytest
 
+from drape_synth import tube_skirt
+
 from core.drape.mesh import (build_cloth, colour_order, dihedral_angles, greedy_colouring, grain_frame,
-                             interior_edges, rest_matrices, tethers)
-from core.drape.synthetic import tube_skirt
+                             interior_edges, rest_matrices, tethers, two_rings)
 from core.errors import DrapeError
 
 
@@ -89,3 +90,12 @@ def test_bad_patterns():
     p.panels = []
     with pytest.raises(DrapeError, match="no panels"):
         build_cloth(p)
+
+
+def test_two_rings_are_the_fabric_neighbours():
+    # a strip of triangles 0-1-2-3-4-5 (each triangle (k, k+1, k+2))
+    faces = np.array([[k, k + 1, k + 2] for k in range(4)])
+    start, idx = two_rings(faces, 6)
+    ring0 = set(idx[start[0]:start[1]].tolist())
+    assert ring0 == {0, 1, 2, 3, 4}  # 1 and 2 share a triangle with 0; 3 and 4 are one more step away
+    assert 5 not in ring0

@@ -1,12 +1,13 @@
 """Fit measurements after the drape (core.metrics.drape), on exact synthetic geometry."""
 import numpy as np
 import pytest
+from drape_synth import HIP_RADIUS, radius, revolution_body, tube_skirt
 
 from core.drape import drape
 from core.drape.mesh import build_cloth
-from core.drape.synthetic import HIP_RADIUS, radius, revolution_body, tube_skirt
+from core.geom.mesh import vertex_normals
 from core.metrics.drape import (covered_body_vertices, drape_metrics, penetration, post_drape_gap, seam_gap,
-                                seam_side_distance, summary, vertex_normals)
+                                seam_side_distance, summary)
 
 
 @pytest.fixture(scope="module")
@@ -25,6 +26,7 @@ def _offset_skirt(skirt, delta):
 
 
 def test_vertex_normals_point_outward(body):
+    # the directions of the gap rays
     v, f = body
     n = vertex_normals(v, f)
     side = (v[:, 2] > 0.3) & (v[:, 2] < 1.3)

@@ -1,10 +1,17 @@
 """Draping a sewing pattern on the body: our own Gauss-Seidel XPBD in Warp.
 
 ``drape(pattern, body_vertices, body_faces, material=None, options=None,
-progress=None) -> DrapeResult``. Warp is imported lazily (on the first drape),
-with its kernel cache in the project's ``.cache/warp``.
+progress=None) -> DrapeResult`` (:mod:`.simulate`) runs a whole drape; for
+frame-by-frame control, :class:`DrapeSolver` (:mod:`.xpbd`) precomputes once
+and ``solver.step(state)`` advances a :class:`DrapeState` by one frame, with
+:mod:`.schedule` deciding growth, settling and divergence. Warp is imported
+lazily (on the first solver).
 """
 from .materials import PRESETS, Material, get_material
-from .xpbd import DrapeOptions, DrapeResult, drape
+from .options import DrapeOptions
+from .result import DrapeResult
+from .simulate import drape
+from .xpbd import DrapeSolver, DrapeState
 
-__all__ = ["drape", "DrapeOptions", "DrapeResult", "Material", "PRESETS", "get_material"]
+__all__ = ["drape", "DrapeSolver", "DrapeState", "DrapeOptions", "DrapeResult", "Material", "PRESETS",
+           "get_material"]

@@ -1,4 +1,4 @@
-"""Warp kernels of the drape and of its fit measurements (one module: one compile).
+"""Warp kernels of the drape (one module: one compile; the body-contact search is :mod:`core.geom.queries`).
 
 XPBD (Macklin et al. 2016) with small steps (Macklin et al. 2019): each
 substep predicts positions, projects every constraint once, Gauss-Seidel
@@ -16,17 +16,7 @@ discrete-shell weight 3|e|^2/(A_a+A_b).
 """
 from __future__ import annotations
 
-import os
-from pathlib import Path
-
-# The kernel cache lives in the project so only the first run compiles.
-os.environ.setdefault("WARP_CACHE_PATH", str(Path(__file__).resolve().parents[2] / ".cache" / "warp"))
-
-import warp as wp  # noqa: E402
-
-# Keep the CLI output to our own lines: Warp's init banner and module-load notes are info-level.
-if getattr(wp.config, "log_level", None) == getattr(wp, "LOG_INFO", 20):
-    wp.config.log_level = getattr(wp, "LOG_WARNING", 30)
+from ..geom.queries import wp  # Warp, set up once for the package (kernel cache, log level)
 
 
 @wp.kernel
@@ -54,6 +44,19 @@ def _project(x: wp.array(dtype=wp.vec3), i: int, j: int, k: int, wi: float, wj: 
         x[k] = x[k] + gk * (wk * dl)
 
 
+@wp.func
+def _project_axis(x: wp.array(dtype=wp.vec3), i: int, j: int, k: int, wi: float, wj: float, wk: float,
+                  d0: float, d1: float, rest: float, alpha: float):
+    """Stretch along one grain direction, C = |F c| - rest, where c = (d0, d1) is its rest_inv column."""
+    e1 = x[j] - x[i]
+    e2 = x[k] - x[i]
+    f = e1 * d0 + e2 * d1
+    l = wp.length(f)
+    if l > 1.0e-12:
+        n = f / l
+        _project(x, i, j, k, wi, wj, wk, l - rest, n * d0, n * d1, alpha)
+
+
 @wp.kernel
 def solve_stretch(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
                   tri: wp.array2d(dtype=int), rest_inv: wp.array(dtype=wp.mat22),
@@ -73,22 +76,8 @@ def solve_stretch(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
     wk = inv_mass[k]
     d = rest_inv[t]
     a = area[t]
-    # weft
-    e1 = x[j] - x[i]
-    e2 = x[k] - x[i]
-    fa = e1 * d[0, 0] + e2 * d[1, 0]
-    la = wp.length(fa)
-    if la > 1.0e-12:
-        n = fa / la
-        _project(x, i, j, k, wi, wj, wk, la - rest_a, n * d[0, 0], n * d[1, 0], inv_dt2 / (k_weft * a))
-    # warp
-    e1 = x[j] - x[i]
-    e2 = x[k] - x[i]
-    fb = e1 * d[0, 1] + e2 * d[1, 1]
-    lb = wp.length(fb)
-    if lb > 1.0e-12:
-        n = fb / lb
-        _project(x, i, j, k, wi, wj, wk, lb - rest_b, n * d[0, 1], n * d[1, 1], inv_dt2 / (k_warp * a))
+    _project_axis(x, i, j, k, wi, wj, wk, d[0, 0], d[1, 0], rest_a, inv_dt2 / (k_weft * a))  # weft
+    _project_axis(x, i, j, k, wi, wj, wk, d[0, 1], d[1, 1], rest_b, inv_dt2 / (k_warp * a))  # warp
     # shear: weft and warp images stay orthogonal
     e1 = x[j] - x[i]
     e2 = x[k] - x[i]
@@ -271,27 +260,6 @@ def apply_delta(x: wp.array(dtype=wp.vec3), dx: wp.array(dtype=wp.vec3)):
 
 
 @wp.kernel
-def find_contacts(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float), body: wp.uint64,
-                  max_dist: float, point: wp.array(dtype=wp.vec3), normal: wp.array(dtype=wp.vec3),
-                  active: wp.array(dtype=int)):
-    """Closest body point and the plane of its triangle, for particles within max_dist.
-
-    Substeps then resolve contact against this plane (refreshed every few
-    substeps): the body is smooth on the scale the cloth moves in between.
-    """
-    i = wp.tid()
-    active[i] = 0
-    if inv_mass[i] == 0.0:
-        return
-    q = wp.mesh_query_point_sign_normal(body, x[i], max_dist)
-    if not q.result:
-        return
-    point[i] = wp.mesh_eval_position(body, q.face, q.u, q.v)
-    normal[i] = wp.mesh_eval_face_normal(body, q.face)
-    active[i] = 1
-
-
-@wp.kernel
 def collide_body(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
                  point: wp.array(dtype=wp.vec3), normal: wp.array(dtype=wp.vec3),
                  active: wp.array(dtype=int), thickness: float, friction: float):
@@ -319,43 +287,3 @@ def update_velocity(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
                     v: wp.array(dtype=wp.vec3), inv_dt: float):
     i = wp.tid()
     v[i] = (x[i] - x_prev[i]) * inv_dt
-
-
-# --- measurements -----------------------------------------------------------
-
-@wp.kernel
-def ray_gap(origins: wp.array(dtype=wp.vec3), dirs: wp.array(dtype=wp.vec3), mesh: wp.uint64,
-            max_t: float, gap: wp.array(dtype=float)):
-    i = wp.tid()
-    q = wp.mesh_query_ray(mesh, origins[i], dirs[i], max_t)
-    if q.result:
-        gap[i] = q.t
-    else:
-        gap[i] = 0.0
-
-
-@wp.kernel
-def signed_distance(points: wp.array(dtype=wp.vec3), mesh: wp.uint64, max_dist: float,
-                    out: wp.array(dtype=float)):
-    """Signed distance to ``mesh`` (negative inside), +max_dist when farther."""
-    i = wp.tid()
-    p = points[i]
-    q = wp.mesh_query_point_sign_normal(mesh, p, max_dist)
-    if q.result:
-        c = wp.mesh_eval_position(mesh, q.face, q.u, q.v)
-        out[i] = wp.length(p - c) * q.sign
-    else:
-        out[i] = max_dist
-
-
-@wp.kernel
-def unsigned_distance(points: wp.array(dtype=wp.vec3), mesh: wp.uint64, max_dist: float,
-                      out: wp.array(dtype=float)):
-    """Distance to ``mesh``, +max_dist when farther."""
-    i = wp.tid()
-    p = points[i]
-    q = wp.mesh_query_point_no_sign(mesh, p, max_dist)
-    if q.result:
-        out[i] = wp.length(p - wp.mesh_eval_position(mesh, q.face, q.u, q.v))
-    else:
-        out[i] = max_dist

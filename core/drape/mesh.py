@@ -471,3 +471,27 @@ def tethers(faces: np.ndarray, rest_inv: np.ndarray, pinned: np.ndarray, bends: 
     anchor[ok] = source[ok]
     length[ok] = dist[ok]
     return anchor, length
+
+
+def two_rings(faces: np.ndarray, n: int) -> tuple:
+    """The particles within two mesh rings of each particle (the self-collision's fabric neighbours).
+
+    Parameters
+    ----------
+    faces : (T, 3) int, particle triangles.
+    n : number of particles.
+
+    Returns
+    -------
+    starts : (n + 1,) int64, CSR row starts; indices : int64, the neighbours of
+    particle i are ``indices[starts[i]:starts[i + 1]]`` (sorted, itself included).
+    """
+    from scipy.sparse import coo_matrix
+    f = np.asarray(faces, dtype=np.int64)
+    rows = np.concatenate([f[:, 0], f[:, 1], f[:, 2], f[:, 1], f[:, 2], f[:, 0]])
+    cols = np.concatenate([f[:, 1], f[:, 2], f[:, 0], f[:, 0], f[:, 1], f[:, 2]])
+    a = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n)).tocsr()
+    a.data[:] = 1.0
+    r = (a + a @ a).tocsr()
+    r.sort_indices()
+    return r.indptr.astype(np.int64), r.indices.astype(np.int64)

@@ -1,7 +1,9 @@
 """Files of a drape: OBJ, PLY (strain and gap per vertex), NPZ, report, preview PNG.
 
 Every writer returns bytes or writes through :mod:`core.fileio`, so a folder
-is filled atomically by :func:`write_drape`.
+is filled atomically by :func:`write_drape`. The fit measurements are the
+caller's (:mod:`core.metrics.drape` comes after the stages): the writers take
+the per-vertex gap and the JSON-ready figures as given.
 """
 from __future__ import annotations
 
@@ -12,30 +14,6 @@ import numpy as np
 from ..fileio import output_dir, write_bytes, write_json, write_text
 
 FILES = ("garment.obj", "garment.ply", "drape.npz", "drape_report.json", "preview.png")
-
-
-def body_of_pattern(pattern) -> tuple:
-    """The body instance a pattern was solved on: (vertices (V, 3), faces (F, 3)).
-
-    ``pattern.body["model"] == "revolution"`` is the synthetic test body of
-    :mod:`core.drape.synthetic`; anything else goes through :func:`core.body.load_body`.
-    """
-    spec = dict(pattern.body or {})
-    model = spec.get("model") or "anny"
-    if model == "revolution":
-        from .synthetic import revolution_body
-        return revolution_body()
-    from ..body import load_body
-    body = load_body(model)
-    shape = spec.get("shape") or None
-    if isinstance(shape, str):  # a size name (XS..XL)
-        from ..body.sizes import size_shape
-        shape = size_shape(body, shape)
-    pose = spec.get("pose")
-    if isinstance(pose, dict):
-        pose = {k: np.asarray(v, dtype=float) for k, v in pose.items()}
-    v = np.asarray(body.vertices(shape, pose), dtype=float)
-    return v, np.asarray(body.faces, dtype=np.int64)
 
 
 def obj_text(result) -> str:
@@ -71,21 +49,24 @@ def ply_bytes(result, vertex_gap: np.ndarray) -> bytes:
     return header.encode("ascii") + vert.tobytes() + faces.tobytes()
 
 
-def npz_bytes(result, metrics: dict) -> bytes:
-    """``drape.npz``: positions (N, 3) by global vertex id, faces (T, 3) and the per-vertex maps."""
+def npz_bytes(result, vertex_gap: np.ndarray) -> bytes:
+    """``drape.npz``: positions (N, 3) by global vertex id, faces (T, 3) and the per-vertex maps (gap (N,) m)."""
     buf = io.BytesIO()
     np.savez_compressed(
         buf, positions=result.positions, faces=result.faces, used=result.used,
         start_positions=result.start_positions, strain_weft=result.strain_weft, strain_warp=result.strain_warp,
-        gap=metrics["vertex_gap"], face_garment=result.face_garment,
+        gap=vertex_gap, face_garment=result.face_garment,
         garment_names=np.asarray(result.garment_names), seam_pairs=result.seam_pairs)
     return buf.getvalue()
 
 
-def report_dict(result, metrics: dict, pattern=None) -> dict:
-    """The JSON report: times, settling, material, and the fit metrics (no per-vertex arrays)."""
-    from ..metrics.drape import summary
-    m = summary(metrics)
+def report_dict(result, fit: dict, pattern=None) -> dict:
+    """The JSON report: times, settling, material, and the fit figures.
+
+    ``fit`` is the JSON-ready summary of the fit measurements
+    (:func:`core.metrics.drape.summary`): ``"all"`` with ``gap_mm``,
+    ``penetration_pct``, ``seam_gap_mm``, and per garment.
+    """
     return {
         "style": getattr(pattern, "style", ""),
         "body": getattr(pattern, "body", {}),
@@ -96,8 +77,8 @@ def report_dict(result, metrics: dict, pattern=None) -> dict:
         "settle_frame": int(result.frames) if result.settled else None,
         "timings": result.timings, "self_collision": bool(result.self_collision),
         "self_radius_m": float(getattr(result, "self_radius", 0.0)),
-        "gap_mm": m["all"]["gap_mm"], "penetration_pct": m["all"]["penetration_pct"],
-        "seam_gap_mm": m["all"]["seam_gap_mm"], "metrics": m,
+        "gap_mm": fit["all"]["gap_mm"], "penetration_pct": fit["all"]["penetration_pct"],
+        "seam_gap_mm": fit["all"]["seam_gap_mm"], "metrics": fit,
     }
 
 
@@ -152,14 +133,29 @@ def preview_png(result, body_vertices: np.ndarray, body_faces: np.ndarray, path,
     write_bytes(path, buf.getvalue())
 
 
-def write_drape(out, result, metrics: dict, body_vertices, body_faces, pattern=None,
+def write_drape(out, result, body_vertices, body_faces, *, fit: dict, vertex_gap: np.ndarray, pattern=None,
                 preview: bool = True) -> Path:
-    """Write every drape file into ``out`` atomically; returns the folder."""
-    report = report_dict(result, metrics, pattern)
+    """Write every drape file (:data:`FILES`) into ``out`` atomically.
+
+    Parameters
+    ----------
+    out : folder, replaced as a whole.
+    result : :class:`core.drape.DrapeResult`.
+    body_vertices : (V, 3) float m, body_faces : (F, 3) int: the body draped on (for the preview).
+    fit : dict, the JSON-ready fit figures for the report (:func:`core.metrics.drape.summary`).
+    vertex_gap : (N,) float, m, per global vertex id, its distance outside the body (PLY and NPZ).
+    pattern : the pattern draped (its style and body record go into the report).
+    preview : write ``preview.png``.
+
+    Returns
+    -------
+    Path of the folder.
+    """
+    report = report_dict(result, fit, pattern)
     with output_dir(out) as tmp:
         write_text(tmp / "garment.obj", obj_text(result))
-        write_bytes(tmp / "garment.ply", ply_bytes(result, metrics["vertex_gap"]))
-        write_bytes(tmp / "drape.npz", npz_bytes(result, metrics))
+        write_bytes(tmp / "garment.ply", ply_bytes(result, vertex_gap))
+        write_bytes(tmp / "drape.npz", npz_bytes(result, vertex_gap))
         write_json(tmp / "drape_report.json", report)
         if preview:
             title = f"{report['style']}: {result.material['name']}, {result.frames} frames ({result.settle_reason})"
@@ -183,5 +179,5 @@ def read_ply_vertices(path) -> dict:
     return {k: arr[:, i] for i, k in enumerate(names)}
 
 
-__all__ = ["FILES", "body_of_pattern", "obj_text", "ply_bytes", "npz_bytes", "report_dict", "preview_png",
+__all__ = ["FILES", "obj_text", "ply_bytes", "npz_bytes", "report_dict", "preview_png",
            "write_drape", "read_ply_vertices"]

@@ -12,58 +12,17 @@
 
 Means and standard deviations of the gap are over body vertices (as the
 paper's gap graph); strain statistics are area-weighted over triangles.
-Lengths are metres in arrays, millimetres in the summary dicts.
+Lengths are metres in arrays, millimetres in the summary dicts. The distance
+and ray queries are :mod:`core.geom.queries` (Warp, imported on first use).
 """
 from __future__ import annotations
 
 import numpy as np
 
 from ..errors import DrapeError
+from ..geom.mesh import triangle_areas, vertex_normals
 
 PENETRATION_DEPTH = 0.002  # m (SPEC item 7)
-
-
-def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Area-weighted unit vertex normals (V, 3) of an outward-oriented mesh."""
-    v = np.asarray(vertices, dtype=float)
-    f = np.asarray(faces)
-    fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])  # length = 2 * area
-    n = np.zeros_like(v)
-    for k in range(3):
-        np.add.at(n, f[:, k], fn)
-    length = np.linalg.norm(n, axis=1, keepdims=True)
-    return n / np.maximum(length, 1e-30)
-
-
-def _wp_mesh(wp, vertices, faces):
-    points = wp.array(np.asarray(vertices, dtype=np.float32), dtype=wp.vec3, device="cpu")
-    idx = wp.array(np.asarray(faces, dtype=np.int32).reshape(-1), dtype=wp.int32, device="cpu")
-    return wp.Mesh(points=points, indices=idx), points, idx
-
-
-def _kernels():
-    from ..drape import kernels as K
-    K.wp.init()
-    return K
-
-
-def distance_to_mesh(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray, signed: bool = False,
-                     max_dist: float = 1.0) -> np.ndarray:
-    """Distance (m) of each point (n, 3) to a triangle mesh; signed: negative inside.
-
-    Points farther than ``max_dist`` get ``max_dist``.
-    """
-    K = _kernels()
-    wp = K.wp
-    pts = np.asarray(points, dtype=np.float32).reshape(-1, 3)
-    if len(pts) == 0:
-        return np.zeros(0)
-    mesh, *_keep = _wp_mesh(wp, vertices, faces)
-    out = wp.zeros(len(pts), dtype=float, device="cpu")
-    kernel = K.signed_distance if signed else K.unsigned_distance
-    wp.launch(kernel, len(pts), inputs=[wp.array(pts, dtype=wp.vec3, device="cpu"), mesh.id, float(max_dist), out],
-              device="cpu")
-    return out.numpy().astype(float)
 
 
 def covered_body_vertices(body_vertices: np.ndarray, garment_xyz: np.ndarray, garment_faces: np.ndarray,
@@ -78,26 +37,10 @@ def covered_body_vertices(body_vertices: np.ndarray, garment_xyz: np.ndarray, ga
     cover_tolerance : m, how far a body vertex may be from the skintight garment
         surface (the embedding's triangles are chords of the body surface).
     """
+    from ..geom.queries import distance_to_mesh
     d = distance_to_mesh(body_vertices, garment_xyz, garment_faces, signed=False,
                          max_dist=2 * cover_tolerance)
     return d <= cover_tolerance
-
-
-def ray_gap(origins: np.ndarray, directions: np.ndarray, vertices: np.ndarray, faces: np.ndarray,
-            max_gap: float = 0.5) -> np.ndarray:
-    """Distance (m) along each ray (n,) to the first hit on a mesh, 0 where none within max_gap."""
-    K = _kernels()
-    wp = K.wp
-    o = np.asarray(origins, dtype=np.float32).reshape(-1, 3)
-    if len(o) == 0:
-        return np.zeros(0)
-    mesh, *_keep = _wp_mesh(wp, vertices, faces)
-    out = wp.zeros(len(o), dtype=float, device="cpu")
-    wp.launch(K.ray_gap, len(o), inputs=[wp.array(o, dtype=wp.vec3, device="cpu"),
-                                         wp.array(np.asarray(directions, dtype=np.float32).reshape(-1, 3),
-                                                  dtype=wp.vec3, device="cpu"),
-                                         mesh.id, float(max_gap), out], device="cpu")
-    return out.numpy().astype(float)
 
 
 def post_drape_gap(body_vertices: np.ndarray, body_faces: np.ndarray, draped: np.ndarray,
@@ -116,10 +59,11 @@ def post_drape_gap(body_vertices: np.ndarray, body_faces: np.ndarray, draped: np
     -------
     gap : (k,) float m, per covered body vertex; covered : (V,) bool mask.
     """
+    from ..geom.queries import ray_hit_distance
     bv = np.asarray(body_vertices, dtype=float)
     covered = covered_body_vertices(bv, skintight, garment_faces, cover_tolerance)
     normals = vertex_normals(bv, body_faces)
-    gap = ray_gap(bv[covered], normals[covered], draped, garment_faces, max_gap)
+    gap = ray_hit_distance(bv[covered], normals[covered], draped, garment_faces, max_gap)
     return gap, covered
 
 
@@ -131,6 +75,7 @@ def penetration(garment_vertices: np.ndarray, body_vertices: np.ndarray, body_fa
     -------
     share : float in [0, 1]; signed_distance : (n,) m, negative inside.
     """
+    from ..geom.queries import distance_to_mesh
     sd = distance_to_mesh(garment_vertices, body_vertices, body_faces, signed=True, max_dist=0.5)
     if len(sd) == 0:
         return 0.0, sd
@@ -261,9 +206,7 @@ def _pairs_of(pairs: np.ndarray, verts: np.ndarray) -> np.ndarray:
 
 def _face_areas(result) -> np.ndarray:
     """Areas (m^2) of the draped triangles, the weights of the strain statistics (0 for slivers)."""
-    x = np.asarray(result.positions, dtype=float)
-    f = np.asarray(result.faces)
-    area = 0.5 * np.linalg.norm(np.cross(x[f[:, 1]] - x[f[:, 0]], x[f[:, 2]] - x[f[:, 0]]), axis=1)
+    area = triangle_areas(np.asarray(result.positions, dtype=float), result.faces)
     valid = getattr(result, "face_valid", None)
     return area if valid is None else area * np.asarray(valid, bool)
 
@@ -273,6 +216,6 @@ def summary(metrics: dict) -> dict:
     return {k: v for k, v in metrics.items() if not isinstance(v, np.ndarray)}
 
 
-__all__ = ["vertex_normals", "distance_to_mesh", "covered_body_vertices", "ray_gap", "post_drape_gap",
+__all__ = ["covered_body_vertices", "post_drape_gap",
            "penetration", "seam_gap", "seam_side_distance", "drape_metrics", "summary",
            "PENETRATION_DEPTH"]

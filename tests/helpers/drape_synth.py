@@ -5,12 +5,21 @@ cylinder (z in [0.6, 0.95] m, radius 0.165 m), so the skirt that covers them
 unrolls without distortion: its pattern is the cylinder cut at both sides and
 scaled by ``ease`` in the weft, its achieved weft scale is ``ease`` everywhere
 (up to the chord of one column) and its seams match exactly.
+
+The skirt's body record names :func:`revolution_obj`, an OBJ copy of the
+default :func:`revolution_body`, so a saved skirt pattern resolves its body
+through the ordinary body loader (the CLI and the workflows) with no test
+hook in the shipped code.
 """
 from __future__ import annotations
 
+import os
+import tempfile
+from pathlib import Path
+
 import numpy as np
 
-from ..pattern.types import Pattern, PatternPanel, PatternSeam
+from core.pattern.types import Pattern, PatternPanel, PatternSeam
 
 # (z, radius) in metres: legs column, cylindrical hips, waist at 1.05 m, chest.
 # Equal neighbours make the monotone cubic exactly flat between them.
@@ -52,6 +61,23 @@ def revolution_body(n_around: int = 48, n_rings: int = 60) -> tuple:
         t0 = (n_rings - 1) * n_around
         faces.append([top, t0 + j, t0 + (j + 1) % n_around])
     return v, np.asarray(faces, dtype=np.int64)
+
+
+def revolution_obj(n_around: int = 48, n_rings: int = 60) -> str:
+    """Path of an OBJ file of :func:`revolution_body` (written once, in the temp folder).
+
+    Coordinates are written with ``repr`` precision, so the body loaded back
+    from it is bitwise the same array.
+    """
+    path = Path(tempfile.gettempdir()) / f"ease_test_revolution_{n_around}x{n_rings}.obj"
+    if not path.is_file():
+        v, f = revolution_body(n_around, n_rings)
+        lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in v.tolist()]
+        lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in f.tolist()]
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text("\n".join(lines) + "\n")
+        os.replace(tmp, path)  # concurrent test runs never read a half-written file
+    return str(path)
 
 
 def tube_skirt(ease: float = 1.2, n_rows: int = 12, n_cols: int = 12, top: float = 0.95,
@@ -104,6 +130,6 @@ def tube_skirt(ease: float = 1.2, n_rows: int = 12, n_cols: int = 12, top: float
     seams = [PatternSeam("side_left", "back", "front", rows + n_cols, rows.copy()),
              PatternSeam("side_right", "front", "back", rows + n_cols, rows.copy())]
     pins = {"skirt": np.arange(n_around, dtype=np.int64)}
-    return Pattern(style=f"tube_skirt_{ease:g}", body={"model": "revolution", "shape": {}, "pose": None},
+    return Pattern(style=f"tube_skirt_{ease:g}", body={"model": revolution_obj(), "shape": {}, "pose": None},
                    garments={"skirt": "skirt"}, panels=panels, seams=seams, pins=pins,
                    materials={"fabric": fabric})

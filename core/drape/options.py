@@ -1,0 +1,151 @@
+"""Settings of a drape, with their units, validated at the door."""
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from typing import Mapping, Optional, Union
+
+import numpy as np
+
+from ..errors import DrapeError
+
+
+@dataclass
+class DrapeOptions:
+    """Simulation settings.
+
+    Time: a frame lasts ``1 / fps`` seconds and is the unit of the settle test
+    and of the rest-shape growth; each frame takes ``substeps`` XPBD substeps of
+    ``1 / (fps * substeps)`` seconds.
+
+    Attributes
+    ----------
+    device : str
+        ``"cpu"`` (default, bitwise repeatable) or ``"cuda"`` / ``"cuda:0"``.
+    fps : float, 1/s
+        Frames per second of simulated time.
+    substeps : int, per frame
+        XPBD substeps per frame (each projects every constraint once).
+    max_frames : int, frames
+        Frame limit.
+    min_frames : int, frames
+        Frames simulated before settling may be declared.
+    settle_speed : float, m/s
+        The root-mean-square particle speed under which a frame counts as still.
+    settle_frames : int, frames
+        Consecutive still frames that mean settled.
+    settle_trim : float, fraction in [0, 0.5)
+        Share of the fastest particles left out of that RMS: a few particles
+        caught between body parts (armpit, crotch) chatter against the contact
+        planes and would otherwise hold a visibly still drape from settling.
+    damping : float, 1/s
+        Velocity decay rate (air drag and internal friction).
+    gravity : float, m/s^2
+        Along -Z.
+    thickness : float, m, or None
+        Collision offset from the body; None: the material's.
+    friction : float (Coulomb coefficient, no unit) or None
+        Friction against the body; None: the material's.
+    search_distance : float, m
+        How far from the body a particle looks for contact; a particle deeper
+        inside the body than this is not pushed out.
+    tether_slack : float, fraction, or None
+        Long-range attachments let a particle stray this fraction beyond its
+        fabric distance from the nearest pin (0.01 = 1 %); None disables them.
+    contact_interval : int, substeps
+        Substeps between contact searches (in between, contact is resolved
+        against the plane of the closest body triangle found).
+    max_speed : float, m/s
+        An RMS speed above this is a diverged (exploding) simulation.
+    max_extent : float, m
+        A garment bounding box larger than this is a diverged (runaway) one.
+    max_strain : float, fraction
+        A triangle stretched more than this (3 = 300 %) is a diverged drape.
+    grow_frames : int, frames
+        Frames over which the fabric grows from its skintight start to its
+        pattern size (the rest stretch of every triangle goes linearly from its
+        start value to 1, substep by substep): a loose garment unfolds
+        quasi-statically instead of springing off the body; 0: at once.
+    self_collision : bool
+        Keep the garment's particles apart (folds and layers stack instead of
+        passing through each other). Off by default: it is particle against
+        particle only (a layer can still slip through another between vertices
+        where the mesh is coarser than the radius), roughly doubles the time
+        per frame, and a loose garment squeezed between body parts (armpits)
+        may chatter and settle later.
+    self_radius : float, m, or None
+        Particle radius of the self-collision (two particles stay twice this
+        apart); None: 0.4 x the median pattern edge, so that a layer cannot slip
+        between the vertices of another.
+    self_exclude : float, self-collision diameters
+        Particles that start (skintight) closer than this many diameters and lie
+        within two mesh rings of each other are fabric neighbours and do not
+        collide (nor do particles that start within half a radius of each other).
+    self_interval : int, substeps
+        Substeps between searches for self-collision candidates (a hash grid
+        over the particles); every substep resolves the candidates found.
+    """
+    device: str = "cpu"
+    fps: float = 30.0                       # 1/s
+    substeps: int = 20                      # per frame
+    max_frames: int = 120                   # frames
+    min_frames: int = 10                    # frames
+    settle_speed: float = 0.01              # m/s
+    settle_frames: int = 5                  # frames
+    settle_trim: float = 0.02               # fraction of the particles
+    damping: float = 3.0                    # 1/s
+    gravity: float = 9.81                   # m/s^2
+    thickness: Optional[float] = None       # m
+    friction: Optional[float] = None        # Coulomb coefficient
+    search_distance: float = 0.03           # m
+    tether_slack: Optional[float] = 0.01    # fraction of the fabric distance
+    contact_interval: int = 10              # substeps
+    max_speed: float = 30.0                 # m/s
+    max_extent: float = 6.0                 # m
+    max_strain: float = 3.0                 # fraction
+    grow_frames: int = 20                   # frames
+    self_collision: bool = False
+    self_radius: Optional[float] = None     # m
+    self_exclude: float = 1.5               # self-collision diameters
+    self_interval: int = 5                  # substeps
+
+    @staticmethod
+    def coerce(options: Union[None, "DrapeOptions", Mapping]) -> "DrapeOptions":
+        """Validated options from None (the defaults), DrapeOptions or a dict of its fields."""
+        if options is None:
+            return DrapeOptions()
+        if isinstance(options, DrapeOptions):
+            opts = options
+        elif isinstance(options, Mapping):
+            known = {f.name for f in fields(DrapeOptions)}
+            unknown = sorted(set(options) - known)
+            if unknown:
+                raise DrapeError(f"unknown drape option(s) {', '.join(unknown)}; options: {', '.join(sorted(known))}")
+            opts = DrapeOptions(**dict(options))
+        else:
+            raise DrapeError(f"options must be DrapeOptions or a dict, not {type(options).__name__}")
+        opts.validate()
+        return opts
+
+    def validate(self) -> None:
+        """Raise DrapeError naming the first field out of its range."""
+        for name in ("fps", "settle_speed", "search_distance", "max_speed", "max_extent", "max_strain"):
+            value = getattr(self, name)
+            self._check(name, isinstance(value, (int, float, np.number)) and value > 0, "a positive number")
+        for name in ("substeps", "max_frames", "settle_frames", "contact_interval", "self_interval"):
+            value = getattr(self, name)
+            self._check(name, isinstance(value, (int, np.integer)) and value > 0, "a positive integer")
+        if not (0.0 <= self.settle_trim < 0.5):
+            raise DrapeError(f"drape option settle_trim = {self.settle_trim!r}: expected a fraction in [0, 0.5)")
+        for name in ("damping", "gravity", "min_frames", "grow_frames"):
+            self._check(name, getattr(self, name) >= 0, "a number >= 0")
+        if not isinstance(self.self_collision, (bool, np.bool_)):
+            raise DrapeError(f"drape option self_collision = {self.self_collision!r}: expected true or false")
+        self._check("self_exclude", self.self_exclude >= 0, "a number >= 0")
+        for name in ("thickness", "friction", "tether_slack", "self_radius"):
+            if getattr(self, name) is not None:
+                self._check(name, getattr(self, name) >= 0, "a number >= 0 or None")
+
+    def _check(self, name: str, ok: bool, expected: str) -> None:
+        value = getattr(self, name)
+        if not ok or not np.isfinite(value):
+            raise DrapeError(f"drape option {name} = {value!r}: expected {expected}")

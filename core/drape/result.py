@@ -1,0 +1,101 @@
+"""What a drape returns: :class:`DrapeResult`, collected from the solver's final state."""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import Optional
+
+import numpy as np
+
+from .mesh import Cloth
+from .strain import face_strains, vertex_average
+
+
+@dataclass
+class DrapeResult:
+    """A settled (or frame-limited) drape.
+
+    Attributes
+    ----------
+    positions : (N, 3) float, draped position of every global garment vertex id, metres
+        (ids no panel uses, if any, stay at 0; see ``used``).
+    faces : (T, 3) int, triangles as global vertex ids (panel order).
+    used : (N,) bool, ids that some panel uses.
+    strain_weft, strain_warp : (N,) float, per-vertex stretch relative to the pattern
+        (0 = pattern size, 0.02 = 2 % longer, negative = compressed), area-weighted from the faces.
+    face_strain_weft, face_strain_warp, face_shear : (T,) float, per-triangle |F w| - 1,
+        |F g| - 1 and the shear angle (degrees) between the weft and warp images minus 90.
+    face_garment : (T,) int index into ``garment_names``.
+    garment_names : list of str.
+    start_positions : (N, 3) float, the skintight embedding the drape started from.
+    seam_pairs : (S, 2) int, global ids sewn together.
+    frames : int, frames simulated.
+    settled : bool; settle_reason : ``"settled"`` or ``"frame limit"``.
+    speed_history : (frames,) float, RMS particle speed per frame (m/s), fastest
+        ``options.settle_trim`` share left out.
+    timings : dict of seconds: ``prepare``, ``compile``, ``simulate``, ``total``.
+    material : dict, the material used; options : dict, the options used; device : str.
+    self_collision : bool, whether particle self-collision was on; self_radius : float, its radius (m).
+    speed : (N,) float, m/s, each vertex's speed at the last frame (where it still moves).
+    face_valid : (T,) bool, False for pattern slivers (held by edge constraints; their
+        strain is not meaningful and reads 0).
+    """
+    positions: np.ndarray
+    faces: np.ndarray
+    used: np.ndarray
+    strain_weft: np.ndarray
+    strain_warp: np.ndarray
+    face_strain_weft: np.ndarray
+    face_strain_warp: np.ndarray
+    face_shear: np.ndarray
+    face_garment: np.ndarray
+    garment_names: list
+    start_positions: np.ndarray
+    seam_pairs: np.ndarray
+    frames: int
+    settled: bool
+    settle_reason: str
+    speed_history: np.ndarray
+    timings: dict
+    material: dict
+    options: dict
+    device: str
+    self_collision: bool = False
+    self_radius: float = 0.0
+    face_valid: Optional[np.ndarray] = None
+    speed: Optional[np.ndarray] = None
+
+
+def collect(cloth: Cloth, x: np.ndarray, v: np.ndarray, settling, timings: dict, material, options,
+            device: str, self_radius: float) -> DrapeResult:
+    """The result of a drape from its final particle state.
+
+    Parameters
+    ----------
+    cloth : the welded cloth that was draped.
+    x, v : (P, 3) float, final particle positions (m) and velocities (m/s).
+    settling : :class:`core.drape.schedule.Settling`, how the drape ended.
+    timings : dict of seconds.
+    material : :class:`Material`; options : :class:`DrapeOptions`; device : its name.
+    self_radius : m, the self-collision radius, 0 when self-collision was off.
+    """
+    n = cloth.n_particles
+    xp = np.asarray(x).astype(float)
+    vp = np.linalg.norm(np.asarray(v).astype(float), axis=1)
+    valid = ~cloth.sliver if len(cloth.sliver) else np.ones(len(cloth.faces), bool)
+    fw, fg, fs = (np.where(valid, a, 0.0) for a in face_strains(xp, cloth))
+    weight = cloth.rest_area * valid
+    sw = vertex_average(fw, cloth.faces, weight, n)
+    sg = vertex_average(fg, cloth.faces, weight, n)
+    used = cloth.particle_of >= 0
+    src = np.where(used, cloth.particle_of, 0)
+    return DrapeResult(
+        positions=np.where(used[:, None], xp[src], 0.0), faces=cloth.faces_global.copy(), used=used,
+        strain_weft=np.where(used, sw[src], 0.0), strain_warp=np.where(used, sg[src], 0.0),
+        face_strain_weft=fw, face_strain_warp=fg, face_shear=fs, face_valid=valid,
+        speed=np.where(used, vp[src], 0.0),
+        face_garment=cloth.face_garment.copy(), garment_names=list(cloth.garment_names),
+        start_positions=np.where(used[:, None], cloth.x0[src], 0.0), seam_pairs=cloth.seam_pairs.copy(),
+        frames=settling.frames, settled=settling.settled, settle_reason=settling.reason,
+        speed_history=settling.speeds, timings=timings, material=material.to_json(), options=asdict(options),
+        device=device, self_collision=self_radius > 0.0, self_radius=self_radius,
+    )
