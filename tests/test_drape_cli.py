@@ -4,9 +4,10 @@ import json
 import numpy as np
 import pytest
 
+from drape_synth import tube_skirt
+
 from core.cli import main
 from core.drape.output import FILES, read_ply_vertices
-from drape_synth import tube_skirt
 from core.pattern.io import save_pattern
 
 
