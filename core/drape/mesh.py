@@ -14,6 +14,7 @@ from typing import Dict, List
 import numpy as np
 
 from ..errors import DrapeError
+from ..geom.strain import weft_of
 
 
 @dataclass
@@ -112,7 +113,7 @@ def grain_frame(grain) -> np.ndarray:
     if not np.isfinite(n) or n < 1e-12:
         raise DrapeError(f"grain {g.tolist()} is not a direction")
     g = g / n
-    return np.array([[-g[1], g[0]], g])
+    return np.array([weft_of(g), g])
 
 
 def rest_matrices(uv: np.ndarray, faces: np.ndarray, grain) -> tuple:
