@@ -220,11 +220,11 @@ def tolerances(prep: Prepared, eps_weft: Optional[float] = None,
     A caller's weft tolerance also stands for the warp unless a warp tolerance
     is given (one ``--tolerance`` means "this much stretch either way").
     """
+    from .design.materials import Materials
     from .errors import PatternError
-    materials = prep.cut.materials or {}
-    w = eps_weft if eps_weft is not None else float(materials.get("eps_weft", 1.1))
-    g = eps_warp if eps_warp is not None else (eps_weft if eps_weft is not None
-                                               else float(materials.get("eps_warp", w)))
+    design = Materials.from_dict(prep.cut.materials)
+    w = eps_weft if eps_weft is not None else design.eps_weft
+    g = eps_warp if eps_warp is not None else (eps_weft if eps_weft is not None else design.eps_warp)
     for name, v in (("tolerance", w), ("tolerance_warp", g)):
         if not (isinstance(v, (int, float)) and v >= 1.0):
             raise PatternError(f"{name}: a stretch tolerance must be >= 1 (1.1 = 10 % stretch), got {v}")
@@ -374,7 +374,9 @@ def _drape_figures(result, metrics) -> Dict[str, object]:
 def write_drape(out, run: DrapeRun, pattern=None, preview: bool = True):
     """Every drape file into ``out`` atomically (see :func:`core.drape.output.write_drape`); returns the folder."""
     from .drape.output import write_drape as _write
-    return _write(out, run.result, run.metrics, run.body_vertices, run.body_faces, pattern=pattern, preview=preview)
+    from .metrics.drape import summary as fit_summary
+    return _write(out, run.result, run.body_vertices, run.body_faces, fit=fit_summary(run.metrics),
+                  vertex_gap=run.metrics["vertex_gap"], pattern=pattern, preview=preview)
 
 
 def drape_summary(run: DrapeRun, pattern) -> str:
@@ -393,14 +395,14 @@ def export_allowance(pattern, allowance: Optional[float] = None, hem: Optional[f
     neither (the exporter then reads the design's itself)."""
     if allowance is None and hem is None:
         return None
-    from .export import DEFAULT_ALLOWANCE, DEFAULT_HEM
+    from .design.materials import ALLOWANCE, HEM
     base = ((pattern.materials or {}).get("export") or {}).get("allowance")
     if isinstance(base, dict):
         table = dict(base)
     elif isinstance(base, (int, float)) and not isinstance(base, bool):
         table = {"default": float(base)}
     else:
-        table = {"default": DEFAULT_ALLOWANCE, "hem": DEFAULT_HEM}
+        table = {"default": ALLOWANCE, "hem": HEM}
     if allowance is not None:
         table["default"] = allowance
     if hem is not None:
