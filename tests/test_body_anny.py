@@ -15,8 +15,8 @@ REFERENCE = os.path.join(HERE, "data", "anny_reference.npz")
 
 
 @pytest.fixture(scope="module")
-def body():
-    return load_body("anny")
+def body(anny):
+    return anny
 
 
 @pytest.fixture(scope="module")

@@ -2,15 +2,15 @@
 import numpy as np
 import pytest
 
-from core.body import POSE_PRESETS, load_body
+from core.body import POSE_PRESETS
 from core.body.lbs import rodrigues
 from core.body.poses import rotation_between
 from core.errors import BodyError
 
 
 @pytest.fixture(scope="module")
-def body():
-    return load_body("anny")
+def body(anny):
+    return anny
 
 
 def _joints(body, pose, shape=None):

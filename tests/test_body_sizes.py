@@ -168,12 +168,6 @@ def test_chart_is_ordered():
 
 
 # -- on the default body -------------------------------------------------
-@pytest.fixture(scope="module")
-def anny():
-    from core.body import load_body
-    return load_body("anny")      # the baked asset is committed: a failure here is a real one
-
-
 def test_anny_reference_is_size_m(anny):
     m = measure(anny)
     for k, v in SIZE_CHART["M"].items():

@@ -13,19 +13,8 @@ from cut_synth import surface_distance, triangle_areas
 
 
 @pytest.fixture(scope="module")
-def anny():
-    from core.body import load_body
-    try:
-        body = load_body("anny")
-    except Exception as e:   # the baked asset is part of the repo; fail loudly if it is broken
-        pytest.fail(f"Anny does not load: {e}")
-    X, J = body.vertices_and_joints()
-    return body, X, J
-
-
-@pytest.fixture(scope="module")
-def shirt(anny):
-    body, X, J = anny
+def shirt(anny, anny_reference):
+    body, (X, J) = anny, anny_reference
     spec = shirt_spec(body, X, J, refine=0.01)
     t = time.perf_counter()
     cut = cut_surface(body, X, spec)
@@ -33,8 +22,8 @@ def shirt(anny):
     return spec, cut
 
 
-def test_six_panels_and_seams(shirt, anny):
-    body, X, _ = anny
+def test_six_panels_and_seams(shirt, anny, anny_reference):
+    body, (X, _) = anny, anny_reference
     spec, cut = shirt
     names = [p.name for p in cut.panels]
     assert names == ["shirt.front", "shirt.back", "shirt.sleeve_front_left", "shirt.sleeve_back_left",
@@ -62,14 +51,14 @@ def test_six_panels_and_seams(shirt, anny):
     assert len(cut.pins["shirt"]) > 20
 
 
-def test_panels_partition_the_garment_region(shirt, anny):
-    body, X, _ = anny
+def test_panels_partition_the_garment_region(shirt, anny, anny_reference):
+    body, (X, _) = anny, anny_reference
     _, cut = shirt
     G = cut.positions(X)
     tris = np.concatenate([np.sort(p.vertex_ids[p.faces], axis=1) for p in cut.panels])
     assert len(np.unique(tris, axis=0)) == len(tris)
     # refinement keeps the area (up to Delaunay flips between nearly coplanar triangles)
-    spec = shirt_spec(body, X, anny[2], refine=None)
+    spec = shirt_spec(body, X, anny_reference[1], refine=None)
     coarse = cut_surface(body, X, spec)
     Gc = coarse.positions(X)
     for p, q in zip(cut.panels, coarse.panels):
@@ -83,8 +72,8 @@ def test_panels_partition_the_garment_region(shirt, anny):
     assert surface_distance(Gc, X, body.faces).max() < 1e-9
 
 
-def test_outward_orientation(shirt, anny):
-    body, X, _ = anny
+def test_outward_orientation(shirt, anny, anny_reference):
+    body, (X, _) = anny, anny_reference
     _, cut = shirt
     import igl
     G = cut.positions(X)
@@ -97,8 +86,8 @@ def test_outward_orientation(shirt, anny):
         assert np.mean((n * nb[fi]).sum(1) > 0) > 0.99, p.name
 
 
-def test_grain(shirt, anny):
-    body, X, J = anny
+def test_grain(shirt, anny, anny_reference):
+    body, (X, J) = anny, anny_reference
     _, cut = shirt
     jn = body.joint_names
     arm = J[jn.index("upperarm01.L")] - J[jn.index("wrist.L")]
@@ -111,8 +100,8 @@ def test_grain(shirt, anny):
             assert np.median(p.warp_dir @ arm) > 0.8        # along the arm, towards the shoulder
 
 
-def test_transfer_to_shapes_and_poses(shirt, anny):
-    body, X, _ = anny
+def test_transfer_to_shapes_and_poses(shirt, anny, anny_reference):
+    body, (X, _) = anny, anny_reference
     _, cut = shirt
     Fb = np.asarray(body.faces, dtype=np.int64)
     instances = [({"weight": 0.1, "height": 0.3}, None), ({"weight": 0.9, "height": 0.7, "muscle": 0.7}, None),
@@ -127,8 +116,8 @@ def test_transfer_to_shapes_and_poses(shirt, anny):
             assert triangle_areas(G[p.vertex_ids], p.faces).min() > 0, (shape, pose, p.name)
 
 
-def test_left_right_mirror(shirt, anny):
-    body, X, _ = anny
+def test_left_right_mirror(shirt, anny, anny_reference):
+    body, (X, _) = anny, anny_reference
     _, cut = shirt
     G = cut.positions(X)
     for a, b in (("shirt.sleeve_front_left", "shirt.sleeve_front_right"),
@@ -142,8 +131,8 @@ def test_left_right_mirror(shirt, anny):
         assert surface_distance(M, G[pb.vertex_ids], pb.faces).max() < 0.002
 
 
-def test_deterministic(shirt, anny):
-    body, X, J = anny
+def test_deterministic(shirt, anny, anny_reference):
+    body, (X, J) = anny, anny_reference
     spec, cut = shirt
     again = cut_surface(body, X, shirt_spec(body, X, J, refine=0.01))
     assert (again.embedding != cut.embedding).nnz == 0
@@ -160,7 +149,7 @@ def _distance_to_polyline(P, Q):
     return np.linalg.norm(a[None] + t[..., None] * ab[None] - P[:, None], axis=2).min(axis=1)
 
 
-def test_template_seams_are_the_exact_geodesics(anny):
+def test_template_seams_are_the_exact_geodesics(anny, anny_reference):
     """The shirt template's seamlines, as cut, are potpourri3d's geodesics between their
     keypoints: every seam vertex within SNAP_ABS (0.5 mm) of the geodesic and the same
     length to 0.1 % - not snapped to mesh vertices, no zig-zag along mesh edges (which
@@ -170,7 +159,7 @@ def test_template_seams_are_the_exact_geodesics(anny):
     from core.cut.split import SNAP_ABS, CutMesh
     from core.design import load_design, resolve
     from core.design.templates import TEMPLATE_DIR
-    body, X, _ = anny
+    body, (X, _) = anny, anny_reference
     BF = np.asarray(body.faces)
     d = load_design(TEMPLATE_DIR / "shirt_long_sleeve.json")
     spec = resolve(d, body, vertices=X)

@@ -9,14 +9,6 @@ from core.design.spec import CutLine, CutSpec, GarmentSpec, PanelSpec
 from cut_anny_shirt import ray_point
 
 
-@pytest.fixture(scope="module")
-def anny():
-    from core.body import load_body
-    body = load_body("anny")
-    X, J = body.vertices_and_joints()
-    return body, X, J
-
-
 def pants_spec(body, X, J):
     lm = body.landmarks
     jn = body.joint_names
@@ -38,8 +30,8 @@ def pants_spec(body, X, J):
     return CutSpec(lines, panels, [GarmentSpec("pants", "lower", pin_line="pants.waist")], refine_edge_length=0.01)
 
 
-def test_pants(anny):
-    body, X, J = anny
+def test_pants(anny, anny_reference):
+    body, (X, J) = anny, anny_reference
     cut = cut_surface(body, X, pants_spec(body, X, J))
     G = cut.positions(X)
     assert len(cut.panels) == 4

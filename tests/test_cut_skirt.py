@@ -13,14 +13,6 @@ from cut_anny_shirt import ray_point
 from cut_synth import triangle_areas
 
 
-@pytest.fixture(scope="module")
-def anny():
-    from core.body import load_body
-    body = load_body("anny")
-    X, J = body.vertices_and_joints()
-    return body, X, J
-
-
 def section_loops(X, F, z0):
     """Number of closed curves in which the plane z = z0 cuts the mesh."""
     s = X[:, 2] - z0
@@ -42,8 +34,8 @@ def section_loops(X, F, z0):
     return connected_components(A, directed=False)[0]
 
 
-def test_skirt_topology_is_one_closed_tube(anny):
-    body, X, _ = anny
+def test_skirt_topology_is_one_closed_tube(anny, anny_reference):
+    body, (X, _) = anny, anny_reference
     F = np.asarray(body.faces)
     mesh = CutMesh(X, F)
     make_skirt(mesh, body, X)
@@ -67,8 +59,8 @@ def test_skirt_topology_is_one_closed_tube(anny):
     assert mesh.nv == len(X)
 
 
-def test_inter_leg_band_is_symmetric(anny):
-    body, X, _ = anny
+def test_inter_leg_band_is_symmetric(anny, anny_reference):
+    body, (X, _) = anny, anny_reference
     H = inter_leg_faces(body, X)
     assert 50 < H.sum() < 0.1 * len(H)
     F = np.asarray(body.faces)
@@ -100,8 +92,8 @@ def skirt_spec(body, X, J, refine=0.01):
                    refine_edge_length=refine, body={"model": "anny"})
 
 
-def test_skirt_cut(anny):
-    body, X, J = anny
+def test_skirt_cut(anny, anny_reference):
+    body, (X, J) = anny, anny_reference
     spec = skirt_spec(body, X, J)
     cut = cut_surface(body, X, spec)
     assert [p.name for p in cut.panels] == ["skirt.front", "skirt.back"]
@@ -130,10 +122,10 @@ def test_skirt_cut(anny):
             assert triangle_areas(Gp[p.vertex_ids], p.faces).min() > 0
 
 
-def test_overlapping_garments_are_cut_separately(anny):
+def test_overlapping_garments_are_cut_separately(anny, anny_reference):
     """A shirt whose hem is below the skirt's waistband: each garment keeps its panels."""
     from cut_anny_shirt import shirt_spec
-    body, X, J = anny
+    body, (X, J) = anny, anny_reference
     shirt = shirt_spec(body, X, J, refine=None)
     skirt = skirt_spec(body, X, J, refine=None)
     both = CutSpec(shirt.lines + skirt.lines, shirt.panels + skirt.panels, shirt.garments + skirt.garments,
@@ -153,12 +145,12 @@ def test_overlapping_garments_are_cut_separately(anny):
     assert set(cut.pins) == {"shirt", "skirt"}
 
 
-def test_points_on_the_removed_band(anny):
+def test_points_on_the_removed_band(anny, anny_reference):
     """A keypoint on a removed triangle goes to the closest point of the bridged surface;
     a panel seed there is an error naming the panel."""
     from core.body.model import SurfacePoint
     from core.errors import CutError
-    body, X, J = anny
+    body, (X, J) = anny, anny_reference
     removed = np.nonzero(inter_leg_faces(body, X))[0]
     F = np.asarray(body.faces)
     c = X[F[removed]].mean(1)

@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from core.body import load_body
 from core.cut.types import GarmentCut, Panel
 from core.design import apply_ease, load_design, resolve, save_design, Resolver
 from core.design.mirror import face_symmetry, mirror_surface_point
@@ -20,8 +19,8 @@ from core.errors import DesignError
 
 
 @pytest.fixture(scope="module")
-def body():
-    return load_body("anny")
+def body(anny):
+    return anny
 
 
 @pytest.fixture(scope="module")
