@@ -52,11 +52,10 @@ STAGES = {
 
 
 def _area(cut, X):
+    from core.geom.mesh import triangle_areas
     total = 0.0
     for p in cut.panels:
-        P = cut.panel_positions(p, X)
-        F = np.asarray(p.faces)
-        total += 0.5 * np.linalg.norm(np.cross(P[F[:, 1]] - P[F[:, 0]], P[F[:, 2]] - P[F[:, 0]]), axis=1).sum()
+        total += triangle_areas(cut.panel_positions(p, X), p.faces).sum()
     return float(total)
 
 
