@@ -1,11 +1,23 @@
 """The Blender side of EASE: thin adapters from the UI to the core.
 
-Modules, one per concern: :mod:`.properties` (scene data), :mod:`.convert`
-(Blender data <-> numpy), :mod:`.ramp` (the ease colour ramp, pure numpy),
-one ``*_ops`` module per workflow stage (body, design, ease, pattern, fit,
-drape, render, export) and :mod:`.panels` (the "EASE" sidebar tab). No
-geometry algorithm lives here: every computation is a call into the core,
-reached with relative imports (``from ..core.body import load_body``).
+Modules, one per concern:
+
+- :mod:`.properties`: the scene properties (what a save keeps);
+- :mod:`.data`: the scene read back (body, design, cut, pattern: getters, no side effects);
+- :mod:`.sync`: the after-change reactions (body moves, design redraws, panels filled,
+  property update callbacks);
+- :mod:`.build`: Blender objects from the core's results, written in one pass;
+- :mod:`.materials`, :mod:`.objects` (collection, roles, removal, progress bar),
+  :mod:`.convert` (Blender data <-> numpy), :mod:`.ramp` (the ease colour ramp, pure
+  numpy), :mod:`.state` (session caches, the add-on's errors);
+- one ``*_ops`` module per workflow stage (body, design, ease, pattern, fit, drape,
+  render, export), none importing another: what they share lives in the modules above;
+- :mod:`.panels`: the "EASE" sidebar tab.
+
+No geometry algorithm lives here and no pipeline step: a surface point from a
+click, the grain line and the piece layout come from ``core.body.surface`` and
+``core.geom.layout``, the pattern, drape and export from :mod:`core.workflows`,
+reached with relative imports (``from ..core import workflows``).
 """
 from __future__ import annotations
 

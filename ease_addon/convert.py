@@ -20,13 +20,18 @@ KEYPOINT_NAMES = "ease_keypoint_names"   # mesh custom property: JSON list of ke
 
 # ----------------------------------------------------------------------------- meshes
 
-def mesh_from_arrays(name: str, vertices: np.ndarray, faces: np.ndarray) -> bpy.types.Mesh:
-    """A new mesh with ``vertices`` (V, 3) metres and triangles ``faces`` (F, 3)."""
+def _mesh_with_vertices(name: str, vertices: np.ndarray) -> bpy.types.Mesh:
     vertices = np.ascontiguousarray(vertices, dtype=np.float32).reshape(-1, 3)
-    faces = np.ascontiguousarray(faces, dtype=np.int32).reshape(-1, 3)
     me = bpy.data.meshes.new(name)
     me.vertices.add(len(vertices))
     me.vertices.foreach_set("co", vertices.ravel())
+    return me
+
+
+def mesh_from_arrays(name: str, vertices: np.ndarray, faces: np.ndarray) -> bpy.types.Mesh:
+    """A new mesh with ``vertices`` (V, 3) metres and triangles ``faces`` (F, 3)."""
+    faces = np.ascontiguousarray(faces, dtype=np.int32).reshape(-1, 3)
+    me = _mesh_with_vertices(name, vertices)
     me.loops.add(faces.size)
     me.loops.foreach_set("vertex_index", faces.ravel())
     me.polygons.add(len(faces))
@@ -39,11 +44,8 @@ def mesh_from_arrays(name: str, vertices: np.ndarray, faces: np.ndarray) -> bpy.
 
 def mesh_edges_from_arrays(name: str, vertices: np.ndarray, edges: np.ndarray) -> bpy.types.Mesh:
     """A wire mesh (no faces): ``vertices`` (V, 3), ``edges`` (E, 2)."""
-    vertices = np.ascontiguousarray(vertices, dtype=np.float32).reshape(-1, 3)
     edges = np.ascontiguousarray(edges, dtype=np.int32).reshape(-1, 2)
-    me = bpy.data.meshes.new(name)
-    me.vertices.add(len(vertices))
-    me.vertices.foreach_set("co", vertices.ravel())
+    me = _mesh_with_vertices(name, vertices)
     me.edges.add(len(edges))
     me.edges.foreach_set("vertices", edges.ravel())
     me.update()
@@ -68,12 +70,6 @@ def polyline_edges(polylines, closed: bool) -> tuple:
     if not verts:
         return np.zeros((0, 3)), np.zeros((0, 2), dtype=np.int64)
     return np.vstack(verts), np.vstack(edges)
-
-
-def new_object(name: str, data, collection=None) -> bpy.types.Object:
-    obj = bpy.data.objects.new(name, data)
-    (collection or bpy.context.scene.collection).objects.link(obj)
-    return obj
 
 
 def get_vertices(me: bpy.types.Mesh) -> np.ndarray:
@@ -226,9 +222,3 @@ def store_json(idblock, key: str, obj) -> None:
 def load_json(idblock, key: str, default=None):
     s = idblock.get(key)
     return default if s in (None, "") else json.loads(s)
-
-
-def ensure_nodes(idblock) -> None:
-    """Give a material/world its node tree (always there in Blender 5; ``use_nodes`` before)."""
-    if idblock.node_tree is None or bpy.app.version < (5, 0, 0):
-        idblock.use_nodes = True

@@ -2,25 +2,19 @@
 bar, status text, Esc cancels; the core runs in a worker thread and only the
 main thread touches Blender data). The result is a garment object with a
 fabric material, two fit-map colour layers (strain, gap) and the pattern
-vertex id of each vertex (``ease_vertex_id``, read back by the export)."""
+vertex id of each vertex (``ease_vertex_id``, read back by the export); see
+:func:`.build.garment`. The drape and its fit measurements are the core's
+(:func:`core.workflows.drape`)."""
 from __future__ import annotations
 
 import json
 import threading
 
 import bpy
-import numpy as np
 
-from . import convert, ramp, state
-from .export_ops import VERTEX_ID, pattern_digest
+from . import build, data, state, sync
+from .objects import objects_with_role, window_progress
 from .operators_base import EaseOperator
-from .pattern_ops import PATTERN_KEY
-
-GARMENT = "EASE Garment"
-STRAIN_LAYER = "fit_strain"
-GAP_LAYER = "fit_gap"
-STRAIN_RANGE = (0.0, 0.10)    # weft strain 0 .. 10 % mapped blue .. red
-GAP_RANGE = (0.0, 0.05)       # gap 0 .. 5 cm mapped blue .. red
 
 _JOBS: list = []              # drape jobs running (cancelled on unregister)
 
@@ -87,117 +81,16 @@ def cancel_running() -> None:
 
 def _pattern_body(pattern):
     """(vertices, faces) of the body instance the pattern was solved on."""
+    from ..core.body.instance import spec_instance
     spec = pattern.body or {}
-    model = state.body_model(spec.get("model", "anny"))
-    shape = spec.get("shape")
-    if isinstance(shape, str):
-        shape, _ = state.size_shape(model, shape)
-    pose = spec.get("pose")
-    if pose == "A":
-        pose = None
-    return model.vertices(shape or None, pose), model.faces
-
-
-def _map_colors(values, lo, hi) -> np.ndarray:
-    # Same ramp as ease (blue = low, red = high) so the legend reads the same way.
-    return ramp.ease_to_color(np.clip(values, lo, hi) + 1.0, lo + 1.0, hi + 1.0)
-
-
-def _fabric_material():
-    mat = bpy.data.materials.get("EASE Fabric")
-    if mat is None:
-        mat = bpy.data.materials.new("EASE Fabric")
-        convert.ensure_nodes(mat)
-        bsdf = next((n for n in mat.node_tree.nodes if n.type == "BSDF_PRINCIPLED"), None)
-        if bsdf is not None:
-            bsdf.inputs["Base Color"].default_value = (0.18, 0.32, 0.55, 1.0)
-            bsdf.inputs["Roughness"].default_value = 0.9
-            for name in ("Sheen Weight", "Sheen"):
-                if name in bsdf.inputs:
-                    bsdf.inputs[name].default_value = 0.5
-                    break
-        mat.diffuse_color = (0.18, 0.32, 0.55, 1.0)
-    return mat
-
-
-def _fitmap_material(layer: str):
-    from .pattern_ops import _ease_material
-    return _ease_material(f"EASE Fit Map {layer}", layer)
-
-
-def garment_object(context, result, gap=None, digest=None):
-    """Build the garment object from a DrapeResult (replacing an earlier one).
-    ``digest``: the pattern it was draped from (default: the scene's pattern now)."""
-    used = np.asarray(result.used, dtype=bool)
-    ids = np.flatnonzero(used)
-    remap = -np.ones(len(used), dtype=np.int64)
-    remap[ids] = np.arange(len(ids))
-    faces = remap[np.asarray(result.faces)]
-    me = convert.mesh_from_arrays(GARMENT, np.asarray(result.positions)[ids], faces)
-    for layer, values, (lo, hi) in ((STRAIN_LAYER, np.asarray(result.strain_weft)[ids], STRAIN_RANGE),
-                                    (GAP_LAYER, None if gap is None else np.asarray(gap)[ids], GAP_RANGE)):
-        if values is None:
-            continue
-        attr = me.color_attributes.new(layer, "FLOAT_COLOR", "POINT")
-        attr.data.foreach_set("color", _map_colors(values, lo, hi).ravel())
-        me.attributes.new(layer + "_value", "FLOAT", "POINT").data.foreach_set(
-            "value", np.asarray(values, dtype=np.float32))
-    # which pattern vertex each garment vertex is: the export reads the garment back by it
-    me.attributes.new(VERTEX_ID, "INT", "POINT").data.foreach_set("value", ids.astype(np.int32))
-    me.materials.append(_fabric_material())
-    for poly in me.polygons:
-        poly.use_smooth = True
-    scene = context.scene
-    old = state.objects_with_role(scene, "garment")
-    obj = convert.new_object(GARMENT, me, state.collection(scene))
-    obj["ease_role"] = "garment"
-    obj["ease_pattern"] = digest or pattern_digest(scene.get(PATTERN_KEY, ""))   # draped from this pattern
-    for o in old:
-        state.remove_object(o)
-    apply_fitmap(scene)
-    return obj
-
-
-def apply_fitmap(scene) -> None:
-    """Colour the garment by the chosen fit map (or the plain fabric)."""
-    mode = scene.ease.fitmap
-    for obj in state.objects_with_role(scene, "garment"):
-        me = obj.data
-        layer = {"STRAIN": STRAIN_LAYER, "GAP": GAP_LAYER}.get(mode)
-        if layer is not None and me.color_attributes.get(layer) is not None:
-            mat = _fitmap_material(layer)
-            me.color_attributes.active_color = me.color_attributes[layer]
-        else:
-            mat = _fabric_material()
-        if me.materials:
-            me.materials[0] = mat
-        else:
-            me.materials.append(mat)
-
-
-def drape_report(result, metrics=None) -> dict:
-    """Key figures of a drape (and its fit metrics) for the panel."""
-    out = {"frames": int(result.frames), "settled": result.settle_reason,
-           "time s": round(float(result.timings.get("total", 0.0)), 2),
-           "mean weft strain %": round(100 * float(np.mean(np.asarray(result.strain_weft)[result.used])), 2),
-           "device": result.device}
-    a = (metrics or {}).get("all") or {}
-    if a:
-        out["mean gap mm"] = round(float(a["gap_mm"]["mean"]), 1)
-        out["penetration %"] = round(float(a["penetration_pct"]), 2)
-        out["seam gap max mm"] = round(float(a["seam_gap_mm"]["max"]), 2)
-    return out
+    return spec_instance(spec, model=state.body_model(spec.get("model", "anny")))
 
 
 def _compute(pattern, body_v, body_f, frames, progress, device="cpu"):
-    from ..core.drape import drape
-    from ..core.progress import sub
-    result = drape(pattern, body_v, body_f, options={"max_frames": int(frames), "device": device},
-                   progress=sub(progress, 0.0, 0.9))
-    if progress is not None:
-        progress(0.92, "measuring the fit (gap, strain)")
-    gap, metrics = state.garment_gap(result, pattern, body_v, body_f)
-    return result, gap, metrics
+    """The core's drape of ``pattern`` on the body (V, F) and its fit measurements (a DrapeRun)."""
+    from ..core import workflows as wf
+    return wf.drape(pattern, options={"max_frames": int(frames), "device": device}, body=(body_v, body_f),
+                    progress=progress)
 
 
 class EASE_OT_drape(EaseOperator):
@@ -209,8 +102,7 @@ class EASE_OT_drape(EaseOperator):
     _timer = None
 
     def _prepare(self, context):
-        from .pattern_ops import stored_pattern
-        pattern = stored_pattern(context.scene)
+        pattern = data.stored_pattern(context.scene)
         if pattern is None:
             raise state.AddonError("no pattern: optimize the pattern first (EASE > Pattern)")
         body_v, body_f = _pattern_body(pattern)
@@ -219,17 +111,10 @@ class EASE_OT_drape(EaseOperator):
     # -- synchronous (scripts, tests): execute
     def run(self, context):
         pattern, body_v, body_f = self._prepare(context)
-        wm = context.window_manager
         s = context.scene.ease
-        wm.progress_begin(0, 100)
-
-        def progress(fraction, message):
-            wm.progress_update(int(100 * fraction))
-        try:
-            result, gap, metrics = _compute(pattern, body_v, body_f, s.drape_frames, progress, s.drape_device)
-        finally:
-            wm.progress_end()
-        apply_drape(context, result, gap, metrics)
+        with window_progress(context) as progress:
+            run = _compute(pattern, body_v, body_f, s.drape_frames, progress, s.drape_device)
+        apply_drape(context, run)
         self.report({"INFO"}, s.drape_status)
 
     # -- interactive: invoke + modal, the core in a worker thread
@@ -241,7 +126,7 @@ class EASE_OT_drape(EaseOperator):
             return {"CANCELLED"}
         s = context.scene.ease
         # the pattern may change while the drape runs: the garment records the one it was draped from
-        digest = pattern_digest(context.scene.get(PATTERN_KEY, ""))
+        digest = data.pattern_digest(context.scene.get(data.PATTERN_KEY, ""))
         self._job = DrapeJob(pattern, body_v, body_f, s.drape_frames, s.drape_device, digest).start()
         wm = context.window_manager
         wm.progress_begin(0, 100)
@@ -267,27 +152,27 @@ class EASE_OT_drape(EaseOperator):
         return {"CANCELLED"}
 
 
-def apply_drape(context, result, gap, metrics, digest=None) -> None:
-    """Show a finished drape: garment object, fit maps, report (main thread)."""
-    from .body_ops import body_object, body_spec, update_body
-    from .pattern_ops import stored_pattern
-    # show the garment on the body it was draped on
-    obj = body_object(context, required=False)
-    pspec = stored_pattern(context.scene).body or {}
+def apply_drape(context, run, digest=None) -> None:
+    """Show a finished drape (a :class:`core.workflows.DrapeRun`): the body it was draped on,
+    the garment object with its fit maps, the report (main thread). ``digest``: the pattern
+    it was draped from (default: the scene's pattern now)."""
+    from ..core.body.instance import instance_shape
+    scene = context.scene
+    obj = data.body_object(context, required=False)
+    pspec = data.stored_pattern(scene).body or {}
     if obj is not None:
-        spec = body_spec(obj)
-        shape = pspec.get("shape")
-        if isinstance(shape, str):
-            shape, _ = state.size_shape(state.body_model(spec["model"]), shape)
+        spec = data.body_spec(obj)
+        shape = instance_shape(state.body_model(spec["model"]), pspec.get("shape"))
         pose = pspec.get("pose") or "A"
         if (shape and dict(shape) != spec["shape"]) or (isinstance(pose, str) and pose != spec["pose"]):
-            update_body(context, obj, shape=dict(shape) if shape else None,
-                        pose=pose if isinstance(pose, str) else None)
-    garment_object(context, result, gap, digest)
-    rep = drape_report(result, metrics)
-    s = context.scene.ease
-    s.drape_json = json.dumps(rep)
-    s.drape_status = f"draped: {rep['frames']} frames, {rep['settled']}"
+            sync.update_body(context, obj, shape=dict(shape) if shape else None,
+                             pose=pose if isinstance(pose, str) else None)
+    build.garment(scene, run.result, run.metrics["vertex_gap"],
+                  digest or data.pattern_digest(scene.get(data.PATTERN_KEY, "")))
+    sync.apply_fitmap(scene)
+    s = scene.ease
+    s.drape_json = json.dumps(run.figures)
+    s.drape_status = f"draped: {run.figures['frames']} frames, {run.figures['settled']}"
 
 
 def step_job(context, job: DrapeJob, event_type: str) -> str:
@@ -311,7 +196,7 @@ def step_job(context, job: DrapeJob, event_type: str) -> str:
     if job.error is not None:
         s.drape_status = f"drape {'cancelled' if job.cancelled else 'stopped'}: {job.error}"
         return "CANCELLED"
-    apply_drape(context, *job.result, digest=job.digest)
+    apply_drape(context, job.result, digest=job.digest)
     return "FINISHED"
 
 
@@ -323,7 +208,7 @@ class EASE_OT_fitmap(EaseOperator):
     mode: bpy.props.EnumProperty(items=[("NONE", "Fabric", ""), ("STRAIN", "Strain", ""), ("GAP", "Gap", "")])
 
     def run(self, context):
-        if not state.objects_with_role(context.scene, "garment"):
+        if not objects_with_role(context.scene, "garment"):
             raise state.AddonError("no draped garment: drape first")
         context.scene.ease.fitmap = self.mode   # its update applies the map
 

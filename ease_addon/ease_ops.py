@@ -7,46 +7,12 @@ per-triangle ease in the design.
 """
 from __future__ import annotations
 
-
 import bpy
 import numpy as np
 
-from . import convert, ramp, state
-from .body_ops import body_object
+from . import convert, data, ramp, state, sync
+from .objects import select_only
 from .operators_base import EaseOperator
-
-
-def ramp_range(scene) -> tuple:
-    s = scene.ease
-    lo, hi = float(s.ease_min), float(s.ease_max)
-    try:
-        ramp.check_range(lo, hi)
-    except ValueError as exc:
-        raise state.AddonError(str(exc)) from None
-    return lo, hi
-
-
-def refresh_legend(scene) -> None:
-    s = scene.ease
-    s.legend.clear()
-    lo, hi = float(s.ease_min), float(s.ease_max)
-    if not lo < hi:
-        return
-    for e, rgba in ramp.legend(lo, hi, 5):
-        item = s.legend.add()
-        item.ease = e
-        item.color = rgba
-
-
-def init_ease_layer(scene, obj, ease: float = 1.0) -> None:
-    """Create the "ease" layer on a body (uniform ``ease``) unless it has one."""
-    lo, hi = ramp_range(scene)
-    if obj.data.color_attributes.get(convert.EASE_LAYER) is None:
-        convert.ensure_color_layer(obj.data, fill=ramp.ease_to_color(ease, lo, hi))
-    else:
-        convert.ensure_color_layer(obj.data)
-    obj.data["ease_ramp"] = [lo, hi]
-    refresh_legend(scene)
 
 
 def layer_range(obj, scene) -> tuple:
@@ -55,7 +21,7 @@ def layer_range(obj, scene) -> tuple:
     r = obj.data.get("ease_ramp")
     if r is not None and len(r) == 2:
         return float(r[0]), float(r[1])
-    return ramp_range(scene)
+    return data.ramp_range(scene)
 
 
 def vertex_ease(obj, scene) -> np.ndarray:
@@ -89,7 +55,7 @@ def triangle_ease(obj, scene) -> np.ndarray:
 def write_vertex_ease(obj, scene, ease: np.ndarray, mask=None) -> None:
     """Write ease (V,) into the layer (only where ``mask``), re-encoding the
     rest if the scene's ramp range changed since the layer was painted."""
-    lo, hi = ramp_range(scene)
+    lo, hi = data.ramp_range(scene)
     old = vertex_ease(obj, scene) if obj.data.color_attributes.get(convert.EASE_LAYER) else np.ones(len(obj.data.vertices))
     new = old.copy()
     if mask is None:
@@ -106,20 +72,63 @@ def write_vertex_ease(obj, scene, ease: np.ndarray, mask=None) -> None:
 
 def panel_vertex_mask(context, panel: str) -> np.ndarray:
     """Body vertices (V,) bool inside ``panel`` of the current cut."""
-    from . import design_ops
-    cut = design_ops.current_cut(context)
+    cut = data.current_cut(context)
     names = [p.name for p in cut.panels]
     if panel not in names:
         raise state.AddonError(f"no panel {panel!r}; panels: {', '.join(names)}")
-    obj = body_object(context)
-    p = cut.panel(panel)
-    emb = cut.embedding[p.vertex_ids].tocsr()
-    # Rows with a single weight are template vertices inside (or on the seam of) the panel.
-    single = np.diff(emb.indptr) == 1
-    cols = emb.indices[emb.indptr[:-1][single]]
+    obj = data.body_object(context)
+    single, cols = _template_rows(cut, cut.panel(panel))
     mask = np.zeros(len(obj.data.vertices), dtype=bool)
     mask[cols] = True
     return mask
+
+
+def _template_rows(cut, panel) -> tuple:
+    """(rows, template vertex ids): the panel's vertices that are template vertices of the body
+    (rows of the embedding with a single weight: inside the panel or on its seam)."""
+    emb = cut.embedding[panel.vertex_ids].tocsr()
+    single = np.flatnonzero(np.diff(emb.indptr) == 1)
+    return single, emb.indices[emb.indptr[single]]
+
+
+def design_with_triangle_ease(context, design, tri_ease: np.ndarray):
+    """A copy of ``design`` whose every panel has the per-triangle ease
+    ``tri_ease`` (F,) on the body triangles it covers."""
+    obj = data.body_object(context)
+    cut = data.cut_for(design, obj)
+    faces = convert.get_triangles(obj.data)
+    d = design.copy()
+    for p in cut.panels:
+        cols = np.unique(cut.embedding[p.vertex_ids].tocsr().indices)
+        inside = np.zeros(len(obj.data.vertices), dtype=bool)
+        inside[cols] = True
+        tris = np.flatnonzero(inside[faces].all(axis=1))
+        if len(tris) == 0:
+            continue
+        d.set_ease(p.name, {"per_triangle": {"triangles": [int(t) for t in tris],
+                                             "values": [round(float(x), 6) for x in tri_ease[tris]],
+                                             "default": round(float(np.median(tri_ease[tris])), 6)}})
+    return d
+
+
+def design_vertex_ease(context) -> np.ndarray:
+    """Per body vertex ease (V,) of the design's cut (mean of the cut triangles'
+    ease around each template vertex; 1.0 off the garment)."""
+    obj = data.body_object(context)
+    cut = data.current_cut(context)
+    V = len(obj.data.vertices)
+    acc = np.zeros(V)
+    cnt = np.zeros(V)
+    for p in cut.panels:
+        f = np.asarray(p.faces)
+        ev = np.zeros(len(p.vertex_ids))
+        cv = np.zeros(len(p.vertex_ids))
+        np.add.at(ev, f.ravel(), np.repeat(np.asarray(p.ease, dtype=float), 3))
+        np.add.at(cv, f.ravel(), 1.0)
+        single, cols = _template_rows(cut, p)
+        np.add.at(acc, cols, ev[single] / np.maximum(cv[single], 1))
+        np.add.at(cnt, cols, 1.0)
+    return np.where(cnt > 0, acc / np.maximum(cnt, 1), 1.0)
 
 
 def set_brush_color(context, rgba) -> None:
@@ -153,11 +162,11 @@ class EASE_OT_brush_ease(EaseOperator):
     bl_label = "Set Brush Ease"
 
     def run(self, context):
-        lo, hi = ramp_range(context.scene)
+        lo, hi = data.ramp_range(context.scene)
         e = context.scene.ease.ease_value
         if not lo <= e <= hi:
             raise state.AddonError(f"ease {e:.3f} is outside the ramp {lo} .. {hi}")
-        obj = body_object(context)
+        obj = data.body_object(context)
         if tuple(layer_range(obj, context.scene)) != (lo, hi):
             # keep the painted field: re-encode the layer in the new range first
             write_vertex_ease(obj, context.scene, vertex_ease(obj, context.scene))
@@ -171,11 +180,9 @@ class EASE_OT_paint_ease(EaseOperator):
     bl_label = "Paint Ease"
 
     def run(self, context):
-        obj = body_object(context)
-        init_ease_layer(context.scene, obj)
-        for o in context.view_layer.objects:
-            o.select_set(o == obj)
-        context.view_layer.objects.active = obj
+        obj = data.body_object(context)
+        sync.init_ease_layer(context.scene, obj)
+        select_only(context, obj)
         bpy.ops.object.mode_set(mode="VERTEX_PAINT")
         bpy.ops.ease.brush_ease()
 
@@ -191,7 +198,7 @@ class EASE_OT_ease_uniform(EaseOperator):
 
     def run(self, context):
         s = context.scene.ease
-        obj = body_object(context)
+        obj = data.body_object(context)
         panel = "" if self.whole_body else (self.panel or s.ease_panel)
         e = self.ease or s.ease_value
         mask = panel_vertex_mask(context, panel) if panel else None
@@ -209,16 +216,13 @@ class EASE_OT_ease_gradient(EaseOperator):
 
     def run(self, context):
         s = context.scene.ease
-        obj = body_object(context)
+        obj = data.body_object(context)
         panel = "" if self.whole_body else (self.panel or s.ease_panel)
         verts = convert.get_vertices(obj.data)
         mask = panel_vertex_mask(context, panel) if panel else np.ones(len(verts), dtype=bool)
         axis = "XYZ".index(s.gradient_axis)
-        x = verts[:, axis]
-        if axis == 2:
-            x = -x        # "top to bottom": from at the top
-        elif axis == 0:
-            x = x          # right (-X) to left (+X)
+        # "top to bottom" starts at the top (-Z); right to left (-X to +X) and front to back as they come
+        x = -verts[:, axis] if axis == 2 else verts[:, axis]
         lo_x, hi_x = x[mask].min(), x[mask].max()
         t = (x - lo_x) / max(hi_x - lo_x, 1e-9)
         e = s.ease_from + np.clip(t, 0.0, 1.0) * (s.ease_to - s.ease_from)
@@ -232,12 +236,10 @@ class EASE_OT_ease_to_design(EaseOperator):
     bl_label = "Ease to Design"
 
     def run(self, context):
-        from . import design_ops
-        obj = body_object(context)
-        design = design_ops.current_design(context)
+        obj = data.body_object(context)
+        design = data.current_design(context)
         tri = triangle_ease(obj, context.scene)
-        new = design_ops.design_with_triangle_ease(context, design, tri)
-        design_ops.set_design(context, new, recut=True)
+        sync.set_design(context, design_with_triangle_ease(context, design, tri), recut=True)
         self.report({"INFO"}, f"ease {tri.min():.3f} .. {tri.max():.3f} written into the design")
 
 
@@ -247,10 +249,9 @@ class EASE_OT_ease_from_design(EaseOperator):
     bl_label = "Ease from Design"
 
     def run(self, context):
-        from . import design_ops
-        obj = body_object(context)
-        v = design_ops.design_vertex_ease(context)
-        lo, hi = ramp_range(context.scene)
+        obj = data.body_object(context)
+        v = design_vertex_ease(context)
+        lo, hi = data.ramp_range(context.scene)
         if v.min() < lo or v.max() > hi:
             s = context.scene.ease
             s.ease_min, s.ease_max = min(lo, float(v.min())), max(hi, float(v.max()))

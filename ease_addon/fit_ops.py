@@ -1,15 +1,25 @@
 """Fit stage: transfer the design to a size, adapt it to poses within the
-material tolerance; the before/after residual-stretch figures show in the
-panel. The transferred/adapted pattern replaces the pieces beside the body
-(and is what Drape and Export use next)."""
+material tolerance (the core's transfer and adapt workflows); their figures
+(transfer deviation, before/after residual stretch) show in the panel. The
+transferred/adapted pattern replaces the pieces beside the body (and is what
+Drape and Export use next)."""
 from __future__ import annotations
 
 import json
 
-from . import state
-from .body_ops import body_object
+from . import data, state, sync
+from .objects import window_progress
 from .operators_base import EaseOperator
-from .pattern_ops import _progress_for, show_pattern
+
+
+def _fit(context, workflow) -> None:
+    """Run ``workflow(prep, progress)`` (a :mod:`core.workflows` pattern run) on the scene's
+    design; its pattern replaces the pieces beside the body, its figures show in the Fit panel."""
+    prep = data.prepared(context)
+    with window_progress(context) as progress:
+        run = workflow(prep, progress)
+    sync.show_pattern(context, run.pattern)
+    context.scene.ease.fit_json = json.dumps(run.figures)
 
 
 class EASE_OT_transfer_size(EaseOperator):
@@ -18,20 +28,10 @@ class EASE_OT_transfer_size(EaseOperator):
     bl_label = "Transfer to Size"
 
     def run(self, context):
-        from . import design_ops
-        s = context.scene.ease
-        obj = body_object(context)
-        design = design_ops.current_design(context)
-        cut = design_ops.cut_for(design, obj)
-        wm = context.window_manager
-        wm.progress_begin(0, 100)
-        try:
-            pattern, figures = state.transfer_pattern(design, cut, obj, s.fit_size, _progress_for(context))
-        finally:
-            wm.progress_end()
-        show_pattern(context, pattern)
-        s.fit_json = json.dumps(figures)
-        self.report({"INFO"}, f"transferred to {s.fit_size}")
+        from ..core import workflows as wf
+        size = context.scene.ease.fit_size
+        _fit(context, lambda prep, progress: wf.transfer(prep, size, progress=progress))
+        self.report({"INFO"}, f"transferred to {size}")
 
 
 class EASE_OT_adapt_poses(EaseOperator):
@@ -40,22 +40,20 @@ class EASE_OT_adapt_poses(EaseOperator):
     bl_label = "Adapt to Poses"
 
     def run(self, context):
-        from . import design_ops
+        from ..core import workflows as wf
         s = context.scene.ease
         poses = [p for p in ("T", "P1", "P2", "P3") if getattr(s, f"adapt_{p}")]
         if not poses:
             raise state.AddonError("choose at least one pose to adapt to")
-        obj = body_object(context)
-        design = design_ops.current_design(context)
-        cut = design_ops.cut_for(design, obj)
-        wm = context.window_manager
-        wm.progress_begin(0, 100)
-        try:
-            pattern, figures = state.adapt_pattern(design, cut, obj, poses, s.tolerance, _progress_for(context))
-        finally:
-            wm.progress_end()
-        show_pattern(context, pattern)
-        s.fit_json = json.dumps(figures)
+        tol = round(float(s.tolerance), 6)     # the property is single precision: 1.1 reads 1.10000002
+
+        def adapt(prep, progress):
+            # the panel's tolerance is the caller's where it differs from the design's weft
+            # tolerance; where it shows the design's, the design decides both (weft and warp)
+            own = prep.cut.materials.get("eps_weft")
+            mine = None if own is not None and abs(tol - float(own)) < 1e-6 else tol
+            return wf.adapt(prep, poses, eps_weft=mine, progress=progress)
+        _fit(context, adapt)
         self.report({"INFO"}, f"adapted to {', '.join(poses)}")
 
 

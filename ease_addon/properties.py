@@ -2,13 +2,16 @@
 
 What must survive a save lives here or in custom properties of the body
 object: the design JSON (with its ease field), the ease layer on the body
-mesh, keypoint layers, the last pattern/fit/drape reports as JSON.
+mesh, keypoint layers, the last pattern/fit/drape reports as JSON. The
+update callbacks hand over to :mod:`.sync` (the after-change reactions).
 """
 from __future__ import annotations
 
 import bpy
 from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProperty,
                        FloatVectorProperty, IntProperty, PointerProperty, StringProperty)
+
+from . import data, sync
 
 SIZES = [(s, s, f"size {s} of the size chart") for s in ("XS", "S", "M", "L", "XL")]
 POSES = [("A", "A", "reference A-pose"), ("T", "T", "T-pose"),
@@ -18,9 +21,7 @@ POSES = [("A", "A", "reference A-pose"), ("T", "T", "T-pose"),
 
 def _shape_value_update(self, context):
     # Slider moved: update the body in place (no-op while the add-on itself fills the list).
-    from . import body_ops
-    if not body_ops.SYNCING:
-        body_ops.apply_shape_from_props(context, report=None)
+    sync.shape_changed(self, context)
 
 
 class EASE_PG_shape_param(bpy.types.PropertyGroup):
@@ -30,8 +31,7 @@ class EASE_PG_shape_param(bpy.types.PropertyGroup):
 
 
 def _param_update(self, context):
-    from . import design_ops
-    design_ops.param_update(self, context)
+    sync.param_changed(self, context)
 
 
 class EASE_PG_design_param(bpy.types.PropertyGroup):
@@ -49,18 +49,15 @@ class EASE_PG_legend(bpy.types.PropertyGroup):
 
 
 def _ramp_update(self, context):
-    from . import ease_ops
-    ease_ops.refresh_legend(context.scene)
+    sync.refresh_legend(context.scene)
 
 
 def _fitmap_update(self, context):
-    from . import drape_ops
-    drape_ops.apply_fitmap(context.scene)
+    sync.apply_fitmap(context.scene)
 
 
 def _template_items(self, context):
-    from . import design_ops
-    return design_ops.template_items()
+    return data.template_items()
 
 
 class EASE_PG_scene(bpy.types.PropertyGroup):

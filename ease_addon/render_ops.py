@@ -7,9 +7,9 @@ import os
 
 import bpy
 import numpy as np
-from mathutils import Vector
 
-from . import convert, state
+from . import state
+from .objects import collection, ensure_nodes, world_bounds
 from .operators_base import EaseOperator
 
 STUDIO = "EASE Studio"
@@ -17,18 +17,15 @@ STUDIO = "EASE Studio"
 
 def scene_bounds(scene) -> tuple:
     """(min, max) world corners of the visible EASE meshes (body, garment, pattern)."""
-    pts = []
-    for o in scene.objects:
-        if o.type == "MESH" and o.get("ease_role") in ("body", "garment", "pattern_panel") and not o.hide_render:
-            pts.extend(o.matrix_world @ Vector(c) for c in o.bound_box)
-    if not pts:
+    shown = [o for o in scene.objects if o.type == "MESH" and not o.hide_render
+             and o.get("ease_role") in ("body", "garment", "pattern_panel")]
+    if not shown:
         return np.array([-0.5, -0.3, 0.0]), np.array([0.5, 0.3, 1.8])
-    a = np.array([tuple(p) for p in pts])
-    return a.min(axis=0), a.max(axis=0)
+    return world_bounds(shown)
 
 
 def _studio_object(scene, name, data):
-    coll = state.collection(scene)
+    coll = collection(scene)
     obj = bpy.data.objects.get(name)
     if obj is None:
         obj = bpy.data.objects.new(name, data)
@@ -70,7 +67,7 @@ def setup_studio(scene, samples: int = 16, resolution_pct: int = 50) -> None:
         lo_obj.rotation_euler = rot
     world = scene.world or bpy.data.worlds.new(STUDIO + " World")
     scene.world = world
-    convert.ensure_nodes(world)
+    ensure_nodes(world)
     bg = world.node_tree.nodes.get("Background")
     if bg is not None:
         bg.inputs["Color"].default_value = (0.6, 0.6, 0.62, 1.0)

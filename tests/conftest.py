@@ -111,3 +111,88 @@ def bpy_session():
 def addon(bpy_session):
     """``addon("state")`` -> the enabled extension's ``ease_addon.state`` module."""
     return lambda name: sys.modules[f"{bpy_session['module']}.ease_addon.{name}"]
+
+
+ADDON_DESIGN = "top_sleeveless.json"     # the add-on tests' design: the cheapest template (two panels)
+
+
+class AddonScene:
+    """The add-on tests' handle on the session's bpy: the scene a test module starts from and
+    the read-backs every module uses.
+
+    Each add-on test module builds the scene it needs with :meth:`reset` in a module fixture
+    (an empty scene, then the designer's steps up to the stage it tests), so no module depends
+    on another having run first.
+    """
+
+    def __init__(self, session: dict):
+        self.bpy, self.module, self.tmp = session["bpy"], session["module"], session["tmp"]
+
+    def mod(self, name: str):
+        """The enabled extension's ``ease_addon.<name>`` module."""
+        return sys.modules[f"{self.module}.ease_addon.{name}"]
+
+    @property
+    def scene(self):
+        return self.bpy.context.scene
+
+    def reset(self, body: bool = False, design: str = None, piecewise_ease: bool = False,
+              pattern: bool = False, drape_frames: int = 0):
+        """An empty scene, then (each step needs the ones before it): the default body, the
+        template ``design``, a piecewise ease field painted into the design (1.2 on the
+        body, 1.4 on the first panel), the optimized pattern, a drape of ``drape_frames``."""
+        ops = self.bpy.ops
+        if self.bpy.context.object is not None and self.bpy.context.object.mode != "OBJECT":
+            ops.object.mode_set(mode="OBJECT")
+        ops.wm.read_homefile(use_empty=True)
+        steps = []
+        if body:
+            steps.append((ops.ease.add_body, dict(source="DEFAULT")))
+        if design:
+            steps.append((ops.ease.load_template, dict(template=design)))
+        for op, kw in steps:
+            assert op(**kw) == {"FINISHED"}, op.idname()
+        if piecewise_ease:
+            first = self.mod("data").current_cut(self.bpy.context).panels[0].name
+            assert ops.ease.ease_uniform(whole_body=True, ease=1.2) == {"FINISHED"}
+            assert ops.ease.ease_uniform(panel=first, ease=1.4) == {"FINISHED"}
+            assert ops.ease.ease_to_design() == {"FINISHED"}
+        if pattern:
+            assert ops.ease.optimize_pattern() == {"FINISHED"}
+        if drape_frames:
+            self.scene.ease.drape_frames, self.scene.ease.drape_device = drape_frames, "cpu"
+            assert ops.ease.drape() == {"FINISHED"}
+        return self
+
+    def objects(self, role: str) -> list:
+        return [o for o in self.bpy.data.objects if o.get("ease_role") == role]
+
+    @staticmethod
+    def verts(obj):
+        """(V, 3) float32 object-space vertex positions of a mesh object."""
+        import numpy as np
+        co = np.empty(len(obj.data.vertices) * 3, dtype=np.float32)
+        obj.data.vertices.foreach_get("co", co)
+        return co.reshape(-1, 3)
+
+    @staticmethod
+    def world_box(obj):
+        """Min and max corner of an object's world-space bounding box."""
+        import numpy as np
+        m = np.array(obj.matrix_world)
+        c = np.array([list(v) for v in obj.bound_box]) @ m[:3, :3].T + m[:3, 3]
+        return c.min(0), c.max(0)
+
+    @staticmethod
+    def run(op, **kw):
+        """Call an operator; its result set, or ``{"ERROR": message}`` when it reported an error."""
+        try:
+            return op(**kw)
+        except RuntimeError as exc:
+            return {"ERROR": str(exc)}
+
+
+@pytest.fixture(scope="session")
+def blender(bpy_session):
+    """:class:`AddonScene` on the session's bpy."""
+    return AddonScene(bpy_session)

@@ -67,7 +67,7 @@ def _install_and_run(z: Path, user: Path) -> dict:
 def _check_sources(names, manifest):
     assert 'platforms = ["linux-x64"]' in manifest
     assert "__init__.py" in names and "ease_addon/__init__.py" in names and "core/__init__.py" in names
-    assert any(n.startswith("examples/designs/") and n.endswith(".json") for n in names)
+    assert any(n.startswith("core/data/designs/") and n.endswith(".json") for n in names)   # the templates
     assert any(n.startswith("core/data/") for n in names)
     for bad in ("tests/", "tools/", "benchmarks/", ".venv/", ".cache/", ".git/", ".ci/"):
         assert not any(n.startswith(bad) for n in names), bad

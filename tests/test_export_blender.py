@@ -1,18 +1,9 @@
-"""The GLB and OBJ of core.export.mesh read back by Blender's own importers (bpy)."""
-import os
-import sys
-import tempfile
-from pathlib import Path
-
+"""The GLB and OBJ of core.export.mesh read back by Blender's own importers (the session's bpy)."""
 import numpy as np
 import pytest
 
-from export_synth import drape_positions, make_pattern  # noqa: E402
-
-os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="ease-blender-"))
-bpy = pytest.importorskip("bpy")
-
-from core.export import export_pattern  # noqa: E402
+from core.export import export_pattern
+from export_synth import drape_positions, make_pattern
 
 
 def _mesh_arrays(obj):
@@ -39,9 +30,10 @@ def exported(tmp_path_factory):
 
 
 @pytest.mark.parametrize("fmt", ["glb", "obj"])
-def test_blender_imports_positions_and_pattern_uvs(exported, fmt):
+def test_blender_imports_positions_and_pattern_uvs(bpy_session, exported, fmt):
+    bpy = bpy_session["bpy"]
     pat, pos, out = exported
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.read_homefile(use_empty=True)     # an empty scene; the session's preferences stay
     if fmt == "glb":
         bpy.ops.import_scene.gltf(filepath=str(out / "garment.glb"))
     else:

@@ -1,0 +1,182 @@
+"""Blender objects from the core's results, each written in one pass.
+
+Everything is computed first, in plain Python by the core (the cut's seam
+loops, the pattern's grain line and sheet layout); the functions here only
+turn those arrays into meshes, curves and text objects. An object of a role
+replaces the earlier ones of that role once the new one exists.
+"""
+from __future__ import annotations
+
+import json
+
+import bpy
+import numpy as np
+
+from . import convert, data, materials, ramp
+from .objects import objects_with_role, remove_objects, role_object
+
+SEAMLINES = "EASE Seamlines"
+KEYPOINTS = "EASE Keypoints"
+ACHIEVED = "achieved_ease"     # CORNER colour layer of the pattern panels (per triangle)
+GAP = 0.08                     # metres between laid-out panels
+SHEET_WIDTH = 1.6              # metres: the pieces beside the body are laid out this wide
+SHEET_TOP = 1.8                # metres: height of the pieces' top edge
+
+
+def body(scene, name: str, vertices: np.ndarray, faces: np.ndarray):
+    """A body object (skin material, smooth shading) with ``vertices`` (V, 3) and ``faces`` (F, 3)."""
+    me = convert.mesh_from_arrays(name, vertices, faces)
+    me.materials.append(materials.skin())
+    for poly in me.polygons:
+        poly.use_smooth = True
+    return role_object(scene, name, me, "body")
+
+
+def seam_loops(cut) -> list:
+    """Global garment vertex ids of every panel boundary loop (closed polylines)."""
+    loops = []
+    for p in cut.panels:
+        for b in p.boundary:
+            loops.append(np.asarray(p.vertex_ids)[np.asarray(b)])
+    return loops
+
+
+def seamlines(scene, cut, verts) -> None:
+    """The seamlines of ``cut`` on the body vertices ``verts`` (a wire object kept in front)."""
+    pos = cut.positions(verts)
+    loops = seam_loops(cut)
+    v, e = convert.polyline_edges([pos[l] for l in loops], closed=True)
+    old = objects_with_role(scene, "seamlines")
+    obj = role_object(scene, SEAMLINES, convert.mesh_edges_from_arrays(SEAMLINES, v, e), "seamlines")
+    obj["ease_ids"] = json.dumps([l.tolist() for l in loops])
+    obj.show_in_front = True
+    obj.color = (1.0, 0.85, 0.1, 1.0)
+    obj.hide_select = True
+    remove_objects(old)
+
+
+def keypoint_markers(scene, names, pts) -> None:
+    """Point markers at the keypoints ``pts`` (K, 3) named ``names``."""
+    old = objects_with_role(scene, "keypoints")
+    me = convert.mesh_edges_from_arrays(KEYPOINTS, pts, np.zeros((0, 2)))
+    obj = role_object(scene, KEYPOINTS, me, "keypoints")
+    obj["ease_names"] = json.dumps(names)
+    obj.show_in_front = True
+    obj.hide_select = True
+    remove_objects(old)
+
+
+def _xz(points2d: np.ndarray, y: float = 0.0) -> np.ndarray:
+    """2D pattern points (n, 2) in the XZ plane (facing the camera, -Y) at depth ``y``."""
+    p = np.asarray(points2d, dtype=np.float64).reshape(-1, 2)
+    return np.stack([p[:, 0], np.full(len(p), y), p[:, 1]], axis=1)
+
+
+def pattern_pieces(scene, pattern, lo: float, hi: float, x0: float, role: str = "pattern_panel") -> list:
+    """The pattern's pieces beside the body (replacing earlier ones of ``role``).
+
+    Each piece is a mesh in the XZ plane: local coordinates are the pattern's
+    2D metres, so its dimensions are the piece's. Children: the boundary
+    curve(s), the grain-line arrow and the piece's name. The pieces are laid
+    out by the core's sheet layout, its top-left corner at (``x0``, 1.8 m).
+    """
+    from ..core.geom.layout import grain_arrows, grain_line, layout_pieces
+    old = objects_with_role(scene, role) + objects_with_role(scene, role + "_part")
+    layout = layout_pieces([np.array([p.uv.min(axis=0), p.uv.max(axis=0)]) for p in pattern.panels],
+                           width=SHEET_WIDTH, margin=GAP)
+    corner = np.array([x0 - GAP, SHEET_TOP + GAP - layout.size[1]])   # the sheet's bottom-left
+    mat = materials.attribute("EASE Achieved Ease", ACHIEVED)
+    made = []
+    for p, off in zip(pattern.panels, layout.offsets):
+        uv = np.asarray(p.uv, dtype=np.float64)
+        v3 = _xz(uv)
+        me = convert.mesh_from_arrays(f"EASE piece {p.name}", v3, p.faces)
+        # colour layers live on points or corners: every corner of a triangle gets its achieved ease
+        col = me.color_attributes.new(ACHIEVED, "FLOAT_COLOR", "CORNER")
+        rgba = ramp.ease_to_color(np.clip(p.achieved_weft, lo, hi), lo, hi)
+        col.data.foreach_set("color", np.repeat(rgba, 3, axis=0).ravel())
+        me.attributes.new("achieved_weft", "FLOAT", "FACE").data.foreach_set(
+            "value", np.asarray(p.achieved_weft, dtype=np.float32))
+        me["ease_ramp"] = (float(lo), float(hi))     # the colours' ramp range (legend, read-back)
+        me.materials.append(mat)
+        obj = role_object(scene, f"EASE piece {p.name}", me, role)
+        ox, oz = corner + off
+        obj.location = (float(ox), 0.0, float(oz))
+        obj["ease_panel"] = p.name
+        obj["ease_mean_achieved_weft"] = float(np.mean(p.achieved_weft))
+        made.append(obj)
+        part = role + "_part"
+        # boundary curve(s), just in front of the mesh
+        cd = bpy.data.curves.new(f"EASE outline {p.name}", "CURVE")
+        cd.dimensions = "3D"
+        for loop in p.boundary:
+            loop = np.asarray(loop)
+            sp = cd.splines.new("POLY")
+            sp.points.add(len(loop) - 1)
+            pts = np.hstack([_xz(uv[loop], -0.001), np.ones((len(loop), 1))]).astype(np.float32)
+            sp.points.foreach_set("co", pts.ravel())
+            sp.use_cyclic_u = True
+        cd.bevel_depth = 0.002
+        role_object(scene, f"EASE outline {p.name}", cd, part, parent=obj)
+        # grain-line arrow: the core's grain line with its arrow heads
+        start, end = grain_line(uv, p.faces, p.boundary, p.grain)
+        v, e = convert.polyline_edges([_xz(l, -0.002) for l in [np.array([start, end])] +
+                                       grain_arrows(start, end)], closed=False)
+        role_object(scene, f"EASE grain {p.name}", convert.mesh_edges_from_arrays(f"EASE grain {p.name}", v, e),
+                    part, parent=obj)
+        # piece name, above the grain line's middle
+        fd = bpy.data.curves.new(f"EASE label {p.name}", "FONT")
+        fd.body = p.name.split(".", 1)[-1] + (" (mirror)" if p.mirror_of else "")
+        fd.size = 0.045
+        fd.align_x = "CENTER"
+        label = role_object(scene, f"EASE label {p.name}", fd, part, parent=obj)
+        c = 0.5 * (start + end)
+        label.location = (float(c[0]), -0.003, float(c[1]) + 0.03)
+        label.rotation_euler = (np.pi / 2, 0.0, 0.0)
+    remove_objects(old)
+    return made
+
+
+# ----------------------------------------------------------------------------- draped garment
+
+GARMENT = "EASE Garment"
+STRAIN_LAYER = "fit_strain"
+GAP_LAYER = "fit_gap"
+FIT_MAPS = {"STRAIN": STRAIN_LAYER, "GAP": GAP_LAYER}   # Fit map choice -> colour layer
+STRAIN_RANGE = (0.0, 0.10)    # weft strain 0 .. 10 % mapped blue .. red
+GAP_RANGE = (0.0, 0.05)       # gap 0 .. 5 cm mapped blue .. red
+
+
+def _map_colors(values, lo, hi) -> np.ndarray:
+    # Same ramp as ease (blue = low, red = high) so the legend reads the same way.
+    return ramp.ease_to_color(np.clip(values, lo, hi) + 1.0, lo + 1.0, hi + 1.0)
+
+
+def garment(scene, result, gap, digest: str):
+    """The garment object of a DrapeResult (replacing an earlier one): fabric material, the
+    fit-map colour layers (strain, gap) with their values, and the pattern vertex id of each
+    vertex (layer :data:`.data.VERTEX_ID`); ``digest`` names the pattern it was draped from."""
+    used = np.asarray(result.used, dtype=bool)
+    ids = np.flatnonzero(used)
+    remap = -np.ones(len(used), dtype=np.int64)
+    remap[ids] = np.arange(len(ids))
+    faces = remap[np.asarray(result.faces)]
+    me = convert.mesh_from_arrays(GARMENT, np.asarray(result.positions)[ids], faces)
+    for layer, values, (lo, hi) in ((STRAIN_LAYER, np.asarray(result.strain_weft)[ids], STRAIN_RANGE),
+                                    (GAP_LAYER, None if gap is None else np.asarray(gap)[ids], GAP_RANGE)):
+        if values is None:
+            continue
+        attr = me.color_attributes.new(layer, "FLOAT_COLOR", "POINT")
+        attr.data.foreach_set("color", _map_colors(values, lo, hi).ravel())
+        me.attributes.new(layer + "_value", "FLOAT", "POINT").data.foreach_set(
+            "value", np.asarray(values, dtype=np.float32))
+    # which pattern vertex each garment vertex is: the export reads the garment back by it
+    me.attributes.new(data.VERTEX_ID, "INT", "POINT").data.foreach_set("value", ids.astype(np.int32))
+    me.materials.append(materials.fabric())
+    for poly in me.polygons:
+        poly.use_smooth = True
+    old = objects_with_role(scene, "garment")
+    obj = role_object(scene, GARMENT, me, "garment")
+    obj["ease_pattern"] = digest     # draped from this pattern
+    remove_objects(old)
+    return obj

@@ -1,0 +1,67 @@
+"""Fit operators (ease_addon.fit_ops): transfer to a size and adaptation to poses show their
+figures; the add-on and the command line give the same pattern.json."""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+DESIGN = "top_sleeveless.json"     # cheapest template: two panels
+
+
+@pytest.fixture(scope="module", autouse=True)
+def scene(blender):
+    """This module's starting scene."""
+    return blender.reset(body=True, design=DESIGN)
+
+
+def test_transfer_and_adapt_show_figures(bpy_session):
+    bpy = bpy_session["bpy"]
+    s = bpy.context.scene.ease
+    s.fit_size = "L"
+    assert bpy.ops.ease.transfer_size() == {"FINISHED"}
+    fig = json.loads(s.fit_json)
+    assert fig["size"] == "L" and fig["transfer deviation mean %"] >= 0
+    s.adapt_P1, s.adapt_P2, s.adapt_P3, s.adapt_T = True, False, False, False
+    s.tolerance = 1.1
+    assert bpy.ops.ease.adapt_poses() == {"FINISHED"}
+    fig = json.loads(s.fit_json)
+    keys = [k for k in fig if k.startswith("P1")]
+    assert keys
+    for k in keys:
+        before, after = (float(x) for x in fig[k].split("/"))
+        assert after <= before + 1e-6
+
+
+WALL_TIMES = ("timings", "optimize_seconds", "init_seconds")    # report entries that differ run to run
+
+
+def _canonical(text: str) -> str:
+    """pattern.json text as the add-on stores it, the report's wall-clock seconds taken out."""
+    from core.fileio import dumps_json
+    obj = json.loads(text)
+    for key in WALL_TIMES:
+        obj["report"].pop(key, None)
+    return dumps_json(obj, indent=None)
+
+
+@pytest.mark.parametrize("mode, cli_args, panel", [
+    ("pattern", [], {}),
+    ("transfer", ["--size", "L"], {"fit_size": "L"}),
+    ("adapt", ["--pose", "P1"], {"adapt_T": False, "adapt_P1": True, "adapt_P2": False, "adapt_P3": False}),
+])
+def test_addon_and_command_line_write_the_same_pattern(bpy_session, addon, tmp_path, mode, cli_args, panel):
+    """One design through `ease pattern|transfer|adapt` and through the add-on's operators: the
+    same pattern.json (the wall-clock seconds in its report aside)."""
+    from core.cli import main
+    from core.design.templates import template_path
+    bpy = bpy_session["bpy"]
+    assert main([mode, str(template_path("top_sleeveless")), "--out", str(tmp_path), "--quiet"] + cli_args) == 0
+    s = bpy.context.scene.ease
+    for key, value in panel.items():
+        setattr(s, key, value)
+    op = {"pattern": bpy.ops.ease.optimize_pattern, "transfer": bpy.ops.ease.transfer_size,
+          "adapt": bpy.ops.ease.adapt_poses}[mode]
+    assert op() == {"FINISHED"}
+    text = bpy.context.scene[addon("data").PATTERN_KEY]
+    assert _canonical(text) == _canonical((tmp_path / "pattern.json").read_text())
