@@ -1,0 +1,190 @@
+"""Batch benchmark: ``ease batch`` throughput, scaling and cluster equivalence on the shirt.
+
+``run(out_dir, quick=False)`` writes ``batch.md`` and ``batch.json``:
+
+- throughput: the long-sleeve shirt over sampled Anny bodies, pattern only
+  (pattern.json + report.json + body.json per item, no preview), on 1 and on
+  2 local workers. The steady rate is items per second between the first and
+  the last completed item (the cluster start and each worker's one-off cut
+  of the design excluded; they are listed apart); per core = rate / workers.
+  Per-item split (median over items, ms): body (shape + girths), transfer
+  (the solve), metrics (compliance, seams), write;
+- speed-up: the 2-worker steady rate over the 1-worker one;
+- simulated cluster: a ``dask scheduler`` and two ``dask worker`` processes
+  started on localhost, the same bodies (same seed) through ``--scheduler``;
+  its manifest is compared with the LocalCluster's, timings and worker ids
+  left out;
+- population (not with ``quick``): 1,000 sampled bodies on 2 workers, every
+  failure listed with its reason.
+
+The datasets are written to a temporary folder and removed.
+"""
+from __future__ import annotations
+
+import os
+import platform
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parent.parent
+if str(REPO) not in sys.path:
+    sys.path.insert(0, str(REPO))
+
+DESIGN = "shirt_long_sleeve"
+SEED = 2024
+
+
+def _timed_batch(design, bodies, out, **kw):
+    """run_batch with the completion times of its items (s since the start)."""
+    from core.batch import run_batch
+    t0 = time.perf_counter()
+    stamps = []
+
+    def progress(fraction, message):
+        if "/" in message.split()[0] and not message.startswith("0/"):
+            stamps.append(time.perf_counter() - t0)
+
+    res = run_batch(design, bodies, out, progress=progress, **kw)
+    return res, stamps, time.perf_counter() - t0
+
+
+def _steady_rate(stamps) -> float:
+    return (len(stamps) - 1) / (stamps[-1] - stamps[0]) if len(stamps) > 1 and stamps[-1] > stamps[0] else 0.0
+
+
+def _split(rows) -> dict:
+    ok = [r for r in rows if r["status"] == "ok"]
+    out = {}
+    for k in ("body", "transfer", "metrics", "write", "setup"):
+        vals = [r[f"timings.{k}"] for r in ok if f"timings.{k}" in r]
+        out[k] = round(1000.0 * float(np.median(vals)), 1) if vals else None
+    return out
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _simulated_cluster(n_workers: int):
+    """(address, processes): a scheduler and ``n_workers`` worker processes on localhost."""
+    port = _free_port()
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")])}
+    quiet = dict(stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=str(REPO), env=env)
+    address = f"tcp://127.0.0.1:{port}"
+    procs = [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
+                               "--port", str(port), "--no-dashboard"], **quiet)]
+    for _ in range(n_workers):
+        procs.append(subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address,
+                                       "--nthreads", "1", "--nworkers", "1", "--no-dashboard"], **quiet))
+    from distributed import Client
+    deadline = time.monotonic() + 60
+    while True:
+        try:
+            with Client(address, timeout="5s") as c:
+                c.wait_for_workers(n_workers, timeout=60)
+            return address, procs
+        except (OSError, TimeoutError):
+            if time.monotonic() > deadline:
+                _stop(procs)
+                raise
+
+
+def _stop(procs) -> None:
+    for p in reversed(procs):
+        p.terminate()
+    for p in procs:
+        try:
+            p.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            p.kill()
+
+
+def run(out_dir, quick: bool = False) -> dict:
+    from core.batch import sample_anny
+    from core.batch.manifest import comparable
+    from core.design.templates import template_path
+    from core.fileio import write_json, write_text
+
+    out = Path(out_dir)
+    design = template_path(DESIGN)
+    n = 16 if quick else 60
+    bodies = sample_anny(n, seed=SEED)
+    result = {"design": DESIGN, "bodies": n, "seed": SEED, "cpu_count": os.cpu_count(),
+              "machine": f"{platform.machine()}, {os.cpu_count()} CPUs (shared)", "runs": {}}
+    with tempfile.TemporaryDirectory(prefix="ease_bench_batch_") as tmp:
+        tmp = Path(tmp)
+        for w in (1, 2):
+            res, stamps, wall = _timed_batch(design, bodies, tmp / f"local{w}", workers=w)
+            rate = _steady_rate(stamps)
+            result["runs"][f"local_{w}"] = {
+                "workers": w, "made": res.made, "failed": res.failed, "wall_s": round(wall, 2),
+                "first_item_s": round(stamps[0], 2) if stamps else None,
+                "steady_items_per_s": round(rate, 2), "items_per_s_per_core": round(rate / w, 2),
+                "split_ms": _split(res.rows)}
+            if w == 2:
+                local_rows = res.rows
+        r1, r2 = result["runs"]["local_1"], result["runs"]["local_2"]
+        result["speedup_2_vs_1"] = (round(r2["steady_items_per_s"] / r1["steady_items_per_s"], 2)
+                                    if r1["steady_items_per_s"] else None)
+
+        address, procs = _simulated_cluster(2)
+        try:
+            res, stamps, wall = _timed_batch(design, bodies, tmp / "cluster", scheduler=address)
+        finally:
+            _stop(procs)
+        same = comparable(res.rows) == comparable(local_rows)
+        result["runs"]["simulated_cluster"] = {"workers": res.workers, "made": res.made, "failed": res.failed,
+                                               "wall_s": round(wall, 2), "steady_items_per_s":
+                                                   round(_steady_rate(stamps), 2), "same_manifest": same}
+
+        if not quick:
+            many = sample_anny(1000, seed=SEED)
+            res, stamps, wall = _timed_batch(design, many, tmp / "population", workers=2)
+            fails = [{"label": r["label"], "status": r["status"], "error": r["error"]}
+                     for r in res.rows if r["status"] != "ok"]
+            result["population"] = {"bodies": 1000, "made": res.made, "failed": res.failed, "crashed": False,
+                                    "wall_s": round(wall, 1), "steady_items_per_s": round(_steady_rate(stamps), 2),
+                                    "failures": fails, "split_ms": _split(res.rows)}
+
+    lines = ["# Batch: `ease batch` on Dask", "",
+             f"Design: {DESIGN} (Anny), {n} bodies sampled with seed {SEED} (uniform phenotypes, adult ages), "
+             f"pattern only (pattern.json, report.json, body.json per item; no preview). "
+             f"Machine: {result['machine']}.", "",
+             "Steady rate: items per second between the first and the last completed item (cluster start and "
+             "each worker's one-off cut of the design excluded: `first item` is the wall time to the first "
+             "completed item). Split: median per item, ms.", "",
+             "| run | workers | items ok / failed | wall s | first item s | items/s | items/s/core | "
+             "body ms | transfer ms | metrics ms | write ms | setup (cut) ms |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for name in ("local_1", "local_2"):
+        r, s = result["runs"][name], result["runs"][name]["split_ms"]
+        lines.append(f"| LocalCluster | {r['workers']} | {r['made']} / {r['failed']} | {r['wall_s']} | "
+                     f"{r['first_item_s']} | {r['steady_items_per_s']} | {r['items_per_s_per_core']} | "
+                     f"{s['body']} | {s['transfer']} | {s['metrics']} | {s['write']} | {s['setup']} |")
+    c = result["runs"]["simulated_cluster"]
+    lines += ["", f"Speed-up, 2 workers over 1 (steady rate): **{result['speedup_2_vs_1']}x**.", "",
+              f"Simulated cluster (a `dask scheduler` and {c['workers']} `dask worker` processes on localhost, "
+              f"`--scheduler`): {c['made']} ok / {c['failed']} failed in {c['wall_s']} s "
+              f"({c['steady_items_per_s']} items/s); manifest equal to the 2-worker LocalCluster's "
+              f"(timings and worker ids aside): **{'yes' if c['same_manifest'] else 'NO'}**.", ""]
+    if "population" in result:
+        p = result["population"]
+        lines += [f"Population: 1,000 sampled bodies on 2 workers: {p['made']} ok, {p['failed']} failed, "
+                  f"no crash, {p['wall_s']} s ({p['steady_items_per_s']} items/s steady).", ""]
+        if p["failures"]:
+            lines += ["| body | status | reason |", "|---|---|---|"]
+            lines += [f"| {f['label']} | {f['status']} | {f['error']} |" for f in p["failures"]]
+            lines.append("")
+    else:
+        lines += ["Population (1,000 bodies): not run in quick mode.", ""]
+    write_text(out / "batch.md", "\n".join(lines))
+    write_json(out / "batch.json", result)
+    return result

@@ -1,0 +1,175 @@
+"""Run a batch on Dask distributed: a LocalCluster by default, or an existing scheduler.
+
+The driver (this process) reads the manifest, submits every item not yet
+done, and appends each returned row to the journal; workers make the items
+(:func:`core.batch.worker.run_item`) and write their folders. Only the driver
+writes the manifest, and only after a worker has returned, that is after the
+item's folder is complete, so an interruption at any moment leaves complete
+rows of complete items, and a rerun of the same command makes exactly the
+items without an ``ok`` row.
+"""
+from __future__ import annotations
+
+import json
+import logging
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import List, Optional, Sequence
+
+from ..errors import EaseError
+from ..progress import Progress, report
+from .bodies import BodySource
+from .items import Item, Options, make_items
+from .manifest import Journal, compact, completed, read_rows
+from .worker import one_line, run_item
+
+
+class BatchError(EaseError):
+    """A batch cannot start (bad design, no bodies, no scheduler)."""
+
+
+@dataclass
+class BatchResult:
+    """What a run did.
+
+    Attributes
+    ----------
+    total : items of the batch; skipped : already complete before this run;
+    made : completed ok in this run; failed : rows with status error/timeout in
+    this run; interrupted : stopped by Ctrl-C (or a progress callback raising
+    KeyboardInterrupt); seconds : wall time of this run; workers : number of
+    workers used; rows : the compacted manifest (all runs).
+    """
+    total: int
+    skipped: int
+    made: int = 0
+    failed: int = 0
+    interrupted: bool = False
+    seconds: float = 0.0
+    workers: int = 0
+    rows: List[dict] = field(default_factory=list)
+
+    def summary(self) -> str:
+        state = "interrupted" if self.interrupted else "done"
+        return (f"batch {state}: {self.made} made, {self.failed} failed, {self.skipped} already complete, "
+                f"{self.total} items, {self.seconds:.1f} s on {self.workers} workers")
+
+
+def read_design(design) -> dict:
+    """The design as a JSON dict, checked (a bad design stops the batch before any worker starts)."""
+    from ..design import load_design
+    if isinstance(design, dict):
+        obj = design
+    else:
+        path = Path(design)
+        try:
+            obj = json.loads(path.read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise BatchError(f"{path}: cannot read the design ({exc.strerror or exc})") from None
+        except json.JSONDecodeError as exc:
+            raise BatchError(f"{path}: not JSON ({exc})") from None
+    load_design(json.loads(json.dumps(obj)))
+    return obj
+
+
+def _client(workers: Optional[int], scheduler: Optional[str]):
+    """(client, cluster or None, number of workers)."""
+    from distributed import Client, LocalCluster
+    if scheduler:
+        try:
+            client = Client(scheduler, timeout="20s")
+        except (OSError, TimeoutError) as exc:
+            raise BatchError(f"--scheduler {scheduler}: cannot connect ({one_line(exc)})") from None
+        return client, None, len(client.scheduler_info().get("workers", {}))
+    n = int(workers or os.cpu_count() or 1)
+    if n < 1:
+        raise BatchError(f"--workers: expected >= 1, got {n}")
+    # processes, one thread each: the solver is numpy/scipy-bound and holds the GIL between calls
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                           silence_logs=logging.ERROR)
+    return Client(cluster), cluster, n
+
+
+def _eta(seconds: float) -> str:
+    s = int(round(seconds))
+    return f"{s // 3600}:{s % 3600 // 60:02d}:{s % 60:02d}"
+
+
+def run_batch(design, bodies: Sequence[BodySource], out, model: str = "anny", options: Optional[Options] = None,
+              workers: Optional[int] = None, scheduler: Optional[str] = None, item_timeout: Optional[float] = None,
+              progress: Optional[Progress] = None) -> BatchResult:
+    """Make every design × body item not yet in ``out``'s manifest.
+
+    Parameters
+    ----------
+    design : path or JSON dict of the design
+    bodies : the batch's bodies (:mod:`core.batch.bodies`)
+    out : the dataset folder: ``items/<id>/`` per item, ``manifest.jsonl`` (+ ``.parquet``)
+    model : body model name or file the design is cut on and the bodies are of
+    options : what each item makes besides the transfer (:class:`Options`)
+    workers : LocalCluster workers (default: the CPU count); ignored with ``scheduler``
+    scheduler : ``tcp://HOST:PORT`` of a running Dask scheduler
+    item_timeout : seconds an item may take (its worker's one-off cut of the design excluded)
+    progress : ``progress(fraction, message)``; the message reads
+        ``"12/100 items, 1 failed, ETA 0:01:05"``. It may raise KeyboardInterrupt
+        to stop as Ctrl-C would.
+
+    Returns
+    -------
+    BatchResult; the manifest is compacted (sorted by id) even when interrupted.
+    """
+    if not bodies:
+        raise BatchError("no bodies: give --bodies, --sample or --smpl-betas")
+    if item_timeout is not None and not item_timeout > 0:
+        raise BatchError(f"--item-timeout: expected seconds > 0, got {item_timeout}")
+    obj = read_design(design)
+    out = Path(out)
+    items = make_items(obj, bodies, model=model, options=options)
+    done = completed(read_rows(out / "manifest.jsonl"))
+    pending: List[Item] = [it for it in items if it.id not in done]
+    result = BatchResult(total=len(items), skipped=len(items) - len(pending))
+    t0 = time.perf_counter()
+    if pending:
+        _submit(pending, out, workers, scheduler, item_timeout, progress, result)
+    result.rows = compact(out)
+    result.seconds = time.perf_counter() - t0
+    return result
+
+
+def _submit(pending, out, workers, scheduler, item_timeout, progress, result: BatchResult) -> None:
+    from distributed import as_completed
+
+    journal = Journal(out)
+    client, cluster, result.workers = _client(workers, scheduler)
+    futures = []
+    try:
+        futures = client.map(run_item, pending, out_root=str(out.resolve()), time_limit=item_timeout,
+                             key=[f"ease-item-{it.id}" for it in pending], pure=False)
+        by_key = {f.key: it for f, it in zip(futures, pending)}
+        t0, n = time.perf_counter(), len(pending)
+        report(progress, 0.0, f"0/{n} items, 0 failed, {result.workers} workers starting")
+        for k, future in enumerate(as_completed(futures), start=1):
+            try:
+                row = future.result()
+            except Exception as exc:  # the worker process died (memory, a crash): the item's error
+                item = by_key[future.key]
+                row = {"id": item.id, "label": item.body.label, "index": item.index, "folder": item.folder,
+                       "body.kind": item.body.kind, "status": "error", "error": one_line(exc)}
+            journal.append(row)
+            if row["status"] == "ok":
+                result.made += 1
+            else:
+                result.failed += 1
+            rate = (time.perf_counter() - t0) / k
+            report(progress, k / n, f"{k}/{n} items, {result.failed} failed, ETA {_eta(rate * (n - k))}")
+    except KeyboardInterrupt:
+        result.interrupted = True
+    finally:
+        journal.close()
+        if futures:
+            client.cancel(futures)
+        client.close()
+        if cluster is not None:
+            cluster.close()

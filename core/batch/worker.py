@@ -1,0 +1,219 @@
+"""One batch item on a worker: body, transfer, optional adaptation / drape / export, files, manifest row.
+
+A worker process cuts each design once: the first item of a design builds a
+:class:`Context` (:func:`core.workflows.prepare`, the solver's factorisation
+and the reference pattern that every transfer starts from) and keeps it in
+this process; later items of the design cost one transfer. The context is a
+pure function of the design, so every worker builds the same one and an
+item's result does not depend on which worker made it.
+
+Errors never leave :func:`run_item`: an item that fails returns a row with
+status ``"error"`` (or ``"timeout"``) and a one-line message, and its folder
+is not written.
+"""
+from __future__ import annotations
+
+import copy
+import os
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Dict, Optional, Tuple
+
+from ..errors import Cancelled, EaseError
+from .items import Item
+
+# design key, config -> Context, per worker process (threads share it under the lock)
+_CONTEXTS: Dict[Tuple[str, str], "Context"] = {}
+_LOCK = threading.Lock()
+
+
+class ItemTimeout(Cancelled):
+    """An item ran past the batch's per-item time limit."""
+
+
+@dataclass
+class Context:
+    """What a worker keeps per design: the preparation, its solver and the reference pattern."""
+    prep: object
+    solver: object
+    start: object
+    seconds: float
+
+
+def context(item: Item) -> Context:
+    """The worker's :class:`Context` of ``item``'s design, built on first use."""
+    from .. import workflows as wf
+    from ..body import load_body
+
+    key = (item.design_key, item.options.config)
+    with _LOCK:
+        ctx = _CONTEXTS.get(key)
+        if ctx is None:
+            t0 = time.perf_counter()
+            prep = wf.prepare(copy.deepcopy(item.design), body=load_body(item.model))
+            solver = wf.make_solver(prep, config=item.options.config)
+            start = wf.reference(prep, config=item.options.config, solver=solver).pattern
+            ctx = _CONTEXTS[key] = Context(prep, solver, start, time.perf_counter() - t0)
+    return ctx
+
+
+def deadline(seconds: Optional[float]):
+    """A progress callback raising :class:`ItemTimeout` once ``seconds`` have passed (None: no limit).
+
+    The stages call it at each solver iteration, fit evaluation and drape
+    frame, so an item stops within one of those steps of its limit.
+    """
+    if not seconds:
+        return None
+    end = time.monotonic() + float(seconds)
+
+    def check(fraction: float, message: str) -> None:
+        if time.monotonic() > end:
+            raise ItemTimeout(f"over the item time limit of {seconds:g} s (at: {message})")
+
+    return check
+
+
+def _target(ctx: Context, item: Item, check) -> Tuple[object, Dict[str, object]]:
+    """The transfer target of ``item``'s body (a size name or a shape dict) and its row entries."""
+    from ..body.sizes import fit_measurements
+    body = item.body
+    if body.kind != "measurements":
+        return body.value, {}
+    fit = fit_measurements(ctx.prep.body, body.value, progress=check)
+    missed = [f"{k} {fit.achieved[k]:.1f} cm for {fit.targets[k]:g}" for k, s in fit.status.items()
+              if s != "within 1 cm"]
+    if missed:
+        raise EaseError(f"{body.origin}: not reachable by this model: {'; '.join(missed)}")
+    return fit.shape, {f"targets.{k}": v for k, v in fit.targets.items()}
+
+
+def _pattern_row(pattern, prefix: str = "metrics.") -> dict:
+    m = pattern.report["metrics"]
+    c, s = m["compliance"], m["seams"]
+    return {f"{prefix}weft_mean_pct": c["mean"], f"{prefix}weft_std_pct": c["std"],
+            f"{prefix}warp_mean_pct": c["warp_mean"], f"{prefix}shear_p95_deg": c["shear_p95"],
+            f"{prefix}seam_mismatch_mean_pct": s["mean"], f"{prefix}seam_mismatch_max_mm": s["max_mm"]}
+
+
+def _adapt(ctx: Context, item: Item, target, check):
+    """The design cut on the item's body and adapted to the batch's poses (a cut per item:
+    adaptation is defined on the body a cut was made on)."""
+    from .. import workflows as wf
+    design = copy.deepcopy(item.design)
+    design["body"] = {**design.get("body", {}), "shape": target}
+    prep = wf.prepare(design, body=ctx.prep.body, progress=check)
+    run = wf.adapt(prep, list(item.options.poses), config=item.options.config, progress=check)
+    stretch = run.pattern.report["residual_stretch"]
+    row = {f"adapt.residual_stretch_before_pct.{pose}": max(v["before"] for v in g.values())
+           for pose, g in stretch.items()}
+    row.update({f"adapt.residual_stretch_after_pct.{pose}": max(v["after"] for v in g.values())
+                for pose, g in stretch.items()})
+    row.update(_pattern_row(run.pattern, "adapt."))
+    return run, row
+
+
+def _drape(ctx: Context, item: Item, run, vertices, check):
+    from .. import workflows as wf
+    drun = wf.drape(run.pattern, body=(vertices, ctx.prep.body.faces), progress=check)
+    a = drun.metrics["all"]
+    return drun, {"drape.gap_mean_mm": a["gap_mm"]["mean"], "drape.penetration_pct": a["penetration_pct"],
+                  "drape.seam_gap_max_mm": a["seam_gap_mm"]["max"], "drape.frames": int(drun.result.frames),
+                  "drape.settled": drun.result.settle_reason}
+
+
+def _write(folder: Path, item: Item, run, arun, drun, preview: bool) -> None:
+    from .. import workflows as wf
+    from ..fileio import output_dir, write_json
+    from .garmentcode import specification
+
+    opts = item.options
+    with output_dir(folder) as tmp:
+        wf.write_pattern(tmp, run, preview=preview)
+        if arun is not None:
+            wf.write_pattern(tmp / "adapt", arun, preview=preview)
+        if drun is not None:
+            wf.write_drape(tmp / "drape", drun, pattern=run.pattern, preview=preview)
+        if opts.export:
+            wf.export(run.pattern, tmp / "export", opts.export,
+                      drape=(drun.result.positions, drun.result.faces) if drun is not None else None)
+        if opts.garmentcode:
+            write_json(tmp / "specification.json", specification(run.pattern))
+        write_json(tmp / "body.json", {"id": item.id, **item.body.record(), "origin": item.body.origin,
+                                       "model": item.model, "shape": run.pattern.body.get("shape")})
+
+
+def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
+    """Make ``item`` into ``out_root/items/<folder>`` and return its manifest row.
+
+    Row keys: ``id``, ``label``, ``index``, ``folder``, ``status`` (``ok``,
+    ``error``, ``timeout``), ``error`` (one line), ``body.kind``, ``shape.*``,
+    ``targets.*`` (cm, measurement bodies), ``body.<measure>_cm`` (cm, measured on the
+    body: :func:`core.body.measure.measure`), ``metrics.*`` (the transferred
+    pattern on its body), ``adapt.*``, ``drape.*``, ``timings.*`` (s: body,
+    transfer, metrics, adapt, drape, write, setup = this worker's cut of the
+    design when this item paid for it), ``worker``.
+    """
+    from .. import workflows as wf
+    from ..body.instance import body_instance
+    from ..body.measure import measure
+
+    row: dict = {"id": item.id, "label": item.body.label, "index": item.index, "folder": item.folder,
+                 "body.kind": item.body.kind, "status": "ok", "error": "", "worker": os.getpid()}
+    timings: Dict[str, float] = {}
+    try:
+        built = (item.design_key, item.options.config) in _CONTEXTS
+        t = time.perf_counter()
+        ctx = context(item)
+        if not built:
+            timings["setup"] = time.perf_counter() - t
+        check = deadline(time_limit)
+        t = time.perf_counter()
+        target, entries = _target(ctx, item, check)
+        row.update(entries)
+        if isinstance(target, str):
+            row["body.size"] = target
+        model = ctx.prep.body
+        vertices = body_instance(model, target, ctx.prep.cut.body.get("pose"))
+        row.update({f"body.{k}_cm": v for k, v in measure(model, body_instance(model, target)).items()})
+        timings["body"] = time.perf_counter() - t
+
+        t = time.perf_counter()
+        run = wf.transfer(ctx.prep, target, config=item.options.config, solver=ctx.solver, start=ctx.start,
+                          progress=check)
+        timings["transfer"] = run.timings["optimize"]
+        row.update({f"shape.{k}": v for k, v in sorted((run.pattern.body.get("shape") or {}).items())})
+        row.update(_pattern_row(run.pattern))
+        timings["metrics"] = time.perf_counter() - t - timings["transfer"]
+
+        arun = drun = None
+        if item.options.poses:
+            t = time.perf_counter()
+            arun, entries = _adapt(ctx, item, target, check)
+            row.update(entries)
+            timings["adapt"] = time.perf_counter() - t
+        if item.options.drape:
+            t = time.perf_counter()
+            drun, entries = _drape(ctx, item, run, vertices, check)
+            row.update(entries)
+            timings["drape"] = time.perf_counter() - t
+
+        t = time.perf_counter()
+        _write(Path(out_root) / "items" / item.folder, item, run, arun, drun, item.options.preview)
+        timings["write"] = time.perf_counter() - t
+    except ItemTimeout as exc:
+        row.update(status="timeout", error=one_line(exc))
+    except Exception as exc:  # one item's failure is recorded, never the batch's
+        row.update(status="error", error=one_line(exc))
+    row.update({f"timings.{k}": v for k, v in timings.items()})
+    return row
+
+
+def one_line(exc: BaseException) -> str:
+    """``Type: first line of the message`` (EaseError: just the message, it names the element)."""
+    text = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+    if isinstance(exc, EaseError) and text:
+        return text
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__

@@ -1,0 +1,114 @@
+"""``ease batch`` end to end on Dask: a small batch, resume, interruption, a failing body, CLI errors.
+
+The cheapest template (top_sleeveless) on Anny; each run starts a 2-worker
+LocalCluster or uses the module's cluster through ``scheduler=``.
+"""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from core.batch import Options, read_measurements, run_batch, sample_anny
+from core.batch.manifest import comparable, read_rows
+from core.design.templates import template_path
+
+DESIGN = template_path("top_sleeveless")
+TABLE = "name,height,chest,waist,hip,size\nlarge,,,,,L\nmeasured,178,96,80,100,\nimpossible,150,150,40,60,\n"
+
+
+@pytest.fixture(scope="module")
+def scheduler():
+    import logging
+
+    from distributed import LocalCluster
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+                      silence_logs=logging.ERROR) as cluster:
+        yield cluster.scheduler_address
+
+
+def test_small_batch_on_a_local_cluster_then_resume(tmp_path):
+    (tmp_path / "bodies.csv").write_text(TABLE)
+    bodies = read_measurements(tmp_path / "bodies.csv")
+    out = tmp_path / "set"
+    lines = []
+    res = run_batch(DESIGN, bodies, out, options=Options(export=("svg",), garmentcode=True), workers=2,
+                    progress=lambda f, m: lines.append(m))
+    assert (res.total, res.made, res.failed, res.skipped, res.workers) == (3, 2, 1, 0, 2)
+    assert lines[-1].startswith("3/3 items, 1 failed, ETA")
+    rows = {r["label"]: r for r in read_rows(out / "manifest.jsonl")}
+    assert [r["id"] for r in res.rows] == sorted(r["id"] for r in res.rows)  # compacted by id
+    bad = rows["impossible"]
+    assert bad["status"] == "error" and "not reachable by this model" in bad["error"]
+    assert "bodies.csv row 3" in bad["error"] and "\n" not in bad["error"]
+    assert not (out / "items" / bad["folder"]).exists()
+    for label in ("large", "measured"):
+        r = rows[label]
+        assert r["status"] == "ok" and r["error"] == ""
+        folder = out / "items" / r["folder"]
+        names = {p.name for p in folder.iterdir()}
+        assert {"pattern.json", "report.json", "body.json", "specification.json", "export"} <= names
+        assert any(p.suffix == ".svg" for p in (folder / "export").iterdir())
+        assert 0 < r["metrics.weft_mean_pct"] < 5 and r["metrics.shear_p95_deg"] > 0
+        assert 60 < r["body.waist_cm"] < 110
+        assert {"timings.body", "timings.transfer", "timings.metrics", "timings.write"} <= set(r)
+        report = json.loads((folder / "report.json").read_text())
+        assert report["transfer_deviation"]["mean"] == pytest.approx(r["metrics.weft_mean_pct"])
+        spec = json.loads((folder / "specification.json").read_text())["pattern"]
+        for p in spec["panels"].values():
+            n = len(p["vertices"])
+            assert [e["endpoints"] for e in p["edges"]] == [[i, (i + 1) % n] for i in range(n)]
+        assert spec["stitches"] and all(s[k]["edge"] < len(spec["panels"][s[k]["panel"]]["edges"])
+                                        for s in spec["stitches"] for k in (0, 1))
+    assert rows["large"]["body.size"] == "L"
+    assert abs(rows["measured"]["body.waist_cm"] - 80) < 1.0 and rows["measured"]["targets.waist"] == 80
+    before = (out / "items" / rows["large"]["folder"] / "pattern.json").stat().st_mtime_ns
+
+    again = run_batch(DESIGN, bodies, out, options=Options(export=("svg",), garmentcode=True), workers=2)
+    # the failed body is tried again; nothing complete is redone
+    assert (again.made, again.failed, again.skipped) == (0, 1, 2)
+    assert (out / "items" / rows["large"]["folder"] / "pattern.json").stat().st_mtime_ns == before
+
+
+def test_interrupted_batch_resumes_without_redoing(tmp_path, scheduler):
+    bodies = sample_anny(4, seed=5)
+    out = tmp_path / "set"
+
+    def stop_after_first(fraction, message):
+        if message.startswith("1/"):
+            raise KeyboardInterrupt
+
+    res = run_batch(DESIGN, bodies, out, scheduler=scheduler, progress=stop_after_first)
+    assert res.interrupted and res.made == 1
+    first = read_rows(out / "manifest.jsonl")
+    assert len(first) == 1 and first[0]["status"] == "ok"
+    stamp = (out / "items" / first[0]["folder"] / "pattern.json").stat().st_mtime_ns
+
+    res = run_batch(DESIGN, bodies, out, scheduler=scheduler)
+    assert (res.made, res.skipped, res.failed, res.interrupted) == (3, 1, 0, False)
+    assert (out / "items" / first[0]["folder"] / "pattern.json").stat().st_mtime_ns == stamp
+    rows = read_rows(out / "manifest.jsonl")
+    assert len(rows) == 4 and len({r["id"] for r in rows}) == 4
+
+    # the same inputs on another run give the same manifest (timings and worker aside)
+    other = run_batch(DESIGN, bodies, tmp_path / "again", scheduler=scheduler)
+    assert comparable(other.rows) == comparable(rows)
+
+
+def test_item_timeout_is_recorded(tmp_path, scheduler):
+    res = run_batch(DESIGN, sample_anny(1, seed=9), tmp_path / "set", scheduler=scheduler, item_timeout=1e-6)
+    (row,) = res.rows
+    assert row["status"] == "timeout" and "time limit" in row["error"]
+
+
+def test_cli_errors_exit_2(tmp_path, capsys):
+    from core.cli import main
+    (tmp_path / "bodies.csv").write_text("height,waist\n170,eighty\n")
+    code = main(["batch", str(DESIGN), "--bodies", str(tmp_path / "bodies.csv"), "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert code == 2 and "bodies.csv: row 1, column 'waist'" in err and len(err.strip().splitlines()) == 1
+    code = main(["batch", str(DESIGN), "--sample", "2", "--poses", "P9", "--out", str(tmp_path / "o")])
+    assert code == 2 and "P9" in capsys.readouterr().err
+    code = main(["batch", str(DESIGN), "--smpl-betas", str(tmp_path / "b.npy"), "--out", str(tmp_path / "o")])
+    assert code == 2 and "--model" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
