@@ -15,10 +15,10 @@ import sys
 from .. import __version__
 from ..errors import Cancelled, EaseError
 from ..paths import default_warp_cache
-from . import bench, body, cut, demo, drape, export, pattern, templates
+from . import batch, bench, body, cut, demo, drape, export, pattern, templates
 
 # Order = order in --help = order of the data flow.
-SUBCOMMANDS = (body, templates, cut, pattern, drape, export, bench)
+SUBCOMMANDS = (body, templates, cut, pattern, drape, export, batch, bench)
 
 
 def build_parser() -> argparse.ArgumentParser:
