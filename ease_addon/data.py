@@ -41,11 +41,11 @@ def body_spec(obj) -> dict:
 
 def keypoint_positions(obj, verts) -> tuple:
     """(names, (K, 3) positions) of the keypoints stored on the body mesh, on vertices ``verts``."""
+    from ..core.body.model import SurfacePoint
     kps = convert.read_keypoints(obj.data)
     faces = convert.get_triangles(obj.data)
-    names = list(kps)
-    pts = np.array([np.asarray(b) @ verts[faces[t]] for t, b in kps.values()]).reshape(-1, 3)
-    return names, pts
+    pts = np.array([SurfacePoint(t, b).position(verts, faces) for t, b in kps.values()]).reshape(-1, 3)
+    return list(kps), pts
 
 
 # ----------------------------------------------------------------------------- design and cut

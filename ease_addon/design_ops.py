@@ -43,6 +43,15 @@ def load_design_into_scene(context, source) -> None:
     bpy.ops.ease.ease_from_design()
 
 
+def _design_file(op, context, missing: str) -> str:
+    """The design file of operator ``op`` (its ``filepath``, else the panel's), absolute;
+    AddonError ``missing`` when neither is set."""
+    path = bpy.path.abspath(op.filepath or context.scene.ease.design_file)
+    if not path:
+        raise state.AddonError(missing)
+    return path
+
+
 class _LoadDesign(EaseOperator):
     """Load the design :meth:`source` names onto the body."""
 
@@ -79,9 +88,7 @@ class EASE_OT_load_design_file(_LoadDesign):
     filepath: bpy.props.StringProperty(subtype="FILE_PATH", default="")
 
     def source(self, context):
-        path = bpy.path.abspath(self.filepath or context.scene.ease.design_file)
-        if not path:
-            raise state.AddonError("set a design file first")
+        path = _design_file(self, context, "set a design file first")
         return path, path
 
 
@@ -94,9 +101,7 @@ class EASE_OT_save_design(EaseOperator):
 
     def run(self, context):
         from ..core.design import save_design
-        path = bpy.path.abspath(self.filepath or context.scene.ease.design_file)
-        if not path:
-            raise state.AddonError("set a design file to save to")
+        path = _design_file(self, context, "set a design file to save to")
         save_design(data.current_design(context), path)
         self.report({"INFO"}, f"saved {path}")
 

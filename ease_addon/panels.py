@@ -12,6 +12,23 @@ class _EasePanel:
     bl_category = "EASE"
 
 
+def _props(layout, s, *names, **kw):
+    """One aligned row of the properties ``names`` of ``s``."""
+    row = layout.row(align=True)
+    for name in names:
+        row.prop(s, name, **kw)
+    return row
+
+
+def _ops(layout, *ops):
+    """One aligned row of operators: ``idname`` or ``(idname, icon)``."""
+    row = layout.row(align=True)
+    for op in ops:
+        idname, icon = (op, "NONE") if isinstance(op, str) else op
+        row.operator(idname, icon=icon)
+    return row
+
+
 def _figures(layout, text: str) -> None:
     """Key figures of a JSON report as label rows."""
     if not text:
@@ -33,8 +50,7 @@ class EASE_PT_body(_EasePanel, bpy.types.Panel):
     bl_idname = "EASE_PT_body"
 
     def draw(self, context):
-        s = context.scene.ease
-        layout = self.layout
+        layout, s = self.layout, context.scene.ease
         row = layout.row(align=True)
         row.operator("ease.add_body", text="Default Body", icon="OUTLINER_OB_ARMATURE").source = "DEFAULT"
         row.operator("ease.add_body", text="From File", icon="FILE").source = "FILE"
@@ -46,21 +62,17 @@ class EASE_PT_body(_EasePanel, bpy.types.Panel):
         box.label(text="Phenotype")
         for item in s.shape:
             box.prop(item, "value", text=item.name, slider=False)
-        row = layout.row(align=True)
-        row.prop(s, "size", expand=True)
+        _props(layout, s, "size", expand=True)
         layout.operator("ease.set_size")
         box = layout.box()
         box.label(text="Measurements (cm)")
         for name in ("height_cm", "chest_cm", "waist_cm", "hip_cm"):
             box.prop(s, name)
-        row = box.row(align=True)
-        row.operator("ease.fit_measurements")
-        row.operator("ease.measure")
+        _ops(box, "ease.fit_measurements", "ease.measure")
         if s.measurements_report:
             for part in s.measurements_report.split(", "):
                 box.label(text=part)
-        row = layout.row(align=True)
-        row.prop(s, "pose", expand=True)
+        _props(layout, s, "pose", expand=True)
         layout.operator("ease.set_pose")
 
 
@@ -69,14 +81,11 @@ class EASE_PT_design(_EasePanel, bpy.types.Panel):
     bl_idname = "EASE_PT_design"
 
     def draw(self, context):
-        s = context.scene.ease
-        layout = self.layout
+        layout, s = self.layout, context.scene.ease
         layout.prop(s, "template")
         layout.operator("ease.load_template")
         layout.prop(s, "design_file")
-        row = layout.row(align=True)
-        row.operator("ease.load_design_file")
-        row.operator("ease.save_design")
+        _ops(layout, "ease.load_design_file", "ease.save_design")
         if not s.design_json:
             return
         box = layout.box()
@@ -88,9 +97,7 @@ class EASE_PT_design(_EasePanel, bpy.types.Panel):
         box = layout.box()
         box.label(text="Keypoints")
         box.prop(s, "keypoint_name")
-        row = box.row(align=True)
-        row.operator("ease.assign_keypoint", icon="VERTEXSEL")
-        row.operator("ease.pick_keypoint", icon="RESTRICT_SELECT_OFF")
+        _ops(box, ("ease.assign_keypoint", "VERTEXSEL"), ("ease.pick_keypoint", "RESTRICT_SELECT_OFF"))
 
 
 class EASE_PT_ease(_EasePanel, bpy.types.Panel):
@@ -98,31 +105,22 @@ class EASE_PT_ease(_EasePanel, bpy.types.Panel):
     bl_idname = "EASE_PT_ease"
 
     def draw(self, context):
-        s = context.scene.ease
-        layout = self.layout
-        row = layout.row(align=True)
-        row.prop(s, "ease_min")
-        row.prop(s, "ease_max")
+        layout, s = self.layout, context.scene.ease
+        _props(layout, s, "ease_min", "ease_max")
         legend = layout.row(align=True)
         for item in s.legend:
             col = legend.column(align=True)
             col.prop(item, "color", text="")
             col.label(text=f"{item.ease:.2f}")
         layout.prop(s, "ease_value")
-        row = layout.row(align=True)
-        row.operator("ease.paint_ease", icon="BRUSH_DATA")
-        row.operator("ease.brush_ease")
+        _ops(layout, ("ease.paint_ease", "BRUSH_DATA"), "ease.brush_ease")
         box = layout.box()
         box.prop(s, "ease_panel")
         box.operator("ease.ease_uniform")
-        row = box.row(align=True)
-        row.prop(s, "ease_from")
-        row.prop(s, "ease_to")
+        _props(box, s, "ease_from", "ease_to")
         box.prop(s, "gradient_axis")
         box.operator("ease.ease_gradient")
-        row = layout.row(align=True)
-        row.operator("ease.ease_to_design")
-        row.operator("ease.ease_from_design")
+        _ops(layout, "ease.ease_to_design", "ease.ease_from_design")
 
 
 class EASE_PT_pattern(_EasePanel, bpy.types.Panel):
@@ -130,14 +128,13 @@ class EASE_PT_pattern(_EasePanel, bpy.types.Panel):
     bl_idname = "EASE_PT_pattern"
 
     def draw(self, context):
-        s = context.scene.ease
-        row = self.layout.row(align=True)
-        row.prop(s, "gather_auto")
+        layout, s = self.layout, context.scene.ease
+        row = _props(layout, s, "gather_auto")
         sub = row.row(align=True)
         sub.enabled = s.gather_auto
         sub.prop(s, "gather_above_pct")
-        self.layout.operator("ease.optimize_pattern", icon="MESH_GRID")
-        _figures(self.layout, s.pattern_json)
+        layout.operator("ease.optimize_pattern", icon="MESH_GRID")
+        _figures(layout, s.pattern_json)
 
 
 class EASE_PT_fit(_EasePanel, bpy.types.Panel):
@@ -145,14 +142,10 @@ class EASE_PT_fit(_EasePanel, bpy.types.Panel):
     bl_idname = "EASE_PT_fit"
 
     def draw(self, context):
-        s = context.scene.ease
-        layout = self.layout
-        row = layout.row(align=True)
-        row.prop(s, "fit_size", expand=True)
+        layout, s = self.layout, context.scene.ease
+        _props(layout, s, "fit_size", expand=True)
         layout.operator("ease.transfer_size")
-        row = layout.row(align=True)
-        for p in ("T", "P1", "P2", "P3"):
-            row.prop(s, f"adapt_{p}", toggle=True)
+        _props(layout, s, *(f"adapt_{p}" for p in ("T", "P1", "P2", "P3")), toggle=True)
         layout.prop(s, "tolerance")
         layout.operator("ease.adapt_poses")
         _figures(layout, s.fit_json)
@@ -163,16 +156,13 @@ class EASE_PT_drape(_EasePanel, bpy.types.Panel):
     bl_idname = "EASE_PT_drape"
 
     def draw(self, context):
-        s = context.scene.ease
-        layout = self.layout
-        row = layout.row(align=True)
-        row.prop(s, "drape_frames")
+        layout, s = self.layout, context.scene.ease
+        row = _props(layout, s, "drape_frames")
         row.prop(s, "drape_device", text="")
         layout.operator("ease.drape", icon="MOD_CLOTH")
         if s.drape_status:
             layout.label(text=s.drape_status)
-        row = layout.row(align=True)
-        row.prop(s, "fitmap", expand=True)
+        _props(layout, s, "fitmap", expand=True)
         _figures(layout, s.drape_json)
 
 
@@ -181,23 +171,17 @@ class EASE_PT_render(_EasePanel, bpy.types.Panel):
     bl_idname = "EASE_PT_render"
 
     def draw(self, context):
-        s = context.scene.ease
-        layout = self.layout
+        layout, s = self.layout, context.scene.ease
         layout.operator("ease.studio_setup", icon="LIGHT_AREA")
-        row = layout.row(align=True)
-        row.prop(s, "render_samples")
-        row.prop(s, "render_resolution")
+        _props(layout, s, "render_samples", "render_resolution")
         layout.prop(s, "render_path")
         layout.operator("ease.render", icon="RENDER_STILL")
         layout.separator()
         layout.prop(s, "export_dir")
-        row = layout.row(align=True)
-        for f in ("svg", "dxf", "pdf", "glb", "obj"):
-            row.prop(s, f"export_{f}", toggle=True)
+        _props(layout, s, *(f"export_{f}" for f in ("svg", "dxf", "pdf", "glb", "obj")), toggle=True)
         col = layout.column(align=True)
-        col.prop(s, "export_allowance_cm")
-        col.prop(s, "export_hem_cm")
-        col.prop(s, "export_notch_cm")
+        for name in ("export_allowance_cm", "export_hem_cm", "export_notch_cm"):
+            col.prop(s, name)
         layout.operator("ease.export_pattern", icon="EXPORT")
 
 

@@ -113,9 +113,6 @@ def addon(bpy_session):
     return lambda name: sys.modules[f"{bpy_session['module']}.ease_addon.{name}"]
 
 
-ADDON_DESIGN = "top_sleeveless.json"     # the add-on tests' design: the cheapest template (two panels)
-
-
 class AddonScene:
     """The add-on tests' handle on the session's bpy: the scene a test module starts from and
     the read-backs every module uses.

@@ -84,7 +84,6 @@ def test_uniform_and_gradient_ease_per_panel(bpy_session, blender, addon):
 def test_ease_layer_to_design(bpy_session, addon):
     bpy = bpy_session["bpy"]
     s = bpy.context.scene.ease
-    design_ops = addon("design_ops")
     ease_ops = addon("ease_ops")
     assert bpy.ops.ease.ease_to_design() == {"FINISHED"}
     design = json.loads(s.design_json)
