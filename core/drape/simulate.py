@@ -53,6 +53,7 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
     if material is None:
         material = (getattr(pattern, "materials", None) or {}).get("fabric")
     mat = get_material(material)
+    # the body is checked before the pattern is welded (the solver checks it again at its own door)
     body_v, body_f = check_body(body_vertices, body_faces)
     report(progress, 0.0, "drape: welding the pattern")
     cloth = build_cloth(pattern)
