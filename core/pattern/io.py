@@ -62,12 +62,20 @@ def pattern_to_json(pattern: Pattern) -> dict:
     }
 
 
+#: Report entries that are wall-clock times: they differ run to run.
+WALL_CLOCK = ("timings", "optimize_seconds", "init_seconds")
+
+
 def save_pattern(pattern: Pattern, out_dir: Union[str, Path], filename: str = FILENAME) -> Path:
     """Write ``pattern`` to ``out_dir/pattern.json`` atomically; returns the file path.
 
     The pattern is validated first, so an invalid pattern never reaches disk.
+    Wall-clock figures (:data:`WALL_CLOCK`) stay out of the file, so the same
+    design gives the same bytes on every run and through every door (CLI,
+    add-on, batch); ``report.json`` beside it keeps them.
     """
     obj = pattern_to_json(pattern)
+    obj["report"] = {k: v for k, v in obj["report"].items() if k not in WALL_CLOCK}
     pattern_from_json(obj)  # validate before anything is written
     try:
         return write_json(Path(out_dir) / filename, obj, indent=None)
