@@ -51,3 +51,17 @@ def test_cut_spec_is_plain_data():
                    panels=[PanelSpec("g.p", "g", sp)], garments=[GarmentSpec("g", "upper", "g.hem")])
     assert spec.refine_edge_length == 0.01 and not spec.skirt and spec.materials == {} and spec.body == {}
     assert spec.panels[0].body_part == "torso" and spec.lines[0].garment is None
+
+
+def test_named_lists():
+    d = _design()
+    d["garments"].append(dict(d["garments"][0]))
+    assert _path(parse_design, d) == "garments[1].name"
+    d = _design()
+    d["garments"][0]["panels"] = []
+    with pytest.raises(DesignError, match="expected a non-empty list of panels"):
+        parse_design(d)
+    d = _design()
+    d["lines"] = {"a": 1}
+    with pytest.raises(DesignError, match="^lines: expected a list of lines"):
+        parse_design(d)

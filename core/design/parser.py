@@ -130,6 +130,20 @@ def _parse_panel(path, obj, params) -> Panel:
     return Panel(obj["name"], seed, part, ease)
 
 
+def _named_list(path, raw, what, parse, required=False):
+    """Parse a list of named elements (lines, panels, garments) with ``parse(path, item)``;
+    their names must be unique."""
+    if not isinstance(raw, list) or (required and not raw):
+        raise DesignError(path, f"expected a {'non-empty ' if required else ''}list of {what}s, got {fmt(raw)}")
+    out = []
+    for i, item in enumerate(raw):
+        x = parse(f"{path}[{i}]", item)
+        if any(y.name == x.name for y in out):
+            raise DesignError(f"{path}[{i}].name", f"duplicate {what} name {x.name!r}")
+        out.append(x)
+    return out
+
+
 def _parse_garment(path, obj, params, shared_lines) -> Garment:
     expect_dict(path, obj, "a garment {name, kind, pin, lines, panels}")
     expect_keys(path, obj, ("name", "kind", "pin", "lines", "panels"))
@@ -139,24 +153,9 @@ def _parse_garment(path, obj, params, shared_lines) -> Garment:
     kind = obj.get("kind")
     if kind not in GARMENT_KINDS:
         raise DesignError(f"{path}.kind", f"expected one of {', '.join(GARMENT_KINDS)}, got {fmt(kind)}")
-    lines_raw = obj.get("lines", [])
-    if not isinstance(lines_raw, list):
-        raise DesignError(f"{path}.lines", f"expected a list of lines, got {fmt(lines_raw)}")
-    lines = []
-    for i, l in enumerate(lines_raw):
-        line = _parse_line(f"{path}.lines[{i}]", l, params)
-        if any(x.name == line.name for x in lines):
-            raise DesignError(f"{path}.lines[{i}].name", f"duplicate line name {line.name!r}")
-        lines.append(line)
-    panels_raw = obj.get("panels")
-    if not isinstance(panels_raw, list) or not panels_raw:
-        raise DesignError(f"{path}.panels", f"expected a non-empty list of panels, got {fmt(panels_raw)}")
-    panels = []
-    for i, p in enumerate(panels_raw):
-        panel = _parse_panel(f"{path}.panels[{i}]", p, params)
-        if any(x.name == panel.name for x in panels):
-            raise DesignError(f"{path}.panels[{i}].name", f"duplicate panel name {panel.name!r}")
-        panels.append(panel)
+    lines = _named_list(f"{path}.lines", obj.get("lines", []), "line", lambda p, x: _parse_line(p, x, params))
+    panels = _named_list(f"{path}.panels", obj.get("panels"), "panel", lambda p, x: _parse_panel(p, x, params),
+                         required=True)
     pin = obj.get("pin")
     if pin is not None:
         names = [l.name for l in lines] + [l.name for l in shared_lines]
@@ -250,24 +249,9 @@ def parse_design(obj: dict) -> Design:
     for k, v in kps_raw.items():
         check_name(f"keypoints.{k}", k)
         keypoints[k] = check_keypoint(f"keypoints.{k}", v, params)
-    shared_raw = obj.get("lines", [])
-    if not isinstance(shared_raw, list):
-        raise DesignError("lines", f"expected a list of lines, got {fmt(shared_raw)}")
-    shared = []
-    for i, l in enumerate(shared_raw):
-        line = _parse_line(f"lines[{i}]", l, params)
-        if any(x.name == line.name for x in shared):
-            raise DesignError(f"lines[{i}].name", f"duplicate line name {line.name!r}")
-        shared.append(line)
-    graw = obj.get("garments")
-    if not isinstance(graw, list) or not graw:
-        raise DesignError("garments", f"expected a non-empty list of garments, got {fmt(graw)}")
-    garments = []
-    for i, g in enumerate(graw):
-        garment = _parse_garment(f"garments[{i}]", g, params, shared)
-        if any(x.name == garment.name for x in garments):
-            raise DesignError(f"garments[{i}].name", f"duplicate garment name {garment.name!r}")
-        garments.append(garment)
+    shared = _named_list("lines", obj.get("lines", []), "line", lambda p, x: _parse_line(p, x, params))
+    garments = _named_list("garments", obj.get("garments"), "garment",
+                           lambda p, x: _parse_garment(p, x, params, shared), required=True)
     skirt = bool(obj.get("skirt", False))
     design = Design(name=name, body=body, materials=materials, parameters=params, keypoints=keypoints,
                     lines=shared, garments=garments, mirror=bool(obj.get("mirror", False)), skirt=skirt,
