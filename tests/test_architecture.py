@@ -30,7 +30,8 @@ LAYERS = {
     "core.export": 7,
     "core.metrics": 8,
     "core.workflows": 9,
-    "core.cli": 10,
+    "core.batch": 10,    # many bodies through the workflows on a Dask cluster
+    "core.cli": 11,
     "core": 0,           # the package's own __init__: the version only
 }
 MAX_LINES = 500
