@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Sequence, Tuple, Union
+from typing import Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -175,9 +175,15 @@ def reference(prep: Prepared, config: str = "improved", iterations: Optional[int
     return PatternRun(pattern, _figures(pattern), {**prep.timings, "optimize": optimize})
 
 
-def transfer(prep: Prepared, size: str, config: str = "improved", iterations: Optional[int] = None,
+def transfer(prep: Prepared, size, config: str = "improved", iterations: Optional[int] = None,
              gather_all: bool = False, solver=None, start=None, progress: Optional[Progress] = None) -> PatternRun:
-    """Shape transfer (paper Eq. transfer-scale): the same cut and ease field on the body of chart size ``size``.
+    """Shape transfer (paper Eq. transfer-scale): the same cut and ease field on another body shape.
+
+    Parameters
+    ----------
+    size : str or mapping
+        A chart size name (XS..XL, fitted on the model) or a shape dict of the
+        model's parameters (a measured or sampled body).
 
     The reference pattern is solved first (or ``start`` is taken as it) and
     seeds the transfer solve; the report records the transfer deviation (the
@@ -188,7 +194,11 @@ def transfer(prep: Prepared, size: str, config: str = "improved", iterations: Op
     from .metrics.pattern import ease_compliance
     from .pattern.solve import transfer_pattern
 
-    size = check_size(size)
+    if isinstance(size, str):
+        size = check_size(size)
+    elif not isinstance(size, Mapping):
+        from .errors import PatternError
+        raise PatternError(f"transfer: expected a size name or a shape dict, got {type(size).__name__}")
     t0 = time.perf_counter()
     if solver is None:
         solver = make_solver(prep, config, iterations, gather_all, progress=sub(progress, 0.0, 0.15))
@@ -199,14 +209,15 @@ def transfer(prep: Prepared, size: str, config: str = "improved", iterations: Op
     pattern = transfer_pattern(prep.cut, prep.reference, target, solver=solver, start=ref_pat,
                                style=prep.design.name,
                                body={"model": prep.cut.body.get("model", prep.body.name), "shape": shape,
-                                     "pose": pose, "size": size},
+                                     "pose": pose, **({"size": size} if isinstance(size, str) else {})},
                                progress=sub(progress, 0.5, 1.0))
     optimize = time.perf_counter() - t0
     dev, refc = ease_compliance(pattern), ease_compliance(ref_pat)
-    pattern.report.update({"config": config, "size": size, "transfer_deviation": dev,
+    label = size if isinstance(size, str) else "custom"
+    pattern.report.update({"config": config, "size": label, "transfer_deviation": dev,
                            "reference_compliance": refc})
     _finish(pattern)
-    figures = {"size": size, **_figures(pattern),
+    figures = {"size": label, **_figures(pattern),
                "transfer deviation mean %": round(float(dev["mean"]), 3),
                "transfer deviation std %": round(float(dev["std"]), 3),
                "reference compliance mean %": round(float(refc["mean"]), 3)}
@@ -278,8 +289,9 @@ def adapt(prep: Prepared, poses: Sequence, eps_weft: Optional[float] = None, eps
     return PatternRun(pattern, figures, {**prep.timings, "optimize": optimize})
 
 
-def write_pattern(out, run: PatternRun) -> None:
-    """``pattern.json``, ``report.json`` (records, metrics, timings) and ``pattern.png`` into ``out``, atomically."""
+def write_pattern(out, run: PatternRun, preview: bool = True) -> None:
+    """``pattern.json``, ``report.json`` (records, metrics, timings) and ``pattern.png``
+    (unless ``preview`` is false) into ``out``, atomically."""
     from .fileio import output_dir, write_json
     from .pattern.io import save_pattern
     from .pattern.plot import render_png
@@ -289,7 +301,8 @@ def write_pattern(out, run: PatternRun) -> None:
     with output_dir(out) as tmp:
         save_pattern(pattern, tmp)
         write_json(tmp / "report.json", pattern.report)
-        render_png(pattern, tmp / "pattern.png")
+        if preview:
+            render_png(pattern, tmp / "pattern.png")
 
 
 def summary(run: PatternRun) -> str:

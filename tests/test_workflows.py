@@ -91,3 +91,19 @@ def test_solver_config_overrides():
     assert cfg.iterations == 3
     with pytest.raises(Exception):
         wf.solver_config("nonsense")
+
+
+def test_transfer_to_a_shape_dict(prep, solver, anny):
+    """A measured or sampled body (a shape dict, no chart size) transfers like a size."""
+    from core.body.sizes import size_shape
+    by_name = wf.transfer(prep, "L", solver=solver)
+    by_shape = wf.transfer(prep, size_shape(anny, "L"), solver=solver)
+    assert _pattern_json(by_shape.pattern) == _pattern_json(by_name.pattern)
+    assert "size" not in by_shape.pattern.body and by_shape.pattern.report["size"] == "custom"
+    with pytest.raises(PatternError, match="shape dict"):
+        wf.transfer(prep, 42, solver=solver)
+
+
+def test_write_pattern_without_preview(prep, solver, tmp_path):
+    wf.write_pattern(tmp_path / "p", wf.reference(prep, solver=solver), preview=False)
+    assert sorted(p.name for p in (tmp_path / "p").iterdir()) == ["pattern.json", "report.json"]
