@@ -28,8 +28,6 @@ from pathlib import Path
 import numpy as np
 
 REPO = Path(__file__).resolve().parent.parent
-if str(REPO) not in sys.path:
-    sys.path.insert(0, str(REPO))
 
 LEVELS = np.linspace(0.9, 2.4, 17)
 GARMENTS = {"shirt": "shirt_long_sleeve", "pants": "pants"}
@@ -42,17 +40,14 @@ NEWTON_PIN = "newton==1.8.0"
 # --- pipeline pieces ---------------------------------------------------------
 
 def load_cut(design_name: str, edge: float, body):
-    """Cut a design of examples/designs on the default body with refinement ``edge`` (m)."""
-    from core.cut import cut_design
-    from core.design import load_design
-    from core.design.resolve import instance_vertices
+    """(cut, reference vertices) of a shipped template on the default body with refinement ``edge`` (m)."""
+    from core import workflows as wf
+    from core.design.templates import template_path
 
-    d = json.loads((REPO / "examples" / "designs" / f"{design_name}.json").read_text())
+    d = json.loads(template_path(design_name).read_text())
     d["refine_edge_length"] = edge
-    design = load_design(d)
-    ref = instance_vertices(design, body)
-    cut = cut_design(design, body=body)
-    return cut, ref
+    prep = wf.prepare(d, body=body)
+    return prep.cut, prep.reference
 
 
 def pattern_at(cut, ref, ease: float, style: str):

@@ -33,17 +33,15 @@ PAPER = {
 RANGES = {"tight": (0.9, 1.0, 1.1), "regular": (1.2, 1.35, 1.5), "loose": (1.6, 1.8, 2.0)}
 
 
-def _cut(name, body, coarse):
-    from core.cut import cut_design
+def _cut(name_or_design, body, coarse):
+    """(design, cut, reference vertices, cut seconds, workflows.Prepared) of a template or a design."""
+    from core import workflows as wf
     from core.design import load_design
-    from core.design.resolve import instance_vertices
-    design = load_design(DESIGNS / f"{name}.json")
+    design = load_design(DESIGNS / f"{name_or_design}.json") if isinstance(name_or_design, str) else name_or_design
     if coarse:
         design.refine_edge_length = coarse
-    t0 = time.perf_counter()
-    cut = cut_design(design, body=body)
-    dt = time.perf_counter() - t0
-    return design, cut, instance_vertices(design, body), dt
+    prep = wf.prepare(design, body=body)
+    return prep.design, prep.cut, prep.reference, prep.timings["cut"], prep
 
 
 def _metrics(pattern, garment=None, cut=None):
@@ -138,8 +136,6 @@ def _group_of(panel_name):
 
 def _seam_study(body, coarse, out_dir):
     """Compliance per panel group with and without princess seams (bust and shoulder blades), same ease."""
-    from core.cut import cut_design
-    from core.design.resolve import instance_vertices
     from core.metrics.pattern import ease_compliance
     from core.pattern.solve import PatternSolver, SolverConfig, build_pattern
     variant, raw = princess_design()
@@ -148,12 +144,9 @@ def _seam_study(body, coarse, out_dir):
     out = {}
     for label, design in (("template", None), ("princess seams", variant)):
         if design is None:
-            design, cut, ref, _ = _cut("shirt_long_sleeve", body, coarse)
+            design, cut, ref, _, _ = _cut("shirt_long_sleeve", body, coarse)
         else:
-            if coarse:
-                design.refine_edge_length = coarse
-            cut = cut_design(design, body=body)
-            ref = instance_vertices(design, body)
+            design, cut, ref, _, _ = _cut(design, body, coarse)
         row = {"panels": len(cut.panels), "faces": int(sum(len(p.faces) for p in cut.panels))}
         for cfg in ("improved", "stretch"):
             solver = PatternSolver(cut, ref, SolverConfig.named(cfg))
@@ -227,12 +220,11 @@ def _fmt(v, d=2):
 
 def run(out_dir, quick: bool = False) -> dict:
     from core.body import load_body
-    from core.body.sizes import size_shape
-    from core.design.resolve import instance_pose, instance_shape
+    from core import workflows as wf
+    from core.body.instance import body_instance
     from core.fileio import write_json, write_text
     from core.metrics.pattern import ease_compliance, residual_stretch
-    from core.pattern.solve import (PatternSolver, SolverConfig, adapt_pattern, build_pattern, solve_pattern,
-                                    transfer_pattern)
+    from core.pattern.solve import PatternSolver, SolverConfig, solve_pattern
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -253,7 +245,7 @@ def run(out_dir, quick: bool = False) -> dict:
     t1 = {}
     solvers = {}
     levels = sorted({r for v in RANGES.values() for r in v})
-    for kind, (design, cut, ref, t_cut) in cuts.items():
+    for kind, (design, cut, ref, t_cut, _) in cuts.items():
         t0 = time.perf_counter()
         solver = PatternSolver(cut, ref, SolverConfig.improved())
         t_init = time.perf_counter() - t0
@@ -295,7 +287,7 @@ def run(out_dir, quick: bool = False) -> dict:
     nonuni = {}
     for key, name in (("teaser", "teaser_shirt_pants"), ("dress", "dress_gradient")):
         try:
-            design, cut, ref, t_cut = _cut(name, body, coarse)
+            design, cut, ref, t_cut, _ = _cut(name, body, coarse)
             t0 = time.perf_counter()
             pat = solve_pattern(cut, ref, SolverConfig.improved(), style=design.name)
             dt = time.perf_counter() - t0
@@ -309,7 +301,7 @@ def run(out_dir, quick: bool = False) -> dict:
 
     # ---------------------------------------------------------------- Table 2
     t2 = {}
-    for kind, (design, cut, ref, _) in cuts.items():
+    for kind, (design, cut, ref, _, _) in cuts.items():
         run12 = t1[kind]["runs"].get("improved@1.2")
         split = _optimize_split(cut, ref)
         t2[kind] = {"seam_mean": run12["seam_mean"], "seam_std": run12["seam_std"], "seam_max_mm": run12["seam_max_mm"],
@@ -320,21 +312,18 @@ def run(out_dir, quick: bool = False) -> dict:
     # ---------------------------------------------------------------- Table 3: transfer
     t3 = {}
     sizes = ("XS", "S", "L", "XL")
-    for kind, (design, cut, ref, _) in cuts.items():
+    for kind, (design, cut, ref, _, prep) in cuts.items():
         solver = solvers[kind]
-        shape0, pose0 = instance_shape(design, body), instance_pose(design)
         ref_pat, _ = _solve(solver, cut)
         floor = ease_compliance(ref_pat)["mean"]
         row = {"reference": floor}
         for size in sizes:
             try:
-                target = body.vertices(size_shape(body, size), pose0)
-                t0 = time.perf_counter()
-                tp = transfer_pattern(cut, ref, target, solver=solver, start=ref_pat)
-                dt = time.perf_counter() - t0
-                m = _metrics(tp)
+                run_ = wf.transfer(prep, size, solver=solver, start=ref_pat)
+                m = _metrics(run_.pattern)
                 row[size] = {"deviation": m["compliance"], "shear_p95": m["shear_p95"], "flips": m["flips"],
-                             "seam_mean": m["seam_mean"], "seconds": dt, "above_floor": m["compliance"] - floor}
+                             "seam_mean": m["seam_mean"], "seconds": run_.timings["optimize"],
+                             "above_floor": m["compliance"] - floor}
             except Exception as exc:
                 row[size] = {"error": f"{type(exc).__name__}: {exc}"}
         t3[kind] = row
@@ -343,25 +332,23 @@ def run(out_dir, quick: bool = False) -> dict:
     # ---------------------------------------------------------------- Table 4: adaptation
     t4 = {}
     eps = 1.10
-    for kind, (design, cut, ref, _) in cuts.items():
+    for kind, (design, cut, ref, _, prep) in cuts.items():
         solver = solvers[kind]
-        shape0 = instance_shape(design, body)
         ref_pat, _ = _solve(solver, cut)
         row = {}
         for pose in ("P1", "P2", "P3"):
             try:
-                P = body.vertices(shape0, pose)
-                X = cut.positions(P)
+                X = cut.positions(body_instance(body, cut.body.get("shape"), pose))
                 xyz = {p.name: X[p.vertex_ids] for p in cut.panels}
-                t0 = time.perf_counter()
-                ap = adapt_pattern(cut, ref, [P], eps_weft=eps, eps_warp=eps, solver=solver, start=ref_pat)
-                dt = time.perf_counter() - t0
+                run_ = wf.adapt(prep, [pose], eps_weft=eps, eps_warp=eps, solver=solver, start=ref_pat)
+                ap = run_.pattern
                 m = _metrics(ap)
                 area = lambda pat: float(sum(np.sum(np.abs(
                     np.cross(p.uv[p.faces[:, 1]] - p.uv[p.faces[:, 0]], p.uv[p.faces[:, 2]] - p.uv[p.faces[:, 0]]))) / 2
                     for p in pat.panels))
                 row[pose] = {"before": residual_stretch(ref_pat, xyz, eps), "after": residual_stretch(ap, xyz, eps),
-                             "flips": m["flips"], "seconds": dt, "area_growth": area(ap) / area(ref_pat) - 1.0}
+                             "flips": m["flips"], "seconds": run_.timings["optimize"],
+                             "area_growth": area(ap) / area(ref_pat) - 1.0}
             except Exception as exc:
                 row[pose] = {"error": f"{type(exc).__name__}: {exc}"}
         t4[kind] = row
@@ -369,7 +356,7 @@ def run(out_dir, quick: bool = False) -> dict:
 
     # ---------------------------------------------------------------- baselines (rho = 1)
     base = {}
-    for kind, (design, cut, ref, _) in cuts.items():
+    for kind, (design, cut, ref, _, _) in cuts.items():
         solver = solvers[kind]
         pat, dt = _solve(solver, cut, ease=1.0)
         try:

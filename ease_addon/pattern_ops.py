@@ -8,7 +8,6 @@ from __future__ import annotations
 import json
 
 from . import data, sync
-from .data import stored_pattern  # noqa: F401  (examples/scripted_run.py reads the pattern here)
 from .objects import window_progress
 from .operators_base import EaseOperator
 

@@ -11,9 +11,10 @@ import bpy
 from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProperty,
                        FloatVectorProperty, IntProperty, PointerProperty, StringProperty)
 
+from ..core.body.sizes import SIZES as CHART_SIZES
 from . import data, sync
 
-SIZES = [(s, s, f"size {s} of the size chart") for s in ("XS", "S", "M", "L", "XL")]
+SIZES = [(s, s, f"size {s} of the size chart") for s in CHART_SIZES]
 POSES = [("A", "A", "reference A-pose"), ("T", "T", "T-pose"),
          ("P1", "P1", "arms forward, legs spread"), ("P2", "P2", "arms up, scissored legs"),
          ("P3", "P3", "sitting, elbows bent")]

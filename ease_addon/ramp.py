@@ -14,8 +14,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core.design.checks import EASE_MAX, EASE_MIN
+
 GREEN = 0.08          # constant green of the ramp (keeps the mid tones purple, not grey)
-EASE_LIMITS = (0.5, 4.0)  # the range the design format accepts
+EASE_LIMITS = (EASE_MIN, EASE_MAX)  # the range the design format accepts
 
 
 def check_range(lo: float, hi: float) -> None:

@@ -108,8 +108,8 @@ def run(design: str, out: str, frames: int = 120, samples: int = 16, resolution:
     _op(bpy, "render")
     core_io = sys.modules[module + ".core.pattern.io"]
     fileio = sys.modules[module + ".core.fileio"]
-    pattern_ops = sys.modules[module + ".ease_addon.pattern_ops"]
-    core_io.save_pattern(pattern_ops.stored_pattern(bpy.context.scene), out)
+    addon_data = sys.modules[module + ".ease_addon.data"]
+    core_io.save_pattern(addon_data.stored_pattern(bpy.context.scene), out)
     files = ["scene.blend", "render.png", "pattern.json"]
     if export:
         s.export_dir = str(out / "export")

@@ -143,7 +143,7 @@ def test_body_from_a_file_the_user_owns(bpy_session, blender, anny):
 def test_body_from_an_smpl_file(bpy_session, blender):
     """From File with an SMPL-format .npz the user owns: its betas become the shape sliders, poses apply."""
     bpy = bpy_session["bpy"]
-    from test_body_smpl import tube_model        # a small SMPL-format model (24 joints)
+    from smpl_synth import tube_model        # a small SMPL-format model (24 joints)
     from core.body import load_body
     path = bpy_session["tmp"] / "my_smpl.npz"
     np.savez(path, **tube_model(J=24, n_ring=12, n_rows=30))

@@ -10,7 +10,7 @@ from core.cli import body as body_cli
 from core.errors import BodyError, EaseError
 
 from test_body_obj import horse, write_obj
-from test_body_smpl import stick_smpl
+from smpl_synth import stick_smpl
 
 
 def ease_body(argv):

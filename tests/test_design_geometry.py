@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 
 from core.body.model import SurfacePoint
+from meshes import ring_grid_faces
 from core.design.geometry import (Geodesics, SectionLoop, SurfaceLocator, nearest_segment, plane_section_loop,
                                   segment_point, surface_tools, turned_normal, vertical_walk)
 from core.geom.polyline import point_at_length, polyline_length
@@ -14,12 +15,7 @@ def capped_cylinder(r=0.1, h=0.6, n=48, m=30):
     th = 2 * np.pi * (np.arange(n) + 0.5) / n           # no vertex on x = 0: a clean mirror in x
     z = np.linspace(0, h, m)
     V = [[r * np.cos(t), r * np.sin(t), zz] for zz in z for t in th]
-    F = []
-    for i in range(m - 1):
-        for j in range(n):
-            a, b = i * n + j, i * n + (j + 1) % n
-            c, d = a + n, b + n
-            F += [[a, b, d], [a, d, c]]
+    F = ring_grid_faces(m, n).tolist()
     bottom, top = len(V), len(V) + 1
     V += [[0, 0, 0], [0, 0, h]]
     for j in range(n):

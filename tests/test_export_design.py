@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from core.design.format import parse_design
+from core.design.parser import parse_design
 from core.errors import DesignError, EaseError, ExportError
 from core.export.allowance import resolve_allowance, seam_allowance
 from core.export.boundary import piece_loops

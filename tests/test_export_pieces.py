@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 
 from export_synth import make_pattern
+from meshes import ring_grid_faces
 
 from core.errors import ExportError
 from core.export.allowance import cut_line, resolve_allowance
@@ -150,11 +151,7 @@ def test_piece_with_a_hole():
     th = 2 * np.pi * np.arange(na) / na
     r = np.linspace(0.08, 0.2, nr)
     uv = np.array([[rr * np.cos(t), rr * np.sin(t)] for rr in r for t in th])
-    faces = []
-    for j in range(nr - 1):
-        for i in range(na):
-            a, b = j * na + i, j * na + (i + 1) % na
-            faces += [[a, b, b + na], [a, b + na, a + na]]
+    faces = ring_grid_faces(nr, na)
     from core.pattern.types import Pattern, PatternPanel
     f = len(faces)
     panel = PatternPanel("cape", "cape", uv, np.array(faces), np.arange(len(uv)), np.zeros((len(uv), 3)),

@@ -29,7 +29,7 @@ Rules (frame: metres, +Z up, the body faces -Y, +X = the body's left):
 """
 from __future__ import annotations
 
-from typing import Dict, Optional
+from typing import Dict
 
 import numpy as np
 

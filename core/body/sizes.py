@@ -16,7 +16,7 @@ from typing import Dict, Mapping, Optional, Sequence
 
 import numpy as np
 
-from ..errors import BodyError, Cancelled
+from ..errors import BodyError
 from ..progress import Progress, report
 from .measure import MEASUREMENTS, measure
 

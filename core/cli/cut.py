@@ -14,6 +14,8 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+from ..body.model import POSE_PRESETS
+from ..body.sizes import SIZES
 from .common import add_quiet, console_progress, subcommand
 
 
@@ -70,9 +72,9 @@ def add_parser(sub) -> None:
     )
     p.add_argument("design", help="design JSON file")
     p.add_argument("--out", required=True, help="output folder")
-    p.add_argument("--size", choices=("XS", "S", "M", "L", "XL"), default=None,
+    p.add_argument("--size", choices=SIZES, default=None,
                    help="cut on this size instead of the design's body shape")
-    p.add_argument("--pose", choices=("A", "T", "P1", "P2", "P3"), default=None,
+    p.add_argument("--pose", choices=POSE_PRESETS, default=None,
                    help="write the panels (OBJ, PNG) on this pose; the cut is made on the design's "
                         "reference pose and holds for every pose")
     p.add_argument("--body", default=None, help="body model (default: the design's, e.g. anny)")

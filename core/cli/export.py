@@ -18,33 +18,11 @@ def _metres(text: str) -> float:
     return v
 
 
-def load_drape(drape_dir: Path):
-    """``(positions (N, 3), faces (F, 3) or None)`` from ``drape_dir/drape.npz`` (or the .npz file itself)."""
-    import numpy as np
-
-    from ..errors import ExportError
-
-    path = Path(drape_dir)
-    if path.is_dir():
-        path = path / "drape.npz"
-    if not path.is_file():
-        raise ExportError(f"--drape: no draped garment at {path} (run `ease drape PATTERN_DIR --out DIR` first)")
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            faces = np.asarray(data["faces"]) if "faces" in data.files else None
-            for key in ("positions", "vertices", "x"):
-                if key in data.files:
-                    return np.asarray(data[key], float), faces
-            keys = ", ".join(data.files)
-    except (OSError, ValueError) as exc:
-        raise ExportError(f"--drape: cannot read {path}: {exc}") from exc
-    raise ExportError(f"--drape: {path} has no 'positions' array (it holds: {keys})")
-
-
 def _run(args) -> int:
     from .. import workflows as wf
     from ..errors import ExportError
     from ..export import parse_formats
+    from ..drape.output import read_drape
     from ..pattern.io import load_pattern
 
     guess = Path(args.pattern_dir).resolve()
@@ -63,7 +41,7 @@ def _run(args) -> int:
                 raise ExportError(f"GLB/OBJ export needs the draped garment: pass --drape DIR (no {guess}/drape.npz); "
                                   f"or leave glb/obj out of --format")
             drape_dir = guess
-        drape = load_drape(drape_dir)
+        drape = read_drape(drape_dir)
     warnings: list = []
     files = wf.export(pattern, args.out, formats=formats, allowance=args.allowance, hem=args.hem,
                       notch_spacing=args.notch_spacing, drape=drape, strict=not args.lenient,

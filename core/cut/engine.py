@@ -50,7 +50,7 @@ from .geodesic import GeodesicPaths, check_surface_point, insert_keypoints, surf
 from .grain import body_part_axis
 from .panels import build_panels, halfedges
 from .split import CutMesh
-from .types import GarmentCut
+from .types import GarmentCut, Panel, Seam
 
 FORBIDDEN_REGIONS = ("head", "hands", "feet")
 ERODE = 2   # rings of vertices a garment may overlap a forbidden region's border by

@@ -9,7 +9,7 @@ triangle the axis is projected into the triangle plane and normalised.
 """
 from __future__ import annotations
 
-from typing import Dict, Optional, Sequence
+from typing import Optional, Sequence
 
 import numpy as np
 

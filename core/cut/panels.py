@@ -97,7 +97,7 @@ def build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset, clock)
         global_of_corner = gv_all
         vertex_of_global = np.arange(n, dtype=np.int64)
     # deterministic local vertex numbering: by (panel, global vertex, component)
-    panels, hems_local = [], {}
+    panels = []
     local_of_corner = np.full(3 * len(F), -1, dtype=np.int64)
     gv_of_corner = F.reshape(-1)
     panel_names = [p.name for p in gpanels]

@@ -15,7 +15,7 @@ applies to every body instance.
 """
 from __future__ import annotations
 
-from typing import List, Tuple
+from typing import List
 
 import numpy as np
 import scipy.sparse as sp

@@ -388,8 +388,6 @@ class CutMesh:
             if best is None:
                 raise CutError(f"{_name(names, line)}: could not trace the geodesic across the mesh")
             f, u, w, bA, bu, bw = best
-            faces = [f]
-            i = 0
             if bA >= -_INSIDE:
                 # target is in this triangle's closure: finish here
                 nxt = self._finish(f, cur, u, w, np.array([bA, bu, bw]), line, allowed, names)

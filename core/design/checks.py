@@ -13,9 +13,12 @@ from __future__ import annotations
 import json
 import math
 import re
-from typing import Dict
+from typing import TYPE_CHECKING, Dict
 
 from ..errors import DesignError
+
+if TYPE_CHECKING:   # annotations only: the types import these checks
+    from .types import Parameter
 
 EASE_MIN, EASE_MAX = 0.5, 4.0
 GARMENT_KINDS = ("upper", "lower", "dress")

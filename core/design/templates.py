@@ -31,6 +31,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Callable, Dict, List
 
+from .materials import EPS_WEFT
+
 
 def template_dir() -> Path:
     """The folder of the template JSON files inside the installed package.
@@ -51,7 +53,7 @@ def _design(name, description, garments, parameters, keypoints, lines=None, skir
         "name": name,
         "description": description,
         "body": {"model": "anny", "shape": "M", "pose": "A"},
-        "materials": {"fabric": fabric, "eps_weft": 1.1, "eps_warp": 1.1},
+        "materials": {"fabric": fabric, "eps_weft": EPS_WEFT, "eps_warp": EPS_WEFT},
         "mirror": True,
         "skirt": skirt,
         "refine_edge_length": 0.01,
@@ -384,14 +386,14 @@ def template_path(name: str) -> Path:
 
 def template(name: str):
     """The template ``name`` as a validated :class:`core.design.Design` (built in code)."""
-    from .format import load_design
+    from .parser import load_design
     _check_name(name)
     return load_design(TEMPLATES[name]())
 
 
 def write_templates(directory=None) -> list:
     """(Re)write every template's JSON into ``directory`` (default :func:`template_dir`); returns the paths."""
-    from .format import load_design, save_design
+    from .parser import load_design, save_design
     directory = Path(directory) if directory is not None else template_dir()
     out = []
     for name, build in TEMPLATES.items():

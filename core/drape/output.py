@@ -163,6 +163,37 @@ def write_drape(out, result, body_vertices, body_faces, *, fit: dict, vertex_gap
     return Path(out)
 
 
+def read_drape(path) -> tuple:
+    """The draped garment of ``drape.npz`` (what :func:`write_drape` wrote), for the export.
+
+    Parameters
+    ----------
+    path : a drape folder or the ``.npz`` file itself.
+
+    Returns
+    -------
+    positions : (N, 3) float, metres, by global garment vertex id.
+    faces : (F, 3) int or None.
+    """
+    from ..errors import ExportError
+
+    path = Path(path)
+    if path.is_dir():
+        path = path / "drape.npz"
+    if not path.is_file():
+        raise ExportError(f"--drape: no draped garment at {path} (run `ease drape PATTERN_DIR --out DIR` first)")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            faces = np.asarray(data["faces"]) if "faces" in data.files else None
+            for key in ("positions", "vertices", "x"):
+                if key in data.files:
+                    return np.asarray(data[key], float), faces
+            keys = ", ".join(data.files)
+    except (OSError, ValueError) as exc:
+        raise ExportError(f"--drape: cannot read {path}: {exc}") from exc
+    raise ExportError(f"--drape: {path} has no 'positions' array (it holds: {keys})")
+
+
 def read_ply_vertices(path) -> dict:
     """Read back the vertex properties of a PLY written by :func:`ply_bytes` (for tests and tools)."""
     data = Path(path).read_bytes()

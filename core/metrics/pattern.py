@@ -12,7 +12,7 @@ The per-triangle geometry is :mod:`core.geom.strain` and :mod:`core.geom.mesh`
 """
 from __future__ import annotations
 
-from typing import Dict, Iterable, Optional, Sequence
+from typing import Dict, Iterable, Optional
 
 import numpy as np
 

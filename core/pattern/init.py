@@ -46,7 +46,6 @@ def lscm(xyz: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 def tutte(xyz: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Tutte-style harmonic flattening onto a circle: flip-free for disk panels."""
-    import igl
     xyz = np.ascontiguousarray(xyz, dtype=np.float64)
     F = np.ascontiguousarray(faces, dtype=np.int64)
     loops = boundary_loops(F)

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from core.pattern.types import Pattern, PatternPanel, PatternSeam
+from meshes import ring_grid_faces
 
 # (z, radius) in metres: legs column, cylindrical hips, waist at 1.05 m, chest.
 # Equal neighbours make the monotone cubic exactly flat between them.
@@ -50,12 +51,7 @@ def revolution_body(n_around: int = 48, n_rings: int = 60) -> tuple:
     verts.append([[0.0, 0.0, z[-1] + 0.02]])
     v = np.vstack(verts)
     bottom, top = len(v) - 2, len(v) - 1
-    faces = []
-    for i in range(n_rings - 1):
-        for j in range(n_around):
-            a, b = i * n_around + j, i * n_around + (j + 1) % n_around
-            c, d = a + n_around, b + n_around
-            faces += [[a, b, d], [a, d, c]]
+    faces = ring_grid_faces(n_rings, n_around).tolist()
     for j in range(n_around):
         faces.append([bottom, (j + 1) % n_around, j])
         t0 = (n_rings - 1) * n_around
