@@ -37,6 +37,9 @@ if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
 DESIGN = "shirt_long_sleeve"
+
+#: core.batch.run.WORKER_CONFIG as a Dask config file for workers started by hand.
+WORKER_YAML = "distributed:\n  nanny:\n    pre-spawn-environ:\n      MALLOC_TRIM_THRESHOLD_: null\n"
 SEED = 2024
 
 
@@ -73,10 +76,14 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def _simulated_cluster(n_workers: int):
+def _simulated_cluster(n_workers: int, config_dir: Path):
     """(address, processes): a scheduler and ``n_workers`` worker processes on localhost."""
     port = _free_port()
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")])}
+    # the workers get the LocalCluster's settings through a config file (docs/batch.md, Clusters)
+    config_dir.mkdir(parents=True, exist_ok=True)
+    (config_dir / "ease.yaml").write_text(WORKER_YAML)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]),
+           "DASK_CONFIG": str(config_dir)}
     quiet = dict(stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=str(REPO), env=env)
     address = f"tcp://127.0.0.1:{port}"
     procs = [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
@@ -135,7 +142,7 @@ def run(out_dir, quick: bool = False) -> dict:
         result["speedup_2_vs_1"] = (round(r2["steady_items_per_s"] / r1["steady_items_per_s"], 2)
                                     if r1["steady_items_per_s"] else None)
 
-        address, procs = _simulated_cluster(2)
+        address, procs = _simulated_cluster(2, tmp / "dask_config")
         try:
             res, stamps, wall = _timed_batch(design, bodies, tmp / "cluster", scheduler=address)
         finally:

@@ -70,7 +70,7 @@ def test_sample_is_seeded_per_body_and_in_range():
 
 
 def _smpl_params(tmp_path):
-    from test_body_smpl import tube_model
+    from smpl_synth import tube_model
 
     from core.body import load_body
     path = tmp_path / "tube.npz"
@@ -145,3 +145,14 @@ def test_placement_recovers_a_rigid_motion():
     xyz = np.column_stack([uv, np.zeros(30)]) @ R.T + t
     R2, t2 = placement(uv, xyz)
     assert np.allclose(R2, R) and np.allclose(t2, t)
+
+
+def test_parquet_beside_the_journal_where_pyarrow_is_installed(tmp_path):
+    pq = pytest.importorskip("pyarrow.parquet")
+    j = Journal(tmp_path)
+    j.append({"id": "b", "status": "ok", "metrics.weft_mean_pct": 1.5})
+    j.append({"id": "a", "status": "error", "error": "x"})
+    j.close()
+    compact(tmp_path)
+    table = pq.read_table(tmp_path / "manifest.parquet").to_pylist()
+    assert [r["id"] for r in table] == ["a", "b"] and table[1]["metrics.weft_mean_pct"] == 1.5
