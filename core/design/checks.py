@@ -13,12 +13,9 @@ from __future__ import annotations
 import json
 import math
 import re
-from typing import TYPE_CHECKING, Dict
+from typing import Dict
 
 from ..errors import DesignError
-
-if TYPE_CHECKING:   # annotations only: the types import these checks
-    from .types import Parameter
 
 EASE_MIN, EASE_MAX = 0.5, 4.0
 GARMENT_KINDS = ("upper", "lower", "dress")
@@ -104,8 +101,8 @@ def param_or_number(path, x, params, kind, lo=None, hi=None, lo_open=False, what
     return check_number(path, x, lo, hi, lo_open=lo_open, what=what)
 
 
-def parameter_value(x, params: Dict[str, "Parameter"]) -> float:
-    """The number a validated ``number | "$param"`` field stands for."""
+def parameter_value(x, params: Dict[str, object]) -> float:
+    """The number a validated ``number | "$param"`` field stands for (``params``: name -> :class:`.types.Parameter`)."""
     if isinstance(x, str):
         return float(params[x[1:]].value)
     return float(x)
