@@ -30,6 +30,7 @@ LAYERS = {
     "core.export": 7,
     "core.metrics": 8,
     "core.workflows": 9,
+    "core.live": 9,      # the live re-solve loop (painting), on the workflows' solver
     "core.batch": 10,    # many bodies through the workflows on a Dask cluster
     "core.cli": 11,
     "core": 0,           # the package's own __init__: the version only
