@@ -32,7 +32,8 @@ no call changes a later one's result.
 from __future__ import annotations
 
 import time
-from typing import Callable, Dict, Optional, Sequence, Tuple
+from dataclasses import dataclass, field
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -222,7 +223,9 @@ class PatternSolver:
         matrix for both coordinates, the per-panel rigid fit, the flip guard
         and the grain re-alignment; the Jacobians of the next iterate are
         carried through the re-alignment's rotation, so only two sparse
-        products per iteration touch the triangles.
+        products per iteration touch the triangles. The configuration's
+        ``iterations`` (adaptation: at least ``adaptation.min_iterations``) of
+        :meth:`iterate` from :meth:`begin`.
 
         Parameters
         ----------
@@ -237,39 +240,86 @@ class PatternSolver:
         plan : the seam plan (default: :meth:`plan_seams` of these targets).
         config : this call's configuration (default: the solver's).
         """
+        state = self.begin(K, c_weft, c_warp, start=start, positions=positions, poses=poses, plan=plan,
+                           config=config)
+        self.iterate(state, state.planned, progress)
+        report(progress, 1.0, "pattern optimized")
+        return self.result(state)
+
+    def begin(self, K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray, start: Optional[np.ndarray] = None,
+              positions: Optional[np.ndarray] = None, poses: Optional[dict] = None,
+              plan: Optional[SeamPlan] = None, config: Optional[SolverConfig] = None,
+              resume: Optional["SolveState"] = None) -> "SolveState":
+        """The state of a solve before its first iteration (arguments as :meth:`solve`).
+
+        ``resume``: a state of an earlier solve of this solver to continue from
+        with new targets (a warm re-solve, e.g. after the designer painted): its
+        iterate (unless ``start`` is given), the feedback's accumulated target
+        corrections, the seam length integral, the local step's memory and the
+        iteration count carry over, so the feedback stays on and the pattern
+        moves only as far as the new targets ask. Nothing is kept on the solver.
+        """
         cfg = config or self.config
         if config is not None:
             cfg.check()
-        fb, ad = cfg.feedback, cfg.adaptation
         plan = plan if plan is not None else self.plan_seams(K, c_weft, c_warp, cfg)
         t0 = time.perf_counter()
-        lu, pin = self.factorisation(cfg, plan)
+        self.factorisation(cfg, plan)
+        nf = len(self.gfaces)
+        if start is not None:
+            U = start.copy()
+        elif resume is not None:
+            U = resume.U.copy()
+        else:
+            U = scaled_start(self.blocks, c_weft, c_warp)
+        adapting = poses is not None
+        ad = cfg.adaptation
+        state = SolveState(
+            K=K, c_weft=c_weft, c_warp=c_warp, plan=plan, config=cfg, poses=poses,
+            positions=self.ref_positions if positions is None else positions,
+            planned=max(int(cfg.iterations), int(ad.min_iterations)) if adapting else int(cfg.iterations),
+            U=U, M=self.jacobians(U), corr_w=np.ones(nf), corr_g=np.ones(nf),
+            integral=np.zeros(len(self.seams.edge_start)),
+            tg=rest_targets(K, c_weft, c_warp, cfg.rest_shape.model))
+        if resume is not None:
+            state.corr_w, state.corr_g = resume.corr_w.copy(), resume.corr_g.copy()
+            state.integral = resume.integral.copy()
+            state.local_state = dict(resume.local_state)
+            state.iteration = resume.iteration
+            if start is None:
+                state.s_cur = resume.s_cur
+        state.seconds = time.perf_counter() - t0
+        return state
+
+    def iterate(self, state: "SolveState", iterations: int, progress: Optional[Progress] = None) -> "SolveState":
+        """Run ``iterations`` more local-global iterations on ``state`` (updated in place and returned).
+
+        ``state.step`` is then the RMS vertex move of the last iteration over
+        the mean edge length (dimensionless; how far from a fixed point).
+        """
+        cfg = state.config
+        fb, ad = cfg.feedback, cfg.adaptation
+        t0 = time.perf_counter()
+        lu, pin = self.factorisation(cfg, state.plan)
         a = self.area_weights(cfg)
         W2 = np.array([1.0, cfg.weights.warp_column ** 2])
-        U = scaled_start(self.blocks, c_weft, c_warp) if start is None else start.copy()
-        pos = self.ref_positions if positions is None else positions
-        nf = len(self.gfaces)
-        corr_w = np.ones(nf)
-        corr_g = np.ones(nf)
-        energies = []
-        backtracks = 0
+        poses = state.poses
         adapting = poses is not None
         gain_w = max(fb.weft, ad.gain) if adapting else fb.weft
         gain_g = max(fb.warp, ad.gain) if adapting else fb.warp
-        n_it = max(int(cfg.iterations), int(ad.min_iterations)) if adapting else int(cfg.iterations)
         hi = ad.ceiling if adapting else fb.ceiling
         step = ad.step if adapting else fb.step
         model = cfg.rest_shape.model
-        tg = rest_targets(K, c_weft, c_warp, model)
+        K, c_weft, c_warp = state.K, state.c_weft, state.c_warp
+        corr_w, corr_g, integral = state.corr_w, state.corr_g, state.integral
+        U, M, s_cur, tg = state.U, state.M, state.s_cur, state.tg
         Kc = components(K)
         aw = (a * W2[0], a * W2[1])
-        M = self.jacobians(U)
-        s_cur = None
-        local_state = {}
-        integral = np.zeros(len(self.seams.edge_start))
         lam_ease, lam_reg = cfg.weights.ease, cfg.weights.regulariser
-        for it in range(n_it):
-            report(progress, it / n_it, f"optimizing pattern: iteration {it + 1}/{n_it}")
+        n_it = int(iterations)
+        for k in range(n_it):
+            it = state.iteration
+            report(progress, k / max(n_it, 1), f"optimizing pattern: iteration {k + 1}/{n_it}")
             if (gain_w > 0 or gain_g > 0) and it >= fb.from_iteration:
                 # move the targets by the achieved/target ratio: the linear solve then
                 # lands on the wanted rho-hat wherever curvature allows it
@@ -292,31 +342,82 @@ class PatternSolver:
                 np.clip(corr_w, fb.floor, hi, out=corr_w)
                 np.clip(corr_g, fb.floor, hi, out=corr_g)
                 tg = rest_targets(K, c_weft * corr_w, c_warp * corr_g, model)
-            RT, Te = local_step(cfg, M, tg, W2, local_state)
-            energies.append(float(np.sum(a * sum(W2[k % 2] * (M[k] - RT[k]) ** 2 for k in range(4)))))
+            RT, Te = local_step(cfg, M, tg, W2, state.local_state)
+            state.energies.append(float(np.sum(a * sum(W2[j % 2] * (M[j] - RT[j]) ** 2 for j in range(4)))))
             # B = lambda_ease T + lambda_reg R T: one right-hand side for both terms (same weights)
-            B = [lam_ease * Te[k] + lam_reg * RT[k] for k in range(4)]
+            B = [lam_ease * Te[j] + lam_reg * RT[j] for j in range(4)]
             rhs = np.empty((self.n, 2))
             rhs[:, 0] = self._GxT @ (aw[0] * B[0]) + self._GyT @ (aw[1] * B[1])
             rhs[:, 1] = self._GxT @ (aw[0] * B[2]) + self._GyT @ (aw[1] * B[3])
-            rhs += seam_rhs(self.seams, U, cfg, plan, integral)
+            rhs += seam_rhs(self.seams, U, cfg, state.plan, integral)
             rhs += pin * U
             U_new = lu(rhs)
             # the step's rigid part per panel carries no strain: remove it so that the flip
             # guard only ever pulls back the local part of the step
             U_new = rigid_align(self.blocks, U_new, U)
+            U_prev = U
             U, nb, s_cur = flip_guard(self.blocks, U, U_new, s_cur)
-            backtracks += nb
+            state.backtracks += nb
             M = self.jacobians(U)
             if cfg.realign_grain:
                 U, M = realign_grain(self.blocks, U, M)
-        report(progress, 1.0, "pattern optimized")
+            state.step = float(np.sqrt(np.mean(np.sum((U - U_prev) ** 2, axis=1)))) / self.mean_edge
+            state.iteration += 1
+        state.U, state.M, state.s_cur, state.tg = U, M, s_cur, tg
+        state.seconds += time.perf_counter() - t0
+        return state
+
+    def result(self, state: "SolveState") -> SolveResult:
+        """The :class:`SolveResult` of ``state``'s current iterate (per panel uv, targets, body positions)."""
         out_uv, tw, tgw, xyz = {}, {}, {}, {}
         f0 = 0
+        U, pos = state.U, state.positions
         for pd in self.panels:
             out_uv[pd.name] = U[pd.offset:pd.offset + pd.n].copy()
-            tw[pd.name] = np.asarray(c_weft[f0:f0 + len(pd.faces)], float).copy()
-            tgw[pd.name] = np.asarray(c_warp[f0:f0 + len(pd.faces)], float).copy()
+            tw[pd.name] = np.asarray(state.c_weft[f0:f0 + len(pd.faces)], float).copy()
+            tgw[pd.name] = np.asarray(state.c_warp[f0:f0 + len(pd.faces)], float).copy()
             xyz[pd.name] = pos[pd.vertex_ids]
             f0 += len(pd.faces)
-        return SolveResult(out_uv, tw, tgw, xyz, time.perf_counter() - t0, n_it, backtracks, energies, plan.gathered)
+        return SolveResult(out_uv, tw, tgw, xyz, state.seconds, state.iteration, state.backtracks,
+                           list(state.energies), state.plan.gathered)
+
+
+@dataclass
+class SolveState:
+    """Where a solve stands between calls of :meth:`PatternSolver.iterate` (a value; the solver keeps none).
+
+    Attributes
+    ----------
+    K : (f, 2, 2) intrinsic offsets of the targets; c_weft, c_warp : (f,) target scales.
+    plan : SeamPlan sewn; config : SolverConfig of the solve; poses : adaptation demands or None.
+    positions : (N, 3) m, the body the result is reported on.
+    planned : iterations a one-shot :meth:`PatternSolver.solve` of this configuration runs.
+    U : (n, 2) m, the current iterate; M : its Jacobians (4 arrays (f,)).
+    corr_w, corr_g : (f,) the feedback's accumulated target corrections.
+    integral : (E,) the seam length term's integral action; tg : the current rest targets.
+    s_cur : (f,) signed areas of ``U`` or None; local_state : the local step's memory.
+    iteration : iterations run so far; energies : energy per iteration; backtracks : flip-guard halvings.
+    step : RMS vertex move of the last iteration over the mean edge length (inf before the first).
+    seconds : wall time spent in :meth:`~PatternSolver.begin` and :meth:`~PatternSolver.iterate`.
+    """
+    K: np.ndarray
+    c_weft: np.ndarray
+    c_warp: np.ndarray
+    plan: SeamPlan
+    config: SolverConfig
+    poses: Optional[dict]
+    positions: np.ndarray
+    planned: int
+    U: np.ndarray
+    M: list
+    corr_w: np.ndarray
+    corr_g: np.ndarray
+    integral: np.ndarray
+    tg: dict
+    s_cur: Optional[np.ndarray] = None
+    local_state: dict = field(default_factory=dict)
+    iteration: int = 0
+    energies: List[float] = field(default_factory=list)
+    backtracks: int = 0
+    step: float = float("inf")
+    seconds: float = 0.0
