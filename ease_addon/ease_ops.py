@@ -91,14 +91,40 @@ def _template_rows(cut, panel) -> tuple:
     return single, emb.indices[emb.indptr[single]]
 
 
-def design_with_triangle_ease(context, design, tri_ease: np.ndarray):
+def x_mirror(obj) -> bool:
+    """Blender's own X-mirror setting of the paint modes: the body mesh's ``use_mirror_x``
+    (the X toggle of Vertex Paint's and Sculpt's Symmetry popover; the tool settings'
+    ``use_symmetry_x`` are legacy and not what the header shows)."""
+    return bool(getattr(obj.data, "use_mirror_x", False))
+
+
+def symmetrised(obj, tri_ease: np.ndarray) -> np.ndarray:
+    """``tri_ease`` (F,) averaged with its mirror image through the body's symmetry map
+    (triangles without a mirror triangle keep their value)."""
+    from ..core.design.mirror import face_symmetry
+    model = state.body_model(data.body_spec(obj)["model"])
+    fs = face_symmetry(convert.get_triangles(obj.data), np.asarray(model.symmetry))
+    out = np.asarray(tri_ease, dtype=np.float64).copy()
+    has = fs >= 0
+    out[has] = 0.5 * (out[has] + out[fs[has]])
+    return out
+
+
+def design_with_triangle_ease(context, design, tri_ease: np.ndarray, mirror: bool = False):
     """A copy of ``design`` whose every panel has the per-triangle ease
-    ``tri_ease`` (F,) on the body triangles it covers."""
+    ``tri_ease`` (F,) on the body triangles it covers.
+
+    ``mirror`` (X-mirror painting, ``tri_ease`` symmetric): the generated ``*_right``
+    panels of a mirrored design stay generated (they read their ``*_left`` panel's field
+    mirrored). Without it each side keeps what was painted on it: a ``*_right`` panel gets
+    a field of its own (and is cut as a piece of its own where it differs)."""
     obj = data.body_object(context)
     cut = data.cut_for(design, obj)
     faces = convert.get_triangles(obj.data)
     d = design.copy()
     for p in cut.panels:
+        if mirror and d.find_panel(p.name)[3]:
+            continue
         cols = np.unique(cut.embedding[p.vertex_ids].tocsr().indices)
         inside = np.zeros(len(obj.data.vertices), dtype=bool)
         inside[cols] = True
@@ -239,8 +265,12 @@ class EASE_OT_ease_to_design(EaseOperator):
         obj = data.body_object(context)
         design = data.current_design(context)
         tri = triangle_ease(obj, context.scene)
-        sync.set_design(context, design_with_triangle_ease(context, design, tri), recut=True)
-        self.report({"INFO"}, f"ease {tri.min():.3f} .. {tri.max():.3f} written into the design")
+        mirror = x_mirror(obj)
+        if mirror:
+            tri = symmetrised(obj, tri)
+        sync.set_design(context, design_with_triangle_ease(context, design, tri, mirror), recut=True)
+        how = "X-mirror: symmetric" if mirror else "each side as painted"
+        self.report({"INFO"}, f"ease {tri.min():.3f} .. {tri.max():.3f} written into the design ({how})")
 
 
 class EASE_OT_ease_from_design(EaseOperator):

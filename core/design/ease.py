@@ -128,9 +128,33 @@ def apply_ease(cut, design, body, body_vertices: np.ndarray, resolver: Optional[
     if resolver is None:
         resolver = Resolver(design, body, body_vertices)
     for panel in cut.panels:
-        g, p, i, mirrored = design.find_panel(panel.name)
-        gi = design.garments.index(g)
-        ease = mirror_ease(p.ease) if mirrored else p.ease
-        path = f"garments[{gi}].panels[{i}].ease"
+        ease, path, _ = _panel_field(design, panel.name)
         panel.ease = panel_ease(cut, panel, ease, resolver, path)
+    for panel in cut.panels:
+        if panel.mirror_of is not None and not _is_mirror_ease(cut, design, panel, resolver):
+            # a right panel with ease of its own (painted without X-mirror) is a piece of
+            # its own: the export must not cut it as the mirror of the left one
+            panel.mirror_of = None
     return cut
+
+
+def _panel_field(design, name: str) -> tuple:
+    """``(ease field, JSON path, generated)`` of the cut panel ``name`` (a generated
+    ``*_right`` panel reads its ``*_left`` source's field mirrored)."""
+    g, p, i, mirrored = design.find_panel(name)
+    gi = design.garments.index(g)
+    return (mirror_ease(p.ease) if mirrored else p.ease), f"garments[{gi}].panels[{i}].ease", mirrored
+
+
+def _is_mirror_ease(cut, design, panel, resolver) -> bool:
+    """True when ``panel.ease`` is its ``mirror_of`` source's field read mirrored (to the
+    6 decimals the add-on writes ease with)."""
+    _, _, generated = _panel_field(design, panel.name)
+    if generated:
+        return True
+    try:
+        source, path, _ = _panel_field(design, panel.mirror_of)
+    except DesignError:       # the source is not a design panel: nothing to compare with
+        return True
+    mirrored = panel_ease(cut, panel, mirror_ease(source), resolver, path)
+    return bool(np.allclose(mirrored, panel.ease, rtol=0.0, atol=1e-6))
