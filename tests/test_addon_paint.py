@@ -82,3 +82,39 @@ def test_x_mirror_paint_symmetrises_the_field(bpy_session, addon):
             left = cut.panel(p.name.replace("_right", "_left"))
             assert p.mirror_of == left.name
             assert np.allclose(np.sort(p.ease), np.sort(left.ease), atol=1e-6)
+
+
+@pytest.mark.parametrize("data_type", ["BYTE_COLOR", "FLOAT_COLOR"])
+@pytest.mark.parametrize("domain", ["POINT", "CORNER"])
+def test_paint_ease_adopts_any_ease_layer_without_loss(bpy_session, addon, data_type, domain):
+    """A designer's ``ease`` layer of any type and domain (made in Blender's Color Attributes
+    panel, or by another tool) is kept: Paint Ease converts it, the ease it reads is unchanged."""
+    bpy = bpy_session["bpy"]
+    ramp, ease_ops = addon("ramp"), addon("ease_ops")
+    sc = bpy.context.scene
+    sc.ease.ease_min, sc.ease.ease_max = 0.9, 2.0
+    me = sc.ease.body.data
+    me.color_attributes.remove(me.color_attributes["ease"])
+    if "ease_ramp" in me:
+        del me["ease_ramp"]
+    layer = me.color_attributes.new("ease", data_type, domain)
+    n = len(layer.data)
+    e = np.random.default_rng(3).uniform(1.0, 1.8, n)   # corners of one vertex differ: no averaging allowed
+    layer.data.foreach_set("color", ramp.ease_to_color(e, 0.9, 2.0).astype(np.float32).ravel())
+    before = ease_ops.triangle_ease(sc.ease.body, sc)
+    assert before.std() > 0.05
+    try:
+        assert bpy.ops.ease.paint_ease() == {"FINISHED"}
+    finally:
+        bpy.ops.object.mode_set(mode="OBJECT")
+    layer = me.color_attributes["ease"]
+    assert layer.data_type == "FLOAT_COLOR" and me.color_attributes.active_color.name == "ease"
+    after = ease_ops.triangle_ease(sc.ease.body, sc)
+    assert np.allclose(after, before, atol=1e-6)
+    # the brush's uniform writes keep the corners they do not touch
+    names = [p.name for p in addon("data").current_cut(bpy.context).panels]
+    assert bpy.ops.ease.ease_uniform(panel=names[0], ease=1.3) == {"FINISHED"}
+    mask = ease_ops.panel_vertex_mask(bpy.context, names[0])
+    faces = addon("convert").get_triangles(me)
+    outside = ~mask[faces].any(axis=1)
+    assert np.allclose(ease_ops.triangle_ease(sc.ease.body, sc)[outside], before[outside], atol=1e-6)
