@@ -1,23 +1,53 @@
-"""Atomic file output: nothing already made is lost or half-written.
+"""Atomic file output: a file or an output folder is all-old or all-new.
 
-Write every output through these helpers. A file appears under its final
-name only once it is complete; an output directory is filled in a sibling
-temporary directory and moved into place at the end, so a failure or a
-cancellation leaves the previous contents untouched.
+Write every output through these helpers.
+
+* :func:`write_bytes` (and the text/JSON forms) writes a temporary file beside
+  the target and renames it over the target: a reader sees the old file or
+  the new one, never a part.
+* :func:`output_dir` fills a new folder beside the target and exchanges the
+  two with one rename (Linux ``renameat2(RENAME_EXCHANGE)``; elsewhere two
+  renames, the old folder kept under a recognisable name until the new one is
+  in place). A failure, an exception or Ctrl-C before that rename leaves the
+  old folder untouched; after it the folder is the new one. Files of the old
+  folder that the run does not write are carried into the new folder (hard
+  links) before the exchange, so they are kept.
+* A target that cannot be renamed (a mount point, or a folder whose parent is
+  read-only) is filled in a staging folder inside it and its entries are
+  swapped one rename each, with SIGINT/SIGTERM held off; if the process is
+  killed during those renames, the next run writing that folder completes the
+  swap first.
+
+Temporary names are ``.NAME.ease-tmp-PID-XXXX`` (``ease-old``/``ease-new``
+while swapping): a run that was killed leaves one behind, and the next write
+of ``NAME`` removes it once process PID no longer exists. Durability against
+a power cut is the filesystem's (files are fsync'ed, folders are not).
 """
 from __future__ import annotations
 
 import contextlib
+import ctypes
+import errno
 import json
 import os
+import re
+import secrets
 import shutil
-import tempfile
+import signal
+import threading
 from pathlib import Path
-from typing import Iterator, Union
+from typing import Iterator, List, Tuple, Union
 
 import numpy as np
 
+from .errors import EaseError
+
 PathLike = Union[str, os.PathLike]
+
+_TEMP = re.compile(r"^\.(?P<name>.*)\.ease-(?P<kind>tmp|old|new)-(?P<pid>\d+)-(?P<tag>[0-9a-f]+)$")
+_NAME_MAX = 200          # of the target's name inside a temporary name (filesystems allow 255 bytes)
+_committed: List[Path] = []
+_lock = threading.Lock()
 
 
 def _umask() -> int:
@@ -35,26 +65,102 @@ def _umask() -> int:
     return mask
 
 
+def _temp_name(name: str, kind: str, tag: str) -> str:
+    return f".{name[:_NAME_MAX]}.ease-{kind}-{tag}"
+
+
+def _new_tag() -> str:
+    return f"{os.getpid()}-{secrets.token_hex(4)}"
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):
+        return True           # another user's process, or no way to tell: leave its files alone
+    return True
+
+
+def _stale(folder: Path, name: str) -> List[Tuple[str, str, Path]]:
+    """``(kind, tag, path)`` of the temporary entries for ``name`` in ``folder``
+    whose process is gone."""
+    out = []
+    try:
+        entries = sorted(os.listdir(folder))
+    except OSError:
+        return out
+    for entry in entries:
+        m = _TEMP.match(entry)
+        if m and m["name"] == name[:_NAME_MAX] and not _alive(int(m["pid"])):
+            out.append((m["kind"], f"{m['pid']}-{m['tag']}", folder / entry))
+    return out
+
+
+def _remove(path: Path) -> None:
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(path)
+
+
+def _refuse(path: Path, exc: OSError, what: str) -> EaseError:
+    reason = exc.strerror or str(exc)
+    return EaseError(f"{path}: cannot write {what} ({reason})")
+
+
+def _check_target(path: Path, folder: bool) -> None:
+    """One clear error for a target that cannot be written (checked before any work)."""
+    for parent in reversed(path.parents):
+        if parent.exists() and not parent.is_dir():
+            raise EaseError(f"{path}: cannot write here: {parent} is a file, not a folder")
+    if folder and path.exists() and not path.is_dir():
+        raise EaseError(f"{path}: is a file; expected an output folder")
+    if not folder and path.is_dir():
+        raise EaseError(f"{path}: is a folder; expected a file name")
+
+
 def write_bytes(path: PathLike, data: bytes) -> Path:
-    """Write ``data`` to ``path`` atomically (temp file in the same dir + rename).
+    """Write ``data`` to ``path`` atomically (temporary file beside it, fsync, rename).
 
     The file gets the permissions a plain ``open(path, "w")`` would give
-    (0666 minus the umask): ``mkstemp`` makes it owner-only, which would hide
-    pattern files from the rest of a cutting room's group.
+    (0666 minus the umask), so pattern files stay readable by a cutting room's
+    group. Temporary files of an earlier, killed write of the same name are
+    removed.
+
+    Raises
+    ------
+    EaseError when ``path`` is a folder, lies under a file or cannot be
+    written (read-only folder or filesystem, no permission).
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    _check_target(path, folder=False)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise _refuse(path.parent, exc, "a folder") from None
+    for _, _, old in _stale(path.parent, path.name):
+        _remove(old)
+    tmp = path.parent / _temp_name(path.name, "tmp", _new_tag())
+    try:
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)   # 0666 minus the umask
+    except OSError as exc:
+        raise _refuse(path, exc, "the file") from None
     try:
         with os.fdopen(fd, "wb") as f:
             f.write(data)
             f.flush()
             os.fsync(f.fileno())
-        os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
+        if isinstance(exc, OSError):
+            raise _refuse(path, exc, "the file") from None
         raise
     return path
 
@@ -85,32 +191,214 @@ def write_json(path: PathLike, obj, indent: int | None = 1) -> Path:
     return write_text(path, dumps_json(obj, indent=indent) + "\n")
 
 
+def committed_outputs() -> Tuple[Path, ...]:
+    """Every output folder :func:`output_dir` has put in place in this process, in order.
+
+    The CLI compares it before and after a command to say truthfully what an
+    interrupted command did write.
+    """
+    with _lock:
+        return tuple(_committed)
+
+
+# ----------------------------------------------------------------------------- output folders
+
+@contextlib.contextmanager
+def _signals_held():
+    """SIGINT/SIGTERM wait until the block is done (main thread, where Python allows it)."""
+    held = {signal.SIGINT, signal.SIGTERM}
+    can = hasattr(signal, "pthread_sigmask") and threading.current_thread() is threading.main_thread()
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, held) if can else None
+    try:
+        yield
+    finally:
+        if can:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+def _exchange(a: Path, b: Path) -> bool:
+    """Swap the folders ``a`` and ``b`` with one rename; False where the system cannot."""
+    func = getattr(_libc(), "renameat2", None) if os.name == "posix" else None
+    if func is None:
+        return False
+    at_fdcwd, rename_exchange = -100, 2
+    if func(at_fdcwd, os.fsencode(a), at_fdcwd, os.fsencode(b), rename_exchange) == 0:
+        return True
+    err = ctypes.get_errno()
+    if err in (errno.EINVAL, errno.ENOSYS, errno.ENOTSUP):
+        return False          # a filesystem without RENAME_EXCHANGE: the two-rename fallback
+    raise OSError(err, os.strerror(err), str(b))
+
+
+_LIBC = []
+
+
+def _libc():
+    if not _LIBC:
+        try:
+            _LIBC.append(ctypes.CDLL(None, use_errno=True))
+        except OSError:
+            _LIBC.append(None)
+    return _LIBC[0]
+
+
+def _carry_over(old: Path, new: Path, top: bool = True) -> None:
+    """Hard-link (else copy) every entry of ``old`` that ``new`` lacks into ``new``.
+
+    The run's own files win: an old entry whose path ``new`` already holds (as
+    a file or a folder) is not carried, nor anything under it when ``new``
+    holds a file there. Temporary entries of EASE are never carried.
+    """
+    for entry in sorted(os.scandir(old), key=lambda e: e.name):
+        if top and _TEMP.match(entry.name):
+            continue
+        dst = new / entry.name
+        if entry.is_dir(follow_symlinks=False):
+            if not os.path.lexists(dst):
+                os.mkdir(dst)
+                _carry_over(Path(entry.path), dst, top=False)
+                shutil.copystat(entry.path, dst)
+            elif dst.is_dir() and not dst.is_symlink():
+                _carry_over(Path(entry.path), dst, top=False)
+        elif not os.path.lexists(dst):
+            if entry.is_symlink():
+                os.symlink(os.readlink(entry.path), dst)
+                continue
+            try:
+                os.link(entry.path, dst, follow_symlinks=False)
+            except OSError:
+                if entry.is_file(follow_symlinks=False):
+                    shutil.copy2(entry.path, dst)
+                # a socket or FIFO that cannot be linked is not output: not carried
+
+
+def _fix_modes(tmp: Path) -> None:
+    # writers that bypass write_bytes (matplotlib, ezdxf, reportlab) follow the
+    # umask; only owner-only files (mkstemp's) need fixing
+    mask = _umask()
+    for src in tmp.rglob("*"):
+        if not src.is_symlink() and src.is_file() and (src.stat().st_mode & 0o777) == 0o600:
+            os.chmod(src, 0o666 & ~mask)
+
+
+def _recover(final: Path) -> None:
+    """Finish or undo what a killed run left for ``final`` (beside it and inside it)."""
+    stale = _stale(final.parent, final.name)
+    for kind, tag, path in stale:
+        if kind == "old" and not os.path.lexists(final):
+            os.rename(path, final)        # killed between the two renames: the old folder back
+    for kind, tag, path in _stale(final.parent, final.name):
+        _remove(path)
+    if final.is_dir():
+        for kind, tag, path in _stale(final, final.name):
+            if kind == "new":
+                _swap_entries(path, final, final / _temp_name(final.name, "old", tag))
+        for kind, tag, path in _stale(final, final.name):
+            _remove(path)
+
+
+def _swap_entries(new: Path, final: Path, old: Path) -> None:
+    """Move every entry of ``new`` into ``final``, the one it replaces into ``old``.
+
+    Resumable: an entry already moved is not in ``new`` any more, and one whose
+    old version was moved aside but the new one not yet in is just moved in.
+    """
+    os.makedirs(old, exist_ok=True)
+    with _signals_held():
+        for name in sorted(os.listdir(new)):
+            dst = final / name
+            if os.path.lexists(dst):
+                os.rename(dst, old / name)
+            os.rename(new / name, dst)
+    _remove(old)
+    _remove(new)
+
+
+def _in_place(final: Path) -> bool:
+    """True when ``final`` is a folder that cannot itself be renamed."""
+    if not final.is_dir():
+        return False
+    try:
+        cwd = Path(os.getcwd())
+    except OSError:
+        cwd = None
+    # renaming the folder that holds the working directory would leave the
+    # process (and a caller's relative paths) in the deleted old folder
+    inside = cwd is not None and (cwd == final or final in cwd.parents)
+    return inside or os.path.ismount(final) or not os.access(final.parent, os.W_OK | os.X_OK)
+
+
 @contextlib.contextmanager
 def output_dir(path: PathLike) -> Iterator[Path]:
-    """Fill a fresh directory and move it to ``path`` only on success.
+    """Fill a new folder and make it ``path`` only on success, all at once.
 
-    Files already in ``path`` that the operation does not write are kept;
-    files it writes replace the old ones. On any exception nothing in
-    ``path`` changes.
+    Yields the folder to write into. Files already in ``path`` that the
+    operation does not write are kept (carried into the new folder); files it
+    writes replace the old ones. On any exception, Ctrl-C included, ``path``
+    is unchanged. The new folder gets the old one's permissions (else 0777
+    minus the umask); its owner and ACLs are the writing user's.
+
+    Raises
+    ------
+    EaseError when ``path`` is a file, lies under a file, or is read-only.
     """
-    final = Path(path)
-    final.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", suffix=".tmp", dir=final.parent))
+    final = Path(os.path.realpath(path))   # a symlink to a folder: replace the folder, keep the link
+    _check_target(final, folder=True)
     try:
-        yield tmp
-        mask = _umask()
-        final.mkdir(parents=True, exist_ok=True)
-        for src in sorted(tmp.rglob("*")):
-            rel = src.relative_to(tmp)
-            dst = final / rel
-            if src.is_dir():
-                dst.mkdir(parents=True, exist_ok=True)
-            else:
-                # writers that bypass write_bytes (matplotlib, ezdxf, reportlab) already follow
-                # the umask; only owner-only files (mkstemp's) need fixing
-                if (src.stat().st_mode & 0o777) == 0o600:
-                    os.chmod(src, 0o666 & ~mask)
-                dst.parent.mkdir(parents=True, exist_ok=True)
-                os.replace(src, dst)
+        final.parent.mkdir(parents=True, exist_ok=True)
+        _recover(final)
+    except OSError as exc:
+        raise _refuse(final, exc, "the output folder") from None
+    if final.is_dir() and not os.access(final, os.W_OK | os.X_OK):
+        raise EaseError(f"{path}: the output folder is read-only")
+    in_place = _in_place(final)
+    tag = _new_tag()
+    tmp = (final if in_place else final.parent) / _temp_name(final.name, "tmp", tag)
+    try:
+        os.mkdir(tmp, 0o700)
+    except OSError as exc:
+        raise _refuse(final, exc, "the output folder") from None
+    try:
+        yield tmp                         # the writers' own errors pass through unchanged
+        try:
+            _fix_modes(tmp)
+            (_commit_in_place if in_place else _commit)(tmp, final, tag)
+        except OSError as exc:
+            raise _refuse(final, exc, "the output folder") from None
     finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+        _remove(tmp)
+
+
+def _commit(tmp: Path, final: Path, tag: str) -> None:
+    old_mode = final.stat().st_mode & 0o7777 if final.is_dir() else 0o777 & ~_umask()
+    if final.is_dir():
+        _carry_over(final, tmp)
+    os.chmod(tmp, old_mode)
+    with _signals_held():
+        if not final.is_dir():
+            os.rename(tmp, final)
+        elif not _exchange(tmp, final):
+            aside = final.parent / _temp_name(final.name, "old", tag)
+            os.rename(final, aside)       # the next run puts it back if killed right here
+            try:
+                os.rename(tmp, final)
+            except OSError:
+                os.rename(aside, final)
+                raise
+            os.rename(aside, tmp)
+        with _lock:
+            _committed.append(final)
+    # tmp now holds the old folder; the caller's finally removes it
+
+
+def _commit_in_place(tmp: Path, final: Path, tag: str) -> None:
+    for entry in os.scandir(tmp):
+        dst = final / entry.name
+        if entry.is_dir(follow_symlinks=False) and dst.is_dir() and not dst.is_symlink():
+            _carry_over(dst, Path(entry.path), top=False)
+    new = final / _temp_name(final.name, "new", tag)
+    with _signals_held():
+        os.rename(tmp, new)               # the commit point: from here on the next run completes the swap
+        _swap_entries(new, final, final / _temp_name(final.name, "old", tag))
+        with _lock:
+            _committed.append(final)

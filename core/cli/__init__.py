@@ -42,17 +42,23 @@ def main(argv=None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 1
+    from ..fileio import committed_outputs
+    before = len(committed_outputs())
     try:
         return int(args.func(args) or 0)
     except EaseError as exc:
         print(f"ease {args.command}: error: {exc}", file=sys.stderr)
         return 2
-    except Cancelled:
-        print(f"ease {args.command}: cancelled; nothing was written", file=sys.stderr)
+    except OSError as exc:  # a file the command reads or writes (disk full, permissions, ...)
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"ease {args.command}: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except (Cancelled, KeyboardInterrupt) as exc:
+        # an output folder is all-old or all-new; say which ones this command completed
+        done = committed_outputs()[before:]
+        what = "cancelled" if isinstance(exc, Cancelled) else "interrupted"
+        said = f"only {', '.join(map(str, done))} was written" if done else "nothing was written"
+        print(f"ease {args.command}: {what}; {said}", file=sys.stderr)
         return 130
-    except KeyboardInterrupt:
-        print(f"ease {args.command}: interrupted; nothing was written", file=sys.stderr)
-        return 130
-
 
 __all__ = ["build_parser", "main"]

@@ -35,11 +35,11 @@ def add_parser(sub) -> None:
 
 
 def _options(args) -> dict:
-    from ..errors import DrapeError
-    for name in ("frames", "substeps"):
-        value = getattr(args, name)
-        if value is not None and value < 1:
-            raise DrapeError(f"--{name}: expected a positive integer, got {value}")
+    from ..drape.options import check_option
+    # refused before the pattern is read or Warp is loaded
+    for flag, name in (("frames", "max_frames"), ("substeps", "substeps")):
+        if getattr(args, flag) is not None:
+            check_option(name, getattr(args, flag), f"--{flag}")
     options = {"device": args.device}
     if args.frames is not None:
         options["max_frames"] = args.frames

@@ -53,6 +53,9 @@ def add_parser(sub) -> None:
 
 
 def _solver_options(args) -> dict:
+    from ..pattern.config import check_iterations
+    if args.iterations is not None:
+        check_iterations("--iterations", args.iterations)
     return {"config": args.config, "iterations": args.iterations, "gather_all": args.no_seam_length}
 
 

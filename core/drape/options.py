@@ -127,25 +127,61 @@ class DrapeOptions:
         return opts
 
     def validate(self) -> None:
-        """Raise DrapeError naming the first field out of its range."""
-        for name in ("fps", "settle_speed", "search_distance", "max_speed", "max_extent", "max_strain"):
-            value = getattr(self, name)
-            self._check(name, isinstance(value, (int, float, np.number)) and value > 0, "a positive number")
-        for name in ("substeps", "max_frames", "settle_frames", "contact_interval", "self_interval"):
-            value = getattr(self, name)
-            self._check(name, isinstance(value, (int, np.integer)) and value > 0, "a positive integer")
-        if not (0.0 <= self.settle_trim < 0.5):
-            raise DrapeError(f"drape option settle_trim = {self.settle_trim!r}: expected a fraction in [0, 0.5)")
-        for name in ("damping", "gravity", "min_frames", "grow_frames"):
-            self._check(name, getattr(self, name) >= 0, "a number >= 0")
+        """Raise DrapeError naming the first field out of its range (:data:`RANGES`)."""
+        for name in RANGES:
+            check_option(name, getattr(self, name))
+        if not isinstance(self.device, str):
+            raise DrapeError(f"drape option device = {self.device!r}: expected 'cpu' or 'cuda'")
         if not isinstance(self.self_collision, (bool, np.bool_)):
             raise DrapeError(f"drape option self_collision = {self.self_collision!r}: expected true or false")
-        self._check("self_exclude", self.self_exclude >= 0, "a number >= 0")
-        for name in ("thickness", "friction", "tether_slack", "self_radius"):
-            if getattr(self, name) is not None:
-                self._check(name, getattr(self, name) >= 0, "a number >= 0 or None")
 
-    def _check(self, name: str, ok: bool, expected: str) -> None:
-        value = getattr(self, name)
-        if not ok or not np.isfinite(value):
-            raise DrapeError(f"drape option {name} = {value!r}: expected {expected}")
+
+#: name -> (kind, low, low included, high, None allowed) of every numeric option.
+#: The upper bounds are far beyond any useful drape; they exist so a typo
+#: (frames 10**9, thickness 1e6) is refused before any work instead of running
+#: for days or allocating without end.
+RANGES = {
+    "fps": (float, 0.0, False, 1000.0, False),
+    "substeps": (int, 1, True, 1000, False),
+    "max_frames": (int, 1, True, 10000, False),
+    "min_frames": (int, 0, True, 10000, False),
+    "settle_speed": (float, 0.0, False, 10.0, False),
+    "settle_frames": (int, 1, True, 10000, False),
+    "settle_trim": (float, 0.0, True, 0.5, False),
+    "damping": (float, 0.0, True, 1000.0, False),
+    "gravity": (float, 0.0, True, 100.0, False),
+    "thickness": (float, 0.0, True, 0.05, True),
+    "friction": (float, 0.0, True, 10.0, True),
+    "search_distance": (float, 0.0, False, 1.0, False),
+    "tether_slack": (float, 0.0, True, 10.0, True),
+    "contact_interval": (int, 1, True, 1000, False),
+    "max_speed": (float, 0.0, False, 1e4, False),
+    "max_extent": (float, 0.0, False, 1e3, False),
+    "max_strain": (float, 0.0, False, 1e3, False),
+    "grow_frames": (int, 0, True, 10000, False),
+    "self_radius": (float, 0.0, True, 0.05, True),
+    "self_exclude": (float, 0.0, True, 100.0, False),
+    "self_interval": (int, 1, True, 1000, False),
+}
+
+
+def check_option(name: str, value, label: Optional[str] = None) -> None:
+    """Raise DrapeError unless ``value`` lies in the range of option ``name``.
+
+    ``label`` names the option in the message (a CLI flag such as
+    ``--frames``); default ``drape option NAME``. ``settle_trim`` excludes its
+    upper bound (a fraction below one half); every other bound is included.
+    """
+    kind, low, low_in, high, none_ok = RANGES[name]
+    label = label or f"drape option {name}"
+    if value is None and none_ok:
+        return
+    is_int = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+    is_num = is_int or (isinstance(value, (float, np.floating)) and kind is float)
+    high_in = name != "settle_trim"
+    ok = is_num and np.isfinite(value) and (value >= low if low_in else value > low) and (
+        value <= high if high_in else value < high)
+    if not ok:
+        what = "an integer" if kind is int else "a number"
+        span = f"{'[' if low_in else '('}{low:g}, {high:g}{']' if high_in else ')'}"
+        raise DrapeError(f"{label} = {value!r}: expected {what} in {span}{' or None' if none_ok else ''}")

@@ -253,10 +253,8 @@ class SolverConfig:
         _finite("feedback.ceiling", fb.ceiling, 1.0, ">=")
         _finite("adaptation.ceiling", ad.ceiling, 1.0, ">=")
         for name, v in (("iterations", self.iterations), ("adaptation.min_iterations", ad.min_iterations)):
-            if int(v) < 1:
-                raise PatternError(f"solver configuration {name}: expected >= 1, got {v}")
-        if int(fb.from_iteration) < 0:
-            raise PatternError(f"solver configuration feedback.from_iteration: expected >= 0, got {fb.from_iteration}")
+            check_iterations(f"solver configuration {name}", v)
+        check_iterations("solver configuration feedback.from_iteration", fb.from_iteration, low=0)
         if s.straight_target not in ("zero", "smooth"):
             raise PatternError(f"solver configuration seams.straight_target: expected 'zero' or 'smooth', "
                                f"got {s.straight_target!r}")
@@ -269,6 +267,21 @@ class SolverConfig:
                                f"{FROM_DESIGN!r}, got {a!r}")
         if isinstance(s.gathered, str) or not all(isinstance(g, str) for g in s.gathered):
             raise PatternError(f"solver configuration seams.gathered: expected a tuple of seam names, got {s.gathered!r}")
+
+
+#: Most local-global iterations of one solve (default 20; an adaptation at least
+#: 40): far beyond convergence, so a typo cannot run for hours.
+MAX_ITERATIONS = 1000
+
+
+def check_iterations(label: str, value, low: int = 1) -> int:
+    """``value`` as an int; :class:`PatternError` naming ``label`` unless it is an integer
+    in ``[low, MAX_ITERATIONS]``."""
+    ok = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) and (
+        low <= value <= MAX_ITERATIONS)
+    if not ok:
+        raise PatternError(f"{label}: expected an integer in {low}..{MAX_ITERATIONS}, got {value!r}")
+    return int(value)
 
 
 def _finite(name: str, value, bound: float, op: str) -> None:
