@@ -1,0 +1,246 @@
+"""Live ease painting: the pattern follows the painted field, a time slice at a time.
+
+A :class:`LiveSession` keeps what is expensive and fixed for one design on one
+body: the cut (:class:`core.workflows.Prepared`), the pattern solver's
+flattening and factorisation (:func:`core.workflows.make_solver`) and the map
+from every cut triangle to the body template triangle it lies on. A new
+painted field (one ease value per body template triangle, what the add-on
+reads from the body's ``ease`` layer) becomes the targets of a warm re-solve
+that starts from the current pattern (:meth:`core.pattern.solver.PatternSolver.begin`
+with ``resume``: the iterate, the feedback's corrections and the seam
+integral carry over). :meth:`LiveSession.run` runs as many local-global
+iterations as fit a time slice and says whether the pattern has converged;
+the caller (the add-on's timer) calls it again while the designer is idle and
+stops calling once it has. A change of topology (a keypoint moved, a
+parameter changed, a seam added: anything but the ease in the design) needs
+a new session, made once (:func:`topology_key` tells when).
+
+The solver itself stays stateless: the solve's state is a value held here.
+"""
+from __future__ import annotations
+
+import json
+import time
+from typing import Dict, Optional
+
+import numpy as np
+
+from . import workflows as wf
+from .errors import PatternError
+
+
+def topology_key(design, body_spec: Optional[dict] = None) -> str:
+    """What a live session depends on: the design without its ease fields, and the body it is cut on.
+
+    Parameters
+    ----------
+    design : core.design.Design or its JSON dict
+    body_spec : ``{"model", "shape", "pose"}`` of the body the cut is made on, or None
+
+    Returns
+    -------
+    str, equal for two designs that differ only in their panels' ease.
+    """
+    d = json.loads(json.dumps(design.to_json() if hasattr(design, "to_json") else design))
+    for g in d.get("garments") or []:
+        for p in g.get("panels") or []:
+            if isinstance(p, dict):
+                p.pop("ease", None)
+    return json.dumps([d, body_spec or {}], sort_keys=True)
+
+
+def body_triangles(prep) -> np.ndarray:
+    """The body template triangle (int64) under each cut triangle, in the solver's order (all panels).
+
+    A cut triangle reads the painted field where it lies, on both sides of a
+    mirrored design (the centroid's closest template triangle on the reference
+    instance, as the design's ``per_triangle`` ease fields are read).
+    """
+    from .design.resolve import Resolver
+    loc = Resolver(prep.design, prep.body, prep.reference).locator
+    out = []
+    for panel in prep.cut.panels:
+        if not len(panel.faces):
+            out.append(np.zeros(0, dtype=np.int64))
+            continue
+        c = prep.cut.panel_positions(panel, prep.reference)[panel.faces].mean(axis=1)
+        out.append(np.asarray(loc.closest(c)[1], dtype=np.int64))
+    return np.concatenate(out)
+
+
+class LiveSession:
+    """The live re-solve of one design on one body (module docstring).
+
+    Parameters
+    ----------
+    prep : core.workflows.Prepared
+    config : solver configuration name (:data:`core.workflows.CONFIGS`)
+    pattern : a pattern of this cut to start from (the scene's), or None for a cold start
+    progress : progress callback of the flattening and factorisation
+
+    Attributes
+    ----------
+    solver : core.pattern.solver.PatternSolver, factorised once for the session
+    triangles : (f,) int64, :func:`body_triangles`
+    ease : (f,) float, the weft ease per cut triangle the current state aims at
+    state : core.pattern.solver.SolveState or None (before the first field)
+    converged : bool, ``state`` is the cold solve of the current field (see :meth:`run`)
+    iterations_since_change : int, warm and cold iterations since the last :meth:`set_ease`
+    seconds_per_iteration : running estimate of one iteration's wall time (what fits a slice)
+    """
+
+    def __init__(self, prep, config: str = "improved", pattern=None, progress=None):
+        self.prep = prep
+        self.config = config
+        self.solver = wf.make_solver(prep, config, progress=progress)
+        self.triangles = body_triangles(prep)
+        self.K = self.solver.offsets(self.solver.ref_positions)[0]
+        self.ease = self.solver.design_ease.copy()
+        self._start = None if pattern is None else self.solver.start_from(pattern)
+        self.state = None
+        self._cold = None
+        self._warm = False
+        self.converged = False
+        self.iterations_since_change = 0
+        self.seconds_per_iteration = None
+
+    @property
+    def n_body_triangles(self) -> int:
+        return len(self.prep.body.faces)
+
+    def cut_ease(self, body_ease) -> np.ndarray:
+        """The per-cut-triangle ease (f,) of a painted field ``body_ease`` (F_body,), checked."""
+        from .design.checks import EASE_MAX, EASE_MIN
+        e = np.asarray(body_ease, dtype=np.float64).reshape(-1)
+        if len(e) != self.n_body_triangles:
+            raise PatternError(f"live ease: expected {self.n_body_triangles} values (one per body template "
+                               f"triangle), got {len(e)}")
+        bad = ~np.isfinite(e) | (e < EASE_MIN - 1e-12) | (e > EASE_MAX + 1e-12)
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise PatternError(f"live ease: triangle {i}: expected an ease in {EASE_MIN}..{EASE_MAX}, got {e[i]}")
+        return e[self.triangles]
+
+    def set_ease(self, body_ease) -> bool:
+        """Aim at a new painted field (F_body,); False (nothing to do) when the garment's ease is unchanged.
+
+        The next :meth:`run` then takes one warm slice from the current
+        pattern. The seam plan follows the new targets; a plan not met before
+        costs one factorisation (cached by the solver for the session).
+        """
+        ease = self.cut_ease(body_ease)
+        if self.state is not None and np.array_equal(ease, self.ease):
+            return False
+        ones = np.ones_like(ease)
+        plan = self.solver.plan_seams(self.K, ease, ones)
+        start = self._start if self.state is None else None
+        self.state = self.solver.begin(self.K, ease, ones, start=start, plan=plan, resume=self.state)
+        self.ease = ease
+        self._cold = None
+        self._warm = True
+        self.converged = False
+        self.iterations_since_change = 0
+        return True
+
+    def run(self, budget_s: float, min_iterations: int = 1) -> int:
+        """Work for about ``budget_s`` seconds (at least ``min_iterations`` iterations); the iterations run.
+
+        The first call after :meth:`set_ease` iterates the warm state (the
+        pattern the designer sees moves towards the new paint at once); later
+        calls advance a cold solve of the same field (the configuration's
+        iterations from the stretched flattening, exactly what *Optimize
+        Pattern* computes), which replaces the warm state when it is complete:
+        the session has then converged, and the pattern no longer depends on
+        the order the field was painted in. An iteration is started only when
+        its expected time still fits the slice.
+        """
+        if self.state is None:
+            self.set_ease(self._design_field())
+        if self.converged:
+            return 0
+        if self._warm:
+            self._warm = False
+            return self._iterate(self.state, budget_s, min_iterations, None)
+        if self._cold is None:
+            ones = np.ones_like(self.ease)
+            self._cold = self.solver.begin(self.K, self.ease, ones, plan=self.state.plan)
+        done = self._iterate(self._cold, budget_s, min_iterations, self._cold.planned)
+        if self._cold.iteration >= self._cold.planned:
+            self.state, self._cold = self._cold, None
+            self.converged = True
+        return done
+
+    def _iterate(self, state, budget_s: float, min_iterations: int, upto: Optional[int]) -> int:
+        done = 0
+        t0 = time.perf_counter()
+        while upto is None or state.iteration < upto:
+            per = self.seconds_per_iteration or 0.0
+            if done >= min_iterations and time.perf_counter() - t0 + per > budget_s:
+                break
+            t1 = time.perf_counter()
+            self.solver.iterate(state, 1)
+            dt = time.perf_counter() - t1
+            # running estimate of one iteration's cost: what decides whether the next one fits
+            self.seconds_per_iteration = dt if per == 0.0 else 0.7 * per + 0.3 * dt
+            done += 1
+            self.iterations_since_change += 1
+        return done
+
+    def _design_field(self) -> np.ndarray:
+        """A body field (F_body,) that gives the design's own ease on the garment (1.0 elsewhere)."""
+        field = np.ones(self.n_body_triangles)
+        field[self.triangles] = self.solver.design_ease
+        return field
+
+    def pattern(self, figures: bool = True):
+        """The current pattern (core.pattern.Pattern, mode ``reference``); with ``figures``, its
+        metrics in ``report["metrics"]``; ``report["live"]``: iterations since the change, converged."""
+        from .pattern.build import build_pattern
+        if self.state is None:
+            self.run(0.0)
+        res = self.solver.result(self.state)
+        pat = build_pattern(self.prep.cut, res, style=self.prep.design.name, mode="reference")
+        pat.report["config"] = self.config
+        pat.report["live"] = {"iterations": int(self.iterations_since_change), "converged": bool(self.converged)}
+        if figures:
+            wf._finish(pat)
+        return pat
+
+    def figures(self, pattern) -> Dict[str, object]:
+        """The key figures of a measured ``pattern`` of this session (as the workflows give them)."""
+        return wf._figures(pattern)
+
+    def cold_pattern(self, body_ease):
+        """A cold solve (the configuration's iterations from the stretched flattening) of the
+        field ``body_ease`` (F_body,) on this session's solver: what live mode converges towards."""
+        from .pattern.build import build_pattern
+        ease = self.cut_ease(body_ease)
+        ones = np.ones_like(ease)
+        res = self.solver.solve(self.K, ease, ones, plan=self.solver.plan_seams(self.K, ease, ones))
+        pat = build_pattern(self.prep.cut, res, style=self.prep.design.name, mode="reference")
+        wf._finish(pat)
+        return pat
+
+
+def achieved_over_painted(pattern, triangles: np.ndarray, n_body: int) -> np.ndarray:
+    """Per body template triangle ``rho_hat / rho - 1`` (F_body,): the achieved weft scale over the
+    painted one, area-weighted over the cut triangles on it (NaN where no garment lies).
+
+    Parameters
+    ----------
+    pattern : core.pattern.Pattern of the session's cut (panels in the cut's order)
+    triangles : (f,) :func:`body_triangles`
+    n_body : number of body template triangles
+    """
+    from .geom.mesh import triangle_areas
+    ratio = np.concatenate([np.asarray(p.achieved_weft, float) / np.asarray(p.target_weft, float)
+                            for p in pattern.panels]) - 1.0
+    area = np.concatenate([triangle_areas(p.xyz, p.faces) for p in pattern.panels])
+    ok = np.isfinite(ratio)
+    w = np.bincount(triangles[ok], weights=area[ok], minlength=n_body)
+    s = np.bincount(triangles[ok], weights=(area * ratio)[ok], minlength=n_body)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(w > 0, s / np.where(w > 0, w, 1.0), np.nan)
+
+
+__all__ = ["LiveSession", "topology_key", "body_triangles", "achieved_over_painted"]

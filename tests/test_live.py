@@ -1,0 +1,140 @@
+"""core.live: the live re-solve of painted ease (no Blender), and the solver's resumable iterations."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from core import workflows as wf
+from core.design.templates import template_dir
+from core.errors import PatternError
+from core.live import LiveSession, achieved_over_painted, body_triangles, topology_key
+from core.pattern.build import build_pattern
+from core.pattern.solver import PatternSolver
+
+DESIGN = "top_sleeveless.json"     # cheapest template: two panels
+
+
+@pytest.fixture(scope="module")
+def prep(anny):
+    return wf.prepare(str(template_dir() / DESIGN), body=anny)
+
+
+@pytest.fixture(scope="module")
+def session(prep):
+    return LiveSession(prep)
+
+
+def _stroke(prep, session, field, ease, seed):
+    """``field`` with a brush-sized patch (6 cm around a garment triangle) painted ``ease``."""
+    faces = np.asarray(prep.body.faces)
+    cent = prep.reference[faces].mean(axis=1)
+    rng = np.random.default_rng(seed)
+    c = cent[rng.choice(np.unique(session.triangles))]
+    out = np.array(field, dtype=float)
+    patch = np.linalg.norm(cent - c, axis=1) < 0.06
+    out[patch] = ease
+    return out, patch
+
+
+def _converge(session, budget=0.05, limit=1000):
+    calls = 0
+    while not session.converged:
+        session.run(budget)
+        calls += 1
+        assert calls < limit
+    return calls
+
+
+def _uv(pattern):
+    return np.concatenate([p.uv for p in pattern.panels])
+
+
+def test_resumed_iterations_equal_one_solve(prep):
+    """begin + iterate(k) + iterate(n - k) is the one-shot solve, bit for bit: the state is the value passed."""
+    solver = wf.make_solver(prep)
+    K, cw, cg = solver.targets_reference()
+    one = solver.solve(K, cw, cg)
+    st = solver.begin(K, cw, cg)
+    solver.iterate(st, 7)
+    solver.iterate(st, st.planned - 7)
+    two = solver.result(st)
+    for name in one.uv:
+        assert np.array_equal(one.uv[name], two.uv[name])
+    assert two.iterations == one.iterations and two.energy == one.energy
+
+
+def test_body_triangles_lie_under_the_cut(prep, session):
+    tri = body_triangles(prep)
+    assert tri.shape == (sum(len(p.faces) for p in prep.cut.panels),)
+    assert tri.min() >= 0 and tri.max() < len(prep.body.faces)
+    # the design's own (uniform per panel) ease read back through the map is the cut's ease
+    assert np.allclose(session.solver.design_ease, session.cut_ease(session._design_field()))
+
+
+def test_live_converges_to_the_cold_solve_whatever_the_painting_order(prep, session):
+    """After any sequence of strokes, the converged live pattern is a cold solve of the last field
+    on a fresh solver, bit for bit (the warm slices shape only what is shown meanwhile)."""
+    field = np.full(len(prep.body.faces), 1.2)
+    assert session.set_ease(field)
+    _converge(session)
+    before = session.pattern()
+    field2, patch = _stroke(prep, session, field, 1.7, seed=1)
+    assert session.set_ease(field2)
+    assert not session.set_ease(field2)        # the same paint again: nothing to do
+    assert session.run(0.0) == 1                # one warm iteration fits a zero slice
+    warm = session.pattern(figures=False)
+    assert not session.converged
+    # the warm slice already moves the painted patch towards its new ease
+    on = np.isin(session.triangles, np.flatnonzero(patch))
+    rw = lambda p: np.concatenate([q.achieved_weft for q in p.panels])  # noqa: E731
+    assert on.any() and np.mean(rw(warm)[on]) > np.mean(rw(before)[on])
+    field3, _ = _stroke(prep, session, field2, 1.05, seed=2)
+    session.set_ease(field3)
+    _converge(session)
+    live = session.pattern()
+    fresh = PatternSolver(prep.cut, prep.reference, wf.solver_config())
+    K, cw, cg = fresh.targets_reference(ease=field3[body_triangles(prep)])
+    cold = build_pattern(prep.cut, fresh.solve(K, cw, cg), style=prep.design.name)
+    assert np.array_equal(_uv(live), _uv(cold))
+    assert live.report["metrics"]["flipped_triangles"] == 0
+    assert live.report["live"]["converged"]
+    figs = session.figures(live)
+    assert figs["compliance mean %"] == round(live.report["metrics"]["compliance"]["mean"], 2)
+
+
+def test_no_work_once_converged(session):
+    _converge(session)
+    assert session.run(1.0) == 0
+
+
+def test_achieved_over_painted(prep, session):
+    _converge(session)
+    pat = session.pattern(figures=False)
+    ratio = achieved_over_painted(pat, session.triangles, len(prep.body.faces))
+    on = np.zeros(len(prep.body.faces), bool)
+    on[session.triangles] = True
+    assert np.isnan(ratio[~on]).all() and np.isfinite(ratio[on]).all()
+    # the pattern realises its painted ease to about its compliance (percent): the mean ratio is near 0
+    comp = pat.report.get("metrics", {}).get("compliance", {}).get("mean") or wf._finish(pat)["compliance"]["mean"]
+    assert abs(np.nanmean(ratio)) < 3 * comp / 100
+
+
+def test_topology_key(prep):
+    d = prep.design.to_json()
+    painted = prep.design.copy()
+    painted.set_ease(prep.cut.panels[0].name, {"value": 1.5})
+    assert topology_key(painted, {"model": "anny"}) == topology_key(d, {"model": "anny"})
+    assert topology_key(d, {"model": "anny", "shape": {"height": 1}}) != topology_key(d, {"model": "anny"})
+    moved = prep.design.copy()
+    name = next(iter(moved.parameters))
+    p = moved.parameters[name]
+    moved.set_parameter(name, p.value * 0.9 if p.value else 0.1)
+    assert topology_key(moved) != topology_key(d)
+
+
+@pytest.mark.parametrize("bad, expect", [(np.ones(5), "expected"), ("nan", "triangle 0"), (9.0, "triangle 0")])
+def test_bad_fields_are_refused(prep, session, bad, expect):
+    if isinstance(bad, str) or np.ndim(bad) == 0:
+        bad = np.full(len(prep.body.faces), np.nan if bad == "nan" else bad)
+    with pytest.raises(PatternError, match=expect):
+        session.set_ease(bad)
