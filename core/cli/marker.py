@@ -1,0 +1,73 @@
+"""``ease marker``: nest the pieces of one or more sizes on a fabric width (a cutting-room marker)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from .common import add_quiet, console_progress, print_files, subcommand
+
+
+def _run(args) -> int:
+    from ..errors import ExportError
+    from ..export.marker import marker_items, nest, parse_quantities, size_label
+    from ..export.marker_render import write_marker
+    from ..pattern.io import load_pattern
+
+    wanted = parse_quantities(args.sizes, "--sizes") if args.sizes is not None else None
+    found = {}
+    for folder in args.pattern_dirs:
+        pattern = load_pattern(folder)
+        size = size_label(pattern, folder)
+        if size in found:
+            raise ExportError(f"{folder}: a second pattern of size {size} (the first is {found[size][0]}); "
+                              f"expected one folder per size")
+        found[size] = (folder, pattern)
+    if wanted is not None:
+        missing = [s for s in wanted if s not in found]
+        if missing:
+            raise ExportError(f"--sizes: no pattern folder of size {', '.join(missing)}; the folders given are "
+                              f"sizes {', '.join(found)}")
+        runs = [(s, found[s][1], n) for s, n in wanted.items()]
+    else:
+        runs = [(s, p, 1) for s, (_, p) in found.items()]
+    if args.width is None or not args.width > 0:
+        raise ExportError(f"--width: expected the fabric width in mm (> 0), got {args.width}")
+    items = marker_items(runs, allowance=args.allowance)
+    marker = nest(items, args.width / 1000.0, seconds=args.seconds, seed=args.seed, one_way=args.one_way,
+                  tilt=args.tilt, threads=args.threads, progress=console_progress(args))
+    title = f"{runs[0][1].style or 'marker'} marker"
+    extra = {"patterns": {s: str(Path(found[s][0])) for s, _, _ in runs},
+             "left_out": sorted(set(found) - {s for s, _, _ in runs})}
+    files = write_marker(marker, args.out, title, extra=extra)
+    print(f"marker {marker.width * 1000:.0f} x {marker.length * 1000:.0f} mm, efficiency "
+          f"{marker.efficiency * 100:.1f} %, {len(marker.placements)} pieces, {marker.seconds:.0f} s ({marker.stopped})")
+    print_files(files)
+    return 0
+
+
+def add_parser(sub) -> None:
+    p = subcommand(
+        sub, "marker", _run,
+        help="nest the pieces of one or more sizes on a fabric width (a cutting-room marker)",
+        description="Nest the cut lines (seam allowance included) of every piece of the given pattern folders "
+                    "(one per size) on a fabric of --width mm, grain parallel to the selvage (pieces turned 0 or "
+                    "180 degrees; 0 only with --one-way), with spyrrow (sparrow / jagua-rs). Writes marker.dxf "
+                    "(plotter DXF, mm), marker.svg, marker.pdf (one sheet at 1:1), marker.png and marker.json "
+                    "(length, efficiency, fabric per garment and per size, time, seed). Ctrl-C stops the search "
+                    "and writes the best marker found so far.")
+    p.add_argument("pattern_dirs", nargs="+", metavar="PATTERN_DIR",
+                   help="folders holding pattern.json (from `ease pattern` / `ease transfer`), one per size")
+    p.add_argument("--width", type=float, default=None, required=True, help="usable fabric width in mm (e.g. 1500)")
+    p.add_argument("--sizes", default=None,
+                   help="garments per size, e.g. XS:1,M:2,L:1 (default: one garment of every folder's size); "
+                        "folders of other sizes are left out")
+    p.add_argument("--seconds", type=int, default=60, help="time budget of the nester in seconds (default 60)")
+    p.add_argument("--seed", type=int, default=0,
+                   help="nester seed (default 0): with one thread a marker that converges in time is repeatable")
+    p.add_argument("--threads", type=int, default=1, help="nester threads (default 1; more: faster, not repeatable)")
+    p.add_argument("--one-way", action="store_true",
+                   help="one-way fabric (nap, pile, directional print): every piece the same way up (0 degrees)")
+    p.add_argument("--tilt", type=float, default=0.0, help="allowed tilt off the grain in degrees (default 0, at most 10)")
+    p.add_argument("--allowance", type=float, default=None,
+                   help="seam allowance in metres for every seam (default: the design's, else 0.01)")
+    p.add_argument("--out", required=True, help="output folder (filled atomically)")
+    add_quiet(p)

@@ -1,0 +1,424 @@
+"""Markers: every piece of one or more sizes nested on a fabric of a given width.
+
+A marker is the cutting-room layout of all pieces to cut from one length of
+fabric. The pieces' cut lines (seam allowance included, from
+:func:`core.export.pieces.build_pieces`) are nested by spyrrow, the sparrow /
+jagua-rs irregular strip packer, run in its own process
+(:mod:`core.export.marker_worker`) so that a cancel or Ctrl-C can stop it and
+keep the best marker found so far.
+
+Frame (metres): x runs along the fabric (the marker length, from 0), y
+across it (0 at one selvage, ``width`` at the other). The grain (warp) of
+every piece lies along x, parallel to the selvage: a piece's frame has the
+grain along +y (:mod:`core.export.pieces`), so it is first turned by -90°
+(:data:`GRAIN_TO_LENGTH`) and then only by 0° or 180° (two-way fabric), 0°
+(one-way fabric: nap, pile, a directional print), each optionally with a
+small tilt tolerance.
+
+Efficiency is the pieces' cut area over the marker area (width x length).
+A piece cut on a fold is unfolded (mirrored about its fold line): a marker is
+cut from a single open ply.
+
+Repeatability: the nester runs on ``threads`` worker threads (1 by default)
+with the given seed. With one thread its search is a function of the seed,
+so a marker whose search ends by itself before the time limit
+(``stopped == "converged"``) is the same, byte for byte, on every run; a
+search cut short by the time limit ends wherever the machine's speed took it.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import queue
+import subprocess
+import sys
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from ..errors import Cancelled, ExportError
+from ..geom.polygon import offset_loop, remove_loops, signed_area
+from ..pattern.types import Pattern
+from ..progress import Progress, report
+from .pieces import PieceDrawing, build_pieces
+
+GRAIN_TO_LENGTH = np.array([[0.0, 1.0], [-1.0, 0.0]])  # piece frame (grain +y) -> marker frame (grain +x)
+NEST_TOLERANCE = 0.0003   # m: outlines simplified within this and grown by it, so nested cut lines never touch
+MAX_TILT = 10.0           # degrees
+WORKER = Path(__file__).with_name("marker_worker.py")
+SPYRROW_PIN = "spyrrow==0.9.0"
+
+
+@dataclass
+class MarkerItem:
+    """One piece of one size to nest, ``count`` times.
+
+    Attributes
+    ----------
+    size : str, the size label (pattern folder or size name).
+    piece : :class:`core.export.pieces.PieceDrawing` (piece frame, m).
+    outline : (k, 2) float, m: the cut line in the piece frame, unfolded for a
+        piece cut on a fold (counter-clockwise).
+    mirror : (2,) point and (2,) unit direction of the fold line, or None.
+    count : int, copies to cut (garments of this size x the label's quantity).
+    area : float, m², of ``outline``.
+    """
+    size: str
+    piece: PieceDrawing
+    outline: np.ndarray
+    mirror: Optional[Tuple[np.ndarray, np.ndarray]]
+    count: int
+    area: float
+
+
+@dataclass
+class Placement:
+    """Where one copy of an item lies: marker point = ``rotation @ piece point + translation``.
+
+    ``angle`` (degrees) is the nester's turn after :data:`GRAIN_TO_LENGTH`.
+    """
+    item: int
+    angle: float
+    rotation: np.ndarray
+    translation: np.ndarray
+
+
+@dataclass
+class Marker:
+    """A nested marker (metres) and how it was found.
+
+    Attributes
+    ----------
+    width, length : float, m: fabric width and marker length (to the farthest cut line).
+    items : the nested :class:`MarkerItem` list.
+    placements : one :class:`Placement` per cut copy.
+    efficiency : float in [0, 1], pieces' cut area / (width x length).
+    seconds : float, wall seconds spent nesting.
+    seed, threads : the nester's seed and worker threads.
+    orientations : the allowed turns (degrees) after the grain turn.
+    stopped : ``"converged"``, ``"time limit"`` or ``"interrupted"``.
+    history : list of (seconds, efficiency), each improvement as it came.
+    """
+    width: float
+    length: float
+    items: List[MarkerItem]
+    placements: List[Placement]
+    efficiency: float
+    seconds: float
+    seed: int
+    threads: int
+    orientations: List[float]
+    stopped: str
+    history: List[Tuple[float, float]] = field(default_factory=list)
+
+
+def orientations(one_way: bool = False, tilt: float = 0.0) -> List[float]:
+    """The allowed turns (degrees): 0 and 180 (0 only for a one-way fabric), each ± ``tilt``."""
+    tilt = float(tilt)
+    if not (0.0 <= tilt <= MAX_TILT):
+        raise ExportError(f"tilt: expected 0 to {MAX_TILT:g} degrees off the grain, got {tilt:g}")
+    base = [0.0] if one_way else [0.0, 180.0]
+    out = []
+    for b in base:
+        out += [b] if tilt == 0 else [b - tilt, b, b + tilt]
+    return out
+
+
+def parse_quantities(text: str, field: str = "sizes") -> Dict[str, int]:
+    """``"XS:1,M:2,L:1"`` (or ``"XS,M"``: one each) as {size: garments}, in the order given."""
+    out: Dict[str, int] = {}
+    for part in str(text).split(","):
+        part = part.strip()
+        if not part:
+            continue
+        name, _, count = part.partition(":")
+        name = name.strip()
+        try:
+            n = int(count) if count.strip() else 1
+        except ValueError:
+            n = 0
+        if not name or n < 1 or name in out:
+            raise ExportError(f"{field}: expected SIZE:GARMENTS pairs such as XS:1,M:2 (each size once, "
+                              f"garments >= 1), got {part!r}")
+        out[name] = n
+    if not out:
+        raise ExportError(f"{field}: expected SIZE:GARMENTS pairs such as XS:1,M:2, got {text!r}")
+    return out
+
+
+def size_label(pattern: Pattern, folder=None) -> str:
+    """The size a pattern is for: its body's chart size, else the folder name."""
+    body = pattern.body or {}
+    size = body.get("size") or (body.get("shape") if isinstance(body.get("shape"), str) else None)
+    return str(size or (Path(folder).name if folder is not None else "-"))
+
+
+def _rot(deg: float) -> np.ndarray:
+    a = math.radians(deg)
+    return np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+
+
+def _fold_line(piece: PieceDrawing) -> Optional[Tuple[np.ndarray, np.ndarray]]:
+    if not piece.fold:
+        return None
+    f = np.asarray(piece.fold[0], float)
+    d = f[-1] - f[0]
+    return f[0], d / max(np.linalg.norm(d), 1e-12)
+
+
+def reflect(points: np.ndarray, line: Tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """(k, 2) points mirrored about the line (point, unit direction)."""
+    p0, d = line
+    q = np.asarray(points, float) - p0
+    along = q @ d
+    return p0 + 2.0 * along[:, None] * d - q
+
+
+def unfold(loop: np.ndarray, line: Tuple[np.ndarray, np.ndarray], tol: float = 1e-5) -> np.ndarray:
+    """The whole outline of a piece cut on a fold: the half and its mirror image.
+
+    Parameters
+    ----------
+    loop : (k, 2) float, m, counter-clockwise cut line of the half piece; the
+        fold edge (no allowance) is a run of vertices on ``line``.
+    line : fold line (point, unit direction).
+    tol : m, distance within which a vertex counts as on the fold.
+
+    Raises
+    ------
+    ExportError when no run of the cut line lies on the fold (an allowance on the fold).
+    """
+    p0, d = line
+    q = loop - p0
+    off = np.abs(q[:, 0] * d[1] - q[:, 1] * d[0]) > tol
+    if off.all() or not off.any():
+        raise ExportError("a piece cut on a fold needs its cut line along the fold (no allowance on the fold)")
+    n = len(loop)
+    # start at the last fold vertex before an off-fold run: A, c1..ck, B with A and B on the fold
+    start = next(i for i in range(n) if not off[i] and off[(i + 1) % n])
+    order = [(start + k) % n for k in range(n)]
+    chain = [order[0]]
+    for i in order[1:]:
+        chain.append(i)
+        if not off[i]:
+            break
+    half = loop[chain]
+    return np.vstack([half, reflect(half[-2:0:-1], line)])
+
+
+def marker_items(patterns: Sequence[Tuple[str, Pattern, int]], allowance=None,
+                 notch_spacing: Optional[float] = None) -> List[MarkerItem]:
+    """The pieces to nest: every piece of every pattern, as many times as garments and labels ask.
+
+    Parameters
+    ----------
+    patterns : (size label, pattern, garments) triples; ``garments`` >= 1 copies
+        of the whole pattern (each piece ``garments x`` its label's quantity;
+        mirrored pieces are pieces of their own in a pattern, drawn mirrored).
+    allowance, notch_spacing : see :func:`core.export.pieces.build_pieces`.
+    """
+    items = []
+    for size, pattern, garments in patterns:
+        if int(garments) < 1:
+            raise ExportError(f"size {size}: expected at least 1 garment, got {garments}")
+        for piece in build_pieces(pattern, allowance, notch_spacing):
+            line = _fold_line(piece)
+            outline = piece.cut[0] if line is None else unfold(piece.cut[0], line)
+            items.append(MarkerItem(size=str(size), piece=piece, outline=outline, mirror=line,
+                                    count=int(garments) * int(piece.quantity), area=float(signed_area(outline))))
+    if not items:
+        raise ExportError("marker: no pieces to nest")
+    return items
+
+
+def _simplify(loop: np.ndarray, tol: float) -> np.ndarray:
+    """Douglas–Peucker on a closed loop: the vertices needed to stay within ``tol`` (m)."""
+    keep = np.zeros(len(loop), bool)
+    far = int(np.argmax(np.linalg.norm(loop - loop[0], axis=1)))
+    keep[[0, far]] = True
+    stack = [(0, far), (far, len(loop))]
+    while stack:
+        a, b = stack.pop()
+        idx = np.arange(a + 1, b)
+        if not len(idx):
+            continue
+        p, q = loop[a], loop[b % len(loop)]
+        d = q - p
+        dist = np.abs(d[0] * (loop[idx, 1] - p[1]) - d[1] * (loop[idx, 0] - p[0])) / max(np.linalg.norm(d), 1e-12)
+        k = int(np.argmax(dist))
+        if dist[k] > tol:
+            keep[idx[k]] = True
+            stack += [(a, int(idx[k])), (int(idx[k]), b)]
+    return loop[keep]
+
+
+def nest_outline(outline: np.ndarray, tol: float = NEST_TOLERANCE) -> np.ndarray:
+    """(m, 2) m: a simpler outline that contains ``outline`` (simplified within ``tol``, then grown by it)."""
+    simple = _simplify(np.asarray(outline, float), tol)
+    grown = offset_loop(simple, np.full(len(simple), tol))
+    return remove_loops(grown)
+
+
+def _check_fits(items: Sequence[MarkerItem], shapes: Sequence[np.ndarray], width: float, turns: Sequence[float]):
+    for it, shape in zip(items, shapes):
+        across = min(float(np.ptp((shape @ _rot(a).T)[:, 1])) for a in turns)
+        if across > width:
+            true = min(float(np.ptp((it.outline @ GRAIN_TO_LENGTH.T @ _rot(a).T)[:, 1])) for a in turns)
+            raise ExportError(f"piece {it.piece.name} (size {it.size}) is {true * 1000:.0f} mm across the grain: "
+                              f"expected a fabric wider than that, got --width {width * 1000:.0f} mm")
+
+
+def _child_env() -> Dict[str, str]:
+    # the worker imports spyrrow from wherever this process found it (venv, Blender's modules)
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([p for p in sys.path if p] + [env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
+    return env
+
+
+def _read_lines(stream, out: "queue.Queue") -> None:
+    for line in stream:
+        out.put(line)
+    out.put(None)
+
+
+def nest(items: Sequence[MarkerItem], width: float, seconds: int = 60, seed: int = 0, one_way: bool = False,
+         tilt: float = 0.0, threads: int = 1, progress: Optional[Progress] = None) -> Marker:
+    """Nest the items on a fabric ``width`` m wide; the shortest marker found in ``seconds``.
+
+    Parameters
+    ----------
+    items : from :func:`marker_items`.
+    width : float, m, usable fabric width (selvage to selvage).
+    seconds : int >= 1, the nester's time budget (it may end sooner when it converges).
+    seed : int, the nester's random seed.
+    one_way, tilt : allowed turns, see :func:`orientations`.
+    threads : int >= 1, the nester's worker threads (more than 1 is faster, not repeatable).
+    progress : ``progress(fraction, message)`` with the live efficiency; raising
+        :class:`core.errors.Cancelled` stops and discards the run.
+
+    Returns
+    -------
+    :class:`Marker`. Ctrl-C (KeyboardInterrupt) stops the search and returns the
+    best marker so far (``stopped == "interrupted"``), or re-raises when there is none yet.
+    """
+    width, seconds, seed, threads = float(width), int(seconds), int(seed), int(threads)
+    if not (math.isfinite(width) and width > 0):
+        raise ExportError(f"width: expected a fabric width > 0 mm, got {width * 1000:g}")
+    if seconds < 1:
+        raise ExportError(f"seconds: expected a time budget of at least 1 s, got {seconds}")
+    if threads < 1:
+        raise ExportError(f"threads: expected at least 1, got {threads}")
+    turns = orientations(one_way, tilt)
+    shapes = [nest_outline(it.outline) @ GRAIN_TO_LENGTH.T for it in items]
+    _check_fits(items, shapes, width, turns)
+    request = {"strip": width * 1000.0, "seconds": seconds, "seed": seed, "threads": threads,
+               "items": [{"shape": np.round(s * 1000.0, 4).tolist(), "demand": it.count, "orientations": turns}
+                         for it, s in zip(items, shapes)]}
+    area = sum(it.area * it.count for it in items)
+    pieces = sum(it.count for it in items)
+    t0 = time.monotonic()
+    report(progress, 0.0, f"nesting {pieces} pieces on {width * 1000:.0f} mm fabric")
+    proc = subprocess.Popen([sys.executable, str(WORKER)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=_child_env())
+    lines: "queue.Queue" = queue.Queue()
+    reader = threading.Thread(target=_read_lines, args=(proc.stdout, lines), daemon=True)
+    best, history, stopped = None, [], None
+    try:
+        proc.stdin.write(json.dumps(request))
+        proc.stdin.close()
+        reader.start()
+        while True:
+            try:
+                line = lines.get(timeout=0.2)
+            except queue.Empty:
+                line = ""
+            if line is None:
+                break
+            msg = json.loads(line) if line.strip() else {}
+            elapsed = time.monotonic() - t0
+            if msg.get("done"):
+                stopped = "converged" if elapsed < seconds - 0.5 else "time limit"
+            elif "placed" in msg:
+                best = msg
+                history.append((round(elapsed, 2), area / (width * msg["length"] / 1000.0)))
+            eff = f"efficiency {history[-1][1] * 100:.1f} %, length {best['length'] / 1000:.3f} m" if best \
+                else "no marker yet"
+            report(progress, min(elapsed / seconds, 0.99), f"nesting {pieces} pieces: {eff}")
+    except KeyboardInterrupt:
+        if best is None:
+            raise
+        stopped = "interrupted"
+    except Cancelled:
+        raise
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        proc.wait()
+    err = proc.stderr.read().strip() if proc.stderr else ""
+    if best is None:
+        if proc.returncode == 3:
+            raise ExportError(f"the marker needs the spyrrow package: pip install {SPYRROW_PIN} ({err})")
+        raise ExportError(f"the nester found no marker (exit {proc.returncode}): {err.splitlines()[-1] if err else ''}")
+    return _marker(items, best, width, time.monotonic() - t0, seed, threads, turns, stopped or "time limit", history)
+
+
+def _marker(items, best, width, seconds, seed, threads, turns, stopped, history) -> Marker:
+    placements = []
+    for k, angle, tx, ty in best["placed"]:
+        rotation = _rot(angle) @ GRAIN_TO_LENGTH
+        placements.append(Placement(item=int(k), angle=float(angle), rotation=rotation,
+                                    translation=np.array([tx, ty]) / 1000.0))
+    # sorted by item then position: the files list copies in a fixed order
+    placements.sort(key=lambda p: (p.item, round(float(p.translation[0]), 6), round(float(p.translation[1]), 6)))
+    length = max(float((items[p.item].outline @ p.rotation.T + p.translation)[:, 0].max()) for p in placements)
+    area = sum(items[p.item].area for p in placements)
+    return Marker(width=width, length=length, items=list(items), placements=placements,
+                  efficiency=area / (width * length), seconds=seconds, seed=seed, threads=threads,
+                  orientations=list(turns), stopped=stopped, history=history)
+
+
+def placed_outline(marker: Marker, placement: Placement) -> np.ndarray:
+    """(k, 2) m: the cut line of one placed copy, in the marker frame."""
+    return marker.items[placement.item].outline @ placement.rotation.T + placement.translation
+
+
+def marker_report(marker: Marker, title: str = "marker") -> dict:
+    """What ``marker.json`` holds: length, efficiency, fabric per garment and per size, time, seed, placements.
+
+    Fabric per size is the marker length shared out by the sizes' cut area;
+    per garment, that share over the size's garment count.
+    """
+    area = sum(marker.items[p.item].area for p in marker.placements)
+    sizes: Dict[str, dict] = {}
+    for it in marker.items:
+        s = sizes.setdefault(it.size, {"garments": 0, "pieces": 0, "area_m2": 0.0})
+        s["pieces"] += it.count
+        s["area_m2"] += it.area * it.count
+    for it in marker.items:
+        sizes[it.size]["garments"] = max(sizes[it.size]["garments"], it.count // max(it.piece.quantity, 1))
+    for s in sizes.values():
+        share = marker.length * s["area_m2"] / area
+        s.update(fabric_m=round(share, 4), fabric_per_garment_m=round(share / max(s["garments"], 1), 4),
+                 area_m2=round(s["area_m2"], 5))
+    garments = sum(s["garments"] for s in sizes.values())
+    return {"title": title, "unit": "mm", "width_mm": round(marker.width * 1000, 2),
+            "length_mm": round(marker.length * 1000, 2), "efficiency_pct": round(marker.efficiency * 100, 3),
+            "pieces_area_m2": round(area, 5), "marker_area_m2": round(marker.width * marker.length, 5),
+            "garments": garments, "fabric_per_garment_m": round(marker.length / max(garments, 1), 4),
+            "sizes": sizes, "pieces": len(marker.placements), "orientations_deg": marker.orientations,
+            "grain": "along the marker length (x), parallel to the selvage",
+            "seed": marker.seed, "threads": marker.threads, "stopped": marker.stopped,
+            "placements": [{"size": marker.items[p.item].size, "piece": marker.items[p.item].piece.name,
+                            "angle_deg": round(p.angle, 4),
+                            "translation_mm": np.round(p.translation * 1000, 3).tolist()}
+                           for p in marker.placements]}
+
+
+__all__ = ["MarkerItem", "Placement", "Marker", "marker_items", "nest", "orientations", "parse_quantities",
+           "size_label", "unfold", "reflect",
+           "nest_outline", "placed_outline", "marker_report", "SPYRROW_PIN"]
