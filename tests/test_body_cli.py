@@ -58,7 +58,7 @@ def test_obj_model_reference_pose(horse_obj, tmp_path):
 
 @pytest.mark.parametrize("argv, message", [
     (["--pose", "Q"], "unknown pose; allowed: A, T, P1, P2, P3"),
-    (["--shape", "beta9=1"], "unknown shape parameter 'beta9'; allowed: beta0, beta1, beta2"),
+    (["--shape", "beta9=1"], "shape.beta9: unknown shape parameter; allowed: beta0, beta1, beta2"),
     (["--shape", "beta0=7"], r"beta0=7 is out of range \[-5, 5\]"),
     (["--shape", "huge"], r"expected a size \(XS, S, M, L, XL\) or name=value pairs"),
     (["--measure", "neck=40"], "unknown measurement 'neck'; allowed: height, chest, waist, hip"),

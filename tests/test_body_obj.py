@@ -95,7 +95,7 @@ def test_blend_shapes_are_linear_and_ranged(horse_files):
     np.testing.assert_allclose(half[low, 2], v[low, 2] - 0.05, atol=1e-6)
     with pytest.raises(BodyError, match=r"belly=2 is out of range \[0, 1\]"):
         body.vertices({"belly": 2})
-    with pytest.raises(BodyError, match="unknown shape parameter 'tail'; allowed: belly, long_neck"):
+    with pytest.raises(BodyError, match="shape.tail: unknown shape parameter; allowed: belly, long_neck"):
         body.vertices({"tail": 0.1})
     with pytest.raises(BodyError, match="needs a skeleton"):
         body.vertices(None, "P1")
@@ -138,7 +138,7 @@ def test_skeleton_poses_the_legs(horse_files):
     assert posed[leg, 2].min() > 0.75 and posed[leg, 1].min() < -1.4
     np.testing.assert_allclose(posed[~leg], v[~leg], atol=1e-12)
     assert body.joints(None, {"fl": np.zeros(3)}).shape == (5, 3)
-    with pytest.raises(BodyError, match="unknown joint 'tail'.*root, fl"):
+    with pytest.raises(BodyError, match="pose.tail: unknown joint.*root, fl"):
         body.vertices(None, {"tail": np.zeros(3)})
 
 

@@ -284,14 +284,14 @@ class AnnyBody(BodyModel):
             return full
         for k, v in shape.items():
             if k not in params:
-                raise BodyError(f"unknown Anny shape parameter {k!r}; allowed: {', '.join(params)}")
+                raise BodyError(f"anny: shape.{k}: unknown Anny shape parameter; allowed: {', '.join(params)}")
             lo, hi, _ = params[k]
             try:
                 v = float(v)
-            except (TypeError, ValueError):
-                raise BodyError(f"Anny shape parameter {k!r} must be a number in [{lo}, {hi}], got {v!r}")
+            except (TypeError, ValueError, OverflowError):
+                raise BodyError(f"anny: shape.{k}: must be a number in [{lo}, {hi}], got {str(v)[:60]!r}") from None
             if not (lo <= v <= hi):
-                raise BodyError(f"Anny shape parameter {k!r}={v} is out of range; allowed [{lo}, {hi}]")
+                raise BodyError(f"anny: shape.{k}={v} is out of range; allowed [{lo}, {hi}]")
             full[k] = v
         return full
 

@@ -49,6 +49,41 @@ REQUIRED_LANDMARKS = (
 
 REQUIRED_REGIONS = ("head", "hands", "feet")
 
+# Longest joint rotation a pose may give (radians): every rotation has an axis-angle of at most pi;
+# up to a full turn is accepted, anything longer is a unit mistake (degrees).
+POSE_ANGLE_MAX = 2.0 * np.pi
+
+
+def listed(names, limit: int = 12) -> str:
+    """``a, b, c, ... (N in all)``: the first names of a long list, for one error line."""
+    names = list(names)
+    return ", ".join(names[:limit]) + (f", ... ({len(names)} in all)" if len(names) > limit else "")
+
+
+def check_axis_angle(value, joint: str, joints, model: str = "") -> np.ndarray:
+    """The (3,) axis-angle (radians) of ``pose[joint]``, checked: a known joint, three finite numbers,
+    at most :data:`POSE_ANGLE_MAX` long.
+
+    Raises
+    ------
+    BodyError naming the pose field (``pose.left_elbow``).
+    """
+    from ..errors import BodyError
+    pre = f"{model}: " if model else ""
+    if joint not in joints:
+        raise BodyError(f"{pre}pose.{joint}: unknown joint; joints: {', '.join(joints)}")
+    try:
+        aa = np.asarray(value, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        aa = None
+    if aa is None or aa.shape != (3,) or not np.all(np.isfinite(aa)):
+        raise BodyError(f"{pre}pose.{joint}: expected a finite axis-angle [rx, ry, rz] in radians, "
+                        f"got {str(value)[:60]}")
+    if float(np.linalg.norm(aa)) > POSE_ANGLE_MAX:
+        raise BodyError(f"{pre}pose.{joint}: a rotation of {np.linalg.norm(aa):.4g} rad is more than a full "
+                        f"turn ({POSE_ANGLE_MAX:.4g} rad); pose angles are radians, not degrees")
+    return aa
+
 
 @dataclass(frozen=True)
 class SurfacePoint:

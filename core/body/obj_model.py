@@ -14,15 +14,20 @@ or ``{name: vertex_id}``, or ``{"landmarks": {...}, "regions": {name: [ids]}}``.
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import Dict, Mapping, Optional
 
 import numpy as np
 
 from ..errors import BodyError
+from .arrays import finite_array, index_array, read_npz
 from .lbs import check_parents, forward_kinematics, rodrigues, skin
-from .model import POSE_PRESETS, BodyModel, SurfacePoint
+from .model import POSE_PRESETS, BodyModel, SurfacePoint, check_axis_angle
 from .smpl import SMPL_TO_OURS, _vertex_point, check_shape, mirror_map
+
+# An OBJ of a 1 M-vertex scan is ~60 MB; refuse files far beyond before reading them.
+MAX_OBJ_BYTES = 1 << 30
 
 # Frame conversions into ours (Z up, facing -Y, +X the body's left).
 UP_AXES = {"z": np.eye(3), "y": SMPL_TO_OURS}
@@ -37,6 +42,8 @@ def read_obj(path) -> tuple:
     """
     path = Path(path)
     try:
+        if path.stat().st_size > MAX_OBJ_BYTES:
+            raise BodyError(f"{path}: an OBJ template over {MAX_OBJ_BYTES >> 20} MiB; not a body this project reads")
         text = path.read_text(encoding="utf-8", errors="replace")
     except OSError as exc:
         raise BodyError(f"cannot read OBJ template {path}: {exc.strerror}") from None
@@ -49,14 +56,17 @@ def read_obj(path) -> tuple:
             try:
                 verts.append([float(c) for c in parts[1:4]])
             except ValueError:
-                raise BodyError(f"{path}:{lineno}: bad vertex line {line.strip()!r}") from None
+                raise BodyError(f"{path}:{lineno}: bad vertex line {line.strip()[:60]!r}") from None
             if len(verts[-1]) != 3:
                 raise BodyError(f"{path}:{lineno}: a vertex needs 3 coordinates")
+            if not all(math.isfinite(c) for c in verts[-1]):
+                raise BodyError(f"{path}:{lineno}: vertex coordinates must be finite numbers, got "
+                                f"{line.strip()[:60]!r}")
         elif parts[0] == "f":
             try:
                 ids = [int(p.split("/")[0]) for p in parts[1:]]
             except ValueError:
-                raise BodyError(f"{path}:{lineno}: bad face line {line.strip()!r}") from None
+                raise BodyError(f"{path}:{lineno}: bad face line {line.strip()[:60]!r}") from None
             n = len(verts)
             ids = [i - 1 if i > 0 else n + i for i in ids]
             if len(ids) < 3 or min(ids) < 0 or max(ids) >= n:
@@ -78,7 +88,10 @@ def _landmarks_from_json(obj, faces: np.ndarray, V: int, where: str):
         if isinstance(spec, (int, np.integer)) and not isinstance(spec, bool):
             if not 0 <= spec < V:
                 raise BodyError(f"{where}: landmark {name!r}: vertex {spec} out of range [0, {V})")
-            out[name] = _vertex_point(faces, int(spec))
+            try:
+                out[name] = _vertex_point(faces, int(spec))
+            except BodyError as exc:
+                raise BodyError(f"{where}: landmark {name!r}: {exc}") from None
             continue
         if not isinstance(spec, Mapping) or "triangle" not in spec or "bary" not in spec:
             raise BodyError(f"{where}: landmark {name!r} must be a vertex id or "
@@ -93,8 +106,12 @@ def _landmarks_from_json(obj, faces: np.ndarray, V: int, where: str):
             raise BodyError(f"{where}: landmark {name!r}: bary must be 3 non-negative weights summing to 1")
         out[name] = point
     regs = {}
+    if not isinstance(regions, Mapping):
+        raise BodyError(f"{where}: 'regions' must be an object name -> [vertex ids]")
     for name, ids in regions.items():
-        ids = np.asarray(ids, dtype=np.int64).ravel()
+        if not isinstance(ids, list) or not all(isinstance(i, int) and not isinstance(i, bool) for i in ids):
+            raise BodyError(f"{where}: region {name!r} must be a list of vertex ids")
+        ids = np.asarray(ids, dtype=np.int64).ravel() if ids else np.zeros(0, dtype=np.int64)
         if ids.size and (ids.min() < 0 or ids.max() >= V):
             raise BodyError(f"{where}: region {name!r} has vertex ids outside [0, {V})")
         regs[name] = ids
@@ -106,7 +123,7 @@ class OBJBody(BodyModel):
 
     def __init__(self, vertices, faces, name="obj", blend_names=(), deltas=None, ranges=None,
                  weights=None, joints=None, parents=None, joint_names=None,
-                 landmarks=None, regions=None, source=""):
+                 landmarks=None, regions=None, source="", skeleton_source=None):
         self.name = name
         self.source = source or name
         self.template = np.asarray(vertices, dtype=float)
@@ -127,13 +144,18 @@ class OBJBody(BodyModel):
         if weights is not None:
             self.weights = np.asarray(weights, dtype=float)
             self.rest_joints = np.asarray(joints, dtype=float)
-            self.parents = check_parents(parents)
+            try:
+                self.parents = check_parents(parents)
+            except BodyError as exc:
+                raise BodyError(f"{skeleton_source or self.source}: {exc}") from None
             J = len(self.parents)
             if self.weights.shape != (V, J) or self.rest_joints.shape != (J, 3):
                 raise BodyError(f"{self.source}: skeleton needs weights ({V}, {J}) and joints ({J}, 3), "
                                 f"got {self.weights.shape} and {self.rest_joints.shape}")
-            self.joint_names = [str(n) for n in joint_names] if joint_names is not None \
+            self.joint_names = [str(n) for n in np.asarray(joint_names).ravel()] if joint_names is not None \
                 else [f"joint{j}" for j in range(J)]
+            if len(self.joint_names) != J:
+                raise BodyError(f"{self.source}: skeleton has {J} joints but {len(self.joint_names)} joint_names")
         else:
             self.rest_joints = np.zeros((0, 3))
             self.parents = np.zeros(0, dtype=np.int64)
@@ -171,12 +193,7 @@ class OBJBody(BodyModel):
                             "to its .npz); only the template pose (A/None) is available")
         aa = np.zeros((len(self.joint_names), 3))
         for name, r in pose.items():
-            if name not in self._joint_index:
-                raise BodyError(f"{self.name}: unknown joint {name!r} in pose; joints: {', '.join(self.joint_names)}")
-            r = np.asarray(r, dtype=float)
-            if r.shape != (3,) or not np.all(np.isfinite(r)):
-                raise BodyError(f"{self.name}: pose[{name!r}] must be a finite axis-angle (3,)")
-            aa[self._joint_index[name]] = r
+            aa[self._joint_index[name]] = check_axis_angle(r, name, self._joint_index, self.source)
         return rodrigues(aa)
 
     def vertices(self, shape=None, pose=None) -> np.ndarray:
@@ -225,29 +242,39 @@ def load_obj_body(path, blendshapes=None, landmarks=None, up: str = "z", name: O
     kw = {}
     if blendshapes is not None:
         bpath = Path(blendshapes)
-        try:
-            with np.load(bpath, allow_pickle=False) as data:
-                arrays = {k: data[k] for k in data.files}
-        except (OSError, ValueError) as exc:
-            raise BodyError(f"{bpath}: not a readable blend-shape .npz ({exc})") from None
+        if not bpath.is_file():
+            raise BodyError(f"blend-shape .npz not found: {bpath}")
+        arrays = read_npz(bpath, what="blend-shape .npz")
         for k in ("names", "deltas"):
             if k not in arrays:
                 raise BodyError(f"{bpath}: missing key {k!r} (blend shapes need names and deltas)")
-        deltas = np.asarray(arrays["deltas"], dtype=float)
+        num = lambda k: finite_array(arrays[k], f"{bpath}: key {k!r}")
+        deltas = num("deltas")
         if deltas.ndim != 3 or deltas.shape[1:] != (V, 3):
             raise BodyError(f"{bpath}: 'deltas' has shape {deltas.shape}, expected (K, {V}, 3)")
-        kw.update(blend_names=list(arrays["names"]), deltas=deltas @ Cm.T, ranges=arrays.get("ranges"))
+        names = arrays["names"]
+        if names.ndim != 1 or len(names) != len(deltas) or names.dtype.kind not in "SU":
+            raise BodyError(f"{bpath}: key 'names' must be {len(deltas)} texts (one per blend shape), got "
+                            f"shape {names.shape} of {names.dtype.str!r}")
+        kw.update(blend_names=list(names), deltas=deltas @ Cm.T,
+                  ranges=num("ranges") if "ranges" in arrays else None)
         skeleton = [k for k in ("weights", "joints", "parents") if k in arrays]
         if skeleton and len(skeleton) < 3:
             missing = sorted({"weights", "joints", "parents"} - set(skeleton))
             raise BodyError(f"{bpath}: skeleton is incomplete, missing key {missing[0]!r}")
         if skeleton:
-            kw.update(weights=arrays["weights"], joints=np.asarray(arrays["joints"], float) @ Cm.T,
-                      parents=arrays["parents"], joint_names=arrays.get("joint_names"))
+            joints = num("joints")
+            if joints.ndim != 2 or joints.shape[1] != 3:
+                raise BodyError(f"{bpath}: key 'joints' has shape {joints.shape}, expected (J, 3)")
+            kw.update(weights=num("weights"), joints=joints @ Cm.T,
+                      parents=index_array(arrays["parents"], f"{bpath}: key 'parents'"),
+                      joint_names=arrays.get("joint_names"), skeleton_source=f"{bpath}: key 'parents'")
     if landmarks is not None:
         lpath = Path(landmarks)
         try:
             obj = json.loads(lpath.read_text(encoding="utf-8"))
+        except RecursionError:
+            raise BodyError(f"{lpath}: not a readable landmark JSON (nested too deeply)") from None
         except (OSError, ValueError) as exc:
             raise BodyError(f"{lpath}: not a readable landmark JSON ({exc})") from None
         if not isinstance(obj, Mapping):

@@ -32,7 +32,7 @@ import numpy as np
 
 from ..errors import BodyError
 from .lbs import rodrigues
-from .model import POSE_PRESETS
+from .model import POSE_PRESETS, check_axis_angle
 
 
 def rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -175,12 +175,7 @@ def pose_rotations(body, pose, heads: np.ndarray, to_native: np.ndarray = None) 
         for bone, R in _preset(preset, names, parents, heads).items():
             D[names.index(bone)] = R
     for bone, aa in extra.items():
-        if bone not in names:
-            raise BodyError(f"unknown joint {bone!r} in pose; allowed joints: {', '.join(names)}")
-        aa = np.asarray(aa, dtype=float)
-        if aa.shape != (3,) or not np.all(np.isfinite(aa)):
-            raise BodyError(f"pose rotation of joint {bone!r} must be a finite axis-angle (3,) in "
-                            f"radians, got {aa.tolist()}")
+        aa = check_axis_angle(aa, bone, names, getattr(body, "name", ""))
         j = names.index(bone)
         D[j] = rodrigues(aa) @ D[j]
     if to_native is not None:

@@ -1,7 +1,7 @@
 """Body models by name: ``load_body("anny")`` (the default, embedded) or a path.
 
 - ``"anny"``: :class:`core.body.anny.AnnyBody`, built once and cached.
-- ``*.npz`` / ``*.pkl``: an SMPL / SMPL-X model file the user owns
+- ``*.npz`` / ``*.pkl`` / ``*.pickle``: an SMPL / SMPL-X model file the user owns
   (:func:`core.body.smpl.load_smpl`).
 - ``*.obj``: a fixed-topology template mesh (:func:`core.body.obj_model.load_obj_body`).
 """
@@ -14,6 +14,8 @@ from ..errors import BodyError
 from .model import BodyModel
 
 BUILTIN = ("anny",)
+SMPL_SUFFIXES = (".npz", ".pkl", ".pickle")
+MODEL_SUFFIXES = SMPL_SUFFIXES + (".obj",)   # every model file a design, the CLI and the add-on accept
 _CACHE = {}
 _LOCK = threading.Lock()
 
@@ -39,11 +41,11 @@ def load_body(name: str = "anny", **kwargs) -> BodyModel:
                 from .anny import AnnyBody
                 _CACHE["anny"] = AnnyBody()
             return _CACHE["anny"]
-    if low.endswith((".npz", ".pkl")):
+    if low.endswith(SMPL_SUFFIXES):
         from .smpl import load_smpl
         return load_smpl(key, **kwargs)
     if low.endswith(".obj"):
         from .obj_model import load_obj_body
         return load_obj_body(key, **kwargs)
     raise BodyError(f"unknown body {key!r}; options: {', '.join(BUILTIN)}, or a path to an "
-                    "SMPL/SMPL-X .npz/.pkl file or a template .obj")
+                    f"SMPL/SMPL-X or template file ({', '.join(MODEL_SUFFIXES)})")

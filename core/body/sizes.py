@@ -115,6 +115,8 @@ def check_targets(targets: Mapping[str, float]) -> Dict[str, float]:
             value = float(value)
         except (TypeError, ValueError):
             raise BodyError(f"measurement {key!r} must be a number of cm, got {value!r}") from None
+        if name in out:
+            raise BodyError(f"measurement {name!r} is given twice (chest and bust are the same girth)")
         lo, hi = TARGET_RANGES[name]
         if not (lo <= value <= hi):
             raise BodyError(f"measurement {key}={value:g} cm is out of range [{lo:g}, {hi:g}] cm")
@@ -251,11 +253,17 @@ def parse_assignments(text: str, what: str) -> Dict[str, float]:
             continue
         if "=" not in item:
             raise BodyError(f"{what}: expected name=value pairs separated by commas, got {item!r}")
-        k, v = item.split("=", 1)
+        k, v = (x.strip() for x in item.split("=", 1))
+        if not k:
+            raise BodyError(f"{what}: a name is missing before '=' in {item!r}")
+        if k in out:
+            raise BodyError(f"{what}: {k!r} is given twice; give each name once")
         try:
-            out[k.strip()] = float(v)
+            out[k] = float(v)
         except ValueError:
-            raise BodyError(f"{what}: value of {k.strip()!r} must be a number, got {v.strip()!r}") from None
+            raise BodyError(f"{what}: value of {k!r} must be a number, got {v!r}") from None
+        if not np.isfinite(out[k]):
+            raise BodyError(f"{what}: value of {k!r} must be a finite number, got {v!r}")
     if not out:
         raise BodyError(f"{what}: no name=value pairs given")
     return out

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..errors import BodyError
 from .lbs import check_parents, forward_kinematics, pose_feature, rodrigues, skin
-from .model import POSE_PRESETS, BodyModel, SurfacePoint
+from .model import POSE_PRESETS, BodyModel, SurfacePoint, check_axis_angle, listed
 
 SMPL_JOINT_NAMES = (
     "pelvis", "left_hip", "right_hip", "spine1", "left_knee", "right_knee", "spine2",
@@ -96,22 +96,23 @@ def check_shape(allowed: Mapping[str, tuple], shape: Optional[Mapping[str, float
         return out
     for key, value in shape.items():
         if key not in allowed:
-            names = list(allowed)
-            listed = ", ".join(names[:12]) + (f", ... ({len(names)} in all)" if len(names) > 12 else "")
-            raise BodyError(f"{model}: unknown shape parameter {key!r}; allowed: {listed}")
+            raise BodyError(f"{model}: shape.{key}: unknown shape parameter; allowed: {listed(allowed)}")
         lo, hi, _ = allowed[key]
         try:
             value = float(value)
-        except (TypeError, ValueError):
-            raise BodyError(f"{model}: shape parameter {key!r} must be a number, got {value!r}") from None
+        except (TypeError, ValueError, OverflowError):
+            raise BodyError(f"{model}: shape.{key}: must be a number, got {str(value)[:60]!r}") from None
         if not (lo <= value <= hi) or not np.isfinite(value):
-            raise BodyError(f"{model}: shape parameter {key}={value:g} is out of range [{lo:g}, {hi:g}]")
+            raise BodyError(f"{model}: shape.{key}={value:g} is out of range [{lo:g}, {hi:g}]")
         out[key] = value
     return out
 
 
 def _vertex_point(faces: np.ndarray, vid: int) -> SurfacePoint:
-    tri = int(np.nonzero((faces == vid).any(axis=1))[0][0])
+    hits = np.nonzero((faces == vid).any(axis=1))[0]
+    if not hits.size:
+        raise BodyError(f"vertex {vid} (a landmark) is on no triangle of 'f'")
+    tri = int(hits[0])
     bary = tuple(1.0 if faces[tri, k] == vid else 0.0 for k in range(3))
     return SurfacePoint(tri, bary)
 
@@ -166,10 +167,17 @@ def _smpl_landmarks(v: np.ndarray, faces: np.ndarray, joints: np.ndarray, names,
     """
     j = {n: joints[i] for i, n in enumerate(names)}
     vid = dict(SMPL_VERTEX_IDS)
+    empty = [r for r in ("torso", "neck", "arm_left", "leg_left", "leg_right") if not regions.get(r, ()).size]
+    if empty:
+        raise BodyError(f"key 'weights': no vertex is skinned mostly to the {empty[0]} joints; the SMPL "
+                        "landmarks need every body part")
     torso = regions["torso"]
     nearest = lambda p, among: int(among[np.argmin(np.linalg.norm(v[among] - p, axis=1))])
 
     def slice_extreme(among, z, tol, key):
+        if not among.size:
+            raise BodyError("key 'v_template': no vertex near the body's midline at the neck; the SMPL "
+                            "landmarks need an SMPL-like body")
         sel = among[np.abs(v[among, 2] - z) < tol]
         if sel.size == 0:
             sel = among
@@ -207,30 +215,39 @@ class SMPLBody(BodyModel):
         self.name = name
         self.source = source or name
         C = SMPL_TO_OURS
-        v_template = np.asarray(arrays["v_template"], dtype=float)
+        import scipy.sparse as sp
+        from .arrays import finite_array, index_array
+        num = lambda key: finite_array(arrays[key], f"{self.source}: key {key!r}")
+        v_template = num("v_template")
         V = v_template.shape[0] if v_template.ndim == 2 else -1
-        self._check(v_template.ndim == 2 and v_template.shape[1] == 3, "v_template", "(V, 3)", v_template.shape)
-        faces = np.asarray(arrays["f"]).astype(np.int64)
+        self._check(v_template.ndim == 2 and v_template.shape[1] == 3 and V > 0, "v_template", "(V, 3)",
+                    v_template.shape)
+        faces = index_array(arrays["f"], f"{self.source}: key 'f'")
         self._check(faces.ndim == 2 and faces.shape[1] == 3 and faces.size and faces.min() >= 0
                     and faces.max() < V, "f", f"(F, 3) vertex ids below {V}", faces.shape)
-        weights = np.asarray(arrays["weights"], dtype=float)
-        self._check(weights.ndim == 2 and weights.shape[0] == V, "weights", f"({V}, J)", weights.shape)
+        weights = num("weights")
+        self._check(weights.ndim == 2 and weights.shape[0] == V and weights.shape[1] > 0, "weights", f"({V}, J)",
+                    weights.shape)
         J = weights.shape[1]
-        kintree = np.asarray(arrays["kintree_table"]).astype(np.int64)
+        kintree = index_array(arrays["kintree_table"], f"{self.source}: key 'kintree_table'")
         self._check(kintree.ndim == 2 and kintree.shape == (2, J), "kintree_table", f"(2, {J})", kintree.shape)
         jreg = arrays["J_regressor"]
+        jreg = jreg.tocsr() if sp.issparse(jreg) else num("J_regressor")
         self._check(jreg.shape == (J, V), "J_regressor", f"({J}, {V})", jreg.shape)
-        shapedirs = np.asarray(arrays["shapedirs"], dtype=float)
+        shapedirs = num("shapedirs")
         self._check(shapedirs.ndim == 3 and shapedirs.shape[:2] == (V, 3), "shapedirs", f"({V}, 3, B)",
                     shapedirs.shape)
-        posedirs = np.asarray(arrays["posedirs"], dtype=float)
+        posedirs = num("posedirs")
         P = 9 * (J - 1)
         self._check(posedirs.shape == (V, 3, P), "posedirs", f"({V}, 3, {P})", posedirs.shape)
 
         # Parents: first kintree row, as indices; the root's parent is -1 (or uint32 max).
         ids = {int(k): i for i, k in enumerate(kintree[1])}
         parents = np.array([-1] + [ids.get(int(p), -2) for p in kintree[0, 1:]], dtype=np.int64)
-        self.parents = check_parents(parents)
+        try:
+            self.parents = check_parents(parents)
+        except BodyError as exc:
+            raise BodyError(f"{self.source}: key 'kintree_table': {exc}") from None
 
         n_betas = shapedirs.shape[2]
         if J == 55 and "expr_dirs" not in arrays:
@@ -244,8 +261,6 @@ class SMPLBody(BodyModel):
         self._shapedirs_flat = self.shapedirs.reshape(V * 3, n_betas)
         self.weights = weights
         self.faces = faces
-        import scipy.sparse as sp
-        jreg = jreg.tocsr() if sp.issparse(jreg) else np.asarray(jreg, dtype=float)
         self.J_regressor = jreg
         self._j_template = np.asarray(jreg @ self.v_template)
         self._j_dirs = np.asarray(jreg @ self.shapedirs.reshape(V, 3 * n_betas)).reshape(J, 3, n_betas)
@@ -264,8 +279,11 @@ class SMPLBody(BodyModel):
         self.regions = _regions_from_weights(weights, self.joint_names)
         self.landmarks = {}
         if V == SMPL_N_VERTICES and J == 24:
-            self.landmarks = _smpl_landmarks(self.v_template, faces, self._j_template, self.joint_names,
-                                             self.symmetry, self.regions)
+            try:
+                self.landmarks = _smpl_landmarks(self.v_template, faces, self._j_template, self.joint_names,
+                                                 self.symmetry, self.regions)
+            except BodyError as exc:
+                raise BodyError(f"{self.source}: {exc}") from None
         self._params = {f"beta{i}": (BETA_RANGE[0], BETA_RANGE[1], 0.0) for i in range(n_betas)}
 
     def _check(self, ok, key, expected, got):
@@ -310,11 +328,7 @@ class SMPLBody(BodyModel):
         for j, p in enumerate(self.parents):
             WA[j] = RA[j] if p < 0 else WA[p] @ RA[j]
         for name, r in pose.items():
-            if name not in self._joint_index:
-                raise BodyError(f"{self.name}: unknown joint {name!r} in pose; joints: {', '.join(self.joint_names)}")
-            r = np.asarray(r, dtype=float)
-            if r.shape != (3,) or not np.all(np.isfinite(r)):
-                raise BodyError(f"{self.name}: pose[{name!r}] must be a finite axis-angle (3,), got shape {r.shape}")
+            r = check_axis_angle(r, name, self._joint_index, self.source)
             j = self._joint_index[name]
             p = self.parents[j]
             Wp = WA[p] if p >= 0 else np.eye(3)
@@ -356,36 +370,23 @@ class SMPLBody(BodyModel):
         return super().landmark_position(name, vertices)
 
 
-def _read_npz(path: Path) -> dict:
-    try:
-        data = np.load(path, allow_pickle=False)
-    except (OSError, ValueError) as exc:
-        raise BodyError(f"{path}: not a readable .npz model file ({exc})") from None
-    out = {}
-    with data:
-        for key in data.files:
-            if key in REQUIRED_KEYS or key == "expr_dirs":
-                try:
-                    out[key] = data[key]
-                except ValueError:
-                    raise BodyError(f"{path}: key {key!r} holds Python objects; re-save it as a plain array") from None
-    return out
-
-
 def _read_pkl(path: Path) -> dict:
     from .unpickle import SparseStandIn, as_array, safe_load
     obj = safe_load(path)
     if not isinstance(obj, dict):
         raise BodyError(f"{path}: expected a dict of arrays in the pickle, got {type(obj).__name__}")
     out = {}
-    for key in REQUIRED_KEYS + ("expr_dirs",):
-        if key not in obj:
-            continue
-        val = obj[key]
-        if key == "J_regressor" and isinstance(val, SparseStandIn):
-            out[key] = val.to_scipy()
-        else:
-            out[key] = as_array(val)
+    try:
+        for key in REQUIRED_KEYS + ("expr_dirs",):
+            if key not in obj:
+                continue
+            val = obj[key]
+            if key == "J_regressor" and isinstance(val, SparseStandIn):
+                out[key] = val.to_scipy()
+            else:
+                out[key] = as_array(val, key)
+    except BodyError as exc:
+        raise BodyError(f"{path}: {exc}") from None
     return out
 
 
@@ -408,7 +409,8 @@ def load_smpl(path, name: Optional[str] = None) -> SMPLBody:
         raise BodyError(f"SMPL model file not found: {path}")
     suffix = path.suffix.lower()
     if suffix == ".npz":
-        arrays = _read_npz(path)
+        from .arrays import read_npz
+        arrays = read_npz(path, REQUIRED_KEYS + ("expr_dirs",), what="SMPL model .npz")
     elif suffix in (".pkl", ".pickle"):
         arrays = _read_pkl(path)
     else:

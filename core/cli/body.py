@@ -17,23 +17,18 @@ from ..body.model import POSE_PRESETS
 from ..errors import BodyError
 from .common import add_quiet, console_progress, print_files, subcommand
 
-MODEL_SUFFIXES = (".npz", ".pkl", ".pickle", ".obj")
-
-
 def load_model(name: str, blendshapes=None, landmarks=None, up: str = "z"):
     """Body model from ``--model``: ``anny`` (default body), or a path to an SMPL
-    ``.npz``/``.pkl`` file or an OBJ template."""
-    path = Path(name)
-    suffix = path.suffix.lower()
-    if suffix in (".npz", ".pkl", ".pickle"):
-        from ..body.smpl import load_smpl
-        return load_smpl(path)
+    ``.npz``/``.pkl``/``.pickle`` file or an OBJ template (the suffixes a design's
+    ``body.model`` takes, :data:`core.body.registry.MODEL_SUFFIXES`)."""
+    from ..body.registry import MODEL_SUFFIXES, load_body
+    suffix = Path(name).suffix.lower()
     if suffix == ".obj":
-        from ..body.obj_model import load_obj_body
-        return load_obj_body(path, blendshapes=blendshapes, landmarks=landmarks, up=up)
+        return load_body(name, blendshapes=blendshapes, landmarks=landmarks, up=up)
+    if suffix in MODEL_SUFFIXES:
+        return load_body(name)
     if suffix or "/" in name:
         raise BodyError(f"--model {name!r}: expected 'anny' or a path to a {', '.join(MODEL_SUFFIXES)} file")
-    from ..body import load_body
     try:
         return load_body(name)
     except (ImportError, FileNotFoundError) as exc:
