@@ -181,3 +181,24 @@ def index_array(value, where: str, error: Type[EaseError] = BodyError) -> np.nda
             raise error(f"{where}: expected whole-number indices")
         a = a.astype(np.int64)
     return a
+
+
+def check_csr(data, indices, indptr, major: int, minor: int, where: str, error=BodyError) -> None:
+    """Compressed-sparse arrays consistent with a (major, minor) shape, every index in range.
+
+    scipy's own constructor does not check index bounds, and a product with an
+    index outside the matrix reads outside its memory.
+    """
+    pre = f"{where}: " if where else ""
+    if indices.dtype.kind not in "iu" or indptr.dtype.kind not in "iu" or data.dtype.kind not in "biuf":
+        raise error(f"{pre}indices and indptr must be integers and data numbers")
+    if indptr.size != major + 1:
+        raise error(f"{pre}'indptr' has {indptr.size} entries, expected {major + 1} (rows + 1)")
+    if indptr[0] != 0 or np.any(np.diff(indptr.astype(np.int64)) < 0) or int(indptr[-1]) != indices.size:
+        raise error(f"{pre}'indptr' must rise from 0 to the number of entries ({indices.size})")
+    if data.size != indices.size:
+        raise error(f"{pre}'data' has {data.size} entries, 'indices' {indices.size}")
+    if indices.size and (indices.min() < 0 or int(indices.max()) >= minor):
+        raise error(f"{pre}'indices' has entries outside [0, {minor})")
+    if data.dtype.kind == "f" and not np.isfinite(data).all():
+        raise error(f"{pre}'data' holds NaN or infinite values")

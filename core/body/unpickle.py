@@ -34,7 +34,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import BodyError
-from .arrays import MAX_ARRAY_ELEMENTS, MAX_TOTAL_BYTES, check_dtype, check_shape, dtype_from_code, numbers
+from .arrays import (MAX_ARRAY_ELEMENTS, MAX_TOTAL_BYTES, check_csr, check_dtype, check_shape,
+                     dtype_from_code, numbers)
 
 # A model pickle is its arrays plus a little: refuse files far larger before reading them.
 MAX_PICKLE_BYTES = MAX_TOTAL_BYTES + (256 << 20)
@@ -249,27 +250,6 @@ class SparseStandIn:
         except (KeyError, TypeError, ValueError, OverflowError, IndexError) as exc:
             raise BodyError(f"a scipy.sparse {self.fmt} matrix in the pickle is malformed ({exc})") from None
         raise BodyError(f"scipy.sparse format {self.fmt!r} is not supported in model files")
-
-
-def check_csr(data, indices, indptr, major: int, minor: int, where: str, error=BodyError) -> None:
-    """Compressed-sparse arrays consistent with a (major, minor) shape, every index in range.
-
-    scipy's own constructor does not check index bounds, and a product with an
-    index outside the matrix reads outside its memory.
-    """
-    pre = f"{where}: " if where else ""
-    if indices.dtype.kind not in "iu" or indptr.dtype.kind not in "iu" or data.dtype.kind not in "biuf":
-        raise error(f"{pre}indices and indptr must be integers and data numbers")
-    if indptr.size != major + 1:
-        raise error(f"{pre}'indptr' has {indptr.size} entries, expected {major + 1} (rows + 1)")
-    if indptr[0] != 0 or np.any(np.diff(indptr.astype(np.int64)) < 0) or int(indptr[-1]) != indices.size:
-        raise error(f"{pre}'indptr' must rise from 0 to the number of entries ({indices.size})")
-    if data.size != indices.size:
-        raise error(f"{pre}'data' has {data.size} entries, 'indices' {indices.size}")
-    if indices.size and (indices.min() < 0 or int(indices.max()) >= minor):
-        raise error(f"{pre}'indices' has entries outside [0, {minor})")
-    if data.dtype.kind == "f" and not np.isfinite(data).all():
-        raise error(f"{pre}'data' holds NaN or infinite values")
 
 
 def _reconstructor(cls, base, state):
