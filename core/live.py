@@ -142,6 +142,14 @@ class LiveSession:
         self.iterations_since_change = 0
         return True
 
+    def restart_from(self, pattern) -> None:
+        """Continue from ``pattern`` of this cut (the scene's after an undo): the next field's warm
+        slice starts there, with fresh feedback corrections."""
+        self._start = self.solver.start_from(pattern)
+        self.state = None
+        self._cold = None
+        self.converged = False
+
     def run(self, budget_s: float, min_iterations: int = 1) -> int:
         """Work for about ``budget_s`` seconds (at least ``min_iterations`` iterations); the iterations run.
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import bpy
 
-from . import (body_ops, design_ops, drape_ops, ease_ops, export_ops, fit_ops, panels, pattern_ops,
+from . import (body_ops, design_ops, drape_ops, ease_ops, export_ops, fit_ops, live, panels, pattern_ops,
                properties, render_ops, state)
 
 CLASSES = (properties.CLASSES + body_ops.CLASSES + design_ops.CLASSES + ease_ops.CLASSES
@@ -41,6 +41,7 @@ def register():
 
 def unregister():
     drape_ops.cancel_running()
+    live.stop()
     properties.unregister_props()
     _unregister_classes()
     state.clear()

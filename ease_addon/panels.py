@@ -121,6 +121,19 @@ class EASE_PT_ease(_EasePanel, bpy.types.Panel):
         box.prop(s, "gradient_axis")
         box.operator("ease.ease_gradient")
         _ops(layout, "ease.ease_to_design", "ease.ease_from_design")
+        box = layout.box()
+        row = box.row(align=True)
+        row.prop(s, "live", toggle=True, icon="PLAY" if not s.live else "PAUSE")
+        if s.live_status:
+            row.label(text=s.live_status)
+        if s.live:
+            box.label(text="ease_fit layer: achieved / painted - 1 (%)")
+            legend = box.row(align=True)
+            for item in s.live_legend:
+                col = legend.column(align=True)
+                col.prop(item, "color", text="")
+                col.label(text=f"{item.ease:+.0f}")
+            _figures(box, s.pattern_json)
 
 
 class EASE_PT_pattern(_EasePanel, bpy.types.Panel):

@@ -12,7 +12,7 @@ from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProp
                        FloatVectorProperty, IntProperty, PointerProperty, StringProperty)
 
 from ..core.body.sizes import SIZES as CHART_SIZES
-from . import data, sync
+from . import data, live, sync
 
 SIZES = [(s, s, f"size {s} of the size chart") for s in CHART_SIZES]
 POSES = [("A", "A", "reference A-pose"), ("T", "T", "T-pose"),
@@ -47,6 +47,10 @@ class EASE_PG_design_param(bpy.types.PropertyGroup):
 class EASE_PG_legend(bpy.types.PropertyGroup):
     ease: FloatProperty(precision=2)
     color: FloatVectorProperty(subtype="COLOR", size=4, min=0.0, max=1.0)
+
+
+def _live_update(self, context):
+    live.toggled(context.scene, context)
 
 
 def _ramp_update(self, context):
@@ -99,6 +103,11 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
     gradient_axis: EnumProperty(name="Axis", items=[("Z", "Top to bottom", ""), ("X", "Right to left", ""),
                                                     ("Y", "Front to back", "")], default="Z")
     legend: CollectionProperty(type=EASE_PG_legend)
+    live: BoolProperty(name="Live", default=False, update=_live_update,
+                       description="Re-solve the pattern while you paint the ease layer; the pieces update in place "
+                                   "and the body's ease_fit layer shows achieved over painted ease")
+    live_status: StringProperty(name="Live status")
+    live_legend: CollectionProperty(type=EASE_PG_legend)
     # Pattern / fit
     pattern_json: StringProperty(name="Pattern report", description="Key figures of the last pattern (JSON)")
     fit_size: EnumProperty(name="Target size", items=SIZES, default="L")

@@ -1,0 +1,330 @@
+"""Live mode: the pattern follows the ease the designer paints.
+
+While *Live* (Ease panel) is on, a ``depsgraph_update_post`` handler notices
+updates of the body and wakes a ``bpy.app.timers`` tick. Each tick takes at
+most one slice (:data:`SLICE_S` of solving, plus writing the objects):
+
+- when the body's ``ease`` layer differs from what the pattern was solved for
+  (a stroke), the new field goes to the core's :class:`core.live.LiveSession`
+  (kept cut and factorisation), one warm slice runs from the current pattern
+  and the flat pattern objects are updated in place (vertex positions,
+  boundary curves, grain arrows, achieved-ease colours: no new object, no new
+  name), with the body's fit overlay (:data:`FIT_LAYER`);
+- while the designer is idle, later ticks advance the session's cold solve of
+  the painted field; when it is complete (converged: the pattern *Optimize
+  Pattern* gives for this paint) the objects, the stored pattern and the key
+  figures are updated, one undo step is pushed for the stroke, and the timer
+  stops: no CPU is used until the next update of the body.
+
+A design whose topology changed (a keypoint moved, a parameter changed, a seam
+added) gets a new session once (:func:`core.live.topology_key`).
+
+Undo: one step per stroke. The step is pushed when the stroke's pattern has
+converged; a stroke that comes before the previous one converged first pushes
+the previous one's step (the layer briefly set back to what that pattern was
+solved for). After an undo or redo the session continues from the restored
+layer and pattern without pushing.
+"""
+from __future__ import annotations
+
+import json
+import time
+
+import bpy
+import numpy as np
+
+from . import convert, data, ease_ops, pattern_ops, sync
+from .objects import objects_with_role, world_bounds
+
+SLICE_S = 0.03          # seconds of solving per tick: the longest the viewport waits for the pattern
+IDLE_TICK_S = 0.02      # seconds between ticks while converging
+FIT_LAYER = "ease_fit"  # CORNER colour layer on the body: achieved / painted ease - 1
+FIT_RANGE = 0.10        # +-10 %: the overlay's full blue / full red
+
+# the session of the scene's design (one per add-on session: the timer serves the active scene)
+_LIVE = {"key": None, "session": None, "colors": None, "unpushed": False, "builds": 0, "restart": False}
+
+
+# ----------------------------------------------------------------------------- the fit overlay
+
+def fit_to_color(values) -> np.ndarray:
+    """Diverging ramp of ``rho_hat / rho - 1`` (n,): blue below (the fabric gives less than painted),
+    white at 0, red above, full colour at +-:data:`FIT_RANGE`; NaN (no garment) is grey.
+    Returns (n, 4) float32 scene-linear RGBA."""
+    v = np.asarray(values, dtype=np.float64)
+    t = np.clip(np.nan_to_num(v, nan=0.0) / FIT_RANGE, -1.0, 1.0)
+    rgba = np.ones(v.shape + (4,))
+    rgba[..., 0] = np.where(t < 0, 1.0 + t, 1.0)
+    rgba[..., 1] = 1.0 - np.abs(t)
+    rgba[..., 2] = np.where(t > 0, 1.0 - t, 1.0)
+    rgba[np.isnan(v), :3] = 0.5
+    return rgba.astype(np.float32)
+
+
+def fill_legend(scene) -> None:
+    """The overlay's legend (percent, colour) in the Ease panel."""
+    coll = scene.ease.live_legend
+    if len(coll) == 5:
+        return
+    coll.clear()
+    for v in np.linspace(-FIT_RANGE, FIT_RANGE, 5):
+        item = coll.add()
+        item.ease = float(100.0 * v)
+        item.color = tuple(float(x) for x in fit_to_color(np.array([v]))[0])
+
+
+def write_overlay(obj, pattern, session) -> None:
+    """The body's :data:`FIT_LAYER` (per face, on its corners) from ``pattern``; the painting layer stays active."""
+    from ..core.live import achieved_over_painted
+    me = obj.data
+    ratio = achieved_over_painted(pattern, session.triangles, len(me.polygons))
+    attr = me.color_attributes.get(FIT_LAYER)
+    if attr is None or attr.domain != "CORNER":
+        active = me.color_attributes.active_color_name
+        if attr is not None:
+            me.color_attributes.remove(attr)
+        attr = me.color_attributes.new(FIT_LAYER, "FLOAT_COLOR", "CORNER")
+        if active in me.color_attributes:
+            me.color_attributes.active_color = me.color_attributes[active]
+    attr.data.foreach_set("color", np.repeat(fit_to_color(ratio), 3, axis=0).ravel())
+    me.update()
+
+
+# ----------------------------------------------------------------------------- pattern objects in place
+
+def _xz(uv, y: float = 0.0) -> np.ndarray:
+    uv = np.asarray(uv, dtype=np.float64).reshape(-1, 2)
+    return np.stack([uv[:, 0], np.full(len(uv), y), uv[:, 1]], axis=1)
+
+
+def _part(name: str):
+    obj = bpy.data.objects.get(name)
+    return obj if obj is not None and obj.get("ease_role") == "pattern_panel_part" else None
+
+
+def update_pieces(scene, pattern) -> bool:
+    """Move the scene's pattern objects onto ``pattern`` in place; False (nothing changed) when they
+    are not this pattern's pieces (other panels or vertex counts): then they must be rebuilt."""
+    from ..core.geom.layout import grain_arrows, grain_line, layout_pieces
+    from . import build, ramp
+    pieces = {o.get("ease_panel"): o for o in objects_with_role(scene, "pattern_panel")}
+    if sorted(pieces) != sorted(p.name for p in pattern.panels):
+        return False
+    for p in pattern.panels:
+        o = pieces[p.name]
+        outline, grain = _part(f"EASE outline {p.name}"), _part(f"EASE grain {p.name}")
+        if (len(o.data.vertices) != len(p.uv) or len(o.data.polygons) != len(p.faces) or outline is None
+                or grain is None or len(outline.data.splines) != len(p.boundary)):
+            return False
+    layout = layout_pieces([np.array([p.uv.min(axis=0), p.uv.max(axis=0)]) for p in pattern.panels],
+                           width=build.SHEET_WIDTH, margin=build.GAP)
+    body = scene.ease.body
+    x0 = float(world_bounds(body)[1][0]) + 0.35 if body is not None else 0.45     # as sync.show_pattern
+    corner = np.array([x0 - build.GAP, build.SHEET_TOP + build.GAP - layout.size[1]])
+    for p, off in zip(pattern.panels, layout.offsets):
+        o = pieces[p.name]
+        me = o.data
+        uv = np.asarray(p.uv, dtype=np.float64)
+        convert.set_vertices(me, _xz(uv))
+        ox, oz = corner + off
+        o.location = (float(ox), 0.0, float(oz))
+        lo, hi = (me.get("ease_ramp") or data.ramp_range(scene))[:2]
+        col = me.color_attributes.get(build.ACHIEVED)
+        if col is not None:
+            rgba = ramp.ease_to_color(np.clip(p.achieved_weft, lo, hi), lo, hi)
+            col.data.foreach_set("color", np.repeat(rgba, 3, axis=0).ravel())
+        a = me.attributes.get("achieved_weft")
+        if a is not None:
+            a.data.foreach_set("value", np.asarray(p.achieved_weft, dtype=np.float32))
+        o["ease_mean_achieved_weft"] = float(np.mean(p.achieved_weft))
+        outline = _part(f"EASE outline {p.name}")
+        for sp, loop in zip(outline.data.splines, p.boundary):
+            loop = np.asarray(loop)
+            if len(sp.points) == len(loop):
+                pts = np.hstack([_xz(uv[loop], -0.001), np.ones((len(loop), 1))]).astype(np.float32)
+                sp.points.foreach_set("co", pts.ravel())
+        outline.data.update_tag()
+        start, end = grain_line(uv, p.faces, p.boundary, p.grain)
+        v, _ = convert.polyline_edges([_xz(l, -0.002) for l in [np.array([start, end])] +
+                                       grain_arrows(start, end)], closed=False)
+        g = _part(f"EASE grain {p.name}")
+        if len(v) == len(g.data.vertices):
+            convert.set_vertices(g.data, v)
+        label = _part(f"EASE label {p.name}")
+        if label is not None:
+            c = 0.5 * (start + end)
+            label.location = (float(c[0]), -0.003, float(c[1]) + 0.03)
+    return True
+
+
+# ----------------------------------------------------------------------------- the loop
+
+def _colors(obj):
+    attr = obj.data.color_attributes.get(convert.EASE_LAYER)
+    if attr is None:
+        return None
+    c = np.empty(len(attr.data) * 4, dtype=np.float32)
+    attr.data.foreach_get("color", c)
+    return c
+
+
+def _set_colors(obj, raw) -> None:
+    obj.data.color_attributes[convert.EASE_LAYER].data.foreach_set("color", raw)
+
+
+def session_for(context):
+    """The live session of the scene's design on its body (built once per topology)."""
+    from ..core.live import LiveSession, topology_key
+    prep = data.prepared(context, lambda design: pattern_ops.gather_settings(context.scene, design))
+    key = topology_key(prep.design, data.body_spec(data.body_object(context)))
+    if _LIVE["key"] != key or _LIVE["session"] is None:
+        start = data.stored_pattern(context.scene)
+        ok = start is not None and [p.name for p in start.panels] == [p.name for p in prep.cut.panels] and \
+            all(len(a.uv) == len(b.vertex_ids) for a, b in zip(start.panels, prep.cut.panels))
+        _LIVE.update(key=key, session=LiveSession(prep, pattern=start if ok else None), colors=None,
+                     builds=_LIVE["builds"] + 1)
+    return _LIVE["session"]
+
+
+def _field(obj, scene) -> np.ndarray:
+    tri = ease_ops.triangle_ease(obj, scene)
+    return ease_ops.symmetrised(obj, tri) if ease_ops.x_mirror(obj) else tri
+
+
+def _show(context, session, final: bool) -> None:
+    """Write the session's pattern into the scene: objects in place (rebuilt when they are not its
+    pieces), the overlay; when ``final``, also the stored pattern and the key figures."""
+    scene = context.scene
+    pattern = session.pattern(figures=final)
+    if not update_pieces(scene, pattern):
+        if not final:
+            pattern = session.pattern(figures=True)
+        sync.show_pattern(context, pattern)
+    elif final:
+        sync.store_pattern(scene, pattern)
+        scene.ease.pattern_json = json.dumps(data.key_figures(pattern))
+    write_overlay(data.body_object(context), pattern, session)
+
+
+def _push(message: str) -> None:
+    try:
+        bpy.ops.ed.undo_push(message=message)
+    except RuntimeError as exc:     # no undo stack (a background script without one)
+        print(f"[ease] live: no undo step: {exc}")
+    _LIVE["unpushed"] = False
+
+
+def step(context, budget_s: float = SLICE_S) -> dict:
+    """One tick of the live loop (what the timer runs; tests call it directly).
+
+    Returns ``{"changed": a new field was taken, "iterations": run, "converged": bool,
+    "seconds": wall time of the tick}``.
+    """
+    t0 = time.perf_counter()
+    scene = context.scene
+    obj = data.body_object(context)
+    session = session_for(context)
+    raw = _colors(obj)
+    changed = False
+    if raw is not None and (_LIVE["colors"] is None or not np.array_equal(raw, _LIVE["colors"])):
+        if _LIVE["unpushed"] and _LIVE["colors"] is not None:
+            # the previous stroke's step was not pushed yet: push it with the layer it was solved for
+            _set_colors(obj, _LIVE["colors"])
+            _push("EASE live paint")
+            _set_colors(obj, raw)
+        if _LIVE["restart"]:
+            # after an undo/redo: continue from the restored pattern
+            _LIVE["restart"] = False
+            restored = data.stored_pattern(scene)
+            if restored is not None and len(restored.panels) == len(session.prep.cut.panels):
+                session.restart_from(restored)
+        else:
+            _LIVE["unpushed"] = _LIVE["colors"] is not None
+        changed = session.set_ease(_field(obj, scene))
+        _LIVE["colors"] = raw
+    was = session.converged
+    n = session.run(budget_s)
+    if changed and not session.converged:
+        _show(context, session, final=False)
+    if session.converged and (not was or changed):
+        _show(context, session, final=True)
+        if _LIVE["unpushed"]:
+            _push("EASE live paint")
+    scene.ease.live_status = ("converged" if session.converged else "converging") + \
+        f" ({session.iterations_since_change} iterations)"
+    return {"changed": changed, "iterations": n, "converged": session.converged,
+            "seconds": time.perf_counter() - t0}
+
+
+def _tick():
+    context = bpy.context
+    scene = getattr(context, "scene", None)
+    if scene is None or not scene.ease.live:
+        return None
+    try:
+        out = step(context)
+    except Exception as exc:  # a timer must never leave a traceback: say it, and stop
+        scene.ease.live_status = f"live: {exc}"
+        print(f"[ease] live: {exc}")
+        return None
+    return None if out["converged"] and not out["changed"] else IDLE_TICK_S
+
+
+def wake() -> None:
+    """Make sure a tick runs soon (idempotent)."""
+    if not bpy.app.timers.is_registered(_tick):
+        bpy.app.timers.register(_tick, first_interval=0.0)
+
+
+@bpy.app.handlers.persistent
+def _on_depsgraph(scene, depsgraph) -> None:
+    s = getattr(scene, "ease", None)
+    if s is None or not s.live or s.body is None:
+        return
+    body = s.body
+    for u in depsgraph.updates:
+        if getattr(u.id, "original", u.id) in (body, body.data):
+            wake()
+            return
+
+
+@bpy.app.handlers.persistent
+def _on_undo(scene, *_args) -> None:
+    _LIVE.update(colors=None, unpushed=False, restart=True)
+    s = getattr(scene, "ease", None)
+    if s is not None and s.live:
+        wake()
+
+
+def _handlers():
+    h = bpy.app.handlers
+    return ((h.depsgraph_update_post, _on_depsgraph), (h.undo_post, _on_undo), (h.redo_post, _on_undo))
+
+
+def start(context) -> None:
+    """Live on: handlers installed, the legend filled, a first tick queued."""
+    for lst, fn in _handlers():
+        if fn not in lst:
+            lst.append(fn)
+    fill_legend(context.scene)
+    _LIVE.update(colors=None, unpushed=False)
+    wake()
+
+
+def stop() -> None:
+    """Live off (or the add-on unregistered): no handler, no timer, the session dropped."""
+    for lst, fn in _handlers():
+        while fn in lst:
+            lst.remove(fn)
+    if bpy.app.timers.is_registered(_tick):
+        bpy.app.timers.unregister(_tick)
+    _LIVE.update(key=None, session=None, colors=None, unpushed=False, restart=False)
+
+
+def toggled(scene, context) -> None:
+    """Update of the *Live* toggle."""
+    if scene.ease.live:
+        start(context)
+    else:
+        stop()
+        scene.ease.live_status = ""
