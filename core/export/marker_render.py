@@ -111,7 +111,8 @@ def marker_svg(marker: Marker, title: str = "marker") -> str:
 def marker_dxf(marker: Marker, title: str = "marker") -> str:
     """A plotter DXF (R2010, mm, no blocks): fabric edges, cut lines, notches, grain lines, labels."""
     ezdxf = dxf_mod._ezdxf()
-    doc = ezdxf.new("R2010", units=dxf_mod.INSUNITS_MM)
+    with dxf_mod._fixed_metadata():      # ezdxf stamps the creation time when the document is made
+        doc = ezdxf.new("R2010", units=dxf_mod.INSUNITS_MM)
     doc.header["$MEASUREMENT"] = 1
     L, W = marker.length * 1000.0, marker.width * 1000.0
     for key in ("$EXTMIN", "$LIMMIN"):
@@ -134,6 +135,8 @@ def marker_dxf(marker: Marker, title: str = "marker") -> str:
                                            "insert": (float(x), float(y))})
     stream = io.StringIO()
     with dxf_mod._fixed_metadata():
+        # ezdxf lists the CLASSES section in registration order, which varies between runs
+        doc.classes.classes = dict(sorted(doc.classes.classes.items(), key=lambda kv: str(kv[0])))
         doc.write(stream)
     return stream.getvalue()
 

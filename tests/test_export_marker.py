@@ -1,0 +1,174 @@
+"""Markers (core.export.marker, `ease marker`): pieces inside the fabric, no overlaps, grain kept,
+efficiency as reported, repeatable with a seed, Ctrl-C keeps the best marker, CLI errors in one line."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+pytest.importorskip("spyrrow")
+
+from core.cli import main
+from core.errors import Cancelled, ExportError
+from core.export.marker import (GRAIN_TO_LENGTH, marker_items, marker_report, nest, orientations, parse_quantities,
+                                placed_outline, unfold)
+from core.export.marker_render import write_marker
+from core.geom.polygon import points_in_polygon, signed_area
+from core.pattern.io import save_pattern
+from export_synth import make_pattern
+
+WIDTH = 1.5
+
+
+def _segments_cross(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether any edge of closed loop a properly crosses an edge of closed loop b."""
+    p, r = a, np.roll(a, -1, axis=0) - a
+    q, s = b, np.roll(b, -1, axis=0) - b
+    den = r[:, None, 0] * s[None, :, 1] - r[:, None, 1] * s[None, :, 0]
+    qp = q[None, :, :] - p[:, None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (qp[..., 0] * s[None, :, 1] - qp[..., 1] * s[None, :, 0]) / den
+        u = (qp[..., 0] * r[:, None, 1] - qp[..., 1] * r[:, None, 0]) / den
+    return bool(np.any((np.abs(den) > 1e-15) & (t > 0) & (t < 1) & (u > 0) & (u < 1)))
+
+
+def _overlap(a: np.ndarray, b: np.ndarray) -> bool:
+    return _segments_cross(a, b) or bool(points_in_polygon(a, b).any()) or bool(points_in_polygon(b, a).any())
+
+
+@pytest.fixture(scope="module")
+def nested():
+    items = marker_items([("M", make_pattern(), 1)])
+    return nest(items, WIDTH, seconds=30, seed=0)
+
+
+def test_marker_pieces_inside_fabric_no_overlap(nested):
+    """Every cut line lies on the fabric, no two overlap, all turns are 0/180 degrees."""
+    m = nested
+    assert len(m.placements) == 2 and {p.item for p in m.placements} == {0, 1}
+    loops = [placed_outline(m, p) for p in m.placements]
+    for loop in loops:
+        assert loop[:, 1].min() >= -1e-6 and loop[:, 1].max() <= WIDTH + 1e-6
+        assert loop[:, 0].min() >= -1e-6 and loop[:, 0].max() <= m.length + 1e-9
+    for i in range(len(loops)):
+        for j in range(i + 1, len(loops)):
+            assert not _overlap(loops[i], loops[j])
+    for p in m.placements:
+        assert min(abs(p.angle - a) for a in (0.0, 180.0, -180.0)) < 1e-6
+        # the grain (+y of the piece frame) runs along the marker length, either way
+        g = p.rotation @ np.array([0.0, 1.0])
+        assert abs(abs(g[0]) - 1.0) < 1e-9
+    area = sum(signed_area(l) for l in loops)
+    assert m.efficiency == pytest.approx(area / (WIDTH * m.length), rel=1e-12)
+    rep = marker_report(m, "t")
+    assert rep["efficiency_pct"] == pytest.approx(100 * area / (WIDTH * m.length), abs=1e-3)
+    assert rep["length_mm"] == pytest.approx(m.length * 1000, abs=0.01)
+    assert rep["sizes"]["M"]["garments"] == 1 and rep["sizes"]["M"]["pieces"] == 2
+    assert rep["sizes"]["M"]["fabric_m"] == pytest.approx(m.length, abs=1e-4)
+
+
+def test_marker_one_way_and_tilt():
+    """One-way fabric: every piece the same way up; a tilt adds small turns either side."""
+    assert orientations(True) == [0.0]
+    assert orientations(False, 2.0) == [-2.0, 0.0, 2.0, 178.0, 180.0, 182.0]
+    with pytest.raises(ExportError, match="tilt"):
+        orientations(False, 30.0)
+    m = nest(marker_items([("M", make_pattern(), 1)]), WIDTH, seconds=30, seed=1, one_way=True)
+    assert all(abs(p.angle) < 1e-9 for p in m.placements)
+    for p in m.placements:
+        assert (p.rotation @ np.array([0.0, 1.0]))[0] == pytest.approx(1.0)
+
+
+def test_marker_ctrl_c_keeps_best_and_cancel_discards():
+    """Ctrl-C during the search returns the best marker so far; a Cancelled progress stops everything."""
+    items = marker_items([("M", make_pattern(), 3)])
+    seen = []
+
+    def interrupt(fraction, message):
+        seen.append(message)
+        if "efficiency" in message:
+            raise KeyboardInterrupt
+
+    m = nest(items, WIDTH, seconds=60, seed=0, progress=interrupt)
+    assert m.stopped == "interrupted" and len(m.placements) == 6 and m.seconds < 60
+    assert 0 < m.efficiency < 1
+
+    def cancel(fraction, message):
+        if "efficiency" in message:
+            raise Cancelled()
+
+    with pytest.raises(Cancelled):
+        nest(items, WIDTH, seconds=60, seed=0, progress=cancel)
+
+
+def test_unfold_mirrors_about_the_fold():
+    """A half piece with its cut line on the fold becomes the whole piece (twice the area)."""
+    half = np.array([[0.0, 0.0], [0.2, 0.0], [0.2, 0.5], [0.0, 0.5], [0.0, 0.25]])
+    whole = unfold(half, (np.array([0.0, 0.0]), np.array([0.0, 1.0])))
+    assert signed_area(whole) == pytest.approx(2 * signed_area(half))
+    assert whole[:, 0].min() == pytest.approx(-0.2) and whole[:, 0].max() == pytest.approx(0.2)
+    with pytest.raises(ExportError, match="fold"):
+        unfold(half + [0.01, 0.0], (np.array([0.0, 0.0]), np.array([0.0, 1.0])))
+
+
+def test_parse_quantities():
+    assert parse_quantities("XS:1, M:2,L") == {"XS": 1, "M": 2, "L": 1}
+    for bad in ("M:0", "M:x", "M:1,M:2", ","):
+        with pytest.raises(ExportError, match="sizes"):
+            parse_quantities(bad)
+
+
+def test_marker_files(nested, tmp_path):
+    """The DXF reads back with the fabric and one cut line per piece; the SVG and PDF are 1:1 in mm."""
+    import ezdxf
+    files = write_marker(nested, tmp_path / "m", "test")
+    assert sorted(p.name for p in files) == ["marker.dxf", "marker.json", "marker.pdf", "marker.png", "marker.svg"]
+    doc = ezdxf.readfile(tmp_path / "m" / "marker.dxf")
+    assert doc.header["$INSUNITS"] == 4
+    cuts = [e for e in doc.modelspace() if e.dxf.layer == "CUT"]
+    assert len(cuts) == 2
+    got = sorted(abs(signed_area(np.array([q[:2] for q in e.get_points()]))) for e in cuts)
+    want = sorted(abs(signed_area(placed_outline(nested, p))) * 1e6 for p in nested.placements)
+    assert np.allclose(got, want, rtol=1e-6)
+    assert len([e for e in doc.modelspace() if e.dxftype() == "TEXT" and e.dxf.layer == "LABEL"]) == 4
+    svg = (tmp_path / "m" / "marker.svg").read_text()
+    assert f'width="{nested.length * 1000:.3f}'.rstrip("0").rstrip(".") in svg and 'height="1500mm"' in svg
+    assert (tmp_path / "m" / "marker.pdf").read_bytes().startswith(b"%PDF")
+
+
+def _cli(capsys, *argv):
+    rc = main(["marker", *map(str, argv), "--quiet"])
+    return rc, capsys.readouterr()
+
+
+def test_marker_cli_same_seed_same_bytes(tmp_path, capsys):
+    """Two runs with the same seed (converged search, one thread) write the same files."""
+    pat = tmp_path / "M"
+    save_pattern(make_pattern(), pat)
+    outs = []
+    for k in range(2):
+        rc, cap = _cli(capsys, pat, "--width", 1500, "--seconds", 30, "--seed", 7, "--out", tmp_path / f"o{k}")
+        assert rc == 0, cap.err
+        outs.append(tmp_path / f"o{k}")
+    reports = [json.loads((o / "marker.json").read_text()) for o in outs]
+    assert reports[0]["stopped"] == "converged" and reports[0]["seed"] == 7
+    for name in ("marker.dxf", "marker.svg", "marker.pdf", "marker.png"):
+        assert (outs[0] / name).read_bytes() == (outs[1] / name).read_bytes(), name
+    for r in reports:
+        r.pop("seconds"), r.pop("history")
+    assert reports[0] == reports[1]
+    assert reports[0]["patterns"] == {"M": str(pat)}
+
+
+def test_marker_cli_errors(tmp_path, capsys):
+    """Bad --sizes, a fabric narrower than a piece, an unknown folder: exit 2 and one line."""
+    pat = tmp_path / "M"
+    save_pattern(make_pattern(), pat)
+    for argv, words in (([pat, "--width", 1500, "--sizes", "M:two"], "--sizes"),
+                        ([pat, "--width", 1500, "--sizes", "XL:1"], "no pattern folder of size XL"),
+                        ([pat, "--width", 300], "across the grain"),
+                        ([tmp_path / "nowhere", "--width", 1500], "no pattern file")):
+        rc, cap = _cli(capsys, *argv, "--seconds", 1, "--out", tmp_path / "bad")
+        assert rc == 2 and words in cap.err and len(cap.err.strip().splitlines()) == 1, cap.err
+    assert not (tmp_path / "bad").exists()
