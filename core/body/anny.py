@@ -240,6 +240,27 @@ def load_data(path: str = ASSET) -> AnnyData:
     return _DATA_CACHE[path]
 
 
+def shape_ranges(labels, extrapolate: bool) -> Dict[str, tuple]:
+    """Anny's shape parameters: label -> (min, max, default)."""
+    lo, hi = (-1.0, 2.0) if extrapolate else (0.0, 1.0)
+    return {k: (lo, hi, DEFAULT_SHAPE.get(k, 0.5)) for k in labels}
+
+
+_NAMES: Dict[str, tuple] = {}
+
+
+def anny_names(path: str = ASSET):
+    """(shape parameters name -> (min, max, default), joint names) of the baked Anny, read from its
+    labels only (milliseconds, for checking a design's body at load); None where the asset is missing."""
+    if path not in _NAMES:
+        if not os.path.exists(path):
+            return None
+        with np.load(path) as z:
+            _NAMES[path] = (shape_ranges([str(s) for s in z["phenotype_labels"]], bool(z["extrapolate_phenotypes"])),
+                            [str(s) for s in z["bone_labels"]])
+    return _NAMES[path]
+
+
 class AnnyBody(BodyModel):
     """The default body: Anny, topology ``anny-noeyes-notongue``, in our frame.
 
@@ -273,9 +294,7 @@ class AnnyBody(BodyModel):
         return dict(DEFAULT_SHAPE)
 
     def shape_parameters(self) -> Dict[str, tuple]:
-        lo = -1.0 if self.data.extrapolate else 0.0
-        hi = 2.0 if self.data.extrapolate else 1.0
-        return {k: (lo, hi, DEFAULT_SHAPE.get(k, 0.5)) for k in self.data.phenotype_labels}
+        return shape_ranges(self.data.phenotype_labels, self.data.extrapolate)
 
     def _check_shape(self, shape: Optional[Shape]) -> Dict[str, float]:
         params = self.shape_parameters()

@@ -11,7 +11,7 @@ edits the add-on's panels make.
 
 Fields of the ``materials`` object (metres):
 
-``fabric``        preset name (default ``"cotton"``)
+``fabric``        preset name, one of :data:`FABRICS` (default ``"cotton"``)
 ``eps_weft``      weft stretch tolerance >= 1 (default 1.1: 10 % stretch)
 ``eps_warp``      warp stretch tolerance >= 1 (default: ``eps_weft``)
 ``gathered``      true (every seam) or a list of seam line names sewn gathered, not flat
@@ -32,6 +32,9 @@ from .checks import check_name, check_number, expect_dict, expect_keys, fmt, is_
 from .naming import mirrored_name
 
 FABRIC = "cotton"
+# The fabric presets a design may name; their physical values are the drape's
+# (core.drape.materials.PRESETS, one per name here).
+FABRICS = ("cotton", "jersey", "denim", "silk")
 EPS_WEFT = 1.1           # weft stretch tolerance: 10 % stretch
 GATHER_ABOVE = 0.2       # gather a seam whose sides' ease demands differ by more than 20 %
 ALLOWANCE = 0.01         # m, seam allowance
@@ -148,8 +151,8 @@ def parse_materials(path: str, obj) -> dict:
     expect_dict(path, obj, "materials {fabric, eps_weft, eps_warp, export, gathered, gather_above}")
     expect_keys(path, obj, ("fabric", "eps_weft", "eps_warp", "export", "gathered", "gather_above"))
     fabric = obj.get("fabric", FABRIC)
-    if not isinstance(fabric, str) or not fabric:
-        raise DesignError(f"{path}.fabric", f"expected a fabric preset name, got {fmt(fabric)}")
+    if not isinstance(fabric, str) or fabric.strip().lower() not in FABRICS:
+        raise DesignError(f"{path}.fabric", f"expected a fabric preset ({', '.join(FABRICS)}), got {fmt(fabric)}")
     out = {"fabric": fabric}
     out["eps_weft"] = check_number(f"{path}.eps_weft", obj.get("eps_weft", EPS_WEFT), 1.0, 4.0, what="a tolerance")
     # the warp tolerance follows the weft's unless the design sets its own

@@ -71,7 +71,7 @@ from typing import Dict, Union
 
 from ..body.model import POSE_PRESETS
 from ..body.sizes import SIZES
-from ..errors import DesignError
+from ..errors import BodyError, DesignError
 from .checks import (BODY_PARTS, GARMENT_KINDS, LINE_ROLES, PARAMETER_KINDS, check_ease, check_name,
                      check_names_unique, check_number, check_parameter_value, check_ring, check_section,
                      expect_dict, expect_keys, fmt, is_number, keypoint_ref, check_keypoint)
@@ -165,12 +165,37 @@ def _parse_garment(path, obj, params, shared_lines) -> Garment:
     return Garment(obj["name"], kind, pin, lines, panels)
 
 
+def _check_on_model(path, model, shape, pose):
+    """The shape parameters and pose joints of a design's body, checked against the model where its
+    names are known without loading it (the built-in Anny); a file model is checked when it is loaded."""
+    from ..body.anny import anny_names
+    from ..body.model import check_axis_angle
+    from ..body.smpl import check_shape
+    names = anny_names() if model.lower() == "anny" else None
+    if names is None:
+        return
+    params, joints = names
+    for k, v in (shape.items() if isinstance(shape, dict) else ()):
+        try:
+            check_shape(params, {k: v}, model)
+        except BodyError as exc:
+            raise DesignError(f"{path}.shape.{k}", str(exc).split(": ", 2)[-1]) from None
+    for k, v in (pose.items() if isinstance(pose, dict) else ()):
+        try:
+            check_axis_angle(v, k, joints)
+        except BodyError as exc:
+            raise DesignError(f"{path}.pose.{k}", str(exc).split(": ", 1)[-1]) from None
+
+
 def _parse_body(path, obj):
+    from ..body.model import POSE_ANGLE_MAX
+    from ..body.registry import BUILTIN, MODEL_SUFFIXES
     expect_dict(path, obj, "a body {model, shape, pose}")
     expect_keys(path, obj, ("model", "shape", "pose"))
     model = obj.get("model", "anny")
-    if not isinstance(model, str) or not model:
-        raise DesignError(f"{path}.model", f"expected a body model name or file path, got {fmt(model)}")
+    if not isinstance(model, str) or not (model.lower() in BUILTIN or model.lower().endswith(MODEL_SUFFIXES)):
+        raise DesignError(f"{path}.model", f"expected {', '.join(BUILTIN)} or a path to a body model file "
+                                           f"({', '.join(MODEL_SUFFIXES)}), got {fmt(model)}")
     shape = obj.get("shape", "M")
     if isinstance(shape, str):
         if shape not in SIZES:
@@ -190,10 +215,12 @@ def _parse_body(path, obj):
             if not isinstance(v, list) or len(v) != 3:
                 raise DesignError(f"{path}.pose.{k}", f"expected an axis-angle [rx, ry, rz] in radians, got {fmt(v)}")
             for i, x in enumerate(v):
-                check_number(f"{path}.pose.{k}[{i}]", x)
+                check_number(f"{path}.pose.{k}[{i}]", x, -POSE_ANGLE_MAX, POSE_ANGLE_MAX,
+                             what="an angle in radians")
         pose = {k: [float(x) for x in v] for k, v in pose.items()}
     elif pose is not None:
         raise DesignError(f"{path}.pose", f"expected a pose preset ({', '.join(POSE_PRESETS)}) or an object joint -> [rx, ry, rz], got {fmt(pose)}")
+    _check_on_model(path, model, shape, pose)
     return {"model": model, "shape": shape, "pose": pose}
 
 
@@ -212,6 +239,9 @@ def _parse_parameters(path, obj) -> Dict[str, Parameter]:
             raise DesignError(f"{p}.kind", f"expected one of {', '.join(PARAMETER_KINDS)}, got {fmt(kind)}")
         lo = check_number(f"{p}.min", v["min"]) if "min" in v else None
         hi = check_number(f"{p}.max", v["max"]) if "max" in v else None
+        if lo is not None and hi is not None and lo > hi:
+            raise DesignError(f"{p}.min", f"min {fmt(v['min'])} is above max {fmt(v['max'])}: the parameter's "
+                                          "range is reversed (min must be <= max)")
         if "value" not in v:
             raise DesignError(f"{p}.value", "missing")
         check_parameter_value(f"{p}.value", kind, v["value"], lo, hi)
@@ -261,16 +291,54 @@ def parse_design(obj: dict) -> Design:
     return design
 
 
+# A design with per-triangle ease over a dense body is a few MB; JSON nests about 8 deep.
+MAX_DESIGN_BYTES = 64 << 20
+MAX_DEPTH = 64
+
+
+def check_depth(obj, limit: int = MAX_DEPTH) -> None:
+    """Refuse JSON nested deeper than ``limit`` (lists and objects), naming the first element too deep."""
+    stack = [(obj, "", 0)]
+    while stack:
+        value, path, depth = stack.pop()
+        if depth > limit:
+            raise DesignError(path, f"nested more than {limit} levels deep; a design is a few levels of "
+                                    "objects and lists")
+        if isinstance(value, dict):
+            stack.extend((v, f"{path}.{k}" if path else str(k), depth + 1) for k, v in value.items())
+        elif isinstance(value, list):
+            stack.extend((v, f"{path}[{i}]", depth + 1) for i, v in enumerate(value))
+
+
+def _design_text(p: Path) -> str:
+    try:
+        if p.stat().st_size > MAX_DESIGN_BYTES:
+            raise DesignError("", f"{p}: over {MAX_DESIGN_BYTES >> 20} MiB; not a design file")
+        data = p.read_bytes()
+    except OSError as exc:
+        raise DesignError("", f"{p}: cannot read ({exc.strerror})") from None
+    if data[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        raise DesignError("", f"{p}: UTF-16 text; save the design as UTF-8")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise DesignError("", f"{p}: not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}, "
+                              "e.g. latin-1); save the design as UTF-8") from None
+
+
 def load_design(source: Union[str, Path, dict, Design]) -> Design:
     """Load and validate a design from a path, a JSON string, a dict or a Design.
 
     Raises
     ------
-    DesignError : naming the JSON path of the first invalid element.
+    DesignError : naming the JSON path of the first invalid element (or the
+        file: not UTF-8, not JSON, nested more than :data:`MAX_DEPTH` deep,
+        over :data:`MAX_DESIGN_BYTES`).
     """
     if isinstance(source, Design):
         return source
     if isinstance(source, dict):
+        check_depth(source)
         return parse_design(copy.deepcopy(source))
     if isinstance(source, str) and source.lstrip().startswith("{"):
         text = source
@@ -279,12 +347,17 @@ def load_design(source: Union[str, Path, dict, Design]) -> Design:
         p = Path(source)
         if not p.is_file():
             raise DesignError("", f"design file not found: {p}")
-        text = p.read_text(encoding="utf-8")
+        text = _design_text(p)
         where = str(p)
     try:
         obj = json.loads(text)
     except json.JSONDecodeError as exc:
         raise DesignError("", f"{where}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})") from None
+    except RecursionError:
+        raise DesignError("", f"{where}: nested more than {MAX_DEPTH} levels deep") from None
+    except ValueError as exc:   # e.g. an integer of more than 4300 digits
+        raise DesignError("", f"{where}: not valid JSON ({str(exc)[:80]})") from None
+    check_depth(obj)
     return parse_design(obj)
 
 

@@ -7,7 +7,8 @@ Kawabata-type measurements give for each fabric; what matters for the drape is
 their order: woven cotton barely stretches (< 5 % under its own weight and
 handling loads), jersey knit stretches easily across the courses (weft).
 
-A design selects a preset by name (``materials.fabric``), the CLI with
+A design selects a preset by name (``materials.fabric``, one of
+:data:`core.design.materials.FABRICS`, checked when the design loads), the CLI with
 ``--material``. Unknown names raise :class:`core.errors.DrapeError`.
 """
 from __future__ import annotations
@@ -17,6 +18,7 @@ from typing import Mapping, Optional, Union
 
 import numpy as np
 
+from ..design.materials import FABRICS
 from ..errors import DrapeError
 
 
@@ -76,8 +78,8 @@ _LIMITS = {"density": 10.0, "stretch_weft": 1.0e6, "stretch_warp": 1.0e6, "shear
 
 
 def names() -> list:
-    """Names of the presets."""
-    return sorted(PRESETS)
+    """Names of the presets (the design's :data:`~core.design.materials.FABRICS`)."""
+    return sorted(FABRICS)
 
 
 def validate(material: Material) -> Material:
