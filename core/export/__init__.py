@@ -57,17 +57,19 @@ def parse_formats(formats: Union[str, Iterable[str]]) -> List[str]:
     """Normalised, de-duplicated format list; ``"all"`` means every format."""
     if isinstance(formats, str):
         formats = formats.split(",")
-    out = []
+    out, every = [], False
     for f in formats:
         f = str(f).strip().lower()
         if not f:
             continue
-        if f == "all":
-            return list(FORMATS)
-        if f not in FORMATS:
+        if f == "all":   # every format, but the other entries are still checked (all,bogus is an error)
+            every = True
+        elif f not in FORMATS:
             raise ExportError(f"format {f!r}: expected some of {', '.join(FORMATS)} (or all)")
-        if f not in out:
+        elif f not in out:
             out.append(f)
+    if every:
+        return list(FORMATS)
     if not out:
         raise ExportError(f"formats: none given; expected some of {', '.join(FORMATS)}")
     return out
