@@ -19,6 +19,9 @@ def _metres(text: str) -> float:
 
 
 def _run(args) -> int:
+    if args.sizes is not None:      # the graded nest of a design: all sizes in one file
+        from .graded import run_graded
+        return run_graded(args)
     from .. import workflows as wf
     from ..errors import ExportError
     from ..export import parse_formats
@@ -78,4 +81,8 @@ def add_parser(sub) -> None:
     p.add_argument("--lenient", action="store_true",
                    help="export pieces whose sew line crosses itself or whose allowance does not fit, with a "
                         "warning (listed in export.json) instead of failing")
+    p.add_argument("--sizes", default=None,
+                   help="graded nest: PATTERN_DIR is then a design file, transferred to these sizes (e.g. "
+                        "XS,S,M,L,XL) and written as graded_astm.dxf (one AAMA block per piece per size), "
+                        "graded.svg and graded.pdf (each piece's sizes stacked at the middle of the grain line)")
     add_quiet(p)
