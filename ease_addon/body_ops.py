@@ -11,21 +11,6 @@ from .objects import remove_object
 from .operators_base import EaseOperator
 
 
-def _measure(model, shape) -> dict:
-    """Height and girths (cm) of ``model`` at ``shape`` in its reference pose."""
-    from ..core.body.instance import body_instance
-    from ..core.body.measure import measure
-    return measure(model, body_instance(model, shape or None))
-
-
-def _format_measurements(m: dict) -> str:
-    """One line: ``height 172.0 cm, chest 94.1 cm, ...``."""
-    parts = []
-    for k, v in (m or {}).items():
-        parts.append(f"{k} {v:.1f} cm" if isinstance(v, (int, float)) else f"{k} {v}")
-    return ", ".join(parts)
-
-
 class EASE_OT_add_body(EaseOperator):
     """Add the default body (Anny) or a body file to the scene"""
     bl_idname = "ease.add_body"
@@ -54,6 +39,7 @@ class EASE_OT_set_size(EaseOperator):
     """Shape the body to a size preset (XS..XL) of the size chart"""
     bl_idname = "ease.set_size"
     bl_label = "Apply Size"
+    needs = ('body',)
 
     size: bpy.props.StringProperty(default="")
 
@@ -64,11 +50,11 @@ class EASE_OT_set_size(EaseOperator):
         size = self.size or s.size
         model = state.body_model(data.body_spec(obj)["model"])
         shape = size_shape(model, size)
-        achieved = _measure(model, shape)
+        achieved = data.measurements(model, shape)
         sync.update_body(context, obj, shape=shape)
         sync.fill_shape_props(context.scene, model, shape)
         obj["ease_size"] = size
-        s.measurements_report = _format_measurements(achieved)
+        s.measurements_report = data.format_measurements(achieved)
         self.report({"INFO"}, f"size {size}: {s.measurements_report}")
 
 
@@ -76,6 +62,7 @@ class EASE_OT_fit_measurements(EaseOperator):
     """Fit the body's shape to the target measurements (cm)"""
     bl_idname = "ease.fit_measurements"
     bl_label = "Fit Measurements"
+    needs = ('body',)
 
     def run(self, context):
         from ..core.body.sizes import fit_measurements
@@ -88,7 +75,7 @@ class EASE_OT_fit_measurements(EaseOperator):
                     for k, v in res.achieved.items()}
         sync.update_body(context, obj, shape=res.shape)
         sync.fill_shape_props(context.scene, model, res.shape)
-        s.measurements_report = _format_measurements(achieved)
+        s.measurements_report = data.format_measurements(achieved)
         self.report({"INFO"}, f"fitted: {s.measurements_report}")
 
 
@@ -96,11 +83,12 @@ class EASE_OT_measure(EaseOperator):
     """Measure the body (height, chest/bust, waist, hip circumferences in cm)"""
     bl_idname = "ease.measure"
     bl_label = "Measure"
+    needs = ('body',)
 
     def run(self, context):
         spec = data.body_spec(data.body_object(context))
-        achieved = _measure(state.body_model(spec["model"]), spec["shape"])
-        context.scene.ease.measurements_report = _format_measurements(achieved)
+        achieved = data.measurements(state.body_model(spec["model"]), spec["shape"])
+        context.scene.ease.measurements_report = data.format_measurements(achieved)
         self.report({"INFO"}, context.scene.ease.measurements_report)
 
 
@@ -108,6 +96,7 @@ class EASE_OT_set_pose(EaseOperator):
     """Pose the body (A, T, P1-P3); the design stays attached"""
     bl_idname = "ease.set_pose"
     bl_label = "Apply Pose"
+    needs = ('body',)
 
     pose: bpy.props.StringProperty(default="")
 
@@ -122,6 +111,7 @@ class EASE_OT_apply_shape(EaseOperator):
     """Apply the phenotype sliders to the body"""
     bl_idname = "ease.apply_shape"
     bl_label = "Apply Shape"
+    needs = ('body',)
 
     def run(self, context):
         obj = data.body_object(context)

@@ -2,8 +2,11 @@
 
 Everything is computed first, in plain Python by the core (the cut's seam
 loops, the pattern's grain line and sheet layout); the functions here only
-turn those arrays into meshes, curves and text objects. An object of a role
-replaces the earlier ones of that role once the new one exists.
+turn those arrays into meshes, curves and text objects. Objects are updated in
+place: an object of the same name and role is reused (its data replaced, or its
+vertices moved where the topology is the same), so names never pile up ``.001``
+suffixes and what the designer set on an object (visibility, modifiers) stays.
+Objects of the role that the new result no longer has are removed.
 """
 from __future__ import annotations
 
@@ -13,7 +16,7 @@ import bpy
 import numpy as np
 
 from . import convert, data, materials, ramp
-from .objects import objects_with_role, remove_objects, role_object
+from .objects import objects_with_role, remove_object, remove_objects, role_object
 
 SEAMLINES = "EASE Seamlines"
 KEYPOINTS = "EASE Keypoints"
@@ -21,6 +24,39 @@ ACHIEVED = "achieved_ease"     # CORNER colour layer of the pattern panels (per 
 GAP = 0.08                     # metres between laid-out panels
 SHEET_WIDTH = 1.6              # metres: the pieces beside the body are laid out this wide
 SHEET_TOP = 1.8                # metres: height of the pieces' top edge
+
+
+def _remove_data(datablock) -> None:
+    if datablock is not None and datablock.users == 0:
+        for coll in (bpy.data.meshes, bpy.data.curves):
+            if datablock.name in coll and coll[datablock.name] == datablock:
+                coll.remove(datablock)
+                return
+
+
+def put_object(scene, name: str, datablock, role: str, parent=None):
+    """The object ``name`` of ``role`` holding ``datablock``: the existing one reused (its
+    old data removed, the new data renamed to ``name``), else a new one."""
+    obj = bpy.data.objects.get(name)
+    if obj is None or obj.get("ease_role") != role or obj.name not in scene.objects \
+            or type(obj.data) is not type(datablock):
+        if obj is not None and obj.get("ease_role") == role:
+            remove_object(obj)      # same name, other kind of data: make way for the new one
+        return role_object(scene, name, datablock, role, parent=parent)
+    old = obj.data
+    obj.data = datablock
+    if old is not None and old != datablock:
+        _remove_data(old)
+    datablock.name = name
+    obj.parent = parent
+    return obj
+
+
+def _remove_others(scene, roles, kept) -> None:
+    """Remove the objects of ``roles`` that are not in ``kept`` (children first)."""
+    keep = {o.name for o in kept}
+    old = [o for r in roles for o in objects_with_role(scene, r) if o.name not in keep]
+    remove_objects(sorted(old, key=lambda o: o.parent is None))
 
 
 def body(scene, name: str, vertices: np.ndarray, faces: np.ndarray):
@@ -46,24 +82,22 @@ def seamlines(scene, cut, verts) -> None:
     pos = cut.positions(verts)
     loops = seam_loops(cut)
     v, e = convert.polyline_edges([pos[l] for l in loops], closed=True)
-    old = objects_with_role(scene, "seamlines")
-    obj = role_object(scene, SEAMLINES, convert.mesh_edges_from_arrays(SEAMLINES, v, e), "seamlines")
+    obj = put_object(scene, SEAMLINES, convert.mesh_edges_from_arrays(SEAMLINES, v, e), "seamlines")
     obj["ease_ids"] = json.dumps([l.tolist() for l in loops])
     obj.show_in_front = True
     obj.color = (1.0, 0.85, 0.1, 1.0)
     obj.hide_select = True
-    remove_objects(old)
+    _remove_others(scene, ["seamlines"], [obj])
 
 
 def keypoint_markers(scene, names, pts) -> None:
     """Point markers at the keypoints ``pts`` (K, 3) named ``names``."""
-    old = objects_with_role(scene, "keypoints")
     me = convert.mesh_edges_from_arrays(KEYPOINTS, pts, np.zeros((0, 2)))
-    obj = role_object(scene, KEYPOINTS, me, "keypoints")
+    obj = put_object(scene, KEYPOINTS, me, "keypoints")
     obj["ease_names"] = json.dumps(names)
     obj.show_in_front = True
     obj.hide_select = True
-    remove_objects(old)
+    _remove_others(scene, ["keypoints"], [obj])
 
 
 def _xz(points2d: np.ndarray, y: float = 0.0) -> np.ndarray:
@@ -72,40 +106,64 @@ def _xz(points2d: np.ndarray, y: float = 0.0) -> np.ndarray:
     return np.stack([p[:, 0], np.full(len(p), y), p[:, 1]], axis=1)
 
 
-def pattern_pieces(scene, pattern, lo: float, hi: float, x0: float, role: str = "pattern_panel") -> list:
-    """The pattern's pieces beside the body (replacing earlier ones of ``role``).
+def _same_topology(me, n_vertices: int, faces: np.ndarray) -> bool:
+    if len(me.vertices) != n_vertices or len(me.polygons) != len(faces):
+        return False
+    vi = np.empty(len(me.loops), dtype=np.int32)
+    me.loops.foreach_get("vertex_index", vi)
+    return bool(np.array_equal(vi, np.asarray(faces, dtype=np.int32).ravel()))
+
+
+def _piece_mesh(scene, name: str, p, lo: float, hi: float, role: str, mat):
+    """The piece object ``name`` of pattern panel ``p``: its vertices moved and its colours
+    rewritten in place where the topology is the one it has, a new mesh otherwise."""
+    v3 = _xz(np.asarray(p.uv, dtype=np.float64))
+    obj = bpy.data.objects.get(name)
+    if obj is not None and obj.get("ease_role") == role and obj.name in scene.objects \
+            and isinstance(obj.data, bpy.types.Mesh) and _same_topology(obj.data, len(v3), p.faces):
+        me = obj.data
+        convert.set_vertices(me, v3)
+    else:
+        me = convert.mesh_from_arrays(name, v3, p.faces)
+        me.color_attributes.new(ACHIEVED, "FLOAT_COLOR", "CORNER")
+        me.attributes.new("achieved_weft", "FLOAT", "FACE")
+        me.materials.append(mat)
+        obj = put_object(scene, name, me, role)
+    # colour layers live on points or corners: every corner of a triangle gets its achieved ease
+    rgba = ramp.ease_to_color(np.clip(p.achieved_weft, lo, hi), lo, hi)
+    me.color_attributes[ACHIEVED].data.foreach_set("color", np.repeat(rgba, 3, axis=0).ravel())
+    me.attributes["achieved_weft"].data.foreach_set("value", np.asarray(p.achieved_weft, dtype=np.float32))
+    me["ease_ramp"] = (float(lo), float(hi))     # the colours' ramp range (legend, read-back)
+    me.update()
+    return obj
+
+
+def update_pattern_objects(scene, pattern, lo: float, hi: float, x0: float, role: str = "pattern_panel") -> list:
+    """The pattern's pieces beside the body, updated in place (objects reused by name;
+    pieces the pattern no longer has are removed). Returns the piece objects.
 
     Each piece is a mesh in the XZ plane: local coordinates are the pattern's
     2D metres, so its dimensions are the piece's. Children: the boundary
     curve(s), the grain-line arrow and the piece's name. The pieces are laid
     out by the core's sheet layout, its top-left corner at (``x0``, 1.8 m).
+    Where a piece's topology is unchanged (a re-solve of the same cut: transfer,
+    adaptation, a live update) its mesh is the same mesh, its vertices moved.
     """
     from ..core.geom.layout import grain_arrows, grain_line, layout_pieces
-    old = objects_with_role(scene, role) + objects_with_role(scene, role + "_part")
     layout = layout_pieces([np.array([p.uv.min(axis=0), p.uv.max(axis=0)]) for p in pattern.panels],
                            width=SHEET_WIDTH, margin=GAP)
     corner = np.array([x0 - GAP, SHEET_TOP + GAP - layout.size[1]])   # the sheet's bottom-left
     mat = materials.attribute("EASE Achieved Ease", ACHIEVED)
-    made = []
+    made, parts = [], []
+    part = role + "_part"
     for p, off in zip(pattern.panels, layout.offsets):
         uv = np.asarray(p.uv, dtype=np.float64)
-        v3 = _xz(uv)
-        me = convert.mesh_from_arrays(f"EASE piece {p.name}", v3, p.faces)
-        # colour layers live on points or corners: every corner of a triangle gets its achieved ease
-        col = me.color_attributes.new(ACHIEVED, "FLOAT_COLOR", "CORNER")
-        rgba = ramp.ease_to_color(np.clip(p.achieved_weft, lo, hi), lo, hi)
-        col.data.foreach_set("color", np.repeat(rgba, 3, axis=0).ravel())
-        me.attributes.new("achieved_weft", "FLOAT", "FACE").data.foreach_set(
-            "value", np.asarray(p.achieved_weft, dtype=np.float32))
-        me["ease_ramp"] = (float(lo), float(hi))     # the colours' ramp range (legend, read-back)
-        me.materials.append(mat)
-        obj = role_object(scene, f"EASE piece {p.name}", me, role)
+        obj = _piece_mesh(scene, f"EASE piece {p.name}", p, lo, hi, role, mat)
         ox, oz = corner + off
         obj.location = (float(ox), 0.0, float(oz))
         obj["ease_panel"] = p.name
         obj["ease_mean_achieved_weft"] = float(np.mean(p.achieved_weft))
         made.append(obj)
-        part = role + "_part"
         # boundary curve(s), just in front of the mesh
         cd = bpy.data.curves.new(f"EASE outline {p.name}", "CURVE")
         cd.dimensions = "3D"
@@ -117,23 +175,24 @@ def pattern_pieces(scene, pattern, lo: float, hi: float, x0: float, role: str = 
             sp.points.foreach_set("co", pts.ravel())
             sp.use_cyclic_u = True
         cd.bevel_depth = 0.002
-        role_object(scene, f"EASE outline {p.name}", cd, part, parent=obj)
+        parts.append(put_object(scene, f"EASE outline {p.name}", cd, part, parent=obj))
         # grain-line arrow: the core's grain line with its arrow heads
         start, end = grain_line(uv, p.faces, p.boundary, p.grain)
         v, e = convert.polyline_edges([_xz(l, -0.002) for l in [np.array([start, end])] +
                                        grain_arrows(start, end)], closed=False)
-        role_object(scene, f"EASE grain {p.name}", convert.mesh_edges_from_arrays(f"EASE grain {p.name}", v, e),
-                    part, parent=obj)
+        parts.append(put_object(scene, f"EASE grain {p.name}",
+                                convert.mesh_edges_from_arrays(f"EASE grain {p.name}", v, e), part, parent=obj))
         # piece name, above the grain line's middle
         fd = bpy.data.curves.new(f"EASE label {p.name}", "FONT")
         fd.body = p.name.split(".", 1)[-1] + (" (mirror)" if p.mirror_of else "")
         fd.size = 0.045
         fd.align_x = "CENTER"
-        label = role_object(scene, f"EASE label {p.name}", fd, part, parent=obj)
+        label = put_object(scene, f"EASE label {p.name}", fd, part, parent=obj)
         c = 0.5 * (start + end)
         label.location = (float(c[0]), -0.003, float(c[1]) + 0.03)
         label.rotation_euler = (np.pi / 2, 0.0, 0.0)
-    remove_objects(old)
+        parts.append(label)
+    _remove_others(scene, [part, role], made + parts)
     return made
 
 
@@ -175,8 +234,7 @@ def garment(scene, result, gap, digest: str):
     me.materials.append(materials.fabric())
     for poly in me.polygons:
         poly.use_smooth = True
-    old = objects_with_role(scene, "garment")
-    obj = role_object(scene, GARMENT, me, "garment")
+    obj = put_object(scene, GARMENT, me, "garment")
     obj["ease_pattern"] = digest     # draped from this pattern
-    remove_objects(old)
+    _remove_others(scene, ["garment"], [obj])
     return obj

@@ -48,6 +48,21 @@ def keypoint_positions(obj, verts) -> tuple:
     return list(kps), pts
 
 
+def measurements(model, shape) -> dict:
+    """Height and girths (cm) of ``model`` at ``shape`` in its reference pose."""
+    from ..core.body.instance import body_instance
+    from ..core.body.measure import measure
+    return measure(model, body_instance(model, shape or None))
+
+
+def format_measurements(m: dict) -> str:
+    """One line: ``height 172.0 cm, chest 94.1 cm, ...``."""
+    parts = []
+    for k, v in (m or {}).items():
+        parts.append(f"{k} {v:.1f} cm" if isinstance(v, (int, float)) else f"{k} {v}")
+    return ", ".join(parts)
+
+
 # ----------------------------------------------------------------------------- design and cut
 
 def current_design(context):
@@ -126,12 +141,28 @@ def template_items():
     return _TEMPLATE_ITEMS
 
 
+# ----------------------------------------------------------------------------- files
+
+def output_path(path: str, setting: str) -> str:
+    """The absolute file or folder ``path`` of the panel setting ``setting`` ("Render to",
+    "Export to"); AddonError when it is empty, or relative to the .blend (``//``) while the
+    .blend is not saved (Blender would resolve it against the current directory)."""
+    import bpy
+    if not path:
+        raise state.AddonError(f"set {setting} first (EASE > Render & Export)")
+    if path.startswith("//") and not bpy.data.filepath:
+        raise state.AddonError(f"{setting} {path} is relative to the .blend file, which is not saved: "
+                               f"save the file first or set an absolute path (EASE > Render & Export)")
+    return bpy.path.abspath(path)
+
+
 # ----------------------------------------------------------------------------- ease ramp
 
 def ramp_range(scene) -> tuple:
     """(lo, hi) of the scene's ease ramp; AddonError when it is not a valid range."""
     s = scene.ease
-    lo, hi = float(s.ease_min), float(s.ease_max)
+    # the properties are single precision: 0.9 reads 0.8999999761581421; the user set 0.9
+    lo, hi = round(float(s.ease_min), 6), round(float(s.ease_max), 6)
     try:
         ramp.check_range(lo, hi)
     except ValueError as exc:

@@ -13,7 +13,7 @@ from __future__ import annotations
 import bpy
 
 from . import convert, data, state, sync
-from .operators_base import EaseOperator
+from .operators_base import EaseOperator, poll_needs
 
 
 def load_design_into_scene(context, source) -> None:
@@ -96,6 +96,7 @@ class EASE_OT_save_design(EaseOperator):
     """Write the current design (with its ease) to the design file"""
     bl_idname = "ease.save_design"
     bl_label = "Save Design"
+    needs = ('design',)
 
     filepath: bpy.props.StringProperty(subtype="FILE_PATH", default="")
 
@@ -110,6 +111,7 @@ class EASE_OT_set_parameter(EaseOperator):
     """Set a design parameter (placement 0..1 or length in metres) and re-cut"""
     bl_idname = "ease.set_parameter"
     bl_label = "Set Parameter"
+    needs = ('body', 'design')
 
     name: bpy.props.StringProperty()
     value: bpy.props.FloatProperty()
@@ -124,6 +126,7 @@ class EASE_OT_recut(EaseOperator):
     """Apply the parameter values to the design and re-cut it"""
     bl_idname = "ease.recut"
     bl_label = "Re-cut"
+    needs = ('body', 'design')
 
     def run(self, context):
         d = data.current_design(context)
@@ -137,6 +140,7 @@ class EASE_OT_assign_keypoint(EaseOperator):
     """Place the named keypoint on the selected body vertex (Edit Mode selection)"""
     bl_idname = "ease.assign_keypoint"
     bl_label = "Keypoint at Selected Vertex"
+    needs = ('body', 'design')
 
     name: bpy.props.StringProperty(default="")
     vertex: bpy.props.IntProperty(default=-1, description="vertex index; -1 uses the selection")
@@ -177,6 +181,8 @@ class EASE_OT_pick_keypoint(bpy.types.Operator):
     bl_idname = "ease.pick_keypoint"
     bl_label = "Pick Keypoint on Surface"
     bl_options = {"REGISTER", "UNDO"}
+    needs = ("body", "design")
+    poll = classmethod(poll_needs)
 
     def invoke(self, context, event):
         if context.area is None or context.area.type != "VIEW_3D":

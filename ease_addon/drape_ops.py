@@ -97,6 +97,7 @@ class EASE_OT_drape(EaseOperator):
     """Drape the pattern on the body (Esc cancels)"""
     bl_idname = "ease.drape"
     bl_label = "Drape"
+    needs = ('pattern',)
 
     _job = None
     _timer = None
@@ -162,17 +163,36 @@ def apply_drape(context, run, digest=None) -> None:
     pspec = data.stored_pattern(scene).body or {}
     if obj is not None:
         spec = data.body_spec(obj)
-        shape = instance_shape(state.body_model(spec["model"]), pspec.get("shape"))
+        model = state.body_model(spec["model"])
+        shape = instance_shape(model, pspec.get("shape"))
         pose = pspec.get("pose") or "A"
         if (shape and dict(shape) != spec["shape"]) or (isinstance(pose, str) and pose != spec["pose"]):
             sync.update_body(context, obj, shape=dict(shape) if shape else None,
                              pose=pose if isinstance(pose, str) else None)
+            show_body(scene, obj, model, pspec)
     build.garment(scene, run.result, run.metrics["vertex_gap"],
                   digest or data.pattern_digest(scene.get(data.PATTERN_KEY, "")))
     sync.apply_fitmap(scene)
     s = scene.ease
     s.drape_json = json.dumps(run.figures)
     s.drape_status = f"draped: {run.figures['frames']} frames, {run.figures['settled']}"
+
+
+def show_body(scene, obj, model, pspec: dict) -> None:
+    """The Body panel follows the body the garment was draped on (a transferred pattern's
+    size, an adapted one's pose): phenotype sliders, size, pose and measurements."""
+    s = scene.ease
+    spec = data.body_spec(obj)
+    sync.fill_shape_props(scene, model, spec["shape"])
+    size = pspec.get("size")
+    if isinstance(size, str) and size in {i.identifier for i in s.bl_rna.properties["size"].enum_items}:
+        s.size = size
+        obj["ease_size"] = size
+    elif "ease_size" in obj:
+        del obj["ease_size"]        # a shape of no chart size
+    if spec["pose"] in {i.identifier for i in s.bl_rna.properties["pose"].enum_items}:
+        s.pose = spec["pose"]
+    s.measurements_report = data.format_measurements(data.measurements(model, spec["shape"]))
 
 
 def step_job(context, job: DrapeJob, event_type: str) -> str:
@@ -204,6 +224,7 @@ class EASE_OT_fitmap(EaseOperator):
     """Colour the garment by strain, gap or plain fabric"""
     bl_idname = "ease.fitmap"
     bl_label = "Fit Map"
+    needs = ('garment',)
 
     mode: bpy.props.EnumProperty(items=[("NONE", "Fabric", ""), ("STRAIN", "Strain", ""), ("GAP", "Gap", "")])
 

@@ -231,12 +231,13 @@ class EASE_OT_brush_ease(EaseOperator):
     """Set the paint brush colour to the chosen ease (from the ease ramp)"""
     bl_idname = "ease.brush_ease"
     bl_label = "Set Brush Ease"
+    needs = ('body',)
 
     def run(self, context):
         lo, hi = data.ramp_range(context.scene)
         e = context.scene.ease.ease_value
         if not lo <= e <= hi:
-            raise state.AddonError(f"ease {e:.3f} is outside the ramp {lo} .. {hi}")
+            raise state.AddonError(f"ease {e:.3f} is outside the ramp {lo:g} .. {hi:g}")
         obj = data.body_object(context)
         if tuple(layer_range(obj, context.scene)) != (lo, hi):
             # keep the painted field: re-encode the layer in the new range first
@@ -249,6 +250,7 @@ class EASE_OT_paint_ease(EaseOperator):
     """Paint the ease layer with Blender's Vertex Paint brushes"""
     bl_idname = "ease.paint_ease"
     bl_label = "Paint Ease"
+    needs = ('body',)
 
     def run(self, context):
         obj = data.body_object(context)
@@ -271,6 +273,7 @@ class EASE_OT_ease_uniform(EaseOperator):
     """Set a uniform ease on a panel (or the whole body) by writing the layer"""
     bl_idname = "ease.ease_uniform"
     bl_label = "Uniform Ease"
+    needs = ('body',)
 
     panel: bpy.props.StringProperty(default="", description="panel name; empty: the panel field of the scene")
     ease: bpy.props.FloatProperty(default=0.0, description="ease; 0 takes the scene's ease value")
@@ -290,6 +293,7 @@ class EASE_OT_ease_gradient(EaseOperator):
     """Set a linear ease gradient on a panel (from -> to along an axis) by writing the layer"""
     bl_idname = "ease.ease_gradient"
     bl_label = "Gradient Ease"
+    needs = ('body',)
 
     panel: bpy.props.StringProperty(default="")
     whole_body: bpy.props.BoolProperty(default=False, description="set the whole body, not one panel")
@@ -314,6 +318,7 @@ class EASE_OT_ease_to_design(EaseOperator):
     """Convert the painted ease layer to per-triangle ease and write it into the design"""
     bl_idname = "ease.ease_to_design"
     bl_label = "Ease to Design"
+    needs = ('body', 'design')
 
     def run(self, context):
         obj = data.body_object(context)
@@ -331,6 +336,7 @@ class EASE_OT_ease_from_design(EaseOperator):
     """Write the design's ease field into the body's ease layer"""
     bl_idname = "ease.ease_from_design"
     bl_label = "Ease from Design"
+    needs = ('body', 'design')
 
     def run(self, context):
         obj = data.body_object(context)

@@ -37,6 +37,7 @@ class EASE_OT_export_pattern(EaseOperator):
     """Export the pattern (SVG, DXF, PDF) and the draped garment (GLB, OBJ) to the export folder"""
     bl_idname = "ease.export_pattern"
     bl_label = "Export Pattern"
+    needs = ('pattern',)
 
     directory: bpy.props.StringProperty(subtype="DIR_PATH", default="")
 
@@ -50,9 +51,7 @@ class EASE_OT_export_pattern(EaseOperator):
         formats = [f for f in FORMATS if getattr(s, f"export_{f}")]
         if not formats:
             raise state.AddonError("choose at least one export format")
-        out = bpy.path.abspath(self.directory or s.export_dir)
-        if not out:
-            raise state.AddonError("set an export folder")
+        out = data.output_path(self.directory or s.export_dir, "Export to")
         design = data.current_design(context) if s.design_json else None
         if design is not None:
             design, allowance, notch = export_settings(scene, design)

@@ -26,6 +26,7 @@ class EASE_OT_transfer_size(EaseOperator):
     """Transfer the design to the chosen size, preserving its ease"""
     bl_idname = "ease.transfer_size"
     bl_label = "Transfer to Size"
+    needs = ('body', 'design')
 
     def run(self, context):
         from ..core import workflows as wf
@@ -38,6 +39,7 @@ class EASE_OT_adapt_poses(EaseOperator):
     """Adapt the design to the chosen poses within the stretch tolerance"""
     bl_idname = "ease.adapt_poses"
     bl_label = "Adapt to Poses"
+    needs = ('body', 'design')
 
     def run(self, context):
         from ..core import workflows as wf

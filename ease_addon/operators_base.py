@@ -1,5 +1,8 @@
-"""The base of every EASE operator: undo support and error reporting.
+"""The base of every EASE operator: what it needs, undo support and error reporting.
 
+``needs`` names what the scene must hold before the operator can run (a body, a
+design, a pattern, a draped garment, something to render); ``poll`` greys the
+button out while one is missing and its tooltip says which, and what to do.
 ``run(context)`` does the work; it computes everything first and only then
 changes the scene, so an error from the core (an ``EaseError`` naming the
 element at fault) is reported in the status bar and the scene is left as it
@@ -11,11 +14,59 @@ import traceback
 
 import bpy
 
-from . import state
+from . import data, state
+from .objects import objects_with_role
+
+
+def _has_body(context) -> bool:
+    return data.body_object(context, required=False) is not None
+
+
+def _has_garment(context) -> bool:
+    return bool(objects_with_role(context.scene, "garment"))
+
+
+def _has_content(context) -> bool:
+    return any(objects_with_role(context.scene, r) for r in ("body", "garment", "pattern_panel"))
+
+
+# requirement -> (test on the context, what the tooltip says is missing)
+REQUIREMENTS = {
+    "body": (_has_body, "needs an EASE body: add one in EASE > Body"),
+    "design": (lambda c: bool(c.scene.ease.design_json),
+               "needs a design: load a template or a design file in EASE > Design"),
+    "pattern": (lambda c: bool(c.scene.get(data.PATTERN_KEY)),
+                "needs a pattern: press Optimize Pattern in EASE > Pattern"),
+    "garment": (_has_garment, "needs a draped garment: press Drape in EASE > Drape"),
+    "content": (_has_content, "nothing to render: add a body in EASE > Body"),
+}
+
+
+def missing(context, needs) -> str:
+    """What the first unmet requirement of ``needs`` says ("" when all are met)."""
+    for need in needs:
+        test, message = REQUIREMENTS[need]
+        if not test(context):
+            return message
+    return ""
+
+
+def poll_needs(cls, context) -> bool:
+    """``poll`` of an operator class with ``needs``: False (and the tooltip) while one is missing."""
+    why = missing(context, getattr(cls, "needs", ()))
+    if why:
+        cls.poll_message_set(why)
+        return False
+    return True
 
 
 class EaseOperator(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
+    needs = ()     # names in REQUIREMENTS (no annotation: Blender reads annotations as properties)
+
+    @classmethod
+    def poll(cls, context):
+        return poll_needs(cls, context)
 
     def run(self, context):  # pragma: no cover - overridden
         raise NotImplementedError

@@ -1,7 +1,7 @@
 """Pattern stage: optimize the pattern of the current design (the core's
 reference workflow) and lay it out beside the body as flat panel objects
 (mesh coloured by achieved ease, boundary curve, grain-line arrow, piece
-name; see :func:`.build.pattern_pieces`). The whole pattern is kept in a
+name; see :func:`.build.update_pattern_objects`). The whole pattern is kept in a
 scene property (pattern.json) so it survives a save."""
 from __future__ import annotations
 
@@ -24,6 +24,7 @@ class EASE_OT_optimize_pattern(EaseOperator):
     """Optimize the sewing pattern of the design and lay it out beside the body"""
     bl_idname = "ease.optimize_pattern"
     bl_label = "Optimize Pattern"
+    needs = ('body', 'design')
 
     def run(self, context):
         from ..core import workflows as wf

@@ -8,7 +8,7 @@ import os
 import bpy
 import numpy as np
 
-from . import state
+from . import data, state
 from .objects import collection, ensure_nodes, world_bounds
 from .operators_base import EaseOperator
 
@@ -86,8 +86,9 @@ def setup_studio(scene, samples: int = 16, resolution_pct: int = 50) -> None:
 
 
 def render_png(scene, path: str) -> str:
-    """Render the scene's camera to ``path`` (PNG); the file appears only when complete."""
-    path = bpy.path.abspath(path)
+    """Render the scene's camera to ``path`` (PNG, absolute or relative to a saved .blend);
+    the file appears only when complete."""
+    path = data.output_path(path, "Render to")
     if not path.lower().endswith(".png"):
         path += ".png"
     os.makedirs(os.path.dirname(os.path.abspath(path)) or ".", exist_ok=True)
@@ -118,9 +119,11 @@ class EASE_OT_render(EaseOperator):
     """Render the studio camera to a PNG file"""
     bl_idname = "ease.render"
     bl_label = "Render PNG"
+    needs = ('content',)
 
     def run(self, context):
         s = context.scene.ease
+        data.output_path(s.render_path, "Render to")      # before the studio changes the scene
         if context.scene.camera is None or STUDIO not in context.scene.camera.name:
             setup_studio(context.scene, s.render_samples, s.render_resolution)
         path = render_png(context.scene, s.render_path)

@@ -242,7 +242,7 @@ def show_pattern(context, pattern, store_as: str = data.PATTERN_KEY) -> None:
     x0 = 0.45
     if body is not None:
         x0 = float(world_bounds(body)[1][0]) + 0.35
-    build.pattern_pieces(context.scene, pattern, lo, hi, x0)
+    build.update_pattern_objects(context.scene, pattern, lo, hi, x0)
     store_pattern(context.scene, pattern, store_as)
     context.scene.ease.pattern_json = json.dumps(data.key_figures(pattern))
 

@@ -85,7 +85,8 @@ def test_undo_restores_the_scene(bpy_session, blender, addon):
     # (operator, arguments, what to set first); every operator that changes the scene
     calls = [(ops.ease_uniform, lambda: dict(whole_body=True, ease=1.9), None),
              (ops.ease_gradient, lambda: dict(panel=names[0]), None),
-             (ops.ease_to_design, dict, None),
+             # a field the design does not have yet (the same field again changes nothing)
+             (ops.ease_to_design, dict, lambda: ops.ease_uniform(whole_body=True, ease=1.6)),
              (ops.ease_from_design, dict, lambda: ops.ease_uniform(whole_body=True, ease=1.7)),
              # a new ramp range: the brush re-encodes the painted layer in it
              (ops.brush_ease, dict, lambda: setattr(E(), "ease_min", 0.8) or setattr(E(), "ease_value", 1.45)),
