@@ -196,6 +196,13 @@ class EASE_PT_render(_EasePanel, bpy.types.Panel):
         for name in ("export_allowance_cm", "export_hem_cm", "export_notch_cm"):
             col.prop(s, name)
         layout.operator("ease.export_pattern", icon="EXPORT")
+        layout.separator()
+        col = layout.column(align=True)
+        for name in ("marker_width_mm", "marker_sizes", "marker_seconds", "marker_one_way"):
+            col.prop(s, name)
+        layout.operator("ease.marker", icon="MOD_UVPROJECT")
+        if s.marker_status:
+            layout.label(text=s.marker_status)
 
 
 CLASSES = (EASE_PT_body, EASE_PT_design, EASE_PT_ease, EASE_PT_pattern, EASE_PT_fit,

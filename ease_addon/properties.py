@@ -139,6 +139,17 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
     export_pdf: BoolProperty(name="PDF", default=False)
     export_glb: BoolProperty(name="GLB", default=False)
     export_obj: BoolProperty(name="OBJ", default=False)
+    # marker (Render & Export panel): fabric width, garments per size, nesting time
+    marker_width_mm: FloatProperty(name="Fabric width (mm)", default=1500.0, min=100.0, max=5000.0, precision=0,
+                                   description="Usable fabric width, selvage to selvage, in millimetres")
+    marker_sizes: StringProperty(name="Sizes", default="",
+                                 description="Garments per size, e.g. XS:1,M:2,L:1 (empty: one garment of the "
+                                             "current pattern's size); other sizes are transferred first")
+    marker_seconds: IntProperty(name="Seconds", default=30, min=1, max=600,
+                                description="Time budget of the nester (it stops sooner when it converges)")
+    marker_one_way: BoolProperty(name="One-way fabric", default=False,
+                                 description="Nap, pile or a directional print: every piece the same way up")
+    marker_status: StringProperty(name="Marker", default="")
     # seam gathering: kept in the design (materials.gather_above) by Optimize Pattern
     gather_auto: BoolProperty(name="Gather loose seams", default=True,
                               description="Gather a seam whose two sides want lengths that differ by more than "

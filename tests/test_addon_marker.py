@@ -1,0 +1,44 @@
+"""Marker operator (ease_addon.marker_ops): the panel's width and sizes nest the scene's pattern with the
+core's marker; the files land in the export folder and the marker shows as an image on a flat object."""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+pytest.importorskip("spyrrow")
+
+DESIGN = "top_sleeveless.json"     # cheapest template: two panels
+
+
+@pytest.fixture(scope="module", autouse=True)
+def scene(blender):
+    return blender.reset(body=True, design=DESIGN, pattern=True)
+
+
+def test_marker_operator(bpy_session, blender):
+    bpy = bpy_session["bpy"]
+    s = bpy.context.scene.ease
+    s.export_dir = str(bpy_session["tmp"] / "marker_export")
+    s.marker_width_mm, s.marker_sizes, s.marker_seconds, s.marker_one_way = 1400.0, "", 3, True
+    assert bpy.ops.ease.marker() == {"FINISHED"}
+    out = bpy_session["tmp"] / "marker_export" / "marker"
+    rep = json.loads((out / "marker.json").read_text())
+    assert rep["width_mm"] == pytest.approx(1400.0) and rep["orientations_deg"] == [0.0]
+    assert rep["pieces"] == len(json.loads(bpy.context.scene["ease_pattern_json"])["panels"])
+    assert all(p["angle_deg"] == 0.0 for p in rep["placements"])
+    assert {"marker.dxf", "marker.svg", "marker.pdf", "marker.png"} <= {p.name for p in out.iterdir()}
+    assert "efficiency" in s.marker_status and f"{rep['efficiency_pct']:.1f}" in s.marker_status
+    # shown: the picture as an image, on a flat object as long and wide as the marker
+    img = bpy.data.images["EASE Marker"]
+    assert img.size[0] > 0 and img.size[1] > 0
+    obj = [o for o in bpy.context.scene.objects if o.get("ease_role") == "marker"]
+    assert len(obj) == 1
+    dims = obj[0].dimensions
+    assert dims[0] == pytest.approx(rep["length_mm"] / 1000, abs=1e-4)
+    assert dims[1] == pytest.approx(1.4, abs=1e-4) and dims[2] == pytest.approx(0.0)
+    # again: one marker object, the image reloaded in place
+    s.marker_sizes = "bad:size"
+    r = blender.run(bpy.ops.ease.marker)
+    assert "ERROR" in r and "Sizes" in r["ERROR"]
+    assert len([o for o in bpy.context.scene.objects if o.get("ease_role") == "marker"]) == 1
