@@ -141,6 +141,14 @@ def template_items():
     return _TEMPLATE_ITEMS
 
 
+# ----------------------------------------------------------------------------- values
+
+def as_typed(value) -> float:
+    """The value of a single-precision Blender float property as the user typed it: the
+    shortest decimal that reads back as the same float32 (0.9, not 0.8999999761581421)."""
+    return float(str(np.float32(value)))
+
+
 # ----------------------------------------------------------------------------- files
 
 def output_path(path: str, setting: str) -> str:
@@ -162,7 +170,7 @@ def ramp_range(scene) -> tuple:
     """(lo, hi) of the scene's ease ramp; AddonError when it is not a valid range."""
     s = scene.ease
     # the properties are single precision: 0.9 reads 0.8999999761581421; the user set 0.9
-    lo, hi = round(float(s.ease_min), 6), round(float(s.ease_max), 6)
+    lo, hi = as_typed(s.ease_min), as_typed(s.ease_max)
     try:
         ramp.check_range(lo, hi)
     except ValueError as exc:

@@ -118,7 +118,7 @@ class EASE_OT_set_parameter(EaseOperator):
 
     def run(self, context):
         d = data.current_design(context)
-        d.set_parameter(self.name, self.value)
+        d.set_parameter(self.name, data.as_typed(self.value))
         sync.set_design(context, d)
 
 
@@ -131,8 +131,9 @@ class EASE_OT_recut(EaseOperator):
     def run(self, context):
         d = data.current_design(context)
         for item in context.scene.ease.design_params:
-            if d.parameters[item.name].value != item.value:
-                d.set_parameter(item.name, item.value)
+            value = data.as_typed(item.value)
+            if d.parameters[item.name].value != value:
+                d.set_parameter(item.name, value)
         sync.set_design(context, d)
 
 

@@ -198,7 +198,7 @@ def param_changed(item, context) -> None:
         return
     try:
         d = data.current_design(context)
-        d.set_parameter(item.name, item.value)
+        d.set_parameter(item.name, data.as_typed(item.value))
         set_design(context, d, fill_params_too=False)
     except state.USER_ERRORS as exc:
         context.scene.ease.drape_status = f"re-cut failed: {exc}"

@@ -143,3 +143,21 @@ def test_reports_print_what_the_user_set(bpy_session, blender):
         r = blender.run(op, **kw)
         assert "ERROR" in r, r
         assert "0.9 .. 2" in r["ERROR"] and not re.search(r"\d\.\d{7,}", r["ERROR"]), r["ERROR"]
+
+
+def test_parameters_keep_the_value_the_user_typed(bpy_session, blender):
+    """Blender's float properties are single precision: 0.3 reads 0.30000001192092896. The
+    design keeps 0.3, and a refused value is quoted as typed."""
+    bpy = bpy_session["bpy"]
+    blender.reset(body=True, design=DESIGN)
+    s = bpy.context.scene.ease
+    item = s.design_params[0]
+    lo, hi = item.min, item.max
+    value = round(0.5 * (lo + hi), 2) + 0.01
+    item.value = value                   # the slider, live re-cut
+    assert json.loads(s.design_json)["parameters"][item.name]["value"] == value
+    assert bpy.ops.ease.set_parameter(name=item.name, value=0.3 if lo <= 0.3 <= hi else value) == {"FINISHED"}
+    got = json.loads(s.design_json)["parameters"][item.name]["value"]
+    assert got == (0.3 if lo <= 0.3 <= hi else value)
+    r = blender.run(bpy.ops.ease.set_parameter, name=item.name, value=hi + 1.1)
+    assert "ERROR" in r and not re.search(r"\d\.\d{7,}", r["ERROR"]), r["ERROR"]
