@@ -66,6 +66,11 @@ def test_right_side_paint_reaches_the_right_panels(bpy_session, addon):
     for p in cut.panels:
         if p.name.endswith("_right"):
             assert p.mirror_of is None, p.name
+    assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
+    pattern = addon("data").stored_pattern(bpy.context.scene)
+    assert not [p.name for p in pattern.panels if p.mirror_of], "the export would mark them 'mirror'"
+    labels = [o.data.body for o in bpy.data.objects if o.name.startswith("EASE label")]
+    assert labels and not [t for t in labels if "mirror" in t]
 
 
 def test_x_mirror_paint_symmetrises_the_field(bpy_session, addon):
