@@ -77,6 +77,7 @@ class LiveSession:
     config : solver configuration name (:data:`core.workflows.CONFIGS`)
     pattern : a pattern of this cut to start from (the scene's), or None for a cold start
     progress : progress callback of the flattening and factorisation
+    warm_iterations : warm iterations after a change (shown as they come) before the cold solve starts
 
     Attributes
     ----------
@@ -89,11 +90,16 @@ class LiveSession:
     seconds_per_iteration : running estimate of one iteration's wall time (what fits a slice)
     """
 
-    def __init__(self, prep, config: str = "improved", pattern=None, progress=None):
+    def __init__(self, prep, config: str = "improved", pattern=None, progress=None, warm_iterations: int = 4):
         self.prep = prep
         self.config = config
         self.solver = wf.make_solver(prep, config, progress=progress)
         self.triangles = body_triangles(prep)
+        from .geom.mesh import triangle_areas
+        pos = self.solver.ref_positions
+        #: (f,) m^2, the cut triangles' areas on the reference body
+        self.areas = np.concatenate([triangle_areas(pos[p.vertex_ids], p.faces) for p in prep.cut.panels])
+        self.warm_iterations = int(warm_iterations)
         self.K = self.solver.offsets(self.solver.ref_positions)[0]
         self.ease = self.solver.design_ease.copy()
         self._start = None if pattern is None else self.solver.start_from(pattern)
@@ -103,6 +109,11 @@ class LiveSession:
         self.converged = False
         self.iterations_since_change = 0
         self.seconds_per_iteration = None
+
+    @property
+    def warming(self) -> bool:
+        """The next :meth:`run` iterates the warm (shown) state, not the cold solve."""
+        return self._warm
 
     @property
     def n_body_triangles(self) -> int:
@@ -153,9 +164,9 @@ class LiveSession:
     def run(self, budget_s: float, min_iterations: int = 1) -> int:
         """Work for about ``budget_s`` seconds (at least ``min_iterations`` iterations); the iterations run.
 
-        The first call after :meth:`set_ease` iterates the warm state (the
-        pattern the designer sees moves towards the new paint at once); later
-        calls advance a cold solve of the same field (the configuration's
+        The first calls after :meth:`set_ease` iterate the warm state (the
+        pattern the designer sees moves towards the new paint at once), up to
+        ``warm_iterations`` in all (at least one); later calls advance a cold solve of the same field (the configuration's
         iterations from the stretched flattening, exactly what *Optimize
         Pattern* computes), which replaces the warm state when it is complete:
         the session has then converged, and the pattern no longer depends on
@@ -167,8 +178,10 @@ class LiveSession:
         if self.converged:
             return 0
         if self._warm:
-            self._warm = False
-            return self._iterate(self.state, budget_s, min_iterations, None)
+            done = self._iterate(self.state, budget_s, min_iterations, self.state.iteration + max(
+                self.warm_iterations - self.iterations_since_change, 0))
+            self._warm = self.iterations_since_change < self.warm_iterations
+            return done
         if self._cold is None:
             ones = np.ones_like(self.ease)
             self._cold = self.solver.begin(self.K, self.ease, ones, plan=self.state.plan)
@@ -230,7 +243,8 @@ class LiveSession:
         return pat
 
 
-def achieved_over_painted(pattern, triangles: np.ndarray, n_body: int) -> np.ndarray:
+def achieved_over_painted(pattern, triangles: np.ndarray, n_body: int,
+                          areas: Optional[np.ndarray] = None) -> np.ndarray:
     """Per body template triangle ``rho_hat / rho - 1`` (F_body,): the achieved weft scale over the
     painted one, area-weighted over the cut triangles on it (NaN where no garment lies).
 
@@ -239,11 +253,12 @@ def achieved_over_painted(pattern, triangles: np.ndarray, n_body: int) -> np.nda
     pattern : core.pattern.Pattern of the session's cut (panels in the cut's order)
     triangles : (f,) :func:`body_triangles`
     n_body : number of body template triangles
+    areas : (f,) m^2, the cut triangles' areas on the pattern's body (computed when None)
     """
     from .geom.mesh import triangle_areas
     ratio = np.concatenate([np.asarray(p.achieved_weft, float) / np.asarray(p.target_weft, float)
                             for p in pattern.panels]) - 1.0
-    area = np.concatenate([triangle_areas(p.xyz, p.faces) for p in pattern.panels])
+    area = areas if areas is not None else np.concatenate([triangle_areas(p.xyz, p.faces) for p in pattern.panels])
     ok = np.isfinite(ratio)
     w = np.bincount(triangles[ok], weights=area[ok], minlength=n_body)
     s = np.bincount(triangles[ok], weights=(area * ratio)[ok], minlength=n_body)

@@ -33,16 +33,17 @@ import time
 import bpy
 import numpy as np
 
-from . import convert, data, ease_ops, pattern_ops, sync
+from . import convert, data, ease_ops, pattern_ops, ramp, sync
 from .objects import objects_with_role, world_bounds
 
 SLICE_S = 0.03          # seconds of solving per tick: the longest the viewport waits for the pattern
-IDLE_TICK_S = 0.02      # seconds between ticks while converging
+IDLE_TICK_S = 0.005     # seconds between ticks while converging (the UI handles its events in between)
 FIT_LAYER = "ease_fit"  # CORNER colour layer on the body: achieved / painted ease - 1
 FIT_RANGE = 0.10        # +-10 %: the overlay's full blue / full red
 
 # the session of the scene's design (one per add-on session: the timer serves the active scene)
-_LIVE = {"key": None, "session": None, "colors": None, "unpushed": False, "builds": 0, "restart": False}
+_LIVE = {"key": None, "session": None, "colors": None, "unpushed": False, "builds": 0, "restart": False,
+         "inputs": None, "faces": None}
 
 
 # ----------------------------------------------------------------------------- the fit overlay
@@ -77,7 +78,7 @@ def write_overlay(obj, pattern, session) -> None:
     """The body's :data:`FIT_LAYER` (per face, on its corners) from ``pattern``; the painting layer stays active."""
     from ..core.live import achieved_over_painted
     me = obj.data
-    ratio = achieved_over_painted(pattern, session.triangles, len(me.polygons))
+    ratio = achieved_over_painted(pattern, session.triangles, len(me.polygons), session.areas)
     attr = me.color_attributes.get(FIT_LAYER)
     if attr is None or attr.domain != "CORNER":
         active = me.color_attributes.active_color_name
@@ -106,7 +107,7 @@ def update_pieces(scene, pattern) -> bool:
     """Move the scene's pattern objects onto ``pattern`` in place; False (nothing changed) when they
     are not this pattern's pieces (other panels or vertex counts): then they must be rebuilt."""
     from ..core.geom.layout import grain_arrows, grain_line, layout_pieces
-    from . import build, ramp
+    from . import build
     pieces = {o.get("ease_panel"): o for o in objects_with_role(scene, "pattern_panel")}
     if sorted(pieces) != sorted(p.name for p in pattern.panels):
         return False
@@ -175,8 +176,17 @@ def _set_colors(obj, raw) -> None:
 def session_for(context):
     """The live session of the scene's design on its body (built once per topology)."""
     from ..core.live import LiveSession, topology_key
+    s = context.scene.ease
+    obj = data.body_object(context)
+    # what the session's inputs are read from: unchanged, nothing is re-read (a tick stays cheap)
+    quick = json.dumps([s.design_json, data.body_spec(obj), s.gather_auto, round(s.gather_above_pct, 6),
+                        obj.name, len(obj.data.polygons)], sort_keys=True)
+    if quick == _LIVE.get("inputs") and _LIVE["session"] is not None:
+        return _LIVE["session"]
     prep = data.prepared(context, lambda design: pattern_ops.gather_settings(context.scene, design))
-    key = topology_key(prep.design, data.body_spec(data.body_object(context)))
+    key = topology_key(prep.design, data.body_spec(obj))
+    _LIVE["inputs"] = quick
+    _LIVE["faces"] = convert.get_triangles(obj.data)
     if _LIVE["key"] != key or _LIVE["session"] is None:
         start = data.stored_pattern(context.scene)
         ok = start is not None and [p.name for p in start.panels] == [p.name for p in prep.cut.panels] and \
@@ -187,7 +197,13 @@ def session_for(context):
 
 
 def _field(obj, scene) -> np.ndarray:
-    tri = ease_ops.triangle_ease(obj, scene)
+    """The painted field per body triangle (F,) as *Ease to Design* reads it (symmetrised with X-mirror)."""
+    faces = _LIVE.get("faces")
+    if faces is None or len(faces) != len(obj.data.polygons) or \
+            obj.data.color_attributes[convert.EASE_LAYER].domain != "POINT":
+        tri = ease_ops.triangle_ease(obj, scene)
+    else:   # the same mean of the vertex values, with the body's triangles kept (its topology is fixed)
+        tri = ramp.vertex_to_triangle(ease_ops.vertex_ease(obj, scene), faces)
     return ease_ops.symmetrised(obj, tri) if ease_ops.x_mirror(obj) else tri
 
 
@@ -242,10 +258,10 @@ def step(context, budget_s: float = SLICE_S) -> dict:
             _LIVE["unpushed"] = _LIVE["colors"] is not None
         changed = session.set_ease(_field(obj, scene))
         _LIVE["colors"] = raw
-    was = session.converged
+    was, warm = session.converged, session.warming
     n = session.run(budget_s)
-    if changed and not session.converged:
-        _show(context, session, final=False)
+    if (changed or warm) and n and not session.converged:
+        _show(context, session, final=False)      # the warm state moved: show it
     if session.converged and (not was or changed):
         _show(context, session, final=True)
         if _LIVE["unpushed"]:
@@ -318,7 +334,7 @@ def stop() -> None:
             lst.remove(fn)
     if bpy.app.timers.is_registered(_tick):
         bpy.app.timers.unregister(_tick)
-    _LIVE.update(key=None, session=None, colors=None, unpushed=False, restart=False)
+    _LIVE.update(key=None, session=None, colors=None, unpushed=False, restart=False, inputs=None, faces=None)
 
 
 def toggled(scene, context) -> None:
