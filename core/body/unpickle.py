@@ -448,7 +448,7 @@ def as_array(obj, key: str = "", _seen=None) -> np.ndarray:
     pre = f"key {key!r}: " if key else ""
     seen = set() if _seen is None else _seen
     if id(obj) in seen:
-        raise BodyError(f"{pre}a chumpy object in the pickle refers to itself")
+        raise BodyError(f"{pre}an object in the pickle refers to itself")
     if len(seen) > MAX_NESTING:
         raise BodyError(f"{pre}chumpy objects nested more than {MAX_NESTING} deep")
     if isinstance(obj, np.ndarray):
