@@ -24,7 +24,9 @@ def test_exports_every_format(tmp_path):
     assert calls and calls[-1] == 1.0 and calls == sorted(calls)
     summary = json.loads((tmp_path / "out" / "export.json").read_text())
     assert [p["name"] for p in summary["pieces"]] == ["front", "back"]
-    assert summary["pdf"]["a4"]["pages"] == summary["pdf"]["a4"]["rows"] * summary["pdf"]["a4"]["columns"]
+    for paper in ("a4", "letter"):
+        info = summary["pdf"][paper]
+        assert info["pages"] + len(info["left_out"]) == info["rows"] * info["columns"]
     assert summary["pieces"][0]["notches_mm"]["side_left"] == summary["pieces"][1]["notches_mm"]["side_left"]
 
 

@@ -1,4 +1,5 @@
-"""core.export.pdf: 1:1 scale (test square, form geometry), tiling page count, plotter sheet."""
+"""core.export.pdf and tiling: 1:1 scale (test square, form geometry), nested pages with lines only, overlap joins,
+wide pieces, plotter sheet."""
 import base64
 import math
 import re
@@ -63,16 +64,49 @@ def made():
     return pat, pieces, lay
 
 
+@pytest.fixture(scope="module")
+def nested(made):
+    pat, pieces, _ = made
+    return {paper: pdf.print_sheet(pieces, paper) for paper in ("a4", "letter")}
+
+
+@pytest.fixture(scope="module")
+def printed_pages(made, nested):
+    """Per paper: the layout, its grid and printed pages, and the printed (row, col) beside their PDF pages."""
+    pat, pieces, _ = made
+    out = {}
+    for paper, lay in nested.items():
+        pg = pages(parse_pdf(pdf.tiled_pdf(pieces, lay, paper, pat.style)))
+        grid, ink = pdf.sheet_pages(pieces, lay, paper)
+        printed = [(r, c) for r in range(grid.rows) for c in range(grid.cols) if ink[r, c]]
+        out[paper] = (lay, grid, ink, list(zip(printed, pg)))
+    return out
+
+
+def _segments_in(box, loops):
+    """Whether any segment of the closed loops (sheet m) meets the box (dense sampling, independent of tiling.py)."""
+    for loop in loops:
+        a, b = loop, np.roll(loop, -1, axis=0)
+        t = np.linspace(0, 1, 41)[:, None, None]
+        q = (a[None] + t * (b - a)[None]).reshape(-1, 2)
+        if np.any(np.all((q >= box[0] - 1e-9) & (q <= box[1] + 1e-9), axis=1)):
+            return True
+    return False
+
+
 @pytest.mark.parametrize("paper,size_mm", [("a4", (210, 297)), ("letter", (215.9, 279.4))])
-def test_tiled_pdf_pages_scale_and_test_square(made, paper, size_mm):
-    pat, pieces, lay = made
+def test_tiled_pdf_pages_scale_and_test_square(made, nested, paper, size_mm):
+    pat, pieces, _ = made
+    lay = nested[paper]
     objs = parse_pdf(pdf.tiled_pdf(pieces, lay, paper, pat.style))
     pg = pages(objs)
-    # page count = the tiling of the layout by the printable area of the paper
+    # windows: the paper less 10 mm margins, overlapping by 10 mm; one page per window with a line
     tile = (size_mm[0] - 20) / 1000, (size_mm[1] - 20) / 1000
-    want = math.ceil(lay.size[0] / tile[0]) * math.ceil(lay.size[1] / tile[1])
-    rows, cols, _ = pdf.tile_grid(lay.size, paper)
-    assert len(pg) == want == rows * cols
+    grid, ink = pdf.sheet_pages(pieces, lay, paper)
+    step = np.array(tile) - pdf.OVERLAP
+    assert grid.cols == math.ceil((lay.size[0] - pdf.OVERLAP) / step[0] - 1e-9)
+    assert grid.rows == math.ceil((lay.size[1] - pdf.OVERLAP) / step[1] - 1e-9)
+    assert len(pg) == int(ink.sum()) and ink[0, 0]
     for head, _ in pg:
         assert mediabox(head) == pytest.approx([0, 0, size_mm[0] * MM, size_mm[1] * MM], abs=1e-3)
     # the 10 cm test square is on page 1 (and only there)
@@ -82,40 +116,78 @@ def test_tiled_pdf_pages_scale_and_test_square(made, paper, size_mm):
     assert len(hits[0]) == 1 and not any(hits[1:])
     x, y = float(hits[0][0][0]), float(hits[0][0][1])
     assert 0 < x and x + 100 * MM < size_mm[0] * MM and 0 < y and y + 100 * MM < size_mm[1] * MM
-    # pieces are placed by pure translations: nothing on a page is scaled
+    # pieces are placed by a quarter turn and a translation: nothing on a page is scaled
     for _, c in pg:
         for a, b, cc, d in re.findall(rb"(-?[\d.]+) (-?[\d.]+) (-?[\d.]+) (-?[\d.]+) -?[\d.]+ -?[\d.]+ cm", c):
-            assert (float(a), float(b), float(cc), float(d)) == (1, 0, 0, 1)
-    # page 1 carries the assembly map: every page's name in its grid
-    assert b"assembly map" in pg[0][1]
-    for r in range(rows):
-        for col in range(cols):
-            assert f"({pdf.row_name(r)}{col + 1}) Tj".encode() in pg[0][1]
-    # page labels: row letter + column number, and join marks naming the neighbour
+            m = np.array([[float(a), float(cc)], [float(b), float(d)]])
+            assert set(np.abs(m).ravel()) <= {0.0, 1.0} and np.linalg.det(m) == 1
+    # page 1 carries the page map: the names of the printed pages in its grid, and no others
+    assert b"page map" in pg[0][1]
+    for r in range(grid.rows):
+        for col in range(grid.cols):
+            assert (f"({pdf.page_name(r, col)}) Tj".encode() in pg[0][1]) == bool(ink[r, col])
+    # page labels: row letter + column number, numbered among the printed pages
     text = b"".join(c for _, c in pg)
-    assert b"page A1" in text and b"join A2" in text and b"join B1" in text
+    assert b"page A1" in text and f"1 of {len(pg)}".encode() in text
 
 
 @pytest.mark.parametrize("paper", ["a4", "letter"])
-def test_every_piece_lands_on_the_pages_it_covers(made, paper):
-    pat, pieces, lay = made
-    pg = pages(parse_pdf(pdf.tiled_pdf(pieces, lay, paper, pat.style)))
-    rows, cols, tile = pdf.tile_grid(lay.size, paper)
+def test_every_page_has_a_line_and_every_line_is_printed(made, printed_pages, paper):
+    pieces = made[1]
+    lay, grid, ink, printed = printed_pages[paper]
+    loops = [lay.place(i, l) for i, p in enumerate(pieces) for l in list(p.cut) + list(p.sew)]
     m = pdf.PAGE_MARGIN
-    for r in range(rows):
-        for c in range(cols):
-            content = pg[r * cols + c][1]
-            drawn = {int(k): (float(x), float(y)) for x, y, k in
-                     re.findall(rb"1 0 0 1 (-?[\d.]+) (-?[\d.]+) cm\s*/FormXob\.piece(\d+) Do", content)}
-            x0, y0 = c * tile[0], lay.size[1] - (r + 1) * tile[1]  # the sheet window of this page
-            for k, (piece, off) in enumerate(zip(pieces, lay.offsets)):
-                box = piece.bbox + off
-                covers = not (box[1, 0] < x0 or box[0, 0] > x0 + tile[0] or box[1, 1] < y0 or box[0, 1] > y0 + tile[1])
-                assert (k in drawn) == covers
-                if covers:  # piece frame -> page: + layout offset - window corner + margin, in points
-                    want = (np.array([m - x0, m - y0]) + off) * 1000 * MM
-                    np.testing.assert_allclose(drawn[k], want, atol=0.01)
-    assert sum(len(re.findall(rb"Do", c)) for _, c in pg) >= len(pieces)
+    for (r, c), (_, content) in printed:
+        win = grid.window(r, c)
+        # a printed page is page 1 or holds a line; a left-out page holds none
+        assert (r, c) == (0, 0) or _segments_in(win, loops)
+        drawn = {int(k): (np.array([[float(a), float(cc)], [float(b), float(d)]]), (float(x), float(y)))
+                 for a, b, cc, d, x, y, k in re.findall(
+                     rb"(-?[\d.]+) (-?[\d.]+) (-?[\d.]+) (-?[\d.]+) (-?[\d.]+) (-?[\d.]+) cm\s*/FormXob\.piece(\d+) Do",
+                     content)}
+        for k, piece in enumerate(pieces):
+            corners = np.array([[piece.bbox[i, 0], piece.bbox[j, 1]] for i in (0, 1) for j in (0, 1)])
+            q = lay.place(k, corners)
+            covers = not (q[:, 0].max() < win[0, 0] or q[:, 0].min() > win[1, 0] or q[:, 1].max() < win[0, 1]
+                          or q[:, 1].min() > win[1, 1])
+            assert (k in drawn) == covers
+            if covers:  # piece frame -> page: turn, + layout offset - window corner + margin, in points
+                R, t = drawn[k]
+                np.testing.assert_array_equal(R, lay.matrix(k))
+                np.testing.assert_allclose(t, (np.array([m, m]) - win[0] + lay.offsets[k]) * 1000 * MM, atol=0.01)
+    for r in range(grid.rows):
+        for c in range(grid.cols):
+            if not ink[r, c]:
+                assert not _segments_in(grid.window(r, c), loops)
+    # the pieces do not overlap on the sheet and stay on it
+    from core.geom.polygon import points_in_polygon
+    outlines = [lay.place(i, p.cut[0]) for i, p in enumerate(pieces)]
+    for i, a in enumerate(outlines):
+        assert a.min() >= 0 and np.all(a <= lay.size + 1e-9)
+        for b in outlines[i + 1:]:
+            assert not points_in_polygon(a, b).any() and not points_in_polygon(b, a).any()
+
+
+@pytest.mark.parametrize("paper", ["a4", "letter"])
+def test_join_marks_name_printed_neighbours(printed_pages, paper):
+    lay, grid, ink, printed = printed_pages[paper]
+    for (r, c), (_, content) in printed:
+        joins = set(re.findall(rb"\(join (\w+)\) Tj", content))
+        want = {pdf.page_name(rr, cc).encode() for rr, cc in ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1))
+                if 0 <= rr < grid.rows and 0 <= cc < grid.cols and ink[rr, cc]}
+        assert joins == want
+
+
+def test_wide_piece_tiles(made):
+    """A piece wider than any page grid tried before (1.6 m) still tiles, on as many columns as it needs."""
+    from export_synth import wide_pattern
+    pieces = build_pieces(wide_pattern(1.6))
+    for paper in ("a4", "letter"):
+        lay = pdf.print_sheet(pieces, paper)
+        grid, ink = pdf.sheet_pages(pieces, lay, paper)
+        assert grid.cols * grid.step[0] + grid.overlap >= 0.6  # turned, or across the columns
+        data = pdf.tiled_pdf(pieces, lay, paper, "wide")
+        assert len(pages(parse_pdf(data))) == int(ink.sum())
 
 
 def test_piece_forms_are_drawn_at_one_to_one(made):

@@ -42,7 +42,7 @@ from ..pattern.types import Pattern
 from ..progress import report, sub
 from ..geom.polyline import polyline_length
 from .allowance import DEFAULT_ALLOWANCE, DEFAULT_HEM, resolve_allowance
-from .layout import LAYOUT_MARGIN, SHEET_WIDTH, fewest_pages, layout_pieces
+from .layout import LAYOUT_MARGIN, SHEET_WIDTH, layout_pieces
 from .notches import DEFAULT_NOTCH_SPACING
 from .pieces import PieceDrawing, build_pieces
 from .validate import validate_drape, validate_pattern
@@ -147,10 +147,12 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
             from . import pdf
             pages = {}
             for paper in ("a4", "letter"):
-                lay = fewest_pages(boxes, paper)
+                lay = pdf.print_sheet(pieces, paper)
                 files[f"pattern_{paper}.pdf"] = pdf.tiled_pdf(pieces, lay, paper, title)
-                rows, cols, _ = pdf.tile_grid(lay.size, paper)
-                pages[paper] = {"rows": rows, "columns": cols, "pages": rows * cols}
+                grid, ink = pdf.sheet_pages(pieces, lay, paper)
+                pages[paper] = {"rows": grid.rows, "columns": grid.cols, "pages": int(ink.sum()),
+                                "left_out": [pdf.page_name(r, c) for r, c in zip(*np.nonzero(~ink))],
+                                "overlap_mm": round(pdf.OVERLAP * 1000, 1)}
             lay = layout_pieces(boxes, SHEET_WIDTH, LAYOUT_MARGIN, reserve=pdf.TEST_RESERVE)
             files["pattern_plotter.pdf"] = pdf.plotter_pdf(pieces, lay, title)
             pages["plotter_mm"] = ((lay.size + 2 * pdf.PAGE_MARGIN) * 1000).round(1).tolist()

@@ -1,13 +1,22 @@
 """PDF at 1:1: tiled on A4 or US Letter for home printers, or one sheet for plotters.
 
 Every piece is drawn once as a form XObject in its own frame (1 PDF point =
-1/72 inch, so lengths are exact) and placed on each page it touches with a
-pure translation. Tiled pages carry a frame (the trim line), join marks on
-every edge shared with a neighbour (half diamonds that make a whole one when
-the pages are butted, labelled with the neighbour's page), the page's row
-letter and column number; page 1 also has a 10 x 10 cm test square to check
-the printer's scale and an assembly map (the page grid with the pieces). The plotter PDF is one page, as wide as a 914 mm roll (or
-the widest piece) and as long as the layout.
+1/72 inch, so lengths are exact) and placed on each page it touches by one
+matrix: a quarter turn (exact integers) and a translation, never a scale.
+
+Tiled pages: the pieces are nested for the page grid (:mod:`.tiling`: the
+fewest pages that carry a cut or sew line; pages with no line are left out).
+Each page prints a window of the sheet (the paper less a 10 mm margin);
+neighbouring windows share a 10 mm strip, marked on both pages by a dashed
+line where the neighbour begins and a join diamond (labelled with the
+neighbour's page) at the same place on both: lay one page over the other up
+to the dashed line, diamonds on diamonds, and tape. Each page has its frame,
+its name (row letter, column number) and its number among the printed pages;
+page 1 also has a 10 x 10 cm test square to check the printer's scale and the
+page map (the page grid, the pieces, the pages left out crossed).
+
+The plotter PDF is one page, as wide as a 914 mm roll (or the widest piece)
+and as long as the layout.
 """
 from __future__ import annotations
 
@@ -21,10 +30,12 @@ import numpy as np
 from ..errors import ExportError
 from ..geom.layout import Layout
 from .pieces import PieceDrawing, ascii_text
+from .tiling import PageGrid, PrintLayout, grid_for, inked_pages, place, print_layout
 
 PT_PER_M = 72.0 / 0.0254
 PAPERS = {"a4": (0.210, 0.297), "letter": (0.2159, 0.2794), "a0": (0.841, 1.189)}
-PAGE_MARGIN = 0.010           # m of white border around the tile frame
+PAGE_MARGIN = 0.010           # m of white border around the page window (what home printers leave unprinted)
+OVERLAP = 0.010               # m of the sheet printed on both neighbouring pages: the strip that is taped over
 TEST_SQUARE = 0.100           # m
 MAP_SIZE = 0.100              # m, largest side of the assembly map under the test square
 TEST_RESERVE = (0.110, 0.232)  # m, layout box kept free for the test square and the assembly map
@@ -53,13 +64,28 @@ def row_name(r: int) -> str:
     return s
 
 
-def tile_grid(sheet: Sequence[float], paper: str) -> Tuple[int, int, np.ndarray]:
-    """Rows, columns and tile size (m) covering a sheet with pages of ``paper`` (portrait)."""
+def tile_size(paper: str) -> np.ndarray:
+    """(2,) float, m: the printable window of one portrait page of ``paper`` (the page less its margins)."""
+    if paper not in PAPERS:
+        raise ExportError(f"paper {paper!r}: expected one of {', '.join(PAPERS)}")
     pw, ph = PAPERS[paper]
-    tile = np.array([pw - 2 * PAGE_MARGIN, ph - 2 * PAGE_MARGIN])
-    cols = max(1, int(math.ceil(sheet[0] / tile[0] - 1e-9)))
-    rows = max(1, int(math.ceil(sheet[1] / tile[1] - 1e-9)))
-    return rows, cols, tile
+    return np.array([pw - 2 * PAGE_MARGIN, ph - 2 * PAGE_MARGIN])
+
+
+def print_sheet(pieces: Sequence[PieceDrawing], paper: str) -> PrintLayout:
+    """The pieces nested for tiled pages of ``paper`` (:func:`core.export.tiling.print_layout`), test square kept free."""
+    return print_layout(pieces, tile_size(paper), OVERLAP, reserve=TEST_RESERVE)[0]
+
+
+def sheet_pages(pieces: Sequence[PieceDrawing], layout: Layout, paper: str) -> Tuple[PageGrid, np.ndarray]:
+    """The page grid of a tiled sheet and which pages are printed ((rows, cols) bool, :func:`inked_pages`)."""
+    grid = grid_for(layout.size, tile_size(paper), OVERLAP)
+    return grid, inked_pages(pieces, layout, grid)
+
+
+def page_name(r: int, c: int) -> str:
+    """A page's name: row letter(s) and column number, ``B3``."""
+    return f"{row_name(r)}{c + 1}"
 
 
 def _pt(points) -> List[Tuple[float, float]]:
@@ -127,14 +153,17 @@ def _test_square(c, corner: np.ndarray) -> None:
     c.drawCentredString(x + side / 2, y + side / 2 - 8, "print at 100% / actual size")
 
 
-def _assembly_map(c, top_left: np.ndarray, pieces, layout: Layout, rows: int, cols: int, tile: np.ndarray) -> None:
-    """A small map of the whole sheet: the page grid with its labels and the pieces' cut lines.
+def _assembly_map(c, top_left: np.ndarray, pieces, layout: Layout, grid: PageGrid, ink: np.ndarray) -> None:
+    """A small map of the whole sheet: the page grid, the printed pages' names and the pieces' cut lines.
 
     ``top_left`` is the map's top-left corner in page metres; the map fits in
-    ``MAP_SIZE`` x ``MAP_SIZE``.
+    ``MAP_SIZE`` x ``MAP_SIZE``. A page left out (nothing to cut on it) is
+    drawn crossed, without a name.
     """
-    H = float(layout.size[1])
-    grid_w, grid_h = cols * tile[0], rows * tile[1]
+    H = grid.height
+    step = grid.step
+    grid_w = grid.cols * step[0] + grid.overlap
+    grid_h = grid.rows * step[1] + grid.overlap
     scale = MAP_SIZE / max(grid_w, grid_h)
     x0, y0 = float(top_left[0]), float(top_left[1]) - grid_h * scale   # bottom-left of the map
 
@@ -144,13 +173,16 @@ def _assembly_map(c, top_left: np.ndarray, pieces, layout: Layout, rows: int, co
 
     c.setFillColorRGB(0, 0, 0)
     c.setFont("Helvetica", 7)
-    c.drawString(x0 * PT_PER_M, (top_left[1] + 0.002) * PT_PER_M, "assembly map: pages by row and column")
+    left_out = int(ink.size - ink.sum())
+    c.drawString(x0 * PT_PER_M, (top_left[1] + 0.002) * PT_PER_M,
+                 "page map: rows A, B, ... columns 1, 2, ..." + (f"; {left_out} crossed pages are left out "
+                                                                "(no line on them)" if left_out else ""))
     c.setLineWidth(0.3)
     c.setStrokeColorRGB(*COLOURS["cut"])
-    for piece, off in zip(pieces, layout.offsets):
-        loop = piece.cut[0] + off
-        step = max(1, len(loop) // 200)  # a map needs no more detail than this
-        pts = to_page(loop[::step])
+    for i, piece in enumerate(pieces):
+        loop = place(layout, i, piece.cut[0])
+        step_k = max(1, len(loop) // 200)  # a map needs no more detail than this
+        pts = to_page(loop[::step_k])
         p = c.beginPath()
         p.moveTo(*pts[0])
         for q in pts[1:]:
@@ -159,105 +191,133 @@ def _assembly_map(c, top_left: np.ndarray, pieces, layout: Layout, rows: int, co
         c.drawPath(p, stroke=1, fill=0)
     c.setStrokeColorRGB(*COLOURS["mark"])
     c.setFillColorRGB(*COLOURS["mark"])
-    size = max(3.0, min(7.0, 0.35 * tile[1] * scale * PT_PER_M))
+    size = max(3.0, min(7.0, 0.35 * step[1] * scale * PT_PER_M))
     c.setFont("Helvetica", size)
-    top = H  # the grid hangs from the sheet's top edge
-    for k in range(cols + 1):
-        (xa, ya), (xb, yb) = to_page([[k * tile[0], top], [k * tile[0], top - grid_h]])
-        c.line(xa, ya, xb, yb)
-    for k in range(rows + 1):
-        (xa, ya), (xb, yb) = to_page([[0, top - k * tile[1]], [grid_w, top - k * tile[1]]])
-        c.line(xa, ya, xb, yb)
-    for r in range(rows):
-        for col in range(cols):
-            (x, y), = to_page([[(col + 0.5) * tile[0], top - (r + 0.5) * tile[1]]])
-            c.drawCentredString(x, y - size / 3, f"{row_name(r)}{col + 1}")
+    for r in range(grid.rows):
+        for col in range(grid.cols):
+            w = grid.window(r, col)
+            # each page's own part of the sheet (the overlap strips go to its right and lower neighbours)
+            (xa, ya), (xb, yb) = to_page([[w[0, 0], w[1, 1] - step[1]], [w[0, 0] + step[0], w[1, 1]]])
+            c.rect(xa, ya, xb - xa, yb - ya, stroke=1, fill=0)
+            if ink[r, col]:
+                c.drawCentredString(0.5 * (xa + xb), 0.5 * (ya + yb) - size / 3, page_name(r, col))
+            else:
+                c.line(xa, ya, xb, yb)
+                c.line(xa, yb, xb, ya)
 
 
-def _piece_boxes(pieces, layout) -> np.ndarray:
-    return np.array([p.bbox + off for p, off in zip(pieces, layout.offsets)]).reshape(-1, 2, 2)
-
-
-def tiled_pdf(pieces: Sequence[PieceDrawing], layout: Layout, paper: str = "a4", title: str = "pattern") -> bytes:
+def tiled_pdf(pieces: Sequence[PieceDrawing], layout: Layout = None, paper: str = "a4",
+              title: str = "pattern") -> bytes:
     """1:1 pattern tiled on ``paper`` pages (``"a4"`` or ``"letter"``), rows top to bottom.
 
-    ``layout`` should keep ``TEST_RESERVE`` free at its top-left (see
-    :func:`core.geom.layout.layout_pieces`); the test square is drawn there.
+    Parameters
+    ----------
+    pieces : the drawings.
+    layout : their placement on the sheet, None: :func:`print_sheet` (nested for
+        the fewest pages). It should keep ``TEST_RESERVE`` free at its
+        top-left; the test square and the page map are drawn there.
+    paper, title : str.
 
     Returns
     -------
-    bytes, the PDF; ``rows * cols`` pages (see :func:`tile_grid`).
+    bytes, the PDF: one page per window of :func:`sheet_pages` that a cut or
+    sew line crosses (and the top-left one), in row order. Neighbouring
+    windows share ``OVERLAP`` of the sheet: each page marks, with a dashed
+    line, where its neighbour's window begins and carries join diamonds in
+    the middle of the shared strip, at the same place on both pages.
     """
     rl_canvas = _reportlab()
-
+    if layout is None:
+        layout = print_sheet(pieces, paper)
     pw, ph = PAPERS[paper]
-    rows, cols, tile = tile_grid(layout.size, paper)
+    grid, ink = sheet_pages(pieces, layout, paper)
+    tile = np.asarray(grid.tile)
     buf = io.BytesIO()
     c = rl_canvas.Canvas(buf, pagesize=(pw * PT_PER_M, ph * PT_PER_M), invariant=1, pageCompression=1)
     c.setTitle(ascii_text(title))
     c.setCreator("EASE")
     forms = _define_forms(c, pieces)
-    boxes = _piece_boxes(pieces, layout)
-    H = float(layout.size[1])
+    boxes = [_placed_box(layout, i, p) for i, p in enumerate(pieces)]
     m = PAGE_MARGIN
-    for r in range(rows):
-        for col in range(cols):
-            x0, y0 = col * tile[0], H - (r + 1) * tile[1]   # sheet window, bottom-left
-            x1, y1 = x0 + tile[0], y0 + tile[1]
+    printed = [(r, col) for r in range(grid.rows) for col in range(grid.cols) if ink[r, col]]
+    for k, (r, col) in enumerate(printed):
+        (x0, y0), (x1, y1) = grid.window(r, col)
+        c.saveState()
+        p = c.beginPath()
+        p.rect(m * PT_PER_M, m * PT_PER_M, tile[0] * PT_PER_M, tile[1] * PT_PER_M)
+        c.clipPath(p, stroke=0, fill=0)
+        for i, (name, box) in enumerate(zip(forms, boxes)):
+            if box[1, 0] < x0 or box[0, 0] > x1 or box[1, 1] < y0 or box[0, 1] > y1:
+                continue
+            R = _turn(layout, i)
+            off = layout.offsets[i]
+            # one cm: the piece's quarter turn (exact integers) and its place; no scaling
             c.saveState()
-            p = c.beginPath()
-            p.rect(m * PT_PER_M, m * PT_PER_M, tile[0] * PT_PER_M, tile[1] * PT_PER_M)
-            c.clipPath(p, stroke=0, fill=0)
-            for name, box, off in zip(forms, boxes, layout.offsets):
-                if box[1, 0] < x0 or box[0, 0] > x1 or box[1, 1] < y0 or box[0, 1] > y1:
-                    continue
-                c.saveState()
-                c.translate((m - x0 + off[0]) * PT_PER_M, (m - y0 + off[1]) * PT_PER_M)
-                c.doForm(name)
-                c.restoreState()
-            if r == 0 and col == 0 and layout.reserved is not None:
-                corner = np.array([layout.reserved[0, 0] - x0 + m, layout.reserved[1, 1] - y0 + m - TEST_SQUARE])
-                _test_square(c, corner)
-                _assembly_map(c, corner - np.array([0.0, 0.012]), pieces, layout, rows, cols, tile)
+            c.transform(R[0, 0], R[1, 0], R[0, 1], R[1, 1], (m - x0 + off[0]) * PT_PER_M, (m - y0 + off[1]) * PT_PER_M)
+            c.doForm(name)
             c.restoreState()
-            _page_marks(c, r, col, rows, cols, tile, title, paper)
-            c.showPage()
+        if (r, col) == (0, 0) and layout.reserved is not None:
+            corner = np.array([layout.reserved[0, 0] - x0 + m, layout.reserved[1, 1] - y0 + m - TEST_SQUARE])
+            _test_square(c, corner)
+            _assembly_map(c, corner - np.array([0.0, 0.012]), pieces, layout, grid, ink)
+        c.restoreState()
+        _page_marks(c, r, col, grid, ink, (k + 1, len(printed)), title, paper)
+        c.showPage()
     c.save()
     return buf.getvalue()
 
 
-def _page_marks(c, r, col, rows, cols, tile, title, paper) -> None:
+def _turn(layout: Layout, i: int) -> np.ndarray:
+    return layout.matrix(i) if isinstance(layout, PrintLayout) else np.eye(2)
+
+
+def _placed_box(layout: Layout, i: int, piece: PieceDrawing) -> np.ndarray:
+    """(2, 2) min/max corner on the sheet of everything drawn for piece ``i``."""
+    corners = np.array([[piece.bbox[a, 0], piece.bbox[b, 1]] for a in (0, 1) for b in (0, 1)])
+    q = place(layout, i, corners)
+    return np.stack([q.min(0), q.max(0)])
+
+
+def _page_marks(c, r, col, grid: PageGrid, ink: np.ndarray, number, title, paper) -> None:
     m = PAGE_MARGIN * PT_PER_M
-    tw, th = tile * PT_PER_M
+    tw, th = np.asarray(grid.tile) * PT_PER_M
+    ov = grid.overlap * PT_PER_M
     c.setStrokeColorRGB(*COLOURS["mark"])
     c.setFillColorRGB(*COLOURS["mark"])
     c.setLineWidth(0.5)
     c.rect(m, m, tw, th, stroke=1, fill=0)
-    name = f"{row_name(r)}{col + 1}"
+    name = page_name(r, col)
     c.setFont("Helvetica", 8)
     c.drawString(m, m + th + 0.35 * m, ascii_text(
-        f"{title} - page {name} (row {row_name(r)}, column {col + 1}; {r * cols + col + 1} of {rows * cols}) - "
-        f"{paper.upper()} at 1:1, do not scale"))
-    # join marks: a half diamond on each shared edge, pointing into the page
-    s = 6.0 * 72 / 25.4
-    marks = []
-    if r > 0:
-        marks.append(((m + tw / 2, m + th), (0, -1), f"{row_name(r - 1)}{col + 1}"))
-    if r < rows - 1:
-        marks.append(((m + tw / 2, m), (0, 1), f"{row_name(r + 1)}{col + 1}"))
-    if col > 0:
-        marks.append(((m, m + th / 2), (1, 0), f"{row_name(r)}{col}"))
-    if col < cols - 1:
-        marks.append(((m + tw, m + th / 2), (-1, 0), f"{row_name(r)}{col + 2}"))
+        f"{title} - page {name} (row {row_name(r)}, column {col + 1}; {number[0]} of {number[1]}) - "
+        f"{paper.upper()} at 1:1, do not scale; overlap the pages up to the dashed lines"))
+
+    def printed(rr, cc):
+        return 0 <= rr < grid.rows and 0 <= cc < grid.cols and bool(ink[rr, cc])
+
+    # per printed neighbour: the dashed line where its window begins (or ends), and a join diamond in the
+    # middle of the shared strip, which lies at the same sheet place on both pages
+    s = 3.5 * 72 / 25.4
+    # (neighbour, dashed line, diamond centre, direction into the page)
+    sides = [((r - 1, col), ((m, m + th - ov), (m + tw, m + th - ov)), (m + tw / 2, m + th - ov / 2), (0, -1)),
+             ((r + 1, col), ((m, m + ov), (m + tw, m + ov)), (m + tw / 2, m + ov / 2), (0, 1)),
+             ((r, col - 1), ((m + ov, m), (m + ov, m + th)), (m + ov / 2, m + th / 2), (1, 0)),
+             ((r, col + 1), ((m + tw - ov, m), (m + tw - ov, m + th)), (m + tw - ov / 2, m + th / 2), (-1, 0))]
     c.setFont("Helvetica", 7)
-    for (x, y), (dx, dy), other in marks:
+    for (rr, cc), (a, b), (x, y), (dx, dy) in sides:
+        if not printed(rr, cc):
+            continue
+        c.setDash([2, 2])
+        c.line(a[0], a[1], b[0], b[1])
+        c.setDash()
         p = c.beginPath()
-        p.moveTo(x - dy * s, y + dx * s)
-        p.lineTo(x + dx * s, y + dy * s)
-        p.lineTo(x + dy * s, y - dx * s)
+        p.moveTo(x - s, y)
+        p.lineTo(x, y + s)
+        p.lineTo(x + s, y)
+        p.lineTo(x, y - s)
         p.close()
         c.drawPath(p, stroke=1, fill=1)
-        c.drawCentredString(x + dx * 2.2 * s, y + dy * 2.2 * s - 2.5, f"join {other}")
+        c.drawCentredString(x + dx * (ov + 4 * s), y + dy * (ov + 2 * s) - 2.5, f"join {page_name(rr, cc)}")
     # corner crosses on the frame corners for alignment
     for x in (m, m + tw):
         for y in (m, m + th):

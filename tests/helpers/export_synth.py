@@ -79,3 +79,14 @@ def drape_positions(pattern: Pattern) -> np.ndarray:
         ang = p.uv[:, 0] / 0.2 + k * math.pi
         pos[p.vertex_ids] = np.column_stack([0.2 * np.sin(ang), -0.2 * np.cos(ang), 0.8 + p.uv[:, 1]])
     return pos
+
+
+def wide_pattern(width: float = 1.6, height: float = 0.5) -> Pattern:
+    """One rectangle ``width`` x ``height`` m (grain along its height), hem at the bottom: wider than a page grid.
+
+    The ease-3.0 shirt front is 1.58 m wide; a tiled PDF must still print it.
+    """
+    uv, faces, loop, sides = grid_piece(17, 6, lambda s, t: ((s - 0.5) * width, t * height))
+    return Pattern(style="wide", body={"model": "anny", "shape": "M", "pose": "A", "size": "M"},
+                   garments={"shirt": "shirt"},
+                   panels=[_panel("front", uv, faces, loop, [0.0, 1.0], hems=[sides["bottom"]])], seams=[])
