@@ -3,7 +3,10 @@
 Blender's own brushes paint it (Vertex Paint, or Sculpt-mode paint); the
 add-on sets the brush colour from the ease ramp (:mod:`.ramp`), sets uniform
 or gradient ease per panel by writing the layer, and converts the layer to
-per-triangle ease in the design.
+per-triangle ease in the design. An ``ease`` layer the designer already has is
+adopted whatever its type and domain, its values kept. On a mirrored design,
+Blender's X-mirror paint setting decides the sides: with it the field is made
+symmetric, without it each side keeps what was painted on it.
 """
 from __future__ import annotations
 
@@ -111,7 +114,10 @@ def adopt_ease_layer(me) -> str:
     else:
         done = ""
     me.color_attributes.active_color = me.color_attributes[convert.EASE_LAYER]
-    me.color_attributes.render_color_index = me.color_attributes.active_color_index
+    try:
+        me.color_attributes.render_color_index = me.color_attributes.active_color_index
+    except AttributeError:  # older API spelling
+        pass
     return done
 
 
