@@ -55,7 +55,8 @@ def cut_design(design, body=None, shape=None, pose=None, progress: Optional[Prog
     spec = resolve(design, body, shape=shape, pose=pose, resolver=resolver)
     t2 = time.perf_counter()
     report(progress, 0.15, "cutting the body surface")
-    cut = cut_surface(body, vertices, spec, progress=sub(progress, 0.15, 0.95), timings=timings)
+    cut = cut_surface(body, vertices, spec, progress=sub(progress, 0.15, 0.95), timings=timings,
+                      seed_names=seed_names(design))
     report(progress, 0.95, "applying ease fields")
     t3 = time.perf_counter()
     apply_ease(cut, design, body, vertices, resolver=resolver)
@@ -68,6 +69,14 @@ def cut_design(design, body=None, shape=None, pose=None, progress: Optional[Prog
         cut.body = dict(spec.body)
     report(progress, 1.0, f"cut {len(cut.panels)} panels")
     return cut
+
+
+def seed_names(design) -> dict:
+    """Panel name -> its seed as the design names it, for the engine's errors:
+    ``"keypoint 'chest_front'"``, or the JSON path of an inline seed."""
+    from ..design.resolve import _panels as design_panels   # (garment, path, panel, mirror_of), mirrors included
+    return {f"{g.name}.{p.name}": f"keypoint {p.seed!r}" if isinstance(p.seed, str) else f"seed {path}.seed"
+            for g, path, p, _ in design_panels(design)}
 
 
 __all__ = ["cut_design"]

@@ -46,9 +46,10 @@ from scipy.sparse.csgraph import connected_components
 from ..design.spec import CutLine, CutSpec, PanelSpec
 from ..errors import CutError
 from ..progress import report
-from .geodesic import GeodesicPaths, check_surface_point, insert_keypoints, surface_point_position
+from .geodesic import GeodesicPaths, check_surface_point, insert_keypoints
 from .grain import body_part_axis
 from .panels import build_panels, halfedges
+from .seeds import seed_face, seed_hint, seed_label
 from .split import CutMesh
 from .types import GarmentCut, Panel, Seam
 
@@ -160,7 +161,7 @@ class _Clock:
 
 
 def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None,
-                timings: Optional[dict] = None) -> GarmentCut:
+                timings: Optional[dict] = None, seed_names: Optional[Dict[str, str]] = None) -> GarmentCut:
     """Cut the body surface into garment panels.
 
     Parameters
@@ -172,6 +173,8 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None,
     timings : optional dict, filled with wall seconds per stage (``prepare``, ``skirt``,
         ``keypoints``, ``geodesics``, ``splitting``, ``flood_fill``, ``embedding``,
         ``refine``, ``delaunay_flips``, ``axes``, ``grain``, ``panels_seams``), for benchmarks.
+    seed_names : optional dict, panel name -> its seed as the design names it
+        (``"keypoint 'chest_front'"``), for error messages.
 
     Returns
     -------
@@ -245,7 +248,7 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None,
             seqs[li] = _insert_line(gm, li, line_kv[li], paths[li], spec.lines[li].closed, names)
         clock.lap("splitting")
         report(progress, base + 0.2 / len(spec.garments), f"cutting garment {g.name}: panels")
-        out = _garment_panels(gm, spec, g, gpanels, seqs, forbidden, BF, X, axes, offset, clock)
+        out = _garment_panels(gm, spec, g, gpanels, seqs, forbidden, BF, X, axes, offset, clock, seed_names)
         panels += out["panels"]
         seams += out["seams"]
         hems.update(out["hems"])
@@ -328,18 +331,9 @@ def face_components(F: np.ndarray, n: int, cut_ukeys: np.ndarray):
     return connected_components(A, directed=False)[1]
 
 
-def _seed_face(mesh: CutMesh, p: PanelSpec, BF, X) -> int:
-    pos = surface_point_position(p.seed, BF, X)
-    try:
-        f, _ = mesh.locate_in_parent(int(p.seed.triangle), pos)
-    except KeyError:
-        raise CutError(f"panel {p.name!r}: its seed lies on a removed part of the body "
-                       f"(between the legs, removed for the skirt topology)")
-    return f
-
-
 def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], seqs: Dict[int, np.ndarray],
-                    forbidden: np.ndarray, BF, X, axes, offset: int, clock: Optional[_Clock] = None):
+                    forbidden: np.ndarray, BF, X, axes, offset: int, clock: Optional[_Clock] = None,
+                    seed_names: Optional[Dict[str, str]] = None):
     clock = clock or _Clock(None)
     F = mesh.F.copy()
     n = mesh.nv
@@ -350,15 +344,21 @@ def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], s
     bad_comp[comp[fb > 0]] = fb[fb > 0]
     label = np.full(len(F), -1, dtype=np.int64)
     owner: Dict[int, str] = {}
+    by_name = {p.name: p for p in gpanels}
     for pi, p in enumerate(gpanels):
-        c = comp[_seed_face(mesh, p, BF, X)]
+        c = comp[seed_face(mesh, p, BF, X, seed_names)]
         if c in owner:
-            raise CutError(f"panels {owner[c]!r} and {p.name!r} are in one region, so panel {p.name!r} "
-                           f"has no faces of its own: a seamline between them is missing or does not "
-                           f"close{_open_ends(mesh, spec, seqs, comp, c)}")
+            # a seed on (or a millimetre from) a seamline is the likely cause: named first
+            hint = seed_hint(mesh, [by_name[owner[c]], p], list(seqs), [l.name for l in spec.lines], BF, X, seed_names)
+            raise CutError(f"panels {owner[c]!r}{seed_label(owner[c], seed_names)} and {p.name!r}"
+                           f"{seed_label(p.name, seed_names)} are in one region, so panel {p.name!r} has no faces "
+                           f"of its own: {hint}a seamline between them is missing or does not close"
+                           + _open_ends(mesh, spec, seqs, comp, c))
         if bad_comp[c]:
-            raise CutError(f"panel {p.name!r} reaches the {FORBIDDEN_REGIONS[bad_comp[c] - 1]} region: "
-                           f"a seamline around it does not close{_open_ends(mesh, spec, seqs, comp, c)}")
+            hint = seed_hint(mesh, [p], list(seqs), [l.name for l in spec.lines], BF, X, seed_names)
+            raise CutError(f"panel {p.name!r}{seed_label(p.name, seed_names)} reaches the "
+                           f"{FORBIDDEN_REGIONS[bad_comp[c] - 1]} region: {hint}a seamline around it does not "
+                           f"close{_open_ends(mesh, spec, seqs, comp, c)}")
         owner[c] = p.name
         label[comp == c] = pi
     keep = label >= 0
