@@ -39,7 +39,8 @@ MAX_NDIM = 8                      # no model array has more than 3 dimensions
 # fixed-width bytes and text (names). Never objects (references), records, voids.
 ALLOWED_KINDS = "biufSU"
 
-_DTYPE_CODE = re.compile(r"^[<>|=]?(\?|b1|[bBhHiIlLqQefdg]|[iu][1248]|f(2|4|8|16)|[SU]\d{0,6})$")
+_DTYPE_CODE = re.compile(r"^[<>|=]?(\?|b1|[bBhHiIlLqQefdg]|[iu][1248]|f(2|4|8|16)|[SU]\d{0,6}"
+                         r"|bool|u?int(8|16|32|64)|float(16|32|64))$")
 
 
 def check_dtype(dtype, where: str, error: Type[EaseError] = BodyError) -> np.dtype:

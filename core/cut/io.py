@@ -135,9 +135,12 @@ def _ids(value, where, bound, shape=None):
     if not isinstance(value, list):
         raise CutError(f"{where}: expected a list of indices, got {type(value).__name__}")
     try:
-        a = np.asarray(value, dtype=np.int64) if value else np.zeros(0, dtype=np.int64)
+        a = np.asarray(value) if value else np.zeros(0, dtype=np.int64)
     except (TypeError, ValueError, OverflowError):
-        raise CutError(f"{where}: expected whole-number indices") from None
+        a = None
+    if a is None or a.dtype.kind not in "iu":   # floats, booleans, text, ragged rows, beyond int64
+        raise CutError(f"{where}: expected whole-number indices")
+    a = a.astype(np.int64)
     if shape is not None:
         if a.size == 0:
             a = a.reshape(0, shape)
@@ -163,10 +166,13 @@ def _floats(value, where, shape):
 
 
 def _field(obj, key, where, kind):
-    if not isinstance(obj, dict) or key not in obj:
-        raise CutError(f"{where}.{key}: missing")
+    at = f"{where}.{key}" if ": " in where else f"{where}: {key}"
+    if not isinstance(obj, dict):
+        raise CutError(f"{where}: expected an object, got {type(obj).__name__}")
+    if key not in obj:
+        raise CutError(f"{at}: missing")
     if not isinstance(obj[key], kind):
-        raise CutError(f"{where}.{key}: expected {getattr(kind, '__name__', 'a value')}, got {type(obj[key]).__name__}")
+        raise CutError(f"{at}: expected {getattr(kind, '__name__', 'a value')}, got {type(obj[key]).__name__}")
     return obj[key]
 
 
@@ -291,6 +297,8 @@ def load_cut(directory: Union[str, Path]) -> GarmentCut:
         cut = GarmentCut(body=body, embedding=E, panels=panels, seams=seams, garments=dict(garments),
                          pins=pins, hems=hems, materials=materials,
                          **{k: v for k, v in extra.items() if k in {f.name for f in dataclasses.fields(GarmentCut)}})
+    except CutError:
+        raise
     except (KeyError, TypeError, ValueError) as exc:
         raise CutError(f"{jpath}: malformed cut ({type(exc).__name__}: {exc})") from None
     return cut
