@@ -15,11 +15,14 @@ layer  content
 15     annotation text (cut on fold, mirror, allowance, units)
 ====== ==========================================================
 
-in millimetres. :func:`astm_document` is DXF R2000 with ``$INSUNITS = 4``
-(mm); the same content as DXF R12 through ezdxf's ``gerber_D6673`` add-on
-(:func:`astm_r12_text`) suits Gerber and other strict R12 readers, which take
-the units from the style system text ``Units: METRIC``. :func:`plain_document`
-has named layers (CUT, SEW, NOTCH, GRAIN, FOLD, LABEL) and no blocks.
+in millimetres; the grain line is one LINE, its arrow heads two open
+polylines on the same layer. :func:`astm_document` is DXF R2000 with
+``$INSUNITS = 4`` (mm); the same content as DXF R12 (:func:`astm_r12_text`)
+suits Gerber and other strict R12 readers, which take the units from the style
+system text ``Units: METRIC`` and, where they read it, ``$MEASUREMENT`` = 1.
+:func:`plain_document` has named layers (CUT, SEW, NOTCH, GRAIN, FOLD, LABEL)
+and no blocks. Every variant sets its extents and limits (``$EXTMIN``,
+``$EXTMAX``, ``$LIMMIN``, ``$LIMMAX``) from the drawing.
 ezdxf is imported here only, so the rest of the core loads without it.
 """
 from __future__ import annotations
@@ -134,6 +137,10 @@ def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, si
             add_poly(blk, _mm(f), close=False, dxfattribs={"layer": L["mirror"]})
         g0, g1 = _mm(piece.grain)
         blk.add_line(g0, g1, dxfattribs={"layer": L["grain"]})
+        # the arrow heads as open polylines (barb, tip, barb) beside the one grain LINE, so that a
+        # reader taking the layer-7 LINE as the grain line still finds exactly one
+        for a in piece.arrows:
+            add_poly(blk, _mm(a), close=False, dxfattribs={"layer": L["grain"]})
         h = piece.text_height * 1000.0
         x, y = _mm(piece.label_at[None])[0]
         system = [f"Piece Name: {ascii_text(piece.name)}", f"Size: {ascii_text(size)}",
@@ -144,7 +151,36 @@ def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, si
             blk.add_text(text, dxfattribs={"layer": layer, "height": h, "insert": (x, y - (k + 1) * 1.5 * h)})
         msp.add_blockref(name, (float(off[0]) * 1000.0, float(off[1]) * 1000.0),
                          dxfattribs={"layer": L["boundary"]})
+    set_extents(doc)
     return doc
+
+
+def set_extents(doc) -> tuple:
+    """Set ``$EXTMIN``/``$EXTMAX`` and ``$LIMMIN``/``$LIMMAX`` from what the modelspace draws (mm).
+
+    Left unset they read +-1e20, and readers that scale "automatically" to
+    the extents (Inkscape) put every coordinate near 1e20.
+
+    Returns
+    -------
+    (lo, hi), two (x, y) tuples in mm.
+    """
+    from ezdxf import bbox
+
+    ext = bbox.extents(doc.modelspace(), fast=True)
+    lo, hi = (0.0, 0.0), (1.0, 1.0)
+    if ext.has_data:
+        lo = (round(float(ext.extmin.x), 6), round(float(ext.extmin.y), 6))
+        hi = (round(float(ext.extmax.x), 6), round(float(ext.extmax.y), 6))
+    # ezdxf copies the modelspace layout's extents and limits into the header when it writes
+    msp = doc.modelspace()
+    msp.reset_extents((lo[0], lo[1], 0.0), (hi[0], hi[1], 0.0))
+    msp.reset_limits(lo, hi)
+    doc.header["$EXTMIN"] = (lo[0], lo[1], 0.0)
+    doc.header["$EXTMAX"] = (hi[0], hi[1], 0.0)
+    doc.header["$LIMMIN"] = lo
+    doc.header["$LIMMAX"] = hi
+    return lo, hi
 
 
 @contextlib.contextmanager
@@ -170,13 +206,59 @@ def astm_text(pieces, layout, style, size) -> str:
 
 
 def astm_r12_text(pieces, layout, style, size) -> str:
-    """ASTM D6673 DXF R12 in the strict form Gerber readers accept (ezdxf gerber_D6673 add-on)."""
-    _ezdxf()
-    from ezdxf.addons import gerber_D6673
+    """ASTM D6673 DXF R12 in the strict form Gerber readers accept.
 
+    The sections Gerber's parser takes (ezdxf's ``gerber_D6673`` add-on: no
+    handles, only the pieces' BLOCK definitions, no ``$MODEL_SPACE`` or
+    ``$PAPER_SPACE`` blocks), plus what other readers need to open it at the
+    right size: a HEADER with ``$ACADVER`` AC1009, ``$MEASUREMENT`` = 1
+    (metric: R12 has no ``$INSUNITS``; Inkscape's "read units from file" and
+    LibreCAD read ``$MEASUREMENT``, R12 readers skip header variables they do not
+    know), ``$LUNITS`` = 2 (decimal), the extents and limits; and a TABLES section
+    with the LTYPE ``CONTINUOUS`` and one LAYER entry per ASTM layer.
+    """
+    ezdxf = _ezdxf()
+    from ezdxf.lldxf.tagwriter import TagWriter
+
+    doc = astm_document(pieces, layout, style, size, "R12")
+    lo, hi = doc.header["$EXTMIN"], doc.header["$EXTMAX"]
     stream = io.StringIO()
     with _fixed_metadata():
-        gerber_D6673.export_stream(astm_document(pieces, layout, style, size, "R12"), stream)
+        w = TagWriter(stream, write_handles=False, dxfversion=ezdxf.const.DXF12)
+        w.write_str("  0\nSECTION\n  2\nHEADER\n")
+        w.write_tag2(9, "$ACADVER")
+        w.write_tag2(1, "AC1009")
+        w.write_tag2(9, "$MEASUREMENT")
+        w.write_tag2(70, 1)
+        w.write_tag2(9, "$LUNITS")
+        w.write_tag2(70, 2)
+        for name, (x, y) in (("$EXTMIN", lo[:2]), ("$EXTMAX", hi[:2]), ("$LIMMIN", lo[:2]), ("$LIMMAX", hi[:2])):
+            w.write_tag2(9, name)
+            w.write_tag2(10, float(x))
+            w.write_tag2(20, float(y))
+            if name.startswith("$EXT"):
+                w.write_tag2(30, 0.0)
+        w.write_tag2(0, "ENDSEC")
+        w.write_str("  0\nSECTION\n  2\nTABLES\n")
+        w.write_str("  0\nTABLE\n  2\nLTYPE\n 70\n1\n")
+        w.write_str("  0\nLTYPE\n  2\nCONTINUOUS\n 70\n0\n  3\nSolid line\n 72\n65\n 73\n0\n 40\n0.0\n")
+        w.write_tag2(0, "ENDTAB")
+        layers = ["0"] + sorted(ASTM_LAYERS.values(), key=int)
+        w.write_str(f"  0\nTABLE\n  2\nLAYER\n 70\n{len(layers)}\n")
+        for name in layers:
+            w.write_str(f"  0\nLAYER\n  2\n{name}\n 70\n0\n 62\n7\n  6\nCONTINUOUS\n")
+        w.write_tag2(0, "ENDTAB")
+        w.write_tag2(0, "ENDSEC")
+        # the pieces' blocks only (Gerber refuses the layout blocks), then the entities
+        w.write_str("  0\nSECTION\n  2\nBLOCKS\n")
+        for record in doc.block_records:
+            if record.is_block_layout:
+                record.export_block_definition(w)
+        w.write_tag2(0, "ENDSEC")
+        w.write_str("  0\nSECTION\n  2\nENTITIES\n")
+        doc.modelspace().entity_space.export_dxf(w)
+        w.write_tag2(0, "ENDSEC")
+        w.write_tag2(0, "EOF")
     return stream.getvalue()
 
 
@@ -205,6 +287,7 @@ def plain_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str):
         x, y = _mm(piece.label_at[None], off)[0]
         for k, text in enumerate(piece.label):
             msp.add_text(text, dxfattribs={"layer": "LABEL", "height": h, "insert": (x, y - (k + 1) * 1.5 * h)})
+    set_extents(doc)
     return doc
 
 
