@@ -75,6 +75,7 @@ class EASE_OT_marker(EaseOperator):
     """Nest the pattern's pieces on the fabric width (a cutting-room marker), write it to the export folder and show it"""
     bl_idname = "ease.marker"
     bl_label = "Marker"
+    needs = ('pattern',)
 
     def run(self, context):
         from ..core import workflows as wf
