@@ -124,6 +124,20 @@ def _check_target(path: Path, folder: bool) -> None:
         raise EaseError(f"{path}: is a folder; expected a file name")
 
 
+def check_output(path: PathLike, folder: bool = True) -> None:
+    """Refuse, before any work, an output that cannot be written.
+
+    ``folder``: ``path`` is an output folder (else a file). Raises
+    :class:`EaseError` (one line naming ``path``) when it is a file where a
+    folder is expected or the reverse, lies under a file, or is read-only.
+    """
+    path = Path(os.path.realpath(path))
+    _check_target(path, folder)
+    probe = path if folder and path.is_dir() else next((p for p in path.parents if p.is_dir()), None)
+    if probe is not None and not os.access(probe, os.W_OK | os.X_OK):
+        raise EaseError(f"{path}: cannot write here: {probe} is read-only")
+
+
 def write_bytes(path: PathLike, data: bytes) -> Path:
     """Write ``data`` to ``path`` atomically (temporary file beside it, fsync, rename).
 
@@ -303,15 +317,32 @@ def _swap_entries(new: Path, final: Path, old: Path) -> None:
     Resumable: an entry already moved is not in ``new`` any more, and one whose
     old version was moved aside but the new one not yet in is just moved in.
     """
-    os.makedirs(old, exist_ok=True)
+    done: List[str] = []
     with _signals_held():
-        for name in sorted(os.listdir(new)):
-            dst = final / name
-            if os.path.lexists(dst):
-                os.rename(dst, old / name)
-            os.rename(new / name, dst)
+        try:
+            os.makedirs(old, exist_ok=True)
+            for name in sorted(os.listdir(new)):
+                dst = final / name
+                if os.path.lexists(dst):
+                    os.rename(dst, old / name)
+                os.rename(new / name, dst)
+                done.append(name)
+        except OSError:
+            # back to the old folder; if even that fails, both stay for the next run to finish
+            _undo_swap(done, new, final, old)
+            _remove(old)
+            _remove(new)
+            raise
     _remove(old)
     _remove(new)
+
+
+def _undo_swap(done: List[str], new: Path, final: Path, old: Path) -> None:
+    """Put back the entries :func:`_swap_entries` moved before it failed (the old folder again)."""
+    for name in done:
+        os.rename(final / name, new / name)
+    for name in os.listdir(old) if old.is_dir() else ():
+        os.rename(old / name, final / name)
 
 
 def _in_place(final: Path) -> bool:
@@ -374,6 +405,7 @@ def _commit(tmp: Path, final: Path, tag: str) -> None:
     if final.is_dir():
         _carry_over(final, tmp)
     os.chmod(tmp, old_mode)
+    aside = None
     with _signals_held():
         if not final.is_dir():
             os.rename(tmp, final)
@@ -385,10 +417,12 @@ def _commit(tmp: Path, final: Path, tag: str) -> None:
             except OSError:
                 os.rename(aside, final)
                 raise
-            os.rename(aside, tmp)
         with _lock:
             _committed.append(final)
-    # tmp now holds the old folder; the caller's finally removes it
+    # the old folder is at tmp (exchanged) or aside (two renames): removed here or by
+    # the caller's finally, else by the next run when this process is killed first
+    if aside is not None:
+        _remove(aside)
 
 
 def _commit_in_place(tmp: Path, final: Path, tag: str) -> None:

@@ -4,8 +4,11 @@ Each module here defines ``add_parser(subparsers)``, which adds its
 subcommands and sets ``func`` (taking the parsed args, returning an exit
 code). The modules parse and check options and print; the work is done by
 :mod:`core.workflows` and the stage packages. Errors of the core
-(:class:`core.errors.EaseError`) print as one clear line and exit with status
-2; nothing half-written is left behind.
+(:class:`core.errors.EaseError`) and of the system (:class:`OSError`: a file
+that cannot be read or written) print as one clear line and exit with status
+2. ``--out`` is checked before any work; an output folder is all-old or
+all-new (:func:`core.fileio.output_dir`), and an interrupted command says
+which output folders it did complete.
 """
 from __future__ import annotations
 
@@ -42,9 +45,12 @@ def main(argv=None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 1
-    from ..fileio import committed_outputs
+    from ..fileio import check_output, committed_outputs
     before = len(committed_outputs())
     try:
+        if getattr(args, "out", None) is not None:
+            # an output that cannot be written is refused before any work (`ease body` writes one file)
+            check_output(args.out, folder=not (args.command == "body" and not getattr(args, "all", False)))
         return int(args.func(args) or 0)
     except EaseError as exc:
         print(f"ease {args.command}: error: {exc}", file=sys.stderr)

@@ -75,9 +75,10 @@ def _write(args, run) -> int:
 def _cmd_pattern(args) -> int:
     from .. import workflows as wf
     from ..progress import sub
+    options = _solver_options(args)
     prog = console_progress(args)
     prep = _prepare(args, prog)
-    return _write(args, wf.reference(prep, **_solver_options(args), progress=sub(prog, 0.4, 0.95)))
+    return _write(args, wf.reference(prep, **options, progress=sub(prog, 0.4, 0.95)))
 
 
 def _cmd_transfer(args) -> int:
@@ -85,9 +86,10 @@ def _cmd_transfer(args) -> int:
     from ..body.sizes import check_size
     from ..progress import sub
     size = check_size(args.size)
+    options = _solver_options(args)
     prog = console_progress(args)
     prep = _prepare(args, prog)
-    return _write(args, wf.transfer(prep, size, **_solver_options(args), progress=sub(prog, 0.4, 0.95)))
+    return _write(args, wf.transfer(prep, size, **options, progress=sub(prog, 0.4, 0.95)))
 
 
 def _cmd_adapt(args) -> int:
@@ -96,7 +98,8 @@ def _cmd_adapt(args) -> int:
     for name, v in (("--tolerance", args.tolerance), ("--tolerance-warp", args.tolerance_warp)):
         if v is not None and not v >= 1.0:
             raise PatternError(f"{name}: a stretch tolerance must be >= 1 (1.1 = 10 % stretch), got {v}")
+    options = _solver_options(args)
     prog = console_progress(args)
     prep = _prepare(args, prog)
     return _write(args, wf.adapt(prep, args.pose, eps_weft=args.tolerance, eps_warp=args.tolerance_warp,
-                                 **_solver_options(args), progress=sub(prog, 0.4, 0.95)))
+                                 **options, progress=sub(prog, 0.4, 0.95)))
