@@ -163,14 +163,16 @@ def _ids(value, where, n, what="vertex ids"):
 
 
 def _id_lists(obj, key, where, n):
-    seqs = obj.get(key, []) or []
+    seqs = obj.get(key)
+    seqs = [] if seqs is None else seqs
     if not isinstance(seqs, list):
         raise PatternError(f"{where}.{key}: expected a list of vertex id lists")
     return [_ids(seq, f"{where}.{key}[{i}]", n) for i, seq in enumerate(seqs)]
 
 
 def _mapping(obj, key):
-    value = obj.get(key) or {}
+    value = obj.get(key)
+    value = {} if value is None else value
     if not isinstance(value, dict):
         raise PatternError(f"{key}: expected an object, got {type(value).__name__}")
     return value
@@ -262,7 +264,8 @@ def pattern_from_json(obj: dict) -> Pattern:
         _ids(p.vertex_ids, f"panels[{k}] ({p.name}).vertex_ids", n_garment,
              "global vertex ids (at most one per panel vertex of the file)")
     by_name = {p.name: p for p in panels}
-    seams_obj = obj.get("seams", []) or []
+    seams_obj = obj.get("seams")
+    seams_obj = [] if seams_obj is None else seams_obj
     if not isinstance(seams_obj, list):
         raise PatternError("seams: expected a list")
     seams = [_seam(k, so, by_name) for k, so in enumerate(seams_obj)]
