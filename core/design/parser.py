@@ -357,8 +357,13 @@ def load_design(source: Union[str, Path, dict, Design]) -> Design:
         raise DesignError("", f"{where}: nested more than {MAX_DEPTH} levels deep") from None
     except ValueError as exc:   # e.g. an integer of more than 4300 digits
         raise DesignError("", f"{where}: not valid JSON ({str(exc)[:80]})") from None
-    check_depth(obj)
-    return parse_design(obj)
+    try:
+        check_depth(obj)
+        return parse_design(obj)
+    except DesignError as exc:
+        if where != "<string>":   # name the file too; path and message stay as they are
+            exc.args = (f"{where}: {exc}",)
+        raise
 
 
 def save_design(design: Design, path: Union[str, Path]) -> Path:
