@@ -22,7 +22,9 @@ def write_obj(path, vertices: np.ndarray, faces: np.ndarray, comment: str = "") 
     faces : (F, 3) int.
     comment : lines written as ``#`` comments at the top.
     """
-    lines = [f"# {line}" for line in comment.splitlines()] + ["# EASE body, metres, +Z up, facing -Y"]
+    lines = [f"# {line}" for line in comment.splitlines()] + ["# EASE body",
+        "# frame: metres, +Z up, the body facing -Y, +X the body's left (EASE/Blender frame; "
+        "`ease export --with-body` writes the same body in this frame)"]
     lines += [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in vertices]
     lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces]
     return write_text(path, "\n".join(lines) + "\n")

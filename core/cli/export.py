@@ -1,7 +1,6 @@
 """``ease export``: cutting-room files (SVG, DXF, PDF) and the draped garment (GLB, OBJ)."""
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
@@ -10,15 +9,35 @@ from .common import add_quiet, console_progress, print_files, subcommand
 FORMATS_HELP = "svg,dxf,pdf,glb,obj or all"
 
 
-def _metres(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a width in metres (e.g. 0.01), got {text!r}") from None
-    return v
+# widths in metres an option may take (the range resolve_allowance accepts for the design's fields)
+ALLOWANCE_RANGE = (0.0, 0.1)
+
+
+def _options(args) -> None:
+    """Numeric options as numbers, each checked against its range before any work (one-line ExportError)."""
+    from ..errors import ExportError
+    from ..export.notches import check_notch_spacing
+
+    for name in ("allowance", "hem"):
+        text = getattr(args, name)
+        if text is None:
+            continue
+        try:
+            v = float(text)
+        except ValueError:
+            v = None
+        lo, hi = ALLOWANCE_RANGE
+        if v is None or not lo <= v <= hi:
+            raise ExportError(f"--{name}: expected a width in metres in [{lo:g}, {hi:g}] (e.g. 0.01), got {text!r}")
+        setattr(args, name, v)
+    if args.notch_spacing is not None:
+        args.notch_spacing = check_notch_spacing(args.notch_spacing, "--notch-spacing")
+    if args.up not in ("y", "z"):
+        raise ExportError(f"--up: expected y or z, got {args.up!r}")
 
 
 def _run(args) -> int:
+    _options(args)
     if args.sizes is not None:      # the graded nest of a design: all sizes in one file
         from .graded import run_graded
         return run_graded(args)
@@ -45,10 +64,18 @@ def _run(args) -> int:
                                   f"or leave glb/obj out of --format")
             drape_dir = guess
         drape = read_drape(drape_dir)
+    body = None
+    if args.with_body and ("glb" in formats or "obj" in formats):
+        from ..body.instance import spec_instance
+        body = spec_instance(pattern.body or {})   # the body the pattern was made on, in the drape's frame
     warnings: list = []
-    files = wf.export(pattern, args.out, formats=formats, allowance=args.allowance, hem=args.hem,
-                      notch_spacing=args.notch_spacing, drape=drape, strict=not args.lenient,
-                      warnings=warnings, progress=console_progress(args))
+    # through core.export directly (not workflows.export) while that has no up/body parameters
+    from ..export import export_pattern
+    table = wf.export_allowance(pattern, args.allowance, args.hem)
+    positions, faces = drape if drape is not None else (None, None)
+    files = export_pattern(pattern, args.out, formats=formats, allowance=table, drape_positions=positions,
+                           drape_faces=faces, notch_spacing=args.notch_spacing, strict=not args.lenient,
+                           warnings=warnings, progress=console_progress(args), up=args.up, body=body)
     for w in warnings:
         print(f"ease export: warning: {w}", file=sys.stderr)
     print_files(files)
@@ -69,12 +96,19 @@ def add_parser(sub) -> None:
                    help=f"comma-separated formats: {FORMATS_HELP} (default: svg,dxf,pdf, plus glb,obj when a "
                         f"drape is given or found)")
     p.add_argument("--out", required=True, help="output folder (filled atomically)")
-    p.add_argument("--allowance", type=_metres, default=None,
+    p.add_argument("--allowance", default=None,
                    help="seam allowance in metres for every seam (default: the design's, else 0.01)")
-    p.add_argument("--hem", type=_metres, default=None,
+    p.add_argument("--hem", default=None,
                    help="hem allowance in metres (default: the design's, else 0.02)")
-    p.add_argument("--notch-spacing", type=_metres, default=None,
-                   help="metres between notches along a seam, besides the seam ends (default 0.10)")
+    p.add_argument("--notch-spacing", default=None,
+                   help="metres between notches along a seam, besides the seam ends (default 0.10; 0: the seam "
+                        "ends only; else 0.005 to 10)")
+    p.add_argument("--up", default="z", metavar="z|y",
+                   help="up axis of garment.obj: z (default; the frame of the body OBJs and drape/garment.obj, "
+                        "metres, body facing -Y) or y; garment.glb is always +Y up, as glTF requires")
+    p.add_argument("--with-body", action="store_true",
+                   help="write the body the pattern was made on (its shape and pose) beside the garment in "
+                        "garment.glb and garment.obj, in the same frame")
     p.add_argument("--drape", default=None,
                    help="folder with drape.npz from `ease drape` (default: PATTERN_DIR/../drape when present); "
                         "needed for glb/obj")

@@ -19,7 +19,9 @@ FILES = ("garment.obj", "garment.ply", "drape.npz", "drape_report.json", "previe
 def obj_text(result) -> str:
     """Wavefront OBJ: vertex k is global garment vertex id k (1-based in the file); one group per garment."""
     out = io.StringIO()
-    out.write("# EASE drape: vertex k = global garment vertex id k-1; metres, +Z up\n")
+    out.write("# EASE drape: vertex k = global garment vertex id k-1\n")
+    # the frame of every 3D file of the project (body OBJs, ease export garment.obj by default)
+    out.write("# frame: metres, +Z up, the body facing -Y, +X the body's left (EASE/Blender frame), as draped\n")
     np.savetxt(out, result.positions, fmt="v %.6f %.6f %.6f")
     for g, name in enumerate(result.garment_names):
         out.write(f"g {name}\n")

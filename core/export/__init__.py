@@ -44,8 +44,8 @@ from ..geom.polyline import polyline_length
 from .allowance import DEFAULT_ALLOWANCE, DEFAULT_HEM, resolve_allowance
 from .layout import LAYOUT_MARGIN, SHEET_WIDTH, layout_pieces
 from .notches import DEFAULT_NOTCH_SPACING
-from .pieces import PieceDrawing, build_pieces
-from .validate import validate_drape, validate_pattern
+from .pieces import PieceDrawing, build_pieces, resolve_notch_spacing
+from .validate import validate_body, validate_drape, validate_pattern
 
 FORMATS = ("svg", "dxf", "pdf", "glb", "obj")
 
@@ -54,22 +54,23 @@ __all__ = ["export_pattern", "FORMATS", "validate_pattern", "build_pieces", "lay
 
 
 def parse_formats(formats: Union[str, Iterable[str]]) -> List[str]:
-    """Normalised, de-duplicated format list; ``"all"`` means every format."""
+    """Normalised, de-duplicated format list; ``"all"`` means every format.
+
+    Every entry is checked, ``"all"`` included among others: an unknown one
+    is an ExportError naming it.
+    """
     if isinstance(formats, str):
         formats = formats.split(",")
-    out, every = [], False
+    out = []
     for f in formats:
         f = str(f).strip().lower()
         if not f:
             continue
-        if f == "all":   # every format, but the other entries are still checked (all,bogus is an error)
-            every = True
-        elif f not in FORMATS:
+        if f != "all" and f not in FORMATS:
             raise ExportError(f"format {f!r}: expected some of {', '.join(FORMATS)} (or all)")
-        elif f not in out:
-            out.append(f)
-    if every:
-        return list(FORMATS)
+        for g in (FORMATS if f == "all" else (f,)):
+            if g not in out:
+                out.append(g)
     if not out:
         raise ExportError(f"formats: none given; expected some of {', '.join(FORMATS)}")
     return out
@@ -78,7 +79,8 @@ def parse_formats(formats: Union[str, Iterable[str]]) -> List[str]:
 def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb"), allowance=None,
                    drape_positions: Optional[np.ndarray] = None, progress=None,
                    notch_spacing: Optional[float] = None, strict: bool = True,
-                   warnings: Optional[list] = None, drape_faces: Optional[np.ndarray] = None) -> List[Path]:
+                   warnings: Optional[list] = None, drape_faces: Optional[np.ndarray] = None,
+                   up: str = "z", body: Optional[tuple] = None) -> List[Path]:
     """Write the pattern's cutting-room files and the draped garment.
 
     Parameters
@@ -102,6 +104,11 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
 
     drape_faces : (F, 3) int or None, the drape's triangles (``drape.npz["faces"]``):
         when given they must be the pattern's (a drape of another pattern is refused).
+    up : ``"z"`` (default) or ``"y"``: the up axis of ``garment.obj`` (see
+        :mod:`core.export.mesh`); ``garment.glb`` is always +Y up, as glTF requires.
+    body : None or (vertices (V, 3) float m, faces (F, 3) int), the body in the
+        drape's frame (:func:`core.body.instance.spec_instance` of ``pattern.body``),
+        written beside the garment in the GLB and OBJ.
 
     Returns
     -------
@@ -113,11 +120,19 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
     formats or the drape are invalid.
     """
     formats = parse_formats(formats)
-    found = validate_pattern(pattern, strict=strict)
+    if up not in ("y", "z"):
+        raise ExportError(f"up: expected 'y' or 'z', got {up!r}")
+    # the options and the design's export fields first: a bad value costs no work and no memory
+    if not isinstance(pattern, Pattern):
+        raise ExportError(f"pattern: expected a core.pattern.types.Pattern, got {type(pattern).__name__}")
+    notch_spacing = resolve_notch_spacing(notch_spacing, pattern)
     widths = resolve_allowance(allowance, pattern)
+    found = validate_pattern(pattern, strict=strict)
     positions = None
     if "glb" in formats or "obj" in formats:
         positions = validate_drape(pattern, drape_positions, drape_faces)
+        if body is not None:
+            body = validate_body(body)
     report(progress, 0.0, "building pattern pieces")
     pieces = build_pieces(pattern, widths, notch_spacing, progress=sub(progress, 0.0, 0.3),
                           warnings=None if strict else found)
@@ -160,10 +175,13 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
         elif fmt in ("glb", "obj"):
             from . import mesh
             meshes = mesh.piece_meshes(pattern, positions, [p.rotation for p in pieces])
+            body_mesh = None if body is None else mesh.body_mesh(*body)
             if fmt == "glb":
-                files["garment.glb"] = mesh.glb_bytes(meshes)
+                files["garment.glb"] = mesh.glb_bytes(meshes, body=body_mesh)
             else:
-                files["garment.obj"] = mesh.obj_text(meshes, title).encode("utf-8")
+                files["garment.obj"] = mesh.obj_text(meshes, title, up=up, body=body_mesh).encode("utf-8")
+            summary["frame"] = {"garment.glb": mesh.FRAME_Y, "garment.obj": mesh.FRAME_Y if up == "y" else mesh.FRAME_Z,
+                                "body": body is not None}
     summary["files"] = sorted(files)
     files["export.json"] = (dumps_json(summary) + "\n").encode("utf-8")
     report(progress, 0.95, "writing files")

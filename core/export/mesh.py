@@ -7,11 +7,21 @@ grain points along +v (the frame of the 2D exports). A fabric texture of 1 m
 repeat then follows the grain on every piece. Seam vertices appear once per
 piece (their uv differ).
 
-Frames: the core is +Z up, -Y forward (Blender); glTF is +Y up, +Z forward,
-so positions and normals are written as ``(x, z, -y)`` (Blender's glTF and
-OBJ importers turn them back). glTF texture coordinates have v pointing down
-from the image top, so ``TEXCOORD_0 = (u, 1 - v)``; importers (Blender
-included) flip it back to the pattern's ``(u, v)``. OBJ ``vt`` is ``(u, v)``.
+Frames, one convention for every 3D file of the project: metres, the garment
+where it was draped (the drape's own coordinates, the body's frame: +Z up,
+the body facing -Y, +X the body's left, as in Blender). The body OBJs of
+``ease body``, ``drape/garment.obj`` and the exported ``garment.obj`` (``up="z"``,
+the default) are written in it unchanged. glTF requires +Y up, so
+``garment.glb`` is always written as ``(x, z, -y)`` (Blender's glTF importer
+turns it back); ``up="y"`` writes the OBJ that way too, for tools that assume
+OBJ is Y-up. Each file states its frame (OBJ header comment, glTF
+``asset.extras``). With ``body`` the body the pattern was made on (its shape
+and pose) is written beside the garment in the same frame: node/object
+``body``.
+
+glTF texture coordinates have v pointing down from the image top, so
+``TEXCOORD_0 = (u, 1 - v)``; importers (Blender included) flip it back to the
+pattern's ``(u, v)``. OBJ ``vt`` is ``(u, v)``.
 """
 from __future__ import annotations
 
@@ -46,10 +56,27 @@ def smooth_normals(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return vn
 
 
+UP_AXES = ("y", "z")
+FRAME_Z = "metres, +Z up, the body facing -Y, +X the body's left (EASE/Blender frame), as draped"
+FRAME_Y = "metres, +Y up, the body facing +Z, +X the body's left (glTF frame: EASE (x, y, z) -> (x, z, -y)), as draped"
+
+
 def to_y_up(v: np.ndarray) -> np.ndarray:
     """(x, y, z) in the core's Z-up frame -> (x, z, -y) in glTF/OBJ Y-up."""
     v = np.asarray(v, float)
     return np.column_stack([v[:, 0], v[:, 2], -v[:, 1]])
+
+
+def to_frame(v: np.ndarray, up: str) -> np.ndarray:
+    """Core-frame points or normals (n, 3) in the file frame ``up`` (``"z"``: unchanged, ``"y"``: :func:`to_y_up`)."""
+    return to_y_up(v) if up == "y" else np.asarray(v, float)
+
+
+def body_mesh(vertices: np.ndarray, faces: np.ndarray):
+    """The body as a mesh for :func:`glb_bytes` / :func:`obj_text`: ("body", positions, normals, faces), core frame."""
+    v = np.asarray(vertices, float)
+    f = np.asarray(faces, np.int64)
+    return ("body", v, smooth_normals(v, f), f)
 
 
 def piece_meshes(pattern: Pattern, positions: np.ndarray, rotations: Sequence[np.ndarray]):
@@ -63,11 +90,12 @@ def piece_meshes(pattern: Pattern, positions: np.ndarray, rotations: Sequence[np
     return out
 
 
-def glb_bytes(meshes, generator: str = "EASE") -> bytes:
-    """A GLB file from :func:`piece_meshes` output.
+def glb_bytes(meshes, generator: str = "EASE", body=None) -> bytes:
+    """A GLB file from :func:`piece_meshes` output (+Y up, as glTF requires).
 
     One node + mesh + primitive per piece, grouped under one node per garment;
-    float32 attributes, uint32 indices, one buffer.
+    float32 attributes, uint32 indices, one buffer. ``body``: :func:`body_mesh`
+    output or None; written as the node ``body`` with its own material.
     """
     blob = bytearray()
     views, accessors, gl_meshes, nodes = [], [], [], []
@@ -108,15 +136,27 @@ def glb_bytes(meshes, generator: str = "EASE") -> bytes:
     for garment, children in garments.items():
         nodes.append({"name": garment, "children": children})
         roots.append(len(nodes) - 1)
+    if body is not None:
+        name, xyz, nrm, faces = body
+        attrs = {"POSITION": add_accessor(to_y_up(xyz).astype(np.float32), "VEC3", 34962, minmax=True),
+                 "NORMAL": add_accessor(to_y_up(nrm).astype(np.float32), "VEC3", 34962)}
+        idx = add_accessor(faces.reshape(-1).astype(np.uint32), "SCALAR", 34963)
+        gl_meshes.append({"name": name, "primitives": [{"attributes": attrs, "indices": idx, "mode": 4,
+                                                        "material": 1}]})
+        nodes.append({"name": name, "mesh": len(gl_meshes) - 1})
+        roots.append(len(nodes) - 1)
     while len(blob) % 4:
         blob.append(0)
-    doc = {"asset": {"version": "2.0", "generator": generator},
+    doc = {"asset": {"version": "2.0", "generator": generator, "extras": {"frame": FRAME_Y}},
            "scene": 0, "scenes": [{"name": "garment", "nodes": roots}], "nodes": nodes, "meshes": gl_meshes,
            "materials": [{"name": "fabric", "doubleSided": True,
                           "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1.0],
-                                                   "metallicFactor": 0.0, "roughnessFactor": 0.9}}],
+                                                   "metallicFactor": 0.0, "roughnessFactor": 0.9}},
+                          {"name": "body", "pbrMetallicRoughness": {"baseColorFactor": [0.93, 0.78, 0.66, 1.0],
+                                                                    "metallicFactor": 0.0, "roughnessFactor": 0.8}}],
            "accessors": accessors, "bufferViews": views, "buffers": [{"byteLength": len(blob)}]}
-    js = json.dumps(doc, separators=(",", ":")).encode("utf-8")
+    # glTF JSON has no Infinity or NaN: refuse rather than write an invalid file
+    js = json.dumps(doc, separators=(",", ":"), allow_nan=False).encode("utf-8")
     js += b" " * ((4 - len(js) % 4) % 4)
     total = 12 + 8 + len(js) + 8 + len(blob)
     return (struct.pack("<III", GLB_MAGIC, 2, total) + struct.pack("<II", len(js), CHUNK_JSON) + js
@@ -152,16 +192,26 @@ def glb_accessor(doc: dict, binary: bytes, index: int) -> np.ndarray:
     return arr.reshape(acc["count"], comps) if comps > 1 else arr
 
 
-def obj_text(meshes, style: str = "garment") -> str:
-    """Wavefront OBJ (Y-up, metres) with ``vt`` from the pattern and ``vn``; one ``o`` per piece."""
-    lines: List[str] = [f"# EASE draped garment: {style}", "# units: metres, +Y up; vt = pattern uv in metres"]
+def obj_text(meshes, style: str = "garment", up: str = "z", body=None) -> str:
+    """Wavefront OBJ (metres, ``up`` = ``"z"``: the core frame, or ``"y"``) with ``vt`` from the pattern and ``vn``;
+    one ``o`` per piece, and ``o body`` (no ``vt``) when ``body`` (:func:`body_mesh` output) is given."""
+    frame = FRAME_Y if up == "y" else FRAME_Z
+    lines: List[str] = [f"# EASE draped garment: {style}", f"# frame: {frame}",
+                        "# vt = pattern uv in metres, grain along +v"]
     base = 1
     for name, garment, xyz, nrm, uv, faces in meshes:
         lines.append(f"o {name.replace(' ', '_')}")
-        lines.extend(f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in to_y_up(xyz))
+        lines.extend(f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in to_frame(xyz, up))
         lines.extend(f"vt {u:.6f} {v:.6f}" for u, v in uv)
-        lines.extend(f"vn {x:.6f} {y:.6f} {z:.6f}" for x, y, z in to_y_up(nrm))
+        lines.extend(f"vn {x:.6f} {y:.6f} {z:.6f}" for x, y, z in to_frame(nrm, up))
         f = faces + base
         lines.extend(f"f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}" for a, b, c in f)
         base += len(xyz)
+    if body is not None:
+        name, xyz, nrm, faces = body
+        lines.append(f"o {name}")
+        lines.extend(f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in to_frame(xyz, up))
+        lines.extend(f"vn {x:.6f} {y:.6f} {z:.6f}" for x, y, z in to_frame(nrm, up))
+        f = faces + base
+        lines.extend(f"f {a}//{a} {b}//{b} {c}//{c}" for a, b, c in f)
     return "\n".join(lines) + "\n"

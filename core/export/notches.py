@@ -18,6 +18,27 @@ from ..pattern.types import Pattern, PatternPanel
 from .boundary import seam_sides
 
 NOTCH_LENGTH = 0.006       # m, slit notch cut into the allowance
+# notch spacing bounds, m: 0 means notches at the seam ends only; below 5 mm notches would merge
+# into one cut (and a seam of 1 m would need 10^9 of them at 1e-9); above 10 m no seam has one
+MIN_NOTCH_SPACING = 0.005
+MAX_NOTCH_SPACING = 10.0
+
+
+def check_notch_spacing(value, where: str = "notch_spacing") -> float:
+    """``value`` as metres between notches, or ExportError naming ``where``.
+
+    Accepted: 0 (the seam ends only) or a finite number in
+    [``MIN_NOTCH_SPACING``, ``MAX_NOTCH_SPACING``] m.
+    """
+    from ..errors import ExportError
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ExportError(f"{where}: expected metres between notches, got {value!r}") from None
+    if isinstance(value, bool) or not (v == 0 or MIN_NOTCH_SPACING <= v <= MAX_NOTCH_SPACING):
+        raise ExportError(f"{where}: expected 0 (notches at the seam ends only) or {MIN_NOTCH_SPACING * 1000:g} mm "
+                          f"to {MAX_NOTCH_SPACING:g} m between notches, got {value!r}")
+    return v
 
 
 @dataclass

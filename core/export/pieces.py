@@ -14,7 +14,6 @@ pattern's.
 """
 from __future__ import annotations
 
-import math
 import unicodedata
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional
@@ -28,7 +27,7 @@ from ..pattern.types import Pattern, PatternPanel
 from ..progress import report
 from .allowance import allowance_text, edge_allowances, fold_ids, piece_cut_lines, resolve_allowance
 from .boundary import edge_table, piece_loops
-from .notches import DEFAULT_NOTCH_SPACING, Notch, piece_notches
+from .notches import DEFAULT_NOTCH_SPACING, Notch, check_notch_spacing, piece_notches
 
 CHAR_WIDTH = 0.6   # Helvetica's mean advance is ~0.55 em: a safe width estimate per character
 TEXT_MIN = 0.0025  # m, smallest label text
@@ -186,6 +185,15 @@ def build_piece(pattern: Pattern, panel: PatternPanel, widths: Dict[str, float],
     return piece
 
 
+def resolve_notch_spacing(notch_spacing, pattern: Pattern) -> float:
+    """The caller's notch spacing (m), else the design's (``materials.export.notch_spacing``), else 10 cm;
+    checked by :func:`core.export.notches.check_notch_spacing` (ExportError naming the option or the field)."""
+    if notch_spacing is not None:
+        return check_notch_spacing(notch_spacing)
+    value = ((pattern.materials or {}).get("export") or {}).get("notch_spacing", DEFAULT_NOTCH_SPACING)
+    return check_notch_spacing(value, "pattern.json materials.export.notch_spacing")
+
+
 def build_pieces(pattern: Pattern, allowance=None, notch_spacing: Optional[float] = None,
                  progress=None, warnings: Optional[List[str]] = None) -> List[PieceDrawing]:
     """:func:`build_piece` for every piece of a validated pattern, in pattern order.
@@ -201,14 +209,7 @@ def build_pieces(pattern: Pattern, allowance=None, notch_spacing: Optional[float
         the problems instead (lenient export).
     """
     widths = resolve_allowance(allowance, pattern)
-    if notch_spacing is None:
-        notch_spacing = ((pattern.materials or {}).get("export") or {}).get("notch_spacing", DEFAULT_NOTCH_SPACING)
-    try:
-        notch_spacing = float(notch_spacing)
-    except (TypeError, ValueError):
-        raise ExportError(f"notch_spacing: expected metres, got {notch_spacing!r}") from None
-    if not math.isfinite(notch_spacing) or notch_spacing < 0:
-        raise ExportError(f"notch_spacing: expected a distance >= 0 m, got {notch_spacing!r}")
+    notch_spacing = resolve_notch_spacing(notch_spacing, pattern)
     out = []
     for i, panel in enumerate(pattern.panels):
         report(progress, i / max(len(pattern.panels), 1), f"piece {panel.name}")

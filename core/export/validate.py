@@ -20,6 +20,8 @@ MIN_AREA = 1e-6  # m^2 (1 cm^2): smaller pieces are degenerate for a cutting roo
 # exported with a warning; larger tangles are errors.
 TANGLE_AREA = 1e-4
 TANGLE_FRACTION = 0.005
+MAX_COORDINATE = 1000.0  # m: a draped vertex farther than this from the origin is a diverged drape (and 1e308
+                         # would be infinite in the GLB's float32)
 
 
 def _ids(a, n: int, where: str) -> np.ndarray:
@@ -166,6 +168,32 @@ def validate_drape(pattern: Pattern, positions: Optional[np.ndarray],
             raise ExportError(f"drape: its {len(theirs)} triangles are not this pattern's {len(mine)} "
                               f"(was it draped from another pattern? drape this one again)")
     used = np.concatenate([np.asarray(panel.vertex_ids, int) for panel in pattern.panels])
-    if not np.all(np.isfinite(p[used])):
-        raise ExportError("drape.positions: holds NaN or infinite values (the drape diverged?)")
+    q = p[used].astype(float)
+    if not np.all(np.isfinite(q)):
+        bad = int(used[np.argmax(~np.all(np.isfinite(q), axis=1))])
+        raise ExportError(f"drape.positions: vertex {bad} holds NaN or infinite values "
+                          f"({p[bad].tolist()}); the drape diverged? "
+                          f"drape the pattern again")
+    far = np.abs(q).max(axis=1)
+    if far.max() > MAX_COORDINATE:
+        bad = int(used[np.argmax(far)])
+        raise ExportError(f"drape.positions: vertex {bad} lies {far.max():.3g} m from the origin (expected within "
+                          f"{MAX_COORDINATE:g} m: a body is about 2 m tall; the drape diverged?)")
     return p.astype(float)
+
+
+def validate_body(body) -> tuple:
+    """The body to export beside the garment: (vertices (V, 3) float m, faces (F, 3) int64), or ExportError."""
+    try:
+        v, f = body
+        v = np.asarray(v, float)
+        f = np.asarray(f)
+    except (TypeError, ValueError):
+        raise ExportError("body: expected (vertices (V, 3), faces (F, 3))") from None
+    if v.ndim != 2 or v.shape[1] != 3 or not len(v) or not np.all(np.isfinite(v)) or \
+            np.abs(v).max() > MAX_COORDINATE:
+        raise ExportError(f"body.vertices: expected (V, 3) finite metres within {MAX_COORDINATE:g} m, got shape "
+                          f"{v.shape}")
+    if f.ndim != 2 or f.shape[1] != 3 or f.dtype.kind not in "iu" or (f.size and (f.min() < 0 or f.max() >= len(v))):
+        raise ExportError(f"body.faces: expected (F, 3) vertex ids in [0, {len(v)}), got shape {f.shape}")
+    return v, f.astype(np.int64)
