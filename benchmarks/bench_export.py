@@ -13,6 +13,7 @@ from __future__ import annotations
 import importlib.util
 import io
 import re
+import sys
 import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -21,14 +22,20 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 SYNTHETIC = HERE.parent / "tests" / "helpers" / "synthetic_pattern.py"
+DXF_READER = HERE.parent / "tests" / "helpers" / "dxf_reader.py"   # the tests' second, ezdxf-independent reader
+
+
+def _load(path: Path, name: str):
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module   # dataclasses look their module up while the class is made
+    spec.loader.exec_module(module)
+    return module
 
 
 def _two_panels():
     """The synthetic tube of the pattern tests, loaded by file path (test helpers are no package)."""
-    spec = importlib.util.spec_from_file_location("ease_bench_synthetic_pattern", SYNTHETIC)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.two_panels()
+    return _load(SYNTHETIC, "ease_bench_synthetic_pattern").two_panels()
 
 
 def _patterns():
@@ -167,16 +174,24 @@ def run(out_dir, quick: bool = False) -> dict:
         row["warnings"] = len(warnings)
         lay = layout_pieces([p.bbox for p in pieces], 0.88, 0.02)
         lay_pdf = layout_pieces([p.bbox for p in pieces], 0.88, 0.02, reserve=pdf.TEST_RESERVE)
+        t = time.perf_counter()
+        sheets = {paper: pdf.print_sheet(pieces, paper) for paper in ("a4", "letter")}
+        row["pdf_nest_ms"] = (time.perf_counter() - t) * 1000 / 2
         texts = {}
         for fmt, fn in (("svg", lambda: svg.svg_document(pieces, lay, pattern.style)),
                         ("dxf", lambda: dxf.astm_text(pieces, lay, pattern.style, "M")),
                         ("dxf_r12", lambda: dxf.astm_r12_text(pieces, lay, pattern.style, "M")),
-                        ("pdf_a4", lambda: pdf.tiled_pdf(pieces, lay_pdf, "a4", pattern.style)),
+                        ("dxf_plain", lambda: dxf.plain_text(pieces, lay, pattern.style)),
+                        ("pdf_a4", lambda: pdf.tiled_pdf(pieces, sheets["a4"], "a4", pattern.style)),
+                        ("pdf_letter", lambda: pdf.tiled_pdf(pieces, sheets["letter"], "letter", pattern.style)),
                         ("pdf_plotter", lambda: pdf.plotter_pdf(pieces, lay_pdf, pattern.style))):
             t = time.perf_counter()
             texts[fmt] = fn()
             row[f"{fmt}_ms"] = (time.perf_counter() - t) * 1000
-        row["a4_pages"] = int(np.prod(pdf.tile_grid(lay_pdf.size, "a4")[:2]))
+        for paper, lay_p in sheets.items():
+            row[f"{paper}_pages"], row[f"{paper}_empty_pages"] = _page_counts(pieces, lay_p, paper,
+                                                                              texts[f"pdf_{paper}"])
+        row.update(_two_readers(pattern, pieces, texts))
         rects = re.findall(rb"(-?[\d.]+) (-?[\d.]+) re", _page_one(texts["pdf_a4"]))
         squares = [float(w) for w, h in rects if abs(float(w) - float(h)) < 1e-3 and float(w) > 100]
         row["pdf_test_square_mm"] = squares[0] * 25.4 / 72 if squares else None
@@ -190,7 +205,8 @@ def run(out_dir, quick: bool = False) -> dict:
              "corners (allowance squared or mitred so sewn corners close) or where a 2 cm hem meets a 1 cm seam: "
              "there the nearest cut line is the neighbour's.", ""]
     keys = ["pieces", "boundary_vertices", "warnings", "build_ms", "svg_ms", "dxf_ms", "dxf_r12_ms", "pdf_a4_ms",
-            "pdf_plotter_ms", "a4_pages", "pdf_test_square_mm", "allowance_err_mm_p95", "allowance_err_mm_max",
+            "pdf_plotter_ms", "pdf_nest_ms", "a4_pages", "a4_empty_pages", "letter_pages", "letter_empty_pages",
+            "dxf_readers", "pdf_test_square_mm", "allowance_err_mm_p95", "allowance_err_mm_max",
             "allowance_edges_within_0.1mm_pct", "notch_counts_match", "notch_arclength_mismatch_mm", "svg_size_err_mm", "dxf_sew_length_err_mm"]
     lines.append("| pattern | " + " | ".join(keys) + " |")
     lines.append("|---" * (len(keys) + 1) + "|")
@@ -209,6 +225,68 @@ def run(out_dir, quick: bool = False) -> dict:
     summary = {"results": results, "marker": marker}
     write_json(out_dir / "export.json", summary)
     return summary
+
+
+def _page_counts(pieces, layout, paper: str, data: bytes):
+    """(pages in the PDF, pages of them with no cut or sew line), the line check by dense sampling of the lines
+    against each printed window (independent of the tiler's clipping test); page 1 holds the test square."""
+    from core.export import pdf
+    n = len(re.findall(rb"/Type /Page\b", data))
+    grid, ink = pdf.sheet_pages(pieces, layout, paper)
+    pts = []
+    for i, p in enumerate(pieces):
+        for loop in list(p.cut) + list(p.sew):
+            q = layout.place(i, loop)
+            b = np.roll(q, -1, axis=0)
+            t = np.linspace(0.0, 1.0, 21)[:, None, None]
+            pts.append((q[None] + t * (b - q)[None]).reshape(-1, 2))
+    pts = np.concatenate(pts)
+    empty = 0
+    for r, c in zip(*np.nonzero(ink)):
+        w = grid.window(r, c)
+        if not np.any(np.all((pts >= w[0]) & (pts <= w[1]), axis=1)):
+            empty += 1
+    return n, empty
+
+
+def _two_readers(pattern, pieces, texts: dict) -> dict:
+    """Every DXF variant through ezdxf (audit, recover) and the tests' independent reader: "pass", or what failed."""
+    import ezdxf
+    from ezdxf import recover
+
+    reader = _load(DXF_READER, "ease_bench_dxf_reader")
+    want_sew = [p.sew for p in pieces]
+    want_len = sorted(sum(reader.polyline_length(l * 1000, True) for l in s) for s in want_sew)
+    want_notches = sum(len(p.notches) for p in pieces)
+    failed = []
+    for fmt in ("dxf", "dxf_r12", "dxf_plain"):
+        text = texts[fmt]
+        try:
+            doc = ezdxf.read(io.StringIO(text))
+            if doc.audit().has_errors:
+                failed.append(f"{fmt}: ezdxf audit")
+            if recover.read(io.BytesIO(text.encode("utf-8")))[1].has_errors:
+                failed.append(f"{fmt}: ezdxf recover")
+            dwg = reader.read(text)
+        except Exception as exc:  # a reader that cannot read the file is what this row reports
+            failed.append(f"{fmt}: {type(exc).__name__}")
+            continue
+        if fmt == "dxf_plain":
+            ents = dwg.entities
+            sew = [e for e in ents if e.layer == "SEW" and e.points is not None]
+            notches = sum(1 for e in ents if e.kind == "LINE" and e.layer == "NOTCH")
+        else:
+            ents = [e for name in (e.value(2) for e in dwg.entities if e.kind == "INSERT") for e in dwg.blocks[name]]
+            sew = [e for e in ents if e.layer == "14" and e.points is not None]
+            notches = sum(1 for e in ents if e.kind == "LINE" and e.layer == "4")
+        got = sorted(reader.polyline_length(e.points, e.closed) for e in sew)
+        if len(got) != len(want_len) or np.abs(np.array(got) - want_len).max() > 0.01 or notches != want_notches:
+            failed.append(f"{fmt}: pieces/sew lengths/notches differ")
+        for var in ("$EXTMIN", "$EXTMAX"):
+            v = dwg.header_number(var, 10)
+            if v is None or abs(v) >= 1e19:
+                failed.append(f"{fmt}: {var} unset")
+    return {"dxf_readers": "pass" if not failed else "; ".join(failed)}
 
 
 def _page_one(data: bytes) -> bytes:
