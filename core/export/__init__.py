@@ -13,15 +13,18 @@ format    files
 ========= =====================================================================
 ``svg``   ``pattern.svg`` (1:1, mm)
 ``dxf``   ``pattern_astm.dxf`` (ASTM D6673/AAMA, R2000, $INSUNITS mm),
-          ``pattern_astm_r12.dxf`` (same, R12 for Gerber), ``pattern_plain.dxf``
-``pdf``   ``pattern_a4.pdf``, ``pattern_letter.pdf`` (tiled 1:1),
-          ``pattern_plotter.pdf`` (one sheet, 914 mm roll)
-``glb``   ``garment.glb`` (needs the drape)
-``obj``   ``garment.obj`` (needs the drape)
+          ``pattern_astm_r12.dxf`` (same, R12 for Gerber/CLO: $MEASUREMENT metric,
+          LAYER table), ``pattern_plain.dxf``; extents set in all three
+``pdf``   ``pattern_a4.pdf``, ``pattern_letter.pdf`` (tiled 1:1, nested for the
+          fewest pages with a line, 10 mm overlaps), ``pattern_plotter.pdf``
+          (one sheet, 914 mm roll)
+``glb``   ``garment.glb`` (needs the drape; +Y up as glTF requires)
+``obj``   ``garment.obj`` (needs the drape; +Z up like every other 3D file, or ``up="y"``)
 ========= =====================================================================
 
-plus ``export.json``: per piece sew-line length, allowance, notch count, and
-the page counts.
+plus ``export.json``: per piece sew-line length, allowance, notch count, the
+page counts and pages left out, and the 3D files' frames. Which file suits
+which tool: ``docs/export.md``.
 
 Seam allowance and notch spacing are set in the design (``materials.export``:
 ``{"allowance": 0.01 | {"default", "hem", "fold", "<seam line>": m},
