@@ -116,3 +116,11 @@ def test_missing_writer_package_is_a_clear_error(tmp_path, monkeypatch, fmt, mod
     with pytest.raises(ExportError, match=module.split(".")[0]):
         export_pattern(make_pattern(), tmp_path / "out", formats=f"svg,{fmt}")
     assert not (tmp_path / "out").exists()
+
+
+def test_a_piece_wider_than_the_page_grid_exports(tmp_path):
+    """The ease-3.0 shirt front is 1.58 m wide: every format still exports it (it raised a TypeError in PDF)."""
+    from export_synth import wide_pattern
+    files = export_pattern(wide_pattern(1.6), tmp_path / "out", formats="svg,dxf,pdf")
+    summary = json.loads((tmp_path / "out" / "export.json").read_text())
+    assert summary["pdf"]["a4"]["pages"] >= 8 and "pattern_a4.pdf" in {f.name for f in files}

@@ -134,3 +134,27 @@ def test_missing_pattern_and_help(tmp_path, capsys):
     with pytest.raises(SystemExit):
         run(["export", "--help"])
     assert "ASTM" in capsys.readouterr().out
+
+
+def test_with_body_and_up_axis(job, anny):
+    """--with-body writes the pattern's body (Anny, size M, A-pose) beside the garment; --up picks the OBJ frame."""
+    from core.body.instance import spec_instance
+    root, pat = job
+    drape = root / "drape"
+    drape.mkdir()
+    np.savez(drape / "drape.npz", positions=drape_positions(pat))
+    V, F = spec_instance(pat.body, anny)
+    for up in ("z", "y"):
+        out = root / f"x_{up}"
+        assert run(["export", str(root / "pattern"), "--format", "obj,glb", "--drape", str(drape), "--out",
+                    str(out), "--with-body", "--up", up, "--quiet"]) == 0
+        text = (out / "garment.obj").read_text()
+        assert ("+Z up" in text.splitlines()[1]) == (up == "z")
+        body = text.split("o body\n", 1)[1].splitlines()
+        v = np.array([[float(t) for t in l.split()[1:]] for l in body if l.startswith("v ")])
+        want = V if up == "z" else np.column_stack([V[:, 0], V[:, 2], -V[:, 1]])
+        np.testing.assert_allclose(v, want, atol=2e-6)
+        assert sum(1 for l in body if l.startswith("f ")) == len(F)
+        from core.export.mesh import read_glb
+        doc, _ = read_glb((out / "garment.glb").read_bytes())
+        assert "body" in [n["name"] for n in doc["nodes"]] and "+Y up" in doc["asset"]["extras"]["frame"]
