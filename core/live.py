@@ -224,12 +224,12 @@ class LiveSession:
         pat.report["config"] = self.config
         pat.report["live"] = {"iterations": int(self.iterations_since_change), "converged": bool(self.converged)}
         if figures:
-            wf._finish(pat)
+            wf.measure_pattern(pat)
         return pat
 
     def figures(self, pattern) -> Dict[str, object]:
         """The key figures of a measured ``pattern`` of this session (as the workflows give them)."""
-        return wf._figures(pattern)
+        return wf.pattern_figures(pattern)
 
     def cold_pattern(self, body_ease):
         """A cold solve (the configuration's iterations from the stretched flattening) of the
@@ -239,7 +239,7 @@ class LiveSession:
         ones = np.ones_like(ease)
         res = self.solver.solve(self.K, ease, ones, plan=self.solver.plan_seams(self.K, ease, ones))
         pat = build_pattern(self.prep.cut, res, style=self.prep.design.name, mode="reference")
-        wf._finish(pat)
+        wf.measure_pattern(pat)
         return pat
 
 

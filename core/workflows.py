@@ -128,8 +128,9 @@ def make_solver(prep: Prepared, config: str = "improved", iterations: Optional[i
                          progress=progress)
 
 
-def _finish(pattern):
-    """Measure ``pattern`` into its report; a flipped triangle is an error, not a figure."""
+def measure_pattern(pattern) -> dict:
+    """Measure ``pattern`` into its report (``report["metrics"]``) and return the metrics;
+    a flipped triangle is an error, not a figure."""
     from .errors import PatternError
     from .metrics.pattern import pattern_report
     metrics = pattern_report(pattern)
@@ -139,7 +140,8 @@ def _finish(pattern):
     return metrics
 
 
-def _figures(pattern) -> Dict[str, object]:
+def pattern_figures(pattern) -> Dict[str, object]:
+    """The key figures of a measured pattern (label -> rounded value), for the CLI and the add-on."""
     m = pattern.report["metrics"]
     c, s = m["compliance"], m["seams"]
     return {"pieces": len(pattern.panels),
@@ -171,8 +173,8 @@ def reference(prep: Prepared, config: str = "improved", iterations: Optional[int
     pattern = _solve_reference(prep, solver, sub(progress, 0.2, 1.0))
     optimize = time.perf_counter() - t0
     pattern.report["config"] = config
-    _finish(pattern)
-    return PatternRun(pattern, _figures(pattern), {**prep.timings, "optimize": optimize})
+    measure_pattern(pattern)
+    return PatternRun(pattern, pattern_figures(pattern), {**prep.timings, "optimize": optimize})
 
 
 def transfer(prep: Prepared, size, config: str = "improved", iterations: Optional[int] = None,
@@ -216,8 +218,8 @@ def transfer(prep: Prepared, size, config: str = "improved", iterations: Optiona
     label = size if isinstance(size, str) else "custom"
     pattern.report.update({"config": config, "size": label, "transfer_deviation": dev,
                            "reference_compliance": refc})
-    _finish(pattern)
-    figures = {"size": label, **_figures(pattern),
+    measure_pattern(pattern)
+    figures = {"size": label, **pattern_figures(pattern),
                "transfer deviation mean %": round(float(dev["mean"]), 3),
                "transfer deviation std %": round(float(dev["std"]), 3),
                "reference compliance mean %": round(float(refc["mean"]), 3)}
@@ -284,8 +286,8 @@ def adapt(prep: Prepared, poses: Sequence, eps_weft: Optional[float] = None, eps
             figures[f"{name} {g or 'all'} stretched % before/after"] = f"{before:.1f} / {after:.1f}"
     pattern.report.update({"config": config, "poses": names, "eps_weft": eps_w, "eps_warp": eps_g,
                            "residual_stretch": stretch})
-    _finish(pattern)
-    figures.update(_figures(pattern))
+    measure_pattern(pattern)
+    figures.update(pattern_figures(pattern))
     return PatternRun(pattern, figures, {**prep.timings, "optimize": optimize})
 
 
@@ -453,5 +455,5 @@ def export(pattern, out, formats: Union[str, Sequence[str]] = ("svg", "dxf", "pd
 
 
 __all__ = ["CONFIGS", "Prepared", "PatternRun", "DrapeRun", "prepare", "solver_config", "make_solver",
-           "reference", "transfer", "adapt", "tolerances", "write_pattern", "summary", "drape", "write_drape",
-           "drape_summary", "export_allowance", "export"]
+           "reference", "transfer", "adapt", "tolerances", "measure_pattern", "pattern_figures", "write_pattern",
+           "summary", "drape", "write_drape", "drape_summary", "export_allowance", "export"]
