@@ -83,8 +83,12 @@ def read_design(design) -> dict:
 
 def _client(workers: Optional[int], scheduler: Optional[str]):
     """(client, cluster or None, number of workers)."""
-    import dask
-    from distributed import Client, LocalCluster
+    try:
+        import dask
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise BatchError("ease batch needs Dask: pip install 'ease-garments[batch]' "
+                         "(dask, distributed; ./ease.sh installs them)") from None
     if scheduler:
         try:
             client = Client(scheduler, timeout="20s")
