@@ -249,6 +249,7 @@ CRAFTED_NPZ = {
     "no_joints": lambda: model_npz_bytes({**small_model(), "weights": np.zeros((24, 0)),
                                           "kintree_table": np.zeros((2, 0), int), "J_regressor": np.zeros((0, 24)),
                                           "posedirs": np.zeros((24, 3, 0))}),
+    "smpl_topology_one_joint": lambda: _smpl_topology_one_joint(),
     "missing_key": lambda: model_npz_bytes({k: v for k, v in small_model().items() if k != "weights"}),
     "npy_renamed": lambda: _model_members()["v_template"],
     "empty_file": lambda: b"",
@@ -257,6 +258,18 @@ CRAFTED_NPZ = {
     "zip_without_arrays": lambda: npz_bytes({}),
     "text_file": lambda: b"v_template = [1, 2, 3]\n",
 }
+
+def _smpl_topology_one_joint():
+    """SMPL's 6890 vertices and 24 joints with every vertex skinned to the pelvis: no body part to
+    place the landmarks on (was "argmax of an empty sequence")."""
+    from smpl_synth import stick_smpl
+    m = stick_smpl()
+    V = 6890
+    rng = np.random.default_rng(5)
+    return model_npz_bytes({**m, "v_template": rng.random((V, 3)), "f": np.arange(V - 2)[:, None] + np.arange(3),
+                            "weights": np.eye(24)[np.zeros(V, int)], "J_regressor": np.eye(24, V),
+                            "shapedirs": np.zeros((V, 3, 2)), "posedirs": np.zeros((V, 3, 207))}, compressed=True)
+
 
 CRAFTED_OBJ = {
     "nan_vertex": "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n",
