@@ -45,7 +45,7 @@ def test_export_pattern(bpy_session, blender, addon):
     from scipy.spatial import cKDTree
     got = _obj_vertices(out / "garment.obj")
     v = blender.verts(garment).astype(np.float64)
-    want = np.column_stack([v[:, 0], v[:, 2], -v[:, 1]])          # OBJ is Y-up
+    want = v                    # garment.obj is Z-up by default, like the body OBJs (Blender's frame)
     assert cKDTree(want).query(got)[0].max() < 1e-5 and cKDTree(got).query(want)[0].max() < 1e-5
 
     # a garment draped from another pattern is not exported as this pattern's
