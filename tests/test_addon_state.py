@@ -17,7 +17,7 @@ NEEDS_BODY = ("set_size", "fit_measurements", "measure", "set_pose", "apply_shap
               "paint_ease", "ease_uniform", "ease_gradient")
 NEEDS_DESIGN = ("save_design", "set_parameter", "recut", "assign_keypoint", "pick_keypoint", "ease_to_design",
                 "ease_from_design", "optimize_pattern", "transfer_size", "adapt_poses")
-NEEDS_PATTERN = ("drape", "export_pattern")
+NEEDS_PATTERN = ("drape", "export_pattern", "marker")
 RUN_ANYWHERE = ("add_body", "load_template", "load_design_file", "studio_setup")
 
 
@@ -49,8 +49,8 @@ def test_every_operator_says_what_it_needs(bpy_session, blender, empty):
         assert not op.poll(), f"ease.{name} can be pressed in an empty scene"
         msg = _refusal(op)
         # operators of other stages (not named here) say at least where to go
-        want = {"save_design": "design", "drape": "pattern", "export_pattern": "pattern", "fitmap": "garment",
-                "render": "render"}.get(name, "body" if name in NEEDS_BODY + NEEDS_DESIGN else "")
+        want = {"save_design": "design", "drape": "pattern", "export_pattern": "pattern", "marker": "pattern",
+                "fitmap": "garment", "render": "render"}.get(name, "body" if name in NEEDS_BODY + NEEDS_DESIGN else "")
         assert want in msg.lower() and "EASE >" in msg, (name, msg)
     blender.reset(body=True)
     for name in NEEDS_BODY + ("render",):

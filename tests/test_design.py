@@ -167,8 +167,8 @@ def test_save_refuses_invalid_design(tmp_path):
 
 def test_edits_validate():
     d = load_design(shirt())
-    d.set_parameter("sleeve_length", 0.3)
-    assert d.parameters["sleeve_length"].value == 0.3
+    d.set_parameter("sleeve_length", 0.45)
+    assert d.parameters["sleeve_length"].value == 0.45
     with pytest.raises(DesignError) as e:
         d.set_parameter("sleeve_length", 2.0)
     assert e.value.path == "parameters.sleeve_length"
