@@ -12,7 +12,7 @@ import json
 import bpy
 import numpy as np
 
-EASE_LAYER = "ease"                      # colour attribute (POINT, FLOAT_COLOR) holding the ease field
+EASE_LAYER = "ease"                      # colour attribute (float colour, point or face corner): the ease field
 KEYPOINT_LAYER = "ease_keypoint"         # FACE int: 1 + keypoint index on that triangle, 0 = none
 KEYPOINT_BARY_LAYER = "ease_keypoint_bary"  # CORNER float: barycentric weight of the keypoint
 KEYPOINT_NAMES = "ease_keypoint_names"   # mesh custom property: JSON list of keypoint names
@@ -103,11 +103,14 @@ def get_triangles(me: bpy.types.Mesh) -> np.ndarray:
 # ----------------------------------------------------------------------------- ease colour layer
 
 def ensure_color_layer(me: bpy.types.Mesh, name: str = EASE_LAYER, fill=None):
-    """The POINT/FLOAT_COLOR attribute ``name`` (created if missing), made
-    active for painting and display; ``fill`` (4,) sets every vertex."""
+    """The FLOAT_COLOR attribute ``name`` (a POINT one created if missing), made active
+    for painting and display; ``fill`` (4,) sets every vertex of a new one. An existing
+    ``ease`` layer is adopted (:func:`adopt_ease_layer`), never replaced."""
     attr = me.color_attributes.get(name)
-    if attr is not None and (attr.domain != "POINT" or attr.data_type != "FLOAT_COLOR"):
-        me.color_attributes.remove(attr)
+    if attr is not None and name == EASE_LAYER:
+        adopt_ease_layer(me)            # the designer's painting is kept, whatever its type
+    elif attr is not None and (attr.domain != "POINT" or attr.data_type != "FLOAT_COLOR"):
+        me.color_attributes.remove(attr)    # a display layer of ours: remade
         attr = None
     if attr is None:
         attr = me.color_attributes.new(name=name, type="FLOAT_COLOR", domain="POINT")
@@ -119,6 +122,47 @@ def ensure_color_layer(me: bpy.types.Mesh, name: str = EASE_LAYER, fill=None):
     except AttributeError:  # older API spelling
         pass
     return me.color_attributes[name]
+
+
+def element_vertices(me, domain: str) -> np.ndarray:
+    """The vertex of each element (n,) of a colour layer on ``domain`` (POINT or CORNER)."""
+    if domain == "POINT":
+        return np.arange(len(me.vertices))
+    vi = np.empty(len(me.loops), dtype=np.int32)
+    me.loops.foreach_get("vertex_index", vi)
+    return vi
+
+
+def adopt_ease_layer(me) -> str:
+    """Make the mesh's existing ``ease`` layer the one EASE paints, whatever its type and
+    domain, keeping every value: byte colours become float colours (the same scene-linear
+    colours), a face-corner layer whose corners agree on each vertex becomes a point layer,
+    one whose corners differ stays a float face-corner layer. Returns what was done (empty
+    when the layer was already a float point layer)."""
+    attr = me.color_attributes[EASE_LAYER]
+    colors, domain = read_colors(me, EASE_LAYER)
+    was = f"{attr.data_type.replace('_', ' ').lower()}, {domain.lower()}"
+    target = domain
+    if domain == "CORNER":
+        vi = element_vertices(me, domain)
+        first = np.zeros((len(me.vertices), 4))
+        first[vi[::-1]] = colors[::-1]          # one corner's colour per vertex
+        if np.array_equal(first[vi], colors):
+            target, colors = "POINT", first
+    if attr.data_type != "FLOAT_COLOR" or target != domain:
+        me.color_attributes.remove(attr)
+        attr = me.color_attributes.new(EASE_LAYER, "FLOAT_COLOR", target)
+        attr.data.foreach_set("color", colors.astype(np.float32).ravel())
+        me.update()
+        done = f"adopted the ease layer ({was}) as float colour, {target.lower()}"
+    else:
+        done = ""
+    me.color_attributes.active_color = me.color_attributes[EASE_LAYER]
+    try:
+        me.color_attributes.render_color_index = me.color_attributes.active_color_index
+    except AttributeError:  # older API spelling
+        pass
+    return done
 
 
 def write_colors(me: bpy.types.Mesh, rgba: np.ndarray, name: str = EASE_LAYER) -> None:

@@ -55,15 +55,6 @@ def triangle_ease(obj, scene) -> np.ndarray:
     return ramp.vertex_to_triangle(e, convert.get_triangles(me))
 
 
-def _element_vertices(me, domain: str) -> np.ndarray:
-    """The vertex of each element (n,) of a colour layer on ``domain`` (POINT or CORNER)."""
-    if domain == "POINT":
-        return np.arange(len(me.vertices))
-    vi = np.empty(len(me.loops), dtype=np.int32)
-    me.loops.foreach_get("vertex_index", vi)
-    return vi
-
-
 def write_vertex_ease(obj, scene, ease: np.ndarray, mask=None) -> None:
     """Write ease (V,) into the layer (only where ``mask``), re-encoding the
     rest if the scene's ramp range changed since the layer was painted. A
@@ -73,9 +64,9 @@ def write_vertex_ease(obj, scene, ease: np.ndarray, mask=None) -> None:
     if me.color_attributes.get(convert.EASE_LAYER) is None:
         convert.ensure_color_layer(me, fill=ramp.ease_to_color(1.0, lo, hi))
     else:
-        adopt_ease_layer(me)
+        convert.adopt_ease_layer(me)
     colors, domain = convert.read_colors(me, convert.EASE_LAYER)
-    vi = _element_vertices(me, domain)
+    vi = convert.element_vertices(me, domain)
     new = ramp.color_to_ease(colors, *layer_range(obj, scene))
     ease = np.broadcast_to(np.asarray(ease, dtype=np.float64), (len(me.vertices),))
     where = np.ones(len(vi), dtype=bool) if mask is None else np.asarray(mask)[vi]
@@ -87,38 +78,6 @@ def write_vertex_ease(obj, scene, ease: np.ndarray, mask=None) -> None:
         "color", ramp.ease_to_color(new, lo, hi).astype(np.float32).ravel())
     me.update()
     me["ease_ramp"] = [lo, hi]
-
-
-def adopt_ease_layer(me) -> str:
-    """Make the mesh's existing ``ease`` layer the one EASE paints, whatever its type and
-    domain, keeping every value: byte colours become float colours (the same scene-linear
-    colours), a face-corner layer whose corners agree on each vertex becomes a point layer,
-    one whose corners differ stays a float face-corner layer. Returns what was done (empty
-    when the layer was already a float point layer)."""
-    attr = me.color_attributes[convert.EASE_LAYER]
-    colors, domain = convert.read_colors(me, convert.EASE_LAYER)
-    was = f"{attr.data_type.replace('_', ' ').lower()}, {domain.lower()}"
-    target = domain
-    if domain == "CORNER":
-        vi = _element_vertices(me, domain)
-        first = np.zeros((len(me.vertices), 4))
-        first[vi[::-1]] = colors[::-1]          # one corner's colour per vertex
-        if np.array_equal(first[vi], colors):
-            target, colors = "POINT", first
-    if attr.data_type != "FLOAT_COLOR" or target != domain:
-        me.color_attributes.remove(attr)
-        attr = me.color_attributes.new(convert.EASE_LAYER, "FLOAT_COLOR", target)
-        attr.data.foreach_set("color", colors.astype(np.float32).ravel())
-        me.update()
-        done = f"adopted the ease layer ({was}) as float colour, {target.lower()}"
-    else:
-        done = ""
-    me.color_attributes.active_color = me.color_attributes[convert.EASE_LAYER]
-    try:
-        me.color_attributes.render_color_index = me.color_attributes.active_color_index
-    except AttributeError:  # older API spelling
-        pass
-    return done
 
 
 def panel_vertex_mask(context, panel: str) -> np.ndarray:
@@ -264,7 +223,7 @@ class EASE_OT_paint_ease(EaseOperator):
             sync.init_ease_layer(context.scene, obj)
         else:
             # the designer's own painting is kept, whatever the layer's type and domain
-            done = adopt_ease_layer(obj.data)
+            done = convert.adopt_ease_layer(obj.data)
             if done:
                 self.report({"INFO"}, done)
             if obj.data.get("ease_ramp") is None:
