@@ -428,7 +428,8 @@ def export_allowance(pattern, allowance: Optional[float] = None, hem: Optional[f
 def export(pattern, out, formats: Union[str, Sequence[str]] = ("svg", "dxf", "pdf"), allowance=None,
            hem: Optional[float] = None, notch_spacing: Optional[float] = None,
            drape: Optional[Tuple[np.ndarray, Optional[np.ndarray]]] = None, strict: bool = True,
-           warnings: Optional[List[str]] = None, progress: Optional[Progress] = None) -> list:
+           warnings: Optional[List[str]] = None, up: str = "z", with_body: bool = False,
+           progress: Optional[Progress] = None) -> list:
     """Cutting-room files (SVG, DXF, PDF) and the draped garment (GLB, OBJ) into ``out``, atomically.
 
     Parameters
@@ -441,6 +442,9 @@ def export(pattern, out, formats: Union[str, Sequence[str]] = ("svg", "dxf", "pd
     drape : (positions (N, 3) by global vertex id, faces or None) for GLB/OBJ
     strict : refuse pieces whose sew line crosses itself (False: export with a warning)
     warnings : list to receive the warnings
+    up : ``"z"`` (the body OBJs' frame, default) or ``"y"``: the up axis of ``garment.obj``
+        (``garment.glb`` is Y-up, as glTF requires)
+    with_body : also write the pattern's body instance beside the draped garment, in the same frame
 
     Returns
     -------
@@ -449,9 +453,15 @@ def export(pattern, out, formats: Union[str, Sequence[str]] = ("svg", "dxf", "pd
     from .export import export_pattern, parse_formats
     table = allowance if isinstance(allowance, dict) else export_allowance(pattern, allowance, hem)
     positions, faces = drape if drape is not None else (None, None)
-    return export_pattern(pattern, out, formats=parse_formats(formats), allowance=table,
+    formats = parse_formats(formats)
+    body = None
+    if with_body and ("glb" in formats or "obj" in formats):
+        from .body.instance import spec_instance
+        body = spec_instance(pattern.body or {})      # the body the pattern was made on
+    return export_pattern(pattern, out, formats=formats, allowance=table,
                           drape_positions=positions, drape_faces=faces, notch_spacing=notch_spacing,
-                          strict=strict, warnings=warnings if warnings is not None else [], progress=progress)
+                          strict=strict, warnings=warnings if warnings is not None else [], up=up, body=body,
+                          progress=progress)
 
 
 __all__ = ["CONFIGS", "Prepared", "PatternRun", "DrapeRun", "prepare", "solver_config", "make_solver",

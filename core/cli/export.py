@@ -64,18 +64,10 @@ def _run(args) -> int:
                                   f"or leave glb/obj out of --format")
             drape_dir = guess
         drape = read_drape(drape_dir)
-    body = None
-    if args.with_body and ("glb" in formats or "obj" in formats):
-        from ..body.instance import spec_instance
-        body = spec_instance(pattern.body or {})   # the body the pattern was made on, in the drape's frame
     warnings: list = []
-    # through core.export directly (not workflows.export) while that has no up/body parameters
-    from ..export import export_pattern
-    table = wf.export_allowance(pattern, args.allowance, args.hem)
-    positions, faces = drape if drape is not None else (None, None)
-    files = export_pattern(pattern, args.out, formats=formats, allowance=table, drape_positions=positions,
-                           drape_faces=faces, notch_spacing=args.notch_spacing, strict=not args.lenient,
-                           warnings=warnings, progress=console_progress(args), up=args.up, body=body)
+    files = wf.export(pattern, args.out, formats=formats, allowance=args.allowance, hem=args.hem,
+                      notch_spacing=args.notch_spacing, drape=drape, strict=not args.lenient, warnings=warnings,
+                      up=args.up, with_body=args.with_body, progress=console_progress(args))
     for w in warnings:
         print(f"ease export: warning: {w}", file=sys.stderr)
     print_files(files)
