@@ -23,8 +23,8 @@ Fields (metres, the body frame of :mod:`core`: +Z up, body faces -Y, +X = body's
 ``mirror``             true: every ``*_left`` keypoint / line / panel gets its
                        ``*_right`` counterpart through the body's symmetry map
 ``skirt``              true: cut on the skirt topology (dresses, skirts)
-``refine_edge_length`` target *mean* edge length of the cut panels (m, 0.002..0.1,
-                       default 0.01): every edge longer than 1.5x it is split
+``refine_edge_length`` target *mean* edge length of the cut panels (m, 0.005..0.1,
+                       default 0.01; finer does not drape): every edge longer than 1.5x it is split
                        (:mod:`core.cut.refine`); null keeps the body's resolution
 ``parameters``         ``{name: number | {"value", "kind": "placement" (0..1) |
                        "length" (m) | "number", "min", "max"}}``; used as
@@ -72,9 +72,10 @@ from typing import Dict, Union
 from ..body.model import POSE_PRESETS
 from ..body.sizes import SIZES
 from ..errors import BodyError, DesignError
-from .checks import (BODY_PARTS, GARMENT_KINDS, LINE_ROLES, PARAMETER_KINDS, check_ease, check_name,
-                     check_names_unique, check_number, check_parameter_value, check_ring, check_section,
-                     expect_dict, expect_keys, fmt, is_number, keypoint_ref, check_keypoint)
+from .checks import (BODY_PARTS, GARMENT_KINDS, LINE_ROLES, PARAMETER_KINDS, REFINE_EDGE_MAX, REFINE_EDGE_MIN,
+                     check_ease, check_name, check_names_unique, check_number, check_parameter_value,
+                     check_ring, check_section, expect_dict, expect_keys, fmt, is_number, keypoint_ref,
+                     check_keypoint)
 from .materials import check_seam_names, parse_materials
 from .types import FORMAT, VERSION, Design, Garment, Line, Panel, Parameter
 
@@ -272,7 +273,8 @@ def parse_design(obj: dict) -> Design:
             raise DesignError(k, f"expected true or false, got {fmt(obj.get(k))}")
     rel = obj.get("refine_edge_length", 0.01)
     if rel is not None:
-        rel = check_number("refine_edge_length", rel, 0.002, 0.1, what="an edge length in metres (or null)")
+        rel = check_number("refine_edge_length", rel, REFINE_EDGE_MIN, REFINE_EDGE_MAX,
+                           what="an edge length in metres (or null; finer meshes do not drape)")
     params = _parse_parameters("parameters", obj.get("parameters", {}))
     kps_raw = expect_dict("keypoints", obj.get("keypoints", {}), "an object name -> keypoint")
     keypoints = {}
