@@ -3,7 +3,7 @@
 Field checks return the normalised value (``check_keypoint`` a keypoint dict,
 ``check_ease`` an ease field, ``check_number`` a float) or raise
 :class:`core.errors.DesignError` whose ``path`` is the offending element
-(``garments[0].panels[2].ease.value: expected a number in 0.5..4.0, got 7``).
+(``garments[0].panels[2].ease.value: expected a number in 0.8..4.0, got 7``).
 The parser (:mod:`core.design.parser`) builds the design from them; the
 design's own edits (:class:`core.design.types.Design`) re-validate with them.
 Design-wide checks (names unique, seam names of the materials) come last.
@@ -240,7 +240,7 @@ def _ease_value(path, x):
 
 
 def check_ease(path, obj, params) -> dict:
-    """Validate an ease field. Every value must be finite and in 0.5..4.0."""
+    """Validate an ease field. Every value must be finite and in EASE_MIN..EASE_MAX (0.8..4.0)."""
     if is_number(obj):
         return {"value": _ease_value(path, obj)}
     expect_dict(path, obj, "an ease field {value} | {from, to, between|axis} | {per_triangle}")

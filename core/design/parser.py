@@ -4,7 +4,7 @@ A design is plain JSON. Loading validates every element
 (:mod:`core.design.checks`, the materials by :mod:`core.design.materials`) and raises
 :class:`core.errors.DesignError` whose ``path`` is the JSON path of the
 offending element (``garments[0].panels[2].ease.value: expected a number in
-0.5..4.0, got 7``). Everything that depends on a body (landmark names, whether
+0.8..4.0, got 7``). Everything that depends on a body (landmark names, whether
 a length fits on a limb) is checked when the design is resolved
 (:func:`core.design.resolve.resolve`), with the same kind of path.
 
@@ -56,7 +56,7 @@ ease field             ``{"value"}`` | ``{"from", "to", "between": [a, b]}`` |
                        ``{"from", "to", "axis", "over": "panel" | "garment"}`` |
                        ``{"per_triangle": {"triangles",
                        "values", "default"}}`` (body template triangles) -- every
-                       value finite and in 0.5..4.0 (see :mod:`core.design.ease`)
+                       value finite and in 0.8..4.0 (see :mod:`core.design.ease`)
 =====================  ==========================================================
 
 Keypoint references are strings: the name of a design keypoint, of a point
