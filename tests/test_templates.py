@@ -14,7 +14,7 @@ import pytest
 from core.body import load_body
 from core.body.sizes import size_shape
 from core.cut import cut_design
-from core.design import load_design
+from core.design import EASE_MAX, EASE_MIN, load_design
 from core.design.templates import TEMPLATES, template_dir, template_path
 
 # garment -> number of openings (boundary loops of the sewn garment)
@@ -245,7 +245,7 @@ def check_recut(cut, name, V):
     its openings, equal seam sides, mirrored halves, ease in range."""
     assert len(cut.panels) == PANELS[name], name
     for p in cut.panels:
-        assert len(p.faces) > 0 and np.all((p.ease >= 0.5) & (p.ease <= 4.0))
+        assert len(p.faces) > 0 and np.all((p.ease >= EASE_MIN) & (p.ease <= EASE_MAX))
     for g, n in OPENINGS[name].items():
         check_partition(cut, g, n, V)
         check_global_ids(cut, g, n)
@@ -262,7 +262,7 @@ def test_template_cuts_on_all_sizes_and_poses(name, body, instances):
     assert sorted(p.name for p in cut.panels) == sorted(design.panel_names())
     for p in cut.panels:
         assert len(p.faces) > 0 and len(p.ease) == len(p.faces)
-        assert np.all((p.ease >= 0.5) & (p.ease <= 4.0))
+        assert np.all((p.ease >= EASE_MIN) & (p.ease <= EASE_MAX))
         assert np.allclose(np.linalg.norm(p.warp_dir, axis=1), 1.0, atol=1e-6)
     for g, n in OPENINGS[name].items():
         assert cut.garments[g] == next(x.kind for x in design.garments if x.name == g)
