@@ -12,6 +12,7 @@ from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProp
                        FloatVectorProperty, IntProperty, PointerProperty, StringProperty)
 
 from ..core.body.sizes import SIZES as CHART_SIZES
+from ..core.design.checks import EASE_MAX, EASE_MIN
 from . import data, live, sync
 
 SIZES = [(s, s, f"size {s} of the size chart") for s in CHART_SIZES]
@@ -93,13 +94,13 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
                              description="Re-cut the design when a parameter changes")
     keypoint_name: StringProperty(name="Keypoint", description="Keypoint to place on the selected vertex")
     # Ease
-    ease_min: FloatProperty(name="Ramp min", default=0.9, min=0.5, max=4.0, update=_ramp_update)
-    ease_max: FloatProperty(name="Ramp max", default=2.0, min=0.5, max=4.0, update=_ramp_update)
-    ease_value: FloatProperty(name="Ease", default=1.3, min=0.5, max=4.0,
+    ease_min: FloatProperty(name="Ramp min", default=0.9, min=EASE_MIN, max=EASE_MAX, update=_ramp_update)
+    ease_max: FloatProperty(name="Ramp max", default=2.0, min=EASE_MIN, max=EASE_MAX, update=_ramp_update)
+    ease_value: FloatProperty(name="Ease", default=1.3, min=EASE_MIN, max=EASE_MAX,
                               description="Ease the brush paints (weft scale; 1.0 lies on the body)")
     ease_panel: StringProperty(name="Panel", description="Panel whose ease the operators set")
-    ease_from: FloatProperty(name="From", default=1.1, min=0.5, max=4.0)
-    ease_to: FloatProperty(name="To", default=1.6, min=0.5, max=4.0)
+    ease_from: FloatProperty(name="From", default=1.1, min=EASE_MIN, max=EASE_MAX)
+    ease_to: FloatProperty(name="To", default=1.6, min=EASE_MIN, max=EASE_MAX)
     gradient_axis: EnumProperty(name="Axis", items=[("Z", "Top to bottom", ""), ("X", "Right to left", ""),
                                                     ("Y", "Front to back", "")], default="Z")
     legend: CollectionProperty(type=EASE_PG_legend)

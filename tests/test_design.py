@@ -63,7 +63,7 @@ def test_bad_ease_value_names_the_json_path():
     d["garments"][0]["panels"][2]["ease"] = {"value": 7}
     e = error_of(d)
     assert e.path == "garments[0].panels[2].ease.value"
-    assert str(e) == "garments[0].panels[2].ease.value: panel 'sleeve_front_left': expected a number in 0.5..4.0, got 7"
+    assert str(e) == "garments[0].panels[2].ease.value: panel 'sleeve_front_left': expected a number in 0.8..4.0, got 7"
 
 
 @pytest.mark.parametrize("ease, path", [
