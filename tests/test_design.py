@@ -507,3 +507,19 @@ def test_gathered_seams_in_materials():
     obj["materials"].update(gathered=True, gather_above=None)
     d = load_design(obj)
     assert d.materials["gathered"] is True and d.materials["gather_above"] is None
+
+
+def test_a_body_error_at_resolve_names_the_design_body():
+    """A shape parameter or joint only a file model knows is checked when the instance is made:
+    the error then points at the design's body, not at a bare parameter name."""
+    from core.design.resolve import instance_vertices
+    from core.errors import BodyError
+
+    class FileModel:
+        def vertices(self, shape=None, pose=None):
+            raise BodyError("shape.beta99: unknown shape parameter; known: beta0..beta9")
+
+    d = load_design(shirt())
+    with pytest.raises(DesignError) as e:
+        instance_vertices(d, FileModel(), shape={"beta99": 1.0})
+    assert e.value.path == "body" and "beta99" in str(e.value)

@@ -67,9 +67,15 @@ def instance_pose(design: Design, pose=None):
 
 
 def instance_vertices(design: Design, body, shape=None, pose=None) -> np.ndarray:
-    """Vertices (V, 3) of the body instance a design is resolved on (``shape``/``pose`` override the design's)."""
-    return body_instance(body, design.body.get("shape") if shape is None else shape,
-                         design.body.get("pose") if pose is None else pose)
+    """Vertices (V, 3) of the body instance a design is resolved on (``shape``/``pose`` override the design's).
+
+    A shape parameter or pose joint the model does not know (an SMPL or OBJ
+    model is only read here) is a design error at ``body``."""
+    try:
+        return body_instance(body, design.body.get("shape") if shape is None else shape,
+                             design.body.get("pose") if pose is None else pose)
+    except BodyError as exc:
+        raise DesignError("body", str(exc)) from None
 
 
 _FACE_SYM = {}
