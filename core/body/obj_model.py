@@ -24,7 +24,8 @@ from ..errors import BodyError
 from .arrays import finite_array, index_array, read_npz
 from .lbs import check_parents, forward_kinematics, rodrigues, skin
 from .model import POSE_PRESETS, BodyModel, SurfacePoint, check_axis_angle
-from .smpl import SMPL_TO_OURS, _vertex_point, check_shape, mirror_map
+from .model import check_shape
+from .smpl import SMPL_TO_OURS, _vertex_point, mirror_map
 
 # An OBJ of a 1 M-vertex scan is ~60 MB; refuse files far beyond before reading them.
 MAX_OBJ_BYTES = 1 << 30

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..errors import BodyError
 from .lbs import check_parents, forward_kinematics, pose_feature, rodrigues, skin
-from .model import POSE_PRESETS, BodyModel, SurfacePoint, check_axis_angle, listed
+from .model import POSE_PRESETS, BodyModel, SurfacePoint, check_axis_angle, check_shape
 
 SMPL_JOINT_NAMES = (
     "pelvis", "left_hip", "right_hip", "spine1", "left_knee", "right_knee", "spine2",
@@ -87,25 +87,6 @@ def _preset_rotations(name: str) -> Dict[str, np.ndarray]:
                 "left_elbow": z(-90), "right_elbow": z(90)}
     raise BodyError(f"unknown pose preset {name!r}; allowed: {', '.join(POSE_PRESETS)} "
                     "or a dict joint -> axis-angle")
-
-
-def check_shape(allowed: Mapping[str, tuple], shape: Optional[Mapping[str, float]], model: str) -> Dict[str, float]:
-    """Complete and validate a shape dict against ``allowed`` (name -> (min, max, default))."""
-    out = {k: float(v[2]) for k, v in allowed.items()}
-    if shape is None:
-        return out
-    for key, value in shape.items():
-        if key not in allowed:
-            raise BodyError(f"{model}: shape.{key}: unknown shape parameter; allowed: {listed(allowed)}")
-        lo, hi, _ = allowed[key]
-        try:
-            value = float(value)
-        except (TypeError, ValueError, OverflowError):
-            raise BodyError(f"{model}: shape.{key}: must be a number, got {str(value)[:60]!r}") from None
-        if not (lo <= value <= hi) or not np.isfinite(value):
-            raise BodyError(f"{model}: shape.{key}={value:g} is out of range [{lo:g}, {hi:g}]")
-        out[key] = value
-    return out
 
 
 def _vertex_point(faces: np.ndarray, vid: int) -> SurfacePoint:

@@ -171,7 +171,7 @@ def _check_on_model(path, model, shape, pose):
     names are known without loading it (the built-in Anny); a file model is checked when it is loaded."""
     from ..body.anny import anny_names
     from ..body.model import check_axis_angle
-    from ..body.smpl import check_shape
+    from ..body.model import check_shape
     names = anny_names() if model.lower() == "anny" else None
     if names is None:
         return
