@@ -198,14 +198,11 @@ def _parse_body(path, obj):
         raise DesignError(f"{path}.model", f"expected {', '.join(BUILTIN)} or a path to a body model file "
                                            f"({', '.join(MODEL_SUFFIXES)}), got {fmt(model)}")
     shape = obj.get("shape", "M")
-    if isinstance(shape, str):
-        if shape not in SIZES:
-            raise DesignError(f"{path}.shape", f"expected a size ({', '.join(SIZES)}) or an object of shape parameters, got {fmt(shape)}")
-    elif isinstance(shape, dict):
+    if isinstance(shape, dict):
         for k, v in shape.items():
             check_number(f"{path}.shape.{k}", v)
         shape = {k: float(v) for k, v in shape.items()}
-    elif shape is not None:
+    elif shape is not None and not (isinstance(shape, str) and shape in SIZES):
         raise DesignError(f"{path}.shape", f"expected a size ({', '.join(SIZES)}) or an object of shape parameters, got {fmt(shape)}")
     pose = obj.get("pose", "A")
     if isinstance(pose, str):
