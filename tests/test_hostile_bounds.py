@@ -92,7 +92,6 @@ def _mutate(obj, path, value):
 LOADER = r"""
 import json, resource, sys
 resource.setrlimit(resource.RLIMIT_AS, ({cap}, {cap}))
-sys.path.insert(0, {root!r})
 from core.errors import PatternError
 from core.pattern.io import load_pattern
 out = []
@@ -111,7 +110,7 @@ print(json.dumps(out))
 def _run_capped(tmp_path, files):
     (tmp_path / "files.json").write_text(json.dumps([str(f) for f in files]))
     script = tmp_path / "loader.py"
-    script.write_text(LOADER.format(cap=CAP, root=str(ROOT)))
+    script.write_text(LOADER.format(cap=CAP))
     res = subprocess.run([PY, str(script), str(tmp_path / "files.json")], capture_output=True, text=True,
                          timeout=600)
     assert res.returncode == 0, res.stderr[-2000:]
@@ -147,7 +146,7 @@ def test_huge_vertex_id_is_refused_by_ease_drape_in_bounded_memory(tmp_path, pat
     (tmp_path / "p").mkdir()
     (tmp_path / "p" / "pattern.json").write_text(json.dumps(obj))
     code = (f"import resource, sys; resource.setrlimit(resource.RLIMIT_AS, ({CAP}, {CAP})); "
-            f"sys.path.insert(0, {str(ROOT)!r}); from core.cli import main; "
+            f"from core.cli import main; "
             f"sys.exit(main(['drape', {str(tmp_path / 'p')!r}, '--out', {str(tmp_path / 'd')!r}, '--quiet']))")
     res = subprocess.run([PY, "-c", code], capture_output=True, text=True, timeout=300)
     lines = [line for line in res.stderr.splitlines() if line.startswith("ease ")]

@@ -308,7 +308,6 @@ def test_unwritable_targets_are_one_clear_error(tmp_path, make, match):
 
 CHILD = r"""
 import os, sys, time
-sys.path.insert(0, {root!r})
 import core.fileio as F
 mode, delay, out = sys.argv[1], float(sys.argv[2]), sys.argv[3]
 if mode == "two renames":
@@ -339,7 +338,7 @@ def test_killed_while_committing_version_after_version(tmp_path, case):
     out = tmp_path / "out"
     _fill(out, {"keep.txt": "kept"})
     script = tmp_path / "child.py"
-    script.write_text(CHILD.format(root=str(ROOT)))
+    script.write_text(CHILD.format())
     child = subprocess.Popen([PY, str(script), mode, "0.001", str(out)], stdout=subprocess.PIPE, text=True)
     assert child.stdout.readline().strip() == "ready"
     time.sleep(random.Random(seed).uniform(0.05, 0.4))
@@ -372,7 +371,6 @@ def _one_version(out: Path) -> None:
 
 CLI_CHILD = r"""
 import contextlib, os, sys, time
-sys.path.insert(0, {root!r})
 import core.fileio as F
 delay = float(os.environ["EASE_TEST_DELAY"])
 for name in ("rename", "link", "mkdir", "replace"):
@@ -403,7 +401,7 @@ class Commands:
         self.base = base
         save_pattern(tube_skirt(1.2, n_rows=8, n_cols=10), base / "pattern")
         self.script = base / "child.py"
-        self.script.write_text(CLI_CHILD.format(root=str(ROOT)))
+        self.script.write_text(CLI_CHILD.format())
         assert main(["drape", str(base / "pattern"), "--out", str(base / "drape"), "--quiet", "--frames", "2",
                      "--no-preview"]) == 0
         shirt = ROOT / "core" / "data" / "designs" / "top_sleeveless.json"
