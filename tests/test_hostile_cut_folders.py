@@ -10,24 +10,16 @@ import pytest
 
 from conftest import sample
 from hostile_cut_folders import case_list, make_case
-from hostile_runner import check_message, failures, run_cases
+from hostile_runner import run_checked, split_cases
 
 CASES = case_list()
-CRAFTED = [c for c in CASES if not c[0].startswith("mut")]
-MUTATED = [c for c in CASES if c[0].startswith("mut")]
-CHUNK = 30
-MUTATED_CHUNKS = [tuple(MUTATED[i:i + CHUNK]) for i in range(0, len(MUTATED), CHUNK)]
+CRAFTED, MUTATED_CHUNKS = split_cases(CASES, 30)
 
 
 def _run(cases, tmp_path):
     folders = [make_case(c, tmp_path) for c in cases]
-    results = run_cases("hostile_cut_folders:check_cut", folders)
-    bad = failures(results)
-    assert not bad, f"{len(bad)} of {len(cases)} crashed or traced back: {bad[:5]}"
-    for folder, status, message in results:
-        if status == "refused":
-            check_message(message, f"{folder}/cut.json", f"{folder}/cut_embedding.npz")
-    return {case: (status, message) for case, (_, status, message) in zip(cases, results)}
+    return run_checked("hostile_cut_folders:check_cut", cases, folders,
+                       lambda folder: (f"{folder}/cut.json", f"{folder}/cut_embedding.npz"))
 
 
 def test_crafted_cut_folders_are_refused_naming_file_and_key(tmp_path):

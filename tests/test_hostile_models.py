@@ -17,25 +17,15 @@ import pytest
 
 from conftest import sample
 from hostile_models import case_list, make_case, small_model
-from hostile_runner import check_message, failures, run_cases
+from hostile_runner import run_checked, split_cases
 
 CASES = case_list()
-CRAFTED = [c for c in CASES if not c[0].startswith("mut")]
-MUTATED = [c for c in CASES if c[0].startswith("mut")]
-CHUNK = 15
-MUTATED_CHUNKS = [tuple(MUTATED[i:i + CHUNK]) for i in range(0, len(MUTATED), CHUNK)]
+CRAFTED, MUTATED_CHUNKS = split_cases(CASES, 15)
 
 
 def _run(cases, tmp_path):
     paths = [make_case(c, tmp_path) for c in cases]
-    results = run_cases("hostile_models:check_model", paths)
-    assert len(results) == len(cases)
-    bad = failures(results)
-    assert not bad, f"{len(bad)} of {len(cases)} crashed or traced back: {bad[:5]}"
-    for path, status, message in results:
-        if status == "refused":
-            check_message(message, path)
-    return {case: (status, message) for case, (_, status, message) in zip(cases, results)}
+    return run_checked("hostile_models:check_model", cases, paths, lambda path: (path,))
 
 
 def test_crafted_model_files_are_refused_and_valid_ones_load(tmp_path):

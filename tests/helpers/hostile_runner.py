@@ -74,3 +74,24 @@ def check_message(message: str, *names) -> None:
     """A refusal is one line that names the file (any of ``names``)."""
     assert "\n" not in message.strip(), f"refusal over several lines: {message!r}"
     assert any(str(n) in message for n in names), f"refusal does not name {names}: {message!r}"
+
+
+def split_cases(cases: list, chunk: int) -> tuple:
+    """(crafted cases, seeded mutations in tuples of ``chunk``): a generator's cases whose name
+    starts with ``mut`` are mutations, run as a sample of chunks in CI."""
+    crafted = [c for c in cases if not c[0].startswith("mut")]
+    mutated = [c for c in cases if c[0].startswith("mut")]
+    return crafted, [tuple(mutated[i:i + chunk]) for i in range(0, len(mutated), chunk)]
+
+
+def run_checked(check: str, cases: list, inputs: list, names_of) -> dict:
+    """Run ``inputs`` (one per case) through ``check``; no crash or traceback is allowed, and
+    every refusal is one line naming a file of ``names_of(input)``. Returns case -> (status, message)."""
+    results = run_cases(check, inputs)
+    assert len(results) == len(cases)
+    bad = failures(results)
+    assert not bad, f"{len(bad)} of {len(cases)} crashed or traced back: {bad[:5]}"
+    for item, status, message in results:
+        if status == "refused":
+            check_message(message, *names_of(item))
+    return {case: (status, message) for case, (_, status, message) in zip(cases, results)}
