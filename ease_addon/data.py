@@ -180,6 +180,14 @@ def ramp_range(scene) -> tuple:
 
 # ----------------------------------------------------------------------------- pattern and garment
 
+def required_pattern(scene, to: str):
+    """The scene's pattern, or AddonError saying what it is needed ``to`` do (``"to export"``)."""
+    pattern = stored_pattern(scene)
+    if pattern is None:
+        raise state.AddonError(f"no pattern {to}: optimize the pattern first (EASE > Pattern)")
+    return pattern
+
+
 def stored_pattern(scene, key: str = PATTERN_KEY):
     """The pattern kept in the scene (None if there is none); parsed once per text."""
     from ..core.pattern.io import pattern_from_json

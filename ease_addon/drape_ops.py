@@ -103,9 +103,7 @@ class EASE_OT_drape(EaseOperator):
     _timer = None
 
     def _prepare(self, context):
-        pattern = data.stored_pattern(context.scene)
-        if pattern is None:
-            raise state.AddonError("no pattern: optimize the pattern first (EASE > Pattern)")
+        pattern = data.required_pattern(context.scene, "to drape")
         body_v, body_f = _pattern_body(pattern)
         return pattern, body_v, body_f
 

@@ -45,9 +45,7 @@ class EASE_OT_export_pattern(EaseOperator):
         from ..core import workflows as wf
         scene = context.scene
         s = scene.ease
-        pattern = data.stored_pattern(scene)
-        if pattern is None:
-            raise state.AddonError("no pattern to export: optimize the pattern first")
+        pattern = data.required_pattern(scene, "to export")
         formats = [f for f in FORMATS if getattr(s, f"export_{f}")]
         if not formats:
             raise state.AddonError("choose at least one export format")

@@ -83,12 +83,8 @@ class EASE_OT_marker(EaseOperator):
         from ..core.export.marker_render import write_marker
         scene = context.scene
         s = scene.ease
-        pattern = data.stored_pattern(scene)
-        if pattern is None:
-            raise state.AddonError("no pattern to nest: optimize the pattern first")
-        out = bpy.path.abspath(s.export_dir)
-        if not out:
-            raise state.AddonError("set an export folder")
+        pattern = data.required_pattern(scene, "to nest")
+        out = data.output_path(s.export_dir, "Export to")
         wanted = parse_quantities(s.marker_sizes, "Sizes") if s.marker_sizes.strip() else {size_label(pattern): 1}
         runs = _patterns(context, pattern, wanted)
         allowance = wf.export_allowance(pattern, round(s.export_allowance_cm / 100.0, 6),
