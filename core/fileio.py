@@ -205,6 +205,16 @@ def write_json(path: PathLike, obj, indent: int | None = 1) -> Path:
     return write_text(path, dumps_json(obj, indent=indent) + "\n")
 
 
+def write_files(out_dir: PathLike, files: dict) -> List[Path]:
+    """Write ``{relative name: bytes}`` into the folder ``out_dir`` at once (:func:`output_dir`);
+    returns the final paths."""
+    out_dir = Path(out_dir)
+    with output_dir(out_dir) as tmp:
+        for name, data in files.items():
+            write_bytes(tmp / name, data)
+    return [out_dir / name for name in files]
+
+
 def committed_outputs() -> Tuple[Path, ...]:
     """Every output folder :func:`output_dir` has put in place in this process, in order.
 

@@ -32,6 +32,8 @@ Pose = Union[str, Mapping[str, np.ndarray], None]
 
 POSE_PRESETS = ("A", "T", "P1", "P2", "P3")
 REFERENCE_POSE = "A"   # the preset every model is built in: the same instance as pose None
+#: The frame of every 3D file the project writes (body OBJs, drapes, exported garments by default).
+FRAME = "metres, +Z up, the body facing -Y, +X the body's left (EASE/Blender frame)"
 
 REQUIRED_LANDMARKS = (
     "neck_front", "neck_back", "neck_left", "neck_right",

@@ -11,6 +11,7 @@ import io
 from pathlib import Path
 import numpy as np
 
+from ..body.model import FRAME
 from ..fileio import output_dir, write_bytes, write_json, write_text
 
 FILES = ("garment.obj", "garment.ply", "drape.npz", "drape_report.json", "preview.png")
@@ -21,7 +22,7 @@ def obj_text(result) -> str:
     out = io.StringIO()
     out.write("# EASE drape: vertex k = global garment vertex id k-1\n")
     # the frame of every 3D file of the project (body OBJs, ease export garment.obj by default)
-    out.write("# frame: metres, +Z up, the body facing -Y, +X the body's left (EASE/Blender frame), as draped\n")
+    out.write(f"# frame: {FRAME}, as draped\n")
     np.savetxt(out, result.positions, fmt="v %.6f %.6f %.6f")
     for g, name in enumerate(result.garment_names):
         out.write(f"g {name}\n")

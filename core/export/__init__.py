@@ -40,7 +40,7 @@ from typing import Iterable, List, Optional, Union
 import numpy as np
 
 from ..errors import ExportError
-from ..fileio import dumps_json, output_dir, write_bytes
+from ..fileio import dumps_json, write_files
 from ..pattern.types import Pattern
 from ..progress import report, sub
 from ..geom.polyline import polyline_length
@@ -123,7 +123,8 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
     formats or the drape are invalid.
     """
     formats = parse_formats(formats)
-    if up not in ("y", "z"):
+    from .mesh import UP_AXES
+    if up not in UP_AXES:
         raise ExportError(f"up: expected 'y' or 'z', got {up!r}")
     # the options and the design's export fields first: a bad value costs no work and no memory
     if not isinstance(pattern, Pattern):
@@ -147,6 +148,10 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
     files = {}   # relative name -> bytes, rendered fully before anything is written
     summary = {"style": title, "size": size, "unit": "mm", "allowance_mm": {k: v * 1000 for k, v in widths.items()},
                "pieces": [_piece_summary(p, pattern) for p in pieces], "warnings": found}
+    if "glb" in formats or "obj" in formats:
+        from . import mesh
+        meshes = mesh.piece_meshes(pattern, positions, [p.rotation for p in pieces])
+        body_mesh = None if body is None else mesh.body_mesh(*body)
     steps = len(formats)
     for k, fmt in enumerate(formats):
         report(progress, 0.3 + 0.65 * k / steps, f"rendering {fmt.upper()}")
@@ -166,8 +171,8 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
             pages = {}
             for paper in ("a4", "letter"):
                 lay = pdf.print_sheet(pieces, paper)
-                files[f"pattern_{paper}.pdf"] = pdf.tiled_pdf(pieces, lay, paper, title)
                 grid, ink = pdf.sheet_pages(pieces, lay, paper)
+                files[f"pattern_{paper}.pdf"] = pdf.tiled_pdf(pieces, lay, paper, title, pages=(grid, ink))
                 pages[paper] = {"rows": grid.rows, "columns": grid.cols, "pages": int(ink.sum()),
                                 "left_out": [pdf.page_name(r, c) for r, c in zip(*np.nonzero(~ink))],
                                 "overlap_mm": round(pdf.OVERLAP * 1000, 1)}
@@ -176,9 +181,6 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
             pages["plotter_mm"] = ((lay.size + 2 * pdf.PAGE_MARGIN) * 1000).round(1).tolist()
             summary["pdf"] = pages
         elif fmt in ("glb", "obj"):
-            from . import mesh
-            meshes = mesh.piece_meshes(pattern, positions, [p.rotation for p in pieces])
-            body_mesh = None if body is None else mesh.body_mesh(*body)
             if fmt == "glb":
                 files["garment.glb"] = mesh.glb_bytes(meshes, body=body_mesh)
             else:
@@ -188,12 +190,9 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
     summary["files"] = sorted(files)
     files["export.json"] = (dumps_json(summary) + "\n").encode("utf-8")
     report(progress, 0.95, "writing files")
-    out_dir = Path(out_dir)
-    with output_dir(out_dir) as tmp:
-        for name, data in files.items():
-            write_bytes(tmp / name, data)
+    paths = write_files(out_dir, files)
     report(progress, 1.0, f"wrote {len(files)} files to {out_dir}")
-    return [out_dir / name for name in files]
+    return paths
 
 
 def _piece_summary(piece: PieceDrawing, pattern: Pattern) -> dict:

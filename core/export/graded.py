@@ -31,7 +31,7 @@ from xml.sax.saxutils import escape
 import numpy as np
 
 from ..errors import ExportError
-from ..fileio import dumps_json
+from ..fileio import dumps_json, write_files
 from ..geom.layout import Layout, layout_pieces
 from ..geom.polyline import polyline_length
 from ..pattern.types import Pattern
@@ -39,7 +39,6 @@ from ..progress import Progress, report, sub
 from . import dxf as dxf_mod
 from . import pdf as pdf_mod
 from .layout import LAYOUT_MARGIN, SHEET_WIDTH
-from .marker_render import write_folder
 from .pieces import PieceDrawing, ascii_text, build_pieces
 from .svg import STROKE_MM, _fmt, _path
 
@@ -244,7 +243,7 @@ def export_graded(patterns: Mapping[str, Pattern], out_dir, allowance=None, notc
              "graded.svg": graded_svg(stacks, layout, title).encode("utf-8"),
              "graded.pdf": graded_pdf(stacks, layout, title),
              "graded.json": (dumps_json(summary) + "\n").encode("utf-8")}
-    paths = write_folder(out_dir, files)
+    paths = write_files(out_dir, files)
     report(progress, 1.0, f"wrote the graded nest to {out_dir}")
     return paths
 

@@ -19,7 +19,7 @@ from xml.sax.saxutils import escape, quoteattr
 
 import numpy as np
 
-from ..fileio import dumps_json, output_dir, write_bytes
+from ..fileio import dumps_json, write_files
 from ..progress import Progress, report
 from . import dxf as dxf_mod
 from . import pdf as pdf_mod
@@ -219,18 +219,9 @@ def write_marker(marker: Marker, out_dir, title: str = "marker", progress: Optio
              "marker.pdf": marker_pdf(marker, title),
              "marker.png": marker_png(marker, title),
              "marker.json": (dumps_json(summary) + "\n").encode("utf-8")}
-    paths = write_folder(out_dir, files)
+    paths = write_files(out_dir, files)
     report(progress, 1.0, f"wrote the marker to {out_dir}")
     return paths
 
 
-def write_folder(out_dir, files: dict) -> List[Path]:
-    """Write {relative name: bytes} into ``out_dir`` at once (:func:`core.fileio.output_dir`); the paths."""
-    out_dir = Path(out_dir)
-    with output_dir(out_dir) as tmp:
-        for name, data in files.items():
-            write_bytes(tmp / name, data)
-    return [out_dir / name for name in files]
-
-
-__all__ = ["marker_svg", "marker_dxf", "marker_pdf", "marker_png", "write_marker", "write_folder", "FILES"]
+__all__ = ["marker_svg", "marker_dxf", "marker_pdf", "marker_png", "write_marker", "FILES"]

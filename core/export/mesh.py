@@ -31,6 +31,7 @@ from typing import List, Sequence, Tuple
 
 import numpy as np
 
+from ..body.model import FRAME
 from ..geom.mesh import vertex_normals
 from ..pattern.types import Pattern
 
@@ -57,7 +58,7 @@ def smooth_normals(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 
 UP_AXES = ("y", "z")
-FRAME_Z = "metres, +Z up, the body facing -Y, +X the body's left (EASE/Blender frame), as draped"
+FRAME_Z = f"{FRAME}, as draped"
 FRAME_Y = "metres, +Y up, the body facing +Z, +X the body's left (glTF frame: EASE (x, y, z) -> (x, z, -y)), as draped"
 
 

@@ -21,7 +21,6 @@ and as long as the layout.
 from __future__ import annotations
 
 import io
-import math
 import string
 from typing import List, Sequence, Tuple
 
@@ -207,7 +206,7 @@ def _assembly_map(c, top_left: np.ndarray, pieces, layout: Layout, grid: PageGri
 
 
 def tiled_pdf(pieces: Sequence[PieceDrawing], layout: Layout = None, paper: str = "a4",
-              title: str = "pattern") -> bytes:
+              title: str = "pattern", pages: Tuple[PageGrid, np.ndarray] = None) -> bytes:
     """1:1 pattern tiled on ``paper`` pages (``"a4"`` or ``"letter"``), rows top to bottom.
 
     Parameters
@@ -217,6 +216,7 @@ def tiled_pdf(pieces: Sequence[PieceDrawing], layout: Layout = None, paper: str 
         the fewest pages). It should keep ``TEST_RESERVE`` free at its
         top-left; the test square and the page map are drawn there.
     paper, title : str.
+    pages : (grid, printed) of :func:`sheet_pages` for this layout when the caller has them.
 
     Returns
     -------
@@ -230,7 +230,7 @@ def tiled_pdf(pieces: Sequence[PieceDrawing], layout: Layout = None, paper: str 
     if layout is None:
         layout = print_sheet(pieces, paper)
     pw, ph = PAPERS[paper]
-    grid, ink = sheet_pages(pieces, layout, paper)
+    grid, ink = pages if pages is not None else sheet_pages(pieces, layout, paper)
     tile = np.asarray(grid.tile)
     buf = io.BytesIO()
     c = rl_canvas.Canvas(buf, pagesize=(pw * PT_PER_M, ph * PT_PER_M), invariant=1, pageCompression=1)

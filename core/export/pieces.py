@@ -20,7 +20,6 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
-from ..errors import ExportError
 from ..geom.layout import grain_arrows, grain_line, grain_rotation
 from ..geom.polygon import MITRE_LIMIT, ray_hit
 from ..pattern.types import Pattern, PatternPanel
