@@ -100,7 +100,7 @@ class LiveSession:
         #: (f,) m^2, the cut triangles' areas on the reference body
         self.areas = np.concatenate([triangle_areas(pos[p.vertex_ids], p.faces) for p in prep.cut.panels])
         self.warm_iterations = int(warm_iterations)
-        self.K = self.solver.offsets(self.solver.ref_positions)[0]
+        self.K = self.solver.ref_offsets[0]
         self.ease = self.solver.design_ease.copy()
         self._start = None if pattern is None else self.solver.start_from(pattern)
         self.state = None

@@ -128,15 +128,21 @@ def make_solver(prep: Prepared, config: str = "improved", iterations: Optional[i
                          progress=progress)
 
 
-def measure_pattern(pattern) -> dict:
-    """Measure ``pattern`` into its report (``report["metrics"]``) and return the metrics;
-    a flipped triangle is an error, not a figure."""
+def _checked_metrics(pattern) -> dict:
+    """The metrics of ``pattern`` (:func:`core.metrics.pattern.pattern_report`); a flipped
+    triangle is an error, not a figure."""
     from .errors import PatternError
     from .metrics.pattern import pattern_report
     metrics = pattern_report(pattern)
     if metrics["flipped_triangles"]:
         raise PatternError(f"{metrics['flipped_triangles']} flipped triangles; nothing written")
-    pattern.report["metrics"] = metrics
+    return metrics
+
+
+def measure_pattern(pattern) -> dict:
+    """Measure ``pattern`` into its report (``report["metrics"]``) and return the metrics;
+    a flipped triangle is an error, not a figure."""
+    pattern.report["metrics"] = metrics = _checked_metrics(pattern)
     return metrics
 
 
@@ -214,11 +220,13 @@ def transfer(prep: Prepared, size, config: str = "improved", iterations: Optiona
                                      "pose": pose, **({"size": size} if isinstance(size, str) else {})},
                                progress=sub(progress, 0.5, 1.0))
     optimize = time.perf_counter() - t0
-    dev, refc = ease_compliance(pattern), ease_compliance(ref_pat)
+    metrics = _checked_metrics(pattern)
+    dev = metrics["compliance"]                       # the transfer deviation is the compliance on the target
+    refc = (ref_pat.report.get("metrics") or {}).get("compliance") or ease_compliance(ref_pat)
     label = size if isinstance(size, str) else "custom"
     pattern.report.update({"config": config, "size": label, "transfer_deviation": dev,
                            "reference_compliance": refc})
-    measure_pattern(pattern)
+    pattern.report["metrics"] = metrics
     figures = {"size": label, **pattern_figures(pattern),
                "transfer deviation mean %": round(float(dev["mean"]), 3),
                "transfer deviation std %": round(float(dev["std"]), 3),
@@ -233,15 +241,8 @@ def tolerances(prep: Prepared, eps_weft: Optional[float] = None,
     A caller's weft tolerance also stands for the warp unless a warp tolerance
     is given (one ``--tolerance`` means "this much stretch either way").
     """
-    from .design.materials import Materials
-    from .errors import PatternError
-    design = Materials.from_dict(prep.cut.materials)
-    w = eps_weft if eps_weft is not None else design.eps_weft
-    g = eps_warp if eps_warp is not None else (eps_weft if eps_weft is not None else design.eps_warp)
-    for name, v in (("tolerance", w), ("tolerance_warp", g)):
-        if not (isinstance(v, (int, float)) and v >= 1.0):
-            raise PatternError(f"{name}: a stretch tolerance must be >= 1 (1.1 = 10 % stretch), got {v}")
-    return float(w), float(g)
+    from .pattern.config import tolerances as resolve
+    return resolve(prep.cut.materials, eps_weft, eps_warp)
 
 
 def adapt(prep: Prepared, poses: Sequence, eps_weft: Optional[float] = None, eps_warp: Optional[float] = None,

@@ -7,7 +7,6 @@ commands.
 """
 from __future__ import annotations
 
-from ..errors import PatternError
 from ..workflows import CONFIGS
 from .common import add_quiet, console_progress, subcommand
 
@@ -95,9 +94,10 @@ def _cmd_transfer(args) -> int:
 def _cmd_adapt(args) -> int:
     from .. import workflows as wf
     from ..progress import sub
+    from ..pattern.config import check_tolerance
     for name, v in (("--tolerance", args.tolerance), ("--tolerance-warp", args.tolerance_warp)):
-        if v is not None and not v >= 1.0:
-            raise PatternError(f"{name}: a stretch tolerance must be >= 1 (1.1 = 10 % stretch), got {v}")
+        if v is not None:
+            check_tolerance(name, v)                  # refused before the cut
     options = _solver_options(args)
     prog = console_progress(args)
     prep = _prepare(args, prog)

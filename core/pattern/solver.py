@@ -95,6 +95,11 @@ class PatternSolver:
         self._GyT = self._Gy.T.tocsr()
         self._factors: Dict[tuple, Tuple[Callable, np.ndarray]] = {}
         self.n_factorisations = 0
+        # the reference body's offsets serve every reference target, adaptation and seam plan:
+        # computed once, read-only (a solve never changes them)
+        self.ref_offsets = tuple(a.copy() for a in self.offsets(self.ref_positions))
+        for a in self.ref_offsets:
+            a.flags.writeable = False
         self.timings = {"init": time.perf_counter() - t0}
         report(progress, 1.0, "flattened")
 
@@ -115,7 +120,7 @@ class PatternSolver:
         ease, a scalar or one value per triangle of all panels in order
         (benchmarks sweep it).
         """
-        K, _, _ = self.offsets(self.ref_positions if positions is None else positions)
+        K, _, _ = self.ref_offsets if positions is None else self.offsets(positions)
         ease = reference_ease(self.design_ease, ease)
         return K, ease.copy(), np.ones_like(ease)
 
@@ -125,7 +130,7 @@ class PatternSolver:
         cfg = config or self.config
         eps_weft = check_tolerance("eps_weft", eps_weft)
         eps_warp = check_tolerance("eps_warp", eps_warp)
-        K, lw, lg = self.offsets(self.ref_positions)
+        K, lw, lg = self.ref_offsets
         poses = [self.offsets(P)[1:] for P in pose_positions]
         cw, cg = adaptation_scales(self.design_ease, lw, lg, poses, eps_weft, eps_warp, cfg.adaptation.margin)
         return K, cw, cg
@@ -148,7 +153,7 @@ class PatternSolver:
     def design_plan(self, config: Optional[SolverConfig] = None) -> SeamPlan:
         """The seam plan of the design's own ease on the reference body: what transfer and adaptation
         solves sew (the reference pattern's plan)."""
-        K = self.offsets(self.ref_positions)[0]
+        K = self.ref_offsets[0]
         return self.plan_seams(K, self.design_ease, np.ones_like(self.design_ease), config)
 
     # ------------------------------------------------------------------ the system
