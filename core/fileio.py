@@ -323,17 +323,20 @@ def _fix_modes(tmp: Path) -> None:
 
 def _recover(final: Path) -> None:
     """Finish or undo what a killed run left for ``final`` (beside it and inside it)."""
+    # one listing each (a batch lists its items folder once per item): what is moved or
+    # swapped below is gone when removed, and _remove ignores a path that is gone
     stale = _stale(final.parent, final.name)
     for kind, tag, path in stale:
         if kind == "old" and not os.path.lexists(final):
             os.rename(path, final)        # killed between the two renames: the old folder back
-    for kind, tag, path in _stale(final.parent, final.name):
+    for kind, tag, path in stale:
         _remove(path)
     if final.is_dir():
-        for kind, tag, path in _stale(final, final.name):
+        inside = _stale(final, final.name)
+        for kind, tag, path in inside:
             if kind == "new":
                 _swap_entries(path, final, final / _temp_name(final.name, "old", tag))
-        for kind, tag, path in _stale(final, final.name):
+        for kind, tag, path in inside:
             _remove(path)
 
 
