@@ -42,7 +42,6 @@ MAX_PICKLE_BYTES = MAX_TOTAL_BYTES + (256 << 20)
 # Chumpy objects nest (an array inside a Ch inside a Ch); real files go 2-3 deep.
 MAX_NESTING = 32
 
-_ARRAY_KINDS = "biufSU"
 _DTYPE_FLAGS_REFUSED = 0x01 | 0x02 | 0x04 | 0x10 | 0x20 | 0x40   # refcount/list-pickle/pointer/pyapi/getitem/setitem
 
 
@@ -245,8 +244,6 @@ class SparseStandIn:
                 if len(data) and (row.min() < 0 or row.max() >= shape[0] or col.min() < 0 or col.max() >= shape[1]):
                     raise ValueError(f"an entry lies outside the shape {shape}")
                 return sp.coo_matrix((data, (row, col)), shape=shape)
-        except BodyError as exc:
-            raise BodyError(f"a scipy.sparse {self.fmt} matrix in the pickle is malformed ({exc})") from None
         except (KeyError, TypeError, ValueError, OverflowError, IndexError) as exc:
             raise BodyError(f"a scipy.sparse {self.fmt} matrix in the pickle is malformed ({exc})") from None
         raise BodyError(f"scipy.sparse format {self.fmt!r} is not supported in model files")

@@ -32,8 +32,6 @@ from typing import Dict, List, Optional, Tuple
 import numpy as np
 
 from ..body.instance import body_instance
-from ..body.instance import instance_pose as body_pose
-from ..body.instance import instance_shape as body_shape
 from ..body.model import SurfacePoint
 from ..errors import BodyError, DesignError
 from .checks import parameter_value
@@ -54,16 +52,6 @@ AXIS_VECTORS = {
 # Where a trace along a body part heads (landmarks), and its limit.
 TRACE_TARGET = {"arm_left": "wrist_left", "arm_right": "wrist_right",
                 "leg_left": "ankle_left", "leg_right": "ankle_right"}
-
-
-def instance_shape(design: Design, body, shape=None):
-    """The shape dict of the instance to cut on (``shape`` overrides the design's)."""
-    return body_shape(body, design.body.get("shape") if shape is None else shape)
-
-
-def instance_pose(design: Design, pose=None):
-    """The pose of the instance to cut on (``pose`` overrides the design's)."""
-    return body_pose(design.body.get("pose") if pose is None else pose)
 
 
 def instance_vertices(design: Design, body, shape=None, pose=None) -> np.ndarray:

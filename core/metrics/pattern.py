@@ -7,8 +7,7 @@ achieved weft scale ``1/|J w|``, warp scale ``1/|J g|``; required stretch
 ``|J w|`` on a target body; shear = angle(J w, J g) - 90 degrees. Means and
 standard deviations are area-weighted (3D area on the measured body), in percent.
 The per-triangle geometry is :mod:`core.geom.strain` and :mod:`core.geom.mesh`
-(re-exported here: ``scales``, ``jacobians``, ``weft_of``, ``signed_areas_2d``,
-``areas_3d``).
+(``scales`` and ``signed_areas_2d`` are re-exported here).
 """
 from __future__ import annotations
 
@@ -16,11 +15,11 @@ from typing import Dict, Iterable, Optional
 
 import numpy as np
 
-from ..geom.mesh import signed_areas_2d, triangle_areas as areas_3d
+from ..geom.mesh import signed_areas_2d, triangle_areas
 from ..geom.polyline import polyline_length
-from ..geom.strain import jacobians, scales, weft_of
+from ..geom.strain import scales
 
-__all__ = ["jacobians", "scales", "weft_of", "signed_areas_2d", "areas_3d", "flipped_count", "required_stretch",
+__all__ = ["scales", "signed_areas_2d", "flipped_count", "required_stretch",
            "weighted_stats", "compliance_per_triangle", "ease_compliance", "seam_mismatch", "residual_stretch",
            "flips", "pattern_report"]
 
@@ -94,7 +93,7 @@ def ease_compliance(pattern, garment: Optional[str] = None, xyz: Optional[Dict[s
         comp.append(compliance_per_triangle(rw, t))
         warp.append((rg - p.target_warp) / p.target_warp)
         shear.append(sh)
-        area.append(areas_3d(X, p.faces))
+        area.append(triangle_areas(X, p.faces))
     if not comp:
         return {}
     a = np.concatenate(area)
@@ -146,7 +145,7 @@ def residual_stretch(pattern, body_xyz: Dict[str, np.ndarray], eps_weft: float =
     for p in _panels(pattern, garment):
         X = body_xyz[p.name]
         r_weft, _ = required_stretch(p.uv, X, p.faces, p.grain)
-        a = areas_3d(X, p.faces)
+        a = triangle_areas(X, p.faces)
         over += float(np.sum(a[r_weft > eps_weft]))
         total += float(np.sum(a))
     return 100.0 * over / total if total > 0 else 0.0
