@@ -16,7 +16,7 @@ import bpy
 import numpy as np
 
 from . import convert, data, materials, ramp
-from .objects import objects_with_role, remove_object, remove_objects, role_object
+from .objects import objects_with_role, remove_data, remove_object, remove_objects, role_object
 
 SEAMLINES = "EASE Seamlines"
 KEYPOINTS = "EASE Keypoints"
@@ -24,14 +24,6 @@ ACHIEVED = "achieved_ease"     # CORNER colour layer of the pattern panels (per 
 GAP = 0.08                     # metres between laid-out panels
 SHEET_WIDTH = 1.6              # metres: the pieces beside the body are laid out this wide
 SHEET_TOP = 1.8                # metres: height of the pieces' top edge
-
-
-def _remove_data(datablock) -> None:
-    if datablock is not None and datablock.users == 0:
-        for coll in (bpy.data.meshes, bpy.data.curves):
-            if datablock.name in coll and coll[datablock.name] == datablock:
-                coll.remove(datablock)
-                return
 
 
 def put_object(scene, name: str, datablock, role: str, parent=None):
@@ -46,7 +38,7 @@ def put_object(scene, name: str, datablock, role: str, parent=None):
     old = obj.data
     obj.data = datablock
     if old is not None and old != datablock:
-        _remove_data(old)
+        remove_data(old)
     datablock.name = name
     obj.parent = parent
     return obj

@@ -13,7 +13,7 @@ import threading
 import bpy
 
 from . import build, data, state, sync
-from .objects import objects_with_role, window_progress
+from .objects import window_progress
 from .operators_base import EaseOperator
 
 _JOBS: list = []              # drape jobs running (cancelled on unregister)
@@ -226,9 +226,7 @@ class EASE_OT_fitmap(EaseOperator):
 
     mode: bpy.props.EnumProperty(items=[("NONE", "Fabric", ""), ("STRAIN", "Strain", ""), ("GAP", "Gap", "")])
 
-    def run(self, context):
-        if not objects_with_role(context.scene, "garment"):
-            raise state.AddonError("no draped garment: drape first")
+    def run(self, context):     # poll (needs garment) has made sure there is a draped garment
         context.scene.ease.fitmap = self.mode   # its update applies the map
 
 

@@ -44,15 +44,20 @@ def objects_with_role(scene, role: str) -> list:
     return [o for o in scene.objects if o.get("ease_role") == role]
 
 
+def remove_data(datablock) -> None:
+    """Remove a mesh or curve datablock once nothing uses it."""
+    if datablock is not None and datablock.users == 0:
+        for coll in (bpy.data.meshes, bpy.data.curves):
+            if datablock.name in coll and coll[datablock.name] == datablock:
+                coll.remove(datablock)
+                return
+
+
 def remove_object(obj) -> None:
     """Remove ``obj`` and its mesh or curve data once nothing else uses it."""
     data = obj.data
     bpy.data.objects.remove(obj, do_unlink=True)
-    if data is not None and data.users == 0:
-        for coll in (bpy.data.meshes, bpy.data.curves):
-            if data.name in coll and coll[data.name] == data:
-                coll.remove(data)
-                break
+    remove_data(data)
 
 
 def remove_objects(objects) -> None:

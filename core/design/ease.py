@@ -128,10 +128,9 @@ def apply_ease(cut, design, body, body_vertices: np.ndarray, resolver: Optional[
     if resolver is None:
         resolver = Resolver(design, body, body_vertices)
     for panel in cut.panels:
-        ease, path, _ = _panel_field(design, panel.name)
+        ease, path, generated = _panel_field(design, panel.name)
         panel.ease = panel_ease(cut, panel, ease, resolver, path)
-    for panel in cut.panels:
-        if panel.mirror_of is not None and not _is_mirror_ease(cut, design, panel, resolver):
+        if panel.mirror_of is not None and not generated and not _is_mirror_ease(cut, design, panel, resolver):
             # a right panel with ease of its own (painted without X-mirror) is a piece of
             # its own: the export must not cut it as the mirror of the left one
             panel.mirror_of = None
@@ -147,11 +146,8 @@ def _panel_field(design, name: str) -> tuple:
 
 
 def _is_mirror_ease(cut, design, panel, resolver) -> bool:
-    """True when ``panel.ease`` is its ``mirror_of`` source's field read mirrored (to the
-    6 decimals the add-on writes ease with)."""
-    _, _, generated = _panel_field(design, panel.name)
-    if generated:
-        return True
+    """True when ``panel.ease`` (a design panel's own field) is its ``mirror_of`` source's
+    field read mirrored (to the 6 decimals the add-on writes ease with)."""
     try:
         source, path, _ = _panel_field(design, panel.mirror_of)
     except DesignError:       # the source is not a design panel: nothing to compare with
