@@ -62,22 +62,44 @@ def prepare(design, body=None, cut=None, progress: Optional[Progress] = None) ->
         A cut of this design made earlier (the add-on keeps one); None cuts now.
     progress : callback, optional
     """
-    from .body import load_body
     from .body.instance import spec_instance
+    from .body.registry import OBJ_OPTIONS, load_spec, resolve_body_files
     from .design import load_design
 
     t0 = time.perf_counter()
+    base = _design_folder(design)
     design = load_design(design)
+    if base is not None:    # an OBJ template's files are named relative to the design file
+        design.body.update(resolve_body_files(design.body, base))
     if body is None:
-        body = load_body(design.body.get("model", "anny") or "anny")
+        body = load_spec(design.body)
     t1 = time.perf_counter()
     if cut is None:
         from .cut import cut_design
         cut = cut_design(design, body=body, progress=sub(progress, 0.0, 0.95))
+    for key in OBJ_OPTIONS:     # the cut's body record names the template's files too (drape, pattern)
+        if design.body.get(key) is not None:
+            cut.body.setdefault(key, design.body[key])
     t2 = time.perf_counter()
     reference, _ = spec_instance(cut.body, model=body)
     report(progress, 1.0, f"cut {len(cut.panels)} panels")
     return Prepared(design, body, cut, reference, {"load": t1 - t0, "cut": t2 - t1})
+
+
+def _design_folder(design):
+    """The folder of a design given as a file path (its body's files are relative to it), else None."""
+    import os
+    if isinstance(design, os.PathLike) or (isinstance(design, str) and not design.lstrip().startswith("{")):
+        return os.path.dirname(os.path.abspath(os.fspath(design)))
+    return None
+
+
+def size_name(prep: Prepared, size: str) -> str:
+    """The canonical chart size of ``size`` for ``prep``: a bare name (``"M"``) is of the
+    design's chart (``body.chart``), a qualified one (``"women:M"``) of its own."""
+    from .body.sizes import check_size
+    text = str(size)
+    return check_size(text) if ":" in text else check_size(text, prep.design.body.get("chart"))
 
 
 # ----------------------------------------------------------------------------- pattern
@@ -128,33 +150,32 @@ def make_solver(prep: Prepared, config: str = "improved", iterations: Optional[i
                          progress=progress)
 
 
-def _checked_metrics(pattern) -> dict:
-    """The metrics of ``pattern`` (:func:`core.metrics.pattern.pattern_report`); a flipped
-    triangle is an error, not a figure."""
-    from .errors import PatternError
+def _checked_metrics(pattern, checks: Optional[Sequence[str]] = None) -> dict:
+    """The metrics of ``pattern`` (:func:`core.metrics.pattern.pattern_report`, with the region
+    report and the collapse sites on the pattern's body landmarks); a pattern failing one of
+    ``checks`` (default :data:`core.metrics.checks.REFUSED`: flipped, and collapsed once the
+    solver prevents it) is an error naming the panel and where on the body, not a figure."""
+    from .metrics.checks import check_pattern
     from .metrics.pattern import pattern_report
-    metrics = pattern_report(pattern)
-    if metrics["flipped_triangles"]:
-        raise PatternError(f"{metrics['flipped_triangles']} flipped triangles; nothing written")
+    from .metrics.regions import body_landmarks
+    metrics = pattern_report(pattern, body_landmarks(pattern))
+    check_pattern(metrics, checks)
     return metrics
 
 
-def measure_pattern(pattern) -> dict:
+def measure_pattern(pattern, checks: Optional[Sequence[str]] = None) -> dict:
     """Measure ``pattern`` into its report (``report["metrics"]``) and return the metrics;
-    a flipped triangle is an error, not a figure."""
-    pattern.report["metrics"] = metrics = _checked_metrics(pattern)
+    a pattern failing one of ``checks`` (see :func:`_checked_metrics`) is an error, not a figure."""
+    pattern.report["metrics"] = metrics = _checked_metrics(pattern, checks)
     return metrics
 
 
 def pattern_figures(pattern) -> Dict[str, object]:
-    """The key figures of a measured pattern (label -> rounded value), for the CLI and the add-on."""
-    m = pattern.report["metrics"]
-    c, s = m["compliance"], m["seams"]
-    return {"pieces": len(pattern.panels),
-            "compliance mean %": round(float(c["mean"]), 2), "compliance std %": round(float(c["std"]), 2),
-            "shear p95 deg": round(float(c["shear_p95"]), 1),
-            "seam mismatch mean %": round(float(s["mean"]), 2), "seam mismatch max mm": round(float(s["max_mm"]), 1),
-            "flipped": int(m["flipped_triangles"]), "gathered seams": len(s.get("gathered") or {})}
+    """The key figures of a measured pattern (label -> rounded value), for the CLI and the add-on:
+    weft compliance with the warp deviation and shear beside it, flipped and collapsed counts
+    (:func:`core.metrics.figures.key_figures`)."""
+    from .metrics.figures import key_figures
+    return key_figures(pattern)
 
 
 def _solve_reference(prep, solver, progress):
@@ -190,20 +211,20 @@ def transfer(prep: Prepared, size, config: str = "improved", iterations: Optiona
     Parameters
     ----------
     size : str or mapping
-        A chart size name (XS..XL, fitted on the model) or a shape dict of the
-        model's parameters (a measured or sampled body).
+        A chart size name (fitted on the model): ``"M"`` of the design's chart
+        (``body.chart``, default the default chart) or ``"women:M"``; or a shape
+        dict of the model's parameters (a measured or sampled body).
 
     The reference pattern is solved first (or ``start`` is taken as it) and
     seeds the transfer solve; the report records the transfer deviation (the
     ease compliance on the target body) beside the reference's own compliance.
     """
     from .body.instance import body_instance, instance_shape
-    from .body.sizes import check_size
     from .metrics.pattern import ease_compliance
     from .pattern.solve import transfer_pattern
 
     if isinstance(size, str):
-        size = check_size(size)
+        size = size_name(prep, size)
     elif not isinstance(size, Mapping):
         from .errors import PatternError
         raise PatternError(f"transfer: expected a size name or a shape dict, got {type(size).__name__}")
@@ -309,21 +330,9 @@ def write_pattern(out, run: PatternRun, preview: bool = True) -> None:
 
 
 def summary(run: PatternRun) -> str:
-    """The one-line summary the CLI prints after a pattern run."""
-    pattern = run.pattern
-    m = pattern.report["metrics"]
-    c, s = m["compliance"], m["seams"]
-    line = (f"{pattern.mode}: {len(pattern.panels)} pieces, ease compliance {c['mean']:.2f} ± {c['std']:.2f} % "
-            f"(shear p95 {c['shear_p95']:.1f}°), seam mismatch {s['mean']:.2f} % (max {s['max_mm']:.1f} mm), "
-            f"flipped {m['flipped_triangles']}, optimize {run.timings.get('optimize', 0.0):.2f} s"
-            + (f"; gathered: {', '.join(sorted(s['gathered']))}" if s.get("gathered") else ""))
-    if "transfer_deviation" in pattern.report:
-        line += f"; transfer deviation {pattern.report['transfer_deviation']['mean']:.2f} %"
-    if "residual_stretch" in pattern.report:
-        worst = max((v["after"] for d in pattern.report["residual_stretch"].values() for v in d.values()),
-                    default=0.0)
-        line += f"; residual stretch after adaptation <= {worst:.2f} %"
-    return line
+    """The one-line summary the CLI prints after a pattern run (:func:`core.metrics.figures.summary_line`)."""
+    from .metrics.figures import summary_line
+    return summary_line(run.pattern, run.timings.get("optimize", 0.0))
 
 
 # ----------------------------------------------------------------------------- drape

@@ -47,3 +47,31 @@ def test_axis_from_region_points():
     P = t * d + 0.02 * rng.normal(size=(50, 3))
     a = body_part_axis("arm", "left", region_points=P)
     assert a[2] > 0 and abs(a @ d) > 0.98
+
+
+def _quadruped():
+    """The box horse of tests/test_body_obj.py (facing -Y, head up front), as vertices and triangles."""
+    from test_body_obj import horse
+    v, quads, owner = horse()
+    F = np.array([t for q in quads for t in ((q[0], q[1], q[2]), (q[0], q[2], q[3]))])
+    return v, F, np.array(owner)
+
+
+def test_quadruped_warp_runs_along_the_spine():
+    """No skeleton, regions or landmarks: the warp on the barrel runs along the spine (Y), not
+    around the barrel (the vertical it used to take), pointing to the head end."""
+    v, F, owner = _quadruped()
+    axis = body_part_axis("torso", "left", landmarks={}, faces=F, X=v)
+    assert abs(axis[1]) > 0.95 and axis[1] < 0, axis            # along -Y, towards the head
+    barrel = np.nonzero(np.isin(F, np.nonzero(owner == "torso")[0]).all(1))[0]
+    w = warp_directions(v, F[barrel], axis)
+    # side and back faces of the barrel: the warp lies along the spine
+    sides = np.abs(np.cross(v[F[barrel, 1]] - v[F[barrel, 0]], v[F[barrel, 2]] - v[F[barrel, 0]]))[:, 1] < 1e-9
+    assert sides.sum() >= 8 and np.all(np.abs(w[sides, 1]) > 0.999)
+
+
+def test_standing_body_keeps_the_vertical():
+    """A standing body (the horse stood up on its tail) keeps the vertical torso axis."""
+    v, F, _ = _quadruped()
+    standing = np.stack([v[:, 0], v[:, 2], -v[:, 1]], 1)
+    np.testing.assert_allclose(body_part_axis("torso", "left", landmarks={}, faces=F, X=standing), [0, 0, 1])

@@ -19,7 +19,7 @@ Pose = Union[None, str, Mapping[str, object]]
 
 
 def instance_shape(model, shape: Shape) -> Optional[dict]:
-    """The shape dict of ``shape``: a chart size name (XS..XL) is fitted on ``model``.
+    """The shape dict of ``shape``: a chart size name (``"M"``, ``"women:M"``) is fitted on ``model``.
 
     Parameters
     ----------
@@ -74,10 +74,11 @@ def spec_instance(spec: Mapping, model=None) -> Tuple[np.ndarray, np.ndarray]:
 
     ``spec`` is the ``body`` record of a design, cut or pattern:
     ``{"model": "anny" | file, "shape": size name | dict, "pose": ...}``. The
-    model is loaded through :func:`core.body.load_body` unless given.
+    model is loaded through :func:`core.body.registry.load_spec` unless given (an OBJ
+    template with the landmarks, blend shapes and up axis its record names).
     """
     if model is None:
-        from .registry import load_body
-        model = load_body(spec.get("model") or "anny")
+        from .registry import load_spec
+        model = load_spec(spec)
     V = body_instance(model, spec.get("shape"), spec.get("pose"))
     return V, np.asarray(model.faces, dtype=np.int64)

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..errors import BodyError
 from ..progress import Progress, report
+from .charts import PUBLISHED, SizeChart
 from .measure import MEASUREMENTS, measure
 
 TOLERANCE_CM = 1.0
@@ -137,7 +138,8 @@ def fit_parameters(body) -> list:
 
 def fit_measurements(body, targets: Mapping[str, float], progress: Optional[Progress] = None,
                      parameters: Optional[Sequence[str]] = None,
-                     start: Optional[Mapping[str, float]] = None) -> FitResult:
+                     start: Optional[Mapping[str, float]] = None,
+                     bounds: Optional[Mapping[str, Sequence[float]]] = None) -> FitResult:
     """Fit ``body``'s shape to target measurements (cm) by bounded least squares.
 
     Parameters
@@ -148,6 +150,7 @@ def fit_measurements(body, targets: Mapping[str, float], progress: Optional[Prog
     parameters : shape parameters to move (default :func:`fit_parameters`);
         the others stay at ``start`` (default the model's reference shape).
     start : initial shape.
+    bounds : optional name -> (lo, hi) narrowing a parameter's range (a chart's adult ages).
 
     Returns
     -------
@@ -166,8 +169,9 @@ def fit_measurements(body, targets: Mapping[str, float], progress: Optional[Prog
     base = dict(body.default_shape())
     if start:
         base.update({k: float(v) for k, v in start.items()})
-    lo = np.array([allowed[n][0] for n in names], dtype=float)
-    hi = np.array([allowed[n][1] for n in names], dtype=float)
+    narrow = dict(bounds or {})
+    lo = np.array([max(allowed[n][0], narrow.get(n, allowed[n][:2])[0]) for n in names], dtype=float)
+    hi = np.array([min(allowed[n][1], narrow.get(n, allowed[n][:2])[1]) for n in names], dtype=float)
     span = np.where(hi > lo, hi - lo, 1.0)
     keys = sorted(targets)
     want = np.array([targets[k] for k in keys])
@@ -217,31 +221,105 @@ def fit_measurements(body, targets: Mapping[str, float], progress: Optional[Prog
 
 _CACHE: Dict[tuple, Dict[str, float]] = {}
 
-
-def check_size(size: str) -> str:
-    key = str(size).upper()
-    if key not in SIZE_CHART:
-        raise BodyError(f"unknown size {size!r}; allowed: {', '.join(SIZES)}")
-    return key
+DEFAULT_CHART = "default"
 
 
-def size_shape(body, size: str, progress: Optional[Progress] = None) -> Dict[str, float]:
-    """Shape dict of chart size ``size`` (XS..XL) for ``body``.
+def _charts() -> Dict[str, SizeChart]:
+    """Every chart by name: the default one (:data:`SIZE_CHART`) first, then the published ones."""
+    default = SizeChart(name=DEFAULT_CHART, title="Anny's bodies around the reference shape (M)",
+                        sizes=SIZE_CHART, fitted=FITTED_SHAPES)
+    return {DEFAULT_CHART: default, **PUBLISHED}
 
-    The default body's sizes are stored (:data:`FITTED_SHAPES`); other models
-    are fitted to :data:`SIZE_CHART` once per process.
-    """
-    key = check_size(size)
+
+CHARTS: Dict[str, SizeChart] = _charts()
+CHART_NAMES = tuple(CHARTS)
+
+
+def check_chart(chart: Optional[str], what: str = "chart") -> SizeChart:
+    """The chart named ``chart`` (None: the default); a BodyError naming ``what`` and the choices."""
+    key = DEFAULT_CHART if chart is None else str(chart).strip().lower()
+    if key not in CHARTS:
+        raise BodyError(f"{what}: unknown size chart {chart!r}; allowed: {', '.join(CHART_NAMES)}")
+    return CHARTS[key]
+
+
+def chart_sizes(chart: Optional[str] = None) -> tuple:
+    """Size names of ``chart`` in size order."""
+    return tuple(check_chart(chart).sizes)
+
+
+def split_size(size: str, chart: Optional[str] = None) -> tuple:
+    """(chart, size) of a size name: ``"M"`` (of ``chart``, default the default chart) or
+    ``"women:M"``; a BodyError listing the choices for an unknown chart or size."""
+    text = str(size).strip()
+    if ":" in text:
+        named, text = (t.strip() for t in text.split(":", 1))
+        if chart is not None and check_chart(named).name != check_chart(chart).name:
+            raise BodyError(f"size {size!r} is of chart {named!r}, not of chart {chart!r}")
+        chart = named
+    c = check_chart(chart)
+    key = text.upper()
+    if key not in c.sizes:
+        where = "" if c.name == DEFAULT_CHART else f" of chart {c.name!r}"
+        raise BodyError(f"unknown size {size!r}{where}; allowed: {', '.join(c.sizes)}")
+    return c, key
+
+
+def check_size(size: str, chart: Optional[str] = None) -> str:
+    """The canonical name of a chart size: ``"M"`` on the default chart, ``"women:M"`` on another."""
+    c, key = split_size(size, chart)
+    return key if c.name == DEFAULT_CHART else f"{c.name}:{key}"
+
+
+def size_targets(size: str, chart: Optional[str] = None) -> Dict[str, float]:
+    """The chart's target measurements (cm) of ``size``."""
+    c, key = split_size(size, chart)
+    return dict(c.sizes[key])
+
+
+def chart_fit(body, size: str, chart: Optional[str] = None, progress: Optional[Progress] = None) -> FitResult:
+    """Fit ``body`` to a chart size as the chart says: from its start phenotype (the
+    gender), moving its parameters within its bounds, where the model has them."""
+    c, key = split_size(size, chart)
     params = body.shape_parameters()
-    stored = FITTED_SHAPES.get(getattr(body, "name", ""), {}).get(key)
+    names = [n for n in c.parameters if n in params]
+    start = {k: v for k, v in c.start.items() if k in params}
+    return fit_measurements(body, c.sizes[key], progress=progress, start=start or None,
+                            parameters=names if len(names) >= 2 else None,
+                            bounds={k: v for k, v in c.bounds.items() if k in params})
+
+
+def size_shape(body, size: str, progress: Optional[Progress] = None, chart: Optional[str] = None) -> Dict[str, float]:
+    """Shape dict of chart size ``size`` (``"M"``, or ``"women:M"``; ``chart`` names the
+    chart of an unqualified name, default the default chart) for ``body``.
+
+    Anny's sizes are stored (each chart's ``fitted``, :data:`FITTED_SHAPES` for the
+    default chart); other models are fitted to the chart once per process.
+    """
+    c, key = split_size(size, chart)
+    params = body.shape_parameters()
+    stored = c.fitted.get(getattr(body, "name", ""), {}).get(key)
     if stored is not None and all(k in params for k in stored):
         shape = dict(body.default_shape())
         shape.update(stored)
         return shape
-    cache_key = (getattr(body, "name", ""), body.n_vertices, key)
+    _check_girth_landmarks(body, f"{c.name}:{key}")
+    cache_key = (getattr(body, "name", ""), body.n_vertices, c.name, key)
     if cache_key not in _CACHE:
-        _CACHE[cache_key] = fit_measurements(body, SIZE_CHART[key], progress=progress).shape
+        _CACHE[cache_key] = chart_fit(body, key, c.name, progress=progress).shape
     return dict(_CACHE[cache_key])
+
+
+def _check_girth_landmarks(body, size: str) -> None:
+    """A size is fitted by its girths: say so when the model lacks the landmarks they are taken at
+    (an OBJ template without a landmark file) instead of failing inside the measurement."""
+    from .measure import GIRTH_LANDMARKS
+    have = getattr(body, "landmarks", None) or {}
+    missing = sorted({n for names in GIRTH_LANDMARKS.values() for n in names} - set(have))
+    if missing:
+        raise BodyError(f"size {size}: body {getattr(body, 'name', '?')!r} has no {', '.join(missing)} landmarks, "
+                        "which a chart size is fitted by; give the model's landmark file (a design's "
+                        "body.landmarks, --landmarks) or a shape of its own parameters instead of a size")
 
 
 def parse_assignments(text: str, what: str) -> Dict[str, float]:

@@ -3,6 +3,8 @@
 Examples::
 
     ease body --shape XL --pose P3 --out body.obj
+    ease body --chart women --size M --out woman_m.obj
+    ease body --size men:L --pose T --out man_l.obj
     ease body --measure chest=96,waist=80,hip=100,height=175 --out me.obj
     ease body --shape height=0.7,weight=0.6 --out tall.obj
     ease body --model SMPL_NEUTRAL.npz --shape beta0=1.5 --pose T --out smpl.obj
@@ -35,18 +37,19 @@ def load_model(name: str, blendshapes=None, landmarks=None, up: str = "z"):
         raise BodyError(f"--model {name!r}: the body model is not available ({exc})") from None
 
 
-def resolve_shape(body, text, progress=None):
-    """``--shape`` value: a chart size (XS..XL) or ``name=value,...`` shape parameters."""
-    from ..body.sizes import SIZES, parse_assignments, size_shape
+def resolve_shape(body, text, progress=None, chart=None):
+    """``--shape`` value: a chart size (``M`` of ``chart``, or ``women:M``) or ``name=value,...``
+    shape parameters."""
+    from ..body.sizes import chart_sizes, parse_assignments, size_shape
     from ..body.smpl import check_shape
     if text is None:
         return dict(body.default_shape())
-    if str(text).upper() in SIZES:
-        return size_shape(body, text, progress=progress)
     if "=" not in str(text):
+        if ":" in str(text) or str(text).upper() in chart_sizes(chart):
+            return size_shape(body, text, progress=progress, chart=None if ":" in str(text) else chart)
         params = ", ".join(body.shape_parameters()) or "none"
-        raise BodyError(f"--shape {text!r}: expected a size ({', '.join(SIZES)}) or name=value pairs "
-                        f"of the model's shape parameters ({params})")
+        raise BodyError(f"--shape {text!r}: expected a size ({', '.join(chart_sizes(chart))}) or name=value pairs "
+                        f"of the model's shape parameters ({params}), or chart:size")
     return check_shape(body.shape_parameters(), parse_assignments(text, "--shape"), f"--shape ({body.name})")
 
 
@@ -64,7 +67,18 @@ def run(args) -> int:
     from ..body.output import measures_text, safe_measure, write_obj
     from ..body.sizes import check_targets, fit_measurements, parse_assignments
 
+    from ..body.sizes import check_chart, check_size
+
     progress = console_progress(args)
+    if args.chart is not None:
+        check_chart(args.chart, "--chart")
+    if args.size is not None:
+        if args.shape is not None:
+            raise BodyError("give either --size or --shape, not both")
+        try:
+            args.shape = check_size(args.size, None if ":" in args.size else args.chart)
+        except BodyError as exc:
+            raise BodyError(f"--size: {exc}") from None
     if args.pose not in (None,) and args.pose not in POSE_PRESETS:
         raise BodyError(f"--pose {args.pose!r}: unknown pose; allowed: {', '.join(POSE_PRESETS)}")
     if args.shape is not None and args.measure is not None:
@@ -82,7 +96,7 @@ def run(args) -> int:
         shape = fit.shape
         print(fit.summary())
     else:
-        shape = resolve_shape(body, args.shape, progress)
+        shape = resolve_shape(body, args.shape, progress, args.chart)
     pose = args.pose or "A"
     v = body.vertices(shape, pose)
     m_std = safe_measure(body, body.vertices(shape, None))
@@ -96,8 +110,10 @@ def run(args) -> int:
 
 
 def _chart_text() -> str:
-    from ..body.sizes import SIZE_CHART
-    return "; ".join(f"{k} " + "/".join(f"{v:g}" for v in row.values()) for k, row in SIZE_CHART.items())
+    from ..body.sizes import CHARTS
+    return "\n".join(f"  {c.name}: " + "; ".join(f"{k} " + "/".join(f"{v:g}" for v in row.values())
+                                                for k, row in c.sizes.items())
+                     for c in CHARTS.values())
 
 
 def add_parser(subparsers) -> None:
@@ -108,12 +124,16 @@ def add_parser(subparsers) -> None:
                     "(height, chest, waist, hip in cm). --all writes sizes XS..XL and poses A, T, P1, P2, P3 "
                     "and a PNG of them side by side.",
         formatter_class=argparse.RawDescriptionHelpFormatter,
-        epilog="examples:" + __doc__.split("Examples::", 1)[1].rstrip() + "\n\nsizes (cm, height/chest/waist/hip): " + _chart_text(),
+        epilog="examples:" + __doc__.split("Examples::", 1)[1].rstrip() + "\n\nsize charts (cm, height/chest/waist[/hip]):\n" + _chart_text(),
     )
     p.add_argument("--model", default="anny",
                    help="body model: 'anny' (default body) or a path to an SMPL/SMPL-X .npz/.pkl or an OBJ template")
     p.add_argument("--shape", default=None,
                    help="a chart size XS, S, M, L, XL (M = reference) or name=value,... shape parameters")
+    p.add_argument("--chart", default=None,
+                   help="size chart of --size/--shape sizes: default (Anny's XS..XL), women or men (EN 13402-3)")
+    p.add_argument("--size", default=None,
+                   help="a size of --chart (e.g. M) or chart:size (women:M); the same as --shape SIZE")
     p.add_argument("--measure", default=None, metavar="chest=96,waist=80,hip=100,height=175",
                    help="fit the shape to these measurements in cm (any of height, chest/bust, waist, hip)")
     p.add_argument("--pose", default=None, help=f"pose preset: {', '.join(POSE_PRESETS)} (default A)")

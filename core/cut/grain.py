@@ -6,6 +6,13 @@ covers (SPEC "Frames and grain"): the torso axis (pelvis -> neck), the arm
 are oriented to point *up* the body part (towards the neck / the shoulder /
 the hip), so the grain of every panel points to the garment's top. Per
 triangle the axis is projected into the triangle plane and normalised.
+
+Without a skeleton, regions or landmarks (an OBJ template) the torso's axis is
+found from the body's surface: where its principal axis lies nearer the
+horizontal than the vertical (a quadruped: long along its spine) the torso
+axis is the horizontal principal direction (the spine in plan view; the head
+and legs tilt the full 3D axis), pointing to the head end, so the warp runs
+along the barrel, not around it. A standing body keeps the vertical.
 """
 from __future__ import annotations
 
@@ -71,9 +78,55 @@ def body_part_axis(part: str, side: str, joint_names=None, joints=None,
             axis = pts[1] - pts[0]
         except KeyError:
             axis = None
+    if axis is None and part == "torso" and X is not None and faces is not None:
+        lying = surface_long_axis(np.asarray(X, float), np.asarray(faces))
+        if lying is not None and abs(lying[2]) < np.sqrt(0.5):
+            flat = surface_long_axis(np.asarray(X, float), np.asarray(faces), horizontal=True)
+            if flat is not None:
+                return flat if flat @ lying >= 0 else -flat
     if axis is None or np.linalg.norm(axis) < 1e-9:
         axis = np.array([0.0, 0.0, 1.0])
     if axis[2] < 0:
+        axis = -axis
+    return axis / np.linalg.norm(axis)
+
+
+def surface_long_axis(X: np.ndarray, F: np.ndarray, horizontal: bool = False) -> Optional[np.ndarray]:
+    """Unit principal axis (3,) of a mesh's surface, pointing to its higher end; None if degenerate.
+    ``horizontal``: the principal direction of the surface seen from above (z = 0).
+
+    The second moment is integrated exactly over each triangle (area/12 of the corners' outer
+    products plus the sum's), so the answer does not depend on how finely the mesh is cut.
+    The end whose outermost tenth of the surface (along the axis) stands higher is "up":
+    a quadruped's head and neck, a person's head.
+
+    Parameters
+    ----------
+    X : (V, 3) vertices, metres.  F : (F, 3) triangles.
+    """
+    if len(F) == 0:
+        return None
+    a, b, c = X[F[:, 0]], X[F[:, 1]], X[F[:, 2]]
+    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    total = area.sum()
+    if total <= 0:
+        return None
+    centroid = (area[:, None] * (a + b + c) / 3.0).sum(0) / total
+    a, b, c = a - centroid, b - centroid, c - centroid
+    s = a + b + c
+    M = np.einsum("f,fi,fj->ij", area / 12.0, a, a) + np.einsum("f,fi,fj->ij", area / 12.0, b, b) \
+        + np.einsum("f,fi,fj->ij", area / 12.0, c, c) + np.einsum("f,fi,fj->ij", area / 12.0, s, s)
+    if horizontal:
+        M[2, :] = 0.0
+        M[:, 2] = 0.0
+    w, v = np.linalg.eigh(M)
+    if w[-1] <= 0 or w[-1] - w[-2] < 1e-6 * w[-1]:
+        return None
+    axis = v[:, -1]
+    mid = (a + b + c) / 3.0 + centroid
+    t = (mid - centroid) @ axis
+    lo, hi = np.quantile(t, [0.1, 0.9])
+    if mid[t >= hi, 2].mean() < mid[t <= lo, 2].mean():
         axis = -axis
     return axis / np.linalg.norm(axis)
 

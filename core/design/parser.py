@@ -51,7 +51,10 @@ line                   ``{"name", "role": "seam" | "opening" | "guide"}`` plus o
                        keypoints, e.g. a centre seam on the midline). A ``guide``
                        line is not cut; it only names points.
 panel                  ``{"name", "seed": keypoint inside it, "body_part": "torso" |
-                       "arm" | "leg", "ease": field}``
+                       "arm" | "leg", "ease": field, "darts": [dart, ...]}``
+dart                   ``{"name", "line": seam or hem line of the mouth, "apex": keypoint,
+                       "intake": m | "auto", "apex_offset": m, "at": keypoint}``
+                       (see :mod:`core.design.darts`)
 ease field             ``{"value"}`` | ``{"from", "to", "between": [a, b]}`` |
                        ``{"from", "to", "axis", "over": "panel" | "garment"}`` |
                        ``{"per_triangle": {"triangles",
@@ -76,6 +79,7 @@ from .checks import (BODY_PARTS, GARMENT_KINDS, LINE_ROLES, PARAMETER_KINDS, REF
                      check_ease, check_name, check_names_unique, check_number, check_parameter_value,
                      check_ring, check_section, expect_dict, expect_keys, fmt, is_number, keypoint_ref,
                      check_keypoint)
+from .darts import parse_darts
 from .materials import check_seam_names, parse_materials
 from .types import FORMAT, VERSION, Design, Garment, Line, Panel, Parameter
 
@@ -113,8 +117,8 @@ def _parse_line(path, obj, params) -> Line:
 
 
 def _parse_panel(path, obj, params) -> Panel:
-    expect_dict(path, obj, "a panel {name, seed, body_part, ease}")
-    expect_keys(path, obj, ("name", "seed", "body_part", "ease"))
+    expect_dict(path, obj, "a panel {name, seed, body_part, ease, darts}")
+    expect_keys(path, obj, ("name", "seed", "body_part", "ease", "darts"))
     for k in ("name", "seed"):
         if k not in obj:
             raise DesignError(f"{path}.{k}", "missing")
@@ -128,7 +132,8 @@ def _parse_panel(path, obj, params) -> Panel:
     except DesignError as exc:
         # name the panel, not only its JSON path
         raise DesignError(exc.path, f"panel {obj['name']!r}: {exc.message}") from None
-    return Panel(obj["name"], seed, part, ease)
+    darts = parse_darts(f"{path}.darts", obj["darts"], params) if "darts" in obj else []
+    return Panel(obj["name"], seed, part, ease, darts)
 
 
 def _named_list(path, raw, what, parse, required=False):
@@ -191,19 +196,52 @@ def _check_on_model(path, model, shape, pose):
 def _parse_body(path, obj):
     from ..body.model import POSE_ANGLE_MAX
     from ..body.registry import BUILTIN, MODEL_SUFFIXES
-    expect_dict(path, obj, "a body {model, shape, pose}")
-    expect_keys(path, obj, ("model", "shape", "pose"))
+    from ..body.sizes import CHART_NAMES, check_chart, check_size, chart_sizes
+    expect_dict(path, obj, "a body {model, chart, shape, pose} (an OBJ model also landmarks, blendshapes, up)")
+    expect_keys(path, obj, ("model", "chart", "shape", "pose", "landmarks", "blendshapes", "up"))
     model = obj.get("model", "anny")
     if not isinstance(model, str) or not (model.lower() in BUILTIN or model.lower().endswith(MODEL_SUFFIXES)):
         raise DesignError(f"{path}.model", f"expected {', '.join(BUILTIN)} or a path to a body model file "
                                            f"({', '.join(MODEL_SUFFIXES)}), got {fmt(model)}")
-    shape = obj.get("shape", "M")
+    is_obj = model.lower().endswith(".obj")
+    extra = {}
+    # An OBJ template's own files: its landmarks (which a chart size and the keypoints need), blend
+    # shapes (its shape parameters) and up axis; paths relative to the design file.
+    for key, suffix in (("landmarks", ".json"), ("blendshapes", ".npz")):
+        if key in obj:
+            v = obj[key]
+            if not is_obj:
+                raise DesignError(f"{path}.{key}", f"only an OBJ template (body.model *.obj) takes a {key} file; "
+                                                   f"the model is {fmt(model)}")
+            if not isinstance(v, str) or not v.lower().endswith(suffix):
+                raise DesignError(f"{path}.{key}", f"expected a path to a {suffix} file, got {fmt(v)}")
+            extra[key] = v
+    if "up" in obj:
+        if not is_obj or obj["up"] not in ("z", "y"):
+            raise DesignError(f"{path}.up", f"expected 'z' or 'y' (the up axis of an OBJ template), got {fmt(obj['up'])}")
+        extra["up"] = obj["up"]
+    chart = obj.get("chart")
+    if chart is not None:
+        if not isinstance(chart, str) or chart.strip().lower() not in CHART_NAMES:
+            raise DesignError(f"{path}.chart", f"expected a size chart ({', '.join(CHART_NAMES)}), got {fmt(chart)}")
+        chart = check_chart(chart).name
+    # An OBJ template is a body of its own: its reference shape unless a shape is named (a chart
+    # size needs its landmarks); the parametric models default to size M.
+    shape = obj.get("shape", None if is_obj else "M")
     if isinstance(shape, dict):
         for k, v in shape.items():
             check_number(f"{path}.shape.{k}", v)
         shape = {k: float(v) for k, v in shape.items()}
-    elif shape is not None and not (isinstance(shape, str) and shape in SIZES):
-        raise DesignError(f"{path}.shape", f"expected a size ({', '.join(SIZES)}) or an object of shape parameters, got {fmt(shape)}")
+    elif isinstance(shape, str):
+        try:
+            shape = check_size(shape, chart)     # "M" of the chart, stored as "women:M"
+        except BodyError:
+            raise DesignError(f"{path}.shape", f"expected a size of chart {chart or 'default'} "
+                                               f"({', '.join(chart_sizes(chart))}) or an object of shape "
+                                               f"parameters, got {fmt(shape)}") from None
+    elif shape is not None:
+        raise DesignError(f"{path}.shape", f"expected a size ({', '.join(chart_sizes(chart))}) or an object of "
+                                           f"shape parameters, got {fmt(shape)}")
     pose = obj.get("pose", "A")
     if isinstance(pose, str):
         if pose not in POSE_PRESETS:
@@ -219,7 +257,7 @@ def _parse_body(path, obj):
     elif pose is not None:
         raise DesignError(f"{path}.pose", f"expected a pose preset ({', '.join(POSE_PRESETS)}) or an object joint -> [rx, ry, rz], got {fmt(pose)}")
     _check_on_model(path, model, shape, pose)
-    return {"model": model, "shape": shape, "pose": pose}
+    return {"model": model, **({"chart": chart} if chart else {}), "shape": shape, "pose": pose, **extra}
 
 
 def _parse_parameters(path, obj) -> Dict[str, Parameter]:
