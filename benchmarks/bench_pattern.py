@@ -46,15 +46,16 @@ def _cut(name_or_design, body, coarse):
 
 def _metrics(pattern, garment=None, cut=None):
     """Table figures of one pattern; with ``cut``, also the sleeves' (arm panels') compliance and shear."""
-    from core.metrics.pattern import ease_compliance, flips, seam_mismatch
+    from core.metrics.pattern import collapse, ease_compliance, flips, seam_mismatch
     c = ease_compliance(pattern, garment)
     s = seam_mismatch(pattern, garment)
-    fl = sum(v for k, v in flips(pattern).items()
-             if garment is None or pattern.panel(k).garment == garment)
+    mine = lambda k: garment is None or pattern.panel(k).garment == garment
+    fl = sum(v for k, v in flips(pattern).items() if mine(k))
+    col = sum(v["count"] for k, v in collapse(pattern).items() if mine(k))
     out = {"compliance": c["mean"], "compliance_std": c["std"], "compliance_p95": c["p95"],
            "shear_mean": c["shear_mean"], "shear_p95": c["shear_p95"], "warp_dev": c["warp_mean"],
            "seam_mean": s["mean"], "seam_std": s["std"], "seam_max_mm": s["max_mm"], "flips": int(fl),
-           "warp_signed": c["warp_signed"],
+           "collapsed": int(col), "warp_signed": c["warp_signed"],
            "gathered": {k: float(v) for k, v in sorted(s.get("gathered", {}).items())}}
     arms = [p.name for p in cut.panels if p.body_part == "arm"] if cut is not None else []
     if arms:
@@ -202,6 +203,48 @@ def _baselines(cut, ref, solver_time, ours):
     return out
 
 
+def _templates(body, coarse):
+    """Every shipped template at its design ease on M, transferred to XS..XL and adapted to P1 (improved):
+    weft compliance with warp deviation and shear beside it, flipped and collapsed counts with the collapse
+    sites, and the region report (compliance within 6 cm of the bust points, shoulder blades and seat).
+
+    Measured directly (not through the workflows), so a pattern the pipeline would refuse is still measured."""
+    from core import workflows as wf
+    from core.body.instance import body_instance, instance_shape
+    from core.metrics.pattern import pattern_report
+    from core.metrics.regions import body_landmarks
+    from core.pattern.solve import adapt_pattern, solve_pattern, transfer_pattern
+    out = {}
+    for path in sorted(DESIGNS.glob("*.json")):
+        try:
+            design, cut, ref, _, prep = _cut(path.stem, body, coarse)
+            solver = wf.make_solver(prep)
+            pose = cut.body.get("pose")
+            pats = {"M": solve_pattern(cut, ref, solver=solver, style=design.name)}
+            for size in ("XS", "S", "L", "XL"):
+                shape = instance_shape(body, size)
+                pats[size] = transfer_pattern(cut, ref, body_instance(body, shape, pose), solver=solver,
+                                              start=pats["M"], style=design.name,
+                                              body={"model": body.name, "shape": shape, "pose": pose, "size": size})
+            pats["P1"] = adapt_pattern(cut, ref, [body_instance(body, cut.body.get("shape"), "P1")], solver=solver,
+                                       start=pats["M"], style=design.name)
+            row = {"design": design.name}
+            for key, pat in pats.items():
+                m = pattern_report(pat, body_landmarks(pat, body))
+                c = m["compliance"]
+                row[key] = {"compliance": c["mean"], "warp_dev": c["warp_mean"], "warp_signed": c["warp_signed"],
+                            "shear_p95": c["shear_p95"], "flips": m["flipped_triangles"],
+                            "collapsed": m["collapsed_triangles"], "collapse_sites": m["collapse_sites"],
+                            "regions": m["regions"]}
+            out[path.stem] = row
+        except Exception as exc:
+            out[path.stem] = {"error": f"{type(exc).__name__}: {exc}"}
+    return out
+
+
+TEMPLATE_BODIES = ("M", "XS", "S", "L", "XL", "P1")
+
+
 def _gathered_cell(g) -> str:
     """``armhole_left#0 1.43, ...`` -> ``armhole x4 (1.30-1.43)``: seams grouped by line, sides merged."""
     if not g:
@@ -275,8 +318,10 @@ def run(out_dir, quick: bool = False) -> dict:
             if vals:
                 agg[f"{cfg_name}/{rng}"] = {
                     key: float(np.mean([v[key] for v in vals]))
-                    for key in ("compliance", "compliance_std", "shear_mean", "shear_p95", "seam_mean", "seam_max_mm")}
+                    for key in ("compliance", "compliance_std", "warp_dev", "warp_signed", "shear_mean", "shear_p95",
+                                "seam_mean", "seam_max_mm")}
                 agg[f"{cfg_name}/{rng}"]["flips"] = int(sum(v["flips"] for v in vals))
+                agg[f"{cfg_name}/{rng}"]["collapsed"] = int(sum(v["collapsed"] for v in vals))
                 sl = [v["sleeves"] for v in vals if "sleeves" in v]
                 if sl:
                     agg[f"{cfg_name}/{rng}"]["sleeves"] = {k: float(np.mean([x[k] for x in sl]))
@@ -322,6 +367,7 @@ def run(out_dir, quick: bool = False) -> dict:
                 run_ = wf.transfer(prep, size, solver=solver, start=ref_pat)
                 m = _metrics(run_.pattern)
                 row[size] = {"deviation": m["compliance"], "shear_p95": m["shear_p95"], "flips": m["flips"],
+                             "warp_dev": m["warp_dev"], "collapsed": m["collapsed"],
                              "seam_mean": m["seam_mean"], "seconds": run_.timings["optimize"],
                              "above_floor": m["compliance"] - floor}
             except Exception as exc:
@@ -347,7 +393,8 @@ def run(out_dir, quick: bool = False) -> dict:
                     np.cross(p.uv[p.faces[:, 1]] - p.uv[p.faces[:, 0]], p.uv[p.faces[:, 2]] - p.uv[p.faces[:, 0]]))) / 2
                     for p in pat.panels))
                 row[pose] = {"before": residual_stretch(ref_pat, xyz, eps), "after": residual_stretch(ap, xyz, eps),
-                             "flips": m["flips"], "seconds": run_.timings["optimize"],
+                             "flips": m["flips"], "collapsed": m["collapsed"], "warp_dev": m["warp_dev"],
+                             "seconds": run_.timings["optimize"],
                              "area_growth": area(ap) / area(ref_pat) - 1.0}
             except Exception as exc:
                 row[pose] = {"error": f"{type(exc).__name__}: {exc}"}
@@ -376,14 +423,19 @@ def run(out_dir, quick: bool = False) -> dict:
         R["errors"]["seam_study"] = f"{type(exc).__name__}: {exc}"
         R["seam_study"] = {}
 
-    flips_total = 0
-    for kind in t1:
-        flips_total += sum(v["flips"] for v in t1[kind]["runs"].values())
-    flips_total += sum(v.get("flips", 0) for v in nonuni.values())
-    flips_total += sum(v.get("flips", 0) for k in t3 for s, v in t3[k].items() if isinstance(v, dict))
-    flips_total += sum(v.get("flips", 0) for k in t4 for v in t4[k].values())
-    flips_total += sum(row[c]["flips"] for row in R["seam_study"].values() for c in ("improved", "stretch"))
-    R["flipped_triangles_total"] = int(flips_total)
+    # ---------------------------------------------------------------- every template: warp, collapse, regions
+    R["templates"] = _templates(body, coarse)
+
+    for key, name in (("flips", "flipped_triangles_total"), ("collapsed", "collapsed_triangles_total")):
+        total = 0
+        for kind in t1:
+            total += sum(v[key] for v in t1[kind]["runs"].values())
+        total += sum(v.get(key, 0) for v in nonuni.values())
+        total += sum(v.get(key, 0) for k in t3 for s, v in t3[k].items() if isinstance(v, dict))
+        total += sum(v.get(key, 0) for k in t4 for v in t4[k].values())
+        total += sum(row[c][key] for row in R["seam_study"].values() for c in ("improved", "stretch"))
+        total += sum(row[b][key] for row in R["templates"].values() for b in TEMPLATE_BODIES if b in row)
+        R[name] = int(total)
     R["wall_seconds"] = time.perf_counter() - t_start
 
     write_json(out_dir / "pattern.json", R)
@@ -420,8 +472,8 @@ def _markdown(R) -> str:
     if R["errors"]:
         L += ["Not measured (errors): " + "; ".join(f"`{k}`: {v}" for k, v in R["errors"].items()), ""]
     L += ["## Table 1: ease compliance (uniform), both garments", "",
-          "| range | paper mean ± std | config | ours mean ± std | shear mean / p95 | sleeves mean (shear p95) | flips |",
-          "|---|---|---|---|---|---|---|"]
+          "| range | paper mean ± std | config | ours mean ± std | warp dev (signed) | shear mean / p95 | sleeves mean (shear p95) | flips | collapsed |",
+          "|---|---|---|---|---|---|---|---|---|"]
     for rng in RANGES:
         for cfg in ("improved", "paper", "stretch"):
             a = R["table1_ranges"].get(f"{cfg}/{rng}")
@@ -431,27 +483,28 @@ def _markdown(R) -> str:
             sl = a.get("sleeves")
             slc = f"{_fmt(sl['compliance'])} ({_fmt(sl['shear_p95'], 1)})" if sl else "–"
             L.append(f"| {rng} {RANGES[rng]} | {pm} ± {ps} | {cfg} | {_fmt(a['compliance'])} ± {_fmt(a['compliance_std'])} "
-                     f"| {_fmt(a['shear_mean'], 1)} / {_fmt(a['shear_p95'], 1)} | {slc} | {a['flips']} |")
+                     f"| {_warp(a)} | {_fmt(a['shear_mean'], 1)} / {_fmt(a['shear_p95'], 1)} | {slc} | {a['flips']} "
+                     f"| {a.get('collapsed', '–')} |")
     L += ["", "Per garment and ease level:", "",
-          "| garment | config | rho | compliance mean ± std | p95 | shear mean / p95 | sleeves mean (shear p95) | warp dev (signed) | seam mean % / max mm | gathered (ratio) | flips | solve s |",
-          "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+          "| garment | config | rho | compliance mean ± std | p95 | warp dev (signed) | shear mean / p95 | sleeves mean (shear p95) | seam mean % / max mm | gathered (ratio) | flips | collapsed | solve s |",
+          "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for kind, t in R["table1_uniform"].items():
         for key, v in t["runs"].items():
             sl = v.get("sleeves")
             slc = f"{_fmt(sl['compliance'])} ({_fmt(sl['shear_p95'], 1)})" if sl else "–"
             L.append(f"| {t['design']} ({t['faces']} tris) | {v['config']} | {v['rho']:g} | {_fmt(v['compliance'])} ± "
-                     f"{_fmt(v['compliance_std'])} | {_fmt(v['compliance_p95'])} | {_fmt(v['shear_mean'], 1)} / "
-                     f"{_fmt(v['shear_p95'], 1)} | {slc} | {_fmt(v['warp_dev'])} ({_fmt(v.get('warp_signed', 0.0), 2)}) "
+                     f"{_fmt(v['compliance_std'])} | {_fmt(v['compliance_p95'])} | {_warp(v)} | {_fmt(v['shear_mean'], 1)} / "
+                     f"{_fmt(v['shear_p95'], 1)} | {slc} "
                      f"| {_fmt(v['seam_mean'])} / {_fmt(v['seam_max_mm'], 1)} | {_gathered_cell(v.get('gathered'))} "
-                     f"| {v['flips']} | {_fmt(v['seconds'])} |")
+                     f"| {v['flips']} | {v['collapsed']} | {_fmt(v['seconds'])} |")
     L += ["", "Non-uniform designs (improved):", "",
-          "| design | paper | ours mean ± std | shear mean / p95 | seam mean % / max mm | gathered (ratio) | flips | optimize s |",
-          "|---|---|---|---|---|---|---|---|"]
+          "| design | paper | ours mean ± std | warp dev (signed) | shear mean / p95 | seam mean % / max mm | gathered (ratio) | flips | collapsed | optimize s |",
+          "|---|---|---|---|---|---|---|---|---|---|"]
     for key, v in R["table1_nonuniform"].items():
         pm, ps = P["table1"][key]
-        L.append(f"| {v['design']} | {pm} ± {ps} | {_fmt(v['compliance'])} ± {_fmt(v['compliance_std'])} | "
+        L.append(f"| {v['design']} | {pm} ± {ps} | {_fmt(v['compliance'])} ± {_fmt(v['compliance_std'])} | {_warp(v)} | "
                  f"{_fmt(v['shear_mean'], 1)} / {_fmt(v['shear_p95'], 1)} | {_fmt(v['seam_mean'])} / {_fmt(v['seam_max_mm'], 1)} "
-                 f"| {_gathered_cell(v.get('gathered'))} | {v['flips']} | {_fmt(v['optimize_seconds'])} |")
+                 f"| {_gathered_cell(v.get('gathered'))} | {v['flips']} | {v.get('collapsed', '–')} | {_fmt(v['optimize_seconds'])} |")
     L += ["", "## Table 2: seam mismatch and runtime (improved, rho 1.2)", "",
           "| garment | paper seam % | ours seam mean ± std % | max mm | paper runtime s | cut s | optimize s | = flatten + factorise + 20 it. | re-solve s | ARAP s (20 it.) | optimize / ARAP |",
           "|---|---|---|---|---|---|---|---|---|---|---|"]
@@ -476,50 +529,96 @@ def _markdown(R) -> str:
         cells = []
         for s in ("XS", "S", "L", "XL"):
             v = row.get(s, {})
-            cells.append(f"{_fmt(v.get('deviation'))} (+{_fmt(v.get('above_floor'))}, shear p95 {_fmt(v.get('shear_p95'), 1)}, "
-                         f"flips {v.get('flips', '–')})" if "deviation" in v else v.get("error", "–"))
+            cells.append(f"{_fmt(v.get('deviation'))} (+{_fmt(v.get('above_floor'))}, warp {_fmt(v.get('warp_dev'))}, "
+                         f"shear p95 {_fmt(v.get('shear_p95'), 1)}, flips {v.get('flips', '–')}, "
+                         f"collapsed {v.get('collapsed', '–')})" if "deviation" in v else v.get("error", "–"))
         L.append(f"| {kind} | {_fmt(row['reference'])} | " + " | ".join(cells) + " |")
     L += ["", "## Table 4: residual stretch (area % with r_weft > 1.10), before / after adaptation", "",
-          "| garment | pose | paper before / after | ours before / after | pattern area growth | flips |",
-          "|---|---|---|---|---|---|"]
+          "| garment | pose | paper before / after | ours before / after | pattern area growth | warp dev | flips | collapsed |",
+          "|---|---|---|---|---|---|---|---|"]
     for kind, row in R["table4"].items():
         for pose, v in row.items():
             pb, pa = P["table4"][kind][pose]
             if "error" in v:
-                L.append(f"| {kind} | {pose} | {pb} / {pa} | {v['error']} | | |")
+                L.append(f"| {kind} | {pose} | {pb} / {pa} | {v['error']} | | | | |")
             else:
                 L.append(f"| {kind} | {pose} | {pb} / {pa} | {_fmt(v['before'])} / {_fmt(v['after'])} | "
-                         f"{100 * v['area_growth']:.1f} % | {v['flips']} |")
+                         f"{100 * v['area_growth']:.1f} % | {_fmt(v.get('warp_dev'))} | {v['flips']} | {v.get('collapsed', '–')} |")
     L += ["", "## Baselines on the same panels (rho = 1, seams not coupled in the baselines)", "",
-          "| garment | method | seconds | compliance mean ± std | shear p95 | seam mean % / max mm | flips |",
-          "|---|---|---|---|---|---|---|"]
+          "| garment | method | seconds | compliance mean ± std | warp dev (signed) | shear p95 | seam mean % / max mm | flips | collapsed |",
+          "|---|---|---|---|---|---|---|---|---|"]
     for kind, row in R["baselines"].items():
         for m, v in row.items():
             if "error" in v:
-                L.append(f"| {kind} | {m} | {_fmt(v['seconds'])} | {v['error']} | | | |")
+                L.append(f"| {kind} | {m} | {_fmt(v['seconds'])} | {v['error']} | | | | | |")
             else:
                 L.append(f"| {kind} | {m} | {_fmt(v['seconds'])} | {_fmt(v['compliance'])} ± {_fmt(v['compliance_std'])} | "
-                         f"{_fmt(v['shear_p95'], 1)} | {_fmt(v['seam_mean'])} / {_fmt(v['seam_max_mm'], 1)} | {v['flips']} |")
+                         f"{_warp(v)} | {_fmt(v['shear_p95'], 1)} | {_fmt(v['seam_mean'])} / {_fmt(v['seam_max_mm'], 1)} "
+                         f"| {v['flips']} | {v.get('collapsed', '–')} |")
     L += ["", "## Extra seams where curvature holds compliance up (bust, shoulder blades)", "",
           "The long-sleeve shirt template against the same design with princess seams (armhole - bust point - hem on "
           "the front, armhole - shoulder blade - hem on the back; `pattern_shirt_princess.json`), design ease 1.2, "
           "same mesh resolution. Compliance mean % (shear p95 in degrees) per panel group.", "",
-          "| design | panels | config | front | back | sleeves | all | seam mean % / max mm | flips |",
-          "|---|---|---|---|---|---|---|---|---|"]
+          "| design | panels | config | front | back | sleeves | all | warp dev (signed) | seam mean % / max mm | flips | collapsed |",
+          "|---|---|---|---|---|---|---|---|---|---|---|"]
     for label, row in R.get("seam_study", {}).items():
         for cfg in ("improved", "stretch"):
             v = row[cfg]
             g = v["groups"]
             cell = lambda k: f"{_fmt(g[k]['compliance'])} ({_fmt(g[k]['shear_p95'], 1)})" if k in g else "–"
             L.append(f"| {label} | {row['panels']} | {cfg} | {cell('front')} | {cell('back')} | {cell('sleeves')} | "
-                     f"{_fmt(v['compliance'])} ({_fmt(v['shear_p95'], 1)}) | {_fmt(v['seam_mean'])} / {_fmt(v['seam_max_mm'], 1)} "
-                     f"| {v['flips']} |")
+                     f"{_fmt(v['compliance'])} ({_fmt(v['shear_p95'], 1)}) | {_warp(v)} | {_fmt(v['seam_mean'])} / {_fmt(v['seam_max_mm'], 1)} "
+                     f"| {v['flips']} | {v['collapsed']} |")
     if R.get("seam_study"):
         L += ["", "Per panel (improved): " + "; ".join(
             f"{label}: " + ", ".join(f"{n} {_fmt(x['compliance'])}" for n, x in row["improved"]["per_panel"].items())
             for label, row in R["seam_study"].items()) + "."]
-    L += ["", f"**Flipped triangles over every run: {R['flipped_triangles_total']}.**", ""]
+    L += _templates_markdown(R.get("templates") or {})
+    L += ["", f"**Flipped triangles over every run: {R['flipped_triangles_total']}. Collapsed triangles over every "
+          f"run: {R.get('collapsed_triangles_total', '–')}.**", ""]
     return "\n".join(L)
+
+
+def _warp(v) -> str:
+    """``warp dev (signed)`` cell: mean |rho_warp / target - 1| % (signed mean)."""
+    return f"{_fmt(v.get('warp_dev'))} ({_fmt(v.get('warp_signed'), 2)})"
+
+
+def _templates_markdown(T) -> list:
+    """The every-template table, its collapse sites and the region report."""
+    if not T:
+        return []
+    L = ["", "## Every template at every size: warp beside weft, flipped and collapsed", "",
+         "Each shipped template at its design ease (improved): reference on M, transferred to XS..XL, adapted to P1 "
+         "(the design's tolerance). Cell: weft compliance % / warp deviation % (shear p95 deg), flipped / collapsed. "
+         "The P1 compliance is to the raised adaptation targets (docs/metrics.md). Collapsed: a triangle whose 2D area "
+         "is under 25 % of its 3D area times the targets, or whose achieved weft or warp scale is under half its "
+         "target.", "",
+         "| design | " + " | ".join(TEMPLATE_BODIES) + " |", "|---|" + "---|" * len(TEMPLATE_BODIES)]
+    sites = []
+    for name, row in T.items():
+        if "error" in row:
+            L.append(f"| {name} | {row['error']} |" + " |" * (len(TEMPLATE_BODIES) - 1))
+            continue
+        cells = []
+        for b in TEMPLATE_BODIES:
+            v = row[b]
+            cells.append(f"{_fmt(v['compliance'])} / {_fmt(v['warp_dev'])} ({_fmt(v['shear_p95'], 1)}), "
+                         f"{v['flips']} / {v['collapsed']}")
+            for panel, ss in v["collapse_sites"].items():
+                where = ", ".join(f"{x['count']} near {x['near']}" if x.get("near") else f"{x['count']}" for x in ss)
+                sites.append(f"{name} {b} `{panel}`: {where}")
+        L.append(f"| {name} | " + " | ".join(cells) + " |")
+    if sites:
+        L += ["", "Collapse sites (nearest landmark of the collapsed triangles' 3D centroids): " + "; ".join(sites) + "."]
+    L += ["", "### Regions: compliance within 6 cm of a landmark (M, design ease, improved)", "",
+          "| design | landmark | weft mean (signed) % | warp dev (signed) % | shear p95 | area cm² |",
+          "|---|---|---|---|---|---|"]
+    for name, row in T.items():
+        for lm, r in (row.get("M", {}).get("regions") or {}).items():
+            L.append(f"| {name} | {lm} | {_fmt(r['mean'])} ({_fmt(r['signed'])}) | {_fmt(r['warp_mean'])} "
+                     f"({_fmt(r['warp_signed'])}) | {_fmt(r['shear_p95'], 1)} | {1e4 * r['area']:.0f} |")
+    return L
 
 
 def _plot(R, path):
@@ -552,4 +651,5 @@ def _plot(R, path):
 if __name__ == "__main__":
     import sys
     r = run(sys.argv[1] if len(sys.argv) > 1 else REPO / "benchmarks" / "results", quick="--quick" in sys.argv)
-    print(json.dumps({k: r[k] for k in ("table1_ranges", "table2", "flipped_triangles_total", "wall_seconds")}, indent=1))
+    print(json.dumps({k: r[k] for k in ("table1_ranges", "table2", "flipped_triangles_total", "collapsed_triangles_total",
+                                        "wall_seconds")}, indent=1))

@@ -214,6 +214,7 @@ def key_figures(pattern) -> dict:
     m = rep.get("metrics") or {}
     c, sm = m.get("compliance") or {}, m.get("seams") or {}
     for label, d, k in (("ease compliance mean %", c, "mean"), ("ease compliance std %", c, "std"),
+                        ("warp deviation mean %", c, "warp_mean"), ("warp deviation signed %", c, "warp_signed"),
                         ("shear p95 deg", c, "shear_p95"), ("seam mismatch mean %", sm, "mean"),
                         ("seam mismatch max mm", sm, "max_mm")):
         if isinstance(d.get(k), (int, float)):
@@ -222,6 +223,11 @@ def key_figures(pattern) -> dict:
         out["gathered seams"] = len(sm["gathered"])
     if "flipped_triangles" in m:
         out["flipped triangles"] = int(m["flipped_triangles"])
+    if "collapsed_triangles" in m:
+        out["collapsed triangles"] = int(m["collapsed_triangles"])
+    for name, r in sorted((m.get("regions") or {}).items()):
+        # compliance near a landmark (weft / warp %), where fit fails first
+        out[f"{name.replace('_', ' ')} % (weft / warp)"] = f"{float(r['mean']):.2f} / {float(r['warp_mean']):.2f}"
     if isinstance(rep.get("optimize_seconds"), (int, float)):
         out["optimize s"] = round(float(rep["optimize_seconds"]), 2)
     return out

@@ -14,6 +14,12 @@ Rules (frame: metres, +Z up, the body faces -Y, +X = the body's left):
 - ``armpit_*``: apex of the gap between arm and torso, in the frontal plane of
   the shoulder joint (highest first hit of upward rays from outside the body);
 - ``bust_*``: most anterior chest point on each side between armpit and waist;
+- ``shoulder_blade_*``: most posterior point of the upper back on each side, within
+  10 cm below to 6 cm above the armpits and inside 60 % of the shoulder's half width
+  (the prominence of the scapula a back pattern must cover);
+- ``seat_*``: most posterior point of each buttock between crotch and waist
+  (the seat prominence);
+- ``gluteal_cleft``: the midline of the back at the seat level (ray from behind at x = 0);
 - ``waist_*``: natural waist, the narrowest horizontal torso girth between the
   crotch and the armpits, then front/back/sides of that slice;
 - ``hip_*``: the sides of the widest horizontal girth between crotch and waist;
@@ -351,12 +357,23 @@ def anny_landmarks(body, ref_vertices: np.ndarray, ref_joints: np.ndarray) -> Di
     cy = _midline_centre_y(v, f, zh)
     lm["hip_left"] = ray_point(v, f, (0.0, cy, zh), X, "hip_left")
     lm["hip_right"] = ray_point(v, f, (0.0, cy, zh), -X, "hip_right")
+    # Seat: each buttock's most posterior vertex; the cleft between them on the midline.
+    for side, sx in (("left", 1.0), ("right", -1.0)):
+        side_ids = ids[sx * v[ids, 0] > 0]
+        lm[f"seat_{side}"] = vertex_point(f, int(side_ids[np.argmax(v[side_ids, 1])]))
+    lm["gluteal_cleft"] = ray_point(v, f, (0.0, 2.0, zh), -Y, "gluteal_cleft")
 
     # Bust points: most anterior torso vertex on each side between waist and armpits.
     for side, sx in (("left", 1.0), ("right", -1.0)):
         sel = torso & (v[:, 2] > zw + 0.05) & (v[:, 2] < armpit_z) & (sx * v[:, 0] > 0.03)
         ids = np.nonzero(sel)[0]
         lm[f"bust_{side}"] = vertex_point(f, int(ids[np.argmin(v[ids, 1])]))
+        # Shoulder blade: most posterior upper-back vertex, inside the shoulder (off the arm).
+        half = 0.6 * abs(J["upperarm01" + (".L" if sx > 0 else ".R")][0])
+        sel = (torso & (v[:, 2] > armpit_z - 0.10) & (v[:, 2] < armpit_z + 0.06)
+               & (sx * v[:, 0] > 0.03) & (sx * v[:, 0] < half))
+        ids = np.nonzero(sel)[0]
+        lm[f"shoulder_blade_{side}"] = vertex_point(f, int(ids[np.argmax(v[ids, 1])]))
 
     # Navel: deepest dent of the front midline profile between crotch and waist.
     zs = np.linspace(crotch_z + 0.08, zw + 0.03, 90)

@@ -18,39 +18,24 @@ import numpy as np
 from ..geom.mesh import signed_areas_2d, triangle_areas
 from ..geom.polyline import polyline_length
 from ..geom.strain import scales
+from .collapse import collapse, oriented_areas
+from .regions import region_compliance
+from .stats import weighted_stats
 
 __all__ = ["scales", "signed_areas_2d", "flipped_count", "required_stretch",
            "weighted_stats", "compliance_per_triangle", "ease_compliance", "seam_mismatch", "residual_stretch",
-           "flips", "pattern_report"]
+           "flips", "collapse", "region_compliance", "pattern_report"]
 
 
 def flipped_count(uv: np.ndarray, faces: np.ndarray) -> int:
     """Triangles whose 2D orientation differs from the panel's majority (degenerate count as flipped)."""
-    s = signed_areas_2d(uv, faces)
-    major = 1.0 if np.sum(s > 0) >= np.sum(s < 0) else -1.0
-    return int(np.sum(s * major <= 0))
+    return int(np.sum(oriented_areas(uv, faces) <= 0))
 
 
 def required_stretch(uv, xyz_body, faces, grain):
     """SPEC required stretch on a body instance: ``r_weft = |J_B w|``, ``r_warp = |J_B g|`` (f,)."""
     rw, rg, _ = scales(uv, xyz_body, faces, grain)
     return 1.0 / rw, 1.0 / rg
-
-
-def weighted_stats(values: np.ndarray, weights: np.ndarray) -> Dict[str, float]:
-    """Area-weighted mean, std and 95th percentile of ``values``."""
-    v = np.asarray(values, float)
-    w = np.asarray(weights, float)
-    ok = np.isfinite(v) & (w > 0)
-    v, w = v[ok], w[ok]
-    if v.size == 0:
-        return {"mean": float("nan"), "std": float("nan"), "p95": float("nan"), "max": float("nan")}
-    mean = float(np.sum(w * v) / np.sum(w))
-    std = float(np.sqrt(np.sum(w * (v - mean) ** 2) / np.sum(w)))
-    order = np.argsort(v)
-    cw = np.cumsum(w[order]) / np.sum(w)
-    p95 = float(v[order][min(np.searchsorted(cw, 0.95), v.size - 1)])
-    return {"mean": mean, "std": std, "p95": p95, "max": float(v.max())}
 
 
 def compliance_per_triangle(achieved_weft: np.ndarray, target_weft: np.ndarray) -> np.ndarray:
@@ -156,15 +141,38 @@ def flips(pattern) -> Dict[str, int]:
     return {p.name: flipped_count(p.uv, p.faces) for p in pattern.panels}
 
 
-def pattern_report(pattern) -> Dict[str, object]:
-    """All reference-body metrics of a pattern, per garment and overall."""
+def pattern_report(pattern, landmarks: Optional[Dict[str, np.ndarray]] = None) -> Dict[str, object]:
+    """All reference-body metrics of a pattern, per garment and overall.
+
+    Parameters
+    ----------
+    pattern : Pattern
+    landmarks : optional name -> (3,) position (m) on the pattern's body
+        (:func:`core.metrics.regions.body_landmarks`): with them the report
+        says where collapsed triangles lie and adds the region report.
+
+    Returns
+    -------
+    dict: ``compliance`` and ``seams`` (all panels), ``garments[g]`` (the same
+    per garment, with ``regions``), ``flipped_triangles`` /
+    ``flipped_per_panel``, ``collapsed_triangles`` / ``collapsed_per_panel``
+    / ``collapse_sites`` (panel -> sites, panels with collapsed triangles
+    only), and ``regions`` (landmark -> compliance within
+    :data:`core.metrics.regions.REGION_RADIUS`; empty without landmarks).
+    """
     out = {"garments": {}}
     for g in sorted({p.garment for p in pattern.panels}):
-        out["garments"][g] = {"compliance": ease_compliance(pattern, g), "seams": seam_mismatch(pattern, g)}
+        out["garments"][g] = {"compliance": ease_compliance(pattern, g), "seams": seam_mismatch(pattern, g),
+                              "regions": region_compliance(pattern, landmarks or {}, garment=g)}
     out["compliance"] = ease_compliance(pattern)
     seams = seam_mismatch(pattern)
     out["seams"] = seams
     fl = flips(pattern)
     out["flipped_triangles"] = int(sum(fl.values()))
     out["flipped_per_panel"] = fl
+    col = collapse(pattern, landmarks)
+    out["collapsed_triangles"] = int(sum(v["count"] for v in col.values()))
+    out["collapsed_per_panel"] = {k: v["count"] for k, v in col.items()}
+    out["collapse_sites"] = {k: v["sites"] for k, v in col.items() if v["count"]}
+    out["regions"] = region_compliance(pattern, landmarks or {})
     return out

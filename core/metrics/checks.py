@@ -1,0 +1,46 @@
+"""The checks a measured pattern must pass before anything is written.
+
+SPEC requires zero flipped triangles in every reported pattern, and issue 14
+adds zero collapsed triangles (:mod:`core.metrics.collapse`). Each check is
+named, so the pipeline (:func:`core.workflows.measure_pattern`, used by the
+CLI, the add-on, batch runs and the benchmarks' workflow calls) applies one
+list, :data:`REFUSED`, and a caller can name the checks it applies.
+"""
+from __future__ import annotations
+
+from typing import Iterable, Mapping, Optional
+
+from ..errors import PatternError
+from .collapse import collapse_message
+
+#: Every check a pattern can be refused by.
+CHECKS = ("flipped", "collapsed")
+#: The checks the pipeline applies. ``"collapsed"`` joins once the solver
+#: prevents collapse on every shipped template (issue 14); until then the
+#: collapse is measured and reported beside the flips, not refused.
+REFUSED = ("flipped",)
+
+
+def check_pattern(metrics: Mapping, checks: Optional[Iterable[str]] = None) -> None:
+    """Raise :class:`PatternError` when the measured ``metrics`` fail one of ``checks``.
+
+    Parameters
+    ----------
+    metrics : dict of :func:`core.metrics.pattern.pattern_report`.
+    checks : names from :data:`CHECKS`; None applies :data:`REFUSED`.
+
+    The message names each failing panel, and for collapse where on the body
+    (nearest landmark, 3D centroid in m).
+    """
+    checks = tuple(REFUSED if checks is None else checks)
+    unknown = [c for c in checks if c not in CHECKS]
+    if unknown:
+        raise ValueError(f"unknown pattern checks {unknown}; known: {', '.join(CHECKS)}")
+    if "flipped" in checks and metrics["flipped_triangles"]:
+        panels = ", ".join(f"{k} ({v})" for k, v in metrics["flipped_per_panel"].items() if v)
+        raise PatternError(f"{metrics['flipped_triangles']} flipped triangles ({panels}); nothing written")
+    if "collapsed" in checks and metrics.get("collapsed_triangles"):
+        per = {k: {"count": n, "sites": metrics["collapse_sites"].get(k, [])}
+               for k, n in metrics["collapsed_per_panel"].items()}
+        raise PatternError(f"{collapse_message(per)}; nothing written (the cloth there keeps under a quarter "
+                           "of the area its ease asks for)")
