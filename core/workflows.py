@@ -62,22 +62,44 @@ def prepare(design, body=None, cut=None, progress: Optional[Progress] = None) ->
         A cut of this design made earlier (the add-on keeps one); None cuts now.
     progress : callback, optional
     """
-    from .body import load_body
     from .body.instance import spec_instance
+    from .body.registry import OBJ_OPTIONS, load_spec, resolve_body_files
     from .design import load_design
 
     t0 = time.perf_counter()
+    base = _design_folder(design)
     design = load_design(design)
+    if base is not None:    # an OBJ template's files are named relative to the design file
+        design.body.update(resolve_body_files(design.body, base))
     if body is None:
-        body = load_body(design.body.get("model", "anny") or "anny")
+        body = load_spec(design.body)
     t1 = time.perf_counter()
     if cut is None:
         from .cut import cut_design
         cut = cut_design(design, body=body, progress=sub(progress, 0.0, 0.95))
+    for key in OBJ_OPTIONS:     # the cut's body record names the template's files too (drape, pattern)
+        if design.body.get(key) is not None:
+            cut.body.setdefault(key, design.body[key])
     t2 = time.perf_counter()
     reference, _ = spec_instance(cut.body, model=body)
     report(progress, 1.0, f"cut {len(cut.panels)} panels")
     return Prepared(design, body, cut, reference, {"load": t1 - t0, "cut": t2 - t1})
+
+
+def _design_folder(design):
+    """The folder of a design given as a file path (its body's files are relative to it), else None."""
+    import os
+    if isinstance(design, os.PathLike) or (isinstance(design, str) and not design.lstrip().startswith("{")):
+        return os.path.dirname(os.path.abspath(os.fspath(design)))
+    return None
+
+
+def size_name(prep: Prepared, size: str) -> str:
+    """The canonical chart size of ``size`` for ``prep``: a bare name (``"M"``) is of the
+    design's chart (``body.chart``), a qualified one (``"women:M"``) of its own."""
+    from .body.sizes import check_size
+    text = str(size)
+    return check_size(text) if ":" in text else check_size(text, prep.design.body.get("chart"))
 
 
 # ----------------------------------------------------------------------------- pattern
@@ -189,20 +211,20 @@ def transfer(prep: Prepared, size, config: str = "improved", iterations: Optiona
     Parameters
     ----------
     size : str or mapping
-        A chart size name (XS..XL, fitted on the model) or a shape dict of the
-        model's parameters (a measured or sampled body).
+        A chart size name (fitted on the model): ``"M"`` of the design's chart
+        (``body.chart``, default the default chart) or ``"women:M"``; or a shape
+        dict of the model's parameters (a measured or sampled body).
 
     The reference pattern is solved first (or ``start`` is taken as it) and
     seeds the transfer solve; the report records the transfer deviation (the
     ease compliance on the target body) beside the reference's own compliance.
     """
     from .body.instance import body_instance, instance_shape
-    from .body.sizes import check_size
     from .metrics.pattern import ease_compliance
     from .pattern.solve import transfer_pattern
 
     if isinstance(size, str):
-        size = check_size(size)
+        size = size_name(prep, size)
     elif not isinstance(size, Mapping):
         from .errors import PatternError
         raise PatternError(f"transfer: expected a size name or a shape dict, got {type(size).__name__}")
