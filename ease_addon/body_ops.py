@@ -36,7 +36,7 @@ class EASE_OT_add_body(EaseOperator):
 
 
 class EASE_OT_set_size(EaseOperator):
-    """Shape the body to a size preset (XS..XL) of the size chart"""
+    """Shape the body to a size preset of the chosen size chart (default XS..XL, women's, men's)"""
     bl_idname = "ease.set_size"
     bl_label = "Apply Size"
     needs = ('body',)
@@ -44,10 +44,11 @@ class EASE_OT_set_size(EaseOperator):
     size: bpy.props.StringProperty(default="")
 
     def run(self, context):
-        from ..core.body.sizes import size_shape
+        from ..core.body.sizes import check_size, size_shape
         obj = data.body_object(context)
         s = context.scene.ease
         size = self.size or s.size
+        size = check_size(size, None if ":" in size else s.chart)     # "women:M" on the women's chart
         model = state.body_model(data.body_spec(obj)["model"])
         shape = size_shape(model, size)
         achieved = data.measurements(model, shape)

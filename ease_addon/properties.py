@@ -11,11 +11,14 @@ import bpy
 from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProperty,
                        FloatVectorProperty, IntProperty, PointerProperty, StringProperty)
 
+from ..core.body.sizes import CHARTS
 from ..core.body.sizes import SIZES as CHART_SIZES
 from ..core.design.checks import EASE_MAX, EASE_MIN
 from . import data, live, sync
 
 SIZES = [(s, s, f"size {s} of the size chart") for s in CHART_SIZES]
+# Every chart's sizes are letters of the default chart's XS..XL; the chart says which apply.
+CHART_ITEMS = [(c.name, c.name.capitalize(), f"{c.title}; sizes {', '.join(c.sizes)}") for c in CHARTS.values()]
 POSES = [("A", "A", "reference A-pose"), ("T", "T", "T-pose"),
          ("P1", "P1", "arms forward, legs spread"), ("P2", "P2", "arms up, scissored legs"),
          ("P3", "P3", "sitting, elbows bent")]
@@ -73,6 +76,8 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
     body_file: StringProperty(name="Body file", subtype="FILE_PATH",
                               description="SMPL/SMPL-X .npz/.pkl or template .obj the user owns")
     shape: CollectionProperty(type=EASE_PG_shape_param)
+    chart: EnumProperty(name="Chart", items=CHART_ITEMS, default="default",
+                        description="Size chart of the size presets: Anny's own (default) or EN 13402-3 women's / men's")
     size: EnumProperty(name="Size", items=SIZES, default="M")
     pose: EnumProperty(name="Pose", items=POSES, default="A")
     height_cm: FloatProperty(name="Height", default=170.0, min=100.0, max=230.0, unit="NONE",

@@ -1,0 +1,175 @@
+"""Size charts (default, women's and men's EN 13402-3): stored fits within 1 cm, re-fits, names,
+designs on a chart body and on an OBJ template."""
+import argparse
+import json
+
+import numpy as np
+import pytest
+from conftest import sample
+
+from core.body.charts import PUBLISHED
+from core.body.measure import measure
+from core.body.registry import load_spec, resolve_body_files
+from core.body.sizes import (CHART_NAMES, CHARTS, TOLERANCE_CM, chart_fit, chart_sizes, check_size,
+                             size_shape, size_targets)
+from core.errors import BodyError, DesignError
+
+from test_body_obj import horse, write_obj
+
+CASES = [(c, s) for c in PUBLISHED for s in PUBLISHED[c].sizes]
+
+
+def test_chart_names_and_errors():
+    assert CHART_NAMES == ("default", "women", "men")
+    assert check_size("m", "Women") == "women:M" and check_size("women:l") == "women:L"
+    assert check_size("M") == "M" and check_size("default:XL") == "XL"
+    assert chart_sizes("men") == ("S", "M", "L", "XL")
+    with pytest.raises(BodyError, match="unknown size chart 'kids'; allowed: default, women, men"):
+        check_size("M", "kids")
+    with pytest.raises(BodyError, match="unknown size 'XL' of chart 'women'; allowed: S, M, L"):
+        check_size("XL", "women")
+    with pytest.raises(BodyError, match="is of chart 'men', not of chart 'women'"):
+        check_size("men:M", "women")
+
+
+def test_charts_are_ordered_and_sourced():
+    for c in PUBLISHED.values():
+        assert "EN 13402-3" in c.title
+        rows = list(c.sizes.values())
+        for a, b in zip(rows, rows[1:]):
+            assert b["chest"] > a["chest"] and b["waist"] > a["waist"]
+        assert set(c.fitted["anny"]) == set(c.sizes)
+
+
+@pytest.mark.parametrize("chart,size", CASES)
+def test_stored_fits_measure_within_1cm(anny, chart, size):
+    """The stored Anny shape of each chart size, re-measured, is within 1 cm of every target,
+    with the chart's gender phenotype."""
+    shape = size_shape(anny, size, chart=chart)
+    assert shape["gender"] == PUBLISHED[chart].start["gender"]
+    got = measure(anny, anny.vertices(shape))
+    for k, want in size_targets(size, chart).items():
+        assert abs(got[k] - want) <= TOLERANCE_CM, (chart, size, k, got[k], want)
+
+
+@pytest.mark.parametrize("case", sample(CASES, 2, seed=14))
+def test_refit_lands_within_1cm(anny, case):
+    """fit_measurements re-makes each stored fit: within 1 cm, and near the stored shape's girths."""
+    chart, size = case
+    fit = chart_fit(anny, size, chart)
+    assert fit.ok, fit.summary()
+    stored = measure(anny, anny.vertices(size_shape(anny, size, chart=chart)))
+    for k in size_targets(size, chart):
+        assert abs(fit.achieved[k] - stored[k]) <= 2 * TOLERANCE_CM
+
+
+def test_women_and_men_differ_where_the_chart_says(anny):
+    w = measure(anny, anny.vertices(size_shape(anny, "women:M")))
+    m = measure(anny, anny.vertices(size_shape(anny, "men:M")))
+    assert w["hip"] - w["waist"] > m["hip"] - m["waist"] + 5     # the women's chart's hip drop
+
+
+# -- designs -------------------------------------------------------------------------------
+def _design(body):
+    with open("core/data/designs/top_short_sleeve.json") as f:
+        d = json.load(f)
+    d["body"] = body
+    return d
+
+
+def test_design_body_chart(anny):
+    from core.design import load_design
+    design = load_design(_design({"chart": "women", "shape": "M"}))
+    assert design.body["shape"] == "women:M" and design.body["chart"] == "women"
+    assert load_design(design.to_json()).body == design.body           # saved and read back alike
+    with pytest.raises(DesignError, match=r"body\.chart.*default, women, men.*kids"):
+        load_design(_design({"chart": "kids", "shape": "M"}))
+    with pytest.raises(DesignError, match=r"body\.shape.*chart women \(S, M, L\).*XL"):
+        load_design(_design({"chart": "women", "shape": "XL"}))
+
+
+def test_prepare_and_transfer_on_a_chart_body(anny):
+    """A design on women:M is cut on that body; transfer "L" means the design's chart's L."""
+    import core.workflows as wf
+    prep = wf.prepare(_design({"chart": "women", "shape": "M"}), body=anny)
+    assert prep.cut.body["shape"] == "women:M"
+    np.testing.assert_allclose(prep.reference, anny.vertices(size_shape(anny, "women:M")), atol=1e-9)
+    assert wf.size_name(prep, "l") == "women:L" and wf.size_name(prep, "men:M") == "men:M"
+    with pytest.raises(BodyError, match="allowed: S, M, L"):
+        wf.size_name(prep, "XS")
+    run = wf.transfer(prep, "L", iterations=3)
+    assert run.pattern.report["size"] == "women:L"
+    assert run.pattern.body["shape"] == size_shape(anny, "women:L")
+
+
+@pytest.fixture
+def horse_design(tmp_path):
+    """A box horse OBJ with landmarks and blend shapes in a subfolder, and a design naming them
+    relative to the design file."""
+    (tmp_path / "bodies").mkdir()
+    v, quads, owner = horse()
+    write_obj(tmp_path / "bodies" / "horse.obj", v, quads)
+    belly = np.zeros((len(v), 3))
+    belly[(np.array(owner) == "torso") & (v[:, 2] < 1.0), 2] = -0.1
+    np.savez(tmp_path / "bodies" / "shapes.npz", names=np.array(["belly"]), deltas=belly[None])
+    (tmp_path / "bodies" / "marks.json").write_text(json.dumps({"withers": 5, "nose": 40}))
+    body = {"model": "bodies/horse.obj", "landmarks": "bodies/marks.json", "blendshapes": "bodies/shapes.npz"}
+    return tmp_path, body
+
+
+def test_obj_template_through_a_design(horse_design):
+    from core.design import load_design
+    folder, body = horse_design
+    design = load_design(_design(dict(body)))
+    assert design.body["shape"] is None                   # an OBJ template is its own reference body
+    spec = resolve_body_files(design.body, folder)
+    assert spec["model"] == str(folder / "bodies" / "horse.obj")
+    model = load_spec(spec)
+    assert set(model.landmarks) == {"withers", "nose"} and list(model.shape_parameters()) == ["belly"]
+    from core.body.instance import spec_instance
+    V, _ = spec_instance({**spec, "shape": {"belly": 1.0}})
+    assert V.shape == model.vertices().shape and (V[:, 2] < model.vertices()[:, 2] - 0.05).sum() == 4
+    # A chart size on a template without the girth landmarks says what is missing.
+    with pytest.raises(BodyError, match="has no bust_left.*landmarks.*body.landmarks"):
+        size_shape(model, "M")
+    for key, value, message in (("landmarks", "marks.txt", "a .json file"), ("up", "x", "'z' or 'y'")):
+        with pytest.raises(DesignError, match=rf"body\.{key}.*{message}"):
+            load_design(_design({**body, key: value}))
+    with pytest.raises(DesignError, match=r"body\.landmarks.*only an OBJ template"):
+        load_design(_design({"model": "anny", "landmarks": "m.json"}))
+
+
+def test_cli_body_chart(tmp_path):
+    from core.cli import body as body_cli
+
+    def ease_body(argv):
+        parser = argparse.ArgumentParser(prog="ease")
+        body_cli.add_parser(parser.add_subparsers(dest="command"))
+        args = parser.parse_args(["body", *argv, "--quiet"])
+        return args.func(args)
+
+    out = tmp_path / "w.obj"
+    assert ease_body(["--chart", "women", "--size", "S", "--out", str(out)]) == 0
+    with pytest.raises(BodyError, match="--size: unknown size 'XL' of chart 'women'; allowed: S, M, L"):
+        ease_body(["--chart", "women", "--size", "XL", "--out", str(out)])
+    with pytest.raises(BodyError, match="--chart: unknown size chart 'kids'; allowed: default, women, men"):
+        ease_body(["--chart", "kids", "--size", "M", "--out", str(out)])
+
+
+def test_addon_chart_presets(bpy_session, blender, anny):
+    """The add-on's chart beside the size: Apply Size on the women's chart gives women:M; a size
+    the chart lacks is refused and the body stays."""
+    bpy = bpy_session["bpy"]
+    blender.reset()
+    assert bpy.ops.ease.add_body(source="DEFAULT") == {"FINISHED"}
+    s = bpy.context.scene.ease
+    assert {i.identifier for i in s.bl_rna.properties["chart"].enum_items} == set(CHART_NAMES)
+    s.chart = "women"
+    assert bpy.ops.ease.set_size(size="M") == {"FINISHED"}
+    assert np.allclose(blender.verts(s.body), anny.vertices(size_shape(anny, "women:M")), atol=1e-5)
+    assert s.body["ease_size"] == "women:M"
+    before = blender.verts(s.body).copy()
+    with pytest.raises(RuntimeError, match="unknown size 'XS' of chart 'women'"):
+        bpy.ops.ease.set_size(size="XS")
+    assert np.allclose(blender.verts(s.body), before)
+    s.chart = "default"
