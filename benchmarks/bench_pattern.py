@@ -3,10 +3,13 @@
 Table 1 ease compliance (uniform tight/regular/loose for a shirt and pants,
 the two non-uniform designs), Table 2 seam mismatch and runtime, Table 3
 transfer deviation (XS, S, L, XL), Table 4 residual stretch before/after
-adaptation (P1, P2, P3; eps = 1.10), flipped triangles in every run, the
-side-by-side against plain LSCM and libigl ARAP, and paper-default vs
-improved vs stretch configurations. Shear (SPEC 8) is given beside every
-compliance figure. Metric definitions: shared SPEC.md.
+adaptation (P1, P2, P3; eps = 1.10), flipped and collapsed triangles in every
+run, the side-by-side against plain LSCM and libigl ARAP, paper-default vs
+improved vs stretch configurations, and every shipped template at every size
+and after P1 adaptation with its collapse sites and the region report (bust
+points, shoulder blades, seat). Shear (SPEC 8) and the warp deviation are given
+beside every compliance figure. Metric definitions: shared SPEC.md and
+docs/metrics.md.
 
 Every uniform-ease solve of one garment reuses one solver (flattening and
 factorisation): only the right-hand side changes.

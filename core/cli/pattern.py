@@ -28,7 +28,9 @@ def add_parser(sub) -> None:
                    help="optimize the sewing pattern of a design on its reference body",
                    description="Cut the design on its body and optimize the 2D pattern so the achieved "
                                "weft/warp scales follow the painted ease. Writes pattern.json, report.json "
-                               "(metrics, timings) and pattern.png.")
+                               "(metrics: weft compliance with the warp deviation and shear beside it, flipped and "
+                               "collapsed triangles, compliance near the bust points, shoulder blades and seat; "
+                               "timings) and pattern.png. A pattern with a flipped triangle is refused.")
     _common(p)
 
     p = subcommand(sub, "transfer", _cmd_transfer,

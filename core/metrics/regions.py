@@ -35,13 +35,13 @@ def body_landmarks(pattern, model=None) -> Dict[str, np.ndarray]:
     loaded (a synthetic pattern, a moved OBJ file).
     """
     from ..body.instance import spec_instance
-    from ..body.registry import load_body
+    from ..body.registry import load_spec
     from ..errors import EaseError
     spec = getattr(pattern, "body", None) or {}
     if not spec.get("model"):
         return {}
     try:
-        model = model if model is not None else load_body(spec["model"])
+        model = model if model is not None else load_spec(spec)    # an OBJ template with its landmarks file
         V, _ = spec_instance(spec, model=model)
     except (EaseError, OSError):
         return {}
