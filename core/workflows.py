@@ -409,7 +409,8 @@ def drape_summary(run: DrapeRun, pattern) -> str:
     r, a = run.result, run.metrics["all"]
     return (f"drape {pattern.style}: {r.material['name']}, {r.frames} frames ({r.settle_reason}), "
             f"simulate {r.timings['simulate']:.1f} s; gap {a['gap_mm']['mean']:.1f} ± {a['gap_mm']['std']:.1f} mm, "
-            f"penetration {a['penetration_pct']:.2f} %, seam gap max {a['seam_gap_mm']['max']:.2f} mm")
+            f"penetration {a['penetration_pct']:.2f} %, seam gap max {a['seam_gap_mm']['max']:.2f} mm; "
+            f"strain weft {a['strain_weft_pct']['mean']:.2f} % / warp {a['strain_warp_pct']['mean']:.2f} % (mean)")
 
 
 # ----------------------------------------------------------------------------- export
