@@ -258,10 +258,14 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None,
         offset += out["W"].shape[0]
     W = sp.vstack(rows).tocsr() if rows else sp.csr_matrix((0, len(X)))
     W.sort_indices()
+    darts = {}
+    if any(getattr(l, "dart", None) is not None for l in spec.lines):
+        from .darts import dart_records
+        darts = dart_records(spec, seams, X, BF)
     report(progress, 1.0, "cutting: done")
     return GarmentCut(body=dict(spec.body), embedding=W, panels=panels, seams=seams,
                       garments={g.name: g.kind for g in spec.garments}, pins=pins, hems=hems,
-                      materials=dict(spec.materials))
+                      materials=dict(spec.materials), darts=darts)
 
 
 def _axes(body, X, spec):

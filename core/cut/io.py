@@ -104,7 +104,9 @@ def cut_to_json(cut: GarmentCut) -> dict:
         "panels": panels, "seams": seams,
     }
     known = {"body", "embedding", "panels", "seams", "garments", "pins", "hems", "materials"}
-    extra = {f.name: _encode(getattr(cut, f.name)) for f in dataclasses.fields(cut) if f.name not in known}
+    # a cut without darts writes no darts record (its files stay as they were)
+    extra = {f.name: _encode(getattr(cut, f.name)) for f in dataclasses.fields(cut)
+             if f.name not in known and not (f.name == "darts" and not cut.darts)}
     if extra:
         out["extra"] = extra
     return out

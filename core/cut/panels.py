@@ -155,7 +155,7 @@ def build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset, clock)
             if line.role == "seam":
                 both = (pl >= 0) & (pr >= 0)
                 key = np.where(both, pl * (len(gpanels) + 1) + pr, -1)
-                for sel in _stretches(key, closed_run):
+                for sel in _joined(_joined(_stretches(key, closed_run), la0, la1), lb0, lb1):
                     if key[sel[0]] >= 0:
                         stretches.append((int(pl[sel[0]]), int(pr[sel[0]]), np.append(la0[sel], la1[sel[-1]]),
                                           np.append(lb0[sel], lb1[sel[-1]])))
@@ -165,7 +165,7 @@ def build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset, clock)
                 one_l, one_r = pl, pr
             # open edges: hems per side
             for side, l0, l1 in ((one_l, la0, la1), (one_r, lb0, lb1)):
-                for sel in _stretches(side, closed_run):
+                for sel in _joined(_stretches(side, closed_run), l0, l1):
                     if side[sel[0]] >= 0:
                         verts = np.append(l0[sel], l1[sel[-1]])
                         if side is one_r:
@@ -194,6 +194,17 @@ def _stretches(key: np.ndarray, closed: bool) -> List[np.ndarray]:
     k_ = key[idx]
     cuts = np.nonzero(k_[1:] != k_[:-1])[0] + 1
     return np.split(idx, cuts)
+
+
+def _joined(stretches: List[np.ndarray], l0: np.ndarray, l1: np.ndarray) -> List[np.ndarray]:
+    """The stretches split where consecutive edges do not share their local vertex
+    (``l1`` of one edge != ``l0`` of the next): where the line crosses the mouth of a
+    dart, whose two legs split the vertex there in the panel."""
+    out = []
+    for sel in stretches:
+        brk = np.nonzero(l1[sel[:-1]] != l0[sel[1:]])[0] + 1
+        out += np.split(sel, brk) if len(brk) else [sel]
+    return out
 
 
 def _boundary_loops(a: np.ndarray, b: np.ndarray, name: str) -> List[np.ndarray]:

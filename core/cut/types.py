@@ -68,12 +68,36 @@ class Seam:
 
     ``verts_a[i]`` (local to ``panel_a``) is sewn to ``verts_b[i]`` (local to
     ``panel_b``); both map to the same global garment vertex.
+
+    A *dart* is a seam of a panel with itself whose two sides (the legs) run
+    from the mouth to one shared vertex, the apex (:func:`seam_kind`).
     """
     name: str
     panel_a: str
     panel_b: str
     verts_a: np.ndarray
     verts_b: np.ndarray
+
+    @property
+    def kind(self) -> str:
+        """``"dart"`` or ``"seam"`` (:func:`seam_kind`)."""
+        return seam_kind(self)
+
+    @property
+    def apex(self) -> Optional[int]:
+        """The local vertex id of a dart's apex (both legs end there), None for a seam."""
+        return int(self.verts_a[-1]) if seam_kind(self) == "dart" else None
+
+
+def seam_kind(seam) -> str:
+    """``"dart"`` for a seam of one panel with itself whose sides end at one vertex (the
+    legs of a dart meeting at its apex), else ``"seam"``. Read from the seam's vertices
+    alone, so a cut or a pattern reloaded from its files knows its darts. Works on any
+    object with ``panel_a``, ``panel_b``, ``verts_a``, ``verts_b``."""
+    va, vb = seam.verts_a, seam.verts_b
+    if seam.panel_a == seam.panel_b and len(va) >= 2 and int(va[-1]) == int(vb[-1]) and int(va[0]) != int(vb[0]):
+        return "dart"
+    return "seam"
 
 
 @dataclass
@@ -92,6 +116,8 @@ class GarmentCut:
     hems : dict panel name -> list of (k,) local-id polylines that are open
         edges (hems, cuffs, necklines), not seams.
     materials : dict, e.g. ``{"eps_weft": 1.1, "eps_warp": 1.1, "fabric": "cotton"}``.
+    darts : dict dart seam name -> ``{"panel", "intake" (m, or None for auto), "apex_offset" (m),
+        "apex" ((3,) float, the true apex on the reference body, m), "line" (the line of its mouth)}``.
     """
     body: dict
     embedding: sp.csr_matrix
@@ -101,6 +127,7 @@ class GarmentCut:
     pins: Dict[str, np.ndarray] = field(default_factory=dict)
     hems: Dict[str, List[np.ndarray]] = field(default_factory=dict)
     materials: dict = field(default_factory=dict)
+    darts: Dict[str, dict] = field(default_factory=dict)
 
     @property
     def n_vertices(self) -> int:

@@ -440,7 +440,11 @@ def resolve(design, body, shape=None, pose=None, vertices: Optional[np.ndarray] 
         pts = resolver.line_points(i)
         if line.role == "guide":
             continue
-        lines.append(CutLine(full, pts, closed=line.closed, role=line.role))
+        lines.append(CutLine(full, list(pts), closed=line.closed, role=line.role))
+    if any(p.darts for g in design.garments for p in g.panels):
+        from .darts import resolve_darts
+        lines += resolve_darts(resolver, design, lines, [(g, path, p, path.endswith("(mirrored)"))
+                                                         for g, path, p, _ in _panels(design)])
     names = {l.name for l in lines}
     panels = []
     for g, path, p, mirror_of in _panels(design):

@@ -27,12 +27,15 @@ class CutLine:
         line name's prefix (``"shirt.side_left"`` -> ``"shirt"``) if there is
         one, else every garment. Garments are cut separately, so the lines of
         one garment never cut another (overlapping shirt and pants).
+    dart : the :class:`core.design.darts.DartSpec` of a dart line (a seam from
+        the mouth, on another line, to the sewn point inside one panel), else None.
     """
     name: str
     points: List[SurfacePoint]
     closed: bool = False
     role: str = "seam"
     garment: Optional[str] = None
+    dart: Optional[object] = None
 
 
 @dataclass

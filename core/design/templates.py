@@ -374,6 +374,30 @@ def dress_gradient():
                   length_range=(0.36, 0.8))
 
 
+#: the women's body of the women's templates: size M of the women's chart (core.body.charts: Anny at
+#: gender phenotype 1.0 fitted to EN 13402-3)
+WOMEN_BODY = {"model": "anny", "chart": "women", "shape": "M", "pose": "A"}
+
+
+def blouse_fitted():
+    """Women's sleeveless fitted blouse: the sleeveless top on a women's body, hem just below the
+    waist, ease 1.1, with a bust dart from each side seam towards the bust point
+    (:mod:`core.design.darts`; ``*_right`` mirrored)."""
+    d = _top("fitted blouse", "Women's sleeveless fitted blouse (women's chart, size M): front and back, hem just "
+                              "below the waist, bust darts from the side seams towards the bust points; ease 1.1.",
+             "none")
+    d["body"] = copy.deepcopy(WOMEN_BODY)
+    d["parameters"]["hem_length"]["value"] = 0.01
+    g = d["garments"][0]
+    g["name"] = "blouse"
+    for p in g["panels"]:
+        p["ease"] = {"value": 1.1}
+    front = next(p for p in g["panels"] if p["name"] == "front")
+    front["darts"] = [{"name": "bust_dart_left", "line": "side_left", "apex": "bust_left", "intake": "auto",
+                       "apex_offset": 0.025}]
+    return d
+
+
 TEMPLATES: Dict[str, Callable[[], dict]] = {
     "shirt_long_sleeve": shirt_long_sleeve,
     "top_short_sleeve": top_short_sleeve,
@@ -385,6 +409,7 @@ TEMPLATES: Dict[str, Callable[[], dict]] = {
     "jacket": jacket,
     "teaser_shirt_pants": teaser_shirt_pants,
     "dress_gradient": dress_gradient,
+    "blouse_fitted": blouse_fitted,
 }
 
 

@@ -15,6 +15,7 @@ from typing import Any, Dict, List, Optional
 
 from ..errors import DesignError
 from .checks import check_ease, check_keypoint, check_name, check_parameter_value
+from .darts import Dart, mirror_dart
 from .mirror import mirror_panel
 from .naming import mirrored_name
 
@@ -72,15 +73,20 @@ class Line:
 
 @dataclass
 class Panel:
-    """A panel: the region of the cut surface around ``seed``, with its ease field."""
+    """A panel: the region of the cut surface around ``seed``, with its ease field and its
+    darts (:class:`core.design.darts.Dart`, written only when there are some)."""
     name: str
     seed: Any
     body_part: str = "torso"
     ease: dict = field(default_factory=lambda: {"value": 1.0})
+    darts: List[Dart] = field(default_factory=list)
 
     def to_json(self):
-        return {"name": self.name, "seed": copy.deepcopy(self.seed),
-                "body_part": self.body_part, "ease": copy.deepcopy(self.ease)}
+        out = {"name": self.name, "seed": copy.deepcopy(self.seed),
+               "body_part": self.body_part, "ease": copy.deepcopy(self.ease)}
+        if self.darts:
+            out["darts"] = [d.to_json() for d in self.darts]
+        return out
 
 
 @dataclass
@@ -216,6 +222,7 @@ class Design:
         gi = self.garments.index(g)
         if mirrored:
             p = mirror_panel(p)
+            p.darts = [mirror_dart(d) for d in p.darts]
             g.panels.append(p)
             i = len(g.panels) - 1
         p.ease = check_ease(f"garments[{gi}].panels[{i}].ease", ease, self.parameters)

@@ -88,8 +88,12 @@ def seam_sides(pattern: Pattern, panel_name: str) -> Iterator[Tuple[PatternSeam,
     ------
     (seam, side, ids): the :class:`core.pattern.types.PatternSeam`, ``"a"`` or
     ``"b"``, and that side's (k,) int local vertex ids, in pattern order.
+    Darts are not among them: their legs lie inside the piece's drawn outline
+    (:mod:`core.export.darts`).
     """
     for s in pattern.seams:
+        if s.kind == "dart":
+            continue
         if s.panel_a == panel_name:
             yield s, "a", np.asarray(s.verts_a, int)
         if s.panel_b == panel_name:

@@ -11,16 +11,20 @@ layer  content
 4      notches (slit notches, LINE from the boundary inward)
 6      mirror line (a fold edge)
 7      grain line (LINE, pointing along the warp)
+8      internal lines: a dart's legs and its fold arrow
+13     drill holes (POINT: a dart's drill hole)
 14     sew line
 15     annotation text (cut on fold, mirror, allowance, units)
 ====== ==========================================================
+
+(layers 8 and 13 only in a pattern with darts, so files without darts stay as they were)
 
 in millimetres; the grain line is one LINE, its arrow heads two open
 polylines on the same layer. :func:`astm_document` is DXF R2000 with
 ``$INSUNITS = 4`` (mm); the same content as DXF R12 (:func:`astm_r12_text`)
 suits Gerber and other strict R12 readers, which take the units from the style
 system text ``Units: METRIC`` and, where they read it, ``$MEASUREMENT`` = 1.
-:func:`plain_document` has named layers (CUT, SEW, NOTCH, GRAIN, FOLD, LABEL)
+:func:`plain_document` has named layers (CUT, SEW, NOTCH, GRAIN, FOLD, LABEL; DART with darts)
 and no blocks. Every variant sets its extents and limits (``$EXTMIN``,
 ``$EXTMAX``, ``$LIMMIN``, ``$LIMMAX``) from the drawing.
 ezdxf is imported here only, so the rest of the core loads without it.
@@ -38,6 +42,7 @@ import numpy as np
 from ..errors import ExportError
 from ..geom.layout import Layout
 from ..geom.polygon import turn_points
+from .darts import DRILL_DIAMETER
 from .pieces import PieceDrawing, ascii_text
 
 ASTM_LAYERS = {"boundary": "1", "turn": "2", "notch": "4", "mirror": "6", "grain": "7", "sew": "14",
@@ -45,6 +50,12 @@ ASTM_LAYERS = {"boundary": "1", "turn": "2", "notch": "4", "mirror": "6", "grain
 TURN_DEG = 20.0  # a polyline vertex turning more than this is a corner (turn point), else a curve point
 PLAIN_LAYERS = {"CUT": 1, "SEW": 5, "NOTCH": 3, "GRAIN": 7, "FOLD": 6, "LABEL": 7}  # ACI colours
 INSUNITS_MM = 4
+DART_LAYERS = {"internal": "8", "drill": "13"}
+
+
+def _layers(pieces) -> dict:
+    """The ASTM layers a drawing uses: the dart layers only where a piece has a dart."""
+    return {**ASTM_LAYERS, **DART_LAYERS} if any(p.darts for p in pieces) else dict(ASTM_LAYERS)
 
 
 def _ezdxf():
@@ -108,11 +119,11 @@ def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, si
             return layout.add_polyline2d(points, close=close, dxfattribs=dxfattribs)
         return layout.add_lwpolyline(points, close=close, dxfattribs=dxfattribs)
 
-    for name in ASTM_LAYERS.values():
+    L = _layers(pieces)
+    for name in L.values():
         if name not in doc.layers:
             doc.layers.add(name)
     msp = doc.modelspace()
-    L = ASTM_LAYERS
     h_style = 5.0
     style_text = [f"Style Name: {ascii_text(style)}", f"Sample Size: {ascii_text(size)}",
                   "Grading Rule Table: none", "Units: METRIC", "Author: EASE"]
@@ -135,6 +146,10 @@ def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, si
             blk.add_line(a, b, dxfattribs={"layer": L["notch"]})
         for f in piece.fold:
             add_poly(blk, _mm(f), close=False, dxfattribs={"layer": L["mirror"]})
+        for dart in piece.darts:
+            for line in dart.legs + [dart.fold, dart.fold_head]:
+                add_poly(blk, _mm(line), close=False, dxfattribs={"layer": L["internal"]})
+            blk.add_point(_mm(dart.drill[None])[0], dxfattribs={"layer": L["drill"]})
         g0, g1 = _mm(piece.grain)
         blk.add_line(g0, g1, dxfattribs={"layer": L["grain"]})
         # the arrow heads as open polylines (barb, tip, barb) beside the one grain LINE, so that a
@@ -243,7 +258,7 @@ def astm_r12_text(pieces, layout, style, size) -> str:
         w.write_str("  0\nTABLE\n  2\nLTYPE\n 70\n1\n")
         w.write_str("  0\nLTYPE\n  2\nCONTINUOUS\n 70\n0\n  3\nSolid line\n 72\n65\n 73\n0\n 40\n0.0\n")
         w.write_tag2(0, "ENDTAB")
-        layers = ["0"] + sorted(ASTM_LAYERS.values(), key=int)
+        layers = ["0"] + sorted(_layers(pieces).values(), key=int)
         w.write_str(f"  0\nTABLE\n  2\nLAYER\n 70\n{len(layers)}\n")
         for name in layers:
             w.write_str(f"  0\nLAYER\n  2\n{name}\n 70\n0\n 62\n7\n  6\nCONTINUOUS\n")
@@ -267,7 +282,8 @@ def plain_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str):
     ezdxf = _ezdxf()
     doc = ezdxf.new("R2010", units=INSUNITS_MM)
     doc.header["$MEASUREMENT"] = 1
-    for name, colour in PLAIN_LAYERS.items():
+    plain = {**PLAIN_LAYERS, "DART": 4} if any(p.darts for p in pieces) else PLAIN_LAYERS
+    for name, colour in plain.items():
         doc.layers.add(name, color=colour)
     msp = doc.modelspace()
     for piece, off in zip(pieces, layout.offsets):
@@ -280,6 +296,10 @@ def plain_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str):
             msp.add_line(a, b, dxfattribs={"layer": "NOTCH"})
         for f in piece.fold:
             msp.add_lwpolyline(_mm(f, off), dxfattribs={"layer": "FOLD"})
+        for dart in piece.darts:
+            for line in dart.legs + [dart.fold, dart.fold_head]:
+                msp.add_lwpolyline(_mm(line, off), dxfattribs={"layer": "DART"})
+            msp.add_circle(_mm(dart.drill[None], off)[0], 0.5 * DRILL_DIAMETER * 1000.0, dxfattribs={"layer": "DART"})
         msp.add_lwpolyline(_mm(piece.grain, off), dxfattribs={"layer": "GRAIN"})
         for a in piece.arrows:
             msp.add_lwpolyline(_mm(a, off), dxfattribs={"layer": "GRAIN"})

@@ -134,10 +134,19 @@ def piece_notches(pattern: Pattern, panel: PatternPanel, xy: np.ndarray, loops: 
                 if np.linalg.norm(d) > 1e-12:
                     break
             nrm = np.array([d[1], -d[0]]) / max(np.linalg.norm(d), 1e-300)
-            t_cut = ray_hit(q, nrm, cut[li])
-            t_cut = edge_w[li][ei] if t_cut is None else t_cut
-            a0 = q + t_cut * nrm
-            seg = np.stack([a0, a0 - min(NOTCH_LENGTH, max(t_cut, 1e-4) * 0.9 + 1e-4) * nrm]) \
-                if t_cut > 0 else np.stack([q + 0.5 * NOTCH_LENGTH * nrm, q - 0.5 * NOTCH_LENGTH * nrm])
-            notches.append(Notch(seam=seam.name, side=side, s=float(s), point=q, normal=nrm, segment=seg))
+            notches.append(Notch(seam=seam.name, side=side, s=float(s), point=q, normal=nrm,
+                                 segment=slit(q, nrm, cut[li], edge_w[li][ei])))
     return notches
+
+
+def slit(q: np.ndarray, nrm: np.ndarray, cut_loop: np.ndarray, width: float) -> np.ndarray:
+    """(2, 2) the slit of a notch at sew-line point ``q`` (2,) with outward unit normal ``nrm``:
+    from the cut line ``cut_loop`` (m, 2) straight out from ``q`` inward, ``NOTCH_LENGTH`` long
+    (shorter where the allowance is narrower); on an edge without allowance it straddles the
+    sew line. ``width``: the edge's allowance (m), where the ray misses the cut line."""
+    t_cut = ray_hit(q, nrm, cut_loop)
+    t_cut = width if t_cut is None else t_cut
+    a0 = q + t_cut * nrm
+    if t_cut > 0:
+        return np.stack([a0, a0 - min(NOTCH_LENGTH, max(t_cut, 1e-4) * 0.9 + 1e-4) * nrm])
+    return np.stack([q + 0.5 * NOTCH_LENGTH * nrm, q - 0.5 * NOTCH_LENGTH * nrm])

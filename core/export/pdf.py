@@ -28,6 +28,7 @@ import numpy as np
 
 from ..errors import ExportError
 from ..geom.layout import Layout
+from .darts import DRILL_DIAMETER
 from .pieces import PieceDrawing, ascii_text
 from .tiling import PageGrid, PrintLayout, grid_for, inked_pages, place, print_layout
 
@@ -121,6 +122,15 @@ def _define_forms(c, pieces: Sequence[PieceDrawing]) -> List[str]:
         for f in piece.fold:
             _poly(c, f, False)
         c.setDash()
+        for dart in piece.darts:
+            c.setStrokeColorRGB(*COLOURS["sew"])
+            for leg in dart.legs:
+                _poly(c, leg, False)
+            c.setStrokeColorRGB(*COLOURS["mark"])
+            _poly(c, dart.fold, False)
+            _poly(c, dart.fold_head, False)
+            x, y = _pt(dart.drill[None])[0]
+            c.circle(x, y, 0.5 * DRILL_DIAMETER * PT_PER_M, stroke=1, fill=0)
         c.setStrokeColorRGB(*COLOURS["notch"])
         for n in piece.notches:
             _poly(c, n.segment, False)

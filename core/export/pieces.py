@@ -26,7 +26,8 @@ from ..pattern.types import Pattern, PatternPanel
 from ..progress import report
 from .allowance import allowance_text, edge_allowances, fold_ids, piece_cut_lines, resolve_allowance
 from .boundary import edge_table, piece_loops
-from .notches import DEFAULT_NOTCH_SPACING, Notch, check_notch_spacing, piece_notches
+from .darts import DartDrawing, bridge_darts, dart_drawing, piece_darts
+from .notches import DEFAULT_NOTCH_SPACING, Notch, check_notch_spacing, piece_notches, slit
 
 CHAR_WIDTH = 0.6   # Helvetica's mean advance is ~0.55 em: a safe width estimate per character
 TEXT_MIN = 0.0025  # m, smallest label text
@@ -46,7 +47,7 @@ class PieceDrawing:
     cut : list of (m, 2) closed loops, the cut line (allowance included).
     edge_allowance : list of (k,) float, allowance of each sew edge (m).
     fold : list of (j, 2) polylines on the fold (layer "mirror line").
-    notches : list of :class:`core.export.notches.Notch`.
+    notches : list of :class:`core.export.notches.Notch` (a dart's: one at each leg's mouth).
     grain : (2, 2) float, grain line end points (bottom, top).
     arrows : list of (3, 2) polylines, arrow heads at both grain ends.
     label : list of str, label lines (ASCII).
@@ -71,6 +72,7 @@ class PieceDrawing:
     text_height: float
     quantity: int
     bbox: np.ndarray = field(default_factory=lambda: np.zeros((2, 2)))
+    darts: List[DartDrawing] = field(default_factory=list)
 
 
 def ascii_text(text: str) -> str:
@@ -154,13 +156,19 @@ def build_piece(pattern: Pattern, panel: PatternPanel, widths: Dict[str, float],
     rot = grain_rotation(panel.grain)
     xy = np.asarray(panel.uv, float) @ rot.T
     loops = piece_loops(panel)
+    darts = piece_darts(pattern, panel)
+    if darts:
+        loops = bridge_darts(loops, darts)
     table = edge_table(loops)
     edge_w = edge_allowances(pattern, panel, widths, loops, table)
+    mouths = _bridge_allowance(loops, table, darts, edge_w)
     fold = fold_ids(panel)
     folds = [] if fold is None else [xy[fold]]
     sew = [xy[b] for b in loops]
     cut = piece_cut_lines(panel.name, sew, edge_w, mitre_limit, warnings)
     notches = piece_notches(pattern, panel, xy, loops, table, edge_w, cut, notch_spacing)
+    drawn = [dart_drawing(panel, s, xy) for s in darts]
+    notches += _mouth_notches(darts, mouths, xy, loops, cut, edge_w)
     # xy is already in the grain frame: the grain is +y there
     start, end = grain_line(xy, np.asarray(panel.faces, int), loops, np.array([0.0, 1.0]))
     grain, arrows = np.stack([start, end]), grain_arrows(start, end)
@@ -175,13 +183,45 @@ def build_piece(pattern: Pattern, panel: PatternPanel, widths: Dict[str, float],
     piece = PieceDrawing(name=panel.name, garment=panel.garment, rotation=rot, sew=sew, sew_ids=loops,
                          cut=cut, edge_allowance=edge_w, fold=folds, notches=notches, grain=grain,
                          arrows=arrows, label=label, label_at=label_at, text_height=text_h,
-                         quantity=quantity)
+                         quantity=quantity, darts=drawn)
     tw = max(len(s) for s in label) * CHAR_WIDTH * text_h
     th = len(label) * 1.5 * text_h
     lo = np.minimum(lo, [label_at[0], label_at[1] - th])
     hi = np.maximum(hi, [label_at[0] + tw, label_at[1]])
     piece.bbox = np.stack([lo, hi])
     return piece
+
+
+def _bridge_allowance(loops, table, darts, edge_w) -> list:
+    """Give each dart's bridge (the sew edge across its mouth) the allowance of the edge
+    before it (the hem or seam the dart opens on); ``(loop, edge)`` of each bridge, per dart."""
+    out = []
+    for s in darts:
+        key = (int(s.verts_a[0]), int(s.verts_b[0]))
+        if key not in table:
+            out.append(None)
+            continue
+        li, ei = table[key]
+        edge_w[li][ei] = edge_w[li][(ei - 1) % len(loops[li])]
+        out.append((li, ei))
+    return out
+
+
+def _mouth_notches(darts, mouths, xy, loops, cut, edge_w) -> List[Notch]:
+    """A notch at each leg's mouth of every dart (side ``a`` and ``b``, at arc length 0)."""
+    out = []
+    for s, at in zip(darts, mouths):
+        if at is None:
+            continue
+        li, ei = at
+        b = loops[li]
+        d = xy[b[(ei + 1) % len(b)]] - xy[b[ei]]
+        nrm = np.array([d[1], -d[0]]) / max(np.linalg.norm(d), 1e-300)
+        for side, v in (("a", s.verts_a[0]), ("b", s.verts_b[0])):
+            q = xy[int(v)]
+            out.append(Notch(seam=s.name, side=side, s=0.0, point=q, normal=nrm,
+                             segment=slit(q, nrm, cut[li], edge_w[li][ei])))
+    return out
 
 
 def resolve_notch_spacing(notch_spacing, pattern: Pattern) -> float:

@@ -4,7 +4,8 @@
 millimetres, so one user unit is one millimetre in every viewer, printer and
 laser cutter. One ``<g>`` per piece; lines are told apart by stroke colour
 (laser cutters map colours to operations): cut line red, sew line blue,
-notches green, grain line black, fold (mirror) line magenta, text black.
+notches green, grain line black, fold (mirror) line magenta, text black;
+a dart's legs blue (class ``dart``), its fold arrow and drill hole grey.
 """
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from xml.sax.saxutils import escape, quoteattr
 import numpy as np
 
 from ..geom.layout import Layout
+from .darts import DRILL_DIAMETER
 from .pieces import PieceDrawing
 
 COLOURS = {"cut": "#ff0000", "sew": "#0000ff", "notch": "#00a000", "grain": "#000000",
@@ -67,6 +69,14 @@ def svg_document(pieces: Sequence[PieceDrawing], layout: Layout, title: str = "p
         for f in piece.fold:
             out.append(f'<path class="fold" d="{_path(mm(f, off), False)}" stroke="{COLOURS["fold"]}" '
                        f'stroke-dasharray="8,2,1,2" {line}/>')
+        for dart in piece.darts:
+            d = " ".join(_path(mm(leg, off), False) for leg in dart.legs)
+            out.append(f'<path class="dart" data-dart={quoteattr(dart.name)} d="{d}" stroke="{COLOURS["sew"]}" {line}/>')
+            d = " ".join(_path(mm(x, off), False) for x in (dart.fold, dart.fold_head))
+            out.append(f'<path class="dart-fold" d="{d}" stroke="{COLOURS["mark"]}" {line}/>')
+            x, y = mm(dart.drill[None], off)[0]
+            out.append(f'<circle class="drill" cx="{_fmt(x)}" cy="{_fmt(y)}" r="{_fmt(500 * DRILL_DIAMETER)}" '
+                       f'stroke="{COLOURS["mark"]}" {line}/>')
         if piece.notches:
             d = " ".join(_path(mm(n.segment, off), False) for n in piece.notches)
             out.append(f'<path class="notch" d="{d}" stroke="{COLOURS["notch"]}" {line}/>')

@@ -66,8 +66,32 @@ def build_pattern(cut, result: SolveResult, style: str = "", body: Optional[dict
                          gathered=s.name in result.gathered)
              for s in cut.seams]
     body = dict(body if body is not None else cut.body)
+    report = {"optimize_seconds": result.seconds, "iterations": result.iterations,
+              "backtracks": result.backtracks, "gathered_seams": list(result.gathered)}
+    darts = dart_report(cut, uv, seams)
+    if darts:
+        report["darts"] = darts
     return Pattern(style=style, body=body, garments=dict(cut.garments), panels=panels, seams=seams,
                    pins={g: np.asarray(v, int) for g, v in cut.pins.items()},
                    materials=dict(materials if materials is not None else cut.materials), mode=mode,
-                   report={"optimize_seconds": result.seconds, "iterations": result.iterations,
-                           "backtracks": result.backtracks, "gathered_seams": list(result.gathered)})
+                   report=report)
+
+
+def dart_report(cut, uv: Dict[str, np.ndarray], seams: List[PatternSeam]) -> Dict[str, dict]:
+    """Per dart: its intake at the mouth in the pattern (``intake_mm``; ``intake_set_mm`` where
+    the design sets one), its legs' lengths and their difference (mm), its panel."""
+    out = {}
+    for s in seams:
+        if s.kind != "dart":
+            continue
+        p = uv[s.panel_a]
+        a, b = p[s.verts_a], p[s.verts_b]
+        la = float(np.linalg.norm(np.diff(a, axis=0), axis=1).sum())
+        lb = float(np.linalg.norm(np.diff(b, axis=0), axis=1).sum())
+        rec = (getattr(cut, "darts", {}) or {}).get(s.name, {})
+        out[s.name] = {"panel": s.panel_a, "intake_mm": round(1000 * float(np.linalg.norm(a[0] - b[0])), 3),
+                       "legs_mm": [round(1000 * la, 3), round(1000 * lb, 3)],
+                       "leg_difference_mm": round(1000 * abs(la - lb), 4)}
+        if rec.get("intake") is not None:
+            out[s.name]["intake_set_mm"] = round(1000 * float(rec["intake"]), 3)
+    return out

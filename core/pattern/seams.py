@@ -21,7 +21,7 @@ switch for gathered designs, per seam).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
@@ -103,6 +103,11 @@ class SeamLayout:
     row_side: np.ndarray
     mean_edge: float
     total_area: float
+    edge_weight: Optional[np.ndarray] = None
+    mouth_a: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    mouth_b: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    mouth_width: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    mouth_apex: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
 
 
 @dataclass(frozen=True)
@@ -135,6 +140,13 @@ def _side_edges(name: str, pd, v: np.ndarray, table) -> np.ndarray:
     return ef
 
 
+#: the seam-length weight on a dart's legs, times the seams' (20 oscillates): the legs of a dart sew to
+#: equal length within 0.1 mm (a seam's sides meet within ~0.3 mm at weight 1)
+DART_LENGTH_WEIGHT = 10.0
+#: the weight of a dart's intake term (the mouth's width), times the seam-length weight, per unit area
+DART_INTAKE_WEIGHT = 1.0
+
+
 def seam_layout(cut, panels, uv0: np.ndarray, n: int, mean_edge: float, total_area: float) -> SeamLayout:
     """Stack the seams of ``cut`` over the solver's panels (``_PanelData``) and initial flattening ``uv0`` (n, 2)."""
     by_name = {pd.name: pd for pd in panels}
@@ -157,7 +169,31 @@ def seam_layout(cut, panels, uv0: np.ndarray, n: int, mean_edge: float, total_ar
             sides.append(SeamSide(si, g, np.linalg.norm(np.diff(uv0[g], axis=0), axis=1), ef))
             pair.append(len(sides) - 1)
         pairs.append(tuple(pair))
-    return _stack(sides, pairs, n, mean_edge, total_area)
+    layout = _stack(sides, pairs, n, mean_edge, total_area)
+    darts = [si for si, s in enumerate(cut.seams) if s.kind == "dart"]
+    if not darts:
+        return layout
+    from dataclasses import replace
+    is_dart = np.repeat([cut.seams[sd.seam].kind == "dart" for sd in sides], [len(sd.gids) - 1 for sd in sides])
+    # only darts with a set intake get the mouth term ("auto" ones open as the flattening opens them)
+    darts_set = [si for si in darts if (getattr(cut, "darts", {}) or {}).get(cut.seams[si].name, {}).get("intake")
+                 is not None]
+    set_w = [cut.darts[cut.seams[si].name]["intake"] for si in darts_set]
+    return replace(layout, edge_weight=np.where(is_dart, DART_LENGTH_WEIGHT, 1.0),
+                   mouth_a=np.array([sides[pairs[si][0]].gids[0] for si in darts_set], int),
+                   mouth_b=np.array([sides[pairs[si][1]].gids[0] for si in darts_set], int),
+                   mouth_apex=np.array([sides[pairs[si][0]].gids[-1] for si in darts_set], int),
+                   mouth_width=np.array([float(w) for w in set_w], float))
+
+
+def _length_weight(layout: SeamLayout, config: SolverConfig, plan: SeamPlan) -> np.ndarray:
+    """(E,) the seam-length term's weight of every seam edge (dart legs weigh more)."""
+    c = config.weights.seam_length * layout.edge_rest / (layout.mean_edge * layout.total_area) * plan.sewn_edges
+    return c if layout.edge_weight is None else c * layout.edge_weight
+
+
+def _intake_weight(layout: SeamLayout, config: SolverConfig) -> float:
+    return DART_INTAKE_WEIGHT * config.weights.seam_length / layout.total_area
 
 
 def _stack(sides: List[SeamSide], pairs, n: int, h: float, total_area: float) -> SeamLayout:
@@ -238,7 +274,9 @@ def plan_seams(cut, layout: SeamLayout, uv0: np.ndarray, K: np.ndarray, c_weft: 
         auto = tuple(n for n in demand if n.split("#", 1)[0] in lines)
     explicit = tuple(config.seams.gathered) + design_gathered(cut.materials)
     named = [s.name for s in cut.seams if seam_is_gathered(s.name, explicit)]
-    gathered = tuple(sorted(set(named) | set(auto)))
+    # a dart's legs always sew to equal length
+    darts = {s.name for s in cut.seams if s.kind == "dart"}
+    gathered = tuple(sorted((set(named) | set(auto)) - darts))
     side_gathered = np.array([seam_is_gathered(cut.seams[sd.seam].name, gathered) for sd in layout.sides], bool)
     return SeamPlan(gathered=gathered, demand=demand,
                     sewn_edges=np.repeat(~side_gathered, [len(sd.gids) - 1 for sd in layout.sides]).astype(float),
@@ -250,11 +288,17 @@ def seam_matrix(layout: SeamLayout, config: SolverConfig, plan: SeamPlan, L: sp.
     w = config.weights
     n = L.shape[0]
     if layout.sides and w.seam_length > 0:
-        c = w.seam_length * layout.edge_rest / (layout.mean_edge * layout.total_area) * plan.sewn_edges
+        c = _length_weight(layout, config, plan)
         E0, E1 = layout.edge_start, layout.edge_end
         L = L + sp.coo_matrix((np.concatenate([c, c, -c, -c]),
                                (np.concatenate([E0, E1, E0, E1]), np.concatenate([E0, E1, E1, E0]))),
                               shape=(n, n)).tocsr()
+    if len(layout.mouth_a) and w.seam_length > 0:
+        # a set dart intake: |u_a - u_b - width d|^2 at each mouth
+        c = np.full(len(layout.mouth_a), _intake_weight(layout, config))
+        A, B = layout.mouth_a, layout.mouth_b
+        L = L + sp.coo_matrix((np.concatenate([c, c, -c, -c]), (np.concatenate([A, B, A, B]),
+                                                                 np.concatenate([A, B, B, A]))), shape=(n, n)).tocsr()
     if layout.sides and w.seam_straight + w.seam_curve > 0 and layout.second_diff is not None:
         lam = w.seam_straight + w.seam_curve * plan.sewn_rows
         L = L + layout.second_diff_T @ sp.diags(lam * layout.row_band) @ layout.second_diff
@@ -298,10 +342,14 @@ def seam_rhs(layout: SeamLayout, U: np.ndarray, config: SolverConfig, plan: Seam
             np.clip(integral, -cap, cap, out=integral)
             lbar = lbar + integral
         dirn = cur / np.maximum(cur_len, 1e-300)[:, None]
-        c = w.seam_length * layout.edge_rest / (layout.mean_edge * layout.total_area) * plan.sewn_edges
+        c = _length_weight(layout, config, plan)
         tgt = (c * lbar)[:, None] * dirn
         for d in range(2):
             rhs[:, d] += np.bincount(E1, tgt[:, d], minlength=n) - np.bincount(E0, tgt[:, d], minlength=n)
+    if len(layout.mouth_a) and w.seam_length > 0:
+        tgt = _intake_weight(layout, config) * _mouth_targets(layout, U)
+        np.add.at(rhs, layout.mouth_a, tgt)
+        np.add.at(rhs, layout.mouth_b, -tgt)
     if layout.second_diff is None:
         return rhs
     d2 = layout.second_diff @ U
@@ -316,6 +364,18 @@ def seam_rhs(layout: SeamLayout, U: np.ndarray, config: SolverConfig, plan: Seam
         acc += (w.seam_curve * layout.row_band * plan.sewn_rows)[:, None] * (0.5 * (d2 + _fitted_partner(layout, U, d2)))
     rhs += layout.second_diff_T @ acc
     return rhs
+
+
+def _mouth_targets(layout: SeamLayout, U: np.ndarray) -> np.ndarray:
+    """(M, 2) the target of each set-intake dart's mouth gap ``u_a - u_b``: its component across
+    the dart (the normal of mouth -> apex on leg ``a``'s side, the open side of a counter-clockwise
+    piece) set to the intake, so a crossed dart is pulled open; the component along the dart kept."""
+    a, b = U[layout.mouth_a], U[layout.mouth_b]
+    gap = a - b
+    axis = U[layout.mouth_apex] - 0.5 * (a + b)
+    across = np.stack([-axis[:, 1], axis[:, 0]], axis=1) / np.maximum(np.linalg.norm(axis, axis=1), 1e-300)[:, None]
+    now = np.sum(gap * across, axis=1)
+    return gap + (layout.mouth_width - now)[:, None] * across
 
 
 def _fitted_partner(layout: SeamLayout, U: np.ndarray, d2: np.ndarray) -> np.ndarray:

@@ -12,6 +12,8 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
+from ..cut.types import seam_kind
+
 
 @dataclass
 class PatternPanel:
@@ -60,6 +62,17 @@ class PatternSeam:
     verts_a: np.ndarray
     verts_b: np.ndarray
     gathered: bool = False
+
+    @property
+    def kind(self) -> str:
+        """``"dart"`` (the legs of a dart, both ending at its apex) or ``"seam"``
+        (:func:`core.cut.types.seam_kind`: read from the vertices, so a reloaded pattern knows it)."""
+        return seam_kind(self)
+
+    @property
+    def apex(self) -> Optional[int]:
+        """A dart's apex (local vertex id on ``panel_a``, where both legs end), None for a seam."""
+        return int(self.verts_a[-1]) if seam_kind(self) == "dart" else None
 
 
 @dataclass

@@ -1,0 +1,125 @@
+"""Darts end to end on the real body: the design format, the slit in the cut, the legs
+sewn to equal length in the pattern, the export drawing (legs, fold, drill hole,
+notches in SVG, AAMA DXF and PDF), the drape welding the legs, and bad darts refused
+with the field named (exit status 2 through the CLI)."""
+import copy
+
+import numpy as np
+import pytest
+
+from core.design import load_design
+from core.design.templates import TEMPLATES, template_path
+from core.errors import DesignError
+
+
+@pytest.fixture(scope="module")
+def blouse_run(anny):
+    from core import workflows as wf
+    prep = wf.prepare(template_path("blouse_fitted"), body=anny)
+    return prep, wf.reference(prep)
+
+
+def _design(darts):
+    d = TEMPLATES["blouse_fitted"]()
+    d["garments"][0]["panels"][0]["darts"] = darts
+    return d
+
+
+def test_dart_round_trips_and_designs_without_darts_write_none():
+    d = load_design(TEMPLATES["blouse_fitted"]())
+    again = load_design(d.to_json())
+    assert again.garments[0].panels[0].darts == d.garments[0].panels[0].darts
+    assert d.to_json()["garments"][0]["panels"][0]["darts"][0]["intake"] == "auto"
+    top = load_design(TEMPLATES["top_sleeveless"]()).to_json()
+    assert all("darts" not in p for g in top["garments"] for p in g["panels"])
+
+
+@pytest.mark.parametrize("dart, field", [
+    ({"name": "d_left", "line": "side_left", "apex": "bust_left", "intake": 0}, "darts[0].intake"),
+    ({"name": "d_left", "line": "side_left", "apex": "bust_left", "intake": -0.01}, "darts[0].intake"),
+    ({"name": "d_left", "line": "side_left", "apex": {"landmark": "bust_left"}}, "darts[0].apex"),
+    ({"name": "d_left", "line": "side_left"}, "darts[0].apex"),
+    ({"name": "d_left", "line": "side_left", "apex": "bust_left", "depth": 1}, "darts[0].depth"),
+])
+def test_bad_dart_fields_are_refused_on_load(dart, field):
+    with pytest.raises(DesignError) as exc:
+        load_design(_design([dart]))
+    assert field in exc.value.path
+
+
+@pytest.mark.parametrize("dart, field, words", [
+    ({"name": "d_left", "line": "side_left", "apex": "no_such_point"}, "darts[0].apex", "unknown keypoint"),
+    ({"name": "d_left", "line": "no_line", "apex": "bust_left"}, "darts[0].line", "no seam or hem line"),
+    # the apex on the back: the dart line leaves the front
+    ({"name": "d_left", "line": "side_left", "apex": "chest_back"}, "darts[0]", "off its panel"),
+])
+def test_bad_dart_exits_2_naming_the_field(dart, field, words, tmp_path, capsys):
+    from core.cli import main
+    import json
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(_design([dart])))
+    assert main(["cut", str(path), "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert field in err and words in err and len(err.strip().splitlines()) == 1
+
+
+def test_dart_slits_the_cut_and_its_legs_sew_to_equal_length(blouse_run):
+    prep, run = blouse_run
+    cut, pattern = prep.cut, run.pattern
+    darts = [s for s in cut.seams if s.kind == "dart"]
+    assert sorted(s.name for s in darts) == ["blouse.bust_dart_left", "blouse.bust_dart_right"]
+    assert sorted(cut.darts) == sorted(s.name for s in darts)
+    front = cut.panel("blouse.front")
+    boundary = set(np.concatenate(front.boundary).tolist())
+    for s in darts:
+        assert s.panel_a == s.panel_b == "blouse.front"
+        # the slit: two distinct local vertices per leg point (but the apex), on the boundary, one global id
+        assert s.apex == s.verts_b[-1] and np.all(s.verts_a[:-1] != s.verts_b[:-1])
+        assert set(s.verts_a.tolist()) <= boundary and set(s.verts_b.tolist()) <= boundary
+        assert np.array_equal(front.vertex_ids[s.verts_a], front.vertex_ids[s.verts_b])
+        # the sewn point stops short of the true apex by the apex offset (along the body)
+        apex = prep.cut.positions(prep.reference)[front.vertex_ids[s.apex]]
+        gap = np.linalg.norm(apex - cut.darts[s.name]["apex"])
+        assert 0.5 * 0.025 < gap <= 0.025 + 2e-3
+    for s in (s for s in pattern.seams if s.kind == "dart"):
+        a, b = pattern.seam_polylines(s)
+        la = np.linalg.norm(np.diff(a, axis=0), axis=1).sum()
+        lb = np.linalg.norm(np.diff(b, axis=0), axis=1).sum()
+        assert abs(la - lb) <= 1e-4, s.name                       # 0.1 mm
+        assert np.linalg.norm(a[0] - b[0]) > 0.01                 # the dart opens in the flat pattern
+        rec = pattern.report["darts"][s.name]
+        assert rec["leg_difference_mm"] <= 0.1 and rec["intake_mm"] > 10
+    assert run.figures["flipped"] == 0
+
+
+def test_export_draws_legs_fold_drill_hole_and_notches(blouse_run, tmp_path):
+    from core.export import export_pattern
+    from core.export.pieces import build_pieces
+    _, run = blouse_run
+    pieces = {p.name: p for p in build_pieces(run.pattern)}
+    front = pieces["blouse.front"]
+    assert len(front.darts) == 2 and not pieces["blouse.back"].darts
+    for d in front.darts:
+        assert len(d.legs) == 2 and np.allclose(d.legs[0][-1], d.legs[1][-1])
+        assert sum(n.seam == d.name for n in front.notches) == 2
+        assert 0.005 < np.linalg.norm(d.drill - d.apex) <= 0.0101
+    # the outline bridges the mouth: no leg vertex but the mouths lies on it
+    export_pattern(run.pattern, tmp_path, formats=("svg", "dxf", "pdf"))
+    svg = (tmp_path / "pattern.svg").read_text()
+    assert svg.count('class="dart"') == 2 and svg.count('class="drill"') == 2
+    import ezdxf
+    doc = ezdxf.readfile(tmp_path / "pattern_astm.dxf")
+    ents = [e for b in doc.blocks for e in b]
+    assert sum(e.dxftype() == "POINT" and e.dxf.layer == "13" for e in ents) == 2
+    assert sum(e.dxf.layer == "8" for e in ents) == 2 * 4
+    assert (tmp_path / "pattern_a4.pdf").stat().st_size > 0
+
+
+def test_drape_welds_the_legs(blouse_run):
+    from core.drape.mesh import build_cloth
+    _, run = blouse_run
+    cloth = build_cloth(run.pattern)
+    front = run.pattern.panel("blouse.front")
+    for s in (s for s in run.pattern.seams if s.kind == "dart"):
+        ga, gb = front.vertex_ids[s.verts_a], front.vertex_ids[s.verts_b]
+        assert np.array_equal(cloth.particle_of[ga], cloth.particle_of[gb])
