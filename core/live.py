@@ -19,9 +19,10 @@ The solver itself stays stateless: the solve's state is a value held here.
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 import time
-from typing import Dict, Optional
+from typing import Callable, Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -109,6 +110,8 @@ class LiveSession:
         self.converged = False
         self.iterations_since_change = 0
         self.seconds_per_iteration = None
+        #: the stored pattern's text, made a piece at a time (:class:`PatternText`)
+        self.text = PatternText()
 
     @property
     def warming(self) -> bool:
@@ -152,6 +155,11 @@ class LiveSession:
         self.converged = False
         self.iterations_since_change = 0
         return True
+
+    def end_warm(self) -> None:
+        """Go on with the cold solve from the next :meth:`run` (the warm state shown is enough: a
+        caller that shows each warm slice at a cost ends the warm phase after the first one)."""
+        self._warm = False
 
     def restart_from(self, pattern) -> None:
         """Continue from ``pattern`` of this cut (the scene's after an undo): the next field's warm
@@ -243,6 +251,76 @@ class LiveSession:
         return pat
 
 
+class PatternText:
+    """The compact ``pattern.json`` text of a session's patterns, made a piece at a time.
+
+    What :func:`core.fileio.dumps_json` of :func:`core.pattern.io.pattern_to_json`
+    gives with ``indent=None``, byte for byte, but as a list of units (one per
+    pattern piece, then one that joins them), so that a caller with a time
+    budget (the add-on's timer) can spread the encoding over several slices.
+    The text of an array field that did not change since the last pattern of
+    this cut (faces, vertex ids, body positions, unpainted targets) is kept and
+    reused: a stroke re-encodes the 2D positions and the scales, not the cut.
+    """
+
+    def __init__(self):
+        self._fields: Dict[Tuple[str, str], Tuple[np.ndarray, str]] = {}
+
+    def units(self, pattern) -> List[Tuple[int, Callable[[], Optional[str]]]]:
+        """``[(size, work)]``: call each ``work()`` in order; the last one returns the text.
+
+        ``size`` is the unit's share of the encoding (the piece's triangles;
+        the join counts all of them), what a caller's time estimate scales with.
+        """
+        pieces: List[str] = []
+        units = [(len(p.faces), lambda p=p: pieces.append(self._panel(pattern, p))) for p in pattern.panels]
+        units.append((sum(len(p.faces) for p in pattern.panels), lambda: self._join(pattern, pieces)))
+        return units
+
+    def text(self, pattern) -> str:
+        """The whole text at once (the units run in a row)."""
+        out = None
+        for _, work in self.units(pattern):
+            out = work()
+        return out
+
+    def _panel(self, pattern, panel) -> str:
+        from .fileio import dumps_json
+        from .pattern.io import pattern_to_json
+        arrays = {f.name: getattr(panel, f.name) for f in dataclasses.fields(panel)
+                  if isinstance(getattr(panel, f.name), np.ndarray)}
+        kept = {}
+        for name, value in arrays.items():
+            hit = self._fields.get((panel.name, name))
+            if hit is not None and hit[0].dtype == value.dtype and np.array_equal(hit[0], value):
+                kept[name] = hit[1]
+        # the kept fields are converted empty (their lists are what costs), their text is reused
+        one = dataclasses.replace(pattern, panels=[dataclasses.replace(
+            panel, **{k: arrays[k][:0] for k in kept})], seams=[], pins={})
+        d = pattern_to_json(one)["panels"][0]
+        if set(kept) - set(d):      # a field stored under another name: convert it in full
+            d = pattern_to_json(dataclasses.replace(one, panels=[panel]))["panels"][0]
+            kept = {}
+        parts = []
+        for key, value in d.items():
+            text = kept.get(key)
+            if text is None:
+                text = dumps_json(value, indent=None)
+                if key in arrays:
+                    self._fields[(panel.name, key)] = (np.array(arrays[key]), text)
+            parts.append(f"{json.dumps(key)}: {text}")
+        return "{" + ", ".join(parts) + "}"
+
+    @staticmethod
+    def _join(pattern, pieces: List[str]) -> str:
+        from .fileio import dumps_json
+        from .pattern.io import pattern_to_json
+        top = pattern_to_json(dataclasses.replace(pattern, panels=[]))
+        parts = [f"{json.dumps(k)}: " + ("[" + ", ".join(pieces) + "]" if k == "panels" else dumps_json(v, indent=None))
+                 for k, v in top.items()]
+        return "{" + ", ".join(parts) + "}"
+
+
 def achieved_over_painted(pattern, triangles: np.ndarray, n_body: int,
                           areas: Optional[np.ndarray] = None) -> np.ndarray:
     """Per body template triangle ``rho_hat / rho - 1`` (F_body,): the achieved weft scale over the
@@ -266,4 +344,4 @@ def achieved_over_painted(pattern, triangles: np.ndarray, n_body: int,
         return np.where(w > 0, s / np.where(w > 0, w, 1.0), np.nan)
 
 
-__all__ = ["LiveSession", "topology_key", "body_triangles", "achieved_over_painted"]
+__all__ = ["LiveSession", "PatternText", "topology_key", "body_triangles", "achieved_over_painted"]

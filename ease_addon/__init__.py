@@ -37,10 +37,19 @@ _register_classes, _unregister_classes = bpy.utils.register_classes_factory(CLAS
 def register():
     _register_classes()
     properties.register_props()
+    if live.on_load not in bpy.app.handlers.load_post:
+        bpy.app.handlers.load_post.append(live.on_load)
+    # a file already open (the add-on enabled after it was read): Live follows its toggle once
+    # the context is the file's (register runs with a restricted one)
+    bpy.app.timers.register(live.resume, first_interval=0.0)
 
 
 def unregister():
     drape_ops.cancel_running()
+    while live.on_load in bpy.app.handlers.load_post:
+        bpy.app.handlers.load_post.remove(live.on_load)
+    if bpy.app.timers.is_registered(live.resume):
+        bpy.app.timers.unregister(live.resume)
     live.stop()
     properties.unregister_props()
     _unregister_classes()

@@ -2,48 +2,60 @@
 
 While *Live* (Ease panel) is on, a ``depsgraph_update_post`` handler notices
 updates of the body and wakes a ``bpy.app.timers`` tick. Each tick takes at
-most one slice (:data:`SLICE_S` of solving, plus writing the objects):
+most one slice (:data:`SLICE_S`: solving, writing the objects, the final work):
 
 - when the body's ``ease`` layer differs from what the pattern was solved for
   (a stroke), the new field goes to the core's :class:`core.live.LiveSession`
-  (kept cut and factorisation), one warm slice runs from the current pattern
-  and the flat pattern objects are updated in place (vertex positions,
+  (kept cut and factorisation), one warm slice (the iterations that fit beside
+  showing their result) runs from the current pattern and the flat pattern objects are updated in place (vertex positions,
   boundary curves, grain arrows, achieved-ease colours: no new object, no new
   name), with the body's fit overlay (:data:`FIT_LAYER`);
 - while the designer is idle, later ticks advance the session's cold solve of
   the painted field; when it is complete (converged: the pattern *Optimize
-  Pattern* gives for this paint) the objects, the stored pattern and the key
-  figures are updated, one undo step is pushed for the stroke, and the timer
-  stops: no CPU is used until the next update of the body.
+  Pattern* gives for this paint) the final work follows in units that each fit
+  a slice (show the objects, measure, encode the stored pattern a piece at a
+  time, store it with the key figures), and then the timer stops: no CPU is
+  used until the next update of the body.
+
+A tick plans its work with running estimates of each kind of work, so the
+viewport waits at most one slice, or one indivisible unit (one iteration and
+the showing of its result, or the metrics) where that is longer.
 
 A design whose topology changed (a keypoint moved, a parameter changed, a seam
 added) gets a new session once (:func:`core.live.topology_key`).
 
-Undo: one step per stroke. The step is pushed when the stroke's pattern has
-converged; a stroke that comes before the previous one converged first pushes
-the previous one's step (the layer briefly set back to what that pattern was
-solved for). After an undo or redo the session continues from the restored
-layer and pattern without pushing.
+Undo: one step per stroke, the stroke's own (Blender's paint stroke, or the
+EASE operator that wrote the layer, pushes it); live mode pushes none, which
+would double it. After an undo or redo the loop continues from the restored
+layer and pattern and converges to the restored paint's cold solve, which is
+the pattern the previous stroke had, bit for bit (the converged pattern does
+not depend on the painting history).
+
+A file saved with Live on opens with Live running (``load_post``); one saved
+with it off opens with no handler and no timer of a previous file.
 """
 from __future__ import annotations
 
 import json
 import time
+from collections import deque
 
 import bpy
 import numpy as np
 
-from . import convert, data, ease_ops, pattern_ops, ramp, sync
+from . import convert, data, ease_ops, pattern_ops, ramp, state, sync
 from .objects import objects_with_role, world_bounds
 
-SLICE_S = 0.03          # seconds of solving per tick: the longest the viewport waits for the pattern
+SLICE_S = 0.03          # seconds of work per tick: the longest the viewport waits for the pattern
 IDLE_TICK_S = 0.005     # seconds between ticks while converging (the UI handles its events in between)
 FIT_LAYER = "ease_fit"  # CORNER colour layer on the body: achieved / painted ease - 1
 FIT_RANGE = 0.10        # +-10 %: the overlay's full blue / full red
 
 # the session of the scene's design (one per add-on session: the timer serves the active scene)
-_LIVE = {"key": None, "session": None, "colors": None, "unpushed": False, "builds": 0, "restart": False,
-         "inputs": None, "faces": None}
+_LIVE = {"key": None, "session": None, "colors": None, "builds": 0, "restart": False,
+         "inputs": None, "faces": None, "final": None}
+# running estimates, seconds per cut triangle of each kind of work (show, measure, encode, store)
+_RATES = {}
 
 
 # ----------------------------------------------------------------------------- the fit overlay
@@ -169,10 +181,6 @@ def _colors(obj):
     return c
 
 
-def _set_colors(obj, raw) -> None:
-    obj.data.color_attributes[convert.EASE_LAYER].data.foreach_set("color", raw)
-
-
 def session_for(context):
     """The live session of the scene's design on its body (built once per topology)."""
     from ..core.live import LiveSession, topology_key
@@ -192,7 +200,7 @@ def session_for(context):
         ok = start is not None and [p.name for p in start.panels] == [p.name for p in prep.cut.panels] and \
             all(len(a.uv) == len(b.vertex_ids) for a, b in zip(start.panels, prep.cut.panels))
         _LIVE.update(key=key, session=LiveSession(prep, pattern=start if ok else None), colors=None,
-                     builds=_LIVE["builds"] + 1)
+                     builds=_LIVE["builds"] + 1, final=None)
     return _LIVE["session"]
 
 
@@ -207,34 +215,77 @@ def _field(obj, scene) -> np.ndarray:
     return ease_ops.symmetrised(obj, tri) if ease_ops.x_mirror(obj) else tri
 
 
-def _show(context, session, final: bool) -> None:
-    """Write the session's pattern into the scene: objects in place (rebuilt when they are not its
-    pieces), the overlay; when ``final``, also the stored pattern and the key figures."""
-    scene = context.scene
-    pattern = session.pattern(figures=final)
-    if not update_pieces(scene, pattern):
-        if not final:
-            pattern = session.pattern(figures=True)
-        sync.show_pattern(context, pattern)
-    elif final:
-        sync.store_pattern(scene, pattern)
-        scene.ease.pattern_json = json.dumps(data.key_figures(pattern))
+def _estimate(kind: str, size: int):
+    """Expected seconds of a unit of work of ``kind`` and ``size``; None before one was timed."""
+    rate = _RATES.get(kind)
+    return None if rate is None else rate * size
+
+
+def _timed(kind: str, size: int, work):
+    """Run ``work()``, keep a running estimate of its kind's seconds per size; its result."""
+    t = time.perf_counter()
+    out = work()
+    rate = (time.perf_counter() - t) / max(size, 1)
+    old = _RATES.get(kind)
+    _RATES[kind] = rate if old is None else 0.7 * old + 0.3 * rate
+    return out
+
+
+def _show(context, session) -> None:
+    """Write the session's (warm) pattern into the scene: objects in place (rebuilt, stored and
+    measured when they are not its pieces: a new cut), the overlay."""
+    pattern = session.pattern(figures=False)
+    if not update_pieces(context.scene, pattern):
+        sync.show_pattern(context, session.pattern(figures=True))
     write_overlay(data.body_object(context), pattern, session)
 
 
-def _push(message: str) -> None:
-    try:
-        bpy.ops.ed.undo_push(message=message)
-    except RuntimeError as exc:     # no undo stack (a background script without one)
-        print(f"[ease] live: no undo step: {exc}")
-    _LIVE["unpushed"] = False
+def _final_units(context, session) -> deque:
+    """The work after the cold solve completed, as a queue of ``(kind, size, work)`` units each
+    well within a slice: show the pattern (objects in place, overlay), measure it, encode it a
+    piece at a time, then store it with its key figures (together: the panel never shows
+    figures of another pattern than the stored one)."""
+    from ..core import workflows as wf
+    scene = context.scene
+    n = len(session.triangles)
+    queue = deque()
+    box = {}
+
+    def show():
+        box["pattern"] = pattern = session.pattern(figures=False)
+        if not update_pieces(scene, pattern):
+            # not this pattern's pieces (a new cut): rebuilt, measured and stored at once
+            sync.show_pattern(context, session.pattern(figures=True))
+        else:
+            queue.append(("measure", n, measure))
+        write_overlay(data.body_object(context), pattern, session)
+
+    def measure():
+        wf.measure_pattern(box["pattern"])
+        units = session.text.units(box["pattern"])
+        queue.extend(("encode", size, work) for size, work in units[:-1])
+        queue.append(("store", units[-1][0], lambda: store(units[-1][1])))
+
+    def store(join):
+        text, pattern = join(), box["pattern"]
+        scene[data.PATTERN_KEY] = text
+        state.PATTERNS[(scene.name, data.PATTERN_KEY)] = (text, pattern)   # as sync.store_pattern
+        scene.ease.pattern_json = json.dumps(data.key_figures(pattern))
+
+    queue.append(("show", n, show))
+    return queue
 
 
 def step(context, budget_s: float = SLICE_S) -> dict:
     """One tick of the live loop (what the timer runs; tests call it directly).
 
-    Returns ``{"changed": a new field was taken, "iterations": run, "converged": bool,
-    "seconds": wall time of the tick}``.
+    The tick plans its work to fit ``budget_s``: iterations, the showing of a warm state,
+    the units of the final work (:func:`_final_units`), each started only when its running
+    estimate still fits; at least one unit of work is done, so a tick is longer than the
+    slice only when that one unit is.
+
+    Returns ``{"changed": a new field was taken, "iterations": run, "units": the final units
+    done (kinds), "converged": the pattern is the cold solve and stored, "seconds": wall time}``.
     """
     t0 = time.perf_counter()
     scene = context.scene
@@ -243,32 +294,40 @@ def step(context, budget_s: float = SLICE_S) -> dict:
     raw = _colors(obj)
     changed = False
     if raw is not None and (_LIVE["colors"] is None or not np.array_equal(raw, _LIVE["colors"])):
-        if _LIVE["unpushed"] and _LIVE["colors"] is not None:
-            # the previous stroke's step was not pushed yet: push it with the layer it was solved for
-            _set_colors(obj, _LIVE["colors"])
-            _push("EASE live paint")
-            _set_colors(obj, raw)
         if _LIVE["restart"]:
             # after an undo/redo: continue from the restored pattern
             _LIVE["restart"] = False
             restored = data.stored_pattern(scene)
             if restored is not None and len(restored.panels) == len(session.prep.cut.panels):
                 session.restart_from(restored)
-        else:
-            _LIVE["unpushed"] = _LIVE["colors"] is not None
         changed = session.set_ease(_field(obj, scene))
         _LIVE["colors"] = raw
+        if changed:
+            _LIVE["final"] = None       # the pattern it would have stored is superseded
     was, warm = session.converged, session.warming
-    n = session.run(budget_s)
-    if (changed or warm) and n and not session.converged:
-        _show(context, session, final=False)      # the warm state moved: show it
+    n_tri = len(session.triangles)
+    show_s = (_estimate("show", n_tri) or 0.0) if warm else 0.0
+    n = session.run(max(budget_s - show_s, 0.0))
+    if warm and n and not session.converged:
+        _timed("show", n_tri, lambda: _show(context, session))     # the warm state moved: show it
+        # one warm slice is shown per stroke: the next ticks go to the cold solve (another warm
+        # slice would cost another showing, and converging is what the designer waits for)
+        session.end_warm()
     if session.converged and (not was or changed):
-        _show(context, session, final=True)
-        if _LIVE["unpushed"]:
-            _push("EASE live paint")
-    scene.ease.live_status = ("converged" if session.converged else "converging") + \
+        _LIVE["final"] = _final_units(context, session)
+    final, units = _LIVE["final"], []
+    while final:
+        kind, size, work = final[0]
+        est = _estimate(kind, size)
+        if (n or units) and (est is None or time.perf_counter() - t0 + est > budget_s):
+            break
+        final.popleft()
+        _timed(kind, size, work)
+        units.append(kind)
+    done = session.converged and not final
+    scene.ease.live_status = ("converged" if done else "converging") + \
         f" ({session.iterations_since_change} iterations)"
-    return {"changed": changed, "iterations": n, "converged": session.converged,
+    return {"changed": changed, "iterations": n, "units": units, "converged": done,
             "seconds": time.perf_counter() - t0}
 
 
@@ -306,7 +365,7 @@ def _on_depsgraph(scene, depsgraph) -> None:
 
 @bpy.app.handlers.persistent
 def _on_undo(scene, *_args) -> None:
-    _LIVE.update(colors=None, unpushed=False, restart=True)
+    _LIVE.update(colors=None, restart=True, final=None)
     s = getattr(scene, "ease", None)
     if s is not None and s.live:
         wake()
@@ -323,7 +382,7 @@ def start(context) -> None:
         if fn not in lst:
             lst.append(fn)
     fill_legend(context.scene)
-    _LIVE.update(colors=None, unpushed=False)
+    _LIVE.update(colors=None, final=None)
     wake()
 
 
@@ -334,7 +393,25 @@ def stop() -> None:
             lst.remove(fn)
     if bpy.app.timers.is_registered(_tick):
         bpy.app.timers.unregister(_tick)
-    _LIVE.update(key=None, session=None, colors=None, unpushed=False, restart=False, inputs=None, faces=None)
+    _LIVE.update(key=None, session=None, colors=None, restart=False, inputs=None, faces=None, final=None)
+
+
+def resume(*_args) -> None:
+    """Make the loop agree with the active scene's *Live* toggle: running when it is on, nothing of
+    another file's loop left (the handlers, the timer, the session) when it is off. Returns None
+    (also a one-shot timer)."""
+    stop()
+    context = bpy.context
+    s = getattr(getattr(context, "scene", None), "ease", None)
+    if s is not None and s.live:
+        start(context)
+    return None
+
+
+@bpy.app.handlers.persistent
+def on_load(*_args) -> None:
+    """``load_post``: a file was opened (or the start-up file read); Live follows its toggle."""
+    resume()
 
 
 def toggled(scene, context) -> None:

@@ -117,46 +117,134 @@ def test_topology_change_rebuilds_once(blender):
     assert blender.objects("pattern_panel")
 
 
-def test_undo_restores_the_previous_pattern(blender):
+def _cold_uv(blender):
+    live = blender.mod("live")
+    bpy = blender.bpy
+    session = live.session_for(bpy.context)
+    cold = session.cold_pattern(live._field(bpy.context.scene.ease.body, bpy.context.scene))
+    return {p.name: p.uv for p in cold.panels}
+
+
+def _stored(blender):
+    """The stored pattern.json and the key figures, wall-clock times left out (they differ run to run)."""
+    import json
+    from core.pattern.io import WALL_CLOCK
+    scene = blender.bpy.context.scene
+    d = json.loads(scene["ease_pattern_json"])
+    d["report"] = {k: v for k, v in d["report"].items() if k not in WALL_CLOCK}
+    figures = {k: v for k, v in json.loads(scene.ease.pattern_json).items() if not k.endswith(" s")}
+    return d, figures
+
+
+def test_final_work_in_bounded_units(blender):
+    """After the cold solve, the final work (show, measure, encode, store) comes in units: with a
+    zero slice every tick does exactly one unit of work (one iteration, with the showing of a warm
+    state, or one final unit), one encoding unit per piece; what is stored is what a one-shot
+    store writes, byte for byte."""
+    from core.fileio import dumps_json
+    from core.pattern.io import pattern_to_json
     bpy = blender.bpy
     live = blender.mod("live")
     _converge(blender)
-    bpy.ops.ed.undo_push(message="before")
+    _stroke(blender, 1.45, seed=21)
+    ticks = []
+    for _ in range(500):
+        ticks.append(live.step(bpy.context, budget_s=0.0))
+        if ticks[-1]["converged"]:
+            break
+    assert ticks[-1]["converged"] and ticks[0]["changed"]
+    assert all(t["iterations"] + len(t["units"]) == 1 for t in ticks)
+    stored = blender.mod("data").stored_pattern(bpy.context.scene)
+    assert [u for t in ticks for u in t["units"]] == ["show", "measure"] + ["encode"] * len(stored.panels) + ["store"]
+    assert bpy.context.scene["ease_pattern_json"] == dumps_json(pattern_to_json(stored), indent=None)
+    cold = _cold_uv(blender)
+    assert all(np.array_equal(p.uv, cold[p.name]) for p in stored.panels)
+    # a slice that holds it all: the same work in one tick after the solve
+    _stroke(blender, 1.25, seed=22)
+    while not live.step(bpy.context, budget_s=0.0)["iterations"] or not live.session_for(bpy.context).converged:
+        pass
+    out = live.step(bpy.context, budget_s=60.0)
+    assert out["converged"] and out["units"] == ["show", "measure"] + ["encode"] * len(stored.panels) + ["store"]
+
+
+def test_undo_restores_the_previous_pattern(blender):
+    """One undo step per stroke, the stroke's own (headless, the test pushes it as a paint stroke
+    does): live mode adds none, so one undo goes back one stroke, and the loop converges to the
+    previous stroke's pattern again, bit for bit; redo comes back to the last one's."""
+    bpy = blender.bpy
+    live = blender.mod("live")
+    _converge(blender)
     _stroke(blender, 1.6, seed=7)
-    _converge(blender)                      # pushes the stroke's step
-    first, first_uv = bpy.context.scene["ease_pattern_json"], _stored_uv(blender)
+    bpy.ops.ed.undo_push(message="stroke A")        # what the paint stroke pushes at its end
+    _converge(blender)
+    first, first_uv = _stored(blender), _stored_uv(blender)
     layer = live._colors(bpy.context.scene.ease.body)
     _stroke(blender, 1.05, seed=8)
+    bpy.ops.ed.undo_push(message="stroke B")
     assert live.step(bpy.context)["changed"]      # a live update
     _converge(blender)
-    second = _stored_uv(blender)
+    second, second_text = _stored_uv(blender), _stored(blender)
     assert any(not np.array_equal(second[k], first_uv[k]) for k in first_uv)
     assert bpy.ops.ed.undo() == {"FINISHED"}
-    # one step back: the paint and the pattern before the last stroke
-    assert bpy.context.scene["ease_pattern_json"] == first
+    # one step back: the paint before the last stroke; the loop takes it up and converges to
+    # its pattern again (stored, shown, figured)
     assert np.array_equal(live._colors(bpy.context.scene.ease.body), layer)
-    # the loop picks up the restored paint and pattern and converges to the same pattern again
     _converge(blender)
-    assert all(np.array_equal(_stored_uv(blender)[k], first_uv[k]) for k in first_uv)
+    assert _stored(blender) == first
+    for o in blender.objects("pattern_panel"):
+        assert np.allclose(blender.verts(o)[:, [0, 2]], first_uv[o["ease_panel"]], atol=1e-6)
+    assert bpy.ops.ed.redo() == {"FINISHED"}
+    _converge(blender)
+    assert _stored(blender) == second_text
 
 
 def test_strokes_faster_than_convergence_keep_one_step_each(blender):
-    """A stroke that comes before the previous one converged first pushes the previous one's step:
-    undo still goes back one stroke (its paint), and the loop converges to its pattern."""
+    """A stroke that comes before the previous one converged: undo still goes back one stroke
+    (its paint), and the loop converges to its pattern."""
     bpy = blender.bpy
     live = blender.mod("live")
     _converge(blender)
-    bpy.ops.ed.undo_push(message="before")
     _stroke(blender, 1.5, seed=11)
+    bpy.ops.ed.undo_push(message="stroke A")
     assert live.step(bpy.context)["changed"]
     layer_a = live._colors(bpy.context.scene.ease.body)
     _stroke(blender, 1.15, seed=12)
-    assert live.step(bpy.context)["changed"]      # pushes stroke A's step first
+    bpy.ops.ed.undo_push(message="stroke B")
+    assert live.step(bpy.context)["changed"]
     _converge(blender)
     assert bpy.ops.ed.undo() == {"FINISHED"}
     assert np.array_equal(live._colors(bpy.context.scene.ease.body), layer_a)
     _converge(blender)
-    session = live.session_for(bpy.context)
-    cold = session.cold_pattern(live._field(bpy.context.scene.ease.body, bpy.context.scene))
+    cold = _cold_uv(blender)
     stored = _stored_uv(blender)
-    assert all(np.allclose(stored[p.name], p.uv, rtol=0, atol=1e-12) for p in cold.panels)
+    assert all(np.array_equal(stored[k], cold[k]) for k in cold)
+
+
+def test_live_follows_the_file_it_opens(blender, bpy_session):
+    """A file saved with Live on opens with the loop running (it converges and follows a stroke);
+    one saved with it off opens with no handler, timer or session of the previous file."""
+    bpy = blender.bpy
+    live = blender.mod("live")
+    _converge(blender)
+    on, off = str(bpy_session["tmp"] / "live_on.blend"), str(bpy_session["tmp"] / "live_off.blend")
+    assert bpy.ops.wm.save_as_mainfile(filepath=on, copy=True) == {"FINISHED"}
+    bpy.context.scene.ease.live = False
+    assert bpy.ops.wm.save_as_mainfile(filepath=off, copy=True) == {"FINISHED"}
+    bpy.context.scene.ease.live = True
+    _converge(blender)
+    assert live._LIVE["session"] is not None
+    assert bpy.ops.wm.open_mainfile(filepath=off) == {"FINISHED"}
+    assert not bpy.context.scene.ease.live
+    assert live._on_depsgraph not in bpy.app.handlers.depsgraph_update_post
+    assert not bpy.app.timers.is_registered(live._tick) and live._LIVE["session"] is None
+    assert bpy.ops.wm.open_mainfile(filepath=on) == {"FINISHED"}
+    assert bpy.context.scene.ease.live
+    assert live._on_depsgraph in bpy.app.handlers.depsgraph_update_post
+    assert bpy.app.timers.is_registered(live._tick)
+    _converge(blender)
+    before = _pieces(blender)
+    _stroke(blender, 1.7, seed=31)
+    bpy.context.view_layer.update()          # what a stroke's redraw does: the handler wakes the timer
+    assert live.step(bpy.context)["changed"]
+    assert any(not np.array_equal(before[k], v) for k, v in _pieces(blender).items())
+    _converge(blender)

@@ -7,7 +7,7 @@ import pytest
 from core import workflows as wf
 from core.design.templates import template_dir
 from core.errors import PatternError
-from core.live import LiveSession, achieved_over_painted, body_triangles, topology_key
+from core.live import LiveSession, PatternText, achieved_over_painted, body_triangles, topology_key
 from core.pattern.build import build_pattern
 from core.pattern.solver import PatternSolver
 
@@ -117,6 +117,31 @@ def test_achieved_over_painted(prep, session):
     # the pattern realises its painted ease to about its compliance (percent): the mean ratio is near 0
     comp = pat.report.get("metrics", {}).get("compliance", {}).get("mean") or wf.measure_pattern(pat)["compliance"]["mean"]
     assert abs(np.nanmean(ratio)) < 3 * comp / 100
+
+
+def test_pattern_text_is_the_stored_text_a_piece_at_a_time(prep, session):
+    """The units' text is what a one-shot ``dumps_json(pattern_to_json(...))`` writes, byte for byte,
+    after a change too (the kept text of unchanged fields reused, the changed ones re-encoded);
+    one unit per piece and one join."""
+    from core.fileio import dumps_json
+    from core.pattern.io import pattern_to_json
+    text = PatternText()
+    field = np.full(len(prep.body.faces), 1.2)
+    session.set_ease(field)
+    _converge(session)
+    first = session.pattern()
+    assert text.text(first) == dumps_json(pattern_to_json(first), indent=None)
+    name = first.panels[0].name
+    faces_text, uv_text = text._fields[(name, "faces")][1], text._fields[(name, "uv")][1]
+    session.set_ease(_stroke(prep, session, field, 1.6, seed=4)[0])
+    _converge(session)
+    second = session.pattern()
+    units = text.units(second)
+    assert [size for size, _ in units] == [len(p.faces) for p in second.panels] + [len(session.triangles)]
+    out = [work() for _, work in units][-1]
+    assert out == dumps_json(pattern_to_json(second), indent=None)
+    assert text._fields[(name, "faces")][1] is faces_text           # the cut's text kept
+    assert text._fields[(name, "uv")][1] != uv_text                  # the moved positions re-encoded
 
 
 def test_topology_key(prep):
