@@ -17,24 +17,9 @@ from core.export.marker_render import write_marker
 from core.geom.polygon import points_in_polygon, signed_area
 from core.pattern.io import save_pattern
 from export_synth import make_pattern
+from marker_synth import overlap
 
 WIDTH = 1.5
-
-
-def _segments_cross(a: np.ndarray, b: np.ndarray) -> bool:
-    """Whether any edge of closed loop a properly crosses an edge of closed loop b."""
-    p, r = a, np.roll(a, -1, axis=0) - a
-    q, s = b, np.roll(b, -1, axis=0) - b
-    den = r[:, None, 0] * s[None, :, 1] - r[:, None, 1] * s[None, :, 0]
-    qp = q[None, :, :] - p[:, None, :]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (qp[..., 0] * s[None, :, 1] - qp[..., 1] * s[None, :, 0]) / den
-        u = (qp[..., 0] * r[:, None, 1] - qp[..., 1] * r[:, None, 0]) / den
-    return bool(np.any((np.abs(den) > 1e-15) & (t > 0) & (t < 1) & (u > 0) & (u < 1)))
-
-
-def _overlap(a: np.ndarray, b: np.ndarray) -> bool:
-    return _segments_cross(a, b) or bool(points_in_polygon(a, b).any()) or bool(points_in_polygon(b, a).any())
 
 
 @pytest.fixture(scope="module")
@@ -53,7 +38,7 @@ def test_marker_pieces_inside_fabric_no_overlap(nested):
         assert loop[:, 0].min() >= -1e-6 and loop[:, 0].max() <= m.length + 1e-9
     for i in range(len(loops)):
         for j in range(i + 1, len(loops)):
-            assert not _overlap(loops[i], loops[j])
+            assert not overlap(loops[i], loops[j])
     for p in m.placements:
         assert min(abs(p.angle - a) for a in (0.0, 180.0, -180.0)) < 1e-6
         # the grain (+y of the piece frame) runs along the marker length, either way

@@ -5,7 +5,9 @@ fabric. The pieces' cut lines (seam allowance included, from
 :func:`core.export.pieces.build_pieces`) are nested by spyrrow, the sparrow /
 jagua-rs irregular strip packer, run in its own process
 (:mod:`core.export.marker_worker`) so that a cancel or Ctrl-C can stop it and
-keep the best marker found so far.
+keep the best marker found so far. Each cut line is nested as a simpler
+polygon that holds it (:func:`core.export.marker_outline.nest_outline`), so
+the true cut lines of two nested pieces never meet.
 
 Frame (metres): x runs along the fabric (the marker length, from 0), y
 across it (0 at one selvage, ``width`` at the other). The grain (warp) of
@@ -42,13 +44,13 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import numpy as np
 
 from ..errors import Cancelled, ExportError
-from ..geom.polygon import offset_loop, remove_loops, signed_area
+from ..geom.polygon import signed_area
 from ..pattern.types import Pattern
 from ..progress import Progress, report
+from .marker_outline import nest_outline
 from .pieces import PieceDrawing, build_pieces
 
 GRAIN_TO_LENGTH = np.array([[0.0, 1.0], [-1.0, 0.0]])  # piece frame (grain +y) -> marker frame (grain +x)
-NEST_TOLERANCE = 0.0003   # m: outlines simplified within this and grown by it, so nested cut lines never touch
 MAX_TILT = 10.0           # degrees
 WORKER = Path(__file__).with_name("marker_worker.py")
 SPYRROW_PIN = "spyrrow==0.9.0"
@@ -234,34 +236,6 @@ def marker_items(patterns: Sequence[Tuple[str, Pattern, int]], allowance=None,
     if not items:
         raise ExportError("marker: no pieces to nest")
     return items
-
-
-def _simplify(loop: np.ndarray, tol: float) -> np.ndarray:
-    """Douglas–Peucker on a closed loop: the vertices needed to stay within ``tol`` (m)."""
-    keep = np.zeros(len(loop), bool)
-    far = int(np.argmax(np.linalg.norm(loop - loop[0], axis=1)))
-    keep[[0, far]] = True
-    stack = [(0, far), (far, len(loop))]
-    while stack:
-        a, b = stack.pop()
-        idx = np.arange(a + 1, b)
-        if not len(idx):
-            continue
-        p, q = loop[a], loop[b % len(loop)]
-        d = q - p
-        dist = np.abs(d[0] * (loop[idx, 1] - p[1]) - d[1] * (loop[idx, 0] - p[0])) / max(np.linalg.norm(d), 1e-12)
-        k = int(np.argmax(dist))
-        if dist[k] > tol:
-            keep[idx[k]] = True
-            stack += [(a, int(idx[k])), (int(idx[k]), b)]
-    return loop[keep]
-
-
-def nest_outline(outline: np.ndarray, tol: float = NEST_TOLERANCE) -> np.ndarray:
-    """(m, 2) m: a simpler outline that contains ``outline`` (simplified within ``tol``, then grown by it)."""
-    simple = _simplify(np.asarray(outline, float), tol)
-    grown = offset_loop(simple, np.full(len(simple), tol))
-    return remove_loops(grown)
 
 
 def _check_fits(items: Sequence[MarkerItem], shapes: Sequence[np.ndarray], width: float, turns: Sequence[float]):
