@@ -154,7 +154,9 @@ def resolve_darts(resolver, design, lines: list, panels) -> list:
     by_name = {l.name: l for l in lines}
     taken = set(by_name)
     out = []
+    done = {}   # full dart name -> (mouth, sewn point): a mirrored dart mirrors its source's points
     for g, path, panel, mirrored in panels:
+        own = {d.name for d in panel.darts} if not mirrored else set()
         for k, d in enumerate(panel_darts(panel, mirrored, design.mirror)):
             dp = f"{path}.darts[{k}]" if k < len(panel.darts) else f"{path}.darts (mirror of {swap_side(d.name)})"
             full = f"{g.name}.{d.name}"
@@ -167,24 +169,31 @@ def resolve_darts(resolver, design, lines: list, panels) -> list:
                 raise DesignError(f"{dp}.line", f"dart {d.name!r}: no seam or hem line {d.line!r} in garment "
                                                 f"{g.name!r}; lines: {', '.join(names) or 'none'}")
             apex = resolver.ref(d.apex, f"{dp}.apex")
-            at = apex if d.at is None else resolver.ref(d.at, f"{dp}.at")
-            mouth = _insert_mouth(resolver, host, at, f"{dp}.line", d.name)
-            poly = resolver.geodesics.path(mouth, apex)
-            length = polyline_length(poly)
-            if length - d.apex_offset < MIN_DART_LENGTH:
-                raise DesignError(f"{dp}.apex", f"dart {d.name!r}: its apex is {length * 1000:.0f} mm from the "
-                                                f"{d.line!r} line; a dart needs {MIN_DART_LENGTH * 1000:.0f} mm "
-                                                f"after the apex offset of {d.apex_offset * 1000:.0f} mm")
-            p, _, _ = point_at_length(poly, length - d.apex_offset)
-            end = resolver.locator.locate(p[None])[0]
+            source = f"{g.name}.{swap_side(d.name)}"
+            if (mirrored or d.name not in own) and source in done and design.mirror:
+                # the mirror image of the source dart's points, so both sides are cut alike
+                mouth, end = (resolver.mirror(x) for x in done[source])
+                mouth = _insert_mouth(resolver, host, mouth, f"{dp}.line", d.name, exact=True)
+            else:
+                at = apex if d.at is None else resolver.ref(d.at, f"{dp}.at")
+                mouth = _insert_mouth(resolver, host, at, f"{dp}.line", d.name)
+                poly = resolver.geodesics.path(mouth, apex)
+                length = polyline_length(poly)
+                if length - d.apex_offset < MIN_DART_LENGTH:
+                    raise DesignError(f"{dp}.apex", f"dart {d.name!r}: its apex is {length * 1000:.0f} mm from the "
+                                                    f"{d.line!r} line; a dart needs {MIN_DART_LENGTH * 1000:.0f} mm "
+                                                    f"after the apex offset of {d.apex_offset * 1000:.0f} mm")
+                p, _, _ = point_at_length(poly, length - d.apex_offset)
+                end = resolver.locator.locate(p[None])[0]
+            done[full] = (mouth, end)
             spec = DartSpec(full, f"{g.name}.{panel.name}", dp, apex, d.intake, d.apex_offset, host.name)
             out.append(CutLine(full, [mouth, end], closed=False, role="seam", dart=spec))
     return out
 
 
-def _insert_mouth(resolver, host, at: SurfacePoint, path: str, name: str) -> SurfacePoint:
-    """The point of cut line ``host`` nearest to ``at``, made one of its points (so the
-    dart and the line meet at one cut vertex)."""
+def _insert_mouth(resolver, host, at: SurfacePoint, path: str, name: str, exact: bool = False) -> SurfacePoint:
+    """The point of cut line ``host`` nearest to ``at`` (``exact``: ``at`` itself, a point on
+    the line), made one of its points (so the dart and the line meet at one cut vertex)."""
     pts = host.points
     target = resolver.position(at)
     best = None
@@ -196,10 +205,12 @@ def _insert_mouth(resolver, host, at: SurfacePoint, path: str, name: str) -> Sur
         if best is None or dist[j] < best[0]:
             best = (float(dist[j]), i, j, len(poly), poly[j])
     _, i, j, m, q = best
+    if exact:
+        q = target
     # a mouth within SNAP of a point of the line is that point (no sliver segment)
     for end in (pts[i], pts[(i + 1) % len(pts)]):
         if np.linalg.norm(resolver.position(end) - q) < SNAP:
             return end
-    mouth = resolver.locator.locate(q[None])[0]
+    mouth = at if exact else resolver.locator.locate(q[None])[0]
     host.points.insert(i + 1, mouth)
     return mouth

@@ -78,8 +78,10 @@ def build_pattern(cut, result: SolveResult, style: str = "", body: Optional[dict
 
 
 def dart_report(cut, uv: Dict[str, np.ndarray], seams: List[PatternSeam]) -> Dict[str, dict]:
-    """Per dart: its intake at the mouth in the pattern (``intake_mm``; ``intake_set_mm`` where
-    the design sets one), its legs' lengths and their difference (mm), its panel."""
+    """Per dart: its intake at the mouth in the pattern (``intake_mm``: the mouth's width across
+    the dart, negative where the legs cross, i.e. the flattening overlaps cloth there instead of
+    taking it in; ``intake_set_mm`` where the design sets one), its legs' lengths and their
+    difference (mm), its panel."""
     out = {}
     for s in seams:
         if s.kind != "dart":
@@ -89,9 +91,18 @@ def dart_report(cut, uv: Dict[str, np.ndarray], seams: List[PatternSeam]) -> Dic
         la = float(np.linalg.norm(np.diff(a, axis=0), axis=1).sum())
         lb = float(np.linalg.norm(np.diff(b, axis=0), axis=1).sum())
         rec = (getattr(cut, "darts", {}) or {}).get(s.name, {})
-        out[s.name] = {"panel": s.panel_a, "intake_mm": round(1000 * float(np.linalg.norm(a[0] - b[0])), 3),
+        out[s.name] = {"panel": s.panel_a, "intake_mm": round(1000 * dart_intake(a[0], b[0], a[-1]), 3),
                        "legs_mm": [round(1000 * la, 3), round(1000 * lb, 3)],
                        "leg_difference_mm": round(1000 * abs(la - lb), 4)}
         if rec.get("intake") is not None:
             out[s.name]["intake_set_mm"] = round(1000 * float(rec["intake"]), 3)
     return out
+
+
+def dart_intake(mouth_a: np.ndarray, mouth_b: np.ndarray, apex: np.ndarray) -> float:
+    """The width (m) of a dart's mouth across the dart in a counter-clockwise piece: leg ``a``
+    (the side on the left of mouth -> apex) minus leg ``b`` along the left normal of the dart's
+    axis; negative when the legs cross (points (2,), metres)."""
+    axis = apex - 0.5 * (mouth_a + mouth_b)
+    across = np.array([-axis[1], axis[0]]) / max(float(np.linalg.norm(axis)), 1e-300)
+    return float(np.dot(mouth_a - mouth_b, across))
