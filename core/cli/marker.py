@@ -33,7 +33,7 @@ def _run(args) -> int:
         raise ExportError(f"--width: expected the fabric width in mm (> 0), got {args.width}")
     items = marker_items(runs, allowance=args.allowance)
     marker = nest(items, args.width / 1000.0, seconds=args.seconds, seed=args.seed, one_way=args.one_way,
-                  tilt=args.tilt, threads=args.threads, progress=console_progress(args))
+                  tilt=args.tilt, threads=args.threads, tries=args.tries, progress=console_progress(args))
     title = f"{runs[0][1].style or 'marker'} marker"
     extra = {"patterns": {s: str(Path(found[s][0])) for s, _, _ in runs},
              "left_out": sorted(set(found) - {s for s, _, _ in runs})}
@@ -64,6 +64,9 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=int, default=0,
                    help="nester seed (default 0): with one thread a marker that converges in time is repeatable")
     p.add_argument("--threads", type=int, default=1, help="nester threads (default 1; more: faster, not repeatable)")
+    p.add_argument("--tries", type=int, default=1,
+                   help="nesters run side by side in the same time, seeds SEED, SEED+1, ... (default 1); "
+                        "the shortest marker is kept; uses THREADS x TRIES cores")
     p.add_argument("--one-way", action="store_true",
                    help="one-way fabric (nap, pile, directional print): every piece the same way up (0 degrees)")
     p.add_argument("--tilt", type=float, default=0.0, help="allowed tilt off the grain in degrees (default 0, at most 10)")

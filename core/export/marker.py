@@ -26,6 +26,11 @@ with the given seed. With one thread its search is a function of the seed,
 so a marker whose search ends by itself before the time limit
 (``stopped == "converged"``) is the same, byte for byte, on every run; a
 search cut short by the time limit ends wherever the machine's speed took it.
+More cores help in two ways, both within the same wall time: ``threads``
+(the nester's own worker threads, one search) and ``tries`` (nesters side by
+side with seeds ``seed``, ``seed + 1``, ..., the shortest marker kept); the
+marker reports both, so its efficiency is always that of ``seconds`` on
+``threads x tries`` cores.
 """
 from __future__ import annotations
 
@@ -105,6 +110,7 @@ class Marker:
     orientations : the allowed turns (degrees) after the grain turn.
     stopped : ``"converged"``, ``"time limit"`` or ``"interrupted"``.
     history : list of (seconds, efficiency), each improvement as it came.
+    tries : nesters run side by side (seeds ``seed`` ...), ``best_seed`` the one whose marker this is.
     """
     width: float
     length: float
@@ -117,6 +123,8 @@ class Marker:
     orientations: List[float]
     stopped: str
     history: List[Tuple[float, float]] = field(default_factory=list)
+    tries: int = 1
+    best_seed: int = 0
 
 
 def orientations(one_way: bool = False, tilt: float = 0.0) -> List[float]:
@@ -254,14 +262,14 @@ def _child_env() -> Dict[str, str]:
     return env
 
 
-def _read_lines(stream, out: "queue.Queue") -> None:
+def _read_lines(stream, out: "queue.Queue", tag: int) -> None:
     for line in stream:
-        out.put(line)
-    out.put(None)
+        out.put((tag, line))
+    out.put((tag, None))
 
 
 def nest(items: Sequence[MarkerItem], width: float, seconds: int = 60, seed: int = 0, one_way: bool = False,
-         tilt: float = 0.0, threads: int = 1, progress: Optional[Progress] = None) -> Marker:
+         tilt: float = 0.0, threads: int = 1, tries: int = 1, progress: Optional[Progress] = None) -> Marker:
     """Nest the items on a fabric ``width`` m wide; the shortest marker found in ``seconds``.
 
     Parameters
@@ -269,9 +277,11 @@ def nest(items: Sequence[MarkerItem], width: float, seconds: int = 60, seed: int
     items : from :func:`marker_items`.
     width : float, m, usable fabric width (selvage to selvage).
     seconds : int >= 1, the nester's time budget (it may end sooner when it converges).
-    seed : int, the nester's random seed.
+    seed : int, the nester's random seed (tries use ``seed``, ``seed + 1``, ...).
     one_way, tilt : allowed turns, see :func:`orientations`.
-    threads : int >= 1, the nester's worker threads (more than 1 is faster, not repeatable).
+    threads : int >= 1, worker threads of each nester (more than 1 is faster, not repeatable).
+    tries : int >= 1, nesters run side by side in the same ``seconds``, each with its own
+        seed and ``threads`` threads (``threads x tries`` cores in all); the shortest marker wins.
     progress : ``progress(fraction, message)`` with the live efficiency; raising
         :class:`core.errors.Cancelled` stops and discards the run.
 
@@ -280,49 +290,54 @@ def nest(items: Sequence[MarkerItem], width: float, seconds: int = 60, seed: int
     :class:`Marker`. Ctrl-C (KeyboardInterrupt) stops the search and returns the
     best marker so far (``stopped == "interrupted"``), or re-raises when there is none yet.
     """
-    width, seconds, seed, threads = float(width), int(seconds), int(seed), int(threads)
+    width, seconds, seed, threads, tries = float(width), int(seconds), int(seed), int(threads), int(tries)
     if not (math.isfinite(width) and width > 0):
         raise ExportError(f"width: expected a fabric width > 0 mm, got {width * 1000:g}")
     if seconds < 1:
         raise ExportError(f"seconds: expected a time budget of at least 1 s, got {seconds}")
-    if threads < 1:
-        raise ExportError(f"threads: expected at least 1, got {threads}")
+    if threads < 1 or tries < 1:
+        raise ExportError(f"{'threads' if threads < 1 else 'tries'}: expected at least 1, "
+                          f"got {threads if threads < 1 else tries}")
     turns = orientations(one_way, tilt)
     shapes = [nest_outline(it.outline) @ GRAIN_TO_LENGTH.T for it in items]
     _check_fits(items, shapes, width, turns)
-    request = {"strip": width * 1000.0, "seconds": seconds, "seed": seed, "threads": threads,
+    request = {"strip": width * 1000.0, "seconds": seconds, "threads": threads,
                "items": [{"shape": np.round(s * 1000.0, 4).tolist(), "demand": it.count, "orientations": turns}
                          for it, s in zip(items, shapes)]}
     area = sum(it.area * it.count for it in items)
     pieces = sum(it.count for it in items)
     t0 = time.monotonic()
     report(progress, 0.0, f"nesting {pieces} pieces on {width * 1000:.0f} mm fabric")
-    proc = subprocess.Popen([sys.executable, str(WORKER)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=_child_env())
     lines: "queue.Queue" = queue.Queue()
-    reader = threading.Thread(target=_read_lines, args=(proc.stdout, lines), daemon=True)
-    best, history, stopped = None, [], None
+    procs = []
+    best, history, running, ends = None, [], tries, []
     try:
-        proc.stdin.write(json.dumps(request))
-        proc.stdin.close()
-        reader.start()
-        while True:
+        for k in range(tries):
+            proc = subprocess.Popen([sys.executable, str(WORKER)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                    stderr=subprocess.PIPE, text=True, env=_child_env())
+            procs.append(proc)
+            proc.stdin.write(json.dumps(dict(request, seed=seed + k)))
+            proc.stdin.close()
+            threading.Thread(target=_read_lines, args=(proc.stdout, lines, k), daemon=True).start()
+        while running:
             try:
-                line = lines.get(timeout=0.2)
+                k, line = lines.get(timeout=0.2)
             except queue.Empty:
-                line = ""
+                k, line = -1, ""
             if line is None:
-                break
+                running -= 1
+                continue
             msg = json.loads(line) if line.strip() else {}
             elapsed = time.monotonic() - t0
             if msg.get("done"):
-                stopped = "converged" if elapsed < seconds - 0.5 else "time limit"
-            elif "placed" in msg:
-                best = msg
+                ends.append("converged" if elapsed < seconds - 0.5 else "time limit")
+            elif "placed" in msg and (best is None or msg["length"] < best["length"]):
+                best = dict(msg, seed=seed + k)
                 history.append((round(elapsed, 2), area / (width * msg["length"] / 1000.0)))
             eff = f"efficiency {history[-1][1] * 100:.1f} %, length {best['length'] / 1000:.3f} m" if best \
                 else "no marker yet"
             report(progress, min(elapsed / seconds, 0.99), f"nesting {pieces} pieces: {eff}")
+        stopped = "converged" if ends and all(e == "converged" for e in ends) else "time limit"
     except KeyboardInterrupt:
         if best is None:
             raise
@@ -330,18 +345,20 @@ def nest(items: Sequence[MarkerItem], width: float, seconds: int = 60, seed: int
     except Cancelled:
         raise
     finally:
-        if proc.poll() is None:
-            proc.kill()
-        proc.wait()
-    err = proc.stderr.read().strip() if proc.stderr else ""
+        for proc in procs:
+            if proc.poll() is None:
+                proc.kill()
+            proc.wait()
     if best is None:
-        if proc.returncode == 3:
+        errs = [(p.returncode, p.stderr.read().strip() if p.stderr else "") for p in procs]
+        code, err = next((e for e in errs if e[0] == 3), errs[-1] if errs else (None, ""))
+        if code == 3:
             raise ExportError(f"the marker needs the spyrrow package: pip install {SPYRROW_PIN} ({err})")
-        raise ExportError(f"the nester found no marker (exit {proc.returncode}): {err.splitlines()[-1] if err else ''}")
-    return _marker(items, best, width, time.monotonic() - t0, seed, threads, turns, stopped or "time limit", history)
+        raise ExportError(f"the nester found no marker (exit {code}): {err.splitlines()[-1] if err else ''}")
+    return _marker(items, best, width, time.monotonic() - t0, seed, threads, turns, stopped, history, tries)
 
 
-def _marker(items, best, width, seconds, seed, threads, turns, stopped, history) -> Marker:
+def _marker(items, best, width, seconds, seed, threads, turns, stopped, history, tries=1) -> Marker:
     placements = []
     for k, angle, tx, ty in best["placed"]:
         rotation = _rot(angle) @ GRAIN_TO_LENGTH
@@ -353,7 +370,8 @@ def _marker(items, best, width, seconds, seed, threads, turns, stopped, history)
     area = sum(items[p.item].area for p in placements)
     return Marker(width=width, length=length, items=list(items), placements=placements,
                   efficiency=area / (width * length), seconds=seconds, seed=seed, threads=threads,
-                  orientations=list(turns), stopped=stopped, history=history)
+                  orientations=list(turns), stopped=stopped, history=history, tries=tries,
+                  best_seed=int(best.get("seed", seed)))
 
 
 def placed_outline(marker: Marker, placement: Placement) -> np.ndarray:
@@ -386,7 +404,8 @@ def marker_report(marker: Marker, title: str = "marker") -> dict:
             "garments": garments, "fabric_per_garment_m": round(marker.length / max(garments, 1), 4),
             "sizes": sizes, "pieces": len(marker.placements), "orientations_deg": marker.orientations,
             "grain": "along the marker length (x), parallel to the selvage",
-            "seed": marker.seed, "threads": marker.threads, "stopped": marker.stopped,
+            "seed": marker.seed, "threads": marker.threads, "tries": marker.tries, "best_seed": marker.best_seed,
+            "stopped": marker.stopped,
             "placements": [{"size": marker.items[p.item].size, "piece": marker.items[p.item].piece.name,
                             "angle_deg": round(p.angle, 4),
                             "translation_mm": np.round(p.translation * 1000, 3).tolist()}
