@@ -123,3 +123,57 @@ def test_drape_welds_the_legs(blouse_run):
     for s in (s for s in run.pattern.seams if s.kind == "dart"):
         ga, gb = front.vertex_ids[s.verts_a], front.vertex_ids[s.verts_b]
         assert np.array_equal(cloth.particle_of[ga], cloth.particle_of[gb])
+
+
+
+@pytest.mark.slow
+def test_set_intake_is_held(anny):
+    from core import workflows as wf
+    d = TEMPLATES["blouse_fitted"]()
+    d["garments"][0]["panels"][0]["darts"][0]["intake"] = 0.04
+    run = wf.reference(wf.prepare(d, body=anny))
+    for rec in run.pattern.report["darts"].values():
+        assert rec["intake_set_mm"] == 40.0
+        assert abs(rec["intake_mm"] - 40.0) <= 2.0 and rec["leg_difference_mm"] <= 0.5
+
+
+def test_skirt_back_darts_open_and_export(anny, tmp_path):
+    from core import workflows as wf
+    from core.export import export_pattern
+    run = wf.reference(wf.prepare(template_path("skirt_darted"), body=anny))
+    darts = run.pattern.report["darts"]
+    assert sorted(darts) == ["skirt.back_dart_left", "skirt.back_dart_right"]
+    assert all(r["intake_mm"] > 10 and r["leg_difference_mm"] <= 0.1 for r in darts.values())
+    export_pattern(run.pattern, tmp_path, formats=("svg",))
+    assert (tmp_path / "pattern.svg").read_text().count('class="dart"') == 2
+
+
+def test_auto_darts_are_placed_written_back_and_reduce_the_error(anny, blouse_run):
+    from core import workflows as wf
+    from core.cut.auto_darts import place_darts
+    from core.design import save_design
+    d = TEMPLATES["blouse_fitted"]()
+    d["garments"][0]["panels"][0]["darts"] = {"auto": {"max_count": 1, "max_intake": 0.08}}
+    design = load_design(d)
+    assert design.garments[0].panels[0].auto_darts == {"max_count": 1, "max_intake": 0.08}
+    placed = place_darts(design, body=anny)
+    darts = placed.garments[0].panels[0].darts
+    assert len(darts) == 1 and darts[0].apex == "bust_left" and placed.garments[0].panels[0].auto_darts is None
+    # written back: the placed design saves and loads as an ordinary design with that dart
+    import tempfile, pathlib
+    with tempfile.TemporaryDirectory() as tmp:
+        again = load_design(save_design(placed, pathlib.Path(tmp) / "placed.json"))
+    assert again.garments[0].panels[0].darts == darts
+    with_darts = wf.reference(wf.prepare(placed, body=anny)).figures["compliance mean %"]
+    plain = copy.deepcopy(TEMPLATES["blouse_fitted"]())
+    plain["garments"][0]["panels"][0].pop("darts")
+    without = wf.reference(wf.prepare(plain, body=anny)).figures["compliance mean %"]
+    assert with_darts < without - 0.2
+
+
+def test_auto_darts_request_is_checked():
+    for bad, field in (({"auto": {"max_count": 0}}, "max_count"), ({"auto": {"max_intake": -1}}, "max_intake"),
+                       ({"auto": {"count": 2}}, "count"), ({"manual": 1}, "darts")):
+        with pytest.raises(DesignError) as exc:
+            load_design(_design(bad))
+        assert field in exc.value.path

@@ -50,6 +50,10 @@ def cut_design(design, body=None, shape=None, pose=None, progress: Optional[Prog
         body = load_body(design.body.get("model", "anny"))
     t0 = time.perf_counter()
     vertices = instance_vertices(design, body, shape, pose)
+    from .auto_darts import has_auto, place_darts
+    if has_auto(design):
+        # automatic darts placed first, on this instance (core.cut.auto_darts)
+        design = place_darts(design, body, vertices, progress=sub(progress, 0.0, 0.1))
     t1 = time.perf_counter()
     resolver = Resolver(design, body, vertices)
     spec = resolve(design, body, shape=shape, pose=pose, resolver=resolver)

@@ -87,6 +87,30 @@ class DartSpec:
     host: str
 
 
+#: what ``"darts": "auto"`` asks for: at most this many darts, at most this intake (m) each
+AUTO_DEFAULTS = {"max_count": 2, "max_intake": 0.06}
+
+
+def parse_auto(path: str, obj) -> Optional[dict]:
+    """``"auto"`` or ``{"auto": true | {"max_count", "max_intake"}}`` as the request dict, else None."""
+    if obj == "auto":
+        return dict(AUTO_DEFAULTS)
+    if not (isinstance(obj, dict) and "auto" in obj):
+        return None
+    expect_keys(path, obj, ("auto",))
+    req = obj["auto"]
+    if req is True:
+        return dict(AUTO_DEFAULTS)
+    expect_dict(f"{path}.auto", req, 'true or {"max_count", "max_intake"}')
+    expect_keys(f"{path}.auto", req, tuple(AUTO_DEFAULTS))
+    count = req.get("max_count", AUTO_DEFAULTS["max_count"])
+    if not isinstance(count, int) or isinstance(count, bool) or not 1 <= count <= 8:
+        raise DesignError(f"{path}.auto.max_count", f"expected a whole number of darts in 1..8, got {fmt(count)}")
+    intake = check_number(f"{path}.auto.max_intake", req.get("max_intake", AUTO_DEFAULTS["max_intake"]), 0.0,
+                          INTAKE_MAX, lo_open=True, what="the widest intake in metres")
+    return {"max_count": count, "max_intake": intake}
+
+
 def parse_darts(path: str, obj, params) -> List[Dart]:
     """The ``darts`` list of a panel, validated (names unique, intake > 0 or ``"auto"``)."""
     if not isinstance(obj, list):

@@ -52,7 +52,9 @@ line                   ``{"name", "role": "seam" | "opening" | "guide"}`` plus o
                        line is not cut; it only names points.
 panel                  ``{"name", "seed": keypoint inside it, "body_part": "torso" |
                        "arm" | "leg", "ease": field, "darts": [dart, ...]}``
-dart                   ``{"name", "line": seam or hem line of the mouth, "apex": keypoint,
+dart                   ``"auto"`` | ``{"auto": {"max_count", "max_intake"}}`` (placed by
+                       :mod:`core.cut.auto_darts`) or a list of
+                       ``{"name", "line": seam or hem line of the mouth, "apex": keypoint,
                        "intake": m | "auto", "apex_offset": m, "at": keypoint}``
                        (see :mod:`core.design.darts`)
 ease field             ``{"value"}`` | ``{"from", "to", "between": [a, b]}`` |
@@ -79,7 +81,7 @@ from .checks import (BODY_PARTS, GARMENT_KINDS, LINE_ROLES, PARAMETER_KINDS, REF
                      check_ease, check_name, check_names_unique, check_number, check_parameter_value,
                      check_ring, check_section, expect_dict, expect_keys, fmt, is_number, keypoint_ref,
                      check_keypoint)
-from .darts import parse_darts
+from .darts import parse_auto, parse_darts
 from .materials import check_seam_names, parse_materials
 from .types import FORMAT, VERSION, Design, Garment, Line, Panel, Parameter
 
@@ -132,8 +134,9 @@ def _parse_panel(path, obj, params) -> Panel:
     except DesignError as exc:
         # name the panel, not only its JSON path
         raise DesignError(exc.path, f"panel {obj['name']!r}: {exc.message}") from None
-    darts = parse_darts(f"{path}.darts", obj["darts"], params) if "darts" in obj else []
-    return Panel(obj["name"], seed, part, ease, darts)
+    auto = parse_auto(f"{path}.darts", obj["darts"]) if "darts" in obj else None
+    darts = parse_darts(f"{path}.darts", obj["darts"], params) if "darts" in obj and auto is None else []
+    return Panel(obj["name"], seed, part, ease, darts, auto)
 
 
 def _named_list(path, raw, what, parse, required=False):

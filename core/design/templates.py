@@ -398,6 +398,29 @@ def blouse_fitted():
     return d
 
 
+def skirt_darted():
+    """Women's fitted skirt: the two-panel skirt on a women's body, ease 1.1, with a waist dart
+    on each side of the back, 13 cm long, pointing down at the seat; ``*_right`` mirrored. (Front
+    darts towards the stomach open by less than 4 mm on this body, or cross: the front's side
+    seams take its shaping, so the template has none.)"""
+    d = skirt()
+    d["name"] = "darted skirt"
+    d["description"] = ("Women's fitted skirt (women's chart, size M): front and back on the skirt topology, "
+                        "waist darts towards the stomach and the seat; ease 1.1.")
+    d["body"] = copy.deepcopy(WOMEN_BODY)
+    d["parameters"]["back_dart_length"] = {"value": 0.13, "kind": "length", "min": 0.07, "max": 0.18}
+    d["parameters"]["back_dart_place"] = {"value": 0.5, "kind": "placement", "min": 0.2, "max": 0.8}
+    d["keypoints"]["back_dart_top_left"] = {"between": ["waist_back", "waist_side_left"], "t": "$back_dart_place"}
+    d["keypoints"]["back_dart_apex_left"] = {"trace": {"from": "back_dart_top_left", "along": "torso_down",
+                                                       "length": "$back_dart_length"}}
+    for p in d["garments"][0]["panels"]:
+        p["ease"] = {"value": 1.1}
+        if p["name"] == "back":
+            p["darts"] = [{"name": "back_dart_left", "line": "waist", "apex": "back_dart_apex_left",
+                           "at": "back_dart_top_left", "intake": "auto", "apex_offset": 0.01}]
+    return d
+
+
 TEMPLATES: Dict[str, Callable[[], dict]] = {
     "shirt_long_sleeve": shirt_long_sleeve,
     "top_short_sleeve": top_short_sleeve,
@@ -410,6 +433,7 @@ TEMPLATES: Dict[str, Callable[[], dict]] = {
     "teaser_shirt_pants": teaser_shirt_pants,
     "dress_gradient": dress_gradient,
     "blouse_fitted": blouse_fitted,
+    "skirt_darted": skirt_darted,
 }
 
 

@@ -74,17 +74,21 @@ class Line:
 @dataclass
 class Panel:
     """A panel: the region of the cut surface around ``seed``, with its ease field and its
-    darts (:class:`core.design.darts.Dart`, written only when there are some)."""
+    darts (:class:`core.design.darts.Dart`, written only when there are some), or a request for
+    automatic darts (``auto_darts``: ``{"max_count", "max_intake"}``, :mod:`core.cut.auto_darts`)."""
     name: str
     seed: Any
     body_part: str = "torso"
     ease: dict = field(default_factory=lambda: {"value": 1.0})
     darts: List[Dart] = field(default_factory=list)
+    auto_darts: Optional[dict] = None
 
     def to_json(self):
         out = {"name": self.name, "seed": copy.deepcopy(self.seed),
                "body_part": self.body_part, "ease": copy.deepcopy(self.ease)}
-        if self.darts:
+        if self.auto_darts:
+            out["darts"] = {"auto": copy.deepcopy(self.auto_darts)}
+        elif self.darts:
             out["darts"] = [d.to_json() for d in self.darts]
         return out
 

@@ -144,7 +144,7 @@ def _side_edges(name: str, pd, v: np.ndarray, table) -> np.ndarray:
 #: equal length within 0.1 mm (a seam's sides meet within ~0.3 mm at weight 1)
 DART_LENGTH_WEIGHT = 10.0
 #: the weight of a dart's intake term (the mouth's width), times the seam-length weight, per unit area
-DART_INTAKE_WEIGHT = 1.0
+DART_INTAKE_WEIGHT = 0.3
 
 
 def seam_layout(cut, panels, uv0: np.ndarray, n: int, mean_edge: float, total_area: float) -> SeamLayout:
