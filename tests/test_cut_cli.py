@@ -11,7 +11,7 @@ from core.cut.io import load_cut, save_cut
 from core.cut.output import obj_text
 from core.cut.types import GarmentCut, Panel, Seam
 from core.design.templates import TEMPLATES, template_path
-from core.errors import CutError, DesignError
+from core.errors import BodyError, CutError, DesignError
 
 SHIRT = template_path("shirt_long_sleeve")
 
@@ -72,6 +72,18 @@ def test_cut_on_another_size_shown_on_a_pose(tmp_path):
     V = np.array([[float(x) for x in l.split()[1:]] for l in (out / "panels.obj").read_text().splitlines()
                   if l.startswith("v ")])
     assert np.allclose(V, X, atol=1e-6)
+
+
+def test_size_of_a_chart_and_unknown_sizes(tmp_path):
+    """``--size women:M`` cuts on that chart's size; an unknown size names --size and the choices."""
+    out = tmp_path / "w"
+    assert ease_cut(template_path("skirt"), "--out", out, "--size", "women:M", "--quiet", "--no-png") == 0
+    assert load_cut(out).body["shape"] == "women:M"
+    for size, words in (("XXL", "XS, S, M, L, XL"), ("women:XL", "S, M, L"), ("kids:M", "chart")):
+        with pytest.raises(BodyError) as e:
+            ease_cut(template_path("skirt"), "--out", tmp_path / "bad", "--size", size, "--quiet")
+        assert str(e.value).startswith("--size:") and words in str(e.value), e.value
+    assert not (tmp_path / "bad").exists()
 
 
 def test_bad_design_writes_nothing(tmp_path):

@@ -91,6 +91,7 @@ def test_graded_cli_errors(tmp_path, capsys):
     from core.design.templates import template_path
     design = template_path("top_sleeveless")
     for target, sizes, words in ((design, "XS,XXL", "--sizes"), (design, "M,M", "--sizes"),
+                                 (design, "women:XL", "S, M, L"),
                                  (tmp_path, "XS,M", "design JSON")):
         rc = main(["export", str(target), "--sizes", sizes, "--out", str(tmp_path / "g"), "--quiet"])
         err = capsys.readouterr().err

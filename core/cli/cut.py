@@ -15,13 +15,15 @@ import time
 from pathlib import Path
 
 from ..body.model import POSE_PRESETS
-from ..body.sizes import SIZES
+from ..body.sizes import check_size
+from ..errors import BodyError
 from .common import add_quiet, console_progress, subcommand
 
 
 def run_cut(design_path, out, size=None, pose=None, body_name=None, progress=None, png=True) -> dict:
     """Cut ``design_path`` and write the cut directory ``out``; returns a summary."""
     from ..body import load_body
+    from ..body.registry import load_spec
     from ..body.instance import body_instance
     from ..cut import cut_design
     from ..cut.io import save_cut
@@ -30,7 +32,13 @@ def run_cut(design_path, out, size=None, pose=None, body_name=None, progress=Non
     from ..fileio import output_dir, write_json, write_text
 
     design = load_design(design_path)
-    body = load_body(body_name or design.body.get("model", "anny"))
+    if size is not None:
+        # A bare size is of the design's own chart (body.chart), as in ``ease transfer``.
+        try:
+            size = check_size(size, None if ":" in str(size) else design.body.get("chart"))
+        except BodyError as exc:
+            raise BodyError(f"--size: {exc}") from None
+    body = load_body(body_name) if body_name else load_spec(design.body)
     t0 = time.perf_counter()
     # The design is defined (its lengths traced) on its reference pose; the cut is
     # pose-independent, so a requested pose only changes where the panels are shown.
@@ -72,8 +80,9 @@ def add_parser(sub) -> None:
     )
     p.add_argument("design", help="design JSON file")
     p.add_argument("--out", required=True, help="output folder")
-    p.add_argument("--size", choices=SIZES, default=None,
-                   help="cut on this size instead of the design's body shape")
+    p.add_argument("--size", default=None,
+                   help="cut on this size instead of the design's body shape: a size of the design's chart "
+                        "(e.g. M) or of a named one (women:M)")
     p.add_argument("--pose", choices=POSE_PRESETS, default=None,
                    help="write the panels (OBJ, PNG) on this pose; the cut is made on the design's "
                         "reference pose and holds for every pose")

@@ -9,14 +9,23 @@ from __future__ import annotations
 from typing import List
 
 
-def parse_sizes(text: str) -> List[str]:
-    """``"XS,S,M"`` as chart size names, each once (``--sizes``)."""
-    from ..body.sizes import SIZES
-    from ..errors import ExportError
-    sizes = [s.strip() for s in str(text).split(",") if s.strip()]
-    bad = [s for s in sizes if s not in SIZES]
-    if not sizes or bad or len(set(sizes)) != len(sizes):
-        raise ExportError(f"--sizes: expected chart sizes from {','.join(SIZES)}, each once, got {text!r}")
+def parse_sizes(text: str, check=None) -> List[str]:
+    """``"XS,S,M"`` (or ``"women:S,women:M"``) as size names, each once (``--sizes``).
+
+    ``check`` maps a name to its canonical chart size (raising for an unknown one); the
+    default checks against the default chart.
+    """
+    from ..body.sizes import check_size
+    from ..errors import EaseError, ExportError
+
+    check = check or check_size
+    names = [s.strip() for s in str(text).split(",") if s.strip()]
+    try:
+        sizes = [check(s) for s in names]
+    except EaseError as exc:
+        raise ExportError(f"--sizes: {getattr(exc, 'message', exc)}") from None
+    if not sizes or len(set(sizes)) != len(sizes):
+        raise ExportError(f"--sizes: expected chart sizes (e.g. XS,S,M,L,XL), each once, got {text!r}")
     return sizes
 
 
@@ -25,17 +34,22 @@ def run_graded(args) -> int:
     from pathlib import Path
 
     from .. import workflows as wf
+    from ..body.sizes import check_size
+    from ..design import load_design
     from ..errors import ExportError
     from ..export.graded import export_graded
     from ..progress import sub
     from .common import console_progress, print_files
 
-    sizes = parse_sizes(args.sizes)
     design = Path(args.pattern_dir)
     if not design.is_file():
         raise ExportError(f"{design}: --sizes grades a design: expected the design JSON file "
                           f"(the shipped ones: `ease templates`)")
     progress = console_progress(args)
+    # Bare size names are of the design's own chart (body.chart), as in ``ease transfer``;
+    # checked before the (slow) preparation.
+    chart = load_design(design).body.get("chart")
+    sizes = parse_sizes(args.sizes, lambda s: check_size(s, None if ":" in s else chart))
     prep = wf.prepare(design, progress=sub(progress, 0.0, 0.2))
     solver = wf.make_solver(prep)
     ref = wf.reference(prep, solver=solver, progress=sub(progress, 0.2, 0.3)).pattern
