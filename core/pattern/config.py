@@ -8,7 +8,8 @@ plain numbers. Groups:
 - :class:`RestShape` -- the regulariser's rest shape and the local step;
 - :class:`SeamOptions` -- the seam terms' targets and which seams are sewn gathered;
 - :class:`Feedback` -- the per-iteration correction of the targets by the achieved scales;
-- :class:`Adaptation` -- what pose adaptation solves do differently.
+- :class:`Adaptation` -- what pose adaptation solves do differently;
+- :class:`CollapseGuard` -- the targets of triangles near collapse raised until they open.
 
 Precedence, for every setting the design can also give (``materials``): the
 caller's value over the design's over the default. Only the gathering
@@ -142,10 +143,39 @@ class Adaptation:
     min_iterations: int = 40
     ceiling: float = 2.0
     step: float = 0.06
+    smooth: int = 0
+
+
+@dataclass(frozen=True)
+class CollapseGuard:
+    """Keeps every triangle open (no collapse: no triangle squeezed to a sliver without flipping).
+
+    Where the body is far from developable (the skirt topology's bridge
+    between the legs: cones of angle sum 1.4 x 2 pi next to 0.6 x 2 pi) the
+    cheapest flat map squeezes a few triangles to slivers rather than spread
+    the squeeze over their neighbours, and the flip guard holds them there.
+    With ``Q`` a triangle's Jacobian relative to its targets (singular values
+    1: the targets met; the smaller bounds its weft and warp scales from
+    below as fractions of their targets), a triangle whose smaller singular
+    value falls under ``guard_scale`` is stiffened: its ease and regulariser
+    weight times ``1 + gain``, the gain raised by ``guard_grow`` per iteration
+    while it stays under (from 1, at most ``guard_limit``), and pulled towards
+    ``Q`` with its singular values clamped from below at ``guard_open``
+    (rotation and shear kept). A solve where no triangle nears collapse is
+    unchanged; one that guards factorises its own stiffened matrix (kept in
+    the solve's state; the solver's shared factorisation is untouched).
+    Targets reported and measured stay the design's. ``guard_scale`` 0 turns
+    it off (the paper preset).
+    """
+    guard_scale: float = 0.6
+    guard_open: float = 0.7
+    guard_grow: float = 2.0
+    guard_limit: float = 100.0
+    guard_release: float = 0.5
 
 
 _GROUPS = {"weights": Weights, "rest_shape": RestShape, "seams": SeamOptions, "feedback": Feedback,
-           "adaptation": Adaptation}
+           "adaptation": Adaptation, "guard": CollapseGuard}
 
 
 @dataclass(frozen=True)
@@ -164,6 +194,7 @@ class SolverConfig:
     seams: SeamOptions = field(default_factory=SeamOptions)
     feedback: Feedback = field(default_factory=Feedback)
     adaptation: Adaptation = field(default_factory=Adaptation)
+    guard: CollapseGuard = field(default_factory=CollapseGuard)
 
     @classmethod
     def paper(cls, **overrides) -> "SolverConfig":
@@ -171,7 +202,8 @@ class SolverConfig:
         base = cls(weights=Weights(seam_length=100.0, seam_straight=5.0, seam_curve=10.0),
                    rest_shape=RestShape(model="isometric", warp_slack=0.0, warp_row=1.0),
                    seams=SeamOptions(straight_target="zero", length_integral=0.0, gather_above=None),
-                   feedback=Feedback(weft=0.0), adaptation=Adaptation(margin=0.0, gain=0.0))
+                   feedback=Feedback(weft=0.0), adaptation=Adaptation(margin=0.0, gain=0.0),
+                   guard=CollapseGuard(guard_scale=0.0))
         return base.with_overrides(**overrides)
 
     @classmethod
@@ -234,8 +266,9 @@ class SolverConfig:
 
     def check(self) -> None:
         """Raise :class:`PatternError` naming the first invalid setting."""
-        w, r, s, fb, ad = self.weights, self.rest_shape, self.seams, self.feedback, self.adaptation
-        nonneg = [("weights", w, ("ease", "regulariser", "seam_length", "seam_straight", "seam_curve", "sliver")),
+        w, r, s, fb, ad, gd = self.weights, self.rest_shape, self.seams, self.feedback, self.adaptation, self.guard
+        nonneg = [("guard", gd, ("guard_scale",)),
+                  ("weights", w, ("ease", "regulariser", "seam_length", "seam_straight", "seam_curve", "sliver")),
                   ("rest_shape", r, ("warp_slack",)),
                   ("seams", s, ("length_integral", "length_integral_cap")),
                   ("feedback", fb, ("weft", "warp", "step")),
@@ -252,8 +285,15 @@ class SolverConfig:
             raise PatternError(f"solver configuration feedback.floor: expected <= 1, got {fb.floor}")
         _finite("feedback.ceiling", fb.ceiling, 1.0, ">=")
         _finite("adaptation.ceiling", ad.ceiling, 1.0, ">=")
+        _finite("guard.guard_open", gd.guard_open, gd.guard_scale, ">=")
+        _finite("guard.guard_grow", gd.guard_grow, 1.0, ">")
+        _finite("guard.guard_limit", gd.guard_limit, 1.0, ">=")
+        _finite("guard.guard_release", gd.guard_release, 0.0, ">=")
+        if gd.guard_release > 1:
+            raise PatternError(f"solver configuration guard.guard_release: expected <= 1, got {gd.guard_release}")
         for name, v in (("iterations", self.iterations), ("adaptation.min_iterations", ad.min_iterations)):
             check_iterations(f"solver configuration {name}", v)
+        check_iterations("solver configuration adaptation.smooth", ad.smooth, low=0)
         check_iterations("solver configuration feedback.from_iteration", fb.from_iteration, low=0)
         if s.straight_target not in ("zero", "smooth"):
             raise PatternError(f"solver configuration seams.straight_target: expected 'zero' or 'smooth', "

@@ -16,6 +16,11 @@ from ..geom.mesh import boundary_loops, signed_areas_2d, triangle_areas
 #: Edges or triangle images shorter than this (relative to the panel's mean
 #: edge length) are treated as degenerate and skip the grain vote.
 DEGENERATE = 1e-8
+#: A flattening with a triangle whose area scale (2D over 3D area) is under this fraction of the
+#: panel's median is polished by SLIM (:func:`open_collapsed`).
+COLLAPSED_START = 0.1
+#: SLIM iterations of that polish.
+SLIM_ITERATIONS = 20
 
 
 def _far_pair(xyz: np.ndarray, candidates: np.ndarray) -> tuple:
@@ -70,6 +75,31 @@ def tutte(xyz: np.ndarray, faces: np.ndarray) -> np.ndarray:
         from scipy.sparse.linalg import splu
         uv[free] = splu(Lff).solve(np.asarray(rhs))
     return normalise_orientation_and_scale(uv, xyz, F)
+
+
+def open_collapsed(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """``uv`` (n, 2), or where it squeezes a triangle to a sliver, the same panel polished by SLIM.
+
+    Conformal maps (LSCM) shrink the cloth towards a cone of excess angle
+    (the skirt topology's bridge between the legs: angle sums 1.4 x 2 pi) by
+    orders of magnitude; the optimizer's flip guard would then hold those
+    triangles collapsed. SLIM's symmetric Dirichlet energy (a barrier against
+    collapse and flips, libigl) spreads the squeeze; its result is taken only
+    when it is flip-free. Panels without such a triangle are returned as they
+    are (unchanged patterns).
+    """
+    import igl
+    F = np.asarray(faces, np.int64)
+    ratio = signed_areas_2d(uv, F) / np.maximum(triangle_areas(xyz, F), 1e-300)
+    if not (np.all(ratio > 0) and ratio.min() < COLLAPSED_START * np.median(ratio)):
+        return uv
+    data = igl.slim_precompute(np.asfortranarray(xyz, dtype=np.float64), np.asfortranarray(F, dtype=np.int32),
+                               np.asfortranarray(uv, dtype=np.float64), igl.MappingEnergyType.SYMMETRIC_DIRICHLET,
+                               np.zeros(0, np.int32), np.zeros((0, 2)), 0.0)
+    out = np.asarray(igl.slim_solve(data, SLIM_ITERATIONS), dtype=np.float64)[:, :2]
+    if not (np.all(np.isfinite(out)) and np.all(signed_areas_2d(out, F) > 0)):
+        return uv
+    return normalise_orientation_and_scale(out, xyz, F)
 
 
 def normalise_orientation_and_scale(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -176,7 +206,8 @@ def pulled_back_warp(xyz: np.ndarray, faces: np.ndarray, G: np.ndarray, warp_dir
 def flatten_panel(xyz: np.ndarray, faces: np.ndarray, warp_dir: np.ndarray) -> dict:
     """The initial flattening and what the optimizer derives from it, in one pass.
 
-    LSCM (Tutte where LSCM folds), counter-clockwise, area-matched, rotated
+    LSCM (Tutte where LSCM folds; polished by SLIM where it squeezes a triangle to a sliver,
+    :func:`open_collapsed`), counter-clockwise, area-matched, rotated
     so the area-weighted vote of the pulled-back 3D warp is +y.
 
     Returns a dict: ``uv`` (n, 2); ``G``, ``area`` as :func:`gradient_operators`
@@ -189,6 +220,7 @@ def flatten_panel(xyz: np.ndarray, faces: np.ndarray, warp_dir: np.ndarray) -> d
     s = signed_areas_2d(uv, F)
     if np.any(s <= DEGENERATE * np.mean(np.abs(s))):
         uv = tutte(xyz, F)
+    uv = open_collapsed(uv, xyz, F)
     G, area = gradient_operators(uv, F)
     img, ok = pulled_back_warp(xyz, F, G, warp_dir)
     w = np.where(ok & (area != 0), triangle_areas(xyz, F), 0.0)

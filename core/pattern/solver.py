@@ -45,12 +45,18 @@ from .build import SolveResult
 from .config import SolverConfig, check_tolerance
 from .panels import flatten_panels
 from .seams import SeamPlan, plan_seams, seam_layout, seam_matrix, seam_rhs
-from .steps import flip_guard, local_step, realign_grain, rigid_align, scaled_start
+from .steps import (collapse_guard, flip_guard, local_step, realign_grain, relative_singular_values, rigid_align,
+                    scaled_start)
 from .targets import adaptation_scales, reference_ease, rest_targets
 from .validate import body_positions, validate_cut
 
 #: Weight of each panel's translation pin, relative to its mean diagonal entry.
 PIN_WEIGHT = 1e-6
+#: Iterations added at a time after the planned ones while a triangle is still collapsed.
+COLLAPSE_ROUNDS = 5
+#: Smallest relative singular value (:func:`.steps.relative_singular_values`) of an open triangle: above
+#: it the weft and warp scales are at least half their targets and the area a quarter (SPEC collapse).
+COLLAPSED_BELOW = 0.5
 
 
 class PatternSolver:
@@ -94,6 +100,7 @@ class PatternSolver:
         self._GxT = self._Gx.T.tocsr()
         self._GyT = self._Gy.T.tocsr()
         self._factors: Dict[tuple, Tuple[Callable, np.ndarray]] = {}
+        self._neighbourhood: Optional[sp.csr_matrix] = None
         self.n_factorisations = 0
         # the reference body's offsets serve every reference target, adaptation and seam plan:
         # computed once, read-only (a solve never changes them)
@@ -184,6 +191,23 @@ class PatternSolver:
             self.n_factorisations += 1
         return self._factors[key]
 
+    def guarded_factorisation(self, config: Optional[SolverConfig], plan: SeamPlan,
+                              gain: np.ndarray) -> Callable:
+        """Back-substitution of the system matrix with the collapse guard's triangles stiffened.
+
+        ``gain`` (f,): triangle ``t``'s ease + regulariser weight is multiplied
+        by ``1 + gain[t]`` (:func:`.steps.collapse_guard`). Built for one solve
+        and kept in its :class:`SolveState`, never on the solver; the shared
+        factorisation (:meth:`factorisation`) is untouched, and a solve where
+        no triangle nears collapse never builds one.
+        """
+        cfg = config or self.config
+        A, _ = self._matrix(cfg, plan)
+        w = cfg.weights
+        a = (w.ease + w.regulariser) * self.area_weights(cfg) * gain
+        extra = self._GxT @ sp.diags(a) @ self._Gx + self._GyT @ sp.diags(a * w.warp_column ** 2) @ self._Gy
+        return splu((A + extra).tocsc(), permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True}).solve
+
     def _matrix(self, cfg: SolverConfig, plan: SeamPlan):
         """The fixed system matrix (both pattern coordinates): ease + regulariser (one operator), the seam
         terms, and the gauge pins (returned apart, (n, 2): they also enter every right-hand side)."""
@@ -248,6 +272,12 @@ class PatternSolver:
         state = self.begin(K, c_weft, c_warp, start=start, positions=positions, poses=poses, plan=plan,
                            config=config)
         self.iterate(state, state.planned, progress)
+        # a solve far from its start (high ease, a strong pose) may still hold a triangle the collapse
+        # guard is opening: a few more iterations, at most as many again as planned
+        extra = 0
+        while extra < state.planned and self.collapsing(state):
+            self.iterate(state, COLLAPSE_ROUNDS)
+            extra += COLLAPSE_ROUNDS
         report(progress, 1.0, "pattern optimized")
         return self.result(state)
 
@@ -284,10 +314,12 @@ class PatternSolver:
             positions=self.ref_positions if positions is None else positions,
             planned=max(int(cfg.iterations), int(ad.min_iterations)) if adapting else int(cfg.iterations),
             U=U, M=self.jacobians(U), corr_w=np.ones(nf), corr_g=np.ones(nf),
+            guard=np.zeros(nf),
             integral=np.zeros(len(self.seams.edge_start)),
             tg=rest_targets(K, c_weft, c_warp, cfg.rest_shape.model))
         if resume is not None:
             state.corr_w, state.corr_g = resume.corr_w.copy(), resume.corr_g.copy()
+            state.guard = resume.guard.copy()
             state.integral = resume.integral.copy()
             state.local_state = dict(resume.local_state)
             state.iteration = resume.iteration
@@ -325,6 +357,7 @@ class PatternSolver:
         for k in range(n_it):
             it = state.iteration
             report(progress, k / max(n_it, 1), f"optimizing pattern: iteration {k + 1}/{n_it}")
+            retarget = False
             if (gain_w > 0 or gain_g > 0) and it >= fb.from_iteration:
                 # move the targets by the achieved/target ratio: the linear solve then
                 # lands on the wanted rho-hat wherever curvature allows it
@@ -344,19 +377,40 @@ class PatternSolver:
                     corr_w[ok] *= np.clip((goal_w[ok] / rw[ok]) ** gain_w, 1 - step, 1 + step)
                 if gain_g > 0:
                     corr_g[ok] *= np.clip((goal_g[ok] / rg[ok]) ** gain_g, 1 - step, 1 + step)
+                if adapting and ad.smooth > 0:
+                    # the poses' demands are local: corrections spread over the neighbourhood (and
+                    # across seams, so both sides of a seam grow alike) ask for compatible, shear-free cloth
+                    S = self.neighbourhood()
+                    for _ in range(ad.smooth):
+                        corr_w[:] = S @ corr_w
+                        corr_g[:] = S @ corr_g
                 np.clip(corr_w, fb.floor, hi, out=corr_w)
                 np.clip(corr_g, fb.floor, hi, out=corr_g)
+                retarget = True
+            if retarget:
                 tg = rest_targets(K, c_weft * corr_w, c_warp * corr_g, model)
             RT, Te = local_step(cfg, M, tg, W2, state.local_state)
             state.energies.append(float(np.sum(a * sum(W2[j % 2] * (M[j] - RT[j]) ** 2 for j in range(4)))))
             # B = lambda_ease T + lambda_reg R T: one right-hand side for both terms (same weights)
             B = [lam_ease * Te[j] + lam_reg * RT[j] for j in range(4)]
+            solve_k, aw_k = lu, aw
+            if cfg.guard.guard_scale > 0:
+                # triangles near collapse: stiffened and pulled towards their opened shape
+                gidx, Z, grown = collapse_guard(cfg.guard, M, Kc, c_weft, c_warp, state.guard)
+                if gidx.size:
+                    if grown or state.guard_solve is None:
+                        state.guard_solve = self.guarded_factorisation(cfg, state.plan, state.guard)
+                    solve_k = state.guard_solve
+                    g = state.guard[gidx]
+                    for j in range(4):
+                        B[j][gidx] = (B[j][gidx] + (lam_ease + lam_reg) * g * Z[j]) / (1.0 + g)
+                    aw_k = (aw[0] * (1.0 + state.guard), aw[1] * (1.0 + state.guard))
             rhs = np.empty((self.n, 2))
-            rhs[:, 0] = self._GxT @ (aw[0] * B[0]) + self._GyT @ (aw[1] * B[1])
-            rhs[:, 1] = self._GxT @ (aw[0] * B[2]) + self._GyT @ (aw[1] * B[3])
+            rhs[:, 0] = self._GxT @ (aw_k[0] * B[0]) + self._GyT @ (aw_k[1] * B[1])
+            rhs[:, 1] = self._GxT @ (aw_k[0] * B[2]) + self._GyT @ (aw_k[1] * B[3])
             rhs += seam_rhs(self.seams, U, cfg, state.plan, integral)
             rhs += pin * U
-            U_new = lu(rhs)
+            U_new = solve_k(rhs)
             # the step's rigid part per panel carries no strain: remove it so that the flip
             # guard only ever pulls back the local part of the step
             U_new = rigid_align(self.blocks, U_new, U)
@@ -371,6 +425,30 @@ class PatternSolver:
         state.U, state.M, state.s_cur, state.tg = U, M, s_cur, tg
         state.seconds += time.perf_counter() - t0
         return state
+
+    def neighbourhood(self) -> sp.csr_matrix:
+        """Area-weighted mean over each triangle's neighbours (f, f): the triangles sharing a vertex with
+        it, across seams too (seam vertices are one cut vertex), rows summing to 1."""
+        if self._neighbourhood is None:
+            ids = np.concatenate([pd.vertex_ids[pd.faces] for pd in self.panels])
+            f = len(ids)
+            inc = sp.csr_matrix((np.ones(3 * f), (np.repeat(np.arange(f), 3), ids.ravel())),
+                                shape=(f, int(ids.max()) + 1))
+            A = (inc @ inc.T).tocsr()
+            A.data[:] = 1.0
+            A = A @ sp.diags(np.abs(self.blocks.area0))
+            self._neighbourhood = (sp.diags(1.0 / np.asarray(A.sum(axis=1)).ravel()) @ A).tocsr()
+        return self._neighbourhood
+
+    def collapsing(self, state: "SolveState") -> bool:
+        """Whether ``state``'s iterate has a collapsed triangle (smaller relative singular value under
+        :data:`COLLAPSED_BELOW`) while the configuration guards against collapse."""
+        if state.config.guard.guard_scale <= 0:
+            return False
+        Kc = components(state.K)
+        _, s2, _ = relative_singular_values(state.M, Kc, state.c_weft, state.c_warp)
+        body = (Kc[0] * Kc[3] - Kc[1] * Kc[2]) > 0         # a degenerate body triangle has no shape to keep
+        return bool(np.any(~(s2 >= COLLAPSED_BELOW) & body))
 
     def result(self, state: "SolveState") -> SolveResult:
         """The :class:`SolveResult` of ``state``'s current iterate (per panel uv, targets, body positions)."""
@@ -399,6 +477,8 @@ class SolveState:
     planned : iterations a one-shot :meth:`PatternSolver.solve` of this configuration runs.
     U : (n, 2) m, the current iterate; M : its Jacobians (4 arrays (f,)).
     corr_w, corr_g : (f,) the feedback's accumulated target corrections.
+    guard : (f,) the collapse guard's stiffening gains (:func:`.steps.collapse_guard`; 0 = not guarded);
+    guard_solve : the back-substitution of the matrix with those gains, or None.
     integral : (E,) the seam length term's integral action; tg : the current rest targets.
     s_cur : (f,) signed areas of ``U`` or None; local_state : the local step's memory.
     iteration : iterations run so far; energies : energy per iteration; backtracks : flip-guard halvings.
@@ -417,9 +497,11 @@ class SolveState:
     M: list
     corr_w: np.ndarray
     corr_g: np.ndarray
+    guard: np.ndarray
     integral: np.ndarray
     tg: dict
     s_cur: Optional[np.ndarray] = None
+    guard_solve: Optional[Callable] = None
     local_state: dict = field(default_factory=dict)
     iteration: int = 0
     energies: List[float] = field(default_factory=list)

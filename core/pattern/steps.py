@@ -5,6 +5,7 @@
 - :func:`flip_guard`: vertices of triangles that would flip step back locally.
 - :func:`realign_grain`: every panel turned so its voted grain is +y.
 - :func:`scaled_start`: the initial flattening stretched by each panel's mean targets.
+- :func:`collapse_guard`: the target factors of triangles near collapse raised until they open.
 
 Jacobians ``M`` are 4 (f,) arrays m00, m01, m10, m11 (pattern coordinate
 ``i`` along initial axis ``j``); 2x2 targets likewise (:func:`core.geom.strain.components`).
@@ -16,8 +17,8 @@ from typing import List, Optional, Tuple
 import numpy as np
 
 from ..geom.mesh import signed_areas_2d
-from ..geom.strain import components
-from .config import SolverConfig
+from ..geom.strain import components, scales_of_offsets
+from .config import CollapseGuard, SolverConfig
 from .panels import PanelBlocks
 
 #: Rounds of local step-halving before a panel takes a uniformly shortened step (flip guard).
@@ -234,3 +235,64 @@ def realign_grain(blocks: PanelBlocks, U: np.ndarray, M: List[np.ndarray]):
     ct, st = np.repeat(c, blocks.face_counts), np.repeat(sn, blocks.face_counts)
     M = [ct * M[0] - st * M[2], ct * M[1] - st * M[3], st * M[0] + ct * M[2], st * M[1] + ct * M[3]]
     return U, M
+
+
+def relative_singular_values(M: list, Kc: list, c_weft: np.ndarray, c_warp: np.ndarray):
+    """Singular values (s1 >= |s2|, s2 < 0 when flipped) (f,) of each triangle's Jacobian relative to its
+    targets, ``Q = diag(c)^-1 M K^-1`` (1, 1: the targets met; the smaller bounds the weft and warp
+    scales from below, as fractions of their targets), and ``Q`` as 4 (f,) arrays."""
+    det_k = Kc[0] * Kc[3] - Kc[1] * Kc[2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        i00, i01, i10, i11 = Kc[3] / det_k, -Kc[1] / det_k, -Kc[2] / det_k, Kc[0] / det_k
+        q = [(M[0] * i00 + M[1] * i10) / c_weft, (M[0] * i01 + M[1] * i11) / c_weft,
+             (M[2] * i00 + M[3] * i10) / c_warp, (M[2] * i01 + M[3] * i11) / c_warp]
+    # closed-form 2x2 SVD: s1, s2 = |(E, H)| +- |(F, G)| with signed s2
+    e, f = 0.5 * (q[0] + q[3]), 0.5 * (q[0] - q[3])
+    g, h = 0.5 * (q[2] + q[1]), 0.5 * (q[2] - q[1])
+    r1, r2 = np.hypot(e, h), np.hypot(f, g)
+    return r1 + r2, r1 - r2, q
+
+
+def collapse_guard(guard: CollapseGuard, M: list, Kc: list, c_weft: np.ndarray, c_warp: np.ndarray,
+                   gain: np.ndarray):
+    """The collapse guard of one iteration (:class:`~core.pattern.config.CollapseGuard`).
+
+    A triangle whose smaller relative singular value
+    (:func:`relative_singular_values`) is under ``guard_scale`` has its
+    stiffening ``gain`` (f, updated in place) raised by ``guard_grow`` (to at
+    least 1, at most ``guard_limit``); a guarded triangle stays guarded for the
+    rest of the solve. Each guarded triangle is pulled towards its opened
+    shape: its Jacobian with the relative singular values clamped from below
+    at ``guard_open`` (rotation and shear kept; a flipped one unfolded), which
+    is itself where it is already open enough, so the pull costs nothing
+    there.
+
+    Returns (idx (k,) the guarded triangles, their opened Jacobians as 4 (k,)
+    arrays, whether any gain grew).
+    """
+    s1, s2, _ = relative_singular_values(M, Kc, c_weft, c_warp)
+    low = ~(s2 >= guard.guard_scale)                 # NaN (degenerate) counts as low
+    low &= np.isfinite(Kc[0] * Kc[3] - Kc[1] * Kc[2]) & (Kc[0] * Kc[3] - Kc[1] * Kc[2] > 0)
+    grown = bool(np.any(low & (gain < guard.guard_limit)))
+    if grown:
+        gain[low] = np.minimum(np.maximum(gain[low] * guard.guard_grow, 1.0), guard.guard_limit)
+    # open again: the stiffening is given back, so guarded triangles do not freeze their neighbourhood
+    free = (gain > 0) & (s2 >= guard.guard_open)
+    if np.any(free):
+        gain[free] *= guard.guard_release
+        gain[free & (gain < 1.0)] = 0.0
+        grown = True
+    idx = np.flatnonzero(gain > 0)
+    if idx.size == 0:
+        return idx, None, False
+    Mi = np.stack([np.stack([M[0][idx], M[1][idx]], -1), np.stack([M[2][idx], M[3][idx]], -1)], -2)
+    Ki = np.stack([np.stack([Kc[0][idx], Kc[1][idx]], -1), np.stack([Kc[2][idx], Kc[3][idx]], -1)], -2)
+    c = np.stack([c_weft[idx], c_warp[idx]], -1)
+    Uq, S, Vt = np.linalg.svd((Mi / c[:, :, None]) @ np.linalg.inv(Ki))
+    # a reflection: the signed SVD (the smaller singular value negative), so clamping unfolds it
+    neg = np.linalg.det(Uq) * np.linalg.det(Vt) < 0
+    Uq[neg, :, 1] *= -1.0
+    S[neg, 1] *= -1.0
+    S = np.maximum(S, guard.guard_open)
+    Z = (c[:, :, None] * ((Uq * S[:, None, :]) @ Vt)) @ Ki
+    return idx, [Z[:, 0, 0], Z[:, 0, 1], Z[:, 1, 0], Z[:, 1, 1]], grown
