@@ -45,8 +45,8 @@ from .build import SolveResult
 from .config import SolverConfig, check_tolerance
 from .panels import flatten_panels
 from .seams import SeamPlan, plan_seams, seam_layout, seam_matrix, seam_rhs
-from .steps import (collapse_guard, flip_guard, local_step, realign_grain, relative_singular_values, rigid_align,
-                    scaled_start)
+from .steps import (any_collapsed, collapse_guard, face_neighbourhood, flip_guard, local_step, realign_grain,
+                    rigid_align, scaled_start)
 from .targets import adaptation_scales, reference_ease, rest_targets
 from .validate import body_positions, validate_cut
 
@@ -54,9 +54,6 @@ from .validate import body_positions, validate_cut
 PIN_WEIGHT = 1e-6
 #: Iterations added at a time after the planned ones while a triangle is still collapsed.
 COLLAPSE_ROUNDS = 5
-#: Smallest relative singular value (:func:`.steps.relative_singular_values`) of an open triangle: above
-#: it the weft and warp scales are at least half their targets and the area a quarter (SPEC collapse).
-COLLAPSED_BELOW = 0.5
 
 
 class PatternSolver:
@@ -427,28 +424,16 @@ class PatternSolver:
         return state
 
     def neighbourhood(self) -> sp.csr_matrix:
-        """Area-weighted mean over each triangle's neighbours (f, f): the triangles sharing a vertex with
-        it, across seams too (seam vertices are one cut vertex), rows summing to 1."""
+        """:func:`.steps.face_neighbourhood` of the panels (built on first use)."""
         if self._neighbourhood is None:
-            ids = np.concatenate([pd.vertex_ids[pd.faces] for pd in self.panels])
-            f = len(ids)
-            inc = sp.csr_matrix((np.ones(3 * f), (np.repeat(np.arange(f), 3), ids.ravel())),
-                                shape=(f, int(ids.max()) + 1))
-            A = (inc @ inc.T).tocsr()
-            A.data[:] = 1.0
-            A = A @ sp.diags(np.abs(self.blocks.area0))
-            self._neighbourhood = (sp.diags(1.0 / np.asarray(A.sum(axis=1)).ravel()) @ A).tocsr()
+            self._neighbourhood = face_neighbourhood(self.panels, self.blocks.area0)
         return self._neighbourhood
 
     def collapsing(self, state: "SolveState") -> bool:
-        """Whether ``state``'s iterate has a collapsed triangle (smaller relative singular value under
-        :data:`COLLAPSED_BELOW`) while the configuration guards against collapse."""
-        if state.config.guard.guard_scale <= 0:
-            return False
-        Kc = components(state.K)
-        _, s2, _ = relative_singular_values(state.M, Kc, state.c_weft, state.c_warp)
-        body = (Kc[0] * Kc[3] - Kc[1] * Kc[2]) > 0         # a degenerate body triangle has no shape to keep
-        return bool(np.any(~(s2 >= COLLAPSED_BELOW) & body))
+        """Whether ``state``'s iterate has a collapsed triangle (:func:`.steps.any_collapsed`) while its
+        configuration guards against collapse."""
+        return state.config.guard.guard_scale > 0 and any_collapsed(state.M, components(state.K), state.c_weft,
+                                                                    state.c_warp)
 
     def result(self, state: "SolveState") -> SolveResult:
         """The :class:`SolveResult` of ``state``'s current iterate (per panel uv, targets, body positions)."""

@@ -253,6 +253,33 @@ def relative_singular_values(M: list, Kc: list, c_weft: np.ndarray, c_warp: np.n
     return r1 + r2, r1 - r2, q
 
 
+#: Smallest relative singular value (:func:`relative_singular_values`) of an open triangle: above it
+#: the weft and warp scales are at least half their targets and the area a quarter (SPEC collapse).
+COLLAPSED_BELOW = 0.5
+
+
+def any_collapsed(M: list, Kc: list, c_weft: np.ndarray, c_warp: np.ndarray) -> bool:
+    """Whether a triangle's smaller relative singular value is under :data:`COLLAPSED_BELOW` (degenerate
+    body triangles, with no shape to keep, left out)."""
+    _, s2, _ = relative_singular_values(M, Kc, c_weft, c_warp)
+    body = (Kc[0] * Kc[3] - Kc[1] * Kc[2]) > 0
+    return bool(np.any(~(s2 >= COLLAPSED_BELOW) & body))
+
+
+def face_neighbourhood(panels, area0: np.ndarray):
+    """Area-weighted mean over each triangle's neighbours (f, f) sparse: the triangles sharing a cut
+    vertex with it (across seams too: a seam vertex is one cut vertex), rows summing to 1.
+    ``panels``: the stacked :class:`~.panels.PanelData`; ``area0`` (f,) their flattening's areas."""
+    import scipy.sparse as sp
+    ids = np.concatenate([pd.vertex_ids[pd.faces] for pd in panels])
+    f = len(ids)
+    inc = sp.csr_matrix((np.ones(3 * f), (np.repeat(np.arange(f), 3), ids.ravel())), shape=(f, int(ids.max()) + 1))
+    A = (inc @ inc.T).tocsr()
+    A.data[:] = 1.0
+    A = A @ sp.diags(np.abs(area0))
+    return (sp.diags(1.0 / np.asarray(A.sum(axis=1)).ravel()) @ A).tocsr()
+
+
 def collapse_guard(guard: CollapseGuard, M: list, Kc: list, c_weft: np.ndarray, c_warp: np.ndarray,
                    gain: np.ndarray):
     """The collapse guard of one iteration (:class:`~core.pattern.config.CollapseGuard`).
