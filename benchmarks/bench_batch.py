@@ -8,7 +8,11 @@
   the last completed item (the cluster start and each worker's one-off cut
   of the design excluded; they are listed apart); per core = rate / workers.
   Per-item split (median over items, ms): body (shape + girths), transfer
-  (the solve), metrics (compliance, seams), write;
+  (the solve), metrics (compliance, seams), write, and the worker's CPU time
+  per item. The CPU-time rate (1 / median CPU seconds of an item, the items
+  that paid for their worker's cut left out) is the throughput per core that
+  does not depend on what else the machine runs; the load average is
+  recorded beside it;
 - speed-up: the 2-worker steady rate over the 1-worker one;
 - simulated cluster: a ``dask scheduler`` and two ``dask worker`` processes
   started on localhost, the same bodies (same seed) through ``--scheduler``;
@@ -65,7 +69,18 @@ def _split(rows) -> dict:
     for k in ("body", "transfer", "metrics", "write", "setup"):
         vals = [r[f"timings.{k}"] for r in ok if f"timings.{k}" in r]
         out[k] = round(1000.0 * float(np.median(vals)), 1) if vals else None
+    cpu = [r["timings.cpu"] for r in ok if "timings.cpu" in r and "timings.setup" not in r]
+    out["cpu"] = round(1000.0 * float(np.median(cpu)), 1) if cpu else None
     return out
+
+
+def _cpu_rate(split) -> float:
+    """Items per CPU second of a worker (per core): 1 / the median CPU time of an item."""
+    return round(1000.0 / split["cpu"], 2) if split.get("cpu") else 0.0
+
+
+def _load() -> list:
+    return [round(v, 2) for v in os.getloadavg()] if hasattr(os, "getloadavg") else []
 
 
 def _free_port() -> int:
@@ -127,13 +142,16 @@ def run(out_dir, quick: bool = False) -> dict:
     with tempfile.TemporaryDirectory(prefix="ease_bench_batch_") as tmp:
         tmp = Path(tmp)
         for w in (1, 2):
+            load = _load()
             res, stamps, wall = _timed_batch(design, bodies, tmp / f"local{w}", workers=w)
             rate = _steady_rate(stamps)
+            split = _split(res.rows)
             result["runs"][f"local_{w}"] = {
                 "workers": w, "made": res.made, "failed": res.failed, "wall_s": round(wall, 2),
                 "first_item_s": round(stamps[0], 2) if stamps else None,
                 "steady_items_per_s": round(rate, 2), "items_per_s_per_core": round(rate / w, 2),
-                "split_ms": _split(res.rows)}
+                "cpu_items_per_s_per_core": _cpu_rate(split), "load_before": load, "load_after": _load(),
+                "split_ms": split}
             if w == 2:
                 local_rows = res.rows
         r1, r2 = result["runs"]["local_1"], result["runs"]["local_2"]
@@ -165,15 +183,20 @@ def run(out_dir, quick: bool = False) -> dict:
              f"Machine: {result['machine']}.", "",
              "Steady rate: items per second between the first and the last completed item (cluster start and "
              "each worker's one-off cut of the design excluded: `first item` is the wall time to the first "
-             "completed item). Split: median per item, ms.", "",
+             "completed item). CPU rate: 1 / the median CPU seconds a worker spends on an item (per core, "
+             "whatever else runs; load: the 1-minute load average before / after the run). "
+             "Split: median per item, ms.", "",
              "| run | workers | items ok / failed | wall s | first item s | items/s | items/s/core | "
-             "body ms | transfer ms | metrics ms | write ms | setup (cut) ms |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "items/CPU-s (per core) | load | body ms | transfer ms | metrics ms | write ms | CPU ms | "
+             "setup (cut) ms |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for name in ("local_1", "local_2"):
         r, s = result["runs"][name], result["runs"][name]["split_ms"]
+        load = f"{r['load_before'][0]} / {r['load_after'][0]}" if r["load_before"] else "n/a"
         lines.append(f"| LocalCluster | {r['workers']} | {r['made']} / {r['failed']} | {r['wall_s']} | "
                      f"{r['first_item_s']} | {r['steady_items_per_s']} | {r['items_per_s_per_core']} | "
-                     f"{s['body']} | {s['transfer']} | {s['metrics']} | {s['write']} | {s['setup']} |")
+                     f"{r['cpu_items_per_s_per_core']} | {load} | {s['body']} | {s['transfer']} | "
+                     f"{s['metrics']} | {s['write']} | {s['cpu']} | {s['setup']} |")
     c = result["runs"]["simulated_cluster"]
     lines += ["", f"Speed-up, 2 workers over 1 (steady rate): **{result['speedup_2_vs_1']}x**.", "",
               f"Simulated cluster (a `dask scheduler` and {c['workers']} `dask worker` processes on localhost, "

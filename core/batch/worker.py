@@ -154,7 +154,9 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
     body: :func:`core.body.measure.measure`), ``metrics.*`` (the transferred
     pattern on its body), ``adapt.*``, ``drape.*``, ``timings.*`` (s: body,
     transfer, metrics, adapt, drape, write, setup = this worker's cut of the
-    design when this item paid for it), ``worker``.
+    design when this item paid for it; ``cpu`` = the CPU seconds of this
+    worker's process for the item, the cut included when it paid for it:
+    throughput on a shared machine), ``worker``.
     """
     from .. import workflows as wf
     from ..body.instance import body_instance
@@ -163,6 +165,7 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
     row: dict = {"id": item.id, "label": item.body.label, "index": item.index, "folder": item.folder,
                  "body.kind": item.body.kind, "status": "ok", "error": "", "worker": os.getpid()}
     timings: Dict[str, float] = {}
+    cpu = time.process_time()
     try:
         built = (item.design_key, item.options.config) in _CONTEXTS
         t = time.perf_counter()
@@ -176,8 +179,11 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
         if isinstance(target, str):
             row["body.size"] = target
         model = ctx.prep.body
-        vertices = body_instance(model, target, ctx.prep.cut.body.get("pose"))
-        row.update({f"body.{k}_cm": v for k, v in measure(model, body_instance(model, target)).items()})
+        rest = body_instance(model, target)
+        row.update({f"body.{k}_cm": v for k, v in measure(model, rest).items()})
+        pose = ctx.prep.cut.body.get("pose")
+        # the posed body only for the drape (the transfer poses its own target)
+        vertices = (rest if not pose else body_instance(model, target, pose)) if item.options.drape else None
         timings["body"] = time.perf_counter() - t
 
         t = time.perf_counter()
@@ -207,6 +213,7 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
         row.update(status="timeout", error=one_line(exc))
     except Exception as exc:  # one item's failure is recorded, never the batch's
         row.update(status="error", error=one_line(exc))
+    timings["cpu"] = time.process_time() - cpu
     row.update({f"timings.{k}": v for k, v in timings.items()})
     return row
 

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..errors import PatternError
 from ..fileio import dumps_json, write_text
+from .jsonnum import arrays_text
 from .types import Pattern, PatternPanel, PatternSeam
 
 FORMAT = "ease.pattern"
@@ -31,39 +32,94 @@ VERSION = 1
 FILENAME = "pattern.json"
 
 
-def pattern_to_json(pattern: Pattern) -> dict:
-    """The JSON-ready dict of ``pattern`` (numpy arrays become lists)."""
-    panels = []
-    for p in pattern.panels:
-        panels.append({
-            "name": p.name, "garment": p.garment,
-            "uv": np.asarray(p.uv, float).tolist(),
-            "faces": np.asarray(p.faces, int).tolist(),
-            "vertex_ids": np.asarray(p.vertex_ids, int).tolist(),
-            "xyz": np.asarray(p.xyz, float).tolist(),
-            "grain": np.asarray(p.grain, float).tolist(),
-            "target_weft": np.asarray(p.target_weft, float).tolist(),
-            "target_warp": np.asarray(p.target_warp, float).tolist(),
-            "achieved_weft": np.asarray(p.achieved_weft, float).tolist(),
-            "achieved_warp": np.asarray(p.achieved_warp, float).tolist(),
-            "boundary": [np.asarray(b, int).tolist() for b in p.boundary],
-            "hems": [np.asarray(h, int).tolist() for h in p.hems],
-            "mirror_of": p.mirror_of,
-        })
-    seams = [{"name": s.name, "panel_a": s.panel_a, "panel_b": s.panel_b,
-              "verts_a": np.asarray(s.verts_a, int).tolist(),
-              "verts_b": np.asarray(s.verts_b, int).tolist(), "gathered": bool(s.gathered)} for s in pattern.seams]
+def _pattern_dict(pattern: Pattern) -> dict:
+    """The file's layout with the numbers still numpy arrays (float64 / int64)."""
+    def f(a):
+        return np.asarray(a, float)
+
+    def i(a):
+        return np.asarray(a, np.int64)
+
+    panels = [{"name": p.name, "garment": p.garment, "uv": f(p.uv), "faces": i(p.faces),
+               "vertex_ids": i(p.vertex_ids), "xyz": f(p.xyz), "grain": f(p.grain),
+               "target_weft": f(p.target_weft), "target_warp": f(p.target_warp),
+               "achieved_weft": f(p.achieved_weft), "achieved_warp": f(p.achieved_warp),
+               "boundary": [i(b) for b in p.boundary], "hems": [i(h) for h in p.hems],
+               "mirror_of": p.mirror_of} for p in pattern.panels]
+    seams = [{"name": s.name, "panel_a": s.panel_a, "panel_b": s.panel_b, "verts_a": i(s.verts_a),
+              "verts_b": i(s.verts_b), "gathered": bool(s.gathered)} for s in pattern.seams]
     return {
         "format": FORMAT, "version": VERSION, "unit": "m",
         "style": pattern.style, "body": pattern.body, "garments": pattern.garments,
         "mode": pattern.mode, "materials": pattern.materials, "report": pattern.report,
-        "pins": {g: np.asarray(v, int).tolist() for g, v in pattern.pins.items()},
+        "pins": {g: i(v) for g, v in pattern.pins.items()},
         "panels": panels, "seams": seams,
     }
 
 
+def _map_arrays(obj, fn):
+    """``obj`` with every numpy array replaced by ``fn(array)`` (dicts and lists copied, the rest shared)."""
+    if isinstance(obj, np.ndarray):
+        return fn(obj)
+    if isinstance(obj, dict):
+        return {k: _map_arrays(v, fn) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [_map_arrays(v, fn) for v in obj]
+    return obj
+
+
+def pattern_to_json(pattern: Pattern) -> dict:
+    """The JSON-ready dict of ``pattern`` (numpy arrays become lists)."""
+    return _map_arrays(_pattern_dict(pattern), lambda a: a.tolist())
+
+
 #: Report entries that are wall-clock times: they differ run to run.
 WALL_CLOCK = ("timings", "optimize_seconds", "init_seconds")
+
+#: Stand-in for an array in the text written by :func:`pattern_text` (json escapes a NUL as ``\u0000``).
+_SLOT = "\\u0000"
+
+
+def _text(obj: dict) -> str:
+    """The JSON text of a :func:`_pattern_dict` (one line, ``", "`` / ``": "`` separators).
+
+    The arrays' numbers are formatted in one pass (:func:`core.pattern.jsonnum.arrays_text`):
+    floats with 17 significant digits, which read back as the very same doubles.
+    The rest goes through :func:`core.fileio.dumps_json` with a NUL-named slot for
+    each array; a file whose own strings hold NULs takes the plain path.
+    """
+    arrays: list = []
+
+    def slot(a):
+        arrays.append(a)
+        return "\x00" + str(len(arrays) - 1)
+
+    skeleton = dumps_json(_map_arrays(obj, slot), indent=None)
+    parts = skeleton.split(f'"{_SLOT}')
+    if len(parts) - 1 != len(arrays) or skeleton.count(_SLOT) != len(arrays):
+        return dumps_json(_map_arrays(obj, lambda a: a.tolist()), indent=None)
+    texts = arrays_text(arrays)
+    out = [parts[0]]
+    for k, part in enumerate(parts[1:]):
+        index, rest = part.split('"', 1)
+        if index != str(k):
+            return dumps_json(_map_arrays(obj, lambda a: a.tolist()), indent=None)
+        out += [texts[k], rest]
+    return "".join(out)
+
+
+def pattern_text(pattern: Pattern) -> str:
+    """The text of ``pattern.json`` for ``pattern`` (validated; wall-clock report entries left out).
+
+    Raises :class:`PatternError` for an invalid pattern or a non-finite number.
+    """
+    obj = _pattern_dict(pattern)
+    obj["report"] = {k: v for k, v in obj["report"].items() if k not in WALL_CLOCK}
+    pattern_from_json(obj)  # validate before anything is written
+    try:
+        return _text(obj) + "\n"
+    except ValueError as exc:  # NaN/inf refused by allow_nan=False
+        raise PatternError(f"pattern {pattern.style!r} holds non-finite numbers: {exc}") from exc
 
 
 def save_pattern(pattern: Pattern, out_dir: Union[str, Path], filename: str = FILENAME) -> Path:
@@ -72,16 +128,11 @@ def save_pattern(pattern: Pattern, out_dir: Union[str, Path], filename: str = FI
     The pattern is validated first, so an invalid pattern never reaches disk.
     Wall-clock figures (:data:`WALL_CLOCK`) stay out of the file, so the same
     design gives the same bytes on every run and through every door (CLI,
-    add-on, batch); ``report.json`` beside it keeps them.
+    add-on, batch); ``report.json`` beside it keeps them. Floats are written
+    with 17 significant digits (:mod:`core.pattern.jsonnum`): reading the file
+    gives back the very arrays written.
     """
-    obj = pattern_to_json(pattern)
-    obj["report"] = {k: v for k, v in obj["report"].items() if k not in WALL_CLOCK}
-    pattern_from_json(obj)  # validate before anything is written
-    try:
-        text = dumps_json(obj, indent=None) + "\n"
-    except ValueError as exc:  # NaN/inf refused by allow_nan=False
-        raise PatternError(f"pattern {pattern.style!r} holds non-finite numbers: {exc}") from exc
-    return write_text(Path(out_dir) / filename, text)
+    return write_text(Path(out_dir) / filename, pattern_text(pattern))
 
 
 #: Largest pattern.json read (bytes): a real one is a few MB; the JSON parser
