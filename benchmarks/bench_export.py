@@ -6,12 +6,16 @@ default body. For each: milliseconds to build the pieces and to render each
 format, and what the files say read back: SVG piece sizes vs the pattern (mm),
 DXF sew-line lengths vs the pattern (mm), the PDF test square (mm), measured
 allowance width vs requested (mm), notch arc-length mismatch across seams (mm).
+Marker efficiency of the teaser's size run XS-XL on 150 cm fabric at 10, 30
+and 60 s, on one nester thread, on all cores as threads, and on all cores as
+side-by-side tries (with the load average: the nester stops on wall time).
 Writes ``export.md`` and ``export.json`` into ``out_dir``.
 """
 from __future__ import annotations
 
 import importlib.util
 import io
+import os
 import re
 import sys
 import time
@@ -128,27 +132,39 @@ def _marker_rows(quick: bool = False) -> dict:
                           MARKER_WIDTH, 0.02)
     rows = [{"method": "strip layout", "seconds": 0.0, "length_m": round(float(strip.size[1]), 3),
              "efficiency_pct": round(100 * area / (MARKER_WIDTH * float(strip.size[1])), 2)}]
-    for budget in ((5, 10) if quick else MARKER_BUDGETS):
-        m = nest(items, MARKER_WIDTH, seconds=budget, seed=0)
-        rows.append({"method": "spyrrow", "seconds": budget, "length_m": round(m.length, 3),
-                     "efficiency_pct": round(100 * m.efficiency, 2), "stopped": m.stopped,
-                     "wall_s": round(m.seconds, 1)})
+    cores = os.cpu_count() or 1
+    runs = [(1, 1, b) for b in ((5, 10) if quick else MARKER_BUDGETS)]
+    if cores > 1 and not quick:
+        runs += [(cores, 1, b) for b in MARKER_BUDGETS] + [(1, cores, MARKER_BUDGETS[-1])]
+    load = [round(os.getloadavg()[0], 2)]
+    for threads, tries, budget in runs:
+        m = nest(items, MARKER_WIDTH, seconds=budget, seed=0, threads=threads, tries=tries)
+        rows.append({"method": "spyrrow", "threads": threads, "tries": tries, "seconds": budget,
+                     "length_m": round(m.length, 3), "efficiency_pct": round(100 * m.efficiency, 2),
+                     "stopped": m.stopped, "wall_s": round(m.seconds, 1), "load": round(os.getloadavg()[0], 2)})
+    load.append(round(os.getloadavg()[0], 2))
     return {"pieces": sum(it.count for it in items), "sizes": list(MARKER_SIZES), "width_m": MARKER_WIDTH,
-            "rows": rows}
+            "cores": cores, "load_start_end": load, "rows": rows}
 
 
 def _marker_md(marker: dict) -> list:
     lines = ["", "## Marker efficiency", "",
              f"Teaser shirt + pants, sizes {', '.join(marker.get('sizes', []))} (one garment each, "
              f"{marker.get('pieces', '-')} pieces), {marker.get('width_m', 0) * 100:.0f} cm fabric, grain along the "
-             "selvage (0/180 degrees), seed 0, one nester thread. Efficiency = pieces' cut area / marker area. "
+             "selvage (0/180 degrees), seed 0. Efficiency = the true cut lines' area (allowance included) / marker "
+             "area (width x length to the farthest true cut line). Threads: the nester's worker threads (one "
+             "search); tries: nesters side by side in the same wall time (seeds 0, 1, ...), the shortest kept; "
+             f"cores used = threads x tries, of {marker.get('cores', '-')} on this machine. Load average (1 min) "
+             f"at the start and end: {marker.get('load_start_end', '-')}, and after each run in the load column "
+             "(the nester stops on wall time: a loaded machine gives it less work). "
              f"The strip layout row is {STRIP_EFFICIENCY_NOTE}.", ""]
     if "error" in marker:
         return lines + [f"not run: {marker['error']}"]
-    lines += ["| method | budget s | wall s | length m | efficiency % |", "|---|---|---|---|---|"]
+    lines += ["| method | threads | tries | budget s | wall s | length m | efficiency % | load |",
+              "|---|---|---|---|---|---|---|---|"]
     for r in marker["rows"]:
-        lines.append(f"| {r['method']} | {r['seconds']:g} | {r.get('wall_s', '-')} | {r['length_m']} | "
-                     f"{r['efficiency_pct']} |")
+        lines.append(f"| {r['method']} | {r.get('threads', '-')} | {r.get('tries', '-')} | {r['seconds']:g} | "
+                     f"{r.get('wall_s', '-')} | {r['length_m']} | {r['efficiency_pct']} | {r.get('load', '-')} |")
     return lines
 
 
