@@ -103,6 +103,7 @@ def test_export_draws_legs_fold_drill_hole_and_notches(blouse_run, tmp_path):
         assert len(d.legs) == 2 and np.allclose(d.legs[0][-1], d.legs[1][-1])
         assert sum(n.seam == d.name for n in front.notches) == 2
         assert 0.005 < np.linalg.norm(d.drill - d.apex) <= 0.0101
+        assert d.fold[1][1] < d.fold[0][1]         # a level (bust) dart is pressed down
     # the outline bridges the mouth: no leg vertex but the mouths lies on it
     export_pattern(run.pattern, tmp_path, formats=("svg", "dxf", "pdf"))
     svg = (tmp_path / "pattern.svg").read_text()
@@ -177,3 +178,17 @@ def test_auto_darts_request_is_checked():
         with pytest.raises(DesignError) as exc:
             load_design(_design(bad))
         assert field in exc.value.path
+
+
+def test_cut_and_pattern_files_keep_the_darts(blouse_run, tmp_path):
+    from core.cut.io import load_cut, save_cut
+    from core.pattern.io import load_pattern, save_pattern
+    prep, run = blouse_run
+    save_cut(prep.cut, tmp_path / "cut")
+    cut = load_cut(tmp_path / "cut")
+    assert sorted(cut.darts) == sorted(prep.cut.darts)
+    rec, again = prep.cut.darts["blouse.bust_dart_left"], cut.darts["blouse.bust_dart_left"]
+    assert again["intake"] is None and np.allclose(again["apex"], rec["apex"])
+    assert [s.kind for s in cut.seams] == [s.kind for s in prep.cut.seams]
+    pattern = load_pattern(save_pattern(run.pattern, tmp_path / "p"))
+    assert [s.apex for s in pattern.seams] == [s.apex for s in run.pattern.seams]

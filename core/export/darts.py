@@ -80,12 +80,14 @@ def dart_drawing(panel: PatternPanel, seam, xy: np.ndarray) -> DartDrawing:
     mid = 0.5 * (a[0] + b[0])
     axis = mid - apex
     drill = apex + DRILL_INSET * axis / max(np.linalg.norm(axis), 1e-12)
-    # pressed towards the body's centre (upright darts) or down (level darts): decided on the body
+    # pressed towards the body's centre (upright darts) or down (level darts), decided on the body
+    # by the side each leg's cloth lies on (the legs themselves coincide there)
     P = np.asarray(panel.xyz, float)
-    ia, ib = int(seam.verts_a[0]), int(seam.verts_b[0])
-    d3 = P[int(seam.verts_a[-1])] - 0.5 * (P[ia] + P[ib])
+    ia = int(seam.verts_a[0])
+    d3 = P[int(seam.verts_a[-1])] - P[ia]
     upright = abs(d3[2]) >= np.hypot(d3[0], d3[1])
-    onto_a = abs(P[ia, 0]) < abs(P[ib, 0]) if upright else P[ia, 2] < P[ib, 2]
+    ca, cb = (_side_centroid(panel, v[:-1], P) for v in (seam.verts_a, seam.verts_b))
+    onto_a = abs(ca[0]) < abs(cb[0]) if upright else ca[2] < cb[2]
     src, dst = (b[0], a[0]) if onto_a else (a[0], b[0])
     fold = np.stack([src, dst])
     d = dst - src
@@ -95,3 +97,10 @@ def dart_drawing(panel: PatternPanel, seam, xy: np.ndarray) -> DartDrawing:
     h = min(FOLD_HEAD, 0.4 * n)
     head = np.stack([dst - h * u + 0.5 * h * w, dst, dst - h * u - 0.5 * h * w])
     return DartDrawing(name=seam.name, legs=[a, b], apex=apex, drill=drill, fold=fold, fold_head=head)
+
+
+def _side_centroid(panel: PatternPanel, ids, P: np.ndarray) -> np.ndarray:
+    """(3,) the body centroid of the triangles touching the leg vertices ``ids`` (one side of a dart)."""
+    faces = np.asarray(panel.faces, int)
+    touch = np.isin(faces, np.asarray(ids, int)).any(axis=1)
+    return P[faces[touch]].mean(axis=(0, 1))
