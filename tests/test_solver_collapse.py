@@ -84,7 +84,7 @@ def test_guarded_solve_keeps_the_shared_factorisation(skirt):
 @pytest.mark.parametrize("kw, field", [
     ({"guard_scale": -0.1}, "guard.guard_scale"), ({"guard_open": 0.3}, "guard.guard_open"),
     ({"guard_grow": 1.0}, "guard.guard_grow"), ({"guard_limit": 0.5}, "guard.guard_limit"),
-    ({"guard_release": 1.5}, "guard.guard_release"), ({"smooth": -1}, "adaptation.smooth"),
+    ({"guard_release": 1.5}, "guard.guard_release"), ({"spread": -1}, "adaptation.spread"), ({"cap_warp": 0.5}, "adaptation.cap_warp"), ({"warp_gain": -1.0}, "adaptation.warp_gain"),
 ])
 def test_guard_settings_are_checked(kw, field):
     with pytest.raises(PatternError, match=f"solver configuration {field}"):

@@ -136,7 +136,16 @@ class PatternSolver:
         eps_warp = check_tolerance("eps_warp", eps_warp)
         K, lw, lg = self.ref_offsets
         poses = [self.offsets(P)[1:] for P in pose_positions]
-        cw, cg = adaptation_scales(self.design_ease, lw, lg, poses, eps_weft, eps_warp, cfg.adaptation.margin)
+        ad = cfg.adaptation
+        cw, cg = adaptation_scales(self.design_ease, lw, lg, poses, eps_weft, eps_warp, ad.margin, ad.cap_weft,
+                                   ad.cap_warp)
+        if ad.spread:
+            # a pose's demand is a sharp local peak (the armpit with the arm raised): raised cloth around it
+            # (the running maximum of the neighbours' mean, across seams too) asks for a compatible flat shape
+            S = self.neighbourhood()
+            for _ in range(ad.spread):
+                cw = np.maximum(cw, S @ cw)
+                cg = np.maximum(cg, S @ cg)
         return K, cw, cg
 
     def pose_demands(self, pose_positions: Sequence[np.ndarray], eps_weft: float, eps_warp: float,
@@ -340,7 +349,7 @@ class PatternSolver:
         poses = state.poses
         adapting = poses is not None
         gain_w = max(fb.weft, ad.gain) if adapting else fb.weft
-        gain_g = max(fb.warp, ad.gain) if adapting else fb.warp
+        gain_g = max(fb.warp, ad.gain if ad.warp_gain is None else ad.warp_gain) if adapting else fb.warp
         hi = ad.ceiling if adapting else fb.ceiling
         step = ad.step if adapting else fb.step
         model = cfg.rest_shape.model
@@ -369,18 +378,13 @@ class PatternSolver:
                         with np.errstate(divide="ignore", invalid="ignore"):
                             goal_w = np.fmax(goal_w, poses["margin"] * rw / pw / poses["eps_weft"])
                             goal_g = np.fmax(goal_g, poses["margin"] * rg / pg / poses["eps_warp"])
+                    goal_w = np.fmin(goal_w, ad.cap_weft * poses["ease_weft"])
+                    goal_g = np.fmin(goal_g, ad.cap_warp * poses["ease_warp"])
                 ok = np.isfinite(rw) & np.isfinite(rg) & (rw > 0) & (rg > 0) & np.isfinite(goal_w) & np.isfinite(goal_g)
                 if gain_w > 0:
                     corr_w[ok] *= np.clip((goal_w[ok] / rw[ok]) ** gain_w, 1 - step, 1 + step)
                 if gain_g > 0:
                     corr_g[ok] *= np.clip((goal_g[ok] / rg[ok]) ** gain_g, 1 - step, 1 + step)
-                if adapting and ad.smooth > 0:
-                    # the poses' demands are local: corrections spread over the neighbourhood (and
-                    # across seams, so both sides of a seam grow alike) ask for compatible, shear-free cloth
-                    S = self.neighbourhood()
-                    for _ in range(ad.smooth):
-                        corr_w[:] = S @ corr_w
-                        corr_g[:] = S @ corr_g
                 np.clip(corr_w, fb.floor, hi, out=corr_w)
                 np.clip(corr_g, fb.floor, hi, out=corr_g)
                 retarget = True

@@ -298,8 +298,10 @@ def collapse_guard(guard: CollapseGuard, M: list, Kc: list, c_weft: np.ndarray, 
     arrays, whether any gain grew).
     """
     s1, s2, _ = relative_singular_values(M, Kc, c_weft, c_warp)
-    low = ~(s2 >= guard.guard_scale)                 # NaN (degenerate) counts as low
-    low &= np.isfinite(Kc[0] * Kc[3] - Kc[1] * Kc[2]) & (Kc[0] * Kc[3] - Kc[1] * Kc[2] > 0)
+    # a degenerate body triangle has no shape to keep; a non-finite iterate is the flip guard's to refuse
+    valid = (Kc[0] * Kc[3] - Kc[1] * Kc[2] > 0) & np.isfinite(s1) & np.isfinite(s2)
+    gain[~valid] = 0.0
+    low = valid & ~(s2 >= guard.guard_scale)
     grown = bool(np.any(low & (gain < guard.guard_limit)))
     if grown:
         gain[low] = np.minimum(np.maximum(gain[low] * guard.guard_grow, 1.0), guard.guard_limit)

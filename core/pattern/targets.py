@@ -47,7 +47,8 @@ def reference_ease(design_ease: np.ndarray, ease=None) -> np.ndarray:
 
 
 def adaptation_scales(ease: np.ndarray, len_weft: np.ndarray, len_warp: np.ndarray,
-                      pose_lengths: Sequence[tuple], eps_weft: float, eps_warp: float, margin: float):
+                      pose_lengths: Sequence[tuple], eps_weft: float, eps_warp: float, margin: float,
+                      cap_weft: float = np.inf, cap_warp: float = np.inf):
     """Target scales (c_weft, c_warp) (f,) of Eq. material-scale.
 
     Parameters
@@ -57,6 +58,8 @@ def adaptation_scales(ease: np.ndarray, len_weft: np.ndarray, len_warp: np.ndarr
     pose_lengths : per pose the pair (len_weft, len_warp) (f,) on that pose.
     eps_weft, eps_warp : the stretch tolerances (>= 1).
     margin : fraction the pose demands are raised by before the tolerance applies.
+    cap_weft, cap_warp : most a target may be raised, as a multiple of the design's (ease, 1): where a
+        pose stretches the skin by several times (the armpit with the arm raised) no flat cloth follows.
     """
     want_w = ease * len_weft
     want_g = 1.0 * len_warp
@@ -67,4 +70,4 @@ def adaptation_scales(ease: np.ndarray, len_weft: np.ndarray, len_warp: np.ndarr
     with np.errstate(divide="ignore", invalid="ignore"):
         cw = np.where(len_weft > 0, want_w / len_weft, ease)
         cg = np.where(len_warp > 0, want_g / len_warp, 1.0)
-    return cw, cg
+    return np.minimum(cw, cap_weft * ease), np.minimum(cg, cap_warp)
