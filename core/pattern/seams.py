@@ -28,7 +28,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..cut.types import seam_names
-from ..design.naming import mirrored_name
+from ..design.naming import mirrored_name, swap_side
 from ..errors import PatternError
 from .config import SolverConfig, gather_threshold
 
@@ -271,6 +271,9 @@ def plan_seams(cut, layout: SeamLayout, uv0: np.ndarray, K: np.ndarray, c_weft: 
     auto = ()
     if above is not None:
         lines = {n.split("#", 1)[0] for n, r in demand.items() if r > above}
+        # a line and its mirror gather together: their demands differ only by the flattening's
+        # asymmetry (the cut is symmetric to 0.1 mm), not by the design
+        lines |= {swap_side(n) for n in lines}
         auto = tuple(n for n in demand if n.split("#", 1)[0] in lines)
     explicit = tuple(config.seams.gathered) + design_gathered(cut.materials)
     named = [s.name for s in cut.seams if seam_is_gathered(s.name, explicit)]
