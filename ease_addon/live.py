@@ -43,7 +43,7 @@ from collections import deque
 import bpy
 import numpy as np
 
-from . import convert, data, ease_ops, pattern_ops, ramp, state, sync
+from . import convert, data, ease_ops, pattern_ops, ramp, sync
 from .objects import objects_with_role, world_bounds
 
 SLICE_S = 0.03          # seconds of work per tick: the longest the viewport waits for the pattern
@@ -267,9 +267,8 @@ def _final_units(context, session) -> deque:
         queue.append(("store", units[-1][0], lambda: store(units[-1][1])))
 
     def store(join):
-        text, pattern = join(), box["pattern"]
-        scene[data.PATTERN_KEY] = text
-        state.PATTERNS[(scene.name, data.PATTERN_KEY)] = (text, pattern)   # as sync.store_pattern
+        pattern = box["pattern"]
+        sync.store_pattern(scene, pattern, text=join())
         scene.ease.pattern_json = json.dumps(data.key_figures(pattern))
 
     queue.append(("show", n, show))

@@ -222,11 +222,16 @@ def fill_design_props(scene, design) -> None:
 
 # ----------------------------------------------------------------------------- pattern and garment
 
-def store_pattern(scene, pattern, key: str = data.PATTERN_KEY) -> None:
-    """Keep the whole pattern (pattern.json) in a scene property (saved in the .blend)."""
-    from ..core.fileio import dumps_json
-    from ..core.pattern.io import pattern_to_json
-    text = dumps_json(pattern_to_json(pattern), indent=None)
+def store_pattern(scene, pattern, key: str = data.PATTERN_KEY, text=None) -> None:
+    """Keep the whole pattern (pattern.json) in a scene property (saved in the .blend).
+
+    ``text``: the pattern's stored text when the caller has it already (the live loop
+    encodes it a piece at a time); otherwise it is encoded here.
+    """
+    if text is None:
+        from ..core.fileio import dumps_json
+        from ..core.pattern.io import pattern_to_json
+        text = dumps_json(pattern_to_json(pattern), indent=None)
     scene[key] = text
     state.PATTERNS[(scene.name, key)] = (text, pattern)
 
