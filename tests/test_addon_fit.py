@@ -34,13 +34,10 @@ def test_transfer_and_adapt_show_figures(bpy_session):
 
 
 def _canonical(text: str) -> str:
-    """The add-on's stored pattern as ``save_pattern`` writes it: wall-clock seconds out of the report."""
-    from core.fileio import dumps_json
-    from core.pattern.io import WALL_CLOCK
-    obj = json.loads(text)
-    for key in WALL_CLOCK:
-        obj["report"].pop(key, None)
-    return dumps_json(obj, indent=None) + "\n"          # write_json ends the file with a newline
+    """The add-on's stored pattern as ``save_pattern`` writes it (its number format, wall-clock
+    seconds out of the report): reading is exact, so equal patterns give equal bytes."""
+    from core.pattern.io import pattern_from_json, pattern_text
+    return pattern_text(pattern_from_json(json.loads(text)))
 
 
 @pytest.mark.parametrize("mode, cli_args, panel", [
