@@ -86,6 +86,22 @@ def test_size_of_a_chart_and_unknown_sizes(tmp_path):
     assert not (tmp_path / "bad").exists()
 
 
+def test_automatic_darts_are_written_back(tmp_path):
+    """``ease cut`` of a design asking for automatic darts writes them into design.json as
+    explicit darts (the designer edits them there); cutting that file again gives the same cut."""
+    d = TEMPLATES["blouse_fitted"]()
+    d["garments"][0]["panels"][0]["darts"] = {"auto": {"max_count": 1, "max_intake": 0.08}}
+    src = tmp_path / "auto.json"
+    src.write_text(json.dumps(d))
+    out = tmp_path / "cut"
+    assert ease_cut(src, "--out", out, "--quiet", "--no-png") == 0
+    placed = json.loads((out / "design.json").read_text())["garments"][0]["panels"][0]["darts"]
+    assert isinstance(placed, list) and len(placed) == 1 and placed[0]["apex"] == "bust_left"
+    again = tmp_path / "again"
+    assert ease_cut(out / "design.json", "--out", again, "--quiet", "--no-png") == 0
+    assert (again / "cut.json").read_bytes() == (out / "cut.json").read_bytes()
+
+
 def test_bad_design_writes_nothing(tmp_path):
     d = TEMPLATES["shirt_long_sleeve"]()
     d["garments"][0]["panels"][0]["ease"] = {"value": 7}

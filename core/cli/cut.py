@@ -26,6 +26,7 @@ def run_cut(design_path, out, size=None, pose=None, body_name=None, progress=Non
     from ..body.registry import load_spec
     from ..body.instance import body_instance
     from ..cut import cut_design
+    from ..cut.auto_darts import has_auto, place_darts
     from ..cut.io import save_cut
     from ..cut.output import obj_text, render_png
     from ..design import load_design
@@ -39,6 +40,9 @@ def run_cut(design_path, out, size=None, pose=None, body_name=None, progress=Non
         except BodyError as exc:
             raise BodyError(f"--size: {exc}") from None
     body = load_body(body_name) if body_name else load_spec(design.body)
+    if has_auto(design):
+        # automatic darts placed here, so design.json holds them as explicit darts to edit
+        design = place_darts(design, body=body, progress=progress)
     t0 = time.perf_counter()
     # The design is defined (its lengths traced) on its reference pose; the cut is
     # pose-independent, so a requested pose only changes where the panels are shown.
