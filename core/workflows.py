@@ -63,35 +63,21 @@ def prepare(design, body=None, cut=None, progress: Optional[Progress] = None) ->
     progress : callback, optional
     """
     from .body.instance import spec_instance
-    from .body.registry import OBJ_OPTIONS, load_spec, resolve_body_files
+    from .body.registry import load_spec
     from .design import load_design
 
     t0 = time.perf_counter()
-    base = _design_folder(design)
-    design = load_design(design)
-    if base is not None:    # an OBJ template's files are named relative to the design file
-        design.body.update(resolve_body_files(design.body, base))
+    design = load_design(design)      # an OBJ template's files made absolute against the design file
     if body is None:
         body = load_spec(design.body)
     t1 = time.perf_counter()
     if cut is None:
         from .cut import cut_design
         cut = cut_design(design, body=body, progress=sub(progress, 0.0, 0.95))
-    for key in OBJ_OPTIONS:     # the cut's body record names the template's files too (drape, pattern)
-        if design.body.get(key) is not None:
-            cut.body.setdefault(key, design.body[key])
     t2 = time.perf_counter()
     reference, _ = spec_instance(cut.body, model=body)
     report(progress, 1.0, f"cut {len(cut.panels)} panels")
     return Prepared(design, body, cut, reference, {"load": t1 - t0, "cut": t2 - t1})
-
-
-def _design_folder(design):
-    """The folder of a design given as a file path (its body's files are relative to it), else None."""
-    import os
-    if isinstance(design, os.PathLike) or (isinstance(design, str) and not design.lstrip().startswith("{")):
-        return os.path.dirname(os.path.abspath(os.fspath(design)))
-    return None
 
 
 def size_name(prep: Prepared, size: str) -> str:
@@ -153,13 +139,14 @@ def make_solver(prep: Prepared, config: str = "improved", iterations: Optional[i
 def _checked_metrics(pattern, checks: Optional[Sequence[str]] = None) -> dict:
     """The metrics of ``pattern`` (:func:`core.metrics.pattern.pattern_report`, with the region
     report and the collapse sites on the pattern's body landmarks); a pattern failing one of
-    ``checks`` (default :data:`core.metrics.checks.REFUSED`: flipped, and collapsed once the
-    solver prevents it) is an error naming the panel and where on the body, not a figure."""
-    from .metrics.checks import check_pattern
+    ``checks`` (default :func:`core.metrics.checks.checks_for` the pattern: flipped and collapsed;
+    a live preview still converging only flipped) is an error naming the panel and where on the
+    body, not a figure."""
+    from .metrics.checks import check_pattern, checks_for
     from .metrics.pattern import pattern_report
     from .metrics.regions import body_landmarks
     metrics = pattern_report(pattern, body_landmarks(pattern))
-    check_pattern(metrics, checks)
+    check_pattern(metrics, checks_for(pattern) if checks is None else checks)
     return metrics
 
 

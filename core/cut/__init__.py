@@ -46,8 +46,8 @@ def cut_design(design, body=None, shape=None, pose=None, progress: Optional[Prog
     design = load_design(design)
     report(progress, 0.0, f"resolving design {design.name!r}")
     if body is None:
-        from ..body import load_body
-        body = load_body(design.body.get("model", "anny"))
+        from ..body.registry import load_spec
+        body = load_spec(design.body)
     t0 = time.perf_counter()
     vertices = instance_vertices(design, body, shape, pose)
     from .auto_darts import has_auto, place_darts

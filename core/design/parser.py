@@ -75,7 +75,6 @@ from pathlib import Path
 from typing import Dict, Union
 
 from ..body.model import POSE_PRESETS
-from ..body.sizes import SIZES
 from ..errors import BodyError, DesignError
 from .checks import (BODY_PARTS, GARMENT_KINDS, LINE_ROLES, PARAMETER_KINDS, REFINE_EDGE_MAX, REFINE_EDGE_MIN,
                      check_ease, check_name, check_names_unique, check_number, check_parameter_value,
@@ -399,11 +398,16 @@ def load_design(source: Union[str, Path, dict, Design]) -> Design:
         raise DesignError("", f"{where}: not valid JSON ({str(exc)[:80]})") from None
     try:
         check_depth(obj)
-        return parse_design(obj)
+        design = parse_design(obj)
     except DesignError as exc:
         if where != "<string>":   # name the file too; path and message stay as they are
             exc.args = (f"{where}: {exc}",)
         raise
+    if where != "<string>":
+        # an OBJ template's files are named relative to the design file, for every caller
+        from ..body.registry import resolve_body_files
+        design.body.update(resolve_body_files(design.body, p.parent))
+    return design
 
 
 def save_design(design: Design, path: Union[str, Path]) -> Path:

@@ -33,6 +33,7 @@ import numpy as np
 
 from ..body.instance import body_instance
 from ..body.model import SurfacePoint
+from ..body.registry import OBJ_OPTIONS
 from ..errors import BodyError, DesignError
 from .checks import parameter_value
 from .parser import load_design
@@ -462,4 +463,6 @@ def resolve(design, body, shape=None, pose=None, vertices: Optional[np.ndarray] 
         pose_used = {k: [float(x) for x in np.asarray(v).ravel()] for k, v in pose_used.items()}
     return CutSpec(lines=lines, panels=panels, garments=garments, skirt=bool(design.skirt),
                    refine_edge_length=design.refine_edge_length, materials=dict(design.materials),
-                   body={"model": design.body.get("model", "anny"), "shape": shape_used, "pose": pose_used})
+                   body={"model": design.body.get("model", "anny"), "shape": shape_used, "pose": pose_used,
+                         # an OBJ template's own files travel with the cut (pattern, drape reload it)
+                         **{k: design.body[k] for k in OBJ_OPTIONS if design.body.get(k) is not None}})
