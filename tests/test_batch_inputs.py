@@ -30,11 +30,21 @@ def test_measurement_table(tmp_path):
     assert bodies[2].value == {"hip": 101.0} and bodies[2].origin == "bodies.csv row 3"
 
 
+def test_sizes_of_a_chart(tmp_path):
+    """A ``chart`` column or a qualified size names a size of another chart; a bare size stays
+    bare (the design's own chart reads it, as ``ease transfer`` does)."""
+    p = _csv(tmp_path, "size,chart\nm,women\nmen:L,\nS,\n")
+    assert [b.value for b in read_measurements(p)] == ["women:M", "men:L", "S"]
+
+
 @pytest.mark.parametrize("text, words", [
     ("height,waist\n170,80\n180,eighty\n", ["bodies.csv", "row 2", "'waist'", "'eighty'"]),
     ("height,inseam\n170,80\n", ["bodies.csv", "column 2", "'inseam'"]),
     ("height,size\n170,XXL\n", ["row 1", "'size'", "XXL"]),
     ("height,size\n170,M\n", ["row 1", "not both"]),
+    ("size,chart\nXL,women\n", ["row 1", "'size/chart'", "S, M, L"]),
+    ("size,chart\nM,kids\n", ["row 1", "kids"]),
+    ("height,chart\n170,women\n", ["row 1", "'chart'", "no size"]),
     ("height,waist\n170,80,3\n", ["row 1", "3 cells"]),
     ("height,waist\n,\n", ["bodies.csv", "no body rows"]),
     ("", ["empty"]),

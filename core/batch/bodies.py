@@ -28,11 +28,15 @@ from ..errors import BodyError
 #: Anny's age range sampled (2/3 = 25 years, 1 = 90 years; see :mod:`core.body.anny`).
 ADULT_AGE = (2.0 / 3.0, 1.0)
 
-#: Column names of a measurement table read as the chart size (XS..XL).
+#: Column names of a measurement table read as the chart size (XS..XL, or women:M).
 SIZE_COLUMNS = ("size",)
 
 #: Columns that only name a row.
 NAME_COLUMNS = ("name", "id", "label")
+
+# The size chart of a row's ``size`` (core.body.sizes.CHART_NAMES); without it a bare size is
+# of the design's own chart, as in ``ease transfer``.
+CHART_COLUMNS = ("chart",)
 
 
 class BodySourceError(BodyError):
@@ -78,7 +82,8 @@ def read_measurements(path) -> List[BodySource]:
 
     Columns: ``height``, ``chest`` (or ``bust``), ``waist``, ``hip`` in cm (any
     subset the fit takes, see :data:`core.body.measure.MEASUREMENTS`), or
-    ``size`` (a chart size XS..XL, used as such where given), and optionally
+    ``size`` (a chart size: ``M`` of the design's chart, ``women:M``, or ``M`` with a
+    ``chart`` column naming the chart; used as such where given), and optionally
     ``name``. Empty cells are "not given".
 
     Raises
@@ -86,7 +91,7 @@ def read_measurements(path) -> List[BodySource]:
     BodySourceError naming the file, row (1 = the first body) and column.
     """
     from ..body.measure import MEASUREMENTS
-    from ..body.sizes import SIZES
+    from ..body.sizes import check_size
 
     path = Path(path)
     try:
@@ -99,11 +104,11 @@ def read_measurements(path) -> List[BodySource]:
         raise BodySourceError(f"{path}: empty body table; expected a header row "
                               f"({', '.join(MEASUREMENTS)}, bust, size, name) and one row per body")
     header = [h.strip().lower() for h in rows[0]]
-    allowed = set(MEASUREMENTS) | {"bust"} | set(SIZE_COLUMNS) | set(NAME_COLUMNS)
+    allowed = set(MEASUREMENTS) | {"bust"} | set(SIZE_COLUMNS) | set(NAME_COLUMNS) | set(CHART_COLUMNS)
     for j, h in enumerate(header):
         if h not in allowed:
             raise BodySourceError(f"{path}: header column {j + 1} {h!r} is not a measurement; allowed: "
-                                  f"{', '.join(MEASUREMENTS)}, bust (cm), size, name")
+                                  f"{', '.join(MEASUREMENTS)}, bust (cm), size, chart, name")
     if "chest" in header and "bust" in header:
         raise BodySourceError(f"{path}: header has both 'chest' and 'bust' (the same girth); keep one")
     out = []
@@ -116,13 +121,19 @@ def read_measurements(path) -> List[BodySource]:
         size = next((cells[c] for c in SIZE_COLUMNS if cells.get(c)), "")
         targets = {("chest" if h == "bust" else h): _number(v, f"{path}: row {i}, column {h!r}")
                    for h, v in cells.items() if v and h in MEASUREMENTS + ("bust",)}
+        chart = next((cells[c] for c in CHART_COLUMNS if cells.get(c)), "") or None
+        if chart and not size:
+            raise BodySourceError(f"{path}: row {i}, column 'chart': a chart names the chart of a size; "
+                                  f"this row has no size")
         if size:
-            if size.upper() not in SIZES:
-                raise BodySourceError(f"{path}: row {i}, column 'size': unknown size {size!r}; "
-                                      f"allowed: {', '.join(SIZES)}")
+            try:
+                size = check_size(size, chart)      # "women:M" when the chart is named
+            except BodyError as exc:
+                raise BodySourceError(f"{path}: row {i}, column {'size' if chart is None else 'size/chart'!r}: "
+                                      f"{exc}") from None
             if targets:
                 raise BodySourceError(f"{path}: row {i}: give a size or measurements, not both")
-            out.append(BodySource(name, "size", size.upper(), origin))
+            out.append(BodySource(name, "size", size, origin))
         elif targets:
             out.append(BodySource(name, "measurements", targets, origin))
         else:
