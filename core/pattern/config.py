@@ -145,7 +145,7 @@ class Adaptation:
     mean over the raised targets (0 = none): the cloth around a sharp demand
     is raised too, so the raised region has a flat shape with less shear.
     ``cap_weft``, ``cap_warp``: most a target may be raised, as a multiple of
-    the design's (inf: no cap).
+    the design's (None: no cap).
     """
     margin: float = 0.06
     gain: float = 0.2
@@ -154,8 +154,8 @@ class Adaptation:
     step: float = 0.06
     warp_gain: Optional[float] = 0.08
     spread: int = 30
-    cap_weft: float = float("inf")
-    cap_warp: float = float("inf")
+    cap_weft: Optional[float] = None
+    cap_warp: Optional[float] = None
 
 
 @dataclass(frozen=True)
@@ -311,9 +311,8 @@ class SolverConfig:
         if ad.warp_gain is not None:
             _finite("adaptation.warp_gain", ad.warp_gain, 0.0, ">=")
         for k in ("cap_weft", "cap_warp"):
-            if not (isinstance(getattr(ad, k), (int, float)) and getattr(ad, k) >= 1.0):
-                raise PatternError(f"solver configuration adaptation.{k}: expected a number >= 1 (inf: no cap), "
-                                   f"got {getattr(ad, k)!r}")
+            if getattr(ad, k) is not None:
+                _finite(f"adaptation.{k}", getattr(ad, k), 1.0, ">=")
         check_iterations("solver configuration feedback.from_iteration", fb.from_iteration, low=0)
         if s.straight_target not in ("zero", "smooth"):
             raise PatternError(f"solver configuration seams.straight_target: expected 'zero' or 'smooth', "

@@ -137,8 +137,8 @@ class PatternSolver:
         K, lw, lg = self.ref_offsets
         poses = [self.offsets(P)[1:] for P in pose_positions]
         ad = cfg.adaptation
-        cw, cg = adaptation_scales(self.design_ease, lw, lg, poses, eps_weft, eps_warp, ad.margin, ad.cap_weft,
-                                   ad.cap_warp)
+        cap_w, cap_g = (np.inf if c is None else c for c in (ad.cap_weft, ad.cap_warp))
+        cw, cg = adaptation_scales(self.design_ease, lw, lg, poses, eps_weft, eps_warp, ad.margin, cap_w, cap_g)
         if ad.spread:
             # a pose's demand is a sharp local peak (the armpit with the arm raised): raised cloth around it
             # (the running maximum of the neighbours' mean, across seams too) asks for a compatible flat shape
@@ -378,8 +378,8 @@ class PatternSolver:
                         with np.errstate(divide="ignore", invalid="ignore"):
                             goal_w = np.fmax(goal_w, poses["margin"] * rw / pw / poses["eps_weft"])
                             goal_g = np.fmax(goal_g, poses["margin"] * rg / pg / poses["eps_warp"])
-                    goal_w = np.fmin(goal_w, ad.cap_weft * poses["ease_weft"])
-                    goal_g = np.fmin(goal_g, ad.cap_warp * poses["ease_warp"])
+                    goal_w = goal_w if ad.cap_weft is None else np.fmin(goal_w, ad.cap_weft * poses["ease_weft"])
+                    goal_g = goal_g if ad.cap_warp is None else np.fmin(goal_g, ad.cap_warp * poses["ease_warp"])
                 ok = np.isfinite(rw) & np.isfinite(rg) & (rw > 0) & (rg > 0) & np.isfinite(goal_w) & np.isfinite(goal_g)
                 if gain_w > 0:
                     corr_w[ok] *= np.clip((goal_w[ok] / rw[ok]) ** gain_w, 1 - step, 1 + step)
