@@ -215,6 +215,7 @@ def _templates(body, coarse):
     from core import workflows as wf
     from core.body.instance import body_instance, instance_shape
     from core.metrics.pattern import pattern_report
+    from core.errors import EaseError
     from core.metrics.regions import body_landmarks
     from core.pattern.solve import adapt_pattern, solve_pattern, transfer_pattern
     out = {}
@@ -225,13 +226,17 @@ def _templates(body, coarse):
             pose = cut.body.get("pose")
             pats = {"M": solve_pattern(cut, ref, solver=solver, style=design.name)}
             for size in ("XS", "S", "L", "XL"):
+                try:
+                    size = wf.size_name(prep, size)      # of the design's chart (a women's template: women:S)
+                except EaseError:
+                    continue                             # a size its chart does not have
                 shape = instance_shape(body, size)
-                pats[size] = transfer_pattern(cut, ref, body_instance(body, shape, pose), solver=solver,
+                pats[size.split(":")[-1]] = transfer_pattern(cut, ref, body_instance(body, shape, pose), solver=solver,
                                               start=pats["M"], style=design.name,
                                               body={"model": body.name, "shape": shape, "pose": pose, "size": size})
             pats["P1"] = adapt_pattern(cut, ref, [body_instance(body, cut.body.get("shape"), "P1")], solver=solver,
                                        start=pats["M"], style=design.name)
-            row = {"design": design.name}
+            row = {"design": design.name, "body": cut.body.get("size") or design.body.get("shape") or "M"}
             for key, pat in pats.items():
                 m = pattern_report(pat, body_landmarks(pat, body))
                 c = m["compliance"]
@@ -246,6 +251,56 @@ def _templates(body, coarse):
 
 
 TEMPLATE_BODIES = ("M", "XS", "S", "L", "XL", "P1")
+
+#: The women's wear table: (template, uniform ease levels or None for the design's own ease).
+WOMENS = (("blouse_fitted", (1.1, 1.3)), ("skirt_darted", None))
+
+
+def _without_darts(raw: dict) -> dict:
+    """The design ``raw`` (JSON) with every dart removed: the same pattern pieces sewn without darts."""
+    import copy
+    d = copy.deepcopy(raw)
+    d["name"] = f"{d.get('name', 'design')}, no darts"
+    for g in d.get("garments", []):
+        for p in g.get("panels", []):
+            p.pop("darts", None)
+    return d
+
+
+def _womens(body, coarse):
+    """Women's wear on its chart's M (the templates' ``body``): each darted template at the given uniform ease
+    levels (or its own ease) with its darts and without them: weft with warp and shear beside it, the bust and
+    seat regions, flipped and collapsed."""
+    from core.design import load_design
+    from core.metrics.pattern import pattern_report
+    from core.metrics.regions import body_landmarks
+    from core.pattern.solve import PatternSolver, SolverConfig
+    out = {}
+    for name, levels in WOMENS:
+        path = DESIGNS / f"{name}.json"
+        if not path.exists():
+            continue
+        raw = json.loads(path.read_text())
+        for label, d in (("darts", raw), ("no darts", _without_darts(raw))):
+            key = f"{name} ({label})"
+            try:
+                design, cut, ref, _, _ = _cut(load_design(d), body, coarse)
+                solver = PatternSolver(cut, ref, SolverConfig.improved())
+                rows = {}
+                for rho in levels or (None,):
+                    pat, dt = _solve(solver, cut, ease=rho, style=design.name)
+                    m = pattern_report(pat, body_landmarks(pat, body))
+                    c = m["compliance"]
+                    rows["design" if rho is None else f"{rho:g}"] = {
+                        "compliance": c["mean"], "compliance_std": c["std"], "warp_dev": c["warp_mean"],
+                        "warp_signed": c["warp_signed"], "shear_p95": c["shear_p95"],
+                        "flips": m["flipped_triangles"], "collapsed": m["collapsed_triangles"],
+                        "regions": m["regions"], "darts": len(getattr(cut, "darts", None) or []),
+                        "body": dict(design.body), "seconds": dt}
+                out[key] = rows
+            except Exception as exc:
+                out[key] = {"error": f"{type(exc).__name__}: {exc}"}
+    return out
 
 
 def _gathered_cell(g) -> str:
@@ -428,6 +483,7 @@ def run(out_dir, quick: bool = False) -> dict:
 
     # ---------------------------------------------------------------- every template: warp, collapse, regions
     R["templates"] = _templates(body, coarse)
+    R["womens"] = _womens(body, coarse)
 
     for key, name in (("flips", "flipped_triangles_total"), ("collapsed", "collapsed_triangles_total")):
         total = 0
@@ -438,6 +494,7 @@ def run(out_dir, quick: bool = False) -> dict:
         total += sum(v.get(key, 0) for k in t4 for v in t4[k].values())
         total += sum(row[c][key] for row in R["seam_study"].values() for c in ("improved", "stretch"))
         total += sum(row[b][key] for row in R["templates"].values() for b in TEMPLATE_BODIES if b in row)
+        total += sum(v[key] for rows in R["womens"].values() for v in rows.values() if isinstance(v, dict))
         R[name] = int(total)
     R["wall_seconds"] = time.perf_counter() - t_start
 
@@ -576,6 +633,7 @@ def _markdown(R) -> str:
         L += ["", "Per panel (improved): " + "; ".join(
             f"{label}: " + ", ".join(f"{n} {_fmt(x['compliance'])}" for n, x in row["improved"]["per_panel"].items())
             for label, row in R["seam_study"].items()) + "."]
+    L += _womens_markdown(R.get("womens") or {})
     L += _templates_markdown(R.get("templates") or {})
     L += ["", f"**Flipped triangles over every run: {R['flipped_triangles_total']}. Collapsed triangles over every "
           f"run: {R.get('collapsed_triangles_total', '–')}.**", ""]
@@ -587,12 +645,45 @@ def _warp(v) -> str:
     return f"{_fmt(v.get('warp_dev'))} ({_fmt(v.get('warp_signed'), 2)})"
 
 
+def _region_cell(regions, a, b) -> str:
+    """``left / right`` region means (signed means) of the landmark pair ``a``, ``b``."""
+    if a not in regions and b not in regions:
+        return "–"
+    cell = lambda k: f"{_fmt(regions[k]['mean'])} ({_fmt(regions[k]['signed'])})" if k in regions else "–"
+    return f"{cell(a)} / {cell(b)}"
+
+
+def _womens_markdown(W) -> list:
+    """The women's wear table: darted templates beside the same pieces without darts."""
+    if not W:
+        return []
+    L = ["", "## Women's wear: darts against no darts (improved)", "",
+         "Each darted template on its body (the women's chart's M) with its darts and with the darts removed, "
+         "at uniform ease 1.1 and 1.3 (the blouse) or the design's own ease. Targets (issue 14): weft <= 1.0 %, "
+         "warp <= 3 %, shear p95 <= 5 deg, bust region <= 1.5 %. Regions: compliance within 6 cm of the landmark, "
+         "left / right, mean (signed) %.", "",
+         "| design | body | rho | darts | weft mean ± std | warp dev (signed) | shear p95 | bust L / R | seat L / R "
+         "| flips | collapsed |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for key, rows in W.items():
+        if "error" in rows:
+            L.append(f"| {key} | {rows['error']} |" + " |" * 9)
+            continue
+        for rho, v in rows.items():
+            b = v["body"]
+            L.append(f"| {key} | {b.get('shape') or b.get('chart') or 'M'} | {rho} | {v['darts']} "
+                     f"| {_fmt(v['compliance'])} ± {_fmt(v['compliance_std'])} | {_warp(v)} | {_fmt(v['shear_p95'], 1)} "
+                     f"| {_region_cell(v['regions'], 'bust_left', 'bust_right')} "
+                     f"| {_region_cell(v['regions'], 'seat_left', 'seat_right')} | {v['flips']} | {v['collapsed']} |")
+    return L
+
+
 def _templates_markdown(T) -> list:
     """The every-template table, its collapse sites and the region report."""
     if not T:
         return []
     L = ["", "## Every template at every size: warp beside weft, flipped and collapsed", "",
-         "Each shipped template at its design ease (improved): reference on M, transferred to XS..XL, adapted to P1 "
+         "Each shipped template at its design ease (improved): reference on M (of the design's chart), transferred "
+         "to XS..XL of that chart, adapted to P1 "
          "(the design's tolerance). Cell: weft compliance % / warp deviation % (shear p95 deg), flipped / collapsed. "
          "The P1 compliance is to the raised adaptation targets (docs/metrics.md). Collapsed: a triangle whose 2D area "
          "is under 25 % of its 3D area times the targets, or whose achieved weft or warp scale is under half its "
@@ -605,13 +696,17 @@ def _templates_markdown(T) -> list:
             continue
         cells = []
         for b in TEMPLATE_BODIES:
-            v = row[b]
+            v = row.get(b)
+            if v is None:
+                cells.append("not in its chart")
+                continue
             cells.append(f"{_fmt(v['compliance'])} / {_fmt(v['warp_dev'])} ({_fmt(v['shear_p95'], 1)}), "
                          f"{v['flips']} / {v['collapsed']}")
             for panel, ss in v["collapse_sites"].items():
                 where = ", ".join(f"{x['count']} near {x['near']}" if x.get("near") else f"{x['count']}" for x in ss)
                 sites.append(f"{name} {b} `{panel}`: {where}")
-        L.append(f"| {name} | " + " | ".join(cells) + " |")
+        own = row.get("body")
+        L.append(f"| {name}{f' ({own})' if isinstance(own, str) and own != 'M' else ''} | " + " | ".join(cells) + " |")
     if sites:
         L += ["", "Collapse sites (nearest landmark of the collapsed triangles' 3D centroids): " + "; ".join(sites) + "."]
     L += ["", "### Regions: compliance within 6 cm of a landmark (M, design ease, improved)", "",

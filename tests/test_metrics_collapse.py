@@ -96,6 +96,18 @@ def test_the_workflow_check_refuses_a_collapse():
     assert m["collapsed_triangles"] == 5 and pat.report["metrics"] is m
 
 
+def test_the_pipeline_refuses_a_collapse_by_default_but_not_a_preview_in_between():
+    assert checks.REFUSED == ("flipped", "collapsed")
+    pat = _pattern([c for c in CASES if c[0] > 0])
+    with pytest.raises(PatternError, match="5 collapsed triangles"):
+        wf.measure_pattern(pat)
+    pat.report["live"] = {"iterations": 3, "converged": False}     # a live preview still converging: shown
+    assert wf.measure_pattern(pat)["collapsed_triangles"] == 5
+    pat.report["live"]["converged"] = True                          # converged: a pattern like any other
+    with pytest.raises(PatternError, match="5 collapsed triangles"):
+        wf.measure_pattern(pat)
+
+
 def test_flips_are_refused_with_the_panel_named():
     with pytest.raises(PatternError, match=r"1 flipped triangles \(skirt.back \(1\)\)"):
         checks.check_pattern(pattern_report(_pattern()), ("flipped",))

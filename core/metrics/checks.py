@@ -15,10 +15,22 @@ from .collapse import collapse_message
 
 #: Every check a pattern can be refused by.
 CHECKS = ("flipped", "collapsed")
-#: The checks the pipeline applies. ``"collapsed"`` joins once the solver
-#: prevents collapse on every shipped template (issue 14); until then the
-#: collapse is measured and reported beside the flips, not refused.
-REFUSED = ("flipped",)
+#: The checks the pipeline applies: zero collapsed is required like zero flipped
+#: (issue 14; the solver's collapse guard prevents it on every shipped template).
+REFUSED = ("flipped", "collapsed")
+#: The checks of a live preview still converging (``report["live"]["converged"]`` false): a
+#: state in between is shown with its collapse count, not refused; once converged it is a
+#: pattern like any other.
+PREVIEW_REFUSED = ("flipped",)
+
+
+def checks_for(pattern) -> tuple:
+    """The checks the pipeline applies to ``pattern``: :data:`PREVIEW_REFUSED` for a live preview
+    that has not converged yet, else :data:`REFUSED`."""
+    live = (getattr(pattern, "report", None) or {}).get("live")
+    if isinstance(live, dict) and not live.get("converged", True):
+        return PREVIEW_REFUSED
+    return REFUSED
 
 
 def check_pattern(metrics: Mapping, checks: Optional[Iterable[str]] = None) -> None:
@@ -27,7 +39,8 @@ def check_pattern(metrics: Mapping, checks: Optional[Iterable[str]] = None) -> N
     Parameters
     ----------
     metrics : dict of :func:`core.metrics.pattern.pattern_report`.
-    checks : names from :data:`CHECKS`; None applies :data:`REFUSED`.
+    checks : names from :data:`CHECKS`; None applies :data:`REFUSED` (the pipeline passes
+        :func:`checks_for` of the pattern).
 
     The message names each failing panel, and for collapse where on the body
     (nearest landmark, 3D centroid in m).
