@@ -55,5 +55,5 @@ def check_pattern(metrics: Mapping, checks: Optional[Iterable[str]] = None) -> N
     if "collapsed" in checks and metrics.get("collapsed_triangles"):
         per = {k: {"count": n, "sites": metrics["collapse_sites"].get(k, [])}
                for k, n in metrics["collapsed_per_panel"].items()}
-        raise PatternError(f"{collapse_message(per)}; nothing written (the cloth there keeps under a quarter "
-                           "of the area its ease asks for)")
+        raise PatternError(f"{collapse_message(per)}; nothing written (a collapsed triangle keeps under half "
+                           "the weft or warp its ease asks for)")
