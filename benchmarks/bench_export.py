@@ -114,6 +114,13 @@ MARKER_BUDGETS = (10, 30, 60)  # nester seconds; quick: the first two, shorter
 STRIP_EFFICIENCY_NOTE = "the export's sheet layout of the same pieces (skyline of bounding boxes 2 cm apart, 1.5 m wide)"
 
 
+def _child_cpu() -> float:
+    """CPU seconds of the finished nester processes so far (they run as children)."""
+    import resource
+    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return ru.ru_utime + ru.ru_stime
+
+
 def _marker_rows(quick: bool = False) -> dict:
     """Marker efficiency against nesting time: the teaser's size run XS-XL, one garment each, 150 cm fabric."""
     from core import workflows as wf
@@ -138,10 +145,12 @@ def _marker_rows(quick: bool = False) -> dict:
         runs += [(cores, 1, b) for b in MARKER_BUDGETS] + [(1, cores, MARKER_BUDGETS[-1])]
     load = [round(os.getloadavg()[0], 2)]
     for threads, tries, budget in runs:
+        cpu0 = _child_cpu()
         m = nest(items, MARKER_WIDTH, seconds=budget, seed=0, threads=threads, tries=tries)
         rows.append({"method": "spyrrow", "threads": threads, "tries": tries, "seconds": budget,
                      "length_m": round(m.length, 3), "efficiency_pct": round(100 * m.efficiency, 2),
-                     "stopped": m.stopped, "wall_s": round(m.seconds, 1), "load": round(os.getloadavg()[0], 2)})
+                     "stopped": m.stopped, "wall_s": round(m.seconds, 1), "cpu_s": round(_child_cpu() - cpu0, 1),
+                     "load": round(os.getloadavg()[0], 2)})
     load.append(round(os.getloadavg()[0], 2))
     return {"pieces": sum(it.count for it in items), "sizes": list(MARKER_SIZES), "width_m": MARKER_WIDTH,
             "cores": cores, "load_start_end": load, "rows": rows}
@@ -156,15 +165,17 @@ def _marker_md(marker: dict) -> list:
              "search); tries: nesters side by side in the same wall time (seeds 0, 1, ...), the shortest kept; "
              f"cores used = threads x tries, of {marker.get('cores', '-')} on this machine. Load average (1 min) "
              f"at the start and end: {marker.get('load_start_end', '-')}, and after each run in the load column "
-             "(the nester stops on wall time: a loaded machine gives it less work). "
+             "(the nester stops on wall time: a loaded machine gives it less work; cpu s is the CPU time the nesters "
+             "got, budget x cores used on an idle machine). "
              f"The strip layout row is {STRIP_EFFICIENCY_NOTE}.", ""]
     if "error" in marker:
         return lines + [f"not run: {marker['error']}"]
-    lines += ["| method | threads | tries | budget s | wall s | length m | efficiency % | load |",
-              "|---|---|---|---|---|---|---|---|"]
+    lines += ["| method | threads | tries | budget s | wall s | cpu s | length m | efficiency % | load |",
+              "|---|---|---|---|---|---|---|---|---|"]
     for r in marker["rows"]:
         lines.append(f"| {r['method']} | {r.get('threads', '-')} | {r.get('tries', '-')} | {r['seconds']:g} | "
-                     f"{r.get('wall_s', '-')} | {r['length_m']} | {r['efficiency_pct']} | {r.get('load', '-')} |")
+                     f"{r.get('wall_s', '-')} | {r.get('cpu_s', '-')} | {r['length_m']} | {r['efficiency_pct']} | "
+                     f"{r.get('load', '-')} |")
     return lines
 
 
