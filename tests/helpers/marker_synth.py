@@ -34,4 +34,5 @@ def wavy_pattern(pieces: int = 3) -> Pattern:
 
 def overlap(a: np.ndarray, b: np.ndarray) -> bool:
     """Whether two closed loops overlap: an edge crossing, or a vertex of one strictly inside the other."""
-    return edges_meet(a, b, touching=False) or bool(points_in_polygon(a, b).any()) or bool(points_in_polygon(b, a).any())
+    return (edges_meet(a, b, touching=False) or bool(points_in_polygon(a, b).any())
+            or bool(points_in_polygon(b, a).any()))
