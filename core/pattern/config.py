@@ -183,7 +183,7 @@ class CollapseGuard:
     guard_scale: float = 0.6
     guard_open: float = 0.7
     guard_grow: float = 2.0
-    guard_limit: float = 20.0
+    guard_limit: float = 30.0
     guard_release: float = 0.5
 
 
