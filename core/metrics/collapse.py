@@ -41,14 +41,18 @@ def oriented_areas(uv: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return s if np.sum(s > 0) >= np.sum(s < 0) else -s
 
 
-def _criteria(uv, xyz, faces, grain, target_weft, target_warp):
-    """(kept, small, thin) (f,) bool each: not flipped; area rule; scale rule (module rule)."""
+def _criteria(uv, xyz, faces, grain, target_weft, target_warp, strain=None):
+    """(kept, small, thin) (f,) bool each: not flipped; area rule; scale rule (module rule).
+    ``strain``: the panel's :class:`core.metrics.strains.PanelStrain` on ``xyz`` if known."""
     a2 = oriented_areas(uv, faces)
-    a3 = triangle_areas(xyz, faces)
     tw = np.asarray(target_weft, float)
     tg = np.asarray(target_warp, float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rw, rg, _ = scales(uv, xyz, faces, grain)
+    if strain is not None:
+        rw, rg, _, a3 = strain
+    else:
+        a3 = triangle_areas(xyz, faces)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rw, rg, _ = scales(uv, xyz, faces, grain)
     small = a2 < AREA_FRACTION * a3 * tw * tg
     thin = (rw < SCALE_FRACTION * tw) | (rg < SCALE_FRACTION * tg)
     return a2 > 0, small, thin
@@ -92,7 +96,7 @@ def _sites(centroids: np.ndarray, landmarks: Optional[Mapping[str, np.ndarray]])
     return sorted(out, key=lambda s: (-s["count"], s["near"]))
 
 
-def collapse(pattern, landmarks: Optional[Mapping[str, np.ndarray]] = None) -> Dict[str, dict]:
+def collapse(pattern, landmarks: Optional[Mapping[str, np.ndarray]] = None, strains=None) -> Dict[str, dict]:
     """Collapsed triangles per panel, measured on each panel's own ``xyz`` against its targets.
 
     Parameters
@@ -100,6 +104,7 @@ def collapse(pattern, landmarks: Optional[Mapping[str, np.ndarray]] = None) -> D
     pattern : Pattern
     landmarks : optional name -> (3,) position (m) on the same body, to say
         where on the body each group of collapsed triangles lies.
+    strains : optional :func:`core.metrics.strains.pattern_strains` of ``pattern`` (read, not recomputed).
 
     Returns
     -------
@@ -115,7 +120,8 @@ def collapse(pattern, landmarks: Optional[Mapping[str, np.ndarray]] = None) -> D
     for p in pattern.panels:
         X = np.asarray(p.xyz, float)
         F = np.asarray(p.faces)
-        kept, small, thin = _criteria(p.uv, X, F, p.grain, p.target_weft, p.target_warp)
+        kept, small, thin = _criteria(p.uv, X, F, p.grain, p.target_weft, p.target_warp,
+                                      None if strains is None else strains[p.name])
         m = kept & (small | thin)
         n = int(m.sum())
         out[p.name] = {"count": n, "area": int(np.sum(kept & small)), "scale_only": int(np.sum(m & ~small)),

@@ -21,6 +21,7 @@ from ..geom.strain import scales
 from .collapse import collapse, oriented_areas
 from .regions import region_compliance
 from .stats import weighted_stats
+from .strains import pattern_strains
 
 __all__ = ["scales", "signed_areas_2d", "flipped_count", "required_stretch",
            "weighted_stats", "compliance_per_triangle", "ease_compliance", "seam_mismatch", "residual_stretch",
@@ -51,7 +52,7 @@ def _panels(pattern, garment, names=None):
 
 def ease_compliance(pattern, garment: Optional[str] = None, xyz: Optional[Dict[str, np.ndarray]] = None,
                     target: Optional[Dict[str, np.ndarray]] = None,
-                    panels: Optional[Iterable[str]] = None) -> Dict[str, float]:
+                    panels: Optional[Iterable[str]] = None, strains=None) -> Dict[str, float]:
     """Ease compliance (SPEC 1 and 3) with shear (SPEC 8), area-weighted, percent / degrees.
 
     Parameters
@@ -62,6 +63,8 @@ def ease_compliance(pattern, garment: Optional[str] = None, xyz: Optional[Dict[s
         (default: each panel's own ``xyz``, the body it was solved for).
     target : optional dict panel name -> (f,) target weft scale (default ``target_weft``).
     panels : optional panel names to restrict to (e.g. the sleeves).
+    strains : optional :func:`core.metrics.strains.pattern_strains` of ``pattern``
+        (read instead of recomputed when ``xyz`` is None).
 
     Returns
     -------
@@ -72,13 +75,17 @@ def ease_compliance(pattern, garment: Optional[str] = None, xyz: Optional[Dict[s
     """
     comp, shear, warp, area = [], [], [], []
     for p in _panels(pattern, garment, None if panels is None else set(panels)):
-        X = p.xyz if xyz is None else xyz[p.name]
-        rw, rg, sh = scales(p.uv, X, p.faces, p.grain)
+        if xyz is None and strains is not None:
+            rw, rg, sh, a3 = strains[p.name]
+        else:
+            X = p.xyz if xyz is None else xyz[p.name]
+            rw, rg, sh = scales(p.uv, X, p.faces, p.grain)
+            a3 = triangle_areas(X, p.faces)
         t = p.target_weft if target is None else target[p.name]
         comp.append(compliance_per_triangle(rw, t))
         warp.append((rg - p.target_warp) / p.target_warp)
         shear.append(sh)
-        area.append(triangle_areas(X, p.faces))
+        area.append(a3)
     if not comp:
         return {}
     a = np.concatenate(area)
@@ -161,18 +168,20 @@ def pattern_report(pattern, landmarks: Optional[Dict[str, np.ndarray]] = None) -
     :data:`core.metrics.regions.REGION_RADIUS`; empty without landmarks).
     """
     out = {"garments": {}}
+    strains = pattern_strains(pattern)      # every figure below reads the same per-triangle scales
     for g in sorted({p.garment for p in pattern.panels}):
-        out["garments"][g] = {"compliance": ease_compliance(pattern, g), "seams": seam_mismatch(pattern, g),
-                              "regions": region_compliance(pattern, landmarks or {}, garment=g)}
-    out["compliance"] = ease_compliance(pattern)
+        out["garments"][g] = {"compliance": ease_compliance(pattern, g, strains=strains),
+                              "seams": seam_mismatch(pattern, g),
+                              "regions": region_compliance(pattern, landmarks or {}, garment=g, strains=strains)}
+    out["compliance"] = ease_compliance(pattern, strains=strains)
     seams = seam_mismatch(pattern)
     out["seams"] = seams
     fl = flips(pattern)
     out["flipped_triangles"] = int(sum(fl.values()))
     out["flipped_per_panel"] = fl
-    col = collapse(pattern, landmarks)
+    col = collapse(pattern, landmarks, strains=strains)
     out["collapsed_triangles"] = int(sum(v["count"] for v in col.values()))
     out["collapsed_per_panel"] = {k: v["count"] for k, v in col.items()}
     out["collapse_sites"] = {k: v["sites"] for k, v in col.items() if v["count"]}
-    out["regions"] = region_compliance(pattern, landmarks or {})
+    out["regions"] = region_compliance(pattern, landmarks or {}, strains=strains)
     return out

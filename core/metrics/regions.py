@@ -15,9 +15,8 @@ from typing import Dict, Iterable, Mapping, Optional
 
 import numpy as np
 
-from ..geom.mesh import triangle_areas
-from ..geom.strain import scales
 from .stats import weighted_stats
+from .strains import panel_strain
 
 #: The landmarks of the region report (those a body lacks are left out).
 REGION_LANDMARKS = ("bust_left", "bust_right", "shoulder_blade_left", "shoulder_blade_right",
@@ -50,7 +49,7 @@ def body_landmarks(pattern, model=None) -> Dict[str, np.ndarray]:
 
 def region_compliance(pattern, landmarks: Mapping[str, np.ndarray], radius: float = REGION_RADIUS,
                       names: Optional[Iterable[str]] = REGION_LANDMARKS,
-                      garment: Optional[str] = None) -> Dict[str, dict]:
+                      garment: Optional[str] = None, strains=None) -> Dict[str, dict]:
     """Compliance within ``radius`` of each named landmark.
 
     Parameters
@@ -61,6 +60,7 @@ def region_compliance(pattern, landmarks: Mapping[str, np.ndarray], radius: floa
     names : landmarks to report (default :data:`REGION_LANDMARKS`; None: every
         landmark given); names missing from ``landmarks`` are skipped.
     garment : restrict to one garment.
+    strains : optional :func:`core.metrics.strains.pattern_strains` of ``pattern`` (read, not recomputed).
 
     Returns
     -------
@@ -77,11 +77,11 @@ def region_compliance(pattern, landmarks: Mapping[str, np.ndarray], radius: floa
         if garment is not None and p.garment != garment:
             continue
         X, F = np.asarray(p.xyz, float), np.asarray(p.faces)
-        rw, rg, sh = scales(p.uv, X, F, p.grain)
+        rw, rg, sh, a3 = strains[p.name] if strains is not None else panel_strain(p)
         weft.append((rw - p.target_weft) / p.target_weft)
         warp.append((rg - p.target_warp) / p.target_warp)
         shear.append(sh)
-        area.append(triangle_areas(X, F))
+        area.append(a3)
         cen.append(X[F].mean(axis=1))
     if not cen:
         return {}
