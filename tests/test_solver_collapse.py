@@ -47,6 +47,13 @@ def test_skirt_gluteal_cleft_no_longer_collapses(skirt):
         assert flipped_count(p.uv, p.faces) == 0
 
 
+def test_the_paper_preset_is_guarded_too(skirt):
+    """``--config paper`` takes the paper's weights literally but keeps the guard: its patterns are
+    not refused for collapse (unguarded, the skirt keeps slivers at the gluteal cleft)."""
+    pat = solve_pattern(skirt.cut, skirt.reference, SolverConfig.named("paper"))
+    assert SolverConfig.named("paper").guard.guard_scale > 0 and _collapsed(pat) == 0
+
+
 def test_relative_singular_values_match_numpy():
     rng = np.random.default_rng(3)
     f = 50
