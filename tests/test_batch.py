@@ -50,6 +50,7 @@ def test_small_batch_on_a_local_cluster_then_resume(tmp_path):
         assert {"pattern.json", "report.json", "body.json", "specification.json", "export"} <= names
         assert any(p.suffix == ".svg" for p in (folder / "export").iterdir())
         assert 0 < r["metrics.weft_mean_pct"] < 5 and r["metrics.shear_p95_deg"] > 0
+        assert r["metrics.flipped"] == 0 and r["metrics.collapsed"] == 0 and "metrics.warp_signed_pct" in r
         assert 60 < r["body.waist_cm"] < 110
         assert {"timings.body", "timings.transfer", "timings.metrics", "timings.write"} <= set(r)
         report = json.loads((folder / "report.json").read_text())
