@@ -126,12 +126,15 @@ def _cold_uv(blender):
 
 
 def _stored(blender):
-    """The stored pattern.json and the key figures, wall-clock times left out (they differ run to run)."""
+    """The stored pattern.json and the key figures, wall-clock times left out (they differ run to run),
+    and the live record's iteration count (how many warm iterations fitted the time slices before the
+    cold solve: a matter of the clock, not of the pattern)."""
     import json
     from core.pattern.io import WALL_CLOCK
     scene = blender.bpy.context.scene
     d = json.loads(scene["ease_pattern_json"])
     d["report"] = {k: v for k, v in d["report"].items() if k not in WALL_CLOCK}
+    d["report"].get("live", {}).pop("iterations", None)
     figures = {k: v for k, v in json.loads(scene.ease.pattern_json).items() if not k.endswith(" s")}
     return d, figures
 
