@@ -106,6 +106,7 @@ class LiveSession:
         self._start = None if pattern is None else self.solver.start_from(pattern)
         self.state = None
         self._cold = None
+        self._cold_upto = 0          # the cold solve runs to here (planned, then collapse rounds)
         self._warm = False
         self.converged = False
         self.iterations_since_change = 0
@@ -193,10 +194,17 @@ class LiveSession:
         if self._cold is None:
             ones = np.ones_like(self.ease)
             self._cold = self.solver.begin(self.K, self.ease, ones, plan=self.state.plan)
-        done = self._iterate(self._cold, budget_s, min_iterations, self._cold.planned)
-        if self._cold.iteration >= self._cold.planned:
-            self.state, self._cold = self._cold, None
-            self.converged = True
+            self._cold_upto = self._cold.planned
+        done = self._iterate(self._cold, budget_s, min_iterations, self._cold_upto)
+        if self._cold.iteration >= self._cold_upto:
+            # ended by the solver's own rule (collapse rounds after the planned iterations), so the
+            # pattern is the one Optimize Pattern gives
+            more = self.solver.extra_iterations(self._cold)
+            if more:
+                self._cold_upto += more
+            else:
+                self.state, self._cold = self._cold, None
+                self.converged = True
         return done
 
     def _iterate(self, state, budget_s: float, min_iterations: int, upto: Optional[int]) -> int:

@@ -163,3 +163,29 @@ def test_bad_fields_are_refused(prep, session, bad, expect):
         bad = np.full(len(prep.body.faces), np.nan if bad == "nan" else bad)
     with pytest.raises(PatternError, match=expect):
         session.set_ease(bad)
+
+
+def test_the_cold_solve_ends_by_the_solvers_rule(prep, monkeypatch):
+    """The live cold solve ends where PatternSolver.solve ends (collapse rounds after the planned
+    iterations included), so the converged pattern is Optimize Pattern's: here the solver is told a
+    triangle is still collapsing after the planned iterations, once; both then run one more round."""
+    from core.pattern import solver as S
+    calls = {"solve": 0, "live": 0}
+
+    def once(key):
+        def collapsing(self, state):
+            calls[key] += 1
+            return calls[key] == 1
+        return collapsing
+
+    solver = wf.make_solver(prep)
+    K, cw, cg = solver.targets_reference()
+    monkeypatch.setattr(S.PatternSolver, "collapsing", once("solve"))
+    one = solver.solve(K, cw, cg)
+    assert one.iterations == solver.config.iterations + S.COLLAPSE_ROUNDS
+    session = LiveSession(prep)
+    monkeypatch.setattr(S.PatternSolver, "collapsing", once("live"))
+    session.set_ease(np.full(session.n_body_triangles, 1.1))
+    session.end_warm()
+    _converge(session)
+    assert session.state.iteration == one.iterations and calls["live"] == 2

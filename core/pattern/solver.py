@@ -278,12 +278,11 @@ class PatternSolver:
         state = self.begin(K, c_weft, c_warp, start=start, positions=positions, poses=poses, plan=plan,
                            config=config)
         self.iterate(state, state.planned, progress)
-        # a solve far from its start (high ease, a strong pose) may still hold a triangle the collapse
-        # guard is opening: a few more iterations, at most as many again as planned
-        extra = 0
-        while extra < state.planned and self.collapsing(state):
-            self.iterate(state, COLLAPSE_ROUNDS)
-            extra += COLLAPSE_ROUNDS
+        while True:
+            more = self.extra_iterations(state)
+            if not more:
+                break
+            self.iterate(state, more)
         report(progress, 1.0, "pattern optimized")
         return self.result(state)
 
@@ -432,6 +431,19 @@ class PatternSolver:
         if self._neighbourhood is None:
             self._neighbourhood = face_neighbourhood(self.panels, self.blocks.area0)
         return self._neighbourhood
+
+    def extra_iterations(self, state: "SolveState") -> int:
+        """Iterations to add to ``state`` now that it has run its planned ones (0: the solve is done).
+
+        A solve far from its start (high ease, a strong pose) may still hold a triangle the
+        collapse guard is opening: :data:`COLLAPSE_ROUNDS` more at a time, at most as many again
+        as planned. Every driver of a solve (:meth:`solve`, the live loop) ends it by this rule,
+        so they end on the same pattern.
+        """
+        extra = state.iteration - state.planned
+        if extra < 0:
+            return -extra
+        return COLLAPSE_ROUNDS if extra < state.planned and self.collapsing(state) else 0
 
     def collapsing(self, state: "SolveState") -> bool:
         """Whether ``state``'s iterate has a collapsed triangle (:func:`.steps.any_collapsed`) while its
