@@ -32,8 +32,7 @@ no call changes a later one's result.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
-from typing import Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Callable, Dict, Optional, Sequence, Tuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -45,6 +44,7 @@ from .build import SolveResult
 from .config import SolverConfig, check_tolerance
 from .panels import flatten_panels
 from .seams import SeamPlan, plan_seams, seam_layout, seam_matrix, seam_rhs
+from .state import SolveState
 from .steps import (any_collapsed, collapse_guard, face_neighbourhood, flip_guard, local_step, realign_grain,
                     rigid_align, scaled_start)
 from .targets import adaptation_scales, reference_ease, rest_targets
@@ -464,48 +464,3 @@ class PatternSolver:
             f0 += len(pd.faces)
         return SolveResult(out_uv, tw, tgw, xyz, state.seconds, state.iteration, state.backtracks,
                            list(state.energies), state.plan.gathered)
-
-
-@dataclass
-class SolveState:
-    """Where a solve stands between calls of :meth:`PatternSolver.iterate` (a value; the solver keeps none).
-
-    Attributes
-    ----------
-    K : (f, 2, 2) intrinsic offsets of the targets; c_weft, c_warp : (f,) target scales.
-    plan : SeamPlan sewn; config : SolverConfig of the solve; poses : adaptation demands or None.
-    positions : (N, 3) m, the body the result is reported on.
-    planned : iterations a one-shot :meth:`PatternSolver.solve` of this configuration runs.
-    U : (n, 2) m, the current iterate; M : its Jacobians (4 arrays (f,)).
-    corr_w, corr_g : (f,) the feedback's accumulated target corrections.
-    guard : (f,) the collapse guard's stiffening gains (:func:`.steps.collapse_guard`; 0 = not guarded);
-    guard_solve : the back-substitution of the matrix with those gains, or None.
-    integral : (E,) the seam length term's integral action; tg : the current rest targets.
-    s_cur : (f,) signed areas of ``U`` or None; local_state : the local step's memory.
-    iteration : iterations run so far; energies : energy per iteration; backtracks : flip-guard halvings.
-    step : RMS vertex move of the last iteration over the mean edge length (inf before the first).
-    seconds : wall time spent in :meth:`~PatternSolver.begin` and :meth:`~PatternSolver.iterate`.
-    """
-    K: np.ndarray
-    c_weft: np.ndarray
-    c_warp: np.ndarray
-    plan: SeamPlan
-    config: SolverConfig
-    poses: Optional[dict]
-    positions: np.ndarray
-    planned: int
-    U: np.ndarray
-    M: list
-    corr_w: np.ndarray
-    corr_g: np.ndarray
-    guard: np.ndarray
-    integral: np.ndarray
-    tg: dict
-    s_cur: Optional[np.ndarray] = None
-    guard_solve: Optional[Callable] = None
-    local_state: dict = field(default_factory=dict)
-    iteration: int = 0
-    energies: List[float] = field(default_factory=list)
-    backtracks: int = 0
-    step: float = float("inf")
-    seconds: float = 0.0
