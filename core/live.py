@@ -85,7 +85,7 @@ class LiveSession:
     solver : core.pattern.solver.PatternSolver, factorised once for the session
     triangles : (f,) int64, :func:`body_triangles`
     ease : (f,) float, the weft ease per cut triangle the current state aims at
-    state : core.pattern.solver.SolveState or None (before the first field)
+    state : core.pattern.state.SolveState or None (before the first field)
     converged : bool, ``state`` is the cold solve of the current field (see :meth:`run`)
     iterations_since_change : int, warm and cold iterations since the last :meth:`set_ease`
     seconds_per_iteration : running estimate of one iteration's wall time (what fits a slice)
@@ -101,6 +101,11 @@ class LiveSession:
         #: (f,) m^2, the cut triangles' areas on the reference body
         self.areas = np.concatenate([triangle_areas(pos[p.vertex_ids], p.faces) for p in prep.cut.panels])
         self.warm_iterations = int(warm_iterations)
+        # Warm slices are previews (shown with their collapse count, never stored): they run without
+        # the collapse guard, whose factorisation of a stiffened matrix (tens of ms) would block the
+        # viewport beyond a slice after every stroke; the cold solve that converges keeps it.
+        cfg = self.solver.config
+        self.preview_config = dataclasses.replace(cfg, guard=dataclasses.replace(cfg.guard, guard_scale=0.0))
         self.K = self.solver.ref_offsets[0]
         self.ease = self.solver.design_ease.copy()
         self._start = None if pattern is None else self.solver.start_from(pattern)
@@ -149,7 +154,8 @@ class LiveSession:
         ones = np.ones_like(ease)
         plan = self.solver.plan_seams(self.K, ease, ones)
         start = self._start if self.state is None else None
-        self.state = self.solver.begin(self.K, ease, ones, start=start, plan=plan, resume=self.state)
+        self.state = self.solver.begin(self.K, ease, ones, start=start, plan=plan, resume=self.state,
+                                       config=self.preview_config)
         self.ease = ease
         self._cold = None
         self._warm = True
