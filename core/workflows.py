@@ -83,9 +83,8 @@ def prepare(design, body=None, cut=None, progress: Optional[Progress] = None) ->
 def size_name(prep: Prepared, size: str) -> str:
     """The canonical chart size of ``size`` for ``prep``: a bare name (``"M"``) is of the
     design's chart (``body.chart``), a qualified one (``"women:M"``) of its own."""
-    from .body.sizes import check_size
-    text = str(size)
-    return check_size(text) if ":" in text else check_size(text, prep.design.body.get("chart"))
+    from .body.sizes import size_of
+    return size_of(str(size), prep.design.body.get("chart"))
 
 
 # ----------------------------------------------------------------------------- pattern

@@ -44,11 +44,11 @@ class EASE_OT_set_size(EaseOperator):
     size: bpy.props.StringProperty(default="")
 
     def run(self, context):
-        from ..core.body.sizes import check_size, size_shape
+        from ..core.body.sizes import size_of, size_shape
         obj = data.body_object(context)
         s = context.scene.ease
         size = self.size or s.size
-        size = check_size(size, None if ":" in size else s.chart)     # "women:M" on the women's chart
+        size = size_of(size, s.chart)     # "women:M" on the women's chart
         model = state.body_model(data.body_spec(obj)["model"])
         shape = size_shape(model, size)
         achieved = data.measurements(model, shape)

@@ -10,7 +10,7 @@ from conftest import sample
 from core.body.charts import PUBLISHED
 from core.body.measure import measure
 from core.body.registry import load_spec, resolve_body_files
-from core.body.sizes import (CHART_NAMES, CHARTS, TOLERANCE_CM, chart_fit, chart_sizes, check_size,
+from core.body.sizes import (CHART_NAMES, CHARTS, TOLERANCE_CM, chart_fit, chart_sizes, check_size, size_of,
                              size_shape, size_targets)
 from core.errors import BodyError, DesignError
 
@@ -30,6 +30,14 @@ def test_chart_names_and_errors():
         check_size("XL", "women")
     with pytest.raises(BodyError, match="is of chart 'men', not of chart 'women'"):
         check_size("men:M", "women")
+
+
+def test_a_chart_names_bare_sizes_only():
+    """size_of: the chart is the default of a bare size; a qualified size keeps its own chart."""
+    assert size_of("l", "women") == "women:L" and size_of("men:L", "women") == "men:L"
+    assert size_of("M", None) == "M" and size_of("women:M", None) == "women:M"
+    with pytest.raises(BodyError, match="unknown size 'XL' of chart 'women'"):
+        size_of("XL", "women")
 
 
 def test_charts_are_ordered_and_sourced():

@@ -271,6 +271,13 @@ def check_size(size: str, chart: Optional[str] = None) -> str:
     return key if c.name == DEFAULT_CHART else f"{c.name}:{key}"
 
 
+def size_of(size: str, chart: Optional[str] = None) -> str:
+    """:func:`check_size` of ``size`` where ``chart`` names the chart of a bare size only: ``"L"``
+    is ``chart``'s L, ``"men:L"`` stays of its own chart (a design's chart, a ``--chart`` option,
+    the add-on's chart selector: defaults that a qualified name overrides)."""
+    return check_size(size, None if ":" in str(size) else chart)
+
+
 def size_targets(size: str, chart: Optional[str] = None) -> Dict[str, float]:
     """The chart's target measurements (cm) of ``size``."""
     c, key = split_size(size, chart)

@@ -40,13 +40,13 @@ def load_model(name: str, blendshapes=None, landmarks=None, up: str = "z"):
 def resolve_shape(body, text, progress=None, chart=None):
     """``--shape`` value: a chart size (``M`` of ``chart``, or ``women:M``) or ``name=value,...``
     shape parameters."""
-    from ..body.sizes import chart_sizes, parse_assignments, size_shape
+    from ..body.sizes import chart_sizes, parse_assignments, size_of, size_shape
     from ..body.smpl import check_shape
     if text is None:
         return dict(body.default_shape())
     if "=" not in str(text):
         if ":" in str(text) or str(text).upper() in chart_sizes(chart):
-            return size_shape(body, text, progress=progress, chart=None if ":" in str(text) else chart)
+            return size_shape(body, size_of(text, chart), progress=progress)
         params = ", ".join(body.shape_parameters()) or "none"
         raise BodyError(f"--shape {text!r}: expected a size ({', '.join(chart_sizes(chart))}) or name=value pairs "
                         f"of the model's shape parameters ({params}), or chart:size")
@@ -67,7 +67,7 @@ def run(args) -> int:
     from ..body.output import measures_text, safe_measure, write_obj
     from ..body.sizes import check_targets, fit_measurements, parse_assignments
 
-    from ..body.sizes import check_chart, check_size
+    from ..body.sizes import check_chart, size_of
 
     progress = console_progress(args)
     if args.chart is not None:
@@ -76,7 +76,7 @@ def run(args) -> int:
         if args.shape is not None:
             raise BodyError("give either --size or --shape, not both")
         try:
-            args.shape = check_size(args.size, None if ":" in args.size else args.chart)
+            args.shape = size_of(args.size, args.chart)
         except BodyError as exc:
             raise BodyError(f"--size: {exc}") from None
     if args.pose not in (None,) and args.pose not in POSE_PRESETS:

@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 
 from ..body.model import POSE_PRESETS
-from ..body.sizes import check_size
+from ..body.sizes import size_of
 from ..errors import BodyError
 from .common import add_quiet, console_progress, subcommand
 
@@ -36,7 +36,7 @@ def run_cut(design_path, out, size=None, pose=None, body_name=None, progress=Non
     if size is not None:
         # A bare size is of the design's own chart (body.chart), as in ``ease transfer``.
         try:
-            size = check_size(size, None if ":" in str(size) else design.body.get("chart"))
+            size = size_of(size, design.body.get("chart"))
         except BodyError as exc:
             raise BodyError(f"--size: {exc}") from None
     body = load_body(body_name) if body_name else load_spec(design.body)

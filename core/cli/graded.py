@@ -34,7 +34,7 @@ def run_graded(args) -> int:
     from pathlib import Path
 
     from .. import workflows as wf
-    from ..body.sizes import check_size
+    from ..body.sizes import size_of
     from ..design import load_design
     from ..errors import ExportError
     from ..export.graded import export_graded
@@ -49,7 +49,7 @@ def run_graded(args) -> int:
     # Bare size names are of the design's own chart (body.chart), as in ``ease transfer``;
     # checked before the (slow) preparation.
     chart = load_design(design).body.get("chart")
-    sizes = parse_sizes(args.sizes, lambda s: check_size(s, None if ":" in s else chart))
+    sizes = parse_sizes(args.sizes, lambda s: size_of(s, chart))
     prep = wf.prepare(design, progress=sub(progress, 0.0, 0.2))
     solver = wf.make_solver(prep)
     ref = wf.reference(prep, solver=solver, progress=sub(progress, 0.2, 0.3)).pattern
