@@ -21,7 +21,7 @@ from ..geom.strain import scales
 from .collapse import collapse, oriented_areas
 from .regions import region_compliance
 from .stats import weighted_stats
-from .strains import pattern_strains
+from .strains import panel_strain, pattern_strains
 
 __all__ = ["scales", "signed_areas_2d", "flipped_count", "required_stretch",
            "weighted_stats", "compliance_per_triangle", "ease_compliance", "seam_mismatch", "residual_stretch",
@@ -75,12 +75,11 @@ def ease_compliance(pattern, garment: Optional[str] = None, xyz: Optional[Dict[s
     """
     comp, shear, warp, area = [], [], [], []
     for p in _panels(pattern, garment, None if panels is None else set(panels)):
-        if xyz is None and strains is not None:
-            rw, rg, sh, a3 = strains[p.name]
+        if xyz is None:     # on the panel's own body: its strains, given or computed once here
+            rw, rg, sh, a3 = strains[p.name] if strains is not None else panel_strain(p)
         else:
-            X = p.xyz if xyz is None else xyz[p.name]
-            rw, rg, sh = scales(p.uv, X, p.faces, p.grain)
-            a3 = triangle_areas(X, p.faces)
+            rw, rg, sh = scales(p.uv, xyz[p.name], p.faces, p.grain)
+            a3 = triangle_areas(xyz[p.name], p.faces)
         t = p.target_weft if target is None else target[p.name]
         comp.append(compliance_per_triangle(rw, t))
         warp.append((rg - p.target_warp) / p.target_warp)
