@@ -36,12 +36,12 @@ from typing import Callable, Dict, Optional, Sequence, Tuple
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import splu
 
 from ..geom.strain import components, intrinsic_offsets, scales_of_offsets
 from ..progress import Progress, report
 from .build import SolveResult
 from .config import SolverConfig, check_tolerance
+from .factor import SymmetricFactor
 from .panels import flatten_panels
 from .seams import SeamPlan, plan_seams, seam_layout, seam_matrix, seam_rhs
 from .state import SolveState
@@ -96,7 +96,9 @@ class PatternSolver:
         self._Gy = sp.csr_matrix((b.G[:, :, 1].ravel(), (rows, cols)), shape=(f, self.n))
         self._GxT = self._Gx.T.tocsr()
         self._GyT = self._Gy.T.tocsr()
-        self._factors: Dict[tuple, Tuple[Callable, np.ndarray]] = {}
+        self._blocks_G = b.G
+        self._factors: Dict[tuple, Tuple[SymmetricFactor, np.ndarray]] = {}
+        self._guard_slots: Dict[tuple, np.ndarray] = {}
         self._neighbourhood: Optional[sp.csr_matrix] = None
         self.n_factorisations = 0
         # the reference body's offsets serve every reference target, adaptation and seam plan:
@@ -179,40 +181,60 @@ class PatternSolver:
         a = self.area_fraction
         return np.maximum(a, (config or self.config).weights.sliver * float(np.mean(a)))
 
-    def factorisation(self, config: Optional[SolverConfig], plan: SeamPlan) -> Tuple[Callable, np.ndarray]:
-        """(back-substitution ``rhs (n, 2) -> U (n, 2)``, gauge pins (n, 2)) of the fixed system matrix of
-        ``config``'s weights and ``plan``; factorised on first use and kept."""
+    def factorisation(self, config: Optional[SolverConfig], plan: SeamPlan) -> Tuple[SymmetricFactor, np.ndarray]:
+        """(factorisation of the fixed system matrix (:class:`.factor.SymmetricFactor`; called on a
+        right-hand side ``(n, 2)`` it back-substitutes), gauge pins (n, 2)) of ``config``'s weights and
+        ``plan``; factorised on first use and kept."""
         cfg = config or self.config
-        w = cfg.weights
-        key = (w.ease, w.regulariser, w.seam_length, w.seam_straight, w.seam_curve, w.warp_column, w.sliver,
-               plan.gathered)
+        key = self._factor_key(cfg, plan)
         if key not in self._factors:
             t0 = time.perf_counter()
             A, pin = self._matrix(cfg, plan)
-            # symmetric positive definite: a symmetric minimum-degree ordering on A + A^T keeps the
-            # factors ~40 % sparser than the default column ordering (faster factor and solves)
-            lu = splu(A, permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True}).solve
-            self._factors[key] = (lu, pin)
+            self._factors[key] = (SymmetricFactor(A), pin)
             self.timings["factorise"] = time.perf_counter() - t0
             self.n_factorisations += 1
         return self._factors[key]
 
-    def guarded_factorisation(self, config: Optional[SolverConfig], plan: SeamPlan,
-                              gain: np.ndarray) -> Callable:
-        """Back-substitution of the system matrix with the collapse guard's triangles stiffened.
+    @staticmethod
+    def _factor_key(cfg: SolverConfig, plan: SeamPlan) -> tuple:
+        w = cfg.weights
+        return (w.ease, w.regulariser, w.seam_length, w.seam_straight, w.seam_curve, w.warp_column, w.sliver,
+                plan.gathered)
+
+    def guarded_factorisation(self, config: Optional[SolverConfig], plan: SeamPlan, gain: np.ndarray,
+                              reuse: Optional[SymmetricFactor] = None) -> SymmetricFactor:
+        """The factorisation of the system matrix with the collapse guard's triangles stiffened.
 
         ``gain`` (f,): triangle ``t``'s ease + regulariser weight is multiplied
-        by ``1 + gain[t]`` (:func:`.steps.collapse_guard`). Built for one solve
-        and kept in its :class:`SolveState`, never on the solver; the shared
-        factorisation (:meth:`factorisation`) is untouched, and a solve where
-        no triangle nears collapse never builds one.
+        by ``1 + gain[t]`` (:func:`.steps.collapse_guard`). The stiffening only
+        changes values on the shared matrix's sparsity pattern (a triangle's
+        terms are already in it), so only the numeric factorisation is redone:
+        ``reuse``, an earlier guarded factorisation of the same solve, is
+        refactorised in place. It lives in the solve's :class:`SolveState`,
+        never on the solver; the shared factorisation (:meth:`factorisation`)
+        is untouched, and a solve where no triangle nears collapse never builds one.
         """
         cfg = config or self.config
-        A, _ = self._matrix(cfg, plan)
+        base, _ = self.factorisation(cfg, plan)
+        key = self._factor_key(cfg, plan)
+        if key not in self._guard_slots:
+            # where each triangle's 3 x 3 block of terms sits in the matrix's values (once per matrix)
+            F = self.gfaces
+            rows = np.repeat(F, 3, axis=1)
+            cols = np.tile(F, (1, 3))
+            self._guard_slots[key] = base.positions(rows, cols)
+        pos = self._guard_slots[key]
         w = cfg.weights
-        a = (w.ease + w.regulariser) * self.area_weights(cfg) * gain
-        extra = self._GxT @ sp.diags(a) @ self._Gx + self._GyT @ sp.diags(a * w.warp_column ** 2) @ self._Gy
-        return splu((A + extra).tocsc(), permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True}).solve
+        t = np.flatnonzero(gain > 0)
+        a = (w.ease + w.regulariser) * self.area_weights(cfg)[t] * gain[t]
+        b = self._blocks_G
+        gx, gy = b[t, :, 0], b[t, :, 1]
+        # a_t (gx_p gx_q + w^2 gy_p gy_q): the triangle's extra terms, entry (p, q) at slot 3 p + q
+        extra = a[:, None, None] * (gx[:, :, None] * gx[:, None, :]
+                                    + w.warp_column ** 2 * gy[:, :, None] * gy[:, None, :])
+        data = base.matrix.data + np.bincount(pos[t].ravel(), weights=extra.reshape(len(t), 9).ravel(),
+                                              minlength=base.matrix.nnz)
+        return base.with_values(data, reuse=reuse)
 
     def _matrix(self, cfg: SolverConfig, plan: SeamPlan):
         """The fixed system matrix (both pattern coordinates): ease + regulariser (one operator), the seam
@@ -399,7 +421,8 @@ class PatternSolver:
                 gidx, Z, grown = collapse_guard(cfg.guard, M, Kc, c_weft, c_warp, state.guard)
                 if gidx.size:
                     if grown or state.guard_solve is None:
-                        state.guard_solve = self.guarded_factorisation(cfg, state.plan, state.guard)
+                        state.guard_solve = self.guarded_factorisation(cfg, state.plan, state.guard,
+                                                                       reuse=state.guard_solve)
                     solve_k = state.guard_solve
                     g = state.guard[gidx]
                     for j in range(4):
