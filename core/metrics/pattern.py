@@ -11,6 +11,7 @@ The per-triangle geometry is :mod:`core.geom.strain` and :mod:`core.geom.mesh`
 """
 from __future__ import annotations
 
+import copy
 from typing import Dict, Iterable, Optional
 
 import numpy as np
@@ -20,7 +21,7 @@ from ..geom.polyline import polyline_length
 from ..geom.strain import scales
 from .collapse import collapse, oriented_areas
 from .regions import region_compliance
-from .stats import weighted_stats
+from .stats import weighted_mean, weighted_stats
 from .strains import panel_strain, pattern_strains
 
 __all__ = ["scales", "signed_areas_2d", "flipped_count", "required_stretch",
@@ -92,8 +93,8 @@ def ease_compliance(pattern, garment: Optional[str] = None, xyz: Optional[Dict[s
     s = weighted_stats(np.concatenate(shear), a)
     warp = 100.0 * np.concatenate(warp)
     return {"mean": c["mean"], "std": c["std"], "p95": c["p95"], "max": c["max"],
-            "shear_mean": s["mean"], "shear_p95": s["p95"], "warp_mean": weighted_stats(np.abs(warp), a)["mean"],
-            "warp_signed": weighted_stats(warp, a)["mean"], "area": float(a.sum())}
+            "shear_mean": s["mean"], "shear_p95": s["p95"], "warp_mean": weighted_mean(np.abs(warp), a),
+            "warp_signed": weighted_mean(warp, a), "area": float(a.sum())}
 
 
 def seam_mismatch(pattern, garment: Optional[str] = None) -> Dict[str, object]:
@@ -168,13 +169,19 @@ def pattern_report(pattern, landmarks: Optional[Dict[str, np.ndarray]] = None) -
     """
     out = {"garments": {}}
     strains = pattern_strains(pattern)      # every figure below reads the same per-triangle scales
-    for g in sorted({p.garment for p in pattern.panels}):
+    overall = {"compliance": ease_compliance(pattern, strains=strains), "seams": seam_mismatch(pattern),
+               "regions": region_compliance(pattern, landmarks or {}, strains=strains)}
+    garments = sorted({p.garment for p in pattern.panels})
+    for g in garments:
+        if len(garments) == 1:
+            # one garment: its panels and seams are all of them, so its figures are the overall ones
+            # (the same floats; a copy, so that a reader editing one entry leaves the other)
+            out["garments"][g] = copy.deepcopy(overall)
+            continue
         out["garments"][g] = {"compliance": ease_compliance(pattern, g, strains=strains),
                               "seams": seam_mismatch(pattern, g),
                               "regions": region_compliance(pattern, landmarks or {}, garment=g, strains=strains)}
-    out["compliance"] = ease_compliance(pattern, strains=strains)
-    seams = seam_mismatch(pattern)
-    out["seams"] = seams
+    out["compliance"], out["seams"] = overall["compliance"], overall["seams"]
     fl = flips(pattern)
     out["flipped_triangles"] = int(sum(fl.values()))
     out["flipped_per_panel"] = fl
@@ -182,5 +189,5 @@ def pattern_report(pattern, landmarks: Optional[Dict[str, np.ndarray]] = None) -
     out["collapsed_triangles"] = int(sum(v["count"] for v in col.values()))
     out["collapsed_per_panel"] = {k: v["count"] for k, v in col.items()}
     out["collapse_sites"] = {k: v["sites"] for k, v in col.items() if v["count"]}
-    out["regions"] = region_compliance(pattern, landmarks or {}, strains=strains)
+    out["regions"] = overall["regions"]
     return out

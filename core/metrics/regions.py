@@ -15,7 +15,7 @@ from typing import Dict, Iterable, Mapping, Optional
 
 import numpy as np
 
-from .stats import weighted_stats
+from .stats import weighted_mean, weighted_stats
 from .strains import panel_strain
 
 #: The landmarks of the region report (those a body lacks are left out).
@@ -96,9 +96,9 @@ def region_compliance(pattern, landmarks: Mapping[str, np.ndarray], radius: floa
         c = weighted_stats(np.abs(weft[inside]), a)
         s = weighted_stats(shear[inside], a)
         out[name] = {"mean": c["mean"], "std": c["std"], "p95": c["p95"],
-                     "signed": weighted_stats(weft[inside], a)["mean"],
-                     "warp_mean": weighted_stats(np.abs(warp[inside]), a)["mean"],
-                     "warp_signed": weighted_stats(warp[inside], a)["mean"],
+                     "signed": weighted_mean(weft[inside], a),
+                     "warp_mean": weighted_mean(np.abs(warp[inside]), a),
+                     "warp_signed": weighted_mean(warp[inside], a),
                      "shear_mean": s["mean"], "shear_p95": s["p95"],
                      "area": float(a.sum()), "n": int(inside.sum())}
     return out
