@@ -385,7 +385,10 @@ class PatternSolver:
             it = state.iteration
             report(progress, k / max(n_it, 1), f"optimizing pattern: iteration {k + 1}/{n_it}")
             retarget = False
-            if (gain_w > 0 or gain_g > 0) and it >= fb.from_iteration:
+            # an adaptation's last ``settle`` iterations keep the targets still: the seams' length integral
+            # closes the seams and the shear the moving targets drove settles
+            settling = adapting and ad.settle > 0 and it >= state.planned - ad.settle
+            if (gain_w > 0 or gain_g > 0) and it >= fb.from_iteration and not settling:
                 # move the targets by the achieved/target ratio: the linear solve then
                 # lands on the wanted rho-hat wherever curvature allows it
                 rw, rg = scales_of_offsets(M, Kc)

@@ -1,0 +1,92 @@
+"""Pose adaptation without the bias cost (issue 14): the settling phase, the warp cap, and the adapted
+shirt's shear and seams, on a coarse shirt."""
+import numpy as np
+import pytest
+
+from core.errors import PatternError
+from core.pattern.solve import PatternSolver, SolverConfig, adapt_pattern, solve_pattern
+
+
+@pytest.fixture(scope="module")
+def shirt(anny):
+    from core import workflows as wf
+    from core.design import load_design
+    from core.design.templates import TEMPLATE_DIR
+    design = load_design(TEMPLATE_DIR / "shirt_long_sleeve.json")
+    design.refine_edge_length = 0.02
+    prep = wf.prepare(design, body=anny)
+    solver = PatternSolver(prep.cut, prep.reference)
+    ref = solve_pattern(prep.cut, prep.reference, solver=solver)
+    return prep, solver, ref
+
+
+def _pose(prep, anny, name="P1"):
+    from core.body.instance import body_instance
+    return body_instance(anny, prep.cut.body.get("shape"), name)
+
+
+def _adapt_state(prep, solver, ref, pose, cfg):
+    poses = [solver.positions(pose, "pose")]
+    K, cw, cg = solver.targets_adapt(poses, 1.1, 1.1, cfg)
+    demands = solver.pose_demands(poses, 1.1, 1.1, cfg)
+    return solver.begin(K, cw, cg, start=solver.start_from(ref), poses=demands, plan=solver.design_plan(cfg),
+                        config=cfg), cw, cg
+
+
+def test_settling_iterations_freeze_the_feedback(shirt, anny):
+    prep, solver, ref = shirt
+    cfg = SolverConfig.improved(settle=10)
+    state, _, _ = _adapt_state(prep, solver, ref, _pose(prep, anny), cfg)
+    solver.iterate(state, state.planned - 10)
+    cw, cg = state.corr_w.copy(), state.corr_g.copy()
+    assert not np.allclose(cw, 1.0)            # the feedback did move the targets before
+    solver.iterate(state, 10)
+    assert np.array_equal(cw, state.corr_w) and np.array_equal(cg, state.corr_g)
+
+
+def test_without_settling_the_feedback_runs_to_the_end(shirt, anny):
+    prep, solver, ref = shirt
+    state, _, _ = _adapt_state(prep, solver, ref, _pose(prep, anny), SolverConfig.improved(settle=0))
+    solver.iterate(state, state.planned - 1)
+    cw = state.corr_w.copy()
+    solver.iterate(state, 1)
+    assert not np.array_equal(cw, state.corr_w)
+
+
+def test_settling_and_warp_cap_leave_reference_solves_alone(shirt):
+    prep, solver, _ = shirt
+    a = solve_pattern(prep.cut, prep.reference, SolverConfig.improved(settle=0, cap_warp=None), solver=solver)
+    b = solve_pattern(prep.cut, prep.reference, SolverConfig.improved(settle=15, cap_warp=1.2), solver=solver)
+    for p, q in zip(a.panels, b.panels):
+        assert np.array_equal(p.uv, q.uv)
+
+
+def test_warp_targets_are_capped(shirt, anny):
+    prep, solver, ref = shirt
+    cfg = SolverConfig.improved()
+    _, cw, cg = _adapt_state(prep, solver, ref, _pose(prep, anny), cfg)
+    assert cfg.adaptation.cap_warp == 2.0 and cg.max() <= 2.0 + 1e-12
+    _, _, free = _adapt_state(prep, solver, ref, _pose(prep, anny), SolverConfig.improved(cap_warp=None))
+    assert free.max() > 2.0                    # the armpit asks for more than a flat cloth gives
+
+
+def test_adapted_shirt_keeps_stretch_low_with_less_shear_and_closed_seams(shirt, anny):
+    from core.metrics.pattern import ease_compliance, residual_stretch, seam_mismatch
+    prep, solver, ref = shirt
+    pose = _pose(prep, anny)
+    X = prep.cut.positions(pose)
+    xyz = {p.name: X[p.vertex_ids] for p in prep.cut.panels}
+    old = SolverConfig.improved(adaptation=dict(margin=0.06, gain=0.2, warp_gain=0.08, cap_warp=None, settle=0))
+    before = adapt_pattern(prep.cut, prep.reference, [pose], eps_weft=1.1, solver=solver, start=ref, config=old)
+    after = adapt_pattern(prep.cut, prep.reference, [pose], eps_weft=1.1, solver=solver, start=ref)
+    assert residual_stretch(after, xyz, 1.1) <= 1.0
+    assert ease_compliance(after)["shear_p95"] < ease_compliance(before)["shear_p95"]
+    assert seam_mismatch(after)["max_mm"] < seam_mismatch(before)["max_mm"]
+
+
+@pytest.mark.parametrize("override, where", [({"settle": -1}, "adaptation.settle"),
+                                             ({"settle": 40}, "adaptation.settle"),
+                                             ({"settle": 1.5}, "adaptation.settle")])
+def test_bad_settle_is_refused(override, where):
+    with pytest.raises(PatternError, match=where):
+        SolverConfig.improved(**override).check()
