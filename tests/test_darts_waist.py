@@ -1,0 +1,50 @@
+"""Waist and shoulder darts beside the bust darts (:func:`core.design.blouse_variants.blouse_waist_darts`):
+on a converged solve every dart closes (its legs sew to equal length within 0.1 mm), a set intake is
+realised, and the mirrored darts open alike."""
+import numpy as np
+import pytest
+
+from core.design import load_design
+from core.design.blouse_variants import blouse_waist_darts
+
+
+@pytest.fixture(scope="module")
+def waist_run(anny):
+    from core import workflows as wf
+    prep = wf.prepare(blouse_waist_darts(), body=anny)
+    # the darts open over the iterations (docs/darts.md, "Limits"): a converged solve
+    return prep, wf.reference(prep, iterations=200)
+
+
+def test_variant_has_front_waist_and_shoulder_darts_mirrored(waist_run):
+    prep, _ = waist_run
+    names = sorted(prep.cut.darts)
+    assert names == sorted(f"blouse.{k}_{s}" for k in ("bust_dart", "waist_dart", "shoulder_dart")
+                           for s in ("left", "right"))
+    hosts = {k.split(".")[1]: v["line"].split(".")[-1] for k, v in prep.cut.darts.items()}
+    assert hosts["waist_dart_left"] == "hem" and hosts["shoulder_dart_right"] == "shoulder_right"
+
+
+def test_waist_darts_close_and_realise_their_intake(waist_run):
+    _, run = waist_run
+    darts = run.pattern.report["darts"]
+    assert run.figures["flipped"] == 0 and run.figures.get("collapsed") == 0
+    for name, rec in darts.items():
+        assert rec["leg_difference_mm"] <= 0.1, (name, rec)
+        assert rec["intake_mm"] > 0, (name, rec)           # none crossed
+        if "waist" in name or "shoulder" in name:
+            assert rec["intake_set_mm"] == 20.0
+            assert abs(rec["intake_mm"] - 20.0) <= 1.5, (name, rec)     # a soft term: 94-102 % held
+    for k in ("waist_dart", "shoulder_dart"):
+        assert abs(darts[f"blouse.{k}_left"]["intake_mm"] - darts[f"blouse.{k}_right"]["intake_mm"]) <= 1.0
+
+
+def test_back_waist_dart_points_at_the_shoulder_blade(anny):
+    from core import workflows as wf
+    prep = wf.prepare(blouse_waist_darts(waist=None, shoulder=None, back=0.015), body=anny)
+    for side in ("left", "right"):
+        rec = prep.cut.darts[f"blouse.back_waist_dart_{side}"]
+        assert rec["panel"] == "blouse.back" and rec["intake"] == pytest.approx(0.015)
+        assert rec["line"].split(".")[-1] == "hem"
+        blade = anny.landmark_position(f"shoulder_blade_{side}", prep.reference)
+        assert np.linalg.norm(rec["apex"] - blade) < 1e-6
