@@ -111,7 +111,7 @@ def test_linux_zip_builds_installs_and_runs(tmp_path):
         manifest = zf.read("blender_manifest.toml").decode()
     wheels = [n for n in names if n.startswith("wheels/") and n.endswith(".whl")]
     dists = {Path(w).name.split("-", 1)[0].lower() for w in wheels}
-    for want in ("scipy", "libigl", "potpourri3d", "warp_lang", "ezdxf", "reportlab", "matplotlib"):
+    for want in ("scipy", "qdldl", "libigl", "potpourri3d", "warp_lang", "ezdxf", "reportlab", "matplotlib"):
         assert want in dists, f"{want} wheel missing"
     assert "numpy" not in dists, "numpy comes from Blender"
     assert all(("manylinux" in w or "none-any" in w or "linux" in w) for w in wheels)
@@ -119,7 +119,7 @@ def test_linux_zip_builds_installs_and_runs(tmp_path):
         assert f'"./{w}"' in manifest
     _check_sources(names, manifest)
     out = _install_and_run(z, tmp_path / "user")
-    for pkg in ("scipy", "igl", "potpourri3d", "warp", "ezdxf", "reportlab", "matplotlib"):
+    for pkg in ("scipy", "qdldl", "igl", "potpourri3d", "warp", "ezdxf", "reportlab", "matplotlib"):
         assert pkg in out["site_packages"], f"wheel {pkg} not installed by Blender"
 
 
