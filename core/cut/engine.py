@@ -51,6 +51,7 @@ from .grain import body_part_axis
 from .panels import build_panels, halfedges
 from .seeds import seed_face, seed_hint, seed_label
 from .split import CutMesh
+from .symmetric import body_face_sides, coded_labels, mirrored_mesh
 from .types import GarmentCut, Panel, Seam
 
 FORBIDDEN_REGIONS = ("head", "hands", "feet")
@@ -223,6 +224,8 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None,
     clock.lap("geodesics")
 
     axes = _axes(body, X, spec)
+    sides = body_face_sides(body, X)
+    mirror = None if sides is None else (np.asarray(body.symmetry, dtype=np.int64), sides)
     clock.lap("axes")
     gnames = [g.name for g in spec.garments]
     garment_lines = {g: [i for i, l in enumerate(spec.lines) if g in line_garments(l, gnames)] for g in gnames}
@@ -248,7 +251,8 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None,
             seqs[li] = _insert_line(gm, li, line_kv[li], paths[li], spec.lines[li].closed, names)
         clock.lap("splitting")
         report(progress, base + 0.2 / len(spec.garments), f"cutting garment {g.name}: panels")
-        out = _garment_panels(gm, spec, g, gpanels, seqs, forbidden, BF, X, axes, offset, clock, seed_names)
+        out = _garment_panels(gm, spec, g, gpanels, seqs, forbidden, BF, X, axes, offset, clock, seed_names,
+                              mirror)
         panels += out["panels"]
         seams += out["seams"]
         hems.update(out["hems"])
@@ -337,7 +341,9 @@ def face_components(F: np.ndarray, n: int, cut_ukeys: np.ndarray):
 
 def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], seqs: Dict[int, np.ndarray],
                     forbidden: np.ndarray, BF, X, axes, offset: int, clock: Optional[_Clock] = None,
-                    seed_names: Optional[Dict[str, str]] = None):
+                    seed_names: Optional[Dict[str, str]] = None, mirror=None):
+    """One garment's panels; ``mirror``: ``(body symmetry, body triangle sides)`` to make a
+    mirrored garment's right half the exact mirror of its left (:mod:`.symmetric`), or None."""
     clock = clock or _Clock(None)
     F = mesh.F.copy()
     n = mesh.nv
@@ -381,6 +387,8 @@ def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], s
     clock.lap("embedding")
     lines_li = sorted(seqs)
     lines = [remap[seqs[li]] for li in lines_li]
+    plan, lab = coded_labels(mirror, [p.name for p in gpanels], [spec.lines[li].name for li in lines_li],
+                             mesh.parent[keep], lab)
     if spec.refine_edge_length is not None:
         from .refine import delaunay_flips, refine
         # lines may leave the garment (-1 ids): refine only their in-garment stretches
@@ -399,6 +407,9 @@ def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], s
         lines = [[pieces[j] for j in range(len(pieces)) if owners[j] == k] for k in range(len(lines))]
     else:
         lines = [_runs(l) for l in lines]
+    if plan is not None:
+        Xg, Fg, lab, W, lines = mirrored_mesh(mirror, plan, Xg, Fg, lab, W, lines, X)
+        clock.lap("mirror")
     out = build_panels(spec, gpanels, Xg, Fg, lab, lines, lines_li, axes, offset, clock)
     vog = out.pop("vertex_of_global")
     pins = None

@@ -1,0 +1,130 @@
+"""Mirrored designs stay symmetric (issue 14): the right half of a mirrored garment's cut is the
+exact mirror image of its left half, a panel across the body is flattened symmetrically, and the
+solved left and right pieces agree to round-off; seams are gathered for a mirror pair together."""
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from core.cut.symmetric import body_face_sides, mirror_plan
+from core.design.naming import swap_side
+from core.pattern.mirror_flat import self_mirror_map, symmetric_flattening
+from mirror_pairs import outline_asymmetry, seam_asymmetry
+
+
+@pytest.fixture(scope="module")
+def shirt(anny):
+    from core import workflows as wf
+    from core.design import load_design
+    from core.design.templates import TEMPLATE_DIR
+    design = load_design(TEMPLATE_DIR / "shirt_long_sleeve.json")
+    design.refine_edge_length = 0.02
+    return wf.prepare(design, body=anny)
+
+
+def _mirror_rows(W, symmetry):
+    V = W.shape[1]
+    return W @ sp.csr_matrix((np.ones(V), (np.arange(V), symmetry)), shape=(V, V))
+
+
+def test_anny_is_mirror_symmetric_with_a_midline(anny, anny_reference):
+    sides = body_face_sides(anny, np.asarray(anny_reference[0]))
+    assert sides is not None and sides.mean() == 0.5       # as many triangles on each side, none across
+
+
+def test_mirrored_cut_is_the_exact_mirror_of_its_left_half(shirt, anny):
+    cut, X = shirt.cut, shirt.reference
+    W = cut.embedding
+    Y, Ym = W @ X, _mirror_rows(W, np.asarray(anny.symmetry)) @ X
+    from scipy.spatial import cKDTree
+    d, j = cKDTree(Y).query(Ym)
+    assert d.max() < 1e-12                      # every garment vertex's mirror row is a garment vertex
+    for p in cut.panels:
+        q = cut.panel(swap_side(p.name))
+        assert len(p.faces) == len(q.faces) and len(p.vertex_ids) == len(q.vertex_ids)
+        # faces map onto faces (orientation reversed)
+        local = {g: i for i, g in enumerate(q.vertex_ids)}
+        m = np.array([local.get(int(j[g]), -1) for g in p.vertex_ids])
+        assert np.all(m >= 0), p.name
+        key = lambda F: set(map(tuple, np.sort(F, axis=1).tolist()))
+        assert key(m[p.faces]) == key(q.faces), p.name
+
+
+def test_self_mirror_panels_are_recognised(shirt):
+    Y = shirt.cut.positions(shirt.reference)
+    for name in ("shirt.front", "shirt.back"):
+        p = shirt.cut.panel(name)
+        m = self_mirror_map(Y[p.vertex_ids], p.faces)
+        assert m is not None and np.all(m[m] == np.arange(len(m)))
+    sleeve = shirt.cut.panel("shirt.sleeve_front_left")
+    assert self_mirror_map(Y[sleeve.vertex_ids], sleeve.faces) is None
+
+
+@pytest.mark.parametrize("ease", [1.2, 3.5])
+def test_left_and_right_pieces_agree(shirt, ease):
+    from core import workflows as wf
+    saved = [p.ease for p in shirt.cut.panels]
+    try:
+        for p in shirt.cut.panels:
+            p.ease = np.full(len(p.faces), ease)
+        pat = wf.reference(shirt).pattern
+    finally:
+        for p, e in zip(shirt.cut.panels, saved):
+            p.ease = e
+    seams = seam_asymmetry(pat)
+    assert any(k.startswith("shirt.armhole_left#") for k in seams)
+    assert max(seams.values()) < 0.5e-3, max(seams.items(), key=lambda kv: kv[1])
+    assert max(outline_asymmetry(pat).values()) < 0.5e-3
+    gathered = {s.name for s in pat.seams if s.gathered}
+    assert gathered == {swap_side(n.partition("#")[0]) + n[len(n.partition("#")[0]):] for n in gathered}
+
+
+def test_mirror_pairs_gather_together_at_the_default_threshold(shirt):
+    from core.pattern.solve import PatternSolver
+    solver = PatternSolver(shirt.cut, shirt.reference)
+    K = solver.ref_offsets[0]
+    ones = np.ones(len(solver.gfaces))
+    for ease in (3.5, 4.5):
+        plan = solver.plan_seams(K, ease * ones, ones)
+        d = plan.demand
+        assert d["shirt.side_left"] == pytest.approx(d["shirt.side_right"], abs=1e-4)   # the body: 0.1 mm
+        assert ("shirt.side_left" in plan.gathered) == ("shirt.side_right" in plan.gathered)
+    assert {"shirt.side_left", "shirt.side_right"} <= set(plan.gathered)       # ease 4.5
+
+
+def test_cut_stays_deterministic(anny, shirt):
+    from core import workflows as wf
+    a, b = shirt.cut, wf.prepare(shirt.design, body=anny).cut
+    assert a.embedding.data.tobytes() == b.embedding.data.tobytes()
+    assert a.embedding.indices.tobytes() == b.embedding.indices.tobytes()
+    for p, q in zip(a.panels, b.panels):
+        assert p.faces.tobytes() == q.faces.tobytes() and p.vertex_ids.tobytes() == q.vertex_ids.tobytes()
+
+
+def test_mirror_plan_needs_every_mirror():
+    assert mirror_plan(["g.front", "g.sleeve_left", "g.sleeve_right"], ["g.neck", "g.arm_left", "g.arm_right"])
+    assert mirror_plan(["g.front", "g.sleeve_left"], ["g.neck"]) is None          # no right sleeve
+    assert mirror_plan(["g.front", "g.back"], ["g.neck"]) is None                 # nothing mirrored
+    assert mirror_plan(["g.a_left", "g.a_right"], ["g.l_left"]) is None            # a line without its mirror
+
+
+def test_symmetric_flattening_of_a_symmetric_strip():
+    # a 2 x 1 grid, symmetric about x = 0, flattened with a lean: averaged with its reflection
+    xs, ys = np.linspace(-1, 1, 5), np.linspace(0, 1, 3)
+    xyz = np.array([[x, 0.0, y] for y in ys for x in xs])
+    def grid(mirrored):
+        F = []
+        for r in range(2):
+            for c in range(4):
+                a, b, d, e = r * 5 + c, r * 5 + c + 1, (r + 1) * 5 + c, (r + 1) * 5 + c + 1
+                F += [[a, b, d], [b, e, d]] if mirrored and c < 2 else [[a, b, e], [a, e, d]]
+        return np.array(F)
+    # the diagonals lean the same way on both sides: not its own mirror image
+    assert self_mirror_map(xyz, grid(False)) is None
+    F = grid(True)
+    m = self_mirror_map(xyz, F)
+    assert m is not None and np.array_equal(m, [r * 5 + (4 - c) for r in range(3) for c in range(5)])
+    lean = np.c_[xyz[:, 0] + 0.1 * xyz[:, 2] * (xyz[:, 0] + 1), xyz[:, 2]]
+    fl = {"uv": lean}
+    out = symmetric_flattening(fl, xyz, F, np.tile([0.0, 0.0, 1.0], (len(F), 1)), m)
+    uv = out["uv"] - out["uv"].mean(0)
+    np.testing.assert_allclose(uv[m] * [-1, 1], uv, atol=1e-12)
