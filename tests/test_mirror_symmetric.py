@@ -128,3 +128,18 @@ def test_symmetric_flattening_of_a_symmetric_strip():
     out = symmetric_flattening(fl, xyz, F, np.tile([0.0, 0.0, 1.0], (len(F), 1)), m)
     uv = out["uv"] - out["uv"].mean(0)
     np.testing.assert_allclose(uv[m] * [-1, 1], uv, atol=1e-12)
+
+
+def test_a_darted_front_is_its_own_mirror(anny):
+    # the dart's legs share their global vertices (the dart is a seam of the panel with itself):
+    # the mirror map still tells the two copies apart, so the darted front flattens symmetrically
+    from core import workflows as wf
+    from core.design.templates import TEMPLATE_DIR
+    prep = wf.prepare(TEMPLATE_DIR / "blouse_fitted.json", body=anny)
+    front = prep.cut.panel("blouse.front")
+    assert len(np.unique(front.vertex_ids)) < len(front.vertex_ids)
+    Y = prep.cut.positions(prep.reference)
+    m = self_mirror_map(Y[front.vertex_ids], front.faces)
+    assert m is not None
+    pat = wf.reference(prep).pattern
+    assert max(seam_asymmetry(pat).values()) < 0.5e-3

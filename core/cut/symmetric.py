@@ -70,8 +70,8 @@ def mirror_plan(panel_names: Sequence[str], line_names: Sequence[str]) -> Option
         return None if min(out, default=0) < 0 else np.asarray(out, dtype=np.int64)
 
     pm, lm = index(panel_names), index(line_names)
-    if pm is None or lm is None or np.all(pm == np.arange(len(pm))):
-        return None         # not mirrored: no panel has a mirror of another name
+    if pm is None or lm is None or (np.all(pm == np.arange(len(pm))) and np.all(lm == np.arange(len(lm)))):
+        return None         # not mirrored: no panel or line has a mirror of another name
     return {"panel": pm, "line": lm, "panel_side": _sides(panel_names), "line_side": _sides(line_names)}
 
 

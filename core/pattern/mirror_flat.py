@@ -34,16 +34,25 @@ def self_mirror_map(xyz: np.ndarray, faces: np.ndarray) -> Optional[np.ndarray]:
     xyz : (n, 3) float, the panel on the reference body (m); faces : (f, 3) int.
     """
     xyz = np.asarray(xyz, float)
+    F = np.asarray(faces, np.int64)
     if len(xyz) < 3 or xyz[:, 0].min() >= 0 or xyz[:, 0].max() <= 0:
         return None
-    d, m = cKDTree(xyz).query(xyz * [-1.0, 1.0, 1.0], k=2)
-    # unique nearest: a sliver at the midline could have two candidates
-    if d[:, 0].max() > MATCH_TOLERANCE or np.any(d[:, 1] < 2.0 * d[:, 0] + 1e-12):
+    # matched by a point pulled towards the vertex's faces: the two copies of a vertex on a
+    # dart's legs (one position) and a keypoint beside its mirror at the midline (0.02 mm apart)
+    # are told apart by the side their faces lie on; the pull commutes with the mirror
+    centroid = xyz[F].mean(axis=1)
+    pull = np.zeros_like(xyz)
+    np.add.at(pull, F.reshape(-1), np.repeat(centroid, 3, axis=0))
+    count = np.bincount(F.reshape(-1), minlength=len(xyz)).astype(float)
+    if np.any(count == 0):
         return None
+    key = 0.5 * (xyz + pull / count[:, None])
+    d, m = cKDTree(key).query(key * [-1.0, 1.0, 1.0], k=2)
+    if d[:, 0].max() > MATCH_TOLERANCE or np.any(d[:, 1] < 2.0 * d[:, 0] + 1e-12):
+        return None             # not its own mirror image, or a match is not unique
     m = m[:, 0]
     if np.any(m[m] != np.arange(len(m))):
         return None
-    F = np.asarray(faces, np.int64)
     n = np.int64(len(xyz))
     def key(T):
         T = np.sort(T, axis=1)
