@@ -1,5 +1,5 @@
-"""Pose adaptation without the bias cost (issue 14): the settling phase, the warp cap, and the adapted
-shirt's shear and seams, on a coarse shirt."""
+"""Pose adaptation without the bias cost (issue 14): the settling phase, the raising-only feedback, the
+warp cap, and the adapted shirt's shear and seams, on a coarse shirt."""
 import numpy as np
 import pytest
 
@@ -76,7 +76,8 @@ def test_adapted_shirt_keeps_stretch_low_with_less_shear_and_closed_seams(shirt,
     pose = _pose(prep, anny)
     X = prep.cut.positions(pose)
     xyz = {p.name: X[p.vertex_ids] for p in prep.cut.panels}
-    old = SolverConfig.improved(adaptation=dict(margin=0.06, gain=0.2, warp_gain=0.08, cap_warp=None, settle=0))
+    old = SolverConfig.improved(adaptation=dict(margin=0.06, gain=0.2, warp_gain=0.08, cap_warp=None, settle=0,
+                                                lower=1.0))
     before = adapt_pattern(prep.cut, prep.reference, [pose], eps_weft=1.1, solver=solver, start=ref, config=old)
     after = adapt_pattern(prep.cut, prep.reference, [pose], eps_weft=1.1, solver=solver, start=ref)
     assert residual_stretch(after, xyz, 1.1) <= 1.0
@@ -84,7 +85,28 @@ def test_adapted_shirt_keeps_stretch_low_with_less_shear_and_closed_seams(shirt,
     assert seam_mismatch(after)["max_mm"] < seam_mismatch(before)["max_mm"]
 
 
+def test_the_feedback_only_raises_unless_told_to_lower(shirt, anny):
+    prep, solver, ref = shirt
+    pose = _pose(prep, anny)
+    state, _, _ = _adapt_state(prep, solver, ref, pose, SolverConfig.improved())
+    solver.iterate(state, state.planned)
+    assert state.corr_w.min() >= 1.0 and state.corr_g.min() >= 1.0
+    both, _, _ = _adapt_state(prep, solver, ref, pose, SolverConfig.improved(lower=1.0))
+    solver.iterate(both, both.planned)
+    assert min(both.corr_w.min(), both.corr_g.min()) < 1.0      # somewhere a triangle is past its goal
+
+
+def test_reference_feedback_still_lowers(shirt):
+    # the raising-only rule is the adaptation's: a reference solve's feedback corrects both ways
+    prep, solver, _ = shirt
+    K, cw, cg = solver.targets_reference()
+    state = solver.begin(K, cw, cg, config=SolverConfig.improved())
+    solver.iterate(state, state.planned)
+    assert state.corr_w.min() < 1.0 < state.corr_w.max()
+
+
 @pytest.mark.parametrize("override, where", [({"settle": -1}, "adaptation.settle"),
+                                             ({"lower": -0.5}, "adaptation.lower"),
                                              ({"settle": 40}, "adaptation.settle"),
                                              ({"settle": 1.5}, "adaptation.settle")])
 def test_bad_settle_is_refused(override, where):

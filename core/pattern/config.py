@@ -151,8 +151,13 @@ class Adaptation:
     ``settle``: the last iterations of an adaptation solve run with the
     feedback frozen (0 = none): the targets stop moving, so the seams' length
     integral closes the seams and the shear the moving targets drive settles.
+    ``lower``: how far one iteration may lower a target's correction, as a
+    fraction of ``step`` (0: the feedback only raises: an adaptation adds
+    cloth where a pose needs it, and lowering it where a triangle is past its
+    goal pulls that triangle against its raised neighbours, which is shear,
+    for less cloth; 1: both ways alike).
     """
-    margin: float = 0.16
+    margin: float = 0.12
     gain: float = 0.1
     min_iterations: int = 40
     ceiling: float = 2.0
@@ -162,6 +167,7 @@ class Adaptation:
     cap_weft: Optional[float] = None
     cap_warp: Optional[float] = 2.0
     settle: int = 10
+    lower: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -224,15 +230,16 @@ class SolverConfig:
                    rest_shape=RestShape(model="isometric", warp_slack=0.0, warp_row=1.0),
                    seams=SeamOptions(straight_target="zero", length_integral=0.0, gather_above=None),
                    feedback=Feedback(weft=0.0, warp=0.0),
-                   adaptation=Adaptation(margin=0.0, gain=0.0, warp_gain=None, spread=0, cap_warp=None, settle=0))
+                   adaptation=Adaptation(margin=0.0, gain=0.0, warp_gain=None, spread=0, cap_warp=None, settle=0,
+                                             lower=1.0))
         return base.with_overrides(**overrides)
 
     @classmethod
     def improved(cls, **overrides) -> "SolverConfig":
         """Our default: pre-stretched ARAP rest shape, lighter seam-shape terms, free warp length within 12 %,
         light weft feedback (gain 0.06), seams gathered where their sides' demands differ by
-        > 20 %, the collapse guard; adaptation: margin 16 %, feedback 0.1 (warp 0.04) on targets spread over 30
-        passes, warp targets capped at 2, the last 10 iterations with the feedback frozen."""
+        > 20 %, the collapse guard; adaptation: margin 12 %, feedback 0.1 (warp 0.04), raising only, on targets
+        spread over 30 passes, warp targets capped at 2, the last 10 iterations with the feedback frozen."""
         return cls().with_overrides(**overrides)
 
     @classmethod
@@ -295,7 +302,7 @@ class SolverConfig:
                   ("rest_shape", r, ("warp_slack",)),
                   ("seams", s, ("length_integral", "length_integral_cap")),
                   ("feedback", fb, ("weft", "warp", "step")),
-                  ("adaptation", ad, ("margin", "gain", "step"))]
+                  ("adaptation", ad, ("margin", "gain", "step", "lower"))]
         for group, obj, names in nonneg:
             for k in names:
                 _finite(f"{group}.{k}", getattr(obj, k), 0.0, ">=")

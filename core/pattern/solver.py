@@ -373,6 +373,9 @@ class PatternSolver:
         gain_g = max(fb.warp, ad.gain if ad.warp_gain is None else ad.warp_gain) if adapting else fb.warp
         hi = ad.ceiling if adapting else fb.ceiling
         step = ad.step if adapting else fb.step
+        # an adaptation only adds cloth: a correction lowered where a triangle is already past its goal
+        # pulls it against its raised neighbours, which is shear
+        lower = 1 - ad.lower * step if adapting else 1 - step
         model = cfg.rest_shape.model
         K, c_weft, c_warp = state.K, state.c_weft, state.c_warp
         corr_w, corr_g, integral = state.corr_w, state.corr_g, state.integral
@@ -406,9 +409,9 @@ class PatternSolver:
                     goal_g = goal_g if ad.cap_warp is None else np.fmin(goal_g, ad.cap_warp * poses["ease_warp"])
                 ok = np.isfinite(rw) & np.isfinite(rg) & (rw > 0) & (rg > 0) & np.isfinite(goal_w) & np.isfinite(goal_g)
                 if gain_w > 0:
-                    corr_w[ok] *= np.clip((goal_w[ok] / rw[ok]) ** gain_w, 1 - step, 1 + step)
+                    corr_w[ok] *= np.clip((goal_w[ok] / rw[ok]) ** gain_w, lower, 1 + step)
                 if gain_g > 0:
-                    corr_g[ok] *= np.clip((goal_g[ok] / rg[ok]) ** gain_g, 1 - step, 1 + step)
+                    corr_g[ok] *= np.clip((goal_g[ok] / rg[ok]) ** gain_g, lower, 1 + step)
                 np.clip(corr_w, fb.floor, hi, out=corr_w)
                 np.clip(corr_g, fb.floor, hi, out=corr_g)
                 retarget = True
