@@ -112,6 +112,14 @@ def test_residual_stretch_area_fraction():
     # areas are measured on the posed body: 0.65 of 1.15
     assert M.residual_stretch(pat, {"a": posed}, 1.10) == pytest.approx(100 * 0.65 / 1.15)
     assert M.residual_stretch(pat, {"a": xyz}, 1.10) == 0.0
+    # along the warp: the widened column has no warp stretch; a body 30 % longer along the grain has it everywhere
+    assert M.residual_stretch(pat, {"a": posed}, 1.10, direction="warp") == 0.0
+    longer = xyz.copy()
+    longer[:, 2] *= 1.3
+    assert M.residual_stretch(pat, {"a": longer}, 1.10, direction="warp") == pytest.approx(100.0)
+    assert M.residual_stretch(pat, {"a": longer}, 1.10) == 0.0
+    with pytest.raises(ValueError, match="direction"):
+        M.residual_stretch(pat, {"a": xyz}, 1.10, direction="bias")
 
 
 def test_flips():

@@ -128,17 +128,21 @@ def seam_mismatch(pattern, garment: Optional[str] = None) -> Dict[str, object]:
 
 
 def residual_stretch(pattern, body_xyz: Dict[str, np.ndarray], eps_weft: float = 1.10,
-                     garment: Optional[str] = None) -> float:
+                     garment: Optional[str] = None, direction: str = "weft") -> float:
     """Residual stretch (SPEC 4): percent of garment area (on the posed body) with ``r_weft > eps_weft``.
 
     ``body_xyz`` maps panel name -> (n, 3) panel positions on the target pose.
+    ``direction="warp"``: the same along the warp (``r_warp > eps_weft``), what a
+    weft figure alone does not show.
     """
+    if direction not in ("weft", "warp"):
+        raise ValueError(f"direction: expected 'weft' or 'warp', got {direction!r}")
     over, total = 0.0, 0.0
     for p in _panels(pattern, garment):
         X = body_xyz[p.name]
-        r_weft, _ = required_stretch(p.uv, X, p.faces, p.grain)
+        r = required_stretch(p.uv, X, p.faces, p.grain)[0 if direction == "weft" else 1]
         a = triangle_areas(X, p.faces)
-        over += float(np.sum(a[r_weft > eps_weft]))
+        over += float(np.sum(a[r > eps_weft]))
         total += float(np.sum(a))
     return 100.0 * over / total if total > 0 else 0.0
 
