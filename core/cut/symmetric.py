@@ -15,15 +15,15 @@ neckline, a hem ring) has its right stretches replaced by the reflection of
 its left ones. On any body instance the right half is then what the body's
 own asymmetry gives, never a meshing artefact.
 
-The left half is decided per face: a ``*_left`` / ``*_right`` panel's faces
-are on its side; the faces of a panel that is its own mirror (a front across
-the body) on the side of their body triangle (the body template has no
-triangle across its midline). Vertices shared by both halves (the midline,
-a centre seam) get the mirror-symmetric average of their row.
+The left half is the faces whose body triangle is on the body's left (the
+template has no triangle across its midline); a ``*_left`` panel must lie in
+it. Vertices shared by both halves lie on the midline; their rows get the
+mirror-symmetric average (a round-off change).
 
 Whenever the garment is not mirror-symmetric by name and topology (a panel
 or line without its mirror, a skirt bridge, a line whose reflection is not
-another line), :func:`symmetrize` returns None and the cut keeps its mesh.
+another line, a ``*_left`` panel across the midline: a centre seam traced
+beside it, as on the pants), :func:`symmetrize` returns None and the cut keeps its mesh.
 """
 from __future__ import annotations
 
@@ -107,9 +107,11 @@ def symmetrize(X: np.ndarray, F: np.ndarray, lab: np.ndarray, face_side: np.ndar
     F = np.asarray(F, dtype=np.int64)
     lab = np.asarray(lab, dtype=np.int64)
     n = len(X)
+    left = np.asarray(face_side) == 1
     ps = plan["panel_side"][lab]
-    left = np.where(ps >= 0, ps == 1, np.asarray(face_side) == 1)
-    if not left.any():
+    if not left.any() or np.any(ps[left] == 0) or np.any(ps[~left] == 1):
+        # a *_left panel reaching over the midline (a centre seam traced beside it): its mirror
+        # would overlap its own faces; the garment keeps its mesh
         return None
     # a *_left panel's faces mirror onto its *_right panel: both must lie on their own side
     pm = plan["panel"]
