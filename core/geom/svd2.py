@@ -16,6 +16,20 @@ from typing import List, Sequence, Tuple
 import numpy as np
 
 
+def _halves(A: Sequence[np.ndarray]):
+    """(e, f, g, h) of ``A``: its conformal part (e, h) and anti-conformal part (f, g)."""
+    a00, a01, a10, a11 = (np.asarray(a, float) for a in A)
+    return 0.5 * (a00 + a11), 0.5 * (a00 - a11), 0.5 * (a10 + a01), 0.5 * (a10 - a01)
+
+
+def signed_singular_values2(A: Sequence[np.ndarray]) -> Tuple[np.ndarray, np.ndarray]:
+    """(s1, s2) (k,) of 2 x 2 matrices given as 4 (k,) arrays: ``s1 >= |s2|``, ``s2 < 0`` for a
+    reflection (:func:`signed_svd2` without the rotations)."""
+    e, f, g, h = _halves(A)
+    q, r = np.hypot(e, h), np.hypot(f, g)
+    return q + r, q - r
+
+
 def signed_svd2(A: Sequence[np.ndarray]) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The signed SVD of 2 x 2 matrices given as 4 (k,) arrays a00, a01, a10, a11.
 
@@ -24,9 +38,7 @@ def signed_svd2(A: Sequence[np.ndarray]) -> Tuple[np.ndarray, np.ndarray, np.nda
     s1, s2 : (k,) the singular values, ``s1 >= |s2|``, ``s2 < 0`` for a reflection.
     phi, theta : (k,) radians, ``A = R(phi) diag(s1, s2) R(theta)``.
     """
-    a00, a01, a10, a11 = (np.asarray(a, float) for a in A)
-    e, f = 0.5 * (a00 + a11), 0.5 * (a00 - a11)
-    g, h = 0.5 * (a10 + a01), 0.5 * (a10 - a01)
+    e, f, g, h = _halves(A)
     q, r = np.hypot(e, h), np.hypot(f, g)
     a1, a2 = np.arctan2(g, f), np.arctan2(h, e)
     return q + r, q - r, 0.5 * (a2 + a1), 0.5 * (a2 - a1)
@@ -52,4 +64,4 @@ def clamp_singular_values_below(A: Sequence[np.ndarray], floor: float) -> List[n
     return compose2(np.maximum(s1, floor), np.maximum(s2, floor), phi, theta)
 
 
-__all__ = ["signed_svd2", "compose2", "clamp_singular_values_below"]
+__all__ = ["signed_singular_values2", "signed_svd2", "compose2", "clamp_singular_values_below"]

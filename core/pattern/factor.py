@@ -38,7 +38,8 @@ class SymmetricFactor:
         # QDLDL factorises the upper triangle: handed over directly, an update skips its own
         # extraction of it (5.1 -> 3.4 ms on the shirt)
         n = A.shape[0]
-        col = np.repeat(np.arange(n), np.diff(A.indptr))
+        #: (nnz,) the column of each stored entry
+        self._cols = col = np.repeat(np.arange(n, dtype=np.int64), np.diff(A.indptr))
         keep = np.flatnonzero(A.indices <= col)
         self._upper = (keep, A.indices[keep],
                        np.concatenate([[0], np.cumsum(np.bincount(col[keep], minlength=n))]).astype(A.indptr.dtype))
@@ -72,8 +73,7 @@ class SymmetricFactor:
         """
         A = self.matrix
         n = np.int64(self.n)
-        col_of = np.repeat(np.arange(self.n, dtype=np.int64), np.diff(A.indptr))
-        keys = col_of * n + A.indices.astype(np.int64)  # ascending: CSC sorted by column, then row
+        keys = self._cols * n + A.indices.astype(np.int64)  # ascending: CSC sorted by column, then row
         want = np.asarray(cols, np.int64) * n + np.asarray(rows, np.int64)
         pos = np.searchsorted(keys, want)
         ok = (pos < len(keys)) & (keys[np.minimum(pos, len(keys) - 1)] == want)

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..geom.mesh import signed_areas_2d
 from ..geom.strain import components, scales_of_offsets
-from ..geom.svd2 import clamp_singular_values_below
+from ..geom.svd2 import clamp_singular_values_below, signed_singular_values2
 from .config import CollapseGuard, SolverConfig
 from .panels import PanelBlocks
 
@@ -247,11 +247,8 @@ def relative_singular_values(M: list, Kc: list, c_weft: np.ndarray, c_warp: np.n
         i00, i01, i10, i11 = Kc[3] / det_k, -Kc[1] / det_k, -Kc[2] / det_k, Kc[0] / det_k
         q = [(M[0] * i00 + M[1] * i10) / c_weft, (M[0] * i01 + M[1] * i11) / c_weft,
              (M[2] * i00 + M[3] * i10) / c_warp, (M[2] * i01 + M[3] * i11) / c_warp]
-    # closed-form 2x2 SVD: s1, s2 = |(E, H)| +- |(F, G)| with signed s2
-    e, f = 0.5 * (q[0] + q[3]), 0.5 * (q[0] - q[3])
-    g, h = 0.5 * (q[2] + q[1]), 0.5 * (q[2] - q[1])
-    r1, r2 = np.hypot(e, h), np.hypot(f, g)
-    return r1 + r2, r1 - r2, q
+    s1, s2 = signed_singular_values2(q)
+    return s1, s2, q
 
 
 #: Smallest relative singular value (:func:`relative_singular_values`) of an open triangle: above it
