@@ -1,6 +1,6 @@
 """core.design.naming (left/right names) and the name-substituting mirror of core.design.mirror."""
 from core.design.mirror import mirror_line, mirror_panel
-from core.design.naming import mirror_axis, mirrored_name, swap_side
+from core.design.naming import mirror_axis, mirrored_name, side_of, swap_side
 from core.design.types import Line, Panel
 
 
@@ -14,6 +14,15 @@ def test_swap_side_both_ways():
     for a, b in (("wrist_left", "wrist_right"), ("arm_left_up", "arm_right_up")):
         assert swap_side(a) == b and swap_side(b) == a
     assert swap_side("neck_back") == "neck_back"
+
+
+def test_side_of_follows_the_swap_rule():
+    cases = {"sleeve_left": "left", "side_right": "right", "arm_left_front": "left", "arm_right_up": "right",
+             "front": None, "neck_back": None, "left": None, "hem_left_right": "right"}
+    for name, side in cases.items():
+        assert side_of(name) == side, name
+        # a name with a side swaps to the other side's name, a midline name to itself
+        assert (swap_side(name) == name) == (side is None), name
 
 
 def test_mirror_axis():

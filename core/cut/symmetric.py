@@ -32,7 +32,9 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 import scipy.sparse as sp
 
-from ..design.naming import swap_side
+from ..design.naming import side_of, swap_side
+from ..geom.mesh import triangle_areas
+from ..geom.polyline import polyline_length
 
 #: largest distance (m) between a shared (midline) vertex and its mirror image that is
 #: averaged away; a larger one means the halves were not split at the midline
@@ -77,13 +79,8 @@ def mirror_plan(panel_names: Sequence[str], line_names: Sequence[str]) -> Option
 
 def _sides(names: Sequence[str]) -> np.ndarray:
     """(k,) int per name: 1 for a ``*_left`` name, 0 for ``*_right``, -1 for a midline name."""
-    def side(n: str) -> int:
-        for tail, k in (("_left", 1), ("_right", 0)):
-            if n.endswith(tail):
-                return k
-        return 1 if "_left_" in n else (0 if "_right_" in n else -1)
-    out = [side(n) for n in names]
-    return np.asarray(out, dtype=np.int64)
+    codes = {"left": 1, "right": 0, None: -1}
+    return np.asarray([codes[side_of(n)] for n in names], dtype=np.int64)
 
 
 def symmetrize(X: np.ndarray, F: np.ndarray, lab: np.ndarray, face_side: np.ndarray, W: sp.csr_matrix,
@@ -163,8 +160,7 @@ SHAPE_TOLERANCE = 0.02
 def _same_shape(X, F, lab, lines, X2, F2, lab2, lines2) -> bool:
     """Every panel's area and every line's length and centroid the same within tolerance."""
     def areas(X, F, lab):
-        a = 0.5 * np.linalg.norm(np.cross(X[F[:, 1]] - X[F[:, 0]], X[F[:, 2]] - X[F[:, 0]]), axis=1)
-        return np.bincount(lab, a, minlength=int(max(lab.max(), lab2.max())) + 1)
+        return np.bincount(lab, triangle_areas(X, F), minlength=int(max(lab.max(), lab2.max())) + 1)
 
     A, A2 = areas(np.asarray(X, float), F, lab), areas(X2, F2, lab2)
     if np.any(np.abs(A2 - A) > SHAPE_TOLERANCE * np.maximum(A, 1e-12)):
@@ -172,8 +168,8 @@ def _same_shape(X, F, lab, lines, X2, F2, lab2, lines2) -> bool:
     for r1, r2 in zip(lines, lines2):
         P1 = [np.asarray(X, float)[r] for r in r1]
         P2 = [X2[r] for r in r2]
-        L1 = sum(np.linalg.norm(np.diff(p, axis=0), axis=1).sum() for p in P1)
-        L2 = sum(np.linalg.norm(np.diff(p, axis=0), axis=1).sum() for p in P2)
+        L1 = sum(polyline_length(p) for p in P1)
+        L2 = sum(polyline_length(p) for p in P2)
         if abs(L2 - L1) > SHAPE_TOLERANCE * L1 + 2e-3:
             return False
         if P1 and P2 and np.linalg.norm(np.concatenate(P1).mean(0) - np.concatenate(P2).mean(0)) > 5e-3:

@@ -32,6 +32,18 @@ def swap_side(name: str) -> str:
     return name
 
 
+def side_of(name: str) -> Optional[str]:
+    """``"left"`` or ``"right"``: the side a name is on by :func:`swap_side`'s rule (suffix first,
+    then an inner side word); None for a midline name."""
+    for side in ("left", "right"):
+        if name.endswith("_" + side):
+            return side
+    for side in ("left", "right"):
+        if f"_{side}_" in name:
+            return side
+    return None
+
+
 _AXIS_FLIP = {"x": "-x", "+x": "-x", "-x": "x"}
 
 

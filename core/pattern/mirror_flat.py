@@ -17,6 +17,7 @@ from typing import Optional
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..design.mirror import face_symmetry
 from ..geom.mesh import triangle_areas
 from . import init as _init
 
@@ -53,11 +54,7 @@ def self_mirror_map(xyz: np.ndarray, faces: np.ndarray) -> Optional[np.ndarray]:
     m = m[:, 0]
     if np.any(m[m] != np.arange(len(m))):
         return None
-    n = np.int64(len(xyz))
-    def key(T):
-        T = np.sort(T, axis=1)
-        return (T[:, 0] * n + T[:, 1]) * n + T[:, 2]
-    if not np.array_equal(np.sort(key(F)), np.sort(key(m[F]))):
+    if np.any(face_symmetry(F, m) < 0):      # a face whose mirror is not a face
         return None
     return m
 
