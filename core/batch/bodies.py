@@ -12,7 +12,8 @@ generator ``numpy.random.default_rng([S, i])``, so it does not depend on how
 many bodies are drawn or in what order the workers take them. Each phenotype
 is uniform on its range (Anny: gender, muscle, weight, height, proportions on
 [0, 1]), except age, uniform on :data:`ADULT_AGE` (Anny's young-adult anchor,
-25 years, to its old anchor, 90 years): the templates are adult garments.
+25 years, to its old anchor, 90 years): the templates are adult garments;
+cup size and firmness stay at Anny's average.
 """
 from __future__ import annotations
 
@@ -143,8 +144,13 @@ def read_measurements(path) -> List[BodySource]:
     return out
 
 
+# Anny's parameters a sample holds at their default (see sample_anny).
+HELD_AT_AVERAGE = ("cupsize", "firmness")
+
+
 def sample_anny(n: int, seed: int = 0, parameters: Optional[Mapping[str, tuple]] = None) -> List[BodySource]:
-    """``n`` Anny shapes, uniform on each phenotype's range (age on :data:`ADULT_AGE`).
+    """``n`` Anny shapes, uniform on each phenotype's range (age on :data:`ADULT_AGE`;
+    cup size and firmness at their average, :data:`HELD_AT_AVERAGE`).
 
     Parameters
     ----------
@@ -160,7 +166,9 @@ def sample_anny(n: int, seed: int = 0, parameters: Optional[Mapping[str, tuple]]
     if parameters is None:
         from ..body import load_body
         parameters = load_body("anny").shape_parameters()
-    names = sorted(parameters)
+    # The breast phenotypes stay at Anny's average: they became shape parameters after
+    # datasets were made with this sampler, and a seed keeps giving the same bodies.
+    names = sorted(k for k in parameters if k not in HELD_AT_AVERAGE)
     bounds = {k: (ADULT_AGE if k == "age" else parameters[k][:2]) for k in names}
     out = []
     for i in range(int(n)):

@@ -53,7 +53,24 @@ _RACES = ("african", "asian", "caucasian")
 # "morphological age" puts 0.5 at ~13 years). 0.7 is a young adult (MakeHuman ~31
 # years, fully grown by Anny's calibration).
 DEFAULT_AGE = 0.7
-DEFAULT_SHAPE = dict(gender=0.5, age=DEFAULT_AGE, muscle=0.5, weight=0.5, height=0.5, proportions=0.5)
+DEFAULT_SHAPE = dict(gender=0.5, age=DEFAULT_AGE, muscle=0.5, weight=0.5, height=0.5, proportions=0.5,
+                     cupsize=0.5, firmness=0.5)
+
+
+def shape_labels(labels, variations) -> list:
+    """Anny's shape parameters: the baked ``phenotype_labels`` and the breast phenotypes.
+
+    Anny lists ``cupsize`` and ``firmness`` among its variations (anchors 0, 0.5, 1, masked
+    into the female targets' products) but not among its ``phenotype_labels``, which name
+    only its six macro phenotypes; left at their average they are what Anny evaluates by
+    default (0.5). They are shape parameters here because a women's size chart needs them:
+    at a women's M, ``cupsize`` 0 .. 1 moves the bust girth 89.8 .. 103.4 cm with the waist
+    and hip still (a male body is unchanged by them).
+    """
+    out = [str(s) for s in labels]
+    groups = {str(v).split(":")[0] for v in variations}
+    out += [g for g in ("cupsize", "firmness") if g in groups and g not in out]
+    return out
 
 
 def _interpolation_weights(value: float, anchors: np.ndarray, extrapolate: bool) -> np.ndarray:
@@ -112,7 +129,7 @@ class AnnyData:
         self.sparse_weights = csr_matrix(dense)
         self.mask = z["stacked_phenotype_blend_shapes_mask"].astype(bool)
         self.projection = z["phenotype_blendshape_projection"].astype(float)
-        self.phenotype_labels = [str(s) for s in z["phenotype_labels"]]
+        self.phenotype_labels = shape_labels(z["phenotype_labels"], z["phenotype_variations"])
         self.variations = [str(s).split(":") for s in z["phenotype_variations"]]
         self.bone_labels = [str(s) for s in z["bone_labels"]]
         self.parents = z["bone_parents"].astype(np.int64)
@@ -256,7 +273,8 @@ def anny_names(path: str = ASSET):
         if not os.path.exists(path):
             return None
         with np.load(path) as z:
-            _NAMES[path] = (shape_ranges([str(s) for s in z["phenotype_labels"]], bool(z["extrapolate_phenotypes"])),
+            _NAMES[path] = (shape_ranges(shape_labels(z["phenotype_labels"], z["phenotype_variations"]),
+                                         bool(z["extrapolate_phenotypes"])),
                             [str(s) for s in z["bone_labels"]])
     return _NAMES[path]
 
@@ -266,8 +284,8 @@ class AnnyBody(BodyModel):
 
     Shape: Anny's phenotypes, each in [0, 1]: ``gender`` (0 male .. 1 female),
     ``age`` (0 baby ~1 year, 1/3 child ~11 years, 2/3 young adult ~25 years, 1 old
-    ~90 years; default 0.7), ``muscle``, ``weight``, ``height``, ``proportions``
-    (0.5 = average). Pose: a preset of
+    ~90 years; default 0.7), ``muscle``, ``weight``, ``height``, ``proportions``,
+    ``cupsize`` and ``firmness`` (the breast, female bodies only) (0.5 = average). Pose: a preset of
     :mod:`core.body.poses` or a dict joint -> axis-angle (radians, about our
     frame's axes as they stand at the reference A-pose, carried along by the
     parent's rotation; see :mod:`core.body.model`) applied on top of the A-pose.

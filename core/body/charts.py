@@ -42,8 +42,12 @@ women's XS (78/62/86 cm) needs a slimmer bust than Anny's lightest adult woman
 up to ~50 years (age <= 0.8: best bust +1.5 cm even at age 0.9; only a ~90-year-old
 body reaches it), women's XL (113/97/120 cm) more girth than Anny's heaviest
 (weight 1: best 109.8/99.7/119.2 cm), men's XS (82/70 cm) a slimmer male than
-Anny's lightest (best 84.7 cm chest, 77.0 cm waist). Anny's baked model has no cup size
-or firmness phenotype, so the bust is fitted with weight, muscle and proportions.
+Anny's lightest (best 84.7 cm chest, 77.0 cm waist). The women's fits may also move
+Anny's ``cupsize`` (0 .. 1 moves a women's M bust 89.8 .. 103.4 cm, waist and hip
+still), which does not bring these sizes in reach either: at 176 cm the XS bust stays
+at 81.9 cm with the smallest cup (the rib cage, not the breast, sets it), and XL's
+23 cm drop from hip to waist is beyond Anny's heaviest women (best with cupsize 0.8:
+112.6/98.2/116.8 cm). The stored S, M and L fits keep the average cup (0.5).
 """
 from __future__ import annotations
 
@@ -94,7 +98,7 @@ WOMEN = SizeChart(
     name="women",
     title="women's EN 13402-3 letter codes S-L (bust/waist/hip band midpoints), height 176 cm",
     sizes={"S": _women(86.0, 70.0, 94.0), "M": _women(94.0, 78.0, 102.0), "L": _women(102.0, 86.5, 110.5)},
-    start={"gender": 1.0}, parameters=FIT_PARAMETERS, bounds={"age": ADULT_AGE},
+    start={"gender": 1.0}, parameters=FIT_PARAMETERS + ("cupsize",), bounds={"age": ADULT_AGE},
     fitted={"anny": {
         "S": {"gender": 1.0, "age": 0.701, "muscle": 0.7032, "weight": 0.0523, "height": 0.5031, "proportions": 0.9899},
         "M": {"gender": 1.0, "age": 0.67, "muscle": 0.43, "weight": 0.7422, "height": 0.4863, "proportions": 0.3837},
