@@ -88,6 +88,23 @@ def test_guarded_solve_keeps_the_shared_factorisation(skirt):
     assert solver.n_factorisations == 1 and np.any(st.guard > 0) and st.guard_solve is not None
 
 
+def test_a_finished_solve_gives_its_guarded_factorisation_to_the_next(skirt, monkeypatch):
+    # the next guarded solve refactorises it (values only) instead of building one: the same pattern
+    # bitwise as on a fresh solver, and no second symbolic analysis
+    from core.pattern import factor
+    fresh = solve_pattern(skirt.cut, skirt.reference, solver=PatternSolver(skirt.cut, skirt.reference))
+    built = []
+    init = factor.SymmetricFactor.__init__
+    monkeypatch.setattr(factor.SymmetricFactor, "__init__", lambda self, A: (built.append(1), init(self, A))[1])
+    solver = PatternSolver(skirt.cut, skirt.reference)
+    first = solve_pattern(skirt.cut, skirt.reference, solver=solver)
+    n_first = len(built)
+    again = solve_pattern(skirt.cut, skirt.reference, solver=solver)
+    assert n_first == 2 and len(built) == n_first    # the shared factorisation and one guarded one
+    for a, b, c in zip(fresh.panels, first.panels, again.panels):
+        assert np.array_equal(a.uv, b.uv) and np.array_equal(a.uv, c.uv)
+
+
 @pytest.mark.parametrize("kw, field", [
     ({"guard_scale": -0.1}, "guard.guard_scale"), ({"guard_open": 0.3}, "guard.guard_open"),
     ({"guard_grow": 1.0}, "guard.guard_grow"), ({"guard_limit": 0.5}, "guard.guard_limit"),

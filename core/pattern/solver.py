@@ -31,6 +31,7 @@ no call changes a later one's result.
 """
 from __future__ import annotations
 
+import threading
 import time
 from typing import Callable, Dict, Optional, Sequence, Tuple
 
@@ -45,8 +46,8 @@ from .factor import SymmetricFactor
 from .panels import flatten_panels
 from .seams import SeamPlan, plan_seams, seam_layout, seam_matrix, seam_rhs
 from .state import SolveState
-from .steps import (any_collapsed, collapse_guard, face_neighbourhood, flip_guard, local_step, realign_grain,
-                    rigid_align, scaled_start)
+from .steps import (any_collapsed, collapse_guard, face_neighbourhood, flip_guard, inverse_offsets, local_step,
+                    realign_grain, rigid_align, scaled_start)
 from .targets import adaptation_scales, reference_ease, rest_targets
 from .validate import body_positions, validate_cut
 
@@ -54,6 +55,8 @@ from .validate import body_positions, validate_cut
 PIN_WEIGHT = 1e-6
 #: Iterations added at a time after the planned ones while a triangle is still collapsed.
 COLLAPSE_ROUNDS = 5
+#: Spare guarded factorisations kept per system matrix (one per thread solving at once is enough).
+GUARD_POOL = 4
 
 
 class PatternSolver:
@@ -99,6 +102,10 @@ class PatternSolver:
         self._blocks_G = b.G
         self._factors: Dict[tuple, Tuple[SymmetricFactor, np.ndarray]] = {}
         self._guard_slots: Dict[tuple, np.ndarray] = {}
+        # finished solves' guarded factorisations, by system matrix: only their symbolic analysis is
+        # reused (every refactorisation recomputes all values), so no result depends on the pool
+        self._guard_pool: Dict[tuple, list] = {}
+        self._pool_lock = threading.Lock()
         self._neighbourhood: Optional[sp.csr_matrix] = None
         self.n_factorisations = 0
         # the reference body's offsets serve every reference target, adaptation and seam plan:
@@ -213,6 +220,11 @@ class PatternSolver:
         refactorised in place. It lives in the solve's :class:`SolveState`,
         never on the solver; the shared factorisation (:meth:`factorisation`)
         is untouched, and a solve where no triangle nears collapse never builds one.
+        Without ``reuse``, a factorisation a finished solve gave back
+        (:meth:`release`) is refactorised if there is one: its symbolic analysis
+        (AMD ordering, elimination tree) is a function of the sparsity pattern
+        alone, so the values are the same bits as a new factorisation's, for
+        ~12 ms less (the shirt) per solve.
         """
         cfg = config or self.config
         base, _ = self.factorisation(cfg, plan)
@@ -234,7 +246,24 @@ class PatternSolver:
                                     + w.warp_column ** 2 * gy[:, :, None] * gy[:, None, :])
         data = base.matrix.data + np.bincount(pos[t].ravel(), weights=extra.reshape(len(t), 9).ravel(),
                                               minlength=base.matrix.nnz)
+        if reuse is None:
+            with self._pool_lock:
+                spare = self._guard_pool.get(key)
+                reuse = spare.pop() if spare else None
         return base.with_values(data, reuse=reuse)
+
+    def release(self, state: "SolveState") -> None:
+        """Give ``state``'s guarded factorisation to the next solve of the same matrix
+        (:meth:`guarded_factorisation`). ``state`` may still :meth:`iterate`: its next guarded step
+        refactorises again."""
+        fac, state.guard_solve = state.guard_solve, None
+        if fac is None:
+            return
+        key = self._factor_key(state.config, state.plan)
+        with self._pool_lock:
+            spare = self._guard_pool.setdefault(key, [])
+            if len(spare) < GUARD_POOL and all(f is not fac for f in spare):
+                spare.append(fac)
 
     def _matrix(self, cfg: SolverConfig, plan: SeamPlan):
         """The fixed system matrix (both pattern coordinates): ease + regulariser (one operator), the seam
@@ -306,6 +335,7 @@ class PatternSolver:
                 break
             self.iterate(state, more)
         report(progress, 1.0, "pattern optimized")
+        self.release(state)
         return self.result(state)
 
     def begin(self, K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray, start: Optional[np.ndarray] = None,
@@ -381,7 +411,11 @@ class PatternSolver:
         corr_w, corr_g, integral = state.corr_w, state.corr_g, state.integral
         U, M, s_cur, tg = state.U, state.M, state.s_cur, state.tg
         Kc = components(K)
+        guarding = cfg.guard.guard_scale > 0
+        Kinv = inverse_offsets(Kc) if guarding else None
         aw = (a * W2[0], a * W2[1])
+        # a product by 1.0 is its operand: skipped where the weights are 1 (the same bits, fewer passes)
+        unit_columns = W2[0] == 1.0 and W2[1] == 1.0
         lam_ease, lam_reg = cfg.weights.ease, cfg.weights.regulariser
         n_it = int(iterations)
         for k in range(n_it):
@@ -416,15 +450,18 @@ class PatternSolver:
                 np.clip(corr_g, fb.floor, hi, out=corr_g)
                 retarget = True
             if retarget:
-                tg = rest_targets(K, c_weft * corr_w, c_warp * corr_g, model)
+                tg = rest_targets(Kc, c_weft * corr_w, c_warp * corr_g, model)
             RT, Te = local_step(cfg, M, tg, W2, state.local_state)
-            state.energies.append(float(np.sum(a * sum(W2[j % 2] * (M[j] - RT[j]) ** 2 for j in range(4)))))
+            res2 = [(M[j] - RT[j]) ** 2 for j in range(4)]
+            if not unit_columns:
+                res2 = [W2[j % 2] * res2[j] for j in range(4)]
+            state.energies.append(float(np.sum(a * (((res2[0] + res2[1]) + res2[2]) + res2[3]))))
             # B = lambda_ease T + lambda_reg R T: one right-hand side for both terms (same weights)
-            B = [lam_ease * Te[j] + lam_reg * RT[j] for j in range(4)]
+            B = [lam_ease * Te[j] + (RT[j] if lam_reg == 1.0 else lam_reg * RT[j]) for j in range(4)]
             solve_k, aw_k = lu, aw
-            if cfg.guard.guard_scale > 0:
+            if guarding:
                 # triangles near collapse: stiffened and pulled towards their opened shape
-                gidx, Z, grown = collapse_guard(cfg.guard, M, Kc, c_weft, c_warp, state.guard)
+                gidx, Z, grown = collapse_guard(cfg.guard, M, Kc, c_weft, c_warp, state.guard, Kinv)
                 if gidx.size:
                     if grown or state.guard_solve is None:
                         state.guard_solve = self.guarded_factorisation(cfg, state.plan, state.guard,
@@ -433,7 +470,8 @@ class PatternSolver:
                     g = state.guard[gidx]
                     for j in range(4):
                         B[j][gidx] = (B[j][gidx] + (lam_ease + lam_reg) * g * Z[j]) / (1.0 + g)
-                    aw_k = (aw[0] * (1.0 + state.guard), aw[1] * (1.0 + state.guard))
+                    stiff = 1.0 + state.guard
+                    aw_k = (aw[0] * stiff, aw[1] * stiff)
             rhs = np.empty((self.n, 2))
             rhs[:, 0] = self._GxT @ (aw_k[0] * B[0]) + self._GyT @ (aw_k[1] * B[1])
             rhs[:, 1] = self._GxT @ (aw_k[0] * B[2]) + self._GyT @ (aw_k[1] * B[3])

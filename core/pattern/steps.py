@@ -41,12 +41,13 @@ def turn(P: np.ndarray, c: np.ndarray, s: np.ndarray) -> np.ndarray:
 def local_step(config: SolverConfig, M: list, tg: dict, W2: np.ndarray, state: dict) -> Tuple[list, list]:
     """Rest shapes ``D R K'`` of the regulariser (best 2x2 rotations, all triangles at once) and the ease target.
 
-    ``tg``: :func:`core.pattern.targets.rest_targets` (its derived products
-    are cached in it under ``"_k"``). ``W2`` (2,): the column weights. With
-    ``rest_shape.warp_slack`` the rest shape's warp row is also scaled by the
-    best factor ``s`` within ``[1/(1+slack), 1+slack]`` (free warp stretch),
-    and so is the ease target; ``s`` alternates with ``R`` across iterations
-    (kept in ``state``, one per solve). Returns (RT, T) as component lists.
+    ``tg``: :func:`core.pattern.targets.rest_targets`. ``W2`` (2,): the column
+    weights. With ``rest_shape.warp_slack`` the rest shape's warp row is also
+    scaled by the best factor ``s`` within ``[1/(1+slack), 1+slack]`` (free
+    warp stretch), and so is the ease target; ``s`` alternates with ``R``
+    across iterations (kept in ``state``, one per solve, beside the products
+    of ``K'`` that do not change while its targets move). Returns (RT, T) as
+    component lists.
 
     The rotation minimises ``|Omega^1/2 (M - D R K') W^1/2|^2`` (``Omega =
     diag(1, warp_row)``): ``f(theta) = -2 (x cos + y sin) + p cos 2theta
@@ -55,42 +56,99 @@ def local_step(config: SolverConfig, M: list, tg: dict, W2: np.ndarray, state: d
     and ``C = K' W K'^T``. The polar angle of ``A`` is exact when ``Delta`` or
     the anisotropy of ``C`` vanishes; one Newton step refines it otherwise.
     """
+    # every product below is the one the formula names, in its order: the iteration runs ~20 times on
+    # every triangle, so temporaries are reused (out=) rather than allocated
     rest = config.rest_shape
-    D, Kr = tg["reg"]
-    if "_k" not in tg:
-        k = components(Kr)
-        tg["_k"] = (k, W2[0] * k[0] ** 2 + W2[1] * k[1] ** 2 - W2[0] * k[2] ** 2 - W2[1] * k[3] ** 2,
-                    W2[0] * k[0] * k[2] + W2[1] * k[1] * k[3], np.ascontiguousarray(D[:, 0]),
-                    np.ascontiguousarray(D[:, 1]), components(tg["T"]))
-    k, Cdiff, C01, d0, d1, T = tg["_k"]
+    d0, d1, k = tg["reg"]
+    T = tg["T"]
+    kp = state.get("_kprod")
+    if kp is None or kp[0] is not k or not np.array_equal(kp[1], W2):
+        kp = (k, W2.copy(), W2[0] * k[0] ** 2 + W2[1] * k[1] ** 2 - W2[0] * k[2] ** 2 - W2[1] * k[3] ** 2,
+              W2[0] * k[0] * k[2] + W2[1] * k[1] * k[3])
+        state["_kprod"] = kp
+    Cdiff, C01 = kp[2], kp[3]
     free = rest.warp_slack > 0
     sw = state.get("sw") if free else None
     dw = d1 if sw is None else d1 * sw
     om = rest.warp_row
-    m0, m1, m2, m3 = W2[0] * M[0], W2[1] * M[1], W2[0] * M[2], W2[1] * M[3]
-    x = d0 * (m0 * k[0] + m1 * k[1]) + om * dw * (m2 * k[2] + m3 * k[3])
-    y = om * dw * (m2 * k[0] + m3 * k[1]) - d0 * (m0 * k[2] + m1 * k[3])
+    if W2[0] == 1.0 and W2[1] == 1.0:
+        m0, m1, m2, m3 = M        # the products by 1 are the values themselves
+    else:
+        m0, m1, m2, m3 = W2[0] * M[0], W2[1] * M[1], W2[0] * M[2], W2[1] * M[3]
+    omdw = om * dw
+    t1 = m0 * k[0]
+    t1 += (t2 := m1 * k[1])
+    x = np.multiply(d0, t1, out=t1)
+    np.multiply(m2, k[2], out=t2)
+    t2 += (t3 := m3 * k[3])
+    x += np.multiply(omdw, t2, out=t2)
+    y = np.multiply(m2, k[0], out=t2)
+    y += np.multiply(m3, k[1], out=t3)
+    y *= omdw
+    np.multiply(m0, k[2], out=t3)
+    t3 += (t4 := m1 * k[3])
+    y -= np.multiply(d0, t3, out=t3)
     r = np.hypot(x, y)
     ok = r > 0
     rs = np.where(ok, r, 1.0)
-    c, sn = np.where(ok, x / rs, 1.0), np.where(ok, y / rs, 0.0)
-    delta = 0.5 * (d0 * d0 - om * dw * dw)
+    c, sn = np.where(ok, np.divide(x, rs, out=t3), 1.0), np.where(ok, np.divide(y, rs, out=t4), 0.0)
+    delta = np.multiply(d0, d0, out=rs)
+    delta -= np.multiply(omdw, dw, out=t3)
+    delta *= 0.5
     if np.any(delta != 0):
-        p, q = delta * Cdiff, -2.0 * delta * C01
-        c2, s2 = c * c - sn * sn, 2.0 * c * sn
-        g1 = 2.0 * (x * sn - y * c) - 2.0 * p * s2 + 2.0 * q * c2
-        g2 = 2.0 * r - 4.0 * p * c2 - 4.0 * q * s2
-        step = np.where(g2 > 0, -g1 / np.where(g2 > 0, g2, 1.0), 0.0)
-        nrm = np.sqrt(1.0 + step * step)
-        c, sn = (c - sn * step) / nrm, (sn + c * step) / nrm
-    rk = [c * k[0] - sn * k[2], c * k[1] - sn * k[3], sn * k[0] + c * k[2], sn * k[1] + c * k[3]]
+        p = np.multiply(delta, Cdiff, out=t4)
+        q = np.multiply(-2.0 * delta, C01, out=delta)
+        c2 = c * c
+        c2 -= np.multiply(sn, sn, out=t3)
+        s2 = 2.0 * c
+        s2 *= sn
+        # g1 = 2 (x sn - y c) - 2 p s2 + 2 q c2
+        g1 = x * sn
+        g1 -= np.multiply(y, c, out=x)
+        g1 *= 2.0
+        pt = np.multiply(2.0, p, out=y)
+        g1 -= np.multiply(pt, s2, out=pt)
+        pt = np.multiply(2.0, q, out=y)
+        g1 += np.multiply(pt, c2, out=pt)
+        # g2 = 2 r - 4 p c2 - 4 q s2
+        g2 = np.multiply(2.0, r, out=r)
+        pt = np.multiply(4.0, p, out=y)
+        g2 -= np.multiply(pt, c2, out=pt)
+        pt = np.multiply(4.0, q, out=y)
+        g2 -= np.multiply(pt, s2, out=pt)
+        pos = g2 > 0
+        step = np.where(pos, np.negative(g1, out=g1) / np.where(pos, g2, 1.0), 0.0)
+        nrm = np.multiply(step, step, out=t3)
+        nrm += 1.0
+        np.sqrt(nrm, out=nrm)
+        c_new = sn * step
+        np.subtract(c, c_new, out=c_new)
+        c_new /= nrm
+        sn_new = np.multiply(c, step, out=step)
+        sn_new += sn
+        sn_new /= nrm
+        c, sn = c_new, sn_new
+    rk = [c * k[0], c * k[1], sn * k[0], sn * k[1]]
+    rk[0] -= sn * k[2]
+    rk[1] -= sn * k[3]
+    rk[2] += c * k[2]
+    rk[3] += c * k[3]
     if free:
         lo, hi = 1.0 / (1.0 + rest.warp_slack), 1.0 + rest.warp_slack
         p0, p1 = d1 * rk[2], d1 * rk[3]
-        sw = np.clip((m2 * p0 + m3 * p1) / np.maximum(W2[0] * p0 * p0 + W2[1] * p1 * p1, 1e-300), lo, hi)
+        num = m2 * p0
+        num += m3 * p1
+        den = W2[0] * p0 * p0
+        den += W2[1] * p1 * p1
+        sw = np.clip(num / np.maximum(den, 1e-300, out=den), lo, hi, out=num)
         state["sw"] = sw
-        RT = [d0 * rk[0], d0 * rk[1], d1 * sw * rk[2], d1 * sw * rk[3]]
-        se = np.clip((m2 * T[2] + m3 * T[3]) / np.maximum(W2[0] * T[2] ** 2 + W2[1] * T[3] ** 2, 1e-300), lo, hi)
+        d1sw = d1 * sw
+        RT = [d0 * rk[0], d0 * rk[1], np.multiply(d1sw, rk[2], out=rk[2]), np.multiply(d1sw, rk[3], out=rk[3])]
+        num = m2 * T[2]
+        num += m3 * T[3]
+        den = W2[0] * T[2] ** 2
+        den += W2[1] * T[3] ** 2
+        se = np.clip(num / np.maximum(den, 1e-300, out=den), lo, hi, out=num)
         return RT, [T[0], T[1], T[2] * se, T[3] * se]
     return [d0 * rk[0], d0 * rk[1], d1 * rk[2], d1 * rk[3]], T
 
@@ -238,13 +296,23 @@ def realign_grain(blocks: PanelBlocks, U: np.ndarray, M: List[np.ndarray]):
     return U, M
 
 
-def relative_singular_values(M: list, Kc: list, c_weft: np.ndarray, c_warp: np.ndarray):
-    """Singular values (s1 >= |s2|, s2 < 0 when flipped) (f,) of each triangle's Jacobian relative to its
-    targets, ``Q = diag(c)^-1 M K^-1`` (1, 1: the targets met; the smaller bounds the weft and warp
-    scales from below, as fractions of their targets), and ``Q`` as 4 (f,) arrays."""
+def inverse_offsets(Kc: list):
+    """(``K^-1`` as 4 (f,) arrays, the body triangles (f,) bool: ``det K > 0``) of intrinsic offsets
+    ``Kc`` (4 (f,) arrays): what :func:`relative_singular_values` divides by, the same for every
+    iteration of a solve."""
     det_k = Kc[0] * Kc[3] - Kc[1] * Kc[2]
     with np.errstate(divide="ignore", invalid="ignore"):
-        i00, i01, i10, i11 = Kc[3] / det_k, -Kc[1] / det_k, -Kc[2] / det_k, Kc[0] / det_k
+        inv = [Kc[3] / det_k, -Kc[1] / det_k, -Kc[2] / det_k, Kc[0] / det_k]
+    return inv, det_k > 0
+
+
+def relative_singular_values(M: list, Kc: list, c_weft: np.ndarray, c_warp: np.ndarray, inverse=None):
+    """Singular values (s1 >= |s2|, s2 < 0 when flipped) (f,) of each triangle's Jacobian relative to its
+    targets, ``Q = diag(c)^-1 M K^-1`` (1, 1: the targets met; the smaller bounds the weft and warp
+    scales from below, as fractions of their targets), and ``Q`` as 4 (f,) arrays.
+    ``inverse``: :func:`inverse_offsets` of ``Kc`` when the caller has it."""
+    (i00, i01, i10, i11), _ = inverse if inverse is not None else inverse_offsets(Kc)
+    with np.errstate(divide="ignore", invalid="ignore"):
         q = [(M[0] * i00 + M[1] * i10) / c_weft, (M[0] * i01 + M[1] * i11) / c_weft,
              (M[2] * i00 + M[3] * i10) / c_warp, (M[2] * i01 + M[3] * i11) / c_warp]
     s1, s2 = signed_singular_values2(q)
@@ -259,9 +327,9 @@ COLLAPSED_BELOW = 0.5
 def any_collapsed(M: list, Kc: list, c_weft: np.ndarray, c_warp: np.ndarray) -> bool:
     """Whether a triangle's smaller relative singular value is under :data:`COLLAPSED_BELOW` (degenerate
     body triangles, with no shape to keep, left out)."""
-    _, s2, _ = relative_singular_values(M, Kc, c_weft, c_warp)
-    body = (Kc[0] * Kc[3] - Kc[1] * Kc[2]) > 0
-    return bool(np.any(~(s2 >= COLLAPSED_BELOW) & body))
+    inverse = inverse_offsets(Kc)
+    _, s2, _ = relative_singular_values(M, Kc, c_weft, c_warp, inverse)
+    return bool(np.any(~(s2 >= COLLAPSED_BELOW) & inverse[1]))
 
 
 def face_neighbourhood(panels, area0: np.ndarray):
@@ -279,7 +347,7 @@ def face_neighbourhood(panels, area0: np.ndarray):
 
 
 def collapse_guard(guard: CollapseGuard, M: list, Kc: list, c_weft: np.ndarray, c_warp: np.ndarray,
-                   gain: np.ndarray):
+                   gain: np.ndarray, inverse=None):
     """The collapse guard of one iteration (:class:`~core.pattern.config.CollapseGuard`).
 
     A triangle whose smaller relative singular value
@@ -292,12 +360,14 @@ def collapse_guard(guard: CollapseGuard, M: list, Kc: list, c_weft: np.ndarray, 
     is itself where it is already open enough, so the pull costs nothing
     there.
 
+    ``inverse``: :func:`inverse_offsets` of ``Kc`` when the caller has it.
     Returns (idx (k,) the guarded triangles, their opened Jacobians as 4 (k,)
     arrays, whether any gain grew).
     """
-    s1, s2, q = relative_singular_values(M, Kc, c_weft, c_warp)
+    inverse = inverse if inverse is not None else inverse_offsets(Kc)
+    s1, s2, q = relative_singular_values(M, Kc, c_weft, c_warp, inverse)
     # a degenerate body triangle has no shape to keep; a non-finite iterate is the flip guard's to refuse
-    valid = (Kc[0] * Kc[3] - Kc[1] * Kc[2] > 0) & np.isfinite(s1) & np.isfinite(s2)
+    valid = inverse[1] & np.isfinite(s1) & np.isfinite(s2)
     gain[~valid] = 0.0
     low = valid & ~(s2 >= guard.guard_scale)
     grown = bool(np.any(low & (gain < guard.guard_limit)))

@@ -14,25 +14,31 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import PatternError
+from ..geom.strain import components
 
 
-def rest_targets(K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray, model: str) -> dict:
-    """Ease target ``T`` (f, 2, 2) and the regulariser's rest shape ``diag(D) R K'``.
+def rest_targets(K, c_weft: np.ndarray, c_warp: np.ndarray, model: str) -> dict:
+    """Ease target ``T`` and the regulariser's rest shape ``diag(D) R K'``, as component arrays.
 
-    ``model == "prestretch"`` (improved): ``T = diag(c) K``, the scales act
-    along the pattern's weft/warp axes after the rotation (``J = Q R^T
-    diag(1/c)``: exact weft scale and no shear for any local rotation
+    ``K``: the intrinsic offsets (f, 2, 2), or their 4 components (f,)
+    (:func:`core.geom.strain.components`; the iterations pass the ones they
+    already have). ``model == "prestretch"`` (improved): ``T = diag(c) K``, the
+    scales act along the pattern's weft/warp axes after the rotation (``J = Q
+    R^T diag(1/c)``: exact weft scale and no shear for any local rotation
     ``R``), and the rest shape is the pre-stretched ``diag(c) R K``.
     ``"isometric"`` (paper, literal): ``T = K diag(c)``, the scales act on the
     initial flattening's barycentric offsets, so a local rotation of a
     stretched triangle turns its stretch off the weft (shear and compliance
     error that grow with rho); the rest shape is the isometric ``R K``.
-    Returns ``{"T": T, "reg": (D (f, 2), K' (f, 2, 2))}``.
+    Returns ``{"T": 4 (f,) arrays t00, t01, t10, t11, "reg": (d_weft (f,), d_warp (f,), K' as 4 (f,)
+    arrays)}``: one product per entry, the same values as the (f, 2, 2) products.
     """
-    c = np.stack([c_weft, c_warp], axis=1)
+    k = components(K) if isinstance(K, np.ndarray) else list(K)
+    cw, cg = np.asarray(c_weft, float), np.asarray(c_warp, float)
     if model == "prestretch":
-        return {"T": c[:, :, None] * K, "reg": (c, K)}
-    return {"T": K * c[:, None, :], "reg": (np.ones_like(c), K)}
+        return {"T": [cw * k[0], cw * k[1], cg * k[2], cg * k[3]], "reg": (cw, cg, k)}
+    one = np.ones_like(cw)
+    return {"T": [k[0] * cw, k[1] * cg, k[2] * cw, k[3] * cg], "reg": (one, one, k)}
 
 
 def reference_ease(design_ease: np.ndarray, ease=None) -> np.ndarray:
