@@ -89,6 +89,35 @@ def test_transfer_keeps_the_ease_field():
     assert sum(flipped_count(p.uv, p.faces) for p in tr.panels) == 0
 
 
+def test_a_transfer_starts_from_the_reference_stretched_to_the_body():
+    # a body 1.15 times as wide (x, y) and as long (z): every piece starts at those lengths, its
+    # centre on the flattening's; on the pattern's own body the start is the pattern re-centred
+    cut, body = two_panels(ease=(1.2, 1.5), bulge=0.1)
+    solver = PatternSolver(cut, body)
+    ref = solve_pattern(cut, body, solver=solver)
+    plain = solver.start_from(ref)
+    assert np.array_equal(solver.start_from(ref, solver.offsets(solver.ref_positions)), plain)
+    wide = solver.positions(body * np.array([1.15, 1.15, 1.0]), "wide")
+    tall = solver.positions(body * np.array([1.0, 1.0, 1.3]), "tall")
+    for pd in solver.panels:
+        sl = slice(pd.offset, pd.offset + pd.n)
+        c = plain[sl].mean(axis=0)
+        for pos, scale in ((wide, [1.15, 1.0]), (tall, [1.0, 1.3])):
+            got = solver.start_from(ref, solver.offsets(pos))[sl]
+            assert np.allclose(got, (plain[sl] - c) * scale + c, atol=2e-3 * np.ptp(plain[sl]))
+
+
+def test_renewing_the_guard_factorisation():
+    from core.pattern.solver import renew_guard
+    held = np.array([0.0, 1.0, 8.0, 0.0])
+    assert renew_guard(np.array([0.0, 1.0, 8.0, 1.0]), held)           # newly guarded: renewed at once
+    assert not renew_guard(np.array([0.0, 2.0, 16.0, 0.0]), held)      # 2 / 3 and 17 / 9: within 3
+    assert renew_guard(np.array([0.0, 8.0, 8.0, 0.0]), held)           # 9 / 2: grown by more than 3
+    assert renew_guard(np.array([0.0, 1.0, 1.0, 0.0]), held)           # 2 / 9: released by more than 3
+    assert not renew_guard(np.array([0.0, 0.0, 4.0, 0.0]), held)       # 1 / 2 and 5 / 9
+    assert renew_guard(np.array([0.0, 2.0, 8.0, 0.0]), held, ratio=1.0)  # any change when the ratio is 1
+
+
 def _pose(body, factor=1.35):
     # a "pose" stretching the upper half's girth, as a raised arm stretches the shoulder
     z = body[:, 2]

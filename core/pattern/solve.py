@@ -56,13 +56,16 @@ def transfer_pattern(cut, ref_vertices, target_vertices, config: Optional[Solver
     """Shape transfer (paper Eq. transfer-scale): the ease field kept on the target body (V, 3).
 
     The reference flattening and factorisation are reused; the solve starts
-    from the reference pattern when ``start`` is given. ``body``: the target
+    from the reference pattern when ``start`` is given, each piece stretched
+    to the target body (:meth:`PatternSolver.start_from`). ``body``: the target
     body's spec, recorded in the pattern.
     """
     solver = _solver(cut, ref_vertices, solver, config, progress)
     tgt = solver.positions(target_vertices, "target body")
-    K, cw, cg = solver.targets_reference(tgt)
-    U0 = None if start is None else solver.start_from(start)
+    offsets = solver.offsets(tgt)
+    K, cw, cg = solver.targets_reference(tgt, offsets=offsets)
+    # the reference pattern stretched by how much longer the target body is under each piece
+    U0 = None if start is None else solver.start_from(start, offsets)
     res = solver.solve(K, cw, cg, start=U0, positions=tgt, progress=sub(progress, 0.3, 1.0),
                        plan=solver.design_plan(config), config=config)
     return build_pattern(cut, res, style=style, body=body, mode="transfer")

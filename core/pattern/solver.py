@@ -47,7 +47,7 @@ from .panels import flatten_panels
 from .seams import SeamPlan, plan_seams, seam_layout, seam_matrix, seam_rhs
 from .state import SolveState
 from .steps import (any_collapsed, collapse_guard, face_neighbourhood, flip_guard, inverse_offsets, local_step,
-                    realign_grain, rigid_align, scaled_start)
+                    opened_jacobians, realign_grain, rigid_align, scaled_start)
 from .targets import adaptation_scales, reference_ease, rest_targets
 from .validate import body_positions, validate_cut
 
@@ -57,6 +57,23 @@ PIN_WEIGHT = 1e-6
 COLLAPSE_ROUNDS = 5
 #: Spare guarded factorisations kept per system matrix (one per thread solving at once is enough).
 GUARD_POOL = 4
+#: The collapse guard's stiffened matrix is refactorised when a triangle is guarded that it does not
+#: stiffen, or when a triangle's weight factor ``1 + gain`` has moved by more than this factor from the
+#: one it holds (gains double or halve per iteration: about every other change). In between the solve
+#: keeps the gains it factorised, in the matrix and the right-hand side alike (one consistent energy).
+#: Shirt transfers: a third fewer refactorisations (~4 ms each), the same patterns to a few 0.01 %.
+GUARD_RENEW = 3.0
+
+
+def renew_guard(gain: np.ndarray, held: np.ndarray, ratio: Optional[float] = None) -> bool:
+    """Whether the collapse guard's gains ``gain`` (f,) call for a new factorisation of the matrix that
+    holds ``held`` (f,): a triangle guarded that it does not stiffen, or a weight factor ``1 + gain``
+    off the held one by more than ``ratio`` either way (default :data:`GUARD_RENEW`)."""
+    ratio = GUARD_RENEW if ratio is None else ratio
+    if np.any((gain > 0) & (held == 0)):
+        return True
+    r = (1.0 + gain) / (1.0 + held)
+    return bool(np.any(r > ratio) or np.any(r * ratio < 1.0))
 
 
 class PatternSolver:
@@ -126,14 +143,19 @@ class PatternSolver:
         X = np.concatenate([positions[pd.vertex_ids][pd.faces] for pd in self.panels])
         return intrinsic_offsets(X, self.blocks.G)
 
-    def targets_reference(self, positions: Optional[np.ndarray] = None, ease=None):
+    def targets_reference(self, positions: Optional[np.ndarray] = None, ease=None, offsets=None):
         """Targets of Eq. ref-scale (or transfer-scale on other ``positions``): (K, c_weft, c_warp).
 
         ``c = (rho_weft, 1)``; ``ease``: optional override of the cut's weft
         ease, a scalar or one value per triangle of all panels in order
-        (benchmarks sweep it).
+        (benchmarks sweep it). ``offsets``: :meth:`offsets` of ``positions``
+        when the caller has them.
         """
-        K, _, _ = self.ref_offsets if positions is None else self.offsets(positions)
+        if positions is None:
+            offsets = self.ref_offsets
+        elif offsets is None:
+            offsets = self.offsets(positions)
+        K = offsets[0]
         ease = reference_ease(self.design_ease, ease)
         return K, ease.copy(), np.ones_like(ease)
 
@@ -256,7 +278,7 @@ class PatternSolver:
         """Give ``state``'s guarded factorisation to the next solve of the same matrix
         (:meth:`guarded_factorisation`). ``state`` may still :meth:`iterate`: its next guarded step
         refactorises again."""
-        fac, state.guard_solve = state.guard_solve, None
+        fac, state.guard_solve, state.guard_held = state.guard_solve, None, None
         if fac is None:
             return
         key = self._factor_key(state.config, state.plan)
@@ -288,14 +310,41 @@ class PatternSolver:
         u, v = np.ascontiguousarray(U[:, 0]), np.ascontiguousarray(U[:, 1])
         return [self._Gx @ u, self._Gy @ u, self._Gx @ v, self._Gy @ v]
 
-    def start_from(self, pattern) -> np.ndarray:
-        """The unknowns (n, 2) of a flip-free ``pattern`` of this cut, each piece re-centred on its initial position."""
+    def start_from(self, pattern, offsets=None) -> np.ndarray:
+        """The unknowns (n, 2) of a flip-free ``pattern`` of this cut, each piece re-centred on its initial position.
+
+        ``offsets``: :meth:`offsets` of the body the solve is on (a transfer's
+        target). Each piece is then also stretched along its weft (x) and its
+        warp (y) by the ratio of that body's weft and warp offset lengths under
+        it to those of the pattern's own body (area-weighted means): an affine
+        image of a flip-free piece, so flip-free, that starts the solve at the
+        new body's lengths rather than the old one's. The planned iterations do
+        not converge a transfer, so the start shows in the result: shirt to 100
+        sampled bodies, the warp deviation 8.6 -> 8.3 % (signed 3.4 -> 1.2 %),
+        weft 1.30 -> 1.28 %, and ~20 % fewer refactorisations of the collapse guard.
+        """
         U = np.concatenate([pattern.panel(pd.name).uv for pd in self.panels])
+        if offsets is not None:
+            _, lw, lg = offsets
+            _, lw0, lg0 = self._own_offsets(pattern)
         out = U.copy()
         for pd in self.panels:
-            sl = slice(pd.offset, pd.offset + pd.n)
-            out[sl] = U[sl] - U[sl].mean(axis=0) + self.uv0[sl].mean(axis=0)
+            sl, fs = self.blocks.panel_slices(pd)
+            centre = U[sl].mean(axis=0)
+            if offsets is None:
+                out[sl] = U[sl] - centre + self.uv0[sl].mean(axis=0)
+                continue
+            w = np.abs(pd.area0)
+            stretch = np.array([np.sum(w * lw[fs]) / np.sum(w * lw0[fs]), np.sum(w * lg[fs]) / np.sum(w * lg0[fs])])
+            out[sl] = (U[sl] - centre) * stretch + self.uv0[sl].mean(axis=0)
         return out
+
+    def _own_offsets(self, pattern):
+        """:meth:`offsets` of the body ``pattern`` lies on (its pieces' ``xyz``): the reference's when it is it."""
+        xyz = [np.asarray(pattern.panel(pd.name).xyz, float) for pd in self.panels]
+        if all(np.array_equal(x, self.ref_positions[pd.vertex_ids]) for x, pd in zip(xyz, self.panels)):
+            return self.ref_offsets
+        return intrinsic_offsets(np.concatenate([x[pd.faces] for x, pd in zip(xyz, self.panels)]), self.blocks.G)
 
     # ------------------------------------------------------------------ iterations
     def solve(self, K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray, start: Optional[np.ndarray] = None,
@@ -461,16 +510,23 @@ class PatternSolver:
             solve_k, aw_k = lu, aw
             if guarding:
                 # triangles near collapse: stiffened and pulled towards their opened shape
-                gidx, Z, grown = collapse_guard(cfg.guard, M, Kc, c_weft, c_warp, state.guard, Kinv)
-                if gidx.size:
-                    if grown or state.guard_solve is None:
-                        state.guard_solve = self.guarded_factorisation(cfg, state.plan, state.guard,
-                                                                       reuse=state.guard_solve)
+                q = collapse_guard(cfg.guard, M, Kc, c_weft, c_warp, state.guard, Kinv)
+                if not np.any(state.guard > 0):
+                    state.guard_held = None          # the shared factorisation again, at no cost
+                elif state.guard_solve is None or state.guard_held is None or renew_guard(state.guard,
+                                                                                           state.guard_held):
+                    state.guard_solve = self.guarded_factorisation(cfg, state.plan, state.guard,
+                                                                   reuse=state.guard_solve)
+                    state.guard_held = state.guard.copy()
+                held = state.guard_held
+                if held is not None:
+                    gidx = np.flatnonzero(held > 0)
+                    Z = opened_jacobians(cfg.guard.guard_open, q, gidx, Kc, c_weft, c_warp)
                     solve_k = state.guard_solve
-                    g = state.guard[gidx]
+                    g = held[gidx]
                     for j in range(4):
                         B[j][gidx] = (B[j][gidx] + (lam_ease + lam_reg) * g * Z[j]) / (1.0 + g)
-                    stiff = 1.0 + state.guard
+                    stiff = 1.0 + held
                     aw_k = (aw[0] * stiff, aw[1] * stiff)
             rhs = np.empty((self.n, 2))
             rhs[:, 0] = self._GxT @ (aw_k[0] * B[0]) + self._GyT @ (aw_k[1] * B[1])

@@ -23,7 +23,8 @@ class SolveState:
     U : (n, 2) m, the current iterate; M : its Jacobians (4 arrays (f,)).
     corr_w, corr_g : (f,) the feedback's accumulated target corrections.
     guard : (f,) the collapse guard's stiffening gains (:func:`.steps.collapse_guard`; 0 = not guarded);
-    guard_solve : the back-substitution of the matrix with those gains, or None.
+    guard_solve : the back-substitution of the matrix with the gains ``guard_held`` (the gains when it was
+    last factorised, :func:`~core.pattern.solver.renew_guard`; None: the shared matrix is solved), or None.
     integral : (E,) the seam length term's integral action; tg : the current rest targets.
     s_cur : (f,) signed areas of ``U`` or None; local_state : the local step's memory.
     iteration : iterations run so far; energies : energy per iteration; backtracks : flip-guard halvings.
@@ -47,6 +48,7 @@ class SolveState:
     tg: dict
     s_cur: Optional[np.ndarray] = None
     guard_solve: Optional[Callable] = None
+    guard_held: Optional[np.ndarray] = None
     local_state: dict = field(default_factory=dict)
     iteration: int = 0
     energies: List[float] = field(default_factory=list)

@@ -5,7 +5,8 @@
 - :func:`flip_guard`: vertices of triangles that would flip step back locally.
 - :func:`realign_grain`: every panel turned so its voted grain is +y.
 - :func:`scaled_start`: the initial flattening stretched by each panel's mean targets.
-- :func:`collapse_guard`: the target factors of triangles near collapse raised until they open.
+- :func:`collapse_guard`: the stiffening of triangles near collapse raised until they open;
+  :func:`opened_jacobians`: what they are pulled towards.
 
 Jacobians ``M`` are 4 (f,) arrays m00, m01, m10, m11 (pattern coordinate
 ``i`` along initial axis ``j``); 2x2 targets likewise (:func:`core.geom.strain.components`).
@@ -347,22 +348,19 @@ def face_neighbourhood(panels, area0: np.ndarray):
 
 
 def collapse_guard(guard: CollapseGuard, M: list, Kc: list, c_weft: np.ndarray, c_warp: np.ndarray,
-                   gain: np.ndarray, inverse=None):
-    """The collapse guard of one iteration (:class:`~core.pattern.config.CollapseGuard`).
+                   gain: np.ndarray, inverse=None) -> list:
+    """The collapse guard's gains of one iteration (:class:`~core.pattern.config.CollapseGuard`).
 
     A triangle whose smaller relative singular value
     (:func:`relative_singular_values`) is under ``guard_scale`` has its
     stiffening ``gain`` (f, updated in place) raised by ``guard_grow`` (to at
-    least 1, at most ``guard_limit``); a guarded triangle stays guarded for the
-    rest of the solve. Each guarded triangle is pulled towards its opened
-    shape: its Jacobian with the relative singular values clamped from below
-    at ``guard_open`` (rotation and shear kept; a flipped one unfolded), which
-    is itself where it is already open enough, so the pull costs nothing
-    there.
+    least 1, at most ``guard_limit``); one that is open again (at least
+    ``guard_open``) gives it back by ``guard_release`` (0 under 1), so guarded
+    triangles do not freeze their neighbourhood. Stiffened triangles are
+    pulled towards their opened shape (:func:`opened_jacobians`).
 
     ``inverse``: :func:`inverse_offsets` of ``Kc`` when the caller has it.
-    Returns (idx (k,) the guarded triangles, their opened Jacobians as 4 (k,)
-    arrays, whether any gain grew).
+    Returns the relative Jacobians ``Q`` (4 (f,) arrays) the gains were set from.
     """
     inverse = inverse if inverse is not None else inverse_offsets(Kc)
     s1, s2, q = relative_singular_values(M, Kc, c_weft, c_warp, inverse)
@@ -370,24 +368,24 @@ def collapse_guard(guard: CollapseGuard, M: list, Kc: list, c_weft: np.ndarray, 
     valid = inverse[1] & np.isfinite(s1) & np.isfinite(s2)
     gain[~valid] = 0.0
     low = valid & ~(s2 >= guard.guard_scale)
-    grown = bool(np.any(low & (gain < guard.guard_limit)))
-    if grown:
+    if np.any(low & (gain < guard.guard_limit)):
         gain[low] = np.minimum(np.maximum(gain[low] * guard.guard_grow, 1.0), guard.guard_limit)
-    # open again: the stiffening is given back, so guarded triangles do not freeze their neighbourhood
     free = (gain > 0) & (s2 >= guard.guard_open)
     if np.any(free):
         gain[free] *= guard.guard_release
         gain[free & (gain < 1.0)] = 0.0
-        grown = True
-    idx = np.flatnonzero(gain > 0)
-    if idx.size == 0:
-        return idx, None, False
-    # the relative Jacobian Q = diag(c)^-1 M K^-1 opened (signed singular values clamped from below,
-    # so a reflection unfolds; closed form: numpy's svd on a few 2x2s costs ms through LAPACK),
-    # then back to a Jacobian: Z = diag(c) Q' K
-    o = clamp_singular_values_below([x[idx] for x in q], guard.guard_open)
+    return q
+
+
+def opened_jacobians(guard_open: float, q: list, idx: np.ndarray, Kc: list, c_weft: np.ndarray,
+                     c_warp: np.ndarray) -> list:
+    """The Jacobians (4 (k,) arrays) triangles ``idx`` are pulled towards: their relative Jacobians
+    ``q`` (:func:`collapse_guard`) with the signed singular values clamped from below at
+    ``guard_open`` (rotation and shear kept; a flipped one unfolded), back in pattern terms. A
+    triangle already open enough is its own target, so the pull costs nothing there."""
+    # closed form: numpy's svd on a few 2x2s costs ms through LAPACK; Z = diag(c) Q' K
+    o = clamp_singular_values_below([x[idx] for x in q], guard_open)
     k = [x[idx] for x in Kc]
     cw, cg = c_weft[idx], c_warp[idx]
-    Z = [cw * (o[0] * k[0] + o[1] * k[2]), cw * (o[0] * k[1] + o[1] * k[3]),
-         cg * (o[2] * k[0] + o[3] * k[2]), cg * (o[2] * k[1] + o[3] * k[3])]
-    return idx, Z, grown
+    return [cw * (o[0] * k[0] + o[1] * k[2]), cw * (o[0] * k[1] + o[1] * k[3]),
+            cg * (o[2] * k[0] + o[3] * k[2]), cg * (o[2] * k[1] + o[3] * k[3])]
