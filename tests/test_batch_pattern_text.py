@@ -57,6 +57,25 @@ def test_text_is_json_dumps_up_to_float_digits():
             assert len(t) >= 2 and t.count(", ") == json.dumps(a.tolist()).count(", ")
 
 
+def test_kept_texts_are_the_formatted_ones_and_follow_the_values():
+    # large arrays' texts are kept by content: the same text alone, among others and from the
+    # store; an array changed in place is formatted again
+    from core.pattern import jsonnum
+    rng = np.random.default_rng(11)
+    big = [rng.standard_normal((jsonnum.CACHE_MIN, 2)), rng.integers(0, 10 ** 6, (jsonnum.CACHE_MIN, 3)),
+           rng.standard_normal(jsonnum.CACHE_MIN).astype(np.float32)]
+    small = [rng.standard_normal(5), np.arange(4)]
+    alone = [jsonnum._format([a])[0] for a in big]
+    first = arrays_text(big + small)
+    again = arrays_text(small + big)
+    assert first[:3] == alone and again[2:] == alone and first[3:] == again[:2]
+    for a in big:
+        a[3] = a[3] + 1
+    changed = [arrays_text([a])[0] for a in big]
+    assert changed == [jsonnum._format([a])[0] for a in big]
+    assert all(t != o for t, o in zip(changed, alone))
+
+
 def test_refusals():
     with pytest.raises(ValueError, match="JSON"):
         array_text(np.array([1.0, np.nan]))

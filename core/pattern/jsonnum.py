@@ -29,6 +29,9 @@ the same bytes. Integers are written in plain decimal. The text is what
 """
 from __future__ import annotations
 
+import hashlib
+import threading
+from collections import OrderedDict
 from typing import List, Sequence, Tuple
 
 import numpy as np
@@ -206,6 +209,40 @@ def _joined(chars, start, end, suffix, suffixes, masks) -> Tuple[bytes, np.ndarr
     return chars[masks[start, end]].tobytes(), np.cumsum(end - start)
 
 
+#: Arrays of at least this many numbers have their text kept by content (:func:`arrays_text`).
+CACHE_MIN = 1024
+#: Characters of kept texts, at most (the least recently used go first).
+CACHE_CHARS = 16_000_000
+_cache: "OrderedDict[tuple, str]" = OrderedDict()
+_cache_chars = 0
+_cache_lock = threading.Lock()
+
+
+def _content_key(a: np.ndarray) -> tuple:
+    """What an array's text depends on: dtype, shape and the bytes of its values (a 160-bit digest)."""
+    a = np.ascontiguousarray(a)
+    return a.dtype.str, a.shape, hashlib.blake2b(memoryview(a).cast("B"), digest_size=20).digest()
+
+
+def _kept(key: tuple):
+    with _cache_lock:
+        text = _cache.get(key)
+        if text is not None:
+            _cache.move_to_end(key)
+        return text
+
+
+def _keep(key: tuple, text: str) -> None:
+    global _cache_chars
+    with _cache_lock:
+        if key in _cache or len(text) > CACHE_CHARS:
+            return
+        _cache[key] = text
+        _cache_chars += len(text)
+        while _cache_chars > CACHE_CHARS:
+            _cache_chars -= len(_cache.popitem(last=False)[1])
+
+
 def arrays_text(arrays: Sequence) -> List[str]:
     """The JSON text of each numeric array, as ``json.dumps(a.tolist())`` up to float digits.
 
@@ -218,11 +255,37 @@ def arrays_text(arrays: Sequence) -> List[str]:
     list of str, one per array: nested lists, ``", "`` between items
     (``[]`` for an empty 1D array). One pass over all numbers of a kind: the
     cost is per number, not per array.
+
+    An array's text is a function of its dtype, shape and values alone, so the
+    texts of arrays of :data:`CACHE_MIN` numbers or more are kept by content
+    (:data:`CACHE_CHARS` characters at most): a batch writes the same faces,
+    vertex ids, outlines and ease targets for every body of a design, and
+    hashing an array costs a tenth of formatting it. The bytes are the same
+    either way.
     """
     arrays = [np.asarray(a) for a in arrays]
     for a in arrays:
         if a.dtype.kind not in "iuf":
             raise TypeError(f"expected an int or float array, got {a.dtype.name}")
+    out: List[str] = [""] * len(arrays)
+    keys, todo = {}, []
+    for i, a in enumerate(arrays):
+        if a.size >= CACHE_MIN:
+            keys[i] = _content_key(a)
+            text = _kept(keys[i])
+            if text is not None:
+                out[i] = text
+                continue
+        todo.append(i)
+    for i, text in zip(todo, _format([arrays[i] for i in todo])):
+        out[i] = text
+        if i in keys:
+            _keep(keys[i], text)
+    return out
+
+
+def _format(arrays: List[np.ndarray]) -> List[str]:
+    """:func:`arrays_text` of checked arrays, every number formatted."""
     depth = max([a.ndim for a in arrays] + [1])
     # what follows a number: c closing brackets, then (unless it ends its array) ", " and as
     # many opening ones: code 2c (array end) or 2c + 1
