@@ -54,6 +54,18 @@ def test_the_paper_preset_is_guarded_too(skirt):
     assert SolverConfig.named("paper").guard.guard_scale > 0 and _collapsed(pat) == 0
 
 
+def test_a_triangle_held_at_the_guard_limit_opens_in_the_extra_rounds(skirt):
+    """At a low stiffening limit (6) a few triangles stay collapsed through the planned iterations
+    and the first extra round; the later rounds raise the limit (x4 each) and open them, where a
+    fixed limit keeps 4 collapsed to the last extra iteration (the pattern refused)."""
+    from core.pattern import solver as S
+    cfg = SolverConfig.improved(guard_limit=6.0)
+    assert S.round_guard(cfg.guard, -3) is cfg.guard and S.round_guard(cfg.guard, S.COLLAPSE_ROUNDS - 1) is cfg.guard
+    assert S.round_guard(cfg.guard, 2 * S.COLLAPSE_ROUNDS).guard_limit == 6.0 * S.GUARD_ESCALATION ** 2
+    pat = solve_pattern(skirt.cut, skirt.reference, cfg)
+    assert _collapsed(pat) == 0 and pat.report["iterations"] > cfg.iterations + S.COLLAPSE_ROUNDS
+
+
 def test_relative_singular_values_match_numpy():
     rng = np.random.default_rng(3)
     f = 50
