@@ -148,10 +148,9 @@ def scales_of_offsets(M: Sequence[np.ndarray], K: Sequence[np.ndarray]) -> Tuple
     rho_weft, rho_warp : (f,) float, as :func:`scales` with grain +y: the 2D->3D map is
         ``J = Q K M^-1`` (Q orthonormal), so ``|J w| = |K M^-1 e_x|`` and ``|J g| = |K M^-1 e_y|``.
     """
-    det = M[0] * M[3] - M[1] * M[2]
-    wx, wy = M[3], -M[2]        # det * M^-1 e_x
-    gx, gy = -M[1], M[0]        # det * M^-1 e_y
+    det = np.abs(M[0] * M[3] - M[1] * M[2])
+    # det M^-1 e_x = (m11, -m10), det M^-1 e_y = (-m01, m00); the signs folded into the sums (a + (-b) is a - b)
     with np.errstate(divide="ignore", invalid="ignore"):
-        rw = np.abs(det) / np.hypot(K[0] * wx + K[1] * wy, K[2] * wx + K[3] * wy)
-        rg = np.abs(det) / np.hypot(K[0] * gx + K[1] * gy, K[2] * gx + K[3] * gy)
+        rw = det / np.hypot(K[0] * M[3] - K[1] * M[2], K[2] * M[3] - K[3] * M[2])
+        rg = det / np.hypot(K[1] * M[0] - K[0] * M[1], K[3] * M[0] - K[2] * M[1])
     return rw, rg

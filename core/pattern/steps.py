@@ -160,7 +160,8 @@ def rigid_align(blocks: PanelBlocks, U_new: np.ndarray, U_old: np.ndarray) -> np
     co, cn = np.add.reduceat(U_old, off) / cnt, np.add.reduceat(U_new, off) / cnt
     rep = blocks.per_vertex
     Pc, Qc = U_old - rep(co), U_new - rep(cn)
-    h = np.add.reduceat(Qc[:, [0, 0, 1, 1]] * Pc[:, [0, 1, 0, 1]], off)   # H = Qc^T Pc per panel
+    # H = Qc^T Pc per panel, entries (q0 p0, q0 p1, q1 p0, q1 p1): one outer product per vertex
+    h = np.add.reduceat((Qc[:, :, None] * Pc[:, None, :]).reshape(-1, 4), off)
     th = np.arctan2(h[:, 1] - h[:, 2], h[:, 0] + h[:, 3])
     return turn(Qc, rep(np.cos(th)), rep(np.sin(th))) + rep(co)
 
@@ -195,18 +196,18 @@ def flip_guard(blocks: PanelBlocks, U_old: np.ndarray, U_new: np.ndarray, s_old:
     if s_old is None:
         s_old = face_areas(blocks, U_old)
     floor = np.minimum(blocks.area_floor, 0.5 * s_old)
+    # most iterations cut nothing: the step's copy and differences are made once a triangle needs it
+    s_all = face_areas(blocks, U_new)
+    bad = np.flatnonzero(s_all <= floor)
+    if bad.size == 0:
+        return U_new.copy(), 0, s_all
     alpha = np.ones(n)
     U = U_new.copy()
     halvings = 0
     faces = None
     D = U_new - U_old
     for _ in range(GUARD_ROUNDS):
-        if faces is None:
-            s_all = face_areas(blocks, U)
-            bad = np.flatnonzero(s_all <= floor)
-            if bad.size == 0:
-                return U, halvings, s_all
-        else:
+        if faces is not None:       # the first round's bad triangles are those found above
             s = face_areas(blocks, U, faces)
             bad = faces[s <= floor[faces]]
             if bad.size == 0:
@@ -360,21 +361,25 @@ def collapse_guard(guard: CollapseGuard, M: list, Kc: list, c_weft: np.ndarray, 
     pulled towards their opened shape (:func:`opened_jacobians`).
 
     ``inverse``: :func:`inverse_offsets` of ``Kc`` when the caller has it.
-    Returns the relative Jacobians ``Q`` (4 (f,) arrays) the gains were set from.
+    Returns (the relative Jacobians ``Q`` (4 (f,) arrays) the gains were set
+    from, the guarded triangles (k,): ``gain > 0`` after the update).
     """
     inverse = inverse if inverse is not None else inverse_offsets(Kc)
     s1, s2, q = relative_singular_values(M, Kc, c_weft, c_warp, inverse)
     # a degenerate body triangle has no shape to keep; a non-finite iterate is the flip guard's to refuse
-    valid = inverse[1] & np.isfinite(s1) & np.isfinite(s2)
-    gain[~valid] = 0.0
-    low = valid & ~(s2 >= guard.guard_scale)
-    if np.any(low & (gain < guard.guard_limit)):
+    # (s1 = a + b and s2 = a - b of two hypotenuses: s1 finite makes s2 finite)
+    valid = inverse[1] & np.isfinite(s1)
+    np.multiply(gain, valid, out=gain)      # 0 where not valid (gains are finite, >= 0)
+    low = np.flatnonzero(valid & (s2 < guard.guard_scale))
+    if np.any(gain[low] < guard.guard_limit):
         gain[low] = np.minimum(np.maximum(gain[low] * guard.guard_grow, 1.0), guard.guard_limit)
-    free = (gain > 0) & (s2 >= guard.guard_open)
-    if np.any(free):
+    held = np.flatnonzero(gain > 0)
+    free = held[s2[held] >= guard.guard_open]
+    if free.size:
         gain[free] *= guard.guard_release
-        gain[free & (gain < 1.0)] = 0.0
-    return q
+        gain[free[gain[free] < 1.0]] = 0.0
+        held = held[gain[held] > 0]
+    return q, held
 
 
 def opened_jacobians(guard_open: float, q: list, idx: np.ndarray, Kc: list, c_weft: np.ndarray,
