@@ -485,6 +485,8 @@ class PatternSolver:
         aw = (a * W2[0], a * W2[1])
         # a product by 1.0 is its operand: skipped where the weights are 1 (the same bits, fewer passes)
         unit_columns = W2[0] == 1.0 and W2[1] == 1.0
+        # a reference or transfer solve aims the feedback at its own targets: their finiteness once
+        targets_finite = None if adapting else np.isfinite(c_weft) & np.isfinite(c_warp)
         lam_ease, lam_reg = cfg.weights.ease, cfg.weights.regulariser
         n_it = int(iterations)
         for k in range(n_it):
@@ -510,7 +512,8 @@ class PatternSolver:
                             goal_g = np.fmax(goal_g, poses["margin"] * rg / pg / poses["eps_warp"])
                     goal_w = goal_w if ad.cap_weft is None else np.fmin(goal_w, ad.cap_weft * poses["ease_weft"])
                     goal_g = goal_g if ad.cap_warp is None else np.fmin(goal_g, ad.cap_warp * poses["ease_warp"])
-                ok = np.isfinite(rw) & np.isfinite(rg) & (rw > 0) & (rg > 0) & np.isfinite(goal_w) & np.isfinite(goal_g)
+                ok = np.isfinite(rw) & np.isfinite(rg) & (rw > 0) & (rg > 0) & (
+                    targets_finite if not adapting else np.isfinite(goal_w) & np.isfinite(goal_g))
                 if gain_w > 0:
                     corr_w[ok] *= np.clip((goal_w[ok] / rw[ok]) ** gain_w, lower, 1 + step)
                 if gain_g > 0:
@@ -521,10 +524,12 @@ class PatternSolver:
             if retarget:
                 tg = rest_targets(Kc, c_weft * corr_w, c_warp * corr_g, model)
             RT, Te = local_step(cfg, M, tg, W2, state.local_state)
-            res2 = [(M[j] - RT[j]) ** 2 for j in range(4)]
-            if not unit_columns:
-                res2 = [W2[j % 2] * res2[j] for j in range(4)]
-            state.energies.append(float(np.sum(a * (((res2[0] + res2[1]) + res2[2]) + res2[3]))))
+            # the regulariser's energy (a diagnostic): sum_t a_t |(M_t - R_t T_t) W|^2, one dot product per entry
+            energy = 0.0
+            for j in range(4):
+                r = M[j] - RT[j]
+                energy += W2[j % 2] * float(np.dot(a, np.multiply(r, r, out=r)))
+            state.energies.append(energy)
             # B = lambda_ease T + lambda_reg R T: one right-hand side for both terms (same weights)
             B = [lam_ease * Te[j] + (RT[j] if lam_reg == 1.0 else lam_reg * RT[j]) for j in range(4)]
             solve_k, aw_k = lu, aw
@@ -565,7 +570,8 @@ class PatternSolver:
             M = self.jacobians(U)
             if cfg.realign_grain:
                 U, M = realign_grain(self.blocks, U, M)
-            state.step = float(np.sqrt(np.mean(np.sum((U - U_prev) ** 2, axis=1)))) / self.mean_edge
+            d = (U - U_prev).ravel()
+            state.step = float(np.sqrt(np.dot(d, d) / len(U))) / self.mean_edge
             state.iteration += 1
         state.U, state.M, state.s_cur, state.tg = U, M, s_cur, tg
         state.seconds += time.perf_counter() - t0
