@@ -16,14 +16,18 @@ its left ones. On any body instance the right half is then what the body's
 own asymmetry gives, never a meshing artefact.
 
 The left half is the faces whose body triangle is on the body's left (the
-template has no triangle across its midline); a ``*_left`` panel must lie in
-it. Vertices shared by both halves lie on the midline; their rows get the
-mirror-symmetric average (a round-off change).
+template has no triangle across its midline). Vertices shared by both halves
+lie on the midline; their rows get the mirror-symmetric average (a round-off
+change). A centre seam between a ``*_left`` panel and its own mirror (the
+pants' centre front and back: plane sections sampled every 3 cm and joined by
+geodesics, up to 0.6 mm beside the midline) is moved onto the midline: the
+``*_right`` panel's slivers on the body's left join the ``*_left`` panel, and
+the seam's runs become the midline edges between the pair.
 
 Whenever the garment is not mirror-symmetric by name and topology (a panel
 or line without its mirror, a skirt bridge, a line whose reflection is not
-another line, a ``*_left`` panel across the midline: a centre seam traced
-beside it, as on the pants), :func:`symmetrize` returns None and the cut keeps its mesh.
+another line, a panel or line changed by more than :data:`SHAPE_TOLERANCE`),
+:func:`symmetrize` returns None and the cut keeps its mesh.
 """
 from __future__ import annotations
 
@@ -105,13 +109,15 @@ def symmetrize(X: np.ndarray, F: np.ndarray, lab: np.ndarray, face_side: np.ndar
     lab = np.asarray(lab, dtype=np.int64)
     n = len(X)
     left = np.asarray(face_side) == 1
-    ps = plan["panel_side"][lab]
-    if not left.any() or np.any(ps[left] == 0) or np.any(ps[~left] == 1):
-        # a *_left panel reaching over the midline (a centre seam traced beside it): its mirror
-        # would overlap its own faces; the garment keeps its mesh
+    if not left.any():
         return None
-    # a *_left panel's faces mirror onto its *_right panel: both must lie on their own side
     pm = plan["panel"]
+    # a centre seam between a *_left panel and its own mirror (the pants' centre front and
+    # back) is traced a fraction of a millimetre beside the midline: the slivers of the
+    # *_right panel on the body's left join the *_left panel, and the seam is rebuilt on the
+    # midline (_centre_runs); _same_shape bounds what this moves
+    centre = _centre_lines(F, lab, lines, plan, n)
+    lab = np.where(left & (plan["panel_side"][lab] == 0), pm[lab], lab)
     inL = np.zeros(n, dtype=bool)
     inL[F[left].reshape(-1)] = True
     inR = np.zeros(n, dtype=bool)
@@ -144,7 +150,8 @@ def symmetrize(X: np.ndarray, F: np.ndarray, lab: np.ndarray, face_side: np.ndar
     FL = F[left]
     Fnew = np.concatenate([new[FL], mir[FL][:, ::-1]])
     labnew = np.concatenate([lab[left], pm[lab[left]]])
-    out_lines = _mirror_lines(lines, plan, inL, mid, new, mir)
+    out_lines = _mirror_lines(lines, plan, inL, mid, new, mir, centre, _midline_edges(F, left, lab, pm, new),
+                              np.asarray(X, float), Xnew)
     if out_lines is None or not _lines_mirror(out_lines, plan, new, mir, n_new=len(Xnew)):
         return None
     if not _same_shape(X, F, lab, lines, Xnew, Fnew, labnew, out_lines):
@@ -177,13 +184,99 @@ def _same_shape(X, F, lab, lines, X2, F2, lab2, lines2) -> bool:
     return True
 
 
-def _mirror_lines(lines, plan, inL, mid, new, mir) -> Optional[List[List[np.ndarray]]]:
+def _edge_keys(F: np.ndarray, n: int) -> np.ndarray:
+    """(3 f,) int64 undirected edge key ``min * n + max`` of each face's three edges."""
+    e = np.stack([F, np.roll(F, -1, axis=1)], axis=2).reshape(-1, 2)
+    return e.min(1) * np.int64(n) + e.max(1)
+
+
+def _centre_lines(F, lab, lines, plan, n) -> Dict[int, set]:
+    """Midline lines that are centre seams: line index -> the set of their panels' pair keys
+    ``min(a, mirror a)`` of the sided panels ``a`` they separate from their own mirror."""
+    keys = _edge_keys(F, n)
+    order = np.argsort(keys, kind="stable")
+    sk, fl = keys[order], lab[order // 3]
+    pm = plan["panel"]
+    out = {}
+    for k, runs in enumerate(lines):
+        if plan["line_side"][k] >= 0 or not runs:
+            continue
+        e = np.concatenate([np.sort(np.stack([r[:-1], r[1:]], 1), axis=1) for r in runs])
+        q = e[:, 0] * np.int64(n) + e[:, 1]
+        lo, hi = np.searchsorted(sk, q, "left"), np.searchsorted(sk, q, "right")
+        pairs = set()
+        for a, b in zip(lo.tolist(), hi.tolist()):
+            if b - a == 2 and fl[a] != fl[a + 1] and pm[fl[a]] == fl[a + 1]:
+                pairs.add(int(min(fl[a], fl[a + 1])))
+        if pairs:
+            out[k] = pairs
+    return out
+
+
+def _midline_edges(F, left, lab, pm, new) -> Dict[int, np.ndarray]:
+    """Per sided panel pair key (see :func:`_centre_lines`), its edges on the midline after
+    the rebuild ((e, 2) new ids): the edges both halves share, on a face of that pair."""
+    n = np.int64(len(new))
+    kl, kr = _edge_keys(F[left], n), _edge_keys(F[~left], n)
+    on_mid = np.isin(kl, kr)
+    fl = np.repeat(lab[left], 3)
+    out = {}
+    for key in np.unique(np.minimum(fl, pm[fl])[on_mid & (fl != pm[fl])]).tolist():
+        k = kl[on_mid & (np.minimum(fl, pm[fl]) == key)]
+        out[int(key)] = new[np.stack([k // n, k % n], 1)]
+    return out
+
+
+def _chains(edges: np.ndarray) -> Optional[List[np.ndarray]]:
+    """The vertex sequences of a set of edges that form disjoint open paths (None otherwise),
+    each from its smaller end id."""
+    if len(edges) == 0:
+        return []
+    adj: Dict[int, List[int]] = {}
+    for a, b in edges.tolist():
+        adj.setdefault(a, []).append(b)
+        adj.setdefault(b, []).append(a)
+    if max(len(v) for v in adj.values()) > 2:
+        return None
+    seen, out = set(), []
+    for start in sorted(v for v, nb in adj.items() if len(nb) == 1):
+        if start in seen:
+            continue
+        path, prev = [start], None
+        while True:
+            seen.add(path[-1])
+            nxt = [w for w in adj[path[-1]] if w != prev]
+            if not nxt:
+                break
+            prev = path[-1]
+            path.append(nxt[0])
+        out.append(np.asarray(path, dtype=np.int64))
+    return out if len(seen) == len(adj) else None        # a closed loop is no centre seam
+
+
+def _centre_runs(runs, pairs, midline, X, Xnew) -> Optional[List[np.ndarray]]:
+    """A centre seam rebuilt on the midline: the midline edges of its panel pairs, each run
+    running the way the old line ran (from the end nearer its first vertex; ``X``: the old
+    mesh's vertices, ``Xnew``: the rebuilt mesh's)."""
+    e = [midline[k] for k in sorted(pairs) if k in midline]
+    chains = _chains(np.concatenate(e)) if e else None
+    if not chains:
+        return None
+    first = X[np.concatenate(runs)[0]]
+    return [c if np.linalg.norm(Xnew[c[0]] - first) <= np.linalg.norm(Xnew[c[-1]] - first) else c[::-1].copy()
+            for c in chains]
+
+
+def _mirror_lines(lines, plan, inL, mid, new, mir, centre, midline, X, Xnew) -> Optional[List[List[np.ndarray]]]:
     """Every line's runs in the new ids: a left line's kept, a right line's the mirror of its
-    left line's, a midline line's rebuilt by :func:`_self_mirror_runs`."""
+    left line's, a centre seam's rebuilt on the midline (:func:`_centre_runs`), another
+    midline line's by :func:`_self_mirror_runs`."""
     out: List[List[np.ndarray]] = []
     for k, runs in enumerate(lines):
         side = plan["line_side"][k]
-        if side < 0:
+        if k in centre:
+            got = _centre_runs(runs, centre[k], midline, X, Xnew)
+        elif side < 0:
             got = _self_mirror_runs(runs, inL, mid, new, mir)
         else:
             src = runs if side == 1 else lines[plan["line"][k]]
