@@ -135,16 +135,16 @@ def make_solver(prep: Prepared, config: str = "improved", iterations: Optional[i
                          progress=progress)
 
 
-def _checked_metrics(pattern, checks: Optional[Sequence[str]] = None) -> dict:
+def _checked_metrics(pattern, checks: Optional[Sequence[str]] = None, vertices=None) -> dict:
     """The metrics of ``pattern`` (:func:`core.metrics.pattern.pattern_report`, with the region
     report and the collapse sites on the pattern's body landmarks); a pattern failing one of
     ``checks`` (default :func:`core.metrics.checks.checks_for` the pattern: flipped and collapsed;
     a live preview still converging only flipped) is an error naming the panel and where on the
-    body, not a figure."""
+    body, not a figure. ``vertices``: the pattern's body instance when the caller has it."""
     from .metrics.checks import check_pattern, checks_for
     from .metrics.pattern import pattern_report
     from .metrics.regions import body_landmarks
-    metrics = pattern_report(pattern, body_landmarks(pattern))
+    metrics = pattern_report(pattern, body_landmarks(pattern, vertices=vertices))
     check_pattern(metrics, checks_for(pattern) if checks is None else checks)
     return metrics
 
@@ -191,7 +191,8 @@ def reference(prep: Prepared, config: str = "improved", iterations: Optional[int
 
 
 def transfer(prep: Prepared, size, config: str = "improved", iterations: Optional[int] = None,
-             gather_all: bool = False, solver=None, start=None, progress: Optional[Progress] = None) -> PatternRun:
+             gather_all: bool = False, solver=None, start=None, progress: Optional[Progress] = None,
+             vertices=None) -> PatternRun:
     """Shape transfer (paper Eq. transfer-scale): the same cut and ease field on another body shape.
 
     Parameters
@@ -204,6 +205,8 @@ def transfer(prep: Prepared, size, config: str = "improved", iterations: Optiona
     The reference pattern is solved first (or ``start`` is taken as it) and
     seeds the transfer solve; the report records the transfer deviation (the
     ease compliance on the target body) beside the reference's own compliance.
+    ``vertices``: the target body's instance in the cut's pose when the caller
+    has made it (a batch item measured it), so it is not evaluated again.
     """
     from .body.instance import body_instance, instance_shape
     from .metrics.pattern import ease_compliance
@@ -220,14 +223,14 @@ def transfer(prep: Prepared, size, config: str = "improved", iterations: Optiona
     ref_pat = start if start is not None else _solve_reference(prep, solver, sub(progress, 0.15, 0.5))
     pose = prep.cut.body.get("pose")
     shape = instance_shape(prep.body, size)
-    target = body_instance(prep.body, shape, pose)
+    target = vertices if vertices is not None else body_instance(prep.body, shape, pose)
     pattern = transfer_pattern(prep.cut, prep.reference, target, solver=solver, start=ref_pat,
                                style=prep.design.name,
                                body={"model": prep.cut.body.get("model", prep.body.name), "shape": shape,
                                      "pose": pose, **({"size": size} if isinstance(size, str) else {})},
                                progress=sub(progress, 0.5, 1.0))
     optimize = time.perf_counter() - t0
-    metrics = _checked_metrics(pattern)
+    metrics = _checked_metrics(pattern, vertices=target)
     dev = metrics["compliance"]                       # the transfer deviation is the compliance on the target
     refc = (ref_pat.report.get("metrics") or {}).get("compliance") or ease_compliance(ref_pat)
     label = size if isinstance(size, str) else "custom"

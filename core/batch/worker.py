@@ -190,7 +190,7 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
 
         t = time.perf_counter()
         run = wf.transfer(ctx.prep, target, config=item.options.config, solver=ctx.solver, start=ctx.start,
-                          progress=check)
+                          progress=check, vertices=rest if not pose else None)
         timings["transfer"] = run.timings["optimize"]
         row.update({f"shape.{k}": v for k, v in sorted((run.pattern.body.get("shape") or {}).items())})
         row.update(_pattern_row(run.pattern))

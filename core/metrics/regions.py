@@ -25,11 +25,13 @@ REGION_LANDMARKS = ("bust_left", "bust_right", "shoulder_blade_left", "shoulder_
 REGION_RADIUS = 0.06
 
 
-def body_landmarks(pattern, model=None) -> Dict[str, np.ndarray]:
+def body_landmarks(pattern, model=None, vertices=None) -> Dict[str, np.ndarray]:
     """Every landmark of the pattern's body (its ``body`` record), name -> (3,) position in m.
 
     The body is the instance the pattern's panels were solved on (the target
-    shape of a transfer, the reference of a reference or adapted pattern).
+    shape of a transfer, the reference of a reference or adapted pattern);
+    ``vertices`` (V, 3): that instance when the caller has made it (a transfer
+    has), so it is not evaluated again.
     Returns an empty dict when the record names no model, or one that cannot be
     loaded (a synthetic pattern, a moved OBJ file).
     """
@@ -41,7 +43,7 @@ def body_landmarks(pattern, model=None) -> Dict[str, np.ndarray]:
         return {}
     try:
         model = model if model is not None else load_spec(spec)    # an OBJ template with its landmarks file
-        V, _ = spec_instance(spec, model=model)
+        V = vertices if vertices is not None else spec_instance(spec, model=model)[0]
     except (EaseError, OSError):
         return {}
     return {n: np.asarray(model.landmark_position(n, V), float) for n in sorted(model.landmarks)}
