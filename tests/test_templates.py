@@ -186,6 +186,15 @@ def check_body_coverage(cut, G, GX, X, skirt=False):
     rows = np.intersect1d(rows, used)
     original[E.indices[E.indptr[rows]]] = np.isclose(E.data[E.indptr[rows]], 1.0)
     inside = original[body_faces].all(axis=1)
+    # an opening snapped through a corner (core.cut.split: SNAP_SLIVER) may cross the triangle beside it:
+    # a triangle with a corner on a hem is partly outside the garment though all its corners are in it
+    on_hem = np.zeros(len(X), dtype=bool)
+    for p in cut.panels:
+        for line in cut.hems.get(p.name, []):
+            g = np.asarray(p.vertex_ids)[np.asarray(line)]
+            g = g[single[g]]
+            on_hem[E.indices[E.indptr[g]][np.isclose(E.data[E.indptr[g]], 1.0)]] = True
+    inside &= ~on_hem[body_faces].any(axis=1)
     if skirt:       # the skirt topology removed the band between the legs: not garment surface
         from core.cut.skirt import make_skirt
         from core.cut.split import CutMesh

@@ -1,9 +1,11 @@
-"""Variants of the fitted blouse template with more darts than it ships with.
+"""Variants of the fitted blouse template with other darts than it ships with.
 
-:func:`blouse_waist_darts` adds the tailor's front waist dart (from the hem up towards the bust
-point), a shoulder dart towards the bust point and, optionally, a back waist dart (from the hem
-towards the shoulder blade) to :func:`core.design.templates.blouse_fitted`. It is not a shipped
-template (see its docs and docs/darts.md, "Limits": the darts pay only on a converged solve).
+The template (:func:`core.design.templates.blouse_fitted`) has bust darts from the side seams
+and front waist darts from the hem, both towards the bust points. :func:`blouse_waist_darts`
+sets the waist darts' intake (or leaves them out), adds a shoulder dart towards the bust point
+and, optionally, a back waist dart (from the hem towards the shoulder blade). It is not a shipped
+template (see its docs and docs/darts.md, "Limits": the shoulder darts pay only on a converged
+solve).
 """
 from __future__ import annotations
 
@@ -17,17 +19,15 @@ SHOULDER_DART_INTAKE = 0.02
 
 
 def blouse_waist_darts(waist=WAIST_DART_INTAKE, shoulder=SHOULDER_DART_INTAKE, back=None, apex_offset=0.02):
-    """The fitted blouse with the tailor's front waist dart (from the hem up towards the bust
-    point), a shoulder dart towards the bust point and, with ``back`` (m), a back waist dart from
-    the hem towards the shoulder blade, beside the side-seam bust darts; ``*_right`` mirrored.
+    """The fitted blouse with its front waist dart (from the hem up towards the bust point) at
+    intake ``waist``, a shoulder dart towards the bust point and, with ``back`` (m), a back waist
+    dart from the hem towards the shoulder blade, beside the side-seam bust darts; ``*_right``
+    mirrored.
 
-    Not a shipped template: the darts pay only on a converged solve. Measured on women:M
-    (ease 1.1 / 1.3; weft %, warp %, shear p95 deg, bust region %): at the solver's default 20
-    iterations 1.81 / 1.22, 8.5, 6.8 / 7.6, 5.8 / 3.9 and 1 collapsed triangle at 1.3 (the bust
-    darts alone: 1.49 / 1.48, 7.0, 4.7 / 5.1, 5.1 / 5.2); at 200 iterations 0.54 / 0.55, 8.8 / 9.0,
-    5.9 / 6.4, 2.3 / 2.5; at 200 iterations with warp slack 0 (ease 1.1) 0.58, 2.98, 7.1, 2.6
-    (docs/darts.md, "Limits"). Intakes in m (None: leave the dart out), ``apex_offset`` m for
-    the front darts.
+    Not a shipped template: the shoulder darts pay only on a converged solve (figures on women:M
+    in benchmarks/results/pattern.md, "Women's wear", the "waist + shoulder darts" rows, and
+    docs/darts.md, "Limits"). Intakes in m (None: leave the dart out), ``apex_offset`` m for the
+    front darts.
     """
     d = blouse_fitted()
     d["description"] = ("Women's sleeveless fitted blouse (women's chart, size M) with bust, waist and shoulder "
@@ -35,7 +35,10 @@ def blouse_waist_darts(waist=WAIST_DART_INTAKE, shoulder=SHOULDER_DART_INTAKE, b
                                                            if back else "") + ".")
     g = d["garments"][0]
     front = next(p for p in g["panels"] if p["name"] == "front")
-    front["darts"][0]["apex_offset"] = apex_offset
+    # the template's own darts: the bust dart, and its waist dart (set here, or left out)
+    bust = next(x for x in front["darts"] if x["name"] == "bust_dart_left")
+    bust["apex_offset"] = apex_offset
+    front["darts"] = [bust]
     extra = (("waist_dart_left", "hem", waist), ("shoulder_dart_left", "shoulder_left", shoulder))
     front["darts"] += [{"name": n, "line": line, "apex": "bust_left", "intake": w, "apex_offset": apex_offset}
                        for n, line, w in extra if w]
