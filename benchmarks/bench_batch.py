@@ -41,7 +41,8 @@ REPO = Path(__file__).resolve().parent.parent
 DESIGN = "shirt_long_sleeve"
 
 #: core.batch.run.WORKER_CONFIG as a Dask config file for workers started by hand.
-WORKER_YAML = "distributed:\n  nanny:\n    pre-spawn-environ:\n      MALLOC_TRIM_THRESHOLD_: null\n"
+WORKER_YAML = ("distributed:\n  nanny:\n    pre-spawn-environ:\n      MALLOC_TRIM_THRESHOLD_: null\n"
+               "  worker:\n    profile:\n      enabled: false\n")
 SEED = 2024
 
 

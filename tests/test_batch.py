@@ -113,3 +113,31 @@ def test_cli_errors_exit_2(tmp_path, capsys):
     code = main(["batch", str(DESIGN), "--smpl-betas", str(tmp_path / "b.npy"), "--out", str(tmp_path / "o")])
     assert code == 2 and "--model" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+def test_the_documented_worker_settings_are_the_local_clusters():
+    # a cluster started by hand gets the LocalCluster's worker settings from a config file: the one
+    # the bench writes and docs/batch.md shows must say what core.batch.run.WORKER_CONFIG says
+    import re
+    import sys
+    from pathlib import Path
+
+    import yaml
+
+    from core.batch.run import WORKER_CONFIG
+    root = Path(__file__).resolve().parent.parent
+    sys.path.insert(0, str(root / "benchmarks"))
+    try:
+        from bench_batch import WORKER_YAML
+    finally:
+        sys.path.remove(str(root / "benchmarks"))
+
+    def flat(d, prefix=""):
+        out = {}
+        for k, v in d.items():
+            out.update(flat(v, f"{prefix}{k}.") if isinstance(v, dict) else {f"{prefix}{k}": v})
+        return out
+
+    doc = (root / "docs" / "batch.md").read_text(encoding="utf-8")
+    block = re.search(r"```yaml\n(distributed:.*?)```", doc, re.S).group(1)
+    assert flat(yaml.safe_load(WORKER_YAML)) == WORKER_CONFIG == flat(yaml.safe_load(block))
