@@ -10,6 +10,26 @@ from typing import List
 import numpy as np
 
 
+def row_dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise dot products (F,) of (F, 3) arrays: ``numpy.sum(a * b, axis=1)`` term by term in its
+    order (the same bits), without numpy's reduction over a short strided axis (several times slower)."""
+    return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
+
+
+def row_norm(a: np.ndarray) -> np.ndarray:
+    """Row-wise lengths (F,) of an (F, 3) array: ``numpy.linalg.norm(a, axis=1)``, the same bits."""
+    return np.sqrt(row_dot(a, a))
+
+
+def row_cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross products (F, 3) of (F, 3) arrays: ``numpy.cross(a, b)``, the same bits."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return out
+
+
 def triangle_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Unsigned triangle areas.
 
@@ -24,7 +44,7 @@ def triangle_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """
     v = np.asarray(vertices, float)
     f = np.asarray(faces, int)
-    return 0.5 * np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1)
+    return 0.5 * row_norm(row_cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]))
 
 
 def signed_areas_2d(uv: np.ndarray, faces: np.ndarray) -> np.ndarray:

@@ -19,6 +19,8 @@ from typing import List, Sequence, Tuple
 
 import numpy as np
 
+from .mesh import row_cross, row_dot, row_norm
+
 
 def weft_of(grain: np.ndarray) -> np.ndarray:
     """The 2D weft (2,): the grain (2,) turned by +90 degrees."""
@@ -74,10 +76,9 @@ def scales(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray, grain: np.ndarray
     g = np.asarray(grain, float) / np.linalg.norm(grain)
     jw = J @ weft_of(g)
     jg = J @ g
-    lw = np.linalg.norm(jw, axis=1)
-    lg = np.linalg.norm(jg, axis=1)
+    lw, lg = row_norm(jw), row_norm(jg)
     with np.errstate(divide="ignore", invalid="ignore"):
-        cosang = np.sum(jw * jg, axis=1) / (lw * lg)
+        cosang = row_dot(jw, jg) / (lw * lg)
         shear = np.abs(np.degrees(np.arccos(np.clip(cosang, -1.0, 1.0))) - 90.0)
         return 1.0 / lw, 1.0 / lg, shear
 
@@ -117,11 +118,10 @@ def intrinsic_offsets(corners: np.ndarray, G: np.ndarray) -> Tuple[np.ndarray, n
     """
     S = gradient_jacobians(corners, G)  # (f, 3, 2)
     sw, sg = S[:, :, 0], S[:, :, 1]
-    lw = np.linalg.norm(sw, axis=1)
-    lg = np.linalg.norm(sg, axis=1)
+    lw, lg = row_norm(sw), row_norm(sg)
     safe = np.where(lg > 0, lg, 1.0)
-    along = np.sum(sw * sg, axis=1) / safe
-    across = np.linalg.norm(np.cross(sw, sg), axis=1) / safe
+    along = row_dot(sw, sg) / safe
+    across = row_norm(row_cross(sw, sg)) / safe
     K = np.zeros((len(G), 2, 2))
     K[:, 0, 0] = across
     K[:, 1, 0] = along
