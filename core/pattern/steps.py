@@ -91,12 +91,15 @@ def local_step(config: SolverConfig, M: list, tg: dict, W2: np.ndarray, state: d
     y -= np.multiply(d0, t3, out=t3)
     r = np.hypot(x, y)
     ok = r > 0
-    rs = np.where(ok, r, 1.0)
-    c, sn = np.where(ok, np.divide(x, rs, out=t3), 1.0), np.where(ok, np.divide(y, rs, out=t4), 0.0)
-    delta = np.multiply(d0, d0, out=rs)
+    if ok.all():        # the usual case: what the where() below would pick everywhere
+        c, sn = x / r, y / r
+    else:
+        rs = np.where(ok, r, 1.0)
+        c, sn = np.where(ok, np.divide(x, rs, out=t3), 1.0), np.where(ok, np.divide(y, rs, out=t4), 0.0)
+    delta = d0 * d0
     delta -= np.multiply(omdw, dw, out=t3)
     delta *= 0.5
-    if np.any(delta != 0):
+    if delta.any():
         p = np.multiply(delta, Cdiff, out=t4)
         q = np.multiply(-2.0 * delta, C01, out=delta)
         c2 = c * c
@@ -118,7 +121,11 @@ def local_step(config: SolverConfig, M: list, tg: dict, W2: np.ndarray, state: d
         pt = np.multiply(4.0, q, out=y)
         g2 -= np.multiply(pt, s2, out=pt)
         pos = g2 > 0
-        step = np.where(pos, np.negative(g1, out=g1) / np.where(pos, g2, 1.0), 0.0)
+        if pos.all():
+            step = np.negative(g1, out=g1)
+            step /= g2
+        else:
+            step = np.where(pos, np.negative(g1, out=g1) / np.where(pos, g2, 1.0), 0.0)
         nrm = np.multiply(step, step, out=t3)
         nrm += 1.0
         np.sqrt(nrm, out=nrm)
