@@ -17,7 +17,7 @@ from ..errors import PatternError
 from ..geom.mesh import triangle_areas
 from ..progress import Progress, report
 from . import init as _init
-from .mirror_flat import self_mirror_map, symmetric_flattening
+from .mirror_flat import approximate_mirror, self_mirror_map, symmetric_flattening
 
 #: Smallest 2D area a triangle may keep in a step, as a fraction of its initial area (flip guard).
 AREA_FLOOR = 1e-6
@@ -93,8 +93,12 @@ def flatten_panels(cut, positions: np.ndarray, progress: Optional[Progress] = No
         if np.all(triangle_areas(xyz, F) <= 0):
             raise PatternError(f"panel {p.name!r}: all triangles are degenerate on the reference body")
         fl = _init.flatten_panel(xyz, F, np.asarray(p.warp_dir, float))
-        mirror = self_mirror_map(xyz, F) if p.mirror_of is None else None
-        if mirror is not None:      # a panel across the body: its flattening made symmetric too
+        mirror = None
+        if p.mirror_of is None:     # a panel across the body: its flattening made symmetric too
+            mirror = self_mirror_map(xyz, F)
+            if mirror is None:      # its mesh not its own mirror image (the skirt topology)
+                mirror = approximate_mirror(xyz, F)
+        if mirror is not None:
             fl = symmetric_flattening(fl, xyz, F, np.asarray(p.warp_dir, float), mirror)
         flat.append(fl)
         panels.append(PanelData(p.name, offset, len(p.vertex_ids), F, F + offset, np.asarray(p.vertex_ids, int),

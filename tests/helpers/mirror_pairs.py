@@ -45,8 +45,9 @@ def seam_asymmetry(pattern) -> Dict[str, float]:
 
 def outline_asymmetry(pattern) -> Dict[str, float]:
     """Per mirror pair of panels (or a panel that is its own mirror): the largest distance (m)
-    between a boundary vertex of one and the other's boundary reflected (x -> -x) and aligned
-    (centroids and principal axes), as symmetric Hausdorff distance over vertices."""
+    between a boundary vertex of one and the other's boundary polyline reflected (x -> -x) and
+    aligned, both ways (symmetric Hausdorff distance of vertices to outlines: two outlines of
+    one shape sampled by different vertices, as on the skirt topology, are 0 apart)."""
     out = {}
     names = [p.name for p in pattern.panels]
     for p in pattern.panels:
@@ -65,9 +66,17 @@ def _outline(panel) -> np.ndarray:
     return np.asarray(panel.uv[np.asarray(loop)], float)
 
 
+def _to_loop(P: np.ndarray, loop: np.ndarray) -> np.ndarray:
+    """(k,) distance of every point of ``P`` to the closed polyline ``loop``."""
+    A, AB = loop, np.roll(loop, -1, axis=0) - loop
+    t = np.einsum("pkd,kd->pk", P[:, None] - A[None], AB) / np.maximum(np.einsum("kd,kd->k", AB, AB), 1e-30)
+    C = A[None] + np.clip(t, 0.0, 1.0)[..., None] * AB[None]
+    return np.linalg.norm(P[:, None] - C, axis=2).min(axis=1)
+
+
 def _aligned_hausdorff(a: np.ndarray, b: np.ndarray) -> float:
     """Rigidly align ``b`` onto ``a`` (best rotation by nearest-point iterations) and return the
-    symmetric vertex-to-vertex Hausdorff distance."""
+    symmetric Hausdorff distance of each outline's vertices to the other outline."""
     from scipy.spatial import cKDTree
     b = b - b.mean(0) + a.mean(0)
     ta = cKDTree(a)
@@ -80,6 +89,4 @@ def _aligned_hausdorff(a: np.ndarray, b: np.ndarray) -> float:
             U[:, -1] *= -1
             R = U @ Vt
         b = P @ R + a[j].mean(0)
-    d1 = ta.query(b)[0].max()
-    d2 = cKDTree(b).query(a)[0].max()
-    return float(max(d1, d2))
+    return float(max(_to_loop(b, a).max(), _to_loop(a, b).max()))
