@@ -111,6 +111,7 @@ def _accuracy(pattern, pieces, texts: dict) -> dict:
 MARKER_SIZES = ("XS", "S", "M", "L", "XL")
 MARKER_WIDTH = 1.5            # m of fabric
 MARKER_BUDGETS = (10, 30, 60)  # nester seconds; quick: the first two, shorter
+MARKER_SEEDS = (0, 1, 2)      # the all-core rows: one run per seed (seeds differ by about as much as settings do)
 STRIP_EFFICIENCY_NOTE = "the export's sheet layout of the same pieces (skyline of bounding boxes 2 cm apart, 1.5 m wide)"
 
 
@@ -140,17 +141,27 @@ def _marker_rows(quick: bool = False) -> dict:
     rows = [{"method": "strip layout", "seconds": 0.0, "length_m": round(float(strip.size[1]), 3),
              "efficiency_pct": round(100 * area / (MARKER_WIDTH * float(strip.size[1])), 2)}]
     cores = os.cpu_count() or 1
-    runs = [(1, 1, b) for b in ((5, 10) if quick else MARKER_BUDGETS)]
+    runs = [(1, 1, b, (0,)) for b in ((5, 10) if quick else MARKER_BUDGETS)]
     if cores > 1 and not quick:
-        runs += [(cores, 1, b) for b in MARKER_BUDGETS] + [(1, cores, MARKER_BUDGETS[-1])]
+        runs += [(cores, 1, b, MARKER_SEEDS) for b in MARKER_BUDGETS] + [(1, cores, MARKER_BUDGETS[-1], (0,))]
     load = [round(os.getloadavg()[0], 2)]
-    for threads, tries, budget in runs:
-        cpu0 = _child_cpu()
-        m = nest(items, MARKER_WIDTH, seconds=budget, seed=0, threads=threads, tries=tries)
-        rows.append({"method": "spyrrow", "threads": threads, "tries": tries, "seconds": budget,
-                     "length_m": round(m.length, 3), "efficiency_pct": round(100 * m.efficiency, 2),
-                     "stopped": m.stopped, "wall_s": round(m.seconds, 1), "cpu_s": round(_child_cpu() - cpu0, 1),
-                     "load": round(os.getloadavg()[0], 2)})
+    for threads, tries, budget, seeds in runs:
+        got = []
+        for seed in seeds:
+            cpu0 = _child_cpu()
+            m = nest(items, MARKER_WIDTH, seconds=budget, seed=seed, threads=threads, tries=tries)
+            got.append({"efficiency_pct": 100 * m.efficiency, "length_m": m.length, "stopped": m.stopped,
+                        "wall_s": m.seconds, "cpu_s": _child_cpu() - cpu0, "load": os.getloadavg()[0]})
+        eff = [g["efficiency_pct"] for g in got]
+        rows.append({"method": "spyrrow", "threads": threads, "tries": tries, "seconds": budget, "seeds": list(seeds),
+                     "length_m": round(float(np.mean([g["length_m"] for g in got])), 3),
+                     "efficiency_pct": round(float(np.mean(eff)), 2),
+                     "efficiency_pct_min": round(min(eff), 2), "efficiency_pct_max": round(max(eff), 2),
+                     "efficiency_pct_by_seed": [round(e, 2) for e in eff],
+                     "stopped": sorted({g["stopped"] for g in got}),
+                     "wall_s": round(float(np.mean([g["wall_s"] for g in got])), 1),
+                     "cpu_s": round(float(np.mean([g["cpu_s"] for g in got])), 1),
+                     "load": [round(g["load"], 2) for g in got]})
     load.append(round(os.getloadavg()[0], 2))
     return {"pieces": sum(it.count for it in items), "sizes": list(MARKER_SIZES), "width_m": MARKER_WIDTH,
             "cores": cores, "load_start_end": load, "rows": rows}
@@ -160,22 +171,27 @@ def _marker_md(marker: dict) -> list:
     lines = ["", "## Marker efficiency", "",
              f"Teaser shirt + pants, sizes {', '.join(marker.get('sizes', []))} (one garment each, "
              f"{marker.get('pieces', '-')} pieces), {marker.get('width_m', 0) * 100:.0f} cm fabric, grain along the "
-             "selvage (0/180 degrees), seed 0. Efficiency = the true cut lines' area (allowance included) / marker "
+             "selvage (0/180 degrees). Efficiency = the true cut lines' area (allowance included) / marker "
              "area (width x length to the farthest true cut line). Threads: the nester's worker threads (one "
              "search); tries: nesters side by side in the same wall time (seeds 0, 1, ...), the shortest kept; "
-             f"cores used = threads x tries, of {marker.get('cores', '-')} on this machine. Load average (1 min) "
-             f"at the start and end: {marker.get('load_start_end', '-')}, and after each run in the load column "
-             "(the nester stops on wall time: a loaded machine gives it less work; cpu s is the CPU time the nesters "
-             "got, budget x cores used on an idle machine). "
+             f"cores used = threads x tries, of {marker.get('cores', '-')} on this machine. Rows with several seeds "
+             "are one run per seed: efficiency, length, wall and cpu s are their means, min-max the spread. Load "
+             f"average (1 min) at the start and end: {marker.get('load_start_end', '-')}, and after each run in the "
+             "load column (the nester stops on wall time: a loaded machine gives it less work; cpu s is the CPU time "
+             "the nesters got, budget x cores used on an idle machine). "
              f"The strip layout row is {STRIP_EFFICIENCY_NOTE}.", ""]
     if "error" in marker:
         return lines + [f"not run: {marker['error']}"]
-    lines += ["| method | threads | tries | budget s | wall s | cpu s | length m | efficiency % | load |",
-              "|---|---|---|---|---|---|---|---|---|"]
+    lines += ["| method | threads | tries | budget s | seeds | wall s | cpu s | length m | efficiency % | min-max % "
+              "| load |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in marker["rows"]:
+        seeds = ", ".join(str(s) for s in r.get("seeds", [])) or "-"
+        spread = f"{r['efficiency_pct_min']}-{r['efficiency_pct_max']}" if len(r.get("seeds", [])) > 1 else "-"
+        load = ", ".join(str(x) for x in r["load"]) if isinstance(r.get("load"), list) else r.get("load", "-")
         lines.append(f"| {r['method']} | {r.get('threads', '-')} | {r.get('tries', '-')} | {r['seconds']:g} | "
-                     f"{r.get('wall_s', '-')} | {r.get('cpu_s', '-')} | {r['length_m']} | {r['efficiency_pct']} | "
-                     f"{r.get('load', '-')} |")
+                     f"{seeds} | {r.get('wall_s', '-')} | {r.get('cpu_s', '-')} | {r['length_m']} | "
+                     f"{r['efficiency_pct']} | {spread} | {load} |")
     return lines
 
 
