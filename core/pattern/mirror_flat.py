@@ -35,6 +35,24 @@ from . import init as _init
 MATCH_TOLERANCE = 5e-4
 
 
+def _across_midline(xyz: np.ndarray, faces: np.ndarray):
+    """``(xyz, faces, keys)`` of a panel that crosses the body's midplane x = 0 (None otherwise, or
+    when a vertex is on no face): ``keys`` every vertex pulled half way towards the mean centroid
+    of its faces, so the two copies of a vertex on a dart's legs (one position) are told apart by
+    the side their faces lie on; the pull commutes with the mirror."""
+    xyz = np.asarray(xyz, float)
+    F = np.asarray(faces, np.int64)
+    if len(xyz) < 3 or xyz[:, 0].min() >= 0 or xyz[:, 0].max() <= 0:
+        return None
+    centroid = xyz[F].mean(axis=1)
+    pull = np.zeros_like(xyz)
+    np.add.at(pull, F.reshape(-1), np.repeat(centroid, 3, axis=0))
+    count = np.bincount(F.reshape(-1), minlength=len(xyz)).astype(float)
+    if np.any(count == 0):
+        return None
+    return xyz, F, 0.5 * (xyz + pull / count[:, None])
+
+
 def self_mirror_map(xyz: np.ndarray, faces: np.ndarray) -> Optional[np.ndarray]:
     """(n,) int, the mirror vertex (through the body's midplane x = 0) of every panel vertex,
     or None when the panel's mesh is not its own mirror image (vertices and faces).
@@ -43,16 +61,13 @@ def self_mirror_map(xyz: np.ndarray, faces: np.ndarray) -> Optional[np.ndarray]:
     ----------
     xyz : (n, 3) float, the panel on the reference body (m); faces : (f, 3) int.
     """
-    xyz = np.asarray(xyz, float)
-    F = np.asarray(faces, np.int64)
-    if len(xyz) < 3 or xyz[:, 0].min() >= 0 or xyz[:, 0].max() <= 0:
-        return None
     # matched by a point pulled towards the vertex's faces: the two copies of a vertex on a
     # dart's legs (one position) and a keypoint beside its mirror at the midline (0.02 mm apart)
     # are told apart by the side their faces lie on
-    key = _pulled_keys(xyz, F)
-    if key is None:
+    got = _across_midline(xyz, faces)
+    if got is None:
         return None
+    xyz, F, key = got
     d, m = cKDTree(key).query(key * [-1.0, 1.0, 1.0], k=2)
     if d[:, 0].max() > MATCH_TOLERANCE or np.any(d[:, 1] < 2.0 * d[:, 0] + 1e-12):
         return None             # not its own mirror image, or a match is not unique
@@ -62,19 +77,6 @@ def self_mirror_map(xyz: np.ndarray, faces: np.ndarray) -> Optional[np.ndarray]:
     if np.any(face_symmetry(F, m) < 0):      # a face whose mirror is not a face
         return None
     return m
-
-
-def _pulled_keys(xyz: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """Every vertex pulled half way towards the mean centroid of its faces: the two copies of a
-    vertex on a dart's legs (one position) are told apart by the side their faces lie on, and
-    the pull commutes with the mirror."""
-    centroid = xyz[F].mean(axis=1)
-    pull = np.zeros_like(xyz)
-    np.add.at(pull, F.reshape(-1), np.repeat(centroid, 3, axis=0))
-    count = np.bincount(F.reshape(-1), minlength=len(xyz)).astype(float)
-    if np.any(count == 0):
-        return None
-    return 0.5 * (xyz + pull / count[:, None])
 
 
 #: largest distance (m) from a panel vertex's reflection to the panel for :func:`approximate_mirror`
@@ -95,13 +97,10 @@ def approximate_mirror(xyz: np.ndarray, faces: np.ndarray) -> Optional[sp.csr_ma
     xyz : (n, 3) float, the panel on the reference body (m); faces : (f, 3) int.
     """
     from ..design.geometry import SurfaceLocator
-    xyz = np.asarray(xyz, float)
-    F = np.asarray(faces, np.int64)
-    if len(xyz) < 3 or xyz[:, 0].min() >= 0 or xyz[:, 0].max() <= 0:
+    got = _across_midline(xyz, faces)
+    if got is None:
         return None
-    key = _pulled_keys(xyz, F)
-    if key is None:
-        return None
+    xyz, F, key = got
     R = np.array([-1.0, 1.0, 1.0])
     q = xyz * R
     locator = SurfaceLocator(xyz, F)
