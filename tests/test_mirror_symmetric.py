@@ -141,9 +141,11 @@ def test_mirror_pairs_gather_together_at_the_default_threshold(shirt):
     assert {"shirt.side_left", "shirt.side_right"} <= set(plan.gathered)       # ease 4.5
 
 
-def test_cut_stays_deterministic(anny, shirt):
+@pytest.mark.parametrize("garment", ["shirt", "pants"])
+def test_cut_stays_deterministic(anny, garment, request):
     from core import workflows as wf
-    a, b = shirt.cut, wf.prepare(shirt.design, body=anny).cut
+    prep = request.getfixturevalue(garment)
+    a, b = prep.cut, wf.prepare(prep.design, body=anny).cut
     assert a.embedding.data.tobytes() == b.embedding.data.tobytes()
     assert a.embedding.indices.tobytes() == b.embedding.indices.tobytes()
     for p, q in zip(a.panels, b.panels):
