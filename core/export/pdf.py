@@ -2,10 +2,12 @@
 
 Every piece is drawn once as a form XObject in its own frame (1 PDF point =
 1/72 inch, so lengths are exact) and placed on each page it touches by one
-matrix: a quarter turn (exact integers) and a translation, never a scale.
+matrix: a rotation (a quarter turn, exact integers, tilted by at most 10
+degrees on tiled pages) and a translation, never a scale.
 
 Tiled pages: the pieces are nested for the page grid (:mod:`.tiling`: the
-fewest pages that carry a cut or sew line; pages with no line are left out).
+fewest pages that carry a cut or sew line; pages with no line are left out,
+and each label is moved within its piece onto a printed page).
 Each page prints a window of the sheet (the paper less a 10 mm margin);
 neighbouring windows share a 10 mm strip, marked on both pages by a dashed
 line where the neighbour begins and a join diamond (labelled with the
@@ -103,7 +105,9 @@ def _poly(c, points, closed: bool) -> None:
     c.drawPath(p, stroke=1, fill=0)
 
 
-def _define_forms(c, pieces: Sequence[PieceDrawing]) -> List[str]:
+def _define_forms(c, pieces: Sequence[PieceDrawing], labels=None, grains=None) -> List[str]:
+    """One form XObject per piece; ``labels`` (n, 2): piece-frame top-left of each label (None: ``label_at``),
+    ``grains`` (n, 2): piece-frame shift of each grain line and its arrows (None: none)."""
     names = []
     for k, piece in enumerate(pieces):
         name = f"piece{k}"
@@ -135,13 +139,14 @@ def _define_forms(c, pieces: Sequence[PieceDrawing]) -> List[str]:
         for n in piece.notches:
             _poly(c, n.segment, False)
         c.setStrokeColorRGB(*COLOURS["grain"])
-        _poly(c, piece.grain, False)
+        shift = np.zeros(2) if grains is None else np.asarray(grains[k], float)
+        _poly(c, piece.grain + shift, False)
         for a in piece.arrows:
-            _poly(c, a, False)
+            _poly(c, a + shift, False)
         h = piece.text_height * PT_PER_M
         c.setFillColorRGB(*COLOURS["text"])
         c.setFont("Helvetica", h)
-        x, y = _pt(piece.label_at[None])[0]
+        x, y = _pt(np.asarray(piece.label_at if labels is None else labels[k], float)[None])[0]
         for i, text in enumerate(piece.label):
             c.drawString(x, y - (i + 1) * 1.5 * h + 0.5 * h, ascii_text(text))
         c.endForm()
@@ -246,7 +251,7 @@ def tiled_pdf(pieces: Sequence[PieceDrawing], layout: Layout = None, paper: str 
     c = rl_canvas.Canvas(buf, pagesize=(pw * PT_PER_M, ph * PT_PER_M), invariant=1, pageCompression=1)
     c.setTitle(ascii_text(title))
     c.setCreator("EASE")
-    forms = _define_forms(c, pieces)
+    forms = _define_forms(c, pieces, getattr(layout, "labels", None), getattr(layout, "grains", None))
     boxes = [_placed_box(layout, i, p) for i, p in enumerate(pieces)]
     m = PAGE_MARGIN
     printed = [(r, col) for r in range(grid.rows) for col in range(grid.cols) if ink[r, col]]
@@ -261,7 +266,7 @@ def tiled_pdf(pieces: Sequence[PieceDrawing], layout: Layout = None, paper: str 
                 continue
             R = _turn(layout, i)
             off = layout.offsets[i]
-            # one cm: the piece's quarter turn (exact integers) and its place; no scaling
+            # one cm: the piece's rotation (exact integers for quarter turns) and its place; no scaling
             c.saveState()
             c.transform(R[0, 0], R[1, 0], R[0, 1], R[1, 1], (m - x0 + off[0]) * PT_PER_M, (m - y0 + off[1]) * PT_PER_M)
             c.doForm(name)
