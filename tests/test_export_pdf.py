@@ -173,7 +173,7 @@ def test_every_page_has_a_line_and_every_line_is_printed(made, printed_pages, pa
 def test_labels_and_grain_lines_are_on_printed_pages(made, printed_pages, paper):
     """Pages inside a piece are left out, so each label moves onto pages printed for their lines (inside the sew
     line, clear of the lines) and each grain line shows at least GRAIN_SHOWN; the forms draw them there."""
-    from core.export import tiling
+    from core.export import print_labels, tiling
     from core.geom.polygon import points_in_polygon
     pieces = made[1]
     lay, grid, ink, printed = printed_pages[paper]
@@ -204,7 +204,7 @@ def test_labels_and_grain_lines_are_on_printed_pages(made, printed_pages, paper)
         for r, c in zip(*np.nonzero(ink)):
             w = grid.window(r, c)
             on |= np.all((s >= w[0]) & (s <= w[1]), axis=1)
-        assert on.mean() * length >= min(tiling.GRAIN_SHOWN, length) - 0.002
+        assert on.mean() * length >= min(print_labels.GRAIN_SHOWN, length) - 0.002
     assert moved  # the tube's labels sit in the middle of its pieces, on pages left out
 
 

@@ -1,0 +1,198 @@
+"""Page windows of a tiled print sheet and the lines that reach them.
+
+The sheet of a tiled PDF is a grid of page windows (:class:`PageGrid`: the
+printable area of the paper, neighbouring windows overlapping by the taping
+strip). A piece lies on the sheet turned and shifted (:class:`PrintLayout`);
+:func:`line_pages` tells which windows its cut and sew lines and dart legs
+cross (Liang-Barsky clipping of their segments). Raster helpers shared by the
+print packer (:mod:`.tiling`) and the label placement (:mod:`.print_labels`)
+sample lines and fill polygons on a cell grid.
+
+All lengths are metres, sheet frame y up, origin bottom-left.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from ..geom.layout import Layout
+
+
+@dataclass
+class PrintLayout(Layout):
+    """A :class:`core.geom.layout.Layout` whose pieces may be turned: sheet = R(angles[i]) @ p + offsets[i].
+
+    ``angles`` are degrees counter-clockwise (None: all 0); ``labels`` (n, 2)
+    piece-frame top-left corners of the labels where the print layout moved
+    them (None: each piece's own ``label_at``); ``grains`` (n, 2) piece-frame
+    shifts of the grain lines (and their arrows) across the grain (None: 0).
+    """
+    angles: Optional[np.ndarray] = None
+    labels: Optional[np.ndarray] = None
+    grains: Optional[np.ndarray] = None
+
+    def matrix(self, i: int) -> np.ndarray:
+        """(2, 2) float, the rotation of piece ``i`` (piece frame -> sheet)."""
+        return rotation(0.0 if self.angles is None else float(self.angles[i]))
+
+    def place(self, i: int, points) -> np.ndarray:
+        """(m, 2) piece-frame points of piece ``i`` on the sheet."""
+        return np.asarray(points, float) @ self.matrix(i).T + self.offsets[i]
+
+
+def rotation(degrees: float) -> np.ndarray:
+    """(2, 2) rotation by ``degrees`` counter-clockwise; exact integers for quarter turns."""
+    k, rest = divmod(float(degrees), 90.0)
+    if rest == 0.0:
+        c, s = [(1, 0), (0, 1), (-1, 0), (0, -1)][int(k) % 4]
+        return np.array([[c, -s], [s, c]], float)
+    a = math.radians(float(degrees))
+    return np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+
+
+def place(layout: Layout, i: int, points) -> np.ndarray:
+    """Piece ``i``'s points on the sheet of any layout (turned when it is a :class:`PrintLayout`)."""
+    if isinstance(layout, PrintLayout):
+        return layout.place(i, points)
+    return np.asarray(points, float) + layout.offsets[i]
+
+
+@dataclass(frozen=True)
+class PageGrid:
+    """The page windows of a tiled sheet.
+
+    Attributes
+    ----------
+    tile : (w, h) float, window size (printable area of one page), m.
+    overlap : float, m shared by neighbouring windows (the taping strip).
+    rows, cols : int, windows down and across.
+    height : float, sheet height (m); row 0 hangs from the top edge.
+    """
+    tile: Tuple[float, float]
+    overlap: float
+    rows: int
+    cols: int
+    height: float
+
+    @property
+    def step(self) -> np.ndarray:
+        """(2,) float, m from one window's corner to the next one's."""
+        return np.asarray(self.tile, float) - self.overlap
+
+    def window(self, r: int, c: int) -> np.ndarray:
+        """(2, 2) float, min/max corner of window (row ``r`` from the top, column ``c``) on the sheet."""
+        sx, sy = self.step
+        y1 = self.height - r * sy
+        return np.array([[c * sx, y1 - self.tile[1]], [c * sx + self.tile[0], y1]])
+
+
+def grid_for(size: Sequence[float], tile: Sequence[float], overlap: float) -> PageGrid:
+    """The fewest windows of ``tile`` (m, overlapping by ``overlap``) that cover a sheet of ``size`` (m)."""
+    step = np.asarray(tile, float) - overlap
+    cols = max(1, int(math.ceil((float(size[0]) - overlap) / step[0] - 1e-9)))
+    rows = max(1, int(math.ceil((float(size[1]) - overlap) / step[1] - 1e-9)))
+    return PageGrid(tile=(float(tile[0]), float(tile[1])), overlap=float(overlap), rows=rows, cols=cols,
+                    height=float(size[1]))
+
+
+def piece_lines(piece) -> List[np.ndarray]:
+    """The closed cut and sew loops of a piece, (k, 2) float each, piece frame: what makes a page worth printing."""
+    return [np.asarray(l, float) for l in list(piece.cut) + list(piece.sew)]
+
+
+def segments(loops, open_lines=()) -> Tuple[np.ndarray, np.ndarray]:
+    """Segment ends (a, b), (k, 2) each, of closed loops and open polylines."""
+    a = [np.asarray(l, float) for l in loops] + [np.asarray(l, float)[:-1] for l in open_lines]
+    b = [np.roll(np.asarray(l, float), -1, axis=0) for l in loops] + [np.asarray(l, float)[1:] for l in open_lines]
+    if not a:
+        return np.zeros((0, 2)), np.zeros((0, 2))
+    return np.concatenate(a), np.concatenate(b)
+
+
+def _piece_segments(piece) -> Tuple[np.ndarray, np.ndarray]:
+    """Piece-frame segments of the lines that make a page worth printing: cut and sew loops, dart legs."""
+    return segments(piece_lines(piece), [leg for d in piece.darts for leg in d.legs])
+
+
+def _hits_box(a: np.ndarray, b: np.ndarray, box: np.ndarray) -> bool:
+    """Whether any segment a[i]-b[i] meets the closed box (Liang-Barsky clipping, vectorised)."""
+    d = b - a
+    t0 = np.zeros(len(a))
+    t1 = np.ones(len(a))
+    ok = np.ones(len(a), bool)
+    for k in range(2):
+        for p, q in ((-d[:, k], a[:, k] - box[0, k]), (d[:, k], box[1, k] - a[:, k])):
+            par = np.abs(p) < 1e-15
+            ok &= ~(par & (q < 0))
+            r = q / np.where(par, 1.0, p)
+            t0 = np.where(~par & (p < 0), np.maximum(t0, r), t0)
+            t1 = np.where(~par & (p > 0), np.minimum(t1, r), t1)
+    return bool(np.any(ok & (t0 <= t1)))
+
+
+def windows_hit(a: np.ndarray, b: np.ndarray, grid: PageGrid, out: np.ndarray) -> None:
+    """Set ``out[r, c]`` for every window that a segment a[i]-b[i] (sheet m) meets."""
+    if not len(a):
+        return
+    lo, hi = np.minimum(a, b).min(0), np.maximum(a, b).max(0)
+    sx, sy = grid.step
+    # only the windows that meet the segments' bounding box: column c spans [c sx, c sx + w], row r hangs r sy
+    # below the top edge
+    c0 = max(0, int(math.ceil((lo[0] - grid.tile[0]) / sx)) - 1)
+    c1 = min(grid.cols - 1, int(math.floor(hi[0] / sx)) + 1)
+    r0 = max(0, int(math.ceil((grid.height - hi[1] - grid.tile[1]) / sy)) - 1)
+    r1 = min(grid.rows - 1, int(math.floor((grid.height - lo[1]) / sy)) + 1)
+    for r in range(r0, r1 + 1):
+        for c in range(c0, c1 + 1):
+            if out[r, c]:
+                continue
+            w = grid.window(r, c)
+            out[r, c] = bool(np.all(hi >= w[0]) and np.all(lo <= w[1]) and _hits_box(a, b, w))
+
+
+def line_pages(pieces, layout: Layout, grid: PageGrid) -> np.ndarray:
+    """(rows, cols) bool: the windows that a cut or sew line or a dart leg crosses."""
+    ink = np.zeros((grid.rows, grid.cols), bool)
+    for i, p in enumerate(pieces):
+        a, b = _piece_segments(p)
+        windows_hit(place(layout, i, a), place(layout, i, b), grid, ink)
+    return ink
+
+
+def sample_open(line, spacing: float) -> np.ndarray:
+    """Points along an open polyline, at most ``spacing`` apart, ends included, (m, 2)."""
+    p = np.asarray(line, float)
+    if len(p) < 2:
+        return p.reshape(-1, 2)
+    return np.concatenate([a + np.linspace(0.0, 1.0, int(math.ceil(np.linalg.norm(b - a) / spacing)) + 2)[:, None]
+                           * (b - a) for a, b in zip(p[:-1], p[1:])])
+
+
+def fill_cells(mask: np.ndarray, poly: np.ndarray, x0: float, y1: float, cell: float) -> None:
+    """Set the cells of ``mask`` (row 0 at y1, column 0 at x0) whose centre lies inside ``poly`` (scanlines)."""
+    a, b = poly, np.roll(poly, -1, axis=0)
+    for i in range(mask.shape[0]):
+        y = y1 - (i + 0.5) * cell
+        s = (a[:, 1] > y) != (b[:, 1] > y)
+        if not s.any():
+            continue
+        xs = np.sort(a[s, 0] + (y - a[s, 1]) * (b[s, 0] - a[s, 0]) / (b[s, 1] - a[s, 1]))
+        for xa, xb in zip(xs[0::2], xs[1::2]):
+            j0 = max(int(math.ceil((xa - x0) / cell - 0.5)), 0)
+            j1 = min(int(math.floor((xb - x0) / cell - 0.5)), mask.shape[1] - 1)
+            mask[i, j0:j1 + 1] = True
+
+
+def sample_loops(loops: Sequence[np.ndarray], spacing: float) -> np.ndarray:
+    """Points along closed loops, at most ``spacing`` apart, (m, 2)."""
+    out = []
+    for l in loops:
+        a, b = l, np.roll(l, -1, axis=0)
+        n = np.maximum(1, np.ceil(np.linalg.norm(b - a, axis=1) / spacing).astype(int))
+        t = np.concatenate([np.arange(k) / k for k in n])
+        rep = np.repeat(np.arange(len(l)), n)
+        out.append(a[rep] + t[:, None] * (b - a)[rep])
+    return np.concatenate(out)
