@@ -108,7 +108,7 @@ def test_a_transfer_starts_from_the_reference_stretched_to_the_body():
 
 
 def test_renewing_the_guard_factorisation():
-    from core.pattern.solver import renew_guard
+    from core.pattern.guard import renew_guard
     held = np.array([0.0, 1.0, 8.0, 0.0])
     assert renew_guard(np.array([0.0, 1.0, 8.0, 1.0]), held)           # newly guarded: renewed at once
     assert not renew_guard(np.array([0.0, 2.0, 16.0, 0.0]), held)      # 2 / 3 and 17 / 9: within 3

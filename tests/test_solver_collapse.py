@@ -58,7 +58,7 @@ def test_a_triangle_held_at_the_guard_limit_opens_in_the_extra_rounds(skirt):
     """At a low stiffening limit (6) a few triangles stay collapsed through the planned iterations
     and the first extra round; the later rounds raise the limit (x4 each) and open them, where a
     fixed limit keeps 4 collapsed to the last extra iteration (the pattern refused)."""
-    from core.pattern import solver as S
+    from core.pattern import guard as S
     cfg = SolverConfig.improved(guard_limit=6.0)
     assert S.round_guard(cfg.guard, -3) is cfg.guard and S.round_guard(cfg.guard, S.COLLAPSE_ROUNDS - 1) is cfg.guard
     assert S.round_guard(cfg.guard, 2 * S.COLLAPSE_ROUNDS).guard_limit == 6.0 * S.GUARD_ESCALATION ** 2

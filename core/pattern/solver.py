@@ -31,21 +31,22 @@ no call changes a later one's result.
 """
 from __future__ import annotations
 
-import threading
 import time
-from dataclasses import replace
-from typing import Callable, Dict, Optional, Sequence, Tuple
+from typing import Dict, Optional, Sequence, Tuple
 
 import numpy as np
 import scipy.sparse as sp
 
-from ..geom.strain import components, intrinsic_offsets, scales_of_offsets
+from ..geom.strain import components, intrinsic_offsets
 from ..progress import Progress, report
 from .build import SolveResult
 from .config import SolverConfig, check_tolerance
 from .factor import SymmetricFactor
+from .feedback import feedback_gains, move_corrections
+from .guard import COLLAPSE_ROUNDS, GuardedFactors, renew_guard, round_guard
 from .panels import flatten_panels
 from .seams import SeamPlan, plan_seams, seam_layout, seam_matrix, seam_rhs
+from .start import pattern_start
 from .state import SolveState
 from .steps import (any_collapsed, collapse_guard, face_neighbourhood, flip_guard, inverse_offsets, local_step,
                     opened_jacobians, realign_grain, rigid_align, scaled_start)
@@ -54,47 +55,6 @@ from .validate import body_positions, validate_cut
 
 #: Weight of each panel's translation pin, relative to its mean diagonal entry.
 PIN_WEIGHT = 1e-6
-#: Iterations added at a time after the planned ones while a triangle is still collapsed.
-COLLAPSE_ROUNDS = 5
-#: Each round of extra iterations after the first multiplies the collapse guard's stiffening limit by this.
-GUARD_ESCALATION = 4.0
-#: Spare guarded factorisations kept per system matrix (one per thread solving at once is enough).
-GUARD_POOL = 4
-#: The collapse guard's stiffened matrix is refactorised when a triangle is guarded that it does not
-#: stiffen, or when a triangle's weight factor ``1 + gain`` has moved by more than this factor from the
-#: one it holds (gains double or halve per iteration: about every other change). In between the solve
-#: keeps the gains it factorised, in the matrix and the right-hand side alike (one consistent energy).
-#: Shirt transfers: a third fewer refactorisations (~4 ms each), the same patterns to a few 0.01 %.
-GUARD_RENEW = 3.0
-
-
-def round_guard(guard, extra: int):
-    """The collapse guard of an iteration ``extra`` iterations past a solve's planned ones.
-
-    A triangle can sit under the collapse bound with its stiffening at ``guard_limit`` while
-    its neighbours' pull balances it (the skirt's gluteal cleft at the finest refinement, on
-    an AMD EPYC: relative scale 0.47 from iteration 15 on, at gain 30; on an Intel Xeon the
-    same solve ended just above 0.5). Each round of :data:`COLLAPSE_ROUNDS` extra iterations
-    after the first raises the limit by :data:`GUARD_ESCALATION`, so such a triangle opens
-    (0.60 five iterations later) instead of the pattern being refused; a solve that ends
-    within its planned iterations or its first extra round never sees a higher limit.
-    """
-    level = extra // COLLAPSE_ROUNDS if extra > 0 else 0
-    if level == 0:
-        return guard
-    return replace(guard, guard_limit=guard.guard_limit * GUARD_ESCALATION ** level)
-
-
-def renew_guard(gain: np.ndarray, held: np.ndarray, ratio: Optional[float] = None) -> bool:
-    """Whether the collapse guard's gains ``gain`` (f,) call for a new factorisation of the matrix that
-    holds ``held`` (f,): a triangle guarded that it does not stiffen, or a weight factor ``1 + gain``
-    off the held one by more than ``ratio`` either way (default :data:`GUARD_RENEW`)."""
-    ratio = GUARD_RENEW if ratio is None else ratio
-    if np.any((gain > 0) & (held == 0)):
-        return True
-    r = (1.0 + gain) / (1.0 + held)
-    return bool(np.any(r > ratio) or np.any(r * ratio < 1.0))
-
 
 class PatternSolver:
     """Local-global ease optimizer over all panels of a cut, factorised once.
@@ -138,11 +98,8 @@ class PatternSolver:
         self._GyT = self._Gy.T.tocsr()
         self._blocks_G = b.G
         self._factors: Dict[tuple, Tuple[SymmetricFactor, np.ndarray]] = {}
-        self._guard_slots: Dict[tuple, np.ndarray] = {}
-        # finished solves' guarded factorisations, by system matrix: only their symbolic analysis is
-        # reused (every refactorisation recomputes all values), so no result depends on the pool
-        self._guard_pool: Dict[tuple, list] = {}
-        self._pool_lock = threading.Lock()
+        # the collapse guard's stiffened factorisations and the spare ones finished solves gave back
+        self._guarded = GuardedFactors(self.gfaces, b.G)
         self._neighbourhood: Optional[sp.csr_matrix] = None
         self.n_factorisations = 0
         # the reference body's offsets serve every reference target, adaptation and seam plan:
@@ -270,42 +227,15 @@ class PatternSolver:
         """
         cfg = config or self.config
         base, _ = self.factorisation(cfg, plan)
-        key = self._factor_key(cfg, plan)
-        if key not in self._guard_slots:
-            # where each triangle's 3 x 3 block of terms sits in the matrix's values (once per matrix)
-            F = self.gfaces
-            rows = np.repeat(F, 3, axis=1)
-            cols = np.tile(F, (1, 3))
-            self._guard_slots[key] = base.positions(rows, cols)
-        pos = self._guard_slots[key]
-        w = cfg.weights
-        t = np.flatnonzero(gain > 0)
-        a = (w.ease + w.regulariser) * self.area_weights(cfg)[t] * gain[t]
-        b = self._blocks_G
-        gx, gy = b[t, :, 0], b[t, :, 1]
-        # a_t (gx_p gx_q + w^2 gy_p gy_q): the triangle's extra terms, entry (p, q) at slot 3 p + q
-        extra = a[:, None, None] * (gx[:, :, None] * gx[:, None, :]
-                                    + w.warp_column ** 2 * gy[:, :, None] * gy[:, None, :])
-        data = base.matrix.data + np.bincount(pos[t].ravel(), weights=extra.reshape(len(t), 9).ravel(),
-                                              minlength=base.matrix.nnz)
-        if reuse is None:
-            with self._pool_lock:
-                spare = self._guard_pool.get(key)
-                reuse = spare.pop() if spare else None
-        return base.with_values(data, reuse=reuse)
+        return self._guarded.factorise(self._factor_key(cfg, plan), base, cfg.weights, self.area_weights(cfg), gain,
+                                       reuse=reuse)
 
     def release(self, state: "SolveState") -> None:
         """Give ``state``'s guarded factorisation to the next solve of the same matrix
         (:meth:`guarded_factorisation`). ``state`` may still :meth:`iterate`: its next guarded step
         refactorises again."""
         fac, state.guard_solve, state.guard_held = state.guard_solve, None, None
-        if fac is None:
-            return
-        key = self._factor_key(state.config, state.plan)
-        with self._pool_lock:
-            spare = self._guard_pool.setdefault(key, [])
-            if len(spare) < GUARD_POOL and all(f is not fac for f in spare):
-                spare.append(fac)
+        self._guarded.give_back(self._factor_key(state.config, state.plan), fac)
 
     def _matrix(self, cfg: SolverConfig, plan: SeamPlan):
         """The fixed system matrix (both pattern coordinates): ease + regulariser (one operator), the seam
@@ -331,33 +261,12 @@ class PatternSolver:
         return [self._Gx @ u, self._Gy @ u, self._Gx @ v, self._Gy @ v]
 
     def start_from(self, pattern, offsets=None) -> np.ndarray:
-        """The unknowns (n, 2) of a flip-free ``pattern`` of this cut, each piece re-centred on its initial position.
-
-        ``offsets``: :meth:`offsets` of the body the solve is on (a transfer's
-        target). Each piece is then also stretched along its weft (x) and its
-        warp (y) by the ratio of that body's weft and warp offset lengths under
-        it to those of the pattern's own body (area-weighted means): an affine
-        image of a flip-free piece, so flip-free, that starts the solve at the
-        new body's lengths rather than the old one's. The planned iterations do
-        not converge a transfer, so the start shows in the result: shirt to 100
-        sampled bodies, the warp deviation 8.6 -> 8.3 % (signed 3.4 -> 1.2 %),
-        weft 1.30 -> 1.28 %, and ~20 % fewer refactorisations of the collapse guard.
-        """
-        U = np.concatenate([pattern.panel(pd.name).uv for pd in self.panels])
-        if offsets is not None:
-            _, lw, lg = offsets
-            _, lw0, lg0 = self._own_offsets(pattern)
-        out = U.copy()
-        for pd in self.panels:
-            sl, fs = self.blocks.panel_slices(pd)
-            centre = U[sl].mean(axis=0)
-            if offsets is None:
-                out[sl] = U[sl] - centre + self.uv0[sl].mean(axis=0)
-                continue
-            w = np.abs(pd.area0)
-            stretch = np.array([np.sum(w * lw[fs]) / np.sum(w * lw0[fs]), np.sum(w * lg[fs]) / np.sum(w * lg0[fs])])
-            out[sl] = (U[sl] - centre) * stretch + self.uv0[sl].mean(axis=0)
-        return out
+        """The unknowns (n, 2) of a flip-free ``pattern`` of this cut, each piece re-centred on its initial
+        position and, given ``offsets`` (:meth:`offsets` of the body the solve is on, a transfer's target),
+        stretched to that body's weft and warp lengths (:func:`.start.pattern_start`)."""
+        uv = [pattern.panel(pd.name).uv for pd in self.panels]
+        own = None if offsets is None else self._own_offsets(pattern)
+        return pattern_start(self.blocks, uv, self.uv0, offsets, own)
 
     def _own_offsets(self, pattern):
         """:meth:`offsets` of the body ``pattern`` lies on (its pieces' ``xyz``): the reference's when it is it."""
@@ -468,13 +377,7 @@ class PatternSolver:
         W2 = np.array([1.0, cfg.weights.warp_column ** 2])
         poses = state.poses
         adapting = poses is not None
-        gain_w = max(fb.weft, ad.gain) if adapting else fb.weft
-        gain_g = max(fb.warp, ad.gain if ad.warp_gain is None else ad.warp_gain) if adapting else fb.warp
-        hi = ad.ceiling if adapting else fb.ceiling
-        step = ad.step if adapting else fb.step
-        # an adaptation only adds cloth: a correction lowered where a triangle is already past its goal
-        # pulls it against its raised neighbours, which is shear
-        lower = 1 - ad.lower * step if adapting else 1 - step
+        gain_w, gain_g, _, _, _ = feedback_gains(cfg, adapting)
         model = cfg.rest_shape.model
         K, c_weft, c_warp = state.K, state.c_weft, state.c_warp
         corr_w, corr_g, integral = state.corr_w, state.corr_g, state.integral
@@ -499,27 +402,7 @@ class PatternSolver:
             if (gain_w > 0 or gain_g > 0) and it >= fb.from_iteration and not settling:
                 # move the targets by the achieved/target ratio: the linear solve then
                 # lands on the wanted rho-hat wherever curvature allows it
-                rw, rg = scales_of_offsets(M, Kc)
-                goal_w, goal_g = c_weft, c_warp
-                if adapting:
-                    goal_w, goal_g = poses["ease_weft"].copy(), poses["ease_warp"].copy()
-                    for Kp in poses["offsets"]:
-                        # stretch of the pose along the current weft/warp: rho-hat on the reference
-                        # over rho-hat on the pose
-                        pw, pg = scales_of_offsets(M, Kp)
-                        with np.errstate(divide="ignore", invalid="ignore"):
-                            goal_w = np.fmax(goal_w, poses["margin"] * rw / pw / poses["eps_weft"])
-                            goal_g = np.fmax(goal_g, poses["margin"] * rg / pg / poses["eps_warp"])
-                    goal_w = goal_w if ad.cap_weft is None else np.fmin(goal_w, ad.cap_weft * poses["ease_weft"])
-                    goal_g = goal_g if ad.cap_warp is None else np.fmin(goal_g, ad.cap_warp * poses["ease_warp"])
-                ok = np.isfinite(rw) & np.isfinite(rg) & (rw > 0) & (rg > 0) & (
-                    targets_finite if not adapting else np.isfinite(goal_w) & np.isfinite(goal_g))
-                if gain_w > 0:
-                    corr_w[ok] *= np.clip((goal_w[ok] / rw[ok]) ** gain_w, lower, 1 + step)
-                if gain_g > 0:
-                    corr_g[ok] *= np.clip((goal_g[ok] / rg[ok]) ** gain_g, lower, 1 + step)
-                np.clip(corr_w, fb.floor, hi, out=corr_w)
-                np.clip(corr_g, fb.floor, hi, out=corr_g)
+                move_corrections(cfg, M, Kc, c_weft, c_warp, corr_w, corr_g, poses, targets_finite)
                 retarget = True
             if retarget:
                 tg = rest_targets(Kc, c_weft * corr_w, c_warp * corr_g, model)

@@ -18,7 +18,6 @@ from typing import List, Optional, Tuple
 import numpy as np
 
 from ..geom.mesh import signed_areas_2d
-from ..geom.strain import components, scales_of_offsets
 from ..geom.svd2 import clamp_singular_values_below, signed_singular_values2
 from .config import CollapseGuard, SolverConfig
 from .panels import PanelBlocks
