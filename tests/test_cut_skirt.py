@@ -55,8 +55,58 @@ def test_skirt_topology_is_one_closed_tube(anny, anny_reference):
         z0 = crotch + t * (knee - crotch)
         assert section_loops(X, np.asarray(F), z0) == 2        # two legs on the body
         assert section_loops(mesh.X, Fm, z0) == 1              # one tube around both legs
-    # the bridge follows any shape and pose: its corners are body vertices
+    # the bridge follows any shape and pose: its corners are body vertices or midpoints of a
+    # body vertex and its mirror (on the midline)
+    S = np.asarray(body.symmetry)
+    added = range(len(X), mesh.nv)
+    assert len(added) > 10
+    for v in added:
+        cols, vals = mesh.weights[v]
+        assert len(cols) == 2 and S[cols[0]] == cols[1] and np.allclose(vals, 0.5)
+        assert abs(mesh.X[v, 0]) < 1e-12
+
+
+def _mirror_keys(mesh, S):
+    """Sorted-corner keys of every face and of its mirror image (added midline vertices are
+    their own mirror)."""
+    m = np.arange(mesh.nv)
+    m[: len(S)] = S
+    key = lambda T: set(map(tuple, np.sort(T, axis=1).tolist()))
+    return key(mesh.F), key(m[mesh.F])
+
+
+def test_skirt_topology_is_its_own_mirror(anny, anny_reference):
+    # the band, the curtains and their midline split are mirror images: every face's mirror is
+    # a face, and every bridge face lies on one side of the midline (the sides returned)
+    body, (X, _) = anny, anny_reference
+    mesh = CutMesh(X, np.asarray(body.faces))
+    sides = make_skirt(mesh, body, X)
+    faces, mirrored = _mirror_keys(mesh, np.asarray(body.symmetry))
+    assert faces == mirrored
+    assert sides is not None and len(sides) == mesh._ptri_count() - len(body.faces)
+    bridge = mesh.F[mesh.parent >= len(body.faces)]
+    x = mesh.X[bridge][..., 0]
+    on_mid = np.abs(x) < 1e-12
+    assert len(bridge) == len(sides) and sides.sum() == len(sides) // 2
+    got = np.where(np.where(on_mid, 0.0, x).sum(1) > 0, 1, 0)
+    np.testing.assert_array_equal(got, sides[mesh.parent[mesh.parent >= len(body.faces)] - len(body.faces)])
+    assert not np.any((x > 1e-12).any(1) & (x < -1e-12).any(1))         # none across the midline
+
+
+def test_skirt_topology_without_a_symmetry_map(anny, anny_reference):
+    # no symmetry map: the legs are zipped directly, as one closed tube, with no new vertices
+    import copy
+    body, (X, _) = anny, anny_reference
+    plain = copy.copy(body)
+    plain.symmetry = None
+    mesh = CutMesh(X, np.asarray(body.faces))
+    assert make_skirt(mesh, plain, X) is None
     assert mesh.nv == len(X)
+    a = mesh.F.reshape(-1)
+    b = np.roll(mesh.F, -1, 1).reshape(-1)
+    assert np.isin(a * mesh.nv + b, b * mesh.nv + a).all()
+    faces, mirrored = _mirror_keys(mesh, np.asarray(body.symmetry))
+    assert faces != mirrored                                        # the zip is not a mirror image
 
 
 def test_inter_leg_band_is_symmetric(anny, anny_reference):

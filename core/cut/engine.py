@@ -193,9 +193,10 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None,
     mesh = CutMesh(X, BF)
     forbidden = forbidden_body_faces(body, len(BF))
     clock.lap("prepare")
+    bridge_sides = None
     if spec.skirt:
         from .skirt import make_skirt
-        make_skirt(mesh, body, X)
+        bridge_sides = make_skirt(mesh, body, X)
         forbidden = np.concatenate([forbidden, np.zeros(mesh._ptri_count() - len(BF), dtype=np.int64)])
         clock.lap("skirt")
 
@@ -225,6 +226,10 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None,
 
     axes = _axes(body, X, spec)
     sides = body_face_sides(body, X)
+    if sides is not None and spec.skirt:
+        # the bridge's triangles are parents after the body's: their sides follow (None: the
+        # bridge lies across the midline, no mirrored rebuild)
+        sides = None if bridge_sides is None else np.concatenate([sides, bridge_sides])
     mirror = None if sides is None else (np.asarray(body.symmetry, dtype=np.int64), sides)
     clock.lap("axes")
     gnames = [g.name for g in spec.garments]

@@ -14,12 +14,20 @@ goes around both legs as one loop: the lower body is one tube.
 Everything is decided from the body's geometry on the given vertices, so it
 works for any shape and pose: the band is the set of leg/crotch triangles
 facing the other leg (angle around the leg axis), between the crotch
-landmark and a point above the ankles. The curtains add no vertices (their
-corners are body vertices), so they follow any shape and pose of the model.
+landmark and a point above the ankles. On a body with a left/right symmetry
+map the band is made its own mirror image and each curtain is split on the
+midline: its left half joins the left leg's edge to new midline vertices (the
+midpoints of every edge vertex and its mirror, weights 1/2 and 1/2 on two
+body vertices) and its right half is the reflection of the left, so the whole
+surface is its own mirror and a mirrored garment on it is rebuilt as the exact
+mirror of its left half (:mod:`.symmetric`). Without a symmetry map the legs'
+edges are zipped directly (no new vertices). Either way every curtain vertex
+is a fixed combination of body vertices, so the curtains follow any shape and
+pose of the model.
 """
 from __future__ import annotations
 
-from typing import List, Tuple
+from typing import List, Optional, Tuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -177,13 +185,133 @@ def _zip(A: List[int], B: List[int], X: np.ndarray) -> List[Tuple[int, int, int,
     return out
 
 
-def make_skirt(mesh: CutMesh, body, X: np.ndarray) -> None:
-    """Apply the skirt topology to ``mesh`` (the unmodified body mesh) in place."""
+def _mirror_faces(F: np.ndarray, S: np.ndarray, nv: int) -> Optional[np.ndarray]:
+    """(F,) int, the face whose corners are the mirror images (``S``) of each face's; None when
+    a face has no mirror face."""
+    def key(T):
+        T = np.sort(T, axis=1)
+        return (T[:, 0] * nv + T[:, 1]) * nv + T[:, 2]
+
+    k = key(F)
+    order = np.argsort(k, kind="stable")
+    km = key(S[F])
+    pos = np.clip(np.searchsorted(k[order], km), 0, len(k) - 1)
+    if not np.array_equal(k[order][pos], km):
+        return None
+    return order[pos]
+
+
+def _symmetric_band(F: np.ndarray, H: np.ndarray, S: np.ndarray, nv: int) -> Optional[np.ndarray]:
+    """The removed band made its own mirror image (its union with its reflection, cleaned), or
+    None when that is not possible (the body mesh is not its own mirror)."""
+    mf = _mirror_faces(F, S, nv)
+    if mf is None:
+        return None
+    H = _clean(F, H | H[mf], nv)
+    return H if np.array_equal(H, H[mf]) else None
+
+
+def _mirrored_bridge(mesh: CutMesh, loop: List[int], X: np.ndarray, S: np.ndarray):
+    """The bridge as a left half and its mirror image, split on the midline.
+
+    The hole's boundary is the mirror image of itself: from the front midline vertex down the
+    left leg and up to the back midline vertex, and the reflection of that arc. Each curtain
+    (front and back) is built between the left arc and a chain of new midline vertices, the
+    midpoints of every arc vertex and its mirror (body weights ½ and ½, so they follow any
+    shape and pose), and reflected through ``S``; both curtains end at the midpoint of the
+    arc's lowest vertex and its mirror. Every bridge triangle then lies on one side of the
+    midline, and the whole surface is its own mirror image, so a mirrored garment cut on it
+    can be rebuilt as the exact mirror of its left half (:mod:`.symmetric`).
+
+    Returns
+    -------
+    (tris (k, 3) int, sides (k,) int8: 1 on the left, 0 on the right), or None when the
+    boundary is not its own mirror image (then the caller zips the legs as before).
+    """
+    L = np.asarray(loop)
+    n = len(L)
+    on_mid = np.nonzero(S[L] == L)[0]
+    if len(on_mid) != 2:
+        return None
+    kf, kb = sorted(on_mid.tolist(), key=lambda k: X[L[k], 1])     # front (smaller y), back
+    arc1 = [loop[(kf + i) % n] for i in range((kb - kf) % n + 1)]
+    arc2 = [loop[(kb + i) % n] for i in range((kf - kb) % n + 1)]
+    left, right = (arc1, arc2) if X[arc1[1:-1], 0].mean() > X[arc2[1:-1], 0].mean() else (arc2, arc1)
+    if len(left) < 3 or left[0] != right[-1] or not np.array_equal(S[left], right[::-1]) \
+            or np.any(X[left[1:-1], 0] <= 0):
+        return None
+    inner = np.asarray(left[1:-1])
+    e = 1 + int(np.argmin(X[inner, 2]))                   # the left leg's lowest hole vertex
+    mid = {left[0]: left[0], left[-1]: left[-1]}
+    for v in inner.tolist():
+        w = int(S[v])
+        cols = np.array(sorted((v, w)), dtype=np.int64)
+        mid[v] = mesh._add_vertex(0.5 * (X[v] + X[w]), cols, np.array([0.5, 0.5]))
+    bnd = set(zip(loop, loop[1:] + loop[:1]))
+    tris = []
+    for chain in (left[: e + 1], left[e:][::-1]):          # the two curtains, each from the midline down
+        for a, b in zip(chain[:-1], chain[1:]):
+            ma, mb = mid[a], mid[b]
+            # the quad b, a, ma, mb in the orientation that holds the boundary edge reversed
+            quad = [b, a, ma, mb] if (a, b) in bnd else [a, b, mb, ma]
+            if ma == a:                                     # at the midline vertex: a triangle
+                quad.remove(ma)
+                tris.append(quad)
+                continue
+            p0, p1, p2, p3 = quad
+            # the shorter diagonal
+            if np.linalg.norm(mesh.X[p0] - mesh.X[p2]) <= np.linalg.norm(mesh.X[p1] - mesh.X[p3]):
+                tris += [[p0, p1, p2], [p0, p2, p3]]
+            else:
+                tris += [[p0, p1, p3], [p1, p2, p3]]
+    T = np.asarray(tris, dtype=np.int64)
+    m = np.arange(mesh.nv, dtype=np.int64)
+    m[: len(S)] = S
+    T = np.concatenate([T, m[T][:, ::-1]])
+    sides = np.repeat(np.array([1, 0], dtype=np.int8), len(tris))
+    return T, sides
+
+
+def make_skirt(mesh: CutMesh, body, X: np.ndarray) -> Optional[np.ndarray]:
+    """Apply the skirt topology to ``mesh`` (the unmodified body mesh) in place.
+
+    Returns
+    -------
+    (k,) int8 per new (bridge) parent triangle, in order: 1 on the body's left, 0 on its
+    right, when the body has a symmetry map and the bridge is built as a mirror image
+    (:func:`_mirrored_bridge`); else None (the legs zipped directly, triangles across the
+    midline).
+    """
     F = mesh.F.copy()
     nv = mesh.nv
     H = _clean(F, inter_leg_faces(body, X), nv)
+    S = _symmetry(body, X)
+    if S is not None:
+        Hs = _symmetric_band(F, H, S, nv)
+        S, H = (None, H) if Hs is None else (S, Hs)
     keep = F[~H]
     loop = _boundary_loop(keep, nv)
+    if S is not None:
+        got = _mirrored_bridge(mesh, loop, X, S)
+        if got is not None:
+            tris, sides = got
+            mesh.replace_faces(np.nonzero(H)[0], tris, mesh.X[tris])
+            return sides
+    _zip_legs(mesh, H, loop, X)
+    return None
+
+
+def _symmetry(body, X: np.ndarray) -> Optional[np.ndarray]:
+    """The body's left/right vertex map when it is usable (an involution with a midline that
+    no triangle crosses, :func:`.symmetric.body_face_sides`), else None."""
+    from .symmetric import body_face_sides
+    if body_face_sides(body, X) is None:
+        return None
+    return np.asarray(body.symmetry, dtype=np.int64)
+
+
+def _zip_legs(mesh: CutMesh, H: np.ndarray, loop: List[int], X: np.ndarray) -> None:
+    """The bridge without a symmetry map: the legs' edges zipped directly (by arc length)."""
     L = np.asarray(loop)
     P = X[L]
     n = len(L)

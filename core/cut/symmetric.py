@@ -25,8 +25,9 @@ geodesics, up to 0.6 mm beside the midline) is moved onto the midline: the
 the seam's runs become the midline edges between the pair.
 
 Whenever the garment is not mirror-symmetric by name and topology (a panel
-or line without its mirror, a skirt bridge, a line whose reflection is not
-another line, a panel or line changed by more than :data:`SHAPE_TOLERANCE`),
+or line without its mirror, a skirt bridge built without a symmetry map
+(:mod:`.skirt` splits it on the midline otherwise), a line whose reflection is
+not another line, a panel or line changed by more than :data:`SHAPE_TOLERANCE`),
 :func:`symmetrize` returns None and the cut keeps its mesh.
 """
 from __future__ import annotations
@@ -294,6 +295,11 @@ def _self_mirror_runs(runs, inL, mid, new, mir) -> Optional[List[np.ndarray]]:
     # the left stretches: maximal runs of left vertices, split at midline vertices
     stretches = []
     for r in runs:
+        hit = np.nonzero(mid[r])[0]
+        if len(r) > 2 and r[0] == r[-1] and len(hit):
+            # a closed run (a hem ring around the skirt topology's bridge) starting on the left:
+            # its left stretch across the start is whole when the run starts on the midline
+            r = np.concatenate([r[hit[0]:-1], r[:hit[0] + 1]])
         cur: List[int] = []
         for v in r.tolist():
             if not inL[v]:
@@ -388,7 +394,7 @@ def coded_labels(mirror, panel_names: Sequence[str], line_names: Sequence[str], 
         return None, lab
     plan = mirror_plan(panel_names, line_names)
     sides = mirror[1]
-    if plan is None or len(parents) == 0 or parents.max() >= len(sides):     # a skirt's bridge faces
+    if plan is None or len(parents) == 0 or parents.max() >= len(sides):     # a bridge without sides
         return None, lab
     return plan, 2 * np.asarray(lab, dtype=np.int64) + sides[parents]
 
