@@ -11,7 +11,9 @@ close to the original where that was nearly so. A panel whose mesh is not its
 own mirror image keeps its flattening.
 
 A panel across the body whose mesh is not its own mirror image (the skirt
-topology's front and back: their leg bridges are not cut symmetrically) is
+topology's front and back on a body without a symmetry map, where the leg
+bridge is zipped across the midline; with one, :mod:`core.cut.skirt` splits
+it on the midline and the panel is its own mirror) is
 averaged with its reflection all the same, through an approximate mirror:
 each vertex's reflection is located in the panel's own triangles and the
 flattening interpolated there (:func:`approximate_mirror`). The result is
