@@ -66,6 +66,23 @@ def test_a_triangle_held_at_the_guard_limit_opens_in_the_extra_rounds(skirt):
     assert _collapsed(pat) == 0 and pat.report["iterations"] > cfg.iterations + S.COLLAPSE_ROUNDS
 
 
+def test_a_resumed_solve_counts_its_extra_rounds_from_its_own_start(skirt, monkeypatch):
+    """A warm re-solve (the live preview) resumes a finished solve's iteration count; its guard is the
+    plain one until it has run past its own planned iterations, not escalated from its first iteration."""
+    from core.pattern import solver as S
+    solver = PatternSolver(skirt.cut, skirt.reference)
+    K, cw, cg = solver.targets_reference()
+    done = solver.begin(K, cw, cg)
+    solver.iterate(done, done.planned + 2 * S.COLLAPSE_ROUNDS)          # a finished, long solve
+    seen = []
+    plain = S.round_guard
+    monkeypatch.setattr(S, "round_guard", lambda g, extra: (seen.append(extra), plain(g, extra))[1])
+    warm = solver.begin(K, cw * 1.01, cg, resume=done)
+    assert warm.iteration == warm.started == done.iteration
+    solver.iterate(warm, 4)
+    assert seen and max(seen) < 0
+
+
 def test_relative_singular_values_match_numpy():
     rng = np.random.default_rng(3)
     f = 50

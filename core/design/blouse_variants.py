@@ -9,12 +9,12 @@ solve).
 """
 from __future__ import annotations
 
-from .templates import blouse_fitted
+from .templates import BLOUSE_WAIST_DART_INTAKE, blouse_fitted
 
 #: m, the waist and shoulder darts' set intakes of :func:`blouse_waist_darts` (held by the solver's
 #: soft intake term; ``"auto"`` ones cross on one side: the flattening shares the bust's wedge
 #: between converging darts arbitrarily, see docs/darts.md)
-WAIST_DART_INTAKE = 0.02
+WAIST_DART_INTAKE = BLOUSE_WAIST_DART_INTAKE
 SHOULDER_DART_INTAKE = 0.02
 
 

@@ -2,8 +2,8 @@
 
 Every piece is drawn once as a form XObject in its own frame (1 PDF point =
 1/72 inch, so lengths are exact) and placed on each page it touches by one
-matrix: a rotation (a quarter turn, exact integers, tilted by at most 10
-degrees on tiled pages) and a translation, never a scale.
+matrix: a rotation (a quarter turn, exact integers, and a tilt on tiled
+pages where :data:`.tiling.TILTS` adds tilts) and a translation, never a scale.
 
 Tiled pages: the pieces are nested for the page grid (:mod:`.tiling`: the
 fewest pages that carry a cut or sew line; pages with no line are left out,

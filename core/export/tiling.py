@@ -42,7 +42,7 @@ EXTRA_COLUMNS = 4       # sheet widths tried: the narrowest that holds the wides
 TURNS = (0, 1, 2, 3)    # quarter turns tried per piece
 # degrees added to each quarter turn: (0, -5, 5, -10, 10) prints the teaser on 58 A4 pages instead of 61 (Letter 62
 # either way) for 4.5x the layout time (~10 s CPU a paper instead of ~2 s), so no tilt by default
-TILTS = (0.0,)
+TILTS = (0.0,)          # the first is 0: print_layout tries the quarter turns alone first
 ALIGN_EPS = 0.0015      # m, how far past a page line an aligned position puts the piece's lines
 
 

@@ -25,9 +25,10 @@ fixed by the ease term's axes and the grain re-alignment after every
 iteration. No triangle ever flips (:func:`.steps.flip_guard`).
 
 The solver keeps only what it precomputed from the cut and the reference
-body, and a cache of factorisations keyed by the weights and the seam plan;
-every call takes its configuration (default: the solver's) and seam plan, so
-no call changes a later one's result.
+body, a cache of factorisations keyed by the weights and the seam plan, and
+spare guarded factorisations (:class:`.guard.GuardedFactors`: symbolic
+analysis reused only); every call takes its configuration (default: the
+solver's) and seam plan, so no call changes a later one's result.
 """
 from __future__ import annotations
 
@@ -96,7 +97,6 @@ class PatternSolver:
         self._Gy = sp.csr_matrix((b.G[:, :, 1].ravel(), (rows, cols)), shape=(f, self.n))
         self._GxT = self._Gx.T.tocsr()
         self._GyT = self._Gy.T.tocsr()
-        self._blocks_G = b.G
         self._factors: Dict[tuple, Tuple[SymmetricFactor, np.ndarray]] = {}
         # the collapse guard's stiffened factorisations and the spare ones finished solves gave back
         self._guarded = GuardedFactors(self.gfaces, b.G)
@@ -216,8 +216,8 @@ class PatternSolver:
         changes values on the shared matrix's sparsity pattern (a triangle's
         terms are already in it), so only the numeric factorisation is redone:
         ``reuse``, an earlier guarded factorisation of the same solve, is
-        refactorised in place. It lives in the solve's :class:`SolveState`,
-        never on the solver; the shared factorisation (:meth:`factorisation`)
+        refactorised in place. While a solve runs it lives in its :class:`SolveState`,
+        not on the solver; the shared factorisation (:meth:`factorisation`)
         is untouched, and a solve where no triangle nears collapse never builds one.
         Without ``reuse``, a factorisation a finished solve gave back
         (:meth:`release`) is refactorised if there is one: its symbolic analysis
@@ -357,7 +357,7 @@ class PatternSolver:
             state.guard = resume.guard.copy()
             state.integral = resume.integral.copy()
             state.local_state = dict(resume.local_state)
-            state.iteration = resume.iteration
+            state.iteration = state.started = resume.iteration
             if start is None:
                 state.s_cur = resume.s_cur
         state.seconds = time.perf_counter() - t0
@@ -418,7 +418,7 @@ class PatternSolver:
             solve_k, aw_k = lu, aw
             if guarding:
                 # triangles near collapse: stiffened and pulled towards their opened shape
-                q, guarded = collapse_guard(round_guard(cfg.guard, it - state.planned), M, Kc, c_weft, c_warp,
+                q, guarded = collapse_guard(round_guard(cfg.guard, it - state.started - state.planned), M, Kc, c_weft, c_warp,
                                             state.guard, Kinv)
                 held = state.guard_held
                 if not guarded.size:

@@ -24,10 +24,12 @@ class SolveState:
     corr_w, corr_g : (f,) the feedback's accumulated target corrections.
     guard : (f,) the collapse guard's stiffening gains (:func:`.steps.collapse_guard`; 0 = not guarded);
     guard_solve : the back-substitution of the matrix with the gains ``guard_held`` (the gains when it was
-    last factorised, :func:`~core.pattern.solver.renew_guard`; None: the shared matrix is solved), or None.
+    last factorised, :func:`~core.pattern.guard.renew_guard`; None: the shared matrix is solved), or None.
     integral : (E,) the seam length term's integral action; tg : the current rest targets.
     s_cur : (f,) signed areas of ``U`` or None; local_state : the local step's memory.
-    iteration : iterations run so far; energies : energy per iteration; backtracks : flip-guard halvings.
+    iteration : iterations run so far (a resumed solve carries the earlier one's on); started : ``iteration``
+    when this solve began (0, or the resumed solve's count); energies : energy per iteration; backtracks :
+    flip-guard halvings.
     step : RMS vertex move of the last iteration over the mean edge length (inf before the first).
     seconds : wall time spent in :meth:`~PatternSolver.begin` and :meth:`~PatternSolver.iterate`.
     """
@@ -51,6 +53,7 @@ class SolveState:
     guard_held: Optional[np.ndarray] = None
     local_state: dict = field(default_factory=dict)
     iteration: int = 0
+    started: int = 0
     energies: List[float] = field(default_factory=list)
     backtracks: int = 0
     step: float = float("inf")

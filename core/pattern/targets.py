@@ -33,7 +33,8 @@ def rest_targets(K, c_weft: np.ndarray, c_warp: np.ndarray, model: str) -> dict:
     Returns ``{"T": 4 (f,) arrays t00, t01, t10, t11, "reg": (d_weft (f,), d_warp (f,), K' as 4 (f,)
     arrays)}``: one product per entry, the same values as the (f, 2, 2) products.
     """
-    k = components(K) if isinstance(K, np.ndarray) else list(K)
+    # the caller's component list itself: the local step keeps its K-only products while it is the same list
+    k = components(K) if isinstance(K, np.ndarray) else K
     cw, cg = np.asarray(c_weft, float), np.asarray(c_warp, float)
     if model == "prestretch":
         return {"T": [cw * k[0], cw * k[1], cg * k[2], cg * k[3]], "reg": (cw, cg, k)}
