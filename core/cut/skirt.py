@@ -33,6 +33,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
+from ..design.mirror import face_symmetry
 from ..errors import CutError
 from .split import CutMesh
 
@@ -185,27 +186,11 @@ def _zip(A: List[int], B: List[int], X: np.ndarray) -> List[Tuple[int, int, int,
     return out
 
 
-def _mirror_faces(F: np.ndarray, S: np.ndarray, nv: int) -> Optional[np.ndarray]:
-    """(F,) int, the face whose corners are the mirror images (``S``) of each face's; None when
-    a face has no mirror face."""
-    def key(T):
-        T = np.sort(T, axis=1)
-        return (T[:, 0] * nv + T[:, 1]) * nv + T[:, 2]
-
-    k = key(F)
-    order = np.argsort(k, kind="stable")
-    km = key(S[F])
-    pos = np.clip(np.searchsorted(k[order], km), 0, len(k) - 1)
-    if not np.array_equal(k[order][pos], km):
-        return None
-    return order[pos]
-
-
 def _symmetric_band(F: np.ndarray, H: np.ndarray, S: np.ndarray, nv: int) -> Optional[np.ndarray]:
     """The removed band made its own mirror image (its union with its reflection, cleaned), or
     None when that is not possible (the body mesh is not its own mirror)."""
-    mf = _mirror_faces(F, S, nv)
-    if mf is None:
+    mf = face_symmetry(F, S)
+    if np.any(mf < 0):
         return None
     H = _clean(F, H | H[mf], nv)
     return H if np.array_equal(H, H[mf]) else None

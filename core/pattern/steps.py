@@ -202,7 +202,8 @@ def flip_guard(blocks: PanelBlocks, U_old: np.ndarray, U_new: np.ndarray, s_old:
     if s_old is None:
         s_old = face_areas(blocks, U_old)
     floor = np.minimum(blocks.area_floor, 0.5 * s_old)
-    # most iterations cut nothing: the step's copy and differences are made once a triangle needs it
+    # most iterations cut nothing: their areas are checked once, and the step's differences and the
+    # halving state are made only when a triangle needs them
     s_all = face_areas(blocks, U_new)
     bad = np.flatnonzero(s_all <= floor)
     if bad.size == 0:
