@@ -429,7 +429,7 @@ def export(pattern, out, formats: Union[str, Sequence[str]] = ("svg", "dxf", "pd
            hem: Optional[float] = None, notch_spacing: Optional[float] = None,
            drape: Optional[Tuple[np.ndarray, Optional[np.ndarray]]] = None, strict: bool = True,
            warnings: Optional[List[str]] = None, up: str = "z", with_body: bool = False,
-           progress: Optional[Progress] = None) -> list:
+           progress: Optional[Progress] = None, print_all: bool = False) -> list:
     """Cutting-room files (SVG, DXF, PDF) and the draped garment (GLB, OBJ) into ``out``, atomically.
 
     Parameters
@@ -445,6 +445,7 @@ def export(pattern, out, formats: Union[str, Sequence[str]] = ("svg", "dxf", "pd
     up : ``"z"`` (the body OBJs' frame, default) or ``"y"``: the up axis of ``garment.obj``
         (``garment.glb`` is Y-up, as glTF requires)
     with_body : also write the pattern's body instance beside the draped garment, in the same frame
+    print_all : print every piece on the tiled PDFs (default: each mirrored pair once, labelled cut 2)
 
     Returns
     -------
@@ -461,7 +462,7 @@ def export(pattern, out, formats: Union[str, Sequence[str]] = ("svg", "dxf", "pd
     return export_pattern(pattern, out, formats=formats, allowance=table,
                           drape_positions=positions, drape_faces=faces, notch_spacing=notch_spacing,
                           strict=strict, warnings=warnings if warnings is not None else [], up=up, body=body,
-                          progress=progress)
+                          progress=progress, print_all=print_all)
 
 
 __all__ = ["CONFIGS", "Prepared", "PatternRun", "DrapeRun", "prepare", "solver_config", "make_solver",

@@ -158,3 +158,15 @@ def test_with_body_and_up_axis(job, anny):
         from core.export.mesh import read_glb
         doc, _ = read_glb((out / "garment.glb").read_bytes())
         assert "body" in [n["name"] for n in doc["nodes"]] and "+Y up" in doc["asset"]["extras"]["frame"]
+
+
+def test_print_all_prints_every_piece_on_the_tiled_pdfs(tmp_path):
+    """Default: a mirrored pair is printed once (cut 2); --print-all prints both pieces."""
+    import json
+    from export_synth import mirrored_pattern
+    save_pattern(mirrored_pattern(), tmp_path / "pattern")
+    for flag, want in (([], [("front_left", 2)]), (["--print-all"], [("front_left", 1), ("front_right", 1)])):
+        out = tmp_path / ("x" + "".join(flag))
+        assert run(["export", str(tmp_path / "pattern"), "--format", "pdf", "--out", str(out), "--quiet"] + flag) == 0
+        s = json.loads((out / "export.json").read_text())
+        assert [(p["piece"], p["quantity"]) for p in s["pdf"]["a4"]["pieces"]] == want

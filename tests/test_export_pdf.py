@@ -287,3 +287,92 @@ def test_plotter_pdf_is_one_sheet_at_full_size(made):
 
 def test_row_names():
     assert [pdf.row_name(i) for i in (0, 1, 25, 26, 27)] == ["A", "B", "Z", "AA", "AB"]
+
+
+def _forms(data: bytes):
+    """The content streams of a PDF's form XObjects (one per piece drawn), in piece order."""
+    objs = parse_pdf(data)
+    return [objs[k][1] for k in sorted(objs) if b"/Subtype /Form" in objs[k][0]]
+
+
+def _export(pat, out, **kw):
+    import json
+    from core.export import export_pattern
+    export_pattern(pat, out, formats="svg,dxf,pdf", **kw)
+    return json.loads((out / "export.json").read_text())
+
+
+def test_mirrored_pair_prints_once_labelled_cut_2(tmp_path):
+    """A declared pair whose sides are mirror images is one piece on the tiled PDFs, labelled to cut 2 (1 + 1
+    mirrored) naming both; the SVG, DXF and plotter sheet keep both pieces, each cut once."""
+    from export_synth import mirrored_pattern
+    s = _export(mirrored_pattern(), tmp_path / "o")
+    for paper in ("a4", "letter"):
+        assert s["pdf"][paper]["pieces"] == [{"piece": "front_left", "quantity": 2, "cut": "1 as printed + 1 mirrored",
+                                              "pieces": ["front_left", "front_right"]}]
+        forms = _forms((tmp_path / "o" / f"pattern_{paper}.pdf").read_bytes())
+        assert len(forms) == 1
+        assert b"(cut 2: front_left) Tj" in forms[0] and b"(+ mirrored \\(front_right\\)) Tj" in forms[0]
+    assert len(_forms((tmp_path / "o" / "pattern_plotter.pdf").read_bytes())) == 2
+    assert [(p["name"], p["quantity"]) for p in s["pieces"]] == [("front_left", 1), ("front_right", 1)]
+    assert s["pdf"]["plotter_pieces"] == [{"piece": "front_left", "quantity": 1},
+                                          {"piece": "front_right", "quantity": 1}]
+    svg = (tmp_path / "o" / "pattern.svg").read_text()
+    assert svg.count('data-quantity="1"') == 2 and "front_right" in svg
+    # print_all: both pieces on the tiled pages, as built
+    s = _export(mirrored_pattern(), tmp_path / "all", print_all=True)
+    assert [p["piece"] for p in s["pdf"]["a4"]["pieces"]] == ["front_left", "front_right"]
+    forms = _forms((tmp_path / "all" / "pattern_a4.pdf").read_bytes())
+    assert len(forms) == 2 and not any(b"cut 2" in f for f in forms)
+
+
+def test_pair_that_is_not_a_mirror_prints_twice(tmp_path):
+    """A right piece 4 mm wider on its outer side (ease painted on one side), or one that is a copy rather than
+    a mirror image of the left, prints both pieces, each labelled as not the other's mirror."""
+    from export_synth import mirrored_pattern
+    from core.export.print_set import MIRROR_TOL, mirror_gap
+    s = _export(mirrored_pattern(bulge=0.004), tmp_path / "o")
+    plan = s["pdf"]["a4"]["pieces"]
+    assert [(p["piece"], p["quantity"]) for p in plan] == [("front_left", 1), ("front_right", 1)]
+    assert all(p["not_mirrored_mm"] > MIRROR_TOL * 1000 for p in plan)
+    forms = _forms((tmp_path / "o" / "pattern_a4.pdf").read_bytes())
+    assert len(forms) == 2
+    assert b"(not the mirror of front_right" in forms[0] and b"(not the mirror of front_left" in forms[1]
+    # the geometric test itself: an exact mirror is 0 apart; a translated copy of a lopsided piece is no mirror
+    pieces = build_pieces(mirrored_pattern())
+    assert mirror_gap(pieces[0], pieces[1]) < 1e-9
+    copy = build_pieces(mirrored_pattern())[0]
+    assert mirror_gap(pieces[0], copy) > 0.005
+    # a gap just under the tolerance still collapses (0.3 mm bulge)
+    pieces = build_pieces(mirrored_pattern(bulge=0.0003))
+    assert 0 < mirror_gap(pieces[0], pieces[1]) <= MIRROR_TOL
+
+
+def test_printing_pairs_once_saves_pages_without_empty_ones(tmp_path):
+    """The tube with a mirrored pair beside it (a small teaser): fewer pages with the pair printed once, every
+    printed page crossed by a line; the same input gives the same bytes."""
+    from export_synth import mirrored_pattern
+    from core.export.print_set import print_set
+    pat = make_pattern()
+    pair = mirrored_pattern()
+    for p in pair.panels:
+        p.vertex_ids = p.vertex_ids + 10_000
+    pat.panels += pair.panels
+    pat.seams += pair.seams
+    pieces = build_pieces(pat)
+    counts = {}
+    for print_all in (False, True):
+        printed, plan = print_set(pat, pieces, print_all=print_all)
+        assert len(printed) == (4 if print_all else 3)
+        lay = pdf.print_sheet(printed, "a4")
+        grid, ink = pdf.sheet_pages(printed, lay, "a4")
+        loops = [lay.place(i, l) for i, p in enumerate(printed) for l in list(p.cut) + list(p.sew)]
+        for r, c in zip(*np.nonzero(ink)):
+            assert (r, c) == (0, 0) or _segments_in(grid.window(r, c), loops)
+        counts[print_all] = int(ink.sum())
+    assert counts[False] < counts[True]
+    a = _export(pat, tmp_path / "a")
+    b = _export(pat, tmp_path / "b")
+    assert a["pdf"]["a4"]["pages"] == counts[False]
+    for name in ("pattern_a4.pdf", "pattern_letter.pdf"):
+        assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes()

@@ -67,7 +67,8 @@ def _run(args) -> int:
     warnings: list = []
     files = wf.export(pattern, args.out, formats=formats, allowance=args.allowance, hem=args.hem,
                       notch_spacing=args.notch_spacing, drape=drape, strict=not args.lenient, warnings=warnings,
-                      up=args.up, with_body=args.with_body, progress=console_progress(args))
+                      up=args.up, with_body=args.with_body, progress=console_progress(args),
+                      print_all=args.print_all)
     for w in warnings:
         print(f"ease export: warning: {w}", file=sys.stderr)
     print_files(files)
@@ -104,6 +105,10 @@ def add_parser(sub) -> None:
     p.add_argument("--drape", default=None,
                    help="folder with drape.npz from `ease drape` (default: PATTERN_DIR/../drape when present); "
                         "needed for glb/obj")
+    p.add_argument("--print-all", action="store_true",
+                   help="print every piece on the tiled A4/Letter PDFs; by default each mirrored pair (left and "
+                        "right sides mirror images within 0.5 mm) is printed once, labelled cut 2 (1 as printed "
+                        "+ 1 mirrored); SVG, DXF and the plotter PDF always hold every piece")
     p.add_argument("--lenient", action="store_true",
                    help="export pieces whose sew line crosses itself or whose allowance does not fit, with a "
                         "warning (listed in export.json) instead of failing")

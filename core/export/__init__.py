@@ -16,14 +16,17 @@ format    files
           ``pattern_astm_r12.dxf`` (same, R12 for Gerber/CLO: $MEASUREMENT metric,
           LAYER table), ``pattern_plain.dxf``; extents set in all three
 ``pdf``   ``pattern_a4.pdf``, ``pattern_letter.pdf`` (tiled 1:1, nested for the
-          fewest pages with a line, 10 mm overlaps), ``pattern_plotter.pdf``
-          (one sheet, 914 mm roll)
+          fewest pages with a line, 10 mm overlaps; each mirrored pair printed
+          once, labelled cut 2), ``pattern_plotter.pdf`` (one sheet, 914 mm
+          roll, every piece)
 ``glb``   ``garment.glb`` (needs the drape; +Y up as glTF requires)
 ``obj``   ``garment.obj`` (needs the drape; +Z up like every other 3D file, or ``up="y"``)
 ========= =====================================================================
 
 plus ``export.json``: per piece sew-line length, allowance, notch count, the
-page counts and pages left out, and the 3D files' frames. Which file suits
+page counts and pages left out, per paper the pieces printed and how many to
+cut from each (``pdf.a4.pieces``: ``piece``, ``quantity``, ``cut``,
+``pieces``), and the 3D files' frames. Which file suits
 which tool: ``docs/export.md``.
 
 Seam allowance and notch spacing are set in the design (``materials.export``:
@@ -83,7 +86,7 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
                    drape_positions: Optional[np.ndarray] = None, progress=None,
                    notch_spacing: Optional[float] = None, strict: bool = True,
                    warnings: Optional[list] = None, drape_faces: Optional[np.ndarray] = None,
-                   up: str = "z", body: Optional[tuple] = None) -> List[Path]:
+                   up: str = "z", body: Optional[tuple] = None, print_all: bool = False) -> List[Path]:
     """Write the pattern's cutting-room files and the draped garment.
 
     Parameters
@@ -112,6 +115,10 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
     body : None or (vertices (V, 3) float m, faces (F, 3) int), the body in the
         drape's frame (:func:`core.body.instance.spec_instance` of ``pattern.body``),
         written beside the garment in the GLB and OBJ.
+    print_all : bool. False (default): the tiled PDFs (A4, Letter) print each
+        mirrored pair once, labelled to cut 2 (1 as printed + 1 mirrored), when
+        its sides are mirror images within 0.5 mm (:mod:`.print_set`); True:
+        every piece. SVG, DXF and the plotter PDF always hold every piece.
 
     Returns
     -------
@@ -168,17 +175,21 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
             files["pattern_plain.dxf"] = dxf.plain_text(pieces, lay, title).encode("utf-8")
         elif fmt == "pdf":
             from . import pdf
+            from .print_set import print_set
+            # home-printer pages: each mirrored pair printed once (cut 2), unless print_all
+            printed, plan = print_set(pattern, pieces, print_all=print_all)
             pages = {}
             for paper in ("a4", "letter"):
-                lay = pdf.print_sheet(pieces, paper)
-                grid, ink = pdf.sheet_pages(pieces, lay, paper)
-                files[f"pattern_{paper}.pdf"] = pdf.tiled_pdf(pieces, lay, paper, title, pages=(grid, ink))
+                lay = pdf.print_sheet(printed, paper)
+                grid, ink = pdf.sheet_pages(printed, lay, paper)
+                files[f"pattern_{paper}.pdf"] = pdf.tiled_pdf(printed, lay, paper, title, pages=(grid, ink))
                 pages[paper] = {"rows": grid.rows, "columns": grid.cols, "pages": int(ink.sum()),
                                 "left_out": [pdf.page_name(r, c) for r, c in zip(*np.nonzero(~ink))],
-                                "overlap_mm": round(pdf.OVERLAP * 1000, 1)}
+                                "overlap_mm": round(pdf.OVERLAP * 1000, 1), "pieces": plan}
             lay = layout_pieces(boxes, SHEET_WIDTH, LAYOUT_MARGIN, reserve=pdf.TEST_RESERVE)
             files["pattern_plotter.pdf"] = pdf.plotter_pdf(pieces, lay, title)
             pages["plotter_mm"] = ((lay.size + 2 * pdf.PAGE_MARGIN) * 1000).round(1).tolist()
+            pages["plotter_pieces"] = [{"piece": p.name, "quantity": p.quantity} for p in pieces]
             summary["pdf"] = pages
         elif fmt in ("glb", "obj"):
             if fmt == "glb":

@@ -14,6 +14,7 @@ pattern's.
 """
 from __future__ import annotations
 
+import dataclasses
 import unicodedata
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional
@@ -31,6 +32,7 @@ from .notches import DEFAULT_NOTCH_SPACING, Notch, check_notch_spacing, piece_no
 
 CHAR_WIDTH = 0.6   # Helvetica's mean advance is ~0.55 em: a safe width estimate per character
 TEXT_MIN = 0.0025  # m, smallest label text
+CUT_LINE = 3       # index of the label line that says how to cut the piece (:func:`_label`)
 
 
 @dataclass
@@ -53,7 +55,9 @@ class PieceDrawing:
     label : list of str, label lines (ASCII).
     label_at : (2,) float, top-left of the label block.
     text_height : float, m.
-    quantity : int, how many to cut.
+    quantity : int, how many to cut from this drawing: 1 for every pattern piece (a mirrored
+        pair is two pieces); 2 for a pair's left piece printed once for both on a
+        tiled PDF (:func:`core.export.print_set.print_set`).
     bbox : (2, 2) float, min and max corner of everything drawn.
     """
     name: str
@@ -120,7 +124,7 @@ def _place_label(sew: List[np.ndarray], grain: np.ndarray, label: List[str], tex
 
 def _label(pattern: Pattern, panel: PatternPanel, quantity: int, folded: bool,
            edge_w: List[np.ndarray]) -> List[str]:
-    """The label lines of a piece: style, piece, size, how to cut it, units and allowance."""
+    """The label lines of a piece: style, piece, size, how to cut it (line ``CUT_LINE``), units and allowance."""
     size = (pattern.body or {}).get("size") or (pattern.body or {}).get("shape") or "-"
     notes = []
     if folded:
@@ -175,21 +179,40 @@ def build_piece(pattern: Pattern, panel: PatternPanel, widths: Dict[str, float],
 
     quantity = 1
     label = _label(pattern, panel, quantity, bool(folds), edge_w)
-    lo = np.min([c.min(0) for c in cut], axis=0)
-    hi = np.max([c.max(0) for c in cut], axis=0)
-    extent = hi - lo
-    text_h = float(np.clip(min(extent) / (len(label) * 3.0), 0.003, 0.008))
-    label_at, text_h = _place_label(sew, grain, label, text_h)
     piece = PieceDrawing(name=panel.name, garment=panel.garment, rotation=rot, sew=sew, sew_ids=loops,
                          cut=cut, edge_allowance=edge_w, fold=folds, notches=notches, grain=grain,
-                         arrows=arrows, label=label, label_at=label_at, text_height=text_h,
+                         arrows=arrows, label=label, label_at=np.zeros(2), text_height=0.0,
                          quantity=quantity, darts=drawn)
+    _set_label(piece, label)
+    return piece
+
+
+def _set_label(piece: PieceDrawing, label: List[str]) -> None:
+    """Give ``piece`` the label lines ``label``: text height from the piece's size, placed inside the sew line
+    (:func:`_place_label`), and the bounding box of the cut lines and the label."""
+    lo = np.min([c.min(0) for c in piece.cut], axis=0)
+    hi = np.max([c.max(0) for c in piece.cut], axis=0)
+    text_h = float(np.clip(min(hi - lo) / (len(label) * 3.0), 0.003, 0.008))
+    label_at, text_h = _place_label(piece.sew, piece.grain, label, text_h)
     tw = max(len(s) for s in label) * CHAR_WIDTH * text_h
     th = len(label) * 1.5 * text_h
     lo = np.minimum(lo, [label_at[0], label_at[1] - th])
     hi = np.maximum(hi, [label_at[0] + tw, label_at[1]])
-    piece.bbox = np.stack([lo, hi])
-    return piece
+    piece.label, piece.label_at, piece.text_height, piece.bbox = label, label_at, text_h, np.stack([lo, hi])
+
+
+def relabel(piece: PieceDrawing, how: List[str], quantity: int) -> PieceDrawing:
+    """A copy of ``piece`` to cut ``quantity`` times, its label's cut line (``cut 1, ...``) replaced by the lines
+    ``how``.
+
+    The label is placed again (a wider label may need smaller text) and the
+    bounding box follows; lines, notches and grain are the piece's own.
+    """
+    out = dataclasses.replace(piece, quantity=int(quantity))
+    label = list(piece.label)
+    label[CUT_LINE:CUT_LINE + 1] = [ascii_text(h) for h in how]
+    _set_label(out, label)
+    return out
 
 
 def _bridge_allowance(loops, table, darts, edge_w) -> list:

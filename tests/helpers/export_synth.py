@@ -90,3 +90,27 @@ def wide_pattern(width: float = 1.6, height: float = 0.5) -> Pattern:
     return Pattern(style="wide", body={"model": "anny", "shape": "M", "pose": "A", "size": "M"},
                    garments={"shirt": "shirt"},
                    panels=[_panel("front", uv, faces, loop, [0.0, 1.0], hems=[sides["bottom"]])], seams=[])
+
+
+def mirrored_pattern(bulge: float = 0.0) -> Pattern:
+    """A left piece and its declared mirror (``front_right``, ``mirror_of="front_left"``) sewn on a centre seam.
+
+    The left piece is lopsided (slanted, its outer side curved), so its mirror
+    image is a different shape. ``bulge`` (m) pushes the right piece's outer
+    side out by up to that much: 0 gives an exact mirror, a few mm a pair whose
+    sides differ (as ease painted on one side only would make it).
+    """
+    def lopsided(s, t):
+        x = (s - 0.5) * (0.36 - 0.08 * t) + 0.06 * t - 0.03 * (1 - s) * np.sin(np.pi * t)
+        return x, 0.5 * t
+
+    uv, faces, loop, sides = grid_piece(7, 9, lopsided)
+    left = _panel("front_left", uv, faces, loop, [0.0, 1.0], hems=[sides["bottom"]])
+    ruv = uv * np.array([-1.0, 1.0]) + np.array([1.0, 0.0])
+    outer = np.isin(np.arange(len(uv)), sides["left"])   # becomes the right piece's outer side
+    ruv[outer, 0] += bulge * np.sin(np.pi * uv[outer, 1] / 0.5)
+    right = _panel("front_right", ruv, faces[:, ::-1], loop[::-1], [0.0, 1.0], hems=[sides["bottom"][::-1]],
+                   mirror_of="front_left", id0=len(uv))
+    seams = [PatternSeam("centre", "front_left", "front_right", sides["right"], sides["right"])]
+    return Pattern(style="mirror test", body={"model": "anny", "shape": "M", "pose": "A", "size": "M"},
+                   garments={"shirt": "shirt"}, panels=[left, right], seams=seams)

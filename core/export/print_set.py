@@ -1,0 +1,149 @@
+"""Which pieces a home-printer PDF prints: each mirrored pair once, as home-sewing patterns do.
+
+A left and right piece that are mirror images of each other are cut from one
+paper piece: once as printed and once with the paper turned over (or from
+fabric folded double). The tiled PDFs (A4, Letter) print such a pair once,
+labelled ``cut 2: <left>`` / ``+ mirrored (<right>)``; every other format (SVG,
+DXF, the plotter sheet, the marker) keeps every piece, since a cutting room
+or a plotter lays each piece by itself.
+
+A pair is printed once only when its drawn geometry really is mirrored:
+the right piece's sew and cut lines, notches, dart legs, drill holes and
+fold arrows must lie within ``MIRROR_TOL`` of the left piece's reflected
+across the grain (either reflection that keeps the grain line's direction:
+grain lines have arrows at both ends) and aligned by the outline's centroid,
+with the same number of loops, notches and darts. A pair whose sides differ
+(for example ease painted on one side only) prints both pieces, each
+labelled as not the other's mirror.
+
+All lengths are metres, piece frame (grain = +y).
+"""
+from __future__ import annotations
+
+import dataclasses
+from typing import List, Sequence, Tuple
+
+import numpy as np
+
+from ..geom.polygon import distance_to_polyline
+from ..pattern.types import Pattern
+from .pieces import PieceDrawing, relabel
+
+MIRROR_TOL = 0.0005     # m: a pair further apart than this prints both pieces
+# the reflections of the piece frame that keep the grain's axis: across the grain, and along it (the same up to a
+# half turn, which a grain line with arrows at both ends does not tell apart)
+REFLECTIONS = (np.diag([-1.0, 1.0]), np.diag([1.0, -1.0]))
+
+
+def _centroid(loop: np.ndarray) -> np.ndarray:
+    """(2,) area centroid of a closed loop."""
+    x, y = loop[:, 0], loop[:, 1]
+    x1, y1 = np.roll(x, -1), np.roll(y, -1)
+    c = x * y1 - x1 * y
+    return np.array([((x + x1) * c).sum(), ((y + y1) * c).sum()]) / (3.0 * c.sum())
+
+
+def _marks(piece: PieceDrawing) -> np.ndarray:
+    """(m, 2) points of the piece's small marks: notch slits, dart legs, drill holes, fold arrows, fold lines."""
+    pts = [np.asarray(n.segment, float) for n in piece.notches]
+    for d in piece.darts:
+        pts += [np.asarray(l, float) for l in d.legs] + [np.asarray(d.drill, float)[None], np.asarray(d.fold, float)]
+    pts += [np.asarray(f, float) for f in piece.fold]
+    return np.concatenate(pts) if pts else np.zeros((0, 2))
+
+
+def _loops_apart(a: Sequence[np.ndarray], b: Sequence[np.ndarray]) -> float:
+    """Largest distance between the closed loops ``a[k]`` and ``b[k]`` (each vertex to the other loop, both ways)."""
+    return max((max(distance_to_polyline(p, q).max(), distance_to_polyline(q, p).max()) for p, q in zip(a, b)),
+               default=0.0)
+
+
+def _points_apart(a: np.ndarray, b: np.ndarray) -> float:
+    """Largest distance from a point of either set to the nearest point of the other."""
+    if not len(a):
+        return 0.0
+    d = np.linalg.norm(a[:, None, :] - b[None, :, :], axis=2)
+    return float(max(d.min(axis=1).max(), d.min(axis=0).max()))
+
+
+def mirror_gap(left: PieceDrawing, right: PieceDrawing) -> float:
+    """How far (m) ``right`` lies from the mirror image of ``left``: inf when their drawings differ in kind.
+
+    ``left`` is reflected across its grain (or along it), moved so that the
+    centroids of the outlines meet, and compared line by line: sew and cut
+    loops (each vertex to the other loop, both ways) and the notches', darts'
+    and fold lines' points (each to the nearest of the other piece's). The
+    smaller of the two reflections' largest distances is returned.
+    """
+    kinds = lambda p: (len(p.sew), len(p.cut), len(p.notches), len(p.darts), len(p.fold))  # noqa: E731
+    if kinds(left) != kinds(right):
+        return float("inf")
+    best = float("inf")
+    for F in REFLECTIONS:
+        shift = _centroid(np.asarray(right.sew[0], float)) - _centroid(np.asarray(left.sew[0], float) @ F)
+        move = lambda loops: [np.asarray(l, float) @ F + shift for l in loops]  # noqa: E731
+        gap = max(_loops_apart(move(left.sew), right.sew), _loops_apart(move(left.cut), right.cut),
+                  _points_apart(_marks(left) @ F + shift, _marks(right)))
+        best = min(best, gap)
+    return float(best)
+
+
+def print_set(pattern: Pattern, pieces: Sequence[PieceDrawing], print_all: bool = False,
+              tol: float = MIRROR_TOL) -> Tuple[List[PieceDrawing], List[dict]]:
+    """The pieces a tiled PDF prints, and what each printed piece stands for.
+
+    Parameters
+    ----------
+    pattern : the pattern the pieces were built from (``panel.mirror_of`` names the pairs).
+    pieces : :func:`core.export.pieces.build_pieces` of it, in pattern order.
+    print_all : True prints every piece as it is (quantity 1 each).
+    tol : m, how far a right piece may lie from its left piece's mirror image to be printed once.
+
+    Returns
+    -------
+    printed : the drawings to print, in pattern order; a left piece printed for
+        its pair has quantity 2 and the label lines ``cut 2: <left>``, ``+ mirrored (<right>)``.
+    plan : one dict per printed drawing: ``piece`` (its name), ``quantity``
+        (how many to cut from it), ``cut`` (how: ``"as printed"`` or
+        ``"1 as printed + 1 mirrored"``), ``pieces`` (the pattern pieces it
+        stands for) and, for a declared pair printed twice, ``not_mirrored_mm``
+        (how far apart its sides are, None when their drawings differ in kind);
+        such a piece's label says it is not the other's mirror.
+    """
+    by_name = {p.name: k for k, p in enumerate(pieces)}
+    twin = {}          # left index -> right index, for pairs printed once
+    apart = {}         # piece index -> (its declared mirror's index, mm apart or None), for pairs printed twice
+    for k, panel in enumerate(pattern.panels[:len(pieces)]):
+        j = by_name.get(panel.mirror_of) if panel.mirror_of else None
+        if j is None or j == k or print_all or j in twin:
+            continue
+        gap = mirror_gap(pieces[j], pieces[k])
+        if gap <= tol:
+            twin[j] = k
+        else:
+            mm = round(gap * 1000, 1) if np.isfinite(gap) else None
+            apart[j], apart[k] = (k, mm), (j, mm)
+    skipped = set(twin.values())
+    printed, plan = [], []
+    for k, piece in enumerate(pieces):
+        if k in skipped:
+            continue
+        if k in twin:
+            other = pieces[twin[k]].name
+            fold = ", on fold" if piece.fold else ""
+            printed.append(relabel(piece, [f"cut 2: {piece.name}", f"+ mirrored ({other}){fold}"], 2))
+            plan.append({"piece": piece.name, "quantity": 2, "cut": "1 as printed + 1 mirrored",
+                         "pieces": [piece.name, other]})
+            continue
+        entry = {"piece": piece.name, "quantity": piece.quantity, "cut": "as printed", "pieces": [piece.name]}
+        if k in apart:
+            # its label must not send the reader to flip the other piece's paper
+            other, mm = apart[k]
+            why = "differs" if mm is None else f"{mm:g} mm off"
+            printed.append(relabel(piece, [f"cut {piece.quantity} as printed",
+                                           f"(not the mirror of {pieces[other].name}: {why})"], piece.quantity))
+            entry["not_mirrored_mm"] = mm
+        else:
+            printed.append(dataclasses.replace(piece))
+        plan.append(entry)
+    return printed, plan
