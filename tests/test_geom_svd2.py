@@ -42,3 +42,17 @@ def test_clamping_opens_small_singular_values_and_unfolds_reflections_only():
     ref = (U * np.maximum(S0, 0.7)[:, None, :]) @ Vt
     distinct = np.abs(S0[:, 0] - np.abs(S0[:, 1])) > 1e-6
     assert np.allclose(B[distinct], ref[distinct], atol=1e-9)
+
+
+def test_hypot_is_numpys_to_an_ulp_over_the_solvers_range():
+    from core.geom.svd2 import hypot
+    rng = np.random.default_rng(3)
+    # Jacobian entries, scales and metre offsets: 1e-9 .. 1e3, either sign, exact zeros included
+    x = rng.choice([-1.0, 1.0], 4000) * 10.0 ** rng.uniform(-9, 3, 4000)
+    y = rng.choice([-1.0, 1.0], 4000) * 10.0 ** rng.uniform(-9, 3, 4000)
+    x[:3], y[:3] = [0.0, 3.0, 0.0], [0.0, 4.0, -2.0]
+    h, ref = hypot(x, y), np.hypot(x, y)
+    assert np.array_equal(h[:3], [0.0, 5.0, 2.0])
+    assert np.all(np.abs(h - ref) <= np.spacing(ref))
+    assert np.isnan(hypot(np.array([np.nan]), np.array([1.0]))[0])
+    assert np.isinf(hypot(np.array([np.inf]), np.array([1.0]))[0])

@@ -20,6 +20,7 @@ from typing import List, Sequence, Tuple
 import numpy as np
 
 from .mesh import row_cross, row_dot, row_norm
+from .svd2 import hypot
 
 
 def weft_of(grain: np.ndarray) -> np.ndarray:
@@ -151,6 +152,6 @@ def scales_of_offsets(M: Sequence[np.ndarray], K: Sequence[np.ndarray]) -> Tuple
     det = np.abs(M[0] * M[3] - M[1] * M[2])
     # det M^-1 e_x = (m11, -m10), det M^-1 e_y = (-m01, m00); the signs folded into the sums (a + (-b) is a - b)
     with np.errstate(divide="ignore", invalid="ignore"):
-        rw = det / np.hypot(K[0] * M[3] - K[1] * M[2], K[2] * M[3] - K[3] * M[2])
-        rg = det / np.hypot(K[1] * M[0] - K[0] * M[1], K[3] * M[0] - K[2] * M[1])
+        rw = det / hypot(K[0] * M[3] - K[1] * M[2], K[2] * M[3] - K[3] * M[2])
+        rg = det / hypot(K[1] * M[0] - K[0] * M[1], K[3] * M[0] - K[2] * M[1])
     return rw, rg

@@ -16,6 +16,22 @@ from typing import List, Sequence, Tuple
 import numpy as np
 
 
+def hypot(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """``sqrt(x**2 + y**2)`` element-wise (a new array), within an ulp of ``numpy.hypot``.
+
+    ``numpy.hypot`` calls libm's ``hypot`` once per element, which scales its
+    operands against overflow: ~15 ns an element on this project's x86 hosts
+    against ~2 ns for the three vectorised passes here (a solver iteration on
+    the shirt's 21.6k triangles takes six of them: ~1.9 of its ~9 ms). The
+    values it serves (2x2 Jacobian entries, scale factors, offsets in metres)
+    lie many decades inside the range where the squares neither overflow nor
+    underflow.
+    """
+    r = np.multiply(x, x)
+    r += np.multiply(y, y)
+    return np.sqrt(r, out=r)
+
+
 def _halves(A: Sequence[np.ndarray]):
     """(e, f, g, h) of ``A``: its conformal part (e, h) and anti-conformal part (f, g)."""
     a00, a01, a10, a11 = (np.asarray(a, float) for a in A)
@@ -26,7 +42,7 @@ def signed_singular_values2(A: Sequence[np.ndarray]) -> Tuple[np.ndarray, np.nda
     """(s1, s2) (k,) of 2 x 2 matrices given as 4 (k,) arrays: ``s1 >= |s2|``, ``s2 < 0`` for a
     reflection (:func:`signed_svd2` without the rotations)."""
     e, f, g, h = _halves(A)
-    q, r = np.hypot(e, h), np.hypot(f, g)
+    q, r = hypot(e, h), hypot(f, g)
     return q + r, q - r
 
 
@@ -39,7 +55,7 @@ def signed_svd2(A: Sequence[np.ndarray]) -> Tuple[np.ndarray, np.ndarray, np.nda
     phi, theta : (k,) radians, ``A = R(phi) diag(s1, s2) R(theta)``.
     """
     e, f, g, h = _halves(A)
-    q, r = np.hypot(e, h), np.hypot(f, g)
+    q, r = hypot(e, h), hypot(f, g)
     a1, a2 = np.arctan2(g, f), np.arctan2(h, e)
     return q + r, q - r, 0.5 * (a2 + a1), 0.5 * (a2 - a1)
 
@@ -64,4 +80,4 @@ def clamp_singular_values_below(A: Sequence[np.ndarray], floor: float) -> List[n
     return compose2(np.maximum(s1, floor), np.maximum(s2, floor), phi, theta)
 
 
-__all__ = ["signed_singular_values2", "signed_svd2", "compose2", "clamp_singular_values_below"]
+__all__ = ["hypot", "signed_singular_values2", "signed_svd2", "compose2", "clamp_singular_values_below"]

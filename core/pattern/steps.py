@@ -18,7 +18,7 @@ from typing import List, Optional, Tuple
 import numpy as np
 
 from ..geom.mesh import signed_areas_2d
-from ..geom.svd2 import clamp_singular_values_below, signed_singular_values2
+from ..geom.svd2 import clamp_singular_values_below, hypot, signed_singular_values2
 from .config import CollapseGuard, SolverConfig
 from .panels import PanelBlocks
 
@@ -88,7 +88,7 @@ def local_step(config: SolverConfig, M: list, tg: dict, W2: np.ndarray, state: d
     np.multiply(m0, k[2], out=t3)
     t3 += (t4 := m1 * k[3])
     y -= np.multiply(d0, t3, out=t3)
-    r = np.hypot(x, y)
+    r = hypot(x, y)
     ok = r > 0
     if ok.all():        # the usual case: what the where() below would pick everywhere
         c, sn = x / r, y / r
@@ -291,7 +291,7 @@ def realign_grain(blocks: PanelBlocks, U: np.ndarray, M: List[np.ndarray]):
     """
     wx, wy = blocks.warp0[:, 0], blocks.warp0[:, 1]
     ix, iy = M[0] * wx + M[1] * wy, M[2] * wx + M[3] * wy  # current 2D image of the warp
-    nrm = np.hypot(ix, iy)
+    nrm = hypot(ix, iy)
     w = np.where(nrm > 0, blocks.warp_vote, 0.0) / np.maximum(nrm, 1e-300)
     vx = np.add.reduceat(w * ix, blocks.face_offsets)
     vy = np.add.reduceat(w * iy, blocks.face_offsets)
