@@ -445,7 +445,8 @@ def export(pattern, out, formats: Union[str, Sequence[str]] = ("svg", "dxf", "pd
     up : ``"z"`` (the body OBJs' frame, default) or ``"y"``: the up axis of ``garment.obj``
         (``garment.glb`` is Y-up, as glTF requires)
     with_body : also write the pattern's body instance beside the draped garment, in the same frame
-    print_all : print every piece on the tiled PDFs (default: each mirrored pair once, labelled cut 2)
+    print_all : print every piece whole on the tiled PDFs (default: each mirrored pair once, labelled cut 2;
+        symmetric pieces as halves on the fold)
 
     Returns
     -------

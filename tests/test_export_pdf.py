@@ -376,3 +376,42 @@ def test_printing_pairs_once_saves_pages_without_empty_ones(tmp_path):
     assert a["pdf"]["a4"]["pages"] == counts[False]
     for name in ("pattern_a4.pdf", "pattern_letter.pdf"):
         assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes()
+
+
+def test_symmetric_piece_prints_as_a_half_on_the_fold(tmp_path):
+    """The tube's front and back are symmetric about their centre lines: the tiled PDFs print their halves, cut
+    line and sew line clipped at the axis, the fold line drawn there, notches of the kept side, grain line inside,
+    labelled to cut on the fold; a front 5 mm wider on one side prints whole."""
+    from core.export.print_set import print_set
+    from core.geom.polygon import distance_to_polyline, points_in_polygon, signed_area
+    pat = make_pattern()
+    pieces = build_pieces(pat)
+    printed, plan = print_set(pat, pieces)
+    assert [e["cut"] for e in plan] == ["on fold (half printed)"] * 2
+    for whole, half in zip(pieces, printed):
+        cut, full = half.cut[0], whole.cut[0]
+        x0 = half.fold[0][0, 0]
+        assert np.allclose(half.fold[0][:, 0], x0) and np.all(cut[:, 0] >= x0 - 1e-12)
+        # every point of the half's cut line is on the whole piece's cut line or on the fold line
+        off = distance_to_polyline(cut, full)
+        assert np.all((off < 1e-9) | (np.abs(cut[:, 0] - x0) < 1e-12))
+        assert abs(signed_area(cut)) == pytest.approx(0.5 * abs(signed_area(full)), rel=2e-3)
+        # the fold line spans the cut line's edge on the axis
+        on = cut[np.abs(cut[:, 0] - x0) < 1e-12, 1]
+        assert half.fold[0][:, 1].tolist() == pytest.approx([on.min(), on.max()])
+        assert len(half.notches) == sum(n.point[0] >= x0 - 5e-4 for n in whole.notches) < len(whole.notches)
+        assert points_in_polygon(half.grain, half.sew[0]).all() and np.ptp(half.grain[:, 0]) == 0
+        assert half.label[3:5] == [f"cut 1 on fold: {whole.name}", "(half printed: fold line on the fabric fold)"]
+        assert len(half.edge_allowance[0]) == len(half.sew[0]) and 0.0 in half.edge_allowance[0]
+    # the label placed inside the half
+    from core.export import tiling
+    for half in printed:
+        assert points_in_polygon(tiling.label_box(half, half.label_at), half.sew[0]).all()
+    # one side of the front pushed out by 5 mm: not symmetric, printed whole; the back still folds
+    pat.panels[0].uv = pat.panels[0].uv * np.where(pat.panels[0].uv[:, :1] > 0, [1.02, 1.0], [1.0, 1.0])
+    printed, plan = print_set(pat, build_pieces(pat))
+    assert [e["cut"] for e in plan] == ["as printed", "on fold (half printed)"]
+    assert not printed[0].fold and printed[0].label == build_pieces(pat)[0].label
+    # print_all and fold=False print the whole pieces
+    assert [e["cut"] for e in print_set(make_pattern(), pieces, fold=False)[1]] == ["as printed"] * 2
+    assert [e["cut"] for e in print_set(make_pattern(), pieces, print_all=True)[1]] == ["as printed"] * 2

@@ -106,9 +106,10 @@ def add_parser(sub) -> None:
                    help="folder with drape.npz from `ease drape` (default: PATTERN_DIR/../drape when present); "
                         "needed for glb/obj")
     p.add_argument("--print-all", action="store_true",
-                   help="print every piece on the tiled A4/Letter PDFs; by default each mirrored pair (left and "
-                        "right sides mirror images within 0.5 mm) is printed once, labelled cut 2 (1 as printed "
-                        "+ 1 mirrored); SVG, DXF and the plotter PDF always hold every piece")
+                   help="print every piece whole on the tiled A4/Letter PDFs; by default each mirrored pair (left "
+                        "and right sides mirror images within 0.5 mm) is printed once, labelled cut 2 (1 as "
+                        "printed + 1 mirrored), and a piece symmetric about a line along its grain as its half, "
+                        "to cut on the fold; SVG, DXF and the plotter PDF always hold every piece whole")
     p.add_argument("--lenient", action="store_true",
                    help="export pieces whose sew line crosses itself or whose allowance does not fit, with a "
                         "warning (listed in export.json) instead of failing")

@@ -17,8 +17,8 @@ format    files
           LAYER table), ``pattern_plain.dxf``; extents set in all three
 ``pdf``   ``pattern_a4.pdf``, ``pattern_letter.pdf`` (tiled 1:1, nested for the
           fewest pages with a line, 10 mm overlaps; each mirrored pair printed
-          once, labelled cut 2), ``pattern_plotter.pdf`` (one sheet, 914 mm
-          roll, every piece)
+          once, labelled cut 2; symmetric pieces as halves on the fold),
+          ``pattern_plotter.pdf`` (one sheet, 914 mm roll, every piece)
 ``glb``   ``garment.glb`` (needs the drape; +Y up as glTF requires)
 ``obj``   ``garment.obj`` (needs the drape; +Z up like every other 3D file, or ``up="y"``)
 ========= =====================================================================
@@ -117,8 +117,10 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
         written beside the garment in the GLB and OBJ.
     print_all : bool. False (default): the tiled PDFs (A4, Letter) print each
         mirrored pair once, labelled to cut 2 (1 as printed + 1 mirrored), when
-        its sides are mirror images within 0.5 mm (:mod:`.print_set`); True:
-        every piece. SVG, DXF and the plotter PDF always hold every piece.
+        its sides are mirror images within 0.5 mm, and a piece symmetric about
+        a line along its grain within 0.5 mm as its half, to cut on the fold
+        (:mod:`.print_set`); True: every piece whole. SVG, DXF and the plotter
+        PDF always hold every piece whole.
 
     Returns
     -------
@@ -176,7 +178,8 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
         elif fmt == "pdf":
             from . import pdf
             from .print_set import print_set
-            # home-printer pages: each mirrored pair printed once (cut 2), unless print_all
+            # home-printer pages: each mirrored pair printed once (cut 2), symmetric pieces as halves on the
+            # fold, unless print_all
             printed, plan = print_set(pattern, pieces, print_all=print_all)
             pages = {}
             for paper in ("a4", "letter"):

@@ -1,4 +1,4 @@
-"""Which pieces a home-printer PDF prints: each mirrored pair once, as home-sewing patterns do.
+"""Which pieces a home-printer PDF prints: each mirrored pair once, symmetric pieces as halves on the fold.
 
 A left and right piece that are mirror images of each other are cut from one
 paper piece: once as printed and once with the paper turned over (or from
@@ -16,6 +16,11 @@ with the same number of loops, notches and darts. A pair whose sides differ
 (for example ease painted on one side only) prints both pieces, each
 labelled as not the other's mirror.
 
+A piece printed by itself that is its own mirror image across a line along
+its grain within the same tolerance (a shirt front or back without a centre
+seam) prints as its half, labelled ``cut 1 on fold: <piece>``, the fold line
+drawn (:mod:`.fold_half`).
+
 All lengths are metres, piece frame (grain = +y).
 """
 from __future__ import annotations
@@ -25,45 +30,14 @@ from typing import List, Sequence, Tuple
 
 import numpy as np
 
-from ..geom.polygon import distance_to_polyline
 from ..pattern.types import Pattern
+from .fold_half import centroid, fold_axis, fold_half, loops_apart, marks, points_apart
 from .pieces import PieceDrawing, relabel
 
 MIRROR_TOL = 0.0005     # m: a pair further apart than this prints both pieces
 # the reflections of the piece frame that keep the grain's axis: across the grain, and along it (the same up to a
 # half turn, which a grain line with arrows at both ends does not tell apart)
 REFLECTIONS = (np.diag([-1.0, 1.0]), np.diag([1.0, -1.0]))
-
-
-def _centroid(loop: np.ndarray) -> np.ndarray:
-    """(2,) area centroid of a closed loop."""
-    x, y = loop[:, 0], loop[:, 1]
-    x1, y1 = np.roll(x, -1), np.roll(y, -1)
-    c = x * y1 - x1 * y
-    return np.array([((x + x1) * c).sum(), ((y + y1) * c).sum()]) / (3.0 * c.sum())
-
-
-def _marks(piece: PieceDrawing) -> np.ndarray:
-    """(m, 2) points of the piece's small marks: notch slits, dart legs, drill holes, fold arrows, fold lines."""
-    pts = [np.asarray(n.segment, float) for n in piece.notches]
-    for d in piece.darts:
-        pts += [np.asarray(l, float) for l in d.legs] + [np.asarray(d.drill, float)[None], np.asarray(d.fold, float)]
-    pts += [np.asarray(f, float) for f in piece.fold]
-    return np.concatenate(pts) if pts else np.zeros((0, 2))
-
-
-def _loops_apart(a: Sequence[np.ndarray], b: Sequence[np.ndarray]) -> float:
-    """Largest distance between the closed loops ``a[k]`` and ``b[k]`` (each vertex to the other loop, both ways)."""
-    return max((max(distance_to_polyline(p, q).max(), distance_to_polyline(q, p).max()) for p, q in zip(a, b)),
-               default=0.0)
-
-
-def _points_apart(a: np.ndarray, b: np.ndarray) -> float:
-    """Largest distance from a point of either set to the nearest point of the other."""
-    if not len(a):
-        return 0.0
-    d = np.linalg.norm(a[:, None, :] - b[None, :, :], axis=2)
-    return float(max(d.min(axis=1).max(), d.min(axis=0).max()))
 
 
 def mirror_gap(left: PieceDrawing, right: PieceDrawing) -> float:
@@ -80,16 +54,16 @@ def mirror_gap(left: PieceDrawing, right: PieceDrawing) -> float:
         return float("inf")
     best = float("inf")
     for F in REFLECTIONS:
-        shift = _centroid(np.asarray(right.sew[0], float)) - _centroid(np.asarray(left.sew[0], float) @ F)
+        shift = centroid(np.asarray(right.sew[0], float)) - centroid(np.asarray(left.sew[0], float) @ F)
         move = lambda loops: [np.asarray(l, float) @ F + shift for l in loops]  # noqa: E731
-        gap = max(_loops_apart(move(left.sew), right.sew), _loops_apart(move(left.cut), right.cut),
-                  _points_apart(_marks(left) @ F + shift, _marks(right)))
+        gap = max(loops_apart(move(left.sew), right.sew), loops_apart(move(left.cut), right.cut),
+                  points_apart(marks(left) @ F + shift, marks(right)))
         best = min(best, gap)
     return float(best)
 
 
 def print_set(pattern: Pattern, pieces: Sequence[PieceDrawing], print_all: bool = False,
-              tol: float = MIRROR_TOL) -> Tuple[List[PieceDrawing], List[dict]]:
+              tol: float = MIRROR_TOL, fold: bool = True) -> Tuple[List[PieceDrawing], List[dict]]:
     """The pieces a tiled PDF prints, and what each printed piece stands for.
 
     Parameters
@@ -97,15 +71,18 @@ def print_set(pattern: Pattern, pieces: Sequence[PieceDrawing], print_all: bool 
     pattern : the pattern the pieces were built from (``panel.mirror_of`` names the pairs).
     pieces : :func:`core.export.pieces.build_pieces` of it, in pattern order.
     print_all : True prints every piece as it is (quantity 1 each).
-    tol : m, how far a right piece may lie from its left piece's mirror image to be printed once.
+    tol : m, how far a right piece may lie from its left piece's mirror image to be printed once, and a piece
+        from its own mirror image across a line along the grain to be printed as a half on the fold.
+    fold : False prints symmetric pieces whole (pairs are still printed once).
 
     Returns
     -------
     printed : the drawings to print, in pattern order; a left piece printed for
-        its pair has quantity 2 and the label lines ``cut 2: <left>``, ``+ mirrored (<right>)``.
+        its pair has quantity 2 and the label lines ``cut 2: <left>``, ``+ mirrored (<right>)``;
+        a symmetric piece is its half with the lines ``cut 1 on fold: <piece>``, ``(half printed: ...)``.
     plan : one dict per printed drawing: ``piece`` (its name), ``quantity``
-        (how many to cut from it), ``cut`` (how: ``"as printed"`` or
-        ``"1 as printed + 1 mirrored"``), ``pieces`` (the pattern pieces it
+        (how many to cut from it), ``cut`` (how: ``"as printed"``,
+        ``"1 as printed + 1 mirrored"`` or ``"on fold (half printed)"``), ``pieces`` (the pattern pieces it
         stands for) and, for a declared pair printed twice, ``not_mirrored_mm``
         (how far apart its sides are, None when their drawings differ in kind);
         such a piece's label says it is not the other's mirror.
@@ -130,8 +107,8 @@ def print_set(pattern: Pattern, pieces: Sequence[PieceDrawing], print_all: bool 
             continue
         if k in twin:
             other = pieces[twin[k]].name
-            fold = ", on fold" if piece.fold else ""
-            printed.append(relabel(piece, [f"cut 2: {piece.name}", f"+ mirrored ({other}){fold}"], 2))
+            folded = ", on fold" if piece.fold else ""
+            printed.append(relabel(piece, [f"cut 2: {piece.name}", f"+ mirrored ({other}){folded}"], 2))
             plan.append({"piece": piece.name, "quantity": 2, "cut": "1 as printed + 1 mirrored",
                          "pieces": [piece.name, other]})
             continue
@@ -143,6 +120,11 @@ def print_set(pattern: Pattern, pieces: Sequence[PieceDrawing], print_all: bool 
             printed.append(relabel(piece, [f"cut {piece.quantity} as printed",
                                            f"(not the mirror of {pieces[other].name}: {why})"], piece.quantity))
             entry["not_mirrored_mm"] = mm
+        elif fold and not print_all and (x0 := fold_axis(piece, tol)) is not None:
+            printed.append(relabel(fold_half(piece, x0, tol), [f"cut {piece.quantity} on fold: {piece.name}",
+                                                                "(half printed: fold line on the fabric fold)"],
+                                   piece.quantity))
+            entry["cut"] = "on fold (half printed)"
         else:
             printed.append(dataclasses.replace(piece))
         plan.append(entry)
