@@ -45,3 +45,19 @@ def test_figures_read_from_strains_equal_the_recomputed_ones():
     # a body given explicitly is measured on it, not read from the strains of the panels' own xyz
     other = {p.name: p.xyz * 1.1 for p in pat.panels}
     assert M.ease_compliance(pat, xyz=other, strains=strains) == M.ease_compliance(pat, xyz=other)
+
+
+def test_a_pieces_scales_are_computed_once_and_follow_its_edits():
+    p = _pattern().panels[0]
+    first = p.scales()
+    memo = p._scales
+    again = p.scales()
+    assert p._scales is memo                                  # read back, not recomputed
+    assert all(np.array_equal(a, b) for a, b in zip(first, again))
+    again[0][:] = 0.0                                         # a caller's array is its own
+    assert np.array_equal(p.scales()[0], first[0])
+    p.uv[3] += 0.05                                           # an edit in place: recomputed
+    moved = p.scales()
+    assert all(np.array_equal(a, b) for a, b in zip(moved, M.scales(p.uv, p.xyz, p.faces, p.grain)))
+    assert not np.array_equal(moved[0], first[0])
+    assert np.array_equal(panel_strain(p).weft, moved[0])

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..geom.mesh import triangle_areas
 from ..geom.strain import scales
+from ..pattern.types import PatternPanel
 
 
 class PanelStrain(NamedTuple):
@@ -27,8 +28,11 @@ class PanelStrain(NamedTuple):
 def panel_strain(panel) -> PanelStrain:
     """The :class:`PanelStrain` of ``panel`` (a pattern panel: ``uv``, ``xyz``, ``faces``, ``grain``)."""
     X, F = np.asarray(panel.xyz, float), np.asarray(panel.faces)
-    with np.errstate(divide="ignore", invalid="ignore"):     # a degenerate triangle reads as inf/nan
-        rw, rg, sh = scales(panel.uv, X, F, panel.grain)
+    if isinstance(panel, PatternPanel):     # the scales its assembly computed, while they are still its own
+        rw, rg, sh = panel.scales()
+    else:
+        with np.errstate(divide="ignore", invalid="ignore"):     # a degenerate triangle reads as inf/nan
+            rw, rg, sh = scales(panel.uv, X, F, panel.grain)
     return PanelStrain(rw, rg, sh, triangle_areas(X, F))
 
 

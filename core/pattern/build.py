@@ -8,7 +8,6 @@ import numpy as np
 
 from ..errors import PatternError
 from ..geom.mesh import boundary_loops, signed_areas_2d
-from ..geom.strain import scales
 from .types import Pattern, PatternPanel, PatternSeam
 
 #: Gap between laid-out pieces, metres.
@@ -50,18 +49,19 @@ def build_pattern(cut, result: SolveResult, style: str = "", body: Optional[dict
     panels = []
     for p in cut.panels:
         xyz = result.xyz[p.name]
-        grain = np.array([0.0, 1.0])
-        rw, rg, _ = scales(uv[p.name], xyz, p.faces, grain)
         s = signed_areas_2d(uv[p.name], p.faces)
         if np.any(s <= 0):
             raise PatternError(f"panel {p.name!r}: {int(np.sum(s <= 0))} flipped triangles in the optimized pattern")
-        panels.append(PatternPanel(
+        piece = PatternPanel(
             name=p.name, garment=p.garment, uv=uv[p.name], faces=np.asarray(p.faces, int),
-            vertex_ids=np.asarray(p.vertex_ids, int), xyz=np.asarray(xyz, float), grain=grain,
+            vertex_ids=np.asarray(p.vertex_ids, int), xyz=np.asarray(xyz, float), grain=np.array([0.0, 1.0]),
             target_weft=result.target_weft[p.name], target_warp=result.target_warp[p.name],
-            achieved_weft=rw, achieved_warp=rg,
+            achieved_weft=None, achieved_warp=None,
             boundary=[np.asarray(b, int) for b in (p.boundary or boundary_loops(p.faces))],
-            hems=[np.asarray(h, int) for h in cut.hems.get(p.name, [])], mirror_of=p.mirror_of))
+            hems=[np.asarray(h, int) for h in cut.hems.get(p.name, [])], mirror_of=p.mirror_of)
+        # the piece keeps its scales: the pattern's report reads them again (PatternPanel.scales)
+        piece.achieved_weft, piece.achieved_warp, _ = piece.scales()
+        panels.append(piece)
     seams = [PatternSeam(s.name, s.panel_a, s.panel_b, np.asarray(s.verts_a, int), np.asarray(s.verts_b, int),
                          gathered=s.name in result.gathered)
              for s in cut.seams]

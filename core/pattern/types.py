@@ -8,11 +8,12 @@ is the unit warp direction in 2D (the optimizer aligns it to +y), the weft is
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
 from ..cut.types import seam_kind
+from ..geom.strain import scales
 
 
 @dataclass
@@ -47,6 +48,25 @@ class PatternPanel:
     boundary: List[np.ndarray] = field(default_factory=list)
     hems: List[np.ndarray] = field(default_factory=list)
     mirror_of: Optional[str] = None
+    #: (copies of the inputs, value) of the last :meth:`scales`
+    _scales: Optional[tuple] = field(default=None, init=False, repr=False, compare=False)
+
+    def scales(self) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The piece's achieved weft and warp scales and shear (degrees) on its own body, (f,) each:
+        :func:`core.geom.strain.scales` of ``uv``, ``xyz``, ``faces``, ``grain`` (a degenerate
+        triangle reads as inf / nan, without a warning).
+
+        Computed once while those four hold the same values (the pattern's assembly sets
+        ``achieved_weft`` / ``achieved_warp`` from it and its report reads it again: a shirt
+        transfer paid ~7 ms twice); every call returns new arrays.
+        """
+        inputs = (self.uv, self.xyz, self.faces, self.grain)
+        memo = self._scales
+        if memo is None or not all(np.array_equal(a, b) for a, b in zip(memo[0], inputs)):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                value = scales(*inputs)
+            memo = self._scales = (tuple(np.array(a, copy=True) for a in inputs), value)
+        return tuple(v.copy() for v in memo[1])
 
 
 @dataclass
