@@ -24,41 +24,80 @@ not read):
 - The EN 13402-3 letter codes (XS..XL) as bands of those girths, as two public
   transcriptions of the standard's letter-code table give them: women's bust
   XS 74-82, S 82-90, M 90-98, L 98-107, XL 107-119; men's chest S 86-94,
-  M 94-102, L 102-110, XL 110-118. The girths of a size here are the band
+  M 94-102, L 102-110, XL 110-118 (men's XS, 82/70 cm, is the band below S by the
+  same 8 cm chest and waist steps). The girths of a size here are the band
   midpoints the same transcriptions list (women's waist 62/70/78/86.5/97, hip
   86/94/102/110.5/120; men's waist 70/78/86/94/102), which equal the
   standard's example 88-72-96 moved by its 4 cm steps (waist = bust - 16,
   hip = bust + 8 up to bust 102).
-- Height is not part of the letter-code table (EN 13402 treats it as a
-  separate dimension) and no verifiable EN height table was found; every size
-  of a chart is held at one height, 176 cm (Anny's female reference body is
-  176.9 cm), so a chart size changes girths, not stature, as the default chart does.
+- Height is not part of the letter-code table (EN 13402 treats it as a separate
+  dimension; no EN height table was found). The heights come from German size
+  tables, which give one per size.
+  Women's: 168 cm for every size. The German women's "Normalgrößen" hold one body
+  height for a whole series (168 cm; "Kurzgrößen" 160, "Langgrößen" 176 cm), as
+  style-engineers.com, "Größentabellen: Damengrößen & Sondergrößen für Frauen"
+  (August 2012, http://www.style-engineers.com/2012/08/groessentabellen-damengroessen-
+  sondergroessen-fuer-frauen/) states; the Hohenstein institute, which publishes the
+  German body-measurement tables, gives the same 1.68 m for women's size 38 (interview
+  with Rose-Marie Riedl, jetzt.de, "Vermiss mich! Warum Jungs oft keine passenden
+  Kleider finden", https://jetzt.de/interview/vermiss-mich-warum-jungs-oft-keine-
+  passenden-kleider-finden-411500); Universal-Lexikon (2012, "Konfektionsgrößen")
+  also puts normal figures at 168 cm (its short and long series, 162 and 174 cm, differ).
+  Men's: height grows with the size (:data:`MEN_HEIGHT_BY_CHEST`), from the table of
+  German men's sizes 42-64 at https://gist.github.com/rixx/c54f8b52dbe5d84fe42a3289d253e80b
+  (height 166, 168, 170 ... 188 cm; chest 80, 86, 90, 94 ... 126 cm; waist 70, 74,
+  78 ... 114 cm; it names a source the stored copy does not show). Its sizes 46, 50,
+  54 and 58 have exactly the chest/waist of the chart's S, M, L and XL (90/78 ...
+  114/102 cm), so S..XL take its heights 170, 174, 178 and 182 cm; XS (chest 82 cm)
+  takes 166.7 cm, interpolated between sizes 42 (80 cm, 166) and 44 (86 cm, 168). A
+  second published table (FWF clothing sizes, https://cdn.shopify.com/s/files/1/1668/
+  0297/files/FWF_Clothing_Sizes.pdf: men's 44-64 at 168, 171, 174, 177, 180, 182 ...
+  cm for chest 88, 92, 96, 100, 104, 108 ... cm) puts the same chests 0.5-3 cm taller.
 - Men's hip girth has no letter-code column (men's bottoms are sized by waist):
   the men's sizes have no hip target, and the fit holds the hip near the
   starting body's (see :func:`core.body.sizes.fit_measurements`).
 
-Sizes Anny cannot reach within 1 cm are left out rather than fitted badly:
-women's XS (78/62/86 cm) needs a slimmer bust than Anny's lightest adult woman
-up to ~50 years (age <= 0.8: best bust +1.5 cm even at age 0.9; only a ~90-year-old
-body reaches it), women's XL (113/97/120 cm) more girth than Anny's heaviest
-(weight 1: best 109.8/99.7/119.2 cm), men's XS (82/70 cm) a slimmer male than
-Anny's lightest (best 84.7 cm chest, 77.0 cm waist). The women's fits may also move
-Anny's ``cupsize`` (0 .. 1 moves a women's M bust 89.8 .. 103.4 cm, waist and hip
-still), which does not bring these sizes in reach either: at 176 cm the XS bust stays
-at 81.9 cm with the smallest cup (the rib cage, not the breast, sets it), and XL's
-23 cm drop from hip to waist is beyond Anny's heaviest women (best with cupsize 0.8:
-112.6/98.2/116.8 cm). The stored S, M and L fits keep the average cup (0.5).
+Every size of both charts is fitted within 1 cm of each target (the stored fits below;
+:func:`core.body.sizes.chart_fit` makes them, from :data:`RESTARTS` where the first fit
+misses). The women's fits move Anny's ``cupsize`` (0 .. 1 moves a women's M bust
+89.8 .. 103.4 cm, waist and hip still): XS needs the smallest cup (0), L the largest
+(1). At 168 cm women's XS is in reach (at 176 cm its bust stayed >= 81.9 cm); Anny's
+``firmness`` is not fitted: it moves the XS bust by < 0.1 cm and brings no size in reach.
+
+Women's XL (113/97/120 cm) is left out: Anny cannot reach it within 1 cm. Its best fit
+(every restart, cupsize 1, weight 0.83, muscle 0, age 0.8) is 112.0/99.4/116.5 cm at
+168.9 cm: XL's 23 cm drop from hip to waist is beyond Anny's heavy women (17.2 cm there).
+Anny's weight widens the waist about twice as fast as the hip (weight 0.6 -> 0.83: waist
++14.9, hip +8.0 cm), so the girths that reach XL's hip overshoot its waist. Adding
+``firmness`` gives 112.0/99.2/116.8 cm.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from typing import Dict, Mapping, Tuple
 
-CHART_HEIGHT_CM = 176.0
+import numpy as np
+
+# Body height (cm) of the women's sizes: the German women's "Normalgrößen" hold one height
+# for every girth (see the module docstring).
+WOMEN_HEIGHT_CM = 168.0
+
+# Men's body height (cm) by chest girth (cm), the German men's normal sizes 42..58 (see the
+# module docstring); a chart size between two rows takes the height linearly interpolated.
+MEN_HEIGHT_BY_CHEST = ((80.0, 166.0), (86.0, 168.0), (90.0, 170.0), (94.0, 172.0), (98.0, 174.0),
+                       (102.0, 176.0), (106.0, 178.0), (110.0, 180.0), (114.0, 182.0))
 
 # Adult ages only (Anny: 2/3 = young adult ~25 years, 0.8 ~ 50 years): a size fit may use
 # age (girth distribution shifts with it) but never turns the body into a teenager or a 90-year-old.
 ADULT_AGE = (0.67, 0.8)
+
+# Where a chart fit starts again when its first fit misses: the centres of the cells of Anny's
+# piecewise-linear muscle, weight and proportions blends (anchors 0, 0.5, 1). A local fit from the
+# average body stays on its side of a kink: from muscle 0.5 the men's XS fit ends at muscle 1
+# (chest 83.2, waist 74.5 cm) and the women's XS at muscle 0.8 (bust 79.3 cm), both of which land
+# from a start in the low-muscle, low-weight cells.
+RESTARTS = tuple({"muscle": m, "weight": w, "proportions": p}
+                 for m in (0.25, 0.75) for w in (0.25, 0.75) for p in (0.25, 0.75))
 
 
 @dataclass(frozen=True)
@@ -70,10 +109,12 @@ class SizeChart:
     name : the chart's name (``"women"``).
     title : one line naming the chart and its source.
     sizes : size name -> {height, chest, waist[, hip]} in cm, in size order.
-    start : shape parameters the fit starts from and does not move (the gender phenotype).
+    start : shape parameters the fit starts from (the gender phenotype, which it does not move).
     parameters : shape parameters the fit moves (where the model has them).
     bounds : parameter -> (lo, hi) narrowing its range during the fit.
     fitted : model name -> size -> shape parameters, stored fits (re-fitted by the tests).
+    restarts : partial start shapes a fit that misses is made again from, in order
+        (:func:`core.body.sizes.chart_fit`).
     """
     name: str
     title: str
@@ -82,40 +123,51 @@ class SizeChart:
     parameters: Tuple[str, ...] = ()
     bounds: Mapping[str, Tuple[float, float]] = field(default_factory=dict)
     fitted: Mapping[str, Mapping[str, Mapping[str, float]]] = field(default_factory=dict)
+    restarts: Tuple[Mapping[str, float], ...] = ()
 
 
 def _women(bust, waist, hip):
-    return {"height": CHART_HEIGHT_CM, "chest": bust, "waist": waist, "hip": hip}
+    return {"height": WOMEN_HEIGHT_CM, "chest": bust, "waist": waist, "hip": hip}
 
 
 def _men(chest, waist):
-    return {"height": CHART_HEIGHT_CM, "chest": chest, "waist": waist}
+    return {"height": round(float(np.interp(chest, *zip(*MEN_HEIGHT_BY_CHEST))), 1), "chest": chest, "waist": waist}
 
 
 FIT_PARAMETERS = ("height", "weight", "muscle", "proportions", "age")
 
 WOMEN = SizeChart(
     name="women",
-    title="women's EN 13402-3 letter codes S-L (bust/waist/hip band midpoints), height 176 cm",
-    sizes={"S": _women(86.0, 70.0, 94.0), "M": _women(94.0, 78.0, 102.0), "L": _women(102.0, 86.5, 110.5)},
+    title="women's EN 13402-3 letter codes XS-L (bust/waist/hip band midpoints), height 168 cm (DOB normal sizes)",
+    sizes={"XS": _women(78.0, 62.0, 86.0), "S": _women(86.0, 70.0, 94.0), "M": _women(94.0, 78.0, 102.0),
+           "L": _women(102.0, 86.5, 110.5)},
     start={"gender": 1.0}, parameters=FIT_PARAMETERS + ("cupsize",), bounds={"age": ADULT_AGE},
+    restarts=RESTARTS,
     fitted={"anny": {
-        "S": {"gender": 1.0, "age": 0.701, "muscle": 0.7032, "weight": 0.0523, "height": 0.5031, "proportions": 0.9899},
-        "M": {"gender": 1.0, "age": 0.67, "muscle": 0.43, "weight": 0.7422, "height": 0.4863, "proportions": 0.3837},
-        "L": {"gender": 1.0, "age": 0.7069, "muscle": 0.316, "weight": 1.0, "height": 0.48, "proportions": 0.0},
+        "XS": {"gender": 1.0, "age": 0.7681, "muscle": 0.3887, "weight": 0.0, "height": 0.422, "proportions": 0.5152,
+               "cupsize": 0.0},
+        "S": {"gender": 1.0, "age": 0.6824, "muscle": 0.6292, "weight": 0.3788, "height": 0.4244, "proportions": 0.809,
+              "cupsize": 0.4845},
+        "M": {"gender": 1.0, "age": 0.6953, "muscle": 0.3519, "weight": 0.7075, "height": 0.4196, "proportions": 0.5426,
+              "cupsize": 0.6467},
+        "L": {"gender": 1.0, "age": 0.8, "muscle": 0.0, "weight": 0.6246, "height": 0.433, "proportions": 0.8066,
+              "cupsize": 1.0},
     }},
 )
 
 MEN = SizeChart(
     name="men",
-    title="men's EN 13402-3 letter codes S-XL (chest/waist band midpoints), height 176 cm",
-    sizes={"S": _men(90.0, 78.0), "M": _men(98.0, 86.0), "L": _men(106.0, 94.0), "XL": _men(114.0, 102.0)},
+    title="men's EN 13402-3 letter codes XS-XL (chest/waist band midpoints), height 167-182 cm (German normal sizes)",
+    sizes={"XS": _men(82.0, 70.0), "S": _men(90.0, 78.0), "M": _men(98.0, 86.0), "L": _men(106.0, 94.0),
+           "XL": _men(114.0, 102.0)},
     start={"gender": 0.0}, parameters=FIT_PARAMETERS, bounds={"age": ADULT_AGE},
+    restarts=RESTARTS,
     fitted={"anny": {
-        "S": {"gender": 0.0, "age": 0.7254, "muscle": 0.6163, "weight": 0.0, "height": 0.3654, "proportions": 1.0},
-        "M": {"gender": 0.0, "age": 0.738, "muscle": 0.4262, "weight": 0.5776, "height": 0.3663, "proportions": 0.6421},
-        "L": {"gender": 0.0, "age": 0.67, "muscle": 0.023, "weight": 0.5013, "height": 0.3581, "proportions": 0.0},
-        "XL": {"gender": 0.0, "age": 0.67, "muscle": 0.0519, "weight": 0.6552, "height": 0.3561, "proportions": 0.0},
+        "XS": {"gender": 0.0, "age": 0.8, "muscle": 0.0362, "weight": 0.1444, "height": 0.2805, "proportions": 1.0},
+        "S": {"gender": 0.0, "age": 0.8, "muscle": 0.5144, "weight": 0.059, "height": 0.3164, "proportions": 1.0},
+        "M": {"gender": 0.0, "age": 0.7615, "muscle": 0.4299, "weight": 0.6038, "height": 0.3502, "proportions": 0.6007},
+        "L": {"gender": 0.0, "age": 0.67, "muscle": 0.0066, "weight": 0.4868, "height": 0.3764, "proportions": 0.0},
+        "XL": {"gender": 0.0, "age": 0.67, "muscle": 0.3695, "weight": 1.0, "height": 0.4125, "proportions": 0.2617},
     }},
 )
 
