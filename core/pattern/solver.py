@@ -391,11 +391,11 @@ class PatternSolver:
         # a reference or transfer solve aims the feedback at its own targets: their finiteness once
         targets_finite = None if adapting else np.isfinite(c_weft) & np.isfinite(c_warp)
         lam_ease, lam_reg = cfg.weights.ease, cfg.weights.regulariser
+        pinned = np.flatnonzero(pin[:, 0])
         n_it = int(iterations)
         for k in range(n_it):
             it = state.iteration
             report(progress, k / max(n_it, 1), f"optimizing pattern: iteration {k + 1}/{n_it}")
-            retarget = False
             # an adaptation's last ``settle`` iterations keep the targets still: the seams' length integral
             # closes the seams and the shear the moving targets drove settles
             settling = adapting and ad.settle > 0 and it >= state.planned - ad.settle
@@ -403,8 +403,6 @@ class PatternSolver:
                 # move the targets by the achieved/target ratio: the linear solve then
                 # lands on the wanted rho-hat wherever curvature allows it
                 move_corrections(cfg, M, Kc, c_weft, c_warp, corr_w, corr_g, poses, targets_finite)
-                retarget = True
-            if retarget:
                 tg = rest_targets(Kc, c_weft * corr_w, c_warp * corr_g, model)
             RT, Te = local_step(cfg, M, tg, W2, state.local_state)
             # the regulariser's energy (a diagnostic): sum_t a_t |(M_t - R_t T_t) W|^2, one dot product per entry
@@ -438,11 +436,11 @@ class PatternSolver:
                         B[j][gidx] = (B[j][gidx] + (lam_ease + lam_reg) * g * Z[j]) / (1.0 + g)
                     stiff = 1.0 + held
                     aw_k = (aw[0] * stiff,) * 2 if unit_columns else (aw[0] * stiff, aw[1] * stiff)
-            rhs = np.empty((self.n, 2))
-            rhs[:, 0] = self._GxT @ (aw_k[0] * B[0]) + self._GyT @ (aw_k[1] * B[1])
-            rhs[:, 1] = self._GxT @ (aw_k[0] * B[2]) + self._GyT @ (aw_k[1] * B[3])
-            rhs += seam_rhs(self.seams, U, cfg, state.plan, integral)
-            rhs += pin * U
+            # the seams' part (a new array) plus the triangles' (x + y is y + x); the pins only where they are
+            rhs = seam_rhs(self.seams, U, cfg, state.plan, integral)
+            rhs[:, 0] += self._GxT @ (aw_k[0] * B[0]) + self._GyT @ (aw_k[1] * B[1])
+            rhs[:, 1] += self._GxT @ (aw_k[0] * B[2]) + self._GyT @ (aw_k[1] * B[3])
+            rhs[pinned] += pin[pinned] * U[pinned]
             U_new = solve_k(rhs)
             # the step's rigid part per panel carries no strain: remove it so that the flip
             # guard only ever pulls back the local part of the step

@@ -145,16 +145,17 @@ def local_step(config: SolverConfig, M: list, tg: dict, W2: np.ndarray, state: d
         p0, p1 = d1 * rk[2], d1 * rk[3]
         num = m2 * p0
         num += m3 * p1
-        den = W2[0] * p0 * p0
-        den += W2[1] * p1 * p1
+        unit = W2[0] == 1.0 and W2[1] == 1.0     # products by 1 skipped: the same values
+        den = p0 * p0 if unit else W2[0] * p0 * p0
+        den += p1 * p1 if unit else W2[1] * p1 * p1
         sw = np.clip(num / np.maximum(den, 1e-300, out=den), lo, hi, out=num)
         state["sw"] = sw
         d1sw = d1 * sw
         RT = [d0 * rk[0], d0 * rk[1], np.multiply(d1sw, rk[2], out=rk[2]), np.multiply(d1sw, rk[3], out=rk[3])]
         num = m2 * T[2]
         num += m3 * T[3]
-        den = W2[0] * T[2] ** 2
-        den += W2[1] * T[3] ** 2
+        den = T[2] ** 2 if unit else W2[0] * T[2] ** 2
+        den += T[3] ** 2 if unit else W2[1] * T[3] ** 2
         se = np.clip(num / np.maximum(den, 1e-300, out=den), lo, hi, out=num)
         return RT, [T[0], T[1], T[2] * se, T[3] * se]
     return [d0 * rk[0], d0 * rk[1], d1 * rk[2], d1 * rk[3]], T
@@ -292,7 +293,9 @@ def realign_grain(blocks: PanelBlocks, U: np.ndarray, M: List[np.ndarray]):
     wx, wy = blocks.warp0[:, 0], blocks.warp0[:, 1]
     ix, iy = M[0] * wx + M[1] * wy, M[2] * wx + M[3] * wy  # current 2D image of the warp
     nrm = hypot(ix, iy)
-    w = np.where(nrm > 0, blocks.warp_vote, 0.0) / np.maximum(nrm, 1e-300)
+    # a triangle whose warp image vanished does not vote (every one usually votes: the where() is skipped)
+    vote = blocks.warp_vote if (nrm > 0).all() else np.where(nrm > 0, blocks.warp_vote, 0.0)
+    w = vote / np.maximum(nrm, 1e-300)
     vx = np.add.reduceat(w * ix, blocks.face_offsets)
     vy = np.add.reduceat(w * iy, blocks.face_offsets)
     theta = -np.where((vx == 0) & (vy == 0), 0.0, np.arctan2(-vx, vy))
