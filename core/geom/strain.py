@@ -45,16 +45,18 @@ def jacobians(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray) -> np.ndarray:
     uv = np.asarray(uv, float)
     xyz = np.asarray(xyz, float)
     F = np.asarray(faces, int)
-    D2 = np.stack([uv[F[:, 1]] - uv[F[:, 0]], uv[F[:, 2]] - uv[F[:, 0]]], axis=2)  # (f,2,2)
-    D3 = np.stack([xyz[F[:, 1]] - xyz[F[:, 0]], xyz[F[:, 2]] - xyz[F[:, 0]]], axis=2)  # (f,3,2)
-    det = D2[:, 0, 0] * D2[:, 1, 1] - D2[:, 0, 1] * D2[:, 1, 0]
-    inv = np.empty_like(D2)
+    u0, x0 = uv[F[:, 0]], xyz[F[:, 0]]
+    e1, e2 = uv[F[:, 1]] - u0, uv[F[:, 2]] - u0          # the 2D edges: D2's columns
+    d1, d2 = xyz[F[:, 1]] - x0, xyz[F[:, 2]] - x0        # the 3D edges: D3's columns
+    det = e1[:, 0] * e2[:, 1] - e2[:, 0] * e1[:, 1]
     with np.errstate(divide="ignore", invalid="ignore"):
-        inv[:, 0, 0] = D2[:, 1, 1] / det
-        inv[:, 1, 1] = D2[:, 0, 0] / det
-        inv[:, 0, 1] = -D2[:, 0, 1] / det
-        inv[:, 1, 0] = -D2[:, 1, 0] / det
-    return D3 @ inv
+        i00, i01, i10, i11 = e2[:, 1] / det, -e2[:, 0] / det, -e1[:, 1] / det, e1[:, 0] / det
+    # D3 D2^-1 written out: numpy's matmul on (f, 3, 2) stacks calls BLAS once per triangle
+    # (~10x slower) and its fused multiply-adds make the last bit depend on the CPU
+    J = np.empty((len(F), 3, 2))
+    J[:, :, 0] = d1 * i00[:, None] + d2 * i10[:, None]
+    J[:, :, 1] = d1 * i01[:, None] + d2 * i11[:, None]
+    return J
 
 
 def scales(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray, grain: np.ndarray
@@ -75,8 +77,9 @@ def scales(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray, grain: np.ndarray
     """
     J = jacobians(uv, xyz, faces)
     g = np.asarray(grain, float) / np.linalg.norm(grain)
-    jw = J @ weft_of(g)
-    jg = J @ g
+    w = weft_of(g)
+    jw = J[:, :, 0] * w[0] + J[:, :, 1] * w[1]        # J w and J g written out (see jacobians)
+    jg = J[:, :, 0] * g[0] + J[:, :, 1] * g[1]
     lw, lg = row_norm(jw), row_norm(jg)
     with np.errstate(divide="ignore", invalid="ignore"):
         cosang = row_dot(jw, jg) / (lw * lg)
