@@ -112,6 +112,7 @@ MARKER_SIZES = ("XS", "S", "M", "L", "XL")
 MARKER_WIDTH = 1.5            # m of fabric
 MARKER_BUDGETS = (10, 30, 60)  # nester seconds; quick: the first two, shorter
 MARKER_SEEDS = (0, 1, 2)      # the all-core rows: one run per seed (seeds differ by about as much as settings do)
+MARKER_TILT = 2.0             # degrees each side of 0/180 in the tilt-tolerance row (the default is no tilt)
 STRIP_EFFICIENCY_NOTE = "the export's sheet layout of the same pieces (skyline of bounding boxes 2 cm apart, 1.5 m wide)"
 
 
@@ -141,19 +142,23 @@ def _marker_rows(quick: bool = False) -> dict:
     rows = [{"method": "strip layout", "seconds": 0.0, "length_m": round(float(strip.size[1]), 3),
              "efficiency_pct": round(100 * area / (MARKER_WIDTH * float(strip.size[1])), 2)}]
     cores = os.cpu_count() or 1
-    runs = [(1, 1, b, (0,)) for b in ((5, 10) if quick else MARKER_BUDGETS)]
+    runs = [(1, 1, b, (0,), 0.0) for b in ((5, 10) if quick else MARKER_BUDGETS)]
     if cores > 1 and not quick:
-        runs += [(cores, 1, b, MARKER_SEEDS) for b in MARKER_BUDGETS] + [(1, cores, MARKER_BUDGETS[-1], (0,))]
+        runs += [(cores, 1, b, MARKER_SEEDS, 0.0) for b in MARKER_BUDGETS]
+        runs += [(1, cores, MARKER_BUDGETS[-1], (0,), 0.0)]
+        # the issue allows a small tilt tolerance beside 0/180; not the default (`ease marker --tilt DEG`)
+        runs += [(cores, 1, MARKER_BUDGETS[-1], (0,), MARKER_TILT)]
     load = [round(os.getloadavg()[0], 2)]
-    for threads, tries, budget, seeds in runs:
+    for threads, tries, budget, seeds, tilt in runs:
         got = []
         for seed in seeds:
             cpu0 = _child_cpu()
-            m = nest(items, MARKER_WIDTH, seconds=budget, seed=seed, threads=threads, tries=tries)
+            m = nest(items, MARKER_WIDTH, seconds=budget, seed=seed, threads=threads, tries=tries, tilt=tilt)
             got.append({"efficiency_pct": 100 * m.efficiency, "length_m": m.length, "stopped": m.stopped,
                         "wall_s": m.seconds, "cpu_s": _child_cpu() - cpu0, "load": os.getloadavg()[0]})
         eff = [g["efficiency_pct"] for g in got]
-        rows.append({"method": "spyrrow", "threads": threads, "tries": tries, "seconds": budget, "seeds": list(seeds),
+        rows.append({"method": "spyrrow" if not tilt else f"spyrrow, tilt +-{tilt:g} deg", "tilt_deg": tilt,
+                     "threads": threads, "tries": tries, "seconds": budget, "seeds": list(seeds),
                      "length_m": round(float(np.mean([g["length_m"] for g in got])), 3),
                      "efficiency_pct": round(float(np.mean(eff)), 2),
                      "efficiency_pct_min": round(min(eff), 2), "efficiency_pct_max": round(max(eff), 2),
@@ -178,7 +183,10 @@ def _marker_md(marker: dict) -> list:
              "are one run per seed: efficiency, length, wall and cpu s are their means, min-max the spread. Load "
              f"average (1 min) at the start and end: {marker.get('load_start_end', '-')}, and after each run in the "
              "load column (the nester stops on wall time: a loaded machine gives it less work; cpu s is the CPU time "
-             "the nesters got, budget x cores used on an idle machine). "
+             "the nesters got, budget x cores used on an idle machine). The tilt row is a tilt-tolerance run: "
+             f"each piece may also lie {MARKER_TILT:g} degrees either side of 0/180 (`ease marker --tilt "
+             f"{MARKER_TILT:g}`, which the issue allows as an option; every other row and the default keep the grain "
+             "at 0/180 exactly). "
              f"The strip layout row is {STRIP_EFFICIENCY_NOTE}.", ""]
     if "error" in marker:
         return lines + [f"not run: {marker['error']}"]
@@ -198,6 +206,7 @@ def _marker_md(marker: dict) -> list:
 def run(out_dir, quick: bool = False) -> dict:
     from core.export import dxf, pdf, svg
     from core.export.pieces import build_pieces
+    from core.export.print_set import print_set
     from core.geom.layout import layout_pieces
     from core.export.validate import validate_pattern
     from core.fileio import write_json, write_text
@@ -217,23 +226,30 @@ def run(out_dir, quick: bool = False) -> dict:
         row["warnings"] = len(warnings)
         lay = layout_pieces([p.bbox for p in pieces], 0.88, 0.02)
         lay_pdf = layout_pieces([p.bbox for p in pieces], 0.88, 0.02, reserve=pdf.TEST_RESERVE)
-        t = time.perf_counter()
-        sheets = {paper: pdf.print_sheet(pieces, paper) for paper in ("a4", "letter")}
+        # home-printer pages: each mirrored pair printed once (the export's default)
+        printed, _ = print_set(pattern, pieces)
+        row["printed_pieces"] = len(printed)
+        t, c = time.perf_counter(), time.process_time()
+        sheets = {paper: pdf.print_sheet(printed, paper) for paper in ("a4", "letter")}
         row["pdf_nest_ms"] = (time.perf_counter() - t) * 1000 / 2
+        row["pdf_nest_cpu_ms"] = (time.process_time() - c) * 1000 / 2
         texts = {}
         for fmt, fn in (("svg", lambda: svg.svg_document(pieces, lay, pattern.style)),
                         ("dxf", lambda: dxf.astm_text(pieces, lay, pattern.style, "M")),
                         ("dxf_r12", lambda: dxf.astm_r12_text(pieces, lay, pattern.style, "M")),
                         ("dxf_plain", lambda: dxf.plain_text(pieces, lay, pattern.style)),
-                        ("pdf_a4", lambda: pdf.tiled_pdf(pieces, sheets["a4"], "a4", pattern.style)),
-                        ("pdf_letter", lambda: pdf.tiled_pdf(pieces, sheets["letter"], "letter", pattern.style)),
+                        ("pdf_a4", lambda: pdf.tiled_pdf(printed, sheets["a4"], "a4", pattern.style)),
+                        ("pdf_letter", lambda: pdf.tiled_pdf(printed, sheets["letter"], "letter", pattern.style)),
                         ("pdf_plotter", lambda: pdf.plotter_pdf(pieces, lay_pdf, pattern.style))):
             t = time.perf_counter()
             texts[fmt] = fn()
             row[f"{fmt}_ms"] = (time.perf_counter() - t) * 1000
         for paper, lay_p in sheets.items():
-            row[f"{paper}_pages"], row[f"{paper}_empty_pages"] = _page_counts(pieces, lay_p, paper,
+            row[f"{paper}_pages"], row[f"{paper}_empty_pages"] = _page_counts(printed, lay_p, paper,
                                                                               texts[f"pdf_{paper}"])
+            # every piece printed (`--print-all`), for comparison
+            every = pdf.print_sheet(pieces, paper)
+            row[f"{paper}_pages_print_all"] = int(pdf.sheet_pages(pieces, every, paper)[1].sum())
         row.update(_two_readers(pattern, pieces, texts))
         rects = re.findall(rb"(-?[\d.]+) (-?[\d.]+) re", _page_one(texts["pdf_a4"]))
         squares = [float(w) for w, h in rects if abs(float(w) - float(h)) < 1e-3 and float(w) > 100]
@@ -246,9 +262,13 @@ def run(out_dir, quick: bool = False) -> dict:
              "accuracy of the files read back (mm). Allowance error: distance from each sew-line edge's midpoint to "
              "the cut line minus the requested width; edges off by more than 0.1 mm are those next to "
              "corners (allowance squared or mitred so sewn corners close) or where a 2 cm hem meets a 1 cm seam: "
-             "there the nearest cut line is the neighbour's.", ""]
+             "there the nearest cut line is the neighbour's. Tiled PDFs (a4, letter): each mirrored pair printed "
+             "once, labelled cut 2 (the export's default; `printed_pieces` drawings), `*_pages_print_all` the same "
+             "paper with every piece printed (`ease export --print-all`); empty pages: printed pages that no cut or "
+             "sew line crosses; `pdf_nest_ms` / `pdf_nest_cpu_ms`: wall / CPU time of the print layout per paper.", ""]
     keys = ["pieces", "boundary_vertices", "warnings", "build_ms", "svg_ms", "dxf_ms", "dxf_r12_ms", "pdf_a4_ms",
-            "pdf_plotter_ms", "pdf_nest_ms", "a4_pages", "a4_empty_pages", "letter_pages", "letter_empty_pages",
+            "pdf_plotter_ms", "pdf_nest_ms", "pdf_nest_cpu_ms", "printed_pieces", "a4_pages", "a4_empty_pages",
+            "a4_pages_print_all", "letter_pages", "letter_empty_pages", "letter_pages_print_all",
             "dxf_readers", "pdf_test_square_mm", "allowance_err_mm_p95", "allowance_err_mm_max",
             "allowance_edges_within_0.1mm_pct", "notch_counts_match", "notch_arclength_mismatch_mm", "svg_size_err_mm", "dxf_sew_length_err_mm"]
     lines.append("| pattern | " + " | ".join(keys) + " |")
