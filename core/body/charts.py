@@ -59,9 +59,11 @@ not read):
 
 Every size of both charts is fitted within 1 cm of each target (the stored fits below;
 :func:`core.body.sizes.chart_fit` makes them, from :data:`RESTARTS` where the first fit
-misses). The women's fits move Anny's ``cupsize`` (0 .. 1 moves a women's M bust
-89.8 .. 103.4 cm, waist and hip still): XS needs the smallest cup (0), L the largest
-(1). At 168 cm women's XS is in reach (at 176 cm its bust stayed >= 81.9 cm); Anny's
+misses). The women's fits may move Anny's ``cupsize`` (0 .. 1 moves a women's M bust
+89.8 .. 103.4 cm, waist and hip still) where the average cup (0.5) cannot reach a size
+(the chart's ``assist``): XS needs the smallest cup (0), L the largest (1); S and M keep
+0.5 (with the cup free from the start, the least-squares fit drifts: M ended at cup 0.65,
+weight 0.71, a body whose bust is harder to fit than the average-cup M at weight 0.79). At 168 cm women's XS is in reach (at 176 cm its bust stayed >= 81.9 cm); Anny's
 ``firmness`` is not fitted: it moves the XS bust by < 0.1 cm and brings no size in reach.
 
 Women's XL (113/97/120 cm) is left out: Anny cannot reach it within 1 cm. Its best fit
@@ -115,6 +117,10 @@ class SizeChart:
     fitted : model name -> size -> shape parameters, stored fits (re-fitted by the tests).
     restarts : partial start shapes a fit that misses is made again from, in order
         (:func:`core.body.sizes.chart_fit`).
+    assist : shape parameters held at the start (the model's average) unless the fit
+        without them misses from every restart (the women's ``cupsize``: a size the
+        average cup reaches keeps it, so the chart's bodies differ by the girths the
+        chart gives, not by a cup the least-squares fit drifted to).
     """
     name: str
     title: str
@@ -124,6 +130,7 @@ class SizeChart:
     bounds: Mapping[str, Tuple[float, float]] = field(default_factory=dict)
     fitted: Mapping[str, Mapping[str, Mapping[str, float]]] = field(default_factory=dict)
     restarts: Tuple[Mapping[str, float], ...] = ()
+    assist: Tuple[str, ...] = ()
 
 
 def _women(bust, waist, hip):
@@ -141,15 +148,15 @@ WOMEN = SizeChart(
     title="women's EN 13402-3 letter codes XS-L (bust/waist/hip band midpoints), height 168 cm (DOB normal sizes)",
     sizes={"XS": _women(78.0, 62.0, 86.0), "S": _women(86.0, 70.0, 94.0), "M": _women(94.0, 78.0, 102.0),
            "L": _women(102.0, 86.5, 110.5)},
-    start={"gender": 1.0}, parameters=FIT_PARAMETERS + ("cupsize",), bounds={"age": ADULT_AGE},
-    restarts=RESTARTS,
+    start={"gender": 1.0}, parameters=FIT_PARAMETERS, bounds={"age": ADULT_AGE},
+    restarts=RESTARTS, assist=("cupsize",),
     fitted={"anny": {
         "XS": {"gender": 1.0, "age": 0.7681, "muscle": 0.3887, "weight": 0.0, "height": 0.422, "proportions": 0.5152,
                "cupsize": 0.0},
-        "S": {"gender": 1.0, "age": 0.6824, "muscle": 0.6292, "weight": 0.3788, "height": 0.4244, "proportions": 0.809,
-              "cupsize": 0.4845},
-        "M": {"gender": 1.0, "age": 0.6953, "muscle": 0.3519, "weight": 0.7075, "height": 0.4196, "proportions": 0.5426,
-              "cupsize": 0.6467},
+        "S": {"gender": 1.0, "age": 0.6833, "muscle": 0.6217, "weight": 0.3708, "height": 0.4245, "proportions": 0.8134,
+              "cupsize": 0.5},
+        "M": {"gender": 1.0, "age": 0.67, "muscle": 0.3555, "weight": 0.7876, "height": 0.41, "proportions": 0.2371,
+              "cupsize": 0.5},
         "L": {"gender": 1.0, "age": 0.8, "muscle": 0.0, "weight": 0.6246, "height": 0.433, "proportions": 0.8066,
               "cupsize": 1.0},
     }},

@@ -289,26 +289,29 @@ def chart_fit(body, size: str, chart: Optional[str] = None, progress: Optional[P
     gender), moving its parameters within its bounds, where the model has them.
 
     A fit that misses a target is made again from each of the chart's ``restarts`` in
-    turn (the start phenotype kept) until one lands; the first that lands is returned,
-    else the one with the smallest largest miss.
+    turn (the start phenotype kept) until one lands; then, where the chart has ``assist``
+    parameters, the same again with them moving too. The first fit that lands is
+    returned, else the one with the smallest largest miss.
     """
     c, key = split_size(size, chart)
     params = body.shape_parameters()
     names = [n for n in c.parameters if n in params]
+    helpers = [n for n in c.assist if n in params and n not in names]
     start = {k: v for k, v in c.start.items() if k in params}
     best, best_miss = None, np.inf
-    for extra in ({},) + tuple(c.restarts):
-        moved = {k: v for k, v in extra.items() if k in names}
-        if extra and not moved:
-            continue                   # a restart of parameters this model does not have
-        fit = fit_measurements(body, c.sizes[key], progress=progress, start={**start, **moved} or None,
-                               parameters=names if len(names) >= 2 else None,
-                               bounds={k: v for k, v in c.bounds.items() if k in params})
-        if fit.ok:
-            return fit
-        miss = max(abs(fit.achieved[k] - v) for k, v in fit.targets.items())
-        if miss < best_miss:
-            best, best_miss = fit, miss
+    for moving in ([names, names + helpers] if helpers else [names]):
+        for extra in ({},) + tuple(c.restarts):
+            moved = {k: v for k, v in extra.items() if k in moving}
+            if extra and not moved:
+                continue                   # a restart of parameters this model does not have
+            fit = fit_measurements(body, c.sizes[key], progress=progress, start={**start, **moved} or None,
+                                   parameters=moving if len(moving) >= 2 else None,
+                                   bounds={k: v for k, v in c.bounds.items() if k in params})
+            if fit.ok:
+                return fit
+            miss = max(abs(fit.achieved[k] - v) for k, v in fit.targets.items())
+            if miss < best_miss:
+                best, best_miss = fit, miss
     return best
 
 
