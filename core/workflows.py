@@ -25,7 +25,7 @@ import numpy as np
 from .progress import Progress, report, sub
 
 #: Solver configurations a user can name (``--config``); see :mod:`core.pattern`.
-CONFIGS = ("improved", "paper", "stretch")
+CONFIGS = ("improved", "paper", "stretch", "fitted")
 
 
 # ----------------------------------------------------------------------------- prepare

@@ -10,7 +10,7 @@ solve).
 """
 from __future__ import annotations
 
-from .templates import BLOUSE_WAIST_DART_INTAKE, blouse_fitted
+from .garments import BLOUSE_WAIST_DART_INTAKE, blouse_fitted
 
 #: m, the waist and shoulder darts' set intakes of :func:`blouse_waist_darts` (held by the solver's
 #: soft intake term; ``"auto"`` ones cross on one side: the flattening shares the bust's wedge
@@ -61,7 +61,20 @@ def blouse_waist_darts(waist=WAIST_DART_INTAKE, shoulder=SHOULDER_DART_INTAKE, b
 def four_dart_blouse():
     """The fitted blouse with four darts towards each bust point (side seam, hem, shoulder and
     neckline), each ending :data:`FOUR_DART_APEX_OFFSET` from the bust point: the variant that
-    comes nearest issue 14's blouse targets when solved to convergence (not shipped: at the
-    default 20 iterations its shear is higher than the template's; figures in
-    benchmarks/results/pattern.md, women's wear)."""
+    comes nearest issue 14's blouse targets when solved to convergence, shipped as the template
+    :func:`blouse_four_darts` (figures in benchmarks/results/pattern.md, women's wear)."""
     return blouse_waist_darts(neck=NECK_DART_INTAKE, apex_offset=FOUR_DART_APEX_OFFSET)
+
+
+def blouse_four_darts():
+    """Women's sleeveless fitted blouse with four darts towards each bust point: from the side
+    seam, the hem, the shoulder and the neckline, each ending 5 mm from the bust point
+    (:func:`four_dart_blouse`). Made for ``ease pattern --config
+    fitted`` (the darts open over the iterations; at the default 20 its shear is higher than
+    the two-dart blouse's: benchmarks/results/pattern.md, women's wear)."""
+    d = four_dart_blouse()
+    d["name"] = "four-dart blouse"
+    d["description"] = ("Women's sleeveless fitted blouse (women's chart, size M): bust darts from the side seams, "
+                        "waist darts from the hem, shoulder and neckline darts, all towards the bust points and "
+                        "ending 5 mm short of them; ease 1.1. Solve it with --config fitted.")
+    return d
