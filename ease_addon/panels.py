@@ -146,6 +146,7 @@ class EASE_PT_pattern(_EasePanel, bpy.types.Panel):
         sub = row.row(align=True)
         sub.enabled = s.gather_auto
         sub.prop(s, "gather_above_pct")
+        layout.prop(s, "solver_config")
         layout.operator("ease.optimize_pattern", icon="MESH_GRID")
         _figures(layout, s.pattern_json)
 

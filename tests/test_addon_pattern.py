@@ -86,3 +86,27 @@ def test_gathering_setting_reaches_the_design_and_the_pattern(bpy_session, addon
         assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
     assert json.loads(s.design_json)["materials"]["gather_above"] == pytest.approx(0.2)
     assert "gathered seams" not in json.loads(s.pattern_json) or gathered()
+
+
+def test_solver_configuration_reaches_the_pattern(bpy_session, addon):
+    """The Pattern panel's solver choice is the configuration Optimize Pattern solves with; every
+    configuration of the core is offered."""
+    from core.workflows import CONFIGS
+    bpy = bpy_session["bpy"]
+    scene = bpy.context.scene
+    s = scene.ease
+    data = addon("data")
+    props = addon("properties")
+    assert sorted(k for k, _, _ in props.SOLVER_CONFIGS) == sorted(CONFIGS)
+    try:
+        s.solver_config = "fitted"
+        assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
+        fitted = json.loads(scene[data.PATTERN_KEY])
+        assert fitted["report"]["config"] == "fitted"
+    finally:
+        s.solver_config = "improved"
+    assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
+    plain = json.loads(scene[data.PATTERN_KEY])
+    assert plain["report"]["config"] == "improved"
+    # a different solve, not the same pattern relabelled
+    assert fitted["report"]["metrics"]["compliance"]["warp_mean"] != plain["report"]["metrics"]["compliance"]["warp_mean"]
