@@ -161,7 +161,7 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
     throughput on a shared machine), ``worker``.
     """
     from .. import workflows as wf
-    from ..body.instance import body_instance
+    from ..body.instance import body_instance, instance_pose
     from ..body.measure import measure
 
     row: dict = {"id": item.id, "label": item.body.label, "index": item.index, "folder": item.folder,
@@ -183,14 +183,17 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
         model = ctx.prep.body
         rest = body_instance(model, target)
         row.update({f"body.{k}_cm": v for k, v in measure(model, rest).items()})
-        pose = ctx.prep.cut.body.get("pose")
-        # the posed body only for the drape (the transfer poses its own target)
-        vertices = (rest if not pose else body_instance(model, target, pose)) if item.options.drape else None
+        # the cut's pose: the reference pose ("A", or none) is the rest instance itself, which the transfer
+        # then takes as its target instead of evaluating the body again; another pose is the transfer's to
+        # make, and the drape's (the posed body, only then)
+        at_rest = instance_pose(ctx.prep.cut.body.get("pose")) is None
+        vertices = (rest if at_rest else body_instance(model, target, ctx.prep.cut.body.get("pose"))
+                    ) if item.options.drape else None
         timings["body"] = time.perf_counter() - t
 
         t = time.perf_counter()
         run = wf.transfer(ctx.prep, target, config=item.options.config, solver=ctx.solver, start=ctx.start,
-                          progress=check, vertices=rest if not pose else None)
+                          progress=check, vertices=rest if at_rest else None)
         timings["transfer"] = run.timings["optimize"]
         row.update({f"shape.{k}": v for k, v in sorted((run.pattern.body.get("shape") or {}).items())})
         row.update(_pattern_row(run.pattern))
