@@ -46,10 +46,12 @@ def test_notches_match_on_both_sides_of_every_seam():
     for seam in pat.seams:
         na = [n for n in pieces[seam.panel_a].notches if n.seam == seam.name]
         nb = [n for n in pieces[seam.panel_b].notches if n.seam == seam.name]
-        assert len(na) == len(nb) == 7  # ends + every 10 cm (not 60: 2 mm from the end) on a 60.2 cm seam
+        # ends + every 10 cm from either end + the middle (the stretch there is 20 cm) on a 60.2 cm seam
+        assert len(na) == len(nb) == 7
         sa, sb = np.array([n.s for n in na]), np.array([n.s for n in nb])
         np.testing.assert_allclose(sa, sb, atol=1e-12)
-        np.testing.assert_allclose(sa[1:-1], 0.1 * np.arange(1, 6))
+        length = sa[-1]
+        np.testing.assert_allclose(sa[1:-1], [0.1, 0.2, 0.5 * length, length - 0.2, length - 0.1])
         # each notch lies on its sew line at arc length s from the seam's first vertex
         for side, notches in (("a", na), ("b", nb)):
             piece = pieces[getattr(seam, f"panel_{side}")]
@@ -63,20 +65,63 @@ def test_notches_match_on_both_sides_of_every_seam():
 
 
 def test_notch_positions_rules():
+    # every 10 cm from either end; the 12 cm left in the middle (<= 1.25 spacing) gets no notch
     sa, sb = notch_positions(0.32, 0.32, 0.1)
-    # 0.30 is only 2 cm (< spacing / 4) from the end: dropped
-    np.testing.assert_allclose(sa, [0, 0.1, 0.2, 0.32])
+    np.testing.assert_allclose(sa, [0, 0.1, 0.22, 0.32])
+    # 13 cm left in the middle: a notch halves it
     sa, _ = notch_positions(0.33, 0.33, 0.1)
-    np.testing.assert_allclose(sa, [0, 0.1, 0.2, 0.3, 0.33])
+    np.testing.assert_allclose(sa, [0, 0.1, 0.165, 0.23, 0.33])
+    # 0.2 from both ends of a 0.45 seam would be 5 mm apart (< spacing / 4): one 0.1 from each end
+    sa, _ = notch_positions(0.45, 0.45, 0.1)
+    np.testing.assert_allclose(sa, [0, 0.1, 0.2, 0.25, 0.35, 0.45])
+    # sides of different lengths: the first half matches from the start, the second from the end
     sa, sb = notch_positions(0.31, 0.312, 0.1)
-    np.testing.assert_allclose(sa, [0, 0.1, 0.2, 0.31])
-    np.testing.assert_allclose(sb, [0, 0.1, 0.2, 0.312])
+    np.testing.assert_allclose(sa, [0, 0.1, 0.21, 0.31])
+    np.testing.assert_allclose(sb, [0, 0.1, 0.212, 0.312])
+    sa, sb = notch_positions(0.35, 0.352, 0.1)
+    np.testing.assert_allclose(sa, [0, 0.1, 0.175, 0.25, 0.35])
+    np.testing.assert_allclose(sb, [0, 0.1, 0.176, 0.252, 0.352])
     sa, _ = notch_positions(0.5, 0.5, 0.0)
     np.testing.assert_allclose(sa, [0, 0.5])
-    # gathered: the shorter side's notches every spacing, the longer side's at the same fractions
+    np.testing.assert_allclose(notch_positions(0.02, 0.03, 0.1)[0], [0, 0.02])
+    # gathered: the shorter side's notches every spacing from either end, the longer side's at the same fractions
     sa, sb = notch_positions(0.45, 0.30, 0.1, gathered=True)
     np.testing.assert_allclose(sb, [0, 0.1, 0.2, 0.3])
     np.testing.assert_allclose(sa, [0, 0.15, 0.3, 0.45])
+    sa, sb = notch_positions(0.66, 0.44, 0.1, gathered=True)
+    np.testing.assert_allclose(sb, [0, 0.1, 0.2, 0.24, 0.34, 0.44])
+    np.testing.assert_allclose(sa, 1.5 * sb)
+
+
+@pytest.mark.parametrize("gathered", [False, True])
+def test_notch_positions_do_not_depend_on_the_seams_direction(gathered):
+    """A seam measured from its other end (its mirror image, or the same seam listed the other way round) gets
+    the same notches: the rule is symmetric by construction, whatever the lengths and spacing."""
+    rng = np.random.default_rng(16)
+    for _ in range(300):
+        la, spacing = rng.uniform(0.0, 1.5), rng.choice([0.0, rng.uniform(0.005, 0.3)])
+        lb = la * rng.uniform(0.6, 1.6) if gathered else la + rng.uniform(-0.01, 0.01)
+        lb = max(lb, 0.0)
+        sa, sb = notch_positions(la, lb, spacing, gathered)
+        np.testing.assert_allclose(la - sa[::-1], sa, atol=1e-12)
+        np.testing.assert_allclose(lb - sb[::-1], sb, atol=1e-12)
+        # the sides swapped: each side keeps its notches
+        ra, rb = notch_positions(lb, la, spacing, gathered)
+        np.testing.assert_allclose(ra, sb, atol=1e-12)
+        np.testing.assert_allclose(rb, sa, atol=1e-12)
+        assert len(sa) == len(sb) >= 2 and np.all(np.diff(sa) >= 0)
+        lmin = min(la, lb)
+        if spacing > 0 and lmin > 0:
+            ss = sa if la <= lb else sb
+            # no stretch of the shorter side longer than 1.25 spacing nor, between interior notches or an end,
+            # shorter than spacing / 4 (a seam shorter than that keeps only its ends)
+            assert np.diff(ss).max() <= 1.25 * spacing + 1e-12 or len(ss) == 2 and lmin <= 1.25 * spacing
+            assert len(ss) == 2 or np.diff(ss).min() >= 0.25 * spacing - 1e-12
+            if not gathered:
+                # matched from the nearer end: equal arc lengths on both sides, the middle at half of each
+                half = len(sa) // 2
+                np.testing.assert_allclose(sa[:half], sb[:half], atol=1e-12)
+                np.testing.assert_allclose(la - sa[-half:], lb - sb[-half:], atol=1e-12)
 
 
 def test_grain_rotation_keeps_lengths_and_points_up():
@@ -206,7 +251,7 @@ def test_self_seam_closing_a_tube():
     p = build_pieces(pat, allowance={"back_seam": 0.015})[0]
     a = [n for n in p.notches if n.side == "a"]
     b = [n for n in p.notches if n.side == "b"]
-    assert len(a) == len(b) == 6  # 0, 10, 20, 30, 40 (5 cm before the end), 45 cm
+    assert len(a) == len(b) == 6  # 0, 10, 20, 25, 35, 45 cm: every 10 cm from either end
     np.testing.assert_allclose([n.s for n in a], [n.s for n in b])
     np.testing.assert_allclose([n.point[1] for n in a], [n.point[1] for n in b])  # same heights
     assert all(n.normal[0] < 0 for n in a) and all(n.normal[0] > 0 for n in b)  # each points off its edge

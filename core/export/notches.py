@@ -1,8 +1,14 @@
 """Notches: slits cut into the allowance at matching arc lengths on both sides of a seam.
 
 Both sides of a seam get a notch at each end and at the same interior arc
-lengths, so the sewer matches them stretch by stretch; on a gathered seam the
-interior notches sit at the same fractions of each side instead.
+lengths, measured from the nearer end of the seam, so the sewer matches them
+stretch by stretch; on a gathered seam the interior notches sit at the same
+fractions of each side instead. Measuring from both ends makes the notches
+independent of the direction a seam happens to run in: the seams of a
+mirrored design (``side_left`` / ``side_right``) get mirror-image notches, and
+a seam across the centre line gets notches symmetric about it, so a left and
+right piece still print once and a symmetric piece as its half on the fold
+(:mod:`.print_set`).
 """
 from __future__ import annotations
 
@@ -18,6 +24,9 @@ from ..pattern.types import Pattern, PatternPanel
 from .boundary import seam_sides
 
 NOTCH_LENGTH = 0.006       # m, slit notch cut into the allowance
+# m, half the chord along the seam whose normal an interior slit follows: a notch on a mesh vertex would
+# otherwise take one of the two edges' normals, and the mirror image of a piece is not meshed alike
+NORMAL_SPAN = 0.01
 # notch spacing bounds, m: 0 means notches at the seam ends only; below 5 mm notches would merge
 # into one cut (and a seam of 1 m would need 10^9 of them at 1e-9); above 10 m no seam has one
 MIN_NOTCH_SPACING = 0.005
@@ -49,7 +58,8 @@ class Notch:
     ----------
     seam : str, the seam name.
     side : ``"a"`` or ``"b"``.
-    s : float, arc length (m) along this side of the seam from its first vertex.
+    s : float, arc length (m) along this side of the seam from its first vertex (the notches of the
+        seam's second half match those of the other side at equal arc lengths from the last vertex).
     point : (2,) float, the notch position on the sew line (piece frame, m).
     normal : (2,) float, unit outward normal of the sew line there.
     segment : (2, 2) float, the slit: from the cut line inward, ``NOTCH_LENGTH`` long.
@@ -66,12 +76,21 @@ def notch_positions(length_a: float, length_b: float, spacing: float = DEFAULT_N
                     gathered: bool = False) -> Tuple[np.ndarray, np.ndarray]:
     """Arc lengths of the notches on the two sides of a seam.
 
-    Both sides get the seam ends and the same interior positions
-    ``spacing, 2 spacing, ...`` measured from the seam's first vertex, skipping
-    those closer than ``spacing / 4`` to the shorter side's end. On a
-    ``gathered`` seam the interior notches sit at the same *fractions* of each
-    side (spaced ``spacing`` on the shorter one), so each stretch of the
-    longer side is gathered into its own stretch of the shorter.
+    Both sides get the seam ends and interior notches ``spacing, 2 spacing,
+    ...`` measured from *each* end towards the middle of the shorter side,
+    stopping ``spacing / 8`` short of it (so no two notches are closer than
+    ``spacing / 4``), plus one in the middle where the stretch left there is
+    longer than ``1.25 spacing``. The first half's notches lie at the same
+    arc lengths from the seam's first vertex on both sides, the second half's
+    at the same arc lengths from its last vertex, the middle one at half of
+    each side: the difference in length between the sides (the ease the
+    sewer works in) falls in the middle stretch. The rule does not depend on
+    which end a seam starts from, so a seam and its mirror image get mirrored
+    notches whichever way each runs, and a seam that is its own mirror image
+    (a waist seam across a front) gets notches symmetric about its middle.
+    On a ``gathered`` seam the interior notches sit at the same *fractions*
+    of each side (those of the shorter side), so each stretch of the longer
+    side is gathered into its own stretch of the shorter.
 
     Parameters
     ----------
@@ -81,22 +100,26 @@ def notch_positions(length_a: float, length_b: float, spacing: float = DEFAULT_N
 
     Returns
     -------
-    s_a, s_b : (k,) float arrays of equal length, metres.
+    s_a, s_b : (k,) float arrays of equal length, metres from each side's first vertex.
     """
     lmin = min(length_a, length_b)
-    interior = []
+    head, middle = [], []
     if spacing > 0:
         k = 1
-        while k * spacing <= lmin - 0.25 * spacing:
-            interior.append(k * spacing)
+        while k * spacing <= 0.5 * lmin - 0.125 * spacing:
+            head.append(k * spacing)
             k += 1
-    if gathered and lmin > 0:
-        f = np.array(interior) / lmin
-        return (np.concatenate([[0.0], f * length_a, [length_a]]),
-                np.concatenate([[0.0], f * length_b, [length_b]]))
-    s_a = np.array([0.0] + interior + [length_a])
-    s_b = np.array([0.0] + interior + [length_b])
-    return s_a, s_b
+        if lmin - 2 * len(head) * spacing > 1.25 * spacing:
+            middle = [0.5]
+    head = np.array(head)
+
+    def side(length: float) -> np.ndarray:
+        if gathered and lmin > 0:
+            return np.concatenate([[0.0], head / lmin * length, np.array(middle) * length,
+                                   length - head[::-1] / lmin * length, [length]])
+        return np.concatenate([[0.0], head, np.array(middle) * length, length - head[::-1], [length]])
+
+    return side(length_a), side(length_b)
 
 
 def piece_notches(pattern: Pattern, panel: PatternPanel, xy: np.ndarray, loops: List[np.ndarray],
@@ -125,7 +148,7 @@ def piece_notches(pattern: Pattern, panel: PatternPanel, xy: np.ndarray, loops: 
         lb = polyline_length(np.asarray(other.uv, float)[other_ids])
         s_here, _ = notch_positions(la, lb, spacing, gathered=bool(getattr(seam, "gathered", False)))
         pts, edges, _ = point_at_length(xy[ids], s_here)
-        for s, q, e in zip(s_here, pts, edges):
+        for i, (s, q, e) in enumerate(zip(s_here, pts, edges)):
             li, ei = table[(int(ids[e]), int(ids[e + 1]))]
             b = loops[li]
             # the edge's outward normal; a zero-length edge borrows its neighbour's
@@ -134,9 +157,28 @@ def piece_notches(pattern: Pattern, panel: PatternPanel, xy: np.ndarray, loops: 
                 if np.linalg.norm(d) > 1e-12:
                     break
             nrm = np.array([d[1], -d[0]]) / max(np.linalg.norm(d), 1e-300)
+            if 0 < i < len(s_here) - 1:
+                nrm = _chord_normal(xy[ids], s, nrm)
             notches.append(Notch(seam=seam.name, side=side, s=float(s), point=q, normal=nrm,
                                  segment=slit(q, nrm, cut[li], edge_w[li][ei])))
     return notches
+
+
+def _chord_normal(side: np.ndarray, s: float, edge_normal: np.ndarray) -> np.ndarray:
+    """(2,) unit normal of the chord of the seam side ``side`` (k, 2) from arc length ``s - NORMAL_SPAN`` to
+    ``s + NORMAL_SPAN``, turned to the side of ``edge_normal`` (the outward normal of the edge at ``s``).
+
+    An interior notch's slit follows it rather than the edge's normal, so that a
+    notch at the middle of a symmetric seam points along the axis and a seam's
+    mirror image (meshed differently) gets the mirrored slit.
+    """
+    (a, b), _, _ = point_at_length(side, [s - NORMAL_SPAN, s + NORMAL_SPAN])
+    d = b - a
+    length = float(np.linalg.norm(d))
+    if length <= 1e-12:
+        return edge_normal
+    nrm = np.array([d[1], -d[0]]) / length
+    return nrm if float(nrm @ edge_normal) >= 0 else -nrm
 
 
 def slit(q: np.ndarray, nrm: np.ndarray, cut_loop: np.ndarray, width: float) -> np.ndarray:
