@@ -74,15 +74,23 @@ def _accuracy(pattern, pieces, texts: dict) -> dict:
     # squared or mitred so that sewn corners close, or where a 2 cm hem meets a 1 cm seam:
     # there the nearest cut line is the neighbour's
     out["allowance_edges_within_0.1mm_pct"] = float(100.0 * np.mean(np.concatenate(err) <= 1e-4))
-    # notches: same count and arc lengths on both sides of every seam
+    # notches: same count on both sides of every seam, at equal arc lengths from the nearer end (the first half
+    # from the start, the second from the end, a middle one at half of each side; a gathered seam's at equal
+    # fractions of each side): the mismatch in mm along the shorter side
     by = {p.name: p for p in pieces}
     worst, count_ok = 0.0, True
     for s in pattern.seams:
-        a = [n.s for n in by[s.panel_a].notches if n.seam == s.name and n.side == "a"]
-        b = [n.s for n in by[s.panel_b].notches if n.seam == s.name and n.side == "b"]
+        a = np.array([n.s for n in by[s.panel_a].notches if n.seam == s.name and n.side == "a"])
+        b = np.array([n.s for n in by[s.panel_b].notches if n.seam == s.name and n.side == "b"])
         count_ok &= len(a) == len(b)
         if len(a) == len(b) and len(a) > 2:
-            worst = max(worst, float(np.abs(np.array(a[:-1]) - np.array(b[:-1])).max()))
+            la, lb = a[-1], b[-1]
+            off = np.abs(a / la - b / lb) * min(la, lb)
+            if not s.gathered:
+                half = len(a) // 2
+                off[:half] = np.abs(a[:half] - b[:half])
+                off[len(a) - half:] = np.abs((la - a[len(a) - half:]) - (lb - b[len(a) - half:]))
+            worst = max(worst, float(off.max()))
     out["notch_counts_match"] = bool(count_ok)
     out["notch_arclength_mismatch_mm"] = worst * 1000
     # SVG: piece sizes (mm) vs the pattern's

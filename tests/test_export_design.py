@@ -154,24 +154,34 @@ def test_allowance_set_in_the_design_reaches_the_files(shorts_pattern):
         # and nowhere is the allowance narrower than asked
         assert np.all(measured >= expect - 0.05), panel.name
     assert seen == {12.0, 15.0, 20.0, 30.0}
-    # labels: the mirrored right pieces say so, the left ones name their twin
+    # labels: the right pieces are declared mirrors of the left ones, but the design gives the right side seam
+    # and the left inseam wider allowances: the cut lines are no mirror images, and every label says so
     for panel in pat.panels:
         texts = [t.text for t in groups[panel.name].findall("svg:text", NS)]
-        want = f"mirror of {panel.mirror_of}" if panel.mirror_of else "mirrored by"
         assert panel.name.endswith("_right") == bool(panel.mirror_of)
-        assert any(t.startswith("cut 1") and want in t for t in texts), texts
+        twin = panel.mirror_of or panel.name.replace("_left", "_right")
+        line = next(t for t in texts if t.startswith("cut 1"))
+        assert line.startswith(f"cut 1, not the mirror of {twin}: ") and line.endswith(" mm off"), texts
+        assert float(line.split(": ")[1].split()[0]) > 3.0   # 3 mm more allowance on one side
         assert "units: mm, allowance" in " ".join(texts)
 
-    # notches every 8 cm from the design, identical on both sides of each seam
+    # notches every 8 cm from the design, from either end of each seam: at equal arc lengths from the nearer
+    # end on both sides (the middle one, where there is one, at half of each side)
     by_seam = {}
     for p in summary["pieces"]:
         for seam, s in p["notches_mm"].items():
-            by_seam.setdefault(seam, []).append(s)
+            by_seam.setdefault(seam, []).append(np.array(s))
     assert set(by_seam) == seams
-    for seam, sides in by_seam.items():
-        assert len(sides) == 2 and len(sides[0]) == len(sides[1]), seam
-        np.testing.assert_allclose(sides[0][1:-1], sides[1][1:-1], atol=0.01)
-        np.testing.assert_allclose(sides[0][1:-1], 80.0 * np.arange(1, len(sides[0]) - 1), atol=0.01)
+    for seam, (a, b) in by_seam.items():
+        assert len(a) == len(b) >= 3, seam
+        half = len(a) // 2
+        step = 80.0 * np.arange(1, half)
+        for side in (a, b):
+            np.testing.assert_allclose(side[1:half], step, atol=0.01)
+            np.testing.assert_allclose(side[-1] - side[-half:-1], step[::-1], atol=0.01)
+            if len(side) % 2:
+                assert side[half] == pytest.approx(side[-1] / 2, abs=0.01)
+    assert max(len(a) for a, _ in by_seam.values()) >= 6
 
 
 def test_command_line_overrides_the_design(shorts_pattern):

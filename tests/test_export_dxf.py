@@ -72,7 +72,9 @@ def test_astm_blocks_layers_and_sew_lengths(made, writer):
         texts = [e.dxf.text for e in blk if e.dxftype() == "TEXT"]
         assert f"Piece Name: {panel.name}" in texts and "Size: M" in texts and "Quantity: 1" in texts
     back_texts = [e.dxf.text for e in blocks[1] if e.dxftype() == "TEXT" and e.dxf.layer == "15"]
-    assert any("mirror of front" in t for t in back_texts)
+    # the back is declared the front's mirror but is no mirror image: the label says so, with the figure
+    gap = round(pieces[1].mirror_gaps["front"] * 1000, 1)
+    assert gap > 0.5 and f"cut 1, not the mirror of front: {gap:g} mm off" in back_texts
 
 
 def test_plain_dxf(made):

@@ -14,9 +14,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from core.export.fold_half import centroid, fold_axis, points_apart
+from core.export.fold_half import fold_axis
+from core.export.mirror_check import MIRROR_TOL, REFLECTIONS, centroid, mirror_gap, points_apart
 from core.export.pieces import build_pieces
-from core.export.print_set import MIRROR_TOL, REFLECTIONS, mirror_gap, print_set
+from core.export.print_set import print_set
 from core.geom.polyline import polyline_length
 
 REPO = Path(__file__).resolve().parent.parent
@@ -114,3 +115,48 @@ def test_dress_prints_its_halves_on_the_fold(patterns, tmp_path):
         plan = summary["pdf"][paper]["pieces"]
         assert [e["cut"] for e in plan] == ["on fold (half printed)"] * 4
         assert [e["pieces"] for e in plan] == [[p.name] for p in patterns["dress"].panels]
+
+
+def _texts(out: Path):
+    """The label texts of every file written: SVG (per piece group), AAMA DXF (per block), plain DXF (all)."""
+    import ezdxf
+    import xml.etree.ElementTree as ET
+    ns = {"svg": "http://www.w3.org/2000/svg"}
+    root = ET.parse(out / "pattern.svg").getroot()
+    svg = {g.get("data-piece"): [t.text for t in g.findall("svg:text", ns)] for g in root.iter(f"{{{ns['svg']}}}g")
+           if g.get("data-piece")}
+    aama = {}
+    for b in ezdxf.readfile(out / "pattern_astm.dxf").blocks:
+        if not b.name.startswith("*"):
+            aama[b.name] = [e.dxf.text for e in b if e.dxftype() == "TEXT"]
+    plain = [e.dxf.text for e in ezdxf.readfile(out / "pattern_plain.dxf").modelspace() if e.dxftype() == "TEXT"]
+    return svg, aama, plain
+
+
+@pytest.mark.parametrize("bulge,mirrored", [(0.0, True), (0.0003, True), (0.004, False)])
+def test_svg_and_dxf_labels_follow_the_mirror_check(tmp_path, bulge, mirrored):
+    """A declared pair is labelled ``mirror of`` / ``mirrored by`` in the SVG and DXF only when the tiled PDF's
+    check finds it a mirror image (within 0.5 mm: the 0.3 mm bulge is); ease painted on one side (a 4 mm bulge)
+    makes both labels say ``not the mirror of X: N mm off``, the figure the PDF's plan gives."""
+    pytest.importorskip("ezdxf")
+    from export_synth import mirrored_pattern
+    from core.export import export_pattern
+    export_pattern(mirrored_pattern(bulge), tmp_path, formats="svg,dxf,pdf")
+    summary = json.loads((tmp_path / "export.json").read_text())
+    plan = summary["pdf"]["a4"]["pieces"]
+    if mirrored:
+        want = {"front_left": "cut 1, mirrored by front_right", "front_right": "cut 1, mirror of front_left"}
+        assert [e["quantity"] for e in plan] == [2]
+    else:
+        mm = plan[0]["not_mirrored_mm"]
+        assert mm == plan[1]["not_mirrored_mm"] > 0.5
+        want = {"front_left": f"cut 1, not the mirror of front_right: {mm:g} mm off",
+                "front_right": f"cut 1, not the mirror of front_left: {mm:g} mm off"}
+    svg, aama, plain = _texts(tmp_path)
+    for piece, line in want.items():
+        assert line in svg[piece], svg[piece]
+        block = next(texts for name, texts in aama.items() if piece in name)
+        assert any(line in t for t in block), block
+        assert line in plain
+    cut_lines = [t for texts in [*svg.values(), *aama.values(), plain] for t in texts if t.startswith("cut ")]
+    assert len(cut_lines) == 6 and all(("not the mirror" in t) != mirrored for t in cut_lines)

@@ -136,13 +136,19 @@ def test_grain_rotation_keeps_lengths_and_points_up():
 
 
 def test_labels_carry_style_size_quantity_and_mirror():
+    from export_synth import mirrored_pattern
+    left, right = build_pieces(mirrored_pattern())
+    assert left.label[0] == "mirror test" and "size: M" in left.label
+    assert left.label[3] == "cut 1, mirrored by front_right" and right.label[3] == "cut 1, mirror of front_left"
+    assert any("units: mm" in s for s in right.label)
+    # a declared pair that is no mirror image (the tube's back is rotated and shaped apart from its front)
     pat = make_pattern()
     pat.panels[1].mirror_of = "front"
     front, back = build_pieces(pat)
-    assert front.label[0] == "test shirt" and "size: M" in front.label
-    assert any("mirrored by back" in s for s in front.label)
-    assert any(s.startswith("cut 1") and "mirror of front" in s for s in back.label)
-    assert any("units: mm" in s for s in back.label)
+    gap = back.mirror_gaps["front"]
+    assert gap == front.mirror_gaps["back"] > 0.01
+    assert front.label[3] == f"cut 1, not the mirror of back: {round(gap * 1000, 1):g} mm off"
+    assert back.label[3] == f"cut 1, not the mirror of front: {round(gap * 1000, 1):g} mm off"
 
 
 def test_fold_edge_gets_no_allowance_and_label():

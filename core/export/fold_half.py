@@ -26,45 +26,13 @@ from typing import Optional
 import numpy as np
 
 from ..geom.layout import grain_arrows
-from ..geom.polygon import distance_to_polyline, ray_hit
+from ..geom.polygon import ray_hit
+from .mirror_check import centroid, loops_apart, marks, points_apart
 from .pieces import PieceDrawing
 
 GRAIN_FRACTION = 0.6    # part of the half's chord through its centroid that the moved grain line spans
 GRAIN_INSET = 0.4       # where across the half the moved grain line lies: 0 on the fold, 1 at the far side
 SIDE_TOL = 1e-9         # m, a point this close to the axis counts as on it
-
-
-def centroid(loop: np.ndarray) -> np.ndarray:
-    """(2,) area centroid of a closed loop."""
-    x, y = loop[:, 0], loop[:, 1]
-    x1, y1 = np.roll(x, -1), np.roll(y, -1)
-    c = x * y1 - x1 * y
-    return np.array([((x + x1) * c).sum(), ((y + y1) * c).sum()]) / (3.0 * c.sum())
-
-
-def marks(piece: PieceDrawing) -> np.ndarray:
-    """(m, 2) points of the piece's small marks: notch slits, dart legs, drill holes, fold arrows, fold lines."""
-    pts = [np.asarray(n.segment, float) for n in piece.notches]
-    for d in piece.darts:
-        pts += [np.asarray(l, float) for l in d.legs] + [np.asarray(d.drill, float)[None], np.asarray(d.fold, float)]
-    pts += [np.asarray(f, float) for f in piece.fold]
-    return np.concatenate(pts) if pts else np.zeros((0, 2))
-
-
-def loops_apart(a, b) -> float:
-    """Largest distance between the closed loops ``a[k]`` and ``b[k]`` (each vertex to the other loop, both ways)."""
-    return max((max(distance_to_polyline(p, q).max(), distance_to_polyline(q, p).max()) for p, q in zip(a, b)),
-               default=0.0)
-
-
-def points_apart(a: np.ndarray, b: np.ndarray) -> float:
-    """Largest distance from a point of either set to the nearest point of the other (0 when both are empty)."""
-    if not len(a) and not len(b):
-        return 0.0
-    if not len(a) or not len(b):
-        return float("inf")
-    d = np.linalg.norm(a[:, None, :] - b[None, :, :], axis=2)
-    return float(max(d.min(axis=1).max(), d.min(axis=0).max()))
 
 
 def _crossings(loop: np.ndarray, x0: float) -> int:

@@ -28,6 +28,7 @@ from ..progress import report
 from .allowance import allowance_text, edge_allowances, fold_ids, piece_cut_lines, resolve_allowance
 from .boundary import edge_table, piece_loops
 from .darts import DartDrawing, bridge_darts, dart_drawing, piece_darts
+from .mirror_check import MIRROR_TOL, mirror_gap
 from .notches import DEFAULT_NOTCH_SPACING, Notch, check_notch_spacing, piece_notches, slit
 
 CHAR_WIDTH = 0.6   # Helvetica's mean advance is ~0.55 em: a safe width estimate per character
@@ -59,6 +60,9 @@ class PieceDrawing:
         pair is two pieces); 2 for a pair's left piece printed once for both on a
         tiled PDF (:func:`core.export.print_set.print_set`).
     bbox : (2, 2) float, min and max corner of everything drawn.
+    mirror_gaps : dict, for a piece of a declared pair (``mirror_of`` either way): the other piece's name ->
+        how far (m) the right piece lies from the left one's mirror image (inf: their drawings differ in kind),
+        :func:`core.export.mirror_check.mirror_gap`; the label and the tiled PDF's print set follow it.
     """
     name: str
     garment: str
@@ -77,6 +81,7 @@ class PieceDrawing:
     quantity: int
     bbox: np.ndarray = field(default_factory=lambda: np.zeros((2, 2)))
     darts: List[DartDrawing] = field(default_factory=list)
+    mirror_gaps: Dict[str, float] = field(default_factory=dict)
 
 
 def ascii_text(text: str) -> str:
@@ -122,23 +127,40 @@ def _place_label(sew: List[np.ndarray], grain: np.ndarray, label: List[str], tex
     return np.array([x0, mid + 0.5 * len(label) * 1.5 * h]), h
 
 
+def not_mirror_note(other: str, gap: float) -> str:
+    """What a piece of a declared pair says when it is not ``other``'s mirror image, ``gap`` m off (inf: its
+    drawing differs in kind): ``not the mirror of <other>: N mm off`` (or ``: differs``)."""
+    why = f"{round(gap * 1000, 1):g} mm off" if np.isfinite(gap) else "differs"
+    return f"not the mirror of {other}: {why}"
+
+
+def _cut_line(quantity: int, folded: bool, panel: PatternPanel, pattern: Pattern,
+              gaps: Optional[Dict[str, float]] = None) -> str:
+    """The label's line ``CUT_LINE``: ``cut N`` and notes: on a fold; for a declared pair, ``mirror of X`` /
+    ``mirrored by X`` where ``gaps`` (other piece -> m) has it within ``MIRROR_TOL`` of X's mirror image, else
+    :func:`not_mirror_note` (no ``gaps``: the declaration is taken as it stands)."""
+    notes = ["cut on fold"] if folded else []
+    gaps = gaps or {}
+    twins = [p.name for p in pattern.panels if p.mirror_of == panel.name]
+    pairs = ([(panel.mirror_of, "mirror of")] if panel.mirror_of else []) + [(t, "mirrored by") for t in twins]
+    same = [(other, how) for other, how in pairs if gaps.get(other, 0.0) <= MIRROR_TOL]
+    for how in ("mirror of", "mirrored by"):
+        names = [other for other, h in same if h == how]
+        if names:
+            notes.append(f"{how} {', '.join(names)}")
+    notes += [not_mirror_note(other, gaps[other]) for other, _ in pairs if gaps.get(other, 0.0) > MIRROR_TOL]
+    return ascii_text(f"cut {quantity}" + "".join(f", {n}" for n in notes))
+
+
 def _label(pattern: Pattern, panel: PatternPanel, quantity: int, folded: bool,
            edge_w: List[np.ndarray]) -> List[str]:
     """The label lines of a piece: style, piece, size, how to cut it (line ``CUT_LINE``), units and allowance."""
     size = (pattern.body or {}).get("size") or (pattern.body or {}).get("shape") or "-"
-    notes = []
-    if folded:
-        notes.append("cut on fold")
-    if panel.mirror_of:
-        notes.append(f"mirror of {panel.mirror_of}")
-    twins = [p.name for p in pattern.panels if p.mirror_of == panel.name]
-    if twins:
-        notes.append(f"mirrored by {', '.join(twins)}")
     return [ascii_text(pattern.style or "pattern"),
             ascii_text(f"piece: {panel.name}" + (f" ({panel.garment})" if panel.garment and
                                                  not panel.name.startswith(panel.garment) else "")),
             ascii_text(f"size: {size}"),
-            ascii_text(f"cut {quantity}" + ("".join(f", {n}" for n in notes))),
+            _cut_line(quantity, folded, panel, pattern),
             ascii_text(f"units: mm, {allowance_text(edge_w)}")]
 
 
@@ -276,4 +298,26 @@ def build_pieces(pattern: Pattern, allowance=None, notch_spacing: Optional[float
     for i, panel in enumerate(pattern.panels):
         report(progress, i / max(len(pattern.panels), 1), f"piece {panel.name}")
         out.append(build_piece(pattern, panel, widths, notch_spacing, warnings=warnings))
+    _check_pairs(pattern, out)
     return out
+
+
+def _check_pairs(pattern: Pattern, pieces: List[PieceDrawing]) -> None:
+    """Measure every declared pair (``mirror_of``) as the tiled PDF does (:func:`core.export.mirror_check.mirror_gap`),
+    keep the figure on both pieces (``mirror_gaps``) and let their labels say whether each is the other's mirror
+    image: a pair whose sides differ (ease painted on one side) must not send the cutter to flip one piece's paper
+    for the other in any file."""
+    by_name = {p.name: k for k, p in enumerate(pieces)}
+    for k, panel in enumerate(pattern.panels[:len(pieces)]):
+        j = by_name.get(panel.mirror_of) if panel.mirror_of else None
+        if j is None or j == k:
+            continue
+        gap = mirror_gap(pieces[j], pieces[k])
+        pieces[j].mirror_gaps[pieces[k].name] = pieces[k].mirror_gaps[pieces[j].name] = gap
+    for k, piece in enumerate(pieces):
+        if piece.mirror_gaps:
+            label = list(piece.label)
+            label[CUT_LINE] = _cut_line(piece.quantity, bool(piece.fold), pattern.panels[k], pattern,
+                                        piece.mirror_gaps)
+            if label != piece.label:
+                _set_label(piece, label)

@@ -31,35 +31,9 @@ from typing import List, Sequence, Tuple
 import numpy as np
 
 from ..pattern.types import Pattern
-from .fold_half import centroid, fold_axis, fold_half, loops_apart, marks, points_apart
-from .pieces import PieceDrawing, relabel
-
-MIRROR_TOL = 0.0005     # m: a pair further apart than this prints both pieces
-# the reflections of the piece frame that keep the grain's axis: across the grain, and along it (the same up to a
-# half turn, which a grain line with arrows at both ends does not tell apart)
-REFLECTIONS = (np.diag([-1.0, 1.0]), np.diag([1.0, -1.0]))
-
-
-def mirror_gap(left: PieceDrawing, right: PieceDrawing) -> float:
-    """How far (m) ``right`` lies from the mirror image of ``left``: inf when their drawings differ in kind.
-
-    ``left`` is reflected across its grain (or along it), moved so that the
-    centroids of the outlines meet, and compared line by line: sew and cut
-    loops (each vertex to the other loop, both ways) and the notches', darts'
-    and fold lines' points (each to the nearest of the other piece's). The
-    smaller of the two reflections' largest distances is returned.
-    """
-    kinds = lambda p: (len(p.sew), len(p.cut), len(p.notches), len(p.darts), len(p.fold))  # noqa: E731
-    if kinds(left) != kinds(right):
-        return float("inf")
-    best = float("inf")
-    for F in REFLECTIONS:
-        shift = centroid(np.asarray(right.sew[0], float)) - centroid(np.asarray(left.sew[0], float) @ F)
-        move = lambda loops: [np.asarray(l, float) @ F + shift for l in loops]  # noqa: E731
-        gap = max(loops_apart(move(left.sew), right.sew), loops_apart(move(left.cut), right.cut),
-                  points_apart(marks(left) @ F + shift, marks(right)))
-        best = min(best, gap)
-    return float(best)
+from .fold_half import fold_axis, fold_half
+from .mirror_check import MIRROR_TOL, mirror_gap
+from .pieces import PieceDrawing, not_mirror_note, relabel
 
 
 def print_set(pattern: Pattern, pieces: Sequence[PieceDrawing], print_all: bool = False,
@@ -89,17 +63,18 @@ def print_set(pattern: Pattern, pieces: Sequence[PieceDrawing], print_all: bool 
     """
     by_name = {p.name: k for k, p in enumerate(pieces)}
     twin = {}          # left index -> right index, for pairs printed once
-    apart = {}         # piece index -> (its declared mirror's index, mm apart or None), for pairs printed twice
+    apart = {}         # piece index -> (its declared mirror's index, m apart), for pairs printed twice
     for k, panel in enumerate(pattern.panels[:len(pieces)]):
         j = by_name.get(panel.mirror_of) if panel.mirror_of else None
         if j is None or j == k or print_all or j in twin:
             continue
-        gap = mirror_gap(pieces[j], pieces[k])
+        # build_pieces measured the pair already (for the labels of every file)
+        gap = pieces[k].mirror_gaps.get(pieces[j].name)
+        gap = mirror_gap(pieces[j], pieces[k]) if gap is None else gap
         if gap <= tol:
             twin[j] = k
         else:
-            mm = round(gap * 1000, 1) if np.isfinite(gap) else None
-            apart[j], apart[k] = (k, mm), (j, mm)
+            apart[j], apart[k] = (k, gap), (j, gap)
     skipped = set(twin.values())
     printed, plan = [], []
     for k, piece in enumerate(pieces):
@@ -115,11 +90,10 @@ def print_set(pattern: Pattern, pieces: Sequence[PieceDrawing], print_all: bool 
         entry = {"piece": piece.name, "quantity": piece.quantity, "cut": "as printed", "pieces": [piece.name]}
         if k in apart:
             # its label must not send the reader to flip the other piece's paper
-            other, mm = apart[k]
-            why = "differs" if mm is None else f"{mm:g} mm off"
-            printed.append(relabel(piece, [f"cut {piece.quantity} as printed",
-                                           f"(not the mirror of {pieces[other].name}: {why})"], piece.quantity))
-            entry["not_mirrored_mm"] = mm
+            other, gap = apart[k]
+            note = not_mirror_note(pieces[other].name, gap)
+            printed.append(relabel(piece, [f"cut {piece.quantity} as printed", f"({note})"], piece.quantity))
+            entry["not_mirrored_mm"] = round(gap * 1000, 1) if np.isfinite(gap) else None
         elif fold and not print_all and (x0 := fold_axis(piece, tol)) is not None:
             printed.append(relabel(fold_half(piece, x0, tol), [f"cut {piece.quantity} on fold: {piece.name}",
                                                                 "(half printed: fold line on the fabric fold)"],
