@@ -344,11 +344,12 @@ def seam_rhs(layout: SeamLayout, U: np.ndarray, config: SolverConfig, plan: Seam
             cap = s.length_integral_cap * lbar
             np.clip(integral, -cap, cap, out=integral)
             lbar = lbar + integral
-        dirn = cur / np.maximum(cur_len, 1e-300)[:, None]
-        c = _length_weight(layout, config, plan)
-        tgt = (c * lbar)[:, None] * dirn
+        # (c Lbar) times the direction, a coordinate at a time (the same products as broadcast over (E, 2))
+        scale = np.maximum(cur_len, 1e-300)
+        cl = _length_weight(layout, config, plan) * lbar
         for d in range(2):
-            rhs[:, d] += np.bincount(E1, tgt[:, d], minlength=n) - np.bincount(E0, tgt[:, d], minlength=n)
+            tgt = cl * (cur[:, d] / scale)
+            rhs[:, d] += np.bincount(E1, tgt, minlength=n) - np.bincount(E0, tgt, minlength=n)
     if len(layout.mouth_a) and w.seam_length > 0:
         tgt = _intake_weight(layout, config) * _mouth_targets(layout, U)
         np.add.at(rhs, layout.mouth_a, tgt)
@@ -362,9 +363,14 @@ def seam_rhs(layout: SeamLayout, U: np.ndarray, config: SolverConfig, plan: Seam
         sm = d2.copy()
         i = np.flatnonzero(layout.row_smooth)
         sm[i] = 0.5 * (d2[i - 1] + d2[i + 1])
-        acc += (w.seam_straight * layout.row_band * layout.row_straight)[:, None] * sm
+        ws = w.seam_straight * layout.row_band * layout.row_straight
+        acc[:, 0] += ws * sm[:, 0]
+        acc[:, 1] += ws * sm[:, 1]
     if w.seam_curve > 0:
-        acc += (w.seam_curve * layout.row_band * plan.sewn_rows)[:, None] * (0.5 * (d2 + _fitted_partner(layout, U, d2)))
+        wc = w.seam_curve * layout.row_band * plan.sewn_rows
+        mean = 0.5 * (d2 + _fitted_partner(layout, U, d2))
+        acc[:, 0] += wc * mean[:, 0]
+        acc[:, 1] += wc * mean[:, 1]
     rhs += layout.second_diff_T @ acc
     return rhs
 
