@@ -277,7 +277,7 @@ def _adaptation_figures(cut, pose, ref_pat, adapted) -> dict:
             "area_growth": _pattern_area(adapted) / _pattern_area(ref_pat) - 1.0}
 
 #: The women's wear table: (template, uniform ease levels or None for the design's own ease).
-WOMENS = (("blouse_fitted", (1.1, 1.3)), ("blouse_four_darts", (1.1, 1.3)), ("skirt_darted", None))
+WOMENS = (("blouse_fitted", (1.1, 1.3)), ("skirt_darted", None))
 
 
 def _without_darts(raw: dict) -> dict:
@@ -308,19 +308,19 @@ def _womens(body, coarse):
         variants = [("darts", raw), ("no darts", _without_darts(raw))]
         if name == "blouse_fitted":
             # the tailor's front waist and shoulder darts (not shipped: they pay only on a converged solve)
-            from core.design.blouse_variants import blouse_waist_darts
-            variants.append(("waist + shoulder darts", blouse_waist_darts()))
+            from core.design.blouse_variants import blouse_waist_darts, four_dart_blouse
+            variants += [("waist + shoulder darts", blouse_waist_darts()), ("four darts", four_dart_blouse())]
         base = SolverConfig.improved()
         for label, d in variants:
             key = f"{name} ({label})"
             # the frontier of issue 14's targets: converged (200 iterations), and converged with the
             # design's warp lengths kept (warp slack 0), beside the default 20 iterations
             configs = [("", None)]
-            if name.startswith("blouse") and label != "no darts":
+            if name == "blouse_fitted" and label != "no darts":
                 configs += [(", 200 it.", dataclasses.replace(base, iterations=200)),
                             (", 200 it., warp slack 0", dataclasses.replace(
                                 base, iterations=200, rest_shape=dataclasses.replace(base.rest_shape, warp_slack=0.0)))]
-            if name == "blouse_four_darts" and label == "darts":
+            if label == "four darts":
                 # the configuration the template is made for: converged, warp lengths nearly kept, a weak
                 # weft feedback (it buys weft and the bust region with shear) and a stiffer regulariser
                 configs.append((", fitted", SolverConfig.fitted()))
@@ -707,8 +707,8 @@ def _womens_markdown(W) -> list:
     L = ["", "## Women's wear: darts against no darts (improved)", "",
          "Each darted template on its body (the women's chart's M) with its darts and with the darts removed, "
          "at uniform ease 1.1 and 1.3 (the blouse) or the design's own ease; the blouse also with the tailor's "
-         "front waist and shoulder darts (`core.design.blouse_variants`, not shipped); the four-dart blouse "
-         "template (side seam, hem, shoulder and neckline darts, each ending 5 mm from the bust point); the darted "
+         "front waist and shoulder darts and with four darts (side seam, hem, shoulder and neckline darts, each "
+         "ending 5 mm from the bust point; `core.design.blouse_variants`, not shipped); the darted "
          "blouses also solved to convergence (200 iterations) and converged with the design's warp lengths kept "
          "(warp slack 0), and the four-dart blouse with the `fitted` configuration it is made for (300 iterations, "
          "warp slack 0.01, weft feedback 0.01 accumulated to at most 1.2, regulariser 2). "

@@ -79,12 +79,12 @@ def test_four_darts_close_and_fit_the_bust_better_than_three(anny, waist_run):
 
 def test_fitted_configuration_keeps_warp_and_shear_on_the_four_dart_blouse(anny):
     """``--config fitted`` (converged, warp lengths nearly kept, weak weft feedback, regulariser 2) on the
-    shipped four-dart blouse: warp near its design length and shear low where improved's 200 iterations
+    four-dart blouse: warp near its design length and shear low where improved's 200 iterations
     buy weft with warp (women:M, ease 1.1: 2.87 % / 4.9 deg against 8.73 % / 5.2 deg), the bust region
     within 2 % (1.36 %), every dart closed."""
     from core import workflows as wf
-    from core.design.templates import template_path
-    prep = wf.prepare(template_path("blouse_four_darts"), body=anny)
+    from core.design.blouse_variants import four_dart_blouse
+    prep = wf.prepare(four_dart_blouse(), body=anny)
     run = wf.reference(prep, config="fitted")
     f = run.figures
     assert f["flipped"] == 0 and f.get("collapsed") == 0
