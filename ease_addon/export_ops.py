@@ -65,7 +65,7 @@ class EASE_OT_export_pattern(EaseOperator):
                 skipped = f"{'/'.join(f.upper() for f in formats if f in ('glb', 'obj'))} skipped: {why}"
                 formats = flat
         files = wf.export(pattern, out, formats, allowance=allowance, notch_spacing=notch,
-                          drape=None if positions is None else (positions, None))
+                          drape=None if positions is None else (positions, None), print_all=s.export_print_all)
         # -- the scene changes from here on: the design keeps the settings it was exported with
         if design is not None:
             text = json.dumps(design.to_json(), sort_keys=True)

@@ -196,6 +196,9 @@ class EASE_PT_render(_EasePanel, bpy.types.Panel):
         col = layout.column(align=True)
         for name in ("export_allowance_cm", "export_hem_cm", "export_notch_cm"):
             col.prop(s, name)
+        row = layout.row()
+        row.enabled = s.export_pdf
+        row.prop(s, "export_print_all")
         layout.operator("ease.export_pattern", icon="EXPORT")
         layout.separator()
         col = layout.column(align=True)

@@ -181,6 +181,10 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
                                  description="Hem allowance (cm)")
     export_notch_cm: FloatProperty(name="Notch spacing", default=10.0, min=0.0, max=100.0, precision=1,
                                    description="Notches along each seam every this many cm (0: seam ends only)")
+    export_print_all: BoolProperty(name="Print every piece", default=False,
+                                   description="Tiled A4/Letter PDFs: print every piece whole (default: each "
+                                               "mirrored pair once, cut 2, and symmetric pieces as halves on "
+                                               "the fold)")
 
 
 CLASSES = (EASE_PG_shape_param, EASE_PG_design_param, EASE_PG_legend, EASE_PG_scene)

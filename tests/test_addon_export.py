@@ -107,3 +107,26 @@ def test_paint_mode_design_file_save_and_recut(bpy_session, blender):
     assert bpy.ops.ease.recut() == {"FINISHED"}
     r = blender.run(bpy.ops.ease.load_design_file, filepath=str(bpy_session["tmp"] / "missing.json"))
     assert "ERROR" in r and "missing.json" in r["ERROR"]
+
+
+def test_print_every_piece_reaches_the_tiled_pdf(bpy_session):
+    """The panel's *Print every piece* decides whether the tiled PDFs print the top's symmetric front and
+    back as halves on the fold (the default) or whole."""
+    bpy = bpy_session["bpy"]
+    s = bpy.context.scene.ease
+    saved = (s.export_svg, s.export_dxf, s.export_pdf, s.export_glb, s.export_obj, s.export_dir)
+    plans = {}
+    try:
+        s.export_svg, s.export_dxf, s.export_pdf, s.export_glb, s.export_obj = False, False, True, False, False
+        for every in (False, True):
+            s.export_print_all = every
+            out = bpy_session["tmp"] / f"export_print_all_{every}"
+            s.export_dir = str(out)
+            assert bpy.ops.ease.export_pattern() == {"FINISHED"}
+            plans[every] = json.loads((out / "export.json").read_text())["pdf"]["a4"]
+    finally:
+        s.export_print_all = False
+        s.export_svg, s.export_dxf, s.export_pdf, s.export_glb, s.export_obj, s.export_dir = saved
+    assert {p["cut"] for p in plans[False]["pieces"]} == {"on fold (half printed)"}
+    assert {p["cut"] for p in plans[True]["pieces"]} == {"as printed"}
+    assert plans[True]["pages"] > plans[False]["pages"]
