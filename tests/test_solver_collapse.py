@@ -60,8 +60,10 @@ def test_a_triangle_held_at_the_guard_limit_opens_in_the_extra_rounds(skirt):
     fixed limit keeps 4 collapsed to the last extra iteration (the pattern refused)."""
     from core.pattern import guard as S
     cfg = SolverConfig.improved(guard_limit=6.0)
-    assert S.round_guard(cfg.guard, -3) is cfg.guard and S.round_guard(cfg.guard, S.COLLAPSE_ROUNDS - 1) is cfg.guard
-    assert S.round_guard(cfg.guard, 2 * S.COLLAPSE_ROUNDS).guard_limit == 6.0 * S.GUARD_ESCALATION ** 2
+    n = cfg.iterations
+    assert S.round_guard(cfg.guard, -3, n) is cfg.guard
+    assert S.round_guard(cfg.guard, S.COLLAPSE_ROUNDS - 1, n) is cfg.guard
+    assert S.round_guard(cfg.guard, 2 * S.COLLAPSE_ROUNDS, n).guard_limit == 6.0 * S.GUARD_ESCALATION ** 2
     pat = solve_pattern(skirt.cut, skirt.reference, cfg)
     assert _collapsed(pat) == 0 and pat.report["iterations"] > cfg.iterations + S.COLLAPSE_ROUNDS
 
@@ -76,7 +78,7 @@ def test_a_resumed_solve_counts_its_extra_rounds_from_its_own_start(skirt, monke
     solver.iterate(done, done.planned + 2 * S.COLLAPSE_ROUNDS)          # a finished, long solve
     seen = []
     plain = S.round_guard
-    monkeypatch.setattr(S, "round_guard", lambda g, extra: (seen.append(extra), plain(g, extra))[1])
+    monkeypatch.setattr(S, "round_guard", lambda g, extra, planned: (seen.append(extra), plain(g, extra, planned))[1])
     warm = solver.begin(K, cw * 1.01, cg, resume=done)
     assert warm.iteration == warm.started == done.iteration
     solver.iterate(warm, 4)
@@ -142,3 +144,43 @@ def test_a_finished_solve_gives_its_guarded_factorisation_to_the_next(skirt, mon
 def test_guard_settings_are_checked(kw, field):
     with pytest.raises(PatternError, match=f"solver configuration {field}"):
         SolverConfig.improved(**kw).check()
+
+
+def test_rescue_iterations_keep_the_guards_gains():
+    """Past the extra rounds (as many as planned) an iteration is a rescue one: the guard keeps every
+    gain it raised (release 1) under the limit of the first rescue round, held there; before them it
+    releases as configured."""
+    from core.pattern import guard as S
+    g = SolverConfig.improved().guard
+    n = 20
+    last = S.round_guard(g, n - 1, n)
+    assert not S.rescuing(n - 1, n) and last.guard_release == g.guard_release < 1.0
+    rescue = S.round_guard(g, n, n)
+    assert S.rescuing(n, n) and rescue.guard_release == 1.0
+    assert rescue.guard_limit == g.guard_limit * S.GUARD_ESCALATION ** (n // S.COLLAPSE_ROUNDS)
+    assert S.round_guard(g, n + 3 * S.COLLAPSE_ROUNDS + 2, n) == rescue      # the limit held, not raised
+
+
+def test_the_solvers_refusal_rule_is_the_metrics():
+    """The rescue runs on the rule a pattern is refused for: the solver's numbers are the metric's, and
+    on a pattern's own Jacobians it finds the very triangles the metric finds collapsed."""
+    from core.metrics import collapse as C
+    from core.pattern import guard as G
+    from core.pattern.build import build_pattern
+    assert (G.REFUSED_AREA, G.REFUSED_SCALE) == (C.AREA_FRACTION, C.SCALE_FRACTION)
+    cut, body = tube(ease=1.3)
+    solver = PatternSolver(cut, body)
+    K, cw, cg = solver.targets_reference()
+    st = solver.begin(K, cw, cg)
+    solver.iterate(st, 3)
+    Kc = components(K)
+    assert not G.refused(st) and not G.refused_mask(st.M, Kc, cw, cg).any()
+    # targets raised at random, so that some triangles fall under each part of the rule and most do not
+    rng = np.random.default_rng(1)
+    st.c_weft, st.c_warp = cw * rng.uniform(0.8, 2.3, len(cw)), cg * rng.uniform(0.8, 2.3, len(cg))
+    mask = G.refused_mask(st.M, Kc, st.c_weft, st.c_warp)
+    pat = build_pattern(cut, solver.result(st))
+    p = pat.panels[0]
+    metric = C.collapsed_mask(p.uv, p.xyz, p.faces, p.grain, p.target_weft, p.target_warp)
+    assert len(pat.panels) == 1 and 0 < mask.sum() < len(mask) // 2, mask.sum()
+    assert np.array_equal(mask, metric)

@@ -44,7 +44,7 @@ from .build import SolveResult
 from .config import SolverConfig, check_tolerance
 from .factor import SymmetricFactor
 from .feedback import feedback_gains, move_corrections
-from .guard import COLLAPSE_ROUNDS, GuardedFactors, renew_guard, round_guard
+from .guard import COLLAPSE_ROUNDS, RESCUE_ITERATIONS, GuardedFactors, refused, renew_guard, rescuing, round_guard
 from .panels import flatten_panels
 from .seams import SeamPlan, plan_seams, seam_layout, seam_matrix, seam_rhs
 from .start import pattern_start
@@ -395,10 +395,10 @@ class PatternSolver:
         n_it = int(iterations)
         for k in range(n_it):
             it = state.iteration
+            extra = it - state.started - state.planned
             report(progress, k / max(n_it, 1), f"optimizing pattern: iteration {k + 1}/{n_it}")
-            # an adaptation's last ``settle`` iterations keep the targets still: the seams' length integral
-            # closes the seams and the shear the moving targets drove settles
-            settling = adapting and ad.settle > 0 and it >= state.planned - ad.settle
+            # targets held still: an adaptation's last ``settle`` iterations (seams close, shear settles), rescue ones
+            settling = adapting and ad.settle > 0 and it >= state.planned - ad.settle or rescuing(extra, state.planned)
             if (gain_w > 0 or gain_g > 0) and it >= fb.from_iteration and not settling:
                 # move the targets by the achieved/target ratio: the linear solve then
                 # lands on the wanted rho-hat wherever curvature allows it
@@ -416,7 +416,7 @@ class PatternSolver:
             solve_k, aw_k = lu, aw
             if guarding:
                 # triangles near collapse: stiffened and pulled towards their opened shape
-                q, guarded = collapse_guard(round_guard(cfg.guard, it - state.started - state.planned), M, Kc, c_weft, c_warp,
+                q, guarded = collapse_guard(round_guard(cfg.guard, extra, state.planned), M, Kc, c_weft, c_warp,
                                             state.guard, Kinv)
                 held = state.guard_held
                 if not guarded.size:
@@ -467,15 +467,17 @@ class PatternSolver:
     def extra_iterations(self, state: "SolveState") -> int:
         """Iterations to add to ``state`` now that it has run its planned ones (0: the solve is done).
 
-        A solve far from its start (high ease, a strong pose) may still hold a triangle the
-        collapse guard is opening: :data:`COLLAPSE_ROUNDS` more at a time, at most as many again
-        as planned. Every driver of a solve (:meth:`solve`, the live loop) ends it by this rule,
-        so they end on the same pattern.
+        A solve far from its start (high ease, a strong pose) may still hold a triangle the collapse
+        guard is opening: :data:`COLLAPSE_ROUNDS` more at a time, as many again as planned, then up to
+        :data:`RESCUE_ITERATIONS` rescue iterations while it would be refused (:func:`.guard.rescuing`).
+        Every driver of a solve (:meth:`solve`, the live loop) ends it by this rule: the same pattern.
         """
         extra = state.iteration - state.planned
         if extra < 0:
             return -extra
-        return COLLAPSE_ROUNDS if extra < state.planned and self.collapsing(state) else 0
+        if rescuing(extra, state.planned):
+            return COLLAPSE_ROUNDS if extra < state.planned + RESCUE_ITERATIONS and refused(state) else 0
+        return COLLAPSE_ROUNDS if self.collapsing(state) else 0
 
     def collapsing(self, state: "SolveState") -> bool:
         """Whether ``state``'s iterate has a collapsed triangle (:func:`.steps.any_collapsed`) while its
