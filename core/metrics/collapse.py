@@ -28,11 +28,12 @@ import numpy as np
 
 from ..geom.mesh import signed_areas_2d, triangle_areas
 from ..geom.strain import scales
-
-#: A triangle keeping less than this share of the 2D area its targets ask for is collapsed.
-AREA_FRACTION = 0.25
-#: ... or whose achieved weft or warp scale is under this share of its target.
-SCALE_FRACTION = 0.5
+# the rule's two numbers live with the solver, which ends a solve by the same rule (its rescue
+# iterations, core.pattern.guard.refused_mask): a triangle keeping less than AREA_FRACTION of the
+# 2D area its targets ask for is collapsed, or one whose weft or warp scale is under SCALE_FRACTION
+# of its target
+from ..pattern.guard import REFUSED_AREA as AREA_FRACTION
+from ..pattern.guard import REFUSED_SCALE as SCALE_FRACTION
 
 
 def oriented_areas(uv: np.ndarray, faces: np.ndarray) -> np.ndarray:

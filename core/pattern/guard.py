@@ -30,7 +30,7 @@ GUARD_ESCALATION = 4.0
 #: that would be refused for collapse when they end (:func:`rescuing`, :func:`refused`).
 RESCUE_ITERATIONS = 40
 #: The collapse rule a pattern is refused for (docs/metrics.md; :mod:`core.metrics.collapse`, a later
-#: stage, holds the same two numbers as ``AREA_FRACTION`` and ``SCALE_FRACTION``): a triangle keeping
+#: stage, reads these two numbers as ``AREA_FRACTION`` and ``SCALE_FRACTION``): a triangle keeping
 #: under this share of the 2D area its targets ask for ...
 REFUSED_AREA = 0.25
 #: ... or a weft or warp scale under this share of its target.
