@@ -65,16 +65,10 @@ def move_corrections(cfg, M: list, Kc: list, c_weft: np.ndarray, c_warp: np.ndar
     ok = np.isfinite(rw) & np.isfinite(rg) & (rw > 0) & (rg > 0) & (
         targets_finite if not adapting else np.isfinite(goal_w) & np.isfinite(goal_g))
     # every triangle is usually valid: the whole arrays then, the same values without the masked copies
-    every = ok.all()
+    where = slice(None) if ok.all() else ok
     if gain_w > 0:
-        if every:
-            corr_w *= np.clip((goal_w / rw) ** gain_w, lower, upper)
-        else:
-            corr_w[ok] *= np.clip((goal_w[ok] / rw[ok]) ** gain_w, lower, upper)
+        corr_w[where] *= np.clip((goal_w[where] / rw[where]) ** gain_w, lower, upper)
     if gain_g > 0:
-        if every:
-            corr_g *= np.clip((goal_g / rg) ** gain_g, lower, upper)
-        else:
-            corr_g[ok] *= np.clip((goal_g[ok] / rg[ok]) ** gain_g, lower, upper)
+        corr_g[where] *= np.clip((goal_g[where] / rg[where]) ** gain_g, lower, upper)
     np.clip(corr_w, fb.floor, hi, out=corr_w)
     np.clip(corr_g, fb.floor, hi, out=corr_g)
