@@ -23,6 +23,18 @@ MIRROR_TOL = 0.0005     # m: a pair further apart than this prints both pieces
 REFLECTIONS = (np.diag([-1.0, 1.0]), np.diag([1.0, -1.0]))
 
 
+def declared_pairs(pattern, pieces) -> list:
+    """``(left, right)`` indices into ``pieces`` (built from ``pattern``, in pattern order) of every
+    declared pair: a panel whose ``mirror_of`` names another piece is the right of that left one."""
+    by_name = {p.name: k for k, p in enumerate(pieces)}
+    out = []
+    for k, panel in enumerate(pattern.panels[:len(pieces)]):
+        j = by_name.get(panel.mirror_of) if panel.mirror_of else None
+        if j is not None and j != k:
+            out.append((j, k))
+    return out
+
+
 def mirror_gap(left, right) -> float:
     """How far (m) ``right`` lies from the mirror image of ``left``: inf when their drawings differ in kind.
 
@@ -43,7 +55,6 @@ def mirror_gap(left, right) -> float:
                   points_apart(marks(left) @ F + shift, marks(right)))
         best = min(best, gap)
     return float(best)
-
 
 
 def centroid(loop: np.ndarray) -> np.ndarray:

@@ -28,7 +28,7 @@ from ..progress import report
 from .allowance import allowance_text, edge_allowances, fold_ids, piece_cut_lines, resolve_allowance
 from .boundary import edge_table, piece_loops
 from .darts import DartDrawing, bridge_darts, dart_drawing, piece_darts
-from .mirror_check import MIRROR_TOL, mirror_gap
+from .mirror_check import MIRROR_TOL, declared_pairs, mirror_gap
 from .notches import DEFAULT_NOTCH_SPACING, Notch, check_notch_spacing, piece_notches, slit
 
 CHAR_WIDTH = 0.6   # Helvetica's mean advance is ~0.55 em: a safe width estimate per character
@@ -307,11 +307,7 @@ def _check_pairs(pattern: Pattern, pieces: List[PieceDrawing]) -> None:
     keep the figure on both pieces (``mirror_gaps``) and let their labels say whether each is the other's mirror
     image: a pair whose sides differ (ease painted on one side) must not send the cutter to flip one piece's paper
     for the other in any file."""
-    by_name = {p.name: k for k, p in enumerate(pieces)}
-    for k, panel in enumerate(pattern.panels[:len(pieces)]):
-        j = by_name.get(panel.mirror_of) if panel.mirror_of else None
-        if j is None or j == k:
-            continue
+    for j, k in declared_pairs(pattern, pieces):
         gap = mirror_gap(pieces[j], pieces[k])
         pieces[j].mirror_gaps[pieces[k].name] = pieces[k].mirror_gaps[pieces[j].name] = gap
     for k, piece in enumerate(pieces):

@@ -32,7 +32,7 @@ import numpy as np
 
 from ..pattern.types import Pattern
 from .fold_half import fold_axis, fold_half
-from .mirror_check import MIRROR_TOL, mirror_gap
+from .mirror_check import MIRROR_TOL, declared_pairs, mirror_gap
 from .pieces import PieceDrawing, not_mirror_note, relabel
 
 
@@ -61,12 +61,10 @@ def print_set(pattern: Pattern, pieces: Sequence[PieceDrawing], print_all: bool 
         (how far apart its sides are, None when their drawings differ in kind);
         such a piece's label says it is not the other's mirror.
     """
-    by_name = {p.name: k for k, p in enumerate(pieces)}
     twin = {}          # left index -> right index, for pairs printed once
     apart = {}         # piece index -> (its declared mirror's index, m apart), for pairs printed twice
-    for k, panel in enumerate(pattern.panels[:len(pieces)]):
-        j = by_name.get(panel.mirror_of) if panel.mirror_of else None
-        if j is None or j == k or print_all or j in twin:
+    for j, k in ([] if print_all else declared_pairs(pattern, pieces)):
+        if j in twin:
             continue
         # build_pieces measured the pair already (for the labels of every file)
         gap = pieces[k].mirror_gaps.get(pieces[j].name)
