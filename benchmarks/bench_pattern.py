@@ -321,7 +321,7 @@ def _womens(body, coarse):
                             (", 200 it., warp slack 0", dataclasses.replace(
                                 base, iterations=200, rest_shape=dataclasses.replace(base.rest_shape, warp_slack=0.0)))]
             if label == "four darts":
-                # the configuration the template is made for: converged, warp lengths nearly kept, a weak
+                # the configuration the variant is made for: converged, warp lengths nearly kept, a weak
                 # weft feedback (it buys weft and the bust region with shear) and a stiffer regulariser
                 configs.append((", fitted", SolverConfig.fitted()))
             try:

@@ -57,7 +57,6 @@ def blouse_waist_darts(waist=WAIST_DART_INTAKE, shoulder=SHOULDER_DART_INTAKE, b
     return d
 
 
-
 def four_dart_blouse():
     """The fitted blouse with four darts towards each bust point (side seam, hem, shoulder and
     neckline), each ending :data:`FOUR_DART_APEX_OFFSET` from the bust point: the variant that
