@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from core.export.fold_half import fold_axis
-from core.export.mirror_check import MIRROR_TOL, REFLECTIONS, centroid, mirror_gap, points_apart
+from core.export.mirror_check import MIRROR_TOL, REFLECTIONS, mirror_gap, points_apart
+from core.geom.polygon import centroid
 from core.export.pieces import build_pieces
 from core.export.print_set import print_set
 from core.geom.polyline import polyline_length

@@ -1,9 +1,9 @@
-"""core.geom.polygon: one test per operation (signed area, offset, crossings, loops, inside, corners, distance, rays)."""
+"""core.geom.polygon: one test per operation (signed area, centroid, offset, crossings, loops, inside, corners, distance, rays)."""
 import numpy as np
 import pytest
 
 from core.errors import ExportError
-from core.geom.polygon import (cross2, distance_to_polyline, line_intersection, offset_loop, points_in_polygon,
+from core.geom.polygon import (centroid, cross2, distance_to_polyline, line_intersection, offset_loop, points_in_polygon,
                                ray_hit, remove_loops, segments_cross, signed_area, turn_points)
 
 SQUARE = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
@@ -20,6 +20,15 @@ def test_signed_area_sign_follows_orientation():
     assert signed_area(SQUARE[::-1]) == pytest.approx(-1.0)
     tri = np.array([[0, 0], [2, 0], [0, 3]], float)
     assert signed_area(tri) == pytest.approx(3.0)
+
+
+def test_centroid_is_the_area_centroid_either_orientation():
+    # an L of two unit squares and a 2x1 bar: the area centroid, not the vertex mean (which is pulled to the corner)
+    ell = np.array([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]], float)
+    expected = np.array([2 * 1.0 + 1 * 0.5, 2 * 0.5 + 1 * 1.5]) / 3.0   # bar (area 2) and square (area 1)
+    np.testing.assert_allclose(centroid(ell), expected, atol=1e-12)
+    np.testing.assert_allclose(centroid(ell[::-1]), expected, atol=1e-12)
+    assert not np.allclose(centroid(ell), ell.mean(axis=0))
 
 
 def test_line_intersection_and_parallel_lines():

@@ -26,8 +26,8 @@ from typing import Optional
 import numpy as np
 
 from ..geom.layout import grain_arrows
-from ..geom.polygon import ray_hit
-from .mirror_check import centroid, loops_apart, marks, points_apart
+from ..geom.polygon import centroid, ray_hit
+from .mirror_check import loops_apart, marks, points_apart
 from .pieces import PieceDrawing
 
 GRAIN_FRACTION = 0.6    # part of the half's chord through its centroid that the moved grain line spans

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..geom.polygon import distance_to_polyline
+from ..geom.polygon import centroid, distance_to_polyline
 
 MIRROR_TOL = 0.0005     # m: a pair further apart than this prints both pieces
 # the reflections of the piece frame that keep the grain's axis: across the grain, and along it (the same up to a
@@ -55,14 +55,6 @@ def mirror_gap(left, right) -> float:
                   points_apart(marks(left) @ F + shift, marks(right)))
         best = min(best, gap)
     return float(best)
-
-
-def centroid(loop: np.ndarray) -> np.ndarray:
-    """(2,) area centroid of a closed loop."""
-    x, y = loop[:, 0], loop[:, 1]
-    x1, y1 = np.roll(x, -1), np.roll(y, -1)
-    c = x * y1 - x1 * y
-    return np.array([((x + x1) * c).sum(), ((y + y1) * c).sum()]) / (3.0 * c.sum())
 
 
 def marks(piece) -> np.ndarray:

@@ -45,6 +45,23 @@ def signed_area(loop: np.ndarray) -> float:
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
 
 
+def centroid(loop: np.ndarray) -> np.ndarray:
+    """Area centroid of a closed polygon.
+
+    Parameters
+    ----------
+    loop : (k, 2) float, any length unit; either orientation.
+
+    Returns
+    -------
+    (2,) float, in the loop's unit.
+    """
+    x, y = loop[:, 0], loop[:, 1]
+    x1, y1 = np.roll(x, -1), np.roll(y, -1)
+    c = x * y1 - x1 * y
+    return np.array([((x + x1) * c).sum(), ((y + y1) * c).sum()]) / (3.0 * c.sum())
+
+
 def line_intersection(a0: np.ndarray, t0: np.ndarray, a1: np.ndarray, t1: np.ndarray) -> Optional[np.ndarray]:
     """Intersection of the lines ``a0 + s t0`` and ``a1 + u t1``.
 
