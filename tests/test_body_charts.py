@@ -81,9 +81,14 @@ def test_restarts_bring_xs_in_reach(anny, chart):
     c = PUBLISHED[chart]
     first = fit_measurements(anny, c.sizes["XS"], start=c.start, parameters=c.parameters, bounds=c.bounds)
     assert not first.ok
-    fit = chart_fit(anny, "XS", chart)
+    seen = []
+    fit = chart_fit(anny, "XS", chart, progress=lambda f, m: seen.append((f, m)))
     assert fit.ok, fit.summary()
     assert max(abs(fit.achieved[k] - v) for k, v in fit.targets.items()) <= TOLERANCE_CM
+    # the restarts share one rising bar, each labelled with its place among the attempts
+    fractions = [f for f, _ in seen]
+    assert fractions == sorted(fractions) and fractions[-1] == 1.0
+    assert any("fit 2 of" in m for _, m in seen)
 
 
 def test_women_and_men_differ_where_the_chart_says(anny):

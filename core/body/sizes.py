@@ -17,7 +17,7 @@ from typing import Dict, Mapping, Optional, Sequence
 import numpy as np
 
 from ..errors import BodyError
-from ..progress import Progress, report
+from ..progress import Progress, report, sub
 from .charts import PUBLISHED, SizeChart
 from .measure import MEASUREMENTS, measure
 
@@ -298,20 +298,30 @@ def chart_fit(body, size: str, chart: Optional[str] = None, progress: Optional[P
     names = [n for n in c.parameters if n in params]
     helpers = [n for n in c.assist if n in params and n not in names]
     start = {k: v for k, v in c.start.items() if k in params}
-    best, best_miss = None, np.inf
+    attempts = []
     for moving in ([names, names + helpers] if helpers else [names]):
         for extra in ({},) + tuple(c.restarts):
             moved = {k: v for k, v in extra.items() if k in moving}
             if extra and not moved:
                 continue                   # a restart of parameters this model does not have
-            fit = fit_measurements(body, c.sizes[key], progress=progress, start={**start, **moved} or None,
-                                   parameters=moving if len(moving) >= 2 else None,
-                                   bounds={k: v for k, v in c.bounds.items() if k in params})
-            if fit.ok:
-                return fit
-            miss = max(abs(fit.achieved[k] - v) for k, v in fit.targets.items())
-            if miss < best_miss:
-                best, best_miss = fit, miss
+            attempts.append((moving, moved))
+    best, best_miss = None, np.inf
+    for i, (moving, moved) in enumerate(attempts):
+        # Each attempt owns a slice of one bar, so a size that needs restarts shows one
+        # rising bar ("fit 3 of 18") instead of a bar that falls back to 0 per restart.
+        step = sub(progress, i / len(attempts), (i + 1) / len(attempts))
+        labelled = None if step is None else (lambda f, m, i=i, step=step:
+                                              step(f, f"{m} (fit {i + 1} of {len(attempts)} for {size})"))
+        fit = fit_measurements(body, c.sizes[key], progress=labelled, start={**start, **moved} or None,
+                               parameters=moving if len(moving) >= 2 else None,
+                               bounds={k: v for k, v in c.bounds.items() if k in params})
+        if fit.ok:
+            report(progress, 1.0, f"fit of {size} done")
+            return fit
+        miss = max(abs(fit.achieved[k] - v) for k, v in fit.targets.items())
+        if miss < best_miss:
+            best, best_miss = fit, miss
+    report(progress, 1.0, f"fit of {size} done (closest of {len(attempts)})")
     return best
 
 
