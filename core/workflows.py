@@ -25,7 +25,7 @@ import numpy as np
 from .progress import Progress, report, sub
 
 #: Solver configurations a user can name (``--config``); see :mod:`core.pattern`.
-CONFIGS = ("improved", "paper", "stretch", "fitted")
+CONFIGS = ("improved", "paper", "stretch", "fitted", "lengths")
 
 
 # ----------------------------------------------------------------------------- prepare

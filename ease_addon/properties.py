@@ -24,6 +24,8 @@ SOLVER_CONFIGS = [("improved", "Improved", "the default: 20 local-global iterati
                   ("fitted", "Fitted", "darted, close-fitting garments: solved to convergence (300 iterations), "
                                        "the warp lengths nearly kept (about 15x the time)"),
                   ("stretch", "Stretch", "stronger weft feedback: compliance bought with shear and warp length"),
+                  ("lengths", "Lengths", "the design's lengths kept along the grain: weft and warp both close to "
+                                         "the ease (warp within 3 %), for about twice the shear; not for skirts"),
                   ("paper", "Paper", "the EASE paper's weights taken literally")]
 POSES = [("A", "A", "reference A-pose"), ("T", "T", "T-pose"),
          ("P1", "P1", "arms forward, legs spread"), ("P2", "P2", "arms up, scissored legs"),

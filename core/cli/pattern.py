@@ -16,8 +16,11 @@ def _common(p) -> None:
     p.add_argument("--out", required=True, help="output folder (pattern.json, report.json, pattern.png)")
     p.add_argument("--config", choices=CONFIGS, default="improved",
                    help="solver configuration: improved (default; pre-stretched ARAP), paper (the paper's "
-                        "weights taken literally), stretch (compliance bought with shear)")
-    p.add_argument("--iterations", type=int, default=None, help="local-global iterations (default 20)")
+                        "weights taken literally), stretch (compliance bought with shear), fitted (darted, "
+                        "close-fitting garments: 300 iterations, warp lengths nearly kept), lengths (the "
+                        "design's lengths kept along the grain: warp within 3 %% for about twice the shear)")
+    p.add_argument("--iterations", type=int, default=None,
+                   help="local-global iterations (default: the configuration's, 20; fitted 300)")
     p.add_argument("--no-seam-length", action="store_true",
                    help="gather every seam: the seam-length term off (the paper's switch for gathered designs)")
     add_quiet(p)
