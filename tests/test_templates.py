@@ -167,10 +167,22 @@ def check_body_coverage(cut, G, GX, X, skirt=False):
     Needs an unrefined cut: refined triangles may straddle body edges."""
     from core.design.geometry import SurfaceLocator
     body_faces = np.asarray(load_body("anny").faces)
+    Xs = X
+    if skirt:       # the skirt topology: the band between the legs removed, the cleft spanned
+        from core.cut.skirt import make_skirt, span_surface
+        from core.cut.split import CutMesh
+        from core.body.instance import spec_instance
+        # built on the cut's own reference body (a women's template is cut on women:M), like the cut
+        R = spec_instance(cut.body, model=load_body("anny"))[0]
+        mesh = CutMesh(R, body_faces)
+        make_skirt(mesh, load_body("anny"), R)
+        B = span_surface(mesh, load_body("anny"), R)
+        # the garment lies on the spanned surface (core.cut.span): its triangles cover those
+        Xs = X if B is None else np.asarray(B @ X)
     a = _areas(GX, G)
-    d2, tri, _ = SurfaceLocator(X, body_faces).closest(GX[G].mean(axis=1))
+    d2, tri, _ = SurfaceLocator(Xs, body_faces).closest(GX[G].mean(axis=1))
     on_body = d2 < 1e-8                      # skirt bridge triangles are not on the body
-    cover = np.bincount(tri[on_body], weights=a[on_body], minlength=len(body_faces)) / _areas(X, body_faces)
+    cover = np.bincount(tri[on_body], weights=a[on_body], minlength=len(body_faces)) / _areas(Xs, body_faces)
     assert cover.max() < 1 + 1e-6, "a body triangle is covered twice"
     # head, hands and feet are never garment (beyond the 2-ring border a seam may run on)
     from core.cut.engine import FORBIDDEN_REGIONS, forbidden_body_faces
@@ -196,10 +208,6 @@ def check_body_coverage(cut, G, GX, X, skirt=False):
             on_hem[E.indices[E.indptr[g]][np.isclose(E.data[E.indptr[g]], 1.0)]] = True
     inside &= ~on_hem[body_faces].any(axis=1)
     if skirt:       # the skirt topology removed the band between the legs: not garment surface
-        from core.cut.skirt import make_skirt
-        from core.cut.split import CutMesh
-        mesh = CutMesh(X, body_faces)
-        make_skirt(mesh, load_body("anny"), X)
         kept = np.zeros(len(body_faces), dtype=bool)
         par = np.asarray(mesh.parent)
         kept[par[par < len(body_faces)]] = True

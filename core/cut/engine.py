@@ -193,10 +193,15 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None,
     mesh = CutMesh(X, BF)
     forbidden = forbidden_body_faces(body, len(BF))
     clock.lap("prepare")
-    bridge_sides = None
+    bridge_sides = span = None
     if spec.skirt:
-        from .skirt import make_skirt
+        from .skirt import make_skirt, span_surface
         bridge_sides = make_skirt(mesh, body, X)
+        # the skirt lies on a membrane over the concavities between the legs, not in the
+        # creases: the cut works on that surface, and its embedding is composed with it below
+        span = span_surface(mesh, body, X)
+        if span is not None:
+            X = np.asarray(span @ X)
         forbidden = np.concatenate([forbidden, np.zeros(mesh._ptri_count() - len(BF), dtype=np.int64)])
         clock.lap("skirt")
 
@@ -266,6 +271,8 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None,
         rows.append(out["W"])
         offset += out["W"].shape[0]
     W = sp.vstack(rows).tocsr() if rows else sp.csr_matrix((0, len(X)))
+    if span is not None:
+        W = (W @ span).tocsr()
     W.sort_indices()
     darts = {}
     if any(getattr(l, "dart", None) is not None for l in spec.lines):

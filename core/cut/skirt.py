@@ -50,9 +50,12 @@ def _landmark(body, name, X):
     return np.asarray(sp_.bary, float) @ X[np.asarray(body.faces)[sp_.triangle]]
 
 
-def inter_leg_faces(body, X: np.ndarray) -> np.ndarray:
-    """(F,) bool: body triangles between the legs (the band removed for the skirt topology)."""
-    F = np.asarray(body.faces, dtype=np.int64)
+def _leg_frame(body, X: np.ndarray):
+    """The legs as the skirt topology sees them: (crotch, z_bot, z_top, legs, zc, centre).
+
+    ``legs`` maps side -> the leg's vertex ids, ``centre`` side -> (x(zc), y(zc)): the leg's
+    centre line, the centroids of horizontal slices between ``z_bot`` (the bottom of the
+    band) and the crotch."""
     crotch = _landmark(body, "crotch", X)
     ankle = 0.5 * (_landmark(body, "ankle_left", X) + _landmark(body, "ankle_right", X))
     z_top = crotch[2] + CROTCH_MARGIN
@@ -79,6 +82,22 @@ def inter_leg_faces(body, X: np.ndarray) -> np.ndarray:
         cy = np.bincount(k, P[:, 1], nb) / np.maximum(np.bincount(k, None, nb), 1)
         have = np.bincount(k, None, nb) > 0
         centre[side] = (np.interp(zc, zc[have], cx[have]), np.interp(zc, zc[have], cy[have]))
+    return crotch, z_bot, z_top, legs, zc, centre
+
+
+def _centres_at(z: np.ndarray, zc: np.ndarray, centre) -> Tuple[np.ndarray, np.ndarray]:
+    """(left, right) leg centres (n, 2) at heights ``z`` (held at the ends of the slices)."""
+    z = np.clip(z, zc[0], zc[-1])
+    cl = np.stack([np.interp(z, zc, centre["left"][0]), np.interp(z, zc, centre["left"][1])], 1)
+    cr = np.stack([np.interp(z, zc, centre["right"][0]), np.interp(z, zc, centre["right"][1])], 1)
+    return cl, cr
+
+
+def inter_leg_faces(body, X: np.ndarray) -> np.ndarray:
+    """(F,) bool: body triangles between the legs (the band removed for the skirt topology)."""
+    F = np.asarray(body.faces, dtype=np.int64)
+    crotch, z_bot, z_top, legs, zc, centre = _leg_frame(body, X)
+    regions = getattr(body, "regions", {}) or {}
     # candidate vertices: the legs and the torso just above the crotch
     cand = np.zeros(len(X), dtype=bool)
     cand[legs["left"]] = True
@@ -86,9 +105,7 @@ def inter_leg_faces(body, X: np.ndarray) -> np.ndarray:
     torso = np.asarray(regions.get("torso", []), dtype=np.int64)
     cand[torso] = True
     cand &= (X[:, 2] >= z_bot) & (X[:, 2] <= z_top)
-    z = np.clip(X[:, 2], zc[0], zc[-1])
-    cl = np.stack([np.interp(z, zc, centre["left"][0]), np.interp(z, zc, centre["left"][1])], 1)
-    cr = np.stack([np.interp(z, zc, centre["right"][0]), np.interp(z, zc, centre["right"][1])], 1)
+    cl, cr = _centres_at(X[:, 2], zc, centre)
     left = X[:, 0] >= 0.5 * (cl[:, 0] + cr[:, 0])
     own = np.where(left[:, None], cl, cr)
     other = np.where(left[:, None], cr, cl)
@@ -101,6 +118,55 @@ def inter_leg_faces(body, X: np.ndarray) -> np.ndarray:
     between = np.abs(X[:, 0] - 0.5 * (cl[:, 0] + cr[:, 0])) < 0.25 * np.abs(cl[:, 0] - cr[:, 0])
     mark = cand & (inner | (between & (X[:, 2] <= z_top)))
     return mark[F].all(1)
+
+
+def span_candidates(body, X: np.ndarray) -> np.ndarray:
+    """(V,) bool: body vertices the spanned skirt surface may lift off the body (:mod:`.span`).
+
+    Between the two legs' centre lines (in x), from the bottom of the bridge up to
+    :data:`.span.SPAN_TOP` of the way from the crotch to the back waist: the crotch, the
+    creases beside it, the curtains' joins with the legs and the gluteal cleft."""
+    from .span import SPAN_TOP
+    crotch, z_bot, _, _, zc, centre = _leg_frame(body, X)
+    top = crotch[2] + SPAN_TOP * (_landmark(body, "waist_back", X)[2] - crotch[2])
+    cl, cr = _centres_at(X[:, 2], zc, centre)
+    lo, hi = np.minimum(cl[:, 0], cr[:, 0]), np.maximum(cl[:, 0], cr[:, 0])
+    return (X[:, 2] >= z_bot) & (X[:, 2] <= top) & (X[:, 0] > lo) & (X[:, 0] < hi)
+
+
+def span_surface(mesh: CutMesh, body, X: np.ndarray) -> Optional[sp.csr_matrix]:
+    """Lift the skirt topology's surface off the body's concavities between the legs, in place.
+
+    ``mesh`` is the body mesh after :func:`make_skirt`. Its vertices move onto the membrane of
+    :func:`.span.spanning_operator` (bridge vertices follow their body weights), and every
+    parent triangle is re-made from the moved corners, so the cut proceeds on the spanned
+    surface.
+
+    Returns
+    -------
+    (V, V) csr operator ``B``: the spanned body vertices are ``B @ X`` on any shape and pose
+    (the cut's embedding is composed with it), or None when nothing lifts off.
+    """
+    from .span import spanning_operator
+    S = _symmetry(body, X)
+    B = spanning_operator(mesh, X, span_candidates(body, X), S)
+    if B is None:
+        return None
+    Y = np.asarray(B @ X)
+    V = len(X)
+    Xn = mesh._X
+    Xn[:V] = Y
+    for v in range(V, mesh.nv):
+        c, w = mesh.vertex_weights(v)
+        Xn[v] = w @ Y[c]
+    # parents: the body's triangles on the moved corners, each bridge triangle (its own parent) too
+    BF = np.asarray(body.faces, dtype=np.int64)
+    tris = mesh._parent_corners().copy()
+    tris[: len(BF)] = Y[BF]
+    own = mesh.parent >= len(BF)
+    tris[mesh.parent[own]] = mesh.X[mesh.F[own]]
+    mesh._set_parents(tris)
+    return B
 
 
 def _clean(F: np.ndarray, H: np.ndarray, nv: int) -> np.ndarray:
