@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from core import workflows as wf
+from core.geom.mesh import row_norm
 from core.metrics.pattern import pattern_report
 from core.metrics.regions import REGION_LANDMARKS, body_landmarks, region_compliance
 from core.pattern.types import Pattern, PatternPanel
@@ -109,3 +110,39 @@ def test_addon_key_figures_show_warp_collapse_and_regions(addon):
     assert fig["warp deviation signed %"] == pytest.approx(-10.0)
     assert fig["collapsed triangles"] == 0 and fig["flipped triangles"] == 0
     assert fig["bust left % (weft / warp)"] == "20.00 / 10.00"
+
+
+def _tilted():
+    """The sheet tilted out of the xy plane (z = y), a quarter of it: distances to a landmark depend on z."""
+    pat = _sheet(31)
+    p = pat.panels[0]
+    p.xyz = 0.5 * np.c_[p.xyz[:, 0], p.xyz[:, 1], p.xyz[:, 1]]
+    return pat
+
+
+def test_region_rows_are_the_rows_within_the_radius():
+    # the report measures only the rows within the radius along z: the same rows as the whole distance test
+    pat = _tilted()
+    p = pat.panels[0]
+    cen = (p.xyz[p.faces[:, 0]] + p.xyz[p.faces[:, 1]] + p.xyz[p.faces[:, 2]]) / 3.0
+    rng = np.random.default_rng(5)
+    c = cen[200]
+    # landmarks whose radius passes through a centroid, along z and across it
+    lms = {"bust_left": np.array([0.25, 0.25, 0.25]), "bust_right": c + np.array([0.0, 0.0, 0.05]),
+           "seat_left": c + np.array([0.03, 0.04, 0.0])}
+    lms.update({f"extra_{i}": rng.uniform(0.0, 0.5, 3) for i in range(3)})
+    for radius in (0.05, 0.06, 0.1):
+        got = region_compliance(pat, lms, radius=radius, names=None)
+        for name, lm in lms.items():
+            n = int(np.sum(row_norm(cen - lm) <= radius))
+            assert got.get(name, {"n": 0})["n"] == n, (name, radius)
+
+
+def test_one_garment_report_copies_its_overall_figures():
+    pat = _tilted()
+    m = pattern_report(pat, {"bust_left": np.array([0.25, 0.25, 0.25])})
+    g = m["garments"]["top"]
+    assert g == {"compliance": m["compliance"], "seams": m["seams"], "regions": m["regions"]}
+    assert g["regions"] is not m["regions"] and g["regions"]["bust_left"] is not m["regions"]["bust_left"]
+    g["regions"]["bust_left"]["mean"] = -1.0
+    assert m["regions"]["bust_left"]["mean"] != -1.0

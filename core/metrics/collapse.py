@@ -42,10 +42,11 @@ def oriented_areas(uv: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return s if np.sum(s > 0) >= np.sum(s < 0) else -s
 
 
-def _criteria(uv, xyz, faces, grain, target_weft, target_warp, strain=None):
+def _criteria(uv, xyz, faces, grain, target_weft, target_warp, strain=None, a2=None):
     """(kept, small, thin) (f,) bool each: not flipped; area rule; scale rule (module rule).
-    ``strain``: the panel's :class:`core.metrics.strains.PanelStrain` on ``xyz`` if known."""
-    a2 = oriented_areas(uv, faces)
+    ``strain``: the panel's :class:`core.metrics.strains.PanelStrain` on ``xyz`` if known; ``a2``: its
+    :func:`oriented_areas` if known."""
+    a2 = oriented_areas(uv, faces) if a2 is None else a2
     tw = np.asarray(target_weft, float)
     tg = np.asarray(target_warp, float)
     if strain is not None:
@@ -97,7 +98,8 @@ def _sites(centroids: np.ndarray, landmarks: Optional[Mapping[str, np.ndarray]])
     return sorted(out, key=lambda s: (-s["count"], s["near"]))
 
 
-def collapse(pattern, landmarks: Optional[Mapping[str, np.ndarray]] = None, strains=None) -> Dict[str, dict]:
+def collapse(pattern, landmarks: Optional[Mapping[str, np.ndarray]] = None, strains=None,
+             oriented: Optional[Mapping[str, np.ndarray]] = None) -> Dict[str, dict]:
     """Collapsed triangles per panel, measured on each panel's own ``xyz`` against its targets.
 
     Parameters
@@ -106,6 +108,7 @@ def collapse(pattern, landmarks: Optional[Mapping[str, np.ndarray]] = None, stra
     landmarks : optional name -> (3,) position (m) on the same body, to say
         where on the body each group of collapsed triangles lies.
     strains : optional :func:`core.metrics.strains.pattern_strains` of ``pattern`` (read, not recomputed).
+    oriented : optional panel name -> :func:`oriented_areas` of its piece (read, not recomputed).
 
     Returns
     -------
@@ -122,7 +125,8 @@ def collapse(pattern, landmarks: Optional[Mapping[str, np.ndarray]] = None, stra
         X = np.asarray(p.xyz, float)
         F = np.asarray(p.faces)
         kept, small, thin = _criteria(p.uv, X, F, p.grain, p.target_weft, p.target_warp,
-                                      None if strains is None else strains[p.name])
+                                      None if strains is None else strains[p.name],
+                                      None if oriented is None else oriented[p.name])
         m = kept & (small | thin)
         n = int(m.sum())
         out[p.name] = {"count": n, "area": int(np.sum(kept & small)), "scale_only": int(np.sum(m & ~small)),

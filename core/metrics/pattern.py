@@ -147,9 +147,25 @@ def residual_stretch(pattern, body_xyz: Dict[str, np.ndarray], eps_weft: float =
     return 100.0 * over / total if total > 0 else 0.0
 
 
-def flips(pattern) -> Dict[str, int]:
-    """Flipped-triangle count per panel (SPEC "Per-triangle scales")."""
-    return {p.name: flipped_count(p.uv, p.faces) for p in pattern.panels}
+def flips(pattern, oriented: Optional[Dict[str, np.ndarray]] = None) -> Dict[str, int]:
+    """Flipped-triangle count per panel (SPEC "Per-triangle scales"). ``oriented``: panel name ->
+    :func:`~core.metrics.collapse.oriented_areas` of its pieces when the caller has them."""
+    if oriented is None:
+        return {p.name: flipped_count(p.uv, p.faces) for p in pattern.panels}
+    return {p.name: int(np.sum(oriented[p.name] <= 0)) for p in pattern.panels}
+
+
+def _tree_copy(obj):
+    """A copy of a report tree (dicts and lists of numbers, strings, None): what ``copy.deepcopy`` gives it,
+    without its memo (a batch item's report copied at ~1/6 of the cost); immutable scalars shared, as
+    ``deepcopy`` shares them."""
+    if isinstance(obj, dict):
+        return {k: _tree_copy(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [_tree_copy(v) for v in obj]
+    if isinstance(obj, (int, float, str, bool, type(None), np.generic)):
+        return obj
+    return copy.deepcopy(obj)
 
 
 def pattern_report(pattern, landmarks: Optional[Dict[str, np.ndarray]] = None) -> Dict[str, object]:
@@ -180,16 +196,18 @@ def pattern_report(pattern, landmarks: Optional[Dict[str, np.ndarray]] = None) -
         if len(garments) == 1:
             # one garment: its panels and seams are all of them, so its figures are the overall ones
             # (the same floats; a copy, so that a reader editing one entry leaves the other)
-            out["garments"][g] = copy.deepcopy(overall)
+            out["garments"][g] = _tree_copy(overall)
             continue
         out["garments"][g] = {"compliance": ease_compliance(pattern, g, strains=strains),
                               "seams": seam_mismatch(pattern, g),
                               "regions": region_compliance(pattern, landmarks or {}, garment=g, strains=strains)}
     out["compliance"], out["seams"] = overall["compliance"], overall["seams"]
-    fl = flips(pattern)
+    # every piece's areas in its majority orientation: the flips and the collapse rule read the same ones
+    oriented = {p.name: oriented_areas(p.uv, p.faces) for p in pattern.panels}
+    fl = flips(pattern, oriented)
     out["flipped_triangles"] = int(sum(fl.values()))
     out["flipped_per_panel"] = fl
-    col = collapse(pattern, landmarks, strains=strains)
+    col = collapse(pattern, landmarks, strains=strains, oriented=oriented)
     out["collapsed_triangles"] = int(sum(v["count"] for v in col.values()))
     out["collapsed_per_panel"] = {k: v["count"] for k, v in col.items()}
     out["collapse_sites"] = {k: v["sites"] for k, v in col.items() if v["count"]}
