@@ -30,6 +30,22 @@ class SolveResult:
     gathered: tuple = ()
 
 
+def solve_result(panels, state) -> SolveResult:
+    """The :class:`SolveResult` of a solve's current iterate (a :class:`~.state.SolveState`) on the stacked
+    ``panels`` (:class:`~.panels.PanelData`): per panel uv, targets and body positions."""
+    out_uv, tw, tgw, xyz = {}, {}, {}, {}
+    f0 = 0
+    U, pos = state.U, state.positions
+    for pd in panels:
+        out_uv[pd.name] = U[pd.offset:pd.offset + pd.n].copy()
+        tw[pd.name] = np.asarray(state.c_weft[f0:f0 + len(pd.faces)], float).copy()
+        tgw[pd.name] = np.asarray(state.c_warp[f0:f0 + len(pd.faces)], float).copy()
+        xyz[pd.name] = pos[pd.vertex_ids]
+        f0 += len(pd.faces)
+    return SolveResult(out_uv, tw, tgw, xyz, state.seconds, state.iteration, state.backtracks,
+                       list(state.energies), state.plan.gathered)
+
+
 def row_layout(uv: Dict[str, np.ndarray], order: Sequence[str], gap: float = PIECE_GAP) -> Dict[str, np.ndarray]:
     """Translate the pieces into one row (left to right, bottoms aligned), gap in metres."""
     out, x = {}, 0.0

@@ -53,8 +53,10 @@ class PanelBlocks:
     ``face_offsets``/``face_counts`` per panel; ``uv0`` (n, 2) the initial
     flattening, ``G`` (f, 3, 2) its gradient operators, ``area0`` (f,) its
     areas; ``area_floor`` (f,) the flip guard's smallest area; ``warp0``
-    (f, 2) the 3D warp pulled back to ``uv0`` (a material direction) and
-    ``warp_vote`` (f,) its grain-vote weight (3D area, 0 where degenerate).
+    (f, 2) the 3D warp pulled back to ``uv0`` (a material direction; ``warp_columns``: its two
+    columns, contiguous) and ``warp_vote`` (f,) its grain-vote weight (3D area, 0 where degenerate);
+    ``corners`` (f, 3) each triangle's corners as rows of the cut's embedding (a body's positions
+    ``P[corners]`` are the stacked panels' triangles in one gather).
     """
     panels: List[PanelData]
     n: int
@@ -71,6 +73,8 @@ class PanelBlocks:
     area_floor: np.ndarray
     warp0: np.ndarray
     warp_vote: np.ndarray
+    warp_columns: tuple
+    corners: np.ndarray
 
     def per_vertex(self, x: np.ndarray) -> np.ndarray:
         """Per-panel values (p, ...) repeated onto every unknown of the panel (n, ...)."""
@@ -109,6 +113,7 @@ def flatten_panels(cut, positions: np.ndarray, progress: Optional[Progress] = No
     gfaces = np.concatenate([pd.gfaces for pd in panels])
     area0 = np.concatenate([pd.area0 for pd in panels])
     nf = len(gfaces)
+    warp0 = np.concatenate([fl["warp"] for fl in flat])
     return PanelBlocks(
         panels=panels, n=offset, faces=gfaces,
         face_columns=tuple(np.ascontiguousarray(gfaces[:, c]) for c in range(3)),
@@ -118,5 +123,8 @@ def flatten_panels(cut, positions: np.ndarray, progress: Optional[Progress] = No
         face_offsets=np.array([pd.face_offset for pd in panels]),
         face_counts=np.array([len(pd.faces) for pd in panels]),
         uv0=np.concatenate([pd.uv0 for pd in panels]), G=np.concatenate([pd.G for pd in panels]), area0=area0,
-        area_floor=AREA_FLOOR * np.abs(area0), warp0=np.concatenate([fl["warp"] for fl in flat]),
-        warp_vote=np.concatenate([fl["warp_weight"] for fl in flat]))
+        area_floor=AREA_FLOOR * np.abs(area0), warp0=warp0,
+        warp_vote=np.concatenate([fl["warp_weight"] for fl in flat]),
+        # the iterations read them every time: strided column views cost twice a contiguous array's pass
+        warp_columns=(np.ascontiguousarray(warp0[:, 0]), np.ascontiguousarray(warp0[:, 1])),
+        corners=np.concatenate([pd.vertex_ids[pd.faces] for pd in panels]))

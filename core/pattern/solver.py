@@ -40,7 +40,7 @@ import scipy.sparse as sp
 
 from ..geom.strain import components, intrinsic_offsets
 from ..progress import Progress, report
-from .build import SolveResult
+from .build import SolveResult, solve_result
 from .config import SolverConfig, check_tolerance
 from .factor import SymmetricFactor
 from .feedback import feedback_gains, move_corrections
@@ -95,12 +95,12 @@ class PatternSolver:
         cols = self.gfaces.ravel()
         self._Gx = sp.csr_matrix((b.G[:, :, 0].ravel(), (rows, cols)), shape=(f, self.n))
         self._Gy = sp.csr_matrix((b.G[:, :, 1].ravel(), (rows, cols)), shape=(f, self.n))
-        self._GxT = self._Gx.T.tocsr()
-        self._GyT = self._Gy.T.tocsr()
+        self._GxT, self._GyT = self._Gx.T.tocsr(), self._Gy.T.tocsr()
         self._factors: Dict[tuple, Tuple[SymmetricFactor, np.ndarray]] = {}
         # the collapse guard's stiffened factorisations and the spare ones finished solves gave back
         self._guarded = GuardedFactors(self.gfaces, b.G)
         self._neighbourhood: Optional[sp.csr_matrix] = None
+        self._design_plans: Dict[SolverConfig, SeamPlan] = {}
         self.n_factorisations = 0
         # the reference body's offsets serve every reference target, adaptation and seam plan:
         # computed once, read-only (a solve never changes them)
@@ -117,8 +117,7 @@ class PatternSolver:
 
     def offsets(self, positions: np.ndarray):
         """Intrinsic offsets ``K`` (f, 2, 2) and the 3D weft/warp offset lengths (f,) on ``positions``."""
-        X = np.concatenate([positions[pd.vertex_ids][pd.faces] for pd in self.panels])
-        return intrinsic_offsets(X, self.blocks.G)
+        return intrinsic_offsets(positions[self.blocks.corners], self.blocks.G)
 
     def targets_reference(self, positions: Optional[np.ndarray] = None, ease=None, offsets=None):
         """Targets of Eq. ref-scale (or transfer-scale on other ``positions``): (K, c_weft, c_warp).
@@ -173,9 +172,16 @@ class PatternSolver:
 
     def design_plan(self, config: Optional[SolverConfig] = None) -> SeamPlan:
         """The seam plan of the design's own ease on the reference body: what transfer and adaptation
-        solves sew (the reference pattern's plan)."""
-        K = self.ref_offsets[0]
-        return self.plan_seams(K, self.design_ease, np.ones_like(self.design_ease), config)
+        solves sew (the reference pattern's plan). Planned once per configuration (every item of a batch
+        sews it), read-only."""
+        cfg = config or self.config
+        plan = self._design_plans.get(cfg)
+        if plan is None:
+            plan = self.plan_seams(self.ref_offsets[0], self.design_ease, np.ones_like(self.design_ease), cfg)
+            for a in (plan.sewn_edges, plan.sewn_rows):
+                a.flags.writeable = False
+            self._design_plans[cfg] = plan
+        return plan
 
     # ------------------------------------------------------------------ the system
     def area_weights(self, config: Optional[SolverConfig] = None) -> np.ndarray:
@@ -392,6 +398,7 @@ class PatternSolver:
         targets_finite = None if adapting else np.isfinite(c_weft) & np.isfinite(c_warp)
         lam_ease, lam_reg = cfg.weights.ease, cfg.weights.regulariser
         pinned = np.flatnonzero(pin[:, 0])
+        warp_from = None    # the last rest targets while their warp products hold (rest_targets' warp_from)
         n_it = int(iterations)
         for k in range(n_it):
             it = state.iteration
@@ -403,7 +410,10 @@ class PatternSolver:
                 # move the targets by the achieved/target ratio: the linear solve then
                 # lands on the wanted rho-hat wherever curvature allows it
                 move_corrections(cfg, M, Kc, c_weft, c_warp, corr_w, corr_g, poses, targets_finite)
-                tg = rest_targets(Kc, c_weft * corr_w, c_warp * corr_g, model)
+                cg = c_warp * corr_g if warp_from is None else None
+                tg = rest_targets(Kc, c_weft * corr_w, cg, model, warp_from)
+                # no warp gain: the feedback only bounds the warp corrections, so after its first move they hold
+                warp_from = None if gain_g > 0 else tg
             RT, Te = local_step(cfg, M, tg, W2, state.local_state)
             # the regulariser's energy (a diagnostic): sum_t a_t |(M_t - R_t T_t) W|^2, one dot product per entry
             energy = 0.0
@@ -486,15 +496,5 @@ class PatternSolver:
                                                                     state.c_warp)
 
     def result(self, state: "SolveState") -> SolveResult:
-        """The :class:`SolveResult` of ``state``'s current iterate (per panel uv, targets, body positions)."""
-        out_uv, tw, tgw, xyz = {}, {}, {}, {}
-        f0 = 0
-        U, pos = state.U, state.positions
-        for pd in self.panels:
-            out_uv[pd.name] = U[pd.offset:pd.offset + pd.n].copy()
-            tw[pd.name] = np.asarray(state.c_weft[f0:f0 + len(pd.faces)], float).copy()
-            tgw[pd.name] = np.asarray(state.c_warp[f0:f0 + len(pd.faces)], float).copy()
-            xyz[pd.name] = pos[pd.vertex_ids]
-            f0 += len(pd.faces)
-        return SolveResult(out_uv, tw, tgw, xyz, state.seconds, state.iteration, state.backtracks,
-                           list(state.energies), state.plan.gathered)
+        """The :class:`SolveResult` of ``state``'s current iterate (:func:`.build.solve_result`)."""
+        return solve_result(self.panels, state)

@@ -154,9 +154,13 @@ def local_step(config: SolverConfig, M: list, tg: dict, W2: np.ndarray, state: d
         RT = [d0 * rk[0], d0 * rk[1], np.multiply(d1sw, rk[2], out=rk[2]), np.multiply(d1sw, rk[3], out=rk[3])]
         num = m2 * T[2]
         num += m3 * T[3]
-        den = T[2] ** 2 if unit else W2[0] * T[2] ** 2
-        den += T[3] ** 2 if unit else W2[1] * T[3] ** 2
-        se = np.clip(num / np.maximum(den, 1e-300, out=den), lo, hi, out=num)
+        # the ease target's warp row changes only with the warp targets: its weighted square, kept while it stays
+        tden = state.get("_tden")
+        if tden is None or tden[0] is not T[2] or tden[1] is not T[3] or not np.array_equal(tden[2], W2):
+            den = T[2] ** 2 if unit else W2[0] * T[2] ** 2
+            den += T[3] ** 2 if unit else W2[1] * T[3] ** 2
+            tden = state["_tden"] = (T[2], T[3], W2.copy(), np.maximum(den, 1e-300, out=den))
+        se = np.clip(num / tden[3], lo, hi, out=num)
         return RT, [T[0], T[1], T[2] * se, T[3] * se]
     return [d0 * rk[0], d0 * rk[1], d1 * rk[2], d1 * rk[3]], T
 
@@ -294,7 +298,7 @@ def realign_grain(blocks: PanelBlocks, U: np.ndarray, M: List[np.ndarray]):
     ``M``: the Jacobians of ``U``; returns the rotated ``U`` and its
     Jacobians (the same rotation applied to the rows).
     """
-    wx, wy = blocks.warp0[:, 0], blocks.warp0[:, 1]
+    wx, wy = blocks.warp_columns
     ix, iy = M[0] * wx + M[1] * wy, M[2] * wx + M[3] * wy  # current 2D image of the warp
     nrm = hypot(ix, iy)
     # a triangle whose warp image vanished does not vote (every one usually votes: the where() is skipped)

@@ -9,7 +9,7 @@ offsets (:func:`core.geom.strain.intrinsic_offsets`) and target scales
 """
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Optional, Sequence
 
 import numpy as np
 
@@ -17,7 +17,8 @@ from ..errors import PatternError
 from ..geom.strain import components
 
 
-def rest_targets(K, c_weft: np.ndarray, c_warp: np.ndarray, model: str) -> dict:
+def rest_targets(K, c_weft: np.ndarray, c_warp: Optional[np.ndarray], model: str,
+                 warp_from: Optional[dict] = None) -> dict:
     """Ease target ``T`` and the regulariser's rest shape ``diag(D) R K'``, as component arrays.
 
     ``K``: the intrinsic offsets (f, 2, 2), or their 4 components (f,)
@@ -32,10 +33,20 @@ def rest_targets(K, c_weft: np.ndarray, c_warp: np.ndarray, model: str) -> dict:
     error that grow with rho); the rest shape is the isometric ``R K``.
     Returns ``{"T": 4 (f,) arrays t00, t01, t10, t11, "reg": (d_weft (f,), d_warp (f,), K' as 4 (f,)
     arrays)}``: one product per entry, the same values as the (f, 2, 2) products.
+
+    ``warp_from``: an earlier result of the same ``K`` and ``model`` whose warp scales equal
+    ``c_warp`` (then None): its products by them are taken over, not recomputed (the same
+    arrays: the feedback moves the weft targets every iteration, the warp's only with a warp gain).
     """
     # the caller's component list itself: the local step keeps its K-only products while it is the same list
     k = components(K) if isinstance(K, np.ndarray) else K
-    cw, cg = np.asarray(c_weft, float), np.asarray(c_warp, float)
+    cw = np.asarray(c_weft, float)
+    if warp_from is not None:
+        T = warp_from["T"]
+        if model == "prestretch":
+            return {"T": [cw * k[0], cw * k[1], T[2], T[3]], "reg": (cw, warp_from["reg"][1], k)}
+        return {"T": [k[0] * cw, T[1], k[2] * cw, T[3]], "reg": warp_from["reg"]}
+    cg = np.asarray(c_warp, float)
     if model == "prestretch":
         return {"T": [cw * k[0], cw * k[1], cg * k[2], cg * k[3]], "reg": (cw, cg, k)}
     one = np.ones_like(cw)
