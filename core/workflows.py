@@ -9,6 +9,10 @@ is separate (:func:`write_pattern`, :func:`write_drape`, :func:`export`).
 
 Settings follow one precedence rule: the caller's value, else the design's
 (its ``materials``), else the default (:class:`core.design.materials.Materials`).
+The solver configuration too (:func:`config_name`): the caller's ``config``
+(``--config`` given, the add-on's Solver set to a configuration), else the
+design's ``"solver"``, else ``"improved"``; ``iterations`` and ``gather_all``
+override that configuration's settings.
 
 Progress: every function takes ``progress(fraction, message)`` for its own
 span 0..1 (compose spans with :func:`core.progress.sub`); the callback may
@@ -22,10 +26,13 @@ from typing import Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
+from .design.checks import SOLVER_CONFIGS
 from .progress import Progress, report, sub
 
-#: Solver configurations a user can name (``--config``); see :mod:`core.pattern`.
-CONFIGS = ("improved", "paper", "stretch", "fitted", "lengths")
+#: Solver configurations a user (``--config``) or a design (``"solver"``) can name; see :mod:`core.pattern`.
+CONFIGS = SOLVER_CONFIGS
+#: The configuration of a design that names none, when the user names none either.
+DEFAULT_CONFIG = "improved"
 
 
 # ----------------------------------------------------------------------------- prepare
@@ -107,7 +114,23 @@ class PatternRun:
     timings: Dict[str, float] = field(default_factory=dict)
 
 
-def solver_config(name: str = "improved", iterations: Optional[int] = None, gather_all: bool = False):
+def config_name(design, config: Optional[str] = None) -> str:
+    """The solver configuration a run of ``design`` uses: ``config`` when the caller names one (the
+    user's explicit choice), else the design's ``solver``, else :data:`DEFAULT_CONFIG`.
+
+    Parameters
+    ----------
+    design : :class:`Prepared`, core.design.Design or a design dict (JSON)
+    config : one of :data:`CONFIGS`, or None
+    """
+    if config is not None:
+        return config
+    design = getattr(design, "design", design)
+    own = design.get("solver") if isinstance(design, Mapping) else getattr(design, "solver", None)
+    return own or DEFAULT_CONFIG
+
+
+def solver_config(name: str = DEFAULT_CONFIG, iterations: Optional[int] = None, gather_all: bool = False):
     """The solver configuration ``name`` with the user's overrides.
 
     Parameters
@@ -126,13 +149,14 @@ def solver_config(name: str = "improved", iterations: Optional[int] = None, gath
     return SolverConfig.named(name, **overrides)
 
 
-def make_solver(prep: Prepared, config: str = "improved", iterations: Optional[int] = None,
+def make_solver(prep: Prepared, config: Optional[str] = None, iterations: Optional[int] = None,
                 gather_all: bool = False, progress: Optional[Progress] = None):
     """The pattern solver of ``prep``: one flattening and factorisation, shared by
-    :func:`reference`, :func:`transfer` and :func:`adapt` (and by every body of a batch)."""
+    :func:`reference`, :func:`transfer` and :func:`adapt` (and by every body of a batch).
+    ``config``: the configuration's name, None for the design's (:func:`config_name`)."""
     from .pattern.solve import PatternSolver
-    return PatternSolver(prep.cut, prep.reference, solver_config(config, iterations, gather_all),
-                         progress=progress)
+    return PatternSolver(prep.cut, prep.reference,
+                         solver_config(config_name(prep, config), iterations, gather_all), progress=progress)
 
 
 def _checked_metrics(pattern, checks: Optional[Sequence[str]] = None, vertices=None) -> dict:
@@ -169,17 +193,19 @@ def _solve_reference(prep, solver, progress):
     return solve_pattern(prep.cut, prep.reference, solver=solver, style=prep.design.name, progress=progress)
 
 
-def reference(prep: Prepared, config: str = "improved", iterations: Optional[int] = None,
+def reference(prep: Prepared, config: Optional[str] = None, iterations: Optional[int] = None,
               gather_all: bool = False, solver=None, progress: Optional[Progress] = None) -> PatternRun:
     """The design's pattern on its own (reference) body.
 
     Parameters
     ----------
     prep : :class:`Prepared`
-    config, iterations, gather_all : see :func:`solver_config` (ignored when
-        ``solver`` is given, except ``config`` as the name recorded in the report)
+    config, iterations, gather_all : see :func:`solver_config`; ``config`` None: the design's
+        (:func:`config_name`). Ignored when ``solver`` is given, except ``config`` as the name
+        recorded in the report.
     solver : PatternSolver of ``prep`` to reuse, or None
     """
+    config = config_name(prep, config)
     t0 = time.perf_counter()
     if solver is None:
         solver = make_solver(prep, config, iterations, gather_all, progress=sub(progress, 0.0, 0.2))
@@ -190,7 +216,7 @@ def reference(prep: Prepared, config: str = "improved", iterations: Optional[int
     return PatternRun(pattern, pattern_figures(pattern), {**prep.timings, "optimize": optimize})
 
 
-def transfer(prep: Prepared, size, config: str = "improved", iterations: Optional[int] = None,
+def transfer(prep: Prepared, size, config: Optional[str] = None, iterations: Optional[int] = None,
              gather_all: bool = False, solver=None, start=None, progress: Optional[Progress] = None,
              vertices=None) -> PatternRun:
     """Shape transfer (paper Eq. transfer-scale): the same cut and ease field on another body shape.
@@ -212,6 +238,7 @@ def transfer(prep: Prepared, size, config: str = "improved", iterations: Optiona
     from .metrics.pattern import ease_compliance
     from .pattern.solve import transfer_pattern
 
+    config = config_name(prep, config)
     if isinstance(size, str):
         size = size_name(prep, size)
     elif not isinstance(size, Mapping):
@@ -256,7 +283,7 @@ def tolerances(prep: Prepared, eps_weft: Optional[float] = None,
 
 
 def adapt(prep: Prepared, poses: Sequence, eps_weft: Optional[float] = None, eps_warp: Optional[float] = None,
-          config: str = "improved", iterations: Optional[int] = None, gather_all: bool = False, solver=None,
+          config: Optional[str] = None, iterations: Optional[int] = None, gather_all: bool = False, solver=None,
           start=None, progress: Optional[Progress] = None) -> PatternRun:
     """Pose adaptation (paper Eqs. adapt-scale, material-scale): the pattern grows
     where a target pose needs more fabric than the stretch tolerance allows.
@@ -273,6 +300,7 @@ def adapt(prep: Prepared, poses: Sequence, eps_weft: Optional[float] = None, eps
     from .metrics.pattern import residual_stretch
     from .pattern.solve import adapt_pattern
 
+    config = config_name(prep, config)
     eps_w, eps_g = tolerances(prep, eps_weft, eps_warp)
     names = [p if isinstance(p, str) else f"pose{i + 1}" for i, p in enumerate(poses)]
     t0 = time.perf_counter()
@@ -466,6 +494,7 @@ def export(pattern, out, formats: Union[str, Sequence[str]] = ("svg", "dxf", "pd
                           progress=progress, print_all=print_all)
 
 
-__all__ = ["CONFIGS", "Prepared", "PatternRun", "DrapeRun", "prepare", "solver_config", "make_solver",
+__all__ = ["CONFIGS", "DEFAULT_CONFIG", "Prepared", "PatternRun", "DrapeRun", "prepare", "config_name",
+           "solver_config", "make_solver",
            "reference", "transfer", "adapt", "tolerances", "measure_pattern", "pattern_figures", "write_pattern",
            "summary", "drape", "write_drape", "drape_summary", "export_allowance", "export"]

@@ -74,6 +74,31 @@ def current_design(context):
     return load_design(text)
 
 
+#: the Solver choice that leaves the configuration to the design (its ``"solver"`` field, else the core's default)
+DESIGN_SOLVER = "design"
+
+
+def solver_choice(scene):
+    """The solver configuration the pattern operators pass to the core: the Solver choice, or None
+    for the design's own (:func:`core.workflows.config_name` applies it)."""
+    choice = scene.ease.solver_config
+    return None if choice == DESIGN_SOLVER else choice
+
+
+def design_solver(scene) -> str:
+    """The configuration the scene's design names (its ``"solver"``), else the core's default: what
+    the Solver choice *Design's* stands for. The panel asks on every redraw: the design JSON (megabytes
+    with a painted field) is parsed once per text."""
+    from ..core.workflows import config_name
+    text = scene.ease.design_json
+    if _SOLVER_SEEN[0] != text:
+        _SOLVER_SEEN[:] = [text, config_name(json.loads(text) if text else {})]
+    return _SOLVER_SEEN[1]
+
+
+_SOLVER_SEEN = [None, None]     # (design text, its configuration) of the last design_solver call
+
+
 def cut_on(design, model_name: str, shape: dict):
     """The cut of ``design`` on body ``model_name`` with ``shape`` (its reference pose); cached.
 

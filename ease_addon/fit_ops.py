@@ -31,7 +31,8 @@ class EASE_OT_transfer_size(EaseOperator):
     def run(self, context):
         from ..core import workflows as wf
         size = context.scene.ease.fit_size
-        _fit(context, lambda prep, progress: wf.transfer(prep, size, progress=progress))
+        config = data.solver_choice(context.scene)
+        _fit(context, lambda prep, progress: wf.transfer(prep, size, config=config, progress=progress))
         self.report({"INFO"}, f"transferred to {size}")
 
 
@@ -54,7 +55,7 @@ class EASE_OT_adapt_poses(EaseOperator):
             # tolerance; where it shows the design's, the design decides both (weft and warp)
             own = prep.cut.materials.get("eps_weft")
             mine = None if own is not None and abs(tol - float(own)) < 1e-6 else tol
-            return wf.adapt(prep, poses, eps_weft=mine, progress=progress)
+            return wf.adapt(prep, poses, eps_weft=mine, config=data.solver_choice(context.scene), progress=progress)
         _fit(context, adapt)
         self.report({"INFO"}, f"adapted to {', '.join(poses)}")
 

@@ -5,6 +5,8 @@ import json
 
 import bpy
 
+from . import data
+
 
 class _EasePanel:
     bl_space_type = "VIEW_3D"
@@ -147,6 +149,8 @@ class EASE_PT_pattern(_EasePanel, bpy.types.Panel):
         sub.enabled = s.gather_auto
         sub.prop(s, "gather_above_pct")
         layout.prop(s, "solver_config")
+        if s.solver_config == data.DESIGN_SOLVER and s.design_json:
+            layout.label(text=f"Design's solver: {data.design_solver(context.scene).capitalize()}")
         layout.operator("ease.optimize_pattern", icon="MESH_GRID")
         _figures(layout, s.pattern_json)
 

@@ -30,7 +30,7 @@ class EASE_OT_optimize_pattern(EaseOperator):
         from ..core import workflows as wf
         prep = data.prepared(context, lambda design: gather_settings(context.scene, design))
         with window_progress(context) as progress:
-            pattern = wf.reference(prep, config=context.scene.ease.solver_config, progress=progress).pattern
+            pattern = wf.reference(prep, config=data.solver_choice(context.scene), progress=progress).pattern
         # -- the scene changes from here on: the design keeps the gathering it was solved with
         text = json.dumps(prep.design.to_json(), sort_keys=True)
         if text != context.scene.ease.design_json:

@@ -19,8 +19,11 @@ from . import data, live, sync
 SIZES = [(s, s, f"size {s} of the size chart") for s in CHART_SIZES]
 # Every chart's sizes are letters of the default chart's XS..XL; the chart says which apply.
 CHART_ITEMS = [(c.name, c.name.capitalize(), f"{c.title}; sizes {', '.join(c.sizes)}") for c in CHARTS.values()]
-#: the solver configurations (core.workflows.CONFIGS) as Optimize Pattern offers them
-SOLVER_CONFIGS = [("improved", "Improved", "the default: 20 local-global iterations, warp free within 12 %"),
+#: the solver configurations (core.workflows.CONFIGS) as the pattern operators offer them, after the design's own
+#: choice (its "solver" field, applied by the core: data.solver_choice)
+SOLVER_CONFIGS = [(data.DESIGN_SOLVER, "Design's", "the configuration the design names (its \"solver\" field), "
+                                              "else Improved"),
+                  ("improved", "Improved", "20 local-global iterations, warp free within 12 %"),
                   ("fitted", "Fitted", "darted, close-fitting garments: solved to convergence (300 iterations), "
                                        "the warp lengths nearly kept (about 15x the time)"),
                   ("stretch", "Stretch", "stronger weft feedback: compliance bought with shear and warp length"),
@@ -164,9 +167,10 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
     marker_one_way: BoolProperty(name="One-way fabric", default=False,
                                  description="Nap, pile or a directional print: every piece the same way up")
     marker_status: StringProperty(name="Marker", default="")
-    solver_config: EnumProperty(name="Solver", items=SOLVER_CONFIGS, default="improved",
-                                description="Solver configuration of Optimize Pattern (live painting keeps "
-                                            "Improved: it must answer within a stroke)")
+    solver_config: EnumProperty(name="Solver", items=SOLVER_CONFIGS, default=data.DESIGN_SOLVER,
+                                description="Solver configuration of Optimize Pattern, Transfer to Size and Adapt "
+                                            "to Poses: the design's own, or one chosen here over it (live "
+                                            "painting keeps Improved: it must answer within a stroke)")
     # seam gathering: kept in the design (materials.gather_above) by Optimize Pattern
     gather_auto: BoolProperty(name="Gather loose seams", default=True,
                               description="Gather a seam whose two sides want lengths that differ by more than "

@@ -90,23 +90,48 @@ def test_gathering_setting_reaches_the_design_and_the_pattern(bpy_session, addon
 
 def test_solver_configuration_reaches_the_pattern(bpy_session, addon):
     """The Pattern panel's solver choice is the configuration Optimize Pattern solves with; every
-    configuration of the core is offered."""
+    configuration of the core is offered, after the design's own choice (the default)."""
     from core.workflows import CONFIGS
     bpy = bpy_session["bpy"]
     scene = bpy.context.scene
     s = scene.ease
     data = addon("data")
     props = addon("properties")
-    assert sorted(k for k, _, _ in props.SOLVER_CONFIGS) == sorted(CONFIGS)
+    assert [k for k, _, _ in props.SOLVER_CONFIGS][0] == data.DESIGN_SOLVER == s.solver_config
+    assert sorted(k for k, _, _ in props.SOLVER_CONFIGS[1:]) == sorted(CONFIGS)
     try:
         s.solver_config = "fitted"
         assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
         fitted = json.loads(scene[data.PATTERN_KEY])
         assert fitted["report"]["config"] == "fitted"
     finally:
-        s.solver_config = "improved"
+        s.solver_config = data.DESIGN_SOLVER
     assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
     plain = json.loads(scene[data.PATTERN_KEY])
-    assert plain["report"]["config"] == "improved"
+    assert plain["report"]["config"] == "improved"      # the top names none: the core's default
     # a different solve, not the same pattern relabelled
     assert fitted["report"]["metrics"]["compliance"]["warp_mean"] != plain["report"]["metrics"]["compliance"]["warp_mean"]
+
+
+def test_the_designs_solver_is_the_default_and_a_choice_overrides_it(bpy_session, addon):
+    """A design naming its configuration ("solver") is solved with it under the Solver choice
+    *Design's*, which the panel spells out; a configuration chosen in the panel wins over it."""
+    bpy = bpy_session["bpy"]
+    scene = bpy.context.scene
+    s = scene.ease
+    data = addon("data")
+    before = s.design_json
+    try:
+        s.design_json = json.dumps({**json.loads(before), "solver": "stretch"}, sort_keys=True)
+        assert data.design_solver(scene) == "stretch"
+        assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
+        assert json.loads(scene[data.PATTERN_KEY])["report"]["config"] == "stretch"
+        assert json.loads(s.design_json)["solver"] == "stretch"            # kept in the design
+        s.solver_config = "improved"
+        assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
+        assert json.loads(scene[data.PATTERN_KEY])["report"]["config"] == "improved"
+        assert json.loads(s.design_json)["solver"] == "stretch"            # the choice does not edit it
+    finally:
+        s.solver_config = data.DESIGN_SOLVER
+        s.design_json = before
+    assert data.design_solver(scene) == "improved"

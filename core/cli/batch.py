@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import sys
 
-from ..workflows import CONFIGS
+from ..workflows import CONFIGS, config_name
 from .common import add_quiet, console_progress, subcommand
 
 
@@ -43,7 +43,8 @@ def add_parser(sub) -> None:
     p.add_argument("--garmentcode", action="store_true",
                    help="also write each item as a GarmentCode pattern specification (specification.json)")
     p.add_argument("--preview", action="store_true", help="write pattern.png per item (slower than the solve)")
-    p.add_argument("--config", choices=CONFIGS, default="improved", help="solver configuration (default improved)")
+    p.add_argument("--config", choices=CONFIGS, default=None,
+                   help="solver configuration (default: the design's \"solver\", else improved)")
     p.add_argument("--out", required=True, help="dataset folder (created; reused to resume)")
     p.add_argument("--workers", type=int, default=None, help="local workers (default: the CPU count)")
     p.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
@@ -83,7 +84,7 @@ def _cmd(args) -> int:
     if unknown:
         from ..batch import BatchError
         raise BatchError(f"--poses: unknown pose {unknown[0]!r}; allowed: {', '.join(POSE_PRESETS)}")
-    options = Options(config=args.config, poses=poses, drape=args.drape,
+    options = Options(config=config_name(design, args.config), poses=poses, drape=args.drape,
                       export=tuple(parse_formats(args.export)) if args.export else (),
                       garmentcode=args.garmentcode, preview=args.preview)
     result = run_batch(design, bodies, args.out, model=_model(args, design), options=options,

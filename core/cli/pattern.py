@@ -14,9 +14,10 @@ from .common import add_quiet, console_progress, subcommand
 def _common(p) -> None:
     p.add_argument("design", help="design JSON file (the shipped ones: `ease templates`)")
     p.add_argument("--out", required=True, help="output folder (pattern.json, report.json, pattern.png)")
-    p.add_argument("--config", choices=CONFIGS, default="improved",
-                   help="solver configuration: improved (default; pre-stretched ARAP), paper (the paper's "
-                        "weights taken literally), stretch (compliance bought with shear), fitted (darted, "
+    p.add_argument("--config", choices=CONFIGS, default=None,
+                   help="solver configuration (default: the one the design names in its \"solver\" field, else "
+                        "improved; given, it overrides the design's): improved (pre-stretched ARAP), paper (the "
+                        "paper's weights taken literally), stretch (compliance bought with shear), fitted (darted, "
                         "close-fitting garments: 300 iterations, warp lengths nearly kept), lengths (the "
                         "design's lengths kept along the grain: warp within 3 %% for about twice the shear)")
     p.add_argument("--iterations", type=int, default=None,

@@ -26,6 +26,10 @@ Fields (metres, the body frame of :mod:`core`: +Z up, body faces -Y, +X = body's
 ``refine_edge_length`` target *mean* edge length of the cut panels (m, 0.005..0.1,
                        default 0.01; finer does not drape): every edge longer than 1.5x it is split
                        (:mod:`core.cut.refine`); null keeps the body's resolution
+``solver``             optional: the solver configuration the design is made for
+                       (``"improved"`` | ``"paper"`` | ``"stretch"`` | ``"fitted"`` | ``"lengths"``); the
+                       pattern is solved with it unless the user chooses one
+                       (``--config``, the add-on's Solver); absent: ``"improved"``
 ``parameters``         ``{name: number | {"value", "kind": "placement" (0..1) |
                        "length" (m) | "number", "min", "max"}}``; used as
                        ``"$name"`` wherever a number is expected
@@ -77,9 +81,9 @@ from typing import Dict, Union
 from ..body.model import POSE_PRESETS
 from ..errors import BodyError, DesignError
 from .checks import (BODY_PARTS, GARMENT_KINDS, LINE_ROLES, PARAMETER_KINDS, REFINE_EDGE_MAX, REFINE_EDGE_MIN,
-                     check_ease, check_name, check_names_unique, check_number, check_parameter_value,
-                     check_ring, check_section, expect_dict, expect_keys, fmt, is_number, keypoint_ref,
-                     check_keypoint)
+                     SOLVER_CONFIGS, check_ease, check_name, check_names_unique, check_number,
+                     check_parameter_value, check_ring, check_section, expect_dict, expect_keys, fmt, is_number,
+                     keypoint_ref, check_keypoint)
 from .darts import parse_auto, parse_darts
 from .materials import check_seam_names, parse_materials
 from .types import FORMAT, VERSION, Design, Garment, Line, Panel, Parameter
@@ -291,7 +295,7 @@ def parse_design(obj: dict) -> Design:
     """Validate a design object (parsed JSON) and build a :class:`Design`."""
     expect_dict("", obj, "a design object")
     top = ("format", "version", "name", "description", "body", "materials", "mirror", "skirt",
-           "refine_edge_length", "parameters", "keypoints", "lines", "garments")
+           "refine_edge_length", "solver", "parameters", "keypoints", "lines", "garments")
     expect_keys("", obj, top)
     if obj.get("format") != FORMAT:
         raise DesignError("format", f"expected {FORMAT!r}, got {fmt(obj.get('format'))}")
@@ -312,6 +316,10 @@ def parse_design(obj: dict) -> Design:
     if rel is not None:
         rel = check_number("refine_edge_length", rel, REFINE_EDGE_MIN, REFINE_EDGE_MAX,
                            what="an edge length in metres (or null; finer meshes do not drape)")
+    solver = obj.get("solver")
+    if solver is not None and solver not in SOLVER_CONFIGS:
+        raise DesignError("solver", f"expected a solver configuration ({', '.join(SOLVER_CONFIGS)}) or null, "
+                                    f"got {fmt(solver)}")
     params = _parse_parameters("parameters", obj.get("parameters", {}))
     kps_raw = expect_dict("keypoints", obj.get("keypoints", {}), "an object name -> keypoint")
     keypoints = {}
@@ -324,7 +332,7 @@ def parse_design(obj: dict) -> Design:
     skirt = bool(obj.get("skirt", False))
     design = Design(name=name, body=body, materials=materials, parameters=params, keypoints=keypoints,
                     lines=shared, garments=garments, mirror=bool(obj.get("mirror", False)), skirt=skirt,
-                    refine_edge_length=rel, description=desc)
+                    refine_edge_length=rel, description=desc, solver=solver)
     check_names_unique(design)
     check_seam_names(design)
     return design

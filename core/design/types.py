@@ -129,6 +129,9 @@ class Design:
     skirt : bool, cut on the skirt topology (dresses, skirts)
     refine_edge_length : float metres or None, the target mean edge length of the refined
         panels (edges longer than 1.5x are split, see :mod:`core.cut.refine`); None: no refinement
+    solver : str or None, the solver configuration the design is made for (one of
+        :data:`core.design.checks.SOLVER_CONFIGS`); None: the default. A user's explicit choice
+        overrides it (:func:`core.workflows.config_name`).
     """
     name: str
     body: dict
@@ -141,6 +144,7 @@ class Design:
     skirt: bool = False
     refine_edge_length: Optional[float] = 0.01
     description: str = ""
+    solver: Optional[str] = None
 
     # -- serialisation
     def to_json(self) -> dict:
@@ -157,6 +161,7 @@ class Design:
             "mirror": self.mirror,
             "skirt": self.skirt,
             "refine_edge_length": self.refine_edge_length,
+            **({"solver": self.solver} if self.solver is not None else {}),
             "parameters": {k: p.to_json() for k, p in self.parameters.items()},
             "keypoints": copy.deepcopy(self.keypoints),
         })

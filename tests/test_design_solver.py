@@ -1,0 +1,114 @@
+"""A design names the solver configuration it is made for (``"solver"``): parsed, written back,
+refused when it is not one, and honoured by every door through core.workflows unless the user
+chooses one (``--config`` given, the add-on's Solver set to a configuration)."""
+import json
+
+import pytest
+
+from core import workflows as wf
+from core.cli import main
+from core.design import load_design
+from core.design.checks import SOLVER_CONFIGS
+from core.design.templates import TEMPLATES
+from core.errors import DesignError, PatternError
+from core.pattern.config import SolverConfig
+
+
+def _top(**fields):
+    d = TEMPLATES["top_sleeveless"]()
+    d.update(fields)
+    return d
+
+
+@pytest.mark.parametrize("name", SOLVER_CONFIGS)
+def test_every_configuration_parses_and_round_trips(name):
+    design = load_design(_top(solver=name))
+    assert design.solver == name
+    assert design.to_json()["solver"] == name
+    assert load_design(design.to_json()).solver == name
+
+
+def test_absent_is_none_and_not_written():
+    design = load_design(_top())
+    assert design.solver is None and "solver" not in design.to_json()
+    assert load_design(_top(solver=None)).solver is None
+
+
+def test_the_design_format_names_the_solvers_presets():
+    """The names the format accepts are the presets the solver builds, and no other."""
+    for name in SOLVER_CONFIGS:
+        SolverConfig.named(name)
+    with pytest.raises(PatternError) as err:
+        SolverConfig.named("nonsense")
+    listed = str(err.value).split("expected one of ", 1)[1].split(", got", 1)[0].split(", ")
+    assert sorted(listed) == sorted(SOLVER_CONFIGS) == sorted(wf.CONFIGS)
+
+
+@pytest.mark.parametrize("value", ["fast", "Fitted", 3, True, ["fitted"], {"name": "fitted"}])
+def test_a_bad_solver_is_refused_at_its_path(value):
+    with pytest.raises(DesignError) as err:
+        load_design(_top(solver=value))
+    assert err.value.path == "solver"
+    assert "expected a solver configuration (improved, paper, stretch, fitted, lengths)" in err.value.message
+
+
+def test_the_cli_refuses_a_bad_solver_in_one_line(tmp_path, capsys):
+    """The project's bad-input rule: exit status 2 and one line naming the file, the field and what
+    is expected; nothing written."""
+    path = tmp_path / "blouse.json"
+    path.write_text(json.dumps(_top(solver="fast")))
+    assert main(["pattern", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert err[0].startswith(f"ease pattern: error: {path}: solver: expected a solver configuration")
+    assert err[0].endswith('got "fast"')
+    assert not (tmp_path / "out").exists()
+
+
+def test_precedence_caller_then_design_then_default():
+    fitted = load_design(_top(solver="fitted"))
+    plain = load_design(_top())
+    assert wf.config_name(fitted) == "fitted"
+    assert wf.config_name(fitted, "stretch") == "stretch"            # the user's choice wins
+    assert wf.config_name(plain) == wf.DEFAULT_CONFIG == "improved"
+    assert wf.config_name(plain, "paper") == "paper"
+    assert wf.config_name(_top(solver="lengths")) == "lengths"       # a design dict (the batch's)
+    assert wf.config_name({}) == "improved"
+
+
+def test_the_cli_leaves_the_choice_to_the_design_unless_given():
+    from core.cli import build_parser
+    for cmd in (["pattern", "d.json", "--out", "o"], ["transfer", "d.json", "--out", "o", "--size", "L"],
+                ["adapt", "d.json", "--out", "o", "--pose", "P1"],
+                ["batch", "d.json", "--out", "o", "--sample", "2"]):
+        assert build_parser().parse_args(cmd).config is None, cmd
+        assert build_parser().parse_args(cmd + ["--config", "paper"]).config == "paper", cmd
+
+
+@pytest.fixture(scope="module")
+def stretched(anny):
+    """The sleeveless top naming ``stretch`` (a cheap configuration that differs from improved), cut."""
+    return wf.prepare(_top(solver="stretch"), body=anny)
+
+
+def test_the_workflows_solve_with_the_designs_configuration(stretched):
+    solver = wf.make_solver(stretched)
+    assert solver.config == SolverConfig.stretch()
+    run = wf.reference(stretched, solver=solver)
+    assert run.pattern.report["config"] == "stretch"
+    # the user's overrides apply to the design's configuration: its iterations, the rest kept
+    assert wf.make_solver(stretched, iterations=3).config == SolverConfig.stretch(iterations=3)
+    assert wf.make_solver(stretched, "improved").config == SolverConfig.improved()
+
+
+def test_the_designs_configuration_is_solved_not_relabelled(stretched):
+    """The design's configuration and the user's explicit one give different patterns, each recorded
+    as what it is; the same as naming the design's configuration explicitly, to the bit."""
+    own = wf.reference(stretched, iterations=3)
+    named = wf.reference(stretched, "stretch", iterations=3)
+    chosen = wf.reference(stretched, "improved", iterations=3)
+    assert own.pattern.report["config"] == named.pattern.report["config"] == "stretch"
+    assert chosen.pattern.report["config"] == "improved"
+    for a, b, c in zip(own.pattern.panels, named.pattern.panels, chosen.pattern.panels):
+        assert a.uv.tobytes() == b.uv.tobytes()
+        assert a.uv.tobytes() != c.uv.tobytes()
