@@ -37,6 +37,7 @@ from ..body.model import SurfacePoint
 from ..errors import DesignError
 from ..geom.polyline import point_at_length, polyline_length
 from .checks import check_name, check_number, expect_dict, expect_keys, fmt, keypoint_ref
+from .dart_tips import spread_tip
 from .naming import mirrored_name, swap_side
 
 #: m, default distance the sewn dart point stops short of the true apex
@@ -179,6 +180,7 @@ def resolve_darts(resolver, design, lines: list, panels) -> list:
     taken = set(by_name)
     out = []
     done = {}   # full dart name -> (mouth, sewn point): a mirrored dart mirrors its source's points
+    placed = {}  # full panel name -> positions of the sewn points placed so far (room between tips)
     for g, path, panel, mirrored in panels:
         own = {d.name for d in panel.darts} if not mirrored else set()
         for k, d in enumerate(panel_darts(panel, mirrored, design.mirror)):
@@ -209,7 +211,9 @@ def resolve_darts(resolver, design, lines: list, panels) -> list:
                                                     f"after the apex offset of {d.apex_offset * 1000:.0f} mm")
                 p, _, _ = point_at_length(poly, length - d.apex_offset)
                 end = resolver.locator.locate(p[None])[0]
+                end = spread_tip(resolver, apex, end, placed.get(f"{g.name}.{panel.name}", []), f"{dp}.apex", d.name)
             done[full] = (mouth, end)
+            placed.setdefault(f"{g.name}.{panel.name}", []).append(resolver.position(end))
             spec = DartSpec(full, f"{g.name}.{panel.name}", dp, apex, d.intake, d.apex_offset, host.name)
             out.append(CutLine(full, [mouth, end], closed=False, role="seam", dart=spec))
     return out
