@@ -55,11 +55,11 @@ def test_four_darts_close_and_fit_the_bust_better_than_three(anny, waist_run):
     converged, every dart closes and the bust region (within 6 cm of the bust points) is nearer its
     ease than with three darts ending 2 cm short (1.3 % against 2.3 % on women:M at ease 1.1)."""
     from core import workflows as wf
-    from core.design.blouse_variants import FOUR_DART_APEX_OFFSET, NECK_DART_INTAKE, four_dart_blouse
-    prep = wf.prepare(four_dart_blouse(), body=anny)
+    from core.design.blouse_variants import FOUR_DART_APEX_OFFSET, NECK_DART_INTAKE, blouse_four_darts
+    prep = wf.prepare(blouse_four_darts(), body=anny)
     assert sorted(k.split(".")[1] for k in prep.cut.darts) == sorted(
         f"{k}_{s}" for k in ("bust_dart", "waist_dart", "shoulder_dart", "neck_dart") for s in ("left", "right"))
-    run = wf.reference(prep, iterations=200)
+    run = wf.reference(prep, "improved", iterations=200)     # not the template's fitted: as waist_run
     assert run.figures["flipped"] == 0 and run.figures.get("collapsed") == 0
     darts = run.pattern.report["darts"]
     for name, rec in darts.items():
@@ -78,14 +78,15 @@ def test_four_darts_close_and_fit_the_bust_better_than_three(anny, waist_run):
 
 
 def test_fitted_configuration_keeps_warp_and_shear_on_the_four_dart_blouse(anny):
-    """``--config fitted`` (converged, warp lengths nearly kept, weak weft feedback, regulariser 2) on the
-    four-dart blouse: warp near its design length and shear low where improved's 200 iterations
-    buy weft with warp (women:M, ease 1.1: 2.87 % / 4.9 deg against 8.73 % / 5.2 deg), the bust region
-    within 2 % (1.36 %), every dart closed."""
+    """The template ``blouse_four_darts`` names ``fitted`` (converged, warp lengths nearly kept, weak
+    weft feedback, regulariser 2) and is solved with it: warp near its design length and shear low
+    where improved's 200 iterations buy weft with warp (women:M, ease 1.1: 2.89 % / 4.9 deg against
+    8.73 % / 5.2 deg), the bust region within 2 % (1.34 %), every dart closed."""
     from core import workflows as wf
-    from core.design.blouse_variants import four_dart_blouse
-    prep = wf.prepare(four_dart_blouse(), body=anny)
-    run = wf.reference(prep, config="fitted")
+    from core.design.templates import template_path
+    prep = wf.prepare(template_path("blouse_four_darts"), body=anny)
+    run = wf.reference(prep)
+    assert run.pattern.report["config"] == "fitted"
     f = run.figures
     assert f["flipped"] == 0 and f.get("collapsed") == 0
     assert f["warp deviation mean %"] < 3.5 and f["shear p95 deg"] < 5.5 and f["compliance mean %"] < 1.0, f

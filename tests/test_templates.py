@@ -29,12 +29,13 @@ OPENINGS = {
     "dress_gradient": {"dress": 4},
     "jacket": {"jacket": 3},                     # neckline + front opening + hem is one loop; two cuffs
     "blouse_fitted": {"blouse": 4},              # neckline, hem, two armholes
+    "blouse_four_darts": {"blouse": 4},
     "skirt_darted": {"skirt": 2},                # waist, hem
     "teaser_shirt_pants": {"shirt": 4, "pants": 3},
 }
 PANELS = {"shirt_long_sleeve": 6, "top_short_sleeve": 6, "top_sleeveless": 2, "pants": 4, "shorts": 4,
           "skirt": 2, "dress": 4, "dress_gradient": 4, "jacket": 7, "teaser_shirt_pants": 10,
-          "blouse_fitted": 2, "skirt_darted": 2}
+          "blouse_fitted": 2, "blouse_four_darts": 2, "skirt_darted": 2}
 
 
 @pytest.fixture(scope="module")

@@ -1,12 +1,12 @@
-"""Variants of the fitted blouse template with other darts than it ships with.
+"""The fitted blouse with other darts than :func:`core.design.garments.blouse_fitted` ships with.
 
-The template (:func:`core.design.templates.blouse_fitted`) has bust darts from the side seams
-and front waist darts from the hem, both towards the bust points. :func:`blouse_waist_darts`
-sets the waist darts' intake (or leaves them out), adds a shoulder dart towards the bust point
-and, optionally, a neckline dart towards the bust point and a back waist dart (from the hem
-towards the shoulder blade); :func:`four_dart_blouse` is the four-dart variant. It is not a shipped
-template (see its docs and docs/darts.md, "Limits": the shoulder darts pay only on a converged
-solve).
+The ``blouse_fitted`` template has bust darts from the side seams and front waist darts from the
+hem, both towards the bust points. :func:`blouse_waist_darts` sets the waist darts' intake (or
+leaves them out), adds a shoulder dart towards the bust point and, optionally, a neckline dart
+towards the bust point and a back waist dart (from the hem towards the shoulder blade); it is a
+study, not a template (the shoulder darts pay only on a converged solve, docs/darts.md, "Limits").
+:func:`blouse_four_darts`, the four-dart blouse, is the shipped template ``blouse_four_darts``:
+it names the solver configuration it is made for (``"solver": "fitted"``).
 """
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ from .garments import BLOUSE_WAIST_DART_INTAKE, blouse_fitted
 #: between converging darts arbitrarily, see docs/darts.md)
 WAIST_DART_INTAKE = BLOUSE_WAIST_DART_INTAKE
 SHOULDER_DART_INTAKE = 0.02
-#: m, the neckline darts' intake of :func:`four_dart_blouse`, and the front darts' apex offset there:
+#: m, the neckline darts' intake of :func:`blouse_four_darts`, and the front darts' apex offset there:
 #: four darts sharing the bust's wedge, each ending 5 mm from the bust point (2 mm leaves a sliver
 #: at the apex that flips), are the blouse's best frontier (benchmarks/results/pattern.md, women's wear)
 NECK_DART_INTAKE = 0.0075
@@ -57,13 +57,21 @@ def blouse_waist_darts(waist=WAIST_DART_INTAKE, shoulder=SHOULDER_DART_INTAKE, b
     return d
 
 
-def four_dart_blouse():
-    """The fitted blouse with four darts towards each bust point (side seam, hem, shoulder and
-    neckline), each ending :data:`FOUR_DART_APEX_OFFSET` from the bust point: the variant that
-    meets issue 14's blouse targets with the ``fitted`` solver configuration (figures in
-    benchmarks/results/pattern.md, women's wear). Not shipped as a template: at the default 20
-    iterations its seams are 3.1-4.7 mm apart at the ends of some parameter ranges, and at the
-    finest refinement (5 mm edges) its four dart tips, 5 mm from the bust point, leave the
-    triangles between them to flip (1725 flipped with ``fitted``); at 7.5 mm from the point it
-    solves there, with the bust region at 1.56 % instead of 1.36 % (women:M, ease 1.1)."""
-    return blouse_waist_darts(neck=NECK_DART_INTAKE, apex_offset=FOUR_DART_APEX_OFFSET)
+def blouse_four_darts():
+    """Template ``blouse_four_darts``: the fitted blouse with four darts towards each bust point (side
+    seam, hem, shoulder and neckline), each ending :data:`FOUR_DART_APEX_OFFSET` from the bust point,
+    solved with the ``fitted`` configuration it names (``"solver"``; converged, the warp lengths
+    nearly kept): issue 14's blouse targets on women:M (figures in benchmarks/results/pattern.md,
+    women's wear). At the default 20 iterations its seams part by up to 4.7 mm at the ends of its
+    parameter ranges; with ``fitted`` by under 1.5 mm. The shoulder and neckline darts arrive at a
+    narrow angle: the cut turns the neckline dart's point along the 5 mm circle so a ring of
+    triangles stays between the tips (:mod:`core.design.dart_tips`; without it the solve at 5 mm
+    edges flips)."""
+    d = blouse_waist_darts(neck=NECK_DART_INTAKE, apex_offset=FOUR_DART_APEX_OFFSET)
+    d["name"] = "four-dart blouse"
+    d["description"] = ("Women's sleeveless fitted blouse (women's chart, size M) with four darts towards each "
+                        "bust point: from the side seam, the hem, the shoulder and the neckline, each ending 5 mm "
+                        "from the point; ease 1.1; solved with the fitted configuration (converged, the warp "
+                        "lengths kept).")
+    d["solver"] = "fitted"
+    return d

@@ -5,8 +5,8 @@ package's ``core/data/designs/`` (:func:`template_dir`; a source checkout's
 ``examples/designs`` links there) are written from them by
 :func:`write_templates` (tests check they are current), so an installed
 wheel or the Blender extension has them too.
-The builders are in :mod:`.garments` (construction of each garment there);
-:mod:`.blouse_variants` builds variants of the blouse that are not shipped.
+The builders are in :mod:`.garments` (construction of each garment there) and
+:mod:`.blouse_variants` (the four-dart blouse, and variants of the blouse that are not shipped).
 """
 from __future__ import annotations
 
@@ -14,6 +14,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Callable, Dict, List
 
+from .blouse_variants import blouse_four_darts
 from .garments import (blouse_fitted, dress, dress_gradient, jacket, pants, shirt_long_sleeve, shorts, skirt,
                        skirt_darted, teaser_shirt_pants, top_short_sleeve, top_sleeveless)
 
@@ -42,6 +43,7 @@ TEMPLATES: Dict[str, Callable[[], dict]] = {
     "teaser_shirt_pants": teaser_shirt_pants,
     "dress_gradient": dress_gradient,
     "blouse_fitted": blouse_fitted,
+    "blouse_four_darts": blouse_four_darts,
     "skirt_darted": skirt_darted,
 }
 
