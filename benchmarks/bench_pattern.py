@@ -319,7 +319,7 @@ def _skirt_surfaces(body, coarse):
 
 
 #: The women's wear table: (template, uniform ease levels or None for the design's own ease).
-WOMENS = (("blouse_fitted", (1.1, 1.3)), ("skirt_darted", None))
+WOMENS = (("blouse_fitted", (1.1, 1.3)), ("blouse_four_darts", (1.1, 1.3)), ("skirt_darted", None))
 
 
 def _without_darts(raw: dict) -> dict:
@@ -335,11 +335,13 @@ def _without_darts(raw: dict) -> dict:
 
 def _womens(body, coarse):
     """Women's wear on its chart's M (the templates' ``body``): each darted template at the given uniform ease
-    levels (or its own ease) with its darts and without them: weft with warp and shear beside it, the bust and
-    seat regions, flipped and collapsed."""
+    levels (or its own ease) with its darts and without them, solved with the configuration it names (its
+    ``solver``, else improved): weft with warp and shear beside it, the bust and seat regions, flipped and
+    collapsed."""
     from core.design import load_design
     from core.metrics.pattern import pattern_report
     from core.metrics.regions import body_landmarks
+    from core import workflows as wf
     from core.pattern.solve import PatternSolver, SolverConfig
     out = {}
     for name, levels in WOMENS:
@@ -350,22 +352,25 @@ def _womens(body, coarse):
         variants = [("darts", raw), ("no darts", _without_darts(raw))]
         if name == "blouse_fitted":
             # the tailor's front waist and shoulder darts (not shipped: they pay only on a converged solve)
-            from core.design.blouse_variants import blouse_waist_darts, four_dart_blouse
-            variants += [("waist + shoulder darts", blouse_waist_darts()), ("four darts", four_dart_blouse())]
-        base = SolverConfig.improved()
+            from core.design.blouse_variants import blouse_waist_darts
+            variants.append(("waist + shoulder darts", blouse_waist_darts()))
+        # the design's own configuration (the four-dart blouse names fitted: converged, warp lengths nearly
+        # kept, a weak weft feedback, which buys weft and the bust region with shear, a stiffer regulariser);
+        # its pieces without darts are solved with it too
+        own = wf.config_name(raw)
+        base = SolverConfig.named(own)
+        improved = SolverConfig.improved()
         for label, d in variants:
             key = f"{name} ({label})"
             # the frontier of issue 14's targets: converged (200 iterations), and converged with the
             # design's warp lengths kept (warp slack 0), beside the default 20 iterations
-            configs = [("", None)]
-            if name == "blouse_fitted" and label != "no darts":
-                configs += [(", 200 it.", dataclasses.replace(base, iterations=200)),
+            configs = [("" if own == "improved" else f", {own}", None)]
+            if name.startswith("blouse") and label != "no darts":
+                configs += [(", improved", improved)] if own != "improved" else []
+                configs += [(", 200 it.", dataclasses.replace(improved, iterations=200)),
                             (", 200 it., warp slack 0", dataclasses.replace(
-                                base, iterations=200, rest_shape=dataclasses.replace(base.rest_shape, warp_slack=0.0)))]
-            if label == "four darts":
-                # the configuration the variant is made for: converged, warp lengths nearly kept, a weak
-                # weft feedback (it buys weft and the bust region with shear) and a stiffer regulariser
-                configs.append((", fitted", SolverConfig.fitted()))
+                                improved, iterations=200,
+                                rest_shape=dataclasses.replace(improved.rest_shape, warp_slack=0.0)))]
             try:
                 design, cut, ref, _, _ = _cut(load_design(d), body, coarse)
                 solver = PatternSolver(cut, ref, base)
@@ -751,14 +756,18 @@ def _womens_markdown(W) -> list:
     """The women's wear table: darted templates beside the same pieces without darts."""
     if not W:
         return []
-    L = ["", "## Women's wear: darts against no darts (improved)", "",
+    L = ["", "## Women's wear: darts against no darts", "",
          "Each darted template on its body (the women's chart's M) with its darts and with the darts removed, "
-         "at uniform ease 1.1 and 1.3 (the blouse) or the design's own ease; the blouse also with the tailor's "
-         "front waist and shoulder darts and with four darts (side seam, hem, shoulder and neckline darts, each "
-         "ending 5 mm from the bust point; `core.design.blouse_variants`, not shipped); the darted "
-         "blouses also solved to convergence (200 iterations) and converged with the design's warp lengths kept "
-         "(warp slack 0), and the four-dart blouse with the `fitted` configuration it is made for (300 iterations, "
-         "warp slack 0.01, weft feedback 0.01 accumulated to at most 1.2, regulariser 2). "
+         "at uniform ease 1.1 and 1.3 (the blouses) or the design's own ease, solved with the configuration the "
+         "template names (its `solver`; improved where it names none, rows without a configuration). "
+         "`blouse_fitted` also with the tailor's front waist and shoulder darts (`core.design.blouse_variants`, "
+         "not shipped). `blouse_four_darts` has four darts towards each bust point (side seam, hem, shoulder and "
+         "neckline, each ending 5 mm from it; the neckline dart's point turned along that circle to keep a ring "
+         "of triangles between it and the shoulder dart's, `core.design.dart_tips`) and names the `fitted` "
+         "configuration (300 iterations, warp slack 0.01, weft feedback 0.01 accumulated to at most 1.2, "
+         "regulariser 2); its pieces without darts are solved with fitted too, and the darted blouses also "
+         "with improved (20 iterations), converged (200 iterations) and converged with the design's warp lengths "
+         "kept (warp slack 0): the frontier. "
          "Targets (issue 14): weft <= 1.0 %, "
          "warp <= 3 %, shear p95 <= 5 deg, bust region <= 1.5 %. Regions: compliance within 6 cm of the landmark, "
          "left / right, mean (signed) %.", "",
