@@ -24,7 +24,7 @@ def _patterns(context, pattern, wanted):
     from ..core import workflows as wf
     from ..core.export.marker import size_label
     here = size_label(pattern)
-    runs, prep, solver = [], None, None
+    runs, prep, solver, config = [], None, None, None
     for size, garments in wanted.items():
         if size == here:
             runs.append((size, pattern, garments))
@@ -33,9 +33,10 @@ def _patterns(context, pattern, wanted):
             if not context.scene.ease.design_json:
                 raise state.AddonError(f"marker: size {size} needs the design to transfer from; load a design")
             prep = data.prepared(context)
-            solver = wf.make_solver(prep)
+            config = data.solver_choice(context.scene)          # as Transfer to Size: the design's or the chosen
+            solver = wf.make_solver(prep, config)
         start = pattern if pattern.mode == "reference" else None
-        runs.append((size, wf.transfer(prep, size, solver=solver, start=start).pattern, garments))
+        runs.append((size, wf.transfer(prep, size, config=config, solver=solver, start=start).pattern, garments))
     return runs
 
 
