@@ -156,9 +156,19 @@ def scales_of_offsets(M: Sequence[np.ndarray], K: Sequence[np.ndarray]) -> Tuple
     rho_weft, rho_warp : (f,) float, as :func:`scales` with grain +y: the 2D->3D map is
         ``J = Q K M^-1`` (Q orthonormal), so ``|J w| = |K M^-1 e_x|`` and ``|J g| = |K M^-1 e_y|``.
     """
-    det = np.abs(M[0] * M[3] - M[1] * M[2])
+    # each difference formed in its own new array, the temporaries reused (out=): the same operations
+    t = M[1] * M[2]
+    det = M[0] * M[3]
+    det -= t
+    np.abs(det, out=det)
     # det M^-1 e_x = (m11, -m10), det M^-1 e_y = (-m01, m00); the signs folded into the sums (a + (-b) is a - b)
+    out = []
     with np.errstate(divide="ignore", invalid="ignore"):
-        rw = det / hypot(K[0] * M[3] - K[1] * M[2], K[2] * M[3] - K[3] * M[2])
-        rg = det / hypot(K[1] * M[0] - K[0] * M[1], K[3] * M[0] - K[2] * M[1])
-    return rw, rg
+        # weft: |(k0 m11 - k1 m10, k2 m11 - k3 m10)|; warp: |(k1 m00 - k0 m01, k3 m00 - k2 m01)|
+        for (ka, kb, kc, kd), (m, n) in (((0, 1, 2, 3), (3, 2)), ((1, 0, 3, 2), (0, 1))):
+            x = K[ka] * M[m]
+            x -= np.multiply(K[kb], M[n], out=t)
+            y = K[kc] * M[m]
+            y -= np.multiply(K[kd], M[n], out=t)
+            out.append(np.divide(det, hypot(x, y), out=x))
+    return out[0], out[1]

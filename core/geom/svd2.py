@@ -35,7 +35,10 @@ def hypot(x: np.ndarray, y: np.ndarray) -> np.ndarray:
 def _halves(A: Sequence[np.ndarray]):
     """(e, f, g, h) of ``A``: its conformal part (e, h) and anti-conformal part (f, g)."""
     a00, a01, a10, a11 = (np.asarray(a, float) for a in A)
-    return 0.5 * (a00 + a11), 0.5 * (a00 - a11), 0.5 * (a10 + a01), 0.5 * (a10 - a01)
+    out = [a00 + a11, a00 - a11, a10 + a01, a10 - a01]
+    for x in out:
+        x *= 0.5            # 0.5 (a + b), in the sum's own array
+    return out
 
 
 def signed_singular_values2(A: Sequence[np.ndarray]) -> Tuple[np.ndarray, np.ndarray]:
@@ -43,7 +46,9 @@ def signed_singular_values2(A: Sequence[np.ndarray]) -> Tuple[np.ndarray, np.nda
     reflection (:func:`signed_svd2` without the rotations)."""
     e, f, g, h = _halves(A)
     q, r = hypot(e, h), hypot(f, g)
-    return q + r, q - r
+    s1 = q + r
+    q -= r
+    return s1, q
 
 
 def signed_svd2(A: Sequence[np.ndarray]) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -50,7 +50,7 @@ from .seams import SeamPlan, plan_seams, seam_layout, seam_matrix, seam_rhs
 from .start import pattern_start
 from .state import SolveState
 from .steps import (any_collapsed, collapse_guard, face_neighbourhood, flip_guard, inverse_offsets, local_step,
-                    opened_jacobians, realign_grain, rigid_align, scaled_start)
+                    opened_jacobians, realign_grain, regulariser_energy, rigid_align, scaled_start)
 from .targets import adaptation_scales, reference_ease, rest_targets
 from .validate import body_positions, validate_cut
 
@@ -90,9 +90,8 @@ class PatternSolver:
         self.design_ease = np.concatenate([pd.ease for pd in self.panels])
         self.seams = seam_layout(cut, self.panels, self.uv0, self.n, self.mean_edge, self.total_area)
         # gradient operators as sparse (f, n) matrices: (Gx @ U)[t] = M_t[:, 0], (Gy @ U)[t] = M_t[:, 1]
-        f = len(self.gfaces)
+        f, cols = len(self.gfaces), self.gfaces.ravel()
         rows = np.repeat(np.arange(f), 3)
-        cols = self.gfaces.ravel()
         self._Gx = sp.csr_matrix((b.G[:, :, 0].ravel(), (rows, cols)), shape=(f, self.n))
         self._Gy = sp.csr_matrix((b.G[:, :, 1].ravel(), (rows, cols)), shape=(f, self.n))
         self._GxT, self._GyT = self._Gx.T.tocsr(), self._Gy.T.tocsr()
@@ -415,14 +414,11 @@ class PatternSolver:
                 # no warp gain: the feedback only bounds the warp corrections, so after its first move they hold
                 warp_from = None if gain_g > 0 else tg
             RT, Te = local_step(cfg, M, tg, W2, state.local_state)
-            # the regulariser's energy (a diagnostic): sum_t a_t |(M_t - R_t T_t) W|^2, one dot product per entry
-            energy = 0.0
+            state.energies.append(regulariser_energy(a, M, RT, W2))
+            # B = lambda_ease T + lambda_reg R T: one right-hand side for both terms (same weights), in R T's arrays
+            B = [RT[j] if lam_reg == 1.0 else np.multiply(lam_reg, RT[j], out=RT[j]) for j in range(4)]
             for j in range(4):
-                r = M[j] - RT[j]
-                energy += W2[j % 2] * float(np.dot(a, np.multiply(r, r, out=r)))
-            state.energies.append(energy)
-            # B = lambda_ease T + lambda_reg R T: one right-hand side for both terms (same weights)
-            B = [lam_ease * Te[j] + (RT[j] if lam_reg == 1.0 else lam_reg * RT[j]) for j in range(4)]
+                B[j] += lam_ease * Te[j]        # x + y is y + x: the same sums
             solve_k, aw_k = lu, aw
             if guarding:
                 # triangles near collapse: stiffened and pulled towards their opened shape
@@ -448,8 +444,10 @@ class PatternSolver:
                     aw_k = (aw[0] * stiff,) * 2 if unit_columns else (aw[0] * stiff, aw[1] * stiff)
             # the seams' part (a new array) plus the triangles' (x + y is y + x); the pins only where they are
             rhs = seam_rhs(self.seams, U, cfg, state.plan, integral)
-            rhs[:, 0] += self._GxT @ (aw_k[0] * B[0]) + self._GyT @ (aw_k[1] * B[1])
-            rhs[:, 1] += self._GxT @ (aw_k[0] * B[2]) + self._GyT @ (aw_k[1] * B[3])
+            for j in range(4):      # the weighted right-hand side, in B's arrays
+                np.multiply(aw_k[j % 2], B[j], out=B[j])
+            rhs[:, 0] += self._GxT @ B[0] + self._GyT @ B[1]
+            rhs[:, 1] += self._GxT @ B[2] + self._GyT @ B[3]
             rhs[pinned] += pin[pinned] * U[pinned]
             U_new = solve_k(rhs)
             # the step's rigid part per panel carries no strain: remove it so that the flip

@@ -1,6 +1,7 @@
 """The pieces of one local-global iteration, on the stacked panels (:class:`.panels.PanelBlocks`).
 
-- :func:`local_step`: the regulariser's rest shapes (best rotation per triangle, closed form).
+- :func:`local_step`: the regulariser's rest shapes (best rotation per triangle, closed form);
+  :func:`regulariser_energy`: its energy (a diagnostic).
 - :func:`rigid_align`: a step's rigid part removed per panel.
 - :func:`flip_guard`: vertices of triangles that would flip step back locally.
 - :func:`realign_grain`: every panel turned so its voted grain is +y.
@@ -165,6 +166,17 @@ def local_step(config: SolverConfig, M: list, tg: dict, W2: np.ndarray, state: d
     return [d0 * rk[0], d0 * rk[1], d1 * rk[2], d1 * rk[3]], T
 
 
+def regulariser_energy(a: np.ndarray, M: list, RT: list, W2: np.ndarray) -> float:
+    """The regulariser's energy (a diagnostic): ``sum_t a_t |(M_t - R_t T_t) W|^2`` of the Jacobians ``M``
+    and the rest shapes ``RT`` (4 (f,) arrays each), area weights ``a`` (f,) and column weights ``W2``
+    (2,); one dot product per entry."""
+    energy = 0.0
+    for j in range(4):
+        r = M[j] - RT[j]
+        energy += W2[j % 2] * float(np.dot(a, np.multiply(r, r, out=r)))
+    return energy
+
+
 def rigid_align(blocks: PanelBlocks, U_new: np.ndarray, U_old: np.ndarray) -> np.ndarray:
     """``U_new`` (n, 2) moved rigidly per panel onto ``U_old`` (area-free Kabsch, all panels at once)."""
     off, cnt = blocks.vertex_offsets, blocks.vertex_counts[:, None]
@@ -187,9 +199,17 @@ def face_areas(blocks: PanelBlocks, U: np.ndarray, faces: Optional[np.ndarray] =
     F0, F1, F2 = blocks.face_columns if faces is None else (c[faces] for c in blocks.face_columns)
     u, v = U[:, 0], U[:, 1]
     u0, v0 = u[F0], v[F0]
-    ax, ay = u[F1] - u0, v[F1] - v0
-    bx, by = u[F2] - u0, v[F2] - v0
-    return 0.5 * (ax * by - ay * bx)
+    # 0.5 (ax by - ay bx) with ax = u[F1] - u0 etc., each product into its gathered operand (the same operations)
+    ax, ay, bx, by = u[F1], v[F1], u[F2], v[F2]
+    ax -= u0
+    ay -= v0
+    bx -= u0
+    by -= v0
+    ax *= by
+    ay *= bx
+    ax -= ay
+    ax *= 0.5
+    return ax
 
 
 def flip_guard(blocks: PanelBlocks, U_old: np.ndarray, U_new: np.ndarray, s_old: Optional[np.ndarray] = None):
@@ -298,22 +318,36 @@ def realign_grain(blocks: PanelBlocks, U: np.ndarray, M: List[np.ndarray]):
     ``M``: the Jacobians of ``U``; returns the rotated ``U`` and its
     Jacobians (the same rotation applied to the rows).
     """
+    # the temporaries are reused (out=): the same operations in their order, fewer new arrays
     wx, wy = blocks.warp_columns
-    ix, iy = M[0] * wx + M[1] * wy, M[2] * wx + M[3] * wy  # current 2D image of the warp
+    t = M[1] * wy
+    ix = M[0] * wx                          # the current 2D image of the warp: M w
+    ix += t
+    iy = M[2] * wx
+    iy += np.multiply(M[3], wy, out=t)
     nrm = hypot(ix, iy)
     # a triangle whose warp image vanished does not vote (every one usually votes: the where() is skipped)
     vote = blocks.warp_vote if (nrm > 0).all() else np.where(nrm > 0, blocks.warp_vote, 0.0)
-    w = vote / np.maximum(nrm, 1e-300)
-    vx = np.add.reduceat(w * ix, blocks.face_offsets)
-    vy = np.add.reduceat(w * iy, blocks.face_offsets)
+    w = np.divide(vote, np.maximum(nrm, 1e-300, out=nrm), out=nrm)
+    vx = np.add.reduceat(np.multiply(w, ix, out=ix), blocks.face_offsets)
+    vy = np.add.reduceat(np.multiply(w, iy, out=iy), blocks.face_offsets)
     theta = -np.where((vx == 0) & (vy == 0), 0.0, np.arctan2(-vx, vy))
     c, sn = np.cos(theta), np.sin(theta)
     rep = blocks.per_vertex
     ctr = rep(np.add.reduceat(U, blocks.vertex_offsets) / blocks.vertex_counts[:, None])
     U = turn(U - ctr, rep(c), rep(sn)) + ctr
     ct, st = np.repeat(c, blocks.face_counts), np.repeat(sn, blocks.face_counts)
-    M = [ct * M[0] - st * M[2], ct * M[1] - st * M[3], st * M[0] + ct * M[2], st * M[1] + ct * M[3]]
-    return U, M
+    # [ct m0 - st m2, ct m1 - st m3, st m0 + ct m2, st m1 + ct m3]
+    out = []
+    for x, y, sign in ((0, 2, -1), (1, 3, -1), (0, 2, 1), (1, 3, 1)):
+        if sign < 0:
+            r = ct * M[x]
+            r -= np.multiply(st, M[y], out=t)
+        else:
+            r = st * M[x]
+            r += np.multiply(ct, M[y], out=t)
+        out.append(r)
+    return U, out
 
 
 def inverse_offsets(Kc: list):
@@ -332,9 +366,15 @@ def relative_singular_values(M: list, Kc: list, c_weft: np.ndarray, c_warp: np.n
     scales from below, as fractions of their targets), and ``Q`` as 4 (f,) arrays.
     ``inverse``: :func:`inverse_offsets` of ``Kc`` when the caller has it."""
     (i00, i01, i10, i11), _ = inverse if inverse is not None else inverse_offsets(Kc)
+    q, t = [], np.empty_like(M[0])
     with np.errstate(divide="ignore", invalid="ignore"):
-        q = [(M[0] * i00 + M[1] * i10) / c_weft, (M[0] * i01 + M[1] * i11) / c_weft,
-             (M[2] * i00 + M[3] * i10) / c_warp, (M[2] * i01 + M[3] * i11) / c_warp]
+        # q_ij = (M_i0 inv_0j + M_i1 inv_1j) / c_i, each sum formed in its own new array (the same operations)
+        for a, b, c in ((M[0], M[1], c_weft), (M[2], M[3], c_warp)):
+            for ia, ib in ((i00, i10), (i01, i11)):
+                x = a * ia
+                x += np.multiply(b, ib, out=t)
+                x /= c
+                q.append(x)
     s1, s2 = signed_singular_values2(q)
     return s1, s2, q
 
