@@ -73,7 +73,7 @@ def test_anny_cleft_and_crotch_spanned_outside_the_body(spanned):
     assert B is not None
     Y = np.asarray(B @ X)
     moved = np.linalg.norm(Y - X, axis=1) > 1e-9
-    assert 100 < moved.sum() < 2000
+    assert 50 < moved.sum() < 2000
     assert not (moved & ~span_candidates(body, X)).any()
     # every moved vertex lies outside the body (signed distance to the body mesh >= 0)
     s = igl.signed_distance(Y[moved], X, np.asarray(body.faces, dtype=np.int64))[0]

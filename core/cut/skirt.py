@@ -123,12 +123,14 @@ def inter_leg_faces(body, X: np.ndarray) -> np.ndarray:
 def span_candidates(body, X: np.ndarray) -> np.ndarray:
     """(V,) bool: body vertices the spanned skirt surface may lift off the body (:mod:`.span`).
 
-    Between the two legs' centre lines (in x), from the bottom of the bridge up to
-    :data:`.span.SPAN_TOP` of the way from the crotch to the back waist: the crotch, the
-    creases beside it, the curtains' joins with the legs and the gluteal cleft."""
-    from .span import SPAN_TOP
+    Between the two legs' centre lines (in x), from :data:`.span.SPAN_BOTTOM` of the way
+    from the crotch down to the bottom of the bridge up to :data:`.span.SPAN_TOP` of the way
+    from the crotch to the back waist: the crotch, the creases beside it, the top of the
+    curtains, the gluteal folds and the gluteal cleft."""
+    from .span import SPAN_BOTTOM, SPAN_TOP
     crotch, z_bot, _, _, zc, centre = _leg_frame(body, X)
     top = crotch[2] + SPAN_TOP * (_landmark(body, "waist_back", X)[2] - crotch[2])
+    z_bot = crotch[2] - SPAN_BOTTOM * (crotch[2] - z_bot)
     cl, cr = _centres_at(X[:, 2], zc, centre)
     lo, hi = np.minimum(cl[:, 0], cr[:, 0]), np.maximum(cl[:, 0], cr[:, 0])
     return (X[:, 2] >= z_bot) & (X[:, 2] <= top) & (X[:, 0] > lo) & (X[:, 0] < hi)
