@@ -127,6 +127,19 @@ def test_item_ids_hash_design_body_and_options():
     assert len(make_items(design, bodies + bodies[:1])) == 3  # the same body twice is one item
 
 
+
+def test_items_take_the_designs_solver_unless_the_caller_names_one():
+    """Options.config None is the design's own "solver" (else improved), made explicit in the item: the
+    same ids as naming it, so a rerun skips what either way made; a caller's choice wins."""
+    bodies = sample_anny(2, seed=0, parameters=ANNY_PARAMS)
+    fitted = {"name": "d", "keypoints": {}, "solver": "fitted"}
+    assert {it.options.config for it in make_items(fitted, bodies)} == {"fitted"}
+    assert [it.id for it in make_items(fitted, bodies)] == \
+        [it.id for it in make_items(fitted, bodies, options=Options(config="fitted"))]
+    assert {it.options.config for it in make_items(fitted, bodies, options=Options(config="lengths"))} == {"lengths"}
+    assert {it.options.config for it in make_items({"name": "d", "keypoints": {}}, bodies)} == {"improved"}
+
+
 def test_journal_survives_a_torn_last_line(tmp_path):
     j = Journal(tmp_path)
     j.append({"id": "b", "status": "ok", "timings.body": 1.0})

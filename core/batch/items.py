@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import List, Optional, Sequence, Tuple
 
 from .bodies import BodySource
@@ -32,14 +32,16 @@ class Options:
 
     Attributes
     ----------
-    config : solver configuration name (:data:`core.workflows.CONFIGS`)
+    config : solver configuration name (:data:`core.workflows.CONFIGS`), or None for the
+        design's own (its ``solver``, else improved: :func:`core.workflows.config_name`),
+        resolved when the items are made, so an item's record always names one
     poses : pose presets to adapt each item's pattern to (empty: none)
     drape : drape each item's pattern on its body (Warp XPBD)
     export : cutting-room formats written per item (``("svg", "dxf")``)
     garmentcode : also write the GarmentCode pattern specification
     preview : write ``pattern.png`` per item (costs more than the solve)
     """
-    config: str = "improved"
+    config: Optional[str] = None
     poses: Tuple[str, ...] = ()
     drape: bool = False
     export: Tuple[str, ...] = ()
@@ -86,7 +88,11 @@ def make_items(design: dict, bodies: Sequence[BodySource], model: str = "anny",
     Two bodies with the same record make the same item; the duplicate is kept
     once (the first).
     """
+    from ..workflows import config_name
     options = options or Options()
+    # the design's own configuration made explicit: the id (and a rerun's skip) is the same
+    # whether the caller named it or left it to the design
+    options = replace(options, config=config_name(design, options.config))
     design_key = content_hash({"design": design, "model": model})
     seen, out = set(), []
     for i, body in enumerate(bodies):
