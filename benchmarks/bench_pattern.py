@@ -212,7 +212,8 @@ def _baselines(cut, ref, solver_time, ours):
 
 
 def _templates(body, coarse):
-    """Every shipped template at its design ease on M, transferred to XS..XL and adapted to P1 (improved):
+    """Every shipped template at its design ease on M, transferred to XS..XL and adapted to P1 (the configuration
+    the design names, else improved):
     weft compliance with warp deviation and shear beside it, flipped and collapsed counts with the collapse
     sites, and the region report (compliance within 6 cm of the bust points, shoulder blades and seat).
 
@@ -820,7 +821,9 @@ def _templates_markdown(T) -> list:
     if not T:
         return []
     L = ["", "## Every template at every size: warp beside weft, flipped and collapsed", "",
-         "Each shipped template at its design ease (improved): reference on M (of the design's chart), transferred "
+         "Each shipped template at its design ease, solved with the configuration it names (improved unless it names "
+         "another: blouse_four_darts fitted, whose adaptations move the targets in their first 30 of 300 iterations "
+         "as improved's do in 60, `adaptation.feedback_until`): reference on M (of the design's chart), transferred "
          "to XS..XL of that chart, adapted to P1 "
          "(the design's tolerance), each measured on the surface it lies on (the skin; for the skirt topology the "
          "membrane spanning the cleft and crotch, docs/metrics.md). "
@@ -864,7 +867,7 @@ def _templates_markdown(T) -> list:
         L.append(f"| {name} | {_fmt(a['eps_weft'])} | {_fmt(a['before'])} / {_fmt(a['after'])} | "
                  f"{_fmt(a['warp_before'])} / {_fmt(a['warp_after'])} | {_fmt(a['shear_p95'], 1)} "
                  f"({_fmt(row['M']['shear_p95'], 1)}) | {_fmt(a['seam_max_mm'])} | {100 * a['area_growth']:.1f} % |")
-    L += ["", "### Regions: compliance within 6 cm of a landmark (M, design ease, improved)", "",
+    L += ["", "### Regions: compliance within 6 cm of a landmark (M, design ease, the design's configuration)", "",
           "| design | landmark | weft mean (signed) % | warp dev (signed) % | shear p95 | area cm² |",
           "|---|---|---|---|---|---|"]
     for name, row in T.items():

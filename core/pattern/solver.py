@@ -403,8 +403,8 @@ class PatternSolver:
             it = state.iteration
             extra = it - state.started - state.planned
             report(progress, k / max(n_it, 1), f"optimizing pattern: iteration {k + 1}/{n_it}")
-            # targets held still: an adaptation's last ``settle`` iterations (seams close, shear settles), rescue ones
-            settling = adapting and ad.settle > 0 and it >= state.planned - ad.settle or rescuing(extra, state.planned)
+            # targets held still: an adaptation's settling iterations (seams close, shear settles), rescue ones
+            settling = adapting and ad.holds(it, state.planned) or rescuing(extra, state.planned)
             if (gain_w > 0 or gain_g > 0) and it >= fb.from_iteration and not settling:
                 # move the targets by the achieved/target ratio: the linear solve then
                 # lands on the wanted rho-hat wherever curvature allows it
