@@ -121,3 +121,27 @@ def test_skirt_cut_lies_on_the_spanned_surface(anny, anny_reference):
     assert np.sqrt(d_span.max()) < 1e-9
     d_body = igl.point_mesh_squared_distance(G[used], V, np.asarray(body.faces, dtype=np.int64))[0]
     assert np.sqrt(d_body.max()) > 0.02
+
+
+def test_the_active_set_reaches_its_fixed_point_on_a_sampled_body(anny, monkeypatch):
+    # sample_anny(8, seed=0)[5]: a mirror pair pulled outwards by 1.2e-5 was freed, lifted only
+    # 3.3 um (touching: held again), freed again, ... until the round limit (41 solves). A vertex
+    # freed and then found only touching is now held for good: 8 solves, the same membrane.
+    import igl
+
+    import core.cut.span as span
+    from core.batch.bodies import sample_anny
+    X = np.asarray(anny.vertices(sample_anny(8, seed=0)[5].value), float)
+    F = np.asarray(anny.faces)
+    mesh = CutMesh(X, F)
+    make_skirt(mesh, anny, X)
+    calls = []
+    splu = span.spla.splu
+    monkeypatch.setattr(span.spla, "splu", lambda A: calls.append(1) or splu(A))
+    B = span_surface(mesh, anny, X)
+    assert B is not None
+    assert len(calls) < span._MAX_ROUNDS
+    Y = np.asarray(B @ X)
+    moved = np.linalg.norm(Y - X, axis=1) > 1e-9
+    assert moved.sum() > 50
+    assert igl.signed_distance(Y[moved], X, F.astype(np.int64))[0].min() > 0.0
