@@ -159,6 +159,30 @@ def test_skirt_back_darts_open_and_export(anny, tmp_path):
     assert (tmp_path / "pattern.svg").read_text().count('class="dart"') == 2
 
 
+@pytest.mark.parametrize("place, length", [(0.5953, 0.1467), (0.6, 0.16), (0.6, 0.18)])
+def test_skirt_back_dart_starts_on_the_waist_seam_across_its_range(anny, place, length):
+    """Inside the darted skirt's declared ranges (0.5953 / 0.1467: the range test's interior7)
+    the back dart's mouth is on the waist ring, not on the resolver geodesic's joint 5.3 mm
+    above it (from where the waist seam dropped to the ring point along the dart: "cut lines
+    'skirt.back_dart_left' and 'skirt.waist' cross"), and each dart is one seam of the back."""
+    from core.cut import cut_design
+    from core.design.resolve import Resolver, instance_vertices, resolve
+    d = TEMPLATES["skirt_darted"]()
+    d["parameters"]["back_dart_place"]["value"] = place
+    d["parameters"]["back_dart_length"]["value"] = length
+    d = load_design(d)
+    d.refine_edge_length = None
+    R = Resolver(d, anny, instance_vertices(d, anny))
+    lines = {l.name: l for l in resolve(d, anny, resolver=R).lines}
+    ring_z = R.position(R.point("waist_front", "test"))[2]
+    for side in ("left", "right"):
+        mouth = R.position(lines[f"skirt.back_dart_{side}"].points[0])
+        assert abs(mouth[2] - ring_z) < 1e-3, (side, mouth[2] - ring_z)
+    cut = cut_design(d, body=anny)
+    assert sorted(cut.darts) == ["skirt.back_dart_left", "skirt.back_dart_right"]
+    assert all(r["panel"] == "skirt.back" for r in cut.darts.values())
+
+
 def test_auto_darts_are_placed_written_back_and_reduce_the_error(anny, blouse_run):
     from core import workflows as wf
     from core.cut.auto_darts import place_darts
