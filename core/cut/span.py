@@ -19,15 +19,15 @@ region: the solution of an obstacle problem.
   active-set iteration. On a convex part of the body the membrane would sink
   into it, so nothing moves there; across a crease it lifts off and bridges it.
 - Only vertices between the two legs' centre lines, from :data:`SPAN_BOTTOM`
-  of the way from the crotch down to the bridge's bottom (6 cm below the
+  of the way from the crotch down to the bridge's bottom (6.8 cm below the
   crotch on M: the gluteal folds) up to :data:`SPAN_TOP` of the way from the
   crotch to the back waist (above the cleft), are candidates: the concavities
   across the cleft and the crotch, not a general smoothing of the body. Lower
   down, the curtains' joins with the legs are left as the bridge makes them:
   spanned there too (``SPAN_BOTTOM`` 1), the figures barely change (skirt M
   shear p95 6.1 against 6.3 deg, P1 6.8 against 5.6) while a scissored pose
-  (P2) puts 97 spanned vertices up to 34 mm inside the legs (13, up to 2.5 mm,
-  as it is), since a vertex of one leg's join is then a combination of both
+  (P2) puts 102 spanned vertices up to 34 mm inside the legs (19, up to 2.5 mm,
+  as it is; igl signed distance to the P2 body), since a vertex of one leg's join is then a combination of both
   legs' vertices.
 
 The membrane's free vertices are fixed linear combinations of held body
@@ -49,7 +49,7 @@ import scipy.sparse.linalg as spla
 from ..geom.mesh import vertex_normals
 from .split import CutMesh
 
-SPAN_BOTTOM = 0.1       # candidates down to this fraction of the crotch -> bridge bottom (6 cm on M)
+SPAN_BOTTOM = 0.1       # candidates down to this fraction of the crotch -> bridge bottom (6.8 cm on M)
 SPAN_TOP = 0.5          # candidates up to this fraction of the crotch -> waist (back) height
 SPAN_TOL = 1e-5         # m: a membrane vertex lifted off the body by less than this is held (touching)
 SPAN_DROP = 1e-4        # harmonic weights below this (relative to the row's largest) are dropped
