@@ -129,7 +129,7 @@ def spanning_operator(mesh: CutMesh, X: np.ndarray, candidates: np.ndarray,
 
     free = cand.copy()
     released = np.zeros(V, dtype=bool)      # vertices the active set freed again after holding them
-    touching = np.zeros(V, dtype=bool)      # ... and then found only touching: held for good
+    settled = np.zeros(V, dtype=bool)       # ... and then held once more: held for good
     for _ in range(_MAX_ROUNDS):
         Y = solve(free)
         h = pair(((Y - X) * N).sum(1))
@@ -137,14 +137,16 @@ def spanning_operator(mesh: CutMesh, X: np.ndarray, candidates: np.ndarray,
         # a touching vertex keeps its place instead of sliding along the body)
         inside = free & (h < SPAN_TOL)
         if inside.any():
-            # a vertex freed by its pull yet lifted by less than SPAN_TOL is not freed again: the
-            # force and the lift disagree at the tolerance (a pair of sample_anny(8)[5] was
-            # pulled by 1.2e-5, lifted 3.3 um, and held and freed in turn until the round limit)
-            touching |= inside & released & (h >= 0.0)
+            # a vertex freed by its pull and then held again is not freed a second time: its pull
+            # (a force, compared with SPAN_TOL) and its lift once free can disagree in sign or
+            # size. Without this, held and freed in turn until the round limit: on
+            # sample_anny(40, seed=0) bodies 5 (a mirror pair pulled by 1.2e-5, lifted 3.3 um),
+            # 8 (pulled 2.0e-5, then 53 um inside), 14, 23 and 28.
+            settled |= inside & released
             free &= ~inside
             continue
         pull = pair(-((Q @ Y) * N).sum(1))          # the membrane's force on a held vertex, outwards > 0
-        release = cand & ~free & ~touching & (pull > SPAN_TOL)
+        release = cand & ~free & ~settled & (pull > SPAN_TOL)
         if not release.any():
             break
         free |= release
