@@ -24,16 +24,27 @@ wrapping ~20 numpy arrays as ``wp.array`` would cost ~8 us each a call.
 from __future__ import annotations
 
 import ctypes
+import os
 
 import numpy as np
 
 from core.geom.queries import wp  # the project's Warp set-up (kernel cache folder, log level)
+
+if os.environ.get("EXP_WARP_CPU_FLAGS") is not None:
+    # e.g. "" (a generic x86-64 target, SSE2): Warp's default is -march=native (the host's ISA)
+    wp.config.cpu_compiler_flags = os.environ["EXP_WARP_CPU_FLAGS"]
 from warp._src.types import array_t
 
 f64 = wp.float64
 A = wp.array(dtype=wp.float64)
 A2 = wp.array2d(dtype=wp.float64)
 I2 = wp.array2d(dtype=wp.int32)
+
+
+@wp.func
+def _jac(m0: A, m1: A, m2: A, m3: A, i: int):
+    """Triangle ``i``'s Jacobian entries m00, m01, m10, m11."""
+    return m0[i], m1[i], m2[i], m3[i]
 
 
 @wp.func
@@ -48,10 +59,7 @@ def local_step_kernel(m0: A, m1: A, m2: A, m3: A, d0a: A, d1a: A, k0a: A, k1a: A
                       lo: f64, hi: f64, newton: int,
                       rt0: A, rt1: A, rt2: A, rt3: A, te2: A, te3: A, sw_out: A, off: int):
     i = wp.tid() + off
-    M0 = m0[i]
-    M1 = m1[i]
-    M2 = m2[i]
-    M3 = m3[i]
+    M0, M1, M2, M3 = _jac(m0, m1, m2, m3, i)
     d0 = d0a[i]
     d1 = d1a[i]
     k0 = k0a[i]
@@ -141,10 +149,7 @@ def feedback_kernel(m0: A, m1: A, m2: A, m3: A, k0a: A, k1a: A, k2a: A, k3a: A, 
                     gain_w: f64, gain_g: f64, lower: f64, upper: f64, floor: f64, ceil: f64,
                     corr_w: A, corr_g: A, off: int):
     i = wp.tid() + off
-    M0 = m0[i]
-    M1 = m1[i]
-    M2 = m2[i]
-    M3 = m3[i]
+    M0, M1, M2, M3 = _jac(m0, m1, m2, m3, i)
     k0 = k0a[i]
     k1 = k1a[i]
     k2 = k2a[i]
@@ -171,10 +176,7 @@ def guard_kernel(m0: A, m1: A, m2: A, m3: A, i00a: A, i01a: A, i10a: A, i11a: A,
                  cw: A, cg: A, scale: f64, opn: f64, grow: f64, limit: f64, release: f64,
                  gain: A, q0: A, q1: A, q2: A, q3: A, s2out: A, off: int):
     i = wp.tid() + off
-    M0 = m0[i]
-    M1 = m1[i]
-    M2 = m2[i]
-    M3 = m3[i]
+    M0, M1, M2, M3 = _jac(m0, m1, m2, m3, i)
     i00 = i00a[i]
     i01 = i01a[i]
     i10 = i10a[i]
@@ -255,6 +257,12 @@ V = wp.array(dtype=v8)
 
 
 @wp.func
+def _jac8(m0: V, m1: V, m2: V, m3: V, i: int):
+    """Task ``i``'s 8 Jacobians, entry by entry."""
+    return m0[i], m1[i], m2[i], m3[i]
+
+
+@wp.func
 def vsqrt(x: v8):
     s = v8()
     for j in range(8):
@@ -301,10 +309,7 @@ def local_step_kernel8(m0: V, m1: V, m2: V, m3: V, d0a: V, d1a: V, k0a: V, k1a: 
                        lo: f64, hi: f64, newton: int,
                        rt0: V, rt1: V, rt2: V, rt3: V, te2: V, te3: V, sw_out: V):
     i = wp.tid()
-    M0 = m0[i]
-    M1 = m1[i]
-    M2 = m2[i]
-    M3 = m3[i]
+    M0, M1, M2, M3 = _jac8(m0, m1, m2, m3, i)
     d0 = d0a[i]
     d1 = d1a[i]
     k0 = k0a[i]
@@ -389,10 +394,7 @@ def feedback_kernel8(m0: V, m1: V, m2: V, m3: V, k0a: V, k1a: V, k2a: V, k3a: V,
                      gain_w: f64, gain_g: f64, lower: f64, upper: f64, floor: f64, ceil: f64,
                      corr_w: V, corr_g: V):
     i = wp.tid()
-    M0 = m0[i]
-    M1 = m1[i]
-    M2 = m2[i]
-    M3 = m3[i]
+    M0, M1, M2, M3 = _jac8(m0, m1, m2, m3, i)
     k0 = k0a[i]
     k1 = k1a[i]
     k2 = k2a[i]
@@ -423,10 +425,7 @@ def guard_kernel8(m0: V, m1: V, m2: V, m3: V, i00a: V, i01a: V, i10a: V, i11a: V
                   cw: V, cg: V, scale: f64, opn: f64, grow: f64, limit: f64, release: f64,
                   gain: V, q0: V, q1: V, q2: V, q3: V, s2out: V):
     i = wp.tid()
-    M0 = m0[i]
-    M1 = m1[i]
-    M2 = m2[i]
-    M3 = m3[i]
+    M0, M1, M2, M3 = _jac8(m0, m1, m2, m3, i)
     i00 = i00a[i]
     i01 = i01a[i]
     i10 = i10a[i]
@@ -471,10 +470,7 @@ def ratio_kernel8(m0: V, m1: V, m2: V, m3: V, k0a: V, k1a: V, k2a: V, k3a: V, cw
     """The feedback's achieved/target ratios goal / rho (1 where the feedback does not move a triangle):
     numpy then raises them to the gains (its pow, SIMD, not libm's)."""
     i = wp.tid()
-    M0 = m0[i]
-    M1 = m1[i]
-    M2 = m2[i]
-    M3 = m3[i]
+    M0, M1, M2, M3 = _jac8(m0, m1, m2, m3, i)
     k0 = k0a[i]
     k1 = k1a[i]
     k2 = k2a[i]
@@ -499,10 +495,7 @@ def ratio_kernel8(m0: V, m1: V, m2: V, m3: V, k0a: V, k1a: V, k2a: V, k3a: V, cw
 def ratio_kernel(m0: A, m1: A, m2: A, m3: A, k0a: A, k1a: A, k2a: A, k3a: A, cw: A, cg: A,
                  ratio_w: A, ratio_g: A, off: int):
     i = wp.tid() + off
-    M0 = m0[i]
-    M1 = m1[i]
-    M2 = m2[i]
-    M3 = m3[i]
+    M0, M1, M2, M3 = _jac(m0, m1, m2, m3, i)
     det = wp.abs(M0 * M3 - M1 * M2)
     rw = _scale(det, k0a[i], k1a[i], k2a[i], k3a[i], M3, M2)
     rg = _scale(det, k1a[i], k0a[i], k3a[i], k2a[i], M0, M1)
@@ -515,6 +508,61 @@ def ratio_kernel(m0: A, m1: A, m2: A, m3: A, k0a: A, k1a: A, k2a: A, k3a: A, cw:
     else:
         ratio_w[i] = f64(1.0)
         ratio_g[i] = f64(1.0)
+
+
+@wp.kernel
+def vote_kernel8(m0: V, m1: V, m2: V, m3: V, wxa: V, wya: V, vote: V, wix: V, wiy: V):
+    """:func:`core.pattern.steps.realign_grain`'s per-triangle votes (w ix, w iy): the warp's image and
+    its weight; numpy sums them per panel."""
+    i = wp.tid()
+    wx = wxa[i]
+    wy = wya[i]
+    ix = wp.cw_mul(m0[i], wx) + wp.cw_mul(m1[i], wy)
+    iy = wp.cw_mul(m2[i], wx) + wp.cw_mul(m3[i], wy)
+    nrm = vsqrt(wp.cw_mul(ix, ix) + wp.cw_mul(iy, iy))
+    w = wp.cw_div(vpos(nrm, vote[i], v8(f64(0.0))), vfloor(nrm, f64(1e-300)))
+    wix[i] = wp.cw_mul(w, ix)
+    wiy[i] = wp.cw_mul(w, iy)
+
+
+@wp.kernel
+def vote_kernel(m0: A, m1: A, m2: A, m3: A, wxa: A, wya: A, vote: A, wix: A, wiy: A, off: int):
+    i = wp.tid() + off
+    wx = wxa[i]
+    wy = wya[i]
+    ix = m0[i] * wx + m1[i] * wy
+    iy = m2[i] * wx + m3[i] * wy
+    nrm = wp.sqrt(ix * ix + iy * iy)
+    v = f64(0.0)
+    if nrm > f64(0.0):
+        v = vote[i]
+    w = v / wp.max(nrm, f64(1e-300))
+    wix[i] = w * ix
+    wiy[i] = w * iy
+
+
+@wp.kernel
+def rotate_kernel8(m0: V, m1: V, m2: V, m3: V, cta: V, sta: V, o0: V, o1: V, o2: V, o3: V):
+    """The Jacobians turned with their panel: [ct m0 - st m2, ct m1 - st m3, st m0 + ct m2, st m1 + ct m3]."""
+    i = wp.tid()
+    ct = cta[i]
+    st = sta[i]
+    M0, M1, M2, M3 = _jac8(m0, m1, m2, m3, i)
+    o0[i] = wp.cw_mul(ct, M0) - wp.cw_mul(st, M2)
+    o1[i] = wp.cw_mul(ct, M1) - wp.cw_mul(st, M3)
+    o2[i] = wp.cw_mul(st, M0) + wp.cw_mul(ct, M2)
+    o3[i] = wp.cw_mul(st, M1) + wp.cw_mul(ct, M3)
+
+
+@wp.kernel
+def rotate_kernel(m0: A, m1: A, m2: A, m3: A, cta: A, sta: A, o0: A, o1: A, o2: A, o3: A, off: int):
+    i = wp.tid() + off
+    ct = cta[i]
+    st = sta[i]
+    o0[i] = ct * m0[i] - st * m2[i]
+    o1[i] = ct * m1[i] - st * m3[i]
+    o2[i] = st * m0[i] + ct * m2[i]
+    o3[i] = st * m1[i] + ct * m3[i]
 
 
 def _ctype(a: np.ndarray) -> array_t:

@@ -33,7 +33,7 @@ from core.pattern import steps as ST  # noqa: E402
 from core.pattern import feedback as FB  # noqa: E402
 
 SEED = 2024
-ORIG = {"local_step": S.local_step, "move_corrections": S.move_corrections, "collapse_guard": S.collapse_guard,
+ORIG = {"realign_grain": S.realign_grain, "local_step": S.local_step, "move_corrections": S.move_corrections, "collapse_guard": S.collapse_guard,
         "flip_guard": S.flip_guard, "jacobians": S.PatternSolver.jacobians}
 
 
@@ -140,6 +140,32 @@ def collapse_guard_w(guard, M, Kc, c_weft, c_warp, gain, inverse=None):
     return out[:4], np.flatnonzero(gain > 0)
 
 
+def realign_grain_w(blocks, U, M):
+    """:func:`core.pattern.steps.realign_grain`: the votes and the Jacobians' rotation in one launch each,
+    the per-panel sums, angles and the vertices' rotation in numpy (as there)."""
+    import warp_kernels as WK
+    wx, wy = blocks.warp_columns
+    f = len(M[0])
+    wix, wiy = _launch("vote", WK.vote_kernel8, WK.vote_kernel, f, 2, (M[0], M[1], M[2], M[3], wx, wy,
+                                                                        blocks.warp_vote))
+    vx = np.add.reduceat(wix, blocks.face_offsets)
+    vy = np.add.reduceat(wiy, blocks.face_offsets)
+    theta = -np.where((vx == 0) & (vy == 0), 0.0, np.arctan2(-vx, vy))
+    c, sn = np.cos(theta), np.sin(theta)
+    rep = blocks.per_vertex
+    ctr = rep(np.add.reduceat(U, blocks.vertex_offsets) / blocks.vertex_counts[:, None])
+    U = ST.turn(U - ctr, rep(c), rep(sn)) + ctr
+    ct, st = np.repeat(c, blocks.face_counts), np.repeat(sn, blocks.face_counts)
+    out = [np.empty(f) for _ in range(4)]       # new arrays: the iterate's Jacobians outlive the call
+    s = _W.get(("rotate", f))
+    if s is None:
+        s = _W[("rotate", f)] = (WK.Launch(WK.rotate_kernel8, f // 8, 8), WK.Launch(WK.rotate_kernel, f % 8))
+    s[0](M[0], M[1], M[2], M[3], ct, st, *out)
+    if f % 8:
+        s[1](M[0], M[1], M[2], M[3], ct, st, *out, f - f % 8)
+    return U, out
+
+
 _NBAD = np.zeros(1, np.int32)
 
 
@@ -185,10 +211,12 @@ def jacobians_w(self, U):
 
 
 WARP = {"local_step": local_step_w, "move_corrections": move_corrections_split, "collapse_guard": collapse_guard_w,
-        "flip_guard": flip_guard_w}
+        "flip_guard": flip_guard_w, "realign_grain": realign_grain_w}
 
 
-def patch(on: bool, which=("local_step", "move_corrections", "collapse_guard", "flip_guard", "jacobians")):
+def patch(on: bool, which=("local_step", "move_corrections", "collapse_guard", "flip_guard", "realign_grain")):
+    """Swap the solver module's steps for the Warp drop-ins (``on``) or back; the Jacobians (scipy's CSR
+    product, faster than a gather kernel: ``calls``) only when named."""
     for name in which:
         fn = (jacobians_w if on else ORIG[name]) if name == "jacobians" else (WARP[name] if on else ORIG[name])
         if name == "jacobians":
@@ -234,6 +262,7 @@ def capture(item, at=10):
         cfg, cp(M), cp(Kc), cw.copy(), cg.copy(), a.copy(), b.copy()))
     S.collapse_guard = spy("collapse_guard", ORIG["collapse_guard"], lambda g, M, Kc, cw, cg, gain, inv=None: (
         g, cp(M), cp(Kc), cw.copy(), cg.copy(), gain.copy(), inv))
+    S.realign_grain = spy("realign_grain", ORIG["realign_grain"], lambda b, U, M: (b, U.copy(), cp(M)))
     S.flip_guard = spy("flip_guard", ORIG["flip_guard"], lambda b, Uo, Un, s=None: (b, Uo.copy(), Un.copy(), s.copy()))
     try:
         model = ctx.prep.body
@@ -310,6 +339,9 @@ def calls():
                                    "areas": _diff(outs["numpy"][2], outs["warp"][2]),
                                    "halvings": [outs["numpy"][1], outs["warp"][1]]}}
 
+    bl, Ug, Mg = got["realign_grain"]
+    a_, b_ = ORIG["realign_grain"](bl, Ug, Mg), realign_grain_w(bl, Ug, Mg)
+    rows["realign_grain"] = {"diff": {"U": _diff(a_[0], b_[0]), **{f"M{j}": _diff(a_[1][j], b_[1][j]) for j in range(4)}}}
     U = Un
     rows["jacobians"] = {"diff": {f"M{j}": _diff(a, b) for j, (a, b) in
                                   enumerate(zip(ORIG["jacobians"](solver, U), jacobians_w(solver, U)))}}
@@ -333,6 +365,7 @@ def calls():
         "flip_guard": (lambda: ORIG["flip_guard"](blocks, Uo, Un, s_old),
                        lambda: flip_guard_w(blocks, Uo, Un, s_old)),
         "jacobians": (lambda: ORIG["jacobians"](solver, U), lambda: jacobians_w(solver, U)),
+        "realign_grain": (lambda: ORIG["realign_grain"](bl, Ug, Mg), lambda: realign_grain_w(bl, Ug, Mg)),
     }
     st_w = dict(st)
     cases["local_step"] = (cases["local_step"][0], lambda: local_step_w(cfg, M, tg, W2, st_w))
@@ -381,6 +414,7 @@ def _digest(folder: Path) -> str:
         if name == "report.json":      # timings differ run to run: hash the report without them
             rep = json.loads(txt)
             rep.pop("timings", None)
+            rep.pop("optimize_seconds", None)
             txt = json.dumps(rep, sort_keys=True).encode()
         h.update(txt)
     return h.hexdigest()
@@ -399,6 +433,7 @@ def items(n, repeats=2):
         cpu = {"numpy": [], "warp": []}
         rows = {}
         digests = {}
+        raw = []
         print(load())
         for r in range(repeats):
             for i, it in enumerate(its):
@@ -410,6 +445,8 @@ def items(n, repeats=2):
                     patch(False)
                     assert row["status"] == "ok", row["error"]
                     cpu[mode].append(row["timings.cpu"])
+                    raw.append({"item": i, "round": r, "mode": mode, "first": mode == order[0],
+                                "cpu": row["timings.cpu"], "transfer": row["timings.transfer"]})
                     rows.setdefault(mode, {}).setdefault(i, []).append(row)
                     digests.setdefault(mode, {}).setdefault(i, []).append(_digest(out / "items" / it.folder))
         print(load())
@@ -429,8 +466,58 @@ def items(n, repeats=2):
                                                                    for r in v])), 1) for m in rows},
            "figures_max_abs_diff": worst, "numpy_runs_same_bytes": same_np, "warp_runs_same_bytes": same_w,
            "numpy_vs_warp_same_bytes": same_both, "load": load()}
+    # the pair's difference by which mode ran first (the host's state drifts between the two)
+    for first in ("numpy", "warp"):
+        d = [1000 * (b["cpu"] - a["cpu"]) for a, b in zip(raw[0::2], raw[1::2]) if a["mode"] == first]
+        d = d if first == "numpy" else [-x for x in d]
+        out[f"paired_warp_minus_numpy_ms_when_{first}_first"] = round(float(np.median(d)), 1) if d else None
+    out["total_cpu_s"] = {m: round(sum(v), 3) for m, v in cpu.items()}
+    Path("/tmp/warp_exp_items_raw.json").write_text(json.dumps(raw))
     print(json.dumps(out, indent=1))
     return out
+
+
+# ---------------------------------------------------------------------------------------------- as the bench
+def _worker_setup(repo, here, on):
+    import sys as _s
+    _s.path[:0] = [repo, here]
+    import warp_local_step as X
+    X.patch(on)
+    return on
+
+
+def batch(n=30, runs=4):
+    """``bench --only batch``'s CPU rate (median CPU of an item, the item that paid for the cut left out)
+    through a 1-worker LocalCluster with the bench's worker settings, numpy and Warp runs alternating;
+    the Warp drop-ins are installed in the worker process (``Client.run``)."""
+    import dask
+    from distributed import Client, LocalCluster
+    from core.batch import run_batch, sample_anny
+    from core.batch.run import WORKER_CONFIG
+    from core.design.templates import template_path
+    bodies = sample_anny(n, seed=SEED)
+    res = {"numpy": [], "warp": []}
+    for r in range(runs):
+        mode = ("numpy", "warp")[r % 2]
+        with dask.config.set(WORKER_CONFIG):
+            cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None)
+        client = Client(cluster)
+        try:
+            client.run(_worker_setup, str(REPO), str(HERE), mode == "warp")
+            with tempfile.TemporaryDirectory(prefix="warp_exp_batch_") as tmp:
+                l0 = load()
+                out = run_batch(template_path("shirt_long_sleeve"), bodies, Path(tmp) / "out",
+                                scheduler=cluster.scheduler_address)
+                cpu = [row["timings.cpu"] for row in out.rows if row["status"] == "ok" and "timings.setup" not in row]
+                med = 1000 * float(np.median(cpu))
+                res[mode].append(med)
+                print(mode, "made", out.made, "failed", out.failed, "median CPU ms %.1f" % med,
+                      "items/CPU-s %.2f" % (1000 / med), l0, "->", load(), flush=True)
+        finally:
+            client.close()
+            cluster.close()
+    print(json.dumps({m: [round(v, 1) for v in vals] for m, vals in res.items()}))
+    return res
 
 
 # ---------------------------------------------------------------------------------------------- compile
@@ -469,5 +556,7 @@ if __name__ == "__main__":
         calls()
     elif what == "items":
         items(int(sys.argv[2]) if len(sys.argv) > 2 else 8, int(sys.argv[3]) if len(sys.argv) > 3 else 2)
+    elif what == "batch":
+        batch(int(sys.argv[2]) if len(sys.argv) > 2 else 30, int(sys.argv[3]) if len(sys.argv) > 3 else 4)
     elif what == "compile":
         compile_times()
