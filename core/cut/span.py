@@ -63,6 +63,7 @@ SPAN_BOTTOM = 0.1       # candidates down to this fraction of the crotch -> brid
 SPAN_TOP = 0.5          # candidates up to this fraction of the crotch -> waist (back) height
 SPAN_TOL = 1e-5         # m: a membrane vertex lifted off the body by less than this is held (touching)
 SPAN_DROP = 1e-4        # harmonic weights below this (relative to the row's largest) are dropped
+COT_MAX = 1e3           # largest cotangent weight (an angle of 0.06 deg; Anny's smallest: 0.8 deg)
 _MAX_ROUNDS = 40          # a guard: a vertex is freed again at most once, so the rounds end (5-12 on 40 sampled bodies)
 
 
@@ -70,14 +71,17 @@ def _cotan_laplacian(X: np.ndarray, F: np.ndarray, n: int) -> sp.csr_matrix:
     """(n, n) graph Laplacian ``D - W`` with clamped cotangent edge weights on ``X``.
 
     Clamping (an obtuse angle contributes 0, never a negative weight) keeps the
-    membrane's weights positive, so the harmonic extension is a convex combination."""
+    membrane's weights positive, so the harmonic extension is a convex combination.
+    Clamped at :data:`COT_MAX` too: a degenerate triangle (an OBJ template with two
+    vertices at one place) gave a weight of ~1e297, and the solve lost every other weight
+    to rounding (a pit spanned 7.6 cm deep of its 10 instead of flat)."""
     rows, cols, vals = [], [], []
     for k in range(3):
         i, j, o = F[:, (k + 1) % 3], F[:, (k + 2) % 3], F[:, k]   # edge i-j opposite corner o
         a, b = X[i] - X[o], X[j] - X[o]
         cross = np.linalg.norm(np.cross(a, b), axis=1)
         cot = (a * b).sum(1) / np.maximum(cross, 1e-300)
-        w = 0.5 * np.maximum(cot, 0.0)
+        w = 0.5 * np.clip(cot, 0.0, COT_MAX)
         rows += [i, j]
         cols += [j, i]
         vals += [w, w]
