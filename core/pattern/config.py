@@ -294,7 +294,8 @@ class SolverConfig:
         feedback (gains 0.13 / 0.07) that buy the weft and warp scales back with shear. On the shirt and
         the pants at every uniform ease 0.9-2.0: weft <= 1.15 %, warp <= 2.94 %, for shear p95 7.7-9.4 deg
         (improved: 4.1-4.8 deg, warp 6.4-7.8 %) and seams <= 2.8 mm; on the skirt topology seams reach
-        4-5 mm (benchmarks/results/frontier.md: the frontier this point lies on)."""
+        3.1-4.7 mm, over the 3 mm templates promise (benchmarks/results/frontier.md: the frontier this
+        point lies on)."""
         base = cls(rest_shape=RestShape(warp_slack=0.0), feedback=Feedback(weft=0.13, warp=0.07))
         return base.with_overrides(**overrides)
 
