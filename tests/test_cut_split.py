@@ -117,3 +117,24 @@ def test_copy_is_independent():
     k.split_edge(0, 1, 0.5)
     assert m.nv == len(X) and k.nv == len(X) + 1
     assert len(m.F) == len(F)
+
+
+def test_move_body_remakes_vertices_and_parents():
+    """CutMesh.move_body (the skirt's spanned surface): the body vertices move, a vertex off the body
+    follows its weights, and every face lies in its parent on the moved corners (body parents by
+    their body triangle, a replaced face's own parent by its face)."""
+    X, F = grid(3)
+    m = CutMesh(X, F)
+    # two faces replaced by one new triangle each (their own parents), as the skirt bridge is added
+    new = F[[0, 1]]
+    m.replace_faces(np.array([0, 1]), new, X[new])
+    v = m.split_edge(5, 6, 0.25)                  # a vertex off the body: weights over 5 and 6
+    Y = X + np.stack([0 * X[:, 0], 0 * X[:, 0], np.sin(3 * X[:, 0]) * X[:, 1]], 1)   # curved: parents move
+    m.move_body(Y, F)
+    assert np.allclose(m.X[: len(X)], Y)
+    assert np.allclose(m.X[v], 0.75 * Y[5] + 0.25 * Y[6])
+    for f in range(m.nf):
+        q = m.X[m.F[f]].mean(axis=0)
+        assert m.parent_contains(np.array([m.parent[f]]), q)[0], f
+    # the body parents of the removed faces are re-made too (unused, as before the move)
+    assert np.allclose(m._parent_corners()[: len(F)], Y[F])

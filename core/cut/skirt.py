@@ -154,20 +154,8 @@ def span_surface(mesh: CutMesh, body, X: np.ndarray) -> Optional[sp.csr_matrix]:
     B = spanning_operator(mesh, X, span_candidates(body, X), S)
     if B is None:
         return None
-    Y = np.asarray(B @ X)
-    V = len(X)
-    Xn = mesh._X
-    Xn[:V] = Y
-    for v in range(V, mesh.nv):
-        c, w = mesh.vertex_weights(v)
-        Xn[v] = w @ Y[c]
-    # parents: the body's triangles on the moved corners, each bridge triangle (its own parent) too
-    BF = np.asarray(body.faces, dtype=np.int64)
-    tris = mesh._parent_corners().copy()
-    tris[: len(BF)] = Y[BF]
-    own = mesh.parent >= len(BF)
-    tris[mesh.parent[own]] = mesh.X[mesh.F[own]]
-    mesh._set_parents(tris)
+    # the body's triangles and each bridge triangle (its own parent) re-made on the moved corners
+    mesh.move_body(np.asarray(B @ X), np.asarray(body.faces, dtype=np.int64))
     return B
 
 

@@ -225,6 +225,30 @@ class CutMesh:
         self._set_parents(tris)
         self._rebuild_adjacency()
 
+    def move_body(self, Y: np.ndarray, body_faces: np.ndarray) -> None:
+        """Move the body vertices to ``Y`` and re-make the parent triangles on the moved corners.
+
+        For a mesh whose faces have not been split yet (the body mesh, the skirt bridge added by
+        :meth:`replace_faces`): every other vertex follows its body weights, parent ``p`` of the
+        body's triangles is ``body_faces[p]`` on ``Y``, and every later parent (a bridge triangle,
+        its own face's parent) is its face on the moved vertices.
+
+        Parameters
+        ----------
+        Y : (n_body, 3) float, the body vertices' new positions (metres).
+        body_faces : (Fb, 3) int, the body's triangles (parents ``0 .. Fb - 1``).
+        """
+        Xn = self._X
+        Xn[: self.n_body] = Y
+        for v in range(self.n_body, self.nv):
+            c, w = self.vertex_weights(v)
+            Xn[v] = w @ Y[c]
+        tris = self._parent_corners().copy()
+        tris[: len(body_faces)] = Y[body_faces]
+        own = self.parent >= len(body_faces)
+        tris[self.parent[own]] = self.X[self.F[own]]
+        self._set_parents(tris)
+
     def _ptri_count(self) -> int:
         return int(self._p0.shape[0])
 
