@@ -20,6 +20,14 @@ def test_presets_and_overrides():
     assert SolverConfig.improved().to_dict()["seams"]["gather_above"] == FROM_DESIGN
 
 
+def test_gathered_as_a_list_is_a_hashable_configuration():
+    """A caller's list of gathered seams: the configuration equals the tuple one and is hashable (the
+    solver keeps a seam plan per configuration: a list raised TypeError in a transfer)."""
+    cfg = SolverConfig.named("improved", gathered=["*"])
+    assert cfg == SolverConfig.named("improved", gathered=("*",)) and cfg.seams.gathered == ("*",)
+    assert hash(cfg) == hash(SolverConfig.named("improved", gathered=("*",)))
+
+
 @pytest.mark.parametrize("kw, field", [
     ({"nonsense": 1}, "nonsense: no such setting"),
     ({"step": 0.1}, "step: in feedback and adaptation"),

@@ -105,6 +105,12 @@ class SeamOptions:
     gathered: Tuple[str, ...] = ()
     gather_above: object = FROM_DESIGN
 
+    def __post_init__(self):
+        # a list of names (a caller's, a JSON's) kept as a tuple: a configuration is hashable, as the
+        # solver's per-configuration seam plans need (PatternSolver.design_plan)
+        if isinstance(self.gathered, list):
+            object.__setattr__(self, "gathered", tuple(self.gathered))
+
 
 @dataclass(frozen=True)
 class Feedback:
