@@ -41,6 +41,19 @@ def spread_tip(resolver, apex: SurfacePoint, end: SurfacePoint, placed: Sequence
     and the point found is laid back on the surface. The smallest turn wins; of two equal
     turns, the one away from the nearest placed point.
 
+    Parameters
+    ----------
+    resolver : the design's surface resolver (``position``, ``faces``, ``vertices``, ``locator``)
+    apex : SurfacePoint, the dart's apex
+    end : SurfacePoint, the dart's sewn point, its apex offset from ``apex``
+    placed : (k, 3) float, metres: the sewn points of the darts placed before it in the panel
+    path, name : the dart's design path and name (the refusal names them)
+    ring : float, metres: the least distance kept from each placed point
+
+    Returns
+    -------
+    SurfacePoint: ``end`` itself when it has room, else the turned point.
+
     Raises
     ------
     DesignError at ``path`` when no point of the circle is far enough from every placed
