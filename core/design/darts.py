@@ -169,7 +169,8 @@ def resolve_darts(resolver, design, lines: list, panels) -> list:
     design : the Design.
     lines : list of :class:`core.design.spec.CutLine`, the design's cut lines (host lines are
         changed in place: the mouth becomes one of their points).
-    panels : ``(garment, path, panel, mirror_of, mirrored)`` of every panel, mirrors included.
+    panels : ``(garment, path, panel, mirrored)`` of every panel, mirrors included (``mirrored``: the
+        panel is another's mirror image).
 
     Returns
     -------
