@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import sys
 
-from ..workflows import CONFIGS, config_name
+from ..workflows import CONFIGS
 from .common import add_quiet, console_progress, subcommand
 
 
@@ -84,7 +84,8 @@ def _cmd(args) -> int:
     if unknown:
         from ..batch import BatchError
         raise BatchError(f"--poses: unknown pose {unknown[0]!r}; allowed: {', '.join(POSE_PRESETS)}")
-    options = Options(config=config_name(design, args.config), poses=poses, drape=args.drape,
+    # config None: make_items takes the design's own "solver" (else improved)
+    options = Options(config=args.config, poses=poses, drape=args.drape,
                       export=tuple(parse_formats(args.export)) if args.export else (),
                       garmentcode=args.garmentcode, preview=args.preview)
     result = run_batch(design, bodies, args.out, model=_model(args, design), options=options,
