@@ -68,6 +68,16 @@ def anny_reference(anny):
     return anny.vertices_and_joints()
 
 
+@pytest.fixture
+def numpy_steps():
+    """The solver's per-triangle steps in numpy for the test (the Warp kernels off: tests of numpy's own
+    memos; :mod:`core.pattern.compiled` gives the same bits either way)."""
+    from core.pattern import compiled
+    compiled.use(False)
+    yield
+    compiled.use(None)
+
+
 # ----------------------------------------------------------------------------- Blender
 
 def _import_bpy(user_dir: str):

@@ -36,7 +36,7 @@ def test_rest_targets_take_over_the_warp_products(model):
     assert kept["reg"][2] is k
 
 
-def test_local_step_with_its_kept_warp_row_is_a_fresh_one():
+def test_local_step_with_its_kept_warp_row_is_a_fresh_one(numpy_steps):
     rng = np.random.default_rng(4)
     f = 800
     cfg = SolverConfig.improved()

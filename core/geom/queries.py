@@ -29,6 +29,33 @@ if getattr(wp.config, "log_level", None) == getattr(wp, "LOG_INFO", 20):
     wp.config.log_level = getattr(wp, "LOG_WARNING", 30)
 
 
+def init_cpu() -> None:
+    """``wp.init()`` for CPU work, without the native library's notice that no CUDA driver was found.
+
+    The notice is written straight to file descriptor 2 by Warp's C++ code
+    (no Python setting silences it); the pattern solver's kernels run on the
+    CPU, so on a machine without a GPU it would only add a line to every run's
+    output. A drape that asks for a CUDA device on such a machine is refused
+    with its own message (:func:`core.drape.xpbd._device`).
+    """
+    import os
+    import sys
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (AttributeError, OSError, ValueError):   # no file descriptor 2 (an embedding host)
+        wp.init()
+        return
+    try:
+        quiet = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(quiet, 2)
+        os.close(quiet)
+        wp.init()
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
 @wp.kernel
 def closest_plane(points: wp.array(dtype=wp.vec3), weight: wp.array(dtype=float), mesh: wp.uint64,
                   max_dist: float, point: wp.array(dtype=wp.vec3), normal: wp.array(dtype=wp.vec3),

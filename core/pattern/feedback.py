@@ -13,6 +13,7 @@ from typing import Optional, Tuple
 import numpy as np
 
 from ..geom.strain import scales_of_offsets
+from . import compiled
 
 
 def feedback_gains(cfg, adapting: bool) -> Tuple[float, float, float, float, float]:
@@ -48,6 +49,16 @@ def move_corrections(cfg, M: list, Kc: list, c_weft: np.ndarray, c_warp: np.ndar
     fb, ad = cfg.feedback, cfg.adaptation
     adapting = poses is not None
     gain_w, gain_g, lower, upper, hi = feedback_gains(cfg, adapting)
+    done = None if adapting else compiled.ratios(M, Kc, c_weft, c_warp)
+    if done is not None:
+        # every triangle moves (else numpy below): the whole arrays, the operators numpy's path uses
+        if gain_w > 0:
+            corr_w *= np.clip(done[0] ** gain_w, lower, upper)
+        if gain_g > 0:
+            corr_g *= np.clip(done[1] ** gain_g, lower, upper)
+        np.clip(corr_w, fb.floor, hi, out=corr_w)
+        np.clip(corr_g, fb.floor, hi, out=corr_g)
+        return
     rw, rg = scales_of_offsets(M, Kc)
     goal_w, goal_g = c_weft, c_warp
     if adapting:

@@ -40,6 +40,7 @@ import scipy.sparse as sp
 
 from ..geom.strain import components, intrinsic_offsets
 from ..progress import Progress, report
+from . import compiled
 from .build import SolveResult, solve_result
 from .config import SolverConfig, check_tolerance
 from .factor import SymmetricFactor
@@ -106,6 +107,7 @@ class PatternSolver:
         self.ref_offsets = tuple(a.copy() for a in self.offsets(self.ref_positions))
         for a in self.ref_offsets:
             a.flags.writeable = False
+        compiled.load(progress)     # Warp's per-triangle kernels: compiled on a machine's first run
         self.timings = {"init": time.perf_counter() - t0}
         report(progress, 1.0, "flattened")
 

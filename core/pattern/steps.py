@@ -20,6 +20,7 @@ import numpy as np
 
 from ..geom.mesh import signed_areas_2d
 from ..geom.svd2 import clamp_singular_values_below, hypot, signed_singular_values2
+from . import compiled
 from .config import CollapseGuard, SolverConfig
 from .panels import PanelBlocks
 
@@ -70,6 +71,13 @@ def local_step(config: SolverConfig, M: list, tg: dict, W2: np.ndarray, state: d
     Cdiff, C01 = kp[2], kp[3]
     free = rest.warp_slack > 0
     sw = state.get("sw") if free else None
+    lo, hi = (1.0 / (1.0 + rest.warp_slack), 1.0 + rest.warp_slack) if free else (1.0, 1.0)
+    if W2[0] == 1.0 and W2[1] == 1.0:
+        done = compiled.local_step(M, d0, d1, k, (Cdiff, C01), T, sw, rest.warp_row, free, lo, hi)
+        if done is not None:
+            if free:
+                state["sw"] = done[2]
+            return done[0], done[1]
     dw = d1 if sw is None else d1 * sw
     om = rest.warp_row
     if W2[0] == 1.0 and W2[1] == 1.0:
@@ -142,7 +150,6 @@ def local_step(config: SolverConfig, M: list, tg: dict, W2: np.ndarray, state: d
     rk[2] += c * k[2]
     rk[3] += c * k[3]
     if free:
-        lo, hi = 1.0 / (1.0 + rest.warp_slack), 1.0 + rest.warp_slack
         p0, p1 = d1 * rk[2], d1 * rk[3]
         num = m2 * p0
         num += m3 * p1
@@ -320,25 +327,31 @@ def realign_grain(blocks: PanelBlocks, U: np.ndarray, M: List[np.ndarray]):
     """
     # the temporaries are reused (out=): the same operations in their order, fewer new arrays
     wx, wy = blocks.warp_columns
-    t = M[1] * wy
-    ix = M[0] * wx                          # the current 2D image of the warp: M w
-    ix += t
-    iy = M[2] * wx
-    iy += np.multiply(M[3], wy, out=t)
-    nrm = hypot(ix, iy)
-    # a triangle whose warp image vanished does not vote (every one usually votes: the where() is skipped)
-    vote = blocks.warp_vote if (nrm > 0).all() else np.where(nrm > 0, blocks.warp_vote, 0.0)
-    w = np.divide(vote, np.maximum(nrm, 1e-300, out=nrm), out=nrm)
-    vx = np.add.reduceat(np.multiply(w, ix, out=ix), blocks.face_offsets)
-    vy = np.add.reduceat(np.multiply(w, iy, out=iy), blocks.face_offsets)
+    votes = compiled.grain_votes(M, wx, wy, blocks.warp_vote)
+    if votes is None:
+        t = M[1] * wy
+        ix = M[0] * wx                          # the current 2D image of the warp: M w
+        ix += t
+        iy = M[2] * wx
+        iy += np.multiply(M[3], wy, out=t)
+        nrm = hypot(ix, iy)
+        # a triangle whose warp image vanished does not vote (every one usually votes: the where() is skipped)
+        vote = blocks.warp_vote if (nrm > 0).all() else np.where(nrm > 0, blocks.warp_vote, 0.0)
+        w = np.divide(vote, np.maximum(nrm, 1e-300, out=nrm), out=nrm)
+        votes = np.multiply(w, ix, out=ix), np.multiply(w, iy, out=iy)
+    vx = np.add.reduceat(votes[0], blocks.face_offsets)
+    vy = np.add.reduceat(votes[1], blocks.face_offsets)
     theta = -np.where((vx == 0) & (vy == 0), 0.0, np.arctan2(-vx, vy))
     c, sn = np.cos(theta), np.sin(theta)
     rep = blocks.per_vertex
     ctr = rep(np.add.reduceat(U, blocks.vertex_offsets) / blocks.vertex_counts[:, None])
     U = turn(U - ctr, rep(c), rep(sn)) + ctr
     ct, st = np.repeat(c, blocks.face_counts), np.repeat(sn, blocks.face_counts)
+    out = compiled.turned(M, ct, st)
+    if out is not None:
+        return U, out
     # [ct m0 - st m2, ct m1 - st m3, st m0 + ct m2, st m1 + ct m3]
-    out = []
+    out, t = [], np.empty_like(ct)
     for x, y, sign in ((0, 2, -1), (1, 3, -1), (0, 2, 1), (1, 3, 1)):
         if sign < 0:
             r = ct * M[x]
@@ -423,6 +436,9 @@ def collapse_guard(guard: CollapseGuard, M: list, Kc: list, c_weft: np.ndarray, 
     from, the guarded triangles (k,): ``gain > 0`` after the update).
     """
     inverse = inverse if inverse is not None else inverse_offsets(Kc)
+    q = compiled.collapse_guard(guard, M, inverse, c_weft, c_warp, gain)
+    if q is not None:
+        return q, np.flatnonzero(gain > 0)
     s1, s2, q = relative_singular_values(M, Kc, c_weft, c_warp, inverse)
     # a degenerate body triangle has no shape to keep; a non-finite iterate is the flip guard's to refuse
     # (s1 = a + b and s2 = a - b of two hypotenuses: s1 finite makes s2 finite)

@@ -1,0 +1,303 @@
+"""Launching the solver's Warp CPU kernels (:mod:`.kernels`): the same bits as numpy, or numpy.
+
+The per-triangle steps of a local-global iteration (:func:`.steps.local_step`,
+:func:`.feedback.move_corrections`, :func:`.steps.collapse_guard`,
+:func:`.steps.realign_grain`) ask this module first; it returns None when
+numpy must do the step, and the step then runs its numpy code:
+
+- the kernels are off (``EASE_SOLVER_KERNELS=numpy``, :func:`use`), Warp
+  does not import or its compiler fails (one warning, then numpy for the
+  process);
+- a case the kernels do not cover: fewer than 8 triangles, column weights
+  other than 1, an adaptation's feedback, an input that is not a contiguous
+  float64 (f,) array;
+- a kernel flags a lane where Warp and numpy could part: a NaN meeting a
+  min / max (Warp's ignore it, numpy's propagate it), a triangle the feedback
+  leaves, a local step whose every ``delta`` is 0 (numpy skips its Newton step).
+
+So a pattern is the same bytes either way (tests/test_pattern_kernels.py).
+Outputs are new arrays every call, as numpy's are: a solve may keep them.
+Launches are Warp's recorded CPU launches with the argument struct kept per
+thread and only the arguments that changed rebound (wrapping ~25 numpy arrays
+as ``wp.array`` costs ~8 us each, a launch ~2 us this way).
+"""
+from __future__ import annotations
+
+import ctypes
+import logging
+import os
+import threading
+from typing import Optional
+
+import numpy as np
+
+from ..progress import Progress, report
+
+log = logging.getLogger(__name__)
+
+#: Environment variable choosing the per-triangle steps' code: ``warp`` (default) or ``numpy``.
+ENV = "EASE_SOLVER_KERNELS"
+_LANES = 8
+_state = {"ready": None, "forced": None}
+_lock = threading.Lock()
+_local = threading.local()
+
+
+def use(enabled: Optional[bool]) -> None:
+    """Force the kernels on (True: if they load) or off (False), or follow :data:`ENV` again (None)."""
+    _state["forced"] = enabled
+
+
+def enabled() -> bool:
+    """Whether the kernels run: wanted (:func:`use`, :data:`ENV`) and loaded (compiled on first use)."""
+    wanted = _state["forced"]
+    if wanted is None:
+        wanted = os.environ.get(ENV, "warp").strip().lower() != "numpy"
+    return bool(wanted) and load()
+
+
+def load(progress: Optional[Progress] = None) -> bool:
+    """Import Warp and load the kernels, compiling them on a machine's first run (~15 s, then cached in
+    Warp's kernel cache); False, with one warning, where that fails."""
+    if _state["ready"] is None:
+        with _lock:
+            if _state["ready"] is None:
+                report(progress, 0.99, "loading the solver's kernels (compiled on the first run)")
+                try:
+                    from ..geom.queries import init_cpu
+                    from . import kernels as K
+                    init_cpu()
+                    K.wp.load_module(K, device="cpu")
+                    _state["ready"] = True
+                except Exception as exc:  # noqa: BLE001 - any failure leaves numpy, which gives the same bits
+                    log.warning("pattern solver: Warp kernels unavailable (%s: %s); using numpy",
+                                type(exc).__name__, exc)
+                    _state["ready"] = False
+    return bool(_state["ready"])
+
+
+class _Unsuitable(Exception):
+    """An argument the kernels do not take: numpy does the step."""
+
+
+_F64 = np.dtype(np.float64)
+_I32 = np.dtype(np.int32)
+
+
+def _address(a: np.ndarray) -> int:
+    # ctypes' view of the buffer is 3x quicker than ``a.ctypes.data``; a read-only array has none
+    try:
+        return ctypes.addressof(ctypes.c_char.from_buffer(a))
+    except TypeError:
+        return a.ctypes.data
+
+
+def _pointer(a, f: int) -> int:
+    """The data address of ``a``, a contiguous float64 (f,) or int32 flag array (else :class:`_Unsuitable`)."""
+    if type(a) is not np.ndarray or not a.flags.c_contiguous:
+        raise _Unsuitable
+    if a.dtype is _F64 and a.shape == (f,) or a.dtype is _I32:
+        return _address(a)
+    raise _Unsuitable
+
+
+class _Launch:
+    """One recorded CPU launch of ``kernel`` over ``dim`` tasks on the arrays' elements from ``shift``.
+
+    Recorded with Warp (``wp.launch(record_cmd=True)``) on first use; then
+    :meth:`bind` writes an argument into the kept argument struct and
+    :meth:`__call__` runs the kernel's CPU entry point.
+    """
+
+    #: use Warp's private CPU entry (warp-lang is pinned); False: the public replay, ~6 us more a launch
+    private = True
+
+    def __init__(self, kernel, args, dim: int, shift: int):
+        from . import kernels as K
+        wp = K.wp
+        self.dim, self.shift = dim, shift
+        inputs = []
+        for a in args:
+            if isinstance(a, np.ndarray) and a.dtype == np.int32:
+                inputs.append(wp.array(a, dtype=wp.int32, device="cpu", copy=False))
+            elif isinstance(a, np.ndarray):
+                view = a[shift:shift + _LANES * dim].reshape(dim, _LANES)
+                inputs.append(wp.array(view, dtype=K.v8, device="cpu", copy=False))
+            else:
+                inputs.append(a)
+        self.cmd = cmd = wp.launch(kernel, dim=dim, inputs=inputs, device="cpu", record_cmd=True)
+        cmd.launch()          # the first call's launch (and Warp's argument struct type)
+        self.fast = None
+        if not self.private:
+            return
+        try:
+            # Warp's own CPU launch builds its argument struct anew each call (~0.3 us an argument):
+            # keep one and call the kernel's entry point
+            struct_type, fields = kernel._invoke_cache[(tuple(type(p) for p in cmd.params[1:]), False)]
+            struct = struct_type()
+            for j, field in enumerate(fields):
+                setattr(struct, field[0], cmd.params[1 + j])
+            self.fields = [getattr(struct, name) if isinstance(a, np.ndarray) else name
+                           for (name, _), a in zip(fields, args)]
+            self.struct = struct
+            self.fast = (ctypes.byref(cmd.params[0]), ctypes.byref(struct), cmd.hooks.forward)
+        except (AttributeError, KeyError, TypeError):
+            self.fast = None
+
+    def bind(self, j: int, a, address: Optional[int]) -> None:
+        """Argument ``j`` is now ``a`` (an array at ``address``, or a scalar)."""
+        if self.fast is not None:
+            if address is None:
+                setattr(self.struct, self.fields[j], a)
+            else:
+                self.fields[j].data = address if a.dtype is _I32 else address + 8 * self.shift
+        elif address is None:
+            self.cmd.set_param_at_index(j, a)
+        else:
+            from warp._src.types import array_t
+            shape, strides = ((len(a),), (4,)) if a.dtype is _I32 else ((self.dim,), (8 * _LANES,))
+            start = address if a.dtype is _I32 else address + 8 * self.shift
+            self.cmd.set_param_at_index_from_ctype(j, array_t(start, 0, 1, shape, strides))
+
+    def __call__(self) -> None:
+        if self.fast is not None:
+            bounds, struct, forward = self.fast
+            forward(bounds, struct)
+        else:
+            self.cmd.launch()
+
+
+class _Pair:
+    """``kernel`` over the f // 8 blocks of 8 triangles and, where f % 8 != 0, once more over the 8 last
+    (every kernel writes outputs only, so the overlap writes the same values twice).
+
+    Only the arguments that are other objects than last time are rebound; the
+    last call's arrays stay referenced, so an address compared is never a freed
+    array's.
+    """
+
+    def __init__(self, kernel, f: int, args):
+        for a in args:
+            if isinstance(a, np.ndarray):
+                _pointer(a, f)
+        self.f, self.last = f, list(args)
+        # recording runs the launches: this is also the first call
+        self.launches = [_Launch(kernel, args, f // _LANES, 0)]
+        if f % _LANES:
+            self.launches.append(_Launch(kernel, args, 1, f - _LANES))
+
+    def __call__(self, args) -> None:
+        last = self.last
+        for j, a in enumerate(args):
+            if a is last[j]:
+                continue
+            if isinstance(a, np.ndarray):
+                address = _pointer(a, self.f)
+            elif a == last[j]:
+                continue
+            else:
+                address = None
+            for launch in self.launches:
+                launch.bind(j, a, address)
+            last[j] = a
+        for launch in self.launches:
+            launch()
+
+
+def _run(kernel, f: int, args) -> None:
+    """One call of ``kernel`` on the (f,) arrays ``args`` (:class:`_Pair`, kept per thread)."""
+    cache = getattr(_local, "launches", None)
+    if cache is None:
+        cache = _local.launches = {}
+    pair = cache.get((kernel.key, f))
+    if pair is None:
+        cache[(kernel.key, f)] = _Pair(kernel, f, args)
+    else:
+        pair(args)
+
+
+def _outputs(k: int, f: int) -> list:
+    """``k`` new (f,) output arrays (the rows of one allocation)."""
+    return list(np.empty((k, f)))
+
+
+def _call(kernel, f: int, head: tuple, n_out: int, n_flags: int = 0):
+    """``kernel`` on ``head`` (its inputs), ``n_out`` new (f,) outputs and ``n_flags`` counters zeroed:
+    (outputs, counters), or None where the kernels do not apply (off, f < 8, an unsuitable argument)."""
+    if f < _LANES or not enabled():
+        return None
+    out = _outputs(n_out, f)
+    flags = np.zeros(n_flags, np.int32)
+    try:
+        _run(kernel, f, (*head, *out, flags) if n_flags else (*head, *out))
+    except _Unsuitable:
+        return None
+    return out, flags
+
+
+def _kernels():
+    from . import kernels
+    return kernels
+
+
+def local_step(M, d0, d1, k, kprod, T, sw, warp_row: float, free: bool, lo: float, hi: float):
+    """:func:`.steps.local_step`'s rest shapes and targets with unit column weights: (RT, T, sw) or None.
+
+    ``kprod``: the two products of ``K'`` (``Cdiff``, ``C01``); ``sw`` the
+    last warp factors (None: none yet); ``lo``, ``hi`` their bounds where
+    ``free``. Returns the rest shapes (4 (f,)), the ease target (4 (f,)) and
+    the new warp factors (None unless ``free``).
+    """
+    head = (*M, d0, d1, *k, *kprod, T[2], T[3], d1 if sw is None else sw, int(sw is not None), float(warp_row),
+            int(free), float(lo), float(hi))
+    got = _call(_kernels().local_step8, len(d0), head + (1,), 7, 2)
+    if got is not None and not got[1][0]:
+        # every delta 0: numpy takes no Newton step (the kernel's is a no-op only to round-off)
+        got = _call(_kernels().local_step8, len(d0), head + (0,), 7, 2)
+    if got is None or got[1][1]:
+        return None
+    out = got[0]
+    if free:
+        return out[:4], [T[0], T[1], out[4], out[5]], out[6]
+    return out[:4], T, None
+
+
+def ratios(M, Kc, c_weft, c_warp):
+    """:func:`.feedback.move_corrections`' ratios ``c / rho`` (weft, warp) (f,) of a solve aimed at its own
+    targets, or None (then numpy; also when a triangle is left out of the feedback)."""
+    got = _call(_kernels().ratios8, len(c_weft), (*M, *Kc, c_weft, c_warp), 2, 1)
+    return None if got is None or got[1][0] else got[0]
+
+
+def _body_weights(body: np.ndarray) -> np.ndarray:
+    """The body triangles' mask (f,) bool as 0. / 1. (the kernel's lanes are float64), kept per mask."""
+    kept = getattr(_local, "body", None)
+    if kept is None or kept[0] is not body:
+        kept = _local.body = (body, body.astype(np.float64))
+    return kept[1]
+
+
+def collapse_guard(guard, M, inverse, c_weft, c_warp, gain: np.ndarray):
+    """:func:`.steps.collapse_guard`'s relative Jacobians ``q`` (4 (f,)), ``gain`` updated in place; or
+    None (``gain`` untouched; numpy then)."""
+    (i00, i01, i10, i11), body = inverse
+    got = _call(_kernels().guard8, len(gain), (*M, i00, i01, i10, i11, _body_weights(body), c_weft, c_warp,
+                                               float(guard.guard_scale), float(guard.guard_open),
+                                               float(guard.guard_grow), float(guard.guard_limit),
+                                               float(guard.guard_release), gain), 5)
+    if got is None:
+        return None
+    gain[:] = got[0][0]
+    return got[0][1:]
+
+
+def grain_votes(M, wx, wy, vote):
+    """:func:`.steps.realign_grain`'s per-triangle votes ``(w ix, w iy)`` (f,) each, or None."""
+    got = _call(_kernels().votes8, len(vote), (*M, wx, wy, vote), 2, 1)
+    return None if got is None or got[1][0] else got[0]
+
+
+def turned(M, ct, st):
+    """The Jacobians ``M`` turned by per-triangle cosines ``ct`` and sines ``st`` (4 (f,)), or None."""
+    got = _call(_kernels().turn8, len(ct), (*M, ct, st), 4)
+    return None if got is None else got[0]

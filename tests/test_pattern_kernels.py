@@ -1,0 +1,195 @@
+"""The solver's Warp kernels (core/pattern/kernels.py via compiled.py) give numpy's bits, step by step and
+for whole patterns, and numpy takes over wherever they do not apply."""
+import numpy as np
+import pytest
+
+from core.pattern import compiled
+from core.pattern.config import SolverConfig
+from core.pattern.feedback import move_corrections
+from core.pattern.solve import PatternSolver, transfer_pattern
+from core.pattern.steps import collapse_guard, inverse_offsets, local_step, realign_grain
+from core.pattern.targets import rest_targets
+from synthetic_pattern import two_panels
+
+# every tail length f % 8, a size under one block of 8, and one of several blocks
+SIZES = [5, 8, 9, 10, 11, 12, 13, 14, 15, 83]
+
+
+@pytest.fixture
+def both():
+    """Run a step with numpy and with the kernels: ``both(fn)`` -> (numpy's result, the kernels')."""
+    assert compiled.load(), "Warp kernels failed to load (see the log's warning)"
+
+    def run(fn):
+        try:
+            compiled.use(False)
+            ref = fn()
+            compiled.use(True)
+            return ref, fn()
+        finally:
+            compiled.use(None)
+    return run
+
+
+def _same(a, b):
+    """Bitwise equality of nested lists / tuples of arrays (NaNs equal where both are NaN)."""
+    if isinstance(a, (list, tuple)):
+        assert isinstance(b, (list, tuple)) and len(a) == len(b)
+        for x, y in zip(a, b):
+            _same(x, y)
+    elif isinstance(a, np.ndarray):
+        assert a.dtype == b.dtype and a.shape == b.shape
+        assert np.array_equal(a.view(np.uint8), b.view(np.uint8)), np.flatnonzero(a != b)[:10]
+    else:
+        assert a == b
+
+
+def _inputs(f, seed, collapse=False):
+    rng = np.random.default_rng(seed)
+    K = rng.normal(0, 0.01, (f, 2, 2)) + np.array([[0.01, 0.0], [0.0, 0.012]])
+    Kc = [np.ascontiguousarray(K[:, i, j]) for i in range(2) for j in range(2)]
+    M = [rng.normal(m, 0.3, f) for m in (1.1, 0.0, 0.0, 0.9)]
+    if collapse:
+        M[0][: f // 3] *= 0.1           # some triangles near collapse, some flipped
+        M[3][: f // 5] *= -0.5
+    cw, cg = rng.uniform(0.9, 1.6, f), rng.uniform(0.95, 1.2, f)
+    return rng, K, Kc, M, cw, cg
+
+
+@pytest.mark.parametrize("f", SIZES)
+@pytest.mark.parametrize("name", ["improved", "paper", "lengths", "stretch"])
+def test_local_step_same_bits(both, f, name):
+    cfg = SolverConfig.named(name)
+    _, K, Kc, M, cw, cg = _inputs(f, f)
+    M[0][0] = M[1][0] = M[2][0] = M[3][0] = 0.0           # r = 0: no rotation to find
+    tg = rest_targets(Kc, cw, cg, cfg.rest_shape.model)
+    W2 = np.ones(2)
+
+    def run():
+        state = {}
+        first = local_step(cfg, M, tg, W2, state)
+        second = local_step(cfg, M, tg, W2, state)    # with the first call's warp factors
+        return first, second, state.get("sw")
+    ref, got = both(run)
+    _same(ref[:2], got[:2])
+    if ref[2] is not None:
+        _same(ref[2], got[2])
+
+
+def test_local_step_nan_lanes_fall_back_to_numpy(both):
+    cfg = SolverConfig.named("improved")
+    _, K, Kc, M, cw, cg = _inputs(83, 3)
+    M[2][7] = np.nan                                      # the warp factor's clip meets a NaN
+    tg = rest_targets(Kc, cw, cg, cfg.rest_shape.model)
+    ref, got = both(lambda: local_step(cfg, M, tg, np.ones(2), {}))
+    _same(ref, got)
+    assert np.isnan(got[0][2][7])                          # numpy's NaN, not Warp's clipped value
+
+
+@pytest.mark.parametrize("f", SIZES)
+@pytest.mark.parametrize("poison", [None, "target", "jacobian"])
+def test_feedback_same_bits(both, f, poison):
+    cfg = SolverConfig.named("lengths")
+    _, K, Kc, M, cw, cg = _inputs(f, 100 + f)
+    if poison == "target":
+        cw[f // 2] = np.inf                               # the feedback leaves that triangle
+    elif poison == "jacobian":
+        M[0][1] = M[1][1] = 0.0                           # a degenerate triangle: rho infinite or NaN
+        M[2][1] = M[3][1] = 0.0
+
+    def run():
+        cw_corr, cg_corr = np.linspace(0.9, 1.1, f), np.linspace(1.05, 0.95, f)
+        move_corrections(cfg, M, Kc, cw, cg, cw_corr, cg_corr)
+        return cw_corr, cg_corr
+    ref, got = both(run)
+    _same(ref, got)
+
+
+@pytest.mark.parametrize("f", SIZES)
+def test_collapse_guard_same_bits(both, f):
+    guard = SolverConfig.named("improved").guard
+    rng, K, Kc, M, cw, cg = _inputs(f, 200 + f, collapse=True)
+    Kc[0][-1] = Kc[1][-1] = 0.0                           # a degenerate body triangle: det K = 0
+    M[1][f // 2] = np.nan                                 # a non-finite iterate
+    start = rng.choice([0.0, 1.0, 1.5, guard.guard_limit, 2.0 / guard.guard_release], f)
+
+    def run():
+        gain = start.copy()
+        q, held = collapse_guard(guard, M, Kc, cw, cg, gain, inverse_offsets(Kc))
+        return q, held, gain
+    ref, got = both(run)
+    _same(ref, got)
+    if f == SIZES[-1]:     # the cases the update distinguishes all occur
+        gain = ref[2]
+        assert ref[1].size and (gain > start).any() and ((start > 0) & (gain < start)).any() and (gain == 0).any()
+
+
+@pytest.fixture(scope="module")
+def tube():
+    cut, body = two_panels(ease=(1.2, 1.6), bulge=0.2)
+    return cut, body, PatternSolver(cut, body)
+
+
+def test_realign_grain_same_bits(both, tube):
+    _, _, solver = tube
+    rng = np.random.default_rng(7)
+    U = solver.uv0 + rng.normal(0, 1e-3, solver.uv0.shape)
+    M = solver.jacobians(U)
+    ref, got = both(lambda: realign_grain(solver.blocks, U, M))
+    _same(ref, got)
+    M[0][3] = np.nan                                      # a NaN image: numpy's path (its NaN vote)
+    ref, got = both(lambda: realign_grain(solver.blocks, U, M))
+    _same(ref, got)
+
+
+@pytest.mark.parametrize("name", ["improved", "paper", "lengths"])
+def test_transfer_same_bits(both, tube, name):
+    cut, body, _ = tube
+    big = body * np.array([1.1, 1.05, 1.0])
+
+    def run():
+        p = transfer_pattern(cut, body, big, config=SolverConfig.named(name), solver=PatternSolver(cut, body))
+        return [x for pn in p.panels for x in (pn.uv, pn.target_weft, pn.target_warp)]
+    ref, got = both(run)
+    _same(ref, got)
+
+
+def test_public_launch_path_same_bits(both, monkeypatch):
+    """Warp's public recorded launch (where its private argument struct is not there) gives the same bits."""
+    monkeypatch.setattr(compiled._Launch, "private", False)
+    monkeypatch.setattr(compiled._local, "launches", {}, raising=False)
+    cfg = SolverConfig.named("improved")
+    _, K, Kc, M, cw, cg = _inputs(83, 11)
+    tg = rest_targets(Kc, cw, cg, cfg.rest_shape.model)
+
+    def run():
+        state = {}
+        return local_step(cfg, M, tg, np.ones(2), state), local_step(cfg, M, tg, np.ones(2), state)
+    ref, got = both(run)
+    _same(ref, got)
+    launches = compiled._local.launches
+    assert launches and all(launch.fast is None for pair in launches.values() for launch in pair.launches)
+
+
+def test_switches(monkeypatch):
+    monkeypatch.setenv(compiled.ENV, "numpy")
+    assert not compiled.enabled()
+    monkeypatch.setenv(compiled.ENV, "warp")
+    assert compiled.enabled()
+    compiled.use(False)
+    try:
+        assert not compiled.enabled()
+    finally:
+        compiled.use(None)
+
+
+def test_a_failed_load_leaves_numpy(monkeypatch, caplog):
+    import core.geom.queries as Q
+
+    def broken():
+        raise RuntimeError("no compiler")
+    monkeypatch.setattr(Q, "init_cpu", broken)
+    monkeypatch.setitem(compiled._state, "ready", None)
+    assert not compiled.load()
+    assert "using numpy" in caplog.text
+    assert not compiled.enabled()
