@@ -22,6 +22,7 @@ switch for gathered designs, per seam).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
@@ -108,6 +109,8 @@ class SeamLayout:
     mouth_b: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     mouth_width: np.ndarray = field(default_factory=lambda: np.zeros(0))
     mouth_apex: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    #: what :func:`seam_rhs` derives from the layout on first use (its indices, the last solve's weights)
+    cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
 
 @dataclass(frozen=True)
@@ -324,16 +327,23 @@ def seam_rhs(layout: SeamLayout, U: np.ndarray, config: SolverConfig, plan: Seam
       their neighbours (``"smooth"``: damps oscillations, keeps curves);
     - matched curvature: towards the mean of this side's second difference
       and the other side's, rotated by the best rigid fit of the two polylines.
+
+    Only the ``m`` seam vertices are summed into (:func:`_rhs_index`), on flat arrays, each entry by
+    the same floating-point operations in the same order as a sum over all ``n`` per coordinate.
     """
     w, s = config.weights, config.seams
     n = len(U)
     rhs = np.zeros((n, 2))
     if not layout.sides:
         return rhs
-    E0, E1, Eo = layout.edge_start, layout.edge_end, layout.edge_partner
-    cur = U[E1] - U[E0]
-    cur_len = np.sqrt(cur[:, 0] ** 2 + cur[:, 1] ** 2)
+    ix = _rhs_index(layout)
+    c_len, ws2, wc2 = _rhs_weights(layout, config, plan)
+    Uf = U.reshape(-1)
+    m = len(ix.vids)
     if w.seam_length > 0:
+        cur = (Uf.take(ix.end_xy) - Uf.take(ix.start_xy)).reshape(2, -1)      # coordinate-major
+        cur_len = np.sqrt(cur[0] ** 2 + cur[1] ** 2)
+        Eo = layout.edge_partner
         lbar = 0.5 * (cur_len + cur_len[Eo])
         if s.length_integral > 0:
             # integral action: what the proximal pull leaves of the mismatch is
@@ -344,35 +354,98 @@ def seam_rhs(layout: SeamLayout, U: np.ndarray, config: SolverConfig, plan: Seam
             cap = s.length_integral_cap * lbar
             np.clip(integral, -cap, cap, out=integral)
             lbar = lbar + integral
-        # (c Lbar) times the direction, a coordinate at a time (the same products as broadcast over (E, 2))
-        scale = np.maximum(cur_len, 1e-300)
-        cl = _length_weight(layout, config, plan) * lbar
-        for d in range(2):
-            tgt = cl * (cur[:, d] / scale)
-            rhs[:, d] += np.bincount(E1, tgt, minlength=n) - np.bincount(E0, tgt, minlength=n)
+        # (c Lbar) times the direction. Bin d m + v sums coordinate d of the edges at v in edge order, as a
+        # bincount per coordinate does; a sum from +0.0 is never -0.0, so adding it to zeros changes nothing
+        tgt = (c_len * lbar) * (cur / np.maximum(cur_len, 1e-300))
+        part = np.bincount(ix.end_bins, tgt.ravel(), minlength=2 * m) - np.bincount(ix.start_bins, tgt.ravel(),
+                                                                                    minlength=2 * m)
+    else:
+        part = np.zeros(2 * m)
+    part = part.reshape(2, m).T                                                  # (m, 2), a view
     if len(layout.mouth_a) and w.seam_length > 0:
         tgt = _intake_weight(layout, config) * _mouth_targets(layout, U)
-        np.add.at(rhs, layout.mouth_a, tgt)
-        np.add.at(rhs, layout.mouth_b, -tgt)
-    if layout.second_diff is None:
-        return rhs
-    d2 = layout.second_diff @ U
-    acc = np.zeros_like(d2)
-    if w.seam_straight > 0 and s.straight_target == "smooth":
-        # damp oscillations only: towards the neighbours' mean second difference
-        sm = d2.copy()
-        i = np.flatnonzero(layout.row_smooth)
-        sm[i] = 0.5 * (d2[i - 1] + d2[i + 1])
-        ws = w.seam_straight * layout.row_band * layout.row_straight
-        acc[:, 0] += ws * sm[:, 0]
-        acc[:, 1] += ws * sm[:, 1]
-    if w.seam_curve > 0:
-        wc = w.seam_curve * layout.row_band * plan.sewn_rows
-        mean = 0.5 * (d2 + _fitted_partner(layout, U, d2))
-        acc[:, 0] += wc * mean[:, 0]
-        acc[:, 1] += wc * mean[:, 1]
-    rhs += layout.second_diff_T @ acc
+        np.add.at(part, ix.mouth_a, tgt)
+        np.add.at(part, ix.mouth_b, -tgt)
+    if layout.second_diff is not None and (ws2 is not None or wc2 is not None):
+        d2 = (layout.second_diff @ U).ravel()                                    # (2R,), row-major
+        # each row's terms, flat; the zero they were added to is left out: it changes no non-zero, and a
+        # zero's sign cannot reach the product below (its sums start at +0.0)
+        acc = None
+        if ws2 is not None:
+            # damp oscillations only: towards the neighbours' mean second difference
+            sm = d2.copy()
+            sm[ix.smooth] = 0.5 * (d2.take(ix.smooth_prev) + d2.take(ix.smooth_next))
+            acc = ws2 * sm
+        if wc2 is not None:
+            mean = 0.5 * (d2 + _fitted_partner(layout, Uf, d2, ix))
+            acc = wc2 * mean if acc is None else acc + wc2 * mean
+        part = (ix.second_diff_T @ acc.reshape(-1, 2)) + part                   # x + y is y + x
+    rhs.reshape(-1)[ix.vids_xy] = part.ravel()
     return rhs
+
+
+def _rhs_index(layout: SeamLayout) -> SimpleNamespace:
+    """:func:`seam_rhs`'s indices into flat arrays on ``layout``, built on first use and kept on the layout.
+
+    ``vids`` (m,) the seam vertices (sorted global ids), ``vids_xy`` (2m,) their entries in a flat
+    (n, 2) array; ``start_xy``/``end_xy`` (2E,) the edge ends' entries, coordinate-major, and
+    ``start_bins``/``end_bins`` (2E,) their bins ``d m + v`` (``v`` local); ``mouth_a``/``mouth_b``
+    local; ``second_diff_T`` (m, R) the layout's rows of the seam vertices (entries in the layout's
+    order). In flat (R, 2) second differences: ``smooth`` the smoothed entries, ``smooth_prev``/
+    ``smooth_next`` their neighbours', ``row_partner`` (2R,) the other side's entries, ``row_turned``
+    the same swapped (``d_1, d_0``) with ``turn_sign`` (-1, 1), ``row_side`` each entry's side. The
+    rigid fit: ``vertex_xy`` (2V,) the sides' vertices' entries and ``side_bins2`` their bins
+    ``2 side + d``, ``count2`` (2k,) the sides' vertex counts; for ``H[side, i, j]`` ``h_q``/``h_p``
+    (4V,) the entries ``(v, i)`` of the partner and ``(v, j)`` of the vertex, ``side_bins4`` the bins
+    ``4 side + 2 i + j``.
+    """
+    ix = layout.cache.get("rhs_index")
+    if ix is not None:
+        return ix
+    D = layout.second_diff
+    vids = np.unique(np.concatenate([layout.edge_start, layout.edge_end, layout.mouth_a, layout.mouth_b]
+                                    + ([D.indices] if D is not None else [])))
+    m, k = len(vids), len(layout.sides)
+    local = lambda g: np.searchsorted(vids, g)
+    xy = lambda i: (2 * i[:, None] + np.arange(2)).ravel()                 # row-major entries (i, 0), (i, 1)
+    major = lambda i, step: np.concatenate([i, i + step])                  # coordinate-major
+    partner_side = np.zeros(k, int)
+    for a, b in layout.pairs:
+        partner_side[a], partner_side[b] = b, a
+    if not np.array_equal(layout.side_vertex_count, layout.side_vertex_count[partner_side]):
+        raise PatternError("a seam's two sides have different vertex counts; they pair one to one")
+    smooth, rp = np.flatnonzero(layout.row_smooth), layout.row_partner
+    V, vp, side, ij = len(layout.vertex_ids), layout.vertex_partner, layout.vertex_side, np.arange(4)
+    ix = SimpleNamespace(
+        vids=vids, vids_xy=xy(vids), start_xy=major(2 * layout.edge_start, 1), end_xy=major(2 * layout.edge_end, 1),
+        start_bins=major(local(layout.edge_start), m), end_bins=major(local(layout.edge_end), m),
+        mouth_a=local(layout.mouth_a), mouth_b=local(layout.mouth_b),
+        second_diff_T=None if D is None else layout.second_diff_T[vids],
+        smooth=xy(smooth), smooth_prev=xy(smooth - 1), smooth_next=xy(smooth + 1),
+        row_partner=xy(rp), row_turned=xy(rp)[np.arange(2 * len(rp)) ^ 1], turn_sign=np.tile([-1.0, 1.0], len(rp)),
+        row_side=np.repeat(layout.row_side, 2), vertex_xy=xy(layout.vertex_ids), side_bins2=xy(side),
+        count2=np.repeat(layout.side_vertex_count, 2), side_bins4=(4 * side[:, None] + ij).ravel(),
+        h_q=2 * np.repeat(vp, 4) + np.tile(ij // 2, V), h_p=2 * np.repeat(np.arange(V), 4) + np.tile(ij % 2, V))
+    layout.cache["rhs_index"] = ix
+    return ix
+
+
+def _rhs_weights(layout: SeamLayout, config: SolverConfig, plan: SeamPlan):
+    """:func:`seam_rhs`'s weights: the length term's (E,) (:func:`_length_weight`), the smoothing
+    straightness term's and the matched curvature's per flat (R, 2) entry (2R,), None where a term is
+    off; kept on the layout for the last plan and weights (a solve's do not change between iterations)."""
+    w, s = config.weights, config.seams
+    key = (w.seam_length, w.seam_straight, w.seam_curve, s.straight_target)
+    got = layout.cache.get("rhs_weights")
+    if got is not None and got[0] is plan and got[1] == key:
+        return got[2]
+    rows = layout.second_diff is not None
+    out = (_length_weight(layout, config, plan) if w.seam_length > 0 else None,
+           np.repeat(w.seam_straight * layout.row_band * layout.row_straight, 2)
+           if rows and w.seam_straight > 0 and s.straight_target == "smooth" else None,
+           np.repeat(w.seam_curve * layout.row_band * plan.sewn_rows, 2) if rows and w.seam_curve > 0 else None)
+    layout.cache["rhs_weights"] = (plan, key, out)
+    return out
 
 
 def _mouth_targets(layout: SeamLayout, U: np.ndarray) -> np.ndarray:
@@ -387,20 +460,17 @@ def _mouth_targets(layout: SeamLayout, U: np.ndarray) -> np.ndarray:
     return gap + (layout.mouth_width - now)[:, None] * across
 
 
-def _fitted_partner(layout: SeamLayout, U: np.ndarray, d2: np.ndarray) -> np.ndarray:
-    """The other side's second differences (R, 2), turned by the best rigid fit of the two seam
-    polylines (per side, vectorised Kabsch)."""
+def _fitted_partner(layout: SeamLayout, Uf: np.ndarray, d2: np.ndarray, ix: SimpleNamespace) -> np.ndarray:
+    """The other side's second differences, flat (2R,), turned by the best rigid fit of the two seam
+    polylines (per side, vectorised Kabsch); ``Uf`` and ``d2`` the iterate and second differences, flat."""
     k = len(layout.sides)
-    side = layout.vertex_side
-    P = U[layout.vertex_ids]
-    Q = P[layout.vertex_partner]
-    cnt = layout.side_vertex_count
-    Pm = np.stack([np.bincount(side, P[:, d], minlength=k) for d in range(2)], axis=1) / cnt[:, None]
-    Qm = np.stack([np.bincount(side, Q[:, d], minlength=k) for d in range(2)], axis=1) / cnt[:, None]
-    Pc, Qc = P - Pm[side], Q - Qm[side]
-    # H = Qc^T Pc per side; rotation = polar(H^T)
-    h = {(i, j): np.bincount(side, Qc[:, i] * Pc[:, j], minlength=k) for i in range(2) for j in range(2)}
-    th = np.arctan2(h[(0, 1)] - h[(1, 0)], h[(0, 0)] + h[(1, 1)])
-    c_, s_ = np.cos(th)[layout.row_side], np.sin(th)[layout.row_side]
-    do = d2[layout.row_partner]
-    return np.stack([c_ * do[:, 0] - s_ * do[:, 1], s_ * do[:, 0] + c_ * do[:, 1]], axis=1)
+    # per-side means (bin 2 side + d sums in vertex order); the partners' means are the other side's:
+    # its vertices pair with this side's in order
+    P = Uf.take(ix.vertex_xy)
+    Pc = P - (np.bincount(ix.side_bins2, P, minlength=2 * k) / ix.count2).take(ix.side_bins2)
+    # H = Qc^T Pc per side (Qc the partners' Pc); rotation = polar(H^T)
+    H = np.bincount(ix.side_bins4, Pc.take(ix.h_q) * Pc.take(ix.h_p), minlength=4 * k).reshape(k, 4)
+    th = np.arctan2(H[:, 1] - H[:, 2], H[:, 0] + H[:, 3])
+    # (c d_0 - s d_1, s d_0 + c d_1) as c (d_0, d_1) + s (-d_1, d_0): s (-d_1) is -(s d_1), a sum's terms commute
+    return (np.cos(th).take(ix.row_side) * d2.take(ix.row_partner)
+            + np.sin(th).take(ix.row_side) * (d2.take(ix.row_turned) * ix.turn_sign))
