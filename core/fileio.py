@@ -90,10 +90,13 @@ def _stale(folder: Path, name: str) -> List[Tuple[str, str, Path]]:
     whose process is gone."""
     out = []
     try:
-        entries = sorted(os.listdir(folder))
+        entries = os.listdir(folder)
     except OSError:
         return out
-    for entry in entries:
+    # a batch lists its items folder once per item: the cheap prefix test first, the
+    # regex and the sort on the few entries that pass it
+    prefix = f".{name[:_NAME_MAX]}.ease-"
+    for entry in sorted(e for e in entries if e.startswith(prefix)):
         m = _TEMP.match(entry)
         if m and m["name"] == name[:_NAME_MAX] and not _alive(int(m["pid"])):
             out.append((m["kind"], f"{m['pid']}-{m['tag']}", folder / entry))

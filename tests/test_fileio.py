@@ -72,3 +72,21 @@ def test_json_of_numpy_values():
     assert s == '{"a": [0, 1, 2], "b": 0.5, "c": 2, "d": true}'
     with pytest.raises(TypeError, match="not JSON serialisable: object"):
         dumps_json({"x": object()})
+
+
+def test_only_the_temporaries_of_the_name_written_are_removed(tmp_path):
+    # the listing is filtered by the name's prefix before the pattern: names that share a prefix
+    # with the one written (".out2", ".out.x"), or a dead run's temporary inside another name's, stay
+    import subprocess
+    import sys
+    child = subprocess.Popen([sys.executable, "-c", "pass"])
+    child.wait()
+    dead = child.pid
+    mine = [f".out.ease-tmp-{dead}-ab12", f".out.ease-old-{dead}-cd34"]
+    others = [f".out2.ease-tmp-{dead}-ab12", f".out.x.ease-tmp-{dead}-ab12", f".o.ease-tmp-{dead}-ab12",
+              f".out.ease-tmp-{dead}-ab12.ease-tmp-{dead}-ef56", "out.ease-tmp-1-ab12"]
+    for name in mine + others:
+        (tmp_path / name).mkdir()
+    with output_dir(tmp_path / "out") as d:
+        write_text(d / "a.json", "{}")
+    assert sorted(os.listdir(tmp_path)) == sorted(others + ["out"])

@@ -183,8 +183,8 @@ def _numbers(value, where, kind):
     if a.dtype.kind not in ("iu" if kind == "int" else "iuf"):
         raise PatternError(f"{where}: expected {kind}s, got {a.dtype.name} values")
     if kind == "int":
-        return a.astype(np.int64)
-    a = a.astype(float)
+        return a.astype(np.int64, copy=False)   # no copy of an int64 array (pattern_text checks its own)
+    a = a.astype(float, copy=False)
     if not np.all(np.isfinite(a)):
         raise PatternError(f"{where}: holds NaN or infinite values")
     return a
@@ -320,12 +320,14 @@ def pattern_from_json(obj: dict) -> Pattern:
     if not isinstance(seams_obj, list):
         raise PatternError("seams: expected a list")
     seams = [_seam(k, so, by_name) for k, so in enumerate(seams_obj)]
-    used = np.unique(np.concatenate([p.vertex_ids for p in panels]))
+    used = np.zeros(n_garment, bool)         # the ids of the panels' vertices (all in [0, n_garment))
+    for p in panels:
+        used[p.vertex_ids] = True
     pins = {}
     for g, ids in _mapping(obj, "pins").items():
         a = _ids(ids, f"pins.{g}", n_garment, "global vertex ids")
-        if not np.all(np.isin(a, used)):
-            raise PatternError(f"pins.{g}: vertex {int(a[~np.isin(a, used)][0])} is in no panel")
+        if not np.all(used[a]):
+            raise PatternError(f"pins.{g}: vertex {int(a[~used[a]][0])} is in no panel")
         pins[str(g)] = a
     mode = obj.get("mode", "reference")
     if mode not in ("reference", "transfer", "adapt"):

@@ -16,10 +16,16 @@ the decimal digits of all the arrays of a file are computed at once with numpy:
 - numbers outside ``1e-5 <= |x| < 1e15`` (not met in a pattern, whose
   coordinates are metres and scales ratios) keep ``repr``; zeros are ``0.0``.
 
-The characters of every number are laid out in fixed columns (integer digits
-right-aligned before the point, 21 fraction digits after it), so the text of
-all numbers is built with whole-column numpy operations, in chunks that stay
-in the cache, and one compaction per chunk.
+Each number and what follows it (``", "``, brackets) get a row of 4-byte
+columns whose place does not depend on the number's length: the sign first,
+then the integer part and the point (or ``0.`` and the zeros of a number below
+0.1) from a table, then 17 fraction digits four at a time from a table, then
+the suffix. Leading and trailing zeros that are not written, and every unused
+byte, are NUL; one pass that drops the NULs leaves the text. So the rows are
+made with whole-column numpy operations (no per-exponent passes, no
+per-number lengths) and the text with one compaction: a row is 28 bytes for
+the numbers of a pattern (below 10**4, arrays of up to two dimensions), 44
+with larger integer parts.
 
 The digits depend only on the values (no platform ``printf``; the exponent is
 checked against the digits, not taken from ``log10``), so the same arrays give
@@ -29,10 +35,9 @@ the same bytes. Integers are written in plain decimal. The text is what
 """
 from __future__ import annotations
 
-import hashlib
 import threading
 from collections import OrderedDict
-from typing import List, Sequence, Tuple
+from typing import List, Sequence
 
 import numpy as np
 
@@ -41,206 +46,237 @@ _LO, _HI = 10 ** (_DIGITS - 1), 10 ** _DIGITS  # the integer mantissa lies in [_
 _E_MIN, _E_MAX = -5, 14                        # decimal exponents formatted in bulk (10**(16-e) exact)
 _POW10 = 10.0 ** np.arange(0, 23)
 _SPLIT = 134217729.0                           # 2**27 + 1: Dekker's splitter for float64
-#: 10**p split as Dekker does (exact: 10**p = 5**p * 2**p has at most 49 significant bits for p <= 22)
-_POW10_HI = _SPLIT * _POW10 - (_SPLIT * _POW10 - _POW10)
-_POW10_LO = _POW10 - _POW10_HI
-#: "0000".."9999" as uint32: four digit characters per table entry
-_QUADS = np.frombuffer("".join(f"{i:04d}" for i in range(10000)).encode("ascii"), np.uint32).copy()
-#: float columns: sign and up to 15 integer digits in 0..15, the point at 16, 21 fraction
-#: digits in 17..37, "0" in 38..39 (the words 16..39 find the last non-zero digit). Digits
-#: are written four at a time (uint32 columns), so every group starts at a multiple of 4.
-_POINT = 16
-_FRAC = _DIGITS - 1 - _E_MIN                   # 21 fraction columns
-_FLOAT_COLS = 40
-_CHUNK = 8192                                  # numbers per pass: a pass's tables stay in the cache
-_ZERO_WORD = np.frombuffer(b"0" * 8, np.uint64)[0]
+_CHUNK = 1 << 15                               # numbers per pass: bounds the temporaries of a huge array
+_MINUS = np.uint8(ord("-"))
+
+
+def _texts(texts, width: int, dtype) -> np.ndarray:
+    """Each text NUL-padded to ``width`` bytes, as one ``dtype`` word (or ``width / itemsize`` words)."""
+    return np.frombuffer(b"".join(t.encode("ascii").ljust(width, b"\0") for t in texts), dtype).copy()
+
+
+#: Four digit characters per uint32 entry, four variants of 10**4 entries each (index: value + variant):
+#: all four digits; trailing zeros NUL (a float's last fraction digits); leading zeros NUL, 0 all NUL
+#: (an integer's upper digits); leading zeros NUL, 0 as "0" (an integer's last four digits)
+_FULL, _TRAIL, _LEAD, _LAST = 0, 10_000, 20_000, 30_000
+_QUAD = _texts([f"{i:04d}" for i in range(10_000)]
+               + [f"{i:04d}".rstrip("0") for i in range(10_000)]
+               + [(str(i) if i else "").rjust(4, "\0") for i in range(10_000)]
+               + [str(i).rjust(4, "\0") for i in range(10_000)], 4, np.uint32)
+_QUAD_FULL, _QUAD_TRAIL = _QUAD[_FULL:_TRAIL], _QUAD[_TRAIL:_LEAD]
+#: The 8 bytes before a float's last 16 fraction digits (uint64; byte 0 left NUL for the sign, byte 7
+#: for the first fraction digit, added as a multiple of :data:`_BYTE7`), by index: 5 + e for e < 0:
+#: "0." and -1 - e zeros; 5 + w: "w." for an integer part w < 10**4; 10005 + w: "wwww." (w's last four
+#: digits: a larger integer part, whose upper digits precede these bytes)
+_WHOLE, _WHOLE4 = 5, 10_005
+_PREFIX = _texts([("0." + "0" * k).rjust(7, "\0") for k in range(4, -1, -1)]
+                 + [f"{w}.".rjust(7, "\0") for w in range(10_000)]
+                 + [f"{w:04d}.".rjust(7, "\0") for w in range(10_000)], 8, np.uint64)
+_BYTE7 = np.frombuffer(b"\0" * 7 + b"\1", np.uint64)[0]       # 1 in byte 7, in this machine's byte order
+#: By e + 5 (-5 <= e <= 14): 10**p with p = 16 - max(e, -1) digits of q after the point (p = 17 below 1,
+#: where the prefix holds "0." and the zeros), and 10**(17 - p), which left-aligns them in 17 digits
+_E = np.arange(_E_MIN, _E_MAX + 1)
+_SPLIT_AT = 10 ** (16 - np.maximum(_E, -1))
+_ALIGN = 10 ** (1 + np.maximum(_E, -1))
+
+
+def _suffixes(depth: int) -> np.ndarray:
+    """(2 depth + 2, s) uint32: the text that follows a number, by code: c closing brackets,
+    then (unless it ends its array) ", " and as many opening ones: code 2c (array end) or 2c + 1."""
+    texts = ["]" * (c // 2) + ("" if c % 2 == 0 else ", " + "[" * (c // 2)) for c in range(2 * depth + 2)]
+    quads = (max(map(len, texts)) + 3) // 4
+    return _texts(texts, 4 * quads, np.uint32).reshape(len(texts), quads)
 
 
 def _mantissa(a: np.ndarray, e: np.ndarray) -> np.ndarray:
     """The nearest integer of ``a * 10**(16 - e)`` (int64), exactly: ``hi + lo`` is the exact
     product (Dekker), ``hi`` an integer above 2**53 and ``|lo| <= 8``."""
-    p = 16 - e
-    bh, bl = _POW10_HI[p], _POW10_LO[p]
-    hi = a * _POW10[p]
-    ca = _SPLIT * a
-    ah = ca - (ca - a)
+    b = _POW10[16 - e]
+    bh = _SPLIT * b                          # 10**p split as Dekker does (exact: 10**p = 5**p * 2**p
+    bh -= bh - b                             # has at most 49 significant bits for p <= 22)
+    bl = b - bh
+    hi = a * b
+    ah = _SPLIT * a                          # in place from here: fewer temporaries of n numbers
+    ah -= ah - a
     al = a - ah
-    lo = ((ah * bh - hi) + ah * bl + al * bh) + al * bl
-    return hi.astype(np.int64) + np.rint(lo).astype(np.int64)
+    b = al * bl                              # the terms of ((ah * bh - hi) + ah * bl + al * bh) + al * bl
+    bl *= ah
+    ah *= bh
+    ah -= hi
+    ah += bl
+    bh *= al
+    ah += bh
+    ah += b
+    q = hi.astype(np.int64)
+    q += np.rint(ah, out=ah).astype(np.int64)
+    return q
 
 
-def _put_digits(words: np.ndarray, q: np.ndarray) -> None:
-    """Write the decimal digit characters of ``q`` (int64, 0 <= q < 10**(4 * k), zero-padded, most
-    significant first) into ``words`` ((n, k) uint32 columns of a character table)."""
-    for col in range(words.shape[1] - 1, -1, -1):
-        rest = q // 10000                        # by a constant: numpy's fast division; % is not
-        words[:, col] = _QUADS[q - rest * 10000]
-        q = rest
-
-
-def _mask_table(width: int) -> np.ndarray:
-    """(width + 1, width + 1, width) bool: row [s, e] keeps the columns s..e-1."""
-    col = np.arange(width)
-    return (col[None, None, :] >= np.arange(width + 1)[:, None, None]) & \
-        (col[None, None, :] < np.arange(width + 1)[None, :, None])
-
-
-def _round8(n: int) -> int:
-    return (n + 7) // 8 * 8
-
-
-class _Floats:
-    """The per-number fields of a flat finite float array, computed on the whole array (1D work)."""
-
-    def __init__(self, x: np.ndarray):
-        n = x.size
-        a = np.abs(x)
-        zero = a == 0
-        fast = (a >= 10.0 ** _E_MIN) & (a < 10.0 ** (_E_MAX + 1))
-        af = np.where(fast, a, 1.0)
-        e = np.clip(np.floor(np.log10(af)).astype(np.int64), _E_MIN, _E_MAX)
-        q = _mantissa(af, e)
-        for _ in range(2):  # log10 may be one off near a power of ten: the digits decide
-            low, high = q < _LO, q >= _HI
-            if not (low.any() or high.any()):
-                break
-            e = e - low + high
-            fast &= (e >= _E_MIN) & (e <= _E_MAX)
-            e = np.clip(e, _E_MIN, _E_MAX)
-            q = _mantissa(np.where(fast, af, 1.0), e)
-        up = q >= _HI                            # rounded up to 10**17: one decade more
+def _decimal(a: np.ndarray):
+    """(q, e, fast) of the magnitudes ``a``: ``a`` is ``q * 10**(e - 16)`` rounded to the nearest,
+    ``10**16 <= q < 10**17``, where ``fast`` (``-5 <= e <= 14``); q = e = 0 elsewhere."""
+    fast = (a >= 10.0 ** _E_MIN) & (a < 10.0 ** (_E_MAX + 1))
+    af = np.where(fast, a, 1.0)
+    e = np.floor(np.log10(af)).astype(np.int64)
+    np.clip(e, _E_MIN, _E_MAX, out=e)
+    q = _mantissa(af, e)
+    for _ in range(2):  # log10 may be one off near a power of ten: the digits decide
+        low, high = q < _LO, q >= _HI
+        if not (low.any() or high.any()):
+            break    # every q in range: what follows the loop would change nothing
+        e = e - low + high
+        fast &= (e >= _E_MIN) & (e <= _E_MAX)
+        e = np.clip(e, _E_MIN, _E_MAX)
+        q = _mantissa(np.where(fast, af, 1.0), e)
+    else:
+        up = q >= _HI                        # rounded up to 10**17: one decade more
         q, e = np.where(up, q // 10, q), e + up
         fast &= (q >= _LO) & (q < _HI) & (e <= _E_MAX)
-        q = np.where(fast, q, 0)                 # zeros (and the slow ones, redone): "0.0"
-        e = np.where(fast, e, 0)
-        # x = q * 10**-p (p = 16 - e): integer part q // 10**p, then the fraction's p digits
-        # left-aligned in 21 columns as two integers of 11 and 10 digits (21 overflow int64)
-        whole, hi, lo = np.zeros(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64)
-        for ev in np.flatnonzero(np.bincount(e - _E_MIN, minlength=_E_MAX - _E_MIN + 1)) + _E_MIN:
-            # one exponent at a time: division by a constant is numpy's fast one
-            rows = np.flatnonzero(e == ev)
-            qv = q[rows]
-            p = 16 - int(ev)
-            if p <= 16:
-                w = qv // 10 ** p
-                whole[rows] = w
-                qv = qv - w * 10 ** p
-            t = _FRAC - p
-            if t >= 10:
-                hi[rows], lo[rows] = qv * 10 ** (t - 10), 0
-            else:
-                h = qv // 10 ** (10 - t)
-                hi[rows], lo[rows] = h, (qv - h * 10 ** (10 - t)) * 10 ** t
-        self.whole, self.hi, self.lo = whole, hi, lo
-        self.start = _POINT - np.maximum(e + 1, 1) - np.signbit(x)
-        self.sign = np.signbit(x)
-        self.slow = np.flatnonzero(~fast & ~zero)
-        self.slow_text = [repr(float(v)).encode("ascii") for v in x[self.slow]]
-        top = int(whole.max()) if n else 0
-        self.whole_quads = max(1, (len(str(top)) + 3) // 4)
-
-    def chunk(self, lo_i: int, hi_i: int, width: int):
-        """(chars (m, width) uint8, start (m,), end (m,)) of the numbers ``lo_i..hi_i - 1``."""
-        m = hi_i - lo_i
-        chars = np.empty((m, width), np.uint8)
-        quads = chars.view(np.uint32)
-        wq = self.whole_quads
-        _put_digits(quads[:, _POINT // 4 - wq:_POINT // 4], self.whole[lo_i:hi_i])
-        _put_digits(quads[:, _POINT // 4:_POINT // 4 + 3], self.hi[lo_i:hi_i])      # col 16 dummy, 17..27
-        _put_digits(quads[:, _POINT // 4 + 3:_FLOAT_COLS // 4], self.lo[lo_i:hi_i] * 100)  # 28..37, "00"
-        chars[:, _POINT] = ord(".")
-        # the last non-zero fraction digit: the highest byte of (word xor "00000000") that is not 0,
-        # from the float exponent of the word (exact enough: no byte of it exceeds 9)
-        words = chars.view(np.uint64)[:, _POINT // 8:_FLOAT_COLS // 8] ^ _ZERO_WORD
-        byte = (np.frexp(words.astype(np.float64))[1] - 1) >> 3
-        last = np.where(words[:, 2] != 0, _POINT + 16 + byte[:, 2],
-                        np.where(words[:, 1] != 0, _POINT + 8 + byte[:, 1], _POINT + byte[:, 0]))
-        end = np.maximum(last, _POINT + 1) + 1
-        start = self.start[lo_i:hi_i].copy()
-        sign = np.flatnonzero(self.sign[lo_i:hi_i])
-        chars.reshape(-1)[sign * width + start[sign]] = ord("-")
-        at = np.searchsorted(self.slow, [lo_i, hi_i])
-        for i in range(at[0], at[1]):            # tiny or huge magnitudes: Python's repr (also exact)
-            r, text = self.slow[i] - lo_i, self.slow_text[i]
-            chars[r, :len(text)] = np.frombuffer(text, np.uint8)
-            start[r], end[r] = 0, len(text)
-        return chars, start, end
+    q *= fast
+    e *= fast
+    return q, e, fast
 
 
-class _Ints:
-    """The per-number fields of a flat integer array."""
+def _float_rows(x: np.ndarray, suffix: np.ndarray, words: np.ndarray, rows: np.ndarray) -> None:
+    """Write the rows of the floats ``x`` followed by their suffixes (codes ``suffix`` into the
+    ``words`` table) into ``rows`` ((n, 4 (h + 6 + s)) uint8, h = 4 when an integer part may exceed
+    9999, else 0), in uint32 quads: [sign, upper integer digits (h)] [the 8 bytes of :data:`_PREFIX`
+    with the first fraction digit (2)] [16 fraction digits (4)] [suffix (s)], NUL where nothing is."""
+    n, s = x.size, words.shape[1]
+    quads = rows.view(np.uint32)
+    h = quads.shape[1] - 6 - s
+    a = np.abs(x)
+    q, e, fast = _decimal(a)
+    # |x| = q * 10**-p: the integer part, and the fraction's digits left-aligned in 17 digits
+    ei = e - _E_MIN
+    whole, frac = np.divmod(q, _SPLIT_AT[ei])
+    frac *= _ALIGN[ei]
+    prefix = np.minimum(e, 0, out=e)
+    prefix += _WHOLE
+    if h:
+        upper = whole // 10_000                  # < 10**11: three quads, zeros before the first digit NUL
+        lead = np.ones(n, bool)
+        quads[:, 0] = 0
+        for j, u in enumerate((upper // 10 ** 8, upper // 10_000 % 10_000, upper % 10_000)):
+            quads[:, 1 + j] = _QUAD[u + _LEAD * lead]
+            lead &= u == 0
+        prefix += whole % 10_000 + (upper > 0) * (_WHOLE4 - _WHOLE)
+    else:
+        prefix += whole
+    first = frac // 10 ** 16                     # always written: "x.0" when the fraction is 0
+    word = _PREFIX[prefix]
+    word += (first + ord("0")).view(np.uint64) * _BYTE7
+    word = word.view(np.uint32).reshape(n, 2)
+    quads[:, h] = word[:, 0]                     # column by column: a 2D strided copy is slower
+    quads[:, h + 1] = word[:, 1]
+    frac -= first * 10 ** 16
+    hi8 = frac // 10 ** 8
+    lo8 = frac - hi8 * 10 ** 8
+    v0, v2 = hi8 // 10_000, lo8 // 10_000
+    v1, v3 = hi8 - v0 * 10_000, lo8 - v2 * 10_000
+    quads[:, h + 5] = _QUAD_TRAIL[v3]            # the trailing zeros of the last quad are NUL
+    for j, v in enumerate((v0, v1, v2)):
+        quads[:, h + 2 + j] = _QUAD_FULL[v]
+    ends = np.flatnonzero(v3 == 0)               # rare: ends in 4 zeros, whose quads before may end it too
+    trail = np.ones(ends.size, bool)
+    for j, v in ((2, v2[ends]), (1, v1[ends]), (0, v0[ends])):
+        quads[ends, h + 2 + j] = _QUAD[v + _TRAIL * trail]
+        trail &= v == 0
+    quads[:, h + 6:] = words[suffix]
+    rows[:, 0] = np.signbit(x).view(np.uint8) * _MINUS
+    slow = np.flatnonzero(~fast)
+    slow = slow[a[slow] != 0]
+    if slow.size:                               # tiny or huge magnitudes: Python's repr (also exact);
+        width = rows.shape[1] - 4 * s            # at most 24 characters ("-2.2250738585072014e-308")
+        text = b"".join(repr(float(v)).encode("ascii").ljust(width, b"\0") for v in x[slow])
+        rows[slow, :width] = np.frombuffer(text, np.uint8).reshape(slow.size, width)
 
-    def __init__(self, v: np.ndarray):
-        v = v.astype(np.int64)
-        if v.size and v.min() == np.iinfo(np.int64).min:
-            raise ValueError("integer out of range for JSON text: -2**63")
-        self.neg = v < 0
-        self.mag = np.abs(v)
-        digits = max(1, len(str(int(self.mag.max())))) if v.size else 1
-        self.quads = (digits + 3) // 4
-        nd = np.ones(v.size, np.int64)
-        for i in range(1, digits):
-            nd += self.mag >= 10 ** i
-        self.cols = 4 + 4 * self.quads           # sign in 0..3, digits from column 4
-        self.start = self.cols - nd - self.neg
 
-    def chunk(self, lo_i: int, hi_i: int, width: int):
-        chars = np.empty((hi_i - lo_i, width), np.uint8)
-        _put_digits(chars.view(np.uint32)[:, 1:1 + self.quads], self.mag[lo_i:hi_i])
-        start = self.start[lo_i:hi_i]
-        neg = np.flatnonzero(self.neg[lo_i:hi_i])
-        chars.reshape(-1)[neg * width + start[neg]] = ord("-")
-        return chars, start, np.full(hi_i - lo_i, self.cols, np.int64)
+def _float_width(x: np.ndarray, suffix_quads: int) -> int:
+    # conservative: a wider row only adds NULs
+    big = np.any((np.abs(x) >= 9999.0) & (np.abs(x) < 10.0 ** (_E_MAX + 1)))
+    return 4 * (4 * bool(big) + 6 + suffix_quads)
 
 
-def _joined(chars, start, end, suffix, suffixes, masks) -> Tuple[bytes, np.ndarray]:
-    """(text, end offsets (n,)): each token followed by its ``suffixes[suffix[i]]``."""
-    width = chars.shape[1]
-    flat = chars.reshape(-1)
-    end = end.copy()
-    for code, text in enumerate(suffixes):
-        sel = np.flatnonzero(suffix == code)
-        if not sel.size:
-            continue
-        at = sel * width + end[sel]
-        for j, ch in enumerate(text.encode("ascii")):
-            flat[at + j] = ch
-        end[sel] += len(text)
-    return chars[masks[start, end]].tobytes(), np.cumsum(end - start)
+def _int_rows(v: np.ndarray, suffix: np.ndarray, words: np.ndarray, rows: np.ndarray) -> None:
+    """Write the rows of the integers ``v``: [sign, NULs] [quads of digits, zeros before the first
+    digit NUL] [suffix (s quads)]."""
+    n, s = v.size, words.shape[1]
+    quads = rows.view(np.uint32)
+    nq = quads.shape[1] - s - 1
+    mag = np.abs(v)
+    parts = []
+    for _ in range(nq):
+        rest = mag // 10_000
+        parts.append(mag - rest * 10_000)
+        mag = rest
+    quads[:, 0] = 0
+    lead = np.ones(n, bool)
+    for j, part in enumerate(reversed(parts)):
+        quads[:, 1 + j] = _QUAD[part + np.where(lead, _LAST if j == nq - 1 else _LEAD, _FULL)]
+        lead &= part == 0
+    quads[:, nq + 1:] = words[suffix]
+    rows[:, 0] = (v < 0).view(np.uint8) * _MINUS
+
+
+def _int_width(v: np.ndarray, suffix_quads: int) -> int:
+    digits = len(str(int(np.abs(v).max()))) if v.size else 1
+    return 4 * (1 + (digits + 3) // 4 + suffix_quads)
 
 
 #: Arrays of at least this many numbers have their text kept by content (:func:`arrays_text`).
 CACHE_MIN = 1024
-#: Characters of kept texts, at most (the least recently used go first).
-CACHE_CHARS = 16_000_000
-_cache: "OrderedDict[tuple, str]" = OrderedDict()
-_cache_chars = 0
+#: Bytes kept, at most: the texts and the values they were made from (the least recently used go first).
+CACHE_BYTES = 24_000_000
+#: Values of an array that make its fingerprint (spread evenly over it, the last one included).
+_PROBES = 256
+_cache: "OrderedDict[tuple, tuple]" = OrderedDict()
+_cache_bytes = 0
 _cache_lock = threading.Lock()
 
 
 def _content_key(a: np.ndarray) -> tuple:
-    """What an array's text depends on: dtype, shape and the bytes of its values (a 160-bit digest)."""
-    a = np.ascontiguousarray(a)
-    return a.dtype.str, a.shape, hashlib.blake2b(memoryview(a).cast("B"), digest_size=20).digest()
+    """dtype, shape and a fingerprint of ``a``: the bytes of :data:`_PROBES` of its values.
+
+    Cheap (a batch's arrays are looked up every item, most of them to find
+    that they changed); a key says where to look, :func:`_kept` compares all
+    the values before it answers.
+    """
+    flat = a.reshape(-1)
+    return a.dtype.str, a.shape, flat[::max(1, flat.size // _PROBES)].tobytes() + flat[-1:].tobytes()
 
 
-def _kept(key: tuple):
+def _same_bits(a: np.ndarray, b: np.ndarray) -> bool:
+    # bit for bit, as the text depends on them (0.0 and -0.0 differ)
+    bits = np.dtype(f"u{a.dtype.itemsize}")
+    return bool(np.array_equal(a.view(bits), b.view(bits)))
+
+
+def _kept(key: tuple, a: np.ndarray):
+    """The kept text of ``a`` (None if there is none for these very values)."""
     with _cache_lock:
-        text = _cache.get(key)
-        if text is not None:
-            _cache.move_to_end(key)
-        return text
+        hit = _cache.get(key)
+        if hit is None or not _same_bits(hit[0], a):
+            return None
+        _cache.move_to_end(key)
+        return hit[1]
 
 
-def _keep(key: tuple, text: str) -> None:
-    global _cache_chars
+def _keep(key: tuple, a: np.ndarray, text: str) -> None:
+    """Keep ``text`` for a copy of ``a``'s values (replacing another array of the same key)."""
+    global _cache_bytes
+    size = a.nbytes + len(text)
     with _cache_lock:
-        if key in _cache or len(text) > CACHE_CHARS:
+        if size > CACHE_BYTES:
             return
-        _cache[key] = text
-        _cache_chars += len(text)
-        while _cache_chars > CACHE_CHARS:
-            _cache_chars -= len(_cache.popitem(last=False)[1])
+        old = _cache.pop(key, None)
+        if old is not None:
+            _cache_bytes -= old[0].nbytes + len(old[1])
+        _cache[key] = (a.copy(), text)
+        _cache_bytes += size
+        while _cache_bytes > CACHE_BYTES:
+            values, kept = _cache.popitem(last=False)[1]
+            _cache_bytes -= values.nbytes + len(kept)
 
 
 def arrays_text(arrays: Sequence) -> List[str]:
@@ -257,10 +293,11 @@ def arrays_text(arrays: Sequence) -> List[str]:
     cost is per number, not per array.
 
     An array's text is a function of its dtype, shape and values alone, so the
-    texts of arrays of :data:`CACHE_MIN` numbers or more are kept by content
-    (:data:`CACHE_CHARS` characters at most): a batch writes the same faces,
-    vertex ids, outlines and ease targets for every body of a design, and
-    hashing an array costs a tenth of formatting it. The bytes are the same
+    texts of arrays of :data:`CACHE_MIN` numbers or more are kept with a copy
+    of their values (:data:`CACHE_BYTES` at most): a batch writes the same
+    faces, vertex ids, outlines and ease targets for every body of a design.
+    A text is used again only for an array equal to the copy bit for bit
+    (looked up by a fingerprint, compared in full), so the bytes are the same
     either way.
     """
     arrays = [np.asarray(a) for a in arrays]
@@ -272,7 +309,7 @@ def arrays_text(arrays: Sequence) -> List[str]:
     for i, a in enumerate(arrays):
         if a.size >= CACHE_MIN:
             keys[i] = _content_key(a)
-            text = _kept(keys[i])
+            text = _kept(keys[i], a)
             if text is not None:
                 out[i] = text
                 continue
@@ -280,18 +317,16 @@ def arrays_text(arrays: Sequence) -> List[str]:
     for i, text in zip(todo, _format([arrays[i] for i in todo])):
         out[i] = text
         if i in keys:
-            _keep(keys[i], text)
+            _keep(keys[i], arrays[i], text)
     return out
 
 
 def _format(arrays: List[np.ndarray]) -> List[str]:
     """:func:`arrays_text` of checked arrays, every number formatted."""
     depth = max([a.ndim for a in arrays] + [1])
-    # what follows a number: c closing brackets, then (unless it ends its array) ", " and as
-    # many opening ones: code 2c (array end) or 2c + 1
-    suffixes = ["]" * (c // 2) + ("" if c % 2 == 0 else ", " + "[" * (c // 2)) for c in range(2 * depth + 2)]
+    words = _suffixes(depth)
     out: List[str] = [""] * len(arrays)
-    for kind, fields, cols in (("f", _Floats, _FLOAT_COLS), ("iu", _Ints, None)):
+    for kind, rows_of, width_of in (("f", _float_rows, _float_width), ("iu", _int_rows, _int_width)):
         group = [(i, a) for i, a in enumerate(arrays) if a.dtype.kind in kind]
         for i, a in group:
             if not a.size:
@@ -304,33 +339,30 @@ def _format(arrays: List[np.ndarray]) -> List[str]:
             values = values.astype(np.float64)
             if not np.all(np.isfinite(values)):
                 raise ValueError("Out of range float values are not JSON compliant")
-        closes = np.zeros(values.size, np.int64)
-        opens = np.zeros(values.size, np.int64)
+        else:
+            values = values.astype(np.int64)
+            if values.min() == np.iinfo(np.int64).min:
+                raise ValueError("integer out of range for JSON text: -2**63")
+        # the suffix codes: ", " (1); 2 more for each dimension whose row a number ends; 2 ndim at the end
+        suffix = np.ones(values.size, np.int64)
         spans, at = [], 0
         for i, a in group:
             step = 1
-            for d in range(a.ndim - 1, -1, -1):  # the numbers that end a row of each dimension
+            for d in range(a.ndim - 1, 0, -1):
                 step *= a.shape[d]
-                closes[at + step - 1:at + a.size:step] += 1
-                opens[at + step - 1:at + a.size - 1:step] += 1
+                suffix[at + step - 1:at + a.size:step] += 2
+            suffix[at + a.size - 1] = 2 * a.ndim
             spans.append((i, at, at + a.size, a.ndim))
             at += a.size
-        last = np.zeros(values.size, bool)
-        last[[hi - 1 for _, _, hi, _ in spans]] = True
-        suffix = np.where(last, 2 * closes, 2 * opens + 1)
-        f = fields(values)
-        width = _round8((cols or f.cols) + 2 * depth)
-        masks = _mask_table(width)
-        pieces, ends, done = [], [], 0
+        rows = np.empty((values.size, width_of(values, words.shape[1])), np.uint8)
         for c in range(0, values.size, _CHUNK):
-            hi_c = min(c + _CHUNK, values.size)
-            piece, piece_ends = _joined(*f.chunk(c, hi_c, width), suffix[c:hi_c], suffixes, masks)
-            pieces.append(piece)
-            ends.append(piece_ends + done)
-            done += len(piece)
-        text, ends = b"".join(pieces), np.concatenate(ends)
+            rows_of(values[c:c + _CHUNK], suffix[c:c + _CHUNK], words, rows[c:c + _CHUNK])
+        keep = rows.reshape(-1) != 0
+        text = rows.reshape(-1)[keep].tobytes().decode("ascii")     # the one compaction
+        width, end = rows.shape[1], 0
         for i, lo, hi, ndim in spans:
-            out[i] = "[" * ndim + text[(ends[lo - 1] if lo else 0):ends[hi - 1]].decode("ascii")
+            start, end = end, end + int(np.count_nonzero(keep[lo * width:hi * width]))
+            out[i] = "[" * ndim + text[start:end]
     return out
 
 
