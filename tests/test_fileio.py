@@ -90,3 +90,13 @@ def test_only_the_temporaries_of_the_name_written_are_removed(tmp_path):
     with output_dir(tmp_path / "out") as d:
         write_text(d / "a.json", "{}")
     assert sorted(os.listdir(tmp_path)) == sorted(others + ["out"])
+
+
+def test_a_file_under_a_file_is_one_clear_error(tmp_path):
+    from core.errors import EaseError
+    (tmp_path / "f").write_text("x")
+    for target in (tmp_path / "f" / "a.json", tmp_path / "f" / "sub" / "a.json"):
+        with pytest.raises(EaseError, match="f is a file, not a folder"):
+            write_text(target, "{}")
+    write_text(tmp_path / "new" / "sub" / "a.json", "{}")        # missing folders are made
+    assert (tmp_path / "new" / "sub" / "a.json").read_text() == "{}"

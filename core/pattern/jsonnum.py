@@ -81,9 +81,10 @@ _ALIGN = 10 ** (1 + np.maximum(_E, -1))
 
 
 def _suffixes(depth: int) -> np.ndarray:
-    """(2 depth + 2, s) uint32: the text that follows a number, by code: c closing brackets,
-    then (unless it ends its array) ", " and as many opening ones: code 2c (array end) or 2c + 1."""
-    texts = ["]" * (c // 2) + ("" if c % 2 == 0 else ", " + "[" * (c // 2)) for c in range(2 * depth + 2)]
+    """(2 depth + 1, s) uint32: the text that follows a number, by code: c closing brackets,
+    then (unless it ends its array) ", " and as many opening ones: code 2c (array end, c = ndim)
+    or 2c + 1 (c < ndim): at most 2 depth characters, one quad for a pattern's arrays."""
+    texts = ["]" * (c // 2) + ("" if c % 2 == 0 else ", " + "[" * (c // 2)) for c in range(2 * depth + 1)]
     quads = (max(map(len, texts)) + 3) // 4
     return _texts(texts, 4 * quads, np.uint32).reshape(len(texts), quads)
 
