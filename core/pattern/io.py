@@ -80,8 +80,8 @@ WALL_CLOCK = ("timings", "optimize_seconds", "init_seconds")
 _SLOT = "\\u0000"
 
 
-def _text(obj: dict) -> str:
-    """The JSON text of a :func:`_pattern_dict` (one line, ``", "`` / ``": "`` separators).
+def _text(obj: dict, end: str = "") -> str:
+    """The JSON text of a :func:`_pattern_dict` (one line, ``", "`` / ``": "`` separators), then ``end``.
 
     The arrays' numbers are formatted in one pass (:func:`core.pattern.jsonnum.arrays_text`):
     floats with 17 significant digits, which read back as the very same doubles.
@@ -97,15 +97,15 @@ def _text(obj: dict) -> str:
     skeleton = dumps_json(_map_arrays(obj, slot), indent=None)
     parts = skeleton.split(f'"{_SLOT}')
     if len(parts) - 1 != len(arrays) or skeleton.count(_SLOT) != len(arrays):
-        return dumps_json(_map_arrays(obj, lambda a: a.tolist()), indent=None)
+        return dumps_json(_map_arrays(obj, lambda a: a.tolist()), indent=None) + end
     texts = arrays_text(arrays)
     out = [parts[0]]
     for k, part in enumerate(parts[1:]):
         index, rest = part.split('"', 1)
         if index != str(k):
-            return dumps_json(_map_arrays(obj, lambda a: a.tolist()), indent=None)
+            return dumps_json(_map_arrays(obj, lambda a: a.tolist()), indent=None) + end
         out += [texts[k], rest]
-    return "".join(out)
+    return "".join(out + [end])        # one copy of the megabytes, not two
 
 
 def pattern_text(pattern: Pattern) -> str:
@@ -117,7 +117,7 @@ def pattern_text(pattern: Pattern) -> str:
     obj["report"] = {k: v for k, v in obj["report"].items() if k not in WALL_CLOCK}
     pattern_from_json(obj)  # validate before anything is written
     try:
-        return _text(obj) + "\n"
+        return _text(obj, "\n")
     except ValueError as exc:  # NaN/inf refused by allow_nan=False
         raise PatternError(f"pattern {pattern.style!r} holds non-finite numbers: {exc}") from exc
 
