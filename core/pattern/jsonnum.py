@@ -114,10 +114,15 @@ def _mantissa(a: np.ndarray, e: np.ndarray) -> np.ndarray:
 
 
 def _decimal(a: np.ndarray):
-    """(q, e, fast) of the magnitudes ``a``: ``a`` is ``q * 10**(e - 16)`` rounded to the nearest,
-    ``10**16 <= q < 10**17``, where ``fast`` (``-5 <= e <= 14``); q = e = 0 elsewhere."""
+    """(q, e, other) of the magnitudes ``a``: ``a`` is ``q * 10**(e - 16)`` rounded to the nearest,
+    ``10**16 <= q < 10**17`` and ``-5 <= e <= 14``, but at the indices ``other`` (zeros and the
+    magnitudes left to ``repr``), where q = e = 0."""
     fast = (a >= 10.0 ** _E_MIN) & (a < 10.0 ** (_E_MAX + 1))
-    af = np.where(fast, a, 1.0)
+    other = np.flatnonzero(~fast)            # few: a pattern's zeros and rounding dust
+    af = a
+    if other.size:
+        af = a.copy()
+        af[other] = 1.0
     e = np.floor(np.log10(af)).astype(np.int64)
     np.clip(e, _E_MIN, _E_MAX, out=e)
     q = _mantissa(af, e)
@@ -129,13 +134,15 @@ def _decimal(a: np.ndarray):
         fast &= (e >= _E_MIN) & (e <= _E_MAX)
         e = np.clip(e, _E_MIN, _E_MAX)
         q = _mantissa(np.where(fast, af, 1.0), e)
+        other = np.flatnonzero(~fast)
     else:
         up = q >= _HI                        # rounded up to 10**17: one decade more
         q, e = np.where(up, q // 10, q), e + up
         fast &= (q >= _LO) & (q < _HI) & (e <= _E_MAX)
-    q *= fast
-    e *= fast
-    return q, e, fast
+        other = np.flatnonzero(~fast)
+    q[other] = 0
+    e[other] = 0
+    return q, e, other
 
 
 def _float_rows(x: np.ndarray, suffix: np.ndarray, words: np.ndarray, rows: np.ndarray) -> None:
@@ -147,7 +154,7 @@ def _float_rows(x: np.ndarray, suffix: np.ndarray, words: np.ndarray, rows: np.n
     quads = rows.view(np.uint32)
     h = quads.shape[1] - 6 - s
     a = np.abs(x)
-    q, e, fast = _decimal(a)
+    q, e, other = _decimal(a)
     # |x| = q * 10**-p: the integer part, and the fraction's digits left-aligned in 17 digits
     ei = e - _E_MIN
     whole, frac = np.divmod(q, _SPLIT_AT[ei])
@@ -179,14 +186,14 @@ def _float_rows(x: np.ndarray, suffix: np.ndarray, words: np.ndarray, rows: np.n
     for j, v in enumerate((v0, v1, v2)):
         quads[:, h + 2 + j] = _QUAD_FULL[v]
     ends = np.flatnonzero(v3 == 0)               # rare: ends in 4 zeros, whose quads before may end it too
-    trail = np.ones(ends.size, bool)
-    for j, v in ((2, v2[ends]), (1, v1[ends]), (0, v0[ends])):
-        quads[ends, h + 2 + j] = _QUAD[v + _TRAIL * trail]
-        trail &= v == 0
+    if ends.size:
+        trail = np.ones(ends.size, bool)
+        for j, v in ((2, v2[ends]), (1, v1[ends]), (0, v0[ends])):
+            quads[ends, h + 2 + j] = _QUAD[v + _TRAIL * trail]
+            trail &= v == 0
     quads[:, h + 6:] = words[suffix]
     rows[:, 0] = np.signbit(x).view(np.uint8) * _MINUS
-    slow = np.flatnonzero(~fast)
-    slow = slow[a[slow] != 0]
+    slow = other[a[other] != 0]
     if slow.size:                               # tiny or huge magnitudes: Python's repr (also exact);
         width = rows.shape[1] - 4 * s            # at most 24 characters ("-2.2250738585072014e-308")
         text = b"".join(repr(float(v)).encode("ascii").ljust(width, b"\0") for v in x[slow])
@@ -358,11 +365,11 @@ def _format(arrays: List[np.ndarray]) -> List[str]:
         rows = np.empty((values.size, width_of(values, words.shape[1])), np.uint8)
         for c in range(0, values.size, _CHUNK):
             rows_of(values[c:c + _CHUNK], suffix[c:c + _CHUNK], words, rows[c:c + _CHUNK])
-        keep = rows.reshape(-1) != 0
-        text = rows.reshape(-1)[keep].tobytes().decode("ascii")     # the one compaction
-        width, end = rows.shape[1], 0
+        # the one compaction: bytes.translate's deletion (a C loop) is twice numpy's boolean indexing
+        text = rows.tobytes().translate(None, b"\0").decode("ascii")
+        end = 0
         for i, lo, hi, ndim in spans:
-            start, end = end, end + int(np.count_nonzero(keep[lo * width:hi * width]))
+            start, end = end, end + int(np.count_nonzero(rows[lo:hi]))
             out[i] = "[" * ndim + text[start:end]
     return out
 
