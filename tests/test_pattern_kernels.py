@@ -31,6 +31,20 @@ def both():
     return run
 
 
+@pytest.fixture
+def ran(monkeypatch):
+    """How many calls of each of :mod:`core.pattern.compiled`'s steps the kernels did (gave a result) in
+    the test: a comparison with numpy only tests the kernels where they ran."""
+    counts = {}
+    for name in ("local_step", "ratios", "collapse_guard", "grain_votes", "turned"):
+        def spy(*args, _step=getattr(compiled, name), _name=name):
+            got = _step(*args)
+            counts[_name] = counts.get(_name, 0) + (got is not None)
+            return got
+        monkeypatch.setattr(compiled, name, spy)
+    return counts
+
+
 def _same(a, b):
     """Bitwise equality of nested lists / tuples of arrays (NaNs equal where both are NaN)."""
     if isinstance(a, (list, tuple)):
@@ -122,6 +136,32 @@ def test_collapse_guard_same_bits(both, f):
     if f == SIZES[-1]:     # the cases the update distinguishes all occur
         gain = ref[2]
         assert ref[1].size and (gain > start).any() and ((start > 0) & (gain < start)).any() and (gain == 0).any()
+
+
+@pytest.mark.parametrize("grow, over", [(2.0, True), (2.0, False), (0.9, False)])
+def test_collapse_guard_gains_at_or_over_the_limit(both, ran, grow, over):
+    """numpy raises the low triangles' gains only if one is under the limit: where all are at it (or over
+    it, as a resumed solve's gains after an escalated limit) it leaves them, and so must the kernel."""
+    from dataclasses import replace
+    from core.pattern.steps import relative_singular_values
+    guard = replace(SolverConfig.named("improved").guard, guard_grow=grow)
+    f = 83
+    rng, K, Kc, M, cw, cg = _inputs(f, 5, collapse=True)
+    inverse = inverse_offsets(Kc)
+    _, s2, _ = relative_singular_values(M, Kc, cw, cg, inverse)
+    low = inverse[1] & (s2 < guard.guard_scale)
+    start = np.where(low, guard.guard_limit, rng.choice([0.0, 1.0, 4.0], f))
+    if over:
+        start[np.flatnonzero(low)[::2]] *= 3.0
+
+    def run():
+        gain = start.copy()
+        q, held = collapse_guard(guard, M, Kc, cw, cg, gain, inverse)
+        return q, held, gain
+    ref, got = both(run)
+    _same(ref, got)
+    assert low.sum() > 3 and np.array_equal(ref[2][low], start[low])     # numpy left them
+    assert ran.get("collapse_guard", 0) == (0 if over or grow < 1 else 1)
 
 
 @pytest.fixture(scope="module")

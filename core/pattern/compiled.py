@@ -279,13 +279,17 @@ def _body_weights(body: np.ndarray) -> np.ndarray:
 
 def collapse_guard(guard, M, inverse, c_weft, c_warp, gain: np.ndarray):
     """:func:`.steps.collapse_guard`'s relative Jacobians ``q`` (4 (f,)), ``gain`` updated in place; or
-    None (``gain`` untouched; numpy then)."""
+    None (``gain`` untouched; numpy then: also for a guard that lowers gains as it raises them,
+    ``guard_grow`` or ``guard_limit`` under 1, and where a gain under the guard is over ``guard_limit``,
+    as after a resumed solve's escalated limit)."""
+    if not (guard.guard_grow >= 1.0 and guard.guard_limit >= 1.0):
+        return None
     (i00, i01, i10, i11), body = inverse
     got = _call(_kernels().guard8, len(gain), (*M, i00, i01, i10, i11, _body_weights(body), c_weft, c_warp,
                                                float(guard.guard_scale), float(guard.guard_open),
                                                float(guard.guard_grow), float(guard.guard_limit),
-                                               float(guard.guard_release), gain), 5)
-    if got is None:
+                                               float(guard.guard_release), gain), 5, 1)
+    if got is None or got[1][0]:
         return None
     gain[:] = got[0][0]
     return got[0][1:]

@@ -212,9 +212,11 @@ def ratios8(m0: V, m1: V, m2: V, m3: V, k0a: V, k1a: V, k2a: V, k3a: V, cw: V, c
 @wp.kernel
 def guard8(m0: V, m1: V, m2: V, m3: V, i00a: V, i01a: V, i10a: V, i11a: V, body_ok: V,
            cw: V, cg: V, scale: f64, opn: f64, grow: f64, limit: f64, release: f64,
-           gain_in: V, gain: V, q0: V, q1: V, q2: V, q3: V):
+           gain_in: V, gain: V, q0: V, q1: V, q2: V, q3: V, flags: Flags):
     """:func:`.steps.collapse_guard`: the relative Jacobians ``q`` (:func:`.steps.relative_singular_values`)
-    and the gains after the update (``gain``, from ``gain_in``); numpy lists the held triangles."""
+    and the gains after the update (``gain``, from ``gain_in``); numpy lists the held triangles.
+    ``flags[0]``: triangles under ``scale`` whose gain is over ``limit`` or NaN, or raised to NaN
+    (numpy raises the gains only if one is under the limit, and its min / max propagate a NaN)."""
     i = wp.tid()
     M0, M1, M2, M3 = four(m0, m1, m2, m3, i)
     i00 = i00a[i]
@@ -242,15 +244,21 @@ def guard8(m0: V, m1: V, m2: V, m3: V, i00a: V, i01a: V, i10a: V, i11a: V, body_
     gn = gain_in[i]
     bo = body_ok[i]
     fin = s1 - s1
-    # the gains are finite and >= 0, and s2 is finite where the triangle is valid: min / max see no NaN
+    over = int(0)
+    # s2 is finite where the triangle is valid; where no raised gain is over the limit (or NaN) numpy's
+    # "raise only if one is under the limit" is the raise itself (grow >= 1, limit >= 1: the caller's)
     for j in range(8):
         ok = wp.where(bo[j] > f64(0.0), wp.where(fin[j] == f64(0.0), 1, 0), 0)
         x = wp.where(ok != 0, gn[j], gn[j] * f64(0.0))
-        x = wp.where(ok != 0, wp.where(s2[j] < scale, wp.min(wp.max(x * grow, f64(1.0)), limit), x), x)
+        low = wp.where(ok != 0, wp.where(s2[j] < scale, 1, 0), 0)
+        up = x * grow
+        over += wp.where(low != 0, wp.where(x <= limit, wp.where(up == up, 0, 1), 1), 0)
+        x = wp.where(low != 0, wp.min(wp.max(up, f64(1.0)), limit), x)
         xr = x * release
         xr = wp.where(xr < f64(1.0), f64(0.0), xr)
         gn[j] = wp.where(x > f64(0.0), wp.where(s2[j] >= opn, xr, x), x)
     gain[i] = gn
+    flag(flags, 0, over)
 
 
 @wp.kernel
