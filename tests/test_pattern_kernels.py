@@ -164,6 +164,74 @@ def test_collapse_guard_gains_at_or_over_the_limit(both, ran, grow, over):
     assert ran.get("collapse_guard", 0) == (0 if over or grow < 1 else 1)
 
 
+def _unaligned(x):
+    buf = np.zeros(x.nbytes + 1, np.uint8)
+    out = np.frombuffer(buf.data, np.float64, len(x), offset=1)
+    out.flags.writeable = True
+    out[:] = x
+    return out
+
+
+class _Sub(np.ndarray):
+    pass
+
+
+UNSUITABLE = {
+    "float32": lambda x: x.astype(np.float32),
+    "int32": lambda x: (x * 100).astype(np.int32),      # an int32 array in a float64 slot: read past its end
+    "int64": lambda x: (x * 100).astype(np.int64),
+    "big-endian": lambda x: x.astype(">f8"),
+    "strided": lambda x: np.repeat(x, 2)[::2],
+    "longer": lambda x: np.append(x, 1.0),
+    "2-d": lambda x: x[:, None],
+    "unaligned": _unaligned,
+    "subclass": lambda x: x.view(_Sub),
+    "list": lambda x: list(x),
+}
+
+
+@pytest.mark.parametrize("kind", sorted(UNSUITABLE))
+def test_unsuitable_arrays_go_to_numpy(both, ran, kind):
+    """An argument the kernels cannot read as a float64 (f,) array: numpy takes the call, and the
+    launches' arguments rebound before it was met stay consistent (the next calls give numpy's bits)."""
+    cfg = SolverConfig.named("lengths")
+    f = 83
+    _, K, Kc, M, cw, cg = _inputs(f, 21)
+    bad = UNSUITABLE[kind](cg)
+
+    def run():
+        out = []
+        for M_, c_warp in ((M, cg), ([m * 1.01 for m in M], bad), (M, cg)):
+            if c_warp is bad:       # M_ is rebound before c_warp is met
+                out.append(compiled.ratios(M_, Kc, cw, bad))
+                continue
+            a, b = np.linspace(0.9, 1.1, f), np.linspace(1.05, 0.95, f)
+            move_corrections(cfg, M_, Kc, cw, c_warp, a, b)
+            out += [a, b]
+        return out
+    ref, got = both(run)
+    assert got[2] is None
+    _same(ref[:2] + ref[3:], got[:2] + got[3:])
+    assert ran["ratios"] == 2
+    assert compiled.turned(M, bad, cw) is None          # no flags there: the launcher alone refuses it
+
+
+def test_equal_float64_dtypes_and_read_only_arrays_run(both, ran):
+    """Arrays that came through pickle (a Dask worker's: an equal float64 dtype, another object) and
+    read-only ones are the kernels' too."""
+    import pickle
+    cfg = SolverConfig.named("improved")
+    _, K, Kc, M, cw, cg = _inputs(83, 31)
+    M = pickle.loads(pickle.dumps(M))
+    assert M[0].dtype is not np.dtype(np.float64)
+    for x in Kc:
+        x.flags.writeable = False
+    tg = rest_targets(Kc, cw, cg, cfg.rest_shape.model)
+    ref, got = both(lambda: local_step(cfg, M, tg, np.ones(2), {}))
+    _same(ref, got)
+    assert ran["local_step"] == 1
+
+
 @pytest.fixture(scope="module")
 def tube():
     cut, body = two_panels(ease=(1.2, 1.6), bulge=0.2)

@@ -92,13 +92,31 @@ def _address(a: np.ndarray) -> int:
         return a.ctypes.data
 
 
-def _pointer(a, f: int) -> int:
-    """The data address of ``a``, a contiguous float64 (f,) or int32 flag array (else :class:`_Unsuitable`)."""
-    if type(a) is not np.ndarray or not a.flags.c_contiguous:
+def _pointer(a, f: int, counters: bool) -> int:
+    """The data address of ``a``: an aligned, contiguous, native float64 (f,) array, or with ``counters``
+    an int32 one (else :class:`_Unsuitable`: another dtype would be read past its end or as other bits).
+
+    Float64 is compared by equality after identity: an array that came through pickle (a Dask
+    worker's) has an equal dtype that is another object.
+    """
+    if type(a) is not np.ndarray:
         raise _Unsuitable
-    if a.dtype is _F64 and a.shape == (f,) or a.dtype is _I32:
-        return _address(a)
-    raise _Unsuitable
+    flags = a.flags
+    if not (flags.c_contiguous and flags.aligned):
+        raise _Unsuitable
+    if counters:
+        if a.dtype is not _I32:
+            raise _Unsuitable
+    elif a.shape != (f,) or not (a.dtype is _F64 or a.dtype == _F64):
+        raise _Unsuitable
+    return _address(a)
+
+
+def _slots(kernel) -> tuple:
+    """Per argument of ``kernel``: False (an (f,) float64 array read as 8-vectors), True (int32
+    counters) or None (a scalar)."""
+    from . import kernels as K
+    return tuple((a.type.dtype is K.wp.int32) if K.wp.types.is_array(a.type) else None for a in kernel.adj.args)
 
 
 class _Launch:
@@ -106,21 +124,21 @@ class _Launch:
 
     Recorded with Warp (``wp.launch(record_cmd=True)``) on first use; then
     :meth:`bind` writes an argument into the kept argument struct and
-    :meth:`__call__` runs the kernel's CPU entry point.
+    :meth:`__call__` runs the kernel's CPU entry point. ``slots``: :func:`_slots` of ``kernel``.
     """
 
     #: use Warp's private CPU entry (warp-lang is pinned); False: the public replay, ~6 us more a launch
     private = True
 
-    def __init__(self, kernel, args, dim: int, shift: int):
+    def __init__(self, kernel, slots: tuple, args, dim: int, shift: int):
         from . import kernels as K
         wp = K.wp
-        self.dim, self.shift = dim, shift
+        self.dim, self.shift, self.slots = dim, shift, slots
         inputs = []
-        for a in args:
-            if isinstance(a, np.ndarray) and a.dtype == np.int32:
+        for a, counters in zip(args, slots):
+            if counters:
                 inputs.append(wp.array(a, dtype=wp.int32, device="cpu", copy=False))
-            elif isinstance(a, np.ndarray):
+            elif counters is not None:
                 view = a[shift:shift + _LANES * dim].reshape(dim, _LANES)
                 inputs.append(wp.array(view, dtype=K.v8, device="cpu", copy=False))
             else:
@@ -137,8 +155,8 @@ class _Launch:
             struct = struct_type()
             for j, field in enumerate(fields):
                 setattr(struct, field[0], cmd.params[1 + j])
-            self.fields = [getattr(struct, name) if isinstance(a, np.ndarray) else name
-                           for (name, _), a in zip(fields, args)]
+            self.fields = [name if counters is None else getattr(struct, name)
+                           for (name, _), counters in zip(fields, slots)]
             self.struct = struct
             self.fast = (ctypes.byref(cmd.params[0]), ctypes.byref(struct), cmd.hooks.forward)
         except (AttributeError, KeyError, TypeError):
@@ -146,17 +164,18 @@ class _Launch:
 
     def bind(self, j: int, a, address: Optional[int]) -> None:
         """Argument ``j`` is now ``a`` (an array at ``address``, or a scalar)."""
+        counters = self.slots[j]
         if self.fast is not None:
             if address is None:
                 setattr(self.struct, self.fields[j], a)
             else:
-                self.fields[j].data = address if a.dtype is _I32 else address + 8 * self.shift
+                self.fields[j].data = address if counters else address + 8 * self.shift
         elif address is None:
             self.cmd.set_param_at_index(j, a)
         else:
             from warp._src.types import array_t
-            shape, strides = ((len(a),), (4,)) if a.dtype is _I32 else ((self.dim,), (8 * _LANES,))
-            start = address if a.dtype is _I32 else address + 8 * self.shift
+            shape, strides = ((len(a),), (4,)) if counters else ((self.dim,), (8 * _LANES,))
+            start = address if counters else address + 8 * self.shift
             self.cmd.set_param_at_index_from_ctype(j, array_t(start, 0, 1, shape, strides))
 
     def __call__(self) -> None:
@@ -177,22 +196,24 @@ class _Pair:
     """
 
     def __init__(self, kernel, f: int, args):
-        for a in args:
-            if isinstance(a, np.ndarray):
-                _pointer(a, f)
+        self.slots = slots = _slots(kernel)
+        for a, counters in zip(args, slots):
+            if counters is not None:
+                _pointer(a, f, counters)
         self.f, self.last = f, list(args)
         # recording runs the launches: this is also the first call
-        self.launches = [_Launch(kernel, args, f // _LANES, 0)]
+        self.launches = [_Launch(kernel, slots, args, f // _LANES, 0)]
         if f % _LANES:
-            self.launches.append(_Launch(kernel, args, 1, f - _LANES))
+            self.launches.append(_Launch(kernel, slots, args, 1, f - _LANES))
 
     def __call__(self, args) -> None:
         last = self.last
         for j, a in enumerate(args):
             if a is last[j]:
                 continue
-            if isinstance(a, np.ndarray):
-                address = _pointer(a, self.f)
+            counters = self.slots[j]
+            if counters is not None:
+                address = _pointer(a, self.f, counters)
             elif a == last[j]:
                 continue
             else:
