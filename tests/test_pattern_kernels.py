@@ -232,6 +232,25 @@ def test_equal_float64_dtypes_and_read_only_arrays_run(both, ran):
     assert ran["local_step"] == 1
 
 
+def test_launches_keep_no_arrays_and_few_sizes(monkeypatch):
+    """The kept launches hold no array past its call (a solve's memory goes with it), and a thread keeps
+    launches for a few sizes only (a batch over many designs meets a new size with every design)."""
+    import weakref
+    assert compiled.load()
+    monkeypatch.setattr(compiled._local, "launches", {}, raising=False)
+    rng = np.random.default_rng(0)
+    for f in range(8, 8 + 2 * compiled._KEPT):
+        for _ in range(2):      # recorded, then rebound
+            M = [rng.normal(size=f) for _ in range(4)]
+            ct, st = rng.normal(size=f), rng.normal(size=f)
+            out = compiled.turned(M, ct, st)
+            assert out is not None
+            arrays = [weakref.ref(x) for x in (*M, ct, st, out[0].base)]
+            del M, ct, st, out
+            assert not any(r() is not None for r in arrays)
+    assert len(compiled._local.launches) == compiled._KEPT
+
+
 @pytest.fixture(scope="module")
 def tube():
     cut, body = two_panels(ease=(1.2, 1.6), bulge=0.2)

@@ -27,6 +27,7 @@ import ctypes
 import logging
 import os
 import threading
+import weakref
 from typing import Optional
 
 import numpy as np
@@ -38,6 +39,9 @@ log = logging.getLogger(__name__)
 #: Environment variable choosing the per-triangle steps' code: ``warp`` (default) or ``numpy``.
 ENV = "EASE_SOLVER_KERNELS"
 _LANES = 8
+#: recorded launches a thread keeps, the most recently used: the 5 kernels at 4 sizes (a batch over many
+#: designs, or the add-on over a session, meets a new size with every design)
+_KEPT = 20
 _state = {"ready": None, "forced": None}
 _lock = threading.Lock()
 _local = threading.local()
@@ -145,6 +149,9 @@ class _Launch:
                 inputs.append(a)
         self.cmd = cmd = wp.launch(kernel, dim=dim, inputs=inputs, device="cpu", record_cmd=True)
         cmd.launch()          # the first call's launch (and Warp's argument struct type)
+        # the recorded launch keeps the first call's Warp arrays, and so its numpy arrays, for a graph
+        # capture's replay, which these launches never are
+        cmd.fwd_args = None
         self.fast = None
         if not self.private:
             return
@@ -190,9 +197,9 @@ class _Pair:
     """``kernel`` over the f // 8 blocks of 8 triangles and, where f % 8 != 0, once more over the 8 last
     (every kernel writes outputs only, so the overlap writes the same values twice).
 
-    Only the arguments that are other objects than last time are rebound; the
-    last call's arrays stay referenced, so an address compared is never a freed
-    array's.
+    Only the arguments that are other objects than last time are rebound. The
+    last call's arrays are known by weak references: a freed one is never taken
+    for a new array at its address, and none is kept alive past its solve.
     """
 
     def __init__(self, kernel, f: int, args):
@@ -200,7 +207,8 @@ class _Pair:
         for a, counters in zip(args, slots):
             if counters is not None:
                 _pointer(a, f, counters)
-        self.f, self.last = f, list(args)
+        self.f = f
+        self.last = [a if counters is None else weakref.ref(a) for a, counters in zip(args, slots)]
         # recording runs the launches: this is also the first call
         self.launches = [_Launch(kernel, slots, args, f // _LANES, 0)]
         if f % _LANES:
@@ -209,32 +217,38 @@ class _Pair:
     def __call__(self, args) -> None:
         last = self.last
         for j, a in enumerate(args):
-            if a is last[j]:
-                continue
             counters = self.slots[j]
-            if counters is not None:
-                address = _pointer(a, self.f, counters)
-            elif a == last[j]:
-                continue
+            if counters is None:
+                if a == last[j]:
+                    continue
+                address, kept = None, a
             else:
-                address = None
+                if last[j]() is a:
+                    continue
+                address, kept = _pointer(a, self.f, counters), weakref.ref(a)
             for launch in self.launches:
                 launch.bind(j, a, address)
-            last[j] = a
+            last[j] = kept
         for launch in self.launches:
             launch()
 
 
 def _run(kernel, f: int, args) -> None:
-    """One call of ``kernel`` on the (f,) arrays ``args`` (:class:`_Pair`, kept per thread)."""
+    """One call of ``kernel`` on the (f,) arrays ``args`` (:class:`_Pair`, the last :data:`_KEPT` kept per
+    thread: each thread binds its own argument structs)."""
     cache = getattr(_local, "launches", None)
     if cache is None:
         cache = _local.launches = {}
-    pair = cache.get((kernel.key, f))
-    if pair is None:
-        cache[(kernel.key, f)] = _Pair(kernel, f, args)
-    else:
+    key = (kernel.key, f)
+    pair = cache.pop(key, None)
+    if pair is not None:
+        cache[key] = pair           # the most recently used last
         pair(args)
+        return
+    pair = _Pair(kernel, f, args)   # recording runs the launches: this is also the call
+    if len(cache) >= _KEPT:
+        del cache[next(iter(cache))]
+    cache[key] = pair
 
 
 def _outputs(k: int, f: int) -> list:
