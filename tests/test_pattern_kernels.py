@@ -320,3 +320,19 @@ def test_a_failed_load_leaves_numpy(monkeypatch, caplog):
     assert not compiled.load()
     assert "using numpy" in caplog.text
     assert not compiled.enabled()
+
+
+def test_a_failed_launch_leaves_numpy(both, monkeypatch, caplog):
+    """A launch Warp refuses: numpy's result, one warning, and numpy for the rest of the process."""
+    def broken(*args):
+        raise RuntimeError("no launch")
+    cfg = SolverConfig.named("improved")
+    _, K, Kc, M, cw, cg = _inputs(83, 41)
+    tg = rest_targets(Kc, cw, cg, cfg.rest_shape.model)
+    monkeypatch.setattr(compiled._Launch, "__init__", broken)
+    monkeypatch.setattr(compiled._local, "launches", {}, raising=False)
+    monkeypatch.setitem(compiled._state, "ready", True)
+    ref, got = both(lambda: [local_step(cfg, M, tg, np.ones(2), {}) for _ in range(2)])
+    _same(ref, got)
+    assert caplog.text.count("using numpy") == 1
+    assert not compiled.enabled()

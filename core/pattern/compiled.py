@@ -6,8 +6,8 @@ The per-triangle steps of a local-global iteration (:func:`.steps.local_step`,
 numpy must do the step, and the step then runs its numpy code:
 
 - the kernels are off (``EASE_SOLVER_KERNELS=numpy``, :func:`use`), Warp
-  does not import or its compiler fails (one warning, then numpy for the
-  process);
+  does not import, its compiler fails or it refuses a launch (one warning,
+  then numpy for the process);
 - a case the kernels do not cover: fewer than 8 triangles, column weights
   other than 1, an adaptation's feedback, an input that is not a contiguous
   float64 (f,) array;
@@ -74,10 +74,16 @@ def load(progress: Optional[Progress] = None) -> bool:
                     K.wp.load_module(K, device="cpu")
                     _state["ready"] = True
                 except Exception as exc:  # noqa: BLE001 - any failure leaves numpy, which gives the same bits
-                    log.warning("pattern solver: Warp kernels unavailable (%s: %s); using numpy",
-                                type(exc).__name__, exc)
-                    _state["ready"] = False
+                    _give_up("loading", exc)
     return bool(_state["ready"])
+
+
+def _give_up(doing: str, exc: Exception) -> None:
+    """The kernels off for the process after ``exc`` while ``doing``: one warning, numpy after."""
+    if _state["ready"] is not False:
+        _state["ready"] = False
+        log.warning("pattern solver: Warp kernels unavailable (%s: %s: %s); using numpy",
+                    doing, type(exc).__name__, exc)
 
 
 class _Unsuitable(Exception):
@@ -266,6 +272,9 @@ def _call(kernel, f: int, head: tuple, n_out: int, n_flags: int = 0):
     try:
         _run(kernel, f, (*head, *out, flags) if n_flags else (*head, *out))
     except _Unsuitable:
+        return None
+    except Exception as exc:  # noqa: BLE001 - a launch Warp refuses leaves numpy, as a failed load does
+        _give_up("launching " + kernel.key, exc)
         return None
     return out, flags
 
