@@ -336,3 +336,15 @@ def test_a_failed_launch_leaves_numpy(both, monkeypatch, caplog):
     _same(ref, got)
     assert caplog.text.count("using numpy") == 1
     assert not compiled.enabled()
+
+
+def test_a_scalar_rebound_when_only_its_sign_of_zero_changes(monkeypatch):
+    """0.0 == -0.0, but the kernel must see the one it is given (the launch's kept argument struct)."""
+    import math
+    assert compiled.load()
+    monkeypatch.setattr(compiled._local, "launches", {}, raising=False)
+    _, K, Kc, M, cw, cg = _inputs(16, 51)
+    for om in (0.0, -0.0):
+        assert compiled.local_step(M, cw, cg, Kc, (cw, cg), Kc, None, om, False, 1.0, 1.0) is not None
+    (pair,) = compiled._local.launches.values()
+    assert all(math.copysign(1.0, launch.struct.om) == -1.0 for launch in pair.launches)

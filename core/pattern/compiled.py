@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import ctypes
 import logging
+import math
 import os
 import threading
 import weakref
@@ -225,7 +226,7 @@ class _Pair:
         for j, a in enumerate(args):
             counters = self.slots[j]
             if counters is None:
-                if a == last[j]:
+                if _same_scalar(a, last[j]):
                     continue
                 address, kept = None, a
             else:
@@ -237,6 +238,12 @@ class _Pair:
             last[j] = kept
         for launch in self.launches:
             launch()
+
+
+def _same_scalar(a, b) -> bool:
+    """Whether scalars ``a`` and ``b`` are the same number to the bit: 0.0 == -0.0, but a kernel may
+    tell them apart (a product's sign); NaN is never the same."""
+    return a == b and (a != 0 or math.copysign(1.0, a) == math.copysign(1.0, b))
 
 
 def _run(kernel, f: int, args) -> None:
