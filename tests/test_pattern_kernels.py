@@ -310,6 +310,15 @@ def test_switches(monkeypatch):
         compiled.use(None)
 
 
+def test_numpy_asked_for_loads_no_kernels(monkeypatch, tube):
+    """``EASE_SOLVER_KERNELS=numpy``: a solver's set-up neither imports nor compiles the kernels."""
+    cut, body, _ = tube
+    monkeypatch.setenv(compiled.ENV, "numpy")
+    monkeypatch.setitem(compiled._state, "ready", None)
+    PatternSolver(cut, body)
+    assert compiled._state["ready"] is None
+
+
 def test_a_failed_load_leaves_numpy(monkeypatch, caplog):
     import core.geom.queries as Q
 

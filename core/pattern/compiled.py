@@ -53,12 +53,24 @@ def use(enabled: Optional[bool]) -> None:
     _state["forced"] = enabled
 
 
+def wanted() -> bool:
+    """Whether the kernels are asked for: :func:`use`, else :data:`ENV`."""
+    forced = _state["forced"]
+    if forced is None:
+        return os.environ.get(ENV, "warp").strip().lower() != "numpy"
+    return bool(forced)
+
+
 def enabled() -> bool:
-    """Whether the kernels run: wanted (:func:`use`, :data:`ENV`) and loaded (compiled on first use)."""
-    wanted = _state["forced"]
-    if wanted is None:
-        wanted = os.environ.get(ENV, "warp").strip().lower() != "numpy"
-    return bool(wanted) and load()
+    """Whether the kernels run: :func:`wanted` and loaded (compiled on first use)."""
+    return wanted() and load()
+
+
+def prepare(progress: Optional[Progress] = None) -> None:
+    """:func:`load` the kernels now where they are wanted (a solver's set-up, so its first iteration does
+    not compile them); with ``EASE_SOLVER_KERNELS=numpy`` Warp is not even imported."""
+    if wanted():
+        load(progress)
 
 
 def load(progress: Optional[Progress] = None) -> bool:

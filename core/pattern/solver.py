@@ -107,7 +107,7 @@ class PatternSolver:
         self.ref_offsets = tuple(a.copy() for a in self.offsets(self.ref_positions))
         for a in self.ref_offsets:
             a.flags.writeable = False
-        compiled.load(progress)     # Warp's per-triangle kernels: compiled on a machine's first run
+        compiled.prepare(progress)  # Warp's per-triangle kernels: compiled on a machine's first run
         self.timings = {"init": time.perf_counter() - t0}
         report(progress, 1.0, "flattened")
 
