@@ -12,7 +12,11 @@ results are the same bits and a pattern is the same bytes with or without it
   power stays in numpy (:func:`ratios8` stops before it);
 - Warp's ``min`` / ``max`` ignore a NaN where numpy's propagate it: every
   kernel counts the lanes where that could matter in ``flags`` and the caller
-  then takes the numpy path for the whole call.
+  then takes the numpy path for the whole call;
+- a NaN is a NaN either way, but where two NaNs of different sign meet, x86
+  keeps one operand's, and clang and numpy may order a commutative
+  operation's operands differently: a NaN's sign and payload bits may differ
+  (no pattern holds a NaN; tests/test_pattern_kernels.py checks the rest).
 
 Speed: 8 triangles a task, as 8-vectors of float64 (the (f,) arrays viewed as
 (f // 8,) vectors): LLVM's SLP vectoriser turns Warp's component loops into
