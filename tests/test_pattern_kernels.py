@@ -378,6 +378,30 @@ def test_transfer_same_bits(both, tube, name):
     _same(ref, got)
 
 
+def test_threads_same_bits(tube, ran):
+    """Solves in several threads at once (Dask workers' threads, the add-on's background solve): each
+    thread binds its own launches, and every pattern is numpy's."""
+    from concurrent.futures import ThreadPoolExecutor
+    cut, body, _ = tube
+    sizes = [body * np.array([1.0 + 0.03 * i, 1.05, 1.0]) for i in range(4)]
+    solvers = [PatternSolver(cut, body) for _ in sizes]      # a solver is one thread's
+
+    def run(solver, big):
+        p = transfer_pattern(cut, body, big, config=SolverConfig.named("improved"), solver=solver)
+        return [x for pn in p.panels for x in (pn.uv, pn.target_weft, pn.target_warp)]
+    assert compiled.load()
+    compiled.use(False)
+    try:
+        ref = [run(solvers[0], big) for big in sizes]
+        compiled.use(True)
+        with ThreadPoolExecutor(len(sizes)) as pool:
+            got = list(pool.map(run, solvers, sizes))
+    finally:
+        compiled.use(None)
+    _same(ref, got)
+    assert ran["local_step"] > 0
+
+
 def test_public_launch_path_same_bits(both, monkeypatch):
     """Warp's public recorded launch (where its private argument struct is not there) gives the same bits."""
     monkeypatch.setattr(compiled._Launch, "private", False)
