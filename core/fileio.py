@@ -331,16 +331,45 @@ def _fix_modes(tmp: Path) -> None:
             os.chmod(src, 0o666 & ~mask)
 
 
-def _recover(final: Path) -> None:
-    """Finish or undo what a killed run left for ``final`` (beside it and inside it)."""
-    # one listing each (a batch lists its items folder once per item): what is moved or
-    # swapped below is gone when removed, and _remove ignores a path that is gone
-    stale = _stale(final.parent, final.name)
+def _put_back(final: Path, stale) -> None:
+    """Undo what killed runs left beside ``final``: ``stale``, its entries from :func:`_stale`."""
+    # what is moved below is gone when removed, and _remove ignores a path that is gone
     for kind, tag, path in stale:
         if kind == "old" and not os.path.lexists(final):
             os.rename(path, final)        # killed between the two renames: the old folder back
     for kind, tag, path in stale:
         _remove(path)
+
+
+def recover_folder(folder: PathLike) -> None:
+    """What killed runs left beside every entry of ``folder``, finished or undone with one listing
+    (:func:`output_dir` with ``recover=False`` then skips its own listing of ``folder``).
+
+    A batch writes thousands of item folders into one folder: listing it once per
+    item made writing an item cost time in proportion to the items already there.
+    A temporary whose name was shortened (a target name over 200 characters) is left
+    to :func:`output_dir`'s own recovery, which knows the full name.
+    """
+    folder = Path(folder)
+    try:
+        entries = sorted(os.listdir(folder))
+    except OSError:
+        return
+    stale = {}
+    for entry in entries:
+        m = _TEMP.match(entry)
+        if m and len(m["name"]) < _NAME_MAX and not _alive(int(m["pid"])):
+            stale.setdefault(m["name"], []).append((m["kind"], f"{m['pid']}-{m['tag']}", folder / entry))
+    for name, found in stale.items():
+        _put_back(folder / name, found)
+
+
+def _recover(final: Path, beside: bool = True) -> None:
+    """Finish or undo what a killed run left for ``final`` (beside it, unless ``beside`` is False:
+    the caller ran :func:`recover_folder` on its folder, and inside it)."""
+    # one listing each: what is moved or swapped below is gone when removed
+    if beside:
+        _put_back(final, _stale(final.parent, final.name))
     if final.is_dir():
         inside = _stale(final, final.name)
         for kind, tag, path in inside:
@@ -399,7 +428,7 @@ def _in_place(final: Path) -> bool:
 
 
 @contextlib.contextmanager
-def output_dir(path: PathLike) -> Iterator[Path]:
+def output_dir(path: PathLike, recover: bool = True) -> Iterator[Path]:
     """Fill a new folder and make it ``path`` only on success, all at once.
 
     Yields the folder to write into. Files already in ``path`` that the
@@ -407,6 +436,9 @@ def output_dir(path: PathLike) -> Iterator[Path]:
     writes replace the old ones. On any exception, Ctrl-C included, ``path``
     is unchanged. The new folder gets the old one's permissions (else 0777
     minus the umask); its owner and ACLs are the writing user's.
+    ``recover`` False: the caller ran :func:`recover_folder` on ``path``'s folder
+    (a batch, once for all its items), so what killed runs left beside ``path`` is
+    not looked for again.
 
     Raises
     ------
@@ -416,7 +448,7 @@ def output_dir(path: PathLike) -> Iterator[Path]:
     _check_target(final, folder=True)
     try:
         final.parent.mkdir(parents=True, exist_ok=True)
-        _recover(final)
+        _recover(final, beside=recover)
     except OSError as exc:
         raise _refuse(final, exc, "the output folder") from None
     if final.is_dir() and not os.access(final, os.W_OK | os.X_OK):

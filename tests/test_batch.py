@@ -17,6 +17,14 @@ DESIGN = template_path("top_sleeveless")
 TABLE = "name,height,chest,waist,hip,size\nlarge,,,,,L\nmeasured,178,96,80,100,\nimpossible,150,150,40,60,\n"
 
 
+def _dead_pid() -> int:
+    import subprocess
+    import sys
+    child = subprocess.Popen([sys.executable, "-c", "pass"])
+    child.wait()
+    return child.pid
+
+
 @pytest.fixture(scope="module")
 def scheduler():
     import logging
@@ -84,10 +92,19 @@ def test_interrupted_batch_resumes_without_redoing(tmp_path, scheduler):
     first = read_rows(out / "manifest.jsonl")
     assert len(first) == 1 and first[0]["status"] == "ok"
     stamp = (out / "items" / first[0]["folder"] / "pattern.json").stat().st_mtime_ns
+    # what a killed worker leaves: its half-written folder, and a done item's folder moved aside
+    # between the two renames of a replacement; the next run clears both before it starts
+    dead = _dead_pid()
+    half = out / "items" / f".{first[0]['folder']}x.ease-tmp-{dead}-ab12"
+    half.mkdir()
+    done = out / "items" / first[0]["folder"]
+    done.rename(out / "items" / f".{first[0]['folder']}.ease-old-{dead}-cd34")
 
     res = run_batch(DESIGN, bodies, out, scheduler=scheduler)
     assert (res.made, res.skipped, res.failed, res.interrupted) == (3, 1, 0, False)
     assert (out / "items" / first[0]["folder"] / "pattern.json").stat().st_mtime_ns == stamp
+    assert not half.exists() and sorted(p.name for p in (out / "items").iterdir()) == sorted(
+        r["folder"] for r in read_rows(out / "manifest.jsonl"))
     rows = read_rows(out / "manifest.jsonl")
     assert len(rows) == 4 and len({r["id"] for r in rows}) == 4
 

@@ -245,6 +245,32 @@ def test_killed_runs_are_cleaned_and_the_two_rename_gap_recovered(tmp_path):
     assert temps(tmp_path, out) == [str(live)]
 
 
+def test_a_folders_leftovers_are_recovered_with_one_listing(tmp_path, monkeypatch):
+    """recover_folder clears what killed runs left beside every entry (a batch's items folder, once);
+    output_dir(recover=False) then writes without listing that folder again."""
+    from core import fileio
+    pid = _dead_pid()
+    _fill(tmp_path / "a", {"x": "old a"})
+    os.rename(tmp_path / "a", tmp_path / f".a.ease-old-{pid}-ab12")      # a's two-rename gap
+    _fill(tmp_path / f".a.ease-tmp-{pid}-ab12", {"x": "half"})
+    _fill(tmp_path / f".b.ease-tmp-{pid}-cd34", {"x": "half"})
+    _fill(tmp_path / "c", {"x": "c"})
+    live = tmp_path / f".d.ease-tmp-{os.getpid()}-ef56"                  # a live run's: left alone
+    live.mkdir()
+    fileio.recover_folder(tmp_path)
+    assert _texts(tmp_path / "a") == {"x": "old a"} and _texts(tmp_path / "c") == {"x": "c"}
+    assert sorted(os.listdir(tmp_path)) == sorted(["a", "c", live.name])
+    listed = []
+    real = os.listdir
+    monkeypatch.setattr(fileio.os, "listdir", lambda p=".": listed.append(Path(p)) or real(p))
+    with output_dir(tmp_path / "e", recover=False) as d:
+        write_text(d / "y", "e")
+    assert _texts(tmp_path / "e") == {"y": "e"} and tmp_path not in listed
+    with output_dir(tmp_path / "f") as d:      # by default it looks beside its target itself
+        write_text(d / "y", "f")
+    assert tmp_path in listed
+
+
 def test_in_place_swap_killed_midway_is_completed_by_the_next_run(tmp_path):
     out = tmp_path / "out"
     _fill(out, {"a": "old a", "b": "old b", "keep": "k"})

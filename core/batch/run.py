@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import List, Optional, Sequence
 
 from ..errors import EaseError
+from ..fileio import recover_folder
 from ..progress import Progress, report
 from .bodies import BodySource
 from .items import Item, Options, make_items
@@ -153,6 +154,9 @@ def run_batch(design, bodies: Sequence[BodySource], out, model: str = "anny", op
     result = BatchResult(total=len(items), skipped=len(items) - len(pending))
     t0 = time.perf_counter()
     if pending:
+        # what killed runs left in the items folder, cleared once here: the workers then write
+        # an item without listing a folder that holds every item made so far
+        recover_folder(out / "items")
         _submit(pending, out, workers, scheduler, item_timeout, progress, result)
     result.rows = compact(out)
     result.seconds = time.perf_counter() - t0

@@ -132,7 +132,8 @@ def _write(folder: Path, item: Item, run, arun, drun, preview: bool) -> None:
     from .garmentcode import specification
 
     opts = item.options
-    with output_dir(folder) as tmp:
+    # the items folder's leftovers of killed runs were cleared when the batch started (run_batch)
+    with output_dir(folder, recover=False) as tmp:
         wf.write_pattern(tmp, run, preview=preview)
         if arun is not None:
             wf.write_pattern(tmp / "adapt", arun, preview=preview)
