@@ -5,8 +5,9 @@ written with the same floating-point operations in the same order, so its
 results are the same bits and a pattern is the same bytes with or without it
 (:mod:`.compiled` launches them and falls back to numpy). What makes that hold:
 
-- Warp's code generator makes one C++ statement of each operation, so clang
-  contracts nothing into fused multiply-adds, and IEEE ``+ - * / sqrt`` give
+- Warp's code generator makes one C++ statement of each operation and the
+  module is built without floating-point contraction (``fuse_fp`` off), so
+  nothing becomes a fused multiply-add, and IEEE ``+ - * / sqrt`` give
   numpy's bits, on any x86 or ARM target;
 - no libm call: numpy's ``power`` is its own SIMD routine, so the feedback's
   power stays in numpy (:func:`ratios8` stops before it);
@@ -30,8 +31,9 @@ from __future__ import annotations
 
 from ..geom.queries import wp  # Warp as the package sets it up (kernel cache folder, log level)
 
-# forward only: no gradients are taken here, and the adjoints would double the compile time
-wp.set_module_options({"enable_backward": False})
+# forward only: no gradients are taken here, and the adjoints would double the compile time; no fused
+# multiply-add even where clang's front end would form one (Warp's default lets the backend fuse those)
+wp.set_module_options({"enable_backward": False, "fuse_fp": False})
 
 f64 = wp.float64
 v8 = wp.types.vector(length=8, dtype=wp.float64)
@@ -191,7 +193,7 @@ def ratios8(m0: V, m1: V, m2: V, m3: V, k0a: V, k1a: V, k2a: V, k3a: V, cw: V, c
             ratio_w: V, ratio_g: V, flags: Flags):
     """:func:`.feedback.move_corrections`' achieved/target ratios ``goal / rho`` (weft, warp) of a
     reference or transfer solve; numpy raises them to the gains. ``flags[0]``: triangles the feedback
-    leaves (a scale or target not finite or not positive): numpy then takes the call."""
+    leaves (a scale not finite or not positive, a target not finite): numpy then takes the call."""
     i = wp.tid()
     M0, M1, M2, M3 = four(m0, m1, m2, m3, i)
     k0, k1, k2, k3 = four(k0a, k1a, k2a, k3a, i)
