@@ -9,17 +9,20 @@ numpy must do the step, and the step then runs its numpy code:
   does not import, its compiler fails or it refuses a launch (one warning,
   then numpy for the process);
 - a case the kernels do not cover: fewer than 8 triangles, column weights
-  other than 1, an adaptation's feedback, an input that is not a contiguous
-  float64 (f,) array;
+  other than 1, an adaptation's feedback, a collapse guard whose gains numpy
+  would leave over its limit, an input that is not an aligned contiguous
+  native float64 (f,) array;
 - a kernel flags a lane where Warp and numpy could part: a NaN meeting a
   min / max (Warp's ignore it, numpy's propagate it), a triangle the feedback
   leaves, a local step whose every ``delta`` is 0 (numpy skips its Newton step).
 
 So a pattern is the same bytes either way (tests/test_pattern_kernels.py).
-Outputs are new arrays every call, as numpy's are: a solve may keep them.
+Outputs are new arrays every call, as numpy's are (the rows of one block: a
+kept row keeps its block, e.g. the local step's warp factors its 7 rows).
 Launches are Warp's recorded CPU launches with the argument struct kept per
 thread and only the arguments that changed rebound (wrapping ~25 numpy arrays
-as ``wp.array`` costs ~8 us each, a launch ~2 us this way).
+as ``wp.array`` costs ~8 us each, a launch ~2 us this way); a thread keeps
+the launches of the last few sizes, and no array past its call.
 """
 from __future__ import annotations
 
@@ -44,7 +47,7 @@ _LANES = 8
 #: designs, or the add-on over a session, meets a new size with every design)
 _KEPT = 20
 _state = {"ready": None, "forced": None}
-_lock = threading.Lock()
+_lock = threading.RLock()      # load() gives up under it
 _local = threading.local()
 
 
@@ -93,10 +96,11 @@ def load(progress: Optional[Progress] = None) -> bool:
 
 def _give_up(doing: str, exc: Exception) -> None:
     """The kernels off for the process after ``exc`` while ``doing``: one warning, numpy after."""
-    if _state["ready"] is not False:
-        _state["ready"] = False
-        log.warning("pattern solver: Warp kernels unavailable (%s: %s: %s); using numpy",
-                    doing, type(exc).__name__, exc)
+    with _lock:
+        if _state["ready"] is not False:
+            _state["ready"] = False
+            log.warning("pattern solver: Warp kernels unavailable (%s: %s: %s); using numpy",
+                        doing, type(exc).__name__, exc)
 
 
 class _Unsuitable(Exception):
