@@ -32,6 +32,13 @@ def both():
 
 
 @pytest.fixture
+def kernels_on(monkeypatch):
+    """The kernels on for the test, whatever EASE_SOLVER_KERNELS says."""
+    assert compiled.load(), "Warp kernels failed to load (see the log's warning)"
+    monkeypatch.setitem(compiled._state, "forced", True)
+
+
+@pytest.fixture
 def ran(monkeypatch):
     """How many calls of each of :mod:`core.pattern.compiled`'s steps the kernels did (gave a result) in
     the test: a comparison with numpy only tests the kernels where they ran."""
@@ -329,11 +336,10 @@ def test_equal_float64_dtypes_and_read_only_arrays_run(both, ran):
     assert ran["local_step"] == 1
 
 
-def test_launches_keep_no_arrays_and_few_sizes(monkeypatch):
+def test_launches_keep_no_arrays_and_few_sizes(kernels_on, monkeypatch):
     """The kept launches hold no array past its call (a solve's memory goes with it), and a thread keeps
     launches for a few sizes only (a batch over many designs meets a new size with every design)."""
     import weakref
-    assert compiled.load()
     monkeypatch.setattr(compiled._local, "launches", {}, raising=False)
     rng = np.random.default_rng(0)
     for f in range(8, 8 + 2 * compiled._KEPT):
@@ -468,10 +474,9 @@ def test_a_failed_launch_leaves_numpy(both, monkeypatch, caplog):
     assert not compiled.enabled()
 
 
-def test_a_scalar_rebound_when_only_its_sign_of_zero_changes(monkeypatch):
+def test_a_scalar_rebound_when_only_its_sign_of_zero_changes(kernels_on, monkeypatch):
     """0.0 == -0.0, but the kernel must see the one it is given (the launch's kept argument struct)."""
     import math
-    assert compiled.load()
     monkeypatch.setattr(compiled._local, "launches", {}, raising=False)
     _, K, Kc, M, cw, cg = _inputs(16, 51)
     for om in (0.0, -0.0):
