@@ -77,8 +77,8 @@ def prepare(progress: Optional[Progress] = None) -> None:
 
 
 def load(progress: Optional[Progress] = None) -> bool:
-    """Import Warp and load the kernels, compiling them on a machine's first run (~15 s, then cached in
-    Warp's kernel cache); False, with one warning, where that fails."""
+    """Import Warp and load the kernels, compiling them on a machine's first run (~5 s of CPU, then cached
+    in Warp's kernel cache); False, with one warning, where that fails."""
     if _state["ready"] is None:
         with _lock:
             if _state["ready"] is None:
