@@ -430,6 +430,8 @@ def test_switches(monkeypatch):
     assert not compiled.enabled()
     monkeypatch.setenv(compiled.ENV, "warp")
     assert compiled.enabled()
+    monkeypatch.setenv(compiled.ENV, "off")        # not a value: numpy (the reference), with a warning
+    assert not compiled.enabled()
     compiled.use(False)
     try:
         assert not compiled.enabled()

@@ -59,9 +59,16 @@ def use(enabled: Optional[bool]) -> None:
 def wanted() -> bool:
     """Whether the kernels are asked for: :func:`use`, else :data:`ENV`."""
     forced = _state["forced"]
-    if forced is None:
-        return os.environ.get(ENV, "warp").strip().lower() != "numpy"
-    return bool(forced)
+    if forced is not None:
+        return bool(forced)
+    value = os.environ.get(ENV, "warp").strip().lower()
+    if value not in ("warp", "numpy", ""):
+        # a typo ("off", "0") must not silently mean the kernels: numpy, the reference, and say so once
+        if not _state.get("env_warned"):
+            _state["env_warned"] = True
+            log.warning("%s=%r: expected warp or numpy; using numpy", ENV, value)
+        return False
+    return value != "numpy"
 
 
 def enabled() -> bool:
