@@ -100,3 +100,22 @@ def test_a_file_under_a_file_is_one_clear_error(tmp_path):
             write_text(target, "{}")
     write_text(tmp_path / "new" / "sub" / "a.json", "{}")        # missing folders are made
     assert (tmp_path / "new" / "sub" / "a.json").read_text() == "{}"
+
+
+def test_large_files_leave_the_page_cache_once_on_disk(tmp_path, monkeypatch):
+    """A written file of UNCACHE_BYTES or more is fsync'ed, then its cached pages dropped (the next
+    file reuses them); a small one keeps them. Both read back whole."""
+    import os
+    from core import fileio
+    if not hasattr(os, "posix_fadvise"):
+        pytest.skip("no posix_fadvise on this platform")
+    calls = []
+    real = os.posix_fadvise
+    monkeypatch.setattr(fileio.os, "posix_fadvise",
+                        lambda fd, off, n, advice: calls.append(advice) or real(fd, off, n, advice))
+    big, small = b"x" * fileio.UNCACHE_BYTES, b"y" * 100
+    write_bytes(tmp_path / "big.bin", big)
+    assert calls == [os.POSIX_FADV_DONTNEED]
+    write_bytes(tmp_path / "small.bin", small)
+    assert calls == [os.POSIX_FADV_DONTNEED]
+    assert (tmp_path / "big.bin").read_bytes() == big and (tmp_path / "small.bin").read_bytes() == small
