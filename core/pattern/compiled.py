@@ -232,21 +232,23 @@ class _Pair:
     for a new array at its address, and none is kept alive past its solve.
     """
 
-    def __init__(self, kernel, f: int, args):
+    def __init__(self, kernel, f: int, head: tuple, out: np.ndarray, flags: Optional[np.ndarray]):
         self.slots = slots = _slots(kernel)
+        args = (*head, *out) + (() if flags is None else (flags,))
         for a, counters in zip(args, slots):
             if counters is not None:
                 _pointer(a, f, counters)
         self.f = f
-        self.last = [a if counters is None else weakref.ref(a) for a, counters in zip(args, slots)]
+        self.last = [a if counters is None else weakref.ref(a) for a, counters in zip(head, slots)]
         # recording runs the launches: this is also the first call
         self.launches = [_Launch(kernel, slots, args, f // _LANES, 0)]
         if f % _LANES:
             self.launches.append(_Launch(kernel, slots, args, 1, f - _LANES))
 
-    def __call__(self, args) -> None:
+    def __call__(self, head: tuple, out: np.ndarray, flags: Optional[np.ndarray]) -> None:
+        """Run on the inputs ``head``, the outputs: the rows of ``out`` (k, f), and ``flags``."""
         last = self.last
-        for j, a in enumerate(args):
+        for j, a in enumerate(head):
             counters = self.slots[j]
             if counters is None:
                 if _same_scalar(a, last[j]):
@@ -259,6 +261,15 @@ class _Pair:
             for launch in self.launches:
                 launch.bind(j, a, address)
             last[j] = kept
+        # the outputs are new every call, made by _call: their rows' addresses follow from the block's
+        base, row, j = _address(out), out.strides[0], len(head)
+        for k in range(out.shape[0]):
+            for launch in self.launches:
+                launch.bind(j + k, out, base + k * row)
+        if flags is not None:
+            address = _address(flags)
+            for launch in self.launches:
+                launch.bind(j + out.shape[0], flags, address)
         for launch in self.launches:
             launch()
 
@@ -269,9 +280,9 @@ def _same_scalar(a, b) -> bool:
     return a == b and (a != 0 or math.copysign(1.0, a) == math.copysign(1.0, b))
 
 
-def _run(kernel, f: int, args) -> None:
-    """One call of ``kernel`` on the (f,) arrays ``args`` (:class:`_Pair`, the last :data:`_KEPT` kept per
-    thread: each thread binds its own argument structs)."""
+def _run(kernel, f: int, head: tuple, out: np.ndarray, flags: Optional[np.ndarray]) -> None:
+    """One call of ``kernel`` (:class:`_Pair`, the last :data:`_KEPT` kept per thread: each thread binds
+    its own argument structs) on the inputs ``head``, the rows of ``out`` (k, f) and ``flags``."""
     cache = getattr(_local, "launches", None)
     if cache is None:
         cache = _local.launches = {}
@@ -279,28 +290,25 @@ def _run(kernel, f: int, args) -> None:
     pair = cache.pop(key, None)
     if pair is not None:
         cache[key] = pair           # the most recently used last
-        pair(args)
+        pair(head, out, flags)
         return
-    pair = _Pair(kernel, f, args)   # recording runs the launches: this is also the call
+    pair = _Pair(kernel, f, head, out, flags)   # recording runs the launches: this is also the call
     if len(cache) >= _KEPT:
         del cache[next(iter(cache))]
     cache[key] = pair
 
 
-def _outputs(k: int, f: int) -> list:
-    """``k`` new (f,) output arrays (the rows of one allocation)."""
-    return list(np.empty((k, f)))
-
-
 def _call(kernel, f: int, head: tuple, n_out: int, n_flags: int = 0):
-    """``kernel`` on ``head`` (its inputs), ``n_out`` new (f,) outputs and ``n_flags`` counters zeroed:
-    (outputs, counters), or None where the kernels do not apply (off, f < 8, an unsuitable argument)."""
+    """``kernel`` on ``head`` (its inputs), ``n_out`` new (f,) outputs (the rows of one allocation) and
+    ``n_flags`` counters zeroed: (outputs, counters), or None where the kernels do not apply (off, f < 8,
+    an unsuitable argument)."""
     if f < _LANES or not enabled():
         return None
-    out = _outputs(n_out, f)
+    block = np.empty((n_out, f))
     flags = np.zeros(n_flags, np.int32)
     try:
-        _run(kernel, f, (*head, *out, flags) if n_flags else (*head, *out))
+        _run(kernel, f, head, block, flags if n_flags else None)
+        out = list(block)
     except _Unsuitable:
         return None
     except Exception as exc:  # noqa: BLE001 - a launch Warp refuses leaves numpy, as a failed load does
