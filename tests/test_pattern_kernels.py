@@ -43,7 +43,7 @@ def ran(monkeypatch):
     """How many calls of each of :mod:`core.pattern.compiled`'s steps the kernels did (gave a result) in
     the test: a comparison with numpy only tests the kernels where they ran."""
     counts = {}
-    for name in ("local_step", "ratios", "collapse_guard", "grain_votes", "turned"):
+    for name in ("local_step", "ratios", "collapse_guard", "grain_votes", "turned", "flip_check"):
         def spy(*args, _step=getattr(compiled, name), _name=name):
             got = _step(*args)
             counts[_name] = counts.get(_name, 0) + (got is not None)
@@ -358,6 +358,28 @@ def test_launches_keep_no_arrays_and_few_sizes(kernels_on, monkeypatch):
 def tube():
     cut, body = two_panels(ease=(1.2, 1.6), bulge=0.2)
     return cut, body, PatternSolver(cut, body)
+
+
+@pytest.mark.parametrize("case", ["small", "flipping", "nan_old", "nan_step"])
+def test_flip_guard_same_bits(both, ran, tube, case):
+    """The flip guard's first check in the kernel: a step that cuts nothing is the kernel's alone; one
+    with a triangle at its floor, or a NaN where Warp's min and numpy's part, is numpy's."""
+    from core.pattern.steps import face_areas, flip_guard
+    _, _, solver = tube
+    rng = np.random.default_rng(3)
+    U_old = solver.uv0 * 1.02
+    s_old = face_areas(solver.blocks, U_old)
+    U_new = U_old + rng.normal(0, 1e-4 if case != "flipping" else 2e-2, U_old.shape)
+    if case == "nan_old":
+        s_old = s_old.copy()
+        s_old[5] = np.nan
+    elif case == "nan_step":
+        U_new[7] = np.nan
+    ref, got = both(lambda: flip_guard(solver.blocks, U_old, U_new, s_old))
+    _same(ref, got, nan_bits=False)
+    # the check ran but for the NaN floor; a step with a triangle at its floor went on to numpy's halving
+    assert ran.get("flip_check", 0) == (0 if case == "nan_old" else 1)
+    assert (ref[1] > 0) == (case == "flipping")
 
 
 def test_realign_grain_same_bits(both, tube):

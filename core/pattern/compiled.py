@@ -387,3 +387,14 @@ def turned(M, ct, st):
     """The Jacobians ``M`` turned by per-triangle cosines ``ct`` and sines ``st`` (4 (f,)), or None."""
     got = _call(_kernels().turn8, len(ct), (*M, ct, st), 4)
     return None if got is None else got[0]
+
+
+def flip_check(blocks, U_new: np.ndarray, s_old: np.ndarray):
+    """:func:`.steps.flip_guard`'s first check of a step ``U_new`` (n, 2) from an iterate of signed areas
+    ``s_old`` (f,): (the step's signed areas (f,), how many triangles are at or under their floor), or
+    None. The corners' coordinates are gathered by numpy (a gather is no faster in a kernel)."""
+    F0, F1, F2 = blocks.face_columns
+    u, v = U_new[:, 0], U_new[:, 1]
+    got = _call(_kernels().areas8, len(F0), (u[F0], v[F0], u[F1], v[F1], u[F2], v[F2], blocks.area_floor, s_old),
+                1, 2)
+    return None if got is None or got[1][1] else (got[0][0], int(got[1][0]))

@@ -294,3 +294,27 @@ def turn8(m0: V, m1: V, m2: V, m3: V, cta: V, sta: V, o0: V, o1: V, o2: V, o3: V
     o1[i] = wp.cw_mul(ct, M1) - wp.cw_mul(st, M3)
     o2[i] = wp.cw_mul(st, M0) + wp.cw_mul(ct, M2)
     o3[i] = wp.cw_mul(st, M1) + wp.cw_mul(ct, M3)
+
+
+@wp.kernel
+def areas8(u0: V, v0: V, u1: V, v1: V, u2: V, v2: V, area_floor: V, s_old: V, s: V, flags: Flags):
+    """:func:`.steps.flip_guard`'s first check: the signed areas ``s`` of a step's triangles from their
+    corners' coordinates (gathered by numpy) and, in ``flags[0]``, how many are at or under their floor
+    ``min(area_floor, s_old / 2)``; ``flags[1]``: lanes where ``s_old`` is NaN (numpy's floor is NaN there,
+    Warp's min would not be)."""
+    i = wp.tid()
+    a = u0[i]
+    b = v0[i]
+    ax = u1[i] - a
+    ay = v1[i] - b
+    bx = u2[i] - a
+    by = v2[i] - b
+    area = (wp.cw_mul(ax, by) - wp.cw_mul(ay, bx)) * f64(0.5)
+    s[i] = area
+    old = s_old[i] * f64(0.5)
+    fl = area_floor[i]
+    low = int(0)
+    for j in range(8):
+        low += wp.where(area[j] <= wp.min(fl[j], old[j]), 1, 0)
+    flag(flags, 0, low)
+    flag(flags, 1, nans(old))

@@ -235,6 +235,10 @@ def flip_guard(blocks: PanelBlocks, U_old: np.ndarray, U_new: np.ndarray, s_old:
     """
     F = blocks.faces
     n = blocks.n
+    if s_old is not None:
+        checked = compiled.flip_check(blocks, U_new, s_old)
+        if checked is not None and checked[1] == 0:
+            return U_new.copy(), 0, checked[0]
     if s_old is None:
         s_old = face_areas(blocks, U_old)
     floor = np.minimum(blocks.area_floor, 0.5 * s_old)
