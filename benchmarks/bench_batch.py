@@ -42,7 +42,7 @@ DESIGN = "shirt_long_sleeve"
 
 #: core.batch.run.WORKER_CONFIG as a Dask config file for workers started by hand.
 WORKER_YAML = ("distributed:\n  nanny:\n    pre-spawn-environ:\n      MALLOC_TRIM_THRESHOLD_: null\n"
-               "  worker:\n    profile:\n      enabled: false\n"
+               "  worker:\n    profile:\n      enabled: false\n    memory:\n      monitor-interval: 1s\n"
                "  admin:\n    tick:\n      interval: 1s\n    system-monitor:\n      interval: 5s\n")
 SEED = 2024
 
