@@ -28,19 +28,17 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import errno
-import json
 import os
 import re
 import secrets
 import shutil
-import signal
 import threading
 from pathlib import Path
 from typing import Iterator, List, Tuple, Union
 
-import numpy as np
-
 from .errors import EaseError
+from .jsontext import dumps_json
+from .signals import signals_held
 
 PathLike = Union[str, os.PathLike]
 
@@ -212,24 +210,6 @@ def write_text(path: PathLike, text: str) -> Path:
     return write_bytes(path, text.encode("utf-8"))
 
 
-def _json_default(obj):
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, (np.floating,)):
-        return float(obj)
-    if isinstance(obj, (np.bool_,)):
-        return bool(obj)
-    if isinstance(obj, Path):
-        return str(obj)
-    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
-
-
-def dumps_json(obj, indent: int | None = 1) -> str:
-    return json.dumps(obj, indent=indent, default=_json_default, allow_nan=False)
-
-
 def write_json(path: PathLike, obj, indent: int | None = 1) -> Path:
     return write_text(path, dumps_json(obj, indent=indent) + "\n")
 
@@ -255,35 +235,6 @@ def committed_outputs() -> Tuple[Path, ...]:
 
 
 # ----------------------------------------------------------------------------- output folders
-
-@contextlib.contextmanager
-def _signals_held():
-    """SIGINT/SIGTERM wait until the block is done (main thread, where Python allows it).
-
-    Blocking the signals is not enough on its own: a signal that arrived just
-    before the block has already tripped Python's handler, which would raise
-    at the next bytecode, inside the block. So the handlers are also swapped
-    for one that only records the signal; it is delivered after the block."""
-    held = (signal.SIGINT, signal.SIGTERM)
-    if not (hasattr(signal, "pthread_sigmask") and threading.current_thread() is threading.main_thread()):
-        yield
-        return
-    pending: List[int] = []
-    handlers = {s: signal.signal(s, lambda signum, frame: pending.append(signum)) for s in held}
-    mask = signal.pthread_sigmask(signal.SIG_BLOCK, held)
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, mask)    # a blocked signal arrives now: recorded
-        for s, handler in handlers.items():
-            signal.signal(s, handler)
-        for s in dict.fromkeys(pending):                     # delivered as if it came now
-            handler = handlers[s]
-            if callable(handler):
-                handler(s, None)
-            elif handler == signal.SIG_DFL:
-                signal.raise_signal(s)
-
 
 def _exchange(a: Path, b: Path) -> bool:
     """Swap the folders ``a`` and ``b`` with one rename; False where the system cannot."""
@@ -406,7 +357,7 @@ def _swap_entries(new: Path, final: Path, old: Path) -> None:
     old version was moved aside but the new one not yet in is just moved in.
     """
     done: List[str] = []
-    with _signals_held():
+    with signals_held():
         try:
             os.makedirs(old, exist_ok=True)
             for name in sorted(os.listdir(new)):
@@ -497,7 +448,7 @@ def _commit(tmp: Path, final: Path, tag: str) -> None:
         _carry_over(final, tmp)
     os.chmod(tmp, old_mode)
     aside = None
-    with _signals_held():
+    with signals_held():
         if not final.is_dir():
             os.rename(tmp, final)
         elif not _exchange(tmp, final):
@@ -522,7 +473,7 @@ def _commit_in_place(tmp: Path, final: Path, tag: str) -> None:
         if entry.is_dir(follow_symlinks=False) and dst.is_dir() and not dst.is_symlink():
             _carry_over(dst, Path(entry.path), top=False)
     new = final / _temp_name(final.name, "new", tag)
-    with _signals_held():
+    with signals_held():
         os.rename(tmp, new)               # the commit point: from here on the next run completes the swap
         _swap_entries(new, final, final / _temp_name(final.name, "old", tag))
         with _lock:

@@ -20,7 +20,8 @@ ROOT = Path(__file__).resolve().parent.parent
 
 #: Layer of each part of ``core`` (a module may import its own layer and lower ones).
 LAYERS = {
-    "core.errors": 0, "core.fileio": 0, "core.progress": 0, "core.paths": 0,
+    "core.errors": 0, "core.fileio": 0, "core.jsontext": 0, "core.signals": 0, "core.progress": 0,
+    "core.paths": 0,
     "core.geom": 1,
     "core.body": 2,
     "core.design": 3,
