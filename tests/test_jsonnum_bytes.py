@@ -143,3 +143,25 @@ def test_kept_texts_stay_within_their_budget(monkeypatch):
         assert jsonnum.arrays_text([a])[0] == reference._format([a])[0]
     assert len(jsonnum._cache) == 2 and jsonnum._cache_bytes <= jsonnum.CACHE_BYTES
     assert jsonnum.arrays_text([arrays[-1]])[0] == reference._format([arrays[-1]])[0]
+
+
+def test_a_text_kept_belongs_to_the_values_it_was_made_from(monkeypatch):
+    # another thread (the add-on writes in the background) may change an array while its text is
+    # formatted: the values kept with the text must be the ones it was made from, else a later
+    # array equal to the changed values would get the old values' text
+    monkeypatch.setattr(jsonnum, "_cache", type(jsonnum._cache)())
+    monkeypatch.setattr(jsonnum, "_cache_bytes", 0)
+    a = np.random.default_rng(3).standard_normal(4 * jsonnum.CACHE_MIN)
+    before = jsonnum._content_key(a)
+    real = jsonnum._format
+
+    def format_then_change(arrays):
+        out = real(arrays)
+        a[1] += 1.0                               # not among the probed values: the key stays
+        return out
+
+    monkeypatch.setattr(jsonnum, "_format", format_then_change)
+    jsonnum.arrays_text([a])
+    monkeypatch.setattr(jsonnum, "_format", real)
+    assert jsonnum._content_key(a) == before
+    assert jsonnum.arrays_text([a])[0] == reference._format([a])[0]

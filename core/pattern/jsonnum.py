@@ -271,7 +271,7 @@ def _kept(key: tuple, a: np.ndarray):
 
 
 def _keep(key: tuple, a: np.ndarray, text: str) -> None:
-    """Keep ``text`` for a copy of ``a``'s values (replacing another array of the same key)."""
+    """Keep ``text`` for ``a``, the private copy it was made from (replacing another array of the same key)."""
     global _cache_bytes
     size = a.nbytes + len(text)
     with _cache_lock:
@@ -280,7 +280,7 @@ def _keep(key: tuple, a: np.ndarray, text: str) -> None:
         old = _cache.pop(key, None)
         if old is not None:
             _cache_bytes -= old[0].nbytes + len(old[1])
-        _cache[key] = (a.copy(), text)
+        _cache[key] = (a, text)
         _cache_bytes += size
         while _cache_bytes > CACHE_BYTES:
             values, kept = _cache.popitem(last=False)[1]
@@ -321,6 +321,9 @@ def arrays_text(arrays: Sequence) -> List[str]:
             if text is not None:
                 out[i] = text
                 continue
+            # formatted from the copy that is kept: the caller may change the array meanwhile (another
+            # thread), and a text kept with other values would be given to an array equal to those
+            arrays[i] = a.copy()
         todo.append(i)
     for i, text in zip(todo, _format([arrays[i] for i in todo])):
         out[i] = text
