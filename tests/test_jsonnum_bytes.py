@@ -165,3 +165,11 @@ def test_a_text_kept_belongs_to_the_values_it_was_made_from(monkeypatch):
     monkeypatch.setattr(jsonnum, "_format", real)
     assert jsonnum._content_key(a) == before
     assert jsonnum.arrays_text([a])[0] == reference._format([a])[0]
+
+
+def test_wide_floats_written_twice():
+    # a long double has no unsigned integer of its width to compare bits with (and padding bytes
+    # that are not its value): its text is made every time, as the reference does
+    a = np.arange(2 * jsonnum.CACHE_MIN, dtype=np.longdouble) / 3
+    for _ in range(2):
+        assert jsonnum.arrays_text([a])[0] == reference._format([a])[0]

@@ -301,9 +301,10 @@ def arrays_text(arrays: Sequence) -> List[str]:
     cost is per number, not per array.
 
     An array's text is a function of its dtype, shape and values alone, so the
-    texts of arrays of :data:`CACHE_MIN` numbers or more are kept with a copy
-    of their values (:data:`CACHE_BYTES` at most): a batch writes the same
-    faces, vertex ids, outlines and ease targets for every body of a design.
+    texts of arrays of :data:`CACHE_MIN` numbers or more (of at most 8 bytes
+    each) are kept with a copy of their values (:data:`CACHE_BYTES` at most):
+    a batch writes the same faces, vertex ids, outlines and ease targets for
+    every body of a design.
     A text is used again only for an array equal to the copy bit for bit
     (looked up by a fingerprint, compared in full), so the bytes are the same
     either way.
@@ -315,7 +316,9 @@ def arrays_text(arrays: Sequence) -> List[str]:
     out: List[str] = [""] * len(arrays)
     keys, todo = {}, []
     for i, a in enumerate(arrays):
-        if a.size >= CACHE_MIN:
+        # bits compared as unsigned integers of the same width: none for a long double's 16 bytes
+        # (6 of them padding, not its value), whose text is made every time
+        if a.size >= CACHE_MIN and a.dtype.itemsize <= 8:
             keys[i] = _content_key(a)
             text = _kept(keys[i], a)
             if text is not None:
