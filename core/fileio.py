@@ -318,8 +318,8 @@ def recover_folder(folder: PathLike) -> None:
 
     A batch writes thousands of item folders into one folder: listing it once per
     item made writing an item cost time in proportion to the items already there.
-    A temporary whose name was shortened (a target name over 200 characters) is left
-    to :func:`output_dir`'s own recovery, which knows the full name.
+    A temporary whose name may have been shortened (a target name of 200 characters
+    or more) is left to :func:`output_dir`'s own recovery, which knows the full name.
     """
     folder = Path(folder)
     try:
@@ -409,7 +409,8 @@ def output_dir(path: PathLike, recover: bool = True) -> Iterator[Path]:
     minus the umask); its owner and ACLs are the writing user's.
     ``recover`` False: the caller ran :func:`recover_folder` on ``path``'s folder
     (a batch, once for all its items), so what killed runs left beside ``path`` is
-    not looked for again.
+    not looked for again (but for a name of 200 characters or more, which
+    :func:`recover_folder` leaves).
 
     Raises
     ------
@@ -419,7 +420,8 @@ def output_dir(path: PathLike, recover: bool = True) -> Iterator[Path]:
     _check_target(final, folder=True)
     try:
         final.parent.mkdir(parents=True, exist_ok=True)
-        _recover(final, beside=recover)
+        # a shortened name's leftovers are left by recover_folder (whose they are is not known there)
+        _recover(final, beside=recover or len(final.name) >= _NAME_MAX)
     except OSError as exc:
         raise _refuse(final, exc, "the output folder") from None
     if final.is_dir() and not os.access(final, os.W_OK | os.X_OK):

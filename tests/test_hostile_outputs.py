@@ -271,6 +271,18 @@ def test_a_folders_leftovers_are_recovered_with_one_listing(tmp_path, monkeypatc
     assert tmp_path in listed
 
 
+def test_a_long_names_leftovers_are_recovered_without_recover_folder(tmp_path):
+    """recover_folder leaves a temporary whose name was shortened (it cannot tell whose it is);
+    output_dir(recover=False) of that name then looks beside its target itself."""
+    from core import fileio
+    pid, name = _dead_pid(), "n" * (F._NAME_MAX + 10)
+    _fill(tmp_path / f".{name[:F._NAME_MAX]}.ease-old-{pid}-ab12", {"keep": "old"})    # its two-rename gap
+    fileio.recover_folder(tmp_path)
+    with output_dir(tmp_path / name, recover=False) as d:
+        write_text(d / "y", "new")
+    assert _texts(tmp_path / name) == {"keep": "old", "y": "new"} and temps(tmp_path) == []
+
+
 def test_in_place_swap_killed_midway_is_completed_by_the_next_run(tmp_path):
     out = tmp_path / "out"
     _fill(out, {"a": "old a", "b": "old b", "keep": "k"})
