@@ -173,3 +173,13 @@ def test_wide_floats_written_twice():
     a = np.arange(2 * jsonnum.CACHE_MIN, dtype=np.longdouble) / 3
     for _ in range(2):
         assert jsonnum.arrays_text([a])[0] == reference._format([a])[0]
+
+
+def test_int64_and_uint64_together_and_uint64_out_of_range():
+    # concatenated as they are, int64 and uint64 arrays meet as float64 (53 bits) and a uint64 of
+    # 2**63 or more wraps in int64: the text must be json's, or an error
+    import json
+    arrays = [np.array([2 ** 60 + 1, -(2 ** 62) - 3], np.int64), np.array([1, 2 ** 63 - 1], np.uint64)]
+    assert jsonnum.arrays_text(arrays) == [json.dumps(a.tolist()) for a in arrays]
+    with pytest.raises(ValueError, match="out of range"):
+        jsonnum.arrays_text([np.array([2 ** 63], np.uint64)])

@@ -348,13 +348,15 @@ def _format(arrays: List[np.ndarray]) -> List[str]:
         group = [(i, a) for i, a in group if a.size]
         if not group:
             continue
-        values = np.concatenate([a.ravel() for _, a in group])
         if kind == "f":
-            values = values.astype(np.float64)
+            values = np.concatenate([a.ravel() for _, a in group]).astype(np.float64)
             if not np.all(np.isfinite(values)):
                 raise ValueError("Out of range float values are not JSON compliant")
         else:
-            values = values.astype(np.int64)
+            # each array to int64 first: int64 and uint64 concatenated meet as float64 (53 bits)
+            if any(a.dtype.kind == "u" and a.max() > np.iinfo(np.int64).max for _, a in group):
+                raise ValueError("integer out of range for JSON text: 2**63 or more")
+            values = np.concatenate([a.ravel().astype(np.int64, copy=False) for _, a in group])
             if values.min() == np.iinfo(np.int64).min:
                 raise ValueError("integer out of range for JSON text: -2**63")
         # the suffix codes: ", " (1); 2 more for each dimension whose row a number ends; 2 ndim at the end
