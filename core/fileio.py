@@ -28,6 +28,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import errno
+import hashlib
 import os
 import re
 import secrets
@@ -43,7 +44,7 @@ from .signals import signals_held
 PathLike = Union[str, os.PathLike]
 
 _TEMP = re.compile(r"^\.(?P<name>.*)\.ease-(?P<kind>tmp|old|new)-(?P<pid>\d+)-(?P<tag>[0-9a-f]+)$")
-_NAME_MAX = 200          # of the target's name inside a temporary name (filesystems allow 255 bytes)
+_NAME_MAX = 200          # bytes of the target's name inside a temporary name (filesystems allow 255)
 _committed: List[Path] = []
 _lock = threading.Lock()
 
@@ -63,8 +64,21 @@ def _umask() -> int:
     return mask
 
 
+def _short(name: str) -> str:
+    """``name`` as its temporaries carry it: under :data:`_NAME_MAX` bytes as it is, else its first
+    whole characters, ``~`` and a hash of the whole, exactly :data:`_NAME_MAX` bytes (so a shortened
+    name is known by its length), and names alike in their first bytes never take each other's
+    leftovers (a killed run's old folder put back under another name)."""
+    raw = os.fsencode(name)
+    if len(raw) < _NAME_MAX:
+        return name
+    head = raw[:_NAME_MAX - 9].decode("utf-8", "ignore")      # a character cut in two dropped
+    tildes = "~" * (_NAME_MAX - 8 - len(head.encode("utf-8")))
+    return f"{head}{tildes}{hashlib.blake2b(raw, digest_size=4).hexdigest()}"
+
+
 def _temp_name(name: str, kind: str, tag: str) -> str:
-    return f".{name[:_NAME_MAX]}.ease-{kind}-{tag}"
+    return f".{_short(name)}.ease-{kind}-{tag}"
 
 
 def _new_tag() -> str:
@@ -93,10 +107,11 @@ def _stale(folder: Path, name: str) -> List[Tuple[str, str, Path]]:
         return out
     # a batch lists its items folder once per item: the cheap prefix test first, the
     # regex and the sort on the few entries that pass it
-    prefix = f".{name[:_NAME_MAX]}.ease-"
+    short = _short(name)
+    prefix = f".{short}.ease-"
     for entry in sorted(e for e in entries if e.startswith(prefix)):
         m = _TEMP.match(entry)
-        if m and m["name"] == name[:_NAME_MAX] and not _alive(int(m["pid"])):
+        if m and m["name"] == short and not _alive(int(m["pid"])):
             out.append((m["kind"], f"{m['pid']}-{m['tag']}", folder / entry))
     return out
 
@@ -318,8 +333,8 @@ def recover_folder(folder: PathLike) -> None:
 
     A batch writes thousands of item folders into one folder: listing it once per
     item made writing an item cost time in proportion to the items already there.
-    A temporary whose name may have been shortened (a target name of 200 characters
-    or more) is left to :func:`output_dir`'s own recovery, which knows the full name.
+    A temporary whose name was shortened (a target name of 200 bytes or more) is left
+    to :func:`output_dir`'s own recovery, which knows the full name.
     """
     folder = Path(folder)
     try:
@@ -329,7 +344,7 @@ def recover_folder(folder: PathLike) -> None:
     stale = {}
     for entry in entries:
         m = _TEMP.match(entry)
-        if m and len(m["name"]) < _NAME_MAX and not _alive(int(m["pid"])):
+        if m and len(os.fsencode(m["name"])) < _NAME_MAX and not _alive(int(m["pid"])):
             stale.setdefault(m["name"], []).append((m["kind"], f"{m['pid']}-{m['tag']}", folder / entry))
     for name, found in stale.items():
         _put_back(folder / name, found)
@@ -409,7 +424,7 @@ def output_dir(path: PathLike, recover: bool = True) -> Iterator[Path]:
     minus the umask); its owner and ACLs are the writing user's.
     ``recover`` False: the caller ran :func:`recover_folder` on ``path``'s folder
     (a batch, once for all its items), so what killed runs left beside ``path`` is
-    not looked for again (but for a name of 200 characters or more, which
+    not looked for again (but for a name of 200 bytes or more, which
     :func:`recover_folder` leaves).
 
     Raises
@@ -421,7 +436,7 @@ def output_dir(path: PathLike, recover: bool = True) -> Iterator[Path]:
     try:
         final.parent.mkdir(parents=True, exist_ok=True)
         # a shortened name's leftovers are left by recover_folder (whose they are is not known there)
-        _recover(final, beside=recover or len(final.name) >= _NAME_MAX)
+        _recover(final, beside=recover or _short(final.name) != final.name)
     except OSError as exc:
         raise _refuse(final, exc, "the output folder") from None
     if final.is_dir() and not os.access(final, os.W_OK | os.X_OK):

@@ -276,11 +276,38 @@ def test_a_long_names_leftovers_are_recovered_without_recover_folder(tmp_path):
     output_dir(recover=False) of that name then looks beside its target itself."""
     from core import fileio
     pid, name = _dead_pid(), "n" * (F._NAME_MAX + 10)
-    _fill(tmp_path / f".{name[:F._NAME_MAX]}.ease-old-{pid}-ab12", {"keep": "old"})    # its two-rename gap
+    _fill(tmp_path / F._temp_name(name, "old", f"{pid}-ab12"), {"keep": "old"})    # its two-rename gap
     fileio.recover_folder(tmp_path)
     with output_dir(tmp_path / name, recover=False) as d:
         write_text(d / "y", "new")
     assert _texts(tmp_path / name) == {"keep": "old", "y": "new"} and temps(tmp_path) == []
+
+
+def test_long_names_that_share_their_start_keep_their_own_leftovers(tmp_path):
+    """Temporaries carry a long name shortened; two names alike in their first 200 characters must
+    not take each other's: y's old folder (a two-rename gap) is put back for y, not for x."""
+    pid = _dead_pid()
+    x, y = "n" * F._NAME_MAX + "x", "n" * F._NAME_MAX + "y"
+    with output_dir(tmp_path / y) as d:
+        write_text(d / "a", "y")
+    os.rename(tmp_path / y, tmp_path / F._temp_name(y, "old", f"{pid}-ab12"))
+    with output_dir(tmp_path / x) as d:
+        write_text(d / "b", "x")
+    assert _texts(tmp_path / x) == {"b": "x"}
+    with output_dir(tmp_path / y) as d:
+        write_text(d / "c", "y")
+    assert _texts(tmp_path / y) == {"a": "y", "c": "y"} and temps(tmp_path) == []
+
+
+def test_a_name_long_in_bytes_is_written(tmp_path):
+    """A name of 80 three-byte characters (240 bytes of the 255 a file name may have) is written:
+    its temporaries' names are cut to bytes, not characters."""
+    name = "\u00e9\u4e2d" * 48                 # 96 characters, 240 bytes
+    write_text(tmp_path / name, "a")
+    with output_dir(tmp_path / (name + "d")) as d:
+        write_text(d / name, "b")
+    assert (tmp_path / name).read_text() == "a" and (tmp_path / (name + "d") / name).read_text() == "b"
+    assert temps(tmp_path, tmp_path / (name + "d")) == []
 
 
 def test_in_place_swap_killed_midway_is_completed_by_the_next_run(tmp_path):
