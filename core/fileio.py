@@ -154,8 +154,11 @@ def check_output(path: PathLike, folder: bool = True) -> None:
     folder is expected or the reverse, lies under a file, or is read-only.
     """
     path = Path(os.path.realpath(path))
-    _check_target(path, folder)
-    probe = path if folder and path.is_dir() else next((p for p in path.parents if p.is_dir()), None)
+    try:
+        _check_target(path, folder)
+        probe = path if folder and path.is_dir() else next((p for p in path.parents if p.is_dir()), None)
+    except OSError as exc:      # a folder on the way that cannot be searched: one line, not a traceback
+        raise _refuse(path, exc, "the output") from None
     if probe is not None and not os.access(probe, os.W_OK | os.X_OK):
         raise EaseError(f"{path}: cannot write here: {probe} is read-only")
 
@@ -432,8 +435,8 @@ def output_dir(path: PathLike, recover: bool = True) -> Iterator[Path]:
     EaseError when ``path`` is a file, lies under a file, or is read-only.
     """
     final = Path(os.path.realpath(path))   # a symlink to a folder: replace the folder, keep the link
-    _check_target(final, folder=True)
     try:
+        _check_target(final, folder=True)
         final.parent.mkdir(parents=True, exist_ok=True)
         # a shortened name's leftovers are left by recover_folder (whose they are is not known there)
         _recover(final, beside=recover or _short(final.name) != final.name)

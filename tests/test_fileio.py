@@ -119,3 +119,22 @@ def test_large_files_leave_the_page_cache_once_on_disk(tmp_path, monkeypatch):
     write_bytes(tmp_path / "small.bin", small)
     assert calls == [os.POSIX_FADV_DONTNEED]
     assert (tmp_path / "big.bin").read_bytes() == big and (tmp_path / "small.bin").read_bytes() == small
+
+
+def test_a_folder_that_cannot_be_searched_is_one_clear_error(tmp_path, monkeypatch):
+    """A PermissionError while checking the target (a folder on the way without search permission; root
+    cannot make one, so the check is made to meet it) is an EaseError naming the path, not a traceback."""
+    from pathlib import Path
+
+    from core.errors import EaseError
+    from core.fileio import check_output
+    real = Path.is_dir
+
+    def refusing(self):
+        if self.name == "locked":
+            raise PermissionError(13, "Permission denied", str(self))
+        return real(self)
+    monkeypatch.setattr(Path, "is_dir", refusing)
+    for make in (lambda p: check_output(p), lambda p: output_dir(p).__enter__()):
+        with pytest.raises(EaseError, match="locked.*Permission denied"):
+            make(tmp_path / "locked" / "out")
