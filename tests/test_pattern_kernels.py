@@ -43,10 +43,10 @@ def ran(monkeypatch):
     """How many calls of each of :mod:`core.pattern.compiled`'s steps the kernels did (gave a result) in
     the test: a comparison with numpy only tests the kernels where they ran."""
     counts = {}
-    for name in ("local_step", "ratios", "collapse_guard", "grain_votes", "turned", "flip_check"):
+    for name in ("local_step", "ratios", "collapse_guard", "grain_votes", "turned", "flip_check", "corrections"):
         def spy(*args, _step=getattr(compiled, name), _name=name):
             got = _step(*args)
-            counts[_name] = counts.get(_name, 0) + (got is not None)
+            counts[_name] = counts.get(_name, 0) + (got is not None and got is not False)
             return got
         monkeypatch.setattr(compiled, name, spy)
     return counts
@@ -221,6 +221,29 @@ def test_feedback_same_bits(both, f, poison):
         return cw_corr, cg_corr
     ref, got = both(run)
     _same(ref, got)
+
+
+@pytest.mark.parametrize("name", ["improved", "lengths", "paper", "stretch"])
+@pytest.mark.parametrize("poison", [None, "nan_correction", "far"])
+def test_feedback_corrections_same_bits(both, ran, name, poison):
+    """The feedback's clips and products after numpy's power, in the kernel: one gain, both, none; a NaN
+    correction (numpy's clip keeps it: numpy's path) and ratios far off (the per-step bound and the
+    ceiling bite)."""
+    cfg = SolverConfig.named(name)
+    _, K, Kc, M, cw, cg = _inputs(83, 7)
+    if poison == "far":
+        cw = cw * 40.0
+    start_w, start_g = np.linspace(0.9, 1.1, 83), np.linspace(1.05, 0.95, 83)
+    if poison == "nan_correction":
+        start_w[4] = np.nan
+
+    def run():
+        a, b = start_w.copy(), start_g.copy()
+        move_corrections(cfg, M, Kc, cw, cg, a, b)
+        return a, b
+    ref, got = both(run)
+    _same(ref, got)
+    assert ran.get("corrections", 0) == (0 if poison == "nan_correction" else 1)
 
 
 @pytest.mark.parametrize("f", SIZES)

@@ -351,6 +351,23 @@ def ratios(M, Kc, c_weft, c_warp):
     return None if got is None or got[1][0] else got[0]
 
 
+def corrections(p_w, p_g, corr_w: np.ndarray, corr_g: np.ndarray, lower: float, upper: float, floor: float,
+                hi: float) -> bool:
+    """:func:`.feedback.move_corrections`' last steps: ``corr *= clip(p, lower, upper)`` for each of
+    ``p_w``, ``p_g`` (f,) that is not None (the ratios to their gains, numpy's power), then every
+    correction clipped to ``[floor, hi]``; ``corr_w``, ``corr_g`` (f,) updated in place. False (both
+    untouched) where numpy must."""
+    got = _call(_kernels().corrections8, len(corr_w),
+                (corr_w if p_w is None else p_w, corr_g if p_g is None else p_g, corr_w, corr_g,
+                 int(p_w is not None), int(p_g is not None), float(lower), float(upper), float(floor), float(hi)),
+                2, 1)
+    if got is None or got[1][0]:
+        return False
+    corr_w[:] = got[0][0]
+    corr_g[:] = got[0][1]
+    return True
+
+
 def _body_weights(body: np.ndarray) -> np.ndarray:
     """The body triangles' mask (f,) bool as 0. / 1. (the kernel's lanes are float64), kept per mask."""
     kept = getattr(_local, "body", None)

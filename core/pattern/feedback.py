@@ -51,13 +51,17 @@ def move_corrections(cfg, M: list, Kc: list, c_weft: np.ndarray, c_warp: np.ndar
     gain_w, gain_g, lower, upper, hi = feedback_gains(cfg, adapting)
     done = None if adapting else compiled.ratios(M, Kc, c_weft, c_warp)
     if done is not None:
-        # every triangle moves (else numpy below): the whole arrays, the operators numpy's path uses
-        if gain_w > 0:
-            corr_w *= np.clip(done[0] ** gain_w, lower, upper)
-        if gain_g > 0:
-            corr_g *= np.clip(done[1] ** gain_g, lower, upper)
-        np.clip(corr_w, fb.floor, hi, out=corr_w)
-        np.clip(corr_g, fb.floor, hi, out=corr_g)
+        # every triangle moves (else numpy below): the whole arrays, the operators numpy's path uses; the
+        # power is numpy's (its own SIMD routine, not libm's), the clips and products the kernel's
+        p_w = done[0] ** gain_w if gain_w > 0 else None
+        p_g = done[1] ** gain_g if gain_g > 0 else None
+        if not compiled.corrections(p_w, p_g, corr_w, corr_g, lower, upper, fb.floor, hi):
+            if p_w is not None:
+                corr_w *= np.clip(p_w, lower, upper)
+            if p_g is not None:
+                corr_g *= np.clip(p_g, lower, upper)
+            np.clip(corr_w, fb.floor, hi, out=corr_w)
+            np.clip(corr_g, fb.floor, hi, out=corr_g)
         return
     rw, rg = scales_of_offsets(M, Kc)
     goal_w, goal_g = c_weft, c_warp

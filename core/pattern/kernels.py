@@ -318,3 +318,23 @@ def areas8(u0: V, v0: V, u1: V, v1: V, u2: V, v2: V, area_floor: V, s_old: V, s:
         low += wp.where(area[j] <= wp.min(fl[j], old[j]), 1, 0)
     flag(flags, 0, low)
     flag(flags, 1, nans(old))
+
+
+@wp.kernel
+def corrections8(p_w: V, p_g: V, corr_w: V, corr_g: V, use_w: int, use_g: int, lower: f64, upper: f64,
+                 floor: f64, hi: f64, new_w: V, new_g: V, flags: Flags):
+    """:func:`.feedback.move_corrections` after numpy's power of the ratios (``p_w``, ``p_g``: the ratios
+    to the gains; read where ``use_w`` / ``use_g``): ``corr *= clip(p, lower, upper)``, then ``clip(corr,
+    floor, hi)``, into ``new_w``, ``new_g``. ``flags[0]``: lanes with a NaN (numpy's clip keeps it)."""
+    i = wp.tid()
+    a = corr_w[i]
+    b = corr_g[i]
+    pw = p_w[i]
+    pg = p_g[i]
+    if use_w != 0:
+        a = wp.cw_mul(a, vclip(pw, lower, upper))
+    if use_g != 0:
+        b = wp.cw_mul(b, vclip(pg, lower, upper))
+    new_w[i] = vclip(a, floor, hi)
+    new_g[i] = vclip(b, floor, hi)
+    flag(flags, 0, nans(a) + nans(b) + nans(pw) + nans(pg))
