@@ -43,7 +43,8 @@ def ran(monkeypatch):
     """How many calls of each of :mod:`core.pattern.compiled`'s steps the kernels did (gave a result) in
     the test: a comparison with numpy only tests the kernels where they ran."""
     counts = {}
-    for name in ("local_step", "ratios", "collapse_guard", "grain_votes", "turned", "flip_check", "corrections"):
+    for name in ("local_step", "ratios", "collapse_guard", "grain_votes", "turned", "flip_check", "corrections",
+                 "rhs_terms"):
         def spy(*args, _step=getattr(compiled, name), _name=name):
             got = _step(*args)
             counts[_name] = counts.get(_name, 0) + (got is not None and got is not False)
@@ -244,6 +245,21 @@ def test_feedback_corrections_same_bits(both, ran, name, poison):
     ref, got = both(run)
     _same(ref, got)
     assert ran.get("corrections", 0) == (0 if poison == "nan_correction" else 1)
+
+
+@pytest.mark.parametrize("lam", [(1.0, 1.0), (2.0, 1.0), (1.0, 0.5), (0.0, 3.0)])
+def test_rhs_terms_same_bits(both, ran, lam):
+    """The right-hand side's terms lambda_reg R T + lambda_ease T in the kernel, unit weights included."""
+    from core.pattern.steps import rhs_terms
+    rng = np.random.default_rng(9)
+    RT0, T = [rng.normal(0, 1, 83) for _ in range(4)], [rng.normal(0, 1, 83) for _ in range(4)]
+    RT0[0][:3] = [-0.0, 0.0, np.inf]
+    def run():
+        with np.errstate(invalid="ignore"):       # 0 x inf where lambda_reg is 0: NaN in both
+            return rhs_terms([x.copy() for x in RT0], T, *lam)
+    ref, got = both(run)
+    _same(ref, got)
+    assert ran.get("rhs_terms") == 1
 
 
 @pytest.mark.parametrize("f", SIZES)

@@ -368,6 +368,13 @@ def corrections(p_w, p_g, corr_w: np.ndarray, corr_g: np.ndarray, lower: float, 
     return True
 
 
+def rhs_terms(RT, T, lam_reg: float, lam_ease: float):
+    """:func:`.steps.rhs_terms` (4 new (f,) arrays), or None."""
+    got = _call(_kernels().rhs_terms8, len(RT[0]), (*RT, *T, float(lam_reg), int(lam_reg != 1.0), float(lam_ease)),
+                4)
+    return None if got is None else got[0]
+
+
 def _body_weights(body: np.ndarray) -> np.ndarray:
     """The body triangles' mask (f,) bool as 0. / 1. (the kernel's lanes are float64), kept per mask."""
     kept = getattr(_local, "body", None)

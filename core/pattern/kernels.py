@@ -338,3 +338,24 @@ def corrections8(p_w: V, p_g: V, corr_w: V, corr_g: V, use_w: int, use_g: int, l
     new_w[i] = vclip(a, floor, hi)
     new_g[i] = vclip(b, floor, hi)
     flag(flags, 0, nans(a) + nans(b) + nans(pw) + nans(pg))
+
+
+@wp.kernel
+def rhs_terms8(rt0: V, rt1: V, rt2: V, rt3: V, t0: V, t1: V, t2: V, t3: V, lam_reg: f64, scale_reg: int,
+               lam_ease: f64, b0: V, b1: V, b2: V, b3: V):
+    """:func:`.steps.rhs_terms`: ``B = lambda_reg R T + lambda_ease T`` entry by entry (``R T`` not
+    scaled where ``scale_reg`` is 0: a weight of 1)."""
+    i = wp.tid()
+    r0 = rt0[i]
+    r1 = rt1[i]
+    r2 = rt2[i]
+    r3 = rt3[i]
+    if scale_reg != 0:
+        r0 = r0 * lam_reg
+        r1 = r1 * lam_reg
+        r2 = r2 * lam_reg
+        r3 = r3 * lam_reg
+    b0[i] = r0 + t0[i] * lam_ease
+    b1[i] = r1 + t1[i] * lam_ease
+    b2[i] = r2 + t2[i] * lam_ease
+    b3[i] = r3 + t3[i] * lam_ease

@@ -51,7 +51,7 @@ from .seams import SeamPlan, plan_seams, seam_layout, seam_matrix, seam_rhs
 from .start import pattern_start
 from .state import SolveState
 from .steps import (any_collapsed, collapse_guard, face_neighbourhood, flip_guard, inverse_offsets, local_step,
-                    opened_jacobians, realign_grain, regulariser_energy, rigid_align, scaled_start)
+                    opened_jacobians, realign_grain, regulariser_energy, rhs_terms, rigid_align, scaled_start)
 from .targets import adaptation_scales, reference_ease, rest_targets
 from .validate import body_positions, validate_cut
 
@@ -417,10 +417,7 @@ class PatternSolver:
                 warp_from = None if gain_g > 0 else tg
             RT, Te = local_step(cfg, M, tg, W2, state.local_state)
             state.energies.append(regulariser_energy(a, M, RT, W2))
-            # B = lambda_ease T + lambda_reg R T: one right-hand side for both terms (same weights), in R T's arrays
-            B = [RT[j] if lam_reg == 1.0 else np.multiply(lam_reg, RT[j], out=RT[j]) for j in range(4)]
-            for j in range(4):
-                B[j] += lam_ease * Te[j]        # x + y is y + x: the same sums
+            B = rhs_terms(RT, Te, lam_reg, lam_ease)   # lambda_reg R T + lambda_ease T (RT's arrays may be reused)
             solve_k, aw_k = lu, aw
             if guarding:
                 # triangles near collapse: stiffened and pulled towards their opened shape

@@ -173,6 +173,19 @@ def local_step(config: SolverConfig, M: list, tg: dict, W2: np.ndarray, state: d
     return [d0 * rk[0], d0 * rk[1], d1 * rk[2], d1 * rk[3]], T
 
 
+def rhs_terms(RT: list, T: list, lam_reg: float, lam_ease: float) -> list:
+    """The triangles' right-hand side terms ``B = lambda_reg R T + lambda_ease T`` (4 (f,) arrays; one
+    right-hand side for the regulariser and the ease term, which have the same weights) of the rest
+    shapes ``RT`` and the ease targets ``T`` (4 (f,) each; ``RT``'s arrays may be reused)."""
+    B = compiled.rhs_terms(RT, T, lam_reg, lam_ease)
+    if B is not None:
+        return B
+    B = [RT[j] if lam_reg == 1.0 else np.multiply(lam_reg, RT[j], out=RT[j]) for j in range(4)]
+    for j in range(4):
+        B[j] += lam_ease * T[j]        # x + y is y + x: the same sums
+    return B
+
+
 def regulariser_energy(a: np.ndarray, M: list, RT: list, W2: np.ndarray) -> float:
     """The regulariser's energy (a diagnostic): ``sum_t a_t |(M_t - R_t T_t) W|^2`` of the Jacobians ``M``
     and the rest shapes ``RT`` (4 (f,) arrays each), area weights ``a`` (f,) and column weights ``W2``
