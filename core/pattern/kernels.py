@@ -346,10 +346,7 @@ def rhs_terms8(rt0: V, rt1: V, rt2: V, rt3: V, t0: V, t1: V, t2: V, t3: V, lam_r
     """:func:`.steps.rhs_terms`: ``B = lambda_reg R T + lambda_ease T`` entry by entry (``R T`` not
     scaled where ``scale_reg`` is 0: a weight of 1)."""
     i = wp.tid()
-    r0 = rt0[i]
-    r1 = rt1[i]
-    r2 = rt2[i]
-    r3 = rt3[i]
+    r0, r1, r2, r3 = four(rt0, rt1, rt2, rt3, i)
     if scale_reg != 0:
         r0 = r0 * lam_reg
         r1 = r1 * lam_reg
