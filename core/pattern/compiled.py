@@ -1,9 +1,10 @@
 """Launching the solver's Warp CPU kernels (:mod:`.kernels`): the same bits as numpy, or numpy.
 
 The per-triangle steps of a local-global iteration (:func:`.steps.local_step`,
-:func:`.feedback.move_corrections`, :func:`.steps.collapse_guard`,
-:func:`.steps.realign_grain`) ask this module first; it returns None when
-numpy must do the step, and the step then runs its numpy code:
+:func:`.feedback.move_corrections`, :func:`.steps.rhs_terms`,
+:func:`.steps.collapse_guard`, :func:`.steps.flip_guard`,
+:func:`.steps.realign_grain`) ask this module first; it returns None (False)
+when numpy must do the step, and the step then runs its numpy code:
 
 - the kernels are off (``EASE_SOLVER_KERNELS=numpy``, :func:`use`), Warp
   does not import, its compiler fails or it refuses a launch (one warning,
@@ -43,9 +44,9 @@ log = logging.getLogger(__name__)
 #: Environment variable choosing the per-triangle steps' code: ``warp`` (default) or ``numpy``.
 ENV = "EASE_SOLVER_KERNELS"
 _LANES = 8
-#: recorded launches a thread keeps, the most recently used: the 5 kernels at 4 sizes (a batch over many
+#: recorded launches a thread keeps, the most recently used: the 8 kernels at 4 sizes (a batch over many
 #: designs, or the add-on over a session, meets a new size with every design)
-_KEPT = 20
+_KEPT = 32
 _state = {"ready": None, "forced": None}
 _lock = threading.RLock()      # load() gives up under it
 _local = threading.local()
@@ -418,6 +419,8 @@ def flip_check(blocks, U_new: np.ndarray, s_old: np.ndarray):
     ``s_old`` (f,): (the step's signed areas (f,), how many triangles are at or under their floor), or
     None. The corners' coordinates are gathered by numpy (a gather is no faster in a kernel)."""
     F0, F1, F2 = blocks.face_columns
+    if len(F0) < _LANES or not enabled():
+        return None                 # numpy's guard gathers the corners itself: not twice
     u, v = U_new[:, 0], U_new[:, 1]
     got = _call(_kernels().areas8, len(F0), (u[F0], v[F0], u[F1], v[F1], u[F2], v[F2], blocks.area_floor, s_old),
                 1, 2)

@@ -46,23 +46,34 @@ def move_corrections(cfg, M: list, Kc: list, c_weft: np.ndarray, c_warp: np.ndar
     targets_finite : (f,) bool, ``isfinite(c_weft) & isfinite(c_warp)`` (without poses; computed once
         per solve by the caller).
     """
-    fb, ad = cfg.feedback, cfg.adaptation
+    fb = cfg.feedback
     adapting = poses is not None
     gain_w, gain_g, lower, upper, hi = feedback_gains(cfg, adapting)
     done = None if adapting else compiled.ratios(M, Kc, c_weft, c_warp)
     if done is not None:
-        # every triangle moves (else numpy below): the whole arrays, the operators numpy's path uses; the
-        # power is numpy's (its own SIMD routine, not libm's), the clips and products the kernel's
-        p_w = done[0] ** gain_w if gain_w > 0 else None
-        p_g = done[1] ** gain_g if gain_g > 0 else None
-        if not compiled.corrections(p_w, p_g, corr_w, corr_g, lower, upper, fb.floor, hi):
-            if p_w is not None:
-                corr_w *= np.clip(p_w, lower, upper)
-            if p_g is not None:
-                corr_g *= np.clip(p_g, lower, upper)
-            np.clip(corr_w, fb.floor, hi, out=corr_w)
-            np.clip(corr_g, fb.floor, hi, out=corr_g)
+        where = slice(None)            # the kernel's ratios: every triangle moves (else numpy's below)
+        ratio_w, ratio_g = done
+    else:
+        where, ratio_w, ratio_g = _ratios(cfg, M, Kc, c_weft, c_warp, gain_w, gain_g, poses, targets_finite)
+    # the power is numpy's (its own SIMD routine, not libm's); the clips and products the kernel's where the
+    # whole arrays move, numpy's otherwise
+    p_w = ratio_w ** gain_w if gain_w > 0 else None
+    p_g = ratio_g ** gain_g if gain_g > 0 else None
+    if isinstance(where, slice) and compiled.corrections(p_w, p_g, corr_w, corr_g, lower, upper, fb.floor, hi):
         return
+    if p_w is not None:
+        corr_w[where] *= np.clip(p_w, lower, upper)
+    if p_g is not None:
+        corr_g[where] *= np.clip(p_g, lower, upper)
+    np.clip(corr_w, fb.floor, hi, out=corr_w)
+    np.clip(corr_g, fb.floor, hi, out=corr_g)
+
+
+def _ratios(cfg, M, Kc, c_weft, c_warp, gain_w, gain_g, poses, targets_finite):
+    """numpy's (where, goal / rho weft, warp) of :func:`move_corrections`: ``where`` the triangles the
+    feedback moves (a full slice when all do), the ratios on them (None for a gain of 0)."""
+    ad = cfg.adaptation
+    adapting = poses is not None
     rw, rg = scales_of_offsets(M, Kc)
     goal_w, goal_g = c_weft, c_warp
     if adapting:
@@ -81,9 +92,5 @@ def move_corrections(cfg, M: list, Kc: list, c_weft: np.ndarray, c_warp: np.ndar
         targets_finite if not adapting else np.isfinite(goal_w) & np.isfinite(goal_g))
     # every triangle is usually valid: the whole arrays then, the same values without the masked copies
     where = slice(None) if ok.all() else ok
-    if gain_w > 0:
-        corr_w[where] *= np.clip((goal_w[where] / rw[where]) ** gain_w, lower, upper)
-    if gain_g > 0:
-        corr_g[where] *= np.clip((goal_g[where] / rg[where]) ** gain_g, lower, upper)
-    np.clip(corr_w, fb.floor, hi, out=corr_w)
-    np.clip(corr_g, fb.floor, hi, out=corr_g)
+    return (where, goal_w[where] / rw[where] if gain_w > 0 else None,
+            goal_g[where] / rg[where] if gain_g > 0 else None)

@@ -248,16 +248,15 @@ def flip_guard(blocks: PanelBlocks, U_old: np.ndarray, U_new: np.ndarray, s_old:
     """
     F = blocks.faces
     n = blocks.n
-    if s_old is not None:
-        checked = compiled.flip_check(blocks, U_new, s_old)
-        if checked is not None and checked[1] == 0:
-            return U_new.copy(), 0, checked[0]
+    checked = None if s_old is None else compiled.flip_check(blocks, U_new, s_old)
+    if checked is not None and checked[1] == 0:
+        return U_new.copy(), 0, checked[0]
     if s_old is None:
         s_old = face_areas(blocks, U_old)
     floor = np.minimum(blocks.area_floor, 0.5 * s_old)
-    # most iterations cut nothing: their areas are checked once, and the step's differences and the
-    # halving state are made only when a triangle needs them
-    s_all = face_areas(blocks, U_new)
+    # most iterations cut nothing: their areas are checked once (the kernel's, the same bits, when it ran),
+    # and the step's differences and the halving state are made only when a triangle needs them
+    s_all = face_areas(blocks, U_new) if checked is None else checked[0]
     bad = np.flatnonzero(s_all <= floor)
     if bad.size == 0:
         return U_new.copy(), 0, s_all
