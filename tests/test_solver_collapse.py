@@ -130,7 +130,7 @@ def test_a_finished_solve_gives_its_guarded_factorisation_to_the_next(skirt, mon
     fresh = solve_pattern(skirt.cut, skirt.reference, solver=PatternSolver(skirt.cut, skirt.reference))
     built = []
     init = factor.SymmetricFactor.__init__
-    monkeypatch.setattr(factor.SymmetricFactor, "__init__", lambda self, A: (built.append(1), init(self, A))[1])
+    monkeypatch.setattr(factor.SymmetricFactor, "__init__", lambda self, A, **kw: (built.append(1), init(self, A, **kw))[1])
     solver = PatternSolver(skirt.cut, skirt.reference)
     first = solve_pattern(skirt.cut, skirt.reference, solver=solver)
     n_first = len(built)

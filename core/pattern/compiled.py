@@ -94,16 +94,24 @@ def load(progress: Optional[Progress] = None) -> bool:
                 try:
                     from ..geom.queries import init_cpu
                     from . import kernels as K
+                    from . import ldl_kernels
                     init_cpu()
                     K.wp.load_module(K, device="cpu")
+                    K.wp.load_module(ldl_kernels, device="cpu")
                     _state["ready"] = True
                 except Exception as exc:  # noqa: BLE001 - any failure leaves numpy, which gives the same bits
-                    _give_up("loading", exc)
+                    give_up("loading", exc)
     return bool(_state["ready"])
 
 
-def _give_up(doing: str, exc: Exception) -> None:
-    """The kernels off for the process after ``exc`` while ``doing``: one warning, numpy after."""
+def ldl_kernels():
+    """:mod:`.ldl_kernels`, loaded (call where :func:`enabled`)."""
+    from . import ldl_kernels as module
+    return module
+
+
+def give_up(doing: str, exc: Exception) -> None:
+    """The kernels off for the process after ``exc`` while ``doing``: one warning, numpy (and qdldl) after."""
     with _lock:
         if _state["ready"] is not False:
             _state["ready"] = False
@@ -313,7 +321,7 @@ def _call(kernel, f: int, head: tuple, n_out: int, n_flags: int = 0):
     except _Unsuitable:
         return None
     except Exception as exc:  # noqa: BLE001 - a launch Warp refuses leaves numpy, as a failed load does
-        _give_up("launching " + kernel.key, exc)
+        give_up("launching " + kernel.key, exc)
         return None
     return out, flags
 

@@ -1,0 +1,183 @@
+"""QDLDL's LDLᵀ of the system matrix, refactorised only where values changed, solved two columns at once.
+
+:class:`.factor.SymmetricFactor` factorises with qdldl-python (AMD ordering,
+elimination tree, numeric factors) and, where the solver's Warp kernels run
+(:func:`.compiled.enabled`), hands the factors to an :class:`LDL`:
+
+- :meth:`LDL.refactorise`: the collapse guard stiffens a few triangles, which
+  changes a few columns of the matrix. Only the rows of L those columns reach
+  (the columns and their ancestors in the elimination tree) can change; the
+  others would be recomputed from the same inputs into the same bits. On the
+  long-sleeved shirt a guard's refactorisation recomputes 2-10 % of the rows,
+  27-73 % of the work (the top separators of a panel are on every path),
+  instead of all of it;
+- :meth:`LDL.solve`: both pattern coordinates in one pass over L.
+
+The loops are QDLDL's (:mod:`.ldl_kernels`) on the matrix qdldl-python
+factorises (its symmetric permutation, entries in its order), so factors and
+solutions are qdldl's bits and a pattern is the same bytes either way
+(tests/test_pattern_ldl.py). A launch Warp refuses turns the kernels off for
+the process (:func:`.compiled.give_up`) and the factor goes back to qdldl.
+"""
+from __future__ import annotations
+
+import threading
+from typing import Optional
+
+import numpy as np
+
+from . import compiled
+
+_I32 = np.int32
+
+
+class Plan:
+    """The symbolic side of QDLDL's factorisation of one sparsity pattern (shared by every :class:`LDL` of it).
+
+    Parameters
+    ----------
+    P : (n,) int, the AMD ordering qdldl chose (row ``i`` of the permuted matrix is row ``P[i]``).
+    L : (n, n) ``scipy.sparse.csc_matrix``, its strictly lower factor (the pattern is used).
+    upper : (keep, rows, indptr) of :class:`.factor.SymmetricFactor`: the upper triangle's entries
+        (indices into the full matrix's values), their rows and column pointers.
+    nnz : int, the number of stored values of the full matrix.
+    """
+
+    def __init__(self, P: np.ndarray, L, upper: tuple, nnz: int):
+        K = compiled.ldl_kernels()
+        keep, rows, ptr = upper
+        n = len(P)
+        self.n = n
+        self.P = np.ascontiguousarray(P, _I32)
+        self.Lp = np.ascontiguousarray(L.indptr, _I32)
+        self.Li = np.ascontiguousarray(L.indices, _I32)
+        pinv = np.empty(n, np.int64)
+        pinv[P] = np.arange(n)
+        # qdldl-python's symperm: the upper triangle's entries (in column order) scattered to column
+        # max(pinv i, pinv j) of the permuted matrix, each column in scan order; the order of a column's
+        # entries is the order QDLDL walks them in, which decides its sums' order
+        cols = np.repeat(np.arange(n), np.diff(ptr))
+        i2, j2 = pinv[rows], pinv[cols]
+        target = np.maximum(i2, j2)
+        order = np.argsort(target, kind="stable")
+        self.Ap = np.concatenate([[0], np.cumsum(np.bincount(target, minlength=n))]).astype(_I32)
+        self.Ai = np.minimum(i2, j2)[order].astype(_I32)
+        #: (nnz_upper,) the full matrix's value index of each permuted entry
+        self.src = np.asarray(keep, np.int64)[order]
+        #: (nnz,) the permuted column a full-matrix value enters (-1: below the diagonal, not read)
+        self.entry_column = np.full(nnz, -1, _I32)
+        self.entry_column[keep] = target
+        # elimination tree: a column's parent is its first row below the diagonal in L
+        self.etree = np.full(n, -1, _I32)
+        has = np.diff(self.Lp) > 0
+        self.etree[has] = self.Li[self.Lp[:-1][has]]
+        self.rowptr = np.concatenate([[0], np.cumsum(np.bincount(self.Li, minlength=n))]).astype(_I32)
+        self.seq_c = np.zeros(len(self.Li), _I32)
+        self.seq_slot = np.zeros(len(self.Li), _I32)
+        K.wp.launch(K.ldl_plan, dim=1, device="cpu", inputs=[
+            n, *_arrays(self.Ap, self.Ai, self.etree, self.Lp, self.rowptr, self.seq_c, self.seq_slot,
+                        np.zeros(4 * n, _I32))])
+
+
+def _arrays(*arrays) -> list:
+    K = compiled.ldl_kernels()
+    return [K.wp.array(a, device="cpu", copy=False) for a in arrays]
+
+
+class LDL:
+    """The numeric factors ``L``, ``D``, ``1 / D`` of the matrix with values ``data`` on :class:`Plan` ``plan``.
+
+    Parameters
+    ----------
+    plan : :class:`Plan`.
+    Lx : (nnz_L,) float, L's values in QDLDL's layout; D, Dinv : (n,) float.
+    data : (nnz,) float, the full matrix's values they factorise (held by reference, never written).
+    """
+
+    def __init__(self, plan: Plan, Lx: np.ndarray, D: np.ndarray, Dinv: np.ndarray, data: np.ndarray,
+                 Ax: Optional[np.ndarray] = None):
+        self.plan = plan
+        self.Lx, self.D, self.Dinv = Lx, D, Dinv
+        self.data = data
+        self.Ax = np.take(data, plan.src) if Ax is None else Ax   # the permuted upper triangle's values
+        # per thread: recorded launches and their buffers (a thread's solves never share scratch space)
+        self._records: dict = {}
+
+    @classmethod
+    def from_qdldl(cls, solver, upper: tuple, data: np.ndarray) -> "LDL":
+        """The factors of qdldl-python ``solver``, which factorised the upper triangle ``upper`` of ``data``."""
+        L, D, P = solver.factors()
+        plan = Plan(P, L, upper, len(data))
+        D = np.array(D, float)
+        return cls(plan, np.array(L.data, float), D, 1 / D, data)
+
+    def __getstate__(self):
+        return {**self.__dict__, "_records": {}}
+
+    def copy(self) -> "LDL":
+        """An independent copy (its own values, the same plan)."""
+        return LDL(self.plan, self.Lx.copy(), self.D.copy(), self.Dinv.copy(), self.data, self.Ax.copy())
+
+    def _record(self, name: str, make):
+        key = (name, threading.get_ident())
+        rec = self._records.get(key)
+        if rec is None:
+            rec = self._records[key] = make()
+        return rec
+
+    def _rows_record(self):
+        K, p = compiled.ldl_kernels(), self.plan
+        mark, y, failed = np.zeros(p.n, _I32), np.zeros(p.n), np.zeros(1, _I32)
+        cmd = K.wp.launch(K.ldl_rows, dim=1, device="cpu", record_cmd=True, inputs=[
+            p.n, *_arrays(mark, p.Ap, p.Ai, self.Ax, p.etree, p.rowptr, p.seq_c, p.seq_slot, p.Lp, p.Li,
+                          self.Lx, self.D, self.Dinv, y, failed)])
+        return cmd, mark, failed
+
+    def _solve_record(self):
+        K, p = compiled.ldl_kernels(), self.plan
+        b, work, x = np.zeros((p.n, 2)), np.zeros(2 * p.n), np.zeros((p.n, 2))
+        cmd = K.wp.launch(K.ldl_solve2, dim=1, device="cpu", record_cmd=True, inputs=[
+            p.n, *_arrays(p.P, p.Lp, p.Li, self.Lx, self.Dinv, b.reshape(-1), work, x.reshape(-1))])
+        return cmd, b, x
+
+    def refactorise(self, data: np.ndarray) -> bool:
+        """Factorise the matrix with values ``data`` (nnz,) in place, recomputing the rows that differ
+        from the held values' (compared bit for bit). False: the kernels failed (they are off now)."""
+        data = np.asarray(data, float)
+        changed = np.flatnonzero(data.view(np.int64) != self.data.view(np.int64))
+        columns = self.plan.entry_column[changed]
+        columns = columns[columns >= 0]
+        if len(columns):
+            try:
+                cmd, mark, failed = self._record("rows", self._rows_record)
+                np.take(data, self.plan.src, out=self.Ax)
+                mark[columns] = 1
+                cmd.launch()
+            except Exception as exc:  # noqa: BLE001 - a launch Warp refuses leaves qdldl, the same bits
+                compiled.give_up("launching ldl_rows", exc)
+                return False
+            if failed[0]:
+                failed[0] = 0
+                raise ValueError("matrix is not quasi-definite: a zero pivot in its LDL^T factorisation")
+        self.data = data
+        return True
+
+    def solve(self, rhs: np.ndarray) -> Optional[np.ndarray]:
+        """``A⁻¹ rhs`` for rhs (n,) or (n, k), or None where the kernels failed (they are off now)."""
+        rhs = np.asarray(rhs, float)
+        cols = rhs[:, None] if rhs.ndim == 1 else rhs
+        k = cols.shape[1]
+        out = np.empty(cols.shape)
+        try:
+            cmd, b, x = self._record("solve", self._solve_record)
+            for j in range(0, k, 2):
+                # a lone last column is solved beside zeros: each column's operations are its own
+                m = min(2, k - j)
+                b[:, :m] = cols[:, j:j + m]
+                b[:, m:] = 0.0
+                cmd.launch()
+                out[:, j:j + m] = x[:, :m]
+        except Exception as exc:  # noqa: BLE001 - as refactorise
+            compiled.give_up("launching ldl_solve2", exc)
+            return None
+        return out[:, 0] if rhs.ndim == 1 else out

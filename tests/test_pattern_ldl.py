@@ -1,0 +1,181 @@
+"""core.pattern.ldl: QDLDL's factors refactorised row by row and solved two columns at once, with qdldl's bits."""
+import pickle
+
+import numpy as np
+import pytest
+import qdldl
+import scipy.sparse as sp
+
+from core.pattern import compiled
+from core.pattern.factor import SymmetricFactor
+
+
+@pytest.fixture
+def kernels_on(monkeypatch):
+    assert compiled.load(), "Warp kernels failed to load (see the log's warning)"
+    monkeypatch.setitem(compiled._state, "forced", True)
+
+
+def _spd(n, seed, blocks=1, density=4):
+    """A random SPD matrix (a weighted graph Laplacian plus a diagonal), ``blocks`` unconnected parts."""
+    rng = np.random.default_rng(seed)
+    parts = []
+    for b in range(blocks):
+        m = max(1, n // blocks)
+        i, j = rng.integers(0, m, density * m), rng.integers(0, m, density * m)
+        W = sp.coo_matrix((rng.random(density * m), (i, j)), shape=(m, m)).tocsc()
+        W = W + W.T
+        W.setdiag(0)
+        parts.append(sp.diags(np.asarray(abs(W).sum(axis=1)).ravel()) - W + sp.diags(0.1 + rng.random(m)))
+    A = sp.block_diag(parts).tocsc()
+    A.eliminate_zeros()
+    return A
+
+
+def _bits(a):
+    return np.ascontiguousarray(a, float).view(np.int64)
+
+
+def _changed(f: SymmetricFactor, kind: str, seed: int) -> np.ndarray:
+    """New values on ``f``'s pattern, still SPD: ``kind`` says which change."""
+    rng = np.random.default_rng(seed)
+    A = f.matrix
+    data = A.data.copy()
+    n = f.n
+    diag = f.positions(np.arange(n), np.arange(n))
+    if kind == "none":
+        return data
+    if kind == "one_diagonal":
+        data[diag[rng.integers(n)]] *= 3.0
+        return data
+    if kind == "all":
+        return data * (1.0 + 0.5 * rng.random()) + 0.0
+    # a few symmetric off-diagonal pairs scaled, the diagonals raised to keep dominance
+    rows, cols = A.indices, np.repeat(np.arange(n), np.diff(A.indptr))
+    off = np.flatnonzero(rows < cols)
+    if len(off) == 0:
+        data[diag] *= 1.5
+        return data
+    pick = rng.choice(off, size=min(3, len(off)), replace=False)
+    for e in pick:
+        r, c = rows[e], cols[e]
+        s = 1.0 + rng.random()
+        data[e] *= s
+        data[f.positions(np.array([c]), np.array([r]))] *= s
+        data[diag[[r, c]]] += abs(data[e]) * s
+    return data
+
+
+MATRICES = [(1, 1), (2, 1), (5, 1), (60, 1), (300, 1), (300, 3), (40, 40)]
+
+
+@pytest.mark.parametrize("n, blocks", MATRICES)
+@pytest.mark.parametrize("kind", ["none", "one_diagonal", "pairs", "all"])
+def test_refactorised_factors_are_qdldls_bits(kernels_on, n, blocks, kind):
+    f = SymmetricFactor(_spd(n, seed=n + blocks, blocks=blocks))
+    assert f._ldl is not None
+    data = _changed(f, kind, seed=7)
+    g = f.with_values(data)                        # a copy of f's factors, the changed rows recomputed
+    h = f.with_values(_changed(f, "pairs", 3))
+    h = f.with_values(data, reuse=h)               # refactorised in place from other values
+    B = sp.csc_matrix((data, f.matrix.indices, f.matrix.indptr), shape=f.matrix.shape)
+    ref = qdldl.Solver(sp.triu(B, format="csc"), upper=True)
+    L, D, _ = ref.factors()
+    for x in (g, h):
+        assert np.array_equal(_bits(x._ldl.Lx), _bits(L.data)) and np.array_equal(_bits(x._ldl.D), _bits(D))
+    rhs = np.random.default_rng(1).standard_normal((f.n, 3))
+    want = np.stack([ref.solve(np.ascontiguousarray(rhs[:, j])) for j in range(3)], 1)
+    for x in (g, h):
+        assert np.array_equal(_bits(x.solve(rhs)), _bits(want))
+        assert np.array_equal(_bits(x.solve(rhs[:, :2])), _bits(want[:, :2]))
+        assert np.array_equal(_bits(x.solve(rhs[:, 0])), _bits(want[:, 0]))
+        assert np.array_equal(_bits(x.solve(rhs[:, 1:2])), _bits(want[:, 1:2]))
+
+
+def test_only_the_reached_rows_are_recomputed(kernels_on, monkeypatch):
+    """A change in one column recomputes that row and its elimination-tree ancestors, no other."""
+    f = SymmetricFactor(_spd(300, seed=5, blocks=3))
+    plan = f._ldl.plan
+    data = f.matrix.data.copy()
+    k = 17
+    data[f.positions(np.array([k]), np.array([k]))] *= 2.0
+    g = f.with_values(data)
+    col = int(plan.entry_column[f.positions(np.array([k]), np.array([k]))[0]])
+    path = [col]
+    while plan.etree[path[-1]] != -1:
+        path.append(int(plan.etree[path[-1]]))
+    moved = np.flatnonzero(_bits(g._ldl.D) != _bits(f._ldl.D))
+    assert set(moved) <= set(path) and col in moved and len(path) < plan.n // 2
+    rows_l = np.flatnonzero(_bits(g._ldl.Lx) != _bits(f._ldl.Lx))
+    assert set(plan.Li[rows_l]) <= set(path)
+
+
+def test_the_original_is_untouched(kernels_on):
+    f = SymmetricFactor(_spd(60, seed=2))
+    b = np.random.default_rng(2).random((f.n, 2))
+    x0 = f.solve(b)
+    g = f.with_values(_changed(f, "all", 4))
+    g = f.with_values(_changed(f, "pairs", 5), reuse=g)
+    assert not np.array_equal(g.solve(b), x0)
+    assert np.array_equal(f.solve(b), x0)
+
+
+def test_kernels_and_qdldl_give_the_same_bits_on_a_solvers_guarded_matrices(kernels_on, monkeypatch):
+    """The solver's own system matrix and the collapse guard's stiffenings of it, refactorised in turn."""
+    from synthetic_pattern import two_panels
+    from core.pattern.solve import PatternSolver
+    cut, body = two_panels(ease=(1.2, 1.6), bulge=0.2)
+    rng = np.random.default_rng(0)
+    results = []
+    for forced in (False, True):
+        monkeypatch.setitem(compiled._state, "forced", forced)
+        solver = PatternSolver(cut, body)
+        K, cw, cg = solver.targets_reference()
+        plan = solver.plan_seams(K, cw, cg)
+        base, _ = solver.factorisation(None, plan)
+        assert (base._ldl is not None) == forced
+        rng = np.random.default_rng(0)
+        rhs = rng.standard_normal((base.n, 2))
+        out, fac = [base(rhs)], None
+        for _ in range(4):
+            gain = np.where(rng.random(len(solver.gfaces)) < 0.05, rng.random(len(solver.gfaces)) * 8, 0.0)
+            fac = solver.guarded_factorisation(None, plan, gain, reuse=fac)
+            out.append(fac(rhs))
+        results.append(out)
+    for a, b in zip(*results):
+        assert np.array_equal(_bits(a), _bits(b))
+
+
+def test_a_failed_launch_leaves_qdldl(kernels_on, monkeypatch, caplog):
+    """A launch Warp refuses: qdldl's bits, one warning, and qdldl (and numpy) for the rest of the process."""
+    from core.pattern.ldl import LDL
+    f = SymmetricFactor(_spd(60, seed=3))
+    data = _changed(f, "pairs", 6)
+    g_ref = f.with_values(data)
+    b = np.random.default_rng(3).random((f.n, 2))
+    want = g_ref.solve(b)
+
+    def broken(self):
+        raise RuntimeError("no launch")
+    monkeypatch.setattr(LDL, "_rows_record", broken)
+    monkeypatch.setattr(LDL, "_solve_record", broken)
+    monkeypatch.setitem(compiled._state, "ready", True)
+    g = f.with_values(data)
+    assert g._ldl is None and np.array_equal(_bits(g.solve(b)), _bits(want))
+    assert caplog.text.count("using numpy") == 1
+    assert not compiled.enabled()
+    assert np.array_equal(_bits(f.solve(b)), _bits(SymmetricFactor(f.matrix).solve(b)))
+
+
+def test_a_zero_pivot_is_refused(kernels_on):
+    f = SymmetricFactor(sp.diags([2.0, 3.0, 4.0]).tocsc())
+    with pytest.raises(ValueError, match="quasi-definite"):
+        f.with_values(np.array([2.0, 0.0, 4.0]))
+
+
+def test_a_pickled_factor_solves(kernels_on):
+    f = SymmetricFactor(_spd(60, seed=4))
+    b = np.random.default_rng(4).random((f.n, 2))
+    x = f.solve(b)                                    # its launches are recorded now
+    g = pickle.loads(pickle.dumps(f))
+    assert np.array_equal(_bits(g.solve(b)), _bits(x))
