@@ -179,3 +179,50 @@ def test_a_pickled_factor_solves(kernels_on):
     x = f.solve(b)                                    # its launches are recorded now
     g = pickle.loads(pickle.dumps(f))
     assert np.array_equal(_bits(g.solve(b)), _bits(x))
+
+
+def test_a_refused_refactorisation_leaves_a_factor_that_refactorises_to_qdldls_bits(kernels_on):
+    """After a zero pivot (ValueError) the factor refactorised in place still holds what it factorised:
+    the next values are qdldl's bits, not the refused matrix's rows left beside them."""
+    f = SymmetricFactor(sp.diags([2.0, 3.0, 4.0]).tocsc())
+    g = f.with_values(np.array([2.0, 3.0, 4.0]))
+    with pytest.raises(ValueError, match="quasi-definite"):
+        f.with_values(np.array([2.0, 0.0, 4.0]), reuse=g)
+    g = f.with_values(np.array([2.0, 3.0, 5.0]), reuse=g)
+    assert np.array_equal(_bits(g.solve(np.ones(3))), _bits([1 / 2, 1 / 3, 1 / 5]))
+
+
+def test_a_failed_plan_launch_leaves_qdldl(kernels_on, monkeypatch, caplog):
+    """The symbolic plan's launch refused: the factor is qdldl's (not an error), one warning."""
+    from core.pattern import ldl
+
+    def broken(self, *args):
+        raise RuntimeError("no launch")
+    A = _spd(60, seed=8)
+    want = SymmetricFactor(A).solve(np.ones(60))
+    monkeypatch.setattr(ldl.Plan, "__init__", broken)
+    monkeypatch.setitem(compiled._state, "ready", True)
+    f = SymmetricFactor(A)
+    assert f._ldl is None and f._qdldl is not None and not compiled.enabled()
+    assert np.array_equal(_bits(f.solve(np.ones(60))), _bits(want))
+    assert caplog.text.count("using numpy") == 1
+
+
+def test_a_wrong_right_hand_side_raises_and_leaves_the_kernels_on(kernels_on, monkeypatch):
+    """A caller's mistake is a ValueError, as qdldl's, not a failed launch turning the kernels off."""
+    monkeypatch.setitem(compiled._state, "ready", True)
+    f = SymmetricFactor(_spd(60, seed=9))
+    for rhs in (np.ones(61), np.ones((59, 2)), np.ones((60, 2, 1))):
+        with pytest.raises(ValueError):
+            f.solve(rhs)
+    assert compiled.enabled() and f._ldl is not None
+
+
+def test_factors_past_int32_indices_stay_qdldls():
+    """qdldl's indices are 64-bit, the kernels' int32: an L with 2**31 entries is left to qdldl."""
+    from types import SimpleNamespace
+    from core.pattern.ldl import LDL
+    L = SimpleNamespace(indptr=np.array([0, 2 ** 31], np.int64), indices=np.zeros(0, np.int32), data=np.zeros(0))
+    solver = SimpleNamespace(factors=lambda: (L, np.ones(1), np.zeros(1, np.int64)))
+    upper = (np.array([0]), np.array([0], np.int32), np.array([0, 1], np.int32))
+    assert LDL.from_qdldl(solver, upper, np.ones(1)) is None

@@ -66,7 +66,8 @@ class SymmetricFactor:
         if compiled.enabled():
             from .ldl import LDL
             self._ldl = LDL.from_qdldl(self._qdldl, self._upper, A.data)
-            self._qdldl = None     # its factors are the LDL's now
+            if self._ldl is not None:
+                self._qdldl = None     # its factors are the LDL's now
 
     def _qdldl_solver(self):
         """qdldl-python's factorisation of the matrix (made again where the kernels gave up: the same bits)."""
@@ -85,7 +86,8 @@ class SymmetricFactor:
         return self.matrix.shape[0]
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
-        """``A⁻¹ rhs`` for rhs (n,) or (n, k), one back-substitution per column."""
+        """``A⁻¹ rhs`` for rhs (n,) or (n, k): each column back-substituted on its own (the LDL's
+        kernel does two at once, each with its own operations)."""
         rhs = np.asarray(rhs, float)
         if self._ldl is not None:
             out = self._ldl.solve(rhs)

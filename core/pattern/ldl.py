@@ -17,7 +17,10 @@ The loops are QDLDL's (:mod:`.ldl_kernels`) on the matrix qdldl-python
 factorises (its symmetric permutation, entries in its order), so factors and
 solutions are qdldl's bits and a pattern is the same bytes either way
 (tests/test_pattern_ldl.py). A launch Warp refuses turns the kernels off for
-the process (:func:`.compiled.give_up`) and the factor goes back to qdldl.
+the process (:func:`.compiled.give_up`) and the factor goes back to qdldl
+(factors made earlier keep their LDL until a launch of theirs fails: the same
+bits either way). A zero pivot raises ValueError (qdldl-python's constructor
+raises RuntimeError; its update ignores it and leaves stale factors).
 """
 from __future__ import annotations
 
@@ -104,10 +107,18 @@ class LDL:
         self._records: dict = {}
 
     @classmethod
-    def from_qdldl(cls, solver, upper: tuple, data: np.ndarray) -> "LDL":
-        """The factors of qdldl-python ``solver``, which factorised the upper triangle ``upper`` of ``data``."""
+    def from_qdldl(cls, solver, upper: tuple, data: np.ndarray) -> Optional["LDL"]:
+        """The factors of qdldl-python ``solver``, which factorised the upper triangle ``upper`` of ``data``;
+        None where they stay qdldl's: indices past the kernels' int32 (qdldl's are 64-bit), or the plan's
+        launch failed (the kernels are off now)."""
         L, D, P = solver.factors()
-        plan = Plan(P, L, upper, len(data))
+        if max(int(L.indptr[-1]), len(data), 2 * len(P)) > np.iinfo(_I32).max:
+            return None
+        try:
+            plan = Plan(P, L, upper, len(data))
+        except Exception as exc:  # noqa: BLE001 - as refactorise
+            compiled.give_up("launching ldl_plan", exc)
+            return None
         D = np.array(D, float)
         return cls(plan, np.array(L.data, float), D, 1 / D, data)
 
@@ -142,7 +153,8 @@ class LDL:
 
     def refactorise(self, data: np.ndarray) -> bool:
         """Factorise the matrix with values ``data`` (nnz,) in place, recomputing the rows that differ
-        from the held values' (compared bit for bit). False: the kernels failed (they are off now)."""
+        from the held values' (compared bit for bit). False: the kernels failed (they are off now).
+        ValueError: a zero pivot (what is held then is the factorisation of ``data``, zero pivot and all)."""
         data = np.asarray(data, float)
         changed = np.flatnonzero(data.view(np.int64) != self.data.view(np.int64))
         columns = self.plan.entry_column[changed]
@@ -158,6 +170,9 @@ class LDL:
                 return False
             if failed[0]:
                 failed[0] = 0
+                # the factors are those of ``data`` (every reached row was recomputed): held as such, a
+                # later refactorisation recomputes what differs from it
+                self.data = data
                 raise ValueError("matrix is not quasi-definite: a zero pivot in its LDL^T factorisation")
         self.data = data
         return True
@@ -166,6 +181,9 @@ class LDL:
         """``A⁻¹ rhs`` for rhs (n,) or (n, k), or None where the kernels failed (they are off now)."""
         rhs = np.asarray(rhs, float)
         cols = rhs[:, None] if rhs.ndim == 1 else rhs
+        if cols.ndim != 2 or len(cols) != self.plan.n:
+            # the caller's error, raised as qdldl does, not a failed launch that turns the kernels off
+            raise ValueError(f"expected a right-hand side of {self.plan.n} rows, got shape {rhs.shape}")
         k = cols.shape[1]
         out = np.empty(cols.shape)
         try:
