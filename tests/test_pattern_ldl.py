@@ -226,3 +226,49 @@ def test_factors_past_int32_indices_stay_qdldls():
     solver = SimpleNamespace(factors=lambda: (L, np.ones(1), np.zeros(1, np.int64)))
     upper = (np.array([0]), np.array([0], np.int32), np.array([0, 1], np.int32))
     assert LDL.from_qdldl(solver, upper, np.ones(1)) is None
+
+
+def _edge(kind: str):
+    """(matrix, values to refactorise to in turn) for the cases where QDLDL's bits are easiest to miss."""
+    if kind == "no_diagonal":                       # quasi-definite: D starts at 0 where a diagonal is missing
+        A = sp.csc_matrix(np.array([[1.0, 1.0, 0], [1.0, 0, 2.0], [0, 2.0, 3.0]]))
+        return A, [A.data * 2, A.data + 1, A.data]
+    A = _spd(60, seed=11)
+    f = SymmetricFactor(A)
+    rows, cols, d = f.matrix.indices, f._cols, f.matrix.data
+    if kind == "signed_zeros":                      # -0.0 and 0.0 are other bits: both refactorised
+        e = np.flatnonzero(rows < cols)[:4]
+        zero = np.concatenate([e, f.positions(cols[e], rows[e])])
+        A = f.matrix.copy()
+        A.data[zero] = 0.0                          # explicit zeros, on the pattern
+        neg = A.data.copy()
+        neg[zero] = -0.0
+        return A, [neg, A.data.copy(), neg]
+    if kind == "nonfinite":
+        out = []
+        for e, v in ((5, np.nan), (9, np.inf), (9, -np.inf), (12, -np.nan)):
+            x = d.copy()
+            x[e] = v
+            out += [x, d.copy()]
+        return A, out
+    low = d.copy()                                  # lower triangle only: qdldl reads the upper one
+    low[np.flatnonzero(rows > cols)[:5]] *= 7.0
+    return A, [low, d.copy(), low]
+
+
+@pytest.mark.parametrize("kind", ["no_diagonal", "signed_zeros", "nonfinite", "lower_only"])
+def test_edge_values_are_qdldls_bits(kernels_on, kind):
+    A, values = _edge(kind)
+    f = SymmetricFactor(A)
+    assert f._ldl is not None
+    rhs = np.random.default_rng(2).standard_normal((f.n, 2))
+    g = None
+    for data in values:
+        g = f.with_values(data, reuse=g)
+        B = sp.csc_matrix((data, f.matrix.indices, f.matrix.indptr), shape=f.matrix.shape)
+        ref = qdldl.Solver(sp.triu(B, format="csc"), upper=True)
+        L, D, _ = ref.factors()
+        want = np.stack([ref.solve(np.ascontiguousarray(rhs[:, j])) for j in range(2)], 1)
+        for x in (g, f.with_values(data)):
+            assert np.array_equal(_bits(x._ldl.Lx), _bits(L.data)) and np.array_equal(_bits(x._ldl.D), _bits(D))
+            assert np.array_equal(_bits(x.solve(rhs)), _bits(want))
