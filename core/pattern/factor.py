@@ -8,11 +8,11 @@ the symbolic analysis (AMD ordering, elimination tree) of QDLDL and redoes only
 the numeric factorisation for new values: on the long-sleeve shirt (11.5k
 vertices) 3.4 ms against 27 ms for a new SuperLU factorisation, and a
 back-substitution of both pattern coordinates in 0.6 ms against 1.2 ms.
-Where the solver's Warp kernels run (:func:`.compiled.enabled`), qdldl's
-factors go to an :class:`.ldl.LDL`, which refactorises only the rows of L a
-change of values reaches and solves both coordinates in one pass, with
-qdldl's bits (shirt: a guard's refactorisation 2.7 -> ~1 ms, a solve of both
-coordinates 0.6 -> 0.34 ms).
+Where the solver's Warp kernels run (:func:`.compiled.enabled`) with qdldl's
+bits (:func:`.ldl.matches_qdldl`), qdldl's factors go to an :class:`.ldl.LDL`,
+which refactorises only the rows of L a change of values reaches and solves
+both coordinates in one pass, with qdldl's bits (shirt: a guard's
+refactorisation 2.7 -> ~1 ms, a solve of both coordinates 0.6 -> 0.34 ms).
 """
 from __future__ import annotations
 
@@ -64,8 +64,8 @@ class SymmetricFactor:
                        np.concatenate([[0], np.cumsum(np.bincount(col[keep], minlength=n))]).astype(A.indptr.dtype))
         self._qdldl = qdldl.Solver(self._upper_matrix(A.data), upper=True)
         if compiled.enabled():
-            from .ldl import LDL
-            self._ldl = LDL.from_qdldl(self._qdldl, self._upper, A.data)
+            from .ldl import LDL, matches_qdldl
+            self._ldl = LDL.from_qdldl(self._qdldl, self._upper, A.data) if matches_qdldl() else None
             if self._ldl is not None:
                 self._qdldl = None     # its factors are the LDL's now
 

@@ -2,7 +2,9 @@
 
 :class:`.factor.SymmetricFactor` factorises with qdldl-python (AMD ordering,
 elimination tree, numeric factors) and, where the solver's Warp kernels run
-(:func:`.compiled.enabled`), hands the factors to an :class:`LDL`:
+(:func:`.compiled.enabled`) and they give qdldl's bits on the machine
+(:func:`matches_qdldl`: not where qdldl's build fuses multiply-adds, as its
+macOS arm64 wheel does), hands the factors to an :class:`LDL`:
 
 - :meth:`LDL.refactorise`: the collapse guard stiffens a few triangles, which
   changes a few columns of the matrix. Only the rows of L those columns reach
@@ -24,6 +26,7 @@ raises RuntimeError; its update ignores it and leaves stale factors).
 """
 from __future__ import annotations
 
+import logging
 import threading
 from typing import Optional
 
@@ -31,6 +34,7 @@ import numpy as np
 
 from . import compiled
 
+log = logging.getLogger(__name__)
 _I32 = np.int32
 
 
@@ -199,3 +203,56 @@ class LDL:
             compiled.give_up("launching ldl_solve2", exc)
             return None
         return out[:, 0] if rhs.ndim == 1 else out
+
+
+#: whether the kernels give qdldl-python's bits on this machine (:func:`matches_qdldl`), once probed
+_MATCH: dict = {}
+
+
+def matches_qdldl() -> bool:
+    """Whether QDLDL's loops in :mod:`.ldl_kernels` give qdldl-python's bits here, probed once per process.
+
+    The kernels are built without fused multiply-adds, as are qdldl's x86-64 wheels (Linux, Windows:
+    baseline x86-64 has no FMA); its macOS arm64 wheel fuses ``y -= l * x`` (``fmsub`` in
+    ``QDLDL_factor`` and ``QDLDL_solve``). There the kernels' rows would differ from qdldl's in the last
+    bits, and a refactorised factor would mix both by the rows its history recomputed (a result
+    depending on the guard's pool), so qdldl keeps the factors. The probe: a fixed SPD matrix (a chain
+    with random couplings, n = 200) factorised and solved both ways, every row recomputed by the
+    kernels (QDLDL's loops with ``y -= l * x`` fused give 1,722 of its 6,656 entries of L other bits).
+    """
+    if "qdldl" not in _MATCH:
+        _MATCH["qdldl"] = _probe()
+    return _MATCH["qdldl"]
+
+
+def _probe() -> bool:
+    import qdldl
+    import scipy.sparse as sp
+    n, rng = 200, np.random.default_rng(0)
+    i = np.concatenate([np.arange(n - 1), rng.integers(0, n, 4 * n)])
+    j = np.concatenate([np.arange(1, n), rng.integers(0, n, 4 * n)])
+    W = sp.coo_matrix((rng.random(len(i)), (i, j)), shape=(n, n)).tocsc()
+    W = W + W.T
+    W.setdiag(0)
+    A = sp.diags(np.asarray(W.sum(axis=1)).ravel() + rng.random(n)) - W
+    U = sp.triu(A, format="csc")
+    U.sort_indices()
+    solver = qdldl.Solver(U, upper=True)
+    # the upper triangle as the "full" matrix: its values are all kept
+    ref = LDL.from_qdldl(solver, (np.arange(U.nnz), U.indices, U.indptr), U.data)
+    if ref is None:
+        return False
+    mine = LDL(ref.plan, np.zeros_like(ref.Lx), np.zeros(n), np.zeros(n), np.full(U.nnz, np.nan))
+    b = rng.standard_normal((n, 2))
+    if not mine.refactorise(U.data):      # every value differs from the NaNs: every row recomputed
+        return False
+    x = mine.solve(b)
+    if x is None:
+        return False
+    want = np.stack([solver.solve(np.ascontiguousarray(b[:, k])) for k in range(2)], 1)
+    same = all(np.array_equal(a.view(np.int64), w.view(np.int64))
+               for a, w in ((mine.Lx, ref.Lx), (mine.D, ref.D), (x, want)))
+    if not same:
+        log.info("pattern solver: the LDL kernels differ from qdldl's bits here (its build fuses "
+                 "multiply-adds); qdldl factorises")
+    return same
