@@ -11,8 +11,10 @@ back-substitution of both pattern coordinates in 0.6 ms against 1.2 ms.
 Where the solver's Warp kernels run (:func:`.compiled.enabled`) with qdldl's
 bits (:func:`.ldl.matches_qdldl`), qdldl's factors go to an :class:`.ldl.LDL`,
 which refactorises only the rows of L a change of values reaches and solves
-both coordinates in one pass, with qdldl's bits (shirt: a guard's
-refactorisation 2.7 -> ~1 ms, a solve of both coordinates 0.6 -> 0.34 ms).
+both coordinates in one pass, with qdldl's bits (shirt, CPU time inside
+transfers: a guard's refactorisation 3.9 -> 1.2 ms, a solve of both
+coordinates 0.85 -> 0.53 ms; 2.7 -> 0.8 and 0.6 -> 0.34 ms in isolation,
+where L stays in the caches).
 """
 from __future__ import annotations
 

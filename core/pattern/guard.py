@@ -137,7 +137,9 @@ class GuardedFactors:
     Keyed by the system matrix (the solver's factorisation key). A spare
     factorisation is reused only for its symbolic analysis (AMD ordering,
     elimination tree: a function of the sparsity pattern alone); every
-    refactorisation recomputes all values, so no result depends on the pool.
+    refactorisation gives the factors of its own values (all of them with
+    qdldl; with :class:`.ldl.LDL` the rows whose inputs differ from the ones
+    the spare held, the others being the same bits), so no result depends on the pool.
     """
 
     def __init__(self, faces: np.ndarray, G: np.ndarray):
