@@ -80,9 +80,14 @@ def _split(rows) -> dict:
     for k in ("body", "transfer", "metrics", "write", "setup"):
         vals = [r[f"timings.{k}"] for r in ok if f"timings.{k}" in r]
         out[k] = round(1000.0 * float(np.median(vals)), 1) if vals else None
-    cpu = [r["timings.cpu"] for r in ok if "timings.cpu" in r and "timings.setup" not in r]
+    cpu = _item_cpu(rows)
     out["cpu"] = round(1000.0 * float(np.median(cpu)), 1) if cpu else None
     return out
+
+
+def _item_cpu(rows) -> list:
+    """The CPU seconds of the items made without their worker's one-off cut."""
+    return [r["timings.cpu"] for r in rows if r["status"] == "ok" and "timings.cpu" in r and "timings.setup" not in r]
 
 
 def _cpu_rate(split) -> float:
@@ -153,6 +158,7 @@ def run(out_dir, quick: bool = False) -> dict:
     with tempfile.TemporaryDirectory(prefix="ease_bench_batch_") as tmp:
         tmp = Path(tmp)
         steady = {1: [0, 0.0], 2: [0, 0.0]}     # workers -> [items, seconds] between first and last completions
+        cpus = {1: [], 2: []}                   # workers -> the items' CPU seconds (those that paid no cut)
         for k in range(1, pairs + 1):
             for w in (1, 2):
                 load = _load()
@@ -162,6 +168,7 @@ def run(out_dir, quick: bool = False) -> dict:
                     steady[w][0] += len(stamps) - 1
                     steady[w][1] += stamps[-1] - stamps[0]
                 split = _split(res.rows)
+                cpus[w] += _item_cpu(res.rows)
                 result["runs"][f"local_{w}" + (f"_{k}" if k > 1 else "")] = {
                     "workers": w, "made": res.made, "failed": res.failed, "wall_s": round(wall, 2),
                     "first_item_s": round(stamps[0], 2) if stamps else None,
@@ -173,6 +180,8 @@ def run(out_dir, quick: bool = False) -> dict:
         pooled = {w: steady[w][0] / steady[w][1] if steady[w][1] else 0.0 for w in steady}
         result["steady_items_per_s_pooled"] = {str(w): round(v, 2) for w, v in pooled.items()}
         result["speedup_2_vs_1"] = round(pooled[2] / pooled[1], 2) if pooled[1] else None
+        result["cpu_items_per_s_per_core_pooled"] = {
+            str(w): round(1.0 / float(np.median(v)), 2) if v else 0.0 for w, v in cpus.items()}
         result["speedup_per_pair"] = [
             round(result["runs"][f"local_2{s}"]["steady_items_per_s"] / result["runs"][f"local_1{s}"]["steady_items_per_s"], 2)
             if result["runs"][f"local_1{s}"]["steady_items_per_s"] else None
@@ -222,10 +231,12 @@ def run(out_dir, quick: bool = False) -> dict:
                      f"{r['cpu_items_per_s_per_core']} | {load} | {s['body']} | {s['transfer']} | "
                      f"{s['metrics']} | {s['write']} | {s['cpu']} | {s['setup']} |")
     c = result["runs"]["simulated_cluster"]
-    pooled = result["steady_items_per_s_pooled"]
+    pooled, cpu_pooled = result["steady_items_per_s_pooled"], result["cpu_items_per_s_per_core_pooled"]
     lines += ["", f"Speed-up, 2 workers over 1 (steady rate, {pairs} pair(s) of runs taken in turn, pooled: "
               f"{pooled['2']} / {pooled['1']} items/s): **{result['speedup_2_vs_1']}x** "
-              f"(each pair: {', '.join(f'{v}x' for v in result['speedup_per_pair'])}).", "",
+              f"(each pair: {', '.join(f'{v}x' for v in result['speedup_per_pair'])}). "
+              f"Items per CPU-second per core, the median item of the runs pooled: 1 worker {cpu_pooled['1']}, "
+              f"2 workers {cpu_pooled['2']}.", "",
               f"Simulated cluster (a `dask scheduler` and {c['workers']} `dask worker` processes on localhost, "
               f"`--scheduler`): {c['made']} ok / {c['failed']} failed in {c['wall_s']} s "
               f"({c['steady_items_per_s']} items/s); manifest equal to the 2-worker LocalCluster's "
