@@ -39,6 +39,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Optional
 
 import numpy as np
 
@@ -56,18 +57,42 @@ BODIES = 150
 PAIRS = 2
 
 
+def _cpu_ticks() -> Optional[np.ndarray]:
+    """The machine's CPU time so far by state (user, nice, system, idle, iowait, irq, softirq, steal; Linux's
+    /proc/stat), or None elsewhere."""
+    try:
+        with open("/proc/stat") as f:
+            return np.array([float(x) for x in f.readline().split()[1:9]])
+    except (OSError, ValueError):
+        return None
+
+
+def _shares(a, b) -> dict:
+    """Percent of the machine's CPU time from ticks ``a`` to ``b`` (:func:`_cpu_ticks`) spent busy, idle, waiting
+    for the disk and stolen by the host: what a wall-clock rate cannot tell from the code's speed."""
+    if a is None or b is None or len(a) < 8 or len(b) < 8 or not (b - a).sum() > 0:
+        return {}
+    d = b - a
+    pct = 100.0 * d / d.sum()
+    return {"busy_pct": round(float(pct[[0, 1, 2, 5, 6]].sum()), 1), "idle_pct": round(float(pct[3]), 1),
+            "iowait_pct": round(float(pct[4]), 1), "steal_pct": round(float(pct[7]), 1)}
+
+
 def _timed_batch(design, bodies, out, **kw):
-    """run_batch with the completion times of its items (s since the start)."""
+    """run_batch with the completion times of its items (s since the start) and the machine's CPU shares
+    between the first and the last completion (:func:`_shares`)."""
     from core.batch import run_batch
     t0 = time.perf_counter()
-    stamps = []
+    stamps, ticks = [], []
 
     def progress(fraction, message):
         if "/" in message.split()[0] and not message.startswith("0/"):
             stamps.append(time.perf_counter() - t0)
+            ticks[min(len(ticks), 1):] = [_cpu_ticks()]     # the first completion's, then the latest's
 
     res = run_batch(design, bodies, out, progress=progress, **kw)
-    return res, stamps, time.perf_counter() - t0
+    shares = _shares(ticks[0], ticks[-1]) if len(ticks) == 2 else {}
+    return res, stamps, time.perf_counter() - t0, shares
 
 
 def _steady_rate(stamps) -> float:
@@ -93,6 +118,12 @@ def _item_cpu(rows) -> list:
 def _cpu_rate(split) -> float:
     """Items per CPU second of a worker (per core): 1 / the median CPU time of an item."""
     return round(1000.0 / split["cpu"], 2) if split.get("cpu") else 0.0
+
+
+def _shares_text(shares) -> str:
+    if not shares:
+        return "n/a"
+    return " / ".join(str(shares[k]) for k in ("busy_pct", "idle_pct", "iowait_pct", "steal_pct"))
 
 
 def _load() -> list:
@@ -162,7 +193,7 @@ def run(out_dir, quick: bool = False) -> dict:
         for k in range(1, pairs + 1):
             for w in (1, 2):
                 load = _load()
-                res, stamps, wall = _timed_batch(design, bodies, tmp / f"local{w}_{k}", workers=w)
+                res, stamps, wall, shares = _timed_batch(design, bodies, tmp / f"local{w}_{k}", workers=w)
                 rate = _steady_rate(stamps)
                 if rate:
                     steady[w][0] += len(stamps) - 1
@@ -174,7 +205,7 @@ def run(out_dir, quick: bool = False) -> dict:
                     "first_item_s": round(stamps[0], 2) if stamps else None,
                     "steady_items_per_s": round(rate, 2), "items_per_s_per_core": round(rate / w, 2),
                     "cpu_items_per_s_per_core": _cpu_rate(split), "load_before": load, "load_after": _load(),
-                    "split_ms": split}
+                    "machine_cpu": shares, "split_ms": split}
                 if w == 2 and k == 1:
                     local_rows = res.rows
         pooled = {w: steady[w][0] / steady[w][1] if steady[w][1] else 0.0 for w in steady}
@@ -189,7 +220,7 @@ def run(out_dir, quick: bool = False) -> dict:
 
         address, procs = _simulated_cluster(2, tmp / "dask_config")
         try:
-            res, stamps, wall = _timed_batch(design, bodies, tmp / "cluster", scheduler=address)
+            res, stamps, wall, _ = _timed_batch(design, bodies, tmp / "cluster", scheduler=address)
         finally:
             _stop(procs)
         same = comparable(res.rows) == comparable(local_rows)
@@ -199,7 +230,7 @@ def run(out_dir, quick: bool = False) -> dict:
 
         if not quick:
             many = sample_anny(1000, seed=SEED)
-            res, stamps, wall = _timed_batch(design, many, tmp / "population", workers=2)
+            res, stamps, wall, _ = _timed_batch(design, many, tmp / "population", workers=2)
             fails = [{"label": r["label"], "status": r["status"], "error": r["error"]}
                      for r in res.rows if r["status"] != "ok"]
             result["population"] = {"bodies": 1000, "made": res.made, "failed": res.failed, "crashed": False,
@@ -214,12 +245,14 @@ def run(out_dir, quick: bool = False) -> dict:
              "Steady rate: items per second between the first and the last completed item (cluster start and "
              "each worker's one-off cut of the design excluded: `first item` is the wall time to the first "
              "completed item). CPU rate: 1 / the median CPU seconds a worker spends on an item (per core, "
-             "whatever else runs; load: the 1-minute load average before / after the run). "
+             "whatever else runs; load: the 1-minute load average before / after the run; machine: the whole "
+             "machine's CPU time between the first and the last completed item, busy (any process), idle, "
+             "waiting for the disk, stolen by the host). "
              "Split: median per item, ms.", "",
              "| run | workers | items ok / failed | wall s | first item s | items/s | items/s/core | "
-             "items/CPU-s (per core) | load | body ms | transfer ms | metrics ms | write ms | CPU ms | "
-             "setup (cut) ms |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "items/CPU-s (per core) | load | machine busy / idle / disk wait / steal % | body ms | transfer ms | "
+             "metrics ms | write ms | CPU ms | setup (cut) ms |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for name in result["runs"]:
         if not name.startswith("local_"):
             continue
@@ -228,7 +261,8 @@ def run(out_dir, quick: bool = False) -> dict:
         pair = name.split("_")[2] if name.count("_") == 2 else "1"
         lines.append(f"| LocalCluster (pair {pair}) | {r['workers']} | {r['made']} / {r['failed']} | {r['wall_s']} | "
                      f"{r['first_item_s']} | {r['steady_items_per_s']} | {r['items_per_s_per_core']} | "
-                     f"{r['cpu_items_per_s_per_core']} | {load} | {s['body']} | {s['transfer']} | "
+                     f"{r['cpu_items_per_s_per_core']} | {load} | {_shares_text(r.get('machine_cpu'))} | "
+                     f"{s['body']} | {s['transfer']} | "
                      f"{s['metrics']} | {s['write']} | {s['cpu']} | {s['setup']} |")
     c = result["runs"]["simulated_cluster"]
     pooled, cpu_pooled = result["steady_items_per_s_pooled"], result["cpu_items_per_s_per_core_pooled"]
