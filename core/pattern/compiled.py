@@ -94,10 +94,11 @@ def load(progress: Optional[Progress] = None) -> bool:
                 try:
                     from ..geom.queries import init_cpu
                     from . import kernels as K
-                    from . import ldl_kernels
+                    from . import ldl_kernels, sparse_kernels
                     init_cpu()
                     K.wp.load_module(K, device="cpu")
                     K.wp.load_module(ldl_kernels, device="cpu")
+                    K.wp.load_module(sparse_kernels, device="cpu")
                     _state["ready"] = True
                 except Exception as exc:  # noqa: BLE001 - any failure leaves numpy, which gives the same bits
                     give_up("loading", exc)
@@ -107,6 +108,12 @@ def load(progress: Optional[Progress] = None) -> bool:
 def ldl_kernels():
     """:mod:`.ldl_kernels`, loaded (call where :func:`enabled`)."""
     from . import ldl_kernels as module
+    return module
+
+
+def sparse_kernels():
+    """:mod:`.sparse_kernels`, loaded (call where :func:`enabled`)."""
+    from . import sparse_kernels as module
     return module
 
 
@@ -155,6 +162,24 @@ def _pointer(a, f: int, counters: bool) -> int:
     return _address(a)
 
 
+#: an argument slot of a native-snippet kernel: an array of any dtype and length, bound by its address
+_RAW = "raw"
+
+
+def address(a: np.ndarray) -> int:
+    """The data address of numpy array ``a`` (what :meth:`_Launch.bind` takes)."""
+    return _address(a)
+
+
+def native(kernel, args) -> "_Launch":
+    """A recorded one-task CPU launch of native-snippet ``kernel`` (:mod:`.sparse_kernels`), run once on ``args``
+    (numpy arrays, their dtypes the kernel's; scalars); then ``launch.bind(j, a, address(a))`` puts another
+    array in slot ``j`` and ``launch()`` runs it. A launch is one thread's (it keeps its argument struct)."""
+    from . import kernels as K
+    slots = tuple(_RAW if K.wp.types.is_array(a.type) else None for a in kernel.adj.args)
+    return _Launch(kernel, slots, args, 1, 0)
+
+
 def _slots(kernel) -> tuple:
     """Per argument of ``kernel``: False (an (f,) float64 array read as 8-vectors), True (int32
     counters) or None (a scalar)."""
@@ -179,7 +204,9 @@ class _Launch:
         self.dim, self.shift, self.slots = dim, shift, slots
         inputs = []
         for a, counters in zip(args, slots):
-            if counters:
+            if counters == _RAW:
+                inputs.append(wp.array(a, device="cpu", copy=False))
+            elif counters:
                 inputs.append(wp.array(a, dtype=wp.int32, device="cpu", copy=False))
             elif counters is not None:
                 view = a[shift:shift + _LANES * dim].reshape(dim, _LANES)
@@ -220,7 +247,8 @@ class _Launch:
             self.cmd.set_param_at_index(j, a)
         else:
             from warp._src.types import array_t
-            shape, strides = ((len(a),), (4,)) if counters else ((self.dim,), (8 * _LANES,))
+            shape, strides = (((a.size,), (a.itemsize,)) if counters == _RAW else ((len(a),), (4,)) if counters
+                              else ((self.dim,), (8 * _LANES,)))
             start = address if counters else address + 8 * self.shift
             self.cmd.set_param_at_index_from_ctype(j, array_t(start, 0, 1, shape, strides))
 

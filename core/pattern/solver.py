@@ -47,6 +47,7 @@ from .factor import SymmetricFactor
 from .feedback import feedback_gains, move_corrections
 from .guard import COLLAPSE_ROUNDS, RESCUE_ITERATIONS, GuardedFactors, refused, renew_guard, rescuing, round_guard
 from .panels import flatten_panels
+from .products import GradientProducts
 from .seams import SeamPlan, plan_seams, seam_layout, seam_matrix, seam_rhs
 from .start import pattern_start
 from .state import SolveState
@@ -96,6 +97,7 @@ class PatternSolver:
         self._Gx = sp.csr_matrix((b.G[:, :, 0].ravel(), (rows, cols)), shape=(f, self.n))
         self._Gy = sp.csr_matrix((b.G[:, :, 1].ravel(), (rows, cols)), shape=(f, self.n))
         self._GxT, self._GyT = self._Gx.T.tocsr(), self._Gy.T.tocsr()
+        self._products = GradientProducts(self._Gx, self._Gy, self._GxT, self._GyT)
         self._factors: Dict[tuple, Tuple[SymmetricFactor, np.ndarray]] = {}
         # the collapse guard's stiffened factorisations and the spare ones finished solves gave back
         self._guarded = GuardedFactors(self.gfaces, b.G)
@@ -264,8 +266,7 @@ class PatternSolver:
 
         ``m_ij``: derivative of pattern coordinate ``i`` (u, v) along initial axis ``j`` (x, y).
         """
-        u, v = np.ascontiguousarray(U[:, 0]), np.ascontiguousarray(U[:, 1])
-        return [self._Gx @ u, self._Gy @ u, self._Gx @ v, self._Gy @ v]
+        return self._products.jacobians(U)
 
     def start_from(self, pattern, offsets=None) -> np.ndarray:
         """The unknowns (n, 2) of a flip-free ``pattern`` of this cut, each piece re-centred on its initial
@@ -445,8 +446,7 @@ class PatternSolver:
             rhs = seam_rhs(self.seams, U, cfg, state.plan, integral)
             for j in range(4):      # the weighted right-hand side, in B's arrays
                 np.multiply(aw_k[j % 2], B[j], out=B[j])
-            rhs[:, 0] += self._GxT @ B[0] + self._GyT @ B[1]
-            rhs[:, 1] += self._GxT @ B[2] + self._GyT @ B[3]
+            self._products.add_rhs(rhs, B)      # rhs[:, 0] += GxT B0 + GyT B1, rhs[:, 1] += GxT B2 + GyT B3
             rhs[pinned] += pin[pinned] * U[pinned]
             U_new = solve_k(rhs)
             # the step's rigid part per panel carries no strain: remove it so that the flip
