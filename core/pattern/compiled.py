@@ -105,18 +105,6 @@ def load(progress: Optional[Progress] = None) -> bool:
     return bool(_state["ready"])
 
 
-def ldl_kernels():
-    """:mod:`.ldl_kernels`, loaded (call where :func:`enabled`)."""
-    from . import ldl_kernels as module
-    return module
-
-
-def sparse_kernels():
-    """:mod:`.sparse_kernels`, loaded (call where :func:`enabled`)."""
-    from . import sparse_kernels as module
-    return module
-
-
 def give_up(doing: str, exc: Exception) -> None:
     """The kernels off for the process after ``exc`` while ``doing``: one warning, numpy (and qdldl) after."""
     with _lock:
@@ -160,6 +148,24 @@ def _pointer(a, f: int, counters: bool) -> int:
     elif a.shape != (f,) or not (a.dtype is _F64 or a.dtype == _F64):
         raise _Unsuitable
     return _address(a)
+
+
+class PerThread:
+    """A holder of recorded launches per thread in ``self._local`` (a ``threading.local``: a launch keeps
+    its argument struct, so threads never share one, and a finished thread's go with it); it pickles
+    without them."""
+
+    def __init__(self):
+        self._local = threading.local()
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        del state["_local"]
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._local = threading.local()
 
 
 #: an argument slot of a native-snippet kernel: an array of any dtype and length, bound by its address

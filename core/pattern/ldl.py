@@ -27,7 +27,6 @@ raises RuntimeError; its update ignores it and leaves stale factors).
 from __future__ import annotations
 
 import logging
-import threading
 from typing import Optional
 
 import numpy as np
@@ -51,7 +50,7 @@ class Plan:
     """
 
     def __init__(self, P: np.ndarray, L, upper: tuple, nnz: int):
-        K = compiled.ldl_kernels()
+        from . import ldl_kernels as K
         keep, rows, ptr = upper
         n = len(P)
         self.n = n
@@ -87,11 +86,11 @@ class Plan:
 
 
 def _arrays(*arrays) -> list:
-    K = compiled.ldl_kernels()
-    return [K.wp.array(a, device="cpu", copy=False) for a in arrays]
+    from .ldl_kernels import wp
+    return [wp.array(a, device="cpu", copy=False) for a in arrays]
 
 
-class LDL:
+class LDL(compiled.PerThread):
     """The numeric factors ``L``, ``D``, ``1 / D`` of the matrix with values ``data`` on :class:`Plan` ``plan``.
 
     Parameters
@@ -107,8 +106,7 @@ class LDL:
         self.Lx, self.D, self.Dinv = Lx, D, Dinv
         self.data = data
         self.Ax = np.take(data, plan.src) if Ax is None else Ax   # the permuted upper triangle's values
-        # per thread: recorded launches and their buffers (a thread's solves never share scratch space)
-        self._records: dict = {}
+        super().__init__()      # per thread: recorded launches and their buffers (no shared scratch space)
 
     @classmethod
     def from_qdldl(cls, solver, upper: tuple, data: np.ndarray) -> Optional["LDL"]:
@@ -126,22 +124,20 @@ class LDL:
         D = np.array(D, float)
         return cls(plan, np.array(L.data, float), D, 1 / D, data)
 
-    def __getstate__(self):
-        return {**self.__dict__, "_records": {}}
-
     def copy(self) -> "LDL":
         """An independent copy (its own values, the same plan)."""
         return LDL(self.plan, self.Lx.copy(), self.D.copy(), self.Dinv.copy(), self.data, self.Ax.copy())
 
     def _record(self, name: str, make):
-        key = (name, threading.get_ident())
-        rec = self._records.get(key)
+        rec = getattr(self._local, name, None)
         if rec is None:
-            rec = self._records[key] = make()
+            rec = make()
+            setattr(self._local, name, rec)
         return rec
 
     def _rows_record(self):
-        K, p = compiled.ldl_kernels(), self.plan
+        from . import ldl_kernels as K
+        p = self.plan
         mark, y, failed = np.zeros(p.n, _I32), np.zeros(p.n), np.zeros(1, _I32)
         cmd = K.wp.launch(K.ldl_rows, dim=1, device="cpu", record_cmd=True, inputs=[
             p.n, *_arrays(mark, p.Ap, p.Ai, self.Ax, p.etree, p.rowptr, p.seq_c, p.seq_slot, p.Lp, p.Li,
@@ -149,7 +145,8 @@ class LDL:
         return cmd, mark, failed
 
     def _solve_record(self):
-        K, p = compiled.ldl_kernels(), self.plan
+        from . import ldl_kernels as K
+        p = self.plan
         b, work, x = np.zeros((p.n, 2)), np.zeros(2 * p.n), np.zeros((p.n, 2))
         cmd = K.wp.launch(K.ldl_solve2, dim=1, device="cpu", record_cmd=True, inputs=[
             p.n, *_arrays(p.P, p.Lp, p.Li, self.Lx, self.Dinv, b.reshape(-1), work, x.reshape(-1))])

@@ -11,7 +11,6 @@ not take, scipy does (shirt: Jacobians 304 -> 141-180 us, right-hand side
 """
 from __future__ import annotations
 
-import threading
 from typing import List
 
 import numpy as np
@@ -28,13 +27,14 @@ def _csr(M: sp.csr_matrix) -> tuple:
             np.ascontiguousarray(M.data, np.float64))
 
 
-def _interleaved(a: np.ndarray, n: int) -> bool:
-    """Whether ``a`` is an aligned, C-contiguous native float64 (n, 2) array (what the kernels read)."""
-    return (type(a) is np.ndarray and a.shape == (n, 2) and a.dtype == _F64 and a.flags.c_contiguous
-            and a.flags.aligned and a.dtype.isnative)
+def _takes(a, shape: tuple) -> bool:
+    """Whether ``a`` is what the kernels read: an aligned, C-contiguous, native float64 array of ``shape``
+    (a dtype equal to native float64 is native)."""
+    return (type(a) is np.ndarray and a.shape == shape and a.dtype == _F64 and a.flags.c_contiguous
+            and a.flags.aligned)
 
 
-class GradientProducts:
+class GradientProducts(compiled.PerThread):
     """Products with a solver's gradient operators.
 
     Parameters
@@ -51,16 +51,9 @@ class GradientProducts:
         self.f, self.n = Gx.shape
         self._g = _csr(Gx) + _csr(Gy)
         self._gt = _csr(GxT) + _csr(GyT)
-        self._local = threading.local()
-
-    def __getstate__(self):
-        state = dict(self.__dict__)
-        del state["_local"]
-        return state
-
-    def __setstate__(self, state):
-        self.__dict__.update(state)
-        self._local = threading.local()
+        # the kernels index with int32 (the interleaved coordinates at 2 n + 1): larger operators stay scipy's
+        self._fits = max(Gx.nnz, Gy.nnz, GxT.nnz, GyT.nnz, 2 * self.n + 2, self.f + 1) <= np.iinfo(np.int32).max
+        super().__init__()
 
     def _run(self, name: str, fixed: tuple, moving: list) -> bool:
         """Kernel ``name`` on ``fixed`` (the CSR arrays, first) and ``moving`` (rebound every call);
@@ -71,7 +64,7 @@ class GradientProducts:
         try:
             launch = launches.get(name)
             if launch is None:
-                K = compiled.sparse_kernels()
+                from . import sparse_kernels as K
                 # recorded on 1-D views (the kernels' arrays); runs it once
                 launches[name] = compiled.native(getattr(K, name), list(fixed) + [a.reshape(-1) for a in moving])
                 return True
@@ -86,7 +79,7 @@ class GradientProducts:
 
     def jacobians(self, U: np.ndarray) -> List[np.ndarray]:
         """``[Gx u, Gy u, Gx v, Gy v]`` (4 new contiguous (f,) arrays) of ``U`` (n, 2)."""
-        if self.f and _interleaved(U, self.n) and compiled.enabled():
+        if self.f and self._fits and _takes(U, (self.n, 2)) and compiled.enabled():
             out = np.empty((4, self.f))
             if self._run("jacobians", (self.f,) + self._g, [U, *out]):
                 return list(out)
@@ -96,9 +89,8 @@ class GradientProducts:
     def add_rhs(self, rhs: np.ndarray, B: list) -> None:
         """``rhs[:, 0] += Gxᵀ B[0] + Gyᵀ B[1]``, ``rhs[:, 1] += Gxᵀ B[2] + Gyᵀ B[3]`` in place (rhs (n, 2),
         B four (f,) arrays)."""
-        if (self.n and _interleaved(rhs, self.n) and compiled.enabled()
-                and all(type(b) is np.ndarray and b.shape == (self.f,) and b.dtype == _F64 and b.flags.c_contiguous
-                        and b.flags.aligned and b.dtype.isnative for b in B)):
+        if (self.n and self._fits and _takes(rhs, (self.n, 2)) and all(_takes(b, (self.f,)) for b in B)
+                and compiled.enabled()):
             if self._run("add_rhs", (self.n,) + self._gt, [*B, rhs]):
                 return
         rhs[:, 0] += self.GxT @ B[0] + self.GyT @ B[1]
