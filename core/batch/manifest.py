@@ -86,9 +86,15 @@ class Journal:
                     f.write(b"\n")
 
     def append(self, row: dict) -> None:
-        self._file.write(dumps_json(row, indent=None) + "\n")
-        self._file.flush()
-        os.fsync(self._file.fileno())
+        self.extend([row])
+
+    def extend(self, rows: Iterable[dict]) -> None:
+        """Append ``rows`` in one write and one flush to disk (a task's items arrive together)."""
+        text = "".join(dumps_json(row, indent=None) + "\n" for row in rows)
+        if text:
+            self._file.write(text)
+            self._file.flush()
+            os.fsync(self._file.fileno())
 
     def close(self) -> None:
         self._file.close()

@@ -19,7 +19,7 @@ import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Dict, Optional, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple
 
 from ..errors import Cancelled, EaseError
 from .items import Item
@@ -222,6 +222,14 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
     timings["cpu"] = time.process_time() - cpu
     row.update({f"timings.{k}": v for k, v in timings.items()})
     return row
+
+
+def run_items(items: Sequence[Item], out_root, time_limit: Optional[float] = None) -> List[dict]:
+    """:func:`run_item` on each of ``items`` in turn (one Dask task of several items); their rows.
+
+    Each item has its own time limit and its own error row, as it would in a task of its own.
+    """
+    return [run_item(item, out_root, time_limit=time_limit) for item in items]
 
 
 def one_line(exc: BaseException) -> str:
