@@ -319,3 +319,21 @@ def test_design_names_its_gathered_seams(anny):
     big = ref * np.array([1.05, 1.05, 1.0])
     t = transfer_pattern(cut, ref, big, solver=solver)
     assert tuple(sorted(s.name for s in t.seams if s.gathered)) == solver.design_plan().gathered
+
+
+def test_regulariser_energy_is_the_weighted_sum_of_squared_offsets():
+    """The energy diagnostic: sum_t a_t |(M_t - R_t T_t) W|^2 over the four Jacobian entries (warp
+    column weighted by W2[1]), inputs left as they were; its dot products are einsum's, not BLAS's
+    (a threaded BLAS dot of > 10k values left threads spinning ~90 ms a shirt transfer)."""
+    from core.pattern.steps import regulariser_energy
+    rng = np.random.default_rng(3)
+    f = 30_000                        # above OpenBLAS's threading threshold for a dot product
+    a = rng.random(f)
+    M = [rng.normal(size=f) for _ in range(4)]
+    RT = [rng.normal(size=f) for _ in range(4)]
+    W2 = np.array([1.0, 0.25])
+    keep = [m.copy() for m in M] + [r.copy() for r in RT]
+    want = sum(W2[j % 2] * np.sum(a * (M[j] - RT[j]) ** 2) for j in range(4))
+    assert regulariser_energy(a, M, RT, W2) == pytest.approx(want, rel=1e-12)
+    assert all(np.array_equal(x, y) for x, y in zip(M + RT, keep))
+    assert regulariser_energy(a, RT, RT, W2) == 0.0
