@@ -159,6 +159,43 @@ def test_a_worker_killed_under_a_task_of_several_items_costs_only_its_item(tmp_p
     assert not (tmp_path / "set" / "items" / rows[2]["folder"]).exists()
 
 
+def test_ctrl_c_as_a_task_s_rows_reach_the_journal_leaves_the_counts_equal_to_the_rows(tmp_path, scheduler,
+                                                                                       monkeypatch):
+    """SIGINT during the journal's write and fsync waits for it (signals_held) and then stops the
+    batch: the rows it wrote are counted in the result all the same."""
+    import signal
+
+    from core.batch.manifest import Journal
+    extend = Journal.extend
+
+    def extend_then_ctrl_c(self, rows):
+        extend(self, rows)
+        signal.raise_signal(signal.SIGINT)
+
+    monkeypatch.setattr(Journal, "extend", extend_then_ctrl_c)
+    res = run_batch(DESIGN, sample_anny(2, seed=5), tmp_path / "set", scheduler=scheduler)
+    rows = read_rows(tmp_path / "set" / "manifest.jsonl")
+    assert res.interrupted and len(rows) == 1 and rows[0]["status"] == "ok"
+    assert (res.made, res.failed) == (1, 0)
+
+
+def test_a_run_beside_another_of_the_same_items_on_one_scheduler_makes_its_own(tmp_path, scheduler):
+    """Two runs of the same items into two folders, at once on one scheduler: each writes its own
+    folders (the tasks' keys are the run's, not only the items')."""
+    bodies = sample_anny(3, seed=5)
+    inner = []
+
+    def second_run(fraction, message):
+        if not inner:       # run "a" has submitted its tasks and holds them: run "b" now
+            inner.append(run_batch(DESIGN, bodies, tmp_path / "b", scheduler=scheduler))
+
+    outer = run_batch(DESIGN, bodies, tmp_path / "a", scheduler=scheduler, progress=second_run)
+    for name, res in (("a", outer), ("b", inner[0])):
+        assert (res.made, res.failed) == (3, 0)
+        assert all((tmp_path / name / "items" / r["folder"] / "pattern.json").exists() for r in res.rows)
+    assert comparable(outer.rows) == comparable(inner[0].rows)
+
+
 def test_cli_errors_exit_2(tmp_path, capsys):
     from core.cli import main
     (tmp_path / "bodies.csv").write_text("height,waist\n170,eighty\n")

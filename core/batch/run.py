@@ -15,6 +15,7 @@ import json
 import logging
 import os
 import time
+import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import List, Optional, Sequence
@@ -207,10 +208,14 @@ def _submit(pending, out, workers, scheduler, item_timeout, progress, result: Ba
     journal = Journal(out)
     client, cluster, result.workers = _client(workers, scheduler)
     futures, groups = [], {}
+    # the keys are this run's: a scheduler shares a key's task (and its result) between its clients,
+    # so another run of the same items at once (into another folder, or with other task sizes) would
+    # return rows of items made elsewhere, or of other items than the task's
+    token = uuid.uuid4().hex[:12]
 
     def submit(tasks, prefix):
         new = client.map(run_items, tasks, out_root=str(out.resolve()), time_limit=item_timeout,
-                         key=[f"{prefix}-{group[0].id}" for group in tasks], pure=False)
+                         key=[f"{prefix}-{group[0].id}-{token}" for group in tasks], pure=False)
         futures.extend(new)
         groups.update((f.key, group) for f, group in zip(new, tasks))
         return new
@@ -235,11 +240,11 @@ def _submit(pending, out, workers, scheduler, item_timeout, progress, result: Ba
             else:
                 exc = value[1] if isinstance(value, tuple) else value
                 rows = [_error_row(group[0], exc)]
-            with signals_held():         # a task's rows go into the journal together
-                journal.extend(rows)
             failed = result.failed
             ok = sum(row["status"] == "ok" for row in rows)
-            result.made, result.failed = result.made + ok, result.failed + len(rows) - ok
+            with signals_held():         # a task's rows go into the journal and the counts together
+                journal.extend(rows)
+                result.made, result.failed = result.made + ok, result.failed + len(rows) - ok
             for row in rows:         # counted first: a progress callback may stop the batch here
                 k, failed = k + 1, failed + (row["status"] != "ok")
                 rate = (time.perf_counter() - t0) / k
