@@ -198,8 +198,13 @@ def task_sizes(n: int, workers: int, largest: int = ITEMS_PER_TASK) -> List[int]
 
 
 def _error_row(item: Item, exc: BaseException) -> dict:
+    # Dask's KilledWorker text names the task's key (which carries the run's token) and a worker
+    # address: neither means anything to the user, and the manifest would differ run to run
+    error = (f"KilledWorker: the worker process died {1 + getattr(exc, 'allowed_failures', 0)} time(s) "
+             "while this item was on it (out of memory, or a crash; a rerun tries it again)" if type(exc).__name__ == "KilledWorker"
+             else one_line(exc))
     return {"id": item.id, "label": item.body.label, "index": item.index, "folder": item.folder,
-            "body.kind": item.body.kind, "status": "error", "error": one_line(exc)}
+            "body.kind": item.body.kind, "status": "error", "error": error}
 
 
 def _submit(pending, out, workers, scheduler, item_timeout, progress, result: BatchResult) -> None:
