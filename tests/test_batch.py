@@ -211,6 +211,106 @@ def test_cli_errors_exit_2(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
+def test_bad_inputs_stop_before_any_work_with_one_line(tmp_path, capsys):
+    from core.cli import main
+    out = tmp_path / "o"
+
+    def run(*args):
+        code = main(["batch", *map(str, args), "--out", str(out)])
+        err = capsys.readouterr().err.strip()
+        assert code == 2 and len(err.splitlines()) == 1 and "Traceback" not in err, err
+        return err
+
+    (tmp_path / "bodies.csv").write_text("height,chest\n-170,90\n")
+    assert "bodies.csv: row 1, column 'height': expected 50..250 cm, got -170" in run(
+        DESIGN, "--bodies", tmp_path / "bodies.csv")
+    (tmp_path / "bust.csv").write_text("name,bust\nx,400\n")
+    assert "row 1, column 'bust'" in run(DESIGN, "--bodies", tmp_path / "bust.csv")
+    (tmp_path / "design.json").write_text('{"foo": 1}')
+    assert "design.json: foo: unknown field" in run(tmp_path / "design.json", "--sample", 2)
+    assert "--workers: expected >= 1, got 0" in run(DESIGN, "--sample", 2, "--workers", 0)
+    assert "--export glb" in run(DESIGN, "--sample", 2, "--export", "svg,glb")
+    assert "--scheduler nonsense: expected tcp://HOST:PORT" in run(DESIGN, "--sample", 2, "--scheduler", "nonsense")
+    assert not out.exists()
+
+
+def _server(answer: bytes):
+    """A TCP server on localhost that takes connections and sends ``answer`` (b"": nothing, ever)."""
+    import socket
+    import threading
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen()
+    held = []
+
+    def serve():
+        while True:
+            try:
+                conn, _ = srv.accept()
+            except OSError:
+                return
+            held.append(conn)
+            if answer:
+                conn.sendall(answer)
+    threading.Thread(target=serve, daemon=True).start()
+    return srv, f"tcp://127.0.0.1:{srv.getsockname()[1]}"
+
+
+@pytest.mark.parametrize("answer, said", [(b"", "no Dask scheduler answered within 1 s"),
+                                          (b"HTTP/1.0 400 Bad request\r\n\r\n" * 4, "Dask scheduler")])
+def test_a_scheduler_address_that_is_not_a_dask_scheduler_fails_in_bounded_time(tmp_path, monkeypatch, answer, said):
+    """Client() waited without end on a server that never answers (a web server) and read a
+    frame length of exabytes from one that answers something else."""
+    from core.batch import run as run_module
+    from core.batch.run import BatchError
+    monkeypatch.setattr(run_module, "SCHEDULER_PROBE_S", 1.0)
+    srv, address = _server(answer)
+    try:
+        with pytest.raises(BatchError, match=said):
+            run_batch(DESIGN, sample_anny(2, seed=1), tmp_path / "set", scheduler=address)
+    finally:
+        srv.close()
+    assert not (tmp_path / "set").exists()
+
+
+def test_local_workers_leave_ctrl_c_to_the_driver(scheduler):
+    """A terminal's Ctrl-C reaches every process of its group: the local cluster's workers
+    ignore it (their deaths printed tracebacks before the driver's own clean stop)."""
+    import logging
+    import signal
+
+    from distributed import Client, LocalCluster
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None,
+                      silence_logs=logging.CRITICAL, preload=["core.batch.local_worker"]) as cluster:
+        with Client(cluster) as client:
+            ignored = client.run(lambda: signal.getsignal(signal.SIGINT) == signal.SIG_IGN)
+    assert list(ignored.values()) == [True]
+    with Client(scheduler) as client:         # the preload is the local cluster's only
+        assert not any(client.run(lambda: signal.getsignal(signal.SIGINT) == signal.SIG_IGN).values())
+
+
+def test_ctrl_c_twice_still_leaves_a_compacted_manifest_and_an_interrupted_result(tmp_path, scheduler, monkeypatch):
+    """The second Ctrl-C lands in the first one's clean-up: the clean-up finishes, the manifest is
+    compacted and the run reports itself interrupted (the CLI said "nothing was written")."""
+    import signal
+
+    from core.batch import run as run_module
+    close = run_module.Journal.close
+
+    def close_then_ctrl_c(self):
+        close(self)
+        signal.raise_signal(signal.SIGINT)
+
+    def progress(fraction, message):
+        if message.startswith("2/"):
+            raise KeyboardInterrupt
+    monkeypatch.setattr(run_module.Journal, "close", close_then_ctrl_c)
+    res = run_batch(DESIGN, sample_anny(8, seed=4), tmp_path / "set", scheduler=scheduler, progress=progress)
+    rows = read_rows(tmp_path / "set" / "manifest.jsonl")
+    assert res.interrupted and 2 <= len(rows) < 8 and res.made + res.failed == len(rows)
+    assert [r["id"] for r in rows] == sorted(r["id"] for r in rows) == [r["id"] for r in res.rows]
+
+
 def test_the_documented_worker_settings_are_the_local_clusters():
     # a cluster started by hand gets the LocalCluster's worker settings from a config file: the one
     # the bench writes and docs/batch.md shows must say what core.batch.run.WORKER_CONFIG says
@@ -237,3 +337,11 @@ def test_the_documented_worker_settings_are_the_local_clusters():
     doc = (root / "docs" / "batch.md").read_text(encoding="utf-8")
     block = re.search(r"```yaml\n(distributed:.*?)```", doc, re.S).group(1)
     assert flat(yaml.safe_load(WORKER_YAML)) == WORKER_CONFIG == flat(yaml.safe_load(block))
+
+
+def test_summary_counts_in_words():
+    from core.batch.run import BatchResult
+    assert BatchResult(total=3, skipped=0, made=2, failed=1, workers=1, seconds=1.0).summary() == \
+        "batch done: 2 made, 1 failed, 0 already complete, 3 items, 1.0 s on 1 worker"
+    assert BatchResult(total=1, skipped=1).summary() == \
+        "batch done: 0 made, 0 failed, 1 already complete, 1 item, 0.0 s (nothing left to make)"

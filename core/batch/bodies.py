@@ -92,7 +92,7 @@ def read_measurements(path) -> List[BodySource]:
     BodySourceError naming the file, row (1 = the first body) and column.
     """
     from ..body.measure import MEASUREMENTS
-    from ..body.sizes import check_size
+    from ..body.sizes import TARGET_RANGES, check_size
 
     path = Path(path)
     try:
@@ -136,6 +136,12 @@ def read_measurements(path) -> List[BodySource]:
                 raise BodySourceError(f"{path}: row {i}: give a size or measurements, not both")
             out.append(BodySource(name, "size", size, origin))
         elif targets:
+            for h, v in targets.items():      # the chart's range, checked here so the batch never starts
+                lo, hi = TARGET_RANGES[h]
+                if not lo <= v <= hi:
+                    column = "bust" if h == "chest" and "bust" in header else h
+                    raise BodySourceError(f"{path}: row {i}, column {column!r}: expected {lo:g}..{hi:g} cm, "
+                                          f"got {v:g}")
             out.append(BodySource(name, "measurements", targets, origin))
         else:
             raise BodySourceError(f"{path}: row {i}: no measurement and no size given")

@@ -76,8 +76,10 @@ class BatchResult:
 
     def summary(self) -> str:
         state = "interrupted" if self.interrupted else "done"
+        where = (f"on {self.workers} worker{'s' * (self.workers != 1)}" if self.made + self.failed or self.workers
+                 else "(nothing left to make)")
         return (f"batch {state}: {self.made} made, {self.failed} failed, {self.skipped} already complete, "
-                f"{self.total} items, {self.seconds:.1f} s on {self.workers} workers")
+                f"{self.total} item{'s' * (self.total != 1)}, {self.seconds:.1f} s {where}")
 
 
 def read_design(design) -> dict:
@@ -93,8 +95,59 @@ def read_design(design) -> dict:
             raise BatchError(f"{path}: cannot read the design ({exc.strerror or exc})") from None
         except json.JSONDecodeError as exc:
             raise BatchError(f"{path}: not JSON ({exc})") from None
-    load_design(json.loads(json.dumps(obj)))
+    try:
+        load_design(json.loads(json.dumps(obj)))
+    except EaseError as exc:
+        if isinstance(design, dict):
+            raise
+        raise BatchError(f"{design}: {exc}") from None
     return obj
+
+
+#: Seconds a --scheduler address has to answer as a Dask scheduler.
+SCHEDULER_PROBE_S = 20.0
+
+
+def _check_scheduler(address: str) -> None:
+    """Stop in one line on an address that is not a Dask scheduler answering.
+
+    ``Client()`` waits without end on a server that takes the connection and never
+    answers (a web server, say the dashboard's port), and one that answers something
+    else can make it read a frame length of exabytes: a probe in its own thread and
+    event loop, bounded by :data:`SCHEDULER_PROBE_S`, asks for the scheduler's identity.
+    """
+    import asyncio
+    import concurrent.futures
+
+    from distributed.comm import connect
+    from distributed.comm.addressing import parse_address, parse_host_port
+    try:
+        parse_host_port(parse_address(address)[1])
+    except (ValueError, TypeError) as exc:
+        raise BatchError(f"--scheduler {address}: expected tcp://HOST:PORT ({one_line(exc)})") from None
+
+    async def identity():
+        comm = await connect(address, timeout=SCHEDULER_PROBE_S)
+        try:
+            await comm.write({"op": "identity"})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    def probe():
+        return asyncio.run(asyncio.wait_for(identity(), SCHEDULER_PROBE_S))
+
+    with concurrent.futures.ThreadPoolExecutor(1) as pool:   # a caller may be running an event loop
+        try:
+            reply = pool.submit(probe).result()
+        except (asyncio.TimeoutError, TimeoutError):
+            raise BatchError(f"--scheduler {address}: no Dask scheduler answered within "
+                             f"{SCHEDULER_PROBE_S:g} s") from None
+        except Exception as exc:  # refused, reset, or bytes that are not Dask's protocol
+            raise BatchError(f"--scheduler {address}: cannot connect to a Dask scheduler ({one_line(exc)})") from None
+    if not isinstance(reply, dict) or reply.get("type") != "Scheduler":
+        kind = reply.get("type") if isinstance(reply, dict) else type(reply).__name__
+        raise BatchError(f"--scheduler {address}: not a Dask scheduler (it answered as {kind!r})")
 
 
 def _client(workers: Optional[int], scheduler: Optional[str]):
@@ -106,18 +159,20 @@ def _client(workers: Optional[int], scheduler: Optional[str]):
         raise BatchError("ease batch needs Dask: pip install 'ease-garments[batch]' "
                          "(dask, distributed; ./ease.sh installs them)") from None
     if scheduler:
+        _check_scheduler(scheduler)
         try:
             client = Client(scheduler, timeout="20s")
-        except (OSError, TimeoutError) as exc:
+        except (OSError, TimeoutError, ValueError, MemoryError) as exc:
+            # MemoryError: a server that is not Dask's answered with bytes read as a frame length
             raise BatchError(f"--scheduler {scheduler}: cannot connect ({one_line(exc)})") from None
         return client, None, len(client.scheduler_info().get("workers", {}))
-    n = int(workers or os.cpu_count() or 1)
+    n = int(os.cpu_count() or 1) if workers is None else int(workers)
     if n < 1:
         raise BatchError(f"--workers: expected >= 1, got {n}")
     # processes, one thread each: the solver is numpy/scipy-bound and holds the GIL between calls
     with dask.config.set(WORKER_CONFIG):
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                               silence_logs=logging.ERROR)
+                               silence_logs=logging.ERROR, preload=["core.batch.local_worker"])
     return Client(cluster), cluster, n
 
 
@@ -153,6 +208,10 @@ def run_batch(design, bodies: Sequence[BodySource], out, model: str = "anny", op
         raise BatchError("no bodies: give --bodies, --sample or --smpl-betas")
     if item_timeout is not None and not item_timeout > 0:
         raise BatchError(f"--item-timeout: expected seconds > 0, got {item_timeout}")
+    meshes = [f for f in (options.export if options else ()) if f in ("glb", "obj")]
+    if meshes and not options.drape:
+        raise BatchError(f"--export {meshes[0]}: the garment's 3D file is of the draped garment; "
+                         f"add --drape, or export svg, dxf, pdf only")
     obj = read_design(design)
     out = Path(out)
     items = make_items(obj, bodies, model=model, options=options)
@@ -164,8 +223,15 @@ def run_batch(design, bodies: Sequence[BodySource], out, model: str = "anny", op
         # what killed runs left in the items folder, cleared once here: the workers then write
         # an item without listing a folder that holds every item made so far
         recover_folder(out / "items")
-        _submit(pending, out, workers, scheduler, item_timeout, progress, result)
-    result.rows = compact(out)
+        try:
+            _submit(pending, out, workers, scheduler, item_timeout, progress, result)
+        except KeyboardInterrupt:       # Ctrl-C again while the first one's clean-up ran
+            result.interrupted = True
+    try:
+        with signals_held():            # the manifest is compacted whole whatever Ctrl-C does meanwhile
+            result.rows = compact(out)
+    except KeyboardInterrupt:           # arrived during the compaction, which is done: a stop like any
+        result.interrupted = True
     result.seconds = time.perf_counter() - t0
     return result
 
@@ -210,9 +276,9 @@ def _error_row(item: Item, exc: BaseException) -> dict:
 def _submit(pending, out, workers, scheduler, item_timeout, progress, result: BatchResult) -> None:
     from distributed import as_completed
 
-    journal = Journal(out)
+    # the cluster first: a --scheduler that does not answer leaves no manifest behind
     client, cluster, result.workers = _client(workers, scheduler)
-    futures, groups = [], {}
+    journal, futures, groups = None, [], {}
     # the keys are this run's: a scheduler shares a key's task (and its result) between its clients,
     # so another run of the same items at once (into another folder, or with other task sizes) would
     # return rows of items made elsewhere, or of other items than the task's
@@ -226,6 +292,7 @@ def _submit(pending, out, workers, scheduler, item_timeout, progress, result: Ba
         return new
 
     try:
+        journal = Journal(out)
         tasks, i = [], 0
         for size in task_sizes(len(pending), result.workers):
             tasks.append(pending[i:i + size])
@@ -257,9 +324,11 @@ def _submit(pending, out, workers, scheduler, item_timeout, progress, result: Ba
     except KeyboardInterrupt:
         result.interrupted = True
     finally:
-        journal.close()
-        if futures:
-            client.cancel(futures)
-        client.close()
-        if cluster is not None:
-            cluster.close()
+        with signals_held():     # Ctrl-C again: delivered once the workers are stopped and released
+            if journal is not None:
+                journal.close()
+            if futures:
+                client.cancel(futures)
+            client.close()
+            if cluster is not None:
+                cluster.close()
