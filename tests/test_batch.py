@@ -49,6 +49,7 @@ def test_small_batch_on_a_local_cluster_then_resume(tmp_path):
     bad = rows["impossible"]
     assert bad["status"] == "error" and "not reachable by this model" in bad["error"]
     assert "bodies.csv row 3" in bad["error"] and "\n" not in bad["error"]
+    assert (bad["targets.height"], bad["targets.chest"], bad["targets.waist"]) == (150, 150, 40)  # what was asked
     assert not (out / "items" / bad["folder"]).exists()
     for label in ("large", "measured"):
         r = rows[label]
@@ -345,3 +346,14 @@ def test_summary_counts_in_words():
         "batch done: 2 made, 1 failed, 0 already complete, 3 items, 1.0 s on 1 worker"
     assert BatchResult(total=1, skipped=1).summary() == \
         "batch done: 0 made, 0 failed, 1 already complete, 1 item, 0.0 s (nothing left to make)"
+
+
+def test_a_body_refused_for_collapse_keeps_its_shape_in_the_row(tmp_path, scheduler):
+    """Sample 0 of seed 0 collapses at the armpit on this design: its row still carries the body's
+    shape parameters (they came from the pattern, which a refused body does not have), so the
+    refused bodies can be studied from the manifest alone."""
+    bodies = sample_anny(1, seed=0)
+    res = run_batch(DESIGN, bodies, tmp_path / "set", scheduler=scheduler)
+    row = res.rows[0]
+    assert row["status"] == "error" and "collapsed" in row["error"]
+    assert {k[len("shape."):]: v for k, v in row.items() if k.startswith("shape.")} == bodies[0].value

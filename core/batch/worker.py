@@ -162,7 +162,7 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
     throughput on a shared machine), ``worker``.
     """
     from .. import workflows as wf
-    from ..body.instance import body_instance, instance_pose
+    from ..body.instance import body_instance, instance_pose, instance_shape
     from ..body.measure import measure
 
     row: dict = {"id": item.id, "label": item.body.label, "index": item.index, "folder": item.folder,
@@ -177,11 +177,15 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
             timings["setup"] = time.perf_counter() - t
         check = deadline(time_limit)
         t = time.perf_counter()
+        if item.body.kind == "measurements":     # what was asked, also on a row whose fit fails
+            row.update({f"targets.{k}": v for k, v in item.body.value.items()})
         target, entries = _target(ctx, item, check)
         row.update(entries)
         if isinstance(target, str):
             row["body.size"] = target
         model = ctx.prep.body
+        # the body's shape before anything can fail on it: a refused body's row says which body it is
+        row.update({f"shape.{k}": v for k, v in sorted((instance_shape(model, target) or {}).items())})
         rest = body_instance(model, target)
         row.update({f"body.{k}_cm": v for k, v in measure(model, rest).items()})
         # the cut's pose: the reference pose ("A", or none) is the rest instance itself, which the transfer
