@@ -14,6 +14,9 @@ from core.batch.manifest import comparable, read_rows
 from core.design.templates import template_path
 
 DESIGN = template_path("top_sleeveless")
+#: LocalCluster settings: no dashboard, and the scheduler's HTTP routes on any free port (8787 is
+#: taken by whichever cluster started first: a warning for every other)
+NO_DASHBOARD = {"dashboard_address": None, "scheduler_kwargs": {"dashboard_address": ":0"}}
 TABLE = "name,height,chest,waist,hip,size\nlarge,,,,,L\nmeasured,178,96,80,100,\nimpossible,150,150,40,60,\n"
 
 
@@ -30,7 +33,7 @@ def scheduler():
     import logging
 
     from distributed import LocalCluster
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, **NO_DASHBOARD,
                       silence_logs=logging.ERROR) as cluster:
         yield cluster.scheduler_address
 
@@ -150,7 +153,7 @@ def test_a_worker_killed_under_a_task_of_several_items_costs_only_its_item(tmp_p
     killer = str(Path(__file__).parent / "helpers" / "batch_killer.py")
     with dask.config.set({"distributed.scheduler.allowed-failures": 0,
                           "distributed.scheduler.worker-saturation": 1.0}):
-        with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None,
+        with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, **NO_DASHBOARD,
                           silence_logs=logging.CRITICAL, preload=[killer]) as cluster:
             res = run_batch(DESIGN, sample_anny(6, seed=5), tmp_path / "set", scheduler=cluster.scheduler_address)
     rows = {r["index"]: r for r in res.rows}
@@ -281,7 +284,7 @@ def test_local_workers_leave_ctrl_c_to_the_driver(scheduler):
     import signal
 
     from distributed import Client, LocalCluster
-    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None,
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, **NO_DASHBOARD,
                       silence_logs=logging.CRITICAL, preload=["core.batch.local_worker"]) as cluster:
         with Client(cluster) as client:
             ignored = client.run(lambda: signal.getsignal(signal.SIGINT) == signal.SIG_IGN)

@@ -172,7 +172,10 @@ def _client(workers: Optional[int], scheduler: Optional[str]):
     # processes, one thread each: the solver is numpy/scipy-bound and holds the GIL between calls
     with dask.config.set(WORKER_CONFIG):
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                               silence_logs=logging.ERROR, preload=["core.batch.local_worker"])
+                               silence_logs=logging.ERROR, preload=["core.batch.local_worker"],
+                               # no dashboard, but the scheduler's HTTP routes still take a port: any free
+                               # one, not 8787 with a warning when another cluster holds it
+                               scheduler_kwargs={"dashboard_address": ":0"})
     return Client(cluster), cluster, n
 
 
