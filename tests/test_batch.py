@@ -360,3 +360,16 @@ def test_a_body_refused_for_collapse_keeps_its_shape_in_the_row(tmp_path, schedu
     row = res.rows[0]
     assert row["status"] == "error" and "collapsed" in row["error"]
     assert {k[len("shape."):]: v for k, v in row.items() if k.startswith("shape.")} == bodies[0].value
+
+
+def test_the_summary_lists_this_commands_failures_only(tmp_path, capsys):
+    """A dataset folder reused with other bodies or options: the summary's failure lines are those of
+    this command's items (seed 0's sample 0 is refused on this design; seed 5's is made)."""
+    from core.cli import main
+    out = str(tmp_path / "set")
+    assert main(["batch", str(DESIGN), "--sample", "1", "--seed", "0", "--workers", "1", "--quiet", "--out", out]) == 1
+    assert "sample 0: error:" in capsys.readouterr().out
+    assert main(["batch", str(DESIGN), "--sample", "1", "--seed", "5", "--workers", "1", "--quiet", "--out", out]) == 0
+    said = capsys.readouterr().out
+    assert "1 made, 0 failed" in said and ": error:" not in said
+    assert len(read_rows(tmp_path / "set" / "manifest.jsonl")) == 2

@@ -63,7 +63,8 @@ class BatchResult:
     made : completed ok in this run; failed : rows with status error/timeout in
     this run; interrupted : stopped by Ctrl-C (or a progress callback raising
     KeyboardInterrupt); seconds : wall time of this run; workers : number of
-    workers used; rows : the compacted manifest (all runs).
+    workers used; rows : the compacted manifest (all runs, whatever their options);
+    ids : the ids of this batch's items (made now or before), in the bodies' order.
     """
     total: int
     skipped: int
@@ -73,6 +74,12 @@ class BatchResult:
     seconds: float = 0.0
     workers: int = 0
     rows: List[dict] = field(default_factory=list)
+    ids: List[str] = field(default_factory=list)
+
+    def own_rows(self) -> List[dict]:
+        """The manifest's rows of this batch's items (a folder may also hold another option set's)."""
+        ids = set(self.ids)
+        return [row for row in self.rows if row.get("id") in ids]
 
     def summary(self) -> str:
         state = "interrupted" if self.interrupted else "done"
@@ -220,7 +227,7 @@ def run_batch(design, bodies: Sequence[BodySource], out, model: str = "anny", op
     items = make_items(obj, bodies, model=model, options=options)
     done = completed(read_rows(out / "manifest.jsonl"))
     pending: List[Item] = [it for it in items if it.id not in done]
-    result = BatchResult(total=len(items), skipped=len(items) - len(pending))
+    result = BatchResult(total=len(items), skipped=len(items) - len(pending), ids=[it.id for it in items])
     t0 = time.perf_counter()
     if pending:
         # what killed runs left in the items folder, cleared once here: the workers then write

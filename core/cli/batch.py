@@ -92,7 +92,7 @@ def _cmd(args) -> int:
                        workers=args.workers, scheduler=args.scheduler, item_timeout=args.item_timeout,
                        progress=console_progress(args))
     print(result.summary())
-    for row in result.rows:
+    for row in result.own_rows():       # this command's items: the folder may hold other options' too
         if row.get("status") != "ok":
             print(f"{row['label']}: {row['status']}: {row.get('error', '')}")
     if result.interrupted:
