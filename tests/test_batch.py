@@ -373,3 +373,19 @@ def test_the_summary_lists_this_commands_failures_only(tmp_path, capsys):
     said = capsys.readouterr().out
     assert "1 made, 0 failed" in said and ": error:" not in said
     assert len(read_rows(tmp_path / "set" / "manifest.jsonl")) == 2
+
+
+def test_a_bare_size_is_of_the_designs_chart(tmp_path, scheduler):
+    """A table's bare ``M`` on a women's-chart design is that chart's M, as ``ease transfer --size M``
+    reads it: the item's body, girths and pattern were the default chart's M (chest 95.6 cm
+    instead of 93.9) under a pattern record naming women:M."""
+    from core.batch.bodies import BodySource
+    design = template_path("blouse_fitted")
+    assert json.loads(design.read_text())["body"]["chart"] == "women"
+    res = run_batch(design, [BodySource("bare", "size", "M"), BodySource("named", "size", "women:M")],
+                    tmp_path / "set", scheduler=scheduler)
+    rows = {r["label"]: r for r in res.rows}
+    assert rows["bare"]["status"] == rows["named"]["status"] == "ok"
+    assert rows["bare"]["body.size"] == "women:M"
+    same = [k for k in rows["named"] if k.startswith(("body.", "shape.", "metrics."))]
+    assert len(same) > 10 and all(rows["bare"][k] == rows["named"][k] for k in same)

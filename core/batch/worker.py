@@ -78,8 +78,13 @@ def deadline(seconds: Optional[float]):
 
 def _target(ctx: Context, item: Item, check) -> Tuple[object, Dict[str, object]]:
     """The transfer target of ``item``'s body (a size name or a shape dict) and its row entries."""
+    from .. import workflows as wf
     from ..body.sizes import fit_measurements
     body = item.body
+    if body.kind == "size":
+        # a bare size is of the design's chart (as the transfer reads it): named so here, or the
+        # item's body instance, girths and shape would be the default chart's size
+        return wf.size_name(ctx.prep, body.value), {}
     if body.kind != "measurements":
         return body.value, {}
     fit = fit_measurements(ctx.prep.body, body.value, progress=check)
