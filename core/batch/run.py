@@ -27,7 +27,7 @@ from ..signals import signals_held
 from .bodies import BodySource
 from .items import Item, Options, make_items
 from .manifest import Journal, compact, completed, read_rows
-from .worker import one_line, run_items
+from .worker import item_row, one_line, run_items
 
 
 #: Dask settings for the local workers. Distributed's nannies start workers with
@@ -169,8 +169,7 @@ def _client(workers: Optional[int], scheduler: Optional[str]):
         _check_scheduler(scheduler)
         try:
             client = Client(scheduler, timeout="20s")
-        except (OSError, TimeoutError, ValueError, MemoryError) as exc:
-            # MemoryError: a server that is not Dask's answered with bytes read as a frame length
+        except (OSError, TimeoutError) as exc:     # the probe above answered; the scheduler went since
             raise BatchError(f"--scheduler {scheduler}: cannot connect ({one_line(exc)})") from None
         return client, None, len(client.scheduler_info().get("workers", {}))
     n = int(os.cpu_count() or 1) if workers is None else int(workers)
@@ -276,11 +275,12 @@ def task_sizes(n: int, workers: int, largest: int = ITEMS_PER_TASK) -> List[int]
 def _error_row(item: Item, exc: BaseException) -> dict:
     # Dask's KilledWorker text names the task's key (which carries the run's token) and a worker
     # address: neither means anything to the user, and the manifest would differ run to run
-    error = (f"KilledWorker: the worker process died {1 + getattr(exc, 'allowed_failures', 0)} time(s) "
-             "while this item was on it (out of memory, or a crash; a rerun tries it again)" if type(exc).__name__ == "KilledWorker"
-             else one_line(exc))
-    return {"id": item.id, "label": item.body.label, "index": item.index, "folder": item.folder,
-            "body.kind": item.body.kind, "status": "error", "error": error}
+    if type(exc).__name__ == "KilledWorker":
+        error = (f"KilledWorker: the worker process died {1 + getattr(exc, 'allowed_failures', 0)} time(s) "
+                 "while this item was on it (out of memory, or a crash; a rerun tries it again)")
+    else:
+        error = one_line(exc)
+    return item_row(item, "error", error)
 
 
 def _submit(pending, out, workers, scheduler, item_timeout, progress, result: BatchResult) -> None:

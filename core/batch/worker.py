@@ -153,6 +153,12 @@ def _write(folder: Path, item: Item, run, arun, drun, preview: bool) -> None:
                                        "model": item.model, "shape": run.pattern.body.get("shape")})
 
 
+def item_row(item: Item, status: str = "ok", error: str = "") -> dict:
+    """The manifest row's first keys: the item, its body's kind, its status and error."""
+    return {"id": item.id, "label": item.body.label, "index": item.index, "folder": item.folder,
+            "body.kind": item.body.kind, "status": status, "error": error}
+
+
 def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
     """Make ``item`` into ``out_root/items/<folder>`` and return its manifest row.
 
@@ -170,8 +176,7 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
     from ..body.instance import body_instance, instance_pose, instance_shape
     from ..body.measure import measure
 
-    row: dict = {"id": item.id, "label": item.body.label, "index": item.index, "folder": item.folder,
-                 "body.kind": item.body.kind, "status": "ok", "error": "", "worker": os.getpid()}
+    row = {**item_row(item), "worker": os.getpid()}
     timings: Dict[str, float] = {}
     cpu = time.process_time()
     try:
@@ -205,7 +210,6 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
         run = wf.transfer(ctx.prep, target, config=item.options.config, solver=ctx.solver, start=ctx.start,
                           progress=check, vertices=rest if at_rest else None)
         timings["transfer"] = run.timings["optimize"]
-        row.update({f"shape.{k}": v for k, v in sorted((run.pattern.body.get("shape") or {}).items())})
         row.update(_pattern_row(run.pattern))
         timings["metrics"] = time.perf_counter() - t - timings["transfer"]
 
