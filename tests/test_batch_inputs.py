@@ -142,13 +142,13 @@ def test_items_take_the_designs_solver_unless_the_caller_names_one():
 
 def test_journal_survives_a_torn_last_line(tmp_path):
     j = Journal(tmp_path)
-    j.append({"id": "b", "status": "ok", "timings.body": 1.0})
-    j.append({"id": "a", "status": "error", "error": "x"})
+    j.extend([{"id": "b", "status": "ok", "timings.body": 1.0}])
+    j.extend([{"id": "a", "status": "error", "error": "x"}])
     j.close()
     with open(tmp_path / "manifest.jsonl", "a") as f:
         f.write('{"id": "c", "sta')  # a crash mid-write
     j = Journal(tmp_path)
-    j.append({"id": "a", "status": "ok"})
+    j.extend([{"id": "a", "status": "ok"}])
     j.close()
     rows = read_rows(tmp_path / "manifest.jsonl")
     assert [r["id"] for r in rows] == ["b", "a", "a"]
@@ -173,8 +173,8 @@ def test_placement_recovers_a_rigid_motion():
 def test_parquet_beside_the_journal_where_pyarrow_is_installed(tmp_path):
     pq = pytest.importorskip("pyarrow.parquet")
     j = Journal(tmp_path)
-    j.append({"id": "b", "status": "ok", "metrics.weft_mean_pct": 1.5})
-    j.append({"id": "a", "status": "error", "error": "x"})
+    j.extend([{"id": "b", "status": "ok", "metrics.weft_mean_pct": 1.5}])
+    j.extend([{"id": "a", "status": "error", "error": "x"}])
     j.close()
     compact(tmp_path)
     table = pq.read_table(tmp_path / "manifest.parquet").to_pylist()

@@ -85,9 +85,6 @@ class Journal:
                 if f.read(1) != b"\n":
                     f.write(b"\n")
 
-    def append(self, row: dict) -> None:
-        self.extend([row])
-
     def extend(self, rows: Iterable[dict]) -> None:
         """Append ``rows`` in one write and one flush to disk (a task's items arrive together)."""
         text = "".join(dumps_json(row, indent=None) + "\n" for row in rows)
