@@ -233,7 +233,14 @@ def transfer(prep: Prepared, size, config: Optional[str] = None, iterations: Opt
     ease compliance on the target body) beside the reference's own compliance.
     ``vertices``: the target body's instance in the cut's pose when the caller
     has made it (a batch item measured it), so it is not evaluated again.
+
+    The design's own size (the chart size its body is, ``body.shape``) is the
+    reference pattern itself, not a re-solve on the same body: one size, one
+    pattern, whichever door (``ease pattern``, ``ease transfer``, a graded
+    nest, a batch item) it comes through.
     """
+    import copy
+
     from .body.instance import body_instance, instance_shape
     from .metrics.pattern import ease_compliance
     from .pattern.solve import transfer_pattern
@@ -250,12 +257,17 @@ def transfer(prep: Prepared, size, config: Optional[str] = None, iterations: Opt
     ref_pat = start if start is not None else _solve_reference(prep, solver, sub(progress, 0.15, 0.5))
     pose = prep.cut.body.get("pose")
     shape = instance_shape(prep.body, size)
-    target = vertices if vertices is not None else body_instance(prep.body, shape, pose)
-    pattern = transfer_pattern(prep.cut, prep.reference, target, solver=solver, start=ref_pat,
-                               style=prep.design.name,
-                               body={"model": prep.cut.body.get("model", prep.body.name), "shape": shape,
-                                     "pose": pose, **({"size": size} if isinstance(size, str) else {})},
-                               progress=sub(progress, 0.5, 1.0))
+    body = {"model": prep.cut.body.get("model", prep.body.name), "shape": shape, "pose": pose,
+            **({"size": size} if isinstance(size, str) else {})}
+    if is_own_size(prep, size):
+        pattern = copy.deepcopy(ref_pat)
+        pattern.body, pattern.mode = body, "transfer"
+        report(progress, 1.0, f"{size} is the design's own size: its reference pattern")
+        target = prep.reference if vertices is None else vertices
+    else:
+        target = vertices if vertices is not None else body_instance(prep.body, shape, pose)
+        pattern = transfer_pattern(prep.cut, prep.reference, target, solver=solver, start=ref_pat,
+                                   style=prep.design.name, body=body, progress=sub(progress, 0.5, 1.0))
     optimize = time.perf_counter() - t0
     metrics = _checked_metrics(pattern, vertices=target)
     dev = metrics["compliance"]                       # the transfer deviation is the compliance on the target
@@ -269,6 +281,12 @@ def transfer(prep: Prepared, size, config: Optional[str] = None, iterations: Opt
                "transfer deviation std %": round(float(dev["std"]), 3),
                "reference compliance mean %": round(float(refc["mean"]), 3)}
     return PatternRun(pattern, figures, {**prep.timings, "optimize": optimize})
+
+
+def is_own_size(prep: Prepared, size) -> bool:
+    """Whether ``size`` (a name, canonical or bare) is the chart size the design's body is (``body.shape``)."""
+    own = prep.cut.body.get("shape")
+    return isinstance(size, str) and isinstance(own, str) and size_name(prep, size) == size_name(prep, own)
 
 
 def tolerances(prep: Prepared, eps_weft: Optional[float] = None,
@@ -496,5 +514,6 @@ def export(pattern, out, formats: Union[str, Sequence[str]] = ("svg", "dxf", "pd
 
 __all__ = ["CONFIGS", "DEFAULT_CONFIG", "Prepared", "PatternRun", "DrapeRun", "prepare", "config_name",
            "solver_config", "make_solver",
-           "reference", "transfer", "adapt", "tolerances", "measure_pattern", "pattern_figures", "write_pattern",
+           "reference", "transfer", "is_own_size", "adapt", "tolerances", "measure_pattern", "pattern_figures",
+           "write_pattern",
            "summary", "drape", "write_drape", "drape_summary", "export_allowance", "export"]
