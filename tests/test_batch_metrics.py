@@ -34,4 +34,5 @@ def test_one_garment_report_lists_the_overall_figures_as_its_own():
     assert g["regions"] == region_compliance(one, lm, garment="a") == rep["regions"]
     assert g["compliance"] is not rep["compliance"] and g["regions"] is not rep["regions"]
     assert list(rep) == ["garments", "compliance", "seams", "flipped_triangles", "flipped_per_panel",
-                         "collapsed_triangles", "collapsed_per_panel", "collapse_sites", "regions"]
+                         "collapsed_triangles", "collapsed_per_panel", "collapse_sites", "regions",
+                         "crossings", "crossings_per_panel", "crossing_sites", "darts", "pieces"]

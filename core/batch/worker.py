@@ -101,7 +101,7 @@ def _pattern_row(pattern, prefix: str = "metrics.") -> dict:
     return {f"{prefix}weft_mean_pct": c["mean"], f"{prefix}weft_std_pct": c["std"],
             f"{prefix}warp_mean_pct": c["warp_mean"], f"{prefix}warp_signed_pct": c["warp_signed"],
             f"{prefix}shear_p95_deg": c["shear_p95"], f"{prefix}flipped": m["flipped_triangles"],
-            f"{prefix}collapsed": m.get("collapsed_triangles", 0),
+            f"{prefix}collapsed": m.get("collapsed_triangles", 0), f"{prefix}crossings": m.get("crossings", 0),
             f"{prefix}seam_mismatch_mean_pct": s["mean"], f"{prefix}seam_mismatch_max_mm": s["max_mm"]}
 
 

@@ -134,7 +134,7 @@ def collapse(pattern, landmarks: Optional[Mapping[str, np.ndarray]] = None, stra
     return out
 
 
-def _where(site: dict) -> str:
+def site_where(site: dict) -> str:
     xyz = ", ".join(f"{v:.3f}" for v in site["centroid"])
     if site.get("near"):
         return f"near {site['near']} ({xyz} m)"
@@ -150,7 +150,7 @@ def collapse_message(per_panel: Mapping[str, dict]) -> str:
     for name, v in per_panel.items():
         if not v["count"]:
             continue
-        where = "; ".join(f"{s['count']} {_where(s)}" for s in v["sites"])
+        where = "; ".join(f"{s['count']} {site_where(s)}" for s in v["sites"])
         parts.append(f"panel {name}: {v['count']} collapsed triangles ({where})"
-                     if len(v["sites"]) > 1 else f"panel {name}: {v['count']} collapsed triangles {_where(v['sites'][0])}")
+                     if len(v["sites"]) > 1 else f"panel {name}: {v['count']} collapsed triangles {site_where(v['sites'][0])}")
     return "; ".join(parts)

@@ -2,7 +2,7 @@
 
 Both read ``pattern.report["metrics"]`` (:func:`core.metrics.pattern.pattern_report`)
 and show the warp deviation and shear beside the weft compliance, and the
-collapsed count beside the flipped one (``docs/metrics.md``).
+collapsed and crossing counts beside the flipped one (``docs/metrics.md``).
 :func:`core.workflows.pattern_figures` and :func:`core.workflows.summary` are
 these, for the CLI, the add-on and batch runs.
 """
@@ -22,17 +22,20 @@ def key_figures(pattern) -> Dict[str, object]:
             "shear p95 deg": round(float(c["shear_p95"]), 1),
             "seam mismatch mean %": round(float(s["mean"]), 2), "seam mismatch max mm": round(float(s["max_mm"]), 1),
             "flipped": int(m["flipped_triangles"]), "collapsed": int(m.get("collapsed_triangles", 0)),
+            "crossings": int(m.get("crossings", 0)),
             "gathered seams": len(s.get("gathered") or {})}
 
 
 def summary_line(pattern, optimize_seconds: float = 0.0) -> str:
-    """One line: compliance (warp, shear), seams, flipped, collapsed, the worst region, the mode's records."""
+    """One line: compliance (warp, shear), seams, flipped, collapsed, crossings, the worst region, the mode's
+    records."""
     m = pattern.report["metrics"]
     c, s = m["compliance"], m["seams"]
     line = (f"{pattern.mode}: {len(pattern.panels)} pieces, ease compliance {c['mean']:.2f} ± {c['std']:.2f} % "
             f"(warp {c['warp_mean']:.2f} %, signed {c['warp_signed']:+.2f} %; shear p95 {c['shear_p95']:.1f}°), "
             f"seam mismatch {s['mean']:.2f} % (max {s['max_mm']:.1f} mm), "
             f"flipped {m['flipped_triangles']}, collapsed {m.get('collapsed_triangles', 0)}, "
+            f"crossings {m.get('crossings', 0)}, "
             f"optimize {optimize_seconds:.2f} s"
             + (f"; gathered: {', '.join(sorted(s['gathered']))}" if s.get("gathered") else ""))
     regions = m.get("regions") or {}

@@ -20,6 +20,7 @@ from ..geom.mesh import signed_areas_2d, triangle_areas
 from ..geom.polyline import polyline_length
 from ..geom.strain import scales
 from .collapse import collapse, oriented_areas
+from .injectivity import crossings, dart_gaps
 from .regions import region_compliance
 from .stats import weighted_mean, weighted_stats
 from .strains import panel_strain, pattern_strains
@@ -72,7 +73,7 @@ def ease_compliance(pattern, garment: Optional[str] = None, xyz: Optional[Dict[s
     dict with ``mean``, ``std``, ``p95``, ``max`` (percent), ``shear_mean``,
     ``shear_p95`` (degrees), ``warp_mean`` (percent deviation of the warp
     scale from its target), ``warp_signed`` (its signed mean: near 0 when the
-    garment's length is kept), ``area`` (m^2).
+    garment's length is kept), ``warp_p95`` (its 95th percentile), ``area`` (m^2).
     """
     comp, shear, warp, area = [], [], [], []
     for p in _panels(pattern, garment, None if panels is None else set(panels)):
@@ -92,9 +93,10 @@ def ease_compliance(pattern, garment: Optional[str] = None, xyz: Optional[Dict[s
     c = weighted_stats(100.0 * np.concatenate(comp), a)
     s = weighted_stats(np.concatenate(shear), a)
     warp = 100.0 * np.concatenate(warp)
+    w = weighted_stats(np.abs(warp), a)
     return {"mean": c["mean"], "std": c["std"], "p95": c["p95"], "max": c["max"],
-            "shear_mean": s["mean"], "shear_p95": s["p95"], "warp_mean": weighted_mean(np.abs(warp), a),
-            "warp_signed": weighted_mean(warp, a), "area": float(a.sum())}
+            "shear_mean": s["mean"], "shear_p95": s["p95"], "warp_mean": w["mean"],
+            "warp_signed": weighted_mean(warp, a), "warp_p95": w["p95"], "area": float(a.sum())}
 
 
 def seam_mismatch(pattern, garment: Optional[str] = None) -> Dict[str, object]:
@@ -184,8 +186,12 @@ def pattern_report(pattern, landmarks: Optional[Dict[str, np.ndarray]] = None) -
     per garment, with ``regions``), ``flipped_triangles`` /
     ``flipped_per_panel``, ``collapsed_triangles`` / ``collapsed_per_panel``
     / ``collapse_sites`` (panel -> sites, panels with collapsed triangles
-    only), and ``regions`` (landmark -> compliance within
-    :data:`core.metrics.regions.REGION_RADIUS`; empty without landmarks).
+    only), ``regions`` (landmark -> compliance within
+    :data:`core.metrics.regions.REGION_RADIUS`; empty without landmarks),
+    ``crossings`` / ``crossings_per_panel`` / ``crossing_sites`` (the sew line's
+    crossings, :mod:`core.metrics.injectivity`; sites of panels with crossings
+    only), ``darts`` (dart name -> its legs' ``min_gap_mm`` and ``crossings``)
+    and ``pieces`` (panel name -> its own :func:`ease_compliance`).
     """
     out = {"garments": {}}
     strains = pattern_strains(pattern)      # every figure below reads the same per-triangle scales
@@ -212,4 +218,10 @@ def pattern_report(pattern, landmarks: Optional[Dict[str, np.ndarray]] = None) -
     out["collapsed_per_panel"] = {k: v["count"] for k, v in col.items()}
     out["collapse_sites"] = {k: v["sites"] for k, v in col.items() if v["count"]}
     out["regions"] = overall["regions"]
+    cross = crossings(pattern, landmarks)
+    out["crossings"] = int(sum(v["count"] for v in cross.values()))
+    out["crossings_per_panel"] = {k: v["count"] for k, v in cross.items()}
+    out["crossing_sites"] = {k: v["sites"] for k, v in cross.items() if v["count"]}
+    out["darts"] = dart_gaps(pattern)
+    out["pieces"] = {p.name: ease_compliance(pattern, panels=(p.name,), strains=strains) for p in pattern.panels}
     return out

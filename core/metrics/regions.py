@@ -68,7 +68,7 @@ def region_compliance(pattern, landmarks: Mapping[str, np.ndarray], radius: floa
     Returns
     -------
     dict name -> ``{"mean", "std", "p95", "signed"}`` (weft compliance, %),
-    ``warp_mean``, ``warp_signed`` (%), ``shear_mean``, ``shear_p95`` (deg),
+    ``warp_mean``, ``warp_p95``, ``warp_signed`` (%), ``shear_mean``, ``shear_p95`` (deg),
     ``area`` (m^2) and ``n`` (triangles); a landmark the garment does not
     cover within ``radius`` is left out.
     """
@@ -104,9 +104,10 @@ def region_compliance(pattern, landmarks: Mapping[str, np.ndarray], radius: floa
         a = area[inside]
         c = weighted_stats(np.abs(weft[inside]), a)
         s = weighted_stats(shear[inside], a)
+        w = weighted_stats(np.abs(warp[inside]), a)
         out[name] = {"mean": c["mean"], "std": c["std"], "p95": c["p95"],
                      "signed": weighted_mean(weft[inside], a),
-                     "warp_mean": weighted_mean(np.abs(warp[inside]), a),
+                     "warp_mean": w["mean"], "warp_p95": w["p95"],
                      "warp_signed": weighted_mean(warp[inside], a),
                      "shear_mean": s["mean"], "shear_p95": s["p95"],
                      "area": float(a.sum()), "n": int(inside.size)}
