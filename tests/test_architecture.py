@@ -7,7 +7,9 @@
   functions count: a lazy import only hides a cycle).
 - ``core`` never imports ``bpy``; add-on operator modules never import one
   another (what they share lives in the add-on's data, sync and helper modules).
-- No module in ``core`` over 500 lines.
+- The layer table in docs/architecture.md is this file's ``LAYERS``.
+- A module's size is decided by what belongs together, not by a line count: modules over
+  ``SOFT_LINES`` get a warning (a prompt to look, never a failure).
 """
 from __future__ import annotations
 
@@ -21,7 +23,7 @@ ROOT = Path(__file__).resolve().parent.parent
 #: Layer of each part of ``core`` (a module may import its own layer and lower ones).
 LAYERS = {
     "core.errors": 0, "core.fileio": 0, "core.jsontext": 0, "core.signals": 0, "core.progress": 0,
-    "core.paths": 0,
+    "core.paths": 0, "core.choices": 0,
     "core.geom": 1,
     "core.body": 2,
     "core.design": 3,
@@ -36,7 +38,8 @@ LAYERS = {
     "core.cli": 11,
     "core": 0,           # the package's own __init__: the version only
 }
-MAX_LINES = 500
+#: modules longer than this are listed in a warning: worth a look, not a rule
+SOFT_LINES = 800
 
 
 def _module_name(path: Path) -> str:
@@ -165,10 +168,32 @@ def test_addon_operator_modules_do_not_import_each_other():
     assert not bad, "\n".join(bad)
 
 
-@pytest.mark.parametrize("module", sorted(m for m in MODULES if m.startswith("core")))
-def test_core_module_size(module):
-    n = len(MODULES[module].read_text(encoding="utf-8").splitlines())
-    assert n <= MAX_LINES, f"{MODULES[module].relative_to(ROOT)} has {n} lines (at most {MAX_LINES})"
+def test_long_modules_are_named():
+    """A soft size check: a long module is named in a warning, so a reader can ask whether it is one job."""
+    import warnings
+    long = {m: len(p.read_text(encoding="utf-8").splitlines()) for m, p in MODULES.items()}
+    long = {m: n for m, n in long.items() if n > SOFT_LINES}
+    if long:
+        warnings.warn("modules over %d lines: %s" % (SOFT_LINES, ", ".join(f"{m} ({n})" for m, n in sorted(long.items()))))
+
+
+def _documented_layers() -> dict:
+    """docs/architecture.md's layer table (under "### Layering"): {module prefix: layer}."""
+    text = (ROOT / "docs" / "architecture.md").read_text(encoding="utf-8")
+    table = text.split("### Layering", 1)[1].split("\n\n|", 1)[1].split("\n\n", 1)[0]
+    got = {}
+    for row in table.splitlines()[2:]:
+        layer, modules = [c.strip() for c in row.strip("|").split("|")]
+        for name in modules.split(","):
+            got[name.strip().strip("`").split(" ")[0]] = int(layer)
+    return got
+
+
+def test_the_documented_layer_table_is_the_tested_one():
+    documented = _documented_layers()
+    tested = {m: layer for m, layer in LAYERS.items() if m != "core"}
+    assert documented == tested, {m: (documented.get(m), tested.get(m))
+                                  for m in documented.keys() | tested.keys() if documented.get(m) != tested.get(m)}
 
 
 def test_the_layer_table_knows_every_core_module():

@@ -23,6 +23,24 @@ def test_every_stage_has_a_subcommand_with_help(capsys):
         assert out.startswith(f"usage: ease {name}"), name
 
 
+def test_help_loads_no_pipeline():
+    """``ease --help`` and the parsers import no numpy and no stage: start-up stays a bare interpreter's."""
+    import subprocess
+    import sys
+    code = ("import sys; import core.cli; core.cli.build_parser().format_help(); "
+            "print(sorted(m for m in sys.modules if m.split('.')[0] in ('numpy', 'scipy', 'warp') "
+            "or m.split('.')[:2] in (['core', 'body'], ['core', 'design'], ['core', 'pattern'])))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
+
+
+def test_body_help_lists_the_size_charts(capsys):
+    with pytest.raises(SystemExit):
+        cli.build_parser().parse_args(["body", "--help"])
+    out = capsys.readouterr().out
+    assert "women: XS" in out and "men: XS" in out
+
+
 def test_no_command_prints_help_and_fails(capsys):
     assert cli.main([]) == 1
     assert "COMMAND" in capsys.readouterr().out

@@ -58,6 +58,11 @@ def test_pattern_and_adapt_on_the_default_body(anny, tmp_path, capsys):
     ad = load_pattern(out2)
     rep2 = json.loads((out2 / "report.json").read_text())
     assert ad.mode == "adapt" and rep2["metrics"]["flipped_triangles"] == 0
+
+    out3 = tmp_path / "no_png"                           # --no-png: the same pattern, no picture
+    assert _run(["pattern", str(SHORTS), "--out", str(out3), "--quiet", "--no-png"]) == 0
+    assert not (out3 / "pattern.png").exists()
+    assert (out3 / "pattern.json").read_bytes() == (out / "pattern.json").read_bytes()
     rs = rep2["residual_stretch"]["P3"]
     for g, v in rs.items():
         assert v["after"] <= v["before"] + 1e-9

@@ -27,11 +27,11 @@ from typing import Dict, Mapping, Optional, Union
 
 import numpy as np
 
+from ..choices import POSE_PRESETS, REFERENCE_POSE  # noqa: F401  (re-exported: the model's interface)
+
 Shape = Mapping[str, float]
 Pose = Union[str, Mapping[str, np.ndarray], None]
 
-POSE_PRESETS = ("A", "T", "P1", "P2", "P3")
-REFERENCE_POSE = "A"   # the preset every model is built in: the same instance as pose None
 #: The frame of every 3D file the project writes (body OBJs, drapes, exported garments by default).
 FRAME = "metres, +Z up, the body facing -Y, +X the body's left (EASE/Blender frame)"
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import sys
 
-from ..workflows import CONFIGS
+from ..choices import SOLVER_CONFIGS as CONFIGS
 from .common import add_quiet, console_progress, subcommand
 
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..body.model import POSE_PRESETS
+from ..choices import POSE_PRESETS
 from ..errors import BodyError
 from .common import add_quiet, console_progress, print_files, subcommand
 
@@ -116,6 +116,19 @@ def _chart_text() -> str:
                      for c in CHARTS.values())
 
 
+class _ChartsHelp(argparse.RawDescriptionHelpFormatter):
+    """``ease body --help``'s epilog with the size charts, read only when the help is shown: the charts
+    need numpy, which ``ease --help`` and every other command's parser do without."""
+
+    def add_text(self, text):
+        if text and _CHARTS in text:
+            text = text.replace(_CHARTS, _chart_text())
+        super().add_text(text)
+
+
+_CHARTS = "<size charts>"
+
+
 def add_parser(subparsers) -> None:
     p = subcommand(
         subparsers, "body", run,
@@ -123,8 +136,8 @@ def add_parser(subparsers) -> None:
         description="Write a posed body as OBJ (metres, +Z up, facing -Y) and print its measurements "
                     "(height, chest, waist, hip in cm). --all writes sizes XS..XL and poses A, T, P1, P2, P3 "
                     "and a PNG of them side by side.",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        epilog="examples:" + __doc__.split("Examples::", 1)[1].rstrip() + "\n\nsize charts (cm, height/chest/waist[/hip]):\n" + _chart_text(),
+        formatter_class=_ChartsHelp,
+        epilog="examples:" + __doc__.split("Examples::", 1)[1].rstrip() + "\n\nsize charts (cm, height/chest/waist[/hip]):\n" + _CHARTS,
     )
     p.add_argument("--model", default="anny",
                    help="body model: 'anny' (default body) or a path to an SMPL/SMPL-X .npz/.pkl or an OBJ template")

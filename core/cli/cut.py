@@ -14,8 +14,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from ..body.model import POSE_PRESETS
-from ..body.sizes import size_of
+from ..choices import POSE_PRESETS
 from ..errors import BodyError
 from .common import add_quiet, console_progress, subcommand
 
@@ -36,6 +35,7 @@ def run_cut(design_path, out, size=None, pose=None, body_name=None, progress=Non
     if size is not None:
         # A bare size is of the design's own chart (body.chart), as in ``ease transfer``.
         try:
+            from ..body.sizes import size_of
             size = size_of(size, design.body.get("chart"))
         except BodyError as exc:
             raise BodyError(f"--size: {exc}") from None

@@ -1,13 +1,13 @@
 """``ease pattern``, ``ease transfer``, ``ease adapt``: sewing patterns from a design.
 
 Each writes ``pattern.json`` (:mod:`core.pattern.io`), ``report.json``
-(SPEC metrics and stage timings) and ``pattern.png`` into ``--out``
+(SPEC metrics and stage timings) and ``pattern.png`` (not with ``--no-png``) into ``--out``
 atomically, through :mod:`core.workflows`. Heavy imports happen inside the
 commands.
 """
 from __future__ import annotations
 
-from ..workflows import CONFIGS
+from ..choices import SOLVER_CONFIGS as CONFIGS
 from .common import add_quiet, console_progress, subcommand
 
 
@@ -24,6 +24,8 @@ def _common(p) -> None:
                    help="local-global iterations (default: the configuration's, 20; fitted 300)")
     p.add_argument("--no-seam-length", action="store_true",
                    help="gather every seam: the seam-length term off (the paper's switch for gathered designs)")
+    p.add_argument("--no-png", action="store_true", help="skip pattern.png (its drawing is ~half the wall time "
+                                                           "of a small pattern)")
     add_quiet(p)
 
 
@@ -72,7 +74,7 @@ def _prepare(args, prog):
 
 def _write(args, run) -> int:
     from .. import workflows as wf
-    wf.write_pattern(args.out, run)
+    wf.write_pattern(args.out, run, preview=not args.no_png)
     print(wf.summary(run))
     return 0
 

@@ -15,6 +15,7 @@ import math
 import re
 from typing import Dict
 
+from ..choices import SOLVER_CONFIGS  # noqa: F401  (re-exported)
 from ..errors import DesignError
 
 # Ease a design may ask for. The floor is the lowest ease that drapes: with every panel at
@@ -31,10 +32,6 @@ LINE_ROLES = ("seam", "opening", "guide")  # a guide line is not cut: it only na
 BODY_PARTS = ("torso", "arm", "leg")
 TRACE_ALONG = ("arm_left", "arm_right", "leg_left", "leg_right", "torso_down", "torso_up")
 PARAMETER_KINDS = ("placement", "length", "number")
-# The solver configurations a design may name (``"solver"``) and a user may choose (``ease pattern
-# --config``, the add-on's Solver): the presets of core.pattern.config.SolverConfig.named, listed
-# here, below the pattern stage, so the design format can check the name.
-SOLVER_CONFIGS = ("improved", "paper", "stretch", "fitted", "lengths")
 AXES = ("x", "-x", "+x", "y", "-y", "+y", "z", "-z", "+z")
 KEYPOINT_KINDS = ("landmark", "triangle", "between", "trace", "mirror_of")
 
