@@ -12,7 +12,8 @@ columns are the images of the unit weft and warp. Weft and warp stretch are
 C = |F_i| - 1, shear is C = F_0 . F_1; each has compliance 1/(k A).
 Bending is the dihedral angle of two triangles (rest: flat inside a panel, the
 sewn fold across a seam), with the
-discrete-shell weight 3|e|^2/(A_a+A_b).
+weight |e|^2/(A_a+A_b): compliance 1/(bending * weight) stores bending * kappa^2 / 2 per area
+on a smoothly bent isotropic mesh (:class:`core.drape.mesh.Cloth`).
 """
 from __future__ import annotations
 
@@ -260,10 +261,43 @@ def apply_delta(x: wp.array(dtype=wp.vec3), dx: wp.array(dtype=wp.vec3)):
 
 
 @wp.kernel
+def closest_contact(points: wp.array(dtype=wp.vec3), weight: wp.array(dtype=float), mesh: wp.uint64,
+                    max_dist: float, flat: float, point: wp.array(dtype=wp.vec3), normal: wp.array(dtype=wp.vec3),
+                    hit: wp.array(dtype=int)):
+    """The contact plane of each particle: through its closest point on the body, facing the particle.
+
+    The normal is the direction from the closest point to the particle (away
+    from it where the particle is inside): on a face it is the face normal, past
+    a convex edge or corner it turns with the particle round the edge, so the
+    cloth slides off the edge instead of resting on the extended plane of the
+    last triangle. Within ``flat`` of the surface (where that direction is
+    float noise) the face normal is taken. ``hit[i]`` is 0 where the body is
+    farther than ``max_dist`` or the particle is pinned (``weight[i]`` 0).
+    """
+    i = wp.tid()
+    hit[i] = 0
+    if weight[i] == 0.0:
+        return
+    p = points[i]
+    q = wp.mesh_query_point_sign_normal(mesh, p, max_dist)
+    if not q.result:
+        return
+    c = wp.mesh_eval_position(mesh, q.face, q.u, q.v)
+    n = wp.mesh_eval_face_normal(mesh, q.face)
+    d = p - c
+    dist = wp.length(d)
+    if dist > flat:
+        n = d * (q.sign / dist)
+    point[i] = c
+    normal[i] = n
+    hit[i] = 1
+
+
+@wp.kernel
 def collide_body(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
                  point: wp.array(dtype=wp.vec3), normal: wp.array(dtype=wp.vec3),
                  active: wp.array(dtype=int), thickness: float, friction: float):
-    """Keep particles ``thickness`` outside the contact plane; Coulomb friction."""
+    """Keep particles ``thickness`` outside their contact plane (:func:`closest_contact`); Coulomb friction."""
     i = wp.tid()
     if active[i] == 0:
         return

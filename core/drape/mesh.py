@@ -39,7 +39,9 @@ class Cloth:
     pinned : (P,) bool.
     bends : (B, 4) int, particles (a, b, e0, e1) of each interior edge: a and b
         opposite, (e0, e1) the shared edge.
-    bend_weight : (B,) float, 3|e|^2 / (A_a + A_b), the discrete-shell factor (1/m^0).
+    bend_weight : (B,) float, |e|^2 / (A_a + A_b) (no unit): with it, sum(w theta^2 / 2) * bending
+        is the bending energy of a smooth surface, bending * kappa^2 / 2 per area, within about 10 %
+        on an isotropic mesh (the discrete-shell 3|e|^2/A stored 3.3 times that: bending was ~3x the preset).
     seam_pairs : (S, 2) int, global ids sewn together, for the seam-gap metric.
     garment_of_particle : (P,) int, index into ``garment_names``.
     tether_anchor : (P,) int, the nearest pinned particle along the fabric (-1: none, or pinned).
@@ -340,9 +342,9 @@ def build_cloth(pattern) -> Cloth:
     corner = lambda v, t: rest_xy[t, np.argmax(faces[t] == v[:, None], axis=1)]  # noqa: E731
     if len(bends):
         e = corner(bends[:, 3], bend_faces[:, 0]) - corner(bends[:, 2], bend_faces[:, 0])
-        bend_weight = 3.0 * np.sum(e * e, axis=1) / np.maximum(rest_area[bend_faces].sum(axis=1), 1e-16)
+        bend_weight = np.sum(e * e, axis=1) / np.maximum(rest_area[bend_faces].sum(axis=1), 1e-16)
         # slivers give huge weights (tiny areas): cap at ten times the equilateral value
-        bend_weight = np.minimum(bend_weight, 10 * 2 * np.sqrt(3.0))
+        bend_weight = np.minimum(bend_weight, 10 * 2 / np.sqrt(3.0))
     else:
         bend_weight = np.zeros(0)
 

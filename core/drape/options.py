@@ -53,7 +53,8 @@ class DrapeOptions:
         fabric distance from the nearest pin (0.01 = 1 %); None disables them.
     contact_interval : int, substeps
         Substeps between contact searches (in between, contact is resolved
-        against the plane of the closest body triangle found).
+        against the plane found: through the particle's closest point on the
+        body, facing the particle, so it follows the surface round convex edges).
     max_speed : float, m/s
         An RMS speed above this is a diverged (exploding) simulation.
     max_extent : float, m

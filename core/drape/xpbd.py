@@ -28,6 +28,9 @@ from .options import DrapeOptions
 from .schedule import growth_per_substep, initial_growth
 from .strain import face_strains
 
+# within this distance (m) of the body the contact normal is the face's (the direction to the
+# closest point is float32 noise there); farther out it is that direction (see kernels.closest_contact)
+CONTACT_FLAT = 1.0e-4
 # most self-collision candidates a particle keeps (a particle in a fold meets a few of the other layer)
 SELF_PAIRS = 16
 
@@ -63,8 +66,8 @@ class DrapeState:
     ----------
     x, v, x_prev : (P,) wp.vec3 arrays: positions (m), velocities (m/s), positions before the substep.
     grow : (1,) float array, the rest-shape growth from the skintight start (0) to the pattern (1).
-    contact_point, contact_normal, contact_active : (P,) arrays, the plane of the closest body
-        triangle of each particle (refreshed every ``contact_interval`` substeps).
+    contact_point, contact_normal, contact_active : (P,) arrays, each particle's contact plane:
+        through its closest point on the body, facing it (refreshed every ``contact_interval`` substeps).
     substeps : int, substeps taken so far (times the self-collision search).
     frames : int, frames taken so far.
     self_grid, self_dx, self_partner, self_count : self-collision buffers (None when off).
@@ -266,8 +269,9 @@ class DrapeSolver:
         finish = [self._launch(K.collide_body, n, [s.x, s.x_prev, s.contact_point, s.contact_normal,
                                                    s.contact_active, self.thickness, self.friction]),
                   self._launch(K.update_velocity, n, [s.x, s.x_prev, s.v, 1.0 / self.dt])]
-        contacts = self._launch(self._Q.closest_plane, n, [s.x, self._w, self._body.id, opts.search_distance,
-                                                           s.contact_point, s.contact_normal, s.contact_active])
+        contacts = self._launch(K.closest_contact, n, [s.x, self._w, self._body.id, opts.search_distance,
+                                                       CONTACT_FLAT, s.contact_point, s.contact_normal,
+                                                       s.contact_active])
         pairs, collide = None, []
         if self.self_radius > 0.0:
             r = self.self_radius

@@ -1,0 +1,98 @@
+"""Body contact that follows the surface, and the textile tests (core.drape.textile, SPEC item 11)."""
+import numpy as np
+import pytest
+
+from core.drape import DrapeSolver
+from core.drape import textile as T
+from core.drape.mesh import build_cloth
+
+
+def _ledge_drape(edge=0.01, frames=60):
+    """A cotton strip clamped on a box whose top ends in a 90 degree edge at x = 0; 6 cm hang past it."""
+    uv, faces = T.strip_mesh([-0.03, 0.0, 0.06], 0.03, edge)
+    pattern = T.sheet_pattern(uv, faces, 0.00303, uv[:, 0] <= -0.02, "cotton")
+    cloth = build_cloth(pattern)
+    body = T.box_body((-0.2, -0.1, -0.1), (0.0, 0.1, 0.0))
+    solver = DrapeSolver(cloth, *body, "cotton", {"max_frames": frames})
+    state = solver.state()
+    for _ in range(frames):
+        solver.step(state)
+    return uv, cloth, state.x.numpy().astype(float)
+
+
+def test_cloth_falls_off_a_convex_edge():
+    # contact against the extended plane of the nearest triangle held the strip flat on an invisible
+    # shelf up to the 3 cm search distance past the edge; the closest point on the mesh lets it fall
+    uv, cloth, x = _ledge_drape()
+    past = cloth.particle_of[np.nonzero(uv[:, 0] >= 0.02 - 1e-9)[0]]
+    # 2 cm and more past the edge, within the old shelf's reach: well below the top face
+    assert x[past, 2].max() < -0.005
+    tip = cloth.particle_of[np.nonzero(uv[:, 0] >= 0.06 - 1e-9)[0]]
+    assert x[tip, 2].mean() < -0.03
+    # and nothing went through the box: above its top or outside its side face
+    assert np.all((x[:, 2] > -1e-3) | (x[:, 0] > -1e-3))
+
+
+def test_contact_plane_turns_round_the_edge():
+    # a particle beside and above the edge: its plane is through the edge, facing it (45 degrees)
+    from core.drape import kernels as K
+    from core.geom.queries import warp_mesh
+    wp = K.wp
+    v, f = T.box_body((-0.2, -0.1, -0.1), (0.0, 0.1, 0.0))
+    mesh = warp_mesh(v, f, device="cpu")
+    pts = np.array([[0.01, 0.0, 0.01], [-0.05, 0.0, 0.002], [0.004, 0.0, -0.05]])
+    n = len(pts)
+    point, normal, hit = (wp.zeros(n, dtype=wp.vec3, device="cpu"), wp.zeros(n, dtype=wp.vec3, device="cpu"),
+                          wp.zeros(n, dtype=int, device="cpu"))
+    wp.launch(K.closest_contact, n, inputs=[wp.array(pts, dtype=wp.vec3, device="cpu"),
+                                            wp.ones(n, dtype=float, device="cpu"), mesh.id, 0.03, 1e-4,
+                                            point, normal, hit], device="cpu")
+    nrm, pt = normal.numpy(), point.numpy()
+    assert hit.numpy().tolist() == [1, 1, 1]
+    assert np.allclose(pt[0], [0.0, 0.0, 0.0], atol=1e-6)
+    assert np.allclose(nrm[0], [np.sqrt(0.5), 0.0, np.sqrt(0.5)], atol=1e-5)
+    assert np.allclose(nrm[1], [0.0, 0.0, 1.0], atol=1e-5)    # over the top face: its normal
+    assert np.allclose(nrm[2], [1.0, 0.0, 0.0], atol=1e-5)    # beside the side face: its normal
+
+
+def test_shadow_area_and_nodes():
+    uv, faces = T.disc_mesh(0.15, 0.01, 0.09, seed=1)
+    # the rasterised disc (1 mm cells) is the disc's area within the polygon's chord error
+    assert T.shadow_area(uv, faces) == pytest.approx(np.pi * 0.15 ** 2, rel=0.01)
+    # a rim with 7 bumps of 1 cm: 7 nodes; a circle: none
+    th = np.linspace(-np.pi, np.pi, 400, endpoint=False)
+    r = 0.12 + 0.01 * np.cos(7 * th + 0.3)
+    assert T.count_nodes(np.column_stack([r * np.cos(th), r * np.sin(th)]))[0] == 7
+    assert T.count_nodes(0.12 * np.column_stack([np.cos(th), np.sin(th)]))[0] == 0
+
+
+def test_disc_mesh_has_the_clamp_ring():
+    uv, faces = T.disc_mesh(0.15, 0.01, 0.09)
+    r = np.hypot(uv[:, 0], uv[:, 1])
+    assert np.sum(np.isclose(r, 0.09)) >= 50 and np.isclose(r.max(), 0.15)
+    e = uv[faces[:, [1, 2, 0]]] - uv[faces]
+    lengths = np.linalg.norm(e, axis=2)
+    assert 0.007 < np.median(lengths) < 0.013
+
+
+@pytest.fixture(scope="module")
+def cusick_cotton():
+    return T.cusick("cotton", edge=0.01, max_frames=300)
+
+
+def test_cusick_settles_by_energy_and_displacement(cusick_cotton):
+    r = cusick_cotton
+    assert r["settled"]
+    assert r["energy"] < T.SETTLE_ENERGY and r["move_mm"] < T.SETTLE_MOVE * 1e3
+    # the clamp holds the centre; the annulus hangs: the shadow lies between the support and the flat disc
+    assert 0.0 < r["dc_pct"] < 100.0
+    x = r["positions"]
+    assert x[:, 2].min() < -0.02
+    assert r["nodes"] >= 3
+
+
+def test_settle_stops_only_when_still():
+    # a drape cut off early is not settled, and says so
+    r = T.cusick("cotton", edge=0.015, max_frames=5)
+    assert not r["settled"] and r["frames"] == 5
+    assert r["energy"] > T.SETTLE_ENERGY or r["move_mm"] > T.SETTLE_MOVE * 1e3
