@@ -123,3 +123,44 @@ def test_looser_pattern_has_larger_gap(body):
 def test_radius_profile_is_cylindrical_at_the_hips():
     z = np.linspace(0.6, 0.95, 20)
     assert np.allclose(radius(z), HIP_RADIUS)
+
+
+def _sheet(n=24, size=0.2):
+    g = np.linspace(0.0, size, n + 1)
+    u, v = np.meshgrid(g, g, indexing="ij")
+    faces = []
+    for i in range(n):
+        for j in range(n):
+            a, b, c, d = i * (n + 1) + j, (i + 1) * (n + 1) + j, (i + 1) * (n + 1) + j + 1, i * (n + 1) + j + 1
+            faces += [[a, b, c], [a, c, d]]
+    return u.ravel(), v.ravel(), np.asarray(faces)
+
+
+def test_fold_measures_flat_cylinder_and_crease():
+    from core.metrics.drape import fold_measures
+    u, v, f = _sheet()
+    flat = fold_measures(np.column_stack([u, v, np.zeros_like(u)]), f)
+    assert flat["mean_dihedral_deg"] == pytest.approx(0.0, abs=1e-9) and flat["edges_over_30_pct"] == 0.0
+    assert flat["mean_curvature_per_m"] == pytest.approx(0.0, abs=1e-9)
+    # rolled round a cylinder of radius R: mean curvature 1 / (2 R), nothing folded
+    R = 0.08
+    cyl = np.column_stack([R * np.sin(u / R), v, R * (1 - np.cos(u / R))])
+    m = fold_measures(cyl, f)
+    assert m["mean_curvature_per_m"] == pytest.approx(1.0 / (2 * R), rel=0.05)
+    assert m["edges_over_30_pct"] == 0.0 and 0.0 < m["mean_dihedral_deg"] < 10.0
+    # folded sharply at u = 0.1 (90 degrees): the crease edges (one row of 24 of the 1680) are over 30
+    crease = np.column_stack([np.minimum(u, 0.1), v, np.maximum(u - 0.1, 0.0)])
+    c = fold_measures(crease, f)
+    assert c["edges"] == 1680
+    assert c["edges_over_30_pct"] == pytest.approx(100.0 * 24 / 1680)
+    # the crease bends 90 degrees over 0.2 m of edge: sum |theta| |e| / (2 A) = (pi/2) 0.2 / (2 * 0.04)
+    assert c["mean_curvature_per_m"] == pytest.approx(np.pi / 2 * 0.2 / 0.08, rel=1e-6)
+
+
+def test_drape_report_has_fold_measures(body):
+    skirt = tube_skirt(1.2, n_rows=8, n_cols=8)
+    res = drape(skirt, *body, options={"max_frames": 15})
+    m = summary(drape_metrics(res, *body, pattern=skirt))
+    for scope in (m["all"], m["garments"]["skirt"]):
+        assert set(scope["folds"]) == {"mean_dihedral_deg", "edges_over_30_pct", "mean_curvature_per_m", "edges"}
+        assert scope["folds"]["edges"] > 0 and scope["folds"]["mean_curvature_per_m"] > 0

@@ -9,6 +9,11 @@
 - seam gap: distance between the two sides of every sewn vertex pair after
   the drape (0 by construction when seams are welded; measured anyway).
 - strain: per-vertex weft and warp stretch relative to the pattern.
+- folds (:func:`fold_measures`): over the interior edges of the draped mesh,
+  the mean dihedral angle (degrees, 0 flat), the share of edges bent over 30
+  degrees, and the mean curvature sum|theta_e| |e| / (2 A) (1/m: the
+  area-weighted mean of |H| = |k1 + k2| / 2 on a smooth surface; 1/(2R) on a
+  cylinder of radius R).
 
 Means and standard deviations of the gap are over body vertices (as the
 paper's gap graph); strain statistics are area-weighted over triangles.
@@ -139,6 +144,37 @@ def _area_stats_pct(values: np.ndarray, area: np.ndarray) -> dict:
     return {"mean": mean, "std": std, "p95": p95, "max": float(v.max())}
 
 
+FOLD_ANGLE = 30.0  # degrees: an edge bent more than this counts as folded
+
+
+def fold_measures(positions: np.ndarray, faces: np.ndarray) -> dict:
+    """How folded a draped mesh is (see the module notes).
+
+    Parameters
+    ----------
+    positions : (N, 3) float, m. faces : (T, 3) int (slivers and all). Edges count where two
+        triangles share both vertex ids: in a drape result, seams whose sides keep their own ids
+        are left out.
+
+    Returns
+    -------
+    dict: ``mean_dihedral_deg``, ``edges_over_30_pct``, ``mean_curvature_per_m``, ``edges`` (the count).
+    """
+    from ..drape.mesh import dihedral_angles, interior_edges
+    x = np.asarray(positions, dtype=float)
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    bends, _ = interior_edges(f) if len(f) else (np.zeros((0, 4), np.int64), None)
+    area = float(triangle_areas(x, f).sum()) if len(f) else 0.0
+    if len(bends) == 0 or area <= 0:
+        return {"mean_dihedral_deg": 0.0, "edges_over_30_pct": 0.0, "mean_curvature_per_m": 0.0, "edges": 0}
+    theta = np.abs(dihedral_angles(x, bends))
+    length = np.linalg.norm(x[bends[:, 3]] - x[bends[:, 2]], axis=1)
+    deg = np.degrees(theta)
+    return {"mean_dihedral_deg": float(deg.mean()),
+            "edges_over_30_pct": 100.0 * float(np.mean(deg > FOLD_ANGLE)),
+            "mean_curvature_per_m": float(np.sum(theta * length) / (2.0 * area)), "edges": int(len(bends))}
+
+
 def drape_metrics(result, body_vertices: np.ndarray, body_faces: np.ndarray, pattern=None,
                   cover_tolerance: float = 0.004) -> dict:
     """All fit measurements of a :class:`core.drape.DrapeResult`, per garment and overall.
@@ -148,7 +184,7 @@ def drape_metrics(result, body_vertices: np.ndarray, body_faces: np.ndarray, pat
     dict with, per garment (``"garments"``) and for all (``"all"``): ``gap_mm``
     (mean, std, max, n body vertices), ``penetration_pct``, ``seam_gap_mm`` (max,
     mean), ``strain_weft_pct`` / ``strain_warp_pct`` (area-weighted mean, std, p95,
-    max). Arrays for maps: ``vertex_gap`` (N,) m (per garment vertex: its distance
+    max), ``folds`` (:func:`fold_measures`). Arrays for maps: ``vertex_gap`` (N,) m (per garment vertex: its distance
     outside the body, 0 inside), ``body_gap`` (V,) m (0 where not covered).
     """
     bv = np.asarray(body_vertices, dtype=float)
@@ -179,6 +215,7 @@ def drape_metrics(result, body_vertices: np.ndarray, body_faces: np.ndarray, pat
             "seam_gap_mm": {"max": float(sg.max(initial=0.0) * 1000), "mean": float(sg.mean() * 1000) if len(sg) else 0.0},
             "strain_weft_pct": _area_stats_pct(result.face_strain_weft[sel], area[sel]),
             "strain_warp_pct": _area_stats_pct(result.face_strain_warp[sel], area[sel]),
+            "folds": fold_measures(x, gf),
         }
     sg = seam_gap(x, result.seam_pairs)
     out["all"] = {
@@ -187,6 +224,7 @@ def drape_metrics(result, body_vertices: np.ndarray, body_faces: np.ndarray, pat
         "seam_gap_mm": {"max": float(sg.max(initial=0.0) * 1000), "mean": float(sg.mean() * 1000) if len(sg) else 0.0},
         "strain_weft_pct": _area_stats_pct(result.face_strain_weft, area),
         "strain_warp_pct": _area_stats_pct(result.face_strain_warp, area),
+        "folds": fold_measures(x, faces),
     }
     if pattern is not None:
         sides = seam_side_distance(pattern, x)
@@ -216,6 +254,6 @@ def summary(metrics: dict) -> dict:
     return {k: v for k, v in metrics.items() if not isinstance(v, np.ndarray)}
 
 
-__all__ = ["covered_body_vertices", "post_drape_gap",
+__all__ = ["covered_body_vertices", "post_drape_gap", "fold_measures", "FOLD_ANGLE",
            "penetration", "seam_gap", "seam_side_distance", "drape_metrics", "summary",
            "PENETRATION_DEPTH"]
