@@ -1,8 +1,10 @@
 """``ease export DESIGN --sizes XS,S,M,L,XL``: the graded nest of a design (all sizes in one file).
 
 The transfers to each size run through :mod:`core.workflows` (one cut, one
-solver, the reference pattern as the start of every transfer); the files are
-written by :func:`core.export.graded.export_graded`.
+solver, the reference pattern as the start of every transfer; the design's
+own size is the reference pattern itself, as ``ease pattern`` writes it); the
+files are written by :func:`core.export.graded.export_graded`, with the
+design's own size as the sample size the grade points come from.
 """
 from __future__ import annotations
 
@@ -58,7 +60,8 @@ def run_graded(args) -> int:
         span = sub(progress, 0.3 + 0.6 * k / len(sizes), 0.3 + 0.6 * (k + 1) / len(sizes))
         patterns[size] = wf.transfer(prep, size, solver=solver, start=ref, progress=span).pattern
     allowance = wf.export_allowance(ref, args.allowance, args.hem)
+    own = next((s for s in sizes if wf.is_own_size(prep, s)), None)
     files = export_graded(patterns, args.out, allowance=allowance, notch_spacing=args.notch_spacing,
-                          progress=sub(progress, 0.9, 1.0))
+                          progress=sub(progress, 0.9, 1.0), sample=own)
     print_files(files)
     return 0

@@ -138,9 +138,8 @@ def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, si
         for loop in piece.sew:
             add_poly(blk, _mm(loop), close=True, dxfattribs={"layer": L["sew"]})
         # turn points tell pattern CAD which vertices are corners (the rest are curve points)
-        for loop in piece.cut + piece.sew:
-            for q in _mm(loop[turn_points(loop, TURN_DEG)]):
-                blk.add_point(q, dxfattribs={"layer": L["turn"]})
+        for q in _mm(piece_turn_points(piece)):
+            blk.add_point(q, dxfattribs={"layer": L["turn"]})
         for n in piece.notches:
             a, b = _mm(n.segment)
             blk.add_line(a, b, dxfattribs={"layer": L["notch"]})
@@ -168,6 +167,16 @@ def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, si
                          dxfattribs={"layer": L["boundary"]})
     set_extents(doc)
     return doc
+
+
+def piece_turn_points(piece) -> np.ndarray:
+    """(t, 2) m: the corners a piece's AAMA block marks (layer 2): its own ``turn_points`` where set (a graded
+    nest's, shared by every size), else the cut lines' and then the sew lines' vertices turning by more than
+    :data:`TURN_DEG`, loop by loop."""
+    if piece.turn_points is not None:
+        return np.asarray(piece.turn_points, float).reshape(-1, 2)
+    found = [loop[turn_points(loop, TURN_DEG)] for loop in piece.cut + piece.sew]
+    return np.concatenate(found) if found else np.zeros((0, 2))
 
 
 def set_extents(doc) -> tuple:

@@ -7,6 +7,17 @@ of its grain line, with the grain lines on one line (every piece frame has
 the grain along +y, :mod:`core.export.pieces`). The stacks are laid out on
 one sheet.
 
+Grade points: every size of a piece has the same notches and the same
+corners (AAMA turn points), in the same order, as CAD grade rules work point
+to point. They are the sample size's (the design's own size, else M, else
+the middle one), which is drawn exactly as ``ease export`` draws it alone:
+each seam's notches are those of the sample's seam, their distances from the
+seam's ends scaled by the seam's length in each size
+(:func:`core.export.notches.notch_positions` ``base``); each corner is the
+same sew-line vertex (the sizes share one mesh), or for a corner of the cut
+line the cut-line vertex nearest to where the sample's corner lies from its
+nearest sew-line vertex.
+
 Files:
 
 ======================= ======================================================
@@ -38,7 +49,9 @@ from ..pattern.types import Pattern
 from ..progress import Progress, report, sub
 from . import dxf as dxf_mod
 from . import pdf as pdf_mod
+from .dxf import piece_turn_points
 from .layout import LAYOUT_MARGIN, SHEET_WIDTH
+from .notches import seam_lengths
 from .pieces import PieceDrawing, ascii_text, build_pieces
 from .svg import STROKE_MM, _fmt, _path
 
@@ -57,7 +70,7 @@ def _shifted(piece: PieceDrawing, d: np.ndarray) -> PieceDrawing:
         piece, sew=[l + d for l in piece.sew], cut=[l + d for l in piece.cut], fold=[f + d for f in piece.fold],
         notches=[dataclasses.replace(n, point=n.point + d, segment=n.segment + d) for n in piece.notches],
         grain=piece.grain + d, arrows=[a + d for a in piece.arrows], label_at=piece.label_at + d,
-        bbox=piece.bbox + d)
+        bbox=piece.bbox + d, turn_points=None if piece.turn_points is None else piece.turn_points + d)
 
 
 def reference_point(piece: PieceDrawing) -> np.ndarray:
@@ -65,30 +78,80 @@ def reference_point(piece: PieceDrawing) -> np.ndarray:
     return 0.5 * (piece.grain[0] + piece.grain[1])
 
 
+def sample_size(sizes, own: Optional[str] = None) -> str:
+    """The graded nest's sample size (AAMA ``Sample Size``, the size the grade points come from): ``own``
+    (the design's own size) when among ``sizes``, else M, else the middle size."""
+    sizes = [str(s) for s in sizes]
+    if own is not None and str(own) in sizes:
+        return str(own)
+    return "M" if "M" in sizes else sizes[len(sizes) // 2]
+
+
+def _nearest(points: np.ndarray, to: np.ndarray) -> np.ndarray:
+    """Index into ``points`` (n, 2) of the nearest point to each of ``to`` (t, 2)."""
+    return np.argmin(np.linalg.norm(to[:, None, :] - points[None, :, :], axis=2), axis=1)
+
+
+def graded_turn_points(sample: PieceDrawing, piece: PieceDrawing) -> np.ndarray:
+    """(t, 2) m: the sample size's corners (:func:`core.export.dxf.piece_turn_points`) on another size's
+    drawing ``piece`` of the same piece, in the sample's order.
+
+    A corner on the sample's sew line is the same sew-line vertex (the sizes share the mesh); a corner
+    of the cut line is the cut-line vertex of ``piece`` nearest to the point that lies from its nearest
+    sew-line vertex as the sample's corner lies from it.
+    """
+    own = piece_turn_points(sample)
+    if piece is sample or not len(own):
+        return own
+    if [len(i) for i in sample.sew_ids] != [len(i) for i in piece.sew_ids] or \
+            any(not np.array_equal(a, b) for a, b in zip(sample.sew_ids, piece.sew_ids)):
+        raise ExportError(f"piece {piece.name}: its sew line's vertices differ between sizes; "
+                          f"expected the sizes of one design")
+    sew_s, sew_p = np.concatenate(sample.sew), np.concatenate(piece.sew)
+    cut_p = np.concatenate(piece.cut)
+    j = _nearest(sew_s, own)
+    out = sew_p[j] + (own - sew_s[j])
+    on_cut = np.linalg.norm(own - sew_s[j], axis=1) > 1e-9
+    if on_cut.any():
+        out[on_cut] = cut_p[_nearest(cut_p, out[on_cut])]
+    return out
+
+
 def graded_stacks(patterns: Mapping[str, Pattern], allowance=None,
-                  notch_spacing: Optional[float] = None, progress: Optional[Progress] = None
-                  ) -> Dict[str, Dict[str, PieceDrawing]]:
+                  notch_spacing: Optional[float] = None, progress: Optional[Progress] = None,
+                  sample: Optional[str] = None) -> Dict[str, Dict[str, PieceDrawing]]:
     """Piece name -> {size: drawing}, each size moved so its reference point is at the origin.
+
+    Every size has the sample size's grade points (module docstring): the same notches and turn points
+    per piece, in the same order.
 
     Parameters
     ----------
     patterns : {size: Pattern}, in size order; every size must have the same pieces.
     allowance, notch_spacing : see :func:`core.export.pieces.build_pieces`.
+    sample : the sample size (:func:`sample_size`), None: M, else the middle size.
     """
     if len(patterns) < 1:
         raise ExportError("sizes: expected at least one size to grade")
-    stacks: Dict[str, Dict[str, PieceDrawing]] = {}
+    sample = sample_size(patterns, sample)
+    grade_from = seam_lengths(patterns[sample])
+    order = [sample] + [s for s in patterns if str(s) != sample]
+    drawn: Dict[str, list] = {}
     names = None
-    for k, (size, pattern) in enumerate(patterns.items()):
-        pieces = build_pieces(pattern, allowance, notch_spacing, progress=sub(progress, k / len(patterns),
-                                                                              (k + 1) / len(patterns)))
+    for k, size in enumerate(order):
+        pieces = build_pieces(patterns[size], allowance, notch_spacing, grade_from=grade_from,
+                              progress=sub(progress, k / len(patterns), (k + 1) / len(patterns)))
         got = [p.name for p in pieces]
         if names is None:
             names = got
         elif got != names:
-            raise ExportError(f"size {size}: pieces {', '.join(got)} differ from the first size's "
+            raise ExportError(f"size {size}: pieces {', '.join(got)} differ from size {sample}'s "
                               f"({', '.join(names)}); expected the sizes of one design")
-        for p in pieces:
+        drawn[str(size)] = pieces
+    stacks: Dict[str, Dict[str, PieceDrawing]] = {}
+    for size in patterns:
+        for own, p in zip(drawn[sample], drawn[str(size)]):
+            p = dataclasses.replace(p, turn_points=graded_turn_points(own, p))
             stacks.setdefault(p.name, {})[str(size)] = _shifted(p, -reference_point(p))
     return stacks
 
@@ -99,8 +162,9 @@ def _layout(stacks: Dict[str, Dict[str, PieceDrawing]]) -> Layout:
     return layout_pieces(boxes, SHEET_WIDTH, LAYOUT_MARGIN)
 
 
-def graded_dxf(stacks, layout: Layout, style: str) -> str:
-    """ASTM D6673 DXF (R2000, mm) with one block per piece per size, the size named in each block."""
+def graded_dxf(stacks, layout: Layout, style: str, sample: Optional[str] = None) -> str:
+    """ASTM D6673 DXF (R2000, mm) with one block per piece per size, the size named in each block;
+    ``sample``: the ``Sample Size`` (:func:`sample_size`)."""
     sizes = list(next(iter(stacks.values())))
     flat, offsets, owner = [], [], []
     for (name, stack), off in zip(stacks.items(), layout.offsets):
@@ -109,7 +173,7 @@ def graded_dxf(stacks, layout: Layout, style: str) -> str:
             offsets.append(off)
             owner.append((name, size))
     lay = Layout(offsets=np.array(offsets), size=layout.size, reserved=None)
-    sample = "M" if "M" in sizes else sizes[len(sizes) // 2]
+    sample = sample_size(sizes, sample)
     stream = io.StringIO()
     with dxf_mod._fixed_metadata():
         doc = dxf_mod.astm_document(flat, lay, style, sample, "R2000")
@@ -222,24 +286,29 @@ def graded_pdf(stacks, layout: Layout, title: str) -> bytes:
 
 
 def export_graded(patterns: Mapping[str, Pattern], out_dir, allowance=None, notch_spacing: Optional[float] = None,
-                  title: Optional[str] = None, progress: Optional[Progress] = None) -> List[Path]:
+                  title: Optional[str] = None, progress: Optional[Progress] = None,
+                  sample: Optional[str] = None) -> List[Path]:
     """Write the graded nest of ``{size: Pattern}`` (DXF-AAMA, SVG, PDF, graded.json) into ``out_dir`` atomically.
 
-    Returns the written paths.
+    ``sample``: the size the grade points come from (:func:`sample_size`; the design's own size). Returns
+    the written paths.
     """
-    stacks = graded_stacks(patterns, allowance, notch_spacing, progress=sub(progress, 0.0, 0.6))
+    sample = sample_size(patterns, sample)
+    stacks = graded_stacks(patterns, allowance, notch_spacing, progress=sub(progress, 0.0, 0.6), sample=sample)
     first = next(iter(patterns.values()))
     title = title or f"{first.style or 'pattern'} graded"
     layout = _layout(stacks)
     report(progress, 0.6, "rendering the graded nest")
-    summary = {"title": title, "unit": "mm", "sizes": list(patterns), "reference_point": "middle of the grain line",
+    summary = {"title": title, "unit": "mm", "sizes": list(patterns), "sample_size": sample,
+               "reference_point": "middle of the grain line",
                "pieces": {name: {size: {"sew_line_mm": round(sum(polyline_length(l, closed=True) for l in d.sew)
                                                              * 1000, 2),
                                         "cut_line_mm": round(sum(polyline_length(l, closed=True) for l in d.cut)
-                                                             * 1000, 2)}
+                                                             * 1000, 2),
+                                        "notches": len(d.notches), "turn_points": len(d.turn_points)}
                                  for size, d in stack.items()} for name, stack in stacks.items()},
                "sheet_mm": (np.asarray(layout.size) * 1000).round(1).tolist()}
-    files = {"graded_astm.dxf": graded_dxf(stacks, layout, title).encode("ascii", "replace"),
+    files = {"graded_astm.dxf": graded_dxf(stacks, layout, title, sample).encode("ascii", "replace"),
              "graded.svg": graded_svg(stacks, layout, title).encode("utf-8"),
              "graded.pdf": graded_pdf(stacks, layout, title),
              "graded.json": (dumps_json(summary) + "\n").encode("utf-8")}
@@ -248,5 +317,5 @@ def export_graded(patterns: Mapping[str, Pattern], out_dir, allowance=None, notc
     return paths
 
 
-__all__ = ["graded_stacks", "reference_point", "graded_dxf", "graded_svg", "graded_pdf", "export_graded",
-           "SIZE_COLOURS"]
+__all__ = ["graded_stacks", "reference_point", "sample_size", "graded_turn_points", "graded_dxf", "graded_svg",
+           "graded_pdf", "export_graded", "SIZE_COLOURS"]

@@ -13,7 +13,7 @@ right piece still print once and a symmetric piece as its half on the fold
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Dict, List, Tuple
+from typing import Dict, List, Mapping, Optional, Tuple
 
 import numpy as np
 
@@ -73,7 +73,7 @@ class Notch:
 
 
 def notch_positions(length_a: float, length_b: float, spacing: float = DEFAULT_NOTCH_SPACING,
-                    gathered: bool = False) -> Tuple[np.ndarray, np.ndarray]:
+                    gathered: bool = False, base: Optional[float] = None) -> Tuple[np.ndarray, np.ndarray]:
     """Arc lengths of the notches on the two sides of a seam.
 
     Both sides get the seam ends and interior notches ``spacing, 2 spacing,
@@ -97,21 +97,29 @@ def notch_positions(length_a: float, length_b: float, spacing: float = DEFAULT_N
     length_a, length_b : float, the lengths of the two sides, metres.
     spacing : float, metres between interior notches (0: ends only).
     gathered : bool, see above.
+    base : float or None, metres: grade from a seam of this length (the shorter side of the
+        same seam in a graded nest's sample size): the notches are those of a seam ``base``
+        long, their distances from the ends scaled by ``min(length_a, length_b) / base``, so
+        every size of a graded nest has the same notches (grade points) in the same order
+        and the sample size has exactly its own. None: this seam's own rule.
 
     Returns
     -------
     s_a, s_b : (k,) float arrays of equal length, metres from each side's first vertex.
     """
     lmin = min(length_a, length_b)
+    rule = lmin if base is None else float(base)
     head, middle = [], []
     if spacing > 0:
         k = 1
-        while k * spacing <= 0.5 * lmin - 0.125 * spacing:
+        while k * spacing <= 0.5 * rule - 0.125 * spacing:
             head.append(k * spacing)
             k += 1
-        if lmin - 2 * len(head) * spacing > 1.25 * spacing:
+        if rule - 2 * len(head) * spacing > 1.25 * spacing:
             middle = [0.5]
     head = np.array(head)
+    if base is not None and rule > 0:
+        head = head * (lmin / rule)
 
     def side(length: float) -> np.ndarray:
         if gathered and lmin > 0:
@@ -124,7 +132,8 @@ def notch_positions(length_a: float, length_b: float, spacing: float = DEFAULT_N
 
 def piece_notches(pattern: Pattern, panel: PatternPanel, xy: np.ndarray, loops: List[np.ndarray],
                   table: Dict[Tuple[int, int], Tuple[int, int]], edge_w: List[np.ndarray],
-                  cut: List[np.ndarray], spacing: float = DEFAULT_NOTCH_SPACING) -> List[Notch]:
+                  cut: List[np.ndarray], spacing: float = DEFAULT_NOTCH_SPACING,
+                  grade_from: Optional[Mapping[str, float]] = None) -> List[Notch]:
     """The notches of every seam side on one piece, in seam order.
 
     Each slit starts on the cut line straight out from the notch point and
@@ -139,6 +148,8 @@ def piece_notches(pattern: Pattern, panel: PatternPanel, xy: np.ndarray, loops: 
     edge_w : list of (k,) float, allowance per sew edge (m).
     cut : list of (m, 2) float, the cut line of each loop (piece frame, m).
     spacing : float, metres between interior notches (see :func:`notch_positions`).
+    grade_from : seam name -> the sample size's seam length (:func:`seam_lengths`) in a graded
+        nest: each seam's notches are graded from it (``base`` of :func:`notch_positions`).
     """
     notches: List[Notch] = []
     for seam, side, ids in seam_sides(pattern, panel.name):
@@ -146,7 +157,8 @@ def piece_notches(pattern: Pattern, panel: PatternPanel, xy: np.ndarray, loops: 
         other_ids = np.asarray(seam.verts_b if side == "a" else seam.verts_a, int)
         la = polyline_length(xy[ids])
         lb = polyline_length(np.asarray(other.uv, float)[other_ids])
-        s_here, _ = notch_positions(la, lb, spacing, gathered=bool(getattr(seam, "gathered", False)))
+        s_here, _ = notch_positions(la, lb, spacing, gathered=bool(getattr(seam, "gathered", False)),
+                                    base=None if grade_from is None else grade_from.get(seam.name))
         pts, edges, _ = point_at_length(xy[ids], s_here)
         for i, (s, q, e) in enumerate(zip(s_here, pts, edges)):
             li, ei = table[(int(ids[e]), int(ids[e + 1]))]
@@ -162,6 +174,19 @@ def piece_notches(pattern: Pattern, panel: PatternPanel, xy: np.ndarray, loops: 
             notches.append(Notch(seam=seam.name, side=side, s=float(s), point=q, normal=nrm,
                                  segment=slit(q, nrm, cut[li], edge_w[li][ei])))
     return notches
+
+
+def seam_lengths(pattern: Pattern) -> Dict[str, float]:
+    """Seam name -> the length (m) of its shorter side, the length :func:`notch_positions` places
+    notches by (darts left out, as in :func:`core.export.boundary.seam_sides`)."""
+    out = {}
+    for seam in pattern.seams:
+        if seam.kind == "dart":
+            continue
+        sides = [(seam.panel_a, seam.verts_a), (seam.panel_b, seam.verts_b)]
+        out[seam.name] = min(polyline_length(np.asarray(pattern.panel(p).uv, float)[np.asarray(ids, int)])
+                             for p, ids in sides)
+    return out
 
 
 def _chord_normal(side: np.ndarray, s: float, edge_normal: np.ndarray) -> np.ndarray:

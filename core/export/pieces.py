@@ -17,7 +17,7 @@ from __future__ import annotations
 import dataclasses
 import unicodedata
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional
+from typing import Dict, List, Mapping, Optional
 
 import numpy as np
 
@@ -63,6 +63,9 @@ class PieceDrawing:
     mirror_gaps : dict, for a piece of a declared pair (``mirror_of`` either way): the other piece's name ->
         how far (m) the right piece lies from the left one's mirror image (inf: their drawings differ in kind),
         :func:`core.export.mirror_check.mirror_gap`; the label and the tiled PDF's print set follow it.
+    turn_points : (t, 2) float or None, the corners (AAMA turn points) the DXF marks; None: the vertices
+        where the cut and sew lines turn by more than :data:`core.export.dxf.TURN_DEG` (a graded nest sets
+        the sample size's corners on every size, :mod:`core.export.graded`).
     """
     name: str
     garment: str
@@ -82,6 +85,7 @@ class PieceDrawing:
     bbox: np.ndarray = field(default_factory=lambda: np.zeros((2, 2)))
     darts: List[DartDrawing] = field(default_factory=list)
     mirror_gaps: Dict[str, float] = field(default_factory=dict)
+    turn_points: Optional[np.ndarray] = None
 
 
 def ascii_text(text: str) -> str:
@@ -166,7 +170,8 @@ def _label(pattern: Pattern, panel: PatternPanel, quantity: int, folded: bool,
 
 def build_piece(pattern: Pattern, panel: PatternPanel, widths: Dict[str, float],
                 notch_spacing: float = DEFAULT_NOTCH_SPACING,
-                mitre_limit: float = MITRE_LIMIT, warnings: Optional[List[str]] = None) -> PieceDrawing:
+                mitre_limit: float = MITRE_LIMIT, warnings: Optional[List[str]] = None,
+                grade_from: Optional[Mapping[str, float]] = None) -> PieceDrawing:
     """The drawing of one piece: sew and cut lines, notches, grain line, label.
 
     Parameters
@@ -178,6 +183,8 @@ def build_piece(pattern: Pattern, panel: PatternPanel, widths: Dict[str, float],
     mitre_limit : float, see :func:`core.geom.polygon.offset_loop`.
     warnings : list or None; when given, a cut line that does not fit is drawn
         anyway and the problem appended here (see :func:`core.export.allowance.cut_line`).
+    grade_from : seam name -> length (m) to grade the notches from (a graded nest's sample size,
+        :func:`core.export.notches.piece_notches`), or None.
     """
     rot = grain_rotation(panel.grain)
     xy = np.asarray(panel.uv, float) @ rot.T
@@ -192,7 +199,7 @@ def build_piece(pattern: Pattern, panel: PatternPanel, widths: Dict[str, float],
     folds = [] if fold is None else [xy[fold]]
     sew = [xy[b] for b in loops]
     cut = piece_cut_lines(panel.name, sew, edge_w, mitre_limit, warnings)
-    notches = piece_notches(pattern, panel, xy, loops, table, edge_w, cut, notch_spacing)
+    notches = piece_notches(pattern, panel, xy, loops, table, edge_w, cut, notch_spacing, grade_from)
     drawn = [dart_drawing(panel, s, xy) for s in darts]
     notches += _mouth_notches(darts, mouths, xy, loops, cut, edge_w)
     # xy is already in the grain frame: the grain is +y there
@@ -279,7 +286,8 @@ def resolve_notch_spacing(notch_spacing, pattern: Pattern) -> float:
 
 
 def build_pieces(pattern: Pattern, allowance=None, notch_spacing: Optional[float] = None,
-                 progress=None, warnings: Optional[List[str]] = None) -> List[PieceDrawing]:
+                 progress=None, warnings: Optional[List[str]] = None,
+                 grade_from: Optional[Mapping[str, float]] = None) -> List[PieceDrawing]:
     """:func:`build_piece` for every piece of a validated pattern, in pattern order.
 
     Parameters
@@ -291,13 +299,14 @@ def build_pieces(pattern: Pattern, allowance=None, notch_spacing: Optional[float
     progress : ``progress(fraction, message)`` callback.
     warnings : None raises on a cut line that does not fit; a list collects
         the problems instead (lenient export).
+    grade_from : see :func:`build_piece`.
     """
     widths = resolve_allowance(allowance, pattern)
     notch_spacing = resolve_notch_spacing(notch_spacing, pattern)
     out = []
     for i, panel in enumerate(pattern.panels):
         report(progress, i / max(len(pattern.panels), 1), f"piece {panel.name}")
-        out.append(build_piece(pattern, panel, widths, notch_spacing, warnings=warnings))
+        out.append(build_piece(pattern, panel, widths, notch_spacing, warnings=warnings, grade_from=grade_from))
     _check_pairs(pattern, out)
     return out
 
