@@ -2,12 +2,12 @@
 
 Every local-global iteration takes the pattern's Jacobians ``Gx u, Gy u,
 Gx v, Gy v`` and adds ``Gxᵀ b + Gyᵀ b'`` to both columns of the right-hand
-side: eight scipy CSR products over 21.6k triangles (shirt). Where the
+side: eight scipy CSR products over every triangle of the pattern. Where the
 solver's Warp kernels run (:func:`.compiled.enabled`) two kernels
-(:mod:`.sparse_kernels`) make them in one pass each with scipy's operations
-in scipy's order, so the bits are the same; else, or for arguments they do
-not take, scipy does (shirt: Jacobians 304 -> 141-180 us, right-hand side
-236-288 -> 112-155 us).
+(:mod:`.sparse_kernels`) make them in one pass each, instead of eight scipy
+calls, with scipy's operations in scipy's order, so the bits are the same;
+else, or for arguments they do not take, scipy does. Measured timings:
+``benchmarks/results/pattern_kernels_history.md``.
 """
 from __future__ import annotations
 

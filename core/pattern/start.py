@@ -24,9 +24,9 @@ def pattern_start(blocks, uv: Sequence[np.ndarray], uv0: np.ndarray,
     ratio of the target body's weft and warp offset lengths under it to those of the pattern's
     own body (area-weighted means): an affine image of a flip-free piece, so flip-free, that
     starts the solve at the new body's lengths rather than the old one's. The planned
-    iterations do not converge a transfer, so the start shows in the result: shirt to 100
-    sampled bodies, the warp deviation 8.6 -> 8.3 % (signed 3.4 -> 1.2 %), weft 1.30 -> 1.28 %,
-    and ~20 % fewer refactorisations of the collapse guard.
+    iterations do not converge a transfer, so the start shows in the result: a lower warp
+    deviation and fewer refactorisations of the collapse guard than from the unstretched
+    pattern (measured: ``benchmarks/results/pattern_kernels_history.md``).
     """
     U = np.concatenate([np.asarray(x, float) for x in uv])
     out = U.copy()
