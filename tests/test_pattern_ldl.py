@@ -182,10 +182,15 @@ def test_a_failed_launch_leaves_qdldl(kernels_on, monkeypatch, caplog):
     _same(f.solve(b), SymmetricFactor(f.matrix).solve(b))
 
 
-def test_a_zero_pivot_is_refused(kernels_on):
-    f = SymmetricFactor(sp.diags([2.0, 3.0, 4.0]).tocsc())
-    with pytest.raises(ValueError, match="quasi-definite"):
-        f.with_values(np.array([2.0, 0.0, 4.0]))
+def test_a_zero_pivot_is_refused(kernels_on, monkeypatch):
+    """A new factorisation with a zero pivot is the pattern's one-line refusal on both paths (issue 30:
+    it was a ValueError traceback with the kernels, a RuntimeError from qdldl without them)."""
+    from core.errors import PatternError
+    for forced in (True, False):
+        monkeypatch.setitem(compiled._state, "forced", forced)
+        f = SymmetricFactor(sp.diags([2.0, 3.0, 4.0]).tocsc())
+        with pytest.raises(PatternError, match="zero pivot"):
+            f.with_values(np.array([2.0, 0.0, 4.0]))
 
 
 @pytest.mark.same_bits
@@ -198,15 +203,20 @@ def test_a_pickled_factor_solves(kernels_on):
 
 
 @pytest.mark.same_bits
-def test_a_refused_refactorisation_leaves_a_factor_that_refactorises_to_qdldls_bits(kernels_on):
-    """After a zero pivot (ValueError) the factor refactorised in place still holds what it factorised:
-    the next values are qdldl's bits, not the refused matrix's rows left beside them."""
-    f = SymmetricFactor(sp.diags([2.0, 3.0, 4.0]).tocsc())
-    g = f.with_values(np.array([2.0, 3.0, 4.0]))
-    with pytest.raises(ValueError, match="quasi-definite"):
-        f.with_values(np.array([2.0, 0.0, 4.0]), reuse=g)
-    g = f.with_values(np.array([2.0, 3.0, 5.0]), reuse=g)
-    _same(g.solve(np.ones(3)), [1 / 2, 1 / 3, 1 / 5])
+def test_a_refused_refactorisation_goes_on_as_qdldl_and_refactorises_to_qdldls_bits(kernels_on, monkeypatch):
+    """A zero pivot in a reused factor's refactorisation is handed to qdldl's update, as without the
+    kernels (which does not raise): both paths solve alike after it, and the next values are qdldl's
+    bits, not the refused matrix's rows left beside them."""
+    out = {}
+    for forced in (True, False):
+        monkeypatch.setitem(compiled._state, "forced", forced)
+        f = SymmetricFactor(sp.diags([2.0, 3.0, 4.0]).tocsc())
+        g = f.with_values(np.array([2.0, 3.0, 4.0]))
+        g = f.with_values(np.array([2.0, 0.0, 4.0]), reuse=g)         # no traceback
+        out[forced] = g.solve(np.ones(3))
+        g = f.with_values(np.array([2.0, 3.0, 5.0]), reuse=g)
+        _same(g.solve(np.ones(3)), [1 / 2, 1 / 3, 1 / 5])
+    _same(out[True], out[False])
 
 
 @pytest.mark.same_bits

@@ -22,7 +22,19 @@ import numpy as np
 import qdldl
 import scipy.sparse as sp
 
+from ..errors import PatternError
 from . import compiled
+
+
+def _qdldl(upper: sp.csc_matrix) -> "qdldl.Solver":
+    """qdldl-python's factorisation of ``upper``; a matrix it cannot factorise (a zero pivot: the
+    solve's terms gave it no positive definite system) is the pattern's refusal in one line, on both
+    solver paths, not a traceback."""
+    try:
+        return qdldl.Solver(upper, upper=True)
+    except RuntimeError:
+        raise PatternError("the pattern's linear system has a zero pivot (not positive definite): the solve "
+                           "cannot go on; nothing written") from None
 
 
 class SymmetricFactor:
@@ -51,10 +63,10 @@ class SymmetricFactor:
             self._cols, self._upper = like._cols, like._upper
             if like._ldl is not None:
                 ldl = like._ldl.copy()
-                if ldl.refactorise(A.data):
+                if _refactorised(ldl, A.data):
                     self._ldl = ldl
                     return
-            self._qdldl = qdldl.Solver(self._upper_matrix(A.data), upper=True)
+            self._qdldl = _qdldl(self._upper_matrix(A.data))
             return
         # QDLDL factorises the upper triangle: handed over directly, an update skips its own
         # extraction of it (5.1 -> 3.4 ms on the shirt)
@@ -64,7 +76,7 @@ class SymmetricFactor:
         keep = np.flatnonzero(A.indices <= col)
         self._upper = (keep, A.indices[keep],
                        np.concatenate([[0], np.cumsum(np.bincount(col[keep], minlength=n))]).astype(A.indptr.dtype))
-        self._qdldl = qdldl.Solver(self._upper_matrix(A.data), upper=True)
+        self._qdldl = _qdldl(self._upper_matrix(A.data))
         if compiled.enabled():
             from .ldl import LDL, matches_qdldl
             self._ldl = LDL.from_qdldl(self._qdldl, self._upper, A.data) if matches_qdldl() else None
@@ -75,7 +87,7 @@ class SymmetricFactor:
         """qdldl-python's factorisation of the matrix (made again where the kernels gave up: the same bits)."""
         self._ldl = None
         if self._qdldl is None:
-            self._qdldl = qdldl.Solver(self._upper_matrix(self.matrix.data), upper=True)
+            self._qdldl = _qdldl(self._upper_matrix(self.matrix.data))
         return self._qdldl
 
     def _upper_matrix(self, data: np.ndarray) -> sp.csc_matrix:
@@ -137,7 +149,17 @@ class SymmetricFactor:
                 and np.array_equal(reuse.matrix.indices, self.matrix.indices)):
             raise ValueError("reuse: a factorisation of another sparsity pattern")
         B.data.flags.writeable = False
-        if reuse._ldl is None or not reuse._ldl.refactorise(B.data):
+        if reuse._ldl is None or not _refactorised(reuse._ldl, B.data):
             reuse._qdldl_solver().update(self._upper_matrix(data), upper=True)
         reuse.matrix = B
         return reuse
+
+
+def _refactorised(ldl, data: np.ndarray) -> bool:
+    """The kernels' refactorisation of ``ldl`` for ``data``; False where they gave up or met a zero pivot:
+    the caller then takes qdldl's, as the numpy path does (its update of a matrix with a zero pivot
+    does not raise, so both paths go on alike and end in the same figures or the same refusal)."""
+    try:
+        return ldl.refactorise(data)
+    except ValueError:
+        return False
