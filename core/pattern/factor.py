@@ -5,16 +5,14 @@ back-substitutes it once per iteration. The collapse guard stiffens a few
 triangles of it, which changes values but never the sparsity pattern (a
 triangle's terms already sit in the matrix). :class:`SymmetricFactor` keeps
 the symbolic analysis (AMD ordering, elimination tree) of QDLDL and redoes only
-the numeric factorisation for new values: on the long-sleeve shirt (11.5k
-vertices) 3.4 ms against 27 ms for a new SuperLU factorisation, and a
-back-substitution of both pattern coordinates in 0.6 ms against 1.2 ms.
+the numeric factorisation for new values, a fraction of the cost of a new
+(SuperLU) factorisation; its back-substitution of both pattern coordinates is
+cheaper than SuperLU's too.
 Where the solver's Warp kernels run (:func:`.compiled.enabled`) with qdldl's
 bits (:func:`.ldl.matches_qdldl`), qdldl's factors go to an :class:`.ldl.LDL`,
 which refactorises only the rows of L a change of values reaches and solves
-both coordinates in one pass, with qdldl's bits (shirt, CPU time inside
-transfers: a guard's refactorisation 3.9 -> 1.2 ms, a solve of both
-coordinates 0.85 -> 0.53 ms; 2.7 -> 0.8 and 0.6 -> 0.34 ms in isolation,
-where L stays in the caches).
+both coordinates in one pass, with qdldl's bits. Measured timings:
+``benchmarks/results/pattern_kernels_history.md``.
 """
 from __future__ import annotations
 
@@ -69,7 +67,7 @@ class SymmetricFactor:
             self._qdldl = _qdldl(self._upper_matrix(A.data))
             return
         # QDLDL factorises the upper triangle: handed over directly, an update skips its own
-        # extraction of it (5.1 -> 3.4 ms on the shirt)
+        # extraction of it
         n = A.shape[0]
         #: (nnz,) the column of each stored entry
         self._cols = col = np.repeat(np.arange(n, dtype=np.int64), np.diff(A.indptr))
