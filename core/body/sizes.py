@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import BodyError
 from ..progress import Progress, report, sub
-from .charts import PUBLISHED, SizeChart
+from .charts import LOCAL_GIRTHS, PUBLISHED, SizeChart
 from .measure import MEASUREMENTS, measure
 
 TOLERANCE_CM = 1.0
@@ -66,6 +66,17 @@ TARGET_RANGES = {"height": (50.0, 250.0), "chest": (40.0, 200.0), "waist": (30.0
 
 # Shape parameters that change size (not gender, age, ethnicity) where the model has them.
 PREFERRED_FIT_PARAMETERS = ("height", "weight", "muscle", "proportions")
+
+# Anny's local changes (MakeHuman's measurement modifiers, -1 .. 1, 0 = the phenotype's own body)
+# that a girth fit may move where the phenotypes alone miss: one per girth, each moving its own
+# girth by 10-18 cm over its range and the others by < 1 cm, all of them symmetric (no ``l-``/``r-``
+# twin), so the body stays left/right symmetric.
+LOCAL_FIT_PARAMETERS = LOCAL_GIRTHS
+
+# Pull of a local change towards 0 (the population's body for the phenotypes), cm per unit of the
+# change: stronger than the phenotypes' REGULARIZATION_CM, so a fit uses a local change only as far
+# as the phenotypes cannot reach a girth.
+LOCAL_REGULARIZATION_CM = 2.0
 
 
 @dataclass
@@ -125,6 +136,12 @@ def check_targets(targets: Mapping[str, float]) -> Dict[str, float]:
     return out
 
 
+def local_parameters(body) -> Dict[str, tuple]:
+    """The model's local changes a shape may carry besides its shape parameters (Anny's), else {}."""
+    own = getattr(body, "local_change_parameters", None)
+    return dict(own()) if callable(own) else {}
+
+
 def fit_parameters(body) -> list:
     """Shape parameters a size fit moves: the size-related ones where the model has
     them (Anny: height, weight, muscle, proportions), else its first ten (SMPL betas)."""
@@ -161,12 +178,15 @@ def fit_measurements(body, targets: Mapping[str, float], progress: Optional[Prog
     from scipy.optimize import least_squares
 
     targets = check_targets(targets)
-    allowed = body.shape_parameters()
+    local = local_parameters(body)
+    allowed = {**body.shape_parameters(), **local}
     names = list(parameters) if parameters is not None else fit_parameters(body)
     for n in names:
         if n not in allowed:
-            raise BodyError(f"cannot fit unknown shape parameter {n!r}; allowed: {', '.join(allowed)}")
+            raise BodyError(f"cannot fit unknown shape parameter {n!r}; allowed: {', '.join(body.shape_parameters())}"
+                            + (" and Anny's local changes" if local else ""))
     base = dict(body.default_shape())
+    base.update({n: float(allowed[n][2]) for n in names if n in local})
     if start:
         base.update({k: float(v) for k, v in start.items()})
     narrow = dict(bounds or {})
@@ -183,6 +203,9 @@ def fit_measurements(body, targets: Mapping[str, float], progress: Optional[Prog
         return s
 
     u0 = np.clip((np.array([base[n] for n in names], dtype=float) - lo) / span, 0.0, 1.0)
+    # The pull of each parameter towards its start, cm per unit of u (a local change's range is 2).
+    pull = np.array([LOCAL_REGULARIZATION_CM * span[i] if n in local else REGULARIZATION_CM
+                     for i, n in enumerate(names)])
     # Measurements without a target are held near the start body's (a tailor giving only a
     # chest girth means "this body, bigger chest", not a taller one), where the model can
     # measure them (girths need its landmarks).
@@ -205,12 +228,12 @@ def fit_measurements(body, targets: Mapping[str, float], progress: Optional[Prog
         # The held measurements pull harder, but still far below the targets' weight.
         return np.concatenate([np.array([got[k] for k in keys]) - want,
                                HOLD_WEIGHT * (np.array([got[k] for k in hold_keys]) - hold),
-                               REGULARIZATION_CM * (u - u0)])
+                               pull * (u - u0)])
 
     # Finite differences of 1e-3 of the range: the slices' polygon noise stays below it.
     sol = least_squares(residual, u0, bounds=(0.0, 1.0), diff_step=1e-3, x_scale=1.0,
                         ftol=1e-8, xtol=1e-8, gtol=1e-10, max_nfev=200 * max(1, len(names)) // 4 + 40)
-    shape = shape_of(sol.x)
+    shape = {k: v for k, v in shape_of(sol.x).items() if k not in local or v != 0.0}
     achieved = measure(body, body.vertices(shape))
     status = {k: ("within 1 cm" if abs(achieved[k] - targets[k]) <= TOLERANCE_CM
                   else "not reachable by this model") for k in keys}
@@ -298,8 +321,10 @@ def chart_fit(body, size: str, chart: Optional[str] = None, progress: Optional[P
     names = [n for n in c.parameters if n in params]
     helpers = [n for n in c.assist if n in params and n not in names]
     start = {k: v for k, v in c.start.items() if k in params}
+    local = [n for n in c.local if n in local_parameters(body)]
+    stages = [names] + ([names + helpers] if helpers else []) + ([names + helpers + local] if local else [])
     attempts = []
-    for moving in ([names, names + helpers] if helpers else [names]):
+    for moving in stages:
         for extra in ({},) + tuple(c.restarts):
             moved = {k: v for k, v in extra.items() if k in moving}
             if extra and not moved:
@@ -335,7 +360,7 @@ def size_shape(body, size: str, progress: Optional[Progress] = None, chart: Opti
     c, key = split_size(size, chart)
     params = body.shape_parameters()
     stored = c.fitted.get(getattr(body, "name", ""), {}).get(key)
-    if stored is not None and all(k in params for k in stored):
+    if stored is not None and all(k in params or k in local_parameters(body) for k in stored):
         shape = dict(body.default_shape())
         shape.update(stored)
         return shape
