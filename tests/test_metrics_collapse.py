@@ -97,7 +97,7 @@ def test_the_workflow_check_refuses_a_collapse():
 
 
 def test_the_pipeline_refuses_a_collapse_by_default_but_not_a_preview_in_between():
-    assert checks.REFUSED == ("flipped", "collapsed")
+    assert checks.REFUSED == ("flipped", "collapsed", "crossings")
     pat = _pattern([c for c in CASES if c[0] > 0])
     with pytest.raises(PatternError, match="5 collapsed triangles"):
         wf.measure_pattern(pat)

@@ -126,3 +126,22 @@ def test_dart_gap_of_a_pattern_without_darts_is_empty():
     pat = _sheet()
     pat.seams = []
     assert dart_gaps(pat) == {}
+
+
+def test_the_four_dart_blouse_is_refused_naming_its_crossed_darts(anny, tmp_path):
+    """On the real body: the template's bust and shoulder darts cross on women:M (issue 30, not yet cured
+    by the solver): ``ease pattern`` refuses it in one line naming the piece, the darts and where on the
+    body, and writes nothing."""
+    from core.cli import main
+    from core.design.templates import template_path
+    out = tmp_path / "out"
+    assert main(["pattern", str(template_path("blouse_four_darts")), "--out", str(out), "--quiet"]) == 2
+    assert not out.exists()
+    prep = wf.prepare(template_path("blouse_four_darts"), body=anny)
+    with pytest.raises(PatternError) as e:
+        wf.reference(prep)
+    msg = str(e.value)
+    assert "\n" not in msg and msg.startswith("panel blouse.front: the legs of dart blouse.")
+    for dart in ("bust_dart_left", "bust_dart_right", "shoulder_dart_left", "shoulder_dart_right"):
+        assert f"the legs of dart blouse.{dart} cross" in msg
+    assert "near bust_left" in msg and "nothing written" in msg

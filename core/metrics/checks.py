@@ -20,7 +20,7 @@ CHECKS = ("flipped", "collapsed", "crossings")
 #: The checks the pipeline applies: zero collapsed is required like zero flipped
 #: (issue 14; the solver's collapse guard prevents it on every shipped template), and zero
 #: crossings: a piece that overlaps itself cannot be cut (issue 30).
-REFUSED = ("flipped", "collapsed")
+REFUSED = ("flipped", "collapsed", "crossings")
 #: The checks of a live preview still converging (``report["live"]["converged"]`` false): a
 #: state in between is shown with its collapse and crossing counts, not refused; once converged
 #: it is a pattern like any other.
