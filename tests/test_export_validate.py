@@ -145,7 +145,8 @@ def test_lenient_validation_returns_geometry_warnings():
         validate_pattern(pat, strict=False)
 
 
-def test_sliver_loops_are_warnings_even_when_strict():
+def test_sliver_loops_are_refused_too():
+    """Issue 30: no area threshold lets a loop through (it let 8.2 cm^2 pass on a men's XS blouse)."""
     pat = make_pattern()
     front = pat.panel("front")
     loop = front.boundary[0]  # starts along the bottom edge, 6.25 cm between vertices
@@ -153,5 +154,7 @@ def test_sliver_loops_are_warnings_even_when_strict():
     # swap two bottom vertices a hair above the edge: a bow-tie of ~0.2 cm^2
     front.uv[loop[1]] = (x2, 0.001)
     front.uv[loop[2]] = (x1, 0.0008)
-    warnings = validate_pattern(pat)
-    assert len(warnings) == 1 and "small slivers" in warnings[0] and "front" in warnings[0]
+    with pytest.raises(ExportError, match=r"piece 'front'.uv: the sew line crosses itself .* enclosing 0.062 cm\^2"):
+        validate_pattern(pat)
+    warnings = validate_pattern(pat, strict=False)
+    assert len(warnings) == 1 and "crosses itself" in warnings[0]
