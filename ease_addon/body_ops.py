@@ -7,7 +7,6 @@ from __future__ import annotations
 import bpy
 
 from . import data, state, sync
-from .objects import remove_object
 from .operators_base import EaseOperator
 
 
@@ -29,9 +28,15 @@ class EASE_OT_add_body(EaseOperator):
         else:
             name = "anny"
         old = data.body_object(context, required=False)
-        obj = sync.new_body(context, name, pose=s.pose)
-        if old is not None and old != obj:
-            remove_object(old)
+        obj = sync.new_body(context, name, pose=s.pose, replaces=old)
+        if s.design_json:
+            # the design's keypoints, seamlines and ease on the new body, as after loading it
+            try:
+                sync.set_design(context, data.current_design(context))
+            except state.USER_ERRORS as exc:
+                self.report({"WARNING"}, f"the design does not fit the new body, load it again: {exc}")
+            else:
+                bpy.ops.ease.ease_from_design()
         self.report({"INFO"}, f"added body {name} ({len(obj.data.vertices)} vertices)")
 
 
@@ -39,7 +44,7 @@ class EASE_OT_set_size(EaseOperator):
     """Shape the body to a size preset of the chosen size chart (default XS..XL, women's, men's)"""
     bl_idname = "ease.set_size"
     bl_label = "Apply Size"
-    needs = ('body',)
+    needs = ('body', 'size')
 
     size: bpy.props.StringProperty(default="")
 
@@ -51,11 +56,9 @@ class EASE_OT_set_size(EaseOperator):
         size = size_of(size, s.chart)     # "women:M" on the women's chart
         model = state.body_model(data.body_spec(obj)["model"])
         shape = size_shape(model, size)
-        achieved = data.measurements(model, shape)
         sync.update_body(context, obj, shape=shape)
         sync.fill_shape_props(context.scene, model, shape)
-        obj["ease_size"] = size
-        s.measurements_report = data.format_measurements(achieved)
+        sync.show_size(context.scene, obj, size)
         self.report({"INFO"}, f"size {size}: {s.measurements_report}")
 
 

@@ -69,13 +69,15 @@ def seam_loops(cut) -> list:
     return loops
 
 
-def seamlines(scene, cut, verts) -> None:
-    """The seamlines of ``cut`` on the body vertices ``verts`` (a wire object kept in front)."""
+def seamlines(scene, cut, verts, design: str = "") -> None:
+    """The seamlines of ``cut`` on the body vertices ``verts`` (a wire object kept in front);
+    ``design``: the fingerprint of the design they are drawn for (:func:`.data.design_digest`)."""
     pos = cut.positions(verts)
     loops = seam_loops(cut)
     v, e = convert.polyline_edges([pos[l] for l in loops], closed=True)
     obj = put_object(scene, SEAMLINES, convert.mesh_edges_from_arrays(SEAMLINES, v, e), "seamlines")
     obj["ease_ids"] = json.dumps([l.tolist() for l in loops])
+    obj["ease_design"] = design
     obj.show_in_front = True
     obj.color = (1.0, 0.85, 0.1, 1.0)
     obj.hide_select = True
@@ -176,8 +178,11 @@ def update_pattern_objects(scene, pattern, lo: float, hi: float, x0: float, role
                                 convert.mesh_edges_from_arrays(f"EASE grain {p.name}", v, e), part, parent=obj))
         # piece name, above the grain line's middle
         fd = bpy.data.curves.new(f"EASE label {p.name}", "FONT")
-        fd.body = p.name.split(".", 1)[-1] + (" (mirror)" if p.mirror_of else "")
-        fd.size = 0.045
+        lines = [p.name.split(".", 1)[-1].replace("_", " ")] + (["(mirror)"] if p.mirror_of else [])
+        fd.body = "\n".join(lines)
+        # no wider than 80 % of the piece (Blender's font: ~0.5 em a character), so labels stay apart
+        width = float(uv[:, 0].max() - uv[:, 0].min())
+        fd.size = min(0.045, 0.8 * width / (0.5 * max(len(t) for t in lines)))
         fd.align_x = "CENTER"
         label = put_object(scene, f"EASE label {p.name}", fd, part, parent=obj)
         c = 0.5 * (start + end)

@@ -87,16 +87,54 @@ def solver_choice(scene):
 
 def design_solver(scene) -> str:
     """The configuration the scene's design names (its ``"solver"``), else the core's default: what
-    the Solver choice *Design's* stands for. The panel asks on every redraw: the design JSON (megabytes
-    with a painted field) is parsed once per text."""
+    the Solver choice *Design's* stands for."""
+    return _design_head(scene)["solver"]
+
+
+def design_chart(scene) -> str:
+    """The size chart of the scene's design (its ``body.chart``, else the default chart): the chart
+    of a bare size in *Transfer to Size*."""
+    return _design_head(scene)["chart"]
+
+
+def chart_sizes(chart: str) -> tuple:
+    """The size names of ``chart`` in size order (the presets the panels offer on it)."""
+    from ..core.body.sizes import chart_sizes as sizes
+    return sizes(chart)
+
+
+def all_sizes() -> list:
+    """Every size name of every chart, in size order (the default chart's first, then what the
+    others add: XS .. 4XL)."""
+    from ..core.body.sizes import CHARTS
+    return list(dict.fromkeys(z for c in CHARTS.values() for z in c.sizes))
+
+
+def nearest_size(size: str, chart: str) -> str:
+    """``size`` if ``chart`` has it, else the chart's size nearest to it in the size order of all
+    charts (XS .. 4XL): the smaller one on a tie."""
+    sizes = chart_sizes(chart)
+    if size in sizes:
+        return size
+    order = all_sizes()
+    at = order.index(size) if size in order else 0
+    return min(sizes, key=lambda z: (abs(order.index(z) - at), order.index(z)))
+
+
+def _design_head(scene) -> dict:
+    """What the panels show of the scene's design on every redraw (its solver, its chart): the
+    design JSON (megabytes with a painted field) is parsed once per text."""
+    from ..core.body.sizes import DEFAULT_CHART
     from ..core.workflows import config_name
     text = scene.ease.design_json
-    if _SOLVER_SEEN[0] != text:
-        _SOLVER_SEEN[:] = [text, config_name(json.loads(text) if text else {})]
-    return _SOLVER_SEEN[1]
+    if _DESIGN_SEEN[0] != text:
+        d = json.loads(text) if text else {}
+        _DESIGN_SEEN[:] = [text, {"solver": config_name(d),
+                                  "chart": (d.get("body") or {}).get("chart") or DEFAULT_CHART}]
+    return _DESIGN_SEEN[1]
 
 
-_SOLVER_SEEN = [None, None]     # (design text, its configuration) of the last design_solver call
+_DESIGN_SEEN = [None, None]     # (design text, what _design_head read of it)
 
 
 def cut_on(design, model_name: str, shape: dict):
@@ -108,20 +146,39 @@ def cut_on(design, model_name: str, shape: dict):
     """
     from ..core.body.instance import instance_shape
     from ..core.cut import cut_design
-    key = json.dumps([design.to_json(), model_name, shape or {}], sort_keys=True)
+    key = (design_text(design), model_name, json.dumps(shape or {}, sort_keys=True))
     cached = state.CUTS.get(key)
     if cached is not None:
         return cached
     model = state.body_model(model_name)
     own = instance_shape(model, design.body.get("shape"))
-    same = model_name == design.body.get("model", "anny") and _full(model, own) == _full(model, shape)
+    same = model_name == design.body.get("model", "anny") and full_shape(model, own) == full_shape(model, shape)
     cut = cut_design(design, body=model, shape=None if same else (dict(shape) if shape else None))
     state.CUTS.clear()        # one cut per session is plenty; keeps memory bounded
     state.CUTS[key] = cut
     return cut
 
 
-def _full(model, shape) -> dict:
+def design_text(design) -> str:
+    """The text ``scene.ease.design_json`` holds for ``design`` (what :func:`.sync.set_design` stores)."""
+    return json.dumps(design.to_json(), sort_keys=True)
+
+
+def design_digest(text: str) -> str:
+    """Fingerprint of a design text: which design the seamlines on the body were drawn for."""
+    return hashlib.sha1((text or "").encode("utf-8")).hexdigest()
+
+
+def cached_cut(text: str, model_name: str):
+    """The cached cut of the design ``text`` (:func:`design_text`) on body model ``model_name``, on
+    any shape (the cut's embedding holds for every shape and pose); None when there is none."""
+    for (d, m, _shape), cut in state.CUTS.items():
+        if d == text and m == model_name:
+            return cut
+    return None
+
+
+def full_shape(model, shape) -> dict:
     """Every shape parameter of ``model``: its defaults where ``shape`` has none."""
     full = {k: float(v) for k, v in model.default_shape().items()}
     full.update({k: float(v) for k, v in (shape or {}).items()})
@@ -302,3 +359,129 @@ def prepared(context, edit=None):
     if edit is not None:
         design = edit(design)
     return wf.prepare(design, body=state.body_model(body_spec(obj)["model"]), cut=cut_for(design, obj))
+
+
+# ----------------------------------------------------------------------------- the painted ease field
+
+def layer_range(obj, scene) -> tuple:
+    """The ramp range the layer was painted with (stored on the mesh); the
+    scene's range for a layer that has none yet."""
+    r = obj.data.get("ease_ramp")
+    if r is not None and len(r) == 2:
+        return float(r[0]), float(r[1])
+    return ramp_range(scene)
+
+
+def vertex_ease(obj, scene) -> np.ndarray:
+    """Per-vertex ease (V,) decoded from the layer (corner layers are averaged per vertex)."""
+    lo, hi = layer_range(obj, scene)
+    me = obj.data
+    colors, domain = convert.read_colors(me, convert.EASE_LAYER)
+    e = ramp.color_to_ease(colors, lo, hi)
+    if domain == "CORNER":
+        vi = np.empty(len(me.loops), dtype=np.int32)
+        me.loops.foreach_get("vertex_index", vi)
+        acc = np.bincount(vi, weights=e, minlength=len(me.vertices))
+        cnt = np.bincount(vi, minlength=len(me.vertices))
+        e = np.where(cnt > 0, acc / np.maximum(cnt, 1), 1.0)
+    return e
+
+
+def triangle_ease(obj, scene) -> np.ndarray:
+    """Per-triangle ease (F,) of the body from its layer: the mean of the
+    triangle's vertex (or corner) values, so a uniformly painted area reads
+    back exactly the value the brush used."""
+    lo, hi = layer_range(obj, scene)
+    me = obj.data
+    colors, domain = convert.read_colors(me, convert.EASE_LAYER)
+    e = ramp.color_to_ease(colors, lo, hi)
+    if domain == "CORNER":
+        return e.reshape(-1, 3).mean(axis=1)
+    return ramp.vertex_to_triangle(e, convert.get_triangles(me))
+
+
+def template_rows(cut, panel) -> tuple:
+    """(rows, template vertex ids): the panel's vertices that are template vertices of the body
+    (rows of the embedding with a single weight: inside the panel or on its seam)."""
+    emb = cut.embedding[panel.vertex_ids].tocsr()
+    single = np.flatnonzero(np.diff(emb.indptr) == 1)
+    return single, emb.indices[emb.indptr[single]]
+
+
+def x_mirror(obj) -> bool:
+    """Blender's own X-mirror setting of the paint modes: the body mesh's ``use_mirror_x``
+    (the X toggle of Vertex Paint's and Sculpt's Symmetry popover; the tool settings'
+    ``use_symmetry_x`` are legacy and not what the header shows)."""
+    return bool(getattr(obj.data, "use_mirror_x", False))
+
+
+def symmetrised(obj, tri_ease: np.ndarray) -> np.ndarray:
+    """``tri_ease`` (F,) averaged with its mirror image through the body's symmetry map
+    (triangles without a mirror triangle keep their value)."""
+    from ..core.design.mirror import face_symmetry
+    model = state.body_model(body_spec(obj)["model"])
+    fs = face_symmetry(convert.get_triangles(obj.data), np.asarray(model.symmetry))
+    out = np.asarray(tri_ease, dtype=np.float64).copy()
+    has = fs >= 0
+    out[has] = 0.5 * (out[has] + out[fs[has]])
+    return out
+
+
+def design_vertex_ease(context) -> np.ndarray:
+    """Per body vertex ease (V,) of the design's cut (mean of the cut triangles'
+    ease around each template vertex; 1.0 off the garment)."""
+    obj = body_object(context)
+    cut = current_cut(context)
+    V = len(obj.data.vertices)
+    acc = np.zeros(V)
+    cnt = np.zeros(V)
+    for p in cut.panels:
+        f = np.asarray(p.faces)
+        ev = np.zeros(len(p.vertex_ids))
+        cv = np.zeros(len(p.vertex_ids))
+        np.add.at(ev, f.ravel(), np.repeat(np.asarray(p.ease, dtype=float), 3))
+        np.add.at(cv, f.ravel(), 1.0)
+        single, cols = template_rows(cut, p)
+        np.add.at(acc, cols, ev[single] / np.maximum(cv[single], 1))
+        np.add.at(cnt, cols, 1.0)
+    return np.where(cnt > 0, acc / np.maximum(cnt, 1), 1.0)
+
+
+def element_mirror(me, symmetry) -> np.ndarray:
+    """The mirror element of every element of the ease layer (V,) or (3F,) through the body's
+    vertex symmetry map: a vertex's mirror vertex; a face corner's corner of the mirror face at
+    the mirror vertex (-1 where the face has no mirror face)."""
+    from ..core.design.mirror import face_symmetry
+    sym = np.asarray(symmetry)
+    if me.color_attributes[convert.EASE_LAYER].domain == "POINT":
+        return sym
+    faces = convert.get_triangles(me)
+    fs = face_symmetry(faces, sym)
+    target = sym[faces]                                   # (F, 3) the mirror vertex of each corner
+    other = faces[np.maximum(fs, 0)]                      # (F, 3) the mirror face's corners
+    j = np.argmax(target[:, :, None] == other[:, None, :], axis=2)
+    out = 3 * np.maximum(fs, 0)[:, None] + j
+    out[fs < 0] = -1
+    return out.ravel()
+
+
+SEEN_LAYER = "ease_seen"     # FLOAT layer beside "ease": its values when the add-on last read or wrote it
+
+
+def seen_ease(obj):
+    """The ease layer's values (per element) when the add-on last took them (Ease to Design, Ease
+    from Design, a Live tick: :func:`.sync.remember_layer`); None when there is no such record of
+    this layer's shape. What changed since is a stroke (X-mirror mirrors one-sided strokes)."""
+    me = obj.data
+    seen, layer = me.attributes.get(SEEN_LAYER), me.color_attributes.get(convert.EASE_LAYER)
+    if seen is None or layer is None or seen.domain != layer.domain or seen.data_type != "FLOAT":
+        return None
+    v = np.empty(len(seen.data), dtype=np.float32)
+    seen.data.foreach_get("value", v)
+    return v.astype(np.float64)
+
+
+def layer_ease(obj, scene) -> np.ndarray:
+    """The ease layer's values per element (a vertex or a face corner, as the layer is)."""
+    colors, _domain = convert.read_colors(obj.data, convert.EASE_LAYER)
+    return ramp.color_to_ease(colors, *layer_range(obj, scene))

@@ -16,11 +16,14 @@ from . import convert, data, state, sync
 from .operators_base import EaseOperator, poll_needs
 
 
-def load_design_into_scene(context, source) -> None:
+def load_design_into_scene(context, source) -> str:
     """Load a design (path or dict) onto the scene body, shaping the body as the design says.
 
     The design is validated and cut on the body it asks for before anything
-    in the scene changes, so a bad design leaves the scene as it was.
+    in the scene changes, so a bad design leaves the scene as it was. The Body
+    panel then says what the body is (the design's chart size, its sliders and
+    measurements). Returns what happened to the body, for the report ("" when
+    it kept its shape).
     """
     from ..core.body.instance import instance_shape
     from ..core.design import load_design
@@ -28,19 +31,29 @@ def load_design_into_scene(context, source) -> None:
     obj = data.body_object(context, required=False)
     model_name = data.body_spec(obj)["model"] if obj is not None else design.body.get("model", "anny")
     model = state.body_model(model_name)
-    shape = instance_shape(model, design.body.get("shape"))
+    named = design.body.get("shape")
+    shape = instance_shape(model, named)
+    before = data.body_spec(obj)["shape"] if obj is not None else {}
     full = dict(model.default_shape())
-    full.update({k: float(v) for k, v in (shape or (data.body_spec(obj)["shape"] if obj is not None else {})).items()})
+    full.update({k: float(v) for k, v in (shape or before).items()})
     data.cut_on(design, model_name, full)          # raises (DesignError/CutError) before any change
     # -- the scene changes from here on
     if obj is None:
         obj = sync.new_body(context, model_name, shape=full)
+        reshaped = False
     else:
+        reshaped = data.full_shape(model, before) != full
         sync.update_body(context, obj, shape=full)
         sync.fill_shape_props(context.scene, model, full)
+    if shape:
+        sync.show_size(context.scene, obj, named if isinstance(named, str) else None)
     sync.set_design(context, design)
     sync.fill_design_props(context.scene, design)     # its gathering, tolerance, allowance and notches
     bpy.ops.ease.ease_from_design()
+    if not reshaped:
+        return ""
+    return f"the body takes the design's size {named}" if isinstance(named, str) else \
+        "the body takes the design's shape"
 
 
 def _design_file(op, context, missing: str) -> str:
@@ -61,8 +74,8 @@ class _LoadDesign(EaseOperator):
 
     def run(self, context):
         path, shown = self.source(context)
-        load_design_into_scene(context, path)
-        self.report({"INFO"}, f"loaded {shown}")
+        body = load_design_into_scene(context, path)
+        self.report({"INFO"}, f"loaded {shown}" + (f"; {body}" if body else ""))
 
 
 class EASE_OT_load_template(_LoadDesign):
@@ -118,8 +131,13 @@ class EASE_OT_set_parameter(EaseOperator):
 
     def run(self, context):
         d = data.current_design(context)
-        d.set_parameter(self.name, data.as_typed(self.value))
-        sync.set_design(context, d)
+        try:
+            d.set_parameter(self.name, data.as_typed(self.value))
+            sync.set_design(context, d)
+        except state.USER_ERRORS as exc:
+            sync.refuse_param(context, self.name, exc)
+            raise
+        context.scene.ease.design_status = ""
 
 
 class EASE_OT_recut(EaseOperator):
@@ -130,11 +148,19 @@ class EASE_OT_recut(EaseOperator):
 
     def run(self, context):
         d = data.current_design(context)
-        for item in context.scene.ease.design_params:
-            value = data.as_typed(item.value)
-            if d.parameters[item.name].value != value:
-                d.set_parameter(item.name, value)
-        sync.set_design(context, d)
+        name = None
+        try:
+            for item in context.scene.ease.design_params:
+                value = data.as_typed(item.value)
+                if d.parameters[item.name].value != value:
+                    name = item.name
+                    d.set_parameter(item.name, value)
+            name = None     # the values are the design's: a cut that fails is no one slider's
+            sync.set_design(context, d)
+        except state.USER_ERRORS as exc:
+            sync.refuse_param(context, name, exc)
+            raise
+        context.scene.ease.design_status = ""
 
 
 class EASE_OT_assign_keypoint(EaseOperator):

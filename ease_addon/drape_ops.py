@@ -159,12 +159,18 @@ def apply_drape(context, run, digest=None) -> None:
     scene = context.scene
     obj = data.body_object(context, required=False)
     pspec = data.stored_pattern(scene).body or {}
+    moved = []      # what of the body changed: said in the status line
     if obj is not None:
         spec = data.body_spec(obj)
         model = state.body_model(spec["model"])
         shape = instance_shape(model, pspec.get("shape"))
         pose = pspec.get("pose") or "A"
-        if (shape and dict(shape) != spec["shape"]) or (isinstance(pose, str) and pose != spec["pose"]):
+        if shape and data.full_shape(model, shape) != data.full_shape(model, spec["shape"]):
+            moved.append(f"size {pspec.get('size') or 'of the pattern'}")
+        if isinstance(pose, str) and pose != spec["pose"]:
+            moved.append(f"pose {pose} (it was {spec['pose']}; the pattern is solved in {pose}: "
+                         f"Adapt to Poses, then drape, for another pose)")
+        if moved:
             sync.update_body(context, obj, shape=dict(shape) if shape else None,
                              pose=pose if isinstance(pose, str) else None)
             show_body(scene, obj, model, pspec)
@@ -173,24 +179,25 @@ def apply_drape(context, run, digest=None) -> None:
     sync.apply_fitmap(scene)
     s = scene.ease
     s.drape_json = json.dumps(run.figures)
-    s.drape_status = f"draped: {run.figures['frames']} frames, {run.figures['settled']}"
+    s.drape_status = f"draped: {run.figures['frames']} frames, {run.figures['settled']}" + \
+        (f"; the body takes the pattern's {', '.join(moved)}" if moved else "")
 
 
 def show_body(scene, obj, model, pspec: dict) -> None:
     """The Body panel follows the body the garment was draped on (a transferred pattern's
-    size, an adapted one's pose): phenotype sliders, size, pose and measurements."""
+    size, an adapted one's pose): phenotype sliders, chart and size, pose and measurements."""
+    from ..core.body.sizes import check_size
     s = scene.ease
     spec = data.body_spec(obj)
     sync.fill_shape_props(scene, model, spec["shape"])
     size = pspec.get("size")
-    if isinstance(size, str) and size in {i.identifier for i in s.bl_rna.properties["size"].enum_items}:
-        s.size = size
-        obj["ease_size"] = size
-    elif "ease_size" in obj:
-        del obj["ease_size"]        # a shape of no chart size
+    try:
+        size = check_size(size) if isinstance(size, str) else None
+    except state.USER_ERRORS:
+        size = None                 # a shape of no chart size
+    sync.show_size(scene, obj, size)
     if spec["pose"] in {i.identifier for i in s.bl_rna.properties["pose"].enum_items}:
         s.pose = spec["pose"]
-    s.measurements_report = data.format_measurements(data.measurements(model, spec["shape"]))
 
 
 def step_job(context, job: DrapeJob, event_type: str) -> str:

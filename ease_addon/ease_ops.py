@@ -18,43 +18,6 @@ from .objects import select_only
 from .operators_base import EaseOperator
 
 
-def layer_range(obj, scene) -> tuple:
-    """The ramp range the layer was painted with (stored on the mesh); the
-    scene's range for a layer that has none yet."""
-    r = obj.data.get("ease_ramp")
-    if r is not None and len(r) == 2:
-        return float(r[0]), float(r[1])
-    return data.ramp_range(scene)
-
-
-def vertex_ease(obj, scene) -> np.ndarray:
-    """Per-vertex ease (V,) decoded from the layer (corner layers are averaged per vertex)."""
-    lo, hi = layer_range(obj, scene)
-    me = obj.data
-    colors, domain = convert.read_colors(me, convert.EASE_LAYER)
-    e = ramp.color_to_ease(colors, lo, hi)
-    if domain == "CORNER":
-        vi = np.empty(len(me.loops), dtype=np.int32)
-        me.loops.foreach_get("vertex_index", vi)
-        acc = np.bincount(vi, weights=e, minlength=len(me.vertices))
-        cnt = np.bincount(vi, minlength=len(me.vertices))
-        e = np.where(cnt > 0, acc / np.maximum(cnt, 1), 1.0)
-    return e
-
-
-def triangle_ease(obj, scene) -> np.ndarray:
-    """Per-triangle ease (F,) of the body from its layer: the mean of the
-    triangle's vertex (or corner) values, so a uniformly painted area reads
-    back exactly the value the brush used."""
-    lo, hi = layer_range(obj, scene)
-    me = obj.data
-    colors, domain = convert.read_colors(me, convert.EASE_LAYER)
-    e = ramp.color_to_ease(colors, lo, hi)
-    if domain == "CORNER":
-        return e.reshape(-1, 3).mean(axis=1)
-    return ramp.vertex_to_triangle(e, convert.get_triangles(me))
-
-
 def write_vertex_ease(obj, scene, ease: np.ndarray, mask=None) -> None:
     """Write ease (V,) into the layer (only where ``mask``), re-encoding the
     rest if the scene's ramp range changed since the layer was painted. A
@@ -67,7 +30,7 @@ def write_vertex_ease(obj, scene, ease: np.ndarray, mask=None) -> None:
         convert.adopt_ease_layer(me)
     colors, domain = convert.read_colors(me, convert.EASE_LAYER)
     vi = convert.element_vertices(me, domain)
-    new = ramp.color_to_ease(colors, *layer_range(obj, scene))
+    new = ramp.color_to_ease(colors, *data.layer_range(obj, scene))
     ease = np.broadcast_to(np.asarray(ease, dtype=np.float64), (len(me.vertices),))
     where = np.ones(len(vi), dtype=bool) if mask is None else np.asarray(mask)[vi]
     new[where] = ease[vi][where]
@@ -87,37 +50,10 @@ def panel_vertex_mask(context, panel: str) -> np.ndarray:
     if panel not in names:
         raise state.AddonError(f"no panel {panel!r}; panels: {', '.join(names)}")
     obj = data.body_object(context)
-    single, cols = _template_rows(cut, cut.panel(panel))
+    single, cols = data.template_rows(cut, cut.panel(panel))
     mask = np.zeros(len(obj.data.vertices), dtype=bool)
     mask[cols] = True
     return mask
-
-
-def _template_rows(cut, panel) -> tuple:
-    """(rows, template vertex ids): the panel's vertices that are template vertices of the body
-    (rows of the embedding with a single weight: inside the panel or on its seam)."""
-    emb = cut.embedding[panel.vertex_ids].tocsr()
-    single = np.flatnonzero(np.diff(emb.indptr) == 1)
-    return single, emb.indices[emb.indptr[single]]
-
-
-def x_mirror(obj) -> bool:
-    """Blender's own X-mirror setting of the paint modes: the body mesh's ``use_mirror_x``
-    (the X toggle of Vertex Paint's and Sculpt's Symmetry popover; the tool settings'
-    ``use_symmetry_x`` are legacy and not what the header shows)."""
-    return bool(getattr(obj.data, "use_mirror_x", False))
-
-
-def symmetrised(obj, tri_ease: np.ndarray) -> np.ndarray:
-    """``tri_ease`` (F,) averaged with its mirror image through the body's symmetry map
-    (triangles without a mirror triangle keep their value)."""
-    from ..core.design.mirror import face_symmetry
-    model = state.body_model(data.body_spec(obj)["model"])
-    fs = face_symmetry(convert.get_triangles(obj.data), np.asarray(model.symmetry))
-    out = np.asarray(tri_ease, dtype=np.float64).copy()
-    has = fs >= 0
-    out[has] = 0.5 * (out[has] + out[fs[has]])
-    return out
 
 
 def design_with_triangle_ease(context, design, tri_ease: np.ndarray, mirror: bool = False):
@@ -145,26 +81,6 @@ def design_with_triangle_ease(context, design, tri_ease: np.ndarray, mirror: boo
                                              "values": [round(float(x), 6) for x in tri_ease[tris]],
                                              "default": round(float(np.median(tri_ease[tris])), 6)}})
     return d
-
-
-def design_vertex_ease(context) -> np.ndarray:
-    """Per body vertex ease (V,) of the design's cut (mean of the cut triangles'
-    ease around each template vertex; 1.0 off the garment)."""
-    obj = data.body_object(context)
-    cut = data.current_cut(context)
-    V = len(obj.data.vertices)
-    acc = np.zeros(V)
-    cnt = np.zeros(V)
-    for p in cut.panels:
-        f = np.asarray(p.faces)
-        ev = np.zeros(len(p.vertex_ids))
-        cv = np.zeros(len(p.vertex_ids))
-        np.add.at(ev, f.ravel(), np.repeat(np.asarray(p.ease, dtype=float), 3))
-        np.add.at(cv, f.ravel(), 1.0)
-        single, cols = _template_rows(cut, p)
-        np.add.at(acc, cols, ev[single] / np.maximum(cv[single], 1))
-        np.add.at(cnt, cols, 1.0)
-    return np.where(cnt > 0, acc / np.maximum(cnt, 1), 1.0)
 
 
 def set_brush_color(context, rgba) -> None:
@@ -204,9 +120,9 @@ class EASE_OT_brush_ease(EaseOperator):
         if not lo <= e <= hi:
             raise state.AddonError(f"ease {e:.3f} is outside the ramp {lo:g} .. {hi:g}")
         obj = data.body_object(context)
-        if tuple(layer_range(obj, context.scene)) != (lo, hi):
+        if tuple(data.layer_range(obj, context.scene)) != (lo, hi):
             # keep the painted field: re-encode the layer in the new range first
-            write_vertex_ease(obj, context.scene, vertex_ease(obj, context.scene))
+            write_vertex_ease(obj, context.scene, data.vertex_ease(obj, context.scene))
         set_brush_color(context, ramp.ease_to_color(e, lo, hi))
         self.report({"INFO"}, f"brush paints ease {e:.3f}")
 
@@ -288,11 +204,13 @@ class EASE_OT_ease_to_design(EaseOperator):
     def run(self, context):
         obj = data.body_object(context)
         design = data.current_design(context)
-        tri = triangle_ease(obj, context.scene)
-        mirror = x_mirror(obj)
+        mirror = data.x_mirror(obj)
+        sync.mirrored_paint(obj, context.scene)     # X-mirror: a one-sided stroke painted on both sides
+        tri = data.triangle_ease(obj, context.scene)
         if mirror:
-            tri = symmetrised(obj, tri)
+            tri = data.symmetrised(obj, tri)
         sync.set_design(context, design_with_triangle_ease(context, design, tri, mirror), recut=True)
+        sync.remember_layer(obj, context.scene)
         how = "X-mirror: symmetric" if mirror else "each side as painted"
         self.report({"INFO"}, f"ease {tri.min():.3f} .. {tri.max():.3f} written into the design ({how})")
 
@@ -305,12 +223,13 @@ class EASE_OT_ease_from_design(EaseOperator):
 
     def run(self, context):
         obj = data.body_object(context)
-        v = design_vertex_ease(context)
+        v = data.design_vertex_ease(context)
         lo, hi = data.ramp_range(context.scene)
         if v.min() < lo or v.max() > hi:
             s = context.scene.ease
             s.ease_min, s.ease_max = min(lo, float(v.min())), max(hi, float(v.max()))
         write_vertex_ease(obj, context.scene, v)
+        sync.remember_layer(obj, context.scene)
 
 
 CLASSES = (EASE_OT_brush_ease, EASE_OT_paint_ease, EASE_OT_ease_uniform, EASE_OT_ease_gradient,

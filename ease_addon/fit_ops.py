@@ -26,7 +26,7 @@ class EASE_OT_transfer_size(EaseOperator):
     """Transfer the design to the chosen size, preserving its ease"""
     bl_idname = "ease.transfer_size"
     bl_label = "Transfer to Size"
-    needs = ('body', 'design')
+    needs = ('body', 'design', 'fit_size')
 
     def run(self, context):
         from ..core import workflows as wf

@@ -43,7 +43,7 @@ from collections import deque
 import bpy
 import numpy as np
 
-from . import convert, data, ease_ops, pattern_ops, ramp, sync
+from . import convert, data, pattern_ops, ramp, sync
 from .objects import objects_with_role, world_bounds
 
 SLICE_S = 0.03          # seconds of work per tick: the longest the viewport waits for the pattern
@@ -52,7 +52,7 @@ FIT_LAYER = "ease_fit"  # CORNER colour layer on the body: achieved / painted ea
 FIT_RANGE = 0.10        # +-10 %: the overlay's full blue / full red
 
 # the session of the scene's design (one per add-on session: the timer serves the active scene)
-_LIVE = {"key": None, "session": None, "colors": None, "builds": 0, "restart": False,
+_LIVE = {"key": None, "session": None, "colors": None, "mirror": None, "builds": 0, "restart": False,
          "inputs": None, "faces": None, "final": None}
 # running estimates, seconds per cut triangle of each kind of work (show, measure, encode, store)
 _RATES = {}
@@ -209,10 +209,10 @@ def _field(obj, scene) -> np.ndarray:
     faces = _LIVE.get("faces")
     if faces is None or len(faces) != len(obj.data.polygons) or \
             obj.data.color_attributes[convert.EASE_LAYER].domain != "POINT":
-        tri = ease_ops.triangle_ease(obj, scene)
+        tri = data.triangle_ease(obj, scene)
     else:   # the same mean of the vertex values, with the body's triangles kept (its topology is fixed)
-        tri = ramp.vertex_to_triangle(ease_ops.vertex_ease(obj, scene), faces)
-    return ease_ops.symmetrised(obj, tri) if ease_ops.x_mirror(obj) else tri
+        tri = ramp.vertex_to_triangle(data.vertex_ease(obj, scene), faces)
+    return data.symmetrised(obj, tri) if data.x_mirror(obj) else tri
 
 
 def _estimate(kind: str, size: int):
@@ -292,7 +292,11 @@ def step(context, budget_s: float = SLICE_S) -> dict:
     session = session_for(context)
     raw = _colors(obj)
     changed = False
-    if raw is not None and (_LIVE["colors"] is None or not np.array_equal(raw, _LIVE["colors"])):
+    mirror = data.x_mirror(obj)
+    if raw is not None and (_LIVE["colors"] is None or not np.array_equal(raw, _LIVE["colors"])
+                            or mirror != _LIVE["mirror"]):
+        if sync.mirrored_paint(obj, scene):     # X-mirror: a one-sided stroke painted on both sides
+            raw = _colors(obj)
         if _LIVE["restart"]:
             # after an undo/redo: continue from the restored pattern
             _LIVE["restart"] = False
@@ -300,7 +304,8 @@ def step(context, budget_s: float = SLICE_S) -> dict:
             if restored is not None and len(restored.panels) == len(session.prep.cut.panels):
                 session.restart_from(restored)
         changed = session.set_ease(_field(obj, scene))
-        _LIVE["colors"] = raw
+        sync.remember_layer(obj, scene)
+        _LIVE["colors"], _LIVE["mirror"] = raw, mirror
         if changed:
             _LIVE["final"] = None       # the pattern it would have stored is superseded
     was, warm = session.converged, session.warming
@@ -392,7 +397,8 @@ def stop() -> None:
             lst.remove(fn)
     if bpy.app.timers.is_registered(_tick):
         bpy.app.timers.unregister(_tick)
-    _LIVE.update(key=None, session=None, colors=None, restart=False, inputs=None, faces=None, final=None)
+    _LIVE.update(key=None, session=None, colors=None, mirror=None, restart=False, inputs=None, faces=None,
+                 final=None)
 
 
 def resume(*_args) -> None:

@@ -79,7 +79,8 @@ def world_bounds(objects) -> tuple:
 def select_only(context, obj) -> None:
     """Make ``obj`` the only selected object and the active one."""
     for o in context.view_layer.objects:
-        o.select_set(o == obj)
+        if o is not None:       # (an object removed in this operator: the view layer lists None until updated)
+            o.select_set(o == obj)
     context.view_layer.objects.active = obj
 
 

@@ -30,7 +30,20 @@ def _has_content(context) -> bool:
     return any(objects_with_role(context.scene, r) for r in ("body", "garment", "pattern_panel"))
 
 
-# requirement -> (test on the context, what the tooltip says is missing)
+def _size_on_chart(context) -> bool:
+    s = context.scene.ease
+    return s.size in data.chart_sizes(s.chart)
+
+
+def _fit_size_on_chart(context) -> bool:
+    return context.scene.ease.fit_size in data.chart_sizes(data.design_chart(context.scene))
+
+
+def _sizes_text(chart: str) -> str:
+    return f"the {chart} chart has sizes {', '.join(data.chart_sizes(chart))}"
+
+
+# requirement -> (test on the context, what the tooltip says is missing: text, or a function of the context)
 REQUIREMENTS = {
     "body": (_has_body, "needs an EASE body: add one in EASE > Body"),
     "design": (lambda c: bool(c.scene.ease.design_json),
@@ -39,6 +52,10 @@ REQUIREMENTS = {
                 "needs a pattern: press Optimize Pattern in EASE > Pattern"),
     "garment": (_has_garment, "needs a draped garment: press Drape in EASE > Drape"),
     "content": (_has_content, "nothing to render: add a body in EASE > Body"),
+    "size": (_size_on_chart, lambda c: f"size {c.scene.ease.size} is not on the chosen chart: "
+                                       f"{_sizes_text(c.scene.ease.chart)}"),
+    "fit_size": (_fit_size_on_chart, lambda c: f"target size {c.scene.ease.fit_size} is not on the design's "
+                                               f"chart: {_sizes_text(data.design_chart(c.scene))}"),
 }
 
 
@@ -47,7 +64,7 @@ def missing(context, needs) -> str:
     for need in needs:
         test, message = REQUIREMENTS[need]
         if not test(context):
-            return message
+            return message(context) if callable(message) else message
     return ""
 
 

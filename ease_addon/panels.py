@@ -31,6 +31,15 @@ def _ops(layout, *ops):
     return row
 
 
+def _sizes(layout, s, prop: str, chart: str):
+    """One aligned row of the size presets of ``chart`` for the enum ``prop``: only the chart's
+    (the enum holds every chart's sizes)."""
+    row = layout.row(align=True)
+    for size in data.chart_sizes(chart):
+        row.prop_enum(s, prop, size)
+    return row
+
+
 def _figures(layout, text: str) -> None:
     """Key figures of a JSON report as label rows."""
     if not text:
@@ -64,7 +73,8 @@ class EASE_PT_body(_EasePanel, bpy.types.Panel):
         box.label(text="Phenotype")
         for item in s.shape:
             box.prop(item, "value", text=item.name, slider=False)
-        _props(layout, s, "size", expand=True)
+        layout.prop(s, "chart")
+        _sizes(layout, s, "size", s.chart)
         layout.operator("ease.set_size")
         box = layout.box()
         box.label(text="Measurements (cm)")
@@ -95,6 +105,8 @@ class EASE_PT_design(_EasePanel, bpy.types.Panel):
         box.prop(s, "live_recut")
         for item in s.design_params:
             box.prop(item, "value", text=item.name)
+        if s.design_status:
+            box.label(text=s.design_status, icon="ERROR")
         box.operator("ease.recut")
         box = layout.box()
         box.label(text="Keypoints")
@@ -161,7 +173,10 @@ class EASE_PT_fit(_EasePanel, bpy.types.Panel):
 
     def draw(self, context):
         layout, s = self.layout, context.scene.ease
-        _props(layout, s, "fit_size", expand=True)
+        chart = data.design_chart(context.scene)
+        if chart != "default":
+            layout.label(text=f"Sizes of the design's chart: {chart}")
+        _sizes(layout, s, "fit_size", chart)
         layout.operator("ease.transfer_size")
         _props(layout, s, *(f"adapt_{p}" for p in ("T", "P1", "P2", "P3")), toggle=True)
         layout.prop(s, "tolerance")

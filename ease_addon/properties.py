@@ -12,12 +12,13 @@ from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProp
                        FloatVectorProperty, IntProperty, PointerProperty, StringProperty)
 
 from ..core.body.sizes import CHARTS
-from ..core.body.sizes import SIZES as CHART_SIZES
 from ..core.design.checks import EASE_MAX, EASE_MIN
 from . import data, live, sync
 
-SIZES = [(s, s, f"size {s} of the size chart") for s in CHART_SIZES]
-# Every chart's sizes are letters of the default chart's XS..XL; the chart says which apply.
+# Every size name of every chart, in size order (the default chart's first); the panels offer the
+# ones of the chart that applies (the Body panel's chart selector, the design's chart in Fit).
+SIZES = [(s, s, f"size {s} of the chart ({', '.join(c.name for c in CHARTS.values() if s in c.sizes)})")
+         for s in data.all_sizes()]
 CHART_ITEMS = [(c.name, c.name.capitalize(), f"{c.title}; sizes {', '.join(c.sizes)}") for c in CHARTS.values()]
 #: the solver configurations (core.workflows.CONFIGS) as the pattern operators offer them, after the design's own
 #: choice (its "solver" field, applied by the core: data.solver_choice)
@@ -76,6 +77,10 @@ def _fitmap_update(self, context):
     sync.apply_fitmap(context.scene)
 
 
+def _chart_update(self, context):
+    sync.chart_changed(context.scene)
+
+
 def _template_items(self, context):
     return data.template_items()
 
@@ -87,7 +92,7 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
     body_file: StringProperty(name="Body file", subtype="FILE_PATH",
                               description="SMPL/SMPL-X .npz/.pkl or template .obj the user owns")
     shape: CollectionProperty(type=EASE_PG_shape_param)
-    chart: EnumProperty(name="Chart", items=CHART_ITEMS, default="default",
+    chart: EnumProperty(name="Chart", items=CHART_ITEMS, default="default", update=_chart_update,
                         description="Size chart of the size presets: Anny's own (default) or EN 13402-3 women's / men's")
     size: EnumProperty(name="Size", items=SIZES, default="M")
     pose: EnumProperty(name="Pose", items=POSES, default="A")
@@ -106,6 +111,8 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
     design_file: StringProperty(name="Design file", subtype="FILE_PATH")
     design_json: StringProperty(name="Design", description="The current design (JSON)")
     design_params: CollectionProperty(type=EASE_PG_design_param)
+    design_status: StringProperty(name="Design status",
+                                  description="Why the last parameter value was refused (empty: none was)")
     live_recut: BoolProperty(name="Live re-cut", default=True,
                              description="Re-cut the design when a parameter changes")
     keypoint_name: StringProperty(name="Keypoint", description="Keypoint to place on the selected vertex")

@@ -16,7 +16,7 @@ class AddonError(EaseError):
 USER_ERRORS = (EaseError, Cancelled, KeyError, ValueError, OSError)
 
 _MODELS: dict = {}
-CUTS: dict = {}       # (design json, body model, shape) key -> GarmentCut
+CUTS: dict = {}       # (design text, body model, shape json) -> GarmentCut (data.cut_on)
 PATTERNS: dict = {}   # (scene name, key) -> (pattern json text, Pattern)
 
 

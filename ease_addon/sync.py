@@ -15,7 +15,7 @@ from contextlib import contextmanager
 import numpy as np
 
 from . import build, convert, data, materials, ramp, state
-from .objects import objects_with_role, select_only, world_bounds
+from .objects import objects_with_role, remove_object, select_only, world_bounds
 
 SYNCING = False   # True while the add-on fills the sliders (their update callbacks must not fire)
 
@@ -45,6 +45,32 @@ def fill_shape_props(scene, model, shape: dict) -> None:
             item.value = float(shape.get(name, default))
 
 
+def show_size(scene, obj, size) -> None:
+    """The Body panel and the body say which chart size the body has: ``size`` (``"M"``,
+    ``"women:M"``) sets the chart selector, the size preset and the body's ``ease_size``;
+    None (a shape of no chart size) clears the body's record. The measurements follow."""
+    from ..core.body.sizes import split_size
+    s = scene.ease
+    if size is None:
+        if "ease_size" in obj:
+            del obj["ease_size"]
+    else:
+        chart, key = split_size(size)
+        s.chart = chart.name
+        s.size = key
+        obj["ease_size"] = size
+    spec = data.body_spec(obj)
+    s.measurements_report = data.format_measurements(data.measurements(state.body_model(spec["model"]),
+                                                                        spec["shape"]))
+
+
+def chart_changed(scene) -> None:
+    """Update of the chart selector: the size preset stays one of the chart's (the nearest
+    one where the chart has no such size)."""
+    s = scene.ease
+    s.size = data.nearest_size(s.size, s.chart)
+
+
 def body_vertices(spec: dict) -> np.ndarray:
     """Vertices of the body spec ``{"model", "shape", "pose"}`` (the core's body instance)."""
     from ..core.body.instance import body_instance
@@ -64,21 +90,29 @@ def update_body(context, obj, shape=None, pose=None) -> None:
     convert.set_vertices(obj.data, verts)
     convert.store_json(obj, "ease_shape", spec["shape"])
     obj["ease_pose"] = spec["pose"]
+    if shape is not None and "ease_size" in obj:
+        del obj["ease_size"]        # a shape of its own; a caller setting a chart size says so after
     refresh_attachments(context, obj, verts)
 
 
-def new_body(context, model_name: str, shape=None, pose: str = "A"):
-    """Add a body object and make it the scene's body (shape sliders, ease layer, selection)."""
+def new_body(context, model_name: str, shape=None, pose: str = "A", replaces=None):
+    """Add a body object and make it the scene's body (shape sliders, ease layer, selection);
+    ``replaces``: the body it replaces, removed once the new one is computed (so the new one
+    takes its name, with no ``.001``)."""
     model = state.body_model(model_name)
     shape = dict(model.default_shape() if shape is None else shape)
     verts = body_vertices({"model": model_name, "shape": shape, "pose": pose})
     scene = context.scene
+    if replaces is not None:
+        remove_object(replaces)
     obj = build.body(scene, "EASE Body", verts, model.faces)
     obj["ease_model"] = model_name
     convert.store_json(obj, "ease_shape", shape)
     obj["ease_pose"] = pose
     scene.ease.body = obj
     fill_shape_props(scene, model, shape)
+    if shape == dict(model.default_shape()) and model_name == "anny":
+        show_size(scene, obj, "M")     # Anny's reference shape is the default chart's M
     init_ease_layer(scene, obj)
     select_only(context, obj)
     return obj
@@ -99,24 +133,32 @@ def shape_changed(item, context) -> None:
 
 
 def refresh_attachments(context, obj, verts) -> None:
-    """Move the seamlines and keypoint markers onto the body's current vertices."""
+    """Move the seamlines and keypoint markers onto the body's current vertices.
+
+    Seamlines follow only when they were drawn for the scene's design (their ``ease_design``
+    fingerprint): lines of another design (a design being replaced: :func:`set_design` redraws
+    them next) or that do not fit the cut are left alone, never indexed with another cut's ids.
+    """
     scene = context.scene
+    text = scene.ease.design_json
     for o in objects_with_role(scene, "seamlines"):
         ids = json.loads(o.get("ease_ids", "[]"))
-        if not scene.ease.design_json or not ids:
+        digest = data.design_digest(text)
+        if not text or not ids or o.get("ease_design", digest) != digest:   # (lines of older files: unstamped)
             continue
         # The cut's embedding holds for every shape and pose: move the lines with
-        # the cached cut (no re-cut while a slider is dragged).
-        cut = next(iter(state.CUTS.values()), None)
-        if cut is None or cut.embedding.shape[1] != len(verts):
-            # no cut yet, or one made on another body model (a body file replaced it)
+        # the cached cut of this design (no re-cut while a slider is dragged).
+        cut = data.cached_cut(text, data.body_spec(obj)["model"])
+        if cut is None:
             try:
                 cut = data.current_cut(context)
             except state.USER_ERRORS:
                 continue
-            if cut.embedding.shape[1] != len(verts):
-                continue
+        if cut.embedding.shape[1] != len(verts):
+            continue
         pos = cut.positions(verts)
+        if max(max(l) for l in ids) >= len(pos):
+            continue
         v, _ = convert.polyline_edges([pos[np.asarray(l)] for l in ids], closed=True)
         if len(v) == len(o.data.vertices):
             convert.set_vertices(o.data, v)
@@ -139,6 +181,61 @@ def refresh_legend(scene) -> None:
         item = s.legend.add()
         item.ease = e
         item.color = rgba
+
+
+MIRROR_TOL = 1e-4      # ease: a layer element differing from before by more was painted
+
+
+def mirror_stroke(obj, scene, before) -> int:
+    """X-mirror as Blender's own paint mirror does it: where the ease layer differs from ``before``
+    (its values per element, :func:`.data.layer_ease`) on one side only, the stroke is painted on
+    the mirror side too (the colours copied, so both sides hold what the brush put down, not an
+    average with what was there). Where both sides changed (Blender's mirrored stroke) the layer
+    is left as it is. Returns how many elements were written."""
+    me = obj.data
+    now = data.layer_ease(obj, scene)
+    before = np.asarray(before, dtype=np.float64)
+    if before.shape != now.shape:
+        return 0
+    mirror = data.element_mirror(me, state.body_model(data.body_spec(obj)["model"]).symmetry)
+    changed = np.abs(now - before) > MIRROR_TOL
+    has = mirror >= 0
+    one = changed & has
+    one[has] &= ~changed[mirror[has]]
+    if not one.any():
+        return 0
+    attr = me.color_attributes[convert.EASE_LAYER]
+    colors = np.empty(len(attr.data) * 4, dtype=np.float32)
+    attr.data.foreach_get("color", colors)
+    colors = colors.reshape(-1, 4)
+    colors[mirror[one]] = colors[one]
+    attr.data.foreach_set("color", colors.ravel())
+    me.update()
+    return int(one.sum())
+
+
+def remember_layer(obj, scene) -> None:
+    """Record the ease layer's values as taken now (:func:`.data.seen_ease`): strokes are what
+    differs from them later."""
+    me = obj.data
+    e = data.layer_ease(obj, scene).astype(np.float32)
+    layer = me.color_attributes[convert.EASE_LAYER]
+    seen = me.attributes.get(data.SEEN_LAYER)
+    if seen is None or seen.domain != layer.domain or seen.data_type != "FLOAT":
+        if seen is not None:
+            me.attributes.remove(seen)
+        seen = me.attributes.new(data.SEEN_LAYER, "FLOAT", layer.domain)
+    seen.data.foreach_set("value", e)
+
+
+def mirrored_paint(obj, scene) -> int:
+    """With X-mirror on: the strokes since the layer was last taken (:func:`.data.seen_ease`) that
+    reached one side only are painted on the other side too (:func:`mirror_stroke`); 0 (nothing
+    written) with X-mirror off or no record."""
+    before = data.seen_ease(obj)
+    if not data.x_mirror(obj) or before is None:
+        return 0
+    return mirror_stroke(obj, scene, before)
 
 
 def init_ease_layer(scene, obj, ease: float = 1.0) -> None:
@@ -180,29 +277,54 @@ def set_design(context, design, recut: bool = True, fill_params_too: bool = True
     kps = data.resolved_keypoints(design, model, verts)
     # -- the scene changes from here on
     scene = context.scene
-    scene.ease.design_json = json.dumps(design.to_json(), sort_keys=True)
+    scene.ease.design_json = data.design_text(design)
     if fill_params_too:   # not from a parameter slider's own update: its collection must stay put
         fill_params(scene, design)
+    # the Fit panel offers the design's chart's sizes: the target is one of them
+    scene.ease.fit_size = data.nearest_size(scene.ease.fit_size, data.design_chart(scene))
     convert.write_keypoints(obj.data, kps)
     build.keypoint_markers(scene, *data.keypoint_positions(obj, verts))
     if cut is not None:
-        build.seamlines(scene, cut, verts)
+        build.seamlines(scene, cut, verts, data.design_digest(scene.ease.design_json))
         names = [p.name for p in cut.panels]
         if scene.ease.ease_panel not in names:
             scene.ease.ease_panel = names[0] if names else ""
 
 
 def param_changed(item, context) -> None:
-    """Live re-cut when a parameter slider moves (errors go to the status text)."""
-    if SYNCING or not context.scene.ease.live_recut:
+    """Live re-cut when a parameter slider moves. A value the design refuses (out of range, a cut
+    that fails) is not kept: the slider goes back to the design's value and the error shows under
+    the Parameters, naming the parameter."""
+    s = context.scene.ease
+    if SYNCING or not s.live_recut:
         return
     try:
         d = data.current_design(context)
         d.set_parameter(item.name, data.as_typed(item.value))
         set_design(context, d, fill_params_too=False)
     except state.USER_ERRORS as exc:
-        context.scene.ease.drape_status = f"re-cut failed: {exc}"
+        refuse_param(context, item.name, exc)
         print(f"[ease] re-cut failed: {exc}")
+    else:
+        s.design_status = ""
+
+
+def refuse_param(context, name, exc) -> None:
+    """A parameter value was refused with ``exc`` (``name``: the parameter's, None for a cut of
+    several that failed): the sliders show the design's values again (in place: this may run in
+    a slider's own update) and the Design panel says why, naming the parameter and the value tried."""
+    s = context.scene.ease
+    item = s.design_params.get(name) if name else None
+    tried = None if item is None else data.as_typed(item.value)
+    try:
+        params = data.current_design(context).parameters
+    except state.USER_ERRORS:
+        params = {}
+    with filling():
+        for i in s.design_params:
+            if i.name in params and data.as_typed(i.value) != params[i.name].value:
+                i.value = params[i.name].value
+    s.design_status = f"{name} = {tried:g} refused: {exc}" if tried is not None else str(exc)
 
 
 def fill_design_props(scene, design) -> None:

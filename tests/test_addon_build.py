@@ -37,10 +37,10 @@ out = {"install": sorted(r), "enabled": list(addon_utils.check("bl_ext.user_defa
 bpy.ops.wm.read_homefile(use_empty=True)
 out["add_body"] = sorted(bpy.ops.ease.add_body(source="DEFAULT"))
 out["uniform"] = sorted(bpy.ops.ease.ease_uniform(whole_body=True, ease=1.25))
-ease_ops = sys.modules["bl_ext.user_default.ease.ease_addon.ease_ops"]
+data = sys.modules["bl_ext.user_default.ease.ease_addon.data"]
 body = bpy.context.scene.ease.body
 out["vertices"] = len(body.data.vertices)
-out["ease"] = float(ease_ops.vertex_ease(body, bpy.context.scene).mean())
+out["ease"] = float(data.vertex_ease(body, bpy.context.scene).mean())
 out["core_file"] = sys.modules["bl_ext.user_default.ease.core"].__file__
 sp = os.path.join(sys.argv[2], "extensions", ".local", "lib", "python3.11", "site-packages")
 out["site_packages"] = sorted(os.listdir(sp)) if os.path.isdir(sp) else []

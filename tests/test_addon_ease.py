@@ -45,7 +45,7 @@ def test_brush_colour_and_painted_layer_read_back(bpy_session, addon):
     edge = faces[600:650]
     colors[np.unique(edge)] = 0.5 * c0 + 0.5 * c1
     me.color_attributes["ease"].data.foreach_set("color", colors.astype(np.float32).ravel())
-    tri = ease_ops.triangle_ease(obj, bpy.context.scene)
+    tri = addon("data").triangle_ease(obj, bpy.context.scene)
     inner = [i for i in range(500) if not np.isin(faces[i], np.unique(faces[500:])).any()]
     assert inner and np.allclose(tri[inner], 1.3, atol=1e-5)     # exact for the brush's value
     only_edge = [i for i in range(600, 650) if np.isin(faces[i], np.unique(edge)).all()
@@ -61,12 +61,12 @@ def test_uniform_and_gradient_ease_per_panel(bpy_session, blender, addon):
     names = [p.name for p in cut.panels]
     assert bpy.ops.ease.ease_uniform(whole_body=True, ease=1.2) == {"FINISHED"}
     assert bpy.ops.ease.ease_uniform(panel=names[0], ease=1.5) == {"FINISHED"}
-    v = ease_ops.vertex_ease(s.body, bpy.context.scene)
+    v = addon("data").vertex_ease(s.body, bpy.context.scene)
     mask = ease_ops.panel_vertex_mask(bpy.context, names[0])
     assert np.allclose(v[mask], 1.5, atol=1e-5) and np.allclose(v[~mask], 1.2, atol=1e-5)
     s.ease_from, s.ease_to, s.gradient_axis = 1.1, 1.7, "Z"
     assert bpy.ops.ease.ease_gradient(panel=names[-1]) == {"FINISHED"}
-    v = ease_ops.vertex_ease(s.body, bpy.context.scene)
+    v = addon("data").vertex_ease(s.body, bpy.context.scene)
     m2 = ease_ops.panel_vertex_mask(bpy.context, names[-1])
     z = blender.verts(s.body)[:, 2]
     top, bottom = m2 & (z >= np.percentile(z[m2], 95)), m2 & (z <= np.percentile(z[m2], 5))
@@ -75,7 +75,7 @@ def test_uniform_and_gradient_ease_per_panel(bpy_session, blender, addon):
     # a value outside the ramp is refused, the layer unchanged
     r = blender.run(bpy.ops.ease.ease_uniform, panel=names[0], ease=3.5)
     assert "ERROR" in r
-    assert np.allclose(ease_ops.vertex_ease(s.body, bpy.context.scene), v)
+    assert np.allclose(addon("data").vertex_ease(s.body, bpy.context.scene), v)
     # back to the piecewise field the pattern test uses
     assert bpy.ops.ease.ease_uniform(whole_body=True, ease=1.2) == {"FINISHED"}
     assert bpy.ops.ease.ease_uniform(panel=names[0], ease=1.4) == {"FINISHED"}
@@ -96,8 +96,8 @@ def test_ease_layer_to_design(bpy_session, addon):
     assert np.median(first.ease) == pytest.approx(1.4, abs=1e-4)
     assert np.median(other.ease) == pytest.approx(1.2, abs=1e-4)
     # and back: the design's field written into the layer reads back the same
-    v_before = ease_ops.vertex_ease(s.body, bpy.context.scene)
+    v_before = addon("data").vertex_ease(s.body, bpy.context.scene)
     assert bpy.ops.ease.ease_from_design() == {"FINISHED"}
-    v_after = ease_ops.vertex_ease(s.body, bpy.context.scene)
+    v_after = addon("data").vertex_ease(s.body, bpy.context.scene)
     inside = ease_ops.panel_vertex_mask(bpy.context, names[0])
     assert np.median(np.abs(v_after[inside] - v_before[inside])) < 1e-4

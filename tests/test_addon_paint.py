@@ -27,7 +27,7 @@ def _paint_random(bpy, addon, seed=0):
     me = s.body.data
     e = np.random.default_rng(seed).uniform(1.0, 1.8, len(me.vertices))
     me.color_attributes["ease"].data.foreach_set("color", ramp.ease_to_color(e, 0.9, 2.0).astype(np.float32).ravel())
-    return ease_ops.triangle_ease(s.body, bpy.context.scene)
+    return addon("data").triangle_ease(s.body, bpy.context.scene)
 
 
 def _own_share(bpy, addon, cut, tri_ease):
@@ -106,7 +106,7 @@ def test_paint_ease_adopts_any_ease_layer_without_loss(bpy_session, addon, data_
     n = len(layer.data)
     e = np.random.default_rng(3).uniform(1.0, 1.8, n)   # corners of one vertex differ: no averaging allowed
     layer.data.foreach_set("color", ramp.ease_to_color(e, 0.9, 2.0).astype(np.float32).ravel())
-    before = ease_ops.triangle_ease(sc.ease.body, sc)
+    before = addon("data").triangle_ease(sc.ease.body, sc)
     assert before.std() > 0.05
     try:
         assert bpy.ops.ease.paint_ease() == {"FINISHED"}
@@ -114,7 +114,7 @@ def test_paint_ease_adopts_any_ease_layer_without_loss(bpy_session, addon, data_
         bpy.ops.object.mode_set(mode="OBJECT")
     layer = me.color_attributes["ease"]
     assert layer.data_type == "FLOAT_COLOR" and me.color_attributes.active_color.name == "ease"
-    after = ease_ops.triangle_ease(sc.ease.body, sc)
+    after = addon("data").triangle_ease(sc.ease.body, sc)
     assert np.allclose(after, before, atol=1e-6)
     # the brush's uniform writes keep the corners they do not touch
     names = [p.name for p in addon("data").current_cut(bpy.context).panels]
@@ -122,4 +122,4 @@ def test_paint_ease_adopts_any_ease_layer_without_loss(bpy_session, addon, data_
     mask = ease_ops.panel_vertex_mask(bpy.context, names[0])
     faces = addon("convert").get_triangles(me)
     outside = ~mask[faces].any(axis=1)
-    assert np.allclose(ease_ops.triangle_ease(sc.ease.body, sc)[outside], before[outside], atol=1e-6)
+    assert np.allclose(addon("data").triangle_ease(sc.ease.body, sc)[outside], before[outside], atol=1e-6)

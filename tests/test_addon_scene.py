@@ -35,7 +35,7 @@ def _fingerprint(bpy, blender, ease_ops, convert):
                          g.data.materials[0].name if g.data.materials else None)
     if s.body is not None:
         fp["verts"] = float(np.round(blender.verts(s.body).astype(np.float64).sum(), 5))
-        fp["ease"] = float(np.round(ease_ops.vertex_ease(s.body, sc).sum(), 5))
+        fp["ease"] = float(np.round(blender.mod("data").vertex_ease(s.body, sc).sum(), 5))
         fp["kp"] = json.dumps(convert.read_keypoints(s.body.data), sort_keys=True)
         layer = s.body.data.color_attributes.get("ease")
         raw = np.empty(len(layer.data) * 4, dtype=np.float32)
@@ -145,7 +145,7 @@ def test_save_reopen_round_trip(bpy_session, addon):
     ease_ops = addon("ease_ops")
     convert = addon("convert")
     design = s.design_json
-    ease_v = ease_ops.vertex_ease(s.body, bpy.context.scene).copy()
+    ease_v = addon("data").vertex_ease(s.body, bpy.context.scene).copy()
     kps = convert.read_keypoints(s.body.data)
     path = str(bpy_session["tmp"] / "scene.blend")
     assert bpy.ops.wm.save_as_mainfile(filepath=path) == {"FINISHED"}
@@ -154,7 +154,7 @@ def test_save_reopen_round_trip(bpy_session, addon):
     assert bpy.ops.wm.open_mainfile(filepath=path) == {"FINISHED"}
     s = bpy.context.scene.ease
     assert s.design_json == design
-    assert np.allclose(ease_ops.vertex_ease(s.body, bpy.context.scene), ease_v, atol=1e-7)
+    assert np.allclose(addon("data").vertex_ease(s.body, bpy.context.scene), ease_v, atol=1e-7)
     assert convert.read_keypoints(s.body.data) == kps
     data = addon("data")
     assert data.stored_pattern(bpy.context.scene) is not None
