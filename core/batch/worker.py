@@ -175,6 +175,7 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
     from .. import workflows as wf
     from ..body.instance import body_instance, instance_pose, instance_shape
     from ..body.measure import measure
+    from ..export.pieces import readable_name
 
     row = {**item_row(item), "worker": os.getpid()}
     timings: Dict[str, float] = {}
@@ -197,7 +198,8 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
         # the body's shape before anything can fail on it: a refused body's row says which body it is
         row.update({f"shape.{k}": v for k, v in sorted((instance_shape(model, target) or {}).items())})
         rest = body_instance(model, target)
-        row.update({f"body.{k}_cm": v for k, v in measure(model, rest).items()})
+        girths = measure(model, rest)
+        row.update({f"body.{k}_cm": v for k, v in girths.items()})
         # the cut's pose: the reference pose ("A", or none) is the rest instance itself, which the transfer
         # then takes as its target instead of evaluating the body again; another pose is the transfer's to
         # make, and the drape's (the posed body, only then)
@@ -210,6 +212,10 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
         run = wf.transfer(ctx.prep, target, config=item.options.config, solver=ctx.solver, start=ctx.start,
                           progress=check, vertices=rest if at_rest else None)
         timings["transfer"] = run.timings["optimize"]
+        # the body in its own fields of pattern.json and every export: a readable name where it has no chart
+        # size (sample-0017, not its shape parameters), its girths
+        run.pattern.body.update({} if isinstance(target, str) else {"name": readable_name(item.body.label)},
+                                measurements_cm=dict(girths))
         row.update(_pattern_row(run.pattern))
         timings["metrics"] = time.perf_counter() - t - timings["transfer"]
 
