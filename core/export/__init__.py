@@ -50,7 +50,7 @@ from ..geom.polyline import polyline_length
 from .allowance import DEFAULT_ALLOWANCE, DEFAULT_HEM, resolve_allowance
 from .layout import LAYOUT_MARGIN, SHEET_WIDTH, layout_pieces
 from .notches import DEFAULT_NOTCH_SPACING
-from .pieces import PieceDrawing, build_pieces, resolve_notch_spacing
+from .pieces import PieceDrawing, body_summary, build_pieces, resolve_notch_spacing, size_label
 from .validate import validate_body, validate_drape, validate_pattern
 
 FORMATS = ("svg", "dxf", "pdf", "glb", "obj")
@@ -153,9 +153,10 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
         warnings.extend(found)
     boxes = [p.bbox for p in pieces]
     title = pattern.style or "pattern"
-    size = str((pattern.body or {}).get("size") or (pattern.body or {}).get("shape") or "-")
+    size = size_label(pattern)
     files = {}   # relative name -> bytes, rendered fully before anything is written
-    summary = {"style": title, "size": size, "unit": "mm", "allowance_mm": {k: v * 1000 for k, v in widths.items()},
+    summary = {"style": title, "size": size, "body": body_summary(pattern), "unit": "mm",
+               "allowance_mm": {k: v * 1000 for k, v in widths.items()},
                "pieces": [_piece_summary(p, pattern) for p in pieces], "warnings": found}
     if "glb" in formats or "obj" in formats:
         from . import mesh

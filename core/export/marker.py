@@ -54,6 +54,7 @@ from ..pattern.types import Pattern
 from ..progress import Progress, report
 from .marker_outline import nest_outline
 from .pieces import PieceDrawing, build_pieces
+from .pieces import size_label as pieces_size_label
 
 GRAIN_TO_LENGTH = np.array([[0.0, 1.0], [-1.0, 0.0]])  # piece frame (grain +y) -> marker frame (grain +x)
 MAX_TILT = 10.0           # degrees
@@ -162,10 +163,12 @@ def parse_quantities(text: str, field: str = "sizes") -> Dict[str, int]:
 
 
 def size_label(pattern: Pattern, folder=None) -> str:
-    """The size a pattern is for: its body's chart size, else the folder name."""
-    body = pattern.body or {}
-    size = body.get("size") or (body.get("shape") if isinstance(body.get("shape"), str) else None)
-    return str(size or (Path(folder).name if folder is not None else "-"))
+    """The size a pattern is for (:func:`core.export.pieces.size_label`: its chart size, else its body's
+    name), else the folder name."""
+    size = pieces_size_label(pattern)
+    if size in ("-", "custom") and folder is not None:
+        return Path(folder).name
+    return size
 
 
 def _rot(deg: float) -> np.ndarray:

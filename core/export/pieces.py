@@ -15,6 +15,7 @@ pattern's.
 from __future__ import annotations
 
 import dataclasses
+import re
 import unicodedata
 from dataclasses import dataclass, field
 from typing import Dict, List, Mapping, Optional
@@ -94,6 +95,44 @@ def ascii_text(text: str) -> str:
     return "".join(ch if 32 <= ord(ch) < 127 else "?" for ch in s)
 
 
+def readable_name(label: str) -> str:
+    """A body's label as a size name for files and labels: a generated label ``<kind> <number>`` (a batch's
+    ``sample 17``, ``row 3``, ``betas 4``) as ``sample-0017``, any other (a table's ``name`` column) as written
+    (ASCII); ``custom`` for an empty one."""
+    m = re.fullmatch(r"\s*([A-Za-z]+)\s+(\d+)\s*", str(label))
+    if m:
+        return f"{m.group(1).lower()}-{int(m.group(2)):04d}"
+    return ascii_text(label).strip() or "custom"
+
+
+def size_label(pattern: Pattern) -> str:
+    """The size a pattern is for, as every file names it (AAMA ``Size:`` / ``Sample Size:``, labels,
+    ``export.json``): the body's chart size (``size``, or a ``shape`` given by name), else the body's ``name``
+    (a batch's measured or sampled body, :func:`readable_name`), else ``custom`` for a body given only by
+    its shape parameters, ``-`` without a body. Never the shape parameters themselves."""
+    body = pattern.body or {}
+    for key in ("size", "name", "shape"):
+        value = body.get(key)
+        if isinstance(value, str) and value.strip():
+            return value.strip()
+    return "custom" if body.get("shape") is not None else "-"
+
+
+def body_summary(pattern: Pattern) -> dict:
+    """The pattern's body in its own fields, for ``export.json``: ``size`` (:func:`size_label`), ``model``,
+    ``pose`` (a preset's name), ``shape`` (the model's parameters, when given as such) and
+    ``measurements_cm`` (where the body record carries them, e.g. a batch item's girths)."""
+    body = pattern.body or {}
+    out = {"size": size_label(pattern)}
+    for key in ("name", "model", "pose"):
+        if isinstance(body.get(key), str):
+            out[key] = body[key]
+    for key in ("shape", "measurements_cm"):
+        if isinstance(body.get(key), dict):
+            out[key] = {str(k): float(v) for k, v in sorted(body[key].items())}
+    return out
+
+
 def _room(sew: List[np.ndarray], y: np.ndarray, x: float, direction: float) -> float:
     """Smallest distance (m) from (x, y_k) along +-x to the sew line, over the rows y_k."""
     d = np.array([direction, 0.0])
@@ -159,7 +198,7 @@ def _cut_line(quantity: int, folded: bool, panel: PatternPanel, pattern: Pattern
 def _label(pattern: Pattern, panel: PatternPanel, quantity: int, folded: bool,
            edge_w: List[np.ndarray]) -> List[str]:
     """The label lines of a piece: style, piece, size, how to cut it (line ``CUT_LINE``), units and allowance."""
-    size = (pattern.body or {}).get("size") or (pattern.body or {}).get("shape") or "-"
+    size = size_label(pattern)
     return [ascii_text(pattern.style or "pattern"),
             ascii_text(f"piece: {panel.name}" + (f" ({panel.garment})" if panel.garment and
                                                  not panel.name.startswith(panel.garment) else "")),
