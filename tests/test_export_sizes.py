@@ -19,7 +19,8 @@ def test_readable_name(label, name):
     assert readable_name(label) == name
 
 
-@pytest.mark.parametrize("body, size", [({"shape": "M"}, "M"), ({"shape": {"age": 0.9}, "size": "women:L"}, "women:L"),
+@pytest.mark.parametrize("body, size", [({"shape": "M"}, "M"),
+                                        ({"shape": {"age": 0.9}, "size": "women:L"}, "women:L"),
                                         ({"shape": {"age": 0.9}, "name": "sample-0003"}, "sample-0003"),
                                         ({"shape": {"age": 0.9}}, "custom"), ({}, "-")])
 def test_size_label(body, size):
