@@ -109,6 +109,7 @@ class EASE_OT_save_design(EaseOperator):
     """Write the current design (with its ease) to the design file"""
     bl_idname = "ease.save_design"
     bl_label = "Save Design"
+    bl_options = {"REGISTER"}      # writes a file, changes no Blender data: no undo step
     needs = ('design',)
 
     filepath: bpy.props.StringProperty(subtype="FILE_PATH", default="")

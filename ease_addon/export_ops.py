@@ -37,7 +37,7 @@ class EASE_OT_export_pattern(EaseOperator):
     """Export the pattern (SVG, DXF, PDF) and the draped garment (GLB, OBJ) to the export folder"""
     bl_idname = "ease.export_pattern"
     bl_label = "Export Pattern"
-    needs = ('pattern',)
+    needs = ('pattern', 'export_dir')   # greyed out, saying why, on an unsaved file with a "//" folder
 
     directory: bpy.props.StringProperty(subtype="DIR_PATH", default="")
 

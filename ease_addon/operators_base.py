@@ -39,6 +39,16 @@ def _fit_size_on_chart(context) -> bool:
     return context.scene.ease.fit_size in data.chart_sizes(data.design_chart(context.scene))
 
 
+def _output_problem(path: str, setting: str) -> str:
+    """Why the panel's output ``path`` ("Export to", "Render to") cannot be written now ("" when it can):
+    empty, or relative to a .blend that is not saved."""
+    try:
+        data.output_path(path, setting)
+    except state.AddonError as exc:
+        return str(exc)
+    return ""
+
+
 def _sizes_text(chart: str) -> str:
     return f"the {chart} chart has sizes {', '.join(data.chart_sizes(chart))}"
 
@@ -52,6 +62,11 @@ REQUIREMENTS = {
                 "needs a pattern: press Optimize Pattern in EASE > Pattern"),
     "garment": (_has_garment, "needs a draped garment: press Drape in EASE > Drape"),
     "content": (_has_content, "nothing to render: add a body in EASE > Body"),
+    # an output folder or file the button can write to (an unsaved file has no folder for "//" paths)
+    "export_dir": (lambda c: not _output_problem(c.scene.ease.export_dir, "Export to"),
+                   lambda c: _output_problem(c.scene.ease.export_dir, "Export to")),
+    "render_path": (lambda c: not _output_problem(c.scene.ease.render_path, "Render to"),
+                    lambda c: _output_problem(c.scene.ease.render_path, "Render to")),
     "size": (_size_on_chart, lambda c: f"size {c.scene.ease.size} is not on the chosen chart: "
                                        f"{_sizes_text(c.scene.ease.chart)}"),
     "fit_size": (_fit_size_on_chart, lambda c: f"target size {c.scene.ease.fit_size} is not on the design's "

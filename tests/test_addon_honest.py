@@ -305,3 +305,56 @@ def test_x_mirror_on_while_live_runs_resolves(blender):
     finally:
         me.use_mirror_x = False
         s.live = False
+
+
+def test_operators_push_an_undo_step_as_the_ui_calls_them(blender):
+    """A button press runs the operator with an undo push (``undo=True`` from Python): each EASE
+    operator that changes the scene is one undo step, so Ctrl+Z takes back exactly it."""
+    bpy = blender.bpy
+    blender.reset(body=True, design=TOP)
+    E = lambda: bpy.context.scene.ease  # noqa: E731  (undo rebuilds the data: fetch afresh)
+    name = E().design_params[0].name
+    steps = [(bpy.ops.ease.set_size, dict(size="S"), lambda: E().body.get("ease_size")),
+             (bpy.ops.ease.set_pose, dict(pose="P1"), lambda: E().body.get("ease_pose")),
+             (bpy.ops.ease.ease_uniform, dict(whole_body=True, ease=1.6),
+              lambda: round(float(blender.mod("data").vertex_ease(E().body, bpy.context.scene).mean()), 6)),
+             (bpy.ops.ease.set_parameter, dict(name=name, value=0.5 * (E().design_params[0].value
+                                                                      + E().design_params[0].min)),
+              lambda: E().design_json),
+             (bpy.ops.ease.load_template, dict(template=SHIRT), lambda: E().design_json)]
+    bpy.ops.ed.undo_push(message="start")
+    for op, kw, read in steps:
+        before = read()
+        assert op("EXEC_DEFAULT", True, **kw) == {"FINISHED"}
+        assert read() != before, op.idname()
+        assert bpy.ops.ed.undo() == {"FINISHED"}
+        assert read() == before, op.idname()
+        assert bpy.ops.ed.redo() == {"FINISHED"}
+        assert read() != before, op.idname()
+    assert "UNDO" not in bpy.types.EASE_OT_save_design.bl_options      # a file only: no empty step
+
+
+def test_export_greyed_out_on_an_unsaved_file(blender):
+    """Export to "//ease_export" on a file never saved could be pressed and then failed."""
+    bpy = blender.bpy
+    blender.reset(body=True, design=TOP, pattern=True)
+    s = bpy.context.scene.ease
+    assert not bpy.data.filepath
+    assert s.export_dir.startswith("//")          # the default: next to the .blend
+    assert not bpy.ops.ease.export_pattern.poll()
+    why = blender.mod("operators_base").missing(bpy.context, bpy.types.EASE_OT_export_pattern.needs)
+    assert "save" in why and "Export to" in why
+    s.export_dir = str(blender.tmp / "unsaved_export")
+    assert bpy.ops.ease.export_pattern.poll()
+
+
+def test_drape_from_a_posed_body_says_the_body_moves(blender):
+    """Draping while the body was posed P1 silently put it back in A (the pattern is solved in A)."""
+    bpy = blender.bpy
+    blender.reset(body=True, design=TOP, pattern=True)
+    s = bpy.context.scene.ease
+    assert bpy.ops.ease.set_pose(pose="P1") == {"FINISHED"}
+    s.drape_frames, s.drape_device = 2, "cpu"
+    assert bpy.ops.ease.drape() == {"FINISHED"}
+    assert s.body["ease_pose"] == "A" and s.pose == "A"
+    assert "pose A" in s.drape_status and "P1" in s.drape_status
