@@ -207,8 +207,12 @@ class EASE_PT_render(_EasePanel, bpy.types.Panel):
         layout, s = self.layout, context.scene.ease
         layout.operator("ease.studio_setup", icon="LIGHT_AREA")
         _props(layout, s, "render_samples", "render_resolution")
+        layout.prop(s, "render_view", expand=True)
         layout.prop(s, "render_path")
         layout.operator("ease.render", icon="RENDER_STILL")
+        row = layout.row(align=True)
+        row.prop(s, "render_turntable_frames")
+        row.operator("ease.render_turntable", icon="RENDER_ANIMATION")
         layout.separator()
         layout.prop(s, "export_dir")
         _props(layout, s, *(f"export_{f}" for f in ("svg", "dxf", "pdf", "glb", "obj")), toggle=True)

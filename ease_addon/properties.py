@@ -155,8 +155,18 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
                          default="NONE", update=_fitmap_update)
     # Render / export
     render_path: StringProperty(name="Render to", subtype="FILE_PATH", default="//ease_render.png")
-    render_samples: IntProperty(name="Samples", default=16, min=1, max=4096)
-    render_resolution: IntProperty(name="Resolution %", default=50, min=5, max=100)
+    render_samples: IntProperty(name="Samples", default=32, min=1, max=4096,
+                                description="Cycles samples per pixel (adaptive, denoised)")
+    render_resolution: IntProperty(name="Resolution %", default=100, min=5, max=100,
+                                   description="% of the studio's 1080 x 1440 frame")
+    render_view: EnumProperty(name="View", items=[("FRONT", "Front", "the front camera"),
+                                                  ("THREE_QUARTER", "3/4", "the three-quarter camera (front right)"),
+                                                  ("BACK", "Back", "the back camera"),
+                                                  ("PATTERN", "Pattern", "the pattern pieces, flat"),
+                                                  ("ALL", "All", "front, 3/4 and back: one PNG each")],
+                              default="FRONT")
+    render_turntable_frames: IntProperty(name="Turntable frames", default=24, min=2, max=720,
+                                         description="frames of a full turn around the body")
     export_dir: StringProperty(name="Export to", subtype="DIR_PATH", default="//ease_export")
     export_svg: BoolProperty(name="SVG", default=True)
     export_dxf: BoolProperty(name="DXF", default=True)
