@@ -20,6 +20,8 @@ Fields of the ``materials`` object (metres):
 ``export``        ``{"allowance": m | {"default", "hem", "fold", seam line: m},
                   "notch_spacing": m}``: seam allowance 0..0.1 m (default 1 cm,
                   hems 2 cm, folds 0) and notch spacing (default 10 cm)
+``color``         the fabric's colour in renders: ``"#rrggbb"`` or ``[r, g, b]`` in 0..1
+                  (sRGB), or ``{garment: colour}``; default: the fabric preset's
 """
 from __future__ import annotations
 
@@ -148,8 +150,8 @@ def _widths(allowance) -> Dict[str, float]:
 def parse_materials(path: str, obj) -> dict:
     """Validate a ``materials`` object; the result has ``fabric``, ``eps_weft`` and ``eps_warp`` filled in
     (their defaults when absent) and the optional fields as given."""
-    expect_dict(path, obj, "materials {fabric, eps_weft, eps_warp, export, gathered, gather_above}")
-    expect_keys(path, obj, ("fabric", "eps_weft", "eps_warp", "export", "gathered", "gather_above"))
+    expect_dict(path, obj, "materials {fabric, eps_weft, eps_warp, export, gathered, gather_above, color}")
+    expect_keys(path, obj, ("fabric", "eps_weft", "eps_warp", "export", "gathered", "gather_above", "color"))
     fabric = obj.get("fabric", FABRIC)
     if not isinstance(fabric, str) or fabric.strip().lower() not in FABRICS:
         raise DesignError(f"{path}.fabric", f"expected a fabric preset ({', '.join(FABRICS)}), got {fmt(fabric)}")
@@ -176,7 +178,26 @@ def parse_materials(path: str, obj) -> dict:
         out["gather_above"] = None if a is None else check_number(
             f"{path}.gather_above", a, 0.01, 10.0,
             what="a fraction (0.25: gather a seam whose sides' ease demands differ by more than 25 %) or null")
+    if "color" in obj:
+        c = obj["color"]
+        if isinstance(c, dict):
+            for k, v in c.items():
+                check_name(f"{path}.color.{k}", k)
+                _check_color(f"{path}.color.{k}", v)
+            out["color"] = dict(c)
+        else:
+            out["color"] = _check_color(f"{path}.color", c)
     return out
+
+
+def _check_color(path: str, value):
+    """A render colour: ``"#rrggbb"`` or ``[r, g, b]`` in 0..1 (sRGB)."""
+    if isinstance(value, str) and len(value) == 7 and value[0] == "#" \
+            and all(ch in "0123456789abcdefABCDEF" for ch in value[1:]):
+        return value
+    if isinstance(value, list) and len(value) == 3 and all(is_number(x) and 0.0 <= x <= 1.0 for x in value):
+        return list(value)
+    raise DesignError(path, f'expected a colour "#rrggbb" or [r, g, b] in 0..1, got {fmt(value)}')
 
 
 def _parse_export(path, obj):
