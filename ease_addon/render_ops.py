@@ -1,88 +1,36 @@
-"""Render stage: a studio preset (camera framing the body, three-point
-lights, Cycles on the CPU with few samples) and a PNG render."""
+"""Render stage: the studio preset (:mod:`.render_studio`: set, light rig, front / 3/4 /
+back cameras, Cycles with adaptive sampling and denoising), the garment dressed in its
+fabric (:mod:`.render_fabric`), PNG renders of one view or all, and a turntable."""
 from __future__ import annotations
 
-import math
 import os
 
 import bpy
-import numpy as np
 
-from . import data, state
-from .objects import collection, ensure_nodes, world_bounds
+from . import data, render_fabric, render_studio, state
+from .objects import window_progress
 from .operators_base import EaseOperator
 
-STUDIO = "EASE Studio"
+VIEW_FILES = {"FRONT": "front", "THREE_QUARTER": "three_quarter", "BACK": "back"}
 
 
-def scene_bounds(scene) -> tuple:
-    """(min, max) world corners of the visible EASE meshes (body, garment, pattern)."""
-    shown = [o for o in scene.objects if o.type == "MESH" and not o.hide_render
-             and o.get("ease_role") in ("body", "garment", "pattern_panel")]
-    if not shown:
-        return np.array([-0.5, -0.3, 0.0]), np.array([0.5, 0.3, 1.8])
-    return world_bounds(shown)
+def setup_studio(scene, samples: int = 32, resolution_pct: int = 100, view: str = "FRONT") -> list:
+    """The studio for the scene's content and the garment's fabric; the names of the objects
+    not made by EASE that were hidden from the render (:func:`.render_studio.clear_set`)."""
+    render_fabric.dress_garments(scene)
+    return render_studio.setup(scene, samples, resolution_pct, view)
 
 
-def _studio_object(scene, name, data):
-    coll = collection(scene)
-    obj = bpy.data.objects.get(name)
-    if obj is None:
-        obj = bpy.data.objects.new(name, data)
-        coll.objects.link(obj)
-    obj["ease_role"] = "studio"
-    return obj
-
-
-def setup_studio(scene, samples: int = 16, resolution_pct: int = 50) -> None:
-    """Camera in front of the body (-Y) framing the body, garment and pattern
-    pieces, key/fill/rim lights, grey world, Cycles CPU with ``samples``
-    samples at ``resolution_pct`` % of a 1200-pixel-high frame."""
-    lo, hi = scene_bounds(scene)
-    centre = (lo + hi) / 2
-    w, h = float(max(hi[0] - lo[0], 0.3)), float(max(hi[2] - lo[2], 0.3))
-    # frame aspect follows the content (portrait for a body, landscape with the pattern beside it)
-    aspect = min(max(w / h, 0.8), 1.8)
-    res_y = 1200
-    res_x = int(round(res_y * aspect / 2) * 2)
-    cam_data = bpy.data.cameras.get(STUDIO + " Camera") or bpy.data.cameras.new(STUDIO + " Camera")
-    cam_data.lens = 50.0
-    cam_data.sensor_fit = "AUTO"      # the 36 mm sensor spans the larger image side
-    cam = _studio_object(scene, STUDIO + " Camera", cam_data)
-    big = 0.5 * 36.0 / 50.0
-    tan_h = big if res_x >= res_y else big * res_x / res_y
-    tan_v = big if res_y >= res_x else big * res_y / res_x
-    dist = 1.08 * max(0.5 * w / tan_h, 0.5 * h / tan_v)
-    cam.location = (float(centre[0]), float(lo[1] - dist), float(centre[2]))
-    cam.rotation_euler = (math.pi / 2, 0.0, 0.0)
-    scene.camera = cam
-    for name, energy, loc, rot in (("Key", 250.0, (-1.5, -2.5, 2.6), (math.radians(55), 0, math.radians(-30))),
-                                   ("Fill", 90.0, (2.0, -2.0, 1.6), (math.radians(65), 0, math.radians(45))),
-                                   ("Rim", 180.0, (0.5, 2.5, 2.4), (math.radians(-55), 0, math.radians(170)))):
-        ld = bpy.data.lights.get(f"{STUDIO} {name}") or bpy.data.lights.new(f"{STUDIO} {name}", "AREA")
-        ld.energy = energy
-        ld.size = 1.5
-        lo_obj = _studio_object(scene, f"{STUDIO} {name}", ld)
-        lo_obj.location = (centre[0] + loc[0], centre[1] + loc[1], loc[2])
-        lo_obj.rotation_euler = rot
-    world = scene.world or bpy.data.worlds.new(STUDIO + " World")
-    scene.world = world
-    ensure_nodes(world)
-    bg = world.node_tree.nodes.get("Background")
-    if bg is not None:
-        bg.inputs["Color"].default_value = (0.6, 0.6, 0.62, 1.0)
-        bg.inputs["Strength"].default_value = 0.45
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = int(samples)
-    scene.cycles.use_denoising = False
-    if hasattr(scene.cycles, "use_adaptive_sampling"):
-        scene.cycles.use_adaptive_sampling = False
-    scene.render.resolution_x = res_x
-    scene.render.resolution_y = res_y
-    scene.render.resolution_percentage = int(resolution_pct)
-    scene.render.image_settings.file_format = "PNG"
-    scene.render.film_transparent = False
+def _ready(scene, s) -> list:
+    """Studio made (once), garment dressed, the panel's samples and size applied; hidden names."""
+    if bpy.data.objects.get(render_studio.camera_name("FRONT")) is None \
+            or render_studio.camera_name("FRONT") not in scene.objects:
+        return setup_studio(scene, s.render_samples, s.render_resolution)
+    render_fabric.dress_garments(scene)
+    scene.cycles.samples = int(s.render_samples)
+    scene.render.resolution_percentage = int(s.render_resolution)
+    lo_hi = render_studio.subject_points(scene)
+    return render_studio.clear_set(scene, 0.5 * (lo_hi.min(axis=0) + lo_hi.max(axis=0)))
 
 
 def render_png(scene, path: str) -> str:
@@ -105,29 +53,100 @@ def render_png(scene, path: str) -> str:
     return path
 
 
+def view_paths(path: str, view: str) -> list:
+    """[(view, file)] that a render of ``view`` writes: ``path`` itself for one view, and
+    ``<stem>_front.png``, ``<stem>_three_quarter.png``, ``<stem>_back.png`` for ALL."""
+    if view != "ALL":
+        return [(view, path)]
+    stem = path[:-4] if path.lower().endswith(".png") else path
+    return [(v, f"{stem}_{name}.png") for v, name in VIEW_FILES.items()]
+
+
+def _hidden_note(hidden: list) -> str:
+    if not hidden:
+        return ""
+    return (f"; hid from the render {len(hidden)} object(s) not made by EASE that stood in the studio: "
+            + ", ".join(hidden))
+
+
 class EASE_OT_studio_setup(EaseOperator):
-    """Set up the studio: camera framing the body, lights, Cycles CPU with few samples"""
+    """Set up the studio: a floor and backdrop, soft area lights, front / 3/4 / back cameras framing
+    the body and garment, the garment in its fabric, Cycles with adaptive sampling and denoising"""
     bl_idname = "ease.studio_setup"
     bl_label = "Studio Preset"
 
     def run(self, context):
         s = context.scene.ease
-        setup_studio(context.scene, s.render_samples, s.render_resolution)
+        view = s.render_view if s.render_view in render_studio.VIEWS or s.render_view == "PATTERN" else "FRONT"
+        if view == "PATTERN" and bpy.data.objects.get(render_studio.camera_name("PATTERN")) is None \
+                and not [o for o in context.scene.objects if o.get("ease_role") == "pattern_panel"]:
+            view = "FRONT"
+        hidden = setup_studio(context.scene, s.render_samples, s.render_resolution, view)
+        self.report({"INFO"}, "studio ready: front, 3/4, back cameras" + _hidden_note(hidden))
+
+
+def _use_view(scene, view: str) -> None:
+    try:
+        render_studio.use_view(scene, view)
+    except KeyError:
+        raise state.AddonError(f"no {view.lower()} camera: the scene has no pattern pieces "
+                               f"(EASE > Pattern) to show") from None
+
+
+def render_shots(context, shots) -> tuple:
+    """Render ``shots`` [(message, place the camera: f(scene), path)] one after the other with the
+    studio ready (:func:`_ready`) and the window's progress; the scene camera and what the render
+    shows are put back after. Returns (paths written, names hidden from the render)."""
+    s, scene = context.scene.ease, context.scene
+    data.output_path(s.render_path, "Render to")      # before the studio changes the scene
+    hidden = _ready(scene, s)
+    old = scene.camera
+    written = []
+    with window_progress(context) as progress:
+        try:
+            for i, (message, place, path) in enumerate(shots):
+                progress(i / len(shots), message)
+                place(scene)
+                written.append(render_png(scene, path))
+        finally:
+            if old is not None and old.name in scene.objects:
+                scene.camera = old
+                render_studio.show_for(scene, old.get("ease_view", "FRONT"))
+    return written, hidden
 
 
 class EASE_OT_render(EaseOperator):
-    """Render the studio camera to a PNG file"""
+    """Render the studio camera of the chosen view (or front, 3/4 and back) to PNG"""
     bl_idname = "ease.render"
     bl_label = "Render PNG"
     needs = ('content',)
 
     def run(self, context):
         s = context.scene.ease
-        data.output_path(s.render_path, "Render to")      # before the studio changes the scene
-        if context.scene.camera is None or STUDIO not in context.scene.camera.name:
-            setup_studio(context.scene, s.render_samples, s.render_resolution)
-        path = render_png(context.scene, s.render_path)
-        self.report({"INFO"}, f"rendered {path}")
+        shots = [(f"rendering {view.lower()}", lambda scene, v=view: _use_view(scene, v), path)
+                 for view, path in view_paths(s.render_path, s.render_view)]
+        written, hidden = render_shots(context, shots)
+        if s.render_view != "ALL":      # the view rendered stays the scene camera
+            _use_view(context.scene, s.render_view)
+        self.report({"INFO"}, "rendered " + ", ".join(written) + _hidden_note(hidden))
 
 
-CLASSES = (EASE_OT_studio_setup, EASE_OT_render)
+class EASE_OT_render_turntable(EaseOperator):
+    """Render a full turn around the body: Turntable frames PNGs <Render to>_0001.png, ..."""
+    bl_idname = "ease.render_turntable"
+    bl_label = "Render Turntable"
+    needs = ('content',)
+
+    def run(self, context):
+        s = context.scene.ease
+        base = data.output_path(s.render_path, "Render to")
+        stem = base[:-4] if base.lower().endswith(".png") else base
+        n = int(s.render_turntable_frames)
+        shots = [(f"turntable frame {i + 1}/{n}",
+                  lambda scene, a=360.0 * i / n: render_studio.turntable_camera(scene, a), f"{stem}_{i + 1:04d}.png")
+                 for i in range(n)]
+        written, hidden = render_shots(context, shots)
+        self.report({"INFO"}, f"rendered {len(written)} frames {written[0]} .. {written[-1]}" + _hidden_note(hidden))
+
+
+CLASSES = (EASE_OT_studio_setup, EASE_OT_render, EASE_OT_render_turntable)

@@ -31,7 +31,7 @@ def test_drape_garment_and_fit_map(bpy_session, blender):
     assert len(garments) == 1
     g = garments[0]
     assert len(g.data.polygons) > 100
-    assert g.data.materials[0].name == "EASE Fabric"
+    assert g.data.materials[0].name == "EASE Fabric cotton"   # the design's fabric preset
     assert g.data.color_attributes.get("fit_strain") is not None
     rep = json.loads(s.drape_json)
     assert rep["frames"] >= 1
@@ -52,7 +52,7 @@ def test_drape_garment_and_fit_map(bpy_session, blender):
         cols[layer] = c
     assert not np.allclose(cols["fit_strain"], cols["fit_gap"])
     assert bpy.ops.ease.fitmap(mode="NONE") == {"FINISHED"}
-    assert g.data.materials[0].name == "EASE Fabric"
+    assert g.data.materials[0].name == "EASE Fabric cotton"   # the design's fabric preset
 
 
 def test_drape_modal_progress_and_esc(bpy_session, blender, addon):
