@@ -41,16 +41,27 @@ CASES = {"shirt": "shirt_long_sleeve.json", "teaser": "teaser_shirt_pants.json"}
 
 
 def _addon():
-    """(bpy, module name, live module, ease_ops module) with the add-on enabled from this checkout."""
+    """(bpy, live module, ease_ops module, data module) of the add-on enabled from this checkout.
+
+    The benchmark measures the checkout, never an installed copy: bpy gets a fresh user folder of
+    its own (a user folder with an installed extension puts that extension's bundled wheels ahead
+    of this environment's packages: a scipy of another build, without ``scipy.sparse``), the core's
+    dependencies are imported before bpy, and the add-on's modules are the checkout's.
+    """
+    import os
+    import tempfile
+    import scipy.sparse  # noqa: F401  (this environment's scipy, before bpy extends sys.path)
+    import scipy.sparse.linalg  # noqa: F401
+    if "bpy" not in sys.modules:
+        os.environ["BLENDER_USER_RESOURCES"] = tempfile.mkdtemp(prefix="ease_bench_live_user_")
     spec = importlib.util.spec_from_file_location("ease_scripted_run", REPO / "examples" / "scripted_run.py")
     sr = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(sr)
     bpy = sr._bpy()
-    module = next((m for m in sys.modules if m.endswith(".ease_addon.live")), None)
-    if module is None:
-        sr.enable_from_checkout(bpy)
-        module = next(m for m in sys.modules if m.endswith(".ease_addon.live"))
-    base = module[:-len(".live")]
+    base = next((m[:-len(".live")] for m in sys.modules if m.endswith(".ease_addon.live")
+                 and Path(sys.modules[m].__file__).resolve().is_relative_to(REPO)), None)
+    if base is None:
+        base = sr.enable_from_checkout(bpy) + ".ease_addon"
     return bpy, sys.modules[base + ".live"], sys.modules[base + ".ease_ops"], sys.modules[base + ".data"]
 
 

@@ -358,3 +358,40 @@ def test_drape_from_a_posed_body_says_the_body_moves(blender):
     assert bpy.ops.ease.drape() == {"FINISHED"}
     assert s.body["ease_pose"] == "A" and s.pose == "A"
     assert "pose A" in s.drape_status and "P1" in s.drape_status
+
+
+BENCH_PROBE = r"""
+import importlib.util, sys
+spec = importlib.util.spec_from_file_location("bench_live", sys.argv[1])
+bench = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(bench)
+bpy, live, ease_ops, data = bench._addon()
+import scipy.sparse
+print("RESULT", scipy.sparse.__file__, live.__file__)
+"""
+
+
+def test_live_bench_ignores_an_installed_copy_in_the_user_folder(tmp_path):
+    """``ease bench --only live`` crashed (ModuleNotFoundError: scipy.sparse) when the Blender user
+    folder held an installed extension: its bundled wheels come before this environment's packages.
+    Here that folder holds a scipy without ``sparse``; the bench still gets this environment's
+    scipy and the checkout's add-on."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+    pytest.importorskip("bpy")
+    root = Path(__file__).resolve().parent.parent
+    site = tmp_path / "user" / "extensions" / ".local" / "lib" / f"python{sys.version_info[0]}.{sys.version_info[1]}" \
+        / "site-packages" / "scipy"
+    site.mkdir(parents=True)
+    (site / "__init__.py").write_text("# a scipy of another build, without sparse\n")
+    env = dict(os.environ, BLENDER_USER_RESOURCES=str(tmp_path / "user"),
+               WARP_CACHE_PATH=str(root / ".cache" / "warp"))
+    r = subprocess.run([sys.executable, "-c", BENCH_PROBE, str(root / "benchmarks" / "bench_live.py")],
+                       capture_output=True, text=True, env=env, timeout=600)
+    line = next((l for l in r.stdout.splitlines() if l.startswith("RESULT ")), None)
+    assert r.returncode == 0 and line, r.stdout[-2000:] + r.stderr[-2000:]
+    _, sparse, live = line.split()
+    assert str(tmp_path) not in sparse
+    assert Path(live).resolve().is_relative_to(root)
