@@ -282,7 +282,7 @@ def tip_angle(material: Material, overhang: float, edge: float, opts: DrapeOptio
 
 
 def cantilever(material: Union[None, str, Material] = None, edge: float = 0.005, options=None,
-               max_frames: int = 300, lo: float = 0.01, hi: float = 0.12, iterations: int = 7) -> dict:
+               max_frames: int = 300, lo: float = 0.004, hi: float = 0.12, iterations: int = 8) -> dict:
     """ASTM D1388 bending length: half the overhang whose tip lies on the 41.5 degree line.
 
     The overhang is found by bisection in [``lo``, ``hi``] (the tip angle grows
@@ -314,7 +314,7 @@ def cantilever(material: Union[None, str, Material] = None, edge: float = 0.005,
             hi, a_hi = mid, a_mid
     if a_lo <= CANTILEVER_ANGLE <= a_hi and a_hi > a_lo:
         overhang = lo + (hi - lo) * (CANTILEVER_ANGLE - a_lo) / (a_hi - a_lo)
-    else:
+    else:  # the 41.5 degree line is outside [lo, hi]
         overhang = float("nan")
     expected = (mat.bending / (mat.density * opts.gravity)) ** (1.0 / 3.0) if mat.bending > 0 else 0.0
     return {"material": mat.name, "edge_mm": edge * 1e3, "substeps": opts.substeps,
