@@ -1,4 +1,4 @@
-"""The pipeline, once: prepare → reference → transfer / adapt → drape → export.
+"""The pipeline, once: prepare → reference → transfer / adapt → drape → export → marker.
 
 The CLI (:mod:`core.cli`), the add-on (``ease_addon``), the benchmarks, batch
 runs and the demo call these functions and nothing below them to run a
@@ -512,8 +512,47 @@ def export(pattern, out, formats: Union[str, Sequence[str]] = ("svg", "dxf", "pd
                           progress=progress, print_all=print_all)
 
 
+# ----------------------------------------------------------------------------- marker
+
+def marker(runs: Sequence[Tuple[str, object, int]], width: float, allowance=None, hem: Optional[float] = None,
+           notch_spacing: Optional[float] = None, seconds: int = 60, seed: int = 0, one_way: bool = False,
+           tilt: float = 0.0, threads: int = 1, tries: int = 1, progress: Optional[Progress] = None):
+    """A cutting-room marker: the pieces of ``runs`` nested on a fabric ``width`` m wide (:mod:`core.marker`).
+
+    Parameters
+    ----------
+    runs : (size label, core.pattern.Pattern, garments) per size
+    allowance, hem : as :func:`export`: the export's rule, one for every output (each pattern's table,
+        :func:`export_allowance`, with ``allowance`` on every seam and ``hem`` over it; a table as such),
+        so the marker nests the cut lines ``ease export`` draws
+    notch_spacing, seconds, seed, one_way, tilt, threads, tries : see :func:`core.marker.nest`; the
+        numbers are checked before any work (:func:`core.marker.check_options`)
+
+    Returns
+    -------
+    core.marker.Marker
+    """
+    from .marker import check_options, marker_items, nest
+    check_options(width, seconds, seed, threads, tries)
+    items = []
+    for size, pattern, garments in runs:
+        table = allowance if isinstance(allowance, dict) else export_allowance(pattern, allowance, hem)
+        items += marker_items([(size, pattern, garments)], allowance=table, notch_spacing=notch_spacing)
+    return nest(items, width, seconds=seconds, seed=seed, one_way=one_way, tilt=tilt, threads=threads, tries=tries,
+                progress=progress)
+
+
+def write_marker(out, marker, title: str = "marker", extra: Optional[dict] = None,
+                 progress: Optional[Progress] = None) -> list:
+    """The marker's files (DXF, SVG, PDF, PNG, ``marker.json`` with ``extra`` merged) into ``out``, atomically;
+    returns the written paths."""
+    from .marker import write_marker as _write
+    return _write(marker, out, title, progress=progress, extra=extra)
+
+
 __all__ = ["CONFIGS", "DEFAULT_CONFIG", "Prepared", "PatternRun", "DrapeRun", "prepare", "config_name",
            "solver_config", "make_solver",
            "reference", "transfer", "is_own_size", "adapt", "tolerances", "measure_pattern", "pattern_figures",
            "write_pattern",
-           "summary", "drape", "write_drape", "drape_summary", "export_allowance", "export"]
+           "summary", "drape", "write_drape", "drape_summary", "export_allowance", "export", "marker",
+           "write_marker"]
