@@ -135,8 +135,8 @@ def _marker_rows(quick: bool = False) -> dict:
     """Marker efficiency against nesting time: the teaser's size run XS-XL, one garment each, 150 cm fabric."""
     from core import workflows as wf
     from core.design.templates import template_path
-    from core.export.marker import marker_items, nest
     from core.geom.layout import layout_pieces
+    from core.marker import marker_items, nest
 
     prep = wf.prepare(template_path("teaser_shirt_pants"))
     solver = wf.make_solver(prep)

@@ -1,6 +1,7 @@
 """Marker: nest the pattern's pieces (one or more sizes) on the fabric width with the core's
-marker (:mod:`core.export.marker`), write the marker files into the export folder's
-``marker`` subfolder, and show the marker picture on a flat object lying behind the body.
+marker stage (:func:`core.workflows.marker`, as ``ease marker``: the export's allowance rule, the
+panel's allowance and hem over the design's table), write the marker files into the export
+folder's ``marker`` subfolder, and show the marker picture on a flat object lying behind the body.
 
 Sizes other than the scene pattern's are transferred from the current design first
 (:func:`core.workflows.transfer`, the scene pattern as the start when it is the reference).
@@ -22,7 +23,7 @@ IMAGE = "EASE Marker"
 def _patterns(context, pattern, wanted):
     """(size, pattern, garments) per wanted size: the scene's pattern for its own size, transfers for the rest."""
     from ..core import workflows as wf
-    from ..core.export.marker import size_label
+    from ..core.marker import size_label
     here = size_label(pattern)
     runs, prep, solver, config = [], None, None, None
     for size, garments in wanted.items():
@@ -80,22 +81,19 @@ class EASE_OT_marker(EaseOperator):
 
     def run(self, context):
         from ..core import workflows as wf
-        from ..core.export.marker import marker_items, nest, parse_quantities, size_label
-        from ..core.export.marker_render import write_marker
+        from ..core.marker import parse_quantities, size_label
         scene = context.scene
         s = scene.ease
         pattern = data.required_pattern(scene, "to nest")
         out = data.output_path(s.export_dir, "Export to")
         wanted = parse_quantities(s.marker_sizes, "Sizes") if s.marker_sizes.strip() else {size_label(pattern): 1}
         runs = _patterns(context, pattern, wanted)
-        allowance = wf.export_allowance(pattern, round(s.export_allowance_cm / 100.0, 6),
-                                        round(s.export_hem_cm / 100.0, 6))
-        items = marker_items(runs, allowance=allowance)
         with window_progress(context) as progress:
-            marker = nest(items, s.marker_width_mm / 1000.0, seconds=s.marker_seconds, seed=0,
-                          one_way=s.marker_one_way, progress=progress)
+            marker = wf.marker(runs, s.marker_width_mm / 1000.0, allowance=round(s.export_allowance_cm / 100.0, 6),
+                               hem=round(s.export_hem_cm / 100.0, 6), seconds=s.marker_seconds, seed=0,
+                               one_way=s.marker_one_way, progress=progress)
         title = f"{pattern.style or 'pattern'} marker"
-        files = write_marker(marker, Path(out) / "marker", title)
+        files = wf.write_marker(Path(out) / "marker", marker, title)
         show_marker(context, marker, next(f for f in files if f.name == "marker.png"))
         s.marker_status = (f"{marker.width * 1000:.0f} x {marker.length * 1000:.0f} mm, "
                            f"efficiency {marker.efficiency * 100:.1f} %")

@@ -29,6 +29,10 @@ def test_marker_operator(bpy_session, blender):
     assert all(p["angle_deg"] == 0.0 for p in rep["placements"])
     assert {"marker.dxf", "marker.svg", "marker.pdf", "marker.png"} <= {p.name for p in out.iterdir()}
     assert "efficiency" in s.marker_status and f"{rep['efficiency_pct']:.1f}" in s.marker_status
+    # the export's allowance rule (core.workflows.marker): the panel's seam and hem allowances, the hem kept
+    widths = {round(s.export_allowance_cm * 10, 2), round(s.export_hem_cm * 10, 2)}
+    assert len(widths) == 2 and any(len(w) == 2 for w in rep["allowance_mm"].values())
+    assert all(set(w) <= widths for w in rep["allowance_mm"].values())
     # shown: the picture as an image, on a flat object as long and wide as the marker
     img = bpy.data.images["EASE Marker"]
     assert img.size[0] > 0 and img.size[1] > 0

@@ -31,6 +31,7 @@ LAYERS = {
     "core.pattern": 5,
     "core.drape": 6,
     "core.export": 7,
+    "core.marker": 8,    # the marker stage: nesting the export's pieces on a fabric width
     "core.metrics": 8,
     "core.workflows": 9,
     "core.live": 9,      # the live re-solve loop (painting), on the workflows' solver

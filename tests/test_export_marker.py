@@ -1,4 +1,4 @@
-"""Markers (core.export.marker, `ease marker`): pieces inside the fabric, no overlaps, grain kept,
+"""Markers (core.marker, `ease marker`): pieces inside the fabric, no overlaps, grain kept,
 efficiency as reported, repeatable with a seed, Ctrl-C keeps the best marker, CLI errors in one line."""
 from __future__ import annotations
 
@@ -11,10 +11,10 @@ pytest.importorskip("spyrrow")
 
 from core.cli import main
 from core.errors import Cancelled, ExportError
-from core.export.marker import (GRAIN_TO_LENGTH, marker_items, marker_report, nest, orientations, parse_quantities,
-                                placed_outline, unfold)
-from core.export.marker_render import write_marker
 from core.geom.polygon import points_in_polygon, signed_area
+from core.marker.nesting import (GRAIN_TO_LENGTH, marker_items, marker_report, nest, orientations, parse_quantities,
+                                 placed_outline, unfold)
+from core.marker.render import write_marker
 from core.pattern.io import save_pattern
 from export_synth import make_pattern
 from marker_synth import overlap
@@ -167,4 +167,48 @@ def test_marker_cli_errors(tmp_path, capsys):
                         ([tmp_path / "nowhere", "--width", 1500], "no pattern file")):
         rc, cap = _cli(capsys, *argv, "--seconds", 1, "--out", tmp_path / "bad")
         assert rc == 2 and words in cap.err and len(cap.err.strip().splitlines()) == 1, cap.err
+    assert not (tmp_path / "bad").exists()
+
+
+def test_marker_cli_keeps_the_design_hem_as_export_does(tmp_path, capsys):
+    """One allowance rule for every output: on a design whose hem allowance is 30 mm, `ease marker --allowance`
+    and `ease export --allowance` both keep the 30 mm hem under the new seam allowance (the marker used to nest a
+    hem of the --allowance too), and nest the cut lines the export draws."""
+    pattern = make_pattern()
+    pattern.materials = {"export": {"allowance": {"default": 0.01, "hem": 0.03}}}
+    pat = tmp_path / "M"
+    save_pattern(pattern, pat)
+    rc, cap = _cli(capsys, pat, "--width", 1500, "--seconds", 1, "--allowance", 0.015, "--out", tmp_path / "m")
+    assert rc == 0, cap.err
+    assert main(["export", str(pat), "--format", "svg", "--allowance", "0.015", "--out", str(tmp_path / "e"),
+                 "--quiet"]) == 0
+    marker = json.loads((tmp_path / "m" / "marker.json").read_text())
+    export = json.loads((tmp_path / "e" / "export.json").read_text())
+    assert marker["allowance_mm"] == {p["name"]: p["allowance_mm"] for p in export["pieces"]}
+    assert marker["allowance_mm"]["front"] == [15.0, 30.0]
+    cut = {p["name"]: p["cut_line_mm"] for p in export["pieces"]}
+    items = {it.piece.name: it for it in marker_items([("M", pattern, 1)], allowance={"default": 0.015, "hem": 0.03})}
+    for name, it in items.items():
+        length = float(np.sum(np.linalg.norm(np.diff(np.vstack([it.outline, it.outline[:1]]), axis=0), axis=1)))
+        assert length * 1000 == pytest.approx(cut[name], abs=0.01)
+    rc, cap = _cli(capsys, pat, "--width", 1500, "--seconds", 1, "--allowance", 0.015, "--hem", 0.02,
+                   "--out", tmp_path / "m2")
+    assert rc == 0 and json.loads((tmp_path / "m2" / "marker.json").read_text())["allowance_mm"]["front"] == [15.0, 20.0]
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--threads", 100000], "--threads: expected 1 to"), (["--tries", 1000], "--tries: expected 1 to"),
+    (["--width", 1e308], "--width: expected a fabric width"), (["--sizes", "M:1000000000"], "1 to 100 garments"),
+    (["--seed", -1], "--seed: expected 0 to"), (["--seed", 2 ** 70], "--seed: expected 0 to"),
+    (["--seconds", 0], "--seconds: expected a time budget"), (["--allowance", 0.5], "--allowance: expected"),
+    (["--hem", "x"], "--hem: expected")])
+def test_marker_cli_bounds(tmp_path, capsys, argv, words):
+    """Each bound refused in one line (exit 2) before any work: no nester started, nothing written."""
+    pat = tmp_path / "M"
+    save_pattern(make_pattern(), pat)
+    base = {"--width": 1500, "--seconds": 5}
+    for k in range(0, len(argv), 2):
+        base[argv[k]] = argv[k + 1]
+    rc, cap = _cli(capsys, pat, *[x for kv in base.items() for x in kv], "--out", tmp_path / "bad")
+    assert rc == 2 and words in cap.err and len(cap.err.strip().splitlines()) == 1, cap.err
     assert not (tmp_path / "bad").exists()

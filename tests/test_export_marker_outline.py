@@ -1,11 +1,11 @@
-"""Nesting outlines (core.export.marker_outline) hold the true cut line, and a marker of curved, concave
+"""Nesting outlines (core.marker.outline) hold the true cut line, and a marker of curved, concave
 pieces keeps the true cut lines apart, inside the fabric, grain kept."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from core.export.marker_outline import CLEARANCE, NEST_TOLERANCE, holds, nest_outline, simplify_indices
+from core.marker.outline import CLEARANCE, NEST_TOLERANCE, holds, nest_outline, simplify_indices
 from core.geom.polygon import distance_to_polyline, offset_loop, points_in_polygon, remove_loops, signed_area
 from marker_synth import overlap, wavy_pattern
 
@@ -52,7 +52,7 @@ def test_holds_can_fail():
 def test_marker_curved_pieces_true_cut_lines_apart():
     """Curved, concave pieces with wavy sides (six copies) nested: the true cut lines do not overlap, lie on
     the fabric, touch-close (so the check bites), and every piece is turned 0 or 180 degrees only."""
-    from core.export.marker import marker_items, nest, placed_outline
+    from core.marker.nesting import marker_items, nest, placed_outline
     pytest.importorskip("spyrrow")
     width = 0.6
     items = marker_items([("M", wavy_pattern(3), 2)])

@@ -13,10 +13,10 @@ FORMATS_HELP = "svg,dxf,pdf,glb,obj or all"
 ALLOWANCE_RANGE = (0.0, 0.1)
 
 
-def _options(args) -> None:
-    """Numeric options as numbers, each checked against its range before any work (one-line ExportError)."""
+def allowance_options(args) -> None:
+    """``--allowance`` and ``--hem`` as metres, each checked against :data:`ALLOWANCE_RANGE` before any work
+    (one-line ExportError); ``ease export`` and ``ease marker`` alike."""
     from ..errors import ExportError
-    from ..export.notches import check_notch_spacing
 
     for name in ("allowance", "hem"):
         text = getattr(args, name)
@@ -30,6 +30,14 @@ def _options(args) -> None:
         if v is None or not lo <= v <= hi:
             raise ExportError(f"--{name}: expected a width in metres in [{lo:g}, {hi:g}] (e.g. 0.01), got {text!r}")
         setattr(args, name, v)
+
+
+def _options(args) -> None:
+    """Numeric options as numbers, each checked against its range before any work (one-line ExportError)."""
+    from ..errors import ExportError
+    from ..export.notches import check_notch_spacing
+
+    allowance_options(args)
     if args.notch_spacing is not None:
         args.notch_spacing = check_notch_spacing(args.notch_spacing, "--notch-spacing")
     if args.up not in ("y", "z"):

@@ -1,4 +1,8 @@
-"""``ease marker``: nest the pieces of one or more sizes on a fabric width (a cutting-room marker)."""
+"""``ease marker``: nest the pieces of one or more sizes on a fabric width (a cutting-room marker).
+
+The marker is made by :func:`core.workflows.marker` (as in the add-on), with the export's allowance
+rule: ``--allowance`` and ``--hem`` over the design's table, as ``ease export`` draws the cut lines.
+"""
 from __future__ import annotations
 
 from pathlib import Path
@@ -7,11 +11,16 @@ from .common import add_quiet, console_progress, print_files, subcommand
 
 
 def _run(args) -> int:
+    from .. import workflows as wf
     from ..errors import ExportError
-    from ..export.marker import marker_items, nest, parse_quantities, size_label
-    from ..export.marker_render import write_marker
+    from ..marker import check_options, parse_quantities, size_label
     from ..pattern.io import load_pattern
+    from .export import allowance_options
 
+    allowance_options(args)
+    if args.width is None:
+        raise ExportError("--width: expected the fabric width in mm (e.g. 1500)")
+    check_options(args.width / 1000.0, args.seconds, args.seed, args.threads, args.tries, prefix="--")
     wanted = parse_quantities(args.sizes, "--sizes") if args.sizes is not None else None
     found = {}
     for folder in args.pattern_dirs:
@@ -29,15 +38,13 @@ def _run(args) -> int:
         runs = [(s, found[s][1], n) for s, n in wanted.items()]
     else:
         runs = [(s, p, 1) for s, (_, p) in found.items()]
-    if args.width is None or not args.width > 0:
-        raise ExportError(f"--width: expected the fabric width in mm (> 0), got {args.width}")
-    items = marker_items(runs, allowance=args.allowance)
-    marker = nest(items, args.width / 1000.0, seconds=args.seconds, seed=args.seed, one_way=args.one_way,
-                  tilt=args.tilt, threads=args.threads, tries=args.tries, progress=console_progress(args))
+    marker = wf.marker(runs, args.width / 1000.0, allowance=args.allowance, hem=args.hem, seconds=args.seconds,
+                       seed=args.seed, one_way=args.one_way, tilt=args.tilt, threads=args.threads, tries=args.tries,
+                       progress=console_progress(args))
     title = f"{runs[0][1].style or 'marker'} marker"
     extra = {"patterns": {s: str(Path(found[s][0])) for s, _, _ in runs},
              "left_out": sorted(set(found) - {s for s, _, _ in runs})}
-    files = write_marker(marker, args.out, title, extra=extra)
+    files = wf.write_marker(args.out, marker, title, extra=extra)
     print(f"marker {marker.width * 1000:.0f} x {marker.length * 1000:.0f} mm, efficiency "
           f"{marker.efficiency * 100:.1f} %, {len(marker.placements)} pieces, {marker.seconds:.0f} s ({marker.stopped})")
     print_files(files)
@@ -56,21 +63,26 @@ def add_parser(sub) -> None:
                     "and writes the best marker found so far.")
     p.add_argument("pattern_dirs", nargs="+", metavar="PATTERN_DIR",
                    help="folders holding pattern.json (from `ease pattern` / `ease transfer`), one per size")
-    p.add_argument("--width", type=float, default=None, required=True, help="usable fabric width in mm (e.g. 1500)")
+    p.add_argument("--width", type=float, default=None, required=True,
+                   help="usable fabric width in mm (e.g. 1500; at most 10000)")
     p.add_argument("--sizes", default=None,
-                   help="garments per size, e.g. XS:1,M:2,L:1 (default: one garment of every folder's size); "
-                        "folders of other sizes are left out")
+                   help="garments per size, e.g. XS:1,M:2,L:1 (1 to 100 each; default: one garment of every "
+                        "folder's size); folders of other sizes are left out")
     p.add_argument("--seconds", type=int, default=60, help="time budget of the nester in seconds (default 60)")
     p.add_argument("--seed", type=int, default=0,
-                   help="nester seed (default 0): with one thread a marker that converges in time is repeatable")
-    p.add_argument("--threads", type=int, default=1, help="nester threads (default 1; more: faster, not repeatable)")
+                   help="nester seed, 0 to 2**32-1 (default 0): with one thread a marker that converges in time "
+                        "is repeatable")
+    p.add_argument("--threads", type=int, default=1,
+                   help="nester threads (default 1; more: faster, not repeatable; at most the machine's cores)")
     p.add_argument("--tries", type=int, default=1,
                    help="nesters run side by side in the same time, seeds SEED, SEED+1, ... (default 1); "
-                        "the shortest marker is kept; uses THREADS x TRIES cores")
+                        "the shortest marker is kept; uses THREADS x TRIES cores, at most the machine's")
     p.add_argument("--one-way", action="store_true",
                    help="one-way fabric (nap, pile, directional print): every piece the same way up (0 degrees)")
     p.add_argument("--tilt", type=float, default=0.0, help="allowed tilt off the grain in degrees (default 0, at most 10)")
-    p.add_argument("--allowance", type=float, default=None,
-                   help="seam allowance in metres for every seam (default: the design's, else 0.01)")
+    p.add_argument("--allowance", default=None,
+                   help="seam allowance in metres for every seam (default: the design's, else 0.01); the design's "
+                        "hem allowance stays unless --hem is given, as in `ease export`")
+    p.add_argument("--hem", default=None, help="hem allowance in metres (default: the design's, else 0.02)")
     p.add_argument("--out", required=True, help="output folder (filled atomically)")
     add_quiet(p)

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from core.pattern.types import Pattern
-from core.export.marker_outline import edges_meet
+from core.marker.outline import edges_meet
 from core.geom.polygon import points_in_polygon
 from export_synth import _panel, grid_piece
 

@@ -1,4 +1,4 @@
-"""The nesting worker of :mod:`core.export.marker`, run as its own process.
+"""The nesting worker of :mod:`core.marker.nesting`, run as its own process.
 
 It reads one JSON request on stdin (strip height, items, time budget, seed,
 threads), runs spyrrow (the sparrow / jagua-rs strip packer) and writes one

@@ -4,9 +4,9 @@ A marker is the cutting-room layout of all pieces to cut from one length of
 fabric. The pieces' cut lines (seam allowance included, from
 :func:`core.export.pieces.build_pieces`) are nested by spyrrow, the sparrow /
 jagua-rs irregular strip packer, run in its own process
-(:mod:`core.export.marker_worker`) so that a cancel or Ctrl-C can stop it and
+(:mod:`core.marker.worker`) so that a cancel or Ctrl-C can stop it and
 keep the best marker found so far. Each cut line is nested as a simpler
-polygon that holds it (:func:`core.export.marker_outline.nest_outline`), so
+polygon that holds it (:func:`core.marker.outline.nest_outline`), so
 the true cut lines of two nested pieces never meet.
 
 Frame (metres): x runs along the fabric (the marker length, from 0), y
@@ -49,16 +49,19 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import numpy as np
 
 from ..errors import Cancelled, ExportError
+from ..export.pieces import PieceDrawing, build_pieces
+from ..export.pieces import size_label as pieces_size_label
 from ..geom.polygon import signed_area
 from ..pattern.types import Pattern
 from ..progress import Progress, report
-from .marker_outline import nest_outline
-from .pieces import PieceDrawing, build_pieces
-from .pieces import size_label as pieces_size_label
+from .outline import nest_outline
 
 GRAIN_TO_LENGTH = np.array([[0.0, 1.0], [-1.0, 0.0]])  # piece frame (grain +y) -> marker frame (grain +x)
 MAX_TILT = 10.0           # degrees
-WORKER = Path(__file__).with_name("marker_worker.py")
+MAX_WIDTH = 10.0          # m of fabric width: the widest rolls are ~3.2 m
+MAX_SECONDS = 24 * 3600   # s of nesting
+MAX_GARMENTS = 100        # garments of one size in one marker
+WORKER = Path(__file__).with_name("worker.py")
 SPYRROW_PIN = "spyrrow==0.9.0"
 
 
@@ -140,6 +143,47 @@ def orientations(one_way: bool = False, tilt: float = 0.0) -> List[float]:
     return out
 
 
+def _cores() -> int:
+    return max(int(os.cpu_count() or 1), 1)
+
+
+def check_options(width: float, seconds: int = 60, seed: int = 0, threads: int = 1, tries: int = 1,
+                  prefix: str = ""):
+    """``(width, seconds, seed, threads, tries)`` checked, before any work: ExportError naming the option
+    (``prefix`` + name, e.g. ``--`` for the CLI) otherwise.
+
+    Ranges: width (m) in (0, :data:`MAX_WIDTH`]; seconds 1 to :data:`MAX_SECONDS`; seed 0 to 2**32 - 1
+    (the nester's); threads and tries 1 to the machine's cores each, ``threads x tries`` at most the cores
+    too (a nester thread or try per core: more only share them).
+    """
+    def num(name, value, kind):
+        try:
+            v = kind(value)
+        except (TypeError, ValueError, OverflowError):
+            raise ExportError(f"{prefix}{name}: expected a number, got {value!r}") from None
+        if kind is int and (isinstance(value, bool) or v != value):
+            raise ExportError(f"{prefix}{name}: expected a whole number, got {value!r}")
+        return v
+
+    width, seconds, seed = num("width", width, float), num("seconds", seconds, int), num("seed", seed, int)
+    threads, tries = num("threads", threads, int), num("tries", tries, int)
+    if not (math.isfinite(width) and 0 < width <= MAX_WIDTH):
+        raise ExportError(f"{prefix}width: expected a fabric width in mm in (0, {MAX_WIDTH * 1000:g}], "
+                          f"got {width * 1000:g}")
+    if not 1 <= seconds <= MAX_SECONDS:
+        raise ExportError(f"{prefix}seconds: expected a time budget of 1 to {MAX_SECONDS} s, got {seconds}")
+    if not 0 <= seed < 2 ** 32:
+        raise ExportError(f"{prefix}seed: expected 0 to {2 ** 32 - 1}, got {seed}")
+    cores = _cores()
+    for name, v in (("threads", threads), ("tries", tries)):
+        if not 1 <= v <= cores:
+            raise ExportError(f"{prefix}{name}: expected 1 to {cores} (this machine's cores), got {v}")
+    if threads * tries > cores:
+        raise ExportError(f"{prefix}threads x {prefix}tries: expected at most {cores} (this machine's cores), "
+                          f"got {threads} x {tries}")
+    return width, seconds, seed, threads, tries
+
+
 def parse_quantities(text: str, field: str = "sizes") -> Dict[str, int]:
     """``"XS:1,M:2,L:1"`` (or ``"XS,M"``: one each) as {size: garments}, in the order given."""
     out: Dict[str, int] = {}
@@ -153,9 +197,9 @@ def parse_quantities(text: str, field: str = "sizes") -> Dict[str, int]:
             n = int(count) if count.strip() else 1
         except ValueError:
             n = 0
-        if not name or n < 1 or name in out:
+        if not name or not 1 <= n <= MAX_GARMENTS or name in out:
             raise ExportError(f"{field}: expected SIZE:GARMENTS pairs such as XS:1,M:2 (each size once, "
-                              f"garments >= 1), got {part!r}")
+                              f"1 to {MAX_GARMENTS} garments), got {part!r}")
         out[name] = n
     if not out:
         raise ExportError(f"{field}: expected SIZE:GARMENTS pairs such as XS:1,M:2, got {text!r}")
@@ -237,8 +281,8 @@ def marker_items(patterns: Sequence[Tuple[str, Pattern, int]], allowance=None,
     """
     items = []
     for size, pattern, garments in patterns:
-        if int(garments) < 1:
-            raise ExportError(f"size {size}: expected at least 1 garment, got {garments}")
+        if not 1 <= int(garments) <= MAX_GARMENTS:
+            raise ExportError(f"size {size}: expected 1 to {MAX_GARMENTS} garments, got {garments}")
         for piece in build_pieces(pattern, allowance, notch_spacing):
             line = _fold_line(piece)
             outline = piece.cut[0] if line is None else unfold(piece.cut[0], line)
@@ -293,14 +337,7 @@ def nest(items: Sequence[MarkerItem], width: float, seconds: int = 60, seed: int
     :class:`Marker`. Ctrl-C (KeyboardInterrupt) stops the search and returns the
     best marker so far (``stopped == "interrupted"``), or re-raises when there is none yet.
     """
-    width, seconds, seed, threads, tries = float(width), int(seconds), int(seed), int(threads), int(tries)
-    if not (math.isfinite(width) and width > 0):
-        raise ExportError(f"width: expected a fabric width > 0 mm, got {width * 1000:g}")
-    if seconds < 1:
-        raise ExportError(f"seconds: expected a time budget of at least 1 s, got {seconds}")
-    if threads < 1 or tries < 1:
-        raise ExportError(f"{'threads' if threads < 1 else 'tries'}: expected at least 1, "
-                          f"got {threads if threads < 1 else tries}")
+    width, seconds, seed, threads, tries = check_options(width, seconds, seed, threads, tries)
     turns = orientations(one_way, tilt)
     shapes = [nest_outline(it.outline) @ GRAIN_TO_LENGTH.T for it in items]
     _check_fits(items, shapes, width, turns)
@@ -406,6 +443,8 @@ def marker_report(marker: Marker, title: str = "marker") -> dict:
             "pieces_area_m2": round(area, 5), "marker_area_m2": round(marker.width * marker.length, 5),
             "garments": garments, "fabric_per_garment_m": round(marker.length / max(garments, 1), 4),
             "sizes": sizes, "pieces": len(marker.placements), "orientations_deg": marker.orientations,
+            "allowance_mm": {it.piece.name: sorted({round(float(w) * 1000, 2) for e in it.piece.edge_allowance
+                                                    for w in e}) for it in marker.items},
             "grain": "along the marker length (x), parallel to the selvage",
             "seed": marker.seed, "threads": marker.threads, "tries": marker.tries, "best_seed": marker.best_seed,
             "stopped": marker.stopped,
@@ -416,5 +455,5 @@ def marker_report(marker: Marker, title: str = "marker") -> dict:
 
 
 __all__ = ["MarkerItem", "Placement", "Marker", "marker_items", "nest", "orientations", "parse_quantities",
-           "size_label", "unfold", "reflect",
+           "check_options", "size_label", "unfold", "reflect", "MAX_WIDTH", "MAX_SECONDS", "MAX_GARMENTS",
            "nest_outline", "placed_outline", "marker_report", "SPYRROW_PIN"]

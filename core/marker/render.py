@@ -1,6 +1,6 @@
 """Marker files: plotter DXF, SVG and a single-sheet PDF at 1:1 in millimetres, plus ``marker.json``.
 
-The marker frame (:mod:`core.export.marker`): x along the fabric, y across
+The marker frame (:mod:`core.marker.nesting`): x along the fabric, y across
 it, the fabric from y = 0 to the width. Every file shows the fabric edges
 (selvages and the marker ends), each piece's cut line, notches, grain line
 with arrows and a label (piece, size). A piece cut on a fold is drawn whole:
@@ -19,13 +19,13 @@ from xml.sax.saxutils import escape, quoteattr
 
 import numpy as np
 
+from ..export import dxf as dxf_mod
+from ..export import pdf as pdf_mod
+from ..export.pieces import ascii_text
+from ..export.svg import COLOURS, STROKE_MM, _fmt, _path
 from ..fileio import dumps_json, write_files
 from ..progress import Progress, report
-from . import dxf as dxf_mod
-from . import pdf as pdf_mod
-from .marker import Marker, Placement, marker_report
-from .pieces import ascii_text
-from .svg import COLOURS, STROKE_MM, _fmt, _path
+from .nesting import Marker, Placement, marker_report
 
 FILES = ("marker.dxf", "marker.svg", "marker.pdf", "marker.png", "marker.json")
 DXF_LAYERS = {"CUT": 1, "NOTCH": 3, "GRAIN": 7, "FOLD": 6, "LABEL": 7, "FABRIC": 8}  # ACI colours
