@@ -122,6 +122,10 @@ def test_marker_files(nested, tmp_path):
     assert sorted(p.name for p in files) == ["marker.dxf", "marker.json", "marker.pdf", "marker.png", "marker.svg"]
     doc = ezdxf.readfile(tmp_path / "m" / "marker.dxf")
     assert doc.header["$INSUNITS"] == 4
+    # the extents are the drawing's (they read +-1e20 before): the fabric and the title above it
+    lo, hi = doc.header["$EXTMIN"], doc.header["$EXTMAX"]
+    assert lo[0] == pytest.approx(0.0, abs=1e-6) and lo[1] == pytest.approx(0.0, abs=1e-6)
+    assert nested.length * 1000 - 1e-3 <= hi[0] < 1e4 and 1500 < hi[1] < 1600
     cuts = [e for e in doc.modelspace() if e.dxf.layer == "CUT"]
     assert len(cuts) == 2
     got = sorted(abs(signed_area(np.array([q[:2] for q in e.get_points()]))) for e in cuts)

@@ -115,10 +115,6 @@ def marker_dxf(marker: Marker, title: str = "marker") -> str:
         doc = ezdxf.new("R2010", units=dxf_mod.INSUNITS_MM)
     doc.header["$MEASUREMENT"] = 1
     L, W = marker.length * 1000.0, marker.width * 1000.0
-    for key in ("$EXTMIN", "$LIMMIN"):
-        doc.header[key] = (0.0, 0.0, 0.0) if key == "$EXTMIN" else (0.0, 0.0)
-    doc.header["$EXTMAX"] = (L, W, 0.0)
-    doc.header["$LIMMAX"] = (L, W)
     for name, colour in DXF_LAYERS.items():
         doc.layers.add(name, color=colour)
     msp = doc.modelspace()
@@ -133,6 +129,8 @@ def marker_dxf(marker: Marker, title: str = "marker") -> str:
         for (x, y), text in zip(base * 1000.0, _label(marker, p)):
             msp.add_text(text, dxfattribs={"layer": "LABEL", "height": h * 1000.0, "rotation": angle,
                                            "insert": (float(x), float(y))})
+    # the extents of what is drawn (left unset, ezdxf writes the modelspace's +-1e20 over the header's)
+    dxf_mod.set_extents(doc)
     stream = io.StringIO()
     with dxf_mod._fixed_metadata():
         # ezdxf lists the CLASSES section in registration order, which varies between runs
