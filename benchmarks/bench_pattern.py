@@ -54,13 +54,15 @@ def _cut(name_or_design, body, coarse):
 
 def _metrics(pattern, garment=None, cut=None):
     """Table figures of one pattern; with ``cut``, also the sleeves' (arm panels') compliance and shear."""
+    from core.metrics.injectivity import crossings
     from core.metrics.pattern import collapse, ease_compliance, flips, seam_mismatch
     c = ease_compliance(pattern, garment)
     s = seam_mismatch(pattern, garment)
     mine = lambda k: garment is None or pattern.panel(k).garment == garment
     fl = sum(v for k, v in flips(pattern).items() if mine(k))
     col = sum(v["count"] for k, v in collapse(pattern).items() if mine(k))
-    out = {"compliance": c["mean"], "compliance_std": c["std"], "compliance_p95": c["p95"],
+    cross = sum(v["count"] for k, v in crossings(pattern).items() if mine(k))
+    out = {"crossings": int(cross), "compliance": c["mean"], "compliance_std": c["std"], "compliance_p95": c["p95"],
            "shear_mean": c["shear_mean"], "shear_p95": c["shear_p95"], "warp_dev": c["warp_mean"],
            "seam_mean": s["mean"], "seam_std": s["std"], "seam_max_mm": s["max_mm"], "flips": int(fl),
            "collapsed": int(col), "warp_signed": c["warp_signed"],
@@ -250,7 +252,8 @@ def _templates(body, coarse):
                 row[key] = {"compliance": c["mean"], "warp_dev": c["warp_mean"], "warp_signed": c["warp_signed"],
                             "shear_p95": c["shear_p95"], "flips": m["flipped_triangles"],
                             "collapsed": m["collapsed_triangles"], "collapse_sites": m["collapse_sites"],
-                            "regions": m["regions"]}
+                            "crossings": m["crossings"], "crossing_sites": m["crossing_sites"],
+                            "pieces": _pieces(m), "regions": m["regions"]}
             out[path.stem] = row
         except Exception as exc:
             out[path.stem] = {"error": f"{type(exc).__name__}: {exc}"}
@@ -258,6 +261,30 @@ def _templates(body, coarse):
 
 
 TEMPLATE_BODIES = ("M", "XS", "S", "L", "XL", "P1")
+
+
+def _measure_darts():
+    """benchmarks/measure_darts.py, loaded by its path (``ease bench`` loads this file so, outside any package)."""
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("ease_bench_measure_darts", Path(__file__).parent / "measure_darts.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _pieces(m) -> dict:
+    """Per piece of a pattern_report: weft mean / p95, warp mean / p95 (%), shear p95 (deg)."""
+    return {name: {k: c[k] for k in ("mean", "p95", "warp_mean", "warp_p95", "shear_p95")}
+            for name, c in (m.get("pieces") or {}).items()}
+
+
+def _worst_piece(v) -> str:
+    """``front 5.9`` of a row with ``pieces``: the piece with the largest shear p95 and its value."""
+    pieces = v.get("pieces") or {}
+    if not pieces:
+        return "–"
+    name = max(sorted(pieces), key=lambda k: pieces[k]["shear_p95"])
+    return f"{name.split('.')[-1]} {_fmt(pieces[name]['shear_p95'], 1)}"
 
 
 def _pattern_area(pat) -> float:
@@ -384,6 +411,7 @@ def _womens(body, coarse):
                         "compliance": c["mean"], "compliance_std": c["std"], "warp_dev": c["warp_mean"],
                         "warp_signed": c["warp_signed"], "shear_p95": c["shear_p95"],
                         "flips": m["flipped_triangles"], "collapsed": m["collapsed_triangles"],
+                        "crossings": m["crossings"], "pieces": _pieces(m),
                         "regions": m["regions"], "darts": len(getattr(cut, "darts", None) or []),
                         "body": dict(design.body), "seconds": dt}
                 out[key] = rows
@@ -574,17 +602,22 @@ def run(out_dir, quick: bool = False) -> dict:
     R["templates"] = _templates(body, coarse)
     R["skirt_surfaces"] = _skirt_surfaces(body, coarse)
     R["womens"] = _womens(body, coarse)
+    try:
+        R["four_darts_sizes"] = _measure_darts().four_darts_sizes(body)
+    except Exception as exc:
+        R["four_darts_sizes"] = {"error": f"{type(exc).__name__}: {exc}"}
 
-    for key, name in (("flips", "flipped_triangles_total"), ("collapsed", "collapsed_triangles_total")):
+    for key, name in (("flips", "flipped_triangles_total"), ("collapsed", "collapsed_triangles_total"),
+                      ("crossings", "crossings_total")):
         total = 0
         for kind in t1:
-            total += sum(v[key] for v in t1[kind]["runs"].values())
+            total += sum(v.get(key, 0) for v in t1[kind]["runs"].values())
         total += sum(v.get(key, 0) for v in nonuni.values())
         total += sum(v.get(key, 0) for k in t3 for s, v in t3[k].items() if isinstance(v, dict))
         total += sum(v.get(key, 0) for k in t4 for v in t4[k].values())
-        total += sum(row[c][key] for row in R["seam_study"].values() for c in ("improved", "stretch"))
-        total += sum(row[b][key] for row in R["templates"].values() for b in TEMPLATE_BODIES if b in row)
-        total += sum(v[key] for rows in R["womens"].values() for v in rows.values() if isinstance(v, dict))
+        total += sum(row[c].get(key, 0) for row in R["seam_study"].values() for c in ("improved", "stretch"))
+        total += sum(row[b].get(key, 0) for row in R["templates"].values() for b in TEMPLATE_BODIES if b in row)
+        total += sum(v.get(key, 0) for rows in R["womens"].values() for v in rows.values() if isinstance(v, dict))
         R[name] = int(total)
     R["wall_seconds"] = time.perf_counter() - t_start
 
@@ -733,10 +766,12 @@ def _markdown(R) -> str:
             f"{label}: " + ", ".join(f"{n} {_fmt(x['compliance'])}" for n, x in row["improved"]["per_panel"].items())
             for label, row in R["seam_study"].items()) + "."]
     L += _womens_markdown(R.get("womens") or {})
+    L += _measure_darts().four_darts_markdown(R.get("four_darts_sizes") or {})
     L += _templates_markdown(R.get("templates") or {})
     L += _skirt_surfaces_markdown(R.get("skirt_surfaces") or {})
     L += ["", f"**Flipped triangles over every run: {R['flipped_triangles_total']}. Collapsed triangles over every "
-          f"run: {R.get('collapsed_triangles_total', '–')}.**", ""]
+          f"run: {R.get('collapsed_triangles_total', '–')}. Crossings (sew lines or dart legs that cross, "
+          f"docs/metrics.md) over every run: {R.get('crossings_total', '–')}.**", ""]
     return "\n".join(L)
 
 
@@ -772,18 +807,41 @@ def _womens_markdown(W) -> list:
          "Targets (issue 14): weft <= 1.0 %, "
          "warp <= 3 %, shear p95 <= 5 deg, bust region <= 1.5 %. Regions: compliance within 6 cm of the landmark, "
          "left / right, mean (signed) %.", "",
-         "| design | body | rho | darts | weft mean ± std | warp dev (signed) | shear p95 | bust L / R | seat L / R "
-         "| flips | collapsed |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+         "Worst piece: the piece with the largest shear p95 and that value (a piece-level problem a garment mean "
+         "hides). Crossings: boundary edges of a piece that cross or touch (dart legs included); a pattern with "
+         "one is refused by the pipeline (issue 30) and measured here.", "",
+         "| design | body | rho | darts | weft mean ± std | warp dev (signed) | shear p95 | worst piece | bust L / R "
+         "| seat L / R | flips | collapsed | crossings |", "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for key, rows in W.items():
         if "error" in rows:
-            L.append(f"| {key} | {rows['error']} |" + " |" * 9)
+            L.append(f"| {key} | {rows['error']} |" + " |" * 11)
             continue
         for rho, v in rows.items():
             b = v["body"]
             L.append(f"| {key} | {b.get('shape') or b.get('chart') or 'M'} | {rho} | {v['darts']} "
                      f"| {_fmt(v['compliance'])} ± {_fmt(v['compliance_std'])} | {_warp(v)} | {_fmt(v['shear_p95'], 1)} "
-                     f"| {_region_cell(v['regions'], 'bust_left', 'bust_right')} "
-                     f"| {_region_cell(v['regions'], 'seat_left', 'seat_right')} | {v['flips']} | {v['collapsed']} |")
+                     f"| {_worst_piece(v)} | {_region_cell(v['regions'], 'bust_left', 'bust_right')} "
+                     f"| {_region_cell(v['regions'], 'seat_left', 'seat_right')} | {v['flips']} | {v['collapsed']} "
+                     f"| {v.get('crossings', '–')} |")
+    return L
+
+
+def _pieces_markdown(T) -> list:
+    """Per piece of every template on M: weft, warp and shear, and where a piece crosses itself."""
+    L = ["", "### Per piece (M, design ease, the design's configuration)", "",
+         "Weft compliance mean / p95 %, warp deviation mean / p95 %, shear p95 deg of each piece on its own: "
+         "a piece-level problem cannot hide in the garment's mean. Crossings: where a piece's sew line crosses "
+         "itself (its dart legs or boundary stretches, nearest landmark).", "",
+         "| design | piece | weft mean / p95 | warp mean / p95 | shear p95 | crossings |", "|---|---|---|---|---|---|"]
+    for name, row in T.items():
+        v = row.get("M") if isinstance(row, dict) else None
+        if not v:
+            continue
+        for piece, c in (v.get("pieces") or {}).items():
+            where = "; ".join(f"{s['count']} {' x '.join(s['between'])} near {s.get('near')}"
+                              for s in (v.get("crossing_sites") or {}).get(piece, [])) or "0"
+            L.append(f"| {name} | {piece} | {_fmt(c['mean'])} / {_fmt(c['p95'])} | {_fmt(c['warp_mean'])} / "
+                     f"{_fmt(c['warp_p95'])} | {_fmt(c['shear_p95'], 1)} | {where} |")
     return L
 
 
@@ -827,7 +885,7 @@ def _templates_markdown(T) -> list:
          "to XS..XL of that chart, adapted to P1 "
          "(the design's tolerance), each measured on the surface it lies on (the skin; for the skirt topology the "
          "membrane spanning the cleft and crotch, docs/metrics.md). "
-         "Cell: weft compliance % / warp deviation % (shear p95 deg), flipped / collapsed. "
+         "Cell: weft compliance % / warp deviation % (shear p95 deg), flipped / collapsed / crossings. "
          "The P1 compliance is to the raised adaptation targets (docs/metrics.md). Collapsed: a triangle whose 2D area "
          "is under 25 % of its 3D area times the targets, or whose achieved weft or warp scale is under half its "
          "target.", "",
@@ -844,7 +902,7 @@ def _templates_markdown(T) -> list:
                 cells.append("not in its chart")
                 continue
             cells.append(f"{_fmt(v['compliance'])} / {_fmt(v['warp_dev'])} ({_fmt(v['shear_p95'], 1)}), "
-                         f"{v['flips']} / {v['collapsed']}")
+                         f"{v['flips']} / {v['collapsed']} / {v.get('crossings', '–')}")
             for panel, ss in v["collapse_sites"].items():
                 where = ", ".join(f"{x['count']} near {x['near']}" if x.get("near") else f"{x['count']}" for x in ss)
                 sites.append(f"{name} {b} `{panel}`: {where}")
@@ -852,6 +910,7 @@ def _templates_markdown(T) -> list:
         L.append(f"| {name}{f' ({own})' if isinstance(own, str) and own != 'M' else ''} | " + " | ".join(cells) + " |")
     if sites:
         L += ["", "Collapse sites (nearest landmark of the collapsed triangles' 3D centroids): " + "; ".join(sites) + "."]
+    L += _pieces_markdown(T)
     L += ["", "### Every template adapted to P1: issue 14's adaptation targets", "",
           "The P1 column's patterns against the targets of Table 4 (residual stretch <= 1 %, shear p95 <= 8 deg, "
           "every seam <= 2 mm), at the design's own tolerance: weft and warp residual stretch on the pose before / "
