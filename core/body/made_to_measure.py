@@ -1,0 +1,306 @@
+"""Made-to-measure: fit Anny's phenotypes and local changes to a table of tape measures.
+
+:func:`fit_tape` takes any subset of :data:`core.body.tape.TAPE_MEASURES` (cm) and fits the
+body's phenotypes and, for each measure given, the Anny local change that moves that measure
+(:data:`LOCAL_FOR`), by bounded least squares:
+
+- every local change is pulled towards 0, the population's body for the phenotypes
+  (:data:`LOCAL_PULL_CM` cm per unit), the phenotypes towards their start
+  (:data:`PHENOTYPE_PULL_CM` cm per full range), so a measure the phenotypes reach is not bent
+  by a local change, and a fit with few measures stays a plausible body;
+- the local changes used are the symmetric ones (no ``l-``/``r-`` twin): the body stays
+  left/right symmetric;
+- the body must not cut into itself where a made-to-measure body would: the thighs (their
+  sections at the thigh level may not overlap) and the upper arms and the torso (the upper
+  arm's section may not reach inside the chest's); a fitted body that does is reported.
+
+A measure the fit cannot bring within its tolerance (1 cm on girths, 1.5 cm on lengths) is
+reported with the value reached (:attr:`TapeFit.status`), never silently.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Dict, Mapping, Optional, Sequence
+
+import numpy as np
+
+from ..errors import BodyError
+from ..progress import Progress, report
+from .tape import LENGTHS, TAPE_MEASURES, canonical, tape_measures
+
+GIRTH_TOLERANCE_CM = 1.0
+LENGTH_TOLERANCE_CM = 1.5
+
+# The Anny local change(s) a measure brings in: MakeHuman's measurement modifiers, each moving
+# its own measure by 4-18 cm over its range (docs/measurements.md).
+LOCAL_FOR = {
+    "neck": ("measure-neck-circ-incr",),
+    "shoulder_width": ("measure-shoulder-dist-incr",),
+    "chest": ("measure-bust-circ-incr",),
+    "underbust": ("measure-underbust-circ-incr",),
+    "waist": ("measure-waist-circ-incr",),
+    "high_hip": ("hip-scale-horiz-incr",),
+    "hip": ("measure-hips-circ-incr",),
+    "upper_arm": ("measure-upperarm-circ-incr",),
+    "wrist": ("measure-wrist-circ-incr",),
+    "arm_length": ("measure-upperarm-length-incr", "measure-lowerarm-length-incr"),
+    "back_waist_length": ("measure-napetowaist-dist-incr",),
+    "inseam": ("measure-upperleg-height-incr", "measure-lowerleg-height-incr"),
+    "thigh": ("measure-thigh-circ-incr",),
+}
+
+# Phenotypes a made-to-measure fit moves (gender too unless the table gives it).
+PHENOTYPES = ("height", "weight", "muscle", "proportions", "age", "cupsize")
+
+# Adult ages (Anny: 2/3 = 25 years, 0.8 ~ 50 years), as the charts.
+ADULT_AGE = (0.67, 0.8)
+
+# Pulls towards the population (cm per unit of a local change; per full range of a phenotype).
+LOCAL_PULL_CM = 1.5
+PHENOTYPE_PULL_CM = 0.5
+
+# Plausible ranges (cm): outside them a value is a typo (mm, inches), not a body.
+RANGES = {"height": (100.0, 230.0), "neck": (25.0, 65.0), "shoulder_width": (20.0, 60.0),
+          "chest": (60.0, 180.0), "underbust": (55.0, 170.0), "waist": (45.0, 180.0),
+          "high_hip": (55.0, 180.0), "hip": (60.0, 190.0), "upper_arm": (15.0, 60.0),
+          "wrist": (10.0, 30.0), "arm_length": (35.0, 90.0), "back_waist_length": (25.0, 65.0),
+          "inseam": (45.0, 110.0), "thigh": (30.0, 95.0)}
+
+
+def tolerance(name: str) -> float:
+    return LENGTH_TOLERANCE_CM if name in LENGTHS else GIRTH_TOLERANCE_CM
+
+
+def check_tape_targets(targets: Mapping[str, object], where: str = "measurements") -> Dict[str, float]:
+    """Validate a table of tape measures (cm): names of :data:`TAPE_MEASURES` (or aliases) and,
+    optionally, ``gender`` (0 male .. 1 female); a BodyError naming ``where.<name>`` otherwise."""
+    if not targets:
+        raise BodyError(f"{where}: no measurements given; allowed: {', '.join(TAPE_MEASURES)} (cm)")
+    out: Dict[str, float] = {}
+    for key, value in targets.items():
+        name = "gender" if str(key).strip().lower() == "gender" else None
+        if name is None:
+            try:
+                name = canonical(key)
+            except BodyError as exc:
+                raise BodyError(f"{where}.{key}: {exc!s}") from None
+        try:
+            value = float(value)
+        except (TypeError, ValueError):
+            raise BodyError(f"{where}.{key}: must be a number of cm, got {value!r}") from None
+        if not np.isfinite(value):
+            raise BodyError(f"{where}.{key}: must be a finite number, got {value!r}")
+        if name in out:
+            raise BodyError(f"{where}.{key}: {name!r} is given twice")
+        lo, hi = (0.0, 1.0) if name == "gender" else RANGES[name]
+        if not lo <= value <= hi:
+            unit = "" if name == "gender" else " cm"
+            raise BodyError(f"{where}.{key}={value:g}{unit} is out of range [{lo:g}, {hi:g}]{unit}")
+        out[name] = value
+    if set(out) == {"gender"}:
+        raise BodyError(f"{where}: no measurements given besides gender")
+    return out
+
+
+@dataclass
+class TapeFit:
+    """Outcome of :func:`fit_tape`.
+
+    shape : the fitted shape (phenotypes and the local changes used).
+    targets : the measures asked for (cm); achieved : all :data:`TAPE_MEASURES` of the body (cm).
+    status : measure -> ``"within 1 cm"`` / ``"within 1.5 cm"`` or ``"not reachable: closest X cm"``.
+    collisions : parts that cut into each other on the fitted body (``"thighs"``, ``"arm/torso"``).
+    """
+    shape: Dict[str, float]
+    targets: Dict[str, float]
+    achieved: Dict[str, float]
+    status: Dict[str, str]
+    collisions: list = field(default_factory=list)
+    evaluations: int = 0
+    parameters: list = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return all(s.startswith("within") for s in self.status.values()) and not self.collisions
+
+    def errors(self) -> Dict[str, float]:
+        return {k: self.achieved[k] - v for k, v in self.targets.items()}
+
+    def summary(self) -> str:
+        lines = []
+        for name in TAPE_MEASURES:
+            got = self.achieved[name]
+            if name in self.targets:
+                lines.append(f"{name:>17}: {got:6.1f} cm (target {self.targets[name]:.1f}: {self.status[name]})")
+            else:
+                lines.append(f"{name:>17}: {got:6.1f} cm")
+        if self.collisions:
+            lines.append(f"the fitted body cuts into itself: {', '.join(self.collisions)}")
+        return "\n".join(lines)
+
+
+def collisions(body, shape) -> list:
+    """Parts of the body at ``shape`` that cut into each other: the thighs' sections 3 cm under the
+    crotch overlapping, or the upper arm's section (square to the bone, at its middle) reaching
+    inside the torso's horizontal section at that height (the tape-measure sections, see
+    :mod:`core.body.tape`)."""
+    from scipy.spatial import Delaunay
+
+    from .tape import THIGH_BELOW_CROTCH, _parts, section_loops
+    v, joints = body.vertices_and_joints(shape)
+    J = dict(zip(body.joint_names, joints))
+    parts = _parts(body)
+    out = []
+    z = body.landmark_position("crotch", v)[2] - THIGH_BELOW_CROTCH
+    loops = section_loops(v, parts.no_arms, (0.0, 0.0, z), (0.0, 0.0, 1.0))
+    legs = [min(loops, key=lambda p: np.linalg.norm(p.mean(0)[:2] - J[j][:2])) for j in ("upperleg01.L", "upperleg01.R")]
+    if legs[0] is not legs[1]:
+        hull = Delaunay(legs[0][:, :2])
+        if (hull.find_simplex(legs[1][:, :2]) >= 0).any():
+            out.append("thighs")
+    else:
+        out.append("thighs")
+    a, b = J["upperarm01.L"], J["lowerarm01.L"]
+    arm = section_loops(v, parts.arm_left, 0.5 * (a + b), b - a)
+    zmid = 0.5 * (a[2] + b[2])
+    torso = section_loops(v, parts.no_arms, (0.0, 0.0, zmid), (0.0, 0.0, 1.0))
+    if arm and torso:
+        trunk = min(torso, key=lambda p: np.linalg.norm(p.mean(0)[:2]))
+        hull = Delaunay(trunk[:, :2])
+        inner = np.concatenate(arm)
+        # The arm's points at about that height, projected down: inside the trunk's section = a cut.
+        inner = inner[np.abs(inner[:, 2] - zmid) < 0.01]
+        if len(inner) and (hull.find_simplex(inner[:, :2]) >= 0).any():
+            out.append("arm/torso")
+    return out
+
+
+# Finite-difference step of the Jacobian (parameter units): 2 % of a phenotype's range moves a
+# girth by a few millimetres, well above the tape's level-search noise (< 0.3 mm).
+FD_STEP = 0.02
+
+
+def solve(residual, x0, lo, hi, step=FD_STEP, done=None, max_evaluations=400, refresh=8):
+    """Bounded Levenberg-Marquardt with Broyden updates of a finite-difference Jacobian.
+
+    The Jacobian is made once by forward differences (one residual per parameter), then updated
+    by Broyden's rank-one rule after each step and remade after ``refresh`` steps or when a step
+    fails twice: a fit of 20 parameters takes some 60-90 residuals instead of several hundred.
+    Steps are clipped to the box [lo, hi]. ``done(r)`` stops early.
+    """
+    x = np.clip(np.asarray(x0, dtype=float), lo, hi)
+    r = residual(x)
+    count = 1
+    lam = 1e-2
+    J = None
+    since = 0
+    failures = 0
+    while count < max_evaluations:
+        if done is not None and done(r):
+            break
+        if J is None or since >= refresh or failures >= 2:
+            J = np.empty((r.size, x.size))
+            for i in range(x.size):
+                h = step if x[i] + step <= hi[i] else -step
+                xi = x.copy()
+                xi[i] += h
+                J[:, i] = (residual(xi) - r) / h
+            count += x.size
+            since, failures = 0, 0
+            fresh = True
+        A = J.T @ J
+        g = J.T @ r
+        dx = -np.linalg.solve(A + lam * np.diag(np.diag(A) + 1e-9), g)
+        xn = np.clip(x + dx, lo, hi)
+        dx = xn - x
+        if not np.any(dx):
+            break
+        rn = residual(xn)
+        count += 1
+        pred = r @ r - np.sum((r + J @ dx) ** 2)
+        gain = (r @ r - rn @ rn) / pred if pred > 0 else -1.0
+        # Broyden: the Jacobian learns what the step showed, accepted or not.
+        J = J + np.outer(rn - r - J @ dx, dx) / (dx @ dx)
+        since += 1
+        if gain > 0:
+            improvement = (r @ r - rn @ rn) / max(r @ r, 1e-12)
+            x, r = xn, rn
+            lam = max(lam / 3.0, 1e-6)
+            failures = 0
+            if improvement < 1e-5 and fresh:
+                break
+            fresh = False
+        else:
+            lam *= 4.0
+            failures += 1
+            if failures >= 2 and fresh:
+                break
+    return x
+
+
+def fit_tape(body, targets: Mapping[str, float], progress: Optional[Progress] = None,
+             start: Optional[Mapping[str, float]] = None, local: bool = True,
+             parameters: Optional[Sequence[str]] = None) -> TapeFit:
+    """Fit ``body`` (Anny) to tape measures (cm) of :data:`TAPE_MEASURES`.
+
+    Parameters
+    ----------
+    targets : measure -> cm (aliases accepted), and optionally ``gender`` (0 male .. 1 female;
+        held there; without it the fit moves gender too, from 0.5).
+    start : a start shape (default the reference shape); local : whether local changes move.
+    parameters : the phenotypes to move (default :data:`PHENOTYPES`, gender where not given).
+    """
+    t = check_tape_targets(targets)
+    own = getattr(body, "local_change_parameters", None)
+    if not callable(own):
+        raise BodyError(f"made-to-measure: body {getattr(body, 'name', '?')!r} has no local changes (Anny's)")
+    allowed = {**body.shape_parameters(), **own()}
+    base = dict(body.default_shape())
+    if start:
+        base.update({k: float(v) for k, v in start.items()})
+    gender = t.pop("gender", None)
+    if gender is not None:
+        base["gender"] = gender
+    names = list(parameters) if parameters is not None else list(PHENOTYPES) + ([] if gender is not None else ["gender"])
+    if local:
+        names += [c for k in t for c in LOCAL_FOR.get(k, ()) if c in allowed and c not in names]
+    for n in names:
+        if n not in allowed:
+            raise BodyError(f"made-to-measure: unknown shape parameter {n!r}")
+    is_local = np.array([n in own() for n in names])
+    lo = np.array([allowed[n][0] if n != "age" else ADULT_AGE[0] for n in names])
+    hi = np.array([allowed[n][1] if n != "age" else ADULT_AGE[1] for n in names])
+    x0 = np.clip(np.array([base.get(n, allowed[n][2]) for n in names], dtype=float), lo, hi)
+    prior = np.where(is_local, 0.0, x0)
+    pull = np.where(is_local, LOCAL_PULL_CM, PHENOTYPE_PULL_CM / np.where(hi > lo, hi - lo, 1.0))
+    keys = sorted(t)
+    want = np.array([t[k] for k in keys])
+    scale = np.array([GIRTH_TOLERANCE_CM / tolerance(k) for k in keys])   # lengths weigh 1/1.5
+    count = [0]
+
+    def shape_of(x):
+        s = dict(base)
+        s.update({n: float(v) for n, v in zip(names, np.clip(x, lo, hi))})
+        return {k: v for k, v in s.items() if not (k in own() and v == 0.0)}
+
+    def residual(x):
+        count[0] += 1
+        if count[0] % 10 == 1:
+            report(progress, min(0.95, count[0] / 400.0), f"fitting {len(keys)} measures ({count[0]} evaluations)")
+        s = shape_of(x)
+        got = tape_measures(body, None, keys, shape=s)
+        return np.concatenate([scale * (np.array([got[k] for k in keys]) - want), pull * (x - prior)])
+
+    x = solve(residual, x0, lo, hi, step=FD_STEP, done=lambda r: bool(np.all(np.abs(r[:len(keys)]) <= 0.3)))
+    shape = shape_of(x)
+    achieved = tape_measures(body, None, TAPE_MEASURES, shape=shape)
+    status = {}
+    for k in keys:
+        err = achieved[k] - t[k]
+        status[k] = (f"within {tolerance(k):g} cm" if abs(err) <= tolerance(k)
+                     else f"not reachable: closest {achieved[k]:.1f} cm")
+    if gender is not None:
+        t["gender"] = gender
+    report(progress, 1.0, "fit done")
+    return TapeFit(shape=shape, targets={k: t[k] for k in keys}, achieved=achieved, status=status,
+                   collisions=collisions(body, shape), evaluations=count[0], parameters=names)
