@@ -60,10 +60,10 @@ def test_astm_blocks_layers_and_sew_lengths(made, writer):
         cut = [e for e in blk if e.dxf.layer == "1" and e.dxftype() in ("POLYLINE", "LWPOLYLINE")]
         assert len(cut) == 1 and polyline_length(_poly_points(cut[0]), closed=True) > want + 8 * 10
         assert len([e for e in blk if e.dxf.layer == "4"]) == len(piece.notches)
-        grain = [e for e in blk if e.dxf.layer == "7" and e.dxftype() == "LINE"]
-        assert len(grain) == 1 and grain[0].dxf.end[1] > grain[0].dxf.start[1]
-        # the arrow heads: two open barb-tip-barb polylines, tips on the grain line's ends
-        heads = [_poly_points(e) for e in blk if e.dxf.layer == "7" and e.dxftype() != "LINE"]
+        grain = [e for e in blk if e.dxf.layer == "7"]
+        assert len(grain) == 1 and grain[0].dxftype() == "LINE" and grain[0].dxf.end[1] > grain[0].dxf.start[1]
+        # the arrow heads: two open barb-tip-barb polylines on the annotation layer, tips on the grain line's ends
+        heads = [_poly_points(e) for e in blk if e.dxf.layer == "15" and e.dxftype() != "TEXT"]
         assert len(heads) == 2 and all(len(h) == 3 for h in heads)
         tips = sorted(tuple(np.round(h[1], 6)) for h in heads)
         ends = sorted(tuple(np.round(np.array(p)[:2], 6)) for p in (grain[0].dxf.start, grain[0].dxf.end))

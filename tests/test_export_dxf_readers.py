@@ -1,6 +1,6 @@
 """Every DXF variant read by two independent readers (ezdxf with audit and recover, and tests/helpers/dxf_reader),
 compared with export.json: piece count, sew-line lengths, notch counts; headers that open at the right size
-(extents, units, the R12 layer table); AAMA grain lines with arrow heads."""
+(extents, units, the R12 layer table); AAMA grain lines alone on layer 7, their arrow heads on 15."""
 import io
 import json
 
@@ -51,8 +51,8 @@ def _ezdxf_pieces(doc, plain):
         sew = [e for e in blk if e.dxf.layer == "14"]
         out.append((blk.name, dxf_reader.polyline_length(pts(sew[0]), True),
                     sum(1 for e in blk if e.dxf.layer == "4"),
-                    sum(1 for e in blk if e.dxf.layer == "7" and e.dxftype() == "LINE"),
-                    sum(1 for e in blk if e.dxf.layer == "7" and e.dxftype() in ("POLYLINE", "LWPOLYLINE"))))
+                    sum(1 for e in blk if e.dxf.layer == "7"),
+                    sum(1 for e in blk if e.dxf.layer == "15" and e.dxftype() in ("POLYLINE", "LWPOLYLINE"))))
     return out
 
 
@@ -69,8 +69,8 @@ def _own_pieces(dwg, plain):
         assert len(sew) == 1 and sew[0].closed
         out.append((name, dxf_reader.polyline_length(sew[0].points, True),
                     sum(1 for e in ents if e.layer == "4" and e.kind == "LINE"),
-                    sum(1 for e in ents if e.layer == "7" and e.kind == "LINE"),
-                    sum(1 for e in ents if e.layer == "7" and e.kind in ("POLYLINE", "LWPOLYLINE"))))
+                    sum(1 for e in ents if e.layer == "7"),
+                    sum(1 for e in ents if e.layer == "15" and e.kind in ("POLYLINE", "LWPOLYLINE"))))
     return out
 
 
@@ -97,7 +97,7 @@ def test_both_readers_agree_with_export_json(exported, variant):
             assert [g[0] for g in got] == names
             np.testing.assert_allclose([g[1] for g in got], sew_mm, atol=0.006)
             assert [g[2] for g in got] == notches
-            assert all(g[3] == 1 and g[4] == 2 for g in got)  # one grain LINE, two arrow heads
+            assert all(g[3] == 1 and g[4] == 2 for g in got)  # the grain LINE alone on 7, two arrow heads on 15
 
 
 @pytest.mark.parametrize("variant", VARIANTS)

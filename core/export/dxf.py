@@ -14,13 +14,13 @@ layer  content
 8      internal lines: a dart's legs and its fold arrow
 13     drill holes (POINT: a dart's drill hole)
 14     sew line
-15     annotation text (cut on fold, mirror, allowance, units)
+15     annotation (text: cut on fold, mirror, allowance, units; the grain line's arrow heads)
 ====== ==========================================================
 
 (layers 8 and 13 only in a pattern with darts, so files without darts stay as they were)
 
-in millimetres; the grain line is one LINE, its arrow heads two open
-polylines on the same layer. :func:`astm_document` is DXF R2000 with
+in millimetres; the grain line is one LINE, alone on layer 7; its arrow heads
+are two open polylines on the annotation layer 15. :func:`astm_document` is DXF R2000 with
 ``$INSUNITS = 4`` (mm); the same content as DXF R12 (:func:`astm_r12_text`)
 suits Gerber and other strict R12 readers, which take the units from the style
 system text ``Units: METRIC`` and, where they read it, ``$MEASUREMENT`` = 1.
@@ -151,10 +151,10 @@ def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, si
             blk.add_point(_mm(dart.drill[None])[0], dxfattribs={"layer": L["drill"]})
         g0, g1 = _mm(piece.grain)
         blk.add_line(g0, g1, dxfattribs={"layer": L["grain"]})
-        # the arrow heads as open polylines (barb, tip, barb) beside the one grain LINE, so that a
-        # reader taking the layer-7 LINE as the grain line still finds exactly one
+        # the arrow heads as open polylines (barb, tip, barb) on the annotation layer: the grain layer holds
+        # the grain line alone, as the standard expects (one grain line per piece)
         for a in piece.arrows:
-            add_poly(blk, _mm(a), close=False, dxfattribs={"layer": L["grain"]})
+            add_poly(blk, _mm(a), close=False, dxfattribs={"layer": L["annotation"]})
         h = piece.text_height * 1000.0
         x, y = _mm(piece.label_at[None])[0]
         system = [f"Piece Name: {ascii_text(piece.name)}", f"Size: {ascii_text(size)}",
