@@ -10,6 +10,7 @@ Objects of the role that the new result no longer has are removed.
 """
 from __future__ import annotations
 
+import hashlib
 import json
 
 import bpy
@@ -100,9 +101,17 @@ def _xz(points2d: np.ndarray, y: float = 0.0) -> np.ndarray:
     return np.stack([p[:, 0], np.full(len(p), y), p[:, 1]], axis=1)
 
 
-def _same_topology(me, n_vertices: int, faces: np.ndarray) -> bool:
+def _faces_digest(faces: np.ndarray) -> str:
+    return hashlib.sha1(np.ascontiguousarray(faces, dtype=np.int32).tobytes()).hexdigest()
+
+
+def _same_topology(me, n_vertices: int, faces: np.ndarray, digest: str) -> bool:
+    """``me`` has ``n_vertices`` vertices and the triangles ``faces`` (their ``digest``, kept on
+    the mesh: no read-back of its loops on every live update)."""
     if len(me.vertices) != n_vertices or len(me.polygons) != len(faces):
         return False
+    if me.get("ease_faces") is not None:
+        return me["ease_faces"] == digest
     vi = np.empty(len(me.loops), dtype=np.int32)
     me.loops.foreach_get("vertex_index", vi)
     return bool(np.array_equal(vi, np.asarray(faces, dtype=np.int32).ravel()))
@@ -112,23 +121,100 @@ def _piece_mesh(scene, name: str, p, lo: float, hi: float, role: str, mat):
     """The piece object ``name`` of pattern panel ``p``: its vertices moved and its colours
     rewritten in place where the topology is the one it has, a new mesh otherwise."""
     v3 = _xz(np.asarray(p.uv, dtype=np.float64))
+    digest = _faces_digest(p.faces)
     obj = bpy.data.objects.get(name)
     if obj is not None and obj.get("ease_role") == role and obj.name in scene.objects \
-            and isinstance(obj.data, bpy.types.Mesh) and _same_topology(obj.data, len(v3), p.faces):
+            and isinstance(obj.data, bpy.types.Mesh) and _same_topology(obj.data, len(v3), p.faces, digest):
         me = obj.data
-        convert.set_vertices(me, v3)
+        me.vertices.foreach_set("co", v3.astype(np.float32).ravel())     # (updated below, once)
     else:
         me = convert.mesh_from_arrays(name, v3, p.faces)
         me.color_attributes.new(ACHIEVED, "FLOAT_COLOR", "CORNER")
         me.attributes.new("achieved_weft", "FLOAT", "FACE")
         me.materials.append(mat)
         obj = put_object(scene, name, me, role)
+    me["ease_faces"] = digest
     # colour layers live on points or corners: every corner of a triangle gets its achieved ease
     rgba = ramp.ease_to_color(np.clip(p.achieved_weft, lo, hi), lo, hi)
     me.color_attributes[ACHIEVED].data.foreach_set("color", np.repeat(rgba, 3, axis=0).ravel())
     me.attributes["achieved_weft"].data.foreach_set("value", np.asarray(p.achieved_weft, dtype=np.float32))
     me["ease_ramp"] = (float(lo), float(hi))     # the colours' ramp range (legend, read-back)
     me.update()
+    return obj
+
+
+def same_pieces(scene, pattern, role: str = "pattern_panel") -> bool:
+    """The scene's piece objects are ``pattern``'s pieces (the same panels, vertex and triangle
+    counts, outline loops): :func:`update_pattern_objects` then only moves what is there (a
+    re-solve of the same cut: a live update, a transfer)."""
+    pieces = {o.get("ease_panel"): o for o in objects_with_role(scene, role)}
+    if sorted(pieces) != sorted(p.name for p in pattern.panels):
+        return False
+    for p in pattern.panels:
+        o, outline = pieces[p.name], _part(f"EASE outline {p.name}", role + "_part")
+        if (len(o.data.vertices) != len(p.uv) or len(o.data.polygons) != len(p.faces) or outline is None
+                or [len(sp.points) for sp in outline.data.splines] != [len(b) for b in p.boundary]):
+            return False
+    return True
+
+
+def _part(name: str, part: str):
+    """The existing child object ``name`` of a piece (its role ``part``: "pattern_panel_part"), or None."""
+    obj = bpy.data.objects.get(name)
+    return obj if obj is not None and obj.get("ease_role") == part else None
+
+
+def _outline(scene, name: str, uv: np.ndarray, boundary, parent, part: str):
+    """The piece's boundary curve(s), just in front of its mesh: the points moved where the
+    curve has these loops' point counts, a new curve otherwise."""
+    loops = [_xz(uv[np.asarray(loop)], -0.001) for loop in boundary]
+    obj = _part(name, part)
+    if obj is not None and obj.name in scene.objects and isinstance(obj.data, bpy.types.Curve) \
+            and [len(sp.points) for sp in obj.data.splines] == [len(l) for l in loops]:
+        for sp, pts in zip(obj.data.splines, loops):
+            sp.points.foreach_set("co", np.hstack([pts, np.ones((len(pts), 1))]).astype(np.float32).ravel())
+        obj.data.update_tag()
+        obj.parent = parent
+        return obj
+    cd = bpy.data.curves.new(name, "CURVE")
+    cd.dimensions = "3D"
+    for pts in loops:
+        sp = cd.splines.new("POLY")
+        sp.points.add(len(pts) - 1)
+        sp.points.foreach_set("co", np.hstack([pts, np.ones((len(pts), 1))]).astype(np.float32).ravel())
+        sp.use_cyclic_u = True
+    cd.bevel_depth = 0.002
+    return put_object(scene, name, cd, part, parent=parent)
+
+
+def _grain(scene, name: str, start, end, parent, part: str):
+    """The core's grain line with its arrow heads (a wire mesh): moved in place where it is one."""
+    from ..core.geom.layout import grain_arrows
+    v, e = convert.polyline_edges([_xz(l, -0.002) for l in [np.array([start, end])] + grain_arrows(start, end)],
+                                  closed=False)
+    obj = _part(name, part)
+    if obj is not None and obj.name in scene.objects and isinstance(obj.data, bpy.types.Mesh) \
+            and len(obj.data.vertices) == len(v):
+        convert.set_vertices(obj.data, v)
+        obj.parent = parent
+        return obj
+    return put_object(scene, name, convert.mesh_edges_from_arrays(name, v, e), part, parent=parent)
+
+
+def _label(scene, name: str, text: str, start, end, parent, part: str):
+    """The piece's name above the grain line's middle (the text object kept where it is one)."""
+    obj = _part(name, part)
+    if obj is None or obj.name not in scene.objects or not isinstance(obj.data, bpy.types.TextCurve):
+        fd = bpy.data.curves.new(name, "FONT")
+        fd.size = 0.045
+        fd.align_x = "CENTER"
+        obj = put_object(scene, name, fd, part, parent=parent)
+        obj.rotation_euler = (np.pi / 2, 0.0, 0.0)
+    if obj.data.body != text:
+        obj.data.body = text
+    obj.parent = parent
+    c = 0.5 * (start + end)
+    obj.location = (float(c[0]), -0.003, float(c[1]) + 0.03)
     return obj
 
 
@@ -141,9 +227,10 @@ def update_pattern_objects(scene, pattern, lo: float, hi: float, x0: float, role
     curve(s), the grain-line arrow and the piece's name. The pieces are laid
     out by the core's sheet layout, its top-left corner at (``x0``, 1.8 m).
     Where a piece's topology is unchanged (a re-solve of the same cut: transfer,
-    adaptation, a live update) its mesh is the same mesh, its vertices moved.
+    adaptation, a live update) its mesh, outline, grain line and label are the
+    ones it had, their points moved: no datablock is made or removed.
     """
-    from ..core.geom.layout import grain_arrows, grain_line, layout_pieces
+    from ..core.geom.layout import grain_line, layout_pieces
     layout = layout_pieces([np.array([p.uv.min(axis=0), p.uv.max(axis=0)]) for p in pattern.panels],
                            width=SHEET_WIDTH, margin=GAP)
     corner = np.array([x0 - GAP, SHEET_TOP + GAP - layout.size[1]])   # the sheet's bottom-left
@@ -158,37 +245,11 @@ def update_pattern_objects(scene, pattern, lo: float, hi: float, x0: float, role
         obj["ease_panel"] = p.name
         obj["ease_mean_achieved_weft"] = float(np.mean(p.achieved_weft))
         made.append(obj)
-        # boundary curve(s), just in front of the mesh
-        cd = bpy.data.curves.new(f"EASE outline {p.name}", "CURVE")
-        cd.dimensions = "3D"
-        for loop in p.boundary:
-            loop = np.asarray(loop)
-            sp = cd.splines.new("POLY")
-            sp.points.add(len(loop) - 1)
-            pts = np.hstack([_xz(uv[loop], -0.001), np.ones((len(loop), 1))]).astype(np.float32)
-            sp.points.foreach_set("co", pts.ravel())
-            sp.use_cyclic_u = True
-        cd.bevel_depth = 0.002
-        parts.append(put_object(scene, f"EASE outline {p.name}", cd, part, parent=obj))
-        # grain-line arrow: the core's grain line with its arrow heads
+        parts.append(_outline(scene, f"EASE outline {p.name}", uv, p.boundary, obj, part))
         start, end = grain_line(uv, p.faces, p.boundary, p.grain)
-        v, e = convert.polyline_edges([_xz(l, -0.002) for l in [np.array([start, end])] +
-                                       grain_arrows(start, end)], closed=False)
-        parts.append(put_object(scene, f"EASE grain {p.name}",
-                                convert.mesh_edges_from_arrays(f"EASE grain {p.name}", v, e), part, parent=obj))
-        # piece name, above the grain line's middle
-        fd = bpy.data.curves.new(f"EASE label {p.name}", "FONT")
-        lines = [p.name.split(".", 1)[-1].replace("_", " ")] + (["(mirror)"] if p.mirror_of else [])
-        fd.body = "\n".join(lines)
-        # no wider than 80 % of the piece (Blender's font: ~0.5 em a character), so labels stay apart
-        width = float(uv[:, 0].max() - uv[:, 0].min())
-        fd.size = min(0.045, 0.8 * width / (0.5 * max(len(t) for t in lines)))
-        fd.align_x = "CENTER"
-        label = put_object(scene, f"EASE label {p.name}", fd, part, parent=obj)
-        c = 0.5 * (start + end)
-        label.location = (float(c[0]), -0.003, float(c[1]) + 0.03)
-        label.rotation_euler = (np.pi / 2, 0.0, 0.0)
-        parts.append(label)
+        parts.append(_grain(scene, f"EASE grain {p.name}", start, end, obj, part))
+        text = p.name.split(".", 1)[-1] + (" (mirror)" if p.mirror_of else "")
+        parts.append(_label(scene, f"EASE label {p.name}", text, start, end, obj, part))
     _remove_others(scene, [part, role], made + parts)
     return made
 

@@ -43,8 +43,7 @@ from collections import deque
 import bpy
 import numpy as np
 
-from . import convert, data, pattern_ops, ramp, sync
-from .objects import objects_with_role, world_bounds
+from . import build, convert, data, pattern_ops, ramp, sync
 
 SLICE_S = 0.03          # seconds of work per tick: the longest the viewport waits for the pattern
 IDLE_TICK_S = 0.005     # seconds between ticks while converging (the UI handles its events in between)
@@ -101,73 +100,6 @@ def write_overlay(obj, pattern, session) -> None:
             me.color_attributes.active_color = me.color_attributes[active]
     attr.data.foreach_set("color", np.repeat(fit_to_color(ratio), 3, axis=0).ravel())
     me.update()
-
-
-# ----------------------------------------------------------------------------- pattern objects in place
-
-def _xz(uv, y: float = 0.0) -> np.ndarray:
-    uv = np.asarray(uv, dtype=np.float64).reshape(-1, 2)
-    return np.stack([uv[:, 0], np.full(len(uv), y), uv[:, 1]], axis=1)
-
-
-def _part(name: str):
-    obj = bpy.data.objects.get(name)
-    return obj if obj is not None and obj.get("ease_role") == "pattern_panel_part" else None
-
-
-def update_pieces(scene, pattern) -> bool:
-    """Move the scene's pattern objects onto ``pattern`` in place; False (nothing changed) when they
-    are not this pattern's pieces (other panels or vertex counts): then they must be rebuilt."""
-    from ..core.geom.layout import grain_arrows, grain_line, layout_pieces
-    from . import build
-    pieces = {o.get("ease_panel"): o for o in objects_with_role(scene, "pattern_panel")}
-    if sorted(pieces) != sorted(p.name for p in pattern.panels):
-        return False
-    for p in pattern.panels:
-        o = pieces[p.name]
-        outline, grain = _part(f"EASE outline {p.name}"), _part(f"EASE grain {p.name}")
-        if (len(o.data.vertices) != len(p.uv) or len(o.data.polygons) != len(p.faces) or outline is None
-                or grain is None or len(outline.data.splines) != len(p.boundary)):
-            return False
-    layout = layout_pieces([np.array([p.uv.min(axis=0), p.uv.max(axis=0)]) for p in pattern.panels],
-                           width=build.SHEET_WIDTH, margin=build.GAP)
-    body = scene.ease.body
-    x0 = float(world_bounds(body)[1][0]) + 0.35 if body is not None else 0.45     # as sync.show_pattern
-    corner = np.array([x0 - build.GAP, build.SHEET_TOP + build.GAP - layout.size[1]])
-    for p, off in zip(pattern.panels, layout.offsets):
-        o = pieces[p.name]
-        me = o.data
-        uv = np.asarray(p.uv, dtype=np.float64)
-        convert.set_vertices(me, _xz(uv))
-        ox, oz = corner + off
-        o.location = (float(ox), 0.0, float(oz))
-        lo, hi = (me.get("ease_ramp") or data.ramp_range(scene))[:2]
-        col = me.color_attributes.get(build.ACHIEVED)
-        if col is not None:
-            rgba = ramp.ease_to_color(np.clip(p.achieved_weft, lo, hi), lo, hi)
-            col.data.foreach_set("color", np.repeat(rgba, 3, axis=0).ravel())
-        a = me.attributes.get("achieved_weft")
-        if a is not None:
-            a.data.foreach_set("value", np.asarray(p.achieved_weft, dtype=np.float32))
-        o["ease_mean_achieved_weft"] = float(np.mean(p.achieved_weft))
-        outline = _part(f"EASE outline {p.name}")
-        for sp, loop in zip(outline.data.splines, p.boundary):
-            loop = np.asarray(loop)
-            if len(sp.points) == len(loop):
-                pts = np.hstack([_xz(uv[loop], -0.001), np.ones((len(loop), 1))]).astype(np.float32)
-                sp.points.foreach_set("co", pts.ravel())
-        outline.data.update_tag()
-        start, end = grain_line(uv, p.faces, p.boundary, p.grain)
-        v, _ = convert.polyline_edges([_xz(l, -0.002) for l in [np.array([start, end])] +
-                                       grain_arrows(start, end)], closed=False)
-        g = _part(f"EASE grain {p.name}")
-        if len(v) == len(g.data.vertices):
-            convert.set_vertices(g.data, v)
-        label = _part(f"EASE label {p.name}")
-        if label is not None:
-            c = 0.5 * (start + end)
-            label.location = (float(c[0]), -0.003, float(c[1]) + 0.03)
-    return True
 
 
 # ----------------------------------------------------------------------------- the loop
@@ -235,7 +167,9 @@ def _show(context, session) -> None:
     """Write the session's (warm) pattern into the scene: objects in place (rebuilt, stored and
     measured when they are not its pieces: a new cut), the overlay."""
     pattern = session.pattern(figures=False)
-    if not update_pieces(context.scene, pattern):
+    if build.same_pieces(context.scene, pattern):
+        sync.show_pieces(context, pattern)
+    else:
         sync.show_pattern(context, session.pattern(figures=True))
     write_overlay(data.body_object(context), pattern, session)
 
@@ -253,11 +187,12 @@ def _final_units(context, session) -> deque:
 
     def show():
         box["pattern"] = pattern = session.pattern(figures=False)
-        if not update_pieces(scene, pattern):
+        if build.same_pieces(scene, pattern):
+            sync.show_pieces(context, pattern)
+            queue.append(("measure", n, measure))
+        else:
             # not this pattern's pieces (a new cut): rebuilt, measured and stored at once
             sync.show_pattern(context, session.pattern(figures=True))
-        else:
-            queue.append(("measure", n, measure))
         write_overlay(data.body_object(context), pattern, session)
 
     def measure():

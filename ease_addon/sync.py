@@ -358,6 +358,26 @@ def store_pattern(scene, pattern, key: str = data.PATTERN_KEY, text=None) -> Non
     state.PATTERNS[(scene.name, key)] = (text, pattern)
 
 
+PIECES_GAP = 0.35      # metres between the body's right side and the pieces' sheet
+PIECES_X0 = 0.45       # the sheet's left edge with no body
+
+
+def pieces_x0(scene) -> float:
+    """Where the pieces' sheet starts (x, metres): beside the body, else at :data:`PIECES_X0`."""
+    body = scene.ease.body
+    return float(world_bounds(body)[1][0]) + PIECES_GAP if body is not None else PIECES_X0
+
+
+def show_pieces(context, pattern) -> None:
+    """Move the scene's piece objects onto ``pattern`` (a re-solve of their cut: a live update),
+    coloured in the range they were shown with; the stored pattern and its figures stay."""
+    pieces = objects_with_role(context.scene, "pattern_panel")
+    shown = pieces[0].data.get("ease_ramp") if pieces else None
+    lo, hi = (float(shown[0]), float(shown[1])) if shown is not None and len(shown) == 2 \
+        else data.ramp_range(context.scene)
+    build.update_pattern_objects(context.scene, pattern, lo, hi, pieces_x0(context.scene))
+
+
 def show_pattern(context, pattern, store_as: str = data.PATTERN_KEY) -> None:
     """Make ``pattern`` the scene's pattern: its pieces beside the body, its key figures."""
     lo, hi = data.ramp_range(context.scene)
@@ -365,11 +385,7 @@ def show_pattern(context, pattern, store_as: str = data.PATTERN_KEY) -> None:
     w = np.concatenate([np.asarray(p.achieved_weft, dtype=float) for p in pattern.panels])
     lo = max(ramp.EASE_LIMITS[0], min(lo, float(np.percentile(w, 1))))
     hi = min(ramp.EASE_LIMITS[1], max(hi, float(np.percentile(w, 99))))
-    body = context.scene.ease.body
-    x0 = 0.45
-    if body is not None:
-        x0 = float(world_bounds(body)[1][0]) + 0.35
-    build.update_pattern_objects(context.scene, pattern, lo, hi, x0)
+    build.update_pattern_objects(context.scene, pattern, lo, hi, pieces_x0(context.scene))
     store_pattern(context.scene, pattern, store_as)
     context.scene.ease.pattern_json = json.dumps(data.key_figures(pattern))
 

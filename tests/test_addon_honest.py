@@ -395,3 +395,28 @@ def test_live_bench_ignores_an_installed_copy_in_the_user_folder(tmp_path):
     _, sparse, live = line.split()
     assert str(tmp_path) not in sparse
     assert Path(live).resolve().is_relative_to(root)
+
+
+def test_a_re_solve_moves_every_part_of_the_pieces_in_place(blender):
+    """One update of the pattern objects (build.update_pattern_objects, which Live uses too): a
+    re-solve of the same cut (Optimize again, Transfer) moves the pieces, their outlines, grain
+    lines and labels in place: the same datablocks, no new name."""
+    bpy = blender.bpy
+    blender.reset(body=True, design=TOP, pattern=True)
+
+    def datablocks():
+        return {o.name: (o.session_uid, o.data.session_uid)
+                for role in ("pattern_panel", "pattern_panel_part") for o in blender.objects(role)}
+
+    def outline_points():
+        return {o.name: [tuple(p.co) for sp in o.data.splines for p in sp.points][:5]
+                for o in blender.objects("pattern_panel_part") if o.name.startswith("EASE outline")}
+    before, pts = datablocks(), outline_points()
+    assert before and any(n.startswith("EASE grain") for n in before)
+    bpy.context.scene.ease.fit_size = "XL"
+    assert bpy.ops.ease.transfer_size() == {"FINISHED"}
+    assert datablocks() == before
+    assert outline_points() != pts                      # the outlines moved with the pieces
+    n_curves, n_meshes = len(bpy.data.curves), len(bpy.data.meshes)
+    assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
+    assert datablocks() == before and (len(bpy.data.curves), len(bpy.data.meshes)) == (n_curves, n_meshes)
