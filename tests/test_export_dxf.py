@@ -95,3 +95,39 @@ def test_plain_dxf(made):
 def test_dxf_is_deterministic(made):
     pat, pieces, lay = made
     assert dxf.astm_text(pieces, lay, pat.style, "M") == dxf.astm_text(pieces, lay, pat.style, "M")
+
+
+def _renamed(pattern, old, new):
+    for p in pattern.panels:
+        if p.name == old:
+            p.name = new
+        if getattr(p, "mirror_of", None) == old:
+            p.mirror_of = new
+    for s in pattern.seams:
+        s.panel_a = new if s.panel_a == old else s.panel_a
+        s.panel_b = new if s.panel_b == old else s.panel_b
+    return pattern
+
+
+def test_block_names_bounded_per_format(tmp_path):
+    """A long piece name names an R12 block in at most 31 characters (R12's limit; two long names that share
+    their start stay apart), an R2000 block whole; the label text keeps the whole name. A name over 100
+    characters is refused in one line naming the field (it was accepted at 10,000 characters)."""
+    import ezdxf
+
+    from core.errors import ExportError
+    from core.export import export_pattern
+    long_a, long_b = "front_" + "x" * 60, "front_" + "x" * 59 + "y"
+    pattern = _renamed(_renamed(make_pattern(), "front", long_a), "back", long_b)
+    export_pattern(pattern, tmp_path / "e", formats=("dxf",))
+    r12 = ezdxf.readfile(tmp_path / "e" / "pattern_astm_r12.dxf")
+    names = sorted(b.name for b in r12.blocks if not b.name.startswith("*"))
+    assert len(names) == 2 and len(set(names)) == 2 and all(len(n) <= 31 for n in names), names
+    r2000 = ezdxf.readfile(tmp_path / "e" / "pattern_astm.dxf")
+    assert sorted(b.name for b in r2000.blocks if not b.name.startswith("*")) == sorted([long_a, long_b])
+    texts = [e.dxf.text for b in r12.blocks if not b.name.startswith("*") for e in b if e.dxftype() == "TEXT"]
+    assert f"Piece Name: {long_a}" in texts and f"Piece Name: {long_b}" in texts
+    with pytest.raises(ExportError, match=r"pattern.panels\[0\].name: expected at most 100 characters") as err:
+        export_pattern(_renamed(make_pattern(), "front", "f" * 10000), tmp_path / "bad", formats=("dxf",))
+    assert "\n" not in str(err.value) and len(str(err.value)) < 200
+    assert not (tmp_path / "bad").exists()

@@ -74,14 +74,30 @@ def _mm(points, offset=None) -> List[tuple]:
     return [(float(x) * 1000.0, float(y) * 1000.0) for x, y in q]
 
 
-def block_names(pieces: Sequence[PieceDrawing]) -> List[str]:
-    """ASCII block names, one per piece, unique (DXF R12 allows letters, digits, ``_-$``)."""
+#: longest block name per DXF version (R12: 31 characters; later versions: 255)
+BLOCK_NAME_MAX = {"R12": 31, "R2000": 255, "R2010": 255}
+
+
+def _fit_name(name: str, limit: int) -> str:
+    """``name`` cut to ``limit`` characters, a short hash of the whole name at the end where it was cut."""
+    if len(name) <= limit:
+        return name
+    import hashlib
+    tag = hashlib.sha1(name.encode("utf-8")).hexdigest()[:6]
+    return f"{name[:limit - len(tag) - 1]}_{tag}"
+
+
+def block_names(pieces: Sequence[PieceDrawing], dxfversion: str = "R2000") -> List[str]:
+    """ASCII block names, one per piece, unique (DXF R12 allows letters, digits, ``_-$``), at most
+    :data:`BLOCK_NAME_MAX` characters for ``dxfversion`` (a longer name is cut, with a hash of the whole)."""
+    limit = BLOCK_NAME_MAX.get(dxfversion, 31)
     names, seen = [], set()
     for p in pieces:
         base = re.sub(r"[^A-Za-z0-9_\-$]", "_", ascii_text(p.name)) or "PIECE"
-        name, k = base, 2
+        name, k = _fit_name(base, limit), 2
         while name.upper() in seen:
-            name, k = f"{base}_{k}", k + 1
+            suffix = f"_{k}"
+            name, k = _fit_name(base, limit - len(suffix)) + suffix, k + 1
         seen.add(name.upper())
         names.append(name)
     return names
@@ -131,7 +147,7 @@ def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, si
     for k, text in enumerate(style_text):
         msp.add_text(text, dxfattribs={"layer": L["boundary"], "height": h_style,
                                        "insert": (0.0, top + (len(style_text) - k) * 1.5 * h_style)})
-    for piece, name, off in zip(pieces, block_names(pieces), layout.offsets):
+    for piece, name, off in zip(pieces, block_names(pieces, dxfversion), layout.offsets):
         blk = doc.blocks.new(name=name)
         for loop in piece.cut:
             add_poly(blk, _mm(loop), close=True, dxfattribs={"layer": L["boundary"]})

@@ -38,6 +38,10 @@ def _ids(a, n: int, where: str) -> np.ndarray:
     return a
 
 
+#: characters a piece name may have: it is printed on the piece's label and names its DXF block
+MAX_NAME = 100
+
+
 def validate_pattern(pattern: Pattern, strict: bool = True) -> List[str]:
     """Raise :class:`ExportError` unless ``pattern`` can be exported.
 
@@ -45,7 +49,7 @@ def validate_pattern(pattern: Pattern, strict: bool = True) -> List[str]:
     with ``strict=False`` is reported in the returned warnings. Everything
     else always raises.
 
-    Checks: at least one piece; unique piece names; per piece finite uv (n, 2)
+    Checks: at least one piece; unique piece names of at most :data:`MAX_NAME` characters; per piece finite uv (n, 2)
     with n >= 3, faces (f, 3) indexing uv, non-negative vertex ids, a finite
     non-zero grain, boundary loops and hems indexing uv, an outline of area
     >= 1 cm^2 whose sew line does not cross itself, ``mirror_of`` naming a
@@ -58,9 +62,12 @@ def validate_pattern(pattern: Pattern, strict: bool = True) -> List[str]:
         raise ExportError("pattern.panels: the pattern has no pieces")
     warnings: List[str] = []
     names = [p.name for p in pattern.panels]
-    for name in names:
+    for k, name in enumerate(names):
         if not isinstance(name, str) or not name:
             raise ExportError(f"pattern.panels: piece names must be non-empty strings, got {name!r}")
+        if len(name) > MAX_NAME:
+            raise ExportError(f"pattern.panels[{k}].name: expected at most {MAX_NAME} characters (it names the piece "
+                              f"on its label and in every file), got {len(name)}: {name[:24]!r}...")
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise ExportError(f"pattern.panels: duplicate piece names {dup}")
