@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from test_body_sizes import N, TubeBody, ellipse_polygon_perimeter
 
-from core.body.made_to_measure import check_tape_targets, fit_tape, tolerance
+from core.body.made_to_measure import check_tape_targets, fit_tape, sample_body, tolerance
 from core.body.measure import measure
 from core.body.sizes import size_shape
 from core.body.tape import (
@@ -143,20 +143,11 @@ def test_tape_targets_are_checked():
             check_tape_targets(bad)
 
 
-def hidden_body(rng, anny):
-    from core.body.made_to_measure import LOCAL_FOR
-    s = {"gender": float(rng.integers(0, 2)), "age": rng.uniform(0.67, 0.8), "muscle": rng.uniform(0.2, 0.8),
-         "weight": rng.uniform(0.2, 0.8), "height": rng.uniform(0.25, 0.75), "proportions": rng.uniform(0.2, 0.8),
-         "cupsize": rng.uniform(0.3, 0.7)}
-    s.update({c: float(np.clip(rng.normal(0, 0.25), -0.6, 0.6)) for v in LOCAL_FOR.values() for c in v})
-    return s
-
-
 def test_made_to_measure_recovers_a_hidden_body(anny):
     """All 14 tape measures of a hidden body (phenotypes and local changes of the population) are
     fitted within 1 cm (girths) and 1.5 cm (lengths); the body is symmetric and does not cut
     into itself."""
-    hidden = hidden_body(np.random.default_rng([33, 1]), anny)
+    hidden = sample_body(np.random.default_rng([33, 1]))
     targets = tape_measures(anny, shape=hidden)
     fit = fit_tape(anny, {**targets, "gender": hidden["gender"]})
     assert fit.ok, fit.summary()

@@ -210,7 +210,7 @@ MEN = SizeChart(
         "M": {"gender": 0.0, "age": 0.7615, "muscle": 0.4299, "weight": 0.6038, "height": 0.3502, "proportions": 0.6007},
         "L": {"gender": 0.0, "age": 0.67, "muscle": 0.0066, "weight": 0.4868, "height": 0.3764, "proportions": 0.0},
         "XL": {"gender": 0.0, "age": 0.67, "muscle": 0.3695, "weight": 1.0, "height": 0.4125, "proportions": 0.2617},
-        "XXL": {"gender": 0.0, "age": 0.67, "muscle": 0.0815, "weight": 0.7668, "height": 0.4455, "proportions": 0.0},
+        "XXL": {"gender": 0.0, "age": 0.67, "muscle": 0.043, "weight": 0.7452, "height": 0.4472, "proportions": 0.0},
     }},
 )
 

@@ -71,6 +71,19 @@ def tolerance(name: str) -> float:
     return LENGTH_TOLERANCE_CM if name in LENGTHS else GIRTH_TOLERANCE_CM
 
 
+def sample_body(rng: np.random.Generator) -> Dict[str, float]:
+    """A body of the population made-to-measure is meant for (the benchmark's and the tests' hidden
+    bodies): a man or a woman (gender 0 or 1), adult age, muscle, weight and proportions uniform
+    in 0.2 .. 0.8, height 0.25 .. 0.75, cup size 0.3 .. 0.7, and each local change of
+    :data:`LOCAL_FOR` normal with s.d. 0.25, clipped to +/-0.6."""
+    s = {"gender": float(rng.integers(0, 2)), "age": float(rng.uniform(*ADULT_AGE)),
+         "muscle": float(rng.uniform(0.2, 0.8)), "weight": float(rng.uniform(0.2, 0.8)),
+         "height": float(rng.uniform(0.25, 0.75)), "proportions": float(rng.uniform(0.2, 0.8)),
+         "cupsize": float(rng.uniform(0.3, 0.7))}
+    s.update({c: float(np.clip(rng.normal(0.0, 0.25), -0.6, 0.6)) for v in LOCAL_FOR.values() for c in v})
+    return s
+
+
 def check_tape_targets(targets: Mapping[str, object], where: str = "measurements") -> Dict[str, float]:
     """Validate a table of tape measures (cm): names of :data:`TAPE_MEASURES` (or aliases) and,
     optionally, ``gender`` (0 male .. 1 female); a BodyError naming ``where.<name>`` otherwise."""
