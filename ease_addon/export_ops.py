@@ -64,8 +64,11 @@ class EASE_OT_export_pattern(EaseOperator):
                     raise state.AddonError(f"GLB/OBJ export: {why}")
                 skipped = f"{'/'.join(f.upper() for f in formats if f in ('glb', 'obj'))} skipped: {why}"
                 formats = flat
+        # the 3D files in the scene's own frame (Z up, the body's root at the origin), as the garment object
+        # lies: imported back they land on the scene's body
         files = wf.export(pattern, out, formats, allowance=allowance, notch_spacing=notch,
-                          drape=None if positions is None else (positions, None), print_all=s.export_print_all)
+                          drape=None if positions is None else (positions, None), print_all=s.export_print_all,
+                          up="z", origin="root")
         # -- the scene changes from here on: the design keeps the settings it was exported with
         if design is not None:
             text = json.dumps(design.to_json(), sort_keys=True)

@@ -11,7 +11,7 @@ from core.errors import Cancelled, ExportError
 from core.export import FORMATS, export_pattern, parse_formats
 
 ALL_FILES = {"pattern.svg", "pattern_astm.dxf", "pattern_astm_r12.dxf", "pattern_plain.dxf", "pattern_a4.pdf",
-             "pattern_letter.pdf", "pattern_plotter.pdf", "garment.glb", "garment.obj", "export.json"}
+             "pattern_letter.pdf", "pattern_plotter.pdf", "garment.glb", "garment.obj", "garment.mtl", "export.json"}
 
 
 def test_exports_every_format(tmp_path):

@@ -61,7 +61,7 @@ def test_drape_found_next_to_the_pattern(job):
 
 
 ALL = {"pattern.svg", "pattern_astm.dxf", "pattern_astm_r12.dxf", "pattern_plain.dxf", "pattern_a4.pdf",
-       "pattern_letter.pdf", "pattern_plotter.pdf", "garment.glb", "garment.obj", "export.json"}
+       "pattern_letter.pdf", "pattern_plotter.pdf", "garment.glb", "garment.obj", "garment.mtl", "export.json"}
 
 
 @pytest.mark.parametrize("fmt", ["svg,dxf,pdf,glb,obj", "all", "SVG, dxf,pdf,glb,obj,svg"])
@@ -147,7 +147,7 @@ def test_with_body_and_up_axis(job, anny):
     for up in ("z", "y"):
         out = root / f"x_{up}"
         assert run(["export", str(root / "pattern"), "--format", "obj,glb", "--drape", str(drape), "--out",
-                    str(out), "--with-body", "--up", up, "--quiet"]) == 0
+                    str(out), "--with-body", "--up", up, "--origin", "root", "--quiet"]) == 0
         text = (out / "garment.obj").read_text()
         assert ("+Z up" in text.splitlines()[1]) == (up == "z")
         body = text.split("o body\n", 1)[1].splitlines()
@@ -158,6 +158,26 @@ def test_with_body_and_up_axis(job, anny):
         from core.export.mesh import read_glb
         doc, _ = read_glb((out / "garment.glb").read_bytes())
         assert "body" in [n["name"] for n in doc["nodes"]] and "+Y up" in doc["asset"]["extras"]["frame"]
+    # the defaults: Y-up OBJ with its garment.mtl, and the body standing on the floor (its lowest point at 0)
+    out = root / "x_default"
+    assert run(["export", str(root / "pattern"), "--format", "obj,glb", "--drape", str(drape), "--out", str(out),
+                "--with-body", "--quiet"]) == 0
+    text = (out / "garment.obj").read_text()
+    assert "+Y up" in text.splitlines()[1] and "origin on the floor" in text.splitlines()[1]
+    assert "mtllib garment.mtl" in text and "usemtl fabric" in text and "usemtl body" in text
+    mtl = (out / "garment.mtl").read_text()
+    assert "newmtl fabric" in mtl and "newmtl body" in mtl
+    body = text.split("o body\n", 1)[1].splitlines()
+    v = np.array([[float(t) for t in l.split()[1:]] for l in body if l.startswith("v ")])
+    np.testing.assert_allclose(v, np.column_stack([V[:, 0], V[:, 2] - V[:, 2].min(), -V[:, 1]]), atol=2e-6)
+    assert v[:, 1].min() == pytest.approx(0.0, abs=1e-6)
+    from core.export.mesh import glb_accessor
+    doc, binary = read_glb((out / "garment.glb").read_bytes())
+    node = next(n for n in doc["nodes"] if n["name"] == "body")
+    pos = glb_accessor(doc, binary, doc["meshes"][node["mesh"]]["primitives"][0]["attributes"]["POSITION"])
+    assert pos[:, 1].min() == pytest.approx(0.0, abs=1e-5) and "origin on the floor" in doc["asset"]["extras"]["frame"]
+    import json
+    assert json.loads((out / "export.json").read_text())["frame"]["origin"] == "floor"
 
 
 def test_print_all_prints_every_piece_on_the_tiled_pdfs(tmp_path):

@@ -42,6 +42,8 @@ def _options(args) -> None:
         args.notch_spacing = check_notch_spacing(args.notch_spacing, "--notch-spacing")
     if args.up not in ("y", "z"):
         raise ExportError(f"--up: expected y or z, got {args.up!r}")
+    if args.origin not in ("floor", "root"):
+        raise ExportError(f"--origin: expected floor or root, got {args.origin!r}")
 
 
 def _run(args) -> int:
@@ -76,7 +78,7 @@ def _run(args) -> int:
     files = wf.export(pattern, args.out, formats=formats, allowance=args.allowance, hem=args.hem,
                       notch_spacing=args.notch_spacing, drape=drape, strict=not args.lenient, warnings=warnings,
                       up=args.up, with_body=args.with_body, progress=console_progress(args),
-                      print_all=args.print_all)
+                      print_all=args.print_all, origin=args.origin)
     for w in warnings:
         print(f"ease export: warning: {w}", file=sys.stderr)
     print_files(files)
@@ -104,9 +106,13 @@ def add_parser(sub) -> None:
     p.add_argument("--notch-spacing", default=None,
                    help="metres between notches along a seam, besides the seam ends (default 0.10; 0: the seam "
                         "ends only; else 0.005 to 10)")
-    p.add_argument("--up", default="z", metavar="z|y",
-                   help="up axis of garment.obj: z (default; the frame of the body OBJs and drape/garment.obj, "
-                        "metres, body facing -Y) or y; garment.glb is always +Y up, as glTF requires")
+    p.add_argument("--up", default="y", metavar="y|z",
+                   help="up axis of garment.obj: y (default; OBJ readers' convention, Blender's OBJ import "
+                        "included; written with garment.mtl) or z (the frame of the body OBJs and "
+                        "drape/garment.obj, body facing -Y); garment.glb is always +Y up, as glTF requires")
+    p.add_argument("--origin", default="floor", metavar="floor|root",
+                   help="origin of garment.glb and garment.obj: floor (default; the body stands on it: its lowest "
+                        "point at height 0, under its root) or root (the body's root, the pelvis, as draped)")
     p.add_argument("--with-body", action="store_true",
                    help="write the body the pattern was made on (its shape and pose) beside the garment in "
                         "garment.glb and garment.obj, in the same frame")

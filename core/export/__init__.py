@@ -86,7 +86,8 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
                    drape_positions: Optional[np.ndarray] = None, progress=None,
                    notch_spacing: Optional[float] = None, strict: bool = True,
                    warnings: Optional[list] = None, drape_faces: Optional[np.ndarray] = None,
-                   up: str = "z", body: Optional[tuple] = None, print_all: bool = False) -> List[Path]:
+                   up: str = "y", body: Optional[tuple] = None, print_all: bool = False,
+                   origin: str = "floor") -> List[Path]:
     """Write the pattern's cutting-room files and the draped garment.
 
     Parameters
@@ -110,8 +111,11 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
 
     drape_faces : (F, 3) int or None, the drape's triangles (``drape.npz["faces"]``):
         when given they must be the pattern's (a drape of another pattern is refused).
-    up : ``"z"`` (default) or ``"y"``: the up axis of ``garment.obj`` (see
-        :mod:`core.export.mesh`); ``garment.glb`` is always +Y up, as glTF requires.
+    up : ``"y"`` (default: OBJ readers' convention) or ``"z"`` (the core frame): the up axis of
+        ``garment.obj`` (see :mod:`core.export.mesh`); ``garment.glb`` is always +Y up, as glTF requires.
+    origin : ``"floor"`` (default) or ``"root"``: the origin of ``garment.glb`` / ``garment.obj``: on the
+        floor (the lowest point of the body, ``body`` or else the pattern's own body instance, at height 0,
+        under the root) or the body's root (the core frame).
     body : None or (vertices (V, 3) float m, faces (F, 3) int), the body in the
         drape's frame (:func:`core.body.instance.spec_instance` of ``pattern.body``),
         written beside the garment in the GLB and OBJ.
@@ -132,9 +136,11 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
     formats or the drape are invalid.
     """
     formats = parse_formats(formats)
-    from .mesh import UP_AXES
+    from .mesh import ORIGINS, UP_AXES
     if up not in UP_AXES:
         raise ExportError(f"up: expected 'y' or 'z', got {up!r}")
+    if origin not in ORIGINS:
+        raise ExportError(f"origin: expected floor or root, got {origin!r}")
     # the options and the design's export fields first: a bad value costs no work and no memory
     if not isinstance(pattern, Pattern):
         raise ExportError(f"pattern: expected a core.pattern.types.Pattern, got {type(pattern).__name__}")
@@ -146,6 +152,11 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
         positions = validate_drape(pattern, drape_positions, drape_faces)
         if body is not None:
             body = validate_body(body)
+        if origin == "floor":
+            floor = float(np.min((body[0] if body is not None else _pattern_body(pattern))[:, 2]))
+            positions = np.asarray(positions, float) - [0.0, 0.0, floor]
+            if body is not None:
+                body = (np.asarray(body[0], float) - [0.0, 0.0, floor], body[1])
     report(progress, 0.0, "building pattern pieces")
     pieces = build_pieces(pattern, widths, notch_spacing, progress=sub(progress, 0.0, 0.3),
                           warnings=None if strict else found)
@@ -197,17 +208,33 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
             summary["pdf"] = pages
         elif fmt in ("glb", "obj"):
             if fmt == "glb":
-                files["garment.glb"] = mesh.glb_bytes(meshes, body=body_mesh)
+                files["garment.glb"] = mesh.glb_bytes(meshes, body=body_mesh, origin=origin)
             else:
-                files["garment.obj"] = mesh.obj_text(meshes, title, up=up, body=body_mesh).encode("utf-8")
-            summary["frame"] = {"garment.glb": mesh.FRAME_Y, "garment.obj": mesh.FRAME_Y if up == "y" else mesh.FRAME_Z,
-                                "body": body is not None}
+                files["garment.obj"] = mesh.obj_text(meshes, title, up=up, body=body_mesh,
+                                                     origin=origin).encode("utf-8")
+                files[mesh.MTL_NAME] = mesh.mtl_text(meshes, body=body_mesh).encode("utf-8")
+            summary["frame"] = {"garment.glb": mesh.frame_text("y", origin), "garment.obj": mesh.frame_text(up, origin),
+                                "origin": origin, "body": body is not None}
     summary["files"] = sorted(files)
     files["export.json"] = (dumps_json(summary) + "\n").encode("utf-8")
     report(progress, 0.95, "writing files")
     paths = write_files(out_dir, files)
     report(progress, 1.0, f"wrote {len(files)} files to {out_dir}")
     return paths
+
+
+def _pattern_body(pattern: Pattern) -> np.ndarray:
+    """(V, 3) m: the body instance ``pattern`` was made on (its ``body`` record), for the floor of the mesh files."""
+    from ..body.instance import spec_instance
+    from ..errors import EaseError
+    spec = pattern.body or {}
+    if not spec.get("model") and spec.get("shape") is None:
+        raise ExportError("origin floor: the pattern names no body (pattern.json body) to stand on the floor; "
+                          "use origin root")
+    try:
+        return np.asarray(spec_instance(spec)[0], float)
+    except EaseError as exc:
+        raise ExportError(f"origin floor: the pattern's body: {getattr(exc, 'message', exc)}") from None
 
 
 def _piece_summary(piece: PieceDrawing, pattern: Pattern) -> dict:

@@ -10,12 +10,15 @@ piece (their uv differ).
 Frames, one convention for every 3D file of the project: metres, the garment
 where it was draped (the drape's own coordinates, the body's frame: +Z up,
 the body facing -Y, +X the body's left, as in Blender). The body OBJs of
-``ease body``, ``drape/garment.obj`` and the exported ``garment.obj`` (``up="z"``,
-the default) are written in it unchanged. glTF requires +Y up, so
-``garment.glb`` is always written as ``(x, z, -y)`` (Blender's glTF importer
-turns it back); ``up="y"`` writes the OBJ that way too, for tools that assume
-OBJ is Y-up. Each file states its frame (OBJ header comment, glTF
-``asset.extras``). With ``body`` the body the pattern was made on (its shape
+``ease body`` and ``drape/garment.obj`` are written in it unchanged. glTF
+requires +Y up, so ``garment.glb`` is always written as ``(x, z, -y)``
+(Blender's glTF importer turns it back); the exported ``garment.obj`` is
+written that way too by default (``up="y"``: OBJ readers, Blender's importer
+included, assume Y-up), ``up="z"`` keeps the core frame. The exported files'
+origin is on the floor by default (:data:`ORIGINS`: the body's lowest point at
+height 0, under its root), or at the body's root. Each file states its frame
+and origin (OBJ header comment, glTF ``asset.extras``); the OBJ's materials
+are in ``garment.mtl`` beside it. With ``body`` the body the pattern was made on (its shape
 and pose) is written beside the garment in the same frame: node/object
 ``body``.
 
@@ -60,6 +63,27 @@ def smooth_normals(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
 UP_AXES = ("y", "z")
 FRAME_Z = f"{FRAME}, as draped"
 FRAME_Y = "metres, +Y up, the body facing +Z, +X the body's left (glTF frame: EASE (x, y, z) -> (x, z, -y)), as draped"
+#: where a mesh file's origin is: ``"floor"`` (default: under the body's root, at the height of the body's lowest
+#: point, so the body stands on the floor as glTF/OBJ viewers expect) or ``"root"`` (the body's root, the core frame)
+ORIGINS = ("floor", "root")
+ORIGIN_TEXT = {"floor": "origin on the floor: under the body's root, at the body's lowest point",
+               "root": "origin at the body's root (the pelvis)"}
+#: the OBJ's material library, written beside it
+MTL_NAME = "garment.mtl"
+
+
+def frame_text(up: str, origin: str = "root") -> str:
+    """What a mesh file says about its frame: axes (``up``) and origin."""
+    return f"{FRAME_Y if up == 'y' else FRAME_Z}; {ORIGIN_TEXT[origin]}"
+
+
+def mtl_text(meshes, body=None) -> str:
+    """The OBJ's material library: ``fabric`` (the garment, its uv the pattern's) and ``body``, as in the GLB."""
+    lines = ["# EASE materials for garment.obj", "newmtl fabric", "Kd 0.800 0.800 0.800", "Ka 0 0 0", "Ks 0 0 0",
+             "Ns 10", "d 1", "illum 1"]
+    if body is not None:
+        lines += ["", "newmtl body", "Kd 0.930 0.780 0.660", "Ka 0 0 0", "Ks 0 0 0", "Ns 10", "d 1", "illum 1"]
+    return "\n".join(lines) + "\n"
 
 
 def to_y_up(v: np.ndarray) -> np.ndarray:
@@ -91,7 +115,7 @@ def piece_meshes(pattern: Pattern, positions: np.ndarray, rotations: Sequence[np
     return out
 
 
-def glb_bytes(meshes, generator: str = "EASE", body=None) -> bytes:
+def glb_bytes(meshes, generator: str = "EASE", body=None, origin: str = "root") -> bytes:
     """A GLB file from :func:`piece_meshes` output (+Y up, as glTF requires).
 
     One node + mesh + primitive per piece, grouped under one node per garment;
@@ -148,7 +172,7 @@ def glb_bytes(meshes, generator: str = "EASE", body=None) -> bytes:
         roots.append(len(nodes) - 1)
     while len(blob) % 4:
         blob.append(0)
-    doc = {"asset": {"version": "2.0", "generator": generator, "extras": {"frame": FRAME_Y}},
+    doc = {"asset": {"version": "2.0", "generator": generator, "extras": {"frame": frame_text("y", origin)}},
            "scene": 0, "scenes": [{"name": "garment", "nodes": roots}], "nodes": nodes, "meshes": gl_meshes,
            "materials": [{"name": "fabric", "doubleSided": True,
                           "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1.0],
@@ -193,15 +217,17 @@ def glb_accessor(doc: dict, binary: bytes, index: int) -> np.ndarray:
     return arr.reshape(acc["count"], comps) if comps > 1 else arr
 
 
-def obj_text(meshes, style: str = "garment", up: str = "z", body=None) -> str:
-    """Wavefront OBJ (metres, ``up`` = ``"z"``: the core frame, or ``"y"``) with ``vt`` from the pattern and ``vn``;
-    one ``o`` per piece, and ``o body`` (no ``vt``) when ``body`` (:func:`body_mesh` output) is given."""
-    frame = FRAME_Y if up == "y" else FRAME_Z
-    lines: List[str] = [f"# EASE draped garment: {style}", f"# frame: {frame}",
-                        "# vt = pattern uv in metres, grain along +v"]
+def obj_text(meshes, style: str = "garment", up: str = "y", body=None, origin: str = "root") -> str:
+    """Wavefront OBJ (metres, ``up`` = ``"y"``: the OBJ readers' convention, or ``"z"``: the core frame) with
+    ``vt`` from the pattern and ``vn``; one ``o`` per piece, and ``o body`` (no ``vt``) when ``body``
+    (:func:`body_mesh` output) is given; materials from :data:`MTL_NAME` (:func:`mtl_text`). ``origin`` is only
+    stated (the positions are given in it)."""
+    lines: List[str] = [f"# EASE draped garment: {style}", f"# frame: {frame_text(up, origin)}",
+                        "# vt = pattern uv in metres, grain along +v", f"mtllib {MTL_NAME}"]
     base = 1
     for name, garment, xyz, nrm, uv, faces in meshes:
         lines.append(f"o {name.replace(' ', '_')}")
+        lines.append("usemtl fabric")
         lines.extend(f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in to_frame(xyz, up))
         lines.extend(f"vt {u:.6f} {v:.6f}" for u, v in uv)
         lines.extend(f"vn {x:.6f} {y:.6f} {z:.6f}" for x, y, z in to_frame(nrm, up))
@@ -211,6 +237,7 @@ def obj_text(meshes, style: str = "garment", up: str = "z", body=None) -> str:
     if body is not None:
         name, xyz, nrm, faces = body
         lines.append(f"o {name}")
+        lines.append("usemtl body")
         lines.extend(f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in to_frame(xyz, up))
         lines.extend(f"vn {x:.6f} {y:.6f} {z:.6f}" for x, y, z in to_frame(nrm, up))
         f = faces + base
