@@ -474,8 +474,8 @@ def export_allowance(pattern, allowance: Optional[float] = None, hem: Optional[f
 def export(pattern, out, formats: Union[str, Sequence[str]] = ("svg", "dxf", "pdf"), allowance=None,
            hem: Optional[float] = None, notch_spacing: Optional[float] = None,
            drape: Optional[Tuple[np.ndarray, Optional[np.ndarray]]] = None, strict: bool = True,
-           warnings: Optional[List[str]] = None, up: str = "z", with_body: bool = False,
-           progress: Optional[Progress] = None, print_all: bool = False) -> list:
+           warnings: Optional[List[str]] = None, up: str = "y", with_body: bool = False,
+           progress: Optional[Progress] = None, print_all: bool = False, origin: str = "floor") -> list:
     """Cutting-room files (SVG, DXF, PDF) and the draped garment (GLB, OBJ) into ``out``, atomically.
 
     Parameters
@@ -488,8 +488,10 @@ def export(pattern, out, formats: Union[str, Sequence[str]] = ("svg", "dxf", "pd
     drape : (positions (N, 3) by global vertex id, faces or None) for GLB/OBJ
     strict : refuse pieces whose sew line crosses itself (False: export with a warning)
     warnings : list to receive the warnings
-    up : ``"z"`` (the body OBJs' frame, default) or ``"y"``: the up axis of ``garment.obj``
-        (``garment.glb`` is Y-up, as glTF requires)
+    up : ``"y"`` (default, OBJ readers' convention) or ``"z"`` (the body OBJs' frame): the up axis of
+        ``garment.obj`` (``garment.glb`` is Y-up, as glTF requires)
+    origin : ``"floor"`` (default: the body's lowest point at height 0) or ``"root"`` (the body's root):
+        the origin of ``garment.glb`` and ``garment.obj``
     with_body : also write the pattern's body instance beside the draped garment, in the same frame
     print_all : print every piece whole on the tiled PDFs (default: each mirrored pair once, labelled cut 2;
         symmetric pieces as halves on the fold)
@@ -509,7 +511,7 @@ def export(pattern, out, formats: Union[str, Sequence[str]] = ("svg", "dxf", "pd
     return export_pattern(pattern, out, formats=formats, allowance=table,
                           drape_positions=positions, drape_faces=faces, notch_spacing=notch_spacing,
                           strict=strict, warnings=warnings if warnings is not None else [], up=up, body=body,
-                          progress=progress, print_all=print_all)
+                          progress=progress, print_all=print_all, origin=origin)
 
 
 # ----------------------------------------------------------------------------- marker
