@@ -87,8 +87,8 @@ def anny_reference(anny):
 @pytest.fixture
 def numpy_steps():
     """The solver's per-triangle steps in numpy for the test (the Warp kernels off: tests of numpy's own
-    memos; :mod:`core.pattern.compiled` gives the same bits either way)."""
-    from core.pattern import compiled
+    memos; :mod:`core.pattern.accel.compiled` gives the same bits either way)."""
+    from core.pattern.accel import compiled
     compiled.use(False)
     yield
     compiled.use(None)

@@ -3,7 +3,7 @@ for whole patterns, and numpy takes over wherever they do not apply."""
 import numpy as np
 import pytest
 
-from core.pattern import compiled
+from core.pattern.accel import compiled
 from core.pattern.config import SolverConfig
 from core.pattern.feedback import move_corrections
 from core.pattern.solve import PatternSolver, transfer_pattern
@@ -41,7 +41,7 @@ def kernels_on(monkeypatch):
 
 @pytest.fixture
 def ran(monkeypatch):
-    """How many calls of each of :mod:`core.pattern.compiled`'s steps the kernels did (gave a result) in
+    """How many calls of each of :mod:`core.pattern.accel.compiled`'s steps the kernels did (gave a result) in
     the test: a comparison with numpy only tests the kernels where they ran."""
     counts = {}
     for name in ("local_step", "ratios", "collapse_guard", "grain_votes", "turned", "flip_check", "corrections",
@@ -450,7 +450,6 @@ def test_threads_same_bits(tube, ran):
     from concurrent.futures import ThreadPoolExecutor
     cut, body, _ = tube
     sizes = [body * np.array([1.0 + 0.03 * i, 1.05, 1.0]) for i in range(4)]
-    solvers = [PatternSolver(cut, body) for _ in sizes]      # a solver is one thread's
 
     def run(solver, big):
         p = transfer_pattern(cut, body, big, config=SolverConfig.named("improved"), solver=solver)
@@ -458,8 +457,12 @@ def test_threads_same_bits(tube, ran):
     assert compiled.load()
     compiled.use(False)
     try:
-        ref = [run(solvers[0], big) for big in sizes]
+        numpy_solver = PatternSolver(cut, body)                  # a solver chooses its path when built
         compiled.use(True)
+        solvers = [PatternSolver(cut, body) for _ in sizes]      # a solver is one thread's
+        compiled.use(None)
+        assert not numpy_solver.kernels and all(s.kernels for s in solvers)
+        ref = [run(numpy_solver, big) for big in sizes]
         with ThreadPoolExecutor(len(sizes)) as pool:
             got = list(pool.map(run, solvers, sizes))
     finally:
@@ -468,22 +471,32 @@ def test_threads_same_bits(tube, ran):
     assert ran["local_step"] > 0
 
 
-@pytest.mark.same_bits
-def test_public_launch_path_same_bits(both, monkeypatch):
-    """Warp's public recorded launch (where its private argument struct is not there) gives the same bits."""
-    monkeypatch.setattr(compiled._Launch, "private", False)
-    monkeypatch.setattr(compiled._local, "launches", {}, raising=False)
-    cfg = SolverConfig.named("improved")
-    _, K, Kc, M, cw, cg = _inputs(83, 11)
-    tg = rest_targets(Kc, cw, cg, cfg.rest_shape.model)
+def test_only_warps_public_api():
+    """The launches use Warp's public API only (recorded launches, ``set_param_at_index*``, ``__ctype__``):
+    nothing of ``warp._src`` and no private attribute of a Warp object, so another warp-lang release
+    either runs them or refuses a launch (then numpy, one warning)."""
+    import re
+    from pathlib import Path
+    for name in ("compiled", "ldl", "products"):
+        src = (Path(compiled.__file__).parent / f"{name}.py").read_text()
+        assert "_src" not in src and "_invoke_cache" not in src and ".hooks" not in src, name
+        assert not re.search(r"\b(wp|cmd|kernel)\._[a-z]", src), name
 
-    def run():
-        state = {}
-        return local_step(cfg, M, tg, np.ones(2), state), local_step(cfg, M, tg, np.ones(2), state)
-    ref, got = both(run)
-    assert_same(ref, got)
-    launches = compiled._local.launches
-    assert launches and all(launch.fast is None for pair in launches.values() for launch in pair.launches)
+
+def test_a_solver_keeps_the_path_it_chose_when_built(tube, ran, monkeypatch):
+    """The choice is made once, when a solver is built: switching the environment afterwards changes
+    nothing for that solver's solves (and a solver built after the switch follows it)."""
+    cut, body, _ = tube
+    big = body * np.array([1.1, 1.05, 1.0])
+    monkeypatch.setenv(compiled.ENV, "warp")
+    kept = PatternSolver(cut, body)
+    monkeypatch.setenv(compiled.ENV, "numpy")
+    transfer_pattern(cut, body, big, solver=kept)
+    assert kept.kernels and ran["local_step"] > 0
+    ran.clear()
+    fresh = PatternSolver(cut, body)
+    transfer_pattern(cut, body, big, solver=fresh)
+    assert not fresh.kernels and ran.get("local_step", 0) == 0
 
 
 def test_switches(monkeypatch):
@@ -539,11 +552,13 @@ def test_a_failed_launch_leaves_numpy(both, monkeypatch, caplog):
 
 
 def test_a_scalar_rebound_when_only_its_sign_of_zero_changes(kernels_on, monkeypatch):
-    """0.0 == -0.0, but the kernel must see the one it is given (the launch's kept argument struct)."""
+    """0.0 == -0.0, but the kernel must see the one it is given (the recorded launch's parameter)."""
     import math
     monkeypatch.setattr(compiled._local, "launches", {}, raising=False)
     _, K, Kc, M, cw, cg = _inputs(16, 51)
     for om in (0.0, -0.0):
         assert compiled.local_step(M, cw, cg, Kc, (cw, cg), Kc, None, om, False, 1.0, 1.0) is not None
     (pair,) = compiled._local.launches.values()
-    assert all(math.copysign(1.0, launch.struct.om) == -1.0 for launch in pair.launches)
+    for launch in pair.launches:
+        om = [a.label for a in launch.cmd.kernel.adj.args].index("om")
+        assert math.copysign(1.0, launch.cmd.params[1 + om].value) == -1.0

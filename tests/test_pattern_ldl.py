@@ -1,4 +1,4 @@
-"""core.pattern.ldl: QDLDL's factors refactorised row by row and solved two columns at once, with qdldl's bits."""
+"""core.pattern.accel.ldl: QDLDL's factors refactorised row by row and solved two columns at once, with qdldl's bits."""
 import pickle
 
 import numpy as np
@@ -6,7 +6,7 @@ import pytest
 import qdldl
 import scipy.sparse as sp
 
-from core.pattern import compiled
+from core.pattern.accel import compiled
 from same_bits import assert_same
 from core.pattern.factor import SymmetricFactor
 
@@ -15,7 +15,7 @@ from core.pattern.factor import SymmetricFactor
 def kernels_on(monkeypatch):
     assert compiled.load(), "Warp kernels failed to load (see the log's warning)"
     monkeypatch.setitem(compiled._state, "forced", True)
-    from core.pattern.ldl import matches_qdldl
+    from core.pattern.accel.ldl import matches_qdldl
     if not matches_qdldl():
         pytest.skip("this machine's qdldl build has other bits than the kernels (fused multiply-adds): qdldl factorises")
 
@@ -162,7 +162,7 @@ def test_kernels_and_qdldl_give_the_same_bits_on_a_solvers_guarded_matrices(kern
 @pytest.mark.same_bits
 def test_a_failed_launch_leaves_qdldl(kernels_on, monkeypatch, caplog):
     """A launch Warp refuses: qdldl's bits, one warning, and qdldl (and numpy) for the rest of the process."""
-    from core.pattern.ldl import LDL
+    from core.pattern.accel.ldl import LDL
     f = SymmetricFactor(_spd(60, seed=3))
     data = _changed(f, "pairs", 6)
     g_ref = f.with_values(data)
@@ -222,7 +222,7 @@ def test_a_refused_refactorisation_goes_on_as_qdldl_and_refactorises_to_qdldls_b
 @pytest.mark.same_bits
 def test_a_failed_plan_launch_leaves_qdldl(kernels_on, monkeypatch, caplog):
     """The symbolic plan's launch refused: the factor is qdldl's (not an error), one warning."""
-    from core.pattern import ldl
+    from core.pattern.accel import ldl
 
     def broken(self, *args):
         raise RuntimeError("no launch")
@@ -249,7 +249,7 @@ def test_a_wrong_right_hand_side_raises_and_leaves_the_kernels_on(kernels_on, mo
 def test_factors_past_int32_indices_stay_qdldls():
     """qdldl's indices are 64-bit, the kernels' int32: an L with 2**31 entries is left to qdldl."""
     from types import SimpleNamespace
-    from core.pattern.ldl import LDL
+    from core.pattern.accel.ldl import LDL
     L = SimpleNamespace(indptr=np.array([0, 2 ** 31], np.int64), indices=np.zeros(0, np.int32), data=np.zeros(0))
     solver = SimpleNamespace(factors=lambda: (L, np.ones(1), np.zeros(1, np.int64)))
     upper = (np.array([0]), np.array([0], np.int32), np.array([0, 1], np.int32))
@@ -308,7 +308,7 @@ def test_edge_values_are_qdldls_bits(kernels_on, kind):
 def test_where_qdldl_has_other_bits_it_keeps_the_factors(kernels_on, monkeypatch):
     """qdldl's macOS arm64 wheel fuses ``y -= l * x`` (fmsub), the kernels do not: where the probe finds
     other bits (simulated here by qdldl factors one ulp off), every factor stays qdldl's."""
-    from core.pattern import ldl
+    from core.pattern.accel import ldl
 
     class Fused(qdldl.Solver):
         def factors(self):

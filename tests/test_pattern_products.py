@@ -1,4 +1,4 @@
-"""core.pattern.products: the solver's Jacobians and right-hand side products in kernels, scipy's bits."""
+"""core.pattern.accel.products: the solver's Jacobians and right-hand side products in kernels, scipy's bits."""
 import pickle
 from concurrent.futures import ThreadPoolExecutor
 
@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from core.pattern import compiled
+from core.pattern.accel import compiled
 from same_bits import assert_same
-from core.pattern.products import GradientProducts
+from core.pattern.accel.products import GradientProducts
 
 
 @pytest.fixture

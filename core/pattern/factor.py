@@ -8,8 +8,8 @@ the symbolic analysis (AMD ordering, elimination tree) of QDLDL and redoes only
 the numeric factorisation for new values, a fraction of the cost of a new
 (SuperLU) factorisation; its back-substitution of both pattern coordinates is
 cheaper than SuperLU's too.
-Where the solver's Warp kernels run (:func:`.compiled.enabled`) with qdldl's
-bits (:func:`.ldl.matches_qdldl`), qdldl's factors go to an :class:`.ldl.LDL`,
+Where the solver's Warp kernels run (:func:`.accel.compiled.enabled`) with qdldl's
+bits (:func:`.accel.ldl.matches_qdldl`), qdldl's factors go to an :class:`.accel.ldl.LDL`,
 which refactorises only the rows of L a change of values reaches and solves
 both coordinates in one pass, with qdldl's bits. Measured timings:
 ``benchmarks/results/pattern_kernels_history.md``.
@@ -21,7 +21,7 @@ import qdldl
 import scipy.sparse as sp
 
 from ..errors import PatternError
-from . import compiled
+from .accel import compiled
 
 
 def _qdldl(upper: sp.csc_matrix) -> "qdldl.Solver":
@@ -76,7 +76,7 @@ class SymmetricFactor:
                        np.concatenate([[0], np.cumsum(np.bincount(col[keep], minlength=n))]).astype(A.indptr.dtype))
         self._qdldl = _qdldl(self._upper_matrix(A.data))
         if compiled.enabled():
-            from .ldl import LDL, matches_qdldl
+            from .accel.ldl import LDL, matches_qdldl
             self._ldl = LDL.from_qdldl(self._qdldl, self._upper, A.data) if matches_qdldl() else None
             if self._ldl is not None:
                 self._qdldl = None     # its factors are the LDL's now

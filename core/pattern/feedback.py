@@ -13,7 +13,7 @@ from typing import Optional, Tuple
 import numpy as np
 
 from ..geom.strain import scales_of_offsets
-from . import compiled
+from .accel import compiled
 
 
 def feedback_gains(cfg, adapting: bool) -> Tuple[float, float, float, float, float]:

@@ -32,6 +32,7 @@ solver's) and seam plan, so no call changes a later one's result.
 """
 from __future__ import annotations
 
+import functools
 import time
 from typing import Dict, Optional, Sequence, Tuple
 
@@ -40,14 +41,15 @@ import scipy.sparse as sp
 
 from ..geom.strain import components, intrinsic_offsets
 from ..progress import Progress, report
-from . import compiled
+from . import accel
+from .accel import compiled
 from .build import SolveResult, solve_result
 from .config import SolverConfig, check_tolerance
 from .factor import SymmetricFactor
 from .feedback import feedback_gains, move_corrections
 from .guard import COLLAPSE_ROUNDS, RESCUE_ITERATIONS, GuardedFactors, refused, renew_guard, rescuing, round_guard
 from .panels import flatten_panels
-from .products import GradientProducts
+from .accel.products import GradientProducts
 from .seams import SeamPlan, plan_seams, seam_layout, seam_matrix, seam_rhs
 from .start import pattern_start
 from .state import SolveState
@@ -55,6 +57,15 @@ from .steps import (any_collapsed, collapse_guard, face_neighbourhood, flip_guar
                     opened_jacobians, realign_grain, regulariser_energy, rhs_terms, rigid_align, scaled_start)
 from .targets import adaptation_scales, reference_ease, rest_targets
 from .validate import body_positions, validate_cut
+
+def _with_solvers_choice(method):
+    """``method`` runs its steps compiled or not as the solver chose when it was built (``self.kernels``)."""
+    @functools.wraps(method)
+    def run(self, *args, **kwargs):
+        with compiled.chosen(self.kernels):
+            return method(self, *args, **kwargs)
+    return run
+
 
 #: Weight of each panel's translation pin, relative to its mean diagonal entry.
 PIN_WEIGHT = 1e-6
@@ -109,7 +120,8 @@ class PatternSolver:
         self.ref_offsets = tuple(a.copy() for a in self.offsets(self.ref_positions))
         for a in self.ref_offsets:
             a.flags.writeable = False
-        compiled.prepare(progress)  # Warp's per-triangle kernels: compiled on a machine's first run
+        #: whether the steps run as Warp kernels (:mod:`.accel`; compiled on a machine's first run)
+        self.kernels = accel.choose(progress)
         self.timings = {"init": time.perf_counter() - t0}
         report(progress, 1.0, "flattened")
 
@@ -196,6 +208,7 @@ class PatternSolver:
         a = self.area_fraction
         return np.maximum(a, (config or self.config).weights.sliver * float(np.mean(a)))
 
+    @_with_solvers_choice
     def factorisation(self, config: Optional[SolverConfig], plan: SeamPlan) -> Tuple[SymmetricFactor, np.ndarray]:
         """(factorisation of the fixed system matrix (:class:`.factor.SymmetricFactor`; called on a
         right-hand side ``(n, 2)`` it back-substitutes), gauge pins (n, 2)) of ``config``'s weights and
@@ -216,6 +229,7 @@ class PatternSolver:
         return (w.ease, w.regulariser, w.seam_length, w.seam_straight, w.seam_curve, w.warp_column, w.sliver,
                 plan.gathered)
 
+    @_with_solvers_choice
     def guarded_factorisation(self, config: Optional[SolverConfig], plan: SeamPlan, gain: np.ndarray,
                               reuse: Optional[SymmetricFactor] = None) -> SymmetricFactor:
         """The factorisation of the system matrix with the collapse guard's triangles stiffened.
@@ -261,6 +275,7 @@ class PatternSolver:
         pin[off] = PIN_WEIGHT * np.add.reduceat(d, off) / self.blocks.vertex_counts
         return (L + sp.diags(pin)).tocsc(), np.stack([pin, pin], axis=1)
 
+    @_with_solvers_choice
     def jacobians(self, U: np.ndarray) -> list:
         """Jacobians of ``U`` (n, 2) w.r.t. the initial flattening as 4 contiguous (f,) arrays m00, m01, m10, m11.
 
@@ -324,6 +339,7 @@ class PatternSolver:
         self.release(state)
         return self.result(state)
 
+    @_with_solvers_choice
     def begin(self, K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray, start: Optional[np.ndarray] = None,
               positions: Optional[np.ndarray] = None, poses: Optional[dict] = None,
               plan: Optional[SeamPlan] = None, config: Optional[SolverConfig] = None,
@@ -371,6 +387,7 @@ class PatternSolver:
         state.seconds = time.perf_counter() - t0
         return state
 
+    @_with_solvers_choice
     def iterate(self, state: "SolveState", iterations: int, progress: Optional[Progress] = None) -> "SolveState":
         """Run ``iterations`` more local-global iterations on ``state`` (updated in place and returned).
 
@@ -492,6 +509,7 @@ class PatternSolver:
         return state.config.guard.guard_scale > 0 and any_collapsed(state.M, components(state.K), state.c_weft,
                                                                     state.c_warp)
 
+    @_with_solvers_choice
     def result(self, state: "SolveState") -> SolveResult:
         """The :class:`SolveResult` of ``state``'s current iterate (:func:`.build.solve_result`)."""
         return solve_result(self.panels, state)

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..geom.mesh import signed_areas_2d
 from ..geom.svd2 import clamp_singular_values_below, hypot, signed_singular_values2
-from . import compiled
+from .accel import compiled
 from .config import CollapseGuard, SolverConfig
 from .panels import PanelBlocks
 

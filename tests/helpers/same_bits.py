@@ -45,7 +45,7 @@ def contract_holds() -> bool:
 
     The probe runs a local step (numpy against the kernels) and the gradient products (scipy against the
     kernels) and compares their bits, NaNs canonicalised. (The LDL's own probe,
-    :func:`core.pattern.ldl.matches_qdldl`, decides whether the kernels factorise at all: where qdldl's
+    :func:`core.pattern.accel.ldl.matches_qdldl`, decides whether the kernels factorise at all: where qdldl's
     build has other bits, qdldl keeps the factors and tests/test_pattern_ldl.py skips.)
     """
     if MODE["value"] != "auto":
@@ -71,11 +71,11 @@ def probe_summary() -> str:
 def _run_probe():
     import scipy.sparse as sp
 
-    from core.pattern import compiled
+    from core.pattern.accel import compiled
     if not compiled.load():
         return False, "the Warp kernels did not load"
     from core.pattern.config import SolverConfig
-    from core.pattern.products import GradientProducts
+    from core.pattern.accel.products import GradientProducts
     from core.pattern.steps import local_step
     from core.pattern.targets import rest_targets
 

@@ -29,7 +29,7 @@ outputs only, so the overlap writes the same values twice).
 """
 from __future__ import annotations
 
-from ..geom.queries import wp  # Warp as the package sets it up (kernel cache folder, log level)
+from ...geom.queries import wp  # Warp as the package sets it up (kernel cache folder, log level)
 
 # forward only: no gradients are taken here, and the adjoints would double the compile time; no fused
 # multiply-add even where clang's front end would form one (Warp's default lets the backend fuse those)

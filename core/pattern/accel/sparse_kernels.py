@@ -17,7 +17,7 @@ contraction.
 """
 from __future__ import annotations
 
-from ..geom.queries import wp  # Warp as the package sets it up (kernel cache folder, log level)
+from ...geom.queries import wp  # Warp as the package sets it up (kernel cache folder, log level)
 
 wp.set_module_options({"enable_backward": False, "fuse_fp": False})
 

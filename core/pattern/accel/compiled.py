@@ -1,9 +1,9 @@
 """Launching the solver's Warp CPU kernels (:mod:`.kernels`): the same bits as numpy, or numpy.
 
-The per-triangle steps of a local-global iteration (:func:`.steps.local_step`,
-:func:`.feedback.move_corrections`, :func:`.steps.rhs_terms`,
-:func:`.steps.collapse_guard`, :func:`.steps.flip_guard`,
-:func:`.steps.realign_grain`) ask this module first; it returns None (False)
+The per-triangle steps of a local-global iteration (:func:`core.pattern.steps.local_step`,
+:func:`core.pattern.feedback.move_corrections`, :func:`core.pattern.steps.rhs_terms`,
+:func:`core.pattern.steps.collapse_guard`, :func:`core.pattern.steps.flip_guard`,
+:func:`core.pattern.steps.realign_grain`) ask this module first; it returns None (False)
 when numpy must do the step, and the step then runs its numpy code:
 
 - the kernels are off (``EASE_SOLVER_KERNELS=numpy``, :func:`use`), Warp
@@ -20,10 +20,10 @@ when numpy must do the step, and the step then runs its numpy code:
 So a pattern is the same bytes either way (tests/test_pattern_kernels.py).
 Outputs are new arrays every call, as numpy's are (the rows of one block: a
 kept row keeps its block, e.g. the local step's warp factors its 7 rows).
-Launches are Warp's recorded CPU launches with the argument struct kept per
-thread and only the arguments that changed rebound (wrapping ~25 numpy arrays
-as ``wp.array`` costs ~8 us each, a launch ~2 us this way); a thread keeps
-the launches of the last few sizes, and no array past its call.
+Launches are Warp's recorded CPU launches (its public API only), kept per
+thread, with only the arguments that changed rebound: an array by re-pointing
+its slot's ``array_t`` value, never by wrapping it in a new ``wp.array``; a
+thread keeps the launches of the last few sizes, and no array past its call.
 """
 from __future__ import annotations
 
@@ -33,11 +33,12 @@ import math
 import os
 import threading
 import weakref
+from contextlib import contextmanager
 from typing import Optional
 
 import numpy as np
 
-from ..progress import Progress, report
+from ...progress import Progress, report
 
 log = logging.getLogger(__name__)
 
@@ -73,8 +74,23 @@ def wanted() -> bool:
 
 
 def enabled() -> bool:
-    """Whether the kernels run: :func:`wanted` and loaded (compiled on first use)."""
-    return wanted() and load()
+    """Whether the kernels run: the choice of the solver whose call this is (:func:`chosen`), else
+    :func:`wanted`; and loaded (compiled on first use; False after a failure)."""
+    choice = getattr(_local, "chosen", None)
+    return (wanted() if choice is None else choice) and load()
+
+
+@contextmanager
+def chosen(kernels: bool):
+    """The steps this thread runs inside use the kernels or not as ``kernels`` says: the choice a
+    :class:`core.pattern.solver.PatternSolver` made once when it was built (:func:`core.pattern.accel.choose`),
+    whatever :data:`ENV` or :func:`use` say meanwhile."""
+    before = getattr(_local, "chosen", None)
+    _local.chosen = bool(kernels)
+    try:
+        yield
+    finally:
+        _local.chosen = before
 
 
 def prepare(progress: Optional[Progress] = None) -> None:
@@ -92,7 +108,7 @@ def load(progress: Optional[Progress] = None) -> bool:
             if _state["ready"] is None:
                 report(progress, 0.99, "loading the solver's kernels (compiled on the first run)")
                 try:
-                    from ..geom.queries import init_cpu
+                    from ...geom.queries import init_cpu
                     from . import kernels as K
                     from . import ldl_kernels, sparse_kernels
                     init_cpu()
@@ -196,13 +212,13 @@ def _slots(kernel) -> tuple:
 class _Launch:
     """One recorded CPU launch of ``kernel`` over ``dim`` tasks on the arrays' elements from ``shift``.
 
-    Recorded with Warp (``wp.launch(record_cmd=True)``) on first use; then
-    :meth:`bind` writes an argument into the kept argument struct and
-    :meth:`__call__` runs the kernel's CPU entry point. ``slots``: :func:`_slots` of ``kernel``.
+    Recorded with Warp's public API (``wp.launch(record_cmd=True)``) on first
+    use; then :meth:`bind` puts an argument into the recorded launch
+    (``set_param_at_index``; an array as its ``array_t`` value, made once per
+    slot from the recorded Warp array's ``__ctype__()`` and only re-pointed,
+    so no Warp array is made per call) and :meth:`__call__` replays it.
+    ``slots``: :func:`_slots` of ``kernel``.
     """
-
-    #: use Warp's private CPU entry (warp-lang is pinned); False: the public replay, ~6 us more a launch
-    private = True
 
     def __init__(self, kernel, slots: tuple, args, dim: int, shift: int):
         from . import kernels as K
@@ -219,51 +235,33 @@ class _Launch:
                 inputs.append(wp.array(view, dtype=K.v8, device="cpu", copy=False))
             else:
                 inputs.append(a)
+        # each array slot's value, owned here: a copy of the recorded array's (its data pointer and, for
+        # a raw or counter slot, its length are rewritten by bind)
+        self.values = [None if counters is None else type(x.__ctype__()).from_buffer_copy(x.__ctype__())
+                       for x, counters in zip(inputs, slots)]
         self.cmd = cmd = wp.launch(kernel, dim=dim, inputs=inputs, device="cpu", record_cmd=True)
-        cmd.launch()          # the first call's launch (and Warp's argument struct type)
+        cmd.launch()          # the first call's launch
         # the recorded launch keeps the first call's Warp arrays, and so its numpy arrays, for a graph
         # capture's replay, which these launches never are
         cmd.fwd_args = None
-        self.fast = None
-        if not self.private:
-            return
-        try:
-            # Warp's own CPU launch builds its argument struct anew each call (~0.3 us an argument):
-            # keep one and call the kernel's entry point
-            struct_type, fields = kernel._invoke_cache[(tuple(type(p) for p in cmd.params[1:]), False)]
-            struct = struct_type()
-            for j, field in enumerate(fields):
-                setattr(struct, field[0], cmd.params[1 + j])
-            self.fields = [name if counters is None else getattr(struct, name)
-                           for (name, _), counters in zip(fields, slots)]
-            self.struct = struct
-            self.fast = (ctypes.byref(cmd.params[0]), ctypes.byref(struct), cmd.hooks.forward)
-        except (AttributeError, KeyError, TypeError):
-            self.fast = None
 
     def bind(self, j: int, a, address: Optional[int]) -> None:
         """Argument ``j`` is now ``a`` (an array at ``address``, or a scalar)."""
-        counters = self.slots[j]
-        if self.fast is not None:
-            if address is None:
-                setattr(self.struct, self.fields[j], a)
-            else:
-                self.fields[j].data = address if counters else address + 8 * self.shift
-        elif address is None:
+        if address is None:
             self.cmd.set_param_at_index(j, a)
+            return
+        counters = self.slots[j]
+        value = self.values[j]
+        if counters == _RAW:
+            value.data, value.shape[0] = address, a.size
+        elif counters:
+            value.data, value.shape[0] = address, len(a)
         else:
-            from warp._src.types import array_t
-            shape, strides = (((a.size,), (a.itemsize,)) if counters == _RAW else ((len(a),), (4,)) if counters
-                              else ((self.dim,), (8 * _LANES,)))
-            start = address if counters else address + 8 * self.shift
-            self.cmd.set_param_at_index_from_ctype(j, array_t(start, 0, 1, shape, strides))
+            value.data = address + 8 * self.shift
+        self.cmd.set_param_at_index_from_ctype(j, value)
 
     def __call__(self) -> None:
-        if self.fast is not None:
-            bounds, struct, forward = self.fast
-            forward(bounds, struct)
-        else:
-            self.cmd.launch()
+        self.cmd.launch()
 
 
 class _Pair:
