@@ -25,7 +25,7 @@ WIDTH = 1.5
 @pytest.fixture(scope="module")
 def nested():
     items = marker_items([("M", make_pattern(), 1)])
-    return nest(items, WIDTH, seconds=30, seed=0)
+    return nest(items, WIDTH, seconds=30, seed=0, early_stop=True)
 
 
 def test_marker_pieces_inside_fabric_no_overlap(nested):
@@ -87,7 +87,7 @@ def test_marker_ctrl_c_keeps_best_and_cancel_discards():
 def test_marker_tries_keep_the_shortest(nested):
     """Two nesters side by side (tries, seeds 0 and 1): the marker kept is no longer than seed 0's alone
     (``nested``; both converge, so each is repeatable), and the report names the seed it came from."""
-    both = nest(nested.items, WIDTH, seconds=30, seed=0, tries=2)
+    both = nest(nested.items, WIDTH, seconds=30, seed=0, tries=2, early_stop=True)
     if not (both.stopped == nested.stopped == "converged"):
         pytest.skip("a nester hit the time limit (a loaded machine): its marker is not repeatable")
     assert both.length <= nested.length + 1e-9
@@ -148,7 +148,8 @@ def test_marker_cli_same_seed_same_bytes(tmp_path, capsys):
     save_pattern(make_pattern(), pat)
     outs = []
     for k in range(2):
-        rc, cap = _cli(capsys, pat, "--width", 1500, "--seconds", 30, "--seed", 7, "--out", tmp_path / f"o{k}")
+        rc, cap = _cli(capsys, pat, "--width", 1500, "--seconds", 30, "--seed", 7, "--early-stop", "--tries", 1,
+                       "--out", tmp_path / f"o{k}")
         assert rc == 0, cap.err
         outs.append(tmp_path / f"o{k}")
     reports = [json.loads((o / "marker.json").read_text()) for o in outs]
@@ -216,3 +217,14 @@ def test_marker_cli_bounds(tmp_path, capsys, argv, words):
     rc, cap = _cli(capsys, pat, *[x for kv in base.items() for x in kv], "--out", tmp_path / "bad")
     assert rc == 2 and words in cap.err and len(cap.err.strip().splitlines()) == 1, cap.err
     assert not (tmp_path / "bad").exists()
+
+
+def test_marker_budget_is_kept(monkeypatch):
+    """The nesters are stopped at the deadline (budget + MARGIN from the call), whatever they are doing: with the
+    deadline already past and no marker received, the run ends with an error saying so instead of waiting."""
+    from core.marker import nesting
+    items = marker_items([("M", make_pattern(), 2)])
+    monkeypatch.setattr(nesting, "MARGIN", -30.0)
+    with pytest.raises(ExportError, match="within the time budget"):
+        nest(items, WIDTH, seconds=30, seed=0)
+    assert nesting.phase_seconds(60) == (48, 12) and nesting.phase_seconds(1) == (1, 0)

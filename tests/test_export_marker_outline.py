@@ -56,7 +56,7 @@ def test_marker_curved_pieces_true_cut_lines_apart():
     pytest.importorskip("spyrrow")
     width = 0.6
     items = marker_items([("M", wavy_pattern(3), 2)])
-    m = nest(items, width, seconds=6, seed=0)
+    m = nest(items, width, seconds=6, seed=0, early_stop=True)
     loops = [placed_outline(m, p) for p in m.placements]
     assert len(loops) == 6
     closest = np.inf

@@ -1,7 +1,7 @@
 """The nesting worker of :mod:`core.marker.nesting`, run as its own process.
 
-It reads one JSON request on stdin (strip height, items, time budget, seed,
-threads), runs spyrrow (the sparrow / jagua-rs strip packer) and writes one
+It reads one JSON request on stdin (strip height, items, exploration and
+compression seconds, whether the search may end early, seed, threads), runs spyrrow (the sparrow / jagua-rs strip packer) and writes one
 JSON line on stdout for every feasible solution shorter than the last one,
 then ``{"done": true}``. The nester cannot be stopped from outside once it
 runs, so the marker runs it in this separate process: a cancel or Ctrl-C
@@ -29,8 +29,11 @@ def main() -> int:
     items = [spyrrow.Item(str(k), [tuple(p) for p in it["shape"]], int(it["demand"]), list(it["orientations"]))
              for k, it in enumerate(req["items"])]
     instance = spyrrow.StripPackingInstance("marker", float(req["strip"]), items)
-    config = spyrrow.StripPackingConfig(early_termination=True, total_computation_time=int(req["seconds"]),
-                                        seed=int(req["seed"]), num_workers=int(req["threads"]))
+    # the phases' times set here, not left to spyrrow's split of a total (80 % exploration, 20 % compression)
+    config = spyrrow.StripPackingConfig(early_termination=bool(req.get("early_termination", False)),
+                                        total_computation_time=None, exploration_time=int(req["exploration"]),
+                                        compression_time=int(req["compression"]), seed=int(req["seed"]),
+                                        num_workers=int(req["threads"]))
     queue = spyrrow.ProgressQueue()
     result = {}
 
