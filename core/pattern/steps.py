@@ -58,8 +58,8 @@ def local_step(config: SolverConfig, M: list, tg: dict, W2: np.ndarray, state: d
     and ``C = K' W K'^T``. The polar angle of ``A`` is exact when ``Delta`` or
     the anisotropy of ``C`` vanishes; one Newton step refines it otherwise.
     """
-    # every product below is the one the formula names, in its order: the iteration runs ~20 times on
-    # every triangle, so temporaries are reused (out=) rather than allocated
+    # written as the formula reads; the Warp kernel (accel.kernels.local_step8) computes the same
+    # expressions in the same order, so both paths give the same bits
     rest = config.rest_shape
     d0, d1, k = tg["reg"]
     T = tg["T"]
@@ -80,75 +80,33 @@ def local_step(config: SolverConfig, M: list, tg: dict, W2: np.ndarray, state: d
             return done[0], done[1]
     dw = d1 if sw is None else d1 * sw
     om = rest.warp_row
-    if W2[0] == 1.0 and W2[1] == 1.0:
-        m0, m1, m2, m3 = M        # the products by 1 are the values themselves
-    else:
-        m0, m1, m2, m3 = W2[0] * M[0], W2[1] * M[1], W2[0] * M[2], W2[1] * M[3]
+    m0, m1, m2, m3 = M if (W2[0] == 1.0 and W2[1] == 1.0) else (W2[0] * M[0], W2[1] * M[1], W2[0] * M[2],
+                                                                 W2[1] * M[3])
     omdw = om * dw
-    t1 = m0 * k[0]
-    t1 += (t2 := m1 * k[1])
-    x = np.multiply(d0, t1, out=t1)
-    np.multiply(m2, k[2], out=t2)
-    t2 += (t3 := m3 * k[3])
-    x += np.multiply(omdw, t2, out=t2)
-    y = np.multiply(m2, k[0], out=t2)
-    y += np.multiply(m3, k[1], out=t3)
-    y *= omdw
-    np.multiply(m0, k[2], out=t3)
-    t3 += (t4 := m1 * k[3])
-    y -= np.multiply(d0, t3, out=t3)
+    # x, y: the trace and skew parts of A = D Omega M W K'^T; the best angle without anisotropy
+    x = d0 * (m0 * k[0] + m1 * k[1]) + omdw * (m2 * k[2] + m3 * k[3])
+    y = (m2 * k[0] + m3 * k[1]) * omdw - d0 * (m0 * k[2] + m1 * k[3])
     r = hypot(x, y)
     ok = r > 0
-    if ok.all():        # the usual case: what the where() below would pick everywhere
+    if ok.all():
         c, sn = x / r, y / r
-    else:
+    else:            # A = 0: no rotation to find (the identity)
         rs = np.where(ok, r, 1.0)
-        c, sn = np.where(ok, np.divide(x, rs, out=t3), 1.0), np.where(ok, np.divide(y, rs, out=t4), 0.0)
-    delta = d0 * d0
-    delta -= np.multiply(omdw, dw, out=t3)
-    delta *= 0.5
+        c, sn = np.where(ok, x / rs, 1.0), np.where(ok, y / rs, 0.0)
+    delta = (d0 * d0 - omdw * dw) * 0.5
     if delta.any():
-        p = np.multiply(delta, Cdiff, out=t4)
-        q = np.multiply(-2.0 * delta, C01, out=delta)
-        c2 = c * c
-        c2 -= np.multiply(sn, sn, out=t3)
-        s2 = 2.0 * c
-        s2 *= sn
-        # g1 = 2 (x sn - y c) - 2 p s2 + 2 q c2
-        g1 = x * sn
-        g1 -= np.multiply(y, c, out=x)
-        g1 *= 2.0
-        pt = np.multiply(2.0, p, out=y)
-        g1 -= np.multiply(pt, s2, out=pt)
-        pt = np.multiply(2.0, q, out=y)
-        g1 += np.multiply(pt, c2, out=pt)
-        # g2 = 2 r - 4 p c2 - 4 q s2
-        g2 = np.multiply(2.0, r, out=r)
-        pt = np.multiply(4.0, p, out=y)
-        g2 -= np.multiply(pt, c2, out=pt)
-        pt = np.multiply(4.0, q, out=y)
-        g2 -= np.multiply(pt, s2, out=pt)
+        # one Newton step on f(theta) from the polar angle: f' = g1, f'' = g2 at theta
+        p = delta * Cdiff
+        q = -2.0 * delta * C01
+        c2 = c * c - sn * sn                         # cos 2 theta
+        s2 = 2.0 * c * sn                            # sin 2 theta
+        g1 = (x * sn - y * c) * 2.0 - 2.0 * p * s2 + 2.0 * q * c2
+        g2 = 2.0 * r - 4.0 * p * c2 - 4.0 * q * s2
         pos = g2 > 0
-        if pos.all():
-            step = np.negative(g1, out=g1)
-            step /= g2
-        else:
-            step = np.where(pos, np.negative(g1, out=g1) / np.where(pos, g2, 1.0), 0.0)
-        nrm = np.multiply(step, step, out=t3)
-        nrm += 1.0
-        np.sqrt(nrm, out=nrm)
-        c_new = sn * step
-        np.subtract(c, c_new, out=c_new)
-        c_new /= nrm
-        sn_new = np.multiply(c, step, out=step)
-        sn_new += sn
-        sn_new /= nrm
-        c, sn = c_new, sn_new
-    rk = [c * k[0], c * k[1], sn * k[0], sn * k[1]]
-    rk[0] -= sn * k[2]
-    rk[1] -= sn * k[3]
-    rk[2] += c * k[2]
-    rk[3] += c * k[3]
+        step = -g1 / g2 if pos.all() else np.where(pos, -g1 / np.where(pos, g2, 1.0), 0.0)
+        nrm = np.sqrt(step * step + 1.0)             # the angle's tangent step, back on the circle
+        c, sn = (c - sn * step) / nrm, (c * step + sn) / nrm
+    rk = [c * k[0] - sn * k[2], c * k[1] - sn * k[3], sn * k[0] + c * k[2], sn * k[1] + c * k[3]]    # R K'
     if free:
         p0, p1 = d1 * rk[2], d1 * rk[3]
         num = m2 * p0
