@@ -202,3 +202,26 @@ def test_measurements_without_a_target_stay_put(anny):
     assert abs(fit.achieved["waist"] - ref["waist"]) < 1.5 and abs(fit.achieved["hip"] - ref["hip"]) < 1.5
     fit = fit_measurements(anny, {"height": 170.0})
     assert fit.ok and abs(fit.achieved["chest"] - ref["chest"]) < 1.5, fit.summary()
+
+
+def test_realistic_rows_beyond_the_phenotypes_land(anny):
+    """Measurement rows a sewist writes down (a women's XL, a short pear-shaped woman) were refused
+    by the phenotypes around the average body; the fallback pass (gender, adult age, cup size and
+    the girths' local changes) lands them within 1 cm, with a symmetric body, and says so."""
+    from core.body.sizes import FALLBACK_PARAMETERS, _fit_measurements
+    for row in ({"height": 168, "chest": 113, "waist": 97, "hip": 120}, {"height": 160, "chest": 92, "waist": 80, "hip": 104}):
+        first = _fit_measurements(anny, row, None, None, None, None)
+        assert not first.ok
+        fit = fit_measurements(anny, row)
+        assert fit.ok, fit.summary()
+        assert set(FALLBACK_PARAMETERS) <= set(fit.parameters) and fit.evaluations > first.evaluations
+        assert 0.67 <= fit.shape["age"] <= 0.8
+        v = anny.vertices(fit.shape)
+        assert np.abs(v[anny.symmetry] * np.array([-1.0, 1.0, 1.0]) - v).max() < 1e-3
+
+
+def test_a_row_that_lands_at_once_is_fitted_as_before(anny):
+    """The fallback is a second pass only: a row the default parameters reach gives the same shape."""
+    from core.body.sizes import _fit_measurements
+    fit = fit_measurements(anny, SIZE_CHART["L"])
+    assert fit.ok and fit.shape == _fit_measurements(anny, SIZE_CHART["L"], None, None, None, None).shape

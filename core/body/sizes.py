@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import BodyError
 from ..progress import Progress, report, sub
-from .charts import LOCAL_GIRTHS, PUBLISHED, SizeChart
+from .charts import ADULT_AGE, LOCAL_GIRTHS, PUBLISHED, SizeChart
 from .measure import MEASUREMENTS, measure
 
 TOLERANCE_CM = 1.0
@@ -174,7 +174,37 @@ def fit_measurements(body, targets: Mapping[str, float], progress: Optional[Prog
     FitResult. A target that the model cannot reach within 1 cm is reported as
     ``"not reachable by this model"`` with its achieved value; that is not an error.
     Measurements without a target stay near the start body's (weakly held).
+
+    With the default ``parameters``, a fit that misses is made again from where it stopped with
+    :data:`FALLBACK_PARAMETERS` (gender, adult age, cup size) and the local change of each girth
+    given (:data:`LOCAL_OF_GIRTH`, Anny's) moving too; the better of the two is returned. A fit
+    that lands the first time is the same as without this second pass.
     """
+    first = _fit_measurements(body, targets, progress if parameters is not None else sub(progress, 0.0, 0.5),
+                              parameters, start, bounds)
+    local = local_parameters(body)
+    if first.ok or parameters is not None or not local:
+        report(progress, 1.0, "fit done")
+        return first
+    # The default parameters miss: again from where they stopped, with gender, adult age, the cup
+    # and the local change of each girth given moving too (a made-to-measure row the phenotypes
+    # around the average body cannot reach: a women's XL, a man's belly).
+    own = body.shape_parameters()
+    more = [n for n in FALLBACK_PARAMETERS if n in own and n not in first.parameters]
+    more += [LOCAL_OF_GIRTH[k] for k in sorted(check_targets(targets)) if LOCAL_OF_GIRTH.get(k) in local]
+    narrow = {**({"age": ADULT_AGE} if "age" in own else {}), **dict(bounds or {})}
+    second = _fit_measurements(body, targets, sub(progress, 0.5, 1.0), first.parameters + more, first.shape, narrow)
+    second.evaluations += first.evaluations
+    report(progress, 1.0, "fit done")
+    return second if second.ok or _worst_miss(second) < _worst_miss(first) else first
+
+
+def _worst_miss(fit: "FitResult") -> float:
+    return max(abs(fit.achieved[k] - v) for k, v in fit.targets.items())
+
+
+def _fit_measurements(body, targets, progress, parameters, start, bounds) -> FitResult:
+    """One bounded least-squares fit (:func:`fit_measurements` without its fallback)."""
     from scipy.optimize import least_squares
 
     targets = check_targets(targets)
@@ -237,9 +267,15 @@ def fit_measurements(body, targets: Mapping[str, float], progress: Optional[Prog
     achieved = measure(body, body.vertices(shape))
     status = {k: ("within 1 cm" if abs(achieved[k] - targets[k]) <= TOLERANCE_CM
                   else "not reachable by this model") for k in keys}
-    report(progress, 1.0, "fit done")
+    report(progress, 1.0, "fit pass done")
     return FitResult(shape=shape, targets=targets, achieved=achieved, status=status,
                      evaluations=count[0], parameters=names)
+
+
+# What fit_measurements moves besides its default parameters where they miss (see there), and the
+# local change of each girth target.
+FALLBACK_PARAMETERS = ("gender", "age", "cupsize")
+LOCAL_OF_GIRTH = dict(zip(("chest", "waist", "hip"), LOCAL_GIRTHS))
 
 
 _CACHE: Dict[tuple, Dict[str, float]] = {}
