@@ -53,7 +53,7 @@ from .dxf import piece_turn_points
 from .layout import LAYOUT_MARGIN, SHEET_WIDTH
 from .notches import seam_lengths
 from .pieces import PieceDrawing, ascii_text, build_pieces
-from .svg import STROKE_MM, _fmt, _path
+from .svg import STROKE_MM, svg_number, svg_path
 
 # one colour per size, smallest to largest (colour-blind safe, Okabe–Ito)
 SIZE_COLOURS = ("#0072b2", "#009e73", "#e69f00", "#d55e00", "#cc79a7", "#56b4e9", "#f0e442", "#000000")
@@ -206,8 +206,8 @@ def graded_svg(stacks, layout: Layout, title: str) -> str:
 
     line = f'fill="none" stroke-width="{STROKE_MM}" stroke-linejoin="round" stroke-linecap="round"'
     out = ['<?xml version="1.0" encoding="UTF-8" standalone="no"?>',
-           f'<svg xmlns="http://www.w3.org/2000/svg" version="1.1" width="{_fmt(W)}mm" height="{_fmt(H)}mm" '
-           f'viewBox="0 0 {_fmt(W)} {_fmt(H)}">',
+           f'<svg xmlns="http://www.w3.org/2000/svg" version="1.1" width="{svg_number(W)}mm" height="{svg_number(H)}mm" '
+           f'viewBox="0 0 {svg_number(W)} {svg_number(H)}">',
            f"<title>{escape(title)}</title>",
            "<desc>EASE graded nest at 1:1; 1 user unit = 1 mm. Each piece's sizes stacked at the middle of the "
            "grain line; solid: cut line, dashed: sew line, one colour per size (legend).</desc>",
@@ -215,9 +215,9 @@ def graded_svg(stacks, layout: Layout, title: str) -> str:
     for k, size in enumerate(sizes):
         x, y = 10.0 + 30.0 * k, 12.0
         c = SIZE_COLOURS[k % len(SIZE_COLOURS)]
-        out.append(f'<path d="M{_fmt(x)},{_fmt(y)} L{_fmt(x + 10)},{_fmt(y)}" stroke="{c}" fill="none" '
+        out.append(f'<path d="M{svg_number(x)},{svg_number(y)} L{svg_number(x + 10)},{svg_number(y)}" stroke="{c}" fill="none" '
                    f'stroke-width="1"/>')
-        out.append(f'<text x="{_fmt(x + 12)}" y="{_fmt(y + 2)}" font-family="Helvetica, Arial, sans-serif" '
+        out.append(f'<text x="{svg_number(x + 12)}" y="{svg_number(y + 2)}" font-family="Helvetica, Arial, sans-serif" '
                    f'font-size="6" fill="{c}">{escape(size)}</text>')
     out.append("</g>")
     for (name, stack), off in zip(stacks.items(), layout.offsets):
@@ -226,18 +226,18 @@ def graded_svg(stacks, layout: Layout, title: str) -> str:
             c = SIZE_COLOURS[k % len(SIZE_COLOURS)]
             out.append(f'<g class="size" data-size="{escape(size)}">')
             for loop in d.cut:
-                out.append(f'<path class="cut" d="{_path(mm(loop, off), True)}" stroke="{c}" {line}/>')
+                out.append(f'<path class="cut" d="{svg_path(mm(loop, off), True)}" stroke="{c}" {line}/>')
             for loop in d.sew:
-                out.append(f'<path class="sew" d="{_path(mm(loop, off), True)}" stroke="{c}" '
+                out.append(f'<path class="sew" d="{svg_path(mm(loop, off), True)}" stroke="{c}" '
                            f'stroke-dasharray="4,2" {line}/>')
             out.append("</g>")
         first = next(iter(stack.values()))
-        d = " ".join([_path(mm(first.grain, off), False)] + [_path(mm(a, off), False) for a in first.arrows])
+        d = " ".join([svg_path(mm(first.grain, off), False)] + [svg_path(mm(a, off), False) for a in first.arrows])
         out.append(f'<path class="grain" d="{d}" stroke="#000000" {line}/>')
         x, y = mm(np.zeros((1, 2)), off)[0]
-        out.append(f'<path class="reference" d="M{_fmt(x - 3)},{_fmt(y)} L{_fmt(x + 3)},{_fmt(y)} '
-                   f'M{_fmt(x)},{_fmt(y - 3)} L{_fmt(x)},{_fmt(y + 3)}" stroke="#000000" {line}/>')
-        out.append(f'<text x="{_fmt(x + 4)}" y="{_fmt(y - 4)}" font-family="Helvetica, Arial, sans-serif" '
+        out.append(f'<path class="reference" d="M{svg_number(x - 3)},{svg_number(y)} L{svg_number(x + 3)},{svg_number(y)} '
+                   f'M{svg_number(x)},{svg_number(y - 3)} L{svg_number(x)},{svg_number(y + 3)}" stroke="#000000" {line}/>')
+        out.append(f'<text x="{svg_number(x + 4)}" y="{svg_number(y - 4)}" font-family="Helvetica, Arial, sans-serif" '
                    f'font-size="5" fill="#000000">{escape(ascii_text(name))}</text>')
         out.append("</g>")
     out.append("</svg>")

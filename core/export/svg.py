@@ -23,14 +23,16 @@ COLOURS = {"cut": "#ff0000", "sew": "#0000ff", "notch": "#00a000", "grain": "#00
 STROKE_MM = 0.25
 
 
-def _fmt(v: float) -> str:
+def svg_number(v: float) -> str:
+    """``v`` (mm) as SVG text: at most 3 decimals (a micrometre), no trailing zeros, never ``-0``."""
     s = f"{v:.3f}".rstrip("0").rstrip(".")
     return "0" if s in ("-0", "") else s
 
 
-def _path(points_mm: np.ndarray, closed: bool) -> str:
+def svg_path(points_mm: np.ndarray, closed: bool) -> str:
+    """The ``d`` attribute of a polyline through ``points_mm`` (n, 2), closed with ``Z`` if ``closed``."""
     p = points_mm
-    d = "M" + " L".join(f"{_fmt(x)},{_fmt(y)}" for x, y in p)
+    d = "M" + " L".join(f"{svg_number(x)},{svg_number(y)}" for x, y in p)
     return d + (" Z" if closed else "")
 
 
@@ -51,8 +53,8 @@ def svg_document(pieces: Sequence[PieceDrawing], layout: Layout, title: str = "p
 
     out: List[str] = [
         '<?xml version="1.0" encoding="UTF-8" standalone="no"?>',
-        f'<svg xmlns="http://www.w3.org/2000/svg" version="1.1" width="{_fmt(W)}mm" height="{_fmt(H)}mm" '
-        f'viewBox="0 0 {_fmt(W)} {_fmt(H)}">',
+        f'<svg xmlns="http://www.w3.org/2000/svg" version="1.1" width="{svg_number(W)}mm" height="{svg_number(H)}mm" '
+        f'viewBox="0 0 {svg_number(W)} {svg_number(H)}">',
         f"<title>{escape(title)}</title>",
         "<desc>EASE sewing pattern at 1:1; 1 user unit = 1 mm. Red: cut line (seam allowance included); "
         "blue: sew line; green: notches; black: grain line and labels; magenta: fold line.</desc>",
@@ -62,31 +64,31 @@ def svg_document(pieces: Sequence[PieceDrawing], layout: Layout, title: str = "p
         out.append(f"<g id={quoteattr('piece-' + piece.name)} data-piece={quoteattr(piece.name)} "
                    f"data-quantity=\"{piece.quantity}\">")
         for loop in piece.cut:
-            out.append(f'<path class="cut" d="{_path(mm(loop, off), True)}" stroke="{COLOURS["cut"]}" {line}/>')
+            out.append(f'<path class="cut" d="{svg_path(mm(loop, off), True)}" stroke="{COLOURS["cut"]}" {line}/>')
         for loop in piece.sew:
-            out.append(f'<path class="sew" d="{_path(mm(loop, off), True)}" stroke="{COLOURS["sew"]}" '
+            out.append(f'<path class="sew" d="{svg_path(mm(loop, off), True)}" stroke="{COLOURS["sew"]}" '
                        f'stroke-dasharray="4,2" {line}/>')
         for f in piece.fold:
-            out.append(f'<path class="fold" d="{_path(mm(f, off), False)}" stroke="{COLOURS["fold"]}" '
+            out.append(f'<path class="fold" d="{svg_path(mm(f, off), False)}" stroke="{COLOURS["fold"]}" '
                        f'stroke-dasharray="8,2,1,2" {line}/>')
         for dart in piece.darts:
-            d = " ".join(_path(mm(leg, off), False) for leg in dart.legs)
+            d = " ".join(svg_path(mm(leg, off), False) for leg in dart.legs)
             out.append(f'<path class="dart" data-dart={quoteattr(dart.name)} d="{d}" stroke="{COLOURS["sew"]}" {line}/>')
-            d = " ".join(_path(mm(x, off), False) for x in (dart.fold, dart.fold_head))
+            d = " ".join(svg_path(mm(x, off), False) for x in (dart.fold, dart.fold_head))
             out.append(f'<path class="dart-fold" d="{d}" stroke="{COLOURS["mark"]}" {line}/>')
             x, y = mm(dart.drill[None], off)[0]
-            out.append(f'<circle class="drill" cx="{_fmt(x)}" cy="{_fmt(y)}" r="{_fmt(500 * DRILL_DIAMETER)}" '
+            out.append(f'<circle class="drill" cx="{svg_number(x)}" cy="{svg_number(y)}" r="{svg_number(500 * DRILL_DIAMETER)}" '
                        f'stroke="{COLOURS["mark"]}" {line}/>')
         if piece.notches:
-            d = " ".join(_path(mm(n.segment, off), False) for n in piece.notches)
+            d = " ".join(svg_path(mm(n.segment, off), False) for n in piece.notches)
             out.append(f'<path class="notch" d="{d}" stroke="{COLOURS["notch"]}" {line}/>')
-        d = " ".join([_path(mm(piece.grain, off), False)] + [_path(mm(a, off), False) for a in piece.arrows])
+        d = " ".join([svg_path(mm(piece.grain, off), False)] + [svg_path(mm(a, off), False) for a in piece.arrows])
         out.append(f'<path class="grain" d="{d}" stroke="{COLOURS["grain"]}" {line}/>')
         h = piece.text_height * 1000.0
         x, y = mm(piece.label_at[None], off)[0]
         for k, text in enumerate(piece.label):
-            out.append(f'<text class="label" x="{_fmt(x)}" y="{_fmt(y + (k + 1) * 1.5 * h - 0.5 * h)}" '
-                       f'font-family="Helvetica, Arial, sans-serif" font-size="{_fmt(h)}" '
+            out.append(f'<text class="label" x="{svg_number(x)}" y="{svg_number(y + (k + 1) * 1.5 * h - 0.5 * h)}" '
+                       f'font-family="Helvetica, Arial, sans-serif" font-size="{svg_number(h)}" '
                        f'fill="{COLOURS["text"]}">{escape(text)}</text>')
         out.append("</g>")
     out.append("</svg>")

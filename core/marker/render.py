@@ -22,7 +22,7 @@ import numpy as np
 from ..export import dxf as dxf_mod
 from ..export import pdf as pdf_mod
 from ..export.pieces import ascii_text
-from ..export.svg import COLOURS, STROKE_MM, _fmt, _path
+from ..export.svg import COLOURS, STROKE_MM, svg_number, svg_path
 from ..fileio import dumps_json, write_files
 from ..progress import Progress, report
 from .nesting import Marker, Placement, marker_report
@@ -84,24 +84,24 @@ def marker_svg(marker: Marker, title: str = "marker") -> str:
     colour = {"CUT": COLOURS["cut"], "NOTCH": COLOURS["notch"], "GRAIN": COLOURS["grain"], "FOLD": COLOURS["fold"]}
     rep = marker_report(marker, title)
     out = ['<?xml version="1.0" encoding="UTF-8" standalone="no"?>',
-           f'<svg xmlns="http://www.w3.org/2000/svg" version="1.1" width="{_fmt(L)}mm" height="{_fmt(W)}mm" '
-           f'viewBox="0 0 {_fmt(L)} {_fmt(W)}">',
+           f'<svg xmlns="http://www.w3.org/2000/svg" version="1.1" width="{svg_number(L)}mm" height="{svg_number(W)}mm" '
+           f'viewBox="0 0 {svg_number(L)} {svg_number(W)}">',
            f"<title>{escape(title)}</title>",
-           f"<desc>EASE marker at 1:1; 1 user unit = 1 mm. Fabric {_fmt(W)} mm wide (grey: selvages and marker "
-           f"ends), length {_fmt(L)} mm, efficiency {rep['efficiency_pct']:.2f} %. Grain along the length. Red: cut "
+           f"<desc>EASE marker at 1:1; 1 user unit = 1 mm. Fabric {svg_number(W)} mm wide (grey: selvages and marker "
+           f"ends), length {svg_number(L)} mm, efficiency {rep['efficiency_pct']:.2f} %. Grain along the length. Red: cut "
            f"line; green: notches; black: grain line and labels; magenta: fold line.</desc>",
-           f'<rect class="fabric" x="0" y="0" width="{_fmt(L)}" height="{_fmt(W)}" stroke="{FABRIC_COLOUR}" {line}/>']
+           f'<rect class="fabric" x="0" y="0" width="{svg_number(L)}" height="{svg_number(W)}" stroke="{FABRIC_COLOUR}" {line}/>']
     for p in marker.placements:
         it = marker.items[p.item]
         out.append(f"<g id={quoteattr(f'piece-{it.size}-{it.piece.name}-{p.translation[0]:.4f}')} "
                    f"data-piece={quoteattr(it.piece.name)} data-size={quoteattr(it.size)} "
-                   f'data-angle="{_fmt(p.angle)}">')
+                   f'data-angle="{svg_number(p.angle)}">')
         for layer, pts, closed in _lines(marker, p):
-            out.append(f'<path class="{layer.lower()}" d="{_path(mm(pts), closed)}" stroke="{colour[layer]}" {line}/>')
+            out.append(f'<path class="{layer.lower()}" d="{svg_path(mm(pts), closed)}" stroke="{colour[layer]}" {line}/>')
         base, angle, h = _text_place(marker, p)
         for (x, y), text in zip(mm(base), _label(marker, p)):
-            out.append(f'<text class="label" transform="translate({_fmt(x)},{_fmt(y)}) rotate({_fmt(-angle)})" '
-                       f'font-family="Helvetica, Arial, sans-serif" font-size="{_fmt(h * 1000)}" '
+            out.append(f'<text class="label" transform="translate({svg_number(x)},{svg_number(y)}) rotate({svg_number(-angle)})" '
+                       f'font-family="Helvetica, Arial, sans-serif" font-size="{svg_number(h * 1000)}" '
                        f'fill="{COLOURS["text"]}">{escape(text)}</text>')
         out.append("</g>")
     out.append("</svg>")
