@@ -17,7 +17,7 @@ from pathlib import Path
 
 from .common import print_files, subcommand
 
-ORDER = ("body", "cut", "pattern", "drape", "export")
+ORDER = ("body", "cut", "pattern", "drape", "fabric", "export")
 ENV = "EASE_BENCH_DIR"
 
 
