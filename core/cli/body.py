@@ -6,6 +6,7 @@ Examples::
     ease body --chart women --size M --out woman_m.obj
     ease body --size men:L --pose T --out man_l.obj
     ease body --measure chest=96,waist=80,hip=100,height=175 --out me.obj
+    ease body --measurements me.json --out me.obj      # tape measures, made-to-measure
     ease body --shape height=0.7,weight=0.6 --out tall.obj
     ease body --model SMPL_NEUTRAL.npz --shape beta0=1.5 --pose T --out smpl.obj
     ease body --all --out bodies/
@@ -83,6 +84,9 @@ def run(args) -> int:
         raise BodyError(f"--pose {args.pose!r}: unknown pose; allowed: {', '.join(POSE_PRESETS)}")
     if args.shape is not None and args.measure is not None:
         raise BodyError("give either --shape or --measure, not both")
+    if args.measurements is not None and (args.shape is not None or args.measure is not None or args.all):
+        raise BodyError("--measurements fits the body to a table of tape measures; it takes no --shape, --size, "
+                        "--measure or --all")
     if args.all and (args.shape is not None or args.measure is not None or args.pose is not None):
         raise BodyError("--all writes every size and pose; it takes no --shape, --measure or --pose")
     if args.measure is not None:
@@ -91,7 +95,13 @@ def run(args) -> int:
     out = Path(args.out)
     if args.all:
         return _write_all(body, out, progress)
-    if args.measure is not None:
+    if args.measurements is not None:
+        from ..body.made_to_measure import fit_tape, read_tape_file
+        fit = fit_tape(body, read_tape_file(args.measurements), progress=progress)
+        shape = fit.shape
+        print(fit.summary())
+        args.measure = f"measurements of {args.measurements}"
+    elif args.measure is not None:
         fit = fit_measurements(body, targets, progress=progress)
         shape = fit.shape
         print(fit.summary())
@@ -149,6 +159,11 @@ def add_parser(subparsers) -> None:
                    help="a size of --chart (e.g. M) or chart:size (women:M); the same as --shape SIZE")
     p.add_argument("--measure", default=None, metavar="chest=96,waist=80,hip=100,height=175",
                    help="fit the shape to these measurements in cm (any of height, chest/bust, waist, hip)")
+    p.add_argument("--measurements", default=None, metavar="FILE.json|FILE.csv",
+                   help="made-to-measure: fit Anny's phenotypes and local changes to a table of tape measures "
+                        "in cm (height, neck, shoulder_width, chest/bust, underbust, waist, high_hip, hip, "
+                        "upper_arm, wrist, arm_length, back_waist_length, inseam, thigh; optional gender 0..1; "
+                        "docs/measurements.md)")
     p.add_argument("--pose", default=None, help=f"pose preset: {', '.join(POSE_PRESETS)} (default A)")
     p.add_argument("--all", action="store_true", help="write all five sizes and all five poses and bodies.png to --out DIR")
     p.add_argument("--out", required=True, help="output .obj file (or directory with --all)")
