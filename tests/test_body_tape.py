@@ -166,3 +166,29 @@ def test_an_unreachable_measure_is_reported_with_the_closest_value(anny):
     for k in missed:
         assert fit.status[k] == f"not reachable: closest {fit.achieved[k]:.1f} cm"
     assert not fit.ok and "not reachable: closest" in fit.summary()
+
+
+def test_cli_measurements_file(tmp_path, capsys, anny):
+    """``ease body --measurements FILE`` (JSON object, name,cm rows, or a header and a row): the
+    fitted body written as OBJ, each measure beside its target; a bad file exits 2 in one line
+    naming the file and the measure."""
+    from core.cli import main
+    hidden = sample_body(np.random.default_rng([33, 2]))
+    m = tape_measures(anny, shape=hidden, which=("height", "chest", "waist", "hip", "inseam"))
+    (tmp_path / "me.csv").write_text("name,cm\n" + "".join(f"{k},{v:.1f}\n" for k, v in m.items())
+                                     + f"gender,{hidden['gender']:g}\n")
+    rc = main(["body", "--measurements", str(tmp_path / "me.csv"), "--out", str(tmp_path / "me.obj"), "--quiet"])
+    out = capsys.readouterr().out
+    assert rc == 0 and out.count("(target") == 5 and "not reachable" not in out, out
+    assert (tmp_path / "me.obj").exists()
+    (tmp_path / "row.csv").write_text("height,bust\n170,96\n")
+    from core.body.made_to_measure import read_tape_file
+    assert read_tape_file(tmp_path / "row.csv") == {"height": 170.0, "chest": 96.0}
+    for name, text, words in (("bad.json", '{"height": 180, "knee": 40}', "bad.json.knee: unknown measurement"),
+                              ("bad2.json", '[1, 2]', "bad2.json: expected an object"),
+                              ("bad.csv", "height,waist\n170\n", "bad.csv: expected rows"),
+                              ("bad.txt", "height 170", "must be .json or .csv")):
+        (tmp_path / name).write_text(text)
+        rc = main(["body", "--measurements", str(tmp_path / name), "--out", str(tmp_path / "x.obj"), "--quiet"])
+        err = capsys.readouterr().err
+        assert rc == 2 and words in err and len(err.strip().splitlines()) == 1, err

@@ -115,6 +115,51 @@ def check_tape_targets(targets: Mapping[str, object], where: str = "measurements
     return out
 
 
+def read_tape_file(path) -> Dict[str, float]:
+    """A table of tape measures from ``path``: a JSON object ``{"chest": 96, ...}`` (or
+    ``{"measurements": {...}}``), or a CSV either of ``name,cm`` rows or of a header row of names
+    and one row of values. Checked by :func:`check_tape_targets`; errors name the file."""
+    import csv
+    import json
+    from pathlib import Path
+    p = Path(path)
+    where = str(p)
+    try:
+        text = p.read_text(encoding="utf-8-sig")
+    except OSError as exc:
+        raise BodyError(f"{where}: cannot read the measurements ({exc.strerror or exc})") from None
+    if p.suffix.lower() == ".json":
+        try:
+            obj = json.loads(text)
+        except ValueError as exc:
+            raise BodyError(f"{where}: not valid JSON ({exc})") from None
+        if isinstance(obj, dict) and isinstance(obj.get("measurements"), dict):
+            obj = obj["measurements"]
+        if not isinstance(obj, dict):
+            raise BodyError(f"{where}: expected an object of measurements in cm, e.g. {{\"chest\": 96}}")
+        return check_tape_targets(obj, where)
+    if p.suffix.lower() != ".csv":
+        raise BodyError(f"{where}: measurements must be .json or .csv, got {p.suffix or 'no extension'!r}")
+    rows = [[c.strip() for c in r] for r in csv.reader(text.splitlines()) if any(c.strip() for c in r)]
+    if not rows:
+        raise BodyError(f"{where}: no measurements")
+    def number(text):
+        try:
+            float(text)
+            return True
+        except ValueError:
+            return False
+
+    if all(len(r) == 2 for r in rows) and number(rows[-1][1]) and not number(rows[-1][0]) and \
+            (len(rows) != 2 or number(rows[0][1])):
+        table = dict(rows[1:] if not number(rows[0][1]) else rows)     # name,cm rows (a header skipped)
+    elif len(rows) == 2 and len(rows[0]) == len(rows[1]):
+        table = dict(zip(rows[0], rows[1]))
+    else:
+        raise BodyError(f"{where}: expected rows of name,cm or a header row and one row of values")
+    return check_tape_targets(table, where)
+
+
 @dataclass
 class TapeFit:
     """Outcome of :func:`fit_tape`.
