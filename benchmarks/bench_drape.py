@@ -228,7 +228,9 @@ def drape_newton(pattern, body_v, body_f, material, frames: int, fps: float = 30
 
 # --- Blender cloth ------------------------------------------------------------
 
-BLENDER_SCRIPT = r'''
+#: the start of every Blender script here (also bench_fabric's): the inputs (argv: in.npz with a JSON
+#: ``config`` holding ``frames`` and ``fps``, out path), an empty scene, and ``make`` (a mesh object)
+BLENDER_PRELUDE = r'''
 import json, sys, time
 import numpy as np
 import bpy
@@ -248,6 +250,9 @@ def make(name, verts, faces, edges=()):
     ob = bpy.data.objects.new(name, me)
     scene.collection.objects.link(ob)
     return ob
+'''
+
+BLENDER_SCRIPT = BLENDER_PRELUDE + r'''
 
 body = make("body", d["body_v"], d["body_f"])
 col = body.modifiers.new("collision", "COLLISION")
@@ -376,12 +381,13 @@ def _tri_areas(v, f):
 
 def _score(positions, pattern, result_like, body_v, body_f) -> dict:
     """Penetration and mean gap of positions (per global id) in the layout of our DrapeResult."""
-    from core.metrics.drape import penetration, post_drape_gap
+    from core.metrics.drape import fold_measures, penetration, post_drape_gap
     x = np.asarray(positions, float)
     share, _ = penetration(x[result_like.used], body_v, body_f)
     gap, _ = post_drape_gap(body_v, body_f, x, result_like.faces, result_like.start_positions)
     return {"penetration_pct": 100.0 * share, "gap_mean_mm": float(gap.mean() * 1e3) if len(gap) else 0.0,
-            "gap_std_mm": float(gap.std() * 1e3) if len(gap) else 0.0}
+            "gap_std_mm": float(gap.std() * 1e3) if len(gap) else 0.0,
+            "folds": fold_measures(x, result_like.faces)}
 
 
 def side_by_side(pattern, body_v, body_f, frames: int, budget: float = 180.0) -> list:
@@ -499,18 +505,23 @@ def _markdown(res: dict) -> str:
                   f"Every simulator runs the frames our drape needed to settle ({res['side_by_side'][0]['frames']}); "
                   "one that exceeds the time budget stops early and its time for all frames is extrapolated.", "",
                   "| simulator | wall (s) | frames run | wall for all frames (s) | penetration (%) | seam gap (mm) | "
-                  "mean gap (mm) | note |",
-                  "|---|---|---|---|---|---|---|---|"]
+                  "mean gap (mm) | mean dihedral (deg) | edges > 30 deg (%) | mean curvature (1/m) | note |",
+                  "|---|---|---|---|---|---|---|---|---|---|---|"]
         for r in res["side_by_side"]:
             if "skipped" in r:
-                lines.append(f"| {r['simulator']} | – | – | – | – | – | – | skipped: {r['skipped']} |")
+                lines.append(f"| {r['simulator']} | – | – | – | – | – | – | – | – | – | skipped: {r['skipped']} |")
             elif "error" in r:
-                lines.append(f"| {r['simulator']} | – | – | – | – | – | – | could not run: {r['error']} |")
+                lines.append(f"| {r['simulator']} | – | – | – | – | – | – | – | – | – | could not run: {r['error']} |")
             else:
+                f = r.get("folds") or {}
+                folds = (f"{f['mean_dihedral_deg']:.1f} | {f['edges_over_30_pct']:.1f} | "
+                         f"{f['mean_curvature_per_m']:.1f}") if f else "– | – | –"
                 lines.append(f"| {r['simulator']} | {r['wall_s']:.2f} | {r['frames']} | "
                              f"{r['wall_s_for_same_frames']:.1f} | {r['penetration_pct']:.2f} | "
-                             f"{r['seam_gap_mm']:.2f} | {r['gap_mean_mm']:.1f} | {r.get('note', '')} |")
-        lines.append("")
+                             f"{r['seam_gap_mm']:.2f} | {r['gap_mean_mm']:.1f} | {folds} | {r.get('note', '')} |")
+        lines += ["", "Folds (core.metrics.drape.fold_measures): over the interior edges of the draped mesh, the "
+                  "mean dihedral angle, the share of edges bent over 30 degrees, and the mean curvature "
+                  "sum |theta| |e| / (2 A).", ""]
     lines += ["Gap: rays from body vertices under the skintight garment along outward vertex normals to the "
               "draped garment, 0 where nothing is hit. Penetration: garment vertices > 2 mm inside the body. "
               "Seam gap: largest distance between sewn vertices after the drape (0 by construction where seams "
