@@ -4,7 +4,12 @@ import numpy as np
 import pytest
 from test_body_sizes import N, TubeBody, ellipse_polygon_perimeter
 
-from core.body.made_to_measure import check_tape_targets, fit_tape, sample_body, tolerance
+from core.body.made_to_measure import (
+    check_tape_targets,
+    fit_tape,
+    sample_body,
+    tolerance,
+)
 from core.body.measure import measure
 from core.body.sizes import size_shape
 from core.body.tape import (
