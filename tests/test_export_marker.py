@@ -2,6 +2,7 @@
 efficiency as reported, repeatable with a seed, Ctrl-C keeps the best marker, CLI errors in one line."""
 from __future__ import annotations
 
+import io
 import json
 
 import numpy as np
@@ -198,7 +199,8 @@ def test_marker_cli_keeps_the_design_hem_as_export_does(tmp_path, capsys):
         assert length * 1000 == pytest.approx(cut[name], abs=0.01)
     rc, cap = _cli(capsys, pat, "--width", 1500, "--seconds", 1, "--allowance", 0.015, "--hem", 0.02,
                    "--out", tmp_path / "m2")
-    assert rc == 0 and json.loads((tmp_path / "m2" / "marker.json").read_text())["allowance_mm"]["front"] == [15.0, 20.0]
+    hem = json.loads((tmp_path / "m2" / "marker.json").read_text())["allowance_mm"]["front"]
+    assert rc == 0 and hem == [15.0, 20.0]
 
 
 @pytest.mark.parametrize("argv, words", [
@@ -228,3 +230,27 @@ def test_marker_budget_is_kept(monkeypatch):
     with pytest.raises(ExportError, match="within the time budget"):
         nest(items, WIDTH, seconds=30, seed=0)
     assert nesting.phase_seconds(60) == (48, 12) and nesting.phase_seconds(1) == (1, 0)
+
+
+def test_marker_labels_upright_legible_inside(nested):
+    """Each label reads upright on the marker (text angle within +-90 degrees, a piece turned 180 degrees too), is
+    at least 6 mm high (sleeve labels were 4.3 mm) and starts inside its piece; the DXF and SVG carry it."""
+    import dataclasses
+
+    import ezdxf
+
+    from core.marker.nesting import _rot
+    from core.marker.render import LABEL_MIN, _text_place, marker_dxf
+    turned = [dataclasses.replace(p, angle=p.angle + 180.0, rotation=_rot(180.0) @ p.rotation,
+                                  translation=p.translation + [0.0, 0.0]) for p in nested.placements]
+    for p in list(nested.placements) + turned:
+        base, angle, h = _text_place(nested, p)
+        assert -90.0 < angle <= 90.0 and h >= LABEL_MIN - 1e-12
+        outline = placed_outline(nested, p)
+        assert points_in_polygon(base, outline).all()
+        # lines run down the page in reading order: the first line above the second
+        up = np.array([-np.sin(np.radians(angle)), np.cos(np.radians(angle))])
+        assert (base[0] - base[1]) @ up == pytest.approx(1.5 * h)
+    doc = ezdxf.read(io.StringIO(marker_dxf(nested, "t")))
+    labels = [e for e in doc.modelspace() if e.dxftype() == "TEXT" and e.dxf.layer == "LABEL"]
+    assert labels and all(e.dxf.height >= LABEL_MIN * 1000 - 1e-9 and -90 < e.dxf.rotation <= 90 for e in labels)

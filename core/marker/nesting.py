@@ -492,5 +492,6 @@ def marker_report(marker: Marker, title: str = "marker") -> dict:
 
 
 __all__ = ["MarkerItem", "Placement", "Marker", "marker_items", "nest", "orientations", "parse_quantities",
-           "check_options", "default_tries", "phase_seconds", "size_label", "MARGIN", "unfold", "reflect", "MAX_WIDTH", "MAX_SECONDS", "MAX_GARMENTS",
-           "nest_outline", "placed_outline", "marker_report", "SPYRROW_PIN"]
+           "check_options", "default_tries", "phase_seconds", "size_label", "MARGIN", "unfold", "reflect",
+           "MAX_WIDTH", "MAX_SECONDS", "MAX_GARMENTS", "nest_outline", "placed_outline", "marker_report",
+           "SPYRROW_PIN"]

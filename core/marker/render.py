@@ -11,6 +11,7 @@ the same bytes (``marker.json`` also holds the wall time spent).
 """
 from __future__ import annotations
 
+import dataclasses
 import io
 import math
 from pathlib import Path
@@ -21,13 +22,15 @@ import numpy as np
 
 from ..export import dxf as dxf_mod
 from ..export import pdf as pdf_mod
-from ..export.pieces import ascii_text
+from ..export.pieces import CHAR_WIDTH, _place_label, ascii_text
 from ..export.svg import COLOURS, STROKE_MM, svg_number, svg_path
 from ..fileio import dumps_json, write_files
 from ..progress import Progress, report
 from .nesting import Marker, Placement, marker_report
 
 FILES = ("marker.dxf", "marker.svg", "marker.pdf", "marker.png", "marker.json")
+LABEL_MAX = 0.012   # m, the label's height where the piece has room
+LABEL_MIN = 0.006   # m, never smaller: legible on the cutting table
 DXF_LAYERS = {"CUT": 1, "NOTCH": 3, "GRAIN": 7, "FOLD": 6, "LABEL": 7, "FABRIC": 8}  # ACI colours
 FABRIC_COLOUR = "#808080"
 
@@ -63,13 +66,29 @@ def _lines(marker: Marker, p: Placement):
 
 
 def _text_place(marker: Marker, p: Placement):
-    """(baseline points (n, 2) m, angle degrees, height m) of a placed copy's label lines."""
+    """(baseline points (n, 2) m, angle degrees, height m) of a placed copy's label lines.
+
+    The two lines (piece, size) are placed inside the piece's sew line at up to :data:`LABEL_MAX` high
+    (:func:`core.export.pieces._place_label`), never under :data:`LABEL_MIN`, and read upright on the marker
+    whichever way the piece lies (a piece turned 180 degrees gets its label turned back, at the same place).
+    """
     piece = marker.items[p.item].piece
-    h = piece.text_height
-    x, y = piece.label_at
-    local = np.array([[x, y - (k + 1) * 1.5 * h + 0.5 * h] for k in range(2)])
+    lines = _label(marker, p)
+    at, h = _place_label(piece.sew, piece.grain, lines, LABEL_MAX)
+    h = max(float(h), LABEL_MIN)
+    w, th = max(len(t) for t in lines) * CHAR_WIDTH * h, len(lines) * 1.5 * h
+    block = np.array([[at[0], at[1]], [at[0] + w, at[1]], [at[0], at[1] - th], [at[0] + w, at[1] - th]])
+    corners = block @ p.rotation.T + p.translation
     d = p.rotation @ np.array([1.0, 0.0])
-    return local @ p.rotation.T + p.translation, math.degrees(math.atan2(d[1], d[0])), h
+    angle = round(math.degrees(math.atan2(d[1], d[0])), 9)
+    if not -90.0 < angle <= 90.0:               # upside down on the marker: turn the text back
+        angle = angle - 180.0 if angle > 90.0 else angle + 180.0
+    up = np.array([[math.cos(math.radians(angle)), -math.sin(math.radians(angle))],
+                   [math.sin(math.radians(angle)), math.cos(math.radians(angle))]])
+    u = corners @ up                            # the block in the upright text frame
+    x0, top = float(u[:, 0].min()), float(u[:, 1].max())
+    base = np.array([[x0, top - (k + 1) * 1.5 * h + 0.5 * h] for k in range(len(lines))])
+    return base @ up.T, angle, h
 
 
 def marker_svg(marker: Marker, title: str = "marker") -> str:
@@ -149,7 +168,9 @@ def marker_pdf(marker: Marker, title: str = "marker") -> bytes:
     c.setTitle(ascii_text(title))
     c.setCreator("EASE")
     used = sorted({p.item for p in marker.placements})
-    forms = dict(zip(used, pdf_mod._define_forms(c, [marker.items[i].piece for i in used])))
+    # the pieces' lines as forms, their labels drawn upright apart (as in the SVG and DXF)
+    forms = dict(zip(used, pdf_mod._define_forms(c, [dataclasses.replace(marker.items[i].piece, label=[])
+                                                     for i in used])))
     c.setLineWidth(pdf_mod.LINE_PT)
     c.setStrokeColorRGB(*pdf_mod.COLOURS["mark"])
     c.rect(m * k, m * k, L * k, W * k, stroke=1, fill=0)
@@ -158,6 +179,15 @@ def marker_pdf(marker: Marker, title: str = "marker") -> bytes:
             c.saveState()
             c.transform(M[0, 0], M[1, 0], M[0, 1], M[1, 1], (t[0] + m) * k, (t[1] + m) * k)
             c.doForm(forms[p.item])
+            c.restoreState()
+        base, angle, h = _text_place(marker, p)
+        c.setFillColorRGB(*pdf_mod.COLOURS["text"])
+        c.setFont("Helvetica", h * k)
+        for (x, y), text in zip(base, _label(marker, p)):
+            c.saveState()
+            c.translate((x + m) * k, (y + m) * k)
+            c.rotate(angle)
+            c.drawString(0, 0, text)
             c.restoreState()
     rep = marker_report(marker, title)
     c.setFont("Helvetica", 9)

@@ -1,9 +1,10 @@
 """The nesting worker of :mod:`core.marker.nesting`, run as its own process.
 
 It reads one JSON request on stdin (strip height, items, exploration and
-compression seconds, whether the search may end early, seed, threads), runs spyrrow (the sparrow / jagua-rs strip packer) and writes one
-JSON line on stdout for every feasible solution shorter than the last one,
-then ``{"done": true}``. The nester cannot be stopped from outside once it
+compression seconds, whether the search may end early, seed, threads), runs
+spyrrow (the sparrow / jagua-rs strip packer) and writes one JSON line on
+stdout for every feasible solution shorter than the last one, then
+``{"done": true}``. The nester cannot be stopped from outside once it
 runs, so the marker runs it in this separate process: a cancel or Ctrl-C
 kills the process and keeps the best solution already received.
 
