@@ -254,3 +254,36 @@ def test_marker_labels_upright_legible_inside(nested):
     doc = ezdxf.read(io.StringIO(marker_dxf(nested, "t")))
     labels = [e for e in doc.modelspace() if e.dxftype() == "TEXT" and e.dxf.layer == "LABEL"]
     assert labels and all(e.dxf.height >= LABEL_MIN * 1000 - 1e-9 and -90 < e.dxf.rotation <= 90 for e in labels)
+
+
+def test_spread_pairs_nests_one_piece_of_each_mirrored_pair(tmp_path, capsys):
+    """--spread pairs (two plies face to face): one piece of each mirrored pair, the second ply cutting its mirror
+    image; a piece that is its own mirror image half as often (each copy cuts two); a pair whose sides differ,
+    or a lopsided piece of no pair, is refused (the second ply would cut it mirrored)."""
+    from export_synth import mirrored_pattern
+    items = marker_items([("M", mirrored_pattern(), 3)], spread="pairs")
+    assert [(i.piece.name, i.count, i.plies, i.pair, i.garments) for i in items] == \
+        [("front_left", 3, 2, "front_right", 3)]
+    single = marker_items([("M", mirrored_pattern(), 3)])
+    assert [(i.piece.name, i.count, i.plies) for i in single] == [("front_left", 3, 1), ("front_right", 3, 1)]
+    sym = marker_items([("M", make_pattern(), 3)], spread="pairs")        # front and back: their own mirror images
+    assert [(i.piece.name, i.count, i.plies, i.pair) for i in sym] == [("front", 2, 2, ""), ("back", 2, 2, "")]
+    with pytest.raises(ExportError, match="not mirror images"):
+        marker_items([("M", mirrored_pattern(bulge=0.004), 1)], spread="pairs")
+    lopsided = mirrored_pattern()
+    lopsided.panels[1].mirror_of = None
+    with pytest.raises(ExportError, match="neither one of a mirrored pair nor its own mirror image"):
+        marker_items([("M", lopsided, 1)], spread="pairs")
+    with pytest.raises(ExportError, match="spread"):
+        marker_items([("M", make_pattern(), 1)], spread="three")
+    pat = tmp_path / "M"
+    save_pattern(mirrored_pattern(), pat)
+    rc, cap = _cli(capsys, pat, "--width", 1500, "--seconds", 1, "--sizes", "M:2", "--spread", "pairs",
+                   "--out", tmp_path / "m")
+    assert rc == 0, cap.err
+    rep = json.loads((tmp_path / "m" / "marker.json").read_text())
+    assert rep["spread"] == "pairs" and rep["plies"] == 2 and rep["face_to_face"] == {"M/front_left": "front_right"}
+    assert rep["pieces"] == 2 and rep["sizes"]["M"]["garments"] == 2 and rep["sizes"]["M"]["pieces"] == 4
+    assert "front_left + front_right" in (tmp_path / "m" / "marker.svg").read_text()
+    rc, cap = _cli(capsys, pat, "--width", 1500, "--spread", "both", "--out", tmp_path / "bad")
+    assert rc == 2 and "--spread" in cap.err and len(cap.err.strip().splitlines()) == 1

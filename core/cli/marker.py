@@ -13,11 +13,13 @@ from .common import add_quiet, console_progress, print_files, subcommand
 def _run(args) -> int:
     from .. import workflows as wf
     from ..errors import ExportError
-    from ..marker import check_options, default_tries, parse_quantities, size_label
+    from ..marker import SPREADS, check_options, default_tries, parse_quantities, size_label
     from ..pattern.io import load_pattern
     from .export import allowance_options
 
     allowance_options(args)
+    if args.spread not in SPREADS:
+        raise ExportError(f"--spread: expected {' or '.join(SPREADS)}, got {args.spread!r}")
     if args.width is None:
         raise ExportError("--width: expected the fabric width in mm (e.g. 1500)")
     if args.tries is None:
@@ -42,7 +44,7 @@ def _run(args) -> int:
         runs = [(s, p, 1) for s, (_, p) in found.items()]
     marker = wf.marker(runs, args.width / 1000.0, allowance=args.allowance, hem=args.hem, seconds=args.seconds,
                        seed=args.seed, one_way=args.one_way, tilt=args.tilt, threads=args.threads, tries=args.tries,
-                       progress=console_progress(args), early_stop=args.early_stop)
+                       progress=console_progress(args), early_stop=args.early_stop, spread=args.spread)
     title = f"{runs[0][1].style or 'marker'} marker"
     extra = {"patterns": {s: str(Path(found[s][0])) for s, _, _ in runs},
              "left_out": sorted(set(found) - {s for s, _, _ in runs})}
@@ -87,6 +89,10 @@ def add_parser(sub) -> None:
                         "cores, at most the machine's")
     p.add_argument("--one-way", action="store_true",
                    help="one-way fabric (nap, pile, directional print): every piece the same way up (0 degrees)")
+    p.add_argument("--spread", default="single", metavar="single|pairs",
+                   help="single: one ply, every piece nested (default); pairs: two plies face to face, as cutting "
+                        "rooms lay mirrored pieces: one piece of each mirrored pair (the second ply cuts its mirror "
+                        "image), a piece that is its own mirror image half as often")
     p.add_argument("--tilt", type=float, default=0.0, help="allowed tilt off the grain in degrees (default 0, at most 10)")
     p.add_argument("--allowance", default=None,
                    help="seam allowance in metres for every seam (default: the design's, else 0.01); the design's "

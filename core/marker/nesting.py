@@ -62,6 +62,7 @@ MAX_WIDTH = 10.0          # m of fabric width: the widest rolls are ~3.2 m
 MAX_SECONDS = 24 * 3600   # s of nesting
 MAX_GARMENTS = 100        # garments of one size in one marker
 MARGIN = 5.0              # s: a nest returns at most this long after its time budget
+SPREADS = ("single", "pairs")   # one ply; two plies face to face
 EXPLORATION_SHARE = 0.8   # of the budget exploring (sparrow's own split), the rest compressing
 WORKER = Path(__file__).with_name("worker.py")
 SPYRROW_PIN = "spyrrow==0.9.0"
@@ -78,8 +79,13 @@ class MarkerItem:
     outline : (k, 2) float, m: the cut line in the piece frame, unfolded for a
         piece cut on a fold (counter-clockwise).
     mirror : (2,) point and (2,) unit direction of the fold line, or None.
-    count : int, copies to cut (garments of this size x the label's quantity).
+    count : int, copies to nest (garments of this size x the label's quantity; face to face, see
+        :func:`marker_items`).
     area : float, m², of ``outline``.
+    garments : int, garments of this size the marker cuts (0: from ``count``).
+    plies : int, 1 (single ply) or 2 (face to face: each copy cuts the piece and its mirror image).
+    pair : str, face to face: the piece whose mirror image the second ply cuts (a declared pair's right),
+        else "".
     """
     size: str
     piece: PieceDrawing
@@ -87,6 +93,9 @@ class MarkerItem:
     mirror: Optional[Tuple[np.ndarray, np.ndarray]]
     count: int
     area: float
+    garments: int = 0
+    plies: int = 1
+    pair: str = ""
 
 
 @dataclass
@@ -279,8 +288,35 @@ def unfold(loop: np.ndarray, line: Tuple[np.ndarray, np.ndarray], tol: float = 1
     return np.vstack([half, reflect(half[-2:0:-1], line)])
 
 
+def _face_to_face(pattern: Pattern, pieces: Sequence[PieceDrawing], garments: int):
+    """{piece index: (copies to nest, the pair's right piece or "")} of a face-to-face lay (two plies, one the
+    other's mirror image): one piece of each mirrored pair, ``garments`` times (the second ply cuts the other);
+    a piece that is its own mirror image across its grain, ``ceil(garments / 2)`` times (each copy cuts two).
+    ExportError for a pair that is not mirrored, or a piece of neither kind (the second ply would cut it
+    mirrored)."""
+    from ..export.fold_half import fold_axis
+    from ..export.mirror_check import MIRROR_TOL, declared_pairs
+    out, right = {}, set()
+    for j, k in declared_pairs(pattern, pieces):
+        gap = pieces[j].mirror_gaps.get(pieces[k].name, math.inf)
+        if gap > MIRROR_TOL:
+            raise ExportError(f"spread pairs: {pieces[j].name} and {pieces[k].name} are not mirror images "
+                              f"({'differ' if not math.isfinite(gap) else f'{gap * 1000:.1f} mm off'}); "
+                              f"expected a mirrored pair, or spread single")
+        out[j], right = (garments, pieces[k].name), right | {k}
+    for i, piece in enumerate(pieces):
+        if i in out or i in right:
+            continue
+        if piece.fold or fold_axis(piece, MIRROR_TOL) is not None:
+            out[i] = (-(-garments // 2), "")
+        else:
+            raise ExportError(f"spread pairs: piece {piece.name} is neither one of a mirrored pair nor its own "
+                              f"mirror image: the second ply would cut it mirrored; expected spread single")
+    return out
+
+
 def marker_items(patterns: Sequence[Tuple[str, Pattern, int]], allowance=None,
-                 notch_spacing: Optional[float] = None) -> List[MarkerItem]:
+                 notch_spacing: Optional[float] = None, spread: str = "single") -> List[MarkerItem]:
     """The pieces to nest: every piece of every pattern, as many times as garments and labels ask.
 
     Parameters
@@ -289,16 +325,27 @@ def marker_items(patterns: Sequence[Tuple[str, Pattern, int]], allowance=None,
         of the whole pattern (each piece ``garments x`` its label's quantity;
         mirrored pieces are pieces of their own in a pattern, drawn mirrored).
     allowance, notch_spacing : see :func:`core.export.pieces.build_pieces`.
+    spread : ``"single"`` (one ply, every piece nested) or ``"pairs"`` (two plies face to face, as cutting
+        rooms lay mirrored pieces: one piece of each mirrored pair, the second ply cutting its mirror image;
+        a piece that is its own mirror image half as often, each copy cutting two; see :func:`_face_to_face`).
     """
+    if spread not in SPREADS:
+        raise ExportError(f"spread: expected {' or '.join(SPREADS)}, got {spread!r}")
     items = []
     for size, pattern, garments in patterns:
         if not 1 <= int(garments) <= MAX_GARMENTS:
             raise ExportError(f"size {size}: expected 1 to {MAX_GARMENTS} garments, got {garments}")
-        for piece in build_pieces(pattern, allowance, notch_spacing):
+        pieces = build_pieces(pattern, allowance, notch_spacing)
+        lay = _face_to_face(pattern, pieces, int(garments)) if spread == "pairs" else None
+        for i, piece in enumerate(pieces):
+            if lay is not None and i not in lay:
+                continue
             line = _fold_line(piece)
             outline = piece.cut[0] if line is None else unfold(piece.cut[0], line)
+            count, pair = lay[i] if lay is not None else (int(garments), "")
             items.append(MarkerItem(size=str(size), piece=piece, outline=outline, mirror=line,
-                                    count=int(garments) * int(piece.quantity), area=float(signed_area(outline))))
+                                    count=count * int(piece.quantity), area=float(signed_area(outline)),
+                                    garments=int(garments), plies=2 if lay is not None else 1, pair=pair))
     if not items:
         raise ExportError("marker: no pieces to nest")
     return items
@@ -466,10 +513,11 @@ def marker_report(marker: Marker, title: str = "marker") -> dict:
     sizes: Dict[str, dict] = {}
     for it in marker.items:
         s = sizes.setdefault(it.size, {"garments": 0, "pieces": 0, "area_m2": 0.0})
-        s["pieces"] += it.count
+        s["pieces"] += it.count * it.plies
         s["area_m2"] += it.area * it.count
     for it in marker.items:
-        sizes[it.size]["garments"] = max(sizes[it.size]["garments"], it.count // max(it.piece.quantity, 1))
+        sizes[it.size]["garments"] = max(sizes[it.size]["garments"],
+                                         it.garments or it.count // max(it.piece.quantity, 1))
     for s in sizes.values():
         share = marker.length * s["area_m2"] / area
         s.update(fabric_m=round(share, 4), fabric_per_garment_m=round(share / max(s["garments"], 1), 4),
@@ -483,6 +531,10 @@ def marker_report(marker: Marker, title: str = "marker") -> dict:
             "allowance_mm": {it.piece.name: sorted({round(float(w) * 1000, 2) for e in it.piece.edge_allowance
                                                     for w in e}) for it in marker.items},
             "grain": "along the marker length (x), parallel to the selvage",
+            "spread": "pairs" if any(it.plies == 2 for it in marker.items) else "single",
+            "plies": max(it.plies for it in marker.items),
+            "face_to_face": {f"{it.size}/{it.piece.name}": it.pair or "itself" for it in marker.items
+                             if it.plies == 2},
             "seed": marker.seed, "threads": marker.threads, "tries": marker.tries, "best_seed": marker.best_seed,
             "stopped": marker.stopped,
             "placements": [{"size": marker.items[p.item].size, "piece": marker.items[p.item].piece.name,
@@ -492,6 +544,6 @@ def marker_report(marker: Marker, title: str = "marker") -> dict:
 
 
 __all__ = ["MarkerItem", "Placement", "Marker", "marker_items", "nest", "orientations", "parse_quantities",
-           "check_options", "default_tries", "phase_seconds", "size_label", "MARGIN", "unfold", "reflect",
+           "check_options", "default_tries", "SPREADS", "phase_seconds", "size_label", "MARGIN", "unfold", "reflect",
            "MAX_WIDTH", "MAX_SECONDS", "MAX_GARMENTS", "nest_outline", "placed_outline", "marker_report",
            "SPYRROW_PIN"]

@@ -37,6 +37,9 @@ FABRIC_COLOUR = "#808080"
 
 def _label(marker: Marker, p: Placement) -> List[str]:
     it = marker.items[p.item]
+    if it.plies == 2:       # face to face: the second ply cuts the mirror image
+        return [ascii_text(it.piece.name + (f" + {it.pair}" if it.pair else " x2")),
+                ascii_text(f"size {it.size}, 2 plies face to face")]
     return [ascii_text(it.piece.name), ascii_text(f"size {it.size}")]
 
 
