@@ -10,7 +10,7 @@ from ._export import export_allowance
 def marker(runs: Sequence[Tuple[str, object, int]], width: float, allowance=None, hem: Optional[float] = None,
            notch_spacing: Optional[float] = None, seconds: int = 60, seed: int = 0, one_way: bool = False,
            tilt: float = 0.0, threads: int = 1, tries: Optional[int] = None, progress: Optional[Progress] = None,
-           early_stop: bool = False):
+           early_stop: bool = False, spread: str = "single"):
     """A cutting-room marker: the pieces of ``runs`` nested on a fabric ``width`` m wide (:mod:`core.marker`).
 
     Parameters
@@ -23,6 +23,7 @@ def marker(runs: Sequence[Tuple[str, object, int]], width: float, allowance=None
         the numbers are checked before any work (:func:`core.marker.check_options`); ``tries`` None: as many
         nesters (seeds ``seed``, ``seed + 1``, ...) as the machine's cores hold ``threads`` each, in the same
         wall time
+    spread : ``"single"`` (one ply) or ``"pairs"`` (two plies face to face, :func:`core.marker.marker_items`)
 
     Returns
     -------
@@ -35,7 +36,8 @@ def marker(runs: Sequence[Tuple[str, object, int]], width: float, allowance=None
     items = []
     for size, pattern, garments in runs:
         table = allowance if isinstance(allowance, dict) else export_allowance(pattern, allowance, hem)
-        items += marker_items([(size, pattern, garments)], allowance=table, notch_spacing=notch_spacing)
+        items += marker_items([(size, pattern, garments)], allowance=table, notch_spacing=notch_spacing,
+                              spread=spread)
     return nest(items, width, seconds=seconds, seed=seed, one_way=one_way, tilt=tilt, threads=threads, tries=tries,
                 progress=progress, early_stop=early_stop)
 
