@@ -28,7 +28,7 @@ def test_scripted_run_writes_blend_render_and_pattern(tmp_path):
     assert rep["pattern"]["pieces"] == 2 and rep["drape"]["frames"] >= 1
     # the add-on's export: every format, the draped garment included
     want = {"pattern.svg", "pattern_astm.dxf", "pattern_astm_r12.dxf", "pattern_plain.dxf", "pattern_a4.pdf",
-            "pattern_letter.pdf", "pattern_plotter.pdf", "garment.glb", "garment.obj", "export.json"}
+            "pattern_letter.pdf", "pattern_plotter.pdf", "garment.glb", "garment.obj", "garment.mtl", "export.json"}
     assert {p.name for p in (out / "export").iterdir()} == want
     assert {f"export/{n}" for n in want} <= set(rep["files"])
     from core.pattern.io import load_pattern
