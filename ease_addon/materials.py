@@ -33,8 +33,8 @@ FABRIC_COLOR = "ease_fabric_color"  # FLOAT_COLOR corner attribute: the garment'
 
 STITCH_FROM_SEAM = 0.006     # m: top-stitch line this far from a sewn edge
 STITCH_FROM_HEM = 0.015      # m: hem stitch line this far from the hem
-STITCH_WIDTH = 0.0007        # m: half width of a stitch line
-CREASE_WIDTH = 0.003         # m: the seam's crease (a groove on the sewn edge) this wide
+STITCH_WIDTH = 0.0012        # m: half width of a stitch line
+CREASE_WIDTH = 0.005         # m: the seam's crease (a groove on the sewn edge) this wide
 
 
 @dataclass(frozen=True)
@@ -58,7 +58,7 @@ class FabricLook:
 
 
 LOOKS = {
-    "cotton": FabricLook("plain", 0.45, (0.62, 0.70, 0.82), 0.78, 0.35, 0.35),
+    "cotton": FabricLook("plain", 0.45, (0.32, 0.44, 0.64), 0.78, 0.35, 0.35),
     "jersey": FabricLook("knit", 1.1, (0.20, 0.21, 0.23), 0.85, 0.55, 0.45),
     "denim": FabricLook("twill", 0.9, (0.045, 0.075, 0.17), 0.88, 0.25, 0.55, stitch=(0.55, 0.30, 0.07)),
     "silk": FabricLook("satin", 0.25, (0.72, 0.52, 0.36), 0.32, 0.85, 0.15),
@@ -227,9 +227,9 @@ def fabric(preset: str | None = None):
 
     stitch = g.math("MULTIPLY", g.math("MAXIMUM", line(seam_d, STITCH_FROM_SEAM), line(hem_d, STITCH_FROM_HEM)),
                     has_seams)
-    # a stitch is dashed: the thread shows 3 mm in 4 along the line (diagonal dashes read as stitches
+    # a stitch is dashed: the thread shows ~4 mm in 6 along the line (diagonal dashes read as stitches
     # in every direction of the seam)
-    dash = g.map_range(g.sin01(g.math("ADD", u, v), 0.004), 0.3, 0.45)
+    dash = g.map_range(g.sin01(g.math("ADD", u, v), 0.006), 0.2, 0.35)
     stitch = g.math("MULTIPLY", stitch, dash)
     crease = g.math("MULTIPLY", g.map_range(seam_d, CREASE_WIDTH, 0.0), has_seams)
     height = g.math("ADD", g.math("MULTIPLY", weave, 0.7), g.math("MULTIPLY", fibre.outputs["Fac"], 0.3))
@@ -251,7 +251,7 @@ def fabric(preset: str | None = None):
     base = g.mix_rgb(design[3], rgb, design[0])
     shade = g.math("ADD", g.math("MULTIPLY", weave, 0.16), 0.84)
     shade = g.math("MULTIPLY", shade, g.math("MULTIPLY_ADD", slub.outputs["Fac"], 0.12, 0.94))
-    shade = g.math("MULTIPLY", shade, g.math("SUBTRACT", 1.0, g.math("MULTIPLY", crease, 0.35)))
+    shade = g.math("MULTIPLY", shade, g.math("SUBTRACT", 1.0, g.math("MULTIPLY", crease, 0.7)))
     shaded = g.node("ShaderNodeMix", data_type="RGBA", blend_type="MULTIPLY")
     shaded.inputs[0].default_value = 1.0
     g.nt.links.new(base, shaded.inputs[6])
@@ -260,12 +260,13 @@ def fabric(preset: str | None = None):
         g.nt.links.new(shade, comb.inputs[i])
     g.nt.links.new(comb.outputs[0], shaded.inputs[7])
     thread = (*look.stitch, 1.0) if look.stitch else None
-    if thread is None:
-        lighter = g.node("ShaderNodeMix", data_type="RGBA", blend_type="SCREEN")
-        lighter.inputs[0].default_value = 0.35
-        g.nt.links.new(base, lighter.inputs[6])
-        lighter.inputs[7].default_value = (1.0, 1.0, 1.0, 1.0)
-        thread = lighter.outputs[2]
+    if thread is None:    # a shade of the fabric that shows on it: darker on light cloth, lighter on dark
+        light = sum(look.color) / 3 > 0.25
+        shade_of = g.node("ShaderNodeMix", data_type="RGBA", blend_type="MULTIPLY" if light else "SCREEN")
+        shade_of.inputs[0].default_value = 0.6
+        g.nt.links.new(base, shade_of.inputs[6])
+        shade_of.inputs[7].default_value = (0.2, 0.2, 0.2, 1.0) if light else (1.0, 1.0, 1.0, 1.0)
+        thread = shade_of.outputs[2]
     color = g.mix_rgb(stitch, shaded.outputs[2], thread)
     if bsdf is not None:
         g.nt.links.new(color, bsdf.inputs["Base Color"])

@@ -198,7 +198,10 @@ def build_set(scene, centre: np.ndarray, floor_z: float):
     me = bpy.data.meshes.get(SET)
     if me is None:
         me = _cyclorama(SET, SET_RADIUS, COVE, WALL)
+    if not me.materials:
         me.materials.append(materials.floor())
+    elif me.materials[0] is None:
+        me.materials[0] = materials.floor()
     obj = _object(scene, SET, me)
     obj.location = (float(centre[0]), float(centre[1]), float(floor_z))
     return obj

@@ -1,10 +1,12 @@
 """EASE headless: design -> body -> pattern -> drape -> .blend + Cycles PNG + pattern files, through the add-on.
 
-    blender -b --python examples/scripted_run.py -- DESIGN.json OUT_DIR [--frames N] [--samples N]
+    blender -b --python examples/scripted_run.py -- DESIGN.json OUT_DIR [--frames N] [--samples N] [--view ALL]
     python examples/scripted_run.py DESIGN.json OUT_DIR            # with the bpy module (the venv)
 
 Writes into OUT_DIR: ``scene.blend`` (body, ease layer, design, pattern
-pieces, draped garment, studio), ``render.png`` (Cycles, CPU),
+pieces, draped garment, studio), ``render.png`` (Cycles, CPU, the add-on's
+studio preset: 1080 x 1440, 32 samples, denoised; ``render_front.png``,
+``render_three_quarter.png``, ``render_back.png`` with ``--view ALL``),
 ``pattern.json``, ``report.json`` (the key figures the panels show) and
 ``export/`` (the add-on's Export Pattern: SVG, DXF, PDF, and GLB/OBJ of the
 draped garment).
@@ -36,8 +38,12 @@ def _args(argv):
     ap.add_argument("design", help="design JSON (e.g. examples/designs/teaser_shirt_pants.json)")
     ap.add_argument("out", help="output folder")
     ap.add_argument("--frames", type=int, default=120, help="drape frame limit (default 120)")
-    ap.add_argument("--samples", type=int, default=16, help="Cycles samples (default 16)")
-    ap.add_argument("--resolution", type=int, default=40, help="render size, %% of the 1200-pixel-high frame (default 40)")
+    ap.add_argument("--samples", type=int, default=None,
+                    help="Cycles samples (default: the studio preset's, 32, adaptive and denoised)")
+    ap.add_argument("--resolution", type=int, default=None,
+                    help="render size, %% of the studio's 1080 x 1440 frame (default 100)")
+    ap.add_argument("--view", default="FRONT", choices=("FRONT", "THREE_QUARTER", "BACK", "PATTERN", "ALL"),
+                    help="studio camera (ALL: front, 3/4 and back, render_<view>.png each; default FRONT)")
     ap.add_argument("--no-drape", action="store_true", help="skip the drape")
     ap.add_argument("--no-export", action="store_true", help="skip the pattern files (export/)")
     return ap.parse_args(argv)
@@ -84,8 +90,8 @@ def _op(bpy, name, **kw):
     print(f"[scripted_run] {name}: {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
 
 
-def run(design: str, out: str, frames: int = 120, samples: int = 16, resolution: int = 40,
-        drape: bool = True, export: bool = True) -> dict:
+def run(design: str, out: str, frames: int = 120, samples: int | None = None, resolution: int | None = None,
+        drape: bool = True, export: bool = True, view: str = "FRONT") -> dict:
     bpy = _bpy()
     module = enable_from_checkout(bpy)
     out = Path(out).resolve()
@@ -99,7 +105,11 @@ def run(design: str, out: str, frames: int = 120, samples: int = 16, resolution:
     if drape:
         s.drape_frames = frames
         _op(bpy, "drape")
-    s.render_samples, s.render_resolution = samples, resolution
+    if samples is not None:
+        s.render_samples = samples
+    if resolution is not None:
+        s.render_resolution = resolution
+    s.render_view = view
     _op(bpy, "studio_setup")
     blend = out / "scene.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend))
@@ -110,7 +120,9 @@ def run(design: str, out: str, frames: int = 120, samples: int = 16, resolution:
     fileio = sys.modules[module + ".core.fileio"]
     addon_data = sys.modules[module + ".ease_addon.data"]
     core_io.save_pattern(addon_data.stored_pattern(bpy.context.scene), out)
-    files = ["scene.blend", "render.png", "pattern.json"]
+    renders = ([f"render_{v}.png" for v in ("front", "three_quarter", "back")] if view == "ALL"
+               else ["render.png"])
+    files = ["scene.blend", *renders, "pattern.json"]
     if export:
         s.export_dir = str(out / "export")
         s.export_svg = s.export_dxf = s.export_pdf = True
@@ -126,7 +138,7 @@ def run(design: str, out: str, frames: int = 120, samples: int = 16, resolution:
 def main(argv=None) -> int:
     args = _args(sys.argv if argv is None else argv)
     rep = run(args.design, args.out, args.frames, args.samples, args.resolution, not args.no_drape,
-              not args.no_export)
+              not args.no_export, args.view)
     print(json.dumps(rep, indent=1))
     return 0
 
