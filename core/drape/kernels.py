@@ -115,9 +115,17 @@ def advance_grow(grow: wp.array(dtype=float), step: float):
 
 
 @wp.kernel
+def zero(values: wp.array(dtype=float)):
+    values[wp.tid()] = 0.0
+
+
+@wp.kernel
 def solve_bending(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
                   bend: wp.array2d(dtype=int), weight: wp.array(dtype=float), rest: wp.array(dtype=float),
-                  k_bend: float, inv_dt2: float, offset: int):
+                  k_bend: float, inv_dt2: float, offset: int, lam: wp.array(dtype=float)):
+    """Dihedral-angle bending, XPBD with its multiplier ``lam`` accumulated over the iterations of a
+    substep (zeroed at the substep's start): iterated, it converges to the implicit step's bending force,
+    which the one-pass update under-delivers where the compliance is not large against the mass term."""
     b = wp.tid() + offset
     i = bend[b, 0]
     j = bend[b, 1]
@@ -148,8 +156,8 @@ def solve_bending(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
     w2 = inv_mass[j]
     w3 = inv_mass[k]
     w4 = inv_mass[l]
-    denom = (w1 * wp.dot(g1, g1) + w2 * wp.dot(g2, g2) + w3 * wp.dot(g3, g3) + w4 * wp.dot(g4, g4)
-             + inv_dt2 / (k_bend * weight[b]))
+    alpha = inv_dt2 / (k_bend * weight[b])
+    denom = (w1 * wp.dot(g1, g1) + w2 * wp.dot(g2, g2) + w3 * wp.dot(g3, g3) + w4 * wp.dot(g4, g4) + alpha)
     if denom <= 0.0:
         return
     c = theta - rest[b]
@@ -158,7 +166,8 @@ def solve_bending(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
         c = c - 2.0 * wp.pi
     if c < -wp.pi:
         c = c + 2.0 * wp.pi
-    dl = -c / denom
+    dl = -(c + alpha * lam[b]) / denom
+    lam[b] = lam[b] + dl
     x[i] = x1 + g1 * (w1 * dl)
     x[j] = x2 + g2 * (w2 * dl)
     x[k] = x3 + g3 * (w3 * dl)

@@ -25,6 +25,9 @@ class DrapeOptions:
         Frames per second of simulated time.
     substeps : int, per frame
         XPBD substeps per frame (each projects every constraint once).
+    iterations : int, per substep
+        Passes over the stretch, sliver-edge and bending constraints in each
+        substep (XPBD iterations; the bending multipliers accumulate over them).
     max_frames : int, frames
         Frame limit.
     min_frames : int, frames
@@ -88,6 +91,7 @@ class DrapeOptions:
     device: str = "cpu"
     fps: float = 30.0                       # 1/s
     substeps: int = 20                      # per frame
+    iterations: int = 1                     # per substep
     max_frames: int = 120                   # frames
     min_frames: int = 10                    # frames
     settle_speed: float = 0.01              # m/s
@@ -144,6 +148,7 @@ class DrapeOptions:
 RANGES = {
     "fps": (float, 0.0, False, 1000.0, False),
     "substeps": (int, 1, True, 1000, False),
+    "iterations": (int, 1, True, 100, False),
     "max_frames": (int, 1, True, 10000, False),
     "min_frames": (int, 0, True, 10000, False),
     "settle_speed": (float, 0.0, False, 10.0, False),

@@ -68,6 +68,7 @@ class DrapeState:
     grow : (1,) float array, the rest-shape growth from the skintight start (0) to the pattern (1).
     contact_point, contact_normal, contact_active : (P,) arrays, each particle's contact plane:
         through its closest point on the body, facing it (refreshed every ``contact_interval`` substeps).
+    bend_lambda : (B,) float array, the bending constraints' XPBD multipliers within a substep.
     substeps : int, substeps taken so far (times the self-collision search).
     frames : int, frames taken so far.
     self_grid, self_dx, self_partner, self_count : self-collision buffers (None when off).
@@ -80,6 +81,7 @@ class DrapeState:
     contact_point: Any
     contact_normal: Any
     contact_active: Any
+    bend_lambda: Any = None
     substeps: int = 0
     frames: int = 0
     self_grid: Any = None
@@ -224,7 +226,8 @@ class DrapeSolver:
             grow=wp.array([initial_growth(self.options)], dtype=float, device=dev),
             contact_point=wp.zeros(n, dtype=wp.vec3, device=dev),
             contact_normal=wp.zeros(n, dtype=wp.vec3, device=dev),
-            contact_active=wp.zeros(n, dtype=int, device=dev))
+            contact_active=wp.zeros(n, dtype=int, device=dev),
+            bend_lambda=wp.zeros(max(len(self.cloth.bends), 1), dtype=float, device=dev))
         if self.self_radius > 0.0:
             s.self_grid = wp.HashGrid(48, 48, 48, device=dev)
             s.self_dx = wp.zeros(n, dtype=wp.vec3, device=dev)
@@ -246,23 +249,27 @@ class DrapeSolver:
         grow_step = growth_per_substep(opts)
         if grow_step is not None:
             cmds.append(self._launch(K.advance_grow, 1, [s.grow, grow_step]))
+        if mat.bending > 0 and len(self.cloth.bends):
+            cmds.append(self._launch(K.zero, len(self.cloth.bends), [s.bend_lambda]))
+        block = []  # the constraint block, projected opts.iterations times per substep
         off = self._tri_off
         for c in range(len(off) - 1):
-            cmds.append(self._launch(K.solve_stretch, int(off[c + 1] - off[c]),
-                                     [s.x, self._w, self._tri, self._rest_inv, self._area, mat.stretch_weft,
-                                      mat.stretch_warp, mat.shear, inv_dt2, int(off[c]), self._tri_start, s.grow]))
+            block.append(self._launch(K.solve_stretch, int(off[c + 1] - off[c]),
+                                      [s.x, self._w, self._tri, self._rest_inv, self._area, mat.stretch_weft,
+                                       mat.stretch_warp, mat.shear, inv_dt2, int(off[c]), self._tri_start, s.grow]))
         k_edge = 0.5 * (mat.stretch_weft + mat.stretch_warp)
         off = self._edge_off
         for c in range(len(off) - 1):
-            cmds.append(self._launch(K.solve_distance, int(off[c + 1] - off[c]),
-                                     [s.x, self._w, self._edges, self._edge_rest, k_edge, inv_dt2, int(off[c]),
-                                      self._edge_start, s.grow]))
+            block.append(self._launch(K.solve_distance, int(off[c + 1] - off[c]),
+                                      [s.x, self._w, self._edges, self._edge_rest, k_edge, inv_dt2, int(off[c]),
+                                       self._edge_start, s.grow]))
         if mat.bending > 0:
             off = self._bend_off
             for c in range(len(off) - 1):
-                cmds.append(self._launch(K.solve_bending, int(off[c + 1] - off[c]),
-                                         [s.x, self._w, self._bends, self._bend_w, self._bend_rest, mat.bending,
-                                          inv_dt2, int(off[c])]))
+                block.append(self._launch(K.solve_bending, int(off[c + 1] - off[c]),
+                                          [s.x, self._w, self._bends, self._bend_w, self._bend_rest, mat.bending,
+                                           inv_dt2, int(off[c]), s.bend_lambda]))
+        cmds.extend(block * int(opts.iterations))
         if opts.tether_slack is not None and np.any(self.cloth.tether_anchor >= 0):
             cmds.append(self._launch(K.solve_tethers, n, [s.x, self._anchor, self._tether_len,
                                                           1.0 + float(opts.tether_slack)]))
@@ -287,7 +294,10 @@ class DrapeSolver:
         """Advance ``state`` by one frame: ``options.substeps`` substeps of :attr:`dt` seconds.
 
         Each substep: the contact search (every ``contact_interval`` substeps),
-        prediction, rest-shape growth, the constraints colour by colour, the
+        prediction, rest-shape growth, the constraints colour by colour
+        (``iterations`` passes; stretch is projected afresh each pass, its compliance
+        being small against the mass term for every preset, bending accumulates its
+        XPBD multiplier over the passes), tethers, the
         self-collision (search every ``self_interval`` substeps), body contact
         with friction, and the velocities from the position change.
         """
