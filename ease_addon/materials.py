@@ -64,6 +64,7 @@ LOOKS = {
     "silk": FabricLook("satin", 0.25, (0.72, 0.52, 0.36), 0.32, 0.85, 0.15),
 }
 DEFAULT_FABRIC = "cotton"
+LOOK_VERSION = 1        # raise when the fabric shader changes: a saved file's fabric is then rebuilt
 
 
 def _new(name: str):
@@ -197,11 +198,20 @@ def fabric(preset: str | None = None):
     preset = preset if preset in LOOKS else scene_fabric()
     name = f"{FABRIC} {preset}"
     mat = bpy.data.materials.get(name)
-    if mat is not None:
+    if mat is not None and mat.get("ease_look") == LOOK_VERSION:
         return mat
     look = LOOKS[preset]
-    mat, bsdf = _new(name)
+    if mat is None:
+        mat, bsdf = _new(name)
+    else:       # made by an earlier version of the add-on (a saved file): rebuilt in place, slots keep it
+        ensure_nodes(mat)
+        mat.node_tree.nodes.clear()
+        out = mat.node_tree.nodes.new("ShaderNodeOutputMaterial")
+        bsdf = mat.node_tree.nodes.new("ShaderNodeBsdfPrincipled")
+        mat.node_tree.links.new(bsdf.outputs[0], out.inputs["Surface"])
+        out.location = (400, 0)
     mat["ease_fabric"] = preset
+    mat["ease_look"] = LOOK_VERSION
     g = _Graph(mat.node_tree)
     uv = g.node("ShaderNodeUVMap", uv_map=FABRIC_UV)
     sep = g.node("ShaderNodeSeparateXYZ")

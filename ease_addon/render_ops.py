@@ -82,7 +82,8 @@ class EASE_OT_studio_setup(EaseOperator):
                 and not [o for o in context.scene.objects if o.get("ease_role") == "pattern_panel"]:
             view = "FRONT"
         hidden = setup_studio(context.scene, s.render_samples, s.render_resolution, view)
-        self.report({"INFO"}, "studio ready: front, 3/4, back cameras" + _hidden_note(hidden))
+        device = render_studio.gpu_name() or "CPU"
+        self.report({"INFO"}, f"studio ready: front, 3/4, back cameras, Cycles on {device}" + _hidden_note(hidden))
 
 
 def _use_view(scene, view: str) -> None:

@@ -273,3 +273,20 @@ def test_design_colour_reaches_the_garment(scene, bpy_session):
     g.data.attributes[mats.FABRIC_COLOR].data.foreach_get("color", c)
     assert np.allclose(c.reshape(-1, 4)[0, :3], mats.LOOKS["cotton"].color, atol=1e-6)
     assert json.loads(sc.ease.design_json)["materials"]["fabric"] == "cotton"
+
+
+def test_fabric_of_an_earlier_version_is_rebuilt_in_place(scene, bpy_session):
+    """A saved file's fabric made by an earlier add-on (no look version): rebuilt, same datablock."""
+    bpy = scene.bpy
+    mats = scene.mod("materials")
+    old = bpy.data.materials.new("EASE Fabric silk")
+    try:
+        assert "ease_look" not in old
+        mat = mats.fabric("silk")
+        assert mat == old and mat["ease_look"] == mats.LOOK_VERSION and mat["ease_fabric"] == "silk"
+        bsdf = next(n for n in mat.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
+        assert bsdf.inputs["Roughness"].default_value == pytest.approx(mats.LOOKS["silk"].roughness)
+        assert bsdf.inputs["Normal"].is_linked and len(mat.node_tree.nodes) > 30
+        assert mats.fabric("silk") == mat          # current: kept as it is
+    finally:
+        bpy.data.materials.remove(old)
