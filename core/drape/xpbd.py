@@ -290,8 +290,20 @@ class DrapeSolver:
                        self._launch(K.apply_delta, n, [s.x, s.self_dx])]
         return _Launches(contacts=contacts, constraints=cmds, self_pairs=pairs, self_collide=collide, finish=finish)
 
-    def step(self, state: DrapeState) -> None:
+    def move_body(self, vertices) -> None:
+        """Move the body to ``vertices`` (V, 3), same triangles (an animated body): its BVH refitted."""
+        pts = np.ascontiguousarray(vertices, dtype=np.float32).reshape(-1, 3)
+        if pts.shape[0] != self._body.points.shape[0]:
+            raise DrapeError(f"the moved body has {pts.shape[0]} vertices, "
+                             f"the drape's body {self._body.points.shape[0]}")
+        self._body.points.assign(pts)
+        self._body.refit()
+
+    def step(self, state: DrapeState, before_substep=None) -> None:
         """Advance ``state`` by one frame: ``options.substeps`` substeps of :attr:`dt` seconds.
+
+        ``before_substep(i)``, when given, runs before substep ``i`` (it may :meth:`move_body`);
+        the contacts are then searched every substep.
 
         Each substep: the contact search (every ``contact_interval`` substeps),
         prediction, rest-shape growth, the constraints colour by colour
@@ -303,7 +315,9 @@ class DrapeSolver:
         """
         opts, L = self.options, state.launches
         for sub in range(opts.substeps):
-            if sub % opts.contact_interval == 0:
+            if before_substep is not None:
+                before_substep(sub)
+            if before_substep is not None or sub % opts.contact_interval == 0:
                 L.contacts.launch()
             for cmd in L.constraints:
                 cmd.launch()
