@@ -182,6 +182,7 @@ def test_labels_and_grain_lines_are_on_printed_pages(made, printed_pages, paper)
     assert np.array_equal(ink, lines)  # no page is printed for a label or a grain line alone
     objs = parse_pdf(pdf.tiled_pdf(pieces, lay, paper, "t"))
     forms = [objs[k][1] for k in sorted(objs) if b"/Subtype /Form" in objs[k][0]]
+    flips = pdf.upside_down(lay, len(pieces))
     moved = 0
     for i, p in enumerate(pieces):
         at = tiling.label_at(lay, i, p)
@@ -194,9 +195,19 @@ def test_labels_and_grain_lines_are_on_printed_pages(made, printed_pages, paper)
         for r, c in zip(*np.nonzero(~ink)):
             w = grid.window(r, c)
             assert not np.any(np.all((q >= w[0]) & (q <= w[1]), axis=1))
-        # the form writes the label's first line at the moved place (points, piece frame)
-        xy = re.search(rb"1 0 0 1 (-?[\d.]+) (-?[\d.]+) Tm", forms[i])
-        assert float(xy.group(1)) == pytest.approx(at[0] * 1000 * MM, abs=0.01)
+        # the form writes the label's first line at the moved place (points, piece frame); a label that would
+        # read upside down on the page is turned by 180 degrees about the centre of its own box
+        if flips[i]:
+            cm = re.search(rb"-1 0 0 -1 (-?[\d.]+) (-?[\d.]+) cm", forms[i])
+            centre = (box[0] + box[2]) / 2 * 1000 * MM
+            assert float(cm.group(1)) == pytest.approx(centre[0], abs=0.01)
+            assert float(cm.group(2)) == pytest.approx(centre[1], abs=0.01)
+        else:
+            xy = re.search(rb"1 0 0 1 (-?[\d.]+) (-?[\d.]+) Tm", forms[i])
+            assert float(xy.group(1)) == pytest.approx(at[0] * 1000 * MM, abs=0.01)
+        # upright on the page: the label's reading direction turned by at most 90 degrees
+        d = pdf._turn(lay, i) @ np.array([1.0, 0.0]) * (-1.0 if flips[i] else 1.0)
+        assert d[0] > 1e-9 or (abs(d[0]) <= 1e-9 and d[1] > 0)
         g = lay.place(i, p.grain + tiling.grain_shift(lay, i))
         length = np.linalg.norm(g[1] - g[0])
         s = g[0] + np.linspace(0.0, 1.0, 401)[:, None] * (g[1] - g[0])
@@ -415,3 +426,23 @@ def test_symmetric_piece_prints_as_a_half_on_the_fold(tmp_path):
     # print_all and fold=False print the whole pieces
     assert [e["cut"] for e in print_set(make_pattern(), pieces, fold=False)[1]] == ["as printed"] * 2
     assert [e["cut"] for e in print_set(make_pattern(), pieces, print_all=True)[1]] == ["as printed"] * 2
+
+
+def test_a_label_is_placed_whole_on_one_page(printed_pages):
+    """A label lies whole on one printed page where it can (read there, not split across two): a box across
+    the edge between two printed pages does not count as placed, one inside a page does."""
+    from core.export import print_labels
+    lay, grid, ink, _ = printed_pages["a4"]
+    ink = np.ones_like(ink)
+    (x0, y0), (x1, y1) = grid.window(0, 0)
+    # boxes in sheet metres, taken back to piece 0's frame
+    R, off = pdf._turn(lay, 0), lay.offsets[0]
+
+    def local(box):
+        return (np.asarray(box, float) - off) @ R          # the inverse of the piece's quarter turn and place
+
+    inside = local([[x0 + 0.02, y1 - 0.05], [x0 + 0.08, y1 - 0.05], [x0 + 0.08, y1 - 0.02], [x0 + 0.02, y1 - 0.02]])
+    across = local([[x1 - 0.03, y1 - 0.05], [x1 + 0.03, y1 - 0.05], [x1 + 0.03, y1 - 0.02], [x1 - 0.03, y1 - 0.02]])
+    assert print_labels._label_on(inside, lay, 0, grid, ink)
+    assert print_labels._label_on(across, lay, 0, grid, ink, whole=False)
+    assert not print_labels._label_on(across, lay, 0, grid, ink)

@@ -23,6 +23,7 @@ and as long as the layout.
 from __future__ import annotations
 
 import io
+import math
 import string
 from typing import List, Sequence, Tuple
 
@@ -105,9 +106,21 @@ def _poly(c, points, closed: bool) -> None:
     c.drawPath(p, stroke=1, fill=0)
 
 
-def _define_forms(c, pieces: Sequence[PieceDrawing], labels=None, grains=None) -> List[str]:
+def upside_down(layout: Layout, n: int) -> List[bool]:
+    """Per piece of ``layout``: whether its label, written along the piece frame's +x, would read upside down
+    on the sheet (turned by more than 90 degrees); such a label is turned back within its own box."""
+    out = []
+    for i in range(n):
+        d = _turn(layout, i) @ np.array([1.0, 0.0])
+        angle = round(math.degrees(math.atan2(d[1], d[0])), 9)
+        out.append(not -90.0 < angle <= 90.0)
+    return out
+
+
+def _define_forms(c, pieces: Sequence[PieceDrawing], labels=None, grains=None, flips=None) -> List[str]:
     """One form XObject per piece; ``labels`` (n, 2): piece-frame top-left of each label (None: ``label_at``),
-    ``grains`` (n, 2): piece-frame shift of each grain line and its arrows (None: none)."""
+    ``grains`` (n, 2): piece-frame shift of each grain line and its arrows (None: none), ``flips`` (n,) bool:
+    labels turned by 180 degrees within their box, to read upright on a piece printed upside down."""
     names = []
     for k, piece in enumerate(pieces):
         name = f"piece{k}"
@@ -147,8 +160,17 @@ def _define_forms(c, pieces: Sequence[PieceDrawing], labels=None, grains=None) -
         c.setFillColorRGB(*COLOURS["text"])
         c.setFont("Helvetica", h)
         x, y = _pt(np.asarray(piece.label_at if labels is None else labels[k], float)[None])[0]
+        if flips is not None and flips[k] and piece.label:
+            from .pieces import CHAR_WIDTH
+            tw, th = max(len(t) for t in piece.label) * CHAR_WIDTH * h, len(piece.label) * 1.5 * h
+            c.saveState()
+            c.translate(x + 0.5 * tw, y - 0.5 * th)   # the box's centre: turned about it, the box stays
+            c.rotate(180)
+            x, y = -0.5 * tw, 0.5 * th
         for i, text in enumerate(piece.label):
             c.drawString(x, y - (i + 1) * 1.5 * h + 0.5 * h, ascii_text(text))
+        if flips is not None and flips[k] and piece.label:
+            c.restoreState()
         c.endForm()
         names.append(name)
     return names
@@ -251,7 +273,8 @@ def tiled_pdf(pieces: Sequence[PieceDrawing], layout: Layout = None, paper: str 
     c = rl_canvas.Canvas(buf, pagesize=(pw * PT_PER_M, ph * PT_PER_M), invariant=1, pageCompression=1)
     c.setTitle(ascii_text(title))
     c.setCreator("EASE")
-    forms = _define_forms(c, pieces, getattr(layout, "labels", None), getattr(layout, "grains", None))
+    forms = _define_forms(c, pieces, getattr(layout, "labels", None), getattr(layout, "grains", None),
+                          upside_down(layout, len(pieces)))
     boxes = [_placed_box(layout, i, p) for i, p in enumerate(pieces)]
     m = PAGE_MARGIN
     printed = [(r, col) for r in range(grid.rows) for col in range(grid.cols) if ink[r, col]]

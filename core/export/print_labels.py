@@ -22,6 +22,7 @@ from .pages import PageGrid, PrintLayout, fill_cells, line_pages, place, sample_
 
 LABEL_STEP = 0.004      # m, spacing of the places tried for a label
 GRAIN_SHOWN = 0.10      # m of grain line that must be printed (all of it when shorter): enough to lay a ruler on
+LABEL_TRIES = 100       # nearest free places checked exactly for a label (on printed pages, whole on one)
 
 
 def label_at(layout: Layout, i: int, piece) -> np.ndarray:
@@ -86,20 +87,27 @@ def _shown(seg: np.ndarray, grid: PageGrid, ink: np.ndarray, spacing: float = 0.
 def place_labels(pieces, layout: "PrintLayout", grid: PageGrid, ink: np.ndarray) -> np.ndarray:
     """(n, 2) piece-frame top-left corners for the labels, each on pages printed anyway.
 
-    A label keeps its place when its pages are printed; otherwise it moves to
-    the nearest place (on a ``LABEL_STEP`` lattice, nearest first) where it
-    lies inside the sew line, clear of every line, notch, dart and the grain
-    line (2 mm), and every page it reaches is printed (``ink``). A label that
-    finds none keeps its place (its pages are then printed, :func:`inked_pages`).
+    A label keeps its place when its pages are printed and it lies whole on one of
+    them (read on one page, not split across two); otherwise it moves to the nearest
+    place (on a ``LABEL_STEP`` lattice, nearest first) where it lies inside the sew
+    line, clear of every line, notch, dart and the grain line (2 mm), every page it
+    reaches is printed (``ink``) and it lies whole on one. Where no such place is,
+    the same without the one page (a label split over printed pages rather than a
+    page printed for it alone); a label that finds neither keeps its place (its
+    pages are then printed, :func:`inked_pages`).
     """
     out = np.array([np.asarray(p.label_at, float) for p in pieces]).reshape(-1, 2)
     for i, p in enumerate(pieces):
         box = label_box(p, p.label_at)
-        if not len(box) or _label_on(box, layout, i, grid, ink):
+        if not len(box):
             continue
-        found = _label_place(p, box, layout, i, grid, ink)
-        if found is not None:
-            out[i] = found
+        for whole in (True, False):
+            if _label_on(box, layout, i, grid, ink, whole):
+                break
+            found = _label_place(p, box, layout, i, grid, ink, whole)
+            if found is not None:
+                out[i] = found
+                break
     return out
 
 
@@ -138,15 +146,28 @@ def place_grains(pieces, layout: "PrintLayout", grid: PageGrid, ink: np.ndarray)
     return out
 
 
-def _label_on(box: np.ndarray, layout: Layout, i: int, grid: PageGrid, ink: np.ndarray) -> bool:
-    """Whether every window that the piece-frame ``box`` of piece ``i`` reaches is printed."""
+def _label_on(box: np.ndarray, layout: Layout, i: int, grid: PageGrid, ink: np.ndarray,
+              whole: bool = True) -> bool:
+    """Whether every window that the piece-frame ``box`` of piece ``i`` reaches is printed, and (``whole``) the
+    box lies whole within one of them (a label read on one page, not split across two)."""
     here = np.zeros_like(ink)
-    a, b = segments([place(layout, i, box)])
+    placed = place(layout, i, box)
+    a, b = segments([placed])
     windows_hit(a, b, grid, here)
-    return not np.any(here & ~ink)
+    if np.any(here & ~ink):
+        return False
+    if not whole:
+        return True
+    lo, hi = placed.min(axis=0), placed.max(axis=0)
+    for r, c in zip(*np.nonzero(here)):
+        win = grid.window(r, c)
+        if np.all(lo >= win[0]) and np.all(hi <= win[1]):
+            return True
+    return False
 
 
-def _label_place(piece, box: np.ndarray, layout: Layout, i: int, grid: PageGrid, ink: np.ndarray):
+def _label_place(piece, box: np.ndarray, layout: Layout, i: int, grid: PageGrid, ink: np.ndarray,
+                 whole: bool = True):
     """The nearest top-left corner (piece frame) where the label fits inside the piece on printed pages, or None.
 
     On a ``LABEL_STEP`` lattice over the sew line's box, a cell is free when its
@@ -196,7 +217,7 @@ def _label_place(piece, box: np.ndarray, layout: Layout, i: int, grid: PageGrid,
     if not len(r):
         return None
     at = np.stack([lo[0] + c * cell, hi[1] - r * cell], axis=1)
-    for j in np.argsort(np.linalg.norm(at - piece.label_at, axis=1), kind="stable")[:20]:
-        if _label_on(label_box(piece, at[j]), layout, i, grid, ink):
+    for j in np.argsort(np.linalg.norm(at - piece.label_at, axis=1), kind="stable")[:LABEL_TRIES]:
+        if _label_on(label_box(piece, at[j]), layout, i, grid, ink, whole):
             return at[j]
     return None
