@@ -197,6 +197,17 @@ class EASE_PT_drape(_EasePanel, bpy.types.Panel):
             layout.label(text=s.drape_status)
         _props(layout, s, "fitmap", expand=True)
         _figures(layout, s.drape_json)
+        box = layout.box()
+        box.label(text="Animation")
+        box.prop(s, "motion_poses")
+        box.prop(s, "motion_between")
+        box.operator("ease.drape_animation", icon="ARMATURE_DATA")
+        if s.motion_status:
+            box.label(text=s.motion_status)
+        box.prop(s, "motion_path")
+        row = box.row(align=True)
+        row.prop(s, "motion_with_body", toggle=True)
+        row.operator("ease.export_alembic", icon="EXPORT")
 
 
 class EASE_PT_render(_EasePanel, bpy.types.Panel):

@@ -149,6 +149,14 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
     drape_device: EnumProperty(name="Device", items=[("cpu", "CPU", "bitwise repeatable"),
                                                      ("cuda", "CUDA", "NVIDIA GPU through Warp")],
                                default="cpu")
+    # Drape Animation (Drape panel): the pose sequence, its in-betweens, the Alembic file
+    motion_poses: StringProperty(name="Poses", default="A, P1, P3",
+                                 description="pose presets the body moves through, the first the pattern's own")
+    motion_between: IntProperty(name="In-betweens", default=10, min=0, max=240,
+                                description="frames from each pose to the next")
+    motion_status: StringProperty(name="Motion status")
+    motion_path: StringProperty(name="Alembic to", subtype="FILE_PATH", default="//ease_motion.abc")
+    motion_with_body: BoolProperty(name="With body", default=True, description="the body in the Alembic file too")
     fitmap: EnumProperty(name="Fit map", items=[("NONE", "Fabric", "plain fabric material"),
                                                 ("STRAIN", "Strain", "colour by weft strain"),
                                                 ("GAP", "Gap", "colour by body-garment gap")],
