@@ -31,6 +31,8 @@ from .options import DrapeOptions
 from .schedule import check_divergence, run
 from .xpbd import DrapeSolver, check_body
 
+PENETRATION_DEPTH = 0.002   # m: SPEC item 7 (core.metrics.drape.penetration, a later stage) counts deeper
+
 
 @dataclass
 class MotionResult:
@@ -112,7 +114,7 @@ def drape_motion(pattern, body_frames: Sequence[np.ndarray], body_faces,
     ------
     DrapeError on invalid input or divergence (naming the frame).
     """
-    from ..metrics.drape import penetration
+    from ..geom.queries import distance_to_mesh
     opts = DrapeOptions.coerce(options)
     if material is None:
         material = (getattr(pattern, "materials", None) or {}).get("fabric")
@@ -140,8 +142,8 @@ def drape_motion(pattern, body_frames: Sequence[np.ndarray], body_faces,
     def snapshot(body):
         x = state.x.numpy().astype(np.float64)
         pos = np.where(used[:, None], x[src], 0.0)
-        share, _ = penetration(pos[used], body, faces)
-        return pos, share
+        sd = distance_to_mesh(pos[used], body, faces, signed=True, max_dist=0.5)
+        return pos, float(np.mean(sd < -PENETRATION_DEPTH)) if len(sd) else 0.0
 
     pos, share = snapshot(first)
     positions, pens, seconds = [pos], [share], []

@@ -1,0 +1,99 @@
+"""Drape Animation and Export Alembic (ease_addon.motion_ops): the garment through A -> P1 on the
+moving body, shape-keyed per frame, written with Blender's Alembic exporter and read back by its
+importer with the same vertices at every frame."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+DESIGN = "top_sleeveless.json"     # cheapest template: two panels
+BETWEEN = 2                        # A, 2 in-betweens, P1: 4 frames
+
+
+@pytest.fixture(scope="module", autouse=True)
+def scene(blender):
+    blender.reset(body=True, design=DESIGN, pattern=True)
+    s = blender.scene.ease
+    s.motion_poses, s.motion_between = "A, P1", BETWEEN
+    assert blender.bpy.ops.ease.drape_animation() == {"FINISHED"}
+    return blender
+
+
+def _world(obj, depsgraph) -> np.ndarray:
+    ev = obj.evaluated_get(depsgraph)
+    me = ev.to_mesh()
+    co = np.empty(len(me.vertices) * 3, dtype=np.float64)
+    me.vertices.foreach_get("co", co)
+    ev.to_mesh_clear()
+    m = np.array(obj.matrix_world)
+    return co.reshape(-1, 3) @ m[:3, :3].T + m[:3, 3]
+
+
+def test_motion_objects_play_the_frames(scene, bpy_session):
+    bpy = scene.bpy
+    sc = bpy.context.scene
+    body, garment = bpy.data.objects["EASE Motion Body"], bpy.data.objects["EASE Motion Garment"]
+    n = BETWEEN + 2
+    assert (sc.frame_start, sc.frame_end) == (1, n)
+    for o in (body, garment):
+        assert [k.name for k in o.data.shape_keys.key_blocks][1:] == [f"frame {k:04d}" for k in range(1, n + 1)]
+    rep = json.loads(sc["ease_motion_json"])
+    assert rep["poses"] == ["A", "P1"] and rep["frames"] == n and len(rep["penetration_pct"]) == n
+    assert max(rep["penetration_pct"]) <= 0.5
+    assert "worst penetration" in sc.ease.motion_status
+    # the timeline shows each frame's shape; the body really moves (arms forward in P1)
+    first_body = None
+    for f in (1, n):
+        sc.frame_set(f)
+        dg = bpy.context.evaluated_depsgraph_get()
+        key = np.empty(len(garment.data.vertices) * 3, dtype=np.float32)
+        garment.data.shape_keys.key_blocks[f"frame {f:04d}"].data.foreach_get("co", key)
+        assert np.allclose(_world(garment, dg), key.reshape(-1, 3), atol=1e-5)
+        if first_body is None:
+            first_body = _world(body, dg)
+    assert np.abs(_world(body, dg) - first_body).max() > 0.2
+    # the static body and garment are out of the way in the viewport
+    assert all(o.hide_get() for o in scene.objects("body"))
+
+
+def test_alembic_written_and_read_back(scene, bpy_session):
+    bpy = scene.bpy
+    sc = bpy.context.scene
+    s = sc.ease
+    s.motion_path = str(scene.tmp / "motion.abc")
+    s.motion_with_body = True
+    assert bpy.ops.ease.export_alembic() == {"FINISHED"}
+    garment = bpy.data.objects["EASE Motion Garment"]
+    n = sc.frame_end
+    want = {}
+    for f in range(1, n + 1):
+        key = np.empty(len(garment.data.vertices) * 3, dtype=np.float32)
+        garment.data.shape_keys.key_blocks[f"frame {f:04d}"].data.foreach_get("co", key)
+        want[f] = key.reshape(-1, 3)
+    before = set(bpy.data.objects)
+    assert bpy.ops.wm.alembic_import(filepath=s.motion_path, as_background_job=False) == {"FINISHED"}
+    new = [o for o in bpy.data.objects if o not in before and o.type == "MESH"]
+    assert len(new) == 2                              # the garment and the body
+    back = next(o for o in new if len(o.data.vertices) == len(garment.data.vertices))
+    for f in range(1, n + 1):
+        sc.frame_set(f)
+        got = _world(back, bpy.context.evaluated_depsgraph_get())
+        assert got.shape == want[f].shape
+        assert np.abs(got - want[f]).max() < 1e-6, f
+    for o in new:
+        bpy.data.objects.remove(o)
+
+
+def test_poses_field_is_checked(scene, bpy_session):
+    bpy = scene.bpy
+    s = bpy.context.scene.ease
+    old = s.motion_poses
+    try:
+        for text, words in (("A, Q9", "'Q9' is not a pose"), ("A", "two poses"), ("P1, P3", "own pose A")):
+            s.motion_poses = text
+            r = scene.run(bpy.ops.ease.drape_animation)
+            assert "ERROR" in r and words in r["ERROR"] and "Poses" in r["ERROR"], (text, r)
+    finally:
+        s.motion_poses = old
