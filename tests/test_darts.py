@@ -145,7 +145,8 @@ def test_set_intake_is_held(anny):
     assert sorted(run.pattern.report["darts"]) == ["blouse.bust_dart_left", "blouse.bust_dart_right"]
     for rec in run.pattern.report["darts"].values():
         assert rec["intake_set_mm"] == 40.0
-        assert abs(rec["intake_mm"] - 40.0) <= 2.0 and rec["leg_difference_mm"] <= 0.5
+        # 0.51 mm with the solver's gap step between the legs (issue 30), 0.5 before it
+        assert abs(rec["intake_mm"] - 40.0) <= 2.0 and rec["leg_difference_mm"] <= 0.6
 
 
 def test_skirt_back_darts_open_and_export(anny, tmp_path):

@@ -12,11 +12,8 @@ from core.design.blouse_variants import blouse_waist_darts
 def waist_run(anny):
     from core import workflows as wf
     prep = wf.prepare(blouse_waist_darts(), body=anny)
-    # the darts open over the iterations (docs/darts.md, "Limits"): a converged solve. Its shoulder darts'
-    # legs cross (issue 30): measured, not refused here
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr("core.metrics.checks.REFUSED", ("flipped", "collapsed"))
-        return prep, wf.reference(prep, iterations=200)
+    # the darts open over the iterations (docs/darts.md, "Limits"): a converged solve
+    return prep, wf.reference(prep, iterations=200)
 
 
 def test_variant_has_front_waist_and_shoulder_darts_mirrored(waist_run):
@@ -53,7 +50,7 @@ def test_back_waist_dart_points_at_the_shoulder_blade(anny):
         assert np.linalg.norm(rec["apex"] - blade) < 1e-6
 
 
-def test_four_darts_close_and_fit_the_bust_better_than_three(anny, waist_run, monkeypatch):
+def test_four_darts_close_and_fit_the_bust_better_than_three(anny, waist_run):
     """The neckline dart beside the bust, waist and shoulder darts, each 5 mm from the bust point:
     converged, every dart closes and the bust region (within 6 cm of the bust points) is nearer its
     ease than with three darts ending 2 cm short (1.3 % against 2.3 % on women:M at ease 1.1)."""
@@ -62,8 +59,6 @@ def test_four_darts_close_and_fit_the_bust_better_than_three(anny, waist_run, mo
     prep = wf.prepare(blouse_four_darts(), body=anny)
     assert sorted(k.split(".")[1] for k in prep.cut.darts) == sorted(
         f"{k}_{s}" for k in ("bust_dart", "waist_dart", "shoulder_dart", "neck_dart") for s in ("left", "right"))
-    # its front crosses itself (issue 30: the shoulder darts' legs, 2 crossings): measured, not refused here
-    monkeypatch.setattr("core.metrics.checks.REFUSED", ("flipped", "collapsed"))
     run = wf.reference(prep, "improved", iterations=200)     # not the template's fitted: as waist_run
     assert run.figures["flipped"] == 0 and run.figures.get("collapsed") == 0
     darts = run.pattern.report["darts"]
@@ -82,21 +77,22 @@ def test_four_darts_close_and_fit_the_bust_better_than_three(anny, waist_run, mo
     assert bust(run) < 0.75 * bust(waist_run[1])
 
 
-def test_fitted_configuration_keeps_warp_and_shear_on_the_four_dart_blouse(anny, monkeypatch):
+def test_fitted_configuration_keeps_warp_and_shear_on_the_four_dart_blouse(anny):
     """The template ``blouse_four_darts`` names ``fitted`` (converged, warp lengths nearly kept, weak
     weft feedback, regulariser 2) and is solved with it: warp near its design length and shear low
-    where improved's 200 iterations buy weft with warp (women:M, ease 1.1: 2.89 % / 4.9 deg against
-    8.73 % / 5.2 deg), the bust region within 2 % (1.34 %), every dart closed."""
+    where improved's 200 iterations buy weft with warp (women:M, ease 1.1: 3.19 % / 5.9 deg against
+    8.73 % / 5.2 deg), the bust region within 2 % (1.30 %), every dart closed. With the solver's gap step
+    between dart legs (issue 30: before it the piece crossed itself at 2.89 % / 4.9 deg) the warp and shear
+    are what a cuttable piece costs."""
     from core import workflows as wf
     from core.design.templates import template_path
     prep = wf.prepare(template_path("blouse_four_darts"), body=anny)
-    # its front crosses itself (issue 30; tests/test_pattern_validate_crossings.py): measured, not refused here
-    monkeypatch.setattr("core.metrics.checks.REFUSED", ("flipped", "collapsed"))
     run = wf.reference(prep)
     assert run.pattern.report["config"] == "fitted"
     f = run.figures
     assert f["flipped"] == 0 and f.get("collapsed") == 0
-    assert f["warp deviation mean %"] < 3.5 and f["shear p95 deg"] < 5.5 and f["compliance mean %"] < 1.0, f
+    assert f["warp deviation mean %"] < 3.5 and f["shear p95 deg"] < 6.2 and f["compliance mean %"] < 1.0, f
+    assert f["crossings"] == 0, f
     regions = run.pattern.report["metrics"]["regions"]
     assert max(regions[f"bust_{s}"]["mean"] for s in ("left", "right")) < 2.0
     assert all(rec["leg_difference_mm"] <= 0.1 for rec in run.pattern.report["darts"].values())

@@ -128,18 +128,26 @@ def test_dart_gap_of_a_pattern_without_darts_is_empty():
     assert dart_gaps(pat) == {}
 
 
-def test_the_four_dart_blouse_is_refused_naming_its_crossed_darts(anny, tmp_path):
-    """On the real body: the template's bust and shoulder darts cross on women:M (issue 30, not yet cured
-    by the solver): ``ease pattern`` refuses it in one line naming the piece, the darts and where on the
-    body, and writes nothing."""
+def test_the_four_dart_blouse_is_cut_into_a_valid_piece_and_refused_without_the_gap_step(anny, tmp_path,
+                                                                                         monkeypatch):
+    """On the real body (women:M): the template's bust and shoulder darts crossed (4 crossings, from the
+    LSCM start on); the solver's gap step (core.pattern.dart_gaps) keeps every dart's legs apart, and
+    without it ``ease pattern`` refuses the piece in one line naming the darts and where on the body,
+    and writes nothing."""
     from core.cli import main
     from core.design.templates import template_path
+    prep = wf.prepare(template_path("blouse_four_darts"), body=anny)
+    run = wf.reference(prep)
+    m = run.pattern.report["metrics"]
+    assert m["crossings"] == 0 and m["flipped_triangles"] == 0 and m["collapsed_triangles"] == 0
+    assert all(g["min_gap_mm"] > 0 and g["crossings"] == 0 for g in m["darts"].values()), m["darts"]
+    assert all(rec["leg_difference_mm"] <= 0.1 for rec in run.pattern.report["darts"].values())
+    monkeypatch.setattr("core.pattern.dart_gaps.GapCorrection.correct", lambda self, base, U: U)
     out = tmp_path / "out"
     assert main(["pattern", str(template_path("blouse_four_darts")), "--out", str(out), "--quiet"]) == 2
     assert not out.exists()
-    prep = wf.prepare(template_path("blouse_four_darts"), body=anny)
     with pytest.raises(PatternError) as e:
-        wf.reference(prep)
+        wf.reference(wf.prepare(template_path("blouse_four_darts"), body=anny))
     msg = str(e.value)
     assert "\n" not in msg and msg.startswith("panel blouse.front: the legs of dart blouse.")
     for dart in ("bust_dart_left", "bust_dart_right", "shoulder_dart_left", "shoulder_dart_right"):

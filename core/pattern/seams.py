@@ -32,6 +32,7 @@ from ..cut.types import seam_names
 from ..design.naming import mirrored_name, swap_side
 from ..errors import PatternError
 from .config import SolverConfig, gather_threshold
+from .dart_gaps import DartLegs, dart_legs
 
 
 def seam_is_gathered(seam: str, gathered: Sequence[str]) -> bool:
@@ -109,6 +110,8 @@ class SeamLayout:
     mouth_b: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     mouth_width: np.ndarray = field(default_factory=lambda: np.zeros(0))
     mouth_apex: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    #: every dart's matched leg vertices (:mod:`core.pattern.dart_gaps`: the legs kept apart)
+    legs: Optional[DartLegs] = None
     #: what :func:`seam_rhs` derives from the layout on first use (its indices, the last solve's weights)
     cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
@@ -186,7 +189,7 @@ def seam_layout(cut, panels, uv0: np.ndarray, n: int, mean_edge: float, total_ar
                    mouth_a=np.array([sides[pairs[si][0]].gids[0] for si in darts_set], int),
                    mouth_b=np.array([sides[pairs[si][1]].gids[0] for si in darts_set], int),
                    mouth_apex=np.array([sides[pairs[si][0]].gids[-1] for si in darts_set], int),
-                   mouth_width=np.array([float(w) for w in set_w], float))
+                   mouth_width=np.array([float(w) for w in set_w], float), legs=dart_legs(sides, pairs, darts))
 
 
 def _length_weight(layout: SeamLayout, config: SolverConfig, plan: SeamPlan) -> np.ndarray:

@@ -50,6 +50,7 @@ from .feedback import feedback_gains, move_corrections
 from .guard import COLLAPSE_ROUNDS, RESCUE_ITERATIONS, GuardedFactors, refused, renew_guard, rescuing, round_guard
 from .panels import flatten_panels
 from .accel.products import GradientProducts
+from .dart_gaps import GapCorrection, dart_legs
 from .seams import SeamPlan, plan_seams, seam_layout, seam_matrix, seam_rhs
 from .start import pattern_start
 from .state import SolveState
@@ -102,6 +103,7 @@ class PatternSolver:
         self.mean_edge = float(np.mean(el))
         self.design_ease = np.concatenate([pd.ease for pd in self.panels])
         self.seams = seam_layout(cut, self.panels, self.uv0, self.n, self.mean_edge, self.total_area)
+        self.gaps = GapCorrection(self.seams.legs or dart_legs([], [], []))
         # gradient operators as sparse (f, n) matrices: (Gx @ U)[t] = M_t[:, 0], (Gy @ U)[t] = M_t[:, 1]
         f, cols = len(self.gfaces), self.gfaces.ravel()
         rows = np.repeat(np.arange(f), 3)
@@ -465,7 +467,7 @@ class PatternSolver:
                 np.multiply(aw_k[j % 2], B[j], out=B[j])
             self._products.add_rhs(rhs, B)      # rhs[:, 0] += GxT B0 + GyT B1, rhs[:, 1] += GxT B2 + GyT B3
             rhs[pinned] += pin[pinned] * U[pinned]
-            U_new = solve_k(rhs)
+            U_new = self.gaps.correct(lu, solve_k(rhs))     # darts' legs kept apart (dart_gaps)
             # the step's rigid part per panel carries no strain: remove it so that the flip
             # guard only ever pulls back the local part of the step
             U_new = rigid_align(self.blocks, U_new, U)

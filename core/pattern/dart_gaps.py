@@ -1,0 +1,136 @@
+"""A dart's legs keep a positive gap from the mouth to the apex: the solver's correction step.
+
+A dart's legs are sewn to equal length (:data:`core.pattern.seams.DART_LENGTH_WEIGHT`), but
+nothing in the local-global energy keeps them apart, and the initial flattening does not either:
+a conformal map (LSCM) closes a slit at its apex, where the surface is smooth, so a dart starts
+with its legs tangent there, and where several darts share one bust's wedge they cross (the
+four-dart blouse's front: 6 crossings in its LSCM start, 4 after the fitted solve, issue 30).
+The piece then overlaps itself while every triangle keeps its orientation.
+
+This is the dart's share of a global-injectivity constraint (cf. Smith & Schaefer 2015,
+bijective parameterisation with free boundaries, whose barrier keeps boundary edges apart).
+Over the matched vertices ``a_i`` / ``b_i`` of a dart's two legs (the apex left out), the gap
+``u_a,i - u_b,i`` across the dart (along the left normal of the dart's local axis, the direction
+from the pair before to the one after, towards the apex) must be at least ``min_gap_i``: the
+legs' distance from the apex times :data:`MIN_OPENING` (a wedge of that angle). After each
+global step, where a pair is under it (:meth:`GapCorrection.correct`), the step is corrected by
+the smallest change ``d`` in the system matrix's norm that brings those pairs to their bound:
+
+    (A + w D^T D) d = w D^T (t - D U)
+
+with ``D`` the pairs' differences, ``t`` each pair's gap with its component across the dart
+raised to the bound (the other pairs' gaps kept), and ``w`` :data:`STIFFNESS` times the mean
+diagonal of ``A``. An iteration whose pairs are all apart is untouched, so a pattern whose darts
+never close is the same bits as without the step. Both solver backends share this code (the
+factorisation is :class:`.factor.SymmetricFactor`, qdldl's bits on both).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+import scipy.sparse as sp
+
+#: the narrowest wedge (radians, ~1.1 deg) a dart's legs may make: the gap across the dart at a
+#: distance ``d`` from the apex is held at least ``MIN_OPENING * d``
+MIN_OPENING = 0.02
+#: the correction's weight on the pairs' gaps, times the mean diagonal of the system matrix
+STIFFNESS = 100.0
+
+
+@dataclass(frozen=True)
+class DartLegs:
+    """The matched leg vertices of every dart (global unknown ids, (P,) each): ``a``, ``b`` the pair;
+    ``prev_a``/``prev_b`` and ``next_a``/``next_b`` the pairs before it (towards the mouth; the mouth's
+    own pair at the mouth) and after it (towards the apex; the apex twice at the last pair), which
+    give the local axis; ``min_gap`` (P,) metres."""
+    a: np.ndarray
+    b: np.ndarray
+    prev_a: np.ndarray
+    prev_b: np.ndarray
+    next_a: np.ndarray
+    next_b: np.ndarray
+    min_gap: np.ndarray
+
+
+def dart_legs(sides: Sequence, pairs: Sequence, darts: Sequence[int]) -> DartLegs:
+    """The legs of the seams ``darts`` (indices into ``pairs``) from their ``sides``
+    (:class:`core.pattern.seams.SeamSide`: ``gids`` mouth to apex, ``rest_lengths``)."""
+    cols = [[] for _ in range(7)]
+    for si in darts:
+        A, B = sides[pairs[si][0]], sides[pairs[si][1]]
+        ga, gb = np.asarray(A.gids, int), np.asarray(B.gids, int)
+        k = len(ga) - 1                                 # pairs before the apex
+        if k < 1 or len(gb) != len(ga):
+            continue
+        # distance to the apex along the legs (their mean), at each pair
+        la = np.r_[np.cumsum(np.asarray(A.rest_lengths)[::-1])[::-1], 0.0]
+        lb = np.r_[np.cumsum(np.asarray(B.rest_lengths)[::-1])[::-1], 0.0]
+        dist = 0.5 * (la + lb)
+        i = np.arange(k)
+        prev, nxt = np.maximum(i - 1, 0), i + 1
+        for col, v in zip(cols, (ga[i], gb[i], ga[prev], gb[prev], ga[nxt], gb[nxt],
+                                 MIN_OPENING * dist[i])):
+            col.append(v)
+    a, b, pa, pb, na, nb, g = (np.concatenate(c) if c else np.zeros(0) for c in cols)
+    return DartLegs(*(x.astype(int) for x in (a, b, pa, pb, na, nb)), g.astype(float))
+
+
+def _legs_matrix(legs: DartLegs, weight: float, n: int) -> sp.csr_matrix:
+    """(n, n) the term's part of the fixed system matrix: ``weight`` on ``(e_a - e_b)(e_a - e_b)^T``."""
+    c = np.full(len(legs.a), float(weight))
+    A, B = legs.a, legs.b
+    return sp.coo_matrix((np.concatenate([c, c, -c, -c]), (np.concatenate([A, B, A, B]),
+                                                           np.concatenate([A, B, B, A]))), shape=(n, n)).tocsr()
+
+
+def _across(legs: DartLegs, U: np.ndarray):
+    """Each pair's gap ``u_a - u_b`` (P, 2), the unit left normal of the dart's local axis (P, 2) and the
+    gap's component along it (P,): negative where the legs have crossed."""
+    gap = U[legs.a] - U[legs.b]
+    axis = 0.5 * (U[legs.next_a] + U[legs.next_b] - U[legs.prev_a] - U[legs.prev_b])
+    across = np.stack([-axis[:, 1], axis[:, 0]], axis=1) / np.maximum(np.linalg.norm(axis, axis=1),
+                                                                       1e-300)[:, None]
+    return gap, across, np.einsum("ij,ij->i", gap, across)
+
+
+
+
+def leg_gaps(legs: DartLegs, U: np.ndarray) -> np.ndarray:
+    """(P,) each pair's gap across the dart (m; negative where the legs have crossed)."""
+    return _across(legs, U)[2]
+
+
+class GapCorrection:
+    """The correction step of a solver's darts (module rule); its factorisation made once per system matrix."""
+
+    def __init__(self, legs: DartLegs):
+        self.legs = legs
+        self._held = None          # (the system matrix's factorisation, the weight, the corrected one)
+
+    def _factor(self, base):
+        from .factor import SymmetricFactor
+        held = self._held
+        if held is None or held[0] is not base:
+            A = base.matrix
+            w = STIFFNESS * float(A.diagonal().mean())
+            held = self._held = (base, w, SymmetricFactor(A + _legs_matrix(self.legs, w, A.shape[0])))
+        return held[1], held[2]
+
+    def correct(self, base, U: np.ndarray) -> np.ndarray:
+        """``U`` (n, 2), a global step's positions, corrected where a pair of legs is under its gap (a new array),
+        or ``U`` itself where none is. ``base``: the :class:`.factor.SymmetricFactor` of the system matrix."""
+        legs = self.legs
+        if not len(legs.a):
+            return U
+        gap, across, now = _across(legs, U)
+        short = legs.min_gap - now
+        if not np.any(short > 0):
+            return U
+        w, factor = self._factor(base)
+        r = np.maximum(short, 0.0)[:, None] * across           # t - D U: zero on the pairs apart
+        rhs = np.zeros_like(U)
+        np.add.at(rhs, legs.a, w * r)
+        np.add.at(rhs, legs.b, -w * r)
+        return U + factor.solve(rhs)

@@ -1,0 +1,74 @@
+"""The solver's gap step between a dart's legs (core.pattern.dart_gaps, issue 30), on a small system."""
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from core.pattern import dart_gaps as D
+from core.pattern.factor import SymmetricFactor
+from core.pattern.seams import SeamSide
+
+
+def _legs(n_pairs=5, length=0.1):
+    """Two legs of ``n_pairs`` + 1 vertices each (apex shared), ids 0..n_pairs-1 (a), n_pairs.. (b), apex last."""
+    k = n_pairs
+    apex = 2 * k
+    a = np.r_[np.arange(k), apex]
+    b = np.r_[np.arange(k, 2 * k), apex]
+    rest = np.full(k, length / k)
+    sides = [SeamSide(0, a, rest, np.zeros(k, int)), SeamSide(0, b, rest, np.zeros(k, int))]
+    return D.dart_legs(sides, [(0, 1)], [0]), apex + 1
+
+
+def _positions(k, width):
+    """A dart along +y towards the apex at (0, 0.1): leg a on the left (x < 0), b on the right, ``width`` (k,)
+    the signed gap a - b across the dart at each pair (negative: crossed)."""
+    y = np.linspace(0.0, 0.1, k + 1)[:-1]
+    U = np.zeros((2 * k + 1, 2))
+    U[:k] = np.c_[-0.5 * width, y]
+    U[k:2 * k] = np.c_[0.5 * width, y]
+    U[2 * k] = (0.0, 0.1)
+    return U
+
+
+def _base(n):
+    """An SPD system matrix on n unknowns: a chain Laplacian plus a diagonal."""
+    L = sp.diags([-np.ones(n - 1), 2.0 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1]) + sp.eye(n)
+    return SymmetricFactor(L.tocsc())
+
+
+def test_the_legs_and_their_bound():
+    legs, n = _legs()
+    assert legs.a.tolist() == [0, 1, 2, 3, 4] and legs.b.tolist() == [5, 6, 7, 8, 9]
+    assert legs.next_a[-1] == legs.next_b[-1] == 10                     # the apex ends the last pair's axis
+    # the bound: MIN_OPENING times the distance to the apex along the legs
+    assert legs.min_gap == pytest.approx(D.MIN_OPENING * np.array([0.1, 0.08, 0.06, 0.04, 0.02]))
+
+
+def test_legs_apart_are_left_as_they_are():
+    legs, n = _legs()
+    U = _positions(5, np.full(5, 0.01))                                 # 1 cm apart everywhere: above the bound
+    assert D.GapCorrection(legs).correct(_base(n), U) is U
+    # a gap measured on the leg a's side of the dart: positive here
+    assert np.all(D.leg_gaps(legs, U) > 0)
+
+
+def test_crossed_legs_are_pushed_to_their_bound():
+    legs, n = _legs()
+    width = np.array([0.01, 0.004, -0.003, -0.002, 0.0005])             # crossed in the middle
+    U = _positions(5, width)
+    fixed = D.GapCorrection(legs).correct(_base(n), U)
+    gap = D.leg_gaps(legs, fixed)
+    short = width < legs.min_gap
+    # the short pairs reach their bound within the correction's stiffness (w = 100 x the mean diagonal)
+    assert np.all(gap[short] >= 0.95 * legs.min_gap[short]), (gap, legs.min_gap)
+    assert np.all(gap > 0)
+    # along the dart nothing is pushed: the legs' mean y positions stay put within a tenth of a mm
+    assert np.abs(fixed[:10, 1] - U[:10, 1]).max() < 1e-4
+    assert np.all(np.isfinite(fixed))
+
+
+def test_no_darts_no_legs():
+    legs = D.dart_legs([], [], [])
+    assert len(legs.a) == 0
+    U = np.zeros((3, 2))
+    assert D.GapCorrection(legs).correct(_base(3), U) is U
