@@ -31,6 +31,12 @@ def add_parser(sub) -> None:
     p.add_argument("--self-collision", action="store_true",
                    help="keep the garment's own layers apart (particle self-collision; slower)")
     p.add_argument("--no-preview", action="store_true", help="skip preview.png")
+    p.add_argument("--animation", metavar="POSES", default=None,
+                   help="drape through a pose sequence instead, e.g. 'A,P1,P3' (the first the pattern's own "
+                        "pose): writes motion.npz, motion_report.json (penetration, residual stretch, seconds "
+                        "per frame) and garment_motion / body_motion .obj + .pc2 point caches")
+    p.add_argument("--between", type=int, default=10,
+                   help="with --animation: in-between frames from each pose to the next (default 10)")
     add_quiet(p)
 
 
@@ -51,14 +57,49 @@ def _options(args) -> dict:
     return options
 
 
+def _motion(args, options, pattern, prog) -> int:
+    """``--animation``: the drape through the poses (:mod:`core.drape.animate`), its files."""
+    from ..body import load_body
+    from ..body.instance import spec_instance
+    from ..drape.animate import drape_motion, motion_report, pose_frames, write_motion
+    from ..errors import DrapeError
+    from ..progress import report, sub
+    poses = args.poses
+    spec = dict(pattern.body or {})
+    if poses[0] != (spec.get("pose") or "A"):
+        raise DrapeError(f"--animation: the sequence starts at the pattern's own pose {spec.get('pose') or 'A'} "
+                         f"(its garment was cut there), not {poses[0]}")
+    model = load_body(spec.get("model", "anny"))
+    frames = pose_frames(model, spec.get("shape"), poses, args.between)
+    _, faces = spec_instance(spec, model)
+    result = drape_motion(pattern, frames, faces, material=args.material, options=options,
+                          progress=sub(prog, 0.0, 0.95))
+    write_motion(args.out, result, frames, faces, poses, args.between)
+    report(prog, 1.0, "drape: done")
+    rep = motion_report(result, poses, args.between)
+    print(f"motion {' -> '.join(poses)}: {rep['frames']} frames, "
+          f"worst penetration {rep['worst_penetration_pct']:.2f} %, "
+          f"residual stretch p95 up to {max(rep['stretch_p95_pct']):.1f} %, "
+          f"{sum(rep['frame_seconds']) / max(len(rep['frame_seconds']), 1):.2f} s a frame -> {args.out}")
+    return 0
+
+
 def _cmd(args) -> int:
     from .. import workflows as wf
     from ..pattern.io import load_pattern
     from ..progress import report, sub
 
     options = _options(args)
+    if args.animation is not None:      # refused before the pattern is read
+        from ..drape.animate import parse_poses
+        from ..errors import DrapeError
+        args.poses = parse_poses(args.animation, "--animation")
+        if args.between < 0:
+            raise DrapeError(f"--between: expected 0 or more in-between frames, got {args.between}")
     prog = console_progress(args)
     pattern = load_pattern(args.pattern)
+    if args.animation is not None:
+        return _motion(args, options, pattern, prog)
     run = wf.drape(pattern, material=args.material, options=options, progress=sub(prog, 0.0, 0.9))
     report(prog, 0.95, "drape: writing")
     wf.write_drape(args.out, run, pattern=pattern, preview=not args.no_preview)
