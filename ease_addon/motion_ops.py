@@ -32,19 +32,6 @@ MOTION_GARMENT = "EASE Motion Garment"
 MOTION_KEY = "ease_motion_json"
 
 
-def parse_poses(text: str) -> list:
-    """The pose names of the *Poses* field (comma, space or ``->`` separated); AddonError naming
-    the field and the first unknown name."""
-    from ..core.choices import POSE_PRESETS
-    names = [t for t in text.replace("->", ",").replace("→", ",").replace(" ", ",").split(",") if t]
-    for n in names:
-        if n not in POSE_PRESETS:
-            raise state.AddonError(f"Poses: {n!r} is not a pose ({', '.join(POSE_PRESETS)})")
-    if len(names) < 2:
-        raise state.AddonError(f"Poses: name two poses or more (e.g. A, P1, P3), got {text!r}")
-    return names
-
-
 def motion_object(scene, name: str, frames: np.ndarray, faces: np.ndarray, material):
     """The object ``name`` (role ``motion``) with a shape key per frame of ``frames`` (K, V, 3),
     keyed so that frame k (1-based) of the timeline shows ``frames[k - 1]``."""
@@ -89,9 +76,9 @@ def _motion(context):
     """(body frames (K, V, 3), body faces, MotionResult, poses) of the scene's pattern through the Poses."""
     from ..core.body import load_body
     from ..core.body.instance import spec_instance
-    from ..core.drape.animate import drape_motion, pose_frames
+    from ..core.drape.animate import drape_motion, parse_poses, pose_frames
     scene, s = context.scene, context.scene.ease
-    poses = parse_poses(s.motion_poses)
+    poses = parse_poses(s.motion_poses, "Poses")
     pattern = data.required_pattern(scene, "to animate")
     spec = dict(pattern.body or {})
     own = spec.get("pose") or "A"
@@ -113,6 +100,7 @@ class EASE_OT_drape_animation(EaseOperator):
     needs = ('pattern',)
 
     def run(self, context):
+        from ..core.drape.animate import motion_report
         scene, s = context.scene, context.scene.ease
         frames, faces, r, poses = _motion(context)
         used = np.asarray(r.used, dtype=bool)
@@ -125,13 +113,11 @@ class EASE_OT_drape_animation(EaseOperator):
         scene.frame_set(1)
         for o in objects_with_role(scene, "body") + objects_with_role(scene, "garment"):
             o.hide_set(True)
-        report = {"poses": poses, "in_betweens": int(s.motion_between), "frames": len(frames),
-                  "penetration_pct": [round(100 * float(p), 4) for p in r.penetration],
-                  "frame_seconds": [round(float(t), 4) for t in r.frame_seconds],
-                  "settle_frames": r.settle_frames, "device": r.device}
+        report = motion_report(r, poses, int(s.motion_between))
         scene[MOTION_KEY] = json.dumps(report)
-        worst = max(report["penetration_pct"])
+        worst = report["worst_penetration_pct"]
         s.motion_status = (f"{len(frames)} frames ({' -> '.join(poses)}), worst penetration {worst:.2f} %, "
+                           f"stretch p95 up to {max(report['stretch_p95_pct']):.1f} %, "
                            f"{np.mean(r.frame_seconds) if len(r.frame_seconds) else 0:.2f} s a frame")
         self.report({"INFO"}, f"{body.name}, {garment.name}: {s.motion_status}; the static body and "
                               f"garment are hidden in the viewport")

@@ -97,3 +97,34 @@ def test_poses_field_is_checked(scene, bpy_session):
             assert "ERROR" in r and words in r["ERROR"] and "Poses" in r["ERROR"], (text, r)
     finally:
         s.motion_poses = old
+
+
+def test_point_cache_plays_in_blender(scene, bpy_session):
+    """``ease drape --animation``'s garment_motion.obj + .pc2 (core.drape.animate.write_motion), read
+    by Blender's OBJ importer and its Mesh Cache modifier: every frame's vertices as written."""
+    from drape_synth import revolution_body, tube_skirt
+
+    from core.drape.animate import drape_motion, write_motion
+    bpy = scene.bpy
+    sc = bpy.context.scene
+    bv, bf = revolution_body(48, 60)
+    frames = [bv + [0.03 * k, 0.0, 0.01 * k] for k in range(4)]
+    r = drape_motion(tube_skirt(), frames, bf, options={"max_frames": 40})
+    out = scene.tmp / "pc2"
+    write_motion(out, r, frames, bf, ["A", "T"], 2)
+    before = set(bpy.data.objects)
+    assert bpy.ops.wm.obj_import(filepath=str(out / "garment_motion.obj"), forward_axis="Y", up_axis="Z") \
+        == {"FINISHED"}
+    obj = next(o for o in bpy.data.objects if o not in before)
+    mod = obj.modifiers.new("cache", "MESH_CACHE")
+    mod.cache_format, mod.filepath = "PC2", str(out / "garment_motion.pc2")
+    mod.frame_start = 1.0
+    want = r.positions[:, r.used]
+    try:
+        for f in range(1, len(frames) + 1):
+            sc.frame_set(f)
+            got = _world(obj, bpy.context.evaluated_depsgraph_get())
+            assert got.shape == want[f - 1].shape
+            assert np.abs(got - want[f - 1]).max() < 1e-5, f
+    finally:
+        bpy.data.objects.remove(obj)

@@ -2,6 +2,8 @@
 body without tunnelling, pinned vertices ride on it, pose in-betweens keep the limbs' length."""
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from drape_synth import revolution_body, tube_skirt
@@ -81,18 +83,48 @@ def test_pose_in_betweens_keep_the_limbs(anny):
         pose_frames(anny, "M", ["A"], between=3)
 
 
-def test_top_through_a_to_p1_on_the_default_body(anny):
-    """The real body: a top draped in A, carried to P1 (arms forward) over 4 frames; no frame
-    lets more than 0.5 % of the garment through the body, and the top stays on the torso."""
+def test_ease_drape_animation_on_the_default_body(tmp_path, anny):
+    """The real body through the CLI: a top draped in A, carried to P1 (arms forward) over 4 frames;
+    no frame lets more than 0.5 % of the garment through the body, the top stays on the torso, the
+    files say so and the point caches hold the frames."""
     from core import workflows
-    from core.body.instance import spec_instance
+    from core.cli import main
     from core.design import load_design
     from core.design.templates import template_path
+    from core.pattern.io import save_pattern
     prep = workflows.prepare(load_design(template_path("top_sleeveless")))
-    pattern = workflows.reference(prep).pattern
-    _, faces = spec_instance(pattern.body)
-    frames = pose_frames(prep.body, pattern.body.get("shape"), ["A", "P1"], between=3)
-    r = drape_motion(pattern, frames, faces, options={"max_frames": 40})
-    assert np.all(np.isfinite(r.positions)) and r.penetration.max() <= 0.005, r.penetration
-    z = [r.positions[k][r.used][:, 2].mean() for k in (0, len(frames) - 1)]
-    assert abs(z[1] - z[0]) < 0.03, z
+    save_pattern(workflows.reference(prep).pattern, tmp_path / "pattern")
+    out = tmp_path / "motion"
+    assert main(["drape", str(tmp_path / "pattern"), "--out", str(out), "--animation", "A, P1",
+                 "--between", "2", "--frames", "40", "--quiet"]) == 0
+    rep = json.loads((out / "motion_report.json").read_text())
+    assert rep["poses"] == ["A", "P1"] and rep["frames"] == 4 and len(rep["stretch_p95_pct"]) == 4
+    assert rep["worst_penetration_pct"] <= 0.5 and len(rep["frame_seconds"]) == 3
+    z = np.load(out / "motion.npz")
+    pos, used = z["positions"], z["used"]
+    assert pos.shape[0] == 4 and np.all(np.isfinite(pos))
+    assert abs(pos[-1][used][:, 2].mean() - pos[0][used][:, 2].mean()) < 0.03
+    assert np.abs(z["body_vertices"][-1] - body_instance(anny, "M", "P1")).max() < 1e-5
+    k, v = _pc2(out / "garment_motion.pc2")
+    assert k.shape == (4, int(used.sum()), 3) and v == int(used.sum())
+    assert np.array_equal(k, pos[:, used].astype(np.float32))
+
+
+def _pc2(path):
+    """(frames (K, V, 3) float32, V) of a Point Cache 2 file, read from its documented layout."""
+    import struct
+    raw = path.read_bytes()
+    sig, version, n, start, rate, k = struct.unpack("<12siiffi", raw[:32])
+    assert sig == b"POINTCACHE2\0" and version == 1 and (start, rate) == (1.0, 1.0)
+    assert len(raw) == 32 + k * n * 12
+    return np.frombuffer(raw[32:], dtype="<f4").reshape(k, n, 3), n
+
+
+@pytest.mark.parametrize("argv, words", [(["--animation", "A,Q9"], "--animation: 'Q9' is not a pose"),
+                                         (["--animation", "A"], "--animation: name two poses"),
+                                         (["--animation", "A,P1", "--between", "-1"], "--between")])
+def test_ease_drape_animation_refuses_bad_flags_first(tmp_path, capsys, argv, words):
+    from core.cli import main
+    assert main(["drape", str(tmp_path / "no_such_pattern"), "--out", str(tmp_path / "o"), *argv]) == 2
+    err = capsys.readouterr().err
+    assert words in err and err.count("\n") == 1, err

@@ -29,6 +29,7 @@ from .materials import Material, get_material
 from .mesh import build_cloth
 from .options import DrapeOptions
 from .schedule import check_divergence, run
+from .strain import face_strains
 from .xpbd import DrapeSolver, check_body
 
 PENETRATION_DEPTH = 0.002   # m: SPEC item 7 (core.metrics.drape.penetration, a later stage) counts deeper
@@ -45,6 +46,8 @@ class MotionResult:
     faces : (T, 3) int, the garment's triangles (global vertex ids).
     used : (N,) bool.
     penetration : (K,) float, share of the used vertices more than 2 mm inside the body.
+    stretch : (K,) float, residual stretch: the 95th percentile over the triangles of the larger
+        of their weft and warp strain (0.02 = 2 % longer than the pattern).
     frame_seconds : (K - 1,) float, wall time of each moving frame.
     settle_frames : int, frames the first drape took; settled : bool.
     material : dict; device : str.
@@ -53,6 +56,7 @@ class MotionResult:
     faces: np.ndarray
     used: np.ndarray
     penetration: np.ndarray
+    stretch: np.ndarray
     frame_seconds: np.ndarray
     settle_frames: int
     settled: bool
@@ -139,12 +143,17 @@ def drape_motion(pattern, body_frames: Sequence[np.ndarray], body_faces,
     used = cloth.particle_of >= 0
     src = np.where(used, cloth.particle_of, 0)
 
+    valid = ~cloth.sliver if len(cloth.sliver) else np.ones(len(cloth.faces), bool)
+
     def snapshot(body):
         x = state.x.numpy().astype(np.float64)
         pos = np.where(used[:, None], x[src], 0.0)
         sd = distance_to_mesh(pos[used], body, faces, signed=True, max_dist=0.5)
+        weft, warp, _ = face_strains(x, cloth)
+        stretch.append(float(np.percentile(np.maximum(weft, warp)[valid], 95)) if valid.any() else 0.0)
         return pos, float(np.mean(sd < -PENETRATION_DEPTH)) if len(sd) else 0.0
 
+    stretch = []
     pos, share = snapshot(first)
     positions, pens, seconds = [pos], [share], []
     n = opts.substeps
@@ -176,6 +185,74 @@ def drape_motion(pattern, body_frames: Sequence[np.ndarray], body_faces,
         report(progress, 0.3 + 0.7 * k / max(K - 1, 1),
                f"motion: frame {k}/{K - 1}, penetration {100 * share:.2f} %")
     return MotionResult(positions=np.stack(positions), faces=cloth.faces_global.copy(), used=used,
-                        penetration=np.asarray(pens), frame_seconds=np.asarray(seconds),
+                        penetration=np.asarray(pens), stretch=np.asarray(stretch),
+                        frame_seconds=np.asarray(seconds),
                         settle_frames=int(settling.frames), settled=bool(settling.settled),
                         material=mat.to_json(), device=str(solver.device))
+
+
+def parse_poses(text: str, label: str = "poses") -> list:
+    """The pose presets of ``text`` (comma, space or ``->`` separated: ``"A, P1, P3"``); DrapeError
+    naming ``label`` (a CLI flag, a panel field) and the first unknown name."""
+    from ..choices import POSE_PRESETS
+    names = [t for t in str(text).replace("->", ",").replace(" ", ",").split(",") if t]
+    for n in names:
+        if n not in POSE_PRESETS:
+            raise DrapeError(f"{label}: {n!r} is not a pose ({', '.join(POSE_PRESETS)})")
+    if len(names) < 2:
+        raise DrapeError(f"{label}: name two poses or more (e.g. A, P1, P3), got {text!r}")
+    return names
+
+
+def pc2_bytes(frames: np.ndarray) -> bytes:
+    """A Point Cache 2 file (``.pc2``: Blender's Mesh Cache modifier, 3ds Max, Maya and others read it)
+    of ``frames`` (K, V, 3): the header (start frame 1, one sample a frame), then K x V x 3
+    little-endian float32, frame 1 first."""
+    import struct
+    f = np.ascontiguousarray(frames, dtype="<f4")
+    return struct.pack("<12siiffi", b"POINTCACHE2\0", 1, f.shape[1], 1.0, 1.0, f.shape[0]) + f.tobytes()
+
+
+def _obj_bytes(vertices: np.ndarray, faces: np.ndarray, name: str) -> bytes:
+    lines = [f"# EASE motion: the mesh {name}.pc2 moves (its vertex order)", f"o {name}"]
+    lines += [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in np.asarray(vertices, dtype=float)]
+    lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in np.asarray(faces, dtype=np.int64)]
+    return ("\n".join(lines) + "\n").encode("utf-8")
+
+
+def motion_report(result: MotionResult, poses, between: int) -> dict:
+    """The figures of a motion, per frame: penetration and residual stretch (%) and seconds."""
+    return {"poses": list(poses), "in_betweens": int(between), "frames": int(len(result.positions)),
+            "penetration_pct": [round(100 * float(p), 4) for p in result.penetration],
+            "stretch_p95_pct": [round(100 * float(p), 3) for p in result.stretch],
+            "frame_seconds": [round(float(t), 4) for t in result.frame_seconds],
+            "worst_penetration_pct": round(100 * float(result.penetration.max()), 4),
+            "settle_frames": result.settle_frames, "settled": result.settled,
+            "material": result.material.get("name"), "device": result.device}
+
+
+def write_motion(out, result: MotionResult, body_frames, body_faces, poses, between: int) -> list:
+    """The motion's files into the folder ``out`` at once: ``motion.npz`` (garment positions by
+    global vertex id, faces, used; body frames and faces), ``motion_report.json``
+    (:func:`motion_report`), and for other tools ``garment_motion.obj`` / ``.pc2`` and
+    ``body_motion.obj`` / ``.pc2`` (each OBJ is frame 1, its point cache the K frames)."""
+    import io
+
+    from ..fileio import write_files
+    from ..jsontext import dumps_json
+    used = np.asarray(result.used, dtype=bool)
+    remap = -np.ones(len(used), dtype=np.int64)
+    remap[used] = np.arange(int(used.sum()))
+    garment = np.asarray(result.positions)[:, used]
+    gfaces = remap[np.asarray(result.faces)]
+    body = np.stack([np.asarray(b, dtype=np.float64) for b in body_frames])
+    buf = io.BytesIO()
+    np.savez_compressed(buf, positions=np.asarray(result.positions, dtype=np.float32), faces=result.faces,
+                        used=used, body_vertices=body.astype(np.float32), body_faces=np.asarray(body_faces))
+    files = {"motion.npz": buf.getvalue(),
+             "motion_report.json": (dumps_json(motion_report(result, poses, between)) + "\n").encode("utf-8"),
+             "garment_motion.obj": _obj_bytes(garment[0], gfaces, "garment_motion"),
+             "garment_motion.pc2": pc2_bytes(garment),
+             "body_motion.obj": _obj_bytes(body[0], body_faces, "body_motion"),
+             "body_motion.pc2": pc2_bytes(body)}
+    return write_files(out, files)
