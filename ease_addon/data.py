@@ -307,6 +307,8 @@ def key_figures(pattern) -> dict:
         out["flipped triangles"] = int(m["flipped_triangles"])
     if "collapsed_triangles" in m:
         out["collapsed triangles"] = int(m["collapsed_triangles"])
+    if "crossings" in m:
+        out["crossings"] = int(m["crossings"])
     for name, r in sorted((m.get("regions") or {}).items()):
         # compliance near a landmark (weft / warp %), where fit fails first
         out[f"{name.replace('_', ' ')} % (weft / warp)"] = f"{float(r['mean']):.2f} / {float(r['warp_mean']):.2f}"
