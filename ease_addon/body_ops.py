@@ -108,6 +108,7 @@ class EASE_OT_set_pose(EaseOperator):
         obj = data.body_object(context)
         pose = self.pose or context.scene.ease.pose
         sync.update_body(context, obj, pose=pose)
+        context.scene.ease.pose = pose       # the panel shows the body's pose
         self.report({"INFO"}, f"pose {pose}")
 
 

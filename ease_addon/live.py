@@ -26,7 +26,13 @@ added) gets a new session once (:func:`core.live.topology_key`).
 
 Undo: one step per stroke, the stroke's own (Blender's paint stroke, or the
 EASE operator that wrote the layer, pushes it); live mode pushes none, which
-would double it. After an undo or redo the loop continues from the restored
+would double it, except after it rebuilt the pieces of a new cut (datablocks
+replaced outside an undo step crash Blender's memfile undo).
+
+Status: "converged" only once a tick has seen the scene as it is (an EASE
+operator, a slider's re-cut, an update of the body or an undo set it to
+"updating" first) and while the stored pattern is Live's own (Optimize,
+Transfer or Adapt storing another one makes it say so). After an undo or redo the loop continues from the restored
 layer and pattern and converges to the restored paint's cold solve, which is
 the pattern the previous stroke had, bit for bit (the converged pattern does
 not depend on the painting history).
@@ -52,7 +58,7 @@ FIT_RANGE = 0.10        # +-10 %: the overlay's full blue / full red
 
 # the session of the scene's design (one per add-on session: the timer serves the active scene)
 _LIVE = {"key": None, "session": None, "colors": None, "mirror": None, "builds": 0, "restart": False,
-         "inputs": None, "faces": None, "final": None}
+         "inputs": None, "faces": None, "final": None, "stored": None}
 # running estimates, seconds per cut triangle of each kind of work (show, measure, encode, store)
 _RATES = {}
 
@@ -113,6 +119,12 @@ def _colors(obj):
     return c
 
 
+def _of_cut(pattern, cut) -> bool:
+    """``pattern`` is a pattern of ``cut`` (its panels, their vertex counts): one to start from."""
+    return pattern is not None and [p.name for p in pattern.panels] == [p.name for p in cut.panels] and \
+        all(len(a.uv) == len(b.vertex_ids) for a, b in zip(pattern.panels, cut.panels))
+
+
 def session_for(context):
     """The live session of the scene's design on its body (built once per topology)."""
     from ..core.live import LiveSession, topology_key
@@ -129,9 +141,8 @@ def session_for(context):
     _LIVE["faces"] = convert.get_triangles(obj.data)
     if _LIVE["key"] != key or _LIVE["session"] is None:
         start = data.stored_pattern(context.scene)
-        ok = start is not None and [p.name for p in start.panels] == [p.name for p in prep.cut.panels] and \
-            all(len(a.uv) == len(b.vertex_ids) for a, b in zip(start.panels, prep.cut.panels))
-        _LIVE.update(key=key, session=LiveSession(prep, pattern=start if ok else None), colors=None,
+        _LIVE.update(key=key, session=LiveSession(prep, pattern=start if _of_cut(start, prep.cut) else None),
+                     colors=None,
                      builds=_LIVE["builds"] + 1, final=None)
     return _LIVE["session"]
 
@@ -170,8 +181,17 @@ def _show(context, session) -> None:
     if build.same_pieces(context.scene, pattern):
         sync.show_pieces(context, pattern)
     else:
-        sync.show_pattern(context, session.pattern(figures=True))
+        _rebuild(context, session)
     write_overlay(data.body_object(context), pattern, session)
+
+
+def _rebuild(context, session) -> None:
+    """The pieces of a new cut (a parameter or keypoint changed): rebuilt, measured and stored, then
+    an undo step of their own. A tick that replaces datablocks outside an undo step leaves Blender's
+    memfile undo restoring objects whose data it freed: the next Ctrl+Z crashed (segfault)."""
+    sync.show_pattern(context, session.pattern(figures=True))
+    if bpy.ops.ed.undo_push.poll():
+        bpy.ops.ed.undo_push(message="EASE Live: pieces of the new cut")
 
 
 def _final_units(context, session) -> deque:
@@ -192,7 +212,8 @@ def _final_units(context, session) -> deque:
             queue.append(("measure", n, measure))
         else:
             # not this pattern's pieces (a new cut): rebuilt, measured and stored at once
-            sync.show_pattern(context, session.pattern(figures=True))
+            _rebuild(context, session)
+            _LIVE["stored"] = scene.get(data.PATTERN_KEY)
         write_overlay(data.body_object(context), pattern, session)
 
     def measure():
@@ -205,6 +226,7 @@ def _final_units(context, session) -> deque:
         pattern = box["pattern"]
         sync.store_pattern(scene, pattern, text=join())
         scene.ease.pattern_json = json.dumps(data.key_figures(pattern))
+        _LIVE["stored"] = scene.get(data.PATTERN_KEY)
 
     queue.append(("show", n, show))
     return queue
@@ -236,7 +258,7 @@ def step(context, budget_s: float = SLICE_S) -> dict:
             # after an undo/redo: continue from the restored pattern
             _LIVE["restart"] = False
             restored = data.stored_pattern(scene)
-            if restored is not None and len(restored.panels) == len(session.prep.cut.panels):
+            if _of_cut(restored, session.prep.cut):     # (not one of another cut: a parameter undone)
                 session.restart_from(restored)
         changed = session.set_ease(_field(obj, scene))
         sync.remember_layer(obj, scene)
@@ -264,8 +286,14 @@ def step(context, budget_s: float = SLICE_S) -> dict:
         _timed(kind, size, work)
         units.append(kind)
     done = session.converged and not final
-    scene.ease.live_status = ("converged" if done else "converging") + \
-        f" ({session.iterations_since_change} iterations)"
+    if not done:
+        status = "converging"
+    elif scene.get(data.PATTERN_KEY) == _LIVE["stored"]:
+        status = "converged"
+    else:   # Optimize, Transfer or Adapt stored a pattern since: the pieces are not Live's
+        status = "idle: the pieces show another pattern than Live's; paint to update them"
+    scene.ease.live_status = status if status.startswith("idle") else \
+        f"{status} ({session.iterations_since_change} iterations)"
     return {"changed": changed, "iterations": n, "units": units, "converged": done,
             "seconds": time.perf_counter() - t0}
 
@@ -284,6 +312,17 @@ def _tick():
     return None if out["converged"] and not out["changed"] else IDLE_TICK_S
 
 
+def touched(scene) -> None:
+    """Something Live follows may have changed (an EASE operator ran, the body was updated): the
+    status no longer says "converged" until a tick has seen the scene as it is now."""
+    s = getattr(scene, "ease", None)
+    if s is None or not s.live:
+        return
+    if not s.live_status.startswith("updating"):
+        s.live_status = "updating"
+    wake()
+
+
 def wake() -> None:
     """Make sure a tick runs soon (idempotent)."""
     if not bpy.app.timers.is_registered(_tick):
@@ -298,16 +337,14 @@ def _on_depsgraph(scene, depsgraph) -> None:
     body = s.body
     for u in depsgraph.updates:
         if getattr(u.id, "original", u.id) in (body, body.data):
-            wake()
+            touched(scene)
             return
 
 
 @bpy.app.handlers.persistent
 def _on_undo(scene, *_args) -> None:
     _LIVE.update(colors=None, restart=True, final=None)
-    s = getattr(scene, "ease", None)
-    if s is not None and s.live:
-        wake()
+    touched(scene)      # the restored status is the pushed one: not "converged" until a tick has seen it
 
 
 def _handlers():
@@ -333,7 +370,7 @@ def stop() -> None:
     if bpy.app.timers.is_registered(_tick):
         bpy.app.timers.unregister(_tick)
     _LIVE.update(key=None, session=None, colors=None, mirror=None, restart=False, inputs=None, faces=None,
-                 final=None)
+                 final=None, stored=None)
 
 
 def resume(*_args) -> None:

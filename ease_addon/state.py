@@ -18,6 +18,7 @@ USER_ERRORS = (EaseError, Cancelled, KeyError, ValueError, OSError)
 _MODELS: dict = {}
 CUTS: dict = {}       # (design text, body model, shape json) -> GarmentCut (data.cut_on)
 PATTERNS: dict = {}   # (scene name, key) -> (pattern json text, Pattern)
+BUGS: list = []       # (operator, traceback) of every exception an operator caught that is no user error
 
 
 def clear() -> None:
