@@ -45,6 +45,19 @@ def test_skirt_follows_a_fast_moving_body(body):
     assert len(r.frame_seconds) == len(frames) - 1 and r.settled
 
 
+def test_a_body_jumping_20_cm_in_one_frame_keeps_the_skirt(body):
+    """A frame that moves the body further than a simulation frame may (MAX_MOVE) is simulated as
+    several: the skirt is carried, not torn or left inside."""
+    from core.drape.animate import MAX_MOVE
+    bv, bf = body
+    assert 0.2 > 2 * MAX_MOVE
+    r = drape_motion(tube_skirt(), [bv, bv + [0.2, 0.0, 0.0], bv + [0.2, 0.0, 0.0]], bf, options={"max_frames": 60})
+    assert r.penetration.max() <= 0.005, r.penetration
+    # carried 20 cm across, neither thrown up nor overshooting (one 20 cm jump throws it up ~6 cm)
+    assert _centroid(r, 2) - _centroid(r, 0) == pytest.approx([0.2, 0.0, 0.0], abs=0.02)
+    assert r.stretch.max() < 0.15
+
+
 def test_a_still_body_keeps_the_settled_drape(body):
     bv, bf = body
     r = drape_motion(tube_skirt(), [bv] * 4, bf, options={"max_frames": 60})

@@ -7,7 +7,8 @@ by the model (so limbs keep their length, as linear blends of vertices would not
 
 :func:`drape_motion` drapes the pattern on the first frame until it settles
 (the static drape, :func:`core.drape.simulate.drape`'s schedule), then carries
-it through the following frames, one simulation frame each: the body moves a
+it through the following frames, one simulation frame each (several where a body
+vertex moves more than :data:`MAX_MOVE` from one frame to the next): the body moves a
 little before every substep (linearly from one frame to the next, its BVH
 refitted) and the contacts are searched every substep, so the cloth is pushed
 by the body as it moves instead of finding itself inside it at the frame's
@@ -32,6 +33,7 @@ from .schedule import check_divergence, run
 from .strain import face_strains
 from .xpbd import DrapeSolver, check_body
 
+MAX_MOVE = 0.03            # m: a body vertex moves at most this far in one simulation frame (20 substeps)
 PENETRATION_DEPTH = 0.002   # m: SPEC item 7 (core.metrics.drape.penetration, a later stage) counts deeper
 
 
@@ -175,7 +177,12 @@ def drape_motion(pattern, body_frames: Sequence[np.ndarray], body_faces,
     for k in range(1, K):
         a, b = frames[k - 1], frames[k]
         t0 = time.perf_counter()
-        solver.step(state, before_substep=lambda i, a=a, b=b: move(a + (b - a) * ((i + 1) / n)))
+        # a body frame that moves far is simulated as several frames (cloth tunnels through a limb
+        # that jumps more than a few mm a substep)
+        parts = max(1, int(np.ceil(np.abs(b - a).max() / MAX_MOVE)))
+        for j in range(parts):
+            lo, hi = a + (b - a) * (j / parts), a + (b - a) * ((j + 1) / parts)
+            solver.step(state, before_substep=lambda i, lo=lo, hi=hi: move(lo + (hi - lo) * ((i + 1) / n)))
         xs = state.x.numpy()
         check_divergence(settling.frames + k, xs, state.v.numpy()[solver.free], opts, mat, solver.dt, cloth)
         seconds.append(time.perf_counter() - t0)
