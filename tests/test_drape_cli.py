@@ -41,6 +41,10 @@ def test_report(drape_dir):
     assert rep["penetration_pct"] == 0.0
     assert rep["seam_gap_mm"]["max"] < 1.0
     assert rep["self_collision"] is False
+    # the fold measures of every drape (overall and per garment)
+    assert rep["folds"] == rep["metrics"]["all"]["folds"]
+    assert rep["folds"]["edges"] > 0 and 0 < rep["folds"]["mean_dihedral_deg"] < 90
+    assert all("folds" in g for g in rep["metrics"]["garments"].values())
 
 
 def test_npz_obj_ply_agree(drape_dir):

@@ -68,7 +68,8 @@ def report_dict(result, fit: dict, pattern=None) -> dict:
 
     ``fit`` is the JSON-ready summary of the fit measurements
     (:func:`core.metrics.drape.summary`): ``"all"`` with ``gap_mm``,
-    ``penetration_pct``, ``seam_gap_mm``, and per garment.
+    ``penetration_pct``, ``seam_gap_mm``, ``folds`` (mean dihedral angle, share of
+    edges over 30 degrees, mean curvature), and per garment.
     """
     return {
         "style": getattr(pattern, "style", ""),
@@ -81,7 +82,7 @@ def report_dict(result, fit: dict, pattern=None) -> dict:
         "timings": result.timings, "self_collision": bool(result.self_collision),
         "self_radius_m": float(getattr(result, "self_radius", 0.0)),
         "gap_mm": fit["all"]["gap_mm"], "penetration_pct": fit["all"]["penetration_pct"],
-        "seam_gap_mm": fit["all"]["seam_gap_mm"], "metrics": fit,
+        "seam_gap_mm": fit["all"]["seam_gap_mm"], "folds": fit["all"].get("folds"), "metrics": fit,
     }
 
 
