@@ -159,8 +159,9 @@ def _men(chest, waist):
 
 FIT_PARAMETERS = ("height", "weight", "muscle", "proportions", "age")
 
-# Anny's local changes a chart size beyond the phenotypes' reach moves (core.body.sizes.
-# LOCAL_FIT_PARAMETERS): bust, waist, hip girths; the men's chart, without a hip target, the first two.
+# Anny's local changes a chart size beyond the phenotypes' reach moves (also those of
+# core.body.sizes.LOCAL_OF_GIRTH): bust, waist, hip girths; the men's chart, without a hip target,
+# the first two.
 LOCAL_GIRTHS = ("measure-bust-circ-incr", "measure-waist-circ-incr", "measure-hips-circ-incr")
 
 WOMEN = SizeChart(

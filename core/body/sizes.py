@@ -67,12 +67,6 @@ TARGET_RANGES = {"height": (50.0, 250.0), "chest": (40.0, 200.0), "waist": (30.0
 # Shape parameters that change size (not gender, age, ethnicity) where the model has them.
 PREFERRED_FIT_PARAMETERS = ("height", "weight", "muscle", "proportions")
 
-# Anny's local changes (MakeHuman's measurement modifiers, -1 .. 1, 0 = the phenotype's own body)
-# that a girth fit may move where the phenotypes alone miss: one per girth, each moving its own
-# girth by 10-18 cm over its range and the others by < 1 cm, all of them symmetric (no ``l-``/``r-``
-# twin), so the body stays left/right symmetric.
-LOCAL_FIT_PARAMETERS = LOCAL_GIRTHS
-
 # Pull of a local change towards 0 (the population's body for the phenotypes), cm per unit of the
 # change: stronger than the phenotypes' REGULARIZATION_CM, so a fit uses a local change only as far
 # as the phenotypes cannot reach a girth.
@@ -273,7 +267,9 @@ def _fit_measurements(body, targets, progress, parameters, start, bounds) -> Fit
 
 
 # What fit_measurements moves besides its default parameters where they miss (see there), and the
-# local change of each girth target.
+# local change of each girth target: Anny's measurement modifiers (-1 .. 1, 0 = the phenotype's own
+# body), each moving its own girth by 10-18 cm over its range and the others by < 1 cm, all of them
+# symmetric (no ``l-``/``r-`` twin), so the body stays left/right symmetric.
 FALLBACK_PARAMETERS = ("gender", "age", "cupsize")
 LOCAL_OF_GIRTH = dict(zip(("chest", "waist", "hip"), LOCAL_GIRTHS))
 
