@@ -72,3 +72,13 @@ def test_no_darts_no_legs():
     assert len(legs.a) == 0
     U = np.zeros((3, 2))
     assert D.GapCorrection(legs).correct(_base(3), U) is U
+
+
+def test_a_deep_crossing_opens_at_most_a_legs_edge_an_iteration():
+    legs, n = _legs()
+    assert legs.edge == pytest.approx(0.02)
+    width = np.array([-0.05, -0.05, -0.04, -0.02, -0.01])             # crossed by up to 5 cm
+    U = _positions(5, width)
+    gap = D.leg_gaps(legs, D.GapCorrection(legs).correct(_base(n), U))
+    raised = gap - width
+    assert np.all(raised > 0) and np.all(raised <= D.STEP_CAP * legs.edge * 1.001)

@@ -37,6 +37,10 @@ import scipy.sparse as sp
 MIN_OPENING = 0.02
 #: the correction's weight on the pairs' gaps, times the mean diagonal of the system matrix
 STIFFNESS = 100.0
+#: the most a pair's gap is raised in one correction, times the legs' mean edge length (a deep crossing
+#: opens over a few iterations: uncapped, the four-dart blouse transferred to women:XL with the warp
+#: lengths kept diverged)
+STEP_CAP = 1.0
 
 
 @dataclass(frozen=True)
@@ -52,12 +56,15 @@ class DartLegs:
     next_a: np.ndarray
     next_b: np.ndarray
     min_gap: np.ndarray
+    #: m, the mean length of the legs' edges in the initial flattening
+    edge: float = 0.0
 
 
 def dart_legs(sides: Sequence, pairs: Sequence, darts: Sequence[int]) -> DartLegs:
     """The legs of the seams ``darts`` (indices into ``pairs``) from their ``sides``
     (:class:`core.pattern.seams.SeamSide`: ``gids`` mouth to apex, ``rest_lengths``)."""
     cols = [[] for _ in range(7)]
+    rest = []
     for si in darts:
         A, B = sides[pairs[si][0]], sides[pairs[si][1]]
         ga, gb = np.asarray(A.gids, int), np.asarray(B.gids, int)
@@ -68,13 +75,15 @@ def dart_legs(sides: Sequence, pairs: Sequence, darts: Sequence[int]) -> DartLeg
         la = np.r_[np.cumsum(np.asarray(A.rest_lengths)[::-1])[::-1], 0.0]
         lb = np.r_[np.cumsum(np.asarray(B.rest_lengths)[::-1])[::-1], 0.0]
         dist = 0.5 * (la + lb)
+        rest += [np.asarray(A.rest_lengths), np.asarray(B.rest_lengths)]
         i = np.arange(k)
         prev, nxt = np.maximum(i - 1, 0), i + 1
         for col, v in zip(cols, (ga[i], gb[i], ga[prev], gb[prev], ga[nxt], gb[nxt],
                                  MIN_OPENING * dist[i])):
             col.append(v)
     a, b, pa, pb, na, nb, g = (np.concatenate(c) if c else np.zeros(0) for c in cols)
-    return DartLegs(*(x.astype(int) for x in (a, b, pa, pb, na, nb)), g.astype(float))
+    edge = float(np.mean(np.concatenate(rest))) if rest else 0.0
+    return DartLegs(*(x.astype(int) for x in (a, b, pa, pb, na, nb)), g.astype(float), edge)
 
 
 def _legs_matrix(legs: DartLegs, weight: float, n: int) -> sp.csr_matrix:
@@ -129,7 +138,7 @@ class GapCorrection:
         if not np.any(short > 0):
             return U
         w, factor = self._factor(base)
-        r = np.maximum(short, 0.0)[:, None] * across           # t - D U: zero on the pairs apart
+        r = np.clip(short, 0.0, STEP_CAP * legs.edge)[:, None] * across    # t - D U: zero on the pairs apart
         rhs = np.zeros_like(U)
         np.add.at(rhs, legs.a, w * r)
         np.add.at(rhs, legs.b, -w * r)
