@@ -204,7 +204,7 @@ def _parse_body(path, obj):
     from ..body.registry import BUILTIN, MODEL_SUFFIXES
     from ..body.sizes import CHART_NAMES, check_chart, check_size, chart_sizes
     expect_dict(path, obj, "a body {model, chart, shape, pose} (an OBJ model also landmarks, blendshapes, up)")
-    expect_keys(path, obj, ("model", "chart", "shape", "pose", "landmarks", "blendshapes", "up"))
+    expect_keys(path, obj, ("model", "chart", "shape", "measurements", "pose", "landmarks", "blendshapes", "up"))
     model = obj.get("model", "anny")
     if not isinstance(model, str) or not (model.lower() in BUILTIN or model.lower().endswith(MODEL_SUFFIXES)):
         raise DesignError(f"{path}.model", f"expected {', '.join(BUILTIN)} or a path to a body model file "
@@ -234,6 +234,19 @@ def _parse_body(path, obj):
     # An OBJ template is a body of its own: its reference shape unless a shape is named (a chart
     # size needs its landmarks); the parametric models default to size M.
     shape = obj.get("shape", None if is_obj else "M")
+    if "measurements" in obj:        # made-to-measure: the shape fitted to a table of tape measures
+        if "shape" in obj or model.lower() != "anny":
+            raise DesignError(f"{path}.measurements", "a table of tape measures fits Anny's shape: give it "
+                                                      "without body.shape, on model anny")
+        if not isinstance(obj["measurements"], dict):
+            raise DesignError(f"{path}.measurements", f"expected an object measure -> cm, got {fmt(obj['measurements'])}")
+        from ..body.made_to_measure import measured_shape
+        try:
+            shape = measured_shape(obj["measurements"], f"{path}.measurements")
+        except BodyError as exc:   # "body.measurements[.name]: what" -> that path and what
+            where, _, what = str(exc).partition(": ")
+            raise DesignError(where if where.startswith(f"{path}.measurements") else f"{path}.measurements",
+                              what or str(exc)) from None
     if isinstance(shape, dict):
         for k, v in shape.items():
             check_number(f"{path}.shape.{k}", v)
