@@ -1,5 +1,7 @@
 """Tape measures as a tailor takes them (ISO 8559-1, core.body.tape) on shapes with a known answer
 and on Anny, and the made-to-measure fit (core.body.made_to_measure)."""
+import re
+
 import numpy as np
 import pytest
 from test_body_sizes import N, TubeBody, ellipse_polygon_perimeter
@@ -164,8 +166,14 @@ def test_made_to_measure_recovers_a_hidden_body(anny):
 
 
 def test_an_unreachable_measure_is_reported_with_the_closest_value(anny):
-    """Legs of 100 cm under a body of 150 cm: no Anny body has them; the fit says how close it came."""
-    fit = fit_tape(anny, {"height": 150, "inseam": 100, "gender": 1.0})
+    """Legs of 100 cm under a body of 150 cm: no Anny body has them; the fit says how close it came
+    (and a design's table of them is refused naming them: measured_shape, whose fit is kept per
+    process, so the design test below reuses this one)."""
+    from core.body import made_to_measure
+    table = {"height": 150, "inseam": 100, "gender": 1}
+    with pytest.raises(BodyError, match=r"body.measurements: not reachable by Anny: height 150 cm \(closest"):
+        made_to_measure.measured_shape(table)
+    fit = made_to_measure._SHAPES[tuple(sorted(made_to_measure.check_tape_targets(table).items()))]
     missed = [k for k in ("height", "inseam") if not fit.status[k].startswith("within")]
     assert missed
     for k in missed:
@@ -197,3 +205,28 @@ def test_cli_measurements_file(tmp_path, capsys, anny):
         rc = main(["body", "--measurements", str(tmp_path / name), "--out", str(tmp_path / "x.obj"), "--quiet"])
         err = capsys.readouterr().err
         assert rc == 2 and words in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_design_body_measurements(anny):
+    """``"body": {"measurements": {...}}`` in a design: the body is Anny fitted to the table (its
+    local changes in the shape), read back alike; a malformed or unreachable table is a DesignError
+    naming the field (with the closest values reached)."""
+    from core.design import load_design
+    from core.design.templates import TEMPLATES
+    from core.errors import DesignError
+    d = TEMPLATES["skirt_darted"]()
+    table = {"height": 165, "waist": 74, "hip": 104, "gender": 1}
+    d["body"] = {"measurements": table}
+    design = load_design(d)
+    got = tape_measures(anny, shape=design.body["shape"], which=("height", "waist", "hip"))
+    assert all(abs(got[k] - table[k]) <= tolerance(k) for k in got), got
+    assert any(k in anny.local_change_parameters() for k in design.body["shape"])
+    assert load_design(design.to_json()).body == design.body
+    for body, words in (({"measurements": {"knee": 3}}, "body.measurements.knee: unknown measurement 'knee'"),
+                        ({"measurements": {"height": 165}, "shape": "M"}, "without body.shape"),
+                        ({"measurements": [1]}, "expected an object"),
+                        ({"measurements": {"height": 150, "inseam": 100, "gender": 1}},
+                         "not reachable by Anny: height 150 cm (closest")):
+        d["body"] = body
+        with pytest.raises(DesignError, match=re.escape(words)):
+            load_design(d)

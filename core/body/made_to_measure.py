@@ -289,7 +289,7 @@ def solve(residual, x0, lo, hi, step=FD_STEP, done=None, max_evaluations=400, re
             x, r = xn, rn
             lam = max(lam / 3.0, 1e-6)
             failures = 0
-            if improvement < 1e-5 and fresh:
+            if improvement < 1e-4 and fresh:
                 break
             fresh = False
         else:
@@ -365,8 +365,11 @@ def fit_tape(body, targets: Mapping[str, float], progress: Optional[Progress] = 
             break
         x = solve(residual, best, lo, hi, step=FD_STEP, done=lambda r: bool(np.all(np.abs(r[:len(keys)]) <= 0.3)))
         r = residual(x)
+        gained = r @ r < 0.99 * (best_r @ best_r)
         if r @ r < best_r @ best_r:
             best, best_r = x, r
+        if not gained:          # the fit had converged: a measure it misses is out of reach
+            break
     x = best
     shape = shape_of(x)
     achieved = tape_measures(body, None, TAPE_MEASURES, shape=shape)
@@ -380,3 +383,27 @@ def fit_tape(body, targets: Mapping[str, float], progress: Optional[Progress] = 
     report(progress, 1.0, "fit done")
     return TapeFit(shape=shape, targets={k: t[k] for k in keys}, achieved=achieved, status=status,
                    collisions=collisions(body, shape), evaluations=count[0], parameters=names)
+
+
+_SHAPES: Dict[tuple, TapeFit] = {}
+
+
+def measured_shape(targets: Mapping[str, object], where: str = "body.measurements",
+                   progress: Optional[Progress] = None) -> Dict[str, float]:
+    """The shape of the default body (Anny) fitted to a table of tape measures, for a design's
+    ``"body": {"measurements": {...}}``: one fit per table and process. A BodyError naming
+    ``where`` when the table is malformed, or when a measure is not reached (each such measure
+    with the closest value the fit reached), never a body that silently misses."""
+    from . import load_body
+    table = check_tape_targets(targets, where)
+    key = tuple(sorted(table.items()))
+    if key not in _SHAPES:
+        _SHAPES[key] = fit_tape(load_body("anny"), table, progress=progress)
+    fit = _SHAPES[key]
+    missed = [k for k, s in fit.status.items() if not s.startswith("within")]
+    if missed:
+        raise BodyError(f"{where}: not reachable by Anny: " + ", ".join(
+            f"{k} {fit.targets[k]:g} cm (closest {fit.achieved[k]:.1f})" for k in missed))
+    if fit.collisions:
+        raise BodyError(f"{where}: the fitted body cuts into itself ({', '.join(fit.collisions)})")
+    return dict(fit.shape)
