@@ -257,6 +257,7 @@ def solve(residual, x0, lo, hi, step=FD_STEP, done=None, max_evaluations=400, re
     J = None
     since = 0
     failures = 0
+    fresh = False
     while count < max_evaluations:
         if done is not None and done(r):
             break
