@@ -316,11 +316,17 @@ def cantilever(material: Union[None, str, Material] = None, edge: float = 0.005,
         overhang = lo + (hi - lo) * (CANTILEVER_ANGLE - a_lo) / (a_hi - a_lo)
     else:  # the 41.5 degree line is outside [lo, hi]
         overhang = float("nan")
-    expected = (mat.bending / (mat.density * opts.gravity)) ** (1.0 / 3.0) if mat.bending > 0 else 0.0
     return {"material": mat.name, "edge_mm": edge * 1e3, "substeps": opts.substeps,
             "bending_length_cm": overhang * 50.0, "overhang_cm": overhang * 100.0, "runs": runs,
-            "expected_cm": expected * 100.0}
+            "expected_cm": cantilever_expected(mat, opts.gravity)}
 
 
-__all__ = ["cusick", "cantilever", "settle", "shadow_area", "count_nodes", "disc_mesh", "strip_mesh",
-           "cylinder_body", "box_body", "sheet_pattern", "Settled", "SETTLE_ENERGY", "SETTLE_MOVE"]
+def cantilever_expected(material: Union[None, str, Material] = None, gravity: float = 9.81) -> float:
+    """The bending length (cm) the preset itself implies, (G / (rho g))^(1/3): what a heavy elastica
+    with the preset's bending stiffness G and weight per area rho g gives at the 41.5 degree line."""
+    mat = get_material(material)
+    return 100.0 * (mat.bending / (mat.density * gravity)) ** (1.0 / 3.0) if mat.bending > 0 else 0.0
+
+
+__all__ = ["cusick", "cantilever", "cantilever_expected", "settle", "shadow_area", "count_nodes", "disc_mesh",
+           "strip_mesh", "cylinder_body", "box_body", "sheet_pattern", "Settled", "SETTLE_ENERGY", "SETTLE_MOVE"]
