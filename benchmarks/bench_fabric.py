@@ -58,7 +58,7 @@ def ease_rows(quick: bool) -> list:
                 t0 = time.perf_counter()
                 c = T.cusick(name, edge=edge, options=opts, max_frames=400)
                 # the cantilever at 2.5 mm and 4x iterations takes minutes a fabric: left out
-                b = T.cantilever(name, edge=edge / 2, options=opts, iterations=6) \
+                b = T.cantilever(name, edge=edge / 2, options=opts, bisections=6) \
                     if (f == 1 or edge == edges[0]) else None
                 row = {"material": name, "edge_mm": edge * 1e3, "substeps": DrapeOptions().substeps,
                        "iterations": base * f,

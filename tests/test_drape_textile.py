@@ -108,3 +108,16 @@ def test_bending_iterations_converge_the_cantilever():
              for it in (1, 4, 8)}
     assert angle[1] > angle[4] + 8.0
     assert abs(angle[4] - angle[8]) < 2.0
+
+
+def test_cantilever_orders_the_fabrics():
+    # the bisection brackets the 41.5 degree overhang; denim (stiff, heavy) has a longer bending length
+    # than silk (the presets' own (G/W)^(1/3): 1.72 and 0.66 cm)
+    denim = T.cantilever("denim", edge=0.005, bisections=3)
+    silk = T.cantilever("silk", edge=0.005, bisections=3)
+    for r in (denim, silk):
+        assert np.isfinite(r["bending_length_cm"]) and 0.2 < r["bending_length_cm"] < 6.0
+        angles = sorted((q["overhang_cm"], q["angle_deg"]) for q in r["runs"])
+        assert all(a0 <= a1 for (_, a0), (_, a1) in zip(angles[:-1], angles[1:]))  # longer droops more
+    assert denim["bending_length_cm"] > 1.5 * silk["bending_length_cm"]
+    assert T.cantilever_expected("denim") == pytest.approx(1.72, abs=0.01)

@@ -252,7 +252,7 @@ def cusick(material: Union[None, str, Material] = None, edge: float = 0.01, opti
     a_sup, a_spec = np.pi * SUPPORT_RADIUS ** 2, np.pi * SPECIMEN_RADIUS ** 2
     rim = cloth.particle_of[np.nonzero(np.hypot(uv[:, 0], uv[:, 1]) >= SPECIMEN_RADIUS - 1e-9)[0]]
     nodes, outline = count_nodes(x[rim, :2])
-    return {"material": mat.name, "edge_mm": edge * 1e3, "substeps": opts.substeps,
+    return {"material": mat.name, "edge_mm": edge * 1e3, "substeps": opts.substeps, "iterations": opts.iterations,
             "dc_pct": 100.0 * (a_shadow - a_sup) / (a_spec - a_sup), "nodes": nodes,
             "frames": st.frames, "settled": st.settled, "energy": st.energy, "move_mm": st.move * 1e3,
             "particles": cloth.n_particles, "triangles": int(len(cloth.faces)), "seconds": st.seconds,
@@ -282,11 +282,11 @@ def tip_angle(material: Material, overhang: float, edge: float, opts: DrapeOptio
 
 
 def cantilever(material: Union[None, str, Material] = None, edge: float = 0.005, options=None,
-               max_frames: int = 300, lo: float = 0.004, hi: float = 0.12, iterations: int = 8) -> dict:
+               max_frames: int = 300, lo: float = 0.004, hi: float = 0.12, bisections: int = 8) -> dict:
     """ASTM D1388 bending length: half the overhang whose tip lies on the 41.5 degree line.
 
-    The overhang is found by bisection in [``lo``, ``hi``] (the tip angle grows
-    with the overhang); each step is one settled run.
+    The overhang is found by ``bisections`` halvings of [``lo``, ``hi``] (the tip
+    angle grows with the overhang), then interpolated; each step is one settled run.
 
     Returns
     -------
@@ -303,7 +303,7 @@ def cantilever(material: Union[None, str, Material] = None, edge: float = 0.005,
         return a
 
     a_lo, a_hi = angle(lo), angle(hi)
-    for _ in range(iterations):
+    for _ in range(bisections):
         if not (a_lo <= CANTILEVER_ANGLE <= a_hi):
             break
         mid = 0.5 * (lo + hi)
@@ -316,7 +316,7 @@ def cantilever(material: Union[None, str, Material] = None, edge: float = 0.005,
         overhang = lo + (hi - lo) * (CANTILEVER_ANGLE - a_lo) / (a_hi - a_lo)
     else:  # the 41.5 degree line is outside [lo, hi]
         overhang = float("nan")
-    return {"material": mat.name, "edge_mm": edge * 1e3, "substeps": opts.substeps,
+    return {"material": mat.name, "edge_mm": edge * 1e3, "substeps": opts.substeps, "iterations": opts.iterations,
             "bending_length_cm": overhang * 50.0, "overhang_cm": overhang * 100.0, "runs": runs,
             "expected_cm": cantilever_expected(mat, opts.gravity)}
 
