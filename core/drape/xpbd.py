@@ -8,7 +8,9 @@ by one frame. The solver keeps nothing that a step changes, so two states
 stepped by one solver are independent. The schedule around the steps (growth,
 settling, divergence) is :mod:`core.drape.schedule`.
 
-Body contact has thickness and friction. Self-collision is optional
+Body contact has thickness and friction; each particle's contact plane goes
+through its closest point on the body and faces it (so the cloth slides off a
+convex edge instead of resting on the extended plane of the last triangle). Self-collision is optional
 (``self_collision=True``): particle against particle, found with a hash grid
 and resolved Jacobi-style, so it stays repeatable; off by default, when garment
 layers and folds may pass through each other.
