@@ -10,8 +10,8 @@ settling, divergence) is :mod:`core.drape.schedule`.
 
 Body contact has thickness and friction; each particle's contact plane goes
 through its closest point on the body and faces it (so the cloth slides off a
-convex edge instead of resting on the extended plane of the last triangle). Self-collision is optional
-(``self_collision=True``): particle against particle, found with a hash grid
+convex edge instead of resting on the extended plane of the last triangle).
+Self-collision is optional (``self_collision=True``): particle against particle, found with a hash grid
 and resolved Jacobi-style, so it stays repeatable; off by default, when garment
 layers and folds may pass through each other.
 """
