@@ -7,7 +7,8 @@ frames from each to the next, drapes the scene's pattern on the first and carrie
 it through the others, and keeps the result as two objects, ``EASE Motion Body``
 and ``EASE Motion Garment`` (role ``motion``): one shape key a frame, keyed so the
 timeline (frames 1..K, set on the scene) plays the motion. The static body and
-garment are hidden in the viewport (the eye in the Outliner shows them again).
+garment are hidden in the viewport and the render; the studio renders the motion
+objects while they are shown in the viewport (hide them to render the static ones).
 The figures per frame (penetration, seconds) are kept in the scene
 (``ease_motion_json``) and the worst frame is shown in the panel.
 
@@ -109,10 +110,14 @@ class EASE_OT_drape_animation(EaseOperator):
         body = motion_object(scene, MOTION_BODY, frames, faces, materials.skin())
         garment = motion_object(scene, MOTION_GARMENT, r.positions[:, used], remap[np.asarray(r.faces)],
                                 materials.fabric())
+        # the pattern vertex of each vertex: the studio dresses it in its fabric as the static garment
+        vid = garment.data.attributes.new(data.VERTEX_ID, "INT", "POINT")
+        vid.data.foreach_set("value", np.flatnonzero(used).astype(np.int32))
         scene.frame_start, scene.frame_end = 1, len(frames)
         scene.frame_set(1)
         for o in objects_with_role(scene, "body") + objects_with_role(scene, "garment"):
             o.hide_set(True)
+            o.hide_render = True
         report = motion_report(r, poses, int(s.motion_between))
         scene[MOTION_KEY] = json.dumps(report)
         worst = report["worst_penetration_pct"]

@@ -178,6 +178,9 @@ def dress_garment(scene, obj, pattern=None) -> bool:
 
 
 def dress_garments(scene) -> int:
-    """:func:`dress_garment` on every garment of the scene; how many got the pattern's layers."""
+    """:func:`dress_garment` on every garment of the scene (a Drape Animation's too); how many got
+    the pattern's layers."""
     pattern = data.stored_pattern(scene)
-    return sum(dress_garment(scene, o, pattern) for o in objects_with_role(scene, "garment"))
+    garments = objects_with_role(scene, "garment") + [o for o in objects_with_role(scene, "motion")
+                                                      if o.data.attributes.get(data.VERTEX_ID) is not None]
+    return sum(dress_garment(scene, o, pattern) for o in garments)

@@ -46,6 +46,7 @@ VIEWS = {                             # view -> azimuth (degrees from the front,
 }
 PATTERN_VIEW = "PATTERN"
 BODY_ROLES = ("body", "garment")
+MOTION_ROLE = "motion"                # Drape Animation's body and garment (motion_ops)
 PATTERN_ROLES = ("pattern_panel", "pattern_panel_part")
 LIGHTS = (  # name, watts, size (m), azimuth (deg from front), elevation (deg), distance (m), colour
     ("Key", 190.0, 1.0, -25.0, 55.0, 3.2, (1.0, 0.96, 0.90)),
@@ -78,9 +79,10 @@ def _role_objects(scene, roles):
 
 def subject_points(scene) -> np.ndarray:
     """(n, 3) world points the body cameras frame: the body's and the garment's vertices
-    (subsampled), the bounds' corners when there are no meshes."""
+    (subsampled; a Drape Animation's at its first frame too), the bounds' corners when there
+    are no meshes."""
     pts = []
-    for o in _role_objects(scene, BODY_ROLES):
+    for o in _role_objects(scene, BODY_ROLES + (MOTION_ROLE,)):
         if o.type != "MESH" or not len(o.data.vertices):
             continue
         co = np.empty(len(o.data.vertices) * 3, dtype=np.float64)
@@ -296,8 +298,14 @@ def show_for(scene, view: str) -> None:
     flat = view == PATTERN_VIEW
     for o in _role_objects(scene, PATTERN_ROLES):
         o.hide_render = not flat
+    # a Drape Animation's body and garment stand where the static ones do: while they are shown in
+    # the viewport they render instead (hide them, the eye in the Outliner, to render the static ones)
+    motion = _role_objects(scene, (MOTION_ROLE,))
+    shown = [o for o in motion if o.visible_get()]
     for o in _role_objects(scene, BODY_ROLES):
-        o.hide_render = flat
+        o.hide_render = flat or bool(shown)
+    for o in motion:
+        o.hide_render = flat or o not in shown
     if SET in scene.objects:
         scene.objects[SET].hide_render = flat
 

@@ -128,3 +128,30 @@ def test_point_cache_plays_in_blender(scene, bpy_session):
             assert np.abs(got - want[f - 1]).max() < 1e-5, f
     finally:
         bpy.data.objects.remove(obj)
+
+
+def test_studio_renders_the_motion_while_it_is_shown(scene, bpy_session):
+    bpy = scene.bpy
+    sc = bpy.context.scene
+    mats, studio = scene.mod("materials"), scene.mod("render_studio")
+    garment = bpy.data.objects["EASE Motion Garment"]
+    motion = [garment, bpy.data.objects["EASE Motion Body"]]
+    static = scene.objects("body") + scene.objects("garment")
+    assert all(o.hide_render for o in static)                  # F12 shows the motion alone too
+    sc.ease.render_view = "FRONT"
+    assert bpy.ops.ease.studio_setup() == {"FINISHED"}
+    # the motion garment wears the fabric with its layers, as the static one does
+    assert garment.data.uv_layers.get(mats.FABRIC_UV) is not None
+    assert garment.data.attributes.get(mats.SEAM_DIST) is not None
+    assert garment.data.materials[0].name == "EASE Fabric cotton"
+    assert not any(o.hide_render for o in motion) and all(o.hide_render for o in static)
+    # hidden in the viewport: the static body and garment render again
+    for o in motion:
+        o.hide_set(True)
+    try:
+        studio.show_for(sc, "FRONT")
+        assert all(o.hide_render for o in motion) and not any(o.hide_render for o in static)
+    finally:
+        for o in motion:
+            o.hide_set(False)
+        studio.show_for(sc, "FRONT")
