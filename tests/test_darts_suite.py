@@ -2,7 +2,8 @@
 
 Cases: dart mouths along every seam and hem of the blouse's front and back and of the darted
 skirt's pieces; apexes at the bust points, the shoulder blades, the seat, on a seam and off it;
-intakes from 0 to beyond what a piece can take; two darts sharing a mouth, two darts crossing.
+intakes from 0 to beyond what a piece can take; two darts sharing a mouth, two darts crossing;
+``"darts": "auto"`` on six templates.
 Each is cut and solved on its design's body (the design's configuration). A valid pattern has 0
 flipped, 0 collapsed and 0 crossing triangles or edges (the pipeline refuses every other one) and
 its darts' legs sewn equal within 0.1 mm (1.5 mm for a set intake: :data:`SET_LEGS_MM`); a refusal is an :class:`~core.errors.EaseError` of one
@@ -71,11 +72,25 @@ CASES = (
     # the darted skirt: from the waist towards the seat, on the back and the front, and from the hem
     + [(f"skirt {panel} {line} {w}", "skirt", panel, [_dart("d_left", line, "seat_left", w)], None)
        for panel in ("back", "front") for line, w in (("waist", "auto"), ("waist", 0.02), ("hem", 0.02))]
+    # "darts": "auto" on every panel of templates that allow darts
+    + [(f"auto darts {name}", "auto", name, [], None)
+       for name in ("blouse_fitted", "skirt", "dress", "top_sleeveless", "shirt_long_sleeve", "pants")]
 )
+
+
+def _auto(name):
+    """Template ``name`` with ``"darts": "auto"`` on every panel (core.cut.auto_darts places them)."""
+    d = TEMPLATES[name]()
+    for g in d["garments"]:
+        for p in g["panels"]:
+            p["darts"] = "auto"
+    return d
 
 
 def _design(case):
     _, kind, panel, darts, keypoints = case
+    if kind == "auto":
+        return _auto(panel)
     return _blouse(panel, darts, keypoints) if kind == "blouse" else _skirt(panel, darts)
 
 
@@ -101,5 +116,6 @@ def test_the_suite_covers_what_the_issue_lists():
     assert lines <= {c[3][0]["line"] for c in CASES if c[1] == "blouse" and c[2] == "front"}
     assert {"shoulder_blade_left", "seat_left", "bust_left", "side_mid_left"} <= {d["apex"] for c in CASES
                                                                                     for d in c[3]}
+    assert sum(c[1] == "auto" for c in CASES) >= 5
     assert any("one mouth" in n for n in names) and any("crossing" in n for n in names)
     assert any(c[2] == "back" for c in CASES) and {0.0, 0.25} <= {d["intake"] for c in CASES for d in c[3]}
