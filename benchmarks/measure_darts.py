@@ -111,32 +111,39 @@ def four_darts_sizes(body=None, sizes=("XS", "S", "M", "L", "XL"), eases=(1.1, 1
             X = body_instance(body, instance_shape(body, size_name), pose)
             row = {}
             for name, cfg in configs.items():
-                if size == "M":                                   # the design's own body: its reference
-                    pat = refs[name]
-                else:
-                    tgt = solver.positions(X, "target body")
-                    off = solver.offsets(tgt)
-                    K, cw, cg = solver.targets_reference(tgt, ease=ease, offsets=off)
-                    res = solver.solve(K, cw, cg, start=solver.start_from(refs[name], off), positions=tgt,
-                                       plan=solver.design_plan(cfg), config=cfg)
-                    pat = build_pattern(cut, res, mode="transfer")
-                row[name] = four_dart_figures(pat, body)
+                try:
+                    if size == "M":                                   # the design's own body: its reference
+                        pat = refs[name]
+                    else:
+                        tgt = solver.positions(X, "target body")
+                        off = solver.offsets(tgt)
+                        K, cw, cg = solver.targets_reference(tgt, ease=ease, offsets=off)
+                        res = solver.solve(K, cw, cg, start=solver.start_from(refs[name], off), positions=tgt,
+                                           plan=solver.design_plan(cfg), config=cfg)
+                        pat = build_pattern(cut, res, mode="transfer")
+                    row[name] = four_dart_figures(pat, body)
+                except EaseError as exc:                      # refused by the solve itself (flipped)
+                    row[name] = {"error": str(exc)}
             out[f"{size} @ {ease:g}"] = _with_frontier(row)
     p1 = body_instance(body, cut.body.get("shape"), "P1")
     row = {}
     for name, cfg in configs.items():
         K, cw, cg = solver.targets_reference()
-        start = build_pattern(cut, solver.solve(K, cw, cg, config=cfg))
-        row[name] = four_dart_figures(adapt_pattern(cut, prep.reference, [p1], solver=solver, start=start,
-                                                    config=cfg), body)
+        try:
+            start = build_pattern(cut, solver.solve(K, cw, cg, config=cfg))
+            row[name] = four_dart_figures(adapt_pattern(cut, prep.reference, [p1], solver=solver, start=start,
+                                                        config=cfg), body)
+        except EaseError as exc:
+            row[name] = {"error": str(exc)}
     out["P1"] = _with_frontier(row)
     return out
 
 
 def _with_frontier(row: dict) -> dict:
     out = dict(row)
-    out["missed"] = {k: missed(v) for k, v in row.items()}
-    out["frontier"] = [] if any(not m for m in out["missed"].values()) else frontier(row)
+    out["missed"] = {k: (["refused"] if "error" in v else missed(v)) for k, v in row.items()}
+    ok = {k: v for k, v in row.items() if "error" not in v}
+    out["frontier"] = [] if any(not m for m in out["missed"].values()) else frontier(ok)
     return out
 
 
@@ -159,6 +166,9 @@ def four_darts_markdown(rows: dict) -> list:
             if name in ("missed", "frontier"):
                 continue
             star = " *" if name in row.get("frontier", []) else ""
+            if "error" in f:
+                L.append(f"| {case} | {name} | refused: {f['error']} |" + " |" * 6)
+                continue
             L.append(f"| {case} | {name}{star} | {f['crossings']} | {f['legs mm']:.3f} | {f['weft %']:.2f} | "
                      f"{f['warp %']:.2f} | {f['front shear p95 deg']:.1f} | {f['bust region %']:.2f} | "
                      f"{', '.join(row['missed'][name]) or 'none'} |")
