@@ -160,7 +160,8 @@ def run(out_dir, quick: bool = False) -> dict:
             "; ".join(f"{k}: {s}" for k, s in f["status"].items() if s != "within 1 cm")
         cells = [f"{rec['chart_cm'][m]:.1f} / {f['achieved_cm'][m]:.1f}" for m in MEASUREMENTS]
         shape = ", ".join(f"{k}={v:.3f}" for k, v in rec["stored_shape"].items() if k in f["parameters"])
-        lines.append(f"| {size} | " + " | ".join(cells) + f" | {ok} | {f['evaluations']} | {f['seconds']:.1f} | {shape} |")
+        lines.append(f"| {size} | " + " | ".join(cells)
+                     + f" | {ok} | {f['evaluations']} | {f['seconds']:.1f} | {shape} |")
     lines += ["", "Reference (default shape) measured: " +
               ", ".join(f"{k} {v:.1f} cm" for k, v in ref.items()), ""]
     lines += ["## Published charts", "",
@@ -171,14 +172,15 @@ def run(out_dir, quick: bool = False) -> dict:
         lines += [f"**{name}**", "", "| size | " + " | ".join(keys) + " | worst |", "|---|" + "---|" * (len(keys) + 1)]
         for size, rec in table.items():
             worst = max(abs(v[2]) for v in rec.values())
-            lines.append(f"| {size} | " + " | ".join(f"{rec[k][0]:g} / {rec[k][1]:.1f} ({rec[k][2]:+.1f})" for k in keys)
-                         + f" | {worst:.2f} |")
+            cells = " | ".join(f"{rec[k][0]:g} / {rec[k][1]:.1f} ({rec[k][2]:+.1f})" for k in keys)
+            lines.append(f"| {size} | {cells} | {worst:.2f} |")
         lines.append("")
     g, ln, fs = mtm["girth_error_cm"], mtm["length_error_cm"], mtm["fit_seconds"]
     lines += ["## Made-to-measure", "",
               f"{mtm['n']} tape-measure sets (14 measures each, `core.body.tape`) of hidden bodies of the population "
               f"(`made_to_measure.sample_body`, seed {mtm['seed']}), fitted by `fit_tape`: "
-              f"{mtm['landed']} of {mtm['n']} land (girths within 1 cm, lengths within 1.5 cm, no self-intersection).", "",
+              f"{mtm['landed']} of {mtm['n']} land (girths within 1 cm, lengths within 1.5 cm, "
+              "no self-intersection).", "",
               "| | mean | p95 | max |", "|---|---|---|---|",
               f"| girth error (cm) | {g['mean']:.2f} | {g['p95']:.2f} | {g['max']:.2f} |",
               f"| length error (cm) | {ln['mean']:.2f} | {ln['p95']:.2f} | {ln['max']:.2f} |",

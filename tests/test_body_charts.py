@@ -6,15 +6,23 @@ import json
 import numpy as np
 import pytest
 from conftest import sample
+from test_body_obj import horse, write_obj
 
 from core.body.charts import PUBLISHED
 from core.body.measure import measure
 from core.body.registry import load_spec, resolve_body_files
-from core.body.sizes import (CHART_NAMES, CHARTS, TOLERANCE_CM, chart_fit, chart_sizes, check_size, fit_measurements,
-                             size_of, size_shape, size_targets)
+from core.body.sizes import (
+    CHART_NAMES,
+    TOLERANCE_CM,
+    chart_fit,
+    chart_sizes,
+    check_size,
+    fit_measurements,
+    size_of,
+    size_shape,
+    size_targets,
+)
 from core.errors import BodyError, DesignError
-
-from test_body_obj import horse, write_obj
 
 CASES = [(c, s) for c in PUBLISHED for s in PUBLISHED[c].sizes]
 

@@ -4,8 +4,7 @@ import pytest
 
 from core.body.measure import girth_at, hull_perimeter, measure, plane_crossings
 from core.body.model import BodyModel, SurfacePoint
-from core.body.sizes import (SIZE_CHART, SIZES, FitResult, check_targets, fit_measurements,
-                             parse_assignments, size_shape)
+from core.body.sizes import SIZE_CHART, SIZES, FitResult, check_targets, fit_measurements, parse_assignments, size_shape
 from core.errors import BodyError, Cancelled
 
 N = 48  # vertices per ring
@@ -209,7 +208,8 @@ def test_realistic_rows_beyond_the_phenotypes_land(anny):
     by the phenotypes around the average body; the fallback pass (gender, adult age, cup size and
     the girths' local changes) lands them within 1 cm, with a symmetric body, and says so."""
     from core.body.sizes import FALLBACK_PARAMETERS, _fit_measurements
-    for row in ({"height": 168, "chest": 113, "waist": 97, "hip": 120}, {"height": 160, "chest": 92, "waist": 80, "hip": 104}):
+    for row in ({"height": 168, "chest": 113, "waist": 97, "hip": 120},
+                {"height": 160, "chest": 92, "waist": 80, "hip": 104}):
         first = _fit_measurements(anny, row, None, None, None, None)
         assert not first.ok
         fit = fit_measurements(anny, row)

@@ -336,7 +336,8 @@ _NAMES: Dict[str, tuple] = {}
 
 def anny_names(path: str = ASSET):
     """(shape parameters and local changes name -> (min, max, default), joint names) of the baked
-    Anny, read from its labels only (milliseconds, for checking a design's body at load); None where the asset is missing."""
+    Anny, read from its labels only (milliseconds, for checking a design's body at load); None where the
+    asset is missing."""
     if path not in _NAMES:
         if not os.path.exists(path):
             return None

@@ -211,7 +211,8 @@ def collisions(body, shape) -> list:
     out = []
     z = body.landmark_position("crotch", v)[2] - THIGH_BELOW_CROTCH
     loops = section_loops(v, parts.no_arms, (0.0, 0.0, z), (0.0, 0.0, 1.0))
-    legs = [min(loops, key=lambda p: np.linalg.norm(p.mean(0)[:2] - J[j][:2])) for j in ("upperleg01.L", "upperleg01.R")]
+    legs = [min(loops, key=lambda p: np.linalg.norm(p.mean(0)[:2] - J[j][:2]))
+            for j in ("upperleg01.L", "upperleg01.R")]
     if legs[0] is not legs[1]:
         hull = Delaunay(legs[0][:, :2])
         if (hull.find_simplex(legs[1][:, :2]) >= 0).any():
@@ -324,7 +325,8 @@ def fit_tape(body, targets: Mapping[str, float], progress: Optional[Progress] = 
     gender = t.pop("gender", None)
     if gender is not None:
         base["gender"] = gender
-    names = list(parameters) if parameters is not None else list(PHENOTYPES) + ([] if gender is not None else ["gender"])
+    names = (list(parameters) if parameters is not None
+             else list(PHENOTYPES) + ([] if gender is not None else ["gender"]))
     if local:
         names += [c for k in t for c in LOCAL_FOR.get(k, ()) if c in allowed and c not in names]
     for n in names:
