@@ -25,7 +25,7 @@ from core import workflows
 from core.design import EASE_MIN, load_design
 from core.design.checks import REFINE_EDGE_MIN
 from core.design.templates import TEMPLATES
-from core.errors import CutError, DesignError
+from core.errors import CutError, DesignError, PatternError
 
 SEAM_MM = 3.0            # the defaults give <= 2 mm; a torn solve gives centimetres (12 mm and up)
 COMPLIANCE_PCT = 5.0     # the defaults give 0.8 .. 2.4 %; the shortest skirt 3.5 %
@@ -50,6 +50,25 @@ def _cases():
 
 CASES = _cases()
 
+#: Cases refused today where the range promises a pattern: each a real defect, kept visible (strict xfail:
+#: a fix makes the run say so). Both crossed before the crossings check (issue 30) and were written then.
+KNOWN_REFUSED = {
+    "blouse_fitted-interior5": "the waist dart's legs hook past the apex (a crossing; 60 iterations clear it)",
+    "blouse_four_darts-refine": "at 5 mm edges the dart gap step leaves 222 flipped triangles (4 crossings without it)",
+}
+
+
+def _known(cases, key):
+    """``cases`` (as :func:`conftest.sample` gives them) with the :data:`KNOWN_REFUSED` ones marked."""
+    out = []
+    for c in cases:
+        marks, value = (list(c.marks), c.values[0]) if hasattr(c, "marks") else ([], c)
+        reason = KNOWN_REFUSED.get(key(value))
+        if reason:
+            marks.append(pytest.mark.xfail(raises=PatternError, strict=True, reason=reason))
+        out.append(pytest.param(value, marks=marks))
+    return out
+
 
 def _design(name, values):
     d = TEMPLATES[name]()
@@ -67,7 +86,8 @@ def test_every_parameter_declares_its_range():
     assert len(CASES) == sum(2 * len(b()["parameters"]) + INTERIOR for b in TEMPLATES.values())
 
 
-@pytest.mark.parametrize("case", sample(CASES, CI_CASES, seed=15), ids=lambda c: f"{c[0]}-{c[1]}")
+@pytest.mark.parametrize("case", _known(sample(CASES, CI_CASES, seed=15), lambda c: f"{c[0]}-{c[1]}"),
+                         ids=lambda c: f"{c[0]}-{c[1]}")
 def test_declared_value_cuts_and_flattens(case, anny):
     name, _, values = case
     prep = workflows.prepare(_design(name, values), body=anny)
@@ -96,7 +116,7 @@ def test_the_lowest_ease_drapes(name, anny):
     assert drape.result.frames > 0 and drape.figures["penetration %"] < 1.0
 
 
-@pytest.mark.parametrize("name", sample(list(TEMPLATES), 1, seed=16))
+@pytest.mark.parametrize("name", _known(sample(list(TEMPLATES), 1, seed=16), lambda n: f"{n}-refine"))
 def test_the_finest_refinement_solves_and_drapes(name, anny):
     """refine_edge_length at REFINE_EDGE_MIN: the pattern sews and the drape does not
     diverge (at 4 mm the skirt's drape diverges at frame 1 and dress_gradient's side
