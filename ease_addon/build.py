@@ -27,9 +27,15 @@ SHEET_WIDTH = 1.6              # metres: the pieces beside the body are laid out
 SHEET_TOP = 1.8                # metres: height of the pieces' top edge
 
 
+#: datablocks made, swapped or removed here so far: what Live compares around a tick (a tick that
+#: changed any pushes an undo step; Blender's memfile undo crashes on datablocks swapped outside one)
+DATABLOCK_CHANGES = [0]
+
+
 def put_object(scene, name: str, datablock, role: str, parent=None):
     """The object ``name`` of ``role`` holding ``datablock``: the existing one reused (its
     old data removed, the new data renamed to ``name``), else a new one."""
+    DATABLOCK_CHANGES[0] += 1
     obj = bpy.data.objects.get(name)
     if obj is None or obj.get("ease_role") != role or obj.name not in scene.objects \
             or type(obj.data) is not type(datablock):
@@ -49,6 +55,7 @@ def _remove_others(scene, roles, kept) -> None:
     """Remove the objects of ``roles`` that are not in ``kept`` (children first)."""
     keep = {o.name for o in kept}
     old = [o for r in roles for o in objects_with_role(scene, r) if o.name not in keep]
+    DATABLOCK_CHANGES[0] += len(old)
     remove_objects(sorted(old, key=lambda o: o.parent is None))
 
 

@@ -44,12 +44,13 @@ from __future__ import annotations
 
 import json
 import time
+import traceback
 from collections import deque
 
 import bpy
 import numpy as np
 
-from . import build, convert, data, pattern_ops, ramp, sync
+from . import build, convert, data, pattern_ops, ramp, state, sync
 
 SLICE_S = 0.03          # seconds of work per tick: the longest the viewport waits for the pattern
 IDLE_TICK_S = 0.005     # seconds between ticks while converging (the UI handles its events in between)
@@ -186,12 +187,9 @@ def _show(context, session) -> None:
 
 
 def _rebuild(context, session) -> None:
-    """The pieces of a new cut (a parameter or keypoint changed): rebuilt, measured and stored, then
-    an undo step of their own. A tick that replaces datablocks outside an undo step leaves Blender's
-    memfile undo restoring objects whose data it freed: the next Ctrl+Z crashed (segfault)."""
+    """The pieces of a new cut (a parameter or keypoint changed): rebuilt, measured and stored (the
+    tick then pushes an undo step: :func:`step`)."""
     sync.show_pattern(context, session.pattern(figures=True))
-    if bpy.ops.ed.undo_push.poll():
-        bpy.ops.ed.undo_push(message="EASE Live: pieces of the new cut")
 
 
 def _final_units(context, session) -> deque:
@@ -244,6 +242,17 @@ def step(context, budget_s: float = SLICE_S) -> dict:
     done (kinds), "converged": the pattern is the cold solve and stored, "seconds": wall time}``.
     """
     t0 = time.perf_counter()
+    changes = build.DATABLOCK_CHANGES[0]
+    try:
+        return _step(context, budget_s, t0)
+    finally:
+        if build.DATABLOCK_CHANGES[0] != changes and bpy.ops.ed.undo_push.poll():
+            # datablocks made, swapped or removed outside an undo step leave Blender's memfile undo
+            # restoring objects whose data it freed: the next Ctrl+Z crashed (segfault)
+            bpy.ops.ed.undo_push(message="EASE Live: pieces of the new cut")
+
+
+def _step(context, budget_s: float, t0: float) -> dict:
     scene = context.scene
     obj = data.body_object(context)
     session = session_for(context)
@@ -305,9 +314,13 @@ def _tick():
         return None
     try:
         out = step(context)
-    except Exception as exc:  # a timer must never leave a traceback: say it, and stop
+    except state.USER_ERRORS as exc:    # the design does not cut on this body, ...: say it, and stop
         scene.ease.live_status = f"live: {exc}"
-        print(f"[ease] live: {exc}")
+        return None
+    except Exception as exc:  # a bug: a timer must never leave a traceback; the console keeps it
+        traceback.print_exc()
+        state.BUGS.append(("live", traceback.format_exc()))
+        scene.ease.live_status = f"live: {type(exc).__name__}: {exc}"
         return None
     return None if out["converged"] and not out["changed"] else IDLE_TICK_S
 

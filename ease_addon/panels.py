@@ -73,6 +73,8 @@ class EASE_PT_body(_EasePanel, bpy.types.Panel):
         box.label(text="Phenotype")
         for item in s.shape:
             box.prop(item, "value", text=item.name, slider=False)
+        size = s.body.get("ease_size")
+        layout.label(text=f"Body size: {size}" if size else "Body size: a shape of its own (no chart size)")
         layout.prop(s, "chart")
         _sizes(layout, s, "size", s.chart)
         layout.operator("ease.set_size")

@@ -121,6 +121,7 @@ def test_template_says_what_it_does_to_the_body(blender, anny):
     assert bpy.ops.ease.load_template(template=TOP) == {"FINISHED"}
     assert np.allclose(blender.verts(s.body), body_instance(anny, "M"), atol=1e-5)
     assert (s.chart, s.size, s.body["ease_size"]) == ("default", "M", "M")
+    assert "Body size: M" in _draw(blender, "EASE_PT_body")["labels"]
     assert "height 183.5 cm" in s.measurements_report
     assert {i.name: i.value for i in s.shape} == pytest.approx(json.loads(s.body["ease_shape"]), abs=1e-6)
     # a women's design on it: the body and the panel go to women:M together
