@@ -336,6 +336,9 @@ def touched(scene) -> None:
     wake()
 
 
+state.ON_CHANGE[:] = [touched]      # operators and sync tell Live through state.changed
+
+
 def wake() -> None:
     """Make sure a tick runs soon (idempotent)."""
     if not bpy.app.timers.is_registered(_tick):

@@ -114,7 +114,5 @@ class EaseOperator(bpy.types.Operator):
             state.BUGS.append((self.bl_idname, traceback.format_exc()))
             self.report({"ERROR"}, f"{type(exc).__name__}: {exc}")
             return {"CANCELLED"}
-        if context.scene.ease.live:
-            from . import live      # (live imports operator modules: not at the top)
-            live.touched(context.scene)     # Live says "converged" again once a tick has seen the change
+        state.changed(context.scene)    # Live says "converged" again once a tick has seen the change
         return result or {"FINISHED"}

@@ -21,6 +21,17 @@ PATTERNS: dict = {}   # (scene name, key) -> (pattern json text, Pattern)
 BUGS: list = []       # (operator, traceback) of every exception an operator caught that is no user error
 
 
+#: callbacks ``f(scene)`` told that something the pattern follows may have changed (Live registers
+#: its own: operators and sync reach it through :func:`changed` without importing it)
+ON_CHANGE: list = []
+
+
+def changed(scene) -> None:
+    """Tell the :data:`ON_CHANGE` callbacks that ``scene`` may have changed."""
+    for f in ON_CHANGE:
+        f(scene)
+
+
 def clear() -> None:
     _MODELS.clear()
     CUTS.clear()

@@ -45,14 +45,6 @@ def fill_shape_props(scene, model, shape: dict) -> None:
             item.value = float(shape.get(name, default))
 
 
-def _live_touched(scene) -> None:
-    """Live's status stops saying "converged" until its next tick has seen this change (a slider's
-    update runs no operator; :func:`.live.touched`)."""
-    if scene.ease.live:
-        from . import live      # (live imports this module)
-        live.touched(scene)
-
-
 def show_size(scene, obj, size) -> None:
     """The Body panel and the body say which chart size the body has: ``size`` (``"M"``,
     ``"women:M"``) sets the chart selector, the size preset and the body's ``ease_size``;
@@ -98,7 +90,7 @@ def update_body(context, obj, shape=None, pose=None) -> None:
     convert.set_vertices(obj.data, verts)
     convert.store_json(obj, "ease_shape", spec["shape"])
     obj["ease_pose"] = spec["pose"]
-    _live_touched(context.scene)
+    state.changed(context.scene)     # (Live: a slider's update runs no operator)
     if shape is not None:
         # a shape of its own: no chart size, measurements not taken yet (a caller that knows says so after)
         if "ease_size" in obj:
@@ -290,7 +282,7 @@ def set_design(context, design, recut: bool = True, fill_params_too: bool = True
     # -- the scene changes from here on
     scene = context.scene
     scene.ease.design_json = data.design_text(design)
-    _live_touched(scene)
+    state.changed(scene)
     if fill_params_too:   # not from a parameter slider's own update: its collection must stay put
         fill_params(scene, design)
     # the Fit panel offers the design's chart's sizes: the target is one of them
