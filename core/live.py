@@ -6,7 +6,7 @@ flattening and factorisation (:func:`core.workflows.make_solver`) and the map
 from every cut triangle to the body template triangle it lies on. A new
 painted field (one ease value per body template triangle, what the add-on
 reads from the body's ``ease`` layer) becomes the targets of a warm re-solve
-that starts from the current pattern (:meth:`core.pattern.solver.PatternSolver.begin`
+that starts from the current pattern (:meth:`core.pattern.optimizer.solver.PatternSolver.begin`
 with ``resume``: the iterate, the feedback's corrections and the seam
 integral carry over). :meth:`LiveSession.run` runs as many local-global
 iterations as fit a time slice and says whether the pattern has converged;
@@ -82,10 +82,10 @@ class LiveSession:
 
     Attributes
     ----------
-    solver : core.pattern.solver.PatternSolver, factorised once for the session
+    solver : core.pattern.optimizer.solver.PatternSolver, factorised once for the session
     triangles : (f,) int64, :func:`body_triangles`
     ease : (f,) float, the weft ease per cut triangle the current state aims at
-    state : core.pattern.state.SolveState or None (before the first field)
+    state : core.pattern.optimizer.state.SolveState or None (before the first field)
     converged : bool, ``state`` is the cold solve of the current field (see :meth:`run`)
     iterations_since_change : int, warm and cold iterations since the last :meth:`set_ease`
     seconds_per_iteration : running estimate of one iteration's wall time (what fits a slice)

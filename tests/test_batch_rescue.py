@@ -4,7 +4,7 @@ Sample 947 of seed 2024 (Anny: weight 0.90, height 0.15) on the long-sleeved shi
 body triangle under ``sleeve_back_*`` is squeezed to 0.48 of the reference across and stretched
 1.36x along; through the planned iterations and the extra rounds the guard stiffens triangles
 there, they open, it gives their gains back and they collapse again (18 collapsed at the 40th
-iteration: refused). The rescue iterations (:func:`core.pattern.guard.rescuing`) keep the gains
+iteration: refused). The rescue iterations (:func:`core.pattern.optimizer.guard.rescuing`) keep the gains
 and hold the targets, and the pattern is made. A body that passed never runs one.
 """
 from __future__ import annotations
@@ -15,7 +15,7 @@ from core import workflows as wf
 from core.batch import sample_anny
 from core.design.templates import template_path
 from core.errors import PatternError
-from core.pattern import solver as S
+from core.pattern.optimizer import solver as S
 from core.pattern.io import pattern_text
 
 

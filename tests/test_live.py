@@ -9,7 +9,7 @@ from core.design.templates import template_dir
 from core.errors import PatternError
 from core.live import LiveSession, PatternText, achieved_over_painted, body_triangles, topology_key
 from core.pattern.build import build_pattern
-from core.pattern.solver import PatternSolver
+from core.pattern.optimizer.solver import PatternSolver
 
 DESIGN = "top_sleeveless.json"     # cheapest template: two panels
 
@@ -169,7 +169,7 @@ def test_the_cold_solve_ends_by_the_solvers_rule(prep, monkeypatch):
     """The live cold solve ends where PatternSolver.solve ends (collapse rounds after the planned
     iterations included), so the converged pattern is Optimize Pattern's: here the solver is told a
     triangle is still collapsing after the planned iterations, once; both then run one more round."""
-    from core.pattern import solver as S
+    from core.pattern.optimizer import solver as S
     calls = {"solve": 0, "live": 0}
 
     def once(key):

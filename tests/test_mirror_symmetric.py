@@ -7,7 +7,7 @@ import scipy.sparse as sp
 
 from core.cut.symmetric import body_face_sides, mirror_plan
 from core.design.naming import swap_side
-from core.pattern.mirror_flat import approximate_mirror, self_mirror_map, symmetric_flattening
+from core.pattern.optimizer.mirror_flat import approximate_mirror, self_mirror_map, symmetric_flattening
 from mirror_pairs import outline_asymmetry, seam_asymmetry
 
 

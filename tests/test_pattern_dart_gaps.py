@@ -1,11 +1,11 @@
-"""The solver's gap step between a dart's legs (core.pattern.dart_gaps, issue 30), on a small system."""
+"""The solver's gap step between a dart's legs (core.pattern.optimizer.dart_gaps, issue 30), on a small system."""
 import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from core.pattern import dart_gaps as D
-from core.pattern.factor import SymmetricFactor
-from core.pattern.seams import SeamSide
+from core.pattern.optimizer import dart_gaps as D
+from core.pattern.optimizer.factor import SymmetricFactor
+from core.pattern.optimizer.seams import SeamSide
 
 
 def _legs(n_pairs=5, length=0.1):

@@ -1,10 +1,10 @@
-"""core.pattern.factor: LDL^T of the system matrix and its same-pattern refactorisation."""
+"""core.pattern.optimizer.factor: LDL^T of the system matrix and its same-pattern refactorisation."""
 import numpy as np
 import pytest
 import scipy.sparse as sp
 from scipy.sparse.linalg import spsolve
 
-from core.pattern.factor import SymmetricFactor
+from core.pattern.optimizer.factor import SymmetricFactor
 
 
 def _laplacian(n=60, seed=0):

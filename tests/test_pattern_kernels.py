@@ -5,10 +5,10 @@ import pytest
 
 from core.pattern.accel import compiled
 from core.pattern.config import SolverConfig
-from core.pattern.feedback import move_corrections
+from core.pattern.optimizer.feedback import move_corrections
 from core.pattern.solve import PatternSolver, transfer_pattern
-from core.pattern.steps import collapse_guard, inverse_offsets, local_step, realign_grain
-from core.pattern.targets import rest_targets
+from core.pattern.optimizer.steps import collapse_guard, inverse_offsets, local_step, realign_grain
+from core.pattern.optimizer.targets import rest_targets
 from same_bits import assert_same
 from synthetic_pattern import two_panels
 
@@ -241,7 +241,7 @@ def test_feedback_corrections_same_bits(both, ran, name, poison):
 @pytest.mark.parametrize("lam", [(1.0, 1.0), (2.0, 1.0), (1.0, 0.5), (0.0, 3.0)])
 def test_rhs_terms_same_bits(both, ran, lam):
     """The right-hand side's terms lambda_reg R T + lambda_ease T in the kernel, unit weights included."""
-    from core.pattern.steps import rhs_terms
+    from core.pattern.optimizer.steps import rhs_terms
     rng = np.random.default_rng(9)
     RT0, T = [rng.normal(0, 1, 83) for _ in range(4)], [rng.normal(0, 1, 83) for _ in range(4)]
     RT0[0][:3] = [-0.0, 0.0, np.inf]
@@ -279,7 +279,7 @@ def test_collapse_guard_gains_at_or_over_the_limit(both, ran, grow, over):
     """numpy raises the low triangles' gains only if one is under the limit: where all are at it (or over
     it, as a resumed solve's gains after an escalated limit) it leaves them, and so must the kernel."""
     from dataclasses import replace
-    from core.pattern.steps import relative_singular_values
+    from core.pattern.optimizer.steps import relative_singular_values
     guard = replace(SolverConfig.named("improved").guard, guard_grow=grow)
     f = 83
     rng, K, Kc, M, cw, cg = _inputs(f, 5, collapse=True)
@@ -399,7 +399,7 @@ def tube():
 def test_flip_guard_same_bits(both, ran, tube, case):
     """The flip guard's first check in the kernel: a step that cuts nothing is the kernel's alone; one
     with a triangle at its floor, or a NaN where Warp's min and numpy's part, is numpy's."""
-    from core.pattern.steps import face_areas, flip_guard
+    from core.pattern.optimizer.steps import face_areas, flip_guard
     _, _, solver = tube
     rng = np.random.default_rng(3)
     U_old = solver.uv0 * 1.02

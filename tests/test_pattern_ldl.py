@@ -8,7 +8,7 @@ import scipy.sparse as sp
 
 from core.pattern.accel import compiled
 from same_bits import assert_same
-from core.pattern.factor import SymmetricFactor
+from core.pattern.optimizer.factor import SymmetricFactor
 
 
 @pytest.fixture

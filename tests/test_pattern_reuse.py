@@ -6,8 +6,8 @@ import pytest
 
 from core.pattern.config import RestShape, SolverConfig
 from core.pattern.solve import PatternSolver
-from core.pattern.steps import local_step
-from core.pattern.targets import rest_targets
+from core.pattern.optimizer.steps import local_step
+from core.pattern.optimizer.targets import rest_targets
 from synthetic_pattern import two_panels
 
 

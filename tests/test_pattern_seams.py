@@ -1,7 +1,7 @@
 """The seam plan is a value: gathered seams, demands, sewn masks; the seam layout pairs both sides."""
 import numpy as np
 
-from core.pattern.seams import seam_is_gathered
+from core.pattern.optimizer.seams import seam_is_gathered
 from core.pattern.solve import PatternSolver, SolverConfig
 from synthetic_pattern import two_panels
 

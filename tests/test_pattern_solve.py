@@ -108,7 +108,7 @@ def test_a_transfer_starts_from_the_reference_stretched_to_the_body():
 
 
 def test_renewing_the_guard_factorisation():
-    from core.pattern.guard import renew_guard
+    from core.pattern.optimizer.guard import renew_guard
     held = np.array([0.0, 1.0, 8.0, 0.0])
     assert renew_guard(np.array([0.0, 1.0, 8.0, 1.0]), held)           # newly guarded: renewed at once
     assert not renew_guard(np.array([0.0, 2.0, 16.0, 0.0]), held)      # 2 / 3 and 17 / 9: within 3
@@ -325,7 +325,7 @@ def test_regulariser_energy_is_the_weighted_sum_of_squared_offsets():
     """The energy diagnostic: sum_t a_t |(M_t - R_t T_t) W|^2 over the four Jacobian entries (warp
     column weighted by W2[1]), inputs left as they were; its dot products are einsum's, not BLAS's
     (a threaded BLAS dot of > 10k values left threads spinning ~90 ms a shirt transfer)."""
-    from core.pattern.steps import regulariser_energy
+    from core.pattern.optimizer.steps import regulariser_energy
     rng = np.random.default_rng(3)
     f = 30_000                        # above OpenBLAS's threading threshold for a dot product
     a = rng.random(f)

@@ -131,7 +131,7 @@ def test_dart_gap_of_a_pattern_without_darts_is_empty():
 def test_the_four_dart_blouse_is_cut_into_a_valid_piece_and_refused_without_the_gap_step(anny, tmp_path,
                                                                                          monkeypatch):
     """On the real body (women:M): the template's bust and shoulder darts crossed (4 crossings, from the
-    LSCM start on); the solver's gap step (core.pattern.dart_gaps) keeps every dart's legs apart, and
+    LSCM start on); the solver's gap step (core.pattern.optimizer.dart_gaps) keeps every dart's legs apart, and
     without it ``ease pattern`` refuses the piece in one line naming the darts and where on the body,
     and writes nothing."""
     from core.cli import main
@@ -142,7 +142,7 @@ def test_the_four_dart_blouse_is_cut_into_a_valid_piece_and_refused_without_the_
     assert m["crossings"] == 0 and m["flipped_triangles"] == 0 and m["collapsed_triangles"] == 0
     assert all(g["min_gap_mm"] > 0 and g["crossings"] == 0 for g in m["darts"].values()), m["darts"]
     assert all(rec["leg_difference_mm"] <= 0.1 for rec in run.pattern.report["darts"].values())
-    monkeypatch.setattr("core.pattern.dart_gaps.GapCorrection.correct", lambda self, base, U: U)
+    monkeypatch.setattr("core.pattern.optimizer.dart_gaps.GapCorrection.correct", lambda self, base, U: U)
     out = tmp_path / "out"
     assert main(["pattern", str(template_path("blouse_four_darts")), "--out", str(out), "--quiet"]) == 2
     assert not out.exists()

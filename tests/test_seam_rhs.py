@@ -1,6 +1,6 @@
 """``seam_rhs`` on the seam vertices alone gives the bytes of the sum over every vertex.
 
-The reference below is ``core.pattern.seams.seam_rhs`` as it was before it was
+The reference below is ``core.pattern.optimizer.seams.seam_rhs`` as it was before it was
 rewritten for speed (bincounts per coordinate over all ``n`` vertices, the
 rigid fit on (V, 2) arrays), frozen here; the helpers the rewrite left as they
 were (the length and intake weights, the dart mouths' targets) are imported. Both run on real layouts (the
@@ -12,9 +12,9 @@ equal byte for byte (signed zeros included), so that patterns stay the same.
 import numpy as np
 import pytest
 
-import core.pattern.solver as solver_module
+import core.pattern.optimizer.solver as solver_module
 # unchanged by the rewrite, so shared with it: the weights and the dart mouths' targets
-from core.pattern.seams import _intake_weight, _length_weight, _mouth_targets, seam_rhs
+from core.pattern.optimizer.seams import _intake_weight, _length_weight, _mouth_targets, seam_rhs
 from core.pattern.solve import PatternSolver, SolverConfig
 from synthetic_pattern import two_panels
 

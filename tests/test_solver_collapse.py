@@ -5,7 +5,7 @@ import pytest
 from core.errors import PatternError
 from core.geom.strain import components
 from core.pattern.solve import PatternSolver, SolverConfig, solve_pattern
-from core.pattern.steps import relative_singular_values
+from core.pattern.optimizer.steps import relative_singular_values
 from synthetic_pattern import tube
 
 
@@ -62,7 +62,7 @@ def test_a_triangle_held_at_the_guard_limit_opens_in_the_extra_rounds(skirt):
     """At a low stiffening limit (6) a few triangles stay collapsed through the planned iterations
     and the first extra round; the later rounds raise the limit (x4 each) and open them, where a
     fixed limit keeps 4 collapsed to the last extra iteration (the pattern refused)."""
-    from core.pattern import guard as S
+    from core.pattern.optimizer import guard as S
     cfg = SolverConfig.improved(guard_limit=6.0)
     n = cfg.iterations
     assert S.round_guard(cfg.guard, -3, n) is cfg.guard
@@ -75,7 +75,7 @@ def test_a_triangle_held_at_the_guard_limit_opens_in_the_extra_rounds(skirt):
 def test_a_resumed_solve_counts_its_extra_rounds_from_its_own_start(skirt, monkeypatch):
     """A warm re-solve (the live preview) resumes a finished solve's iteration count; its guard is the
     plain one until it has run past its own planned iterations, not escalated from its first iteration."""
-    from core.pattern import solver as S
+    from core.pattern.optimizer import solver as S
     solver = PatternSolver(skirt.cut, skirt.reference)
     K, cw, cg = solver.targets_reference()
     done = solver.begin(K, cw, cg)
@@ -126,7 +126,7 @@ def test_guarded_solve_keeps_the_shared_factorisation(skirt):
 def test_a_finished_solve_gives_its_guarded_factorisation_to_the_next(skirt, monkeypatch):
     # the next guarded solve refactorises it (values only) instead of building one: the same pattern
     # bitwise as on a fresh solver, and no second symbolic analysis
-    from core.pattern import factor
+    from core.pattern.optimizer import factor
     fresh = solve_pattern(skirt.cut, skirt.reference, solver=PatternSolver(skirt.cut, skirt.reference))
     built = []
     init = factor.SymmetricFactor.__init__
@@ -154,7 +154,7 @@ def test_rescue_iterations_keep_the_guards_gains():
     """Past the extra rounds (as many as planned) an iteration is a rescue one: the guard keeps every
     gain it raised (release 1) under the limit of the first rescue round, held there; before them it
     releases as configured."""
-    from core.pattern import guard as S
+    from core.pattern.optimizer import guard as S
     g = SolverConfig.improved().guard
     n = 20
     last = S.round_guard(g, n - 1, n)
@@ -169,7 +169,7 @@ def test_the_solvers_refusal_rule_is_the_metrics():
     """The rescue runs on the rule a pattern is refused for: the solver's numbers are the metric's, and
     on a pattern's own Jacobians it finds the very triangles the metric finds collapsed."""
     from core.metrics import collapse as C
-    from core.pattern import guard as G
+    from core.pattern.optimizer import guard as G
     from core.pattern.build import build_pattern
     assert (G.REFUSED_AREA, G.REFUSED_SCALE) == (C.AREA_FRACTION, C.SCALE_FRACTION)
     cut, body = tube(ease=1.3)

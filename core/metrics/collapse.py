@@ -29,11 +29,11 @@ import numpy as np
 from ..geom.mesh import signed_areas_2d, triangle_areas
 from ..geom.strain import scales
 # the rule's two numbers live with the solver, which ends a solve by the same rule (its rescue
-# iterations, core.pattern.guard.refused_mask): a triangle keeping less than AREA_FRACTION of the
+# iterations, core.pattern.optimizer.guard.refused_mask): a triangle keeping less than AREA_FRACTION of the
 # 2D area its targets ask for is collapsed, or one whose weft or warp scale is under SCALE_FRACTION
 # of its target
-from ..pattern.guard import REFUSED_AREA as AREA_FRACTION
-from ..pattern.guard import REFUSED_SCALE as SCALE_FRACTION
+from ..pattern.optimizer.guard import REFUSED_AREA as AREA_FRACTION
+from ..pattern.optimizer.guard import REFUSED_SCALE as SCALE_FRACTION
 
 
 def oriented_areas(uv: np.ndarray, faces: np.ndarray) -> np.ndarray:

@@ -3,11 +3,17 @@
 - :mod:`.types`: the plain-data :class:`Pattern` (pieces, seams, targets, achieved scales).
 - :mod:`.solve`: the entry points :func:`solve_pattern`, :func:`transfer_pattern`,
   :func:`adapt_pattern` (and :func:`build_pattern`).
-- :mod:`.solver`: :class:`PatternSolver` (LSCM start, local-global ease optimizer, factorised
-  once per cut); its parts: :mod:`.config` (:class:`SolverConfig`, the presets),
-  :mod:`.validate` (input checks), :mod:`.panels` and :mod:`.init` (the flattening),
-  :mod:`.targets`, :mod:`.seams` (seam layout, :class:`SeamPlan`, seam terms),
-  :mod:`.steps` (local step, flip guard, grain re-alignment), :mod:`.build` (assembly).
+- :mod:`.config` (:class:`SolverConfig`, the presets), :mod:`.validate` (input checks),
+  :mod:`.build` (a pattern assembled from a solve).
+- :mod:`.optimizer`: the local-global solve. :mod:`.optimizer.solver`: :class:`PatternSolver`
+  (LSCM start, ease optimizer, factorised once per cut); its parts: :mod:`.optimizer.panels`
+  and :mod:`.optimizer.init` (the flattening), :mod:`.optimizer.targets`,
+  :mod:`.optimizer.seams` (seam layout, :class:`SeamPlan`, seam terms),
+  :mod:`.optimizer.steps` (local step, flip guard, grain re-alignment),
+  :mod:`.optimizer.state` (a solve between iterations), :mod:`.optimizer.start` (a start from
+  an earlier pattern), :mod:`.optimizer.dart_gaps`, :mod:`.optimizer.feedback`,
+  :mod:`.optimizer.guard`, :mod:`.optimizer.factor`.
+- :mod:`.accel`: the same steps compiled (Warp CPU kernels with numpy's bits), one seam.
 - :mod:`.io`: :func:`save_pattern` / :func:`load_pattern` (``pattern.json``); :mod:`.plot`: the PNG.
 
 Submodules import numpy/scipy/igl when used; this package import stays light.

@@ -5,7 +5,7 @@
 - :func:`adapt_pattern`: the pattern grown where target poses need more cloth than the
   stretch tolerances allow (Eqs. adapt-scale, material-scale).
 
-Each takes an optional :class:`~core.pattern.solver.PatternSolver` (the
+Each takes an optional :class:`~core.pattern.optimizer.solver.PatternSolver` (the
 flattening and factorisation, shared by all solves of one cut) and an
 optional :class:`~core.pattern.config.SolverConfig` for this call (default:
 the solver's). Transfer and adaptation sew the reference pattern's seam plan
@@ -24,8 +24,8 @@ from ..errors import PatternError
 from ..progress import Progress, sub
 from .build import SolveResult, build_pattern
 from .config import SolverConfig, tolerances
-from .seams import SeamPlan, seam_is_gathered
-from .solver import PatternSolver
+from .optimizer.seams import SeamPlan, seam_is_gathered
+from .optimizer.solver import PatternSolver
 from .types import Pattern
 from .validate import validate_cut
 

@@ -76,8 +76,8 @@ def _run_probe():
         return False, "the Warp kernels did not load"
     from core.pattern.config import SolverConfig
     from core.pattern.accel.products import GradientProducts
-    from core.pattern.steps import local_step
-    from core.pattern.targets import rest_targets
+    from core.pattern.optimizer.steps import local_step
+    from core.pattern.optimizer.targets import rest_targets
 
     # inputs shaped as a solver's: per-triangle 2x2 reference gradients (m^-1 scale), Jacobians near a
     # rotation with stretch, ease factors across and along the grain

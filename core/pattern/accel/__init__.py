@@ -1,7 +1,7 @@
 """The pattern solver's compiled steps, behind one seam: Warp CPU kernels that give numpy's bits.
 
-The solver's method is written in numpy, scipy and qdldl (:mod:`core.pattern.steps`,
-:mod:`core.pattern.feedback`, :mod:`core.pattern.factor`); this package holds the same steps
+The solver's method is written in numpy, scipy and qdldl (:mod:`core.pattern.optimizer.steps`,
+:mod:`core.pattern.optimizer.feedback`, :mod:`core.pattern.optimizer.factor`); this package holds the same steps
 compiled, and nothing else:
 
 - :mod:`.compiled` launches :mod:`.kernels` (the per-triangle steps: local step, targets' feedback,
@@ -19,7 +19,7 @@ the process after one warning.
 
 :func:`choose` makes the choice: ``EASE_SOLVER_KERNELS`` (``warp``, the default, or ``numpy``),
 then loading the kernels (compiled on a machine's first run, then cached). A
-:class:`core.pattern.solver.PatternSolver` calls it once when it is built and records the answer
+:class:`core.pattern.optimizer.solver.PatternSolver` calls it once when it is built and records the answer
 (``solver.kernels``). Measured on the long-sleeve shirt (transfer to four sizes, CPU time, this
 project's 2-core x86-64 VM; benchmarks/results/pattern_kernels_history.md): the kernels take
 ~110 ms a transfer where numpy takes ~180-220 ms; each part pays (numpy for the per-triangle

@@ -1,9 +1,9 @@
 """Launching the solver's Warp CPU kernels (:mod:`.kernels`): the same bits as numpy, or numpy.
 
-The per-triangle steps of a local-global iteration (:func:`core.pattern.steps.local_step`,
-:func:`core.pattern.feedback.move_corrections`, :func:`core.pattern.steps.rhs_terms`,
-:func:`core.pattern.steps.collapse_guard`, :func:`core.pattern.steps.flip_guard`,
-:func:`core.pattern.steps.realign_grain`) ask this module first; it returns None (False)
+The per-triangle steps of a local-global iteration (:func:`core.pattern.optimizer.steps.local_step`,
+:func:`core.pattern.optimizer.feedback.move_corrections`, :func:`core.pattern.optimizer.steps.rhs_terms`,
+:func:`core.pattern.optimizer.steps.collapse_guard`, :func:`core.pattern.optimizer.steps.flip_guard`,
+:func:`core.pattern.optimizer.steps.realign_grain`) ask this module first; it returns None (False)
 when numpy must do the step, and the step then runs its numpy code:
 
 - the kernels are off (``EASE_SOLVER_KERNELS=numpy``, :func:`use`), Warp
@@ -83,7 +83,7 @@ def enabled() -> bool:
 @contextmanager
 def chosen(kernels: bool):
     """The steps this thread runs inside use the kernels or not as ``kernels`` says: the choice a
-    :class:`core.pattern.solver.PatternSolver` made once when it was built (:func:`core.pattern.accel.choose`),
+    :class:`core.pattern.optimizer.solver.PatternSolver` made once when it was built (:func:`core.pattern.accel.choose`),
     whatever :data:`ENV` or :func:`use` say meanwhile."""
     before = getattr(_local, "chosen", None)
     _local.chosen = bool(kernels)

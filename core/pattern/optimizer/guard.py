@@ -19,7 +19,7 @@ from typing import Dict, Optional
 
 import numpy as np
 
-from ..geom.strain import components, scales_of_offsets
+from ...geom.strain import components, scales_of_offsets
 from .factor import SymmetricFactor
 
 #: Iterations added at a time after the planned ones while a triangle is still collapsed.

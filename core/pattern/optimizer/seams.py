@@ -28,10 +28,10 @@ from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 import numpy as np
 import scipy.sparse as sp
 
-from ..cut.types import seam_names
-from ..design.naming import mirrored_name, swap_side
-from ..errors import PatternError
-from .config import SolverConfig, gather_threshold
+from ...cut.types import seam_names
+from ...design.naming import mirrored_name, swap_side
+from ...errors import PatternError
+from ..config import SolverConfig, gather_threshold
 from .dart_gaps import DartLegs, dart_legs
 
 

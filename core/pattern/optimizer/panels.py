@@ -13,9 +13,9 @@ from typing import List, Optional
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import PatternError
-from ..geom.mesh import triangle_areas
-from ..progress import Progress, report
+from ...errors import PatternError
+from ...geom.mesh import triangle_areas
+from ...progress import Progress, report
 from . import init as _init
 from .mirror_flat import approximate_mirror, self_mirror_map, symmetric_flattening
 

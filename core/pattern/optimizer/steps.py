@@ -18,10 +18,10 @@ from typing import List, Optional, Tuple
 
 import numpy as np
 
-from ..geom.mesh import signed_areas_2d
-from ..geom.svd2 import clamp_singular_values_below, hypot, signed_singular_values2
-from .accel import compiled
-from .config import CollapseGuard, SolverConfig
+from ...geom.mesh import signed_areas_2d
+from ...geom.svd2 import clamp_singular_values_below, hypot, signed_singular_values2
+from ..accel import compiled
+from ..config import CollapseGuard, SolverConfig
 from .panels import PanelBlocks
 
 #: Rounds of local step-halving before a panel takes a uniformly shortened step (flip guard).

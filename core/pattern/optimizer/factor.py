@@ -20,8 +20,8 @@ import numpy as np
 import qdldl
 import scipy.sparse as sp
 
-from ..errors import PatternError
-from .accel import compiled
+from ...errors import PatternError
+from ..accel import compiled
 
 
 def _qdldl(upper: sp.csc_matrix) -> "qdldl.Solver":
@@ -76,7 +76,7 @@ class SymmetricFactor:
                        np.concatenate([[0], np.cumsum(np.bincount(col[keep], minlength=n))]).astype(A.indptr.dtype))
         self._qdldl = _qdldl(self._upper_matrix(A.data))
         if compiled.enabled():
-            from .accel.ldl import LDL, matches_qdldl
+            from ..accel.ldl import LDL, matches_qdldl
             self._ldl = LDL.from_qdldl(self._qdldl, self._upper, A.data) if matches_qdldl() else None
             if self._ldl is not None:
                 self._qdldl = None     # its factors are the LDL's now

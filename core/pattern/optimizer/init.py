@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import PatternError
-from ..geom.mesh import boundary_loops, signed_areas_2d, triangle_areas
+from ...errors import PatternError
+from ...geom.mesh import boundary_loops, signed_areas_2d, triangle_areas
 
 #: Edges or triangle images shorter than this (relative to the panel's mean
 #: edge length) are treated as degenerate and skip the grain vote.

@@ -13,8 +13,8 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from ..errors import PatternError
-from ..geom.strain import components
+from ...errors import PatternError
+from ...geom.strain import components
 
 
 def rest_targets(K, c_weft: np.ndarray, c_warp: Optional[np.ndarray], model: str,

@@ -6,7 +6,7 @@ from typing import Callable, List, Optional
 
 import numpy as np
 
-from .config import SolverConfig
+from ..config import SolverConfig
 from .seams import SeamPlan
 
 

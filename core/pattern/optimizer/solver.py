@@ -39,17 +39,17 @@ from typing import Dict, Optional, Sequence, Tuple
 import numpy as np
 import scipy.sparse as sp
 
-from ..geom.strain import components, intrinsic_offsets
-from ..progress import Progress, report
-from . import accel
-from .accel import compiled
-from .build import SolveResult, solve_result
-from .config import SolverConfig, check_tolerance
+from ...geom.strain import components, intrinsic_offsets
+from ...progress import Progress, report
+from .. import accel
+from ..accel import compiled
+from ..build import SolveResult, solve_result
+from ..config import SolverConfig, check_tolerance
 from .factor import SymmetricFactor
 from .feedback import feedback_gains, move_corrections
 from .guard import COLLAPSE_ROUNDS, RESCUE_ITERATIONS, GuardedFactors, refused, renew_guard, rescuing, round_guard
 from .panels import flatten_panels
-from .accel.products import GradientProducts
+from ..accel.products import GradientProducts
 from .dart_gaps import GapCorrection, dart_legs
 from .seams import SeamPlan, plan_seams, seam_layout, seam_matrix, seam_rhs
 from .start import pattern_start
@@ -57,7 +57,7 @@ from .state import SolveState
 from .steps import (any_collapsed, collapse_guard, face_neighbourhood, flip_guard, inverse_offsets, local_step,
                     opened_jacobians, realign_grain, regulariser_energy, rhs_terms, rigid_align, scaled_start)
 from .targets import adaptation_scales, reference_ease, rest_targets
-from .validate import body_positions, validate_cut
+from ..validate import body_positions, validate_cut
 
 def _with_solvers_choice(method):
     """``method`` runs its steps compiled or not as the solver chose when it was built (``self.kernels``)."""

@@ -28,8 +28,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-from ..design.mirror import face_symmetry
-from ..geom.mesh import triangle_areas
+from ...design.mirror import face_symmetry
+from ...geom.mesh import triangle_areas
 from . import init as _init
 
 #: a vertex and the reflection (x -> -x) of its mirror vertex lie within this (m) on the
@@ -98,7 +98,7 @@ def approximate_mirror(xyz: np.ndarray, faces: np.ndarray) -> Optional[sp.csr_ma
     ----------
     xyz : (n, 3) float, the panel on the reference body (m); faces : (f, 3) int.
     """
-    from ..design.geometry import SurfaceLocator
+    from ...design.geometry import SurfaceLocator
     got = _across_midline(xyz, faces)
     if got is None:
         return None

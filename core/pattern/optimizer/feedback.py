@@ -12,8 +12,8 @@ from typing import Optional, Tuple
 
 import numpy as np
 
-from ..geom.strain import scales_of_offsets
-from .accel import compiled
+from ...geom.strain import scales_of_offsets
+from ..accel import compiled
 
 
 def feedback_gains(cfg, adapting: bool) -> Tuple[float, float, float, float, float]:
