@@ -1,6 +1,6 @@
 """A dart's legs keep a positive gap from the mouth to the apex: the solver's correction step.
 
-A dart's legs are sewn to equal length (:data:`core.pattern.seams.DART_LENGTH_WEIGHT`), but
+A dart's legs are sewn to equal length (:data:`core.pattern.optimizer.seams.DART_LENGTH_WEIGHT`), but
 nothing in the local-global energy keeps them apart, and the initial flattening does not either:
 a conformal map (LSCM) closes a slit at its apex, where the surface is smooth, so a dart starts
 with its legs tangent there, and where several darts share one bust's wedge they cross (the
@@ -62,7 +62,7 @@ class DartLegs:
 
 def dart_legs(sides: Sequence, pairs: Sequence, darts: Sequence[int]) -> DartLegs:
     """The legs of the seams ``darts`` (indices into ``pairs``) from their ``sides``
-    (:class:`core.pattern.seams.SeamSide`: ``gids`` mouth to apex, ``rest_lengths``)."""
+    (:class:`core.pattern.optimizer.seams.SeamSide`: ``gids`` mouth to apex, ``rest_lengths``)."""
     cols = [[] for _ in range(7)]
     rest = []
     for si in darts:

@@ -126,7 +126,7 @@ def approximate_mirror(xyz: np.ndarray, faces: np.ndarray) -> Optional[sp.csr_ma
 
 def symmetric_flattening(fl: dict, xyz: np.ndarray, faces: np.ndarray, warp_dir: np.ndarray,
                          mirror) -> dict:
-    """:func:`core.pattern.init.flatten_panel`'s result ``fl`` made mirror-symmetric.
+    """:func:`core.pattern.optimizer.init.flatten_panel`'s result ``fl`` made mirror-symmetric.
 
     ``uv`` -> ``(uv + T(uv[mirror])) / 2`` with ``T`` the reflection best aligning the
     mirrored layout onto ``uv`` (as ``T`` is an involution, the average is its own

@@ -86,7 +86,7 @@ class PanelBlocks:
 
 
 def flatten_panels(cut, positions: np.ndarray, progress: Optional[Progress] = None) -> PanelBlocks:
-    """Flatten every panel of ``cut`` at ``positions`` (N, 3) (:func:`core.pattern.init.flatten_panel`) and stack them."""
+    """Flatten every panel of ``cut`` at ``positions`` (N, 3) (:func:`core.pattern.optimizer.init.flatten_panel`) and stack them."""
     panels: List[PanelData] = []
     flat = []
     offset = face_offset = 0

@@ -110,7 +110,7 @@ class SeamLayout:
     mouth_b: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     mouth_width: np.ndarray = field(default_factory=lambda: np.zeros(0))
     mouth_apex: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
-    #: every dart's matched leg vertices (:mod:`core.pattern.dart_gaps`: the legs kept apart)
+    #: every dart's matched leg vertices (:mod:`core.pattern.optimizer.dart_gaps`: the legs kept apart)
     legs: Optional[DartLegs] = None
     #: what :func:`seam_rhs` derives from the layout on first use (its indices, the last solve's weights)
     cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)

@@ -184,7 +184,7 @@ class PatternSolver:
     # ------------------------------------------------------------------ seam plan
     def plan_seams(self, K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray,
                    config: Optional[SolverConfig] = None) -> SeamPlan:
-        """The seam plan of targets ``diag(c) K`` (:func:`core.pattern.seams.plan_seams`)."""
+        """The seam plan of targets ``diag(c) K`` (:func:`core.pattern.optimizer.seams.plan_seams`)."""
         return plan_seams(self.cut, self.seams, self.uv0, K, c_weft, c_warp, config or self.config)
 
     def design_plan(self, config: Optional[SolverConfig] = None) -> SeamPlan:

@@ -24,7 +24,7 @@ class SolveState:
     corr_w, corr_g : (f,) the feedback's accumulated target corrections.
     guard : (f,) the collapse guard's stiffening gains (:func:`.steps.collapse_guard`; 0 = not guarded);
     guard_solve : the back-substitution of the matrix with the gains ``guard_held`` (the gains when it was
-    last factorised, :func:`~core.pattern.guard.renew_guard`; None: the shared matrix is solved), or None.
+    last factorised, :func:`~core.pattern.optimizer.guard.renew_guard`; None: the shared matrix is solved), or None.
     integral : (E,) the seam length term's integral action; tg : the current rest targets.
     s_cur : (f,) signed areas of ``U`` or None; local_state : the local step's memory.
     iteration : iterations run so far (a resumed solve carries the earlier one's on); started : ``iteration``

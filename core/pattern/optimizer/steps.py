@@ -43,7 +43,7 @@ def turn(P: np.ndarray, c: np.ndarray, s: np.ndarray) -> np.ndarray:
 def local_step(config: SolverConfig, M: list, tg: dict, W2: np.ndarray, state: dict) -> Tuple[list, list]:
     """Rest shapes ``D R K'`` of the regulariser (best 2x2 rotations, all triangles at once) and the ease target.
 
-    ``tg``: :func:`core.pattern.targets.rest_targets`. ``W2`` (2,): the column
+    ``tg``: :func:`core.pattern.optimizer.targets.rest_targets`. ``W2`` (2,): the column
     weights. With ``rest_shape.warp_slack`` the rest shape's warp row is also
     scaled by the best factor ``s`` within ``[1/(1+slack), 1+slack]`` (free
     warp stretch), and so is the ease target; ``s`` alternates with ``R``
