@@ -9,9 +9,11 @@ walk the repository (pytest, linters) can import this file without bpy.
 
 def register():
     from .ease_addon import register as _register
+
     _register()
 
 
 def unregister():
     from .ease_addon import unregister as _unregister
+
     _unregister()

@@ -16,6 +16,7 @@ reference run's garment (a shape key a frame, as the add-on's Drape Animation
 keeps it) and its importer reads it back: vertex count and the largest position
 error over every frame (bpy in a subprocess; skipped where bpy is missing).
 """
+
 from __future__ import annotations
 
 import subprocess
@@ -33,7 +34,7 @@ if str(REPO) not in sys.path:
 DESIGN = "shirt_long_sleeve"
 POSES = ("A", "P1", "P3")
 
-ROUND_TRIP = r'''
+ROUND_TRIP = r"""
 import sys, numpy as np, bpy
 z = np.load(sys.argv[1]); pos, faces, path = z["positions"], z["faces"], sys.argv[2]
 bpy.ops.wm.read_homefile(use_empty=True)
@@ -63,13 +64,14 @@ for k in range(len(pos)):
         print("VERTS", len(w)); sys.exit(0)
     err = max(err, float(np.abs(w - pos[k]).max()))
 print("VERTS", count, "ERR", err)
-'''
+"""
 
 
 def _devices() -> list:
     out = ["cpu"]
     try:
         import warp as wp
+
         wp.init()
         if wp.get_cuda_device_count() > 0:
             out.append("cuda")
@@ -80,17 +82,23 @@ def _devices() -> list:
 
 def _motion_row(label, pattern, frames, faces, device, marks) -> tuple:
     from core.drape.animate import drape_motion
+
     t0 = time.perf_counter()
     r = drape_motion(pattern, frames, faces, options={"device": device})
     total = time.perf_counter() - t0
-    row = {"pattern": label, "device": device, "frames": len(frames),
-           "seconds_per_frame_mean": round(float(np.mean(r.frame_seconds)), 3),
-           "seconds_per_frame_max": round(float(np.max(r.frame_seconds)), 3),
-           "first_drape_frames": r.settle_frames, "seconds_total": round(total, 1),
-           "worst_penetration_pct": round(100 * float(r.penetration.max()), 3),
-           "stretch_p95_pct_at_P1": round(100 * float(r.stretch[marks["P1"]]), 2),
-           "stretch_p95_pct_at_P3": round(100 * float(r.stretch[marks["P3"]]), 2),
-           "stretch_p95_pct_max": round(100 * float(r.stretch.max()), 2)}
+    row = {
+        "pattern": label,
+        "device": device,
+        "frames": len(frames),
+        "seconds_per_frame_mean": round(float(np.mean(r.frame_seconds)), 3),
+        "seconds_per_frame_max": round(float(np.max(r.frame_seconds)), 3),
+        "first_drape_frames": r.settle_frames,
+        "seconds_total": round(total, 1),
+        "worst_penetration_pct": round(100 * float(r.penetration.max()), 3),
+        "stretch_p95_pct_at_P1": round(100 * float(r.stretch[marks["P1"]]), 2),
+        "stretch_p95_pct_at_P3": round(100 * float(r.stretch[marks["P3"]]), 2),
+        "stretch_p95_pct_max": round(100 * float(r.stretch.max()), 2),
+    }
     return row, r
 
 
@@ -103,12 +111,19 @@ def _round_trip(r) -> dict:
         np.savez(npz, positions=np.asarray(r.positions)[:, used], faces=remap[np.asarray(r.faces)])
         script = Path(tmp) / "round_trip.py"
         script.write_text(ROUND_TRIP)
-        p = subprocess.run([sys.executable, str(script), str(npz), str(Path(tmp) / "garment.abc")],
-                           capture_output=True, text=True, timeout=1800)
+        p = subprocess.run(
+            [sys.executable, str(script), str(npz), str(Path(tmp) / "garment.abc")],
+            capture_output=True,
+            text=True,
+            timeout=1800,
+        )
         line = next((ln for ln in p.stdout.splitlines() if ln.startswith("VERTS")), "")
     if not line:
-        return {"alembic": "skipped (bpy not importable here)" if "No module named 'bpy'" in p.stderr
-                else f"failed: {p.stderr.strip().splitlines()[-1] if p.stderr.strip() else p.returncode}"}
+        return {
+            "alembic": "skipped (bpy not importable here)"
+            if "No module named 'bpy'" in p.stderr
+            else f"failed: {p.stderr.strip().splitlines()[-1] if p.stderr.strip() else p.returncode}"
+        }
     parts = line.split()
     out = {"alembic_vertices": int(parts[1]), "garment_vertices": int(used.sum())}
     if len(parts) > 3:
@@ -123,6 +138,7 @@ def run(out_dir, quick: bool = False) -> dict:
     from core.design.templates import template_path
     from core.drape.animate import pose_frames
     from core.fileio import write_json, write_text
+
     between = 9 if quick else 59
     prep = workflows.prepare(load_design(template_path(DESIGN)))
     reference = workflows.reference(prep).pattern
@@ -138,21 +154,38 @@ def run(out_dir, quick: bool = False) -> dict:
             rows.append(row)
             first = first or r
     trip = _round_trip(first)
-    res = {"design": DESIGN, "poses": list(POSES), "in_betweens": between, "frames": len(frames),
-           "runs": rows, "alembic": trip}
+    res = {
+        "design": DESIGN,
+        "poses": list(POSES),
+        "in_betweens": between,
+        "frames": len(frames),
+        "runs": rows,
+        "alembic": trip,
+    }
     out = Path(out_dir)
     write_json(out / "animation.json", res)
-    md = [f"# Animation: {DESIGN} through {' -> '.join(POSES)}", "",
-          f"{len(frames)} frames ({between} in-betweens a step), the default body (Anny, M); the garment "
-          f"draped on A, then one simulation frame per body frame (20 substeps, the body moved before each). "
-          f"Regenerate: `./ease.sh bench --only animation`{' (this run: --quick)' if quick else ''}.", "",
-          "| pattern | device | s/frame mean | s/frame max | worst penetration % | stretch p95 % at P1 | "
-          "at P3 | max | first drape frames |", "|---|---|---|---|---|---|---|---|---|"]
+    md = [
+        f"# Animation: {DESIGN} through {' -> '.join(POSES)}",
+        "",
+        f"{len(frames)} frames ({between} in-betweens a step), the default body (Anny, M); the garment "
+        f"draped on A, then one simulation frame per body frame (20 substeps, the body moved before each). "
+        f"Regenerate: `./ease.sh bench --only animation`{' (this run: --quick)' if quick else ''}.",
+        "",
+        "| pattern | device | s/frame mean | s/frame max | worst penetration % | stretch p95 % at P1 | "
+        "at P3 | max | first drape frames |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
     for r in rows:
-        md.append(f"| {r['pattern']} | {r['device']} | {r['seconds_per_frame_mean']} | "
-                  f"{r['seconds_per_frame_max']} | {r['worst_penetration_pct']} | {r['stretch_p95_pct_at_P1']} | "
-                  f"{r['stretch_p95_pct_at_P3']} | {r['stretch_p95_pct_max']} | {r['first_drape_frames']} |")
-    md += ["", "Alembic (Blender's exporter, then its importer, the reference run's garment over every frame): "
-           + ", ".join(f"{k} {v}" for k, v in trip.items()), ""]
+        md.append(
+            f"| {r['pattern']} | {r['device']} | {r['seconds_per_frame_mean']} | "
+            f"{r['seconds_per_frame_max']} | {r['worst_penetration_pct']} | {r['stretch_p95_pct_at_P1']} | "
+            f"{r['stretch_p95_pct_at_P3']} | {r['stretch_p95_pct_max']} | {r['first_drape_frames']} |"
+        )
+    md += [
+        "",
+        "Alembic (Blender's exporter, then its importer, the reference run's garment over every frame): "
+        + ", ".join(f"{k} {v}" for k, v in trip.items()),
+        "",
+    ]
     write_text(out / "animation.md", "\n".join(md))
     return res

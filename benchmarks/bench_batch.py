@@ -29,6 +29,7 @@
 
 The datasets are written to a temporary folder and removed.
 """
+
 from __future__ import annotations
 
 import os
@@ -48,9 +49,11 @@ REPO = Path(__file__).resolve().parent.parent
 DESIGN = "shirt_long_sleeve"
 
 #: core.batch.run.WORKER_CONFIG as a Dask config file for workers started by hand.
-WORKER_YAML = ("distributed:\n  nanny:\n    pre-spawn-environ:\n      MALLOC_TRIM_THRESHOLD_: null\n"
-               "  worker:\n    profile:\n      enabled: false\n    memory:\n      monitor-interval: 1s\n"
-               "  admin:\n    tick:\n      interval: 1s\n    system-monitor:\n      interval: 5s\n")
+WORKER_YAML = (
+    "distributed:\n  nanny:\n    pre-spawn-environ:\n      MALLOC_TRIM_THRESHOLD_: null\n"
+    "  worker:\n    profile:\n      enabled: false\n    memory:\n      monitor-interval: 1s\n"
+    "  admin:\n    tick:\n      interval: 1s\n    system-monitor:\n      interval: 5s\n"
+)
 SEED = 2024
 #: bodies of each throughput run (quick: 16), and pairs of 1- and 2-worker runs (quick: 1)
 BODIES = 150
@@ -74,21 +77,26 @@ def _shares(a, b) -> dict:
         return {}
     d = b - a
     pct = 100.0 * d / d.sum()
-    return {"busy_pct": round(float(pct[[0, 1, 2, 5, 6]].sum()), 1), "idle_pct": round(float(pct[3]), 1),
-            "iowait_pct": round(float(pct[4]), 1), "steal_pct": round(float(pct[7]), 1)}
+    return {
+        "busy_pct": round(float(pct[[0, 1, 2, 5, 6]].sum()), 1),
+        "idle_pct": round(float(pct[3]), 1),
+        "iowait_pct": round(float(pct[4]), 1),
+        "steal_pct": round(float(pct[7]), 1),
+    }
 
 
 def _timed_batch(design, bodies, out, **kw):
     """run_batch with the completion times of its items (s since the start) and the machine's CPU shares
     between the first and the last completion (:func:`_shares`)."""
     from core.batch import run_batch
+
     t0 = time.perf_counter()
     stamps, ticks = [], []
 
     def progress(fraction, message):
         if "/" in message.split()[0] and not message.startswith("0/"):
             stamps.append(time.perf_counter() - t0)
-            ticks[min(len(ticks), 1):] = [_cpu_ticks()]     # the first completion's, then the latest's
+            ticks[min(len(ticks), 1) :] = [_cpu_ticks()]  # the first completion's, then the latest's
 
     res = run_batch(design, bodies, out, progress=progress, **kw)
     shares = _shares(ticks[0], ticks[-1]) if len(ticks) == 2 else {}
@@ -142,16 +150,47 @@ def _simulated_cluster(n_workers: int, config_dir: Path):
     # the workers get the LocalCluster's settings through a config file (docs/batch.md, Clusters)
     config_dir.mkdir(parents=True, exist_ok=True)
     (config_dir / "ease.yaml").write_text(WORKER_YAML)
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]),
-           "DASK_CONFIG": str(config_dir)}
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]),
+        "DASK_CONFIG": str(config_dir),
+    }
     quiet = dict(stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=str(REPO), env=env)
     address = f"tcp://127.0.0.1:{port}"
-    procs = [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
-                               "--port", str(port), "--no-dashboard"], **quiet)]
+    procs = [
+        subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "distributed.cli.dask_scheduler",
+                "--host",
+                "127.0.0.1",
+                "--port",
+                str(port),
+                "--no-dashboard",
+            ],
+            **quiet,
+        )
+    ]
     for _ in range(n_workers):
-        procs.append(subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address,
-                                       "--nthreads", "1", "--nworkers", "1", "--no-dashboard"], **quiet))
+        procs.append(
+            subprocess.Popen(
+                [
+                    sys.executable,
+                    "-m",
+                    "distributed.cli.dask_worker",
+                    address,
+                    "--nthreads",
+                    "1",
+                    "--nworkers",
+                    "1",
+                    "--no-dashboard",
+                ],
+                **quiet,
+            )
+        )
     from distributed import Client
+
     deadline = time.monotonic() + 60
     while True:
         try:
@@ -184,12 +223,19 @@ def run(out_dir, quick: bool = False) -> dict:
     design = template_path(DESIGN)
     n, pairs = (16, 1) if quick else (BODIES, PAIRS)
     bodies = sample_anny(n, seed=SEED)
-    result = {"design": DESIGN, "bodies": n, "seed": SEED, "pairs": pairs, "cpu_count": os.cpu_count(),
-              "machine": f"{platform.machine()}, {os.cpu_count()} CPUs (shared)", "runs": {}}
+    result = {
+        "design": DESIGN,
+        "bodies": n,
+        "seed": SEED,
+        "pairs": pairs,
+        "cpu_count": os.cpu_count(),
+        "machine": f"{platform.machine()}, {os.cpu_count()} CPUs (shared)",
+        "runs": {},
+    }
     with tempfile.TemporaryDirectory(prefix="ease_bench_batch_") as tmp:
         tmp = Path(tmp)
-        steady = {1: [0, 0.0], 2: [0, 0.0]}     # workers -> [items, seconds] between first and last completions
-        cpus = {1: [], 2: []}                   # workers -> the items' CPU seconds (those that paid no cut)
+        steady = {1: [0, 0.0], 2: [0, 0.0]}  # workers -> [items, seconds] between first and last completions
+        cpus = {1: [], 2: []}  # workers -> the items' CPU seconds (those that paid no cut)
         for k in range(1, pairs + 1):
             for w in (1, 2):
                 load = _load()
@@ -201,22 +247,37 @@ def run(out_dir, quick: bool = False) -> dict:
                 split = _split(res.rows)
                 cpus[w] += _item_cpu(res.rows)
                 result["runs"][f"local_{w}" + (f"_{k}" if k > 1 else "")] = {
-                    "workers": w, "made": res.made, "failed": res.failed, "wall_s": round(wall, 2),
+                    "workers": w,
+                    "made": res.made,
+                    "failed": res.failed,
+                    "wall_s": round(wall, 2),
                     "first_item_s": round(stamps[0], 2) if stamps else None,
-                    "steady_items_per_s": round(rate, 2), "items_per_s_per_core": round(rate / w, 2),
-                    "cpu_items_per_s_per_core": _cpu_rate(split), "load_before": load, "load_after": _load(),
-                    "machine_cpu": shares, "split_ms": split}
+                    "steady_items_per_s": round(rate, 2),
+                    "items_per_s_per_core": round(rate / w, 2),
+                    "cpu_items_per_s_per_core": _cpu_rate(split),
+                    "load_before": load,
+                    "load_after": _load(),
+                    "machine_cpu": shares,
+                    "split_ms": split,
+                }
                 if w == 2 and k == 1:
                     local_rows = res.rows
         pooled = {w: steady[w][0] / steady[w][1] if steady[w][1] else 0.0 for w in steady}
         result["steady_items_per_s_pooled"] = {str(w): round(v, 2) for w, v in pooled.items()}
         result["speedup_2_vs_1"] = round(pooled[2] / pooled[1], 2) if pooled[1] else None
         result["cpu_items_per_s_per_core_pooled"] = {
-            str(w): round(1.0 / float(np.median(v)), 2) if v else 0.0 for w, v in cpus.items()}
+            str(w): round(1.0 / float(np.median(v)), 2) if v else 0.0 for w, v in cpus.items()
+        }
         result["speedup_per_pair"] = [
-            round(result["runs"][f"local_2{s}"]["steady_items_per_s"] / result["runs"][f"local_1{s}"]["steady_items_per_s"], 2)
-            if result["runs"][f"local_1{s}"]["steady_items_per_s"] else None
-            for s in [""] + [f"_{k}" for k in range(2, pairs + 1)]]
+            round(
+                result["runs"][f"local_2{s}"]["steady_items_per_s"]
+                / result["runs"][f"local_1{s}"]["steady_items_per_s"],
+                2,
+            )
+            if result["runs"][f"local_1{s}"]["steady_items_per_s"]
+            else None
+            for s in [""] + [f"_{k}" for k in range(2, pairs + 1)]
+        ]
 
         address, procs = _simulated_cluster(2, tmp / "dask_config")
         try:
@@ -224,61 +285,91 @@ def run(out_dir, quick: bool = False) -> dict:
         finally:
             _stop(procs)
         same = comparable(res.rows) == comparable(local_rows)
-        result["runs"]["simulated_cluster"] = {"workers": res.workers, "made": res.made, "failed": res.failed,
-                                               "wall_s": round(wall, 2), "steady_items_per_s":
-                                                   round(_steady_rate(stamps), 2), "same_manifest": same}
+        result["runs"]["simulated_cluster"] = {
+            "workers": res.workers,
+            "made": res.made,
+            "failed": res.failed,
+            "wall_s": round(wall, 2),
+            "steady_items_per_s": round(_steady_rate(stamps), 2),
+            "same_manifest": same,
+        }
 
         if not quick:
             many = sample_anny(1000, seed=SEED)
             res, stamps, wall, _ = _timed_batch(design, many, tmp / "population", workers=2)
-            fails = [{"label": r["label"], "status": r["status"], "error": r["error"]}
-                     for r in res.rows if r["status"] != "ok"]
-            result["population"] = {"bodies": 1000, "made": res.made, "failed": res.failed, "crashed": False,
-                                    "wall_s": round(wall, 1), "steady_items_per_s": round(_steady_rate(stamps), 2),
-                                    "failures": fails, "split_ms": _split(res.rows)}
+            fails = [
+                {"label": r["label"], "status": r["status"], "error": r["error"]}
+                for r in res.rows
+                if r["status"] != "ok"
+            ]
+            result["population"] = {
+                "bodies": 1000,
+                "made": res.made,
+                "failed": res.failed,
+                "crashed": False,
+                "wall_s": round(wall, 1),
+                "steady_items_per_s": round(_steady_rate(stamps), 2),
+                "failures": fails,
+                "split_ms": _split(res.rows),
+            }
 
-    lines = ["# Batch: `ease batch` on Dask", "",
-             f"Design: {DESIGN} (Anny), {n} bodies sampled with seed {SEED} (uniform phenotypes, adult ages) "
-             f"a run, 1 and 2 workers in turn, {pairs} pair(s) of runs, "
-             f"pattern only (pattern.json, report.json, body.json per item; no preview). "
-             f"Machine: {result['machine']}.", "",
-             "Steady rate: items per second between the first and the last completed item (cluster start and "
-             "each worker's one-off cut of the design excluded: `first item` is the wall time to the first "
-             "completed item). CPU rate: 1 / the median CPU seconds a worker spends on an item (per core, "
-             "whatever else runs; load: the 1-minute load average before / after the run; machine: the whole "
-             "machine's CPU time between the first and the last completed item, busy (any process), idle, "
-             "waiting for the disk, stolen by the host). "
-             "Split: median per item, ms.", "",
-             "| run | workers | items ok / failed | wall s | first item s | items/s | items/s/core | "
-             "items/CPU-s (per core) | load | machine busy / idle / disk wait / steal % | body ms | transfer ms | "
-             "metrics ms | write ms | CPU ms | setup (cut) ms |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines = [
+        "# Batch: `ease batch` on Dask",
+        "",
+        f"Design: {DESIGN} (Anny), {n} bodies sampled with seed {SEED} (uniform phenotypes, adult ages) "
+        f"a run, 1 and 2 workers in turn, {pairs} pair(s) of runs, "
+        f"pattern only (pattern.json, report.json, body.json per item; no preview). "
+        f"Machine: {result['machine']}.",
+        "",
+        "Steady rate: items per second between the first and the last completed item (cluster start and "
+        "each worker's one-off cut of the design excluded: `first item` is the wall time to the first "
+        "completed item). CPU rate: 1 / the median CPU seconds a worker spends on an item (per core, "
+        "whatever else runs; load: the 1-minute load average before / after the run; machine: the whole "
+        "machine's CPU time between the first and the last completed item, busy (any process), idle, "
+        "waiting for the disk, stolen by the host). "
+        "Split: median per item, ms.",
+        "",
+        "| run | workers | items ok / failed | wall s | first item s | items/s | items/s/core | "
+        "items/CPU-s (per core) | load | machine busy / idle / disk wait / steal % | body ms | transfer ms | "
+        "metrics ms | write ms | CPU ms | setup (cut) ms |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for name in result["runs"]:
         if not name.startswith("local_"):
             continue
         r, s = result["runs"][name], result["runs"][name]["split_ms"]
         load = f"{r['load_before'][0]} / {r['load_after'][0]}" if r["load_before"] else "n/a"
         pair = name.split("_")[2] if name.count("_") == 2 else "1"
-        lines.append(f"| LocalCluster (pair {pair}) | {r['workers']} | {r['made']} / {r['failed']} | {r['wall_s']} | "
-                     f"{r['first_item_s']} | {r['steady_items_per_s']} | {r['items_per_s_per_core']} | "
-                     f"{r['cpu_items_per_s_per_core']} | {load} | {_shares_text(r.get('machine_cpu'))} | "
-                     f"{s['body']} | {s['transfer']} | "
-                     f"{s['metrics']} | {s['write']} | {s['cpu']} | {s['setup']} |")
+        lines.append(
+            f"| LocalCluster (pair {pair}) | {r['workers']} | {r['made']} / {r['failed']} | {r['wall_s']} | "
+            f"{r['first_item_s']} | {r['steady_items_per_s']} | {r['items_per_s_per_core']} | "
+            f"{r['cpu_items_per_s_per_core']} | {load} | {_shares_text(r.get('machine_cpu'))} | "
+            f"{s['body']} | {s['transfer']} | "
+            f"{s['metrics']} | {s['write']} | {s['cpu']} | {s['setup']} |"
+        )
     c = result["runs"]["simulated_cluster"]
     pooled, cpu_pooled = result["steady_items_per_s_pooled"], result["cpu_items_per_s_per_core_pooled"]
-    lines += ["", f"Speed-up, 2 workers over 1 (steady rate, {pairs} pair(s) of runs taken in turn, pooled: "
-              f"{pooled['2']} / {pooled['1']} items/s): **{result['speedup_2_vs_1']}x** "
-              f"(each pair: {', '.join(f'{v}x' for v in result['speedup_per_pair'])}). "
-              f"Items per CPU-second per core, the median item of the runs pooled: 1 worker {cpu_pooled['1']}, "
-              f"2 workers {cpu_pooled['2']}.", "",
-              f"Simulated cluster (a `dask scheduler` and {c['workers']} `dask worker` processes on localhost, "
-              f"`--scheduler`): {c['made']} ok / {c['failed']} failed in {c['wall_s']} s "
-              f"({c['steady_items_per_s']} items/s); manifest equal to the 2-worker LocalCluster's "
-              f"(timings and worker ids aside): **{'yes' if c['same_manifest'] else 'NO'}**.", ""]
+    lines += [
+        "",
+        f"Speed-up, 2 workers over 1 (steady rate, {pairs} pair(s) of runs taken in turn, pooled: "
+        f"{pooled['2']} / {pooled['1']} items/s): **{result['speedup_2_vs_1']}x** "
+        f"(each pair: {', '.join(f'{v}x' for v in result['speedup_per_pair'])}). "
+        f"Items per CPU-second per core, the median item of the runs pooled: 1 worker {cpu_pooled['1']}, "
+        f"2 workers {cpu_pooled['2']}.",
+        "",
+        f"Simulated cluster (a `dask scheduler` and {c['workers']} `dask worker` processes on localhost, "
+        f"`--scheduler`): {c['made']} ok / {c['failed']} failed in {c['wall_s']} s "
+        f"({c['steady_items_per_s']} items/s); manifest equal to the 2-worker LocalCluster's "
+        f"(timings and worker ids aside): **{'yes' if c['same_manifest'] else 'NO'}**.",
+        "",
+    ]
     if "population" in result:
         p = result["population"]
-        lines += [f"Population: 1,000 sampled bodies on 2 workers: {p['made']} ok, {p['failed']} failed, "
-                  f"no crash, {p['wall_s']} s ({p['steady_items_per_s']} items/s steady).", ""]
+        lines += [
+            f"Population: 1,000 sampled bodies on 2 workers: {p['made']} ok, {p['failed']} failed, "
+            f"no crash, {p['wall_s']} s ({p['steady_items_per_s']} items/s steady).",
+            "",
+        ]
         if p["failures"]:
             lines += ["| body | status | reason |", "|---|---|---|"]
             lines += [f"| {f['label']} | {f['status']} | {f['error']} |" for f in p["failures"]]

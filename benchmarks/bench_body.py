@@ -15,6 +15,7 @@
   population (``core.body.made_to_measure.sample_body``, seeded), each fitted with ``fit_tape``:
   the errors on girths and on lengths, how many land (girths 1 cm, lengths 1.5 cm), the fit time.
 """
+
 from __future__ import annotations
 
 import platform
@@ -42,6 +43,7 @@ def charts_table(body) -> dict:
     from core.body.charts import PUBLISHED
     from core.body.measure import measure
     from core.body.sizes import size_shape
+
     out = {}
     for name, chart in PUBLISHED.items():
         out[name] = {}
@@ -55,25 +57,44 @@ def made_to_measure(body, n: int, seed: int = 33) -> dict:
     """``n`` hidden bodies' tape measures fitted by ``fit_tape``: per set the errors (cm), time, evaluations."""
     from core.body.made_to_measure import LENGTHS, fit_tape, sample_body
     from core.body.tape import tape_measures
+
     rows = []
     for i in range(n):
         hidden = sample_body(np.random.default_rng([seed, i]))
         targets = tape_measures(body, shape=hidden)
         t = time.perf_counter()
         fit = fit_tape(body, {**targets, "gender": hidden["gender"]})
-        rows.append({"gender": hidden["gender"], "seconds": time.perf_counter() - t, "evaluations": fit.evaluations,
-                     "ok": fit.ok, "collisions": fit.collisions,
-                     "errors_cm": {k: round(e, 3) for k, e in fit.errors().items()}})
+        rows.append(
+            {
+                "gender": hidden["gender"],
+                "seconds": time.perf_counter() - t,
+                "evaluations": fit.evaluations,
+                "ok": fit.ok,
+                "collisions": fit.collisions,
+                "errors_cm": {k: round(e, 3) for k, e in fit.errors().items()},
+            }
+        )
     girth = [abs(e) for r in rows for k, e in r["errors_cm"].items() if k not in LENGTHS]
     length = [abs(e) for r in rows for k, e in r["errors_cm"].items() if k in LENGTHS]
     secs = [r["seconds"] for r in rows]
-    return {"n": n, "seed": seed, "landed": sum(r["ok"] for r in rows),
-            "girth_error_cm": {"mean": float(np.mean(girth)), "p95": float(np.percentile(girth, 95)),
-                               "max": float(np.max(girth))},
-            "length_error_cm": {"mean": float(np.mean(length)), "p95": float(np.percentile(length, 95)),
-                                "max": float(np.max(length))},
-            "fit_seconds": {"median": float(np.median(secs)), "max": float(np.max(secs))},
-            "evaluations_median": float(np.median([r["evaluations"] for r in rows])), "rows": rows}
+    return {
+        "n": n,
+        "seed": seed,
+        "landed": sum(r["ok"] for r in rows),
+        "girth_error_cm": {
+            "mean": float(np.mean(girth)),
+            "p95": float(np.percentile(girth, 95)),
+            "max": float(np.max(girth)),
+        },
+        "length_error_cm": {
+            "mean": float(np.mean(length)),
+            "p95": float(np.percentile(length, 95)),
+            "max": float(np.max(length)),
+        },
+        "fit_seconds": {"median": float(np.median(secs)), "max": float(np.max(secs))},
+        "evaluations_median": float(np.median([r["evaluations"] for r in rows])),
+        "rows": rows,
+    }
 
 
 def run(out_dir, quick: bool = False) -> dict:
@@ -117,9 +138,14 @@ def run(out_dir, quick: bool = False) -> dict:
         stored = size_shape(body, size)
         sizes[size] = {
             "chart_cm": SIZE_CHART[size],
-            "fit": {"shape": {k: round(v, 4) for k, v in fit.shape.items()}, "achieved_cm": fit.achieved,
-                    "status": fit.status, "evaluations": fit.evaluations, "seconds": fit_s,
-                    "parameters": fit.parameters},
+            "fit": {
+                "shape": {k: round(v, 4) for k, v in fit.shape.items()},
+                "achieved_cm": fit.achieved,
+                "status": fit.status,
+                "evaluations": fit.evaluations,
+                "seconds": fit_s,
+                "parameters": fit.parameters,
+            },
             "stored_shape": stored,
             "stored_measured_cm": measure(body, body.vertices(stored)),
         }
@@ -130,43 +156,65 @@ def run(out_dir, quick: bool = False) -> dict:
     mtm = made_to_measure(body, 5 if quick else 50)
 
     result = {
-        "charts": charts, "made_to_measure": mtm,
-        "model": body.name, "n_vertices": body.n_vertices, "n_faces": int(len(body.faces)),
-        "load_s": load_s, "shape_change_ms": shape_ms, "pose_change_ms": pose_ms, "measure_ms": measure_ms,
-        "shape_change_samples_ms": shape_all, "pose_change_samples_ms": pose_all,
-        "reference_measurements_cm": ref, "sizes": sizes,
+        "charts": charts,
+        "made_to_measure": mtm,
+        "model": body.name,
+        "n_vertices": body.n_vertices,
+        "n_faces": int(len(body.faces)),
+        "load_s": load_s,
+        "shape_change_ms": shape_ms,
+        "pose_change_ms": pose_ms,
+        "measure_ms": measure_ms,
+        "shape_change_samples_ms": shape_all,
+        "pose_change_samples_ms": pose_all,
+        "reference_measurements_cm": ref,
+        "sizes": sizes,
         "machine": {"python": platform.python_version(), "cpu": platform.processor() or platform.machine()},
     }
     lines = [
-        "# Body benchmark", "",
+        "# Body benchmark",
+        "",
         f"Default body `{body.name}`: {body.n_vertices} vertices, {len(body.faces)} triangles. "
-        f"Median of {repeats} runs on {platform.machine()}, Python {platform.python_version()}.", "",
-        "| operation | time |", "|---|---|",
+        f"Median of {repeats} runs on {platform.machine()}, Python {platform.python_version()}.",
+        "",
+        "| operation | time |",
+        "|---|---|",
         f"| load model | {load_s * 1000:.0f} ms |",
         f"| shape change (new shape, A-pose) | {shape_ms:.1f} ms |",
         f"| pose change (same shape, preset) | {pose_ms:.1f} ms |",
-        f"| measure height/chest/waist/hip | {measure_ms:.1f} ms |", "",
-        "## Sizes", "",
+        f"| measure height/chest/waist/hip | {measure_ms:.1f} ms |",
+        "",
+        "## Sizes",
+        "",
         "Chart (cm) and the re-fit of each size from the reference shape "
-        "(`fit_measurements`, bounded least squares on " + ", ".join(
-            next(iter(sizes.values()))["fit"]["parameters"]) + "). Status: within 1 cm of the target, "
-        "or not reachable by this model.", "",
+        "(`fit_measurements`, bounded least squares on "
+        + ", ".join(next(iter(sizes.values()))["fit"]["parameters"])
+        + "). Status: within 1 cm of the target, "
+        "or not reachable by this model.",
+        "",
         "| size | " + " | ".join(f"{m} chart / fit" for m in MEASUREMENTS) + " | status | evals | fit s | shape |",
         "|---|" + "---|" * (len(MEASUREMENTS) + 4),
     ]
     for size, rec in sizes.items():
         f = rec["fit"]
-        ok = "all within 1 cm" if all(s == "within 1 cm" for s in f["status"].values()) else \
-            "; ".join(f"{k}: {s}" for k, s in f["status"].items() if s != "within 1 cm")
+        ok = (
+            "all within 1 cm"
+            if all(s == "within 1 cm" for s in f["status"].values())
+            else "; ".join(f"{k}: {s}" for k, s in f["status"].items() if s != "within 1 cm")
+        )
         cells = [f"{rec['chart_cm'][m]:.1f} / {f['achieved_cm'][m]:.1f}" for m in MEASUREMENTS]
         shape = ", ".join(f"{k}={v:.3f}" for k, v in rec["stored_shape"].items() if k in f["parameters"])
-        lines.append(f"| {size} | " + " | ".join(cells)
-                     + f" | {ok} | {f['evaluations']} | {f['seconds']:.1f} | {shape} |")
-    lines += ["", "Reference (default shape) measured: " +
-              ", ".join(f"{k} {v:.1f} cm" for k, v in ref.items()), ""]
-    lines += ["## Published charts", "",
-              "Each size's stored Anny shape measured (chart measures, `core.body.measure`): target / "
-              "measured (error), cm. Sizes beyond the phenotypes' reach carry Anny's local changes.", ""]
+        lines.append(
+            f"| {size} | " + " | ".join(cells) + f" | {ok} | {f['evaluations']} | {f['seconds']:.1f} | {shape} |"
+        )
+    lines += ["", "Reference (default shape) measured: " + ", ".join(f"{k} {v:.1f} cm" for k, v in ref.items()), ""]
+    lines += [
+        "## Published charts",
+        "",
+        "Each size's stored Anny shape measured (chart measures, `core.body.measure`): target / "
+        "measured (error), cm. Sizes beyond the phenotypes' reach carry Anny's local changes.",
+        "",
+    ]
     for name, table in charts.items():
         keys = list(next(iter(table.values())))
         lines += [f"**{name}**", "", "| size | " + " | ".join(keys) + " | worst |", "|---|" + "---|" * (len(keys) + 1)]
@@ -176,16 +224,23 @@ def run(out_dir, quick: bool = False) -> dict:
             lines.append(f"| {size} | {cells} | {worst:.2f} |")
         lines.append("")
     g, ln, fs = mtm["girth_error_cm"], mtm["length_error_cm"], mtm["fit_seconds"]
-    lines += ["## Made-to-measure", "",
-              f"{mtm['n']} tape-measure sets (14 measures each, `core.body.tape`) of hidden bodies of the population "
-              f"(`made_to_measure.sample_body`, seed {mtm['seed']}), fitted by `fit_tape`: "
-              f"{mtm['landed']} of {mtm['n']} land (girths within 1 cm, lengths within 1.5 cm, "
-              "no self-intersection).", "",
-              "| | mean | p95 | max |", "|---|---|---|---|",
-              f"| girth error (cm) | {g['mean']:.2f} | {g['p95']:.2f} | {g['max']:.2f} |",
-              f"| length error (cm) | {ln['mean']:.2f} | {ln['p95']:.2f} | {ln['max']:.2f} |",
-              f"| fit time (s) | median {fs['median']:.1f} | | {fs['max']:.1f} |", "",
-              f"Median {mtm['evaluations_median']:.0f} body evaluations per fit.", ""]
+    lines += [
+        "## Made-to-measure",
+        "",
+        f"{mtm['n']} tape-measure sets (14 measures each, `core.body.tape`) of hidden bodies of the population "
+        f"(`made_to_measure.sample_body`, seed {mtm['seed']}), fitted by `fit_tape`: "
+        f"{mtm['landed']} of {mtm['n']} land (girths within 1 cm, lengths within 1.5 cm, "
+        "no self-intersection).",
+        "",
+        "| | mean | p95 | max |",
+        "|---|---|---|---|",
+        f"| girth error (cm) | {g['mean']:.2f} | {g['p95']:.2f} | {g['max']:.2f} |",
+        f"| length error (cm) | {ln['mean']:.2f} | {ln['p95']:.2f} | {ln['max']:.2f} |",
+        f"| fit time (s) | median {fs['median']:.1f} | | {fs['max']:.1f} |",
+        "",
+        f"Median {mtm['evaluations_median']:.0f} body evaluations per fit.",
+        "",
+    ]
     write_text(out / "body.md", "\n".join(lines))
     write_json(out / "body.json", result)
     return result
@@ -193,5 +248,6 @@ def run(out_dir, quick: bool = False) -> dict:
 
 if __name__ == "__main__":
     import json
+
     res = run(Path(sys.argv[1] if len(sys.argv) > 1 else "benchmarks/results"))
     print(json.dumps({k: res[k] for k in ("shape_change_ms", "pose_change_ms", "measure_ms")}, indent=1))

@@ -16,6 +16,7 @@
    gap and mean gap for each; a baseline whose package is not installed is
    skipped with a note, one that fails is reported with the reason.
 """
+
 from __future__ import annotations
 
 import json
@@ -39,6 +40,7 @@ NEWTON_PIN = "newton==1.8.0"
 
 # --- pipeline pieces ---------------------------------------------------------
 
+
 def load_cut(design_name: str, edge: float, body):
     """(cut, reference vertices) of a shipped template on the default body with refinement ``edge`` (m)."""
     from core import workflows as wf
@@ -61,19 +63,25 @@ def pattern_at(cut, ref, ease: float, style: str):
 
 def _gap_stats(result, pattern, body_v, body_f) -> dict:
     from core.metrics.drape import drape_metrics, summary
+
     m = summary(drape_metrics(result, body_v, body_f, pattern=pattern))
     a = m["all"]
-    return {"gap_mean_mm": a["gap_mm"]["mean"], "gap_std_mm": a["gap_mm"]["std"], "gap_n": a["gap_mm"]["n"],
-            "penetration_pct": a["penetration_pct"], "seam_gap_mm": a["seam_gap_mm"]["max"],
-            "strain_weft_p95_pct": a["strain_weft_pct"]["p95"], "strain_warp_p95_pct": a["strain_warp_pct"]["p95"]}
+    return {
+        "gap_mean_mm": a["gap_mm"]["mean"],
+        "gap_std_mm": a["gap_mm"]["std"],
+        "gap_n": a["gap_mm"]["n"],
+        "penetration_pct": a["penetration_pct"],
+        "seam_gap_mm": a["seam_gap_mm"]["max"],
+        "strain_weft_p95_pct": a["strain_weft_pct"]["p95"],
+        "strain_warp_p95_pct": a["strain_warp_pct"]["p95"],
+    }
 
 
 #: rest-shape growth lengths (frames) of the drapes averaged per gap-curve level
 GROW_VARIANTS = (15, 20, 25)
 
 
-def gap_curve(garment: str, levels, edge: float, body, drape_options: dict,
-              grow_variants=GROW_VARIANTS) -> list:
+def gap_curve(garment: str, levels, edge: float, body, drape_options: dict, grow_variants=GROW_VARIANTS) -> list:
     """One row per ease level: gap mean/std (mm), penetration, seam gap, frames, times.
 
     Where a loose garment's folds land is chaotic: one drape's mean gap moves by
@@ -96,28 +104,37 @@ def gap_curve(garment: str, levels, edge: float, body, drape_options: dict,
             res = drape(pat, ref, body.faces, options={**drape_options, "grow_frames": int(grow)})
             stats = _gap_stats(res, pat, ref, body.faces)
             runs.append((res, stats))
-        row = {"ease": float(ease), "triangles": int(len(runs[0][0].faces)),
-               "grow_frames": [int(g) for g in grow_variants],
-               "frames": [r.frames for r, _ in runs], "settled": [bool(r.settled) for r, _ in runs],
-               "solve_s": t1 - t0, "drape_s": float(np.mean([r.timings["total"] for r, _ in runs])),
-               "gap_runs_mm": [st["gap_mean_mm"] for _, st in runs],
-               "gap_mean_mm": float(np.mean([st["gap_mean_mm"] for _, st in runs])),
-               "gap_std_mm": float(np.mean([st["gap_std_mm"] for _, st in runs])),
-               "gap_n": runs[0][1]["gap_n"],
-               "penetration_pct": float(max(st["penetration_pct"] for _, st in runs)),
-               "seam_gap_mm": float(max(st["seam_gap_mm"] for _, st in runs)),
-               "strain_weft_p95_pct": float(np.mean([st["strain_weft_p95_pct"] for _, st in runs])),
-               "strain_warp_p95_pct": float(np.mean([st["strain_warp_p95_pct"] for _, st in runs]))}
+        row = {
+            "ease": float(ease),
+            "triangles": int(len(runs[0][0].faces)),
+            "grow_frames": [int(g) for g in grow_variants],
+            "frames": [r.frames for r, _ in runs],
+            "settled": [bool(r.settled) for r, _ in runs],
+            "solve_s": t1 - t0,
+            "drape_s": float(np.mean([r.timings["total"] for r, _ in runs])),
+            "gap_runs_mm": [st["gap_mean_mm"] for _, st in runs],
+            "gap_mean_mm": float(np.mean([st["gap_mean_mm"] for _, st in runs])),
+            "gap_std_mm": float(np.mean([st["gap_std_mm"] for _, st in runs])),
+            "gap_n": runs[0][1]["gap_n"],
+            "penetration_pct": float(max(st["penetration_pct"] for _, st in runs)),
+            "seam_gap_mm": float(max(st["seam_gap_mm"] for _, st in runs)),
+            "strain_weft_p95_pct": float(np.mean([st["strain_weft_p95_pct"] for _, st in runs])),
+            "strain_warp_p95_pct": float(np.mean([st["strain_warp_p95_pct"] for _, st in runs])),
+        }
         rows.append(row)
-        print(f"[bench drape] {garment} ease {ease:.3f}: gap {row['gap_mean_mm']:.1f} ± {row['gap_std_mm']:.1f} mm "
-              f"(runs {', '.join(f'{g:.1f}' for g in row['gap_runs_mm'])}), frames {row['frames']}",
-              file=sys.stderr, flush=True)
+        print(
+            f"[bench drape] {garment} ease {ease:.3f}: gap {row['gap_mean_mm']:.1f} ± {row['gap_std_mm']:.1f} mm "
+            f"(runs {', '.join(f'{g:.1f}' for g in row['gap_runs_mm'])}), frames {row['frames']}",
+            file=sys.stderr,
+            flush=True,
+        )
     return rows
 
 
 def speed_row(pattern, body_v, body_f, edge: float, repeats: int = 3) -> dict:
     """Wall time to a settled drape with the default options: the best of ``repeats`` runs."""
     from core.drape import drape
+
     best = None
     for _ in range(repeats):
         t0 = time.perf_counter()
@@ -126,10 +143,19 @@ def speed_row(pattern, body_v, body_f, edge: float, repeats: int = 3) -> dict:
         if best is None or total < best[1]:
             best = (r, total)
     r, total = best
-    return {"edge_m": edge, "triangles": int(len(r.faces)), "particles": int(r.used.sum()), "frames": r.frames,
-            "settle_reason": r.settle_reason, "simulate_s": r.timings["simulate"], "total_s": total,
-            "prepare_s": r.timings["prepare"], "compile_s": r.timings["compile"], "repeats": repeats,
-            "goal_met": bool(r.settled and total <= 10.0)}
+    return {
+        "edge_m": edge,
+        "triangles": int(len(r.faces)),
+        "particles": int(r.used.sum()),
+        "frames": r.frames,
+        "settle_reason": r.settle_reason,
+        "simulate_s": r.timings["simulate"],
+        "total_s": total,
+        "prepare_s": r.timings["prepare"],
+        "compile_s": r.timings["compile"],
+        "repeats": repeats,
+        "goal_met": bool(r.settled and total <= 10.0),
+    }
 
 
 def monotonic(values) -> bool:
@@ -137,6 +163,7 @@ def monotonic(values) -> bool:
 
 
 # --- Newton SolverStyle3D -----------------------------------------------------
+
 
 class Skipped(Exception):
     """A baseline that cannot run here (its package is missing): reported as skipped, with the reason."""
@@ -146,19 +173,31 @@ def _import_newton():
     try:
         import newton
     except ImportError:
-        raise Skipped(f"newton is not installed (a benchmark-only dependency: `pip install {NEWTON_PIN}`, "
-                      f"or the project's `bench` extra)") from None
+        raise Skipped(
+            f"newton is not installed (a benchmark-only dependency: `pip install {NEWTON_PIN}`, "
+            f"or the project's `bench` extra)"
+        ) from None
     return newton
 
 
 def _check_bpy() -> None:
     import importlib.util
+
     if importlib.util.find_spec("bpy") is None:
         raise Skipped("bpy (Blender as a Python module) is not installed")
 
 
-def drape_newton(pattern, body_v, body_f, material, frames: int, fps: float = 30.0, substeps: int = 10,
-                 iterations: int = 4, time_budget: float = 180.0) -> dict:
+def drape_newton(
+    pattern,
+    body_v,
+    body_f,
+    material,
+    frames: int,
+    fps: float = 30.0,
+    substeps: int = 10,
+    iterations: int = 4,
+    time_budget: float = 180.0,
+) -> dict:
     """Drape ``pattern`` with Newton's SolverStyle3D from the same skintight start, pins and material.
 
     Settings follow Newton's own style3d cloth example (10 substeps, 4 iterations).
@@ -170,6 +209,7 @@ def drape_newton(pattern, body_v, body_f, material, frames: int, fps: float = 30
     newton = _import_newton()
     import warp as wp
     from newton.solvers import style3d
+
     from core.drape.mesh import build_cloth
 
     cloth = build_cloth(pattern)
@@ -184,12 +224,20 @@ def drape_newton(pattern, body_v, body_f, material, frames: int, fps: float = 30
     builder = newton.ModelBuilder(up_axis=newton.Axis.Z)
     newton.solvers.SolverStyle3D.register_custom_attributes(builder)
     style3d.add_cloth_mesh(
-        builder, pos=wp.vec3(0.0, 0.0, 0.0), rot=wp.quat_identity(), vel=wp.vec3(0.0, 0.0, 0.0),
-        vertices=[tuple(map(float, v)) for v in cloth.x0], indices=cloth.faces.reshape(-1).tolist(),
-        panel_verts=[tuple(map(float, q)) for q in uv], panel_indices=uv_idx.reshape(-1).tolist(),
-        density=material.density, scale=1.0, particle_radius=material.thickness,
+        builder,
+        pos=wp.vec3(0.0, 0.0, 0.0),
+        rot=wp.quat_identity(),
+        vel=wp.vec3(0.0, 0.0, 0.0),
+        vertices=[tuple(map(float, v)) for v in cloth.x0],
+        indices=cloth.faces.reshape(-1).tolist(),
+        panel_verts=[tuple(map(float, q)) for q in uv],
+        panel_indices=uv_idx.reshape(-1).tolist(),
+        density=material.density,
+        scale=1.0,
+        particle_radius=material.thickness,
         tri_aniso_ke=wp.vec3(material.stretch_weft, material.stretch_warp, material.shear),
-        edge_aniso_ke=wp.vec3(material.bending, material.bending, material.bending))
+        edge_aniso_ke=wp.vec3(material.bending, material.bending, material.bending),
+    )
     builder.add_shape_mesh(body=-1, mesh=newton.Mesh(np.asarray(body_v, np.float32), np.asarray(body_f).reshape(-1)))
     model = builder.finalize(device="cpu")
     flags = model.particle_flags.numpy()
@@ -197,8 +245,9 @@ def drape_newton(pattern, body_v, body_f, material, frames: int, fps: float = 30
     model.particle_flags = wp.array(flags, device="cpu")
     model.soft_contact_mu = material.friction
     model.set_gravity((0.0, 0.0, -9.81))
-    solver = newton.solvers.SolverStyle3D(model=model, config=newton.solvers.SolverStyle3D.Config(
-        iterations=iterations))
+    solver = newton.solvers.SolverStyle3D(
+        model=model, config=newton.solvers.SolverStyle3D.Config(iterations=iterations)
+    )
     s0, s1 = model.state(), model.state()
     control = model.control()
     pipeline = newton.CollisionPipeline(model)
@@ -221,16 +270,23 @@ def drape_newton(pattern, body_v, body_f, material, frames: int, fps: float = 30
     if not np.all(np.isfinite(x)):
         raise RuntimeError("SolverStyle3D diverged (NaN positions)")
     positions = x[np.where(cloth.particle_of >= 0, cloth.particle_of, 0)]
-    return {"positions": positions, "seconds": t_sim + t_build, "simulate_s": t_sim, "build_s": t_build,
-            "version": getattr(newton, "__version__", "?"),
-            "seam_gap_mm": 0.0, "frames": done, "extrapolated_s": t_build + t_sim * frames / max(done, 1)}
+    return {
+        "positions": positions,
+        "seconds": t_sim + t_build,
+        "simulate_s": t_sim,
+        "build_s": t_build,
+        "version": getattr(newton, "__version__", "?"),
+        "seam_gap_mm": 0.0,
+        "frames": done,
+        "extrapolated_s": t_build + t_sim * frames / max(done, 1),
+    }
 
 
 # --- Blender cloth ------------------------------------------------------------
 
 #: the start of every Blender script here (also bench_fabric's): the inputs (argv: in.npz with a JSON
 #: ``config`` holding ``frames`` and ``fps``, out path), an empty scene, and ``make`` (a mesh object)
-BLENDER_PRELUDE = r'''
+BLENDER_PRELUDE = r"""
 import json, sys, time
 import numpy as np
 import bpy
@@ -250,9 +306,11 @@ def make(name, verts, faces, edges=()):
     ob = bpy.data.objects.new(name, me)
     scene.collection.objects.link(ob)
     return ob
-'''
+"""
 
-BLENDER_SCRIPT = BLENDER_PRELUDE + r'''
+BLENDER_SCRIPT = (
+    BLENDER_PRELUDE
+    + r"""
 
 body = make("body", d["body_v"], d["body_f"])
 col = body.modifiers.new("collision", "COLLISION")
@@ -292,11 +350,21 @@ ev = cloth.evaluated_get(dg)
 x = np.array([tuple(ev.matrix_world @ v.co) for v in ev.data.vertices])
 np.savez(dst, positions=x, seconds=time.perf_counter() - t0, n_eval=len(ev.data.vertices),
          n_in=len(d["verts"]))
-'''
+"""
+)
 
 
-def drape_blender(pattern, body_v, body_f, material, frames: int, fps: float = 30.0, quality: int = 5,
-                  timeout: float = 900.0, use_rest_key: bool = False) -> dict:
+def drape_blender(
+    pattern,
+    body_v,
+    body_f,
+    material,
+    frames: int,
+    fps: float = 30.0,
+    quality: int = 5,
+    timeout: float = 900.0,
+    use_rest_key: bool = False,
+) -> dict:
     """Drape with Blender's cloth modifier (bpy, in a subprocess): unwelded panels from the skintight
     start, sewing springs along the seams, pins as a mass group, body collision.
 
@@ -330,31 +398,50 @@ def drape_blender(pattern, body_v, body_f, material, frames: int, fps: float = 3
     sew.append(np.stack([order[same], order[same + 1]], 1))
     sew = np.unique(np.sort(np.concatenate(sew), axis=1), axis=0)
     sew = sew[sew[:, 0] != sew[:, 1]]
-    pins = np.nonzero(np.isin(ids, np.concatenate([np.asarray(v) for v in pattern.pins.values()])))[0] \
-        if pattern.pins else np.zeros(0, int)
+    pins = (
+        np.nonzero(np.isin(ids, np.concatenate([np.asarray(v) for v in pattern.pins.values()])))[0]
+        if pattern.pins
+        else np.zeros(0, int)
+    )
     n_vert = off
     w = np.concatenate([_tri_areas(np.asarray(p.xyz, float), p.faces) for p in pattern.panels])
     ease = float(np.sum(w * np.concatenate([np.asarray(p.achieved_weft, float) for p in pattern.panels])) / w.sum())
-    area = sum(float(np.sum(_tri_areas(np.column_stack([p.uv, np.zeros(len(p.uv))]), p.faces)))
-               for p in pattern.panels)
-    cfg = {"frames": int(frames), "fps": fps, "quality": int(quality), "thickness": material.thickness,
-           "friction": material.friction, "vertex_mass": material.density * area / n_vert,
-           # Blender's stiffnesses are unitless per-spring scales; map the material's N/m to its usual range
-           "tension": float(np.clip(material.stretch_warp / 200.0, 5.0, 1000.0)),
-           "shear": float(np.clip(material.shear / 2.0, 1.0, 1000.0)),
-           "bending": float(np.clip(material.bending * 1e5, 0.05, 100.0)), "sewing_force": 10.0,
-           "use_rest_key": bool(use_rest_key), "shrink": 0.0 if use_rest_key else -float(ease - 1.0)}
+    area = sum(float(np.sum(_tri_areas(np.column_stack([p.uv, np.zeros(len(p.uv))]), p.faces))) for p in pattern.panels)
+    cfg = {
+        "frames": int(frames),
+        "fps": fps,
+        "quality": int(quality),
+        "thickness": material.thickness,
+        "friction": material.friction,
+        "vertex_mass": material.density * area / n_vert,
+        # Blender's stiffnesses are unitless per-spring scales; map the material's N/m to its usual range
+        "tension": float(np.clip(material.stretch_warp / 200.0, 5.0, 1000.0)),
+        "shear": float(np.clip(material.shear / 2.0, 1.0, 1000.0)),
+        "bending": float(np.clip(material.bending * 1e5, 0.05, 100.0)),
+        "sewing_force": 10.0,
+        "use_rest_key": bool(use_rest_key),
+        "shrink": 0.0 if use_rest_key else -float(ease - 1.0),
+    }
     with tempfile.TemporaryDirectory() as tmp:
         src, dst, script = Path(tmp) / "in.npz", Path(tmp) / "out.npz", Path(tmp) / "cloth.py"
-        np.savez(src, body_v=np.asarray(body_v, float), body_f=np.asarray(body_f), verts=np.concatenate(verts),
-                 faces=np.concatenate(faces), rest=np.concatenate(rest), sew=sew, pins=pins,
-                 config=json.dumps(cfg))
+        np.savez(
+            src,
+            body_v=np.asarray(body_v, float),
+            body_f=np.asarray(body_f),
+            verts=np.concatenate(verts),
+            faces=np.concatenate(faces),
+            rest=np.concatenate(rest),
+            sew=sew,
+            pins=pins,
+            config=json.dumps(cfg),
+        )
         script.write_text(BLENDER_SCRIPT)
         env = dict(os.environ)
         env.setdefault("BLENDER_USER_RESOURCES", tmp)
         t0 = time.perf_counter()
-        proc = subprocess.run([sys.executable, str(script), str(src), str(dst)], env=env, capture_output=True,
-                              text=True, timeout=timeout)
+        proc = subprocess.run(
+            [sys.executable, str(script), str(src), str(dst)], env=env, capture_output=True, text=True, timeout=timeout
+        )
         wall = time.perf_counter() - t0
         if proc.returncode != 0 or not dst.exists():
             raise RuntimeError(f"Blender cloth run failed (exit {proc.returncode}): {proc.stderr.strip()[-400:]}")
@@ -370,8 +457,13 @@ def drape_blender(pattern, body_v, body_f, material, frames: int, fps: float = 3
     np.add.at(count, ids, 1.0)
     positions /= np.maximum(count, 1)[:, None]
     seam = np.linalg.norm(x[sew[:, 0]] - x[sew[:, 1]], axis=1) if len(sew) else np.zeros(0)
-    return {"positions": positions, "seconds": sim, "process_s": wall, "seam_gap_mm": float(seam.max(initial=0) * 1e3),
-            "frames": frames}
+    return {
+        "positions": positions,
+        "seconds": sim,
+        "process_s": wall,
+        "seam_gap_mm": float(seam.max(initial=0) * 1e3),
+        "frames": frames,
+    }
 
 
 def _tri_areas(v, f):
@@ -382,12 +474,16 @@ def _tri_areas(v, f):
 def _score(positions, pattern, result_like, body_v, body_f) -> dict:
     """Penetration and mean gap of positions (per global id) in the layout of our DrapeResult."""
     from core.metrics.drape import fold_measures, penetration, post_drape_gap
+
     x = np.asarray(positions, float)
     share, _ = penetration(x[result_like.used], body_v, body_f)
     gap, _ = post_drape_gap(body_v, body_f, x, result_like.faces, result_like.start_positions)
-    return {"penetration_pct": 100.0 * share, "gap_mean_mm": float(gap.mean() * 1e3) if len(gap) else 0.0,
-            "gap_std_mm": float(gap.std() * 1e3) if len(gap) else 0.0,
-            "folds": fold_measures(x, result_like.faces)}
+    return {
+        "penetration_pct": 100.0 * share,
+        "gap_mean_mm": float(gap.mean() * 1e3) if len(gap) else 0.0,
+        "gap_std_mm": float(gap.std() * 1e3) if len(gap) else 0.0,
+        "folds": fold_measures(x, result_like.faces),
+    }
 
 
 def side_by_side(pattern, body_v, body_f, frames: int, budget: float = 180.0) -> list:
@@ -399,27 +495,46 @@ def side_by_side(pattern, body_v, body_f, frames: int, budget: float = 180.0) ->
     t0 = time.perf_counter()
     ours = drape(pattern, body_v, body_f, options={"max_frames": frames})
     wall = time.perf_counter() - t0
-    row = {"simulator": "EASE XPBD (ours, Warp CPU)", "wall_s": wall, "wall_s_for_same_frames": wall,
-           "frames": ours.frames,
-           "settled": ours.settled, "seam_gap_mm": float(
-               np.linalg.norm(ours.positions[ours.seam_pairs[:, 0]] - ours.positions[ours.seam_pairs[:, 1]],
-                              axis=1).max(initial=0) * 1e3)}
+    row = {
+        "simulator": "EASE XPBD (ours, Warp CPU)",
+        "wall_s": wall,
+        "wall_s_for_same_frames": wall,
+        "frames": ours.frames,
+        "settled": ours.settled,
+        "seam_gap_mm": float(
+            np.linalg.norm(ours.positions[ours.seam_pairs[:, 0]] - ours.positions[ours.seam_pairs[:, 1]], axis=1).max(
+                initial=0
+            )
+            * 1e3
+        ),
+    }
     row.update(_score(ours.positions, pattern, ours, body_v, body_f))
     rows.append(row)
-    for name, fn in (("Newton SolverStyle3D (Warp CPU)", drape_newton), ("Blender cloth + sewing (bpy)",
-                                                                         drape_blender)):
+    for name, fn in (
+        ("Newton SolverStyle3D (Warp CPU)", drape_newton),
+        ("Blender cloth + sewing (bpy)", drape_blender),
+    ):
         try:
             kw = {"time_budget": budget} if fn is drape_newton else {}
             out = fn(pattern, body_v, body_f, mat, frames=ours.frames, **kw)
-            row = {"simulator": name, "wall_s": out["seconds"], "frames": out["frames"], "settled": None,
-                   "seam_gap_mm": out["seam_gap_mm"],
-                   "wall_s_for_same_frames": out.get("extrapolated_s", out["seconds"])}
+            row = {
+                "simulator": name,
+                "wall_s": out["seconds"],
+                "frames": out["frames"],
+                "settled": None,
+                "seam_gap_mm": out["seam_gap_mm"],
+                "wall_s_for_same_frames": out.get("extrapolated_s", out["seconds"]),
+            }
             if fn is drape_newton:
-                row["note"] = (f"newton {out['version']}: build {out['build_s']:.1f} s (incl. first-run kernel compile) + simulate "
-                               f"{out['simulate_s']:.1f} s; 10 substeps x 4 PD iterations per frame")
+                row["note"] = (
+                    f"newton {out['version']}: build {out['build_s']:.1f} s (incl. first-run kernel compile) + simulate "
+                    f"{out['simulate_s']:.1f} s; 10 substeps x 4 PD iterations per frame"
+                )
             else:
-                row["note"] = (f"simulate {out['seconds']:.1f} s (Blender process {out['process_s']:.1f} s); "
-                               "rest = skintight grown by the mean ease (isotropic)")
+                row["note"] = (
+                    f"simulate {out['seconds']:.1f} s (Blender process {out['process_s']:.1f} s); "
+                    "rest = skintight grown by the mean ease (isotropic)"
+                )
             row.update(_score(out["positions"], pattern, ours, body_v, body_f))
         except Skipped as exc:
             row = {"simulator": name, "skipped": str(exc)}
@@ -432,10 +547,13 @@ def side_by_side(pattern, body_v, body_f, frames: int, budget: float = 180.0) ->
 
 # --- report -------------------------------------------------------------------
 
+
 def _plot(curves: dict, path: Path) -> None:
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     fig, axes = plt.subplots(1, len(curves), figsize=(5 * len(curves), 4), dpi=110, squeeze=False)
     for ax, (garment, rows) in zip(axes[0], curves.items()):
         e = np.array([r["ease"] for r in rows])
@@ -448,8 +566,10 @@ def _plot(curves: dict, path: Path) -> None:
         ax.set_title(f"{garment}: mean ± std over body vertices")
         ax.grid(alpha=0.3)
     fig.tight_layout()
-    from core.fileio import write_bytes
     import io
+
+    from core.fileio import write_bytes
+
     buf = io.BytesIO()
     fig.savefig(buf, format="png")
     plt.close(fig)
@@ -457,56 +577,84 @@ def _plot(curves: dict, path: Path) -> None:
 
 
 def _markdown(res: dict) -> str:
-    lines = ["# Drape benchmarks", "",
-             f"Machine: CPU, {res['cpu']}. Material: {res['material']}. Levels: {len(res['levels'])} uniform ease "
-             f"levels in [{res['levels'][0]:.2f}, {res['levels'][-1]:.2f}].", ""]
+    lines = [
+        "# Drape benchmarks",
+        "",
+        f"Machine: CPU, {res['cpu']}. Material: {res['material']}. Levels: {len(res['levels'])} uniform ease "
+        f"levels in [{res['levels'][0]:.2f}, {res['levels'][-1]:.2f}].",
+        "",
+    ]
     o = res["drape_options"]
-    lines += ["## Post-drape gap vs ease (paper Fig. gap-graph, SPEC item 6)", "",
-              f"Each level: the design cut at {res['refine_edge_length_m'] * 100:.1f} cm refinement, the pattern "
-              f"solved with that uniform ease, draped from the skintight start (rest shape grown to the pattern; "
-              f"self-collision {'on' if o['self_collision'] else 'off'}; settled below "
-              f"{o['settle_speed'] * 1000:.0f} mm/s RMS or stopped at {o['max_frames']} frames). Where a loose "
-              f"garment's folds land is chaotic: one drape's mean gap moves by about ±2 mm at the top levels when "
-              f"the growth length changes, as much as one ease step. So each level is draped "
-              f"{len(res['grow_variants'])} times, growing over {'/'.join(str(g) for g in res['grow_variants'])} "
-              f"frames, and the gap mean is their mean; every drape's own mean is in the 'runs' column "
-              f"(the default drape grows over 20). Gap std: over body vertices, averaged over the runs. "
-              f"Penetration and seam gap: the worst run.", "",
-              "![gap curve](drape_gap_curve.png)", ""]
+    lines += [
+        "## Post-drape gap vs ease (paper Fig. gap-graph, SPEC item 6)",
+        "",
+        f"Each level: the design cut at {res['refine_edge_length_m'] * 100:.1f} cm refinement, the pattern "
+        f"solved with that uniform ease, draped from the skintight start (rest shape grown to the pattern; "
+        f"self-collision {'on' if o['self_collision'] else 'off'}; settled below "
+        f"{o['settle_speed'] * 1000:.0f} mm/s RMS or stopped at {o['max_frames']} frames). Where a loose "
+        f"garment's folds land is chaotic: one drape's mean gap moves by about ±2 mm at the top levels when "
+        f"the growth length changes, as much as one ease step. So each level is draped "
+        f"{len(res['grow_variants'])} times, growing over {'/'.join(str(g) for g in res['grow_variants'])} "
+        f"frames, and the gap mean is their mean; every drape's own mean is in the 'runs' column "
+        f"(the default drape grows over 20). Gap std: over body vertices, averaged over the runs. "
+        f"Penetration and seam gap: the worst run.",
+        "",
+        "![gap curve](drape_gap_curve.png)",
+        "",
+    ]
     for garment, rows in res["gap_curve"].items():
         steps = np.diff([r["gap_mean_mm"] for r in rows])
-        worst = (f" (smallest step {steps.min():+.2f} mm, at ease {rows[int(np.argmin(steps)) + 1]['ease']:.3f})"
-                 if len(steps) else "")
-        lines += [f"### {garment} — mean rises monotonically: **{res['monotonic'][garment]}**{worst}", "",
-                  "| ease | triangles | gap mean (mm) | runs (mm) | gap std (mm) | penetration (%) | seam gap (mm) | "
-                  "frames | settled | drape (s, per run) |", "|---|---|---|---|---|---|---|---|---|---|"]
+        worst = (
+            f" (smallest step {steps.min():+.2f} mm, at ease {rows[int(np.argmin(steps)) + 1]['ease']:.3f})"
+            if len(steps)
+            else ""
+        )
+        lines += [
+            f"### {garment} — mean rises monotonically: **{res['monotonic'][garment]}**{worst}",
+            "",
+            "| ease | triangles | gap mean (mm) | runs (mm) | gap std (mm) | penetration (%) | seam gap (mm) | "
+            "frames | settled | drape (s, per run) |",
+            "|---|---|---|---|---|---|---|---|---|---|",
+        ]
         for r in rows:
             runs = " / ".join(f"{g:.1f}" for g in r["gap_runs_mm"])
             frames = "/".join(str(f) for f in r["frames"])
             settled = "all" if all(r["settled"]) else f"{sum(r['settled'])} of {len(r['settled'])}"
-            lines.append(f"| {r['ease']:.3f} | {r['triangles']} | {r['gap_mean_mm']:.1f} | {runs} | "
-                         f"{r['gap_std_mm']:.1f} | {r['penetration_pct']:.2f} | {r['seam_gap_mm']:.2f} | {frames} | "
-                         f"{settled} | {r['drape_s']:.1f} |")
+            lines.append(
+                f"| {r['ease']:.3f} | {r['triangles']} | {r['gap_mean_mm']:.1f} | {runs} | "
+                f"{r['gap_std_mm']:.1f} | {r['penetration_pct']:.2f} | {r['seam_gap_mm']:.2f} | {frames} | "
+                f"{settled} | {r['drape_s']:.1f} |"
+            )
         lines.append("")
     sp = res.get("speed")
     if sp:
-        lines += ["## Speed: settled drape of the shirt on this CPU (goal <= 10 s)", "",
-                  "Wall time of `drape()` with its default options (best of "
-                  f"{sp.get('repeats', 1)} runs; the machine is shared, so the minimum is the cost).", "",
-                  "| refinement | triangles | particles | frames | stop | simulate (s) | total (s) | goal met |",
-                  "|---|---|---|---|---|---|---|---|"]
+        lines += [
+            "## Speed: settled drape of the shirt on this CPU (goal <= 10 s)",
+            "",
+            "Wall time of `drape()` with its default options (best of "
+            f"{sp.get('repeats', 1)} runs; the machine is shared, so the minimum is the cost).",
+            "",
+            "| refinement | triangles | particles | frames | stop | simulate (s) | total (s) | goal met |",
+            "|---|---|---|---|---|---|---|---|",
+        ]
         for row in [sp] + list(sp.get("others", [])):
-            lines.append(f"| {row['edge_m'] * 100:.1f} cm | {row['triangles']} | {row['particles']} | "
-                         f"{row['frames']} | {row['settle_reason']} | {row['simulate_s']:.2f} | "
-                         f"{row['total_s']:.2f} | {row['goal_met']} |")
+            lines.append(
+                f"| {row['edge_m'] * 100:.1f} cm | {row['triangles']} | {row['particles']} | "
+                f"{row['frames']} | {row['settle_reason']} | {row['simulate_s']:.2f} | "
+                f"{row['total_s']:.2f} | {row['goal_met']} |"
+            )
         lines.append("")
     if res.get("side_by_side"):
-        lines += ["## Side-by-side on the same shirt pattern and body", "",
-                  f"Every simulator runs the frames our drape needed to settle ({res['side_by_side'][0]['frames']}); "
-                  "one that exceeds the time budget stops early and its time for all frames is extrapolated.", "",
-                  "| simulator | wall (s) | frames run | wall for all frames (s) | penetration (%) | seam gap (mm) | "
-                  "mean gap (mm) | mean dihedral (deg) | edges > 30 deg (%) | mean curvature (1/m) | note |",
-                  "|---|---|---|---|---|---|---|---|---|---|---|"]
+        lines += [
+            "## Side-by-side on the same shirt pattern and body",
+            "",
+            f"Every simulator runs the frames our drape needed to settle ({res['side_by_side'][0]['frames']}); "
+            "one that exceeds the time budget stops early and its time for all frames is extrapolated.",
+            "",
+            "| simulator | wall (s) | frames run | wall for all frames (s) | penetration (%) | seam gap (mm) | "
+            "mean gap (mm) | mean dihedral (deg) | edges > 30 deg (%) | mean curvature (1/m) | note |",
+            "|---|---|---|---|---|---|---|---|---|---|---|",
+        ]
         for r in res["side_by_side"]:
             if "skipped" in r:
                 lines.append(f"| {r['simulator']} | – | – | – | – | – | – | – | – | – | skipped: {r['skipped']} |")
@@ -514,24 +662,37 @@ def _markdown(res: dict) -> str:
                 lines.append(f"| {r['simulator']} | – | – | – | – | – | – | – | – | – | could not run: {r['error']} |")
             else:
                 f = r.get("folds") or {}
-                folds = (f"{f['mean_dihedral_deg']:.1f} | {f['edges_over_30_pct']:.1f} | "
-                         f"{f['mean_curvature_per_m']:.1f}") if f else "– | – | –"
-                lines.append(f"| {r['simulator']} | {r['wall_s']:.2f} | {r['frames']} | "
-                             f"{r['wall_s_for_same_frames']:.1f} | {r['penetration_pct']:.2f} | "
-                             f"{r['seam_gap_mm']:.2f} | {r['gap_mean_mm']:.1f} | {folds} | {r.get('note', '')} |")
-        lines += ["", "Folds (core.metrics.drape.fold_measures): over the interior edges of the draped mesh, the "
-                  "mean dihedral angle, the share of edges bent over 30 degrees, and the mean curvature "
-                  "sum |theta| |e| / (2 A).", ""]
-    lines += ["Gap: rays from body vertices under the skintight garment along outward vertex normals to the "
-              "draped garment, 0 where nothing is hit. Penetration: garment vertices > 2 mm inside the body. "
-              "Seam gap: largest distance between sewn vertices after the drape (0 by construction where seams "
-              "are welded, as in ours and Newton's run).", ""]
+                folds = (
+                    (f"{f['mean_dihedral_deg']:.1f} | {f['edges_over_30_pct']:.1f} | {f['mean_curvature_per_m']:.1f}")
+                    if f
+                    else "– | – | –"
+                )
+                lines.append(
+                    f"| {r['simulator']} | {r['wall_s']:.2f} | {r['frames']} | "
+                    f"{r['wall_s_for_same_frames']:.1f} | {r['penetration_pct']:.2f} | "
+                    f"{r['seam_gap_mm']:.2f} | {r['gap_mean_mm']:.1f} | {folds} | {r.get('note', '')} |"
+                )
+        lines += [
+            "",
+            "Folds (core.metrics.drape.fold_measures): over the interior edges of the draped mesh, the "
+            "mean dihedral angle, the share of edges bent over 30 degrees, and the mean curvature "
+            "sum |theta| |e| / (2 A).",
+            "",
+        ]
+    lines += [
+        "Gap: rays from body vertices under the skintight garment along outward vertex normals to the "
+        "draped garment, 0 where nothing is hit. Penetration: garment vertices > 2 mm inside the body. "
+        "Seam gap: largest distance between sewn vertices after the drape (0 by construction where seams "
+        "are welded, as in ours and Newton's run).",
+        "",
+    ]
     return "\n".join(lines)
 
 
 def run(out_dir, quick: bool = False) -> dict:
     """Run the drape benchmarks; write drape.md, drape.json and drape_gap_curve.png into ``out_dir``."""
     import os
+
     from core.body import load_body
     from core.fileio import write_json, write_text
 
@@ -545,10 +706,18 @@ def run(out_dir, quick: bool = False) -> dict:
     # self-collision, so that the folds of a loose garment stack instead of passing through each other
     opts = {"max_frames": 60 if quick else 150, "settle_speed": 0.004, "self_collision": True}
     from core.drape import DrapeOptions
+
     opts_all = {**asdict(DrapeOptions()), **opts}
-    res = {"levels": [float(e) for e in levels], "cpu": f"{os.cpu_count()} cores", "material": "cotton",
-           "refine_edge_length_m": edge, "drape_options": opts_all, "grow_variants": list(GROW_VARIANTS),
-           "gap_curve": {}, "monotonic": {}}
+    res = {
+        "levels": [float(e) for e in levels],
+        "cpu": f"{os.cpu_count()} cores",
+        "material": "cotton",
+        "refine_edge_length_m": edge,
+        "drape_options": opts_all,
+        "grow_variants": list(GROW_VARIANTS),
+        "gap_curve": {},
+        "monotonic": {},
+    }
     for garment in GARMENTS:
         rows = gap_curve(garment, levels, edge, body, opts)
         res["gap_curve"][garment] = rows
@@ -572,6 +741,7 @@ def run(out_dir, quick: bool = False) -> dict:
 
 if __name__ == "__main__":
     import argparse
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default=str(REPO / "benchmarks" / "results"))
     ap.add_argument("--quick", action="store_true")

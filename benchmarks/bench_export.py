@@ -11,6 +11,7 @@ and 60 s, on one nester thread, on all cores as threads, and on all cores as
 side-by-side tries (with the load average: the nester stops on wall time).
 Writes ``export.md`` and ``export.json`` into ``out_dir``.
 """
+
 from __future__ import annotations
 
 import importlib.util
@@ -26,13 +27,13 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 SYNTHETIC = HERE.parent / "tests" / "helpers" / "synthetic_pattern.py"
-DXF_READER = HERE.parent / "tests" / "helpers" / "dxf_reader.py"   # the tests' second, ezdxf-independent reader
+DXF_READER = HERE.parent / "tests" / "helpers" / "dxf_reader.py"  # the tests' second, ezdxf-independent reader
 
 
 def _load(path: Path, name: str):
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module   # dataclasses look their module up while the class is made
+    sys.modules[name] = module  # dataclasses look their module up while the class is made
     spec.loader.exec_module(module)
     return module
 
@@ -61,6 +62,7 @@ def _accuracy(pattern, pieces, texts: dict) -> dict:
 
     from core.geom.polygon import distance_to_polyline
     from core.geom.polyline import polyline_length
+
     out = {}
     # allowance: distance from each sew edge midpoint to the cut line vs its width
     err = []
@@ -89,7 +91,7 @@ def _accuracy(pattern, pieces, texts: dict) -> dict:
             if not s.gathered:
                 half = len(a) // 2
                 off[:half] = np.abs(a[:half] - b[:half])
-                off[len(a) - half:] = np.abs((la - a[len(a) - half:]) - (lb - b[len(a) - half:]))
+                off[len(a) - half :] = np.abs((la - a[len(a) - half :]) - (lb - b[len(a) - half :]))
             worst = max(worst, float(off.max()))
     out["notch_counts_match"] = bool(count_ok)
     out["notch_arclength_mismatch_mm"] = worst * 1000
@@ -117,16 +119,19 @@ def _accuracy(pattern, pieces, texts: dict) -> dict:
 
 
 MARKER_SIZES = ("XS", "S", "M", "L", "XL")
-MARKER_WIDTH = 1.5            # m of fabric
+MARKER_WIDTH = 1.5  # m of fabric
 MARKER_BUDGETS = (10, 30, 60)  # nester seconds; quick: the first two, shorter
-MARKER_SEEDS = (0, 1, 2)      # the all-core rows: one run per seed (seeds differ by about as much as settings do)
-MARKER_TILT = 2.0             # degrees each side of 0/180 in the tilt-tolerance row (the default is no tilt)
-STRIP_EFFICIENCY_NOTE = "the export's sheet layout of the same pieces (skyline of bounding boxes 2 cm apart, 1.5 m wide)"
+MARKER_SEEDS = (0, 1, 2)  # the all-core rows: one run per seed (seeds differ by about as much as settings do)
+MARKER_TILT = 2.0  # degrees each side of 0/180 in the tilt-tolerance row (the default is no tilt)
+STRIP_EFFICIENCY_NOTE = (
+    "the export's sheet layout of the same pieces (skyline of bounding boxes 2 cm apart, 1.5 m wide)"
+)
 
 
 def _child_cpu() -> float:
     """CPU seconds of the finished nester processes so far (they run as children)."""
     import resource
+
     ru = resource.getrusage(resource.RUSAGE_CHILDREN)
     return ru.ru_utime + ru.ru_stime
 
@@ -145,10 +150,17 @@ def _marker_rows(quick: bool = False) -> dict:
     items = marker_items(runs)
     area = sum(it.area * it.count for it in items)
     # the export's own sheet layout: bounding boxes, grain along the length, 2 cm apart
-    strip = layout_pieces([np.stack([it.outline.min(0), it.outline.max(0)]) for it in items for _ in range(it.count)],
-                          MARKER_WIDTH, 0.02)
-    rows = [{"method": "strip layout", "seconds": 0.0, "length_m": round(float(strip.size[1]), 3),
-             "efficiency_pct": round(100 * area / (MARKER_WIDTH * float(strip.size[1])), 2)}]
+    strip = layout_pieces(
+        [np.stack([it.outline.min(0), it.outline.max(0)]) for it in items for _ in range(it.count)], MARKER_WIDTH, 0.02
+    )
+    rows = [
+        {
+            "method": "strip layout",
+            "seconds": 0.0,
+            "length_m": round(float(strip.size[1]), 3),
+            "efficiency_pct": round(100 * area / (MARKER_WIDTH * float(strip.size[1])), 2),
+        }
+    ]
     cores = os.cpu_count() or 1
     runs = [(1, 1, b, (0,), 0.0) for b in ((5, 10) if quick else MARKER_BUDGETS)]
     if cores > 1 and not quick:
@@ -162,52 +174,83 @@ def _marker_rows(quick: bool = False) -> dict:
         for seed in seeds:
             cpu0 = _child_cpu()
             m = nest(items, MARKER_WIDTH, seconds=budget, seed=seed, threads=threads, tries=tries, tilt=tilt)
-            got.append({"efficiency_pct": 100 * m.efficiency, "length_m": m.length, "stopped": m.stopped,
-                        "wall_s": m.seconds, "cpu_s": _child_cpu() - cpu0, "load": os.getloadavg()[0]})
+            got.append(
+                {
+                    "efficiency_pct": 100 * m.efficiency,
+                    "length_m": m.length,
+                    "stopped": m.stopped,
+                    "wall_s": m.seconds,
+                    "cpu_s": _child_cpu() - cpu0,
+                    "load": os.getloadavg()[0],
+                }
+            )
         eff = [g["efficiency_pct"] for g in got]
-        rows.append({"method": "spyrrow" if not tilt else f"spyrrow, tilt +-{tilt:g} deg", "tilt_deg": tilt,
-                     "threads": threads, "tries": tries, "seconds": budget, "seeds": list(seeds),
-                     "length_m": round(float(np.mean([g["length_m"] for g in got])), 3),
-                     "efficiency_pct": round(float(np.mean(eff)), 2),
-                     "efficiency_pct_min": round(min(eff), 2), "efficiency_pct_max": round(max(eff), 2),
-                     "efficiency_pct_by_seed": [round(e, 2) for e in eff],
-                     "stopped": sorted({g["stopped"] for g in got}),
-                     "wall_s": round(float(np.mean([g["wall_s"] for g in got])), 1),
-                     "cpu_s": round(float(np.mean([g["cpu_s"] for g in got])), 1),
-                     "load": [round(g["load"], 2) for g in got]})
+        rows.append(
+            {
+                "method": "spyrrow" if not tilt else f"spyrrow, tilt +-{tilt:g} deg",
+                "tilt_deg": tilt,
+                "threads": threads,
+                "tries": tries,
+                "seconds": budget,
+                "seeds": list(seeds),
+                "length_m": round(float(np.mean([g["length_m"] for g in got])), 3),
+                "efficiency_pct": round(float(np.mean(eff)), 2),
+                "efficiency_pct_min": round(min(eff), 2),
+                "efficiency_pct_max": round(max(eff), 2),
+                "efficiency_pct_by_seed": [round(e, 2) for e in eff],
+                "stopped": sorted({g["stopped"] for g in got}),
+                "wall_s": round(float(np.mean([g["wall_s"] for g in got])), 1),
+                "cpu_s": round(float(np.mean([g["cpu_s"] for g in got])), 1),
+                "load": [round(g["load"], 2) for g in got],
+            }
+        )
     load.append(round(os.getloadavg()[0], 2))
-    return {"pieces": sum(it.count for it in items), "sizes": list(MARKER_SIZES), "width_m": MARKER_WIDTH,
-            "cores": cores, "load_start_end": load, "rows": rows}
+    return {
+        "pieces": sum(it.count for it in items),
+        "sizes": list(MARKER_SIZES),
+        "width_m": MARKER_WIDTH,
+        "cores": cores,
+        "load_start_end": load,
+        "rows": rows,
+    }
 
 
 def _marker_md(marker: dict) -> list:
-    lines = ["", "## Marker efficiency", "",
-             f"Teaser shirt + pants, sizes {', '.join(marker.get('sizes', []))} (one garment each, "
-             f"{marker.get('pieces', '-')} pieces), {marker.get('width_m', 0) * 100:.0f} cm fabric, grain along the "
-             "selvage (0/180 degrees). Efficiency = the true cut lines' area (allowance included) / marker "
-             "area (width x length to the farthest true cut line). Threads: the nester's worker threads (one "
-             "search); tries: nesters side by side in the same wall time (seeds 0, 1, ...), the shortest kept; "
-             f"cores used = threads x tries, of {marker.get('cores', '-')} on this machine. Rows with several seeds "
-             "are one run per seed: efficiency, length, wall and cpu s are their means, min-max the spread. Load "
-             f"average (1 min) at the start and end: {marker.get('load_start_end', '-')}, and after each run in the "
-             "load column (the nester stops on wall time: a loaded machine gives it less work; cpu s is the CPU time "
-             "the nesters got, budget x cores used on an idle machine). The tilt row is a tilt-tolerance run: "
-             f"each piece may also lie {MARKER_TILT:g} degrees either side of 0/180 (`ease marker --tilt "
-             f"{MARKER_TILT:g}`, which the issue allows as an option; every other row and the default keep the grain "
-             "at 0/180 exactly). "
-             f"The strip layout row is {STRIP_EFFICIENCY_NOTE}.", ""]
+    lines = [
+        "",
+        "## Marker efficiency",
+        "",
+        f"Teaser shirt + pants, sizes {', '.join(marker.get('sizes', []))} (one garment each, "
+        f"{marker.get('pieces', '-')} pieces), {marker.get('width_m', 0) * 100:.0f} cm fabric, grain along the "
+        "selvage (0/180 degrees). Efficiency = the true cut lines' area (allowance included) / marker "
+        "area (width x length to the farthest true cut line). Threads: the nester's worker threads (one "
+        "search); tries: nesters side by side in the same wall time (seeds 0, 1, ...), the shortest kept; "
+        f"cores used = threads x tries, of {marker.get('cores', '-')} on this machine. Rows with several seeds "
+        "are one run per seed: efficiency, length, wall and cpu s are their means, min-max the spread. Load "
+        f"average (1 min) at the start and end: {marker.get('load_start_end', '-')}, and after each run in the "
+        "load column (the nester stops on wall time: a loaded machine gives it less work; cpu s is the CPU time "
+        "the nesters got, budget x cores used on an idle machine). The tilt row is a tilt-tolerance run: "
+        f"each piece may also lie {MARKER_TILT:g} degrees either side of 0/180 (`ease marker --tilt "
+        f"{MARKER_TILT:g}`, which the issue allows as an option; every other row and the default keep the grain "
+        "at 0/180 exactly). "
+        f"The strip layout row is {STRIP_EFFICIENCY_NOTE}.",
+        "",
+    ]
     if "error" in marker:
         return lines + [f"not run: {marker['error']}"]
-    lines += ["| method | threads | tries | budget s | seeds | wall s | cpu s | length m | efficiency % | min-max % "
-              "| load |",
-              "|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines += [
+        "| method | threads | tries | budget s | seeds | wall s | cpu s | length m | efficiency % | min-max % | load |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for r in marker["rows"]:
         seeds = ", ".join(str(s) for s in r.get("seeds", [])) or "-"
         spread = f"{r['efficiency_pct_min']}-{r['efficiency_pct_max']}" if len(r.get("seeds", [])) > 1 else "-"
         load = ", ".join(str(x) for x in r["load"]) if isinstance(r.get("load"), list) else r.get("load", "-")
-        lines.append(f"| {r['method']} | {r.get('threads', '-')} | {r.get('tries', '-')} | {r['seconds']:g} | "
-                     f"{seeds} | {r.get('wall_s', '-')} | {r.get('cpu_s', '-')} | {r['length_m']} | "
-                     f"{r['efficiency_pct']} | {spread} | {load} |")
+        lines.append(
+            f"| {r['method']} | {r.get('threads', '-')} | {r.get('tries', '-')} | {r['seconds']:g} | "
+            f"{seeds} | {r.get('wall_s', '-')} | {r.get('cpu_s', '-')} | {r['length_m']} | "
+            f"{r['efficiency_pct']} | {spread} | {load} |"
+        )
     return lines
 
 
@@ -215,9 +258,9 @@ def run(out_dir, quick: bool = False) -> dict:
     from core.export import dxf, pdf, svg
     from core.export.pieces import build_pieces
     from core.export.print_set import print_set
-    from core.geom.layout import layout_pieces
     from core.export.validate import validate_pattern
     from core.fileio import write_json, write_text
+    from core.geom.layout import layout_pieces
 
     out_dir = Path(out_dir)
     results = []
@@ -225,8 +268,11 @@ def run(out_dir, quick: bool = False) -> dict:
         if pattern is None:
             results.append({"pattern": name, "error": error})
             continue
-        row = {"pattern": name, "pieces": len(pattern.panels),
-               "boundary_vertices": int(sum(len(b) for p in pattern.panels for b in p.boundary))}
+        row = {
+            "pattern": name,
+            "pieces": len(pattern.panels),
+            "boundary_vertices": int(sum(len(b) for p in pattern.panels for b in p.boundary)),
+        }
         warnings = validate_pattern(pattern, strict=False)
         t = time.perf_counter()
         pieces = build_pieces(pattern, warnings=warnings)
@@ -242,19 +288,22 @@ def run(out_dir, quick: bool = False) -> dict:
         row["pdf_nest_ms"] = (time.perf_counter() - t) * 1000 / 2
         row["pdf_nest_cpu_ms"] = (time.process_time() - c) * 1000 / 2
         texts = {}
-        for fmt, fn in (("svg", lambda: svg.svg_document(pieces, lay, pattern.style)),
-                        ("dxf", lambda: dxf.astm_text(pieces, lay, pattern.style, "M")),
-                        ("dxf_r12", lambda: dxf.astm_r12_text(pieces, lay, pattern.style, "M")),
-                        ("dxf_plain", lambda: dxf.plain_text(pieces, lay, pattern.style)),
-                        ("pdf_a4", lambda: pdf.tiled_pdf(printed, sheets["a4"], "a4", pattern.style)),
-                        ("pdf_letter", lambda: pdf.tiled_pdf(printed, sheets["letter"], "letter", pattern.style)),
-                        ("pdf_plotter", lambda: pdf.plotter_pdf(pieces, lay_pdf, pattern.style))):
+        for fmt, fn in (
+            ("svg", lambda: svg.svg_document(pieces, lay, pattern.style)),
+            ("dxf", lambda: dxf.astm_text(pieces, lay, pattern.style, "M")),
+            ("dxf_r12", lambda: dxf.astm_r12_text(pieces, lay, pattern.style, "M")),
+            ("dxf_plain", lambda: dxf.plain_text(pieces, lay, pattern.style)),
+            ("pdf_a4", lambda: pdf.tiled_pdf(printed, sheets["a4"], "a4", pattern.style)),
+            ("pdf_letter", lambda: pdf.tiled_pdf(printed, sheets["letter"], "letter", pattern.style)),
+            ("pdf_plotter", lambda: pdf.plotter_pdf(pieces, lay_pdf, pattern.style)),
+        ):
             t = time.perf_counter()
             texts[fmt] = fn()
             row[f"{fmt}_ms"] = (time.perf_counter() - t) * 1000
         for paper, lay_p in sheets.items():
-            row[f"{paper}_pages"], row[f"{paper}_empty_pages"] = _page_counts(printed, lay_p, paper,
-                                                                              texts[f"pdf_{paper}"])
+            row[f"{paper}_pages"], row[f"{paper}_empty_pages"] = _page_counts(
+                printed, lay_p, paper, texts[f"pdf_{paper}"]
+            )
             # every piece printed (`--print-all`), for comparison
             every = pdf.print_sheet(pieces, paper)
             row[f"{paper}_pages_print_all"] = int(pdf.sheet_pages(pieces, every, paper)[1].sum())
@@ -265,20 +314,48 @@ def run(out_dir, quick: bool = False) -> dict:
         row.update(_accuracy(pattern, pieces, texts))
         results.append(row)
 
-    lines = ["# Export benchmark", "",
-             "Time to build the pieces (sew/cut lines, notches, grain, labels) and to render each format; "
-             "accuracy of the files read back (mm). Allowance error: distance from each sew-line edge's midpoint to "
-             "the cut line minus the requested width; edges off by more than 0.1 mm are those next to "
-             "corners (allowance squared or mitred so sewn corners close) or where a 2 cm hem meets a 1 cm seam: "
-             "there the nearest cut line is the neighbour's. Tiled PDFs (a4, letter): each mirrored pair printed "
-             "once, labelled cut 2 (the export's default; `printed_pieces` drawings), `*_pages_print_all` the same "
-             "paper with every piece printed (`ease export --print-all`); empty pages: printed pages that no cut or "
-             "sew line crosses; `pdf_nest_ms` / `pdf_nest_cpu_ms`: wall / CPU time of the print layout per paper.", ""]
-    keys = ["pieces", "boundary_vertices", "warnings", "build_ms", "svg_ms", "dxf_ms", "dxf_r12_ms", "pdf_a4_ms",
-            "pdf_plotter_ms", "pdf_nest_ms", "pdf_nest_cpu_ms", "printed_pieces", "a4_pages", "a4_empty_pages",
-            "a4_pages_print_all", "letter_pages", "letter_empty_pages", "letter_pages_print_all",
-            "dxf_readers", "pdf_test_square_mm", "allowance_err_mm_p95", "allowance_err_mm_max",
-            "allowance_edges_within_0.1mm_pct", "notch_counts_match", "notch_arclength_mismatch_mm", "svg_size_err_mm", "dxf_sew_length_err_mm"]
+    lines = [
+        "# Export benchmark",
+        "",
+        "Time to build the pieces (sew/cut lines, notches, grain, labels) and to render each format; "
+        "accuracy of the files read back (mm). Allowance error: distance from each sew-line edge's midpoint to "
+        "the cut line minus the requested width; edges off by more than 0.1 mm are those next to "
+        "corners (allowance squared or mitred so sewn corners close) or where a 2 cm hem meets a 1 cm seam: "
+        "there the nearest cut line is the neighbour's. Tiled PDFs (a4, letter): each mirrored pair printed "
+        "once, labelled cut 2 (the export's default; `printed_pieces` drawings), `*_pages_print_all` the same "
+        "paper with every piece printed (`ease export --print-all`); empty pages: printed pages that no cut or "
+        "sew line crosses; `pdf_nest_ms` / `pdf_nest_cpu_ms`: wall / CPU time of the print layout per paper.",
+        "",
+    ]
+    keys = [
+        "pieces",
+        "boundary_vertices",
+        "warnings",
+        "build_ms",
+        "svg_ms",
+        "dxf_ms",
+        "dxf_r12_ms",
+        "pdf_a4_ms",
+        "pdf_plotter_ms",
+        "pdf_nest_ms",
+        "pdf_nest_cpu_ms",
+        "printed_pieces",
+        "a4_pages",
+        "a4_empty_pages",
+        "a4_pages_print_all",
+        "letter_pages",
+        "letter_empty_pages",
+        "letter_pages_print_all",
+        "dxf_readers",
+        "pdf_test_square_mm",
+        "allowance_err_mm_p95",
+        "allowance_err_mm_max",
+        "allowance_edges_within_0.1mm_pct",
+        "notch_counts_match",
+        "notch_arclength_mismatch_mm",
+        "svg_size_err_mm",
+        "dxf_sew_length_err_mm",
+    ]
     lines.append("| pattern | " + " | ".join(keys) + " |")
     lines.append("|---" * (len(keys) + 1) + "|")
     for r in results:
@@ -302,6 +379,7 @@ def _page_counts(pieces, layout, paper: str, data: bytes):
     """(pages in the PDF, pages of them with no cut or sew line), the line check by dense sampling of the lines
     against each printed window (independent of the tiler's clipping test); page 1 holds the test square."""
     from core.export import pdf
+
     n = len(re.findall(rb"/Type /Page\b", data))
     grid, ink = pdf.sheet_pages(pieces, layout, paper)
     pts = []
@@ -364,13 +442,14 @@ def _page_one(data: bytes) -> bytes:
     """Decoded content stream of the first page of a reportlab PDF."""
     import base64
     import zlib
+
     kids = re.search(rb"/Kids \[\s*(\d+) 0 R", data)
     page = re.search(rb"\n" + kids.group(1) + rb" 0 obj(.*?)endobj", data, re.S).group(1)
     cref = re.search(rb"/Contents (\d+) 0 R", page).group(1)
     obj = re.search(rb"\n" + cref + rb" 0 obj(.*?)endobj", data, re.S).group(1)
     length = int(re.search(rb"/Length (\d+)", obj).group(1))
     start = re.search(rb"stream\r?\n", obj).end()
-    raw = obj[start:start + length]
+    raw = obj[start : start + length]
     if b"ASCII85Decode" in obj[:start]:
         raw = base64.a85decode(raw.strip().removesuffix(b"~>"), adobe=False)
     return zlib.decompress(raw) if b"FlateDecode" in obj[:start] else raw
@@ -379,4 +458,5 @@ def _page_one(data: bytes) -> bytes:
 if __name__ == "__main__":
     import json
     import sys
+
     print(json.dumps(run(sys.argv[1] if len(sys.argv) > 1 else "bench_out"), indent=1, default=str))

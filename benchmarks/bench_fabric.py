@@ -20,6 +20,7 @@ Every EASE run stops on :func:`core.drape.textile.settle` (kinetic energy per ma
 and the largest particle displacement over a frame both under their thresholds,
 3 frames running) or at its frame limit; the tables say which.
 """
+
 from __future__ import annotations
 
 import json
@@ -47,6 +48,7 @@ def ease_rows(quick: bool) -> list:
     from core.drape import DrapeOptions
     from core.drape import textile as T
     from core.drape.materials import PRESETS
+
     base = DrapeOptions().iterations
     edges = EDGES[:1] if quick else EDGES
     factors = ITERATION_FACTORS[:1] if quick else ITERATION_FACTORS
@@ -58,35 +60,52 @@ def ease_rows(quick: bool) -> list:
                 t0 = time.perf_counter()
                 c = T.cusick(name, edge=edge, options=opts, max_frames=400)
                 # the cantilever at 2.5 mm and 4x iterations takes minutes a fabric: left out
-                b = T.cantilever(name, edge=edge / 2, options=opts, bisections=6) \
-                    if (f == 1 or edge == edges[0]) else None
-                row = {"material": name, "edge_mm": edge * 1e3, "substeps": DrapeOptions().substeps,
-                       "iterations": base * f,
-                       "dc_pct": c["dc_pct"], "nodes": c["nodes"], "frames": c["frames"], "settled": c["settled"],
-                       "energy_J_per_kg": c["energy"], "move_mm": c["move_mm"], "particles": c["particles"],
-                       "ms_per_frame": c["ms_per_frame"],
-                       "bending_length_cm": b["bending_length_cm"] if b else float("nan"),
-                       "bending_edge_mm": edge / 2 * 1e3, "bending_expected_cm": T.cantilever_expected(name),
-                       "bending_runs_settled": all(r["settled"] for r in b["runs"]) if b else None,
-                       "wall_s": time.perf_counter() - t0}
+                b = (
+                    T.cantilever(name, edge=edge / 2, options=opts, bisections=6)
+                    if (f == 1 or edge == edges[0])
+                    else None
+                )
+                row = {
+                    "material": name,
+                    "edge_mm": edge * 1e3,
+                    "substeps": DrapeOptions().substeps,
+                    "iterations": base * f,
+                    "dc_pct": c["dc_pct"],
+                    "nodes": c["nodes"],
+                    "frames": c["frames"],
+                    "settled": c["settled"],
+                    "energy_J_per_kg": c["energy"],
+                    "move_mm": c["move_mm"],
+                    "particles": c["particles"],
+                    "ms_per_frame": c["ms_per_frame"],
+                    "bending_length_cm": b["bending_length_cm"] if b else float("nan"),
+                    "bending_edge_mm": edge / 2 * 1e3,
+                    "bending_expected_cm": T.cantilever_expected(name),
+                    "bending_runs_settled": all(r["settled"] for r in b["runs"]) if b else None,
+                    "wall_s": time.perf_counter() - t0,
+                }
                 rows.append(row)
-                print(f"[bench fabric] {name} {edge * 1e3:.0f} mm, {base * f} iterations: DC {row['dc_pct']:.1f} %, "
-                      f"{row['nodes']} nodes, c {row['bending_length_cm']:.2f} cm "
-                      f"({row['frames']} frames, settled {row['settled']}; {row['wall_s']:.0f} s)",
-                      file=sys.stderr, flush=True)
+                print(
+                    f"[bench fabric] {name} {edge * 1e3:.0f} mm, {base * f} iterations: DC {row['dc_pct']:.1f} %, "
+                    f"{row['nodes']} nodes, c {row['bending_length_cm']:.2f} cm "
+                    f"({row['frames']} frames, settled {row['settled']}; {row['wall_s']:.0f} s)",
+                    file=sys.stderr,
+                    flush=True,
+                )
     return rows
 
 
 def _bench_drape():
     """bench_drape.py of this folder (its Blender script prelude), loaded by path as ``ease bench`` does."""
     import importlib.util
+
     spec = importlib.util.spec_from_file_location("ease_bench_drape_prelude", Path(__file__).parent / "bench_drape.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
 
 
-BLENDER_BODY = r'''
+BLENDER_BODY = r"""
 import ast
 out = {"version": bpy.app.version_string, "presets": {}}
 for preset in cfg["presets"]:
@@ -120,13 +139,15 @@ for preset in cfg["presets"]:
     out["presets"][preset] = {"positions": x.tolist(), "seconds": sec,
                               "move_mm": float(np.linalg.norm(x - prev, axis=1).max() * 1e3)}
 json.dump(out, open(dst, "w"))
-'''
+"""
 
 
 def blender_rows() -> list:
     """Blender's cloth presets on the 10 mm Cusick disc (rows with DC and nodes, or one row with the reason)."""
     import importlib.util
+
     from core.drape import textile as T
+
     if importlib.util.find_spec("bpy") is None:
         return [{"preset": "-", "skipped": "bpy (Blender as a Python module) is not installed"}]
     root = Path(importlib.util.find_spec("bpy").origin).parent
@@ -138,29 +159,44 @@ def blender_rows() -> list:
     body_v, body_f = T.cylinder_body(T.SUPPORT_RADIUS, 0.3)
     thickness = 0.003
     verts = np.column_stack([uv, np.full(len(uv), 1.01 * thickness)])
-    cfg = {"frames": BLENDER_FRAMES, "fps": 30, "thickness": thickness, "presets": list(BLENDER_PRESETS),
-           "preset_dir": str(preset_dir)}
+    cfg = {
+        "frames": BLENDER_FRAMES,
+        "fps": 30,
+        "thickness": thickness,
+        "presets": list(BLENDER_PRESETS),
+        "preset_dir": str(preset_dir),
+    }
     with tempfile.TemporaryDirectory() as tmp:
         src, dst, script = Path(tmp) / "in.npz", Path(tmp) / "out.json", Path(tmp) / "cusick.py"
         np.savez(src, body_v=body_v, body_f=body_f, verts=verts, faces=faces, pins=pins, config=json.dumps(cfg))
         script.write_text(_bench_drape().BLENDER_PRELUDE + BLENDER_BODY)
         env = dict(os.environ)
         env.setdefault("BLENDER_USER_RESOURCES", tmp)
-        proc = subprocess.run([sys.executable, str(script), str(src), str(dst)], env=env, capture_output=True,
-                              text=True, timeout=1800)
+        proc = subprocess.run(
+            [sys.executable, str(script), str(src), str(dst)], env=env, capture_output=True, text=True, timeout=1800
+        )
         if proc.returncode != 0 or not dst.exists():
-            return [{"preset": "-", "error": f"Blender run failed (exit {proc.returncode}): "
-                                            f"{proc.stderr.strip()[-400:]}"}]
+            return [
+                {"preset": "-", "error": f"Blender run failed (exit {proc.returncode}): {proc.stderr.strip()[-400:]}"}
+            ]
         out = json.loads(dst.read_text())
     rows = []
     rim = np.nonzero(np.hypot(uv[:, 0], uv[:, 1]) >= T.SPECIMEN_RADIUS - 1e-9)[0]
-    a_sup, a_spec = np.pi * T.SUPPORT_RADIUS ** 2, np.pi * T.SPECIMEN_RADIUS ** 2
+    a_sup, a_spec = np.pi * T.SUPPORT_RADIUS**2, np.pi * T.SPECIMEN_RADIUS**2
     for preset, r in out["presets"].items():
         x = np.asarray(r["positions"], float)
         dc = 100.0 * (T.shadow_area(x[:, :2], faces) - a_sup) / (a_spec - a_sup)
-        rows.append({"preset": preset, "bpy": out["version"], "dc_pct": dc, "nodes": T.count_nodes(x[rim, :2])[0],
-                     "frames": BLENDER_FRAMES, "last_frame_move_mm": r["move_mm"],
-                     "ms_per_frame": 1e3 * r["seconds"] / BLENDER_FRAMES})
+        rows.append(
+            {
+                "preset": preset,
+                "bpy": out["version"],
+                "dc_pct": dc,
+                "nodes": T.count_nodes(x[rim, :2])[0],
+                "frames": BLENDER_FRAMES,
+                "last_frame_move_mm": r["move_mm"],
+                "ms_per_frame": 1e3 * r["seconds"] / BLENDER_FRAMES,
+            }
+        )
         print(f"[bench fabric] Blender {preset}: DC {dc:.1f} %", file=sys.stderr, flush=True)
     return rows
 
@@ -176,43 +212,64 @@ def _spread(rows, material, key):
 
 def _markdown(res: dict) -> str:
     from core.drape.materials import TARGETS
+
     rows = res["ease"]
-    lines = ["# Fabric benchmarks", "",
-             f"Machine: CPU, {res['cpu']}. EASE's drape solver (`DrapeSolver`, its default options but the "
-             "XPBD iterations per substep) on the textile tests of SPEC item 11: Cusick drape coefficient "
-             "(30 cm disc on an 18 cm support, shadow rasterised at 1 mm) and nodes; ASTM D1388 cantilever "
-             "bending length (2.5 cm strip, 41.5 degrees, on a strip meshed at half the Cusick edge: 5 and "
-             "2.5 mm). Settle test: kinetic energy per mass < "
-             f"{res['settle']['energy_J_per_kg']:g} J/kg and largest particle move per frame < "
-             f"{res['settle']['move_mm']:g} mm, {res['settle']['frames']} frames running.", "",
-             "| fabric | edge (mm) | iterations | DC (%) | target DC (%) | nodes | target nodes | settled (frames) | "
-             "bending length (cm) | preset's (G/W)^1/3 (cm) | target (cm) | ms/frame (Cusick) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines = [
+        "# Fabric benchmarks",
+        "",
+        f"Machine: CPU, {res['cpu']}. EASE's drape solver (`DrapeSolver`, its default options but the "
+        "XPBD iterations per substep) on the textile tests of SPEC item 11: Cusick drape coefficient "
+        "(30 cm disc on an 18 cm support, shadow rasterised at 1 mm) and nodes; ASTM D1388 cantilever "
+        "bending length (2.5 cm strip, 41.5 degrees, on a strip meshed at half the Cusick edge: 5 and "
+        "2.5 mm). Settle test: kinetic energy per mass < "
+        f"{res['settle']['energy_J_per_kg']:g} J/kg and largest particle move per frame < "
+        f"{res['settle']['move_mm']:g} mm, {res['settle']['frames']} frames running.",
+        "",
+        "| fabric | edge (mm) | iterations | DC (%) | target DC (%) | nodes | target nodes | settled (frames) | "
+        "bending length (cm) | preset's (G/W)^1/3 (cm) | target (cm) | ms/frame (Cusick) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for r in rows:
         t = TARGETS.get(r["material"], {})
         dc_t = "–".join(f"{v:g}" for v in t.get("dc_pct", ())) or "-"
         nd_t = "–".join(f"{v:g}" for v in t.get("nodes", ())) or "-"
         c_t = "–".join(f"{v:g}" for v in t.get("bending_length_cm", ())) or "-"
-        lines.append(f"| {r['material']} | {r['edge_mm']:.0f} | {r['iterations']} | {r['dc_pct']:.1f} | {dc_t} | "
-                     f"{r['nodes']} | {nd_t} | {'yes' if r['settled'] else 'NO'} ({r['frames']}) | "
-                     f"{_cm(r['bending_length_cm'])} | {r['bending_expected_cm']:.2f} | {c_t} | "
-                     f"{r['ms_per_frame']:.1f} |")
-    lines += ["", "Convergence (target: DC within +-3 points across mesh edge and iterations, i.e. a spread "
-              "<= 6):", "",
-              "| fabric | DC spread (points) | bending length spread (cm) |", "|---|---|---|"]
+        lines.append(
+            f"| {r['material']} | {r['edge_mm']:.0f} | {r['iterations']} | {r['dc_pct']:.1f} | {dc_t} | "
+            f"{r['nodes']} | {nd_t} | {'yes' if r['settled'] else 'NO'} ({r['frames']}) | "
+            f"{_cm(r['bending_length_cm'])} | {r['bending_expected_cm']:.2f} | {c_t} | "
+            f"{r['ms_per_frame']:.1f} |"
+        )
+    lines += [
+        "",
+        "Convergence (target: DC within +-3 points across mesh edge and iterations, i.e. a spread <= 6):",
+        "",
+        "| fabric | DC spread (points) | bending length spread (cm) |",
+        "|---|---|---|",
+    ]
     for m in dict.fromkeys(r["material"] for r in rows):
         lines.append(f"| {m} | {_spread(rows, m, 'dc_pct'):.1f} | {_spread(rows, m, 'bending_length_cm'):.2f} |")
-    lines += ["", f"## Blender cloth presets (bpy {res.get('bpy', '?')}), same 10 mm disc and support, "
-              f"{BLENDER_FRAMES} frames", "",
-              "| preset | DC (%) | nodes | largest move over the last frame (mm) | ms/frame |", "|---|---|---|---|---|"]
+    lines += [
+        "",
+        f"## Blender cloth presets (bpy {res.get('bpy', '?')}), same 10 mm disc and support, {BLENDER_FRAMES} frames",
+        "",
+        "| preset | DC (%) | nodes | largest move over the last frame (mm) | ms/frame |",
+        "|---|---|---|---|---|",
+    ]
     for r in res["blender"]:
         if "dc_pct" in r:
-            lines.append(f"| {r['preset']} | {r['dc_pct']:.1f} | {r['nodes']} | {r['last_frame_move_mm']:.2f} | "
-                         f"{r['ms_per_frame']:.1f} |")
+            lines.append(
+                f"| {r['preset']} | {r['dc_pct']:.1f} | {r['nodes']} | {r['last_frame_move_mm']:.2f} | "
+                f"{r['ms_per_frame']:.1f} |"
+            )
         else:
             lines.append(f"| {r['preset']} | {r.get('skipped') or r.get('error')} | | | |")
-    lines += ["", "Blender's presets are not calibrated to textile tests either; the published ranges are the "
-              "reference. Blender has no silk or jersey preset.", ""]
+    lines += [
+        "",
+        "Blender's presets are not calibrated to textile tests either; the published ranges are the "
+        "reference. Blender has no silk or jersey preset.",
+        "",
+    ]
     return "\n".join(lines)
 
 
@@ -231,11 +288,14 @@ def run(out_dir, quick: bool = False) -> dict:
     """Run the fabric benchmarks; write fabric.md and fabric.json into ``out_dir``."""
     from core.drape import textile as T
     from core.fileio import write_json, write_text
+
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    res = {"cpu": f"{os.cpu_count()} cores", "quick": bool(quick),
-           "settle": {"energy_J_per_kg": T.SETTLE_ENERGY, "move_mm": T.SETTLE_MOVE * 1e3,
-                      "frames": T.SETTLE_FRAMES}}
+    res = {
+        "cpu": f"{os.cpu_count()} cores",
+        "quick": bool(quick),
+        "settle": {"energy_J_per_kg": T.SETTLE_ENERGY, "move_mm": T.SETTLE_MOVE * 1e3, "frames": T.SETTLE_FRAMES},
+    }
     res["ease"] = ease_rows(quick)
     res["blender"] = blender_rows()
     res["bpy"] = next((r["bpy"] for r in res["blender"] if "bpy" in r), None)
@@ -246,6 +306,7 @@ def run(out_dir, quick: bool = False) -> dict:
 
 if __name__ == "__main__":
     import argparse
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default=str(REPO / "benchmarks" / "results"))
     ap.add_argument("--quick", action="store_true")

@@ -23,6 +23,7 @@
 Goals (issue 13): median <= 50 ms, p95 <= 100 ms at 21.6k triangles, converged
 <= 0.5 s after the last stroke, no CPU once converged.
 """
+
 from __future__ import annotations
 
 import importlib.util
@@ -50,16 +51,24 @@ def _addon():
     """
     import os
     import tempfile
+
     import scipy.sparse  # noqa: F401  (this environment's scipy, before bpy extends sys.path)
     import scipy.sparse.linalg  # noqa: F401
+
     if "bpy" not in sys.modules:
         os.environ["BLENDER_USER_RESOURCES"] = tempfile.mkdtemp(prefix="ease_bench_live_user_")
     spec = importlib.util.spec_from_file_location("ease_scripted_run", REPO / "examples" / "scripted_run.py")
     sr = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(sr)
     bpy = sr._bpy()
-    base = next((m[:-len(".live")] for m in sys.modules if m.endswith(".ease_addon.live")
-                 and Path(sys.modules[m].__file__).resolve().is_relative_to(REPO)), None)
+    base = next(
+        (
+            m[: -len(".live")]
+            for m in sys.modules
+            if m.endswith(".ease_addon.live") and Path(sys.modules[m].__file__).resolve().is_relative_to(REPO)
+        ),
+        None,
+    )
     if base is None:
         base = sr.enable_from_checkout(bpy) + ".ease_addon"
     return bpy, sys.modules[base + ".live"], sys.modules[base + ".ease_ops"], sys.modules[base + ".data"]
@@ -88,6 +97,7 @@ def _scheduler(bpy, live, until: float, log=None) -> None:
 def _case(bpy, live, ease_ops, data, template: str, strokes: int, seed: int) -> dict:
     from core.metrics.pattern import ease_compliance
     from core.pattern.build import build_pattern
+
     ops = bpy.ops
     ops.wm.read_homefile(use_empty=True)
     assert ops.ease.add_body(source="DEFAULT") == {"FINISHED"}
@@ -117,13 +127,13 @@ def _case(bpy, live, ease_ops, data, template: str, strokes: int, seed: int) -> 
             latencies.append(1000.0 * (b - pending.pop("t")))
 
     next_at = time.perf_counter()
-    c_paint, w_paint = time.process_time(), next_at     # the process's CPU while painting, all its threads
+    c_paint, w_paint = time.process_time(), next_at  # the process's CPU while painting, all its threads
     for k in range(strokes):
         _scheduler(bpy, live, next_at, log)
         mask = np.linalg.norm(verts - verts[rng.choice(on)], axis=1) < BRUSH_M
         ease_ops.write_vertex_ease(obj, ctx.scene, float(rng.uniform(1.05, 1.8)), mask)
         pending["t"] = time.perf_counter()
-        ctx.view_layer.update()          # what a stroke's redraw does: the depsgraph handler wakes the timer
+        ctx.view_layer.update()  # what a stroke's redraw does: the depsgraph handler wakes the timer
         next_at = pending["t"] + STROKE_EVERY_S
     last = pending["t"]
     # after the last stroke: the loop runs on as the timer runs it; the shown state is kept off the clock
@@ -136,7 +146,7 @@ def _case(bpy, live, ease_ops, data, template: str, strokes: int, seed: int) -> 
         t1 = time.perf_counter()
         ticks.append((t0, t1))
         if solved:
-            final.append(t1 - t0)       # a tick of the final work (the cold solve was complete)
+            final.append(t1 - t0)  # a tick of the final work (the cold solve was complete)
         clock = t1 - last if first else clock + (t1 - t0)
         if first:
             latencies.append(1000.0 * (t1 - last))
@@ -168,69 +178,109 @@ def _case(bpy, live, ease_ops, data, template: str, strokes: int, seed: int) -> 
     ctx.scene.ease.live = False
     lat = np.asarray(latencies)
     tick = 1000.0 * np.asarray([b - a for a, b in ticks[:n_before]])
-    return {"design": template, "triangles": int(len(session.triangles)), "strokes": strokes,
-            "stroke_every_s": STROKE_EVERY_S, "brush_radius_m": BRUSH_M,
-            "setup_s": round(setup_s, 3), "builds": int(live._LIVE["builds"]),
-            "latency_ms": {"median": round(float(np.median(lat)), 1), "p95": round(float(np.percentile(lat, 95)), 1),
-                           "max": round(float(lat.max()), 1), "n": int(lat.size)},
-            "seconds_per_iteration_ms": round(1000.0 * float(session.seconds_per_iteration or 0.0), 2),
-            "cold_compliance_pct": round(cold_c, 3),
-            "within_0.1_point_s": None if within_s is None else round(within_s, 3),
-            "as_good_0.1_point_s": None if good_s is None else round(good_s, 3),
-            "tick_ms": {"median": round(float(np.median(tick)), 1), "p95": round(float(np.percentile(tick, 95)), 1),
-                        "max": round(float(tick.max()), 1), "n": int(tick.size),
-                        "over_slice": int(np.sum(tick > 1000.0 * live.SLICE_S))},
-            "final_work": {"ticks": len(final), "ms": round(1000.0 * sum(final), 1),
-                           "longest_ms": round(1000.0 * max(final), 1) if final else None},
-            "converged_s": round(converged_s, 3), "trace_after_last": trace[:40],
-            "idle_ticks": len(ticks) - n_before, "idle_cpu_fraction": round(idle_cpu, 4),
-            "painting_cpu_cores": round(paint_cpu, 3)}
+    return {
+        "design": template,
+        "triangles": int(len(session.triangles)),
+        "strokes": strokes,
+        "stroke_every_s": STROKE_EVERY_S,
+        "brush_radius_m": BRUSH_M,
+        "setup_s": round(setup_s, 3),
+        "builds": int(live._LIVE["builds"]),
+        "latency_ms": {
+            "median": round(float(np.median(lat)), 1),
+            "p95": round(float(np.percentile(lat, 95)), 1),
+            "max": round(float(lat.max()), 1),
+            "n": int(lat.size),
+        },
+        "seconds_per_iteration_ms": round(1000.0 * float(session.seconds_per_iteration or 0.0), 2),
+        "cold_compliance_pct": round(cold_c, 3),
+        "within_0.1_point_s": None if within_s is None else round(within_s, 3),
+        "as_good_0.1_point_s": None if good_s is None else round(good_s, 3),
+        "tick_ms": {
+            "median": round(float(np.median(tick)), 1),
+            "p95": round(float(np.percentile(tick, 95)), 1),
+            "max": round(float(tick.max()), 1),
+            "n": int(tick.size),
+            "over_slice": int(np.sum(tick > 1000.0 * live.SLICE_S)),
+        },
+        "final_work": {
+            "ticks": len(final),
+            "ms": round(1000.0 * sum(final), 1),
+            "longest_ms": round(1000.0 * max(final), 1) if final else None,
+        },
+        "converged_s": round(converged_s, 3),
+        "trace_after_last": trace[:40],
+        "idle_ticks": len(ticks) - n_before,
+        "idle_cpu_fraction": round(idle_cpu, 4),
+        "painting_cpu_cores": round(paint_cpu, 3),
+    }
 
 
 def run(out_dir, quick: bool = False) -> dict:
     from core.fileio import write_json, write_text
+
     out = Path(out_dir)
     load0 = __import__("os").getloadavg()[0]
     bpy, live, ease_ops, data = _addon()
     cases = {"shirt": CASES["shirt"]} if quick else CASES
     strokes = 15 if quick else STROKES
     results = {name: _case(bpy, live, ease_ops, data, t, strokes, seed=i) for i, (name, t) in enumerate(cases.items())}
-    machine = {"python": platform.python_version(), "cpu": platform.processor() or platform.machine(),
-               "cores": __import__("os").cpu_count(), "bpy": bpy.app.version_string}
+    machine = {
+        "python": platform.python_version(),
+        "cpu": platform.processor() or platform.machine(),
+        "cores": __import__("os").cpu_count(),
+        "bpy": bpy.app.version_string,
+    }
     machine["load_average"] = [round(load0, 2), round(__import__("os").getloadavg()[0], 2)]
-    result = {"machine": machine, "slice_s": live.SLICE_S, "idle_tick_s": live.IDLE_TICK_S, "cases": results,
-              "goals": {"median_ms": 50, "p95_ms": 100, "converged_s": 0.5, "idle_cpu": 0.0}}
-    lines = ["# Live ease painting", "",
-             f"Headless through bpy {machine['bpy']} on {machine['cpu']} ({machine['cores']} cores), Python "
-             f"{machine['python']}. {strokes} simulated strokes per design, one every {STROKE_EVERY_S} s, each a "
-             f"{100 * BRUSH_M:.0f} cm patch of the `ease` layer; the timer's ticks run as Blender runs them "
-             f"(slice {1000 * live.SLICE_S:.0f} ms, {1000 * live.IDLE_TICK_S:.0f} ms apart while converging). "
-             f"Load average at the start / end of the run: {load0:.1f} / {__import__('os').getloadavg()[0]:.1f} (on a shared machine "
-             f"wall times scale with it). Idle CPU includes this script's own 5 ms polling of the timer.", "",
-             "Latency: layer change to the pattern objects updated in the scene. Within 0.1: time after the last "
-             "stroke until the shown pattern's ease compliance is within 0.1 point of a cold solve of the same "
-             "field (the warm pattern is often better than the cold one, so *as good*: until it is at most 0.1 point "
-             "worse). Converged: until the loop stops (the pattern is then the cold solve, bit for bit, stored "
-             "with its figures). Longest tick: the most the viewport waited for the loop in one tick, over "
-             "all ticks of the strokes and convergence (over slice: how many ticks took longer than the "
-             "slice). Final work: the ticks after the cold solve was complete (show, measure, encode, store), "
-             "their number and time. Painting CPU: the process's CPU time (every thread) over wall time from the "
-             "first stroke until the loop stopped, in cores: how much of the machine live painting takes "
-             "(strokes, their redraws and the loop's ticks). Idle CPU: process CPU time over wall time "
-             "during 2 s after convergence.", "",
-             "| design | cut triangles | latency median ms | p95 ms | max ms | longest tick ms | ticks over slice | "
-             "ms / iteration | as good s | within 0.1 s | converged s | final work | painting CPU | idle ticks | idle CPU |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    result = {
+        "machine": machine,
+        "slice_s": live.SLICE_S,
+        "idle_tick_s": live.IDLE_TICK_S,
+        "cases": results,
+        "goals": {"median_ms": 50, "p95_ms": 100, "converged_s": 0.5, "idle_cpu": 0.0},
+    }
+    lines = [
+        "# Live ease painting",
+        "",
+        f"Headless through bpy {machine['bpy']} on {machine['cpu']} ({machine['cores']} cores), Python "
+        f"{machine['python']}. {strokes} simulated strokes per design, one every {STROKE_EVERY_S} s, each a "
+        f"{100 * BRUSH_M:.0f} cm patch of the `ease` layer; the timer's ticks run as Blender runs them "
+        f"(slice {1000 * live.SLICE_S:.0f} ms, {1000 * live.IDLE_TICK_S:.0f} ms apart while converging). "
+        f"Load average at the start / end of the run: {load0:.1f} / {__import__('os').getloadavg()[0]:.1f} (on a shared machine "
+        f"wall times scale with it). Idle CPU includes this script's own 5 ms polling of the timer.",
+        "",
+        "Latency: layer change to the pattern objects updated in the scene. Within 0.1: time after the last "
+        "stroke until the shown pattern's ease compliance is within 0.1 point of a cold solve of the same "
+        "field (the warm pattern is often better than the cold one, so *as good*: until it is at most 0.1 point "
+        "worse). Converged: until the loop stops (the pattern is then the cold solve, bit for bit, stored "
+        "with its figures). Longest tick: the most the viewport waited for the loop in one tick, over "
+        "all ticks of the strokes and convergence (over slice: how many ticks took longer than the "
+        "slice). Final work: the ticks after the cold solve was complete (show, measure, encode, store), "
+        "their number and time. Painting CPU: the process's CPU time (every thread) over wall time from the "
+        "first stroke until the loop stopped, in cores: how much of the machine live painting takes "
+        "(strokes, their redraws and the loop's ticks). Idle CPU: process CPU time over wall time "
+        "during 2 s after convergence.",
+        "",
+        "| design | cut triangles | latency median ms | p95 ms | max ms | longest tick ms | ticks over slice | "
+        "ms / iteration | as good s | within 0.1 s | converged s | final work | painting CPU | idle ticks | idle CPU |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for name, r in results.items():
         lat = r["latency_ms"]
         tk, fw = r["tick_ms"], r["final_work"]
-        lines.append(f"| {name} | {r['triangles']} | {lat['median']} | {lat['p95']} | {lat['max']} | {tk['max']} | "
-                     f"{tk['over_slice']} of {tk['n']} | "
-                     f"{r['seconds_per_iteration_ms']} | {r['as_good_0.1_point_s']} | {r['within_0.1_point_s']} | "
-                     f"{r['converged_s']} | {fw['ticks']} ticks, {fw['ms']} ms | {r['painting_cpu_cores']} cores | "
-                     f"{r['idle_ticks']} | {100 * r['idle_cpu_fraction']:.1f} % |")
-    lines += ["", "Goals: median <= 50 ms, p95 <= 100 ms at 21.6k triangles, converged <= 0.5 s after the last "
-              "stroke, no CPU once converged.", ""]
+        lines.append(
+            f"| {name} | {r['triangles']} | {lat['median']} | {lat['p95']} | {lat['max']} | {tk['max']} | "
+            f"{tk['over_slice']} of {tk['n']} | "
+            f"{r['seconds_per_iteration_ms']} | {r['as_good_0.1_point_s']} | {r['within_0.1_point_s']} | "
+            f"{r['converged_s']} | {fw['ticks']} ticks, {fw['ms']} ms | {r['painting_cpu_cores']} cores | "
+            f"{r['idle_ticks']} | {100 * r['idle_cpu_fraction']:.1f} % |"
+        )
+    lines += [
+        "",
+        "Goals: median <= 50 ms, p95 <= 100 ms at 21.6k triangles, converged <= 0.5 s after the last "
+        "stroke, no CPU once converged.",
+        "",
+    ]
     write_text(out / "live.md", "\n".join(lines))
     write_json(out / "live.json", result)
     return result

@@ -11,6 +11,7 @@ preferences enable, else the CPU: the table says which device, the CPU's
 thread count and the process's CPU seconds beside the wall seconds (on a
 machine shared with other jobs the wall time grows, the CPU time much less).
 """
+
 from __future__ import annotations
 
 import json
@@ -23,7 +24,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 DESIGN = "teaser_shirt_pants"
 
-SCRIPT = r'''
+SCRIPT = r"""
 import json, os, resource, sys, time
 sys.path.insert(0, os.path.join(sys.argv[1], "examples"))
 import scripted_run as sr
@@ -53,33 +54,44 @@ print("RESULT " + json.dumps({"setup_s": round(setup, 2), "views": rows, "device
       "gpu": [d.name for d in getattr(prefs, "devices", []) if d.use and d.type != "CPU"],
       "threads": sc.render.threads, "samples": sc.cycles.samples,
       "size": [sc.render.resolution_x * pct // 100, sc.render.resolution_y * pct // 100]}))
-'''
+"""
 
 
 def run(out_dir, quick: bool = False) -> dict:
     from core.design.templates import template_path
     from core.fileio import write_json, write_text
+
     pct = 34 if quick else 100
     with tempfile.TemporaryDirectory() as tmp:
         script = Path(tmp) / "bench_render_run.py"
         script.write_text(SCRIPT)
         env = dict(os.environ, WARP_CACHE_PATH=os.environ.get("WARP_CACHE_PATH", str(REPO / ".cache" / "warp")))
-        p = subprocess.run([sys.executable, str(script), str(REPO), str(template_path(DESIGN)), tmp, str(pct)],
-                           capture_output=True, text=True, env=env, timeout=7200)
+        p = subprocess.run(
+            [sys.executable, str(script), str(REPO), str(template_path(DESIGN)), tmp, str(pct)],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=7200,
+        )
         line = next((ln for ln in p.stdout.splitlines() if ln.startswith("RESULT ")), None)
     if line is None:
         why = p.stderr.strip()[-2000:] or str(p.returncode)
         raise RuntimeError("the render benchmark's Blender run failed: " + why)
-    res = dict(json.loads(line[len("RESULT "):]), design=DESIGN, quick=quick, load_avg=os.getloadavg())
+    res = dict(json.loads(line[len("RESULT ") :]), design=DESIGN, quick=quick, load_avg=os.getloadavg())
     out = Path(out_dir)
     write_json(out / "render.json", res)
     device = "GPU " + ", ".join(res["gpu"]) if res["device"] == "GPU" else f"CPU, {os.cpu_count()} cores"
-    md = [f"# Render: the studio preset on {DESIGN}", "",
-          f"{res['size'][0]} x {res['size'][1]}, {res['samples']} samples (adaptive, denoised), {device}; "
-          f"Studio Preset {res['setup_s']} s. Load average at the end {tuple(round(x, 1) for x in res['load_avg'])} "
-          f"(wall time grows on a shared machine). Regenerate: `./ease.sh bench --only render`"
-          f"{' (this run: --quick)' if quick else ''}.", "",
-          "| view | wall s | CPU s |", "|---|---|---|"]
+    md = [
+        f"# Render: the studio preset on {DESIGN}",
+        "",
+        f"{res['size'][0]} x {res['size'][1]}, {res['samples']} samples (adaptive, denoised), {device}; "
+        f"Studio Preset {res['setup_s']} s. Load average at the end {tuple(round(x, 1) for x in res['load_avg'])} "
+        f"(wall time grows on a shared machine). Regenerate: `./ease.sh bench --only render`"
+        f"{' (this run: --quick)' if quick else ''}.",
+        "",
+        "| view | wall s | CPU s |",
+        "|---|---|---|",
+    ]
     md += [f"| {r['view'].lower().replace('_', ' ')} | {r['wall_s']} | {r['cpu_s']} |" for r in res["views"]]
     write_text(out / "render.md", "\n".join(md + [""]))
     return res

@@ -23,6 +23,7 @@ while swapping): a run that was killed leaves one behind, and the next write
 of ``NAME`` removes it once process PID no longer exists. Durability against
 a power cut is the filesystem's (files are fsync'ed, folders are not).
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -44,7 +45,7 @@ from .signals import signals_held
 PathLike = Union[str, os.PathLike]
 
 _TEMP = re.compile(r"^\.(?P<name>.*)\.ease-(?P<kind>tmp|old|new)-(?P<pid>\d+)-(?P<tag>[0-9a-f]+)$")
-_NAME_MAX = 200          # bytes of the target's name inside a temporary name (filesystems allow 255)
+_NAME_MAX = 200  # bytes of the target's name inside a temporary name (filesystems allow 255)
 _committed: List[Path] = []
 _lock = threading.Lock()
 
@@ -72,7 +73,7 @@ def _short(name: str) -> str:
     raw = os.fsencode(name)
     if len(raw) < _NAME_MAX:
         return name
-    head = raw[:_NAME_MAX - 9].decode("utf-8", "ignore")      # a character cut in two dropped
+    head = raw[: _NAME_MAX - 9].decode("utf-8", "ignore")  # a character cut in two dropped
     tildes = "~" * (_NAME_MAX - 8 - len(head.encode("utf-8")))
     return f"{head}{tildes}{hashlib.blake2b(raw, digest_size=4).hexdigest()}"
 
@@ -93,7 +94,7 @@ def _alive(pid: int) -> bool:
     except ProcessLookupError:
         return False
     except (PermissionError, OSError):
-        return True           # another user's process, or no way to tell: leave its files alone
+        return True  # another user's process, or no way to tell: leave its files alone
     return True
 
 
@@ -157,7 +158,7 @@ def check_output(path: PathLike, folder: bool = True) -> None:
     try:
         _check_target(path, folder)
         probe = path if folder and path.is_dir() else next((p for p in path.parents if p.is_dir()), None)
-    except OSError as exc:      # a folder on the way that cannot be searched: one line, not a traceback
+    except OSError as exc:  # a folder on the way that cannot be searched: one line, not a traceback
         raise _refuse(path, exc, "the output") from None
     if probe is not None and not os.access(probe, os.W_OK | os.X_OK):
         raise EaseError(f"{path}: cannot write here: {probe} is read-only")
@@ -186,7 +187,7 @@ def write_bytes(path: PathLike, data: bytes) -> Path:
         _remove(old)
     tmp = path.parent / _temp_name(path.name, "tmp", _new_tag())
     try:
-        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)   # 0666 minus the umask
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # 0666 minus the umask
     except OSError as exc:
         raise _refuse(path, exc, "the file") from None
     try:
@@ -220,7 +221,7 @@ def _uncache(fd: int, size: int) -> None:
     A later reader gets the file from disk.
     """
     if size >= UNCACHE_BYTES and hasattr(os, "posix_fadvise"):
-        with contextlib.suppress(OSError):       # advice only: a filesystem may not take it
+        with contextlib.suppress(OSError):  # advice only: a filesystem may not take it
             os.posix_fadvise(fd, 0, 0, os.POSIX_FADV_DONTNEED)
 
 
@@ -254,6 +255,7 @@ def committed_outputs() -> Tuple[Path, ...]:
 
 # ----------------------------------------------------------------------------- output folders
 
+
 def _exchange(a: Path, b: Path) -> bool:
     """Swap the folders ``a`` and ``b`` with one rename; False where the system cannot."""
     func = getattr(_libc(), "renameat2", None) if os.name == "posix" else None
@@ -264,7 +266,7 @@ def _exchange(a: Path, b: Path) -> bool:
         return True
     err = ctypes.get_errno()
     if err in (errno.EINVAL, errno.ENOSYS, errno.ENOTSUP):
-        return False          # a filesystem without RENAME_EXCHANGE: the two-rename fallback
+        return False  # a filesystem without RENAME_EXCHANGE: the two-rename fallback
     raise OSError(err, os.strerror(err), str(b))
 
 
@@ -325,7 +327,7 @@ def _put_back(final: Path, stale) -> None:
     # what is moved below is gone when removed, and _remove ignores a path that is gone
     for kind, tag, path in stale:
         if kind == "old" and not os.path.lexists(final):
-            os.rename(path, final)        # killed between the two renames: the old folder back
+            os.rename(path, final)  # killed between the two renames: the old folder back
     for kind, tag, path in stale:
         _remove(path)
 
@@ -434,7 +436,7 @@ def output_dir(path: PathLike, recover: bool = True) -> Iterator[Path]:
     ------
     EaseError when ``path`` is a file, lies under a file, or is read-only.
     """
-    final = Path(os.path.realpath(path))   # a symlink to a folder: replace the folder, keep the link
+    final = Path(os.path.realpath(path))  # a symlink to a folder: replace the folder, keep the link
     try:
         _check_target(final, folder=True)
         final.parent.mkdir(parents=True, exist_ok=True)
@@ -452,7 +454,7 @@ def output_dir(path: PathLike, recover: bool = True) -> Iterator[Path]:
     except OSError as exc:
         raise _refuse(final, exc, "the output folder") from None
     try:
-        yield tmp                         # the writers' own errors pass through unchanged
+        yield tmp  # the writers' own errors pass through unchanged
         try:
             _fix_modes(tmp)
             (_commit_in_place if in_place else _commit)(tmp, final, tag)
@@ -473,7 +475,7 @@ def _commit(tmp: Path, final: Path, tag: str) -> None:
             os.rename(tmp, final)
         elif not _exchange(tmp, final):
             aside = final.parent / _temp_name(final.name, "old", tag)
-            os.rename(final, aside)       # the next run puts it back if killed right here
+            os.rename(final, aside)  # the next run puts it back if killed right here
             try:
                 os.rename(tmp, final)
             except OSError:
@@ -494,7 +496,7 @@ def _commit_in_place(tmp: Path, final: Path, tag: str) -> None:
             _carry_over(dst, Path(entry.path), top=False)
     new = final / _temp_name(final.name, "new", tag)
     with signals_held():
-        os.rename(tmp, new)               # the commit point: from here on the next run completes the swap
+        os.rename(tmp, new)  # the commit point: from here on the next run completes the swap
         _swap_entries(new, final, final / _temp_name(final.name, "old", tag))
         with _lock:
             _committed.append(final)

@@ -1,4 +1,5 @@
 """JSON text of EASE's values (:func:`dumps_json`): numpy arrays and numbers, paths; NaN refused."""
+
 from __future__ import annotations
 
 import json

@@ -17,6 +17,7 @@ a new session, made once (:func:`topology_key` tells when).
 
 The solver itself stays stateless: the solve's state is a value held here.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -58,6 +59,7 @@ def body_triangles(prep) -> np.ndarray:
     instance, as the design's ``per_triangle`` ease fields are read).
     """
     from .design.resolve import Resolver
+
     loc = Resolver(prep.design, prep.body, prep.reference).locator
     out = []
     for panel in prep.cut.panels:
@@ -97,6 +99,7 @@ class LiveSession:
         self.solver = wf.make_solver(prep, config, progress=progress)
         self.triangles = body_triangles(prep)
         from .geom.mesh import triangle_areas
+
         pos = self.solver.ref_positions
         #: (f,) m^2, the cut triangles' areas on the reference body
         self.areas = np.concatenate([triangle_areas(pos[p.vertex_ids], p.faces) for p in prep.cut.panels])
@@ -111,7 +114,7 @@ class LiveSession:
         self._start = None if pattern is None else self.solver.start_from(pattern)
         self.state = None
         self._cold = None
-        self._cold_upto = 0          # the cold solve runs to here (planned, then collapse rounds)
+        self._cold_upto = 0  # the cold solve runs to here (planned, then collapse rounds)
         self._warm = False
         self.converged = False
         self.iterations_since_change = 0
@@ -131,10 +134,12 @@ class LiveSession:
     def cut_ease(self, body_ease) -> np.ndarray:
         """The per-cut-triangle ease (f,) of a painted field ``body_ease`` (F_body,), checked."""
         from .design.checks import EASE_MAX, EASE_MIN
+
         e = np.asarray(body_ease, dtype=np.float64).reshape(-1)
         if len(e) != self.n_body_triangles:
-            raise PatternError(f"live ease: expected {self.n_body_triangles} values (one per body template "
-                               f"triangle), got {len(e)}")
+            raise PatternError(
+                f"live ease: expected {self.n_body_triangles} values (one per body template triangle), got {len(e)}"
+            )
         bad = ~np.isfinite(e) | (e < EASE_MIN - 1e-12) | (e > EASE_MAX + 1e-12)
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
@@ -154,8 +159,9 @@ class LiveSession:
         ones = np.ones_like(ease)
         plan = self.solver.plan_seams(self.K, ease, ones)
         start = self._start if self.state is None else None
-        self.state = self.solver.begin(self.K, ease, ones, start=start, plan=plan, resume=self.state,
-                                       config=self.preview_config)
+        self.state = self.solver.begin(
+            self.K, ease, ones, start=start, plan=plan, resume=self.state, config=self.preview_config
+        )
         self.ease = ease
         self._cold = None
         self._warm = True
@@ -193,8 +199,12 @@ class LiveSession:
         if self.converged:
             return 0
         if self._warm:
-            done = self._iterate(self.state, budget_s, min_iterations, self.state.iteration + max(
-                self.warm_iterations - self.iterations_since_change, 0))
+            done = self._iterate(
+                self.state,
+                budget_s,
+                min_iterations,
+                self.state.iteration + max(self.warm_iterations - self.iterations_since_change, 0),
+            )
             self._warm = self.iterations_since_change < self.warm_iterations
             return done
         if self._cold is None:
@@ -239,6 +249,7 @@ class LiveSession:
         """The current pattern (core.pattern.Pattern, mode ``reference``); with ``figures``, its
         metrics in ``report["metrics"]``; ``report["live"]``: iterations since the change, converged."""
         from .pattern.build import build_pattern
+
         if self.state is None:
             self.run(0.0)
         res = self.solver.result(self.state)
@@ -257,6 +268,7 @@ class LiveSession:
         """A cold solve (the configuration's iterations from the stretched flattening) of the
         field ``body_ease`` (F_body,) on this session's solver: what live mode converges towards."""
         from .pattern.build import build_pattern
+
         ease = self.cut_ease(body_ease)
         ones = np.ones_like(ease)
         res = self.solver.solve(self.K, ease, ones, plan=self.solver.plan_seams(self.K, ease, ones))
@@ -301,18 +313,23 @@ class PatternText:
     def _panel(self, pattern, panel) -> str:
         from .fileio import dumps_json
         from .pattern.io import pattern_to_json
-        arrays = {f.name: getattr(panel, f.name) for f in dataclasses.fields(panel)
-                  if isinstance(getattr(panel, f.name), np.ndarray)}
+
+        arrays = {
+            f.name: getattr(panel, f.name)
+            for f in dataclasses.fields(panel)
+            if isinstance(getattr(panel, f.name), np.ndarray)
+        }
         kept = {}
         for name, value in arrays.items():
             hit = self._fields.get((panel.name, name))
             if hit is not None and hit[0].dtype == value.dtype and np.array_equal(hit[0], value):
                 kept[name] = hit[1]
         # the kept fields are converted empty (their lists are what costs), their text is reused
-        one = dataclasses.replace(pattern, panels=[dataclasses.replace(
-            panel, **{k: arrays[k][:0] for k in kept})], seams=[], pins={})
+        one = dataclasses.replace(
+            pattern, panels=[dataclasses.replace(panel, **{k: arrays[k][:0] for k in kept})], seams=[], pins={}
+        )
         d = pattern_to_json(one)["panels"][0]
-        if set(kept) - set(d):      # a field stored under another name: convert it in full
+        if set(kept) - set(d):  # a field stored under another name: convert it in full
             d = pattern_to_json(dataclasses.replace(one, panels=[panel]))["panels"][0]
             kept = {}
         parts = []
@@ -329,14 +346,18 @@ class PatternText:
     def _join(pattern, pieces: List[str]) -> str:
         from .fileio import dumps_json
         from .pattern.io import pattern_to_json
+
         top = pattern_to_json(dataclasses.replace(pattern, panels=[]))
-        parts = [f"{json.dumps(k)}: " + ("[" + ", ".join(pieces) + "]" if k == "panels" else dumps_json(v, indent=None))
-                 for k, v in top.items()]
+        parts = [
+            f"{json.dumps(k)}: " + ("[" + ", ".join(pieces) + "]" if k == "panels" else dumps_json(v, indent=None))
+            for k, v in top.items()
+        ]
         return "{" + ", ".join(parts) + "}"
 
 
-def achieved_over_painted(pattern, triangles: np.ndarray, n_body: int,
-                          areas: Optional[np.ndarray] = None) -> np.ndarray:
+def achieved_over_painted(
+    pattern, triangles: np.ndarray, n_body: int, areas: Optional[np.ndarray] = None
+) -> np.ndarray:
     """Per body template triangle ``rho_hat / rho - 1`` (F_body,): the achieved weft scale over the
     painted one, area-weighted over the cut triangles on it (NaN where no garment lies).
 
@@ -348,8 +369,11 @@ def achieved_over_painted(pattern, triangles: np.ndarray, n_body: int,
     areas : (f,) m^2, the cut triangles' areas on the pattern's body (computed when None)
     """
     from .geom.mesh import triangle_areas
-    ratio = np.concatenate([np.asarray(p.achieved_weft, float) / np.asarray(p.target_weft, float)
-                            for p in pattern.panels]) - 1.0
+
+    ratio = (
+        np.concatenate([np.asarray(p.achieved_weft, float) / np.asarray(p.target_weft, float) for p in pattern.panels])
+        - 1.0
+    )
     area = areas if areas is not None else np.concatenate([triangle_areas(p.xyz, p.faces) for p in pattern.panels])
     ok = np.isfinite(ratio)
     w = np.bincount(triangles[ok], weights=area[ok], minlength=n_body)

@@ -5,6 +5,7 @@ extension must not write next to ``site-packages``. Data that ships with the
 package (body model, design templates) is read through
 :mod:`importlib.resources` by the modules that own it.
 """
+
 from __future__ import annotations
 
 import os

@@ -6,6 +6,7 @@ A long operation takes ``progress: Progress | None``. It calls
 partial output behind. The CLI prints a progress line; the add-on drives
 Blender's progress bar and status text.
 """
+
 from __future__ import annotations
 
 import sys
@@ -38,7 +39,7 @@ class ConsoleProgress:
     def __init__(self, stream=None, min_interval: float = 0.2):
         self.stream = stream or sys.stderr
         self.min_interval = min_interval
-        self._last = float("-inf")          # the first line always prints
+        self._last = float("-inf")  # the first line always prints
         self._tty = hasattr(self.stream, "isatty") and self.stream.isatty()
 
     def __call__(self, fraction: float, message: str) -> None:

@@ -4,6 +4,7 @@
 folder itself cannot be renamed; Ctrl-C in the middle would leave it half
 swapped until the next run, so the swap runs with the signals held.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -30,10 +31,10 @@ def signals_held():
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, mask)    # a blocked signal arrives now: recorded
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)  # a blocked signal arrives now: recorded
         for s, handler in handlers.items():
             signal.signal(s, handler)
-        for s in dict.fromkeys(pending):                     # delivered as if it came now
+        for s in dict.fromkeys(pending):  # delivered as if it came now
             handler = handlers[s]
             if callable(handler):
                 handler(s, None)

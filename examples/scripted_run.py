@@ -16,6 +16,7 @@ from this checkout (a temporary extension repository pointing at it) and,
 under a Blender binary whose Python lacks the core's dependencies, borrows
 them from the checkout's ``.venv``.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -31,19 +32,28 @@ REPO = Path(__file__).resolve().parent.parent
 
 def _args(argv):
     if "--" in argv:
-        argv = argv[argv.index("--") + 1:]
+        argv = argv[argv.index("--") + 1 :]
     elif argv and argv[0].endswith(".py"):
         argv = argv[1:]
     ap = argparse.ArgumentParser(prog="scripted_run.py", description=__doc__.split("\n\n")[0])
     ap.add_argument("design", help="design JSON (e.g. examples/designs/teaser_shirt_pants.json)")
     ap.add_argument("out", help="output folder")
     ap.add_argument("--frames", type=int, default=120, help="drape frame limit (default 120)")
-    ap.add_argument("--samples", type=int, default=None,
-                    help="Cycles samples (default: the studio preset's, 32, adaptive and denoised)")
-    ap.add_argument("--resolution", type=int, default=None,
-                    help="render size, %% of the studio's 1080 x 1440 frame (default 100)")
-    ap.add_argument("--view", default="FRONT", choices=("FRONT", "THREE_QUARTER", "BACK", "PATTERN", "ALL"),
-                    help="studio camera (ALL: front, 3/4 and back, render_<view>.png each; default FRONT)")
+    ap.add_argument(
+        "--samples",
+        type=int,
+        default=None,
+        help="Cycles samples (default: the studio preset's, 32, adaptive and denoised)",
+    )
+    ap.add_argument(
+        "--resolution", type=int, default=None, help="render size, %% of the studio's 1080 x 1440 frame (default 100)"
+    )
+    ap.add_argument(
+        "--view",
+        default="FRONT",
+        choices=("FRONT", "THREE_QUARTER", "BACK", "PATTERN", "ALL"),
+        help="studio camera (ALL: front, 3/4 and back, render_<view>.png each; default FRONT)",
+    )
     ap.add_argument("--no-drape", action="store_true", help="skip the drape")
     ap.add_argument("--no-export", action="store_true", help="skip the pattern files (export/)")
     return ap.parse_args(argv)
@@ -55,6 +65,7 @@ def _bpy():
         os.environ["BLENDER_USER_RESOURCES"] = tempfile.mkdtemp(prefix="ease_blender_user_")
     os.environ.setdefault("WARP_CACHE_PATH", str(REPO / ".cache" / "warp"))
     import bpy
+
     try:
         import scipy  # noqa: F401
     except ImportError:  # a Blender binary: use the checkout's venv for the core's dependencies
@@ -71,10 +82,15 @@ def enable_from_checkout(bpy) -> str:
         os.symlink(REPO, link, target_is_directory=True)
     except OSError:  # no symlinks (Windows without rights): copy the package
         import shutil
-        shutil.copytree(REPO, link, ignore=shutil.ignore_patterns(".venv", ".cache", ".git", "tests", "benchmarks",
-                                                                  "build", "dist", "out"))
-    repo = bpy.context.preferences.extensions.repos.new(name="EASE checkout", module="ease_checkout",
-                                                        custom_directory=repo_dir, source="USER")
+
+        shutil.copytree(
+            REPO,
+            link,
+            ignore=shutil.ignore_patterns(".venv", ".cache", ".git", "tests", "benchmarks", "build", "dist", "out"),
+        )
+    repo = bpy.context.preferences.extensions.repos.new(
+        name="EASE checkout", module="ease_checkout", custom_directory=repo_dir, source="USER"
+    )
     module = f"bl_ext.{repo.module}.ease"
     if bpy.ops.preferences.addon_enable(module=module) != {"FINISHED"}:
         raise SystemExit(f"could not enable {module}")
@@ -90,8 +106,16 @@ def _op(bpy, name, **kw):
     print(f"[scripted_run] {name}: {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
 
 
-def run(design: str, out: str, frames: int = 120, samples: int | None = None, resolution: int | None = None,
-        drape: bool = True, export: bool = True, view: str = "FRONT") -> dict:
+def run(
+    design: str,
+    out: str,
+    frames: int = 120,
+    samples: int | None = None,
+    resolution: int | None = None,
+    drape: bool = True,
+    export: bool = True,
+    view: str = "FRONT",
+) -> dict:
     bpy = _bpy()
     module = enable_from_checkout(bpy)
     out = Path(out).resolve()
@@ -120,8 +144,7 @@ def run(design: str, out: str, frames: int = 120, samples: int | None = None, re
     fileio = sys.modules[module + ".core.fileio"]
     addon_data = sys.modules[module + ".ease_addon.data"]
     core_io.save_pattern(addon_data.stored_pattern(bpy.context.scene), out)
-    renders = ([f"render_{v}.png" for v in ("front", "three_quarter", "back")] if view == "ALL"
-               else ["render.png"])
+    renders = [f"render_{v}.png" for v in ("front", "three_quarter", "back")] if view == "ALL" else ["render.png"]
     files = ["scene.blend", *renders, "pattern.json"]
     if export:
         s.export_dir = str(out / "export")
@@ -129,16 +152,28 @@ def run(design: str, out: str, frames: int = 120, samples: int | None = None, re
         s.export_glb = s.export_obj = drape
         _op(bpy, "export_pattern")
         files += sorted(f"export/{p.name}" for p in (out / "export").iterdir())
-    report = {"design": str(design), "pattern": json.loads(s.pattern_json or "{}"),
-              "drape": json.loads(s.drape_json or "{}"), "files": files}
+    report = {
+        "design": str(design),
+        "pattern": json.loads(s.pattern_json or "{}"),
+        "drape": json.loads(s.drape_json or "{}"),
+        "files": files,
+    }
     fileio.write_json(out / "report.json", report)
     return report
 
 
 def main(argv=None) -> int:
     args = _args(sys.argv if argv is None else argv)
-    rep = run(args.design, args.out, args.frames, args.samples, args.resolution, not args.no_drape,
-              not args.no_export, args.view)
+    rep = run(
+        args.design,
+        args.out,
+        args.frames,
+        args.samples,
+        args.resolution,
+        not args.no_drape,
+        not args.no_export,
+        args.view,
+    )
     print(json.dumps(rep, indent=1))
     return 0
 

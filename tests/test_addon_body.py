@@ -1,5 +1,6 @@
 """Body operators (ease_addon.body_ops): the default body, sizes, poses, sliders,
 measurements, a body file; a bad input leaves the scene as it was."""
+
 from __future__ import annotations
 
 import json
@@ -9,7 +10,7 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-DESIGN = "top_sleeveless.json"     # cheapest template: two panels
+DESIGN = "top_sleeveless.json"  # cheapest template: two panels
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -33,6 +34,7 @@ def test_add_body_and_shape_in_place(bpy_session, blender, anny):
     # size preset: the vertices move in place, the ease layer stays
     assert bpy.ops.ease.set_size(size="XL") == {"FINISHED"}
     from core.body.sizes import size_shape
+
     assert np.allclose(blender.verts(obj), model.vertices(size_shape(model, "XL")), atol=1e-5)
     assert obj.data.color_attributes.get("ease") is not None
     assert "chest" in s.measurements_report
@@ -71,7 +73,7 @@ def test_bad_input_reports_and_leaves_scene(bpy_session, blender):
     assert "ERROR" in r and "no_such_design" in r["ERROR"]
     # a design that fails to resolve on the body: the core's message, nothing changed
     bad = json.loads((ROOT / "examples" / "designs" / DESIGN).read_text())
-    bad["body"]["shape"] = "XL"      # would reshape the body if it got that far
+    bad["body"]["shape"] = "XL"  # would reshape the body if it got that far
     bad["keypoints"]["chest_front"] = {"landmark": "nose_tip"}
     path = bpy_session["tmp"] / "bad_design.json"
     path.write_text(json.dumps(bad))
@@ -82,14 +84,16 @@ def test_bad_input_reports_and_leaves_scene(bpy_session, blender):
     # every later stage, asked too early, says what is missing and changes nothing
     s = bpy.context.scene.ease
     s.export_dir = str(bpy_session["tmp"] / "too_early")
-    for op, kw, words in ((bpy.ops.ease.optimize_pattern, {}, "design"),
-                          (bpy.ops.ease.ease_to_design, {}, "design"),
-                          (bpy.ops.ease.recut, {}, "design"),
-                          (bpy.ops.ease.transfer_size, {}, "design"),
-                          (bpy.ops.ease.adapt_poses, {}, "design"),
-                          (bpy.ops.ease.drape, {}, "pattern"),
-                          (bpy.ops.ease.export_pattern, {}, "pattern"),
-                          (bpy.ops.ease.fitmap, dict(mode="STRAIN"), "drape")):
+    for op, kw, words in (
+        (bpy.ops.ease.optimize_pattern, {}, "design"),
+        (bpy.ops.ease.ease_to_design, {}, "design"),
+        (bpy.ops.ease.recut, {}, "design"),
+        (bpy.ops.ease.transfer_size, {}, "design"),
+        (bpy.ops.ease.adapt_poses, {}, "design"),
+        (bpy.ops.ease.drape, {}, "pattern"),
+        (bpy.ops.ease.export_pattern, {}, "pattern"),
+        (bpy.ops.ease.fitmap, dict(mode="STRAIN"), "drape"),
+    ):
         r = blender.run(op, **kw)
         assert "ERROR" in r and words in r["ERROR"].lower(), (op.idname(), r)
         assert np.array_equal(blender.verts(obj), v0) and len(bpy.data.objects) == n_obj, op.idname()
@@ -105,6 +109,7 @@ def test_measurements_fit_and_manual_shape(bpy_session, blender, anny):
     s.height_cm, s.chest_cm, s.waist_cm, s.hip_cm = 175.0, 98.0, 84.0, 102.0
     assert bpy.ops.ease.fit_measurements() == {"FINISHED"}
     from core.body.measure import measure
+
     model = anny
     got = measure(model, blender.verts(s.body).astype(np.float64))
     for k, want in (("height", 175.0), ("chest", 98.0), ("waist", 84.0), ("hip", 102.0)):
@@ -143,8 +148,10 @@ def test_body_from_a_file_the_user_owns(bpy_session, blender, anny):
 def test_body_from_an_smpl_file(bpy_session, blender):
     """From File with an SMPL-format .npz the user owns: its betas become the shape sliders, poses apply."""
     bpy = bpy_session["bpy"]
-    from smpl_synth import tube_model        # a small SMPL-format model (24 joints)
+    from smpl_synth import tube_model  # a small SMPL-format model (24 joints)
+
     from core.body import load_body
+
     path = bpy_session["tmp"] / "my_smpl.npz"
     np.savez(path, **tube_model(J=24, n_ring=12, n_rows=30))
     model = load_body(str(path))
@@ -155,7 +162,7 @@ def test_body_from_an_smpl_file(bpy_session, blender):
     assert obj["ease_model"] == str(path) and len(obj.data.vertices) == model.n_vertices
     assert {i.name for i in s.shape} == set(model.shape_parameters())
     assert np.allclose(blender.verts(obj), model.vertices(), atol=1e-5)
-    next(i for i in s.shape if i.name == "beta1").value = 2.0       # a slider: the body follows
+    next(i for i in s.shape if i.name == "beta1").value = 2.0  # a slider: the body follows
     assert np.allclose(blender.verts(obj), model.vertices({"beta1": 2.0}), atol=1e-5)
     assert bpy.ops.ease.set_pose(pose="P1") == {"FINISHED"}
     assert np.allclose(blender.verts(obj), model.vertices({"beta1": 2.0}, "P1"), atol=1e-5)

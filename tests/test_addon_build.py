@@ -6,6 +6,7 @@ enable are exercised even where the wheels cannot be downloaded.
 
 The install runs in a subprocess: bpy reads its user folder once per process.
 """
+
 from __future__ import annotations
 
 import importlib.util
@@ -51,11 +52,12 @@ print("RESULT " + json.dumps(out))
 def _install_and_run(z: Path, user: Path) -> dict:
     """Install zip ``z`` into the fresh user folder ``user`` in a new process, enable it, run operators."""
     env = dict(os.environ, WARP_CACHE_PATH=str(ROOT / ".cache" / "warp"))
-    r = subprocess.run([sys.executable, "-c", INSTALL, str(z), str(user)],
-                       capture_output=True, text=True, env=env, timeout=600)
+    r = subprocess.run(
+        [sys.executable, "-c", INSTALL, str(z), str(user)], capture_output=True, text=True, env=env, timeout=600
+    )
     line = next((l for l in r.stdout.splitlines() if l.startswith("RESULT ")), None)
     assert r.returncode == 0 and line, r.stdout[-3000:] + r.stderr[-3000:]
-    out = json.loads(line[len("RESULT "):])
+    out = json.loads(line[len("RESULT ") :])
     assert out["install"] == ["FINISHED"] and out["enabled"] == [True, True]
     assert out["add_body"] == ["FINISHED"] and out["uniform"] == ["FINISHED"]
     assert out["vertices"] > 10000 and abs(out["ease"] - 1.25) < 1e-5
@@ -67,7 +69,7 @@ def _install_and_run(z: Path, user: Path) -> dict:
 def _check_sources(names, manifest):
     assert 'platforms = ["linux-x64"]' in manifest
     assert "__init__.py" in names and "ease_addon/__init__.py" in names and "core/__init__.py" in names
-    assert any(n.startswith("core/data/designs/") and n.endswith(".json") for n in names)   # the templates
+    assert any(n.startswith("core/data/designs/") and n.endswith(".json") for n in names)  # the templates
     assert any(n.startswith("core/data/") for n in names)
     for bad in ("tests/", "tools/", "benchmarks/", ".venv/", ".cache/", ".git/", ".ci/"):
         assert not any(n.startswith(bad) for n in names), bad
@@ -80,8 +82,9 @@ def test_linux_zip_without_wheels_installs_and_runs(tmp_path):
     """Needs no network: the zip without bundled wheels, for a Blender whose Python has the
     dependencies (here the test's own Python), goes through the same build, install, enable, run."""
     build = _build_module()
-    zips = build.build(["linux-x64"], tmp_path / "dist", ROOT / ".cache" / "wheels", with_wheels=False,
-                       build_dir=tmp_path / "build")
+    zips = build.build(
+        ["linux-x64"], tmp_path / "dist", ROOT / ".cache" / "wheels", with_wheels=False, build_dir=tmp_path / "build"
+    )
     assert len(zips) == 1
     with zipfile.ZipFile(zips[0]) as zf:
         names = zf.namelist()
@@ -101,8 +104,10 @@ def test_linux_zip_builds_installs_and_runs(tmp_path):
         zips = build.build(["linux-x64"], tmp_path / "dist", cache, build_dir=tmp_path / "build")
     except subprocess.CalledProcessError as exc:
         if not any((cache / "linux-x64").glob("*.whl")):
-            pytest.skip(f"the Linux wheels cannot be downloaded (pip failed: {exc}) and the cache {cache}/linux-x64 "
-                        f"is empty; test_linux_zip_without_wheels_installs_and_runs still covers build/install/run")
+            pytest.skip(
+                f"the Linux wheels cannot be downloaded (pip failed: {exc}) and the cache {cache}/linux-x64 "
+                f"is empty; test_linux_zip_without_wheels_installs_and_runs still covers build/install/run"
+            )
         raise
     assert len(zips) == 1
     z = zips[0]
@@ -121,16 +126,20 @@ def test_linux_zip_builds_installs_and_runs(tmp_path):
     out = _install_and_run(z, tmp_path / "user")
     for pkg in ("scipy", "qdldl", "igl", "potpourri3d", "warp", "ezdxf", "reportlab", "matplotlib"):
         # a package folder, or a single extension module (qdldl.cpython-311-....so)
-        assert any(n == pkg or n.startswith(pkg + ".") for n in out["site_packages"]), \
+        assert any(n == pkg or n.startswith(pkg + ".") for n in out["site_packages"]), (
             f"wheel {pkg} not installed by Blender"
+        )
 
 
 def test_manifest_for_every_platform_lists_its_wheels(tmp_path):
     """The staged manifest of a multi-platform build (no download: placeholder wheel files)."""
     build = _build_module()
     wheels = []
-    for name in ("scipy-1.17.1-cp311-cp311-macosx_14_0_arm64.whl", "scipy-1.17.1-cp311-cp311-win_amd64.whl",
-                 "ezdxf-1.4.5-py3-none-any.whl"):
+    for name in (
+        "scipy-1.17.1-cp311-cp311-macosx_14_0_arm64.whl",
+        "scipy-1.17.1-cp311-cp311-win_amd64.whl",
+        "ezdxf-1.4.5-py3-none-any.whl",
+    ):
         (tmp_path / name).write_bytes(b"")
         wheels.append(tmp_path / name)
     src = build.stage(tmp_path / "b", ["linux-x64", "macos-arm64", "windows-x64"], wheels)

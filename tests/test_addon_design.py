@@ -1,5 +1,6 @@
 """Design operators (ease_addon.design_ops): a template on the body with its seamlines and
 keypoints, keypoints placed on a vertex or by a click, parameters with a live re-cut."""
+
 from __future__ import annotations
 
 import json
@@ -9,7 +10,7 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-DESIGN = "top_sleeveless.json"     # cheapest template: two panels
+DESIGN = "top_sleeveless.json"  # cheapest template: two panels
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -21,6 +22,7 @@ def scene(blender):
 def test_load_template_draws_seamlines_and_keypoints(bpy_session, blender, addon):
     bpy = bpy_session["bpy"]
     from core.design import load_design
+
     assert bpy.ops.ease.load_template(template=DESIGN) == {"FINISHED"}
     s = bpy.context.scene.ease
     design = load_design(json.loads(s.design_json))
@@ -35,6 +37,7 @@ def test_load_template_draws_seamlines_and_keypoints(bpy_session, blender, addon
     body_v = blender.verts(s.body)
     seam_v = blender.verts(seams[0])
     from scipy.spatial import cKDTree
+
     d, _ = cKDTree(body_v).query(seam_v)
     assert d.max() < 0.03
     # the seamlines stay attached when the body is posed (moved in place)
@@ -71,6 +74,7 @@ def test_keypoint_on_a_vertex_selected_in_edit_mode(bpy_session, blender):
     """The designer's way: Edit Mode, select one vertex, Keypoint at Selected Vertex; stays in Edit Mode."""
     bpy = bpy_session["bpy"]
     import bmesh
+
     s = bpy.context.scene.ease
     obj = s.body
     bpy.context.view_layer.objects.active = obj
@@ -88,7 +92,9 @@ def test_keypoint_on_a_vertex_selected_in_edit_mode(bpy_session, blender):
     kp = json.loads(s.design_json)["keypoints"]["edit_point"]
     faces = np.array([p.vertices[:] for p in obj.data.polygons])
     assert vid in faces[kp["triangle"]]
-    assert np.allclose(np.asarray(kp["bary"]) @ blender.verts(obj)[faces[kp["triangle"]]], blender.verts(obj)[vid], atol=1e-6)
+    assert np.allclose(
+        np.asarray(kp["bary"]) @ blender.verts(obj)[faces[kp["triangle"]]], blender.verts(obj)[vid], atol=1e-6
+    )
     # two selected: the add-on says what is wrong, the design unchanged
     before = s.design_json
     sel = np.zeros(len(obj.data.vertices), dtype=bool)
@@ -106,7 +112,7 @@ def test_keypoint_clicked_on_the_surface(bpy_session, blender, addon):
     design_ops = addon("design_ops")
     v = blender.verts(s.body).astype(np.float64)
     chest_z = v[:, 2].min() + 0.72 * np.ptp(v[:, 2])
-    origin, direction = (0.03, -3.0, chest_z), (0.0, 1.0, 0.0)      # from in front (the body faces -Y)
+    origin, direction = (0.03, -3.0, chest_z), (0.0, 1.0, 0.0)  # from in front (the body faces -Y)
     tri = design_ops.pick_on_surface(bpy.context, "clicked_point", origin, direction)
     kp = json.loads(s.design_json)["keypoints"]["clicked_point"]
     assert kp["triangle"] == tri and sum(kp["bary"]) == pytest.approx(1.0)

@@ -1,5 +1,6 @@
 """Drape operators (ease_addon.drape_ops): the garment and its fit maps; the modal drape's
 progress, Esc, a failing core, a pattern changed meanwhile, disabling mid-drape."""
+
 from __future__ import annotations
 
 import json
@@ -7,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-DESIGN = "top_sleeveless.json"     # cheapest template: two panels
+DESIGN = "top_sleeveless.json"  # cheapest template: two panels
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -22,7 +23,7 @@ def test_drape_garment_and_fit_map(bpy_session, blender):
     s.drape_frames = 15
     s.drape_device = "cuda"
     r = blender.run(bpy.ops.ease.drape)
-    if "ERROR" in r:      # no GPU here: the core's message, and no garment made
+    if "ERROR" in r:  # no GPU here: the core's message, and no garment made
         assert "cuda" in r["ERROR"].lower()
         assert not [o for o in bpy.data.objects if o.get("ease_role") == "garment"]
     s.drape_device = "cpu"
@@ -31,7 +32,7 @@ def test_drape_garment_and_fit_map(bpy_session, blender):
     assert len(garments) == 1
     g = garments[0]
     assert len(g.data.polygons) > 100
-    assert g.data.materials[0].name == "EASE Fabric cotton"   # the design's fabric preset
+    assert g.data.materials[0].name == "EASE Fabric cotton"  # the design's fabric preset
     assert g.data.color_attributes.get("fit_strain") is not None
     rep = json.loads(s.drape_json)
     assert rep["frames"] >= 1
@@ -52,7 +53,7 @@ def test_drape_garment_and_fit_map(bpy_session, blender):
         cols[layer] = c
     assert not np.allclose(cols["fit_strain"], cols["fit_gap"])
     assert bpy.ops.ease.fitmap(mode="NONE") == {"FINISHED"}
-    assert g.data.materials[0].name == "EASE Fabric cotton"   # the design's fabric preset
+    assert g.data.materials[0].name == "EASE Fabric cotton"  # the design's fabric preset
 
 
 def test_drape_modal_progress_and_esc(bpy_session, blender, addon):
@@ -77,11 +78,13 @@ def test_drape_modal_progress_and_esc(bpy_session, blender, addon):
     assert not drape_ops._JOBS
     # the core fails mid-drape: its message in the status, the garment as it was
     from core.errors import EaseError
+
     real = drape_ops._compute
 
     def failing(*a, **k):
         a[4](0.3, "frame 12")
         raise EaseError("drape diverged at frame 12 (time step too large?)")
+
     drape_ops._compute = failing
     try:
         job = drape_ops.DrapeJob(pattern, body_v, body_f, frames=400).start()
@@ -124,4 +127,4 @@ def test_drape_modal_progress_and_esc(bpy_session, blender, addon):
     bpy.ops.preferences.addon_disable(module=module)
     assert job.cancelled and not job._thread.is_alive() and job.result is None
     assert bpy.ops.preferences.addon_enable(module=module) == {"FINISHED"}
-    assert bpy.context.scene.ease.drape_json       # the scene's EASE data is still there
+    assert bpy.context.scene.ease.drape_json  # the scene's EASE data is still there

@@ -3,6 +3,7 @@ uniform and gradient ease per panel, the layer into the design and back.
 
 Paint strokes crash headless, so the ease layer is written as data the way a
 brush leaves it (scene-linear colours, linear blends)."""
+
 from __future__ import annotations
 
 import json
@@ -10,7 +11,7 @@ import json
 import numpy as np
 import pytest
 
-DESIGN = "top_sleeveless.json"     # cheapest template: two panels
+DESIGN = "top_sleeveless.json"  # cheapest template: two panels
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -36,7 +37,7 @@ def test_brush_colour_and_painted_layer_read_back(bpy_session, addon):
     # "paint": the brush colour where the stroke was, a 50 % blend with 1.8 on its edge
     obj = s.body
     me = obj.data
-    ease_ops = addon("ease_ops")
+    addon("ease_ops")
     c0, c1 = ramp.ease_to_color(1.3, 0.9, 2.0), ramp.ease_to_color(1.8, 0.9, 2.0)
     colors = np.tile(c1, (len(me.vertices), 1))
     faces = np.array([p.vertices[:] for p in me.polygons])
@@ -47,10 +48,13 @@ def test_brush_colour_and_painted_layer_read_back(bpy_session, addon):
     me.color_attributes["ease"].data.foreach_set("color", colors.astype(np.float32).ravel())
     tri = addon("data").triangle_ease(obj, bpy.context.scene)
     inner = [i for i in range(500) if not np.isin(faces[i], np.unique(faces[500:])).any()]
-    assert inner and np.allclose(tri[inner], 1.3, atol=1e-5)     # exact for the brush's value
-    only_edge = [i for i in range(600, 650) if np.isin(faces[i], np.unique(edge)).all()
-                 and not np.isin(faces[i], np.unique(stroke)).any()]
-    assert only_edge and np.allclose(tri[only_edge], 1.55, atol=1e-5)   # in-between ease
+    assert inner and np.allclose(tri[inner], 1.3, atol=1e-5)  # exact for the brush's value
+    only_edge = [
+        i
+        for i in range(600, 650)
+        if np.isin(faces[i], np.unique(edge)).all() and not np.isin(faces[i], np.unique(stroke)).any()
+    ]
+    assert only_edge and np.allclose(tri[only_edge], 1.55, atol=1e-5)  # in-between ease
 
 
 def test_uniform_and_gradient_ease_per_panel(bpy_session, blender, addon):

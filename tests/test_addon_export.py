@@ -1,5 +1,6 @@
 """Export operators (ease_addon.export_ops): the core's exporters with the panel's allowance,
 the garment read from its object; the export settings saved with the design file."""
+
 from __future__ import annotations
 
 import json
@@ -7,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-DESIGN = "top_sleeveless.json"     # cheapest template: two panels
+DESIGN = "top_sleeveless.json"  # cheapest template: two panels
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -36,17 +37,24 @@ def test_export_pattern(bpy_session, blender, addon):
     exp = json.loads(s.design_json)["materials"]["export"]
     assert exp == {"allowance": {"default": 0.015, "hem": 0.03}, "notch_spacing": 0.08}
     summary = json.loads((out / "export.json").read_text())
-    assert summary["allowance_mm"]["default"] == pytest.approx(15) and summary["allowance_mm"]["hem"] == pytest.approx(30)
+    assert summary["allowance_mm"]["default"] == pytest.approx(15) and summary["allowance_mm"]["hem"] == pytest.approx(
+        30
+    )
     # every 8 cm from either end of a seam (or in its middle); export.json rounds to 0.01 mm
-    off = [min(abs(n - 80.0 * round(n / 80.0)), abs(v[-1] - n - 80.0 * round((v[-1] - n) / 80.0)), abs(n - v[-1] / 2))
-           for p in summary["pieces"] for v in p["notches_mm"].values() for n in v[1:-1]]
+    off = [
+        min(abs(n - 80.0 * round(n / 80.0)), abs(v[-1] - n - 80.0 * round((v[-1] - n) / 80.0)), abs(n - v[-1] / 2))
+        for p in summary["pieces"]
+        for v in p["notches_mm"].values()
+        for n in v[1:-1]
+    ]
     assert off and max(off) < 0.011
     # the draped garment written is the garment object's shape
     garment = next(o for o in bpy.data.objects if o.get("ease_role") == "garment")
     from scipy.spatial import cKDTree
+
     got = _obj_vertices(out / "garment.obj")
     v = blender.verts(garment).astype(np.float64)
-    want = v                    # garment.obj is Z-up by default, like the body OBJs (Blender's frame)
+    want = v  # garment.obj is Z-up by default, like the body OBJs (Blender's frame)
     assert cKDTree(want).query(got)[0].max() < 1e-5 and cKDTree(got).query(want)[0].max() < 1e-5
 
     # a garment draped from another pattern is not exported as this pattern's
@@ -56,7 +64,7 @@ def test_export_pattern(bpy_session, blender, addon):
     s.export_glb, s.export_obj = True, False
     out2 = bpy_session["tmp"] / "export2"
     s.export_dir = str(out2)
-    assert bpy.ops.ease.export_pattern() == {"FINISHED"}          # the 2D files, GLB skipped with a warning
+    assert bpy.ops.ease.export_pattern() == {"FINISHED"}  # the 2D files, GLB skipped with a warning
     assert "pattern.svg" in {p.name for p in out2.iterdir()} and not (out2 / "garment.glb").exists()
     s.export_svg, s.export_dxf = False, False
     out3 = bpy_session["tmp"] / "export3"
@@ -93,8 +101,9 @@ def test_paint_mode_design_file_save_and_recut(bpy_session, blender):
     # the seam allowance set at export time is part of the design file, and comes back with it
     panel = (s.export_allowance_cm, s.export_hem_cm, s.export_notch_cm)
     exp = saved["materials"]["export"]
-    assert (exp["allowance"]["default"], exp["allowance"]["hem"], exp["notch_spacing"]) == \
-        pytest.approx(tuple(v / 100 for v in panel))
+    assert (exp["allowance"]["default"], exp["allowance"]["hem"], exp["notch_spacing"]) == pytest.approx(
+        tuple(v / 100 for v in panel)
+    )
     assert panel != pytest.approx((1.0, 2.0, 10.0))
     s.design_json = ""
     s.export_allowance_cm, s.export_hem_cm, s.export_notch_cm = 1.0, 2.0, 10.0
@@ -103,7 +112,7 @@ def test_paint_mode_design_file_save_and_recut(bpy_session, blender):
     assert (s.export_allowance_cm, s.export_hem_cm, s.export_notch_cm) == pytest.approx(panel)
     item = s.design_params[0]
     s.live_recut = False
-    item.value = item.value            # no live re-cut while switched off
+    item.value = item.value  # no live re-cut while switched off
     assert bpy.ops.ease.recut() == {"FINISHED"}
     r = blender.run(bpy.ops.ease.load_design_file, filepath=str(bpy_session["tmp"] / "missing.json"))
     assert "ERROR" in r and "missing.json" in r["ERROR"]

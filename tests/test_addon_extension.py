@@ -1,5 +1,6 @@
 """The extension itself, headless with the bpy module: its manifest, enabling and disabling,
 the ease ramp (pure numpy) and the sidebar panels naming real properties and operators."""
+
 from __future__ import annotations
 
 import subprocess
@@ -10,7 +11,7 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-DESIGN = "top_sleeveless.json"     # cheapest template: two panels
+DESIGN = "top_sleeveless.json"  # cheapest template: two panels
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -20,16 +21,24 @@ def scene(blender):
 
 
 def test_manifest_validates(blender):
-    script = next(ROOT.glob(".venv/lib/python3.11/site-packages/bpy/*/scripts/addons_core/bl_pkg/cli/blender_ext.py"),
-                  None)
+    script = next(
+        ROOT.glob(".venv/lib/python3.11/site-packages/bpy/*/scripts/addons_core/bl_pkg/cli/blender_ext.py"), None
+    )
     if script is None:
         import bpy  # noqa: F401  (the venv without the usual layout: find it from the module)
+
         script = next(Path(sys.modules["bpy"].__file__).parent.glob("*/scripts/addons_core/bl_pkg/cli/blender_ext.py"))
     r = subprocess.run([sys.executable, str(script), "validate", str(ROOT)], capture_output=True, text=True)
     assert r.returncode == 0, r.stdout + r.stderr
     text = (ROOT / "blender_manifest.toml").read_text()
-    for key in ('id = "ease"', 'type = "add-on"', 'blender_version_min = "4.2.0"',
-                '"SPDX:GPL-3.0-or-later"', "[permissions]", "files = "):
+    for key in (
+        'id = "ease"',
+        'type = "add-on"',
+        'blender_version_min = "4.2.0"',
+        '"SPDX:GPL-3.0-or-later"',
+        "[permissions]",
+        "files = ",
+    ):
         assert key in text
 
 
@@ -37,8 +46,11 @@ def test_enable_disable_twice_leaves_nothing(bpy_session):
     bpy, module = bpy_session["bpy"], bpy_session["module"]
     base_ops = set(dir(bpy.ops.ease))
     assert "add_body" in base_ops and hasattr(bpy.types.Scene, "ease")
-    handlers = {k: len(getattr(bpy.app.handlers, k)) for k in dir(bpy.app.handlers)
-                if isinstance(getattr(bpy.app.handlers, k), list)}
+    handlers = {
+        k: len(getattr(bpy.app.handlers, k))
+        for k in dir(bpy.app.handlers)
+        if isinstance(getattr(bpy.app.handlers, k), list)
+    }
     for _ in range(2):
         bpy.ops.preferences.addon_disable(module=module)
         assert not hasattr(bpy.types.Scene, "ease")
@@ -62,7 +74,7 @@ def test_ramp_blends_decode_to_in_between_ease(addon):
     assert np.allclose(ramp.color_to_ease(c, lo, hi), e, atol=1e-6)
     a = np.linspace(0, 1, 7)[:, None]
     c0, c1 = ramp.ease_to_color(1.1, lo, hi), ramp.ease_to_color(1.8, lo, hi)
-    blend = (1 - a) * c0 + a * c1           # what a soft brush edge leaves in a float layer
+    blend = (1 - a) * c0 + a * c1  # what a soft brush edge leaves in a float layer
     assert np.allclose(ramp.color_to_ease(blend, lo, hi), 1.1 + a[:, 0] * 0.7, atol=1e-6)
     # brush strength scaling the colour does not change the decoded ease
     assert np.allclose(ramp.color_to_ease(0.6 * c0, lo, hi), 1.1, atol=1e-6)
@@ -71,7 +83,7 @@ def test_ramp_blends_decode_to_in_between_ease(addon):
     assert np.allclose(ramp.srgb_to_linear(ramp.linear_to_srgb([0.0, 0.002, 0.3, 1.0])), [0.0, 0.002, 0.3, 1.0])
 
 
-FILE_ONLY = ("save_design",)      # operators that write a file and change no Blender data: no undo step
+FILE_ONLY = ("save_design",)  # operators that write a file and change no Blender data: no undo step
 
 
 class _Recorder:
@@ -109,6 +121,7 @@ class _Recorder:
         class _Props:
             def __setattr__(s, key, value):
                 pass
+
         return _Props()
 
 
@@ -121,10 +134,26 @@ def test_sidebar_panels_name_real_properties_and_operators(bpy_session):
         fake = type("P", (), {"layout": _Recorder(bpy, seen)})()
         cls.draw(fake, bpy.context)
     ops = {n for k, n in seen if k == "op"}
-    for op in ("ease.add_body", "ease.set_size", "ease.fit_measurements", "ease.set_pose", "ease.load_template",
-               "ease.assign_keypoint", "ease.paint_ease", "ease.brush_ease", "ease.ease_uniform",
-               "ease.ease_gradient", "ease.ease_to_design", "ease.optimize_pattern", "ease.transfer_size",
-               "ease.adapt_poses", "ease.drape", "ease.studio_setup", "ease.render", "ease.export_pattern"):
+    for op in (
+        "ease.add_body",
+        "ease.set_size",
+        "ease.fit_measurements",
+        "ease.set_pose",
+        "ease.load_template",
+        "ease.assign_keypoint",
+        "ease.paint_ease",
+        "ease.brush_ease",
+        "ease.ease_uniform",
+        "ease.ease_gradient",
+        "ease.ease_to_design",
+        "ease.optimize_pattern",
+        "ease.transfer_size",
+        "ease.adapt_poses",
+        "ease.drape",
+        "ease.studio_setup",
+        "ease.render",
+        "ease.export_pattern",
+    ):
         assert op in ops, f"{op} is not in the sidebar"
     # every operator that changes Blender data supports undo; Save Design writes a file only
     names = [n for n in dir(bpy.ops.ease) if not n.startswith("_")]

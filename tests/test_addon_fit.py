@@ -1,12 +1,13 @@
 """Fit operators (ease_addon.fit_ops): transfer to a size and adaptation to poses show their
 figures; the add-on and the command line give the same pattern.json."""
+
 from __future__ import annotations
 
 import json
 
 import pytest
 
-DESIGN = "top_sleeveless.json"     # cheapest template: two panels
+DESIGN = "top_sleeveless.json"  # cheapest template: two panels
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -37,26 +38,34 @@ def _canonical(text: str) -> str:
     """The add-on's stored pattern as ``save_pattern`` writes it (its number format, wall-clock
     seconds out of the report): reading is exact, so equal patterns give equal bytes."""
     from core.pattern.io import pattern_from_json, pattern_text
+
     return pattern_text(pattern_from_json(json.loads(text)))
 
 
-@pytest.mark.parametrize("mode, cli_args, panel", [
-    ("pattern", [], {}),
-    ("transfer", ["--size", "L"], {"fit_size": "L"}),
-    ("adapt", ["--pose", "P1"], {"adapt_T": False, "adapt_P1": True, "adapt_P2": False, "adapt_P3": False}),
-])
+@pytest.mark.parametrize(
+    "mode, cli_args, panel",
+    [
+        ("pattern", [], {}),
+        ("transfer", ["--size", "L"], {"fit_size": "L"}),
+        ("adapt", ["--pose", "P1"], {"adapt_T": False, "adapt_P1": True, "adapt_P2": False, "adapt_P3": False}),
+    ],
+)
 def test_addon_and_command_line_write_the_same_pattern(bpy_session, addon, tmp_path, mode, cli_args, panel):
     """One design through `ease pattern|transfer|adapt` and through the add-on's operators: the
     same pattern.json, byte for byte (the file keeps no wall-clock seconds)."""
     from core.cli import main
     from core.design.templates import template_path
+
     bpy = bpy_session["bpy"]
     assert main([mode, str(template_path("top_sleeveless")), "--out", str(tmp_path), "--quiet"] + cli_args) == 0
     s = bpy.context.scene.ease
     for key, value in panel.items():
         setattr(s, key, value)
-    op = {"pattern": bpy.ops.ease.optimize_pattern, "transfer": bpy.ops.ease.transfer_size,
-          "adapt": bpy.ops.ease.adapt_poses}[mode]
+    op = {
+        "pattern": bpy.ops.ease.optimize_pattern,
+        "transfer": bpy.ops.ease.transfer_size,
+        "adapt": bpy.ops.ease.adapt_poses,
+    }[mode]
     assert op() == {"FINISHED"}
     text = bpy.context.scene[addon("data").PATTERN_KEY]
     assert _canonical(text) == (tmp_path / "pattern.json").read_text()

@@ -5,6 +5,7 @@ it on while Live runs re-solves.
 
 Panels are drawn into a recording layout (:class:`Layout`): what a designer would see, headless.
 """
+
 from __future__ import annotations
 
 import json
@@ -12,9 +13,9 @@ import json
 import numpy as np
 import pytest
 
-SHIRT = "top_short_sleeve.json"      # sleeves: a mirrored design with more panels than the top
+SHIRT = "top_short_sleeve.json"  # sleeves: a mirrored design with more panels than the top
 TOP = "top_sleeveless.json"
-BLOUSE = "blouse_fitted.json"        # the women's chart
+BLOUSE = "blouse_fitted.json"  # the women's chart
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -52,6 +53,7 @@ class Layout:
 
         class _Props:
             pass
+
         return _Props()
 
 
@@ -72,6 +74,7 @@ def _seam_count(blender, cut) -> int:
 def _check_whole(blender, template):
     """The scene holds ``template`` throughout: design, seamlines of its cut on the body, markers."""
     from scipy.spatial import cKDTree
+
     bpy = blender.bpy
     s = bpy.context.scene.ease
     data = blender.mod("data")
@@ -111,6 +114,7 @@ def test_template_says_what_it_does_to_the_body(blender, anny):
     """A women:M body, then a template of the default chart's M: the body takes the design's
     size and the Body panel says so (it kept saying women:M while the body was the default M)."""
     from core.body.instance import body_instance
+
     bpy = blender.bpy
     blender.reset(body=True)
     s = bpy.context.scene.ease
@@ -133,6 +137,7 @@ def test_template_says_what_it_does_to_the_body(blender, anny):
 def _short_chart(data):
     """(a chart, a size of another chart it lacks), the chart with the fewest sizes."""
     from core.body.sizes import CHARTS
+
     chart = min(CHARTS, key=lambda c: len(data.chart_sizes(c)))
     lacks = [z for z in data.all_sizes() if z not in data.chart_sizes(chart)]
     assert lacks, "every chart has every size: nothing to offer wrongly"
@@ -150,7 +155,7 @@ def test_body_panel_has_the_chart_selector_and_only_its_sizes(blender):
     assert [v for p, v in log["enums"] if p == "size"] == list(data.chart_sizes(s.chart))
     s.chart = next(c for c in ("default", "women", "men") if lacks in data.chart_sizes(c))
     s.size = lacks
-    s.chart = chart           # it has no such size: the preset moves to the chart's nearest
+    s.chart = chart  # it has no such size: the preset moves to the chart's nearest
     assert s.size == data.chart_sizes(chart)[-1]
     log = _draw(blender, "EASE_PT_body")
     assert [v for p, v in log["enums"] if p == "size"] == list(data.chart_sizes(chart))
@@ -167,15 +172,15 @@ def test_fit_panel_offers_the_design_charts_sizes(blender):
     data = blender.mod("data")
     blender.reset(body=True)
     s = bpy.context.scene.ease
-    sizes = data.chart_sizes("default")              # the top's chart
+    sizes = data.chart_sizes("default")  # the top's chart
     lacks = [z for z in data.all_sizes() if z not in sizes]
     assert lacks
     s.fit_size = lacks[-1]
     assert bpy.ops.ease.load_template(template=TOP) == {"FINISHED"}
-    assert s.fit_size == sizes[-1]                   # not on the design's chart: its nearest
+    assert s.fit_size == sizes[-1]  # not on the design's chart: its nearest
     log = _draw(blender, "EASE_PT_fit")
     assert [v for p, v in log["enums"] if p == "fit_size"] == list(sizes)
-    s.fit_size = lacks[-1]                           # a script sets it anyway
+    s.fit_size = lacks[-1]  # a script sets it anyway
     assert not bpy.ops.ease.transfer_size.poll()
     why = blender.mod("operators_base").missing(bpy.context, ("body", "design", "fit_size"))
     assert lacks[-1] in why and "default" in why and ", ".join(sizes) in why
@@ -199,8 +204,8 @@ def test_out_of_range_parameter_is_refused_where_it_is_set(blender):
     old = design.parameters[item.name].value
     text = s.design_json
     s.drape_status = ""
-    item.value = design.parameters[item.name].max + 0.5       # the slider's live re-cut refuses it
-    assert item.value == pytest.approx(old)                    # the slider shows what the design uses
+    item.value = design.parameters[item.name].max + 0.5  # the slider's live re-cut refuses it
+    assert item.value == pytest.approx(old)  # the slider shows what the design uses
     assert s.design_json == text
     assert item.name in s.design_status and "refused" in s.design_status
     assert s.drape_status == ""
@@ -230,8 +235,9 @@ def _left_patch(blender, ease):
     lo, hi = data.layer_range(obj, bpy.context.scene)
     e = data.vertex_ease(obj, bpy.context.scene)
     e[patch] = ease
-    obj.data.color_attributes["ease"].data.foreach_set("color", ramp.ease_to_color(e, lo, hi).astype(
-        np.float32).ravel())
+    obj.data.color_attributes["ease"].data.foreach_set(
+        "color", ramp.ease_to_color(e, lo, hi).astype(np.float32).ravel()
+    )
     obj.data.update()
     return patch, sym[patch]
 
@@ -252,10 +258,10 @@ def test_x_mirror_mirrors_a_one_sided_stroke(blender):
         me.use_mirror_x = False
     data = blender.mod("data")
     layer = data.vertex_ease(bpy.context.scene.ease.body, bpy.context.scene)
-    assert np.allclose(layer[mirror], 1.8, atol=1e-5)        # the layer shows the mirrored stroke
+    assert np.allclose(layer[mirror], 1.8, atol=1e-5)  # the layer shows the mirrored stroke
     design = data.design_vertex_ease(bpy.context)
     faces = blender.mod("convert").get_triangles(me)
-    inner = patch[faces].all(axis=1)                           # triangles inside the patch
+    inner = patch[faces].all(axis=1)  # triangles inside the patch
     inner_m = np.zeros(len(me.vertices), dtype=bool)
     inner_m[mirror] = True
     inner_m = inner_m[faces].all(axis=1)
@@ -270,6 +276,7 @@ def test_x_mirror_on_while_live_runs_resolves(blender):
     asymmetric pattern. Now the tick sees the mirror, re-solves, and converges to the cold
     solve of the symmetric field."""
     from core.design.mirror import face_symmetry
+
     bpy = blender.bpy
     live, data = blender.mod("live"), blender.mod("data")
     blender.reset(body=True, design=TOP, pattern=True)
@@ -285,11 +292,12 @@ def test_x_mirror_on_while_live_runs_resolves(blender):
                 if live.step(bpy.context)["converged"]:
                     return
             raise AssertionError("live mode did not converge")
+
         converge()
         field = live._field(s.body, bpy.context.scene)
         fs = face_symmetry(blender.mod("convert").get_triangles(me), np.asarray(data.state.body_model("anny").symmetry))
         has = fs >= 0
-        assert np.abs(field[has] - field[fs[has]]).max() > 0.1          # asymmetric as painted
+        assert np.abs(field[has] - field[fs[has]]).max() > 0.1  # asymmetric as painted
         me.use_mirror_x = True
         out = live.step(bpy.context)
         assert out["changed"] and not out["converged"]
@@ -297,7 +305,7 @@ def test_x_mirror_on_while_live_runs_resolves(blender):
         converge()
         assert s.live_status.startswith("converged")
         field = live._field(s.body, bpy.context.scene)
-        assert np.abs(field[has] - field[fs[has]]).max() < 1e-9         # symmetric now
+        assert np.abs(field[has] - field[fs[has]]).max() < 1e-9  # symmetric now
         session = live.session_for(bpy.context)
         cold = session.cold_pattern(field)
         stored = data.stored_pattern(bpy.context.scene)
@@ -315,14 +323,21 @@ def test_operators_push_an_undo_step_as_the_ui_calls_them(blender):
     blender.reset(body=True, design=TOP)
     E = lambda: bpy.context.scene.ease  # noqa: E731  (undo rebuilds the data: fetch afresh)
     name = E().design_params[0].name
-    steps = [(bpy.ops.ease.set_size, dict(size="S"), lambda: E().body.get("ease_size")),
-             (bpy.ops.ease.set_pose, dict(pose="P1"), lambda: E().body.get("ease_pose")),
-             (bpy.ops.ease.ease_uniform, dict(whole_body=True, ease=1.6),
-              lambda: round(float(blender.mod("data").vertex_ease(E().body, bpy.context.scene).mean()), 6)),
-             (bpy.ops.ease.set_parameter, dict(name=name, value=0.5 * (E().design_params[0].value
-                                                                      + E().design_params[0].min)),
-              lambda: E().design_json),
-             (bpy.ops.ease.load_template, dict(template=SHIRT), lambda: E().design_json)]
+    steps = [
+        (bpy.ops.ease.set_size, dict(size="S"), lambda: E().body.get("ease_size")),
+        (bpy.ops.ease.set_pose, dict(pose="P1"), lambda: E().body.get("ease_pose")),
+        (
+            bpy.ops.ease.ease_uniform,
+            dict(whole_body=True, ease=1.6),
+            lambda: round(float(blender.mod("data").vertex_ease(E().body, bpy.context.scene).mean()), 6),
+        ),
+        (
+            bpy.ops.ease.set_parameter,
+            dict(name=name, value=0.5 * (E().design_params[0].value + E().design_params[0].min)),
+            lambda: E().design_json,
+        ),
+        (bpy.ops.ease.load_template, dict(template=SHIRT), lambda: E().design_json),
+    ]
     bpy.ops.ed.undo_push(message="start")
     for op, kw, read in steps:
         before = read()
@@ -332,7 +347,7 @@ def test_operators_push_an_undo_step_as_the_ui_calls_them(blender):
         assert read() == before, op.idname()
         assert bpy.ops.ed.redo() == {"FINISHED"}
         assert read() != before, op.idname()
-    assert "UNDO" not in bpy.types.EASE_OT_save_design.bl_options      # a file only: no empty step
+    assert "UNDO" not in bpy.types.EASE_OT_save_design.bl_options  # a file only: no empty step
 
 
 def test_export_greyed_out_on_an_unsaved_file(blender):
@@ -341,7 +356,7 @@ def test_export_greyed_out_on_an_unsaved_file(blender):
     blender.reset(body=True, design=TOP, pattern=True)
     s = bpy.context.scene.ease
     assert not bpy.data.filepath
-    assert s.export_dir.startswith("//")          # the default: next to the .blend
+    assert s.export_dir.startswith("//")  # the default: next to the .blend
     assert not bpy.ops.ease.export_pattern.poll()
     why = blender.mod("operators_base").missing(bpy.context, bpy.types.EASE_OT_export_pattern.needs)
     assert "save" in why and "Export to" in why
@@ -381,16 +396,29 @@ def test_live_bench_ignores_an_installed_copy_in_the_user_folder(tmp_path):
     import subprocess
     import sys
     from pathlib import Path
+
     pytest.importorskip("bpy")
     root = Path(__file__).resolve().parent.parent
-    site = tmp_path / "user" / "extensions" / ".local" / "lib" / f"python{sys.version_info[0]}.{sys.version_info[1]}" \
-        / "site-packages" / "scipy"
+    site = (
+        tmp_path
+        / "user"
+        / "extensions"
+        / ".local"
+        / "lib"
+        / f"python{sys.version_info[0]}.{sys.version_info[1]}"
+        / "site-packages"
+        / "scipy"
+    )
     site.mkdir(parents=True)
     (site / "__init__.py").write_text("# a scipy of another build, without sparse\n")
-    env = dict(os.environ, BLENDER_USER_RESOURCES=str(tmp_path / "user"),
-               WARP_CACHE_PATH=str(root / ".cache" / "warp"))
-    r = subprocess.run([sys.executable, "-c", BENCH_PROBE, str(root / "benchmarks" / "bench_live.py")],
-                       capture_output=True, text=True, env=env, timeout=600)
+    env = dict(os.environ, BLENDER_USER_RESOURCES=str(tmp_path / "user"), WARP_CACHE_PATH=str(root / ".cache" / "warp"))
+    r = subprocess.run(
+        [sys.executable, "-c", BENCH_PROBE, str(root / "benchmarks" / "bench_live.py")],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=600,
+    )
     line = next((l for l in r.stdout.splitlines() if l.startswith("RESULT ")), None)
     assert r.returncode == 0 and line, r.stdout[-2000:] + r.stderr[-2000:]
     _, sparse, live = line.split()
@@ -406,18 +434,25 @@ def test_a_re_solve_moves_every_part_of_the_pieces_in_place(blender):
     blender.reset(body=True, design=TOP, pattern=True)
 
     def datablocks():
-        return {o.name: (o.session_uid, o.data.session_uid)
-                for role in ("pattern_panel", "pattern_panel_part") for o in blender.objects(role)}
+        return {
+            o.name: (o.session_uid, o.data.session_uid)
+            for role in ("pattern_panel", "pattern_panel_part")
+            for o in blender.objects(role)
+        }
 
     def outline_points():
-        return {o.name: [tuple(p.co) for sp in o.data.splines for p in sp.points][:5]
-                for o in blender.objects("pattern_panel_part") if o.name.startswith("EASE outline")}
+        return {
+            o.name: [tuple(p.co) for sp in o.data.splines for p in sp.points][:5]
+            for o in blender.objects("pattern_panel_part")
+            if o.name.startswith("EASE outline")
+        }
+
     before, pts = datablocks(), outline_points()
     assert before and any(n.startswith("EASE grain") for n in before)
     bpy.context.scene.ease.fit_size = "XL"
     assert bpy.ops.ease.transfer_size() == {"FINISHED"}
     assert datablocks() == before
-    assert outline_points() != pts                      # the outlines moved with the pieces
+    assert outline_points() != pts  # the outlines moved with the pieces
     n_curves, n_meshes = len(bpy.data.curves), len(bpy.data.meshes)
     assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
     assert datablocks() == before and (len(bpy.data.curves), len(bpy.data.meshes)) == (n_curves, n_meshes)

@@ -5,12 +5,13 @@ painted field; a topology change rebuilds once; undo after a live update restore
 Headless, strokes are written as attribute data (a paint stroke segfaults without a window) and the
 timer's tick (:func:`ease_addon.live.step`) is called directly, as the timer would call it.
 """
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-DESIGN = "top_sleeveless.json"     # cheapest template: two panels
+DESIGN = "top_sleeveless.json"  # cheapest template: two panels
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -49,8 +50,11 @@ def _pieces(blender):
 
 
 def _names(bpy):
-    return (sorted(o.name for o in bpy.data.objects), sorted(m.name for m in bpy.data.meshes),
-            sorted(c.name for c in bpy.data.curves))
+    return (
+        sorted(o.name for o in bpy.data.objects),
+        sorted(m.name for m in bpy.data.meshes),
+        sorted(c.name for c in bpy.data.curves),
+    )
 
 
 def _stored_uv(blender):
@@ -61,15 +65,15 @@ def _stored_uv(blender):
 def test_live_update_in_place_and_convergence_to_the_cold_solve(blender):
     bpy = blender.bpy
     live = blender.mod("live")
-    _converge(blender)                       # adopt the layer as it is
+    _converge(blender)  # adopt the layer as it is
     before, names = _pieces(blender), _names(bpy)
     _stroke(blender, 1.75, seed=3)
     out = live.step(bpy.context)
     assert out["changed"] and out["iterations"] >= 1 and not out["converged"]
     after = _pieces(blender)
-    assert _names(bpy) == names                              # no new object, mesh or curve, no new name
+    assert _names(bpy) == names  # no new object, mesh or curve, no new name
     assert sorted(after) == sorted(before)
-    assert any(not np.array_equal(before[k], after[k]) for k in before)   # the pieces moved
+    assert any(not np.array_equal(before[k], after[k]) for k in before)  # the pieces moved
     _converge(blender)
     assert _names(bpy) == names
     # converged: the stored pattern is the cold solve of the painted field (bitwise: the same solver
@@ -80,15 +84,16 @@ def test_live_update_in_place_and_convergence_to_the_cold_solve(blender):
     for p in cold.panels:
         assert np.allclose(stored[p.name], p.uv, rtol=0, atol=1e-12)
         o = next(o for o in blender.objects("pattern_panel") if o["ease_panel"] == p.name)
-        assert np.allclose(blender.verts(o)[:, [0, 2]], p.uv, atol=1e-6)      # float32 mesh
+        assert np.allclose(blender.verts(o)[:, [0, 2]], p.uv, atol=1e-6)  # float32 mesh
     import json
+
     figures = json.loads(bpy.context.scene.ease.pattern_json)
     assert figures["ease compliance mean %"] == pytest.approx(cold.report["metrics"]["compliance"]["mean"], abs=1e-3)
     # the fit overlay: per face on its corners, finite colours, grey off the garment
     me = bpy.context.scene.ease.body.data
     fit = me.color_attributes.get(live.FIT_LAYER)
     assert fit is not None and fit.domain == "CORNER"
-    assert me.color_attributes.active_color_name == "ease"    # painting still paints the ease layer
+    assert me.color_attributes.active_color_name == "ease"  # painting still paints the ease layer
     rgba = np.empty(len(fit.data) * 4, dtype=np.float32)
     fit.data.foreach_get("color", rgba)
     rgba = rgba.reshape(-1, 3, 4)[:, 0]
@@ -130,7 +135,9 @@ def _stored(blender):
     and the live record's iteration count (how many warm iterations fitted the time slices before the
     cold solve: a matter of the clock, not of the pattern)."""
     import json
+
     from core.pattern.io import WALL_CLOCK
+
     scene = blender.bpy.context.scene
     d = json.loads(scene["ease_pattern_json"])
     d["report"] = {k: v for k, v in d["report"].items() if k not in WALL_CLOCK}
@@ -146,6 +153,7 @@ def test_final_work_in_bounded_units(blender):
     store writes, byte for byte."""
     from core.fileio import dumps_json
     from core.pattern.io import pattern_to_json
+
     bpy = blender.bpy
     live = blender.mod("live")
     _converge(blender)
@@ -178,13 +186,13 @@ def test_undo_restores_the_previous_pattern(blender):
     live = blender.mod("live")
     _converge(blender)
     _stroke(blender, 1.6, seed=7)
-    bpy.ops.ed.undo_push(message="stroke A")        # what the paint stroke pushes at its end
+    bpy.ops.ed.undo_push(message="stroke A")  # what the paint stroke pushes at its end
     _converge(blender)
     first, first_uv = _stored(blender), _stored_uv(blender)
     layer = live._colors(bpy.context.scene.ease.body)
     _stroke(blender, 1.05, seed=8)
     bpy.ops.ed.undo_push(message="stroke B")
-    assert live.step(bpy.context)["changed"]      # a live update
+    assert live.step(bpy.context)["changed"]  # a live update
     _converge(blender)
     second, second_text = _stored_uv(blender), _stored(blender)
     assert any(not np.array_equal(second[k], first_uv[k]) for k in first_uv)
@@ -247,7 +255,7 @@ def test_live_follows_the_file_it_opens(blender, bpy_session):
     _converge(blender)
     before = _pieces(blender)
     _stroke(blender, 1.7, seed=31)
-    bpy.context.view_layer.update()          # what a stroke's redraw does: the handler wakes the timer
+    bpy.context.view_layer.update()  # what a stroke's redraw does: the handler wakes the timer
     assert live.step(bpy.context)["changed"]
     assert any(not np.array_equal(before[k], v) for k, v in _pieces(blender).items())
     _converge(blender)

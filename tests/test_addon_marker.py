@@ -1,5 +1,6 @@
 """Marker operator (ease_addon.marker_ops): the panel's width and sizes nest the scene's pattern with the
 core's marker; the files land in the export folder and the marker shows as an image on a flat object."""
+
 from __future__ import annotations
 
 import json
@@ -8,7 +9,7 @@ import pytest
 
 pytest.importorskip("spyrrow")
 
-DESIGN = "top_sleeveless.json"     # cheapest template: two panels
+DESIGN = "top_sleeveless.json"  # cheapest template: two panels
 
 
 @pytest.fixture(scope="module", autouse=True)

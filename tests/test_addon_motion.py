@@ -1,6 +1,7 @@
 """Drape Animation and Export Alembic (ease_addon.motion_ops): the garment through A -> P1 on the
 moving body, shape-keyed per frame, written with Blender's Alembic exporter and read back by its
 importer with the same vertices at every frame."""
+
 from __future__ import annotations
 
 import json
@@ -8,8 +9,8 @@ import json
 import numpy as np
 import pytest
 
-DESIGN = "top_sleeveless.json"     # cheapest template: two panels
-BETWEEN = 2                        # A, 2 in-betweens, P1: 4 frames
+DESIGN = "top_sleeveless.json"  # cheapest template: two panels
+BETWEEN = 2  # A, 2 in-betweens, P1: 4 frames
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -75,7 +76,7 @@ def test_alembic_written_and_read_back(scene, bpy_session):
     before = set(bpy.data.objects)
     assert bpy.ops.wm.alembic_import(filepath=s.motion_path, as_background_job=False) == {"FINISHED"}
     new = [o for o in bpy.data.objects if o not in before and o.type == "MESH"]
-    assert len(new) == 2                              # the garment and the body
+    assert len(new) == 2  # the garment and the body
     back = next(o for o in new if len(o.data.vertices) == len(garment.data.vertices))
     for f in range(1, n + 1):
         sc.frame_set(f)
@@ -105,6 +106,7 @@ def test_point_cache_plays_in_blender(scene, bpy_session):
     from drape_synth import revolution_body, tube_skirt
 
     from core.drape.animate import drape_motion, write_motion
+
     bpy = scene.bpy
     sc = bpy.context.scene
     bv, bf = revolution_body(48, 60)
@@ -113,8 +115,9 @@ def test_point_cache_plays_in_blender(scene, bpy_session):
     out = scene.tmp / "pc2"
     write_motion(out, r, frames, bf, ["A", "T"], 2)
     before = set(bpy.data.objects)
-    assert bpy.ops.wm.obj_import(filepath=str(out / "garment_motion.obj"), forward_axis="Y", up_axis="Z") \
-        == {"FINISHED"}
+    assert bpy.ops.wm.obj_import(filepath=str(out / "garment_motion.obj"), forward_axis="Y", up_axis="Z") == {
+        "FINISHED"
+    }
     obj = next(o for o in bpy.data.objects if o not in before)
     mod = obj.modifiers.new("cache", "MESH_CACHE")
     mod.cache_format, mod.filepath = "PC2", str(out / "garment_motion.pc2")
@@ -137,7 +140,7 @@ def test_studio_renders_the_motion_while_it_is_shown(scene, bpy_session):
     garment = bpy.data.objects["EASE Motion Garment"]
     motion = [garment, bpy.data.objects["EASE Motion Body"]]
     static = scene.objects("body") + scene.objects("garment")
-    assert all(o.hide_render for o in static)                  # F12 shows the motion alone too
+    assert all(o.hide_render for o in static)  # F12 shows the motion alone too
     sc.ease.render_view = "FRONT"
     assert bpy.ops.ease.studio_setup() == {"FINISHED"}
     # the motion garment wears the fabric with its layers, as the static one does

@@ -3,14 +3,13 @@ mirrored design each side keeps what was painted on it unless Blender's X-mirror
 setting is on, and *Paint Ease* adopts an ease layer of any domain and type without loss.
 
 Paint strokes crash headless: the layer is written as data the way a brush leaves it."""
-from __future__ import annotations
 
-import json
+from __future__ import annotations
 
 import numpy as np
 import pytest
 
-DESIGN = "top_short_sleeve.json"     # mirrored: sleeve_*_right are generated from sleeve_*_left
+DESIGN = "top_short_sleeve.json"  # mirrored: sleeve_*_right are generated from sleeve_*_left
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -21,7 +20,7 @@ def scene(blender):
 
 def _paint_random(bpy, addon, seed=0):
     """A random field (1.0 .. 1.8) written into the layer as a brush would; per-triangle ease (F,)."""
-    ramp, ease_ops = addon("ramp"), addon("ease_ops")
+    ramp, _ease_ops = addon("ramp"), addon("ease_ops")
     s = bpy.context.scene.ease
     s.ease_min, s.ease_max = 0.9, 2.0
     me = s.body.data
@@ -33,6 +32,7 @@ def _paint_random(bpy, addon, seed=0):
 def _own_share(bpy, addon, cut, tri_ease):
     """Per panel: the share of its triangles whose target ease is the painted ease where they lie."""
     from core.design.geometry import SurfaceLocator
+
     convert = addon("convert")
     obj = bpy.context.scene.ease.body
     X, F = convert.get_vertices(obj.data), convert.get_triangles(obj.data)
@@ -104,7 +104,7 @@ def test_paint_ease_adopts_any_ease_layer_without_loss(bpy_session, addon, data_
         del me["ease_ramp"]
     layer = me.color_attributes.new("ease", data_type, domain)
     n = len(layer.data)
-    e = np.random.default_rng(3).uniform(1.0, 1.8, n)   # corners of one vertex differ: no averaging allowed
+    e = np.random.default_rng(3).uniform(1.0, 1.8, n)  # corners of one vertex differ: no averaging allowed
     layer.data.foreach_set("color", ramp.ease_to_color(e, 0.9, 2.0).astype(np.float32).ravel())
     before = addon("data").triangle_ease(sc.ease.body, sc)
     assert before.std() > 0.05

@@ -1,5 +1,6 @@
 """Pattern operators (ease_addon.pattern_ops): the optimized pattern's pieces beside the body
 match pattern.json; the gathering setting reaches the design and the pattern."""
+
 from __future__ import annotations
 
 import json
@@ -7,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-DESIGN = "top_sleeveless.json"     # cheapest template: two panels
+DESIGN = "top_sleeveless.json"  # cheapest template: two panels
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -23,6 +24,7 @@ def test_pattern_objects_match_pattern_json(bpy_session, tmp_path, blender, addo
     assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
     data = addon("data")
     from core.pattern.io import load_pattern
+
     text = bpy.context.scene[data.PATTERN_KEY]
     (tmp_path / "pattern.json").write_text(text)
     pattern = load_pattern(tmp_path / "pattern.json")
@@ -46,7 +48,7 @@ def test_pattern_objects_match_pattern_json(bpy_session, tmp_path, blender, addo
         assert np.allclose(got, np.clip(p.achieved_weft, lo_r, hi_r), atol=1e-4)
         assert np.mean((p.achieved_weft >= lo_r) & (p.achieved_weft <= hi_r)) > 0.95
         kids = {c.type for c in o.children}
-        assert {"CURVE", "MESH", "FONT"} <= kids      # outline, grain arrow, name
+        assert {"CURVE", "MESH", "FONT"} <= kids  # outline, grain arrow, name
         # laid out beside the body, not through it
         lo, hi = blender.world_box(o)
         assert hi[0] < body_lo[0] or lo[0] > body_hi[0] or hi[1] < body_lo[1] or lo[1] > body_hi[1], p.name
@@ -92,6 +94,7 @@ def test_solver_configuration_reaches_the_pattern(bpy_session, addon):
     """The Pattern panel's solver choice is the configuration Optimize Pattern solves with; every
     configuration of the core is offered, after the design's own choice (the default)."""
     from core.workflows import CONFIGS
+
     bpy = bpy_session["bpy"]
     scene = bpy.context.scene
     s = scene.ease
@@ -108,9 +111,11 @@ def test_solver_configuration_reaches_the_pattern(bpy_session, addon):
         s.solver_config = data.DESIGN_SOLVER
     assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
     plain = json.loads(scene[data.PATTERN_KEY])
-    assert plain["report"]["config"] == "improved"      # the top names none: the core's default
+    assert plain["report"]["config"] == "improved"  # the top names none: the core's default
     # a different solve, not the same pattern relabelled
-    assert fitted["report"]["metrics"]["compliance"]["warp_mean"] != plain["report"]["metrics"]["compliance"]["warp_mean"]
+    assert (
+        fitted["report"]["metrics"]["compliance"]["warp_mean"] != plain["report"]["metrics"]["compliance"]["warp_mean"]
+    )
 
 
 def test_the_designs_solver_is_the_default_and_a_choice_overrides_it(bpy_session, addon):
@@ -126,11 +131,11 @@ def test_the_designs_solver_is_the_default_and_a_choice_overrides_it(bpy_session
         assert data.design_solver(scene) == "stretch"
         assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
         assert json.loads(scene[data.PATTERN_KEY])["report"]["config"] == "stretch"
-        assert json.loads(s.design_json)["solver"] == "stretch"            # kept in the design
+        assert json.loads(s.design_json)["solver"] == "stretch"  # kept in the design
         s.solver_config = "improved"
         assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
         assert json.loads(scene[data.PATTERN_KEY])["report"]["config"] == "improved"
-        assert json.loads(s.design_json)["solver"] == "stretch"            # the choice does not edit it
+        assert json.loads(s.design_json)["solver"] == "stretch"  # the choice does not edit it
     finally:
         s.solver_config = data.DESIGN_SOLVER
         s.design_json = before

@@ -2,6 +2,7 @@
 on a scene that still has Blender's startup cube and light, the garment in its fabric, and a
 tiny Cycles render read back: body and garment cover the frame they project to, nothing stands
 in front of them, the floor takes their shadow."""
+
 from __future__ import annotations
 
 import itertools
@@ -10,8 +11,8 @@ import json
 import numpy as np
 import pytest
 
-DESIGN = "top_sleeveless.json"     # cheapest template: two panels
-PCT = 6                            # % of 1080 x 1440: a 64 x 86 frame
+DESIGN = "top_sleeveless.json"  # cheapest template: two panels
+PCT = 6  # % of 1080 x 1440: a 64 x 86 frame
 SAMPLES = 4
 
 
@@ -23,8 +24,11 @@ def scene(blender):
     bpy = blender.bpy
     me = bpy.data.meshes.new("Cube")
     h = 1.0
-    me.from_pydata([(x, y, z) for x in (-h, h) for y in (-h, h) for z in (-h, h)], [],
-                   [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)])
+    me.from_pydata(
+        [(x, y, z) for x in (-h, h) for y in (-h, h) for z in (-h, h)],
+        [],
+        [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)],
+    )
     cube = bpy.data.objects.new("Cube", me)
     light = bpy.data.objects.new("Light", bpy.data.lights.new("Light", "POINT"))
     light.location = (4.0, 1.0, 6.0)
@@ -67,8 +71,15 @@ def _projected_mask(blender, objects, shape) -> np.ndarray:
     for o in objects:
         v = blender.verts(o).astype(np.float64)
         tri = np.array([list(p.vertices) for p in o.data.polygons])
-        pts = np.vstack([v, v[tri].mean(axis=1), 0.5 * (v[tri[:, 0]] + v[tri[:, 1]]),
-                         0.5 * (v[tri[:, 1]] + v[tri[:, 2]]), 0.5 * (v[tri[:, 2]] + v[tri[:, 0]])])
+        pts = np.vstack(
+            [
+                v,
+                v[tri].mean(axis=1),
+                0.5 * (v[tri[:, 0]] + v[tri[:, 1]]),
+                0.5 * (v[tri[:, 1]] + v[tri[:, 2]]),
+                0.5 * (v[tri[:, 2]] + v[tri[:, 0]]),
+            ]
+        )
         m = np.array(o.matrix_world)
         world = pts @ m[:3, :3].T + m[:3, 3]
         clip = np.hstack([world, np.ones((len(world), 1))]) @ (proj @ view).T
@@ -94,6 +105,7 @@ def test_studio_replaces_the_startup_scene(scene, bpy_session):
     garment = scene.objects("garment")[0]
     # each view's camera sees the whole body and garment, which fill most of the frame's height
     from bpy_extras.object_utils import world_to_camera_view
+
     for view in ("FRONT", "THREE_QUARTER", "BACK"):
         cam = bpy.data.objects[studio.camera_name(view)]
         ndc = []
@@ -101,6 +113,7 @@ def test_studio_replaces_the_startup_scene(scene, bpy_session):
             m = np.array(o.matrix_world)
             v = scene.verts(o)[::25] @ m[:3, :3].T + m[:3, 3]
             from mathutils import Vector
+
             ndc += [tuple(world_to_camera_view(sc, cam, Vector(p))) for p in v]
         ndc = np.array(ndc)
         assert ndc[:, :2].min() > 0.0 and ndc[:, :2].max() < 1.0 and ndc[:, 2].min() > 0, view
@@ -121,6 +134,7 @@ def test_garment_wears_its_fabric(scene, bpy_session):
     bpy = scene.bpy
     mats = scene.mod("materials")
     from importlib import import_module
+
     core = import_module(f"{scene.module}.core.drape.materials")
     g = scene.objects("garment")[0]
     assert g.data.materials[0].name == "EASE Fabric cotton"
@@ -155,8 +169,10 @@ def test_garment_wears_its_fabric(scene, bpy_session):
     # the weave is scaled in mm: the preset's thread repeat
     nodes = g.data.materials[0].node_tree.nodes
     assert mats.LOOKS["cotton"].weave == "plain"
-    assert any(n.type == "BUMP" and abs(n.inputs["Distance"].default_value
-                                        - 0.3e-3 * mats.LOOKS["cotton"].thread_mm) < 1e-9 for n in nodes)
+    assert any(
+        n.type == "BUMP" and abs(n.inputs["Distance"].default_value - 0.3e-3 * mats.LOOKS["cotton"].thread_mm) < 1e-9
+        for n in nodes
+    )
     bsdf = next(n for n in nodes if n.type == "BSDF_PRINCIPLED")
     assert bsdf.inputs["Sheen Weight"].default_value > 0 and bsdf.inputs["Normal"].is_linked
 
@@ -184,17 +200,17 @@ def test_tiny_render_shows_body_garment_and_shadow(scene, bpy_session):
         body.is_holdout = garment.is_holdout = False
         sc.render.film_transparent = False
     share = both.mean()
-    assert 0.08 < share < 0.5, share                              # a body framed, not a speck
+    assert 0.08 < share < 0.5, share  # a body framed, not a speck
     iou = (both & expected).sum() / (both | expected).sum()
-    assert iou > 0.75, iou                                        # nothing in front, where expected
+    assert iou > 0.75, iou  # nothing in front, where expected
     assert only_garment.mean() > 0.6 * expected_garment.mean() > 0.01
     assert only_garment.sum() <= both.sum()
     # the floor's contact shadow: the floor pixels just around the feet, with and without it
     rows = np.flatnonzero(both.any(axis=1))
-    low = rows.max() - max(2, (rows.max() - rows.min()) // 10)       # the lowest tenth: the feet
+    low = rows.max() - max(2, (rows.max() - rows.min()) // 10)  # the lowest tenth: the feet
     cols = np.flatnonzero(both[low:].any(axis=0))
     region = np.zeros_like(both)
-    region[low - 2:min(rows.max() + 3, h), max(cols.min() - 3, 0):cols.max() + 4] = True
+    region[low - 2 : min(rows.max() + 3, h), max(cols.min() - 3, 0) : cols.max() + 4] = True
     dilated = both.copy()
     for dr, dc in itertools.product((-1, 0, 1), repeat=2):
         dilated |= np.roll(np.roll(both, dr, 0), dc, 1)
@@ -247,7 +263,7 @@ def test_pattern_pieces_and_labels_do_not_overlap(scene, bpy_session):
         assert apart(a, b), (a.name, b.name)
     for a, b in itertools.combinations(labels, 2):
         assert apart(a, b), (a.name, b.name)
-    for lab in labels:          # inside its piece's width
+    for lab in labels:  # inside its piece's width
         (llo, lhi), (plo, phi) = scene.world_box(lab), scene.world_box(lab.parent)
         assert plo[0] <= llo[0] and lhi[0] <= phi[0], lab.name
 
@@ -287,6 +303,6 @@ def test_fabric_of_an_earlier_version_is_rebuilt_in_place(scene, bpy_session):
         bsdf = next(n for n in mat.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
         assert bsdf.inputs["Roughness"].default_value == pytest.approx(mats.LOOKS["silk"].roughness)
         assert bsdf.inputs["Normal"].is_linked and len(mat.node_tree.nodes) > 30
-        assert mats.fabric("silk") == mat          # current: kept as it is
+        assert mats.fabric("silk") == mat  # current: kept as it is
     finally:
         bpy.data.materials.remove(old)

@@ -2,6 +2,7 @@
 buttons that cannot run are greyed out with a tooltip saying what is missing, a render
 of nothing is refused, objects are updated in place (no ``.001`` names), reports print
 what the user set (no float32 noise), and the body shown agrees with the Body panel."""
+
 from __future__ import annotations
 
 import json
@@ -10,13 +11,32 @@ import re
 import numpy as np
 import pytest
 
-DESIGN = "top_sleeveless.json"     # cheapest template: two panels
+DESIGN = "top_sleeveless.json"  # cheapest template: two panels
 
 # what each operator needs, by the empty scene's tooltip
-NEEDS_BODY = ("set_size", "fit_measurements", "measure", "set_pose", "apply_shape", "brush_ease",
-              "paint_ease", "ease_uniform", "ease_gradient")
-NEEDS_DESIGN = ("save_design", "set_parameter", "recut", "assign_keypoint", "pick_keypoint", "ease_to_design",
-                "ease_from_design", "optimize_pattern", "transfer_size", "adapt_poses")
+NEEDS_BODY = (
+    "set_size",
+    "fit_measurements",
+    "measure",
+    "set_pose",
+    "apply_shape",
+    "brush_ease",
+    "paint_ease",
+    "ease_uniform",
+    "ease_gradient",
+)
+NEEDS_DESIGN = (
+    "save_design",
+    "set_parameter",
+    "recut",
+    "assign_keypoint",
+    "pick_keypoint",
+    "ease_to_design",
+    "ease_from_design",
+    "optimize_pattern",
+    "transfer_size",
+    "adapt_poses",
+)
 NEEDS_PATTERN = ("drape", "export_pattern", "marker")
 RUN_ANYWHERE = ("add_body", "load_template", "load_design_file", "studio_setup")
 
@@ -49,8 +69,14 @@ def test_every_operator_says_what_it_needs(bpy_session, blender, empty):
         assert not op.poll(), f"ease.{name} can be pressed in an empty scene"
         msg = _refusal(op)
         # operators of other stages (not named here) say at least where to go
-        want = {"save_design": "design", "drape": "pattern", "export_pattern": "pattern", "marker": "pattern",
-                "fitmap": "garment", "render": "render"}.get(name, "body" if name in NEEDS_BODY + NEEDS_DESIGN else "")
+        want = {
+            "save_design": "design",
+            "drape": "pattern",
+            "export_pattern": "pattern",
+            "marker": "pattern",
+            "fitmap": "garment",
+            "render": "render",
+        }.get(name, "body" if name in NEEDS_BODY + NEEDS_DESIGN else "")
         assert want in msg.lower() and "EASE >" in msg, (name, msg)
     blender.reset(body=True)
     for name in NEEDS_BODY + ("render",):
@@ -114,6 +140,7 @@ def test_drape_after_transfer_body_panel_follows(bpy_session, blender, anny):
     panel (size, phenotype sliders, measurements) follows it."""
     from core.body.instance import body_instance
     from core.body.measure import measure
+
     bpy = bpy_session["bpy"]
     blender.reset(body=True, design=DESIGN)
     s = bpy.context.scene.ease
@@ -137,8 +164,7 @@ def test_reports_print_what_the_user_set(bpy_session, blender):
     s = bpy.context.scene.ease
     s.ease_min, s.ease_max = 0.9, 2.0
     names = [p.name for p in blender.mod("data").current_cut(bpy.context).panels]
-    for op, kw in ((bpy.ops.ease.ease_uniform, dict(panel=names[0], ease=3.5)),
-                   (bpy.ops.ease.brush_ease, {})):
+    for op, kw in ((bpy.ops.ease.ease_uniform, dict(panel=names[0], ease=3.5)), (bpy.ops.ease.brush_ease, {})):
         s.ease_value = 3.1
         r = blender.run(op, **kw)
         assert "ERROR" in r, r
@@ -154,7 +180,7 @@ def test_parameters_keep_the_value_the_user_typed(bpy_session, blender):
     item = s.design_params[0]
     lo, hi = item.min, item.max
     value = round(0.5 * (lo + hi), 2) + 0.01
-    item.value = value                   # the slider, live re-cut
+    item.value = value  # the slider, live re-cut
     assert json.loads(s.design_json)["parameters"][item.name]["value"] == value
     assert bpy.ops.ease.set_parameter(name=item.name, value=0.3 if lo <= 0.3 <= hi else value) == {"FINISHED"}
     got = json.loads(s.design_json)["parameters"][item.name]["value"]

@@ -19,6 +19,7 @@ Headless there is no hypothesis in the environment: the walk is a seeded random 
 seeds of :data:`CI_SEEDS` (:data:`CI_STEPS` steps each); ``pytest --full`` runs
 :data:`FULL_SEEDS` walks of :data:`FULL_STEPS` steps (the designer's afternoon), every template.
 """
+
 from __future__ import annotations
 
 import os
@@ -33,10 +34,10 @@ import pytest
 # restored by an undo (8)
 CI_SEEDS, CI_STEPS = (2, 4, 8), 40
 FULL_SEEDS, FULL_STEPS = tuple(range(10, 20)), 500
-CHEAP = ("top_sleeveless.json", "blouse_fitted.json")          # two-panel designs: CI's templates
+CHEAP = ("top_sleeveless.json", "blouse_fitted.json")  # two-panel designs: CI's templates
 POSES = ("A", "T", "P1", "P2", "P3")
 MEASURE_TOL_CM = 0.05
-TRACE = bool(os.environ.get("EASE_WALK_TRACE"))     # each move printed as it starts (a crash's last)
+TRACE = bool(os.environ.get("EASE_WALK_TRACE"))  # each move printed as it starts (a crash's last)
 
 
 class Walk:
@@ -45,11 +46,12 @@ class Walk:
     def __init__(self, blender, rng: random.Random, full: bool):
         self.b, self.rng, self.full = blender, rng, full
         self.bpy = blender.bpy
-        self.templates = sorted(p.name for p in blender.mod("data").template_dir().glob("*.json")) if full \
-            else list(CHEAP)
+        self.templates = (
+            sorted(p.name for p in blender.mod("data").template_dir().glob("*.json")) if full else list(CHEAP)
+        )
         self.log = []
-        self.results = []            # (operator, FINISHED / ERROR / GREYED / CANCELLED)
-        self.undo_ready = False      # an undo step was pushed since the last file read
+        self.results = []  # (operator, FINISHED / ERROR / GREYED / CANCELLED)
+        self.undo_ready = False  # an undo step was pushed since the last file read
 
     # -- scene access (after an undo, references taken before dangle: always fetch afresh)
     @property
@@ -64,14 +66,15 @@ class Walk:
         ``{"ERROR": message}`` (a refusal: greyed out, or a user error reported)."""
         op = getattr(self.bpy.ops.ease, opname)
         if not op.poll():
-            why = self.mod("operators_base").missing(self.bpy.context,
-                                                     getattr(getattr(self.bpy.types, op.idname()), "needs", ()))
+            why = self.mod("operators_base").missing(
+                self.bpy.context, getattr(getattr(self.bpy.types, op.idname()), "needs", ())
+            )
             assert why, f"{opname} greyed out without a reason"
             self.results.append((opname, "GREYED"))
             return {"GREYED": why}
         try:
             out = op("EXEC_DEFAULT", True, *args, **kw)
-        except RuntimeError as exc:         # the operator reported an error (a user's, or a bug: checked)
+        except RuntimeError as exc:  # the operator reported an error (a user's, or a bug: checked)
             out = {"ERROR": str(exc)}
         self.undo_ready = True
         self.results.append((opname, sorted(out)[0]))
@@ -88,6 +91,7 @@ class Walk:
 
     def set_size(self):
         from core.body.sizes import CHARTS
+
         chart = self.rng.choice(sorted(CHARTS))
         self.s.chart = chart
         self.edited("chart")
@@ -127,7 +131,7 @@ class Walk:
         inside = self.rng.random() < 0.7
         value = self.rng.uniform(lo, hi) if inside else hi + self.rng.uniform(0.01, 0.5)
         if self.rng.random() < 0.5:
-            item.value = value                  # the slider (live re-cut)
+            item.value = value  # the slider (live re-cut)
             self.edited("parameter")
         else:
             self.op("set_parameter", name=item.name, value=value)
@@ -154,8 +158,8 @@ class Walk:
         if layer.domain == "POINT":
             layer.data.foreach_set("color", ramp.ease_to_color(e, lo, hi).astype(np.float32).ravel())
             me.update()
-        self.bpy.context.view_layer.update()    # the stroke's redraw: Live's depsgraph handler sees it
-        self.bpy.ops.ed.undo_push(message="stroke")     # a stroke is one undo step
+        self.bpy.context.view_layer.update()  # the stroke's redraw: Live's depsgraph handler sees it
+        self.bpy.ops.ed.undo_push(message="stroke")  # a stroke is one undo step
         self.undo_ready = True
 
     def ease_to_design(self):
@@ -183,7 +187,7 @@ class Walk:
             return
         live = self.mod("live")
         for _ in range(self.rng.randrange(1, 40)):
-            if live._tick() is None:        # as the timer runs it: stopped (converged, or an error said)
+            if live._tick() is None:  # as the timer runs it: stopped (converged, or an error said)
                 break
 
     def undo(self):
@@ -217,17 +221,31 @@ class Walk:
         self.op("export_pattern")
 
     MOVES = {  # move: (weight in CI, weight with --full)
-        "add_body": (2, 2), "set_size": (4, 4), "set_pose": (4, 4), "load_template": (3, 4),
-        "move_keypoint": (3, 4), "set_parameter": (6, 6), "paint": (8, 8), "ease_to_design": (3, 3),
-        "ease_uniform": (3, 3), "live_toggle": (3, 3), "live_ticks": (5, 5), "undo": (4, 5),
-        "optimize": (2, 3), "transfer": (1, 2), "adapt": (0, 1), "drape": (1, 1), "export": (1, 1)}
+        "add_body": (2, 2),
+        "set_size": (4, 4),
+        "set_pose": (4, 4),
+        "load_template": (3, 4),
+        "move_keypoint": (3, 4),
+        "set_parameter": (6, 6),
+        "paint": (8, 8),
+        "ease_to_design": (3, 3),
+        "ease_uniform": (3, 3),
+        "live_toggle": (3, 3),
+        "live_ticks": (5, 5),
+        "undo": (4, 5),
+        "optimize": (2, 3),
+        "transfer": (1, 2),
+        "adapt": (0, 1),
+        "drape": (1, 1),
+        "export": (1, 1),
+    }
 
     def step(self):
         names = list(self.MOVES)
         weights = [self.MOVES[n][1 if self.full else 0] for n in names]
         move = self.rng.choices(names, weights)[0]
         if self.s.body is None and self.rng.random() < 0.8:
-            move = "add_body"               # a designer starts from a body and a design
+            move = "add_body"  # a designer starts from a body and a design
         elif not self.s.design_json and self.rng.random() < 0.8:
             move = "load_template"
         self.log.append(move)
@@ -235,7 +253,7 @@ class Walk:
             print(f"[walk] {len(self.log)} {move}", flush=True)
         getattr(self, move)()
         if self.s.live and self.rng.random() < 0.5:
-            self.live_ticks()           # the timer runs between the designer's moves
+            self.live_ticks()  # the timer runs between the designer's moves
         self.check()
 
     # -- invariants -----------------------------------------------------------------------------
@@ -245,8 +263,9 @@ class Walk:
         bpy = self.bpy
         s = self.s
         data = self.mod("data")
-        names = [o.name for o in bpy.data.objects] + [m.name for m in bpy.data.meshes] + \
-            [c.name for c in bpy.data.curves]
+        names = (
+            [o.name for o in bpy.data.objects] + [m.name for m in bpy.data.meshes] + [c.name for c in bpy.data.curves]
+        )
         dup = [n for n in names if re.search(r"\.\d{3}$", n) and n.startswith("EASE")]
         assert not dup, dup
         assert s.size in data.chart_sizes(s.chart)
@@ -262,6 +281,7 @@ class Walk:
 
     def _check_body(self, body):
         from core.body.sizes import split_size
+
         s, data = self.s, self.mod("data")
         model = data.state.body_model(data.body_spec(body)["model"])
         shape = data.full_shape(model, data.body_spec(body)["shape"])
@@ -269,9 +289,10 @@ class Walk:
         assert sliders == pytest.approx({k: shape[k] for k in sliders}, abs=1e-5)
         assert s.pose == data.body_spec(body)["pose"]
         size = body.get("ease_size")
-        if size is not None:            # the body's size record (the Body panel shows it) is its shape's
+        if size is not None:  # the body's size record (the Body panel shows it) is its shape's
             split_size(size)
             from core.body.sizes import size_shape
+
             want = data.full_shape(model, size_shape(model, size))
             assert shape == pytest.approx(want, abs=1e-6), size
         if s.measurements_report:
@@ -289,7 +310,7 @@ class Walk:
     def _check_live(self, body):
         live, data = self.mod("live"), self.mod("data")
         if not self.full and self.rng.random() < 0.7:
-            return                      # CI: the cold solve now and then
+            return  # CI: the cold solve now and then
         session = live.session_for(self.bpy.context)
         cold = session.cold_pattern(live._field(body, self.bpy.context.scene))
         stored = data.stored_pattern(self.bpy.context.scene)
@@ -310,6 +331,7 @@ def _walk(blender, seed: int, steps: int, full: bool):
     finally:
         blender.scene.ease.live = False
     from collections import Counter
+
     print(f"seed {seed}: {Counter(walk.log)}; {Counter(r for _, r in walk.results)}")
 
 

@@ -11,19 +11,23 @@
 - A module's size is decided by what belongs together, not by a line count: modules over
   ``SOFT_LINES`` get a warning (a prompt to look, never a failure).
 """
+
 from __future__ import annotations
 
 import ast
 from pathlib import Path
 
-import pytest
-
 ROOT = Path(__file__).resolve().parent.parent
 
 #: Layer of each part of ``core`` (a module may import its own layer and lower ones).
 LAYERS = {
-    "core.errors": 0, "core.fileio": 0, "core.jsontext": 0, "core.signals": 0, "core.progress": 0,
-    "core.paths": 0, "core.choices": 0,
+    "core.errors": 0,
+    "core.fileio": 0,
+    "core.jsontext": 0,
+    "core.signals": 0,
+    "core.progress": 0,
+    "core.paths": 0,
+    "core.choices": 0,
     "core.geom": 1,
     "core.body": 2,
     "core.design": 3,
@@ -31,13 +35,13 @@ LAYERS = {
     "core.pattern": 5,
     "core.drape": 6,
     "core.export": 7,
-    "core.marker": 8,    # the marker stage: nesting the export's pieces on a fabric width
+    "core.marker": 8,  # the marker stage: nesting the export's pieces on a fabric width
     "core.metrics": 8,
     "core.workflows": 9,
-    "core.live": 9,      # the live re-solve loop (painting), on the workflows' solver
-    "core.batch": 10,    # many bodies through the workflows on a Dask cluster
+    "core.live": 9,  # the live re-solve loop (painting), on the workflows' solver
+    "core.batch": 10,  # many bodies through the workflows on a Dask cluster
     "core.cli": 11,
-    "core": 0,           # the package's own __init__: the version only
+    "core": 0,  # the package's own __init__: the version only
 }
 #: modules longer than this are listed in a warning: worth a look, not a rule
 SOFT_LINES = 800
@@ -68,7 +72,7 @@ def _resolve(module: str, is_package: bool, node) -> list:
         parts = module.split(".")
         if not is_package:
             parts = parts[:-1]
-        parts = parts[:len(parts) - (node.level - 1)]
+        parts = parts[: len(parts) - (node.level - 1)]
         base = ".".join(parts + ([node.module] if node.module else []))
     out = []
     for a in node.names:
@@ -115,8 +119,12 @@ def test_core_imports_no_later_stage():
 
 
 def test_core_never_imports_bpy():
-    bad = [m for m, imported in GRAPH.items() if m.startswith("core")
-           and any(t == "bpy" or t.startswith(("bpy.", "mathutils", "addon_utils")) for t in imported)]
+    bad = [
+        m
+        for m, imported in GRAPH.items()
+        if m.startswith("core")
+        and any(t == "bpy" or t.startswith(("bpy.", "mathutils", "addon_utils")) for t in imported)
+    ]
     assert not bad, f"core modules importing Blender: {bad}"
 
 
@@ -172,10 +180,13 @@ def test_addon_operator_modules_do_not_import_each_other():
 def test_long_modules_are_named():
     """A soft size check: a long module is named in a warning, so a reader can ask whether it is one job."""
     import warnings
+
     long = {m: len(p.read_text(encoding="utf-8").splitlines()) for m, p in MODULES.items()}
     long = {m: n for m, n in long.items() if n > SOFT_LINES}
     if long:
-        warnings.warn("modules over %d lines: %s" % (SOFT_LINES, ", ".join(f"{m} ({n})" for m, n in sorted(long.items()))))
+        warnings.warn(
+            "modules over %d lines: %s" % (SOFT_LINES, ", ".join(f"{m} ({n})" for m, n in sorted(long.items())))
+        )
 
 
 def _documented_layers() -> dict:
@@ -193,8 +204,11 @@ def _documented_layers() -> dict:
 def test_the_documented_layer_table_is_the_tested_one():
     documented = _documented_layers()
     tested = {m: layer for m, layer in LAYERS.items() if m != "core"}
-    assert documented == tested, {m: (documented.get(m), tested.get(m))
-                                  for m in documented.keys() | tested.keys() if documented.get(m) != tested.get(m)}
+    assert documented == tested, {
+        m: (documented.get(m), tested.get(m))
+        for m in documented.keys() | tested.keys()
+        if documented.get(m) != tested.get(m)
+    }
 
 
 def test_the_layer_table_knows_every_core_module():

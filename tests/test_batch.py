@@ -3,6 +3,7 @@
 The cheapest template (top_sleeveless) on Anny; each run starts a 2-worker
 LocalCluster or uses the module's cluster through ``scheduler=``.
 """
+
 from __future__ import annotations
 
 import json
@@ -23,6 +24,7 @@ TABLE = "name,height,chest,waist,hip,size\nlarge,,,,,L\nmeasured,178,96,80,100,\
 def _dead_pid() -> int:
     import subprocess
     import sys
+
     child = subprocess.Popen([sys.executable, "-c", "pass"])
     child.wait()
     return child.pid
@@ -33,8 +35,10 @@ def scheduler():
     import logging
 
     from distributed import LocalCluster
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, **NO_DASHBOARD,
-                      silence_logs=logging.ERROR) as cluster:
+
+    with LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, **NO_DASHBOARD, silence_logs=logging.ERROR
+    ) as cluster:
         yield cluster.scheduler_address
 
 
@@ -43,8 +47,14 @@ def test_small_batch_on_a_local_cluster_then_resume(tmp_path):
     bodies = read_measurements(tmp_path / "bodies.csv")
     out = tmp_path / "set"
     lines = []
-    res = run_batch(DESIGN, bodies, out, options=Options(export=("svg",), garmentcode=True), workers=2,
-                    progress=lambda f, m: lines.append(m))
+    res = run_batch(
+        DESIGN,
+        bodies,
+        out,
+        options=Options(export=("svg",), garmentcode=True),
+        workers=2,
+        progress=lambda f, m: lines.append(m),
+    )
     assert (res.total, res.made, res.failed, res.skipped, res.workers) == (3, 2, 1, 0, 2)
     assert lines[-1].startswith("3/3 items, 1 failed, ETA")
     rows = {r["label"]: r for r in read_rows(out / "manifest.jsonl")}
@@ -71,8 +81,9 @@ def test_small_batch_on_a_local_cluster_then_resume(tmp_path):
         for p in spec["panels"].values():
             n = len(p["vertices"])
             assert [e["endpoints"] for e in p["edges"]] == [[i, (i + 1) % n] for i in range(n)]
-        assert spec["stitches"] and all(s[k]["edge"] < len(spec["panels"][s[k]["panel"]]["edges"])
-                                        for s in spec["stitches"] for k in (0, 1))
+        assert spec["stitches"] and all(
+            s[k]["edge"] < len(spec["panels"][s[k]["panel"]]["edges"]) for s in spec["stitches"] for k in (0, 1)
+        )
     assert rows["large"]["body.size"] == "L"
     assert abs(rows["measured"]["body.waist_cm"] - 80) < 1.0 and rows["measured"]["targets.waist"] == 80
     before = (out / "items" / rows["large"]["folder"] / "pattern.json").stat().st_mtime_ns
@@ -108,7 +119,8 @@ def test_interrupted_batch_resumes_without_redoing(tmp_path, scheduler):
     assert (res.made, res.skipped, res.failed, res.interrupted) == (3, 1, 0, False)
     assert (out / "items" / first[0]["folder"] / "pattern.json").stat().st_mtime_ns == stamp
     assert not half.exists() and sorted(p.name for p in (out / "items").iterdir()) == sorted(
-        r["folder"] for r in read_rows(out / "manifest.jsonl"))
+        r["folder"] for r in read_rows(out / "manifest.jsonl")
+    )
     rows = read_rows(out / "manifest.jsonl")
     assert len(rows) == 4 and len({r["id"] for r in rows}) == 4
 
@@ -125,13 +137,14 @@ def test_item_timeout_is_recorded(tmp_path, scheduler):
 
 def test_tasks_carry_one_item_first_and_last_and_a_few_between():
     from core.batch.run import ITEMS_PER_TASK, task_sizes
+
     for n, workers in [(0, 2), (1, 2), (4, 2), (7, 1), (150, 2), (1000, 2), (1000, 64), (5, 0)]:
         sizes = task_sizes(n, workers)
         assert sum(sizes) == n and all(1 <= s <= ITEMS_PER_TASK for s in sizes)
         first = min(n, max(workers, 1))
-        assert sizes[:first] == [1] * first            # each worker's first row (its cut) comes alone
+        assert sizes[:first] == [1] * first  # each worker's first row (its cut) comes alone
         assert sizes[first:] == sorted(sizes[first:], reverse=True)
-        assert n < 2 or sizes[-1] == 1                  # nobody waits at the end for a long task
+        assert n < 2 or sizes[-1] == 1  # nobody waits at the end for a long task
     assert task_sizes(150, 2)[2] == ITEMS_PER_TASK
 
 
@@ -149,29 +162,37 @@ def test_a_worker_killed_under_a_task_of_several_items_costs_only_its_item(tmp_p
     from distributed import LocalCluster
 
     from core.batch.run import task_sizes
+
     assert task_sizes(6, 1)[:2] == [1, 2]
     killer = str(Path(__file__).parent / "helpers" / "batch_killer.py")
-    with dask.config.set({"distributed.scheduler.allowed-failures": 0,
-                          "distributed.scheduler.worker-saturation": 1.0}):
-        with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, **NO_DASHBOARD,
-                          silence_logs=logging.CRITICAL, preload=[killer]) as cluster:
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0, "distributed.scheduler.worker-saturation": 1.0}):
+        with LocalCluster(
+            n_workers=1,
+            threads_per_worker=1,
+            processes=True,
+            **NO_DASHBOARD,
+            silence_logs=logging.CRITICAL,
+            preload=[killer],
+        ) as cluster:
             res = run_batch(DESIGN, sample_anny(6, seed=5), tmp_path / "set", scheduler=cluster.scheduler_address)
     rows = {r["index"]: r for r in res.rows}
     assert (res.made, res.failed, sorted(rows)) == (5, 1, [0, 1, 2, 3, 4, 5])
     assert rows[2]["label"] == "sample 2" and rows[2]["status"] == "error"
     assert rows[2]["error"].startswith("KilledWorker: the worker process died 1 time(s) while this item")
-    assert "ease-item" not in rows[2]["error"] and "tcp://" not in rows[2]["error"]   # no run-specific text
+    assert "ease-item" not in rows[2]["error"] and "tcp://" not in rows[2]["error"]  # no run-specific text
     assert all(rows[i]["status"] == "ok" for i in (0, 1, 3, 4, 5))
     assert not (tmp_path / "set" / "items" / rows[2]["folder"]).exists()
 
 
-def test_ctrl_c_as_a_task_s_rows_reach_the_journal_leaves_the_counts_equal_to_the_rows(tmp_path, scheduler,
-                                                                                       monkeypatch):
+def test_ctrl_c_as_a_task_s_rows_reach_the_journal_leaves_the_counts_equal_to_the_rows(
+    tmp_path, scheduler, monkeypatch
+):
     """SIGINT during the journal's write and fsync waits for it (signals_held) and then stops the
     batch: the rows it wrote are counted in the result all the same."""
     import signal
 
     from core.batch.manifest import Journal
+
     extend = Journal.extend
 
     def extend_then_ctrl_c(self, rows):
@@ -192,7 +213,7 @@ def test_a_run_beside_another_of_the_same_items_on_one_scheduler_makes_its_own(t
     inner = []
 
     def second_run(fraction, message):
-        if not inner:       # run "a" has submitted its tasks and holds them: run "b" now
+        if not inner:  # run "a" has submitted its tasks and holds them: run "b" now
             inner.append(run_batch(DESIGN, bodies, tmp_path / "b", scheduler=scheduler))
 
     outer = run_batch(DESIGN, bodies, tmp_path / "a", scheduler=scheduler, progress=second_run)
@@ -204,6 +225,7 @@ def test_a_run_beside_another_of_the_same_items_on_one_scheduler_makes_its_own(t
 
 def test_cli_errors_exit_2(tmp_path, capsys):
     from core.cli import main
+
     (tmp_path / "bodies.csv").write_text("height,waist\n170,eighty\n")
     code = main(["batch", str(DESIGN), "--bodies", str(tmp_path / "bodies.csv"), "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err
@@ -217,6 +239,7 @@ def test_cli_errors_exit_2(tmp_path, capsys):
 
 def test_bad_inputs_stop_before_any_work_with_one_line(tmp_path, capsys):
     from core.cli import main
+
     out = tmp_path / "o"
 
     def run(*args):
@@ -227,7 +250,8 @@ def test_bad_inputs_stop_before_any_work_with_one_line(tmp_path, capsys):
 
     (tmp_path / "bodies.csv").write_text("height,chest\n-170,90\n")
     assert "bodies.csv: row 1, column 'height': expected 50..250 cm, got -170" in run(
-        DESIGN, "--bodies", tmp_path / "bodies.csv")
+        DESIGN, "--bodies", tmp_path / "bodies.csv"
+    )
     (tmp_path / "bust.csv").write_text("name,bust\nx,400\n")
     assert "row 1, column 'bust'" in run(DESIGN, "--bodies", tmp_path / "bust.csv")
     (tmp_path / "design.json").write_text('{"foo": 1}')
@@ -242,6 +266,7 @@ def _server(answer: bytes):
     """A TCP server on localhost that takes connections and sends ``answer`` (b"": nothing, ever)."""
     import socket
     import threading
+
     srv = socket.socket()
     srv.bind(("127.0.0.1", 0))
     srv.listen()
@@ -256,17 +281,21 @@ def _server(answer: bytes):
             held.append(conn)
             if answer:
                 conn.sendall(answer)
+
     threading.Thread(target=serve, daemon=True).start()
     return srv, f"tcp://127.0.0.1:{srv.getsockname()[1]}"
 
 
-@pytest.mark.parametrize("answer, said", [(b"", "no Dask scheduler answered within 1 s"),
-                                          (b"HTTP/1.0 400 Bad request\r\n\r\n" * 4, "Dask scheduler")])
+@pytest.mark.parametrize(
+    "answer, said",
+    [(b"", "no Dask scheduler answered within 1 s"), (b"HTTP/1.0 400 Bad request\r\n\r\n" * 4, "Dask scheduler")],
+)
 def test_a_scheduler_address_that_is_not_a_dask_scheduler_fails_in_bounded_time(tmp_path, monkeypatch, answer, said):
     """Client() waited without end on a server that never answers (a web server) and read a
     frame length of exabytes from one that answers something else."""
     from core.batch import run as run_module
     from core.batch.run import BatchError
+
     monkeypatch.setattr(run_module, "SCHEDULER_PROBE_S", 1.0)
     srv, address = _server(answer)
     try:
@@ -284,12 +313,19 @@ def test_local_workers_leave_ctrl_c_to_the_driver(scheduler):
     import signal
 
     from distributed import Client, LocalCluster
-    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, **NO_DASHBOARD,
-                      silence_logs=logging.CRITICAL, preload=["core.batch.local_worker"]) as cluster:
+
+    with LocalCluster(
+        n_workers=1,
+        threads_per_worker=1,
+        processes=True,
+        **NO_DASHBOARD,
+        silence_logs=logging.CRITICAL,
+        preload=["core.batch.local_worker"],
+    ) as cluster:
         with Client(cluster) as client:
             ignored = client.run(lambda: signal.getsignal(signal.SIGINT) == signal.SIG_IGN)
     assert list(ignored.values()) == [True]
-    with Client(scheduler) as client:         # the preload is the local cluster's only
+    with Client(scheduler) as client:  # the preload is the local cluster's only
         assert not any(client.run(lambda: signal.getsignal(signal.SIGINT) == signal.SIG_IGN).values())
 
 
@@ -299,6 +335,7 @@ def test_ctrl_c_twice_still_leaves_a_compacted_manifest_and_an_interrupted_resul
     import signal
 
     from core.batch import run as run_module
+
     close = run_module.Journal.close
 
     def close_then_ctrl_c(self):
@@ -308,6 +345,7 @@ def test_ctrl_c_twice_still_leaves_a_compacted_manifest_and_an_interrupted_resul
     def progress(fraction, message):
         if message.startswith("2/"):
             raise KeyboardInterrupt
+
     monkeypatch.setattr(run_module.Journal, "close", close_then_ctrl_c)
     res = run_batch(DESIGN, sample_anny(8, seed=4), tmp_path / "set", scheduler=scheduler, progress=progress)
     rows = read_rows(tmp_path / "set" / "manifest.jsonl")
@@ -325,6 +363,7 @@ def test_the_documented_worker_settings_are_the_local_clusters():
     import yaml
 
     from core.batch.run import WORKER_CONFIG
+
     root = Path(__file__).resolve().parent.parent
     sys.path.insert(0, str(root / "benchmarks"))
     try:
@@ -345,10 +384,15 @@ def test_the_documented_worker_settings_are_the_local_clusters():
 
 def test_summary_counts_in_words():
     from core.batch.run import BatchResult
-    assert BatchResult(total=3, skipped=0, made=2, failed=1, workers=1, seconds=1.0).summary() == \
-        "batch done: 2 made, 1 failed, 0 already complete, 3 items, 1.0 s on 1 worker"
-    assert BatchResult(total=1, skipped=1).summary() == \
-        "batch done: 0 made, 0 failed, 1 already complete, 1 item, 0.0 s (nothing left to make)"
+
+    assert (
+        BatchResult(total=3, skipped=0, made=2, failed=1, workers=1, seconds=1.0).summary()
+        == "batch done: 2 made, 1 failed, 0 already complete, 3 items, 1.0 s on 1 worker"
+    )
+    assert (
+        BatchResult(total=1, skipped=1).summary()
+        == "batch done: 0 made, 0 failed, 1 already complete, 1 item, 0.0 s (nothing left to make)"
+    )
 
 
 def test_a_body_refused_for_collapse_keeps_its_shape_in_the_row(tmp_path, scheduler):
@@ -359,13 +403,14 @@ def test_a_body_refused_for_collapse_keeps_its_shape_in_the_row(tmp_path, schedu
     res = run_batch(DESIGN, bodies, tmp_path / "set", scheduler=scheduler)
     row = res.rows[0]
     assert row["status"] == "error" and "collapsed" in row["error"]
-    assert {k[len("shape."):]: v for k, v in row.items() if k.startswith("shape.")} == bodies[0].value
+    assert {k[len("shape.") :]: v for k, v in row.items() if k.startswith("shape.")} == bodies[0].value
 
 
 def test_the_summary_lists_this_commands_failures_only(tmp_path, capsys):
     """A dataset folder reused with other bodies or options: the summary's failure lines are those of
     this command's items (seed 0's sample 0 is refused on this design; seed 5's is made)."""
     from core.cli import main
+
     out = str(tmp_path / "set")
     assert main(["batch", str(DESIGN), "--sample", "1", "--seed", "0", "--workers", "1", "--quiet", "--out", out]) == 1
     assert "sample 0: error:" in capsys.readouterr().out
@@ -380,10 +425,15 @@ def test_a_bare_size_is_of_the_designs_chart(tmp_path, scheduler):
     reads it: the item's body, girths and pattern were the default chart's M (chest 95.6 cm
     instead of 93.9) under a pattern record naming women:M."""
     from core.batch.bodies import BodySource
+
     design = template_path("blouse_fitted")
     assert json.loads(design.read_text())["body"]["chart"] == "women"
-    res = run_batch(design, [BodySource("bare", "size", "M"), BodySource("named", "size", "women:M")],
-                    tmp_path / "set", scheduler=scheduler)
+    res = run_batch(
+        design,
+        [BodySource("bare", "size", "M"), BodySource("named", "size", "women:M")],
+        tmp_path / "set",
+        scheduler=scheduler,
+    )
     rows = {r["label"]: r for r in res.rows}
     assert rows["bare"]["status"] == rows["named"]["status"] == "ok"
     assert rows["bare"]["body.size"] == "women:M"

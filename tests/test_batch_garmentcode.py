@@ -7,6 +7,7 @@ bounding box and running counter-clockwise (``pattern/core.py: _normalize_edge_l
 GarmentCode itself is not installed here: the ``pygarment`` 2.0.2 wheel installs its modules as top-level
 ``pattern``, ``meshgen`` and ``garmentcode`` (its own imports say ``pygarment.…``, and ``pygarment.data_config``
 is missing), and its mesher needs the CGAL Python bindings and libigl (docs/batch.md)."""
+
 from __future__ import annotations
 
 import math
@@ -46,6 +47,7 @@ def teaser():
     from core import workflows as wf
     from core.body.instance import spec_instance
     from core.design.templates import template_path
+
     prep = wf.prepare(template_path("teaser_shirt_pants"))
     pattern = wf.reference(prep).pattern
     body, _ = spec_instance(pattern.body)
@@ -97,8 +99,7 @@ def test_units_and_floor(teaser):
     high = max(v.max() for n, v in ys.items() if n.startswith("shirt"))
     assert 0.0 <= low < 30.0 and 130.0 < high < 175.0
     width = np.ptp(np.asarray(pattern.panel("shirt.front").uv, float)[:, 0]) * 100
-    assert np.ptp(np.array(spec["pattern"]["panels"]["shirt.front"]["vertices"])[:, 0]) == pytest.approx(width,
-                                                                                                            abs=0.1)
+    assert np.ptp(np.array(spec["pattern"]["panels"]["shirt.front"]["vertices"])[:, 0]) == pytest.approx(width, abs=0.1)
 
 
 def test_edge_loops_normalised(teaser):
@@ -121,6 +122,7 @@ def test_outlines_simplified_within_tolerance(teaser):
     correspondence kept), so every seam is stitched end to end on both sides."""
     from core.export.boundary import piece_loops
     from core.geom.polygon import distance_to_polyline
+
     pattern, spec, _ = teaser
     shortest = np.inf
     for name, panel in spec["pattern"]["panels"].items():
@@ -132,12 +134,13 @@ def test_outlines_simplified_within_tolerance(teaser):
         local = (uv[loop] - uv[loop].min(axis=0)) * 100
         assert distance_to_polyline(local, V, closed=True).max() <= TOLERANCE * 100 + 1e-3, name
         shortest = min(shortest, float(np.linalg.norm(np.diff(np.vstack([V, V[:1]]), axis=0), axis=1).min()))
-    assert shortest > 0.05      # cm: 0.5 mm (the solved outline's shortest edges: 0.04 mm)
+    assert shortest > 0.05  # cm: 0.5 mm (the solved outline's shortest edges: 0.04 mm)
 
     def length(side):
         V = np.array(spec["pattern"]["panels"][side["panel"]]["vertices"])
         i, j = spec["pattern"]["panels"][side["panel"]]["edges"][side["edge"]]["endpoints"]
         return float(np.linalg.norm(V[j] - V[i]))
+
     stitched = {}
     for a, b in spec["pattern"]["stitches"]:
         key = (a["panel"], b["panel"])
@@ -145,9 +148,17 @@ def test_outlines_simplified_within_tolerance(teaser):
         stitched[key] = (sa + length(a), sb + length(b))
     seams = {}
     for s in pattern.seams:
-        full = [float(np.sum(np.linalg.norm(np.diff(np.asarray(pattern.panel(panel).uv, float)[np.asarray(ids, int)],
-                                                    axis=0), axis=1))) * 100
-                for panel, ids in ((s.panel_a, s.verts_a), (s.panel_b, s.verts_b))]
+        full = [
+            float(
+                np.sum(
+                    np.linalg.norm(
+                        np.diff(np.asarray(pattern.panel(panel).uv, float)[np.asarray(ids, int)], axis=0), axis=1
+                    )
+                )
+            )
+            * 100
+            for panel, ids in ((s.panel_a, s.verts_a), (s.panel_b, s.verts_b))
+        ]
         sa, sb = seams.get((s.panel_a, s.panel_b), (0.0, 0.0))
         seams[(s.panel_a, s.panel_b)] = (sa + full[0], sb + full[1])
     assert set(seams) == set(stitched)

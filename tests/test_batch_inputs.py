@@ -1,5 +1,6 @@
 """core.batch inputs without a cluster: body tables, samples, betas, item ids, the manifest journal,
 the GarmentCode placement."""
+
 from __future__ import annotations
 
 import json
@@ -37,19 +38,22 @@ def test_sizes_of_a_chart(tmp_path):
     assert [b.value for b in read_measurements(p)] == ["women:M", "men:L", "S"]
 
 
-@pytest.mark.parametrize("text, words", [
-    ("height,waist\n170,80\n180,eighty\n", ["bodies.csv", "row 2", "'waist'", "'eighty'"]),
-    ("height,inseam\n170,80\n", ["bodies.csv", "column 2", "'inseam'"]),
-    ("height,size\n170,XXL\n", ["row 1", "'size'", "XXL"]),
-    ("height,size\n170,M\n", ["row 1", "not both"]),
-    ("size,chart\n5XL,women\n", ["row 1", "'size/chart'", "S, M, L"]),
-    ("size,chart\nM,kids\n", ["row 1", "kids"]),
-    ("height,chart\n170,women\n", ["row 1", "'chart'", "no size"]),
-    ("height,waist\n170,80,3\n", ["row 1", "3 cells"]),
-    ("height,waist\n,\n", ["bodies.csv", "no body rows"]),
-    ("", ["empty"]),
-    ("height,chest,bust\n1,2,3\n", ["both 'chest' and 'bust'"]),
-])
+@pytest.mark.parametrize(
+    "text, words",
+    [
+        ("height,waist\n170,80\n180,eighty\n", ["bodies.csv", "row 2", "'waist'", "'eighty'"]),
+        ("height,inseam\n170,80\n", ["bodies.csv", "column 2", "'inseam'"]),
+        ("height,size\n170,XXL\n", ["row 1", "'size'", "XXL"]),
+        ("height,size\n170,M\n", ["row 1", "not both"]),
+        ("size,chart\n5XL,women\n", ["row 1", "'size/chart'", "S, M, L"]),
+        ("size,chart\nM,kids\n", ["row 1", "kids"]),
+        ("height,chart\n170,women\n", ["row 1", "'chart'", "no size"]),
+        ("height,waist\n170,80,3\n", ["row 1", "3 cells"]),
+        ("height,waist\n,\n", ["bodies.csv", "no body rows"]),
+        ("", ["empty"]),
+        ("height,chest,bust\n1,2,3\n", ["both 'chest' and 'bust'"]),
+    ],
+)
 def test_bad_tables_name_file_row_and_column(tmp_path, text, words):
     with pytest.raises(BodySourceError) as exc:
         read_measurements(_csv(tmp_path, text))
@@ -83,6 +87,7 @@ def _smpl_params(tmp_path):
     from smpl_synth import tube_model
 
     from core.body import load_body
+
     path = tmp_path / "tube.npz"
     np.savez(path, **tube_model(n_betas=3))
     return load_body(str(path)).shape_parameters()
@@ -96,8 +101,10 @@ def test_betas_files(tmp_path):
     (tmp_path / "b.csv").write_text("beta0,beta1,beta2\n0.5,-1,0\n1,2,-0.5\n")
     for name in ("b.npy", "b.csv"):
         bodies = read_betas(tmp_path / name, params)
-        assert [b.value for b in bodies] == [{"beta0": 0.5, "beta1": -1.0, "beta2": 0.0},
-                                             {"beta0": 1.0, "beta1": 2.0, "beta2": -0.5}]
+        assert [b.value for b in bodies] == [
+            {"beta0": 0.5, "beta1": -1.0, "beta2": 0.0},
+            {"beta0": 1.0, "beta1": 2.0, "beta2": -0.5},
+        ]
     assert read_betas(tmp_path / "b.npz", params)[1].value == {"beta0": 1.0, "beta1": 2.0}
 
 
@@ -107,8 +114,12 @@ def test_bad_betas_name_file_row_and_column(tmp_path):
     np.save(tmp_path / "far.npy", np.array([[0.0, 0.0], [0.0, 99.0]]))
     (tmp_path / "bad.csv").write_text("0,1\n0,x\n")
     (tmp_path / "b.txt").write_text("0")
-    cases = {"wide.npy": ["5 betas", "has 3"], "far.npy": ["row 2", "column 2", "beta1", "out of range"],
-             "bad.csv": ["row 2", "column 2", "'x'"], "b.txt": ["npy, .npz or .csv"]}
+    cases = {
+        "wide.npy": ["5 betas", "has 3"],
+        "far.npy": ["row 2", "column 2", "beta1", "out of range"],
+        "bad.csv": ["row 2", "column 2", "'x'"],
+        "b.txt": ["npy, .npz or .csv"],
+    }
     for name, words in cases.items():
         with pytest.raises(BodySourceError) as exc:
             read_betas(tmp_path / name, params)
@@ -127,15 +138,15 @@ def test_item_ids_hash_design_body_and_options():
     assert len(make_items(design, bodies + bodies[:1])) == 3  # the same body twice is one item
 
 
-
 def test_items_take_the_designs_solver_unless_the_caller_names_one():
     """Options.config None is the design's own "solver" (else improved), made explicit in the item: the
     same ids as naming it, so a rerun skips what either way made; a caller's choice wins."""
     bodies = sample_anny(2, seed=0, parameters=ANNY_PARAMS)
     fitted = {"name": "d", "keypoints": {}, "solver": "fitted"}
     assert {it.options.config for it in make_items(fitted, bodies)} == {"fitted"}
-    assert [it.id for it in make_items(fitted, bodies)] == \
-        [it.id for it in make_items(fitted, bodies, options=Options(config="fitted"))]
+    assert [it.id for it in make_items(fitted, bodies)] == [
+        it.id for it in make_items(fitted, bodies, options=Options(config="fitted"))
+    ]
     assert {it.options.config for it in make_items(fitted, bodies, options=Options(config="lengths"))} == {"lengths"}
     assert {it.options.config for it in make_items({"name": "d", "keypoints": {}}, bodies)} == {"improved"}
 
@@ -154,13 +165,16 @@ def test_journal_survives_a_torn_last_line(tmp_path):
     assert [r["id"] for r in rows] == ["b", "a", "a"]
     assert set(completed(rows)) == {"a", "b"}
     assert [r["id"] for r in compact(tmp_path)] == ["a", "b"]
-    assert comparable(read_rows(tmp_path / "manifest.jsonl")) == [{"id": "a", "status": "ok"},
-                                                                  {"id": "b", "status": "ok"}]
+    assert comparable(read_rows(tmp_path / "manifest.jsonl")) == [
+        {"id": "a", "status": "ok"},
+        {"id": "b", "status": "ok"},
+    ]
     assert json.loads((tmp_path / "manifest.jsonl").read_text().splitlines()[0])["id"] == "a"
 
 
 def test_placement_recovers_a_rigid_motion():
     from scipy.spatial.transform import Rotation
+
     rng = np.random.default_rng(1)
     uv = rng.random((30, 2))
     R = Rotation.from_euler("XYZ", [20, -35, 110], degrees=True).as_matrix()

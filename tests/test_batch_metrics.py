@@ -1,18 +1,20 @@
 """Batch speed work on the metrics (core.metrics, figures byte-identical): the one-garment report
 reads its overall figures once, and the means that need no percentile skip the sort."""
+
 import numpy as np
+from test_metrics_strains import _pattern
 
 from core.metrics import pattern as M
 from core.metrics.regions import region_compliance
 from core.pattern.types import Pattern
-from test_metrics_strains import _pattern
 
 
 def test_weighted_mean_is_the_mean_of_weighted_stats():
     from core.metrics.stats import weighted_mean, weighted_stats
+
     rng = np.random.default_rng(5)
     v, w = rng.normal(size=200), rng.uniform(0, 1, 200)
-    v[3], w[7] = np.nan, 0.0                          # left out by both
+    v[3], w[7] = np.nan, 0.0  # left out by both
     assert weighted_mean(v, w) == weighted_stats(v, w)["mean"]
     assert np.isnan(weighted_mean([np.nan], [1.0])) and np.isnan(weighted_stats([np.nan], [1.0])["mean"])
 
@@ -33,6 +35,19 @@ def test_one_garment_report_lists_the_overall_figures_as_its_own():
     assert g["seams"] == M.seam_mismatch(one, "a") == rep["seams"]
     assert g["regions"] == region_compliance(one, lm, garment="a") == rep["regions"]
     assert g["compliance"] is not rep["compliance"] and g["regions"] is not rep["regions"]
-    assert list(rep) == ["garments", "compliance", "seams", "flipped_triangles", "flipped_per_panel",
-                         "collapsed_triangles", "collapsed_per_panel", "collapse_sites", "regions",
-                         "crossings", "crossings_per_panel", "crossing_sites", "darts", "pieces"]
+    assert list(rep) == [
+        "garments",
+        "compliance",
+        "seams",
+        "flipped_triangles",
+        "flipped_per_panel",
+        "collapsed_triangles",
+        "collapsed_per_panel",
+        "collapse_sites",
+        "regions",
+        "crossings",
+        "crossings_per_panel",
+        "crossing_sites",
+        "darts",
+        "pieces",
+    ]

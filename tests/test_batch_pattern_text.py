@@ -6,17 +6,18 @@ bit for bit, that the text is the JSON the old writer made (up to float
 digits), and that files written by the old writer (shortest repr) still read
 to the same pattern and re-save to the new bytes.
 """
+
 import json
 
 import numpy as np
 import pytest
+from synthetic_pattern import two_panels
 
 from core.errors import PatternError
 from core.fileio import dumps_json
 from core.pattern.io import WALL_CLOCK, load_pattern, pattern_text, pattern_to_json, save_pattern
 from core.pattern.jsonnum import array_text, arrays_text
 from core.pattern.solve import solve_pattern
-from synthetic_pattern import two_panels
 
 
 def _bits(a):
@@ -27,13 +28,32 @@ def _hard_floats():
     """Doubles of every magnitude, the neighbours of powers of ten, ties and odd values."""
     rng = np.random.default_rng(7)
     p10 = 10.0 ** np.arange(-12, 20)
-    near = np.concatenate([p10, np.nextafter(p10, 0), np.nextafter(p10, np.inf),
-                           np.nextafter(np.nextafter(p10, 0), 0)])
+    near = np.concatenate([p10, np.nextafter(p10, 0), np.nextafter(p10, np.inf), np.nextafter(np.nextafter(p10, 0), 0)])
     spread = 10.0 ** rng.uniform(-8, 18, 20000) * rng.choice([-1.0, 1.0], 20000)
-    odd = np.array([0.0, -0.0, 0.1, 0.2, 0.3, 1 / 3, 2 / 3, 1.2, 5e-324, 2.2250738585072014e-308,
-                    1.7976931348623157e308, -1e-300, 0.30000000000000004, 9.999999999999999e-6,
-                    999999999999999.9, 1e15, 123456789012345.67, 2.0 ** -30, 1 - 2.0 ** -53])
-    bits = rng.integers(0, 2 ** 63 - 2 ** 52, 5000, dtype=np.int64).view(np.float64)  # any finite double
+    odd = np.array(
+        [
+            0.0,
+            -0.0,
+            0.1,
+            0.2,
+            0.3,
+            1 / 3,
+            2 / 3,
+            1.2,
+            5e-324,
+            2.2250738585072014e-308,
+            1.7976931348623157e308,
+            -1e-300,
+            0.30000000000000004,
+            9.999999999999999e-6,
+            999999999999999.9,
+            1e15,
+            123456789012345.67,
+            2.0**-30,
+            1 - 2.0**-53,
+        ]
+    )
+    bits = rng.integers(0, 2**63 - 2**52, 5000, dtype=np.int64).view(np.float64)  # any finite double
     return np.concatenate([near, spread, odd, bits[np.isfinite(bits)], rng.standard_normal(5000) * 0.3])
 
 
@@ -45,14 +65,22 @@ def test_every_double_reads_back_bit_for_bit():
 
 def test_text_is_json_dumps_up_to_float_digits():
     rng = np.random.default_rng(3)
-    arrays = [rng.standard_normal((7, 2)), rng.integers(-10 ** 12, 10 ** 12, (5, 3)), np.zeros(0),
-              np.zeros((3, 0)), np.arange(12).reshape(2, 3, 2), rng.standard_normal(4), np.array([-7, 0, 12]),
-              np.array([[1.5, -2.0]]), np.array([2 ** 63 - 1, -(2 ** 63) + 1])]
+    arrays = [
+        rng.standard_normal((7, 2)),
+        rng.integers(-(10**12), 10**12, (5, 3)),
+        np.zeros(0),
+        np.zeros((3, 0)),
+        np.arange(12).reshape(2, 3, 2),
+        rng.standard_normal(4),
+        np.array([-7, 0, 12]),
+        np.array([[1.5, -2.0]]),
+        np.array([2**63 - 1, -(2**63) + 1]),
+    ]
     texts = arrays_text(arrays)
     for a, t in zip(arrays, texts):
         assert json.loads(t) == a.tolist()
         if a.dtype.kind != "f":
-            assert t == json.dumps(a.tolist())          # integers: the very same text
+            assert t == json.dumps(a.tolist())  # integers: the very same text
         else:
             assert len(t) >= 2 and t.count(", ") == json.dumps(a.tolist()).count(", ")
 
@@ -61,9 +89,13 @@ def test_kept_texts_are_the_formatted_ones_and_follow_the_values():
     # large arrays' texts are kept by content: the same text alone, among others and from the
     # store; an array changed in place is formatted again
     from core.pattern import jsonnum
+
     rng = np.random.default_rng(11)
-    big = [rng.standard_normal((jsonnum.CACHE_MIN, 2)), rng.integers(0, 10 ** 6, (jsonnum.CACHE_MIN, 3)),
-           rng.standard_normal(jsonnum.CACHE_MIN).astype(np.float32)]
+    big = [
+        rng.standard_normal((jsonnum.CACHE_MIN, 2)),
+        rng.integers(0, 10**6, (jsonnum.CACHE_MIN, 3)),
+        rng.standard_normal(jsonnum.CACHE_MIN).astype(np.float32),
+    ]
     small = [rng.standard_normal(5), np.arange(4)]
     alone = [jsonnum._format([a])[0] for a in big]
     first = arrays_text(big + small)

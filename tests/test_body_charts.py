@@ -1,5 +1,6 @@
 """Size charts (default, women's and men's EN 13402-3): stored fits within 1 cm, re-fits, names,
 designs on a chart body and on an OBJ template."""
+
 import argparse
 import json
 
@@ -95,11 +96,13 @@ def test_women_xl_needs_local_changes(anny):
     local = {k: v for k, v in stored.items() if k in anny.local_change_parameters()}
     assert set(local) == set(c.local) and all(0 < abs(v) < 1 for v in local.values())
     phen = {k: v for k, v in stored.items() if k not in local}
-    plain = fit_measurements(anny, c.sizes["XL"], start=phen, parameters=list(c.parameters) + ["cupsize"],
-                             bounds=c.bounds)
+    plain = fit_measurements(
+        anny, c.sizes["XL"], start=phen, parameters=list(c.parameters) + ["cupsize"], bounds=c.bounds
+    )
     assert not plain.ok and plain.achieved["hip"] - plain.achieved["waist"] < 20.0
-    fit = fit_measurements(anny, c.sizes["XL"], start=phen, parameters=list(c.parameters) + list(c.local),
-                           bounds=c.bounds)
+    fit = fit_measurements(
+        anny, c.sizes["XL"], start=phen, parameters=list(c.parameters) + list(c.local), bounds=c.bounds
+    )
     assert fit.ok, fit.summary()
     v = anny.vertices(stored)
     assert np.abs(v[anny.symmetry] * np.array([-1.0, 1.0, 1.0]) - v).max() < 1e-3
@@ -125,7 +128,7 @@ def test_restarts_bring_xs_in_reach(anny, chart):
 def test_women_and_men_differ_where_the_chart_says(anny):
     w = measure(anny, anny.vertices(size_shape(anny, "women:M")))
     m = measure(anny, anny.vertices(size_shape(anny, "men:M")))
-    assert w["hip"] - w["waist"] > m["hip"] - m["waist"] + 5     # the women's chart's hip drop
+    assert w["hip"] - w["waist"] > m["hip"] - m["waist"] + 5  # the women's chart's hip drop
 
 
 # -- designs -------------------------------------------------------------------------------
@@ -138,9 +141,10 @@ def _design(body):
 
 def test_design_body_chart(anny):
     from core.design import load_design
+
     design = load_design(_design({"chart": "women", "shape": "M"}))
     assert design.body["shape"] == "women:M" and design.body["chart"] == "women"
-    assert load_design(design.to_json()).body == design.body           # saved and read back alike
+    assert load_design(design.to_json()).body == design.body  # saved and read back alike
     with pytest.raises(DesignError, match=r"body\.chart.*default, women, men.*kids"):
         load_design(_design({"chart": "kids", "shape": "M"}))
     with pytest.raises(DesignError, match=r"body\.shape.*chart women \(XS, S, M, L, XL, XXL, 3XL, 4XL\).*5XL"):
@@ -150,6 +154,7 @@ def test_design_body_chart(anny):
 def test_prepare_and_transfer_on_a_chart_body(anny):
     """A design on women:M is cut on that body; transfer "L" means the design's chart's L."""
     import core.workflows as wf
+
     prep = wf.prepare(_design({"chart": "women", "shape": "M"}), body=anny)
     assert prep.cut.body["shape"] == "women:M"
     np.testing.assert_allclose(prep.reference, anny.vertices(size_shape(anny, "women:M")), atol=1e-9)
@@ -178,14 +183,16 @@ def horse_design(tmp_path):
 
 def test_obj_template_through_a_design(horse_design):
     from core.design import load_design
+
     folder, body = horse_design
     design = load_design(_design(dict(body)))
-    assert design.body["shape"] is None                   # an OBJ template is its own reference body
+    assert design.body["shape"] is None  # an OBJ template is its own reference body
     spec = resolve_body_files(design.body, folder)
     assert spec["model"] == str(folder / "bodies" / "horse.obj")
     model = load_spec(spec)
     assert set(model.landmarks) == {"withers", "nose"} and list(model.shape_parameters()) == ["belly"]
     from core.body.instance import spec_instance
+
     V, _ = spec_instance({**spec, "shape": {"belly": 1.0}})
     assert V.shape == model.vertices().shape and (V[:, 2] < model.vertices()[:, 2] - 0.05).sum() == 4
     # A chart size on a template without the girth landmarks says what is missing.

@@ -1,16 +1,16 @@
 """``ease body``: argument handling, errors that list what is allowed, atomic outputs."""
+
 import argparse
 import json
 
 import numpy as np
 import pytest
+from smpl_synth import stick_smpl
+from test_body_obj import horse, write_obj
 
 from core.body.output import render_bodies
 from core.cli import body as body_cli
-from core.errors import BodyError, EaseError
-
-from test_body_obj import horse, write_obj
-from smpl_synth import stick_smpl
+from core.errors import BodyError
 
 
 def ease_body(argv):
@@ -36,14 +36,16 @@ def horse_obj(tmp_path):
 
 
 def read_obj_vertices(path):
-    return np.array([[float(c) for c in line.split()[1:4]]
-                     for line in path.read_text().splitlines() if line.startswith("v ")])
+    return np.array(
+        [[float(c) for c in line.split()[1:4]] for line in path.read_text().splitlines() if line.startswith("v ")]
+    )
 
 
 def test_writes_posed_smpl_body(stick, tmp_path, capsys):
     out = tmp_path / "out" / "b.obj"
     assert ease_body(["--model", str(stick), "--shape", "beta0=0.5", "--pose", "P2", "--out", str(out)]) == 0
     from core.body.smpl import load_smpl
+
     body = load_smpl(stick)
     np.testing.assert_allclose(read_obj_vertices(out), body.vertices({"beta0": 0.5}, "P2"), atol=2e-6)
     text = capsys.readouterr().out
@@ -56,15 +58,18 @@ def test_obj_model_reference_pose(horse_obj, tmp_path):
     assert len(read_obj_vertices(out)) == 48
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["--pose", "Q"], "unknown pose; allowed: A, T, P1, P2, P3"),
-    (["--shape", "beta9=1"], "shape.beta9: unknown shape parameter; allowed: beta0, beta1, beta2"),
-    (["--shape", "beta0=7"], r"beta0=7 is out of range \[-5, 5\]"),
-    (["--shape", "huge"], r"expected a size \(XS, S, M, L, XL\) or name=value pairs"),
-    (["--measure", "neck=40"], "unknown measurement 'neck'; allowed: height, chest, waist, hip"),
-    (["--measure", "chest=960"], "out of range"),
-    (["--shape", "XL", "--measure", "chest=90"], "either --shape or --measure"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--pose", "Q"], "unknown pose; allowed: A, T, P1, P2, P3"),
+        (["--shape", "beta9=1"], "shape.beta9: unknown shape parameter; allowed: beta0, beta1, beta2"),
+        (["--shape", "beta0=7"], r"beta0=7 is out of range \[-5, 5\]"),
+        (["--shape", "huge"], r"expected a size \(XS, S, M, L, XL\) or name=value pairs"),
+        (["--measure", "neck=40"], "unknown measurement 'neck'; allowed: height, chest, waist, hip"),
+        (["--measure", "chest=960"], "out of range"),
+        (["--shape", "XL", "--measure", "chest=90"], "either --shape or --measure"),
+    ],
+)
 def test_errors_list_what_is_allowed(stick, tmp_path, argv, message):
     out = tmp_path / "never.obj"
     with pytest.raises(BodyError, match=message):
@@ -87,16 +92,17 @@ def test_missing_landmarks_still_report_height(stick, tmp_path, capsys):
 
 def test_render_bodies_png(tmp_path):
     from core.body.obj_model import load_obj_body
+
     v, quads, _ = horse()
     write_obj(tmp_path / "horse.obj", v, quads)
     body = load_obj_body(tmp_path / "horse.obj")
-    path = render_bodies([[("a", body.vertices()), ("b", body.vertices() * 1.2)]], body.faces,
-                                  tmp_path / "pic.png")
+    path = render_bodies([[("a", body.vertices()), ("b", body.vertices() * 1.2)]], body.faces, tmp_path / "pic.png")
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_ease_main_reports_errors_with_exit_code(stick, tmp_path, capsys):
     from core.cli import build_parser, main
+
     build_parser()
     rc = main(["body", "--model", str(stick), "--pose", "sideways", "--out", str(tmp_path / "x.obj")])
     assert rc == 2
@@ -106,16 +112,19 @@ def test_ease_main_reports_errors_with_exit_code(stick, tmp_path, capsys):
 @pytest.fixture(scope="module")
 def anny_available():
     from core.body import load_body
-    return load_body("anny")      # the baked asset is committed: a failure here is a real one
+
+    return load_body("anny")  # the baked asset is committed: a failure here is a real one
 
 
 def test_all_writes_sizes_poses_and_picture(anny_available, tmp_path):
     out = tmp_path / "bodies"
     assert ease_body(["--all", "--out", str(out)]) == 0
     names = sorted(p.name for p in out.iterdir())
-    assert names == sorted([f"size_{s}.obj" for s in ("XS", "S", "M", "L", "XL")]
-                           + [f"pose_{p}.obj" for p in ("A", "T", "P1", "P2", "P3")]
-                           + ["bodies.png", "bodies.json"])
+    assert names == sorted(
+        [f"size_{s}.obj" for s in ("XS", "S", "M", "L", "XL")]
+        + [f"pose_{p}.obj" for p in ("A", "T", "P1", "P2", "P3")]
+        + ["bodies.png", "bodies.json"]
+    )
     summary = json.loads((out / "bodies.json").read_text())
     chest = [summary["sizes"][s]["measured_cm"]["chest"] for s in ("XS", "S", "M", "L", "XL")]
     assert chest == sorted(chest)
@@ -123,6 +132,7 @@ def test_all_writes_sizes_poses_and_picture(anny_available, tmp_path):
 
 def test_measure_fits_anny(anny_available, tmp_path, capsys):
     from core.body.measure import measure
+
     # Targets measured on a known Anny shape are reachable by construction.
     m = measure(anny_available, anny_available.vertices({"weight": 0.7, "height": 0.6}))
     arg = ",".join(f"{k}={v:.1f}" for k, v in m.items())

@@ -1,4 +1,5 @@
 """core.body.instance: one body instance from (model, size name or shape dict, pose)."""
+
 import numpy as np
 
 from core.body.instance import body_instance, instance_pose, instance_shape, spec_instance

@@ -1,4 +1,5 @@
 """OBJ templates as body models, on a generated quadruped made of boxes."""
+
 import json
 
 import numpy as np
@@ -56,22 +57,35 @@ def horse_files(tmp_path):
     belly[(owner == "torso") & (v[:, 2] < 1.0), 2] = -0.1
     neck = np.zeros((V, 3))
     neck[owner == "head", 2] = 0.2
-    joints = np.array([[0, 0, 1.15], [0.16, -0.68, 0.9], [-0.16, -0.68, 0.9],
-                       [0.16, 0.68, 0.9], [-0.16, 0.68, 0.9]])
+    joints = np.array([[0, 0, 1.15], [0.16, -0.68, 0.9], [-0.16, -0.68, 0.9], [0.16, 0.68, 0.9], [-0.16, 0.68, 0.9]])
     parents = np.array([-1, 0, 0, 0, 0])
     weights = np.zeros((V, 5))
     for j, part in enumerate(["torso", "leg_fl", "leg_fr", "leg_bl", "leg_br"]):
         weights[owner == part, j] = 1.0
     weights[owner == "head", 0] = 1.0
-    np.savez(tmp_path / "horse_shapes.npz", names=np.array(["belly", "long_neck"]),
-             deltas=np.stack([belly, neck]), ranges=np.array([[0, 1], [-1, 1.0]]))
-    np.savez(tmp_path / "horse_rig.npz", names=np.array(["belly"]), deltas=belly[None],
-             weights=weights, joints=joints, parents=parents,
-             joint_names=np.array(["root", "fl", "fr", "bl", "br"]))
-    (tmp_path / "horse_marks.json").write_text(json.dumps({
-        "landmarks": {"withers": 5, "nose": {"triangle": 50, "bary": [0.2, 0.3, 0.5]}},
-        "regions": {"head": list(range(40, 48)), "hooves": [0, 8, 16, 24]},
-    }))
+    np.savez(
+        tmp_path / "horse_shapes.npz",
+        names=np.array(["belly", "long_neck"]),
+        deltas=np.stack([belly, neck]),
+        ranges=np.array([[0, 1], [-1, 1.0]]),
+    )
+    np.savez(
+        tmp_path / "horse_rig.npz",
+        names=np.array(["belly"]),
+        deltas=belly[None],
+        weights=weights,
+        joints=joints,
+        parents=parents,
+        joint_names=np.array(["root", "fl", "fr", "bl", "br"]),
+    )
+    (tmp_path / "horse_marks.json").write_text(
+        json.dumps(
+            {
+                "landmarks": {"withers": 5, "nose": {"triangle": 50, "bary": [0.2, 0.3, 0.5]}},
+                "regions": {"head": list(range(40, 48)), "hooves": [0, 8, 16, 24]},
+            }
+        )
+    )
     return tmp_path, v, owner
 
 
@@ -129,8 +143,7 @@ def test_landmarks_regions_and_symmetry(horse_files):
 
 def test_skeleton_poses_the_legs(horse_files):
     path, v, owner = horse_files
-    body = load_obj_body(path / "horse.obj",
-                         blendshapes=path / "horse_rig.npz")
+    body = load_obj_body(path / "horse.obj", blendshapes=path / "horse_rig.npz")
     assert body.joint_names == ["root", "fl", "fr", "bl", "br"]
     # Swing the front-left leg forward 90 deg about X: its hoof comes up to the hip height, in front.
     posed = body.vertices(None, {"fl": np.array([-np.pi / 2, 0, 0])})
@@ -161,6 +174,7 @@ def test_bad_inputs_are_named(horse_files, tmp_path):
 def test_pose_axes_are_reference_axes_carried_by_the_parent(horse_files):
     """core.body.model's convention on a template's skeleton: G_leg = G_root @ R(aa)."""
     from core.body.lbs import rodrigues
+
     path, v, owner = horse_files
     body = load_obj_body(path / "horse.obj", blendshapes=path / "horse_rig.npz")
     J0 = body.joints()

@@ -1,4 +1,5 @@
 """Pose presets and arbitrary joint rotations of the default body, checked geometrically."""
+
 import numpy as np
 import pytest
 
@@ -76,7 +77,7 @@ def test_p1_arms_forward_legs_spread(body):
     for s, sx in ((".L", 1), (".R", -1)):
         arm = _upper_arm(J, s)
         assert abs(_angle(arm, down) - 90) < 3  # shoulder flexion 90
-        assert _angle(arm, [0, -1, 0]) < 5      # pointing forward
+        assert _angle(arm, [0, -1, 0]) < 5  # pointing forward
         spread = _thigh(J, s)
         assert 15 < _angle(spread, down) < 25 and spread[0] * sx > 0
 
@@ -86,24 +87,26 @@ def test_p2_arms_up_scissored_legs(body):
     down = _torso_down(J)
     for s in (".L", ".R"):
         assert abs(_angle(_upper_arm(J, s), down) - 160) < 3
+
     def sagittal(v):  # hip flexion angle in the sagittal plane, + forward
         return np.degrees(np.arctan2(-v[1], -v[2]))
-    assert abs(sagittal(_thigh(J, ".L")) - 30) < 3     # left hip flexed
-    assert abs(sagittal(_thigh(J, ".R")) + 30) < 3     # right hip extended
+
+    assert abs(sagittal(_thigh(J, ".L")) - 30) < 3  # left hip flexed
+    assert abs(sagittal(_thigh(J, ".R")) + 30) < 3  # right hip extended
 
 
 def test_p3_sitting_elbows_bent(body):
     J = _joints(body, "P3")
     down = _torso_down(J)
     for s in (".L", ".R"):
-        hip = _angle(-down, _thigh(J, s))          # trunk vs thigh: 90 when seated
-        knee = _angle(-_thigh(J, s), _shin(J, s))   # thigh vs shin: 90 when seated
+        hip = _angle(-down, _thigh(J, s))  # trunk vs thigh: 90 when seated
+        knee = _angle(-_thigh(J, s), _shin(J, s))  # thigh vs shin: 90 when seated
         elbow = _angle(-_upper_arm(J, s), J["wrist" + s] - J["lowerarm01" + s])
         assert abs(hip - 90) < 8, hip
         assert abs(knee - 90) < 5, knee
         assert abs(elbow - 90) < 5, elbow
         forearm = J["wrist" + s] - J["lowerarm01" + s]
-        assert _angle(forearm, [0, -1, 0]) < 5     # forearms in front
+        assert _angle(forearm, [0, -1, 0]) < 5  # forearms in front
         assert _angle(_upper_arm(J, s), down) < 15  # upper arms down along the torso
 
 
@@ -178,10 +181,12 @@ def test_rotation_axes_are_reference_axes_carried_by_the_parent(body):
     a1, a2 = np.array([0.3, -0.5, 0.4]), np.array([0.0, 0.7, -0.2])
     J = _joints(body, {"upperarm02.L": a1, "lowerarm01.L": a2})
     R1, R2 = rodrigues(a1), rodrigues(a2)
-    np.testing.assert_allclose(J["lowerarm01.L"] - J["upperarm02.L"],
-                               R1 @ (J0["lowerarm01.L"] - J0["upperarm02.L"]), atol=1e-9)
-    np.testing.assert_allclose(J["wrist.L"] - J["lowerarm01.L"],
-                               R1 @ R2 @ (J0["wrist.L"] - J0["lowerarm01.L"]), atol=1e-9)
+    np.testing.assert_allclose(
+        J["lowerarm01.L"] - J["upperarm02.L"], R1 @ (J0["lowerarm01.L"] - J0["upperarm02.L"]), atol=1e-9
+    )
+    np.testing.assert_allclose(
+        J["wrist.L"] - J["lowerarm01.L"], R1 @ R2 @ (J0["wrist.L"] - J0["lowerarm01.L"]), atol=1e-9
+    )
     # the bone's local frame is not the world frame, so the two conventions differ here
     U = body.data.reference_orientations[body.joint_names.index("lowerarm01.L")]
     assert np.abs(U - np.eye(3)).max() > 0.1

@@ -1,4 +1,5 @@
 """Measurements and size fitting: on a synthetic tube body (exact answers) and on Anny."""
+
 import numpy as np
 import pytest
 
@@ -22,8 +23,17 @@ class TubeBody(BodyModel):
     Shape: ``girth`` scales all torso radii, ``belly`` widens the waist ring,
     ``stature`` scales heights. Rings (fraction of stature, rx, ry):
     """
-    RINGS = [(0.0, 0.12, 0.10), (0.45, 0.16, 0.12), (0.52, 0.18, 0.13), (0.62, 0.14, 0.11),
-             (0.72, 0.17, 0.13), (0.82, 0.16, 0.10), (0.86, 0.06, 0.06), (1.0, 0.05, 0.05)]
+
+    RINGS = [
+        (0.0, 0.12, 0.10),
+        (0.45, 0.16, 0.12),
+        (0.52, 0.18, 0.13),
+        (0.62, 0.14, 0.11),
+        (0.72, 0.17, 0.13),
+        (0.82, 0.16, 0.10),
+        (0.86, 0.06, 0.06),
+        (1.0, 0.05, 0.05),
+    ]
     HIP, WAIST, CHEST = 2, 3, 4
 
     def __init__(self):
@@ -44,10 +54,13 @@ class TubeBody(BodyModel):
                     faces += [[a, b, b + N], [a, b + N, a + N]]
         self.faces = np.array(faces)
         V = self.n_torso + 6 * N
-        self.regions = {"arm_left": np.arange(self.n_torso, self.n_torso + 3 * N),
-                        "arm_right": np.arange(self.n_torso + 3 * N, V),
-                        "head": np.arange((rings - 2) * N, rings * N),
-                        "hands": np.zeros(0, int), "feet": np.zeros(0, int)}
+        self.regions = {
+            "arm_left": np.arange(self.n_torso, self.n_torso + 3 * N),
+            "arm_right": np.arange(self.n_torso + 3 * N, V),
+            "head": np.arange((rings - 2) * N, rings * N),
+            "hands": np.zeros(0, int),
+            "feet": np.zeros(0, int),
+        }
         self.joint_names = []
         v = self.vertices()
         self.symmetry = np.array([int(np.argmin(np.linalg.norm(v - p * [-1, 1, 1], axis=1))) for p in v])
@@ -56,11 +69,18 @@ class TubeBody(BodyModel):
             vid = ring * N + k
             tri = int(np.nonzero((self.faces == vid).any(1))[0][0])
             return SurfacePoint(tri, tuple(float(self.faces[tri, i] == vid) for i in range(3)))
+
         q = N // 4
-        self.landmarks = {"bust_left": at(self.CHEST, 3 * q + 2), "bust_right": at(self.CHEST, 3 * q - 2),
-                          "waist_front": at(self.WAIST, 3 * q), "waist_back": at(self.WAIST, q),
-                          "waist_left": at(self.WAIST, 0), "waist_right": at(self.WAIST, 2 * q),
-                          "hip_left": at(self.HIP, 0), "hip_right": at(self.HIP, 2 * q)}
+        self.landmarks = {
+            "bust_left": at(self.CHEST, 3 * q + 2),
+            "bust_right": at(self.CHEST, 3 * q - 2),
+            "waist_front": at(self.WAIST, 3 * q),
+            "waist_back": at(self.WAIST, q),
+            "waist_left": at(self.WAIST, 0),
+            "waist_right": at(self.WAIST, 2 * q),
+            "hip_left": at(self.HIP, 0),
+            "hip_right": at(self.HIP, 2 * q),
+        }
 
     def shape_parameters(self):
         return {"girth": (0.8, 1.4, 1.0), "belly": (0.0, 1.0, 0.0), "stature": (1.5, 2.0, 1.75)}
@@ -142,6 +162,7 @@ def test_unreachable_target_is_reported_not_raised(tube):
 def test_fit_is_cancellable(tube):
     def stop(f, m):
         raise Cancelled()
+
     with pytest.raises(Cancelled):
         fit_measurements(tube, {"chest": 100}, progress=stop)
 
@@ -174,6 +195,7 @@ def test_anny_reference_is_size_m(anny):
     assert size_shape(anny, "M") == anny.default_shape()
     # Girths are taken around the torso only: the A-pose arms cross the waist plane.
     from core.body.measure import GIRTH_LANDMARKS, girth_at, landmark_height
+
     v = anny.vertices()
     everything = 100 * girth_at(v, anny.faces, landmark_height(anny, v, GIRTH_LANDMARKS["waist"]))
     assert everything > m["waist"] + 20
@@ -208,8 +230,11 @@ def test_realistic_rows_beyond_the_phenotypes_land(anny):
     by the phenotypes around the average body; the fallback pass (gender, adult age, cup size and
     the girths' local changes) lands them within 1 cm, with a symmetric body, and says so."""
     from core.body.sizes import FALLBACK_PARAMETERS, _fit_measurements
-    for row in ({"height": 168, "chest": 113, "waist": 97, "hip": 120},
-                {"height": 160, "chest": 92, "waist": 80, "hip": 104}):
+
+    for row in (
+        {"height": 168, "chest": 113, "waist": 97, "hip": 120},
+        {"height": 160, "chest": 92, "waist": 80, "hip": 104},
+    ):
         first = _fit_measurements(anny, row, None, None, None, None)
         assert not first.ok
         fit = fit_measurements(anny, row)
@@ -223,5 +248,6 @@ def test_realistic_rows_beyond_the_phenotypes_land(anny):
 def test_a_row_that_lands_at_once_is_fitted_as_before(anny):
     """The fallback is a second pass only: a row the default parameters reach gives the same shape."""
     from core.body.sizes import _fit_measurements
+
     fit = fit_measurements(anny, SIZE_CHART["L"])
     assert fit.ok and fit.shape == _fit_measurements(anny, SIZE_CHART["L"], None, None, None, None).shape

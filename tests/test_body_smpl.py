@@ -1,4 +1,5 @@
 """SMPL loader, restricted unpickler and skinning, on SMPL-format files made here."""
+
 import pickle
 import sys
 import textwrap
@@ -7,12 +8,12 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 from scipy.spatial.transform import Rotation
+from smpl_synth import stick_smpl, tube_model
 
 from core.body.lbs import forward_kinematics, rodrigues, skin
-from core.body.smpl import SMPL_JOINT_NAMES, SMPL_TO_OURS, load_smpl
+from core.body.smpl import SMPL_TO_OURS, load_smpl
 from core.body.unpickle import safe_load
 from core.errors import BodyError
-from smpl_synth import stick_smpl, tube_model
 
 C = SMPL_TO_OURS
 
@@ -119,7 +120,8 @@ def fake_chumpy(tmp_path, monkeypatch):
     pkg = tmp_path / "fakemods" / "chumpy"
     pkg.mkdir(parents=True)
     (pkg / "__init__.py").write_text("from .ch import Ch\n")
-    (pkg / "ch.py").write_text(textwrap.dedent("""
+    (pkg / "ch.py").write_text(
+        textwrap.dedent("""
         class Ch(object):
             def __init__(self, x):
                 self.x = x
@@ -128,7 +130,8 @@ def fake_chumpy(tmp_path, monkeypatch):
         class ChReduced(Ch):
             def __reduce__(self):
                 return (ChReduced, (self.x,))
-    """))
+    """)
+    )
     monkeypatch.syspath_prepend(str(tmp_path / "fakemods"))
     yield
     for name in [n for n in sys.modules if n == "chumpy" or n.startswith("chumpy.")]:
@@ -137,6 +140,7 @@ def fake_chumpy(tmp_path, monkeypatch):
 
 def test_pkl_with_chumpy_and_sparse(tmp_path, fake_chumpy):
     import chumpy
+
     m = tube_model(seed=5)
     pk = dict(m)
     pk["shapedirs"] = chumpy.Ch(m["shapedirs"])
@@ -165,6 +169,7 @@ class _SystemPayload:
 
     def __reduce__(self):
         import os
+
         return (os.system, (self.cmd,))
 
 
@@ -193,6 +198,7 @@ def test_other_callables_are_refused(tmp_path):
     class Sub:
         def __reduce__(self):
             return (subprocess.call, (["true"],))
+
     with pytest.raises(BodyError, match=r"subprocess\.call"):
         safe_load(pickle.dumps(Sub(), protocol=4))
     with pytest.raises(BodyError, match="not a readable model pickle"):
@@ -234,13 +240,14 @@ def test_pose_presets_on_smpl_skeleton(tmp_path):
     assert body.symmetry[idx["left_knee"]] == idx["right_knee"]
     # Custom rotation applies on top of the A-pose.
     bent = body.vertices(None, {"left_elbow": np.array([0, 0, -np.pi / 2])})
-    assert (bent[wr] - bent[idx["left_elbow"]])[1] < -0.15    # about world Z: the forearm swings forward
+    assert (bent[wr] - bent[idx["left_elbow"]])[1] < -0.15  # about world Z: the forearm swings forward
 
 
 def test_smpl_topology_gets_all_landmarks(tmp_path):
     """A 6890-vertex SMPL-layout model (points scattered around the bones) gets every
     required landmark from the stated vertex ids and rules, left ones on the left."""
     from core.body.model import REQUIRED_LANDMARKS, REQUIRED_REGIONS
+
     m = stick_smpl()
     joints = m["v_template"]
     parents = m["kintree_table"][0].astype(np.int64)
@@ -258,14 +265,22 @@ def test_smpl_topology_gets_all_landmarks(tmp_path):
     weights[np.arange(V), parents[bone]] = 1.0
     weights[:24] = np.eye(24)
     faces = np.array([[i, i + 1, i + 2] for i in range(0, V - 2)])
-    np.savez(tmp_path / "smpl6890.npz", v_template=v, f=faces, weights=weights,
-             kintree_table=m["kintree_table"], J_regressor=np.eye(24, V),
-             shapedirs=np.zeros((V, 3, 10)), posedirs=np.zeros((V, 3, 207)))
+    np.savez(
+        tmp_path / "smpl6890.npz",
+        v_template=v,
+        f=faces,
+        weights=weights,
+        kintree_table=m["kintree_table"],
+        J_regressor=np.eye(24, V),
+        shapedirs=np.zeros((V, 3, 10)),
+        posedirs=np.zeros((V, 3, 207)),
+    )
     body = load_smpl(tmp_path / "smpl6890.npz")
     assert set(REQUIRED_LANDMARKS) <= set(body.landmarks)
     assert set(REQUIRED_REGIONS) <= set(body.regions)
     verts = body.vertices()
     from core.body.smpl import SMPL_VERTEX_IDS
+
     for name in REQUIRED_LANDMARKS:
         p = body.landmark_position(name, verts)
         if name in SMPL_VERTEX_IDS or name == "ankle_right":
@@ -292,9 +307,11 @@ def test_smplx_layout_body_part(tmp_path):
     R = body.rotations({"jaw": np.zeros(3)})
     aa_smpl = Rotation.from_matrix(np.einsum("ba,jbc,cd->jad", C, R, C)).as_rotvec()
     assert np.count_nonzero(np.abs(aa_smpl).sum(1) > 0.01) == 4  # shoulders and hips
-    np.testing.assert_allclose(body.vertices({"beta9": 1.0}, {"jaw": np.zeros(3)}),
-                               reference_lbs({**m, "shapedirs": m["shapedirs"][:, :, :10]},
-                                             np.eye(10)[9], aa_smpl) @ C.T, atol=1e-10)
+    np.testing.assert_allclose(
+        body.vertices({"beta9": 1.0}, {"jaw": np.zeros(3)}),
+        reference_lbs({**m, "shapedirs": m["shapedirs"][:, :, :10]}, np.eye(10)[9], aa_smpl) @ C.T,
+        atol=1e-10,
+    )
 
 
 def test_pose_dict_axes_are_reference_axes_carried_by_the_parent(tmp_path):
@@ -302,6 +319,7 @@ def test_pose_dict_axes_are_reference_axes_carried_by_the_parent(tmp_path):
     reference pose's world axes, carried by the parent's rotation - although SMPL's
     shoulder is already rotated (45 deg) in the A-pose."""
     from core.body.lbs import rodrigues
+
     np.savez(tmp_path / "stick.npz", **stick_smpl())
     body = load_smpl(tmp_path / "stick.npz")
     idx = {n: i for i, n in enumerate(body.joint_names)}

@@ -1,4 +1,5 @@
 """core.body.surface: surface points from a face hit and from the closest point."""
+
 import numpy as np
 import pytest
 
@@ -10,7 +11,7 @@ F = np.array([[0, 1, 2], [1, 3, 2]])
 
 def test_barycentric_inside_and_clipped():
     assert np.allclose(barycentric(V[F[0]], [0.25, 0.25, 0.0]), [0.5, 0.25, 0.25])
-    b = barycentric(V[F[0]], [0.6, 0.6, 0.0])          # past the hypotenuse: clipped onto it
+    b = barycentric(V[F[0]], [0.6, 0.6, 0.0])  # past the hypotenuse: clipped onto it
     assert b.min() >= 0 and b.sum() == pytest.approx(1.0) and b[0] == 0.0
 
 

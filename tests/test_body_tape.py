@@ -1,5 +1,6 @@
 """Tape measures as a tailor takes them (ISO 8559-1, core.body.tape) on shapes with a known answer
 and on Anny, and the made-to-measure fit (core.body.made_to_measure)."""
+
 import re
 
 import numpy as np
@@ -35,8 +36,9 @@ def cylinder(radius=0.1, length=0.6, axis=(0.0, 0.0, 1.0), rings=7, n=N):
     u /= np.linalg.norm(u)
     w = np.cross(axis, u)
     a = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    v = np.concatenate([t * axis + radius * (np.cos(a)[:, None] * u + np.sin(a)[:, None] * w)
-                        for t in np.linspace(0, length, rings)])
+    v = np.concatenate(
+        [t * axis + radius * (np.cos(a)[:, None] * u + np.sin(a)[:, None] * w) for t in np.linspace(0, length, rings)]
+    )
     faces = []
     for r in range(rings - 1):
         for k in range(n):
@@ -52,7 +54,7 @@ def test_a_tilted_limb_is_taped_square_to_its_bone():
     v, f = cylinder(axis=axis)
     exact = 2 * N * 0.1 * np.sin(np.pi / N)
     assert loop_girth(v, f, 0.25 * axis, axis) == pytest.approx(exact, rel=1e-9)
-    assert loop_girth(v, f, 0.25 * axis, (0, 0, 1)) > exact * 1.15   # an ellipse of axes r, r sqrt 2
+    assert loop_girth(v, f, 0.25 * axis, (0, 0, 1)) > exact * 1.15  # an ellipse of axes r, r sqrt 2
     # Two tubes side by side: one loop each, and the tape picks the one nearest the point given.
     v2 = np.concatenate([v, v + [0, 0.5, 0]])
     f2 = np.concatenate([f, f + len(v)])
@@ -74,8 +76,10 @@ def test_natural_waist_is_the_narrowest_section(tube):
     z = natural_waist_height(v, parts, r[tube.HIP][0], r[tube.CHEST][0])
     assert z == pytest.approx(r[tube.WAIST][0], abs=0.002)
     from core.body.measure import girth_at
+
     assert 100 * girth_at(v, None, r[tube.WAIST][0], parts.torso_edges) == pytest.approx(
-        100 * ellipse_polygon_perimeter(*r[tube.WAIST][1:]), rel=1e-9)
+        100 * ellipse_polygon_perimeter(*r[tube.WAIST][1:]), rel=1e-9
+    )
 
 
 def test_back_length_follows_the_surface(tube):
@@ -106,7 +110,7 @@ def test_underbust_is_the_fold_under_a_breast(tube):
     rings = tube.RINGS
     extra = TubeBody.__new__(TubeBody)
     extra.__dict__.update(tube.__dict__)
-    extra.RINGS = rings[:tube.CHEST] + [(fold_z / 1.75, 0.16, 0.13)] + rings[tube.CHEST:]
+    extra.RINGS = rings[: tube.CHEST] + [(fold_z / 1.75, 0.16, 0.13)] + rings[tube.CHEST :]
     extra.CHEST, extra.WAIST = tube.CHEST + 1, tube.WAIST
     TubeBody.__init__(extra)
     bent = extra.vertices()
@@ -139,13 +143,19 @@ def test_anny_tape_measures_beside_the_chart_measures(anny):
 
 
 def test_tape_targets_are_checked():
-    assert check_tape_targets({"Bust": 90, "inside leg": 80, "gender": 1}) == {"chest": 90.0, "inseam": 80.0,
-                                                                               "gender": 1.0}
-    for bad, words in (({"knee": 40}, "measurements.knee: unknown measurement 'knee'"),
-                       ({"waist": "wide"}, "measurements.waist: must be a number"),
-                       ({"wrist": 160}, "measurements.wrist=160 cm is out of range"),
-                       ({"chest": 90, "bust": 91}, "given twice"), ({}, "no measurements given"),
-                       ({"gender": 1}, "besides gender")):
+    assert check_tape_targets({"Bust": 90, "inside leg": 80, "gender": 1}) == {
+        "chest": 90.0,
+        "inseam": 80.0,
+        "gender": 1.0,
+    }
+    for bad, words in (
+        ({"knee": 40}, "measurements.knee: unknown measurement 'knee'"),
+        ({"waist": "wide"}, "measurements.waist: must be a number"),
+        ({"wrist": 160}, "measurements.wrist=160 cm is out of range"),
+        ({"chest": 90, "bust": 91}, "given twice"),
+        ({}, "no measurements given"),
+        ({"gender": 1}, "besides gender"),
+    ):
         with pytest.raises(BodyError, match=words):
             check_tape_targets(bad)
 
@@ -170,6 +180,7 @@ def test_an_unreachable_measure_is_reported_with_the_closest_value(anny):
     (and a design's table of them is refused naming them: measured_shape, whose fit is kept per
     process, so the design test below reuses this one)."""
     from core.body import made_to_measure
+
     table = {"height": 150, "inseam": 100, "gender": 1}
     with pytest.raises(BodyError, match=r"body.measurements: not reachable by Anny: height 150 cm \(closest"):
         made_to_measure.measured_shape(table)
@@ -186,21 +197,26 @@ def test_cli_measurements_file(tmp_path, capsys, anny):
     fitted body written as OBJ, each measure beside its target; a bad file exits 2 in one line
     naming the file and the measure."""
     from core.cli import main
+
     hidden = sample_body(np.random.default_rng([33, 2]))
     m = tape_measures(anny, shape=hidden, which=("height", "chest", "waist", "hip", "inseam"))
-    (tmp_path / "me.csv").write_text("name,cm\n" + "".join(f"{k},{v:.1f}\n" for k, v in m.items())
-                                     + f"gender,{hidden['gender']:g}\n")
+    (tmp_path / "me.csv").write_text(
+        "name,cm\n" + "".join(f"{k},{v:.1f}\n" for k, v in m.items()) + f"gender,{hidden['gender']:g}\n"
+    )
     rc = main(["body", "--measurements", str(tmp_path / "me.csv"), "--out", str(tmp_path / "me.obj"), "--quiet"])
     out = capsys.readouterr().out
     assert rc == 0 and out.count("(target") == 5 and "not reachable" not in out, out
     assert (tmp_path / "me.obj").exists()
     (tmp_path / "row.csv").write_text("height,bust\n170,96\n")
     from core.body.made_to_measure import read_tape_file
+
     assert read_tape_file(tmp_path / "row.csv") == {"height": 170.0, "chest": 96.0}
-    for name, text, words in (("bad.json", '{"height": 180, "knee": 40}', "bad.json.knee: unknown measurement"),
-                              ("bad2.json", '[1, 2]', "bad2.json: expected an object"),
-                              ("bad.csv", "height,waist\n170\n", "bad.csv: expected rows"),
-                              ("bad.txt", "height 170", "must be .json or .csv")):
+    for name, text, words in (
+        ("bad.json", '{"height": 180, "knee": 40}', "bad.json.knee: unknown measurement"),
+        ("bad2.json", "[1, 2]", "bad2.json: expected an object"),
+        ("bad.csv", "height,waist\n170\n", "bad.csv: expected rows"),
+        ("bad.txt", "height 170", "must be .json or .csv"),
+    ):
         (tmp_path / name).write_text(text)
         rc = main(["body", "--measurements", str(tmp_path / name), "--out", str(tmp_path / "x.obj"), "--quiet"])
         err = capsys.readouterr().err
@@ -214,6 +230,7 @@ def test_design_body_measurements(anny):
     from core.design import load_design
     from core.design.templates import TEMPLATES
     from core.errors import DesignError
+
     d = TEMPLATES["skirt_darted"]()
     table = {"height": 165, "waist": 74, "hip": 104, "gender": 1}
     d["body"] = {"measurements": table}
@@ -222,11 +239,15 @@ def test_design_body_measurements(anny):
     assert all(abs(got[k] - table[k]) <= tolerance(k) for k in got), got
     assert any(k in anny.local_change_parameters() for k in design.body["shape"])
     assert load_design(design.to_json()).body == design.body
-    for body, words in (({"measurements": {"knee": 3}}, "body.measurements.knee: unknown measurement 'knee'"),
-                        ({"measurements": {"height": 165}, "shape": "M"}, "without body.shape"),
-                        ({"measurements": [1]}, "expected an object"),
-                        ({"measurements": {"height": 150, "inseam": 100, "gender": 1}},
-                         "not reachable by Anny: height 150 cm (closest")):
+    for body, words in (
+        ({"measurements": {"knee": 3}}, "body.measurements.knee: unknown measurement 'knee'"),
+        ({"measurements": {"height": 165}, "shape": "M"}, "without body.shape"),
+        ({"measurements": [1]}, "expected an object"),
+        (
+            {"measurements": {"height": 150, "inseam": 100, "gender": 1}},
+            "not reachable by Anny: height 150 cm (closest",
+        ),
+    ):
         d["body"] = body
         with pytest.raises(DesignError, match=re.escape(words)):
             load_design(d)

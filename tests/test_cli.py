@@ -1,4 +1,5 @@
 """core.cli: the `ease` command line (subcommands, errors, bench, demo, templates)."""
+
 import pytest
 
 from core import cli
@@ -27,9 +28,12 @@ def test_help_loads_no_pipeline():
     """``ease --help`` and the parsers import no numpy and no stage: start-up stays a bare interpreter's."""
     import subprocess
     import sys
-    code = ("import sys; import core.cli; core.cli.build_parser().format_help(); "
-            "print(sorted(m for m in sys.modules if m.split('.')[0] in ('numpy', 'scipy', 'warp') "
-            "or m.split('.')[:2] in (['core', 'body'], ['core', 'design'], ['core', 'pattern'])))")
+
+    code = (
+        "import sys; import core.cli; core.cli.build_parser().format_help(); "
+        "print(sorted(m for m in sys.modules if m.split('.')[0] in ('numpy', 'scipy', 'warp') "
+        "or m.split('.')[:2] in (['core', 'body'], ['core', 'design'], ['core', 'pattern'])))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
 
@@ -71,10 +75,9 @@ def test_bench_runs_a_benchmark_and_indexes_every_report(tmp_path, monkeypatch, 
     bench_dir = tmp_path / "benchmarks"
     bench_dir.mkdir()
     (bench_dir / "bench_alpha.py").write_text(
-        "def run(out_dir, quick=False):\n"
-        "    (out_dir / 'alpha.md').write_text('quick' if quick else 'full')\n")
-    (bench_dir / "bench_beta.py").write_text(
-        "def run(out_dir):\n    (out_dir / 'beta.md').write_text('b')\n")
+        "def run(out_dir, quick=False):\n    (out_dir / 'alpha.md').write_text('quick' if quick else 'full')\n"
+    )
+    (bench_dir / "bench_beta.py").write_text("def run(out_dir):\n    (out_dir / 'beta.md').write_text('b')\n")
     out = bench_dir / "results"
     assert cli.main(["bench", "--only", "alpha", "--quick", "--bench-dir", str(bench_dir)]) == 0
     assert (out / "alpha.md").read_text() == "quick"
@@ -105,6 +108,7 @@ def test_templates_lists_every_shipped_design(capsys):
 
 def test_demo_skips_the_render_outside_a_checkout(tmp_path, monkeypatch, capsys):
     from core.cli.demo import run_demo
+
     monkeypatch.chdir(tmp_path)
     steps = []
     assert run_demo(tmp_path / "demo", lambda argv: steps.append(argv[0]) or 0) == 0

@@ -1,15 +1,15 @@
 """The cutting engine on the real default body (Anny): a 6-panel long-sleeve shirt."""
+
 import time
 
 import numpy as np
 import pytest
-
-from core.cut.refine import SPLIT_RATIO
-from core.cut.engine import cut_surface
-from core.geom.polyline import polyline_length
-
 from cut_anny_shirt import shirt_spec
 from cut_synth import surface_distance, triangle_areas
+
+from core.cut.engine import cut_surface
+from core.cut.refine import SPLIT_RATIO
+from core.geom.polyline import polyline_length
 
 
 @pytest.fixture(scope="module")
@@ -23,11 +23,17 @@ def shirt(anny, anny_reference):
 
 
 def test_six_panels_and_seams(shirt, anny, anny_reference):
-    body, (X, _) = anny, anny_reference
+    _body, (X, _) = anny, anny_reference
     spec, cut = shirt
     names = [p.name for p in cut.panels]
-    assert names == ["shirt.front", "shirt.back", "shirt.sleeve_front_left", "shirt.sleeve_back_left",
-                     "shirt.sleeve_front_right", "shirt.sleeve_back_right"]
+    assert names == [
+        "shirt.front",
+        "shirt.back",
+        "shirt.sleeve_front_left",
+        "shirt.sleeve_back_left",
+        "shirt.sleeve_front_right",
+        "shirt.sleeve_back_right",
+    ]
     G = cut.positions(X)
     pairs = {frozenset((s.panel_a, s.panel_b)) for s in cut.seams}
     assert frozenset(("shirt.front", "shirt.back")) in pairs
@@ -41,7 +47,7 @@ def test_six_panels_and_seams(shirt, anny, anny_reference):
         assert la > 0.02
         assert abs(la - lb) < 1e-12
     for p in cut.panels:
-        assert len(p.boundary) == 1, p.name             # every panel is a disk
+        assert len(p.boundary) == 1, p.name  # every panel is a disk
         P = G[p.vertex_ids]
         e = np.linalg.norm(P[p.faces] - P[np.roll(p.faces, -1, 1)], axis=2)
         assert e.max() <= SPLIT_RATIO * 0.01 + 1e-12
@@ -62,8 +68,9 @@ def test_panels_partition_the_garment_region(shirt, anny, anny_reference):
     coarse = cut_surface(body, X, spec)
     Gc = coarse.positions(X)
     for p, q in zip(cut.panels, coarse.panels):
-        np.testing.assert_allclose(triangle_areas(G[p.vertex_ids], p.faces).sum(),
-                                   triangle_areas(Gc[q.vertex_ids], q.faces).sum(), rtol=1e-4)  # < one 1 cm^2 triangle
+        np.testing.assert_allclose(
+            triangle_areas(G[p.vertex_ids], p.faces).sum(), triangle_areas(Gc[q.vertex_ids], q.faces).sum(), rtol=1e-4
+        )  # < one 1 cm^2 triangle
     # the unrefined panels are made of whole or split body triangles: their area plus the
     # area of the rest of the body (the other flood-fill regions) is the body's area
     area = sum(triangle_areas(Gc[q.vertex_ids], q.faces).sum() for q in coarse.panels)
@@ -76,6 +83,7 @@ def test_outward_orientation(shirt, anny, anny_reference):
     body, (X, _) = anny, anny_reference
     _, cut = shirt
     import igl
+
     G = cut.positions(X)
     Fb = np.asarray(body.faces, dtype=np.int64)
     nb = np.cross(X[Fb[:, 1]] - X[Fb[:, 0]], X[Fb[:, 2]] - X[Fb[:, 0]])
@@ -87,7 +95,7 @@ def test_outward_orientation(shirt, anny, anny_reference):
 
 
 def test_grain(shirt, anny, anny_reference):
-    body, (X, J) = anny, anny_reference
+    body, (_X, J) = anny, anny_reference
     _, cut = shirt
     jn = body.joint_names
     arm = J[jn.index("upperarm01.L")] - J[jn.index("wrist.L")]
@@ -95,17 +103,22 @@ def test_grain(shirt, anny, anny_reference):
     for p in cut.panels:
         np.testing.assert_allclose(np.linalg.norm(p.warp_dir, axis=1), 1.0)
         if p.name == "shirt.front":
-            assert np.median(p.warp_dir[:, 2]) > 0.9        # up the torso
+            assert np.median(p.warp_dir[:, 2]) > 0.9  # up the torso
         if p.name == "shirt.sleeve_front_left":
-            assert np.median(p.warp_dir @ arm) > 0.8        # along the arm, towards the shoulder
+            assert np.median(p.warp_dir @ arm) > 0.8  # along the arm, towards the shoulder
 
 
 def test_transfer_to_shapes_and_poses(shirt, anny, anny_reference):
-    body, (X, _) = anny, anny_reference
+    body, (_X, _) = anny, anny_reference
     _, cut = shirt
     Fb = np.asarray(body.faces, dtype=np.int64)
-    instances = [({"weight": 0.1, "height": 0.3}, None), ({"weight": 0.9, "height": 0.7, "muscle": 0.7}, None),
-                 (None, "P1"), (None, "P2"), (None, "P3")]
+    instances = [
+        ({"weight": 0.1, "height": 0.3}, None),
+        ({"weight": 0.9, "height": 0.7, "muscle": 0.7}, None),
+        (None, "P1"),
+        (None, "P2"),
+        (None, "P3"),
+    ]
     for shape, pose in instances:
         V = body.vertices(shape, pose)
         G = cut.positions(V)
@@ -117,11 +130,13 @@ def test_transfer_to_shapes_and_poses(shirt, anny, anny_reference):
 
 
 def test_left_right_mirror(shirt, anny, anny_reference):
-    body, (X, _) = anny, anny_reference
+    _body, (X, _) = anny, anny_reference
     _, cut = shirt
     G = cut.positions(X)
-    for a, b in (("shirt.sleeve_front_left", "shirt.sleeve_front_right"),
-                 ("shirt.sleeve_back_left", "shirt.sleeve_back_right")):
+    for a, b in (
+        ("shirt.sleeve_front_left", "shirt.sleeve_front_right"),
+        ("shirt.sleeve_back_left", "shirt.sleeve_back_right"),
+    ):
         pa, pb = cut.panel(a), cut.panel(b)
         Aa = triangle_areas(G[pa.vertex_ids], pa.faces).sum()
         Ab = triangle_areas(G[pb.vertex_ids], pb.faces).sum()
@@ -159,6 +174,7 @@ def test_template_seams_are_the_exact_geodesics(anny, anny_reference):
     from core.cut.split import SNAP_ABS, CutMesh
     from core.design import load_design, resolve
     from core.design.templates import TEMPLATE_DIR
+
     body, (X, _) = anny, anny_reference
     BF = np.asarray(body.faces)
     d = load_design(TEMPLATE_DIR / "shirt_long_sleeve.json")
@@ -176,8 +192,8 @@ def test_template_seams_are_the_exact_geodesics(anny, anny_reference):
         G = np.vstack([geo.path(a, b) for a, b in zip(kv[:-1], kv[1:])])
         s = seams[0]
         P = GX[np.asarray(cut.panel(s.panel_a).vertex_ids)[s.verts_a]]
-        assert len(P) > len(line.points)                       # it crosses the mesh
+        assert len(P) > len(line.points)  # it crosses the mesh
         assert _distance_to_polyline(P, G).max() <= SNAP_ABS + 1e-9, line.name
         assert abs(polyline_length(P) - polyline_length(G)) < 1e-3 * polyline_length(G), line.name
         checked += 1
-    assert checked >= 8     # shoulders, sides, sleeve tops and undersides
+    assert checked >= 8  # shoulders, sides, sleeve tops and undersides

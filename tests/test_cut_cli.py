@@ -1,4 +1,5 @@
 """``ease cut``: writes its files (atomically), reloads, is deterministic; bad designs write nothing."""
+
 import argparse
 import json
 
@@ -37,7 +38,7 @@ def test_cut_writes_its_files_and_reloads(tmp_path):
     names = sorted(p.name for p in out.iterdir())
     assert names == ["cut.json", "cut.png", "cut_embedding.npz", "design.json", "panels.obj"]
     assert (out / "cut.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]        # no temp dirs left
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temp dirs left
     cut = load_cut(out)
     assert len(cut.panels) == 6 and len(cut.seams) == 12
     assert cut.garments == {"shirt": "upper"} and len(cut.pins["shirt"]) > 0
@@ -61,16 +62,17 @@ def test_cut_writes_its_files_and_reloads(tmp_path):
 def test_cut_on_another_size_shown_on_a_pose(tmp_path):
     from core.body import load_body
     from core.body.sizes import size_shape
+
     out = tmp_path / "xl"
-    assert ease_cut(template_path("skirt"), "--out", out, "--size", "XL", "--pose", "P3",
-                    "--quiet", "--no-png") == 0
+    assert ease_cut(template_path("skirt"), "--out", out, "--size", "XL", "--pose", "P3", "--quiet", "--no-png") == 0
     cut = load_cut(out)
-    assert cut.body["shape"] == "XL" and cut.body["pose"] == "A"          # cut on the reference pose
+    assert cut.body["shape"] == "XL" and cut.body["pose"] == "A"  # cut on the reference pose
     assert [p.name for p in cut.panels] == ["skirt.front", "skirt.back"]
     body = load_body("anny")
-    X = cut.positions(body.vertices(size_shape(body, "XL"), "P3"))        # ... shown sitting
-    V = np.array([[float(x) for x in l.split()[1:]] for l in (out / "panels.obj").read_text().splitlines()
-                  if l.startswith("v ")])
+    X = cut.positions(body.vertices(size_shape(body, "XL"), "P3"))  # ... shown sitting
+    V = np.array(
+        [[float(x) for x in l.split()[1:]] for l in (out / "panels.obj").read_text().splitlines() if l.startswith("v ")]
+    )
     assert np.allclose(V, X, atol=1e-6)
 
 
@@ -138,15 +140,36 @@ def test_cut_error_writes_nothing(tmp_path):
 
 def _synthetic_cut():
     E = sp.csr_matrix(np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0]]))
-    a = Panel(name="g.a", garment="g", vertex_ids=np.array([0, 1, 2]), faces=np.array([[0, 1, 2]]),
-              warp_dir=np.array([[0, 0, 1.0]]), ease=np.array([1.3]), boundary=[np.array([0, 1, 2])])
-    b = Panel(name="g.b", garment="g", vertex_ids=np.array([1, 2, 3]), faces=np.array([[0, 2, 1]]),
-              warp_dir=np.array([[0, 0, 1.0]]), ease=np.array([2.0]), boundary=[np.array([0, 2, 1])],
-              body_part="arm", mirror_of="g.a")
-    return GarmentCut(body={"model": "anny", "shape": {"weight": 0.7}, "pose": "P1"}, embedding=E,
-                      panels=[a, b], seams=[Seam("g.s", "g.a", "g.b", np.array([1, 2]), np.array([0, 1]))],
-                      garments={"g": "upper"}, pins={"g": np.array([0, 1])},
-                      hems={"g.a": [np.array([2, 0])]}, materials={"fabric": "cotton", "eps_weft": 1.2})
+    a = Panel(
+        name="g.a",
+        garment="g",
+        vertex_ids=np.array([0, 1, 2]),
+        faces=np.array([[0, 1, 2]]),
+        warp_dir=np.array([[0, 0, 1.0]]),
+        ease=np.array([1.3]),
+        boundary=[np.array([0, 1, 2])],
+    )
+    b = Panel(
+        name="g.b",
+        garment="g",
+        vertex_ids=np.array([1, 2, 3]),
+        faces=np.array([[0, 2, 1]]),
+        warp_dir=np.array([[0, 0, 1.0]]),
+        ease=np.array([2.0]),
+        boundary=[np.array([0, 2, 1])],
+        body_part="arm",
+        mirror_of="g.a",
+    )
+    return GarmentCut(
+        body={"model": "anny", "shape": {"weight": 0.7}, "pose": "P1"},
+        embedding=E,
+        panels=[a, b],
+        seams=[Seam("g.s", "g.a", "g.b", np.array([1, 2]), np.array([0, 1]))],
+        garments={"g": "upper"},
+        pins={"g": np.array([0, 1])},
+        hems={"g.a": [np.array([2, 0])]},
+        materials={"fabric": "cotton", "eps_weft": 1.2},
+    )
 
 
 def test_io_round_trip(tmp_path):
@@ -182,50 +205,106 @@ def _shirt_lines(d):
 def _drop_line(name):
     def edit(d):
         d["garments"][0]["lines"] = [l for l in _shirt_lines(d) if l["name"] != name]
+
     return edit
 
 
 def _set(getter, key, value):
     def edit(d):
         getter(d)[key] = value
+
     return edit
 
 
 # issue 3's error list, each through `ease cut` on the long-sleeve shirt: (edit, error, JSON path or
 # None, words the message must contain - the design element it names)
 ERROR_CASES = {
-    "unknown landmark": (_set(lambda d: _shirt_lines(d)[0]["points"], 1, "nek_left"), DesignError,
-                         "garments[0].lines[0].points[1]", ["'nek_left'", "neck_left"]),
+    "unknown landmark": (
+        _set(lambda d: _shirt_lines(d)[0]["points"], 1, "nek_left"),
+        DesignError,
+        "garments[0].lines[0].points[1]",
+        ["'nek_left'", "neck_left"],
+    ),
     "seamline does not close (open neckline)": (
-        _set(lambda d: _shirt_lines(d)[0], "closed", False), CutError, None,
-        ["'shirt.front'", "does not close", "'shirt.neckline'"]),
+        _set(lambda d: _shirt_lines(d)[0], "closed", False),
+        CutError,
+        None,
+        ["'shirt.front'", "does not close", "'shirt.neckline'"],
+    ),
     "seamline does not close (side seam stops at the waist)": (
-        _set(lambda d: _shirt_lines(d)[4], "points", ["armhole_under_left", "waist_left"]), CutError, None,
-        ["'shirt.front'", "'shirt.back'", "does not close", "'shirt.side_left'"]),
+        _set(lambda d: _shirt_lines(d)[4], "points", ["armhole_under_left", "waist_left"]),
+        CutError,
+        None,
+        ["'shirt.front'", "'shirt.back'", "does not close", "'shirt.side_left'"],
+    ),
     "missing seamline": (_drop_line("shoulder_left"), CutError, None, ["'shirt.front'", "'shirt.back'", "missing"]),
     "seamlines cross": (
         lambda d: _shirt_lines(d).append({"name": "belt", "points": ["chest_front", "chest_back"], "role": "seam"}),
-        CutError, None, ["'shirt.belt'", "'shirt.side_", "cross"]),
+        CutError,
+        None,
+        ["'shirt.belt'", "'shirt.side_", "cross"],
+    ),
     "panel with no faces": (
         lambda d: d["garments"][0]["panels"].append({"name": "pocket", "seed": "navel", "body_part": "torso"}),
-        CutError, None, ["'shirt.pocket'", "no faces", "'shirt.front'"]),
-    "keypoint off the body": (_set(lambda d: d["keypoints"], "chest_front", {"triangle": 10 ** 7, "bary": [1, 0, 0]}),
-                              DesignError, "keypoints.chest_front.triangle", ["off the body"]),
-    "keypoint not on its triangle": (_set(lambda d: d["keypoints"], "chest_front", {"triangle": 5, "bary": [1.5, -0.5, 0]}),
-                                     DesignError, "keypoints.chest_front.bary[0]", ["1.5"]),
-    "length leaves the body part": (_set(lambda d: d["parameters"], "sleeve_length", {"value": 0.9, "kind": "length"}),
-                                    DesignError, "parameters.sleeve_length", ["leaves the body part", "arm_left"]),
-    "ease NaN": (_set(lambda d: d["garments"][0]["panels"][1]["ease"], "value", float("nan")), DesignError,
-                 "garments[0].panels[1].ease.value", ["panel 'back'", "NaN"]),
-    "ease below 0.8": (_set(lambda d: d["garments"][0]["panels"][1]["ease"], "value", 0.3), DesignError,
-                       "garments[0].panels[1].ease.value", ["panel 'back'", "0.8..4.0"]),
-    "ease gradient above 4": (_set(lambda d: d["garments"][0]["panels"], 2,
-                                   {"name": "sleeve_front_left", "seed": "sleeve_front_mid_left", "body_part": "arm",
-                                    "ease": {"from": 1.0, "to": 4.5, "axis": "z"}}),
-                              DesignError, "garments[0].panels[2].ease.to", ["panel 'sleeve_front_left'", "4.5"]),
-    "ease per-triangle value": (_set(lambda d: d["garments"][0]["panels"][0], "ease",
-                                     {"per_triangle": {"triangles": [0, 1], "values": [1.2, float("inf")]}}),
-                                DesignError, "garments[0].panels[0].ease.per_triangle.values[1]", ["panel 'front'"]),
+        CutError,
+        None,
+        ["'shirt.pocket'", "no faces", "'shirt.front'"],
+    ),
+    "keypoint off the body": (
+        _set(lambda d: d["keypoints"], "chest_front", {"triangle": 10**7, "bary": [1, 0, 0]}),
+        DesignError,
+        "keypoints.chest_front.triangle",
+        ["off the body"],
+    ),
+    "keypoint not on its triangle": (
+        _set(lambda d: d["keypoints"], "chest_front", {"triangle": 5, "bary": [1.5, -0.5, 0]}),
+        DesignError,
+        "keypoints.chest_front.bary[0]",
+        ["1.5"],
+    ),
+    "length leaves the body part": (
+        _set(lambda d: d["parameters"], "sleeve_length", {"value": 0.9, "kind": "length"}),
+        DesignError,
+        "parameters.sleeve_length",
+        ["leaves the body part", "arm_left"],
+    ),
+    "ease NaN": (
+        _set(lambda d: d["garments"][0]["panels"][1]["ease"], "value", float("nan")),
+        DesignError,
+        "garments[0].panels[1].ease.value",
+        ["panel 'back'", "NaN"],
+    ),
+    "ease below 0.8": (
+        _set(lambda d: d["garments"][0]["panels"][1]["ease"], "value", 0.3),
+        DesignError,
+        "garments[0].panels[1].ease.value",
+        ["panel 'back'", "0.8..4.0"],
+    ),
+    "ease gradient above 4": (
+        _set(
+            lambda d: d["garments"][0]["panels"],
+            2,
+            {
+                "name": "sleeve_front_left",
+                "seed": "sleeve_front_mid_left",
+                "body_part": "arm",
+                "ease": {"from": 1.0, "to": 4.5, "axis": "z"},
+            },
+        ),
+        DesignError,
+        "garments[0].panels[2].ease.to",
+        ["panel 'sleeve_front_left'", "4.5"],
+    ),
+    "ease per-triangle value": (
+        _set(
+            lambda d: d["garments"][0]["panels"][0],
+            "ease",
+            {"per_triangle": {"triangles": [0, 1], "values": [1.2, float("inf")]}},
+        ),
+        DesignError,
+        "garments[0].panels[0].ease.per_triangle.values[1]",
+        ["panel 'front'"],
+    ),
 }
 
 
@@ -235,7 +314,7 @@ def test_each_bad_input_is_named_and_writes_nothing(case, tmp_path):
     d = TEMPLATES["shirt_long_sleeve"]()
     edit(d)
     bad = tmp_path / "bad.json"
-    bad.write_text(json.dumps(d))               # NaN / Infinity as JSON extensions
+    bad.write_text(json.dumps(d))  # NaN / Infinity as JSON extensions
     out = tmp_path / "out"
     with pytest.raises(error) as e:
         ease_cut(bad, "--out", out, "--quiet")
@@ -244,4 +323,4 @@ def test_each_bad_input_is_named_and_writes_nothing(case, tmp_path):
     for w in words:
         assert w in str(e.value), (w, str(e.value))
     assert not out.exists()
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.json"]       # no temporary leftovers
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.json"]  # no temporary leftovers

@@ -1,17 +1,16 @@
 """core.cut.engine.cut_surface on a synthetic tube body (and on Anny, see test_cut_anny)."""
+
 import numpy as np
 import pytest
+from cut_synth import LEFT, R, SynthBody, capsule, surface_distance, triangle_areas, tube_spec
 
 from core.cut.engine import cut_surface
-from core.cut.refine import SPLIT_RATIO
 from core.cut.geodesic import GeodesicPaths, insert_keypoints
-from core.geom.polyline import polyline_length
+from core.cut.refine import SPLIT_RATIO
 from core.cut.split import CutMesh
-from core.errors import CutError
-
-from cut_synth import (BACK, FRONT, LEFT, RIGHT, R, SynthBody, capsule, surface_distance,
-                            triangle_areas, tube_spec)
 from core.design.spec import CutLine, PanelSpec
+from core.errors import CutError
+from core.geom.polyline import polyline_length
 
 
 @pytest.fixture(scope="module")
@@ -34,8 +33,8 @@ def test_panels_seams_hems(cut):
         # both sides are the same global vertices, hence the same 3D length
         np.testing.assert_array_equal(a.vertex_ids[s.verts_a], b.vertex_ids[s.verts_b])
     for p in cut.panels:
-        assert len(p.boundary) == 1                     # a disk
-        assert len(cut.hems[p.name]) == 2               # neck and hem stretches
+        assert len(p.boundary) == 1  # a disk
+        assert len(cut.hems[p.name]) == 2  # neck and hem stretches
         assert p.warp_dir.shape == (len(p.faces), 3)
         np.testing.assert_allclose(np.linalg.norm(p.warp_dir, axis=1), 1.0)
         np.testing.assert_array_equal(p.ease, 1.0)
@@ -68,7 +67,7 @@ def test_partition_covers_closed_surface():
     area = sum(triangle_areas(X[p.vertex_ids], p.faces).sum() for p in cut.panels)
     np.testing.assert_allclose(area, triangle_areas(body.V, body.faces).sum(), rtol=1e-10)
     tris = np.concatenate([np.sort(p.vertex_ids[p.faces], axis=1) for p in cut.panels])
-    assert len(np.unique(tris, axis=0)) == len(tris)   # no face doubled
+    assert len(np.unique(tris, axis=0)) == len(tris)  # no face doubled
     # neck and hem are openings: hems on both sides; the caps are panels of their own
     assert len(cut.hems["shirt.cap_top"]) == 1
 
@@ -124,7 +123,9 @@ def test_refined_cut(body):
         e = np.linalg.norm(P[p.faces] - P[np.roll(p.faces, -1, 1)], axis=2)
         assert e.max() <= SPLIT_RATIO * h + 1e-12
         a = triangle_areas(P, p.faces).sum()
-        np.testing.assert_allclose(a, triangle_areas(Xc[q.vertex_ids], q.faces).sum(), rtol=1e-6)  # Delaunay flips: nearly coplanar
+        np.testing.assert_allclose(
+            a, triangle_areas(Xc[q.vertex_ids], q.faces).sum(), rtol=1e-6
+        )  # Delaunay flips: nearly coplanar
         assert len(p.boundary) == 1
     for s in cut.seams:
         a, b = cut.panel(s.panel_a), cut.panel(s.panel_b)
@@ -151,8 +152,9 @@ def test_missing_seam_merges_panels(body):
 
 def test_crossing_lines(body):
     spec = tube_spec(body)
-    spec.lines.append(CutLine("shirt.belt", [body.point([R * np.cos(a), R * np.sin(a), 0.5])
-                                             for a in (LEFT - 0.5, LEFT + 0.5)]))
+    spec.lines.append(
+        CutLine("shirt.belt", [body.point([R * np.cos(a), R * np.sin(a), 0.5]) for a in (LEFT - 0.5, LEFT + 0.5)])
+    )
     with pytest.raises(CutError, match="shirt.belt.*shirt.side_left|shirt.side_left.*shirt.belt"):
         cut_surface(body, body.V, spec)
 
@@ -166,8 +168,9 @@ def test_seed_in_head_region(body):
 
 def test_bad_keypoint_and_names(body):
     from core.body.model import SurfacePoint
+
     spec = tube_spec(body)
-    spec.lines[0].points[1] = SurfacePoint(10 ** 7, (1.0, 0.0, 0.0))
+    spec.lines[0].points[1] = SurfacePoint(10**7, (1.0, 0.0, 0.0))
     with pytest.raises(CutError, match="shirt.neck.*off the body"):
         cut_surface(body, body.V, spec)
     spec = tube_spec(body)
@@ -193,6 +196,7 @@ def test_self_seam_opens_a_tube_panel(body):
 
 def test_progress_and_cancel(body):
     from core.errors import Cancelled
+
     seen = []
     cut_surface(body, body.V, tube_spec(body), progress=lambda f, m: seen.append((f, m)))
     fr = [f for f, _ in seen]
@@ -202,5 +206,6 @@ def test_progress_and_cancel(body):
     def stop(f, m):
         if f > 0.3:
             raise Cancelled()
+
     with pytest.raises(Cancelled):
         cut_surface(body, body.V, tube_spec(body), progress=stop)

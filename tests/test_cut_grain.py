@@ -1,18 +1,42 @@
 """core.cut.grain: warp per triangle along the body part's long axis."""
+
 import numpy as np
 
 from core.cut.grain import body_part_axis, warp_directions
 
 
 def test_axes_from_joint_names_point_up_the_part():
-    names = ["root", "neck01", "upperarm01.L", "wrist.L", "upperarm01.R", "wrist.R",
-             "upperleg01.L", "foot.L", "upperleg01.R", "foot.R"]
-    J = np.array([[0, 0, 0], [0, 0, 0.5], [0.2, 0, 0.45], [0.5, 0, 0.1], [-0.2, 0, 0.45], [-0.5, 0, 0.1],
-                  [0.1, 0, 0], [0.12, 0, -0.8], [-0.1, 0, 0], [-0.12, 0, -0.8]], float)
+    names = [
+        "root",
+        "neck01",
+        "upperarm01.L",
+        "wrist.L",
+        "upperarm01.R",
+        "wrist.R",
+        "upperleg01.L",
+        "foot.L",
+        "upperleg01.R",
+        "foot.R",
+    ]
+    J = np.array(
+        [
+            [0, 0, 0],
+            [0, 0, 0.5],
+            [0.2, 0, 0.45],
+            [0.5, 0, 0.1],
+            [-0.2, 0, 0.45],
+            [-0.5, 0, 0.1],
+            [0.1, 0, 0],
+            [0.12, 0, -0.8],
+            [-0.1, 0, 0],
+            [-0.12, 0, -0.8],
+        ],
+        float,
+    )
     np.testing.assert_allclose(body_part_axis("torso", "left", names, J), [0, 0, 1])
     arm = body_part_axis("arm", "left", names, J)
     np.testing.assert_allclose(arm, np.array([-0.3, 0, 0.35]) / np.hypot(0.3, 0.35))
-    assert body_part_axis("arm", "right", names, J)[0] > 0       # right arm: mirror
+    assert body_part_axis("arm", "right", names, J)[0] > 0  # right arm: mirror
     leg = body_part_axis("leg", "left", names, J)
     assert leg[2] > 0.99
     # SMPL-style names work too
@@ -52,6 +76,7 @@ def test_axis_from_region_points():
 def _quadruped():
     """The box horse of tests/test_body_obj.py (facing -Y, head up front), as vertices and triangles."""
     from test_body_obj import horse
+
     v, quads, owner = horse()
     F = np.array([t for q in quads for t in ((q[0], q[1], q[2]), (q[0], q[2], q[3]))])
     return v, F, np.array(owner)
@@ -62,7 +87,7 @@ def test_quadruped_warp_runs_along_the_spine():
     around the barrel (the vertical it used to take), pointing to the head end."""
     v, F, owner = _quadruped()
     axis = body_part_axis("torso", "left", landmarks={}, faces=F, X=v)
-    assert abs(axis[1]) > 0.95 and axis[1] < 0, axis            # along -Y, towards the head
+    assert abs(axis[1]) > 0.95 and axis[1] < 0, axis  # along -Y, towards the head
     barrel = np.nonzero(np.isin(F, np.nonzero(owner == "torso")[0]).all(1))[0]
     w = warp_directions(v, F[barrel], axis)
     # side and back faces of the barrel: the warp lies along the spine

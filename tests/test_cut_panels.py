@@ -1,4 +1,5 @@
 """core.cut.panels (half-edges, boundary loops, line stretches) and core.cut.incidence."""
+
 import numpy as np
 import pytest
 

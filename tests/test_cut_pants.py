@@ -1,32 +1,41 @@
 """Four-panel pants on Anny: four cut lines meet at the crotch keypoint (no skirt topology)."""
+
 import numpy as np
-import pytest
+from cut_anny_shirt import ray_point
 
 from core.cut.engine import cut_surface
-from core.geom.polyline import polyline_length
 from core.design.spec import CutLine, CutSpec, GarmentSpec, PanelSpec
-
-from cut_anny_shirt import ray_point
+from core.geom.polyline import polyline_length
 
 
 def pants_spec(body, X, J):
     lm = body.landmarks
     jn = body.joint_names
-    lines = [CutLine("pants.waist", [lm["waist_front"], lm["waist_left"], lm["waist_back"], lm["waist_right"]],
-                     closed=True, role="opening"),
-             CutLine("pants.center_front", [lm["waist_front"], lm["crotch"]]),
-             CutLine("pants.center_back", [lm["waist_back"], lm["crotch"]])]
+    lines = [
+        CutLine(
+            "pants.waist",
+            [lm["waist_front"], lm["waist_left"], lm["waist_back"], lm["waist_right"]],
+            closed=True,
+            role="opening",
+        ),
+        CutLine("pants.center_front", [lm["waist_front"], lm["crotch"]]),
+        CutLine("pants.center_back", [lm["waist_back"], lm["crotch"]]),
+    ]
     panels = []
     for side, S, out in (("left", "L", 1.0), ("right", "R", -1.0)):
         knee, ankle = J[jn.index(f"lowerleg01.{S}")], J[jn.index(f"foot.{S}")]
-        c = knee + 0.6 * (ankle - knee)                        # hem at mid-shin
+        c = knee + 0.6 * (ankle - knee)  # hem at mid-shin
         o, f, i, b = (ray_point(body, X, c, d) for d in ([out, 0, 0], [0, -1, 0], [-out, 0, 0], [0, 1, 0]))
-        lines += [CutLine(f"pants.hem_{side}", [o, f, i, b], closed=True, role="opening"),
-                  CutLine(f"pants.outseam_{side}", [lm[f"waist_{side}"], o]),
-                  CutLine(f"pants.inseam_{side}", [lm["crotch"], i])]
+        lines += [
+            CutLine(f"pants.hem_{side}", [o, f, i, b], closed=True, role="opening"),
+            CutLine(f"pants.outseam_{side}", [lm[f"waist_{side}"], o]),
+            CutLine(f"pants.inseam_{side}", [lm["crotch"], i]),
+        ]
         thigh = J[jn.index(f"upperleg01.{S}")] + 0.4 * (knee - J[jn.index(f"upperleg01.{S}")])
-        panels += [PanelSpec(f"pants.front_{side}", "pants", ray_point(body, X, thigh, [0, -1, 0]), body_part="leg"),
-                   PanelSpec(f"pants.back_{side}", "pants", ray_point(body, X, thigh, [0, 1, 0]), body_part="leg")]
+        panels += [
+            PanelSpec(f"pants.front_{side}", "pants", ray_point(body, X, thigh, [0, -1, 0]), body_part="leg"),
+            PanelSpec(f"pants.back_{side}", "pants", ray_point(body, X, thigh, [0, 1, 0]), body_part="leg"),
+        ]
     return CutSpec(lines, panels, [GarmentSpec("pants", "lower", pin_line="pants.waist")], refine_edge_length=0.01)
 
 

@@ -1,16 +1,16 @@
 """Skirt topology (core.cut.skirt) on Anny, and a two-panel skirt cut on it."""
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from cut_anny_shirt import ray_point
+from cut_synth import triangle_areas
 from scipy.sparse.csgraph import connected_components
 
 from core.cut.engine import cut_surface
 from core.cut.skirt import inter_leg_faces, make_skirt
-from core.design.spec import CutLine, CutSpec, GarmentSpec, PanelSpec
 from core.cut.split import CutMesh
-
-from cut_anny_shirt import ray_point
-from cut_synth import triangle_areas
+from core.design.spec import CutLine, CutSpec, GarmentSpec, PanelSpec
 
 
 def section_loops(X, F, z0):
@@ -29,8 +29,9 @@ def section_loops(X, F, z0):
     i, j = fid[sel][order][:-1][same], fid[sel][order][1:][same]
     faces = np.unique(fid[sel])
     idx = {f: t for t, f in enumerate(faces.tolist())}
-    A = sp.coo_matrix((np.ones(len(i)), ([idx[x] for x in i.tolist()], [idx[x] for x in j.tolist()])),
-                      shape=(len(faces), len(faces)))
+    A = sp.coo_matrix(
+        (np.ones(len(i)), ([idx[x] for x in i.tolist()], [idx[x] for x in j.tolist()])), shape=(len(faces), len(faces))
+    )
     return connected_components(A, directed=False)[0]
 
 
@@ -44,17 +45,17 @@ def test_skirt_topology_is_one_closed_tube(anny, anny_reference):
     a = Fm.reshape(-1)
     b = np.roll(Fm, -1, 1).reshape(-1)
     key = a * nv + b
-    assert len(np.unique(key)) == len(key)                     # oriented manifold
-    assert np.isin(key, b * nv + a).all()                      # closed: no boundary edge
+    assert len(np.unique(key)) == len(key)  # oriented manifold
+    assert np.isin(key, b * nv + a).all()  # closed: no boundary edge
     used = np.unique(Fm)
     E = len(np.unique(np.minimum(a, b) * nv + np.maximum(a, b)))
-    assert len(used) - E + len(Fm) == 2                        # still a sphere
+    assert len(used) - E + len(Fm) == 2  # still a sphere
     crotch = body.landmarks["crotch"].position(X, F)[2]
     knee = body.landmarks["knee_left"].position(X, F)[2]
     for t in (0.3, 0.6):
         z0 = crotch + t * (knee - crotch)
-        assert section_loops(X, np.asarray(F), z0) == 2        # two legs on the body
-        assert section_loops(mesh.X, Fm, z0) == 1              # one tube around both legs
+        assert section_loops(X, np.asarray(F), z0) == 2  # two legs on the body
+        assert section_loops(mesh.X, Fm, z0) == 1  # one tube around both legs
     # the bridge follows any shape and pose: its corners are body vertices or midpoints of a
     # body vertex and its mirror (on the midline)
     S = np.asarray(body.symmetry)
@@ -90,12 +91,13 @@ def test_skirt_topology_is_its_own_mirror(anny, anny_reference):
     assert len(bridge) == len(sides) and sides.sum() == len(sides) // 2
     got = np.where(np.where(on_mid, 0.0, x).sum(1) > 0, 1, 0)
     np.testing.assert_array_equal(got, sides[mesh.parent[mesh.parent >= len(body.faces)] - len(body.faces)])
-    assert not np.any((x > 1e-12).any(1) & (x < -1e-12).any(1))         # none across the midline
+    assert not np.any((x > 1e-12).any(1) & (x < -1e-12).any(1))  # none across the midline
 
 
 def test_skirt_topology_without_a_symmetry_map(anny, anny_reference):
     # no symmetry map: the legs are zipped directly, as one closed tube, with no new vertices
     import copy
+
     body, (X, _) = anny, anny_reference
     plain = copy.copy(body)
     plain.symmetry = None
@@ -106,7 +108,7 @@ def test_skirt_topology_without_a_symmetry_map(anny, anny_reference):
     b = np.roll(mesh.F, -1, 1).reshape(-1)
     assert np.isin(a * mesh.nv + b, b * mesh.nv + a).all()
     faces, mirrored = _mirror_keys(mesh, np.asarray(body.symmetry))
-    assert faces != mirrored                                        # the zip is not a mirror image
+    assert faces != mirrored  # the zip is not a mirror image
 
 
 def test_inter_leg_band_is_symmetric(anny, anny_reference):
@@ -125,21 +127,33 @@ def skirt_spec(body, X, J, refine=0.01):
     pos = {k: v.position(X, F) for k, v in lm.items()}
     hem = []
     for S, out in (("L", 1.0), ("R", -1.0)):
-        k = J[jn.index(f"lowerleg01.{S}")] + [0, 0, 0.08]          # just above the knee
+        k = J[jn.index(f"lowerleg01.{S}")] + [0, 0, 0.08]  # just above the knee
         hem.append([ray_point(body, X, k, d) for d in ([out, 0, 0], [0, -1, 0], [0, 1, 0])])
     (lo, lf, lb), (ro, rf, rb) = hem
     centre = np.array([0.0, 0.5 * (pos["waist_front"][1] + pos["waist_back"][1]), pos["hip_left"][2]])
     lines = [
-        CutLine("skirt.waist", [lm["waist_front"], lm["waist_left"], lm["waist_back"], lm["waist_right"]],
-                closed=True, role="opening"),
+        CutLine(
+            "skirt.waist",
+            [lm["waist_front"], lm["waist_left"], lm["waist_back"], lm["waist_right"]],
+            closed=True,
+            role="opening",
+        ),
         CutLine("skirt.hem", [lo, lb, rb, ro, rf, lf], closed=True, role="opening"),
         CutLine("skirt.side_left", [lm["waist_left"], lo]),
         CutLine("skirt.side_right", [lm["waist_right"], ro]),
     ]
-    panels = [PanelSpec("skirt.front", "skirt", ray_point(body, X, centre, [0, -1, 0])),
-              PanelSpec("skirt.back", "skirt", ray_point(body, X, centre, [0, 1, 0]))]
-    return CutSpec(lines, panels, [GarmentSpec("skirt", "lower", pin_line="skirt.waist")], skirt=True,
-                   refine_edge_length=refine, body={"model": "anny"})
+    panels = [
+        PanelSpec("skirt.front", "skirt", ray_point(body, X, centre, [0, -1, 0])),
+        PanelSpec("skirt.back", "skirt", ray_point(body, X, centre, [0, 1, 0])),
+    ]
+    return CutSpec(
+        lines,
+        panels,
+        [GarmentSpec("skirt", "lower", pin_line="skirt.waist")],
+        skirt=True,
+        refine_edge_length=refine,
+        body={"model": "anny"},
+    )
 
 
 def test_skirt_cut(anny, anny_reference):
@@ -160,8 +174,14 @@ def test_skirt_cut(anny, anny_reference):
         a, b = cut.panel(s.panel_a), cut.panel(s.panel_b)
         np.testing.assert_array_equal(a.vertex_ids[s.verts_a], b.vertex_ids[s.verts_b])
     # the hem of front and back together is one closed loop around both legs
-    hem = np.concatenate([cut.panel(n).vertex_ids[h] for n in ("skirt.front", "skirt.back")
-                          for h in cut.hems[n] if G[cut.panel(n).vertex_ids[h]][:, 2].mean() < -0.2])
+    hem = np.concatenate(
+        [
+            cut.panel(n).vertex_ids[h]
+            for n in ("skirt.front", "skirt.back")
+            for h in cut.hems[n]
+            if G[cut.panel(n).vertex_ids[h]][:, 2].mean() < -0.2
+        ]
+    )
     ends, counts = np.unique(hem, return_counts=True)
     assert (counts <= 2).all()
     # transfers to poses with the same topology and non-degenerate triangles
@@ -175,11 +195,17 @@ def test_skirt_cut(anny, anny_reference):
 def test_overlapping_garments_are_cut_separately(anny, anny_reference):
     """A shirt whose hem is below the skirt's waistband: each garment keeps its panels."""
     from cut_anny_shirt import shirt_spec
+
     body, (X, J) = anny, anny_reference
     shirt = shirt_spec(body, X, J, refine=None)
     skirt = skirt_spec(body, X, J, refine=None)
-    both = CutSpec(shirt.lines + skirt.lines, shirt.panels + skirt.panels, shirt.garments + skirt.garments,
-                   skirt=True, refine_edge_length=None)
+    both = CutSpec(
+        shirt.lines + skirt.lines,
+        shirt.panels + skirt.panels,
+        shirt.garments + skirt.garments,
+        skirt=True,
+        refine_edge_length=None,
+    )
     cut = cut_surface(body, X, both)
     # alone, each on the same surface as together: the skirt topology's, spanned over the cleft
     # (core.cut.span), which the shirt's back also reaches
@@ -191,8 +217,11 @@ def test_overlapping_garments_are_cut_separately(anny, anny_reference):
         Gr = ref.positions(X)
         for p in ref.panels:
             q = cut.panel(p.name)
-            np.testing.assert_allclose(triangle_areas(G[q.vertex_ids], q.faces).sum(),
-                                       triangle_areas(Gr[p.vertex_ids], p.faces).sum(), rtol=1e-9)
+            np.testing.assert_allclose(
+                triangle_areas(G[q.vertex_ids], q.faces).sum(),
+                triangle_areas(Gr[p.vertex_ids], p.faces).sum(),
+                rtol=1e-9,
+            )
     ids = {g: np.concatenate([p.vertex_ids for p in cut.panels if p.garment == g]) for g in ("shirt", "skirt")}
     assert not set(ids["shirt"].tolist()) & set(ids["skirt"].tolist())
     assert set(cut.pins) == {"shirt", "skirt"}
@@ -203,6 +232,7 @@ def test_points_on_the_removed_band(anny, anny_reference):
     a panel seed there is an error naming the panel."""
     from core.body.model import SurfacePoint
     from core.errors import CutError
+
     body, (X, J) = anny, anny_reference
     removed = np.nonzero(inter_leg_faces(body, X))[0]
     F = np.asarray(body.faces)

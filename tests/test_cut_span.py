@@ -1,4 +1,5 @@
 """The skirt's surface spans the body's concavities (core.cut.span, core.cut.skirt.span_surface)."""
+
 import numpy as np
 import pytest
 
@@ -14,7 +15,7 @@ def _grid(n=25, pit=0.1, bump=0.0):
     t = np.linspace(0.0, 1.0, n)
     x, y = np.meshgrid(t, t, indexing="ij")
     z = -pit * np.maximum(0.0, np.minimum(1.0 - np.abs(x - 0.5) / 0.2, 1.0 - np.abs(y - 0.5) / 0.35))
-    z += bump * np.maximum(0.0, 1.0 - ((x - 0.15) ** 2 + (y - 0.5) ** 2) / 0.1 ** 2)
+    z += bump * np.maximum(0.0, 1.0 - ((x - 0.15) ** 2 + (y - 0.5) ** 2) / 0.1**2)
     X = np.stack([x.ravel(), y.ravel(), z.ravel()], 1)
     k = np.arange(n * n).reshape(n, n)
     a, b, c, d = k[:-1, :-1].ravel(), k[1:, :-1].ravel(), k[1:, 1:].ravel(), k[:-1, 1:].ravel()
@@ -35,9 +36,9 @@ def test_a_pit_is_spanned_flat():
     np.testing.assert_allclose(Y[in_pit, 2], 0.0, atol=1e-12)
     far = (np.abs(X[:, 0] - 0.5) > 0.3) | (np.abs(X[:, 1] - 0.5) > 0.45)
     np.testing.assert_array_equal(Y[far], X[far])
-    np.testing.assert_array_equal(Y[~inner], X[~inner])          # only candidates move
-    np.testing.assert_allclose(np.asarray(B.sum(1)).ravel(), 1.0, atol=1e-12)   # affine rows
-    assert (B.data > 0).all()                                   # convex combinations
+    np.testing.assert_array_equal(Y[~inner], X[~inner])  # only candidates move
+    np.testing.assert_allclose(np.asarray(B.sum(1)).ravel(), 1.0, atol=1e-12)  # affine rows
+    assert (B.data > 0).all()  # convex combinations
 
 
 def test_a_degenerate_triangle_does_not_hold_the_membrane():
@@ -57,9 +58,9 @@ def test_a_bump_is_never_pressed_in():
     # nowhere does it go below the surface
     X, F, inner = _grid(bump=0.05)
     Y = np.asarray(spanning_operator(CutMesh(X, F), X, inner) @ X)
-    top = X[:, 2] == X[:, 2].max()              # the summit: the membrane rests on it
+    top = X[:, 2] == X[:, 2].max()  # the summit: the membrane rests on it
     np.testing.assert_array_equal(Y[top], X[top])
-    assert (Y[X[:, 2] > 0, 2] > X[X[:, 2] > 0, 2]).any()         # a tent down the flanks
+    assert (Y[X[:, 2] > 0, 2] > X[X[:, 2] > 0, 2]).any()  # a tent down the flanks
     assert (Y[:, 2] >= X[:, 2] - SPAN_TOL).all()
 
 
@@ -81,6 +82,7 @@ def spanned(anny, anny_reference):
 
 def test_anny_cleft_and_crotch_spanned_outside_the_body(spanned):
     import igl
+
     body, X, mesh, B = spanned
     assert B is not None
     Y = np.asarray(B @ X)
@@ -114,9 +116,11 @@ def test_skirt_cut_lies_on_the_spanned_surface(anny, anny_reference):
     # the cut's embedding is composed with the span: on another body instance (P1) the garment lies
     # on that instance's spanned skirt surface, off the body in the cleft; repeated, the same bytes
     import igl
+    from test_cut_skirt import skirt_spec
+
     from core.cut.engine import cut_surface
     from core.cut.io import embedding_bytes
-    from test_cut_skirt import skirt_spec
+
     body, (X, J) = anny, anny_reference
     spec = skirt_spec(body, X, J, refine=None)
     cut = cut_surface(body, X, spec)
@@ -145,6 +149,7 @@ def test_the_active_set_reaches_its_fixed_point_on_a_sampled_body(anny, monkeypa
 
     import core.cut.span as span
     from core.batch.bodies import sample_anny
+
     X = np.asarray(anny.vertices(sample_anny(i + 1, seed=0)[i].value), float)
     F = np.asarray(anny.faces)
     mesh = CutMesh(X, F)
@@ -168,6 +173,7 @@ def test_a_body_without_a_symmetry_map_is_spanned_too(anny, anny_reference):
     import copy
 
     import igl
+
     body, (X, _) = anny, anny_reference
     plain = copy.copy(body)
     plain.symmetry = None

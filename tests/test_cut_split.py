@@ -1,4 +1,5 @@
 """core.cut.split: edge/triangle splitting, weights, and exact segment tracing."""
+
 import numpy as np
 import pytest
 
@@ -44,12 +45,12 @@ def test_split_edge_and_face_keep_ids_and_weights():
     np.testing.assert_allclose(m.X[v], [0.125, 0, 0])
     c, w = m.vertex_weights(v)
     assert list(c) == [0, 1] and np.allclose(w, [0.75, 0.25])
-    p = m.split_face(0, (0.2, 0.3, 0.5))
+    m.split_face(0, (0.2, 0.3, 0.5))
     check_mesh(m)
     np.testing.assert_allclose(embedding_positions(m, X), m.X)
     A = 0.5 * np.abs(np.cross(m.X[m.F[:, 1]] - m.X[m.F[:, 0]], m.X[m.F[:, 2]] - m.X[m.F[:, 0]])[:, 2]).sum()
     np.testing.assert_allclose(A, area)
-    np.testing.assert_array_equal(m.X[: len(X)], X)      # original ids unchanged
+    np.testing.assert_array_equal(m.X[: len(X)], X)  # original ids unchanged
 
 
 def test_insert_point_snaps_near_vertices_and_edges():
@@ -58,7 +59,7 @@ def test_insert_point_snaps_near_vertices_and_edges():
     tri = m.F[0].tolist()
     assert m.insert_point(0, (1 - SNAP / 10, SNAP / 20, SNAP / 20)) == tri[0]
     nv = m.nv
-    v = m.insert_point(0, (0.5, 0.5 - SNAP / 10, SNAP / 10))     # on an edge: 1 vertex, 2 faces each side
+    v = m.insert_point(0, (0.5, 0.5 - SNAP / 10, SNAP / 10))  # on an edge: 1 vertex, 2 faces each side
     assert m.nv == nv + 1 and v == nv
     check_mesh(m)
 
@@ -67,6 +68,7 @@ def trace_geodesic(m, a, b, line, names=None):
     """Insert the geodesic a -> b (a straight segment on a flat mesh), point by point
     (each step of :meth:`CutMesh.trace` stays inside one parent triangle)."""
     from core.cut.geodesic import GeodesicPaths
+
     pts = GeodesicPaths(m.X, m.F).path(a, b)
     out, cur = [], a
     for q in pts[1:-1]:
@@ -90,7 +92,7 @@ def test_trace_is_exact_straight_segment():
     t = (P - pa) @ d / (d @ d)
     assert np.all(np.diff(t) > 0)
     off = np.linalg.norm(P - pa - t[:, None] * d, axis=1)
-    assert off.max() < SNAP * 0.2          # a snap moves a crossing by < SNAP x edge length
+    assert off.max() < SNAP * 0.2  # a snap moves a crossing by < SNAP x edge length
     np.testing.assert_allclose(np.linalg.norm(np.diff(P, axis=0), axis=1).sum(), np.linalg.norm(d), rtol=1e-4)
     # consecutive path vertices are joined by edges marked as cut
     for u, w in zip(path[:-1], path[1:]):
@@ -128,8 +130,8 @@ def test_move_body_remakes_vertices_and_parents():
     # two faces replaced by one new triangle each (their own parents), as the skirt bridge is added
     new = F[[0, 1]]
     m.replace_faces(np.array([0, 1]), new, X[new])
-    v = m.split_edge(5, 6, 0.25)                  # a vertex off the body: weights over 5 and 6
-    Y = X + np.stack([0 * X[:, 0], 0 * X[:, 0], np.sin(3 * X[:, 0]) * X[:, 1]], 1)   # curved: parents move
+    v = m.split_edge(5, 6, 0.25)  # a vertex off the body: weights over 5 and 6
+    Y = X + np.stack([0 * X[:, 0], 0 * X[:, 0], np.sin(3 * X[:, 0]) * X[:, 1]], 1)  # curved: parents move
     m.move_body(Y, F)
     assert np.allclose(m.X[: len(X)], Y)
     assert np.allclose(m.X[v], 0.75 * Y[5] + 0.25 * Y[6])

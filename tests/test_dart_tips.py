@@ -2,6 +2,7 @@
 each dart still ends its apex offset from its apex, no two sewn points of a panel lie closer than
 TIP_RING (at the finest refinement no triangle holds two of them), and the four-dart blouse solves
 there."""
+
 import numpy as np
 import pytest
 
@@ -17,8 +18,11 @@ def _tips(prep, panel):
     """{dart name: (its sewn point's position (3,), local ids of its legs)} of ``panel``."""
     X = prep.cut.positions(prep.reference)
     p = prep.cut.panel(panel)
-    return {s.name: (X[p.vertex_ids[s.apex]], np.r_[s.verts_a, s.verts_b])
-            for s in prep.cut.seams if s.kind == "dart" and s.panel_a == panel}
+    return {
+        s.name: (X[p.vertex_ids[s.apex]], np.r_[s.verts_a, s.verts_b])
+        for s in prep.cut.seams
+        if s.kind == "dart" and s.panel_a == panel
+    }
 
 
 def _triangles_on_two_tips(prep, panel) -> int:
@@ -50,7 +54,7 @@ def test_sewn_points_keep_their_distance(blouse):
         rec = blouse.cut.darts[a]
         # every dart still ends its apex offset from the bust point (the body is flat at this scale)
         assert np.linalg.norm(tips[a][0] - rec["apex"]) == pytest.approx(FOUR_DART_APEX_OFFSET, abs=2e-4), a
-        for b in names[i + 1:]:
+        for b in names[i + 1 :]:
             assert np.linalg.norm(tips[a][0] - tips[b][0]) >= TIP_RING - 1e-4, (a, b)
 
 
@@ -67,7 +71,7 @@ def test_a_ring_of_triangles_at_the_finest_refinement(anny, monkeypatch):
 def test_the_mirrored_darts_mirror_the_turned_point(blouse, anny):
     """The ``*_right`` darts mirror the left ones' points, the turned one included."""
     tips = _tips(blouse, "blouse.front")
-    flip = np.array([-1.0, 1.0, 1.0])               # Anny's left-right mirror: x -> -x
+    flip = np.array([-1.0, 1.0, 1.0])  # Anny's left-right mirror: x -> -x
     for k in ("bust_dart", "waist_dart", "shoulder_dart", "neck_dart"):
         left, right = tips[f"blouse.{k}_left"][0], tips[f"blouse.{k}_right"][0]
         assert np.linalg.norm(left * flip - right) < 1e-6, k
@@ -82,7 +86,7 @@ def test_the_four_dart_blouse_solves_at_the_finest_refinement(anny, monkeypatch)
     triangles against it: 222 flipped, refused; docs/darts.md)."""
     monkeypatch.setattr("core.pattern.optimizer.dart_gaps.GapCorrection.correct", lambda self, base, U: U)
     monkeypatch.setattr("core.metrics.checks.REFUSED", ("flipped", "collapsed"))
-    run = wf.reference(_finest(anny))                # the design's fitted configuration
+    run = wf.reference(_finest(anny))  # the design's fitted configuration
     f = run.figures
     assert run.pattern.report["config"] == "fitted"
     assert f["flipped"] == 0 and f["collapsed"] == 0 and f["seam mismatch max mm"] <= 3.0, f

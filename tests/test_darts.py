@@ -2,6 +2,7 @@
 sewn to equal length in the pattern, the export drawing (legs, fold, drill hole,
 notches in SVG, AAMA DXF and PDF), the drape welding the legs, and bad darts refused
 with the field named (exit status 2 through the CLI)."""
+
 import copy
 
 import numpy as np
@@ -15,6 +16,7 @@ from core.errors import DesignError
 @pytest.fixture(scope="module")
 def blouse_run(anny):
     from core import workflows as wf
+
     prep = wf.prepare(template_path("blouse_fitted"), body=anny)
     return prep, wf.reference(prep)
 
@@ -34,28 +36,36 @@ def test_dart_round_trips_and_designs_without_darts_write_none():
     assert all("darts" not in p for g in top["garments"] for p in g["panels"])
 
 
-@pytest.mark.parametrize("dart, field", [
-    ({"name": "d_left", "line": "side_left", "apex": "bust_left", "intake": 0}, "darts[0].intake"),
-    ({"name": "d_left", "line": "side_left", "apex": "bust_left", "intake": -0.01}, "darts[0].intake"),
-    ({"name": "d_left", "line": "side_left", "apex": {"landmark": "bust_left"}}, "darts[0].apex"),
-    ({"name": "d_left", "line": "side_left"}, "darts[0].apex"),
-    ({"name": "d_left", "line": "side_left", "apex": "bust_left", "depth": 1}, "darts[0].depth"),
-])
+@pytest.mark.parametrize(
+    "dart, field",
+    [
+        ({"name": "d_left", "line": "side_left", "apex": "bust_left", "intake": 0}, "darts[0].intake"),
+        ({"name": "d_left", "line": "side_left", "apex": "bust_left", "intake": -0.01}, "darts[0].intake"),
+        ({"name": "d_left", "line": "side_left", "apex": {"landmark": "bust_left"}}, "darts[0].apex"),
+        ({"name": "d_left", "line": "side_left"}, "darts[0].apex"),
+        ({"name": "d_left", "line": "side_left", "apex": "bust_left", "depth": 1}, "darts[0].depth"),
+    ],
+)
 def test_bad_dart_fields_are_refused_on_load(dart, field):
     with pytest.raises(DesignError) as exc:
         load_design(_design([dart]))
     assert field in exc.value.path
 
 
-@pytest.mark.parametrize("dart, field, words", [
-    ({"name": "d_left", "line": "side_left", "apex": "no_such_point"}, "darts[0].apex", "unknown keypoint"),
-    ({"name": "d_left", "line": "no_line", "apex": "bust_left"}, "darts[0].line", "no seam or hem line"),
-    # the apex on the back: the dart line leaves the front
-    ({"name": "d_left", "line": "side_left", "apex": "chest_back"}, "darts[0]", "off its panel"),
-])
+@pytest.mark.parametrize(
+    "dart, field, words",
+    [
+        ({"name": "d_left", "line": "side_left", "apex": "no_such_point"}, "darts[0].apex", "unknown keypoint"),
+        ({"name": "d_left", "line": "no_line", "apex": "bust_left"}, "darts[0].line", "no seam or hem line"),
+        # the apex on the back: the dart line leaves the front
+        ({"name": "d_left", "line": "side_left", "apex": "chest_back"}, "darts[0]", "off its panel"),
+    ],
+)
 def test_bad_dart_exits_2_naming_the_field(dart, field, words, tmp_path, capsys):
-    from core.cli import main
     import json
+
+    from core.cli import main
+
     path = tmp_path / "bad.json"
     path.write_text(json.dumps(_design([dart])))
     assert main(["cut", str(path), "--out", str(tmp_path / "o"), "--quiet"]) == 2
@@ -67,8 +77,12 @@ def test_dart_slits_the_cut_and_its_legs_sew_to_equal_length(blouse_run):
     prep, run = blouse_run
     cut, pattern = prep.cut, run.pattern
     darts = [s for s in cut.seams if s.kind == "dart"]
-    assert sorted(s.name for s in darts) == ["blouse.bust_dart_left", "blouse.bust_dart_right",
-                                              "blouse.waist_dart_left", "blouse.waist_dart_right"]
+    assert sorted(s.name for s in darts) == [
+        "blouse.bust_dart_left",
+        "blouse.bust_dart_right",
+        "blouse.waist_dart_left",
+        "blouse.waist_dart_right",
+    ]
     assert sorted(cut.darts) == sorted(s.name for s in darts)
     front = cut.panel("blouse.front")
     boundary = set(np.concatenate(front.boundary).tolist())
@@ -81,14 +95,14 @@ def test_dart_slits_the_cut_and_its_legs_sew_to_equal_length(blouse_run):
         # the sewn point stops short of the true apex by the apex offset (along the body)
         apex = prep.cut.positions(prep.reference)[front.vertex_ids[s.apex]]
         gap = np.linalg.norm(apex - cut.darts[s.name]["apex"])
-        offset = 0.025 if "bust" in s.name else 0.02                # the template's apex offsets
+        offset = 0.025 if "bust" in s.name else 0.02  # the template's apex offsets
         assert 0.5 * offset < gap <= offset + 2e-3
     for s in (s for s in pattern.seams if s.kind == "dart"):
         a, b = pattern.seam_polylines(s)
         la = np.linalg.norm(np.diff(a, axis=0), axis=1).sum()
         lb = np.linalg.norm(np.diff(b, axis=0), axis=1).sum()
-        assert abs(la - lb) <= 1e-4, s.name                       # 0.1 mm
-        assert np.linalg.norm(a[0] - b[0]) > 0.01                 # the dart opens in the flat pattern
+        assert abs(la - lb) <= 1e-4, s.name  # 0.1 mm
+        assert np.linalg.norm(a[0] - b[0]) > 0.01  # the dart opens in the flat pattern
         rec = pattern.report["darts"][s.name]
         assert rec["leg_difference_mm"] <= 0.1 and rec["intake_mm"] > 10
     assert run.figures["flipped"] == 0
@@ -97,6 +111,7 @@ def test_dart_slits_the_cut_and_its_legs_sew_to_equal_length(blouse_run):
 def test_export_draws_legs_fold_drill_hole_and_notches(blouse_run, tmp_path):
     from core.export import export_pattern
     from core.export.pieces import build_pieces
+
     _, run = blouse_run
     pieces = {p.name: p for p in build_pieces(run.pattern)}
     front = pieces["blouse.front"]
@@ -106,7 +121,7 @@ def test_export_draws_legs_fold_drill_hole_and_notches(blouse_run, tmp_path):
         assert sum(n.seam == d.name for n in front.notches) == 2
         assert 0.005 < np.linalg.norm(d.drill - d.apex) <= 0.0101
         if "bust" in d.name:
-            assert d.fold[1][1] < d.fold[0][1]     # a level (bust) dart is pressed down
+            assert d.fold[1][1] < d.fold[0][1]  # a level (bust) dart is pressed down
     # upright (waist) darts are pressed towards the centre front: the two arrows point at each other
     waist = sorted((d for d in front.darts if "waist" in d.name), key=lambda d: d.fold[0][0])
     assert [np.sign(d.fold[1][0] - d.fold[0][0]) for d in waist] == [1.0, -1.0]
@@ -115,6 +130,7 @@ def test_export_draws_legs_fold_drill_hole_and_notches(blouse_run, tmp_path):
     svg = (tmp_path / "pattern.svg").read_text()
     assert svg.count('class="dart"') == 4 and svg.count('class="drill"') == 4
     import ezdxf
+
     doc = ezdxf.readfile(tmp_path / "pattern_astm.dxf")
     ents = [e for b in doc.blocks for e in b]
     assert sum(e.dxftype() == "POINT" and e.dxf.layer == "13" for e in ents) == 4
@@ -124,6 +140,7 @@ def test_export_draws_legs_fold_drill_hole_and_notches(blouse_run, tmp_path):
 
 def test_drape_welds_the_legs(blouse_run):
     from core.drape.mesh import build_cloth
+
     _, run = blouse_run
     cloth = build_cloth(run.pattern)
     front = run.pattern.panel("blouse.front")
@@ -132,10 +149,10 @@ def test_drape_welds_the_legs(blouse_run):
         assert np.array_equal(cloth.particle_of[ga], cloth.particle_of[gb])
 
 
-
 @pytest.mark.slow
 def test_set_intake_is_held(anny):
     from core import workflows as wf
+
     d = TEMPLATES["blouse_fitted"]()
     # the bust darts alone, set: the template's waist darts (set at 20 mm) are held the same way, and
     # converging on the bust point beside them the set bust darts' legs end 0.6 mm apart
@@ -152,6 +169,7 @@ def test_set_intake_is_held(anny):
 def test_skirt_back_darts_open_and_export(anny, tmp_path):
     from core import workflows as wf
     from core.export import export_pattern
+
     run = wf.reference(wf.prepare(template_path("skirt_darted"), body=anny))
     darts = run.pattern.report["darts"]
     assert sorted(darts) == ["skirt.back_dart_left", "skirt.back_dart_right"]
@@ -168,6 +186,7 @@ def test_skirt_back_dart_starts_on_the_waist_seam_across_its_range(anny, place, 
     'skirt.back_dart_left' and 'skirt.waist' cross"), and each dart is one seam of the back."""
     from core.cut import cut_design
     from core.design.resolve import Resolver, instance_vertices, resolve
+
     d = TEMPLATES["skirt_darted"]()
     d["parameters"]["back_dart_place"]["value"] = place
     d["parameters"]["back_dart_length"]["value"] = length
@@ -188,6 +207,7 @@ def test_auto_darts_are_placed_written_back_and_reduce_the_error(anny, blouse_ru
     from core import workflows as wf
     from core.cut.auto_darts import place_darts
     from core.design import save_design
+
     d = TEMPLATES["blouse_fitted"]()
     d["garments"][0]["panels"][0]["darts"] = {"auto": {"max_count": 1, "max_intake": 0.08}}
     design = load_design(d)
@@ -196,7 +216,9 @@ def test_auto_darts_are_placed_written_back_and_reduce_the_error(anny, blouse_ru
     darts = placed.garments[0].panels[0].darts
     assert len(darts) == 1 and darts[0].apex == "bust_left" and placed.garments[0].panels[0].auto_darts is None
     # written back: the placed design saves and loads as an ordinary design with that dart
-    import tempfile, pathlib
+    import pathlib
+    import tempfile
+
     with tempfile.TemporaryDirectory() as tmp:
         again = load_design(save_design(placed, pathlib.Path(tmp) / "placed.json"))
     assert again.garments[0].panels[0].darts == darts
@@ -208,8 +230,12 @@ def test_auto_darts_are_placed_written_back_and_reduce_the_error(anny, blouse_ru
 
 
 def test_auto_darts_request_is_checked():
-    for bad, field in (({"auto": {"max_count": 0}}, "max_count"), ({"auto": {"max_intake": -1}}, "max_intake"),
-                       ({"auto": {"count": 2}}, "count"), ({"manual": 1}, "darts")):
+    for bad, field in (
+        ({"auto": {"max_count": 0}}, "max_count"),
+        ({"auto": {"max_intake": -1}}, "max_intake"),
+        ({"auto": {"count": 2}}, "count"),
+        ({"manual": 1}, "darts"),
+    ):
         with pytest.raises(DesignError) as exc:
             load_design(_design(bad))
         assert field in exc.value.path
@@ -218,6 +244,7 @@ def test_auto_darts_request_is_checked():
 def test_cut_and_pattern_files_keep_the_darts(blouse_run, tmp_path):
     from core.cut.io import load_cut, save_cut
     from core.pattern.io import load_pattern, save_pattern
+
     prep, run = blouse_run
     save_cut(prep.cut, tmp_path / "cut")
     cut = load_cut(tmp_path / "cut")

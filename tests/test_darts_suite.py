@@ -10,9 +10,10 @@ its darts' legs sewn equal within 0.1 mm (1.5 mm for a set intake: :data:`SET_LE
 line. Never a traceback, never a tangled pattern. CI runs a seeded sample; ``pytest --full`` runs
 every case.
 """
-import pytest
 
+import pytest
 from conftest import sample
+
 from core import workflows as wf
 from core.design.templates import TEMPLATES
 from core.errors import EaseError
@@ -48,33 +49,72 @@ def _dart(name, line, apex, intake="auto", **kw):
 SIDE_MID = {"side_mid_left": {"between": ["armhole_under_left", "hem_side_left"], "t": 0.5}}
 CASES = (
     # the blouse front: a mouth on every line it touches, towards the bust point, intakes auto and set
-    [(f"front {line} {intake}", "blouse", "front", [_dart("d_left", line, "bust_left", intake)], None)
-     for line in ("side_left", "hem", "shoulder_left", "neckline", "armhole_left")
-     for intake in ("auto", 0.02)]
+    [
+        (f"front {line} {intake}", "blouse", "front", [_dart("d_left", line, "bust_left", intake)], None)
+        for line in ("side_left", "hem", "shoulder_left", "neckline", "armhole_left")
+        for intake in ("auto", 0.02)
+    ]
     # intakes from none to beyond what the piece can take (0 and 0.25 are refused by the design's check)
-    + [(f"front side_left intake {w}", "blouse", "front", [_dart("d_left", "side_left", "bust_left", w)], None)
-       for w in (0.0, 0.005, 0.08, 0.2, 0.25)]
+    + [
+        (f"front side_left intake {w}", "blouse", "front", [_dart("d_left", "side_left", "bust_left", w)], None)
+        for w in (0.0, 0.005, 0.08, 0.2, 0.25)
+    ]
     # the back: towards the shoulder blade from the hem and the shoulder
-    + [(f"back {line}", "blouse", "back", [_dart("d_left", line, "shoulder_blade_left", 0.015)], None)
-       for line in ("hem", "shoulder_left")]
+    + [
+        (f"back {line}", "blouse", "back", [_dart("d_left", line, "shoulder_blade_left", 0.015)], None)
+        for line in ("hem", "shoulder_left")
+    ]
     # an apex on a seam (the side seam's middle) from the hem, and a mouth at a seam's end
-    + [("front hem apex on the side seam", "blouse", "front", [_dart("d_left", "hem", "side_mid_left", 0.02)],
-        SIDE_MID),
-       ("front mouth at a seam end", "blouse", "front",
-        [_dart("d_left", "side_left", "bust_left", at="armhole_under_left")], None)]
+    + [
+        (
+            "front hem apex on the side seam",
+            "blouse",
+            "front",
+            [_dart("d_left", "hem", "side_mid_left", 0.02)],
+            SIDE_MID,
+        ),
+        (
+            "front mouth at a seam end",
+            "blouse",
+            "front",
+            [_dart("d_left", "side_left", "bust_left", at="armhole_under_left")],
+            None,
+        ),
+    ]
     # two darts sharing a mouth, two darts crossing
-    + [("front two darts one mouth", "blouse", "front",
-        [_dart("a_left", "hem", "bust_left", 0.02, at="hem_front"),
-         _dart("b_left", "hem", "bust_left", 0.02, at="hem_front", apex_offset=0.04)], None),
-       ("front two darts crossing", "blouse", "front",
-        [_dart("a_left", "side_left", "bust_left", 0.02, at="hem_side_left"),
-         _dart("b_left", "hem", "armhole_under_left", 0.02, at="hem_front")], None)]
+    + [
+        (
+            "front two darts one mouth",
+            "blouse",
+            "front",
+            [
+                _dart("a_left", "hem", "bust_left", 0.02, at="hem_front"),
+                _dart("b_left", "hem", "bust_left", 0.02, at="hem_front", apex_offset=0.04),
+            ],
+            None,
+        ),
+        (
+            "front two darts crossing",
+            "blouse",
+            "front",
+            [
+                _dart("a_left", "side_left", "bust_left", 0.02, at="hem_side_left"),
+                _dart("b_left", "hem", "armhole_under_left", 0.02, at="hem_front"),
+            ],
+            None,
+        ),
+    ]
     # the darted skirt: from the waist towards the seat, on the back and the front, and from the hem
-    + [(f"skirt {panel} {line} {w}", "skirt", panel, [_dart("d_left", line, "seat_left", w)], None)
-       for panel in ("back", "front") for line, w in (("waist", "auto"), ("waist", 0.02), ("hem", 0.02))]
+    + [
+        (f"skirt {panel} {line} {w}", "skirt", panel, [_dart("d_left", line, "seat_left", w)], None)
+        for panel in ("back", "front")
+        for line, w in (("waist", "auto"), ("waist", 0.02), ("hem", 0.02))
+    ]
     # "darts": "auto" on every panel of templates that allow darts
-    + [(f"auto darts {name}", "auto", name, [], None)
-       for name in ("blouse_fitted", "skirt", "dress", "top_sleeveless", "shirt_long_sleeve", "pants")]
+    + [
+        (f"auto darts {name}", "auto", name, [], None)
+        for name in ("blouse_fitted", "skirt", "dress", "top_sleeveless", "shirt_long_sleeve", "pants")
+    ]
 )
 
 
@@ -98,7 +138,7 @@ def _design(case):
 def test_a_dart_case_is_a_valid_pattern_or_a_one_line_refusal(case, anny):
     try:
         run = wf.reference(wf.prepare(_design(case), body=anny))
-    except EaseError as exc:                      # refused: one line, nothing else (anything else fails the test)
+    except EaseError as exc:  # refused: one line, nothing else (anything else fails the test)
         msg = str(exc)
         assert msg and "\n" not in msg and "Traceback" not in msg, msg
         return
@@ -114,8 +154,9 @@ def test_the_suite_covers_what_the_issue_lists():
     names = [c[0] for c in CASES]
     lines = {"side_left", "hem", "shoulder_left", "neckline", "armhole_left"}
     assert lines <= {c[3][0]["line"] for c in CASES if c[1] == "blouse" and c[2] == "front"}
-    assert {"shoulder_blade_left", "seat_left", "bust_left", "side_mid_left"} <= {d["apex"] for c in CASES
-                                                                                    for d in c[3]}
+    assert {"shoulder_blade_left", "seat_left", "bust_left", "side_mid_left"} <= {
+        d["apex"] for c in CASES for d in c[3]
+    }
     assert sum(c[1] == "auto" for c in CASES) >= 5
     assert any("one mouth" in n for n in names) and any("crossing" in n for n in names)
     assert any(c[2] == "back" for c in CASES) and {0.0, 0.25} <= {d["intake"] for c in CASES for d in c[3]}

@@ -3,6 +3,7 @@
 Resolution runs on the real default body (Anny). Ease fields are checked on a
 cut made directly from body triangles (no cutting engine needed here).
 """
+
 import json
 import math
 
@@ -11,10 +12,10 @@ import pytest
 import scipy.sparse as sp
 
 from core.cut.types import GarmentCut, Panel
-from core.design import apply_ease, load_design, resolve, save_design, Resolver
+from core.design import Resolver, apply_ease, load_design, resolve, save_design
 from core.design.mirror import face_symmetry, mirror_surface_point
 from core.design.naming import mirrored_name, swap_side
-from core.design.templates import TEMPLATES, TEMPLATE_DIR, template
+from core.design.templates import TEMPLATE_DIR, TEMPLATES, template
 from core.errors import DesignError
 
 
@@ -39,6 +40,7 @@ def error_of(obj):
 
 
 # ------------------------------------------------------------------ format
+
 
 @pytest.mark.parametrize("name", list(TEMPLATES))
 def test_template_round_trip(name, tmp_path):
@@ -66,18 +68,24 @@ def test_bad_ease_value_names_the_json_path():
     assert str(e) == "garments[0].panels[2].ease.value: panel 'sleeve_front_left': expected a number in 0.8..4.0, got 7"
 
 
-@pytest.mark.parametrize("ease, path", [
-    ({"value": float("nan")}, "garments[0].panels[1].ease.value"),
-    ({"value": 0.2}, "garments[0].panels[1].ease.value"),
-    ({"value": "loose"}, "garments[0].panels[1].ease.value"),
-    ({"from": 1.0, "to": 5.0, "axis": "z"}, "garments[0].panels[1].ease.to"),
-    ({"from": 1.0, "to": 1.5}, "garments[0].panels[1].ease"),
-    ({"from": 1.0, "to": 1.5, "axis": "w"}, "garments[0].panels[1].ease.axis"),
-    ({"per_triangle": {"values": [1.0, 4.5]}}, "garments[0].panels[1].ease.per_triangle.values[1]"),
-    ({"per_triangle": {"triangles": [1], "values": [1.0, 1.2]}}, "garments[0].panels[1].ease.per_triangle.triangles"),
-    ({"per_triangle": {"values": [float("inf")]}}, "garments[0].panels[1].ease.per_triangle.values[0]"),
-    ({"mystery": 1}, "garments[0].panels[1].ease"),
-])
+@pytest.mark.parametrize(
+    "ease, path",
+    [
+        ({"value": float("nan")}, "garments[0].panels[1].ease.value"),
+        ({"value": 0.2}, "garments[0].panels[1].ease.value"),
+        ({"value": "loose"}, "garments[0].panels[1].ease.value"),
+        ({"from": 1.0, "to": 5.0, "axis": "z"}, "garments[0].panels[1].ease.to"),
+        ({"from": 1.0, "to": 1.5}, "garments[0].panels[1].ease"),
+        ({"from": 1.0, "to": 1.5, "axis": "w"}, "garments[0].panels[1].ease.axis"),
+        ({"per_triangle": {"values": [1.0, 4.5]}}, "garments[0].panels[1].ease.per_triangle.values[1]"),
+        (
+            {"per_triangle": {"triangles": [1], "values": [1.0, 1.2]}},
+            "garments[0].panels[1].ease.per_triangle.triangles",
+        ),
+        ({"per_triangle": {"values": [float("inf")]}}, "garments[0].panels[1].ease.per_triangle.values[0]"),
+        ({"mystery": 1}, "garments[0].panels[1].ease"),
+    ],
+)
 def test_bad_ease_fields(ease, path):
     d = shirt()
     d["garments"][0]["panels"][1]["ease"] = ease
@@ -96,49 +104,61 @@ def _set(d, dotted, value):
         node[last] = value
 
 
-@pytest.mark.parametrize("where, value, path", [
-    ("format", "ease-pattern", "format"),
-    ("version", 2, "version"),
-    ("name", "", "name"),
-    ("body.shape", "XXL", "body.shape"),
-    ("body.pose", "P9", "body.pose"),
-    ("materials.eps_weft", 0.9, "materials.eps_weft"),
-    ("materials.eps_warp", "stiff", "materials.eps_warp"),
-    ("materials.gathered", "armhole_left", "materials.gathered"),
-    ("materials.gathered", ["armhole_lfet"], "materials.gathered[0]"),
-    ("materials.gathered", ["arm hole"], "materials.gathered[0]"),
-    ("materials.gather_above", 0.0, "materials.gather_above"),
-    ("materials.gather_above", "often", "materials.gather_above"),
-    ("parameters.sleeve_length", {"value": -0.1, "kind": "length"}, "parameters.sleeve_length.value"),
-    ("parameters.sleeve_length", {"value": 0.5, "kind": "length", "max": 0.45}, "parameters.sleeve_length.value"),
-    ("parameters.armhole_drop", {"value": 0.03, "kind": "wobble"}, "parameters.armhole_drop.kind"),
-    ("keypoints.chest_front", {"between": ["neck_front", "waist_front"], "t": 1.5}, "keypoints.chest_front.t"),
-    ("keypoints.chest_front", {"between": ["neck_front"], "t": 0.5}, "keypoints.chest_front.between"),
-    ("keypoints.chest_front", {"between": ["neck_front", "waist_front"], "t": "$nope"}, "keypoints.chest_front.t"),
-    ("keypoints.chest_front", {"between": ["neck_front", "waist_front"], "t": "$sleeve_length"},
-     "keypoints.chest_front.t"),
-    ("keypoints.chest_front", {"triangle": 3, "bary": [0.5, 0.6, 0.2]}, "keypoints.chest_front.bary"),
-    ("keypoints.chest_front", {"triangle": -1, "bary": [1, 0, 0]}, "keypoints.chest_front.triangle"),
-    ("keypoints.chest_front", {"landmark": "neck_front", "triangle": 1}, "keypoints.chest_front"),
-    ("keypoints.armhole_under_left", {"trace": {"from": "armpit_left", "along": "tail", "length": 0.1}},
-     "keypoints.armhole_under_left.trace.along"),
-    ("keypoints.armhole_under_left", {"trace": {"from": "armpit_left", "along": "arm_left"}},
-     "keypoints.armhole_under_left.trace.length"),
-    ("garments.0.kind", "hat", "garments[0].kind"),
-    ("garments.0.pin", "collar", "garments[0].pin"),
-    ("garments.0.lines.0.role", "glue", "garments[0].lines[0].role"),
-    ("garments.0.lines.0.points", ["neck_front", "neck_back"], "garments[0].lines[0].points"),
-    ("garments.0.lines.0.points", ["neck_front", 3, "neck_back"], "garments[0].lines[0].points[1]"),
-    ("garments.0.lines.2.ring.points", 2, "garments[0].lines[2].ring.points"),
-    ("garments.0.lines.2.ring.normal", "sideways", "garments[0].lines[2].ring.normal"),
-    ("garments.0.lines.1.name", "neckline", "garments[0].lines[1].name"),
-    ("garments.0.panels.1.name", "front", "garments[0].panels[1].name"),
-    ("garments.0.panels.1.body_part", "wing", "garments[0].panels[1].body_part"),
-    ("garments.0.panels", [], "garments[0].panels"),
-    ("garments", [], "garments"),
-    ("refine_edge_length", 0.0, "refine_edge_length"),
-    ("mirror", "yes", "mirror"),
-])
+@pytest.mark.parametrize(
+    "where, value, path",
+    [
+        ("format", "ease-pattern", "format"),
+        ("version", 2, "version"),
+        ("name", "", "name"),
+        ("body.shape", "XXL", "body.shape"),
+        ("body.pose", "P9", "body.pose"),
+        ("materials.eps_weft", 0.9, "materials.eps_weft"),
+        ("materials.eps_warp", "stiff", "materials.eps_warp"),
+        ("materials.gathered", "armhole_left", "materials.gathered"),
+        ("materials.gathered", ["armhole_lfet"], "materials.gathered[0]"),
+        ("materials.gathered", ["arm hole"], "materials.gathered[0]"),
+        ("materials.gather_above", 0.0, "materials.gather_above"),
+        ("materials.gather_above", "often", "materials.gather_above"),
+        ("parameters.sleeve_length", {"value": -0.1, "kind": "length"}, "parameters.sleeve_length.value"),
+        ("parameters.sleeve_length", {"value": 0.5, "kind": "length", "max": 0.45}, "parameters.sleeve_length.value"),
+        ("parameters.armhole_drop", {"value": 0.03, "kind": "wobble"}, "parameters.armhole_drop.kind"),
+        ("keypoints.chest_front", {"between": ["neck_front", "waist_front"], "t": 1.5}, "keypoints.chest_front.t"),
+        ("keypoints.chest_front", {"between": ["neck_front"], "t": 0.5}, "keypoints.chest_front.between"),
+        ("keypoints.chest_front", {"between": ["neck_front", "waist_front"], "t": "$nope"}, "keypoints.chest_front.t"),
+        (
+            "keypoints.chest_front",
+            {"between": ["neck_front", "waist_front"], "t": "$sleeve_length"},
+            "keypoints.chest_front.t",
+        ),
+        ("keypoints.chest_front", {"triangle": 3, "bary": [0.5, 0.6, 0.2]}, "keypoints.chest_front.bary"),
+        ("keypoints.chest_front", {"triangle": -1, "bary": [1, 0, 0]}, "keypoints.chest_front.triangle"),
+        ("keypoints.chest_front", {"landmark": "neck_front", "triangle": 1}, "keypoints.chest_front"),
+        (
+            "keypoints.armhole_under_left",
+            {"trace": {"from": "armpit_left", "along": "tail", "length": 0.1}},
+            "keypoints.armhole_under_left.trace.along",
+        ),
+        (
+            "keypoints.armhole_under_left",
+            {"trace": {"from": "armpit_left", "along": "arm_left"}},
+            "keypoints.armhole_under_left.trace.length",
+        ),
+        ("garments.0.kind", "hat", "garments[0].kind"),
+        ("garments.0.pin", "collar", "garments[0].pin"),
+        ("garments.0.lines.0.role", "glue", "garments[0].lines[0].role"),
+        ("garments.0.lines.0.points", ["neck_front", "neck_back"], "garments[0].lines[0].points"),
+        ("garments.0.lines.0.points", ["neck_front", 3, "neck_back"], "garments[0].lines[0].points[1]"),
+        ("garments.0.lines.2.ring.points", 2, "garments[0].lines[2].ring.points"),
+        ("garments.0.lines.2.ring.normal", "sideways", "garments[0].lines[2].ring.normal"),
+        ("garments.0.lines.1.name", "neckline", "garments[0].lines[1].name"),
+        ("garments.0.panels.1.name", "front", "garments[0].panels[1].name"),
+        ("garments.0.panels.1.body_part", "wing", "garments[0].panels[1].body_part"),
+        ("garments.0.panels", [], "garments[0].panels"),
+        ("garments", [], "garments"),
+        ("refine_edge_length", 0.0, "refine_edge_length"),
+        ("mirror", "yes", "mirror"),
+    ],
+)
 def test_validation_errors_name_the_path(where, value, path):
     d = shirt()
     _set(d, where, value)
@@ -189,26 +209,48 @@ def test_mirrored_names():
     assert mirrored_name("front") is None
     assert swap_side("arm_right") == "arm_left" and swap_side("crotch") == "crotch"
     d = load_design(shirt())
-    assert set(d.panel_names()) == {"shirt.front", "shirt.back", "shirt.sleeve_front_left",
-                                    "shirt.sleeve_back_left", "shirt.sleeve_front_right",
-                                    "shirt.sleeve_back_right"}
+    assert set(d.panel_names()) == {
+        "shirt.front",
+        "shirt.back",
+        "shirt.sleeve_front_left",
+        "shirt.sleeve_back_left",
+        "shirt.sleeve_front_right",
+        "shirt.sleeve_back_right",
+    }
 
 
 # ------------------------------------------------------------------ resolution on Anny
 
+
 def test_shirt_resolves_to_a_cut_spec(body, ref):
     spec = resolve(shirt(), body, vertices=ref)
     names = {l.name for l in spec.lines}
-    for n in ("shirt.neckline", "shirt.hem", "shirt.cuff_left", "shirt.cuff_right", "shirt.armhole_left",
-              "shirt.armhole_right", "shirt.shoulder_left", "shirt.shoulder_right", "shirt.side_left",
-              "shirt.side_right", "shirt.sleeve_top_left", "shirt.sleeve_under_right"):
+    for n in (
+        "shirt.neckline",
+        "shirt.hem",
+        "shirt.cuff_left",
+        "shirt.cuff_right",
+        "shirt.armhole_left",
+        "shirt.armhole_right",
+        "shirt.shoulder_left",
+        "shirt.shoulder_right",
+        "shirt.side_left",
+        "shirt.side_right",
+        "shirt.sleeve_top_left",
+        "shirt.sleeve_under_right",
+    ):
         assert n in names
     roles = {l.name: l.role for l in spec.lines}
     assert roles["shirt.neckline"] == roles["shirt.hem"] == roles["shirt.cuff_left"] == "opening"
     assert roles["shirt.side_left"] == roles["shirt.armhole_right"] == "seam"
-    assert [p.name for p in spec.panels] == ["shirt.front", "shirt.back", "shirt.sleeve_front_left",
-                                             "shirt.sleeve_back_left", "shirt.sleeve_front_right",
-                                             "shirt.sleeve_back_right"]
+    assert [p.name for p in spec.panels] == [
+        "shirt.front",
+        "shirt.back",
+        "shirt.sleeve_front_left",
+        "shirt.sleeve_back_left",
+        "shirt.sleeve_front_right",
+        "shirt.sleeve_back_right",
+    ]
     assert spec.panels[4].mirror_of == "shirt.sleeve_front_left"
     assert spec.garments[0].pin_line == "shirt.neckline" and spec.garments[0].kind == "upper"
     assert spec.materials["eps_weft"] == 1.1 and spec.body["shape"] == "M"
@@ -250,7 +292,7 @@ def test_length_leaving_the_body_part_names_the_parameter(body, ref):
 
 def test_keypoint_off_the_body_and_cycles(body, ref):
     d = shirt()
-    d["keypoints"]["chest_front"] = {"triangle": 10 ** 7, "bary": [1, 0, 0]}
+    d["keypoints"]["chest_front"] = {"triangle": 10**7, "bary": [1, 0, 0]}
     with pytest.raises(DesignError) as e:
         resolve(d, body, vertices=ref)
     assert e.value.path == "keypoints.chest_front.triangle" and "off the body" in str(e.value)
@@ -280,7 +322,7 @@ def test_placement_and_trace_geometry(body, ref):
     w = body.landmark_position("wrist_left", ref)
     t = pos("tr")
     assert 0.15 < np.linalg.norm(t - s) <= 0.2 + 1e-6
-    assert np.linalg.norm(t - w) < np.linalg.norm(s - w)       # it went towards the wrist
+    assert np.linalg.norm(t - w) < np.linalg.norm(s - w)  # it went towards the wrist
 
 
 def test_ring_points_lie_on_their_plane(body, ref):
@@ -321,6 +363,7 @@ def test_mirroring_surface_points(body, ref):
 @pytest.mark.parametrize("size", ["XS", "XL"])
 def test_templates_resolve_on_other_sizes(body, size):
     from core.design.resolve import instance_vertices
+
     d = load_design(shirt())
     V = instance_vertices(d, body, shape=size)
     spec = resolve(d, body, vertices=V, shape=size)
@@ -328,6 +371,7 @@ def test_templates_resolve_on_other_sizes(body, size):
 
 
 # ------------------------------------------------------------------ ease fields
+
 
 def _body_cut(body, ref, regions):
     """A cut whose panels are whole body regions (identity embedding)."""
@@ -339,28 +383,38 @@ def _body_cut(body, ref, regions):
         vid = np.unique(F)
         remap = {v: i for i, v in enumerate(vid)}
         local = np.vectorize(remap.get)(F)
-        panels.append(Panel(name=name, garment="shirt", vertex_ids=vid, faces=local,
-                            warp_dir=np.tile([0, 0, 1.0], (len(F), 1)), ease=np.ones(len(F))))
+        panels.append(
+            Panel(
+                name=name,
+                garment="shirt",
+                vertex_ids=vid,
+                faces=local,
+                warp_dir=np.tile([0, 0, 1.0], (len(F), 1)),
+                ease=np.ones(len(F)),
+            )
+        )
     n = len(ref)
     return GarmentCut(body={}, embedding=sp.identity(n, format="csr"), panels=panels, seams=[])
 
 
 def test_ease_fields(body, ref):
-    regions = {"shirt.front": body.regions["torso"], "shirt.sleeve_front_left": body.regions["arm_left"],
-               "shirt.sleeve_front_right": body.regions["arm_right"]}
+    regions = {
+        "shirt.front": body.regions["torso"],
+        "shirt.sleeve_front_left": body.regions["arm_left"],
+        "shirt.sleeve_front_right": body.regions["arm_right"],
+    }
     d = shirt()
     panels = d["garments"][0]["panels"]
     panels[0]["ease"] = {"from": 1.0, "to": 2.0, "axis": "-z"}
     ftri = np.flatnonzero(np.isin(np.asarray(body.faces), body.regions["arm_left"]).all(axis=1))
     chosen = ftri[::3]
-    panels[2]["ease"] = {"per_triangle": {"triangles": chosen.tolist(), "values": [2.5] * len(chosen),
-                                          "default": 1.1}}
+    panels[2]["ease"] = {"per_triangle": {"triangles": chosen.tolist(), "values": [2.5] * len(chosen), "default": 1.1}}
     cut = apply_ease(_body_cut(body, ref, regions), d, body, ref)
     front = cut.panel("shirt.front")
     c = cut.panel_positions(front, ref)[front.faces].mean(axis=1)
     top, bottom = np.argmax(c[:, 2]), np.argmin(c[:, 2])
     assert math.isclose(front.ease[top], 1.0) and math.isclose(front.ease[bottom], 2.0)
-    assert np.all(np.diff(front.ease[np.argsort(-c[:, 2])]) >= -1e-12)      # rises towards the hem
+    assert np.all(np.diff(front.ease[np.argsort(-c[:, 2])]) >= -1e-12)  # rises towards the hem
     left = cut.panel("shirt.sleeve_front_left")
     assert set(np.round(left.ease, 6)) == {1.1, 2.5}
     assert math.isclose((left.ease == 2.5).sum(), len(chosen), rel_tol=0.01)
@@ -375,7 +429,7 @@ def test_gradient_between_keypoints_and_over_the_garment(body, ref):
     regions = {"shirt.front": body.regions["torso"]}
     cut = apply_ease(_body_cut(body, ref, regions), d, body, ref)
     e = cut.panels[0].ease
-    assert e.min() == 1.0 and e.max() == 1.8                  # clamped beyond both ends
+    assert e.min() == 1.0 and e.max() == 1.8  # clamped beyond both ends
     c = cut.panel_positions(cut.panels[0], ref)[cut.panels[0].faces].mean(axis=1)
     zn, zw = body.landmark_position("neck_front", ref)[2], body.landmark_position("waist_front", ref)[2]
     mid = np.abs(c[:, 2] - (zn + zw) / 2) < 0.01
@@ -387,7 +441,7 @@ def test_gradient_between_keypoints_and_over_the_garment(body, ref):
     regions = {"shirt.front": body.regions["torso"], "shirt.sleeve_front_left": body.regions["arm_left"]}
     cut = apply_ease(_body_cut(body, ref, regions), d, body, ref)
     torso, arm = cut.panel("shirt.front"), cut.panel("shirt.sleeve_front_left")
-    assert torso.ease.min() == 1.0 and torso.ease.max() == 2.0      # the torso spans the garment's height
+    assert torso.ease.min() == 1.0 and torso.ease.max() == 2.0  # the torso spans the garment's height
     assert arm.ease.min() > 1.0 and arm.ease.max() < 2.0
     d["garments"][0]["panels"][0]["ease"]["over"] = "body"
     assert error_of(d).path == "garments[0].panels[0].ease.over"
@@ -414,7 +468,7 @@ def test_mirror_of_keypoints_and_explicit_mirror_panels(body, ref):
     d["keypoints"]["spot_mirror"] = {"mirror_of": "spot_left"}
     d["garments"][0]["panels"][2]["seed"] = {"between": ["armhole_front_left", "cuff_front_left"], "t": 0.5}
     design = load_design(d)
-    design.set_ease("shirt.sleeve_front_right", {"value": 1.5})      # the mirrored seed becomes explicit
+    design.set_ease("shirt.sleeve_front_right", {"value": 1.5})  # the mirrored seed becomes explicit
     again = load_design(design.to_json())
     r = Resolver(again, body, ref)
     p, q = r.position(r.point("spot_left", "")), r.position(r.point("spot_mirror", ""))
@@ -448,6 +502,7 @@ def test_traced_length_follows_the_limb_in_the_design_pose(body, pose):
     """A length is traced down the body part in the design's reference pose: from the
     shoulder tip along the arm it drops steeply in the A-pose and runs out level in the T-pose."""
     from core.design.resolve import instance_vertices
+
     d = shirt()
     d["body"]["pose"] = pose
     d["keypoints"]["tr"] = {"trace": {"from": "shoulder_left", "along": "arm_left", "length": 0.25}}
@@ -457,7 +512,7 @@ def test_traced_length_follows_the_limb_in_the_design_pose(body, pose):
     t = r.position(r.point("tr", "tr"))
     s = body.landmark_position("shoulder_left", V)
     e = body.landmark_position("elbow_left", V)
-    drop = np.degrees(np.arctan2(s[2] - t[2], t[0] - s[0]))    # below the horizontal, degrees
+    drop = np.degrees(np.arctan2(s[2] - t[2], t[0] - s[0]))  # below the horizontal, degrees
     arm = np.degrees(np.arctan2(s[2] - e[2], e[0] - s[0]))
     assert abs(drop - arm) < 12, (drop, arm)
     assert (drop > 30) if pose == "A" else (abs(drop) < 15)
@@ -480,8 +535,8 @@ def test_ring_tilted_to_contain_a_keypoint(body, ref):
         n = np.linalg.svd(P - c)[2][-1]
         assert np.abs((P - c) @ n).max() < 1e-6
         assert abs((r.position(r.point(f"shoulder_{side}", "")) - c) @ n) < 1e-6
-        assert r.point(f"armhole_top_{side}", "") in r.line_points(i)     # a vertex of the ring
-        assert abs(n[0]) > 0.99              # the A-pose armhole: (nearly) the sagittal plane
+        assert r.point(f"armhole_top_{side}", "") in r.line_points(i)  # a vertex of the ring
+        assert abs(n[0]) > 0.99  # the A-pose armhole: (nearly) the sagittal plane
     # without ``contains`` the plane is across the arm's axis and misses the shoulder tip
     del arm["ring"]["contains"]
     r = Resolver(load_design(d), body, ref)
@@ -491,7 +546,7 @@ def test_ring_tilted_to_contain_a_keypoint(body, ref):
     # bad values name their JSON path
     arm["ring"]["contains"] = 3
     assert error_of(d).path == "garments[0].lines[2].ring.contains"
-    arm["ring"]["contains"] = "armhole_under_left"          # the through point itself
+    arm["ring"]["contains"] = "armhole_under_left"  # the through point itself
     with pytest.raises(DesignError) as exc:
         resolve(load_design(d), body, vertices=ref)
     assert exc.value.path == "garments[0].lines[2].ring.contains"

@@ -1,10 +1,17 @@
 """core.design.checks and core.design.parser: field checks return normalised values, errors name the field."""
+
 import pytest
 
 from core.body.model import POSE_PRESETS, SurfacePoint
 from core.body.sizes import SIZES
-from core.design.checks import (check_ease, check_keypoint, check_name, check_number, check_parameter_value,
-                                parameter_value)
+from core.design.checks import (
+    check_ease,
+    check_keypoint,
+    check_name,
+    check_number,
+    check_parameter_value,
+    parameter_value,
+)
 from core.design.parser import parse_design
 from core.design.spec import CutLine, CutSpec, GarmentSpec, PanelSpec
 from core.design.types import Parameter
@@ -32,8 +39,13 @@ def test_field_checks():
 
 
 def _design(**body):
-    return {"format": "ease-design", "version": 1, "name": "t", "body": body,
-            "garments": [{"name": "g", "kind": "upper", "panels": [{"name": "p", "seed": "navel"}]}]}
+    return {
+        "format": "ease-design",
+        "version": 1,
+        "name": "t",
+        "body": body,
+        "garments": [{"name": "g", "kind": "upper", "panels": [{"name": "p", "seed": "navel"}]}],
+    }
 
 
 def test_body_sizes_and_poses_come_from_the_body_stage():
@@ -47,8 +59,11 @@ def test_body_sizes_and_poses_come_from_the_body_stage():
 
 def test_cut_spec_is_plain_data():
     sp = SurfacePoint(3, (1.0, 0.0, 0.0))
-    spec = CutSpec(lines=[CutLine("g.hem", [sp, sp, sp], closed=True, role="opening")],
-                   panels=[PanelSpec("g.p", "g", sp)], garments=[GarmentSpec("g", "upper", "g.hem")])
+    spec = CutSpec(
+        lines=[CutLine("g.hem", [sp, sp, sp], closed=True, role="opening")],
+        panels=[PanelSpec("g.p", "g", sp)],
+        garments=[GarmentSpec("g", "upper", "g.hem")],
+    )
     assert spec.refine_edge_length == 0.01 and not spec.skirt and spec.materials == {} and spec.body == {}
     assert spec.panels[0].body_part == "torso" and spec.lines[0].garment is None
 

@@ -1,4 +1,5 @@
 """``materials.color`` of a design (the render's fabric colour): accepted forms, refusals naming the field."""
+
 from __future__ import annotations
 
 import pytest
@@ -12,10 +13,17 @@ def test_colour_forms_are_kept(color):
     assert parse_materials("materials", {"color": color})["color"] == color
 
 
-@pytest.mark.parametrize("color, field", [("red", "materials.color"), ("#12345", "materials.color"),
-                                          ([0.1, 0.2], "materials.color"), ([0, 0, 2], "materials.color"),
-                                          ({"shirt": "#zzzzzz"}, "materials.color.shirt"),
-                                          ({"a b": "#ffffff"}, "materials.color.a b")])
+@pytest.mark.parametrize(
+    "color, field",
+    [
+        ("red", "materials.color"),
+        ("#12345", "materials.color"),
+        ([0.1, 0.2], "materials.color"),
+        ([0, 0, 2], "materials.color"),
+        ({"shirt": "#zzzzzz"}, "materials.color.shirt"),
+        ({"a b": "#ffffff"}, "materials.color.a b"),
+    ],
+)
 def test_bad_colours_name_the_field(color, field):
     with pytest.raises(DesignError) as e:
         parse_materials("materials", {"color": color})

@@ -1,6 +1,7 @@
 """A ``*_right`` panel is cut as the mirror of its ``*_left`` panel only while its ease is
 the left one's read mirrored (core.design.ease.apply_ease): a right side with ease of its
 own is a piece of its own, and the export does not mark it "mirror"."""
+
 from __future__ import annotations
 
 import numpy as np

@@ -1,18 +1,28 @@
 """Surface geometry of keypoint resolution, checked on analytic meshes (a closed cylinder)."""
+
 import numpy as np
 import pytest
+from meshes import ring_grid_faces
 
 from core.body.model import SurfacePoint
-from meshes import ring_grid_faces
-from core.design.geometry import (Geodesics, SectionLoop, SurfaceLocator, nearest_segment, plane_section_loop,
-                                  segment_point, surface_tools, turned_normal, vertical_walk)
-from core.geom.polyline import point_at_length, polyline_length
+from core.design.geometry import (
+    Geodesics,
+    SectionLoop,
+    SurfaceLocator,
+    nearest_segment,
+    plane_section_loop,
+    segment_point,
+    surface_tools,
+    turned_normal,
+    vertical_walk,
+)
 from core.design.mirror import face_symmetry, mirror_surface_point
+from core.geom.polyline import point_at_length, polyline_length
 
 
 def capped_cylinder(r=0.1, h=0.6, n=48, m=30):
     """Closed cylinder around +Z (radius r, height h), outward triangles, symmetric in x."""
-    th = 2 * np.pi * (np.arange(n) + 0.5) / n           # no vertex on x = 0: a clean mirror in x
+    th = 2 * np.pi * (np.arange(n) + 0.5) / n  # no vertex on x = 0: a clean mirror in x
     z = np.linspace(0, h, m)
     V = [[r * np.cos(t), r * np.sin(t), zz] for zz in z for t in th]
     F = ring_grid_faces(m, n).tolist()
@@ -33,7 +43,7 @@ def test_plane_section_of_a_cylinder_is_its_circle():
     assert np.allclose(poly[:, 2], 0.31)
     per = np.linalg.norm(np.diff(np.vstack([poly, poly[:1]]), axis=0), axis=1).sum()
     n = 48
-    assert abs(per - 2 * n * 0.1 * np.sin(np.pi / n)) < 1e-9      # the inscribed 48-gon
+    assert abs(per - 2 * n * 0.1 * np.sin(np.pi / n)) < 1e-9  # the inscribed 48-gon
     # counter-clockwise about +Z; clockwise when asked
     c = np.cross(poly[0], poly[1])[2]
     assert c > 0
@@ -49,7 +59,7 @@ def test_plane_section_of_a_cylinder_is_its_circle():
 
 def test_plane_section_that_runs_into_a_boundary_is_refused():
     V, F = capped_cylinder()
-    keep = ~np.isin(F, [len(V) - 1]).any(axis=1)           # open the top
+    keep = ~np.isin(F, [len(V) - 1]).any(axis=1)  # open the top
     Fo = F[keep]
     p = np.array([0.1, 0.0, 0.3])
     sp = SurfaceLocator(V, Fo).locate(p[None])[0]
@@ -62,7 +72,7 @@ def test_locator_and_segment_points():
     loc = SurfaceLocator(V, F)
     q = np.array([[0.1 * np.cos(0.3), 0.1 * np.sin(0.3), 0.2]])
     sp = loc.locate(q)[0]
-    assert np.linalg.norm(sp.position(V, F) - q[0]) < 2e-3          # chord sag only
+    assert np.linalg.norm(sp.position(V, F) - q[0]) < 2e-3  # chord sag only
     assert abs(sum(sp.bary) - 1) < 1e-12 and min(sp.bary) >= 0
     c = V[F[7]].mean(axis=0)
     s2 = segment_point(V, F, 7, c)
@@ -120,7 +130,7 @@ def test_surface_tools_are_reused_per_instance():
     assert surface_tools(V.copy(), F) is t1
     assert surface_tools(V * 1.01, F) is not t1
     e, fe = t1.edges
-    assert len(e) == 3 * len(F) // 2 and fe.shape == F.shape          # closed surface: E = 3F/2
+    assert len(e) == 3 * len(F) // 2 and fe.shape == F.shape  # closed surface: E = 3F/2
 
 
 def test_turned_normal_holds_the_point():
@@ -139,7 +149,7 @@ def test_section_loop_from_its_start():
     loop = SectionLoop(V, F, poly, pts, segf, p0, start)
     assert loop.S[0] == start and np.allclose(loop.closed[0], loop.closed[-1])
     assert loop.total == pytest.approx(polyline_length(poly, closed=True))
-    assert loop.at(0.0) == start and loop.at(loop.total) == start          # modulo the loop length
+    assert loop.at(0.0) == start and loop.at(loop.total) == start  # modulo the loop length
     q = loop.at(loop.total / 4).position(V, F)
     assert abs(q[2] - 0.3) < 1e-9 and np.linalg.norm(q[:2]) == pytest.approx(0.1, abs=1e-3)
     s, dist = loop.arc_position(q)

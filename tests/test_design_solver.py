@@ -1,6 +1,7 @@
 """A design names the solver configuration it is made for (``"solver"``): parsed, written back,
 refused when it is not one, and honoured by every door through core.workflows unless the user
 chooses one (``--config`` given, the add-on's Solver set to a configuration)."""
+
 import json
 
 import pytest
@@ -69,18 +70,22 @@ def test_precedence_caller_then_design_then_default():
     fitted = load_design(_top(solver="fitted"))
     plain = load_design(_top())
     assert wf.config_name(fitted) == "fitted"
-    assert wf.config_name(fitted, "stretch") == "stretch"            # the user's choice wins
+    assert wf.config_name(fitted, "stretch") == "stretch"  # the user's choice wins
     assert wf.config_name(plain) == wf.DEFAULT_CONFIG == "improved"
     assert wf.config_name(plain, "paper") == "paper"
-    assert wf.config_name(_top(solver="lengths")) == "lengths"       # a design dict (the batch's)
+    assert wf.config_name(_top(solver="lengths")) == "lengths"  # a design dict (the batch's)
     assert wf.config_name({}) == "improved"
 
 
 def test_the_cli_leaves_the_choice_to_the_design_unless_given():
     from core.cli import build_parser
-    for cmd in (["pattern", "d.json", "--out", "o"], ["transfer", "d.json", "--out", "o", "--size", "L"],
-                ["adapt", "d.json", "--out", "o", "--pose", "P1"],
-                ["batch", "d.json", "--out", "o", "--sample", "2"]):
+
+    for cmd in (
+        ["pattern", "d.json", "--out", "o"],
+        ["transfer", "d.json", "--out", "o", "--size", "L"],
+        ["adapt", "d.json", "--out", "o", "--pose", "P1"],
+        ["batch", "d.json", "--out", "o", "--sample", "2"],
+    ):
         assert build_parser().parse_args(cmd).config is None, cmd
         assert build_parser().parse_args(cmd + ["--config", "paper"]).config == "paper", cmd
 

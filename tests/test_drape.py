@@ -1,4 +1,5 @@
 """The XPBD drape on a body of revolution with a two-panel tube skirt (core.drape)."""
+
 import numpy as np
 import pytest
 from drape_synth import HIP_RADIUS, radius, revolution_body, tube_skirt
@@ -115,6 +116,7 @@ def test_growth_starts_from_the_skintight_stretch(body, skirt):
 def _sheets(n=10, size=0.2, drop=0.03):
     """Two flat square sheets 1 m beside the body: the lower one pinned, the upper one ``drop`` above it."""
     from core.pattern.types import Pattern, PatternPanel
+
     g = np.linspace(0.0, size, n + 1)
     u, v = (a.ravel() for a in np.meshgrid(g, g, indexing="ij"))
     faces = []
@@ -126,12 +128,30 @@ def _sheets(n=10, size=0.2, drop=0.03):
     panels = []
     for k, (name, z) in enumerate((("lower", 0.5), ("upper", 0.5 + drop))):
         xyz = np.column_stack([1.0 + u, v, np.full(len(u), z)])
-        panels.append(PatternPanel(name=name, garment="sheets", uv=np.column_stack([u, v]), faces=faces,
-                                   vertex_ids=k * len(u) + np.arange(len(u)), xyz=xyz, grain=np.array([0.0, 1.0]),
-                                   target_weft=np.ones(len(faces)), target_warp=np.ones(len(faces)),
-                                   achieved_weft=np.ones(len(faces)), achieved_warp=np.ones(len(faces))))
-    return Pattern(style="sheets", body={"model": "revolution"}, garments={"sheets": "sheets"}, panels=panels,
-                   seams=[], pins={"sheets": np.arange(len(u))}, materials={"fabric": "cotton"})
+        panels.append(
+            PatternPanel(
+                name=name,
+                garment="sheets",
+                uv=np.column_stack([u, v]),
+                faces=faces,
+                vertex_ids=k * len(u) + np.arange(len(u)),
+                xyz=xyz,
+                grain=np.array([0.0, 1.0]),
+                target_weft=np.ones(len(faces)),
+                target_warp=np.ones(len(faces)),
+                achieved_weft=np.ones(len(faces)),
+                achieved_warp=np.ones(len(faces)),
+            )
+        )
+    return Pattern(
+        style="sheets",
+        body={"model": "revolution"},
+        garments={"sheets": "sheets"},
+        panels=panels,
+        seams=[],
+        pins={"sheets": np.arange(len(u))},
+        materials={"fabric": "cotton"},
+    )
 
 
 def test_self_collision_stacks_layers(body):

@@ -1,9 +1,9 @@
 """``ease drape`` end to end on the synthetic skirt (core.cli.drape, core.workflows.drape)."""
+
 import json
 
 import numpy as np
 import pytest
-
 from drape_synth import tube_skirt
 
 from core.cli import main
@@ -85,8 +85,22 @@ def test_help(capsys):
 
 def test_self_collision_flag(pattern_dir, tmp_path):
     out = tmp_path / "sc"
-    assert main(["drape", str(pattern_dir), "--out", str(out), "--quiet", "--frames", "15", "--no-preview",
-                 "--self-collision"]) == 0
+    assert (
+        main(
+            [
+                "drape",
+                str(pattern_dir),
+                "--out",
+                str(out),
+                "--quiet",
+                "--frames",
+                "15",
+                "--no-preview",
+                "--self-collision",
+            ]
+        )
+        == 0
+    )
     rep = json.loads((out / "drape_report.json").read_text())
     assert rep["self_collision"] is True and rep["options"]["self_collision"] is True
     assert rep["self_radius_m"] > 0

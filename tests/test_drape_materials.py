@@ -1,4 +1,5 @@
 """Fabric presets (core.drape.materials)."""
+
 import pytest
 
 from core.drape.materials import PRESETS, Material, get_material, names

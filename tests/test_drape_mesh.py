@@ -1,11 +1,20 @@
 """Welding, rest matrices, colouring, bending stencils and tethers (core.drape.mesh)."""
+
 import numpy as np
 import pytest
-
 from drape_synth import tube_skirt
 
-from core.drape.mesh import (build_cloth, colour_order, dihedral_angles, greedy_colouring, grain_frame,
-                             interior_edges, rest_matrices, tethers, two_rings)
+from core.drape.mesh import (
+    build_cloth,
+    colour_order,
+    dihedral_angles,
+    grain_frame,
+    greedy_colouring,
+    interior_edges,
+    rest_matrices,
+    tethers,
+    two_rings,
+)
 from core.errors import DrapeError
 
 
@@ -96,7 +105,7 @@ def test_two_rings_are_the_fabric_neighbours():
     # a strip of triangles 0-1-2-3-4-5 (each triangle (k, k+1, k+2))
     faces = np.array([[k, k + 1, k + 2] for k in range(4)])
     start, idx = two_rings(faces, 6)
-    ring0 = set(idx[start[0]:start[1]].tolist())
+    ring0 = set(idx[start[0] : start[1]].tolist())
     assert ring0 == {0, 1, 2, 3, 4}  # 1 and 2 share a triangle with 0; 3 and 4 are one more step away
     assert 5 not in ring0
 
@@ -107,6 +116,7 @@ def test_bending_weight_stores_the_continuum_energy(edge):
     # bending stiffness) is the continuum kappa^2 / 2 per area, whatever the edge length (the
     # discrete-shell 3|e|^2/A stored 3.3 times it on this mesh)
     from core.drape import textile as T
+
     uv, faces = T.disc_mesh(0.15, edge, 0.09)
     cloth = build_cloth(T.sheet_pattern(uv, faces, 0.0, np.zeros(len(uv), bool), "cotton"))
     radius = 0.1
@@ -115,5 +125,5 @@ def test_bending_weight_stores_the_continuum_energy(edge):
         u = x[:, axis].copy()
         x[:, axis], x[:, 2] = radius * np.sin(u / radius), radius * (1 - np.cos(u / radius))
         energy = 0.5 * np.sum(cloth.bend_weight * dihedral_angles(x, cloth.bends) ** 2)
-        continuum = 0.5 * cloth.rest_area.sum() / radius ** 2
+        continuum = 0.5 * cloth.rest_area.sum() / radius**2
         assert energy / continuum == pytest.approx(1.0, abs=0.15)

@@ -1,5 +1,6 @@
 """The drape carried through a body's motion (core.drape.animate): the garment follows a moving
 body without tunnelling, pinned vertices ride on it, pose in-betweens keep the limbs' length."""
+
 from __future__ import annotations
 
 import json
@@ -49,6 +50,7 @@ def test_a_body_jumping_20_cm_in_one_frame_keeps_the_skirt(body):
     """A frame that moves the body further than a simulation frame may (MAX_MOVE) is simulated as
     several: the skirt is carried, not torn or left inside."""
     from core.drape.animate import MAX_MOVE
+
     bv, bf = body
     assert 0.2 > 2 * MAX_MOVE
     r = drape_motion(tube_skirt(), [bv, bv + [0.2, 0.0, 0.0], bv + [0.2, 0.0, 0.0]], bf, options={"max_frames": 60})
@@ -81,9 +83,9 @@ def test_pose_in_betweens_keep_the_limbs(anny):
     assert len(frames) == 9
     for k, pose in ((0, "A"), (4, "P1"), (8, "P3")):
         assert np.allclose(frames[k], body_instance(anny, "M", pose))
-    tip = int(np.argmax(frames[0][:, 0]))                          # the left fingertip in A
+    tip = int(np.argmax(frames[0][:, 0]))  # the left fingertip in A
     head = anny.joints(instance_shape(anny, "M"))[list(anny.joint_names).index("upperarm01.L")]
-    shoulder = int(np.argmin(np.linalg.norm(frames[0] - head, axis=1)))   # the skin at the shoulder joint
+    shoulder = int(np.argmin(np.linalg.norm(frames[0] - head, axis=1)))  # the skin at the shoulder joint
     # A -> P1 turns the shoulder only (P3 then bends the elbow): the arm keeps its length
     arm = np.array([np.linalg.norm(f[tip] - f[shoulder]) for f in frames[:5]])
     assert arm.max() - arm.min() < 0.01 * arm[0], arm
@@ -91,7 +93,7 @@ def test_pose_in_betweens_keep_the_limbs(anny):
     lin = 0.5 * (frames[0] + frames[4])
     assert np.linalg.norm(lin[tip] - lin[shoulder]) < arm[2] - 0.02
     steps = [np.linalg.norm(frames[k + 1][tip] - frames[k][tip]) for k in range(4)]
-    assert max(steps) < 2.0 * min(steps)                            # even steps from A to P1
+    assert max(steps) < 2.0 * min(steps)  # even steps from A to P1
     with pytest.raises(DrapeError):
         pose_frames(anny, "M", ["A"], between=3)
 
@@ -105,11 +107,28 @@ def test_ease_drape_animation_on_the_default_body(tmp_path, anny):
     from core.design import load_design
     from core.design.templates import template_path
     from core.pattern.io import save_pattern
+
     prep = workflows.prepare(load_design(template_path("top_sleeveless")))
     save_pattern(workflows.reference(prep).pattern, tmp_path / "pattern")
     out = tmp_path / "motion"
-    assert main(["drape", str(tmp_path / "pattern"), "--out", str(out), "--animation", "A, P1",
-                 "--between", "2", "--frames", "40", "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "drape",
+                str(tmp_path / "pattern"),
+                "--out",
+                str(out),
+                "--animation",
+                "A, P1",
+                "--between",
+                "2",
+                "--frames",
+                "40",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     rep = json.loads((out / "motion_report.json").read_text())
     assert rep["poses"] == ["A", "P1"] and rep["frames"] == 4 and len(rep["stretch_p95_pct"]) == 4
     assert rep["worst_penetration_pct"] <= 0.5 and len(rep["frame_seconds"]) == 3
@@ -126,6 +145,7 @@ def test_ease_drape_animation_on_the_default_body(tmp_path, anny):
 def _pc2(path):
     """(frames (K, V, 3) float32, V) of a Point Cache 2 file, read from its documented layout."""
     import struct
+
     raw = path.read_bytes()
     sig, version, n, start, rate, k = struct.unpack("<12siiffi", raw[:32])
     assert sig == b"POINTCACHE2\0" and version == 1 and (start, rate) == (1.0, 1.0)
@@ -133,11 +153,17 @@ def _pc2(path):
     return np.frombuffer(raw[32:], dtype="<f4").reshape(k, n, 3), n
 
 
-@pytest.mark.parametrize("argv, words", [(["--animation", "A,Q9"], "--animation: 'Q9' is not a pose"),
-                                         (["--animation", "A"], "--animation: name two poses"),
-                                         (["--animation", "A,P1", "--between", "-1"], "--between")])
+@pytest.mark.parametrize(
+    "argv, words",
+    [
+        (["--animation", "A,Q9"], "--animation: 'Q9' is not a pose"),
+        (["--animation", "A"], "--animation: name two poses"),
+        (["--animation", "A,P1", "--between", "-1"], "--between"),
+    ],
+)
 def test_ease_drape_animation_refuses_bad_flags_first(tmp_path, capsys, argv, words):
     from core.cli import main
+
     assert main(["drape", str(tmp_path / "no_such_pattern"), "--out", str(tmp_path / "o"), *argv]) == 2
     err = capsys.readouterr().err
     assert words in err and err.count("\n") == 1, err

@@ -1,4 +1,5 @@
 """Body contact that follows the surface, and the textile tests (core.drape.textile, SPEC item 11)."""
+
 import numpy as np
 import pytest
 
@@ -37,28 +38,44 @@ def test_contact_plane_turns_round_the_edge():
     # a particle beside and above the edge: its plane is through the edge, facing it (45 degrees)
     from core.drape import kernels as K
     from core.geom.queries import warp_mesh
+
     wp = K.wp
     v, f = T.box_body((-0.2, -0.1, -0.1), (0.0, 0.1, 0.0))
     mesh = warp_mesh(v, f, device="cpu")
     pts = np.array([[0.01, 0.0, 0.01], [-0.05, 0.0, 0.002], [0.004, 0.0, -0.05]])
     n = len(pts)
-    point, normal, hit = (wp.zeros(n, dtype=wp.vec3, device="cpu"), wp.zeros(n, dtype=wp.vec3, device="cpu"),
-                          wp.zeros(n, dtype=int, device="cpu"))
-    wp.launch(K.closest_contact, n, inputs=[wp.array(pts, dtype=wp.vec3, device="cpu"),
-                                            wp.ones(n, dtype=float, device="cpu"), mesh.id, 0.03, 1e-4,
-                                            point, normal, hit], device="cpu")
+    point, normal, hit = (
+        wp.zeros(n, dtype=wp.vec3, device="cpu"),
+        wp.zeros(n, dtype=wp.vec3, device="cpu"),
+        wp.zeros(n, dtype=int, device="cpu"),
+    )
+    wp.launch(
+        K.closest_contact,
+        n,
+        inputs=[
+            wp.array(pts, dtype=wp.vec3, device="cpu"),
+            wp.ones(n, dtype=float, device="cpu"),
+            mesh.id,
+            0.03,
+            1e-4,
+            point,
+            normal,
+            hit,
+        ],
+        device="cpu",
+    )
     nrm, pt = normal.numpy(), point.numpy()
     assert hit.numpy().tolist() == [1, 1, 1]
     assert np.allclose(pt[0], [0.0, 0.0, 0.0], atol=1e-6)
     assert np.allclose(nrm[0], [np.sqrt(0.5), 0.0, np.sqrt(0.5)], atol=1e-5)
-    assert np.allclose(nrm[1], [0.0, 0.0, 1.0], atol=1e-5)    # over the top face: its normal
-    assert np.allclose(nrm[2], [1.0, 0.0, 0.0], atol=1e-5)    # beside the side face: its normal
+    assert np.allclose(nrm[1], [0.0, 0.0, 1.0], atol=1e-5)  # over the top face: its normal
+    assert np.allclose(nrm[2], [1.0, 0.0, 0.0], atol=1e-5)  # beside the side face: its normal
 
 
 def test_shadow_area_and_nodes():
     uv, faces = T.disc_mesh(0.15, 0.01, 0.09, seed=1)
     # the rasterised disc (1 mm cells) is the disc's area within the polygon's chord error
-    assert T.shadow_area(uv, faces) == pytest.approx(np.pi * 0.15 ** 2, rel=0.01)
+    assert T.shadow_area(uv, faces) == pytest.approx(np.pi * 0.15**2, rel=0.01)
     # a rim with 7 bumps of 1 cm: 7 nodes; a circle: none
     th = np.linspace(-np.pi, np.pi, 400, endpoint=False)
     r = 0.12 + 0.01 * np.cos(7 * th + 0.3)
@@ -104,8 +121,10 @@ def test_bending_iterations_converge_the_cantilever():
     # converges (36.3 degrees at 4 passes, 35.5 at 8)
     from core.drape import DrapeOptions
     from core.drape.materials import get_material
-    angle = {it: T.tip_angle(get_material("cotton"), 0.025, 0.005, DrapeOptions(iterations=it), 300)[0]
-             for it in (1, 4, 8)}
+
+    angle = {
+        it: T.tip_angle(get_material("cotton"), 0.025, 0.005, DrapeOptions(iterations=it), 300)[0] for it in (1, 4, 8)
+    }
     assert angle[1] > angle[4] + 8.0
     assert abs(angle[4] - angle[8]) < 2.0
 

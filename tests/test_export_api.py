@@ -1,24 +1,40 @@
 """core.export.export_pattern: all formats, atomic output, failures before any file is written."""
+
 import json
 import sys
 
 import numpy as np
 import pytest
-
 from export_synth import drape_positions, make_pattern
 
 from core.errors import Cancelled, ExportError
 from core.export import FORMATS, export_pattern, parse_formats
 
-ALL_FILES = {"pattern.svg", "pattern_astm.dxf", "pattern_astm_r12.dxf", "pattern_plain.dxf", "pattern_a4.pdf",
-             "pattern_letter.pdf", "pattern_plotter.pdf", "garment.glb", "garment.obj", "garment.mtl", "export.json"}
+ALL_FILES = {
+    "pattern.svg",
+    "pattern_astm.dxf",
+    "pattern_astm_r12.dxf",
+    "pattern_plain.dxf",
+    "pattern_a4.pdf",
+    "pattern_letter.pdf",
+    "pattern_plotter.pdf",
+    "garment.glb",
+    "garment.obj",
+    "garment.mtl",
+    "export.json",
+}
 
 
 def test_exports_every_format(tmp_path):
     pat = make_pattern()
     calls = []
-    files = export_pattern(pat, tmp_path / "out", formats="all", drape_positions=drape_positions(pat),
-                           progress=lambda f, m: calls.append(f))
+    files = export_pattern(
+        pat,
+        tmp_path / "out",
+        formats="all",
+        drape_positions=drape_positions(pat),
+        progress=lambda f, m: calls.append(f),
+    )
     assert {f.name for f in files} == ALL_FILES
     assert {f.name for f in (tmp_path / "out").iterdir()} == ALL_FILES
     assert calls and calls[-1] == 1.0 and calls == sorted(calls)
@@ -47,12 +63,15 @@ def test_allowance_from_the_design_materials(tmp_path):
     assert s["pieces"][0]["notches_mm"]["side_left"][1] == 200
 
 
-@pytest.mark.parametrize("kwargs,words", [
-    ({"formats": "svg,tiff"}, "tiff"),
-    ({"formats": "glb"}, "drape"),
-    ({"allowance": {"sidee": 0.01}}, "sidee"),
-    ({"allowance": {"hem": 1.0}}, "hem"),
-])
+@pytest.mark.parametrize(
+    "kwargs,words",
+    [
+        ({"formats": "svg,tiff"}, "tiff"),
+        ({"formats": "glb"}, "drape"),
+        ({"allowance": {"sidee": 0.01}}, "sidee"),
+        ({"allowance": {"hem": 1.0}}, "hem"),
+    ],
+)
 def test_bad_arguments_fail_before_writing(tmp_path, kwargs, words):
     out = tmp_path / "out"
     out.mkdir()
@@ -121,6 +140,7 @@ def test_missing_writer_package_is_a_clear_error(tmp_path, monkeypatch, fmt, mod
 def test_a_piece_wider_than_the_page_grid_exports(tmp_path):
     """The ease-3.0 shirt front is 1.58 m wide: every format still exports it (it raised a TypeError in PDF)."""
     from export_synth import wide_pattern
+
     files = export_pattern(wide_pattern(1.6), tmp_path / "out", formats="svg,dxf,pdf")
     summary = json.loads((tmp_path / "out" / "export.json").read_text())
     assert summary["pdf"]["a4"]["pages"] >= 8 and "pattern_a4.pdf" in {f.name for f in files}

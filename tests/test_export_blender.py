@@ -1,9 +1,10 @@
 """The GLB and OBJ of core.export.mesh read back by Blender's own importers (the session's bpy)."""
+
 import numpy as np
 import pytest
+from export_synth import drape_positions, make_pattern
 
 from core.export import export_pattern
-from export_synth import drape_positions, make_pattern
 
 
 def _mesh_arrays(obj):
@@ -38,8 +39,7 @@ def exported(tmp_path_factory):
     return pat, pos, out
 
 
-@pytest.mark.parametrize("fmt,up", [("glb", "z"), ("obj", "z"), ("obj", "y"), ("glb", "default"),
-                                    ("obj", "default")])
+@pytest.mark.parametrize("fmt,up", [("glb", "z"), ("obj", "z"), ("obj", "y"), ("glb", "default"), ("obj", "default")])
 def test_blender_imports_positions_and_pattern_uvs(bpy_session, exported, fmt, up):
     """Every file comes back in Blender's Z-up frame at the draped positions: the GLB (always Y-up) and the
     Y-up OBJ (the default) through the importers' default axes, the Z-up OBJ with up Z, forward Y. By default
@@ -48,7 +48,7 @@ def test_blender_imports_positions_and_pattern_uvs(bpy_session, exported, fmt, u
     pat, pos, out = exported
     out = out / up
     lift = np.array([0.0, 0.0, -_body()[0][:, 2].min()]) if up == "default" else np.zeros(3)
-    bpy.ops.wm.read_homefile(use_empty=True)     # an empty scene; the session's preferences stay
+    bpy.ops.wm.read_homefile(use_empty=True)  # an empty scene; the session's preferences stay
     if fmt == "glb":
         bpy.ops.import_scene.gltf(filepath=str(out / "garment.glb"))
     elif up in ("y", "default"):

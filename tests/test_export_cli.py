@@ -1,15 +1,13 @@
 """core.cli.export: `ease export PATTERN_DIR --format ... --out DIR [--drape DIR]`."""
+
 import argparse
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
-
 from export_synth import drape_positions, make_pattern  # noqa: E402
 
-from core.errors import EaseError  # noqa: E402
 from core.cli import export as cli  # noqa: E402
+from core.errors import EaseError  # noqa: E402
 from core.pattern.io import save_pattern  # noqa: E402
 
 
@@ -33,12 +31,29 @@ def job(tmp_path):
 
 def test_export_2d_formats(job, capsys):
     root, pat = job
-    assert run(["export", str(root / "pattern"), "--format", "svg,dxf", "--out", str(root / "x"),
-                "--allowance", "0.012", "--hem", "0.03", "--quiet"]) == 0
+    assert (
+        run(
+            [
+                "export",
+                str(root / "pattern"),
+                "--format",
+                "svg,dxf",
+                "--out",
+                str(root / "x"),
+                "--allowance",
+                "0.012",
+                "--hem",
+                "0.03",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     names = sorted(p.name for p in (root / "x").iterdir())
     assert names == ["export.json", "pattern.svg", "pattern_astm.dxf", "pattern_astm_r12.dxf", "pattern_plain.dxf"]
     assert "pattern.svg" in capsys.readouterr().out
     import json
+
     s = json.loads((root / "x" / "export.json").read_text())
     assert s["allowance_mm"]["default"] == 12 and s["allowance_mm"]["hem"] == 30
 
@@ -60,8 +75,19 @@ def test_drape_found_next_to_the_pattern(job):
     assert {"garment.glb", "garment.obj", "pattern_a4.pdf", "pattern.svg", "pattern_astm.dxf"} <= names
 
 
-ALL = {"pattern.svg", "pattern_astm.dxf", "pattern_astm_r12.dxf", "pattern_plain.dxf", "pattern_a4.pdf",
-       "pattern_letter.pdf", "pattern_plotter.pdf", "garment.glb", "garment.obj", "garment.mtl", "export.json"}
+ALL = {
+    "pattern.svg",
+    "pattern_astm.dxf",
+    "pattern_astm_r12.dxf",
+    "pattern_plain.dxf",
+    "pattern_a4.pdf",
+    "pattern_letter.pdf",
+    "pattern_plotter.pdf",
+    "garment.glb",
+    "garment.obj",
+    "garment.mtl",
+    "export.json",
+}
 
 
 @pytest.mark.parametrize("fmt", ["svg,dxf,pdf,glb,obj", "all", "SVG, dxf,pdf,glb,obj,svg"])
@@ -70,14 +96,17 @@ def test_every_format_by_list_or_all(job, tmp_path, fmt):
     d = tmp_path / "drape_elsewhere"
     d.mkdir()
     np.savez(d / "drape.npz", positions=drape_positions(pat))
-    assert run(["export", str(root / "pattern"), "--format", fmt, "--drape", str(d), "--out", str(root / "x"),
-                "--quiet"]) == 0
+    assert (
+        run(["export", str(root / "pattern"), "--format", fmt, "--drape", str(d), "--out", str(root / "x"), "--quiet"])
+        == 0
+    )
     assert {p.name for p in (root / "x").iterdir()} == ALL
 
 
 def test_ease_command_runs_export(job, tmp_path, capsys):
     """`ease export ...` through the real entry point (core.cli.main), drape found beside the pattern."""
     from core.cli import main
+
     root, pat = job
     (root / "drape").mkdir()
     np.savez(root / "drape" / "drape.npz", positions=drape_positions(pat))
@@ -96,8 +125,12 @@ def test_drape_of_another_pattern_is_refused(job, tmp_path):
     msg = run(["export", str(root / "pattern"), "--format", "glb", "--drape", str(d), "--out", str(root / "x")])
     assert isinstance(msg, str) and "another pattern" in msg and not (root / "x").exists()
     np.savez(d / "drape.npz", positions=drape_positions(pat), faces=faces)
-    assert run(["export", str(root / "pattern"), "--format", "glb", "--drape", str(d), "--out", str(root / "x"),
-                "--quiet"]) == 0
+    assert (
+        run(
+            ["export", str(root / "pattern"), "--format", "glb", "--drape", str(d), "--out", str(root / "x"), "--quiet"]
+        )
+        == 0
+    )
 
 
 @pytest.mark.parametrize("fmt", ["all", "svg,obj"])
@@ -123,8 +156,12 @@ def test_explicit_drape_dir_and_bad_npz(job, tmp_path):
     msg = run(["export", str(root / "pattern"), "--format", "obj", "--drape", str(d), "--out", str(root / "x")])
     assert isinstance(msg, str) and "positions" in msg
     np.savez(d / "drape.npz", positions=drape_positions(pat))
-    assert run(["export", str(root / "pattern"), "--format", "obj", "--drape", str(d), "--out", str(root / "x"),
-                "--quiet"]) == 0
+    assert (
+        run(
+            ["export", str(root / "pattern"), "--format", "obj", "--drape", str(d), "--out", str(root / "x"), "--quiet"]
+        )
+        == 0
+    )
     assert (root / "x" / "garment.obj").is_file()
 
 
@@ -139,6 +176,7 @@ def test_missing_pattern_and_help(tmp_path, capsys):
 def test_with_body_and_up_axis(job, anny):
     """--with-body writes the pattern's body (Anny, size M, A-pose) beside the garment; --up picks the OBJ frame."""
     from core.body.instance import spec_instance
+
     root, pat = job
     drape = root / "drape"
     drape.mkdir()
@@ -146,8 +184,27 @@ def test_with_body_and_up_axis(job, anny):
     V, F = spec_instance(pat.body, anny)
     for up in ("z", "y"):
         out = root / f"x_{up}"
-        assert run(["export", str(root / "pattern"), "--format", "obj,glb", "--drape", str(drape), "--out",
-                    str(out), "--with-body", "--up", up, "--origin", "root", "--quiet"]) == 0
+        assert (
+            run(
+                [
+                    "export",
+                    str(root / "pattern"),
+                    "--format",
+                    "obj,glb",
+                    "--drape",
+                    str(drape),
+                    "--out",
+                    str(out),
+                    "--with-body",
+                    "--up",
+                    up,
+                    "--origin",
+                    "root",
+                    "--quiet",
+                ]
+            )
+            == 0
+        )
         text = (out / "garment.obj").read_text()
         assert ("+Z up" in text.splitlines()[1]) == (up == "z")
         body = text.split("o body\n", 1)[1].splitlines()
@@ -156,12 +213,28 @@ def test_with_body_and_up_axis(job, anny):
         np.testing.assert_allclose(v, want, atol=2e-6)
         assert sum(1 for l in body if l.startswith("f ")) == len(F)
         from core.export.mesh import read_glb
+
         doc, _ = read_glb((out / "garment.glb").read_bytes())
         assert "body" in [n["name"] for n in doc["nodes"]] and "+Y up" in doc["asset"]["extras"]["frame"]
     # the defaults: Y-up OBJ with its garment.mtl, and the body standing on the floor (its lowest point at 0)
     out = root / "x_default"
-    assert run(["export", str(root / "pattern"), "--format", "obj,glb", "--drape", str(drape), "--out", str(out),
-                "--with-body", "--quiet"]) == 0
+    assert (
+        run(
+            [
+                "export",
+                str(root / "pattern"),
+                "--format",
+                "obj,glb",
+                "--drape",
+                str(drape),
+                "--out",
+                str(out),
+                "--with-body",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     text = (out / "garment.obj").read_text()
     assert "+Y up" in text.splitlines()[1] and "origin on the floor" in text.splitlines()[1]
     assert "mtllib garment.mtl" in text and "usemtl fabric" in text and "usemtl body" in text
@@ -172,18 +245,22 @@ def test_with_body_and_up_axis(job, anny):
     np.testing.assert_allclose(v, np.column_stack([V[:, 0], V[:, 2] - V[:, 2].min(), -V[:, 1]]), atol=2e-6)
     assert v[:, 1].min() == pytest.approx(0.0, abs=1e-6)
     from core.export.mesh import glb_accessor
+
     doc, binary = read_glb((out / "garment.glb").read_bytes())
     node = next(n for n in doc["nodes"] if n["name"] == "body")
     pos = glb_accessor(doc, binary, doc["meshes"][node["mesh"]]["primitives"][0]["attributes"]["POSITION"])
     assert pos[:, 1].min() == pytest.approx(0.0, abs=1e-5) and "origin on the floor" in doc["asset"]["extras"]["frame"]
     import json
+
     assert json.loads((out / "export.json").read_text())["frame"]["origin"] == "floor"
 
 
 def test_print_all_prints_every_piece_on_the_tiled_pdfs(tmp_path):
     """Default: a mirrored pair is printed once (cut 2); --print-all prints both pieces."""
     import json
+
     from export_synth import mirrored_pattern
+
     save_pattern(mirrored_pattern(), tmp_path / "pattern")
     for flag, want in (([], [("front_left", 2)]), (["--print-all"], [("front_left", 1), ("front_right", 1)])):
         out = tmp_path / ("x" + "".join(flag))

@@ -4,6 +4,7 @@
 (``pattern.json``) to ``ease export``, which uses it when no ``--allowance`` is
 given. The end-to-end test measures the allowance in the written SVG.
 """
+
 import copy
 import json
 import re
@@ -22,14 +23,16 @@ from core.geom.polygon import ray_hit
 REPO = Path(__file__).resolve().parent.parent
 SHORTS = REPO / "examples" / "designs" / "shorts.json"
 NS = {"svg": "http://www.w3.org/2000/svg"}
-EXPORT = {"allowance": {"default": 0.012, "hem": 0.03, "side_right": 0.02, "shorts.inseam_left": 0.015},
-          "notch_spacing": 0.08}
+EXPORT = {
+    "allowance": {"default": 0.012, "hem": 0.03, "side_right": 0.02, "shorts.inseam_left": 0.015},
+    "notch_spacing": 0.08,
+}
 
 
 def _shorts(export=None, coarse=True):
     d = json.loads(SHORTS.read_text())
     if coarse:
-        d["refine_edge_length"] = 0.03   # a coarse cut keeps the solve at a few seconds
+        d["refine_edge_length"] = 0.03  # a coarse cut keeps the solve at a few seconds
     if export is not None:
         d["materials"]["export"] = copy.deepcopy(export)
     return d
@@ -49,16 +52,19 @@ def test_design_keeps_its_export_settings(tmp_path):
     assert parse_design(d).materials["export"] == {"allowance": 0.015}
 
 
-@pytest.mark.parametrize("export,path", [
-    ({"allowance": 0.5}, "materials.export.allowance"),
-    ({"allowance": {"hem": -0.01}}, "materials.export.allowance.hem"),
-    ({"allowance": {"hem": "2cm"}}, "materials.export.allowance.hem"),
-    ({"allowance": {"sidee_left": 0.01}}, "materials.export.allowance.sidee_left"),
-    ({"allowance": {"waist": 0.01}}, "materials.export.allowance.waist"),  # an opening, not a seam
-    ({"allowance": [0.01]}, "materials.export.allowance"),
-    ({"notch_spacing": -0.1}, "materials.export.notch_spacing"),
-    ({"notches": 0.1}, "materials.export.notches"),
-])
+@pytest.mark.parametrize(
+    "export,path",
+    [
+        ({"allowance": 0.5}, "materials.export.allowance"),
+        ({"allowance": {"hem": -0.01}}, "materials.export.allowance.hem"),
+        ({"allowance": {"hem": "2cm"}}, "materials.export.allowance.hem"),
+        ({"allowance": {"sidee_left": 0.01}}, "materials.export.allowance.sidee_left"),
+        ({"allowance": {"waist": 0.01}}, "materials.export.allowance.waist"),  # an opening, not a seam
+        ({"allowance": [0.01]}, "materials.export.allowance"),
+        ({"notch_spacing": -0.1}, "materials.export.notch_spacing"),
+        ({"notches": 0.1}, "materials.export.notches"),
+    ],
+)
 def test_bad_export_settings_name_their_path(export, path):
     with pytest.raises(DesignError) as e:
         parse_design(_shorts(export))
@@ -77,6 +83,7 @@ def test_seam_keys_pick_the_most_specific_entry():
 
 def _run(argv):
     from core.cli import build_parser
+
     args = build_parser().parse_args(argv)
     return args.func(args)
 
@@ -84,6 +91,7 @@ def _run(argv):
 @pytest.fixture(scope="module")
 def shorts_pattern(tmp_path_factory):
     from core.body import load_body
+
     try:
         load_body("anny")
     except EaseError as exc:
@@ -104,6 +112,7 @@ def _paths(group, cls):
 
 def test_allowance_set_in_the_design_reaches_the_files(shorts_pattern):
     from core.pattern.io import load_pattern
+
     root = shorts_pattern
     pat = load_pattern(root / "pattern")
     # the design's settings travelled through the cut into pattern.json
@@ -132,8 +141,15 @@ def test_allowance_set_in_the_design_reaches_the_files(shorts_pattern):
                 if name == panel.name:
                     for u, v in zip(ids[:-1], ids[1:]):
                         want[frozenset((int(u), int(v)))] = seam_allowance(widths, s.name)
-        expect = np.array([want.get(frozenset((int(loop[i]), int(loop[(i + 1) % len(loop)]))), widths["default"])
-                           for i in range(len(loop))]) * 1000
+        expect = (
+            np.array(
+                [
+                    want.get(frozenset((int(loop[i]), int(loop[(i + 1) % len(loop)]))), widths["default"])
+                    for i in range(len(loop))
+                ]
+            )
+            * 1000
+        )
         (sew,), (cut,) = _paths(groups[panel.name], "sew"), _paths(groups[panel.name], "cut")
         # the allowance as a cutter measures it: from the middle of each sew edge, square
         # to the edge, out to the cut line (SVG y points down: the outward normal flips)
@@ -162,7 +178,7 @@ def test_allowance_set_in_the_design_reaches_the_files(shorts_pattern):
         twin = panel.mirror_of or panel.name.replace("_left", "_right")
         line = next(t for t in texts if t.startswith("cut 1"))
         assert line.startswith(f"cut 1, not the mirror of {twin}: ") and line.endswith(" mm off"), texts
-        assert float(line.split(": ")[1].split()[0]) > 3.0   # 3 mm more allowance on one side
+        assert float(line.split(": ")[1].split()[0]) > 3.0  # 3 mm more allowance on one side
         assert "units: mm, allowance" in " ".join(texts)
 
     # notches every 8 cm from the design, from either end of each seam: at equal arc lengths from the nearer
@@ -186,21 +202,37 @@ def test_allowance_set_in_the_design_reaches_the_files(shorts_pattern):
 
 def test_command_line_overrides_the_design(shorts_pattern):
     root = shorts_pattern
-    assert _run(["export", str(root / "pattern"), "--format", "svg", "--out", str(root / "y"), "--allowance",
-                 "0.005", "--notch-spacing", "0", "--quiet"]) == 0
+    assert (
+        _run(
+            [
+                "export",
+                str(root / "pattern"),
+                "--format",
+                "svg",
+                "--out",
+                str(root / "y"),
+                "--allowance",
+                "0.005",
+                "--notch-spacing",
+                "0",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     s = json.loads((root / "y" / "export.json").read_text())
     # --allowance replaces the default; the design's hem and per-seam widths stay
     assert s["allowance_mm"]["default"] == 5 and s["allowance_mm"]["hem"] == 30
     assert s["allowance_mm"]["side_right"] == 20
-    assert all(len(v) == 2 for p in s["pieces"] for v in p["notches_mm"].values())   # seam ends only
+    assert all(len(v) == 2 for p in s["pieces"] for v in p["notches_mm"].values())  # seam ends only
 
 
 def test_pattern_with_a_stale_seam_key_fails_before_writing(shorts_pattern, tmp_path):
-    from core.pattern.io import load_pattern
     from core.export import export_pattern
+    from core.pattern.io import load_pattern
+
     pat = load_pattern(shorts_pattern / "pattern")
     pat.materials = {"export": {"allowance": {"yoke": 0.01}}}
     with pytest.raises(ExportError, match="yoke.*side_right"):
         export_pattern(pat, tmp_path / "z", formats="svg")
     assert not (tmp_path / "z").exists()
-

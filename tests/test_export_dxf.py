@@ -1,17 +1,17 @@
 """core.export.dxf: ASTM D6673/AAMA blocks and layers, plain DXF, read back with ezdxf."""
+
 import io
 
 import numpy as np
 import pytest
-
 from export_synth import make_pattern
 
 ezdxf = pytest.importorskip("ezdxf")
 
-from core.export import dxf
-from core.export.pieces import build_pieces
-from core.geom.layout import layout_pieces
-from core.geom.polyline import polyline_length
+from core.export import dxf  # noqa: E402  (after the importorskip)
+from core.export.pieces import build_pieces  # noqa: E402  (after the importorskip)
+from core.geom.layout import layout_pieces  # noqa: E402  (after the importorskip)
+from core.geom.polyline import polyline_length  # noqa: E402  (after the importorskip)
 
 
 @pytest.fixture(scope="module")
@@ -117,6 +117,7 @@ def test_block_names_bounded_per_format(tmp_path):
 
     from core.errors import ExportError
     from core.export import export_pattern
+
     long_a, long_b = "front_" + "x" * 60, "front_" + "x" * 59 + "y"
     pattern = _renamed(_renamed(make_pattern(), "front", long_a), "back", long_b)
     export_pattern(pattern, tmp_path / "e", formats=("dxf",))

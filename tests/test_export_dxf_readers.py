@@ -1,13 +1,13 @@
 """Every DXF variant read by two independent readers (ezdxf with audit and recover, and tests/helpers/dxf_reader),
 compared with export.json: piece count, sew-line lengths, notch counts; headers that open at the right size
 (extents, units, the R12 layer table); AAMA grain lines alone on layer 7, their arrow heads on 15."""
+
 import io
 import json
 
+import dxf_reader
 import numpy as np
 import pytest
-
-import dxf_reader
 from export_synth import make_pattern, wide_pattern
 
 ezdxf = pytest.importorskip("ezdxf")
@@ -16,10 +16,12 @@ from ezdxf import recover  # noqa: E402
 from core.export import export_pattern  # noqa: E402
 
 VARIANTS = ("pattern_astm.dxf", "pattern_astm_r12.dxf", "pattern_plain.dxf")
-CASES = {"tube 0 deg": lambda: make_pattern(rotate_back_deg=0.0),
-         "tube 30 deg": lambda: make_pattern(rotate_back_deg=30.0),
-         "tube 75 deg, fine": lambda: make_pattern(rotate_back_deg=75.0, nx=15, ny=21),
-         "wide 1.6 m": lambda: wide_pattern(1.6)}
+CASES = {
+    "tube 0 deg": lambda: make_pattern(rotate_back_deg=0.0),
+    "tube 30 deg": lambda: make_pattern(rotate_back_deg=30.0),
+    "tube 75 deg, fine": lambda: make_pattern(rotate_back_deg=75.0, nx=15, ny=21),
+    "wide 1.6 m": lambda: wide_pattern(1.6),
+}
 
 
 @pytest.fixture(scope="module", params=sorted(CASES))
@@ -32,16 +34,21 @@ def exported(request, tmp_path_factory):
 
 def _want(summary):
     pieces = summary["pieces"]
-    return ([p["name"] for p in pieces], [p["sew_line_mm"] for p in pieces],
-            [sum(len(v) for v in p["notches_mm"].values()) for p in pieces])
+    return (
+        [p["name"] for p in pieces],
+        [p["sew_line_mm"] for p in pieces],
+        [sum(len(v) for v in p["notches_mm"].values()) for p in pieces],
+    )
 
 
 def _ezdxf_pieces(doc, plain):
     """(name, sew length mm, notch count, grain LINEs, arrow polylines) per piece, read by ezdxf."""
+
     def pts(e):
         if e.dxftype() == "LWPOLYLINE":
             return np.array([p[:2] for p in e.get_points()])
         return np.array([tuple(v.dxf.location)[:2] for v in e.vertices])
+
     if plain:
         msp = doc.modelspace()
         sew = [dxf_reader.polyline_length(pts(e), True) for e in msp.query('LWPOLYLINE[layer=="SEW"]')]
@@ -49,17 +56,25 @@ def _ezdxf_pieces(doc, plain):
     out = []
     for blk in [b for b in doc.blocks if not b.name.startswith("*")]:
         sew = [e for e in blk if e.dxf.layer == "14"]
-        out.append((blk.name, dxf_reader.polyline_length(pts(sew[0]), True),
-                    sum(1 for e in blk if e.dxf.layer == "4"),
-                    sum(1 for e in blk if e.dxf.layer == "7"),
-                    sum(1 for e in blk if e.dxf.layer == "15" and e.dxftype() in ("POLYLINE", "LWPOLYLINE"))))
+        out.append(
+            (
+                blk.name,
+                dxf_reader.polyline_length(pts(sew[0]), True),
+                sum(1 for e in blk if e.dxf.layer == "4"),
+                sum(1 for e in blk if e.dxf.layer == "7"),
+                sum(1 for e in blk if e.dxf.layer == "15" and e.dxftype() in ("POLYLINE", "LWPOLYLINE")),
+            )
+        )
     return out
 
 
 def _own_pieces(dwg, plain):
     if plain:
-        sew = [dxf_reader.polyline_length(e.points, e.closed) for e in dwg.entities
-               if e.kind == "LWPOLYLINE" and e.layer == "SEW"]
+        sew = [
+            dxf_reader.polyline_length(e.points, e.closed)
+            for e in dwg.entities
+            if e.kind == "LWPOLYLINE" and e.layer == "SEW"
+        ]
         return sew, sum(1 for e in dwg.entities if e.kind == "LINE" and e.layer == "NOTCH")
     out = []
     inserted = [e.value(2) for e in dwg.entities if e.kind == "INSERT"]
@@ -67,10 +82,15 @@ def _own_pieces(dwg, plain):
         ents = dwg.blocks[name]
         sew = [e for e in ents if e.layer == "14" and e.kind in ("POLYLINE", "LWPOLYLINE")]
         assert len(sew) == 1 and sew[0].closed
-        out.append((name, dxf_reader.polyline_length(sew[0].points, True),
-                    sum(1 for e in ents if e.layer == "4" and e.kind == "LINE"),
-                    sum(1 for e in ents if e.layer == "7"),
-                    sum(1 for e in ents if e.layer == "15" and e.kind in ("POLYLINE", "LWPOLYLINE"))))
+        out.append(
+            (
+                name,
+                dxf_reader.polyline_length(sew[0].points, True),
+                sum(1 for e in ents if e.layer == "4" and e.kind == "LINE"),
+                sum(1 for e in ents if e.layer == "7"),
+                sum(1 for e in ents if e.layer == "15" and e.kind in ("POLYLINE", "LWPOLYLINE")),
+            )
+        )
     return out
 
 

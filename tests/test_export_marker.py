@@ -1,5 +1,6 @@
 """Markers (core.marker, `ease marker`): pieces inside the fabric, no overlaps, grain kept,
 efficiency as reported, repeatable with a seed, Ctrl-C keeps the best marker, CLI errors in one line."""
+
 from __future__ import annotations
 
 import io
@@ -10,15 +11,23 @@ import pytest
 
 pytest.importorskip("spyrrow")
 
+from export_synth import make_pattern
+from marker_synth import overlap
+
 from core.cli import main
 from core.errors import Cancelled, ExportError
 from core.geom.polygon import points_in_polygon, signed_area
-from core.marker.nesting import (GRAIN_TO_LENGTH, marker_items, marker_report, nest, orientations, parse_quantities,
-                                 placed_outline, unfold)
+from core.marker.nesting import (
+    marker_items,
+    marker_report,
+    nest,
+    orientations,
+    parse_quantities,
+    placed_outline,
+    unfold,
+)
 from core.marker.render import write_marker
 from core.pattern.io import save_pattern
-from export_synth import make_pattern
-from marker_synth import overlap
 
 WIDTH = 1.5
 
@@ -119,6 +128,7 @@ def test_parse_quantities():
 def test_marker_files(nested, tmp_path):
     """The DXF reads back with the fabric and one cut line per piece; the SVG and PDF are 1:1 in mm."""
     import ezdxf
+
     files = write_marker(nested, tmp_path / "m", "test")
     assert sorted(p.name for p in files) == ["marker.dxf", "marker.json", "marker.pdf", "marker.png", "marker.svg"]
     doc = ezdxf.readfile(tmp_path / "m" / "marker.dxf")
@@ -149,8 +159,21 @@ def test_marker_cli_same_seed_same_bytes(tmp_path, capsys):
     save_pattern(make_pattern(), pat)
     outs = []
     for k in range(2):
-        rc, cap = _cli(capsys, pat, "--width", 1500, "--seconds", 30, "--seed", 7, "--early-stop", "--tries", 1,
-                       "--out", tmp_path / f"o{k}")
+        rc, cap = _cli(
+            capsys,
+            pat,
+            "--width",
+            1500,
+            "--seconds",
+            30,
+            "--seed",
+            7,
+            "--early-stop",
+            "--tries",
+            1,
+            "--out",
+            tmp_path / f"o{k}",
+        )
         assert rc == 0, cap.err
         outs.append(tmp_path / f"o{k}")
     reports = [json.loads((o / "marker.json").read_text()) for o in outs]
@@ -167,10 +190,12 @@ def test_marker_cli_errors(tmp_path, capsys):
     """Bad --sizes, a fabric narrower than a piece, an unknown folder: exit 2 and one line."""
     pat = tmp_path / "M"
     save_pattern(make_pattern(), pat)
-    for argv, words in (([pat, "--width", 1500, "--sizes", "M:two"], "--sizes"),
-                        ([pat, "--width", 1500, "--sizes", "XL:1"], "no pattern folder of size XL"),
-                        ([pat, "--width", 300], "across the grain"),
-                        ([tmp_path / "nowhere", "--width", 1500], "no pattern file")):
+    for argv, words in (
+        ([pat, "--width", 1500, "--sizes", "M:two"], "--sizes"),
+        ([pat, "--width", 1500, "--sizes", "XL:1"], "no pattern folder of size XL"),
+        ([pat, "--width", 300], "across the grain"),
+        ([tmp_path / "nowhere", "--width", 1500], "no pattern file"),
+    ):
         rc, cap = _cli(capsys, *argv, "--seconds", 1, "--out", tmp_path / "bad")
         assert rc == 2 and words in cap.err and len(cap.err.strip().splitlines()) == 1, cap.err
     assert not (tmp_path / "bad").exists()
@@ -186,8 +211,10 @@ def test_marker_cli_keeps_the_design_hem_as_export_does(tmp_path, capsys):
     save_pattern(pattern, pat)
     rc, cap = _cli(capsys, pat, "--width", 1500, "--seconds", 1, "--allowance", 0.015, "--out", tmp_path / "m")
     assert rc == 0, cap.err
-    assert main(["export", str(pat), "--format", "svg", "--allowance", "0.015", "--out", str(tmp_path / "e"),
-                 "--quiet"]) == 0
+    assert (
+        main(["export", str(pat), "--format", "svg", "--allowance", "0.015", "--out", str(tmp_path / "e"), "--quiet"])
+        == 0
+    )
     marker = json.loads((tmp_path / "m" / "marker.json").read_text())
     export = json.loads((tmp_path / "e" / "export.json").read_text())
     assert marker["allowance_mm"] == {p["name"]: p["allowance_mm"] for p in export["pieces"]}
@@ -197,18 +224,27 @@ def test_marker_cli_keeps_the_design_hem_as_export_does(tmp_path, capsys):
     for name, it in items.items():
         length = float(np.sum(np.linalg.norm(np.diff(np.vstack([it.outline, it.outline[:1]]), axis=0), axis=1)))
         assert length * 1000 == pytest.approx(cut[name], abs=0.01)
-    rc, cap = _cli(capsys, pat, "--width", 1500, "--seconds", 1, "--allowance", 0.015, "--hem", 0.02,
-                   "--out", tmp_path / "m2")
+    rc, cap = _cli(
+        capsys, pat, "--width", 1500, "--seconds", 1, "--allowance", 0.015, "--hem", 0.02, "--out", tmp_path / "m2"
+    )
     hem = json.loads((tmp_path / "m2" / "marker.json").read_text())["allowance_mm"]["front"]
     assert rc == 0 and hem == [15.0, 20.0]
 
 
-@pytest.mark.parametrize("argv, words", [
-    (["--threads", 100000], "--threads: expected 1 to"), (["--tries", 1000], "--tries: expected 1 to"),
-    (["--width", 1e308], "--width: expected a fabric width"), (["--sizes", "M:1000000000"], "1 to 100 garments"),
-    (["--seed", -1], "--seed: expected 0 to"), (["--seed", 2 ** 70], "--seed: expected 0 to"),
-    (["--seconds", 0], "--seconds: expected a time budget"), (["--allowance", 0.5], "--allowance: expected"),
-    (["--hem", "x"], "--hem: expected")])
+@pytest.mark.parametrize(
+    "argv, words",
+    [
+        (["--threads", 100000], "--threads: expected 1 to"),
+        (["--tries", 1000], "--tries: expected 1 to"),
+        (["--width", 1e308], "--width: expected a fabric width"),
+        (["--sizes", "M:1000000000"], "1 to 100 garments"),
+        (["--seed", -1], "--seed: expected 0 to"),
+        (["--seed", 2**70], "--seed: expected 0 to"),
+        (["--seconds", 0], "--seconds: expected a time budget"),
+        (["--allowance", 0.5], "--allowance: expected"),
+        (["--hem", "x"], "--hem: expected"),
+    ],
+)
 def test_marker_cli_bounds(tmp_path, capsys, argv, words):
     """Each bound refused in one line (exit 2) before any work: no nester started, nothing written."""
     pat = tmp_path / "M"
@@ -225,6 +261,7 @@ def test_marker_budget_is_kept(monkeypatch):
     """The nesters are stopped at the deadline (budget + MARGIN from the call), whatever they are doing: with the
     deadline already past and no marker received, the run ends with an error saying so instead of waiting."""
     from core.marker import nesting
+
     items = marker_items([("M", make_pattern(), 2)])
     monkeypatch.setattr(nesting, "MARGIN", -30.0)
     with pytest.raises(ExportError, match="within the time budget"):
@@ -241,8 +278,13 @@ def test_marker_labels_upright_legible_inside(nested):
 
     from core.marker.nesting import _rot
     from core.marker.render import LABEL_MIN, _text_place, marker_dxf
-    turned = [dataclasses.replace(p, angle=p.angle + 180.0, rotation=_rot(180.0) @ p.rotation,
-                                  translation=p.translation + [0.0, 0.0]) for p in nested.placements]
+
+    turned = [
+        dataclasses.replace(
+            p, angle=p.angle + 180.0, rotation=_rot(180.0) @ p.rotation, translation=p.translation + [0.0, 0.0]
+        )
+        for p in nested.placements
+    ]
     for p in list(nested.placements) + turned:
         base, angle, h = _text_place(nested, p)
         assert -90.0 < angle <= 90.0 and h >= LABEL_MIN - 1e-12
@@ -261,12 +303,14 @@ def test_spread_pairs_nests_one_piece_of_each_mirrored_pair(tmp_path, capsys):
     image; a piece that is its own mirror image half as often (each copy cuts two); a pair whose sides differ,
     or a lopsided piece of no pair, is refused (the second ply would cut it mirrored)."""
     from export_synth import mirrored_pattern
+
     items = marker_items([("M", mirrored_pattern(), 3)], spread="pairs")
-    assert [(i.piece.name, i.count, i.plies, i.pair, i.garments) for i in items] == \
-        [("front_left", 3, 2, "front_right", 3)]
+    assert [(i.piece.name, i.count, i.plies, i.pair, i.garments) for i in items] == [
+        ("front_left", 3, 2, "front_right", 3)
+    ]
     single = marker_items([("M", mirrored_pattern(), 3)])
     assert [(i.piece.name, i.count, i.plies) for i in single] == [("front_left", 3, 1), ("front_right", 3, 1)]
-    sym = marker_items([("M", make_pattern(), 3)], spread="pairs")        # front and back: their own mirror images
+    sym = marker_items([("M", make_pattern(), 3)], spread="pairs")  # front and back: their own mirror images
     assert [(i.piece.name, i.count, i.plies, i.pair) for i in sym] == [("front", 2, 2, ""), ("back", 2, 2, "")]
     with pytest.raises(ExportError, match="not mirror images"):
         marker_items([("M", mirrored_pattern(bulge=0.004), 1)], spread="pairs")
@@ -278,8 +322,9 @@ def test_spread_pairs_nests_one_piece_of_each_mirrored_pair(tmp_path, capsys):
         marker_items([("M", make_pattern(), 1)], spread="three")
     pat = tmp_path / "M"
     save_pattern(mirrored_pattern(), pat)
-    rc, cap = _cli(capsys, pat, "--width", 1500, "--seconds", 1, "--sizes", "M:2", "--spread", "pairs",
-                   "--out", tmp_path / "m")
+    rc, cap = _cli(
+        capsys, pat, "--width", 1500, "--seconds", 1, "--sizes", "M:2", "--spread", "pairs", "--out", tmp_path / "m"
+    )
     assert rc == 0, cap.err
     rep = json.loads((tmp_path / "m" / "marker.json").read_text())
     assert rep["spread"] == "pairs" and rep["plies"] == 2 and rep["face_to_face"] == {"M/front_left": "front_right"}

@@ -1,21 +1,26 @@
 """Nesting outlines (core.marker.outline) hold the true cut line, and a marker of curved, concave
 pieces keeps the true cut lines apart, inside the fabric, grain kept."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from core.marker.outline import CLEARANCE, NEST_TOLERANCE, holds, nest_outline, simplify_indices
-from core.geom.polygon import distance_to_polyline, offset_loop, points_in_polygon, remove_loops, signed_area
 from marker_synth import overlap, wavy_pattern
+
+from core.geom.polygon import distance_to_polyline, offset_loop, points_in_polygon, remove_loops, signed_area
+from core.marker.outline import CLEARANCE, NEST_TOLERANCE, holds, nest_outline, simplify_indices
 
 
 def _blob(seed: int, n: int = 400) -> np.ndarray:
     """A concave, wiggly closed loop (counter-clockwise), about 0.3 m across."""
     rng = np.random.default_rng(seed)
     th = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
-    r = 0.15 * (1 + 0.25 * np.sin(rng.integers(3, 7) * th + rng.uniform(0, 6))
-                + 0.01 * np.sin(rng.integers(30, 60) * th) + 0.002 * rng.standard_normal(n))
+    r = 0.15 * (
+        1
+        + 0.25 * np.sin(rng.integers(3, 7) * th + rng.uniform(0, 6))
+        + 0.01 * np.sin(rng.integers(30, 60) * th)
+        + 0.002 * rng.standard_normal(n)
+    )
     return np.column_stack([r * np.cos(th), r * np.sin(th)])
 
 
@@ -45,14 +50,15 @@ def test_holds_can_fail():
     corner_cut = np.array([[-0.1, -0.1], [1.1, -0.1], [1.1, 0.85], [0.85, 1.1], [-0.1, 1.1]])
     assert not holds(corner_cut, square)
     notch = np.array([[-0.1, -0.1], [0.4, -0.1], [0.5, 0.2], [0.6, -0.1], [1.1, -0.1], [1.1, 1.1], [-0.1, 1.1]])
-    assert not holds(notch, square)   # every square vertex inside, yet the notch reaches into the square
-    assert not holds(square[::-1] * 1.1 - 0.05, square)   # clockwise
+    assert not holds(notch, square)  # every square vertex inside, yet the notch reaches into the square
+    assert not holds(square[::-1] * 1.1 - 0.05, square)  # clockwise
 
 
 def test_marker_curved_pieces_true_cut_lines_apart():
     """Curved, concave pieces with wavy sides (six copies) nested: the true cut lines do not overlap, lie on
     the fabric, touch-close (so the check bites), and every piece is turned 0 or 180 degrees only."""
     from core.marker.nesting import marker_items, nest, placed_outline
+
     pytest.importorskip("spyrrow")
     width = 0.6
     items = marker_items([("M", wavy_pattern(3), 2)])
@@ -62,10 +68,10 @@ def test_marker_curved_pieces_true_cut_lines_apart():
     closest = np.inf
     for i, a in enumerate(loops):
         assert a[:, 1].min() >= -1e-6 and a[:, 1].max() <= width + 1e-6 and a[:, 0].min() >= -1e-6
-        for b in loops[i + 1:]:
+        for b in loops[i + 1 :]:
             assert not overlap(a, b)
             closest = min(closest, float(distance_to_polyline(a, b).min()))
-    assert closest < 0.002   # the nester packed pieces against each other
+    assert closest < 0.002  # the nester packed pieces against each other
     for p in m.placements:
         assert min(abs(p.angle - a) for a in (0.0, 180.0, -180.0)) < 1e-6
     assert m.efficiency == pytest.approx(sum(signed_area(a) for a in loops) / (width * m.length), rel=1e-9)

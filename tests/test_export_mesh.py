@@ -1,7 +1,7 @@
 """core.export.mesh: GLB (header, chunks, accessors, UVs = pattern uv) and OBJ with vt."""
+
 import numpy as np
 import pytest
-
 from export_synth import drape_positions, make_pattern
 
 from core.export import mesh

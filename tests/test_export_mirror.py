@@ -8,6 +8,7 @@ the fold); the teaser's left and right pieces (declared pairs) must stay
 mirror images too. Patterns are solved on coarse cuts (3 cm edges) to keep
 the module at a few seconds.
 """
+
 import json
 from pathlib import Path
 
@@ -16,9 +17,9 @@ import pytest
 
 from core.export.fold_half import fold_axis
 from core.export.mirror_check import MIRROR_TOL, REFLECTIONS, mirror_gap, points_apart
-from core.geom.polygon import centroid
 from core.export.pieces import build_pieces
 from core.export.print_set import print_set
+from core.geom.polygon import centroid
 from core.geom.polyline import polyline_length
 
 REPO = Path(__file__).resolve().parent.parent
@@ -29,6 +30,7 @@ DESIGNS = ("dress", "teaser_shirt_pants")
 def patterns(anny, tmp_path_factory):
     from core.cli import build_parser
     from core.pattern.io import load_pattern
+
     root = tmp_path_factory.mktemp("mirror")
     out = {}
     for name in DESIGNS:
@@ -110,6 +112,7 @@ def test_both_sides_of_every_seam_match(patterns, name):
 def test_dress_prints_its_halves_on_the_fold(patterns, tmp_path):
     """The tiled PDFs print each of the dress's pieces once, as its half on the fold (export.json says how)."""
     from core.export import export_pattern
+
     export_pattern(patterns["dress"], tmp_path, formats="pdf")
     summary = json.loads((tmp_path / "export.json").read_text())
     for paper in ("a4", "letter"):
@@ -120,12 +123,17 @@ def test_dress_prints_its_halves_on_the_fold(patterns, tmp_path):
 
 def _texts(out: Path):
     """The label texts of every file written: SVG (per piece group), AAMA DXF (per block), plain DXF (all)."""
-    import ezdxf
     import xml.etree.ElementTree as ET
+
+    import ezdxf
+
     ns = {"svg": "http://www.w3.org/2000/svg"}
     root = ET.parse(out / "pattern.svg").getroot()
-    svg = {g.get("data-piece"): [t.text for t in g.findall("svg:text", ns)] for g in root.iter(f"{{{ns['svg']}}}g")
-           if g.get("data-piece")}
+    svg = {
+        g.get("data-piece"): [t.text for t in g.findall("svg:text", ns)]
+        for g in root.iter(f"{{{ns['svg']}}}g")
+        if g.get("data-piece")
+    }
     aama = {}
     for b in ezdxf.readfile(out / "pattern_astm.dxf").blocks:
         if not b.name.startswith("*"):
@@ -141,7 +149,9 @@ def test_svg_and_dxf_labels_follow_the_mirror_check(tmp_path, bulge, mirrored):
     makes both labels say ``not the mirror of X: N mm off``, the figure the PDF's plan gives."""
     pytest.importorskip("ezdxf")
     from export_synth import mirrored_pattern
+
     from core.export import export_pattern
+
     export_pattern(mirrored_pattern(bulge), tmp_path, formats="svg,dxf,pdf")
     summary = json.loads((tmp_path / "export.json").read_text())
     plan = summary["pdf"]["a4"]["pieces"]
@@ -151,8 +161,10 @@ def test_svg_and_dxf_labels_follow_the_mirror_check(tmp_path, bulge, mirrored):
     else:
         mm = plan[0]["not_mirrored_mm"]
         assert mm == plan[1]["not_mirrored_mm"] > 0.5
-        want = {"front_left": f"cut 1, not the mirror of front_right: {mm:g} mm off",
-                "front_right": f"cut 1, not the mirror of front_left: {mm:g} mm off"}
+        want = {
+            "front_left": f"cut 1, not the mirror of front_right: {mm:g} mm off",
+            "front_right": f"cut 1, not the mirror of front_left: {mm:g} mm off",
+        }
     svg, aama, plain = _texts(tmp_path)
     for piece, line in want.items():
         assert line in svg[piece], svg[piece]

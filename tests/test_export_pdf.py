@@ -1,5 +1,6 @@
 """core.export.pdf and tiling: 1:1 scale (test square, form geometry), nested pages with lines only, overlap joins,
 wide pieces, plotter sheet."""
+
 import base64
 import math
 import re
@@ -7,7 +8,6 @@ import zlib
 
 import numpy as np
 import pytest
-
 from export_synth import make_pattern
 
 pytest.importorskip("reportlab")
@@ -28,9 +28,9 @@ def parse_pdf(data: bytes):
         stream = None
         head = body
         if sm:
-            head = body[:sm.start()]
+            head = body[: sm.start()]
             length = int(re.search(rb"/Length (\d+)", head).group(1))
-            raw = body[sm.end():sm.end() + length]
+            raw = body[sm.end() : sm.end() + length]
             if b"ASCII85Decode" in head:
                 raw = base64.a85decode(raw.strip().removesuffix(b"~>"), adobe=False)
             if b"FlateDecode" in head:
@@ -111,8 +111,10 @@ def test_tiled_pdf_pages_scale_and_test_square(made, nested, paper, size_mm):
         assert mediabox(head) == pytest.approx([0, 0, size_mm[0] * MM, size_mm[1] * MM], abs=1e-3)
     # the 10 cm test square is on page 1 (and only there)
     squares = [re.findall(rb"(-?[\d.]+) (-?[\d.]+) (-?[\d.]+) (-?[\d.]+) re", c) for _, c in pg]
-    hits = [[s for s in page if abs(float(s[2]) - 100 * MM) < 0.01 and abs(float(s[3]) - 100 * MM) < 0.01]
-            for page in squares]
+    hits = [
+        [s for s in page if abs(float(s[2]) - 100 * MM) < 0.01 and abs(float(s[3]) - 100 * MM) < 0.01]
+        for page in squares
+    ]
     assert len(hits[0]) == 1 and not any(hits[1:])
     x, y = float(hits[0][0][0]), float(hits[0][0][1])
     assert 0 < x and x + 100 * MM < size_mm[0] * MM and 0 < y and y + 100 * MM < size_mm[1] * MM
@@ -142,15 +144,22 @@ def test_every_page_has_a_line_and_every_line_is_printed(made, printed_pages, pa
         win = grid.window(r, c)
         # a printed page is page 1 or holds a line; a left-out page holds none
         assert (r, c) == (0, 0) or _segments_in(win, loops)
-        drawn = {int(k): (np.array([[float(a), float(cc)], [float(b), float(d)]]), (float(x), float(y)))
-                 for a, b, cc, d, x, y, k in re.findall(
-                     rb"(-?[\d.]+) (-?[\d.]+) (-?[\d.]+) (-?[\d.]+) (-?[\d.]+) (-?[\d.]+) cm\s*/FormXob\.piece(\d+) Do",
-                     content)}
+        drawn = {
+            int(k): (np.array([[float(a), float(cc)], [float(b), float(d)]]), (float(x), float(y)))
+            for a, b, cc, d, x, y, k in re.findall(
+                rb"(-?[\d.]+) (-?[\d.]+) (-?[\d.]+) (-?[\d.]+) (-?[\d.]+) (-?[\d.]+) cm\s*/FormXob\.piece(\d+) Do",
+                content,
+            )
+        }
         for k, piece in enumerate(pieces):
             corners = np.array([[piece.bbox[i, 0], piece.bbox[j, 1]] for i in (0, 1) for j in (0, 1)])
             q = lay.place(k, corners)
-            covers = not (q[:, 0].max() < win[0, 0] or q[:, 0].min() > win[1, 0] or q[:, 1].max() < win[0, 1]
-                          or q[:, 1].min() > win[1, 1])
+            covers = not (
+                q[:, 0].max() < win[0, 0]
+                or q[:, 0].min() > win[1, 0]
+                or q[:, 1].max() < win[0, 1]
+                or q[:, 1].min() > win[1, 1]
+            )
             assert (k in drawn) == covers
             if covers:  # piece frame -> page: turn, + layout offset - window corner + margin, in points
                 R, t = drawn[k]
@@ -162,10 +171,11 @@ def test_every_page_has_a_line_and_every_line_is_printed(made, printed_pages, pa
                 assert not _segments_in(grid.window(r, c), loops)
     # the pieces do not overlap on the sheet and stay on it
     from core.geom.polygon import points_in_polygon
+
     outlines = [lay.place(i, p.cut[0]) for i, p in enumerate(pieces)]
     for i, a in enumerate(outlines):
         assert a.min() >= 0 and np.all(a <= lay.size + 1e-9)
-        for b in outlines[i + 1:]:
+        for b in outlines[i + 1 :]:
             assert not points_in_polygon(a, b).any() and not points_in_polygon(b, a).any()
 
 
@@ -175,6 +185,7 @@ def test_labels_and_grain_lines_are_on_printed_pages(made, printed_pages, paper)
     line, clear of the lines) and each grain line shows at least GRAIN_SHOWN; the forms draw them there."""
     from core.export import print_labels, tiling
     from core.geom.polygon import points_in_polygon
+
     pieces = made[1]
     lay, grid, ink, printed = printed_pages[paper]
     lines = tiling.line_pages(pieces, lay, grid)
@@ -222,6 +233,7 @@ def test_labels_and_grain_lines_are_on_printed_pages(made, printed_pages, paper)
 def test_tilted_piece_is_drawn_turned_not_scaled(made):
     """A piece tilted by a few degrees is placed by that rotation on every page (cos, sin in the matrix)."""
     from core.export import tiling
+
     pat, pieces, _ = made
     lay = pdf.print_sheet(pieces, "a4")
     angles = np.array(lay.angles, float)
@@ -232,8 +244,11 @@ def test_tilted_piece_is_drawn_turned_not_scaled(made):
     np.testing.assert_array_equal(tiling.rotation(270.0), [[0, 1], [-1, 0]])
     found = 0
     for _, c in pages(parse_pdf(pdf.tiled_pdf(pieces, tilted, "a4", pat.style))):
-        for a, b, cc, d in re.findall(rb"(-?[\d.]+) (-?[\d.]+) (-?[\d.]+) (-?[\d.]+) -?[\d.]+ -?[\d.]+ cm\s*/FormXob"
-                                      rb"\.piece0 Do", c):
+        for a, b, cc, d in re.findall(
+            rb"(-?[\d.]+) (-?[\d.]+) (-?[\d.]+) (-?[\d.]+) -?[\d.]+ -?[\d.]+ cm\s*/FormXob"
+            rb"\.piece0 Do",
+            c,
+        ):
             np.testing.assert_allclose([[float(a), float(cc)], [float(b), float(d)]], R, atol=1e-5)
             found += 1
     assert found
@@ -250,14 +265,18 @@ def test_join_marks_name_printed_neighbours(printed_pages, paper):
     lay, grid, ink, printed = printed_pages[paper]
     for (r, c), (_, content) in printed:
         joins = set(re.findall(rb"\(join (\w+)\) Tj", content))
-        want = {pdf.page_name(rr, cc).encode() for rr, cc in ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1))
-                if 0 <= rr < grid.rows and 0 <= cc < grid.cols and ink[rr, cc]}
+        want = {
+            pdf.page_name(rr, cc).encode()
+            for rr, cc in ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1))
+            if 0 <= rr < grid.rows and 0 <= cc < grid.cols and ink[rr, cc]
+        }
         assert joins == want
 
 
 def test_wide_piece_tiles(made):
     """A piece wider than any page grid tried before (1.6 m) still tiles, on as many columns as it needs."""
     from export_synth import wide_pattern
+
     pieces = build_pieces(wide_pattern(1.6))
     for paper in ("a4", "letter"):
         lay = pdf.print_sheet(pieces, paper)
@@ -308,7 +327,9 @@ def _forms(data: bytes):
 
 def _export(pat, out, **kw):
     import json
+
     from core.export import export_pattern
+
     export_pattern(pat, out, formats="svg,dxf,pdf", **kw)
     return json.loads((out / "export.json").read_text())
 
@@ -317,17 +338,26 @@ def test_mirrored_pair_prints_once_labelled_cut_2(tmp_path):
     """A declared pair whose sides are mirror images is one piece on the tiled PDFs, labelled to cut 2 (1 + 1
     mirrored) naming both; the SVG, DXF and plotter sheet keep both pieces, each cut once."""
     from export_synth import mirrored_pattern
+
     s = _export(mirrored_pattern(), tmp_path / "o")
     for paper in ("a4", "letter"):
-        assert s["pdf"][paper]["pieces"] == [{"piece": "front_left", "quantity": 2, "cut": "1 as printed + 1 mirrored",
-                                              "pieces": ["front_left", "front_right"]}]
+        assert s["pdf"][paper]["pieces"] == [
+            {
+                "piece": "front_left",
+                "quantity": 2,
+                "cut": "1 as printed + 1 mirrored",
+                "pieces": ["front_left", "front_right"],
+            }
+        ]
         forms = _forms((tmp_path / "o" / f"pattern_{paper}.pdf").read_bytes())
         assert len(forms) == 1
         assert b"(cut 2: front_left) Tj" in forms[0] and b"(+ mirrored \\(front_right\\)) Tj" in forms[0]
     assert len(_forms((tmp_path / "o" / "pattern_plotter.pdf").read_bytes())) == 2
     assert [(p["name"], p["quantity"]) for p in s["pieces"]] == [("front_left", 1), ("front_right", 1)]
-    assert s["pdf"]["plotter_pieces"] == [{"piece": "front_left", "quantity": 1},
-                                          {"piece": "front_right", "quantity": 1}]
+    assert s["pdf"]["plotter_pieces"] == [
+        {"piece": "front_left", "quantity": 1},
+        {"piece": "front_right", "quantity": 1},
+    ]
     svg = (tmp_path / "o" / "pattern.svg").read_text()
     assert svg.count('data-quantity="1"') == 2 and "front_right" in svg
     # print_all: both pieces on the tiled pages, as built
@@ -341,7 +371,9 @@ def test_pair_that_is_not_a_mirror_prints_twice(tmp_path):
     """A right piece 4 mm wider on its outer side (ease painted on one side), or one that is a copy rather than
     a mirror image of the left, prints both pieces, each labelled as not the other's mirror."""
     from export_synth import mirrored_pattern
+
     from core.export.print_set import MIRROR_TOL, mirror_gap
+
     s = _export(mirrored_pattern(bulge=0.004), tmp_path / "o")
     plan = s["pdf"]["a4"]["pieces"]
     assert [(p["piece"], p["quantity"]) for p in plan] == [("front_left", 1), ("front_right", 1)]
@@ -363,7 +395,9 @@ def test_printing_pairs_once_saves_pages_without_empty_ones(tmp_path):
     """The tube with a mirrored pair beside it (a small teaser): fewer pages with the pair printed once, every
     printed page crossed by a line; the same input gives the same bytes."""
     from export_synth import mirrored_pattern
+
     from core.export.print_set import print_set
+
     pat = make_pattern()
     pair = mirrored_pattern()
     for p in pair.panels:
@@ -383,7 +417,7 @@ def test_printing_pairs_once_saves_pages_without_empty_ones(tmp_path):
         counts[print_all] = int(ink.sum())
     assert counts[False] < counts[True]
     a = _export(pat, tmp_path / "a")
-    b = _export(pat, tmp_path / "b")
+    _export(pat, tmp_path / "b")
     assert a["pdf"]["a4"]["pages"] == counts[False]
     for name in ("pattern_a4.pdf", "pattern_letter.pdf"):
         assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes()
@@ -395,6 +429,7 @@ def test_symmetric_piece_prints_as_a_half_on_the_fold(tmp_path):
     labelled to cut on the fold; a front 5 mm wider on one side prints whole."""
     from core.export.print_set import print_set
     from core.geom.polygon import distance_to_polyline, points_in_polygon, signed_area
+
     pat = make_pattern()
     pieces = build_pieces(pat)
     printed, plan = print_set(pat, pieces)
@@ -416,6 +451,7 @@ def test_symmetric_piece_prints_as_a_half_on_the_fold(tmp_path):
         assert len(half.edge_allowance[0]) == len(half.sew[0]) and 0.0 in half.edge_allowance[0]
     # the label placed inside the half
     from core.export import tiling
+
     for half in printed:
         assert points_in_polygon(tiling.label_box(half, half.label_at), half.sew[0]).all()
     # one side of the front pushed out by 5 mm: not symmetric, printed whole; the back still folds
@@ -432,6 +468,7 @@ def test_a_label_is_placed_whole_on_one_page(printed_pages):
     """A label lies whole on one printed page where it can (read there, not split across two): a box across
     the edge between two printed pages does not count as placed, one inside a page does."""
     from core.export import print_labels
+
     lay, grid, ink, _ = printed_pages["a4"]
     ink = np.ones_like(ink)
     (x0, y0), (x1, y1) = grid.window(0, 0)
@@ -439,7 +476,7 @@ def test_a_label_is_placed_whole_on_one_page(printed_pages):
     R, off = pdf._turn(lay, 0), lay.offsets[0]
 
     def local(box):
-        return (np.asarray(box, float) - off) @ R          # the inverse of the piece's quarter turn and place
+        return (np.asarray(box, float) - off) @ R  # the inverse of the piece's quarter turn and place
 
     inside = local([[x0 + 0.02, y1 - 0.05], [x0 + 0.08, y1 - 0.05], [x0 + 0.08, y1 - 0.02], [x0 + 0.02, y1 - 0.02]])
     across = local([[x1 - 0.03, y1 - 0.05], [x1 + 0.03, y1 - 0.05], [x1 + 0.03, y1 - 0.02], [x1 - 0.03, y1 - 0.02]])

@@ -1,7 +1,7 @@
 """core.export.pieces, allowance, notches: cut lines, allowance widths, notches, grain, labels."""
+
 import numpy as np
 import pytest
-
 from export_synth import make_pattern
 from meshes import ring_grid_faces
 
@@ -137,6 +137,7 @@ def test_grain_rotation_keeps_lengths_and_points_up():
 
 def test_labels_carry_style_size_quantity_and_mirror():
     from export_synth import mirrored_pattern
+
     left, right = build_pieces(mirrored_pattern())
     assert left.label[0] == "mirror test" and "size: M" in left.label
     assert left.label[3] == "cut 1, mirrored by front_right" and right.label[3] == "cut 1, mirror of front_left"
@@ -182,8 +183,9 @@ def test_build_pieces_is_deterministic():
 
 
 def test_narrow_slit_is_refused_with_a_clear_error():
-    corners = np.array([[0, 0], [0.4, 0], [0.4, 0.1925], [0.2, 0.1925], [0.2, 0.2075], [0.4, 0.2075],
-                        [0.4, 0.4], [0, 0.4]])
+    corners = np.array(
+        [[0, 0], [0.4, 0], [0.4, 0.1925], [0.2, 0.1925], [0.2, 0.2075], [0.4, 0.2075], [0.4, 0.4], [0, 0.4]]
+    )
     pts = []
     for i in range(len(corners)):
         a, b = corners[i], corners[(i + 1) % len(corners)]
@@ -204,9 +206,21 @@ def test_piece_with_a_hole():
     uv = np.array([[rr * np.cos(t), rr * np.sin(t)] for rr in r for t in th])
     faces = ring_grid_faces(nr, na)
     from core.pattern.types import Pattern, PatternPanel
+
     f = len(faces)
-    panel = PatternPanel("cape", "cape", uv, np.array(faces), np.arange(len(uv)), np.zeros((len(uv), 3)),
-                         np.array([0.0, 1.0]), np.ones(f), np.ones(f), np.ones(f), np.ones(f))
+    panel = PatternPanel(
+        "cape",
+        "cape",
+        uv,
+        np.array(faces),
+        np.arange(len(uv)),
+        np.zeros((len(uv), 3)),
+        np.array([0.0, 1.0]),
+        np.ones(f),
+        np.ones(f),
+        np.ones(f),
+        np.ones(f),
+    )
     pat = Pattern("cape", {"size": "M"}, {"cape": "upper"}, [panel], [])
     piece = build_pieces(pat, allowance=0.01)[0]
     assert len(piece.sew) == 2 and len(piece.cut) == 2
@@ -230,9 +244,11 @@ def test_duplicate_boundary_vertex_on_a_seam_still_gets_notches():
 
 
 def test_label_stays_inside_narrow_pieces():
-    from export_synth import grid_piece, _panel
+    from export_synth import _panel, grid_piece
+
     from core.export.pieces import CHAR_WIDTH
     from core.pattern.types import Pattern
+
     panels = []
     for k, w in enumerate((0.5, 0.12, 0.07)):
         uv, faces, loop, _ = grid_piece(5, 9, lambda s, t, w=w: ((s - 0.5) * w, t * 0.6))
@@ -248,8 +264,10 @@ def test_label_stays_inside_narrow_pieces():
 
 
 def test_self_seam_closing_a_tube():
-    from export_synth import grid_piece, _panel
+    from export_synth import _panel, grid_piece
+
     from core.pattern.types import Pattern, PatternSeam
+
     uv, faces, loop, sides = grid_piece(9, 7, lambda s, t: (s * 0.8, t * 0.45))
     panel = _panel("tube", uv, faces, loop, [0.0, 1.0], hems=[sides["bottom"]])
     seam = PatternSeam("back_seam", "tube", "tube", sides["left"][::-1], sides["right"])

@@ -1,6 +1,7 @@
 """A pattern's size as every file names it (core.export.pieces.size_label): a chart size, else a batch body's
 readable name (``sample-0017``), never a Python dict of shape parameters; the body's shape and girths in their
 own fields of export.json."""
+
 from __future__ import annotations
 
 import json
@@ -12,17 +13,31 @@ from core.export.pieces import readable_name, size_label
 from core.pattern.types import Pattern
 
 
-@pytest.mark.parametrize("label, name", [("sample 17", "sample-0017"), ("row 3", "row-0003"),
-                                         ("betas 12345", "betas-12345"), ("Anna B.", "Anna B."),
-                                         ("  ", "custom"), ("Zoë", "Zoe")])
+@pytest.mark.parametrize(
+    "label, name",
+    [
+        ("sample 17", "sample-0017"),
+        ("row 3", "row-0003"),
+        ("betas 12345", "betas-12345"),
+        ("Anna B.", "Anna B."),
+        ("  ", "custom"),
+        ("Zoë", "Zoe"),
+    ],
+)
 def test_readable_name(label, name):
     assert readable_name(label) == name
 
 
-@pytest.mark.parametrize("body, size", [({"shape": "M"}, "M"),
-                                        ({"shape": {"age": 0.9}, "size": "women:L"}, "women:L"),
-                                        ({"shape": {"age": 0.9}, "name": "sample-0003"}, "sample-0003"),
-                                        ({"shape": {"age": 0.9}}, "custom"), ({}, "-")])
+@pytest.mark.parametrize(
+    "body, size",
+    [
+        ({"shape": "M"}, "M"),
+        ({"shape": {"age": 0.9}, "size": "women:L"}, "women:L"),
+        ({"shape": {"age": 0.9}, "name": "sample-0003"}, "sample-0003"),
+        ({"shape": {"age": 0.9}}, "custom"),
+        ({}, "-"),
+    ],
+)
 def test_size_label(body, size):
     assert size_label(Pattern(style="s", body=body, garments={}, panels=[], seams=[])) == size
 
@@ -44,9 +59,9 @@ def test_batch_item_files_name_the_sampled_body(tmp_path):
     folder = tmp_path / "items" / row["folder"]
     summary = json.loads((folder / "export" / "export.json").read_text())
     assert summary["size"] == "sample-0000" and summary["body"]["size"] == "sample-0000"
-    shape = {k[len("shape."):]: v for k, v in row.items() if k.startswith("shape.")}
+    shape = {k[len("shape.") :]: v for k, v in row.items() if k.startswith("shape.")}
     assert summary["body"]["shape"] == pytest.approx(shape)
-    girths = {k[len("body."):-len("_cm")]: v for k, v in row.items() if k.startswith("body.") and k.endswith("_cm")}
+    girths = {k[len("body.") : -len("_cm")]: v for k, v in row.items() if k.startswith("body.") and k.endswith("_cm")}
     assert girths and summary["body"]["measurements_cm"] == pytest.approx(girths)
     pattern = json.loads((folder / "pattern.json").read_text())
     assert pattern["body"]["name"] == "sample-0000" and pattern["body"]["measurements_cm"] == pytest.approx(girths)

@@ -1,16 +1,16 @@
 """core.export.svg: 1:1 millimetres, one group per piece, distinct colours."""
+
 import re
 import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
-
 from export_synth import make_pattern
 
 from core.export.pieces import build_pieces
+from core.export.svg import COLOURS, svg_document
 from core.geom.layout import layout_pieces
 from core.geom.polyline import polyline_length
-from core.export.svg import COLOURS, svg_document
 
 NS = {"svg": "http://www.w3.org/2000/svg"}
 
@@ -60,7 +60,7 @@ def test_piece_sizes_in_mm_equal_the_pattern(svg):
     pat, pieces, lay, root = svg
     for g, piece in zip(root.findall("svg:g", NS), pieces):
         panel = pat.panel(g.get("data-piece"))
-        (sew, closed), = _points(g.find("svg:path[@class='sew']", NS).get("d"))
+        ((sew, closed),) = _points(g.find("svg:path[@class='sew']", NS).get("d"))
         assert closed
         # the pattern's own numbers: uv (m) in the grain-up frame
         loop = panel.boundary[0]
@@ -78,5 +78,6 @@ def test_notch_count_matches_pieces(svg):
         segs = _points(g.find("svg:path[@class='notch']", NS).get("d"))
         assert len(segs) == len(piece.notches)
         for (pts, _), n in zip(segs, piece.notches):
-            assert np.linalg.norm(pts[1] - pts[0]) == pytest.approx(np.linalg.norm(n.segment[1] - n.segment[0]) * 1000,
-                                                                     abs=0.01)
+            assert np.linalg.norm(pts[1] - pts[0]) == pytest.approx(
+                np.linalg.norm(n.segment[1] - n.segment[0]) * 1000, abs=0.01
+            )

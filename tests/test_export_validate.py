@@ -1,7 +1,7 @@
 """core.export.validate: invalid patterns and drapes are refused with errors naming the culprit."""
+
 import numpy as np
 import pytest
-
 from export_synth import drape_positions, make_pattern
 
 from core.errors import ExportError
@@ -61,20 +61,23 @@ def _hem(p):
     p.panel("front").hems = [np.array([-1, 0])]
 
 
-@pytest.mark.parametrize("breaker,words", [
-    (_nan_uv, ["back", "uv", "not finite"]),
-    (_flat_piece, ["front", "degenerate"]),
-    (_tangled, ["front", "crosses itself"]),
-    (_seam_piece, ["side_left", "panel_b", "sleeve"]),
-    (_seam_range, ["side_right", "verts_a"]),
-    (_seam_inside, ["side_left", "boundary"]),
-    (_seam_lengths, ["side_left", "equally long"]),
-    (_faces, ["front", "faces"]),
-    (_grain, ["front", "grain"]),
-    (_dup, ["duplicate", "front"]),
-    (_mirror, ["mirror_of", "nobody"]),
-    (_hem, ["front", "hems[0]"]),
-])
+@pytest.mark.parametrize(
+    "breaker,words",
+    [
+        (_nan_uv, ["back", "uv", "not finite"]),
+        (_flat_piece, ["front", "degenerate"]),
+        (_tangled, ["front", "crosses itself"]),
+        (_seam_piece, ["side_left", "panel_b", "sleeve"]),
+        (_seam_range, ["side_right", "verts_a"]),
+        (_seam_inside, ["side_left", "boundary"]),
+        (_seam_lengths, ["side_left", "equally long"]),
+        (_faces, ["front", "faces"]),
+        (_grain, ["front", "grain"]),
+        (_dup, ["duplicate", "front"]),
+        (_mirror, ["mirror_of", "nobody"]),
+        (_hem, ["front", "hems[0]"]),
+    ],
+)
 def test_invalid_pattern_names_the_culprit(breaker, words):
     pat = make_pattern()
     validate_pattern(pat)  # fine before breaking it
@@ -124,7 +127,7 @@ def test_drape_of_another_pattern_is_refused():
     # the pattern's own triangles, in any order and rotation: accepted
     rolled = np.roll(faces[::-1], 1, axis=1)
     assert validate_drape(pat, pos, rolled).shape == pos.shape
-    assert validate_drape(pat, pos, np.zeros((0, 3), int)).shape == pos.shape    # no faces: not checked
+    assert validate_drape(pat, pos, np.zeros((0, 3), int)).shape == pos.shape  # no faces: not checked
     # another pattern with as many vertices: other triangles (a flipped diagonal), one missing, one extra
     other = faces.copy()
     other[0] = [faces[0][0], faces[0][1], faces[1][2]]

@@ -1,4 +1,5 @@
 """core.geom.layout: grain frame, interior point, grain line, arrow heads, sheet layout (one test each)."""
+
 import math
 
 import numpy as np
@@ -76,9 +77,13 @@ def test_layout_has_no_overlaps_and_reserves_the_corner():
     for i, a in enumerate(placed):
         assert a[0, 0] >= 0.02 - 1e-12 and a[0, 1] >= 0.02 - 1e-12
         assert a[1, 0] <= lay.size[0] - 0.02 + 1e-12 and a[1, 1] <= lay.size[1] - 0.02 + 1e-12
-        for b in placed[i + 1:]:
-            sep = (a[1, 0] + 0.02 <= b[0, 0] + 1e-12 or b[1, 0] + 0.02 <= a[0, 0] + 1e-12 or
-                   a[1, 1] + 0.02 <= b[0, 1] + 1e-12 or b[1, 1] + 0.02 <= a[0, 1] + 1e-12)
+        for b in placed[i + 1 :]:
+            sep = (
+                a[1, 0] + 0.02 <= b[0, 0] + 1e-12
+                or b[1, 0] + 0.02 <= a[0, 0] + 1e-12
+                or a[1, 1] + 0.02 <= b[0, 1] + 1e-12
+                or b[1, 1] + 0.02 <= a[0, 1] + 1e-12
+            )
             assert sep
     # the reserved box is at the top-left corner
     assert lay.reserved[0, 0] == pytest.approx(0.02) and lay.reserved[1, 1] == pytest.approx(lay.size[1] - 0.02)

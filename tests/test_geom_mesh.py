@@ -1,4 +1,5 @@
 """core.geom.mesh: triangle areas, signed 2D areas, face and vertex normals, boundary loops (one test each)."""
+
 import numpy as np
 import pytest
 

@@ -1,10 +1,22 @@
 """core.geom.polygon: one test per operation (signed area, centroid, offset, crossings, loops, inside, corners, distance, rays)."""
+
 import numpy as np
 import pytest
 
 from core.errors import ExportError
-from core.geom.polygon import (centroid, cross2, distance_to_polyline, line_intersection, offset_loop, points_in_polygon,
-                               ray_hit, remove_loops, segments_cross, signed_area, turn_points)
+from core.geom.polygon import (
+    centroid,
+    cross2,
+    distance_to_polyline,
+    line_intersection,
+    offset_loop,
+    points_in_polygon,
+    ray_hit,
+    remove_loops,
+    segments_cross,
+    signed_area,
+    turn_points,
+)
 
 SQUARE = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
 
@@ -25,7 +37,7 @@ def test_signed_area_sign_follows_orientation():
 def test_centroid_is_the_area_centroid_either_orientation():
     # an L of two unit squares and a 2x1 bar: the area centroid, not the vertex mean (which is pulled to the corner)
     ell = np.array([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]], float)
-    expected = np.array([2 * 1.0 + 1 * 0.5, 2 * 0.5 + 1 * 1.5]) / 3.0   # bar (area 2) and square (area 1)
+    expected = np.array([2 * 1.0 + 1 * 0.5, 2 * 0.5 + 1 * 1.5]) / 3.0  # bar (area 2) and square (area 1)
     np.testing.assert_allclose(centroid(ell), expected, atol=1e-12)
     np.testing.assert_allclose(centroid(ell[::-1]), expected, atol=1e-12)
     assert not np.allclose(centroid(ell), ell.mean(axis=0))
@@ -100,7 +112,7 @@ def test_offset_of_too_few_points_is_refused():
 def test_remove_loops_reports_the_area_cut_away():
     poly = np.array([[0, 0], [1, 0], [1, 1.1], [1.1, 1.0], [0.9, 1.0], [0, 1]], float)
     out, removed = remove_loops(poly, return_removed=True)
-    assert removed == pytest.approx(0.5 * 0.1 * 0.1, rel=1e-9)   # the ear (1, 1), (1, 1.1), (1.1, 1)
+    assert removed == pytest.approx(0.5 * 0.1 * 0.1, rel=1e-9)  # the ear (1, 1), (1, 1.1), (1.1, 1)
     # the hole orientation keeps the clockwise part
     hole, _ = remove_loops(poly[::-1], orientation=-1.0, return_removed=True)
     assert signed_area(hole) < 0 and segments_cross(hole) is None
@@ -123,8 +135,9 @@ def test_distance_to_polyline_closed_and_open():
     q = np.array([[0.5, -0.2], [0.5, 0.5], [-0.3, 1.4]])
     np.testing.assert_allclose(distance_to_polyline(q, SQUARE), [0.2, 0.5, 0.5])
     # open: the closing edge (0, 1) -> (0, 0) is not part of it
-    np.testing.assert_allclose(distance_to_polyline(np.array([[-0.1, 0.5]]), SQUARE, closed=False),
-                               [np.hypot(0.1, 0.5)])
+    np.testing.assert_allclose(
+        distance_to_polyline(np.array([[-0.1, 0.5]]), SQUARE, closed=False), [np.hypot(0.1, 0.5)]
+    )
 
 
 def test_ray_hit_first_crossing_or_none():

@@ -1,4 +1,5 @@
 """core.geom.polyline: length, cumulative length, point at arc length (one test each)."""
+
 import numpy as np
 import pytest
 

@@ -1,4 +1,5 @@
 """Closest-point, distance and ray queries on a mesh (core.geom.queries), on a unit cube."""
+
 import numpy as np
 import pytest
 
@@ -19,6 +20,7 @@ def _cube():
 
 def test_cube_is_outward():
     from core.geom.mesh import face_normals
+
     v, f = _cube()
     centre = v[f].mean(axis=1) - 0.5
     assert np.all(np.einsum("ij,ij->i", face_normals(v, f), centre) > 0)
@@ -68,9 +70,20 @@ def test_closest_plane():
     point = wp.zeros(n, dtype=wp.vec3, device="cpu")
     normal = wp.zeros(n, dtype=wp.vec3, device="cpu")
     hit = wp.zeros(n, dtype=int, device="cpu")
-    wp.launch(Q.closest_plane, n, inputs=[wp.array(pts, dtype=wp.vec3, device="cpu"),
-                                          wp.array(weight, dtype=float, device="cpu"), mesh.id, 0.1,
-                                          point, normal, hit], device="cpu")
+    wp.launch(
+        Q.closest_plane,
+        n,
+        inputs=[
+            wp.array(pts, dtype=wp.vec3, device="cpu"),
+            wp.array(weight, dtype=float, device="cpu"),
+            mesh.id,
+            0.1,
+            point,
+            normal,
+            hit,
+        ],
+        device="cpu",
+    )
     assert hit.numpy().tolist() == [1, 1, 0, 0]  # the third is farther than 0.1 m
     assert np.allclose(point.numpy()[:2], [[0.5, 0.5, 1.0], [0.3, 0.0, 0.4]], atol=1e-6)
     assert np.allclose(normal.numpy()[:2], [[0.0, 0.0, 1.0], [0.0, -1.0, 0.0]], atol=1e-6)

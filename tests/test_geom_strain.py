@@ -1,4 +1,5 @@
 """core.geom.strain: Jacobians, weft/warp scales and shear of affine maps with known answers."""
+
 import numpy as np
 import pytest
 

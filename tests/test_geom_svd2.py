@@ -1,4 +1,5 @@
 """core.geom.svd2: the closed-form signed 2 x 2 SVD against numpy's."""
+
 import numpy as np
 
 from core.geom.svd2 import clamp_singular_values_below, compose2, signed_svd2
@@ -23,6 +24,7 @@ def test_singular_values_match_numpy_with_the_sign_of_the_determinant():
     B = np.stack([np.stack(out[:2], -1), np.stack(out[2:], -1)], -2)
     assert np.allclose(B, A, atol=1e-12)
 
+
 def test_clamping_opens_small_singular_values_and_unfolds_reflections_only():
     A, c = _stack()
     out = clamp_singular_values_below(c, 0.7)
@@ -46,6 +48,7 @@ def test_clamping_opens_small_singular_values_and_unfolds_reflections_only():
 
 def test_hypot_is_numpys_to_an_ulp_over_the_solvers_range():
     from core.geom.svd2 import hypot
+
     rng = np.random.default_rng(3)
     # Jacobian entries, scales and metre offsets: 1e-9 .. 1e3, either sign, exact zeros included
     x = rng.choice([-1.0, 1.0], 4000) * 10.0 ** rng.uniform(-9, 3, 4000)

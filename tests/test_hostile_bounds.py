@@ -11,6 +11,7 @@
   ranges; the CLI refuses ``--frames``, ``--substeps``, ``--iterations`` out of
   range before any work, in one line naming the option.
 """
+
 import json
 import math
 import subprocess
@@ -18,7 +19,6 @@ import sys
 from pathlib import Path
 
 import pytest
-
 from conftest import sample
 
 from core.drape.options import RANGES, DrapeOptions
@@ -27,13 +27,15 @@ from core.pattern.config import MAX_ITERATIONS, SolverConfig
 
 ROOT = Path(__file__).resolve().parents[1]
 PY = sys.executable
-CAP = 2 * 2**30          # address space of the children, bytes: far below what the old drape grew to
+CAP = 2 * 2**30  # address space of the children, bytes: far below what the old drape grew to
 
 
 @pytest.fixture(scope="module")
 def pattern_obj():
     from drape_synth import tube_skirt
+
     from core.pattern.io import pattern_to_json
+
     return json.loads(json.dumps(pattern_to_json(tube_skirt(1.2, n_rows=6, n_cols=8))))
 
 
@@ -74,8 +76,16 @@ def _cases(obj):
     for g in obj["pins"]:
         for v in BAD_INDEX:
             cases.append((f"pins.{g}[0]={v!r}", "pins", ("pins", g, 0), v))
-    for key, v in (("pins", [1, 2]), ("seams", {"a": 1}), ("report", [1]), ("materials", "cotton"),
-                   ("garments", 3), ("style", {"x": 1}), ("panels", {"a": 1}), ("body", [1])):
+    for key, v in (
+        ("pins", [1, 2]),
+        ("seams", {"a": 1}),
+        ("report", [1]),
+        ("materials", "cotton"),
+        ("garments", 3),
+        ("style", {"x": 1}),
+        ("panels", {"a": 1}),
+        ("body", [1]),
+    ):
         cases.append((f"{key}={v!r}", key, (key,), v))
     return cases
 
@@ -111,8 +121,7 @@ def _run_capped(tmp_path, files):
     (tmp_path / "files.json").write_text(json.dumps([str(f) for f in files]))
     script = tmp_path / "loader.py"
     script.write_text(LOADER.format(cap=CAP))
-    res = subprocess.run([PY, str(script), str(tmp_path / "files.json")], capture_output=True, text=True,
-                         timeout=600)
+    res = subprocess.run([PY, str(script), str(tmp_path / "files.json")], capture_output=True, text=True, timeout=600)
     assert res.returncode == 0, res.stderr[-2000:]
     return json.loads(res.stdout)
 
@@ -121,6 +130,7 @@ def test_hostile_pattern_fields_are_refused_naming_the_field(tmp_path, pattern_o
     cases = _cases(pattern_obj)
     full = request.config.getoption("--full")
     import random
+
     chosen = cases if full else random.Random(19).sample(cases, 150)
     files = []
     for i, (_, _, path, value) in enumerate(chosen):
@@ -132,8 +142,13 @@ def test_hostile_pattern_fields_are_refused_naming_the_field(tmp_path, pattern_o
     crashes = [(c[0], r) for c, r in zip(chosen, results) if r[0] == "crash"]
     assert crashes == []
     for (label, field, path, value), (kind, msg) in zip(chosen, results):
-        may_load = field in NUMBER_FIELDS and field not in ("grain",) and isinstance(value, float) and \
-            math.isfinite(value) and abs(value) <= 100
+        may_load = (
+            field in NUMBER_FIELDS
+            and field not in ("grain",)
+            and isinstance(value, float)
+            and math.isfinite(value)
+            and abs(value) <= 100
+        )
         if kind == "ok":
             assert may_load, label
         else:
@@ -145,9 +160,11 @@ def test_huge_vertex_id_is_refused_by_ease_drape_in_bounded_memory(tmp_path, pat
     obj = _mutate(pattern_obj, ("panels", 0, "vertex_ids", 0), 10**9)
     (tmp_path / "p").mkdir()
     (tmp_path / "p" / "pattern.json").write_text(json.dumps(obj))
-    code = (f"import resource, sys; resource.setrlimit(resource.RLIMIT_AS, ({CAP}, {CAP})); "
-            f"from core.cli import main; "
-            f"sys.exit(main(['drape', {str(tmp_path / 'p')!r}, '--out', {str(tmp_path / 'd')!r}, '--quiet']))")
+    code = (
+        f"import resource, sys; resource.setrlimit(resource.RLIMIT_AS, ({CAP}, {CAP})); "
+        f"from core.cli import main; "
+        f"sys.exit(main(['drape', {str(tmp_path / 'p')!r}, '--out', {str(tmp_path / 'd')!r}, '--quiet']))"
+    )
     res = subprocess.run([PY, "-c", code], capture_output=True, text=True, timeout=300)
     lines = [line for line in res.stderr.splitlines() if line.startswith("ease ")]
     assert res.returncode == 2 and len(lines) == 1, res.stderr
@@ -156,6 +173,7 @@ def test_huge_vertex_id_is_refused_by_ease_drape_in_bounded_memory(tmp_path, pat
 
 def test_a_huge_or_deeply_nested_file_is_refused(tmp_path, monkeypatch):
     from core.pattern import io
+
     (tmp_path / "pattern.json").write_text("[" * 100000 + "]" * 100000)
     with pytest.raises(PatternError, match="nested too deeply"):
         io.load_pattern(tmp_path)
@@ -167,18 +185,25 @@ def test_a_huge_or_deeply_nested_file_is_refused(tmp_path, monkeypatch):
 
 # ----------------------------------------------------------------------------- options
 
+
 def _option_cases():
     cases = []
     for name, (kind, low, low_in, high, none_ok) in RANGES.items():
         span = high - low
-        cases += [(name, high, True), (name, low if low_in else low + span * 1e-3, True),
-                  (name, low - 1 if low_in else low, False), (name, high * 10 + 1, False),
-                  (name, float("nan"), False), (name, float("inf"), False), (name, "3", False),
-                  (name, True, False), (name, None, none_ok)]
+        cases += [
+            (name, high, True),
+            (name, low if low_in else low + span * 1e-3, True),
+            (name, low - 1 if low_in else low, False),
+            (name, high * 10 + 1, False),
+            (name, float("nan"), False),
+            (name, float("inf"), False),
+            (name, "3", False),
+            (name, True, False),
+            (name, None, none_ok),
+        ]
         if kind is int:
             cases.append((name, 2.5, False))
-    return [c for c in cases if not (c[0] == "settle_trim" and c[1] == 0.5 and c[2])] + \
-        [("settle_trim", 0.5, False)]
+    return [c for c in cases if not (c[0] == "settle_trim" and c[1] == 0.5 and c[2])] + [("settle_trim", 0.5, False)]
 
 
 @pytest.mark.parametrize("case", sample(_option_cases(), 80, seed=20), ids=str)
@@ -191,8 +216,20 @@ def test_drape_options_in_and_out_of_range(case):
             DrapeOptions.coerce({name: value})
 
 
-@pytest.mark.parametrize("value, ok", [(1, True), (MAX_ITERATIONS, True), (0, False), (MAX_ITERATIONS + 1, False),
-                                       (10**9, False), (-3, False), (2.5, False), (True, False), ("20", False)])
+@pytest.mark.parametrize(
+    "value, ok",
+    [
+        (1, True),
+        (MAX_ITERATIONS, True),
+        (0, False),
+        (MAX_ITERATIONS + 1, False),
+        (10**9, False),
+        (-3, False),
+        (2.5, False),
+        (True, False),
+        ("20", False),
+    ],
+)
 def test_solver_iterations_range(value, ok):
     if ok:
         SolverConfig.named("improved", iterations=value).check()
@@ -201,16 +238,19 @@ def test_solver_iterations_range(value, ok):
             SolverConfig.named("improved", iterations=value).check()
 
 
-@pytest.mark.parametrize("argv, flag", [
-    (["drape", "PATTERN", "--frames", "1000000000"], "--frames"),
-    (["drape", "PATTERN", "--frames", "0"], "--frames"),
-    (["drape", "PATTERN", "--substeps", "100000"], "--substeps"),
-    (["pattern", "DESIGN", "--iterations", "1000000000"], "--iterations"),
-    (["transfer", "DESIGN", "--size", "XL", "--iterations", "0"], "--iterations"),
-    (["adapt", "DESIGN", "--pose", "P1", "--iterations", "-2"], "--iterations"),
-])
+@pytest.mark.parametrize(
+    "argv, flag",
+    [
+        (["drape", "PATTERN", "--frames", "1000000000"], "--frames"),
+        (["drape", "PATTERN", "--frames", "0"], "--frames"),
+        (["drape", "PATTERN", "--substeps", "100000"], "--substeps"),
+        (["pattern", "DESIGN", "--iterations", "1000000000"], "--iterations"),
+        (["transfer", "DESIGN", "--size", "XL", "--iterations", "0"], "--iterations"),
+        (["adapt", "DESIGN", "--pose", "P1", "--iterations", "-2"], "--iterations"),
+    ],
+)
 def test_cli_refuses_out_of_range_options_before_work(tmp_path, argv, flag):
-    (tmp_path / "PATTERN").mkdir()                    # never read: the option is refused first
+    (tmp_path / "PATTERN").mkdir()  # never read: the option is refused first
     subst = {"PATTERN": str(tmp_path / "PATTERN"), "DESIGN": str(ROOT / "core/data/designs/skirt.json")}
     argv = [subst.get(a, a) for a in argv] + ["--out", str(tmp_path / "out"), "--quiet"]
     res = subprocess.run([PY, "-m", "core.cli", *argv], capture_output=True, text=True, cwd=ROOT, timeout=120)

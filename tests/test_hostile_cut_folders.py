@@ -6,8 +6,8 @@ space (:mod:`hostile_runner`): an out-of-range embedding index used to read
 outside memory there. No case may crash or trace back, and every refusal is one
 line naming the file (``cut.json`` or ``cut_embedding.npz``) and the key.
 """
-import pytest
 
+import pytest
 from conftest import sample
 from hostile_cut_folders import case_list, make_case
 from hostile_runner import run_checked, split_cases
@@ -18,8 +18,12 @@ CRAFTED, MUTATED_CHUNKS = split_cases(CASES, 30)
 
 def _run(cases, tmp_path):
     folders = [make_case(c, tmp_path) for c in cases]
-    return run_checked("hostile_cut_folders:check_cut", cases, folders,
-                       lambda folder: (f"{folder}/cut.json", f"{folder}/cut_embedding.npz"))
+    return run_checked(
+        "hostile_cut_folders:check_cut",
+        cases,
+        folders,
+        lambda folder: (f"{folder}/cut.json", f"{folder}/cut_embedding.npz"),
+    )
 
 
 def test_crafted_cut_folders_are_refused_naming_file_and_key(tmp_path):
@@ -44,7 +48,9 @@ def test_a_saved_cut_reloads_unchanged(tmp_path):
     """The checks accept what save_cut writes, and the reloaded cut is the same."""
     import numpy as np
     from hostile_cut_folders import small_cut
+
     from core.cut.io import load_cut, save_cut
+
     cut = small_cut()
     save_cut(cut, tmp_path)
     back = load_cut(tmp_path)

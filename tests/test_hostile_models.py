@@ -10,11 +10,11 @@ bombs, self-references, malformed arrays, NaN templates, broken zips and OBJs)
 all run in CI; the seeded byte mutations of a valid pickle, npz and OBJ run as
 a fixed sample (``--full``: all of them).
 """
+
 import pickle
 
 import numpy as np
 import pytest
-
 from conftest import sample
 from hostile_models import case_list, make_case, small_model
 from hostile_runner import run_checked, split_cases
@@ -34,7 +34,7 @@ def test_crafted_model_files_are_refused_and_valid_ones_load(tmp_path):
     for (kind, name), (status, message) in out.items():
         if kind == "valid":
             assert status == "ok", (name, message)
-        elif kind in ("pkl", "npz"):          # every crafted pickle and npz is an attack or broken
+        elif kind in ("pkl", "npz"):  # every crafted pickle and npz is an attack or broken
             assert status == "refused", (kind, name)
     by_name = {name.split("@")[0]: out[(kind, name)][1] for kind, name in out if kind == "pkl"}
     assert "refers to itself" in by_name["self_referencing_chumpy"]
@@ -55,6 +55,7 @@ def test_mutated_model_files_never_crash(chunk, tmp_path):
 
 def test_protocol_2_empty_array_loads():
     from core.body.unpickle import safe_load
+
     for protocol in range(6):
         got = safe_load(pickle.dumps({"a": np.zeros(0), "b": np.zeros((0, 3), np.float32)}, protocol=protocol))
         assert got["a"].shape == (0,) and got["b"].shape == (0, 3) and got["b"].dtype == np.float32
@@ -63,16 +64,19 @@ def test_protocol_2_empty_array_loads():
 def test_limits_admit_a_real_smplx_file():
     """SMPL-X's largest arrays (shapedirs 10475x3x400, posedirs 10475x3x486 float64) fit under the limits."""
     from core.body.arrays import MAX_TOTAL_BYTES, check_shape
-    sizes = [check_shape(s, 8, "smplx") * 8 for s in ((10475, 3), (10475, 3, 400), (10475, 3, 486), (55, 10475),
-                                                         (10475, 55))]
+
+    sizes = [
+        check_shape(s, 8, "smplx") * 8 for s in ((10475, 3), (10475, 3, 400), (10475, 3, 486), (55, 10475), (10475, 55))
+    ]
     assert sum(sizes) < MAX_TOTAL_BYTES / 4
     with pytest.raises(Exception, match="over the limit"):
-        check_shape((10 ** 12,), 8, "bomb")
+        check_shape((10**12,), 8, "bomb")
 
 
 def test_pickle_and_npz_load_the_same_model(tmp_path):
     """The checked loaders change nothing for a valid file: pickle (protocols 0-5) == npz."""
     from core.body import load_body
+
     m = small_model()
     np.savez(tmp_path / "m.npz", **m)
     ref = load_body(str(tmp_path / "m.npz")).vertices({"beta1": 0.5})

@@ -15,6 +15,7 @@ Each checks that the folder holds exactly the old set of files or exactly the
 new one (by content hash) and that no temporary entry is left after the next
 run. ``pytest --full`` runs every case; CI a seeded sample.
 """
+
 import hashlib
 import json
 import os
@@ -26,7 +27,6 @@ import time
 from pathlib import Path
 
 import pytest
-
 from conftest import sample
 
 import core.fileio as F
@@ -46,10 +46,12 @@ def _content(p: Path) -> bytes:
     multiset of its lines (ezdxf's plain DXF orders two objects differently run to run)."""
     data = p.read_bytes()
     if p.suffix == ".json":
+
         def strip(o):
             if isinstance(o, dict):
                 return {k: strip(v) for k, v in o.items() if k not in WALL_CLOCK}
             return [strip(v) for v in o] if isinstance(o, list) else o
+
         return json.dumps(strip(json.loads(data)), sort_keys=True).encode()
     if p.suffix == ".dxf":
         return b"\n".join(sorted(data.splitlines()))
@@ -112,6 +114,7 @@ def _texts(folder: Path) -> dict:
 
 class Faults:
     """Make the ``at``-th call (counting from 0) of the patched system calls raise OSError."""
+
     CALLS = ("rename", "replace", "link", "mkdir", "chmod", "open")
 
     def __init__(self, monkeypatch, at=None):
@@ -144,6 +147,7 @@ class Faults:
         def call(*args, **kwargs):
             self._count()
             return func(*args, **kwargs)
+
         return call
 
 
@@ -190,7 +194,7 @@ def test_a_fault_at_any_step_leaves_the_old_folder(tmp_path, monkeypatch, case):
     mode, state, at = case
     out, calls, error = _run(tmp_path, monkeypatch, mode, state, at=at)
     old = OLD_STATES[state]
-    if error is None:          # no fault reached, or one a caller may ignore (mkdir of an existing folder)
+    if error is None:  # no fault reached, or one a caller may ignore (mkdir of an existing folder)
         assert _texts(out) == _expected_new(old)
     else:
         assert at < calls and isinstance(error, EaseError) and "injected I/O error" in str(error), error
@@ -209,7 +213,7 @@ def test_a_failing_writer_leaves_the_old_folder(tmp_path, monkeypatch, case):
     if fail == len(FILES):
         assert error is None and _texts(out) == _expected_new(old)
     else:
-        assert isinstance(error, RuntimeError)        # the writer's own error, unchanged
+        assert isinstance(error, RuntimeError)  # the writer's own error, unchanged
         assert (_texts(out) if out.exists() else {}) == old
     assert temps(tmp_path, out) == []
 
@@ -222,6 +226,7 @@ def test_fault_cases_reach_every_call(tmp_path_factory):
 
 
 # ----------------------------------------------------------------------------- recovery, naming, modes
+
 
 def _dead_pid() -> int:
     p = subprocess.Popen([PY, "-c", "pass"])
@@ -237,7 +242,7 @@ def test_killed_runs_are_cleaned_and_the_two_rename_gap_recovered(tmp_path):
     os.rename(out, tmp_path / f".out.ease-old-{pid}-ab12")
     _fill(tmp_path / f".out.ease-tmp-{pid}-ab12", {"a.json": "half"})
     _fill(tmp_path / f".out.ease-tmp-{pid}-cd34", {"x": "stale"})
-    live = tmp_path / f".out.ease-tmp-{os.getpid()}-ef56"      # a live run's: left alone
+    live = tmp_path / f".out.ease-tmp-{os.getpid()}-ef56"  # a live run's: left alone
     live.mkdir()
     with output_dir(out) as d:
         write_text(d / "b.json", "new")
@@ -249,13 +254,14 @@ def test_a_folders_leftovers_are_recovered_with_one_listing(tmp_path, monkeypatc
     """recover_folder clears what killed runs left beside every entry (a batch's items folder, once);
     output_dir(recover=False) then writes without listing that folder again."""
     from core import fileio
+
     pid = _dead_pid()
     _fill(tmp_path / "a", {"x": "old a"})
-    os.rename(tmp_path / "a", tmp_path / f".a.ease-old-{pid}-ab12")      # a's two-rename gap
+    os.rename(tmp_path / "a", tmp_path / f".a.ease-old-{pid}-ab12")  # a's two-rename gap
     _fill(tmp_path / f".a.ease-tmp-{pid}-ab12", {"x": "half"})
     _fill(tmp_path / f".b.ease-tmp-{pid}-cd34", {"x": "half"})
     _fill(tmp_path / "c", {"x": "c"})
-    live = tmp_path / f".d.ease-tmp-{os.getpid()}-ef56"                  # a live run's: left alone
+    live = tmp_path / f".d.ease-tmp-{os.getpid()}-ef56"  # a live run's: left alone
     live.mkdir()
     fileio.recover_folder(tmp_path)
     assert _texts(tmp_path / "a") == {"x": "old a"} and _texts(tmp_path / "c") == {"x": "c"}
@@ -266,7 +272,7 @@ def test_a_folders_leftovers_are_recovered_with_one_listing(tmp_path, monkeypatc
     with output_dir(tmp_path / "e", recover=False) as d:
         write_text(d / "y", "e")
     assert _texts(tmp_path / "e") == {"y": "e"} and tmp_path not in listed
-    with output_dir(tmp_path / "f") as d:      # by default it looks beside its target itself
+    with output_dir(tmp_path / "f") as d:  # by default it looks beside its target itself
         write_text(d / "y", "f")
     assert tmp_path in listed
 
@@ -275,8 +281,9 @@ def test_a_long_names_leftovers_are_recovered_without_recover_folder(tmp_path):
     """recover_folder leaves a temporary whose name was shortened (it cannot tell whose it is);
     output_dir(recover=False) of that name then looks beside its target itself."""
     from core import fileio
+
     pid, name = _dead_pid(), "n" * (F._NAME_MAX + 10)
-    _fill(tmp_path / F._temp_name(name, "old", f"{pid}-ab12"), {"keep": "old"})    # its two-rename gap
+    _fill(tmp_path / F._temp_name(name, "old", f"{pid}-ab12"), {"keep": "old"})  # its two-rename gap
     fileio.recover_folder(tmp_path)
     with output_dir(tmp_path / name, recover=False) as d:
         write_text(d / "y", "new")
@@ -302,7 +309,7 @@ def test_long_names_that_share_their_start_keep_their_own_leftovers(tmp_path):
 def test_a_name_long_in_bytes_is_written(tmp_path):
     """A name of 80 three-byte characters (240 bytes of the 255 a file name may have) is written:
     its temporaries' names are cut to bytes, not characters."""
-    name = "\u00e9\u4e2d" * 48                 # 96 characters, 240 bytes
+    name = "\u00e9\u4e2d" * 48  # 96 characters, 240 bytes
     write_text(tmp_path / name, "a")
     with output_dir(tmp_path / (name + "d")) as d:
         write_text(d / name, "b")
@@ -353,10 +360,13 @@ def test_the_working_directory_is_swapped_in_place(tmp_path, monkeypatch):
     assert Path("a").read_text() == "new" and Path.cwd() == out
 
 
-@pytest.mark.parametrize("make, match", [
-    (lambda p: p.write_text("x"), "is a file; expected an output folder"),
-    (lambda p: p.parent.joinpath("f").write_text("x") or None, "is a file, not a folder"),
-])
+@pytest.mark.parametrize(
+    "make, match",
+    [
+        (lambda p: p.write_text("x"), "is a file; expected an output folder"),
+        (lambda p: p.parent.joinpath("f").write_text("x") or None, "is a file, not a folder"),
+    ],
+)
 def test_unwritable_targets_are_one_clear_error(tmp_path, make, match):
     target = tmp_path / "out"
     make(target)
@@ -416,7 +426,7 @@ def test_killed_while_committing_version_after_version(tmp_path, case):
     if not later:
         _one_version(out)
     before = tree(out)
-    with output_dir(out):                             # the next run
+    with output_dir(out):  # the next run
         pass
     assert (tree(out) == before or later) and temps(tmp_path, out) == []
     _one_version(out)
@@ -426,7 +436,7 @@ def _one_version(out: Path) -> None:
     files = _texts(out)
     assert files.pop("keep.txt") == "kept"
     versions = {text.split()[0] for text in files.values()}
-    assert len(versions) <= 1, files                  # never a mix of two versions
+    assert len(versions) <= 1, files  # never a mix of two versions
     if versions:
         v = versions.pop()
         assert files == {f"{'s/' if i >= 4 else ''}f{i}.txt": f"{v} f{i}" for i in range(6)}
@@ -461,20 +471,41 @@ class Commands:
 
     def __init__(self, base: Path):
         from drape_synth import tube_skirt
+
         from core.cli import main
         from core.pattern.io import save_pattern
+
         self.base = base
         save_pattern(tube_skirt(1.2, n_rows=8, n_cols=10), base / "pattern")
         self.script = base / "child.py"
         self.script.write_text(CLI_CHILD.format())
-        assert main(["drape", str(base / "pattern"), "--out", str(base / "drape"), "--quiet", "--frames", "2",
-                     "--no-preview"]) == 0
+        assert (
+            main(
+                [
+                    "drape",
+                    str(base / "pattern"),
+                    "--out",
+                    str(base / "drape"),
+                    "--quiet",
+                    "--frames",
+                    "2",
+                    "--no-preview",
+                ]
+            )
+            == 0
+        )
         shirt = ROOT / "core" / "data" / "designs" / "top_sleeveless.json"
         self.commands = {
-            "export": (["export", str(base / "pattern"), "--quiet", "--format", "all", "--drape",
-                        str(base / "drape")], ["--allowance", "0.01"], ["--allowance", "0.015"]),
-            "drape": (["drape", str(base / "pattern"), "--quiet", "--no-preview"], ["--frames", "2"],
-                      ["--frames", "3"]),
+            "export": (
+                ["export", str(base / "pattern"), "--quiet", "--format", "all", "--drape", str(base / "drape")],
+                ["--allowance", "0.01"],
+                ["--allowance", "0.015"],
+            ),
+            "drape": (
+                ["drape", str(base / "pattern"), "--quiet", "--no-preview"],
+                ["--frames", "2"],
+                ["--frames", "3"],
+            ),
             "pattern": (["pattern", str(shirt), "--quiet"], ["--iterations", "2"], ["--iterations", "3"]),
         }
         self.known = {}
@@ -502,8 +533,9 @@ def commands(tmp_path_factory):
 
 def _child(script, argv, cwd, wait_for_exit=False, signal_after=None, sig=None):
     env = dict(os.environ, EASE_TEST_DELAY="0.004", PYTHONPATH=str(ROOT / "tests" / "helpers"))
-    p = subprocess.Popen([PY, str(script), *argv], cwd=cwd, env=env, stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True)
+    p = subprocess.Popen(
+        [PY, str(script), *argv], cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
     line = p.stdout.readline()
     t0 = time.perf_counter()
     if signal_after is not None and line.strip() == "writing":
@@ -517,7 +549,7 @@ def _child(script, argv, cwd, wait_for_exit=False, signal_after=None, sig=None):
 
 
 CLI_CASES = [(c, sig, seed) for c in ("export", "drape", "pattern") for sig in ("INT", "KILL") for seed in range(30)]
-CLI_CI = {"export": 3, "drape": 2, "pattern": 0}    # pattern (a real cut and solve): --full only
+CLI_CI = {"export": 3, "drape": 2, "pattern": 0}  # pattern (a real cut and solve): --full only
 
 
 def _cli_sample():
@@ -531,17 +563,26 @@ def _cli_sample():
 def test_interrupted_command_leaves_all_old_or_all_new(commands, tmp_path, case):
     command, sig, seed = case
     import shutil
+
     argv, old_opt, new_opt, old_ref, new_ref, window = commands.get(command)
     old_tree, new_tree = tree(old_ref), tree(new_ref)
     out = tmp_path / "out"
-    shutil.copytree(old_ref, out)                     # what the old run wrote
+    shutil.copytree(old_ref, out)  # what the old run wrote
     # the write phase (marker -> exit) of this command takes `window` seconds: strike anywhere in it
     after = random.Random(seed).uniform(0.0, 1.2 * window)
-    rc, err = _child(commands.script, argv + new_opt + ["--out", str(out)], commands.base, signal_after=after,
-                     sig=getattr(signal, f"SIG{sig}"))
+    rc, err = _child(
+        commands.script,
+        argv + new_opt + ["--out", str(out)],
+        commands.base,
+        signal_after=after,
+        sig=getattr(signal, f"SIG{sig}"),
+    )
     now = tree(out)
-    assert now in (old_tree, new_tree), (rc, err, {k: (v == old_tree.get(k), v == new_tree.get(k))
-                                                   for k, v in now.items() if v != new_tree.get(k)})
+    assert now in (old_tree, new_tree), (
+        rc,
+        err,
+        {k: (v == old_tree.get(k), v == new_tree.get(k)) for k, v in now.items() if v != new_tree.get(k)},
+    )
     said = [line for line in err.splitlines() if line.startswith("ease ")]
     if rc == 0:
         assert now == new_tree and "Traceback" not in err, err
@@ -553,12 +594,13 @@ def test_interrupted_command_leaves_all_old_or_all_new(commands, tmp_path, case)
         assert now == new_tree and not said, err
     else:
         assert sig == "KILL" and rc == -signal.SIGKILL, (rc, err)
-    with output_dir(out):                             # the next run
+    with output_dir(out):  # the next run
         pass
     assert tree(out) == now and temps(tmp_path, out) == []
 
 
 # ----------------------------------------------------------------------------- mount points, read-only
+
 
 def _in_mount_namespace(cmd: str, tmp_path):
     """Run ``cmd`` (sh) in a private mount namespace; skip where that is not allowed."""
@@ -566,8 +608,9 @@ def _in_mount_namespace(cmd: str, tmp_path):
     if probe.returncode != 0:
         pytest.skip("no private mount namespace here (needs unshare -m: root or user namespaces)")
     env = dict(os.environ, PYTHONPATH=f"{ROOT}:{ROOT / 'tests' / 'helpers'}")
-    return subprocess.run(["unshare", "-m", "sh", "-c", cmd], capture_output=True, text=True, cwd=tmp_path,
-                          env=env, timeout=300)
+    return subprocess.run(
+        ["unshare", "-m", "sh", "-c", cmd], capture_output=True, text=True, cwd=tmp_path, env=env, timeout=300
+    )
 
 
 def test_out_on_a_mount_point_and_on_a_read_only_folder(commands, tmp_path):
@@ -575,10 +618,12 @@ def test_out_on_a_mount_point_and_on_a_read_only_folder(commands, tmp_path):
     mnt, ro, copy = tmp_path / "mnt", tmp_path / "ro", tmp_path / "copy"
     mnt.mkdir(), ro.mkdir()
     cli, args = f"{PY} -m core.cli", " ".join(argv)
-    script = (f"mount -t tmpfs none {mnt} && mount -t tmpfs -o ro none {ro} && "
-              f"{cli} {args} {' '.join(old_opt)} --out {mnt} && echo kept > {mnt}/keep.txt && "
-              f"{cli} {args} {' '.join(new_opt)} --out {mnt} && cp -a {mnt} {copy} && "
-              f"{cli} {args} --out {ro}; echo rc=$?")
+    script = (
+        f"mount -t tmpfs none {mnt} && mount -t tmpfs -o ro none {ro} && "
+        f"{cli} {args} {' '.join(old_opt)} --out {mnt} && echo kept > {mnt}/keep.txt && "
+        f"{cli} {args} {' '.join(new_opt)} --out {mnt} && cp -a {mnt} {copy} && "
+        f"{cli} {args} --out {ro}; echo rc=$?"
+    )
     res = _in_mount_namespace(script, tmp_path)
     assert res.stdout.strip().endswith("rc=2"), res.stdout + res.stderr
     err = [line for line in res.stderr.splitlines() if line.startswith("ease ")]
@@ -587,13 +632,16 @@ def test_out_on_a_mount_point_and_on_a_read_only_folder(commands, tmp_path):
     assert now.pop("keep.txt") and now == tree(new_ref) and temps(copy) == []
 
 
-@pytest.mark.parametrize("argv, match", [
-    (["export", "PATTERN", "--out", "FILE"], "is a file; expected an output folder"),
-    (["drape", "PATTERN", "--out", "FILE/sub"], "is a file, not a folder"),
-    (["pattern", "DESIGN", "--out", "FILE"], "is a file; expected an output folder"),
-    (["body", "--out", "DIR"], "is a folder; expected a file name"),
-    (["body", "--all", "--out", "FILE"], "is a file; expected an output folder"),
-])
+@pytest.mark.parametrize(
+    "argv, match",
+    [
+        (["export", "PATTERN", "--out", "FILE"], "is a file; expected an output folder"),
+        (["drape", "PATTERN", "--out", "FILE/sub"], "is a file, not a folder"),
+        (["pattern", "DESIGN", "--out", "FILE"], "is a file; expected an output folder"),
+        (["body", "--out", "DIR"], "is a folder; expected a file name"),
+        (["body", "--all", "--out", "FILE"], "is a file; expected an output folder"),
+    ],
+)
 def test_bad_out_is_one_line_before_any_work(commands, tmp_path, argv, match):
     base = commands.base
     (tmp_path / "FILE").write_text("x")

@@ -8,6 +8,7 @@ folder outside the checkout: the templates and the body model come from
 package data, nothing written or listed points into the checkout, and the
 Warp kernel cache goes to the user's cache folder.
 """
+
 import os
 import shutil
 import site
@@ -32,6 +33,7 @@ def _can_build_wheels() -> bool:
         return True
     try:
         import wheel  # noqa: F401
+
         return True
     except ImportError:
         return False
@@ -56,20 +58,37 @@ def installed(tmp_path_factory):
     shutil.copytree(ROOT / "core", src / "core", ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "WARP_CACHE_PATH", "EASE_BENCH_DIR")}
     env["XDG_CACHE_HOME"] = str(tmp / "xdg")
-    _run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "--no-index", "-q",
-          "-w", str(tmp / "dist"), str(src)], tmp, env)
+    _run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "wheel",
+            "--no-deps",
+            "--no-build-isolation",
+            "--no-index",
+            "-q",
+            "-w",
+            str(tmp / "dist"),
+            str(src),
+        ],
+        tmp,
+        env,
+    )
     wheel = next((tmp / "dist").glob("ease_garments-*.whl"))
 
     venv = tmp / "venv"
     _run([sys.executable, "-m", "venv", "--without-pip", str(venv)], tmp, env)
     py = venv / ("Scripts/python.exe" if os.name == "nt" else "bin/python")
-    purelib = Path(_run([str(py), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
-                        tmp, env).strip())
+    purelib = Path(_run([str(py), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"], tmp, env).strip())
     # the checkout's dependencies (numpy, scipy, warp ...), not its editable install of core
     deps = [p for p in site.getsitepackages() + [sysconfig.get_paths()["purelib"]] if Path(p).is_dir()]
     (purelib / "ease_checkout_deps.pth").write_text("\n".join(dict.fromkeys(deps)) + "\n")
-    _run([sys.executable, "-m", "pip", "--python", str(py), "install", "--no-deps", "--no-index", "-q",
-          str(wheel)], tmp, env)
+    _run(
+        [sys.executable, "-m", "pip", "--python", str(py), "install", "--no-deps", "--no-index", "-q", str(wheel)],
+        tmp,
+        env,
+    )
     ease = venv / ("Scripts/ease.exe" if os.name == "nt" else "bin/ease")
     work = tmp / "work"
     work.mkdir()
@@ -97,8 +116,11 @@ def test_help_and_templates_from_package_data(installed):
 
 def test_pattern_of_a_template_outside_the_checkout(installed):
     ease, py, env, work, purelib = installed
-    design = _run([str(py), "-c", "from core.design.templates import template_path; "
-                                  "print(template_path('top_sleeveless'))"], work, env).strip()
+    design = _run(
+        [str(py), "-c", "from core.design.templates import template_path; print(template_path('top_sleeveless'))"],
+        work,
+        env,
+    ).strip()
     out = _run([str(ease), "pattern", design, "--out", "pattern", "--quiet"], work, env)
     assert out.startswith("reference:")
     for name in ("pattern.json", "report.json", "pattern.png"):
@@ -115,10 +137,15 @@ def test_bench_needs_a_checkout(installed):
 
 def test_warp_cache_in_the_user_cache(installed):
     ease, py, env, work, purelib = installed
-    code = ("import os; from core.paths import default_warp_cache; default_warp_cache(); "
-            "import core.drape.kernels; print(os.environ['WARP_CACHE_PATH'])")
+    code = (
+        "import os; from core.paths import default_warp_cache; default_warp_cache(); "
+        "import core.drape.kernels; print(os.environ['WARP_CACHE_PATH'])"
+    )
     cache = Path(_run([str(py), "-c", code], work, env).strip().splitlines()[-1])
     assert cache == Path(env["XDG_CACHE_HOME"]) / "ease" / "warp"
     code = "import os, core.drape.kernels; print(os.environ['WARP_CACHE_PATH'])"
     cache = Path(_run([str(py), "-c", code], work, env).strip().splitlines()[-1])
-    assert not cache.is_relative_to(purelib.parent.parent.parent) and cache == Path(env["XDG_CACHE_HOME"]) / "ease" / "warp"
+    assert (
+        not cache.is_relative_to(purelib.parent.parent.parent)
+        and cache == Path(env["XDG_CACHE_HOME"]) / "ease" / "warp"
+    )

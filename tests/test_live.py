@@ -1,4 +1,5 @@
 """core.live: the live re-solve of painted ease (no Blender), and the solver's resumable iterations."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -11,7 +12,7 @@ from core.live import LiveSession, PatternText, achieved_over_painted, body_tria
 from core.pattern.build import build_pattern
 from core.pattern.optimizer.solver import PatternSolver
 
-DESIGN = "top_sleeveless.json"     # cheapest template: two panels
+DESIGN = "top_sleeveless.json"  # cheapest template: two panels
 
 
 @pytest.fixture(scope="module")
@@ -80,8 +81,8 @@ def test_live_converges_to_the_cold_solve_whatever_the_painting_order(prep, sess
     before = session.pattern()
     field2, patch = _stroke(prep, session, field, 1.7, seed=1)
     assert session.set_ease(field2)
-    assert not session.set_ease(field2)        # the same paint again: nothing to do
-    assert session.run(0.0) == 1                # one warm iteration fits a zero slice
+    assert not session.set_ease(field2)  # the same paint again: nothing to do
+    assert session.run(0.0) == 1  # one warm iteration fits a zero slice
     warm = session.pattern(figures=False)
     assert not session.converged
     # the warm slice already moves the painted patch towards its new ease
@@ -115,7 +116,9 @@ def test_achieved_over_painted(prep, session):
     on[session.triangles] = True
     assert np.isnan(ratio[~on]).all() and np.isfinite(ratio[on]).all()
     # the pattern realises its painted ease to about its compliance (percent): the mean ratio is near 0
-    comp = pat.report.get("metrics", {}).get("compliance", {}).get("mean") or wf.measure_pattern(pat)["compliance"]["mean"]
+    comp = (
+        pat.report.get("metrics", {}).get("compliance", {}).get("mean") or wf.measure_pattern(pat)["compliance"]["mean"]
+    )
     assert abs(np.nanmean(ratio)) < 3 * comp / 100
 
 
@@ -125,6 +128,7 @@ def test_pattern_text_is_the_stored_text_a_piece_at_a_time(prep, session):
     one unit per piece and one join."""
     from core.fileio import dumps_json
     from core.pattern.io import pattern_to_json
+
     text = PatternText()
     field = np.full(len(prep.body.faces), 1.2)
     session.set_ease(field)
@@ -140,8 +144,8 @@ def test_pattern_text_is_the_stored_text_a_piece_at_a_time(prep, session):
     assert [size for size, _ in units] == [len(p.faces) for p in second.panels] + [len(session.triangles)]
     out = [work() for _, work in units][-1]
     assert out == dumps_json(pattern_to_json(second), indent=None)
-    assert text._fields[(name, "faces")][1] is faces_text           # the cut's text kept
-    assert text._fields[(name, "uv")][1] != uv_text                  # the moved positions re-encoded
+    assert text._fields[(name, "faces")][1] is faces_text  # the cut's text kept
+    assert text._fields[(name, "uv")][1] != uv_text  # the moved positions re-encoded
 
 
 def test_topology_key(prep):
@@ -170,12 +174,14 @@ def test_the_cold_solve_ends_by_the_solvers_rule(prep, monkeypatch):
     iterations included), so the converged pattern is Optimize Pattern's: here the solver is told a
     triangle is still collapsing after the planned iterations, once; both then run one more round."""
     from core.pattern.optimizer import solver as S
+
     calls = {"solve": 0, "live": 0}
 
     def once(key):
         def collapsing(self, state):
             calls[key] += 1
             return calls[key] == 1
+
         return collapsing
 
     solver = wf.make_solver(prep)

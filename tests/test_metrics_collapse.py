@@ -1,4 +1,5 @@
 """Collapsed triangles: a known count on hand-made triangles, their sites, and the refusal."""
+
 import numpy as np
 import pytest
 
@@ -28,15 +29,15 @@ def _soup(cases, origin=(0.0, 0.0, 0.0)):
 
 
 CASES = [
-    (1.0, 1.0, 1.0, 1.0),   # as asked
-    (0.6, 0.6, 1.0, 1.0),   # area 36 % of the body's, both scales above half: kept
+    (1.0, 1.0, 1.0, 1.0),  # as asked
+    (0.6, 0.6, 1.0, 1.0),  # area 36 % of the body's, both scales above half: kept
     (0.45, 1.0, 1.0, 1.0),  # weft under half: collapsed (scale rule)
-    (1.0, 0.4, 1.0, 1.0),   # warp under half: collapsed (scale rule)
-    (0.3, 0.3, 1.0, 1.0),   # area 9 %: collapsed (area rule, and the scale rule)
-    (0.7, 1.0, 1.5, 1.0),   # 0.7 where 1.5 was asked: under half its target, collapsed
-    (1.5, 1.0, 1.5, 1.0),   # the same target reached: kept
+    (1.0, 0.4, 1.0, 1.0),  # warp under half: collapsed (scale rule)
+    (0.3, 0.3, 1.0, 1.0),  # area 9 %: collapsed (area rule, and the scale rule)
+    (0.7, 1.0, 1.5, 1.0),  # 0.7 where 1.5 was asked: under half its target, collapsed
+    (1.5, 1.0, 1.5, 1.0),  # the same target reached: kept
     (1.2, 1.15, 2.2, 2.2),  # area 1.38 of 4.84 asked (29 %), scales 55 % and 52 %: kept
-    (1.1, 1.0, 2.2, 2.2),   # area 1.1 of 4.84 (23 %): collapsed (area rule, warp 45 %)
+    (1.1, 1.0, 2.2, 2.2),  # area 1.1 of 4.84 (23 %): collapsed (area rule, warp 45 %)
     (-1.0, 1.0, 1.0, 1.0),  # mirrored: a flip, counted by flips, not as collapsed
 ]
 COLLAPSED = [2, 3, 4, 5, 8]
@@ -44,9 +45,19 @@ COLLAPSED = [2, 3, 4, 5, 8]
 
 def _pattern(cases=CASES, name="skirt.back", origin=(0.0, 0.0, 0.0), body=None):
     uv, xyz, F, tw, tg = _soup(cases, origin)
-    p = PatternPanel(name=name, garment="skirt", uv=uv, faces=F, vertex_ids=np.arange(len(uv)), xyz=xyz,
-                     grain=np.array([0.0, 1.0]), target_weft=tw, target_warp=tg,
-                     achieved_weft=np.ones(len(F)), achieved_warp=np.ones(len(F)))
+    p = PatternPanel(
+        name=name,
+        garment="skirt",
+        uv=uv,
+        faces=F,
+        vertex_ids=np.arange(len(uv)),
+        xyz=xyz,
+        grain=np.array([0.0, 1.0]),
+        target_weft=tw,
+        target_warp=tg,
+        achieved_weft=np.ones(len(F)),
+        achieved_warp=np.ones(len(F)),
+    )
     return Pattern(style="test", body=body or {}, garments={"skirt": "skirt"}, panels=[p], seams=[])
 
 
@@ -57,11 +68,11 @@ def test_collapsed_mask_known_triangles():
 
 def test_collapse_counts_by_rule_and_beside_flips():
     m = pattern_report(_pattern())
-    assert m["flipped_triangles"] == 1                       # the mirrored one, and only there
+    assert m["flipped_triangles"] == 1  # the mirrored one, and only there
     assert m["collapsed_triangles"] == len(COLLAPSED)
     assert m["collapsed_per_panel"] == {"skirt.back": len(COLLAPSED)}
     per = collapse(_pattern())["skirt.back"]
-    assert per["area"] == 2 and per["scale_only"] == 3        # cases 4 and 8 by area; 2, 3, 5 by a scale alone
+    assert per["area"] == 2 and per["scale_only"] == 3  # cases 4 and 8 by area; 2, 3, 5 by a scale alone
 
 
 def test_collapse_sites_name_the_nearest_landmark():
@@ -84,14 +95,14 @@ def test_collapsed_pattern_is_refused_naming_panel_and_place():
     msg = str(e.value)
     assert msg.startswith("panel skirt.back: 5 collapsed triangles near gluteal_cleft (")
     assert " m)" in msg and "nothing written" in msg
-    checks.check_pattern(pattern_report(_pattern(CASES[:2])), ("flipped", "collapsed"))   # a clean one passes
+    checks.check_pattern(pattern_report(_pattern(CASES[:2])), ("flipped", "collapsed"))  # a clean one passes
 
 
 def test_the_workflow_check_refuses_a_collapse():
-    pat = _pattern([c for c in CASES if c[0] > 0])            # no flip: only the collapse can refuse it
+    pat = _pattern([c for c in CASES if c[0] > 0])  # no flip: only the collapse can refuse it
     with pytest.raises(PatternError, match=r"panel skirt.back: 5 collapsed triangles at \("):
         wf.measure_pattern(pat, checks=("flipped", "collapsed"))
-    assert "metrics" not in pat.report                       # nothing recorded on refusal
+    assert "metrics" not in pat.report  # nothing recorded on refusal
     m = wf.measure_pattern(pat, checks=("flipped",))
     assert m["collapsed_triangles"] == 5 and pat.report["metrics"] is m
 
@@ -101,9 +112,9 @@ def test_the_pipeline_refuses_a_collapse_by_default_but_not_a_preview_in_between
     pat = _pattern([c for c in CASES if c[0] > 0])
     with pytest.raises(PatternError, match="5 collapsed triangles"):
         wf.measure_pattern(pat)
-    pat.report["live"] = {"iterations": 3, "converged": False}     # a live preview still converging: shown
+    pat.report["live"] = {"iterations": 3, "converged": False}  # a live preview still converging: shown
     assert wf.measure_pattern(pat)["collapsed_triangles"] == 5
-    pat.report["live"]["converged"] = True                          # converged: a pattern like any other
+    pat.report["live"]["converged"] = True  # converged: a pattern like any other
     with pytest.raises(PatternError, match="5 collapsed triangles"):
         wf.measure_pattern(pat)
 
@@ -119,8 +130,17 @@ def test_unknown_check_name():
 
 
 def test_collapse_message_lists_every_site():
-    per = {"a": {"count": 3, "sites": [{"near": "bust_left", "count": 2, "centroid": [0.1, -0.14, 0.36]},
-                                       {"near": "bust_right", "count": 1, "centroid": [-0.1, -0.14, 0.36]}]},
-           "b": {"count": 0, "sites": []}}
-    assert collapse_message(per) == ("panel a: 3 collapsed triangles (2 near bust_left (0.100, -0.140, 0.360 m); "
-                                     "1 near bust_right (-0.100, -0.140, 0.360 m))")
+    per = {
+        "a": {
+            "count": 3,
+            "sites": [
+                {"near": "bust_left", "count": 2, "centroid": [0.1, -0.14, 0.36]},
+                {"near": "bust_right", "count": 1, "centroid": [-0.1, -0.14, 0.36]},
+            ],
+        },
+        "b": {"count": 0, "sites": []},
+    }
+    assert collapse_message(per) == (
+        "panel a: 3 collapsed triangles (2 near bust_left (0.100, -0.140, 0.360 m); "
+        "1 near bust_right (-0.100, -0.140, 0.360 m))"
+    )

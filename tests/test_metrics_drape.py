@@ -1,4 +1,5 @@
 """Fit measurements after the drape (core.metrics.drape), on exact synthetic geometry."""
+
 import numpy as np
 import pytest
 from drape_synth import HIP_RADIUS, radius, revolution_body, tube_skirt
@@ -6,8 +7,15 @@ from drape_synth import HIP_RADIUS, radius, revolution_body, tube_skirt
 from core.drape import drape
 from core.drape.mesh import build_cloth
 from core.geom.mesh import vertex_normals
-from core.metrics.drape import (covered_body_vertices, drape_metrics, penetration, post_drape_gap, seam_gap,
-                                seam_side_distance, summary)
+from core.metrics.drape import (
+    covered_body_vertices,
+    drape_metrics,
+    penetration,
+    post_drape_gap,
+    seam_gap,
+    seam_side_distance,
+    summary,
+)
 
 
 @pytest.fixture(scope="module")
@@ -138,6 +146,7 @@ def _sheet(n=24, size=0.2):
 
 def test_fold_measures_flat_cylinder_and_crease():
     from core.metrics.drape import fold_measures
+
     u, v, f = _sheet()
     flat = fold_measures(np.column_stack([u, v, np.zeros_like(u)]), f)
     assert flat["mean_dihedral_deg"] == pytest.approx(0.0, abs=1e-9) and flat["edges_over_30_pct"] == 0.0

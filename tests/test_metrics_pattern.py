@@ -1,4 +1,5 @@
 """SPEC pattern metrics on hand-made cases with known values."""
+
 import numpy as np
 import pytest
 
@@ -20,9 +21,19 @@ def _square(nx=4, ny=3):
 def _panel(name, uv, xyz, F, target=1.0):
     f = len(F)
     rw, rg, _ = M.scales(uv, xyz, F, [0.0, 1.0])
-    return PatternPanel(name=name, garment="g", uv=uv, faces=F, vertex_ids=np.arange(len(uv)), xyz=xyz,
-                        grain=np.array([0.0, 1.0]), target_weft=np.full(f, target), target_warp=np.ones(f),
-                        achieved_weft=rw, achieved_warp=rg)
+    return PatternPanel(
+        name=name,
+        garment="g",
+        uv=uv,
+        faces=F,
+        vertex_ids=np.arange(len(uv)),
+        xyz=xyz,
+        grain=np.array([0.0, 1.0]),
+        target_weft=np.full(f, target),
+        target_warp=np.ones(f),
+        achieved_weft=rw,
+        achieved_warp=rg,
+    )
 
 
 def test_scales_of_an_affine_map():
@@ -80,8 +91,9 @@ def test_seam_mismatch_percent_and_mm():
     a = _panel("a", uv, xyz, F)
     b = _panel("b", uv * np.array([1.0, 1.02]), xyz, F)  # b's left edge 2 % longer
     left = np.array([0, 4, 8])
-    pat = Pattern(style="s", body={}, garments={"g": "upper"}, panels=[a, b],
-                  seams=[PatternSeam("side", "a", "b", left, left)])
+    pat = Pattern(
+        style="s", body={}, garments={"g": "upper"}, panels=[a, b], seams=[PatternSeam("side", "a", "b", left, left)]
+    )
     sm = M.seam_mismatch(pat)
     assert sm["mean"] == pytest.approx(100 * 0.02 / 1.01)
     assert sm["max_mm"] == pytest.approx(20.0)
@@ -94,9 +106,13 @@ def test_gathered_seams_are_listed_not_counted_as_mismatch():
     a = _panel("a", uv, xyz, F)
     b = _panel("b", uv * np.array([1.0, 1.5]), xyz, F)  # b's left edge half as long again: gathered into a's
     left, right = np.array([0, 4, 8]), np.array([2, 6, 10])
-    pat = Pattern(style="s", body={}, garments={"g": "upper"}, panels=[a, b],
-                  seams=[PatternSeam("cap", "a", "b", left, left, gathered=True),
-                         PatternSeam("side", "a", "b", right, right)])
+    pat = Pattern(
+        style="s",
+        body={},
+        garments={"g": "upper"},
+        panels=[a, b],
+        seams=[PatternSeam("cap", "a", "b", left, left, gathered=True), PatternSeam("side", "a", "b", right, right)],
+    )
     sm = M.seam_mismatch(pat)
     assert sm["n"] == 1 and set(sm["per_seam"]) == {"side"}
     assert sm["gathered"] == {"cap": pytest.approx(1.5)}

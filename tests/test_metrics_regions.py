@@ -1,5 +1,6 @@
 """Region report: compliance near named landmarks, on a synthetic body with a known answer,
 and the landmarks it uses on Anny; warp and collapse in the summary and the add-on's figures."""
+
 import numpy as np
 import pytest
 
@@ -14,7 +15,7 @@ def _sheet(n=41):
     """A 1 m x 1 m flat "body" (z = 0) whose pattern has weft scale 1.2 left of x = 0.5 and 1.0 right of
     it, warp scale 0.9 everywhere, against targets 1: compliance 20 % (signed +20) on the left, 0 on
     the right, warp deviation 10 % (signed -10) everywhere."""
-    xs = np.linspace(0.0, 1.0, n)                   # a grid line at x = 0.5: the scale is piecewise constant
+    xs = np.linspace(0.0, 1.0, n)  # a grid line at x = 0.5: the scale is piecewise constant
     X, Y = np.meshgrid(xs, xs)
     xyz = np.c_[X.ravel(), Y.ravel(), np.zeros(X.size)]
     u = np.where(xyz[:, 0] < 0.5, 1.2 * xyz[:, 0], 0.6 + (xyz[:, 0] - 0.5))
@@ -26,17 +27,30 @@ def _sheet(n=41):
             F += [(a, b, c), (a, c, d)]
     F = np.array(F)
     f = len(F)
-    p = PatternPanel(name="front", garment="top", uv=uv, faces=F, vertex_ids=np.arange(len(uv)), xyz=xyz,
-                     grain=np.array([0.0, 1.0]), target_weft=np.ones(f), target_warp=np.ones(f),
-                     achieved_weft=np.ones(f), achieved_warp=np.ones(f))
+    p = PatternPanel(
+        name="front",
+        garment="top",
+        uv=uv,
+        faces=F,
+        vertex_ids=np.arange(len(uv)),
+        xyz=xyz,
+        grain=np.array([0.0, 1.0]),
+        target_weft=np.ones(f),
+        target_warp=np.ones(f),
+        achieved_weft=np.ones(f),
+        achieved_warp=np.ones(f),
+    )
     return Pattern(style="sheet", body={}, garments={"top": "top"}, panels=[p], seams=[])
 
 
 def test_region_compliance_known_answer():
     pat = _sheet()
-    lm = {"bust_left": np.array([0.25, 0.5, 0.0]), "bust_right": np.array([0.75, 0.5, 0.0]),
-          "seat_left": np.array([0.25, 0.5, 0.3]),    # 30 cm off the sheet: nothing within 6 cm
-          "knee_left": np.array([0.5, 0.5, 0.0])}     # not a region landmark: not reported by default
+    lm = {
+        "bust_left": np.array([0.25, 0.5, 0.0]),
+        "bust_right": np.array([0.75, 0.5, 0.0]),
+        "seat_left": np.array([0.25, 0.5, 0.3]),  # 30 cm off the sheet: nothing within 6 cm
+        "knee_left": np.array([0.5, 0.5, 0.0]),
+    }  # not a region landmark: not reported by default
     r = region_compliance(pat, lm, radius=0.2)
     assert set(r) == {"bust_left", "bust_right"}
     left, right = r["bust_left"], r["bust_right"]
@@ -46,7 +60,7 @@ def test_region_compliance_known_answer():
     for v in (left, right):
         assert v["warp_mean"] == pytest.approx(10.0) and v["warp_signed"] == pytest.approx(-10.0)
         assert v["shear_p95"] == pytest.approx(0.0, abs=1e-6)
-        assert v["area"] == pytest.approx(np.pi * 0.2 ** 2, rel=0.05)    # the disc, to the mesh's resolution
+        assert v["area"] == pytest.approx(np.pi * 0.2**2, rel=0.05)  # the disc, to the mesh's resolution
     # straddling x = 0.5: half the disc at 20 %, half at 0 (the centre column of triangles split evenly)
     mid = region_compliance(pat, lm, radius=0.2, names=["knee_left"])["knee_left"]
     assert mid["mean"] == pytest.approx(10.0, abs=0.5)
@@ -56,19 +70,21 @@ def test_region_compliance_known_answer():
 def test_pattern_report_carries_regions_per_garment():
     lm = {"bust_left": np.array([0.25, 0.5, 0.0])}
     m = pattern_report(_sheet(), lm)
-    assert m["regions"]["bust_left"]["mean"] == pytest.approx(20.0)   # default radius 6 cm: inside the left half
+    assert m["regions"]["bust_left"]["mean"] == pytest.approx(20.0)  # default radius 6 cm: inside the left half
     assert m["garments"]["top"]["regions"]["bust_left"] == m["regions"]["bust_left"]
-    assert pattern_report(_sheet())["regions"] == {}                  # no landmarks, no regions
+    assert pattern_report(_sheet())["regions"] == {}  # no landmarks, no regions
 
 
 def test_region_landmarks_on_anny(anny, anny_reference):
     V, _ = anny_reference
-    P = {n: anny.landmark_position(n, V) for n in REGION_LANDMARKS + ("gluteal_cleft", "waist_back", "crotch",
-                                                                        "armpit_left", "bust_left")}
+    P = {
+        n: anny.landmark_position(n, V)
+        for n in REGION_LANDMARKS + ("gluteal_cleft", "waist_back", "crotch", "armpit_left", "bust_left")
+    }
     for side, sx in (("left", 1), ("right", -1)):
         blade, seat = P[f"shoulder_blade_{side}"], P[f"seat_{side}"]
-        assert sx * blade[0] > 0.03 and sx * seat[0] > 0.02             # on its own side
-        assert blade[1] > 0.05 and seat[1] > 0.05                        # on the back (the body faces -Y)
+        assert sx * blade[0] > 0.03 and sx * seat[0] > 0.02  # on its own side
+        assert blade[1] > 0.05 and seat[1] > 0.05  # on the back (the body faces -Y)
         assert P["waist_back"][2] < blade[2] < P["armpit_left"][2] + 0.06
         assert P["crotch"][2] < seat[2] < P["waist_back"][2]
     # symmetric, and the cleft on the midline, in front of the seat prominences
@@ -79,7 +95,7 @@ def test_region_landmarks_on_anny(anny, anny_reference):
 
 def test_body_landmarks_of_a_pattern(anny):
     pat = _sheet()
-    assert body_landmarks(pat) == {}                                  # a synthetic pattern names no body
+    assert body_landmarks(pat) == {}  # a synthetic pattern names no body
     pat.body = {"model": "anny", "shape": None, "pose": None}
     lm = body_landmarks(pat, anny)
     assert set(REGION_LANDMARKS) <= set(lm)
@@ -93,7 +109,7 @@ def test_summary_and_figures_show_warp_and_collapse():
     wf.measure_pattern(pat)
     run = wf.PatternRun(pat, wf.pattern_figures(pat), {"optimize": 0.1})
     line = wf.summary(run)
-    assert "ease compliance 10.00" in line                           # half the sheet at 20 %
+    assert "ease compliance 10.00" in line  # half the sheet at 20 %
     assert "(warp 10.00 %, signed -10.00 %; shear p95 0.0°)" in line
     assert "flipped 0, collapsed 0" in line
     assert run.figures["warp deviation mean %"] == 10.0 and run.figures["warp deviation signed %"] == -10.0
@@ -128,8 +144,11 @@ def test_region_rows_are_the_rows_within_the_radius():
     rng = np.random.default_rng(5)
     c = cen[200]
     # landmarks whose radius passes through a centroid, along z and across it
-    lms = {"bust_left": np.array([0.25, 0.25, 0.25]), "bust_right": c + np.array([0.0, 0.0, 0.05]),
-           "seat_left": c + np.array([0.03, 0.04, 0.0])}
+    lms = {
+        "bust_left": np.array([0.25, 0.25, 0.25]),
+        "bust_right": c + np.array([0.0, 0.0, 0.05]),
+        "seat_left": c + np.array([0.03, 0.04, 0.0]),
+    }
     lms.update({f"extra_{i}": rng.uniform(0.0, 0.5, 3) for i in range(3)})
     for radius in (0.05, 0.06, 0.1):
         got = region_compliance(pat, lms, radius=radius, names=None)

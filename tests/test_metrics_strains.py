@@ -1,4 +1,5 @@
 """core.metrics.strains: one pass of per-triangle strains that every reference-body figure reads."""
+
 import numpy as np
 
 from core.metrics import pattern as M
@@ -12,16 +13,29 @@ def _pattern():
     rng = np.random.default_rng(3)
     xs, ys = np.meshgrid(np.linspace(0, 1, 6), np.linspace(0, 1, 5))
     uv = np.c_[xs.ravel(), ys.ravel()]
-    F = np.array([(j * 6 + i, j * 6 + i + 1, (j + 1) * 6 + i + 1) for j in range(4) for i in range(5)]
-                 + [(j * 6 + i, (j + 1) * 6 + i + 1, (j + 1) * 6 + i) for j in range(4) for i in range(5)])
+    F = np.array(
+        [(j * 6 + i, j * 6 + i + 1, (j + 1) * 6 + i + 1) for j in range(4) for i in range(5)]
+        + [(j * 6 + i, (j + 1) * 6 + i + 1, (j + 1) * 6 + i) for j in range(4) for i in range(5)]
+    )
     panels = []
     for k, g in enumerate(("a", "b")):
         xyz = np.c_[uv[:, 0] / 1.2, 0.05 * rng.standard_normal(len(uv)), uv[:, 1] / (1.0 + 0.1 * k)]
         f = len(F)
-        panels.append(PatternPanel(name=f"{g}.p", garment=g, uv=uv + rng.normal(0, 0.01, uv.shape), faces=F,
-                                   vertex_ids=np.arange(len(uv)), xyz=xyz, grain=np.array([0.0, 1.0]),
-                                   target_weft=np.full(f, 1.2), target_warp=np.ones(f),
-                                   achieved_weft=np.ones(f), achieved_warp=np.ones(f)))
+        panels.append(
+            PatternPanel(
+                name=f"{g}.p",
+                garment=g,
+                uv=uv + rng.normal(0, 0.01, uv.shape),
+                faces=F,
+                vertex_ids=np.arange(len(uv)),
+                xyz=xyz,
+                grain=np.array([0.0, 1.0]),
+                target_weft=np.full(f, 1.2),
+                target_warp=np.ones(f),
+                achieved_weft=np.ones(f),
+                achieved_warp=np.ones(f),
+            )
+        )
     return Pattern(style="s", body={}, garments={"a": "upper", "b": "lower"}, panels=panels, seams=[])
 
 
@@ -52,11 +66,11 @@ def test_a_pieces_scales_are_computed_once_and_follow_its_edits():
     first = p.scales()
     memo = p._scales
     again = p.scales()
-    assert p._scales is memo                                  # read back, not recomputed
+    assert p._scales is memo  # read back, not recomputed
     assert all(np.array_equal(a, b) for a, b in zip(first, again))
-    again[0][:] = 0.0                                         # a caller's array is its own
+    again[0][:] = 0.0  # a caller's array is its own
     assert np.array_equal(p.scales()[0], first[0])
-    p.uv[3] += 0.05                                           # an edit in place: recomputed
+    p.uv[3] += 0.05  # an edit in place: recomputed
     moved = p.scales()
     assert all(np.array_equal(a, b) for a, b in zip(moved, M.scales(p.uv, p.xyz, p.faces, p.grain)))
     assert not np.array_equal(moved[0], first[0])

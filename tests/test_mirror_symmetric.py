@@ -1,14 +1,15 @@
 """Mirrored designs stay symmetric (issue 14): the right half of a mirrored garment's cut is the
 exact mirror image of its left half, a panel across the body is flattened symmetrically, and the
 solved left and right pieces agree to round-off; seams are gathered for a mirror pair together."""
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from mirror_pairs import outline_asymmetry, seam_asymmetry
 
 from core.cut.symmetric import body_face_sides, mirror_plan
 from core.design.naming import swap_side
 from core.pattern.optimizer.mirror_flat import approximate_mirror, self_mirror_map, symmetric_flattening
-from mirror_pairs import outline_asymmetry, seam_asymmetry
 
 
 @pytest.fixture(scope="module")
@@ -16,6 +17,7 @@ def shirt(anny):
     from core import workflows as wf
     from core.design import load_design
     from core.design.templates import TEMPLATE_DIR
+
     design = load_design(TEMPLATE_DIR / "shirt_long_sleeve.json")
     design.refine_edge_length = 0.02
     return wf.prepare(design, body=anny)
@@ -25,6 +27,7 @@ def shirt(anny):
 def pants(anny):
     from core import workflows as wf
     from core.design.templates import TEMPLATE_DIR
+
     return wf.prepare(TEMPLATE_DIR / "pants.json", body=anny)
 
 
@@ -32,6 +35,7 @@ def pants(anny):
 def skirt(anny):
     from core import workflows as wf
     from core.design.templates import TEMPLATE_DIR
+
     return wf.prepare(TEMPLATE_DIR / "skirt.json", body=anny)
 
 
@@ -42,7 +46,7 @@ def _mirror_rows(W, symmetry):
 
 def test_anny_is_mirror_symmetric_with_a_midline(anny, anny_reference):
     sides = body_face_sides(anny, np.asarray(anny_reference[0]))
-    assert sides is not None and sides.mean() == 0.5       # as many triangles on each side, none across
+    assert sides is not None and sides.mean() == 0.5  # as many triangles on each side, none across
 
 
 @pytest.mark.parametrize("garment", ["shirt", "pants", "skirt"])
@@ -52,8 +56,9 @@ def test_mirrored_cut_is_the_exact_mirror_of_its_left_half(garment, request, ann
     W = cut.embedding
     Y, Ym = W @ X, _mirror_rows(W, np.asarray(anny.symmetry)) @ X
     from scipy.spatial import cKDTree
+
     d, j = cKDTree(Y).query(Ym)
-    assert d.max() < 1e-12                      # every garment vertex's mirror row is a garment vertex
+    assert d.max() < 1e-12  # every garment vertex's mirror row is a garment vertex
     for p in cut.panels:
         q = cut.panel(swap_side(p.name))
         assert len(p.faces) == len(q.faces) and len(p.vertex_ids) == len(q.vertex_ids)
@@ -78,6 +83,7 @@ def test_self_mirror_panels_are_recognised(shirt):
 @pytest.mark.parametrize("ease", [1.2, 3.5])
 def test_left_and_right_pieces_agree(shirt, ease):
     from core import workflows as wf
+
     saved = [p.ease for p in shirt.cut.panels]
     try:
         for p in shirt.cut.panels:
@@ -91,11 +97,12 @@ def test_left_and_right_pieces_agree(shirt, ease):
     assert max(seams.values()) < 0.5e-3, max(seams.items(), key=lambda kv: kv[1])
     assert max(outline_asymmetry(pat).values()) < 0.5e-3
     gathered = {s.name for s in pat.seams if s.gathered}
-    assert gathered == {swap_side(n.partition("#")[0]) + n[len(n.partition("#")[0]):] for n in gathered}
+    assert gathered == {swap_side(n.partition("#")[0]) + n[len(n.partition("#")[0]) :] for n in gathered}
 
 
 def _solved_at(prep, ease):
     from core import workflows as wf
+
     saved = [p.ease for p in prep.cut.panels]
     try:
         for p in prep.cut.panels:
@@ -112,11 +119,13 @@ def test_pants_centre_seams_lie_on_the_midline(pants, anny):
     cut, X = pants.cut, pants.reference
     Y = cut.positions(X)
     S = np.asarray(anny.symmetry)
-    tol = np.abs(np.asarray(X)[S == np.arange(len(S)), 0]).max()      # the body's own midline
+    tol = np.abs(np.asarray(X)[S == np.arange(len(S)), 0]).max()  # the body's own midline
     for name in ("pants.center_front", "pants.center_back"):
         s = next(s for s in cut.seams if s.name == name)
-        assert {s.panel_a, s.panel_b} in ({"pants.front_left", "pants.front_right"},
-                                          {"pants.back_left", "pants.back_right"})
+        assert {s.panel_a, s.panel_b} in (
+            {"pants.front_left", "pants.front_right"},
+            {"pants.back_left", "pants.back_right"},
+        )
         ids = np.asarray(cut.panel(s.panel_a).vertex_ids)[np.asarray(s.verts_a)]
         assert len(ids) > 10 and np.abs(Y[ids, 0]).max() <= tol, name
 
@@ -124,33 +133,36 @@ def test_pants_centre_seams_lie_on_the_midline(pants, anny):
 @pytest.mark.parametrize("ease", [1.2, 3.5])
 def test_left_and_right_pants_agree(pants, ease):
     from core import workflows as wf
+
     pat = _solved_at(pants, ease)
     seams = seam_asymmetry(pat)
     assert {"pants.side_left @ pants.front_left", "pants.inseam_left @ pants.back_left"} <= set(seams)
-    assert max(seams.values()) < 0.5e-3, max(seams.items(), key=lambda kv: kv[1])     # were 3.0 / 3.8 mm
+    assert max(seams.values()) < 0.5e-3, max(seams.items(), key=lambda kv: kv[1])  # were 3.0 / 3.8 mm
     outline = outline_asymmetry(pat)
     assert set(outline) == {"pants.front_left", "pants.back_left"}
-    assert max(outline.values()) < 0.5e-3, outline                                    # were 6.1 / 12.2 mm
+    assert max(outline.values()) < 0.5e-3, outline  # were 6.1 / 12.2 mm
     figures = wf.pattern_figures(pat)
     assert figures["flipped"] == 0 and figures["collapsed"] == 0
 
 
 def test_mirror_pairs_gather_together_at_the_default_threshold(shirt):
     from core.pattern.solve import PatternSolver
+
     solver = PatternSolver(shirt.cut, shirt.reference)
     K = solver.ref_offsets[0]
     ones = np.ones(len(solver.gfaces))
     for ease in (3.5, 4.5):
         plan = solver.plan_seams(K, ease * ones, ones)
         d = plan.demand
-        assert d["shirt.side_left"] == pytest.approx(d["shirt.side_right"], abs=1e-4)   # the body: 0.1 mm
+        assert d["shirt.side_left"] == pytest.approx(d["shirt.side_right"], abs=1e-4)  # the body: 0.1 mm
         assert ("shirt.side_left" in plan.gathered) == ("shirt.side_right" in plan.gathered)
-    assert {"shirt.side_left", "shirt.side_right"} <= set(plan.gathered)       # ease 4.5
+    assert {"shirt.side_left", "shirt.side_right"} <= set(plan.gathered)  # ease 4.5
 
 
 @pytest.mark.parametrize("garment", ["shirt", "pants", "skirt"])
 def test_cut_stays_deterministic(anny, garment, request):
     from core import workflows as wf
+
     prep = request.getfixturevalue(garment)
     a, b = prep.cut, wf.prepare(prep.design, body=anny).cut
     assert a.embedding.data.tobytes() == b.embedding.data.tobytes()
@@ -161,9 +173,9 @@ def test_cut_stays_deterministic(anny, garment, request):
 
 def test_mirror_plan_needs_every_mirror():
     assert mirror_plan(["g.front", "g.sleeve_left", "g.sleeve_right"], ["g.neck", "g.arm_left", "g.arm_right"])
-    assert mirror_plan(["g.front", "g.sleeve_left"], ["g.neck"]) is None          # no right sleeve
-    assert mirror_plan(["g.front", "g.back"], ["g.neck"]) is None                 # nothing mirrored
-    assert mirror_plan(["g.a_left", "g.a_right"], ["g.l_left"]) is None            # a line without its mirror
+    assert mirror_plan(["g.front", "g.sleeve_left"], ["g.neck"]) is None  # no right sleeve
+    assert mirror_plan(["g.front", "g.back"], ["g.neck"]) is None  # nothing mirrored
+    assert mirror_plan(["g.a_left", "g.a_right"], ["g.l_left"]) is None  # a line without its mirror
 
 
 def _strip(mirrored):
@@ -219,8 +231,8 @@ def test_skirt_topology_left_and_right_agree(anny, name, request):
     # 1.23 / 1.97 mm (skirt, ease 1.2 / 3.5), 0.55 / 0.85 mm (dress), 0.16 / 0.64 mm (skirt_darted)
     from core import workflows as wf
     from core.design.templates import TEMPLATE_DIR
-    prep = request.getfixturevalue("skirt") if name == "skirt" else \
-        wf.prepare(TEMPLATE_DIR / f"{name}.json", body=anny)
+
+    prep = request.getfixturevalue("skirt") if name == "skirt" else wf.prepare(TEMPLATE_DIR / f"{name}.json", body=anny)
     for ease in (1.2, 3.5):
         pat = _solved_at(prep, ease)
         seams, outline = seam_asymmetry(pat), outline_asymmetry(pat)
@@ -235,6 +247,7 @@ def test_a_darted_front_is_its_own_mirror(anny):
     # the mirror map still tells the two copies apart, so the darted front flattens symmetrically
     from core import workflows as wf
     from core.design.templates import TEMPLATE_DIR
+
     prep = wf.prepare(TEMPLATE_DIR / "blouse_fitted.json", body=anny)
     front = prep.cut.panel("blouse.front")
     assert len(np.unique(front.vertex_ids)) < len(front.vertex_ids)

@@ -1,13 +1,14 @@
 """`ease pattern`, `ease transfer`, `ease adapt`: arguments, outputs, errors."""
+
 import argparse
 import json
 
 import numpy as np
 import pytest
 
+from core.cli import pattern as cli
 from core.design.templates import template_path
 from core.errors import PatternError
-from core.cli import pattern as cli
 from core.pattern.io import load_pattern
 
 SHORTS = template_path("shorts")
@@ -59,7 +60,7 @@ def test_pattern_and_adapt_on_the_default_body(anny, tmp_path, capsys):
     rep2 = json.loads((out2 / "report.json").read_text())
     assert ad.mode == "adapt" and rep2["metrics"]["flipped_triangles"] == 0
 
-    out3 = tmp_path / "no_png"                           # --no-png: the same pattern, no picture
+    out3 = tmp_path / "no_png"  # --no-png: the same pattern, no picture
     assert _run(["pattern", str(SHORTS), "--out", str(out3), "--quiet", "--no-png"]) == 0
     assert not (out3 / "pattern.png").exists()
     assert (out3 / "pattern.json").read_bytes() == (out / "pattern.json").read_bytes()

@@ -1,11 +1,12 @@
 """SolverConfig: presets, overrides, validation naming the field, the precedence caller > design > default."""
+
 from pathlib import Path
 
 import pytest
 
 from core.design.materials import EPS_WEFT, GATHER_ABOVE
 from core.errors import PatternError
-from core.pattern.config import (FROM_DESIGN, Feedback, SolverConfig, Weights, gather_threshold, tolerances)
+from core.pattern.config import FROM_DESIGN, Feedback, SolverConfig, Weights, gather_threshold, tolerances
 
 
 def test_presets_and_overrides():
@@ -28,27 +29,40 @@ def test_gathered_as_a_list_is_a_hashable_configuration():
     assert hash(cfg) == hash(SolverConfig.named("improved", gathered=("*",)))
 
 
-@pytest.mark.parametrize("kw, field", [
-    ({"nonsense": 1}, "nonsense: no such setting"),
-    ({"step": 0.1}, "step: in feedback and adaptation"),
-    ({"weights": {"lambda_len": 1.0}}, "weights.lambda_len: no such setting"),
-    ({"weights": 3}, "weights: expected a Weights"),
-])
+@pytest.mark.parametrize(
+    "kw, field",
+    [
+        ({"nonsense": 1}, "nonsense: no such setting"),
+        ({"step": 0.1}, "step: in feedback and adaptation"),
+        ({"weights": {"lambda_len": 1.0}}, "weights.lambda_len: no such setting"),
+        ({"weights": 3}, "weights: expected a Weights"),
+    ],
+)
 def test_bad_overrides_name_the_setting(kw, field):
     with pytest.raises(PatternError, match=field):
         SolverConfig.improved(**kw)
 
 
-@pytest.mark.parametrize("kw, field", [
-    ({"seam_length": -1.0}, "weights.seam_length"), ({"warp_column": 0.0}, "weights.warp_column"),
-    ({"ease": 0.0, "regulariser": 0.0}, "weights: ease \\+ regulariser"),
-    ({"warp_row": 0.0}, "rest_shape.warp_row"), ({"model": "initial"}, "rest_shape.model"),
-    ({"straight_target": "flat"}, "seams.straight_target"), ({"gather_above": 0.0}, "seams.gather_above"),
-    ({"gathered": "armhole_left"}, "seams.gathered"), ({"floor": 1.5}, "feedback.floor"),
-    ({"feedback": {"ceiling": 0.9}}, "feedback.ceiling"), ({"adaptation": {"ceiling": 0.5}}, "adaptation.ceiling"),
-    ({"min_iterations": 0}, "adaptation.min_iterations"), ({"iterations": 0}, "iterations"),
-    ({"from_iteration": -1}, "feedback.from_iteration"), ({"margin": float("nan")}, "adaptation.margin"),
-])
+@pytest.mark.parametrize(
+    "kw, field",
+    [
+        ({"seam_length": -1.0}, "weights.seam_length"),
+        ({"warp_column": 0.0}, "weights.warp_column"),
+        ({"ease": 0.0, "regulariser": 0.0}, "weights: ease \\+ regulariser"),
+        ({"warp_row": 0.0}, "rest_shape.warp_row"),
+        ({"model": "initial"}, "rest_shape.model"),
+        ({"straight_target": "flat"}, "seams.straight_target"),
+        ({"gather_above": 0.0}, "seams.gather_above"),
+        ({"gathered": "armhole_left"}, "seams.gathered"),
+        ({"floor": 1.5}, "feedback.floor"),
+        ({"feedback": {"ceiling": 0.9}}, "feedback.ceiling"),
+        ({"adaptation": {"ceiling": 0.5}}, "adaptation.ceiling"),
+        ({"min_iterations": 0}, "adaptation.min_iterations"),
+        ({"iterations": 0}, "iterations"),
+        ({"from_iteration": -1}, "feedback.from_iteration"),
+        ({"margin": float("nan")}, "adaptation.margin"),
+    ],
+)
 def test_invalid_settings_name_the_field(kw, field):
     with pytest.raises(PatternError, match=f"solver configuration {field}"):
         SolverConfig.improved(**kw).check()
@@ -79,12 +93,13 @@ def test_lengths_keeps_the_warp_that_improved_spends_and_shows_the_shear_it_cost
     from core import workflows as wf
     from core.design import load_design
     from core.pattern.solve import build_pattern
+
     design = load_design(Path(__file__).resolve().parents[1] / "examples" / "designs" / "pants.json")
-    design.refine_edge_length = 0.03            # coarse: the same trade, a tenth of the triangles
+    design.refine_edge_length = 0.03  # coarse: the same trade, a tenth of the triangles
     prep = wf.prepare(design, body=anny)
     solver = wf.make_solver(prep)
     got = {}
-    K, cw, cg = solver.targets_reference()         # one set of targets; only the configuration differs
+    K, cw, cg = solver.targets_reference()  # one set of targets; only the configuration differs
     for name in ("improved", "lengths"):
         pattern = build_pattern(prep.cut, solver.solve(K, cw, cg, config=SolverConfig.named(name)))
         got[name] = wf.measure_pattern(pattern)["compliance"]

@@ -1,4 +1,5 @@
 """The solver's gap step between a dart's legs (core.pattern.optimizer.dart_gaps, issue 30), on a small system."""
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
@@ -25,7 +26,7 @@ def _positions(k, width):
     y = np.linspace(0.0, 0.1, k + 1)[:-1]
     U = np.zeros((2 * k + 1, 2))
     U[:k] = np.c_[-0.5 * width, y]
-    U[k:2 * k] = np.c_[0.5 * width, y]
+    U[k : 2 * k] = np.c_[0.5 * width, y]
     U[2 * k] = (0.0, 0.1)
     return U
 
@@ -39,14 +40,14 @@ def _base(n):
 def test_the_legs_and_their_bound():
     legs, n = _legs()
     assert legs.a.tolist() == [0, 1, 2, 3, 4] and legs.b.tolist() == [5, 6, 7, 8, 9]
-    assert legs.next_a[-1] == legs.next_b[-1] == 10                     # the apex ends the last pair's axis
+    assert legs.next_a[-1] == legs.next_b[-1] == 10  # the apex ends the last pair's axis
     # the bound: MIN_OPENING times the distance to the apex along the legs
     assert legs.min_gap == pytest.approx(D.MIN_OPENING * np.array([0.1, 0.08, 0.06, 0.04, 0.02]))
 
 
 def test_legs_apart_are_left_as_they_are():
     legs, n = _legs()
-    U = _positions(5, np.full(5, 0.01))                                 # 1 cm apart everywhere: above the bound
+    U = _positions(5, np.full(5, 0.01))  # 1 cm apart everywhere: above the bound
     assert D.GapCorrection(legs).correct(_base(n), U) is U
     # a gap measured on the leg a's side of the dart: positive here
     assert np.all(D.leg_gaps(legs, U) > 0)
@@ -54,7 +55,7 @@ def test_legs_apart_are_left_as_they_are():
 
 def test_crossed_legs_are_pushed_to_their_bound():
     legs, n = _legs()
-    width = np.array([0.01, 0.004, -0.003, -0.002, 0.0005])             # crossed in the middle
+    width = np.array([0.01, 0.004, -0.003, -0.002, 0.0005])  # crossed in the middle
     U = _positions(5, width)
     fixed = D.GapCorrection(legs).correct(_base(n), U)
     gap = D.leg_gaps(legs, fixed)
@@ -77,7 +78,7 @@ def test_no_darts_no_legs():
 def test_a_deep_crossing_opens_at_most_a_legs_edge_an_iteration():
     legs, n = _legs()
     assert legs.edge == pytest.approx(0.02)
-    width = np.array([-0.05, -0.05, -0.04, -0.02, -0.01])             # crossed by up to 5 cm
+    width = np.array([-0.05, -0.05, -0.04, -0.02, -0.01])  # crossed by up to 5 cm
     U = _positions(5, width)
     gap = D.leg_gaps(legs, D.GapCorrection(legs).correct(_base(n), U))
     raised = gap - width

@@ -1,4 +1,5 @@
 """core.pattern.optimizer.factor: LDL^T of the system matrix and its same-pattern refactorisation."""
+
 import numpy as np
 import pytest
 import scipy.sparse as sp

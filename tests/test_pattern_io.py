@@ -1,13 +1,14 @@
 """pattern.json round trip and validation."""
+
 import json
 
 import numpy as np
 import pytest
+from synthetic_pattern import two_panels
 
 from core.errors import PatternError
 from core.pattern.io import load_pattern, pattern_to_json, save_pattern
 from core.pattern.solve import solve_pattern
-from synthetic_pattern import two_panels
 
 
 @pytest.fixture(scope="module")
@@ -43,20 +44,23 @@ def _write(tmp_path, obj):
     return tmp_path
 
 
-@pytest.mark.parametrize("mutate, match", [
-    (lambda o: o.update(format="other"), "format"),
-    (lambda o: o.update(panels=[]), "panels"),
-    (lambda o: o["panels"][0].update(uv=[[0, 0]]), r"panels\[0\] \(front\)\.uv"),
-    (lambda o: o["panels"][0].update(faces=[]), "faces"),
-    (lambda o: o["panels"][0]["faces"].__setitem__(0, [0, 1, 999]), "faces: vertex indices"),
-    (lambda o: o["panels"][1]["target_weft"].__setitem__(0, 0.0), r"panels\[1\] \(back\)\.target_weft"),
-    (lambda o: o["panels"][0].update(grain=[0.0, 2.0]), "grain"),
-    (lambda o: o["panels"][0].pop("xyz"), "xyz: missing"),
-    (lambda o: o["seams"][0].update(panel_b="nope"), r"seams\[0\]\.panel_b"),
-    (lambda o: o["seams"][0].update(verts_b=[0]), r"seams\[0\]\.verts_a/verts_b"),
-    (lambda o: o.update(mode="draft"), "mode"),
-    (lambda o: o["seams"][0].update(gathered="yes"), r"seams\[0\]\.gathered"),
-])
+@pytest.mark.parametrize(
+    "mutate, match",
+    [
+        (lambda o: o.update(format="other"), "format"),
+        (lambda o: o.update(panels=[]), "panels"),
+        (lambda o: o["panels"][0].update(uv=[[0, 0]]), r"panels\[0\] \(front\)\.uv"),
+        (lambda o: o["panels"][0].update(faces=[]), "faces"),
+        (lambda o: o["panels"][0]["faces"].__setitem__(0, [0, 1, 999]), "faces: vertex indices"),
+        (lambda o: o["panels"][1]["target_weft"].__setitem__(0, 0.0), r"panels\[1\] \(back\)\.target_weft"),
+        (lambda o: o["panels"][0].update(grain=[0.0, 2.0]), "grain"),
+        (lambda o: o["panels"][0].pop("xyz"), "xyz: missing"),
+        (lambda o: o["seams"][0].update(panel_b="nope"), r"seams\[0\]\.panel_b"),
+        (lambda o: o["seams"][0].update(verts_b=[0]), r"seams\[0\]\.verts_a/verts_b"),
+        (lambda o: o.update(mode="draft"), "mode"),
+        (lambda o: o["seams"][0].update(gathered="yes"), r"seams\[0\]\.gathered"),
+    ],
+)
 def test_validation_names_the_field(tmp_path, pattern, mutate, match):
     obj = json.loads(json.dumps(pattern_to_json(pattern)))
     mutate(obj)
@@ -82,6 +86,7 @@ def test_missing_and_broken_files(tmp_path):
 
 def test_invalid_pattern_is_never_written(tmp_path, pattern):
     import copy
+
     bad = copy.deepcopy(pattern)
     bad.panels[0].uv[0, 0] = np.nan
     with pytest.raises(PatternError):

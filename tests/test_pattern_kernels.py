@@ -1,16 +1,17 @@
 """The solver's Warp kernels (core/pattern/kernels.py via compiled.py) give numpy's bits, step by step and
 for whole patterns, and numpy takes over wherever they do not apply."""
+
 import numpy as np
 import pytest
+from same_bits import assert_same
+from synthetic_pattern import two_panels
 
 from core.pattern.accel import compiled
 from core.pattern.config import SolverConfig
 from core.pattern.optimizer.feedback import move_corrections
-from core.pattern.solve import PatternSolver, transfer_pattern
 from core.pattern.optimizer.steps import collapse_guard, inverse_offsets, local_step, realign_grain
 from core.pattern.optimizer.targets import rest_targets
-from same_bits import assert_same
-from synthetic_pattern import two_panels
+from core.pattern.solve import PatternSolver, transfer_pattern
 
 # every tail length f % 8, a size under one block of 8, and one of several blocks
 SIZES = [5, 8, 9, 10, 11, 12, 13, 14, 15, 83]
@@ -29,6 +30,7 @@ def both():
             return ref, fn()
         finally:
             compiled.use(None)
+
     return run
 
 
@@ -44,12 +46,22 @@ def ran(monkeypatch):
     """How many calls of each of :mod:`core.pattern.accel.compiled`'s steps the kernels did (gave a result) in
     the test: a comparison with numpy only tests the kernels where they ran."""
     counts = {}
-    for name in ("local_step", "ratios", "collapse_guard", "grain_votes", "turned", "flip_check", "corrections",
-                 "rhs_terms"):
+    for name in (
+        "local_step",
+        "ratios",
+        "collapse_guard",
+        "grain_votes",
+        "turned",
+        "flip_check",
+        "corrections",
+        "rhs_terms",
+    ):
+
         def spy(*args, _step=getattr(compiled, name), _name=name):
             got = _step(*args)
             counts[_name] = counts.get(_name, 0) + (got is not None and got is not False)
             return got
+
         monkeypatch.setattr(compiled, name, spy)
     return counts
 
@@ -60,7 +72,7 @@ def _inputs(f, seed, collapse=False):
     Kc = [np.ascontiguousarray(K[:, i, j]) for i in range(2) for j in range(2)]
     M = [rng.normal(m, 0.3, f) for m in (1.1, 0.0, 0.0, 0.9)]
     if collapse:
-        M[0][: f // 3] *= 0.1           # some triangles near collapse, some flipped
+        M[0][: f // 3] *= 0.1  # some triangles near collapse, some flipped
         M[3][: f // 5] *= -0.5
     cw, cg = rng.uniform(0.9, 1.6, f), rng.uniform(0.95, 1.2, f)
     return rng, K, Kc, M, cw, cg
@@ -72,15 +84,16 @@ def _inputs(f, seed, collapse=False):
 def test_local_step_same_bits(both, f, name):
     cfg = SolverConfig.named(name)
     _, K, Kc, M, cw, cg = _inputs(f, f)
-    M[0][0] = M[1][0] = M[2][0] = M[3][0] = 0.0           # r = 0: no rotation to find
+    M[0][0] = M[1][0] = M[2][0] = M[3][0] = 0.0  # r = 0: no rotation to find
     tg = rest_targets(Kc, cw, cg, cfg.rest_shape.model)
     W2 = np.ones(2)
 
     def run():
         state = {}
         first = local_step(cfg, M, tg, W2, state)
-        second = local_step(cfg, M, tg, W2, state)    # with the first call's warp factors
+        second = local_step(cfg, M, tg, W2, state)  # with the first call's warp factors
         return first, second, state.get("sw")
+
     ref, got = both(run)
     assert_same(ref[:2], got[:2])
     if ref[2] is not None:
@@ -91,16 +104,30 @@ def test_local_step_same_bits(both, f, name):
 def test_local_step_nan_lanes_fall_back_to_numpy(both):
     cfg = SolverConfig.named("improved")
     _, K, Kc, M, cw, cg = _inputs(83, 3)
-    M[2][7] = np.nan                                      # the warp factor's clip meets a NaN
+    M[2][7] = np.nan  # the warp factor's clip meets a NaN
     tg = rest_targets(Kc, cw, cg, cfg.rest_shape.model)
     ref, got = both(lambda: local_step(cfg, M, tg, np.ones(2), {}))
     assert_same(ref, got)
-    assert np.isnan(got[0][2][7])                          # numpy's NaN, not Warp's clipped value
+    assert np.isnan(got[0][2][7])  # numpy's NaN, not Warp's clipped value
 
 
 # zeros of both signs, subnormals, values whose squares underflow or overflow, and the non-finite ones
-FINITE = [0.0, -0.0, 5e-324, -5e-324, 1e-310, 2.2250738585072014e-308, 1e-160, -1e-160, 1e-300, 1.0, -1.0,
-          1e154, -1e154, 1e200]
+FINITE = [
+    0.0,
+    -0.0,
+    5e-324,
+    -5e-324,
+    1e-310,
+    2.2250738585072014e-308,
+    1e-160,
+    -1e-160,
+    1e-300,
+    1.0,
+    -1.0,
+    1e154,
+    -1e154,
+    1e200,
+]
 NON_FINITE = FINITE + [np.inf, -np.inf, np.nan, -np.nan]
 
 
@@ -112,7 +139,7 @@ def _sprinkle(rng, arrays, values, share):
 
 
 @pytest.mark.same_bits
-@pytest.mark.filterwarnings("ignore::RuntimeWarning")     # numpy's overflow / invalid notes
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # numpy's overflow / invalid notes
 @pytest.mark.parametrize("finite", [True, False])
 @pytest.mark.parametrize("name", ["improved", "paper", "lengths", "stretch"])
 def test_local_step_special_values_same_bits(both, ran, name, finite):
@@ -120,8 +147,10 @@ def test_local_step_special_values_same_bits(both, ran, name, finite):
     for seed in range(8):
         rng, K, Kc, M, cw, cg = _inputs(83, 300 + seed)
         tg = rest_targets(Kc, cw, cg, cfg.rest_shape.model)
-        tg = {"T": [t.copy() for t in tg["T"]], "reg": (tg["reg"][0].copy(), tg["reg"][1].copy(),
-                                                       [x.copy() for x in tg["reg"][2]])}
+        tg = {
+            "T": [t.copy() for t in tg["T"]],
+            "reg": (tg["reg"][0].copy(), tg["reg"][1].copy(), [x.copy() for x in tg["reg"][2]]),
+        }
         values = FINITE if finite else NON_FINITE
         _sprinkle(rng, M, values, 0.3)
         _sprinkle(rng, [*tg["T"], tg["reg"][0], tg["reg"][1], *tg["reg"][2]], values, 0.1)
@@ -129,14 +158,15 @@ def test_local_step_special_values_same_bits(both, ran, name, finite):
         def run():
             state = {}
             return local_step(cfg, M, tg, np.ones(2), state), local_step(cfg, M, tg, np.ones(2), state)
+
         ref, got = both(run)
         assert_same(ref, got)
-    if cfg.rest_shape.warp_slack == 0:      # no clip, so no NaN to meet one: the kernels always run
+    if cfg.rest_shape.warp_slack == 0:  # no clip, so no NaN to meet one: the kernels always run
         assert ran["local_step"] == 16
 
 
 @pytest.mark.same_bits
-@pytest.mark.filterwarnings("ignore::RuntimeWarning")     # numpy's overflow / invalid notes
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # numpy's overflow / invalid notes
 @pytest.mark.parametrize("gains", [(0.15, 0.0), (2.0, 0.5), (1.0, 1.0), (0.5, 2.0), (0.7, 0.3), (2, 1)])
 def test_feedback_special_values_same_bits(both, ran, gains):
     """Subnormal and signed-zero shears, extreme targets, and the gains numpy's ``**`` computes
@@ -151,13 +181,14 @@ def test_feedback_special_values_same_bits(both, ran, gains):
             cw_corr, cg_corr = np.linspace(0.9, 1.1, 83), np.linspace(1.05, 0.95, 83)
             move_corrections(cfg, M, Kc, cw, cg, cw_corr, cg_corr)
             return cw_corr, cg_corr
+
         ref, got = both(run)
         assert_same(ref, got)
     assert ran["ratios"] == 8
 
 
 @pytest.mark.same_bits
-@pytest.mark.filterwarnings("ignore::RuntimeWarning")     # numpy's overflow / invalid notes
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # numpy's overflow / invalid notes
 @pytest.mark.parametrize("finite", [True, False])
 def test_collapse_guard_special_values_same_bits(both, ran, finite):
     guard = SolverConfig.named("improved").guard
@@ -173,13 +204,14 @@ def test_collapse_guard_special_values_same_bits(both, ran, finite):
             gain = start.copy()
             q, held = collapse_guard(guard, M, Kc, cw, cg, gain, inverse_offsets(Kc))
             return q, held, gain
+
         ref, got = both(run)
         assert_same(ref, got)
     assert ran["collapse_guard"] == 8
 
 
 @pytest.mark.same_bits
-@pytest.mark.filterwarnings("ignore::RuntimeWarning")     # numpy's overflow / invalid notes
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # numpy's overflow / invalid notes
 @pytest.mark.parametrize("finite", [True, False])
 def test_realign_grain_special_values_same_bits(both, ran, tube, finite):
     _, _, solver = tube
@@ -200,15 +232,16 @@ def test_feedback_same_bits(both, f, poison):
     cfg = SolverConfig.named("lengths")
     _, K, Kc, M, cw, cg = _inputs(f, 100 + f)
     if poison == "target":
-        cw[f // 2] = np.inf                               # the feedback leaves that triangle
+        cw[f // 2] = np.inf  # the feedback leaves that triangle
     elif poison == "jacobian":
-        M[0][1] = M[1][1] = 0.0                           # a degenerate triangle: rho infinite or NaN
+        M[0][1] = M[1][1] = 0.0  # a degenerate triangle: rho infinite or NaN
         M[2][1] = M[3][1] = 0.0
 
     def run():
         cw_corr, cg_corr = np.linspace(0.9, 1.1, f), np.linspace(1.05, 0.95, f)
         move_corrections(cfg, M, Kc, cw, cg, cw_corr, cg_corr)
         return cw_corr, cg_corr
+
     ref, got = both(run)
     assert_same(ref, got)
 
@@ -232,6 +265,7 @@ def test_feedback_corrections_same_bits(both, ran, name, poison):
         a, b = start_w.copy(), start_g.copy()
         move_corrections(cfg, M, Kc, cw, cg, a, b)
         return a, b
+
     ref, got = both(run)
     assert_same(ref, got)
     assert ran.get("corrections", 0) == (0 if poison == "nan_correction" else 1)
@@ -242,12 +276,15 @@ def test_feedback_corrections_same_bits(both, ran, name, poison):
 def test_rhs_terms_same_bits(both, ran, lam):
     """The right-hand side's terms lambda_reg R T + lambda_ease T in the kernel, unit weights included."""
     from core.pattern.optimizer.steps import rhs_terms
+
     rng = np.random.default_rng(9)
     RT0, T = [rng.normal(0, 1, 83) for _ in range(4)], [rng.normal(0, 1, 83) for _ in range(4)]
     RT0[0][:3] = [-0.0, 0.0, np.inf]
+
     def run():
-        with np.errstate(invalid="ignore"):       # 0 x inf where lambda_reg is 0: NaN in both
+        with np.errstate(invalid="ignore"):  # 0 x inf where lambda_reg is 0: NaN in both
             return rhs_terms([x.copy() for x in RT0], T, *lam)
+
     ref, got = both(run)
     assert_same(ref, got)
     assert ran.get("rhs_terms") == 1
@@ -258,17 +295,18 @@ def test_rhs_terms_same_bits(both, ran, lam):
 def test_collapse_guard_same_bits(both, f):
     guard = SolverConfig.named("improved").guard
     rng, K, Kc, M, cw, cg = _inputs(f, 200 + f, collapse=True)
-    Kc[0][-1] = Kc[1][-1] = 0.0                           # a degenerate body triangle: det K = 0
-    M[1][f // 2] = np.nan                                 # a non-finite iterate
+    Kc[0][-1] = Kc[1][-1] = 0.0  # a degenerate body triangle: det K = 0
+    M[1][f // 2] = np.nan  # a non-finite iterate
     start = rng.choice([0.0, 1.0, 1.5, guard.guard_limit, 2.0 / guard.guard_release], f)
 
     def run():
         gain = start.copy()
         q, held = collapse_guard(guard, M, Kc, cw, cg, gain, inverse_offsets(Kc))
         return q, held, gain
+
     ref, got = both(run)
     assert_same(ref, got)
-    if f == SIZES[-1]:     # the cases the update distinguishes all occur
+    if f == SIZES[-1]:  # the cases the update distinguishes all occur
         gain = ref[2]
         assert ref[1].size and (gain > start).any() and ((start > 0) & (gain < start)).any() and (gain == 0).any()
 
@@ -279,7 +317,9 @@ def test_collapse_guard_gains_at_or_over_the_limit(both, ran, grow, over):
     """numpy raises the low triangles' gains only if one is under the limit: where all are at it (or over
     it, as a resumed solve's gains after an escalated limit) it leaves them, and so must the kernel."""
     from dataclasses import replace
+
     from core.pattern.optimizer.steps import relative_singular_values
+
     guard = replace(SolverConfig.named("improved").guard, guard_grow=grow)
     f = 83
     rng, K, Kc, M, cw, cg = _inputs(f, 5, collapse=True)
@@ -294,9 +334,10 @@ def test_collapse_guard_gains_at_or_over_the_limit(both, ran, grow, over):
         gain = start.copy()
         q, held = collapse_guard(guard, M, Kc, cw, cg, gain, inverse)
         return q, held, gain
+
     ref, got = both(run)
     assert_same(ref, got)
-    assert low.sum() > 3 and np.array_equal(ref[2][low], start[low])     # numpy left them
+    assert low.sum() > 3 and np.array_equal(ref[2][low], start[low])  # numpy left them
     assert ran.get("collapse_guard", 0) == (0 if over or grow < 1 else 1)
 
 
@@ -314,7 +355,7 @@ class _Sub(np.ndarray):
 
 UNSUITABLE = {
     "float32": lambda x: x.astype(np.float32),
-    "int32": lambda x: (x * 100).astype(np.int32),      # an int32 array in a float64 slot: read past its end
+    "int32": lambda x: (x * 100).astype(np.int32),  # an int32 array in a float64 slot: read past its end
     "int64": lambda x: (x * 100).astype(np.int64),
     "big-endian": lambda x: x.astype(">f8"),
     "strided": lambda x: np.repeat(x, 2)[::2],
@@ -339,18 +380,19 @@ def test_unsuitable_arrays_go_to_numpy(both, ran, kind):
     def run():
         out = []
         for M_, c_warp in ((M, cg), ([m * 1.01 for m in M], bad), (M, cg)):
-            if c_warp is bad:       # M_ is rebound before c_warp is met
+            if c_warp is bad:  # M_ is rebound before c_warp is met
                 out.append(compiled.ratios(M_, Kc, cw, bad))
                 continue
             a, b = np.linspace(0.9, 1.1, f), np.linspace(1.05, 0.95, f)
             move_corrections(cfg, M_, Kc, cw, c_warp, a, b)
             out += [a, b]
         return out
+
     ref, got = both(run)
     assert got[2] is None
     assert_same(ref[:2] + ref[3:], got[:2] + got[3:])
     assert ran["ratios"] == 2
-    assert compiled.turned(M, bad, cw) is None          # no flags there: the launcher alone refuses it
+    assert compiled.turned(M, bad, cw) is None  # no flags there: the launcher alone refuses it
 
 
 @pytest.mark.same_bits
@@ -358,6 +400,7 @@ def test_equal_float64_dtypes_and_read_only_arrays_run(both, ran):
     """Arrays that came through pickle (a Dask worker's: an equal float64 dtype, another object) and
     read-only ones are the kernels' too."""
     import pickle
+
     cfg = SolverConfig.named("improved")
     _, K, Kc, M, cw, cg = _inputs(83, 31)
     M = pickle.loads(pickle.dumps(M))
@@ -374,10 +417,11 @@ def test_launches_keep_no_arrays_and_few_sizes(kernels_on, monkeypatch):
     """The kept launches hold no array past its call (a solve's memory goes with it), and a thread keeps
     launches for a few sizes only (a batch over many designs meets a new size with every design)."""
     import weakref
+
     monkeypatch.setattr(compiled._local, "launches", {}, raising=False)
     rng = np.random.default_rng(0)
     for f in range(8, 8 + 2 * compiled._KEPT):
-        for _ in range(2):      # recorded, then rebound
+        for _ in range(2):  # recorded, then rebound
             M = [rng.normal(size=f) for _ in range(4)]
             ct, st = rng.normal(size=f), rng.normal(size=f)
             out = compiled.turned(M, ct, st)
@@ -400,6 +444,7 @@ def test_flip_guard_same_bits(both, ran, tube, case):
     """The flip guard's first check in the kernel: a step that cuts nothing is the kernel's alone; one
     with a triangle at its floor, or a NaN where Warp's min and numpy's part, is numpy's."""
     from core.pattern.optimizer.steps import face_areas, flip_guard
+
     _, _, solver = tube
     rng = np.random.default_rng(3)
     U_old = solver.uv0 * 1.02
@@ -425,7 +470,7 @@ def test_realign_grain_same_bits(both, tube):
     M = solver.jacobians(U)
     ref, got = both(lambda: realign_grain(solver.blocks, U, M))
     assert_same(ref, got)
-    M[0][3] = np.nan                                      # a NaN image: numpy's path (its NaN vote)
+    M[0][3] = np.nan  # a NaN image: numpy's path (its NaN vote)
     ref, got = both(lambda: realign_grain(solver.blocks, U, M))
     assert_same(ref, got)
 
@@ -439,6 +484,7 @@ def test_transfer_same_bits(both, tube, name):
     def run():
         p = transfer_pattern(cut, body, big, config=SolverConfig.named(name), solver=PatternSolver(cut, body))
         return [x for pn in p.panels for x in (pn.uv, pn.target_weft, pn.target_warp)]
+
     ref, got = both(run)
     assert_same(ref, got)
 
@@ -448,18 +494,20 @@ def test_threads_same_bits(tube, ran):
     """Solves in several threads at once (Dask workers' threads, the add-on's background solve): each
     thread binds its own launches, and every pattern is numpy's."""
     from concurrent.futures import ThreadPoolExecutor
+
     cut, body, _ = tube
     sizes = [body * np.array([1.0 + 0.03 * i, 1.05, 1.0]) for i in range(4)]
 
     def run(solver, big):
         p = transfer_pattern(cut, body, big, config=SolverConfig.named("improved"), solver=solver)
         return [x for pn in p.panels for x in (pn.uv, pn.target_weft, pn.target_warp)]
+
     assert compiled.load()
     compiled.use(False)
     try:
-        numpy_solver = PatternSolver(cut, body)                  # a solver chooses its path when built
+        numpy_solver = PatternSolver(cut, body)  # a solver chooses its path when built
         compiled.use(True)
-        solvers = [PatternSolver(cut, body) for _ in sizes]      # a solver is one thread's
+        solvers = [PatternSolver(cut, body) for _ in sizes]  # a solver is one thread's
         compiled.use(None)
         assert not numpy_solver.kernels and all(s.kernels for s in solvers)
         ref = [run(numpy_solver, big) for big in sizes]
@@ -477,6 +525,7 @@ def test_only_warps_public_api():
     either runs them or refuses a launch (then numpy, one warning)."""
     import re
     from pathlib import Path
+
     for name in ("compiled", "ldl", "products"):
         src = (Path(compiled.__file__).parent / f"{name}.py").read_text()
         assert "_src" not in src and "_invoke_cache" not in src and ".hooks" not in src, name
@@ -504,7 +553,7 @@ def test_switches(monkeypatch):
     assert not compiled.enabled()
     monkeypatch.setenv(compiled.ENV, "warp")
     assert compiled.enabled()
-    monkeypatch.setenv(compiled.ENV, "off")        # not a value: numpy (the reference), with a warning
+    monkeypatch.setenv(compiled.ENV, "off")  # not a value: numpy (the reference), with a warning
     assert not compiled.enabled()
     compiled.use(False)
     try:
@@ -527,6 +576,7 @@ def test_a_failed_load_leaves_numpy(monkeypatch, caplog):
 
     def broken():
         raise RuntimeError("no compiler")
+
     monkeypatch.setattr(Q, "init_cpu", broken)
     monkeypatch.setitem(compiled._state, "ready", None)
     assert not compiled.load()
@@ -537,8 +587,10 @@ def test_a_failed_load_leaves_numpy(monkeypatch, caplog):
 @pytest.mark.same_bits
 def test_a_failed_launch_leaves_numpy(both, monkeypatch, caplog):
     """A launch Warp refuses: numpy's result, one warning, and numpy for the rest of the process."""
+
     def broken(*args):
         raise RuntimeError("no launch")
+
     cfg = SolverConfig.named("improved")
     _, K, Kc, M, cw, cg = _inputs(83, 41)
     tg = rest_targets(Kc, cw, cg, cfg.rest_shape.model)
@@ -554,6 +606,7 @@ def test_a_failed_launch_leaves_numpy(both, monkeypatch, caplog):
 def test_a_scalar_rebound_when_only_its_sign_of_zero_changes(kernels_on, monkeypatch):
     """0.0 == -0.0, but the kernel must see the one it is given (the recorded launch's parameter)."""
     import math
+
     monkeypatch.setattr(compiled._local, "launches", {}, raising=False)
     _, K, Kc, M, cw, cg = _inputs(16, 51)
     for om in (0.0, -0.0):

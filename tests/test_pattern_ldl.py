@@ -1,13 +1,14 @@
 """core.pattern.accel.ldl: QDLDL's factors refactorised row by row and solved two columns at once, with qdldl's bits."""
+
 import pickle
 
 import numpy as np
 import pytest
 import qdldl
 import scipy.sparse as sp
+from same_bits import assert_same
 
 from core.pattern.accel import compiled
-from same_bits import assert_same
 from core.pattern.optimizer.factor import SymmetricFactor
 
 
@@ -16,8 +17,11 @@ def kernels_on(monkeypatch):
     assert compiled.load(), "Warp kernels failed to load (see the log's warning)"
     monkeypatch.setitem(compiled._state, "forced", True)
     from core.pattern.accel.ldl import matches_qdldl
+
     if not matches_qdldl():
-        pytest.skip("this machine's qdldl build has other bits than the kernels (fused multiply-adds): qdldl factorises")
+        pytest.skip(
+            "this machine's qdldl build has other bits than the kernels (fused multiply-adds): qdldl factorises"
+        )
 
 
 def _spd(n, seed, blocks=1, density=4):
@@ -86,9 +90,9 @@ def test_refactorised_factors_are_qdldls_bits(kernels_on, n, blocks, kind):
     f = SymmetricFactor(_spd(n, seed=n + blocks, blocks=blocks))
     assert f._ldl is not None
     data = _changed(f, kind, seed=7)
-    g = f.with_values(data)                        # a copy of f's factors, the changed rows recomputed
+    g = f.with_values(data)  # a copy of f's factors, the changed rows recomputed
     h = f.with_values(_changed(f, "pairs", 3))
-    h = f.with_values(data, reuse=h)               # refactorised in place from other values
+    h = f.with_values(data, reuse=h)  # refactorised in place from other values
     B = sp.csc_matrix((data, f.matrix.indices, f.matrix.indptr), shape=f.matrix.shape)
     ref = qdldl.Solver(sp.triu(B, format="csc"), upper=True)
     L, D, _ = ref.factors()
@@ -136,7 +140,9 @@ def test_the_original_is_untouched(kernels_on):
 def test_kernels_and_qdldl_give_the_same_bits_on_a_solvers_guarded_matrices(kernels_on, monkeypatch):
     """The solver's own system matrix and the collapse guard's stiffenings of it, refactorised in turn."""
     from synthetic_pattern import two_panels
+
     from core.pattern.solve import PatternSolver
+
     cut, body = two_panels(ease=(1.2, 1.6), bulge=0.2)
     rng = np.random.default_rng(0)
     results = []
@@ -163,6 +169,7 @@ def test_kernels_and_qdldl_give_the_same_bits_on_a_solvers_guarded_matrices(kern
 def test_a_failed_launch_leaves_qdldl(kernels_on, monkeypatch, caplog):
     """A launch Warp refuses: qdldl's bits, one warning, and qdldl (and numpy) for the rest of the process."""
     from core.pattern.accel.ldl import LDL
+
     f = SymmetricFactor(_spd(60, seed=3))
     data = _changed(f, "pairs", 6)
     g_ref = f.with_values(data)
@@ -171,6 +178,7 @@ def test_a_failed_launch_leaves_qdldl(kernels_on, monkeypatch, caplog):
 
     def broken(self):
         raise RuntimeError("no launch")
+
     monkeypatch.setattr(LDL, "_rows_record", broken)
     monkeypatch.setattr(LDL, "_solve_record", broken)
     monkeypatch.setitem(compiled._state, "ready", True)
@@ -186,6 +194,7 @@ def test_a_zero_pivot_is_refused(kernels_on, monkeypatch):
     """A new factorisation with a zero pivot is the pattern's one-line refusal on both paths (issue 30:
     it was a ValueError traceback with the kernels, a RuntimeError from qdldl without them)."""
     from core.errors import PatternError
+
     for forced in (True, False):
         monkeypatch.setitem(compiled._state, "forced", forced)
         f = SymmetricFactor(sp.diags([2.0, 3.0, 4.0]).tocsc())
@@ -197,7 +206,7 @@ def test_a_zero_pivot_is_refused(kernels_on, monkeypatch):
 def test_a_pickled_factor_solves(kernels_on):
     f = SymmetricFactor(_spd(60, seed=4))
     b = np.random.default_rng(4).random((f.n, 2))
-    x = f.solve(b)                                    # its launches are recorded now
+    x = f.solve(b)  # its launches are recorded now
     g = pickle.loads(pickle.dumps(f))
     _same(g.solve(b), x)
 
@@ -212,7 +221,7 @@ def test_a_refused_refactorisation_goes_on_as_qdldl_and_refactorises_to_qdldls_b
         monkeypatch.setitem(compiled._state, "forced", forced)
         f = SymmetricFactor(sp.diags([2.0, 3.0, 4.0]).tocsc())
         g = f.with_values(np.array([2.0, 3.0, 4.0]))
-        g = f.with_values(np.array([2.0, 0.0, 4.0]), reuse=g)         # no traceback
+        g = f.with_values(np.array([2.0, 0.0, 4.0]), reuse=g)  # no traceback
         out[forced] = g.solve(np.ones(3))
         g = f.with_values(np.array([2.0, 3.0, 5.0]), reuse=g)
         _same(g.solve(np.ones(3)), [1 / 2, 1 / 3, 1 / 5])
@@ -226,6 +235,7 @@ def test_a_failed_plan_launch_leaves_qdldl(kernels_on, monkeypatch, caplog):
 
     def broken(self, *args):
         raise RuntimeError("no launch")
+
     A = _spd(60, seed=8)
     want = SymmetricFactor(A).solve(np.ones(60))
     monkeypatch.setattr(ldl.Plan, "__init__", broken)
@@ -249,8 +259,10 @@ def test_a_wrong_right_hand_side_raises_and_leaves_the_kernels_on(kernels_on, mo
 def test_factors_past_int32_indices_stay_qdldls():
     """qdldl's indices are 64-bit, the kernels' int32: an L with 2**31 entries is left to qdldl."""
     from types import SimpleNamespace
+
     from core.pattern.accel.ldl import LDL
-    L = SimpleNamespace(indptr=np.array([0, 2 ** 31], np.int64), indices=np.zeros(0, np.int32), data=np.zeros(0))
+
+    L = SimpleNamespace(indptr=np.array([0, 2**31], np.int64), indices=np.zeros(0, np.int32), data=np.zeros(0))
     solver = SimpleNamespace(factors=lambda: (L, np.ones(1), np.zeros(1, np.int64)))
     upper = (np.array([0]), np.array([0], np.int32), np.array([0, 1], np.int32))
     assert LDL.from_qdldl(solver, upper, np.ones(1)) is None
@@ -258,17 +270,17 @@ def test_factors_past_int32_indices_stay_qdldls():
 
 def _edge(kind: str):
     """(matrix, values to refactorise to in turn) for the cases where QDLDL's bits are easiest to miss."""
-    if kind == "no_diagonal":                       # quasi-definite: D starts at 0 where a diagonal is missing
+    if kind == "no_diagonal":  # quasi-definite: D starts at 0 where a diagonal is missing
         A = sp.csc_matrix(np.array([[1.0, 1.0, 0], [1.0, 0, 2.0], [0, 2.0, 3.0]]))
         return A, [A.data * 2, A.data + 1, A.data]
     A = _spd(60, seed=11)
     f = SymmetricFactor(A)
     rows, cols, d = f.matrix.indices, f._cols, f.matrix.data
-    if kind == "signed_zeros":                      # -0.0 and 0.0 are other bits: both refactorised
+    if kind == "signed_zeros":  # -0.0 and 0.0 are other bits: both refactorised
         e = np.flatnonzero(rows < cols)[:4]
         zero = np.concatenate([e, f.positions(cols[e], rows[e])])
         A = f.matrix.copy()
-        A.data[zero] = 0.0                          # explicit zeros, on the pattern
+        A.data[zero] = 0.0  # explicit zeros, on the pattern
         neg = A.data.copy()
         neg[zero] = -0.0
         return A, [neg, A.data.copy(), neg]
@@ -279,7 +291,7 @@ def _edge(kind: str):
             x[e] = v
             out += [x, d.copy()]
         return A, out
-    low = d.copy()                                  # lower triangle only: qdldl reads the upper one
+    low = d.copy()  # lower triangle only: qdldl reads the upper one
     low[np.flatnonzero(rows > cols)[:5]] *= 7.0
     return A, [low, d.copy(), low]
 
@@ -315,6 +327,7 @@ def test_where_qdldl_has_other_bits_it_keeps_the_factors(kernels_on, monkeypatch
             L, D, P = super().factors()
             L.data = np.nextafter(L.data, np.inf)
             return L, D, P
+
     monkeypatch.setattr(qdldl, "Solver", Fused)
     monkeypatch.setattr(ldl, "_MATCH", {})
     A = _spd(60, seed=12)

@@ -1,13 +1,14 @@
 """core.pattern.accel.products: the solver's Jacobians and right-hand side products in kernels, scipy's bits."""
+
 import pickle
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from same_bits import assert_same
 
 from core.pattern.accel import compiled
-from same_bits import assert_same
 from core.pattern.accel.products import GradientProducts
 
 
@@ -20,7 +21,9 @@ def kernels_on(monkeypatch):
 @pytest.fixture(scope="module")
 def tube():
     from synthetic_pattern import two_panels
+
     from core.pattern.solve import PatternSolver
+
     cut, body = two_panels(ease=(1.2, 1.6), bulge=0.2)
     return PatternSolver(cut, body)
 
@@ -63,7 +66,7 @@ def test_same_bits_as_scipy(kernels_on, f, n):
     B = [rng.standard_normal(f) for _ in range(4)]
     rhs = rng.standard_normal((n, 2))
     J_ref, r_ref = _scipy(P, U, B, rhs)
-    for _ in range(2):                      # recorded on the first call, rebound on the second
+    for _ in range(2):  # recorded on the first call, rebound on the second
         J = P.jacobians(U)
         r = rhs.copy()
         P.add_rhs(r, B)
@@ -124,8 +127,15 @@ def test_threads_and_pickle(kernels_on):
     P = GradientProducts(*_random_operators(300, 200, seed=8))
     rng = np.random.default_rng(9)
     Us = [rng.standard_normal((200, 2)) for _ in range(8)]
-    ref = [_scipy(P, U, [U[:150, 0].repeat(2), U[:150, 1].repeat(2), U[:150, 0].repeat(2),
-                         U[:150, 1].repeat(2)], np.zeros((200, 2)))[0] for U in Us]
+    ref = [
+        _scipy(
+            P,
+            U,
+            [U[:150, 0].repeat(2), U[:150, 1].repeat(2), U[:150, 0].repeat(2), U[:150, 1].repeat(2)],
+            np.zeros((200, 2)),
+        )[0]
+        for U in Us
+    ]
     with ThreadPoolExecutor(4) as pool:
         got = list(pool.map(P.jacobians, Us))
     for a, b in zip(got, ref):
@@ -142,6 +152,7 @@ def test_a_failed_launch_leaves_scipy(kernels_on, monkeypatch, caplog):
 
     def broken(*args):
         raise RuntimeError("no launch")
+
     monkeypatch.setattr(compiled, "native", broken)
     monkeypatch.setitem(compiled._state, "ready", True)
     assert_same(list(P.jacobians(U)), list(J_ref))

@@ -1,14 +1,15 @@
 """Values a solve keeps instead of recomputing are the values it would recompute: the rest targets' warp
 products, the local step's warp-row weights, the design's seam plan (the region report's rows:
 tests/test_metrics_regions.py)."""
+
 import numpy as np
 import pytest
+from synthetic_pattern import two_panels
 
 from core.pattern.config import RestShape, SolverConfig
-from core.pattern.solve import PatternSolver
 from core.pattern.optimizer.steps import local_step
 from core.pattern.optimizer.targets import rest_targets
-from synthetic_pattern import two_panels
+from core.pattern.solve import PatternSolver
 
 
 def _same(a, b):

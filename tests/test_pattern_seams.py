@@ -1,9 +1,10 @@
 """The seam plan is a value: gathered seams, demands, sewn masks; the seam layout pairs both sides."""
+
 import numpy as np
+from synthetic_pattern import two_panels
 
 from core.pattern.optimizer.seams import seam_is_gathered
 from core.pattern.solve import PatternSolver, SolverConfig
-from synthetic_pattern import two_panels
 
 
 def test_layout_pairs_both_sides():

@@ -1,12 +1,12 @@
 """Pattern optimizer: analytic tube, seams, flips, transfer, adaptation, bad input."""
+
 import numpy as np
 import pytest
+from synthetic_pattern import tube, two_panels
 
 from core.errors import PatternError
 from core.metrics.pattern import ease_compliance, flipped_count, seam_mismatch, signed_areas_2d
-from core.pattern.solve import (PatternSolver, SolverConfig, adapt_pattern, solve_pattern,
-                                transfer_pattern)
-from synthetic_pattern import tube, two_panels
+from core.pattern.solve import PatternSolver, SolverConfig, adapt_pattern, solve_pattern, transfer_pattern
 
 
 def _polygon_circumference(radius, n):
@@ -109,12 +109,13 @@ def test_a_transfer_starts_from_the_reference_stretched_to_the_body():
 
 def test_renewing_the_guard_factorisation():
     from core.pattern.optimizer.guard import renew_guard
+
     held = np.array([0.0, 1.0, 8.0, 0.0])
-    assert renew_guard(np.array([0.0, 1.0, 8.0, 1.0]), held)           # newly guarded: renewed at once
-    assert not renew_guard(np.array([0.0, 2.0, 16.0, 0.0]), held)      # 2 / 3 and 17 / 9: within 3
-    assert renew_guard(np.array([0.0, 8.0, 8.0, 0.0]), held)           # 9 / 2: grown by more than 3
-    assert renew_guard(np.array([0.0, 1.0, 1.0, 0.0]), held)           # 2 / 9: released by more than 3
-    assert not renew_guard(np.array([0.0, 0.0, 4.0, 0.0]), held)       # 1 / 2 and 5 / 9
+    assert renew_guard(np.array([0.0, 1.0, 8.0, 1.0]), held)  # newly guarded: renewed at once
+    assert not renew_guard(np.array([0.0, 2.0, 16.0, 0.0]), held)  # 2 / 3 and 17 / 9: within 3
+    assert renew_guard(np.array([0.0, 8.0, 8.0, 0.0]), held)  # 9 / 2: grown by more than 3
+    assert renew_guard(np.array([0.0, 1.0, 1.0, 0.0]), held)  # 2 / 9: released by more than 3
+    assert not renew_guard(np.array([0.0, 0.0, 4.0, 0.0]), held)  # 1 / 2 and 5 / 9
     assert renew_guard(np.array([0.0, 2.0, 8.0, 0.0]), held, ratio=1.0)  # any change when the ratio is 1
 
 
@@ -144,6 +145,7 @@ def test_adaptation_never_smaller_than_reference_and_tolerance_shrinks():
 
 def test_adaptation_relieves_stretch():
     from core.metrics.pattern import residual_stretch
+
     cut, body = two_panels(ease=(1.05, 1.05), bulge=0.1)
     ref = solve_pattern(cut, body)
     # a pose widening the whole girth by 25 %: a compatible demand, fully relieved
@@ -190,7 +192,8 @@ def test_wrong_body_is_refused():
     with pytest.raises(PatternError, match="vertices"):
         solve_pattern(cut, body[:-3])
     with pytest.raises(PatternError, match="finite"):
-        bad = body.copy(); bad[0, 0] = np.nan
+        bad = body.copy()
+        bad[0, 0] = np.nan
         solve_pattern(cut, bad)
 
 
@@ -211,11 +214,14 @@ def test_deterministic():
 
 # ----------------------------------------------------------------------------- the default body
 
+
 def _real_cut(name, body):
     from pathlib import Path
+
     from core.cut import cut_design
     from core.design import load_design
     from core.design.resolve import instance_vertices
+
     design = load_design(Path(__file__).resolve().parent.parent / "examples" / "designs" / f"{name}.json")
     design.refine_edge_length = 0.02  # coarser than the default 1 cm: keeps the test short
     return cut_design(design, body=body), instance_vertices(design, body)
@@ -228,6 +234,7 @@ def test_templates_on_the_default_body(name, anny):
     comp = {}
     for rho in (1.0, 1.5):
         from core.pattern.solve import build_pattern
+
         K, cw, cg = solver.targets_reference(ease=rho)
         pat = build_pattern(cut, solver.solve(K, cw, cg))
         assert sum(flipped_count(p.uv, p.faces) for p in pat.panels) == 0
@@ -243,6 +250,7 @@ def test_templates_on_the_default_body(name, anny):
 
 def test_seam_names_for_gathering():
     from core.pattern.solve import seam_is_gathered
+
     assert seam_is_gathered("shirt.armhole_left#1", ("armhole_left",))
     assert seam_is_gathered("shirt.armhole_left#1", ("shirt.armhole_left",))
     assert seam_is_gathered("shirt.armhole_left#1", ("shirt.armhole_left#1",))
@@ -250,8 +258,16 @@ def test_seam_names_for_gathering():
     assert seam_is_gathered("pants.crotch", ("*",))
 
 
-@pytest.mark.parametrize("kw", [{"gather_above": 0.0}, {"gather_above": -0.1}, {"gather_above": float("nan")},
-                                {"gathered": "armhole_left"}, {"gathered": (1,)}])
+@pytest.mark.parametrize(
+    "kw",
+    [
+        {"gather_above": 0.0},
+        {"gather_above": -0.1},
+        {"gather_above": float("nan")},
+        {"gathered": "armhole_left"},
+        {"gathered": (1,)},
+    ],
+)
 def test_bad_gathering_config_is_refused(kw):
     cut, body = two_panels()
     with pytest.raises(PatternError, match="gather"):
@@ -261,6 +277,7 @@ def test_bad_gathering_config_is_refused(kw):
 def _solve_at(solver, cut, rho):
     """(pattern at uniform ease ``rho``, its seam plan)."""
     from core.pattern.solve import build_pattern
+
     K, cw, cg = solver.targets_reference(ease=rho)
     plan = solver.plan_seams(K, cw, cg)
     return build_pattern(cut, solver.solve(K, cw, cg, plan=plan)), plan
@@ -288,8 +305,9 @@ def test_loose_sleeves_are_gathered_into_the_armhole(anny):
         sleeve_side = pa if "sleeve" in s.panel_a else pb
         body_side = pb if "sleeve" in s.panel_a else pa
         # the sleeve's side is the longer one: it is gathered into the bodice's armhole
-        assert np.sum(np.linalg.norm(np.diff(sleeve_side, axis=0), axis=1)) > \
-            1.15 * np.sum(np.linalg.norm(np.diff(body_side, axis=0), axis=1)), name
+        assert np.sum(np.linalg.norm(np.diff(sleeve_side, axis=0), axis=1)) > 1.15 * np.sum(
+            np.linalg.norm(np.diff(body_side, axis=0), axis=1)
+        ), name
     # every seam sewn flat still matches; compliance and shear as at ease 1
     assert sm["mean"] < 0.5 and sm["max_mm"] < 2.0, sm
     c = ease_compliance(loose)
@@ -307,8 +325,7 @@ def test_design_names_its_gathered_seams(anny):
     cut.materials = {**cut.materials, "gathered": ["armhole_left"], "gather_above": None}
     pat = solve_pattern(cut, ref)
     # the mirror of a *_left line comes with it, as everywhere in a mirrored design
-    assert sorted(s.name for s in pat.seams if s.gathered) == sorted(
-        s.name for s in cut.seams if ".armhole_" in s.name)
+    assert sorted(s.name for s in pat.seams if s.gathered) == sorted(s.name for s in cut.seams if ".armhole_" in s.name)
     assert pat.report["gathered_seams"] == sorted(s.name for s in pat.seams if s.gathered)
     cut.materials = {**cut.materials, "gathered": True}
     assert all(s.gathered for s in solve_pattern(cut, ref).seams)
@@ -326,8 +343,9 @@ def test_regulariser_energy_is_the_weighted_sum_of_squared_offsets():
     column weighted by W2[1]), inputs left as they were; its dot products are einsum's, not BLAS's
     (a threaded BLAS dot of > 10k values left threads spinning ~90 ms a shirt transfer)."""
     from core.pattern.optimizer.steps import regulariser_energy
+
     rng = np.random.default_rng(3)
-    f = 30_000                        # above OpenBLAS's threading threshold for a dot product
+    f = 30_000  # above OpenBLAS's threading threshold for a dot product
     a = rng.random(f)
     M = [rng.normal(size=f) for _ in range(4)]
     RT = [rng.normal(size=f) for _ in range(4)]

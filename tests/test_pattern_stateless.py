@@ -1,8 +1,9 @@
 """The solver keeps no state that changes a later call: the same call gives the same pattern bitwise."""
+
 import numpy as np
+from synthetic_pattern import two_panels
 
 from core.pattern.solve import PatternSolver, SolverConfig, adapt_pattern, solve_pattern, transfer_pattern
-from synthetic_pattern import two_panels
 
 
 def _same(a, b):

@@ -4,6 +4,7 @@ The pieces are built by hand: a 1 x 1 m sheet on the z = 0 plane with a dart sli
 bottom edge up to (0.5, 0.5). Each side of the slit is moved by a shear of determinant 1 (no
 triangle flips), so only the global check can see the legs cross.
 """
+
 import numpy as np
 import pytest
 
@@ -15,7 +16,7 @@ from core.metrics.injectivity import crossing_pairs, dart_gaps, panel_crossings,
 from core.metrics.pattern import pattern_report
 from core.pattern.types import Pattern, PatternPanel, PatternSeam
 
-N = 10            # grid cells per side; the slit runs along x = 0.5 from y = 0 to y = 0.5
+N = 10  # grid cells per side; the slit runs along x = 0.5 from y = 0 to y = 0.5
 
 
 def _sheet(cross: float = 0.0, intake: float = 0.1, name: str = "blouse.front"):
@@ -24,8 +25,8 @@ def _sheet(cross: float = 0.0, intake: float = 0.1, name: str = "blouse.front"):
     g = np.linspace(0.0, 1.0, N + 1)
     X, Y = np.meshgrid(g, g, indexing="xy")
     xyz = np.c_[X.ravel(), Y.ravel(), np.zeros(X.size)]
-    vid = np.arange(X.size).reshape(N + 1, N + 1)          # [row y, column x]
-    mid, top = N // 2, N // 2                              # the slit's column and the apex's row
+    vid = np.arange(X.size).reshape(N + 1, N + 1)  # [row y, column x]
+    mid, top = N // 2, N // 2  # the slit's column and the apex's row
     # the right side's copies of the slit's vertices below the apex
     copies = {int(vid[r, mid]): X.size + k for k, r in enumerate(range(top))}
     xyz = np.r_[xyz, xyz[list(copies)]]
@@ -33,24 +34,34 @@ def _sheet(cross: float = 0.0, intake: float = 0.1, name: str = "blouse.front"):
     for r in range(N):
         for c in range(N):
             q = [vid[r, c], vid[r, c + 1], vid[r + 1, c + 1], vid[r + 1, c]]
-            if c == mid and r < top:                       # right of the slit: its copies
+            if c == mid and r < top:  # right of the slit: its copies
                 q = [copies.get(int(v), int(v)) if k in (0, 3) else int(v) for k, v in enumerate(q)]
             faces += [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]
     faces = np.array(faces, int)
     right = np.zeros(len(xyz), bool)
-    right[X.size:] = True
-    right[:X.size] = xyz[:X.size, 0] > 0.5 + 1e-9
+    right[X.size :] = True
+    right[: X.size] = xyz[: X.size, 0] > 0.5 + 1e-9
     y = xyz[:, 1]
-    w = intake * np.clip(1.0 - y / 0.5, 0.0, None)         # the wedge's width, 0 at and above the apex
+    w = intake * np.clip(1.0 - y / 0.5, 0.0, None)  # the wedge's width, 0 at and above the apex
     d = cross * np.where(y < 0.5, np.sin(np.pi * y / 0.5) ** 2, 0.0)
     uv = xyz[:, :2].copy()
     uv[:, 0] += np.where(right, 0.5 * w - d, -0.5 * w * (xyz[:, 0] <= 0.5 + 1e-9))
-    leg_a = [int(vid[r, mid]) for r in range(top + 1)]               # left leg, mouth to apex
+    leg_a = [int(vid[r, mid]) for r in range(top + 1)]  # left leg, mouth to apex
     leg_b = [copies[int(vid[r, mid])] for r in range(top)] + [int(vid[top, mid])]
     f = len(faces)
-    panel = PatternPanel(name=name, garment="blouse", uv=uv, faces=faces, vertex_ids=np.arange(len(uv)),
-                         xyz=xyz, grain=np.array([0.0, 1.0]), target_weft=np.ones(f), target_warp=np.ones(f),
-                         achieved_weft=np.ones(f), achieved_warp=np.ones(f))
+    panel = PatternPanel(
+        name=name,
+        garment="blouse",
+        uv=uv,
+        faces=faces,
+        vertex_ids=np.arange(len(uv)),
+        xyz=xyz,
+        grain=np.array([0.0, 1.0]),
+        target_weft=np.ones(f),
+        target_warp=np.ones(f),
+        achieved_weft=np.ones(f),
+        achieved_warp=np.ones(f),
+    )
     dart = PatternSeam("blouse.bust_dart_left", name, name, np.array(leg_b), np.array(leg_a))
     return Pattern(style="test", body={}, garments={"blouse": "upper"}, panels=[panel], seams=[dart])
 
@@ -59,7 +70,7 @@ def test_the_sheet_is_a_dart_and_flip_free():
     pat = _sheet(cross=0.12)
     assert pat.seams[0].kind == "dart"
     m = pattern_report(pat)
-    assert m["flipped_triangles"] == 0 and m["collapsed_triangles"] == 0      # locally injective
+    assert m["flipped_triangles"] == 0 and m["collapsed_triangles"] == 0  # locally injective
 
 
 def test_a_clean_dart_has_no_crossing_and_a_positive_gap():
@@ -67,7 +78,7 @@ def test_a_clean_dart_has_no_crossing_and_a_positive_gap():
     assert m["crossings"] == 0 and m["crossing_sites"] == {}
     gap = m["darts"]["blouse.bust_dart_left"]
     assert gap["crossings"] == 0 and gap["min_gap_mm"] > 5.0
-    checks.check_pattern(m)                                                   # passes every check
+    checks.check_pattern(m)  # passes every check
 
 
 def test_crossed_legs_are_counted_named_and_refused():
@@ -97,7 +108,7 @@ def test_crossed_legs_are_counted_named_and_refused():
 
 def test_legs_that_touch_count_as_a_crossing():
     """Pushed exactly onto each other half way up: a zero gap is not a positive one."""
-    pat = _sheet(cross=0.05)                      # the wedge is 5 cm wide half way up
+    pat = _sheet(cross=0.05)  # the wedge is 5 cm wide half way up
     assert pattern_report(pat)["crossings"] >= 1
 
 
@@ -112,7 +123,7 @@ def test_a_sew_line_folded_over_another_stretch_is_named():
 
 def test_segment_gaps_and_pairs():
     a0, b0 = np.array([[0.0, 0.0]]), np.array([[1.0, 0.0]])
-    assert segment_gaps(a0, b0, np.array([[0.5, -1.0]]), np.array([[0.5, 1.0]]))[0] == 0.0      # crossing
+    assert segment_gaps(a0, b0, np.array([[0.5, -1.0]]), np.array([[0.5, 1.0]]))[0] == 0.0  # crossing
     assert segment_gaps(a0, b0, np.array([[2.0, 1.0]]), np.array([[2.0, 3.0]]))[0] == pytest.approx(np.sqrt(2))
     # a square's edges: adjacent ones share a vertex and never count; a figure eight crosses once
     sq = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
@@ -128,14 +139,14 @@ def test_dart_gap_of_a_pattern_without_darts_is_empty():
     assert dart_gaps(pat) == {}
 
 
-def test_the_four_dart_blouse_is_cut_into_a_valid_piece_and_refused_without_the_gap_step(anny, tmp_path,
-                                                                                         monkeypatch):
+def test_the_four_dart_blouse_is_cut_into_a_valid_piece_and_refused_without_the_gap_step(anny, tmp_path, monkeypatch):
     """On the real body (women:M): the template's bust and shoulder darts crossed (4 crossings, from the
     LSCM start on); the solver's gap step (core.pattern.optimizer.dart_gaps) keeps every dart's legs apart, and
     without it ``ease pattern`` refuses the piece in one line naming the darts and where on the body,
     and writes nothing."""
     from core.cli import main
     from core.design.templates import template_path
+
     prep = wf.prepare(template_path("blouse_four_darts"), body=anny)
     run = wf.reference(prep)
     m = run.pattern.report["metrics"]

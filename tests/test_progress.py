@@ -1,4 +1,5 @@
 """core.progress: progress callbacks, sub-ranges, and the CLI progress line."""
+
 import io
 
 import pytest
@@ -24,7 +25,7 @@ def test_console_progress_line_and_throttle():
     p = ConsoleProgress(stream=s, min_interval=3600)
     p(0.0, "cutting")
     p(0.5, "throttled away")
-    p(1.0, "done")                                  # the final line always prints
+    p(1.0, "done")  # the final line always prints
     assert s.getvalue().splitlines() == ["[ease]   0% cutting", "[ease] 100% done"]
 
 
@@ -32,6 +33,7 @@ def test_a_callback_cancels_by_raising():
     def cb(f, m):
         if f > 0.3:
             raise Cancelled()
+
     with pytest.raises(Cancelled):
         for i in range(10):
             report(cb, i / 10, "step")

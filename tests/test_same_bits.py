@@ -1,7 +1,7 @@
 """tests/helpers/same_bits.py: how the suite compares two code paths of one computation."""
+
 import numpy as np
 import pytest
-
 import same_bits
 from same_bits import assert_same
 

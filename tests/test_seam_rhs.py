@@ -9,17 +9,19 @@ at several iterates, integral states, configurations and seam plans, and on
 every call of a solve; the right-hand sides and the updated integrals must be
 equal byte for byte (signed zeros included), so that patterns stay the same.
 """
+
 import numpy as np
 import pytest
+from synthetic_pattern import two_panels
 
 import core.pattern.optimizer.solver as solver_module
+
 # unchanged by the rewrite, so shared with it: the weights and the dart mouths' targets
 from core.pattern.optimizer.seams import _intake_weight, _length_weight, _mouth_targets, seam_rhs
 from core.pattern.solve import PatternSolver, SolverConfig
-from synthetic_pattern import two_panels
-
 
 # ----------------------------------------------------------------------------- the frozen reference
+
 
 def _ref_fitted_partner(layout, U, d2):
     k = len(layout.sides)
@@ -84,6 +86,7 @@ def _ref_seam_rhs(layout, U, config, plan, integral):
 
 # ----------------------------------------------------------------------------- comparisons
 
+
 def _same(layout, U, config, plan, integral):
     """Both implementations from copies of ``integral``: equal bytes of the right-hand side and of the
     updated integral (returned, for the next iterate)."""
@@ -116,7 +119,7 @@ def _check_layout(solver, seed):
     U0 = solver.uv0
     iterates = [U0] + [U0 + rng.normal(scale=s * solver.mean_edge, size=U0.shape) for s in (0.01, 0.3, 1.0)]
     collapsed = U0.copy()
-    collapsed[layout.edge_end[3]] = collapsed[layout.edge_start[3]]        # a zero-length seam edge
+    collapsed[layout.edge_end[3]] = collapsed[layout.edge_start[3]]  # a zero-length seam edge
     iterates.append(collapsed)
     integrals = {name: np.zeros(len(layout.edge_start)) for name in CONFIGS}
     plans = {name: solver.design_plan(cfg) for name, cfg in CONFIGS.items()}
@@ -149,7 +152,7 @@ def _check_solve(solver, monkeypatch, **solve):
 
 
 def test_two_panels(monkeypatch):
-    cut, body = two_panels(ease=(1.0, 1.4))          # one side seam demand over the gathering threshold
+    cut, body = two_panels(ease=(1.0, 1.4))  # one side seam demand over the gathering threshold
     solver = PatternSolver(cut, body)
     _check_layout(solver, 0)
     _check_solve(solver, monkeypatch)
@@ -160,8 +163,9 @@ def _real_solver(name, body):
     from core.design import load_design
     from core.design.resolve import instance_vertices
     from core.design.templates import template_path
+
     design = load_design(template_path(name))
-    design.refine_edge_length = 0.02                  # coarser than the default 1 cm: keeps the test short
+    design.refine_edge_length = 0.02  # coarser than the default 1 cm: keeps the test short
     return PatternSolver(cut_design(design, body=body), instance_vertices(design, body))
 
 
@@ -169,6 +173,6 @@ def _real_solver(name, body):
 def test_templates(name, anny, monkeypatch):
     solver = _real_solver(name, anny)
     if name == "blouse_fitted":
-        assert len(solver.seams.mouth_a)               # the set dart intakes' mouth term is exercised
+        assert len(solver.seams.mouth_a)  # the set dart intakes' mouth term is exercised
     _check_layout(solver, 1)
     _check_solve(solver, monkeypatch)

@@ -1,5 +1,6 @@
 """Pose adaptation without the bias cost (issue 14): the settling phase, the raising-only feedback, the
 warp cap, and the adapted shirt's shear and seams, on a coarse shirt."""
+
 import numpy as np
 import pytest
 
@@ -12,6 +13,7 @@ def shirt(anny):
     from core import workflows as wf
     from core.design import load_design
     from core.design.templates import TEMPLATE_DIR
+
     design = load_design(TEMPLATE_DIR / "shirt_long_sleeve.json")
     design.refine_edge_length = 0.02
     prep = wf.prepare(design, body=anny)
@@ -22,6 +24,7 @@ def shirt(anny):
 
 def _pose(prep, anny, name="P1"):
     from core.body.instance import body_instance
+
     return body_instance(anny, prep.cut.body.get("shape"), name)
 
 
@@ -29,8 +32,11 @@ def _adapt_state(prep, solver, ref, pose, cfg):
     poses = [solver.positions(pose, "pose")]
     K, cw, cg = solver.targets_adapt(poses, 1.1, 1.1, cfg)
     demands = solver.pose_demands(poses, 1.1, 1.1, cfg)
-    return solver.begin(K, cw, cg, start=solver.start_from(ref), poses=demands, plan=solver.design_plan(cfg),
-                        config=cfg), cw, cg
+    return (
+        solver.begin(K, cw, cg, start=solver.start_from(ref), poses=demands, plan=solver.design_plan(cfg), config=cfg),
+        cw,
+        cg,
+    )
 
 
 def test_settling_iterations_freeze_the_feedback(shirt, anny):
@@ -41,7 +47,7 @@ def test_settling_iterations_freeze_the_feedback(shirt, anny):
     state, _, _ = _adapt_state(prep, solver, ref, _pose(prep, anny), cfg)
     solver.iterate(state, state.planned - settle)
     cw, cg = state.corr_w.copy(), state.corr_g.copy()
-    assert not np.allclose(cw, 1.0)            # the feedback did move the targets before
+    assert not np.allclose(cw, 1.0)  # the feedback did move the targets before
     solver.iterate(state, settle)
     assert np.array_equal(cw, state.corr_w) and np.array_equal(cg, state.corr_g)
 
@@ -69,17 +75,19 @@ def test_warp_targets_are_capped(shirt, anny):
     _, cw, cg = _adapt_state(prep, solver, ref, _pose(prep, anny), cfg)
     assert cfg.adaptation.cap_warp == 2.0 and cg.max() <= 2.0 + 1e-12
     _, _, free = _adapt_state(prep, solver, ref, _pose(prep, anny), SolverConfig.improved(cap_warp=None))
-    assert free.max() > 2.0                    # the armpit asks for more than a flat cloth gives
+    assert free.max() > 2.0  # the armpit asks for more than a flat cloth gives
 
 
 def test_adapted_shirt_keeps_stretch_low_with_less_shear_and_closed_seams(shirt, anny):
     from core.metrics.pattern import ease_compliance, residual_stretch, seam_mismatch
+
     prep, solver, ref = shirt
     pose = _pose(prep, anny)
     X = prep.cut.positions(pose)
     xyz = {p.name: X[p.vertex_ids] for p in prep.cut.panels}
-    old = SolverConfig.improved(adaptation=dict(margin=0.06, gain=0.2, warp_gain=0.08, cap_warp=None, settle=0,
-                                                lower=1.0))
+    old = SolverConfig.improved(
+        adaptation=dict(margin=0.06, gain=0.2, warp_gain=0.08, cap_warp=None, settle=0, lower=1.0)
+    )
     before = adapt_pattern(prep.cut, prep.reference, [pose], eps_weft=1.1, solver=solver, start=ref, config=old)
     after = adapt_pattern(prep.cut, prep.reference, [pose], eps_weft=1.1, solver=solver, start=ref)
     assert residual_stretch(after, xyz, 1.1) <= 1.0
@@ -95,7 +103,7 @@ def test_the_feedback_only_raises_unless_told_to_lower(shirt, anny):
     assert state.corr_w.min() >= 1.0 and state.corr_g.min() >= 1.0
     both, _, _ = _adapt_state(prep, solver, ref, pose, SolverConfig.improved(lower=1.0))
     solver.iterate(both, both.planned)
-    assert min(both.corr_w.min(), both.corr_g.min()) < 1.0      # somewhere a triangle is past its goal
+    assert min(both.corr_w.min(), both.corr_g.min()) < 1.0  # somewhere a triangle is past its goal
 
 
 def test_reference_feedback_still_lowers(shirt):
@@ -107,13 +115,18 @@ def test_reference_feedback_still_lowers(shirt):
     assert state.corr_w.min() < 1.0 < state.corr_w.max()
 
 
-@pytest.mark.parametrize("override, where", [({"settle": -1}, "adaptation.settle"),
-                                             ({"lower": -0.5}, "adaptation.lower"),
-                                             ({"settle": 60}, "adaptation.settle"),
-                                             ({"settle": 1.5}, "adaptation.settle"),
-                                             ({"feedback_until": -1}, "adaptation.feedback_until"),
-                                             ({"feedback_until": 2.5}, "adaptation.feedback_until"),
-                                             ({"feedback_until": True}, "adaptation.feedback_until")])
+@pytest.mark.parametrize(
+    "override, where",
+    [
+        ({"settle": -1}, "adaptation.settle"),
+        ({"lower": -0.5}, "adaptation.lower"),
+        ({"settle": 60}, "adaptation.settle"),
+        ({"settle": 1.5}, "adaptation.settle"),
+        ({"feedback_until": -1}, "adaptation.feedback_until"),
+        ({"feedback_until": 2.5}, "adaptation.feedback_until"),
+        ({"feedback_until": True}, "adaptation.feedback_until"),
+    ],
+)
 def test_bad_settle_is_refused(override, where):
     with pytest.raises(PatternError, match=where):
         SolverConfig.improved(**override).check()
@@ -122,7 +135,7 @@ def test_bad_settle_is_refused(override, where):
 def test_the_feedback_holds_from_feedback_until_however_long_the_solve(shirt, anny):
     prep, solver, ref = shirt
     ad = SolverConfig.improved().adaptation
-    assert ad.feedback_until is None           # by default only the last ``settle`` hold the feedback
+    assert ad.feedback_until is None  # by default only the last ``settle`` hold the feedback
     assert [ad.holds(it, 60) for it in (0, 29, 30, 59)] == [False, False, True, True]
     cfg = SolverConfig.improved(iterations=100, feedback_until=12)
     assert [cfg.adaptation.holds(it, 100) for it in (11, 12, 69, 70)] == [False, True, True, True]
@@ -130,7 +143,7 @@ def test_the_feedback_holds_from_feedback_until_however_long_the_solve(shirt, an
     solver.iterate(state, 12)
     cw, cg = state.corr_w.copy(), state.corr_g.copy()
     assert not np.allclose(cw, 1.0)
-    solver.iterate(state, 40)                  # long before the last 30: held all the same
+    solver.iterate(state, 40)  # long before the last 30: held all the same
     assert np.array_equal(cw, state.corr_w) and np.array_equal(cg, state.corr_g)
 
 
@@ -139,7 +152,7 @@ def test_fitted_adapts_in_improved_window_and_takes_other_iteration_counts():
     planned = max(fitted.iterations, fitted.adaptation.min_iterations)
     moving = [it for it in range(planned) if not fitted.adaptation.holds(it, planned)]
     assert moving == [it for it in range(60) if not improved.adaptation.holds(it, 60)] == list(range(30))
-    for n in (1, 20, 100, 1000):                  # --iterations overrides it: still a valid configuration
+    for n in (1, 20, 100, 1000):  # --iterations overrides it: still a valid configuration
         SolverConfig.fitted(iterations=n).check()
 
 
@@ -148,6 +161,7 @@ def _template_adapted(anny, name, pose_name, solver=None, **kw):
     (``solver``: the design's configuration when None; ``kw`` for :func:`adapt_pattern`)."""
     from core import workflows as wf
     from core.design.templates import TEMPLATE_DIR
+
     prep = wf.prepare(TEMPLATE_DIR / f"{name}.json", body=anny)
     solver = solver(prep) if solver else wf.make_solver(prep)
     ref = solve_pattern(prep.cut, prep.reference, solver=solver)
@@ -160,6 +174,7 @@ def _assert_adaptation_targets(prep, ref, pose, ap, stretched):
     over ``stretched``: the pose does stretch it), shear p95 <= 8 deg, every seam <= 2 mm, 0 flipped and
     0 collapsed."""
     from core.metrics.pattern import collapse, ease_compliance, flips, residual_stretch, seam_mismatch
+
     X = prep.cut.positions(pose)
     xyz = {p.name: X[p.vertex_ids] for p in prep.cut.panels}
     assert residual_stretch(ref, xyz, 1.1) > stretched
@@ -175,11 +190,13 @@ def test_adapted_four_dart_blouse_meets_the_targets(anny):
     with its feedback running through all 300 iterations (feedback_until None) the raising-only
     corrections ratchet up around the waist and the armpits and the shear p95 reads 8.3 deg."""
     from core.metrics.pattern import ease_compliance
+
     prep, solver, ref, pose, ap = _template_adapted(anny, "blouse_four_darts", "P1")
     assert solver.config == SolverConfig.fitted()
     _assert_adaptation_targets(prep, ref, pose, ap, stretched=10.0)
-    ratchet = adapt_pattern(prep.cut, prep.reference, [pose], solver=solver, start=ref,
-                            config=SolverConfig.fitted(feedback_until=None))
+    ratchet = adapt_pattern(
+        prep.cut, prep.reference, [pose], solver=solver, start=ref, config=SolverConfig.fitted(feedback_until=None)
+    )
     assert ease_compliance(ratchet)["shear_p95"] > 8.0
 
 

@@ -1,12 +1,13 @@
 """The collapse guard: no triangle squeezed to a sliver (issue 14), on a case that collapsed before."""
+
 import numpy as np
 import pytest
+from synthetic_pattern import tube
 
 from core.errors import PatternError
 from core.geom.strain import components
-from core.pattern.solve import PatternSolver, SolverConfig, solve_pattern
 from core.pattern.optimizer.steps import relative_singular_values
-from synthetic_pattern import tube
+from core.pattern.solve import PatternSolver, SolverConfig, solve_pattern
 
 
 def _collapsed(pattern):
@@ -14,25 +15,27 @@ def _collapsed(pattern):
     the 3D area times the targets, or a weft/warp scale under half its target (flipped excluded)."""
     from core.geom.mesh import signed_areas_2d, triangle_areas
     from core.geom.strain import scales
+
     n = 0
     for p in pattern.panels:
         a2 = signed_areas_2d(p.uv, p.faces)
         a3 = triangle_areas(p.xyz, p.faces)
         rw, rg, _ = scales(p.uv, p.xyz, p.faces, p.grain)
-        bad = (a2 < 0.25 * a3 * p.target_weft * p.target_warp) | (rw < 0.5 * p.target_weft) | (
-            rg < 0.5 * p.target_warp)
+        bad = (a2 < 0.25 * a3 * p.target_weft * p.target_warp) | (rw < 0.5 * p.target_weft) | (rg < 0.5 * p.target_warp)
         n += int(np.sum(bad & (a2 > 0)))
     return n
 
 
 @pytest.fixture(scope="module")
 def skirt(anny):
+    from unittest import mock
+
     from core import workflows as wf
     from core.design import load_design
     from core.design.templates import TEMPLATE_DIR
-    from unittest import mock
+
     design = load_design(TEMPLATE_DIR / "skirt.json")
-    design.refine_edge_length = 0.02          # coarse: the gluteal-cleft cone pair is still there
+    design.refine_edge_length = 0.02  # coarse: the gluteal-cleft cone pair is still there
     # on the skin: the skirt is cut on a membrane over the cleft now (core.cut.span), where even a low
     # guard limit leaves nothing collapsed; the guard's hard case is the cleft itself
     with mock.patch("core.cut.skirt.span_surface", return_value=None):
@@ -48,6 +51,7 @@ def test_skirt_gluteal_cleft_no_longer_collapses(skirt):
     assert _collapsed(pat) == 0
     for p in pat.panels:
         from core.metrics.pattern import flipped_count
+
         assert flipped_count(p.uv, p.faces) == 0
 
 
@@ -63,11 +67,12 @@ def test_a_triangle_held_at_the_guard_limit_opens_in_the_extra_rounds(skirt):
     and the first extra round; the later rounds raise the limit (x4 each) and open them, where a
     fixed limit keeps 4 collapsed to the last extra iteration (the pattern refused)."""
     from core.pattern.optimizer import guard as S
+
     cfg = SolverConfig.improved(guard_limit=6.0)
     n = cfg.iterations
     assert S.round_guard(cfg.guard, -3, n) is cfg.guard
     assert S.round_guard(cfg.guard, S.COLLAPSE_ROUNDS - 1, n) is cfg.guard
-    assert S.round_guard(cfg.guard, 2 * S.COLLAPSE_ROUNDS, n).guard_limit == 6.0 * S.GUARD_ESCALATION ** 2
+    assert S.round_guard(cfg.guard, 2 * S.COLLAPSE_ROUNDS, n).guard_limit == 6.0 * S.GUARD_ESCALATION**2
     pat = solve_pattern(skirt.cut, skirt.reference, cfg)
     assert _collapsed(pat) == 0 and pat.report["iterations"] > cfg.iterations + S.COLLAPSE_ROUNDS
 
@@ -76,10 +81,11 @@ def test_a_resumed_solve_counts_its_extra_rounds_from_its_own_start(skirt, monke
     """A warm re-solve (the live preview) resumes a finished solve's iteration count; its guard is the
     plain one until it has run past its own planned iterations, not escalated from its first iteration."""
     from core.pattern.optimizer import solver as S
+
     solver = PatternSolver(skirt.cut, skirt.reference)
     K, cw, cg = solver.targets_reference()
     done = solver.begin(K, cw, cg)
-    solver.iterate(done, done.planned + 2 * S.COLLAPSE_ROUNDS)          # a finished, long solve
+    solver.iterate(done, done.planned + 2 * S.COLLAPSE_ROUNDS)  # a finished, long solve
     seen = []
     plain = S.round_guard
     monkeypatch.setattr(S, "round_guard", lambda g, extra, planned: (seen.append(extra), plain(g, extra, planned))[1])
@@ -127,24 +133,35 @@ def test_a_finished_solve_gives_its_guarded_factorisation_to_the_next(skirt, mon
     # the next guarded solve refactorises it (values only) instead of building one: the same pattern
     # bitwise as on a fresh solver, and no second symbolic analysis
     from core.pattern.optimizer import factor
+
     fresh = solve_pattern(skirt.cut, skirt.reference, solver=PatternSolver(skirt.cut, skirt.reference))
     built = []
     init = factor.SymmetricFactor.__init__
-    monkeypatch.setattr(factor.SymmetricFactor, "__init__", lambda self, A, **kw: (built.append(1), init(self, A, **kw))[1])
+    monkeypatch.setattr(
+        factor.SymmetricFactor, "__init__", lambda self, A, **kw: (built.append(1), init(self, A, **kw))[1]
+    )
     solver = PatternSolver(skirt.cut, skirt.reference)
     first = solve_pattern(skirt.cut, skirt.reference, solver=solver)
     n_first = len(built)
     again = solve_pattern(skirt.cut, skirt.reference, solver=solver)
-    assert n_first == 2 and len(built) == n_first    # the shared factorisation and one guarded one
+    assert n_first == 2 and len(built) == n_first  # the shared factorisation and one guarded one
     for a, b, c in zip(fresh.panels, first.panels, again.panels):
         assert np.array_equal(a.uv, b.uv) and np.array_equal(a.uv, c.uv)
 
 
-@pytest.mark.parametrize("kw, field", [
-    ({"guard_scale": -0.1}, "guard.guard_scale"), ({"guard_open": 0.3}, "guard.guard_open"),
-    ({"guard_grow": 1.0}, "guard.guard_grow"), ({"guard_limit": 0.5}, "guard.guard_limit"),
-    ({"guard_release": 1.5}, "guard.guard_release"), ({"spread": -1}, "adaptation.spread"), ({"cap_warp": 0.5}, "adaptation.cap_warp"), ({"warp_gain": -1.0}, "adaptation.warp_gain"),
-])
+@pytest.mark.parametrize(
+    "kw, field",
+    [
+        ({"guard_scale": -0.1}, "guard.guard_scale"),
+        ({"guard_open": 0.3}, "guard.guard_open"),
+        ({"guard_grow": 1.0}, "guard.guard_grow"),
+        ({"guard_limit": 0.5}, "guard.guard_limit"),
+        ({"guard_release": 1.5}, "guard.guard_release"),
+        ({"spread": -1}, "adaptation.spread"),
+        ({"cap_warp": 0.5}, "adaptation.cap_warp"),
+        ({"warp_gain": -1.0}, "adaptation.warp_gain"),
+    ],
+)
 def test_guard_settings_are_checked(kw, field):
     with pytest.raises(PatternError, match=f"solver configuration {field}"):
         SolverConfig.improved(**kw).check()
@@ -155,6 +172,7 @@ def test_rescue_iterations_keep_the_guards_gains():
     gain it raised (release 1) under the limit of the first rescue round, held there; before them it
     releases as configured."""
     from core.pattern.optimizer import guard as S
+
     g = SolverConfig.improved().guard
     n = 20
     last = S.round_guard(g, n - 1, n)
@@ -162,15 +180,16 @@ def test_rescue_iterations_keep_the_guards_gains():
     rescue = S.round_guard(g, n, n)
     assert S.rescuing(n, n) and rescue.guard_release == 1.0
     assert rescue.guard_limit == g.guard_limit * S.GUARD_ESCALATION ** (n // S.COLLAPSE_ROUNDS)
-    assert S.round_guard(g, n + 3 * S.COLLAPSE_ROUNDS + 2, n) == rescue      # the limit held, not raised
+    assert S.round_guard(g, n + 3 * S.COLLAPSE_ROUNDS + 2, n) == rescue  # the limit held, not raised
 
 
 def test_the_solvers_refusal_rule_is_the_metrics():
     """The rescue runs on the rule a pattern is refused for: the solver's numbers are the metric's, and
     on a pattern's own Jacobians it finds the very triangles the metric finds collapsed."""
     from core.metrics import collapse as C
-    from core.pattern.optimizer import guard as G
     from core.pattern.build import build_pattern
+    from core.pattern.optimizer import guard as G
+
     assert (G.REFUSED_AREA, G.REFUSED_SCALE) == (C.AREA_FRACTION, C.SCALE_FRACTION)
     cut, body = tube(ease=1.3)
     solver = PatternSolver(cut, body)

@@ -1,10 +1,11 @@
 """Mirrored seams gather together; pose adaptation keeps every triangle open (issue 14)."""
+
 import numpy as np
 import pytest
+from test_solver_collapse import _collapsed
 
 from core.design.naming import swap_side
 from core.pattern.solve import PatternSolver, SolverConfig
-from test_solver_collapse import _collapsed
 
 
 @pytest.fixture(scope="module")
@@ -12,6 +13,7 @@ def shirt(anny):
     from core import workflows as wf
     from core.design import load_design
     from core.design.templates import TEMPLATE_DIR
+
     design = load_design(TEMPLATE_DIR / "shirt_long_sleeve.json")
     design.refine_edge_length = 0.02
     return wf.prepare(design, body=anny)
@@ -35,6 +37,7 @@ def test_mirrored_lines_gather_together(shirt):
 
 def test_adaptation_keeps_triangles_open_and_stretch_low(shirt):
     from core import workflows as wf
+
     run = wf.adapt(shirt, ["P1"], eps_weft=1.1, eps_warp=1.1)
     pat = run.pattern
     assert _collapsed(pat) == 0

@@ -16,6 +16,7 @@ and drapes; one step below each is refused at load.
 
 Also here: a panel seed next to its seamline is named in the cut's error.
 """
+
 import random
 
 import pytest
@@ -27,11 +28,11 @@ from core.design.checks import REFINE_EDGE_MIN
 from core.design.templates import TEMPLATES
 from core.errors import CutError, DesignError, PatternError
 
-SEAM_MM = 3.0            # the defaults give <= 2 mm; a torn solve gives centimetres (12 mm and up)
-COMPLIANCE_PCT = 5.0     # the defaults give 0.8 .. 2.4 %; the shortest skirt 3.5 %
-INTERIOR = 8             # random interior combinations per template
-CI_CASES = 30            # cases run in CI (about 0.5 to 3 s each)
-SHORT_DRAPE = {"max_frames": 30}   # the fabric has grown to its pattern size by frame 20
+SEAM_MM = 3.0  # the defaults give <= 2 mm; a torn solve gives centimetres (12 mm and up)
+COMPLIANCE_PCT = 5.0  # the defaults give 0.8 .. 2.4 %; the shortest skirt 3.5 %
+INTERIOR = 8  # random interior combinations per template
+CI_CASES = 30  # cases run in CI (about 0.5 to 3 s each)
+SHORT_DRAPE = {"max_frames": 30}  # the fabric has grown to its pattern size by frame 20
 
 
 def _cases():
@@ -43,8 +44,9 @@ def _cases():
                 out.append((name, f"{p}={end}", {p: spec[end]}))
         rng = random.Random(f"template-ranges-{name}")
         for i in range(INTERIOR):
-            out.append((name, f"interior{i}", {p: round(rng.uniform(s["min"], s["max"]), 4)
-                                               for p, s in params.items()}))
+            out.append(
+                (name, f"interior{i}", {p: round(rng.uniform(s["min"], s["max"]), 4) for p, s in params.items()})
+            )
     return out
 
 
@@ -86,12 +88,13 @@ def test_every_parameter_declares_its_range():
     assert len(CASES) == sum(2 * len(b()["parameters"]) + INTERIOR for b in TEMPLATES.values())
 
 
-@pytest.mark.parametrize("case", _known(sample(CASES, CI_CASES, seed=15), lambda c: f"{c[0]}-{c[1]}"),
-                         ids=lambda c: f"{c[0]}-{c[1]}")
+@pytest.mark.parametrize(
+    "case", _known(sample(CASES, CI_CASES, seed=15), lambda c: f"{c[0]}-{c[1]}"), ids=lambda c: f"{c[0]}-{c[1]}"
+)
 def test_declared_value_cuts_and_flattens(case, anny):
     name, _, values = case
     prep = workflows.prepare(_design(name, values), body=anny)
-    run = workflows.reference(prep)          # raises on a flipped triangle
+    run = workflows.reference(prep)  # raises on a flipped triangle
     assert len(run.pattern.panels) == len(prep.cut.panels) > 0
     _check_pattern(run)
 
@@ -112,7 +115,7 @@ def test_the_lowest_ease_drapes(name, anny):
             p["ease"] = {"value": EASE_MIN}
     run = workflows.reference(workflows.prepare(d, body=anny))
     _check_pattern(run)
-    drape = workflows.drape(run.pattern, options=SHORT_DRAPE)   # raises DrapeError when it diverges
+    drape = workflows.drape(run.pattern, options=SHORT_DRAPE)  # raises DrapeError when it diverges
     assert drape.result.frames > 0 and drape.figures["penetration %"] < 1.0
 
 
@@ -129,9 +132,13 @@ def test_the_finest_refinement_solves_and_drapes(name, anny):
     assert drape.result.frames > 0
 
 
-@pytest.mark.parametrize("field, value, path", [
-    ("ease", round(EASE_MIN - 0.01, 2), "garments[0].panels[0].ease.value"),
-    ("refine_edge_length", REFINE_EDGE_MIN - 0.001, "refine_edge_length")])
+@pytest.mark.parametrize(
+    "field, value, path",
+    [
+        ("ease", round(EASE_MIN - 0.01, 2), "garments[0].panels[0].ease.value"),
+        ("refine_edge_length", REFINE_EDGE_MIN - 0.001, "refine_edge_length"),
+    ],
+)
 def test_below_the_floors_is_refused(field, value, path):
     d = TEMPLATES["skirt"]()
     if field == "ease":
@@ -144,6 +151,7 @@ def test_below_the_floors_is_refused(field, value, path):
 
 
 # ----------------------------------------------------------------------------- seeds
+
 
 def _seed_on_side_seam():
     """The long-sleeve shirt with its front's seed half way down the left side seam
@@ -162,7 +170,7 @@ def test_a_seed_on_its_seam_is_named(anny):
     assert "mm from cut line 'shirt.side_left'" in msg
     mm = float(msg.split("(keypoint 'side_mid') lies ")[1].split(" mm")[0])
     assert 0.0 <= mm < 3.0
-    assert "missing or does not close" in msg      # the other possible cause stays named
+    assert "missing or does not close" in msg  # the other possible cause stays named
 
 
 def test_an_inline_seed_is_named_by_its_path(anny):

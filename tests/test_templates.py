@@ -8,6 +8,7 @@ triangle doubled, its only boundary is the openings, genus 0 with the expected
 number of openings), both sides of every seam have the same 3D length,
 left/right panels mirror each other within 2 mm, ease is filled in range.
 """
+
 import numpy as np
 import pytest
 
@@ -19,23 +20,35 @@ from core.design.templates import TEMPLATES, template_dir, template_path
 
 # garment -> number of openings (boundary loops of the sewn garment)
 OPENINGS = {
-    "shirt_long_sleeve": {"shirt": 4},           # neckline, hem, two cuffs
+    "shirt_long_sleeve": {"shirt": 4},  # neckline, hem, two cuffs
     "top_short_sleeve": {"top": 4},
-    "top_sleeveless": {"top": 4},                # neckline, hem, two armholes
-    "pants": {"pants": 3},                       # waist, two leg hems
+    "top_sleeveless": {"top": 4},  # neckline, hem, two armholes
+    "pants": {"pants": 3},  # waist, two leg hems
     "shorts": {"shorts": 3},
-    "skirt": {"skirt": 2},                       # waist, hem
-    "dress": {"dress": 4},                       # neckline, two armholes, hem
+    "skirt": {"skirt": 2},  # waist, hem
+    "dress": {"dress": 4},  # neckline, two armholes, hem
     "dress_gradient": {"dress": 4},
-    "jacket": {"jacket": 3},                     # neckline + front opening + hem is one loop; two cuffs
-    "blouse_fitted": {"blouse": 4},              # neckline, hem, two armholes
+    "jacket": {"jacket": 3},  # neckline + front opening + hem is one loop; two cuffs
+    "blouse_fitted": {"blouse": 4},  # neckline, hem, two armholes
     "blouse_four_darts": {"blouse": 4},
-    "skirt_darted": {"skirt": 2},                # waist, hem
+    "skirt_darted": {"skirt": 2},  # waist, hem
     "teaser_shirt_pants": {"shirt": 4, "pants": 3},
 }
-PANELS = {"shirt_long_sleeve": 6, "top_short_sleeve": 6, "top_sleeveless": 2, "pants": 4, "shorts": 4,
-          "skirt": 2, "dress": 4, "dress_gradient": 4, "jacket": 7, "teaser_shirt_pants": 10,
-          "blouse_fitted": 2, "blouse_four_darts": 2, "skirt_darted": 2}
+PANELS = {
+    "shirt_long_sleeve": 6,
+    "top_short_sleeve": 6,
+    "top_sleeveless": 2,
+    "pants": 4,
+    "shorts": 4,
+    "skirt": 2,
+    "dress": 4,
+    "dress_gradient": 4,
+    "jacket": 7,
+    "teaser_shirt_pants": 10,
+    "blouse_fitted": 2,
+    "blouse_four_darts": 2,
+    "skirt_darted": 2,
+}
 
 
 @pytest.fixture(scope="module")
@@ -75,6 +88,7 @@ def _boundary_loops(edges):
     """Number of loops formed by undirected boundary edges (each vertex of degree 2)."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
+
     if len(edges) == 0:
         return 0
     v, inv = np.unique(edges, return_inverse=True)
@@ -155,8 +169,9 @@ def check_global_ids(cut, garment, n_openings):
     F_ids = np.concatenate([np.asarray(p.vertex_ids)[np.asarray(p.faces)] for p in panels])
     # the same surface: a global id <-> a vertex of the seam-sewn garment, one to one
     pairs = np.unique(np.stack([F_seam.ravel(), F_ids.ravel()], 1), axis=0)
-    assert len(np.unique(pairs[:, 0])) == len(np.unique(pairs[:, 1])) == len(pairs), \
+    assert len(np.unique(pairs[:, 0])) == len(np.unique(pairs[:, 1])) == len(pairs), (
         "global ids weld panels where no seam joins them (or split a seam)"
+    )
     e = np.sort(np.concatenate([F_ids[:, [0, 1]], F_ids[:, [1, 2]], F_ids[:, [2, 0]]]), axis=1)
     ue, count = np.unique(e, axis=0, return_counts=True)
     assert _boundary_loops(ue[count == 1]) == n_openings
@@ -167,12 +182,14 @@ def check_body_coverage(cut, G, GX, X, skirt=False):
     once where all its corners are garment vertices (nothing lost, nothing doubled).
     Needs an unrefined cut: refined triangles may straddle body edges."""
     from core.design.geometry import SurfaceLocator
+
     body_faces = np.asarray(load_body("anny").faces)
     Xs = X
-    if skirt:       # the skirt topology: the band between the legs removed, the cleft spanned
+    if skirt:  # the skirt topology: the band between the legs removed, the cleft spanned
+        from core.body.instance import spec_instance
         from core.cut.skirt import make_skirt, span_surface
         from core.cut.split import CutMesh
-        from core.body.instance import spec_instance
+
         # built on the cut's own reference body (a women's template is cut on women:M), like the cut
         R = spec_instance(cut.body, model=load_body("anny"))[0]
         mesh = CutMesh(R, body_faces)
@@ -182,17 +199,18 @@ def check_body_coverage(cut, G, GX, X, skirt=False):
         Xs = X if B is None else np.asarray(B @ X)
     a = _areas(GX, G)
     d2, tri, _ = SurfaceLocator(Xs, body_faces).closest(GX[G].mean(axis=1))
-    on_body = d2 < 1e-8                      # skirt bridge triangles are not on the body
+    on_body = d2 < 1e-8  # skirt bridge triangles are not on the body
     cover = np.bincount(tri[on_body], weights=a[on_body], minlength=len(body_faces)) / _areas(Xs, body_faces)
     assert cover.max() < 1 + 1e-6, "a body triangle is covered twice"
     # head, hands and feet are never garment (beyond the 2-ring border a seam may run on)
     from core.cut.engine import FORBIDDEN_REGIONS, forbidden_body_faces
+
     forbidden = forbidden_body_faces(load_body("anny"), len(body_faces))
     assert (forbidden > 0).sum() > 1000
     hit = forbidden[tri[on_body]]
     assert not hit.any(), f"garment on the {FORBIDDEN_REGIONS[hit.max() - 1]} region"
     E = cut.embedding.tocsr()
-    single = (np.diff(E.indptr) == 1)
+    single = np.diff(E.indptr) == 1
     rows = np.flatnonzero(single)
     original = np.zeros(len(X), dtype=bool)
     used = np.unique(G)
@@ -208,7 +226,7 @@ def check_body_coverage(cut, G, GX, X, skirt=False):
             g = g[single[g]]
             on_hem[E.indices[E.indptr[g]][np.isclose(E.data[E.indptr[g]], 1.0)]] = True
     inside &= ~on_hem[body_faces].any(axis=1)
-    if skirt:       # the skirt topology removed the band between the legs: not garment surface
+    if skirt:  # the skirt topology removed the band between the legs: not garment surface
         kept = np.zeros(len(body_faces), dtype=bool)
         par = np.asarray(mesh.parent)
         kept[par[par < len(body_faces)]] = True
@@ -232,6 +250,7 @@ def check_seams(cut, X):
 
 def check_mirrors(cut, X, tol=2e-3):
     import igl
+
     for p in cut.panels:
         if not p.mirror_of:
             continue
@@ -333,8 +352,9 @@ def test_jacket_is_the_shirt_opened_at_the_front(body, instances):
     GX = jacket.positions(X)
     PL, PR = GX[np.asarray(L.vertex_ids)], GX[np.asarray(R.vertex_ids)]
     from scipy.spatial import cKDTree
+
     d, _ = cKDTree(PR).query(PL)
-    assert (d < 1e-9).sum() > 20          # ... though they touch there (the opening line)
+    assert (d < 1e-9).sum() > 20  # ... though they touch there (the opening line)
     # pinned along the neckline on both sides of the opening
     pins = set(jacket.pins["jacket"].tolist())
     assert pins & set(np.asarray(L.vertex_ids).tolist()) and pins & set(np.asarray(R.vertex_ids).tolist())
@@ -364,7 +384,7 @@ def test_every_template_cuts_on_every_size(size, body, instances):
     partition with its openings, equal seam sides, mirrored halves, ease in range."""
     for name in TEMPLATES:
         d = load_design(template_path(name))
-        d.refine_edge_length = None     # refinement is body-independent (tested on M); saves time
+        d.refine_edge_length = None  # refinement is body-independent (tested on M); saves time
         # a size of the design's own chart (the women's templates: women:S, women:L)
         chart = d.body.get("chart")
         if chart is not None and size not in chart_sizes(chart):
@@ -426,6 +446,7 @@ def test_armhole_follows_the_arm_and_keeps_the_a_pose_plane(body):
     """The armhole plane: the sagittal plane (normal x) in the A-pose, as before; turned
     with the arm in T and P1, its top on the shoulder tip and the cuff down the arm."""
     from core.design.resolve import Resolver, instance_vertices
+
     for pose in ("A", "T", "P1"):
         d = load_design(template_path("shirt_long_sleeve"))
         d.body["pose"] = pose
@@ -455,5 +476,6 @@ def test_armhole_follows_the_arm_and_keeps_the_a_pose_plane(body):
         # (55 in the A-pose, the arm hanging 45 degrees down; about 45 in T and P1)
         assert abs(normal @ arm) / np.linalg.norm(arm) > np.cos(np.radians(60)), (pose, normal)
         # the cuff lies on the forearm, past the elbow
-        assert np.linalg.norm(pos("cuff_level_left") - pos("wrist_left")) < \
-            np.linalg.norm(pos("cuff_level_left") - pos("elbow_left"))
+        assert np.linalg.norm(pos("cuff_level_left") - pos("wrist_left")) < np.linalg.norm(
+            pos("cuff_level_left") - pos("elbow_left")
+        )

@@ -1,4 +1,5 @@
 """core.workflows: the one pipeline the CLI, the add-on, the benchmarks and batch call."""
+
 from __future__ import annotations
 
 import json
@@ -23,11 +24,13 @@ def solver(prep):
 
 def _pattern_json(pattern) -> str:
     from core.pattern.io import pattern_to_json
+
     return json.dumps(pattern_to_json(pattern)["panels"], sort_keys=True)
 
 
 def test_prepare_reference_is_the_cut_body_instance(prep, anny):
     from core.body.instance import body_instance
+
     assert prep.cut.body["shape"] == "M" and prep.cut.body["pose"] == "A"
     np.testing.assert_array_equal(prep.reference, body_instance(anny, "M", "A"))
     assert set(prep.timings) == {"load", "cut"}
@@ -80,7 +83,7 @@ def test_adapt_records_residual_stretch_before_and_after(prep, solver):
 def test_tolerances_caller_over_design_over_default(prep):
     design_w = float(prep.cut.materials.get("eps_weft"))
     assert wf.tolerances(prep) == (design_w, float(prep.cut.materials.get("eps_warp", design_w)))
-    assert wf.tolerances(prep, 1.3) == (1.3, 1.3)          # one tolerance: either way
+    assert wf.tolerances(prep, 1.3) == (1.3, 1.3)  # one tolerance: either way
     assert wf.tolerances(prep, 1.3, 1.05) == (1.3, 1.05)
     with pytest.raises(PatternError, match="tolerance"):
         wf.tolerances(prep, 0.9)
@@ -96,6 +99,7 @@ def test_solver_config_overrides():
 def test_transfer_to_a_shape_dict(prep, solver, anny):
     """A measured or sampled body (a shape dict, no chart size) transfers like a size."""
     from core.body.sizes import size_shape
+
     by_name = wf.transfer(prep, "L", solver=solver)
     by_shape = wf.transfer(prep, size_shape(anny, "L"), solver=solver)
     assert _pattern_json(by_shape.pattern) == _pattern_json(by_name.pattern)

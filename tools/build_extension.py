@@ -15,6 +15,7 @@ platforms; then ``blender_ext.py build`` (``--split-platforms`` when
 building for several platforms: one zip per platform, each with only its
 wheels). The repository's own manifest is never rewritten.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -31,10 +32,21 @@ ROOT = Path(__file__).resolve().parent.parent
 
 # Blender platform -> pip --platform tags (newest first; pip accepts several).
 PLATFORM_TAGS = {
-    "linux-x64": ["manylinux_2_28_x86_64", "manylinux_2_27_x86_64", "manylinux_2_17_x86_64",
-                  "manylinux2014_x86_64", "manylinux1_x86_64", "linux_x86_64"],
-    "macos-arm64": ["macosx_14_0_arm64", "macosx_13_0_arm64", "macosx_12_0_arm64", "macosx_11_0_arm64",
-                    "macosx_10_9_universal2"],
+    "linux-x64": [
+        "manylinux_2_28_x86_64",
+        "manylinux_2_27_x86_64",
+        "manylinux_2_17_x86_64",
+        "manylinux2014_x86_64",
+        "manylinux1_x86_64",
+        "linux_x86_64",
+    ],
+    "macos-arm64": [
+        "macosx_14_0_arm64",
+        "macosx_13_0_arm64",
+        "macosx_12_0_arm64",
+        "macosx_11_0_arm64",
+        "macosx_10_9_universal2",
+    ],
     "windows-x64": ["win_amd64"],
 }
 # Not bundled: Blender ships numpy; bpy is Blender itself; pytest and setuptools are for tests and builds;
@@ -64,8 +76,20 @@ def download_wheels(platform: str, reqs: list, numpy: str, cache: Path) -> list:
     """Wheels (paths) for ``platform``, numpy excluded; cached per platform."""
     dest = cache / platform
     dest.mkdir(parents=True, exist_ok=True)
-    cmd = [sys.executable, "-m", "pip", "download", "--quiet", "--only-binary=:all:",
-           "--python-version", "3.11", "--implementation", "cp", "--dest", str(dest)]
+    cmd = [
+        sys.executable,
+        "-m",
+        "pip",
+        "download",
+        "--quiet",
+        "--only-binary=:all:",
+        "--python-version",
+        "3.11",
+        "--implementation",
+        "cp",
+        "--dest",
+        str(dest),
+    ]
     for tag in PLATFORM_TAGS[platform]:
         cmd += ["--platform", tag]
     # numpy resolves with the others (so they fit Blender's numpy) but is not bundled.
@@ -152,7 +176,7 @@ def build(platforms: list, out: Path, cache: Path, with_wheels: bool = True, bui
         seen = set()
         for p in platforms:
             for w in download_wheels(p, reqs, numpy, cache):
-                if w.name not in seen:   # pure-Python wheels are the same file for every platform
+                if w.name not in seen:  # pure-Python wheels are the same file for every platform
                     seen.add(w.name)
                     wheels.append(w)
     build_dir = build_dir or (ROOT / "build")
@@ -170,14 +194,22 @@ def build(platforms: list, out: Path, cache: Path, with_wheels: bool = True, bui
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--platform", action="append", choices=sorted(PLATFORM_TAGS),
-                    help="platform to build for (repeat; default: all three)")
+    ap = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    ap.add_argument(
+        "--platform",
+        action="append",
+        choices=sorted(PLATFORM_TAGS),
+        help="platform to build for (repeat; default: all three)",
+    )
     ap.add_argument("--out", default=str(ROOT / "dist"), help="output folder for the zip(s) (default dist/)")
     ap.add_argument("--cache", default=str(ROOT / ".cache" / "wheels"), help="wheel download cache")
-    ap.add_argument("--no-wheels", action="store_true",
-                    help="build without bundled wheels (for a Python that already has the dependencies)")
+    ap.add_argument(
+        "--no-wheels",
+        action="store_true",
+        help="build without bundled wheels (for a Python that already has the dependencies)",
+    )
     args = ap.parse_args(argv)
     platforms = args.platform or list(PLATFORM_TAGS)
     zips = build(platforms, Path(args.out), Path(args.cache), with_wheels=not args.no_wheels)

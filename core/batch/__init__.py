@@ -9,9 +9,21 @@
 
 The pipeline work goes through :mod:`core.workflows` only. See docs/batch.md.
 """
+
 from .bodies import BodySource, BodySourceError, read_betas, read_measurements, sample_anny
 from .items import Item, Options, make_items
 from .run import BatchError, BatchResult, run_batch
 
-__all__ = ["BodySource", "BodySourceError", "read_betas", "read_measurements", "sample_anny", "Item", "Options",
-           "make_items", "BatchError", "BatchResult", "run_batch"]
+__all__ = [
+    "BodySource",
+    "BodySourceError",
+    "read_betas",
+    "read_measurements",
+    "sample_anny",
+    "Item",
+    "Options",
+    "make_items",
+    "BatchError",
+    "BatchResult",
+    "run_batch",
+]

@@ -15,6 +15,7 @@ is uniform on its range (Anny: gender, muscle, weight, height, proportions on
 25 years, to its old anchor, 90 years): the templates are adult garments;
 cup size and firmness stay at Anny's average.
 """
+
 from __future__ import annotations
 
 import csv
@@ -57,6 +58,7 @@ class BodySource:
     value : the size name, or a dict parameter -> value, or measure -> cm.
     origin : where it came from (``"bodies.csv row 3"``), for error messages.
     """
+
     label: str
     kind: str
     value: object
@@ -102,14 +104,18 @@ def read_measurements(path) -> List[BodySource]:
     rows = list(csv.reader(text.splitlines()))
     rows = [r for r in rows if any(c.strip() for c in r)]
     if not rows:
-        raise BodySourceError(f"{path}: empty body table; expected a header row "
-                              f"({', '.join(MEASUREMENTS)}, bust, size, name) and one row per body")
+        raise BodySourceError(
+            f"{path}: empty body table; expected a header row "
+            f"({', '.join(MEASUREMENTS)}, bust, size, name) and one row per body"
+        )
     header = [h.strip().lower() for h in rows[0]]
     allowed = set(MEASUREMENTS) | {"bust"} | set(SIZE_COLUMNS) | set(NAME_COLUMNS) | set(CHART_COLUMNS)
     for j, h in enumerate(header):
         if h not in allowed:
-            raise BodySourceError(f"{path}: header column {j + 1} {h!r} is not a measurement; allowed: "
-                                  f"{', '.join(MEASUREMENTS)}, bust (cm), size, chart, name")
+            raise BodySourceError(
+                f"{path}: header column {j + 1} {h!r} is not a measurement; allowed: "
+                f"{', '.join(MEASUREMENTS)}, bust (cm), size, chart, name"
+            )
     if "chest" in header and "bust" in header:
         raise BodySourceError(f"{path}: header has both 'chest' and 'bust' (the same girth); keep one")
     out = []
@@ -120,28 +126,32 @@ def read_measurements(path) -> List[BodySource]:
         name = next((cells[c] for c in NAME_COLUMNS if cells.get(c)), "") or f"row {i}"
         origin = f"{path.name} row {i}"
         size = next((cells[c] for c in SIZE_COLUMNS if cells.get(c)), "")
-        targets = {("chest" if h == "bust" else h): _number(v, f"{path}: row {i}, column {h!r}")
-                   for h, v in cells.items() if v and h in MEASUREMENTS + ("bust",)}
+        targets = {
+            ("chest" if h == "bust" else h): _number(v, f"{path}: row {i}, column {h!r}")
+            for h, v in cells.items()
+            if v and h in MEASUREMENTS + ("bust",)
+        }
         chart = next((cells[c] for c in CHART_COLUMNS if cells.get(c)), "") or None
         if chart and not size:
-            raise BodySourceError(f"{path}: row {i}, column 'chart': a chart names the chart of a size; "
-                                  f"this row has no size")
+            raise BodySourceError(
+                f"{path}: row {i}, column 'chart': a chart names the chart of a size; this row has no size"
+            )
         if size:
             try:
-                size = check_size(size, chart)      # "women:M" when the chart is named
+                size = check_size(size, chart)  # "women:M" when the chart is named
             except BodyError as exc:
-                raise BodySourceError(f"{path}: row {i}, column {'size' if chart is None else 'size/chart'!r}: "
-                                      f"{exc}") from None
+                raise BodySourceError(
+                    f"{path}: row {i}, column {'size' if chart is None else 'size/chart'!r}: {exc}"
+                ) from None
             if targets:
                 raise BodySourceError(f"{path}: row {i}: give a size or measurements, not both")
             out.append(BodySource(name, "size", size, origin))
         elif targets:
-            for h, v in targets.items():      # the chart's range, checked here so the batch never starts
+            for h, v in targets.items():  # the chart's range, checked here so the batch never starts
                 lo, hi = TARGET_RANGES[h]
                 if not lo <= v <= hi:
                     column = "bust" if h == "chest" and "bust" in header else h
-                    raise BodySourceError(f"{path}: row {i}, column {column!r}: expected {lo:g}..{hi:g} cm, "
-                                          f"got {v:g}")
+                    raise BodySourceError(f"{path}: row {i}, column {column!r}: expected {lo:g}..{hi:g} cm, got {v:g}")
             out.append(BodySource(name, "measurements", targets, origin))
         else:
             raise BodySourceError(f"{path}: row {i}: no measurement and no size given")
@@ -171,6 +181,7 @@ def sample_anny(n: int, seed: int = 0, parameters: Optional[Mapping[str, tuple]]
         raise BodySourceError(f"--seed: expected an integer >= 0, got {seed!r}")
     if parameters is None:
         from ..body import load_body
+
         parameters = load_body("anny").shape_parameters()
     # The breast phenotypes stay at Anny's average: they became shape parameters after
     # datasets were made with this sampler, and a seed keeps giving the same bodies.
@@ -180,8 +191,7 @@ def sample_anny(n: int, seed: int = 0, parameters: Optional[Mapping[str, tuple]]
     for i in range(int(n)):
         rng = np.random.default_rng([int(seed), i])
         u = rng.random(len(names))
-        shape = {k: round(float(bounds[k][0] + u[j] * (bounds[k][1] - bounds[k][0])), 6)
-                 for j, k in enumerate(names)}
+        shape = {k: round(float(bounds[k][0] + u[j] * (bounds[k][1] - bounds[k][0])), 6) for j, k in enumerate(names)}
         out.append(BodySource(f"sample {i}", "shape", shape, f"sample {i} of seed {seed}"))
     return out
 
@@ -196,8 +206,9 @@ def _betas_array(path: Path) -> np.ndarray:
                 keys = list(z.keys())
                 key = "betas" if "betas" in keys else (keys[0] if len(keys) == 1 else None)
                 if key is None:
-                    raise BodySourceError(f"{path}: expected an array 'betas' (or a single array); "
-                                          f"found {', '.join(keys) or 'none'}")
+                    raise BodySourceError(
+                        f"{path}: expected an array 'betas' (or a single array); found {', '.join(keys) or 'none'}"
+                    )
                 return z[key]
     except (OSError, ValueError) as exc:
         raise BodySourceError(f"{path}: cannot read the betas ({exc})") from None
@@ -245,16 +256,19 @@ def read_betas(path, parameters: Mapping[str, tuple]) -> List[BodySource]:
     names = [f"beta{j}" for j in range(betas.shape[1])]
     missing = [n for n in names if n not in parameters]
     if missing:
-        raise BodySourceError(f"{path}: {betas.shape[1]} betas per body but the model has "
-                              f"{sum(1 for k in parameters if k.startswith('beta'))}")
+        raise BodySourceError(
+            f"{path}: {betas.shape[1]} betas per body but the model has "
+            f"{sum(1 for k in parameters if k.startswith('beta'))}"
+        )
     out = []
     for i, row in enumerate(betas, start=1):
         shape = {}
         for j, v in enumerate(row):
             lo, hi = parameters[names[j]][:2]
             if not (np.isfinite(v) and lo <= v <= hi):
-                raise BodySourceError(f"{path}: row {i}, column {j + 1} (beta{j}) = {v:g} is out of range "
-                                      f"[{lo:g}, {hi:g}]")
+                raise BodySourceError(
+                    f"{path}: row {i}, column {j + 1} (beta{j}) = {v:g} is out of range [{lo:g}, {hi:g}]"
+                )
             shape[names[j]] = float(v)
         out.append(BodySource(f"betas {i}", "shape", shape, f"{path.name} row {i}"))
     return out

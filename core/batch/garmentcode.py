@@ -38,6 +38,7 @@ Mapping (see docs/batch.md for its limits):
   facing +Z, centimetres, the floor (the body's lowest point) at ``y = 0``
   (ours: Z up, facing -Y, metres, the origin at the body's root).
 """
+
 from __future__ import annotations
 
 from typing import Dict, List, Optional, Tuple
@@ -59,12 +60,14 @@ CORNER_DEG = 20.0
 def euler_to_matrix(angles_deg) -> np.ndarray:
     """(3, 3) GarmentCode's rotation of Euler ``angles_deg`` (x, y, z): ``Rz @ Ry @ Rx``."""
     from scipy.spatial.transform import Rotation
+
     return Rotation.from_euler("xyz", np.asarray(angles_deg, float), degrees=True).as_matrix()
 
 
 def matrix_to_euler(R: np.ndarray) -> np.ndarray:
     """(3,) degrees: the Euler angles GarmentCode reads as ``R`` (:func:`euler_to_matrix`)."""
     from scipy.spatial.transform import Rotation
+
     return Rotation.from_matrix(R).as_euler("xyz", degrees=True)
 
 
@@ -98,7 +101,7 @@ def _douglas_peucker(points: np.ndarray, tol: float) -> List[int]:
         if b - a < 2:
             continue
         p, d = points[a], points[b] - points[a]
-        q = points[a + 1:b] - p
+        q = points[a + 1 : b] - p
         n = float(np.linalg.norm(d))
         dist = np.abs(d[0] * q[:, 1] - d[1] * q[:, 0]) / n if n > 1e-15 else np.linalg.norm(q, axis=1)
         k = int(np.argmax(dist))
@@ -110,6 +113,7 @@ def _douglas_peucker(points: np.ndarray, tol: float) -> List[int]:
 
 def _outlines(pattern) -> Dict[str, np.ndarray]:
     from ..export.boundary import piece_loops
+
     return {p.name: piece_loops(p)[0] for p in pattern.panels}
 
 
@@ -120,10 +124,13 @@ def _anchors(pattern, loops: Dict[str, np.ndarray]) -> Tuple[Dict[str, set], Dic
     from ..export.pieces import resolve_notch_spacing
     from ..geom.polygon import turn_points
     from ..geom.polyline import polyline_length
+
     spacing = resolve_notch_spacing(None, pattern)
     must = {name: set() for name in loops}
-    soft = {name: {int(loop[i]) for i in turn_points(np.asarray(pattern.panel(name).uv, float)[loop], CORNER_DEG)}
-            for name, loop in loops.items()}
+    soft = {
+        name: {int(loop[i]) for i in turn_points(np.asarray(pattern.panel(name).uv, float)[loop], CORNER_DEG)}
+        for name, loop in loops.items()
+    }
     for s in pattern.seams:
         sides = [(s.panel_a, np.asarray(s.verts_a, int)), (s.panel_b, np.asarray(s.verts_b, int))]
         lengths = [polyline_length(np.asarray(pattern.panel(p).uv, float)[ids]) for p, ids in sides]
@@ -165,6 +172,7 @@ def simplified_outlines(pattern, tol: float = TOLERANCE, min_edge: float = MIN_E
 def _floor(pattern) -> float:
     """m, our z of the lowest point of the body ``pattern`` was made on (its ``body`` record)."""
     from ..body.instance import spec_instance
+
     V, _ = spec_instance(pattern.body or {})
     return float(np.min(V[:, 2]))
 
@@ -172,7 +180,7 @@ def _floor(pattern) -> float:
 def _panel(panel, ids: np.ndarray, floor: float) -> Tuple[dict, Dict[Tuple[int, int], int]]:
     uv = np.asarray(panel.uv, float)
     start = left_corner(uv[ids])
-    ids = np.roll(ids, -start)                     # the loop from GarmentCode's own origin vertex
+    ids = np.roll(ids, -start)  # the loop from GarmentCode's own origin vertex
     origin = uv[ids].min(axis=0)  # GarmentCode panels sit in their own frame, here from the lower left
     local = (uv - origin) * CM
     xyz = (np.asarray(panel.xyz, float)[ids] - [0.0, 0.0, floor]) * CM @ TO_GARMENTCODE.T
@@ -182,10 +190,12 @@ def _panel(panel, ids: np.ndarray, floor: float) -> Tuple[dict, Dict[Tuple[int, 
     for e in range(n):
         u, v = int(ids[e]), int(ids[(e + 1) % n])
         edges[(u, v)] = edges[(v, u)] = e
-    spec = {"vertices": [[round(float(x), 4), round(float(y), 4)] for x, y in local[ids]],
-            "edges": [{"endpoints": [e, (e + 1) % n]} for e in range(n)],
-            "translation": [round(float(x), 4) for x in t],
-            "rotation": [round(float(a), 4) for a in matrix_to_euler(R)]}
+    spec = {
+        "vertices": [[round(float(x), 4), round(float(y), 4)] for x, y in local[ids]],
+        "edges": [{"endpoints": [e, (e + 1) % n]} for e in range(n)],
+        "translation": [round(float(x), 4) for x in t],
+        "rotation": [round(float(a), 4) for a in matrix_to_euler(R)],
+    }
     return spec, edges
 
 
@@ -210,8 +220,16 @@ def specification(pattern, floor: Optional[float] = None) -> dict:
             eb = edge_of[s.panel_b].get((int(b[i]), int(b[j])))
             if ea is not None and eb is not None:  # both segments on the outlines (holes are left out)
                 stitches.append([{"panel": s.panel_a, "edge": ea}, {"panel": s.panel_b, "edge": eb}])
-    return {"pattern": {"panels": panels, "stitches": stitches, "panel_order": [p.name for p in pattern.panels]},
-            "parameters": {}, "parameter_order": [],
-            "properties": {"curvature_coords": "relative", "normalize_panel_translation": False,
-                           "units_in_meter": 100, "normalized_edge_loops": True,
-                           "source": "EASE", "style": pattern.style}}
+    return {
+        "pattern": {"panels": panels, "stitches": stitches, "panel_order": [p.name for p in pattern.panels]},
+        "parameters": {},
+        "parameter_order": [],
+        "properties": {
+            "curvature_coords": "relative",
+            "normalize_panel_translation": False,
+            "units_in_meter": 100,
+            "normalized_edge_loops": True,
+            "source": "EASE",
+            "style": pattern.style,
+        },
+    }

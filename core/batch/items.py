@@ -7,6 +7,7 @@ same command finds the same ids, so completed items are skipped; changing the
 design, a body or an option makes new ones. The design's own hash keys the
 worker's cache of prepared solvers (:mod:`core.batch.worker`).
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -41,6 +42,7 @@ class Options:
     garmentcode : also write the GarmentCode pattern specification
     preview : write ``pattern.png`` per item (costs more than the solve)
     """
+
     config: Optional[str] = None
     poses: Tuple[str, ...] = ()
     drape: bool = False
@@ -49,8 +51,14 @@ class Options:
     preview: bool = False
 
     def record(self) -> dict:
-        return {"config": self.config, "poses": list(self.poses), "drape": self.drape,
-                "export": list(self.export), "garmentcode": self.garmentcode, "preview": self.preview}
+        return {
+            "config": self.config,
+            "poses": list(self.poses),
+            "drape": self.drape,
+            "export": list(self.export),
+            "garmentcode": self.garmentcode,
+            "preview": self.preview,
+        }
 
 
 @dataclass(frozen=True)
@@ -68,6 +76,7 @@ class Item:
     options : Options
     folder : the item's folder name under the dataset's ``items/``
     """
+
     id: str
     index: int
     body: BodySource
@@ -81,14 +90,16 @@ class Item:
         return self.id[:FOLDER_ID_DIGITS]
 
 
-def make_items(design: dict, bodies: Sequence[BodySource], model: str = "anny",
-               options: Optional[Options] = None) -> List[Item]:
+def make_items(
+    design: dict, bodies: Sequence[BodySource], model: str = "anny", options: Optional[Options] = None
+) -> List[Item]:
     """Design × bodies as :class:`Item` (one per body, in the bodies' order).
 
     Two bodies with the same record make the same item; the duplicate is kept
     once (the first).
     """
     from ..workflows import config_name
+
     options = options or Options()
     # the design's own configuration made explicit: the id (and a rerun's skip) is the same
     # whether the caller named it or left it to the design

@@ -7,6 +7,7 @@ workers itself (cancelling their tasks, closing the cluster), so its workers
 ignore SIGINT. Only the local cluster loads this (:func:`core.batch.run._client`);
 the workers of a cluster started by hand keep their own handling.
 """
+
 from __future__ import annotations
 
 import signal
@@ -16,5 +17,6 @@ import threading
 def dask_setup(service) -> None:
     """Ignore SIGINT in a worker process (Dask calls this for each preload's service)."""
     from distributed import Worker
+
     if isinstance(service, Worker) and threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_IGN)

@@ -11,6 +11,7 @@ At the end of a run :func:`compact` rewrites the journal sorted by item id,
 the last row of each id kept, and, where ``pyarrow`` is installed, writes
 ``manifest.parquet`` beside it (columns = the union of the rows' keys).
 """
+
 from __future__ import annotations
 
 import json
@@ -120,10 +121,10 @@ def write_parquet(path, rows: List[dict]) -> Optional[Path]:
     except ImportError:
         return None
     from ..fileio import write_bytes
+
     keys = sorted({k for r in rows for k in r})
     # lists and mixed types as JSON text: one type per column
-    columns = {k: [(json.dumps(r[k]) if isinstance(r.get(k), (list, dict)) else r.get(k)) for r in rows]
-               for k in keys}
+    columns = {k: [(json.dumps(r[k]) if isinstance(r.get(k), (list, dict)) else r.get(k)) for r in rows] for k in keys}
     sink = pa.BufferOutputStream()
     pq.write_table(pa.table(columns), sink)
     return write_bytes(path, sink.getvalue().to_pybytes())
@@ -131,5 +132,6 @@ def write_parquet(path, rows: List[dict]) -> Optional[Path]:
 
 def comparable(rows: Iterable[dict]) -> List[dict]:
     """Rows without their volatile keys (timings, worker), sorted by id: equal for equal inputs."""
-    return sorted(({k: v for k, v in r.items() if not k.startswith(VOLATILE_PREFIXES)} for r in rows),
-                  key=lambda r: r["id"])
+    return sorted(
+        ({k: v for k, v in r.items() if not k.startswith(VOLATILE_PREFIXES)} for r in rows), key=lambda r: r["id"]
+    )

@@ -9,6 +9,7 @@ item's folder is complete, so an interruption at any moment leaves complete
 rows of complete items, and a rerun of the same command makes exactly the
 items without an ``ok`` row.
 """
+
 from __future__ import annotations
 
 import json
@@ -29,7 +30,6 @@ from .items import Item, Options, make_items
 from .manifest import Journal, compact, completed, read_rows
 from .worker import item_row, one_line, run_items
 
-
 #: Dask settings for the local workers. Distributed's nannies start workers with
 #: MALLOC_TRIM_THRESHOLD_=65536, which turns off glibc's adaptive mmap threshold: every
 #: array the solver allocates per iteration is then mmapped and unmapped, and a transfer
@@ -42,11 +42,13 @@ from .worker import item_row, one_line, run_items
 #: The memory monitor (every 100 ms, in each worker and in its nanny, which lives in the driver's
 #: process) cost 41 ms of CPU a second on an idle 2-worker cluster, 2 % of this 2-core machine, taken
 #: from the workers: 12 ms at 1 s. A worker over its memory limit is then paused or stopped within 1 s.
-WORKER_CONFIG = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
-                 "distributed.worker.profile.enabled": False,
-                 "distributed.admin.tick.interval": "1s",
-                 "distributed.admin.system-monitor.interval": "5s",
-                 "distributed.worker.memory.monitor-interval": "1s"}
+WORKER_CONFIG = {
+    "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "1s",
+    "distributed.admin.system-monitor.interval": "5s",
+    "distributed.worker.memory.monitor-interval": "1s",
+}
 
 
 class BatchError(EaseError):
@@ -66,6 +68,7 @@ class BatchResult:
     workers used; rows : the compacted manifest (all runs, whatever their options);
     ids : the ids of this batch's items (made now or before), in the bodies' order.
     """
+
     total: int
     skipped: int
     made: int = 0
@@ -83,15 +86,21 @@ class BatchResult:
 
     def summary(self) -> str:
         state = "interrupted" if self.interrupted else "done"
-        where = (f"on {self.workers} worker{'s' * (self.workers != 1)}" if self.made + self.failed or self.workers
-                 else "(nothing left to make)")
-        return (f"batch {state}: {self.made} made, {self.failed} failed, {self.skipped} already complete, "
-                f"{self.total} item{'s' * (self.total != 1)}, {self.seconds:.1f} s {where}")
+        where = (
+            f"on {self.workers} worker{'s' * (self.workers != 1)}"
+            if self.made + self.failed or self.workers
+            else "(nothing left to make)"
+        )
+        return (
+            f"batch {state}: {self.made} made, {self.failed} failed, {self.skipped} already complete, "
+            f"{self.total} item{'s' * (self.total != 1)}, {self.seconds:.1f} s {where}"
+        )
 
 
 def read_design(design) -> dict:
     """The design as a JSON dict, checked (a bad design stops the batch before any worker starts)."""
     from ..design import load_design
+
     if isinstance(design, dict):
         obj = design
     else:
@@ -128,6 +137,7 @@ def _check_scheduler(address: str) -> None:
 
     from distributed.comm import connect
     from distributed.comm.addressing import parse_address, parse_host_port
+
     try:
         parse_host_port(parse_address(address)[1])
     except (ValueError, TypeError) as exc:
@@ -144,12 +154,13 @@ def _check_scheduler(address: str) -> None:
     def probe():
         return asyncio.run(asyncio.wait_for(identity(), SCHEDULER_PROBE_S))
 
-    with concurrent.futures.ThreadPoolExecutor(1) as pool:   # a caller may be running an event loop
+    with concurrent.futures.ThreadPoolExecutor(1) as pool:  # a caller may be running an event loop
         try:
             reply = pool.submit(probe).result()
         except (asyncio.TimeoutError, TimeoutError):
-            raise BatchError(f"--scheduler {address}: no Dask scheduler answered within "
-                             f"{SCHEDULER_PROBE_S:g} s") from None
+            raise BatchError(
+                f"--scheduler {address}: no Dask scheduler answered within {SCHEDULER_PROBE_S:g} s"
+            ) from None
         except Exception as exc:  # refused, reset, or bytes that are not Dask's protocol
             raise BatchError(f"--scheduler {address}: cannot connect to a Dask scheduler ({one_line(exc)})") from None
     if not isinstance(reply, dict) or reply.get("type") != "Scheduler":
@@ -163,13 +174,14 @@ def _client(workers: Optional[int], scheduler: Optional[str]):
         import dask
         from distributed import Client, LocalCluster
     except ImportError:
-        raise BatchError("ease batch needs Dask: pip install 'ease-garments[batch]' "
-                         "(dask, distributed; ./ease.sh installs them)") from None
+        raise BatchError(
+            "ease batch needs Dask: pip install 'ease-garments[batch]' (dask, distributed; ./ease.sh installs them)"
+        ) from None
     if scheduler:
         _check_scheduler(scheduler)
         try:
             client = Client(scheduler, timeout="20s")
-        except (OSError, TimeoutError) as exc:     # the probe above answered; the scheduler went since
+        except (OSError, TimeoutError) as exc:  # the probe above answered; the scheduler went since
             raise BatchError(f"--scheduler {scheduler}: cannot connect ({one_line(exc)})") from None
         return client, None, len(client.scheduler_info().get("workers", {}))
     n = int(os.cpu_count() or 1) if workers is None else int(workers)
@@ -177,11 +189,17 @@ def _client(workers: Optional[int], scheduler: Optional[str]):
         raise BatchError(f"--workers: expected >= 1, got {n}")
     # processes, one thread each: the solver is numpy/scipy-bound and holds the GIL between calls
     with dask.config.set(WORKER_CONFIG):
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                               silence_logs=logging.ERROR, preload=["core.batch.local_worker"],
-                               # no dashboard, but the scheduler's HTTP routes still take a port: any free
-                               # one, not 8787 with a warning when another cluster holds it
-                               scheduler_kwargs={"dashboard_address": ":0"})
+        cluster = LocalCluster(
+            n_workers=n,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+            preload=["core.batch.local_worker"],
+            # no dashboard, but the scheduler's HTTP routes still take a port: any free
+            # one, not 8787 with a warning when another cluster holds it
+            scheduler_kwargs={"dashboard_address": ":0"},
+        )
     return Client(cluster), cluster, n
 
 
@@ -190,9 +208,17 @@ def _eta(seconds: float) -> str:
     return f"{s // 3600}:{s % 3600 // 60:02d}:{s % 60:02d}"
 
 
-def run_batch(design, bodies: Sequence[BodySource], out, model: str = "anny", options: Optional[Options] = None,
-              workers: Optional[int] = None, scheduler: Optional[str] = None, item_timeout: Optional[float] = None,
-              progress: Optional[Progress] = None) -> BatchResult:
+def run_batch(
+    design,
+    bodies: Sequence[BodySource],
+    out,
+    model: str = "anny",
+    options: Optional[Options] = None,
+    workers: Optional[int] = None,
+    scheduler: Optional[str] = None,
+    item_timeout: Optional[float] = None,
+    progress: Optional[Progress] = None,
+) -> BatchResult:
     """Make every design × body item not yet in ``out``'s manifest.
 
     Parameters
@@ -219,8 +245,10 @@ def run_batch(design, bodies: Sequence[BodySource], out, model: str = "anny", op
         raise BatchError(f"--item-timeout: expected seconds > 0, got {item_timeout}")
     meshes = [f for f in (options.export if options else ()) if f in ("glb", "obj")]
     if meshes and not options.drape:
-        raise BatchError(f"--export {meshes[0]}: the garment's 3D file is of the draped garment; "
-                         f"add --drape, or export svg, dxf, pdf only")
+        raise BatchError(
+            f"--export {meshes[0]}: the garment's 3D file is of the draped garment; "
+            f"add --drape, or export svg, dxf, pdf only"
+        )
     obj = read_design(design)
     out = Path(out)
     items = make_items(obj, bodies, model=model, options=options)
@@ -234,12 +262,12 @@ def run_batch(design, bodies: Sequence[BodySource], out, model: str = "anny", op
         recover_folder(out / "items")
         try:
             _submit(pending, out, workers, scheduler, item_timeout, progress, result)
-        except KeyboardInterrupt:       # Ctrl-C again while the first one's clean-up ran
+        except KeyboardInterrupt:  # Ctrl-C again while the first one's clean-up ran
             result.interrupted = True
     try:
-        with signals_held():            # the manifest is compacted whole whatever Ctrl-C does meanwhile
+        with signals_held():  # the manifest is compacted whole whatever Ctrl-C does meanwhile
             result.rows = compact(out)
-    except KeyboardInterrupt:           # arrived during the compaction, which is done: a stop like any
+    except KeyboardInterrupt:  # arrived during the compaction, which is done: a stop like any
         result.interrupted = True
     result.seconds = time.perf_counter() - t0
     return result
@@ -276,8 +304,10 @@ def _error_row(item: Item, exc: BaseException) -> dict:
     # Dask's KilledWorker text names the task's key (which carries the run's token) and a worker
     # address: neither means anything to the user, and the manifest would differ run to run
     if type(exc).__name__ == "KilledWorker":
-        error = (f"KilledWorker: the worker process died {1 + getattr(exc, 'allowed_failures', 0)} time(s) "
-                 "while this item was on it (out of memory, or a crash; a rerun tries it again)")
+        error = (
+            f"KilledWorker: the worker process died {1 + getattr(exc, 'allowed_failures', 0)} time(s) "
+            "while this item was on it (out of memory, or a crash; a rerun tries it again)"
+        )
     else:
         error = one_line(exc)
     return item_row(item, "error", error)
@@ -295,8 +325,14 @@ def _submit(pending, out, workers, scheduler, item_timeout, progress, result: Ba
     token = uuid.uuid4().hex[:12]
 
     def submit(tasks, prefix):
-        new = client.map(run_items, tasks, out_root=str(out.resolve()), time_limit=item_timeout,
-                         key=[f"{prefix}-{group[0].id}-{token}" for group in tasks], pure=False)
+        new = client.map(
+            run_items,
+            tasks,
+            out_root=str(out.resolve()),
+            time_limit=item_timeout,
+            key=[f"{prefix}-{group[0].id}-{token}" for group in tasks],
+            pure=False,
+        )
         futures.extend(new)
         groups.update((f.key, group) for f, group in zip(new, tasks))
         return new
@@ -305,7 +341,7 @@ def _submit(pending, out, workers, scheduler, item_timeout, progress, result: Ba
         journal = Journal(out)
         tasks, i = [], 0
         for size in task_sizes(len(pending), result.workers):
-            tasks.append(pending[i:i + size])
+            tasks.append(pending[i : i + size])
             i += size
         queue = as_completed(submit(tasks, "ease-items"), with_results=True, raise_errors=False)
         t0, n, k = time.perf_counter(), len(pending), 0
@@ -324,17 +360,17 @@ def _submit(pending, out, workers, scheduler, item_timeout, progress, result: Ba
                 rows = [_error_row(group[0], exc)]
             failed = result.failed
             ok = sum(row["status"] == "ok" for row in rows)
-            with signals_held():         # a task's rows go into the journal and the counts together
+            with signals_held():  # a task's rows go into the journal and the counts together
                 journal.extend(rows)
                 result.made, result.failed = result.made + ok, result.failed + len(rows) - ok
-            for row in rows:         # counted first: a progress callback may stop the batch here
+            for row in rows:  # counted first: a progress callback may stop the batch here
                 k, failed = k + 1, failed + (row["status"] != "ok")
                 rate = (time.perf_counter() - t0) / k
                 report(progress, k / n, f"{k}/{n} items, {failed} failed, ETA {_eta(rate * (n - k))}")
     except KeyboardInterrupt:
         result.interrupted = True
     finally:
-        with signals_held():     # Ctrl-C again: delivered once the workers are stopped and released
+        with signals_held():  # Ctrl-C again: delivered once the workers are stopped and released
             if journal is not None:
                 journal.close()
             if futures:

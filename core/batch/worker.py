@@ -11,6 +11,7 @@ Errors never leave :func:`run_item`: an item that fails returns a row with
 status ``"error"`` (or ``"timeout"``) and a one-line message, and its folder
 is not written.
 """
+
 from __future__ import annotations
 
 import copy
@@ -36,6 +37,7 @@ class ItemTimeout(Cancelled):
 @dataclass
 class Context:
     """What a worker keeps per design: the preparation, its solver and the reference pattern."""
+
     prep: object
     solver: object
     start: object
@@ -80,6 +82,7 @@ def _target(ctx: Context, item: Item, check) -> Tuple[object, Dict[str, object]]
     """The transfer target of ``item``'s body (a size name or a shape dict) and its row entries."""
     from .. import workflows as wf
     from ..body.sizes import fit_measurements
+
     body = item.body
     if body.kind == "size":
         # a bare size is of the design's chart (as the transfer reads it): named so here, or the
@@ -88,8 +91,9 @@ def _target(ctx: Context, item: Item, check) -> Tuple[object, Dict[str, object]]
     if body.kind != "measurements":
         return body.value, {}
     fit = fit_measurements(ctx.prep.body, body.value, progress=check)
-    missed = [f"{k} {fit.achieved[k]:.1f} cm for {fit.targets[k]:g}" for k, s in fit.status.items()
-              if s != "within 1 cm"]
+    missed = [
+        f"{k} {fit.achieved[k]:.1f} cm for {fit.targets[k]:g}" for k, s in fit.status.items() if s != "within 1 cm"
+    ]
     if missed:
         raise EaseError(f"{body.origin}: not reachable by this model: {'; '.join(missed)}")
     return fit.shape, {f"targets.{k}": v for k, v in fit.targets.items()}
@@ -98,37 +102,52 @@ def _target(ctx: Context, item: Item, check) -> Tuple[object, Dict[str, object]]
 def _pattern_row(pattern, prefix: str = "metrics.") -> dict:
     m = pattern.report["metrics"]
     c, s = m["compliance"], m["seams"]
-    return {f"{prefix}weft_mean_pct": c["mean"], f"{prefix}weft_std_pct": c["std"],
-            f"{prefix}warp_mean_pct": c["warp_mean"], f"{prefix}warp_signed_pct": c["warp_signed"],
-            f"{prefix}shear_p95_deg": c["shear_p95"], f"{prefix}flipped": m["flipped_triangles"],
-            f"{prefix}collapsed": m.get("collapsed_triangles", 0), f"{prefix}crossings": m.get("crossings", 0),
-            f"{prefix}seam_mismatch_mean_pct": s["mean"], f"{prefix}seam_mismatch_max_mm": s["max_mm"]}
+    return {
+        f"{prefix}weft_mean_pct": c["mean"],
+        f"{prefix}weft_std_pct": c["std"],
+        f"{prefix}warp_mean_pct": c["warp_mean"],
+        f"{prefix}warp_signed_pct": c["warp_signed"],
+        f"{prefix}shear_p95_deg": c["shear_p95"],
+        f"{prefix}flipped": m["flipped_triangles"],
+        f"{prefix}collapsed": m.get("collapsed_triangles", 0),
+        f"{prefix}crossings": m.get("crossings", 0),
+        f"{prefix}seam_mismatch_mean_pct": s["mean"],
+        f"{prefix}seam_mismatch_max_mm": s["max_mm"],
+    }
 
 
 def _adapt(ctx: Context, item: Item, target, check):
     """The design cut on the item's body and adapted to the batch's poses (a cut per item:
     adaptation is defined on the body a cut was made on)."""
     from .. import workflows as wf
+
     design = copy.deepcopy(item.design)
     design["body"] = {**design.get("body", {}), "shape": target}
     prep = wf.prepare(design, body=ctx.prep.body, progress=check)
     run = wf.adapt(prep, list(item.options.poses), config=item.options.config, progress=check)
     stretch = run.pattern.report["residual_stretch"]
-    row = {f"adapt.residual_stretch_before_pct.{pose}": max(v["before"] for v in g.values())
-           for pose, g in stretch.items()}
-    row.update({f"adapt.residual_stretch_after_pct.{pose}": max(v["after"] for v in g.values())
-                for pose, g in stretch.items()})
+    row = {
+        f"adapt.residual_stretch_before_pct.{pose}": max(v["before"] for v in g.values()) for pose, g in stretch.items()
+    }
+    row.update(
+        {f"adapt.residual_stretch_after_pct.{pose}": max(v["after"] for v in g.values()) for pose, g in stretch.items()}
+    )
     row.update(_pattern_row(run.pattern, "adapt."))
     return run, row
 
 
 def _drape(ctx: Context, item: Item, run, vertices, check):
     from .. import workflows as wf
+
     drun = wf.drape(run.pattern, body=(vertices, ctx.prep.body.faces), progress=check)
     a = drun.metrics["all"]
-    return drun, {"drape.gap_mean_mm": a["gap_mm"]["mean"], "drape.penetration_pct": a["penetration_pct"],
-                  "drape.seam_gap_max_mm": a["seam_gap_mm"]["max"], "drape.frames": int(drun.result.frames),
-                  "drape.settled": drun.result.settle_reason}
+    return drun, {
+        "drape.gap_mean_mm": a["gap_mm"]["mean"],
+        "drape.penetration_pct": a["penetration_pct"],
+        "drape.seam_gap_max_mm": a["seam_gap_mm"]["max"],
+        "drape.frames": int(drun.result.frames),
+        "drape.settled": drun.result.settle_reason,
+    }
 
 
 def _write(folder: Path, item: Item, run, arun, drun, preview: bool) -> None:
@@ -145,18 +164,37 @@ def _write(folder: Path, item: Item, run, arun, drun, preview: bool) -> None:
         if drun is not None:
             wf.write_drape(tmp / "drape", drun, pattern=run.pattern, preview=preview)
         if opts.export:
-            wf.export(run.pattern, tmp / "export", opts.export,
-                      drape=(drun.result.positions, drun.result.faces) if drun is not None else None)
+            wf.export(
+                run.pattern,
+                tmp / "export",
+                opts.export,
+                drape=(drun.result.positions, drun.result.faces) if drun is not None else None,
+            )
         if opts.garmentcode:
             write_json(tmp / "specification.json", specification(run.pattern))
-        write_json(tmp / "body.json", {"id": item.id, **item.body.record(), "origin": item.body.origin,
-                                       "model": item.model, "shape": run.pattern.body.get("shape")})
+        write_json(
+            tmp / "body.json",
+            {
+                "id": item.id,
+                **item.body.record(),
+                "origin": item.body.origin,
+                "model": item.model,
+                "shape": run.pattern.body.get("shape"),
+            },
+        )
 
 
 def item_row(item: Item, status: str = "ok", error: str = "") -> dict:
     """The manifest row's first keys: the item, its body's kind, its status and error."""
-    return {"id": item.id, "label": item.body.label, "index": item.index, "folder": item.folder,
-            "body.kind": item.body.kind, "status": status, "error": error}
+    return {
+        "id": item.id,
+        "label": item.body.label,
+        "index": item.index,
+        "folder": item.folder,
+        "body.kind": item.body.kind,
+        "status": status,
+        "error": error,
+    }
 
 
 def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
@@ -188,7 +226,7 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
             timings["setup"] = time.perf_counter() - t
         check = deadline(time_limit)
         t = time.perf_counter()
-        if item.body.kind == "measurements":     # what was asked, also on a row whose fit fails
+        if item.body.kind == "measurements":  # what was asked, also on a row whose fit fails
             row.update({f"targets.{k}": v for k, v in item.body.value.items()})
         target, entries = _target(ctx, item, check)
         row.update(entries)
@@ -204,18 +242,29 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
         # then takes as its target instead of evaluating the body again; another pose is the transfer's to
         # make, and the drape's (the posed body, only then)
         at_rest = instance_pose(ctx.prep.cut.body.get("pose")) is None
-        vertices = (rest if at_rest else body_instance(model, target, ctx.prep.cut.body.get("pose"))
-                    ) if item.options.drape else None
+        vertices = (
+            (rest if at_rest else body_instance(model, target, ctx.prep.cut.body.get("pose")))
+            if item.options.drape
+            else None
+        )
         timings["body"] = time.perf_counter() - t
 
         t = time.perf_counter()
-        run = wf.transfer(ctx.prep, target, config=item.options.config, solver=ctx.solver, start=ctx.start,
-                          progress=check, vertices=rest if at_rest else None)
+        run = wf.transfer(
+            ctx.prep,
+            target,
+            config=item.options.config,
+            solver=ctx.solver,
+            start=ctx.start,
+            progress=check,
+            vertices=rest if at_rest else None,
+        )
         timings["transfer"] = run.timings["optimize"]
         # the body in its own fields of pattern.json and every export: a readable name where it has no chart
         # size (sample-0017, not its shape parameters), its girths
-        run.pattern.body.update({} if isinstance(target, str) else {"name": readable_name(item.body.label)},
-                                measurements_cm=dict(girths))
+        run.pattern.body.update(
+            {} if isinstance(target, str) else {"name": readable_name(item.body.label)}, measurements_cm=dict(girths)
+        )
         row.update(_pattern_row(run.pattern))
         timings["metrics"] = time.perf_counter() - t - timings["transfer"]
 

@@ -1,8 +1,8 @@
 """Parametric body models behind one interface (:class:`core.body.model.BodyModel`)."""
-from .model import BodyModel, SurfacePoint, POSE_PRESETS, REQUIRED_LANDMARKS, REQUIRED_REGIONS
 
-__all__ = ["BodyModel", "SurfacePoint", "POSE_PRESETS", "REQUIRED_LANDMARKS",
-           "REQUIRED_REGIONS", "load_body"]
+from .model import POSE_PRESETS, REQUIRED_LANDMARKS, REQUIRED_REGIONS, BodyModel, SurfacePoint
+
+__all__ = ["BodyModel", "SurfacePoint", "POSE_PRESETS", "REQUIRED_LANDMARKS", "REQUIRED_REGIONS", "load_body"]
 
 
 def load_body(name: str = "anny", **kwargs) -> BodyModel:
@@ -12,4 +12,5 @@ def load_body(name: str = "anny", **kwargs) -> BodyModel:
     Implemented in :mod:`core.body.registry`.
     """
     from .registry import load_body as _load
+
     return _load(name, **kwargs)

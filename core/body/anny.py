@@ -33,6 +33,7 @@ body's left — the same as ours — so the conversion at the boundary is the
 identity (``ANNY_TO_EASE``, applied to every position and axis-angle that
 crosses it). Anny's root-bone convention places the pelvis root at the origin.
 """
+
 from __future__ import annotations
 
 import os
@@ -62,8 +63,9 @@ _RACES = ("african", "asian", "caucasian")
 # "morphological age" puts 0.5 at ~13 years). 0.7 is a young adult (MakeHuman ~31
 # years, fully grown by Anny's calibration).
 DEFAULT_AGE = 0.7
-DEFAULT_SHAPE = dict(gender=0.5, age=DEFAULT_AGE, muscle=0.5, weight=0.5, height=0.5, proportions=0.5,
-                     cupsize=0.5, firmness=0.5)
+DEFAULT_SHAPE = dict(
+    gender=0.5, age=DEFAULT_AGE, muscle=0.5, weight=0.5, height=0.5, proportions=0.5, cupsize=0.5, firmness=0.5
+)
 
 
 def shape_labels(labels, variations) -> list:
@@ -107,6 +109,7 @@ def nearest_rotation(M: np.ndarray) -> np.ndarray:
 
 def _rotation_matrices(axis_angle: np.ndarray) -> np.ndarray:
     from .lbs import rodrigues
+
     return rodrigues(axis_angle)
 
 
@@ -138,6 +141,7 @@ class AnnyData:
         np.add.at(dense, (np.repeat(np.arange(V), idx.shape[1]), idx.ravel()), w.ravel())
         self.weights = dense
         from scipy.sparse import csr_matrix
+
         # Each vertex hangs on a few bones: a sparse product skins in well under a millisecond.
         self.sparse_weights = csr_matrix(dense)
         self.mask = z["stacked_phenotype_blend_shapes_mask"].astype(bool)
@@ -158,9 +162,11 @@ class AnnyData:
         # The template's left/right vertex map, baked (None in an asset baked before it was).
         self.symmetry = z["symmetry"].astype(np.int64) if "symmetry" in z.files else None
         self.local_change_labels = [str(s) for s in z["lc_labels"]] if "lc_labels" in z.files else []
-        self._local_raw = ({k: z[k] for k in ("lc_counts", "lc_index", "lc_delta", "lc_scale", "lc_heads",
-                                               "lc_orientations")}
-                           if self.local_change_labels else None)
+        self._local_raw = (
+            {k: z[k] for k in ("lc_counts", "lc_index", "lc_delta", "lc_scale", "lc_heads", "lc_orientations")}
+            if self.local_change_labels
+            else None
+        )
         self._local = None
         self._local_lock = threading.Lock()
 
@@ -169,6 +175,7 @@ class AnnyData:
         with self._local_lock:
             if self._local is None:
                 from scipy.sparse import csr_matrix
+
                 raw = self._local_raw
                 V, J = self.template.shape[0], self.template_heads.shape[0]
                 counts = raw["lc_counts"].astype(np.int64)
@@ -201,6 +208,7 @@ def local_change_weights(data: AnnyData, local_changes: Optional[Mapping[str, fl
 
 def blendshape_coefficients(data: AnnyData, phenotypes: Mapping[str, float]) -> np.ndarray:
     """Anny's blend-shape coefficients (K,) of a phenotype dict (missing -> 0.5)."""
+
     def value(label):
         return float(phenotypes.get(label, 0.5)) if label in data.phenotype_labels else 0.5
 
@@ -239,8 +247,7 @@ def rest_model(data: AnnyData, coeffs: np.ndarray, local: Optional[np.ndarray] =
     return verts, heads, R
 
 
-def forward_kinematics_local_ref(data: AnnyData, heads: np.ndarray, R: np.ndarray,
-                                 D: np.ndarray, d: np.ndarray):
+def forward_kinematics_local_ref(data: AnnyData, heads: np.ndarray, R: np.ndarray, D: np.ndarray, d: np.ndarray):
     """Anny's 'local-ref' forward kinematics.
 
     Parameters
@@ -287,8 +294,13 @@ def skin(data: AnnyData, rest_vertices: np.ndarray, T: np.ndarray) -> np.ndarray
     return np.einsum("vab,vb->va", blend[:, :, :3], rest_vertices) + blend[:, :, 3]
 
 
-def evaluate(data: AnnyData, phenotypes: Mapping[str, float], axis_angle: np.ndarray,
-             root_translation=(0.0, 0.0, 0.0), local_changes: Optional[Mapping[str, float]] = None):
+def evaluate(
+    data: AnnyData,
+    phenotypes: Mapping[str, float],
+    axis_angle: np.ndarray,
+    root_translation=(0.0, 0.0, 0.0),
+    local_changes: Optional[Mapping[str, float]] = None,
+):
     """Evaluate Anny exactly as ``anny.Anny`` does, in Anny's frame.
 
     Parameters
@@ -342,8 +354,9 @@ def anny_names(path: str = ASSET):
         if not os.path.exists(path):
             return None
         with np.load(path) as z:
-            ranges = shape_ranges(shape_labels(z["phenotype_labels"], z["phenotype_variations"]),
-                                  bool(z["extrapolate_phenotypes"]))
+            ranges = shape_ranges(
+                shape_labels(z["phenotype_labels"], z["phenotype_variations"]), bool(z["extrapolate_phenotypes"])
+            )
             if "lc_labels" in z.files:
                 ranges.update(local_change_ranges(z["lc_labels"]))
             _NAMES[path] = (ranges, [str(s) for s in z["bone_labels"]])
@@ -374,6 +387,7 @@ class AnnyBody(BodyModel):
 
     def __init__(self, path: str = ASSET, cache_size: int = 8):
         from . import landmarks as lm
+
         self.data = load_data(path)
         self.faces = self.data.faces
         self.joint_names = list(self.data.bone_labels)
@@ -404,8 +418,11 @@ class AnnyBody(BodyModel):
         """The full phenotype dict of ``shape`` and the local changes it gives (zeros dropped)."""
         local = self.local_change_parameters()
         given = {k: v for k, v in (shape or {}).items() if k in local}
-        full = check_shape(self.shape_parameters(), {k: v for k, v in (shape or {}).items() if k not in local},
-                           "anny") if shape is not None else check_shape(self.shape_parameters(), None, "anny")
+        full = (
+            check_shape(self.shape_parameters(), {k: v for k, v in (shape or {}).items() if k not in local}, "anny")
+            if shape is not None
+            else check_shape(self.shape_parameters(), None, "anny")
+        )
         if given:
             full.update({k: v for k, v in check_shape(local, given, "anny").items() if k in given and v != 0.0})
         return full
@@ -441,6 +458,7 @@ class AnnyBody(BodyModel):
     def pose_rotations(self, pose: Pose = None, shape: Optional[Shape] = None) -> np.ndarray:
         """Per-bone 'local-ref' delta rotations (J, 3, 3) in Anny's frame for a pose."""
         from .poses import pose_rotations
+
         heads = self.rest(shape)[1]
         return pose_rotations(self, pose, heads @ ANNY_TO_EASE.T, to_native=ANNY_TO_EASE.T)
 

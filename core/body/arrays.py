@@ -18,6 +18,7 @@ array may hold :data:`MAX_ARRAY_ELEMENTS` = 2^27 elements (134 M: 1 GiB once
 converted to float64), a file :data:`MAX_TOTAL_BYTES` = 2 GiB of array data,
 which leaves a real SMPL-X file a factor of 6 below every limit.
 """
+
 from __future__ import annotations
 
 import re
@@ -30,26 +31,35 @@ import numpy as np
 
 from ..errors import BodyError, EaseError
 
-MAX_ARRAY_ELEMENTS = 1 << 27      # elements in one array (1 GiB as float64)
-MAX_ARRAY_BYTES = 1 << 30         # bytes of one array as stored
-MAX_TOTAL_BYTES = 2 << 30         # bytes of array data in one file
-MAX_NDIM = 8                      # no model array has more than 3 dimensions
+MAX_ARRAY_ELEMENTS = 1 << 27  # elements in one array (1 GiB as float64)
+MAX_ARRAY_BYTES = 1 << 30  # bytes of one array as stored
+MAX_TOTAL_BYTES = 2 << 30  # bytes of array data in one file
+MAX_NDIM = 8  # no model array has more than 3 dimensions
 
 # dtype kinds a model file may hold: bool, signed and unsigned integers, floats,
 # fixed-width bytes and text (names). Never objects (references), records, voids.
 ALLOWED_KINDS = "biufSU"
 
-_DTYPE_CODE = re.compile(r"^[<>|=]?(\?|b1|[bBhHiIlLqQefdg]|[iu][1248]|f(2|4|8|16)|[SU]\d{0,6}"
-                         r"|bool|u?int(8|16|32|64)|float(16|32|64))$")
+_DTYPE_CODE = re.compile(
+    r"^[<>|=]?(\?|b1|[bBhHiIlLqQefdg]|[iu][1248]|f(2|4|8|16)|[SU]\d{0,6}"
+    r"|bool|u?int(8|16|32|64)|float(16|32|64))$"
+)
 
 
 def check_dtype(dtype, where: str, error: Type[EaseError] = BodyError) -> np.dtype:
     """The dtype if it is a plain one (:data:`ALLOWED_KINDS`, no fields, no sub-array), else ``error``."""
     dt = np.dtype(dtype) if not isinstance(dtype, np.dtype) else dtype
-    if dt.hasobject or dt.fields is not None or dt.subdtype is not None or dt.kind not in ALLOWED_KINDS \
-            or (dt.itemsize == 0 and dt.kind not in "SU"):
-        raise error(f"{where}: dtype {dt.str!r} is not allowed; expected numbers or text "
-                    "(bool, int, float, fixed-width strings), never Python objects or records")
+    if (
+        dt.hasobject
+        or dt.fields is not None
+        or dt.subdtype is not None
+        or dt.kind not in ALLOWED_KINDS
+        or (dt.itemsize == 0 and dt.kind not in "SU")
+    ):
+        raise error(
+            f"{where}: dtype {dt.str!r} is not allowed; expected numbers or text "
+            "(bool, int, float, fixed-width strings), never Python objects or records"
+        )
     return dt
 
 
@@ -62,16 +72,21 @@ def dtype_from_code(code, where: str, error: Type[EaseError] = BodyError) -> np.
 
 def check_shape(shape, itemsize: int, where: str, error: Type[EaseError] = BodyError) -> int:
     """Element count of ``shape`` (a tuple of Python ints) if it and its byte size are within the limits."""
-    if not isinstance(shape, tuple) or len(shape) > MAX_NDIM or not all(
-            isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in shape):
+    if (
+        not isinstance(shape, tuple)
+        or len(shape) > MAX_NDIM
+        or not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in shape)
+    ):
         raise error(f"{where}: array shape {shape!r} is not a tuple of at most {MAX_NDIM} sizes >= 0")
     count = 1
     for s in shape:
-        count *= s   # exact Python ints: no overflow
+        count *= s  # exact Python ints: no overflow
     if count > MAX_ARRAY_ELEMENTS or count * itemsize > MAX_ARRAY_BYTES:
-        raise error(f"{where}: array of shape {shape} ({count:.3g} elements, {count * itemsize / 2**30:.3g} GiB) "
-                    f"is over the limit of {MAX_ARRAY_ELEMENTS:.3g} elements / {MAX_ARRAY_BYTES / 2**30:g} GiB "
-                    "per array")
+        raise error(
+            f"{where}: array of shape {shape} ({count:.3g} elements, {count * itemsize / 2**30:.3g} GiB) "
+            f"is over the limit of {MAX_ARRAY_ELEMENTS:.3g} elements / {MAX_ARRAY_BYTES / 2**30:g} GiB "
+            "per array"
+        )
     return count
 
 
@@ -93,8 +108,10 @@ def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, where: str, error) 
         count = check_shape(tuple(int(s) for s in shape), dt.itemsize, where, error)
         nbytes = count * dt.itemsize
         if info.file_size < header + nbytes:
-            raise error(f"{where}: the header declares {nbytes} bytes of data, the file holds "
-                        f"{max(0, info.file_size - header)} (truncated)")
+            raise error(
+                f"{where}: the header declares {nbytes} bytes of data, the file holds "
+                f"{max(0, info.file_size - header)} (truncated)"
+            )
         out = np.empty(count, dtype=dt)
         view = memoryview(out).cast("B") if nbytes else None
         done = 0
@@ -106,8 +123,9 @@ def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, where: str, error) 
     return out.reshape(shape, order="F" if fortran else "C")
 
 
-def read_npz(path, keys: Optional[Iterable[str]] = None, error: Type[EaseError] = BodyError,
-             what: str = "a .npz file") -> Dict[str, np.ndarray]:
+def read_npz(
+    path, keys: Optional[Iterable[str]] = None, error: Type[EaseError] = BodyError, what: str = "a .npz file"
+) -> Dict[str, np.ndarray]:
     """The arrays of a ``.npz`` archive, each checked before it is read (see the module doc).
 
     Parameters
@@ -142,8 +160,10 @@ def read_npz(path, keys: Optional[Iterable[str]] = None, error: Type[EaseError] 
                 arr = _read_member(zf, info, f"{path}: key {key!r}", error)
                 total += arr.nbytes
                 if total > MAX_TOTAL_BYTES:
-                    raise error(f"{path}: more than {MAX_TOTAL_BYTES / 2**30:g} GiB of array data "
-                                f"(at key {key!r}); not a model file this project reads")
+                    raise error(
+                        f"{path}: more than {MAX_TOTAL_BYTES / 2**30:g} GiB of array data "
+                        f"(at key {key!r}); not a model file this project reads"
+                    )
                 out[key] = arr
     except EaseError:
         raise
@@ -175,10 +195,9 @@ def finite_array(value, where: str, dtype=float, error: Type[EaseError] = BodyEr
 
 def index_array(value, where: str, error: Type[EaseError] = BodyError) -> np.ndarray:
     """``value`` as an int64 array of whole numbers (integer dtype, or floats that are integers)."""
-    a = finite_array(value, where, dtype=np.float64 if np.asarray(value).dtype.kind == "f" else np.int64,
-                     error=error)
+    a = finite_array(value, where, dtype=np.float64 if np.asarray(value).dtype.kind == "f" else np.int64, error=error)
     if a.dtype.kind == "f":
-        if a.size and (np.any(a != np.round(a)) or np.abs(a).max() > 2.0 ** 62):
+        if a.size and (np.any(a != np.round(a)) or np.abs(a).max() > 2.0**62):
             raise error(f"{where}: expected whole-number indices")
         a = a.astype(np.int64)
     return a

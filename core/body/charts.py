@@ -84,6 +84,7 @@ table that were read stop at XL). Men's XXL (122/110 cm, 186 cm) is the next 8 c
 waist band after XL, and equals German men's size 62 (chest 122, waist 110, height 186 cm) of the
 rixx table above, whose sizes 60-64 extend :data:`MEN_HEIGHT_BY_CHEST`; Anny's phenotypes reach it.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -97,9 +98,20 @@ WOMEN_HEIGHT_CM = 168.0
 
 # Men's body height (cm) by chest girth (cm), the German men's normal sizes 42..58 (see the
 # module docstring); a chart size between two rows takes the height linearly interpolated.
-MEN_HEIGHT_BY_CHEST = ((80.0, 166.0), (86.0, 168.0), (90.0, 170.0), (94.0, 172.0), (98.0, 174.0),
-                       (102.0, 176.0), (106.0, 178.0), (110.0, 180.0), (114.0, 182.0), (118.0, 184.0),
-                       (122.0, 186.0), (126.0, 188.0))
+MEN_HEIGHT_BY_CHEST = (
+    (80.0, 166.0),
+    (86.0, 168.0),
+    (90.0, 170.0),
+    (94.0, 172.0),
+    (98.0, 174.0),
+    (102.0, 176.0),
+    (106.0, 178.0),
+    (110.0, 180.0),
+    (114.0, 182.0),
+    (118.0, 184.0),
+    (122.0, 186.0),
+    (126.0, 188.0),
+)
 
 # Adult ages only (Anny: 2/3 = young adult ~25 years, 0.8 ~ 50 years): a size fit may use
 # age (girth distribution shifts with it) but never turns the body into a teenager or a 90-year-old.
@@ -110,8 +122,9 @@ ADULT_AGE = (0.67, 0.8)
 # average body stays on its side of a kink: from muscle 0.5 the men's XS fit ends at muscle 1
 # (chest 83.2, waist 74.5 cm) and the women's XS at muscle 0.8 (bust 79.3 cm), both of which land
 # from a start in the low-muscle, low-weight cells.
-RESTARTS = tuple({"muscle": m, "weight": w, "proportions": p}
-                 for m in (0.25, 0.75) for w in (0.25, 0.75) for p in (0.25, 0.75))
+RESTARTS = tuple(
+    {"muscle": m, "weight": w, "proportions": p} for m in (0.25, 0.75) for w in (0.25, 0.75) for p in (0.25, 0.75)
+)
 
 
 @dataclass(frozen=True)
@@ -137,6 +150,7 @@ class SizeChart:
         the phenotypes (with ``assist``) miss from every restart: the sizes beyond the reach of
         Anny's phenotypes (the women's XL and up, the men's XXL).
     """
+
     name: str
     title: str
     sizes: Mapping[str, Mapping[str, float]]
@@ -167,52 +181,161 @@ LOCAL_GIRTHS = ("measure-bust-circ-incr", "measure-waist-circ-incr", "measure-hi
 WOMEN = SizeChart(
     name="women",
     title="women's EN 13402-3 letter codes XS-XL (bust/waist/hip band midpoints) and its bust series to 131 cm "
-          "(XXL-4XL), height 168 cm (DOB normal sizes)",
-    sizes={"XS": _women(78.0, 62.0, 86.0), "S": _women(86.0, 70.0, 94.0), "M": _women(94.0, 78.0, 102.0),
-           "L": _women(102.0, 86.5, 110.5), "XL": _women(113.0, 97.0, 120.0),
-           "XXL": _women(119.0, 103.0, 125.0), "3XL": _women(125.0, 109.0, 130.0), "4XL": _women(131.0, 115.0, 135.0)},
-    start={"gender": 1.0}, parameters=FIT_PARAMETERS, bounds={"age": ADULT_AGE},
-    restarts=RESTARTS, assist=("cupsize",), local=LOCAL_GIRTHS,
-    fitted={"anny": {
-        "XS": {"gender": 1.0, "age": 0.7681, "muscle": 0.3887, "weight": 0.0, "height": 0.422, "proportions": 0.5152,
-               "cupsize": 0.0},
-        "S": {"gender": 1.0, "age": 0.6833, "muscle": 0.6217, "weight": 0.3708, "height": 0.4245, "proportions": 0.8134,
-              "cupsize": 0.5},
-        "M": {"gender": 1.0, "age": 0.67, "muscle": 0.3555, "weight": 0.7876, "height": 0.41, "proportions": 0.2371,
-              "cupsize": 0.5},
-        "L": {"gender": 1.0, "age": 0.8, "muscle": 0.0, "weight": 0.6246, "height": 0.433, "proportions": 0.8066,
-              "cupsize": 1.0},
-        # Beyond the phenotypes' reach: Anny's local changes of the bust, waist and hip girths move too.
-        "XL": {"gender": 1.0, "age": 0.7272, "muscle": 0.0, "weight": 0.8272, "height": 0.4176, "proportions": 0.579,
-               "cupsize": 1.0, "measure-bust-circ-incr": 0.0605, "measure-waist-circ-incr": -0.1022,
-               "measure-hips-circ-incr": 0.2795},
-        "XXL": {"gender": 1.0, "age": 0.7475, "muscle": 0.0, "weight": 0.9314, "height": 0.4087, "proportions": 0.4189,
-                "cupsize": 1.0, "measure-bust-circ-incr": 0.1252, "measure-waist-circ-incr": -0.1537,
-                "measure-hips-circ-incr": 0.4002},
-        "3XL": {"gender": 1.0, "age": 0.7722, "muscle": 0.0, "weight": 1.0, "height": 0.4048, "proportions": 0.5623,
-                "cupsize": 1.0, "measure-bust-circ-incr": 0.3253, "measure-waist-circ-incr": -0.1555,
-                "measure-hips-circ-incr": 0.5159},
-        "4XL": {"gender": 1.0, "age": 0.8, "muscle": 0.0, "weight": 1.0, "height": 0.4062, "proportions": 1.0,
-                "cupsize": 1.0, "measure-bust-circ-incr": 0.7453, "measure-waist-circ-incr": 0.147,
-                "measure-hips-circ-incr": 0.6746},
-    }},
+    "(XXL-4XL), height 168 cm (DOB normal sizes)",
+    sizes={
+        "XS": _women(78.0, 62.0, 86.0),
+        "S": _women(86.0, 70.0, 94.0),
+        "M": _women(94.0, 78.0, 102.0),
+        "L": _women(102.0, 86.5, 110.5),
+        "XL": _women(113.0, 97.0, 120.0),
+        "XXL": _women(119.0, 103.0, 125.0),
+        "3XL": _women(125.0, 109.0, 130.0),
+        "4XL": _women(131.0, 115.0, 135.0),
+    },
+    start={"gender": 1.0},
+    parameters=FIT_PARAMETERS,
+    bounds={"age": ADULT_AGE},
+    restarts=RESTARTS,
+    assist=("cupsize",),
+    local=LOCAL_GIRTHS,
+    fitted={
+        "anny": {
+            "XS": {
+                "gender": 1.0,
+                "age": 0.7681,
+                "muscle": 0.3887,
+                "weight": 0.0,
+                "height": 0.422,
+                "proportions": 0.5152,
+                "cupsize": 0.0,
+            },
+            "S": {
+                "gender": 1.0,
+                "age": 0.6833,
+                "muscle": 0.6217,
+                "weight": 0.3708,
+                "height": 0.4245,
+                "proportions": 0.8134,
+                "cupsize": 0.5,
+            },
+            "M": {
+                "gender": 1.0,
+                "age": 0.67,
+                "muscle": 0.3555,
+                "weight": 0.7876,
+                "height": 0.41,
+                "proportions": 0.2371,
+                "cupsize": 0.5,
+            },
+            "L": {
+                "gender": 1.0,
+                "age": 0.8,
+                "muscle": 0.0,
+                "weight": 0.6246,
+                "height": 0.433,
+                "proportions": 0.8066,
+                "cupsize": 1.0,
+            },
+            # Beyond the phenotypes' reach: Anny's local changes of the bust, waist and hip girths move too.
+            "XL": {
+                "gender": 1.0,
+                "age": 0.7272,
+                "muscle": 0.0,
+                "weight": 0.8272,
+                "height": 0.4176,
+                "proportions": 0.579,
+                "cupsize": 1.0,
+                "measure-bust-circ-incr": 0.0605,
+                "measure-waist-circ-incr": -0.1022,
+                "measure-hips-circ-incr": 0.2795,
+            },
+            "XXL": {
+                "gender": 1.0,
+                "age": 0.7475,
+                "muscle": 0.0,
+                "weight": 0.9314,
+                "height": 0.4087,
+                "proportions": 0.4189,
+                "cupsize": 1.0,
+                "measure-bust-circ-incr": 0.1252,
+                "measure-waist-circ-incr": -0.1537,
+                "measure-hips-circ-incr": 0.4002,
+            },
+            "3XL": {
+                "gender": 1.0,
+                "age": 0.7722,
+                "muscle": 0.0,
+                "weight": 1.0,
+                "height": 0.4048,
+                "proportions": 0.5623,
+                "cupsize": 1.0,
+                "measure-bust-circ-incr": 0.3253,
+                "measure-waist-circ-incr": -0.1555,
+                "measure-hips-circ-incr": 0.5159,
+            },
+            "4XL": {
+                "gender": 1.0,
+                "age": 0.8,
+                "muscle": 0.0,
+                "weight": 1.0,
+                "height": 0.4062,
+                "proportions": 1.0,
+                "cupsize": 1.0,
+                "measure-bust-circ-incr": 0.7453,
+                "measure-waist-circ-incr": 0.147,
+                "measure-hips-circ-incr": 0.6746,
+            },
+        }
+    },
 )
 
 MEN = SizeChart(
     name="men",
     title="men's EN 13402-3 letter codes XS-XXL (chest/waist band midpoints), height 167-186 cm (German normal sizes)",
-    sizes={"XS": _men(82.0, 70.0), "S": _men(90.0, 78.0), "M": _men(98.0, 86.0), "L": _men(106.0, 94.0),
-           "XL": _men(114.0, 102.0), "XXL": _men(122.0, 110.0)},
-    start={"gender": 0.0}, parameters=FIT_PARAMETERS, bounds={"age": ADULT_AGE},
-    restarts=RESTARTS, local=LOCAL_GIRTHS[:2],
-    fitted={"anny": {
-        "XS": {"gender": 0.0, "age": 0.8, "muscle": 0.0362, "weight": 0.1444, "height": 0.2805, "proportions": 1.0},
-        "S": {"gender": 0.0, "age": 0.8, "muscle": 0.5144, "weight": 0.059, "height": 0.3164, "proportions": 1.0},
-        "M": {"gender": 0.0, "age": 0.7615, "muscle": 0.4299, "weight": 0.6038, "height": 0.3502, "proportions": 0.6007},
-        "L": {"gender": 0.0, "age": 0.67, "muscle": 0.0066, "weight": 0.4868, "height": 0.3764, "proportions": 0.0},
-        "XL": {"gender": 0.0, "age": 0.67, "muscle": 0.3695, "weight": 1.0, "height": 0.4125, "proportions": 0.2617},
-        "XXL": {"gender": 0.0, "age": 0.67, "muscle": 0.043, "weight": 0.7452, "height": 0.4472, "proportions": 0.0},
-    }},
+    sizes={
+        "XS": _men(82.0, 70.0),
+        "S": _men(90.0, 78.0),
+        "M": _men(98.0, 86.0),
+        "L": _men(106.0, 94.0),
+        "XL": _men(114.0, 102.0),
+        "XXL": _men(122.0, 110.0),
+    },
+    start={"gender": 0.0},
+    parameters=FIT_PARAMETERS,
+    bounds={"age": ADULT_AGE},
+    restarts=RESTARTS,
+    local=LOCAL_GIRTHS[:2],
+    fitted={
+        "anny": {
+            "XS": {"gender": 0.0, "age": 0.8, "muscle": 0.0362, "weight": 0.1444, "height": 0.2805, "proportions": 1.0},
+            "S": {"gender": 0.0, "age": 0.8, "muscle": 0.5144, "weight": 0.059, "height": 0.3164, "proportions": 1.0},
+            "M": {
+                "gender": 0.0,
+                "age": 0.7615,
+                "muscle": 0.4299,
+                "weight": 0.6038,
+                "height": 0.3502,
+                "proportions": 0.6007,
+            },
+            "L": {"gender": 0.0, "age": 0.67, "muscle": 0.0066, "weight": 0.4868, "height": 0.3764, "proportions": 0.0},
+            "XL": {
+                "gender": 0.0,
+                "age": 0.67,
+                "muscle": 0.3695,
+                "weight": 1.0,
+                "height": 0.4125,
+                "proportions": 0.2617,
+            },
+            "XXL": {
+                "gender": 0.0,
+                "age": 0.67,
+                "muscle": 0.043,
+                "weight": 0.7452,
+                "height": 0.4472,
+                "proportions": 0.0,
+            },
+        }
+    },
 )
 
 PUBLISHED: Dict[str, SizeChart] = {c.name: c for c in (WOMEN, MEN)}

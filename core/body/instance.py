@@ -6,6 +6,7 @@ through :func:`body_instance` (or :func:`spec_instance` for a stored
 reference pose are read the same way everywhere: the CLI, the add-on, the
 drape and the benchmarks.
 """
+
 from __future__ import annotations
 
 from typing import Mapping, Optional, Tuple, Union
@@ -34,6 +35,7 @@ def instance_shape(model, shape: Shape) -> Optional[dict]:
     """
     if isinstance(shape, str):
         from .sizes import size_shape
+
         return size_shape(model, shape)
     return dict(shape) if shape else None
 
@@ -79,6 +81,7 @@ def spec_instance(spec: Mapping, model=None) -> Tuple[np.ndarray, np.ndarray]:
     """
     if model is None:
         from .registry import load_spec
+
         model = load_spec(spec)
     V = body_instance(model, spec.get("shape"), spec.get("pose"))
     return V, np.asarray(model.faces, dtype=np.int64)

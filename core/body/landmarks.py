@@ -33,6 +33,7 @@ Rules (frame: metres, +Z up, the body faces -Y, +X = the body's left):
 - ``ankle_*``: the outer ankle bone (lateral malleolus), ray from the ankle joint
   outwards.
 """
+
 from __future__ import annotations
 
 from typing import Dict
@@ -53,11 +54,14 @@ def symmetry_map(vertices: np.ndarray, tol: float = 1e-4) -> np.ndarray:
     involution with every mirror match closer than ``tol`` metres.
     """
     from scipy.spatial import cKDTree
+
     v = np.asarray(vertices, dtype=float)
     dist, idx = cKDTree(v).query(v * np.array([-1.0, 1.0, 1.0]))
     if dist.max() > tol or np.any(idx[idx] != np.arange(v.shape[0])):
-        raise BodyError(f"template is not left/right symmetric (worst mirror mismatch "
-                        f"{dist.max() * 1000:.2f} mm); cannot build a symmetry map")
+        raise BodyError(
+            f"template is not left/right symmetric (worst mirror mismatch "
+            f"{dist.max() * 1000:.2f} mm); cannot build a symmetry map"
+        )
     return idx.astype(np.int64)
 
 
@@ -103,8 +107,7 @@ def mirror_surface_point(point: SurfacePoint, faces: np.ndarray, symmetry: np.nd
         if set(faces[c].tolist()) == target:
             bary = [point.bary[int(np.nonzero(image == vid)[0][0])] for vid in faces[c]]
             return SurfacePoint(int(c), tuple(float(b) for b in bary))
-    raise BodyError(f"triangle {point.triangle} has no mirror triangle; the symmetry map "
-                    "does not match the faces")
+    raise BodyError(f"triangle {point.triangle} has no mirror triangle; the symmetry map does not match the faces")
 
 
 def ray_cast(vertices: np.ndarray, faces: np.ndarray, origin, direction, all_hits: bool = False):
@@ -170,8 +173,9 @@ def ray_point(vertices, faces, origin, direction, name: str) -> SurfacePoint:
     """The last exit of a ray from inside the body (the outer surface in that direction)."""
     t, tri, bary = ray_cast(vertices, faces, origin, direction, all_hits=True)
     if t.size == 0:
-        raise BodyError(f"landmark {name}: ray from {np.round(origin, 3)} along "
-                        f"{np.round(direction, 3)} misses the body")
+        raise BodyError(
+            f"landmark {name}: ray from {np.round(origin, 3)} along {np.round(direction, 3)} misses the body"
+        )
     # First exit: rays start inside a limb, so the first surface crossed is the limb's skin.
     return _surface_point(tri[0], bary[0])
 
@@ -211,6 +215,7 @@ def _lowest_apex(vertices, faces, xs, ys, z0, name):
 
 def _hull_perimeter(points2d: np.ndarray) -> float:
     from scipy.spatial import ConvexHull
+
     if points2d.shape[0] < 3:
         return 0.0
     h = ConvexHull(points2d)
@@ -349,8 +354,11 @@ def anny_landmarks(body, ref_vertices: np.ndarray, ref_joints: np.ndarray) -> Di
     trunk = torso.copy()
     trunk[body.regions["leg_left"]] = True
     trunk[body.regions["leg_right"]] = True
-    sel = trunk & (np.abs(v[:, 0]) > 0.02) & (np.abs(v[:, 0]) < 0.5 * abs(lm["waist_left"].position(v, f)[0]
-                                                                         - lm["waist_right"].position(v, f)[0]))
+    sel = (
+        trunk
+        & (np.abs(v[:, 0]) > 0.02)
+        & (np.abs(v[:, 0]) < 0.5 * abs(lm["waist_left"].position(v, f)[0] - lm["waist_right"].position(v, f)[0]))
+    )
     sel &= (v[:, 2] > crotch_z) & (v[:, 2] < zw)
     ids = np.nonzero(sel)[0]
     zh = float(v[ids[np.argmax(v[ids, 1])], 2])
@@ -370,8 +378,13 @@ def anny_landmarks(body, ref_vertices: np.ndarray, ref_joints: np.ndarray) -> Di
         lm[f"bust_{side}"] = vertex_point(f, int(ids[np.argmin(v[ids, 1])]))
         # Shoulder blade: most posterior upper-back vertex, inside the shoulder (off the arm).
         half = 0.6 * abs(J["upperarm01" + (".L" if sx > 0 else ".R")][0])
-        sel = (torso & (v[:, 2] > armpit_z - 0.10) & (v[:, 2] < armpit_z + 0.06)
-               & (sx * v[:, 0] > 0.03) & (sx * v[:, 0] < half))
+        sel = (
+            torso
+            & (v[:, 2] > armpit_z - 0.10)
+            & (v[:, 2] < armpit_z + 0.06)
+            & (sx * v[:, 0] > 0.03)
+            & (sx * v[:, 0] < half)
+        )
         ids = np.nonzero(sel)[0]
         lm[f"shoulder_blade_{side}"] = vertex_point(f, int(ids[np.argmax(v[ids, 1])]))
 

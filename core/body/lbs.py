@@ -5,6 +5,7 @@ A skeleton is a ``parents`` array (J,) with ``parents[0] == -1`` and every
 parent listed before its children; rotations are local (relative to the
 parent), as axis-angle vectors or 3x3 matrices.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -48,8 +49,7 @@ def check_parents(parents: np.ndarray) -> np.ndarray:
     bad = np.nonzero((parents[1:] < 0) | (parents[1:] >= idx[1:]))[0]
     if bad.size:
         j = int(bad[0]) + 1
-        raise BodyError(f"skeleton joint {j} has parent {int(parents[j])}; every parent must be a "
-                        "lower-numbered joint")
+        raise BodyError(f"skeleton joint {j} has parent {int(parents[j])}; every parent must be a lower-numbered joint")
     return parents
 
 

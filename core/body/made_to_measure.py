@@ -17,6 +17,7 @@ body's phenotypes and, for each measure given, the Anny local change that moves 
 A measure the fit cannot bring within its tolerance (1 cm on girths, 1.5 cm on lengths) is
 reported with the value reached (:attr:`TapeFit.status`), never silently.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -60,11 +61,22 @@ LOCAL_PULL_CM = 1.5
 PHENOTYPE_PULL_CM = 0.5
 
 # Plausible ranges (cm): outside them a value is a typo (mm, inches), not a body.
-RANGES = {"height": (100.0, 230.0), "neck": (25.0, 65.0), "shoulder_width": (20.0, 60.0),
-          "chest": (60.0, 180.0), "underbust": (55.0, 170.0), "waist": (45.0, 180.0),
-          "high_hip": (55.0, 180.0), "hip": (60.0, 190.0), "upper_arm": (15.0, 60.0),
-          "wrist": (10.0, 30.0), "arm_length": (35.0, 90.0), "back_waist_length": (25.0, 65.0),
-          "inseam": (45.0, 110.0), "thigh": (30.0, 95.0)}
+RANGES = {
+    "height": (100.0, 230.0),
+    "neck": (25.0, 65.0),
+    "shoulder_width": (20.0, 60.0),
+    "chest": (60.0, 180.0),
+    "underbust": (55.0, 170.0),
+    "waist": (45.0, 180.0),
+    "high_hip": (55.0, 180.0),
+    "hip": (60.0, 190.0),
+    "upper_arm": (15.0, 60.0),
+    "wrist": (10.0, 30.0),
+    "arm_length": (35.0, 90.0),
+    "back_waist_length": (25.0, 65.0),
+    "inseam": (45.0, 110.0),
+    "thigh": (30.0, 95.0),
+}
 
 
 def tolerance(name: str) -> float:
@@ -76,10 +88,15 @@ def sample_body(rng: np.random.Generator) -> Dict[str, float]:
     bodies): a man or a woman (gender 0 or 1), adult age, muscle, weight and proportions uniform
     in 0.2 .. 0.8, height 0.25 .. 0.75, cup size 0.3 .. 0.7, and each local change of
     :data:`LOCAL_FOR` normal with s.d. 0.25, clipped to +/-0.6."""
-    s = {"gender": float(rng.integers(0, 2)), "age": float(rng.uniform(*ADULT_AGE)),
-         "muscle": float(rng.uniform(0.2, 0.8)), "weight": float(rng.uniform(0.2, 0.8)),
-         "height": float(rng.uniform(0.25, 0.75)), "proportions": float(rng.uniform(0.2, 0.8)),
-         "cupsize": float(rng.uniform(0.3, 0.7))}
+    s = {
+        "gender": float(rng.integers(0, 2)),
+        "age": float(rng.uniform(*ADULT_AGE)),
+        "muscle": float(rng.uniform(0.2, 0.8)),
+        "weight": float(rng.uniform(0.2, 0.8)),
+        "height": float(rng.uniform(0.25, 0.75)),
+        "proportions": float(rng.uniform(0.2, 0.8)),
+        "cupsize": float(rng.uniform(0.3, 0.7)),
+    }
     s.update({c: float(np.clip(rng.normal(0.0, 0.25), -0.6, 0.6)) for v in LOCAL_FOR.values() for c in v})
     return s
 
@@ -122,6 +139,7 @@ def read_tape_file(path) -> Dict[str, float]:
     import csv
     import json
     from pathlib import Path
+
     p = Path(path)
     where = str(p)
     try:
@@ -136,13 +154,14 @@ def read_tape_file(path) -> Dict[str, float]:
         if isinstance(obj, dict) and isinstance(obj.get("measurements"), dict):
             obj = obj["measurements"]
         if not isinstance(obj, dict):
-            raise BodyError(f"{where}: expected an object of measurements in cm, e.g. {{\"chest\": 96}}")
+            raise BodyError(f'{where}: expected an object of measurements in cm, e.g. {{"chest": 96}}')
         return check_tape_targets(obj, where)
     if p.suffix.lower() != ".csv":
         raise BodyError(f"{where}: measurements must be .json or .csv, got {p.suffix or 'no extension'!r}")
     rows = [[c.strip() for c in r] for r in csv.reader(text.splitlines()) if any(c.strip() for c in r)]
     if not rows:
         raise BodyError(f"{where}: no measurements")
+
     def number(text):
         try:
             float(text)
@@ -150,9 +169,13 @@ def read_tape_file(path) -> Dict[str, float]:
         except ValueError:
             return False
 
-    if all(len(r) == 2 for r in rows) and number(rows[-1][1]) and not number(rows[-1][0]) and \
-            (len(rows) != 2 or number(rows[0][1])):
-        table = dict(rows[1:] if not number(rows[0][1]) else rows)     # name,cm rows (a header skipped)
+    if (
+        all(len(r) == 2 for r in rows)
+        and number(rows[-1][1])
+        and not number(rows[-1][0])
+        and (len(rows) != 2 or number(rows[0][1]))
+    ):
+        table = dict(rows[1:] if not number(rows[0][1]) else rows)  # name,cm rows (a header skipped)
     elif len(rows) == 2 and len(rows[0]) == len(rows[1]):
         table = dict(zip(rows[0], rows[1]))
     else:
@@ -169,6 +192,7 @@ class TapeFit:
     status : measure -> ``"within 1 cm"`` / ``"within 1.5 cm"`` or ``"not reachable: closest X cm"``.
     collisions : parts that cut into each other on the fitted body (``"thighs"``, ``"arm/torso"``).
     """
+
     shape: Dict[str, float]
     targets: Dict[str, float]
     achieved: Dict[str, float]
@@ -205,14 +229,16 @@ def collisions(body, shape) -> list:
     from scipy.spatial import Delaunay
 
     from .tape import THIGH_BELOW_CROTCH, _parts, section_loops
+
     v, joints = body.vertices_and_joints(shape)
     J = dict(zip(body.joint_names, joints))
     parts = _parts(body)
     out = []
     z = body.landmark_position("crotch", v)[2] - THIGH_BELOW_CROTCH
     loops = section_loops(v, parts.no_arms, (0.0, 0.0, z), (0.0, 0.0, 1.0))
-    legs = [min(loops, key=lambda p: np.linalg.norm(p.mean(0)[:2] - J[j][:2]))
-            for j in ("upperleg01.L", "upperleg01.R")]
+    legs = [
+        min(loops, key=lambda p: np.linalg.norm(p.mean(0)[:2] - J[j][:2])) for j in ("upperleg01.L", "upperleg01.R")
+    ]
     if legs[0] is not legs[1]:
         hull = Delaunay(legs[0][:, :2])
         if (hull.find_simplex(legs[1][:, :2]) >= 0).any():
@@ -302,9 +328,14 @@ def solve(residual, x0, lo, hi, step=FD_STEP, done=None, max_evaluations=400, re
     return x
 
 
-def fit_tape(body, targets: Mapping[str, float], progress: Optional[Progress] = None,
-             start: Optional[Mapping[str, float]] = None, local: bool = True,
-             parameters: Optional[Sequence[str]] = None) -> TapeFit:
+def fit_tape(
+    body,
+    targets: Mapping[str, float],
+    progress: Optional[Progress] = None,
+    start: Optional[Mapping[str, float]] = None,
+    local: bool = True,
+    parameters: Optional[Sequence[str]] = None,
+) -> TapeFit:
     """Fit ``body`` (Anny) to tape measures (cm) of :data:`TAPE_MEASURES`.
 
     Parameters
@@ -325,8 +356,9 @@ def fit_tape(body, targets: Mapping[str, float], progress: Optional[Progress] = 
     gender = t.pop("gender", None)
     if gender is not None:
         base["gender"] = gender
-    names = (list(parameters) if parameters is not None
-             else list(PHENOTYPES) + ([] if gender is not None else ["gender"]))
+    names = (
+        list(parameters) if parameters is not None else list(PHENOTYPES) + ([] if gender is not None else ["gender"])
+    )
     if local:
         names += [c for k in t for c in LOCAL_FOR.get(k, ()) if c in allowed and c not in names]
     for n in names:
@@ -340,7 +372,7 @@ def fit_tape(body, targets: Mapping[str, float], progress: Optional[Progress] = 
     pull = np.where(is_local, LOCAL_PULL_CM, PHENOTYPE_PULL_CM / np.where(hi > lo, hi - lo, 1.0))
     keys = sorted(t)
     want = np.array([t[k] for k in keys])
-    scale = np.array([GIRTH_TOLERANCE_CM / tolerance(k) for k in keys])   # lengths weigh 1/1.5
+    scale = np.array([GIRTH_TOLERANCE_CM / tolerance(k) for k in keys])  # lengths weigh 1/1.5
     count = [0]
 
     def shape_of(x):
@@ -357,21 +389,21 @@ def fit_tape(body, targets: Mapping[str, float], progress: Optional[Progress] = 
         return np.concatenate([scale * (np.array([got[k] for k in keys]) - want), pull * (x - prior)])
 
     def landed(r):
-        return bool(np.all(np.abs(r[:len(keys)]) <= GIRTH_TOLERANCE_CM))
+        return bool(np.all(np.abs(r[: len(keys)]) <= GIRTH_TOLERANCE_CM))
 
-    x = solve(residual, x0, lo, hi, step=FD_STEP, done=lambda r: bool(np.all(np.abs(r[:len(keys)]) <= 0.3)))
+    x = solve(residual, x0, lo, hi, step=FD_STEP, done=lambda r: bool(np.all(np.abs(r[: len(keys)]) <= 0.3)))
     # A fit that stops short (a level that jumps, such as a second waist, can stall a step) goes
     # on from where it stopped with a fresh Jacobian, up to RESTARTS times, the best kept.
     best, best_r = x, residual(x)
     for _ in range(RESTARTS):
         if landed(best_r):
             break
-        x = solve(residual, best, lo, hi, step=FD_STEP, done=lambda r: bool(np.all(np.abs(r[:len(keys)]) <= 0.3)))
+        x = solve(residual, best, lo, hi, step=FD_STEP, done=lambda r: bool(np.all(np.abs(r[: len(keys)]) <= 0.3)))
         r = residual(x)
         gained = r @ r < 0.99 * (best_r @ best_r)
         if r @ r < best_r @ best_r:
             best, best_r = x, r
-        if not gained:          # the fit had converged: a measure it misses is out of reach
+        if not gained:  # the fit had converged: a measure it misses is out of reach
             break
     x = best
     shape = shape_of(x)
@@ -379,25 +411,37 @@ def fit_tape(body, targets: Mapping[str, float], progress: Optional[Progress] = 
     status = {}
     for k in keys:
         err = achieved[k] - t[k]
-        status[k] = (f"within {tolerance(k):g} cm" if abs(err) <= tolerance(k)
-                     else f"not reachable: closest {achieved[k]:.1f} cm")
+        status[k] = (
+            f"within {tolerance(k):g} cm"
+            if abs(err) <= tolerance(k)
+            else f"not reachable: closest {achieved[k]:.1f} cm"
+        )
     if gender is not None:
         t["gender"] = gender
     report(progress, 1.0, "fit done")
-    return TapeFit(shape=shape, targets={k: t[k] for k in keys}, achieved=achieved, status=status,
-                   collisions=collisions(body, shape), evaluations=count[0], parameters=names)
+    return TapeFit(
+        shape=shape,
+        targets={k: t[k] for k in keys},
+        achieved=achieved,
+        status=status,
+        collisions=collisions(body, shape),
+        evaluations=count[0],
+        parameters=names,
+    )
 
 
 _SHAPES: Dict[tuple, TapeFit] = {}
 
 
-def measured_shape(targets: Mapping[str, object], where: str = "body.measurements",
-                   progress: Optional[Progress] = None) -> Dict[str, float]:
+def measured_shape(
+    targets: Mapping[str, object], where: str = "body.measurements", progress: Optional[Progress] = None
+) -> Dict[str, float]:
     """The shape of the default body (Anny) fitted to a table of tape measures, for a design's
     ``"body": {"measurements": {...}}``: one fit per table and process. A BodyError naming
     ``where`` when the table is malformed, or when a measure is not reached (each such measure
     with the closest value the fit reached), never a body that silently misses."""
     from . import load_body
+
     table = check_tape_targets(targets, where)
     key = tuple(sorted(table.items()))
     if key not in _SHAPES:
@@ -405,8 +449,10 @@ def measured_shape(targets: Mapping[str, object], where: str = "body.measurement
     fit = _SHAPES[key]
     missed = [k for k, s in fit.status.items() if not s.startswith("within")]
     if missed:
-        raise BodyError(f"{where}: not reachable by Anny: " + ", ".join(
-            f"{k} {fit.targets[k]:g} cm (closest {fit.achieved[k]:.1f})" for k in missed))
+        raise BodyError(
+            f"{where}: not reachable by Anny: "
+            + ", ".join(f"{k} {fit.targets[k]:g} cm (closest {fit.achieved[k]:.1f})" for k in missed)
+        )
     if fit.collisions:
         raise BodyError(f"{where}: the fitted body cuts into itself ({', '.join(fit.collisions)})")
     return dict(fit.shape)

@@ -12,6 +12,7 @@ and hands left out (a tape passes between arm and torso) using the model's
 
 All results are in centimetres.
 """
+
 from __future__ import annotations
 
 from typing import Dict, Iterable, Optional
@@ -67,6 +68,7 @@ def hull_perimeter(points_2d: np.ndarray) -> float:
     if len(points_2d) < 3:
         return 0.0
     from scipy.spatial import ConvexHull, QhullError
+
     try:
         hull = ConvexHull(points_2d)
     except QhullError:

@@ -19,6 +19,7 @@ its parent. The axes are not the bone's own local (bone-aligned) frame. Every
 model uses this convention (Anny: its ``local-ref`` parameterisation; SMPL and
 skinned OBJ templates: their rest joint frames are the world axes).
 """
+
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
@@ -36,17 +37,32 @@ Pose = Union[str, Mapping[str, np.ndarray], None]
 FRAME = "metres, +Z up, the body facing -Y, +X the body's left (EASE/Blender frame)"
 
 REQUIRED_LANDMARKS = (
-    "neck_front", "neck_back", "neck_left", "neck_right",
-    "shoulder_left", "shoulder_right",
-    "armpit_left", "armpit_right",
-    "bust_left", "bust_right",
-    "waist_front", "waist_back", "waist_left", "waist_right",
-    "hip_left", "hip_right",
-    "crotch", "navel",
-    "elbow_left", "elbow_right",
-    "wrist_left", "wrist_right",
-    "knee_left", "knee_right",
-    "ankle_left", "ankle_right",
+    "neck_front",
+    "neck_back",
+    "neck_left",
+    "neck_right",
+    "shoulder_left",
+    "shoulder_right",
+    "armpit_left",
+    "armpit_right",
+    "bust_left",
+    "bust_right",
+    "waist_front",
+    "waist_back",
+    "waist_left",
+    "waist_right",
+    "hip_left",
+    "hip_right",
+    "crotch",
+    "navel",
+    "elbow_left",
+    "elbow_right",
+    "wrist_left",
+    "wrist_right",
+    "knee_left",
+    "knee_right",
+    "ankle_left",
+    "ankle_right",
 )
 
 REQUIRED_REGIONS = ("head", "hands", "feet")
@@ -71,6 +87,7 @@ def check_axis_angle(value, joint: str, joints, model: str = "") -> np.ndarray:
     BodyError naming the pose field (``pose.left_elbow``).
     """
     from ..errors import BodyError
+
     pre = f"{model}: " if model else ""
     if joint not in joints:
         raise BodyError(f"{pre}pose.{joint}: unknown joint; joints: {', '.join(joints)}")
@@ -79,11 +96,14 @@ def check_axis_angle(value, joint: str, joints, model: str = "") -> np.ndarray:
     except (TypeError, ValueError, OverflowError):
         aa = None
     if aa is None or aa.shape != (3,) or not np.all(np.isfinite(aa)):
-        raise BodyError(f"{pre}pose.{joint}: expected a finite axis-angle [rx, ry, rz] in radians, "
-                        f"got {str(value)[:60]}")
+        raise BodyError(
+            f"{pre}pose.{joint}: expected a finite axis-angle [rx, ry, rz] in radians, got {str(value)[:60]}"
+        )
     if float(np.linalg.norm(aa)) > POSE_ANGLE_MAX:
-        raise BodyError(f"{pre}pose.{joint}: a rotation of {np.linalg.norm(aa):.4g} rad is more than a full "
-                        f"turn ({POSE_ANGLE_MAX:.4g} rad); pose angles are radians, not degrees")
+        raise BodyError(
+            f"{pre}pose.{joint}: a rotation of {np.linalg.norm(aa):.4g} rad is more than a full "
+            f"turn ({POSE_ANGLE_MAX:.4g} rad); pose angles are radians, not degrees"
+        )
     return aa
 
 
@@ -93,6 +113,7 @@ class SurfacePoint:
 
     Holds for every shape and pose of the model, since the topology is fixed.
     """
+
     triangle: int
     bary: tuple  # (3,) floats summing to 1
 
@@ -154,6 +175,7 @@ class BodyModel(ABC):
 
     def landmark_position(self, name: str, vertices: np.ndarray) -> np.ndarray:
         from ..errors import BodyError
+
         if name not in self.landmarks:
             raise BodyError(f"unknown landmark {name!r}; known: {', '.join(sorted(self.landmarks))}")
         return self.landmarks[name].position(vertices, self.faces)
@@ -165,6 +187,7 @@ def check_shape(allowed: Mapping[str, tuple], shape: Optional[Mapping[str, float
     Every model (Anny, SMPL, OBJ) checks shapes here: an unknown parameter, a
     non-number or a value out of its range is a BodyError naming ``shape.<name>``."""
     from ..errors import BodyError
+
     out = {k: float(v[2]) for k, v in allowed.items()}
     if shape is None:
         return out

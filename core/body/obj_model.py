@@ -11,6 +11,7 @@ Blender's shape keys), ``weights`` (V, J), ``joints`` (J, 3), ``parents`` (J,),
 ``joint_names`` (J,). Landmark JSON: ``{name: {"triangle": t, "bary": [..3]}}``
 or ``{name: vertex_id}``, or ``{"landmarks": {...}, "regions": {name: [ids]}}``.
 """
+
 from __future__ import annotations
 
 import json
@@ -23,8 +24,7 @@ import numpy as np
 from ..errors import BodyError
 from .arrays import finite_array, index_array, read_npz
 from .lbs import check_parents, forward_kinematics, rodrigues, skin
-from .model import POSE_PRESETS, BodyModel, SurfacePoint, check_axis_angle
-from .model import check_shape
+from .model import POSE_PRESETS, BodyModel, SurfacePoint, check_axis_angle, check_shape
 from .smpl import SMPL_TO_OURS, _vertex_point, mirror_map
 
 # An OBJ of a 1 M-vertex scan is ~60 MB; refuse files far beyond before reading them.
@@ -61,8 +61,9 @@ def read_obj(path) -> tuple:
             if len(verts[-1]) != 3:
                 raise BodyError(f"{path}:{lineno}: a vertex needs 3 coordinates")
             if not all(math.isfinite(c) for c in verts[-1]):
-                raise BodyError(f"{path}:{lineno}: vertex coordinates must be finite numbers, got "
-                                f"{line.strip()[:60]!r}")
+                raise BodyError(
+                    f"{path}:{lineno}: vertex coordinates must be finite numbers, got {line.strip()[:60]!r}"
+                )
         elif parts[0] == "f":
             try:
                 ids = [int(p.split("/")[0]) for p in parts[1:]]
@@ -71,8 +72,9 @@ def read_obj(path) -> tuple:
             n = len(verts)
             ids = [i - 1 if i > 0 else n + i for i in ids]
             if len(ids) < 3 or min(ids) < 0 or max(ids) >= n:
-                raise BodyError(f"{path}:{lineno}: face refers to a vertex that does not exist "
-                                f"(file has {n} vertices so far)")
+                raise BodyError(
+                    f"{path}:{lineno}: face refers to a vertex that does not exist (file has {n} vertices so far)"
+                )
             faces.extend([ids[0], ids[k], ids[k + 1]] for k in range(1, len(ids) - 1))
     if not faces:
         raise BodyError(f"{path}: OBJ template has no faces")
@@ -95,8 +97,9 @@ def _landmarks_from_json(obj, faces: np.ndarray, V: int, where: str):
                 raise BodyError(f"{where}: landmark {name!r}: {exc}") from None
             continue
         if not isinstance(spec, Mapping) or "triangle" not in spec or "bary" not in spec:
-            raise BodyError(f"{where}: landmark {name!r} must be a vertex id or "
-                            '{"triangle": t, "bary": [b0, b1, b2]}')
+            raise BodyError(
+                f'{where}: landmark {name!r} must be a vertex id or {{"triangle": t, "bary": [b0, b1, b2]}}'
+            )
         try:
             point = SurfacePoint.from_json(spec)
         except (TypeError, ValueError):
@@ -122,9 +125,23 @@ def _landmarks_from_json(obj, faces: np.ndarray, V: int, where: str):
 class OBJBody(BodyModel):
     """A template mesh with optional blend shapes and skeleton; see the module doc."""
 
-    def __init__(self, vertices, faces, name="obj", blend_names=(), deltas=None, ranges=None,
-                 weights=None, joints=None, parents=None, joint_names=None,
-                 landmarks=None, regions=None, source="", skeleton_source=None):
+    def __init__(
+        self,
+        vertices,
+        faces,
+        name="obj",
+        blend_names=(),
+        deltas=None,
+        ranges=None,
+        weights=None,
+        joints=None,
+        parents=None,
+        joint_names=None,
+        landmarks=None,
+        regions=None,
+        source="",
+        skeleton_source=None,
+    ):
         self.name = name
         self.source = source or name
         self.template = np.asarray(vertices, dtype=float)
@@ -134,8 +151,10 @@ class OBJBody(BodyModel):
         self.blend_names = [str(n) for n in blend_names]
         self.deltas = np.zeros((0, V, 3)) if deltas is None else np.asarray(deltas, dtype=float)
         if self.deltas.shape != (K, V, 3):
-            raise BodyError(f"{self.source}: blend shape 'deltas' has shape {self.deltas.shape}, "
-                            f"expected ({K}, {V}, 3) for {K} names and {V} template vertices")
+            raise BodyError(
+                f"{self.source}: blend shape 'deltas' has shape {self.deltas.shape}, "
+                f"expected ({K}, {V}, 3) for {K} names and {V} template vertices"
+            )
         rng = np.tile([0.0, 1.0], (K, 1)) if ranges is None else np.asarray(ranges, dtype=float)
         if rng.shape != (K, 2) or np.any(rng[:, 0] > 0) or np.any(rng[:, 1] < 0):
             raise BodyError(f"{self.source}: blend shape 'ranges' must be (K, 2) [min, max] around 0")
@@ -151,10 +170,15 @@ class OBJBody(BodyModel):
                 raise BodyError(f"{skeleton_source or self.source}: {exc}") from None
             J = len(self.parents)
             if self.weights.shape != (V, J) or self.rest_joints.shape != (J, 3):
-                raise BodyError(f"{self.source}: skeleton needs weights ({V}, {J}) and joints ({J}, 3), "
-                                f"got {self.weights.shape} and {self.rest_joints.shape}")
-            self.joint_names = [str(n) for n in np.asarray(joint_names).ravel()] if joint_names is not None \
+                raise BodyError(
+                    f"{self.source}: skeleton needs weights ({V}, {J}) and joints ({J}, 3), "
+                    f"got {self.weights.shape} and {self.rest_joints.shape}"
+                )
+            self.joint_names = (
+                [str(n) for n in np.asarray(joint_names).ravel()]
+                if joint_names is not None
                 else [f"joint{j}" for j in range(J)]
+            )
             if len(self.joint_names) != J:
                 raise BodyError(f"{self.source}: skeleton has {J} joints but {len(self.joint_names)} joint_names")
         else:
@@ -185,13 +209,19 @@ class OBJBody(BodyModel):
         if isinstance(pose, str):
             if pose not in POSE_PRESETS:
                 raise BodyError(f"unknown pose preset {pose!r}; allowed: {', '.join(POSE_PRESETS)}")
-            raise BodyError(f"{self.name}: pose preset {pose!r} needs a skeleton with known joints; this "
-                            "template has only its own pose (A/None), or give a dict joint -> axis-angle")
+            raise BodyError(
+                f"{self.name}: pose preset {pose!r} needs a skeleton with known joints; this "
+                "template has only its own pose (A/None), or give a dict joint -> axis-angle"
+            )
         if not isinstance(pose, Mapping):
-            raise BodyError(f"pose must be a preset name, a dict joint -> axis-angle or None; got {type(pose).__name__}")
+            raise BodyError(
+                f"pose must be a preset name, a dict joint -> axis-angle or None; got {type(pose).__name__}"
+            )
         if self.weights is None and pose:
-            raise BodyError(f"{self.name}: this template has no skeleton (add weights, joints and parents "
-                            "to its .npz); only the template pose (A/None) is available")
+            raise BodyError(
+                f"{self.name}: this template has no skeleton (add weights, joints and parents "
+                "to its .npz); only the template pose (A/None) is available"
+            )
         aa = np.zeros((len(self.joint_names), 3))
         for name, r in pose.items():
             aa[self._joint_index[name]] = check_axis_angle(r, name, self._joint_index, self.source)
@@ -255,10 +285,11 @@ def load_obj_body(path, blendshapes=None, landmarks=None, up: str = "z", name: O
             raise BodyError(f"{bpath}: 'deltas' has shape {deltas.shape}, expected (K, {V}, 3)")
         names = arrays["names"]
         if names.ndim != 1 or len(names) != len(deltas) or names.dtype.kind not in "SU":
-            raise BodyError(f"{bpath}: key 'names' must be {len(deltas)} texts (one per blend shape), got "
-                            f"shape {names.shape} of {names.dtype.str!r}")
-        kw.update(blend_names=list(names), deltas=deltas @ Cm.T,
-                  ranges=num("ranges") if "ranges" in arrays else None)
+            raise BodyError(
+                f"{bpath}: key 'names' must be {len(deltas)} texts (one per blend shape), got "
+                f"shape {names.shape} of {names.dtype.str!r}"
+            )
+        kw.update(blend_names=list(names), deltas=deltas @ Cm.T, ranges=num("ranges") if "ranges" in arrays else None)
         skeleton = [k for k in ("weights", "joints", "parents") if k in arrays]
         if skeleton and len(skeleton) < 3:
             missing = sorted({"weights", "joints", "parents"} - set(skeleton))
@@ -267,9 +298,13 @@ def load_obj_body(path, blendshapes=None, landmarks=None, up: str = "z", name: O
             joints = num("joints")
             if joints.ndim != 2 or joints.shape[1] != 3:
                 raise BodyError(f"{bpath}: key 'joints' has shape {joints.shape}, expected (J, 3)")
-            kw.update(weights=num("weights"), joints=joints @ Cm.T,
-                      parents=index_array(arrays["parents"], f"{bpath}: key 'parents'"),
-                      joint_names=arrays.get("joint_names"), skeleton_source=f"{bpath}: key 'parents'")
+            kw.update(
+                weights=num("weights"),
+                joints=joints @ Cm.T,
+                parents=index_array(arrays["parents"], f"{bpath}: key 'parents'"),
+                joint_names=arrays.get("joint_names"),
+                skeleton_source=f"{bpath}: key 'parents'",
+            )
     if landmarks is not None:
         lpath = Path(landmarks)
         try:

@@ -2,6 +2,7 @@
 
 Both write through :mod:`core.fileio` (atomic).
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -22,9 +23,11 @@ def write_obj(path, vertices: np.ndarray, faces: np.ndarray, comment: str = "") 
     faces : (F, 3) int.
     comment : lines written as ``#`` comments at the top.
     """
-    lines = [f"# {line}" for line in comment.splitlines()] + ["# EASE body",
+    lines = [f"# {line}" for line in comment.splitlines()] + [
+        "# EASE body",
         "# frame: metres, +Z up, the body facing -Y, +X the body's left (EASE/Blender frame; "
-        "`ease export --with-body` writes the same body in this frame)"]
+        "`ease export --with-body` writes the same body in this frame)",
+    ]
     lines += [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in vertices]
     lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces]
     return write_text(path, "\n".join(lines) + "\n")
@@ -33,6 +36,7 @@ def write_obj(path, vertices: np.ndarray, faces: np.ndarray, comment: str = "") 
 def safe_measure(body, vertices: np.ndarray) -> dict:
     """Measurements (cm) where the model's landmarks allow them; height always."""
     from .measure import measure
+
     try:
         return measure(body, vertices)
     except BodyError:
@@ -48,7 +52,9 @@ def render_bodies(rows, faces: np.ndarray, path, title: str = "") -> Path:
     faces : (F, 3) triangles shared by all bodies.
     """
     import io
+
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.collections import PolyCollection
@@ -80,12 +86,12 @@ def render_bodies(rows, faces: np.ndarray, path, title: str = "") -> Path:
     heights = [b[3] - b[2] for *_, b in laid]
     fig_w = min(16.0, 2.0 * max(len(r) for r in rows) + 1.0)
     fig_h = fig_w * sum(heights) / max(widths) + 0.6
-    fig, axes = plt.subplots(len(rows), 1, figsize=(fig_w, fig_h), squeeze=False,
-                             gridspec_kw={"height_ratios": heights})
+    fig, axes = plt.subplots(
+        len(rows), 1, figsize=(fig_w, fig_h), squeeze=False, gridspec_kw={"height_ratios": heights}
+    )
     for ax, (polys, colors, depth, labels, (x0, x1, z0, z1)) in zip(axes[:, 0], laid):
         order = np.argsort(-depth)  # painter's algorithm: far (large y) first
-        ax.add_collection(PolyCollection(polys[order], facecolors=colors[order], edgecolors="none",
-                                         antialiased=False))
+        ax.add_collection(PolyCollection(polys[order], facecolors=colors[order], edgecolors="none", antialiased=False))
         for x, label in labels:
             ax.text(x, -0.03, label, ha="center", va="top", fontsize=9)
         ax.set_xlim(x0 - 0.05, x0 + max(widths) + 0.05)
@@ -140,8 +146,12 @@ def write_all_bodies(body, out, progress=None) -> dict:
             summary["poses"][pose] = {"file": f"pose_{pose}.obj"}
             poses.append((pose, v))
         report(progress, 0.85, "rendering bodies.png")
-        render_bodies([sizes, poses], body.faces, tmp / "bodies.png",
-                      title=f"{body.name}: sizes XS-XL in A-pose (chest/waist/hip cm); poses A, T, P1, P2, P3 at size M")
+        render_bodies(
+            [sizes, poses],
+            body.faces,
+            tmp / "bodies.png",
+            title=f"{body.name}: sizes XS-XL in A-pose (chest/waist/hip cm); poses A, T, P1, P2, P3 at size M",
+        )
         write_json(tmp / "bodies.json", summary)
     report(progress, 1.0, "done")
     return summary

@@ -24,6 +24,7 @@ by the parent's rotation (Anny's ``local-ref`` parameterisation). They apply on 
 the A-pose. A dict may also name a preset under the key ``"preset"``; its rotations are
 then applied after that preset's.
 """
+
 from __future__ import annotations
 
 from typing import Dict, Mapping
@@ -77,8 +78,8 @@ class _Aimer:
 
     def __init__(self, names, parents, heads):
         self.names, self.parents, self.heads = names, parents, heads
-        self.world = {}   # bone -> accumulated world rotation (relative to the reference pose)
-        self.local = {}   # bone -> delta rotation (parent-carried reference axes)
+        self.world = {}  # bone -> accumulated world rotation (relative to the reference pose)
+        self.local = {}  # bone -> delta rotation (parent-carried reference axes)
 
     def _parent_world(self, bone):
         j = self.names.index(bone)
@@ -119,21 +120,30 @@ def _preset(name: str, names, parents, heads) -> Dict[str, np.ndarray]:
         return {}
     for sx, s in ((1.0, ".L"), (-1.0, ".R")):
         if name == "T":
-            a.aim("upperarm01" + s, "lowerarm01" + s, (sx, 0.0, 0.0),
-                  share=SHOULDER_GIRDLE_SHARE, helper="shoulder01" + s)
+            a.aim(
+                "upperarm01" + s, "lowerarm01" + s, (sx, 0.0, 0.0), share=SHOULDER_GIRDLE_SHARE, helper="shoulder01" + s
+            )
         elif name == "P1":
-            a.aim("upperarm01" + s, "lowerarm01" + s, (0.0, -1.0, 0.0),
-                  share=SHOULDER_GIRDLE_SHARE, helper="shoulder01" + s)
-            a.aim("upperleg01" + s, "lowerleg01" + s, (sx * np.sin(np.radians(20)), 0.0,
-                                                        -np.cos(np.radians(20))))
+            a.aim(
+                "upperarm01" + s,
+                "lowerarm01" + s,
+                (0.0, -1.0, 0.0),
+                share=SHOULDER_GIRDLE_SHARE,
+                helper="shoulder01" + s,
+            )
+            a.aim("upperleg01" + s, "lowerleg01" + s, (sx * np.sin(np.radians(20)), 0.0, -np.cos(np.radians(20))))
         elif name == "P2":
             t = np.radians(160)
-            a.aim("upperarm01" + s, "lowerarm01" + s, (sx * np.sin(t), 0.0, -np.cos(t)),
-                  share=SHOULDER_GIRDLE_SHARE, helper="shoulder01" + s)
-            h = np.radians(30) * (1.0 if s == ".L" else -1.0)   # left flexed, right extended
+            a.aim(
+                "upperarm01" + s,
+                "lowerarm01" + s,
+                (sx * np.sin(t), 0.0, -np.cos(t)),
+                share=SHOULDER_GIRDLE_SHARE,
+                helper="shoulder01" + s,
+            )
+            h = np.radians(30) * (1.0 if s == ".L" else -1.0)  # left flexed, right extended
             spread = np.radians(5)
-            a.aim("upperleg01" + s, "lowerleg01" + s,
-                  _unit((sx * np.sin(spread), -np.sin(h), -np.cos(h))))
+            a.aim("upperleg01" + s, "lowerleg01" + s, _unit((sx * np.sin(spread), -np.sin(h), -np.cos(h))))
         elif name == "P3":
             a.aim("upperarm01" + s, "lowerarm01" + s, _unit((sx * 0.15, 0.0, -1.0)))
             a.aim("lowerarm01" + s, "wrist" + s, (0.0, -1.0, 0.0))
@@ -167,8 +177,10 @@ def pose_rotations(body, pose, heads: np.ndarray, to_native: np.ndarray = None) 
         extra = dict(pose)
         preset = extra.pop("preset", None)
     else:
-        raise BodyError(f"pose must be a preset name ({', '.join(POSE_PRESETS)}), a dict "
-                        f"joint -> axis-angle, or None; got {type(pose).__name__}")
+        raise BodyError(
+            f"pose must be a preset name ({', '.join(POSE_PRESETS)}), a dict "
+            f"joint -> axis-angle, or None; got {type(pose).__name__}"
+        )
     if preset is not None:
         if preset not in POSE_PRESETS:
             raise BodyError(f"unknown pose preset {preset!r}; allowed: {', '.join(POSE_PRESETS)}")

@@ -5,6 +5,7 @@
   (:func:`core.body.smpl.load_smpl`).
 - ``*.obj``: a fixed-topology template mesh (:func:`core.body.obj_model.load_obj_body`).
 """
+
 from __future__ import annotations
 
 import os
@@ -15,7 +16,7 @@ from .model import BodyModel
 
 BUILTIN = ("anny",)
 SMPL_SUFFIXES = (".npz", ".pkl", ".pickle")
-MODEL_SUFFIXES = SMPL_SUFFIXES + (".obj",)   # every model file a design, the CLI and the add-on accept
+MODEL_SUFFIXES = SMPL_SUFFIXES + (".obj",)  # every model file a design, the CLI and the add-on accept
 _CACHE = {}
 _LOCK = threading.Lock()
 
@@ -35,20 +36,26 @@ def load_body(name: str = "anny", **kwargs) -> BodyModel:
     if low == "anny":
         if kwargs:
             from .anny import AnnyBody
+
             return AnnyBody(**kwargs)
         with _LOCK:
             if "anny" not in _CACHE:
                 from .anny import AnnyBody
+
                 _CACHE["anny"] = AnnyBody()
             return _CACHE["anny"]
     if low.endswith(SMPL_SUFFIXES):
         from .smpl import load_smpl
+
         return load_smpl(key, **kwargs)
     if low.endswith(".obj"):
         from .obj_model import load_obj_body
+
         return load_obj_body(key, **kwargs)
-    raise BodyError(f"unknown body {key!r}; options: {', '.join(BUILTIN)}, or a path to an "
-                    f"SMPL/SMPL-X or template file ({', '.join(MODEL_SUFFIXES)})")
+    raise BodyError(
+        f"unknown body {key!r}; options: {', '.join(BUILTIN)}, or a path to an "
+        f"SMPL/SMPL-X or template file ({', '.join(MODEL_SUFFIXES)})"
+    )
 
 
 #: Keys of a body record (a design's ``body``, a cut's or pattern's ``body``) naming an OBJ

@@ -9,6 +9,7 @@ for a body: the stored fit for the default body (:data:`FITTED_SHAPES`, made
 by :func:`fit_measurements` and checked by the tests), otherwise a fit made
 once per process.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -85,6 +86,7 @@ class FitResult:
     status : target name -> ``"within 1 cm"`` or ``"not reachable by this model"``.
     evaluations : number of body evaluations the fit used.
     """
+
     shape: Dict[str, float]
     targets: Dict[str, float]
     achieved: Dict[str, float]
@@ -147,10 +149,14 @@ def fit_parameters(body) -> list:
     return preferred if len(preferred) >= 2 else names[:10]
 
 
-def fit_measurements(body, targets: Mapping[str, float], progress: Optional[Progress] = None,
-                     parameters: Optional[Sequence[str]] = None,
-                     start: Optional[Mapping[str, float]] = None,
-                     bounds: Optional[Mapping[str, Sequence[float]]] = None) -> FitResult:
+def fit_measurements(
+    body,
+    targets: Mapping[str, float],
+    progress: Optional[Progress] = None,
+    parameters: Optional[Sequence[str]] = None,
+    start: Optional[Mapping[str, float]] = None,
+    bounds: Optional[Mapping[str, Sequence[float]]] = None,
+) -> FitResult:
     """Fit ``body``'s shape to target measurements (cm) by bounded least squares.
 
     Parameters
@@ -174,8 +180,9 @@ def fit_measurements(body, targets: Mapping[str, float], progress: Optional[Prog
     given (:data:`LOCAL_OF_GIRTH`, Anny's) moving too; the better of the two is returned. A fit
     that lands the first time is the same as without this second pass.
     """
-    first = _fit_measurements(body, targets, progress if parameters is not None else sub(progress, 0.0, 0.5),
-                              parameters, start, bounds)
+    first = _fit_measurements(
+        body, targets, progress if parameters is not None else sub(progress, 0.0, 0.5), parameters, start, bounds
+    )
     local = local_parameters(body)
     if first.ok or parameters is not None or not local:
         report(progress, 1.0, "fit done")
@@ -207,8 +214,10 @@ def _fit_measurements(body, targets, progress, parameters, start, bounds) -> Fit
     names = list(parameters) if parameters is not None else fit_parameters(body)
     for n in names:
         if n not in allowed:
-            raise BodyError(f"cannot fit unknown shape parameter {n!r}; allowed: {', '.join(body.shape_parameters())}"
-                            + (" and Anny's local changes" if local else ""))
+            raise BodyError(
+                f"cannot fit unknown shape parameter {n!r}; allowed: {', '.join(body.shape_parameters())}"
+                + (" and Anny's local changes" if local else "")
+            )
     base = dict(body.default_shape())
     base.update({n: float(allowed[n][2]) for n in names if n in local})
     if start:
@@ -228,8 +237,9 @@ def _fit_measurements(body, targets, progress, parameters, start, bounds) -> Fit
 
     u0 = np.clip((np.array([base[n] for n in names], dtype=float) - lo) / span, 0.0, 1.0)
     # The pull of each parameter towards its start, cm per unit of u (a local change's range is 2).
-    pull = np.array([LOCAL_REGULARIZATION_CM * span[i] if n in local else REGULARIZATION_CM
-                     for i, n in enumerate(names)])
+    pull = np.array(
+        [LOCAL_REGULARIZATION_CM * span[i] if n in local else REGULARIZATION_CM for i, n in enumerate(names)]
+    )
     # Measurements without a target are held near the start body's (a tailor giving only a
     # chest girth means "this body, bigger chest", not a taller one), where the model can
     # measure them (girths need its landmarks).
@@ -250,20 +260,36 @@ def _fit_measurements(body, targets, progress, parameters, start, bounds) -> Fit
         # the targets leave directions free (fewer targets than parameters, or near-parallel
         # parameters); against girth slopes of 10-30 cm per range it moves a fit by < 0.05 cm.
         # The held measurements pull harder, but still far below the targets' weight.
-        return np.concatenate([np.array([got[k] for k in keys]) - want,
-                               HOLD_WEIGHT * (np.array([got[k] for k in hold_keys]) - hold),
-                               pull * (u - u0)])
+        return np.concatenate(
+            [
+                np.array([got[k] for k in keys]) - want,
+                HOLD_WEIGHT * (np.array([got[k] for k in hold_keys]) - hold),
+                pull * (u - u0),
+            ]
+        )
 
     # Finite differences of 1e-3 of the range: the slices' polygon noise stays below it.
-    sol = least_squares(residual, u0, bounds=(0.0, 1.0), diff_step=1e-3, x_scale=1.0,
-                        ftol=1e-8, xtol=1e-8, gtol=1e-10, max_nfev=200 * max(1, len(names)) // 4 + 40)
+    sol = least_squares(
+        residual,
+        u0,
+        bounds=(0.0, 1.0),
+        diff_step=1e-3,
+        x_scale=1.0,
+        ftol=1e-8,
+        xtol=1e-8,
+        gtol=1e-10,
+        max_nfev=200 * max(1, len(names)) // 4 + 40,
+    )
     shape = {k: v for k, v in shape_of(sol.x).items() if k not in local or v != 0.0}
     achieved = measure(body, body.vertices(shape))
-    status = {k: ("within 1 cm" if abs(achieved[k] - targets[k]) <= TOLERANCE_CM
-                  else "not reachable by this model") for k in keys}
+    status = {
+        k: ("within 1 cm" if abs(achieved[k] - targets[k]) <= TOLERANCE_CM else "not reachable by this model")
+        for k in keys
+    }
     report(progress, 1.0, "fit pass done")
-    return FitResult(shape=shape, targets=targets, achieved=achieved, status=status,
-                     evaluations=count[0], parameters=names)
+    return FitResult(
+        shape=shape, targets=targets, achieved=achieved, status=status, evaluations=count[0], parameters=names
+    )
 
 
 # What fit_measurements moves besides its default parameters where they miss (see there), and the
@@ -281,8 +307,9 @@ DEFAULT_CHART = "default"
 
 def _charts() -> Dict[str, SizeChart]:
     """Every chart by name: the default one (:data:`SIZE_CHART`) first, then the published ones."""
-    default = SizeChart(name=DEFAULT_CHART, title="Anny's bodies around the reference shape (M)",
-                        sizes=SIZE_CHART, fitted=FITTED_SHAPES)
+    default = SizeChart(
+        name=DEFAULT_CHART, title="Anny's bodies around the reference shape (M)", sizes=SIZE_CHART, fitted=FITTED_SHAPES
+    )
     return {DEFAULT_CHART: default, **PUBLISHED}
 
 
@@ -360,18 +387,26 @@ def chart_fit(body, size: str, chart: Optional[str] = None, progress: Optional[P
         for extra in ({},) + tuple(c.restarts):
             moved = {k: v for k, v in extra.items() if k in moving}
             if extra and not moved:
-                continue                   # a restart of parameters this model does not have
+                continue  # a restart of parameters this model does not have
             attempts.append((moving, moved))
     best, best_miss = None, np.inf
     for i, (moving, moved) in enumerate(attempts):
         # Each attempt owns a slice of one bar, so a size that needs restarts shows one
         # rising bar ("fit 3 of 18") instead of a bar that falls back to 0 per restart.
         step = sub(progress, i / len(attempts), (i + 1) / len(attempts))
-        labelled = None if step is None else (lambda f, m, i=i, step=step:
-                                              step(f, f"{m} (fit {i + 1} of {len(attempts)} for {size})"))
-        fit = fit_measurements(body, c.sizes[key], progress=labelled, start={**start, **moved} or None,
-                               parameters=moving if len(moving) >= 2 else None,
-                               bounds={k: v for k, v in c.bounds.items() if k in params})
+        labelled = (
+            None
+            if step is None
+            else (lambda f, m, i=i, step=step: step(f, f"{m} (fit {i + 1} of {len(attempts)} for {size})"))
+        )
+        fit = fit_measurements(
+            body,
+            c.sizes[key],
+            progress=labelled,
+            start={**start, **moved} or None,
+            parameters=moving if len(moving) >= 2 else None,
+            bounds={k: v for k, v in c.bounds.items() if k in params},
+        )
         if fit.ok:
             report(progress, 1.0, f"fit of {size} done")
             return fit
@@ -407,12 +442,15 @@ def _check_girth_landmarks(body, size: str) -> None:
     """A size is fitted by its girths: say so when the model lacks the landmarks they are taken at
     (an OBJ template without a landmark file) instead of failing inside the measurement."""
     from .measure import GIRTH_LANDMARKS
+
     have = getattr(body, "landmarks", None) or {}
     missing = sorted({n for names in GIRTH_LANDMARKS.values() for n in names} - set(have))
     if missing:
-        raise BodyError(f"size {size}: body {getattr(body, 'name', '?')!r} has no {', '.join(missing)} landmarks, "
-                        "which a chart size is fitted by; give the model's landmark file (a design's "
-                        "body.landmarks, --landmarks) or a shape of its own parameters instead of a size")
+        raise BodyError(
+            f"size {size}: body {getattr(body, 'name', '?')!r} has no {', '.join(missing)} landmarks, "
+            "which a chart size is fitted by; give the model's landmark file (a design's "
+            "body.landmarks, --landmarks) or a shape of its own parameters instead of a size"
+        )
 
 
 def parse_assignments(text: str, what: str) -> Dict[str, float]:

@@ -20,6 +20,7 @@ topologies (SMPL-X, custom files) the landmarks are unknown and asking for one
 raises :class:`BodyError`; regions still come from the skinning weights where
 the joints carry SMPL names.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -32,14 +33,38 @@ from .lbs import check_parents, forward_kinematics, pose_feature, rodrigues, ski
 from .model import POSE_PRESETS, BodyModel, SurfacePoint, check_axis_angle, check_shape
 
 SMPL_JOINT_NAMES = (
-    "pelvis", "left_hip", "right_hip", "spine1", "left_knee", "right_knee", "spine2",
-    "left_ankle", "right_ankle", "spine3", "left_foot", "right_foot", "neck",
-    "left_collar", "right_collar", "head", "left_shoulder", "right_shoulder",
-    "left_elbow", "right_elbow", "left_wrist", "right_wrist", "left_hand", "right_hand",
+    "pelvis",
+    "left_hip",
+    "right_hip",
+    "spine1",
+    "left_knee",
+    "right_knee",
+    "spine2",
+    "left_ankle",
+    "right_ankle",
+    "spine3",
+    "left_foot",
+    "right_foot",
+    "neck",
+    "left_collar",
+    "right_collar",
+    "head",
+    "left_shoulder",
+    "right_shoulder",
+    "left_elbow",
+    "right_elbow",
+    "left_wrist",
+    "right_wrist",
+    "left_hand",
+    "right_hand",
 )
 
-_FINGERS = tuple(f"{side}_{finger}{k}" for side in ("left", "right")
-                 for finger in ("index", "middle", "pinky", "ring", "thumb") for k in (1, 2, 3))
+_FINGERS = tuple(
+    f"{side}_{finger}{k}"
+    for side in ("left", "right")
+    for finger in ("index", "middle", "pinky", "ring", "thumb")
+    for k in (1, 2, 3)
+)
 SMPLX_JOINT_NAMES = SMPL_JOINT_NAMES[:22] + ("jaw", "left_eye_smplhf", "right_eye_smplhf") + _FINGERS
 SMPLH_JOINT_NAMES = SMPL_JOINT_NAMES[:22] + _FINGERS
 
@@ -52,10 +77,18 @@ BETA_RANGE = (-5.0, 5.0)
 
 # Vertex ids of the SMPL topology (6890 vertices), SMPL-Anthropometry.
 SMPL_VERTEX_IDS = {
-    "bust_left": 3042, "bust_right": 6489, "navel": 3501, "waist_back": 3022,
-    "crotch": 1210, "wrist_left": 2241, "wrist_right": 5559,
-    "shoulder_left": 3011, "shoulder_right": 6470, "ankle_left": 3325,
-    "neck_front": 3050, "head_top": 412,
+    "bust_left": 3042,
+    "bust_right": 6489,
+    "navel": 3501,
+    "waist_back": 3022,
+    "crotch": 1210,
+    "wrist_left": 2241,
+    "wrist_right": 5559,
+    "shoulder_left": 3011,
+    "shoulder_right": 6470,
+    "ankle_left": 3325,
+    "neck_front": 3050,
+    "head_top": 412,
 }
 SMPL_N_VERTICES = 6890
 
@@ -73,7 +106,7 @@ def _preset_rotations(name: str) -> Dict[str, np.ndarray]:
     x = lambda deg: np.array([deg * _DEG, 0.0, 0.0])
     z = lambda deg: np.array([0.0, 0.0, deg * _DEG])
     legs_a = {"left_hip": y(-5), "right_hip": y(5)}
-    if name == "A":   # arms ~45 deg below horizontal, legs slightly apart
+    if name == "A":  # arms ~45 deg below horizontal, legs slightly apart
         return {"left_shoulder": y(45), "right_shoulder": y(-45), **legs_a}
     if name == "T":
         return dict(legs_a)
@@ -82,11 +115,17 @@ def _preset_rotations(name: str) -> Dict[str, np.ndarray]:
     if name == "P2":  # shoulder abduction 160 deg, scissored legs
         return {"left_shoulder": y(-70), "right_shoulder": y(70), "left_hip": x(-30), "right_hip": x(30)}
     if name == "P3":  # sitting, elbows bent 90 deg with forearms in front
-        return {"left_hip": x(-90), "right_hip": x(-90), "left_knee": x(90), "right_knee": x(90),
-                "left_shoulder": y(80), "right_shoulder": y(-80),
-                "left_elbow": z(-90), "right_elbow": z(90)}
-    raise BodyError(f"unknown pose preset {name!r}; allowed: {', '.join(POSE_PRESETS)} "
-                    "or a dict joint -> axis-angle")
+        return {
+            "left_hip": x(-90),
+            "right_hip": x(-90),
+            "left_knee": x(90),
+            "right_knee": x(90),
+            "left_shoulder": y(80),
+            "right_shoulder": y(-80),
+            "left_elbow": z(-90),
+            "right_elbow": z(90),
+        }
+    raise BodyError(f"unknown pose preset {name!r}; allowed: {', '.join(POSE_PRESETS)} or a dict joint -> axis-angle")
 
 
 def _vertex_point(faces: np.ndarray, vid: int) -> SurfacePoint:
@@ -101,6 +140,7 @@ def _vertex_point(faces: np.ndarray, vid: int) -> SurfacePoint:
 def mirror_map(vertices: np.ndarray) -> np.ndarray:
     """Left<->right vertex map: nearest neighbour of every x-reflected vertex, (V,) int."""
     from scipy.spatial import cKDTree
+
     reflected = vertices * np.array([-1.0, 1.0, 1.0])
     _, idx = cKDTree(vertices).query(reflected)
     return idx.astype(np.int64)
@@ -119,7 +159,9 @@ def _regions_from_weights(weights: np.ndarray, joint_names) -> Dict[str, np.ndar
         return np.nonzero(np.isin(owner, ids))[0].astype(np.int64)
 
     fingers_l = [n for n in names if n.startswith("left_") and n[5:-1] in ("index", "middle", "pinky", "ring", "thumb")]
-    fingers_r = [n for n in names if n.startswith("right_") and n[6:-1] in ("index", "middle", "pinky", "ring", "thumb")]
+    fingers_r = [
+        n for n in names if n.startswith("right_") and n[6:-1] in ("index", "middle", "pinky", "ring", "thumb")
+    ]
     return {
         "head": of("head", "jaw", "left_eye_smplhf", "right_eye_smplhf"),
         "hands": of("left_wrist", "right_wrist", "left_hand", "right_hand", *fingers_l, *fingers_r),
@@ -133,8 +175,9 @@ def _regions_from_weights(weights: np.ndarray, joint_names) -> Dict[str, np.ndar
     }
 
 
-def _smpl_landmarks(v: np.ndarray, faces: np.ndarray, joints: np.ndarray, names, sym: np.ndarray,
-                    regions: Mapping[str, np.ndarray]) -> Dict[str, SurfacePoint]:
+def _smpl_landmarks(
+    v: np.ndarray, faces: np.ndarray, joints: np.ndarray, names, sym: np.ndarray, regions: Mapping[str, np.ndarray]
+) -> Dict[str, SurfacePoint]:
     """Landmarks of the SMPL topology on its T-pose template ``v`` (our frame).
 
     Literature vertex ids (:data:`SMPL_VERTEX_IDS`) where they exist; otherwise:
@@ -150,15 +193,19 @@ def _smpl_landmarks(v: np.ndarray, faces: np.ndarray, joints: np.ndarray, names,
     vid = dict(SMPL_VERTEX_IDS)
     empty = [r for r in ("torso", "neck", "arm_left", "leg_left", "leg_right") if not regions.get(r, ()).size]
     if empty:
-        raise BodyError(f"key 'weights': no vertex is skinned mostly to the {empty[0]} joints; the SMPL "
-                        "landmarks need every body part")
+        raise BodyError(
+            f"key 'weights': no vertex is skinned mostly to the {empty[0]} joints; the SMPL "
+            "landmarks need every body part"
+        )
     torso = regions["torso"]
     nearest = lambda p, among: int(among[np.argmin(np.linalg.norm(v[among] - p, axis=1))])
 
     def slice_extreme(among, z, tol, key):
         if not among.size:
-            raise BodyError("key 'v_template': no vertex near the body's midline at the neck; the SMPL "
-                            "landmarks need an SMPL-like body")
+            raise BodyError(
+                "key 'v_template': no vertex near the body's midline at the neck; the SMPL "
+                "landmarks need an SMPL-like body"
+            )
         sel = among[np.abs(v[among, 2] - z) < tol]
         if sel.size == 0:
             sel = among
@@ -197,18 +244,26 @@ class SMPLBody(BodyModel):
         self.source = source or name
         C = SMPL_TO_OURS
         import scipy.sparse as sp
+
         from .arrays import finite_array, index_array
+
         num = lambda key: finite_array(arrays[key], f"{self.source}: key {key!r}")
         v_template = num("v_template")
         V = v_template.shape[0] if v_template.ndim == 2 else -1
-        self._check(v_template.ndim == 2 and v_template.shape[1] == 3 and V > 0, "v_template", "(V, 3)",
-                    v_template.shape)
+        self._check(
+            v_template.ndim == 2 and v_template.shape[1] == 3 and V > 0, "v_template", "(V, 3)", v_template.shape
+        )
         faces = index_array(arrays["f"], f"{self.source}: key 'f'")
-        self._check(faces.ndim == 2 and faces.shape[1] == 3 and faces.size and faces.min() >= 0
-                    and faces.max() < V, "f", f"(F, 3) vertex ids below {V}", faces.shape)
+        self._check(
+            faces.ndim == 2 and faces.shape[1] == 3 and faces.size and faces.min() >= 0 and faces.max() < V,
+            "f",
+            f"(F, 3) vertex ids below {V}",
+            faces.shape,
+        )
         weights = num("weights")
-        self._check(weights.ndim == 2 and weights.shape[0] == V and weights.shape[1] > 0, "weights", f"({V}, J)",
-                    weights.shape)
+        self._check(
+            weights.ndim == 2 and weights.shape[0] == V and weights.shape[1] > 0, "weights", f"({V}, J)", weights.shape
+        )
         J = weights.shape[1]
         kintree = index_array(arrays["kintree_table"], f"{self.source}: key 'kintree_table'")
         self._check(kintree.ndim == 2 and kintree.shape == (2, J), "kintree_table", f"(2, {J})", kintree.shape)
@@ -216,8 +271,7 @@ class SMPLBody(BodyModel):
         jreg = jreg.tocsr() if sp.issparse(jreg) else num("J_regressor")
         self._check(jreg.shape == (J, V), "J_regressor", f"({J}, {V})", jreg.shape)
         shapedirs = num("shapedirs")
-        self._check(shapedirs.ndim == 3 and shapedirs.shape[:2] == (V, 3), "shapedirs", f"({V}, 3, B)",
-                    shapedirs.shape)
+        self._check(shapedirs.ndim == 3 and shapedirs.shape[:2] == (V, 3), "shapedirs", f"({V}, 3, B)", shapedirs.shape)
         posedirs = num("posedirs")
         P = 9 * (J - 1)
         self._check(posedirs.shape == (V, 3, P), "posedirs", f"({V}, 3, {P})", posedirs.shape)
@@ -261,8 +315,9 @@ class SMPLBody(BodyModel):
         self.landmarks = {}
         if V == SMPL_N_VERTICES and J == 24:
             try:
-                self.landmarks = _smpl_landmarks(self.v_template, faces, self._j_template, self.joint_names,
-                                                 self.symmetry, self.regions)
+                self.landmarks = _smpl_landmarks(
+                    self.v_template, faces, self._j_template, self.joint_names, self.symmetry, self.regions
+                )
             except BodyError as exc:
                 raise BodyError(f"{self.source}: {exc}") from None
         self._params = {f"beta{i}": (BETA_RANGE[0], BETA_RANGE[1], 0.0) for i in range(n_betas)}
@@ -294,8 +349,10 @@ class SMPLBody(BodyModel):
                     aa[self._joint_index[name]] = r
             return rodrigues(aa)
         if not isinstance(pose, Mapping):
-            raise BodyError(f"pose must be a preset name ({', '.join(POSE_PRESETS)}), a dict "
-                            f"joint -> axis-angle, or None; got {type(pose).__name__}")
+            raise BodyError(
+                f"pose must be a preset name ({', '.join(POSE_PRESETS)}), a dict "
+                f"joint -> axis-angle, or None; got {type(pose).__name__}"
+            )
         pose = dict(pose)
         preset = pose.pop("preset", None)
         if preset is not None and preset not in POSE_PRESETS:
@@ -345,14 +402,17 @@ class SMPLBody(BodyModel):
 
     def landmark_position(self, name: str, vertices: np.ndarray) -> np.ndarray:
         if not self.landmarks:
-            raise BodyError(f"{self.name}: landmarks are not known for this topology "
-                            f"({self.n_vertices} vertices, {len(self.joint_names)} joints); they are defined "
-                            f"for the SMPL topology ({SMPL_N_VERTICES} vertices, 24 joints) only")
+            raise BodyError(
+                f"{self.name}: landmarks are not known for this topology "
+                f"({self.n_vertices} vertices, {len(self.joint_names)} joints); they are defined "
+                f"for the SMPL topology ({SMPL_N_VERTICES} vertices, 24 joints) only"
+            )
         return super().landmark_position(name, vertices)
 
 
 def _read_pkl(path: Path) -> dict:
     from .unpickle import SparseStandIn, as_array, safe_load
+
     obj = safe_load(path)
     if not isinstance(obj, dict):
         raise BodyError(f"{path}: expected a dict of arrays in the pickle, got {type(obj).__name__}")
@@ -391,6 +451,7 @@ def load_smpl(path, name: Optional[str] = None) -> SMPLBody:
     suffix = path.suffix.lower()
     if suffix == ".npz":
         from .arrays import read_npz
+
         arrays = read_npz(path, REQUIRED_KEYS + ("expr_dirs",), what="SMPL model .npz")
     elif suffix in (".pkl", ".pickle"):
         arrays = _read_pkl(path)

@@ -6,6 +6,7 @@ instance (the add-on's click, a test's probe) is stored this way. The add-on
 gets the hit face and location from Blender's ray cast and hands them here;
 it computes no geometry itself.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -59,6 +60,7 @@ def closest_surface_point(vertices: np.ndarray, faces: np.ndarray, p) -> Surface
     p : (3,) float.
     """
     import igl
+
     V = np.asarray(vertices, dtype=float)
     F = np.asarray(faces, dtype=np.int64)
     _, fi, c = igl.point_mesh_squared_distance(np.asarray(p, float)[None], V, F)

@@ -12,6 +12,7 @@ leave the arms out; a limb's girth is the loop of that limb only, in a plane squ
 limb's bone. Lengths are straight between landmarks or along the surface, as named. All
 results are in centimetres; the left side is measured (the fitted bodies are symmetric).
 """
+
 from __future__ import annotations
 
 from typing import Dict, Iterable, Optional
@@ -21,20 +22,52 @@ import numpy as np
 from ..errors import BodyError
 from .measure import girth_at, hull_perimeter, torso_edges
 
-TAPE_MEASURES = ("height", "neck", "shoulder_width", "chest", "underbust", "waist", "high_hip", "hip",
-                 "upper_arm", "wrist", "arm_length", "back_waist_length", "inseam", "thigh")
+TAPE_MEASURES = (
+    "height",
+    "neck",
+    "shoulder_width",
+    "chest",
+    "underbust",
+    "waist",
+    "high_hip",
+    "hip",
+    "upper_arm",
+    "wrist",
+    "arm_length",
+    "back_waist_length",
+    "inseam",
+    "thigh",
+)
 
 # The lengths among them (the rest are girths): a fit holds these to 1.5 cm, girths to 1 cm.
 LENGTHS = ("height", "shoulder_width", "arm_length", "back_waist_length", "inseam")
 
 # Other names a table may use.
-ALIASES = {"bust": "chest", "shoulder": "shoulder_width", "upperarm": "upper_arm", "bicep": "upper_arm",
-           "highhip": "high_hip", "back_waist": "back_waist_length", "inside_leg": "inseam"}
+ALIASES = {
+    "bust": "chest",
+    "shoulder": "shoulder_width",
+    "upperarm": "upper_arm",
+    "bicep": "upper_arm",
+    "highhip": "high_hip",
+    "back_waist": "back_waist_length",
+    "inside_leg": "inseam",
+}
 
 # Joints and landmarks the measures need (Anny's rig names; a model without them cannot be taped).
 _JOINTS = ("upperarm01.L", "lowerarm01.L", "wrist.L", "upperleg01.L")
-_LANDMARKS = ("neck_front", "neck_back", "neck_left", "neck_right", "shoulder_left", "shoulder_right",
-              "bust_left", "bust_right", "crotch", "elbow_left", "wrist_left")
+_LANDMARKS = (
+    "neck_front",
+    "neck_back",
+    "neck_left",
+    "neck_right",
+    "shoulder_left",
+    "shoulder_right",
+    "bust_left",
+    "bust_right",
+    "crotch",
+    "elbow_left",
+    "wrist_left",
+)
 
 # Thigh girth: this far below the crotch (the top of the thigh, under the gluteal fold), metres.
 THIGH_BELOW_CROTCH = 0.03
@@ -66,6 +99,7 @@ def section_loops(vertices: np.ndarray, faces: np.ndarray, point, normal) -> lis
     """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
+
     n = np.asarray(normal, dtype=float)
     d = (vertices - np.asarray(point, dtype=float)) @ n
     side = d[faces] > 0.0
@@ -89,7 +123,7 @@ def section_loops(vertices: np.ndarray, faces: np.ndarray, point, normal) -> lis
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(m, m))
     count, label = connected_components(graph, directed=False)
     a, b = ids // len(vertices), ids % len(vertices)
-    with np.errstate(divide="ignore", invalid="ignore"):   # edges the plane does not cross: unused
+    with np.errstate(divide="ignore", invalid="ignore"):  # edges the plane does not cross: unused
         t = (d[a] / (d[a] - d[b]))[:, None]
     pts = vertices[a] + t * (vertices[b] - vertices[a])
     used = np.zeros(m, dtype=bool)
@@ -128,7 +162,7 @@ class _Parts:
         arms = np.zeros(V, dtype=bool)
         for n in ("arm_left", "arm_right", "hands"):
             arms[np.asarray(regions.get(n, ()), dtype=np.int64)] = True
-        self.no_arms = F[~arms[F].any(axis=1)]                   # torso, head, legs
+        self.no_arms = F[~arms[F].any(axis=1)]  # torso, head, legs
         self.arm_left = faces_of("arm_left", "hands", keep=lambda m: m.any(axis=1))
         self.torso_edges = torso_edges(body)
 
@@ -148,8 +182,10 @@ def _check_model(body):
     have = set(getattr(body, "landmarks", {}) or {})
     missing = [n for n in _LANDMARKS if n not in have] + [j for j in _JOINTS if j not in body.joint_names]
     if missing:
-        raise BodyError(f"tape measures: body {getattr(body, 'name', '?')!r} lacks {', '.join(missing)} "
-                        "(the tape measures need Anny's rig and landmarks)")
+        raise BodyError(
+            f"tape measures: body {getattr(body, 'name', '?')!r} lacks {', '.join(missing)} "
+            "(the tape measures need Anny's rig and landmarks)"
+        )
 
 
 def _torso_girth(v, parts, z) -> float:
@@ -197,7 +233,7 @@ def underbust_height(v, parts, bust_x: float, bust_z: float, waist_z: float) -> 
     if len(zs) < 3:
         return float(0.5 * (bust_z + foot))
     chord = front[0] + (front[-1] - front[0]) * (zs - zs[0]) / (zs[-1] - zs[0])
-    w = np.maximum(front - chord, 0.0) ** 2 + 0.003 ** 2
+    w = np.maximum(front - chord, 0.0) ** 2 + 0.003**2
     return float(np.sum(w * zs) / np.sum(w))
 
 
@@ -205,7 +241,7 @@ def _slice_points(v, edges, z):
     """Points (n, 3) where the ``edges`` cross the plane z."""
     d = v[:, 2] - z
     da, db = d[edges[:, 0]], d[edges[:, 1]]
-    c = (da * db < 0) | ((da == 0) & (db != 0))     # an end on the plane counts once, as measure's
+    c = (da * db < 0) | ((da == 0) & (db != 0))  # an end on the plane counts once, as measure's
     t = (da[c] / (da[c] - db[c]))[:, None]
     return v[edges[c, 0]] + t * (v[edges[c, 1]] - v[edges[c, 0]])
 
@@ -244,13 +280,20 @@ def levels(body, v: np.ndarray) -> Dict[str, float]:
     # the crotch to the bust (below it the section widens into the hips).
     waist_z = natural_waist_height(v, parts, crotch_z + 0.35 * (bust_z - crotch_z), bust_z - 0.03)
     hip_z = buttock_height(v, body, parts, crotch_z, waist_z)
-    return {"bust": float(bust_z), "underbust": underbust_height(v, parts, bust_x, bust_z, waist_z),
-            "waist": waist_z, "high_hip": 0.5 * (waist_z + hip_z), "hip": hip_z,
-            "thigh": crotch_z - THIGH_BELOW_CROTCH, "crotch": crotch_z}
+    return {
+        "bust": float(bust_z),
+        "underbust": underbust_height(v, parts, bust_x, bust_z, waist_z),
+        "waist": waist_z,
+        "high_hip": 0.5 * (waist_z + hip_z),
+        "hip": hip_z,
+        "thigh": crotch_z - THIGH_BELOW_CROTCH,
+        "crotch": crotch_z,
+    }
 
 
-def tape_measures(body, vertices: Optional[np.ndarray] = None, which: Iterable[str] = TAPE_MEASURES,
-                  shape=None) -> Dict[str, float]:
+def tape_measures(
+    body, vertices: Optional[np.ndarray] = None, which: Iterable[str] = TAPE_MEASURES, shape=None
+) -> Dict[str, float]:
     """The tape measures (cm) of a standing instance of ``body`` (default its reference shape).
 
     Parameters
@@ -263,8 +306,11 @@ def tape_measures(body, vertices: Optional[np.ndarray] = None, which: Iterable[s
     _check_model(body)
     names = [canonical(n) for n in which]
     if vertices is None:
-        v, joints = body.vertices_and_joints(shape) if hasattr(body, "vertices_and_joints") else \
-            (body.vertices(shape), body.joints(shape))
+        v, joints = (
+            body.vertices_and_joints(shape)
+            if hasattr(body, "vertices_and_joints")
+            else (body.vertices(shape), body.joints(shape))
+        )
     else:
         v, joints = np.asarray(vertices, dtype=float), body.joints(shape)
     if v.shape != (body.n_vertices, 3):
@@ -294,8 +340,10 @@ def tape_measures(body, vertices: Optional[np.ndarray] = None, which: Iterable[s
             a, b = J["lowerarm01.L"], J["wrist.L"]
             m = loop_girth(v, parts.arm_left, lm["wrist_left"], b - a, near=b)
         elif name == "arm_length":
-            m = float(np.linalg.norm(lm["elbow_left"] - lm["shoulder_left"])
-                      + np.linalg.norm(lm["wrist_left"] - lm["elbow_left"]))
+            m = float(
+                np.linalg.norm(lm["elbow_left"] - lm["shoulder_left"])
+                + np.linalg.norm(lm["wrist_left"] - lm["elbow_left"])
+            )
         elif name == "back_waist_length":
             m = back_profile_length(v, parts.torso_edges, float(lm["neck_back"][2]), lv["waist"])
         elif name == "inseam":

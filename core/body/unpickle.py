@@ -25,6 +25,7 @@ checks its arguments and builds arrays only from validated data.
 
 Anything else raises :class:`BodyError` naming the refused callable, before it could run.
 """
+
 from __future__ import annotations
 
 import io
@@ -34,15 +35,14 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import BodyError
-from .arrays import (MAX_ARRAY_ELEMENTS, MAX_TOTAL_BYTES, check_csr, check_dtype, check_shape,
-                     dtype_from_code, numbers)
+from .arrays import MAX_ARRAY_ELEMENTS, MAX_TOTAL_BYTES, check_csr, check_dtype, check_shape, dtype_from_code, numbers
 
 # A model pickle is its arrays plus a little: refuse files far larger before reading them.
 MAX_PICKLE_BYTES = MAX_TOTAL_BYTES + (256 << 20)
 # Chumpy objects nest (an array inside a Ch inside a Ch); real files go 2-3 deep.
 MAX_NESTING = 32
 
-_DTYPE_FLAGS_REFUSED = 0x01 | 0x02 | 0x04 | 0x10 | 0x20 | 0x40   # refcount/list-pickle/pointer/pyapi/getitem/setitem
+_DTYPE_FLAGS_REFUSED = 0x01 | 0x02 | 0x04 | 0x10 | 0x20 | 0x40  # refcount/list-pickle/pointer/pyapi/getitem/setitem
 
 
 def _refuse(what: str):
@@ -70,15 +70,34 @@ class ScalarType(_Marker):
     __slots__ = ()
 
     def __call__(self, *args, **kwargs):
-        if kwargs or len(args) > 1 or (args and not (isinstance(args[0], (bool, float)) or (
-                isinstance(args[0], int) and abs(args[0]) < 2 ** 64))):
-            _refuse(f"numpy.{self.name} called with {len(args)} arguments of types "
-                    f"{', '.join(type(a).__name__ for a in args)}; expected one number")
+        if (
+            kwargs
+            or len(args) > 1
+            or (
+                args and not (isinstance(args[0], (bool, float)) or (isinstance(args[0], int) and abs(args[0]) < 2**64))
+            )
+        ):
+            _refuse(
+                f"numpy.{self.name} called with {len(args)} arguments of types "
+                f"{', '.join(type(a).__name__ for a in args)}; expected one number"
+            )
         return getattr(np, self.name)(*args)
 
 
-_SCALAR_TYPES = ("bool_", "float64", "float32", "float16", "int64", "int32", "int16", "int8",
-                 "uint64", "uint32", "uint16", "uint8")
+_SCALAR_TYPES = (
+    "bool_",
+    "float64",
+    "float32",
+    "float16",
+    "int64",
+    "int32",
+    "int16",
+    "int8",
+    "uint64",
+    "uint32",
+    "uint16",
+    "uint8",
+)
 
 
 class DtypeStandIn:
@@ -95,8 +114,10 @@ class DtypeStandIn:
 
     def __setstate__(self, state):
         if not isinstance(state, tuple) or len(state) not in (8, 9) or state[0] not in (3, 4):
-            _refuse(f"a dtype state of {type(state).__name__} length "
-                    f"{len(state) if isinstance(state, tuple) else '-'}; expected numpy's (3 or 4, ...) tuple")
+            _refuse(
+                f"a dtype state of {type(state).__name__} length "
+                f"{len(state) if isinstance(state, tuple) else '-'}; expected numpy's (3 or 4, ...) tuple"
+            )
         endian, sub, names, fields, elsize, _align, flags = state[1:8]
         if sub is not None or names is not None or fields is not None:
             _refuse("a dtype with fields or a sub-array; model arrays are plain numbers")
@@ -106,8 +127,9 @@ class DtypeStandIn:
             _refuse(f"dtype flags {flags!r} (object references); model arrays are plain numbers")
         if endian not in ("<", ">", "|", "="):
             _refuse(f"dtype byte order {endian!r}")
-        if elsize not in (-1, self.dtype.itemsize) and not (self.dtype.kind in "SU" and isinstance(elsize, int)
-                                                            and 0 < elsize <= 1 << 20):
+        if elsize not in (-1, self.dtype.itemsize) and not (
+            self.dtype.kind in "SU" and isinstance(elsize, int) and 0 < elsize <= 1 << 20
+        ):
             _refuse(f"dtype item size {elsize!r} for {self.dtype.str!r}")
         dt = self.dtype
         if dt.kind in "SU" and elsize not in (-1, dt.itemsize):
@@ -124,7 +146,7 @@ def _as_dtype(dtype, where) -> np.dtype:
 def _raw_bytes(raw, where) -> bytes:
     if isinstance(raw, (bytes, bytearray)):
         return bytes(raw)
-    if isinstance(raw, str):   # a py2 str read as latin1
+    if isinstance(raw, str):  # a py2 str read as latin1
         try:
             return raw.encode("latin1")
         except UnicodeEncodeError:
@@ -164,8 +186,9 @@ class _Budget:
         count = check_shape(shape, dt.itemsize, where)
         data = _raw_bytes(raw, where)
         if len(data) != count * dt.itemsize:
-            _refuse(f"{where}: shape {shape} of {dt.str!r} needs {count * dt.itemsize} bytes, the pickle holds "
-                    f"{len(data)}")
+            _refuse(
+                f"{where}: shape {shape} of {dt.str!r} needs {count * dt.itemsize} bytes, the pickle holds {len(data)}"
+            )
         self.total += len(data)
         if self.total > MAX_TOTAL_BYTES:
             _refuse(f"more than {MAX_TOTAL_BYTES / 2**30:g} GiB of array data")
@@ -202,8 +225,10 @@ class ChumpyStandIn:
         """The array a terminal chumpy object holds (its ``x``)."""
         x = self.state.get("x")
         if x is None:
-            raise BodyError("a chumpy object in the pickle is a derived expression, not an array; "
-                            "re-save the model with plain numpy arrays")
+            raise BodyError(
+                "a chumpy object in the pickle is a derived expression, not an array; "
+                "re-save the model with plain numpy arrays"
+            )
         return as_array(x, _seen=_seen)
 
 
@@ -222,6 +247,7 @@ class SparseStandIn:
 
     def to_scipy(self, _seen=None):
         import scipy.sparse as sp
+
         d = self.state
         try:
             shape = tuple(int(s) for s in d.get("_shape", d.get("shape")))
@@ -253,14 +279,18 @@ def _reconstructor(cls, base, state):
     """Safe ``copyreg._reconstructor`` (protocol 0/1 objects): stand-ins only."""
     if base is _OBJECT and isinstance(cls, type) and issubclass(cls, (ChumpyStandIn, SparseStandIn)):
         return cls.__new__(cls)
-    raise BodyError(f"pickle refused: cannot rebuild {getattr(cls, '__name__', cls)!r} "
-                    f"from base {getattr(base, 'name', base)!r}")
+    raise BodyError(
+        f"pickle refused: cannot rebuild {getattr(cls, '__name__', cls)!r} from base {getattr(base, 'name', base)!r}"
+    )
 
 
 def _codecs_encode(text, encoding="utf-8"):
     """Safe ``_codecs.encode``: py3 protocol<3 pickles store bytes as ``encode(str, 'latin1')``."""
-    if not isinstance(text, str) or not isinstance(encoding, str) or encoding.lower().replace("_", "-") not in (
-            "latin1", "latin-1", "ascii", "utf-8", "utf8"):
+    if (
+        not isinstance(text, str)
+        or not isinstance(encoding, str)
+        or encoding.lower().replace("_", "-") not in ("latin1", "latin-1", "ascii", "utf-8", "utf8")
+    ):
         raise BodyError(f"pickle refused: _codecs.encode with encoding {encoding!r}")
     try:
         return text.encode(encoding)
@@ -280,6 +310,7 @@ def _sparse_factory(fmt):
 
         def __init__(self, *args, **kwargs):
             pass
+
     _Sparse.__name__ = f"{fmt}_matrix"
     return _Sparse
 
@@ -291,16 +322,19 @@ _SPARSE.update({f"{fmt}_array": _SPARSE[f"{fmt}_matrix"] for fmt in ("csc", "csr
 def _container(kind):
     """``set``, ``frozenset``, ``list``, ``tuple``, ``dict`` on a container the pickle already holds
     (same size), never on bytes or text (a list of a 1 GB bytes object is 28 GB)."""
+
     def build(*args):
         if len(args) > 1 or (args and not isinstance(args[0], (list, tuple, dict, set, frozenset))):
             _refuse(f"{kind.__name__}() of {', '.join(type(a).__name__ for a in args)}")
         return kind(*args)
+
     return build
 
 
 def _byte_string(kind):
     """``bytes`` / ``bytearray`` of bytes or of text and an encoding (protocol 2 writes ``bytes()`` for
     b''); never of a size."""
+
     def build(*args):
         if not args:
             return kind()
@@ -309,6 +343,7 @@ def _byte_string(kind):
         if len(args) == 2 and isinstance(args[0], str) and isinstance(args[1], str):
             return kind(_codecs_encode(args[0], args[1]))
         _refuse(f"{kind.__name__}() of {', '.join(type(a).__name__ for a in args)}; expected bytes")
+
     return build
 
 
@@ -325,10 +360,18 @@ def _safe_slice(*args):
 
 
 _OBJECT = _Marker("object")
-_BUILTINS = {"set": _container(set), "frozenset": _container(frozenset), "list": _container(list),
-             "tuple": _container(tuple), "dict": _container(dict), "slice": _safe_slice,
-             "complex": _safe_complex, "object": _OBJECT, "bytes": _byte_string(bytes),
-             "bytearray": _byte_string(bytearray)}
+_BUILTINS = {
+    "set": _container(set),
+    "frozenset": _container(frozenset),
+    "list": _container(list),
+    "tuple": _container(tuple),
+    "dict": _container(dict),
+    "slice": _safe_slice,
+    "complex": _safe_complex,
+    "object": _OBJECT,
+    "bytes": _byte_string(bytes),
+    "bytearray": _byte_string(bytearray),
+}
 
 
 class SafeUnpickler(pickle.Unpickler):
@@ -352,8 +395,9 @@ class SafeUnpickler(pickle.Unpickler):
             return np.frombuffer(raw, dtype=dt)[0]
 
         def frombuffer(buf, dtype, shape, order="C"):
-            return budget.build(tuple(shape) if isinstance(shape, list) else shape, dtype, order == "F",
-                                buf, "an array in the pickle")
+            return budget.build(
+                tuple(shape) if isinstance(shape, list) else shape, dtype, order == "F", buf, "an array in the pickle"
+            )
 
         numpy_names = {"_reconstruct": reconstruct, "scalar": scalar, "_frombuffer": frombuffer}
         self._numpy = {}
@@ -381,8 +425,10 @@ class SafeUnpickler(pickle.Unpickler):
             return _SPARSE[name]
         if module == "chumpy" or module.startswith("chumpy."):
             return ChumpyStandIn
-        raise BodyError(f"pickle refused: it calls {module}.{name}, which is not a numpy/scipy data type; "
-                        "a model file must only contain arrays (the file may be malicious)")
+        raise BodyError(
+            f"pickle refused: it calls {module}.{name}, which is not a numpy/scipy data type; "
+            "a model file must only contain arrays (the file may be malicious)"
+        )
 
     def persistent_load(self, pid):
         raise BodyError("pickle refused: it uses persistent ids, which model files never do")
@@ -412,8 +458,10 @@ def safe_load(data_or_path) -> object:
         try:
             size = path.stat().st_size
             if size > MAX_PICKLE_BYTES:
-                raise BodyError(f"{path}: {size / 2**30:.3g} GiB is over the {MAX_PICKLE_BYTES / 2**30:.3g} GiB a "
-                                "model pickle may have")
+                raise BodyError(
+                    f"{path}: {size / 2**30:.3g} GiB is over the {MAX_PICKLE_BYTES / 2**30:.3g} GiB a "
+                    "model pickle may have"
+                )
             data = path.read_bytes()
         except OSError as exc:
             raise BodyError(f"cannot read {path}: {exc.strerror}") from None
@@ -426,8 +474,18 @@ def safe_load(data_or_path) -> object:
         raise BodyError(f"{where}: not a readable model pickle (nested too deeply)") from None
     except MemoryError:
         raise BodyError(f"{where}: not a readable model pickle (it asks for more memory than there is)") from None
-    except (pickle.UnpicklingError, EOFError, AttributeError, TypeError, ValueError, IndexError, KeyError,
-            OverflowError, UnicodeDecodeError, ImportError) as exc:
+    except (
+        pickle.UnpicklingError,
+        EOFError,
+        AttributeError,
+        TypeError,
+        ValueError,
+        IndexError,
+        KeyError,
+        OverflowError,
+        UnicodeDecodeError,
+        ImportError,
+    ) as exc:
         raise BodyError(f"{where}: not a readable model pickle ({type(exc).__name__}: {exc})") from None
     if isinstance(obj, dict):
         obj = {k: (v.value if isinstance(v, ArrayStandIn) and v.value is not None else v) for k, v in obj.items()}
@@ -466,10 +524,12 @@ def as_array(obj, key: str = "", _seen=None) -> np.ndarray:
         finally:
             seen.discard(id(obj))
         if m.shape[0] * m.shape[1] > MAX_ARRAY_ELEMENTS:
-            raise BodyError(f"{pre}a sparse matrix of shape {m.shape} is over the limit of "
-                            f"{MAX_ARRAY_ELEMENTS:.3g} elements as a dense array")
+            raise BodyError(
+                f"{pre}a sparse matrix of shape {m.shape} is over the limit of "
+                f"{MAX_ARRAY_ELEMENTS:.3g} elements as a dense array"
+            )
         return m.toarray()
-    if isinstance(obj, (bool, float, np.generic)) or (isinstance(obj, int) and abs(obj) < 2 ** 63):
+    if isinstance(obj, (bool, float, np.generic)) or (isinstance(obj, int) and abs(obj) < 2**63):
         return np.asarray(obj)
     if isinstance(obj, (list, tuple)):
         if any(isinstance(x, (ChumpyStandIn, SparseStandIn, ArrayStandIn, list, tuple)) for x in obj):

@@ -10,6 +10,7 @@ that cannot be read or written) print as one clear line and exit with status
 all-new (:func:`core.fileio.output_dir`), and an interrupted command says
 which output folders it did complete.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -46,6 +47,7 @@ def main(argv=None) -> int:
         parser.print_help()
         return 1
     from ..fileio import check_output, committed_outputs
+
     before = len(committed_outputs())
     try:
         if getattr(args, "out", None) is not None:
@@ -66,5 +68,6 @@ def main(argv=None) -> int:
         said = f"only {', '.join(map(str, done))} was written" if done else "nothing was written"
         print(f"ease {args.command}: {what}; {said}", file=sys.stderr)
         return 130
+
 
 __all__ = ["build_parser", "main"]

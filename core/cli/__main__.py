@@ -1,4 +1,5 @@
 """``python -m core.cli``: the ``ease`` command."""
+
 import sys
 
 from . import main

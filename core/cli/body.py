@@ -11,6 +11,7 @@ Examples::
     ease body --model SMPL_NEUTRAL.npz --shape beta0=1.5 --pose T --out smpl.obj
     ease body --all --out bodies/
 """
+
 from __future__ import annotations
 
 import argparse
@@ -20,11 +21,13 @@ from ..choices import POSE_PRESETS
 from ..errors import BodyError
 from .common import add_quiet, console_progress, print_files, subcommand
 
+
 def load_model(name: str, blendshapes=None, landmarks=None, up: str = "z"):
     """Body model from ``--model``: ``anny`` (default body), or a path to an SMPL
     ``.npz``/``.pkl``/``.pickle`` file or an OBJ template (the suffixes a design's
     ``body.model`` takes, :data:`core.body.registry.MODEL_SUFFIXES`)."""
     from ..body.registry import MODEL_SUFFIXES, load_body
+
     suffix = Path(name).suffix.lower()
     if suffix == ".obj":
         return load_body(name, blendshapes=blendshapes, landmarks=landmarks, up=up)
@@ -43,32 +46,33 @@ def resolve_shape(body, text, progress=None, chart=None):
     shape parameters."""
     from ..body.sizes import chart_sizes, parse_assignments, size_of, size_shape
     from ..body.smpl import check_shape
+
     if text is None:
         return dict(body.default_shape())
     if "=" not in str(text):
         if ":" in str(text) or str(text).upper() in chart_sizes(chart):
             return size_shape(body, size_of(text, chart), progress=progress)
         params = ", ".join(body.shape_parameters()) or "none"
-        raise BodyError(f"--shape {text!r}: expected a size ({', '.join(chart_sizes(chart))}) or name=value pairs "
-                        f"of the model's shape parameters ({params}), or chart:size")
+        raise BodyError(
+            f"--shape {text!r}: expected a size ({', '.join(chart_sizes(chart))}) or name=value pairs "
+            f"of the model's shape parameters ({params}), or chart:size"
+        )
     return check_shape(body.shape_parameters(), parse_assignments(text, "--shape"), f"--shape ({body.name})")
 
 
 def _write_all(body, out: Path, progress) -> int:
     from ..body.output import measures_text, write_all_bodies
+
     summary = write_all_bodies(body, out, progress)
     for size, rec in summary["sizes"].items():
         print(f"size {size:>2}: {measures_text(rec['measured_cm'])}")
-    print_files((p for p in sorted(out.iterdir()) if p.name.startswith(("size_", "pose_", "bodies."))),
-                prefix="wrote ")
+    print_files((p for p in sorted(out.iterdir()) if p.name.startswith(("size_", "pose_", "bodies."))), prefix="wrote ")
     return 0
 
 
 def run(args) -> int:
     from ..body.output import measures_text, safe_measure, write_obj
-    from ..body.sizes import check_targets, fit_measurements, parse_assignments
-
-    from ..body.sizes import check_chart, size_of
+    from ..body.sizes import check_chart, check_targets, fit_measurements, parse_assignments, size_of
 
     progress = console_progress(args)
     if args.chart is not None:
@@ -85,8 +89,9 @@ def run(args) -> int:
     if args.shape is not None and args.measure is not None:
         raise BodyError("give either --shape or --measure, not both")
     if args.measurements is not None and (args.shape is not None or args.measure is not None or args.all):
-        raise BodyError("--measurements fits the body to a table of tape measures; it takes no --shape, --size, "
-                        "--measure or --all")
+        raise BodyError(
+            "--measurements fits the body to a table of tape measures; it takes no --shape, --size, --measure or --all"
+        )
     if args.all and (args.shape is not None or args.measure is not None or args.pose is not None):
         raise BodyError("--all writes every size and pose; it takes no --shape, --measure or --pose")
     if args.measure is not None:
@@ -97,6 +102,7 @@ def run(args) -> int:
         return _write_all(body, out, progress)
     if args.measurements is not None:
         from ..body.made_to_measure import fit_tape, read_tape_file
+
         fit = fit_tape(body, read_tape_file(args.measurements), progress=progress)
         shape = fit.shape
         print(fit.summary())
@@ -121,9 +127,11 @@ def run(args) -> int:
 
 def _chart_text() -> str:
     from ..body.sizes import CHARTS
-    return "\n".join(f"  {c.name}: " + "; ".join(f"{k} " + "/".join(f"{v:g}" for v in row.values())
-                                                for k, row in c.sizes.items())
-                     for c in CHARTS.values())
+
+    return "\n".join(
+        f"  {c.name}: " + "; ".join(f"{k} " + "/".join(f"{v:g}" for v in row.values()) for k, row in c.sizes.items())
+        for c in CHARTS.values()
+    )
 
 
 class _ChartsHelp(argparse.RawDescriptionHelpFormatter):
@@ -141,33 +149,58 @@ _CHARTS = "<size charts>"
 
 def add_parser(subparsers) -> None:
     p = subcommand(
-        subparsers, "body", run,
+        subparsers,
+        "body",
+        run,
         help="write a body of a given size/measurements and pose as OBJ",
         description="Write a posed body as OBJ (metres, +Z up, facing -Y) and print its measurements "
-                    "(height, chest, waist, hip in cm). --all writes sizes XS..XL and poses A, T, P1, P2, P3 "
-                    "and a PNG of them side by side.",
+        "(height, chest, waist, hip in cm). --all writes sizes XS..XL and poses A, T, P1, P2, P3 "
+        "and a PNG of them side by side.",
         formatter_class=_ChartsHelp,
-        epilog="examples:" + __doc__.split("Examples::", 1)[1].rstrip() + "\n\nsize charts (cm, height/chest/waist[/hip]):\n" + _CHARTS,
+        epilog="examples:"
+        + __doc__.split("Examples::", 1)[1].rstrip()
+        + "\n\nsize charts (cm, height/chest/waist[/hip]):\n"
+        + _CHARTS,
     )
-    p.add_argument("--model", default="anny",
-                   help="body model: 'anny' (default body) or a path to an SMPL/SMPL-X .npz/.pkl or an OBJ template")
-    p.add_argument("--shape", default=None,
-                   help="a chart size XS, S, M, L, XL (M = reference) or name=value,... shape parameters")
-    p.add_argument("--chart", default=None,
-                   help="size chart of --size/--shape sizes: default (Anny's XS..XL), women or men (EN 13402-3)")
-    p.add_argument("--size", default=None,
-                   help="a size of --chart (e.g. M) or chart:size (women:M); the same as --shape SIZE")
-    p.add_argument("--measure", default=None, metavar="chest=96,waist=80,hip=100,height=175",
-                   help="fit the shape to these measurements in cm (any of height, chest/bust, waist, hip)")
-    p.add_argument("--measurements", default=None, metavar="FILE.json|FILE.csv",
-                   help="made-to-measure: fit Anny's phenotypes and local changes to a table of tape measures "
-                        "in cm (height, neck, shoulder_width, chest/bust, underbust, waist, high_hip, hip, "
-                        "upper_arm, wrist, arm_length, back_waist_length, inseam, thigh; optional gender 0..1; "
-                        "docs/measurements.md)")
+    p.add_argument(
+        "--model",
+        default="anny",
+        help="body model: 'anny' (default body) or a path to an SMPL/SMPL-X .npz/.pkl or an OBJ template",
+    )
+    p.add_argument(
+        "--shape", default=None, help="a chart size XS, S, M, L, XL (M = reference) or name=value,... shape parameters"
+    )
+    p.add_argument(
+        "--chart",
+        default=None,
+        help="size chart of --size/--shape sizes: default (Anny's XS..XL), women or men (EN 13402-3)",
+    )
+    p.add_argument(
+        "--size", default=None, help="a size of --chart (e.g. M) or chart:size (women:M); the same as --shape SIZE"
+    )
+    p.add_argument(
+        "--measure",
+        default=None,
+        metavar="chest=96,waist=80,hip=100,height=175",
+        help="fit the shape to these measurements in cm (any of height, chest/bust, waist, hip)",
+    )
+    p.add_argument(
+        "--measurements",
+        default=None,
+        metavar="FILE.json|FILE.csv",
+        help="made-to-measure: fit Anny's phenotypes and local changes to a table of tape measures "
+        "in cm (height, neck, shoulder_width, chest/bust, underbust, waist, high_hip, hip, "
+        "upper_arm, wrist, arm_length, back_waist_length, inseam, thigh; optional gender 0..1; "
+        "docs/measurements.md)",
+    )
     p.add_argument("--pose", default=None, help=f"pose preset: {', '.join(POSE_PRESETS)} (default A)")
-    p.add_argument("--all", action="store_true", help="write all five sizes and all five poses and bodies.png to --out DIR")
+    p.add_argument(
+        "--all", action="store_true", help="write all five sizes and all five poses and bodies.png to --out DIR"
+    )
     p.add_argument("--out", required=True, help="output .obj file (or directory with --all)")
-    p.add_argument("--blendshapes", default=None, help="OBJ models: .npz of blend shapes (names, deltas, optional skeleton)")
+    p.add_argument(
+        "--blendshapes", default=None, help="OBJ models: .npz of blend shapes (names, deltas, optional skeleton)"
+    )
     p.add_argument("--landmarks", default=None, help="OBJ models: landmark JSON")
     p.add_argument("--up", default="z", choices=("z", "y"), help="OBJ models: up axis of the file (default z)")
     add_quiet(p, "no progress lines")

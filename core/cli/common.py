@@ -1,4 +1,5 @@
 """What every ``ease`` subcommand shares: its parser header, progress line and file listing."""
+
 from __future__ import annotations
 
 import argparse
@@ -20,6 +21,7 @@ def add_quiet(p: argparse.ArgumentParser, what: str = "no progress line") -> Non
 def console_progress(args):
     """The stderr progress line, or None with ``--quiet``."""
     from ..progress import ConsoleProgress
+
     return None if args.quiet else ConsoleProgress()
 
 

@@ -6,6 +6,7 @@ Writes into ``--out`` atomically, through :mod:`core.workflows`:
 reads), ``drape_report.json`` (times, settling, gap, penetration, seam gap)
 and ``preview.png``. Warp is imported inside the command.
 """
+
 from __future__ import annotations
 
 from .common import add_quiet, console_progress, subcommand
@@ -13,35 +14,52 @@ from .common import add_quiet, console_progress, subcommand
 
 def add_parser(sub) -> None:
     p = subcommand(
-        sub, "drape", _cmd,
+        sub,
+        "drape",
+        _cmd,
         help="drape a sewing pattern on its body (XPBD in Warp) and measure the fit",
         description="Drape the pattern in PATTERN_DIR (pattern.json from `ease pattern`) on the body it was "
-                    "solved for: the garment starts skintight on the body and relaxes to its pattern size under "
-                    "gravity, pins and body contact, until it settles or hits the frame limit. Writes "
-                    "garment.obj, garment.ply (strain and gap per vertex), drape.npz, drape_report.json "
-                    "(times, settle frame, gap mean +- std, penetration, seam gap) and preview.png.")
+        "solved for: the garment starts skintight on the body and relaxes to its pattern size under "
+        "gravity, pins and body contact, until it settles or hits the frame limit. Writes "
+        "garment.obj, garment.ply (strain and gap per vertex), drape.npz, drape_report.json "
+        "(times, settle frame, gap mean +- std, penetration, seam gap) and preview.png.",
+    )
     p.add_argument("pattern", metavar="PATTERN_DIR", help="folder with pattern.json (or the file itself)")
     p.add_argument("--out", required=True, help="output folder")
-    p.add_argument("--material", default=None,
-                   help="fabric preset: cotton, jersey, denim, silk (default: the design's materials.fabric, "
-                        "else cotton)")
+    p.add_argument(
+        "--material",
+        default=None,
+        help="fabric preset: cotton, jersey, denim, silk (default: the design's materials.fabric, else cotton)",
+    )
     p.add_argument("--device", default="cpu", help="cpu (default; bitwise repeatable) or cuda")
     p.add_argument("--frames", type=int, default=None, help="frame limit (default 120 at 30 fps)")
     p.add_argument("--substeps", type=int, default=None, help="XPBD substeps per frame (default 20)")
-    p.add_argument("--self-collision", action="store_true",
-                   help="keep the garment's own layers apart (particle self-collision; slower)")
+    p.add_argument(
+        "--self-collision",
+        action="store_true",
+        help="keep the garment's own layers apart (particle self-collision; slower)",
+    )
     p.add_argument("--no-preview", action="store_true", help="skip preview.png")
-    p.add_argument("--animation", metavar="POSES", default=None,
-                   help="drape through a pose sequence instead, e.g. 'A,P1,P3' (the first the pattern's own "
-                        "pose): writes motion.npz, motion_report.json (penetration, residual stretch, seconds "
-                        "per frame) and garment_motion / body_motion .obj + .pc2 point caches")
-    p.add_argument("--between", type=int, default=10,
-                   help="with --animation: in-between frames from each pose to the next (default 10)")
+    p.add_argument(
+        "--animation",
+        metavar="POSES",
+        default=None,
+        help="drape through a pose sequence instead, e.g. 'A,P1,P3' (the first the pattern's own "
+        "pose): writes motion.npz, motion_report.json (penetration, residual stretch, seconds "
+        "per frame) and garment_motion / body_motion .obj + .pc2 point caches",
+    )
+    p.add_argument(
+        "--between",
+        type=int,
+        default=10,
+        help="with --animation: in-between frames from each pose to the next (default 10)",
+    )
     add_quiet(p)
 
 
 def _options(args) -> dict:
     from ..drape.options import check_option
+
     # refused before the pattern is read or Warp is loaded
     for flag, name in (("frames", "max_frames"), ("substeps", "substeps")):
         if getattr(args, flag) is not None:
@@ -64,23 +82,29 @@ def _motion(args, options, pattern, prog) -> int:
     from ..drape.animate import drape_motion, motion_report, pose_frames, write_motion
     from ..errors import DrapeError
     from ..progress import report, sub
+
     poses = args.poses
     spec = dict(pattern.body or {})
     if poses[0] != (spec.get("pose") or "A"):
-        raise DrapeError(f"--animation: the sequence starts at the pattern's own pose {spec.get('pose') or 'A'} "
-                         f"(its garment was cut there), not {poses[0]}")
+        raise DrapeError(
+            f"--animation: the sequence starts at the pattern's own pose {spec.get('pose') or 'A'} "
+            f"(its garment was cut there), not {poses[0]}"
+        )
     model = load_body(spec.get("model", "anny"))
     frames = pose_frames(model, spec.get("shape"), poses, args.between)
     _, faces = spec_instance(spec, model)
-    result = drape_motion(pattern, frames, faces, material=args.material, options=options,
-                          progress=sub(prog, 0.0, 0.95))
+    result = drape_motion(
+        pattern, frames, faces, material=args.material, options=options, progress=sub(prog, 0.0, 0.95)
+    )
     write_motion(args.out, result, frames, faces, poses, args.between)
     report(prog, 1.0, "drape: done")
     rep = motion_report(result, poses, args.between)
-    print(f"motion {' -> '.join(poses)}: {rep['frames']} frames, "
-          f"worst penetration {rep['worst_penetration_pct']:.2f} %, "
-          f"residual stretch p95 up to {max(rep['stretch_p95_pct']):.1f} %, "
-          f"{sum(rep['frame_seconds']) / max(len(rep['frame_seconds']), 1):.2f} s a frame -> {args.out}")
+    print(
+        f"motion {' -> '.join(poses)}: {rep['frames']} frames, "
+        f"worst penetration {rep['worst_penetration_pct']:.2f} %, "
+        f"residual stretch p95 up to {max(rep['stretch_p95_pct']):.1f} %, "
+        f"{sum(rep['frame_seconds']) / max(len(rep['frame_seconds']), 1):.2f} s a frame -> {args.out}"
+    )
     return 0
 
 
@@ -90,9 +114,10 @@ def _cmd(args) -> int:
     from ..progress import report, sub
 
     options = _options(args)
-    if args.animation is not None:      # refused before the pattern is read
+    if args.animation is not None:  # refused before the pattern is read
         from ..drape.animate import parse_poses
         from ..errors import DrapeError
+
         args.poses = parse_poses(args.animation, "--animation")
         if args.between < 0:
             raise DrapeError(f"--between: expected 0 or more in-between frames, got {args.between}")

@@ -6,6 +6,7 @@ own size is the reference pattern itself, as ``ease pattern`` writes it); the
 files are written by :func:`core.export.graded.export_graded`, with the
 design's own size as the sample size the grade points come from.
 """
+
 from __future__ import annotations
 
 from typing import List
@@ -45,8 +46,9 @@ def run_graded(args) -> int:
 
     design = Path(args.pattern_dir)
     if not design.is_file():
-        raise ExportError(f"{design}: --sizes grades a design: expected the design JSON file "
-                          f"(the shipped ones: `ease templates`)")
+        raise ExportError(
+            f"{design}: --sizes grades a design: expected the design JSON file (the shipped ones: `ease templates`)"
+        )
     progress = console_progress(args)
     # Bare size names are of the design's own chart (body.chart), as in ``ease transfer``;
     # checked before the (slow) preparation.
@@ -61,7 +63,13 @@ def run_graded(args) -> int:
         patterns[size] = wf.transfer(prep, size, solver=solver, start=ref, progress=span).pattern
     allowance = wf.export_allowance(ref, args.allowance, args.hem)
     own = next((s for s in sizes if wf.is_own_size(prep, s)), None)
-    files = export_graded(patterns, args.out, allowance=allowance, notch_spacing=args.notch_spacing,
-                          progress=sub(progress, 0.9, 1.0), sample=own)
+    files = export_graded(
+        patterns,
+        args.out,
+        allowance=allowance,
+        notch_spacing=args.notch_spacing,
+        progress=sub(progress, 0.9, 1.0),
+        sample=own,
+    )
     print_files(files)
     return 0

@@ -6,6 +6,7 @@ The result (:class:`core.cut.types.GarmentCut`) gives the panels' 3D vertices
 on any shape and pose through its embedding. Imports stay light here; the
 engine and its dependencies load when a cut is made.
 """
+
 from __future__ import annotations
 
 import time
@@ -14,8 +15,9 @@ from typing import Optional
 from ..progress import Progress, report, sub
 
 
-def cut_design(design, body=None, shape=None, pose=None, progress: Optional[Progress] = None,
-               timings: Optional[dict] = None):
+def cut_design(
+    design, body=None, shape=None, pose=None, progress: Optional[Progress] = None, timings: Optional[dict] = None
+):
     """Cut ``design`` on a body instance.
 
     Parameters
@@ -47,10 +49,12 @@ def cut_design(design, body=None, shape=None, pose=None, progress: Optional[Prog
     report(progress, 0.0, f"resolving design {design.name!r}")
     if body is None:
         from ..body.registry import load_spec
+
         body = load_spec(design.body)
     t0 = time.perf_counter()
     vertices = instance_vertices(design, body, shape, pose)
     from .auto_darts import has_auto, place_darts
+
     if has_auto(design):
         # automatic darts placed first, on this instance (core.cut.auto_darts)
         design = place_darts(design, body, vertices, progress=sub(progress, 0.0, 0.1))
@@ -59,8 +63,9 @@ def cut_design(design, body=None, shape=None, pose=None, progress: Optional[Prog
     spec = resolve(design, body, shape=shape, pose=pose, resolver=resolver)
     t2 = time.perf_counter()
     report(progress, 0.15, "cutting the body surface")
-    cut = cut_surface(body, vertices, spec, progress=sub(progress, 0.15, 0.95), timings=timings,
-                      seed_names=seed_names(design))
+    cut = cut_surface(
+        body, vertices, spec, progress=sub(progress, 0.15, 0.95), timings=timings, seed_names=seed_names(design)
+    )
     report(progress, 0.95, "applying ease fields")
     t3 = time.perf_counter()
     apply_ease(cut, design, body, vertices, resolver=resolver)
@@ -78,9 +83,12 @@ def cut_design(design, body=None, shape=None, pose=None, progress: Optional[Prog
 def seed_names(design) -> dict:
     """Panel name -> its seed as the design names it, for the engine's errors:
     ``"keypoint 'chest_front'"``, or the JSON path of an inline seed."""
-    from ..design.resolve import _panels as design_panels   # (garment, path, panel, mirror_of), mirrors included
-    return {f"{g.name}.{p.name}": f"keypoint {p.seed!r}" if isinstance(p.seed, str) else f"seed {path}.seed"
-            for g, path, p, _ in design_panels(design)}
+    from ..design.resolve import _panels as design_panels  # (garment, path, panel, mirror_of), mirrors included
+
+    return {
+        f"{g.name}.{p.name}": f"keypoint {p.seed!r}" if isinstance(p.seed, str) else f"seed {path}.seed"
+        for g, path, p, _ in design_panels(design)
+    }
 
 
 __all__ = ["cut_design"]

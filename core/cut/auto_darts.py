@@ -24,9 +24,9 @@ The darts are written into the design (:func:`place_darts` returns it, the
 designer can edit it and save it with :func:`core.design.save_design`); a
 mirrored design mirrors them as any dart.
 """
+
 from __future__ import annotations
 
-import copy
 from typing import List
 
 import numpy as np
@@ -41,8 +41,7 @@ MIN_THETA = 0.05
 #: m, the least distance between two automatic darts' apexes
 SPACING = 0.1
 #: the landmarks a tailor points a dart at
-APEX_LANDMARKS = ("bust_left", "bust_right", "shoulder_blade_left", "shoulder_blade_right", "seat_left",
-                  "seat_right")
+APEX_LANDMARKS = ("bust_left", "bust_right", "shoulder_blade_left", "shoulder_blade_right", "seat_left", "seat_right")
 #: m, a peak this near one of them points at the landmark
 SNAP_LANDMARK = 0.06
 #: m, an apex at least this far inside the panel (a dart needs room to open)
@@ -75,6 +74,7 @@ def curvature_peaks(xyz: np.ndarray, faces: np.ndarray, count: int, keep=None) -
     :data:`REACH`, above :data:`MIN_THETA`, :data:`SPACING` apart, largest first; ``keep`` (n,) bool
     limits the candidates (e.g. one side of a mirrored design)."""
     from scipy.spatial import cKDTree
+
     k = angle_defect(xyz, faces)
     tree = cKDTree(xyz)
     near = tree.query_ball_point(xyz, REACH)
@@ -108,13 +108,15 @@ def place_darts(design, body=None, vertices=None, progress=None):
     Design: the automatic requests replaced by the placed darts and their apex keypoints
     (``auto_dart_<k>_apex``, where no landmark is near).
     """
-    from . import cut_design
     from ..design.resolve import Resolver, instance_vertices
+    from . import cut_design
+
     out = design.copy()
     if not has_auto(out):
         return out
     if body is None:
         from ..body import load_body
+
         body = load_body(design.body.get("model", "anny"))
     if vertices is None:
         vertices = instance_vertices(design, body)
@@ -137,6 +139,7 @@ def place_darts(design, body=None, vertices=None, progress=None):
             panel = cut.panel(f"{g.name}.{p.name}")
             xyz = X[panel.vertex_ids]
             from scipy.spatial import cKDTree
+
             inner = cKDTree(xyz[np.unique(np.concatenate(panel.boundary))]).query(xyz)[0] >= INSIDE
             # a mirrored design places its *_left darts (the mirror makes the others): no midline dart
             keep = inner & (xyz[:, 0] >= MIDLINE) if out.mirror else inner
@@ -173,6 +176,7 @@ def _mouth_lines(resolver, design, panel, xyz, garment: str) -> list:
     hem line of ``garment`` (or shared) running along the panel's boundary (:data:`ON_LINE`); in a
     mirrored design its ``*_left`` and midline lines only."""
     from scipy.spatial import cKDTree
+
     edge = np.unique(np.concatenate(panel.boundary)) if panel.boundary else np.arange(len(xyz))
     tree = cKDTree(xyz[edge])
     out = []

@@ -33,6 +33,7 @@ closed line repeats its first vertex at the end. Pins are the garment's
 vertices on its ``pin_line``, in line order. ``warp_dir`` points up the body
 part (see :mod:`.grain`).
 """
+
 from __future__ import annotations
 
 import time
@@ -55,7 +56,7 @@ from .symmetric import body_face_sides, coded_labels, mirrored_mesh
 from .types import GarmentCut, Panel, Seam
 
 FORBIDDEN_REGIONS = ("head", "hands", "feet")
-ERODE = 2   # rings of vertices a garment may overlap a forbidden region's border by
+ERODE = 2  # rings of vertices a garment may overlap a forbidden region's border by
 
 
 # --------------------------------------------------------------------------------------------
@@ -74,8 +75,10 @@ def _validate(spec: CutSpec, n_faces: int) -> None:
             raise CutError(f"cut line {line.name!r}: role must be 'seam' or 'opening', got {line.role!r}")
         need = 3 if line.closed else 2
         if len(line.points) < need:
-            raise CutError(f"cut line {line.name!r}: needs at least {need} keypoints"
-                           f"{' (it is closed)' if line.closed else ''}, got {len(line.points)}")
+            raise CutError(
+                f"cut line {line.name!r}: needs at least {need} keypoints"
+                f"{' (it is closed)' if line.closed else ''}, got {len(line.points)}"
+            )
         for k, p in enumerate(line.points):
             check_surface_point(p, n_faces, f"cut line {line.name!r} point {k}")
         g = getattr(line, "garment", None)
@@ -116,7 +119,7 @@ def forbidden_body_faces(body, n_faces: int) -> np.ndarray:
     """:func:`_forbidden_body_faces`, cached per body model (its regions are fixed)."""
     try:
         hit = _FORBIDDEN_CACHE.get(body)
-    except TypeError:           # not weak-referenceable: no cache
+    except TypeError:  # not weak-referenceable: no cache
         return _forbidden_body_faces(body, n_faces)
     if hit is None or len(hit) != n_faces:
         hit = _forbidden_body_faces(body, n_faces)
@@ -161,8 +164,14 @@ class _Clock:
         self.t = now
 
 
-def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None,
-                timings: Optional[dict] = None, seed_names: Optional[Dict[str, str]] = None) -> GarmentCut:
+def cut_surface(
+    body,
+    body_vertices: np.ndarray,
+    spec: CutSpec,
+    progress=None,
+    timings: Optional[dict] = None,
+    seed_names: Optional[Dict[str, str]] = None,
+) -> GarmentCut:
     """Cut the body surface into garment panels.
 
     Parameters
@@ -196,6 +205,7 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None,
     bridge_sides = span = None
     if spec.skirt:
         from .skirt import make_skirt, span_surface
+
         bridge_sides = make_skirt(mesh, body, X)
         # the skirt lies on a membrane over the concavities between the legs, not in the
         # creases: the cut works on that surface, and its embedding is composed with it below
@@ -211,7 +221,7 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None,
     kv = insert_keypoints(mesh, flat, BF, X)
     line_kv, k = [], 0
     for line in spec.lines:
-        line_kv.append(kv[k:k + len(line.points)])
+        line_kv.append(kv[k : k + len(line.points)])
         k += len(line.points)
     clock.lap("keypoints")
     report(progress, 0.2, "cutting: geodesic paths")
@@ -256,13 +266,15 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None,
         seqs = {}
         todo = garment_lines[g.name]
         for k, li in enumerate(todo):
-            report(progress, base + 0.2 * k / max(len(todo), 1) / len(spec.garments),
-                   f"cutting garment {g.name}: line {names[li]}")
+            report(
+                progress,
+                base + 0.2 * k / max(len(todo), 1) / len(spec.garments),
+                f"cutting garment {g.name}: line {names[li]}",
+            )
             seqs[li] = _insert_line(gm, li, line_kv[li], paths[li], spec.lines[li].closed, names)
         clock.lap("splitting")
         report(progress, base + 0.2 / len(spec.garments), f"cutting garment {g.name}: panels")
-        out = _garment_panels(gm, spec, g, gpanels, seqs, forbidden, BF, X, axes, offset, clock, seed_names,
-                              mirror)
+        out = _garment_panels(gm, spec, g, gpanels, seqs, forbidden, BF, X, axes, offset, clock, seed_names, mirror)
         panels += out["panels"]
         seams += out["seams"]
         hems.update(out["hems"])
@@ -277,11 +289,20 @@ def cut_surface(body, body_vertices: np.ndarray, spec: CutSpec, progress=None,
     darts = {}
     if any(getattr(l, "dart", None) is not None for l in spec.lines):
         from .darts import dart_records
+
         darts = dart_records(spec, seams, X, BF)
     report(progress, 1.0, "cutting: done")
-    return GarmentCut(body=dict(spec.body), embedding=W, panels=panels, seams=seams,
-                      garments={g.name: g.kind for g in spec.garments}, pins=pins, hems=hems,
-                      materials=dict(spec.materials), darts=darts)
+    return GarmentCut(
+        body=dict(spec.body),
+        embedding=W,
+        panels=panels,
+        seams=seams,
+        garments={g.name: g.kind for g in spec.garments},
+        pins=pins,
+        hems=hems,
+        materials=dict(spec.materials),
+        darts=darts,
+    )
 
 
 def _axes(body, X, spec):
@@ -302,7 +323,7 @@ def _axes(body, X, spec):
             V, J = np.asarray(V, float), np.asarray(J, float)
             if V.shape == X.shape and np.abs(V - X).max() < 1e-6 and J.shape == (len(jn), 3):
                 joints = J
-        except Exception:   # e.g. a size name the model does not evaluate directly
+        except Exception:  # e.g. a size name the model does not evaluate directly
             joints = None
     lm = getattr(body, "landmarks", None)
     regions = getattr(body, "regions", None) or {}
@@ -312,13 +333,11 @@ def _axes(body, X, spec):
             name = "torso" if part == "torso" else f"{part}_{side}"
             ids = np.asarray(regions.get(name, []), dtype=np.int64)
             pts = X[ids] if len(ids) >= 10 else None
-            out[(part, side)] = body_part_axis(part, side, jn, joints, lm, np.asarray(body.faces), X,
-                                               region_points=pts)
+            out[(part, side)] = body_part_axis(part, side, jn, joints, lm, np.asarray(body.faces), X, region_points=pts)
     return out
 
 
-def _insert_line(mesh: CutMesh, li: int, kv: List[int], segs: List[np.ndarray],
-                 closed: bool, names) -> np.ndarray:
+def _insert_line(mesh: CutMesh, li: int, kv: List[int], segs: List[np.ndarray], closed: bool, names) -> np.ndarray:
     """Trace a line's geodesic segments into the mesh; its ordered vertex sequence."""
     allowed = set(kv)
     seq_k = list(kv) + ([kv[0]] if closed else [])
@@ -351,9 +370,21 @@ def face_components(F: np.ndarray, n: int, cut_ukeys: np.ndarray):
     return connected_components(A, directed=False)[1]
 
 
-def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], seqs: Dict[int, np.ndarray],
-                    forbidden: np.ndarray, BF, X, axes, offset: int, clock: Optional[_Clock] = None,
-                    seed_names: Optional[Dict[str, str]] = None, mirror=None):
+def _garment_panels(
+    mesh: CutMesh,
+    spec: CutSpec,
+    g,
+    gpanels: List[PanelSpec],
+    seqs: Dict[int, np.ndarray],
+    forbidden: np.ndarray,
+    BF,
+    X,
+    axes,
+    offset: int,
+    clock: Optional[_Clock] = None,
+    seed_names: Optional[Dict[str, str]] = None,
+    mirror=None,
+):
     """One garment's panels; ``mirror``: ``(body symmetry, body triangle sides)`` to make a
     mirrored garment's right half the exact mirror of its left (:mod:`.symmetric`), or None."""
     clock = clock or _Clock(None)
@@ -372,15 +403,19 @@ def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], s
         if c in owner:
             # a seed on (or a millimetre from) a seamline is the likely cause: named first
             hint = seed_hint(mesh, [by_name[owner[c]], p], list(seqs), [l.name for l in spec.lines], BF, X, seed_names)
-            raise CutError(f"panels {owner[c]!r}{seed_label(owner[c], seed_names)} and {p.name!r}"
-                           f"{seed_label(p.name, seed_names)} are in one region, so panel {p.name!r} has no faces "
-                           f"of its own: {hint}a seamline between them is missing or does not close"
-                           + _open_ends(mesh, spec, seqs, comp, c))
+            raise CutError(
+                f"panels {owner[c]!r}{seed_label(owner[c], seed_names)} and {p.name!r}"
+                f"{seed_label(p.name, seed_names)} are in one region, so panel {p.name!r} has no faces "
+                f"of its own: {hint}a seamline between them is missing or does not close"
+                + _open_ends(mesh, spec, seqs, comp, c)
+            )
         if bad_comp[c]:
             hint = seed_hint(mesh, [p], list(seqs), [l.name for l in spec.lines], BF, X, seed_names)
-            raise CutError(f"panel {p.name!r}{seed_label(p.name, seed_names)} reaches the "
-                           f"{FORBIDDEN_REGIONS[bad_comp[c] - 1]} region: {hint}a seamline around it does not "
-                           f"close{_open_ends(mesh, spec, seqs, comp, c)}")
+            raise CutError(
+                f"panel {p.name!r}{seed_label(p.name, seed_names)} reaches the "
+                f"{FORBIDDEN_REGIONS[bad_comp[c] - 1]} region: {hint}a seamline around it does not "
+                f"close{_open_ends(mesh, spec, seqs, comp, c)}"
+            )
         owner[c] = p.name
         label[comp == c] = pi
     keep = label >= 0
@@ -399,10 +434,12 @@ def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], s
     clock.lap("embedding")
     lines_li = sorted(seqs)
     lines = [remap[seqs[li]] for li in lines_li]
-    plan, lab = coded_labels(mirror, [p.name for p in gpanels], [spec.lines[li].name for li in lines_li],
-                             mesh.parent[keep], lab)
+    plan, lab = coded_labels(
+        mirror, [p.name for p in gpanels], [spec.lines[li].name for li in lines_li], mesh.parent[keep], lab
+    )
     if spec.refine_edge_length is not None:
         from .refine import delaunay_flips, refine
+
         # lines may leave the garment (-1 ids): refine only their in-garment stretches
         pieces, owners = [], []
         for k, l in enumerate(lines):
@@ -413,8 +450,9 @@ def _garment_panels(mesh: CutMesh, spec: CutSpec, g, gpanels: List[PanelSpec], s
         clock.lap("refine")
         ng = np.int64(len(Xg))
         fixed = [np.minimum(q[:-1], q[1:]) * ng + np.maximum(q[:-1], q[1:]) for q in pieces]
-        Fg = delaunay_flips(Xg, Fg, lab, np.concatenate(fixed) if fixed else np.zeros(0, np.int64),
-                            max_length=spec.refine_edge_length)
+        Fg = delaunay_flips(
+            Xg, Fg, lab, np.concatenate(fixed) if fixed else np.zeros(0, np.int64), max_length=spec.refine_edge_length
+        )
         clock.lap("delaunay_flips")
         lines = [[pieces[j] for j in range(len(pieces)) if owners[j] == k] for k in range(len(lines))]
     else:
@@ -456,7 +494,7 @@ def _open_ends(mesh: CutMesh, spec: CutSpec, seqs: Dict[int, np.ndarray], comp: 
             continue
         for end, v in (("first", int(seq[0])), ("last", int(seq[-1]))):
             if mesh.cut_verts.get(v, set()) - {li}:
-                continue            # it meets another line there
+                continue  # it meets another line there
             if any(comp[f] == c for f in mesh.vf[v]):
                 out.append(f"{line.name!r} ({end} keypoint)")
     if not out:
@@ -491,5 +529,4 @@ def _weights(mesh: CutMesh, used: np.ndarray, V: int) -> sp.csr_matrix:
         rows.append(np.full(len(c), r))
         cols.append(c)
         vals.append(w)
-    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                         shape=(len(used), V))
+    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(len(used), V))

@@ -7,6 +7,7 @@ vertices by splitting their triangle or edge; then one
 consecutive keypoints is joined by the exact (intrinsic edge-flip) geodesic.
 The returned 3D polyline crosses mesh edges; :meth:`CutMesh.trace` inserts it.
 """
+
 from __future__ import annotations
 
 from typing import Dict, List, Sequence, Tuple
@@ -35,8 +36,7 @@ def check_surface_point(sp, n_faces: int, what: str) -> None:
         raise CutError(f"{what}: keypoint barycentric weights {tuple(bary)} must be >= 0 and sum to 1")
 
 
-def insert_keypoints(mesh: CutMesh, points: Sequence, body_faces: np.ndarray,
-                     X: np.ndarray) -> List[int]:
+def insert_keypoints(mesh: CutMesh, points: Sequence, body_faces: np.ndarray, X: np.ndarray) -> List[int]:
     """Insert SurfacePoints as vertices of ``mesh``; returns their vertex ids.
 
     Equal points give the same vertex. A point whose body triangle is gone
@@ -63,6 +63,7 @@ def insert_keypoints(mesh: CutMesh, points: Sequence, body_faces: np.ndarray,
 def closest_face(mesh: CutMesh, pos: np.ndarray):
     """Face of ``mesh`` closest to ``pos`` and the barycentrics of the closest point."""
     import igl
+
     V, F = mesh.X, mesh.F
     _, fi, c = igl.point_mesh_squared_distance(pos[None].astype(float), V, F.astype(np.int64))
     f = int(np.atleast_1d(fi)[0])
@@ -85,14 +86,16 @@ class GeodesicPaths:
 
     def __init__(self, X: np.ndarray, F: np.ndarray):
         import potpourri3d as pp3d
+
         # the solver wants every vertex referenced (the skirt topology leaves some unused)
         F = np.asarray(F, dtype=np.int64)
         used = np.unique(F)
         self.index = np.full(len(X), -1, dtype=np.int64)
         self.index[used] = np.arange(len(used))
         try:
-            self.solver = pp3d.EdgeFlipGeodesicSolver(np.ascontiguousarray(X[used], dtype=float),
-                                                      np.ascontiguousarray(self.index[F]))
+            self.solver = pp3d.EdgeFlipGeodesicSolver(
+                np.ascontiguousarray(X[used], dtype=float), np.ascontiguousarray(self.index[F])
+            )
         except Exception as e:  # potpourri raises RuntimeError on non-manifold input
             raise CutError(f"the body mesh cannot be cut (geodesic solver: {e})")
 

@@ -14,6 +14,7 @@ axis is the horizontal principal direction (the spine in plan view; the head
 and legs tilt the full 3D axis), pointing to the head end, so the warp runs
 along the barrel, not around it. A standing body keeps the vertical.
 """
+
 from __future__ import annotations
 
 from typing import Optional, Sequence
@@ -23,10 +24,14 @@ import numpy as np
 _JOINTS = {
     # (lower, upper) candidates; "{s}" is the side tag
     "torso": (("pelvis", "root", "spine05", "hips", "hip"), ("neck01", "neck", "neck_01", "spine3")),
-    "arm": (("wrist.{S}", "{side}_wrist", "{s}_wrist", "wrist_{s}", "lowerarm02.{S}"),
-            ("upperarm01.{S}", "{side}_shoulder", "{s}_shoulder", "shoulder_{s}", "shoulder01.{S}")),
-    "leg": (("foot.{S}", "{side}_ankle", "{s}_ankle", "ankle_{s}", "lowerleg02.{S}"),
-            ("upperleg01.{S}", "{side}_hip", "{s}_hip", "hip_{s}", "pelvis.{S}")),
+    "arm": (
+        ("wrist.{S}", "{side}_wrist", "{s}_wrist", "wrist_{s}", "lowerarm02.{S}"),
+        ("upperarm01.{S}", "{side}_shoulder", "{s}_shoulder", "shoulder_{s}", "shoulder01.{S}"),
+    ),
+    "leg": (
+        ("foot.{S}", "{side}_ankle", "{s}_ankle", "ankle_{s}", "lowerleg02.{S}"),
+        ("upperleg01.{S}", "{side}_hip", "{s}_hip", "hip_{s}", "pelvis.{S}"),
+    ),
 }
 _LANDMARKS = {
     "torso": (("waist_front", "waist_back"), ("neck_front", "neck_back")),
@@ -44,8 +49,9 @@ def _find_joint(names: Sequence[str], candidates, side: str) -> Optional[int]:
     return None
 
 
-def body_part_axis(part: str, side: str, joint_names=None, joints=None,
-                   landmarks=None, faces=None, X=None, region_points=None) -> np.ndarray:
+def body_part_axis(
+    part: str, side: str, joint_names=None, joints=None, landmarks=None, faces=None, X=None, region_points=None
+) -> np.ndarray:
     """Unit long axis (3,) of a body part, pointing up the part.
 
     Parameters
@@ -73,8 +79,11 @@ def body_part_axis(part: str, side: str, joint_names=None, joints=None,
             pts = []
             for group in _LANDMARKS[part]:
                 names = [n.format(side=side) for n in group]
-                pts.append(np.mean([np.asarray(landmarks[n].bary, float) @ X[faces[landmarks[n].triangle]]
-                                    for n in names], axis=0))
+                pts.append(
+                    np.mean(
+                        [np.asarray(landmarks[n].bary, float) @ X[faces[landmarks[n].triangle]] for n in names], axis=0
+                    )
+                )
             axis = pts[1] - pts[0]
         except KeyError:
             axis = None
@@ -114,8 +123,12 @@ def surface_long_axis(X: np.ndarray, F: np.ndarray, horizontal: bool = False) ->
     centroid = (area[:, None] * (a + b + c) / 3.0).sum(0) / total
     a, b, c = a - centroid, b - centroid, c - centroid
     s = a + b + c
-    M = np.einsum("f,fi,fj->ij", area / 12.0, a, a) + np.einsum("f,fi,fj->ij", area / 12.0, b, b) \
-        + np.einsum("f,fi,fj->ij", area / 12.0, c, c) + np.einsum("f,fi,fj->ij", area / 12.0, s, s)
+    M = (
+        np.einsum("f,fi,fj->ij", area / 12.0, a, a)
+        + np.einsum("f,fi,fj->ij", area / 12.0, b, b)
+        + np.einsum("f,fi,fj->ij", area / 12.0, c, c)
+        + np.einsum("f,fi,fj->ij", area / 12.0, s, s)
+    )
     if horizontal:
         M[2, :] = 0.0
         M[:, 2] = 0.0

@@ -5,6 +5,7 @@ split; :func:`bary2` / :func:`bary2_scalar` give barycentric coordinates in a
 parent triangle's plane, vectorised and for one point in plain floats (the
 line tracer's inner loop).
 """
+
 from __future__ import annotations
 
 from typing import Dict
@@ -29,12 +30,12 @@ class VertexFaces:
     def __getitem__(self, v: int) -> set:
         s = self._sets.get(v)
         if s is None:
-            s = set(self._faces[self._bounds[v]:self._bounds[v + 1]].tolist()) if v < self._n0 else set()
+            s = set(self._faces[self._bounds[v] : self._bounds[v + 1]].tolist()) if v < self._n0 else set()
             self._sets[v] = s
         return s
 
     def append(self, s: set) -> None:
-        pass    # new vertices start empty (made on first use)
+        pass  # new vertices start empty (made on first use)
 
     def copy(self) -> "VertexFaces":
         other = object.__new__(VertexFaces)

@@ -12,6 +12,7 @@ Files (in one directory):
 
 Every file is written atomically (:mod:`core.fileio`).
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -60,8 +61,11 @@ def _decode(value, where="extra"):
         if arr.shape != (count,):
             raise CutError(f"{where}.data: expected {count} values (shape {shape}), got {arr.size}")
         return arr.reshape(shape)
-    if isinstance(value, list) and value and all(isinstance(v, dict) and set(v) == {"dtype", "shape", "data"}
-                                                 for v in value):
+    if (
+        isinstance(value, list)
+        and value
+        and all(isinstance(v, dict) and set(v) == {"dtype", "shape", "data"} for v in value)
+    ):
         return [_decode(v, f"{where}[{i}]") for i, v in enumerate(value)]
     if isinstance(value, dict):
         return {k: _decode(v, f"{where}.{k}") for k, v in value.items()}
@@ -73,7 +77,10 @@ def cut_to_json(cut: GarmentCut) -> dict:
     panels = []
     for p in cut.panels:
         d = {
-            "name": p.name, "garment": p.garment, "body_part": p.body_part, "mirror_of": p.mirror_of,
+            "name": p.name,
+            "garment": p.garment,
+            "body_part": p.body_part,
+            "mirror_of": p.mirror_of,
             "vertex_ids": np.asarray(p.vertex_ids, dtype=np.int64).tolist(),
             "faces": np.asarray(p.faces, dtype=np.int64).tolist(),
             "warp_dir": np.asarray(p.warp_dir, dtype=np.float64).tolist(),
@@ -88,25 +95,37 @@ def cut_to_json(cut: GarmentCut) -> dict:
         panels.append(d)
     seams = []
     for s in cut.seams:
-        d = {"name": s.name, "panel_a": s.panel_a, "panel_b": s.panel_b,
-             "verts_a": np.asarray(s.verts_a, dtype=np.int64).tolist(),
-             "verts_b": np.asarray(s.verts_b, dtype=np.int64).tolist()}
+        d = {
+            "name": s.name,
+            "panel_a": s.panel_a,
+            "panel_b": s.panel_b,
+            "verts_a": np.asarray(s.verts_a, dtype=np.int64).tolist(),
+            "verts_b": np.asarray(s.verts_b, dtype=np.int64).tolist(),
+        }
         known = {"name", "panel_a", "panel_b", "verts_a", "verts_b"}
         extra = {f.name: _encode(getattr(s, f.name)) for f in dataclasses.fields(s) if f.name not in known}
         if extra:
             d["extra"] = extra
         seams.append(d)
     out = {
-        "format": FORMAT, "version": VERSION,
-        "body": _encode(cut.body), "garments": dict(cut.garments), "materials": _encode(cut.materials),
-        "n_vertices": cut.n_vertices, "n_body_vertices": int(cut.embedding.shape[1]),
+        "format": FORMAT,
+        "version": VERSION,
+        "body": _encode(cut.body),
+        "garments": dict(cut.garments),
+        "materials": _encode(cut.materials),
+        "n_vertices": cut.n_vertices,
+        "n_body_vertices": int(cut.embedding.shape[1]),
         "pins": {k: np.asarray(v, dtype=np.int64).tolist() for k, v in cut.pins.items()},
-        "panels": panels, "seams": seams,
+        "panels": panels,
+        "seams": seams,
     }
     known = {"body", "embedding", "panels", "seams", "garments", "pins", "hems", "materials"}
     # a cut without darts writes no darts record (its files stay as they were)
-    extra = {f.name: _encode(getattr(cut, f.name)) for f in dataclasses.fields(cut)
-             if f.name not in known and not (f.name == "darts" and not cut.darts)}
+    extra = {
+        f.name: _encode(getattr(cut, f.name))
+        for f in dataclasses.fields(cut)
+        if f.name not in known and not (f.name == "darts" and not cut.darts)
+    }
     if extra:
         out["extra"] = extra
     return out
@@ -115,8 +134,13 @@ def cut_to_json(cut: GarmentCut) -> dict:
 def embedding_bytes(embedding) -> bytes:
     E = sp.csr_matrix(embedding)
     buf = io.BytesIO()
-    np.savez_compressed(buf, data=E.data.astype(np.float64), indices=E.indices.astype(np.int64),
-                        indptr=E.indptr.astype(np.int64), shape=np.asarray(E.shape, dtype=np.int64))
+    np.savez_compressed(
+        buf,
+        data=E.data.astype(np.float64),
+        indices=E.indices.astype(np.int64),
+        indptr=E.indptr.astype(np.int64),
+        shape=np.asarray(E.shape, dtype=np.int64),
+    )
     return buf.getvalue()
 
 
@@ -124,8 +148,10 @@ def save_cut(cut: GarmentCut, directory: Union[str, Path]) -> list:
     """Write ``cut.json`` and ``cut_embedding.npz`` into ``directory``; returns the paths."""
     directory = Path(directory)
     obj = cut_to_json(cut)
-    return [write_text(directory / CUT_JSON, dumps_json(obj, indent=None) + "\n"),
-            write_bytes(directory / EMBEDDING_NPZ, embedding_bytes(cut.embedding))]
+    return [
+        write_text(directory / CUT_JSON, dumps_json(obj, indent=None) + "\n"),
+        write_bytes(directory / EMBEDDING_NPZ, embedding_bytes(cut.embedding)),
+    ]
 
 
 # A cut.json of a dense shirt is a few MB; refuse files far beyond before reading them.
@@ -140,7 +166,7 @@ def _ids(value, where, bound, shape=None):
         a = np.asarray(value) if value else np.zeros(0, dtype=np.int64)
     except (TypeError, ValueError, OverflowError):
         a = None
-    if a is None or a.dtype.kind not in "iu":   # floats, booleans, text, ragged rows, beyond int64
+    if a is None or a.dtype.kind not in "iu":  # floats, booleans, text, ragged rows, beyond int64
         raise CutError(f"{where}: expected whole-number indices")
     a = a.astype(np.int64)
     if shape is not None:
@@ -189,8 +215,9 @@ def _read_embedding(npath: Path):
     rows, cols = (int(x) for x in shape)
     data, indices, indptr = (z[k].ravel() for k in ("data", "indices", "indptr"))
     check_csr(data, indices, indptr, rows, cols, str(npath), CutError)
-    return sp.csr_matrix((data.astype(np.float64), indices.astype(np.int64), indptr.astype(np.int64)),
-                         shape=(rows, cols))
+    return sp.csr_matrix(
+        (data.astype(np.float64), indices.astype(np.int64), indptr.astype(np.int64)), shape=(rows, cols)
+    )
 
 
 def _read_panel(d, where, N, fields):
@@ -205,12 +232,20 @@ def _read_panel(d, where, N, fields):
     mirror_of = d.get("mirror_of")
     if not isinstance(body_part, str) or not (mirror_of is None or isinstance(mirror_of, str)):
         raise CutError(f"{where}: body_part and mirror_of must be names")
-    panel = Panel(name=name, garment=_field(d, "garment", where, str), vertex_ids=vids, faces=faces,
-                  warp_dir=_floats(_field(d, "warp_dir", where, list), f"{where}.warp_dir", (F, 3)),
-                  ease=_floats(_field(d, "ease", where, list), f"{where}.ease", (F,)),
-                  boundary=[_ids(b, f"{where}.boundary[{i}]", len(vids))
-                            for i, b in enumerate(_field(d, "boundary", where, list))],
-                  body_part=body_part, mirror_of=mirror_of, **{k: v for k, v in extra.items() if k in fields})
+    panel = Panel(
+        name=name,
+        garment=_field(d, "garment", where, str),
+        vertex_ids=vids,
+        faces=faces,
+        warp_dir=_floats(_field(d, "warp_dir", where, list), f"{where}.warp_dir", (F, 3)),
+        ease=_floats(_field(d, "ease", where, list), f"{where}.ease", (F,)),
+        boundary=[
+            _ids(b, f"{where}.boundary[{i}]", len(vids)) for i, b in enumerate(_field(d, "boundary", where, list))
+        ],
+        body_part=body_part,
+        mirror_of=mirror_of,
+        **{k: v for k, v in extra.items() if k in fields},
+    )
     hems = [_ids(h, f"{where}.hems[{i}]", len(vids)) for i, h in enumerate(d.get("hems") or [])]
     return panel, hems
 
@@ -227,8 +262,14 @@ def _read_seam(d, where, sizes, fields):
     extra = _decode(d.get("extra", {}), f"{where}.extra")
     if not isinstance(extra, dict):
         raise CutError(f"{where}.extra: expected an object")
-    return Seam(name=_field(d, "name", where, str), panel_a=a, panel_b=b, verts_a=va, verts_b=vb,
-                **{k: v for k, v in extra.items() if k in fields})
+    return Seam(
+        name=_field(d, "name", where, str),
+        panel_a=a,
+        panel_b=b,
+        verts_a=va,
+        verts_b=vb,
+        **{k: v for k, v in extra.items() if k in fields},
+    )
 
 
 def load_cut(directory: Union[str, Path]) -> GarmentCut:
@@ -243,6 +284,7 @@ def load_cut(directory: Union[str, Path]) -> GarmentCut:
         inconsistent or refer outside the matrix, or files over the size limits.
     """
     import json
+
     directory = Path(directory)
     jpath, npath = directory / CUT_JSON, directory / EMBEDDING_NPZ
     for p in (jpath, npath):
@@ -261,17 +303,22 @@ def load_cut(directory: Union[str, Path]) -> GarmentCut:
     except (ValueError, RecursionError) as exc:
         raise CutError(f"{jpath}: not valid JSON ({type(exc).__name__})") from None
     if not isinstance(obj, dict):
-        raise CutError(f"{jpath}: expected a JSON object {{format, version, panels, seams, ...}}, "
-                       f"got a {type(obj).__name__}")
+        raise CutError(
+            f"{jpath}: expected a JSON object {{format, version, panels, seams, ...}}, got a {type(obj).__name__}"
+        )
     if obj.get("format") != FORMAT or obj.get("version") != VERSION:
-        raise CutError(f"{jpath}: expected format {FORMAT!r} version {VERSION}, "
-                       f"got {str(obj.get('format'))[:40]!r} version {str(obj.get('version'))[:20]!r}")
+        raise CutError(
+            f"{jpath}: expected format {FORMAT!r} version {VERSION}, "
+            f"got {str(obj.get('format'))[:40]!r} version {str(obj.get('version'))[:20]!r}"
+        )
     E = _read_embedding(npath)
     N = E.shape[0]
     for key, size in (("n_vertices", N), ("n_body_vertices", E.shape[1])):
         if key in obj and obj[key] != size:
-            raise CutError(f"{npath}: embedding has {size} {'rows' if key == 'n_vertices' else 'columns'}, "
-                           f"{jpath.name} key {key!r} expects {str(obj[key])[:20]}")
+            raise CutError(
+                f"{npath}: embedding has {size} {'rows' if key == 'n_vertices' else 'columns'}, "
+                f"{jpath.name} key {key!r} expects {str(obj[key])[:20]}"
+            )
     where = str(jpath)
     panel_fields = {f.name for f in dataclasses.fields(Panel)}
     seam_fields = {f.name for f in dataclasses.fields(Seam)}
@@ -285,8 +332,10 @@ def load_cut(directory: Union[str, Path]) -> GarmentCut:
             sizes[p.name] = len(p.vertex_ids)
             if h:
                 hems[p.name] = h
-        seams = [_read_seam(d, f"{where}: seams[{i}]", sizes, seam_fields)
-                 for i, d in enumerate(_field(obj, "seams", where, list))]
+        seams = [
+            _read_seam(d, f"{where}: seams[{i}]", sizes, seam_fields)
+            for i, d in enumerate(_field(obj, "seams", where, list))
+        ]
         garments = _field(obj, "garments", where, dict)
         if not all(isinstance(v, str) for v in garments.values()):
             raise CutError(f"{where}: garments: expected an object garment name -> kind")
@@ -296,9 +345,17 @@ def load_cut(directory: Union[str, Path]) -> GarmentCut:
         body = _decode(_field(obj, "body", where, dict), f"{where}: body")
         if not isinstance(extra, dict) or not isinstance(materials, dict):
             raise CutError(f"{where}: extra and materials must be objects")
-        cut = GarmentCut(body=body, embedding=E, panels=panels, seams=seams, garments=dict(garments),
-                         pins=pins, hems=hems, materials=materials,
-                         **{k: v for k, v in extra.items() if k in {f.name for f in dataclasses.fields(GarmentCut)}})
+        cut = GarmentCut(
+            body=body,
+            embedding=E,
+            panels=panels,
+            seams=seams,
+            garments=dict(garments),
+            pins=pins,
+            hems=hems,
+            materials=materials,
+            **{k: v for k, v in extra.items() if k in {f.name for f in dataclasses.fields(GarmentCut)}},
+        )
     except CutError:
         raise
     except (KeyError, TypeError, ValueError) as exc:

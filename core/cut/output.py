@@ -3,6 +3,7 @@
 Both are written through :mod:`core.fileio` (atomic) by the caller
 (:func:`obj_text`) or here (:func:`render_png`).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -30,9 +31,9 @@ def _view_polys(X, F, view):
     T = X[F]
     facing = -view * face_normals(X, F)[:, 1]  # cosine to the view direction
     keep = facing > 0
-    xs = T[:, :, 0] * view                      # mirror the back view so left/right read naturally
+    xs = T[:, :, 0] * view  # mirror the back view so left/right read naturally
     poly = np.stack([xs, T[:, :, 2]], axis=2)
-    depth = view * T[:, :, 1].mean(axis=1)      # larger = farther from the viewer
+    depth = view * T[:, :, 1].mean(axis=1)  # larger = farther from the viewer
     return poly[keep], depth[keep], facing[keep], keep
 
 
@@ -40,10 +41,12 @@ def render_png(cut, body_faces, body_vertices, path, title=""):
     """Front and back views of the body (grey) with its panels coloured (top row)
     and with the panels' target ease (bottom row, colour bar)."""
     import matplotlib
+
     matplotlib.use("Agg")
+    import io
+
     import matplotlib.pyplot as plt
     from matplotlib.collections import PolyCollection
-    import io
 
     from ..design.geometry import SurfaceLocator
 
@@ -69,18 +72,24 @@ def render_png(cut, body_faces, body_vertices, path, title=""):
             for part, push in ((~covered, 0.0), (covered, 8e-3)):
                 # body triangles under a panel are pushed back: they only show where the panel ends
                 bp, bd, bs, _ = _view_polys(body_vertices, body_faces[part], view)
-                polys.append(bp); depths.append(bd + push); shades.append(bs)
+                polys.append(bp)
+                depths.append(bd + push)
+                shades.append(bs)
                 colors.append(np.tile([0.78, 0.78, 0.78], (len(bp), 1)))
             for i, p in enumerate(cut.panels):
                 F = np.asarray(p.vertex_ids)[np.asarray(p.faces)]
                 pp, pd, ps, keep = _view_polys(X, F, view)
-                polys.append(pp); depths.append(pd - 3e-3); shades.append(ps)   # in front of the body it lies on
+                polys.append(pp)
+                depths.append(pd - 3e-3)
+                shades.append(ps)  # in front of the body it lies on
                 if mode == "panels":
                     colors.append(np.tile(cmap(i % ncol)[:3], (len(pp), 1)))
                 else:
                     colors.append(ease_cmap((np.asarray(p.ease)[keep] - lo) / (hi - lo))[:, :3])
-            P = np.concatenate(polys); D = np.concatenate(depths)
-            S = np.concatenate(shades); C = np.concatenate(colors)
+            P = np.concatenate(polys)
+            D = np.concatenate(depths)
+            S = np.concatenate(shades)
+            C = np.concatenate(colors)
             order = np.argsort(-D, kind="stable")
             C = C * (0.35 + 0.65 * S)[:, None]
             ax.add_collection(PolyCollection(P[order], facecolors=C[order], edgecolors="none", antialiased=False))
@@ -89,8 +98,15 @@ def render_png(cut, body_faces, body_vertices, path, title=""):
             ax.set_axis_off()
             ax.set_title(f"{label}: {'panels' if mode == 'panels' else 'ease (weft scale)'}")
     handles = [plt.Rectangle((0, 0), 1, 1, color=cmap(i % ncol)) for i in range(len(cut.panels))]
-    fig.legend(handles, [p.name for p in cut.panels], loc="center", bbox_to_anchor=(0.5, 0.515), ncol=4,
-               fontsize=8, frameon=False)
+    fig.legend(
+        handles,
+        [p.name for p in cut.panels],
+        loc="center",
+        bbox_to_anchor=(0.5, 0.515),
+        ncol=4,
+        fontsize=8,
+        frameon=False,
+    )
     sm = plt.cm.ScalarMappable(cmap=ease_cmap, norm=plt.Normalize(lo, hi))
     cax = fig.add_axes([0.25, 0.03, 0.5, 0.012])
     fig.colorbar(sm, cax=cax, orientation="horizontal", label="target weft ease rho")

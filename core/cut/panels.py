@@ -6,6 +6,7 @@ uncut edges), its boundary loops and its grain, and each line its seams
 (panel pairs along it) and hems (open edges), as :class:`core.cut.types.Panel`
 and :class:`core.cut.types.Seam`.
 """
+
 from __future__ import annotations
 
 from typing import List
@@ -93,7 +94,7 @@ def build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset, clock)
         ug, ginv = np.unique(gv_all * ncg + corner_global, return_inverse=True)
         global_of_corner = ginv.reshape(-1)
         vertex_of_global = ug // ncg
-    else:   # no opening runs between faces: one garment vertex per mesh vertex (all used)
+    else:  # no opening runs between faces: one garment vertex per mesh vertex (all used)
         global_of_corner = gv_all
         vertex_of_global = np.arange(n, dtype=np.int64)
     # deterministic local vertex numbering: by (panel, global vertex, component)
@@ -125,9 +126,19 @@ def build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset, clock)
         # boundary half-edges: those not joined to a twin in the same panel
         hb = corners[~join[corners]]
         boundary = _boundary_loops(local_of_corner[hb], local_of_corner[nxt(hb)], p.name)
-        panels.append(Panel(name=p.name, garment=p.garment, vertex_ids=vids.astype(np.int64),
-                            faces=faces.astype(np.int64), warp_dir=warp, ease=np.ones(len(faces)),
-                            boundary=boundary, body_part=p.body_part, mirror_of=p.mirror_of))
+        panels.append(
+            Panel(
+                name=p.name,
+                garment=p.garment,
+                vertex_ids=vids.astype(np.int64),
+                faces=faces.astype(np.int64),
+                warp_dir=warp,
+                ease=np.ones(len(faces)),
+                boundary=boundary,
+                body_part=p.body_part,
+                mirror_of=p.mirror_of,
+            )
+        )
     # seams and hems along the lines: faces left/right of each line edge
     hkey_order = order
     skey = key[hkey_order]
@@ -143,7 +154,7 @@ def build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset, clock)
         stretches = []
         for s in runs:
             a, b = s[:-1], s[1:]
-            hl = halfedge(a, b)             # left face has a -> b
+            hl = halfedge(a, b)  # left face has a -> b
             hr = halfedge(b, a)
             pl = np.where(hl >= 0, lab[np.maximum(hl, 0) // 3], -1)
             pr = np.where(hr >= 0, lab[np.maximum(hr, 0) // 3], -1)
@@ -157,8 +168,14 @@ def build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset, clock)
                 key = np.where(both, pl * (len(gpanels) + 1) + pr, -1)
                 for sel in _joined(_joined(_stretches(key, closed_run), la0, la1), lb0, lb1):
                     if key[sel[0]] >= 0:
-                        stretches.append((int(pl[sel[0]]), int(pr[sel[0]]), np.append(la0[sel], la1[sel[-1]]),
-                                          np.append(lb0[sel], lb1[sel[-1]])))
+                        stretches.append(
+                            (
+                                int(pl[sel[0]]),
+                                int(pr[sel[0]]),
+                                np.append(la0[sel], la1[sel[-1]]),
+                                np.append(lb0[sel], lb1[sel[-1]]),
+                            )
+                        )
                 one_l = np.where(~both, pl, -1)
                 one_r = np.where(~both, pr, -1)
             else:
@@ -169,12 +186,19 @@ def build_panels(spec, gpanels, X, F, lab, lines, lines_li, axes, offset, clock)
                     if side[sel[0]] >= 0:
                         verts = np.append(l0[sel], l1[sel[-1]])
                         if side is one_r:
-                            verts = verts[::-1]   # keep the panel on the left of the polyline
+                            verts = verts[::-1]  # keep the panel on the left of the polyline
                         hems.setdefault(panel_names[int(side[sel[0]])], []).append(verts.astype(np.int64))
         for k, (pa, pb, va, vb) in enumerate(stretches):
             nm = line.name if len(stretches) == 1 else f"{line.name}#{k}"
-            seams.append(Seam(name=nm, panel_a=panel_names[pa], panel_b=panel_names[pb],
-                              verts_a=np.asarray(va, np.int64), verts_b=np.asarray(vb, np.int64)))
+            seams.append(
+                Seam(
+                    name=nm,
+                    panel_a=panel_names[pa],
+                    panel_b=panel_names[pb],
+                    verts_a=np.asarray(va, np.int64),
+                    verts_b=np.asarray(vb, np.int64),
+                )
+            )
     clock.lap("panels_seams")
     return {"panels": panels, "seams": seams, "hems": hems, "vertex_of_global": vertex_of_global}
 

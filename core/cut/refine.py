@@ -13,6 +13,7 @@ vertices. Rounds repeat until no edge exceeds ``SPLIT_RATIO * h``. New
 vertices are midpoints, i.e. averages of two embedding rows, so the refinement
 applies to every body instance.
 """
+
 from __future__ import annotations
 
 from typing import List
@@ -35,8 +36,15 @@ def _edges(F: np.ndarray):
     return E, inv.reshape(-1, 3)
 
 
-def refine(X: np.ndarray, F: np.ndarray, labels: np.ndarray, W: sp.csr_matrix,
-           lines: List[np.ndarray], h: float, max_rounds: int = 12):
+def refine(
+    X: np.ndarray,
+    F: np.ndarray,
+    labels: np.ndarray,
+    W: sp.csr_matrix,
+    lines: List[np.ndarray],
+    h: float,
+    max_rounds: int = 12,
+):
     """Refine triangles ``F`` to a mean edge length near ``h``.
 
     Parameters
@@ -73,8 +81,7 @@ def refine(X: np.ndarray, F: np.ndarray, labels: np.ndarray, W: sp.csr_matrix,
         Es = E[split]
         X = np.concatenate([X, 0.5 * (X[Es[:, 0]] + X[Es[:, 1]])])
         m = len(Es)
-        S = sp.csr_matrix((np.full(2 * m, 0.5), (np.repeat(np.arange(m), 2), Es.reshape(-1))),
-                          shape=(m, n))
+        S = sp.csr_matrix((np.full(2 * m, 0.5), (np.repeat(np.arange(m), 2), Es.reshape(-1))), shape=(m, n))
         W = sp.vstack([W, S @ W]).tocsr()
         F, labels = _split_faces(F, labels, ids[fe], X)
         lines = [_split_line(l, E, ids, n) for l in lines]
@@ -103,15 +110,23 @@ def _split_faces(F, labels, mid, X):
             d1 = np.linalg.norm(X[v[:, 0]] - X[m[:, 1]], axis=1)
             d2 = np.linalg.norm(X[m[:, 0]] - X[v[:, 2]], axis=1)
             a = d1 <= d2
-            t1 = np.where(a[:, None], np.stack([v[:, 0], m[:, 0], m[:, 1]], 1), np.stack([v[:, 0], m[:, 0], v[:, 2]], 1))
-            t2 = np.where(a[:, None], np.stack([v[:, 0], m[:, 1], v[:, 2]], 1), np.stack([m[:, 0], m[:, 1], v[:, 2]], 1))
+            t1 = np.where(
+                a[:, None], np.stack([v[:, 0], m[:, 0], m[:, 1]], 1), np.stack([v[:, 0], m[:, 0], v[:, 2]], 1)
+            )
+            t2 = np.where(
+                a[:, None], np.stack([v[:, 0], m[:, 1], v[:, 2]], 1), np.stack([m[:, 0], m[:, 1], v[:, 2]], 1)
+            )
             outF += [t1, t2]
             outL += [labels[two]] * 3
     three = cnt == 3
     if three.any():
         v, m = F[three], mid[three]
-        outF += [np.stack([v[:, 0], m[:, 0], m[:, 2]], 1), np.stack([m[:, 0], v[:, 1], m[:, 1]], 1),
-                 np.stack([m[:, 2], m[:, 1], v[:, 2]], 1), np.stack([m[:, 0], m[:, 1], m[:, 2]], 1)]
+        outF += [
+            np.stack([v[:, 0], m[:, 0], m[:, 2]], 1),
+            np.stack([m[:, 0], v[:, 1], m[:, 1]], 1),
+            np.stack([m[:, 2], m[:, 1], v[:, 2]], 1),
+            np.stack([m[:, 0], m[:, 1], m[:, 2]], 1),
+        ]
         outL += [labels[three]] * 4
     # keep a deterministic order: children grouped by pattern, parents in order
     return np.concatenate(outF).astype(np.int64), np.concatenate(outL)
@@ -148,9 +163,16 @@ def _member(q: np.ndarray, sorted_keys: np.ndarray) -> np.ndarray:
     return sorted_keys[pos] == q
 
 
-def delaunay_flips(X: np.ndarray, F: np.ndarray, labels: np.ndarray, fixed: np.ndarray,
-                   max_length: float = np.inf, max_rounds: int = 2,
-                   max_dihedral_deg: float = 10.0, _retest_all: bool = False) -> np.ndarray:
+def delaunay_flips(
+    X: np.ndarray,
+    F: np.ndarray,
+    labels: np.ndarray,
+    fixed: np.ndarray,
+    max_length: float = np.inf,
+    max_rounds: int = 2,
+    max_dihedral_deg: float = 10.0,
+    _retest_all: bool = False,
+) -> np.ndarray:
     """Improve triangle shapes by flipping edges to the (extrinsic) Delaunay criterion.
 
     An interior edge is flipped when the two angles opposite it sum to more
@@ -179,8 +201,8 @@ def delaunay_flips(X: np.ndarray, F: np.ndarray, labels: np.ndarray, fixed: np.n
     # but were held back (by a neighbour's flip, or an existing edge), can qualify: every
     # other edge has the same two triangles as before. Testing just those gives the same
     # flips as testing all.
-    dirty = None            # (f,) bool: faces changed by the last round
-    pending = None          # half-edges that qualified last round but were not flipped
+    dirty = None  # (f,) bool: faces changed by the last round
+    pending = None  # half-edges that qualified last round but were not flipped
     for _ in range(max_rounds):
         a = F.reshape(-1)
         b = np.roll(F, -1, axis=1).reshape(-1)
@@ -190,10 +212,10 @@ def delaunay_flips(X: np.ndarray, F: np.ndarray, labels: np.ndarray, fixed: np.n
         rkey = b * n + a
         pos = np.clip(np.searchsorted(key[order], rkey), 0, len(key) - 1)
         twin = np.where(key[order][pos] == rkey, order[pos], -1)
-        h = np.nonzero((twin > np.arange(len(key))))[0]       # each interior edge once
+        h = np.nonzero((twin > np.arange(len(key))))[0]  # each interior edge once
         if dirty is not None and not _retest_all:
             look = dirty[h // 3] | dirty[twin[h] // 3]
-            look[np.searchsorted(h, pending)] = True           # pending half-edges are still in h
+            look[np.searchsorted(h, pending)] = True  # pending half-edges are still in h
             h = h[look]
         t = twin[h]
         fh, ft = h // 3, t // 3
@@ -202,20 +224,23 @@ def delaunay_flips(X: np.ndarray, F: np.ndarray, labels: np.ndarray, fixed: np.n
         h, t, fh, ft = h[ok], t[ok], fh[ok], ft[ok]
         A, B, O1, O2 = X[a[h]], X[b[h]], X[o[h]], X[o[t]]
 
-        def angle(p, q, r):   # angle at p between q and r
+        def angle(p, q, r):  # angle at p between q and r
             u, v = q - p, r - p
             c = (u * v).sum(1) / np.maximum(np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1), 1e-300)
             return np.arccos(np.clip(c, -1.0, 1.0))
+
         viol = angle(O1, A, B) + angle(O2, A, B) - np.pi
         n1 = np.cross(B - A, O1 - A)
         n2 = np.cross(A - B, O2 - B)
         nn = lambda v: v / np.maximum(np.linalg.norm(v, axis=1), 1e-300)[:, None]
         n1, n2 = nn(n1), nn(n2)
-        m1 = nn(np.cross(O2 - A, O1 - A))     # new face (a, o2, o1)
-        m2 = nn(np.cross(O1 - B, O2 - B))     # new face (b, o1, o2)
+        m1 = nn(np.cross(O2 - A, O1 - A))  # new face (a, o2, o1)
+        m2 = nn(np.cross(O1 - B, O2 - B))  # new face (b, o1, o2)
         good = (viol > 1e-6) & ((n1 * n2).sum(1) > cos_max) & (o[h] != o[t])
         good &= np.linalg.norm(O1 - O2, axis=1) <= max_length
-        good &= ((m1 * n1).sum(1) > 0.5) & ((m1 * n2).sum(1) > 0.5) & ((m2 * n1).sum(1) > 0.5) & ((m2 * n2).sum(1) > 0.5)
+        good &= (
+            ((m1 * n1).sum(1) > 0.5) & ((m1 * n2).sum(1) > 0.5) & ((m2 * n1).sum(1) > 0.5) & ((m2 * n2).sum(1) > 0.5)
+        )
         # the new edge must not exist already
         okey = np.minimum(o[h], o[t]) * n + np.maximum(o[h], o[t])
         idx = np.nonzero(good)[0]
@@ -232,7 +257,7 @@ def delaunay_flips(X: np.ndarray, F: np.ndarray, labels: np.ndarray, fixed: np.n
         np.minimum.at(best, fh[idx], rank)
         np.minimum.at(best, ft[idx], rank)
         idx = idx[(best[fh[idx]] == rank) & (best[ft[idx]] == rank)]
-        _, first = np.unique(okey[idx], return_index=True)      # one flip per new edge
+        _, first = np.unique(okey[idx], return_index=True)  # one flip per new edge
         idx = idx[np.sort(first)]
         if len(idx) == 0:
             break

@@ -8,6 +8,7 @@ line snaps up to :data:`core.cut.split.SNAP_ABS` off the exact geodesic, and a
 then finds two seeds in one region; :func:`seed_hint` names the seed and the
 line it is too close to, so the error says what to move.
 """
+
 from __future__ import annotations
 
 from typing import Dict, Optional, Sequence, Tuple
@@ -30,8 +31,10 @@ def seed_face(mesh: CutMesh, p, BF, X, seed_names: Optional[Dict[str, str]] = No
     try:
         f, _ = mesh.locate_in_parent(int(p.seed.triangle), pos)
     except KeyError:
-        raise CutError(f"panel {p.name!r}: its seed{seed_label(p.name, seed_names)} lies on a removed part "
-                       f"of the body (between the legs, removed for the skirt topology)") from None
+        raise CutError(
+            f"panel {p.name!r}: its seed{seed_label(p.name, seed_names)} lies on a removed part "
+            f"of the body (between the legs, removed for the skirt topology)"
+        ) from None
     return f
 
 
@@ -57,8 +60,15 @@ def nearest_line(mesh: CutMesh, pos: np.ndarray, lines: Sequence[int]) -> Tuple[
     return float(d[i]), int(keys[i][1])
 
 
-def seed_hint(mesh: CutMesh, panels, lines: Sequence[int], names: Sequence[str], BF, X,
-              seed_names: Optional[Dict[str, str]] = None) -> str:
+def seed_hint(
+    mesh: CutMesh,
+    panels,
+    lines: Sequence[int],
+    names: Sequence[str],
+    BF,
+    X,
+    seed_names: Optional[Dict[str, str]] = None,
+) -> str:
     """Text naming the seeds of ``panels`` that lie within :data:`SEED_CLEARANCE` of
     one of the cut lines ``lines`` (indices into ``names``), nearest first, ending in
     ``"; otherwise "``; ``""`` if none."""
@@ -69,6 +79,11 @@ def seed_hint(mesh: CutMesh, panels, lines: Sequence[int], names: Sequence[str],
             near.append((d, p.name, li))
     if not near:
         return ""
-    return "; ".join(f"the seed of panel {name!r}{seed_label(name, seed_names)} lies {1000 * d:.1f} mm "
-                     f"from cut line {names[li]!r}, maybe on its other side: move it into its panel"
-                     for d, name, li in sorted(near)) + "; otherwise "
+    return (
+        "; ".join(
+            f"the seed of panel {name!r}{seed_label(name, seed_names)} lies {1000 * d:.1f} mm "
+            f"from cut line {names[li]!r}, maybe on its other side: move it into its panel"
+            for d, name, li in sorted(near)
+        )
+        + "; otherwise "
+    )

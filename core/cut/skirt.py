@@ -25,6 +25,7 @@ edges are zipped directly (no new vertices). Either way every curtain vertex
 is a fixed combination of body vertices, so the curtains follow any shape and
 pose of the model.
 """
+
 from __future__ import annotations
 
 from typing import List, Optional, Tuple
@@ -37,9 +38,9 @@ from ..design.mirror import face_symmetry
 from ..errors import CutError
 from .split import CutMesh
 
-BAND_HALF_ANGLE = np.deg2rad(60.0)   # removed: within this angle of "towards the other leg"
-CROTCH_MARGIN = 0.02                 # metres above the crotch landmark included (the crotch itself)
-BOTTOM = 0.15                        # band bottom: this fraction of crotch->ankle above the ankles
+BAND_HALF_ANGLE = np.deg2rad(60.0)  # removed: within this angle of "towards the other leg"
+CROTCH_MARGIN = 0.02  # metres above the crotch landmark included (the crotch itself)
+BOTTOM = 0.15  # band bottom: this fraction of crotch->ankle above the ankles
 
 
 def _landmark(body, name, X):
@@ -64,7 +65,7 @@ def _leg_frame(body, X: np.ndarray):
     legs = {}
     for side, sign in (("left", 1.0), ("right", -1.0)):
         ids = np.asarray(regions.get(f"leg_{side}", []), dtype=np.int64)
-        if len(ids) == 0:   # no leg regions: the body below the crotch on that side
+        if len(ids) == 0:  # no leg regions: the body below the crotch on that side
             ids = np.nonzero((X[:, 2] < crotch[2]) & (sign * X[:, 0] > 0))[0]
         legs[side] = ids
     # leg centre lines: centroids of horizontal slices of each leg
@@ -128,6 +129,7 @@ def span_candidates(body, X: np.ndarray) -> np.ndarray:
     from the crotch to the back waist: the crotch, the creases beside it, the top of the
     curtains, the gluteal folds and the gluteal cleft."""
     from .span import SPAN_BOTTOM, SPAN_TOP
+
     crotch, z_bot, _, _, zc, centre = _leg_frame(body, X)
     top = crotch[2] + SPAN_TOP * (_landmark(body, "waist_back", X)[2] - crotch[2])
     z_bot = crotch[2] - SPAN_BOTTOM * (crotch[2] - z_bot)
@@ -150,6 +152,7 @@ def span_surface(mesh: CutMesh, body, X: np.ndarray) -> Optional[sp.csr_matrix]:
     (the cut's embedding is composed with it), or None when nothing lifts off.
     """
     from .span import spanning_operator
+
     S = _symmetry(body, X)
     B = spanning_operator(mesh, X, span_candidates(body, X), S)
     if B is None:
@@ -161,6 +164,7 @@ def span_surface(mesh: CutMesh, body, X: np.ndarray) -> Optional[sp.csr_matrix]:
 
 def _clean(F: np.ndarray, H: np.ndarray, nv: int) -> np.ndarray:
     """Make the removed set one disk: its largest component, holes in it filled, no pinches."""
+
     def comps(sel):
         idx = np.nonzero(sel)[0]
         sub = F[idx]
@@ -222,9 +226,11 @@ def _zip(A: List[int], B: List[int], X: np.ndarray) -> List[Tuple[int, int, int,
     """Triangle strip between chains A and B (same start region), by normalised arc length.
 
     Returns triples (x, y, z): chain edge x -> y and the opposite corner z."""
+
     def arc(C):
         s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(X[C], axis=0), axis=1))])
         return s / max(s[-1], 1e-12)
+
     sa, sb = arc(A), arc(B)
     i = j = 0
     out = []
@@ -274,15 +280,19 @@ def _mirrored_bridge(mesh: CutMesh, loop: List[int], X: np.ndarray, S: np.ndarra
     on_mid = np.nonzero(S[L] == L)[0]
     if len(on_mid) != 2:
         return None
-    kf, kb = sorted(on_mid.tolist(), key=lambda k: X[L[k], 1])     # front (smaller y), back
+    kf, kb = sorted(on_mid.tolist(), key=lambda k: X[L[k], 1])  # front (smaller y), back
     arc1 = [loop[(kf + i) % n] for i in range((kb - kf) % n + 1)]
     arc2 = [loop[(kb + i) % n] for i in range((kf - kb) % n + 1)]
     left, right = (arc1, arc2) if X[arc1[1:-1], 0].mean() > X[arc2[1:-1], 0].mean() else (arc2, arc1)
-    if len(left) < 3 or left[0] != right[-1] or not np.array_equal(S[left], right[::-1]) \
-            or np.any(X[left[1:-1], 0] <= 0):
+    if (
+        len(left) < 3
+        or left[0] != right[-1]
+        or not np.array_equal(S[left], right[::-1])
+        or np.any(X[left[1:-1], 0] <= 0)
+    ):
         return None
     inner = np.asarray(left[1:-1])
-    e = 1 + int(np.argmin(X[inner, 2]))                   # the left leg's lowest hole vertex
+    e = 1 + int(np.argmin(X[inner, 2]))  # the left leg's lowest hole vertex
     mid = {left[0]: left[0], left[-1]: left[-1]}
     for v in inner.tolist():
         w = int(S[v])
@@ -290,12 +300,12 @@ def _mirrored_bridge(mesh: CutMesh, loop: List[int], X: np.ndarray, S: np.ndarra
         mid[v] = mesh._add_vertex(0.5 * (X[v] + X[w]), cols, np.array([0.5, 0.5]))
     bnd = set(zip(loop, loop[1:] + loop[:1]))
     tris = []
-    for chain in (left[: e + 1], left[e:][::-1]):          # the two curtains, each from the midline down
+    for chain in (left[: e + 1], left[e:][::-1]):  # the two curtains, each from the midline down
         for a, b in zip(chain[:-1], chain[1:]):
             ma, mb = mid[a], mid[b]
             # the quad b, a, ma, mb in the orientation that holds the boundary edge reversed
             quad = [b, a, ma, mb] if (a, b) in bnd else [a, b, mb, ma]
-            if ma == a:                                     # at the midline vertex: a triangle
+            if ma == a:  # at the midline vertex: a triangle
                 quad.remove(ma)
                 tris.append(quad)
                 continue
@@ -346,6 +356,7 @@ def _symmetry(body, X: np.ndarray) -> Optional[np.ndarray]:
     """The body's left/right vertex map when it is usable (an involution with a midline that
     no triangle crosses, :func:`.symmetric.body_face_sides`), else None."""
     from .symmetric import body_face_sides
+
     if body_face_sides(body, X) is None:
         return None
     return np.asarray(body.symmetry, dtype=np.int64)
@@ -359,12 +370,12 @@ def _zip_legs(mesh: CutMesh, H: np.ndarray, loop: List[int], X: np.ndarray) -> N
     # the loop crosses the body's midline twice: at the front and at the back of the crotch
     mid = 0.0
     sgn = P[:, 0] >= mid
-    cross = np.nonzero(sgn != np.roll(sgn, -1))[0]          # edge k -> k+1 crosses
+    cross = np.nonzero(sgn != np.roll(sgn, -1))[0]  # edge k -> k+1 crosses
     if len(cross) != 2:
         raise CutError(f"skirt topology: the inter-leg hole crosses the midline {len(cross)} times, expected 2")
     ks = [k if abs(P[k, 0]) <= abs(P[(k + 1) % n, 0]) else (k + 1) % n for k in cross]
     ks.sort(key=lambda k: P[k, 1])
-    kf, kb = ks                                              # front (smaller y), back
+    kf, kb = ks  # front (smaller y), back
     # lowest loop vertex on each side
     left = np.nonzero(P[:, 0] > mid)[0]
     right = np.nonzero(P[:, 0] < mid)[0]
@@ -378,6 +389,7 @@ def _zip_legs(mesh: CutMesh, H: np.ndarray, loop: List[int], X: np.ndarray) -> N
             k = (k + 1) % n
             out.append(k)
         return out
+
     # loop order from the front point: first bottom reached is e1, then back, then e2
     d = lambda k: (k - kf) % n
     e1, e2 = (kl, kr) if d(kl) < d(kr) else (kr, kl)

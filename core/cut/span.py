@@ -48,6 +48,7 @@ by millimetres (a relative 1e-2: 126 kB and 2.6 mm on M; 1e-1: 84 kB and
 18 mm); storing ``B``'s 95 free rows (11 kB) once beside the skin embedding
 would keep it near 52 kB, a change of the cut's file format.
 """
+
 from __future__ import annotations
 
 from typing import Optional
@@ -59,12 +60,12 @@ import scipy.sparse.linalg as spla
 from ..geom.mesh import vertex_normals
 from .split import CutMesh
 
-SPAN_BOTTOM = 0.1       # candidates down to this fraction of the crotch -> bridge bottom (6.8 cm on M)
-SPAN_TOP = 0.5          # candidates up to this fraction of the crotch -> waist (back) height
-SPAN_TOL = 1e-5         # m: a membrane vertex lifted off the body by less than this is held (touching)
-SPAN_DROP = 1e-4        # harmonic weights below this (relative to the row's largest) are dropped
-COT_MAX = 1e3           # largest cotangent weight (an angle of 0.06 deg; Anny's smallest: 0.8 deg)
-_MAX_ROUNDS = 40          # a guard: a vertex is freed again at most once, so the rounds end (5-12 on 40 sampled bodies)
+SPAN_BOTTOM = 0.1  # candidates down to this fraction of the crotch -> bridge bottom (6.8 cm on M)
+SPAN_TOP = 0.5  # candidates up to this fraction of the crotch -> waist (back) height
+SPAN_TOL = 1e-5  # m: a membrane vertex lifted off the body by less than this is held (touching)
+SPAN_DROP = 1e-4  # harmonic weights below this (relative to the row's largest) are dropped
+COT_MAX = 1e3  # largest cotangent weight (an angle of 0.06 deg; Anny's smallest: 0.8 deg)
+_MAX_ROUNDS = 40  # a guard: a vertex is freed again at most once, so the rounds end (5-12 on 40 sampled bodies)
 
 
 def _cotan_laplacian(X: np.ndarray, F: np.ndarray, n: int) -> sp.csr_matrix:
@@ -77,7 +78,7 @@ def _cotan_laplacian(X: np.ndarray, F: np.ndarray, n: int) -> sp.csr_matrix:
     to rounding (a pit spanned 7.6 cm deep of its 10 instead of flat)."""
     rows, cols, vals = [], [], []
     for k in range(3):
-        i, j, o = F[:, (k + 1) % 3], F[:, (k + 2) % 3], F[:, k]   # edge i-j opposite corner o
+        i, j, o = F[:, (k + 1) % 3], F[:, (k + 2) % 3], F[:, k]  # edge i-j opposite corner o
         a, b = X[i] - X[o], X[j] - X[o]
         cross = np.linalg.norm(np.cross(a, b), axis=1)
         cot = (a * b).sum(1) / np.maximum(cross, 1e-300)
@@ -97,12 +98,12 @@ def _embedding_rows(mesh: CutMesh, V: int) -> sp.csr_matrix:
         rows.append(np.full(len(c), v))
         cols.append(np.asarray(c, dtype=np.int64))
         vals.append(np.asarray(w, dtype=float))
-    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                         shape=(mesh.nv, V))
+    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(mesh.nv, V))
 
 
-def spanning_operator(mesh: CutMesh, X: np.ndarray, candidates: np.ndarray,
-                      symmetry: Optional[np.ndarray] = None) -> Optional[sp.csr_matrix]:
+def spanning_operator(
+    mesh: CutMesh, X: np.ndarray, candidates: np.ndarray, symmetry: Optional[np.ndarray] = None
+) -> Optional[sp.csr_matrix]:
     """The membrane over the body's concavities among ``candidates`` as a (V, V) operator.
 
     Parameters
@@ -126,10 +127,10 @@ def spanning_operator(mesh: CutMesh, X: np.ndarray, candidates: np.ndarray,
     cand = np.asarray(candidates, bool) & on & (np.asarray(Q.diagonal()) > 0)
     if symmetry is not None:
         cand &= cand[symmetry]
-    N = (P.T @ vertex_normals(mesh.X, F))
+    N = P.T @ vertex_normals(mesh.X, F)
     N /= np.maximum(np.linalg.norm(N, axis=1), 1e-300)[:, None]
 
-    def pair(a):         # a per-vertex figure made equal on mirror pairs (mirror-invariant decisions)
+    def pair(a):  # a per-vertex figure made equal on mirror pairs (mirror-invariant decisions)
         return a if symmetry is None else 0.5 * (a + a[symmetry])
 
     def solve(free):
@@ -142,8 +143,8 @@ def spanning_operator(mesh: CutMesh, X: np.ndarray, candidates: np.ndarray,
         return Y
 
     free = cand.copy()
-    released = np.zeros(V, dtype=bool)      # vertices the active set freed again after holding them
-    settled = np.zeros(V, dtype=bool)       # ... and then held once more: held for good
+    released = np.zeros(V, dtype=bool)  # vertices the active set freed again after holding them
+    settled = np.zeros(V, dtype=bool)  # ... and then held once more: held for good
     for _ in range(_MAX_ROUNDS):
         Y = solve(free)
         h = pair(((Y - X) * N).sum(1))
@@ -159,7 +160,7 @@ def spanning_operator(mesh: CutMesh, X: np.ndarray, candidates: np.ndarray,
             settled |= inside & released
             free &= ~inside
             continue
-        pull = pair(-((Q @ Y) * N).sum(1))          # the membrane's force on a held vertex, outwards > 0
+        pull = pair(-((Q @ Y) * N).sum(1))  # the membrane's force on a held vertex, outwards > 0
         release = cand & ~free & ~settled & (pull > SPAN_TOL)
         if not release.any():
             break
@@ -178,15 +179,20 @@ def spanning_operator(mesh: CutMesh, X: np.ndarray, candidates: np.ndarray,
         return None
     held = np.nonzero(~free)[0]
     Qfc = Q[idx][:, held].tocsc()
-    cols = np.nonzero(np.diff(Qfc.indptr))[0]            # held vertices the free ones touch
+    cols = np.nonzero(np.diff(Qfc.indptr))[0]  # held vertices the free ones touch
     Wf = -spla.splu(Q[idx][:, idx].tocsc()).solve(Qfc[:, cols].toarray())
     Wf[Wf < SPAN_DROP * Wf.max(1, keepdims=True)] = 0.0
-    Wf /= Wf.sum(1, keepdims=True)                       # an affine (convex) combination
+    Wf /= Wf.sum(1, keepdims=True)  # an affine (convex) combination
     r, c = np.nonzero(Wf)
-    B = sp.csr_matrix((np.concatenate([np.ones(V - len(idx)), Wf[r, c]]),
-                       (np.concatenate([held, idx[r]]), np.concatenate([held, held[cols][c]]))), shape=(V, V))
+    B = sp.csr_matrix(
+        (
+            np.concatenate([np.ones(V - len(idx)), Wf[r, c]]),
+            (np.concatenate([held, idx[r]]), np.concatenate([held, held[cols][c]])),
+        ),
+        shape=(V, V),
+    )
     if symmetry is not None:
         S = np.asarray(symmetry, dtype=np.int64)
-        B = (0.5 * (B + B[S][:, S])).tocsr()         # exactly its own mirror image
+        B = (0.5 * (B + B[S][:, S])).tocsr()  # exactly its own mirror image
     B.sort_indices()
     return B

@@ -17,6 +17,7 @@ vertex, off the exact geodesic by at most ``SNAP_ABS`` (not a zig-zag: it still
 crosses the triangles, it does not follow mesh edges). The walk itself, and these
 tolerances, are in :mod:`core.cut.trace` (a mixin of :class:`CutMesh`).
 """
+
 from __future__ import annotations
 
 from typing import Dict, Sequence, Tuple
@@ -25,7 +26,7 @@ import numpy as np
 
 from ..errors import CutError
 from .incidence import VertexFaces, bary2
-from .trace import SNAP, SNAP_SLIVER, SNAP_ABS, LineTracer
+from .trace import SNAP, SNAP_ABS, SNAP_SLIVER, LineTracer
 
 
 class CutMesh(LineTracer):
@@ -60,8 +61,8 @@ class CutMesh(LineTracer):
         self._set_parents(np.asarray(parent_tris, dtype=float))
         self.weights: Dict[int, Tuple[np.ndarray, np.ndarray]] = dict(weights or {})
         self._rebuild_adjacency()
-        self.cut: Dict[Tuple[int, int], int] = {}     # undirected edge -> line index
-        self.cut_verts: Dict[int, set] = {}            # vertex -> line indices through it
+        self.cut: Dict[Tuple[int, int], int] = {}  # undirected edge -> line index
+        self.cut_verts: Dict[int, set] = {}  # vertex -> line indices through it
 
     # -- storage ---------------------------------------------------------------------------
     def _set_parents(self, tris: np.ndarray) -> None:
@@ -74,7 +75,7 @@ class CutMesh(LineTracer):
         n /= np.maximum(nn, 1e-300)[:, None]
         self._p0, self._e1, self._n = p0, e1, n
         self._e2 = np.cross(n, e1)
-        self._scale = np.sqrt(np.maximum(nn, 1e-300))   # ~ edge length of the parent
+        self._scale = np.sqrt(np.maximum(nn, 1e-300))  # ~ edge length of the parent
         self._ptri2 = np.stack([self._to2d_all(tris[:, k]) for k in range(3)], axis=1)
         self._frames = {}
 
@@ -298,7 +299,7 @@ class CutMesh(LineTracer):
             return near
         # distance to each edge (opposite corner j) = bary_j x height_j
         P = self._X[tri]
-        el = np.linalg.norm(np.roll(P, -1, axis=0) - np.roll(P, 1, axis=0), axis=1)   # edge opposite j
+        el = np.linalg.norm(np.roll(P, -1, axis=0) - np.roll(P, 1, axis=0), axis=1)  # edge opposite j
         area2 = np.linalg.norm(np.cross(P[1] - P[0], P[2] - P[0]))
         dist = bary * area2 / np.maximum(el, 1e-300)
         lim = np.minimum(SNAP_SLIVER * el, SNAP_ABS)

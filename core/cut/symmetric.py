@@ -30,6 +30,7 @@ or line without its mirror, a skirt bridge built without a symmetry map
 not another line, a panel or line changed by more than :data:`SHAPE_TOLERANCE`),
 :func:`symmetrize` returns None and the cut keeps its mesh.
 """
+
 from __future__ import annotations
 
 from typing import Dict, List, Optional, Sequence
@@ -71,6 +72,7 @@ def mirror_plan(panel_names: Sequence[str], line_names: Sequence[str]) -> Option
     panel_names : the garment's panels (label ``i`` = ``panel_names[i]``).
     line_names : the garment's cut lines (in the order of the lines given to :func:`symmetrize`).
     """
+
     def index(names):
         at = {n: i for i, n in enumerate(names)}
         out = [at.get(swap_side(n), -1) for n in names]
@@ -78,7 +80,7 @@ def mirror_plan(panel_names: Sequence[str], line_names: Sequence[str]) -> Option
 
     pm, lm = index(panel_names), index(line_names)
     if pm is None or lm is None or (np.all(pm == np.arange(len(pm))) and np.all(lm == np.arange(len(lm)))):
-        return None         # not mirrored: no panel or line has a mirror of another name
+        return None  # not mirrored: no panel or line has a mirror of another name
     return {"panel": pm, "line": lm, "panel_side": _sides(panel_names), "line_side": _sides(line_names)}
 
 
@@ -88,8 +90,17 @@ def _sides(names: Sequence[str]) -> np.ndarray:
     return np.asarray([codes[side_of(n)] for n in names], dtype=np.int64)
 
 
-def symmetrize(X: np.ndarray, F: np.ndarray, lab: np.ndarray, face_side: np.ndarray, W: sp.csr_matrix,
-               lines: List[List[np.ndarray]], plan: dict, symmetry: np.ndarray, body_X: np.ndarray):
+def symmetrize(
+    X: np.ndarray,
+    F: np.ndarray,
+    lab: np.ndarray,
+    face_side: np.ndarray,
+    W: sp.csr_matrix,
+    lines: List[List[np.ndarray]],
+    plan: dict,
+    symmetry: np.ndarray,
+    body_X: np.ndarray,
+):
     """The garment mesh rebuilt as its left half and that half's mirror image.
 
     Parameters
@@ -128,11 +139,11 @@ def symmetrize(X: np.ndarray, F: np.ndarray, lab: np.ndarray, face_side: np.ndar
     twin = np.nonzero(inL & ~mid)[0]
     new = np.full(n, -1, dtype=np.int64)
     new[keep] = np.arange(len(keep))
-    mir = new.copy()                     # old left id -> new id of its mirror image
+    mir = new.copy()  # old left id -> new id of its mirror image
     mir[twin] = len(keep) + np.arange(len(twin))
     S = np.asarray(symmetry, dtype=np.int64)
     V = W.shape[1]
-    P = sp.csr_matrix((np.ones(V), (np.arange(V), S)), shape=(V, V))   # column j -> S[j]
+    P = sp.csr_matrix((np.ones(V), (np.arange(V), S)), shape=(V, V))  # column j -> S[j]
     Wl = sp.csr_matrix(W)[keep]
     Wm = Wl @ P
     is_mid = mid[keep]
@@ -141,22 +152,23 @@ def symmetrize(X: np.ndarray, F: np.ndarray, lab: np.ndarray, face_side: np.ndar
         if np.linalg.norm(pos - mpos, axis=1).max() > MIDLINE_TOLERANCE:
             return None
         D = sp.diags(is_mid.astype(float))
-        Wl = Wl + 0.5 * (D @ (Wm - Wl))          # shared rows: their symmetric average
+        Wl = Wl + 0.5 * (D @ (Wm - Wl))  # shared rows: their symmetric average
         Wl.eliminate_zeros()
     Wnew = sp.vstack([Wl, (Wl @ P)[~is_mid]]).tocsr()
     Wnew.sort_indices()
-    Xnew = np.concatenate([np.asarray(X, float)[keep], Wnew[len(keep):] @ body_X])
+    Xnew = np.concatenate([np.asarray(X, float)[keep], Wnew[len(keep) :] @ body_X])
     if is_mid.any():
         Xnew[np.nonzero(is_mid)[0]] = Wl[is_mid] @ body_X
     FL = F[left]
     Fnew = np.concatenate([new[FL], mir[FL][:, ::-1]])
     labnew = np.concatenate([lab[left], pm[lab[left]]])
-    out_lines = _mirror_lines(lines, plan, inL, mid, new, mir, centre, _midline_edges(F, left, lab, pm, new),
-                              np.asarray(X, float), Xnew)
+    out_lines = _mirror_lines(
+        lines, plan, inL, mid, new, mir, centre, _midline_edges(F, left, lab, pm, new), np.asarray(X, float), Xnew
+    )
     if out_lines is None or not _lines_mirror(out_lines, plan, new, mir, n_new=len(Xnew)):
         return None
     if not _same_shape(X, F, lab, lines, Xnew, Fnew, labnew, out_lines):
-        return None             # the right side was not the left's mirror image (not a mirrored design)
+        return None  # the right side was not the left's mirror image (not a mirrored design)
     return Xnew, Fnew, labnew, Wnew, out_lines
 
 
@@ -167,6 +179,7 @@ SHAPE_TOLERANCE = 0.02
 
 def _same_shape(X, F, lab, lines, X2, F2, lab2, lines2) -> bool:
     """Every panel's area and every line's length and centroid the same within tolerance."""
+
     def areas(X, F, lab):
         return np.bincount(lab, triangle_areas(X, F), minlength=int(max(lab.max(), lab2.max())) + 1)
 
@@ -252,7 +265,7 @@ def _chains(edges: np.ndarray) -> Optional[List[np.ndarray]]:
             prev = path[-1]
             path.append(nxt[0])
         out.append(np.asarray(path, dtype=np.int64))
-    return out if len(seen) == len(adj) else None        # a closed loop is no centre seam
+    return out if len(seen) == len(adj) else None  # a closed loop is no centre seam
 
 
 def _centre_runs(runs, pairs, midline, X, Xnew) -> Optional[List[np.ndarray]]:
@@ -264,8 +277,10 @@ def _centre_runs(runs, pairs, midline, X, Xnew) -> Optional[List[np.ndarray]]:
     if not chains:
         return None
     first = X[np.concatenate(runs)[0]]
-    return [c if np.linalg.norm(Xnew[c[0]] - first) <= np.linalg.norm(Xnew[c[-1]] - first) else c[::-1].copy()
-            for c in chains]
+    return [
+        c if np.linalg.norm(Xnew[c[0]] - first) <= np.linalg.norm(Xnew[c[-1]] - first) else c[::-1].copy()
+        for c in chains
+    ]
 
 
 def _mirror_lines(lines, plan, inL, mid, new, mir, centre, midline, X, Xnew) -> Optional[List[List[np.ndarray]]]:
@@ -299,7 +314,7 @@ def _self_mirror_runs(runs, inL, mid, new, mir) -> Optional[List[np.ndarray]]:
         if len(r) > 2 and r[0] == r[-1] and len(hit):
             # a closed run (a hem ring around the skirt topology's bridge) starting on the left:
             # its left stretch across the start is whole when the run starts on the midline
-            r = np.concatenate([r[hit[0]:-1], r[:hit[0] + 1]])
+            r = np.concatenate([r[hit[0] : -1], r[: hit[0] + 1]])
         cur: List[int] = []
         for v in r.tolist():
             if not inL[v]:
@@ -379,8 +394,7 @@ def _lines_mirror(lines, plan, new, mir, n_new: int) -> bool:
     return True
 
 
-def coded_labels(mirror, panel_names: Sequence[str], line_names: Sequence[str], parents: np.ndarray,
-                 lab: np.ndarray):
+def coded_labels(mirror, panel_names: Sequence[str], line_names: Sequence[str], parents: np.ndarray, lab: np.ndarray):
     """The garment's mirror plan and its face labels with the body side folded in.
 
     Refinement and edge flips then never join a left and a right face (labels differ), so the
@@ -394,7 +408,7 @@ def coded_labels(mirror, panel_names: Sequence[str], line_names: Sequence[str], 
         return None, lab
     plan = mirror_plan(panel_names, line_names)
     sides = mirror[1]
-    if plan is None or len(parents) == 0 or parents.max() >= len(sides):     # a bridge without sides
+    if plan is None or len(parents) == 0 or parents.max() >= len(sides):  # a bridge without sides
         return None, lab
     return plan, 2 * np.asarray(lab, dtype=np.int64) + sides[parents]
 

@@ -8,6 +8,7 @@ end (as a fraction of the edge) is snapped to that vertex, and one no more than
 :data:`SNAP_SLIVER` of the edge and :data:`SNAP_ABS` metres from a free vertex snaps to
 it too (no sliver triangles), unless that vertex lies on another cut line.
 """
+
 from __future__ import annotations
 
 from typing import List, Optional
@@ -17,10 +18,10 @@ import numpy as np
 from ..errors import CutError
 from .incidence import bary2, bary2_scalar
 
-SNAP = 1e-3          # relative snap distance on an edge / in a triangle (always)
-SNAP_SLIVER = 0.05   # a crossing this close to a free vertex (relative to the edge) snaps to it...
-SNAP_ABS = 5e-4      # ...if it is also within this many metres: no sliver triangles
-_INSIDE = 1e-9       # barycentric slack for "point lies in this triangle"
+SNAP = 1e-3  # relative snap distance on an edge / in a triangle (always)
+SNAP_SLIVER = 0.05  # a crossing this close to a free vertex (relative to the edge) snaps to it...
+SNAP_ABS = 5e-4  # ...if it is also within this many metres: no sliver triangles
+_INSIDE = 1e-9  # barycentric slack for "point lies in this triangle"
 _MAX_STEPS = 100000  # guard against a walk that does not progress
 
 
@@ -30,8 +31,14 @@ class LineTracer:
     def _frame(self, P: int):
         fr = self._frames.get(P)
         if fr is None:
-            fr = (self._p0[P].tolist(), self._e1[P].tolist(), self._e2[P].tolist(), self._n[P].tolist(),
-                  float(self._scale[P]), self._ptri2[P].tolist())
+            fr = (
+                self._p0[P].tolist(),
+                self._e1[P].tolist(),
+                self._e2[P].tolist(),
+                self._n[P].tolist(),
+                float(self._scale[P]),
+                self._ptri2[P].tolist(),
+            )
             self._frames[P] = fr
         return fr
 
@@ -99,8 +106,9 @@ class LineTracer:
         c2 = np.stack([np.einsum("ijk,ik->ij", D, e1), np.einsum("ijk,ik->ij", D, e2)], axis=2)
         return faces, tri, bary2(q, c2)
 
-    def trace(self, A: int, target: np.ndarray, line: int, allowed: set,
-              target_vertex: Optional[int] = None, names=None) -> List[int]:
+    def trace(
+        self, A: int, target: np.ndarray, line: int, allowed: set, target_vertex: Optional[int] = None, names=None
+    ) -> List[int]:
         """Insert the straight (in-parent) segment from vertex ``A`` to point ``target``.
 
         Edges crossed are split (or the crossing snapped to a nearby vertex);
@@ -114,7 +122,9 @@ class LineTracer:
         for _ in range(_MAX_STEPS):
             if target_vertex is not None and (cur == target_vertex):
                 return out
-            if target_vertex is not None and (((cur << 32) | target_vertex) in self.he or ((target_vertex << 32) | cur) in self.he):
+            if target_vertex is not None and (
+                ((cur << 32) | target_vertex) in self.he or ((target_vertex << 32) | cur) in self.he
+            ):
                 self._mark(cur, target_vertex, line, allowed, names)
                 out.append(target_vertex)
                 return out

@@ -7,6 +7,7 @@ distinct ids at the same place on the body. Every garment vertex is a
 fixed linear combination of body vertices (``GarmentCut.embedding``), so the
 same cut gives the panels' 3D positions on any shape and pose of the model.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -51,6 +52,7 @@ class Panel:
     body_part : str, ``"torso"``, ``"arm"`` or ``"leg"``.
     mirror_of : name of the panel this one mirrors, or None.
     """
+
     name: str
     garment: str
     vertex_ids: np.ndarray
@@ -72,6 +74,7 @@ class Seam:
     A *dart* is a seam of a panel with itself whose two sides (the legs) run
     from the mouth to one shared vertex, the apex (:func:`seam_kind`).
     """
+
     name: str
     panel_a: str
     panel_b: str
@@ -119,6 +122,7 @@ class GarmentCut:
     darts : dict dart seam name -> ``{"panel", "intake" (m, or None for auto), "apex_offset" (m),
         "apex" ((3,) float, the true apex on the reference body, m), "line" (the line of its mouth)}``.
     """
+
     body: dict
     embedding: sp.csr_matrix
     panels: List[Panel]

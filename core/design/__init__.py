@@ -8,13 +8,31 @@ body, mirroring, ease fields and the garment templates.
 Heavy dependencies (igl, potpourri3d) are imported when a design is resolved,
 not when this package is imported.
 """
+
 from .checks import EASE_MAX, EASE_MIN
+from .ease import apply_ease, panel_ease
 from .materials import Materials
 from .parser import load_design, parse_design, save_design
-from .types import FORMAT, VERSION, Design, Garment, Line, Panel, Parameter
 from .resolve import Resolver, instance_vertices, resolve
-from .ease import apply_ease, panel_ease
+from .types import FORMAT, VERSION, Design, Garment, Line, Panel, Parameter
 
-__all__ = ["Design", "Garment", "Line", "Panel", "Parameter", "Materials", "EASE_MIN", "EASE_MAX", "FORMAT",
-           "VERSION", "load_design", "parse_design", "save_design", "Resolver", "instance_vertices",
-           "resolve", "apply_ease", "panel_ease"]
+__all__ = [
+    "Design",
+    "Garment",
+    "Line",
+    "Panel",
+    "Parameter",
+    "Materials",
+    "EASE_MIN",
+    "EASE_MAX",
+    "FORMAT",
+    "VERSION",
+    "load_design",
+    "parse_design",
+    "save_design",
+    "Resolver",
+    "instance_vertices",
+    "resolve",
+    "apply_ease",
+    "panel_ease",
+]

@@ -8,6 +8,7 @@ study, not a template (the shoulder darts pay only on a converged solve, docs/da
 :func:`blouse_four_darts`, the four-dart blouse, is the shipped template ``blouse_four_darts``:
 it names the solver configuration it is made for (``"solver": "fitted"``).
 """
+
 from __future__ import annotations
 
 from .garments import BLOUSE_WAIST_DART_INTAKE, blouse_fitted
@@ -24,8 +25,7 @@ NECK_DART_INTAKE = 0.0075
 FOUR_DART_APEX_OFFSET = 0.005
 
 
-def blouse_waist_darts(waist=WAIST_DART_INTAKE, shoulder=SHOULDER_DART_INTAKE, back=None, apex_offset=0.02,
-                       neck=None):
+def blouse_waist_darts(waist=WAIST_DART_INTAKE, shoulder=SHOULDER_DART_INTAKE, back=None, apex_offset=0.02, neck=None):
     """The fitted blouse with its front waist dart (from the hem up towards the bust point) at
     intake ``waist``, a shoulder dart towards the bust point, with ``neck`` (m) a neckline dart
     towards the bust point and, with ``back`` (m), a back waist dart from the hem towards the
@@ -37,23 +37,40 @@ def blouse_waist_darts(waist=WAIST_DART_INTAKE, shoulder=SHOULDER_DART_INTAKE, b
     front darts.
     """
     d = blouse_fitted()
-    d["description"] = ("Women's sleeveless fitted blouse (women's chart, size M) with bust, waist, shoulder"
-                        + (" and neckline" if neck else "") + " darts towards the bust points"
-                        + (" and back waist darts towards the shoulder blades" if back else "") + ".")
+    d["description"] = (
+        "Women's sleeveless fitted blouse (women's chart, size M) with bust, waist, shoulder"
+        + (" and neckline" if neck else "")
+        + " darts towards the bust points"
+        + (" and back waist darts towards the shoulder blades" if back else "")
+        + "."
+    )
     g = d["garments"][0]
     front = next(p for p in g["panels"] if p["name"] == "front")
     # the template's own darts: the bust dart, and its waist dart (set here, or left out)
     bust = next(x for x in front["darts"] if x["name"] == "bust_dart_left")
     bust["apex_offset"] = apex_offset
     front["darts"] = [bust]
-    extra = (("waist_dart_left", "hem", waist), ("shoulder_dart_left", "shoulder_left", shoulder),
-             ("neck_dart_left", "neckline", neck))
-    front["darts"] += [{"name": n, "line": line, "apex": "bust_left", "intake": w, "apex_offset": apex_offset}
-                       for n, line, w in extra if w]
+    extra = (
+        ("waist_dart_left", "hem", waist),
+        ("shoulder_dart_left", "shoulder_left", shoulder),
+        ("neck_dart_left", "neckline", neck),
+    )
+    front["darts"] += [
+        {"name": n, "line": line, "apex": "bust_left", "intake": w, "apex_offset": apex_offset}
+        for n, line, w in extra
+        if w
+    ]
     if back:
         rear = next(p for p in g["panels"] if p["name"] == "back")
-        rear["darts"] = [{"name": "back_waist_dart_left", "line": "hem", "apex": "shoulder_blade_left",
-                          "intake": back, "apex_offset": 0.03}]
+        rear["darts"] = [
+            {
+                "name": "back_waist_dart_left",
+                "line": "hem",
+                "apex": "shoulder_blade_left",
+                "intake": back,
+                "apex_offset": 0.03,
+            }
+        ]
     return d
 
 
@@ -69,9 +86,11 @@ def blouse_four_darts():
     edges flips)."""
     d = blouse_waist_darts(neck=NECK_DART_INTAKE, apex_offset=FOUR_DART_APEX_OFFSET)
     d["name"] = "four-dart blouse"
-    d["description"] = ("Women's sleeveless fitted blouse (women's chart, size M) with four darts towards each "
-                        "bust point: from the side seam, the hem, the shoulder and the neckline, each ending 5 mm "
-                        "from the point; ease 1.1; solved with the fitted configuration (converged, the warp "
-                        "lengths kept).")
+    d["description"] = (
+        "Women's sleeveless fitted blouse (women's chart, size M) with four darts towards each "
+        "bust point: from the side seam, the hem, the shoulder and the neckline, each ending 5 mm "
+        "from the point; ease 1.1; solved with the fitted configuration (converged, the warp "
+        "lengths kept)."
+    )
     d["solver"] = "fitted"
     return d

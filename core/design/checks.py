@@ -8,6 +8,7 @@ The parser (:mod:`core.design.parser`) builds the design from them; the
 design's own edits (:class:`core.design.types.Design`) re-validate with them.
 Design-wide checks (names unique, seam names of the materials) come last.
 """
+
 from __future__ import annotations
 
 import json
@@ -38,7 +39,6 @@ KEYPOINT_KINDS = ("landmark", "triangle", "between", "trace", "mirror_of")
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 
-
 def fmt(value) -> str:
     try:
         s = json.dumps(value)
@@ -60,8 +60,9 @@ def expect_dict(path, obj, what="an object"):
 def expect_keys(path, obj, allowed):
     extra = sorted(set(obj) - set(allowed))
     if extra:
-        raise DesignError(f"{path}.{extra[0]}" if path else extra[0],
-                          f"unknown field; expected one of: {', '.join(sorted(allowed))}")
+        raise DesignError(
+            f"{path}.{extra[0]}" if path else extra[0], f"unknown field; expected one of: {', '.join(sorted(allowed))}"
+        )
 
 
 def check_name(path, name):
@@ -99,7 +100,7 @@ def param_or_number(path, x, params, kind, lo=None, hi=None, lo_open=False, what
     """A number, or ``"$name"`` naming a parameter of a compatible kind."""
     if isinstance(x, str):
         if not x.startswith("$"):
-            raise DesignError(path, f"expected a number or \"$parameter\", got {fmt(x)}")
+            raise DesignError(path, f'expected a number or "$parameter", got {fmt(x)}')
         name = x[1:]
         if name not in params:
             raise DesignError(path, f"unknown parameter {name!r}; parameters: {', '.join(params) or 'none'}")
@@ -147,8 +148,10 @@ def check_keypoint(path, obj, params):
         bary = obj.get("bary")
         if not isinstance(bary, (list, tuple)) or len(bary) != 3:
             raise DesignError(f"{path}.bary", f"expected 3 barycentric weights, got {fmt(bary)}")
-        b = [check_number(f"{path}.bary[{i}]", v, -1e-6, 1 + 1e-6, what="a barycentric weight")
-             for i, v in enumerate(bary)]
+        b = [
+            check_number(f"{path}.bary[{i}]", v, -1e-6, 1 + 1e-6, what="a barycentric weight")
+            for i, v in enumerate(bary)
+        ]
         if abs(sum(b) - 1.0) > 1e-4:
             raise DesignError(f"{path}.bary", f"expected weights summing to 1, got sum {sum(b):.6f}")
         return {"triangle": int(tri), "bary": b}
@@ -159,7 +162,7 @@ def check_keypoint(path, obj, params):
             raise DesignError(f"{path}.between", f"expected [keypoint_a, keypoint_b], got {fmt(pair)}")
         refs = [keypoint_ref(f"{path}.between[{i}]", r, params) for i, r in enumerate(pair)]
         if "t" not in obj:
-            raise DesignError(f"{path}.t", "missing; expected a placement 0..1 or \"$parameter\"")
+            raise DesignError(f"{path}.t", 'missing; expected a placement 0..1 or "$parameter"')
         t = param_or_number(f"{path}.t", obj["t"], params, "placement", 0.0, 1.0, what="a placement")
         return {"between": refs, "t": t}
     if kind == "mirror_of":
@@ -176,8 +179,9 @@ def check_keypoint(path, obj, params):
     start = keypoint_ref(f"{path}.trace.from", tr["from"], params)
     if tr["along"] not in TRACE_ALONG:
         raise DesignError(f"{path}.trace.along", f"expected one of {', '.join(TRACE_ALONG)}, got {fmt(tr['along'])}")
-    length = param_or_number(f"{path}.trace.length", tr["length"], params, "length", 0.0, 3.0,
-                              lo_open=True, what="a length in metres")
+    length = param_or_number(
+        f"{path}.trace.length", tr["length"], params, "length", 0.0, 3.0, lo_open=True, what="a length in metres"
+    )
     return {"trace": {"from": start, "along": tr["along"], "length": length}}
 
 
@@ -206,8 +210,9 @@ def check_ring(path, ring, params):
     if not isinstance(n, int) or isinstance(n, bool) or not 4 <= n <= 64:
         raise DesignError(f"{path}.points", f"expected an integer in 4..64, got {fmt(n)}")
     out["points"] = n
-    out["offset"] = param_or_number(f"{path}.offset", ring.get("offset", 0.0), params, "length",
-                                     -0.2, 0.2, what="an offset in metres")
+    out["offset"] = param_or_number(
+        f"{path}.offset", ring.get("offset", 0.0), params, "length", -0.2, 0.2, what="an offset in metres"
+    )
     named = ring.get("named", {})
     expect_dict(f"{path}.named", named, "an object name -> fraction 0..1 or axis")
     out_named = {}
@@ -215,7 +220,9 @@ def check_ring(path, ring, params):
         check_name(f"{path}.named.{k}", k)
         if isinstance(v, str):
             if v not in AXES:
-                raise DesignError(f"{path}.named.{k}", f"expected a fraction 0..1 or an axis ({', '.join(AXES)}), got {fmt(v)}")
+                raise DesignError(
+                    f"{path}.named.{k}", f"expected a fraction 0..1 or an axis ({', '.join(AXES)}), got {fmt(v)}"
+                )
             out_named[k] = v
         else:
             out_named[k] = check_number(f"{path}.named.{k}", v, 0.0, 1.0, what="a fraction of the ring")
@@ -229,10 +236,14 @@ def check_section(path, sec, params):
     for k in ("from", "to", "normal"):
         if k not in sec:
             raise DesignError(f"{path}.{k}", "missing")
-    out = {"from": keypoint_ref(f"{path}.from", sec["from"], params), "to": keypoint_ref(f"{path}.to", sec["to"], params),
-           "normal": check_axis(f"{path}.normal", sec["normal"], params)}
-    out["spacing"] = check_number(f"{path}.spacing", sec.get("spacing", 0.03), 0.005, 0.2,
-                             what="a point spacing in metres")
+    out = {
+        "from": keypoint_ref(f"{path}.from", sec["from"], params),
+        "to": keypoint_ref(f"{path}.to", sec["to"], params),
+        "normal": check_axis(f"{path}.normal", sec["normal"], params),
+    }
+    out["spacing"] = check_number(
+        f"{path}.spacing", sec.get("spacing", 0.03), 0.005, 0.2, what="a point spacing in metres"
+    )
     return out
 
 
@@ -254,17 +265,23 @@ def check_ease(path, obj, params) -> dict:
         expect_keys(f"{path}.per_triangle", pt, ("triangles", "values", "default"))
         vals = pt.get("values")
         if not isinstance(vals, list) or not vals:
-            raise DesignError(f"{path}.per_triangle.values", f"expected a non-empty list of ease values, got {fmt(vals)}")
+            raise DesignError(
+                f"{path}.per_triangle.values", f"expected a non-empty list of ease values, got {fmt(vals)}"
+            )
         out_vals = [_ease_value(f"{path}.per_triangle.values[{i}]", v) for i, v in enumerate(vals)]
         out = {"values": out_vals}
         if "triangles" in pt:
             tris = pt["triangles"]
             if not isinstance(tris, list) or len(tris) != len(vals):
-                raise DesignError(f"{path}.per_triangle.triangles",
-                                  f"expected a list of {len(vals)} body triangle ids (one per value), got {fmt(tris)}")
+                raise DesignError(
+                    f"{path}.per_triangle.triangles",
+                    f"expected a list of {len(vals)} body triangle ids (one per value), got {fmt(tris)}",
+                )
             for i, t in enumerate(tris):
                 if not isinstance(t, int) or isinstance(t, bool) or t < 0:
-                    raise DesignError(f"{path}.per_triangle.triangles[{i}]", f"expected a triangle index >= 0, got {fmt(t)}")
+                    raise DesignError(
+                        f"{path}.per_triangle.triangles[{i}]", f"expected a triangle index >= 0, got {fmt(t)}"
+                    )
             out["triangles"] = [int(t) for t in tris]
         out["default"] = _ease_value(f"{path}.per_triangle.default", pt.get("default", 1.0))
         return {"per_triangle": out}
@@ -273,8 +290,7 @@ def check_ease(path, obj, params) -> dict:
         for k in ("from", "to"):
             if k not in obj:
                 raise DesignError(f"{path}.{k}", "missing; a gradient needs from and to")
-        out = {"from": _ease_value(f"{path}.from", obj["from"]),
-               "to": _ease_value(f"{path}.to", obj["to"])}
+        out = {"from": _ease_value(f"{path}.from", obj["from"]), "to": _ease_value(f"{path}.to", obj["to"])}
         if ("between" in obj) == ("axis" in obj):
             raise DesignError(path, "a gradient needs exactly one of between [keypoint_a, keypoint_b] or axis")
         if "between" in obj:
@@ -288,11 +304,13 @@ def check_ease(path, obj, params) -> dict:
             out["axis"] = obj["axis"]
             over = obj.get("over", "panel")
             if over not in ("panel", "garment"):
-                raise DesignError(f"{path}.over", f"expected \"panel\" or \"garment\", got {fmt(over)}")
+                raise DesignError(f"{path}.over", f'expected "panel" or "garment", got {fmt(over)}')
             if over != "panel":
                 out["over"] = over
         return out
-    raise DesignError(path, f"expected an ease field {{value}} | {{from, to, between|axis}} | {{per_triangle}}, got {fmt(obj)}")
+    raise DesignError(
+        path, f"expected an ease field {{value}} | {{from, to, between|axis}} | {{per_triangle}}, got {fmt(obj)}"
+    )
 
 
 def check_names_unique(design) -> None:

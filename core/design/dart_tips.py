@@ -16,6 +16,7 @@ iterations) and its bust region at the default 10 mm reads 1.34 % (1.36 % before
 the dart instead (the neckline dart to 10 mm) reads 1.38 % and still holds 76 triangles in the
 guard after 150 iterations at 5 mm.
 """
+
 from __future__ import annotations
 
 from typing import Sequence
@@ -32,8 +33,15 @@ TIP_RING = 0.005
 TIP_STEP = np.radians(0.5)
 
 
-def spread_tip(resolver, apex: SurfacePoint, end: SurfacePoint, placed: Sequence[np.ndarray], path: str,
-               name: str, ring: float = TIP_RING) -> SurfacePoint:
+def spread_tip(
+    resolver,
+    apex: SurfacePoint,
+    end: SurfacePoint,
+    placed: Sequence[np.ndarray],
+    path: str,
+    name: str,
+    ring: float = TIP_RING,
+) -> SurfacePoint:
     """``end``, or the nearest point to it on the circle about ``apex`` through it that lies
     ``ring`` (m) from every position in ``placed`` (the sewn points placed before it).
 
@@ -71,17 +79,20 @@ def spread_tip(resolver, apex: SurfacePoint, end: SurfacePoint, placed: Sequence
     n = np.cross(v[1] - v[0], v[2] - v[0])
     n /= np.linalg.norm(n)
     d = E - A
-    h = float(d @ n)                              # height over the tangent plane, kept
+    h = float(d @ n)  # height over the tangent plane, kept
     u = d - h * n
-    w = np.cross(n, u)                            # u turned by +90 degrees about the normal
+    w = np.cross(n, u)  # u turned by +90 degrees about the normal
     near = P[np.argmin(np.linalg.norm(P - E, axis=1))] - A
-    away = -1.0 if float(near @ w) > 0 else 1.0   # turn away from the nearest placed point first
+    away = -1.0 if float(near @ w) > 0 else 1.0  # turn away from the nearest placed point first
     for k in range(1, int(np.pi / TIP_STEP) + 1):
         for sign in (away, -away):
             t = sign * k * TIP_STEP
             q = A + np.cos(t) * u + np.sin(t) * w + h * n
             if np.min(np.linalg.norm(P - q, axis=1)) >= ring:
                 return resolver.locator.locate(q[None])[0]
-    raise DesignError(path, f"dart {name!r}: its sewn point has no room: every point "
-                            f"{np.linalg.norm(u) * 1000:.1f} mm from its apex lies within {ring * 1000:.0f} mm of "
-                            "another dart's sewn point in this panel; give it a larger apex_offset")
+    raise DesignError(
+        path,
+        f"dart {name!r}: its sewn point has no room: every point "
+        f"{np.linalg.norm(u) * 1000:.1f} mm from its apex lies within {ring * 1000:.0f} mm of "
+        "another dart's sewn point in this panel; give it a larger apex_offset",
+    )

@@ -25,6 +25,7 @@ itself. ``*_left`` darts of a mirrored design get their ``*_right``
 counterparts (in the same panel when it spans both sides, in the mirrored
 panel otherwise).
 """
+
 from __future__ import annotations
 
 import copy
@@ -54,6 +55,7 @@ SNAP = 0.005
 @dataclass
 class Dart:
     """A dart of a panel (see the module docs); ``intake`` None means ``"auto"``."""
+
     name: str
     line: str
     apex: object
@@ -62,8 +64,13 @@ class Dart:
     at: Optional[object] = None
 
     def to_json(self) -> dict:
-        out = {"name": self.name, "line": self.line, "apex": copy.deepcopy(self.apex),
-               "intake": "auto" if self.intake is None else self.intake, "apex_offset": self.apex_offset}
+        out = {
+            "name": self.name,
+            "line": self.line,
+            "apex": copy.deepcopy(self.apex),
+            "intake": "auto" if self.intake is None else self.intake,
+            "apex_offset": self.apex_offset,
+        }
         if self.at is not None:
             out["at"] = copy.deepcopy(self.at)
         return out
@@ -79,6 +86,7 @@ class DartSpec:
     intake : m at the mouth in the pattern, or None (``"auto"``); host : the full name of the line
     the mouth lies on.
     """
+
     name: str
     panel: str
     path: str
@@ -107,15 +115,23 @@ def parse_auto(path: str, obj) -> Optional[dict]:
     count = req.get("max_count", AUTO_DEFAULTS["max_count"])
     if not isinstance(count, int) or isinstance(count, bool) or not 1 <= count <= 8:
         raise DesignError(f"{path}.auto.max_count", f"expected a whole number of darts in 1..8, got {fmt(count)}")
-    intake = check_number(f"{path}.auto.max_intake", req.get("max_intake", AUTO_DEFAULTS["max_intake"]), 0.0,
-                          INTAKE_MAX, lo_open=True, what="the widest intake in metres")
+    intake = check_number(
+        f"{path}.auto.max_intake",
+        req.get("max_intake", AUTO_DEFAULTS["max_intake"]),
+        0.0,
+        INTAKE_MAX,
+        lo_open=True,
+        what="the widest intake in metres",
+    )
     return {"max_count": count, "max_intake": intake}
 
 
 def parse_darts(path: str, obj, params) -> List[Dart]:
     """The ``darts`` list of a panel, validated (names unique, intake > 0 or ``"auto"``)."""
     if not isinstance(obj, list):
-        raise DesignError(path, f"expected a list of darts {{name, line, apex, intake, apex_offset, at}}, got {fmt(obj)}")
+        raise DesignError(
+            path, f"expected a list of darts {{name, line, apex, intake, apex_offset, at}}, got {fmt(obj)}"
+        )
     out: List[Dart] = []
     for i, d in enumerate(obj):
         p = f"{path}[{i}]"
@@ -130,12 +146,18 @@ def parse_darts(path: str, obj, params) -> List[Dart]:
         at = keypoint_ref(f"{p}.at", d["at"], params, allow_inline=False) if d.get("at") is not None else None
         intake = d.get("intake", "auto")
         if intake != "auto":
-            intake = check_number(f"{p}.intake", intake, 0.0, INTAKE_MAX, lo_open=True,
-                                  what='"auto" or the width at the mouth in metres')
+            intake = check_number(
+                f"{p}.intake", intake, 0.0, INTAKE_MAX, lo_open=True, what='"auto" or the width at the mouth in metres'
+            )
         else:
             intake = None
-        off = check_number(f"{p}.apex_offset", d.get("apex_offset", APEX_OFFSET), 0.0, APEX_OFFSET_MAX,
-                           what="the distance in metres the dart stops short of its apex")
+        off = check_number(
+            f"{p}.apex_offset",
+            d.get("apex_offset", APEX_OFFSET),
+            0.0,
+            APEX_OFFSET_MAX,
+            what="the distance in metres the dart stops short of its apex",
+        )
         if any(x.name == d["name"] for x in out):
             raise DesignError(f"{p}.name", f"duplicate dart name {d['name']!r}")
         out.append(Dart(d["name"], d["line"], apex, intake, off, at))
@@ -144,8 +166,13 @@ def parse_darts(path: str, obj, params) -> List[Dart]:
 
 def mirror_dart(d: Dart) -> Dart:
     """The counterpart on the other side of the body (names and references swapped)."""
-    return replace(d, name=mirrored_name(d.name) or swap_side(d.name), line=swap_side(d.line),
-                   apex=swap_side(d.apex), at=None if d.at is None else swap_side(d.at))
+    return replace(
+        d,
+        name=mirrored_name(d.name) or swap_side(d.name),
+        line=swap_side(d.line),
+        apex=swap_side(d.apex),
+        at=None if d.at is None else swap_side(d.at),
+    )
 
 
 def panel_darts(panel, mirrored: bool, design_mirror: bool) -> List[Dart]:
@@ -177,10 +204,11 @@ def resolve_darts(resolver, design, lines: list, panels) -> list:
     list of CutLine (role ``"seam"``, ``dart`` set), mouth first.
     """
     from .spec import CutLine
+
     by_name = {l.name: l for l in lines}
     taken = set(by_name)
     out = []
-    done = {}   # full dart name -> (mouth, sewn point): a mirrored dart mirrors its source's points
+    done = {}  # full dart name -> (mouth, sewn point): a mirrored dart mirrors its source's points
     placed = {}  # full panel name -> positions of the sewn points placed so far (room between tips)
     for g, path, panel, mirrored in panels:
         own = {d.name for d in panel.darts} if not mirrored else set()
@@ -193,8 +221,11 @@ def resolve_darts(resolver, design, lines: list, panels) -> list:
             host = by_name.get(f"{g.name}.{d.line}") or by_name.get(d.line)
             if host is None:
                 names = sorted(n.partition(".")[2] or n for n in by_name if n.startswith(f"{g.name}.") or "." not in n)
-                raise DesignError(f"{dp}.line", f"dart {d.name!r}: no seam or hem line {d.line!r} in garment "
-                                                f"{g.name!r}; lines: {', '.join(names) or 'none'}")
+                raise DesignError(
+                    f"{dp}.line",
+                    f"dart {d.name!r}: no seam or hem line {d.line!r} in garment "
+                    f"{g.name!r}; lines: {', '.join(names) or 'none'}",
+                )
             apex = resolver.ref(d.apex, f"{dp}.apex")
             source = f"{g.name}.{swap_side(d.name)}"
             if (mirrored or d.name not in own) and source in done and design.mirror:
@@ -207,9 +238,12 @@ def resolve_darts(resolver, design, lines: list, panels) -> list:
                 poly = resolver.geodesics.path(mouth, apex)
                 length = polyline_length(poly)
                 if length - d.apex_offset < MIN_DART_LENGTH:
-                    raise DesignError(f"{dp}.apex", f"dart {d.name!r}: its apex is {length * 1000:.0f} mm from the "
-                                                    f"{d.line!r} line; a dart needs {MIN_DART_LENGTH * 1000:.0f} mm "
-                                                    f"after the apex offset of {d.apex_offset * 1000:.0f} mm")
+                    raise DesignError(
+                        f"{dp}.apex",
+                        f"dart {d.name!r}: its apex is {length * 1000:.0f} mm from the "
+                        f"{d.line!r} line; a dart needs {MIN_DART_LENGTH * 1000:.0f} mm "
+                        f"after the apex offset of {d.apex_offset * 1000:.0f} mm",
+                    )
                 p, _, _ = point_at_length(poly, length - d.apex_offset)
                 end = resolver.locator.locate(p[None])[0]
                 end = spread_tip(resolver, apex, end, placed.get(f"{g.name}.{panel.name}", []), f"{dp}.apex", d.name)

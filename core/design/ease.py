@@ -21,6 +21,7 @@ Kinds (per panel, in the design's ``ease``):
 Gradients and triangle lookups are evaluated on the reference instance (the
 one the design is cut on), so the same field transfers to every shape and pose.
 """
+
 from __future__ import annotations
 
 from typing import Optional
@@ -29,8 +30,8 @@ import numpy as np
 
 from ..errors import DesignError
 from .checks import EASE_MAX, EASE_MIN
-from .parser import load_design
 from .mirror import mirror_ease
+from .parser import load_design
 from .resolve import AXIS_VECTORS, Resolver
 
 
@@ -90,14 +91,18 @@ def panel_ease(cut, panel, ease: dict, resolver: Resolver, path: str) -> np.ndar
             tris = np.asarray(pt["triangles"], dtype=np.int64)
             bad = np.flatnonzero(tris >= nbody)
             if bad.size:
-                raise DesignError(f"{path}.per_triangle.triangles[{bad[0]}]",
-                                  f"triangle {tris[bad[0]]} does not exist (the body has {nbody} triangles)")
+                raise DesignError(
+                    f"{path}.per_triangle.triangles[{bad[0]}]",
+                    f"triangle {tris[bad[0]]} does not exist (the body has {nbody} triangles)",
+                )
             table = np.full(nbody, float(pt.get("default", 1.0)))
             table[tris] = np.asarray(pt["values"], dtype=float)
         else:
             if len(pt["values"]) != nbody:
-                raise DesignError(f"{path}.per_triangle.values",
-                                  f"expected {nbody} values (one per body template triangle), got {len(pt['values'])}")
+                raise DesignError(
+                    f"{path}.per_triangle.values",
+                    f"expected {nbody} values (one per body template triangle), got {len(pt['values'])}",
+                )
             table = np.asarray(pt["values"], dtype=float)
         rho = table[tri]
     else:  # pragma: no cover - validated on load
@@ -105,8 +110,9 @@ def panel_ease(cut, panel, ease: dict, resolver: Resolver, path: str) -> np.ndar
     rho = np.asarray(rho, dtype=np.float64)
     bad = ~np.isfinite(rho) | (rho < EASE_MIN - 1e-12) | (rho > EASE_MAX + 1e-12)
     if bad.any():
-        raise DesignError(path, f"panel {panel.name!r}: ease must be finite and within "
-                                f"{EASE_MIN}..{EASE_MAX}, got {rho[bad][0]}")
+        raise DesignError(
+            path, f"panel {panel.name!r}: ease must be finite and within {EASE_MIN}..{EASE_MAX}, got {rho[bad][0]}"
+        )
     return rho
 
 
@@ -150,7 +156,7 @@ def _is_mirror_ease(cut, design, panel, resolver) -> bool:
     field read mirrored (to the 6 decimals the add-on writes ease with)."""
     try:
         source, path, _ = _panel_field(design, panel.mirror_of)
-    except DesignError:       # the source is not a design panel: nothing to compare with
+    except DesignError:  # the source is not a design panel: nothing to compare with
         return True
     mirrored = panel_ease(cut, panel, mirror_ease(source), resolver, path)
     return bool(np.allclose(mirrored, panel.ease, rtol=0.0, atol=1e-6))

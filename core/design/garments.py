@@ -19,6 +19,7 @@ Construction (all mirrored left -> right):
 - skirt/dress: the skirt topology (``"skirt": true``): the hem is a loop of
   points on both legs, joined across the bridged inter-leg surface.
 """
+
 from __future__ import annotations
 
 import copy
@@ -47,6 +48,7 @@ def _design(name, description, garments, parameters, keypoints, lines=None, skir
 
 
 # ---------------------------------------------------------------- upper body parts
+
 
 def _top_parts(sleeves: str = "long", hem: str = "hem", ease=None):
     """Parameters, keypoints, lines and panels of a top.
@@ -78,20 +80,29 @@ def _top_parts(sleeves: str = "long", hem: str = "hem", ease=None):
         "chest_back": {"between": ["neck_back", "waist_back"], "t": 0.45},
     }
     lines = [
-        {"name": "neckline", "points": ["neckline_front", "neckline_side_left", "neckline_back",
-                                        "neckline_side_right"],
-         "closed": True, "role": "opening"},
+        {
+            "name": "neckline",
+            "points": ["neckline_front", "neckline_side_left", "neckline_back", "neckline_side_right"],
+            "closed": True,
+            "role": "opening",
+        },
         # a set-in armhole: the section just outside the armpit, over the shoulder tip and
         # across the upper arm - the plane through both, turned least from the arm's axis.
         # It follows the arm in every reference pose (in the A-pose it is the sagittal
         # plane, normal x; a fixed x would slice a raised or forward arm lengthwise).
-        {"name": "armhole_left", "ring": {"through": "armhole_under_left",
-                                           "normal": ["shoulder_left", "arm_axis_left"],
-                                           # front/back: fractions of the ring from the armpit
-                                           # (in the A-pose its front- and backmost points)
-                                           "contains": "armhole_top_left", "points": 12,
-                                           "named": {"armhole_front_left": 0.81, "armhole_back_left": 0.29}},
-         "role": "seam" if sleeves != "none" else "opening"},
+        {
+            "name": "armhole_left",
+            "ring": {
+                "through": "armhole_under_left",
+                "normal": ["shoulder_left", "arm_axis_left"],
+                # front/back: fractions of the ring from the armpit
+                # (in the A-pose its front- and backmost points)
+                "contains": "armhole_top_left",
+                "points": 12,
+                "named": {"armhole_front_left": 0.81, "armhole_back_left": 0.29},
+            },
+            "role": "seam" if sleeves != "none" else "opening",
+        },
         {"name": "shoulder_left", "points": ["neckline_side_left", "armhole_top_left"], "role": "seam"},
         {"name": "side_left", "points": ["armhole_under_left", "hem_side_left"], "role": "seam"},
     ]
@@ -113,39 +124,74 @@ def _top_parts(sleeves: str = "long", hem: str = "hem", ease=None):
             params["sleeve_length"] = {"value": 0.2, "kind": "length", "min": 0.15, "max": 0.3}
             normal = ["shoulder_left", "elbow_left"]
         # the cuff ring is placed by a traced length; its top/under points split the sleeve
-        kps["cuff_level_left"] = {"trace": {"from": "armhole_top_left", "along": "arm_left",
-                                            "length": "$sleeve_length"}}
+        kps["cuff_level_left"] = {
+            "trace": {"from": "armhole_top_left", "along": "arm_left", "length": "$sleeve_length"}
+        }
         kps["sleeve_front_mid_left"] = {"between": ["armhole_front_left", "cuff_front_left"], "t": 0.5}
         kps["sleeve_back_mid_left"] = {"between": ["armhole_back_left", "cuff_back_left"], "t": 0.5}
         lines += [
-            {"name": "cuff_left", "ring": {"through": "cuff_level_left", "normal": normal, "points": 12,
-                                           "named": {"cuff_top_left": "+z", "cuff_under_left": "-z",
-                                                     "cuff_front_left": "-y",
-                                                     "cuff_back_left": "+y"}},
-             "role": "opening"},
+            {
+                "name": "cuff_left",
+                "ring": {
+                    "through": "cuff_level_left",
+                    "normal": normal,
+                    "points": 12,
+                    "named": {
+                        "cuff_top_left": "+z",
+                        "cuff_under_left": "-z",
+                        "cuff_front_left": "-y",
+                        "cuff_back_left": "+y",
+                    },
+                },
+                "role": "opening",
+            },
             {"name": "sleeve_top_left", "points": ["armhole_top_left", "cuff_top_left"], "role": "seam"},
             {"name": "sleeve_under_left", "points": ["armhole_under_left", "cuff_under_left"], "role": "seam"},
         ]
         if sleeves == "long":
             # the forearm turns forward: the sleeve seams pass the elbow on its top and underside
-            lines += [{"name": "elbow_guide_left", "ring": {
-                "through": "elbow_left", "normal": ["shoulder_left", "elbow_left"], "points": 8,
-                "named": {"elbow_top_left": "+z", "elbow_under_left": "-z"}}, "role": "guide"}]
+            lines += [
+                {
+                    "name": "elbow_guide_left",
+                    "ring": {
+                        "through": "elbow_left",
+                        "normal": ["shoulder_left", "elbow_left"],
+                        "points": 8,
+                        "named": {"elbow_top_left": "+z", "elbow_under_left": "-z"},
+                    },
+                    "role": "guide",
+                }
+            ]
             lines[-3]["points"] = ["armhole_top_left", "elbow_top_left", "cuff_top_left"]
             lines[-2]["points"] = ["armhole_under_left", "elbow_under_left", "cuff_under_left"]
         panels += [
-            {"name": "sleeve_front_left", "seed": "sleeve_front_mid_left", "body_part": "arm",
-             "ease": ease.get("sleeve_front_left", {"value": 1.2})},
-            {"name": "sleeve_back_left", "seed": "sleeve_back_mid_left", "body_part": "arm",
-             "ease": ease.get("sleeve_back_left", {"value": 1.2})},
+            {
+                "name": "sleeve_front_left",
+                "seed": "sleeve_front_mid_left",
+                "body_part": "arm",
+                "ease": ease.get("sleeve_front_left", {"value": 1.2}),
+            },
+            {
+                "name": "sleeve_back_left",
+                "seed": "sleeve_back_mid_left",
+                "body_part": "arm",
+                "ease": ease.get("sleeve_back_left", {"value": 1.2}),
+            },
         ]
     return params, kps, lines, panels
 
 
 def _hem_ring(through="hem_front"):
-    return {"name": "hem", "ring": {"through": through, "normal": "z", "points": 16,
-                                    "named": {"hem_side_left": "+x", "hem_side_right": "-x"}},
-            "role": "opening"}
+    return {
+        "name": "hem",
+        "ring": {
+            "through": through,
+            "normal": "z",
+            "points": 16,
+            "named": {"hem_side_left": "+x", "hem_side_right": "-x"},
+        },
+        "role": "opening",
+    }
 
 
 def _top(name, description, sleeves, hem_length=0.10, ease=None):
@@ -154,14 +200,18 @@ def _top(name, description, sleeves, hem_length=0.10, ease=None):
     params["hem_length"] = {"value": hem_length, "kind": "length", "min": 0.005, "max": 0.2}
     kps["hem_front"] = {"trace": {"from": "waist_front", "along": "torso_down", "length": "$hem_length"}}
     lines.insert(1, _hem_ring())
-    garment = {"name": "shirt" if sleeves == "long" else "top", "kind": "upper", "pin": "neckline",
-               "lines": lines, "panels": panels}
+    garment = {
+        "name": "shirt" if sleeves == "long" else "top",
+        "kind": "upper",
+        "pin": "neckline",
+        "lines": lines,
+        "panels": panels,
+    }
     return _design(name, description, [garment], params, kps)
 
 
 def shirt_long_sleeve():
-    return _top("long-sleeve shirt", "Front, back, and each sleeve split front/back (6 panels); ease 1.2.",
-                "long")
+    return _top("long-sleeve shirt", "Front, back, and each sleeve split front/back (6 panels); ease 1.2.", "long")
 
 
 def top_short_sleeve():
@@ -173,13 +223,22 @@ def top_sleeveless():
 
 
 def jacket():
-    d = _top("jacket", "The long-sleeve shirt with one extra cut down the front centre: "
-                       "front_left / front_right open at the front; ease 1.3.", "long",
-             ease={k: {"value": 1.3} for k in ("front", "back", "sleeve_front_left", "sleeve_back_left")})
+    d = _top(
+        "jacket",
+        "The long-sleeve shirt with one extra cut down the front centre: "
+        "front_left / front_right open at the front; ease 1.3.",
+        "long",
+        ease={k: {"value": 1.3} for k in ("front", "back", "sleeve_front_left", "sleeve_back_left")},
+    )
     g = d["garments"][0]
     g["name"] = "jacket"
-    g["lines"].append({"name": "center_front", "section": {"from": "neckline_front", "to": "hem_front",
-                                                             "normal": "x"}, "role": "opening"})
+    g["lines"].append(
+        {
+            "name": "center_front",
+            "section": {"from": "neckline_front", "to": "hem_front", "normal": "x"},
+            "role": "opening",
+        }
+    )
     front = next(p for p in g["panels"] if p["name"] == "front")
     front["name"] = "front_left"
     front["seed"] = "bust_left"
@@ -188,10 +247,10 @@ def jacket():
 
 # ---------------------------------------------------------------- lower body
 
+
 def _pants_parts(length_value, length_range, ease=None, name="pants"):
     ease = ease or {}
-    params = {"leg_length": {"value": length_value, "kind": "length",
-                             "min": length_range[0], "max": length_range[1]}}
+    params = {"leg_length": {"value": length_value, "kind": "length", "min": length_range[0], "max": length_range[1]}}
     kps = {
         "leg_hem_out_left": {"trace": {"from": "waist_side_left", "along": "leg_left", "length": "$leg_length"}},
         "thigh_front_left": {"between": ["waist_front", "leg_hem_front_left"], "t": 0.45},
@@ -199,33 +258,51 @@ def _pants_parts(length_value, length_range, ease=None, name="pants"):
     }
     lines = [
         # centre seams follow the midline (a geodesic there is not unique in the concave crotch)
-        {"name": "center_front", "section": {"from": "waist_front", "to": "crotch", "normal": "x"},
-         "role": "seam"},
+        {"name": "center_front", "section": {"from": "waist_front", "to": "crotch", "normal": "x"}, "role": "seam"},
         # ... from the waist ring's back midpoint (half way round from waist_front), not the
         # waist_back landmark: on other sizes that landmark is a little off the ring's height
-        {"name": "center_back", "section": {"from": "waist_back_mid", "to": "crotch", "normal": "x"},
-         "role": "seam"},
+        {"name": "center_back", "section": {"from": "waist_back_mid", "to": "crotch", "normal": "x"}, "role": "seam"},
         {"name": "side_left", "points": ["waist_side_left", "leg_hem_out_left"], "role": "seam"},
-        {"name": "leg_hem_left", "ring": {"through": "leg_hem_out_left", "normal": "z", "points": 12,
-                                          "named": {"leg_hem_in_left": "-x", "leg_hem_front_left": "-y",
-                                                    "leg_hem_back_left": "+y"}},
-         "role": "opening"},
+        {
+            "name": "leg_hem_left",
+            "ring": {
+                "through": "leg_hem_out_left",
+                "normal": "z",
+                "points": 12,
+                "named": {"leg_hem_in_left": "-x", "leg_hem_front_left": "-y", "leg_hem_back_left": "+y"},
+            },
+            "role": "opening",
+        },
         {"name": "inseam_left", "points": ["crotch", "leg_hem_in_left"], "role": "seam"},
     ]
     panels = [
-        {"name": "front_left", "seed": "thigh_front_left", "body_part": "leg",
-         "ease": ease.get("front_left", {"value": 1.2})},
-        {"name": "back_left", "seed": "thigh_back_left", "body_part": "leg",
-         "ease": ease.get("back_left", {"value": 1.2})},
+        {
+            "name": "front_left",
+            "seed": "thigh_front_left",
+            "body_part": "leg",
+            "ease": ease.get("front_left", {"value": 1.2}),
+        },
+        {
+            "name": "back_left",
+            "seed": "thigh_back_left",
+            "body_part": "leg",
+            "ease": ease.get("back_left", {"value": 1.2}),
+        },
     ]
     return params, kps, lines, panels
 
 
 def _waist_ring(name="waist", role="opening"):
-    return {"name": name, "ring": {"through": "waist_front", "normal": "z", "points": 16,
-                                   "named": {"waist_side_left": "+x", "waist_side_right": "-x",
-                                             "waist_back_mid": 0.5}},
-            "role": role}
+    return {
+        "name": name,
+        "ring": {
+            "through": "waist_front",
+            "normal": "z",
+            "points": 16,
+            "named": {"waist_side_left": "+x", "waist_side_right": "-x", "waist_back_mid": 0.5},
+        },
+        "role": role,
+    }
 
 
 def _lower(name, description, length_value, length_range, garment_name):
@@ -242,29 +319,39 @@ def pants():
 def shorts():
     # the leg hem ring must lie below the crotch: up to 0.27 m down the side (0.26 on XS and
     # XL) it runs round the buttocks and crosses the centre back seam
-    return _lower("shorts", "Four panels (front/back, left/right), legs ending mid-thigh; ease 1.2.",
-                  0.42, (0.3, 0.6), "shorts")
+    return _lower(
+        "shorts", "Four panels (front/back, left/right), legs ending mid-thigh; ease 1.2.", 0.42, (0.3, 0.6), "shorts"
+    )
 
 
 def teaser_shirt_pants():
     """The paper's teaser: a shirt and pants, each panel with its own ease."""
-    shirt_ease = {"front": {"value": 1.15}, "back": {"value": 1.3},
-                  "sleeve_front_left": {"value": 1.45}, "sleeve_back_left": {"value": 1.6}}
+    shirt_ease = {
+        "front": {"value": 1.15},
+        "back": {"value": 1.3},
+        "sleeve_front_left": {"value": 1.45},
+        "sleeve_back_left": {"value": 1.6},
+    }
     params, kps, lines, panels = _top_parts("long", ease=shirt_ease)
     # The shirt ends at the waist, where the pants begin: one shared line.
     for l in lines:
         if l["name"] == "side_left":
             l["points"] = ["armhole_under_left", "waist_side_left"]
     shirt = {"name": "shirt", "kind": "upper", "pin": "neckline", "lines": lines, "panels": panels}
-    pparams, pkps, plines, ppanels = _pants_parts(0.98, (0.5, 1.05), ease={
-        "front_left": {"value": 1.1}, "back_left": {"value": 1.25}})
+    pparams, pkps, plines, ppanels = _pants_parts(
+        0.98, (0.5, 1.05), ease={"front_left": {"value": 1.1}, "back_left": {"value": 1.25}}
+    )
     params.update(pparams)
     kps.update(pkps)
     pants_g = {"name": "pants", "kind": "lower", "pin": "waist", "lines": plines, "panels": ppanels}
-    return _design("teaser shirt + pants",
-                   "The paper's teaser: long-sleeve shirt and pants sharing the waist line, "
-                   "a different uniform ease per panel.",
-                   [shirt, pants_g], params, kps, lines=[_waist_ring()])
+    return _design(
+        "teaser shirt + pants",
+        "The paper's teaser: long-sleeve shirt and pants sharing the waist line, a different uniform ease per panel.",
+        [shirt, pants_g],
+        params,
+        kps,
+        lines=[_waist_ring()],
+    )
 
 
 # ---------------------------------------------------------------- skirt topology
@@ -276,24 +363,43 @@ SKIRT_LENGTH_MIN = 0.3
 
 
 def _skirt_hem_parts(length_value, length_range):
-    params = {"skirt_length": {"value": length_value, "kind": "length",
-                               "min": length_range[0], "max": length_range[1]}}
+    params = {"skirt_length": {"value": length_value, "kind": "length", "min": length_range[0], "max": length_range[1]}}
     kps = {
         "hem_out_left": {"trace": {"from": "waist_side_left", "along": "leg_left", "length": "$skirt_length"}},
     }
     lines = [
-        {"name": "thigh_left", "ring": {"through": "hem_out_left", "normal": "z", "points": 8,
-                                        "named": {"hem_front_left": "-y", "hem_back_left": "+y",
-                                                  }},
-         "role": "guide"},
+        {
+            "name": "thigh_left",
+            "ring": {
+                "through": "hem_out_left",
+                "normal": "z",
+                "points": 8,
+                "named": {
+                    "hem_front_left": "-y",
+                    "hem_back_left": "+y",
+                },
+            },
+            "role": "guide",
+        },
     ]
     return params, kps, lines
 
 
 def _skirt_lines(top_point_front="waist_front"):
     """Side seams and the hem loop across both legs (on the skirt topology)."""
-    hem = {"name": "hem", "points": ["hem_out_left", "hem_front_left", "hem_front_right", "hem_out_right",
-                                     "hem_back_right", "hem_back_left"], "closed": True, "role": "opening"}
+    hem = {
+        "name": "hem",
+        "points": [
+            "hem_out_left",
+            "hem_front_left",
+            "hem_front_right",
+            "hem_out_right",
+            "hem_back_right",
+            "hem_back_left",
+        ],
+        "closed": True,
+        "role": "opening",
+    }
     side = {"name": "side_left", "points": ["waist_side_left", "hem_out_left"], "role": "seam"}
     return [hem, side]
 
@@ -303,10 +409,16 @@ def skirt():
     kps["skirt_front_mid"] = {"between": ["waist_front", "crotch"], "t": 0.5}
     kps["skirt_back_mid"] = {"between": ["waist_back", "crotch"], "t": 0.5}
     lines = [_waist_ring()] + _skirt_lines() + guides
-    g = {"name": "skirt", "kind": "lower", "pin": "waist", "lines": lines, "panels": [
-        {"name": "front", "seed": "skirt_front_mid", "body_part": "torso", "ease": {"value": 1.3}},
-        {"name": "back", "seed": "skirt_back_mid", "body_part": "torso", "ease": {"value": 1.3}},
-    ]}
+    g = {
+        "name": "skirt",
+        "kind": "lower",
+        "pin": "waist",
+        "lines": lines,
+        "panels": [
+            {"name": "front", "seed": "skirt_front_mid", "body_part": "torso", "ease": {"value": 1.3}},
+            {"name": "back", "seed": "skirt_back_mid", "body_part": "torso", "ease": {"value": 1.3}},
+        ],
+    }
     return _design("skirt", "A two-panel skirt on the skirt topology; ease 1.3.", [g], params, kps, skirt=True)
 
 
@@ -334,24 +446,33 @@ def _dress(name, description, ease, length_range=(SKIRT_LENGTH_MIN, 0.8)):
 
 
 def dress():
-    return _dress("dress", "Sleeveless dress: bodice and skirt, front and back, joined by a waist seam "
-                           "(pinned); skirt topology; ease 1.15 bodice, 1.4 skirt.",
-                  {"bodice_front": {"value": 1.15}, "bodice_back": {"value": 1.15},
-                   "skirt_front": {"value": 1.4}, "skirt_back": {"value": 1.4}},
-                  # longer, the pattern solve tears the uniform-ease skirt at its left side
-                  # seam (seam mismatch 12 mm at 0.71 m, 131 mm at 0.75; 2 mm at 0.70)
-                  length_range=(SKIRT_LENGTH_MIN, 0.7))
+    return _dress(
+        "dress",
+        "Sleeveless dress: bodice and skirt, front and back, joined by a waist seam "
+        "(pinned); skirt topology; ease 1.15 bodice, 1.4 skirt.",
+        {
+            "bodice_front": {"value": 1.15},
+            "bodice_back": {"value": 1.15},
+            "skirt_front": {"value": 1.4},
+            "skirt_back": {"value": 1.4},
+        },
+        # longer, the pattern solve tears the uniform-ease skirt at its left side
+        # seam (seam mismatch 12 mm at 0.71 m, 131 mm at 0.75; 2 mm at 0.70)
+        length_range=(SKIRT_LENGTH_MIN, 0.7),
+    )
 
 
 def dress_gradient():
     """The paper's simple dress with ease rising linearly from top to hem."""
     grad = {"from": 1.0, "to": 1.8, "axis": "-z", "over": "garment"}
-    return _dress("dress with linear ease", "The paper's non-uniform dress: ease rising linearly from "
-                                            "1.0 at the neckline to 1.8 at the hem.",
-                  {k: copy.deepcopy(grad) for k in ("bodice_front", "bodice_back", "skirt_front", "skirt_back")},
-                  # shorter, the steeper ease ramp with a deep front neckline tears the pattern's
-                  # seams (mismatch 7 to 17 mm at 0.32 to 0.34 m, neck_drop_front 0.146; 2.4 at 0.36)
-                  length_range=(0.36, 0.8))
+    return _dress(
+        "dress with linear ease",
+        "The paper's non-uniform dress: ease rising linearly from 1.0 at the neckline to 1.8 at the hem.",
+        {k: copy.deepcopy(grad) for k in ("bodice_front", "bodice_back", "skirt_front", "skirt_back")},
+        # shorter, the steeper ease ramp with a deep front neckline tears the pattern's
+        # seams (mismatch 7 to 17 mm at 0.32 to 0.34 m, neck_drop_front 0.146; 2.4 at 0.36)
+        length_range=(0.36, 0.8),
+    )
 
 
 #: the women's body of the women's templates: size M of the women's chart (core.body.charts: Anny at
@@ -373,10 +494,13 @@ def blouse_fitted():
     p95 deg): 1.50 / 6.25 / 4.2 against 1.49 / 6.52 / 4.7; at 1.3 1.47 / 6.40 / 4.5 against
     1.48 / 6.70 / 5.1 (benchmarks/results/pattern.md, women's wear).
     """
-    d = _top("fitted blouse", "Women's sleeveless fitted blouse (women's chart, size M): front and back, hem just "
-                              "below the waist, bust darts from the side seams and waist darts from the hem towards "
-                              "the bust points; ease 1.1.",
-             "none")
+    d = _top(
+        "fitted blouse",
+        "Women's sleeveless fitted blouse (women's chart, size M): front and back, hem just "
+        "below the waist, bust darts from the side seams and waist darts from the hem towards "
+        "the bust points; ease 1.1.",
+        "none",
+    )
     d["body"] = copy.deepcopy(WOMEN_BODY)
     d["parameters"]["hem_length"]["value"] = 0.01
     g = d["garments"][0]
@@ -384,10 +508,16 @@ def blouse_fitted():
     for p in g["panels"]:
         p["ease"] = {"value": 1.1}
     front = next(p for p in g["panels"] if p["name"] == "front")
-    front["darts"] = [{"name": "bust_dart_left", "line": "side_left", "apex": "bust_left", "intake": "auto",
-                       "apex_offset": 0.025},
-                      {"name": "waist_dart_left", "line": "hem", "apex": "bust_left",
-                       "intake": BLOUSE_WAIST_DART_INTAKE, "apex_offset": 0.02}]
+    front["darts"] = [
+        {"name": "bust_dart_left", "line": "side_left", "apex": "bust_left", "intake": "auto", "apex_offset": 0.025},
+        {
+            "name": "waist_dart_left",
+            "line": "hem",
+            "apex": "bust_left",
+            "intake": BLOUSE_WAIST_DART_INTAKE,
+            "apex_offset": 0.02,
+        },
+    ]
     return d
 
 
@@ -398,17 +528,28 @@ def skirt_darted():
     seams take its shaping, so the template has none.)"""
     d = skirt()
     d["name"] = "darted skirt"
-    d["description"] = ("Women's fitted skirt (women's chart, size M): front and back on the skirt topology, "
-                        "waist darts towards the stomach and the seat; ease 1.1.")
+    d["description"] = (
+        "Women's fitted skirt (women's chart, size M): front and back on the skirt topology, "
+        "waist darts towards the stomach and the seat; ease 1.1."
+    )
     d["body"] = copy.deepcopy(WOMEN_BODY)
     d["parameters"]["back_dart_length"] = {"value": 0.13, "kind": "length", "min": 0.07, "max": 0.18}
     d["parameters"]["back_dart_place"] = {"value": 0.5, "kind": "placement", "min": 0.2, "max": 0.8}
     d["keypoints"]["back_dart_top_left"] = {"between": ["waist_back", "waist_side_left"], "t": "$back_dart_place"}
-    d["keypoints"]["back_dart_apex_left"] = {"trace": {"from": "back_dart_top_left", "along": "torso_down",
-                                                       "length": "$back_dart_length"}}
+    d["keypoints"]["back_dart_apex_left"] = {
+        "trace": {"from": "back_dart_top_left", "along": "torso_down", "length": "$back_dart_length"}
+    }
     for p in d["garments"][0]["panels"]:
         p["ease"] = {"value": 1.1}
         if p["name"] == "back":
-            p["darts"] = [{"name": "back_dart_left", "line": "waist", "apex": "back_dart_apex_left",
-                           "at": "back_dart_top_left", "intake": "auto", "apex_offset": 0.01}]
+            p["darts"] = [
+                {
+                    "name": "back_dart_left",
+                    "line": "waist",
+                    "apex": "back_dart_apex_left",
+                    "at": "back_dart_top_left",
+                    "intake": "auto",
+                    "apex_offset": 0.01,
+                }
+            ]
     return d

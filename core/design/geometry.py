@@ -5,6 +5,7 @@ and plane sections (rings) of the body; polylines by arc length are in
 All positions are metres on one body instance ``vertices`` (V, 3) with the
 template ``faces`` (F, 3).
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -22,6 +23,7 @@ class SurfaceLocator:
 
     def __init__(self, vertices: np.ndarray, faces: np.ndarray):
         import igl
+
         self.vertices = np.ascontiguousarray(vertices, dtype=np.float64)
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
         self._tree = igl.AABB()
@@ -31,11 +33,13 @@ class SurfaceLocator:
         """Squared distances (n,), triangles (n,) and barycentric weights (n, 3)
         of the closest surface points to ``points`` (n, 3)."""
         import igl
+
         P = np.ascontiguousarray(np.atleast_2d(points), dtype=np.float64)
         d2, tri, c = self._tree.squared_distance(self.vertices, self.faces, P)
         T = self.faces[tri]
-        bary = igl.barycentric_coordinates(np.ascontiguousarray(c), self.vertices[T[:, 0]],
-                                           self.vertices[T[:, 1]], self.vertices[T[:, 2]])
+        bary = igl.barycentric_coordinates(
+            np.ascontiguousarray(c), self.vertices[T[:, 0]], self.vertices[T[:, 1]], self.vertices[T[:, 2]]
+        )
         bary = np.clip(np.nan_to_num(bary, nan=1.0 / 3.0), 0.0, 1.0)
         bary /= bary.sum(axis=1, keepdims=True)
         return d2, tri.astype(np.int64), bary
@@ -62,6 +66,7 @@ class Geodesics:
     def solver(self):
         if self._solver is None:
             import potpourri3d as pp3d
+
             self._solver = pp3d.EdgeFlipGeodesicSolver(self.vertices, self.faces)
         return self._solver
 
@@ -90,12 +95,12 @@ def _join_start(p: np.ndarray, poly: np.ndarray, near: int = 6) -> np.ndarray:
     k = min(near, len(poly) - 1)
     if k < 1:
         return np.vstack([p[None], poly])
-    a, b = poly[:k], poly[1:k + 1]
+    a, b = poly[:k], poly[1 : k + 1]
     ab = b - a
     t = np.clip(np.einsum("ij,ij->i", p - a, ab) / np.maximum((ab * ab).sum(1), 1e-18), 0, 1)
     q = a + t[:, None] * ab
     i = int(np.argmin(np.linalg.norm(q - p, axis=1)))
-    return np.vstack([p[None], q[i][None], poly[i + 1:]])
+    return np.vstack([p[None], q[i][None], poly[i + 1 :]])
 
 
 def _dedup(poly: np.ndarray, tol: float = 1e-9) -> np.ndarray:
@@ -105,6 +110,7 @@ def _dedup(poly: np.ndarray, tol: float = 1e-9) -> np.ndarray:
 
 
 # ---------------------------------------------------------------- plane sections
+
 
 def _edge_faces(faces: np.ndarray):
     """Unique undirected edges (E, 2) and for each face its 3 edge ids
@@ -119,9 +125,15 @@ def _edge_faces(faces: np.ndarray):
     return edges, inv.reshape(F, 3)
 
 
-def plane_section_loop(vertices: np.ndarray, faces: np.ndarray, point: np.ndarray, normal: np.ndarray,
-                       start_face: int, handed: int = 1, edge_table=None
-                       ) -> Tuple[np.ndarray, List[SurfacePoint], List[int]]:
+def plane_section_loop(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    point: np.ndarray,
+    normal: np.ndarray,
+    start_face: int,
+    handed: int = 1,
+    edge_table=None,
+) -> Tuple[np.ndarray, List[SurfacePoint], List[int]]:
     """The closed curve where the plane through ``point`` with ``normal`` cuts
     the surface, following the connected component through ``start_face``.
 
@@ -146,7 +158,7 @@ def plane_section_loop(vertices: np.ndarray, faces: np.ndarray, point: np.ndarra
     d = np.where(np.abs(d) < 1e-12, 1e-12, d)
     edges, fe = edge_table if edge_table is not None else _edge_faces(faces)
     crossed = (d[edges[:, 0]] > 0) != (d[edges[:, 1]] > 0)
-    fcross = crossed[fe]                                   # (F, 3)
+    fcross = crossed[fe]  # (F, 3)
     if fcross[start_face].sum() != 2:
         # The point sits on an edge or vertex of the plane (e.g. on the midline): start
         # from the nearest crossed triangle instead.
@@ -166,7 +178,10 @@ def plane_section_loop(vertices: np.ndarray, faces: np.ndarray, point: np.ndarra
     first = np.ones(len(src), dtype=bool)
     first[1:] = src[1:] != src[:-1]
     nE = len(edges)
-    f1 = np.full(nE, -1, dtype=np.int64); d1 = f1.copy(); f2 = f1.copy(); d2 = f1.copy()
+    f1 = np.full(nE, -1, dtype=np.int64)
+    d1 = f1.copy()
+    f2 = f1.copy()
+    d2 = f1.copy()
     f1[src[first]], d1[src[first]] = via[first], dst[first]
     f2[src[~first]], d2[src[~first]] = via[~first], dst[~first]
     f1, d1, f2, d2 = f1.tolist(), d1.tolist(), f2.tolist(), d2.tolist()
@@ -187,9 +202,9 @@ def plane_section_loop(vertices: np.ndarray, faces: np.ndarray, point: np.ndarra
         seg_faces.append(prev_face)
     else:
         raise ValueError("the plane section does not close")
-    order = order[:-1]                                      # drop the repeated first edge
+    order = order[:-1]  # drop the repeated first edge
     E = edges[order]
-    w = d[E[:, 0]] / (d[E[:, 0]] - d[E[:, 1]])              # weight of the second vertex
+    w = d[E[:, 0]] / (d[E[:, 0]] - d[E[:, 1]])  # weight of the second vertex
     poly = (1 - w)[:, None] * V[E[:, 0]] + w[:, None] * V[E[:, 1]]
     # Orientation: signed area about the normal.
     c = poly.mean(axis=0)
@@ -302,8 +317,9 @@ def turned_normal(n: np.ndarray, p0: np.ndarray, q: np.ndarray):
     return (m / cos_turn if cos_turn > 0 else None), cos_turn
 
 
-def vertical_walk(vertices: np.ndarray, faces: np.ndarray, start: SurfacePoint, length: float, down: bool,
-                  edge_table=None):
+def vertical_walk(
+    vertices: np.ndarray, faces: np.ndarray, start: SurfacePoint, length: float, down: bool, edge_table=None
+):
     """Walk ``length`` metres down (or up) the surface from ``start`` along the
     vertical normal section (the plane holding the surface normal and +Z).
 
@@ -336,8 +352,10 @@ def vertical_walk(vertices: np.ndarray, faces: np.ndarray, start: SurfacePoint, 
     bwd = [(j - i) % k for i in range(k)]
     # segment faces along each direction (face of segment p_i -> p_i+1 is segf[i])
     seqs = []
-    for order, seg in ((fwd, [segf[j]] + [segf[i] for i in fwd[:-1]]),
-                      (bwd, [segf[j]] + [segf[(i - 1) % k] for i in bwd[:-1]])):
+    for order, seg in (
+        (fwd, [segf[j]] + [segf[i] for i in fwd[:-1]]),
+        (bwd, [segf[j]] + [segf[(i - 1) % k] for i in bwd[:-1]]),
+    ):
         P = np.vstack([p0[None], poly[order]])
         seqs.append((P, seg))
     sign = -1.0 if down else 1.0
@@ -353,7 +371,7 @@ def vertical_walk(vertices: np.ndarray, faces: np.ndarray, start: SurfacePoint, 
         return P, start
     i = int(np.searchsorted(cum, length, side="right") - 1)
     q = P[i] + (length - cum[i]) / L[i] * (P[i + 1] - P[i])
-    walked = np.vstack([P[:i + 1], q[None]])
+    walked = np.vstack([P[: i + 1], q[None]])
     return walked, segment_point(vertices, faces, seg[i], q)
 
 

@@ -23,6 +23,7 @@ Fields of the ``materials`` object (metres):
 ``color``         the fabric's colour in renders: ``"#rrggbb"`` or ``[r, g, b]`` in 0..1
                   (sRGB), or ``{garment: colour}``; default: the fabric preset's
 """
+
 from __future__ import annotations
 
 import copy
@@ -37,12 +38,12 @@ FABRIC = "cotton"
 # The fabric presets a design may name; their physical values are the drape's
 # (core.drape.materials.PRESETS, one per name here).
 FABRICS = ("cotton", "jersey", "denim", "silk")
-EPS_WEFT = 1.1           # weft stretch tolerance: 10 % stretch
-GATHER_ABOVE = 0.2       # gather a seam whose sides' ease demands differ by more than 20 %
-ALLOWANCE = 0.01         # m, seam allowance
-HEM = 0.02               # m, hem allowance
-FOLD = 0.0               # m, a fold has no allowance
-NOTCH_SPACING = 0.10     # m between notches along a seam
+EPS_WEFT = 1.1  # weft stretch tolerance: 10 % stretch
+GATHER_ABOVE = 0.2  # gather a seam whose sides' ease demands differ by more than 20 %
+ALLOWANCE = 0.01  # m, seam allowance
+HEM = 0.02  # m, hem allowance
+FOLD = 0.0  # m, a fold has no allowance
+NOTCH_SPACING = 0.10  # m between notches along a seam
 EXPORT_ALLOWANCE_KEYS = ("default", "hem", "fold")
 
 _KEEP = object()
@@ -61,13 +62,13 @@ class Materials:
     allowances : dict ``{"default", "hem", "fold", seam line: m}``, seam allowances (m).
     notch_spacing : float, m between notches along a seam (0: seam ends only).
     """
+
     fabric: str = FABRIC
     eps_weft: float = EPS_WEFT
     eps_warp: float = EPS_WEFT
     gathered: Union[bool, Tuple[str, ...]] = False
     gather_above: Optional[float] = GATHER_ABOVE
-    allowances: Dict[str, float] = field(
-        default_factory=lambda: {"default": ALLOWANCE, "hem": HEM, "fold": FOLD})
+    allowances: Dict[str, float] = field(default_factory=lambda: {"default": ALLOWANCE, "hem": HEM, "fold": FOLD})
     notch_spacing: float = NOTCH_SPACING
 
     @classmethod
@@ -79,11 +80,15 @@ class Materials:
         export = m.get("export") or {}
         widths = {"default": ALLOWANCE, "hem": HEM, "fold": FOLD}
         widths.update(_widths(export.get("allowance")))
-        return cls(fabric=str(m.get("fabric", FABRIC)), eps_weft=eps_weft,
-                   eps_warp=float(m.get("eps_warp", eps_weft)),
-                   gathered=gathered if isinstance(gathered, bool) else tuple(gathered),
-                   gather_above=m.get("gather_above", GATHER_ABOVE), allowances=widths,
-                   notch_spacing=float(export.get("notch_spacing", NOTCH_SPACING)))
+        return cls(
+            fabric=str(m.get("fabric", FABRIC)),
+            eps_weft=eps_weft,
+            eps_warp=float(m.get("eps_warp", eps_weft)),
+            gathered=gathered if isinstance(gathered, bool) else tuple(gathered),
+            gather_above=m.get("gather_above", GATHER_ABOVE),
+            allowances=widths,
+            notch_spacing=float(export.get("notch_spacing", NOTCH_SPACING)),
+        )
 
     @classmethod
     def of(cls, design) -> "Materials":
@@ -91,8 +96,17 @@ class Materials:
         return cls.from_dict(design.materials)
 
     @staticmethod
-    def edit(materials: Optional[Mapping], *, allowance=_KEEP, hem=_KEEP, notch_spacing=_KEEP,
-             gather_above=_KEEP, eps_weft=_KEEP, eps_warp=_KEEP, fabric=_KEEP) -> dict:
+    def edit(
+        materials: Optional[Mapping],
+        *,
+        allowance=_KEEP,
+        hem=_KEEP,
+        notch_spacing=_KEEP,
+        gather_above=_KEEP,
+        eps_weft=_KEEP,
+        eps_warp=_KEEP,
+        fabric=_KEEP,
+    ) -> dict:
         """The materials dict ``materials`` with the given fields changed, validated.
 
         Parameters
@@ -127,14 +141,19 @@ class Materials:
         old = _widths(exp.get("allowance"))
         given = {k: v for k, v in (("default", allowance), ("hem", hem)) if v is not _KEEP}
         if any(now.allowances[k] != v for k, v in given.items()) or (
-                notch_spacing is not _KEEP and notch_spacing != now.notch_spacing):
+            notch_spacing is not _KEEP and notch_spacing != now.notch_spacing
+        ):
             if given:
                 exp["allowance"] = dict(old, **given)
             if notch_spacing is not _KEEP:
                 exp["notch_spacing"] = notch_spacing
             out["export"] = exp
-        for key, value in (("gather_above", gather_above), ("eps_weft", eps_weft), ("eps_warp", eps_warp),
-                           ("fabric", fabric)):
+        for key, value in (
+            ("gather_above", gather_above),
+            ("eps_weft", eps_weft),
+            ("eps_warp", eps_warp),
+            ("fabric", fabric),
+        ):
             if value is not _KEEP and value != getattr(now, key):
                 out[key] = value
         return parse_materials("materials", out)
@@ -158,8 +177,9 @@ def parse_materials(path: str, obj) -> dict:
     out = {"fabric": fabric}
     out["eps_weft"] = check_number(f"{path}.eps_weft", obj.get("eps_weft", EPS_WEFT), 1.0, 4.0, what="a tolerance")
     # the warp tolerance follows the weft's unless the design sets its own
-    out["eps_warp"] = check_number(f"{path}.eps_warp", obj.get("eps_warp", out["eps_weft"]), 1.0, 4.0,
-                                   what="a tolerance")
+    out["eps_warp"] = check_number(
+        f"{path}.eps_warp", obj.get("eps_warp", out["eps_weft"]), 1.0, 4.0, what="a tolerance"
+    )
     if "export" in obj:
         out["export"] = _parse_export(f"{path}.export", obj["export"])
     if "gathered" in obj:
@@ -175,9 +195,17 @@ def parse_materials(path: str, obj) -> dict:
             raise DesignError(f"{path}.gathered", f"expected true, false or a list of seam line names, got {fmt(g)}")
     if "gather_above" in obj:
         a = obj["gather_above"]
-        out["gather_above"] = None if a is None else check_number(
-            f"{path}.gather_above", a, 0.01, 10.0,
-            what="a fraction (0.25: gather a seam whose sides' ease demands differ by more than 25 %) or null")
+        out["gather_above"] = (
+            None
+            if a is None
+            else check_number(
+                f"{path}.gather_above",
+                a,
+                0.01,
+                10.0,
+                what="a fraction (0.25: gather a seam whose sides' ease demands differ by more than 25 %) or null",
+            )
+        )
     if "color" in obj:
         c = obj["color"]
         if isinstance(c, dict):
@@ -192,8 +220,12 @@ def parse_materials(path: str, obj) -> dict:
 
 def _check_color(path: str, value):
     """A render colour: ``"#rrggbb"`` or ``[r, g, b]`` in 0..1 (sRGB)."""
-    if isinstance(value, str) and len(value) == 7 and value[0] == "#" \
-            and all(ch in "0123456789abcdefABCDEF" for ch in value[1:]):
+    if (
+        isinstance(value, str)
+        and len(value) == 7
+        and value[0] == "#"
+        and all(ch in "0123456789abcdefABCDEF" for ch in value[1:])
+    ):
         return value
     if isinstance(value, list) and len(value) == 3 and all(is_number(x) and 0.0 <= x <= 1.0 for x in value):
         return list(value)
@@ -219,8 +251,13 @@ def _parse_export(path, obj):
                 widths[k] = check_number(f"{path}.allowance.{k}", v, 0.0, 0.1, what="a seam allowance in metres")
             out["allowance"] = widths
     if "notch_spacing" in obj:
-        out["notch_spacing"] = check_number(f"{path}.notch_spacing", obj["notch_spacing"], 0.0, 1.0,
-                                            what="a notch spacing in metres (0: seam ends only)")
+        out["notch_spacing"] = check_number(
+            f"{path}.notch_spacing",
+            obj["notch_spacing"],
+            0.0,
+            1.0,
+            what="a notch spacing in metres (0: seam ends only)",
+        )
     return out
 
 
@@ -250,12 +287,16 @@ def check_seam_names(design) -> None:
     seams = seam_line_names(design)
     for k, name in enumerate(gathered if isinstance(gathered, list) else []):
         if name.partition("#")[0] not in seams:
-            raise DesignError(f"materials.gathered[{k}]",
-                              f"{name!r} is not a seam line of the design; expected one of: "
-                              f"{', '.join(sorted(seams)) or '(no seam lines)'}")
-    for k in (allowance if isinstance(allowance, dict) else {}):
+            raise DesignError(
+                f"materials.gathered[{k}]",
+                f"{name!r} is not a seam line of the design; expected one of: "
+                f"{', '.join(sorted(seams)) or '(no seam lines)'}",
+            )
+    for k in allowance if isinstance(allowance, dict) else {}:
         if k in EXPORT_ALLOWANCE_KEYS or k.partition("#")[0] in seams:
             continue
-        raise DesignError(f"materials.export.allowance.{k}",
-                          f"not a seam line of the design; expected 'default', 'hem', 'fold' or one of: "
-                          f"{', '.join(sorted(seams)) or '(no seam lines)'}")
+        raise DesignError(
+            f"materials.export.allowance.{k}",
+            f"not a seam line of the design; expected 'default', 'hem', 'fold' or one of: "
+            f"{', '.join(sorted(seams)) or '(no seam lines)'}",
+        )

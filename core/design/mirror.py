@@ -5,6 +5,7 @@ Definitions of lines and panels are mirrored by substituting names (so that a
 mirrored line meets the other lines at exactly the same keypoints); keypoints
 are mirrored geometrically through the body's symmetry map.
 """
+
 from __future__ import annotations
 
 import copy
@@ -41,7 +42,9 @@ def mirror_line(line):
     if line.ring is not None:
         r = copy.deepcopy(line.ring)
         r["through"] = _mirror_ref(r["through"])
-        r["normal"] = mirror_axis(r["normal"]) if isinstance(r["normal"], str) else [_mirror_ref(x) for x in r["normal"]]
+        r["normal"] = (
+            mirror_axis(r["normal"]) if isinstance(r["normal"], str) else [_mirror_ref(x) for x in r["normal"]]
+        )
         if "contains" in r:
             r["contains"] = _mirror_ref(r["contains"])
         r["named"] = {swap_side(k): (mirror_axis(v) if isinstance(v, str) else v) for k, v in r["named"].items()}
@@ -52,10 +55,13 @@ def mirror_line(line):
     if line.section is not None:
         c = copy.deepcopy(line.section)
         c["from"], c["to"] = _mirror_ref(c["from"]), _mirror_ref(c["to"])
-        c["normal"] = mirror_axis(c["normal"]) if isinstance(c["normal"], str) else [_mirror_ref(x) for x in c["normal"]]
+        c["normal"] = (
+            mirror_axis(c["normal"]) if isinstance(c["normal"], str) else [_mirror_ref(x) for x in c["normal"]]
+        )
         return replace(line, name=mirrored_name(line.name), points=[], closed=False, ring=None, section=c)
-    return replace(line, name=mirrored_name(line.name), points=[_mirror_ref(p) for p in line.points], ring=None,
-                   section=None)
+    return replace(
+        line, name=mirrored_name(line.name), points=[_mirror_ref(p) for p in line.points], ring=None, section=None
+    )
 
 
 def mirror_ease(ease: dict) -> dict:
@@ -75,6 +81,7 @@ def mirror_panel(panel):
 
 
 # ---------------------------------------------------------------- geometry
+
 
 def face_symmetry(faces: np.ndarray, symmetry: np.ndarray) -> np.ndarray:
     """Mirror face of every face (F,), -1 where the template has none.
@@ -97,8 +104,9 @@ def face_symmetry(faces: np.ndarray, symmetry: np.ndarray) -> np.ndarray:
     return np.where(found, order[pos], -1)
 
 
-def mirror_surface_point(sp: SurfacePoint, faces: np.ndarray, symmetry: np.ndarray,
-                         face_sym: Optional[np.ndarray] = None, locator=None) -> SurfacePoint:
+def mirror_surface_point(
+    sp: SurfacePoint, faces: np.ndarray, symmetry: np.ndarray, face_sym: Optional[np.ndarray] = None, locator=None
+) -> SurfacePoint:
     """The mirror image of a surface point on a fixed-topology template.
 
     Maps the triangle's vertices through the symmetry map; when the template

@@ -5,6 +5,7 @@ A name is mirrored by its side suffix (``sleeve_left``) or an inner side word
 Plain strings only, so the design types, the checks and the resolver share
 one rule.
 """
+
 from __future__ import annotations
 
 from typing import Optional

@@ -71,6 +71,7 @@ ease field             ``{"value"}`` | ``{"from", "to", "between": [a, b]}`` |
 Keypoint references are strings: the name of a design keypoint, of a point
 named on a ring line, of a generated ``*_right`` mirror, or of a body landmark.
 """
+
 from __future__ import annotations
 
 import copy
@@ -80,10 +81,28 @@ from typing import Dict, Union
 
 from ..body.model import POSE_PRESETS
 from ..errors import BodyError, DesignError
-from .checks import (BODY_PARTS, GARMENT_KINDS, LINE_ROLES, PARAMETER_KINDS, REFINE_EDGE_MAX, REFINE_EDGE_MIN,
-                     SOLVER_CONFIGS, check_ease, check_name, check_names_unique, check_number,
-                     check_parameter_value, check_ring, check_section, expect_dict, expect_keys, fmt, is_number,
-                     keypoint_ref, check_keypoint)
+from .checks import (
+    BODY_PARTS,
+    GARMENT_KINDS,
+    LINE_ROLES,
+    PARAMETER_KINDS,
+    REFINE_EDGE_MAX,
+    REFINE_EDGE_MIN,
+    SOLVER_CONFIGS,
+    check_ease,
+    check_keypoint,
+    check_name,
+    check_names_unique,
+    check_number,
+    check_parameter_value,
+    check_ring,
+    check_section,
+    expect_dict,
+    expect_keys,
+    fmt,
+    is_number,
+    keypoint_ref,
+)
 from .darts import parse_auto, parse_darts
 from .materials import check_seam_names, parse_materials
 from .types import FORMAT, VERSION, Design, Garment, Line, Panel, Parameter
@@ -99,8 +118,11 @@ def _parse_line(path, obj, params) -> Line:
     if role not in LINE_ROLES:
         raise DesignError(f"{path}.role", f"expected one of {', '.join(LINE_ROLES)}, got {fmt(role)}")
     if sum(k in obj for k in ("ring", "points", "section")) != 1:
-        raise DesignError(path, "expected exactly one of points (a keypoint list), ring (a closed plane "
-                                "section) or section (a plane section between two keypoints)")
+        raise DesignError(
+            path,
+            "expected exactly one of points (a keypoint list), ring (a closed plane "
+            "section) or section (a plane section between two keypoints)",
+        )
     if "section" in obj:
         if obj.get("closed", False) is not False:
             raise DesignError(f"{path}.closed", "a section is always open")
@@ -115,8 +137,10 @@ def _parse_line(path, obj, params) -> Line:
     pts = obj["points"]
     need = 3 if closed else 2
     if not isinstance(pts, list) or len(pts) < need:
-        raise DesignError(f"{path}.points", f"expected a list of at least {need} keypoints"
-                          f"{' (a closed line)' if closed else ''}, got {fmt(pts)}")
+        raise DesignError(
+            f"{path}.points",
+            f"expected a list of at least {need} keypoints{' (a closed line)' if closed else ''}, got {fmt(pts)}",
+        )
     refs = [keypoint_ref(f"{path}.points[{i}]", r, params) for i, r in enumerate(pts)]
     return Line(obj["name"], refs, closed, role, None)
 
@@ -166,14 +190,18 @@ def _parse_garment(path, obj, params, shared_lines) -> Garment:
     if kind not in GARMENT_KINDS:
         raise DesignError(f"{path}.kind", f"expected one of {', '.join(GARMENT_KINDS)}, got {fmt(kind)}")
     lines = _named_list(f"{path}.lines", obj.get("lines", []), "line", lambda p, x: _parse_line(p, x, params))
-    panels = _named_list(f"{path}.panels", obj.get("panels"), "panel", lambda p, x: _parse_panel(p, x, params),
-                         required=True)
+    panels = _named_list(
+        f"{path}.panels", obj.get("panels"), "panel", lambda p, x: _parse_panel(p, x, params), required=True
+    )
     pin = obj.get("pin")
     if pin is not None:
         names = [l.name for l in lines] + [l.name for l in shared_lines]
         if not isinstance(pin, str) or pin not in names:
-            raise DesignError(f"{path}.pin", f"expected the name of one of the garment's (or shared) lines "
-                                             f"({', '.join(names) or 'none'}), got {fmt(pin)}")
+            raise DesignError(
+                f"{path}.pin",
+                f"expected the name of one of the garment's (or shared) lines "
+                f"({', '.join(names) or 'none'}), got {fmt(pin)}",
+            )
     return Garment(obj["name"], kind, pin, lines, panels)
 
 
@@ -181,18 +209,18 @@ def _check_on_model(path, model, shape, pose):
     """The shape parameters and pose joints of a design's body, checked against the model where its
     names are known without loading it (the built-in Anny); a file model is checked when it is loaded."""
     from ..body.anny import anny_names
-    from ..body.model import check_axis_angle
-    from ..body.model import check_shape
+    from ..body.model import check_axis_angle, check_shape
+
     names = anny_names() if model.lower() == "anny" else None
     if names is None:
         return
     params, joints = names
-    for k, v in (shape.items() if isinstance(shape, dict) else ()):
+    for k, v in shape.items() if isinstance(shape, dict) else ():
         try:
             check_shape(params, {k: v}, model)
         except BodyError as exc:
             raise DesignError(f"{path}.shape.{k}", str(exc).split(": ", 2)[-1]) from None
-    for k, v in (pose.items() if isinstance(pose, dict) else ()):
+    for k, v in pose.items() if isinstance(pose, dict) else ():
         try:
             check_axis_angle(v, k, joints)
         except BodyError as exc:
@@ -202,13 +230,17 @@ def _check_on_model(path, model, shape, pose):
 def _parse_body(path, obj):
     from ..body.model import POSE_ANGLE_MAX
     from ..body.registry import BUILTIN, MODEL_SUFFIXES
-    from ..body.sizes import CHART_NAMES, check_chart, check_size, chart_sizes
+    from ..body.sizes import CHART_NAMES, chart_sizes, check_chart, check_size
+
     expect_dict(path, obj, "a body {model, chart, shape, pose} (an OBJ model also landmarks, blendshapes, up)")
     expect_keys(path, obj, ("model", "chart", "shape", "measurements", "pose", "landmarks", "blendshapes", "up"))
     model = obj.get("model", "anny")
     if not isinstance(model, str) or not (model.lower() in BUILTIN or model.lower().endswith(MODEL_SUFFIXES)):
-        raise DesignError(f"{path}.model", f"expected {', '.join(BUILTIN)} or a path to a body model file "
-                                           f"({', '.join(MODEL_SUFFIXES)}), got {fmt(model)}")
+        raise DesignError(
+            f"{path}.model",
+            f"expected {', '.join(BUILTIN)} or a path to a body model file "
+            f"({', '.join(MODEL_SUFFIXES)}), got {fmt(model)}",
+        )
     is_obj = model.lower().endswith(".obj")
     extra = {}
     # An OBJ template's own files: its landmarks (which a chart size and the keypoints need), blend
@@ -217,14 +249,18 @@ def _parse_body(path, obj):
         if key in obj:
             v = obj[key]
             if not is_obj:
-                raise DesignError(f"{path}.{key}", f"only an OBJ template (body.model *.obj) takes a {key} file; "
-                                                   f"the model is {fmt(model)}")
+                raise DesignError(
+                    f"{path}.{key}",
+                    f"only an OBJ template (body.model *.obj) takes a {key} file; the model is {fmt(model)}",
+                )
             if not isinstance(v, str) or not v.lower().endswith(suffix):
                 raise DesignError(f"{path}.{key}", f"expected a path to a {suffix} file, got {fmt(v)}")
             extra[key] = v
     if "up" in obj:
         if not is_obj or obj["up"] not in ("z", "y"):
-            raise DesignError(f"{path}.up", f"expected 'z' or 'y' (the up axis of an OBJ template), got {fmt(obj['up'])}")
+            raise DesignError(
+                f"{path}.up", f"expected 'z' or 'y' (the up axis of an OBJ template), got {fmt(obj['up'])}"
+            )
         extra["up"] = obj["up"]
     chart = obj.get("chart")
     if chart is not None:
@@ -234,47 +270,63 @@ def _parse_body(path, obj):
     # An OBJ template is a body of its own: its reference shape unless a shape is named (a chart
     # size needs its landmarks); the parametric models default to size M.
     shape = obj.get("shape", None if is_obj else "M")
-    if "measurements" in obj:        # made-to-measure: the shape fitted to a table of tape measures
+    if "measurements" in obj:  # made-to-measure: the shape fitted to a table of tape measures
         if "shape" in obj or model.lower() != "anny":
-            raise DesignError(f"{path}.measurements", "a table of tape measures fits Anny's shape: give it "
-                                                      "without body.shape, on model anny")
+            raise DesignError(
+                f"{path}.measurements",
+                "a table of tape measures fits Anny's shape: give it without body.shape, on model anny",
+            )
         if not isinstance(obj["measurements"], dict):
-            raise DesignError(f"{path}.measurements", f"expected an object measure -> cm, got {fmt(obj['measurements'])}")
+            raise DesignError(
+                f"{path}.measurements", f"expected an object measure -> cm, got {fmt(obj['measurements'])}"
+            )
         from ..body.made_to_measure import measured_shape
+
         try:
             shape = measured_shape(obj["measurements"], f"{path}.measurements")
-        except BodyError as exc:   # "body.measurements[.name]: what" -> that path and what
+        except BodyError as exc:  # "body.measurements[.name]: what" -> that path and what
             where, _, what = str(exc).partition(": ")
-            raise DesignError(where if where.startswith(f"{path}.measurements") else f"{path}.measurements",
-                              what or str(exc)) from None
+            raise DesignError(
+                where if where.startswith(f"{path}.measurements") else f"{path}.measurements", what or str(exc)
+            ) from None
     if isinstance(shape, dict):
         for k, v in shape.items():
             check_number(f"{path}.shape.{k}", v)
         shape = {k: float(v) for k, v in shape.items()}
     elif isinstance(shape, str):
         try:
-            shape = check_size(shape, chart)     # "M" of the chart, stored as "women:M"
+            shape = check_size(shape, chart)  # "M" of the chart, stored as "women:M"
         except BodyError:
-            raise DesignError(f"{path}.shape", f"expected a size of chart {chart or 'default'} "
-                                               f"({', '.join(chart_sizes(chart))}) or an object of shape "
-                                               f"parameters, got {fmt(shape)}") from None
+            raise DesignError(
+                f"{path}.shape",
+                f"expected a size of chart {chart or 'default'} "
+                f"({', '.join(chart_sizes(chart))}) or an object of shape "
+                f"parameters, got {fmt(shape)}",
+            ) from None
     elif shape is not None:
-        raise DesignError(f"{path}.shape", f"expected a size ({', '.join(chart_sizes(chart))}) or an object of "
-                                           f"shape parameters, got {fmt(shape)}")
+        raise DesignError(
+            f"{path}.shape",
+            f"expected a size ({', '.join(chart_sizes(chart))}) or an object of shape parameters, got {fmt(shape)}",
+        )
     pose = obj.get("pose", "A")
     if isinstance(pose, str):
         if pose not in POSE_PRESETS:
-            raise DesignError(f"{path}.pose", f"expected a pose preset ({', '.join(POSE_PRESETS)}) or an object joint -> [rx, ry, rz], got {fmt(pose)}")
+            raise DesignError(
+                f"{path}.pose",
+                f"expected a pose preset ({', '.join(POSE_PRESETS)}) or an object joint -> [rx, ry, rz], got {fmt(pose)}",
+            )
     elif isinstance(pose, dict):
         for k, v in pose.items():
             if not isinstance(v, list) or len(v) != 3:
                 raise DesignError(f"{path}.pose.{k}", f"expected an axis-angle [rx, ry, rz] in radians, got {fmt(v)}")
             for i, x in enumerate(v):
-                check_number(f"{path}.pose.{k}[{i}]", x, -POSE_ANGLE_MAX, POSE_ANGLE_MAX,
-                             what="an angle in radians")
+                check_number(f"{path}.pose.{k}[{i}]", x, -POSE_ANGLE_MAX, POSE_ANGLE_MAX, what="an angle in radians")
         pose = {k: [float(x) for x in v] for k, v in pose.items()}
     elif pose is not None:
-        raise DesignError(f"{path}.pose", f"expected a pose preset ({', '.join(POSE_PRESETS)}) or an object joint -> [rx, ry, rz], got {fmt(pose)}")
+        raise DesignError(
+            f"{path}.pose",
+            f"expected a pose preset ({', '.join(POSE_PRESETS)}) or an object joint -> [rx, ry, rz], got {fmt(pose)}",
+        )
     _check_on_model(path, model, shape, pose)
     return {"model": model, **({"chart": chart} if chart else {}), "shape": shape, "pose": pose, **extra}
 
@@ -295,8 +347,11 @@ def _parse_parameters(path, obj) -> Dict[str, Parameter]:
         lo = check_number(f"{p}.min", v["min"]) if "min" in v else None
         hi = check_number(f"{p}.max", v["max"]) if "max" in v else None
         if lo is not None and hi is not None and lo > hi:
-            raise DesignError(f"{p}.min", f"min {fmt(v['min'])} is above max {fmt(v['max'])}: the parameter's "
-                                          "range is reversed (min must be <= max)")
+            raise DesignError(
+                f"{p}.min",
+                f"min {fmt(v['min'])} is above max {fmt(v['max'])}: the parameter's "
+                "range is reversed (min must be <= max)",
+            )
         if "value" not in v:
             raise DesignError(f"{p}.value", "missing")
         check_parameter_value(f"{p}.value", kind, v["value"], lo, hi)
@@ -307,13 +362,30 @@ def _parse_parameters(path, obj) -> Dict[str, Parameter]:
 def parse_design(obj: dict) -> Design:
     """Validate a design object (parsed JSON) and build a :class:`Design`."""
     expect_dict("", obj, "a design object")
-    top = ("format", "version", "name", "description", "body", "materials", "mirror", "skirt",
-           "refine_edge_length", "solver", "parameters", "keypoints", "lines", "garments")
+    top = (
+        "format",
+        "version",
+        "name",
+        "description",
+        "body",
+        "materials",
+        "mirror",
+        "skirt",
+        "refine_edge_length",
+        "solver",
+        "parameters",
+        "keypoints",
+        "lines",
+        "garments",
+    )
     expect_keys("", obj, top)
     if obj.get("format") != FORMAT:
         raise DesignError("format", f"expected {FORMAT!r}, got {fmt(obj.get('format'))}")
     if obj.get("version") != VERSION:
-        raise DesignError("version", f"expected {VERSION} (this version of EASE reads design version {VERSION}), got {fmt(obj.get('version'))}")
+        raise DesignError(
+            "version",
+            f"expected {VERSION} (this version of EASE reads design version {VERSION}), got {fmt(obj.get('version'))}",
+        )
     name = obj.get("name")
     if not isinstance(name, str) or not name.strip():
         raise DesignError("name", f"expected a non-empty string, got {fmt(name)}")
@@ -327,12 +399,18 @@ def parse_design(obj: dict) -> Design:
             raise DesignError(k, f"expected true or false, got {fmt(obj.get(k))}")
     rel = obj.get("refine_edge_length", 0.01)
     if rel is not None:
-        rel = check_number("refine_edge_length", rel, REFINE_EDGE_MIN, REFINE_EDGE_MAX,
-                           what="an edge length in metres (or null; finer meshes do not drape)")
+        rel = check_number(
+            "refine_edge_length",
+            rel,
+            REFINE_EDGE_MIN,
+            REFINE_EDGE_MAX,
+            what="an edge length in metres (or null; finer meshes do not drape)",
+        )
     solver = obj.get("solver")
     if solver is not None and solver not in SOLVER_CONFIGS:
-        raise DesignError("solver", f"expected a solver configuration ({', '.join(SOLVER_CONFIGS)}) or null, "
-                                    f"got {fmt(solver)}")
+        raise DesignError(
+            "solver", f"expected a solver configuration ({', '.join(SOLVER_CONFIGS)}) or null, got {fmt(solver)}"
+        )
     params = _parse_parameters("parameters", obj.get("parameters", {}))
     kps_raw = expect_dict("keypoints", obj.get("keypoints", {}), "an object name -> keypoint")
     keypoints = {}
@@ -340,12 +418,24 @@ def parse_design(obj: dict) -> Design:
         check_name(f"keypoints.{k}", k)
         keypoints[k] = check_keypoint(f"keypoints.{k}", v, params)
     shared = _named_list("lines", obj.get("lines", []), "line", lambda p, x: _parse_line(p, x, params))
-    garments = _named_list("garments", obj.get("garments"), "garment",
-                           lambda p, x: _parse_garment(p, x, params, shared), required=True)
+    garments = _named_list(
+        "garments", obj.get("garments"), "garment", lambda p, x: _parse_garment(p, x, params, shared), required=True
+    )
     skirt = bool(obj.get("skirt", False))
-    design = Design(name=name, body=body, materials=materials, parameters=params, keypoints=keypoints,
-                    lines=shared, garments=garments, mirror=bool(obj.get("mirror", False)), skirt=skirt,
-                    refine_edge_length=rel, description=desc, solver=solver)
+    design = Design(
+        name=name,
+        body=body,
+        materials=materials,
+        parameters=params,
+        keypoints=keypoints,
+        lines=shared,
+        garments=garments,
+        mirror=bool(obj.get("mirror", False)),
+        skirt=skirt,
+        refine_edge_length=rel,
+        description=desc,
+        solver=solver,
+    )
     check_names_unique(design)
     check_seam_names(design)
     return design
@@ -362,8 +452,9 @@ def check_depth(obj, limit: int = MAX_DEPTH) -> None:
     while stack:
         value, path, depth = stack.pop()
         if depth > limit:
-            raise DesignError(path, f"nested more than {limit} levels deep; a design is a few levels of "
-                                    "objects and lists")
+            raise DesignError(
+                path, f"nested more than {limit} levels deep; a design is a few levels of objects and lists"
+            )
         if isinstance(value, dict):
             stack.extend((v, f"{path}.{k}" if path else str(k), depth + 1) for k, v in value.items())
         elif isinstance(value, list):
@@ -382,8 +473,11 @@ def _design_text(p: Path) -> str:
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise DesignError("", f"{p}: not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}, "
-                              "e.g. latin-1); save the design as UTF-8") from None
+        raise DesignError(
+            "",
+            f"{p}: not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}, "
+            "e.g. latin-1); save the design as UTF-8",
+        ) from None
 
 
 def load_design(source: Union[str, Path, dict, Design]) -> Design:
@@ -415,18 +509,19 @@ def load_design(source: Union[str, Path, dict, Design]) -> Design:
         raise DesignError("", f"{where}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})") from None
     except RecursionError:
         raise DesignError("", f"{where}: nested more than {MAX_DEPTH} levels deep") from None
-    except ValueError as exc:   # e.g. an integer of more than 4300 digits
+    except ValueError as exc:  # e.g. an integer of more than 4300 digits
         raise DesignError("", f"{where}: not valid JSON ({str(exc)[:80]})") from None
     try:
         check_depth(obj)
         design = parse_design(obj)
     except DesignError as exc:
-        if where != "<string>":   # name the file too; path and message stay as they are
+        if where != "<string>":  # name the file too; path and message stay as they are
             exc.args = (f"{where}: {exc}",)
         raise
     if where != "<string>":
         # an OBJ template's files are named relative to the design file, for every caller
         from ..body.registry import resolve_body_files
+
         design.body.update(resolve_body_files(design.body, p.parent))
     return design
 
@@ -434,6 +529,7 @@ def load_design(source: Union[str, Path, dict, Design]) -> Design:
 def save_design(design: Design, path: Union[str, Path]) -> Path:
     """Write ``design`` as JSON atomically (validated again first)."""
     from ..fileio import write_json
+
     obj = design.to_json()
     parse_design(copy.deepcopy(obj))
     return write_json(path, obj, indent=1)

@@ -25,6 +25,7 @@ pose), sampled at
 at a fraction of the ring's length from ``through``, counter-clockwise about
 the normal) for other lines to end on.
 """
+
 from __future__ import annotations
 
 from typing import Dict, List, Optional, Tuple
@@ -35,24 +36,34 @@ from ..body.instance import body_instance
 from ..body.model import SurfacePoint
 from ..body.registry import OBJ_OPTIONS
 from ..errors import BodyError, DesignError
-from .checks import parameter_value
-from .parser import load_design
-from .spec import CutLine, CutSpec, GarmentSpec, PanelSpec
-from .types import Design, Line
 from ..geom.polyline import point_at_length, polyline_length
+from .checks import parameter_value
 from .geometry import SectionLoop, plane_section_loop, surface_tools, turned_normal, vertical_walk
 from .mirror import face_symmetry, mirror_line, mirror_panel, mirror_surface_point
 from .naming import mirrored_name, swap_side
+from .parser import load_design
+from .spec import CutLine, CutSpec, GarmentSpec, PanelSpec
+from .types import Design, Line
 
 AXIS_VECTORS = {
-    "x": (1, 0, 0), "+x": (1, 0, 0), "-x": (-1, 0, 0),
-    "y": (0, 1, 0), "+y": (0, 1, 0), "-y": (0, -1, 0),
-    "z": (0, 0, 1), "+z": (0, 0, 1), "-z": (0, 0, -1),
+    "x": (1, 0, 0),
+    "+x": (1, 0, 0),
+    "-x": (-1, 0, 0),
+    "y": (0, 1, 0),
+    "+y": (0, 1, 0),
+    "-y": (0, -1, 0),
+    "z": (0, 0, 1),
+    "+z": (0, 0, 1),
+    "-z": (0, 0, -1),
 }
 
 # Where a trace along a body part heads (landmarks), and its limit.
-TRACE_TARGET = {"arm_left": "wrist_left", "arm_right": "wrist_right",
-                "leg_left": "ankle_left", "leg_right": "ankle_right"}
+TRACE_TARGET = {
+    "arm_left": "wrist_left",
+    "arm_right": "wrist_right",
+    "leg_left": "ankle_left",
+    "leg_right": "ankle_right",
+}
 
 
 def instance_vertices(design: Design, body, shape=None, pose=None) -> np.ndarray:
@@ -61,8 +72,11 @@ def instance_vertices(design: Design, body, shape=None, pose=None) -> np.ndarray
     A shape parameter or pose joint the model does not know (an SMPL or OBJ
     model is only read here) is a design error at ``body``."""
     try:
-        return body_instance(body, design.body.get("shape") if shape is None else shape,
-                             design.body.get("pose") if pose is None else pose)
+        return body_instance(
+            body,
+            design.body.get("shape") if shape is None else shape,
+            design.body.get("pose") if pose is None else pose,
+        )
     except BodyError as exc:
         raise DesignError("body", str(exc)) from None
 
@@ -96,8 +110,10 @@ class Resolver:
         self.faces = np.asarray(body.faces, dtype=np.int64)
         self.vertices = np.asarray(vertices, dtype=np.float64)
         if self.vertices.ndim != 2 or self.vertices.shape[1] != 3 or len(self.vertices) <= self.faces.max():
-            raise BodyError(f"body vertices {self.vertices.shape} do not match the template of "
-                            f"{getattr(body, 'name', 'the body')!r} ({int(self.faces.max()) + 1} vertices)")
+            raise BodyError(
+                f"body vertices {self.vertices.shape} do not match the template of "
+                f"{getattr(body, 'name', 'the body')!r} ({int(self.faces.max()) + 1} vertices)"
+            )
         if not np.all(np.isfinite(self.vertices)):
             raise BodyError("body vertices must be finite")
         self.tools = surface_tools(self.vertices, self.faces)
@@ -113,8 +129,9 @@ class Resolver:
         d = self.design
         # lines: (full name, JSON path, Line, garment name or None), generated mirrors included
         self.lines: List[Tuple[str, str, Line, Optional[str]]] = []
-        groups = [(None, "lines", d.lines)] + [(g.name, f"garments[{gi}].lines", g.lines)
-                                               for gi, g in enumerate(d.garments)]
+        groups = [(None, "lines", d.lines)] + [
+            (g.name, f"garments[{gi}].lines", g.lines) for gi, g in enumerate(d.garments)
+        ]
         for gname, prefix, lines in groups:
             own = {l.name for l in lines}
             for li, line in enumerate(lines):
@@ -181,9 +198,12 @@ class Resolver:
         lm = self.body.landmarks
         if name not in lm:
             known = sorted(self.design.keypoints) + sorted(self.ring_named)
-            raise DesignError(path, f"unknown keypoint or landmark {name!r}; design keypoints: "
-                                    f"{', '.join(known) or 'none'}; landmarks of body {self.body.name!r}: "
-                                    f"{', '.join(sorted(lm))}")
+            raise DesignError(
+                path,
+                f"unknown keypoint or landmark {name!r}; design keypoints: "
+                f"{', '.join(known) or 'none'}; landmarks of body {self.body.name!r}: "
+                f"{', '.join(sorted(lm))}",
+            )
         return lm[name]
 
     def ref(self, x, path: str) -> SurfacePoint:
@@ -197,8 +217,11 @@ class Resolver:
         if "triangle" in kp:
             nf = len(self.faces)
             if kp["triangle"] >= nf:
-                raise DesignError(f"{path}.triangle", f"keypoint off the body: triangle {kp['triangle']} does not "
-                                                      f"exist (body {self.body.name!r} has {nf} triangles)")
+                raise DesignError(
+                    f"{path}.triangle",
+                    f"keypoint off the body: triangle {kp['triangle']} does not "
+                    f"exist (body {self.body.name!r} has {nf} triangles)",
+                )
             return SurfacePoint(int(kp["triangle"]), tuple(float(b) for b in kp["bary"]))
         if "mirror_of" in kp:
             return self.mirror(self.ref(kp["mirror_of"], f"{path}.mirror_of"))
@@ -224,8 +247,11 @@ class Resolver:
             poly = self.geodesics.path(start, target)
             avail = polyline_length(poly)
             if length > avail:
-                raise DesignError(lpath, f"a length of {length:.3f} m from {from_name} along {along} leaves the "
-                                         f"body part: it is {avail:.3f} m from there to {TRACE_TARGET[along]}")
+                raise DesignError(
+                    lpath,
+                    f"a length of {length:.3f} m from {from_name} along {along} leaves the "
+                    f"body part: it is {avail:.3f} m from there to {TRACE_TARGET[along]}",
+                )
             p, _, _ = point_at_length(poly, length)
             return self.locator.locate(p[None])[0]
         down = along == "torso_down"
@@ -237,8 +263,11 @@ class Resolver:
         limit_name = "crotch" if down else "neck_back"
         limit = self.position(self.landmark(limit_name, f"{path}.along"))[2]
         if got < length - 1e-3 or (down and poly[:, 2].min() < limit) or (not down and poly[:, 2].max() > limit):
-            raise DesignError(lpath, f"a length of {length:.3f} m from {from_name} along {along} leaves the "
-                                     f"torso (past the {limit_name} level)")
+            raise DesignError(
+                lpath,
+                f"a length of {length:.3f} m from {from_name} along {along} leaves the "
+                f"torso (past the {limit_name} level)",
+            )
         return end
 
     # ------------------------------------------------------------ lines
@@ -252,8 +281,9 @@ class Resolver:
         for i in range(len(pts) - 1 + int(line.closed)):
             a, b = pts[i], pts[(i + 1) % len(pts)]
             if np.linalg.norm(self.position(a) - self.position(b)) < 1e-6:
-                raise DesignError(f"{path}.points[{(i + 1) % len(pts)}]",
-                                  f"line {full!r}: consecutive keypoints coincide")
+                raise DesignError(
+                    f"{path}.points[{(i + 1) % len(pts)}]", f"line {full!r}: consecutive keypoints coincide"
+                )
         return pts
 
     def _axis(self, spec, path) -> np.ndarray:
@@ -267,8 +297,7 @@ class Resolver:
             raise DesignError(path, "the two keypoints coincide; they cannot give a direction")
         return v / n
 
-    def _tilt_to_contain(self, n: np.ndarray, p0: np.ndarray, q: np.ndarray, ref, path: str,
-                         full: str) -> np.ndarray:
+    def _tilt_to_contain(self, n: np.ndarray, p0: np.ndarray, q: np.ndarray, ref, path: str, full: str) -> np.ndarray:
         """The normal ``n`` turned least so that the plane through ``p0`` holds the point
         ``q`` of keypoint ``ref`` too (a ring's ``contains``, then a vertex of the ring):
         e.g. an armhole through the armpit and the shoulder tip, otherwise across the arm
@@ -277,8 +306,11 @@ class Resolver:
         if cos_turn is None:
             raise DesignError(f"{path}.contains", f"line {full!r}: {ref!r} is the through point itself")
         if cos_turn < 0.2:
-            raise DesignError(f"{path}.contains", f"line {full!r}: {ref!r} lies (nearly) along the normal "
-                                                  f"from the through point; no plane across it holds both")
+            raise DesignError(
+                f"{path}.contains",
+                f"line {full!r}: {ref!r} lies (nearly) along the normal "
+                f"from the through point; no plane across it holds both",
+            )
         return m
 
     def ring_points(self, index: int) -> List[SurfacePoint]:
@@ -294,8 +326,9 @@ class Resolver:
             contains = self.ref(r["contains"], f"{path}.ring.contains")
             n = self._tilt_to_contain(n, p0, self.position(contains), r["contains"], f"{path}.ring", full)
         try:
-            poly, pts, segf = plane_section_loop(self.vertices, self.faces, p0, n, through.triangle,
-                                                 int(r.get("handed", 1)), self.tools.edges)
+            poly, pts, segf = plane_section_loop(
+                self.vertices, self.faces, p0, n, through.triangle, int(r.get("handed", 1)), self.tools.edges
+            )
         except ValueError as exc:
             raise DesignError(f"{path}.ring", f"line {full!r}: {exc}") from None
         loop = SectionLoop(self.vertices, self.faces, poly, pts, segf, p0, through)
@@ -315,8 +348,10 @@ class Resolver:
             # the contained keypoint is a vertex of the ring (other lines may end on it)
             s_q, dist = loop.arc_position(self.position(contains))
             if dist > 5e-3:
-                raise DesignError(f"{path}.ring.contains", f"line {full!r}: the section does not pass within "
-                                                           f"5 mm of {r['contains']!r}")
+                raise DesignError(
+                    f"{path}.ring.contains",
+                    f"line {full!r}: the section does not pass within 5 mm of {r['contains']!r}",
+                )
             entries.append((s_q % total, contains, None))
         named_s = [e[0] for e in entries]
         N = int(r["points"])
@@ -352,8 +387,10 @@ class Resolver:
         if cos_turn is None:
             raise DesignError(f"{path}.section.to", f"line {full!r}: from and to coincide")
         if cos_turn < np.cos(np.radians(10.0)):
-            raise DesignError(f"{path}.section.normal", f"line {full!r}: {c['to']!r} is more than 10 degrees "
-                                                        f"off the section plane through {c['from']!r}")
+            raise DesignError(
+                f"{path}.section.normal",
+                f"line {full!r}: {c['to']!r} is more than 10 degrees off the section plane through {c['from']!r}",
+            )
         try:
             poly, pts, segf = plane_section_loop(self.vertices, self.faces, pa, n, a.triangle, 1, self.tools.edges)
         except ValueError as exc:
@@ -362,8 +399,10 @@ class Resolver:
         # where ``to`` sits on the loop: the nearest point of the section polyline
         sb, dist = loop.arc_position(pb)
         if dist > 5e-3:
-            raise DesignError(f"{path}.section.to", f"line {full!r}: the section through {c['from']!r} "
-                                                    f"does not pass within 5 mm of {c['to']!r}")
+            raise DesignError(
+                f"{path}.section.to",
+                f"line {full!r}: the section through {c['from']!r} does not pass within 5 mm of {c['to']!r}",
+            )
         total = loop.total
         forward = sb <= total - sb
         length = sb if forward else total - sb
@@ -416,8 +455,9 @@ def _panels(design: Design):
                     yield g, f"garments[{gi}].panels[{pi}] (mirrored)", mirror_panel(p), f"{g.name}.{p.name}"
 
 
-def resolve(design, body, shape=None, pose=None, vertices: Optional[np.ndarray] = None,
-            resolver: Optional[Resolver] = None):
+def resolve(
+    design, body, shape=None, pose=None, vertices: Optional[np.ndarray] = None, resolver: Optional[Resolver] = None
+):
     """Resolve ``design`` on a body instance into a :class:`core.design.spec.CutSpec`.
 
     Parameters
@@ -444,8 +484,10 @@ def resolve(design, body, shape=None, pose=None, vertices: Optional[np.ndarray] 
         lines.append(CutLine(full, list(pts), closed=line.closed, role=line.role))
     if any(p.darts for g in design.garments for p in g.panels):
         from .darts import resolve_darts
-        lines += resolve_darts(resolver, design, lines, [(g, path, p, path.endswith("(mirrored)"))
-                                                         for g, path, p, _ in _panels(design)])
+
+        lines += resolve_darts(
+            resolver, design, lines, [(g, path, p, path.endswith("(mirrored)")) for g, path, p, _ in _panels(design)]
+        )
     names = {l.name for l in lines}
     panels = []
     for g, path, p, mirror_of in _panels(design):
@@ -461,8 +503,18 @@ def resolve(design, body, shape=None, pose=None, vertices: Optional[np.ndarray] 
     pose_used = design.body.get("pose") if pose is None else pose
     if isinstance(pose_used, dict):
         pose_used = {k: [float(x) for x in np.asarray(v).ravel()] for k, v in pose_used.items()}
-    return CutSpec(lines=lines, panels=panels, garments=garments, skirt=bool(design.skirt),
-                   refine_edge_length=design.refine_edge_length, materials=dict(design.materials),
-                   body={"model": design.body.get("model", "anny"), "shape": shape_used, "pose": pose_used,
-                         # an OBJ template's own files travel with the cut (pattern, drape reload it)
-                         **{k: design.body[k] for k in OBJ_OPTIONS if design.body.get(k) is not None}})
+    return CutSpec(
+        lines=lines,
+        panels=panels,
+        garments=garments,
+        skirt=bool(design.skirt),
+        refine_edge_length=design.refine_edge_length,
+        materials=dict(design.materials),
+        body={
+            "model": design.body.get("model", "anny"),
+            "shape": shape_used,
+            "pose": pose_used,
+            # an OBJ template's own files travel with the cut (pattern, drape reload it)
+            **{k: design.body[k] for k in OBJ_OPTIONS if design.body.get(k) is not None},
+        },
+    )

@@ -6,6 +6,7 @@ parameters, mirroring) into a :class:`CutSpec` on one body model; the engine
 :class:`core.cut.types.GarmentCut`. Ease is filled in afterwards by
 ``core.design`` from the design's ease fields, per cut triangle.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -30,6 +31,7 @@ class CutLine:
     dart : the :class:`core.design.darts.DartSpec` of a dart line (a seam from
         the mouth, on another line, to the sewn point inside one panel), else None.
     """
+
     name: str
     points: List[SurfacePoint]
     closed: bool = False
@@ -41,28 +43,30 @@ class CutLine:
 @dataclass
 class PanelSpec:
     """A panel: the region of the cut surface containing ``seed``."""
+
     name: str
     garment: str
     seed: SurfacePoint
-    body_part: str = "torso"          # "torso" | "arm" | "leg" (grain follows its long axis)
+    body_part: str = "torso"  # "torso" | "arm" | "leg" (grain follows its long axis)
     mirror_of: Optional[str] = None
 
 
 @dataclass
 class GarmentSpec:
     name: str
-    kind: str                          # "upper" | "lower" | "dress"
-    pin_line: Optional[str] = None     # name of the opening CutLine pinned while draping
+    kind: str  # "upper" | "lower" | "dress"
+    pin_line: Optional[str] = None  # name of the opening CutLine pinned while draping
 
 
 @dataclass
 class CutSpec:
     """Everything the engine needs. ``skirt`` asks for the skirt topology
     (inter-leg faces removed, leg boundaries bridged) before cutting."""
+
     lines: List[CutLine]
     panels: List[PanelSpec]
     garments: List[GarmentSpec]
     skirt: bool = False
-    refine_edge_length: Optional[float] = 0.01   # target mean edge, metres (split above 1.5x); None: no refinement
+    refine_edge_length: Optional[float] = 0.01  # target mean edge, metres (split above 1.5x); None: no refinement
     materials: dict = field(default_factory=dict)
-    body: dict = field(default_factory=dict)      # {"model", "shape", "pose"} for the record
+    body: dict = field(default_factory=dict)  # {"model", "shape", "pose"} for the record

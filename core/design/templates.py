@@ -8,6 +8,7 @@ wheel or the Blender extension has them too.
 The builders are in :mod:`.garments` (construction of each garment there) and
 :mod:`.blouse_variants` (the four-dart blouse, and variants of the blouse that are not shipped).
 """
+
 from __future__ import annotations
 
 from importlib import resources
@@ -15,8 +16,20 @@ from pathlib import Path
 from typing import Callable, Dict, List
 
 from .blouse_variants import blouse_four_darts
-from .garments import (blouse_fitted, dress, dress_gradient, jacket, pants, shirt_long_sleeve, shorts, skirt,
-                       skirt_darted, teaser_shirt_pants, top_short_sleeve, top_sleeveless)
+from .garments import (
+    blouse_fitted,
+    dress,
+    dress_gradient,
+    jacket,
+    pants,
+    shirt_long_sleeve,
+    shorts,
+    skirt,
+    skirt_darted,
+    teaser_shirt_pants,
+    top_short_sleeve,
+    top_sleeveless,
+)
 
 
 def template_dir() -> Path:
@@ -56,6 +69,7 @@ def list_templates() -> List[str]:
 def _check_name(name: str) -> None:
     if name not in TEMPLATES:
         from ..errors import DesignError
+
         raise DesignError("", f"unknown template {name!r}; templates: {', '.join(TEMPLATES)}")
 
 
@@ -68,6 +82,7 @@ def template_path(name: str) -> Path:
 def template(name: str):
     """The template ``name`` as a validated :class:`core.design.Design` (built in code)."""
     from .parser import load_design
+
     _check_name(name)
     return load_design(TEMPLATES[name]())
 
@@ -75,6 +90,7 @@ def template(name: str):
 def write_templates(directory=None) -> list:
     """(Re)write every template's JSON into ``directory`` (default :func:`template_dir`); returns the paths."""
     from .parser import load_design, save_design
+
     directory = Path(directory) if directory is not None else template_dir()
     out = []
     for name, build in TEMPLATES.items():

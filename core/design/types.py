@@ -7,6 +7,7 @@ the edits (:meth:`Design.set_parameter`, :meth:`Design.set_keypoint`,
 :meth:`Design.set_ease`, used by the add-on) validate what they change with
 :mod:`core.design.checks`, so a design stays valid.
 """
+
 from __future__ import annotations
 
 import copy
@@ -27,6 +28,7 @@ VERSION = 1
 class Parameter:
     """A named design parameter: ``placement`` (0..1 along a geodesic),
     ``length`` (metres, traced on the body) or a plain ``number``."""
+
     name: str
     value: float
     kind: str = "number"
@@ -51,6 +53,7 @@ class Line:
     ``section`` (the plane section from one keypoint to another, e.g. a centre
     seam along the body's midline); see :mod:`core.design.resolve`.
     """
+
     name: str
     points: List[Any] = field(default_factory=list)
     closed: bool = False
@@ -76,6 +79,7 @@ class Panel:
     """A panel: the region of the cut surface around ``seed``, with its ease field and its
     darts (:class:`core.design.darts.Dart`, written only when there are some), or a request for
     automatic darts (``auto_darts``: ``{"max_count", "max_intake"}``, :mod:`core.cut.auto_darts`)."""
+
     name: str
     seed: Any
     body_part: str = "torso"
@@ -84,8 +88,12 @@ class Panel:
     auto_darts: Optional[dict] = None
 
     def to_json(self):
-        out = {"name": self.name, "seed": copy.deepcopy(self.seed),
-               "body_part": self.body_part, "ease": copy.deepcopy(self.ease)}
+        out = {
+            "name": self.name,
+            "seed": copy.deepcopy(self.seed),
+            "body_part": self.body_part,
+            "ease": copy.deepcopy(self.ease),
+        }
         if self.auto_darts:
             out["darts"] = {"auto": copy.deepcopy(self.auto_darts)}
         elif self.darts:
@@ -133,6 +141,7 @@ class Design:
         :data:`core.design.checks.SOLVER_CONFIGS`); None: the default. A user's explicit choice
         overrides it (:func:`core.workflows.config_name`).
     """
+
     name: str
     body: dict
     materials: dict
@@ -155,16 +164,18 @@ class Design:
         }
         if self.description:
             out["description"] = self.description
-        out.update({
-            "body": copy.deepcopy(self.body),
-            "materials": copy.deepcopy(self.materials),
-            "mirror": self.mirror,
-            "skirt": self.skirt,
-            "refine_edge_length": self.refine_edge_length,
-            **({"solver": self.solver} if self.solver is not None else {}),
-            "parameters": {k: p.to_json() for k, p in self.parameters.items()},
-            "keypoints": copy.deepcopy(self.keypoints),
-        })
+        out.update(
+            {
+                "body": copy.deepcopy(self.body),
+                "materials": copy.deepcopy(self.materials),
+                "mirror": self.mirror,
+                "skirt": self.skirt,
+                "refine_edge_length": self.refine_edge_length,
+                **({"solver": self.solver} if self.solver is not None else {}),
+                "parameters": {k: p.to_json() for k, p in self.parameters.items()},
+                "keypoints": copy.deepcopy(self.keypoints),
+            }
+        )
         if self.lines:
             out["lines"] = [l.to_json() for l in self.lines]
         out["garments"] = [g.to_json() for g in self.garments]
@@ -205,13 +216,14 @@ class Design:
             for i, p in enumerate(g.panels):
                 if mirrored_name(p.name) == pname:
                     return g, p, i, True
-        raise DesignError(f"garments[{self.garments.index(g)}].panels",
-                          f"no panel {pname!r} in garment {gname!r}")
+        raise DesignError(f"garments[{self.garments.index(g)}].panels", f"no panel {pname!r} in garment {gname!r}")
 
     # -- edits (the add-on uses these; each re-validates what it changes)
     def set_parameter(self, name: str, value: float) -> None:
         if name not in self.parameters:
-            raise DesignError("parameters", f"no parameter {name!r}; parameters: {', '.join(self.parameters) or 'none'}")
+            raise DesignError(
+                "parameters", f"no parameter {name!r}; parameters: {', '.join(self.parameters) or 'none'}"
+            )
         p = self.parameters[name]
         check_parameter_value(f"parameters.{name}", p.kind, value, p.min, p.max)
         p.value = float(value)

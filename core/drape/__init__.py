@@ -8,11 +8,11 @@ and ``solver.step(state)`` advances a :class:`DrapeState` by one frame, with
 lazily (on the first solver). :mod:`.textile` runs the textile tests (Cusick drape
 coefficient, ASTM D1388 bending length) with the same solver.
 """
+
 from .materials import PRESETS, Material, get_material
 from .options import DrapeOptions
 from .result import DrapeResult
 from .simulate import drape
 from .xpbd import DrapeSolver, DrapeState
 
-__all__ = ["drape", "DrapeSolver", "DrapeState", "DrapeOptions", "DrapeResult", "Material", "PRESETS",
-           "get_material"]
+__all__ = ["drape", "DrapeSolver", "DrapeState", "DrapeOptions", "DrapeResult", "Material", "PRESETS", "get_material"]

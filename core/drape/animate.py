@@ -16,6 +16,7 @@ start. Pinned vertices (a waistband held while draping) ride on their nearest
 body vertex. Each frame reports the share of garment vertices more than 2 mm inside
 the body (SPEC item 7) and its wall time.
 """
+
 from __future__ import annotations
 
 import time
@@ -33,8 +34,8 @@ from .schedule import check_divergence, run
 from .strain import face_strains
 from .xpbd import DrapeSolver, check_body
 
-MAX_MOVE = 0.03            # m: a body vertex moves at most this far in one simulation frame (20 substeps)
-PENETRATION_DEPTH = 0.002   # m: SPEC item 7 (core.metrics.drape.penetration, a later stage) counts deeper
+MAX_MOVE = 0.03  # m: a body vertex moves at most this far in one simulation frame (20 substeps)
+PENETRATION_DEPTH = 0.002  # m: SPEC item 7 (core.metrics.drape.penetration, a later stage) counts deeper
 
 
 @dataclass
@@ -54,6 +55,7 @@ class MotionResult:
     settle_frames : int, frames the first drape took; settled : bool.
     material : dict; device : str.
     """
+
     positions: np.ndarray
     faces: np.ndarray
     used: np.ndarray
@@ -76,9 +78,12 @@ def pose_frames(model, shape=None, poses: Sequence = ("A", "P1", "P3"), between:
 
     from ..body.anny import ANNY_TO_EASE
     from ..body.instance import instance_pose, instance_shape
+
     if not hasattr(model, "pose_rotations") or not hasattr(model, "joint_names"):
-        raise DrapeError(f"pose in-betweens need a body model with joint rotations (Anny); "
-                         f"{getattr(model, 'name', type(model).__name__)} has none")
+        raise DrapeError(
+            f"pose in-betweens need a body model with joint rotations (Anny); "
+            f"{getattr(model, 'name', type(model).__name__)} has none"
+        )
     if len(poses) < 2 or int(between) < 0:
         raise DrapeError("a motion needs two poses or more and between >= 0 in-betweens")
     inst = instance_shape(model, shape)
@@ -101,10 +106,14 @@ def pose_frames(model, shape=None, poses: Sequence = ("A", "P1", "P3"), between:
     return frames
 
 
-def drape_motion(pattern, body_frames: Sequence[np.ndarray], body_faces,
-                 material: Union[None, str, Material, Mapping] = None,
-                 options: Union[None, DrapeOptions, Mapping] = None,
-                 progress: Optional[Progress] = None) -> MotionResult:
+def drape_motion(
+    pattern,
+    body_frames: Sequence[np.ndarray],
+    body_faces,
+    material: Union[None, str, Material, Mapping] = None,
+    options: Union[None, DrapeOptions, Mapping] = None,
+    progress: Optional[Progress] = None,
+) -> MotionResult:
     """Drape ``pattern`` on ``body_frames[0]``, then carry it through the other frames.
 
     Parameters
@@ -121,6 +130,7 @@ def drape_motion(pattern, body_frames: Sequence[np.ndarray], body_faces,
     DrapeError on invalid input or divergence (naming the frame).
     """
     from ..geom.queries import distance_to_mesh
+
     opts = DrapeOptions.coerce(options)
     if material is None:
         material = (getattr(pattern, "materials", None) or {}).get("fabric")
@@ -130,8 +140,10 @@ def drape_motion(pattern, body_frames: Sequence[np.ndarray], body_faces,
     first, faces = check_body(body_frames[0], body_faces)
     for k, v in enumerate(body_frames[1:], 1):
         if np.shape(v) != first.shape:
-            raise DrapeError(f"body frame {k} has shape {np.shape(v)}: every frame must have the first "
-                             f"frame's vertex count ({first.shape[0]}, 3)")
+            raise DrapeError(
+                f"body frame {k} has shape {np.shape(v)}: every frame must have the first "
+                f"frame's vertex count ({first.shape[0]}, 3)"
+            )
     frames = [first] + [check_body(v, faces)[0] for v in body_frames[1:]]
     cloth = build_cloth(pattern)
     solver = DrapeSolver(cloth, first, faces, mat, opts)
@@ -163,6 +175,7 @@ def drape_motion(pattern, body_frames: Sequence[np.ndarray], body_faces,
     pinned = np.flatnonzero(~solver.free)
     if len(pinned):
         from scipy.spatial import cKDTree
+
         x0 = state.x.numpy().astype(np.float64)
         nearest = cKDTree(first).query(x0[pinned])[1]
         offset = x0[pinned] - first[nearest]
@@ -189,19 +202,26 @@ def drape_motion(pattern, body_frames: Sequence[np.ndarray], body_faces,
         pos, share = snapshot(b)
         positions.append(pos)
         pens.append(share)
-        report(progress, 0.3 + 0.7 * k / max(K - 1, 1),
-               f"motion: frame {k}/{K - 1}, penetration {100 * share:.2f} %")
-    return MotionResult(positions=np.stack(positions), faces=cloth.faces_global.copy(), used=used,
-                        penetration=np.asarray(pens), stretch=np.asarray(stretch),
-                        frame_seconds=np.asarray(seconds),
-                        settle_frames=int(settling.frames), settled=bool(settling.settled),
-                        material=mat.to_json(), device=str(solver.device))
+        report(progress, 0.3 + 0.7 * k / max(K - 1, 1), f"motion: frame {k}/{K - 1}, penetration {100 * share:.2f} %")
+    return MotionResult(
+        positions=np.stack(positions),
+        faces=cloth.faces_global.copy(),
+        used=used,
+        penetration=np.asarray(pens),
+        stretch=np.asarray(stretch),
+        frame_seconds=np.asarray(seconds),
+        settle_frames=int(settling.frames),
+        settled=bool(settling.settled),
+        material=mat.to_json(),
+        device=str(solver.device),
+    )
 
 
 def parse_poses(text: str, label: str = "poses") -> list:
     """The pose presets of ``text`` (comma, space or ``->`` separated: ``"A, P1, P3"``); DrapeError
     naming ``label`` (a CLI flag, a panel field) and the first unknown name."""
     from ..choices import POSE_PRESETS
+
     names = [t for t in str(text).replace("->", ",").replace(" ", ",").split(",") if t]
     for n in names:
         if n not in POSE_PRESETS:
@@ -216,6 +236,7 @@ def pc2_bytes(frames: np.ndarray) -> bytes:
     of ``frames`` (K, V, 3): the header (start frame 1, one sample a frame), then K x V x 3
     little-endian float32, frame 1 first."""
     import struct
+
     f = np.ascontiguousarray(frames, dtype="<f4")
     return struct.pack("<12siiffi", b"POINTCACHE2\0", 1, f.shape[1], 1.0, 1.0, f.shape[0]) + f.tobytes()
 
@@ -229,13 +250,19 @@ def _obj_bytes(vertices: np.ndarray, faces: np.ndarray, name: str) -> bytes:
 
 def motion_report(result: MotionResult, poses, between: int) -> dict:
     """The figures of a motion, per frame: penetration and residual stretch (%) and seconds."""
-    return {"poses": list(poses), "in_betweens": int(between), "frames": int(len(result.positions)),
-            "penetration_pct": [round(100 * float(p), 4) for p in result.penetration],
-            "stretch_p95_pct": [round(100 * float(p), 3) for p in result.stretch],
-            "frame_seconds": [round(float(t), 4) for t in result.frame_seconds],
-            "worst_penetration_pct": round(100 * float(result.penetration.max()), 4),
-            "settle_frames": result.settle_frames, "settled": result.settled,
-            "material": result.material.get("name"), "device": result.device}
+    return {
+        "poses": list(poses),
+        "in_betweens": int(between),
+        "frames": int(len(result.positions)),
+        "penetration_pct": [round(100 * float(p), 4) for p in result.penetration],
+        "stretch_p95_pct": [round(100 * float(p), 3) for p in result.stretch],
+        "frame_seconds": [round(float(t), 4) for t in result.frame_seconds],
+        "worst_penetration_pct": round(100 * float(result.penetration.max()), 4),
+        "settle_frames": result.settle_frames,
+        "settled": result.settled,
+        "material": result.material.get("name"),
+        "device": result.device,
+    }
 
 
 def write_motion(out, result: MotionResult, body_frames, body_faces, poses, between: int) -> list:
@@ -247,6 +274,7 @@ def write_motion(out, result: MotionResult, body_frames, body_faces, poses, betw
 
     from ..fileio import write_files
     from ..jsontext import dumps_json
+
     used = np.asarray(result.used, dtype=bool)
     remap = -np.ones(len(used), dtype=np.int64)
     remap[used] = np.arange(int(used.sum()))
@@ -254,12 +282,20 @@ def write_motion(out, result: MotionResult, body_frames, body_faces, poses, betw
     gfaces = remap[np.asarray(result.faces)]
     body = np.stack([np.asarray(b, dtype=np.float64) for b in body_frames])
     buf = io.BytesIO()
-    np.savez_compressed(buf, positions=np.asarray(result.positions, dtype=np.float32), faces=result.faces,
-                        used=used, body_vertices=body.astype(np.float32), body_faces=np.asarray(body_faces))
-    files = {"motion.npz": buf.getvalue(),
-             "motion_report.json": (dumps_json(motion_report(result, poses, between)) + "\n").encode("utf-8"),
-             "garment_motion.obj": _obj_bytes(garment[0], gfaces, "garment_motion"),
-             "garment_motion.pc2": pc2_bytes(garment),
-             "body_motion.obj": _obj_bytes(body[0], body_faces, "body_motion"),
-             "body_motion.pc2": pc2_bytes(body)}
+    np.savez_compressed(
+        buf,
+        positions=np.asarray(result.positions, dtype=np.float32),
+        faces=result.faces,
+        used=used,
+        body_vertices=body.astype(np.float32),
+        body_faces=np.asarray(body_faces),
+    )
+    files = {
+        "motion.npz": buf.getvalue(),
+        "motion_report.json": (dumps_json(motion_report(result, poses, between)) + "\n").encode("utf-8"),
+        "garment_motion.obj": _obj_bytes(garment[0], gfaces, "garment_motion"),
+        "garment_motion.pc2": pc2_bytes(garment),
+        "body_motion.obj": _obj_bytes(body[0], body_faces, "body_motion"),
+        "body_motion.pc2": pc2_bytes(body),
+    }
     return write_files(out, files)

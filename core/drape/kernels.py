@@ -15,14 +15,22 @@ sewn fold across a seam), with the
 weight |e|^2/(A_a+A_b): compliance 1/(bending * weight) stores bending * kappa^2 / 2 per area
 on a smoothly bent isotropic mesh (:class:`core.drape.mesh.Cloth`).
 """
+
 from __future__ import annotations
 
 from ..geom.queries import wp  # Warp, set up once for the package (kernel cache, log level)
 
 
 @wp.kernel
-def predict(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
-            inv_mass: wp.array(dtype=float), gravity: wp.vec3, dt: float, keep: float):
+def predict(
+    x: wp.array(dtype=wp.vec3),
+    v: wp.array(dtype=wp.vec3),
+    x_prev: wp.array(dtype=wp.vec3),
+    inv_mass: wp.array(dtype=float),
+    gravity: wp.vec3,
+    dt: float,
+    keep: float,
+):
     i = wp.tid()
     x_prev[i] = x[i]
     if inv_mass[i] == 0.0:
@@ -34,8 +42,19 @@ def predict(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), x_prev: wp.a
 
 
 @wp.func
-def _project(x: wp.array(dtype=wp.vec3), i: int, j: int, k: int, wi: float, wj: float, wk: float,
-             c: float, gj: wp.vec3, gk: wp.vec3, alpha: float):
+def _project(
+    x: wp.array(dtype=wp.vec3),
+    i: int,
+    j: int,
+    k: int,
+    wi: float,
+    wj: float,
+    wk: float,
+    c: float,
+    gj: wp.vec3,
+    gk: wp.vec3,
+    alpha: float,
+):
     gi = -(gj + gk)
     denom = wi * wp.dot(gi, gi) + wj * wp.dot(gj, gj) + wk * wp.dot(gk, gk) + alpha
     if denom > 0.0:
@@ -46,8 +65,19 @@ def _project(x: wp.array(dtype=wp.vec3), i: int, j: int, k: int, wi: float, wj: 
 
 
 @wp.func
-def _project_axis(x: wp.array(dtype=wp.vec3), i: int, j: int, k: int, wi: float, wj: float, wk: float,
-                  d0: float, d1: float, rest: float, alpha: float):
+def _project_axis(
+    x: wp.array(dtype=wp.vec3),
+    i: int,
+    j: int,
+    k: int,
+    wi: float,
+    wj: float,
+    wk: float,
+    d0: float,
+    d1: float,
+    rest: float,
+    alpha: float,
+):
     """Stretch along one grain direction, C = |F c| - rest, where c = (d0, d1) is its rest_inv column."""
     e1 = x[j] - x[i]
     e2 = x[k] - x[i]
@@ -59,10 +89,20 @@ def _project_axis(x: wp.array(dtype=wp.vec3), i: int, j: int, k: int, wi: float,
 
 
 @wp.kernel
-def solve_stretch(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
-                  tri: wp.array2d(dtype=int), rest_inv: wp.array(dtype=wp.mat22),
-                  area: wp.array(dtype=float), k_weft: float, k_warp: float, k_shear: float,
-                  inv_dt2: float, offset: int, start: wp.array(dtype=wp.vec2), grow: wp.array(dtype=float)):
+def solve_stretch(
+    x: wp.array(dtype=wp.vec3),
+    inv_mass: wp.array(dtype=float),
+    tri: wp.array2d(dtype=int),
+    rest_inv: wp.array(dtype=wp.mat22),
+    area: wp.array(dtype=float),
+    k_weft: float,
+    k_warp: float,
+    k_shear: float,
+    inv_dt2: float,
+    offset: int,
+    start: wp.array(dtype=wp.vec2),
+    grow: wp.array(dtype=float),
+):
     t = wp.tid() + offset
     # rest stretch: from the start's (skintight) stretch to the pattern's (1) as grow goes 0 -> 1
     s0 = start[t]
@@ -84,14 +124,33 @@ def solve_stretch(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
     e2 = x[k] - x[i]
     fa = e1 * d[0, 0] + e2 * d[1, 0]
     fb = e1 * d[0, 1] + e2 * d[1, 1]
-    _project(x, i, j, k, wi, wj, wk, wp.dot(fa, fb),
-             fb * d[0, 0] + fa * d[0, 1], fb * d[1, 0] + fa * d[1, 1], inv_dt2 / (k_shear * a))
+    _project(
+        x,
+        i,
+        j,
+        k,
+        wi,
+        wj,
+        wk,
+        wp.dot(fa, fb),
+        fb * d[0, 0] + fa * d[0, 1],
+        fb * d[1, 0] + fa * d[1, 1],
+        inv_dt2 / (k_shear * a),
+    )
 
 
 @wp.kernel
-def solve_distance(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
-                   edge: wp.array2d(dtype=int), rest: wp.array(dtype=float), k: float, inv_dt2: float,
-                   offset: int, start: wp.array(dtype=float), grow: wp.array(dtype=float)):
+def solve_distance(
+    x: wp.array(dtype=wp.vec3),
+    inv_mass: wp.array(dtype=float),
+    edge: wp.array2d(dtype=int),
+    rest: wp.array(dtype=float),
+    k: float,
+    inv_dt2: float,
+    offset: int,
+    start: wp.array(dtype=float),
+    grow: wp.array(dtype=float),
+):
     """Edge length constraints (the edges of pattern slivers), compliance 1/k; rest grows like the triangles'."""
     e = wp.tid() + offset
     i = edge[e, 0]
@@ -120,9 +179,17 @@ def zero(values: wp.array(dtype=float)):
 
 
 @wp.kernel
-def solve_bending(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
-                  bend: wp.array2d(dtype=int), weight: wp.array(dtype=float), rest: wp.array(dtype=float),
-                  k_bend: float, inv_dt2: float, offset: int, lam: wp.array(dtype=float)):
+def solve_bending(
+    x: wp.array(dtype=wp.vec3),
+    inv_mass: wp.array(dtype=float),
+    bend: wp.array2d(dtype=int),
+    weight: wp.array(dtype=float),
+    rest: wp.array(dtype=float),
+    k_bend: float,
+    inv_dt2: float,
+    offset: int,
+    lam: wp.array(dtype=float),
+):
     """Dihedral-angle bending, XPBD with its multiplier ``lam`` accumulated over the iterations of a
     substep (zeroed at the substep's start): iterated, it converges to the implicit step's bending force,
     which the one-pass update under-delivers where the compliance is not large against the mass term."""
@@ -157,7 +224,7 @@ def solve_bending(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
     w3 = inv_mass[k]
     w4 = inv_mass[l]
     alpha = inv_dt2 / (k_bend * weight[b])
-    denom = (w1 * wp.dot(g1, g1) + w2 * wp.dot(g2, g2) + w3 * wp.dot(g3, g3) + w4 * wp.dot(g4, g4) + alpha)
+    denom = w1 * wp.dot(g1, g1) + w2 * wp.dot(g2, g2) + w3 * wp.dot(g3, g3) + w4 * wp.dot(g4, g4) + alpha
     if denom <= 0.0:
         return
     c = theta - rest[b]
@@ -175,8 +242,7 @@ def solve_bending(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
 
 
 @wp.kernel
-def solve_tethers(x: wp.array(dtype=wp.vec3), anchor: wp.array(dtype=int), length: wp.array(dtype=float),
-                  slack: float):
+def solve_tethers(x: wp.array(dtype=wp.vec3), anchor: wp.array(dtype=int), length: wp.array(dtype=float), slack: float):
     """Long-range attachments: a particle stays within its fabric distance of its pin.
 
     The anchor is pinned (never moves), so particles are independent: no colouring.
@@ -193,10 +259,20 @@ def solve_tethers(x: wp.array(dtype=wp.vec3), anchor: wp.array(dtype=int), lengt
 
 
 @wp.kernel
-def find_self_pairs(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float), x0: wp.array(dtype=wp.vec3),
-                    grid: wp.uint64, search: float, exclude: float, max_pairs: int,
-                    partner: wp.array2d(dtype=int), count: wp.array(dtype=int),
-                    ring_start: wp.array(dtype=int), ring: wp.array(dtype=int), touching: float):
+def find_self_pairs(
+    x: wp.array(dtype=wp.vec3),
+    inv_mass: wp.array(dtype=float),
+    x0: wp.array(dtype=wp.vec3),
+    grid: wp.uint64,
+    search: float,
+    exclude: float,
+    max_pairs: int,
+    partner: wp.array2d(dtype=int),
+    count: wp.array(dtype=int),
+    ring_start: wp.array(dtype=int),
+    ring: wp.array(dtype=int),
+    touching: float,
+):
     """Self-collision candidates of each particle: the others within ``search`` (at most ``max_pairs``).
 
     Fabric neighbours are left out: pairs that started closer than ``exclude``
@@ -234,8 +310,14 @@ def find_self_pairs(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float),
 
 
 @wp.kernel
-def self_collide(x: wp.array(dtype=wp.vec3), inv_mass: wp.array(dtype=float), partner: wp.array2d(dtype=int),
-                 count: wp.array(dtype=int), radius: float, dx: wp.array(dtype=wp.vec3)):
+def self_collide(
+    x: wp.array(dtype=wp.vec3),
+    inv_mass: wp.array(dtype=float),
+    partner: wp.array2d(dtype=int),
+    count: wp.array(dtype=int),
+    radius: float,
+    dx: wp.array(dtype=wp.vec3),
+):
     """Self-collision, particle against particle: keep the candidates ``2 radius`` apart.
 
     Jacobi style: each thread only writes its own correction (the average over
@@ -270,9 +352,16 @@ def apply_delta(x: wp.array(dtype=wp.vec3), dx: wp.array(dtype=wp.vec3)):
 
 
 @wp.kernel
-def closest_contact(points: wp.array(dtype=wp.vec3), weight: wp.array(dtype=float), mesh: wp.uint64,
-                    max_dist: float, flat: float, point: wp.array(dtype=wp.vec3), normal: wp.array(dtype=wp.vec3),
-                    hit: wp.array(dtype=int)):
+def closest_contact(
+    points: wp.array(dtype=wp.vec3),
+    weight: wp.array(dtype=float),
+    mesh: wp.uint64,
+    max_dist: float,
+    flat: float,
+    point: wp.array(dtype=wp.vec3),
+    normal: wp.array(dtype=wp.vec3),
+    hit: wp.array(dtype=int),
+):
     """The contact plane of each particle: through its closest point on the body, facing the particle.
 
     The normal is the direction from the closest point to the particle (away
@@ -303,9 +392,15 @@ def closest_contact(points: wp.array(dtype=wp.vec3), weight: wp.array(dtype=floa
 
 
 @wp.kernel
-def collide_body(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
-                 point: wp.array(dtype=wp.vec3), normal: wp.array(dtype=wp.vec3),
-                 active: wp.array(dtype=int), thickness: float, friction: float):
+def collide_body(
+    x: wp.array(dtype=wp.vec3),
+    x_prev: wp.array(dtype=wp.vec3),
+    point: wp.array(dtype=wp.vec3),
+    normal: wp.array(dtype=wp.vec3),
+    active: wp.array(dtype=int),
+    thickness: float,
+    friction: float,
+):
     """Keep particles ``thickness`` outside their contact plane (:func:`closest_contact`); Coulomb friction."""
     i = wp.tid()
     if active[i] == 0:
@@ -326,7 +421,8 @@ def collide_body(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
 
 
 @wp.kernel
-def update_velocity(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
-                    v: wp.array(dtype=wp.vec3), inv_dt: float):
+def update_velocity(
+    x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), inv_dt: float
+):
     i = wp.tid()
     v[i] = (x[i] - x_prev[i]) * inv_dt

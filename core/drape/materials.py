@@ -11,6 +11,7 @@ A design selects a preset by name (``materials.fabric``, one of
 :data:`core.design.materials.FABRICS`, checked when the design loads), the CLI with
 ``--material``. Unknown names raise :class:`core.errors.DrapeError`.
 """
+
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, replace
@@ -39,6 +40,7 @@ class Material:
     max_stretch : float, the stretch (fraction) the fabric takes in wear; documents
         the preset and is checked by the tests, not used by the solver.
     """
+
     name: str
     density: float
     stretch_weft: float
@@ -56,17 +58,53 @@ class Material:
 PRESETS = {
     # Shirting poplin: stiff in both grains, warp a little stiffer than weft.
     # Bending 5e-6 N*m = 0.05 gf*cm^2/cm, mid-range of Kawabata (KES-FB2) values for shirting.
-    "cotton": Material("cotton", density=0.13, stretch_weft=2.0e3, stretch_warp=3.0e3, shear=30.0,
-                       bending=5.0e-6, friction=0.4, thickness=0.003, max_stretch=0.05),
+    "cotton": Material(
+        "cotton",
+        density=0.13,
+        stretch_weft=2.0e3,
+        stretch_warp=3.0e3,
+        shear=30.0,
+        bending=5.0e-6,
+        friction=0.4,
+        thickness=0.003,
+        max_stretch=0.05,
+    ),
     # Single jersey knit: stretchy across the courses (weft), firmer along the wales.
-    "jersey": Material("jersey", density=0.18, stretch_weft=60.0, stretch_warp=200.0, shear=15.0,
-                       bending=5.0e-7, friction=0.5, thickness=0.003, max_stretch=0.4),
+    "jersey": Material(
+        "jersey",
+        density=0.18,
+        stretch_weft=60.0,
+        stretch_warp=200.0,
+        shear=15.0,
+        bending=5.0e-7,
+        friction=0.5,
+        thickness=0.003,
+        max_stretch=0.4,
+    ),
     # Heavy twill: stiff and heavy, bends little (0.2 gf*cm^2/cm).
-    "denim": Material("denim", density=0.40, stretch_weft=4.0e3, stretch_warp=6.0e3, shear=80.0,
-                      bending=2.0e-5, friction=0.5, thickness=0.004, max_stretch=0.03),
+    "denim": Material(
+        "denim",
+        density=0.40,
+        stretch_weft=4.0e3,
+        stretch_warp=6.0e3,
+        shear=80.0,
+        bending=2.0e-5,
+        friction=0.5,
+        thickness=0.004,
+        max_stretch=0.03,
+    ),
     # Light silk charmeuse: light, slippery, floppy.
-    "silk": Material("silk", density=0.07, stretch_weft=800.0, stretch_warp=1.2e3, shear=5.0,
-                     bending=2.0e-7, friction=0.2, thickness=0.002, max_stretch=0.08),
+    "silk": Material(
+        "silk",
+        density=0.07,
+        stretch_weft=800.0,
+        stretch_warp=1.2e3,
+        shear=5.0,
+        bending=2.0e-7,
+        friction=0.2,
+        thickness=0.002,
+        max_stretch=0.08,
+    ),
 }
 
 DEFAULT = "cotton"
@@ -89,8 +127,15 @@ TARGETS = {
 
 _POSITIVE = ("density", "stretch_weft", "stretch_warp", "shear", "thickness")
 # Upper bounds far beyond any textile: above them the input is a unit mistake.
-_LIMITS = {"density": 10.0, "stretch_weft": 1.0e6, "stretch_warp": 1.0e6, "shear": 1.0e6,
-           "bending": 1.0, "friction": 5.0, "thickness": 0.05}
+_LIMITS = {
+    "density": 10.0,
+    "stretch_weft": 1.0e6,
+    "stretch_warp": 1.0e6,
+    "shear": 1.0e6,
+    "bending": 1.0,
+    "friction": 5.0,
+    "thickness": 0.05,
+}
 
 
 def names() -> list:
@@ -112,13 +157,13 @@ def validate(material: Material) -> Material:
         lo_ok = value > 0 if key in _POSITIVE else value >= 0
         if not lo_ok or value > hi:
             lo = "> 0" if key in _POSITIVE else ">= 0"
-            raise DrapeError(f"material {material.name!r}: {key} = {value:g} is outside the physical range "
-                             f"({lo} and <= {hi:g})")
+            raise DrapeError(
+                f"material {material.name!r}: {key} = {value:g} is outside the physical range ({lo} and <= {hi:g})"
+            )
     return material
 
 
-def get_material(spec: Union[None, str, Material, Mapping] = None,
-                 overrides: Optional[Mapping] = None) -> Material:
+def get_material(spec: Union[None, str, Material, Mapping] = None, overrides: Optional[Mapping] = None) -> Material:
     """Resolve a material: a preset name, a :class:`Material`, or a dict.
 
     Parameters

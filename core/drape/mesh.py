@@ -6,6 +6,7 @@ pattern whose seam sides carry different ids still closes. Rest shapes come
 from the 2D pattern in each panel's grain frame (weft, warp), start positions
 from the skintight embedding ``xyz``.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -51,6 +52,7 @@ class Cloth:
     bend_rest : (B,) float, rest dihedral angle (radians): 0 inside a panel, the skintight angle across a seam.
     edges : (E, 2) int, the sliver edges (particles); edge_rest : (E,) float, their pattern lengths.
     """
+
     n_global: int
     particle_of: np.ndarray
     x0: np.ndarray
@@ -275,6 +277,7 @@ def build_cloth(pattern) -> Cloth:
     pairs = np.concatenate(seam_pairs) if seam_pairs else np.zeros((0, 2), np.int64)
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
+
     link = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n_global, n_global))
     _, label = connected_components(link, directed=False)
     # the root of a welded group is its smallest id: deterministic particle order
@@ -304,8 +307,7 @@ def build_cloth(pattern) -> Cloth:
         inv, area, bad = rest_matrices(np.asarray(p.uv, float), faces, p.grain)
         if np.any(bad):
             t = int(np.nonzero(bad)[0][0])
-            raise DrapeError(f"panel {p.name!r}: pattern triangle {t} is degenerate (zero area); "
-                             f"re-solve the pattern")
+            raise DrapeError(f"panel {p.name!r}: pattern triangle {t} is degenerate (zero area); re-solve the pattern")
         faces_l.append(part[faces])
         faces_g.append(ids[faces])
         fpanel.append(np.full(len(faces), k))
@@ -326,8 +328,9 @@ def build_cloth(pattern) -> Cloth:
     inv_all = np.concatenate(inv_l)
     bends, bend_faces = interior_edges(faces)
     sliver = pattern_quality(inv_all, rest_area) < SLIVER_QUALITY
-    edges, edge_rest = rest_edges(faces[sliver], inv_all[sliver]) if sliver.any() else \
-        (np.zeros((0, 2), np.int64), np.zeros(0))
+    edges, edge_rest = (
+        rest_edges(faces[sliver], inv_all[sliver]) if sliver.any() else (np.zeros((0, 2), np.int64), np.zeros(0))
+    )
 
     pinned = np.zeros(n_part, bool)
     for garment, ids in (pattern.pins or {}).items():
@@ -358,12 +361,27 @@ def build_cloth(pattern) -> Cloth:
     across = panel_of_face[bend_faces[:, 0]] != panel_of_face[bend_faces[:, 1]]
     bend_rest = np.where(across, dihedral_angles(x0, bends), 0.0)
     return Cloth(
-        tether_anchor=anchor, tether_length=length, sliver=sliver, bend_rest=bend_rest, edges=edges, edge_rest=edge_rest,
-        n_global=n_global, particle_of=particle_of, x0=x0, faces=faces,
-        faces_global=np.concatenate(faces_g), face_panel=np.concatenate(fpanel),
-        face_garment=np.concatenate(fgarm), panel_names=[p.name for p in panels],
-        garment_names=garment_names, rest_inv=np.concatenate(inv_l), rest_area=rest_area,
-        mass_area=mass_area, pinned=pinned, bends=bends, bend_weight=bend_weight,
+        tether_anchor=anchor,
+        tether_length=length,
+        sliver=sliver,
+        bend_rest=bend_rest,
+        edges=edges,
+        edge_rest=edge_rest,
+        n_global=n_global,
+        particle_of=particle_of,
+        x0=x0,
+        faces=faces,
+        faces_global=np.concatenate(faces_g),
+        face_panel=np.concatenate(fpanel),
+        face_garment=np.concatenate(fgarm),
+        panel_names=[p.name for p in panels],
+        garment_names=garment_names,
+        rest_inv=np.concatenate(inv_l),
+        rest_area=rest_area,
+        mass_area=mass_area,
+        pinned=pinned,
+        bends=bends,
+        bend_weight=bend_weight,
         seam_pairs=pairs,
         garment_of_particle=garment_of_particle,
     )
@@ -399,8 +417,7 @@ def _rest_corners(faces: np.ndarray, rest_inv: np.ndarray) -> np.ndarray:
     return out
 
 
-def across_lengths(faces: np.ndarray, rest_inv: np.ndarray, bends: np.ndarray,
-                   bend_faces: np.ndarray) -> np.ndarray:
+def across_lengths(faces: np.ndarray, rest_inv: np.ndarray, bends: np.ndarray, bend_faces: np.ndarray) -> np.ndarray:
     """Shortest pattern distance between the two opposite vertices of each interior edge.
 
     The two triangles are unfolded about their shared edge; the straight line
@@ -438,8 +455,9 @@ def across_lengths(faces: np.ndarray, rest_inv: np.ndarray, bends: np.ndarray,
     return np.where(inside, straight, np.minimum(via0, via1))
 
 
-def tethers(faces: np.ndarray, rest_inv: np.ndarray, pinned: np.ndarray, bends: np.ndarray = None,
-            bend_faces: np.ndarray = None) -> tuple:
+def tethers(
+    faces: np.ndarray, rest_inv: np.ndarray, pinned: np.ndarray, bends: np.ndarray = None, bend_faces: np.ndarray = None
+) -> tuple:
     """Long-range attachments (Kim et al. 2012): each free particle's nearest pin.
 
     A particle may never be farther (in 3D) from its nearest pinned particle than
@@ -462,14 +480,14 @@ def tethers(faces: np.ndarray, rest_inv: np.ndarray, pinned: np.ndarray, bends: 
         return anchor, length
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import dijkstra
+
     edges, lens = rest_edges(faces, rest_inv)
     if bends is not None and len(bends):
         edges = np.concatenate([edges, bends[:, :2]])
         lens = np.concatenate([lens, across_lengths(faces, rest_inv, bends, bend_faces)])
     keep = lens > 0
     graph = coo_matrix((lens[keep], (edges[keep, 0], edges[keep, 1])), shape=(n, n)).tocsr()
-    dist, _, source = dijkstra(graph, directed=False, indices=pins, min_only=True,
-                               return_predecessors=True)
+    dist, _, source = dijkstra(graph, directed=False, indices=pins, min_only=True, return_predecessors=True)
     ok = np.isfinite(dist) & ~pinned & (source >= 0)
     anchor[ok] = source[ok]
     length[ok] = dist[ok]
@@ -490,6 +508,7 @@ def two_rings(faces: np.ndarray, n: int) -> tuple:
     particle i are ``indices[starts[i]:starts[i + 1]]`` (sorted, itself included).
     """
     from scipy.sparse import coo_matrix
+
     f = np.asarray(faces, dtype=np.int64)
     rows = np.concatenate([f[:, 0], f[:, 1], f[:, 2], f[:, 1], f[:, 2], f[:, 0]])
     cols = np.concatenate([f[:, 1], f[:, 2], f[:, 0], f[:, 0], f[:, 1], f[:, 2]])

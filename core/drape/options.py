@@ -1,4 +1,5 @@
 """Settings of a drape, with their units, validated at the door."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
@@ -88,30 +89,31 @@ class DrapeOptions:
         Substeps between searches for self-collision candidates (a hash grid
         over the particles); every substep resolves the candidates found.
     """
+
     device: str = "cpu"
-    fps: float = 30.0                       # 1/s
-    substeps: int = 20                      # per frame
-    iterations: int = 1                     # per substep
-    max_frames: int = 120                   # frames
-    min_frames: int = 10                    # frames
-    settle_speed: float = 0.01              # m/s
-    settle_frames: int = 5                  # frames
-    settle_trim: float = 0.02               # fraction of the particles
-    damping: float = 3.0                    # 1/s
-    gravity: float = 9.81                   # m/s^2
-    thickness: Optional[float] = None       # m
-    friction: Optional[float] = None        # Coulomb coefficient
-    search_distance: float = 0.03           # m
-    tether_slack: Optional[float] = 0.01    # fraction of the fabric distance
-    contact_interval: int = 10              # substeps
-    max_speed: float = 30.0                 # m/s
-    max_extent: float = 6.0                 # m
-    max_strain: float = 3.0                 # fraction
-    grow_frames: int = 20                   # frames
+    fps: float = 30.0  # 1/s
+    substeps: int = 20  # per frame
+    iterations: int = 1  # per substep
+    max_frames: int = 120  # frames
+    min_frames: int = 10  # frames
+    settle_speed: float = 0.01  # m/s
+    settle_frames: int = 5  # frames
+    settle_trim: float = 0.02  # fraction of the particles
+    damping: float = 3.0  # 1/s
+    gravity: float = 9.81  # m/s^2
+    thickness: Optional[float] = None  # m
+    friction: Optional[float] = None  # Coulomb coefficient
+    search_distance: float = 0.03  # m
+    tether_slack: Optional[float] = 0.01  # fraction of the fabric distance
+    contact_interval: int = 10  # substeps
+    max_speed: float = 30.0  # m/s
+    max_extent: float = 6.0  # m
+    max_strain: float = 3.0  # fraction
+    grow_frames: int = 20  # frames
     self_collision: bool = False
-    self_radius: Optional[float] = None     # m
-    self_exclude: float = 1.5               # self-collision diameters
-    self_interval: int = 5                  # substeps
+    self_radius: Optional[float] = None  # m
+    self_exclude: float = 1.5  # self-collision diameters
+    self_interval: int = 5  # substeps
 
     @staticmethod
     def coerce(options: Union[None, "DrapeOptions", Mapping]) -> "DrapeOptions":
@@ -185,8 +187,12 @@ def check_option(name: str, value, label: Optional[str] = None) -> None:
     is_int = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
     is_num = is_int or (isinstance(value, (float, np.floating)) and kind is float)
     high_in = name != "settle_trim"
-    ok = is_num and np.isfinite(value) and (value >= low if low_in else value > low) and (
-        value <= high if high_in else value < high)
+    ok = (
+        is_num
+        and np.isfinite(value)
+        and (value >= low if low_in else value > low)
+        and (value <= high if high_in else value < high)
+    )
     if not ok:
         what = "an integer" if kind is int else "a number"
         span = f"{'[' if low_in else '('}{low:g}, {high:g}{']' if high_in else ')'}"

@@ -5,10 +5,12 @@ is filled atomically by :func:`write_drape`. The fit measurements are the
 caller's (:mod:`core.metrics.drape` comes after the stages): the writers take
 the per-vertex gap and the JSON-ready figures as given.
 """
+
 from __future__ import annotations
 
 import io
 from pathlib import Path
+
 import numpy as np
 
 from ..body.model import FRAME
@@ -33,8 +35,17 @@ def obj_text(result) -> str:
 def ply_bytes(result, vertex_gap: np.ndarray) -> bytes:
     """Binary little-endian PLY with per-vertex ``strain_weft``, ``strain_warp`` (fractions) and ``gap`` (m)."""
     n = len(result.positions)
-    vert = np.zeros(n, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("strain_weft", "<f4"),
-                              ("strain_warp", "<f4"), ("gap", "<f4")])
+    vert = np.zeros(
+        n,
+        dtype=[
+            ("x", "<f4"),
+            ("y", "<f4"),
+            ("z", "<f4"),
+            ("strain_weft", "<f4"),
+            ("strain_warp", "<f4"),
+            ("gap", "<f4"),
+        ],
+    )
     vert["x"], vert["y"], vert["z"] = result.positions.T
     vert["strain_weft"] = result.strain_weft
     vert["strain_warp"] = result.strain_warp
@@ -42,13 +53,25 @@ def ply_bytes(result, vertex_gap: np.ndarray) -> bytes:
     faces = np.zeros(len(result.faces), dtype=[("n", "u1"), ("v", "<i4", (3,))])
     faces["n"] = 3
     faces["v"] = result.faces
-    header = "\n".join([
-        "ply", "format binary_little_endian 1.0",
-        "comment EASE drape: vertex k = global garment vertex id k; metres; strain = stretch vs pattern; "
-        "gap = distance outside the body",
-        f"element vertex {n}", "property float x", "property float y", "property float z",
-        "property float strain_weft", "property float strain_warp", "property float gap",
-        f"element face {len(result.faces)}", "property list uchar int vertex_indices", "end_header", ""])
+    header = "\n".join(
+        [
+            "ply",
+            "format binary_little_endian 1.0",
+            "comment EASE drape: vertex k = global garment vertex id k; metres; strain = stretch vs pattern; "
+            "gap = distance outside the body",
+            f"element vertex {n}",
+            "property float x",
+            "property float y",
+            "property float z",
+            "property float strain_weft",
+            "property float strain_warp",
+            "property float gap",
+            f"element face {len(result.faces)}",
+            "property list uchar int vertex_indices",
+            "end_header",
+            "",
+        ]
+    )
     return header.encode("ascii") + vert.tobytes() + faces.tobytes()
 
 
@@ -56,10 +79,18 @@ def npz_bytes(result, vertex_gap: np.ndarray) -> bytes:
     """``drape.npz``: positions (N, 3) by global vertex id, faces (T, 3) and the per-vertex maps (gap (N,) m)."""
     buf = io.BytesIO()
     np.savez_compressed(
-        buf, positions=result.positions, faces=result.faces, used=result.used,
-        start_positions=result.start_positions, strain_weft=result.strain_weft, strain_warp=result.strain_warp,
-        gap=vertex_gap, face_garment=result.face_garment,
-        garment_names=np.asarray(result.garment_names), seam_pairs=result.seam_pairs)
+        buf,
+        positions=result.positions,
+        faces=result.faces,
+        used=result.used,
+        start_positions=result.start_positions,
+        strain_weft=result.strain_weft,
+        strain_warp=result.strain_warp,
+        gap=vertex_gap,
+        face_garment=result.face_garment,
+        garment_names=np.asarray(result.garment_names),
+        seam_pairs=result.seam_pairs,
+    )
     return buf.getvalue()
 
 
@@ -75,20 +106,30 @@ def report_dict(result, fit: dict, pattern=None) -> dict:
         "style": getattr(pattern, "style", ""),
         "body": getattr(pattern, "body", {}),
         "garments": list(result.garment_names),
-        "vertices": int(result.used.sum()), "triangles": int(len(result.faces)),
-        "device": result.device, "material": result.material, "options": result.options,
-        "frames": int(result.frames), "settled": bool(result.settled), "settle_reason": result.settle_reason,
+        "vertices": int(result.used.sum()),
+        "triangles": int(len(result.faces)),
+        "device": result.device,
+        "material": result.material,
+        "options": result.options,
+        "frames": int(result.frames),
+        "settled": bool(result.settled),
+        "settle_reason": result.settle_reason,
         "settle_frame": int(result.frames) if result.settled else None,
-        "timings": result.timings, "self_collision": bool(result.self_collision),
+        "timings": result.timings,
+        "self_collision": bool(result.self_collision),
         "self_radius_m": float(getattr(result, "self_radius", 0.0)),
-        "gap_mm": fit["all"]["gap_mm"], "penetration_pct": fit["all"]["penetration_pct"],
-        "seam_gap_mm": fit["all"]["seam_gap_mm"], "folds": fit["all"].get("folds"), "metrics": fit,
+        "gap_mm": fit["all"]["gap_mm"],
+        "penetration_pct": fit["all"]["penetration_pct"],
+        "seam_gap_mm": fit["all"]["seam_gap_mm"],
+        "folds": fit["all"].get("folds"),
+        "metrics": fit,
     }
 
 
 def preview_png(result, body_vertices: np.ndarray, body_faces: np.ndarray, path, title: str = "") -> None:
     """Front and side views of the body (grey) and the garment coloured by weft strain."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.collections import PolyCollection
@@ -137,8 +178,9 @@ def preview_png(result, body_vertices: np.ndarray, body_faces: np.ndarray, path,
     write_bytes(path, buf.getvalue())
 
 
-def write_drape(out, result, body_vertices, body_faces, *, fit: dict, vertex_gap: np.ndarray, pattern=None,
-                preview: bool = True) -> Path:
+def write_drape(
+    out, result, body_vertices, body_faces, *, fit: dict, vertex_gap: np.ndarray, pattern=None, preview: bool = True
+) -> Path:
     """Write every drape file (:data:`FILES`) into ``out`` atomically.
 
     Parameters
@@ -210,9 +252,17 @@ def read_ply_vertices(path) -> dict:
             break
         if line.startswith("property float"):
             names.append(line.split()[2])
-    arr = np.frombuffer(data[end:end + n * 4 * len(names)], dtype="<f4").reshape(n, len(names))
+    arr = np.frombuffer(data[end : end + n * 4 * len(names)], dtype="<f4").reshape(n, len(names))
     return {k: arr[:, i] for i, k in enumerate(names)}
 
 
-__all__ = ["FILES", "obj_text", "ply_bytes", "npz_bytes", "report_dict", "preview_png",
-           "write_drape", "read_ply_vertices"]
+__all__ = [
+    "FILES",
+    "obj_text",
+    "ply_bytes",
+    "npz_bytes",
+    "report_dict",
+    "preview_png",
+    "write_drape",
+    "read_ply_vertices",
+]

@@ -1,4 +1,5 @@
 """What a drape returns: :class:`DrapeResult`, collected from the solver's final state."""
+
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
@@ -39,6 +40,7 @@ class DrapeResult:
     face_valid : (T,) bool, False for pattern slivers (held by edge constraints; their
         strain is not meaningful and reads 0).
     """
+
     positions: np.ndarray
     faces: np.ndarray
     used: np.ndarray
@@ -65,8 +67,17 @@ class DrapeResult:
     speed: Optional[np.ndarray] = None
 
 
-def collect(cloth: Cloth, x: np.ndarray, v: np.ndarray, settling, timings: dict, material, options,
-            device: str, self_radius: float) -> DrapeResult:
+def collect(
+    cloth: Cloth,
+    x: np.ndarray,
+    v: np.ndarray,
+    settling,
+    timings: dict,
+    material,
+    options,
+    device: str,
+    self_radius: float,
+) -> DrapeResult:
     """The result of a drape from its final particle state.
 
     Parameters
@@ -89,13 +100,28 @@ def collect(cloth: Cloth, x: np.ndarray, v: np.ndarray, settling, timings: dict,
     used = cloth.particle_of >= 0
     src = np.where(used, cloth.particle_of, 0)
     return DrapeResult(
-        positions=np.where(used[:, None], xp[src], 0.0), faces=cloth.faces_global.copy(), used=used,
-        strain_weft=np.where(used, sw[src], 0.0), strain_warp=np.where(used, sg[src], 0.0),
-        face_strain_weft=fw, face_strain_warp=fg, face_shear=fs, face_valid=valid,
+        positions=np.where(used[:, None], xp[src], 0.0),
+        faces=cloth.faces_global.copy(),
+        used=used,
+        strain_weft=np.where(used, sw[src], 0.0),
+        strain_warp=np.where(used, sg[src], 0.0),
+        face_strain_weft=fw,
+        face_strain_warp=fg,
+        face_shear=fs,
+        face_valid=valid,
         speed=np.where(used, vp[src], 0.0),
-        face_garment=cloth.face_garment.copy(), garment_names=list(cloth.garment_names),
-        start_positions=np.where(used[:, None], cloth.x0[src], 0.0), seam_pairs=cloth.seam_pairs.copy(),
-        frames=settling.frames, settled=settling.settled, settle_reason=settling.reason,
-        speed_history=settling.speeds, timings=timings, material=material.to_json(), options=asdict(options),
-        device=device, self_collision=self_radius > 0.0, self_radius=self_radius,
+        face_garment=cloth.face_garment.copy(),
+        garment_names=list(cloth.garment_names),
+        start_positions=np.where(used[:, None], cloth.x0[src], 0.0),
+        seam_pairs=cloth.seam_pairs.copy(),
+        frames=settling.frames,
+        settled=settling.settled,
+        settle_reason=settling.reason,
+        speed_history=settling.speeds,
+        timings=timings,
+        material=material.to_json(),
+        options=asdict(options),
+        device=device,
+        self_collision=self_radius > 0.0,
+        self_radius=self_radius,
     )

@@ -5,6 +5,7 @@ frame; this module decides how the rest shape grows over the first frames,
 when the drape has settled, and when it has blown up (naming the frame and
 the likely cause).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -56,8 +57,15 @@ def settle_speed(velocities: np.ndarray, trim: float = 0.0) -> float:
     return float(np.sqrt(np.mean(sq)))
 
 
-def check_divergence(frame: int, xs: np.ndarray, vs: np.ndarray, opts: DrapeOptions, mat: Material,
-                     dt: float, cloth: Optional[Cloth] = None) -> None:
+def check_divergence(
+    frame: int,
+    xs: np.ndarray,
+    vs: np.ndarray,
+    opts: DrapeOptions,
+    mat: Material,
+    dt: float,
+    cloth: Optional[Cloth] = None,
+) -> None:
     """Raise DrapeError naming the frame and the likely cause when the state blew up.
 
     Parameters
@@ -71,29 +79,37 @@ def check_divergence(frame: int, xs: np.ndarray, vs: np.ndarray, opts: DrapeOpti
     """
     step = f"time step {dt * 1e3:.3g} ms ({opts.substeps} substeps at {opts.fps:g} fps)"
     if not np.all(np.isfinite(xs)) or not np.all(np.isfinite(vs)):
-        raise DrapeError(f"drape diverged at frame {frame}: positions became NaN/inf; likely cause: "
-                         f"{step} too large for the stiffness of {mat.name!r}, or a degenerate pattern triangle")
+        raise DrapeError(
+            f"drape diverged at frame {frame}: positions became NaN/inf; likely cause: "
+            f"{step} too large for the stiffness of {mat.name!r}, or a degenerate pattern triangle"
+        )
     extent = float(np.linalg.norm(xs.max(axis=0) - xs.min(axis=0)))
     if extent > opts.max_extent:
-        raise DrapeError(f"drape diverged at frame {frame}: the garment's bounding box grew to {extent:.1f} m "
-                         f"(limit {opts.max_extent:g} m); likely cause: {step} too large, or stiffness "
-                         f"of {mat.name!r} out of range")
+        raise DrapeError(
+            f"drape diverged at frame {frame}: the garment's bounding box grew to {extent:.1f} m "
+            f"(limit {opts.max_extent:g} m); likely cause: {step} too large, or stiffness "
+            f"of {mat.name!r} out of range"
+        )
     if len(vs):
         rms = float(np.sqrt(np.mean(np.sum(vs.astype(float) ** 2, axis=1))))
         if rms > opts.max_speed:
-            raise DrapeError(f"drape diverged at frame {frame}: kinetic energy exploded (RMS speed "
-                             f"{rms:.1f} m/s > {opts.max_speed:g} m/s); likely cause: {step} too large "
-                             f"for the stiffness of {mat.name!r}")
+            raise DrapeError(
+                f"drape diverged at frame {frame}: kinetic energy exploded (RMS speed "
+                f"{rms:.1f} m/s > {opts.max_speed:g} m/s); likely cause: {step} too large "
+                f"for the stiffness of {mat.name!r}"
+            )
     if cloth is not None and len(cloth.faces):
         fw, fg, _ = face_strains(xs.astype(float), cloth)
         worst = np.maximum(np.abs(fw), np.abs(fg))
         area = cloth.rest_area * (~cloth.sliver if len(cloth.sliver) else 1.0)
         torn = float(area[worst > opts.max_strain].sum() / max(area.sum(), 1e-30))
         if torn > TORN_SHARE:
-            raise DrapeError(f"drape diverged at frame {frame}: {torn * 100:.1f} % of the fabric is stretched "
-                             f"beyond {opts.max_strain * 100:.0f} % (up to {worst.max() * 100:.0f} %); likely "
-                             f"cause: {step} too large, a pattern far too small for the body, or pins far "
-                             f"from their pattern places")
+            raise DrapeError(
+                f"drape diverged at frame {frame}: {torn * 100:.1f} % of the fabric is stretched "
+                f"beyond {opts.max_strain * 100:.0f} % (up to {worst.max() * 100:.0f} %); likely "
+                f"cause: {step} too large, a pattern far too small for the body, or pins far "
+                f"from their pattern places"
+            )
 
 
 @dataclass
@@ -106,6 +122,7 @@ class Settling:
     settled : bool, True when the settle test passed (else the frame limit was hit).
     speeds : (frames,) float, m/s, the trimmed RMS particle speed after each frame.
     """
+
     frames: int
     settled: bool
     speeds: np.ndarray

@@ -9,6 +9,7 @@ energy stays under a threshold for some frames) or at a frame limit; the
 result says which. The solver is :class:`core.drape.xpbd.DrapeSolver`, the
 schedule :mod:`core.drape.schedule`.
 """
+
 from __future__ import annotations
 
 import time
@@ -23,9 +24,14 @@ from .schedule import run
 from .xpbd import DrapeSolver, check_body
 
 
-def drape(pattern, body_vertices, body_faces, material: Union[None, str, Material, Mapping] = None,
-          options: Union[None, DrapeOptions, Mapping] = None,
-          progress: Optional[Progress] = None) -> DrapeResult:
+def drape(
+    pattern,
+    body_vertices,
+    body_faces,
+    material: Union[None, str, Material, Mapping] = None,
+    options: Union[None, DrapeOptions, Mapping] = None,
+    progress: Optional[Progress] = None,
+) -> DrapeResult:
     """Drape a sewing pattern on a body with XPBD.
 
     Parameters
@@ -65,8 +71,11 @@ def drape(pattern, body_vertices, body_faces, material: Union[None, str, Materia
     t_sim = time.perf_counter()
     x, v = state.x.numpy(), state.v.numpy()
     report(progress, 1.0, "drape: settled" if settling.settled else "drape: frame limit reached")
-    timings = {"prepare": t_cloth - t_start + solver.timings["prepare"], "compile": solver.timings["compile"],
-               "simulate": t_sim - t_ready}
+    timings = {
+        "prepare": t_cloth - t_start + solver.timings["prepare"],
+        "compile": solver.timings["compile"],
+        "simulate": t_sim - t_ready,
+    }
     result = collect(cloth, x, v, settling, timings, mat, opts, str(solver.device), solver.self_radius)
     result.timings["total"] = time.perf_counter() - t_start
     return result

@@ -1,4 +1,5 @@
 """Stretch of the cloth relative to its pattern: per triangle and per vertex (plain numpy)."""
+
 from __future__ import annotations
 
 import numpy as np

@@ -16,6 +16,7 @@ solver, options and contact) on a flat specimen over a static support body,
 and stop with :func:`settle`: kinetic energy per unit mass and the largest
 displacement of a particle over one frame both below stated thresholds.
 """
+
 from __future__ import annotations
 
 import time
@@ -30,10 +31,10 @@ from .mesh import build_cloth
 from .options import DrapeOptions
 from .schedule import check_divergence
 
-SPECIMEN_RADIUS = 0.15      # m, the 30 cm disc
-SUPPORT_RADIUS = 0.09       # m, the 18 cm support (and clamp) disc
-STRIP_WIDTH = 0.025         # m, the cantilever strip
-CANTILEVER_ANGLE = 41.5     # degrees below horizontal
+SPECIMEN_RADIUS = 0.15  # m, the 30 cm disc
+SUPPORT_RADIUS = 0.09  # m, the 18 cm support (and clamp) disc
+STRIP_WIDTH = 0.025  # m, the cantilever strip
+CANTILEVER_ANGLE = 41.5  # degrees below horizontal
 #: the settle test: kinetic energy per unit mass (J/kg, = mean v^2/2: 2e-7 is an RMS speed of 0.63 mm/s)
 SETTLE_ENERGY = 2.0e-7
 #: ... and the largest displacement of any free particle over one frame (m)
@@ -46,12 +47,28 @@ def sheet_pattern(uv: np.ndarray, faces: np.ndarray, z: float, pinned: np.ndarra
     """A flat one-piece pattern lying at height ``z``, grain along +Y, the ``pinned`` vertices clamped."""
     n = len(uv)
     ones = np.ones(len(faces))
-    panel = PatternPanel(name="specimen", garment="specimen", uv=np.asarray(uv, float),
-                         faces=np.asarray(faces, np.int64), vertex_ids=np.arange(n),
-                         xyz=np.column_stack([uv, np.full(n, float(z))]), grain=np.array([0.0, 1.0]),
-                         target_weft=ones, target_warp=ones, achieved_weft=ones, achieved_warp=ones)
-    return Pattern(style="specimen", body={}, garments={"specimen": "test"}, panels=[panel], seams=[],
-                   pins={"specimen": np.nonzero(pinned)[0]}, materials={"fabric": fabric})
+    panel = PatternPanel(
+        name="specimen",
+        garment="specimen",
+        uv=np.asarray(uv, float),
+        faces=np.asarray(faces, np.int64),
+        vertex_ids=np.arange(n),
+        xyz=np.column_stack([uv, np.full(n, float(z))]),
+        grain=np.array([0.0, 1.0]),
+        target_weft=ones,
+        target_warp=ones,
+        achieved_weft=ones,
+        achieved_warp=ones,
+    )
+    return Pattern(
+        style="specimen",
+        body={},
+        garments={"specimen": "test"},
+        panels=[panel],
+        seams=[],
+        pins={"specimen": np.nonzero(pinned)[0]},
+        materials={"fabric": fabric},
+    )
 
 
 def disc_mesh(radius: float, edge: float, inner: float, seed: int = 0) -> tuple:
@@ -66,9 +83,14 @@ def disc_mesh(radius: float, edge: float, inner: float, seed: int = 0) -> tuple:
     uv : (n, 2) float m, faces : (f, 3) int (counter-clockwise).
     """
     from scipy.spatial import Delaunay
+
     rng = np.random.default_rng(seed)
-    radii = np.concatenate([np.linspace(0.0, inner, max(1, int(np.ceil(inner / edge))) + 1),
-                            np.linspace(inner, radius, max(1, int(np.ceil((radius - inner) / edge))) + 1)[1:]])
+    radii = np.concatenate(
+        [
+            np.linspace(0.0, inner, max(1, int(np.ceil(inner / edge))) + 1),
+            np.linspace(inner, radius, max(1, int(np.ceil((radius - inner) / edge))) + 1)[1:],
+        ]
+    )
     pts = [np.zeros((1, 2))]
     for r in radii[1:]:
         m = max(6, int(round(2.0 * np.pi * r / edge)))
@@ -111,14 +133,23 @@ def cylinder_body(radius: float, height: float, n_around: int = 256) -> tuple:
     """A closed upright cylinder with its top face at z = 0 (a sharp 90 degree edge), outward faces."""
     th = 2.0 * np.pi * np.arange(n_around) / n_around
     ring = radius * np.column_stack([np.cos(th), np.sin(th)])
-    v = np.vstack([np.column_stack([ring, np.zeros(n_around)]), np.column_stack([ring, np.full(n_around, -height)]),
-                   [[0.0, 0.0, 0.0], [0.0, 0.0, -height]]])
+    v = np.vstack(
+        [
+            np.column_stack([ring, np.zeros(n_around)]),
+            np.column_stack([ring, np.full(n_around, -height)]),
+            [[0.0, 0.0, 0.0], [0.0, 0.0, -height]],
+        ]
+    )
     top, bottom = 2 * n_around, 2 * n_around + 1
     faces = []
     for k in range(n_around):
         a, b = k, (k + 1) % n_around
-        faces += [[top, a, b], [bottom, b + n_around, a + n_around], [a, a + n_around, b + n_around],
-                  [a, b + n_around, b]]
+        faces += [
+            [top, a, b],
+            [bottom, b + n_around, a + n_around],
+            [a, a + n_around, b + n_around],
+            [a, b + n_around, b],
+        ]
     return v, np.asarray(faces, np.int64)
 
 
@@ -135,6 +166,7 @@ def box_body(lo, hi) -> tuple:
 class Settled:
     """How a test run ended: ``frames``, ``settled``, the last frame's kinetic energy per unit mass
     ``energy`` (J/kg) and largest particle displacement ``move`` (m), and the wall ``seconds``."""
+
     frames: int
     settled: bool
     energy: float
@@ -142,8 +174,14 @@ class Settled:
     seconds: float
 
 
-def settle(solver, state, max_frames: int, energy: float = SETTLE_ENERGY, move: float = SETTLE_MOVE,
-           frames_in_a_row: int = SETTLE_FRAMES) -> Settled:
+def settle(
+    solver,
+    state,
+    max_frames: int,
+    energy: float = SETTLE_ENERGY,
+    move: float = SETTLE_MOVE,
+    frames_in_a_row: int = SETTLE_FRAMES,
+) -> Settled:
     """Step until the kinetic energy per unit mass is under ``energy`` (J/kg) and no free particle moved
     more than ``move`` (m) over a frame, ``frames_in_a_row`` frames running, or ``max_frames`` are done.
 
@@ -206,6 +244,7 @@ def count_nodes(rim: np.ndarray, bins: int = 360, prominence: float = 0.004) -> 
     (nodes, outline): int, and the (bins,) outline radii in metres.
     """
     from scipy.signal import find_peaks
+
     th = np.arctan2(rim[:, 1], rim[:, 0])
     r = np.hypot(rim[:, 0], rim[:, 1])
     grid = -np.pi + 2.0 * np.pi * (np.arange(bins) + 0.5) / bins
@@ -217,8 +256,9 @@ def count_nodes(rim: np.ndarray, bins: int = 360, prominence: float = 0.004) -> 
     return int(len(mid)), outline
 
 
-def cusick(material: Union[None, str, Material] = None, edge: float = 0.01, options=None, max_frames: int = 400,
-           seed: int = 0) -> dict:
+def cusick(
+    material: Union[None, str, Material] = None, edge: float = 0.01, options=None, max_frames: int = 400, seed: int = 0
+) -> dict:
     """The Cusick drape test with the drape solver.
 
     Parameters
@@ -236,6 +276,7 @@ def cusick(material: Union[None, str, Material] = None, edge: float = 0.01, opti
     ``faces``, ``outline_mm`` (rim radius per degree).
     """
     from .xpbd import DrapeSolver
+
     mat = get_material(material)
     opts = DrapeOptions.coerce(options)
     uv, faces = disc_mesh(SPECIMEN_RADIUS, edge, SUPPORT_RADIUS, seed)
@@ -249,15 +290,28 @@ def cusick(material: Union[None, str, Material] = None, edge: float = 0.01, opti
     st = settle(solver, state, max_frames)
     x = state.x.numpy().astype(float)
     a_shadow = shadow_area(x[:, :2], cloth.faces)
-    a_sup, a_spec = np.pi * SUPPORT_RADIUS ** 2, np.pi * SPECIMEN_RADIUS ** 2
+    a_sup, a_spec = np.pi * SUPPORT_RADIUS**2, np.pi * SPECIMEN_RADIUS**2
     rim = cloth.particle_of[np.nonzero(np.hypot(uv[:, 0], uv[:, 1]) >= SPECIMEN_RADIUS - 1e-9)[0]]
     nodes, outline = count_nodes(x[rim, :2])
-    return {"material": mat.name, "edge_mm": edge * 1e3, "substeps": opts.substeps, "iterations": opts.iterations,
-            "dc_pct": 100.0 * (a_shadow - a_sup) / (a_spec - a_sup), "nodes": nodes,
-            "frames": st.frames, "settled": st.settled, "energy": st.energy, "move_mm": st.move * 1e3,
-            "particles": cloth.n_particles, "triangles": int(len(cloth.faces)), "seconds": st.seconds,
-            "ms_per_frame": 1e3 * st.seconds / max(st.frames, 1), "positions": x, "faces": cloth.faces,
-            "outline_mm": outline * 1e3}
+    return {
+        "material": mat.name,
+        "edge_mm": edge * 1e3,
+        "substeps": opts.substeps,
+        "iterations": opts.iterations,
+        "dc_pct": 100.0 * (a_shadow - a_sup) / (a_spec - a_sup),
+        "nodes": nodes,
+        "frames": st.frames,
+        "settled": st.settled,
+        "energy": st.energy,
+        "move_mm": st.move * 1e3,
+        "particles": cloth.n_particles,
+        "triangles": int(len(cloth.faces)),
+        "seconds": st.seconds,
+        "ms_per_frame": 1e3 * st.seconds / max(st.frames, 1),
+        "positions": x,
+        "faces": cloth.faces,
+        "outline_mm": outline * 1e3,
+    }
 
 
 def tip_angle(material: Material, overhang: float, edge: float, opts: DrapeOptions, max_frames: int) -> tuple:
@@ -266,6 +320,7 @@ def tip_angle(material: Material, overhang: float, edge: float, opts: DrapeOptio
     The strip is clamped on the platform (x < 0, top at z = 0) and hangs ``overhang`` (m) past its edge.
     """
     from .xpbd import DrapeSolver
+
     on = 0.03
     uv, faces = strip_mesh([-on, 0.0, overhang], STRIP_WIDTH, edge)
     thickness = material.thickness if opts.thickness is None else opts.thickness
@@ -281,8 +336,15 @@ def tip_angle(material: Material, overhang: float, edge: float, opts: DrapeOptio
     return float(np.degrees(np.arctan2(-d[2], d[0]))), st
 
 
-def cantilever(material: Union[None, str, Material] = None, edge: float = 0.005, options=None,
-               max_frames: int = 300, lo: float = 0.004, hi: float = 0.12, bisections: int = 8) -> dict:
+def cantilever(
+    material: Union[None, str, Material] = None,
+    edge: float = 0.005,
+    options=None,
+    max_frames: int = 300,
+    lo: float = 0.004,
+    hi: float = 0.12,
+    bisections: int = 8,
+) -> dict:
     """ASTM D1388 bending length: half the overhang whose tip lies on the 41.5 degree line.
 
     The overhang is found by ``bisections`` halvings of [``lo``, ``hi``] (the tip
@@ -316,9 +378,16 @@ def cantilever(material: Union[None, str, Material] = None, edge: float = 0.005,
         overhang = lo + (hi - lo) * (CANTILEVER_ANGLE - a_lo) / (a_hi - a_lo)
     else:  # the 41.5 degree line is outside [lo, hi]
         overhang = float("nan")
-    return {"material": mat.name, "edge_mm": edge * 1e3, "substeps": opts.substeps, "iterations": opts.iterations,
-            "bending_length_cm": overhang * 50.0, "overhang_cm": overhang * 100.0, "runs": runs,
-            "expected_cm": cantilever_expected(mat, opts.gravity)}
+    return {
+        "material": mat.name,
+        "edge_mm": edge * 1e3,
+        "substeps": opts.substeps,
+        "iterations": opts.iterations,
+        "bending_length_cm": overhang * 50.0,
+        "overhang_cm": overhang * 100.0,
+        "runs": runs,
+        "expected_cm": cantilever_expected(mat, opts.gravity),
+    }
 
 
 def cantilever_expected(material: Union[None, str, Material] = None, gravity: float = 9.81) -> float:
@@ -328,5 +397,19 @@ def cantilever_expected(material: Union[None, str, Material] = None, gravity: fl
     return 100.0 * (mat.bending / (mat.density * gravity)) ** (1.0 / 3.0) if mat.bending > 0 else 0.0
 
 
-__all__ = ["cusick", "cantilever", "cantilever_expected", "settle", "shadow_area", "count_nodes", "disc_mesh",
-           "strip_mesh", "cylinder_body", "box_body", "sheet_pattern", "Settled", "SETTLE_ENERGY", "SETTLE_MOVE"]
+__all__ = [
+    "cusick",
+    "cantilever",
+    "cantilever_expected",
+    "settle",
+    "shadow_area",
+    "count_nodes",
+    "disc_mesh",
+    "strip_mesh",
+    "cylinder_body",
+    "box_body",
+    "sheet_pattern",
+    "Settled",
+    "SETTLE_ENERGY",
+    "SETTLE_MOVE",
+]

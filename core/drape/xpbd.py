@@ -15,6 +15,7 @@ Self-collision is optional (``self_collision=True``): particle against particle,
 and resolved Jacobi-style, so it stays repeatable; off by default, when garment
 layers and folds may pass through each other.
 """
+
 from __future__ import annotations
 
 import time
@@ -43,8 +44,14 @@ def check_body(body_vertices, body_faces) -> tuple:
     f = np.asarray(body_faces)
     if v.ndim != 2 or v.shape[1] != 3 or len(v) < 4 or not np.all(np.isfinite(v)):
         raise DrapeError(f"body vertices must be a finite (V, 3) array, got shape {v.shape}")
-    if f.ndim != 2 or f.shape[1] != 3 or len(f) == 0 or not np.issubdtype(f.dtype, np.integer) \
-            or f.min() < 0 or f.max() >= len(v):
+    if (
+        f.ndim != 2
+        or f.shape[1] != 3
+        or len(f) == 0
+        or not np.issubdtype(f.dtype, np.integer)
+        or f.min() < 0
+        or f.max() >= len(v)
+    ):
         raise DrapeError(f"body faces must be (F, 3) integer indices into the {len(v)} body vertices")
     return v, f.astype(np.int32)
 
@@ -76,6 +83,7 @@ class DrapeState:
     self_grid, self_dx, self_partner, self_count : self-collision buffers (None when off).
     launches : the kernel launches recorded on these arrays (see :meth:`DrapeSolver.state`).
     """
+
     x: Any
     v: Any
     x_prev: Any
@@ -96,11 +104,12 @@ class DrapeState:
 @dataclass
 class _Launches:
     """Recorded kernel launches of one state, in substep order."""
-    contacts: Any            # the contact search, every contact_interval substeps
-    constraints: List[Any]   # predict, growth, stretch, sliver edges, bending, tethers
-    self_pairs: Any          # the self-collision candidate search (None when off)
+
+    contacts: Any  # the contact search, every contact_interval substeps
+    constraints: List[Any]  # predict, growth, stretch, sliver edges, bending, tethers
+    self_pairs: Any  # the self-collision candidate search (None when off)
     self_collide: List[Any]  # self-collision resolve and apply
-    finish: List[Any]        # body contact and friction, velocity update
+    finish: List[Any]  # body contact and friction, velocity update
 
 
 class DrapeSolver:
@@ -134,9 +143,14 @@ class DrapeSolver:
     contact thickness.
     """
 
-    def __init__(self, cloth: Cloth, body_vertices, body_faces,
-                 material: Union[None, str, Material, Mapping] = None,
-                 options: Union[None, DrapeOptions, Mapping] = None):
+    def __init__(
+        self,
+        cloth: Cloth,
+        body_vertices,
+        body_faces,
+        material: Union[None, str, Material, Mapping] = None,
+        options: Union[None, DrapeOptions, Mapping] = None,
+    ):
         t0 = time.perf_counter()
         opts = DrapeOptions.coerce(options)
         mat = get_material(material)
@@ -145,8 +159,9 @@ class DrapeSolver:
         self.thickness = mat.thickness if opts.thickness is None else float(opts.thickness)
         self.friction = mat.friction if opts.friction is None else float(opts.friction)
 
-        from . import kernels as K
         from ..geom import queries as Q
+        from . import kernels as K
+
         wp = K.wp
         wp.init()
         self._K, self._Q, self._wp = K, Q, wp
@@ -190,10 +205,12 @@ class DrapeSolver:
         if fall > self.thickness:
             # XPBD stays bounded at any step, but a step this long lets the cloth pass
             # through the body between contact checks and stalls its constraints: refuse it.
-            raise DrapeError(f"time step {self.dt * 1e3:.3g} ms ({opts.substeps} substeps at {opts.fps:g} fps) "
-                             f"is too large: gravity alone moves a particle {fall * 1e3:.2f} mm per substep, more "
-                             f"than the {self.thickness * 1e3:.1f} mm contact thickness; use more substeps or a "
-                             f"higher fps")
+            raise DrapeError(
+                f"time step {self.dt * 1e3:.3g} ms ({opts.substeps} substeps at {opts.fps:g} fps) "
+                f"is too large: gravity alone moves a particle {fall * 1e3:.2f} mm per substep, more "
+                f"than the {self.thickness * 1e3:.1f} mm contact thickness; use more substeps or a "
+                f"higher fps"
+            )
 
     def _upload(self, cloth: Cloth, inv_mass, tri_order, bend_order, edge_order, body_v, body_f) -> None:
         """The constant device arrays: masses, constraints in colour order, their start lengths, the body BVH."""
@@ -216,7 +233,11 @@ class DrapeSolver:
         e_sorted = cloth.edges[edge_order]
         self._edge_start = wp.array(
             np.linalg.norm(cloth.x0[e_sorted[:, 1]] - cloth.x0[e_sorted[:, 0]], axis=1).astype(f32)
-            if len(e_sorted) else np.zeros(0, f32), dtype=float, device=dev)
+            if len(e_sorted)
+            else np.zeros(0, f32),
+            dtype=float,
+            device=dev,
+        )
         self._body = self._Q.warp_mesh(body_v, body_f, device=dev)
 
     def state(self) -> DrapeState:
@@ -224,12 +245,14 @@ class DrapeSolver:
         wp, dev, n = self._wp, self.device, self.cloth.n_particles
         s = DrapeState(
             x=wp.array(self.cloth.x0.astype(np.float32), dtype=wp.vec3, device=dev),
-            v=wp.zeros(n, dtype=wp.vec3, device=dev), x_prev=wp.zeros(n, dtype=wp.vec3, device=dev),
+            v=wp.zeros(n, dtype=wp.vec3, device=dev),
+            x_prev=wp.zeros(n, dtype=wp.vec3, device=dev),
             grow=wp.array([initial_growth(self.options)], dtype=float, device=dev),
             contact_point=wp.zeros(n, dtype=wp.vec3, device=dev),
             contact_normal=wp.zeros(n, dtype=wp.vec3, device=dev),
             contact_active=wp.zeros(n, dtype=int, device=dev),
-            bend_lambda=wp.zeros(max(len(self.cloth.bends), 1), dtype=float, device=dev))
+            bend_lambda=wp.zeros(max(len(self.cloth.bends), 1), dtype=float, device=dev),
+        )
         if self.self_radius > 0.0:
             s.self_grid = wp.HashGrid(48, 48, 48, device=dev)
             s.self_dx = wp.zeros(n, dtype=wp.vec3, device=dev)
@@ -256,48 +279,127 @@ class DrapeSolver:
         block = []  # the constraint block, projected opts.iterations times per substep
         off = self._tri_off
         for c in range(len(off) - 1):
-            block.append(self._launch(K.solve_stretch, int(off[c + 1] - off[c]),
-                                      [s.x, self._w, self._tri, self._rest_inv, self._area, mat.stretch_weft,
-                                       mat.stretch_warp, mat.shear, inv_dt2, int(off[c]), self._tri_start, s.grow]))
+            block.append(
+                self._launch(
+                    K.solve_stretch,
+                    int(off[c + 1] - off[c]),
+                    [
+                        s.x,
+                        self._w,
+                        self._tri,
+                        self._rest_inv,
+                        self._area,
+                        mat.stretch_weft,
+                        mat.stretch_warp,
+                        mat.shear,
+                        inv_dt2,
+                        int(off[c]),
+                        self._tri_start,
+                        s.grow,
+                    ],
+                )
+            )
         k_edge = 0.5 * (mat.stretch_weft + mat.stretch_warp)
         off = self._edge_off
         for c in range(len(off) - 1):
-            block.append(self._launch(K.solve_distance, int(off[c + 1] - off[c]),
-                                      [s.x, self._w, self._edges, self._edge_rest, k_edge, inv_dt2, int(off[c]),
-                                       self._edge_start, s.grow]))
+            block.append(
+                self._launch(
+                    K.solve_distance,
+                    int(off[c + 1] - off[c]),
+                    [
+                        s.x,
+                        self._w,
+                        self._edges,
+                        self._edge_rest,
+                        k_edge,
+                        inv_dt2,
+                        int(off[c]),
+                        self._edge_start,
+                        s.grow,
+                    ],
+                )
+            )
         if mat.bending > 0:
             off = self._bend_off
             for c in range(len(off) - 1):
-                block.append(self._launch(K.solve_bending, int(off[c + 1] - off[c]),
-                                          [s.x, self._w, self._bends, self._bend_w, self._bend_rest, mat.bending,
-                                           inv_dt2, int(off[c]), s.bend_lambda]))
+                block.append(
+                    self._launch(
+                        K.solve_bending,
+                        int(off[c + 1] - off[c]),
+                        [
+                            s.x,
+                            self._w,
+                            self._bends,
+                            self._bend_w,
+                            self._bend_rest,
+                            mat.bending,
+                            inv_dt2,
+                            int(off[c]),
+                            s.bend_lambda,
+                        ],
+                    )
+                )
         cmds.extend(block * int(opts.iterations))
         if opts.tether_slack is not None and np.any(self.cloth.tether_anchor >= 0):
-            cmds.append(self._launch(K.solve_tethers, n, [s.x, self._anchor, self._tether_len,
-                                                          1.0 + float(opts.tether_slack)]))
-        finish = [self._launch(K.collide_body, n, [s.x, s.x_prev, s.contact_point, s.contact_normal,
-                                                   s.contact_active, self.thickness, self.friction]),
-                  self._launch(K.update_velocity, n, [s.x, s.x_prev, s.v, 1.0 / self.dt])]
-        contacts = self._launch(K.closest_contact, n, [s.x, self._w, self._body.id, opts.search_distance,
-                                                       CONTACT_FLAT, s.contact_point, s.contact_normal,
-                                                       s.contact_active])
+            cmds.append(
+                self._launch(K.solve_tethers, n, [s.x, self._anchor, self._tether_len, 1.0 + float(opts.tether_slack)])
+            )
+        finish = [
+            self._launch(
+                K.collide_body,
+                n,
+                [s.x, s.x_prev, s.contact_point, s.contact_normal, s.contact_active, self.thickness, self.friction],
+            ),
+            self._launch(K.update_velocity, n, [s.x, s.x_prev, s.v, 1.0 / self.dt]),
+        ]
+        contacts = self._launch(
+            K.closest_contact,
+            n,
+            [
+                s.x,
+                self._w,
+                self._body.id,
+                opts.search_distance,
+                CONTACT_FLAT,
+                s.contact_point,
+                s.contact_normal,
+                s.contact_active,
+            ],
+        )
         pairs, collide = None, []
         if self.self_radius > 0.0:
             r = self.self_radius
-            pairs = self._launch(K.find_self_pairs, n, [s.x, self._w, self._x_start, s.self_grid.id,
-                                                        self._self_search, opts.self_exclude * 2.0 * r, SELF_PAIRS,
-                                                        s.self_partner, s.self_count, self._ring_start,
-                                                        self._ring_idx, 0.5 * r])
-            collide = [self._launch(K.self_collide, n, [s.x, self._w, s.self_partner, s.self_count, r, s.self_dx]),
-                       self._launch(K.apply_delta, n, [s.x, s.self_dx])]
+            pairs = self._launch(
+                K.find_self_pairs,
+                n,
+                [
+                    s.x,
+                    self._w,
+                    self._x_start,
+                    s.self_grid.id,
+                    self._self_search,
+                    opts.self_exclude * 2.0 * r,
+                    SELF_PAIRS,
+                    s.self_partner,
+                    s.self_count,
+                    self._ring_start,
+                    self._ring_idx,
+                    0.5 * r,
+                ],
+            )
+            collide = [
+                self._launch(K.self_collide, n, [s.x, self._w, s.self_partner, s.self_count, r, s.self_dx]),
+                self._launch(K.apply_delta, n, [s.x, s.self_dx]),
+            ]
         return _Launches(contacts=contacts, constraints=cmds, self_pairs=pairs, self_collide=collide, finish=finish)
 
     def move_body(self, vertices) -> None:
         """Move the body to ``vertices`` (V, 3), same triangles (an animated body): its BVH refitted."""
         pts = np.ascontiguousarray(vertices, dtype=np.float32).reshape(-1, 3)
         if pts.shape[0] != self._body.points.shape[0]:
-            raise DrapeError(f"the moved body has {pts.shape[0]} vertices, "
-                             f"the drape's body {self._body.points.shape[0]}")
+            raise DrapeError(
+                f"the moved body has {pts.shape[0]} vertices, the drape's body {self._body.points.shape[0]}"
+            )
         self._body.points.assign(pts)
         self._body.refit()
 

@@ -35,6 +35,7 @@ Seam allowance and notch spacing are set in the design (``materials.export``:
 ``materials``) and are used here unless the caller (``--allowance``,
 ``--hem``, ``--notch-spacing``) overrides them.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -44,9 +45,9 @@ import numpy as np
 
 from ..errors import ExportError
 from ..fileio import dumps_json, write_files
+from ..geom.polyline import polyline_length
 from ..pattern.types import Pattern
 from ..progress import report, sub
-from ..geom.polyline import polyline_length
 from .allowance import DEFAULT_ALLOWANCE, DEFAULT_HEM, resolve_allowance
 from .layout import LAYOUT_MARGIN, SHEET_WIDTH, layout_pieces
 from .notches import DEFAULT_NOTCH_SPACING
@@ -55,8 +56,17 @@ from .validate import validate_body, validate_drape, validate_pattern
 
 FORMATS = ("svg", "dxf", "pdf", "glb", "obj")
 
-__all__ = ["export_pattern", "FORMATS", "validate_pattern", "build_pieces", "layout_pieces",
-           "resolve_allowance", "DEFAULT_ALLOWANCE", "DEFAULT_HEM", "DEFAULT_NOTCH_SPACING"]
+__all__ = [
+    "export_pattern",
+    "FORMATS",
+    "validate_pattern",
+    "build_pieces",
+    "layout_pieces",
+    "resolve_allowance",
+    "DEFAULT_ALLOWANCE",
+    "DEFAULT_HEM",
+    "DEFAULT_NOTCH_SPACING",
+]
 
 
 def parse_formats(formats: Union[str, Iterable[str]]) -> List[str]:
@@ -74,7 +84,7 @@ def parse_formats(formats: Union[str, Iterable[str]]) -> List[str]:
             continue
         if f != "all" and f not in FORMATS:
             raise ExportError(f"format {f!r}: expected some of {', '.join(FORMATS)} (or all)")
-        for g in (FORMATS if f == "all" else (f,)):
+        for g in FORMATS if f == "all" else (f,):
             if g not in out:
                 out.append(g)
     if not out:
@@ -82,12 +92,22 @@ def parse_formats(formats: Union[str, Iterable[str]]) -> List[str]:
     return out
 
 
-def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb"), allowance=None,
-                   drape_positions: Optional[np.ndarray] = None, progress=None,
-                   notch_spacing: Optional[float] = None, strict: bool = True,
-                   warnings: Optional[list] = None, drape_faces: Optional[np.ndarray] = None,
-                   up: str = "y", body: Optional[tuple] = None, print_all: bool = False,
-                   origin: str = "floor") -> List[Path]:
+def export_pattern(
+    pattern: Pattern,
+    out_dir,
+    formats=("svg", "dxf", "pdf", "glb"),
+    allowance=None,
+    drape_positions: Optional[np.ndarray] = None,
+    progress=None,
+    notch_spacing: Optional[float] = None,
+    strict: bool = True,
+    warnings: Optional[list] = None,
+    drape_faces: Optional[np.ndarray] = None,
+    up: str = "y",
+    body: Optional[tuple] = None,
+    print_all: bool = False,
+    origin: str = "floor",
+) -> List[Path]:
     """Write the pattern's cutting-room files and the draped garment.
 
     Parameters
@@ -137,6 +157,7 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
     """
     formats = parse_formats(formats)
     from .mesh import ORIGINS, UP_AXES
+
     if up not in UP_AXES:
         raise ExportError(f"up: expected 'y' or 'z', got {up!r}")
     if origin not in ORIGINS:
@@ -158,19 +179,27 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
             if body is not None:
                 body = (np.asarray(body[0], float) - [0.0, 0.0, floor], body[1])
     report(progress, 0.0, "building pattern pieces")
-    pieces = build_pieces(pattern, widths, notch_spacing, progress=sub(progress, 0.0, 0.3),
-                          warnings=None if strict else found)
+    pieces = build_pieces(
+        pattern, widths, notch_spacing, progress=sub(progress, 0.0, 0.3), warnings=None if strict else found
+    )
     if warnings is not None:
         warnings.extend(found)
     boxes = [p.bbox for p in pieces]
     title = pattern.style or "pattern"
     size = size_label(pattern)
-    files = {}   # relative name -> bytes, rendered fully before anything is written
-    summary = {"style": title, "size": size, "body": body_summary(pattern), "unit": "mm",
-               "allowance_mm": {k: v * 1000 for k, v in widths.items()},
-               "pieces": [_piece_summary(p, pattern) for p in pieces], "warnings": found}
+    files = {}  # relative name -> bytes, rendered fully before anything is written
+    summary = {
+        "style": title,
+        "size": size,
+        "body": body_summary(pattern),
+        "unit": "mm",
+        "allowance_mm": {k: v * 1000 for k, v in widths.items()},
+        "pieces": [_piece_summary(p, pattern) for p in pieces],
+        "warnings": found,
+    }
     if "glb" in formats or "obj" in formats:
         from . import mesh
+
         meshes = mesh.piece_meshes(pattern, positions, [p.rotation for p in pieces])
         body_mesh = None if body is None else mesh.body_mesh(*body)
     steps = len(formats)
@@ -178,11 +207,13 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
         report(progress, 0.3 + 0.65 * k / steps, f"rendering {fmt.upper()}")
         if fmt == "svg":
             from .svg import svg_document
+
             lay = layout_pieces(boxes, SHEET_WIDTH, LAYOUT_MARGIN)
             files["pattern.svg"] = svg_document(pieces, lay, title).encode("utf-8")
             summary["sheet_mm"] = (lay.size * 1000).round(1).tolist()
         elif fmt == "dxf":
             from . import dxf
+
             lay = layout_pieces(boxes, SHEET_WIDTH, LAYOUT_MARGIN)
             files["pattern_astm.dxf"] = dxf.astm_text(pieces, lay, title, size).encode("ascii", "replace")
             files["pattern_astm_r12.dxf"] = dxf.astm_r12_text(pieces, lay, title, size).encode("ascii", "replace")
@@ -190,6 +221,7 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
         elif fmt == "pdf":
             from . import pdf
             from .print_set import print_set
+
             # home-printer pages: each mirrored pair printed once (cut 2), symmetric pieces as halves on the
             # fold, unless print_all
             printed, plan = print_set(pattern, pieces, print_all=print_all)
@@ -198,9 +230,14 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
                 lay = pdf.print_sheet(printed, paper)
                 grid, ink = pdf.sheet_pages(printed, lay, paper)
                 files[f"pattern_{paper}.pdf"] = pdf.tiled_pdf(printed, lay, paper, title, pages=(grid, ink))
-                pages[paper] = {"rows": grid.rows, "columns": grid.cols, "pages": int(ink.sum()),
-                                "left_out": [pdf.page_name(r, c) for r, c in zip(*np.nonzero(~ink))],
-                                "overlap_mm": round(pdf.OVERLAP * 1000, 1), "pieces": plan}
+                pages[paper] = {
+                    "rows": grid.rows,
+                    "columns": grid.cols,
+                    "pages": int(ink.sum()),
+                    "left_out": [pdf.page_name(r, c) for r, c in zip(*np.nonzero(~ink))],
+                    "overlap_mm": round(pdf.OVERLAP * 1000, 1),
+                    "pieces": plan,
+                }
             lay = layout_pieces(boxes, SHEET_WIDTH, LAYOUT_MARGIN, reserve=pdf.TEST_RESERVE)
             files["pattern_plotter.pdf"] = pdf.plotter_pdf(pieces, lay, title)
             pages["plotter_mm"] = ((lay.size + 2 * pdf.PAGE_MARGIN) * 1000).round(1).tolist()
@@ -210,11 +247,16 @@ def export_pattern(pattern: Pattern, out_dir, formats=("svg", "dxf", "pdf", "glb
             if fmt == "glb":
                 files["garment.glb"] = mesh.glb_bytes(meshes, body=body_mesh, origin=origin)
             else:
-                files["garment.obj"] = mesh.obj_text(meshes, title, up=up, body=body_mesh,
-                                                     origin=origin).encode("utf-8")
+                files["garment.obj"] = mesh.obj_text(meshes, title, up=up, body=body_mesh, origin=origin).encode(
+                    "utf-8"
+                )
                 files[mesh.MTL_NAME] = mesh.mtl_text(meshes, body=body_mesh).encode("utf-8")
-            summary["frame"] = {"garment.glb": mesh.frame_text("y", origin), "garment.obj": mesh.frame_text(up, origin),
-                                "origin": origin, "body": body is not None}
+            summary["frame"] = {
+                "garment.glb": mesh.frame_text("y", origin),
+                "garment.obj": mesh.frame_text(up, origin),
+                "origin": origin,
+                "body": body is not None,
+            }
     summary["files"] = sorted(files)
     files["export.json"] = (dumps_json(summary) + "\n").encode("utf-8")
     report(progress, 0.95, "writing files")
@@ -227,10 +269,12 @@ def _pattern_body(pattern: Pattern) -> np.ndarray:
     """(V, 3) m: the body instance ``pattern`` was made on (its ``body`` record), for the floor of the mesh files."""
     from ..body.instance import spec_instance
     from ..errors import EaseError
+
     spec = pattern.body or {}
     if not spec.get("model") and spec.get("shape") is None:
-        raise ExportError("origin floor: the pattern names no body (pattern.json body) to stand on the floor; "
-                          "use origin root")
+        raise ExportError(
+            "origin floor: the pattern names no body (pattern.json body) to stand on the floor; use origin root"
+        )
     try:
         return np.asarray(spec_instance(spec)[0], float)
     except EaseError as exc:
@@ -241,9 +285,13 @@ def _piece_summary(piece: PieceDrawing, pattern: Pattern) -> dict:
     seams = {}
     for n in piece.notches:
         seams.setdefault(n.seam, []).append(round(n.s * 1000, 2))
-    return {"name": piece.name, "garment": piece.garment, "quantity": piece.quantity,
-            "sew_line_mm": round(sum(polyline_length(l, closed=True) for l in piece.sew) * 1000, 2),
-            "cut_line_mm": round(sum(polyline_length(l, closed=True) for l in piece.cut) * 1000, 2),
-            "allowance_mm": sorted({round(float(w) * 1000, 2) for e in piece.edge_allowance for w in e}),
-            "notches_mm": seams,
-            "size_mm": ((piece.bbox[1] - piece.bbox[0]) * 1000).round(1).tolist()}
+    return {
+        "name": piece.name,
+        "garment": piece.garment,
+        "quantity": piece.quantity,
+        "sew_line_mm": round(sum(polyline_length(l, closed=True) for l in piece.sew) * 1000, 2),
+        "cut_line_mm": round(sum(polyline_length(l, closed=True) for l in piece.cut) * 1000, 2),
+        "allowance_mm": sorted({round(float(w) * 1000, 2) for e in piece.edge_allowance for w in e}),
+        "notches_mm": seams,
+        "size_mm": ((piece.bbox[1] - piece.bbox[0]) * 1000).round(1).tolist(),
+    }

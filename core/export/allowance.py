@@ -8,6 +8,7 @@ listed twice), then the fold. The cut line is the sew line offset outward by
 those widths (:func:`core.geom.polygon.offset_loop`), loops removed and
 checked.
 """
+
 from __future__ import annotations
 
 import math
@@ -50,14 +51,18 @@ def resolve_allowance(allowance: Union[None, float, Mapping], pattern: Pattern) 
     if isinstance(allowance, (int, float)) and not isinstance(allowance, bool):
         allowance = {"default": float(allowance)}
     if not isinstance(allowance, Mapping):
-        raise ExportError(f"allowance: expected a number or a dict like "
-                          f"{{'default': 0.01, 'hem': 0.02, '<seam>': ...}}, got {type(allowance).__name__}")
+        raise ExportError(
+            f"allowance: expected a number or a dict like "
+            f"{{'default': 0.01, 'hem': 0.02, '<seam>': ...}}, got {type(allowance).__name__}"
+        )
     seams = {s.name for s in pattern.seams}
     lines = {k for n in seams for k in seam_names(n)}
     for key, value in allowance.items():
         if key not in out and key not in lines:
-            raise ExportError(f"allowance[{key!r}]: not a seam of the pattern; expected 'default', 'hem', "
-                              f"'fold' or one of: {', '.join(sorted(lines)) or '(no seams)'}")
+            raise ExportError(
+                f"allowance[{key!r}]: not a seam of the pattern; expected 'default', 'hem', "
+                f"'fold' or one of: {', '.join(sorted(lines)) or '(no seams)'}"
+            )
         try:
             v = float(value)
         except (TypeError, ValueError):
@@ -85,8 +90,13 @@ def fold_ids(panel: PatternPanel) -> Optional[np.ndarray]:
     return np.asarray(ids, int)
 
 
-def edge_allowances(pattern: Pattern, panel: PatternPanel, widths: Mapping[str, float],
-                    loops: List[np.ndarray], table: Dict[Tuple[int, int], Tuple[int, int]]) -> List[np.ndarray]:
+def edge_allowances(
+    pattern: Pattern,
+    panel: PatternPanel,
+    widths: Mapping[str, float],
+    loops: List[np.ndarray],
+    table: Dict[Tuple[int, int], Tuple[int, int]],
+) -> List[np.ndarray]:
     """The allowance of every sew edge of a piece.
 
     Parameters
@@ -122,8 +132,13 @@ def edge_allowances(pattern: Pattern, panel: PatternPanel, widths: Mapping[str, 
     return edge_w
 
 
-def cut_line(sew: np.ndarray, widths: np.ndarray, mitre_limit: float = MITRE_LIMIT,
-             hole: bool = False, warnings: Optional[List[str]] = None) -> np.ndarray:
+def cut_line(
+    sew: np.ndarray,
+    widths: np.ndarray,
+    mitre_limit: float = MITRE_LIMIT,
+    hole: bool = False,
+    warnings: Optional[List[str]] = None,
+) -> np.ndarray:
     """The cut line around one sew-line loop: :func:`offset_loop`, loops removed, checked.
 
     Parameters
@@ -152,16 +167,23 @@ def cut_line(sew: np.ndarray, widths: np.ndarray, mitre_limit: float = MITRE_LIM
     bad = inside if hole else ~inside
     if np.any(bad) or segments_cross(c) is not None:
         q = (sew[keep][np.argmax(bad)] if np.any(bad) else c[0]) * 1000
-        msg = (f"the seam allowance does not fit around the sew line near ({q[0]:.0f}, {q[1]:.0f}) mm "
-               f"(parts of the outline closer than twice the allowance); lower the allowance there")
+        msg = (
+            f"the seam allowance does not fit around the sew line near ({q[0]:.0f}, {q[1]:.0f}) mm "
+            f"(parts of the outline closer than twice the allowance); lower the allowance there"
+        )
         if warnings is None:
             raise ExportError(msg)
         warnings.append(msg)
     return c
 
 
-def piece_cut_lines(name: str, sew: List[np.ndarray], edge_w: List[np.ndarray],
-                    mitre_limit: float = MITRE_LIMIT, warnings: Optional[List[str]] = None) -> List[np.ndarray]:
+def piece_cut_lines(
+    name: str,
+    sew: List[np.ndarray],
+    edge_w: List[np.ndarray],
+    mitre_limit: float = MITRE_LIMIT,
+    warnings: Optional[List[str]] = None,
+) -> List[np.ndarray]:
     """:func:`cut_line` around every loop of one piece (outline, then holes).
 
     Parameters
@@ -177,8 +199,7 @@ def piece_cut_lines(name: str, sew: List[np.ndarray], edge_w: List[np.ndarray],
         # left and offsetting to the right puts the allowance outside it
         found: List[str] = []
         try:
-            c = cut_line(sew[li], edge_w[li], mitre_limit, hole=li > 0,
-                         warnings=None if warnings is None else found)
+            c = cut_line(sew[li], edge_w[li], mitre_limit, hole=li > 0, warnings=None if warnings is None else found)
         except ExportError as exc:
             raise ExportError(f"piece {name!r}: {exc}") from None
         if warnings is not None:

@@ -6,6 +6,7 @@ an allowance offset to the right lies outside the piece. Each boundary edge is
 found again by its two vertex ids through :func:`edge_table`; seams name the
 vertex runs they sew (:func:`seam_sides`).
 """
+
 from __future__ import annotations
 
 from typing import Dict, Iterator, List, Tuple

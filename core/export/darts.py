@@ -9,6 +9,7 @@ pressed: towards the body's centre for an upright dart, down for a level one,
 the tailor's rule), the drill hole just inside the sewn point, and a notch at
 each leg's mouth.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -38,6 +39,7 @@ class DartDrawing:
     fold : (2, 2) from the mouth of the leg folded over to the mouth of the leg it is pressed onto;
     fold_head : (3, 2) the arrow head at ``fold[1]``.
     """
+
     name: str
     legs: List[np.ndarray]
     apex: np.ndarray

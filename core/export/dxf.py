@@ -29,6 +29,7 @@ and no blocks. Every variant sets its extents and limits (``$EXTMIN``,
 ``$EXTMAX``, ``$LIMMIN``, ``$LIMMAX``) from the drawing.
 ezdxf is imported here only, so the rest of the core loads without it.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -45,8 +46,7 @@ from ..geom.polygon import turn_points
 from .darts import DRILL_DIAMETER
 from .pieces import PieceDrawing, ascii_text
 
-ASTM_LAYERS = {"boundary": "1", "turn": "2", "notch": "4", "mirror": "6", "grain": "7", "sew": "14",
-               "annotation": "15"}
+ASTM_LAYERS = {"boundary": "1", "turn": "2", "notch": "4", "mirror": "6", "grain": "7", "sew": "14", "annotation": "15"}
 TURN_DEG = 20.0  # a polyline vertex turning more than this is a corner (turn point), else a curve point
 PLAIN_LAYERS = {"CUT": 1, "SEW": 5, "NOTCH": 3, "GRAIN": 7, "FOLD": 6, "LABEL": 7}  # ACI colours
 INSUNITS_MM = 4
@@ -62,8 +62,9 @@ def _ezdxf():
     try:
         import ezdxf
     except ImportError as exc:  # e.g. a Blender install without the bundled wheel
-        raise ExportError(f"DXF export needs the ezdxf package ({exc}); install it or leave dxf out of the formats") \
-            from None
+        raise ExportError(
+            f"DXF export needs the ezdxf package ({exc}); install it or leave dxf out of the formats"
+        ) from None
     return ezdxf
 
 
@@ -83,8 +84,9 @@ def _fit_name(name: str, limit: int) -> str:
     if len(name) <= limit:
         return name
     import hashlib
+
     tag = hashlib.sha1(name.encode("utf-8")).hexdigest()[:6]
-    return f"{name[:limit - len(tag) - 1]}_{tag}"
+    return f"{name[: limit - len(tag) - 1]}_{tag}"
 
 
 def block_names(pieces: Sequence[PieceDrawing], dxfversion: str = "R2000") -> List[str]:
@@ -103,8 +105,7 @@ def block_names(pieces: Sequence[PieceDrawing], dxfversion: str = "R2000") -> Li
     return names
 
 
-def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, size: str,
-                  dxfversion: str = "R2000"):
+def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, size: str, dxfversion: str = "R2000"):
     """An ezdxf document with ASTM D6673 content: one block per piece, inserted at its layout place.
 
     Parameters
@@ -128,6 +129,7 @@ def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, si
         doc = ezdxf.new(dxfversion, units=INSUNITS_MM)
     if dxfversion != "R12":
         doc.header["$MEASUREMENT"] = 1
+
     # R12 knows only POLYLINE; in R2000 the compact LWPOLYLINE is ~10x faster
     # to write and read for the same vertices
     def add_poly(layout, points, close, dxfattribs):
@@ -141,12 +143,23 @@ def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, si
             doc.layers.add(name)
     msp = doc.modelspace()
     h_style = 5.0
-    style_text = [f"Style Name: {ascii_text(style)}", f"Sample Size: {ascii_text(size)}",
-                  "Grading Rule Table: none", "Units: METRIC", "Author: EASE"]
+    style_text = [
+        f"Style Name: {ascii_text(style)}",
+        f"Sample Size: {ascii_text(size)}",
+        "Grading Rule Table: none",
+        "Units: METRIC",
+        "Author: EASE",
+    ]
     top = float(layout.size[1]) * 1000.0
     for k, text in enumerate(style_text):
-        msp.add_text(text, dxfattribs={"layer": L["boundary"], "height": h_style,
-                                       "insert": (0.0, top + (len(style_text) - k) * 1.5 * h_style)})
+        msp.add_text(
+            text,
+            dxfattribs={
+                "layer": L["boundary"],
+                "height": h_style,
+                "insert": (0.0, top + (len(style_text) - k) * 1.5 * h_style),
+            },
+        )
     for piece, name, off in zip(pieces, block_names(pieces, dxfversion), layout.offsets):
         blk = doc.blocks.new(name=name)
         for loop in piece.cut:
@@ -173,14 +186,17 @@ def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, si
             add_poly(blk, _mm(a), close=False, dxfattribs={"layer": L["annotation"]})
         h = piece.text_height * 1000.0
         x, y = _mm(piece.label_at[None])[0]
-        system = [f"Piece Name: {ascii_text(piece.name)}", f"Size: {ascii_text(size)}",
-                  f"Quantity: {piece.quantity}", f"Category: {ascii_text(piece.garment)}"]
+        system = [
+            f"Piece Name: {ascii_text(piece.name)}",
+            f"Size: {ascii_text(size)}",
+            f"Quantity: {piece.quantity}",
+            f"Category: {ascii_text(piece.garment)}",
+        ]
         notes = [t for t in piece.label[3:]]
         for k, text in enumerate(system + notes):
             layer = L["boundary"] if k < len(system) else L["annotation"]
             blk.add_text(text, dxfattribs={"layer": layer, "height": h, "insert": (x, y - (k + 1) * 1.5 * h)})
-        msp.add_blockref(name, (float(off[0]) * 1000.0, float(off[1]) * 1000.0),
-                         dxfattribs={"layer": L["boundary"]})
+        msp.add_blockref(name, (float(off[0]) * 1000.0, float(off[1]) * 1000.0), dxfattribs={"layer": L["boundary"]})
     set_extents(doc)
     return doc
 

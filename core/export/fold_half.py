@@ -18,6 +18,7 @@ cut on a fold; and when no dart reaches across the line.
 
 All lengths are metres, piece frame (grain = +y).
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -30,9 +31,9 @@ from ..geom.polygon import centroid, ray_hit
 from .mirror_check import loops_apart, marks, points_apart
 from .pieces import PieceDrawing
 
-GRAIN_FRACTION = 0.6    # part of the half's chord through its centroid that the moved grain line spans
-GRAIN_INSET = 0.4       # where across the half the moved grain line lies: 0 on the fold, 1 at the far side
-SIDE_TOL = 1e-9         # m, a point this close to the axis counts as on it
+GRAIN_FRACTION = 0.6  # part of the half's chord through its centroid that the moved grain line spans
+GRAIN_INSET = 0.4  # where across the half the moved grain line lies: 0 on the fold, 1 at the far side
+SIDE_TOL = 1e-9  # m, a point this close to the axis counts as on it
 
 
 def _crossings(loop: np.ndarray, x0: float) -> int:
@@ -50,12 +51,14 @@ def fold_axis(piece: PieceDrawing, tol: float) -> Optional[float]:
     x0 = float(centroid(sew)[0])
     flip = lambda p: np.column_stack([2.0 * x0 - p[:, 0], p[:, 1]])  # noqa: E731
     m = marks(piece)
-    if max(loops_apart([flip(sew)], [sew]), loops_apart([flip(cut)], [cut]),
-           points_apart(flip(m) if len(m) else m, m)) > tol:
+    if (
+        max(loops_apart([flip(sew)], [sew]), loops_apart([flip(cut)], [cut]), points_apart(flip(m) if len(m) else m, m))
+        > tol
+    ):
         return None
     if _crossings(sew, x0) != 2 or _crossings(cut, x0) != 2:
         return None
-    for d in piece.darts:   # a dart must lie wholly on one side of the fold
+    for d in piece.darts:  # a dart must lie wholly on one side of the fold
         x = np.concatenate([np.asarray(l, float)[:, 0] for l in d.legs])
         if x.min() < x0 - SIDE_TOL < x0 + SIDE_TOL < x.max():
             return None
@@ -119,7 +122,14 @@ def fold_half(piece: PieceDrawing, x0: float, tol: float) -> PieceDrawing:
     grain, arrows = _grain(sew, x0)
     keep = lambda pts: bool(np.all(np.asarray(pts, float)[..., 0] >= x0 - tol))  # noqa: E731
     return dataclasses.replace(
-        piece, sew=[sew], sew_ids=[np.where(ids >= 0, src[np.maximum(ids, 0)], -1)], cut=[cut],
-        edge_allowance=[w], fold=[fold], notches=[m for m in piece.notches if keep(m.point)],
+        piece,
+        sew=[sew],
+        sew_ids=[np.where(ids >= 0, src[np.maximum(ids, 0)], -1)],
+        cut=[cut],
+        edge_allowance=[w],
+        fold=[fold],
+        notches=[m for m in piece.notches if keep(m.point)],
         darts=[d for d in piece.darts if keep(np.concatenate([np.asarray(l, float) for l in d.legs]))],
-        grain=grain, arrows=arrows)
+        grain=grain,
+        arrows=arrows,
+    )

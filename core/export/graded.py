@@ -31,6 +31,7 @@ Files:
 ``graded.json``          sizes, pieces, per piece and size the sew-line length
 ======================= ======================================================
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -57,20 +58,27 @@ from .svg import STROKE_MM, svg_number, svg_path
 
 # one colour per size, smallest to largest (colour-blind safe, Okabe–Ito)
 SIZE_COLOURS = ("#0072b2", "#009e73", "#e69f00", "#d55e00", "#cc79a7", "#56b4e9", "#f0e442", "#000000")
-LEGEND_H = 0.03   # m of sheet kept above the stacks for the legend
+LEGEND_H = 0.03  # m of sheet kept above the stacks for the legend
 
 
 def _hex_rgb(colour: str):
-    return tuple(int(colour[i:i + 2], 16) / 255.0 for i in (1, 3, 5))
+    return tuple(int(colour[i : i + 2], 16) / 255.0 for i in (1, 3, 5))
 
 
 def _shifted(piece: PieceDrawing, d: np.ndarray) -> PieceDrawing:
     """The drawing moved by ``d`` (m) in its own frame."""
     return dataclasses.replace(
-        piece, sew=[l + d for l in piece.sew], cut=[l + d for l in piece.cut], fold=[f + d for f in piece.fold],
+        piece,
+        sew=[l + d for l in piece.sew],
+        cut=[l + d for l in piece.cut],
+        fold=[f + d for f in piece.fold],
         notches=[dataclasses.replace(n, point=n.point + d, segment=n.segment + d) for n in piece.notches],
-        grain=piece.grain + d, arrows=[a + d for a in piece.arrows], label_at=piece.label_at + d,
-        bbox=piece.bbox + d, turn_points=None if piece.turn_points is None else piece.turn_points + d)
+        grain=piece.grain + d,
+        arrows=[a + d for a in piece.arrows],
+        label_at=piece.label_at + d,
+        bbox=piece.bbox + d,
+        turn_points=None if piece.turn_points is None else piece.turn_points + d,
+    )
 
 
 def reference_point(piece: PieceDrawing) -> np.ndarray:
@@ -103,10 +111,12 @@ def graded_turn_points(sample: PieceDrawing, piece: PieceDrawing) -> np.ndarray:
     own = piece_turn_points(sample)
     if piece is sample or not len(own):
         return own
-    if [len(i) for i in sample.sew_ids] != [len(i) for i in piece.sew_ids] or \
-            any(not np.array_equal(a, b) for a, b in zip(sample.sew_ids, piece.sew_ids)):
-        raise ExportError(f"piece {piece.name}: its sew line's vertices differ between sizes; "
-                          f"expected the sizes of one design")
+    if [len(i) for i in sample.sew_ids] != [len(i) for i in piece.sew_ids] or any(
+        not np.array_equal(a, b) for a, b in zip(sample.sew_ids, piece.sew_ids)
+    ):
+        raise ExportError(
+            f"piece {piece.name}: its sew line's vertices differ between sizes; expected the sizes of one design"
+        )
     sew_s, sew_p = np.concatenate(sample.sew), np.concatenate(piece.sew)
     cut_p = np.concatenate(piece.cut)
     j = _nearest(sew_s, own)
@@ -117,9 +127,13 @@ def graded_turn_points(sample: PieceDrawing, piece: PieceDrawing) -> np.ndarray:
     return out
 
 
-def graded_stacks(patterns: Mapping[str, Pattern], allowance=None,
-                  notch_spacing: Optional[float] = None, progress: Optional[Progress] = None,
-                  sample: Optional[str] = None) -> Dict[str, Dict[str, PieceDrawing]]:
+def graded_stacks(
+    patterns: Mapping[str, Pattern],
+    allowance=None,
+    notch_spacing: Optional[float] = None,
+    progress: Optional[Progress] = None,
+    sample: Optional[str] = None,
+) -> Dict[str, Dict[str, PieceDrawing]]:
     """Piece name -> {size: drawing}, each size moved so its reference point is at the origin.
 
     Every size has the sample size's grade points (module docstring): the same notches and turn points
@@ -139,14 +153,21 @@ def graded_stacks(patterns: Mapping[str, Pattern], allowance=None,
     drawn: Dict[str, list] = {}
     names = None
     for k, size in enumerate(order):
-        pieces = build_pieces(patterns[size], allowance, notch_spacing, grade_from=grade_from,
-                              progress=sub(progress, k / len(patterns), (k + 1) / len(patterns)))
+        pieces = build_pieces(
+            patterns[size],
+            allowance,
+            notch_spacing,
+            grade_from=grade_from,
+            progress=sub(progress, k / len(patterns), (k + 1) / len(patterns)),
+        )
         got = [p.name for p in pieces]
         if names is None:
             names = got
         elif got != names:
-            raise ExportError(f"size {size}: pieces {', '.join(got)} differ from size {sample}'s "
-                              f"({', '.join(names)}); expected the sizes of one design")
+            raise ExportError(
+                f"size {size}: pieces {', '.join(got)} differ from size {sample}'s "
+                f"({', '.join(names)}); expected the sizes of one design"
+            )
         drawn[str(size)] = pieces
     stacks: Dict[str, Dict[str, PieceDrawing]] = {}
     for size in patterns:
@@ -157,8 +178,10 @@ def graded_stacks(patterns: Mapping[str, Pattern], allowance=None,
 
 
 def _layout(stacks: Dict[str, Dict[str, PieceDrawing]]) -> Layout:
-    boxes = [np.stack([np.min([d.bbox[0] for d in s.values()], axis=0),
-                       np.max([d.bbox[1] for d in s.values()], axis=0)]) for s in stacks.values()]
+    boxes = [
+        np.stack([np.min([d.bbox[0] for d in s.values()], axis=0), np.max([d.bbox[1] for d in s.values()], axis=0)])
+        for s in stacks.values()
+    ]
     return layout_pieces(boxes, SHEET_WIDTH, LAYOUT_MARGIN)
 
 
@@ -186,9 +209,10 @@ def graded_dxf(stacks, layout: Layout, style: str, sample: Optional[str] = None)
                     e.dxf.text = f"Piece Name: {ascii_text(piece)}"
                 elif e.dxf.text.startswith("Size: "):
                     e.dxf.text = f"Size: {ascii_text(size)}"
-        doc.modelspace().add_text(ascii_text(f"Sizes: {', '.join(sizes)}"),
-                                  dxfattribs={"layer": dxf_mod.ASTM_LAYERS["annotation"], "height": 5.0,
-                                              "insert": (0.0, -8.0)})
+        doc.modelspace().add_text(
+            ascii_text(f"Sizes: {', '.join(sizes)}"),
+            dxfattribs={"layer": dxf_mod.ASTM_LAYERS["annotation"], "height": 5.0, "insert": (0.0, -8.0)},
+        )
         doc.classes.classes = dict(sorted(doc.classes.classes.items(), key=lambda kv: str(kv[0])))
         doc.write(stream)
     return stream.getvalue()
@@ -205,20 +229,26 @@ def graded_svg(stacks, layout: Layout, title: str) -> str:
         return np.column_stack([q[:, 0], H - q[:, 1]])
 
     line = f'fill="none" stroke-width="{STROKE_MM}" stroke-linejoin="round" stroke-linecap="round"'
-    out = ['<?xml version="1.0" encoding="UTF-8" standalone="no"?>',
-           f'<svg xmlns="http://www.w3.org/2000/svg" version="1.1" width="{svg_number(W)}mm" height="{svg_number(H)}mm" '
-           f'viewBox="0 0 {svg_number(W)} {svg_number(H)}">',
-           f"<title>{escape(title)}</title>",
-           "<desc>EASE graded nest at 1:1; 1 user unit = 1 mm. Each piece's sizes stacked at the middle of the "
-           "grain line; solid: cut line, dashed: sew line, one colour per size (legend).</desc>",
-           '<g id="legend">']
+    out = [
+        '<?xml version="1.0" encoding="UTF-8" standalone="no"?>',
+        f'<svg xmlns="http://www.w3.org/2000/svg" version="1.1" width="{svg_number(W)}mm" height="{svg_number(H)}mm" '
+        f'viewBox="0 0 {svg_number(W)} {svg_number(H)}">',
+        f"<title>{escape(title)}</title>",
+        "<desc>EASE graded nest at 1:1; 1 user unit = 1 mm. Each piece's sizes stacked at the middle of the "
+        "grain line; solid: cut line, dashed: sew line, one colour per size (legend).</desc>",
+        '<g id="legend">',
+    ]
     for k, size in enumerate(sizes):
         x, y = 10.0 + 30.0 * k, 12.0
         c = SIZE_COLOURS[k % len(SIZE_COLOURS)]
-        out.append(f'<path d="M{svg_number(x)},{svg_number(y)} L{svg_number(x + 10)},{svg_number(y)}" stroke="{c}" fill="none" '
-                   f'stroke-width="1"/>')
-        out.append(f'<text x="{svg_number(x + 12)}" y="{svg_number(y + 2)}" font-family="Helvetica, Arial, sans-serif" '
-                   f'font-size="6" fill="{c}">{escape(size)}</text>')
+        out.append(
+            f'<path d="M{svg_number(x)},{svg_number(y)} L{svg_number(x + 10)},{svg_number(y)}" stroke="{c}" fill="none" '
+            f'stroke-width="1"/>'
+        )
+        out.append(
+            f'<text x="{svg_number(x + 12)}" y="{svg_number(y + 2)}" font-family="Helvetica, Arial, sans-serif" '
+            f'font-size="6" fill="{c}">{escape(size)}</text>'
+        )
     out.append("</g>")
     for (name, stack), off in zip(stacks.items(), layout.offsets):
         out.append(f'<g id="piece-{escape(name)}" data-piece="{escape(name)}">')
@@ -228,17 +258,23 @@ def graded_svg(stacks, layout: Layout, title: str) -> str:
             for loop in d.cut:
                 out.append(f'<path class="cut" d="{svg_path(mm(loop, off), True)}" stroke="{c}" {line}/>')
             for loop in d.sew:
-                out.append(f'<path class="sew" d="{svg_path(mm(loop, off), True)}" stroke="{c}" '
-                           f'stroke-dasharray="4,2" {line}/>')
+                out.append(
+                    f'<path class="sew" d="{svg_path(mm(loop, off), True)}" stroke="{c}" '
+                    f'stroke-dasharray="4,2" {line}/>'
+                )
             out.append("</g>")
         first = next(iter(stack.values()))
         d = " ".join([svg_path(mm(first.grain, off), False)] + [svg_path(mm(a, off), False) for a in first.arrows])
         out.append(f'<path class="grain" d="{d}" stroke="#000000" {line}/>')
         x, y = mm(np.zeros((1, 2)), off)[0]
-        out.append(f'<path class="reference" d="M{svg_number(x - 3)},{svg_number(y)} L{svg_number(x + 3)},{svg_number(y)} '
-                   f'M{svg_number(x)},{svg_number(y - 3)} L{svg_number(x)},{svg_number(y + 3)}" stroke="#000000" {line}/>')
-        out.append(f'<text x="{svg_number(x + 4)}" y="{svg_number(y - 4)}" font-family="Helvetica, Arial, sans-serif" '
-                   f'font-size="5" fill="#000000">{escape(ascii_text(name))}</text>')
+        out.append(
+            f'<path class="reference" d="M{svg_number(x - 3)},{svg_number(y)} L{svg_number(x + 3)},{svg_number(y)} '
+            f'M{svg_number(x)},{svg_number(y - 3)} L{svg_number(x)},{svg_number(y + 3)}" stroke="#000000" {line}/>'
+        )
+        out.append(
+            f'<text x="{svg_number(x + 4)}" y="{svg_number(y - 4)}" font-family="Helvetica, Arial, sans-serif" '
+            f'font-size="5" fill="#000000">{escape(ascii_text(name))}</text>'
+        )
         out.append("</g>")
     out.append("</svg>")
     return "\n".join(out) + "\n"
@@ -285,9 +321,15 @@ def graded_pdf(stacks, layout: Layout, title: str) -> bytes:
     return buf.getvalue()
 
 
-def export_graded(patterns: Mapping[str, Pattern], out_dir, allowance=None, notch_spacing: Optional[float] = None,
-                  title: Optional[str] = None, progress: Optional[Progress] = None,
-                  sample: Optional[str] = None) -> List[Path]:
+def export_graded(
+    patterns: Mapping[str, Pattern],
+    out_dir,
+    allowance=None,
+    notch_spacing: Optional[float] = None,
+    title: Optional[str] = None,
+    progress: Optional[Progress] = None,
+    sample: Optional[str] = None,
+) -> List[Path]:
     """Write the graded nest of ``{size: Pattern}`` (DXF-AAMA, SVG, PDF, graded.json) into ``out_dir`` atomically.
 
     ``sample``: the size the grade points come from (:func:`sample_size`; the design's own size). Returns
@@ -299,23 +341,45 @@ def export_graded(patterns: Mapping[str, Pattern], out_dir, allowance=None, notc
     title = title or f"{first.style or 'pattern'} graded"
     layout = _layout(stacks)
     report(progress, 0.6, "rendering the graded nest")
-    summary = {"title": title, "unit": "mm", "sizes": list(patterns), "sample_size": sample,
-               "reference_point": "middle of the grain line",
-               "pieces": {name: {size: {"sew_line_mm": round(sum(polyline_length(l, closed=True) for l in d.sew)
-                                                             * 1000, 2),
-                                        "cut_line_mm": round(sum(polyline_length(l, closed=True) for l in d.cut)
-                                                             * 1000, 2),
-                                        "notches": len(d.notches), "turn_points": len(d.turn_points)}
-                                 for size, d in stack.items()} for name, stack in stacks.items()},
-               "sheet_mm": (np.asarray(layout.size) * 1000).round(1).tolist()}
-    files = {"graded_astm.dxf": graded_dxf(stacks, layout, title, sample).encode("ascii", "replace"),
-             "graded.svg": graded_svg(stacks, layout, title).encode("utf-8"),
-             "graded.pdf": graded_pdf(stacks, layout, title),
-             "graded.json": (dumps_json(summary) + "\n").encode("utf-8")}
+    summary = {
+        "title": title,
+        "unit": "mm",
+        "sizes": list(patterns),
+        "sample_size": sample,
+        "reference_point": "middle of the grain line",
+        "pieces": {
+            name: {
+                size: {
+                    "sew_line_mm": round(sum(polyline_length(l, closed=True) for l in d.sew) * 1000, 2),
+                    "cut_line_mm": round(sum(polyline_length(l, closed=True) for l in d.cut) * 1000, 2),
+                    "notches": len(d.notches),
+                    "turn_points": len(d.turn_points),
+                }
+                for size, d in stack.items()
+            }
+            for name, stack in stacks.items()
+        },
+        "sheet_mm": (np.asarray(layout.size) * 1000).round(1).tolist(),
+    }
+    files = {
+        "graded_astm.dxf": graded_dxf(stacks, layout, title, sample).encode("ascii", "replace"),
+        "graded.svg": graded_svg(stacks, layout, title).encode("utf-8"),
+        "graded.pdf": graded_pdf(stacks, layout, title),
+        "graded.json": (dumps_json(summary) + "\n").encode("utf-8"),
+    }
     paths = write_files(out_dir, files)
     report(progress, 1.0, f"wrote the graded nest to {out_dir}")
     return paths
 
 
-__all__ = ["graded_stacks", "reference_point", "sample_size", "graded_turn_points", "graded_dxf", "graded_svg",
-           "graded_pdf", "export_graded", "SIZE_COLOURS"]
+__all__ = [
+    "graded_stacks",
+    "reference_point",
+    "sample_size",
+    "graded_turn_points",
+    "graded_dxf",
+    "graded_svg",
+    "graded_pdf",
+    "export_graded",
+    "SIZE_COLOURS",
+]

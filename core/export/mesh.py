@@ -26,6 +26,7 @@ glTF texture coordinates have v pointing down from the image top, so
 ``TEXCOORD_0 = (u, 1 - v)``; importers (Blender included) flip it back to the
 pattern's ``(u, v)``. OBJ ``vt`` is ``(u, v)``.
 """
+
 from __future__ import annotations
 
 import json
@@ -66,8 +67,10 @@ FRAME_Y = "metres, +Y up, the body facing +Z, +X the body's left (glTF frame: EA
 #: where a mesh file's origin is: ``"floor"`` (default: under the body's root, at the height of the body's lowest
 #: point, so the body stands on the floor as glTF/OBJ viewers expect) or ``"root"`` (the body's root, the core frame)
 ORIGINS = ("floor", "root")
-ORIGIN_TEXT = {"floor": "origin on the floor: under the body's root, at the body's lowest point",
-               "root": "origin at the body's root (the pelvis)"}
+ORIGIN_TEXT = {
+    "floor": "origin on the floor: under the body's root, at the body's lowest point",
+    "root": "origin at the body's root (the pelvis)",
+}
 #: the OBJ's material library, written beside it
 MTL_NAME = "garment.mtl"
 
@@ -79,8 +82,16 @@ def frame_text(up: str, origin: str = "root") -> str:
 
 def mtl_text(meshes, body=None) -> str:
     """The OBJ's material library: ``fabric`` (the garment, its uv the pattern's) and ``body``, as in the GLB."""
-    lines = ["# EASE materials for garment.obj", "newmtl fabric", "Kd 0.800 0.800 0.800", "Ka 0 0 0", "Ks 0 0 0",
-             "Ns 10", "d 1", "illum 1"]
+    lines = [
+        "# EASE materials for garment.obj",
+        "newmtl fabric",
+        "Kd 0.800 0.800 0.800",
+        "Ka 0 0 0",
+        "Ks 0 0 0",
+        "Ns 10",
+        "d 1",
+        "illum 1",
+    ]
     if body is not None:
         lines += ["", "newmtl body", "Kd 0.930 0.780 0.660", "Ka 0 0 0", "Ks 0 0 0", "Ns 10", "d 1", "illum 1"]
     return "\n".join(lines) + "\n"
@@ -138,8 +149,12 @@ def glb_bytes(meshes, generator: str = "EASE", body=None, origin: str = "root") 
             data, ctype = np.ascontiguousarray(arr, np.float32), 5126
         else:
             data, ctype = np.ascontiguousarray(arr, np.uint32), 5125
-        acc = {"bufferView": add_view(data.tobytes(), target), "componentType": ctype,
-               "count": int(data.shape[0]), "type": kind}
+        acc = {
+            "bufferView": add_view(data.tobytes(), target),
+            "componentType": ctype,
+            "count": int(data.shape[0]),
+            "type": kind,
+        }
         if minmax:
             acc["min"] = data.min(axis=0).astype(float).tolist()
             acc["max"] = data.max(axis=0).astype(float).tolist()
@@ -148,13 +163,15 @@ def glb_bytes(meshes, generator: str = "EASE", body=None, origin: str = "root") 
 
     for name, garment, xyz, nrm, uv, faces in meshes:
         pos = to_y_up(xyz).astype(np.float32)
-        attrs = {"POSITION": add_accessor(pos, "VEC3", 34962, minmax=True),
-                 "NORMAL": add_accessor(to_y_up(nrm).astype(np.float32), "VEC3", 34962),
-                 "TEXCOORD_0": add_accessor(np.column_stack([uv[:, 0], 1.0 - uv[:, 1]]).astype(np.float32),
-                                            "VEC2", 34962)}
+        attrs = {
+            "POSITION": add_accessor(pos, "VEC3", 34962, minmax=True),
+            "NORMAL": add_accessor(to_y_up(nrm).astype(np.float32), "VEC3", 34962),
+            "TEXCOORD_0": add_accessor(np.column_stack([uv[:, 0], 1.0 - uv[:, 1]]).astype(np.float32), "VEC2", 34962),
+        }
         idx = add_accessor(faces.reshape(-1).astype(np.uint32), "SCALAR", 34963)
-        gl_meshes.append({"name": name, "primitives": [{"attributes": attrs, "indices": idx, "mode": 4,
-                                                        "material": 0}]})
+        gl_meshes.append(
+            {"name": name, "primitives": [{"attributes": attrs, "indices": idx, "mode": 4, "material": 0}]}
+        )
         nodes.append({"name": name, "mesh": len(gl_meshes) - 1})
         garments.setdefault(garment or "garment", []).append(len(nodes) - 1)
     roots = []
@@ -163,29 +180,58 @@ def glb_bytes(meshes, generator: str = "EASE", body=None, origin: str = "root") 
         roots.append(len(nodes) - 1)
     if body is not None:
         name, xyz, nrm, faces = body
-        attrs = {"POSITION": add_accessor(to_y_up(xyz).astype(np.float32), "VEC3", 34962, minmax=True),
-                 "NORMAL": add_accessor(to_y_up(nrm).astype(np.float32), "VEC3", 34962)}
+        attrs = {
+            "POSITION": add_accessor(to_y_up(xyz).astype(np.float32), "VEC3", 34962, minmax=True),
+            "NORMAL": add_accessor(to_y_up(nrm).astype(np.float32), "VEC3", 34962),
+        }
         idx = add_accessor(faces.reshape(-1).astype(np.uint32), "SCALAR", 34963)
-        gl_meshes.append({"name": name, "primitives": [{"attributes": attrs, "indices": idx, "mode": 4,
-                                                        "material": 1}]})
+        gl_meshes.append(
+            {"name": name, "primitives": [{"attributes": attrs, "indices": idx, "mode": 4, "material": 1}]}
+        )
         nodes.append({"name": name, "mesh": len(gl_meshes) - 1})
         roots.append(len(nodes) - 1)
     while len(blob) % 4:
         blob.append(0)
-    doc = {"asset": {"version": "2.0", "generator": generator, "extras": {"frame": frame_text("y", origin)}},
-           "scene": 0, "scenes": [{"name": "garment", "nodes": roots}], "nodes": nodes, "meshes": gl_meshes,
-           "materials": [{"name": "fabric", "doubleSided": True,
-                          "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1.0],
-                                                   "metallicFactor": 0.0, "roughnessFactor": 0.9}},
-                          {"name": "body", "pbrMetallicRoughness": {"baseColorFactor": [0.93, 0.78, 0.66, 1.0],
-                                                                    "metallicFactor": 0.0, "roughnessFactor": 0.8}}],
-           "accessors": accessors, "bufferViews": views, "buffers": [{"byteLength": len(blob)}]}
+    doc = {
+        "asset": {"version": "2.0", "generator": generator, "extras": {"frame": frame_text("y", origin)}},
+        "scene": 0,
+        "scenes": [{"name": "garment", "nodes": roots}],
+        "nodes": nodes,
+        "meshes": gl_meshes,
+        "materials": [
+            {
+                "name": "fabric",
+                "doubleSided": True,
+                "pbrMetallicRoughness": {
+                    "baseColorFactor": [0.8, 0.8, 0.8, 1.0],
+                    "metallicFactor": 0.0,
+                    "roughnessFactor": 0.9,
+                },
+            },
+            {
+                "name": "body",
+                "pbrMetallicRoughness": {
+                    "baseColorFactor": [0.93, 0.78, 0.66, 1.0],
+                    "metallicFactor": 0.0,
+                    "roughnessFactor": 0.8,
+                },
+            },
+        ],
+        "accessors": accessors,
+        "bufferViews": views,
+        "buffers": [{"byteLength": len(blob)}],
+    }
     # glTF JSON has no Infinity or NaN: refuse rather than write an invalid file
     js = json.dumps(doc, separators=(",", ":"), allow_nan=False).encode("utf-8")
     js += b" " * ((4 - len(js) % 4) % 4)
     total = 12 + 8 + len(js) + 8 + len(blob)
-    return (struct.pack("<III", GLB_MAGIC, 2, total) + struct.pack("<II", len(js), CHUNK_JSON) + js
-            + struct.pack("<II", len(blob), CHUNK_BIN) + bytes(blob))
+    return (
+        struct.pack("<III", GLB_MAGIC, 2, total)
+        + struct.pack("<II", len(js), CHUNK_JSON)
+        + js
+        + struct.pack("<II", len(blob), CHUNK_BIN)
+        + bytes(blob)
+    )
 
 
 def read_glb(data: bytes) -> Tuple[dict, bytes]:
@@ -198,12 +244,12 @@ def read_glb(data: bytes) -> Tuple[dict, bytes]:
     jlen, jtype = struct.unpack_from("<II", data, 12)
     if jtype != CHUNK_JSON:
         raise ValueError("GLB: first chunk is not JSON")
-    doc = json.loads(data[20:20 + jlen].decode("utf-8"))
+    doc = json.loads(data[20 : 20 + jlen].decode("utf-8"))
     off = 20 + jlen
     blen, btype = struct.unpack_from("<II", data, off)
     if btype != CHUNK_BIN:
         raise ValueError("GLB: second chunk is not BIN")
-    return doc, data[off + 8:off + 8 + blen]
+    return doc, data[off + 8 : off + 8 + blen]
 
 
 def glb_accessor(doc: dict, binary: bytes, index: int) -> np.ndarray:
@@ -222,8 +268,12 @@ def obj_text(meshes, style: str = "garment", up: str = "y", body=None, origin: s
     ``vt`` from the pattern and ``vn``; one ``o`` per piece, and ``o body`` (no ``vt``) when ``body``
     (:func:`body_mesh` output) is given; materials from :data:`MTL_NAME` (:func:`mtl_text`). ``origin`` is only
     stated (the positions are given in it)."""
-    lines: List[str] = [f"# EASE draped garment: {style}", f"# frame: {frame_text(up, origin)}",
-                        "# vt = pattern uv in metres, grain along +v", f"mtllib {MTL_NAME}"]
+    lines: List[str] = [
+        f"# EASE draped garment: {style}",
+        f"# frame: {frame_text(up, origin)}",
+        "# vt = pattern uv in metres, grain along +v",
+        f"mtllib {MTL_NAME}",
+    ]
     base = 1
     for name, garment, xyz, nrm, uv, faces in meshes:
         lines.append(f"o {name.replace(' ', '_')}")

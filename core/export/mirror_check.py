@@ -11,13 +11,14 @@ Pieces are :class:`core.export.pieces.PieceDrawing` (not imported here:
 :mod:`.pieces` measures its pairs with this module). All lengths are metres,
 piece frame (grain = +y).
 """
+
 from __future__ import annotations
 
 import numpy as np
 
 from ..geom.polygon import centroid, distance_to_polyline
 
-MIRROR_TOL = 0.0005     # m: a pair further apart than this prints both pieces
+MIRROR_TOL = 0.0005  # m: a pair further apart than this prints both pieces
 # the reflections of the piece frame that keep the grain's axis: across the grain, and along it (the same up to a
 # half turn, which a grain line with arrows at both ends does not tell apart)
 REFLECTIONS = (np.diag([-1.0, 1.0]), np.diag([1.0, -1.0]))
@@ -28,7 +29,7 @@ def declared_pairs(pattern, pieces) -> list:
     declared pair: a panel whose ``mirror_of`` names another piece is the right of that left one."""
     by_name = {p.name: k for k, p in enumerate(pieces)}
     out = []
-    for k, panel in enumerate(pattern.panels[:len(pieces)]):
+    for k, panel in enumerate(pattern.panels[: len(pieces)]):
         j = by_name.get(panel.mirror_of) if panel.mirror_of else None
         if j is not None and j != k:
             out.append((j, k))
@@ -51,8 +52,11 @@ def mirror_gap(left, right) -> float:
     for F in REFLECTIONS:
         shift = centroid(np.asarray(right.sew[0], float)) - centroid(np.asarray(left.sew[0], float) @ F)
         move = lambda loops: [np.asarray(l, float) @ F + shift for l in loops]  # noqa: E731
-        gap = max(loops_apart(move(left.sew), right.sew), loops_apart(move(left.cut), right.cut),
-                  points_apart(marks(left) @ F + shift, marks(right)))
+        gap = max(
+            loops_apart(move(left.sew), right.sew),
+            loops_apart(move(left.cut), right.cut),
+            points_apart(marks(left) @ F + shift, marks(right)),
+        )
         best = min(best, gap)
     return float(best)
 
@@ -68,8 +72,9 @@ def marks(piece) -> np.ndarray:
 
 def loops_apart(a, b) -> float:
     """Largest distance between the closed loops ``a[k]`` and ``b[k]`` (each vertex to the other loop, both ways)."""
-    return max((max(distance_to_polyline(p, q).max(), distance_to_polyline(q, p).max()) for p, q in zip(a, b)),
-               default=0.0)
+    return max(
+        (max(distance_to_polyline(p, q).max(), distance_to_polyline(q, p).max()) for p, q in zip(a, b)), default=0.0
+    )
 
 
 def points_apart(a: np.ndarray, b: np.ndarray) -> float:

@@ -10,6 +10,7 @@ a seam across the centre line gets notches symmetric about it, so a left and
 right piece still print once and a symmetric piece as its half on the fold
 (:mod:`.print_set`).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -23,7 +24,7 @@ from ..geom.polyline import point_at_length, polyline_length
 from ..pattern.types import Pattern, PatternPanel
 from .boundary import seam_sides
 
-NOTCH_LENGTH = 0.006       # m, slit notch cut into the allowance
+NOTCH_LENGTH = 0.006  # m, slit notch cut into the allowance
 # m, half the chord along the seam whose normal an interior slit follows: a notch on a mesh vertex would
 # otherwise take one of the two edges' normals, and the mirror image of a piece is not meshed alike
 NORMAL_SPAN = 0.01
@@ -40,13 +41,16 @@ def check_notch_spacing(value, where: str = "notch_spacing") -> float:
     [``MIN_NOTCH_SPACING``, ``MAX_NOTCH_SPACING``] m.
     """
     from ..errors import ExportError
+
     try:
         v = float(value)
     except (TypeError, ValueError):
         raise ExportError(f"{where}: expected metres between notches, got {value!r}") from None
     if isinstance(value, bool) or not (v == 0 or MIN_NOTCH_SPACING <= v <= MAX_NOTCH_SPACING):
-        raise ExportError(f"{where}: expected 0 (notches at the seam ends only) or {MIN_NOTCH_SPACING * 1000:g} mm "
-                          f"to {MAX_NOTCH_SPACING:g} m between notches, got {value!r}")
+        raise ExportError(
+            f"{where}: expected 0 (notches at the seam ends only) or {MIN_NOTCH_SPACING * 1000:g} mm "
+            f"to {MAX_NOTCH_SPACING:g} m between notches, got {value!r}"
+        )
     return v
 
 
@@ -64,6 +68,7 @@ class Notch:
     normal : (2,) float, unit outward normal of the sew line there.
     segment : (2, 2) float, the slit: from the cut line inward, ``NOTCH_LENGTH`` long.
     """
+
     seam: str
     side: str
     s: float
@@ -72,8 +77,13 @@ class Notch:
     segment: np.ndarray
 
 
-def notch_positions(length_a: float, length_b: float, spacing: float = DEFAULT_NOTCH_SPACING,
-                    gathered: bool = False, base: Optional[float] = None) -> Tuple[np.ndarray, np.ndarray]:
+def notch_positions(
+    length_a: float,
+    length_b: float,
+    spacing: float = DEFAULT_NOTCH_SPACING,
+    gathered: bool = False,
+    base: Optional[float] = None,
+) -> Tuple[np.ndarray, np.ndarray]:
     """Arc lengths of the notches on the two sides of a seam.
 
     Both sides get the seam ends and interior notches ``spacing, 2 spacing,
@@ -123,17 +133,25 @@ def notch_positions(length_a: float, length_b: float, spacing: float = DEFAULT_N
 
     def side(length: float) -> np.ndarray:
         if gathered and lmin > 0:
-            return np.concatenate([[0.0], head / lmin * length, np.array(middle) * length,
-                                   length - head[::-1] / lmin * length, [length]])
+            return np.concatenate(
+                [[0.0], head / lmin * length, np.array(middle) * length, length - head[::-1] / lmin * length, [length]]
+            )
         return np.concatenate([[0.0], head, np.array(middle) * length, length - head[::-1], [length]])
 
     return side(length_a), side(length_b)
 
 
-def piece_notches(pattern: Pattern, panel: PatternPanel, xy: np.ndarray, loops: List[np.ndarray],
-                  table: Dict[Tuple[int, int], Tuple[int, int]], edge_w: List[np.ndarray],
-                  cut: List[np.ndarray], spacing: float = DEFAULT_NOTCH_SPACING,
-                  grade_from: Optional[Mapping[str, float]] = None) -> List[Notch]:
+def piece_notches(
+    pattern: Pattern,
+    panel: PatternPanel,
+    xy: np.ndarray,
+    loops: List[np.ndarray],
+    table: Dict[Tuple[int, int], Tuple[int, int]],
+    edge_w: List[np.ndarray],
+    cut: List[np.ndarray],
+    spacing: float = DEFAULT_NOTCH_SPACING,
+    grade_from: Optional[Mapping[str, float]] = None,
+) -> List[Notch]:
     """The notches of every seam side on one piece, in seam order.
 
     Each slit starts on the cut line straight out from the notch point and
@@ -157,8 +175,13 @@ def piece_notches(pattern: Pattern, panel: PatternPanel, xy: np.ndarray, loops: 
         other_ids = np.asarray(seam.verts_b if side == "a" else seam.verts_a, int)
         la = polyline_length(xy[ids])
         lb = polyline_length(np.asarray(other.uv, float)[other_ids])
-        s_here, _ = notch_positions(la, lb, spacing, gathered=bool(getattr(seam, "gathered", False)),
-                                    base=None if grade_from is None else grade_from.get(seam.name))
+        s_here, _ = notch_positions(
+            la,
+            lb,
+            spacing,
+            gathered=bool(getattr(seam, "gathered", False)),
+            base=None if grade_from is None else grade_from.get(seam.name),
+        )
         pts, edges, _ = point_at_length(xy[ids], s_here)
         for i, (s, q, e) in enumerate(zip(s_here, pts, edges)):
             li, ei = table[(int(ids[e]), int(ids[e + 1]))]
@@ -171,8 +194,16 @@ def piece_notches(pattern: Pattern, panel: PatternPanel, xy: np.ndarray, loops: 
             nrm = np.array([d[1], -d[0]]) / max(np.linalg.norm(d), 1e-300)
             if 0 < i < len(s_here) - 1:
                 nrm = _chord_normal(xy[ids], s, nrm)
-            notches.append(Notch(seam=seam.name, side=side, s=float(s), point=q, normal=nrm,
-                                 segment=slit(q, nrm, cut[li], edge_w[li][ei])))
+            notches.append(
+                Notch(
+                    seam=seam.name,
+                    side=side,
+                    s=float(s),
+                    point=q,
+                    normal=nrm,
+                    segment=slit(q, nrm, cut[li], edge_w[li][ei]),
+                )
+            )
     return notches
 
 
@@ -184,8 +215,9 @@ def seam_lengths(pattern: Pattern) -> Dict[str, float]:
         if seam.kind == "dart":
             continue
         sides = [(seam.panel_a, seam.verts_a), (seam.panel_b, seam.verts_b)]
-        out[seam.name] = min(polyline_length(np.asarray(pattern.panel(p).uv, float)[np.asarray(ids, int)])
-                             for p, ids in sides)
+        out[seam.name] = min(
+            polyline_length(np.asarray(pattern.panel(p).uv, float)[np.asarray(ids, int)]) for p, ids in sides
+        )
     return out
 
 

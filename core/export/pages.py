@@ -10,6 +10,7 @@ sample lines and fill polygons on a cell grid.
 
 All lengths are metres, sheet frame y up, origin bottom-left.
 """
+
 from __future__ import annotations
 
 import math
@@ -30,6 +31,7 @@ class PrintLayout(Layout):
     them (None: each piece's own ``label_at``); ``grains`` (n, 2) piece-frame
     shifts of the grain lines (and their arrows) across the grain (None: 0).
     """
+
     angles: Optional[np.ndarray] = None
     labels: Optional[np.ndarray] = None
     grains: Optional[np.ndarray] = None
@@ -71,6 +73,7 @@ class PageGrid:
     rows, cols : int, windows down and across.
     height : float, sheet height (m); row 0 hangs from the top edge.
     """
+
     tile: Tuple[float, float]
     overlap: float
     rows: int
@@ -94,8 +97,9 @@ def grid_for(size: Sequence[float], tile: Sequence[float], overlap: float) -> Pa
     step = np.asarray(tile, float) - overlap
     cols = max(1, int(math.ceil((float(size[0]) - overlap) / step[0] - 1e-9)))
     rows = max(1, int(math.ceil((float(size[1]) - overlap) / step[1] - 1e-9)))
-    return PageGrid(tile=(float(tile[0]), float(tile[1])), overlap=float(overlap), rows=rows, cols=cols,
-                    height=float(size[1]))
+    return PageGrid(
+        tile=(float(tile[0]), float(tile[1])), overlap=float(overlap), rows=rows, cols=cols, height=float(size[1])
+    )
 
 
 def piece_lines(piece) -> List[np.ndarray]:
@@ -167,8 +171,12 @@ def sample_open(line, spacing: float) -> np.ndarray:
     p = np.asarray(line, float)
     if len(p) < 2:
         return p.reshape(-1, 2)
-    return np.concatenate([a + np.linspace(0.0, 1.0, int(math.ceil(np.linalg.norm(b - a) / spacing)) + 2)[:, None]
-                           * (b - a) for a, b in zip(p[:-1], p[1:])])
+    return np.concatenate(
+        [
+            a + np.linspace(0.0, 1.0, int(math.ceil(np.linalg.norm(b - a) / spacing)) + 2)[:, None] * (b - a)
+            for a, b in zip(p[:-1], p[1:])
+        ]
+    )
 
 
 def fill_cells(mask: np.ndarray, poly: np.ndarray, x0: float, y1: float, cell: float) -> None:
@@ -183,7 +191,7 @@ def fill_cells(mask: np.ndarray, poly: np.ndarray, x0: float, y1: float, cell: f
         for xa, xb in zip(xs[0::2], xs[1::2]):
             j0 = max(int(math.ceil((xa - x0) / cell - 0.5)), 0)
             j1 = min(int(math.floor((xb - x0) / cell - 0.5)), mask.shape[1] - 1)
-            mask[i, j0:j1 + 1] = True
+            mask[i, j0 : j1 + 1] = True
 
 
 def sample_loops(loops: Sequence[np.ndarray], spacing: float) -> np.ndarray:

@@ -20,6 +20,7 @@ page map (the page grid, the pieces, the pages left out crossed).
 The plotter PDF is one page, as wide as a 914 mm roll (or the widest piece)
 and as long as the layout.
 """
+
 from __future__ import annotations
 
 import io
@@ -37,13 +38,20 @@ from .tiling import PageGrid, PrintLayout, grid_for, inked_pages, place, print_l
 
 PT_PER_M = 72.0 / 0.0254
 PAPERS = {"a4": (0.210, 0.297), "letter": (0.2159, 0.2794), "a0": (0.841, 1.189)}
-PAGE_MARGIN = 0.010           # m of white border around the page window (what home printers leave unprinted)
-OVERLAP = 0.010               # m of the sheet printed on both neighbouring pages: the strip that is taped over
-TEST_SQUARE = 0.100           # m
-MAP_SIZE = 0.100              # m, largest side of the assembly map under the test square
+PAGE_MARGIN = 0.010  # m of white border around the page window (what home printers leave unprinted)
+OVERLAP = 0.010  # m of the sheet printed on both neighbouring pages: the strip that is taped over
+TEST_SQUARE = 0.100  # m
+MAP_SIZE = 0.100  # m, largest side of the assembly map under the test square
 TEST_RESERVE = (0.110, 0.232)  # m, layout box kept free for the test square and the assembly map
-COLOURS = {"cut": (1, 0, 0), "sew": (0, 0, 1), "notch": (0, 0.63, 0), "grain": (0, 0, 0),
-           "fold": (1, 0, 1), "text": (0, 0, 0), "mark": (0.45, 0.45, 0.45)}
+COLOURS = {
+    "cut": (1, 0, 0),
+    "sew": (0, 0, 1),
+    "notch": (0, 0.63, 0),
+    "grain": (0, 0, 0),
+    "fold": (1, 0, 1),
+    "text": (0, 0, 0),
+    "mark": (0.45, 0.45, 0.45),
+}
 LINE_PT = 0.25e-3 * PT_PER_M
 
 
@@ -51,8 +59,9 @@ def _reportlab():
     try:
         from reportlab.pdfgen import canvas
     except ImportError as exc:  # e.g. a Blender install without the bundled wheel
-        raise ExportError(f"PDF export needs the reportlab package ({exc}); install it or leave pdf out of the "
-                          f"formats") from None
+        raise ExportError(
+            f"PDF export needs the reportlab package ({exc}); install it or leave pdf out of the formats"
+        ) from None
     return canvas
 
 
@@ -162,9 +171,10 @@ def _define_forms(c, pieces: Sequence[PieceDrawing], labels=None, grains=None, f
         x, y = _pt(np.asarray(piece.label_at if labels is None else labels[k], float)[None])[0]
         if flips is not None and flips[k] and piece.label:
             from .pieces import CHAR_WIDTH
+
             tw, th = max(len(t) for t in piece.label) * CHAR_WIDTH * h, len(piece.label) * 1.5 * h
             c.saveState()
-            c.translate(x + 0.5 * tw, y - 0.5 * th)   # the box's centre: turned about it, the box stays
+            c.translate(x + 0.5 * tw, y - 0.5 * th)  # the box's centre: turned about it, the box stays
             c.rotate(180)
             x, y = -0.5 * tw, 0.5 * th
         for i, text in enumerate(piece.label):
@@ -201,7 +211,7 @@ def _assembly_map(c, top_left: np.ndarray, pieces, layout: Layout, grid: PageGri
     grid_w = grid.cols * step[0] + grid.overlap
     grid_h = grid.rows * step[1] + grid.overlap
     scale = MAP_SIZE / max(grid_w, grid_h)
-    x0, y0 = float(top_left[0]), float(top_left[1]) - grid_h * scale   # bottom-left of the map
+    x0, y0 = float(top_left[0]), float(top_left[1]) - grid_h * scale  # bottom-left of the map
 
     def to_page(pts):  # sheet metres (y up, top edge at H) -> page points
         q = np.asarray(pts, float)
@@ -210,9 +220,12 @@ def _assembly_map(c, top_left: np.ndarray, pieces, layout: Layout, grid: PageGri
     c.setFillColorRGB(0, 0, 0)
     c.setFont("Helvetica", 7)
     left_out = int(ink.size - ink.sum())
-    c.drawString(x0 * PT_PER_M, (top_left[1] + 0.002) * PT_PER_M,
-                 "page map: rows A, B, ... columns 1, 2, ..." + (f"; {left_out} crossed pages are left out "
-                                                                "(no line on them)" if left_out else ""))
+    c.drawString(
+        x0 * PT_PER_M,
+        (top_left[1] + 0.002) * PT_PER_M,
+        "page map: rows A, B, ... columns 1, 2, ..."
+        + (f"; {left_out} crossed pages are left out (no line on them)" if left_out else ""),
+    )
     c.setLineWidth(0.3)
     c.setStrokeColorRGB(*COLOURS["cut"])
     for i, piece in enumerate(pieces):
@@ -242,8 +255,13 @@ def _assembly_map(c, top_left: np.ndarray, pieces, layout: Layout, grid: PageGri
                 c.line(xa, yb, xb, ya)
 
 
-def tiled_pdf(pieces: Sequence[PieceDrawing], layout: Layout = None, paper: str = "a4",
-              title: str = "pattern", pages: Tuple[PageGrid, np.ndarray] = None) -> bytes:
+def tiled_pdf(
+    pieces: Sequence[PieceDrawing],
+    layout: Layout = None,
+    paper: str = "a4",
+    title: str = "pattern",
+    pages: Tuple[PageGrid, np.ndarray] = None,
+) -> bytes:
     """1:1 pattern tiled on ``paper`` pages (``"a4"`` or ``"letter"``), rows top to bottom.
 
     Parameters
@@ -273,8 +291,9 @@ def tiled_pdf(pieces: Sequence[PieceDrawing], layout: Layout = None, paper: str 
     c = rl_canvas.Canvas(buf, pagesize=(pw * PT_PER_M, ph * PT_PER_M), invariant=1, pageCompression=1)
     c.setTitle(ascii_text(title))
     c.setCreator("EASE")
-    forms = _define_forms(c, pieces, getattr(layout, "labels", None), getattr(layout, "grains", None),
-                          upside_down(layout, len(pieces)))
+    forms = _define_forms(
+        c, pieces, getattr(layout, "labels", None), getattr(layout, "grains", None), upside_down(layout, len(pieces))
+    )
     boxes = [_placed_box(layout, i, p) for i, p in enumerate(pieces)]
     m = PAGE_MARGIN
     printed = [(r, col) for r in range(grid.rows) for col in range(grid.cols) if ink[r, col]]
@@ -326,9 +345,14 @@ def _page_marks(c, r, col, grid: PageGrid, ink: np.ndarray, number, title, paper
     c.rect(m, m, tw, th, stroke=1, fill=0)
     name = page_name(r, col)
     c.setFont("Helvetica", 8)
-    c.drawString(m, m + th + 0.35 * m, ascii_text(
-        f"{title} - page {name} (row {row_name(r)}, column {col + 1}; {number[0]} of {number[1]}) - "
-        f"{paper.upper()} at 1:1, do not scale; overlap the pages up to the dashed lines"))
+    c.drawString(
+        m,
+        m + th + 0.35 * m,
+        ascii_text(
+            f"{title} - page {name} (row {row_name(r)}, column {col + 1}; {number[0]} of {number[1]}) - "
+            f"{paper.upper()} at 1:1, do not scale; overlap the pages up to the dashed lines"
+        ),
+    )
 
     def printed(rr, cc):
         return 0 <= rr < grid.rows and 0 <= cc < grid.cols and bool(ink[rr, cc])
@@ -337,10 +361,12 @@ def _page_marks(c, r, col, grid: PageGrid, ink: np.ndarray, number, title, paper
     # middle of the shared strip, which lies at the same sheet place on both pages
     s = 3.5 * 72 / 25.4
     # (neighbour, dashed line, diamond centre, direction into the page)
-    sides = [((r - 1, col), ((m, m + th - ov), (m + tw, m + th - ov)), (m + tw / 2, m + th - ov / 2), (0, -1)),
-             ((r + 1, col), ((m, m + ov), (m + tw, m + ov)), (m + tw / 2, m + ov / 2), (0, 1)),
-             ((r, col - 1), ((m + ov, m), (m + ov, m + th)), (m + ov / 2, m + th / 2), (1, 0)),
-             ((r, col + 1), ((m + tw - ov, m), (m + tw - ov, m + th)), (m + tw - ov / 2, m + th / 2), (-1, 0))]
+    sides = [
+        ((r - 1, col), ((m, m + th - ov), (m + tw, m + th - ov)), (m + tw / 2, m + th - ov / 2), (0, -1)),
+        ((r + 1, col), ((m, m + ov), (m + tw, m + ov)), (m + tw / 2, m + ov / 2), (0, 1)),
+        ((r, col - 1), ((m + ov, m), (m + ov, m + th)), (m + ov / 2, m + th / 2), (1, 0)),
+        ((r, col + 1), ((m + tw - ov, m), (m + tw - ov, m + th)), (m + tw - ov / 2, m + th / 2), (-1, 0)),
+    ]
     c.setFont("Helvetica", 7)
     for (rr, cc), (a, b), (x, y), (dx, dy) in sides:
         if not printed(rr, cc):
@@ -372,8 +398,7 @@ def plotter_pdf(pieces: Sequence[PieceDrawing], layout: Layout, title: str = "pa
     m = PAGE_MARGIN
     W, H = float(layout.size[0]), float(layout.size[1])
     buf = io.BytesIO()
-    c = rl_canvas.Canvas(buf, pagesize=((W + 2 * m) * PT_PER_M, (H + 2 * m) * PT_PER_M),
-                         invariant=1, pageCompression=1)
+    c = rl_canvas.Canvas(buf, pagesize=((W + 2 * m) * PT_PER_M, (H + 2 * m) * PT_PER_M), invariant=1, pageCompression=1)
     c.setTitle(ascii_text(title))
     c.setCreator("EASE")
     forms = _define_forms(c, pieces)
@@ -386,8 +411,11 @@ def plotter_pdf(pieces: Sequence[PieceDrawing], layout: Layout, title: str = "pa
         _test_square(c, np.array([layout.reserved[0, 0] + m, layout.reserved[1, 1] + m - TEST_SQUARE]))
     c.setFont("Helvetica", 9)
     c.setFillColorRGB(0, 0, 0)
-    c.drawString(m * PT_PER_M, (H + 1.3 * m) * PT_PER_M,
-                 ascii_text(f"{title} - {W * 1000:.0f} x {H * 1000:.0f} mm at 1:1, do not scale"))
+    c.drawString(
+        m * PT_PER_M,
+        (H + 1.3 * m) * PT_PER_M,
+        ascii_text(f"{title} - {W * 1000:.0f} x {H * 1000:.0f} mm at 1:1, do not scale"),
+    )
     c.showPage()
     c.save()
     return buf.getvalue()

@@ -12,6 +12,7 @@ the grain (warp) points along +y, the way pieces are laid on fabric with the
 selvage vertical. Rotation keeps lengths, so sew-line lengths are the
 pattern's.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -32,9 +33,9 @@ from .darts import DartDrawing, bridge_darts, dart_drawing, piece_darts
 from .mirror_check import MIRROR_TOL, declared_pairs, mirror_gap
 from .notches import DEFAULT_NOTCH_SPACING, Notch, check_notch_spacing, piece_notches, slit
 
-CHAR_WIDTH = 0.6   # Helvetica's mean advance is ~0.55 em: a safe width estimate per character
+CHAR_WIDTH = 0.6  # Helvetica's mean advance is ~0.55 em: a safe width estimate per character
 TEXT_MIN = 0.0025  # m, smallest label text
-CUT_LINE = 3       # index of the label line that says how to cut the piece (:func:`_label`)
+CUT_LINE = 3  # index of the label line that says how to cut the piece (:func:`_label`)
 
 
 @dataclass
@@ -68,6 +69,7 @@ class PieceDrawing:
         where the cut and sew lines turn by more than :data:`core.export.dxf.TURN_DEG` (a graded nest sets
         the sample size's corners on every size, :mod:`core.export.graded`).
     """
+
     name: str
     garment: str
     rotation: np.ndarray
@@ -177,8 +179,9 @@ def not_mirror_note(other: str, gap: float) -> str:
     return f"not the mirror of {other}: {why}"
 
 
-def _cut_line(quantity: int, folded: bool, panel: PatternPanel, pattern: Pattern,
-              gaps: Optional[Dict[str, float]] = None) -> str:
+def _cut_line(
+    quantity: int, folded: bool, panel: PatternPanel, pattern: Pattern, gaps: Optional[Dict[str, float]] = None
+) -> str:
     """The label's line ``CUT_LINE``: ``cut N`` and notes: on a fold; for a declared pair, ``mirror of X`` /
     ``mirrored by X`` where ``gaps`` (other piece -> m) has it within ``MIRROR_TOL`` of X's mirror image, else
     :func:`not_mirror_note` (no ``gaps``: the declaration is taken as it stands)."""
@@ -195,22 +198,30 @@ def _cut_line(quantity: int, folded: bool, panel: PatternPanel, pattern: Pattern
     return ascii_text(f"cut {quantity}" + "".join(f", {n}" for n in notes))
 
 
-def _label(pattern: Pattern, panel: PatternPanel, quantity: int, folded: bool,
-           edge_w: List[np.ndarray]) -> List[str]:
+def _label(pattern: Pattern, panel: PatternPanel, quantity: int, folded: bool, edge_w: List[np.ndarray]) -> List[str]:
     """The label lines of a piece: style, piece, size, how to cut it (line ``CUT_LINE``), units and allowance."""
     size = size_label(pattern)
-    return [ascii_text(pattern.style or "pattern"),
-            ascii_text(f"piece: {panel.name}" + (f" ({panel.garment})" if panel.garment and
-                                                 not panel.name.startswith(panel.garment) else "")),
-            ascii_text(f"size: {size}"),
-            _cut_line(quantity, folded, panel, pattern),
-            ascii_text(f"units: mm, {allowance_text(edge_w)}")]
+    return [
+        ascii_text(pattern.style or "pattern"),
+        ascii_text(
+            f"piece: {panel.name}"
+            + (f" ({panel.garment})" if panel.garment and not panel.name.startswith(panel.garment) else "")
+        ),
+        ascii_text(f"size: {size}"),
+        _cut_line(quantity, folded, panel, pattern),
+        ascii_text(f"units: mm, {allowance_text(edge_w)}"),
+    ]
 
 
-def build_piece(pattern: Pattern, panel: PatternPanel, widths: Dict[str, float],
-                notch_spacing: float = DEFAULT_NOTCH_SPACING,
-                mitre_limit: float = MITRE_LIMIT, warnings: Optional[List[str]] = None,
-                grade_from: Optional[Mapping[str, float]] = None) -> PieceDrawing:
+def build_piece(
+    pattern: Pattern,
+    panel: PatternPanel,
+    widths: Dict[str, float],
+    notch_spacing: float = DEFAULT_NOTCH_SPACING,
+    mitre_limit: float = MITRE_LIMIT,
+    warnings: Optional[List[str]] = None,
+    grade_from: Optional[Mapping[str, float]] = None,
+) -> PieceDrawing:
     """The drawing of one piece: sew and cut lines, notches, grain line, label.
 
     Parameters
@@ -247,10 +258,24 @@ def build_piece(pattern: Pattern, panel: PatternPanel, widths: Dict[str, float],
 
     quantity = 1
     label = _label(pattern, panel, quantity, bool(folds), edge_w)
-    piece = PieceDrawing(name=panel.name, garment=panel.garment, rotation=rot, sew=sew, sew_ids=loops,
-                         cut=cut, edge_allowance=edge_w, fold=folds, notches=notches, grain=grain,
-                         arrows=arrows, label=label, label_at=np.zeros(2), text_height=0.0,
-                         quantity=quantity, darts=drawn)
+    piece = PieceDrawing(
+        name=panel.name,
+        garment=panel.garment,
+        rotation=rot,
+        sew=sew,
+        sew_ids=loops,
+        cut=cut,
+        edge_allowance=edge_w,
+        fold=folds,
+        notches=notches,
+        grain=grain,
+        arrows=arrows,
+        label=label,
+        label_at=np.zeros(2),
+        text_height=0.0,
+        quantity=quantity,
+        darts=drawn,
+    )
     _set_label(piece, label)
     return piece
 
@@ -278,7 +303,7 @@ def relabel(piece: PieceDrawing, how: List[str], quantity: int) -> PieceDrawing:
     """
     out = dataclasses.replace(piece, quantity=int(quantity))
     label = list(piece.label)
-    label[CUT_LINE:CUT_LINE + 1] = [ascii_text(h) for h in how]
+    label[CUT_LINE : CUT_LINE + 1] = [ascii_text(h) for h in how]
     _set_label(out, label)
     return out
 
@@ -310,8 +335,9 @@ def _mouth_notches(darts, mouths, xy, loops, cut, edge_w) -> List[Notch]:
         nrm = np.array([d[1], -d[0]]) / max(np.linalg.norm(d), 1e-300)
         for side, v in (("a", s.verts_a[0]), ("b", s.verts_b[0])):
             q = xy[int(v)]
-            out.append(Notch(seam=s.name, side=side, s=0.0, point=q, normal=nrm,
-                             segment=slit(q, nrm, cut[li], edge_w[li][ei])))
+            out.append(
+                Notch(seam=s.name, side=side, s=0.0, point=q, normal=nrm, segment=slit(q, nrm, cut[li], edge_w[li][ei]))
+            )
     return out
 
 
@@ -324,9 +350,14 @@ def resolve_notch_spacing(notch_spacing, pattern: Pattern) -> float:
     return check_notch_spacing(value, "pattern.json materials.export.notch_spacing")
 
 
-def build_pieces(pattern: Pattern, allowance=None, notch_spacing: Optional[float] = None,
-                 progress=None, warnings: Optional[List[str]] = None,
-                 grade_from: Optional[Mapping[str, float]] = None) -> List[PieceDrawing]:
+def build_pieces(
+    pattern: Pattern,
+    allowance=None,
+    notch_spacing: Optional[float] = None,
+    progress=None,
+    warnings: Optional[List[str]] = None,
+    grade_from: Optional[Mapping[str, float]] = None,
+) -> List[PieceDrawing]:
     """:func:`build_piece` for every piece of a validated pattern, in pattern order.
 
     Parameters
@@ -361,7 +392,6 @@ def _check_pairs(pattern: Pattern, pieces: List[PieceDrawing]) -> None:
     for k, piece in enumerate(pieces):
         if piece.mirror_gaps:
             label = list(piece.label)
-            label[CUT_LINE] = _cut_line(piece.quantity, bool(piece.fold), pattern.panels[k], pattern,
-                                        piece.mirror_gaps)
+            label[CUT_LINE] = _cut_line(piece.quantity, bool(piece.fold), pattern.panels[k], pattern, piece.mirror_gaps)
             if label != piece.label:
                 _set_label(piece, label)

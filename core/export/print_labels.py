@@ -11,6 +11,7 @@ top-left page (test square and page map) is always printed.
 
 All lengths are metres, piece frame unless said, sheet frame y up.
 """
+
 from __future__ import annotations
 
 import math
@@ -18,11 +19,21 @@ import math
 import numpy as np
 
 from ..geom.layout import Layout
-from .pages import PageGrid, PrintLayout, fill_cells, line_pages, place, sample_loops, sample_open, segments, windows_hit
+from .pages import (
+    PageGrid,
+    PrintLayout,
+    fill_cells,
+    line_pages,
+    place,
+    sample_loops,
+    sample_open,
+    segments,
+    windows_hit,
+)
 
-LABEL_STEP = 0.004      # m, spacing of the places tried for a label
-GRAIN_SHOWN = 0.10      # m of grain line that must be printed (all of it when shorter): enough to lay a ruler on
-LABEL_TRIES = 100       # nearest free places checked exactly for a label (on printed pages, whole on one)
+LABEL_STEP = 0.004  # m, spacing of the places tried for a label
+GRAIN_SHOWN = 0.10  # m of grain line that must be printed (all of it when shorter): enough to lay a ruler on
+LABEL_TRIES = 100  # nearest free places checked exactly for a label (on printed pages, whole on one)
 
 
 def label_at(layout: Layout, i: int, piece) -> np.ndarray:
@@ -40,6 +51,7 @@ def grain_shift(layout: Layout, i: int) -> np.ndarray:
 def label_box(piece, at) -> np.ndarray:
     """(4, 2) piece-frame corners of the label block with its top-left at ``at`` (empty when no label)."""
     from .pieces import CHAR_WIDTH
+
     if not piece.label:
         return np.zeros((0, 2))
     th = len(piece.label) * 1.5 * piece.text_height
@@ -121,6 +133,7 @@ def place_grains(pieces, layout: "PrintLayout", grid: PageGrid, ink: np.ndarray)
     to the grain serves to lay the piece on the fabric.
     """
     from ..geom.polygon import points_in_polygon
+
     out = np.zeros((len(pieces), 2))
     for i, p in enumerate(pieces):
         g = np.asarray(p.grain, float)
@@ -146,8 +159,7 @@ def place_grains(pieces, layout: "PrintLayout", grid: PageGrid, ink: np.ndarray)
     return out
 
 
-def _label_on(box: np.ndarray, layout: Layout, i: int, grid: PageGrid, ink: np.ndarray,
-              whole: bool = True) -> bool:
+def _label_on(box: np.ndarray, layout: Layout, i: int, grid: PageGrid, ink: np.ndarray, whole: bool = True) -> bool:
     """Whether every window that the piece-frame ``box`` of piece ``i`` reaches is printed, and (``whole``) the
     box lies whole within one of them (a label read on one page, not split across two)."""
     here = np.zeros_like(ink)
@@ -166,8 +178,7 @@ def _label_on(box: np.ndarray, layout: Layout, i: int, grid: PageGrid, ink: np.n
     return False
 
 
-def _label_place(piece, box: np.ndarray, layout: Layout, i: int, grid: PageGrid, ink: np.ndarray,
-                 whole: bool = True):
+def _label_place(piece, box: np.ndarray, layout: Layout, i: int, grid: PageGrid, ink: np.ndarray, whole: bool = True):
     """The nearest top-left corner (piece frame) where the label fits inside the piece on printed pages, or None.
 
     On a ``LABEL_STEP`` lattice over the sew line's box, a cell is free when its
@@ -177,6 +188,7 @@ def _label_place(piece, box: np.ndarray, layout: Layout, i: int, grid: PageGrid,
     covers are free (summed-area table). The nearest fits are checked exactly.
     """
     from scipy.ndimage import binary_dilation
+
     cell = LABEL_STEP
     size = box[2] - box[0]
     outline = np.asarray(piece.sew[0], float)
@@ -192,8 +204,13 @@ def _label_place(piece, box: np.ndarray, layout: Layout, i: int, grid: PageGrid,
         fill_cells(inner, np.asarray(hole, float), lo[0], hi[1], cell)
         free &= ~inner
     drawn = list(piece.cut) + list(piece.sew)
-    opened = [piece.grain] + [leg for d in piece.darts for leg in d.legs] + [d.fold for d in piece.darts] \
-        + [n.segment for n in piece.notches] + list(piece.fold)
+    opened = (
+        [piece.grain]
+        + [leg for d in piece.darts for leg in d.legs]
+        + [d.fold for d in piece.darts]
+        + [n.segment for n in piece.notches]
+        + list(piece.fold)
+    )
     q = np.concatenate([sample_loops(drawn, cell / 2)] + [sample_open(l, cell / 2) for l in opened])
     line = np.zeros((h, w), bool)
     rr, cc = np.floor((hi[1] - q[:, 1]) / cell).astype(int), np.floor((q[:, 0] - lo[0]) / cell).astype(int)

@@ -23,6 +23,7 @@ drawn (:mod:`.fold_half`).
 
 All lengths are metres, piece frame (grain = +y).
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -36,8 +37,13 @@ from .mirror_check import MIRROR_TOL, declared_pairs, mirror_gap
 from .pieces import PieceDrawing, not_mirror_note, relabel
 
 
-def print_set(pattern: Pattern, pieces: Sequence[PieceDrawing], print_all: bool = False,
-              tol: float = MIRROR_TOL, fold: bool = True) -> Tuple[List[PieceDrawing], List[dict]]:
+def print_set(
+    pattern: Pattern,
+    pieces: Sequence[PieceDrawing],
+    print_all: bool = False,
+    tol: float = MIRROR_TOL,
+    fold: bool = True,
+) -> Tuple[List[PieceDrawing], List[dict]]:
     """The pieces a tiled PDF prints, and what each printed piece stands for.
 
     Parameters
@@ -61,9 +67,9 @@ def print_set(pattern: Pattern, pieces: Sequence[PieceDrawing], print_all: bool 
         (how far apart its sides are, None when their drawings differ in kind);
         such a piece's label says it is not the other's mirror.
     """
-    twin = {}          # left index -> right index, for pairs printed once
-    apart = {}         # piece index -> (its declared mirror's index, m apart), for pairs printed twice
-    for j, k in ([] if print_all else declared_pairs(pattern, pieces)):
+    twin = {}  # left index -> right index, for pairs printed once
+    apart = {}  # piece index -> (its declared mirror's index, m apart), for pairs printed twice
+    for j, k in [] if print_all else declared_pairs(pattern, pieces):
         if j in twin:
             continue
         # build_pieces measured the pair already (for the labels of every file)
@@ -82,8 +88,9 @@ def print_set(pattern: Pattern, pieces: Sequence[PieceDrawing], print_all: bool 
             other = pieces[twin[k]].name
             folded = ", on fold" if piece.fold else ""
             printed.append(relabel(piece, [f"cut 2: {piece.name}", f"+ mirrored ({other}){folded}"], 2))
-            plan.append({"piece": piece.name, "quantity": 2, "cut": "1 as printed + 1 mirrored",
-                         "pieces": [piece.name, other]})
+            plan.append(
+                {"piece": piece.name, "quantity": 2, "cut": "1 as printed + 1 mirrored", "pieces": [piece.name, other]}
+            )
             continue
         entry = {"piece": piece.name, "quantity": piece.quantity, "cut": "as printed", "pieces": [piece.name]}
         if k in apart:
@@ -93,9 +100,13 @@ def print_set(pattern: Pattern, pieces: Sequence[PieceDrawing], print_all: bool 
             printed.append(relabel(piece, [f"cut {piece.quantity} as printed", f"({note})"], piece.quantity))
             entry["not_mirrored_mm"] = round(gap * 1000, 1) if np.isfinite(gap) else None
         elif fold and not print_all and (x0 := fold_axis(piece, tol)) is not None:
-            printed.append(relabel(fold_half(piece, x0, tol), [f"cut {piece.quantity} on fold: {piece.name}",
-                                                                "(half printed: fold line on the fabric fold)"],
-                                   piece.quantity))
+            printed.append(
+                relabel(
+                    fold_half(piece, x0, tol),
+                    [f"cut {piece.quantity} on fold: {piece.name}", "(half printed: fold line on the fabric fold)"],
+                    piece.quantity,
+                )
+            )
             entry["cut"] = "on fold (half printed)"
         else:
             printed.append(dataclasses.replace(piece))

@@ -7,6 +7,7 @@ laser cutter. One ``<g>`` per piece; lines are told apart by stroke colour
 notches green, grain line black, fold (mirror) line magenta, text black;
 a dart's legs blue (class ``dart``), its fold arrow and drill hole grey.
 """
+
 from __future__ import annotations
 
 from typing import List, Sequence
@@ -18,8 +19,15 @@ from ..geom.layout import Layout
 from .darts import DRILL_DIAMETER
 from .pieces import PieceDrawing
 
-COLOURS = {"cut": "#ff0000", "sew": "#0000ff", "notch": "#00a000", "grain": "#000000",
-           "fold": "#ff00ff", "text": "#000000", "mark": "#808080"}
+COLOURS = {
+    "cut": "#ff0000",
+    "sew": "#0000ff",
+    "notch": "#00a000",
+    "grain": "#000000",
+    "fold": "#ff00ff",
+    "text": "#000000",
+    "mark": "#808080",
+}
 STROKE_MM = 0.25
 
 
@@ -61,24 +69,34 @@ def svg_document(pieces: Sequence[PieceDrawing], layout: Layout, title: str = "p
     ]
     line = f'fill="none" stroke-width="{STROKE_MM}" stroke-linejoin="round" stroke-linecap="round"'
     for piece, off in zip(pieces, layout.offsets):
-        out.append(f"<g id={quoteattr('piece-' + piece.name)} data-piece={quoteattr(piece.name)} "
-                   f"data-quantity=\"{piece.quantity}\">")
+        out.append(
+            f"<g id={quoteattr('piece-' + piece.name)} data-piece={quoteattr(piece.name)} "
+            f'data-quantity="{piece.quantity}">'
+        )
         for loop in piece.cut:
             out.append(f'<path class="cut" d="{svg_path(mm(loop, off), True)}" stroke="{COLOURS["cut"]}" {line}/>')
         for loop in piece.sew:
-            out.append(f'<path class="sew" d="{svg_path(mm(loop, off), True)}" stroke="{COLOURS["sew"]}" '
-                       f'stroke-dasharray="4,2" {line}/>')
+            out.append(
+                f'<path class="sew" d="{svg_path(mm(loop, off), True)}" stroke="{COLOURS["sew"]}" '
+                f'stroke-dasharray="4,2" {line}/>'
+            )
         for f in piece.fold:
-            out.append(f'<path class="fold" d="{svg_path(mm(f, off), False)}" stroke="{COLOURS["fold"]}" '
-                       f'stroke-dasharray="8,2,1,2" {line}/>')
+            out.append(
+                f'<path class="fold" d="{svg_path(mm(f, off), False)}" stroke="{COLOURS["fold"]}" '
+                f'stroke-dasharray="8,2,1,2" {line}/>'
+            )
         for dart in piece.darts:
             d = " ".join(svg_path(mm(leg, off), False) for leg in dart.legs)
-            out.append(f'<path class="dart" data-dart={quoteattr(dart.name)} d="{d}" stroke="{COLOURS["sew"]}" {line}/>')
+            out.append(
+                f'<path class="dart" data-dart={quoteattr(dart.name)} d="{d}" stroke="{COLOURS["sew"]}" {line}/>'
+            )
             d = " ".join(svg_path(mm(x, off), False) for x in (dart.fold, dart.fold_head))
             out.append(f'<path class="dart-fold" d="{d}" stroke="{COLOURS["mark"]}" {line}/>')
             x, y = mm(dart.drill[None], off)[0]
-            out.append(f'<circle class="drill" cx="{svg_number(x)}" cy="{svg_number(y)}" r="{svg_number(500 * DRILL_DIAMETER)}" '
-                       f'stroke="{COLOURS["mark"]}" {line}/>')
+            out.append(
+                f'<circle class="drill" cx="{svg_number(x)}" cy="{svg_number(y)}" r="{svg_number(500 * DRILL_DIAMETER)}" '
+                f'stroke="{COLOURS["mark"]}" {line}/>'
+            )
         if piece.notches:
             d = " ".join(svg_path(mm(n.segment, off), False) for n in piece.notches)
             out.append(f'<path class="notch" d="{d}" stroke="{COLOURS["notch"]}" {line}/>')
@@ -87,9 +105,11 @@ def svg_document(pieces: Sequence[PieceDrawing], layout: Layout, title: str = "p
         h = piece.text_height * 1000.0
         x, y = mm(piece.label_at[None], off)[0]
         for k, text in enumerate(piece.label):
-            out.append(f'<text class="label" x="{svg_number(x)}" y="{svg_number(y + (k + 1) * 1.5 * h - 0.5 * h)}" '
-                       f'font-family="Helvetica, Arial, sans-serif" font-size="{svg_number(h)}" '
-                       f'fill="{COLOURS["text"]}">{escape(text)}</text>')
+            out.append(
+                f'<text class="label" x="{svg_number(x)}" y="{svg_number(y + (k + 1) * 1.5 * h - 0.5 * h)}" '
+                f'font-family="Helvetica, Arial, sans-serif" font-size="{svg_number(h)}" '
+                f'fill="{COLOURS["text"]}">{escape(text)}</text>'
+            )
         out.append("</g>")
     out.append("</svg>")
     return "\n".join(out) + "\n"

@@ -23,6 +23,7 @@ left out, and labels and grain lines are moved onto printed pages
 
 All lengths are metres, sheet frame y up, origin bottom-left.
 """
+
 from __future__ import annotations
 
 import itertools
@@ -35,24 +36,25 @@ import numpy as np
 from .pages import PageGrid, PrintLayout, fill_cells, grid_for, line_pages, piece_lines, place, rotation, sample_loops
 from .print_labels import grain_shift, inked_pages, label_at, label_box, place_grains, place_labels
 
-CELL = 0.0075           # m, raster cell of the packer (5 mm packs no tighter on the teaser, at twice the time)
-GAP = 0.010             # m, paper between two pieces (room for the scissors)
-SAMPLE = 0.008          # m, spacing of the cut-line samples that count a piece's pages while packing
-EXTRA_COLUMNS = 4       # sheet widths tried: the narrowest that holds the widest piece, and this many more
-TURNS = (0, 1, 2, 3)    # quarter turns tried per piece
+CELL = 0.0075  # m, raster cell of the packer (5 mm packs no tighter on the teaser, at twice the time)
+GAP = 0.010  # m, paper between two pieces (room for the scissors)
+SAMPLE = 0.008  # m, spacing of the cut-line samples that count a piece's pages while packing
+EXTRA_COLUMNS = 4  # sheet widths tried: the narrowest that holds the widest piece, and this many more
+TURNS = (0, 1, 2, 3)  # quarter turns tried per piece
 # degrees added to each quarter turn: (0, -5, 5, -10, 10) prints the teaser on 58 A4 pages instead of 61 (Letter 62
 # either way) for 4.5x the layout time (~10 s CPU a paper instead of ~2 s), so no tilt by default
-TILTS = (0.0,)          # the first is 0: print_layout tries the quarter turns alone first
-ALIGN_EPS = 0.0015      # m, how far past a page line an aligned position puts the piece's lines
+TILTS = (0.0,)  # the first is 0: print_layout tries the quarter turns alone first
+ALIGN_EPS = 0.0015  # m, how far past a page line an aligned position puts the piece's lines
 
 
 @dataclass
 class _Shape:
     """One piece turned by ``angle`` (degrees): its occupied cells and line samples, from the raster's top-left."""
+
     angle: float
-    mask: np.ndarray        # (h, w) bool, row 0 at the top
-    corner: np.ndarray      # (2,) m, turned-frame position of the mask's top-left corner
-    lines: np.ndarray       # (m, 2) m, line samples relative to ``corner`` (y <= 0)
+    mask: np.ndarray  # (h, w) bool, row 0 at the top
+    corner: np.ndarray  # (2,) m, turned-frame position of the mask's top-left corner
+    lines: np.ndarray  # (m, 2) m, line samples relative to ``corner`` (y <= 0)
 
 
 def _shape(piece, angle: float, gap: float, cell: float) -> _Shape:
@@ -72,8 +74,10 @@ def _shape(piece, angle: float, gap: float, cell: float) -> _Shape:
         fill_cells(mask, label, lo[0], hi[1], cell)
     # the outline's own cells: a thin piece may have no cell centre inside
     edge = sample_loops([outline], cell / 2)
-    mask[np.clip(((hi[1] - edge[:, 1]) / cell).astype(int), 0, h - 1),
-         np.clip(((edge[:, 0] - lo[0]) / cell).astype(int), 0, w - 1)] = True
+    mask[
+        np.clip(((hi[1] - edge[:, 1]) / cell).astype(int), 0, h - 1),
+        np.clip(((edge[:, 0] - lo[0]) / cell).astype(int), 0, w - 1),
+    ] = True
     k = int(math.ceil(pad / cell))
     if k:
         mask = binary_dilation(mask, structure=np.ones((2 * k + 1, 2 * k + 1), bool))
@@ -111,14 +115,14 @@ def _aligned(s: _Shape, hit: np.ndarray, step: np.ndarray, tile: np.ndarray, cel
     """Free positions (rows, columns of ``hit``) where the piece's lines start just past a page line or end just
     before one, across and down: where a piece reaches no further page than it must."""
     x0, x1 = s.lines[:, 0].min(), s.lines[:, 0].max()
-    d0, d1 = -s.lines[:, 1].max(), -s.lines[:, 1].min()   # depth of the lines below the raster's corner
+    d0, d1 = -s.lines[:, 1].max(), -s.lines[:, 1].min()  # depth of the lines below the raster's corner
     ov = tile - step
     rows, cols = hit.shape
 
     def lattice(lo, hi, k_max, st, tl, ov_, size):
         ks = np.arange(k_max + 2)
-        first = np.ceil((ks * st + ov_ + ALIGN_EPS - lo) / cell)   # lines begin past window k - 1's end
-        last = np.floor((ks * st + tl - ALIGN_EPS - hi) / cell)    # lines end before window k's end
+        first = np.ceil((ks * st + ov_ + ALIGN_EPS - lo) / cell)  # lines begin past window k - 1's end
+        last = np.floor((ks * st + tl - ALIGN_EPS - hi) / cell)  # lines end before window k's end
         v = np.unique(np.concatenate([first, last]).astype(int))
         return v[(v >= 0) & (v < size)]
 
@@ -141,6 +145,7 @@ def _overlaps(occ: np.ndarray, masks, below: int, spectra: dict, block: int = 64
     the next pieces too.
     """
     from scipy import fft as sfft
+
     wc = occ.shape[1]
     fit = [m for m in masks if m.shape[1] <= wc]
     if not fit:
@@ -163,7 +168,7 @@ def _overlaps(occ: np.ndarray, masks, below: int, spectra: dict, block: int = 64
         full = sfft.irfft2(sheet * spectra[key][1], s=(rows, cols))
         # the "valid" part for this mask's own depth: rows h - 1 .. top_m - 1, columns w - 1 .. wc - 1
         top_m = min(below + h, len(occ))
-        out.append(full[h - 1:top_m, w - 1:wc] > 0.5)
+        out.append(full[h - 1 : top_m, w - 1 : wc] > 0.5)
     return out
 
 
@@ -194,8 +199,9 @@ def _pack(shapes, order, width: float, tile: np.ndarray, overlap: float, reserve
     spectra = {}
     for i in order:
         best = None
-        hits = _overlaps(occ, [s.mask for s in shapes[i]], int(math.ceil(depth / cell)) + 1
-                         + int(math.ceil(tile[1] / cell)), spectra)
+        hits = _overlaps(
+            occ, [s.mask for s in shapes[i]], int(math.ceil(depth / cell)) + 1 + int(math.ceil(tile[1] / cell)), spectra
+        )
         for s, hit in zip(shapes[i], hits):
             h, w = s.mask.shape
             if hit is None:
@@ -223,15 +229,21 @@ def _pack(shapes, order, width: float, tile: np.ndarray, overlap: float, reserve
             raise ValueError("a piece does not fit the sheet")
         _, s, r, c, touched = best
         h, w = s.mask.shape
-        occ[r:r + h, c:c + w] += s.mask
+        occ[r : r + h, c : c + w] += s.mask
         used |= touched
         placed[i] = (s, c * cell, r * cell)
         depth = max(depth, (r + h) * cell)
     return placed, depth, int(used.sum())
 
 
-def print_layout(pieces, tile: Sequence[float], overlap: float, reserve: Optional[Tuple[float, float]] = None,
-                 gap: float = GAP, cell: float = CELL) -> Tuple[PrintLayout, PageGrid]:
+def print_layout(
+    pieces,
+    tile: Sequence[float],
+    overlap: float,
+    reserve: Optional[Tuple[float, float]] = None,
+    gap: float = GAP,
+    cell: float = CELL,
+) -> Tuple[PrintLayout, PageGrid]:
     """Pieces nested onto the page grid of a tiled PDF so that the fewest pages carry a line.
 
     Parameters
@@ -253,7 +265,7 @@ def print_layout(pieces, tile: Sequence[float], overlap: float, reserve: Optiona
     angles = [90.0 * k + t for t in TILTS for k in TURNS]
     shapes = [[_shape(p, a, gap, cell) for a in angles] for p in pieces]
     # quarter turns alone, then tilted too: a greedy packer with more choices is not always better
-    sets = [[v[:len(TURNS)] for v in shapes], shapes] if len(TILTS) > 1 else [shapes]
+    sets = [[v[: len(TURNS)] for v in shapes], shapes] if len(TILTS) > 1 else [shapes]
     # a piece must fit in some turn: the narrowest turn of the widest piece sets the first width tried
     need = max([min(s.mask.shape[1] for s in v) * cell for v in shapes] + [(reserve[0] + gap) if reserve else 0.0])
     cols0 = max(1, int(math.ceil((need + cell - overlap) / step[0] - 1e-9)))
@@ -269,8 +281,11 @@ def print_layout(pieces, tile: Sequence[float], overlap: float, reserve: Optiona
         turned = np.array([placed[i][0].angle for i in range(n)], float)
         # piece frame -> sheet: R p + offset, with the raster's corner at (x, height - depth)
         offsets = np.array([[placed[i][1], height - placed[i][2]] - placed[i][0].corner for i in range(n)])
-        reserved = None if reserve is None else np.array(
-            [[gap / 2, height - gap / 2 - reserve[1]], [gap / 2 + reserve[0], height - gap / 2]])
+        reserved = (
+            None
+            if reserve is None
+            else np.array([[gap / 2, height - gap / 2 - reserve[1]], [gap / 2 + reserve[0], height - gap / 2]])
+        )
         lay = PrintLayout(offsets=offsets, size=np.array([width, height]), reserved=reserved, angles=turned)
         grid = grid_for(lay.size, tile, overlap)
         ink = line_pages(pieces, lay, grid)
@@ -282,5 +297,22 @@ def print_layout(pieces, tile: Sequence[float], overlap: float, reserve: Optiona
             best = (pages, lay, grid)
     return best[1], best[2]
 
-__all__ = ["PrintLayout", "PageGrid", "rotation", "place", "grid_for", "line_pages", "inked_pages", "place_labels",
-           "label_at", "label_box", "grain_shift", "place_grains", "print_layout", "piece_lines", "CELL", "GAP"]
+
+__all__ = [
+    "PrintLayout",
+    "PageGrid",
+    "rotation",
+    "place",
+    "grid_for",
+    "line_pages",
+    "inked_pages",
+    "place_labels",
+    "label_at",
+    "label_box",
+    "grain_shift",
+    "place_grains",
+    "print_layout",
+    "piece_lines",
+    "CELL",
+    "GAP",
+]

@@ -3,6 +3,7 @@
 Every failure is an :class:`core.errors.ExportError` that names the piece or
 seam and the field at fault, raised before a single file is written.
 """
+
 from __future__ import annotations
 
 from typing import List, Optional
@@ -10,8 +11,8 @@ from typing import List, Optional
 import numpy as np
 
 from ..errors import ExportError
-from ..pattern.types import Pattern
 from ..geom.polygon import remove_loops, segments_cross, signed_area
+from ..pattern.types import Pattern
 from .boundary import edge_table, piece_loops
 
 MIN_AREA = 1e-6  # m^2 (1 cm^2): smaller pieces are degenerate for a cutting room
@@ -19,7 +20,7 @@ MIN_AREA = 1e-6  # m^2 (1 cm^2): smaller pieces are degenerate for a cutting roo
 # threshold let 8.2 cm^2 of real loops through on a men's XS blouse); ``strict=False`` exports it
 # with a warning.
 MAX_COORDINATE = 1000.0  # m: a draped vertex farther than this from the origin is a diverged drape (and 1e308
-                         # would be infinite in the GLB's float32)
+# would be infinite in the GLB's float32)
 
 
 def _ids(a, n: int, where: str) -> np.ndarray:
@@ -66,8 +67,10 @@ def validate_pattern(pattern: Pattern, strict: bool = True) -> List[str]:
         if not isinstance(name, str) or not name:
             raise ExportError(f"pattern.panels: piece names must be non-empty strings, got {name!r}")
         if len(name) > MAX_NAME:
-            raise ExportError(f"pattern.panels[{k}].name: expected at most {MAX_NAME} characters (it names the piece "
-                              f"on its label and in every file), got {len(name)}: {name[:24]!r}...")
+            raise ExportError(
+                f"pattern.panels[{k}].name: expected at most {MAX_NAME} characters (it names the piece "
+                f"on its label and in every file), got {len(name)}: {name[:24]!r}..."
+            )
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise ExportError(f"pattern.panels: duplicate piece names {dup}")
@@ -112,10 +115,11 @@ def validate_pattern(pattern: Pattern, strict: bool = True) -> List[str]:
             hit = segments_cross(uv[loop].astype(float))
             if hit is not None:
                 q = uv[loop][hit[0]] * 1000
-                _, loops_area = remove_loops(uv[loop].astype(float), 1.0 if k == 0 else -1.0,
-                                             return_removed=True)
-                msg = (f"{where}.uv: the sew line crosses itself near ({q[0]:.0f}, {q[1]:.0f}) mm, "
-                       f"enclosing {loops_area * 1e4:.2g} cm^2 in loops")
+                _, loops_area = remove_loops(uv[loop].astype(float), 1.0 if k == 0 else -1.0, return_removed=True)
+                msg = (
+                    f"{where}.uv: the sew line crosses itself near ({q[0]:.0f}, {q[1]:.0f}) mm, "
+                    f"enclosing {loops_area * 1e4:.2g} cm^2 in loops"
+                )
                 if strict:
                     raise ExportError(msg + " (a folded-over or tangled piece)")
                 else:
@@ -130,21 +134,24 @@ def validate_pattern(pattern: Pattern, strict: bool = True) -> List[str]:
         va = np.asarray(seam.verts_a).reshape(-1)
         vb = np.asarray(seam.verts_b).reshape(-1)
         if va.size < 2 or va.size != vb.size:
-            raise ExportError(f"{where}.verts_a/verts_b: expected two equally long polylines of >= 2 vertices, "
-                              f"got {va.size} and {vb.size}")
+            raise ExportError(
+                f"{where}.verts_a/verts_b: expected two equally long polylines of >= 2 vertices, "
+                f"got {va.size} and {vb.size}"
+            )
         for side, v in (("a", va), ("b", vb)):
             pname = getattr(seam, f"panel_{side}")
             panel = pattern.panel(pname)
             ids = _ids(v, len(panel.uv), f"{where}.verts_{side}")
             for u, w in zip(ids[:-1], ids[1:]):
                 if (int(u), int(w)) not in tables[pname]:
-                    raise ExportError(f"{where}.verts_{side}: vertices {u} -> {w} of piece {pname!r} are not "
-                                      f"consecutive boundary vertices (a seam must run along the piece outline)")
+                    raise ExportError(
+                        f"{where}.verts_{side}: vertices {u} -> {w} of piece {pname!r} are not "
+                        f"consecutive boundary vertices (a seam must run along the piece outline)"
+                    )
     return warnings
 
 
-def validate_drape(pattern: Pattern, positions: Optional[np.ndarray],
-                   faces: Optional[np.ndarray] = None) -> np.ndarray:
+def validate_drape(pattern: Pattern, positions: Optional[np.ndarray], faces: Optional[np.ndarray] = None) -> np.ndarray:
     """The drape positions as a float (N, 3) array covering every garment vertex id, or ExportError.
 
     ``faces`` (optional, (F, 3) garment vertex ids, ``drape.npz["faces"]``): the
@@ -157,30 +164,42 @@ def validate_drape(pattern: Pattern, positions: Optional[np.ndarray],
         raise ExportError(f"drape.positions: expected (N, 3) numbers, got shape {p.shape}")
     need = max(int(np.max(panel.vertex_ids)) for panel in pattern.panels) + 1
     if p.shape[0] < need:
-        raise ExportError(f"drape.positions: {p.shape[0]} vertices, but the pattern uses garment vertex ids "
-                          f"up to {need - 1} (was it draped from this pattern?)")
+        raise ExportError(
+            f"drape.positions: {p.shape[0]} vertices, but the pattern uses garment vertex ids "
+            f"up to {need - 1} (was it draped from this pattern?)"
+        )
     if faces is not None and np.size(faces):
         f = np.asarray(faces)
         if f.ndim != 2 or f.shape[1] != 3 or f.dtype.kind not in "iu":
             raise ExportError(f"drape.faces: expected (F, 3) vertex ids, got shape {f.shape}")
-        mine = np.sort(np.concatenate([np.asarray(panel.vertex_ids, int)[np.asarray(panel.faces, int)]
-                                       for panel in pattern.panels]), axis=1)
+        mine = np.sort(
+            np.concatenate(
+                [np.asarray(panel.vertex_ids, int)[np.asarray(panel.faces, int)] for panel in pattern.panels]
+            ),
+            axis=1,
+        )
         theirs = np.sort(f.astype(np.int64), axis=1)
         if len(mine) != len(theirs) or not np.array_equal(np.unique(mine, axis=0), np.unique(theirs, axis=0)):
-            raise ExportError(f"drape: its {len(theirs)} triangles are not this pattern's {len(mine)} "
-                              f"(was it draped from another pattern? drape this one again)")
+            raise ExportError(
+                f"drape: its {len(theirs)} triangles are not this pattern's {len(mine)} "
+                f"(was it draped from another pattern? drape this one again)"
+            )
     used = np.concatenate([np.asarray(panel.vertex_ids, int) for panel in pattern.panels])
     q = p[used].astype(float)
     if not np.all(np.isfinite(q)):
         bad = int(used[np.argmax(~np.all(np.isfinite(q), axis=1))])
-        raise ExportError(f"drape.positions: vertex {bad} holds NaN or infinite values "
-                          f"({p[bad].tolist()}); the drape diverged? "
-                          f"drape the pattern again")
+        raise ExportError(
+            f"drape.positions: vertex {bad} holds NaN or infinite values "
+            f"({p[bad].tolist()}); the drape diverged? "
+            f"drape the pattern again"
+        )
     far = np.abs(q).max(axis=1)
     if far.max() > MAX_COORDINATE:
         bad = int(used[np.argmax(far)])
-        raise ExportError(f"drape.positions: vertex {bad} lies {far.max():.3g} m from the origin (expected within "
-                          f"{MAX_COORDINATE:g} m: a body is about 2 m tall; the drape diverged?)")
+        raise ExportError(
+            f"drape.positions: vertex {bad} lies {far.max():.3g} m from the origin (expected within "
+            f"{MAX_COORDINATE:g} m: a body is about 2 m tall; the drape diverged?)"
+        )
     return p.astype(float)
 
 
@@ -192,10 +211,10 @@ def validate_body(body) -> tuple:
         f = np.asarray(f)
     except (TypeError, ValueError):
         raise ExportError("body: expected (vertices (V, 3), faces (F, 3))") from None
-    if v.ndim != 2 or v.shape[1] != 3 or not len(v) or not np.all(np.isfinite(v)) or \
-            np.abs(v).max() > MAX_COORDINATE:
-        raise ExportError(f"body.vertices: expected (V, 3) finite metres within {MAX_COORDINATE:g} m, got shape "
-                          f"{v.shape}")
+    if v.ndim != 2 or v.shape[1] != 3 or not len(v) or not np.all(np.isfinite(v)) or np.abs(v).max() > MAX_COORDINATE:
+        raise ExportError(
+            f"body.vertices: expected (V, 3) finite metres within {MAX_COORDINATE:g} m, got shape {v.shape}"
+        )
     if f.ndim != 2 or f.shape[1] != 3 or f.dtype.kind not in "iu" or (f.size and (f.min() < 0 or f.max() >= len(v))):
         raise ExportError(f"body.faces: expected (F, 3) vertex ids in [0, {len(v)}), got shape {f.shape}")
     return v, f.astype(np.int64)

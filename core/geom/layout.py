@@ -14,6 +14,7 @@ One definition used by the export, the pattern plot and the add-on.
 
 All lengths are metres.
 """
+
 from __future__ import annotations
 
 import math
@@ -25,10 +26,10 @@ import numpy as np
 from .mesh import signed_areas_2d
 from .polygon import ray_hit
 
-GRAIN_FRACTION = 0.7      # the grain line spans this fraction of the chord through the piece
-GRAIN_MISS = 0.05         # m, half-chord assumed on a side where the ray leaves no loop
-ARROW_HEAD = 0.015        # m, arrow-head length (at most a quarter of the grain line)
-ARROW_ANGLE = 25.0        # degrees, half opening of an arrow head
+GRAIN_FRACTION = 0.7  # the grain line spans this fraction of the chord through the piece
+GRAIN_MISS = 0.05  # m, half-chord assumed on a side where the ray leaves no loop
+ARROW_HEAD = 0.015  # m, arrow-head length (at most a quarter of the grain line)
+ARROW_ANGLE = 25.0  # degrees, half opening of an arrow head
 
 
 def grain_rotation(grain: np.ndarray) -> np.ndarray:
@@ -70,8 +71,13 @@ def interior_point(uv: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return cen[np.argmin(np.linalg.norm(cen - c, axis=1))]
 
 
-def grain_line(uv: np.ndarray, faces: np.ndarray, loops: Sequence[np.ndarray], grain: np.ndarray,
-               length_fraction: float = GRAIN_FRACTION) -> Tuple[np.ndarray, np.ndarray]:
+def grain_line(
+    uv: np.ndarray,
+    faces: np.ndarray,
+    loops: Sequence[np.ndarray],
+    grain: np.ndarray,
+    length_fraction: float = GRAIN_FRACTION,
+) -> Tuple[np.ndarray, np.ndarray]:
     """The grain line of a piece.
 
     From :func:`interior_point`, rays along the grain and against it meet the
@@ -106,8 +112,9 @@ def grain_line(uv: np.ndarray, faces: np.ndarray, loops: Sequence[np.ndarray], g
     return rot.T @ p0, rot.T @ p1
 
 
-def grain_arrows(start: np.ndarray, end: np.ndarray, head: float = ARROW_HEAD,
-                 angle: float = ARROW_ANGLE) -> List[np.ndarray]:
+def grain_arrows(
+    start: np.ndarray, end: np.ndarray, head: float = ARROW_HEAD, angle: float = ARROW_ANGLE
+) -> List[np.ndarray]:
     """Arrow heads at both ends of a grain line.
 
     Parameters
@@ -124,11 +131,13 @@ def grain_arrows(start: np.ndarray, end: np.ndarray, head: float = ARROW_HEAD,
     d = p1 - p0
     length = float(np.linalg.norm(d))
     u = d / max(length, 1e-300)
-    n = np.array([u[1], -u[0]])          # to the right of the line
+    n = np.array([u[1], -u[0]])  # to the right of the line
     h = min(head, 0.25 * length)
     dx = h * math.tan(math.radians(angle))
-    return [np.array([p1 - h * u - dx * n, p1, p1 - h * u + dx * n]),
-            np.array([p0 + h * u - dx * n, p0, p0 + h * u + dx * n])]
+    return [
+        np.array([p1 - h * u - dx * n, p1, p1 - h * u + dx * n]),
+        np.array([p0 + h * u - dx * n, p0, p0 + h * u + dx * n]),
+    ]
 
 
 @dataclass
@@ -141,13 +150,15 @@ class Layout:
     size : (2,) float, sheet width and height.
     reserved : (2, 2) float or None, min/max corner of the reserved box (test square).
     """
+
     offsets: np.ndarray
     size: np.ndarray
     reserved: Optional[np.ndarray] = None
 
 
-def layout_pieces(boxes: Sequence[np.ndarray], width: float = 0.9, margin: float = 0.02,
-                  reserve: Optional[Tuple[float, float]] = None) -> Layout:
+def layout_pieces(
+    boxes: Sequence[np.ndarray], width: float = 0.9, margin: float = 0.02, reserve: Optional[Tuple[float, float]] = None
+) -> Layout:
     """Skyline packing of bounding boxes: tallest first, each where it reaches least far down, then leftmost.
 
     Parameters
@@ -166,14 +177,15 @@ def layout_pieces(boxes: Sequence[np.ndarray], width: float = 0.9, margin: float
     items = [(-sizes[i, 1], -sizes[i, 0], i) for i in range(len(boxes))]
     items.sort()
     order = [i for _, _, i in items]
-    entries = ([("reserve", np.asarray(reserve, float))] if reserve is not None else []) + \
-              [(i, sizes[i]) for i in order]
+    entries = ([("reserve", np.asarray(reserve, float))] if reserve is not None else []) + [
+        (i, sizes[i]) for i in order
+    ]
     sheet_w = max([width] + [s[0] + 2 * margin for _, s in entries])
     # skyline packing, y measured downward from the top edge: the skyline is
     # the fill depth of each x interval; a box goes where its top would be
     # shallowest (then leftmost), spanning the intervals it covers
-    xs = [margin, sheet_w - margin]          # interval boundaries
-    depth = [margin]                          # fill depth of each interval
+    xs = [margin, sheet_w - margin]  # interval boundaries
+    depth = [margin]  # fill depth of each interval
     pos = {}
     for key, s in entries:
         w = float(s[0])

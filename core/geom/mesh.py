@@ -3,6 +3,7 @@
 Vertices are ``(V, 3)`` (or ``(V, 2)`` for pattern coordinates) float arrays
 in metres, faces ``(F, 3)`` integer arrays of vertex ids.
 """
+
 from __future__ import annotations
 
 from typing import List
@@ -104,7 +105,7 @@ def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """
     v = np.asarray(vertices, float)
     f = np.asarray(faces, int)
-    fn = face_normals(v, f, unit=False)           # length = 2 * area: the area weighting
+    fn = face_normals(v, f, unit=False)  # length = 2 * area: the area weighting
     n = np.zeros_like(v)
     for k in range(3):
         np.add.at(n, f[:, k], fn)
@@ -128,6 +129,7 @@ def boundary_loops(faces: np.ndarray) -> List[np.ndarray]:
     (the last vertex joins the first); empty for a closed mesh.
     """
     import igl
+
     f = np.ascontiguousarray(faces, dtype=np.int64)
     if len(f) == 0:
         return []

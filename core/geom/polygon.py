@@ -5,6 +5,7 @@ A polygon is a ``(k, 2)`` float array of points in metres, closed implicitly
 polygons have positive area; an outline is counter-clockwise and a hole
 clockwise, so the material is always on the left of the walk.
 """
+
 from __future__ import annotations
 
 from typing import List, Optional, Tuple
@@ -13,7 +14,7 @@ import numpy as np
 
 from ..errors import ExportError
 
-MITRE_LIMIT = 3.0   # a mitred corner lies at most this many offset widths from the polygon corner
+MITRE_LIMIT = 3.0  # a mitred corner lies at most this many offset widths from the polygon corner
 
 
 def cross2(u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -109,11 +110,15 @@ def segments_cross(loop: np.ndarray, closed: bool = True, tol: float = 1e-12) ->
     # blocks of rows keep the pair arrays small while staying vectorised
     for i0 in range(0, m - 2, 128):
         ii = np.arange(i0, min(i0 + 128, m - 2))[:, None]
-        cand = (jj[None, :] >= ii + 2)
+        cand = jj[None, :] >= ii + 2
         if closed:
             cand &= ~((ii == 0) & (jj[None, :] == m - 1))
-        cand &= ((lo[None, :, 0] <= hi[ii, 0]) & (hi[None, :, 0] >= lo[ii, 0]) &
-                 (lo[None, :, 1] <= hi[ii, 1]) & (hi[None, :, 1] >= lo[ii, 1]))
+        cand &= (
+            (lo[None, :, 0] <= hi[ii, 0])
+            & (hi[None, :, 0] >= lo[ii, 0])
+            & (lo[None, :, 1] <= hi[ii, 1])
+            & (hi[None, :, 1] >= lo[ii, 1])
+        )
         ci, cj = np.nonzero(cand)
         if ci.size == 0:
             continue
@@ -168,7 +173,7 @@ def offset_loop(loop: np.ndarray, widths: np.ndarray, mitre_limit: float = MITRE
     d = np.roll(p, -1, axis=0) - p
     t = d / np.linalg.norm(d, axis=1)[:, None]
     nrm = np.stack([t[:, 1], -t[:, 0]], axis=1)  # right normal = outward for ccw
-    base = p + w[:, None] * nrm                  # a point on each offset line
+    base = p + w[:, None] * nrm  # a point on each offset line
 
     def corner(e0: int, e1: int) -> List[np.ndarray]:
         # the polygon corner: end of e0 (== start of e1 while they are neighbours)
@@ -227,8 +232,7 @@ def offset_loop(loop: np.ndarray, widths: np.ndarray, mitre_limit: float = MITRE
     return np.asarray(out, float)
 
 
-def remove_loops(poly: np.ndarray, orientation: float = 1.0, max_iter: int = 1000,
-                 return_removed: bool = False):
+def remove_loops(poly: np.ndarray, orientation: float = 1.0, max_iter: int = 1000, return_removed: bool = False):
     """Cut the loops out of a self-crossing closed polygon.
 
     At each crossing the polygon splits in two closed parts; the one with the
@@ -260,8 +264,8 @@ def remove_loops(poly: np.ndarray, orientation: float = 1.0, max_iter: int = 100
         x = line_intersection(a0, a1 - a0, b0, b1 - b0)
         if x is None:  # pragma: no cover - segments_cross found a proper crossing
             break
-        outer = np.vstack([p[:i + 1], x[None], p[j + 1:]])
-        inner = np.vstack([x[None], p[i + 1:j + 1]])
+        outer = np.vstack([p[: i + 1], x[None], p[j + 1 :]])
+        inner = np.vstack([x[None], p[i + 1 : j + 1]])
         if orientation * signed_area(outer) >= orientation * signed_area(inner):
             p, cut_away = outer, inner
         else:

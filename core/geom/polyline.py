@@ -3,6 +3,7 @@
 A polyline is a ``(k, d)`` float array of points (d = 2 or 3, metres), open
 unless ``closed=True`` adds the edge from the last point back to the first.
 """
+
 from __future__ import annotations
 
 from typing import Tuple

@@ -14,6 +14,7 @@ Shapes: points and ray origins ``(n, 3)``, mesh vertices ``(V, 3)`` and faces
 ``(F, 3)``; lengths in metres. The mesh is converted to float32 (Warp's
 ``vec3``), so distances are float32-exact, returned as float64.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -40,10 +41,11 @@ def init_cpu() -> None:
     """
     import os
     import sys
+
     try:
         sys.stderr.flush()
         saved = os.dup(2)
-    except (AttributeError, OSError, ValueError):   # no file descriptor 2 (an embedding host)
+    except (AttributeError, OSError, ValueError):  # no file descriptor 2 (an embedding host)
         wp.init()
         return
     try:
@@ -57,9 +59,15 @@ def init_cpu() -> None:
 
 
 @wp.kernel
-def closest_plane(points: wp.array(dtype=wp.vec3), weight: wp.array(dtype=float), mesh: wp.uint64,
-                  max_dist: float, point: wp.array(dtype=wp.vec3), normal: wp.array(dtype=wp.vec3),
-                  hit: wp.array(dtype=int)):
+def closest_plane(
+    points: wp.array(dtype=wp.vec3),
+    weight: wp.array(dtype=float),
+    mesh: wp.uint64,
+    max_dist: float,
+    point: wp.array(dtype=wp.vec3),
+    normal: wp.array(dtype=wp.vec3),
+    hit: wp.array(dtype=int),
+):
     """Closest mesh point and the normal of its triangle, for points within ``max_dist``.
 
     ``hit[i]`` is 1 where found, 0 where the mesh is farther or ``weight[i]`` is
@@ -85,8 +93,9 @@ def _distance(mesh: wp.uint64, p: wp.vec3, q: wp.MeshQueryPoint, sign: float, ma
 
 
 @wp.kernel
-def signed_distance_kernel(points: wp.array(dtype=wp.vec3), mesh: wp.uint64, max_dist: float,
-                           out: wp.array(dtype=float)):
+def signed_distance_kernel(
+    points: wp.array(dtype=wp.vec3), mesh: wp.uint64, max_dist: float, out: wp.array(dtype=float)
+):
     """Signed distance to ``mesh`` (negative inside), +max_dist when farther."""
     i = wp.tid()
     q = wp.mesh_query_point_sign_normal(mesh, points[i], max_dist)
@@ -94,8 +103,9 @@ def signed_distance_kernel(points: wp.array(dtype=wp.vec3), mesh: wp.uint64, max
 
 
 @wp.kernel
-def unsigned_distance_kernel(points: wp.array(dtype=wp.vec3), mesh: wp.uint64, max_dist: float,
-                             out: wp.array(dtype=float)):
+def unsigned_distance_kernel(
+    points: wp.array(dtype=wp.vec3), mesh: wp.uint64, max_dist: float, out: wp.array(dtype=float)
+):
     """Distance to ``mesh``, +max_dist when farther."""
     i = wp.tid()
     q = wp.mesh_query_point_no_sign(mesh, points[i], max_dist)
@@ -103,8 +113,13 @@ def unsigned_distance_kernel(points: wp.array(dtype=wp.vec3), mesh: wp.uint64, m
 
 
 @wp.kernel
-def ray_hit_kernel(origins: wp.array(dtype=wp.vec3), dirs: wp.array(dtype=wp.vec3), mesh: wp.uint64,
-                   max_t: float, t: wp.array(dtype=float)):
+def ray_hit_kernel(
+    origins: wp.array(dtype=wp.vec3),
+    dirs: wp.array(dtype=wp.vec3),
+    mesh: wp.uint64,
+    max_t: float,
+    t: wp.array(dtype=float),
+):
     """Ray parameter of the first hit on ``mesh`` (the distance for unit directions), 0 when none."""
     i = wp.tid()
     q = wp.mesh_query_ray(mesh, origins[i], dirs[i], max_t)
@@ -132,8 +147,9 @@ def warp_mesh(vertices: np.ndarray, faces: np.ndarray, device="cpu") -> "wp.Mesh
     return wp.Mesh(points=points, indices=idx)
 
 
-def _query(kernel, points: np.ndarray, vertices: np.ndarray, faces: np.ndarray, limit: float,
-           extra: tuple = ()) -> np.ndarray:
+def _query(
+    kernel, points: np.ndarray, vertices: np.ndarray, faces: np.ndarray, limit: float, extra: tuple = ()
+) -> np.ndarray:
     """Launch a per-point query kernel ``kernel(points, *extra, mesh, limit, out)`` on the CPU."""
     wp.init()
     pts = np.asarray(points, dtype=np.float32).reshape(-1, 3)
@@ -146,8 +162,9 @@ def _query(kernel, points: np.ndarray, vertices: np.ndarray, faces: np.ndarray, 
     return out.numpy().astype(float)
 
 
-def distance_to_mesh(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray, signed: bool = False,
-                     max_dist: float = 1.0) -> np.ndarray:
+def distance_to_mesh(
+    points: np.ndarray, vertices: np.ndarray, faces: np.ndarray, signed: bool = False, max_dist: float = 1.0
+) -> np.ndarray:
     """Distance of each point to a triangle mesh.
 
     Parameters
@@ -165,8 +182,9 @@ def distance_to_mesh(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray
     return _query(kernel, points, vertices, faces, max_dist)
 
 
-def ray_hit_distance(origins: np.ndarray, directions: np.ndarray, vertices: np.ndarray, faces: np.ndarray,
-                     max_t: float = 0.5) -> np.ndarray:
+def ray_hit_distance(
+    origins: np.ndarray, directions: np.ndarray, vertices: np.ndarray, faces: np.ndarray, max_t: float = 0.5
+) -> np.ndarray:
     """Distance along each ray to its first hit on a triangle mesh.
 
     Parameters
@@ -188,5 +206,12 @@ def ray_hit_distance(origins: np.ndarray, directions: np.ndarray, vertices: np.n
     return _query(ray_hit_kernel, o, vertices, faces, max_t, extra=(dirs,))
 
 
-__all__ = ["closest_plane", "signed_distance_kernel", "unsigned_distance_kernel", "ray_hit_kernel", "warp_mesh",
-           "distance_to_mesh", "ray_hit_distance"]
+__all__ = [
+    "closest_plane",
+    "signed_distance_kernel",
+    "unsigned_distance_kernel",
+    "ray_hit_kernel",
+    "warp_mesh",
+    "distance_to_mesh",
+    "ray_hit_distance",
+]

@@ -13,6 +13,7 @@ Jacobian of any per-vertex map from that flattening (:func:`gradient_jacobians`)
 :func:`intrinsic_offsets` gives the 3D weft/warp offsets in a 2D tangent frame,
 and :func:`scales_of_offsets` the weft/warp scales of a pattern from both.
 """
+
 from __future__ import annotations
 
 from typing import List, Sequence, Tuple
@@ -46,8 +47,8 @@ def jacobians(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray) -> np.ndarray:
     xyz = np.asarray(xyz, float)
     F = np.asarray(faces, int)
     u0, x0 = uv[F[:, 0]], xyz[F[:, 0]]
-    e1, e2 = uv[F[:, 1]] - u0, uv[F[:, 2]] - u0          # the 2D edges: D2's columns
-    d1, d2 = xyz[F[:, 1]] - x0, xyz[F[:, 2]] - x0        # the 3D edges: D3's columns
+    e1, e2 = uv[F[:, 1]] - u0, uv[F[:, 2]] - u0  # the 2D edges: D2's columns
+    d1, d2 = xyz[F[:, 1]] - x0, xyz[F[:, 2]] - x0  # the 3D edges: D3's columns
     det = e1[:, 0] * e2[:, 1] - e2[:, 0] * e1[:, 1]
     with np.errstate(divide="ignore", invalid="ignore"):
         i00, i01, i10, i11 = e2[:, 1] / det, -e2[:, 0] / det, -e1[:, 1] / det, e1[:, 0] / det
@@ -59,8 +60,9 @@ def jacobians(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return J
 
 
-def scales(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray, grain: np.ndarray
-           ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+def scales(
+    uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray, grain: np.ndarray
+) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Achieved weft/warp scales and shear per triangle.
 
     Parameters
@@ -78,7 +80,7 @@ def scales(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray, grain: np.ndarray
     J = jacobians(uv, xyz, faces)
     g = np.asarray(grain, float) / np.linalg.norm(grain)
     w = weft_of(g)
-    jw = J[:, :, 0] * w[0] + J[:, :, 1] * w[1]        # J w and J g written out (see jacobians)
+    jw = J[:, :, 0] * w[0] + J[:, :, 1] * w[1]  # J w and J g written out (see jacobians)
     jg = J[:, :, 0] * g[0] + J[:, :, 1] * g[1]
     lw, lg = row_norm(jw), row_norm(jg)
     with np.errstate(divide="ignore", invalid="ignore"):

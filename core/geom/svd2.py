@@ -9,6 +9,7 @@ as :func:`core.geom.strain.components` gives them).
 A 2 x 2 matrix ``A = R(phi) diag(s1, s2) R(theta)`` with rotations ``R`` (det +1),
 ``s1 >= |s2|`` and ``s2 < 0`` exactly when ``A`` reflects (the *signed* SVD).
 """
+
 from __future__ import annotations
 
 from typing import List, Sequence, Tuple
@@ -37,7 +38,7 @@ def _halves(A: Sequence[np.ndarray]):
     a00, a01, a10, a11 = (np.asarray(a, float) for a in A)
     out = [a00 + a11, a00 - a11, a10 + a01, a10 - a01]
     for x in out:
-        x *= 0.5            # 0.5 (a + b), in the sum's own array
+        x *= 0.5  # 0.5 (a + b), in the sum's own array
     return out
 
 
@@ -70,8 +71,12 @@ def compose2(s1: np.ndarray, s2: np.ndarray, phi: np.ndarray, theta: np.ndarray)
     cp, sp_ = np.cos(phi), np.sin(phi)
     ct, st = np.cos(theta), np.sin(theta)
     # R(phi) diag(s) = [[cp s1, -sp s2], [sp s1, cp s2]]; times R(theta) = [[ct, -st], [st, ct]]
-    return [cp * s1 * ct - sp_ * s2 * st, -cp * s1 * st - sp_ * s2 * ct,
-            sp_ * s1 * ct + cp * s2 * st, -sp_ * s1 * st + cp * s2 * ct]
+    return [
+        cp * s1 * ct - sp_ * s2 * st,
+        -cp * s1 * st - sp_ * s2 * ct,
+        sp_ * s1 * ct + cp * s2 * st,
+        -sp_ * s1 * st + cp * s2 * ct,
+    ]
 
 
 def clamp_singular_values_below(A: Sequence[np.ndarray], floor: float) -> List[np.ndarray]:

@@ -12,13 +12,45 @@ After export in the pipeline (its pieces are the exporter's drawings,
 The CLI (``ease marker``), the add-on and batch runs reach it through
 :func:`core.workflows.marker`.
 """
+
 from __future__ import annotations
 
-from .nesting import MAX_GARMENTS, MAX_SECONDS, MAX_WIDTH, SPREADS, Marker, MarkerItem, Placement
-from .nesting import check_options, default_tries, marker_items, marker_report, nest, orientations
-from .nesting import parse_quantities, placed_outline, size_label
+from .nesting import (
+    MAX_GARMENTS,
+    MAX_SECONDS,
+    MAX_WIDTH,
+    SPREADS,
+    Marker,
+    MarkerItem,
+    Placement,
+    check_options,
+    default_tries,
+    marker_items,
+    marker_report,
+    nest,
+    orientations,
+    parse_quantities,
+    placed_outline,
+    size_label,
+)
 from .render import write_marker
 
-__all__ = ["Marker", "MarkerItem", "Placement", "marker_items", "nest", "check_options", "default_tries",
-           "orientations", "parse_quantities", "size_label", "placed_outline", "marker_report", "write_marker",
-           "MAX_WIDTH", "MAX_SECONDS", "MAX_GARMENTS", "SPREADS"]
+__all__ = [
+    "Marker",
+    "MarkerItem",
+    "Placement",
+    "marker_items",
+    "nest",
+    "check_options",
+    "default_tries",
+    "orientations",
+    "parse_quantities",
+    "size_label",
+    "placed_outline",
+    "marker_report",
+    "write_marker",
+    "MAX_WIDTH",
+    "MAX_SECONDS",
+    "MAX_GARMENTS",
+    "SPREADS",
+]

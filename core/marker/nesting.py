@@ -32,6 +32,7 @@ side with seeds ``seed``, ``seed + 1``, ..., the shortest marker kept); the
 marker reports both, so its efficiency is always that of ``seconds`` on
 ``threads x tries`` cores.
 """
+
 from __future__ import annotations
 
 import json
@@ -57,13 +58,13 @@ from ..progress import Progress, report
 from .outline import nest_outline
 
 GRAIN_TO_LENGTH = np.array([[0.0, 1.0], [-1.0, 0.0]])  # piece frame (grain +y) -> marker frame (grain +x)
-MAX_TILT = 10.0           # degrees
-MAX_WIDTH = 10.0          # m of fabric width: the widest rolls are ~3.2 m
-MAX_SECONDS = 24 * 3600   # s of nesting
-MAX_GARMENTS = 100        # garments of one size in one marker
-MARGIN = 5.0              # s: a nest returns at most this long after its time budget
-SPREADS = ("single", "pairs")   # one ply; two plies face to face
-EXPLORATION_SHARE = 0.8   # of the budget exploring (sparrow's own split), the rest compressing
+MAX_TILT = 10.0  # degrees
+MAX_WIDTH = 10.0  # m of fabric width: the widest rolls are ~3.2 m
+MAX_SECONDS = 24 * 3600  # s of nesting
+MAX_GARMENTS = 100  # garments of one size in one marker
+MARGIN = 5.0  # s: a nest returns at most this long after its time budget
+SPREADS = ("single", "pairs")  # one ply; two plies face to face
+EXPLORATION_SHARE = 0.8  # of the budget exploring (sparrow's own split), the rest compressing
 WORKER = Path(__file__).with_name("worker.py")
 SPYRROW_PIN = "spyrrow==0.9.0"
 
@@ -87,6 +88,7 @@ class MarkerItem:
     pair : str, face to face: the piece whose mirror image the second ply cuts (a declared pair's right),
         else "".
     """
+
     size: str
     piece: PieceDrawing
     outline: np.ndarray
@@ -104,6 +106,7 @@ class Placement:
 
     ``angle`` (degrees) is the nester's turn after :data:`GRAIN_TO_LENGTH`.
     """
+
     item: int
     angle: float
     rotation: np.ndarray
@@ -127,6 +130,7 @@ class Marker:
     history : list of (seconds, efficiency), each improvement as it came.
     tries : nesters run side by side (seeds ``seed`` ...), ``best_seed`` the one whose marker this is.
     """
+
     width: float
     length: float
     items: List[MarkerItem]
@@ -167,8 +171,7 @@ def default_tries(threads: int = 1) -> int:
     return max(_cores() // threads, 1)
 
 
-def check_options(width: float, seconds: int = 60, seed: int = 0, threads: int = 1, tries: int = 1,
-                  prefix: str = ""):
+def check_options(width: float, seconds: int = 60, seed: int = 0, threads: int = 1, tries: int = 1, prefix: str = ""):
     """``(width, seconds, seed, threads, tries)`` checked, before any work: ExportError naming the option
     (``prefix`` + name, e.g. ``--`` for the CLI) otherwise.
 
@@ -176,6 +179,7 @@ def check_options(width: float, seconds: int = 60, seed: int = 0, threads: int =
     (the nester's); threads and tries 1 to the machine's cores each, ``threads x tries`` at most the cores
     too (a nester thread or try per core: more only share them).
     """
+
     def num(name, value, kind):
         try:
             v = kind(value)
@@ -188,19 +192,21 @@ def check_options(width: float, seconds: int = 60, seed: int = 0, threads: int =
     width, seconds, seed = num("width", width, float), num("seconds", seconds, int), num("seed", seed, int)
     threads, tries = num("threads", threads, int), num("tries", tries, int)
     if not (math.isfinite(width) and 0 < width <= MAX_WIDTH):
-        raise ExportError(f"{prefix}width: expected a fabric width in mm in (0, {MAX_WIDTH * 1000:g}], "
-                          f"got {width * 1000:g}")
+        raise ExportError(
+            f"{prefix}width: expected a fabric width in mm in (0, {MAX_WIDTH * 1000:g}], got {width * 1000:g}"
+        )
     if not 1 <= seconds <= MAX_SECONDS:
         raise ExportError(f"{prefix}seconds: expected a time budget of 1 to {MAX_SECONDS} s, got {seconds}")
-    if not 0 <= seed < 2 ** 32:
-        raise ExportError(f"{prefix}seed: expected 0 to {2 ** 32 - 1}, got {seed}")
+    if not 0 <= seed < 2**32:
+        raise ExportError(f"{prefix}seed: expected 0 to {2**32 - 1}, got {seed}")
     cores = _cores()
     for name, v in (("threads", threads), ("tries", tries)):
         if not 1 <= v <= cores:
             raise ExportError(f"{prefix}{name}: expected 1 to {cores} (this machine's cores), got {v}")
     if threads * tries > cores:
-        raise ExportError(f"{prefix}threads x {prefix}tries: expected at most {cores} (this machine's cores), "
-                          f"got {threads} x {tries}")
+        raise ExportError(
+            f"{prefix}threads x {prefix}tries: expected at most {cores} (this machine's cores), got {threads} x {tries}"
+        )
     return width, seconds, seed, threads, tries
 
 
@@ -218,8 +224,10 @@ def parse_quantities(text: str, field: str = "sizes") -> Dict[str, int]:
         except ValueError:
             n = 0
         if not name or not 1 <= n <= MAX_GARMENTS or name in out:
-            raise ExportError(f"{field}: expected SIZE:GARMENTS pairs such as XS:1,M:2 (each size once, "
-                              f"1 to {MAX_GARMENTS} garments), got {part!r}")
+            raise ExportError(
+                f"{field}: expected SIZE:GARMENTS pairs such as XS:1,M:2 (each size once, "
+                f"1 to {MAX_GARMENTS} garments), got {part!r}"
+            )
         out[name] = n
     if not out:
         raise ExportError(f"{field}: expected SIZE:GARMENTS pairs such as XS:1,M:2, got {text!r}")
@@ -296,13 +304,16 @@ def _face_to_face(pattern: Pattern, pieces: Sequence[PieceDrawing], garments: in
     mirrored)."""
     from ..export.fold_half import fold_axis
     from ..export.mirror_check import MIRROR_TOL, declared_pairs
+
     out, right = {}, set()
     for j, k in declared_pairs(pattern, pieces):
         gap = pieces[j].mirror_gaps.get(pieces[k].name, math.inf)
         if gap > MIRROR_TOL:
-            raise ExportError(f"spread pairs: {pieces[j].name} and {pieces[k].name} are not mirror images "
-                              f"({'differ' if not math.isfinite(gap) else f'{gap * 1000:.1f} mm off'}); "
-                              f"expected a mirrored pair, or spread single")
+            raise ExportError(
+                f"spread pairs: {pieces[j].name} and {pieces[k].name} are not mirror images "
+                f"({'differ' if not math.isfinite(gap) else f'{gap * 1000:.1f} mm off'}); "
+                f"expected a mirrored pair, or spread single"
+            )
         out[j], right = (garments, pieces[k].name), right | {k}
     for i, piece in enumerate(pieces):
         if i in out or i in right:
@@ -310,13 +321,19 @@ def _face_to_face(pattern: Pattern, pieces: Sequence[PieceDrawing], garments: in
         if piece.fold or fold_axis(piece, MIRROR_TOL) is not None:
             out[i] = (-(-garments // 2), "")
         else:
-            raise ExportError(f"spread pairs: piece {piece.name} is neither one of a mirrored pair nor its own "
-                              f"mirror image: the second ply would cut it mirrored; expected spread single")
+            raise ExportError(
+                f"spread pairs: piece {piece.name} is neither one of a mirrored pair nor its own "
+                f"mirror image: the second ply would cut it mirrored; expected spread single"
+            )
     return out
 
 
-def marker_items(patterns: Sequence[Tuple[str, Pattern, int]], allowance=None,
-                 notch_spacing: Optional[float] = None, spread: str = "single") -> List[MarkerItem]:
+def marker_items(
+    patterns: Sequence[Tuple[str, Pattern, int]],
+    allowance=None,
+    notch_spacing: Optional[float] = None,
+    spread: str = "single",
+) -> List[MarkerItem]:
     """The pieces to nest: every piece of every pattern, as many times as garments and labels ask.
 
     Parameters
@@ -343,9 +360,19 @@ def marker_items(patterns: Sequence[Tuple[str, Pattern, int]], allowance=None,
             line = _fold_line(piece)
             outline = piece.cut[0] if line is None else unfold(piece.cut[0], line)
             count, pair = lay[i] if lay is not None else (int(garments), "")
-            items.append(MarkerItem(size=str(size), piece=piece, outline=outline, mirror=line,
-                                    count=count * int(piece.quantity), area=float(signed_area(outline)),
-                                    garments=int(garments), plies=2 if lay is not None else 1, pair=pair))
+            items.append(
+                MarkerItem(
+                    size=str(size),
+                    piece=piece,
+                    outline=outline,
+                    mirror=line,
+                    count=count * int(piece.quantity),
+                    area=float(signed_area(outline)),
+                    garments=int(garments),
+                    plies=2 if lay is not None else 1,
+                    pair=pair,
+                )
+            )
     if not items:
         raise ExportError("marker: no pieces to nest")
     return items
@@ -356,8 +383,10 @@ def _check_fits(items: Sequence[MarkerItem], shapes: Sequence[np.ndarray], width
         across = min(float(np.ptp((shape @ _rot(a).T)[:, 1])) for a in turns)
         if across > width:
             true = min(float(np.ptp((it.outline @ GRAIN_TO_LENGTH.T @ _rot(a).T)[:, 1])) for a in turns)
-            raise ExportError(f"piece {it.piece.name} (size {it.size}) is {true * 1000:.0f} mm across the grain: "
-                              f"expected a fabric wider than that, got --width {width * 1000:.0f} mm")
+            raise ExportError(
+                f"piece {it.piece.name} (size {it.size}) is {true * 1000:.0f} mm across the grain: "
+                f"expected a fabric wider than that, got --width {width * 1000:.0f} mm"
+            )
 
 
 def _child_env() -> Dict[str, str]:
@@ -381,9 +410,18 @@ def phase_seconds(seconds: int) -> Tuple[int, int]:
     return explore, seconds - explore
 
 
-def nest(items: Sequence[MarkerItem], width: float, seconds: int = 60, seed: int = 0, one_way: bool = False,
-         tilt: float = 0.0, threads: int = 1, tries: int = 1, progress: Optional[Progress] = None,
-         early_stop: bool = False) -> Marker:
+def nest(
+    items: Sequence[MarkerItem],
+    width: float,
+    seconds: int = 60,
+    seed: int = 0,
+    one_way: bool = False,
+    tilt: float = 0.0,
+    threads: int = 1,
+    tries: int = 1,
+    progress: Optional[Progress] = None,
+    early_stop: bool = False,
+) -> Marker:
     """Nest the items on a fabric ``width`` m wide; the shortest marker found in ``seconds``.
 
     Parameters
@@ -418,10 +456,17 @@ def nest(items: Sequence[MarkerItem], width: float, seconds: int = 60, seed: int
     shapes = [nest_outline(it.outline) @ GRAIN_TO_LENGTH.T for it in items]
     _check_fits(items, shapes, width, turns)
     explore, compress = phase_seconds(seconds)
-    request = {"strip": width * 1000.0, "exploration": explore, "compression": compress, "threads": threads,
-               "early_termination": bool(early_stop),
-               "items": [{"shape": np.round(s * 1000.0, 4).tolist(), "demand": it.count, "orientations": turns}
-                         for it, s in zip(items, shapes)]}
+    request = {
+        "strip": width * 1000.0,
+        "exploration": explore,
+        "compression": compress,
+        "threads": threads,
+        "early_termination": bool(early_stop),
+        "items": [
+            {"shape": np.round(s * 1000.0, 4).tolist(), "demand": it.count, "orientations": turns}
+            for it, s in zip(items, shapes)
+        ],
+    }
     area = sum(it.area * it.count for it in items)
     pieces = sum(it.count for it in items)
     deadline = t0 + seconds + MARGIN
@@ -431,14 +476,20 @@ def nest(items: Sequence[MarkerItem], width: float, seconds: int = 60, seed: int
     best, history, running, ends = None, [], tries, []
     try:
         for k in range(tries):
-            proc = subprocess.Popen([sys.executable, str(WORKER)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                    stderr=subprocess.PIPE, text=True, env=_child_env())
+            proc = subprocess.Popen(
+                [sys.executable, str(WORKER)],
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                text=True,
+                env=_child_env(),
+            )
             procs.append(proc)
             proc.stdin.write(json.dumps(dict(request, seed=seed + k)))
             proc.stdin.close()
             threading.Thread(target=_read_lines, args=(proc.stdout, lines, k), daemon=True).start()
         while running:
-            if time.monotonic() > deadline:    # the budget is a promise: stop the nesters, keep the best
+            if time.monotonic() > deadline:  # the budget is a promise: stop the nesters, keep the best
                 ends.append("time limit")
                 break
             try:
@@ -455,8 +506,11 @@ def nest(items: Sequence[MarkerItem], width: float, seconds: int = 60, seed: int
             elif "placed" in msg and (best is None or msg["length"] < best["length"]):
                 best = dict(msg, seed=seed + k)
                 history.append((round(elapsed, 2), area / (width * msg["length"] / 1000.0)))
-            eff = f"efficiency {history[-1][1] * 100:.1f} %, length {best['length'] / 1000:.3f} m" if best \
+            eff = (
+                f"efficiency {history[-1][1] * 100:.1f} %, length {best['length'] / 1000:.3f} m"
+                if best
                 else "no marker yet"
+            )
             report(progress, min(elapsed / seconds, 0.99), f"nesting {pieces} pieces: {eff}")
         stopped = "converged" if ends and all(e == "converged" for e in ends) else "time limit"
     except KeyboardInterrupt:
@@ -476,8 +530,10 @@ def nest(items: Sequence[MarkerItem], width: float, seconds: int = 60, seed: int
         if code == 3:
             raise ExportError(f"the marker needs the spyrrow package: pip install {SPYRROW_PIN} ({err})")
         if time.monotonic() > deadline:
-            raise ExportError(f"the nester found no marker of {pieces} pieces within the time budget "
-                              f"({seconds} s + {MARGIN:g} s); give it more seconds or fewer garments")
+            raise ExportError(
+                f"the nester found no marker of {pieces} pieces within the time budget "
+                f"({seconds} s + {MARGIN:g} s); give it more seconds or fewer garments"
+            )
         raise ExportError(f"the nester found no marker (exit {code}): {err.splitlines()[-1] if err else ''}")
     return _marker(items, best, width, time.monotonic() - t0, seed, threads, turns, stopped, history, tries)
 
@@ -486,16 +542,28 @@ def _marker(items, best, width, seconds, seed, threads, turns, stopped, history,
     placements = []
     for k, angle, tx, ty in best["placed"]:
         rotation = _rot(angle) @ GRAIN_TO_LENGTH
-        placements.append(Placement(item=int(k), angle=float(angle), rotation=rotation,
-                                    translation=np.array([tx, ty]) / 1000.0))
+        placements.append(
+            Placement(item=int(k), angle=float(angle), rotation=rotation, translation=np.array([tx, ty]) / 1000.0)
+        )
     # sorted by item then position: the files list copies in a fixed order
     placements.sort(key=lambda p: (p.item, round(float(p.translation[0]), 6), round(float(p.translation[1]), 6)))
     length = max(float((items[p.item].outline @ p.rotation.T + p.translation)[:, 0].max()) for p in placements)
     area = sum(items[p.item].area for p in placements)
-    return Marker(width=width, length=length, items=list(items), placements=placements,
-                  efficiency=area / (width * length), seconds=seconds, seed=seed, threads=threads,
-                  orientations=list(turns), stopped=stopped, history=history, tries=tries,
-                  best_seed=int(best.get("seed", seed)))
+    return Marker(
+        width=width,
+        length=length,
+        items=list(items),
+        placements=placements,
+        efficiency=area / (width * length),
+        seconds=seconds,
+        seed=seed,
+        threads=threads,
+        orientations=list(turns),
+        stopped=stopped,
+        history=history,
+        tries=tries,
+        best_seed=int(best.get("seed", seed)),
+    )
 
 
 def placed_outline(marker: Marker, placement: Placement) -> np.ndarray:
@@ -516,34 +584,76 @@ def marker_report(marker: Marker, title: str = "marker") -> dict:
         s["pieces"] += it.count * it.plies
         s["area_m2"] += it.area * it.count
     for it in marker.items:
-        sizes[it.size]["garments"] = max(sizes[it.size]["garments"],
-                                         it.garments or it.count // max(it.piece.quantity, 1))
+        sizes[it.size]["garments"] = max(
+            sizes[it.size]["garments"], it.garments or it.count // max(it.piece.quantity, 1)
+        )
     for s in sizes.values():
         share = marker.length * s["area_m2"] / area
-        s.update(fabric_m=round(share, 4), fabric_per_garment_m=round(share / max(s["garments"], 1), 4),
-                 area_m2=round(s["area_m2"], 5))
+        s.update(
+            fabric_m=round(share, 4),
+            fabric_per_garment_m=round(share / max(s["garments"], 1), 4),
+            area_m2=round(s["area_m2"], 5),
+        )
     garments = sum(s["garments"] for s in sizes.values())
-    return {"title": title, "unit": "mm", "width_mm": round(marker.width * 1000, 2),
-            "length_mm": round(marker.length * 1000, 2), "efficiency_pct": round(marker.efficiency * 100, 3),
-            "pieces_area_m2": round(area, 5), "marker_area_m2": round(marker.width * marker.length, 5),
-            "garments": garments, "fabric_per_garment_m": round(marker.length / max(garments, 1), 4),
-            "sizes": sizes, "pieces": len(marker.placements), "orientations_deg": marker.orientations,
-            "allowance_mm": {it.piece.name: sorted({round(float(w) * 1000, 2) for e in it.piece.edge_allowance
-                                                    for w in e}) for it in marker.items},
-            "grain": "along the marker length (x), parallel to the selvage",
-            "spread": "pairs" if any(it.plies == 2 for it in marker.items) else "single",
-            "plies": max(it.plies for it in marker.items),
-            "face_to_face": {f"{it.size}/{it.piece.name}": it.pair or "itself" for it in marker.items
-                             if it.plies == 2},
-            "seed": marker.seed, "threads": marker.threads, "tries": marker.tries, "best_seed": marker.best_seed,
-            "stopped": marker.stopped,
-            "placements": [{"size": marker.items[p.item].size, "piece": marker.items[p.item].piece.name,
-                            "angle_deg": round(p.angle, 4),
-                            "translation_mm": np.round(p.translation * 1000, 3).tolist()}
-                           for p in marker.placements]}
+    return {
+        "title": title,
+        "unit": "mm",
+        "width_mm": round(marker.width * 1000, 2),
+        "length_mm": round(marker.length * 1000, 2),
+        "efficiency_pct": round(marker.efficiency * 100, 3),
+        "pieces_area_m2": round(area, 5),
+        "marker_area_m2": round(marker.width * marker.length, 5),
+        "garments": garments,
+        "fabric_per_garment_m": round(marker.length / max(garments, 1), 4),
+        "sizes": sizes,
+        "pieces": len(marker.placements),
+        "orientations_deg": marker.orientations,
+        "allowance_mm": {
+            it.piece.name: sorted({round(float(w) * 1000, 2) for e in it.piece.edge_allowance for w in e})
+            for it in marker.items
+        },
+        "grain": "along the marker length (x), parallel to the selvage",
+        "spread": "pairs" if any(it.plies == 2 for it in marker.items) else "single",
+        "plies": max(it.plies for it in marker.items),
+        "face_to_face": {f"{it.size}/{it.piece.name}": it.pair or "itself" for it in marker.items if it.plies == 2},
+        "seed": marker.seed,
+        "threads": marker.threads,
+        "tries": marker.tries,
+        "best_seed": marker.best_seed,
+        "stopped": marker.stopped,
+        "placements": [
+            {
+                "size": marker.items[p.item].size,
+                "piece": marker.items[p.item].piece.name,
+                "angle_deg": round(p.angle, 4),
+                "translation_mm": np.round(p.translation * 1000, 3).tolist(),
+            }
+            for p in marker.placements
+        ],
+    }
 
 
-__all__ = ["MarkerItem", "Placement", "Marker", "marker_items", "nest", "orientations", "parse_quantities",
-           "check_options", "default_tries", "SPREADS", "phase_seconds", "size_label", "MARGIN", "unfold", "reflect",
-           "MAX_WIDTH", "MAX_SECONDS", "MAX_GARMENTS", "nest_outline", "placed_outline", "marker_report",
-           "SPYRROW_PIN"]
+__all__ = [
+    "MarkerItem",
+    "Placement",
+    "Marker",
+    "marker_items",
+    "nest",
+    "orientations",
+    "parse_quantities",
+    "check_options",
+    "default_tries",
+    "SPREADS",
+    "phase_seconds",
+    "size_label",
+    "MARGIN",
+    "unfold",
+    "reflect",
+    "MAX_WIDTH",
+    "MAX_SECONDS",
+    "MAX_GARMENTS",
+    "nest_outline",
+    "placed_outline",
+    "marker_report",
+    "SPYRROW_PIN",
+]

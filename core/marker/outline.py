@@ -15,6 +15,7 @@ the tolerance is halved, and at the end the cut line itself, grown by the
 clearance, is used. The area added is the fabric the nester may not use:
 about a third of what growing the whole simplified outline by ``tol`` adds.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -22,10 +23,10 @@ import numpy as np
 from ..errors import ExportError
 from ..geom.polygon import cross2, offset_loop, points_in_polygon, remove_loops, segments_cross, signed_area
 
-NEST_TOLERANCE = 0.0003   # m: simplified outlines stay within this of the cut line (plus CLEARANCE)
-CLEARANCE = 0.00002       # m: every nesting outline lies at least this far outside its cut line
-MITRE_REACH = 10.0        # a corner point may lie this many tolerances from its vertex, else the corner is bevelled
-MIN_TOLERANCE = 0.00002   # m: below this the tolerance is not halved again (the grown cut line is used)
+NEST_TOLERANCE = 0.0003  # m: simplified outlines stay within this of the cut line (plus CLEARANCE)
+CLEARANCE = 0.00002  # m: every nesting outline lies at least this far outside its cut line
+MITRE_REACH = 10.0  # a corner point may lie this many tolerances from its vertex, else the corner is bevelled
+MIN_TOLERANCE = 0.00002  # m: below this the tolerance is not halved again (the grown cut line is used)
 
 
 def simplify_indices(loop: np.ndarray, tol: float) -> np.ndarray:
@@ -70,12 +71,12 @@ def _outer_polygon(loop: np.ndarray, idx: np.ndarray, tol: float, clearance: flo
         span = loop[np.arange(a, b + (n if b <= a else 0) + 1) % n]
         d = loop[b] - loop[a]
         d = d / max(float(np.linalg.norm(d)), 1e-12)
-        normals[k] = (d[1], -d[0])   # outward: the material is on the left of a counter-clockwise loop
+        normals[k] = (d[1], -d[0])  # outward: the material is on the left of a counter-clockwise loop
         widths[k] = max(0.0, float(((span - loop[a]) @ normals[k]).max())) + clearance
     out = []
     for k in range(m):
         v = loop[idx[k]]
-        j = k - 1   # the chord that ends at v
+        j = k - 1  # the chord that ends at v
         p1, t1 = v + widths[j] * normals[j], np.array([-normals[j][1], normals[j][0]])
         p2, t2 = v + widths[k] * normals[k], np.array([-normals[k][1], normals[k][0]])
         den = float(cross2(t1, t2))
@@ -84,7 +85,7 @@ def _outer_polygon(loop: np.ndarray, idx: np.ndarray, tol: float, clearance: flo
             if np.linalg.norm(x - v) <= max(MITRE_REACH * tol, 4.0 * max(widths[j], widths[k])):
                 out.append(x)
                 continue
-        out += [p1, p2]   # nearly parallel chords or a sharp corner: bevelled
+        out += [p1, p2]  # nearly parallel chords or a sharp corner: bevelled
     return np.array(out)
 
 
@@ -109,8 +110,13 @@ def edges_meet(a: np.ndarray, b: np.ndarray, touching: bool = True) -> bool:
 
 def holds(outer: np.ndarray, loop: np.ndarray) -> bool:
     """Whether the simple counter-clockwise polygon ``outer`` has all of ``loop`` strictly inside it."""
-    return (len(outer) >= 3 and signed_area(outer) > 0 and segments_cross(outer) is None
-            and bool(points_in_polygon(loop, outer).all()) and not edges_meet(loop, outer))
+    return (
+        len(outer) >= 3
+        and signed_area(outer) > 0
+        and segments_cross(outer) is None
+        and bool(points_in_polygon(loop, outer).all())
+        and not edges_meet(loop, outer)
+    )
 
 
 def nest_outline(outline: np.ndarray, tol: float = NEST_TOLERANCE, clearance: float = CLEARANCE) -> np.ndarray:

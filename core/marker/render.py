@@ -9,6 +9,7 @@ the half and its mirror image.
 Only the files' lines and texts depend on the marker: the same marker gives
 the same bytes (``marker.json`` also holds the wall time spent).
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -29,17 +30,19 @@ from ..progress import Progress, report
 from .nesting import Marker, Placement, marker_report
 
 FILES = ("marker.dxf", "marker.svg", "marker.pdf", "marker.png", "marker.json")
-LABEL_MAX = 0.012   # m, the label's height where the piece has room
-LABEL_MIN = 0.006   # m, never smaller: legible on the cutting table
+LABEL_MAX = 0.012  # m, the label's height where the piece has room
+LABEL_MIN = 0.006  # m, never smaller: legible on the cutting table
 DXF_LAYERS = {"CUT": 1, "NOTCH": 3, "GRAIN": 7, "FOLD": 6, "LABEL": 7, "FABRIC": 8}  # ACI colours
 FABRIC_COLOUR = "#808080"
 
 
 def _label(marker: Marker, p: Placement) -> List[str]:
     it = marker.items[p.item]
-    if it.plies == 2:       # face to face: the second ply cuts the mirror image
-        return [ascii_text(it.piece.name + (f" + {it.pair}" if it.pair else " x2")),
-                ascii_text(f"size {it.size}, 2 plies face to face")]
+    if it.plies == 2:  # face to face: the second ply cuts the mirror image
+        return [
+            ascii_text(it.piece.name + (f" + {it.pair}" if it.pair else " x2")),
+            ascii_text(f"size {it.size}, 2 plies face to face"),
+        ]
     return [ascii_text(it.piece.name), ascii_text(f"size {it.size}")]
 
 
@@ -49,7 +52,7 @@ def _halves(marker: Marker, p: Placement):
     out = [(p.rotation, p.translation, True)]
     if it.mirror is not None:
         p0, d = it.mirror
-        refl = 2.0 * np.outer(d, d) - np.eye(2)   # mirror about the fold line through p0
+        refl = 2.0 * np.outer(d, d) - np.eye(2)  # mirror about the fold line through p0
         out.append((p.rotation @ refl, p.rotation @ (p0 - refl @ p0) + p.translation, False))
     return out
 
@@ -84,11 +87,15 @@ def _text_place(marker: Marker, p: Placement):
     corners = block @ p.rotation.T + p.translation
     d = p.rotation @ np.array([1.0, 0.0])
     angle = round(math.degrees(math.atan2(d[1], d[0])), 9)
-    if not -90.0 < angle <= 90.0:               # upside down on the marker: turn the text back
+    if not -90.0 < angle <= 90.0:  # upside down on the marker: turn the text back
         angle = angle - 180.0 if angle > 90.0 else angle + 180.0
-    up = np.array([[math.cos(math.radians(angle)), -math.sin(math.radians(angle))],
-                   [math.sin(math.radians(angle)), math.cos(math.radians(angle))]])
-    u = corners @ up                            # the block in the upright text frame
+    up = np.array(
+        [
+            [math.cos(math.radians(angle)), -math.sin(math.radians(angle))],
+            [math.sin(math.radians(angle)), math.cos(math.radians(angle))],
+        ]
+    )
+    u = corners @ up  # the block in the upright text frame
     x0, top = float(u[:, 0].min()), float(u[:, 1].max())
     base = np.array([[x0, top - (k + 1) * 1.5 * h + 0.5 * h] for k in range(len(lines))])
     return base @ up.T, angle, h
@@ -105,26 +112,34 @@ def marker_svg(marker: Marker, title: str = "marker") -> str:
     line = f'fill="none" stroke-width="{STROKE_MM}" stroke-linejoin="round" stroke-linecap="round"'
     colour = {"CUT": COLOURS["cut"], "NOTCH": COLOURS["notch"], "GRAIN": COLOURS["grain"], "FOLD": COLOURS["fold"]}
     rep = marker_report(marker, title)
-    out = ['<?xml version="1.0" encoding="UTF-8" standalone="no"?>',
-           f'<svg xmlns="http://www.w3.org/2000/svg" version="1.1" width="{svg_number(L)}mm" height="{svg_number(W)}mm" '
-           f'viewBox="0 0 {svg_number(L)} {svg_number(W)}">',
-           f"<title>{escape(title)}</title>",
-           f"<desc>EASE marker at 1:1; 1 user unit = 1 mm. Fabric {svg_number(W)} mm wide (grey: selvages and marker "
-           f"ends), length {svg_number(L)} mm, efficiency {rep['efficiency_pct']:.2f} %. Grain along the length. Red: cut "
-           f"line; green: notches; black: grain line and labels; magenta: fold line.</desc>",
-           f'<rect class="fabric" x="0" y="0" width="{svg_number(L)}" height="{svg_number(W)}" stroke="{FABRIC_COLOUR}" {line}/>']
+    out = [
+        '<?xml version="1.0" encoding="UTF-8" standalone="no"?>',
+        f'<svg xmlns="http://www.w3.org/2000/svg" version="1.1" width="{svg_number(L)}mm" height="{svg_number(W)}mm" '
+        f'viewBox="0 0 {svg_number(L)} {svg_number(W)}">',
+        f"<title>{escape(title)}</title>",
+        f"<desc>EASE marker at 1:1; 1 user unit = 1 mm. Fabric {svg_number(W)} mm wide (grey: selvages and marker "
+        f"ends), length {svg_number(L)} mm, efficiency {rep['efficiency_pct']:.2f} %. Grain along the length. Red: cut "
+        f"line; green: notches; black: grain line and labels; magenta: fold line.</desc>",
+        f'<rect class="fabric" x="0" y="0" width="{svg_number(L)}" height="{svg_number(W)}" stroke="{FABRIC_COLOUR}" {line}/>',
+    ]
     for p in marker.placements:
         it = marker.items[p.item]
-        out.append(f"<g id={quoteattr(f'piece-{it.size}-{it.piece.name}-{p.translation[0]:.4f}')} "
-                   f"data-piece={quoteattr(it.piece.name)} data-size={quoteattr(it.size)} "
-                   f'data-angle="{svg_number(p.angle)}">')
+        out.append(
+            f"<g id={quoteattr(f'piece-{it.size}-{it.piece.name}-{p.translation[0]:.4f}')} "
+            f"data-piece={quoteattr(it.piece.name)} data-size={quoteattr(it.size)} "
+            f'data-angle="{svg_number(p.angle)}">'
+        )
         for layer, pts, closed in _lines(marker, p):
-            out.append(f'<path class="{layer.lower()}" d="{svg_path(mm(pts), closed)}" stroke="{colour[layer]}" {line}/>')
+            out.append(
+                f'<path class="{layer.lower()}" d="{svg_path(mm(pts), closed)}" stroke="{colour[layer]}" {line}/>'
+            )
         base, angle, h = _text_place(marker, p)
         for (x, y), text in zip(mm(base), _label(marker, p)):
-            out.append(f'<text class="label" transform="translate({svg_number(x)},{svg_number(y)}) rotate({svg_number(-angle)})" '
-                       f'font-family="Helvetica, Arial, sans-serif" font-size="{svg_number(h * 1000)}" '
-                       f'fill="{COLOURS["text"]}">{escape(text)}</text>')
+            out.append(
+                f'<text class="label" transform="translate({svg_number(x)},{svg_number(y)}) rotate({svg_number(-angle)})" '
+                f'font-family="Helvetica, Arial, sans-serif" font-size="{svg_number(h * 1000)}" '
+                f'fill="{COLOURS["text"]}">{escape(text)}</text>'
+            )
         out.append("</g>")
     out.append("</svg>")
     return "\n".join(out) + "\n"
@@ -133,7 +148,7 @@ def marker_svg(marker: Marker, title: str = "marker") -> str:
 def marker_dxf(marker: Marker, title: str = "marker") -> str:
     """A plotter DXF (R2010, mm, no blocks): fabric edges, cut lines, notches, grain lines, labels."""
     ezdxf = dxf_mod._ezdxf()
-    with dxf_mod._fixed_metadata():      # ezdxf stamps the creation time when the document is made
+    with dxf_mod._fixed_metadata():  # ezdxf stamps the creation time when the document is made
         doc = ezdxf.new("R2010", units=dxf_mod.INSUNITS_MM)
     doc.header["$MEASUREMENT"] = 1
     L, W = marker.length * 1000.0, marker.width * 1000.0
@@ -141,16 +156,21 @@ def marker_dxf(marker: Marker, title: str = "marker") -> str:
         doc.layers.add(name, color=colour)
     msp = doc.modelspace()
     msp.add_lwpolyline([(0.0, 0.0), (L, 0.0), (L, W), (0.0, W)], close=True, dxfattribs={"layer": "FABRIC"})
-    msp.add_text(ascii_text(f"{title}: {W:.0f} mm fabric, {L:.0f} mm, grain along x"),
-                 dxfattribs={"layer": "FABRIC", "height": 8.0, "insert": (0.0, W + 6.0)})
+    msp.add_text(
+        ascii_text(f"{title}: {W:.0f} mm fabric, {L:.0f} mm, grain along x"),
+        dxfattribs={"layer": "FABRIC", "height": 8.0, "insert": (0.0, W + 6.0)},
+    )
     for p in marker.placements:
         for layer, pts, closed in _lines(marker, p):
-            msp.add_lwpolyline([(float(x), float(y)) for x, y in pts * 1000.0], close=closed,
-                               dxfattribs={"layer": layer})
+            msp.add_lwpolyline(
+                [(float(x), float(y)) for x, y in pts * 1000.0], close=closed, dxfattribs={"layer": layer}
+            )
         base, angle, h = _text_place(marker, p)
         for (x, y), text in zip(base * 1000.0, _label(marker, p)):
-            msp.add_text(text, dxfattribs={"layer": "LABEL", "height": h * 1000.0, "rotation": angle,
-                                           "insert": (float(x), float(y))})
+            msp.add_text(
+                text,
+                dxfattribs={"layer": "LABEL", "height": h * 1000.0, "rotation": angle, "insert": (float(x), float(y))},
+            )
     # the extents of what is drawn (left unset, ezdxf writes the modelspace's +-1e20 over the header's)
     dxf_mod.set_extents(doc)
     stream = io.StringIO()
@@ -172,8 +192,9 @@ def marker_pdf(marker: Marker, title: str = "marker") -> bytes:
     c.setCreator("EASE")
     used = sorted({p.item for p in marker.placements})
     # the pieces' lines as forms, their labels drawn upright apart (as in the SVG and DXF)
-    forms = dict(zip(used, pdf_mod._define_forms(c, [dataclasses.replace(marker.items[i].piece, label=[])
-                                                     for i in used])))
+    forms = dict(
+        zip(used, pdf_mod._define_forms(c, [dataclasses.replace(marker.items[i].piece, label=[]) for i in used]))
+    )
     c.setLineWidth(pdf_mod.LINE_PT)
     c.setStrokeColorRGB(*pdf_mod.COLOURS["mark"])
     c.rect(m * k, m * k, L * k, W * k, stroke=1, fill=0)
@@ -195,9 +216,14 @@ def marker_pdf(marker: Marker, title: str = "marker") -> bytes:
     rep = marker_report(marker, title)
     c.setFont("Helvetica", 9)
     c.setFillColorRGB(0, 0, 0)
-    c.drawString(m * k, (W + 1.6 * m) * k,
-                 ascii_text(f"{title} - marker {W * 1000:.0f} x {L * 1000:.0f} mm at 1:1, grain along the length, "
-                            f"efficiency {rep['efficiency_pct']:.2f} % - do not scale"))
+    c.drawString(
+        m * k,
+        (W + 1.6 * m) * k,
+        ascii_text(
+            f"{title} - marker {W * 1000:.0f} x {L * 1000:.0f} mm at 1:1, grain along the length, "
+            f"efficiency {rep['efficiency_pct']:.2f} % - do not scale"
+        ),
+    )
     c.showPage()
     c.save()
     return buf.getvalue()
@@ -206,6 +232,7 @@ def marker_pdf(marker: Marker, title: str = "marker") -> bytes:
 def marker_png(marker: Marker, title: str = "marker", dpi: int = 60) -> bytes:
     """A preview picture of the marker (PNG; the add-on shows it): fabric, cut lines, one colour per size."""
     import matplotlib
+
     matplotlib.use("Agg", force=False)
     from matplotlib.figure import Figure
     from matplotlib.patches import Polygon, Rectangle
@@ -219,22 +246,35 @@ def marker_png(marker: Marker, title: str = "marker", dpi: int = 60) -> bytes:
     for p in marker.placements:
         it = marker.items[p.item]
         c = cmap(sizes.index(it.size) % 10)
-        ax.add_patch(Polygon(it.outline @ p.rotation.T + p.translation, closed=True, facecolor=(*c[:3], 0.35),
-                             edgecolor="#d00000", linewidth=0.6))
+        ax.add_patch(
+            Polygon(
+                it.outline @ p.rotation.T + p.translation,
+                closed=True,
+                facecolor=(*c[:3], 0.35),
+                edgecolor="#d00000",
+                linewidth=0.6,
+            )
+        )
     ax.set_xlim(-0.01 * L, 1.01 * L)
     ax.set_ylim(-0.02 * W, 1.02 * W)
     ax.set_aspect("equal")
     ax.axis("off")
     rep = marker_report(marker, title)
-    fig.suptitle(ascii_text(f"{title}: {W * 1000:.0f} mm x {L * 1000:.0f} mm, efficiency {rep['efficiency_pct']:.1f} %"
-                            f" ({', '.join(sizes)})"), fontsize=9)
+    fig.suptitle(
+        ascii_text(
+            f"{title}: {W * 1000:.0f} mm x {L * 1000:.0f} mm, efficiency {rep['efficiency_pct']:.1f} %"
+            f" ({', '.join(sizes)})"
+        ),
+        fontsize=9,
+    )
     buf = io.BytesIO()
     fig.savefig(buf, format="png", metadata={"Software": None})
     return buf.getvalue()
 
 
-def write_marker(marker: Marker, out_dir, title: str = "marker", progress: Optional[Progress] = None,
-                 extra: Optional[dict] = None) -> List[Path]:
+def write_marker(
+    marker: Marker, out_dir, title: str = "marker", progress: Optional[Progress] = None, extra: Optional[dict] = None
+) -> List[Path]:
     """Render the marker (DXF, SVG, PDF, PNG preview, ``marker.json``) in memory, then write the folder atomically.
 
     ``extra`` is merged into ``marker.json`` (the caller's inputs: pattern folders, sizes).
@@ -245,11 +285,13 @@ def write_marker(marker: Marker, out_dir, title: str = "marker", progress: Optio
     summary.update(extra or {})
     summary["seconds"] = round(marker.seconds, 2)
     summary["history"] = [{"seconds": t, "efficiency_pct": round(e * 100, 3)} for t, e in marker.history]
-    files = {"marker.dxf": marker_dxf(marker, title).encode("ascii", "replace"),
-             "marker.svg": marker_svg(marker, title).encode("utf-8"),
-             "marker.pdf": marker_pdf(marker, title),
-             "marker.png": marker_png(marker, title),
-             "marker.json": (dumps_json(summary) + "\n").encode("utf-8")}
+    files = {
+        "marker.dxf": marker_dxf(marker, title).encode("ascii", "replace"),
+        "marker.svg": marker_svg(marker, title).encode("utf-8"),
+        "marker.pdf": marker_pdf(marker, title),
+        "marker.png": marker_png(marker, title),
+        "marker.json": (dumps_json(summary) + "\n").encode("utf-8"),
+    }
     paths = write_files(out_dir, files)
     report(progress, 1.0, f"wrote the marker to {out_dir}")
     return paths

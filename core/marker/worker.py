@@ -11,6 +11,7 @@ kills the process and keeps the best solution already received.
 Standalone on purpose: it imports no EASE module, so it runs under any
 ``sys.executable`` (a venv, Blender's Python) with the caller's ``sys.path``.
 """
+
 import json
 import signal
 import sys
@@ -27,14 +28,20 @@ def main() -> int:
         sys.stderr.write(f"spyrrow is not installed ({exc})\n")
         return 3
     req = json.load(sys.stdin)
-    items = [spyrrow.Item(str(k), [tuple(p) for p in it["shape"]], int(it["demand"]), list(it["orientations"]))
-             for k, it in enumerate(req["items"])]
+    items = [
+        spyrrow.Item(str(k), [tuple(p) for p in it["shape"]], int(it["demand"]), list(it["orientations"]))
+        for k, it in enumerate(req["items"])
+    ]
     instance = spyrrow.StripPackingInstance("marker", float(req["strip"]), items)
     # the phases' times set here, not left to spyrrow's split of a total (80 % exploration, 20 % compression)
-    config = spyrrow.StripPackingConfig(early_termination=bool(req.get("early_termination", False)),
-                                        total_computation_time=None, exploration_time=int(req["exploration"]),
-                                        compression_time=int(req["compression"]), seed=int(req["seed"]),
-                                        num_workers=int(req["threads"]))
+    config = spyrrow.StripPackingConfig(
+        early_termination=bool(req.get("early_termination", False)),
+        total_computation_time=None,
+        exploration_time=int(req["exploration"]),
+        compression_time=int(req["compression"]),
+        seed=int(req["seed"]),
+        num_workers=int(req["threads"]),
+    )
     queue = spyrrow.ProgressQueue()
     result = {}
 
@@ -48,8 +55,10 @@ def main() -> int:
     def emit(solution, phase):
         if solution.width < best[0] - 1e-9:
             best[0] = solution.width
-            placed = [[int(p.id), float(p.rotation), float(p.translation[0]), float(p.translation[1])]
-                      for p in solution.placed_items]
+            placed = [
+                [int(p.id), float(p.rotation), float(p.translation[0]), float(p.translation[1])]
+                for p in solution.placed_items
+            ]
             sys.stdout.write(json.dumps({"length": float(solution.width), "phase": phase, "placed": placed}) + "\n")
             sys.stdout.flush()
 

@@ -8,6 +8,7 @@ named, so the pipeline (:func:`core.workflows.measure_pattern`, used by the
 CLI, the add-on, batch runs and the benchmarks' workflow calls) applies one
 list, :data:`REFUSED`, and a caller can name the checks it applies.
 """
+
 from __future__ import annotations
 
 from typing import Iterable, Mapping, Optional
@@ -57,21 +58,30 @@ def check_pattern(metrics: Mapping, checks: Optional[Iterable[str]] = None) -> N
         panels = ", ".join(f"{k} ({v})" for k, v in metrics["flipped_per_panel"].items() if v)
         raise PatternError(f"{metrics['flipped_triangles']} flipped triangles ({panels}); nothing written")
     if "collapsed" in checks and metrics.get("collapsed_triangles"):
-        per = {k: {"count": n, "sites": metrics["collapse_sites"].get(k, [])}
-               for k, n in metrics["collapsed_per_panel"].items()}
-        raise PatternError(f"{collapse_message(per)}; nothing written (a collapsed triangle keeps under half "
-                           "the weft or warp its ease asks for)")
+        per = {
+            k: {"count": n, "sites": metrics["collapse_sites"].get(k, [])}
+            for k, n in metrics["collapsed_per_panel"].items()
+        }
+        raise PatternError(
+            f"{collapse_message(per)}; nothing written (a collapsed triangle keeps under half "
+            "the weft or warp its ease asks for)"
+        )
     if "crossings" in checks and metrics.get("crossings"):
-        raise PatternError(f"{crossing_message(metrics['crossing_sites'])}; nothing written (a piece that "
-                           "overlaps itself cannot be cut)")
+        raise PatternError(
+            f"{crossing_message(metrics['crossing_sites'])}; nothing written (a piece that "
+            "overlaps itself cannot be cut)"
+        )
 
 
 def _stretches(between) -> str:
     a, b = between
     if a == b:
         kind, _, name = a.partition(" ")
-        return f"the legs of {a} cross" if kind == "dart" else (
-            f"the sew line crosses itself along {a}" if kind != "boundary" else "the sew line crosses itself")
+        return (
+            f"the legs of {a} cross"
+            if kind == "dart"
+            else (f"the sew line crosses itself along {a}" if kind != "boundary" else "the sew line crosses itself")
+        )
     return f"{a} crosses {b}"
 
 
@@ -83,6 +93,7 @@ def crossing_message(sites) -> str:
     for name, ss in sites.items():
         for s in ss:
             n = s["count"]
-            parts.append(f"panel {name}: {_stretches(s['between'])} ({n} crossing{'s' if n != 1 else ''}) "
-                         f"{site_where(s)}")
+            parts.append(
+                f"panel {name}: {_stretches(s['between'])} ({n} crossing{'s' if n != 1 else ''}) {site_where(s)}"
+            )
     return "; ".join(parts)

@@ -20,6 +20,7 @@ Each panel's collapsed triangles are grouped into *sites* by the nearest named
 body landmark of their 3D centroid, so a report (and a refusal) can say where
 on the body the cloth collapsed.
 """
+
 from __future__ import annotations
 
 from typing import Dict, List, Mapping, Optional
@@ -28,6 +29,7 @@ import numpy as np
 
 from ..geom.mesh import signed_areas_2d, triangle_areas
 from ..geom.strain import scales
+
 # the rule's two numbers live with the solver, which ends a solve by the same rule (its rescue
 # iterations, core.pattern.optimizer.guard.refused_mask): a triangle keeping less than AREA_FRACTION of the
 # 2D area its targets ask for is collapsed, or one whose weft or warp scale is under SCALE_FRACTION
@@ -60,8 +62,14 @@ def _criteria(uv, xyz, faces, grain, target_weft, target_warp, strain=None, a2=N
     return a2 > 0, small, thin
 
 
-def collapsed_mask(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray, grain: np.ndarray,
-                   target_weft: np.ndarray, target_warp: np.ndarray) -> np.ndarray:
+def collapsed_mask(
+    uv: np.ndarray,
+    xyz: np.ndarray,
+    faces: np.ndarray,
+    grain: np.ndarray,
+    target_weft: np.ndarray,
+    target_warp: np.ndarray,
+) -> np.ndarray:
     """Which triangles of one panel are collapsed (see the module rule).
 
     Parameters
@@ -90,16 +98,25 @@ def _sites(centroids: np.ndarray, landmarks: Optional[Mapping[str, np.ndarray]])
     d = np.linalg.norm(centroids[:, None, :] - P[None, :, :], axis=2)
     near = np.argmin(d, axis=1)
     out = []
-    for k in np.unique(near):                    # sorted by landmark name: deterministic
+    for k in np.unique(near):  # sorted by landmark name: deterministic
         c = centroids[near == k].mean(axis=0)
-        out.append({"near": names[k], "count": int(np.sum(near == k)),
-                    "distance_mm": round(1000.0 * float(np.linalg.norm(c - P[k])), 1),
-                    "centroid": [round(float(x), 4) for x in c]})
+        out.append(
+            {
+                "near": names[k],
+                "count": int(np.sum(near == k)),
+                "distance_mm": round(1000.0 * float(np.linalg.norm(c - P[k])), 1),
+                "centroid": [round(float(x), 4) for x in c],
+            }
+        )
     return sorted(out, key=lambda s: (-s["count"], s["near"]))
 
 
-def collapse(pattern, landmarks: Optional[Mapping[str, np.ndarray]] = None, strains=None,
-             oriented: Optional[Mapping[str, np.ndarray]] = None) -> Dict[str, dict]:
+def collapse(
+    pattern,
+    landmarks: Optional[Mapping[str, np.ndarray]] = None,
+    strains=None,
+    oriented: Optional[Mapping[str, np.ndarray]] = None,
+) -> Dict[str, dict]:
     """Collapsed triangles per panel, measured on each panel's own ``xyz`` against its targets.
 
     Parameters
@@ -124,13 +141,24 @@ def collapse(pattern, landmarks: Optional[Mapping[str, np.ndarray]] = None, stra
     for p in pattern.panels:
         X = np.asarray(p.xyz, float)
         F = np.asarray(p.faces)
-        kept, small, thin = _criteria(p.uv, X, F, p.grain, p.target_weft, p.target_warp,
-                                      None if strains is None else strains[p.name],
-                                      None if oriented is None else oriented[p.name])
+        kept, small, thin = _criteria(
+            p.uv,
+            X,
+            F,
+            p.grain,
+            p.target_weft,
+            p.target_warp,
+            None if strains is None else strains[p.name],
+            None if oriented is None else oriented[p.name],
+        )
         m = kept & (small | thin)
         n = int(m.sum())
-        out[p.name] = {"count": n, "area": int(np.sum(kept & small)), "scale_only": int(np.sum(m & ~small)),
-                       "sites": _sites(X[F[m]].mean(axis=1), landmarks) if n else []}
+        out[p.name] = {
+            "count": n,
+            "area": int(np.sum(kept & small)),
+            "scale_only": int(np.sum(m & ~small)),
+            "sites": _sites(X[F[m]].mean(axis=1), landmarks) if n else [],
+        }
     return out
 
 
@@ -151,6 +179,9 @@ def collapse_message(per_panel: Mapping[str, dict]) -> str:
         if not v["count"]:
             continue
         where = "; ".join(f"{s['count']} {site_where(s)}" for s in v["sites"])
-        parts.append(f"panel {name}: {v['count']} collapsed triangles ({where})"
-                     if len(v["sites"]) > 1 else f"panel {name}: {v['count']} collapsed triangles {site_where(v['sites'][0])}")
+        parts.append(
+            f"panel {name}: {v['count']} collapsed triangles ({where})"
+            if len(v["sites"]) > 1
+            else f"panel {name}: {v['count']} collapsed triangles {site_where(v['sites'][0])}"
+        )
     return "; ".join(parts)

@@ -20,6 +20,7 @@ paper's gap graph); strain statistics are area-weighted over triangles.
 Lengths are metres in arrays, millimetres in the summary dicts. The distance
 and ray queries are :mod:`core.geom.queries` (Warp, imported on first use).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -30,8 +31,9 @@ from ..geom.mesh import triangle_areas, vertex_normals
 PENETRATION_DEPTH = 0.002  # m (SPEC item 7)
 
 
-def covered_body_vertices(body_vertices: np.ndarray, garment_xyz: np.ndarray, garment_faces: np.ndarray,
-                          cover_tolerance: float = 0.004) -> np.ndarray:
+def covered_body_vertices(
+    body_vertices: np.ndarray, garment_xyz: np.ndarray, garment_faces: np.ndarray, cover_tolerance: float = 0.004
+) -> np.ndarray:
     """Mask (V,) of body vertices the skintight garment covers.
 
     Parameters
@@ -43,14 +45,20 @@ def covered_body_vertices(body_vertices: np.ndarray, garment_xyz: np.ndarray, ga
         surface (the embedding's triangles are chords of the body surface).
     """
     from ..geom.queries import distance_to_mesh
-    d = distance_to_mesh(body_vertices, garment_xyz, garment_faces, signed=False,
-                         max_dist=2 * cover_tolerance)
+
+    d = distance_to_mesh(body_vertices, garment_xyz, garment_faces, signed=False, max_dist=2 * cover_tolerance)
     return d <= cover_tolerance
 
 
-def post_drape_gap(body_vertices: np.ndarray, body_faces: np.ndarray, draped: np.ndarray,
-                   garment_faces: np.ndarray, skintight: np.ndarray, cover_tolerance: float = 0.004,
-                   max_gap: float = 0.5) -> tuple:
+def post_drape_gap(
+    body_vertices: np.ndarray,
+    body_faces: np.ndarray,
+    draped: np.ndarray,
+    garment_faces: np.ndarray,
+    skintight: np.ndarray,
+    cover_tolerance: float = 0.004,
+    max_gap: float = 0.5,
+) -> tuple:
     """SPEC item 6: the body-garment air gap along outward body vertex normals.
 
     Parameters
@@ -65,6 +73,7 @@ def post_drape_gap(body_vertices: np.ndarray, body_faces: np.ndarray, draped: np
     gap : (k,) float m, per covered body vertex; covered : (V,) bool mask.
     """
     from ..geom.queries import ray_hit_distance
+
     bv = np.asarray(body_vertices, dtype=float)
     covered = covered_body_vertices(bv, skintight, garment_faces, cover_tolerance)
     normals = vertex_normals(bv, body_faces)
@@ -72,8 +81,9 @@ def post_drape_gap(body_vertices: np.ndarray, body_faces: np.ndarray, draped: np
     return gap, covered
 
 
-def penetration(garment_vertices: np.ndarray, body_vertices: np.ndarray, body_faces: np.ndarray,
-                depth: float = PENETRATION_DEPTH) -> tuple:
+def penetration(
+    garment_vertices: np.ndarray, body_vertices: np.ndarray, body_faces: np.ndarray, depth: float = PENETRATION_DEPTH
+) -> tuple:
     """SPEC item 7: share of garment vertices more than ``depth`` inside the body.
 
     Returns
@@ -81,6 +91,7 @@ def penetration(garment_vertices: np.ndarray, body_vertices: np.ndarray, body_fa
     share : float in [0, 1]; signed_distance : (n,) m, negative inside.
     """
     from ..geom.queries import distance_to_mesh
+
     sd = distance_to_mesh(garment_vertices, body_vertices, body_faces, signed=True, max_dist=0.5)
     if len(sd) == 0:
         return 0.0, sd
@@ -161,6 +172,7 @@ def fold_measures(positions: np.ndarray, faces: np.ndarray) -> dict:
     dict: ``mean_dihedral_deg``, ``edges_over_30_pct``, ``mean_curvature_per_m``, ``edges`` (the count).
     """
     from ..drape.mesh import dihedral_angles, interior_edges
+
     x = np.asarray(positions, dtype=float)
     f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
     bends, _ = interior_edges(f) if len(f) else (np.zeros((0, 4), np.int64), None)
@@ -170,13 +182,17 @@ def fold_measures(positions: np.ndarray, faces: np.ndarray) -> dict:
     theta = np.abs(dihedral_angles(x, bends))
     length = np.linalg.norm(x[bends[:, 3]] - x[bends[:, 2]], axis=1)
     deg = np.degrees(theta)
-    return {"mean_dihedral_deg": float(deg.mean()),
-            "edges_over_30_pct": 100.0 * float(np.mean(deg > FOLD_ANGLE)),
-            "mean_curvature_per_m": float(np.sum(theta * length) / (2.0 * area)), "edges": int(len(bends))}
+    return {
+        "mean_dihedral_deg": float(deg.mean()),
+        "edges_over_30_pct": 100.0 * float(np.mean(deg > FOLD_ANGLE)),
+        "mean_curvature_per_m": float(np.sum(theta * length) / (2.0 * area)),
+        "edges": int(len(bends)),
+    }
 
 
-def drape_metrics(result, body_vertices: np.ndarray, body_faces: np.ndarray, pattern=None,
-                  cover_tolerance: float = 0.004) -> dict:
+def drape_metrics(
+    result, body_vertices: np.ndarray, body_faces: np.ndarray, pattern=None, cover_tolerance: float = 0.004
+) -> dict:
     """All fit measurements of a :class:`core.drape.DrapeResult`, per garment and overall.
 
     Returns
@@ -212,7 +228,10 @@ def drape_metrics(result, body_vertices: np.ndarray, body_faces: np.ndarray, pat
         out["garments"][name] = {
             "gap_mm": _stats_mm(gap),
             "penetration_pct": 100.0 * float(np.mean(sd[verts] < -PENETRATION_DEPTH)),
-            "seam_gap_mm": {"max": float(sg.max(initial=0.0) * 1000), "mean": float(sg.mean() * 1000) if len(sg) else 0.0},
+            "seam_gap_mm": {
+                "max": float(sg.max(initial=0.0) * 1000),
+                "mean": float(sg.mean() * 1000) if len(sg) else 0.0,
+            },
             "strain_weft_pct": _area_stats_pct(result.face_strain_weft[sel], area[sel]),
             "strain_warp_pct": _area_stats_pct(result.face_strain_warp[sel], area[sel]),
             "folds": fold_measures(x, gf),
@@ -254,6 +273,15 @@ def summary(metrics: dict) -> dict:
     return {k: v for k, v in metrics.items() if not isinstance(v, np.ndarray)}
 
 
-__all__ = ["covered_body_vertices", "post_drape_gap", "fold_measures", "FOLD_ANGLE",
-           "penetration", "seam_gap", "seam_side_distance", "drape_metrics", "summary",
-           "PENETRATION_DEPTH"]
+__all__ = [
+    "covered_body_vertices",
+    "post_drape_gap",
+    "fold_measures",
+    "FOLD_ANGLE",
+    "penetration",
+    "seam_gap",
+    "seam_side_distance",
+    "drape_metrics",
+    "summary",
+    "PENETRATION_DEPTH",
+]

@@ -11,6 +11,7 @@ to the apex and meet only at the apex). Each crossing is told by the stretches o
 it joins (a dart's legs, a seam's side, a hem) and where on the body it lies, so a refusal can
 name them. Definitions: ``docs/metrics.md`` ("Crossings").
 """
+
 from __future__ import annotations
 
 from typing import Dict, List, Mapping, Optional, Tuple
@@ -71,8 +72,9 @@ def segment_gaps(a0, b0, a1, b1) -> np.ndarray:
     c1, c2 = cross2(d0, a1 - a0), cross2(d0, b1 - a0)
     c3, c4 = cross2(d1, a0 - a1), cross2(d1, b0 - a1)
     cross = (c1 * c2 < 0) & (c3 * c4 < 0)
-    gap = np.minimum.reduce([_point_segment(a0, a1, b1), _point_segment(b0, a1, b1),
-                             _point_segment(a1, a0, b0), _point_segment(b1, a0, b0)])
+    gap = np.minimum.reduce(
+        [_point_segment(a0, a1, b1), _point_segment(b0, a1, b1), _point_segment(a1, a0, b0), _point_segment(b1, a0, b0)]
+    )
     return np.where(cross, 0.0, gap)
 
 
@@ -138,8 +140,9 @@ def panel_crossings(pattern, panel, landmarks: Optional[Mapping[str, np.ndarray]
     for i, j in pairs:
         key = tuple(sorted((labels[i], labels[j])))
         groups.setdefault(key, []).append(X[np.concatenate([edges[i], edges[j]])].mean(axis=0))
-    sites = [{"between": list(k), "count": len(v), **_nearest(np.mean(v, axis=0), landmarks)}
-             for k, v in groups.items()]
+    sites = [
+        {"between": list(k), "count": len(v), **_nearest(np.mean(v, axis=0), landmarks)} for k, v in groups.items()
+    ]
     return {"count": int(len(pairs)), "sites": sorted(sites, key=lambda s: (-s["count"], s["between"]))}
 
 
@@ -164,7 +167,7 @@ def dart_gaps(pattern) -> Dict[str, dict]:
             out[s.name] = {"min_gap_mm": None, "crossings": 0}
             continue
         uv = np.asarray(panel.uv, float)
-        ea, eb = ea[:-1], eb[:-1]                 # the edges ending at the apex share it
+        ea, eb = ea[:-1], eb[:-1]  # the edges ending at the apex share it
         ii, jj = np.meshgrid(np.arange(len(ea)), np.arange(len(eb)), indexing="ij")
         ii, jj = ii.ravel(), jj.ravel()
         g = segment_gaps(uv[ea[ii, 0]], uv[ea[ii, 1]], uv[eb[jj, 0]], uv[eb[jj, 1]])

@@ -9,6 +9,7 @@ standard deviations are area-weighted (3D area on the measured body), in percent
 The per-triangle geometry is :mod:`core.geom.strain` and :mod:`core.geom.mesh`
 (``scales`` and ``signed_areas_2d`` are re-exported here).
 """
+
 from __future__ import annotations
 
 import copy
@@ -25,9 +26,21 @@ from .regions import region_compliance
 from .stats import weighted_mean, weighted_stats
 from .strains import panel_strain, pattern_strains
 
-__all__ = ["scales", "signed_areas_2d", "flipped_count", "required_stretch",
-           "weighted_stats", "compliance_per_triangle", "ease_compliance", "seam_mismatch", "residual_stretch",
-           "flips", "collapse", "region_compliance", "pattern_report"]
+__all__ = [
+    "scales",
+    "signed_areas_2d",
+    "flipped_count",
+    "required_stretch",
+    "weighted_stats",
+    "compliance_per_triangle",
+    "ease_compliance",
+    "seam_mismatch",
+    "residual_stretch",
+    "flips",
+    "collapse",
+    "region_compliance",
+    "pattern_report",
+]
 
 
 def flipped_count(uv: np.ndarray, faces: np.ndarray) -> int:
@@ -48,13 +61,19 @@ def compliance_per_triangle(achieved_weft: np.ndarray, target_weft: np.ndarray) 
 
 
 def _panels(pattern, garment, names=None):
-    return [p for p in pattern.panels
-            if (garment is None or p.garment == garment) and (names is None or p.name in names)]
+    return [
+        p for p in pattern.panels if (garment is None or p.garment == garment) and (names is None or p.name in names)
+    ]
 
 
-def ease_compliance(pattern, garment: Optional[str] = None, xyz: Optional[Dict[str, np.ndarray]] = None,
-                    target: Optional[Dict[str, np.ndarray]] = None,
-                    panels: Optional[Iterable[str]] = None, strains=None) -> Dict[str, float]:
+def ease_compliance(
+    pattern,
+    garment: Optional[str] = None,
+    xyz: Optional[Dict[str, np.ndarray]] = None,
+    target: Optional[Dict[str, np.ndarray]] = None,
+    panels: Optional[Iterable[str]] = None,
+    strains=None,
+) -> Dict[str, float]:
     """Ease compliance (SPEC 1 and 3) with shear (SPEC 8), area-weighted, percent / degrees.
 
     Parameters
@@ -77,7 +96,7 @@ def ease_compliance(pattern, garment: Optional[str] = None, xyz: Optional[Dict[s
     """
     comp, shear, warp, area = [], [], [], []
     for p in _panels(pattern, garment, None if panels is None else set(panels)):
-        if xyz is None:     # on the panel's own body: its strains, given or computed once here
+        if xyz is None:  # on the panel's own body: its strains, given or computed once here
             rw, rg, sh, a3 = strains[p.name] if strains is not None else panel_strain(p)
         else:
             rw, rg, sh = scales(p.uv, xyz[p.name], p.faces, p.grain)
@@ -94,9 +113,18 @@ def ease_compliance(pattern, garment: Optional[str] = None, xyz: Optional[Dict[s
     s = weighted_stats(np.concatenate(shear), a)
     warp = 100.0 * np.concatenate(warp)
     w = weighted_stats(np.abs(warp), a)
-    return {"mean": c["mean"], "std": c["std"], "p95": c["p95"], "max": c["max"],
-            "shear_mean": s["mean"], "shear_p95": s["p95"], "warp_mean": w["mean"],
-            "warp_signed": weighted_mean(warp, a), "warp_p95": w["p95"], "area": float(a.sum())}
+    return {
+        "mean": c["mean"],
+        "std": c["std"],
+        "p95": c["p95"],
+        "max": c["max"],
+        "shear_mean": s["mean"],
+        "shear_p95": s["p95"],
+        "warp_mean": w["mean"],
+        "warp_signed": weighted_mean(warp, a),
+        "warp_p95": w["p95"],
+        "area": float(a.sum()),
+    }
 
 
 def seam_mismatch(pattern, garment: Optional[str] = None) -> Dict[str, object]:
@@ -123,14 +151,33 @@ def seam_mismatch(pattern, garment: Optional[str] = None) -> Dict[str, object]:
         rel.append(100.0 * r)
         diff.append(1000.0 * abs(la - lb))
     if not rel:
-        return {"mean": 0.0, "std": 0.0, "max_percent": 0.0, "max_mm": 0.0, "n": 0, "per_seam": {},
-                "gathered": gathered}
-    return {"mean": float(np.mean(rel)), "std": float(np.std(rel)), "max_percent": float(np.max(rel)),
-            "max_mm": float(np.max(diff)), "n": len(rel), "per_seam": per, "gathered": gathered}
+        return {
+            "mean": 0.0,
+            "std": 0.0,
+            "max_percent": 0.0,
+            "max_mm": 0.0,
+            "n": 0,
+            "per_seam": {},
+            "gathered": gathered,
+        }
+    return {
+        "mean": float(np.mean(rel)),
+        "std": float(np.std(rel)),
+        "max_percent": float(np.max(rel)),
+        "max_mm": float(np.max(diff)),
+        "n": len(rel),
+        "per_seam": per,
+        "gathered": gathered,
+    }
 
 
-def residual_stretch(pattern, body_xyz: Dict[str, np.ndarray], eps_weft: float = 1.10,
-                     garment: Optional[str] = None, direction: str = "weft") -> float:
+def residual_stretch(
+    pattern,
+    body_xyz: Dict[str, np.ndarray],
+    eps_weft: float = 1.10,
+    garment: Optional[str] = None,
+    direction: str = "weft",
+) -> float:
     """Residual stretch (SPEC 4): percent of garment area (on the posed body) with ``r_weft > eps_weft``.
 
     ``body_xyz`` maps panel name -> (n, 3) panel positions on the target pose.
@@ -194,9 +241,12 @@ def pattern_report(pattern, landmarks: Optional[Dict[str, np.ndarray]] = None) -
     and ``pieces`` (panel name -> its own :func:`ease_compliance`).
     """
     out = {"garments": {}}
-    strains = pattern_strains(pattern)      # every figure below reads the same per-triangle scales
-    overall = {"compliance": ease_compliance(pattern, strains=strains), "seams": seam_mismatch(pattern),
-               "regions": region_compliance(pattern, landmarks or {}, strains=strains)}
+    strains = pattern_strains(pattern)  # every figure below reads the same per-triangle scales
+    overall = {
+        "compliance": ease_compliance(pattern, strains=strains),
+        "seams": seam_mismatch(pattern),
+        "regions": region_compliance(pattern, landmarks or {}, strains=strains),
+    }
     garments = sorted({p.garment for p in pattern.panels})
     for g in garments:
         if len(garments) == 1:
@@ -204,9 +254,11 @@ def pattern_report(pattern, landmarks: Optional[Dict[str, np.ndarray]] = None) -
             # (the same floats; a copy, so that a reader editing one entry leaves the other)
             out["garments"][g] = _tree_copy(overall)
             continue
-        out["garments"][g] = {"compliance": ease_compliance(pattern, g, strains=strains),
-                              "seams": seam_mismatch(pattern, g),
-                              "regions": region_compliance(pattern, landmarks or {}, garment=g, strains=strains)}
+        out["garments"][g] = {
+            "compliance": ease_compliance(pattern, g, strains=strains),
+            "seams": seam_mismatch(pattern, g),
+            "regions": region_compliance(pattern, landmarks or {}, garment=g, strains=strains),
+        }
     out["compliance"], out["seams"] = overall["compliance"], overall["seams"]
     # every piece's areas in its majority orientation: the flips and the collapse rule read the same ones
     oriented = {p.name: oriented_areas(p.uv, p.faces) for p in pattern.panels}

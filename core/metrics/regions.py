@@ -9,6 +9,7 @@ compliance (weft), warp deviation and shear, exactly as
 mean (negative: the region gets less ease than painted). Definitions:
 ``docs/metrics.md``.
 """
+
 from __future__ import annotations
 
 from typing import Dict, Iterable, Mapping, Optional
@@ -20,8 +21,7 @@ from .stats import weighted_mean, weighted_stats
 from .strains import panel_strain
 
 #: The landmarks of the region report (those a body lacks are left out).
-REGION_LANDMARKS = ("bust_left", "bust_right", "shoulder_blade_left", "shoulder_blade_right",
-                    "seat_left", "seat_right")
+REGION_LANDMARKS = ("bust_left", "bust_right", "shoulder_blade_left", "shoulder_blade_right", "seat_left", "seat_right")
 #: Default region radius, m (the issue's "within 6 cm of the bust points").
 REGION_RADIUS = 0.06
 
@@ -39,20 +39,26 @@ def body_landmarks(pattern, model=None, vertices=None) -> Dict[str, np.ndarray]:
     from ..body.instance import spec_instance
     from ..body.registry import load_spec
     from ..errors import EaseError
+
     spec = getattr(pattern, "body", None) or {}
     if not spec.get("model"):
         return {}
     try:
-        model = model if model is not None else load_spec(spec)    # an OBJ template with its landmarks file
+        model = model if model is not None else load_spec(spec)  # an OBJ template with its landmarks file
         V = vertices if vertices is not None else spec_instance(spec, model=model)[0]
     except (EaseError, OSError):
         return {}
     return {n: np.asarray(model.landmark_position(n, V), float) for n in sorted(model.landmarks)}
 
 
-def region_compliance(pattern, landmarks: Mapping[str, np.ndarray], radius: float = REGION_RADIUS,
-                      names: Optional[Iterable[str]] = REGION_LANDMARKS,
-                      garment: Optional[str] = None, strains=None) -> Dict[str, dict]:
+def region_compliance(
+    pattern,
+    landmarks: Mapping[str, np.ndarray],
+    radius: float = REGION_RADIUS,
+    names: Optional[Iterable[str]] = REGION_LANDMARKS,
+    garment: Optional[str] = None,
+    strains=None,
+) -> Dict[str, dict]:
     """Compliance within ``radius`` of each named landmark.
 
     Parameters
@@ -105,10 +111,17 @@ def region_compliance(pattern, landmarks: Mapping[str, np.ndarray], radius: floa
         c = weighted_stats(np.abs(weft[inside]), a)
         s = weighted_stats(shear[inside], a)
         w = weighted_stats(np.abs(warp[inside]), a)
-        out[name] = {"mean": c["mean"], "std": c["std"], "p95": c["p95"],
-                     "signed": weighted_mean(weft[inside], a),
-                     "warp_mean": w["mean"], "warp_p95": w["p95"],
-                     "warp_signed": weighted_mean(warp[inside], a),
-                     "shear_mean": s["mean"], "shear_p95": s["p95"],
-                     "area": float(a.sum()), "n": int(inside.size)}
+        out[name] = {
+            "mean": c["mean"],
+            "std": c["std"],
+            "p95": c["p95"],
+            "signed": weighted_mean(weft[inside], a),
+            "warp_mean": w["mean"],
+            "warp_p95": w["p95"],
+            "warp_signed": weighted_mean(warp[inside], a),
+            "shear_mean": s["mean"],
+            "shear_p95": s["p95"],
+            "area": float(a.sum()),
+            "n": int(inside.size),
+        }
     return out

@@ -1,4 +1,5 @@
 """Area-weighted statistics shared by the pattern metrics (``docs/metrics.md``, "Weighting")."""
+
 from __future__ import annotations
 
 from typing import Dict

@@ -5,6 +5,7 @@ compliance per garment and overall, collapse and the regions: all from the same
 per-triangle scales. Computing them once per panel keeps a report at one pass
 (what a batch item and a live tick pay).
 """
+
 from __future__ import annotations
 
 from typing import Dict, NamedTuple
@@ -19,6 +20,7 @@ from ..pattern.types import PatternPanel
 class PanelStrain(NamedTuple):
     """One panel's per-triangle strains on its ``xyz``: achieved weft and warp scales (f,),
     shear (f,) in degrees, 3D triangle areas (f,) in m^2."""
+
     weft: np.ndarray
     warp: np.ndarray
     shear: np.ndarray
@@ -28,10 +30,10 @@ class PanelStrain(NamedTuple):
 def panel_strain(panel) -> PanelStrain:
     """The :class:`PanelStrain` of ``panel`` (a pattern panel: ``uv``, ``xyz``, ``faces``, ``grain``)."""
     X, F = np.asarray(panel.xyz, float), np.asarray(panel.faces)
-    if isinstance(panel, PatternPanel):     # the scales its assembly computed, while they are still its own
+    if isinstance(panel, PatternPanel):  # the scales its assembly computed, while they are still its own
         rw, rg, sh = panel.scales()
     else:
-        with np.errstate(divide="ignore", invalid="ignore"):     # a degenerate triangle reads as inf/nan
+        with np.errstate(divide="ignore", invalid="ignore"):  # a degenerate triangle reads as inf/nan
             rw, rg, sh = scales(panel.uv, X, F, panel.grain)
     return PanelStrain(rw, rg, sh, triangle_areas(X, F))
 

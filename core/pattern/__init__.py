@@ -18,19 +18,29 @@
 
 Submodules import numpy/scipy/igl when used; this package import stays light.
 """
+
 from .types import Pattern, PatternPanel, PatternSeam
 
-_SOLVE = ("PatternSolver", "SolverConfig", "SeamPlan", "solve_pattern", "transfer_pattern", "adapt_pattern",
-          "build_pattern")
+_SOLVE = (
+    "PatternSolver",
+    "SolverConfig",
+    "SeamPlan",
+    "solve_pattern",
+    "transfer_pattern",
+    "adapt_pattern",
+    "build_pattern",
+)
 
 
 def __getattr__(name):
     # lazy re-exports: ``from core.pattern import solve_pattern`` without importing scipy up front
     if name in _SOLVE:
         from . import solve
+
         return getattr(solve, name)
     if name in ("save_pattern", "load_pattern"):
         from . import io
+
         return getattr(io, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 

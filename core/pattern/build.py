@@ -1,4 +1,5 @@
 """Assemble a :class:`~core.pattern.types.Pattern` from a solve: pieces laid out in a row, achieved scales."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -19,6 +20,7 @@ class SolveResult:
     """The outcome of one solve: per panel ``uv`` (n, 2), per-triangle targets (f,), the body positions
     ``xyz`` (n, 3) it was solved on, the solve's time, iterations, flip-guard backtracks, energies and
     gathered seam names."""
+
     uv: Dict[str, np.ndarray]
     target_weft: Dict[str, np.ndarray]
     target_warp: Dict[str, np.ndarray]
@@ -37,13 +39,22 @@ def solve_result(panels, state) -> SolveResult:
     f0 = 0
     U, pos = state.U, state.positions
     for pd in panels:
-        out_uv[pd.name] = U[pd.offset:pd.offset + pd.n].copy()
-        tw[pd.name] = np.asarray(state.c_weft[f0:f0 + len(pd.faces)], float).copy()
-        tgw[pd.name] = np.asarray(state.c_warp[f0:f0 + len(pd.faces)], float).copy()
+        out_uv[pd.name] = U[pd.offset : pd.offset + pd.n].copy()
+        tw[pd.name] = np.asarray(state.c_weft[f0 : f0 + len(pd.faces)], float).copy()
+        tgw[pd.name] = np.asarray(state.c_warp[f0 : f0 + len(pd.faces)], float).copy()
         xyz[pd.name] = pos[pd.vertex_ids]
         f0 += len(pd.faces)
-    return SolveResult(out_uv, tw, tgw, xyz, state.seconds, state.iteration, state.backtracks,
-                       list(state.energies), state.plan.gathered)
+    return SolveResult(
+        out_uv,
+        tw,
+        tgw,
+        xyz,
+        state.seconds,
+        state.iteration,
+        state.backtracks,
+        list(state.energies),
+        state.plan.gathered,
+    )
 
 
 def row_layout(uv: Dict[str, np.ndarray], order: Sequence[str], gap: float = PIECE_GAP) -> Dict[str, np.ndarray]:
@@ -57,8 +68,14 @@ def row_layout(uv: Dict[str, np.ndarray], order: Sequence[str], gap: float = PIE
     return out
 
 
-def build_pattern(cut, result: SolveResult, style: str = "", body: Optional[dict] = None,
-                  mode: str = "reference", materials: Optional[dict] = None) -> Pattern:
+def build_pattern(
+    cut,
+    result: SolveResult,
+    style: str = "",
+    body: Optional[dict] = None,
+    mode: str = "reference",
+    materials: Optional[dict] = None,
+) -> Pattern:
     """Assemble a :class:`Pattern` from a solve; checks it has no flipped triangle."""
     order = [p.name for p in cut.panels]
     uv = row_layout(result.uv, order)
@@ -69,28 +86,56 @@ def build_pattern(cut, result: SolveResult, style: str = "", body: Optional[dict
         if np.any(s <= 0):
             raise PatternError(f"panel {p.name!r}: {int(np.sum(s <= 0))} flipped triangles in the optimized pattern")
         piece = PatternPanel(
-            name=p.name, garment=p.garment, uv=uv[p.name], faces=np.asarray(p.faces, int),
-            vertex_ids=np.asarray(p.vertex_ids, int), xyz=np.asarray(xyz, float), grain=np.array([0.0, 1.0]),
-            target_weft=result.target_weft[p.name], target_warp=result.target_warp[p.name],
-            achieved_weft=None, achieved_warp=None,
+            name=p.name,
+            garment=p.garment,
+            uv=uv[p.name],
+            faces=np.asarray(p.faces, int),
+            vertex_ids=np.asarray(p.vertex_ids, int),
+            xyz=np.asarray(xyz, float),
+            grain=np.array([0.0, 1.0]),
+            target_weft=result.target_weft[p.name],
+            target_warp=result.target_warp[p.name],
+            achieved_weft=None,
+            achieved_warp=None,
             boundary=[np.asarray(b, int) for b in (p.boundary or boundary_loops(p.faces))],
-            hems=[np.asarray(h, int) for h in cut.hems.get(p.name, [])], mirror_of=p.mirror_of)
+            hems=[np.asarray(h, int) for h in cut.hems.get(p.name, [])],
+            mirror_of=p.mirror_of,
+        )
         # the piece keeps its scales: the pattern's report reads them again (PatternPanel.scales)
         piece.achieved_weft, piece.achieved_warp, _ = piece.scales()
         panels.append(piece)
-    seams = [PatternSeam(s.name, s.panel_a, s.panel_b, np.asarray(s.verts_a, int), np.asarray(s.verts_b, int),
-                         gathered=s.name in result.gathered)
-             for s in cut.seams]
+    seams = [
+        PatternSeam(
+            s.name,
+            s.panel_a,
+            s.panel_b,
+            np.asarray(s.verts_a, int),
+            np.asarray(s.verts_b, int),
+            gathered=s.name in result.gathered,
+        )
+        for s in cut.seams
+    ]
     body = dict(body if body is not None else cut.body)
-    report = {"optimize_seconds": result.seconds, "iterations": result.iterations,
-              "backtracks": result.backtracks, "gathered_seams": list(result.gathered)}
+    report = {
+        "optimize_seconds": result.seconds,
+        "iterations": result.iterations,
+        "backtracks": result.backtracks,
+        "gathered_seams": list(result.gathered),
+    }
     darts = dart_report(cut, uv, seams)
     if darts:
         report["darts"] = darts
-    return Pattern(style=style, body=body, garments=dict(cut.garments), panels=panels, seams=seams,
-                   pins={g: np.asarray(v, int) for g, v in cut.pins.items()},
-                   materials=dict(materials if materials is not None else cut.materials), mode=mode,
-                   report=report)
+    return Pattern(
+        style=style,
+        body=body,
+        garments=dict(cut.garments),
+        panels=panels,
+        seams=seams,
+        pins={g: np.asarray(v, int) for g, v in cut.pins.items()},
+        materials=dict(materials if materials is not None else cut.materials),
+        mode=mode,
+        report=report,
+    )
 
 
 def dart_report(cut, uv: Dict[str, np.ndarray], seams: List[PatternSeam]) -> Dict[str, dict]:
@@ -107,9 +152,12 @@ def dart_report(cut, uv: Dict[str, np.ndarray], seams: List[PatternSeam]) -> Dic
         la = float(np.linalg.norm(np.diff(a, axis=0), axis=1).sum())
         lb = float(np.linalg.norm(np.diff(b, axis=0), axis=1).sum())
         rec = (getattr(cut, "darts", {}) or {}).get(s.name, {})
-        out[s.name] = {"panel": s.panel_a, "intake_mm": round(1000 * dart_intake(a[0], b[0], a[-1]), 3),
-                       "legs_mm": [round(1000 * la, 3), round(1000 * lb, 3)],
-                       "leg_difference_mm": round(1000 * abs(la - lb), 4)}
+        out[s.name] = {
+            "panel": s.panel_a,
+            "intake_mm": round(1000 * dart_intake(a[0], b[0], a[-1]), 3),
+            "legs_mm": [round(1000 * la, 3), round(1000 * lb, 3)],
+            "leg_difference_mm": round(1000 * abs(la - lb), 4),
+        }
         if rec.get("intake") is not None:
             out[s.name]["intake_set_mm"] = round(1000 * float(rec["intake"]), 3)
     return out

@@ -17,6 +17,7 @@ threshold is such a setting here (the design's gathered seams add to the
 caller's); the stretch tolerances are the adaptation's arguments
 (:func:`core.pattern.solve.adapt_pattern`).
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -47,6 +48,7 @@ class Weights:
     the weft target). ``sliver``: every triangle weighs at least this
     fraction of the mean triangle weight, so slivers do not fold for free.
     """
+
     ease: float = 0.1
     regulariser: float = 1.0
     seam_length: float = 15.0
@@ -74,6 +76,7 @@ class RestShape:
     warp (v) row against the weft (u) row when the local step fits each
     triangle's rotation (< 1: the rest shape turns to the current weft first).
     """
+
     model: str = "prestretch"
     warp_slack: float = 0.12
     warp_row: float = 0.5
@@ -99,6 +102,7 @@ class SeamOptions:
     the
     :class:`core.design.materials.Materials` default (0.2).
     """
+
     straight_target: str = "smooth"
     length_integral: float = 1.0
     length_integral_cap: float = 1.0
@@ -123,6 +127,7 @@ class Feedback:
     accumulated correction factor (adaptation solves use their own ceiling
     and step, :class:`Adaptation`).
     """
+
     weft: float = 0.06
     warp: float = 0.0
     from_iteration: int = 2
@@ -177,6 +182,7 @@ class Adaptation:
     waist and the armpits; the back's shear p95 10.4 deg, the garment's 8.3
     after 268 moving iterations, 6.1 after 28).
     """
+
     margin: float = 0.12
     gain: float = 0.1
     min_iterations: int = 60
@@ -193,8 +199,12 @@ class Adaptation:
     def holds(self, iteration: int, planned: int) -> bool:
         """Whether an adaptation's feedback holds still in ``iteration`` (0-based) of a solve of ``planned``
         iterations: in the last ``settle`` and from ``feedback_until`` on."""
-        return (self.settle > 0 and iteration >= planned - self.settle
-                or self.feedback_until is not None and iteration >= self.feedback_until)
+        return (
+            self.settle > 0
+            and iteration >= planned - self.settle
+            or self.feedback_until is not None
+            and iteration >= self.feedback_until
+        )
 
 
 @dataclass(frozen=True)
@@ -218,6 +228,7 @@ class CollapseGuard:
     Targets reported and measured stay the design's. ``guard_scale`` 0 turns
     it off (the paper preset).
     """
+
     guard_scale: float = 0.6
     guard_open: float = 0.7
     guard_grow: float = 2.0
@@ -225,8 +236,14 @@ class CollapseGuard:
     guard_release: float = 0.5
 
 
-_GROUPS = {"weights": Weights, "rest_shape": RestShape, "seams": SeamOptions, "feedback": Feedback,
-           "adaptation": Adaptation, "guard": CollapseGuard}
+_GROUPS = {
+    "weights": Weights,
+    "rest_shape": RestShape,
+    "seams": SeamOptions,
+    "feedback": Feedback,
+    "adaptation": Adaptation,
+    "guard": CollapseGuard,
+}
 
 
 @dataclass(frozen=True)
@@ -238,6 +255,7 @@ class SolverConfig:
     gathered=("*",))``. An override is a top-level field, a group (an instance, or a dict of the
     fields to change), or a field of exactly one group by its own name.
     """
+
     iterations: int = 20
     realign_grain: bool = True
     weights: Weights = field(default_factory=Weights)
@@ -253,12 +271,13 @@ class SolverConfig:
         with the collapse guard (not a term of the paper's energy: without it the shirt and pants
         keep 27-35 collapsed triangles, which every pattern is refused for; with it the figures
         move by under 0.1 point)."""
-        base = cls(weights=Weights(seam_length=100.0, seam_straight=5.0, seam_curve=10.0),
-                   rest_shape=RestShape(model="isometric", warp_slack=0.0, warp_row=1.0),
-                   seams=SeamOptions(straight_target="zero", length_integral=0.0, gather_above=None),
-                   feedback=Feedback(weft=0.0, warp=0.0),
-                   adaptation=Adaptation(margin=0.0, gain=0.0, warp_gain=None, spread=0, cap_warp=None, settle=0,
-                                             lower=1.0))
+        base = cls(
+            weights=Weights(seam_length=100.0, seam_straight=5.0, seam_curve=10.0),
+            rest_shape=RestShape(model="isometric", warp_slack=0.0, warp_row=1.0),
+            seams=SeamOptions(straight_target="zero", length_integral=0.0, gather_above=None),
+            feedback=Feedback(weft=0.0, warp=0.0),
+            adaptation=Adaptation(margin=0.0, gain=0.0, warp_gain=None, spread=0, cap_warp=None, settle=0, lower=1.0),
+        )
         return base.with_overrides(**overrides)
 
     @classmethod
@@ -289,9 +308,13 @@ class SolverConfig:
         move the targets in the first 30 iterations only, as improved's 60 do (``feedback_until``), and settle
         in the other 270: after adaptation to P1, shear p95 6.1 deg instead of 8.3, residual stretch weft /
         warp 0.07 / 0.55 % (0.16 / 0.45), seams 0.17 mm (0.70), 2 % less cloth."""
-        base = cls(iterations=300, weights=Weights(regulariser=2.0), rest_shape=RestShape(warp_slack=0.01),
-                   feedback=Feedback(weft=0.01, ceiling=1.2),
-                   adaptation=Adaptation(feedback_until=Adaptation.min_iterations - Adaptation.settle))
+        base = cls(
+            iterations=300,
+            weights=Weights(regulariser=2.0),
+            rest_shape=RestShape(warp_slack=0.01),
+            feedback=Feedback(weft=0.01, ceiling=1.2),
+            adaptation=Adaptation(feedback_until=Adaptation.min_iterations - Adaptation.settle),
+        )
         return base.with_overrides(**overrides)
 
     @classmethod
@@ -308,8 +331,13 @@ class SolverConfig:
     @classmethod
     def named(cls, name: str, **overrides) -> "SolverConfig":
         """The preset ``name`` (``paper``, ``improved``, ``stretch``, ``fitted``, ``lengths``) with ``overrides``."""
-        table = {"paper": cls.paper, "improved": cls.improved, "stretch": cls.stretch, "fitted": cls.fitted,
-                 "lengths": cls.lengths}
+        table = {
+            "paper": cls.paper,
+            "improved": cls.improved,
+            "stretch": cls.stretch,
+            "fitted": cls.fitted,
+            "lengths": cls.lengths,
+        }
         if name not in table:
             raise PatternError(f"solver configuration: expected one of {', '.join(table)}, got {name!r}")
         return table[name](**overrides)
@@ -324,8 +352,10 @@ class SolverConfig:
                 elif isinstance(value, Mapping):
                     changes.setdefault(key, {}).update(value)
                 else:
-                    raise PatternError(f"solver configuration {key}: expected a {_GROUPS[key].__name__} or a dict "
-                                       f"of its fields, got {value!r}")
+                    raise PatternError(
+                        f"solver configuration {key}: expected a {_GROUPS[key].__name__} or a dict "
+                        f"of its fields, got {value!r}"
+                    )
             elif key in ("iterations", "realign_grain"):
                 top[key] = value
             else:
@@ -354,12 +384,14 @@ class SolverConfig:
     def check(self) -> None:
         """Raise :class:`PatternError` naming the first invalid setting."""
         w, r, s, fb, ad, gd = self.weights, self.rest_shape, self.seams, self.feedback, self.adaptation, self.guard
-        nonneg = [("guard", gd, ("guard_scale",)),
-                  ("weights", w, ("ease", "regulariser", "seam_length", "seam_straight", "seam_curve", "sliver")),
-                  ("rest_shape", r, ("warp_slack",)),
-                  ("seams", s, ("length_integral", "length_integral_cap")),
-                  ("feedback", fb, ("weft", "warp", "step")),
-                  ("adaptation", ad, ("margin", "gain", "step", "lower"))]
+        nonneg = [
+            ("guard", gd, ("guard_scale",)),
+            ("weights", w, ("ease", "regulariser", "seam_length", "seam_straight", "seam_curve", "sliver")),
+            ("rest_shape", r, ("warp_slack",)),
+            ("seams", s, ("length_integral", "length_integral_cap")),
+            ("feedback", fb, ("weft", "warp", "step")),
+            ("adaptation", ad, ("margin", "gain", "step", "lower")),
+        ]
         for group, obj, names in nonneg:
             for k in names:
                 _finite(f"{group}.{k}", getattr(obj, k), 0.0, ">=")
@@ -385,8 +417,10 @@ class SolverConfig:
         if ad.feedback_until is not None:
             check_iterations("solver configuration adaptation.feedback_until", ad.feedback_until, low=0)
         if ad.settle >= max(self.iterations, ad.min_iterations):
-            raise PatternError(f"solver configuration adaptation.settle: expected fewer than the adaptation's "
-                               f"{max(self.iterations, ad.min_iterations)} iterations, got {ad.settle}")
+            raise PatternError(
+                f"solver configuration adaptation.settle: expected fewer than the adaptation's "
+                f"{max(self.iterations, ad.min_iterations)} iterations, got {ad.settle}"
+            )
         if ad.warp_gain is not None:
             _finite("adaptation.warp_gain", ad.warp_gain, 0.0, ">=")
         for k in ("cap_weft", "cap_warp"):
@@ -394,17 +428,22 @@ class SolverConfig:
                 _finite(f"adaptation.{k}", getattr(ad, k), 1.0, ">=")
         check_iterations("solver configuration feedback.from_iteration", fb.from_iteration, low=0)
         if s.straight_target not in ("zero", "smooth"):
-            raise PatternError(f"solver configuration seams.straight_target: expected 'zero' or 'smooth', "
-                               f"got {s.straight_target!r}")
+            raise PatternError(
+                f"solver configuration seams.straight_target: expected 'zero' or 'smooth', got {s.straight_target!r}"
+            )
         if r.model not in ("prestretch", "isometric"):
-            raise PatternError(f"solver configuration rest_shape.model: expected 'prestretch' or 'isometric', "
-                               f"got {r.model!r}")
+            raise PatternError(
+                f"solver configuration rest_shape.model: expected 'prestretch' or 'isometric', got {r.model!r}"
+            )
         a = s.gather_above
         if a != FROM_DESIGN and a is not None and (isinstance(a, str) or not np.isfinite(a) or a <= 0):
-            raise PatternError(f"solver configuration seams.gather_above: expected a fraction > 0, None or "
-                               f"{FROM_DESIGN!r}, got {a!r}")
+            raise PatternError(
+                f"solver configuration seams.gather_above: expected a fraction > 0, None or {FROM_DESIGN!r}, got {a!r}"
+            )
         if isinstance(s.gathered, str) or not all(isinstance(g, str) for g in s.gathered):
-            raise PatternError(f"solver configuration seams.gathered: expected a tuple of seam names, got {s.gathered!r}")
+            raise PatternError(
+                f"solver configuration seams.gathered: expected a tuple of seam names, got {s.gathered!r}"
+            )
 
 
 #: Most local-global iterations of one solve (default 20; an adaptation at least
@@ -415,16 +454,23 @@ MAX_ITERATIONS = 1000
 def check_iterations(label: str, value, low: int = 1) -> int:
     """``value`` as an int; :class:`PatternError` naming ``label`` unless it is an integer
     in ``[low, MAX_ITERATIONS]``."""
-    ok = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) and (
-        low <= value <= MAX_ITERATIONS)
+    ok = (
+        isinstance(value, (int, np.integer))
+        and not isinstance(value, (bool, np.bool_))
+        and (low <= value <= MAX_ITERATIONS)
+    )
     if not ok:
         raise PatternError(f"{label}: expected an integer in {low}..{MAX_ITERATIONS}, got {value!r}")
     return int(value)
 
 
 def _finite(name: str, value, bound: float, op: str) -> None:
-    ok = isinstance(value, (int, float, np.number)) and not isinstance(value, bool) and np.isfinite(value) and (
-        value >= bound if op == ">=" else value > bound)
+    ok = (
+        isinstance(value, (int, float, np.number))
+        and not isinstance(value, bool)
+        and np.isfinite(value)
+        and (value >= bound if op == ">=" else value > bound)
+    )
     if not ok:
         raise PatternError(f"solver configuration {name}: expected a finite value {op} {bound:g}, got {value!r}")
 
@@ -438,8 +484,9 @@ def gather_threshold(config: SolverConfig, materials: Optional[Mapping]) -> Opti
     return None if a is None else float(a)
 
 
-def tolerances(materials: Optional[Mapping], eps_weft: Optional[float] = None,
-               eps_warp: Optional[float] = None) -> Tuple[float, float]:
+def tolerances(
+    materials: Optional[Mapping], eps_weft: Optional[float] = None, eps_warp: Optional[float] = None
+) -> Tuple[float, float]:
     """Stretch tolerances (weft, warp) of an adaptation, each >= 1.
 
     Weft: the caller's ``eps_weft``, else the design's ``materials.eps_weft``,

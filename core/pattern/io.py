@@ -14,6 +14,7 @@ Layout (format ``"ease.pattern"``, version 1)::
 Arrays are plain JSON lists. :func:`load_pattern` checks every field and raises
 :class:`core.errors.PatternError` naming the offending one.
 """
+
 from __future__ import annotations
 
 import json
@@ -34,26 +35,56 @@ FILENAME = "pattern.json"
 
 def _pattern_dict(pattern: Pattern) -> dict:
     """The file's layout with the numbers still numpy arrays (float64 / int64)."""
+
     def f(a):
         return np.asarray(a, float)
 
     def i(a):
         return np.asarray(a, np.int64)
 
-    panels = [{"name": p.name, "garment": p.garment, "uv": f(p.uv), "faces": i(p.faces),
-               "vertex_ids": i(p.vertex_ids), "xyz": f(p.xyz), "grain": f(p.grain),
-               "target_weft": f(p.target_weft), "target_warp": f(p.target_warp),
-               "achieved_weft": f(p.achieved_weft), "achieved_warp": f(p.achieved_warp),
-               "boundary": [i(b) for b in p.boundary], "hems": [i(h) for h in p.hems],
-               "mirror_of": p.mirror_of} for p in pattern.panels]
-    seams = [{"name": s.name, "panel_a": s.panel_a, "panel_b": s.panel_b, "verts_a": i(s.verts_a),
-              "verts_b": i(s.verts_b), "gathered": bool(s.gathered)} for s in pattern.seams]
+    panels = [
+        {
+            "name": p.name,
+            "garment": p.garment,
+            "uv": f(p.uv),
+            "faces": i(p.faces),
+            "vertex_ids": i(p.vertex_ids),
+            "xyz": f(p.xyz),
+            "grain": f(p.grain),
+            "target_weft": f(p.target_weft),
+            "target_warp": f(p.target_warp),
+            "achieved_weft": f(p.achieved_weft),
+            "achieved_warp": f(p.achieved_warp),
+            "boundary": [i(b) for b in p.boundary],
+            "hems": [i(h) for h in p.hems],
+            "mirror_of": p.mirror_of,
+        }
+        for p in pattern.panels
+    ]
+    seams = [
+        {
+            "name": s.name,
+            "panel_a": s.panel_a,
+            "panel_b": s.panel_b,
+            "verts_a": i(s.verts_a),
+            "verts_b": i(s.verts_b),
+            "gathered": bool(s.gathered),
+        }
+        for s in pattern.seams
+    ]
     return {
-        "format": FORMAT, "version": VERSION, "unit": "m",
-        "style": pattern.style, "body": pattern.body, "garments": pattern.garments,
-        "mode": pattern.mode, "materials": pattern.materials, "report": pattern.report,
+        "format": FORMAT,
+        "version": VERSION,
+        "unit": "m",
+        "style": pattern.style,
+        "body": pattern.body,
+        "garments": pattern.garments,
+        "mode": pattern.mode,
+        "materials": pattern.materials,
+        "report": pattern.report,
         "pins": {g: i(v) for g, v in pattern.pins.items()},
-        "panels": panels, "seams": seams,
+        "panels": panels,
+        "seams": seams,
     }
 
 
@@ -105,7 +136,7 @@ def _text(obj: dict, end: str = "") -> str:
         if index != str(k):
             return dumps_json(_map_arrays(obj, lambda a: a.tolist()), indent=None) + end
         out += [texts[k], rest]
-    return "".join(out + [end])        # one copy of the megabytes, not two
+    return "".join(out + [end])  # one copy of the megabytes, not two
 
 
 def pattern_text(pattern: Pattern) -> str:
@@ -158,8 +189,9 @@ def load_pattern(path: Union[str, Path]) -> Pattern:
         raise PatternError(f"{path}: no pattern file (expected {FILENAME} written by `ease pattern`)")
     size = path.stat().st_size
     if size > MAX_FILE_BYTES:
-        raise PatternError(f"{path}: {size / 2**20:.0f} MB is larger than a pattern file can be "
-                           f"({MAX_FILE_BYTES // 2**20} MB)")
+        raise PatternError(
+            f"{path}: {size / 2**20:.0f} MB is larger than a pattern file can be ({MAX_FILE_BYTES // 2**20} MB)"
+        )
     try:
         obj = json.loads(path.read_bytes().decode("utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
@@ -183,7 +215,7 @@ def _numbers(value, where, kind):
     if a.dtype.kind not in ("iu" if kind == "int" else "iuf"):
         raise PatternError(f"{where}: expected {kind}s, got {a.dtype.name} values")
     if kind == "int":
-        return a.astype(np.int64, copy=False)   # no copy of an int64 array (pattern_text checks its own)
+        return a.astype(np.int64, copy=False)  # no copy of an int64 array (pattern_text checks its own)
     a = a.astype(float, copy=False)
     if not np.all(np.isfinite(a)):
         raise PatternError(f"{where}: holds NaN or infinite values")
@@ -255,8 +287,10 @@ def _panel(k, po, names):
     grain = _array(po, "grain", where, float, (2,))
     if abs(np.linalg.norm(grain) - 1.0) > 1e-6:
         raise PatternError(f"{where}.grain: expected a unit 2D vector, got {grain.tolist()}")
-    per_tri = {key: _array(po, key, where, float, (f,), MAX_SCALE)
-               for key in ("target_weft", "target_warp", "achieved_weft", "achieved_warp")}
+    per_tri = {
+        key: _array(po, key, where, float, (f,), MAX_SCALE)
+        for key in ("target_weft", "target_warp", "achieved_weft", "achieved_warp")
+    }
     for key in ("target_weft", "target_warp"):
         if np.any(per_tri[key] <= 0):
             raise PatternError(f"{where}.{key}: scales must be > 0")
@@ -266,9 +300,19 @@ def _panel(k, po, names):
     garment = po.get("garment", "")
     if not isinstance(garment, str):
         raise PatternError(f"{where}.garment: expected a garment name")
-    return PatternPanel(name=name, garment=garment, uv=uv, faces=faces, vertex_ids=vids, xyz=xyz, grain=grain,
-                        boundary=_id_lists(po, "boundary", where, n), hems=_id_lists(po, "hems", where, n),
-                        mirror_of=mirror, **per_tri)
+    return PatternPanel(
+        name=name,
+        garment=garment,
+        uv=uv,
+        faces=faces,
+        vertex_ids=vids,
+        xyz=xyz,
+        grain=grain,
+        boundary=_id_lists(po, "boundary", where, n),
+        hems=_id_lists(po, "hems", where, n),
+        mirror_of=mirror,
+        **per_tri,
+    )
 
 
 def _seam(k, so, by_name):
@@ -281,13 +325,21 @@ def _seam(k, so, by_name):
     va = _ids(so.get("verts_a", []), f"{where}.verts_a", by_name[so["panel_a"]].uv.shape[0])
     vb = _ids(so.get("verts_b", []), f"{where}.verts_b", by_name[so["panel_b"]].uv.shape[0])
     if va.size < 2 or va.size != vb.size:
-        raise PatternError(f"{where}.verts_a/verts_b: expected two equally long polylines of >= 2 "
-                           f"vertices, got {va.size} and {vb.size}")
+        raise PatternError(
+            f"{where}.verts_a/verts_b: expected two equally long polylines of >= 2 "
+            f"vertices, got {va.size} and {vb.size}"
+        )
     gathered = so.get("gathered", False)
     if not isinstance(gathered, bool):
         raise PatternError(f"{where}.gathered: expected true or false, got {gathered!r}")
-    return PatternSeam(name=str(so.get("name", f"seam{k}")), panel_a=so["panel_a"],
-                       panel_b=so["panel_b"], verts_a=va, verts_b=vb, gathered=gathered)
+    return PatternSeam(
+        name=str(so.get("name", f"seam{k}")),
+        panel_a=so["panel_a"],
+        panel_b=so["panel_b"],
+        verts_a=va,
+        verts_b=vb,
+        gathered=gathered,
+    )
 
 
 def pattern_from_json(obj: dict) -> Pattern:
@@ -312,15 +364,19 @@ def pattern_from_json(obj: dict) -> Pattern:
     panels = [_panel(k, po, names) for k, po in enumerate(panels_obj)]
     n_garment = sum(p.uv.shape[0] for p in panels)
     for k, p in enumerate(panels):
-        _ids(p.vertex_ids, f"panels[{k}] ({p.name}).vertex_ids", n_garment,
-             "global vertex ids (at most one per panel vertex of the file)")
+        _ids(
+            p.vertex_ids,
+            f"panels[{k}] ({p.name}).vertex_ids",
+            n_garment,
+            "global vertex ids (at most one per panel vertex of the file)",
+        )
     by_name = {p.name: p for p in panels}
     seams_obj = obj.get("seams")
     seams_obj = [] if seams_obj is None else seams_obj
     if not isinstance(seams_obj, list):
         raise PatternError("seams: expected a list")
     seams = [_seam(k, so, by_name) for k, so in enumerate(seams_obj)]
-    used = np.zeros(n_garment, bool)         # the ids of the panels' vertices (all in [0, n_garment))
+    used = np.zeros(n_garment, bool)  # the ids of the panels' vertices (all in [0, n_garment))
     for p in panels:
         used[p.vertex_ids] = True
     pins = {}
@@ -338,6 +394,14 @@ def pattern_from_json(obj: dict) -> Pattern:
     style = obj.get("style", "")
     if not isinstance(style, str):
         raise PatternError(f"style: expected a name, got {style!r}")
-    return Pattern(style=style, body=body, garments=dict(_mapping(obj, "garments")),
-                   panels=panels, seams=seams, pins=pins, materials=dict(_mapping(obj, "materials")),
-                   mode=mode, report=dict(_mapping(obj, "report")))
+    return Pattern(
+        style=style,
+        body=body,
+        garments=dict(_mapping(obj, "garments")),
+        panels=panels,
+        seams=seams,
+        pins=pins,
+        materials=dict(_mapping(obj, "materials")),
+        mode=mode,
+        report=dict(_mapping(obj, "report")),
+    )

@@ -33,6 +33,7 @@ the same bytes. Integers are written in plain decimal. The text is what
 :func:`json.dumps` writes for ``a.tolist()`` but for the digits of floats
 (nested lists, ``", "`` between items).
 """
+
 from __future__ import annotations
 
 import threading
@@ -41,12 +42,12 @@ from typing import List, Sequence
 
 import numpy as np
 
-_DIGITS = 17                                   # significant digits of a float
-_LO, _HI = 10 ** (_DIGITS - 1), 10 ** _DIGITS  # the integer mantissa lies in [_LO, _HI)
-_E_MIN, _E_MAX = -5, 14                        # decimal exponents formatted in bulk (10**(16-e) exact)
+_DIGITS = 17  # significant digits of a float
+_LO, _HI = 10 ** (_DIGITS - 1), 10**_DIGITS  # the integer mantissa lies in [_LO, _HI)
+_E_MIN, _E_MAX = -5, 14  # decimal exponents formatted in bulk (10**(16-e) exact)
 _POW10 = 10.0 ** np.arange(0, 23)
-_SPLIT = 134217729.0                           # 2**27 + 1: Dekker's splitter for float64
-_CHUNK = 1 << 15                               # numbers per pass: bounds the temporaries of a huge array
+_SPLIT = 134217729.0  # 2**27 + 1: Dekker's splitter for float64
+_CHUNK = 1 << 15  # numbers per pass: bounds the temporaries of a huge array
 _MINUS = np.uint8(ord("-"))
 
 
@@ -59,20 +60,28 @@ def _texts(texts, width: int, dtype) -> np.ndarray:
 #: all four digits; trailing zeros NUL (a float's last fraction digits); leading zeros NUL, 0 all NUL
 #: (an integer's upper digits); leading zeros NUL, 0 as "0" (an integer's last four digits)
 _FULL, _TRAIL, _LEAD, _LAST = 0, 10_000, 20_000, 30_000
-_QUAD = _texts([f"{i:04d}" for i in range(10_000)]
-               + [f"{i:04d}".rstrip("0") for i in range(10_000)]
-               + [(str(i) if i else "").rjust(4, "\0") for i in range(10_000)]
-               + [str(i).rjust(4, "\0") for i in range(10_000)], 4, np.uint32)
+_QUAD = _texts(
+    [f"{i:04d}" for i in range(10_000)]
+    + [f"{i:04d}".rstrip("0") for i in range(10_000)]
+    + [(str(i) if i else "").rjust(4, "\0") for i in range(10_000)]
+    + [str(i).rjust(4, "\0") for i in range(10_000)],
+    4,
+    np.uint32,
+)
 _QUAD_FULL, _QUAD_TRAIL = _QUAD[_FULL:_TRAIL], _QUAD[_TRAIL:_LEAD]
 #: The 8 bytes before a float's last 16 fraction digits (uint64; byte 0 left NUL for the sign, byte 7
 #: for the first fraction digit, added as a multiple of :data:`_BYTE7`), by index: 5 + e for e < 0:
 #: "0." and -1 - e zeros; 5 + w: "w." for an integer part w < 10**4; 10005 + w: "wwww." (w's last four
 #: digits: a larger integer part, whose upper digits precede these bytes)
 _WHOLE, _WHOLE4 = 5, 10_005
-_PREFIX = _texts([("0." + "0" * k).rjust(7, "\0") for k in range(4, -1, -1)]
-                 + [f"{w}.".rjust(7, "\0") for w in range(10_000)]
-                 + [f"{w:04d}.".rjust(7, "\0") for w in range(10_000)], 8, np.uint64)
-_BYTE7 = np.frombuffer(b"\0" * 7 + b"\1", np.uint64)[0]       # 1 in byte 7, in this machine's byte order
+_PREFIX = _texts(
+    [("0." + "0" * k).rjust(7, "\0") for k in range(4, -1, -1)]
+    + [f"{w}.".rjust(7, "\0") for w in range(10_000)]
+    + [f"{w:04d}.".rjust(7, "\0") for w in range(10_000)],
+    8,
+    np.uint64,
+)
+_BYTE7 = np.frombuffer(b"\0" * 7 + b"\1", np.uint64)[0]  # 1 in byte 7, in this machine's byte order
 #: By e + 5 (-5 <= e <= 14): 10**p with p = 16 - max(e, -1) digits of q after the point (p = 17 below 1,
 #: where the prefix holds "0." and the zeros), and 10**(17 - p), which left-aligns them in 17 digits
 _E = np.arange(_E_MIN, _E_MAX + 1)
@@ -93,14 +102,14 @@ def _mantissa(a: np.ndarray, e: np.ndarray) -> np.ndarray:
     """The nearest integer of ``a * 10**(16 - e)`` (int64), exactly: ``hi + lo`` is the exact
     product (Dekker), ``hi`` an integer above 2**53 and ``|lo| <= 8``."""
     b = _POW10[16 - e]
-    bh = _SPLIT * b                          # 10**p split as Dekker does (exact: 10**p = 5**p * 2**p
-    bh -= bh - b                             # has at most 49 significant bits for p <= 22)
+    bh = _SPLIT * b  # 10**p split as Dekker does (exact: 10**p = 5**p * 2**p
+    bh -= bh - b  # has at most 49 significant bits for p <= 22)
     bl = b - bh
     hi = a * b
-    ah = _SPLIT * a                          # in place from here: fewer temporaries of n numbers
+    ah = _SPLIT * a  # in place from here: fewer temporaries of n numbers
     ah -= ah - a
     al = a - ah
-    b = al * bl                              # the terms of ((ah * bh - hi) + ah * bl + al * bh) + al * bl
+    b = al * bl  # the terms of ((ah * bh - hi) + ah * bl + al * bh) + al * bl
     bl *= ah
     ah *= bh
     ah -= hi
@@ -117,8 +126,8 @@ def _decimal(a: np.ndarray):
     """(q, e, other) of the magnitudes ``a``: ``a`` is ``q * 10**(e - 16)`` rounded to the nearest,
     ``10**16 <= q < 10**17`` and ``-5 <= e <= 14``, but at the indices ``other`` (zeros and the
     magnitudes left to ``repr``), where q = e = 0."""
-    fast = (a >= 10.0 ** _E_MIN) & (a < 10.0 ** (_E_MAX + 1))
-    other = np.flatnonzero(~fast)            # few: a pattern's zeros and rounding dust
+    fast = (a >= 10.0**_E_MIN) & (a < 10.0 ** (_E_MAX + 1))
+    other = np.flatnonzero(~fast)  # few: a pattern's zeros and rounding dust
     af = a
     if other.size:
         af = a.copy()
@@ -129,14 +138,14 @@ def _decimal(a: np.ndarray):
     for _ in range(2):  # log10 may be one off near a power of ten: the digits decide
         low, high = q < _LO, q >= _HI
         if not (low.any() or high.any()):
-            break    # every q in range: what follows the loop would change nothing
+            break  # every q in range: what follows the loop would change nothing
         e = e - low + high
         fast &= (e >= _E_MIN) & (e <= _E_MAX)
         e = np.clip(e, _E_MIN, _E_MAX)
         q = _mantissa(np.where(fast, af, 1.0), e)
         other = np.flatnonzero(~fast)
     else:
-        up = q >= _HI                        # rounded up to 10**17: one decade more
+        up = q >= _HI  # rounded up to 10**17: one decade more
         q, e = np.where(up, q // 10, q), e + up
         fast &= (q >= _LO) & (q < _HI) & (e <= _E_MAX)
         other = np.flatnonzero(~fast)
@@ -162,40 +171,40 @@ def _float_rows(x: np.ndarray, suffix: np.ndarray, words: np.ndarray, rows: np.n
     prefix = np.minimum(e, 0, out=e)
     prefix += _WHOLE
     if h:
-        upper = whole // 10_000                  # < 10**11: three quads, zeros before the first digit NUL
+        upper = whole // 10_000  # < 10**11: three quads, zeros before the first digit NUL
         lead = np.ones(n, bool)
         quads[:, 0] = 0
-        for j, u in enumerate((upper // 10 ** 8, upper // 10_000 % 10_000, upper % 10_000)):
+        for j, u in enumerate((upper // 10**8, upper // 10_000 % 10_000, upper % 10_000)):
             quads[:, 1 + j] = _QUAD[u + _LEAD * lead]
             lead &= u == 0
         prefix += whole % 10_000 + (upper > 0) * (_WHOLE4 - _WHOLE)
     else:
         prefix += whole
-    first = frac // 10 ** 16                     # always written: "x.0" when the fraction is 0
+    first = frac // 10**16  # always written: "x.0" when the fraction is 0
     word = _PREFIX[prefix]
     word += (first + ord("0")).view(np.uint64) * _BYTE7
     word = word.view(np.uint32).reshape(n, 2)
-    quads[:, h] = word[:, 0]                     # column by column: a 2D strided copy is slower
+    quads[:, h] = word[:, 0]  # column by column: a 2D strided copy is slower
     quads[:, h + 1] = word[:, 1]
-    frac -= first * 10 ** 16
-    hi8 = frac // 10 ** 8
-    lo8 = frac - hi8 * 10 ** 8
+    frac -= first * 10**16
+    hi8 = frac // 10**8
+    lo8 = frac - hi8 * 10**8
     v0, v2 = hi8 // 10_000, lo8 // 10_000
     v1, v3 = hi8 - v0 * 10_000, lo8 - v2 * 10_000
-    quads[:, h + 5] = _QUAD_TRAIL[v3]            # the trailing zeros of the last quad are NUL
+    quads[:, h + 5] = _QUAD_TRAIL[v3]  # the trailing zeros of the last quad are NUL
     for j, v in enumerate((v0, v1, v2)):
         quads[:, h + 2 + j] = _QUAD_FULL[v]
-    ends = np.flatnonzero(v3 == 0)               # rare: ends in 4 zeros, whose quads before may end it too
+    ends = np.flatnonzero(v3 == 0)  # rare: ends in 4 zeros, whose quads before may end it too
     if ends.size:
         trail = np.ones(ends.size, bool)
         for j, v in ((2, v2[ends]), (1, v1[ends]), (0, v0[ends])):
             quads[ends, h + 2 + j] = _QUAD[v + _TRAIL * trail]
             trail &= v == 0
-    quads[:, h + 6:] = words[suffix]
+    quads[:, h + 6 :] = words[suffix]
     rows[:, 0] = np.signbit(x).view(np.uint8) * _MINUS
     slow = other[a[other] != 0]
-    if slow.size:                               # tiny or huge magnitudes: Python's repr (also exact);
-        width = rows.shape[1] - 4 * s            # at most 24 characters ("-2.2250738585072014e-308")
+    if slow.size:  # tiny or huge magnitudes: Python's repr (also exact);
+        width = rows.shape[1] - 4 * s  # at most 24 characters ("-2.2250738585072014e-308")
         text = b"".join(repr(float(v)).encode("ascii").ljust(width, b"\0") for v in x[slow])
         rows[slow, :width] = np.frombuffer(text, np.uint8).reshape(slow.size, width)
 
@@ -223,7 +232,7 @@ def _int_rows(v: np.ndarray, suffix: np.ndarray, words: np.ndarray, rows: np.nda
     for j, part in enumerate(reversed(parts)):
         quads[:, 1 + j] = _QUAD[part + np.where(lead, _LAST if j == nq - 1 else _LEAD, _FULL)]
         lead &= part == 0
-    quads[:, nq + 1:] = words[suffix]
+    quads[:, nq + 1 :] = words[suffix]
     rows[:, 0] = (v < 0).view(np.uint8) * _MINUS
 
 
@@ -251,7 +260,7 @@ def _content_key(a: np.ndarray) -> tuple:
     the values before it answers.
     """
     flat = a.reshape(-1)
-    return a.dtype.str, a.shape, flat[::max(1, flat.size // _PROBES)].tobytes() + flat[-1:].tobytes()
+    return a.dtype.str, a.shape, flat[:: max(1, flat.size // _PROBES)].tobytes() + flat[-1:].tobytes()
 
 
 def _same_bits(a: np.ndarray, b: np.ndarray) -> bool:
@@ -366,13 +375,13 @@ def _format(arrays: List[np.ndarray]) -> List[str]:
             step = 1
             for d in range(a.ndim - 1, 0, -1):
                 step *= a.shape[d]
-                suffix[at + step - 1:at + a.size:step] += 2
+                suffix[at + step - 1 : at + a.size : step] += 2
             suffix[at + a.size - 1] = 2 * a.ndim
             spans.append((i, at, at + a.size, a.ndim))
             at += a.size
         rows = np.empty((values.size, width_of(values, words.shape[1])), np.uint8)
         for c in range(0, values.size, _CHUNK):
-            rows_of(values[c:c + _CHUNK], suffix[c:c + _CHUNK], words, rows[c:c + _CHUNK])
+            rows_of(values[c : c + _CHUNK], suffix[c : c + _CHUNK], words, rows[c : c + _CHUNK])
         # the one compaction: bytes.translate's deletion (a C loop) is twice numpy's boolean indexing
         text = rows.tobytes().translate(None, b"\0").decode("ascii")
         end = 0

@@ -1,4 +1,5 @@
 """PNG of a pattern: pieces laid out, coloured by achieved weft ease, seams and grain lines drawn."""
+
 from __future__ import annotations
 
 import io
@@ -13,9 +14,10 @@ from ..geom.layout import grain_line
 def render_png(pattern, path, title: str = "", dpi: int = 110) -> Path:
     """Draw ``pattern`` to ``path`` (atomic). Colour = achieved weft scale rho-hat."""
     import matplotlib
+
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
-    from matplotlib.collections import PolyCollection, LineCollection
+    from matplotlib.collections import LineCollection, PolyCollection
 
     allw = np.concatenate([p.achieved_weft for p in pattern.panels])
     allw = allw[np.isfinite(allw)]

@@ -14,6 +14,7 @@ The optimizer itself: :mod:`.solver` (system, iterations), :mod:`.targets`,
 :mod:`.seams`, :mod:`.steps` (local step, flip guard), :mod:`.build`
 (assembly), :mod:`.config` (settings and presets).
 """
+
 from __future__ import annotations
 
 from typing import Optional, Sequence
@@ -29,17 +30,34 @@ from .optimizer.solver import PatternSolver
 from .types import Pattern
 from .validate import validate_cut
 
-__all__ = ["PatternSolver", "SolverConfig", "SolveResult", "SeamPlan", "solve_pattern", "transfer_pattern",
-           "adapt_pattern", "build_pattern", "seam_is_gathered", "validate_cut"]
+__all__ = [
+    "PatternSolver",
+    "SolverConfig",
+    "SolveResult",
+    "SeamPlan",
+    "solve_pattern",
+    "transfer_pattern",
+    "adapt_pattern",
+    "build_pattern",
+    "seam_is_gathered",
+    "validate_cut",
+]
 
 
-def _solver(cut, ref_vertices, solver: Optional[PatternSolver], config: Optional[SolverConfig],
-            progress: Optional[Progress]) -> PatternSolver:
+def _solver(
+    cut, ref_vertices, solver: Optional[PatternSolver], config: Optional[SolverConfig], progress: Optional[Progress]
+) -> PatternSolver:
     return solver or PatternSolver(cut, ref_vertices, config, progress=sub(progress, 0.0, 0.3))
 
 
-def solve_pattern(cut, body_vertices, config: Optional[SolverConfig] = None, style: str = "",
-                  progress: Optional[Progress] = None, solver: Optional[PatternSolver] = None) -> Pattern:
+def solve_pattern(
+    cut,
+    body_vertices,
+    config: Optional[SolverConfig] = None,
+    style: str = "",
+    progress: Optional[Progress] = None,
+    solver: Optional[PatternSolver] = None,
+) -> Pattern:
     """Reference pattern (paper Eq. ref-scale) of ``cut`` on the body instance ``body_vertices`` (V, 3)
     it was cut on."""
     solver = _solver(cut, body_vertices, solver, config, progress)
@@ -50,9 +68,17 @@ def solve_pattern(cut, body_vertices, config: Optional[SolverConfig] = None, sty
     return pat
 
 
-def transfer_pattern(cut, ref_vertices, target_vertices, config: Optional[SolverConfig] = None,
-                     style: str = "", body: Optional[dict] = None, progress: Optional[Progress] = None,
-                     solver: Optional[PatternSolver] = None, start: Optional[Pattern] = None) -> Pattern:
+def transfer_pattern(
+    cut,
+    ref_vertices,
+    target_vertices,
+    config: Optional[SolverConfig] = None,
+    style: str = "",
+    body: Optional[dict] = None,
+    progress: Optional[Progress] = None,
+    solver: Optional[PatternSolver] = None,
+    start: Optional[Pattern] = None,
+) -> Pattern:
     """Shape transfer (paper Eq. transfer-scale): the ease field kept on the target body (V, 3).
 
     The reference flattening and factorisation are reused; the solve starts
@@ -66,15 +92,32 @@ def transfer_pattern(cut, ref_vertices, target_vertices, config: Optional[Solver
     K, cw, cg = solver.targets_reference(tgt, offsets=offsets)
     # the reference pattern stretched by how much longer the target body is under each piece
     U0 = None if start is None else solver.start_from(start, offsets)
-    res = solver.solve(K, cw, cg, start=U0, positions=tgt, progress=sub(progress, 0.3, 1.0),
-                       plan=solver.design_plan(config), config=config)
+    res = solver.solve(
+        K,
+        cw,
+        cg,
+        start=U0,
+        positions=tgt,
+        progress=sub(progress, 0.3, 1.0),
+        plan=solver.design_plan(config),
+        config=config,
+    )
     return build_pattern(cut, res, style=style, body=body, mode="transfer")
 
 
-def adapt_pattern(cut, ref_vertices, pose_vertices: Sequence[np.ndarray], eps_weft: Optional[float] = None,
-                  eps_warp: Optional[float] = None, config: Optional[SolverConfig] = None, style: str = "",
-                  body: Optional[dict] = None, progress: Optional[Progress] = None,
-                  solver: Optional[PatternSolver] = None, start: Optional[Pattern] = None) -> Pattern:
+def adapt_pattern(
+    cut,
+    ref_vertices,
+    pose_vertices: Sequence[np.ndarray],
+    eps_weft: Optional[float] = None,
+    eps_warp: Optional[float] = None,
+    config: Optional[SolverConfig] = None,
+    style: str = "",
+    body: Optional[dict] = None,
+    progress: Optional[Progress] = None,
+    solver: Optional[PatternSolver] = None,
+    start: Optional[Pattern] = None,
+) -> Pattern:
     """Pose adaptation (paper Eqs. adapt-scale, material-scale) for one or more target poses (V, 3).
 
     The pattern is solved for the reference body with targets raised to what
@@ -92,8 +135,16 @@ def adapt_pattern(cut, ref_vertices, pose_vertices: Sequence[np.ndarray], eps_we
     K, cw, cg = solver.targets_adapt(poses, eps_weft, eps_warp, cfg)
     # feedback on the poses' demands only moves right-hand sides: the factorisation is kept
     demands = solver.pose_demands(poses, eps_weft, eps_warp, cfg) if cfg.adaptation.gain > 0 else None
-    res = solver.solve(K, cw, cg, start=None if start is None else solver.start_from(start),
-                       progress=sub(progress, 0.3, 1.0), poses=demands, plan=solver.design_plan(cfg), config=cfg)
+    res = solver.solve(
+        K,
+        cw,
+        cg,
+        start=None if start is None else solver.start_from(start),
+        progress=sub(progress, 0.3, 1.0),
+        poses=demands,
+        plan=solver.design_plan(cfg),
+        config=cfg,
+    )
     mats = dict(cut.materials)
     mats.update({"eps_weft": eps_weft, "eps_warp": eps_warp})
     return build_pattern(cut, res, style=style, body=body, mode="adapt", materials=mats)

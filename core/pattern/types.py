@@ -5,6 +5,7 @@ export stages need nothing else. Lengths are metres; the grain line ``grain``
 is the unit warp direction in 2D (the optimizer aligns it to +y), the weft is
 ``grain`` turned by +90 degrees (SPEC "Frames and grain").
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -34,6 +35,7 @@ class PatternPanel:
     hems : list of (k,) int open polylines on the boundary that are not seams.
     mirror_of : name of the mirrored piece, or None (labels say "mirror").
     """
+
     name: str
     garment: str
     uv: np.ndarray
@@ -76,6 +78,7 @@ class PatternSeam:
     ``gathered``: the sides were not made equally long; the longer one is
     gathered into the shorter (notches at matching fractions of each side).
     """
+
     name: str
     panel_a: str
     panel_b: str
@@ -110,6 +113,7 @@ class Pattern:
     mode : ``"reference"``, ``"transfer"`` or ``"adapt"``.
     report : dict of metrics and timings (SPEC definitions).
     """
+
     style: str
     body: dict
     garments: Dict[str, str]

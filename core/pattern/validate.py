@@ -1,4 +1,5 @@
 """Input checks of the pattern stage: a cut and a body instance, refused with the element named."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -19,7 +20,9 @@ def validate_cut(cut) -> None:
         F = np.asarray(p.faces)
         vids = np.asarray(p.vertex_ids)
         if F.ndim != 2 or F.shape[0] == 0 or F.shape[1] != 3:
-            raise PatternError(f"panel {p.name!r}: empty panel (faces must be a non-empty (f, 3) array, got shape {F.shape})")
+            raise PatternError(
+                f"panel {p.name!r}: empty panel (faces must be a non-empty (f, 3) array, got shape {F.shape})"
+            )
         if vids.ndim != 1 or vids.size < 3:
             raise PatternError(f"panel {p.name!r}: vertex_ids must list >= 3 vertices")
         if F.min() < 0 or F.max() >= vids.size:
@@ -28,7 +31,9 @@ def validate_cut(cut) -> None:
             raise PatternError(f"panel {p.name!r}: vertex_ids outside the embedding's {N} rows")
         ease = np.asarray(p.ease, float)
         if ease.shape != (F.shape[0],):
-            raise PatternError(f"panel {p.name!r}: ease must have one value per triangle ({F.shape[0]}), got shape {ease.shape}")
+            raise PatternError(
+                f"panel {p.name!r}: ease must have one value per triangle ({F.shape[0]}), got shape {ease.shape}"
+            )
         bad = ~np.isfinite(ease) | (ease <= 0)
         if np.any(bad):
             t = int(np.argmax(bad))
@@ -42,8 +47,10 @@ def validate_cut(cut) -> None:
                 raise PatternError(f"seam {s.name!r}: {side} {getattr(s, side)!r} is not a panel of the cut")
         va, vb = np.asarray(s.verts_a), np.asarray(s.verts_b)
         if va.ndim != 1 or va.shape != vb.shape or va.size < 2:
-            raise PatternError(f"seam {s.name!r}: verts_a and verts_b must be equally long polylines of >= 2 "
-                               f"vertices, got {va.shape} and {vb.shape}")
+            raise PatternError(
+                f"seam {s.name!r}: verts_a and verts_b must be equally long polylines of >= 2 "
+                f"vertices, got {va.shape} and {vb.shape}"
+            )
         for side, v in (("a", va), ("b", vb)):
             n = len(cut.panel(getattr(s, f"panel_{side}")).vertex_ids)
             if v.min() < 0 or v.max() >= n:
@@ -59,6 +66,5 @@ def body_positions(cut, body_vertices, what: str) -> np.ndarray:
     if X.ndim != 2 or X.shape[1] != 3 or not np.all(np.isfinite(X)):
         raise PatternError(f"{what}: expected finite body vertices (V, 3), got shape {X.shape}")
     if X.shape[0] != cut.embedding.shape[1]:
-        raise PatternError(f"{what}: has {X.shape[0]} vertices, the cut's embedding expects "
-                           f"{cut.embedding.shape[1]}")
+        raise PatternError(f"{what}: has {X.shape[0]} vertices, the cut's embedding expects {cut.embedding.shape[1]}")
     return cut.positions(X)

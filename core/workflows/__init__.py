@@ -21,29 +21,54 @@ raise :class:`core.errors.Cancelled` to stop.
 One module a stage (``_prepare``, ``_pattern``, ``_drape``, ``_export``, ``_marker``); this
 package is their public interface.
 """
+
 from ._drape import DrapeRun, drape, drape_summary, write_drape
 from ._export import export, export_allowance
 from ._marker import marker, write_marker
 from ._pattern import (
-                       CONFIGS,
-                       DEFAULT_CONFIG,
-                       PatternRun,
-                       adapt,
-                       config_name,
-                       is_own_size,
-                       make_solver,
-                       measure_pattern,
-                       pattern_figures,
-                       reference,
-                       solver_config,
-                       summary,
-                       tolerances,
-                       transfer,
-                       write_pattern,
+    CONFIGS,
+    DEFAULT_CONFIG,
+    PatternRun,
+    adapt,
+    config_name,
+    is_own_size,
+    make_solver,
+    measure_pattern,
+    pattern_figures,
+    reference,
+    solver_config,
+    summary,
+    tolerances,
+    transfer,
+    write_pattern,
 )
 from ._prepare import Prepared, prepare, size_name
 
-__all__ = ["CONFIGS", "DEFAULT_CONFIG", "Prepared", "PatternRun", "DrapeRun", "prepare", "size_name", "config_name",
-           "solver_config", "make_solver", "reference", "transfer", "is_own_size", "adapt", "tolerances",
-           "measure_pattern", "pattern_figures", "write_pattern", "summary", "drape", "write_drape", "drape_summary",
-           "export_allowance", "export", "marker", "write_marker"]
+__all__ = [
+    "CONFIGS",
+    "DEFAULT_CONFIG",
+    "Prepared",
+    "PatternRun",
+    "DrapeRun",
+    "prepare",
+    "size_name",
+    "config_name",
+    "solver_config",
+    "make_solver",
+    "reference",
+    "transfer",
+    "is_own_size",
+    "adapt",
+    "tolerances",
+    "measure_pattern",
+    "pattern_figures",
+    "write_pattern",
+    "summary",
+    "drape",
+    "write_drape",
+    "drape_summary",
+    "export_allowance",
+    "export",
+    "marker",
+    "write_marker",
+]

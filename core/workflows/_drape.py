@@ -1,4 +1,5 @@
 """The drape stage: a pattern draped on its body, its fit figures and files."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -21,6 +22,7 @@ class DrapeRun:
     body_vertices : (V, 3) float64 m, body_faces : (F, 3) int64: the body draped on.
     figures : dict, label -> value for display.
     """
+
     result: object
     metrics: dict
     body_vertices: np.ndarray
@@ -28,8 +30,13 @@ class DrapeRun:
     figures: Dict[str, object] = field(default_factory=dict)
 
 
-def drape(pattern, material=None, options=None, body: Optional[Tuple[np.ndarray, np.ndarray]] = None,
-          progress: Optional[Progress] = None) -> DrapeRun:
+def drape(
+    pattern,
+    material=None,
+    options=None,
+    body: Optional[Tuple[np.ndarray, np.ndarray]] = None,
+    progress: Optional[Progress] = None,
+) -> DrapeRun:
     """Drape ``pattern`` with the project's XPBD (Warp) and measure the fit.
 
     Parameters
@@ -56,10 +63,13 @@ def drape(pattern, material=None, options=None, body: Optional[Tuple[np.ndarray,
 
 
 def _drape_figures(result, metrics) -> Dict[str, object]:
-    out = {"frames": int(result.frames), "settled": result.settle_reason,
-           "time s": round(float(result.timings.get("total", 0.0)), 2),
-           "mean weft strain %": round(100 * float(np.mean(np.asarray(result.strain_weft)[result.used])), 2),
-           "device": result.device}
+    out = {
+        "frames": int(result.frames),
+        "settled": result.settle_reason,
+        "time s": round(float(result.timings.get("total", 0.0)), 2),
+        "mean weft strain %": round(100 * float(np.mean(np.asarray(result.strain_weft)[result.used])), 2),
+        "device": result.device,
+    }
     a = (metrics or {}).get("all") or {}
     if a:
         out["mean gap mm"] = round(float(a["gap_mm"]["mean"]), 1)
@@ -72,14 +82,25 @@ def write_drape(out, run: DrapeRun, pattern=None, preview: bool = True):
     """Every drape file into ``out`` atomically (see :func:`core.drape.output.write_drape`); returns the folder."""
     from ..drape.output import write_drape as _write
     from ..metrics.drape import summary as fit_summary
-    return _write(out, run.result, run.body_vertices, run.body_faces, fit=fit_summary(run.metrics),
-                  vertex_gap=run.metrics["vertex_gap"], pattern=pattern, preview=preview)
+
+    return _write(
+        out,
+        run.result,
+        run.body_vertices,
+        run.body_faces,
+        fit=fit_summary(run.metrics),
+        vertex_gap=run.metrics["vertex_gap"],
+        pattern=pattern,
+        preview=preview,
+    )
 
 
 def drape_summary(run: DrapeRun, pattern) -> str:
     """The one-line summary the CLI prints after a drape."""
     r, a = run.result, run.metrics["all"]
-    return (f"drape {pattern.style}: {r.material['name']}, {r.frames} frames ({r.settle_reason}), "
-            f"simulate {r.timings['simulate']:.1f} s; gap {a['gap_mm']['mean']:.1f} ± {a['gap_mm']['std']:.1f} mm, "
-            f"penetration {a['penetration_pct']:.2f} %, seam gap max {a['seam_gap_mm']['max']:.2f} mm; "
-            f"strain weft {a['strain_weft_pct']['mean']:.2f} % / warp {a['strain_warp_pct']['mean']:.2f} % (mean)")
+    return (
+        f"drape {pattern.style}: {r.material['name']}, {r.frames} frames ({r.settle_reason}), "
+        f"simulate {r.timings['simulate']:.1f} s; gap {a['gap_mm']['mean']:.1f} ± {a['gap_mm']['std']:.1f} mm, "
+        f"penetration {a['penetration_pct']:.2f} %, seam gap max {a['seam_gap_mm']['max']:.2f} mm; "
+        f"strain weft {a['strain_weft_pct']['mean']:.2f} % / warp {a['strain_warp_pct']['mean']:.2f} % (mean)"
+    )

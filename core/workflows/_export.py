@@ -1,4 +1,5 @@
 """The export stage: a pattern's cutting-room files (SVG, DXF, PDF, GLB, OBJ) with one allowance rule."""
+
 from __future__ import annotations
 
 from typing import List, Optional, Sequence, Tuple, Union
@@ -15,6 +16,7 @@ def export_allowance(pattern, allowance: Optional[float] = None, hem: Optional[f
     if allowance is None and hem is None:
         return None
     from ..design.materials import ALLOWANCE, HEM
+
     base = ((pattern.materials or {}).get("export") or {}).get("allowance")
     if isinstance(base, dict):
         table = dict(base)
@@ -29,11 +31,22 @@ def export_allowance(pattern, allowance: Optional[float] = None, hem: Optional[f
     return table
 
 
-def export(pattern, out, formats: Union[str, Sequence[str]] = ("svg", "dxf", "pdf"), allowance=None,
-           hem: Optional[float] = None, notch_spacing: Optional[float] = None,
-           drape: Optional[Tuple[np.ndarray, Optional[np.ndarray]]] = None, strict: bool = True,
-           warnings: Optional[List[str]] = None, up: str = "y", with_body: bool = False,
-           progress: Optional[Progress] = None, print_all: bool = False, origin: str = "floor") -> list:
+def export(
+    pattern,
+    out,
+    formats: Union[str, Sequence[str]] = ("svg", "dxf", "pdf"),
+    allowance=None,
+    hem: Optional[float] = None,
+    notch_spacing: Optional[float] = None,
+    drape: Optional[Tuple[np.ndarray, Optional[np.ndarray]]] = None,
+    strict: bool = True,
+    warnings: Optional[List[str]] = None,
+    up: str = "y",
+    with_body: bool = False,
+    progress: Optional[Progress] = None,
+    print_all: bool = False,
+    origin: str = "floor",
+) -> list:
     """Cutting-room files (SVG, DXF, PDF) and the draped garment (GLB, OBJ) into ``out``, atomically.
 
     Parameters
@@ -59,14 +72,28 @@ def export(pattern, out, formats: Union[str, Sequence[str]] = ("svg", "dxf", "pd
     list of the written paths.
     """
     from ..export import export_pattern, parse_formats
+
     table = allowance if isinstance(allowance, dict) else export_allowance(pattern, allowance, hem)
     positions, faces = drape if drape is not None else (None, None)
     formats = parse_formats(formats)
     body = None
     if with_body and ("glb" in formats or "obj" in formats):
         from ..body.instance import spec_instance
-        body = spec_instance(pattern.body or {})      # the body the pattern was made on
-    return export_pattern(pattern, out, formats=formats, allowance=table,
-                          drape_positions=positions, drape_faces=faces, notch_spacing=notch_spacing,
-                          strict=strict, warnings=warnings if warnings is not None else [], up=up, body=body,
-                          progress=progress, print_all=print_all, origin=origin)
+
+        body = spec_instance(pattern.body or {})  # the body the pattern was made on
+    return export_pattern(
+        pattern,
+        out,
+        formats=formats,
+        allowance=table,
+        drape_positions=positions,
+        drape_faces=faces,
+        notch_spacing=notch_spacing,
+        strict=strict,
+        warnings=warnings if warnings is not None else [],
+        up=up,
+        body=body,
+        progress=progress,
+        print_all=print_all,
+        origin=origin,
+    )

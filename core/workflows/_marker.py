@@ -1,4 +1,5 @@
 """The marker stage: pieces of one or several patterns nested on the fabric's width, and its files."""
+
 from __future__ import annotations
 
 from typing import Optional, Sequence, Tuple
@@ -7,10 +8,22 @@ from ..progress import Progress
 from ._export import export_allowance
 
 
-def marker(runs: Sequence[Tuple[str, object, int]], width: float, allowance=None, hem: Optional[float] = None,
-           notch_spacing: Optional[float] = None, seconds: int = 60, seed: int = 0, one_way: bool = False,
-           tilt: float = 0.0, threads: int = 1, tries: Optional[int] = None, progress: Optional[Progress] = None,
-           early_stop: bool = False, spread: str = "single"):
+def marker(
+    runs: Sequence[Tuple[str, object, int]],
+    width: float,
+    allowance=None,
+    hem: Optional[float] = None,
+    notch_spacing: Optional[float] = None,
+    seconds: int = 60,
+    seed: int = 0,
+    one_way: bool = False,
+    tilt: float = 0.0,
+    threads: int = 1,
+    tries: Optional[int] = None,
+    progress: Optional[Progress] = None,
+    early_stop: bool = False,
+    spread: str = "single",
+):
     """A cutting-room marker: the pieces of ``runs`` nested on a fabric ``width`` m wide (:mod:`core.marker`).
 
     Parameters
@@ -30,21 +43,33 @@ def marker(runs: Sequence[Tuple[str, object, int]], width: float, allowance=None
     core.marker.Marker
     """
     from ..marker import check_options, default_tries, marker_items, nest
+
     if tries is None:
         tries = default_tries(threads)
     check_options(width, seconds, seed, threads, tries)
     items = []
     for size, pattern, garments in runs:
         table = allowance if isinstance(allowance, dict) else export_allowance(pattern, allowance, hem)
-        items += marker_items([(size, pattern, garments)], allowance=table, notch_spacing=notch_spacing,
-                              spread=spread)
-    return nest(items, width, seconds=seconds, seed=seed, one_way=one_way, tilt=tilt, threads=threads, tries=tries,
-                progress=progress, early_stop=early_stop)
+        items += marker_items([(size, pattern, garments)], allowance=table, notch_spacing=notch_spacing, spread=spread)
+    return nest(
+        items,
+        width,
+        seconds=seconds,
+        seed=seed,
+        one_way=one_way,
+        tilt=tilt,
+        threads=threads,
+        tries=tries,
+        progress=progress,
+        early_stop=early_stop,
+    )
 
 
-def write_marker(out, marker, title: str = "marker", extra: Optional[dict] = None,
-                 progress: Optional[Progress] = None) -> list:
+def write_marker(
+    out, marker, title: str = "marker", extra: Optional[dict] = None, progress: Optional[Progress] = None
+) -> list:
     """The marker's files (DXF, SVG, PDF, PNG, ``marker.json`` with ``extra`` merged) into ``out``, atomically;
     returns the written paths."""
     from ..marker import write_marker as _write
+
     return _write(marker, out, title, progress=progress, extra=extra)

@@ -1,5 +1,6 @@
 """The pattern stage: the reference pattern, transfer to other bodies, adaptation to poses, and their
 files and figures."""
+
 from __future__ import annotations
 
 import time
@@ -29,6 +30,7 @@ class PatternRun:
         display (CLI summary, add-on panel).
     timings : dict, wall seconds (``optimize`` plus the preparation's).
     """
+
     pattern: object
     figures: Dict[str, object] = field(default_factory=dict)
     timings: Dict[str, float] = field(default_factory=dict)
@@ -61,6 +63,7 @@ def solver_config(name: str = DEFAULT_CONFIG, iterations: Optional[int] = None, 
         the paper's switch for gathered designs)
     """
     from ..pattern.solve import SolverConfig
+
     overrides = {}
     if iterations is not None:
         overrides["iterations"] = iterations
@@ -69,14 +72,21 @@ def solver_config(name: str = DEFAULT_CONFIG, iterations: Optional[int] = None, 
     return SolverConfig.named(name, **overrides)
 
 
-def make_solver(prep: Prepared, config: Optional[str] = None, iterations: Optional[int] = None,
-                gather_all: bool = False, progress: Optional[Progress] = None):
+def make_solver(
+    prep: Prepared,
+    config: Optional[str] = None,
+    iterations: Optional[int] = None,
+    gather_all: bool = False,
+    progress: Optional[Progress] = None,
+):
     """The pattern solver of ``prep``: one flattening and factorisation, shared by
     :func:`reference`, :func:`transfer` and :func:`adapt` (and by every body of a batch).
     ``config``: the configuration's name, None for the design's (:func:`config_name`)."""
     from ..pattern.solve import PatternSolver
-    return PatternSolver(prep.cut, prep.reference,
-                         solver_config(config_name(prep, config), iterations, gather_all), progress=progress)
+
+    return PatternSolver(
+        prep.cut, prep.reference, solver_config(config_name(prep, config), iterations, gather_all), progress=progress
+    )
 
 
 def _checked_metrics(pattern, checks: Optional[Sequence[str]] = None, vertices=None) -> dict:
@@ -88,6 +98,7 @@ def _checked_metrics(pattern, checks: Optional[Sequence[str]] = None, vertices=N
     from ..metrics.checks import check_pattern, checks_for
     from ..metrics.pattern import pattern_report
     from ..metrics.regions import body_landmarks
+
     metrics = pattern_report(pattern, body_landmarks(pattern, vertices=vertices))
     check_pattern(metrics, checks_for(pattern) if checks is None else checks)
     return metrics
@@ -105,16 +116,24 @@ def pattern_figures(pattern) -> Dict[str, object]:
     weft compliance with the warp deviation and shear beside it, flipped and collapsed counts
     (:func:`core.metrics.figures.key_figures`)."""
     from ..metrics.figures import key_figures
+
     return key_figures(pattern)
 
 
 def _solve_reference(prep, solver, progress):
     from ..pattern.solve import solve_pattern
+
     return solve_pattern(prep.cut, prep.reference, solver=solver, style=prep.design.name, progress=progress)
 
 
-def reference(prep: Prepared, config: Optional[str] = None, iterations: Optional[int] = None,
-              gather_all: bool = False, solver=None, progress: Optional[Progress] = None) -> PatternRun:
+def reference(
+    prep: Prepared,
+    config: Optional[str] = None,
+    iterations: Optional[int] = None,
+    gather_all: bool = False,
+    solver=None,
+    progress: Optional[Progress] = None,
+) -> PatternRun:
     """The design's pattern on its own (reference) body.
 
     Parameters
@@ -136,9 +155,17 @@ def reference(prep: Prepared, config: Optional[str] = None, iterations: Optional
     return PatternRun(pattern, pattern_figures(pattern), {**prep.timings, "optimize": optimize})
 
 
-def transfer(prep: Prepared, size, config: Optional[str] = None, iterations: Optional[int] = None,
-             gather_all: bool = False, solver=None, start=None, progress: Optional[Progress] = None,
-             vertices=None) -> PatternRun:
+def transfer(
+    prep: Prepared,
+    size,
+    config: Optional[str] = None,
+    iterations: Optional[int] = None,
+    gather_all: bool = False,
+    solver=None,
+    start=None,
+    progress: Optional[Progress] = None,
+    vertices=None,
+) -> PatternRun:
     """Shape transfer (paper Eq. transfer-scale): the same cut and ease field on another body shape.
 
     Parameters
@@ -170,6 +197,7 @@ def transfer(prep: Prepared, size, config: Optional[str] = None, iterations: Opt
         size = size_name(prep, size)
     elif not isinstance(size, Mapping):
         from ..errors import PatternError
+
         raise PatternError(f"transfer: expected a size name or a shape dict, got {type(size).__name__}")
     t0 = time.perf_counter()
     if solver is None:
@@ -177,8 +205,12 @@ def transfer(prep: Prepared, size, config: Optional[str] = None, iterations: Opt
     ref_pat = start if start is not None else _solve_reference(prep, solver, sub(progress, 0.15, 0.5))
     pose = prep.cut.body.get("pose")
     shape = instance_shape(prep.body, size)
-    body = {"model": prep.cut.body.get("model", prep.body.name), "shape": shape, "pose": pose,
-            **({"size": size} if isinstance(size, str) else {})}
+    body = {
+        "model": prep.cut.body.get("model", prep.body.name),
+        "shape": shape,
+        "pose": pose,
+        **({"size": size} if isinstance(size, str) else {}),
+    }
     if is_own_size(prep, size):
         pattern = copy.deepcopy(ref_pat)
         pattern.body, pattern.mode = body, "transfer"
@@ -186,20 +218,30 @@ def transfer(prep: Prepared, size, config: Optional[str] = None, iterations: Opt
         target = prep.reference if vertices is None else vertices
     else:
         target = vertices if vertices is not None else body_instance(prep.body, shape, pose)
-        pattern = transfer_pattern(prep.cut, prep.reference, target, solver=solver, start=ref_pat,
-                                   style=prep.design.name, body=body, progress=sub(progress, 0.5, 1.0))
+        pattern = transfer_pattern(
+            prep.cut,
+            prep.reference,
+            target,
+            solver=solver,
+            start=ref_pat,
+            style=prep.design.name,
+            body=body,
+            progress=sub(progress, 0.5, 1.0),
+        )
     optimize = time.perf_counter() - t0
     metrics = _checked_metrics(pattern, vertices=target)
-    dev = metrics["compliance"]                       # the transfer deviation is the compliance on the target
+    dev = metrics["compliance"]  # the transfer deviation is the compliance on the target
     refc = (ref_pat.report.get("metrics") or {}).get("compliance") or ease_compliance(ref_pat)
     label = size if isinstance(size, str) else "custom"
-    pattern.report.update({"config": config, "size": label, "transfer_deviation": dev,
-                           "reference_compliance": refc})
+    pattern.report.update({"config": config, "size": label, "transfer_deviation": dev, "reference_compliance": refc})
     pattern.report["metrics"] = metrics
-    figures = {"size": label, **pattern_figures(pattern),
-               "transfer deviation mean %": round(float(dev["mean"]), 3),
-               "transfer deviation std %": round(float(dev["std"]), 3),
-               "reference compliance mean %": round(float(refc["mean"]), 3)}
+    figures = {
+        "size": label,
+        **pattern_figures(pattern),
+        "transfer deviation mean %": round(float(dev["mean"]), 3),
+        "transfer deviation std %": round(float(dev["std"]), 3),
+        "reference compliance mean %": round(float(refc["mean"]), 3),
+    }
     return PatternRun(pattern, figures, {**prep.timings, "optimize": optimize})
 
 
@@ -209,20 +251,31 @@ def is_own_size(prep: Prepared, size) -> bool:
     return isinstance(size, str) and isinstance(own, str) and size_name(prep, size) == size_name(prep, own)
 
 
-def tolerances(prep: Prepared, eps_weft: Optional[float] = None,
-               eps_warp: Optional[float] = None) -> Tuple[float, float]:
+def tolerances(
+    prep: Prepared, eps_weft: Optional[float] = None, eps_warp: Optional[float] = None
+) -> Tuple[float, float]:
     """(eps_weft, eps_warp): the caller's, else the design's materials, else the default.
 
     A caller's weft tolerance also stands for the warp unless a warp tolerance
     is given (one ``--tolerance`` means "this much stretch either way").
     """
     from ..pattern.config import tolerances as resolve
+
     return resolve(prep.cut.materials, eps_weft, eps_warp)
 
 
-def adapt(prep: Prepared, poses: Sequence, eps_weft: Optional[float] = None, eps_warp: Optional[float] = None,
-          config: Optional[str] = None, iterations: Optional[int] = None, gather_all: bool = False, solver=None,
-          start=None, progress: Optional[Progress] = None) -> PatternRun:
+def adapt(
+    prep: Prepared,
+    poses: Sequence,
+    eps_weft: Optional[float] = None,
+    eps_warp: Optional[float] = None,
+    config: Optional[str] = None,
+    iterations: Optional[int] = None,
+    gather_all: bool = False,
+    solver=None,
+    start=None,
+    progress: Optional[Progress] = None,
+) -> PatternRun:
     """Pose adaptation (paper Eqs. adapt-scale, material-scale): the pattern grows
     where a target pose needs more fabric than the stretch tolerance allows.
 
@@ -247,8 +300,17 @@ def adapt(prep: Prepared, poses: Sequence, eps_weft: Optional[float] = None, eps
     if solver is None:
         solver = make_solver(prep, config, iterations, gather_all, progress=sub(progress, 0.0, 0.15))
     ref_pat = start if start is not None else _solve_reference(prep, solver, sub(progress, 0.15, 0.5))
-    pattern = adapt_pattern(prep.cut, prep.reference, pose_vertices, eps_weft=eps_w, eps_warp=eps_g,
-                            solver=solver, start=ref_pat, style=prep.design.name, progress=sub(progress, 0.5, 1.0))
+    pattern = adapt_pattern(
+        prep.cut,
+        prep.reference,
+        pose_vertices,
+        eps_weft=eps_w,
+        eps_warp=eps_g,
+        solver=solver,
+        start=ref_pat,
+        style=prep.design.name,
+        progress=sub(progress, 0.5, 1.0),
+    )
     optimize = time.perf_counter() - t0
     stretch: Dict[str, dict] = {}
     figures: Dict[str, object] = {"tolerance": round(eps_w, 4), "tolerance warp": round(eps_g, 4)}
@@ -261,8 +323,9 @@ def adapt(prep: Prepared, poses: Sequence, eps_weft: Optional[float] = None, eps
             after = residual_stretch(pattern, xyz, eps_w, g)
             stretch[name][g or "all"] = {"before": before, "after": after}
             figures[f"{name} {g or 'all'} stretched % before/after"] = f"{before:.1f} / {after:.1f}"
-    pattern.report.update({"config": config, "poses": names, "eps_weft": eps_w, "eps_warp": eps_g,
-                           "residual_stretch": stretch})
+    pattern.report.update(
+        {"config": config, "poses": names, "eps_weft": eps_w, "eps_warp": eps_g, "residual_stretch": stretch}
+    )
     measure_pattern(pattern)
     figures.update(pattern_figures(pattern))
     return PatternRun(pattern, figures, {**prep.timings, "optimize": optimize})
@@ -287,4 +350,5 @@ def write_pattern(out, run: PatternRun, preview: bool = True) -> None:
 def summary(run: PatternRun) -> str:
     """The one-line summary the CLI prints after a pattern run (:func:`core.metrics.figures.summary_line`)."""
     from ..metrics.figures import summary_line
+
     return summary_line(run.pattern, run.timings.get("optimize", 0.0))

@@ -1,4 +1,5 @@
 """The prepare stage: a design loaded, its body and its cut (:func:`prepare`)."""
+
 from __future__ import annotations
 
 import time
@@ -23,6 +24,7 @@ class Prepared:
         (its ``cut.body`` record: shape and pose).
     timings : dict, wall seconds of ``load`` and ``cut`` (0 for what was given).
     """
+
     design: object
     body: object
     cut: object
@@ -47,12 +49,13 @@ def prepare(design, body=None, cut=None, progress: Optional[Progress] = None) ->
     from ..design import load_design
 
     t0 = time.perf_counter()
-    design = load_design(design)      # an OBJ template's files made absolute against the design file
+    design = load_design(design)  # an OBJ template's files made absolute against the design file
     if body is None:
         body = load_spec(design.body)
     t1 = time.perf_counter()
     if cut is None:
         from ..cut import cut_design
+
         cut = cut_design(design, body=body, progress=sub(progress, 0.0, 0.95))
     t2 = time.perf_counter()
     reference, _ = spec_instance(cut.body, model=body)
@@ -64,4 +67,5 @@ def size_name(prep: Prepared, size: str) -> str:
     """The canonical chart size of ``size`` for ``prep``: a bare name (``"M"``) is of the
     design's chart (``body.chart``), a qualified one (``"women:M"``) of its own."""
     from ..body.sizes import size_of
+
     return size_of(str(size), prep.design.body.get("chart"))

@@ -1,5 +1,6 @@
 """A Dask worker preload for the batch tests: the item of the body labelled ``sample 2`` ends its
 worker process at once, as a crash or the kernel's out-of-memory killer would."""
+
 import os
 
 from core.batch import worker

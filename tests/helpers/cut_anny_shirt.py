@@ -4,6 +4,7 @@ Keypoints that are not landmarks are found geometrically on the reference
 body: the surface point closest to a point just outside the body in a given
 direction (front/back centre, armhole midpoints, cuff ring around the arm).
 """
+
 import numpy as np
 
 from core.body.model import SurfacePoint
@@ -19,6 +20,7 @@ def surface_point(body, X, p):
 def ray_point(body, X, origin, direction):
     """SurfacePoint where the ray from ``origin`` (inside the body) along ``direction`` leaves it first."""
     import igl
+
     F = np.asarray(body.faces, dtype=np.int64)
     hit = igl.ray_mesh_intersect(np.asarray(origin, float), np.asarray(direction, float), X, F, first=True)
     if not hit:
@@ -43,8 +45,12 @@ def shirt_spec(body, X, joints=None, refine=0.01, garment="shirt"):
     hem_front = at(centre, [0, -1, 0])
     hem_back = at(centre, [0, 1, 0])
     lines = [
-        CutLine(f"{g}.neck", [lm["neck_front"], lm["neck_left"], lm["neck_back"], lm["neck_right"]],
-                closed=True, role="opening"),
+        CutLine(
+            f"{g}.neck",
+            [lm["neck_front"], lm["neck_left"], lm["neck_back"], lm["neck_right"]],
+            closed=True,
+            role="opening",
+        ),
         CutLine(f"{g}.hem", [lm["hip_left"], hem_back, lm["hip_right"], hem_front], closed=True, role="opening"),
     ]
     panels = [PanelSpec(f"{g}.front", g, lm["navel"]), PanelSpec(f"{g}.back", g, lm["waist_back"])]
@@ -59,7 +65,7 @@ def shirt_spec(body, X, joints=None, refine=0.01, garment="shirt"):
         je = joints[jn.index(f"lowerarm01.{S.lower()}")]
         jw = joints[jn.index(f"wrist.{S.lower()}")]
         axis = (jw - je) / np.linalg.norm(jw - je)
-        c = je + 0.75 * (jw - je)                  # cuff a little above the wrist
+        c = je + 0.75 * (jw - je)  # cuff a little above the wrist
         up = np.array([0.0, 0.0, 1.0])
         up = up - (up @ axis) * axis
         up /= np.linalg.norm(up)
@@ -77,7 +83,14 @@ def shirt_spec(body, X, joints=None, refine=0.01, garment="shirt"):
             CutLine(f"{g}.sleeve_under_{side}", [lm[f"armpit_{side}"], cuff[2]]),
         ]
         m = js + 0.6 * (je - js)
-        panels += [PanelSpec(f"{g}.sleeve_front_{side}", g, at(m, front), body_part="arm"),
-                   PanelSpec(f"{g}.sleeve_back_{side}", g, at(m, -front), body_part="arm")]
-    return CutSpec(lines, panels, [GarmentSpec(g, "upper", pin_line=f"{g}.neck")],
-                   refine_edge_length=refine, body={"model": "anny", "shape": None, "pose": None})
+        panels += [
+            PanelSpec(f"{g}.sleeve_front_{side}", g, at(m, front), body_part="arm"),
+            PanelSpec(f"{g}.sleeve_back_{side}", g, at(m, -front), body_part="arm"),
+        ]
+    return CutSpec(
+        lines,
+        panels,
+        [GarmentSpec(g, "upper", pin_line=f"{g}.neck")],
+        refine_edge_length=refine,
+        body={"model": "anny", "shape": None, "pose": None},
+    )

@@ -4,6 +4,7 @@ A closed capsule-like tube (staggered rings, so cut lines cross edges
 obliquely) with a "head" and "feet" region, helpers to make SurfacePoints at
 3D positions, and a two-panel tube "shirt" cut spec.
 """
+
 import numpy as np
 
 from core.body.model import SurfacePoint
@@ -41,14 +42,18 @@ def capsule(r=R, h=1.0, nt=48, nz=40, twist=0.0, scale=1.0):
 
 class SynthBody:
     """A minimal BodyModel-like object on the capsule."""
+
     name = "synth"
 
     def __init__(self, forbidden=True, **kw):
         self.V, self.faces = capsule(**kw)
         z = self.V[:, 2]
         empty = np.zeros(0, dtype=np.int64)
-        self.regions = {"head": np.nonzero(z > 0.9)[0] if forbidden else empty, "hands": empty,
-                        "feet": np.nonzero(z < 0.08)[0] if forbidden else empty}
+        self.regions = {
+            "head": np.nonzero(z > 0.9)[0] if forbidden else empty,
+            "hands": empty,
+            "feet": np.nonzero(z < 0.08)[0] if forbidden else empty,
+        }
         self.joint_names = []
         self.landmarks = {}
         self.symmetry = np.arange(len(self.V))
@@ -59,6 +64,7 @@ class SynthBody:
     def point(self, p):
         """SurfacePoint at the surface point closest to p (3,)."""
         import igl
+
         _, fi, c = igl.point_mesh_squared_distance(np.asarray(p, float)[None], self.V, self.faces)
         f = int(np.atleast_1d(fi)[0])
         c = np.atleast_2d(c)[0]
@@ -86,13 +92,22 @@ def tube_spec(body, refine=None, close_top=True, extra_panels=False):
         CutLine("shirt.side_left", [top[0], bot[0]]),
         CutLine("shirt.side_right", [top[2], bot[2]]),
     ]
-    panels = [PanelSpec("shirt.front", "shirt", body.point([0, -R, 0.5])),
-              PanelSpec("shirt.back", "shirt", body.point([0, R, 0.5]))]
+    panels = [
+        PanelSpec("shirt.front", "shirt", body.point([0, -R, 0.5])),
+        PanelSpec("shirt.back", "shirt", body.point([0, R, 0.5])),
+    ]
     if extra_panels:
-        panels += [PanelSpec("shirt.cap_top", "shirt", body.point([0, -R, 0.9])),
-                   PanelSpec("shirt.cap_bottom", "shirt", body.point([0, -R, 0.1]))]
-    return CutSpec(lines, panels, [GarmentSpec("shirt", "upper", pin_line="shirt.neck")],
-                   refine_edge_length=refine, body={"model": "synth"})
+        panels += [
+            PanelSpec("shirt.cap_top", "shirt", body.point([0, -R, 0.9])),
+            PanelSpec("shirt.cap_bottom", "shirt", body.point([0, -R, 0.1])),
+        ]
+    return CutSpec(
+        lines,
+        panels,
+        [GarmentSpec("shirt", "upper", pin_line="shirt.neck")],
+        refine_edge_length=refine,
+        body={"model": "synth"},
+    )
 
 
 def triangle_areas(X, F):
@@ -101,5 +116,6 @@ def triangle_areas(X, F):
 
 def surface_distance(P, V, F):
     import igl
+
     d, _, _ = igl.point_mesh_squared_distance(np.asarray(P, float), V, F)
     return np.sqrt(d)

@@ -11,6 +11,7 @@ default :func:`revolution_body`, so a saved skirt pattern resolves its body
 through the ordinary body loader (the CLI and the workflows) with no test
 hook in the shipped code.
 """
+
 from __future__ import annotations
 
 import os
@@ -18,20 +19,22 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+from meshes import ring_grid_faces
 
 from core.pattern.types import Pattern, PatternPanel, PatternSeam
-from meshes import ring_grid_faces
 
 # (z, radius) in metres: legs column, cylindrical hips, waist at 1.05 m, chest.
 # Equal neighbours make the monotone cubic exactly flat between them.
-PROFILE = np.array([[0.20, 0.10], [0.45, 0.13], [0.60, 0.165], [0.75, 0.165], [0.95, 0.165],
-                    [1.05, 0.14], [1.20, 0.16], [1.40, 0.12]])
+PROFILE = np.array(
+    [[0.20, 0.10], [0.45, 0.13], [0.60, 0.165], [0.75, 0.165], [0.95, 0.165], [1.05, 0.14], [1.20, 0.16], [1.40, 0.12]]
+)
 HIP_RADIUS = 0.165
 
 
 def radius(z) -> np.ndarray:
     """Body radius (m) at height z (m), smooth (cubic through PROFILE)."""
     from scipy.interpolate import PchipInterpolator
+
     return PchipInterpolator(PROFILE[:, 0], PROFILE[:, 1])(np.asarray(z, dtype=float))
 
 
@@ -76,8 +79,14 @@ def revolution_obj(n_around: int = 48, n_rings: int = 60) -> str:
     return str(path)
 
 
-def tube_skirt(ease: float = 1.2, n_rows: int = 12, n_cols: int = 12, top: float = 0.95,
-               bottom: float = 0.62, fabric: str = "cotton") -> Pattern:
+def tube_skirt(
+    ease: float = 1.2,
+    n_rows: int = 12,
+    n_cols: int = 12,
+    top: float = 0.95,
+    bottom: float = 0.62,
+    fabric: str = "cotton",
+) -> Pattern:
     """A front and a back panel sewn at both sides, pinned at the waist.
 
     Parameters
@@ -113,19 +122,44 @@ def tube_skirt(ease: float = 1.2, n_rows: int = 12, n_cols: int = 12, top: float
         faces = np.asarray(faces, dtype=np.int64)
         nf = len(faces)
         local = lambda i, j: i * (n_cols + 1) + j  # noqa: E731
-        loop = ([local(0, j) for j in range(n_cols + 1)] + [local(i, n_cols) for i in range(1, n_rows + 1)]
-                + [local(n_rows, j) for j in range(n_cols - 1, -1, -1)]
-                + [local(i, 0) for i in range(n_rows - 1, 0, -1)])
-        panels.append(PatternPanel(
-            name=name, garment="skirt", uv=uv, faces=faces, vertex_ids=ids.astype(np.int64), xyz=xyz,
-            grain=np.array([0.0, 1.0]), target_weft=np.full(nf, ease), target_warp=np.ones(nf),
-            achieved_weft=np.full(nf, ease), achieved_warp=np.ones(nf), boundary=[np.asarray(loop)],
-            hems=[np.array([local(0, j) for j in range(n_cols + 1)]),
-                  np.array([local(n_rows, j) for j in range(n_cols + 1)])]))
+        loop = (
+            [local(0, j) for j in range(n_cols + 1)]
+            + [local(i, n_cols) for i in range(1, n_rows + 1)]
+            + [local(n_rows, j) for j in range(n_cols - 1, -1, -1)]
+            + [local(i, 0) for i in range(n_rows - 1, 0, -1)]
+        )
+        panels.append(
+            PatternPanel(
+                name=name,
+                garment="skirt",
+                uv=uv,
+                faces=faces,
+                vertex_ids=ids.astype(np.int64),
+                xyz=xyz,
+                grain=np.array([0.0, 1.0]),
+                target_weft=np.full(nf, ease),
+                target_warp=np.ones(nf),
+                achieved_weft=np.full(nf, ease),
+                achieved_warp=np.ones(nf),
+                boundary=[np.asarray(loop)],
+                hems=[
+                    np.array([local(0, j) for j in range(n_cols + 1)]),
+                    np.array([local(n_rows, j) for j in range(n_cols + 1)]),
+                ],
+            )
+        )
     rows = np.arange(n_rows + 1) * (n_cols + 1)
-    seams = [PatternSeam("side_left", "back", "front", rows + n_cols, rows.copy()),
-             PatternSeam("side_right", "front", "back", rows + n_cols, rows.copy())]
+    seams = [
+        PatternSeam("side_left", "back", "front", rows + n_cols, rows.copy()),
+        PatternSeam("side_right", "front", "back", rows + n_cols, rows.copy()),
+    ]
     pins = {"skirt": np.arange(n_around, dtype=np.int64)}
-    return Pattern(style=f"tube_skirt_{ease:g}", body={"model": revolution_obj(), "shape": {}, "pose": None},
-                   garments={"skirt": "skirt"}, panels=panels, seams=seams, pins=pins,
-                   materials={"fabric": fabric})
+    return Pattern(
+        style=f"tube_skirt_{ease:g}",
+        body={"model": revolution_obj(), "shape": {}, "pose": None},
+        garments={"skirt": "skirt"},
+        panels=panels,
+        seams=seams,
+        pins=pins,
+        materials={"fabric": fabric},
+    )

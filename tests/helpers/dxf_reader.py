@@ -7,6 +7,7 @@ POINT, TEXT, LWPOLYLINE, POLYLINE (+ VERTEX ... SEQEND) and INSERT. Nothing
 here shares code with ezdxf or core.export, so a file both readers agree on
 is not read right only by the library that wrote it.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -18,6 +19,7 @@ import numpy as np
 @dataclass
 class Entity:
     """One entity: its type, layer, group values in file order, and for polylines the points and closed flag."""
+
     kind: str
     layer: str = "0"
     tags: List[Tuple[int, str]] = field(default_factory=list)
@@ -120,7 +122,7 @@ def read(text: str) -> Drawing:
         end = pairs.index((0, "ENDSEC"), k)
         if name in sections:
             raise DxfSyntaxError(f"section {name} twice")
-        sections[name] = pairs[k + 2:end]
+        sections[name] = pairs[k + 2 : end]
         k = end + 1
     header: Dict[str, List[Tuple[int, str]]] = {}
     var = None
@@ -137,7 +139,7 @@ def read(text: str) -> Drawing:
         if code == 0 and value == "TABLE":
             in_layer_table = i + 1 < len(tables) and tables[i + 1] == (2, "LAYER")
         elif in_layer_table and code == 0 and value == "LAYER":
-            name = next((v for c, v in tables[i + 1:] if c == 2), None)
+            name = next((v for c, v in tables[i + 1 :] if c == 2), None)
             layers.append(name)
     blocks: Dict[str, List[Entity]] = {}
     run: List[Tuple[int, str]] = []

@@ -1,4 +1,5 @@
 """Synthetic patterns for the export tests (built directly, no other stage needed)."""
+
 from __future__ import annotations
 
 import math
@@ -35,11 +36,22 @@ def grid_piece(nx: int, ny: int, shape):
 
 def _panel(name, uv, faces, loop, grain, hems=(), mirror_of=None, id0=0):
     n, f = len(uv), len(faces)
-    return PatternPanel(name=name, garment="shirt", uv=uv, faces=faces, vertex_ids=np.arange(n) + id0,
-                        xyz=np.column_stack([uv, np.zeros(n)]), grain=np.asarray(grain, float),
-                        target_weft=np.ones(f), target_warp=np.ones(f), achieved_weft=np.ones(f),
-                        achieved_warp=np.ones(f), boundary=[loop], hems=[np.asarray(h) for h in hems],
-                        mirror_of=mirror_of)
+    return PatternPanel(
+        name=name,
+        garment="shirt",
+        uv=uv,
+        faces=faces,
+        vertex_ids=np.arange(n) + id0,
+        xyz=np.column_stack([uv, np.zeros(n)]),
+        grain=np.asarray(grain, float),
+        target_weft=np.ones(f),
+        target_warp=np.ones(f),
+        achieved_weft=np.ones(f),
+        achieved_warp=np.ones(f),
+        boundary=[loop],
+        hems=[np.asarray(h) for h in hems],
+        mirror_of=mirror_of,
+    )
 
 
 def trapezoid(s, t, bottom=0.50, top=0.40, height=0.60):
@@ -50,7 +62,7 @@ def trapezoid(s, t, bottom=0.50, top=0.40, height=0.60):
 def curved_top(s, t):
     x, y = trapezoid(s, t)
     # a concave neckline dip on the top edge, 6 cm deep
-    return x, y - 0.06 * t ** 3 * np.sin(np.pi * s) ** 2
+    return x, y - 0.06 * t**3 * np.sin(np.pi * s) ** 2
 
 
 def make_pattern(rotate_back_deg: float = 30.0, nx: int = 9, ny: int = 13) -> Pattern:
@@ -62,13 +74,19 @@ def make_pattern(rotate_back_deg: float = 30.0, nx: int = 9, ny: int = 13) -> Pa
     uv_b = uv_b @ rot.T + np.array([1.0, 0.2])
     grain_b = rot @ np.array([0.0, 1.0])
     front = _panel("front", uv_f, faces, loop, [0.0, 1.0], hems=[sides_f["bottom"]])
-    back = _panel("back", uv_b, faces_b, loop_b, grain_b, hems=[sides_b["bottom"]], mirror_of=None,
-                  id0=len(uv_f))
+    back = _panel("back", uv_b, faces_b, loop_b, grain_b, hems=[sides_b["bottom"]], mirror_of=None, id0=len(uv_f))
     # side seams: both run bottom -> top
-    seams = [PatternSeam("side_left", "front", "back", sides_f["left"][::-1], sides_b["right"]),
-             PatternSeam("side_right", "front", "back", sides_f["right"], sides_b["left"][::-1])]
-    return Pattern(style="test shirt", body={"model": "anny", "shape": "M", "pose": "A", "size": "M"},
-                   garments={"shirt": "shirt"}, panels=[front, back], seams=seams)
+    seams = [
+        PatternSeam("side_left", "front", "back", sides_f["left"][::-1], sides_b["right"]),
+        PatternSeam("side_right", "front", "back", sides_f["right"], sides_b["left"][::-1]),
+    ]
+    return Pattern(
+        style="test shirt",
+        body={"model": "anny", "shape": "M", "pose": "A", "size": "M"},
+        garments={"shirt": "shirt"},
+        panels=[front, back],
+        seams=seams,
+    )
 
 
 def drape_positions(pattern: Pattern) -> np.ndarray:
@@ -87,9 +105,13 @@ def wide_pattern(width: float = 1.6, height: float = 0.5) -> Pattern:
     The ease-3.0 shirt front is 1.58 m wide; a tiled PDF must still print it.
     """
     uv, faces, loop, sides = grid_piece(17, 6, lambda s, t: ((s - 0.5) * width, t * height))
-    return Pattern(style="wide", body={"model": "anny", "shape": "M", "pose": "A", "size": "M"},
-                   garments={"shirt": "shirt"},
-                   panels=[_panel("front", uv, faces, loop, [0.0, 1.0], hems=[sides["bottom"]])], seams=[])
+    return Pattern(
+        style="wide",
+        body={"model": "anny", "shape": "M", "pose": "A", "size": "M"},
+        garments={"shirt": "shirt"},
+        panels=[_panel("front", uv, faces, loop, [0.0, 1.0], hems=[sides["bottom"]])],
+        seams=[],
+    )
 
 
 def mirrored_pattern(bulge: float = 0.0) -> Pattern:
@@ -100,6 +122,7 @@ def mirrored_pattern(bulge: float = 0.0) -> Pattern:
     side out by up to that much: 0 gives an exact mirror, a few mm a pair whose
     sides differ (as ease painted on one side only would make it).
     """
+
     def lopsided(s, t):
         x = (s - 0.5) * (0.36 - 0.08 * t) + 0.06 * t - 0.03 * (1 - s) * np.sin(np.pi * t)
         return x, 0.5 * t
@@ -107,10 +130,23 @@ def mirrored_pattern(bulge: float = 0.0) -> Pattern:
     uv, faces, loop, sides = grid_piece(7, 9, lopsided)
     left = _panel("front_left", uv, faces, loop, [0.0, 1.0], hems=[sides["bottom"]])
     ruv = uv * np.array([-1.0, 1.0]) + np.array([1.0, 0.0])
-    outer = np.isin(np.arange(len(uv)), sides["left"])   # becomes the right piece's outer side
+    outer = np.isin(np.arange(len(uv)), sides["left"])  # becomes the right piece's outer side
     ruv[outer, 0] += bulge * np.sin(np.pi * uv[outer, 1] / 0.5)
-    right = _panel("front_right", ruv, faces[:, ::-1], loop[::-1], [0.0, 1.0], hems=[sides["bottom"][::-1]],
-                   mirror_of="front_left", id0=len(uv))
+    right = _panel(
+        "front_right",
+        ruv,
+        faces[:, ::-1],
+        loop[::-1],
+        [0.0, 1.0],
+        hems=[sides["bottom"][::-1]],
+        mirror_of="front_left",
+        id0=len(uv),
+    )
     seams = [PatternSeam("centre", "front_left", "front_right", sides["right"], sides["right"])]
-    return Pattern(style="mirror test", body={"model": "anny", "shape": "M", "pose": "A", "size": "M"},
-                   garments={"shirt": "shirt"}, panels=[left, right], seams=seams)
+    return Pattern(
+        style="mirror test",
+        body={"model": "anny", "shape": "M", "pose": "A", "size": "M"},
+        garments={"shirt": "shirt"},
+        panels=[left, right],
+        seams=seams,
+    )

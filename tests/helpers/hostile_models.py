@@ -6,6 +6,7 @@ loading path a user reaches — :func:`core.body.load_body` (the design, the cut
 the add-on's *Add Body*) and ``ease body --model`` through :func:`core.cli.main` —
 must either work or refuse with one line naming the file.
 """
+
 import contextlib
 import copyreg
 import io
@@ -17,7 +18,6 @@ import zipfile
 from pathlib import Path
 
 import numpy as np
-
 from smpl_synth import tube_model
 
 try:
@@ -33,6 +33,7 @@ def small_model():
 
 # ----------------------------------------------------------------------------- crafting helpers
 
+
 @contextlib.contextmanager
 def fake_chumpy():
     """A module ``chumpy.ch`` with a class ``Ch`` for pickling chumpy-looking objects."""
@@ -40,6 +41,7 @@ def fake_chumpy():
 
     class Ch:
         pass
+
     Ch.__module__, Ch.__qualname__ = "chumpy.ch", "Ch"
     mod.Ch = Ch
     pkg.ch = mod
@@ -77,7 +79,7 @@ def _interface(address=16, n=1 << 20):
 
 def _crafted_values(Ch):
     """name -> value put at ``v_template`` (or the whole pickle, for a name starting with '!')."""
-    big = (10 ** 12,)
+    big = (10**12,)
     d8 = np.dtype("f8")
     self_ch = chumpy(Ch)
     self_ch.__dict__["x"] = self_ch
@@ -90,7 +92,9 @@ def _crafted_values(Ch):
     loop.append(loop)
     return {
         "array_interface_inner": chumpy(Ch, x=chumpy(Ch, __array_interface__=_interface())),
-        "array_interface_outer": chumpy(Ch, __array_interface__=_interface(), x=chumpy(Ch, __array_interface__=_interface(0))),
+        "array_interface_outer": chumpy(
+            Ch, __array_interface__=_interface(), x=chumpy(Ch, __array_interface__=_interface(0))
+        ),
         "array_interface_in_list": chumpy(Ch, x=[chumpy(Ch, __array_interface__=_interface())]),
         "array_attribute": chumpy(Ch, __array__=np.ndarray, __array_priority__=1e9),
         "self_referencing_chumpy": self_ch,
@@ -98,12 +102,22 @@ def _crafted_values(Ch):
         "deep_chumpy": deep,
         "self_containing_list": loop,
         "object_dtype": np.array([1, 2, None], dtype=object),
-        "dtype_object_flags": Reduce(_ma._reconstruct, (np.ndarray, (0,), b"b"),
-                                     (1, (3,), Reduce(np.dtype, ("f8", False, True),
-                                                      (3, "<", None, None, None, -1, -1, 0x3F)), False, b"\0" * 24)),
-        "dtype_void_refs": Reduce(_ma._reconstruct, (np.ndarray, (0,), b"b"),
-                                  (1, (3,), Reduce(np.dtype, ("V8", False, True),
-                                                   (3, "|", None, None, None, 8, 1, 0x01)), False, b"\1" * 24)),
+        "dtype_object_flags": Reduce(
+            _ma._reconstruct,
+            (np.ndarray, (0,), b"b"),
+            (
+                1,
+                (3,),
+                Reduce(np.dtype, ("f8", False, True), (3, "<", None, None, None, -1, -1, 0x3F)),
+                False,
+                b"\0" * 24,
+            ),
+        ),
+        "dtype_void_refs": Reduce(
+            _ma._reconstruct,
+            (np.ndarray, (0,), b"b"),
+            (1, (3,), Reduce(np.dtype, ("V8", False, True), (3, "|", None, None, None, 8, 1, 0x01)), False, b"\1" * 24),
+        ),
         "dtype_fields": Reduce(np.dtype, ("f8", False, True), (3, "<", None, ("a",), {"a": (d8, 0)}, -1, -1, 0)),
         "dtype_O": Reduce(np.dtype, ("O", False, True), (3, "|", None, None, None, -1, -1, 63)),
         "reconstruct_huge": Reduce(_ma._reconstruct, (np.ndarray, big, b"b")),
@@ -113,28 +127,49 @@ def _crafted_values(Ch):
         "setstate_list_data": Reduce(_ma._reconstruct, (np.ndarray, (0,), b"b"), (1, (2,), d8, False, [1.0, 2.0])),
         "setstate_text": Reduce(_ma._reconstruct, (np.ndarray, (0,), b"b"), "not a state"),
         "ndarray_call": Reduce(np.ndarray, (big,)),
-        "ndarray_buffer": Reduce(np.ndarray, ((3,), d8, b"\0" * 8, 10 ** 6)),
+        "ndarray_buffer": Reduce(np.ndarray, ((3,), d8, b"\0" * 8, 10**6)),
         "scalar_object": Reduce(_ma.scalar, (np.dtype("O"), "x")),
         "scalar_short": Reduce(_ma.scalar, (d8, b"\0")),
         "float64_list": Reduce(np.float64, ([1.0] * 10,)),
-        "bytearray_bomb": Reduce(bytearray, (3 * 10 ** 9,)),
-        "bytes_bomb": Reduce(bytes, (3 * 10 ** 9,)),
+        "bytearray_bomb": Reduce(bytearray, (3 * 10**9,)),
+        "bytes_bomb": Reduce(bytes, (3 * 10**9,)),
         "list_of_bytes": Reduce(list, (b"\0" * 1000,)),
-        "sparse_huge_dense": Reduce(copyreg._reconstructor, (_Csc, object, None),
-                                    {"_shape": (10 ** 12, 2), "data": np.zeros(0), "indices": np.zeros(0, np.int32),
-                                     "indptr": np.zeros(3, np.int32)}),
-        "sparse_bad_index": Reduce(copyreg._reconstructor, (_Csc, object, None),
-                                   {"_shape": (24, 3), "data": np.ones(3), "indices": np.array([0, 5, 10 ** 6], np.int32),
-                                    "indptr": np.array([0, 1, 2, 3], np.int32)}),
-        "sparse_bad_indptr": Reduce(copyreg._reconstructor, (_Csc, object, None),
-                                    {"_shape": (24, 3), "data": np.ones(3), "indices": np.zeros(3, np.int32),
-                                     "indptr": np.array([0, 10 ** 6, 2, 3], np.int32)}),
+        "sparse_huge_dense": Reduce(
+            copyreg._reconstructor,
+            (_Csc, object, None),
+            {
+                "_shape": (10**12, 2),
+                "data": np.zeros(0),
+                "indices": np.zeros(0, np.int32),
+                "indptr": np.zeros(3, np.int32),
+            },
+        ),
+        "sparse_bad_index": Reduce(
+            copyreg._reconstructor,
+            (_Csc, object, None),
+            {
+                "_shape": (24, 3),
+                "data": np.ones(3),
+                "indices": np.array([0, 5, 10**6], np.int32),
+                "indptr": np.array([0, 1, 2, 3], np.int32),
+            },
+        ),
+        "sparse_bad_indptr": Reduce(
+            copyreg._reconstructor,
+            (_Csc, object, None),
+            {
+                "_shape": (24, 3),
+                "data": np.ones(3),
+                "indices": np.zeros(3, np.int32),
+                "indptr": np.array([0, 10**6, 2, 3], np.int32),
+            },
+        ),
         "string_v_template": "not vertices",
         "bytes_v_template": b"\0" * 72,
         "dict_v_template": {"a": 1},
         "nan_v_template": np.full((24, 3), np.nan),
         "inf_v_template": np.where(np.arange(72).reshape(24, 3) == 5, np.inf, 0.0),
-        "huge_int_list": [10 ** 30] * 72,
+        "huge_int_list": [10**30] * 72,
         "ragged_list": [[0.0, 1.0], [0.0]],
         "!top_level_list": [1, 2, 3],
         "!empty_pickle": None,
@@ -150,6 +185,7 @@ class _CscFake:
 def _register_csc():
     """Pickle a plain object as ``scipy.sparse._csc.csc_matrix`` (the name a real file gives)."""
     import scipy.sparse._csc as csc_mod
+
     return csc_mod
 
 
@@ -169,6 +205,7 @@ def crafted_pkl_names():
 def _pickle_with_fake_csc(obj, protocol):
     """Pickle ``obj`` with :class:`_CscFake` named ``scipy.sparse._csc.csc_matrix``."""
     import scipy.sparse._csc as csc_mod
+
     real = csc_mod.csc_matrix
     _CscFake.__module__, _CscFake.__qualname__ = "scipy.sparse._csc", "csc_matrix"
     csc_mod.csc_matrix = _CscFake
@@ -230,25 +267,39 @@ def _model_members(**replace):
 
 
 CRAFTED_NPZ = {
-    "declares_1e12_elements": lambda: npz_bytes(_model_members(
-        v_template=npy_bytes({"descr": "<f8", "fortran_order": False, "shape": (10 ** 12,)}, b"\0" * 64))),
-    "declares_1e12_compressed": lambda: npz_bytes(_model_members(
-        shapedirs=npy_bytes({"descr": "<f8", "fortran_order": False, "shape": (10 ** 6, 10 ** 6)}, b"")), True),
-    "object_member": lambda: npz_bytes(_model_members(
-        v_template=npy_bytes({"descr": "|O", "fortran_order": False, "shape": (3,)}, b"\0" * 24))),
-    "record_member": lambda: npz_bytes(_model_members(
-        v_template=npy_bytes({"descr": [("a", "<f8")], "fortran_order": False, "shape": (3,)}, b"\0" * 24))),
-    "short_data": lambda: npz_bytes(_model_members(
-        v_template=npy_bytes({"descr": "<f8", "fortran_order": False, "shape": (24, 3)}, b"\0" * 100))),
+    "declares_1e12_elements": lambda: npz_bytes(
+        _model_members(v_template=npy_bytes({"descr": "<f8", "fortran_order": False, "shape": (10**12,)}, b"\0" * 64))
+    ),
+    "declares_1e12_compressed": lambda: npz_bytes(
+        _model_members(shapedirs=npy_bytes({"descr": "<f8", "fortran_order": False, "shape": (10**6, 10**6)}, b"")),
+        True,
+    ),
+    "object_member": lambda: npz_bytes(
+        _model_members(v_template=npy_bytes({"descr": "|O", "fortran_order": False, "shape": (3,)}, b"\0" * 24))
+    ),
+    "record_member": lambda: npz_bytes(
+        _model_members(
+            v_template=npy_bytes({"descr": [("a", "<f8")], "fortran_order": False, "shape": (3,)}, b"\0" * 24)
+        )
+    ),
+    "short_data": lambda: npz_bytes(
+        _model_members(v_template=npy_bytes({"descr": "<f8", "fortran_order": False, "shape": (24, 3)}, b"\0" * 100))
+    ),
     "string_v_template": lambda: model_npz_bytes({**small_model(), "v_template": np.array("abc")}),
     "nan_v_template": lambda: model_npz_bytes({**small_model(), "v_template": np.full((24, 3), np.nan)}),
     "inf_shapedirs": lambda: model_npz_bytes({**small_model(), "shapedirs": np.full((24, 3, 2), np.inf)}),
     "float_faces": lambda: model_npz_bytes({**small_model(), "f": small_model()["f"] + 0.5}),
     "faces_out_of_range": lambda: model_npz_bytes({**small_model(), "f": small_model()["f"] * 1000}),
     "kintree_cycle": lambda: model_npz_bytes({**small_model(), "kintree_table": np.array([[1, 2, 0], [0, 1, 2]])}),
-    "no_joints": lambda: model_npz_bytes({**small_model(), "weights": np.zeros((24, 0)),
-                                          "kintree_table": np.zeros((2, 0), int), "J_regressor": np.zeros((0, 24)),
-                                          "posedirs": np.zeros((24, 3, 0))}),
+    "no_joints": lambda: model_npz_bytes(
+        {
+            **small_model(),
+            "weights": np.zeros((24, 0)),
+            "kintree_table": np.zeros((2, 0), int),
+            "J_regressor": np.zeros((0, 24)),
+            "posedirs": np.zeros((24, 3, 0)),
+        }
+    ),
     "smpl_topology_one_joint": lambda: _smpl_topology_one_joint(),
     "missing_key": lambda: model_npz_bytes({k: v for k, v in small_model().items() if k != "weights"}),
     "npy_renamed": lambda: _model_members()["v_template"],
@@ -259,16 +310,27 @@ CRAFTED_NPZ = {
     "text_file": lambda: b"v_template = [1, 2, 3]\n",
 }
 
+
 def _smpl_topology_one_joint():
     """SMPL's 6890 vertices and 24 joints with every vertex skinned to the pelvis: no body part to
     place the landmarks on (was "argmax of an empty sequence")."""
     from smpl_synth import stick_smpl
+
     m = stick_smpl()
     V = 6890
     rng = np.random.default_rng(5)
-    return model_npz_bytes({**m, "v_template": rng.random((V, 3)), "f": np.arange(V - 2)[:, None] + np.arange(3),
-                            "weights": np.eye(24)[np.zeros(V, int)], "J_regressor": np.eye(24, V),
-                            "shapedirs": np.zeros((V, 3, 2)), "posedirs": np.zeros((V, 3, 207))}, compressed=True)
+    return model_npz_bytes(
+        {
+            **m,
+            "v_template": rng.random((V, 3)),
+            "f": np.arange(V - 2)[:, None] + np.arange(3),
+            "weights": np.eye(24)[np.zeros(V, int)],
+            "J_regressor": np.eye(24, V),
+            "shapedirs": np.zeros((V, 3, 2)),
+            "posedirs": np.zeros((V, 3, 207)),
+        },
+        compressed=True,
+    )
 
 
 CRAFTED_OBJ = {
@@ -292,33 +354,35 @@ def small_obj_text() -> str:
     m = small_model()
     v = m["v_template"]
     return "".join(f"v {x:.6f} {y:.6f} {z:.6f}\n" for x, y, z in v) + "".join(
-        f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in m["f"])
+        f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in m["f"]
+    )
 
 
 # ----------------------------------------------------------------------------- byte mutations
+
 
 def mutate(data: bytes, seed: int) -> bytes:
     """A seeded damage of ``data``: flipped/zeroed/inserted bytes, a truncation, or digits made huge."""
     rng = np.random.default_rng(seed)
     b = bytearray(data)
     op = seed % 6
-    if op == 0 and b:      # flip a few bytes
+    if op == 0 and b:  # flip a few bytes
         for i in rng.integers(0, len(b), size=int(rng.integers(1, 8))):
             b[i] ^= int(rng.integers(1, 256))
-    elif op == 1:          # truncate
+    elif op == 1:  # truncate
         b = b[: int(rng.integers(0, max(1, len(b))))]
-    elif op == 2 and b:    # insert random bytes
+    elif op == 2 and b:  # insert random bytes
         i = int(rng.integers(0, len(b)))
         b[i:i] = bytes(rng.integers(0, 256, size=int(rng.integers(1, 16)), dtype=np.uint8))
-    elif op == 3 and b:    # zero a range
+    elif op == 3 and b:  # zero a range
         i = int(rng.integers(0, len(b)))
-        b[i:i + int(rng.integers(1, 64))] = b"\0" * len(b[i:i + 64][: int(rng.integers(1, 64))])
-    elif op == 4:          # make a run of digits huge (shapes in .npy headers, OBJ numbers)
+        b[i : i + int(rng.integers(1, 64))] = b"\0" * len(b[i : i + 64][: int(rng.integers(1, 64))])
+    elif op == 4:  # make a run of digits huge (shapes in .npy headers, OBJ numbers)
         digits = [i for i, c in enumerate(b) if 48 <= c <= 57]
         if digits:
             i = digits[int(rng.integers(0, len(digits)))]
-            b[i:i + 1] = b"9" * int(rng.integers(2, 14))
-    else:                  # swap two chunks
+            b[i : i + 1] = b"9" * int(rng.integers(2, 14))
+    else:  # swap two chunks
         if len(b) > 8:
             i, j = sorted(rng.integers(0, len(b), size=2))
             b = b[:i] + b[j:] + b[i:j]
@@ -367,9 +431,12 @@ def make_case(case, folder) -> str:
             path.write_text(small_obj_text())
     else:
         seed = int(key)
-        base = {"mut_pkl": lambda: pickle.dumps(small_model(), protocol=seed % 6),
-                "mut_npz": model_npz_bytes, "mut_npzc": lambda: model_npz_bytes(compressed=True),
-                "mut_obj": lambda: small_obj_text().encode()}[kind]()
+        base = {
+            "mut_pkl": lambda: pickle.dumps(small_model(), protocol=seed % 6),
+            "mut_npz": model_npz_bytes,
+            "mut_npzc": lambda: model_npz_bytes(compressed=True),
+            "mut_obj": lambda: small_obj_text().encode(),
+        }[kind]()
         suffix = {"mut_pkl": ".pkl", "mut_npz": ".npz", "mut_npzc": ".npz", "mut_obj": ".obj"}[kind]
         path = folder / f"{kind}_{seed}{suffix}"
         path.write_bytes(mutate(base, seed))
@@ -381,6 +448,7 @@ def check_model(path: str) -> None:
     posed instance must work or raise an EaseError (the runner records which)."""
     from core.body import load_body
     from core.cli import main
+
     err = io.StringIO()
     out = Path(path).with_suffix(".out.obj")
     with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):

@@ -8,6 +8,7 @@ message), or ``traceback`` (any other exception, MemoryError included). A
 worker killed by a signal (a segfault: return code < 0) is recorded as
 ``crash`` for the case it was on, and a new worker goes on with the next.
 """
+
 import json
 import os
 import subprocess
@@ -19,7 +20,7 @@ HELPERS = Path(__file__).resolve().parent
 
 # Python + numpy + scipy + the core take ~0.2 GiB of address space; a memory bomb that
 # is not refused before allocating (3 GB, 8 TB) fails under this cap instead of taking the machine.
-MEMORY_CAP = 3 << 29   # 1.5 GiB
+MEMORY_CAP = 3 << 29  # 1.5 GiB
 
 _WORKER = r"""
 import json, os, resource, sys
@@ -47,12 +48,17 @@ def run_cases(check: str, cases: list, cap: int = MEMORY_CAP, timeout: float = 3
     """``[(case, status, message), ...]`` for every case, status ``ok|refused|traceback|crash``."""
     results = []
     todo = list(cases)
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1",
-               PYTHONFAULTHANDLER="")
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1", PYTHONFAULTHANDLER="")
     while todo:
-        proc = subprocess.run([sys.executable, "-c", _WORKER, check, str(cap), str(ROOT), str(HELPERS)],
-                              input=json.dumps(todo), capture_output=True, text=True, timeout=timeout,
-                              env=env, cwd=str(ROOT))
+        proc = subprocess.run(
+            [sys.executable, "-c", _WORKER, check, str(cap), str(ROOT), str(HELPERS)],
+            input=json.dumps(todo),
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            env=env,
+            cwd=str(ROOT),
+        )
         done = [json.loads(line) for line in proc.stdout.splitlines() if line.startswith("[")]
         for i, status, message in done:
             results.append((todo[i], status, message))
@@ -61,7 +67,7 @@ def run_cases(check: str, cases: list, cap: int = MEMORY_CAP, timeout: float = 3
         # the worker died on case len(done): a crash (signal) or an exit without a word
         why = f"return code {proc.returncode}: {proc.stderr.strip()[-300:]}"
         results.append((todo[len(done)], "crash" if proc.returncode < 0 else "traceback", why))
-        todo = todo[len(done) + 1:]
+        todo = todo[len(done) + 1 :]
     return results
 
 
@@ -81,7 +87,7 @@ def split_cases(cases: list, chunk: int) -> tuple:
     starts with ``mut`` are mutations, run as a sample of chunks in CI."""
     crafted = [c for c in cases if not c[0].startswith("mut")]
     mutated = [c for c in cases if c[0].startswith("mut")]
-    return crafted, [tuple(mutated[i:i + chunk]) for i in range(0, len(mutated), chunk)]
+    return crafted, [tuple(mutated[i : i + chunk]) for i in range(0, len(mutated), chunk)]
 
 
 def run_checked(check: str, cases: list, inputs: list, names_of) -> dict:

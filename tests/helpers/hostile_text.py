@@ -6,6 +6,7 @@ fabrics, models, shape parameters and joints, huge pose angles) and seeded
 mutations of every template, element by element (:func:`json_mutation`) and
 byte by byte (:func:`mutate`).
 """
+
 import copy
 import json
 
@@ -15,6 +16,7 @@ from hostile_models import mutate
 
 def templates():
     from core.design.templates import TEMPLATES, template_path
+
     return {name: json.loads(template_path(name).read_text(encoding="utf-8")) for name in TEMPLATES}
 
 
@@ -46,9 +48,12 @@ CRAFTED_EDITS = {
     "pose_long_axis": (("body", "pose"), {"root": [6, 6, 0]}, "body.pose.root"),
     "pose_two_numbers": (("body", "pose"), {"root": [0, 1]}, "body.pose.root"),
     "refine_tiny": (("refine_edge_length",), 1e-9, "refine_edge_length"),
-    "parameter_reversed": (("parameters", "p_rev"), {"value": 0.5, "kind": "placement", "min": 0.7, "max": 0.2},
-                           "parameters.p_rev.min"),
-    "name_huge_int": (("name",), 10 ** 100, "name"),
+    "parameter_reversed": (
+        ("parameters", "p_rev"),
+        {"value": 0.5, "kind": "placement", "min": 0.7, "max": 0.2},
+        "parameters.p_rev.min",
+    ),
+    "name_huge_int": (("name",), 10**100, "name"),
     "version_float": (("version",), 1.5, "version"),
 }
 
@@ -102,8 +107,20 @@ def design_bytes(case) -> bytes:
 
 # --measure / --shape strings: (text, refused?)
 ASSIGNMENTS = [
-    ("chest=96,chest=100", True), ("chest=96,bust=100", True), ("chest=1e9", True), ("chest=nan", True),
-    ("chest=inf", True), ("chest=-96", True), ("=96", True), ("chest", True), ("chest=", True),
-    ("chest=96,,waist=80", False), (" chest = 96 ", False), ("neck=40", True), ("chest=9" + "9" * 400, True),
-    ("chest=96,waist=80,hip=100,height=175", False), (",", True), ("chest=0x60", True),
+    ("chest=96,chest=100", True),
+    ("chest=96,bust=100", True),
+    ("chest=1e9", True),
+    ("chest=nan", True),
+    ("chest=inf", True),
+    ("chest=-96", True),
+    ("=96", True),
+    ("chest", True),
+    ("chest=", True),
+    ("chest=96,,waist=80", False),
+    (" chest = 96 ", False),
+    ("neck=40", True),
+    ("chest=9" + "9" * 400, True),
+    ("chest=96,waist=80,hip=100,height=175", False),
+    (",", True),
+    ("chest=0x60", True),
 ]

@@ -1,12 +1,13 @@
 """Synthetic patterns for the marker tests: curved, concave pieces whose cut lines have many vertices."""
+
 from __future__ import annotations
 
 import numpy as np
-
-from core.pattern.types import Pattern
-from core.marker.outline import edges_meet
-from core.geom.polygon import points_in_polygon
 from export_synth import _panel, grid_piece
+
+from core.geom.polygon import points_in_polygon
+from core.marker.outline import edges_meet
+from core.pattern.types import Pattern
 
 
 def wavy_shape(k: int):
@@ -16,8 +17,9 @@ def wavy_shape(k: int):
     def shape(s, t):
         half = 0.5 * width * (1.0 + 0.3 * t)
         x = (s - 0.5) * 2 * half + 0.004 * np.sin(2 * np.pi * waves * t) * (2 * s - 1)
-        y = t * height - 0.05 * t ** 2 * np.sin(np.pi * s) ** 2 + 0.02 * s * t
+        y = t * height - 0.05 * t**2 * np.sin(np.pi * s) ** 2 + 0.02 * s * t
         return x, y
+
     return shape
 
 
@@ -28,11 +30,17 @@ def wavy_pattern(pieces: int = 3) -> Pattern:
         uv, faces, loop, sides = grid_piece(25, 40, wavy_shape(k))
         panels.append(_panel(f"leg{k}", uv, faces, loop, [0.0, 1.0], hems=[sides["bottom"]], id0=n0))
         n0 += len(uv)
-    return Pattern(style="wavy", body={"model": "anny", "shape": "M", "pose": "A", "size": "M"},
-                   garments={"shirt": "shirt"}, panels=panels, seams=[])
+    return Pattern(
+        style="wavy",
+        body={"model": "anny", "shape": "M", "pose": "A", "size": "M"},
+        garments={"shirt": "shirt"},
+        panels=panels,
+        seams=[],
+    )
 
 
 def overlap(a: np.ndarray, b: np.ndarray) -> bool:
     """Whether two closed loops overlap: an edge crossing, or a vertex of one strictly inside the other."""
-    return (edges_meet(a, b, touching=False) or bool(points_in_polygon(a, b).any())
-            or bool(points_in_polygon(b, a).any()))
+    return (
+        edges_meet(a, b, touching=False) or bool(points_in_polygon(a, b).any()) or bool(points_in_polygon(b, a).any())
+    )

@@ -1,4 +1,5 @@
 """Small mesh builders shared by the synthetic test bodies and patterns (no tests here)."""
+
 import numpy as np
 
 

@@ -2,6 +2,7 @@
 
 For tests and measurements of issue 14 ("mirrored designs stay symmetric").
 """
+
 from __future__ import annotations
 
 from typing import Dict
@@ -78,6 +79,7 @@ def _aligned_hausdorff(a: np.ndarray, b: np.ndarray) -> float:
     """Rigidly align ``b`` onto ``a`` (best rotation by nearest-point iterations) and return the
     symmetric Hausdorff distance of each outline's vertices to the other outline."""
     from scipy.spatial import cKDTree
+
     b = b - b.mean(0) + a.mean(0)
     ta = cKDTree(a)
     for _ in range(30):

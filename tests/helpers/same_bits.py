@@ -14,6 +14,7 @@ Tests that rely on the contract carry ``@pytest.mark.same_bits`` and compare wit
   the suite still checks that both paths compute the same thing, and the run's summary says which
   comparison was made.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -72,10 +73,11 @@ def _run_probe():
     import scipy.sparse as sp
 
     from core.pattern.accel import compiled
+
     if not compiled.load():
         return False, "the Warp kernels did not load"
-    from core.pattern.config import SolverConfig
     from core.pattern.accel.products import GradientProducts
+    from core.pattern.config import SolverConfig
     from core.pattern.optimizer.steps import local_step
     from core.pattern.optimizer.targets import rest_targets
 

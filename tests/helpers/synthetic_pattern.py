@@ -4,6 +4,7 @@ Each builder returns ``(cut, body_vertices)``: a :class:`GarmentCut` whose
 embedding is the identity onto a small "body" mesh made for the purpose.
 Frame as everywhere: metres, +Z up.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -27,8 +28,9 @@ def _grid_faces(nu: int, nv: int, closed_u: bool = False) -> np.ndarray:
     return np.array(F, dtype=np.int64)
 
 
-def tube(radius: float = 0.15, height: float = 0.5, n_around: int = 48, n_up: int = 21,
-         ease: float = 1.2, bulge: float = 0.0):
+def tube(
+    radius: float = 0.15, height: float = 0.5, n_around: int = 48, n_up: int = 21, ease: float = 1.2, bulge: float = 0.0
+):
     """A vertical tube cut open by one seam (sewn to itself), warp along +Z.
 
     The panel is the tube unrolled: its vertex column ``n_around`` duplicates
@@ -51,18 +53,31 @@ def tube(radius: float = 0.15, height: float = 0.5, n_around: int = 48, n_up: in
     warp /= np.linalg.norm(warp, axis=1, keepdims=True)
     left = np.array([j * nu for j in range(n_up)])
     right = np.array([j * nu + n_around for j in range(n_up)])
-    panel = Panel(name="tube", garment="tube", vertex_ids=vids, faces=F, warp_dir=warp,
-                  ease=np.full(len(F), float(ease)), body_part="arm")
+    panel = Panel(
+        name="tube",
+        garment="tube",
+        vertex_ids=vids,
+        faces=F,
+        warp_dir=warp,
+        ease=np.full(len(F), float(ease)),
+        body_part="arm",
+    )
     emb = sp.identity(len(body), format="csr")
-    cut = GarmentCut(body={"model": "synthetic", "shape": {}, "pose": None}, embedding=emb, panels=[panel],
-                     seams=[Seam("tube.seam", "tube", "tube", right, left)], garments={"tube": "upper"},
-                     hems={"tube": [np.arange(nu), np.arange(nu) + (n_up - 1) * nu]},
-                     materials={"eps_weft": 1.1, "eps_warp": 1.1})
+    cut = GarmentCut(
+        body={"model": "synthetic", "shape": {}, "pose": None},
+        embedding=emb,
+        panels=[panel],
+        seams=[Seam("tube.seam", "tube", "tube", right, left)],
+        garments={"tube": "upper"},
+        hems={"tube": [np.arange(nu), np.arange(nu) + (n_up - 1) * nu]},
+        materials={"eps_weft": 1.1, "eps_warp": 1.1},
+    )
     return cut, body
 
 
-def two_panels(radius: float = 0.15, height: float = 0.5, n_half: int = 24, n_up: int = 21,
-               ease=(1.2, 1.2), bulge: float = 0.3):
+def two_panels(
+    radius: float = 0.15, height: float = 0.5, n_half: int = 24, n_up: int = 21, ease=(1.2, 1.2), bulge: float = 0.3
+):
     """A bulging tube cut into a front and a back half, sewn on two side seams.
 
     ``ease`` gives each half its uniform weft scale.
@@ -83,12 +98,25 @@ def two_panels(radius: float = 0.15, height: float = 0.5, n_half: int = 24, n_up
         w = np.tile([0.0, 0.0, 1.0], (len(F), 1))
         w = w - np.sum(w * n, axis=1, keepdims=True) * n / np.sum(n * n, axis=1, keepdims=True)
         w /= np.linalg.norm(w, axis=1, keepdims=True)
-        panels.append(Panel(name=name, garment="top", vertex_ids=vids, faces=F, warp_dir=w,
-                            ease=np.full(len(F), float(ease[k])), body_part="torso"))
+        panels.append(
+            Panel(
+                name=name,
+                garment="top",
+                vertex_ids=vids,
+                faces=F,
+                warp_dir=w,
+                ease=np.full(len(F), float(ease[k])),
+                body_part="torso",
+            )
+        )
     col = lambda i: np.array([j * nu + i for j in range(n_up)])
-    seams = [Seam("side_a", "front", "back", col(n_half), col(0)),
-             Seam("side_b", "back", "front", col(n_half), col(0))]
-    cut = GarmentCut(body={"model": "synthetic", "shape": {}, "pose": None},
-                     embedding=sp.identity(len(body), format="csr"), panels=panels, seams=seams,
-                     garments={"top": "upper"}, materials={"eps_weft": 1.1, "eps_warp": 1.1})
+    seams = [Seam("side_a", "front", "back", col(n_half), col(0)), Seam("side_b", "back", "front", col(n_half), col(0))]
+    cut = GarmentCut(
+        body={"model": "synthetic", "shape": {}, "pose": None},
+        embedding=sp.identity(len(body), format="csr"),
+        panels=panels,
+        seams=seams,
+        garments={"top": "upper"},
+        materials={"eps_weft": 1.1, "eps_warp": 1.1},
+    )
     return cut, body

@@ -25,6 +25,7 @@ project's 2-core x86-64 VM; benchmarks/results/pattern_kernels_history.md): the 
 ~110 ms a transfer where numpy takes ~180-220 ms; each part pays (numpy for the per-triangle
 steps ~+60 %, for the LDL ~+25 %, for the products ~+20 %).
 """
+
 from __future__ import annotations
 
 from typing import Optional
@@ -37,5 +38,6 @@ def choose(progress: Optional[Progress] = None) -> bool:
     :func:`.compiled.use` in tests) and loaded; loads (compiles on a machine's first run) where
     asked for. With ``EASE_SOLVER_KERNELS=numpy`` Warp is not imported."""
     from . import compiled
+
     compiled.prepare(progress)
     return compiled.enabled()

@@ -25,6 +25,7 @@ thread, with only the arguments that changed rebound: an array by re-pointing
 its slot's ``array_t`` value, never by wrapping it in a new ``wp.array``; a
 thread keeps the launches of the last few sizes, and no array past its call.
 """
+
 from __future__ import annotations
 
 import ctypes
@@ -49,7 +50,7 @@ _LANES = 8
 #: designs, or the add-on over a session, meets a new size with every design)
 _KEPT = 32
 _state = {"ready": None, "forced": None}
-_lock = threading.RLock()      # load() gives up under it
+_lock = threading.RLock()  # load() gives up under it
 _local = threading.local()
 
 
@@ -111,6 +112,7 @@ def load(progress: Optional[Progress] = None) -> bool:
                     from ...geom.queries import init_cpu
                     from . import kernels as K
                     from . import ldl_kernels, sparse_kernels
+
                     init_cpu()
                     K.wp.load_module(K, device="cpu")
                     K.wp.load_module(ldl_kernels, device="cpu")
@@ -126,8 +128,9 @@ def give_up(doing: str, exc: Exception) -> None:
     with _lock:
         if _state["ready"] is not False:
             _state["ready"] = False
-            log.warning("pattern solver: Warp kernels unavailable (%s: %s: %s); using numpy",
-                        doing, type(exc).__name__, exc)
+            log.warning(
+                "pattern solver: Warp kernels unavailable (%s: %s: %s); using numpy", doing, type(exc).__name__, exc
+            )
 
 
 class _Unsuitable(Exception):
@@ -198,6 +201,7 @@ def native(kernel, args) -> "_Launch":
     (numpy arrays, their dtypes the kernel's; scalars); then ``launch.bind(j, a, address(a))`` puts another
     array in slot ``j`` and ``launch()`` runs it. A launch is one thread's (it keeps its argument struct)."""
     from . import kernels as K
+
     slots = tuple(_RAW if K.wp.types.is_array(a.type) else None for a in kernel.adj.args)
     return _Launch(kernel, slots, args, 1, 0)
 
@@ -206,6 +210,7 @@ def _slots(kernel) -> tuple:
     """Per argument of ``kernel``: False (an (f,) float64 array read as 8-vectors), True (int32
     counters) or None (a scalar)."""
     from . import kernels as K
+
     return tuple((a.type.dtype is K.wp.int32) if K.wp.types.is_array(a.type) else None for a in kernel.adj.args)
 
 
@@ -222,6 +227,7 @@ class _Launch:
 
     def __init__(self, kernel, slots: tuple, args, dim: int, shift: int):
         from . import kernels as K
+
         wp = K.wp
         self.dim, self.shift, self.slots = dim, shift, slots
         inputs = []
@@ -231,16 +237,18 @@ class _Launch:
             elif counters:
                 inputs.append(wp.array(a, dtype=wp.int32, device="cpu", copy=False))
             elif counters is not None:
-                view = a[shift:shift + _LANES * dim].reshape(dim, _LANES)
+                view = a[shift : shift + _LANES * dim].reshape(dim, _LANES)
                 inputs.append(wp.array(view, dtype=K.v8, device="cpu", copy=False))
             else:
                 inputs.append(a)
         # each array slot's value, owned here: a copy of the recorded array's (its data pointer and, for
         # a raw or counter slot, its length are rewritten by bind)
-        self.values = [None if counters is None else type(x.__ctype__()).from_buffer_copy(x.__ctype__())
-                       for x, counters in zip(inputs, slots)]
+        self.values = [
+            None if counters is None else type(x.__ctype__()).from_buffer_copy(x.__ctype__())
+            for x, counters in zip(inputs, slots)
+        ]
         self.cmd = cmd = wp.launch(kernel, dim=dim, inputs=inputs, device="cpu", record_cmd=True)
-        cmd.launch()          # the first call's launch
+        cmd.launch()  # the first call's launch
         # the recorded launch keeps the first call's Warp arrays, and so its numpy arrays, for a graph
         # capture's replay, which these launches never are
         cmd.fwd_args = None
@@ -330,10 +338,10 @@ def _run(kernel, f: int, head: tuple, out: np.ndarray, flags: Optional[np.ndarra
     key = (kernel.key, f)
     pair = cache.pop(key, None)
     if pair is not None:
-        cache[key] = pair           # the most recently used last
+        cache[key] = pair  # the most recently used last
         pair(head, out, flags)
         return
-    pair = _Pair(kernel, f, head, out, flags)   # recording runs the launches: this is also the call
+    pair = _Pair(kernel, f, head, out, flags)  # recording runs the launches: this is also the call
     if len(cache) >= _KEPT:
         del cache[next(iter(cache))]
     cache[key] = pair
@@ -360,6 +368,7 @@ def _call(kernel, f: int, head: tuple, n_out: int, n_flags: int = 0):
 
 def _kernels():
     from . import kernels
+
     return kernels
 
 
@@ -371,8 +380,21 @@ def local_step(M, d0, d1, k, kprod, T, sw, warp_row: float, free: bool, lo: floa
     ``free``. Returns the rest shapes (4 (f,)), the ease target (4 (f,)) and
     the new warp factors (None unless ``free``).
     """
-    head = (*M, d0, d1, *k, *kprod, T[2], T[3], d1 if sw is None else sw, int(sw is not None), float(warp_row),
-            int(free), float(lo), float(hi))
+    head = (
+        *M,
+        d0,
+        d1,
+        *k,
+        *kprod,
+        T[2],
+        T[3],
+        d1 if sw is None else sw,
+        int(sw is not None),
+        float(warp_row),
+        int(free),
+        float(lo),
+        float(hi),
+    )
     got = _call(_kernels().local_step8, len(d0), head + (1,), 7, 2)
     if got is not None and not got[1][0]:
         # every delta 0: numpy takes no Newton step (the kernel's is a no-op only to round-off)
@@ -392,16 +414,31 @@ def ratios(M, Kc, c_weft, c_warp):
     return None if got is None or got[1][0] else got[0]
 
 
-def corrections(p_w, p_g, corr_w: np.ndarray, corr_g: np.ndarray, lower: float, upper: float, floor: float,
-                hi: float) -> bool:
+def corrections(
+    p_w, p_g, corr_w: np.ndarray, corr_g: np.ndarray, lower: float, upper: float, floor: float, hi: float
+) -> bool:
     """:func:`.feedback.move_corrections`' last steps: ``corr *= clip(p, lower, upper)`` for each of
     ``p_w``, ``p_g`` (f,) that is not None (the ratios to their gains, numpy's power), then every
     correction clipped to ``[floor, hi]``; ``corr_w``, ``corr_g`` (f,) updated in place. False (both
     untouched) where numpy must."""
-    got = _call(_kernels().corrections8, len(corr_w),
-                (corr_w if p_w is None else p_w, corr_g if p_g is None else p_g, corr_w, corr_g,
-                 int(p_w is not None), int(p_g is not None), float(lower), float(upper), float(floor), float(hi)),
-                2, 1)
+    got = _call(
+        _kernels().corrections8,
+        len(corr_w),
+        (
+            corr_w if p_w is None else p_w,
+            corr_g if p_g is None else p_g,
+            corr_w,
+            corr_g,
+            int(p_w is not None),
+            int(p_g is not None),
+            float(lower),
+            float(upper),
+            float(floor),
+            float(hi),
+        ),
+        2,
+        1,
+    )
     if got is None or got[1][0]:
         return False
     corr_w[:] = got[0][0]
@@ -411,8 +448,7 @@ def corrections(p_w, p_g, corr_w: np.ndarray, corr_g: np.ndarray, lower: float, 
 
 def rhs_terms(RT, T, lam_reg: float, lam_ease: float):
     """:func:`.steps.rhs_terms` (4 new (f,) arrays), or None."""
-    got = _call(_kernels().rhs_terms8, len(RT[0]), (*RT, *T, float(lam_reg), int(lam_reg != 1.0), float(lam_ease)),
-                4)
+    got = _call(_kernels().rhs_terms8, len(RT[0]), (*RT, *T, float(lam_reg), int(lam_reg != 1.0), float(lam_ease)), 4)
     return None if got is None else got[0]
 
 
@@ -432,10 +468,28 @@ def collapse_guard(guard, M, inverse, c_weft, c_warp, gain: np.ndarray):
     if not (guard.guard_grow >= 1.0 and guard.guard_limit >= 1.0):
         return None
     (i00, i01, i10, i11), body = inverse
-    got = _call(_kernels().guard8, len(gain), (*M, i00, i01, i10, i11, _body_weights(body), c_weft, c_warp,
-                                               float(guard.guard_scale), float(guard.guard_open),
-                                               float(guard.guard_grow), float(guard.guard_limit),
-                                               float(guard.guard_release), gain), 5, 1)
+    got = _call(
+        _kernels().guard8,
+        len(gain),
+        (
+            *M,
+            i00,
+            i01,
+            i10,
+            i11,
+            _body_weights(body),
+            c_weft,
+            c_warp,
+            float(guard.guard_scale),
+            float(guard.guard_open),
+            float(guard.guard_grow),
+            float(guard.guard_limit),
+            float(guard.guard_release),
+            gain,
+        ),
+        5,
+        1,
+    )
     if got is None or got[1][0]:
         return None
     gain[:] = got[0][0]
@@ -460,8 +514,7 @@ def flip_check(blocks, U_new: np.ndarray, s_old: np.ndarray):
     None. The corners' coordinates are gathered by numpy (a gather is no faster in a kernel)."""
     F0, F1, F2 = blocks.face_columns
     if len(F0) < _LANES or not enabled():
-        return None                 # numpy's guard gathers the corners itself: not twice
+        return None  # numpy's guard gathers the corners itself: not twice
     u, v = U_new[:, 0], U_new[:, 1]
-    got = _call(_kernels().areas8, len(F0), (u[F0], v[F0], u[F1], v[F1], u[F2], v[F2], blocks.area_floor, s_old),
-                1, 2)
+    got = _call(_kernels().areas8, len(F0), (u[F0], v[F0], u[F1], v[F1], u[F2], v[F2], blocks.area_floor, s_old), 1, 2)
     return None if got is None or got[1][1] else (got[0][0], int(got[1][0]))

@@ -27,6 +27,7 @@ choices are ``wp.where``. The f % 8 last triangles: the caller launches the
 kernel once more on the 8 last triangles (every kernel is pure: it writes
 outputs only, so the overlap writes the same values twice).
 """
+
 from __future__ import annotations
 
 from ...geom.queries import wp  # Warp as the package sets it up (kernel cache folder, log level)
@@ -107,10 +108,37 @@ def scale8(det: v8, ka: v8, kb: v8, kc: v8, kd: v8, m: v8, n: v8):
 
 
 @wp.kernel
-def local_step8(m0: V, m1: V, m2: V, m3: V, d0a: V, d1a: V, k0a: V, k1a: V, k2a: V, k3a: V,
-                cdiff: V, c01: V, t2a: V, t3a: V, sw_in: V, has_sw: int, om: f64, free: int,
-                lo: f64, hi: f64, newton: int,
-                rt0: V, rt1: V, rt2: V, rt3: V, te2: V, te3: V, sw_out: V, flags: Flags):
+def local_step8(
+    m0: V,
+    m1: V,
+    m2: V,
+    m3: V,
+    d0a: V,
+    d1a: V,
+    k0a: V,
+    k1a: V,
+    k2a: V,
+    k3a: V,
+    cdiff: V,
+    c01: V,
+    t2a: V,
+    t3a: V,
+    sw_in: V,
+    has_sw: int,
+    om: f64,
+    free: int,
+    lo: f64,
+    hi: f64,
+    newton: int,
+    rt0: V,
+    rt1: V,
+    rt2: V,
+    rt3: V,
+    te2: V,
+    te3: V,
+    sw_out: V,
+    flags: Flags,
+):
     """:func:`.steps.local_step` with unit column weights. ``flags[0]``: lanes whose ``delta`` is not 0
     (numpy takes the Newton step only if one is); ``flags[1]``: lanes where a NaN meets a clip."""
     i = wp.tid()
@@ -189,8 +217,9 @@ def local_step8(m0: V, m1: V, m2: V, m3: V, d0a: V, d1a: V, k0a: V, k1a: V, k2a:
 
 
 @wp.kernel
-def ratios8(m0: V, m1: V, m2: V, m3: V, k0a: V, k1a: V, k2a: V, k3a: V, cw: V, cg: V,
-            ratio_w: V, ratio_g: V, flags: Flags):
+def ratios8(
+    m0: V, m1: V, m2: V, m3: V, k0a: V, k1a: V, k2a: V, k3a: V, cw: V, cg: V, ratio_w: V, ratio_g: V, flags: Flags
+):
     """:func:`.feedback.move_corrections`' achieved/target ratios ``goal / rho`` (weft, warp) of a
     reference or transfer solve; numpy raises them to the gains. ``flags[0]``: triangles the feedback
     leaves (a scale not finite or not positive, a target not finite): numpy then takes the call."""
@@ -216,9 +245,31 @@ def ratios8(m0: V, m1: V, m2: V, m3: V, k0a: V, k1a: V, k2a: V, k3a: V, cw: V, c
 
 
 @wp.kernel
-def guard8(m0: V, m1: V, m2: V, m3: V, i00a: V, i01a: V, i10a: V, i11a: V, body_ok: V,
-           cw: V, cg: V, scale: f64, opn: f64, grow: f64, limit: f64, release: f64,
-           gain_in: V, gain: V, q0: V, q1: V, q2: V, q3: V, flags: Flags):
+def guard8(
+    m0: V,
+    m1: V,
+    m2: V,
+    m3: V,
+    i00a: V,
+    i01a: V,
+    i10a: V,
+    i11a: V,
+    body_ok: V,
+    cw: V,
+    cg: V,
+    scale: f64,
+    opn: f64,
+    grow: f64,
+    limit: f64,
+    release: f64,
+    gain_in: V,
+    gain: V,
+    q0: V,
+    q1: V,
+    q2: V,
+    q3: V,
+    flags: Flags,
+):
     """:func:`.steps.collapse_guard`: the relative Jacobians ``q`` (:func:`.steps.relative_singular_values`)
     and the gains after the update (``gain``, from ``gain_in``); numpy lists the held triangles.
     ``flags[0]``: triangles under ``scale`` whose gain is over ``limit`` or NaN, or raised to NaN
@@ -321,8 +372,21 @@ def areas8(u0: V, v0: V, u1: V, v1: V, u2: V, v2: V, area_floor: V, s_old: V, s:
 
 
 @wp.kernel
-def corrections8(p_w: V, p_g: V, corr_w: V, corr_g: V, use_w: int, use_g: int, lower: f64, upper: f64,
-                 floor: f64, hi: f64, new_w: V, new_g: V, flags: Flags):
+def corrections8(
+    p_w: V,
+    p_g: V,
+    corr_w: V,
+    corr_g: V,
+    use_w: int,
+    use_g: int,
+    lower: f64,
+    upper: f64,
+    floor: f64,
+    hi: f64,
+    new_w: V,
+    new_g: V,
+    flags: Flags,
+):
     """:func:`.feedback.move_corrections` after numpy's power of the ratios (``p_w``, ``p_g``: the ratios
     to the gains; read where ``use_w`` / ``use_g``): ``corr *= clip(p, lower, upper)``, then ``clip(corr,
     floor, hi)``, into ``new_w``, ``new_g``. ``flags[0]``: lanes with a NaN (numpy's clip keeps it)."""
@@ -341,8 +405,23 @@ def corrections8(p_w: V, p_g: V, corr_w: V, corr_g: V, use_w: int, use_g: int, l
 
 
 @wp.kernel
-def rhs_terms8(rt0: V, rt1: V, rt2: V, rt3: V, t0: V, t1: V, t2: V, t3: V, lam_reg: f64, scale_reg: int,
-               lam_ease: f64, b0: V, b1: V, b2: V, b3: V):
+def rhs_terms8(
+    rt0: V,
+    rt1: V,
+    rt2: V,
+    rt3: V,
+    t0: V,
+    t1: V,
+    t2: V,
+    t3: V,
+    lam_reg: f64,
+    scale_reg: int,
+    lam_ease: f64,
+    b0: V,
+    b1: V,
+    b2: V,
+    b3: V,
+):
     """:func:`.steps.rhs_terms`: ``B = lambda_reg R T + lambda_ease T`` entry by entry (``R T`` not
     scaled where ``scale_reg`` is 0: a weight of 1)."""
     i = wp.tid()

@@ -24,6 +24,7 @@ the process (:func:`.compiled.give_up`) and the factor goes back to qdldl
 bits either way). A zero pivot raises ValueError (qdldl-python's constructor
 raises RuntimeError; its update ignores it and leaves stale factors).
 """
+
 from __future__ import annotations
 
 import logging
@@ -51,6 +52,7 @@ class Plan:
 
     def __init__(self, P: np.ndarray, L, upper: tuple, nnz: int):
         from . import ldl_kernels as K
+
         keep, rows, ptr = upper
         n = len(P)
         self.n = n
@@ -80,13 +82,22 @@ class Plan:
         self.rowptr = np.concatenate([[0], np.cumsum(np.bincount(self.Li, minlength=n))]).astype(_I32)
         self.seq_c = np.zeros(len(self.Li), _I32)
         self.seq_slot = np.zeros(len(self.Li), _I32)
-        K.wp.launch(K.ldl_plan, dim=1, device="cpu", inputs=[
-            n, *_arrays(self.Ap, self.Ai, self.etree, self.Lp, self.rowptr, self.seq_c, self.seq_slot,
-                        np.zeros(4 * n, _I32))])
+        K.wp.launch(
+            K.ldl_plan,
+            dim=1,
+            device="cpu",
+            inputs=[
+                n,
+                *_arrays(
+                    self.Ap, self.Ai, self.etree, self.Lp, self.rowptr, self.seq_c, self.seq_slot, np.zeros(4 * n, _I32)
+                ),
+            ],
+        )
 
 
 def _arrays(*arrays) -> list:
     from .ldl_kernels import wp
+
     return [wp.array(a, device="cpu", copy=False) for a in arrays]
 
 
@@ -100,13 +111,20 @@ class LDL(compiled.PerThread):
     data : (nnz,) float, the full matrix's values they factorise (held by reference, never written).
     """
 
-    def __init__(self, plan: Plan, Lx: np.ndarray, D: np.ndarray, Dinv: np.ndarray, data: np.ndarray,
-                 Ax: Optional[np.ndarray] = None):
+    def __init__(
+        self,
+        plan: Plan,
+        Lx: np.ndarray,
+        D: np.ndarray,
+        Dinv: np.ndarray,
+        data: np.ndarray,
+        Ax: Optional[np.ndarray] = None,
+    ):
         self.plan = plan
         self.Lx, self.D, self.Dinv = Lx, D, Dinv
         self.data = data
-        self.Ax = np.take(data, plan.src) if Ax is None else Ax   # the permuted upper triangle's values
-        super().__init__()      # per thread: recorded launches and their buffers (no shared scratch space)
+        self.Ax = np.take(data, plan.src) if Ax is None else Ax  # the permuted upper triangle's values
+        super().__init__()  # per thread: recorded launches and their buffers (no shared scratch space)
 
     @classmethod
     def from_qdldl(cls, solver, upper: tuple, data: np.ndarray) -> Optional["LDL"]:
@@ -137,19 +155,49 @@ class LDL(compiled.PerThread):
 
     def _rows_record(self):
         from . import ldl_kernels as K
+
         p = self.plan
         mark, y, failed = np.zeros(p.n, _I32), np.zeros(p.n), np.zeros(1, _I32)
-        cmd = K.wp.launch(K.ldl_rows, dim=1, device="cpu", record_cmd=True, inputs=[
-            p.n, *_arrays(mark, p.Ap, p.Ai, self.Ax, p.etree, p.rowptr, p.seq_c, p.seq_slot, p.Lp, p.Li,
-                          self.Lx, self.D, self.Dinv, y, failed)])
+        cmd = K.wp.launch(
+            K.ldl_rows,
+            dim=1,
+            device="cpu",
+            record_cmd=True,
+            inputs=[
+                p.n,
+                *_arrays(
+                    mark,
+                    p.Ap,
+                    p.Ai,
+                    self.Ax,
+                    p.etree,
+                    p.rowptr,
+                    p.seq_c,
+                    p.seq_slot,
+                    p.Lp,
+                    p.Li,
+                    self.Lx,
+                    self.D,
+                    self.Dinv,
+                    y,
+                    failed,
+                ),
+            ],
+        )
         return cmd, mark, failed
 
     def _solve_record(self):
         from . import ldl_kernels as K
+
         p = self.plan
         b, work, x = np.zeros((p.n, 2)), np.zeros(2 * p.n), np.zeros((p.n, 2))
-        cmd = K.wp.launch(K.ldl_solve2, dim=1, device="cpu", record_cmd=True, inputs=[
-            p.n, *_arrays(p.P, p.Lp, p.Li, self.Lx, self.Dinv, b.reshape(-1), work, x.reshape(-1))])
+        cmd = K.wp.launch(
+            K.ldl_solve2,
+            dim=1,
+            device="cpu",
+            record_cmd=True,
+            inputs=[p.n, *_arrays(p.P, p.Lp, p.Li, self.Lx, self.Dinv, b.reshape(-1), work, x.reshape(-1))],
+        )
         return cmd, b, x
 
     def refactorise(self, data: np.ndarray) -> bool:
@@ -192,10 +240,10 @@ class LDL(compiled.PerThread):
             for j in range(0, k, 2):
                 # a lone last column is solved beside zeros: each column's operations are its own
                 m = min(2, k - j)
-                b[:, :m] = cols[:, j:j + m]
+                b[:, :m] = cols[:, j : j + m]
                 b[:, m:] = 0.0
                 cmd.launch()
-                out[:, j:j + m] = x[:, :m]
+                out[:, j : j + m] = x[:, :m]
         except Exception as exc:  # noqa: BLE001 - as refactorise
             compiled.give_up("launching ldl_solve2", exc)
             return None
@@ -225,6 +273,7 @@ def matches_qdldl() -> bool:
 def _probe() -> bool:
     import qdldl
     import scipy.sparse as sp
+
     n, rng = 200, np.random.default_rng(0)
     i = np.concatenate([np.arange(n - 1), rng.integers(0, n, 4 * n)])
     j = np.concatenate([np.arange(1, n), rng.integers(0, n, 4 * n)])
@@ -241,15 +290,18 @@ def _probe() -> bool:
         return False
     mine = LDL(ref.plan, np.zeros_like(ref.Lx), np.zeros(n), np.zeros(n), np.full(U.nnz, np.nan))
     b = rng.standard_normal((n, 2))
-    if not mine.refactorise(U.data):      # every value differs from the NaNs: every row recomputed
+    if not mine.refactorise(U.data):  # every value differs from the NaNs: every row recomputed
         return False
     x = mine.solve(b)
     if x is None:
         return False
     want = np.stack([solver.solve(np.ascontiguousarray(b[:, k])) for k in range(2)], 1)
-    same = all(np.array_equal(a.view(np.int64), w.view(np.int64))
-               for a, w in ((mine.Lx, ref.Lx), (mine.D, ref.D), (x, want)))
+    same = all(
+        np.array_equal(a.view(np.int64), w.view(np.int64)) for a, w in ((mine.Lx, ref.Lx), (mine.D, ref.D), (x, want))
+    )
     if not same:
-        log.info("pattern solver: the LDL kernels differ from qdldl's bits here (its build fuses "
-                 "multiply-adds); qdldl factorises")
+        log.info(
+            "pattern solver: the LDL kernels differ from qdldl's bits here (its build fuses "
+            "multiply-adds); qdldl factorises"
+        )
     return same

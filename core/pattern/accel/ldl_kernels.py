@@ -19,6 +19,7 @@ array accessors stop clang's loop optimisations); the module is built
 without floating-point contraction, as :mod:`.kernels` is, so no product and
 difference become a fused multiply-add.
 """
+
 from __future__ import annotations
 
 from ...geom.queries import wp  # Warp as the package sets it up (kernel cache folder, log level)
@@ -65,13 +66,11 @@ for (int k = 1; k < n; k++) {
 
 
 @wp.func_native(_PLAN)
-def _plan(n: int, Ap: Ints, Ai: Ints, etree: Ints, Lp: Ints, rowptr: Ints, seq_c: Ints, seq_slot: Ints,
-          work: Ints): ...
+def _plan(n: int, Ap: Ints, Ai: Ints, etree: Ints, Lp: Ints, rowptr: Ints, seq_c: Ints, seq_slot: Ints, work: Ints): ...
 
 
 @wp.kernel
-def ldl_plan(n: int, Ap: Ints, Ai: Ints, etree: Ints, Lp: Ints, rowptr: Ints, seq_c: Ints, seq_slot: Ints,
-             work: Ints):
+def ldl_plan(n: int, Ap: Ints, Ai: Ints, etree: Ints, Lp: Ints, rowptr: Ints, seq_c: Ints, seq_slot: Ints, work: Ints):
     """Row k's entries of L in QDLDL's order: ``seq_c[rowptr[k]:rowptr[k+1]]`` their columns,
     ``seq_slot`` their places in ``Lx`` (``work``: 4 n scratch)."""
     _plan(n, Ap, Ai, etree, Lp, rowptr, seq_c, seq_slot, work)
@@ -114,13 +113,44 @@ return failed;
 
 
 @wp.func_native(_ROWS)
-def _rows(n: int, mark: Ints, Ap: Ints, Ai: Ints, Ax: Reals, etree: Ints, rowptr: Ints, seq_c: Ints,
-          seq_slot: Ints, Lp: Ints, Li: Ints, Lx: Reals, D: Reals, Dinv: Reals, y: Reals) -> int: ...
+def _rows(
+    n: int,
+    mark: Ints,
+    Ap: Ints,
+    Ai: Ints,
+    Ax: Reals,
+    etree: Ints,
+    rowptr: Ints,
+    seq_c: Ints,
+    seq_slot: Ints,
+    Lp: Ints,
+    Li: Ints,
+    Lx: Reals,
+    D: Reals,
+    Dinv: Reals,
+    y: Reals,
+) -> int: ...
 
 
 @wp.kernel
-def ldl_rows(n: int, mark: Ints, Ap: Ints, Ai: Ints, Ax: Reals, etree: Ints, rowptr: Ints, seq_c: Ints,
-             seq_slot: Ints, Lp: Ints, Li: Ints, Lx: Reals, D: Reals, Dinv: Reals, y: Reals, failed: Ints):
+def ldl_rows(
+    n: int,
+    mark: Ints,
+    Ap: Ints,
+    Ai: Ints,
+    Ax: Reals,
+    etree: Ints,
+    rowptr: Ints,
+    seq_c: Ints,
+    seq_slot: Ints,
+    Lp: Ints,
+    Li: Ints,
+    Lx: Reals,
+    D: Reals,
+    Dinv: Reals,
+    y: Reals,
+    failed: Ints,
+):
     """Rows ``k`` of L, D and 1 / D where ``mark[k]`` and their ancestors' (``mark`` is zero after;
     ``y``: n zeros, zeros after; ``failed[0]`` 1 where a pivot is 0)."""
     failed[0] = _rows(n, mark, Ap, Ai, Ax, etree, rowptr, seq_c, seq_slot, Lp, Li, Lx, D, Dinv, y)

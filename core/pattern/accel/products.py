@@ -9,6 +9,7 @@ calls, with scipy's operations in scipy's order, so the bits are the same;
 else, or for arguments they do not take, scipy does. Measured timings:
 ``benchmarks/results/pattern_kernels_history.md``.
 """
+
 from __future__ import annotations
 
 from typing import List
@@ -23,15 +24,17 @@ _F64 = np.dtype(np.float64)
 
 def _csr(M: sp.csr_matrix) -> tuple:
     """(indptr, indices) as int32 and the values as float64, each contiguous (a kernel's CSR arguments)."""
-    return (np.ascontiguousarray(M.indptr, np.int32), np.ascontiguousarray(M.indices, np.int32),
-            np.ascontiguousarray(M.data, np.float64))
+    return (
+        np.ascontiguousarray(M.indptr, np.int32),
+        np.ascontiguousarray(M.indices, np.int32),
+        np.ascontiguousarray(M.data, np.float64),
+    )
 
 
 def _takes(a, shape: tuple) -> bool:
     """Whether ``a`` is what the kernels read: an aligned, C-contiguous, native float64 array of ``shape``
     (a dtype equal to native float64 is native)."""
-    return (type(a) is np.ndarray and a.shape == shape and a.dtype == _F64 and a.flags.c_contiguous
-            and a.flags.aligned)
+    return type(a) is np.ndarray and a.shape == shape and a.dtype == _F64 and a.flags.c_contiguous and a.flags.aligned
 
 
 class GradientProducts(compiled.PerThread):
@@ -65,6 +68,7 @@ class GradientProducts(compiled.PerThread):
             launch = launches.get(name)
             if launch is None:
                 from . import sparse_kernels as K
+
                 # recorded on 1-D views (the kernels' arrays); runs it once
                 launches[name] = compiled.native(getattr(K, name), list(fixed) + [a.reshape(-1) for a in moving])
                 return True
@@ -89,8 +93,13 @@ class GradientProducts(compiled.PerThread):
     def add_rhs(self, rhs: np.ndarray, B: list) -> None:
         """``rhs[:, 0] += Gxᵀ B[0] + Gyᵀ B[1]``, ``rhs[:, 1] += Gxᵀ B[2] + Gyᵀ B[3]`` in place (rhs (n, 2),
         B four (f,) arrays)."""
-        if (self.n and self._fits and _takes(rhs, (self.n, 2)) and all(_takes(b, (self.f,)) for b in B)
-                and compiled.enabled()):
+        if (
+            self.n
+            and self._fits
+            and _takes(rhs, (self.n, 2))
+            and all(_takes(b, (self.f,)) for b in B)
+            and compiled.enabled()
+        ):
             if self._run("add_rhs", (self.n,) + self._gt, [*B, rhs]):
                 return
         rhs[:, 0] += self.GxT @ B[0] + self.GyT @ B[1]

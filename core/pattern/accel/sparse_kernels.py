@@ -15,6 +15,7 @@ Native C++ snippets, as in :mod:`.ldl_kernels` (Warp's kernel language made
 such gather loops slower than scipy), built without floating-point
 contraction.
 """
+
 from __future__ import annotations
 
 from ...geom.queries import wp  # Warp as the package sets it up (kernel cache folder, log level)
@@ -41,13 +42,37 @@ for (int t = 0; t < f; t++) {
 
 
 @wp.func_native(_JACOBIANS)
-def _jacobians(f: int, Gx_ptr: Ints, Gx_ind: Ints, Gx_val: Reals, Gy_ptr: Ints, Gy_ind: Ints, Gy_val: Reals,
-               U: Reals, M00: Reals, M01: Reals, M10: Reals, M11: Reals): ...
+def _jacobians(
+    f: int,
+    Gx_ptr: Ints,
+    Gx_ind: Ints,
+    Gx_val: Reals,
+    Gy_ptr: Ints,
+    Gy_ind: Ints,
+    Gy_val: Reals,
+    U: Reals,
+    M00: Reals,
+    M01: Reals,
+    M10: Reals,
+    M11: Reals,
+): ...
 
 
 @wp.kernel
-def jacobians(f: int, Gx_ptr: Ints, Gx_ind: Ints, Gx_val: Reals, Gy_ptr: Ints, Gy_ind: Ints, Gy_val: Reals,
-              U: Reals, M00: Reals, M01: Reals, M10: Reals, M11: Reals):
+def jacobians(
+    f: int,
+    Gx_ptr: Ints,
+    Gx_ind: Ints,
+    Gx_val: Reals,
+    Gy_ptr: Ints,
+    Gy_ind: Ints,
+    Gy_val: Reals,
+    U: Reals,
+    M00: Reals,
+    M01: Reals,
+    M10: Reals,
+    M11: Reals,
+):
     """``M00 = Gx u``, ``M01 = Gy u``, ``M10 = Gx v``, ``M11 = Gy v`` (f,) for ``U`` (n, 2 interleaved)."""
     _jacobians(f, Gx_ptr, Gx_ind, Gx_val, Gy_ptr, Gy_ind, Gy_val, U, M00, M01, M10, M11)
 
@@ -70,12 +95,36 @@ for (int i = 0; i < n; i++) {
 
 
 @wp.func_native(_ADD_RHS)
-def _add_rhs(n: int, X_ptr: Ints, X_ind: Ints, X_val: Reals, Y_ptr: Ints, Y_ind: Ints, Y_val: Reals,
-             B0: Reals, B1: Reals, B2: Reals, B3: Reals, R: Reals): ...
+def _add_rhs(
+    n: int,
+    X_ptr: Ints,
+    X_ind: Ints,
+    X_val: Reals,
+    Y_ptr: Ints,
+    Y_ind: Ints,
+    Y_val: Reals,
+    B0: Reals,
+    B1: Reals,
+    B2: Reals,
+    B3: Reals,
+    R: Reals,
+): ...
 
 
 @wp.kernel
-def add_rhs(n: int, X_ptr: Ints, X_ind: Ints, X_val: Reals, Y_ptr: Ints, Y_ind: Ints, Y_val: Reals,
-            B0: Reals, B1: Reals, B2: Reals, B3: Reals, R: Reals):
+def add_rhs(
+    n: int,
+    X_ptr: Ints,
+    X_ind: Ints,
+    X_val: Reals,
+    Y_ptr: Ints,
+    Y_ind: Ints,
+    Y_val: Reals,
+    B0: Reals,
+    B1: Reals,
+    B2: Reals,
+    B3: Reals,
+    R: Reals,
+):
     """``R`` (n, 2 interleaved) ``+= (X B0 + Y B1, X B2 + Y B3)`` for CSR ``X = Gxᵀ``, ``Y = Gyᵀ`` (n, f)."""
     _add_rhs(n, X_ptr, X_ind, X_val, Y_ptr, Y_ind, Y_val, B0, B1, B2, B3, R)

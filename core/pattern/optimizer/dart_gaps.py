@@ -24,6 +24,7 @@ diagonal of ``A``. An iteration whose pairs are all apart is untouched, so a pat
 never close is the same bits as without the step. Both solver backends share this code (the
 factorisation is :class:`.factor.SymmetricFactor`, qdldl's bits on both).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -49,6 +50,7 @@ class DartLegs:
     ``prev_a``/``prev_b`` and ``next_a``/``next_b`` the pairs before it (towards the mouth; the mouth's
     own pair at the mouth) and after it (towards the apex; the apex twice at the last pair), which
     give the local axis; ``min_gap`` (P,) metres."""
+
     a: np.ndarray
     b: np.ndarray
     prev_a: np.ndarray
@@ -68,7 +70,7 @@ def dart_legs(sides: Sequence, pairs: Sequence, darts: Sequence[int]) -> DartLeg
     for si in darts:
         A, B = sides[pairs[si][0]], sides[pairs[si][1]]
         ga, gb = np.asarray(A.gids, int), np.asarray(B.gids, int)
-        k = len(ga) - 1                                 # pairs before the apex
+        k = len(ga) - 1  # pairs before the apex
         if k < 1 or len(gb) != len(ga):
             continue
         # distance to the apex along the legs (their mean), at each pair
@@ -78,8 +80,7 @@ def dart_legs(sides: Sequence, pairs: Sequence, darts: Sequence[int]) -> DartLeg
         rest += [np.asarray(A.rest_lengths), np.asarray(B.rest_lengths)]
         i = np.arange(k)
         prev, nxt = np.maximum(i - 1, 0), i + 1
-        for col, v in zip(cols, (ga[i], gb[i], ga[prev], gb[prev], ga[nxt], gb[nxt],
-                                 MIN_OPENING * dist[i])):
+        for col, v in zip(cols, (ga[i], gb[i], ga[prev], gb[prev], ga[nxt], gb[nxt], MIN_OPENING * dist[i])):
             col.append(v)
     a, b, pa, pb, na, nb, g = (np.concatenate(c) if c else np.zeros(0) for c in cols)
     edge = float(np.mean(np.concatenate(rest))) if rest else 0.0
@@ -90,8 +91,9 @@ def _legs_matrix(legs: DartLegs, weight: float, n: int) -> sp.csr_matrix:
     """(n, n) the term's part of the fixed system matrix: ``weight`` on ``(e_a - e_b)(e_a - e_b)^T``."""
     c = np.full(len(legs.a), float(weight))
     A, B = legs.a, legs.b
-    return sp.coo_matrix((np.concatenate([c, c, -c, -c]), (np.concatenate([A, B, A, B]),
-                                                           np.concatenate([A, B, B, A]))), shape=(n, n)).tocsr()
+    return sp.coo_matrix(
+        (np.concatenate([c, c, -c, -c]), (np.concatenate([A, B, A, B]), np.concatenate([A, B, B, A]))), shape=(n, n)
+    ).tocsr()
 
 
 def _across(legs: DartLegs, U: np.ndarray):
@@ -99,11 +101,8 @@ def _across(legs: DartLegs, U: np.ndarray):
     gap's component along it (P,): negative where the legs have crossed."""
     gap = U[legs.a] - U[legs.b]
     axis = 0.5 * (U[legs.next_a] + U[legs.next_b] - U[legs.prev_a] - U[legs.prev_b])
-    across = np.stack([-axis[:, 1], axis[:, 0]], axis=1) / np.maximum(np.linalg.norm(axis, axis=1),
-                                                                       1e-300)[:, None]
+    across = np.stack([-axis[:, 1], axis[:, 0]], axis=1) / np.maximum(np.linalg.norm(axis, axis=1), 1e-300)[:, None]
     return gap, across, np.einsum("ij,ij->i", gap, across)
-
-
 
 
 def leg_gaps(legs: DartLegs, U: np.ndarray) -> np.ndarray:
@@ -116,10 +115,11 @@ class GapCorrection:
 
     def __init__(self, legs: DartLegs):
         self.legs = legs
-        self._held = None          # (the system matrix's factorisation, the weight, the corrected one)
+        self._held = None  # (the system matrix's factorisation, the weight, the corrected one)
 
     def _factor(self, base):
         from .factor import SymmetricFactor
+
         held = self._held
         if held is None or held[0] is not base:
             A = base.matrix
@@ -138,7 +138,7 @@ class GapCorrection:
         if not np.any(short > 0):
             return U
         w, factor = self._factor(base)
-        r = np.clip(short, 0.0, STEP_CAP * legs.edge)[:, None] * across    # t - D U: zero on the pairs apart
+        r = np.clip(short, 0.0, STEP_CAP * legs.edge)[:, None] * across  # t - D U: zero on the pairs apart
         rhs = np.zeros_like(U)
         np.add.at(rhs, legs.a, w * r)
         np.add.at(rhs, legs.b, -w * r)

@@ -14,6 +14,7 @@ which refactorises only the rows of L a change of values reaches and solves
 both coordinates in one pass, with qdldl's bits. Measured timings:
 ``benchmarks/results/pattern_kernels_history.md``.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -31,8 +32,10 @@ def _qdldl(upper: sp.csc_matrix) -> "qdldl.Solver":
     try:
         return qdldl.Solver(upper, upper=True)
     except RuntimeError:
-        raise PatternError("the pattern's linear system has a zero pivot (not positive definite): the solve "
-                           "cannot go on; nothing written") from None
+        raise PatternError(
+            "the pattern's linear system has a zero pivot (not positive definite): the solve "
+            "cannot go on; nothing written"
+        ) from None
 
 
 class SymmetricFactor:
@@ -72,14 +75,18 @@ class SymmetricFactor:
         #: (nnz,) the column of each stored entry
         self._cols = col = np.repeat(np.arange(n, dtype=np.int64), np.diff(A.indptr))
         keep = np.flatnonzero(A.indices <= col)
-        self._upper = (keep, A.indices[keep],
-                       np.concatenate([[0], np.cumsum(np.bincount(col[keep], minlength=n))]).astype(A.indptr.dtype))
+        self._upper = (
+            keep,
+            A.indices[keep],
+            np.concatenate([[0], np.cumsum(np.bincount(col[keep], minlength=n))]).astype(A.indptr.dtype),
+        )
         self._qdldl = _qdldl(self._upper_matrix(A.data))
         if compiled.enabled():
             from ..accel.ldl import LDL, matches_qdldl
+
             self._ldl = LDL.from_qdldl(self._qdldl, self._upper, A.data) if matches_qdldl() else None
             if self._ldl is not None:
-                self._qdldl = None     # its factors are the LDL's now
+                self._qdldl = None  # its factors are the LDL's now
 
     def _qdldl_solver(self):
         """qdldl-python's factorisation of the matrix (made again where the kernels gave up: the same bits)."""
@@ -143,8 +150,10 @@ class SymmetricFactor:
         B = sp.csc_matrix((data, self.matrix.indices, self.matrix.indptr), shape=self.matrix.shape)
         if reuse is None or reuse is self:
             return SymmetricFactor(B, like=self)
-        if not (np.array_equal(reuse.matrix.indptr, self.matrix.indptr)
-                and np.array_equal(reuse.matrix.indices, self.matrix.indices)):
+        if not (
+            np.array_equal(reuse.matrix.indptr, self.matrix.indptr)
+            and np.array_equal(reuse.matrix.indices, self.matrix.indices)
+        ):
             raise ValueError("reuse: a factorisation of another sparsity pattern")
         B.data.flags.writeable = False
         if reuse._ldl is None or not _refactorised(reuse._ldl, B.data):

@@ -6,6 +6,7 @@ achieved/target ratio makes the next solve land on the wanted scale wherever
 curvature allows it. A pose adaptation aims instead at the scales its poses
 demand (paper Eq. adapt-scale) and only ever adds cloth.
 """
+
 from __future__ import annotations
 
 from typing import Optional, Tuple
@@ -31,9 +32,17 @@ def feedback_gains(cfg, adapting: bool) -> Tuple[float, float, float, float, flo
     return gain_w, gain_g, lower, 1 + step, (ad.ceiling if adapting else fb.ceiling)
 
 
-def move_corrections(cfg, M: list, Kc: list, c_weft: np.ndarray, c_warp: np.ndarray, corr_w: np.ndarray,
-                     corr_g: np.ndarray, poses: Optional[dict] = None,
-                     targets_finite: Optional[np.ndarray] = None) -> None:
+def move_corrections(
+    cfg,
+    M: list,
+    Kc: list,
+    c_weft: np.ndarray,
+    c_warp: np.ndarray,
+    corr_w: np.ndarray,
+    corr_g: np.ndarray,
+    poses: Optional[dict] = None,
+    targets_finite: Optional[np.ndarray] = None,
+) -> None:
     """Move the weft and warp corrections ``corr_w``, ``corr_g`` (f,) in place by the achieved/target ratio.
 
     Parameters
@@ -51,14 +60,14 @@ def move_corrections(cfg, M: list, Kc: list, c_weft: np.ndarray, c_warp: np.ndar
     gain_w, gain_g, lower, upper, hi = feedback_gains(cfg, adapting)
     done = None if adapting else compiled.ratios(M, Kc, c_weft, c_warp)
     if done is not None:
-        where = slice(None)            # the kernel's ratios: every triangle moves (else numpy's below)
+        where = slice(None)  # the kernel's ratios: every triangle moves (else numpy's below)
         ratio_w, ratio_g = done
     else:
         where, ratio_w, ratio_g = _ratios(cfg, M, Kc, c_weft, c_warp, gain_w, gain_g, poses, targets_finite)
     # the power is numpy's (its own SIMD routine, not libm's); the clips and products the kernel's where the
     # whole arrays move, numpy's otherwise
-    p_w = ratio_w ** gain_w if gain_w > 0 else None
-    p_g = ratio_g ** gain_g if gain_g > 0 else None
+    p_w = ratio_w**gain_w if gain_w > 0 else None
+    p_g = ratio_g**gain_g if gain_g > 0 else None
     if isinstance(where, slice) and compiled.corrections(p_w, p_g, corr_w, corr_g, lower, upper, fb.floor, hi):
         return
     if p_w is not None:
@@ -88,9 +97,13 @@ def _ratios(cfg, M, Kc, c_weft, c_warp, gain_w, gain_g, poses, targets_finite):
         goal_g = goal_g if ad.cap_warp is None else np.fmin(goal_g, ad.cap_warp * poses["ease_warp"])
     if targets_finite is None and not adapting:
         targets_finite = np.isfinite(c_weft) & np.isfinite(c_warp)
-    ok = np.isfinite(rw) & np.isfinite(rg) & (rw > 0) & (rg > 0) & (
-        targets_finite if not adapting else np.isfinite(goal_w) & np.isfinite(goal_g))
+    ok = (
+        np.isfinite(rw)
+        & np.isfinite(rg)
+        & (rw > 0)
+        & (rg > 0)
+        & (targets_finite if not adapting else np.isfinite(goal_w) & np.isfinite(goal_g))
+    )
     # every triangle is usually valid: the whole arrays then, the same values without the masked copies
     where = slice(None) if ok.all() else ok
-    return (where, goal_w[where] / rw[where] if gain_w > 0 else None,
-            goal_g[where] / rg[where] if gain_g > 0 else None)
+    return (where, goal_w[where] / rw[where] if gain_w > 0 else None, goal_g[where] / rg[where] if gain_g > 0 else None)

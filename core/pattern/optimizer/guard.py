@@ -11,6 +11,7 @@ solve's extra rounds (:func:`round_guard`) and in the rescue iterations of
 a solve that would be refused after them (:func:`rescuing`, :func:`refused`),
 and the per-solver pool of guarded factorisations that finished solves give back.
 """
+
 from __future__ import annotations
 
 import threading
@@ -66,8 +67,9 @@ def round_guard(guard, extra: int, planned: int):
     level = min(extra, planned) // COLLAPSE_ROUNDS if extra > 0 else 0
     if level == 0 and not rescue:
         return guard
-    return replace(guard, guard_limit=guard.guard_limit * GUARD_ESCALATION ** level,
-                   **({"guard_release": 1.0} if rescue else {}))
+    return replace(
+        guard, guard_limit=guard.guard_limit * GUARD_ESCALATION**level, **({"guard_release": 1.0} if rescue else {})
+    )
 
 
 def rescuing(extra: int, planned: int) -> bool:
@@ -149,8 +151,15 @@ class GuardedFactors:
         self._pool: Dict[tuple, list] = {}
         self._lock = threading.Lock()
 
-    def factorise(self, key: tuple, base: SymmetricFactor, weights, area_weights: np.ndarray, gain: np.ndarray,
-                  reuse: Optional[SymmetricFactor] = None) -> SymmetricFactor:
+    def factorise(
+        self,
+        key: tuple,
+        base: SymmetricFactor,
+        weights,
+        area_weights: np.ndarray,
+        gain: np.ndarray,
+        reuse: Optional[SymmetricFactor] = None,
+    ) -> SymmetricFactor:
         """The factorisation of ``base``'s matrix with triangle ``t``'s ease + regulariser terms times ``1 + gain[t]``.
 
         ``weights``: the configuration's :class:`~.config.Weights`; ``area_weights`` (f,) the
@@ -166,10 +175,12 @@ class GuardedFactors:
         a = (weights.ease + weights.regulariser) * area_weights[t] * gain[t]
         gx, gy = self.G[t, :, 0], self.G[t, :, 1]
         # a_t (gx_p gx_q + w^2 gy_p gy_q): the triangle's extra terms, entry (p, q) at slot 3 p + q
-        extra = a[:, None, None] * (gx[:, :, None] * gx[:, None, :]
-                                    + weights.warp_column ** 2 * gy[:, :, None] * gy[:, None, :])
-        data = base.matrix.data + np.bincount(pos[t].ravel(), weights=extra.reshape(len(t), 9).ravel(),
-                                              minlength=base.matrix.nnz)
+        extra = a[:, None, None] * (
+            gx[:, :, None] * gx[:, None, :] + weights.warp_column**2 * gy[:, :, None] * gy[:, None, :]
+        )
+        data = base.matrix.data + np.bincount(
+            pos[t].ravel(), weights=extra.reshape(len(t), 9).ravel(), minlength=base.matrix.nnz
+        )
         if reuse is None:
             with self._lock:
                 spare = self._pool.get(key)

@@ -5,6 +5,7 @@ faces (f, 3) (oriented outward) give a 2D ``uv`` (n, 2), counter-clockwise as
 seen from outside the body, scaled to the 3D area and rotated so that the
 panel's grain (the 3D warp field mapped to 2D) is +y.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -38,6 +39,7 @@ def lscm(xyz: np.ndarray, faces: np.ndarray) -> np.ndarray:
     counter-clockwise (positive majority of signed areas).
     """
     import igl
+
     xyz = np.ascontiguousarray(xyz, dtype=np.float64)
     F = np.ascontiguousarray(faces, dtype=np.int64)
     loops = boundary_loops(F)
@@ -73,6 +75,7 @@ def tutte(xyz: np.ndarray, faces: np.ndarray) -> np.ndarray:
         Lff = L[free][:, free].tocsc()
         rhs = -L[free][:, bnd] @ bc
         from scipy.sparse.linalg import splu
+
         uv[free] = splu(Lff).solve(np.asarray(rhs))
     return normalise_orientation_and_scale(uv, xyz, F)
 
@@ -89,13 +92,20 @@ def open_collapsed(uv: np.ndarray, xyz: np.ndarray, faces: np.ndarray) -> np.nda
     are (unchanged patterns).
     """
     import igl
+
     F = np.asarray(faces, np.int64)
     ratio = signed_areas_2d(uv, F) / np.maximum(triangle_areas(xyz, F), 1e-300)
     if not (np.all(ratio > 0) and ratio.min() < COLLAPSED_START * np.median(ratio)):
         return uv
-    data = igl.slim_precompute(np.asfortranarray(xyz, dtype=np.float64), np.asfortranarray(F, dtype=np.int32),
-                               np.asfortranarray(uv, dtype=np.float64), igl.MappingEnergyType.SYMMETRIC_DIRICHLET,
-                               np.zeros(0, np.int32), np.zeros((0, 2)), 0.0)
+    data = igl.slim_precompute(
+        np.asfortranarray(xyz, dtype=np.float64),
+        np.asfortranarray(F, dtype=np.int32),
+        np.asfortranarray(uv, dtype=np.float64),
+        igl.MappingEnergyType.SYMMETRIC_DIRICHLET,
+        np.zeros(0, np.int32),
+        np.zeros((0, 2)),
+        0.0,
+    )
     out = np.asarray(igl.slim_solve(data, SLIM_ITERATIONS), dtype=np.float64)[:, :2]
     if not (np.all(np.isfinite(out)) and np.all(signed_areas_2d(out, F) > 0)):
         return uv
@@ -190,7 +200,7 @@ def pulled_back_warp(xyz: np.ndarray, faces: np.ndarray, G: np.ndarray, warp_dir
     """
     F = np.asarray(faces, int)
     X = [xyz[F[:, k]] for k in range(3)]
-    Jx = X[0] * G[:, 0, 0, None] + X[1] * G[:, 1, 0, None] + X[2] * G[:, 2, 0, None]   # (f, 3): 2D x -> 3D
+    Jx = X[0] * G[:, 0, 0, None] + X[1] * G[:, 1, 0, None] + X[2] * G[:, 2, 0, None]  # (f, 3): 2D x -> 3D
     Jy = X[0] * G[:, 0, 1, None] + X[1] * G[:, 1, 1, None] + X[2] * G[:, 2, 1, None]
     a, b, c = np.sum(Jx * Jx, axis=1), np.sum(Jx * Jy, axis=1), np.sum(Jy * Jy, axis=1)
     rx, ry = np.sum(Jx * warp_dir, axis=1), np.sum(Jy * warp_dir, axis=1)

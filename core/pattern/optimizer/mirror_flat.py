@@ -20,6 +20,7 @@ flattening interpolated there (:func:`approximate_mirror`). The result is
 not exactly symmetric, but the centimetres of LSCM lean go (skirt side seams
 24.6 mm apart left to right, 1.2 mm after).
 """
+
 from __future__ import annotations
 
 from typing import Optional
@@ -72,11 +73,11 @@ def self_mirror_map(xyz: np.ndarray, faces: np.ndarray) -> Optional[np.ndarray]:
     xyz, F, key = got
     d, m = cKDTree(key).query(key * [-1.0, 1.0, 1.0], k=2)
     if d[:, 0].max() > MATCH_TOLERANCE or np.any(d[:, 1] < 2.0 * d[:, 0] + 1e-12):
-        return None             # not its own mirror image, or a match is not unique
+        return None  # not its own mirror image, or a match is not unique
     m = m[:, 0]
     if np.any(m[m] != np.arange(len(m))):
         return None
-    if np.any(face_symmetry(F, m) < 0):      # a face whose mirror is not a face
+    if np.any(face_symmetry(F, m) < 0):  # a face whose mirror is not a face
         return None
     return m
 
@@ -99,6 +100,7 @@ def approximate_mirror(xyz: np.ndarray, faces: np.ndarray) -> Optional[sp.csr_ma
     xyz : (n, 3) float, the panel on the reference body (m); faces : (f, 3) int.
     """
     from ...design.geometry import SurfaceLocator
+
     got = _across_midline(xyz, faces)
     if got is None:
         return None
@@ -124,8 +126,7 @@ def approximate_mirror(xyz: np.ndarray, faces: np.ndarray) -> Optional[sp.csr_ma
     return sp.csr_matrix((bary.reshape(-1), (np.repeat(np.arange(n), 3), F[tri].reshape(-1))), shape=(n, n))
 
 
-def symmetric_flattening(fl: dict, xyz: np.ndarray, faces: np.ndarray, warp_dir: np.ndarray,
-                         mirror) -> dict:
+def symmetric_flattening(fl: dict, xyz: np.ndarray, faces: np.ndarray, warp_dir: np.ndarray, mirror) -> dict:
     """:func:`core.pattern.optimizer.init.flatten_panel`'s result ``fl`` made mirror-symmetric.
 
     ``uv`` -> ``(uv + T(uv[mirror])) / 2`` with ``T`` the reflection best aligning the
@@ -142,7 +143,7 @@ def symmetric_flattening(fl: dict, xyz: np.ndarray, faces: np.ndarray, warp_dir:
     B = (mirror @ uv if sp.issparse(mirror) else uv[mirror]) - c
     U, _, Vt = np.linalg.svd(B.T @ A)
     R = U @ Vt
-    if np.linalg.det(R) > 0:        # a reflection is wanted: the mirror map reverses orientation
+    if np.linalg.det(R) > 0:  # a reflection is wanted: the mirror map reverses orientation
         U[:, -1] *= -1
         R = U @ Vt
     sym = 0.5 * (A + B @ R) + c

@@ -5,6 +5,7 @@ the unknowns ``offset .. offset + n`` and its faces the rows
 ``face_offset .. face_offset + f`` of the stacked arrays, so per-panel sums
 are ``np.add.reduceat``'s.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -29,6 +30,7 @@ class PanelData:
     ids, ``vertex_ids`` (n,) rows of the cut's embedding, ``warp_dir`` (f, 3), ``ease`` (f,), the initial
     flattening ``uv0`` (n, 2, metres), its gradient operators ``G`` (f, 3, 2), ``area0`` (f,) its signed
     areas (square metres) and ``face_offset``."""
+
     name: str
     offset: int
     n: int
@@ -58,6 +60,7 @@ class PanelBlocks:
     ``corners`` (f, 3) each triangle's corners as rows of the cut's embedding (a body's positions
     ``P[corners]`` are the stacked panels' triangles in one gather).
     """
+
     panels: List[PanelData]
     n: int
     faces: np.ndarray
@@ -98,16 +101,29 @@ def flatten_panels(cut, positions: np.ndarray, progress: Optional[Progress] = No
             raise PatternError(f"panel {p.name!r}: all triangles are degenerate on the reference body")
         fl = _init.flatten_panel(xyz, F, np.asarray(p.warp_dir, float))
         mirror = None
-        if p.mirror_of is None:     # a panel across the body: its flattening made symmetric too
+        if p.mirror_of is None:  # a panel across the body: its flattening made symmetric too
             mirror = self_mirror_map(xyz, F)
-            if mirror is None:      # its mesh not its own mirror image (the skirt topology)
+            if mirror is None:  # its mesh not its own mirror image (the skirt topology)
                 mirror = approximate_mirror(xyz, F)
         if mirror is not None:
             fl = symmetric_flattening(fl, xyz, F, np.asarray(p.warp_dir, float), mirror)
         flat.append(fl)
-        panels.append(PanelData(p.name, offset, len(p.vertex_ids), F, F + offset, np.asarray(p.vertex_ids, int),
-                                np.asarray(p.warp_dir, float), np.asarray(p.ease, float), fl["uv"], fl["G"],
-                                fl["area"], face_offset))
+        panels.append(
+            PanelData(
+                p.name,
+                offset,
+                len(p.vertex_ids),
+                F,
+                F + offset,
+                np.asarray(p.vertex_ids, int),
+                np.asarray(p.warp_dir, float),
+                np.asarray(p.ease, float),
+                fl["uv"],
+                fl["G"],
+                fl["area"],
+                face_offset,
+            )
+        )
         offset += len(p.vertex_ids)
         face_offset += len(F)
     gfaces = np.concatenate([pd.gfaces for pd in panels])
@@ -115,16 +131,24 @@ def flatten_panels(cut, positions: np.ndarray, progress: Optional[Progress] = No
     nf = len(gfaces)
     warp0 = np.concatenate([fl["warp"] for fl in flat])
     return PanelBlocks(
-        panels=panels, n=offset, faces=gfaces,
+        panels=panels,
+        n=offset,
+        faces=gfaces,
         face_columns=tuple(np.ascontiguousarray(gfaces[:, c]) for c in range(3)),
-        vertex_faces=sp.csr_matrix((np.ones(3 * nf), (gfaces.ravel(), np.repeat(np.arange(nf), 3))),
-                                   shape=(offset, nf)),
-        vertex_offsets=np.array([pd.offset for pd in panels]), vertex_counts=np.array([pd.n for pd in panels], float),
+        vertex_faces=sp.csr_matrix(
+            (np.ones(3 * nf), (gfaces.ravel(), np.repeat(np.arange(nf), 3))), shape=(offset, nf)
+        ),
+        vertex_offsets=np.array([pd.offset for pd in panels]),
+        vertex_counts=np.array([pd.n for pd in panels], float),
         face_offsets=np.array([pd.face_offset for pd in panels]),
         face_counts=np.array([len(pd.faces) for pd in panels]),
-        uv0=np.concatenate([pd.uv0 for pd in panels]), G=np.concatenate([pd.G for pd in panels]), area0=area0,
-        area_floor=AREA_FLOOR * np.abs(area0), warp0=warp0,
+        uv0=np.concatenate([pd.uv0 for pd in panels]),
+        G=np.concatenate([pd.G for pd in panels]),
+        area0=area0,
+        area_floor=AREA_FLOOR * np.abs(area0),
+        warp0=warp0,
         warp_vote=np.concatenate([fl["warp_weight"] for fl in flat]),
         # the iterations read them every time: strided column views cost twice a contiguous array's pass
         warp_columns=(np.ascontiguousarray(warp0[:, 0]), np.ascontiguousarray(warp0[:, 1])),
-        corners=np.concatenate([pd.vertex_ids[pd.faces] for pd in panels]))
+        corners=np.concatenate([pd.vertex_ids[pd.faces] for pd in panels]),
+    )

@@ -19,6 +19,7 @@ relative to ``h``::
 Gathered seams have the length and matched-curvature terms off (the paper's
 switch for gathered designs, per seam).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -62,6 +63,7 @@ class SeamSide:
     """One side of a seam: ``seam`` (index in the cut), ``gids`` (k,) global unknown ids along the
     polyline, ``rest_lengths`` (k-1,) its edges' lengths in the initial flattening (metres),
     ``edge_face`` (k-1,) the global index of each edge's triangle."""
+
     seam: int
     gids: np.ndarray
     rest_lengths: np.ndarray
@@ -85,6 +87,7 @@ class SeamLayout:
     rows: they get the straightness term), ``row_side``. ``band`` is
     ``1/(h A)``, ``h`` the mean edge length and ``A`` the total area.
     """
+
     sides: List[SeamSide]
     pairs: List[Tuple[int, int]]
     edge_start: np.ndarray
@@ -121,6 +124,7 @@ class SeamPlan:
     """Which seams a solve sews gathered: ``gathered`` (sorted cut seam names), ``demand`` (seam name ->
     ease demand ratio, longer side / shorter side - 1), and per seam edge / second-difference row
     ``sewn_edges`` (E,) and ``sewn_rows`` (R,): 1.0 where the seam is sewn flat, 0.0 where gathered."""
+
     gathered: Tuple[str, ...]
     demand: Dict[str, float]
     sewn_edges: np.ndarray
@@ -141,8 +145,9 @@ def _side_edges(name: str, pd, v: np.ndarray, table) -> np.ndarray:
         found |= hit
     if not np.all(found):
         i = int(np.argmin(found))
-        raise PatternError(f"seam {name!r}: vertices {(int(v[i]), int(v[i + 1]))} of panel {pd.name!r} "
-                           "are not joined by an edge")
+        raise PatternError(
+            f"seam {name!r}: vertices {(int(v[i]), int(v[i + 1]))} of panel {pd.name!r} are not joined by an edge"
+        )
     return ef
 
 
@@ -180,16 +185,22 @@ def seam_layout(cut, panels, uv0: np.ndarray, n: int, mean_edge: float, total_ar
     if not darts:
         return layout
     from dataclasses import replace
+
     is_dart = np.repeat([cut.seams[sd.seam].kind == "dart" for sd in sides], [len(sd.gids) - 1 for sd in sides])
     # only darts with a set intake get the mouth term ("auto" ones open as the flattening opens them)
-    darts_set = [si for si in darts if (getattr(cut, "darts", {}) or {}).get(cut.seams[si].name, {}).get("intake")
-                 is not None]
+    darts_set = [
+        si for si in darts if (getattr(cut, "darts", {}) or {}).get(cut.seams[si].name, {}).get("intake") is not None
+    ]
     set_w = [cut.darts[cut.seams[si].name]["intake"] for si in darts_set]
-    return replace(layout, edge_weight=np.where(is_dart, DART_LENGTH_WEIGHT, 1.0),
-                   mouth_a=np.array([sides[pairs[si][0]].gids[0] for si in darts_set], int),
-                   mouth_b=np.array([sides[pairs[si][1]].gids[0] for si in darts_set], int),
-                   mouth_apex=np.array([sides[pairs[si][0]].gids[-1] for si in darts_set], int),
-                   mouth_width=np.array([float(w) for w in set_w], float), legs=dart_legs(sides, pairs, darts))
+    return replace(
+        layout,
+        edge_weight=np.where(is_dart, DART_LENGTH_WEIGHT, 1.0),
+        mouth_a=np.array([sides[pairs[si][0]].gids[0] for si in darts_set], int),
+        mouth_b=np.array([sides[pairs[si][1]].gids[0] for si in darts_set], int),
+        mouth_apex=np.array([sides[pairs[si][0]].gids[-1] for si in darts_set], int),
+        mouth_width=np.array([float(w) for w in set_w], float),
+        legs=dart_legs(sides, pairs, darts),
+    )
 
 
 def _length_weight(layout: SeamLayout, config: SolverConfig, plan: SeamPlan) -> np.ndarray:
@@ -210,13 +221,16 @@ def _stack(sides: List[SeamSide], pairs, n: int, h: float, total_area: float) ->
     v_start = np.cumsum([0] + [len(sd.gids) for sd in sides])
     cat = lambda parts, dtype: np.concatenate(parts) if sides else np.zeros(0, dtype)
     edges = dict(
-        edge_start=cat([sd.gids[:-1] for sd in sides], int), edge_end=cat([sd.gids[1:] for sd in sides], int),
-        edge_rest=cat([sd.rest_lengths for sd in sides], float), edge_face=cat([sd.edge_face for sd in sides], int),
+        edge_start=cat([sd.gids[:-1] for sd in sides], int),
+        edge_end=cat([sd.gids[1:] for sd in sides], int),
+        edge_rest=cat([sd.rest_lengths for sd in sides], float),
+        edge_face=cat([sd.edge_face for sd in sides], int),
         edge_partner=cat([e_start[other[k]] + np.arange(len(sd.gids) - 1) for k, sd in enumerate(sides)], int),
         vertex_ids=cat([sd.gids for sd in sides], int),
         vertex_partner=cat([v_start[other[k]] + np.arange(len(sd.gids)) for k, sd in enumerate(sides)], int),
         vertex_side=cat([np.full(len(sd.gids), k) for k, sd in enumerate(sides)], int),
-        side_vertex_count=np.array([len(sd.gids) for sd in sides], float))
+        side_vertex_count=np.array([len(sd.gids) for sd in sides], float),
+    )
     prev, mid, nxt, band, partner, smooth, straight = [], [], [], [], [], [], []
     r_start = np.cumsum([0] + [max(len(sd.gids) - 2, 0) for sd in sides])
     for k, sd in enumerate(sides):
@@ -232,22 +246,43 @@ def _stack(sides: List[SeamSide], pairs, n: int, h: float, total_area: float) ->
         smooth.append(sm)
         straight.append(np.full(m, m >= 3))
     nr = int(r_start[-1]) if len(r_start) else 0
-    rows = dict(second_diff=None, second_diff_T=None, row_band=np.zeros(0), row_partner=np.zeros(0, int),
-                row_smooth=np.zeros(0, bool), row_straight=np.zeros(0, bool), row_side=np.zeros(0, int))
+    rows = dict(
+        second_diff=None,
+        second_diff_T=None,
+        row_band=np.zeros(0),
+        row_partner=np.zeros(0, int),
+        row_smooth=np.zeros(0, bool),
+        row_straight=np.zeros(0, bool),
+        row_side=np.zeros(0, int),
+    )
     if nr:
         prev, mid, nxt = np.concatenate(prev), np.concatenate(mid), np.concatenate(nxt)
         r = np.arange(nr)
-        D = sp.csr_matrix((np.tile([1.0, -2.0, 1.0], nr), (np.repeat(r, 3), np.stack([prev, mid, nxt], axis=1).ravel())),
-                          shape=(nr, n))
-        rows = dict(second_diff=D, second_diff_T=D.T.tocsr(), row_band=np.concatenate(band),
-                    row_partner=np.concatenate(partner), row_smooth=np.concatenate(smooth),
-                    row_straight=np.concatenate(straight),
-                    row_side=np.repeat(np.arange(len(sides)), [max(len(sd.gids) - 2, 0) for sd in sides]))
+        D = sp.csr_matrix(
+            (np.tile([1.0, -2.0, 1.0], nr), (np.repeat(r, 3), np.stack([prev, mid, nxt], axis=1).ravel())),
+            shape=(nr, n),
+        )
+        rows = dict(
+            second_diff=D,
+            second_diff_T=D.T.tocsr(),
+            row_band=np.concatenate(band),
+            row_partner=np.concatenate(partner),
+            row_smooth=np.concatenate(smooth),
+            row_straight=np.concatenate(straight),
+            row_side=np.repeat(np.arange(len(sides)), [max(len(sd.gids) - 2, 0) for sd in sides]),
+        )
     return SeamLayout(sides=sides, pairs=list(pairs), mean_edge=h, total_area=total_area, **edges, **rows)
 
 
-def plan_seams(cut, layout: SeamLayout, uv0: np.ndarray, K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray,
-               config: SolverConfig) -> SeamPlan:
+def plan_seams(
+    cut,
+    layout: SeamLayout,
+    uv0: np.ndarray,
+    K: np.ndarray,
+    c_weft: np.ndarray,
+    c_warp: np.ndarray,
+    config: SolverConfig,
+) -> SeamPlan:
     """Decide which seams are gathered, from the ease demands of the targets ``diag(c) K``.
 
     A side's demand is the seam's length under its own triangles' targets
@@ -287,9 +322,12 @@ def plan_seams(cut, layout: SeamLayout, uv0: np.ndarray, K: np.ndarray, c_weft: 
     darts = {s.name for s in cut.seams if s.kind == "dart"}
     gathered = tuple(sorted((set(named) | set(auto)) - darts))
     side_gathered = np.array([seam_is_gathered(cut.seams[sd.seam].name, gathered) for sd in layout.sides], bool)
-    return SeamPlan(gathered=gathered, demand=demand,
-                    sewn_edges=np.repeat(~side_gathered, [len(sd.gids) - 1 for sd in layout.sides]).astype(float),
-                    sewn_rows=np.repeat(~side_gathered, [max(len(sd.gids) - 2, 0) for sd in layout.sides]).astype(float))
+    return SeamPlan(
+        gathered=gathered,
+        demand=demand,
+        sewn_edges=np.repeat(~side_gathered, [len(sd.gids) - 1 for sd in layout.sides]).astype(float),
+        sewn_rows=np.repeat(~side_gathered, [max(len(sd.gids) - 2, 0) for sd in layout.sides]).astype(float),
+    )
 
 
 def seam_matrix(layout: SeamLayout, config: SolverConfig, plan: SeamPlan, L: sp.csr_matrix) -> sp.csr_matrix:
@@ -299,23 +337,33 @@ def seam_matrix(layout: SeamLayout, config: SolverConfig, plan: SeamPlan, L: sp.
     if layout.sides and w.seam_length > 0:
         c = _length_weight(layout, config, plan)
         E0, E1 = layout.edge_start, layout.edge_end
-        L = L + sp.coo_matrix((np.concatenate([c, c, -c, -c]),
-                               (np.concatenate([E0, E1, E0, E1]), np.concatenate([E0, E1, E1, E0]))),
-                              shape=(n, n)).tocsr()
+        L = (
+            L
+            + sp.coo_matrix(
+                (np.concatenate([c, c, -c, -c]), (np.concatenate([E0, E1, E0, E1]), np.concatenate([E0, E1, E1, E0]))),
+                shape=(n, n),
+            ).tocsr()
+        )
     if len(layout.mouth_a) and w.seam_length > 0:
         # a set dart intake: |u_a - u_b - width d|^2 at each mouth
         c = np.full(len(layout.mouth_a), _intake_weight(layout, config))
         A, B = layout.mouth_a, layout.mouth_b
-        L = L + sp.coo_matrix((np.concatenate([c, c, -c, -c]), (np.concatenate([A, B, A, B]),
-                                                                 np.concatenate([A, B, B, A]))), shape=(n, n)).tocsr()
+        L = (
+            L
+            + sp.coo_matrix(
+                (np.concatenate([c, c, -c, -c]), (np.concatenate([A, B, A, B]), np.concatenate([A, B, B, A]))),
+                shape=(n, n),
+            ).tocsr()
+        )
     if layout.sides and w.seam_straight + w.seam_curve > 0 and layout.second_diff is not None:
         lam = w.seam_straight + w.seam_curve * plan.sewn_rows
         L = L + layout.second_diff_T @ sp.diags(lam * layout.row_band) @ layout.second_diff
     return L
 
 
-def seam_rhs(layout: SeamLayout, U: np.ndarray, config: SolverConfig, plan: SeamPlan,
-             integral: np.ndarray) -> np.ndarray:
+def seam_rhs(
+    layout: SeamLayout, U: np.ndarray, config: SolverConfig, plan: SeamPlan, integral: np.ndarray
+) -> np.ndarray:
     """Right-hand side (n, 2) of the seam terms at the current iterate ``U`` (n, 2).
 
     ``integral`` (E,): the length term's integral action of this solve,
@@ -344,7 +392,7 @@ def seam_rhs(layout: SeamLayout, U: np.ndarray, config: SolverConfig, plan: Seam
     Uf = U.reshape(-1)
     m = len(ix.vids)
     if w.seam_length > 0:
-        cur = (Uf.take(ix.end_xy) - Uf.take(ix.start_xy)).reshape(2, -1)      # coordinate-major
+        cur = (Uf.take(ix.end_xy) - Uf.take(ix.start_xy)).reshape(2, -1)  # coordinate-major
         cur_len = np.sqrt(cur[0] ** 2 + cur[1] ** 2)
         Eo = layout.edge_partner
         lbar = 0.5 * (cur_len + cur_len[Eo])
@@ -360,17 +408,18 @@ def seam_rhs(layout: SeamLayout, U: np.ndarray, config: SolverConfig, plan: Seam
         # (c Lbar) times the direction. Bin d m + v sums coordinate d of the edges at v in edge order, as a
         # bincount per coordinate does; a sum from +0.0 is never -0.0, so adding it to zeros changes nothing
         tgt = (c_len * lbar) * (cur / np.maximum(cur_len, 1e-300))
-        part = np.bincount(ix.end_bins, tgt.ravel(), minlength=2 * m) - np.bincount(ix.start_bins, tgt.ravel(),
-                                                                                    minlength=2 * m)
+        part = np.bincount(ix.end_bins, tgt.ravel(), minlength=2 * m) - np.bincount(
+            ix.start_bins, tgt.ravel(), minlength=2 * m
+        )
     else:
         part = np.zeros(2 * m)
-    part = part.reshape(2, m).T                                                  # (m, 2), a view
+    part = part.reshape(2, m).T  # (m, 2), a view
     if len(layout.mouth_a) and w.seam_length > 0:
         tgt = _intake_weight(layout, config) * _mouth_targets(layout, U)
         np.add.at(part, ix.mouth_a, tgt)
         np.add.at(part, ix.mouth_b, -tgt)
     if layout.second_diff is not None and (ws2 is not None or wc2 is not None):
-        d2 = (layout.second_diff @ U).ravel()                                    # (2R,), row-major
+        d2 = (layout.second_diff @ U).ravel()  # (2R,), row-major
         # each row's terms, flat; the zero they were added to is left out: it changes no non-zero, and a
         # zero's sign cannot reach the product below (its sums start at +0.0)
         acc = None
@@ -382,7 +431,7 @@ def seam_rhs(layout: SeamLayout, U: np.ndarray, config: SolverConfig, plan: Seam
         if wc2 is not None:
             mean = 0.5 * (d2 + _fitted_partner(layout, Uf, d2, ix))
             acc = wc2 * mean if acc is None else acc + wc2 * mean
-        part = (ix.second_diff_T @ acc.reshape(-1, 2)) + part                   # x + y is y + x
+        part = (ix.second_diff_T @ acc.reshape(-1, 2)) + part  # x + y is y + x
     rhs.reshape(-1)[ix.vids_xy] = part.ravel()
     return rhs
 
@@ -406,12 +455,16 @@ def _rhs_index(layout: SeamLayout) -> SimpleNamespace:
     if ix is not None:
         return ix
     D = layout.second_diff
-    vids = np.unique(np.concatenate([layout.edge_start, layout.edge_end, layout.mouth_a, layout.mouth_b]
-                                    + ([D.indices] if D is not None else [])))
+    vids = np.unique(
+        np.concatenate(
+            [layout.edge_start, layout.edge_end, layout.mouth_a, layout.mouth_b]
+            + ([D.indices] if D is not None else [])
+        )
+    )
     m, k = len(vids), len(layout.sides)
     local = lambda g: np.searchsorted(vids, g)
-    xy = lambda i: (2 * i[:, None] + np.arange(2)).ravel()                 # row-major entries (i, 0), (i, 1)
-    major = lambda i, step: np.concatenate([i, i + step])                  # coordinate-major
+    xy = lambda i: (2 * i[:, None] + np.arange(2)).ravel()  # row-major entries (i, 0), (i, 1)
+    major = lambda i, step: np.concatenate([i, i + step])  # coordinate-major
     partner_side = np.zeros(k, int)
     for a, b in layout.pairs:
         partner_side[a], partner_side[b] = b, a
@@ -420,15 +473,29 @@ def _rhs_index(layout: SeamLayout) -> SimpleNamespace:
     smooth, rp = np.flatnonzero(layout.row_smooth), layout.row_partner
     V, vp, side, ij = len(layout.vertex_ids), layout.vertex_partner, layout.vertex_side, np.arange(4)
     ix = SimpleNamespace(
-        vids=vids, vids_xy=xy(vids), start_xy=major(2 * layout.edge_start, 1), end_xy=major(2 * layout.edge_end, 1),
-        start_bins=major(local(layout.edge_start), m), end_bins=major(local(layout.edge_end), m),
-        mouth_a=local(layout.mouth_a), mouth_b=local(layout.mouth_b),
+        vids=vids,
+        vids_xy=xy(vids),
+        start_xy=major(2 * layout.edge_start, 1),
+        end_xy=major(2 * layout.edge_end, 1),
+        start_bins=major(local(layout.edge_start), m),
+        end_bins=major(local(layout.edge_end), m),
+        mouth_a=local(layout.mouth_a),
+        mouth_b=local(layout.mouth_b),
         second_diff_T=None if D is None else layout.second_diff_T[vids],
-        smooth=xy(smooth), smooth_prev=xy(smooth - 1), smooth_next=xy(smooth + 1),
-        row_partner=xy(rp), row_turned=xy(rp)[np.arange(2 * len(rp)) ^ 1], turn_sign=np.tile([-1.0, 1.0], len(rp)),
-        row_side=np.repeat(layout.row_side, 2), vertex_xy=xy(layout.vertex_ids), side_bins2=xy(side),
-        count2=np.repeat(layout.side_vertex_count, 2), side_bins4=(4 * side[:, None] + ij).ravel(),
-        h_q=2 * np.repeat(vp, 4) + np.tile(ij // 2, V), h_p=2 * np.repeat(np.arange(V), 4) + np.tile(ij % 2, V))
+        smooth=xy(smooth),
+        smooth_prev=xy(smooth - 1),
+        smooth_next=xy(smooth + 1),
+        row_partner=xy(rp),
+        row_turned=xy(rp)[np.arange(2 * len(rp)) ^ 1],
+        turn_sign=np.tile([-1.0, 1.0], len(rp)),
+        row_side=np.repeat(layout.row_side, 2),
+        vertex_xy=xy(layout.vertex_ids),
+        side_bins2=xy(side),
+        count2=np.repeat(layout.side_vertex_count, 2),
+        side_bins4=(4 * side[:, None] + ij).ravel(),
+        h_q=2 * np.repeat(vp, 4) + np.tile(ij // 2, V),
+        h_p=2 * np.repeat(np.arange(V), 4) + np.tile(ij % 2, V),
+    )
     layout.cache["rhs_index"] = ix
     return ix
 
@@ -443,10 +510,13 @@ def _rhs_weights(layout: SeamLayout, config: SolverConfig, plan: SeamPlan):
     if got is not None and got[0] is plan and got[1] == key:
         return got[2]
     rows = layout.second_diff is not None
-    out = (_length_weight(layout, config, plan) if w.seam_length > 0 else None,
-           np.repeat(w.seam_straight * layout.row_band * layout.row_straight, 2)
-           if rows and w.seam_straight > 0 and s.straight_target == "smooth" else None,
-           np.repeat(w.seam_curve * layout.row_band * plan.sewn_rows, 2) if rows and w.seam_curve > 0 else None)
+    out = (
+        _length_weight(layout, config, plan) if w.seam_length > 0 else None,
+        np.repeat(w.seam_straight * layout.row_band * layout.row_straight, 2)
+        if rows and w.seam_straight > 0 and s.straight_target == "smooth"
+        else None,
+        np.repeat(w.seam_curve * layout.row_band * plan.sewn_rows, 2) if rows and w.seam_curve > 0 else None,
+    )
     layout.cache["rhs_weights"] = (plan, key, out)
     return out
 
@@ -475,5 +545,6 @@ def _fitted_partner(layout: SeamLayout, Uf: np.ndarray, d2: np.ndarray, ix: Simp
     H = np.bincount(ix.side_bins4, Pc.take(ix.h_q) * Pc.take(ix.h_p), minlength=4 * k).reshape(k, 4)
     th = np.arctan2(H[:, 1] - H[:, 2], H[:, 0] + H[:, 3])
     # (c d_0 - s d_1, s d_0 + c d_1) as c (d_0, d_1) + s (-d_1, d_0): s (-d_1) is -(s d_1), a sum's terms commute
-    return (np.cos(th).take(ix.row_side) * d2.take(ix.row_partner)
-            + np.sin(th).take(ix.row_side) * (d2.take(ix.row_turned) * ix.turn_sign))
+    return np.cos(th).take(ix.row_side) * d2.take(ix.row_partner) + np.sin(th).take(ix.row_side) * (
+        d2.take(ix.row_turned) * ix.turn_sign
+    )

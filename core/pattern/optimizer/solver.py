@@ -30,6 +30,7 @@ spare guarded factorisations (:class:`.guard.GuardedFactors`: symbolic
 analysis reused only); every call takes its configuration (default: the
 solver's) and seam plan, so no call changes a later one's result.
 """
+
 from __future__ import annotations
 
 import functools
@@ -43,33 +44,49 @@ from ...geom.strain import components, intrinsic_offsets
 from ...progress import Progress, report
 from .. import accel
 from ..accel import compiled
+from ..accel.products import GradientProducts
 from ..build import SolveResult, solve_result
 from ..config import SolverConfig, check_tolerance
+from ..validate import body_positions, validate_cut
+from .dart_gaps import GapCorrection, dart_legs
 from .factor import SymmetricFactor
 from .feedback import feedback_gains, move_corrections
 from .guard import COLLAPSE_ROUNDS, RESCUE_ITERATIONS, GuardedFactors, refused, renew_guard, rescuing, round_guard
 from .panels import flatten_panels
-from ..accel.products import GradientProducts
-from .dart_gaps import GapCorrection, dart_legs
 from .seams import SeamPlan, plan_seams, seam_layout, seam_matrix, seam_rhs
 from .start import pattern_start
 from .state import SolveState
-from .steps import (any_collapsed, collapse_guard, face_neighbourhood, flip_guard, inverse_offsets, local_step,
-                    opened_jacobians, realign_grain, regulariser_energy, rhs_terms, rigid_align, scaled_start)
+from .steps import (
+    any_collapsed,
+    collapse_guard,
+    face_neighbourhood,
+    flip_guard,
+    inverse_offsets,
+    local_step,
+    opened_jacobians,
+    realign_grain,
+    regulariser_energy,
+    rhs_terms,
+    rigid_align,
+    scaled_start,
+)
 from .targets import adaptation_scales, reference_ease, rest_targets
-from ..validate import body_positions, validate_cut
+
 
 def _with_solvers_choice(method):
     """``method`` runs its steps compiled or not as the solver chose when it was built (``self.kernels``)."""
+
     @functools.wraps(method)
     def run(self, *args, **kwargs):
         with compiled.chosen(self.kernels):
             return method(self, *args, **kwargs)
+
     return run
 
 
 #: Weight of each panel's translation pin, relative to its mean diagonal entry.
 PIN_WEIGHT = 1e-6
+
 
 class PatternSolver:
     """Local-global ease optimizer over all panels of a cut, factorised once.
@@ -82,8 +99,9 @@ class PatternSolver:
     progress : optional progress callback of the flattening.
     """
 
-    def __init__(self, cut, body_vertices: np.ndarray, config: Optional[SolverConfig] = None,
-                 progress: Optional[Progress] = None):
+    def __init__(
+        self, cut, body_vertices: np.ndarray, config: Optional[SolverConfig] = None, progress: Optional[Progress] = None
+    ):
         validate_cut(cut)
         self.cut = cut
         self.config = config or SolverConfig.improved()
@@ -152,8 +170,13 @@ class PatternSolver:
         ease = reference_ease(self.design_ease, ease)
         return K, ease.copy(), np.ones_like(ease)
 
-    def targets_adapt(self, pose_positions: Sequence[np.ndarray], eps_weft: float, eps_warp: float,
-                      config: Optional[SolverConfig] = None):
+    def targets_adapt(
+        self,
+        pose_positions: Sequence[np.ndarray],
+        eps_weft: float,
+        eps_warp: float,
+        config: Optional[SolverConfig] = None,
+    ):
         """Targets of Eq. material-scale: per direction max(rho sigma_ref, max_i sigma_i / eps)."""
         cfg = config or self.config
         eps_weft = check_tolerance("eps_weft", eps_weft)
@@ -172,18 +195,28 @@ class PatternSolver:
                 cg = np.maximum(cg, S @ cg)
         return K, cw, cg
 
-    def pose_demands(self, pose_positions: Sequence[np.ndarray], eps_weft: float, eps_warp: float,
-                     config: Optional[SolverConfig] = None) -> dict:
+    def pose_demands(
+        self,
+        pose_positions: Sequence[np.ndarray],
+        eps_weft: float,
+        eps_warp: float,
+        config: Optional[SolverConfig] = None,
+    ) -> dict:
         """What adaptation solves feed back on (see :meth:`solve`): the poses' intrinsic offsets and tolerances."""
         cfg = config or self.config
-        return {"offsets": [components(self.offsets(P)[0]) for P in pose_positions],
-                "ease_weft": self.design_ease.copy(), "ease_warp": np.ones(len(self.gfaces)),
-                "eps_weft": check_tolerance("eps_weft", eps_weft), "eps_warp": check_tolerance("eps_warp", eps_warp),
-                "margin": 1.0 + cfg.adaptation.margin}
+        return {
+            "offsets": [components(self.offsets(P)[0]) for P in pose_positions],
+            "ease_weft": self.design_ease.copy(),
+            "ease_warp": np.ones(len(self.gfaces)),
+            "eps_weft": check_tolerance("eps_weft", eps_weft),
+            "eps_warp": check_tolerance("eps_warp", eps_warp),
+            "margin": 1.0 + cfg.adaptation.margin,
+        }
 
     # ------------------------------------------------------------------ seam plan
-    def plan_seams(self, K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray,
-                   config: Optional[SolverConfig] = None) -> SeamPlan:
+    def plan_seams(
+        self, K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray, config: Optional[SolverConfig] = None
+    ) -> SeamPlan:
         """The seam plan of targets ``diag(c) K`` (:func:`core.pattern.optimizer.seams.plan_seams`)."""
         return plan_seams(self.cut, self.seams, self.uv0, K, c_weft, c_warp, config or self.config)
 
@@ -228,12 +261,21 @@ class PatternSolver:
     @staticmethod
     def _factor_key(cfg: SolverConfig, plan: SeamPlan) -> tuple:
         w = cfg.weights
-        return (w.ease, w.regulariser, w.seam_length, w.seam_straight, w.seam_curve, w.warp_column, w.sliver,
-                plan.gathered)
+        return (
+            w.ease,
+            w.regulariser,
+            w.seam_length,
+            w.seam_straight,
+            w.seam_curve,
+            w.warp_column,
+            w.sliver,
+            plan.gathered,
+        )
 
     @_with_solvers_choice
-    def guarded_factorisation(self, config: Optional[SolverConfig], plan: SeamPlan, gain: np.ndarray,
-                              reuse: Optional[SymmetricFactor] = None) -> SymmetricFactor:
+    def guarded_factorisation(
+        self, config: Optional[SolverConfig], plan: SeamPlan, gain: np.ndarray, reuse: Optional[SymmetricFactor] = None
+    ) -> SymmetricFactor:
         """The factorisation of the system matrix with the collapse guard's triangles stiffened.
 
         ``gain`` (f,): triangle ``t``'s ease + regulariser weight is multiplied
@@ -252,8 +294,9 @@ class PatternSolver:
         """
         cfg = config or self.config
         base, _ = self.factorisation(cfg, plan)
-        return self._guarded.factorise(self._factor_key(cfg, plan), base, cfg.weights, self.area_weights(cfg), gain,
-                                       reuse=reuse)
+        return self._guarded.factorise(
+            self._factor_key(cfg, plan), base, cfg.weights, self.area_weights(cfg), gain, reuse=reuse
+        )
 
     def release(self, state: "SolveState") -> None:
         """Give ``state``'s guarded factorisation to the next solve of the same matrix
@@ -266,7 +309,7 @@ class PatternSolver:
         """The fixed system matrix (both pattern coordinates): ease + regulariser (one operator), the seam
         terms, and the gauge pins (returned apart, (n, 2): they also enter every right-hand side)."""
         w = cfg.weights
-        W2 = np.array([1.0, w.warp_column ** 2])
+        W2 = np.array([1.0, w.warp_column**2])
         a = (w.ease + w.regulariser) * self.area_weights(cfg)
         L = (self._GxT @ sp.diags(a * W2[0]) @ self._Gx + self._GyT @ sp.diags(a * W2[1]) @ self._Gy).tocsr()
         L = seam_matrix(self.seams, cfg, plan, L)
@@ -301,10 +344,18 @@ class PatternSolver:
         return intrinsic_offsets(np.concatenate([x[pd.faces] for x, pd in zip(xyz, self.panels)]), self.blocks.G)
 
     # ------------------------------------------------------------------ iterations
-    def solve(self, K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray, start: Optional[np.ndarray] = None,
-              positions: Optional[np.ndarray] = None, progress: Optional[Progress] = None,
-              poses: Optional[dict] = None, plan: Optional[SeamPlan] = None,
-              config: Optional[SolverConfig] = None) -> SolveResult:
+    def solve(
+        self,
+        K: np.ndarray,
+        c_weft: np.ndarray,
+        c_warp: np.ndarray,
+        start: Optional[np.ndarray] = None,
+        positions: Optional[np.ndarray] = None,
+        progress: Optional[Progress] = None,
+        poses: Optional[dict] = None,
+        plan: Optional[SeamPlan] = None,
+        config: Optional[SolverConfig] = None,
+    ) -> SolveResult:
         """Run the local-global iterations towards targets ``diag(c_weft, c_warp) K`` (module docstring).
 
         Per iteration: the local step (closed-form rotations, all triangles at
@@ -329,8 +380,7 @@ class PatternSolver:
         plan : the seam plan (default: :meth:`plan_seams` of these targets).
         config : this call's configuration (default: the solver's).
         """
-        state = self.begin(K, c_weft, c_warp, start=start, positions=positions, poses=poses, plan=plan,
-                           config=config)
+        state = self.begin(K, c_weft, c_warp, start=start, positions=positions, poses=poses, plan=plan, config=config)
         self.iterate(state, state.planned, progress)
         while True:
             more = self.extra_iterations(state)
@@ -342,10 +392,18 @@ class PatternSolver:
         return self.result(state)
 
     @_with_solvers_choice
-    def begin(self, K: np.ndarray, c_weft: np.ndarray, c_warp: np.ndarray, start: Optional[np.ndarray] = None,
-              positions: Optional[np.ndarray] = None, poses: Optional[dict] = None,
-              plan: Optional[SeamPlan] = None, config: Optional[SolverConfig] = None,
-              resume: Optional["SolveState"] = None) -> "SolveState":
+    def begin(
+        self,
+        K: np.ndarray,
+        c_weft: np.ndarray,
+        c_warp: np.ndarray,
+        start: Optional[np.ndarray] = None,
+        positions: Optional[np.ndarray] = None,
+        poses: Optional[dict] = None,
+        plan: Optional[SeamPlan] = None,
+        config: Optional[SolverConfig] = None,
+        resume: Optional["SolveState"] = None,
+    ) -> "SolveState":
         """The state of a solve before its first iteration (arguments as :meth:`solve`).
 
         ``resume``: a state of an earlier solve of this solver to continue from
@@ -371,13 +429,22 @@ class PatternSolver:
         adapting = poses is not None
         ad = cfg.adaptation
         state = SolveState(
-            K=K, c_weft=c_weft, c_warp=c_warp, plan=plan, config=cfg, poses=poses,
+            K=K,
+            c_weft=c_weft,
+            c_warp=c_warp,
+            plan=plan,
+            config=cfg,
+            poses=poses,
             positions=self.ref_positions if positions is None else positions,
             planned=max(int(cfg.iterations), int(ad.min_iterations)) if adapting else int(cfg.iterations),
-            U=U, M=self.jacobians(U), corr_w=np.ones(nf), corr_g=np.ones(nf),
+            U=U,
+            M=self.jacobians(U),
+            corr_w=np.ones(nf),
+            corr_g=np.ones(nf),
             guard=np.zeros(nf),
             integral=np.zeros(len(self.seams.edge_start)),
-            tg=rest_targets(K, c_weft, c_warp, cfg.rest_shape.model))
+            tg=rest_targets(K, c_weft, c_warp, cfg.rest_shape.model),
+        )
         if resume is not None:
             state.corr_w, state.corr_g = resume.corr_w.copy(), resume.corr_g.copy()
             state.guard = resume.guard.copy()
@@ -401,7 +468,7 @@ class PatternSolver:
         t0 = time.perf_counter()
         lu, pin = self.factorisation(cfg, state.plan)
         a = self.area_weights(cfg)
-        W2 = np.array([1.0, cfg.weights.warp_column ** 2])
+        W2 = np.array([1.0, cfg.weights.warp_column**2])
         poses = state.poses
         adapting = poses is not None
         gain_w, gain_g, _, _, _ = feedback_gains(cfg, adapting)
@@ -419,7 +486,7 @@ class PatternSolver:
         targets_finite = None if adapting else np.isfinite(c_weft) & np.isfinite(c_warp)
         lam_ease, lam_reg = cfg.weights.ease, cfg.weights.regulariser
         pinned = np.flatnonzero(pin[:, 0])
-        warp_from = None    # the last rest targets while their warp products hold (rest_targets' warp_from)
+        warp_from = None  # the last rest targets while their warp products hold (rest_targets' warp_from)
         n_it = int(iterations)
         for k in range(n_it):
             it = state.iteration
@@ -437,19 +504,24 @@ class PatternSolver:
                 warp_from = None if gain_g > 0 else tg
             RT, Te = local_step(cfg, M, tg, W2, state.local_state)
             state.energies.append(regulariser_energy(a, M, RT, W2))
-            B = rhs_terms(RT, Te, lam_reg, lam_ease)   # lambda_reg R T + lambda_ease T (RT's arrays may be reused)
+            B = rhs_terms(RT, Te, lam_reg, lam_ease)  # lambda_reg R T + lambda_ease T (RT's arrays may be reused)
             solve_k, aw_k = lu, aw
             if guarding:
                 # triangles near collapse: stiffened and pulled towards their opened shape
-                q, guarded = collapse_guard(round_guard(cfg.guard, extra, state.planned), M, Kc, c_weft, c_warp,
-                                            state.guard, Kinv)
+                q, guarded = collapse_guard(
+                    round_guard(cfg.guard, extra, state.planned), M, Kc, c_weft, c_warp, state.guard, Kinv
+                )
                 held = state.guard_held
                 if not guarded.size:
-                    held = None                      # the shared factorisation again, at no cost
-                elif state.guard_solve is None or held is None or renew_guard(
-                        *(x[np.union1d(guarded, np.flatnonzero(held > 0))] for x in (state.guard, held))):
-                    state.guard_solve = self.guarded_factorisation(cfg, state.plan, state.guard,
-                                                                   reuse=state.guard_solve)
+                    held = None  # the shared factorisation again, at no cost
+                elif (
+                    state.guard_solve is None
+                    or held is None
+                    or renew_guard(*(x[np.union1d(guarded, np.flatnonzero(held > 0))] for x in (state.guard, held)))
+                ):
+                    state.guard_solve = self.guarded_factorisation(
+                        cfg, state.plan, state.guard, reuse=state.guard_solve
+                    )
                     held = state.guard.copy()
                 state.guard_held = held
                 if held is not None:
@@ -463,11 +535,11 @@ class PatternSolver:
                     aw_k = (aw[0] * stiff,) * 2 if unit_columns else (aw[0] * stiff, aw[1] * stiff)
             # the seams' part (a new array) plus the triangles' (x + y is y + x); the pins only where they are
             rhs = seam_rhs(self.seams, U, cfg, state.plan, integral)
-            for j in range(4):      # the weighted right-hand side, in B's arrays
+            for j in range(4):  # the weighted right-hand side, in B's arrays
                 np.multiply(aw_k[j % 2], B[j], out=B[j])
-            self._products.add_rhs(rhs, B)      # rhs[:, 0] += GxT B0 + GyT B1, rhs[:, 1] += GxT B2 + GyT B3
+            self._products.add_rhs(rhs, B)  # rhs[:, 0] += GxT B0 + GyT B1, rhs[:, 1] += GxT B2 + GyT B3
             rhs[pinned] += pin[pinned] * U[pinned]
-            U_new = self.gaps.correct(lu, solve_k(rhs))     # darts' legs kept apart (dart_gaps)
+            U_new = self.gaps.correct(lu, solve_k(rhs))  # darts' legs kept apart (dart_gaps)
             # the step's rigid part per panel carries no strain: remove it so that the flip
             # guard only ever pulls back the local part of the step
             U_new = rigid_align(self.blocks, U_new, U)
@@ -508,8 +580,9 @@ class PatternSolver:
     def collapsing(self, state: "SolveState") -> bool:
         """Whether ``state``'s iterate has a collapsed triangle (:func:`.steps.any_collapsed`) while its
         configuration guards against collapse."""
-        return state.config.guard.guard_scale > 0 and any_collapsed(state.M, components(state.K), state.c_weft,
-                                                                    state.c_warp)
+        return state.config.guard.guard_scale > 0 and any_collapsed(
+            state.M, components(state.K), state.c_weft, state.c_warp
+        )
 
     @_with_solvers_choice
     def result(self, state: "SolveState") -> SolveResult:

@@ -1,4 +1,5 @@
 """A solve's start from an earlier pattern of the same cut (:func:`pattern_start`)."""
+
 from __future__ import annotations
 
 from typing import Optional, Sequence, Tuple
@@ -6,9 +7,13 @@ from typing import Optional, Sequence, Tuple
 import numpy as np
 
 
-def pattern_start(blocks, uv: Sequence[np.ndarray], uv0: np.ndarray,
-                  offsets: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None,
-                  own: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None) -> np.ndarray:
+def pattern_start(
+    blocks,
+    uv: Sequence[np.ndarray],
+    uv0: np.ndarray,
+    offsets: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None,
+    own: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None,
+) -> np.ndarray:
     """The unknowns (n, 2) of a flip-free pattern, each piece re-centred on its initial position.
 
     Parameters

@@ -1,4 +1,5 @@
 """The state of a pattern solve between iterations: a value passed to the solver, never kept on it."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -33,6 +34,7 @@ class SolveState:
     step : RMS vertex move of the last iteration over the mean edge length (inf before the first).
     seconds : wall time spent in :meth:`~PatternSolver.begin` and :meth:`~PatternSolver.iterate`.
     """
+
     K: np.ndarray
     c_weft: np.ndarray
     c_warp: np.ndarray

@@ -12,6 +12,7 @@
 Jacobians ``M`` are 4 (f,) arrays m00, m01, m10, m11 (pattern coordinate
 ``i`` along initial axis ``j``); 2x2 targets likewise (:func:`core.geom.strain.components`).
 """
+
 from __future__ import annotations
 
 from typing import List, Optional, Tuple
@@ -65,8 +66,12 @@ def local_step(config: SolverConfig, M: list, tg: dict, W2: np.ndarray, state: d
     T = tg["T"]
     kp = state.get("_kprod")
     if kp is None or kp[0] is not k or not np.array_equal(kp[1], W2):
-        kp = (k, W2.copy(), W2[0] * k[0] ** 2 + W2[1] * k[1] ** 2 - W2[0] * k[2] ** 2 - W2[1] * k[3] ** 2,
-              W2[0] * k[0] * k[2] + W2[1] * k[1] * k[3])
+        kp = (
+            k,
+            W2.copy(),
+            W2[0] * k[0] ** 2 + W2[1] * k[1] ** 2 - W2[0] * k[2] ** 2 - W2[1] * k[3] ** 2,
+            W2[0] * k[0] * k[2] + W2[1] * k[1] * k[3],
+        )
         state["_kprod"] = kp
     Cdiff, C01 = kp[2], kp[3]
     free = rest.warp_slack > 0
@@ -80,8 +85,7 @@ def local_step(config: SolverConfig, M: list, tg: dict, W2: np.ndarray, state: d
             return done[0], done[1]
     dw = d1 if sw is None else d1 * sw
     om = rest.warp_row
-    m0, m1, m2, m3 = M if (W2[0] == 1.0 and W2[1] == 1.0) else (W2[0] * M[0], W2[1] * M[1], W2[0] * M[2],
-                                                                 W2[1] * M[3])
+    m0, m1, m2, m3 = M if (W2[0] == 1.0 and W2[1] == 1.0) else (W2[0] * M[0], W2[1] * M[1], W2[0] * M[2], W2[1] * M[3])
     omdw = om * dw
     # x, y: the trace and skew parts of A = D Omega M W K'^T; the best angle without anisotropy
     x = d0 * (m0 * k[0] + m1 * k[1]) + omdw * (m2 * k[2] + m3 * k[3])
@@ -90,7 +94,7 @@ def local_step(config: SolverConfig, M: list, tg: dict, W2: np.ndarray, state: d
     ok = r > 0
     if ok.all():
         c, sn = x / r, y / r
-    else:            # A = 0: no rotation to find (the identity)
+    else:  # A = 0: no rotation to find (the identity)
         rs = np.where(ok, r, 1.0)
         c, sn = np.where(ok, x / rs, 1.0), np.where(ok, y / rs, 0.0)
     delta = (d0 * d0 - omdw * dw) * 0.5
@@ -98,20 +102,20 @@ def local_step(config: SolverConfig, M: list, tg: dict, W2: np.ndarray, state: d
         # one Newton step on f(theta) from the polar angle: f' = g1, f'' = g2 at theta
         p = delta * Cdiff
         q = -2.0 * delta * C01
-        c2 = c * c - sn * sn                         # cos 2 theta
-        s2 = 2.0 * c * sn                            # sin 2 theta
+        c2 = c * c - sn * sn  # cos 2 theta
+        s2 = 2.0 * c * sn  # sin 2 theta
         g1 = (x * sn - y * c) * 2.0 - 2.0 * p * s2 + 2.0 * q * c2
         g2 = 2.0 * r - 4.0 * p * c2 - 4.0 * q * s2
         pos = g2 > 0
         step = -g1 / g2 if pos.all() else np.where(pos, -g1 / np.where(pos, g2, 1.0), 0.0)
-        nrm = np.sqrt(step * step + 1.0)             # the angle's tangent step, back on the circle
+        nrm = np.sqrt(step * step + 1.0)  # the angle's tangent step, back on the circle
         c, sn = (c - sn * step) / nrm, (c * step + sn) / nrm
-    rk = [c * k[0] - sn * k[2], c * k[1] - sn * k[3], sn * k[0] + c * k[2], sn * k[1] + c * k[3]]    # R K'
+    rk = [c * k[0] - sn * k[2], c * k[1] - sn * k[3], sn * k[0] + c * k[2], sn * k[1] + c * k[3]]  # R K'
     if free:
         p0, p1 = d1 * rk[2], d1 * rk[3]
         num = m2 * p0
         num += m3 * p1
-        unit = W2[0] == 1.0 and W2[1] == 1.0     # products by 1 skipped: the same values
+        unit = W2[0] == 1.0 and W2[1] == 1.0  # products by 1 skipped: the same values
         den = p0 * p0 if unit else W2[0] * p0 * p0
         den += p1 * p1 if unit else W2[1] * p1 * p1
         sw = np.clip(num / np.maximum(den, 1e-300, out=den), lo, hi, out=num)
@@ -140,7 +144,7 @@ def rhs_terms(RT: list, T: list, lam_reg: float, lam_ease: float) -> list:
         return B
     B = [RT[j] if lam_reg == 1.0 else np.multiply(lam_reg, RT[j], out=RT[j]) for j in range(4)]
     for j in range(4):
-        B[j] += lam_ease * T[j]        # x + y is y + x: the same sums
+        B[j] += lam_ease * T[j]  # x + y is y + x: the same sums
     return B
 
 
@@ -226,7 +230,7 @@ def flip_guard(blocks: PanelBlocks, U_old: np.ndarray, U_new: np.ndarray, s_old:
     faces = None
     D = U_new - U_old
     for _ in range(GUARD_ROUNDS):
-        if faces is not None:       # the first round's bad triangles are those found above
+        if faces is not None:  # the first round's bad triangles are those found above
             s = face_areas(blocks, U, faces)
             bad = faces[s <= floor[faces]]
             if bad.size == 0:
@@ -306,7 +310,7 @@ def realign_grain(blocks: PanelBlocks, U: np.ndarray, M: List[np.ndarray]):
     votes = compiled.grain_votes(M, wx, wy, blocks.warp_vote)
     if votes is None:
         t = M[1] * wy
-        ix = M[0] * wx                          # the current 2D image of the warp: M w
+        ix = M[0] * wx  # the current 2D image of the warp: M w
         ix += t
         iy = M[2] * wx
         iy += np.multiply(M[3], wy, out=t)
@@ -386,6 +390,7 @@ def face_neighbourhood(panels, area0: np.ndarray):
     vertex with it (across seams too: a seam vertex is one cut vertex), rows summing to 1.
     ``panels``: the stacked :class:`~.panels.PanelData`; ``area0`` (f,) their flattening's areas."""
     import scipy.sparse as sp
+
     ids = np.concatenate([pd.vertex_ids[pd.faces] for pd in panels])
     f = len(ids)
     inc = sp.csr_matrix((np.ones(3 * f), (np.repeat(np.arange(f), 3), ids.ravel())), shape=(f, int(ids.max()) + 1))
@@ -395,8 +400,9 @@ def face_neighbourhood(panels, area0: np.ndarray):
     return (sp.diags(1.0 / np.asarray(A.sum(axis=1)).ravel()) @ A).tocsr()
 
 
-def collapse_guard(guard: CollapseGuard, M: list, Kc: list, c_weft: np.ndarray, c_warp: np.ndarray,
-                   gain: np.ndarray, inverse=None) -> list:
+def collapse_guard(
+    guard: CollapseGuard, M: list, Kc: list, c_weft: np.ndarray, c_warp: np.ndarray, gain: np.ndarray, inverse=None
+) -> list:
     """The collapse guard's gains of one iteration (:class:`~core.pattern.config.CollapseGuard`).
 
     A triangle whose smaller relative singular value
@@ -419,7 +425,7 @@ def collapse_guard(guard: CollapseGuard, M: list, Kc: list, c_weft: np.ndarray, 
     # a degenerate body triangle has no shape to keep; a non-finite iterate is the flip guard's to refuse
     # (s1 = a + b and s2 = a - b of two hypotenuses: s1 finite makes s2 finite)
     valid = inverse[1] & np.isfinite(s1)
-    np.multiply(gain, valid, out=gain)      # 0 where not valid (gains are finite, >= 0)
+    np.multiply(gain, valid, out=gain)  # 0 where not valid (gains are finite, >= 0)
     low = np.flatnonzero(valid & (s2 < guard.guard_scale))
     if np.any(gain[low] < guard.guard_limit):
         gain[low] = np.minimum(np.maximum(gain[low] * guard.guard_grow, 1.0), guard.guard_limit)
@@ -432,8 +438,9 @@ def collapse_guard(guard: CollapseGuard, M: list, Kc: list, c_weft: np.ndarray, 
     return q, held
 
 
-def opened_jacobians(guard_open: float, q: list, idx: np.ndarray, Kc: list, c_weft: np.ndarray,
-                     c_warp: np.ndarray) -> list:
+def opened_jacobians(
+    guard_open: float, q: list, idx: np.ndarray, Kc: list, c_weft: np.ndarray, c_warp: np.ndarray
+) -> list:
     """The Jacobians (4 (k,) arrays) triangles ``idx`` are pulled towards: their relative Jacobians
     ``q`` (:func:`collapse_guard`) with the signed singular values clamped from below at
     ``guard_open`` (rotation and shear kept; a flipped one unfolded), back in pattern terms. A
@@ -442,5 +449,9 @@ def opened_jacobians(guard_open: float, q: list, idx: np.ndarray, Kc: list, c_we
     o = clamp_singular_values_below([x[idx] for x in q], guard_open)
     k = [x[idx] for x in Kc]
     cw, cg = c_weft[idx], c_warp[idx]
-    return [cw * (o[0] * k[0] + o[1] * k[2]), cw * (o[0] * k[1] + o[1] * k[3]),
-            cg * (o[2] * k[0] + o[3] * k[2]), cg * (o[2] * k[1] + o[3] * k[3])]
+    return [
+        cw * (o[0] * k[0] + o[1] * k[2]),
+        cw * (o[0] * k[1] + o[1] * k[3]),
+        cg * (o[2] * k[0] + o[3] * k[2]),
+        cg * (o[2] * k[1] + o[3] * k[3]),
+    ]

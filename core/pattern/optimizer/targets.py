@@ -7,6 +7,7 @@ offsets (:func:`core.geom.strain.intrinsic_offsets`) and target scales
 - reference / transfer: ``c = (rho_weft, 1)`` on the reference or the target body;
 - adaptation: per direction ``max(rho sigma_ref, max_i (1 + margin) sigma_i / eps)`` over the poses.
 """
+
 from __future__ import annotations
 
 from typing import Optional, Sequence
@@ -17,8 +18,9 @@ from ...errors import PatternError
 from ...geom.strain import components
 
 
-def rest_targets(K, c_weft: np.ndarray, c_warp: Optional[np.ndarray], model: str,
-                 warp_from: Optional[dict] = None) -> dict:
+def rest_targets(
+    K, c_weft: np.ndarray, c_warp: Optional[np.ndarray], model: str, warp_from: Optional[dict] = None
+) -> dict:
     """Ease target ``T`` and the regulariser's rest shape ``diag(D) R K'``, as component arrays.
 
     ``K``: the intrinsic offsets (f, 2, 2), or their 4 components (f,)
@@ -64,9 +66,17 @@ def reference_ease(design_ease: np.ndarray, ease=None) -> np.ndarray:
     return ease
 
 
-def adaptation_scales(ease: np.ndarray, len_weft: np.ndarray, len_warp: np.ndarray,
-                      pose_lengths: Sequence[tuple], eps_weft: float, eps_warp: float, margin: float,
-                      cap_weft: float = np.inf, cap_warp: float = np.inf):
+def adaptation_scales(
+    ease: np.ndarray,
+    len_weft: np.ndarray,
+    len_warp: np.ndarray,
+    pose_lengths: Sequence[tuple],
+    eps_weft: float,
+    eps_warp: float,
+    margin: float,
+    cap_weft: float = np.inf,
+    cap_warp: float = np.inf,
+):
     """Target scales (c_weft, c_warp) (f,) of Eq. material-scale.
 
     Parameters
