@@ -19,17 +19,42 @@ click, the grain line and the piece layout come from ``core.body.surface`` and
 ``core.geom.layout``, the pattern, drape and export from :mod:`core.workflows`,
 reached with relative imports (``from ..core import workflows``).
 """
+
 from __future__ import annotations
 
 import bpy
 
-from . import (body_ops, design_ops, drape_ops, ease_ops, export_ops, fit_ops, live, marker_ops, motion_ops,
-               panels, pattern_ops, properties, render_ops, state)
+from . import (
+    body_ops,
+    design_ops,
+    drape_ops,
+    ease_ops,
+    export_ops,
+    fit_ops,
+    live,
+    marker_ops,
+    motion_ops,
+    panels,
+    pattern_ops,
+    properties,
+    render_ops,
+    state,
+)
 
-CLASSES = (properties.CLASSES + body_ops.CLASSES + design_ops.CLASSES + ease_ops.CLASSES
-           + pattern_ops.CLASSES + fit_ops.CLASSES + drape_ops.CLASSES + motion_ops.CLASSES + render_ops.CLASSES
-           + export_ops.CLASSES + marker_ops.CLASSES
-           + panels.CLASSES)
+CLASSES = (
+    properties.CLASSES
+    + body_ops.CLASSES
+    + design_ops.CLASSES
+    + ease_ops.CLASSES
+    + pattern_ops.CLASSES
+    + fit_ops.CLASSES
+    + drape_ops.CLASSES
+    + motion_ops.CLASSES
+    + render_ops.CLASSES
+    + export_ops.CLASSES
+    + marker_ops.CLASSES
+    + panels.CLASSES
+)
 
 _register_classes, _unregister_classes = bpy.utils.register_classes_factory(CLASSES)
 

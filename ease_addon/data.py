@@ -6,6 +6,7 @@ stored pattern (``scene["ease_pattern_json"]``), the ease ramp range, the
 draped garment's positions. Every operator and reaction reads the scene
 through here; nothing here writes to it.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -16,11 +17,13 @@ import numpy as np
 from . import convert, ramp, state
 from .objects import objects_with_role
 
-PATTERN_KEY = "ease_pattern_json"   # scene property holding pattern.json
-VERTEX_ID = "ease_vertex_id"        # garment mesh layer: the pattern's vertex id of each vertex
+PATTERN_KEY = "ease_pattern_json"  # scene property holding pattern.json
+VERTEX_ID = "ease_vertex_id"  # garment mesh layer: the pattern's vertex id of each vertex
+MOTION_GARMENT = "EASE Motion Garment"  # the garment of Drape Animation (motion_ops), what Export Alembic writes
 
 
 # ----------------------------------------------------------------------------- body
+
 
 def body_object(context, required: bool = True):
     """The scene's body object; None (or AddonError when ``required``) if there is none."""
@@ -34,14 +37,17 @@ def body_object(context, required: bool = True):
 
 def body_spec(obj) -> dict:
     """``{"model", "shape", "pose"}`` stored on the body object."""
-    return {"model": obj.get("ease_model", "anny"),
-            "shape": convert.load_json(obj, "ease_shape", {}) or {},
-            "pose": obj.get("ease_pose", "A")}
+    return {
+        "model": obj.get("ease_model", "anny"),
+        "shape": convert.load_json(obj, "ease_shape", {}) or {},
+        "pose": obj.get("ease_pose", "A"),
+    }
 
 
 def keypoint_positions(obj, verts) -> tuple:
     """(names, (K, 3) positions) of the keypoints stored on the body mesh, on vertices ``verts``."""
     from ..core.body.model import SurfacePoint
+
     kps = convert.read_keypoints(obj.data)
     faces = convert.get_triangles(obj.data)
     pts = np.array([SurfacePoint(t, b).position(verts, faces) for t, b in kps.values()]).reshape(-1, 3)
@@ -52,6 +58,7 @@ def measurements(model, shape) -> dict:
     """Height and girths (cm) of ``model`` at ``shape`` in its reference pose."""
     from ..core.body.instance import body_instance
     from ..core.body.measure import measure
+
     return measure(model, body_instance(model, shape or None))
 
 
@@ -65,9 +72,11 @@ def format_measurements(m: dict) -> str:
 
 # ----------------------------------------------------------------------------- design and cut
 
+
 def current_design(context):
     """The scene's design as a validated :class:`core.design.Design`."""
     from ..core.design import load_design
+
     text = context.scene.ease.design_json
     if not text:
         raise state.AddonError("no design loaded: load a template or a design file in EASE > Design")
@@ -100,6 +109,7 @@ def design_chart(scene) -> str:
 def chart_sizes(chart: str) -> tuple:
     """The size names of ``chart`` in size order (the presets the panels offer on it)."""
     from ..core.body.sizes import chart_sizes as sizes
+
     return sizes(chart)
 
 
@@ -107,6 +117,7 @@ def all_sizes() -> list:
     """Every size name of every chart, in size order (the default chart's first, then what the
     others add: XS .. 4XL)."""
     from ..core.body.sizes import CHARTS
+
     return list(dict.fromkeys(z for c in CHARTS.values() for z in c.sizes))
 
 
@@ -126,15 +137,18 @@ def _design_head(scene) -> dict:
     design JSON (megabytes with a painted field) is parsed once per text."""
     from ..core.body.sizes import DEFAULT_CHART
     from ..core.workflows import config_name
+
     text = scene.ease.design_json
     if _DESIGN_SEEN[0] != text:
         d = json.loads(text) if text else {}
-        _DESIGN_SEEN[:] = [text, {"solver": config_name(d),
-                                  "chart": (d.get("body") or {}).get("chart") or DEFAULT_CHART}]
+        _DESIGN_SEEN[:] = [
+            text,
+            {"solver": config_name(d), "chart": (d.get("body") or {}).get("chart") or DEFAULT_CHART},
+        ]
     return _DESIGN_SEEN[1]
 
 
-_DESIGN_SEEN = [None, None]     # (design text, what _design_head read of it)
+_DESIGN_SEEN = [None, None]  # (design text, what _design_head read of it)
 
 
 def cut_on(design, model_name: str, shape: dict):
@@ -146,6 +160,7 @@ def cut_on(design, model_name: str, shape: dict):
     """
     from ..core.body.instance import instance_shape
     from ..core.cut import cut_design
+
     key = (design_text(design), model_name, json.dumps(shape or {}, sort_keys=True))
     cached = state.CUTS.get(key)
     if cached is not None:
@@ -154,7 +169,7 @@ def cut_on(design, model_name: str, shape: dict):
     own = instance_shape(model, design.body.get("shape"))
     same = model_name == design.body.get("model", "anny") and full_shape(model, own) == full_shape(model, shape)
     cut = cut_design(design, body=model, shape=None if same else (dict(shape) if shape else None))
-    state.CUTS.clear()        # one cut per session is plenty; keeps memory bounded
+    state.CUTS.clear()  # one cut per session is plenty; keeps memory bounded
     state.CUTS[key] = cut
     return cut
 
@@ -200,6 +215,7 @@ def resolved_keypoints(design, model, verts) -> dict:
     surface points, placements, traced lengths, ring points) resolved on the
     body instance ``verts`` by the core's resolver."""
     from ..core.design.resolve import Resolver
+
     pts = Resolver(design, model, verts).all_keypoints()
     return {n: (int(sp.triangle), tuple(float(b) for b in sp.bary)) for n, sp in pts.items()}
 
@@ -207,6 +223,7 @@ def resolved_keypoints(design, model, verts) -> dict:
 def template_dir():
     """The folder of the design templates shipped with the core."""
     from ..core.design.templates import template_dir as _dir
+
     return _dir()
 
 
@@ -218,12 +235,14 @@ def template_items():
     they are held in a module list)."""
     d = template_dir()
     files = sorted(p.name for p in d.glob("*.json")) if d.is_dir() else []
-    _TEMPLATE_ITEMS[:] = [(f, f[:-5].replace("_", " "), f"template {f}") for f in files] or \
-        [("NONE", "(no templates)", f"{d} has no designs")]
+    _TEMPLATE_ITEMS[:] = [(f, f[:-5].replace("_", " "), f"template {f}") for f in files] or [
+        ("NONE", "(no templates)", f"{d} has no designs")
+    ]
     return _TEMPLATE_ITEMS
 
 
 # ----------------------------------------------------------------------------- values
+
 
 def as_typed(value) -> float:
     """The value of a single-precision Blender float property as the user typed it: the
@@ -233,20 +252,25 @@ def as_typed(value) -> float:
 
 # ----------------------------------------------------------------------------- files
 
+
 def output_path(path: str, setting: str) -> str:
     """The absolute file or folder ``path`` of the panel setting ``setting`` ("Render to",
     "Export to"); AddonError when it is empty, or relative to the .blend (``//``) while the
     .blend is not saved (Blender would resolve it against the current directory)."""
     import bpy
+
     if not path:
         raise state.AddonError(f"set {setting} first (EASE > Render & Export)")
     if path.startswith("//") and not bpy.data.filepath:
-        raise state.AddonError(f"{setting} {path} is relative to the .blend file, which is not saved: "
-                               f"save the file first or set an absolute path (EASE > Render & Export)")
+        raise state.AddonError(
+            f"{setting} {path} is relative to the .blend file, which is not saved: "
+            f"save the file first or set an absolute path (EASE > Render & Export)"
+        )
     return bpy.path.abspath(path)
 
 
 # ----------------------------------------------------------------------------- ease ramp
+
 
 def ramp_range(scene) -> tuple:
     """(lo, hi) of the scene's ease ramp; AddonError when it is not a valid range."""
@@ -262,6 +286,7 @@ def ramp_range(scene) -> tuple:
 
 # ----------------------------------------------------------------------------- pattern and garment
 
+
 def required_pattern(scene, to: str):
     """The scene's pattern, or AddonError saying what it is needed ``to`` do (``"to export"``)."""
     pattern = stored_pattern(scene)
@@ -273,6 +298,7 @@ def required_pattern(scene, to: str):
 def stored_pattern(scene, key: str = PATTERN_KEY):
     """The pattern kept in the scene (None if there is none); parsed once per text."""
     from ..core.pattern.io import pattern_from_json
+
     text = scene.get(key)
     if not text:
         return None
@@ -295,10 +321,15 @@ def key_figures(pattern) -> dict:
     rep = pattern.report or {}
     m = rep.get("metrics") or {}
     c, sm = m.get("compliance") or {}, m.get("seams") or {}
-    for label, d, k in (("ease compliance mean %", c, "mean"), ("ease compliance std %", c, "std"),
-                        ("warp deviation mean %", c, "warp_mean"), ("warp deviation signed %", c, "warp_signed"),
-                        ("shear p95 deg", c, "shear_p95"), ("seam mismatch mean %", sm, "mean"),
-                        ("seam mismatch max mm", sm, "max_mm")):
+    for label, d, k in (
+        ("ease compliance mean %", c, "mean"),
+        ("ease compliance std %", c, "std"),
+        ("warp deviation mean %", c, "warp_mean"),
+        ("warp deviation signed %", c, "warp_signed"),
+        ("shear p95 deg", c, "shear_p95"),
+        ("seam mismatch mean %", sm, "mean"),
+        ("seam mismatch max mm", sm, "max_mm"),
+    ):
         if isinstance(d.get(k), (int, float)):
             out[label] = round(float(d[k]), 3)
     if sm.get("gathered"):
@@ -344,18 +375,20 @@ def design_with_materials(design, **edits):
     they differ from what the design does now); ``design`` itself when nothing changes."""
     from ..core.design import load_design
     from ..core.design.materials import Materials
+
     materials = Materials.edit(design.materials, **edits)
     if materials == design.materials:
         return design
     d = design.to_json()
     d["materials"] = materials
-    return load_design(d)       # DesignError names the field of an invalid value
+    return load_design(d)  # DesignError names the field of an invalid value
 
 
 def prepared(context, edit=None):
     """The scene's design (``edit(design)`` if given: the panels' settings) cut on the
     scene body, ready for the core's pattern workflows (:class:`core.workflows.Prepared`)."""
     from ..core import workflows as wf
+
     obj = body_object(context)
     design = current_design(context)
     if edit is not None:
@@ -364,6 +397,7 @@ def prepared(context, edit=None):
 
 
 # ----------------------------------------------------------------------------- the painted ease field
+
 
 def layer_range(obj, scene) -> tuple:
     """The ramp range the layer was painted with (stored on the mesh); the
@@ -421,6 +455,7 @@ def symmetrised(obj, tri_ease: np.ndarray) -> np.ndarray:
     """``tri_ease`` (F,) averaged with its mirror image through the body's symmetry map
     (triangles without a mirror triangle keep their value)."""
     from ..core.design.mirror import face_symmetry
+
     model = state.body_model(body_spec(obj)["model"])
     fs = face_symmetry(convert.get_triangles(obj.data), np.asarray(model.symmetry))
     out = np.asarray(tri_ease, dtype=np.float64).copy()
@@ -454,20 +489,21 @@ def element_mirror(me, symmetry) -> np.ndarray:
     vertex symmetry map: a vertex's mirror vertex; a face corner's corner of the mirror face at
     the mirror vertex (-1 where the face has no mirror face)."""
     from ..core.design.mirror import face_symmetry
+
     sym = np.asarray(symmetry)
     if me.color_attributes[convert.EASE_LAYER].domain == "POINT":
         return sym
     faces = convert.get_triangles(me)
     fs = face_symmetry(faces, sym)
-    target = sym[faces]                                   # (F, 3) the mirror vertex of each corner
-    other = faces[np.maximum(fs, 0)]                      # (F, 3) the mirror face's corners
+    target = sym[faces]  # (F, 3) the mirror vertex of each corner
+    other = faces[np.maximum(fs, 0)]  # (F, 3) the mirror face's corners
     j = np.argmax(target[:, :, None] == other[:, None, :], axis=2)
     out = 3 * np.maximum(fs, 0)[:, None] + j
     out[fs < 0] = -1
     return out.ravel()
 
 
-SEEN_LAYER = "ease_seen"     # FLOAT layer beside "ease": its values when the add-on last read or wrote it
+SEEN_LAYER = "ease_seen"  # FLOAT layer beside "ease": its values when the add-on last read or wrote it
 
 
 def seen_ease(obj):

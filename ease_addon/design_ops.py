@@ -8,6 +8,7 @@ cached. Keypoints live on the body mesh as attribute layers (see
 :func:`.convert.write_keypoints`); :func:`.sync.set_design` redraws the
 seamlines and keypoint markers.
 """
+
 from __future__ import annotations
 
 import bpy
@@ -27,6 +28,7 @@ def load_design_into_scene(context, source) -> str:
     """
     from ..core.body.instance import instance_shape
     from ..core.design import load_design
+
     design = load_design(source)
     obj = data.body_object(context, required=False)
     model_name = data.body_spec(obj)["model"] if obj is not None else design.body.get("model", "anny")
@@ -36,7 +38,7 @@ def load_design_into_scene(context, source) -> str:
     before = data.body_spec(obj)["shape"] if obj is not None else {}
     full = dict(model.default_shape())
     full.update({k: float(v) for k, v in (shape or before).items()})
-    data.cut_on(design, model_name, full)          # raises (DesignError/CutError) before any change
+    data.cut_on(design, model_name, full)  # raises (DesignError/CutError) before any change
     # -- the scene changes from here on
     if obj is None:
         obj = sync.new_body(context, model_name, shape=full)
@@ -48,12 +50,13 @@ def load_design_into_scene(context, source) -> str:
     if shape:
         sync.show_size(context.scene, obj, named if isinstance(named, str) else None)
     sync.set_design(context, design)
-    sync.fill_design_props(context.scene, design)     # its gathering, tolerance, allowance and notches
+    sync.fill_design_props(context.scene, design)  # its gathering, tolerance, allowance and notches
     bpy.ops.ease.ease_from_design()
     if not reshaped:
         return ""
-    return f"the body takes the design's size {named}" if isinstance(named, str) else \
-        "the body takes the design's shape"
+    return (
+        f"the body takes the design's size {named}" if isinstance(named, str) else "the body takes the design's shape"
+    )
 
 
 def _design_file(op, context, missing: str) -> str:
@@ -80,6 +83,7 @@ class _LoadDesign(EaseOperator):
 
 class EASE_OT_load_template(_LoadDesign):
     """Load a design template onto the body"""
+
     bl_idname = "ease.load_template"
     bl_label = "Load Template"
 
@@ -95,6 +99,7 @@ class EASE_OT_load_template(_LoadDesign):
 
 class EASE_OT_load_design_file(_LoadDesign):
     """Load a design file (JSON) onto the body"""
+
     bl_idname = "ease.load_design_file"
     bl_label = "Load File"
 
@@ -107,15 +112,17 @@ class EASE_OT_load_design_file(_LoadDesign):
 
 class EASE_OT_save_design(EaseOperator):
     """Write the current design (with its ease) to the design file"""
+
     bl_idname = "ease.save_design"
     bl_label = "Save Design"
-    bl_options = {"REGISTER"}      # writes a file, changes no Blender data: no undo step
-    needs = ('design',)
+    bl_options = {"REGISTER"}  # writes a file, changes no Blender data: no undo step
+    needs = ("design",)
 
     filepath: bpy.props.StringProperty(subtype="FILE_PATH", default="")
 
     def run(self, context):
         from ..core.design import save_design
+
         path = _design_file(self, context, "set a design file to save to")
         save_design(data.current_design(context), path)
         self.report({"INFO"}, f"saved {path}")
@@ -123,9 +130,10 @@ class EASE_OT_save_design(EaseOperator):
 
 class EASE_OT_set_parameter(EaseOperator):
     """Set a design parameter (placement 0..1 or length in metres) and re-cut"""
+
     bl_idname = "ease.set_parameter"
     bl_label = "Set Parameter"
-    needs = ('body', 'design')
+    needs = ("body", "design")
 
     name: bpy.props.StringProperty()
     value: bpy.props.FloatProperty()
@@ -143,9 +151,10 @@ class EASE_OT_set_parameter(EaseOperator):
 
 class EASE_OT_recut(EaseOperator):
     """Apply the parameter values to the design and re-cut it"""
+
     bl_idname = "ease.recut"
     bl_label = "Re-cut"
-    needs = ('body', 'design')
+    needs = ("body", "design")
 
     def run(self, context):
         d = data.current_design(context)
@@ -156,7 +165,7 @@ class EASE_OT_recut(EaseOperator):
                 if d.parameters[item.name].value != value:
                     name = item.name
                     d.set_parameter(item.name, value)
-            name = None     # the values are the design's: a cut that fails is no one slider's
+            name = None  # the values are the design's: a cut that fails is no one slider's
             sync.set_design(context, d)
         except state.USER_ERRORS as exc:
             sync.refuse_param(context, name, exc)
@@ -166,9 +175,10 @@ class EASE_OT_recut(EaseOperator):
 
 class EASE_OT_assign_keypoint(EaseOperator):
     """Place the named keypoint on the selected body vertex (Edit Mode selection)"""
+
     bl_idname = "ease.assign_keypoint"
     bl_label = "Keypoint at Selected Vertex"
-    needs = ('body', 'design')
+    needs = ("body", "design")
 
     name: bpy.props.StringProperty(default="")
     vertex: bpy.props.IntProperty(default=-1, description="vertex index; -1 uses the selection")
@@ -195,6 +205,7 @@ class EASE_OT_assign_keypoint(EaseOperator):
 
 def place_keypoint(context, name, tri, bary, was_edit=False):
     from ..core.body.model import SurfacePoint
+
     d = data.current_design(context)
     d.set_keypoint(name, SurfacePoint(int(tri), tuple(float(b) for b in bary)))
     if was_edit:
@@ -206,6 +217,7 @@ def place_keypoint(context, name, tri, bary, was_edit=False):
 
 class EASE_OT_pick_keypoint(bpy.types.Operator):
     """Click on the body surface to place the named keypoint there"""
+
     bl_idname = "ease.pick_keypoint"
     bl_label = "Pick Keypoint on Surface"
     bl_options = {"REGISTER", "UNDO"}
@@ -236,6 +248,7 @@ class EASE_OT_pick_keypoint(bpy.types.Operator):
 
     def _pick(self, context, event):
         from bpy_extras import view3d_utils
+
         region, rv3d = context.region, context.region_data
         co = (event.mouse_region_x, event.mouse_region_y)
         origin = view3d_utils.region_2d_to_origin_3d(region, rv3d, co)
@@ -248,7 +261,9 @@ def pick_on_surface(context, name, origin, direction):
     meets the body: the clicked surface point as (triangle, barycentric weights).
     Returns the triangle index."""
     from mathutils import Vector
+
     from ..core.body.surface import surface_point_at
+
     obj = data.body_object(context)
     if not name:
         raise state.AddonError("type the keypoint's name first")
@@ -261,5 +276,12 @@ def pick_on_surface(context, name, origin, direction):
     return int(sp.triangle)
 
 
-CLASSES = (EASE_OT_load_template, EASE_OT_load_design_file, EASE_OT_save_design, EASE_OT_set_parameter,
-           EASE_OT_recut, EASE_OT_assign_keypoint, EASE_OT_pick_keypoint)
+CLASSES = (
+    EASE_OT_load_template,
+    EASE_OT_load_design_file,
+    EASE_OT_save_design,
+    EASE_OT_set_parameter,
+    EASE_OT_recut,
+    EASE_OT_assign_keypoint,
+    EASE_OT_pick_keypoint,
+)

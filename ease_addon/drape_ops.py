@@ -5,6 +5,7 @@ fabric material, two fit-map colour layers (strain, gap) and the pattern
 vertex id of each vertex (``ease_vertex_id``, read back by the export); see
 :func:`.build.garment`. The drape and its fit measurements are the core's
 (:func:`core.workflows.drape`)."""
+
 from __future__ import annotations
 
 import json
@@ -16,7 +17,7 @@ from . import build, data, state, sync
 from .objects import window_progress
 from .operators_base import EaseOperator
 
-_JOBS: list = []              # drape jobs running (cancelled on unregister)
+_JOBS: list = []  # drape jobs running (cancelled on unregister)
 
 
 class DrapeJob:
@@ -29,7 +30,7 @@ class DrapeJob:
 
     def __init__(self, pattern, body_v, body_f, frames: int, device: str = "cpu", digest=None):
         self.fraction, self.message = 0.0, "starting"
-        self.digest = digest          # the stored pattern's digest when the drape started
+        self.digest = digest  # the stored pattern's digest when the drape started
         self.result = None
         self.error = None
         self._cancel = threading.Event()
@@ -39,6 +40,7 @@ class DrapeJob:
 
     def _progress(self, fraction, message):
         from ..core.errors import Cancelled
+
         self.fraction, self.message = fraction, message
         if self._cancel.is_set():
             raise Cancelled("drape cancelled")
@@ -82,6 +84,7 @@ def cancel_running() -> None:
 def _pattern_body(pattern):
     """(vertices, faces) of the body instance the pattern was solved on."""
     from ..core.body.instance import spec_instance
+
     spec = pattern.body or {}
     return spec_instance(spec, model=state.body_model(spec.get("model", "anny")))
 
@@ -89,15 +92,18 @@ def _pattern_body(pattern):
 def _compute(pattern, body_v, body_f, frames, progress, device="cpu"):
     """The core's drape of ``pattern`` on the body (V, F) and its fit measurements (a DrapeRun)."""
     from ..core import workflows as wf
-    return wf.drape(pattern, options={"max_frames": int(frames), "device": device}, body=(body_v, body_f),
-                    progress=progress)
+
+    return wf.drape(
+        pattern, options={"max_frames": int(frames), "device": device}, body=(body_v, body_f), progress=progress
+    )
 
 
 class EASE_OT_drape(EaseOperator):
     """Drape the pattern on the body (Esc cancels)"""
+
     bl_idname = "ease.drape"
     bl_label = "Drape"
-    needs = ('pattern',)
+    needs = ("pattern",)
 
     _job = None
     _timer = None
@@ -156,10 +162,11 @@ def apply_drape(context, run, digest=None) -> None:
     the garment object with its fit maps, the report (main thread). ``digest``: the pattern
     it was draped from (default: the scene's pattern now)."""
     from ..core.body.instance import instance_shape
+
     scene = context.scene
     obj = data.body_object(context, required=False)
     pspec = data.stored_pattern(scene).body or {}
-    moved = []      # what of the body changed: said in the status line
+    moved = []  # what of the body changed: said in the status line
     if obj is not None:
         spec = data.body_spec(obj)
         model = state.body_model(spec["model"])
@@ -168,25 +175,31 @@ def apply_drape(context, run, digest=None) -> None:
         if shape and data.full_shape(model, shape) != data.full_shape(model, spec["shape"]):
             moved.append(f"size {pspec.get('size') or 'of the pattern'}")
         if isinstance(pose, str) and pose != spec["pose"]:
-            moved.append(f"pose {pose} (it was {spec['pose']}; the pattern is solved in {pose}: "
-                         f"Adapt to Poses, then drape, for another pose)")
+            moved.append(
+                f"pose {pose} (it was {spec['pose']}; the pattern is solved in {pose}: "
+                f"Adapt to Poses, then drape, for another pose)"
+            )
         if moved:
-            sync.update_body(context, obj, shape=dict(shape) if shape else None,
-                             pose=pose if isinstance(pose, str) else None)
+            sync.update_body(
+                context, obj, shape=dict(shape) if shape else None, pose=pose if isinstance(pose, str) else None
+            )
             show_body(scene, obj, model, pspec)
-    build.garment(scene, run.result, run.metrics["vertex_gap"],
-                  digest or data.pattern_digest(scene.get(data.PATTERN_KEY, "")))
+    build.garment(
+        scene, run.result, run.metrics["vertex_gap"], digest or data.pattern_digest(scene.get(data.PATTERN_KEY, ""))
+    )
     sync.apply_fitmap(scene)
     s = scene.ease
     s.drape_json = json.dumps(run.figures)
-    s.drape_status = f"draped: {run.figures['frames']} frames, {run.figures['settled']}" + \
-        (f"; the body takes the pattern's {', '.join(moved)}" if moved else "")
+    s.drape_status = f"draped: {run.figures['frames']} frames, {run.figures['settled']}" + (
+        f"; the body takes the pattern's {', '.join(moved)}" if moved else ""
+    )
 
 
 def show_body(scene, obj, model, pspec: dict) -> None:
     """The Body panel follows the body the garment was draped on (a transferred pattern's
     size, an adapted one's pose): phenotype sliders, chart and size, pose and measurements."""
     from ..core.body.sizes import check_size
+
     s = scene.ease
     spec = data.body_spec(obj)
     sync.fill_shape_props(scene, model, spec["shape"])
@@ -194,7 +207,7 @@ def show_body(scene, obj, model, pspec: dict) -> None:
     try:
         size = check_size(size) if isinstance(size, str) else None
     except state.USER_ERRORS:
-        size = None                 # a shape of no chart size
+        size = None  # a shape of no chart size
     sync.show_size(scene, obj, size)
     if spec["pose"] in {i.identifier for i in s.bl_rna.properties["pose"].enum_items}:
         s.pose = spec["pose"]
@@ -227,14 +240,15 @@ def step_job(context, job: DrapeJob, event_type: str) -> str:
 
 class EASE_OT_fitmap(EaseOperator):
     """Colour the garment by strain, gap or plain fabric"""
+
     bl_idname = "ease.fitmap"
     bl_label = "Fit Map"
-    needs = ('garment',)
+    needs = ("garment",)
 
     mode: bpy.props.EnumProperty(items=[("NONE", "Fabric", ""), ("STRAIN", "Strain", ""), ("GAP", "Gap", "")])
 
-    def run(self, context):     # poll (needs garment) has made sure there is a draped garment
-        context.scene.ease.fitmap = self.mode   # its update applies the map
+    def run(self, context):  # poll (needs garment) has made sure there is a draped garment
+        context.scene.ease.fitmap = self.mode  # its update applies the map
 
 
 CLASSES = (EASE_OT_drape, EASE_OT_fitmap)

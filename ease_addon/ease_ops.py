@@ -8,6 +8,7 @@ adopted whatever its type and domain, its values kept. On a mirrored design,
 Blender's X-mirror paint setting decides the sides: with it the field is made
 symmetric, without it each side keeps what was painted on it.
 """
+
 from __future__ import annotations
 
 import bpy
@@ -35,10 +36,12 @@ def write_vertex_ease(obj, scene, ease: np.ndarray, mask=None) -> None:
     where = np.ones(len(vi), dtype=bool) if mask is None else np.asarray(mask)[vi]
     new[where] = ease[vi][where]
     if new.min() < lo - 1e-9 or new.max() > hi + 1e-9:
-        raise state.AddonError(f"ease {new.min():.3f} .. {new.max():.3f} is outside the ramp "
-                               f"{lo:g} .. {hi:g}: widen the ramp range first")
+        raise state.AddonError(
+            f"ease {new.min():.3f} .. {new.max():.3f} is outside the ramp {lo:g} .. {hi:g}: widen the ramp range first"
+        )
     me.color_attributes[convert.EASE_LAYER].data.foreach_set(
-        "color", ramp.ease_to_color(new, lo, hi).astype(np.float32).ravel())
+        "color", ramp.ease_to_color(new, lo, hi).astype(np.float32).ravel()
+    )
     me.update()
     me["ease_ramp"] = [lo, hi]
 
@@ -77,9 +80,16 @@ def design_with_triangle_ease(context, design, tri_ease: np.ndarray, mirror: boo
         tris = np.flatnonzero(inside[faces].all(axis=1))
         if len(tris) == 0:
             continue
-        d.set_ease(p.name, {"per_triangle": {"triangles": [int(t) for t in tris],
-                                             "values": [round(float(x), 6) for x in tri_ease[tris]],
-                                             "default": round(float(np.median(tri_ease[tris])), 6)}})
+        d.set_ease(
+            p.name,
+            {
+                "per_triangle": {
+                    "triangles": [int(t) for t in tris],
+                    "values": [round(float(x), 6) for x in tri_ease[tris]],
+                    "default": round(float(np.median(tri_ease[tris])), 6),
+                }
+            },
+        )
     return d
 
 
@@ -110,9 +120,10 @@ def set_brush_color(context, rgba) -> None:
 
 class EASE_OT_brush_ease(EaseOperator):
     """Set the paint brush colour to the chosen ease (from the ease ramp)"""
+
     bl_idname = "ease.brush_ease"
     bl_label = "Set Brush Ease"
-    needs = ('body',)
+    needs = ("body",)
 
     def run(self, context):
         lo, hi = data.ramp_range(context.scene)
@@ -129,9 +140,10 @@ class EASE_OT_brush_ease(EaseOperator):
 
 class EASE_OT_paint_ease(EaseOperator):
     """Paint the ease layer with Blender's Vertex Paint brushes"""
+
     bl_idname = "ease.paint_ease"
     bl_label = "Paint Ease"
-    needs = ('body',)
+    needs = ("body",)
 
     def run(self, context):
         obj = data.body_object(context)
@@ -152,9 +164,10 @@ class EASE_OT_paint_ease(EaseOperator):
 
 class EASE_OT_ease_uniform(EaseOperator):
     """Set a uniform ease on a panel (or the whole body) by writing the layer"""
+
     bl_idname = "ease.ease_uniform"
     bl_label = "Uniform Ease"
-    needs = ('body',)
+    needs = ("body",)
 
     panel: bpy.props.StringProperty(default="", description="panel name; empty: the panel field of the scene")
     ease: bpy.props.FloatProperty(default=0.0, description="ease; 0 takes the scene's ease value")
@@ -172,9 +185,10 @@ class EASE_OT_ease_uniform(EaseOperator):
 
 class EASE_OT_ease_gradient(EaseOperator):
     """Set a linear ease gradient on a panel (from -> to along an axis) by writing the layer"""
+
     bl_idname = "ease.ease_gradient"
     bl_label = "Gradient Ease"
-    needs = ('body',)
+    needs = ("body",)
 
     panel: bpy.props.StringProperty(default="")
     whole_body: bpy.props.BoolProperty(default=False, description="set the whole body, not one panel")
@@ -197,15 +211,16 @@ class EASE_OT_ease_gradient(EaseOperator):
 
 class EASE_OT_ease_to_design(EaseOperator):
     """Convert the painted ease layer to per-triangle ease and write it into the design"""
+
     bl_idname = "ease.ease_to_design"
     bl_label = "Ease to Design"
-    needs = ('body', 'design')
+    needs = ("body", "design")
 
     def run(self, context):
         obj = data.body_object(context)
         design = data.current_design(context)
         mirror = data.x_mirror(obj)
-        sync.mirrored_paint(obj, context.scene)     # X-mirror: a one-sided stroke painted on both sides
+        sync.mirrored_paint(obj, context.scene)  # X-mirror: a one-sided stroke painted on both sides
         tri = data.triangle_ease(obj, context.scene)
         if mirror:
             tri = data.symmetrised(obj, tri)
@@ -217,9 +232,10 @@ class EASE_OT_ease_to_design(EaseOperator):
 
 class EASE_OT_ease_from_design(EaseOperator):
     """Write the design's ease field into the body's ease layer"""
+
     bl_idname = "ease.ease_from_design"
     bl_label = "Ease from Design"
-    needs = ('body', 'design')
+    needs = ("body", "design")
 
     def run(self, context):
         obj = data.body_object(context)
@@ -232,5 +248,11 @@ class EASE_OT_ease_from_design(EaseOperator):
         sync.remember_layer(obj, context.scene)
 
 
-CLASSES = (EASE_OT_brush_ease, EASE_OT_paint_ease, EASE_OT_ease_uniform, EASE_OT_ease_gradient,
-           EASE_OT_ease_to_design, EASE_OT_ease_from_design)
+CLASSES = (
+    EASE_OT_brush_ease,
+    EASE_OT_paint_ease,
+    EASE_OT_ease_uniform,
+    EASE_OT_ease_gradient,
+    EASE_OT_ease_to_design,
+    EASE_OT_ease_from_design,
+)

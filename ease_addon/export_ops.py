@@ -9,6 +9,7 @@ draped garment is read from the garment object itself (its ``ease_vertex_id``
 layer maps its vertices to the pattern's), so it exports after a save and
 reopen, and undo of a drape or of a new pattern cannot mix the two up.
 """
+
 from __future__ import annotations
 
 import json
@@ -26,6 +27,7 @@ def export_settings(scene, design):
     (per-seam widths it already has are kept), and the ``(allowance table, notch_spacing)`` to
     export with."""
     from ..core.design.materials import Materials
+
     s = scene.ease
     allowance, hem = round(s.export_allowance_cm / 100.0, 6), round(s.export_hem_cm / 100.0, 6)
     notch = round(s.export_notch_cm / 100.0, 6)
@@ -35,14 +37,16 @@ def export_settings(scene, design):
 
 class EASE_OT_export_pattern(EaseOperator):
     """Export the pattern (SVG, DXF, PDF) and the draped garment (GLB, OBJ) to the export folder"""
+
     bl_idname = "ease.export_pattern"
     bl_label = "Export Pattern"
-    needs = ('pattern', 'export_dir')   # greyed out, saying why, on an unsaved file with a "//" folder
+    needs = ("pattern", "export_dir")  # greyed out, saying why, on an unsaved file with a "//" folder
 
     directory: bpy.props.StringProperty(subtype="DIR_PATH", default="")
 
     def run(self, context):
         from ..core import workflows as wf
+
         scene = context.scene
         s = scene.ease
         pattern = data.required_pattern(scene, "to export")
@@ -66,9 +70,17 @@ class EASE_OT_export_pattern(EaseOperator):
                 formats = flat
         # the 3D files in the scene's own frame (Z up, the body's root at the origin), as the garment object
         # lies: imported back they land on the scene's body
-        files = wf.export(pattern, out, formats, allowance=allowance, notch_spacing=notch,
-                          drape=None if positions is None else (positions, None), print_all=s.export_print_all,
-                          up="z", origin="root")
+        files = wf.export(
+            pattern,
+            out,
+            formats,
+            allowance=allowance,
+            notch_spacing=notch,
+            drape=None if positions is None else (positions, None),
+            print_all=s.export_print_all,
+            up="z",
+            origin="root",
+        )
         # -- the scene changes from here on: the design keeps the settings it was exported with
         if design is not None:
             text = json.dumps(design.to_json(), sort_keys=True)

@@ -3,6 +3,7 @@ material tolerance (the core's transfer and adapt workflows); their figures
 (transfer deviation, before/after residual stretch) show in the panel. The
 transferred/adapted pattern replaces the pieces beside the body (and is what
 Drape and Export use next)."""
+
 from __future__ import annotations
 
 import json
@@ -24,12 +25,14 @@ def _fit(context, workflow) -> None:
 
 class EASE_OT_transfer_size(EaseOperator):
     """Transfer the design to the chosen size, preserving its ease"""
+
     bl_idname = "ease.transfer_size"
     bl_label = "Transfer to Size"
-    needs = ('body', 'design', 'fit_size')
+    needs = ("body", "design", "fit_size")
 
     def run(self, context):
         from ..core import workflows as wf
+
         size = context.scene.ease.fit_size
         config = data.solver_choice(context.scene)
         _fit(context, lambda prep, progress: wf.transfer(prep, size, config=config, progress=progress))
@@ -38,17 +41,19 @@ class EASE_OT_transfer_size(EaseOperator):
 
 class EASE_OT_adapt_poses(EaseOperator):
     """Adapt the design to the chosen poses within the stretch tolerance"""
+
     bl_idname = "ease.adapt_poses"
     bl_label = "Adapt to Poses"
-    needs = ('body', 'design')
+    needs = ("body", "design")
 
     def run(self, context):
         from ..core import workflows as wf
+
         s = context.scene.ease
         poses = [p for p in ("T", "P1", "P2", "P3") if getattr(s, f"adapt_{p}")]
         if not poses:
             raise state.AddonError("choose at least one pose to adapt to")
-        tol = round(float(s.tolerance), 6)     # the property is single precision: 1.1 reads 1.10000002
+        tol = round(float(s.tolerance), 6)  # the property is single precision: 1.1 reads 1.10000002
 
         def adapt(prep, progress):
             # the panel's tolerance is the caller's where it differs from the design's weft
@@ -56,6 +61,7 @@ class EASE_OT_adapt_poses(EaseOperator):
             own = prep.cut.materials.get("eps_weft")
             mine = None if own is not None and abs(tol - float(own)) < 1e-6 else tol
             return wf.adapt(prep, poses, eps_weft=mine, config=data.solver_choice(context.scene), progress=progress)
+
         _fit(context, adapt)
         self.report({"INFO"}, f"adapted to {', '.join(poses)}")
 

@@ -40,6 +40,7 @@ not depend on the painting history).
 A file saved with Live on opens with Live running (``load_post``); one saved
 with it off opens with no handler and no timer of a previous file.
 """
+
 from __future__ import annotations
 
 import json
@@ -52,19 +53,30 @@ import numpy as np
 
 from . import build, convert, data, pattern_ops, ramp, state, sync
 
-SLICE_S = 0.03          # seconds of work per tick: the longest the viewport waits for the pattern
-IDLE_TICK_S = 0.005     # seconds between ticks while converging (the UI handles its events in between)
+SLICE_S = 0.03  # seconds of work per tick: the longest the viewport waits for the pattern
+IDLE_TICK_S = 0.005  # seconds between ticks while converging (the UI handles its events in between)
 FIT_LAYER = "ease_fit"  # CORNER colour layer on the body: achieved / painted ease - 1
-FIT_RANGE = 0.10        # +-10 %: the overlay's full blue / full red
+FIT_RANGE = 0.10  # +-10 %: the overlay's full blue / full red
 
 # the session of the scene's design (one per add-on session: the timer serves the active scene)
-_LIVE = {"key": None, "session": None, "colors": None, "mirror": None, "builds": 0, "restart": False,
-         "inputs": None, "faces": None, "final": None, "stored": None}
+_LIVE = {
+    "key": None,
+    "session": None,
+    "colors": None,
+    "mirror": None,
+    "builds": 0,
+    "restart": False,
+    "inputs": None,
+    "faces": None,
+    "final": None,
+    "stored": None,
+}
 # running estimates, seconds per cut triangle of each kind of work (show, measure, encode, store)
 _RATES = {}
 
 
 # ----------------------------------------------------------------------------- the fit overlay
+
 
 def fit_to_color(values) -> np.ndarray:
     """Diverging ramp of ``rho_hat / rho - 1`` (n,): blue below (the fabric gives less than painted),
@@ -95,6 +107,7 @@ def fill_legend(scene) -> None:
 def write_overlay(obj, pattern, session) -> None:
     """The body's :data:`FIT_LAYER` (per face, on its corners) from ``pattern``; the painting layer stays active."""
     from ..core.live import achieved_over_painted
+
     me = obj.data
     ratio = achieved_over_painted(pattern, session.triangles, len(me.polygons), session.areas)
     attr = me.color_attributes.get(FIT_LAYER)
@@ -111,6 +124,7 @@ def write_overlay(obj, pattern, session) -> None:
 
 # ----------------------------------------------------------------------------- the loop
 
+
 def _colors(obj):
     attr = obj.data.color_attributes.get(convert.EASE_LAYER)
     if attr is None:
@@ -122,18 +136,31 @@ def _colors(obj):
 
 def _of_cut(pattern, cut) -> bool:
     """``pattern`` is a pattern of ``cut`` (its panels, their vertex counts): one to start from."""
-    return pattern is not None and [p.name for p in pattern.panels] == [p.name for p in cut.panels] and \
-        all(len(a.uv) == len(b.vertex_ids) for a, b in zip(pattern.panels, cut.panels))
+    return (
+        pattern is not None
+        and [p.name for p in pattern.panels] == [p.name for p in cut.panels]
+        and all(len(a.uv) == len(b.vertex_ids) for a, b in zip(pattern.panels, cut.panels))
+    )
 
 
 def session_for(context):
     """The live session of the scene's design on its body (built once per topology)."""
     from ..core.live import LiveSession, topology_key
+
     s = context.scene.ease
     obj = data.body_object(context)
     # what the session's inputs are read from: unchanged, nothing is re-read (a tick stays cheap)
-    quick = json.dumps([s.design_json, data.body_spec(obj), s.gather_auto, round(s.gather_above_pct, 6),
-                        obj.name, len(obj.data.polygons)], sort_keys=True)
+    quick = json.dumps(
+        [
+            s.design_json,
+            data.body_spec(obj),
+            s.gather_auto,
+            round(s.gather_above_pct, 6),
+            obj.name,
+            len(obj.data.polygons),
+        ],
+        sort_keys=True,
+    )
     if quick == _LIVE.get("inputs") and _LIVE["session"] is not None:
         return _LIVE["session"]
     prep = data.prepared(context, lambda design: pattern_ops.gather_settings(context.scene, design))
@@ -142,19 +169,26 @@ def session_for(context):
     _LIVE["faces"] = convert.get_triangles(obj.data)
     if _LIVE["key"] != key or _LIVE["session"] is None:
         start = data.stored_pattern(context.scene)
-        _LIVE.update(key=key, session=LiveSession(prep, pattern=start if _of_cut(start, prep.cut) else None),
-                     colors=None,
-                     builds=_LIVE["builds"] + 1, final=None)
+        _LIVE.update(
+            key=key,
+            session=LiveSession(prep, pattern=start if _of_cut(start, prep.cut) else None),
+            colors=None,
+            builds=_LIVE["builds"] + 1,
+            final=None,
+        )
     return _LIVE["session"]
 
 
 def _field(obj, scene) -> np.ndarray:
     """The painted field per body triangle (F,) as *Ease to Design* reads it (symmetrised with X-mirror)."""
     faces = _LIVE.get("faces")
-    if faces is None or len(faces) != len(obj.data.polygons) or \
-            obj.data.color_attributes[convert.EASE_LAYER].domain != "POINT":
+    if (
+        faces is None
+        or len(faces) != len(obj.data.polygons)
+        or obj.data.color_attributes[convert.EASE_LAYER].domain != "POINT"
+    ):
         tri = data.triangle_ease(obj, scene)
-    else:   # the same mean of the vertex values, with the body's triangles kept (its topology is fixed)
+    else:  # the same mean of the vertex values, with the body's triangles kept (its topology is fixed)
         tri = ramp.vertex_to_triangle(data.vertex_ease(obj, scene), faces)
     return data.symmetrised(obj, tri) if data.x_mirror(obj) else tri
 
@@ -198,6 +232,7 @@ def _final_units(context, session) -> deque:
     piece at a time, then store it with its key figures (together: the panel never shows
     figures of another pattern than the stored one)."""
     from ..core import workflows as wf
+
     scene = context.scene
     n = len(session.triangles)
     queue = deque()
@@ -259,27 +294,28 @@ def _step(context, budget_s: float, t0: float) -> dict:
     raw = _colors(obj)
     changed = False
     mirror = data.x_mirror(obj)
-    if raw is not None and (_LIVE["colors"] is None or not np.array_equal(raw, _LIVE["colors"])
-                            or mirror != _LIVE["mirror"]):
-        if sync.mirrored_paint(obj, scene):     # X-mirror: a one-sided stroke painted on both sides
+    if raw is not None and (
+        _LIVE["colors"] is None or not np.array_equal(raw, _LIVE["colors"]) or mirror != _LIVE["mirror"]
+    ):
+        if sync.mirrored_paint(obj, scene):  # X-mirror: a one-sided stroke painted on both sides
             raw = _colors(obj)
         if _LIVE["restart"]:
             # after an undo/redo: continue from the restored pattern
             _LIVE["restart"] = False
             restored = data.stored_pattern(scene)
-            if _of_cut(restored, session.prep.cut):     # (not one of another cut: a parameter undone)
+            if _of_cut(restored, session.prep.cut):  # (not one of another cut: a parameter undone)
                 session.restart_from(restored)
         changed = session.set_ease(_field(obj, scene))
         sync.remember_layer(obj, scene)
         _LIVE["colors"], _LIVE["mirror"] = raw, mirror
         if changed:
-            _LIVE["final"] = None       # the pattern it would have stored is superseded
+            _LIVE["final"] = None  # the pattern it would have stored is superseded
     was, warm = session.converged, session.warming
     n_tri = len(session.triangles)
     show_s = (_estimate("show", n_tri) or 0.0) if warm else 0.0
     n = session.run(max(budget_s - show_s, 0.0))
     if warm and n and not session.converged:
-        _timed("show", n_tri, lambda: _show(context, session))     # the warm state moved: show it
+        _timed("show", n_tri, lambda: _show(context, session))  # the warm state moved: show it
         # one warm slice is shown per stroke: the next ticks go to the cold solve (another warm
         # slice would cost another showing, and converging is what the designer waits for)
         session.end_warm()
@@ -299,12 +335,12 @@ def _step(context, budget_s: float, t0: float) -> dict:
         status = "converging"
     elif scene.get(data.PATTERN_KEY) == _LIVE["stored"]:
         status = "converged"
-    else:   # Optimize, Transfer or Adapt stored a pattern since: the pieces are not Live's
+    else:  # Optimize, Transfer or Adapt stored a pattern since: the pieces are not Live's
         status = "idle: the pieces show another pattern than Live's; paint to update them"
-    scene.ease.live_status = status if status.startswith("idle") else \
-        f"{status} ({session.iterations_since_change} iterations)"
-    return {"changed": changed, "iterations": n, "units": units, "converged": done,
-            "seconds": time.perf_counter() - t0}
+    scene.ease.live_status = (
+        status if status.startswith("idle") else f"{status} ({session.iterations_since_change} iterations)"
+    )
+    return {"changed": changed, "iterations": n, "units": units, "converged": done, "seconds": time.perf_counter() - t0}
 
 
 def _tick():
@@ -314,7 +350,7 @@ def _tick():
         return None
     try:
         out = step(context)
-    except state.USER_ERRORS as exc:    # the design does not cut on this body, ...: say it, and stop
+    except state.USER_ERRORS as exc:  # the design does not cut on this body, ...: say it, and stop
         scene.ease.live_status = f"live: {exc}"
         return None
     except Exception as exc:  # a bug: a timer must never leave a traceback; the console keeps it
@@ -336,7 +372,7 @@ def touched(scene) -> None:
     wake()
 
 
-state.ON_CHANGE[:] = [touched]      # operators and sync tell Live through state.changed
+state.ON_CHANGE[:] = [touched]  # operators and sync tell Live through state.changed
 
 
 def wake() -> None:
@@ -360,7 +396,7 @@ def _on_depsgraph(scene, depsgraph) -> None:
 @bpy.app.handlers.persistent
 def _on_undo(scene, *_args) -> None:
     _LIVE.update(colors=None, restart=True, final=None)
-    touched(scene)      # the restored status is the pushed one: not "converged" until a tick has seen it
+    touched(scene)  # the restored status is the pushed one: not "converged" until a tick has seen it
 
 
 def _handlers():
@@ -385,8 +421,17 @@ def stop() -> None:
             lst.remove(fn)
     if bpy.app.timers.is_registered(_tick):
         bpy.app.timers.unregister(_tick)
-    _LIVE.update(key=None, session=None, colors=None, mirror=None, restart=False, inputs=None, faces=None,
-                 final=None, stored=None)
+    _LIVE.update(
+        key=None,
+        session=None,
+        colors=None,
+        mirror=None,
+        restart=False,
+        inputs=None,
+        faces=None,
+        final=None,
+        stored=None,
+    )
 
 
 def resume(*_args) -> None:

@@ -6,6 +6,7 @@ folder's ``marker`` subfolder, and show the marker picture on a flat object lyin
 Sizes other than the scene pattern's are transferred from the current design first
 (:func:`core.workflows.transfer`, the scene pattern as the start when it is the reference).
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -24,6 +25,7 @@ def _patterns(context, pattern, wanted):
     """(size, pattern, garments) per wanted size: the scene's pattern for its own size, transfers for the rest."""
     from ..core import workflows as wf
     from ..core.marker import size_label
+
     here = size_label(pattern)
     runs, prep, solver, config = [], None, None, None
     for size, garments in wanted.items():
@@ -34,7 +36,7 @@ def _patterns(context, pattern, wanted):
             if not context.scene.ease.design_json:
                 raise state.AddonError(f"marker: size {size} needs the design to transfer from; load a design")
             prep = data.prepared(context)
-            config = data.solver_choice(context.scene)          # as Transfer to Size: the design's or the chosen
+            config = data.solver_choice(context.scene)  # as Transfer to Size: the design's or the chosen
             solver = wf.make_solver(prep, config)
         start = pattern if pattern.mode == "reference" else None
         runs.append((size, wf.transfer(prep, size, config=config, solver=solver, start=start).pattern, garments))
@@ -69,19 +71,21 @@ def show_marker(context, marker, png: Path):
         mat.node_tree.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
     mesh.materials.append(mat)
     obj = objects.role_object(scene, IMAGE, mesh, ROLE)
-    obj.location = (-0.5 * L, 0.6, 0.0)       # on the floor behind the body (the body faces -Y)
+    obj.location = (-0.5 * L, 0.6, 0.0)  # on the floor behind the body (the body faces -Y)
     return obj
 
 
 class EASE_OT_marker(EaseOperator):
     """Nest the pattern's pieces on the fabric width (a cutting-room marker), write it to the export folder and show it"""
+
     bl_idname = "ease.marker"
     bl_label = "Marker"
-    needs = ('pattern',)
+    needs = ("pattern", "export_dir")
 
     def run(self, context):
         from ..core import workflows as wf
         from ..core.marker import parse_quantities, size_label
+
         scene = context.scene
         s = scene.ease
         pattern = data.required_pattern(scene, "to nest")
@@ -89,14 +93,22 @@ class EASE_OT_marker(EaseOperator):
         wanted = parse_quantities(s.marker_sizes, "Sizes") if s.marker_sizes.strip() else {size_label(pattern): 1}
         runs = _patterns(context, pattern, wanted)
         with window_progress(context) as progress:
-            marker = wf.marker(runs, s.marker_width_mm / 1000.0, allowance=round(s.export_allowance_cm / 100.0, 6),
-                               hem=round(s.export_hem_cm / 100.0, 6), seconds=s.marker_seconds, seed=0,
-                               one_way=s.marker_one_way, progress=progress)
+            marker = wf.marker(
+                runs,
+                s.marker_width_mm / 1000.0,
+                allowance=round(s.export_allowance_cm / 100.0, 6),
+                hem=round(s.export_hem_cm / 100.0, 6),
+                seconds=s.marker_seconds,
+                seed=0,
+                one_way=s.marker_one_way,
+                progress=progress,
+            )
         title = f"{pattern.style or 'pattern'} marker"
         files = wf.write_marker(Path(out) / "marker", marker, title)
         show_marker(context, marker, next(f for f in files if f.name == "marker.png"))
-        s.marker_status = (f"{marker.width * 1000:.0f} x {marker.length * 1000:.0f} mm, "
-                           f"efficiency {marker.efficiency * 100:.1f} %")
+        s.marker_status = (
+            f"{marker.width * 1000:.0f} x {marker.length * 1000:.0f} mm, efficiency {marker.efficiency * 100:.1f} %"
+        )
         self.report({"INFO"}, f"marker {s.marker_status} in {Path(out) / 'marker'}")
 
 

@@ -12,6 +12,7 @@ sewn edge / hem) and the colour attribute :data:`FABRIC_COLOR` (the design's
 colour per garment). Without them (a garment not yet through the studio) it
 shows the preset's colour with no weave.
 """
+
 from __future__ import annotations
 
 import math
@@ -22,19 +23,19 @@ import bpy
 from .objects import ensure_nodes
 
 SKIN = "EASE Skin"
-FABRIC = "EASE Fabric"          # + " <preset>"
+FABRIC = "EASE Fabric"  # + " <preset>"
 FLOOR = "EASE Studio Floor"
 ACHIEVED_EASE = "EASE Achieved Ease"
 
-FABRIC_UV = "ease_fabric_uv"        # UV map: pattern metres, U across the grain (weft), V along it (warp)
-SEAM_DIST = "ease_seam_dist"        # FLOAT corner attribute: metres to the nearest sewn edge of the piece
-HEM_DIST = "ease_hem_dist"          # FLOAT corner attribute: metres to the nearest hem of the piece
+FABRIC_UV = "ease_fabric_uv"  # UV map: pattern metres, U across the grain (weft), V along it (warp)
+SEAM_DIST = "ease_seam_dist"  # FLOAT corner attribute: metres to the nearest sewn edge of the piece
+HEM_DIST = "ease_hem_dist"  # FLOAT corner attribute: metres to the nearest hem of the piece
 FABRIC_COLOR = "ease_fabric_color"  # FLOAT_COLOR corner attribute: the garment's colour (alpha 1)
 
-STITCH_FROM_SEAM = 0.006     # m: top-stitch line this far from a sewn edge
-STITCH_FROM_HEM = 0.015      # m: hem stitch line this far from the hem
-STITCH_WIDTH = 0.0012        # m: half width of a stitch line
-CREASE_WIDTH = 0.005         # m: the seam's crease (a groove on the sewn edge) this wide
+STITCH_FROM_SEAM = 0.006  # m: top-stitch line this far from a sewn edge
+STITCH_FROM_HEM = 0.015  # m: hem stitch line this far from the hem
+STITCH_WIDTH = 0.0012  # m: half width of a stitch line
+CREASE_WIDTH = 0.005  # m: the seam's crease (a groove on the sewn edge) this wide
 
 
 @dataclass(frozen=True)
@@ -48,6 +49,7 @@ class FabricLook:
     bump : strength of the weave's relief.
     stitch : linear RGB of the stitching (None: a lighter shade of the fabric).
     """
+
     weave: str
     thread_mm: float
     color: tuple[float, float, float]
@@ -64,7 +66,7 @@ LOOKS = {
     "silk": FabricLook("satin", 0.25, (0.72, 0.52, 0.36), 0.32, 0.85, 0.15),
 }
 DEFAULT_FABRIC = "cotton"
-LOOK_VERSION = 1        # raise when the fabric shader changes: a saved file's fabric is then rebuilt
+LOOK_VERSION = 1  # raise when the fabric shader changes: a saved file's fabric is then rebuilt
 
 
 def _new(name: str):
@@ -85,7 +87,7 @@ def surface(name: str, color, roughness: float, sheen: float = 0.0):
         bsdf.inputs["Base Color"].default_value = color
         bsdf.inputs["Roughness"].default_value = roughness
         if sheen:
-            for socket in ("Sheen Weight", "Sheen"):    # Blender 4+ / 3.x spelling
+            for socket in ("Sheen Weight", "Sheen"):  # Blender 4+ / 3.x spelling
                 if socket in bsdf.inputs:
                     bsdf.inputs[socket].default_value = sheen
                     break
@@ -105,6 +107,7 @@ def floor():
 def scene_fabric(scene=None) -> str:
     """The fabric preset of the scene's pattern (else its design), ``cotton`` when it has neither."""
     from . import data
+
     scene = scene or bpy.context.scene
     name = None
     try:
@@ -113,6 +116,7 @@ def scene_fabric(scene=None) -> str:
             name = (pattern.materials or {}).get("fabric")
         if name is None and scene.ease.design_json:
             import json
+
             name = (json.loads(scene.ease.design_json).get("materials") or {}).get("fabric")
     except (ValueError, TypeError, AttributeError):  # an unreadable design: the design panel reports it
         name = None
@@ -166,27 +170,29 @@ class _Graph:
 
     def sin01(self, x, period):
         """0.5 + 0.5 sin(2 pi x / period)."""
-        return self.math("MULTIPLY_ADD", self.math("SINE", self.math("MULTIPLY", x, 2 * math.pi / period)),
-                         0.5, 0.5)
+        return self.math("MULTIPLY_ADD", self.math("SINE", self.math("MULTIPLY", x, 2 * math.pi / period)), 0.5, 0.5)
 
 
 def _weave_height(g: _Graph, u, v, look: FabricLook):
     """Height 0..1 of the weave at pattern coordinates ``u`` (weft), ``v`` (warp) in metres."""
     p = look.thread_mm / 1000.0
-    if look.weave == "plain":     # over-under: a checker of thread crossings
-        h = g.math("MULTIPLY", g.math("SINE", g.math("MULTIPLY", u, math.pi / p)),
-                   g.math("SINE", g.math("MULTIPLY", v, math.pi / p)))
+    if look.weave == "plain":  # over-under: a checker of thread crossings
+        h = g.math(
+            "MULTIPLY",
+            g.math("SINE", g.math("MULTIPLY", u, math.pi / p)),
+            g.math("SINE", g.math("MULTIPLY", v, math.pi / p)),
+        )
         return g.math("MULTIPLY_ADD", h, 0.5, 0.5)
-    if look.weave == "twill":     # diagonal wales (3/1 twill) over fine warp threads
+    if look.weave == "twill":  # diagonal wales (3/1 twill) over fine warp threads
         wale = g.sin01(g.math("ADD", u, v), p)
         return g.math("MULTIPLY_ADD", g.sin01(u, p / 3.0), 0.25, g.math("MULTIPLY", wale, 0.75))
-    if look.weave == "satin":     # long floats along the warp: a faint, fine rib
+    if look.weave == "satin":  # long floats along the warp: a faint, fine rib
         return g.sin01(g.math("ADD", u, g.math("MULTIPLY", v, 0.2)), p)
     # knit: columns of V-shaped loops (wales along the warp, courses across)
-    across = g.math("FRACT", g.math("DIVIDE", u, p))                   # 0..1 across a wale
-    chevron = g.math("ABSOLUTE", g.math("SUBTRACT", across, 0.5))     # 0.5 at the edges, 0 mid
+    across = g.math("FRACT", g.math("DIVIDE", u, p))  # 0..1 across a wale
+    chevron = g.math("ABSOLUTE", g.math("SUBTRACT", across, 0.5))  # 0.5 at the edges, 0 mid
     course = g.sin01(g.math("ADD", g.math("DIVIDE", v, 0.8 * p), chevron), 1.0)
-    loop = g.math("SINE", g.math("MULTIPLY", across, math.pi))        # each loop rounded across
+    loop = g.math("SINE", g.math("MULTIPLY", across, math.pi))  # each loop rounded across
     return g.math("MULTIPLY", course, loop)
 
 
@@ -203,7 +209,7 @@ def fabric(preset: str | None = None):
     look = LOOKS[preset]
     if mat is None:
         mat, bsdf = _new(name)
-    else:       # made by an earlier version of the add-on (a saved file): rebuilt in place, slots keep it
+    else:  # made by an earlier version of the add-on (a saved file): rebuilt in place, slots keep it
         ensure_nodes(mat)
         mat.node_tree.nodes.clear()
         out = mat.node_tree.nodes.new("ShaderNodeOutputMaterial")
@@ -229,21 +235,22 @@ def fabric(preset: str | None = None):
     # seams: a stitch line at STITCH_FROM_SEAM from the sewn edge and a groove on it; hems: a stitch line
     seam_d = g.attribute(SEAM_DIST)[2]
     hem_d = g.attribute(HEM_DIST)[2]
-    has_seams = g.attribute(FABRIC_COLOR)[3]       # alpha 1 where the studio wrote the garment's layers
+    has_seams = g.attribute(FABRIC_COLOR)[3]  # alpha 1 where the studio wrote the garment's layers
 
     def line(dist, at):
         off = g.math("ABSOLUTE", g.math("SUBTRACT", dist, at))
         return g.map_range(off, STITCH_WIDTH, 0.5 * STITCH_WIDTH, 0.0, 1.0)
 
-    stitch = g.math("MULTIPLY", g.math("MAXIMUM", line(seam_d, STITCH_FROM_SEAM), line(hem_d, STITCH_FROM_HEM)),
-                    has_seams)
+    stitch = g.math(
+        "MULTIPLY", g.math("MAXIMUM", line(seam_d, STITCH_FROM_SEAM), line(hem_d, STITCH_FROM_HEM)), has_seams
+    )
     # a stitch is dashed: the thread shows ~4 mm in 6 along the line (diagonal dashes read as stitches
     # in every direction of the seam)
     dash = g.map_range(g.sin01(g.math("ADD", u, v), 0.006), 0.2, 0.35)
     stitch = g.math("MULTIPLY", stitch, dash)
     crease = g.math("MULTIPLY", g.map_range(seam_d, CREASE_WIDTH, 0.0), has_seams)
     height = g.math("ADD", g.math("MULTIPLY", weave, 0.7), g.math("MULTIPLY", fibre.outputs["Fac"], 0.3))
-    height = g.math("ADD", height, g.math("MULTIPLY", stitch, 0.8))       # the thread stands proud
+    height = g.math("ADD", height, g.math("MULTIPLY", stitch, 0.8))  # the thread stands proud
     height = g.math("SUBTRACT", height, g.math("MULTIPLY", crease, 1.5))  # the seam sinks in
     bump = g.node("ShaderNodeBump")
     bump.inputs["Strength"].default_value = look.bump
@@ -270,7 +277,7 @@ def fabric(preset: str | None = None):
         g.nt.links.new(shade, comb.inputs[i])
     g.nt.links.new(comb.outputs[0], shaded.inputs[7])
     thread = (*look.stitch, 1.0) if look.stitch else None
-    if thread is None:    # a shade of the fabric that shows on it: darker on light cloth, lighter on dark
+    if thread is None:  # a shade of the fabric that shows on it: darker on light cloth, lighter on dark
         light = sum(look.color) / 3 > 0.25
         shade_of = g.node("ShaderNodeMix", data_type="RGBA", blend_type="MULTIPLY" if light else "SCREEN")
         shade_of.inputs[0].default_value = 0.6

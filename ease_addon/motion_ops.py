@@ -16,6 +16,7 @@ The figures per frame (penetration, seconds) are kept in the scene
 body* is on) with Blender's own Alembic exporter over frames 1..K: an ``.abc``
 other DCC tools read.
 """
+
 from __future__ import annotations
 
 import json
@@ -29,7 +30,7 @@ from .objects import objects_with_role, select_only, window_progress
 from .operators_base import EaseOperator
 
 MOTION_BODY = "EASE Motion Body"
-MOTION_GARMENT = "EASE Motion Garment"
+MOTION_GARMENT = data.MOTION_GARMENT
 MOTION_KEY = "ease_motion_json"
 
 
@@ -78,14 +79,16 @@ def _motion(context):
     from ..core.body import load_body
     from ..core.body.instance import spec_instance
     from ..core.drape.animate import drape_motion, parse_poses, pose_frames
+
     scene, s = context.scene, context.scene.ease
     poses = parse_poses(s.motion_poses, "Poses")
     pattern = data.required_pattern(scene, "to animate")
     spec = dict(pattern.body or {})
     own = spec.get("pose") or "A"
     if poses[0] != own:
-        raise state.AddonError(f"Poses: the sequence starts at the pattern's own pose {own} "
-                               f"(its garment was cut there), not {poses[0]}")
+        raise state.AddonError(
+            f"Poses: the sequence starts at the pattern's own pose {own} (its garment was cut there), not {poses[0]}"
+        )
     model = load_body(spec.get("model", "anny"))
     frames = pose_frames(model, spec.get("shape"), poses, int(s.motion_between))
     _, faces = spec_instance(spec, model)
@@ -96,20 +99,23 @@ def _motion(context):
 
 class EASE_OT_drape_animation(EaseOperator):
     """Drape the garment through the pose sequence (Poses, In-betweens): shape-keyed motion objects"""
+
     bl_idname = "ease.drape_animation"
     bl_label = "Drape Animation"
-    needs = ('pattern',)
+    needs = ("pattern",)
 
     def run(self, context):
         from ..core.drape.animate import motion_report
+
         scene, s = context.scene, context.scene.ease
         frames, faces, r, poses = _motion(context)
         used = np.asarray(r.used, dtype=bool)
         remap = -np.ones(len(used), dtype=np.int64)
         remap[used] = np.arange(int(used.sum()))
         body = motion_object(scene, MOTION_BODY, frames, faces, materials.skin())
-        garment = motion_object(scene, MOTION_GARMENT, r.positions[:, used], remap[np.asarray(r.faces)],
-                                materials.fabric())
+        garment = motion_object(
+            scene, MOTION_GARMENT, r.positions[:, used], remap[np.asarray(r.faces)], materials.fabric()
+        )
         # the pattern vertex of each vertex: the studio dresses it in its fabric as the static garment
         vid = garment.data.attributes.new(data.VERTEX_ID, "INT", "POINT")
         vid.data.foreach_set("value", np.flatnonzero(used).astype(np.int32))
@@ -121,24 +127,23 @@ class EASE_OT_drape_animation(EaseOperator):
         report = motion_report(r, poses, int(s.motion_between))
         scene[MOTION_KEY] = json.dumps(report)
         worst = report["worst_penetration_pct"]
-        s.motion_status = (f"{len(frames)} frames ({' -> '.join(poses)}), worst penetration {worst:.2f} %, "
-                           f"stretch p95 up to {max(report['stretch_p95_pct']):.1f} %, "
-                           f"{np.mean(r.frame_seconds) if len(r.frame_seconds) else 0:.2f} s a frame")
-        self.report({"INFO"}, f"{body.name}, {garment.name}: {s.motion_status}; the static body and "
-                              f"garment are hidden in the viewport")
+        s.motion_status = (
+            f"{len(frames)} frames ({' -> '.join(poses)}), worst penetration {worst:.2f} %, "
+            f"stretch p95 up to {max(report['stretch_p95_pct']):.1f} %, "
+            f"{np.mean(r.frame_seconds) if len(r.frame_seconds) else 0:.2f} s a frame"
+        )
+        self.report(
+            {"INFO"},
+            f"{body.name}, {garment.name}: {s.motion_status}; the static body and garment are hidden in the viewport",
+        )
 
 
 class EASE_OT_export_alembic(EaseOperator):
     """Write the motion (garment, and the body with With body) to an Alembic file (.abc)"""
+
     bl_idname = "ease.export_alembic"
     bl_label = "Export Alembic"
-
-    @classmethod
-    def poll(cls, context):
-        if bpy.data.objects.get(MOTION_GARMENT) is None:
-            cls.poll_message_set("needs a motion: press Drape Animation first")
-            return False
-        return True
+    needs = ("motion", "motion_path")
 
     def run(self, context):
         s = context.scene.ease
@@ -157,8 +162,16 @@ class EASE_OT_export_alembic(EaseOperator):
             select_only(context, objs[0])
             for o in objs[1:]:
                 o.select_set(True)
-            r = bpy.ops.wm.alembic_export(filepath=path, start=1, end=end, selected=True,
-                                          uvs=False, face_sets=False, export_hair=False, export_particles=False)
+            r = bpy.ops.wm.alembic_export(
+                filepath=path,
+                start=1,
+                end=end,
+                selected=True,
+                uvs=False,
+                face_sets=False,
+                export_hair=False,
+                export_particles=False,
+            )
         finally:
             for o in context.view_layer.objects:
                 o.select_set(o in before)

@@ -6,6 +6,7 @@ Every object the add-on makes carries an ``ease_role`` custom property
 "<role>_part" for the children of a pattern piece) and lives in the scene's
 "EASE" collection; replacing objects of a role goes through here.
 """
+
 from __future__ import annotations
 
 from contextlib import contextmanager
@@ -79,7 +80,7 @@ def world_bounds(objects) -> tuple:
 def select_only(context, obj) -> None:
     """Make ``obj`` the only selected object and the active one."""
     for o in context.view_layer.objects:
-        if o is not None:       # (an object removed in this operator: the view layer lists None until updated)
+        if o is not None:  # (an object removed in this operator: the view layer lists None until updated)
             o.select_set(o == obj)
     context.view_layer.objects.active = obj
 
@@ -105,6 +106,7 @@ def window_progress(context):
             wm.progress_update(int(100 * fraction))
         except Exception:  # no window (a script run): the core's progress is only shown
             pass
+
     try:
         yield progress
     finally:

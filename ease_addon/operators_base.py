@@ -8,6 +8,7 @@ changes the scene, so an error from the core (an ``EaseError`` naming the
 element at fault) is reported in the status bar and the scene is left as it
 was.
 """
+
 from __future__ import annotations
 
 import traceback
@@ -56,21 +57,44 @@ def _sizes_text(chart: str) -> str:
 # requirement -> (test on the context, what the tooltip says is missing: text, or a function of the context)
 REQUIREMENTS = {
     "body": (_has_body, "needs an EASE body: add one in EASE > Body"),
-    "design": (lambda c: bool(c.scene.ease.design_json),
-               "needs a design: load a template or a design file in EASE > Design"),
-    "pattern": (lambda c: bool(c.scene.get(data.PATTERN_KEY)),
-                "needs a pattern: press Optimize Pattern in EASE > Pattern"),
+    "design": (
+        lambda c: bool(c.scene.ease.design_json),
+        "needs a design: load a template or a design file in EASE > Design",
+    ),
+    "pattern": (
+        lambda c: bool(c.scene.get(data.PATTERN_KEY)),
+        "needs a pattern: press Optimize Pattern in EASE > Pattern",
+    ),
     "garment": (_has_garment, "needs a draped garment: press Drape in EASE > Drape"),
     "content": (_has_content, "nothing to render: add a body in EASE > Body"),
     # an output folder or file the button can write to (an unsaved file has no folder for "//" paths)
-    "export_dir": (lambda c: not _output_problem(c.scene.ease.export_dir, "Export to"),
-                   lambda c: _output_problem(c.scene.ease.export_dir, "Export to")),
-    "render_path": (lambda c: not _output_problem(c.scene.ease.render_path, "Render to"),
-                    lambda c: _output_problem(c.scene.ease.render_path, "Render to")),
-    "size": (_size_on_chart, lambda c: f"size {c.scene.ease.size} is not on the chosen chart: "
-                                       f"{_sizes_text(c.scene.ease.chart)}"),
-    "fit_size": (_fit_size_on_chart, lambda c: f"target size {c.scene.ease.fit_size} is not on the design's "
-                                               f"chart: {_sizes_text(data.design_chart(c.scene))}"),
+    "export_dir": (
+        lambda c: not _output_problem(c.scene.ease.export_dir, "Export to"),
+        lambda c: _output_problem(c.scene.ease.export_dir, "Export to"),
+    ),
+    "render_path": (
+        lambda c: not _output_problem(c.scene.ease.render_path, "Render to"),
+        lambda c: _output_problem(c.scene.ease.render_path, "Render to"),
+    ),
+    "motion": (
+        lambda c: bpy.data.objects.get(data.MOTION_GARMENT) is not None,
+        "needs a motion: press Drape Animation in EASE > Drape",
+    ),
+    "motion_path": (
+        lambda c: not _output_problem(c.scene.ease.motion_path, "Alembic to"),
+        lambda c: _output_problem(c.scene.ease.motion_path, "Alembic to"),
+    ),
+    "size": (
+        _size_on_chart,
+        lambda c: f"size {c.scene.ease.size} is not on the chosen chart: {_sizes_text(c.scene.ease.chart)}",
+    ),
+    "fit_size": (
+        _fit_size_on_chart,
+        lambda c: (
+            f"target size {c.scene.ease.fit_size} is not on the design's "
+            f"chart: {_sizes_text(data.design_chart(c.scene))}"
+        ),
+    ),
 }
 
 
@@ -94,7 +118,7 @@ def poll_needs(cls, context) -> bool:
 
 class EaseOperator(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
-    needs = ()     # names in REQUIREMENTS (no annotation: Blender reads annotations as properties)
+    needs = ()  # names in REQUIREMENTS (no annotation: Blender reads annotations as properties)
 
     @classmethod
     def poll(cls, context):
@@ -114,5 +138,5 @@ class EaseOperator(bpy.types.Operator):
             state.BUGS.append((self.bl_idname, traceback.format_exc()))
             self.report({"ERROR"}, f"{type(exc).__name__}: {exc}")
             return {"CANCELLED"}
-        state.changed(context.scene)    # Live says "converged" again once a tick has seen the change
+        state.changed(context.scene)  # Live says "converged" again once a tick has seen the change
         return result or {"FINISHED"}

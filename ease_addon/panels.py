@@ -1,4 +1,5 @@
 """The "EASE" tab of the 3D view sidebar: one panel per workflow stage."""
+
 from __future__ import annotations
 
 import json
@@ -245,5 +246,4 @@ class EASE_PT_render(_EasePanel, bpy.types.Panel):
             layout.label(text=s.marker_status)
 
 
-CLASSES = (EASE_PT_body, EASE_PT_design, EASE_PT_ease, EASE_PT_pattern, EASE_PT_fit,
-           EASE_PT_drape, EASE_PT_render)
+CLASSES = (EASE_PT_body, EASE_PT_design, EASE_PT_ease, EASE_PT_pattern, EASE_PT_fit, EASE_PT_drape, EASE_PT_render)

@@ -3,6 +3,7 @@ reference workflow) and lay it out beside the body as flat panel objects
 (mesh coloured by achieved ease, boundary curve, grain-line arrow, piece
 name; see :func:`.build.update_pattern_objects`). The whole pattern is kept in a
 scene property (pattern.json) so it survives a save."""
+
 from __future__ import annotations
 
 import json
@@ -22,12 +23,14 @@ def gather_settings(scene, design):
 
 class EASE_OT_optimize_pattern(EaseOperator):
     """Optimize the sewing pattern of the design and lay it out beside the body"""
+
     bl_idname = "ease.optimize_pattern"
     bl_label = "Optimize Pattern"
-    needs = ('body', 'design')
+    needs = ("body", "design")
 
     def run(self, context):
         from ..core import workflows as wf
+
         prep = data.prepared(context, lambda design: gather_settings(context.scene, design))
         with window_progress(context) as progress:
             pattern = wf.reference(prep, config=data.solver_choice(context.scene), progress=progress).pattern

@@ -10,13 +10,14 @@ values), so a blended stroke edge ``(1 - a) c0 + a c1`` still has
 Decoding uses ``t = R / (R + B)``, which is also immune to a brush strength
 that darkens or brightens the colour uniformly.
 """
+
 from __future__ import annotations
 
 import numpy as np
 
 from ..core.design.checks import EASE_MAX, EASE_MIN
 
-GREEN = 0.08          # constant green of the ramp (keeps the mid tones purple, not grey)
+GREEN = 0.08  # constant green of the ramp (keeps the mid tones purple, not grey)
 EASE_LIMITS = (EASE_MIN, EASE_MAX)  # the range the design format accepts
 
 
@@ -25,8 +26,7 @@ def check_range(lo: float, hi: float) -> None:
     if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
         raise ValueError(f"ease ramp range must have min < max, got {lo} .. {hi}")
     if lo < EASE_LIMITS[0] or hi > EASE_LIMITS[1]:
-        raise ValueError(f"ease ramp range {lo} .. {hi} must lie within "
-                         f"{EASE_LIMITS[0]} .. {EASE_LIMITS[1]}")
+        raise ValueError(f"ease ramp range {lo} .. {hi} must lie within {EASE_LIMITS[0]} .. {EASE_LIMITS[1]}")
 
 
 def ease_to_color(ease, lo: float, hi: float) -> np.ndarray:

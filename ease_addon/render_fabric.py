@@ -19,6 +19,7 @@ and a Solidify modifier :data:`THICKNESS` at the fabric preset's thickness
 (``core.drape.materials.PRESETS[...].thickness``, centred on the drape's
 surface), and the preset's fabric material when no fit map is shown.
 """
+
 from __future__ import annotations
 
 import itertools
@@ -38,11 +39,11 @@ def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.nd
     out = np.full(len(points), np.inf)
     d = b - a
     dd = np.maximum((d * d).sum(axis=1), 1e-30)
-    for start in range(0, len(points), 2048):          # bounded memory: 2048 x m at a time
-        p = points[start:start + 2048, None, :]
+    for start in range(0, len(points), 2048):  # bounded memory: 2048 x m at a time
+        p = points[start : start + 2048, None, :]
         t = np.clip(((p - a) * d).sum(axis=2) / dd, 0.0, 1.0)
         q = a + t[..., None] * d
-        out[start:start + 2048] = np.sqrt(((p - q) ** 2).sum(axis=2)).min(axis=1)
+        out[start : start + 2048] = np.sqrt(((p - q) ** 2).sum(axis=2)).min(axis=1)
     return out
 
 
@@ -78,7 +79,7 @@ def _parse_color(value):
             h = value.strip().lstrip("#")
             if len(h) != 6:
                 return None
-            rgb = [int(h[i:i + 2], 16) / 255.0 for i in (0, 2, 4)]
+            rgb = [int(h[i : i + 2], 16) / 255.0 for i in (0, 2, 4)]
         else:
             rgb = [float(x) for x in value]
             if len(rgb) != 3 or not all(0.0 <= x <= 1.0 for x in rgb):
@@ -98,7 +99,7 @@ def garment_colors(pattern, preset: str) -> dict:
         value = given.get(name) if isinstance(given, dict) else given
         rgb = _parse_color(value) if value is not None else None
         if rgb is None:
-            rgb = tuple(c * (0.3 ** i) for c in look.color)
+            rgb = tuple(c * (0.3**i) for c in look.color)
         out[name] = rgb
     return out
 
@@ -112,7 +113,7 @@ def _corner_layers(pattern, preset: str) -> dict:
         uv = np.asarray(p.uv, dtype=np.float64)
         g = np.asarray(p.grain, dtype=np.float64)
         g = g / max(np.linalg.norm(g), 1e-12)
-        turned = np.stack([uv @ np.array([g[1], -g[0]]), uv @ g], axis=1)     # U weft, V warp
+        turned = np.stack([uv @ np.array([g[1], -g[0]]), uv @ g], axis=1)  # U weft, V warp
         ds, dh = edge_distances(p)
         c = faces.ravel()
         ids.append(np.asarray(p.vertex_ids)[c])
@@ -120,8 +121,13 @@ def _corner_layers(pattern, preset: str) -> dict:
         seam.append(ds[c])
         hem.append(dh[c])
         rgba.append(np.tile([*colors[p.garment], 1.0], (len(c), 1)))
-    return {"ids": np.concatenate(ids), "uv": np.concatenate(uvs), "seam": np.concatenate(seam),
-            "hem": np.concatenate(hem), "rgba": np.concatenate(rgba)}
+    return {
+        "ids": np.concatenate(ids),
+        "uv": np.concatenate(uvs),
+        "seam": np.concatenate(seam),
+        "hem": np.concatenate(hem),
+        "rgba": np.concatenate(rgba),
+    }
 
 
 def _set_corner(me, name: str, kind: str, values: np.ndarray, key: str) -> None:
@@ -140,6 +146,7 @@ def dress_garment(scene, obj, pattern=None) -> bool:
     Returns False (layers left as they are) when the garment's faces are not the pattern's
     (a garment draped from another pattern)."""
     from ..core.drape.materials import PRESETS
+
     pattern = pattern if pattern is not None else data.stored_pattern(scene)
     preset = materials.scene_fabric(scene)
     me = obj.data
@@ -147,7 +154,7 @@ def dress_garment(scene, obj, pattern=None) -> bool:
     if mod is None:
         mod = obj.modifiers.new(THICKNESS, "SOLIDIFY")
     mod.thickness = float(PRESETS[preset].thickness if preset in PRESETS else 0.003)
-    mod.offset = 0.0            # centred: the drape keeps the surface this far off the body
+    mod.offset = 0.0  # centred: the drape keeps the surface this far off the body
     mod.use_even_offset = True
     mod.use_rim = True
     if scene.ease.fitmap == "NONE" or not me.materials:
@@ -181,6 +188,7 @@ def dress_garments(scene) -> int:
     """:func:`dress_garment` on every garment of the scene (a Drape Animation's too); how many got
     the pattern's layers."""
     pattern = data.stored_pattern(scene)
-    garments = objects_with_role(scene, "garment") + [o for o in objects_with_role(scene, "motion")
-                                                      if o.data.attributes.get(data.VERTEX_ID) is not None]
+    garments = objects_with_role(scene, "garment") + [
+        o for o in objects_with_role(scene, "motion") if o.data.attributes.get(data.VERTEX_ID) is not None
+    ]
     return sum(dress_garment(scene, o, pattern) for o in garments)

@@ -21,6 +21,7 @@ cube and light, say) are hidden from the render (``hide_render``; they stay
 in the file and in the viewport): :func:`clear_set` returns their names for the
 operator to report.
 """
+
 from __future__ import annotations
 
 import math
@@ -33,20 +34,20 @@ from .objects import collection, world_bounds
 
 STUDIO = "EASE Studio"
 SET = STUDIO + " Set"
-WIDTH, HEIGHT = 1080, 1440            # default frame, pixels (portrait)
-SET_RADIUS = 6.0                      # m: cyclorama floor + cove radius
-COVE = 1.5                            # m: radius of the curve from floor to wall
-WALL = 5.0                            # m: wall height above the floor
-MARGIN = 1.08                         # framing margin over the tightest fit
-PITCH = math.radians(9.0)             # cameras look down this much
-VIEWS = {                             # view -> azimuth (degrees from the front, towards the body's left)
+WIDTH, HEIGHT = 1080, 1440  # default frame, pixels (portrait)
+SET_RADIUS = 6.0  # m: cyclorama floor + cove radius
+COVE = 1.5  # m: radius of the curve from floor to wall
+WALL = 5.0  # m: wall height above the floor
+MARGIN = 1.08  # framing margin over the tightest fit
+PITCH = math.radians(9.0)  # cameras look down this much
+VIEWS = {  # view -> azimuth (degrees from the front, towards the body's left)
     "FRONT": 0.0,
     "THREE_QUARTER": 40.0,
     "BACK": 180.0,
 }
 PATTERN_VIEW = "PATTERN"
 BODY_ROLES = ("body", "garment")
-MOTION_ROLE = "motion"                # Drape Animation's body and garment (motion_ops)
+MOTION_ROLE = "motion"  # Drape Animation's body and garment (motion_ops)
 PATTERN_ROLES = ("pattern_panel", "pattern_panel_part")
 LIGHTS = (  # name, watts, size (m), azimuth (deg from front), elevation (deg), distance (m), colour
     ("Key", 190.0, 1.0, -25.0, 55.0, 3.2, (1.0, 0.96, 0.90)),
@@ -87,7 +88,7 @@ def subject_points(scene) -> np.ndarray:
             continue
         co = np.empty(len(o.data.vertices) * 3, dtype=np.float64)
         o.data.vertices.foreach_get("co", co)
-        co = co.reshape(-1, 3)[::max(1, len(o.data.vertices) // 4000)]
+        co = co.reshape(-1, 3)[:: max(1, len(o.data.vertices) // 4000)]
         m = np.array(o.matrix_world, dtype=np.float64)
         pts.append(co @ m[:3, :3].T + m[:3, 3])
     if not pts:
@@ -98,11 +99,11 @@ def subject_points(scene) -> np.ndarray:
 def _look(direction: np.ndarray) -> tuple:
     """Euler XYZ of a camera looking along ``direction`` (unit), its up towards +Z."""
     from mathutils import Vector
+
     return tuple(Vector(direction).to_track_quat("-Z", "Y").to_euler())
 
 
-def frame_distance(points: np.ndarray, target: np.ndarray, forward: np.ndarray, tan_h: float,
-                   tan_v: float) -> float:
+def frame_distance(points: np.ndarray, target: np.ndarray, forward: np.ndarray, tan_h: float, tan_v: float) -> float:
     """Distance from ``target`` back along ``forward`` at which a perspective camera of half-angle
     tangents ``tan_h``, ``tan_v`` sees every one of ``points``."""
     right = np.cross(forward, [0.0, 0.0, 1.0])
@@ -174,10 +175,16 @@ def _cyclorama(name: str, radius: float, cove: float, wall: float, segments: int
     for t in np.linspace(0.0, 0.5 * math.pi, 9):
         prof.append((radius - cove + cove * math.sin(t), cove * (1 - math.cos(t))))
     prof.append((radius, wall))
-    prof = np.array(prof[1:])                                   # ring 0 is the centre point
+    prof = np.array(prof[1:])  # ring 0 is the centre point
     ang = np.linspace(0.0, 2 * math.pi, segments, endpoint=False)
-    rings = np.stack([np.outer(prof[:, 0], np.cos(ang)), np.outer(prof[:, 0], np.sin(ang)),
-                      np.repeat(prof[:, 1:2], segments, axis=1)], axis=2).reshape(-1, 3)
+    rings = np.stack(
+        [
+            np.outer(prof[:, 0], np.cos(ang)),
+            np.outer(prof[:, 0], np.sin(ang)),
+            np.repeat(prof[:, 1:2], segments, axis=1),
+        ],
+        axis=2,
+    ).reshape(-1, 3)
     verts = np.vstack([[0.0, 0.0, 0.0], rings])
     faces = []
     for j in range(segments):
@@ -229,6 +236,7 @@ def build_lights(scene, centre: np.ndarray, height: float) -> list:
 
 def build_world(scene) -> None:
     from .objects import ensure_nodes
+
     world = scene.world or bpy.data.worlds.new(STUDIO + " World")
     scene.world = world
     ensure_nodes(world)

@@ -4,6 +4,7 @@ Body models, the current cut and parsed patterns are kept here for the
 session; what must survive a save lives in the scene (see :mod:`.properties`
 and :mod:`.data`). The pipeline itself is the core's (:mod:`core.workflows`).
 """
+
 from __future__ import annotations
 
 from ..core.errors import Cancelled, EaseError
@@ -16,9 +17,9 @@ class AddonError(EaseError):
 USER_ERRORS = (EaseError, Cancelled, KeyError, ValueError, OSError)
 
 _MODELS: dict = {}
-CUTS: dict = {}       # (design text, body model, shape json) -> GarmentCut (data.cut_on)
-PATTERNS: dict = {}   # (scene name, key) -> (pattern json text, Pattern)
-BUGS: list = []       # (operator, traceback) of every exception an operator caught that is no user error
+CUTS: dict = {}  # (design text, body model, shape json) -> GarmentCut (data.cut_on)
+PATTERNS: dict = {}  # (scene name, key) -> (pattern json text, Pattern)
+BUGS: list = []  # (operator, traceback) of every exception an operator caught that is no user error
 
 
 #: callbacks ``f(scene)`` told that something the pattern follows may have changed (Live registers
@@ -42,5 +43,6 @@ def body_model(name: str):
     """The body model ``name`` (``"anny"`` or a file path), loaded once."""
     if name not in _MODELS:
         from ..core.body import load_body
+
         _MODELS[name] = load_body(name)
     return _MODELS[name]

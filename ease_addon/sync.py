@@ -7,6 +7,7 @@ beside the body; the property update callbacks (:mod:`.properties`) land
 here too. Operators call these after computing everything they need, so the
 scene changes only once nothing can fail any more.
 """
+
 from __future__ import annotations
 
 import json
@@ -17,7 +18,7 @@ import numpy as np
 from . import build, convert, data, materials, ramp, state
 from .objects import objects_with_role, remove_object, select_only, world_bounds
 
-SYNCING = False   # True while the add-on fills the sliders (their update callbacks must not fire)
+SYNCING = False  # True while the add-on fills the sliders (their update callbacks must not fire)
 
 
 @contextmanager
@@ -32,6 +33,7 @@ def filling():
 
 
 # ----------------------------------------------------------------------------- body
+
 
 def fill_shape_props(scene, model, shape: dict) -> None:
     """Show ``model``'s shape parameters with the values of ``shape`` as the Phenotype sliders."""
@@ -50,6 +52,7 @@ def show_size(scene, obj, size) -> None:
     ``"women:M"``) sets the chart selector, the size preset and the body's ``ease_size``;
     None (a shape of no chart size) clears the body's record. The measurements follow."""
     from ..core.body.sizes import split_size
+
     s = scene.ease
     if size is None:
         if "ease_size" in obj:
@@ -60,8 +63,7 @@ def show_size(scene, obj, size) -> None:
         s.size = key
         obj["ease_size"] = size
     spec = data.body_spec(obj)
-    s.measurements_report = data.format_measurements(data.measurements(state.body_model(spec["model"]),
-                                                                        spec["shape"]))
+    s.measurements_report = data.format_measurements(data.measurements(state.body_model(spec["model"]), spec["shape"]))
 
 
 def chart_changed(scene) -> None:
@@ -74,6 +76,7 @@ def chart_changed(scene) -> None:
 def body_vertices(spec: dict) -> np.ndarray:
     """Vertices of the body spec ``{"model", "shape", "pose"}`` (the core's body instance)."""
     from ..core.body.instance import body_instance
+
     return body_instance(state.body_model(spec["model"]), spec["shape"] or None, spec["pose"])
 
 
@@ -90,7 +93,7 @@ def update_body(context, obj, shape=None, pose=None) -> None:
     convert.set_vertices(obj.data, verts)
     convert.store_json(obj, "ease_shape", spec["shape"])
     obj["ease_pose"] = spec["pose"]
-    state.changed(context.scene)     # (Live: a slider's update runs no operator)
+    state.changed(context.scene)  # (Live: a slider's update runs no operator)
     if shape is not None:
         # a shape of its own: no chart size, measurements not taken yet (a caller that knows says so after)
         if "ease_size" in obj:
@@ -116,7 +119,7 @@ def new_body(context, model_name: str, shape=None, pose: str = "A", replaces=Non
     scene.ease.body = obj
     fill_shape_props(scene, model, shape)
     if shape == dict(model.default_shape()) and model_name == "anny":
-        show_size(scene, obj, "M")     # Anny's reference shape is the default chart's M
+        show_size(scene, obj, "M")  # Anny's reference shape is the default chart's M
     init_ease_layer(scene, obj)
     select_only(context, obj)
     return obj
@@ -148,7 +151,7 @@ def refresh_attachments(context, obj, verts) -> None:
     for o in objects_with_role(scene, "seamlines"):
         ids = json.loads(o.get("ease_ids", "[]"))
         digest = data.design_digest(text)
-        if not text or not ids or o.get("ease_design", digest) != digest:   # (lines of older files: unstamped)
+        if not text or not ids or o.get("ease_design", digest) != digest:  # (lines of older files: unstamped)
             continue
         # The cut's embedding holds for every shape and pose: move the lines with
         # the cached cut of this design (no re-cut while a slider is dragged).
@@ -174,6 +177,7 @@ def refresh_attachments(context, obj, verts) -> None:
 
 # ----------------------------------------------------------------------------- ease layer
 
+
 def refresh_legend(scene) -> None:
     """The ease legend of the Ease panel, from the ramp range (update of Ramp min/max)."""
     s = scene.ease
@@ -187,7 +191,7 @@ def refresh_legend(scene) -> None:
         item.color = rgba
 
 
-MIRROR_TOL = 1e-4      # ease: a layer element differing from before by more was painted
+MIRROR_TOL = 1e-4  # ease: a layer element differing from before by more was painted
 
 
 def mirror_stroke(obj, scene, before) -> int:
@@ -255,6 +259,7 @@ def init_ease_layer(scene, obj, ease: float = 1.0) -> None:
 
 # ----------------------------------------------------------------------------- design
 
+
 def fill_params(scene, design) -> None:
     """Show the design's parameters as the Parameters sliders."""
     with filling():
@@ -273,6 +278,7 @@ def set_design(context, design, recut: bool = True, fill_params_too: bool = True
     """Make ``design`` the scene's design: cut it on the body (errors raise
     before anything changes), store its JSON, redraw seamlines and keypoints."""
     from ..core.design import load_design
+
     design = load_design(design.to_json() if hasattr(design, "to_json") else design)
     obj = data.body_object(context)
     cut = data.cut_for(design, obj) if recut else None
@@ -283,7 +289,7 @@ def set_design(context, design, recut: bool = True, fill_params_too: bool = True
     scene = context.scene
     scene.ease.design_json = data.design_text(design)
     state.changed(scene)
-    if fill_params_too:   # not from a parameter slider's own update: its collection must stay put
+    if fill_params_too:  # not from a parameter slider's own update: its collection must stay put
         fill_params(scene, design)
     # the Fit panel offers the design's chart's sizes: the target is one of them
     scene.ease.fit_size = data.nearest_size(scene.ease.fit_size, data.design_chart(scene))
@@ -336,6 +342,7 @@ def fill_design_props(scene, design) -> None:
     """Show a loaded design's settings in the panels: seam gathering (Pattern), stretch
     tolerance (Fit), seam allowance, hem and notch spacing (Render & Export)."""
     from ..core.design.materials import Materials
+
     m = Materials.of(design)
     s = scene.ease
     s.gather_auto = m.gather_above is not None
@@ -349,6 +356,7 @@ def fill_design_props(scene, design) -> None:
 
 # ----------------------------------------------------------------------------- pattern and garment
 
+
 def store_pattern(scene, pattern, key: str = data.PATTERN_KEY, text=None) -> None:
     """Keep the whole pattern (pattern.json) in a scene property (saved in the .blend).
 
@@ -358,13 +366,14 @@ def store_pattern(scene, pattern, key: str = data.PATTERN_KEY, text=None) -> Non
     if text is None:
         from ..core.fileio import dumps_json
         from ..core.pattern.io import pattern_to_json
+
         text = dumps_json(pattern_to_json(pattern), indent=None)
     scene[key] = text
     state.PATTERNS[(scene.name, key)] = (text, pattern)
 
 
-PIECES_GAP = 0.35      # metres between the body's right side and the pieces' sheet
-PIECES_X0 = 0.45       # the sheet's left edge with no body
+PIECES_GAP = 0.35  # metres between the body's right side and the pieces' sheet
+PIECES_X0 = 0.45  # the sheet's left edge with no body
 
 
 def pieces_x0(scene) -> float:
@@ -378,8 +387,9 @@ def show_pieces(context, pattern) -> None:
     coloured in the range they were shown with; the stored pattern and its figures stay."""
     pieces = objects_with_role(context.scene, "pattern_panel")
     shown = pieces[0].data.get("ease_ramp") if pieces else None
-    lo, hi = (float(shown[0]), float(shown[1])) if shown is not None and len(shown) == 2 \
-        else data.ramp_range(context.scene)
+    lo, hi = (
+        (float(shown[0]), float(shown[1])) if shown is not None and len(shown) == 2 else data.ramp_range(context.scene)
+    )
     build.update_pattern_objects(context.scene, pattern, lo, hi, pieces_x0(context.scene))
 
 

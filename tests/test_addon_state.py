@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -79,8 +80,15 @@ def test_every_operator_says_what_it_needs(bpy_session, blender, empty):
         }.get(name, "body" if name in NEEDS_BODY + NEEDS_DESIGN else "")
         assert want in msg.lower() and "EASE >" in msg, (name, msg)
     blender.reset(body=True)
-    for name in NEEDS_BODY + ("render",):
+    for name in NEEDS_BODY:
         assert getattr(bpy.ops.ease, name).poll(), name
+    # Render on an unsaved file whose "Render to" is relative to it: greyed out, saying why; pressable
+    # once the path is absolute
+    s = bpy.context.scene.ease
+    assert not bpy.data.filepath and s.render_path.startswith("//")
+    assert "not saved" in _refusal(bpy.ops.ease.render) and "Render to" in _refusal(bpy.ops.ease.render)
+    s.render_path = str(Path(bpy_session["tmp"]) / "render.png")
+    assert bpy.ops.ease.render.poll()
     for name in NEEDS_DESIGN:
         assert "design" in _refusal(getattr(bpy.ops.ease, name)), name
     blender.reset(body=True, design=DESIGN)
