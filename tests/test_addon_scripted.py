@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from export_synth import ALL_EXPORT_FILES
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -41,19 +42,7 @@ def test_scripted_run_writes_blend_render_and_pattern(tmp_path):
     rep = json.loads((out / "report.json").read_text())
     assert rep["pattern"]["pieces"] == 2 and rep["drape"]["frames"] >= 1
     # the add-on's export: every format, the draped garment included
-    want = {
-        "pattern.svg",
-        "pattern_astm.dxf",
-        "pattern_astm_r12.dxf",
-        "pattern_plain.dxf",
-        "pattern_a4.pdf",
-        "pattern_letter.pdf",
-        "pattern_plotter.pdf",
-        "garment.glb",
-        "garment.obj",
-        "garment.mtl",
-        "export.json",
-    }
+    want = set(ALL_EXPORT_FILES)
     assert {p.name for p in (out / "export").iterdir()} == want
     assert {f"export/{n}" for n in want} <= set(rep["files"])
     from core.pattern.io import load_pattern

@@ -5,24 +5,12 @@ import sys
 
 import numpy as np
 import pytest
-from export_synth import drape_positions, make_pattern
+from export_synth import ALL_EXPORT_FILES, drape_positions, make_pattern
 
 from core.errors import Cancelled, ExportError
 from core.export import FORMATS, export_pattern, parse_formats
 
-ALL_FILES = {
-    "pattern.svg",
-    "pattern_astm.dxf",
-    "pattern_astm_r12.dxf",
-    "pattern_plain.dxf",
-    "pattern_a4.pdf",
-    "pattern_letter.pdf",
-    "pattern_plotter.pdf",
-    "garment.glb",
-    "garment.obj",
-    "garment.mtl",
-    "export.json",
-}
+ALL_FILES = ALL_EXPORT_FILES
 
 
 def test_exports_every_format(tmp_path):

@@ -4,7 +4,7 @@ import argparse
 
 import numpy as np
 import pytest
-from export_synth import drape_positions, make_pattern  # noqa: E402
+from export_synth import ALL_EXPORT_FILES, drape_positions, make_pattern  # noqa: E402
 
 from core.cli import export as cli  # noqa: E402
 from core.errors import EaseError  # noqa: E402
@@ -75,19 +75,7 @@ def test_drape_found_next_to_the_pattern(job):
     assert {"garment.glb", "garment.obj", "pattern_a4.pdf", "pattern.svg", "pattern_astm.dxf"} <= names
 
 
-ALL = {
-    "pattern.svg",
-    "pattern_astm.dxf",
-    "pattern_astm_r12.dxf",
-    "pattern_plain.dxf",
-    "pattern_a4.pdf",
-    "pattern_letter.pdf",
-    "pattern_plotter.pdf",
-    "garment.glb",
-    "garment.obj",
-    "garment.mtl",
-    "export.json",
-}
+ALL = ALL_EXPORT_FILES
 
 
 @pytest.mark.parametrize("fmt", ["svg,dxf,pdf,glb,obj", "all", "SVG, dxf,pdf,glb,obj,svg"])

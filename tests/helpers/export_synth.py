@@ -150,3 +150,21 @@ def mirrored_pattern(bulge: float = 0.0) -> Pattern:
         panels=[left, right],
         seams=seams,
     )
+
+
+#: Every file ``--format all`` writes (the draped garment included): what a user finds in the folder.
+ALL_EXPORT_FILES = frozenset(
+    {
+        "pattern.svg",
+        "pattern_astm.dxf",
+        "pattern_astm_r12.dxf",
+        "pattern_plain.dxf",
+        "pattern_a4.pdf",
+        "pattern_letter.pdf",
+        "pattern_plotter.pdf",
+        "garment.glb",
+        "garment.obj",
+        "garment.mtl",
+        "export.json",
+    }
+)
