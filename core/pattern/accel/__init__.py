@@ -39,5 +39,6 @@ def choose(progress: Optional[Progress] = None) -> bool:
     asked for. With ``EASE_SOLVER_KERNELS=numpy`` Warp is not imported."""
     from . import compiled
 
-    compiled.prepare(progress)
-    return compiled.enabled()
+    # wanted() first: a numpy choice never imports Warp; not enabled(), which would give the choice of
+    # a solver whose call builds this one (compiled.chosen)
+    return compiled.wanted() and compiled.load(progress)

@@ -94,13 +94,6 @@ def chosen(kernels: bool):
         _local.chosen = before
 
 
-def prepare(progress: Optional[Progress] = None) -> None:
-    """:func:`load` the kernels now where they are wanted (a solver's set-up, so its first iteration does
-    not compile them); with ``EASE_SOLVER_KERNELS=numpy`` Warp is not even imported."""
-    if wanted():
-        load(progress)
-
-
 def load(progress: Optional[Progress] = None) -> bool:
     """Import Warp and load the kernels, compiling them on a machine's first run (~5 s of CPU, then cached
     in Warp's kernel cache); False, with one warning, where that fails."""
