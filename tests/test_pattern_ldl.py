@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import qdldl
 import scipy.sparse as sp
-from same_bits import assert_same
+from same_bits import assert_same_floats
 
 from core.pattern.accel import compiled
 from core.pattern.optimizer.factor import SymmetricFactor
@@ -42,12 +42,6 @@ def _spd(n, seed, blocks=1, density=4):
 
 def _bits(a):
     return np.ascontiguousarray(a, float).view(np.int64)
-
-
-def _same(a, b):
-    """``a`` and ``b`` are one result of two paths (tests/helpers/same_bits.py: bits where the machine keeps
-    the contract)."""
-    assert_same(np.ascontiguousarray(a, float), np.ascontiguousarray(b, float))
 
 
 def _changed(f: SymmetricFactor, kind: str, seed: int) -> np.ndarray:
@@ -97,15 +91,15 @@ def test_refactorised_factors_are_qdldls_bits(kernels_on, n, blocks, kind):
     ref = qdldl.Solver(sp.triu(B, format="csc"), upper=True)
     L, D, _ = ref.factors()
     for x in (g, h):
-        _same(x._ldl.Lx, L.data)
-        _same(x._ldl.D, D)
+        assert_same_floats(x._ldl.Lx, L.data)
+        assert_same_floats(x._ldl.D, D)
     rhs = np.random.default_rng(1).standard_normal((f.n, 3))
     want = np.stack([ref.solve(np.ascontiguousarray(rhs[:, j])) for j in range(3)], 1)
     for x in (g, h):
-        _same(x.solve(rhs), want)
-        _same(x.solve(rhs[:, :2]), want[:, :2])
-        _same(x.solve(rhs[:, 0]), want[:, 0])
-        _same(x.solve(rhs[:, 1:2]), want[:, 1:2])
+        assert_same_floats(x.solve(rhs), want)
+        assert_same_floats(x.solve(rhs[:, :2]), want[:, :2])
+        assert_same_floats(x.solve(rhs[:, 0]), want[:, 0])
+        assert_same_floats(x.solve(rhs[:, 1:2]), want[:, 1:2])
 
 
 def test_only_the_reached_rows_are_recomputed(kernels_on, monkeypatch):
@@ -162,7 +156,7 @@ def test_kernels_and_qdldl_give_the_same_bits_on_a_solvers_guarded_matrices(kern
             out.append(fac(rhs))
         results.append(out)
     for a, b in zip(*results):
-        _same(a, b)
+        assert_same_floats(a, b)
 
 
 @pytest.mark.same_bits
@@ -184,10 +178,10 @@ def test_a_failed_launch_leaves_qdldl(kernels_on, monkeypatch, caplog):
     monkeypatch.setitem(compiled._state, "ready", True)
     g = f.with_values(data)
     assert g._ldl is None
-    _same(g.solve(b), want)
+    assert_same_floats(g.solve(b), want)
     assert caplog.text.count("using numpy") == 1
     assert not compiled.enabled()
-    _same(f.solve(b), SymmetricFactor(f.matrix).solve(b))
+    assert_same_floats(f.solve(b), SymmetricFactor(f.matrix).solve(b))
 
 
 def test_a_zero_pivot_is_refused(kernels_on, monkeypatch):
@@ -208,7 +202,7 @@ def test_a_pickled_factor_solves(kernels_on):
     b = np.random.default_rng(4).random((f.n, 2))
     x = f.solve(b)  # its launches are recorded now
     g = pickle.loads(pickle.dumps(f))
-    _same(g.solve(b), x)
+    assert_same_floats(g.solve(b), x)
 
 
 @pytest.mark.same_bits
@@ -224,8 +218,8 @@ def test_a_refused_refactorisation_goes_on_as_qdldl_and_refactorises_to_qdldls_b
         g = f.with_values(np.array([2.0, 0.0, 4.0]), reuse=g)  # no traceback
         out[forced] = g.solve(np.ones(3))
         g = f.with_values(np.array([2.0, 3.0, 5.0]), reuse=g)
-        _same(g.solve(np.ones(3)), [1 / 2, 1 / 3, 1 / 5])
-    _same(out[True], out[False])
+        assert_same_floats(g.solve(np.ones(3)), [1 / 2, 1 / 3, 1 / 5])
+    assert_same_floats(out[True], out[False])
 
 
 @pytest.mark.same_bits
@@ -242,7 +236,7 @@ def test_a_failed_plan_launch_leaves_qdldl(kernels_on, monkeypatch, caplog):
     monkeypatch.setitem(compiled._state, "ready", True)
     f = SymmetricFactor(A)
     assert f._ldl is None and f._qdldl is not None and not compiled.enabled()
-    _same(f.solve(np.ones(60)), want)
+    assert_same_floats(f.solve(np.ones(60)), want)
     assert caplog.text.count("using numpy") == 1
 
 
@@ -311,9 +305,9 @@ def test_edge_values_are_qdldls_bits(kernels_on, kind):
         L, D, _ = ref.factors()
         want = np.stack([ref.solve(np.ascontiguousarray(rhs[:, j])) for j in range(2)], 1)
         for x in (g, f.with_values(data)):
-            _same(x._ldl.Lx, L.data)
-            _same(x._ldl.D, D)
-            _same(x.solve(rhs), want)
+            assert_same_floats(x._ldl.Lx, L.data)
+            assert_same_floats(x._ldl.D, D)
+            assert_same_floats(x.solve(rhs), want)
 
 
 @pytest.mark.same_bits
@@ -336,4 +330,4 @@ def test_where_qdldl_has_other_bits_it_keeps_the_factors(kernels_on, monkeypatch
     g = f.with_values(_changed(f, "pairs", 1))
     assert g._ldl is None
     b = np.ones(60)
-    _same(f.solve(b), Fused(sp.triu(A, format="csc"), upper=True).solve(b))
+    assert_same_floats(f.solve(b), Fused(sp.triu(A, format="csc"), upper=True).solve(b))
