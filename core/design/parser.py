@@ -480,6 +480,14 @@ def _design_text(p: Path) -> str:
         ) from None
 
 
+def _names_file(text: str) -> bool:
+    """Whether ``text`` is the path of an existing file (False for JSON text too long to be a path)."""
+    try:
+        return "\n" not in text and Path(text).is_file()
+    except (OSError, ValueError):
+        return False
+
+
 def load_design(source: Union[str, Path, dict, Design]) -> Design:
     """Load and validate a design from a path, a JSON string, a dict or a Design.
 
@@ -494,9 +502,12 @@ def load_design(source: Union[str, Path, dict, Design]) -> Design:
     if isinstance(source, dict):
         check_depth(source)
         return parse_design(copy.deepcopy(source))
-    if isinstance(source, str) and source.lstrip().startswith("{"):
+    if isinstance(source, str) and source.lstrip().startswith("{") and not _names_file(source):
+        # JSON text; a path is a path, even one starting with "{" ("{summer} skirt.json")
         text = source
         where = "<string>"
+        if "\n" not in source and '"' not in source:  # no JSON text has neither: a file name, name it
+            raise DesignError("", f"design file not found: {source}")
     else:
         p = Path(source)
         if not p.is_file():
