@@ -47,12 +47,11 @@ def drape(
     body : (vertices (V, 3), faces (F, 3)) or None for the pattern's own body
         instance (its ``body`` record: model, size or shape, pose)
     """
-    from ..body.instance import spec_instance
     from ..drape import drape as _drape
     from ..metrics.drape import drape_metrics
 
     if body is None:
-        body_v, body_f = spec_instance(pattern.body or {})
+        body_v, body_f = pattern_body(pattern, "ease drape")
     else:
         body_v, body_f = np.asarray(body[0], dtype=np.float64), np.asarray(body[1], dtype=np.int64)
     result = _drape(pattern, body_v, body_f, material=material, options=options, progress=sub(progress, 0.0, 0.9))
@@ -60,6 +59,24 @@ def drape(
     metrics = drape_metrics(result, body_v, body_f, pattern=pattern)
     report(progress, 1.0, "drape: done")
     return DrapeRun(result, metrics, body_v, body_f, _drape_figures(result, metrics))
+
+
+def pattern_body(pattern, needed_by: str, error=None) -> Tuple[np.ndarray, np.ndarray]:
+    """(vertices, faces) of the body ``pattern`` was made on (its ``body`` record: model, shape, pose).
+
+    A pattern without a body record is refused (``error``, default :class:`core.errors.DrapeError`):
+    no body is assumed for it, the one line names ``needed_by``.
+    """
+    from ..body.instance import spec_instance
+
+    if not pattern.body:
+        from ..errors import DrapeError
+
+        raise (error or DrapeError)(
+            f"pattern.json: body: missing; {needed_by} needs the body the pattern was made on "
+            f"(model, shape, pose: as `ease pattern` writes it)"
+        )
+    return spec_instance(pattern.body)
 
 
 def _drape_figures(result, metrics) -> Dict[str, object]:
