@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Build the EASE Blender extension zip(s) with the core's wheels bundled.
 
-    python tools/build_extension.py                      # Linux x64, macOS arm64, Windows x64
-    python tools/build_extension.py --platform linux-x64 --out dist
+    python tools/build_extension.py --out ~/ease-dist                        # one zip per platform
+    python tools/build_extension.py --platform linux-x64 --out ~/ease-dist   # Linux x64 only
 
 Steps: download the binary wheels of the core's dependencies for each
 platform (``pip download --only-binary=:all: --platform ... --python-version
@@ -11,9 +11,12 @@ numpy (Blender ships its own); stage the extension (``__init__.py``,
 ``blender_manifest.toml``, ``ease_addon/``, ``core/`` with its package
 data: the body model and the design templates in ``core/data/``) in
 ``build/extension`` with a generated manifest that lists the wheels and the
-platforms; then ``blender_ext.py build`` (``--split-platforms`` when
-building for several platforms: one zip per platform, each with only its
-wheels). The repository's own manifest is never rewritten.
+platforms, in a temporary folder; then ``blender_ext.py build`` into
+``--out`` (``--split-platforms`` when building for several platforms: one zip
+per platform, each with only its wheels, so a user downloads only theirs).
+Nothing is written into the checkout (``--out`` must lie outside it; the wheel
+cache defaults to the user's cache folder), and the repository's own manifest
+is never rewritten.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ import re
 import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -179,8 +183,14 @@ def build(platforms: list, out: Path, cache: Path, with_wheels: bool = True, bui
                 if w.name not in seen:  # pure-Python wheels are the same file for every platform
                     seen.add(w.name)
                     wheels.append(w)
-    build_dir = build_dir or (ROOT / "build")
-    src = stage(build_dir, platforms, wheels)
+    if build_dir is None:  # staged outside the checkout, removed afterwards
+        with tempfile.TemporaryDirectory(prefix="ease-extension-") as tmp:
+            return _build_zips(stage(Path(tmp), platforms, wheels), platforms, out)
+    return _build_zips(stage(build_dir, platforms, wheels), platforms, out)
+
+
+def _build_zips(src: Path, platforms: list, out: Path) -> list:
+    """``blender_ext.py`` validate and build of the staged ``src`` into ``out``; the zips written."""
     script = blender_ext_script()
     out.mkdir(parents=True, exist_ok=True)
     before = set(out.glob("*.zip"))
@@ -189,8 +199,12 @@ def build(platforms: list, out: Path, cache: Path, with_wheels: bool = True, bui
     if len(platforms) > 1:
         cmd.append("--split-platforms")
     subprocess.run(cmd, check=True)
-    zips = sorted(z for z in out.glob("*.zip") if z not in before or z.stat().st_mtime >= src.stat().st_mtime)
-    return zips
+    return sorted(z for z in out.glob("*.zip") if z not in before or z.stat().st_mtime >= src.stat().st_mtime)
+
+
+def user_cache() -> Path:
+    """The wheel cache: ``$XDG_CACHE_HOME/ease/wheels`` (default ``~/.cache/ease/wheels``)."""
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "ease" / "wheels"
 
 
 def main(argv=None) -> int:
@@ -203,8 +217,10 @@ def main(argv=None) -> int:
         choices=sorted(PLATFORM_TAGS),
         help="platform to build for (repeat; default: all three)",
     )
-    ap.add_argument("--out", default=str(ROOT / "dist"), help="output folder for the zip(s) (default dist/)")
-    ap.add_argument("--cache", default=str(ROOT / ".cache" / "wheels"), help="wheel download cache")
+    ap.add_argument(
+        "--out", required=True, help="output folder for the zip(s), outside the checkout (e.g. ~/ease-dist)"
+    )
+    ap.add_argument("--cache", default=None, help=f"wheel download cache (default {user_cache()})")
     ap.add_argument(
         "--no-wheels",
         action="store_true",
@@ -212,7 +228,11 @@ def main(argv=None) -> int:
     )
     args = ap.parse_args(argv)
     platforms = args.platform or list(PLATFORM_TAGS)
-    zips = build(platforms, Path(args.out), Path(args.cache), with_wheels=not args.no_wheels)
+    out = Path(args.out).expanduser().resolve()
+    if out == ROOT or ROOT in out.parents:
+        raise SystemExit(f"--out: {out} is inside the checkout {ROOT}; give a folder outside it (e.g. ~/ease-dist)")
+    cache = Path(args.cache).expanduser() if args.cache else user_cache()
+    zips = build(platforms, out, cache, with_wheels=not args.no_wheels)
     for z in zips:
         print(f"{z}  ({z.stat().st_size / 2**20:.1f} MiB)")
     return 0

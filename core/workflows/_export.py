@@ -78,9 +78,10 @@ def export(
     formats = parse_formats(formats)
     body = None
     if with_body and ("glb" in formats or "obj" in formats):
-        from ..body.instance import spec_instance
+        from ..errors import ExportError
+        from ._drape import pattern_body
 
-        body = spec_instance(pattern.body or {})  # the body the pattern was made on
+        body = pattern_body(pattern, "--with-body", ExportError)  # the body the pattern was made on
     return export_pattern(
         pattern,
         out,
