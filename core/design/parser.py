@@ -105,6 +105,7 @@ from .checks import (
 )
 from .darts import parse_auto, parse_darts
 from .materials import check_seam_names, parse_materials
+from .pleats import parse_pleats
 from .types import FORMAT, VERSION, Design, Garment, Line, Panel, Parameter
 
 
@@ -147,7 +148,7 @@ def _parse_line(path, obj, params) -> Line:
 
 def _parse_panel(path, obj, params) -> Panel:
     expect_dict(path, obj, "a panel {name, seed, body_part, ease, darts}")
-    expect_keys(path, obj, ("name", "seed", "body_part", "ease", "darts"))
+    expect_keys(path, obj, ("name", "seed", "body_part", "ease", "darts", "pleats"))
     for k in ("name", "seed"):
         if k not in obj:
             raise DesignError(f"{path}.{k}", "missing")
@@ -163,7 +164,8 @@ def _parse_panel(path, obj, params) -> Panel:
         raise DesignError(exc.path, f"panel {obj['name']!r}: {exc.message}") from None
     auto = parse_auto(f"{path}.darts", obj["darts"]) if "darts" in obj else None
     darts = parse_darts(f"{path}.darts", obj["darts"], params) if "darts" in obj and auto is None else []
-    return Panel(obj["name"], seed, part, ease, darts, auto)
+    pleats = parse_pleats(f"{path}.pleats", obj["pleats"], params) if "pleats" in obj else []
+    return Panel(obj["name"], seed, part, ease, darts, auto, pleats)
 
 
 def _named_list(path, raw, what, parse, required=False):

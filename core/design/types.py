@@ -19,6 +19,7 @@ from .checks import check_ease, check_keypoint, check_name, check_parameter_valu
 from .darts import Dart, mirror_dart
 from .mirror import mirror_panel
 from .naming import mirrored_name
+from .pleats import Pleat, mirror_pleat
 
 FORMAT = "ease-design"
 VERSION = 1
@@ -86,6 +87,7 @@ class Panel:
     ease: dict = field(default_factory=lambda: {"value": 1.0})
     darts: List[Dart] = field(default_factory=list)
     auto_darts: Optional[dict] = None
+    pleats: List[Pleat] = field(default_factory=list)
 
     def to_json(self):
         out = {
@@ -98,6 +100,8 @@ class Panel:
             out["darts"] = {"auto": copy.deepcopy(self.auto_darts)}
         elif self.darts:
             out["darts"] = [d.to_json() for d in self.darts]
+        if self.pleats:
+            out["pleats"] = [p.to_json() for p in self.pleats]
         return out
 
 
@@ -244,6 +248,7 @@ class Design:
         if mirrored:
             p = mirror_panel(p)
             p.darts = [mirror_dart(d) for d in p.darts]
+            p.pleats = [mirror_pleat(x) for x in p.pleats]
             g.panels.append(p)
             i = len(g.panels) - 1
         p.ease = check_ease(f"garments[{gi}].panels[{i}].ease", ease, self.parameters)
