@@ -202,9 +202,13 @@ class EASE_PT_drape(_EasePanel, bpy.types.Panel):
         _figures(layout, s.drape_json)
         box = layout.box()
         box.label(text="Animation")
-        box.prop(s, "motion_poses")
-        box.prop(s, "motion_between")
-        box.operator("ease.drape_animation", icon="ARMATURE_DATA")
+        box.prop(s, "motion_source", expand=True)
+        if s.motion_source == "POSES":
+            box.prop(s, "motion_poses")
+            box.prop(s, "motion_between")
+        box.operator("ease.add_rig", icon="ARMATURE_DATA")
+        box.prop(s, "motion_adapt")
+        box.operator("ease.drape_animation", icon="MOD_CLOTH")
         if s.motion_status:
             box.label(text=s.motion_status)
         box.prop(s, "motion_path")
@@ -239,7 +243,7 @@ class EASE_PT_render(_EasePanel, bpy.types.Panel):
         layout.operator("ease.export_pattern", icon="EXPORT")
         layout.separator()
         col = layout.column(align=True)
-        for name in ("marker_width_mm", "marker_sizes", "marker_seconds", "marker_one_way"):
+        for name in ("marker_width_mm", "marker_sizes", "marker_seconds", "marker_one_way", "marker_spread"):
             col.prop(s, name)
         layout.operator("ease.marker", icon="MOD_UVPROJECT")
         if s.marker_status:

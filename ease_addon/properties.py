@@ -206,6 +206,20 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
     motion_between: IntProperty(
         name="In-betweens", default=10, min=0, max=240, description="frames from each pose to the next"
     )
+    motion_source: EnumProperty(
+        name="Motion",
+        items=[
+            ("POSES", "Poses", "the pose presets in Poses, with In-betweens from each to the next"),
+            ("ACTION", "Rig Action", "the body rig's keyframed bones over the scene's frame range (Add Rig)"),
+        ],
+        default="POSES",
+    )
+    motion_adapt: BoolProperty(
+        name="Adapt to Poses",
+        default=False,
+        description="adapt the pattern to the motion's poses first (the design's stretch tolerances), "
+        "then drape that pattern through the motion",
+    )
     motion_status: StringProperty(name="Motion status")
     motion_path: StringProperty(name="Alembic to", subtype="FILE_PATH", default="//ease_motion.abc")
     motion_with_body: BoolProperty(name="With body", default=True, description="the body in the Alembic file too")
@@ -267,12 +281,26 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
         default=30,
         min=1,
         max=600,
-        description="Time budget of the nester (it stops sooner when it converges)",
+        description="Time budget of the nester, used whole (the best marker found in it is kept)",
     )
     marker_one_way: BoolProperty(
         name="One-way fabric",
         default=False,
         description="Nap, pile or a directional print: every piece the same way up",
+    )
+    marker_spread: EnumProperty(
+        name="Spread",
+        items=[
+            ("SINGLE", "Single ply", "one ply: every piece nested (ease marker --spread single)"),
+            (
+                "PAIRS",
+                "Pairs, face to face",
+                "two plies face to face, as cutting rooms lay mirrored pieces: one piece of each mirrored pair "
+                "(the second ply cuts its mirror image), a piece that is its own mirror image half as often "
+                "(ease marker --spread pairs)",
+            ),
+        ],
+        default="SINGLE",
     )
     marker_status: StringProperty(name="Marker", default="")
     solver_config: EnumProperty(
