@@ -101,6 +101,7 @@ class EASE_OT_marker(EaseOperator):
                 seconds=s.marker_seconds,
                 seed=0,
                 one_way=s.marker_one_way,
+                spread=s.marker_spread.lower(),  # as `ease marker --spread single|pairs`
                 progress=progress,
             )
         title = f"{pattern.style or 'pattern'} marker"

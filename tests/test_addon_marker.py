@@ -47,3 +47,23 @@ def test_marker_operator(bpy_session, blender):
     r = blender.run(bpy.ops.ease.marker)
     assert "ERROR" in r and "Sizes" in r["ERROR"]
     assert len([o for o in bpy.context.scene.objects if o.get("ease_role") == "marker"]) == 1
+
+
+def test_marker_spread_pairs_as_the_cli(bpy_session):
+    """The panel's Spread: pairs lays two plies face to face, as `ease marker --spread pairs` (core.workflows.marker)."""
+    bpy = bpy_session["bpy"]
+    s = bpy.context.scene.ease
+    s.export_dir = str(bpy_session["tmp"] / "marker_pairs")
+    s.marker_width_mm, s.marker_sizes, s.marker_seconds, s.marker_one_way = 1400.0, "", 2, False
+    s.marker_spread = "PAIRS"
+    try:
+        assert bpy.ops.ease.marker() == {"FINISHED"}
+    finally:
+        s.marker_spread = "SINGLE"
+    rep = json.loads((bpy_session["tmp"] / "marker_pairs" / "marker" / "marker.json").read_text())
+    assert rep["spread"] == "pairs" and rep["plies"] == 2 and rep["face_to_face"]
+    names = {p["name"] for p in json.loads(bpy.context.scene["ease_pattern_json"])["panels"]}
+    # one piece of each mirrored pair nested, the pair's other piece cut by the second ply; a piece that is
+    # its own mirror image once for two garments (one garment here: once)
+    paired = set(rep["face_to_face"].values()) - {"itself"}
+    assert paired <= names and rep["pieces"] == len(names) - len(paired)

@@ -41,6 +41,9 @@ class Options:
     export : cutting-room formats written per item (``("svg", "dxf")``)
     garmentcode : also write the GarmentCode pattern specification
     preview : write ``pattern.png`` per item (costs more than the solve)
+    marker_width : m of fabric: nest each item's pieces into ``marker/`` (:func:`core.workflows.marker`,
+        the export's allowance rule); None: no marker
+    marker_seconds : the nester's budget per item (s); marker_spread : ``"single"`` or ``"pairs"``
     """
 
     config: Optional[str] = None
@@ -49,9 +52,12 @@ class Options:
     export: Tuple[str, ...] = ()
     garmentcode: bool = False
     preview: bool = False
+    marker_width: Optional[float] = None
+    marker_seconds: int = 10
+    marker_spread: str = "single"
 
     def record(self) -> dict:
-        return {
+        out = {
             "config": self.config,
             "poses": list(self.poses),
             "drape": self.drape,
@@ -59,6 +65,9 @@ class Options:
             "garmentcode": self.garmentcode,
             "preview": self.preview,
         }
+        if self.marker_width is not None:  # only then: the ids of batches without a marker stay as they were
+            out["marker"] = {"width": self.marker_width, "seconds": self.marker_seconds, "spread": self.marker_spread}
+        return out
 
 
 @dataclass(frozen=True)

@@ -150,7 +150,30 @@ def _drape(ctx: Context, item: Item, run, vertices, check):
     }
 
 
-def _write(folder: Path, item: Item, run, arun, drun, preview: bool) -> None:
+def _marker(item: Item, run, check):
+    """The item's pieces nested on the batch's fabric width (:func:`core.workflows.marker`, one garment, one
+    nester on this worker's core; the export's allowance rule: the design's table) and its row entries."""
+    from .. import workflows as wf
+    from ..marker import size_label
+
+    opts = item.options
+    marker = wf.marker(
+        [(size_label(run.pattern), run.pattern, 1)],
+        opts.marker_width,
+        seconds=opts.marker_seconds,
+        threads=1,
+        tries=1,
+        spread=opts.marker_spread,
+        progress=check,
+    )
+    return marker, {
+        "marker.efficiency_pct": 100.0 * marker.efficiency,
+        "marker.length_mm": 1000.0 * marker.length,
+        "marker.pieces": len(marker.placements),
+    }
+
+
+def _write(folder: Path, item: Item, run, arun, drun, preview: bool, marker=None) -> None:
     from .. import workflows as wf
     from ..fileio import output_dir, write_json
     from .garmentcode import specification
@@ -170,6 +193,8 @@ def _write(folder: Path, item: Item, run, arun, drun, preview: bool) -> None:
                 opts.export,
                 drape=(drun.result.positions, drun.result.faces) if drun is not None else None,
             )
+        if marker is not None:
+            wf.write_marker(tmp / "marker", marker, f"{run.pattern.style or 'pattern'} marker")
         if opts.garmentcode:
             write_json(tmp / "specification.json", specification(run.pattern))
         write_json(
@@ -204,8 +229,8 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
     ``error``, ``timeout``), ``error`` (one line), ``body.kind``, ``shape.*``,
     ``targets.*`` (cm, measurement bodies), ``body.<measure>_cm`` (cm, measured on the
     body: :func:`core.body.measure.measure`), ``metrics.*`` (the transferred
-    pattern on its body), ``adapt.*``, ``drape.*``, ``timings.*`` (s: body,
-    transfer, metrics, adapt, drape, write, setup = this worker's cut of the
+    pattern on its body), ``adapt.*``, ``drape.*``, ``marker.*`` (efficiency %, length mm,
+    pieces), ``timings.*`` (s: body, transfer, metrics, adapt, drape, marker, write, setup = this worker's cut of the
     design when this item paid for it; ``cpu`` = the CPU seconds of this
     worker's process for the item, the cut included when it paid for it:
     throughput on a shared machine), ``worker``.
@@ -280,8 +305,15 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
             row.update(entries)
             timings["drape"] = time.perf_counter() - t
 
+        marker = None
+        if item.options.marker_width is not None:
+            t = time.perf_counter()
+            marker, entries = _marker(item, run, check)
+            row.update(entries)
+            timings["marker"] = time.perf_counter() - t
+
         t = time.perf_counter()
-        _write(Path(out_root) / "items" / item.folder, item, run, arun, drun, item.options.preview)
+        _write(Path(out_root) / "items" / item.folder, item, run, arun, drun, item.options.preview, marker)
         timings["write"] = time.perf_counter() - t
     except ItemTimeout as exc:
         row.update(status="timeout", error=one_line(exc))

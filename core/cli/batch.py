@@ -67,6 +67,26 @@ def add_parser(sub) -> None:
         action="store_true",
         help="also write each item as a GarmentCode pattern specification (specification.json)",
     )
+    p.add_argument(
+        "--marker",
+        type=float,
+        default=None,
+        metavar="WIDTH_MM",
+        help="also nest each item's pieces on a fabric WIDTH_MM wide into marker/ (as `ease marker`, the "
+        "export's allowance rule; one nester per worker)",
+    )
+    p.add_argument(
+        "--marker-seconds",
+        type=int,
+        default=10,
+        help="the nester's budget per item with --marker (default 10 s; 1 to 86400)",
+    )
+    p.add_argument(
+        "--spread",
+        default="single",
+        metavar="single|pairs",
+        help="with --marker: single (one ply, default) or pairs (two plies face to face, as `ease marker --spread`)",
+    )
     p.add_argument("--preview", action="store_true", help="write pattern.png per item (slower than the solve)")
     p.add_argument(
         "--config",
@@ -111,6 +131,23 @@ def _model(args, design: dict) -> str:
     return args.model or (design.get("body") or {}).get("model") or "anny"
 
 
+def _marker_options(args):
+    """``--marker`` in m (None: no marker), its budget and spread checked before any work (one line each)."""
+    from ..batch import BatchError
+    from ..errors import EaseError
+    from ..marker import SPREADS, check_options
+
+    if args.spread not in SPREADS:
+        raise BatchError(f"--spread: expected {' or '.join(SPREADS)}, got {args.spread!r}")
+    if args.marker is None:
+        return None
+    try:
+        width, *_ = check_options(args.marker / 1000.0, args.marker_seconds, 0, 1, 1, prefix="--")
+    except EaseError as exc:
+        raise BatchError(str(exc).replace("--width", "--marker").replace("--seconds", "--marker-seconds")) from None
+    return width
+
+
 def _cmd(args) -> int:
     from ..batch import Options, run_batch
     from ..batch.run import read_design
@@ -125,6 +162,7 @@ def _cmd(args) -> int:
         from ..batch import BatchError
 
         raise BatchError(f"--poses: unknown pose {unknown[0]!r}; allowed: {', '.join(POSE_PRESETS)}")
+    marker_width = _marker_options(args)
     # config None: make_items takes the design's own "solver" (else improved)
     options = Options(
         config=args.config,
@@ -133,6 +171,9 @@ def _cmd(args) -> int:
         export=tuple(parse_formats(args.export)) if args.export else (),
         garmentcode=args.garmentcode,
         preview=args.preview,
+        marker_width=marker_width,
+        marker_seconds=args.marker_seconds,
+        marker_spread=args.spread,
     )
     result = run_batch(
         design,
