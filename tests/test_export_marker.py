@@ -169,6 +169,8 @@ def test_marker_cli_same_seed_same_bytes(tmp_path, capsys):
             "--seed",
             7,
             "--early-stop",
+            "--threads",
+            1,
             "--tries",
             1,
             "--out",
@@ -332,3 +334,13 @@ def test_spread_pairs_nests_one_piece_of_each_mirrored_pair(tmp_path, capsys):
     assert "front_left + front_right" in (tmp_path / "m" / "marker.svg").read_text()
     rc, cap = _cli(capsys, pat, "--width", 1500, "--spread", "both", "--out", tmp_path / "bad")
     assert rc == 2 and "--spread" in cap.err and len(cap.err.strip().splitlines()) == 1
+
+
+def test_default_split_is_one_nester_with_a_thread_a_core(monkeypatch):
+    from core.marker import default_split, nesting
+
+    monkeypatch.setattr(nesting, "_cores", lambda: 4)
+    assert default_split() == (4, 1)  # one search, its workers side by side
+    assert default_split(1, None) == (1, 4) and default_split(2, None) == (2, 2)  # tries fill the cores
+    assert default_split(None, 2) == (2, 2) and default_split(None, 3) == (1, 3)
+    assert default_split(3, 1) == (3, 1)

@@ -14,7 +14,7 @@ from .common import add_quiet, console_progress, print_files, subcommand
 def _run(args) -> int:
     from .. import workflows as wf
     from ..errors import ExportError
-    from ..marker import SPREADS, check_options, default_tries, parse_quantities, size_label
+    from ..marker import SPREADS, check_options, default_split, parse_quantities, size_label
     from ..pattern.io import load_pattern
     from .export import allowance_options
 
@@ -23,8 +23,7 @@ def _run(args) -> int:
         raise ExportError(f"--spread: expected {' or '.join(SPREADS)}, got {args.spread!r}")
     if args.width is None:
         raise ExportError("--width: expected the fabric width in mm (e.g. 1500)")
-    if args.tries is None:
-        args.tries = default_tries(args.threads)
+    args.threads, args.tries = default_split(args.threads, args.tries)
     check_options(args.width / 1000.0, args.seconds, args.seed, args.threads, args.tries, prefix="--")
     wanted = parse_quantities(args.sizes, "--sizes") if args.sizes is not None else None
     found = {}
@@ -115,7 +114,7 @@ def add_parser(sub) -> None:
         "--seed",
         type=int,
         default=0,
-        help="nester seed, 0 to 2**32-1 (default 0): with --early-stop and one thread and try, a marker "
+        help="nester seed, 0 to 2**32-1 (default 0): with --early-stop, --threads 1 and --tries 1, a marker "
         "that converges in time is repeatable",
     )
     p.add_argument(
@@ -127,15 +126,16 @@ def add_parser(sub) -> None:
     p.add_argument(
         "--threads",
         type=int,
-        default=1,
-        help="nester threads (default 1; more: faster, not repeatable; at most the machine's cores)",
+        default=None,
+        help="worker threads of each nester (default: one a core, with one nester; they search side by side "
+        "and share the best marker; at most the machine's cores)",
     )
     p.add_argument(
         "--tries",
         type=int,
         default=None,
-        help="nesters run side by side in the same time, seeds SEED, SEED+1, ... (default: as many as "
-        "the machine's cores hold THREADS each); the shortest marker is kept; THREADS x TRIES "
+        help="nesters run side by side in the same time, seeds SEED, SEED+1, ... (default 1; with --threads: "
+        "as many as the machine's cores hold THREADS each); the shortest marker is kept; THREADS x TRIES "
         "cores, at most the machine's",
     )
     p.add_argument(

@@ -18,7 +18,7 @@ def marker(
     seed: int = 0,
     one_way: bool = False,
     tilt: float = 0.0,
-    threads: int = 1,
+    threads: Optional[int] = None,
     tries: Optional[int] = None,
     progress: Optional[Progress] = None,
     early_stop: bool = False,
@@ -33,19 +33,19 @@ def marker(
         :func:`export_allowance`, with ``allowance`` on every seam and ``hem`` over it; a table as such),
         so the marker nests the cut lines ``ease export`` draws
     notch_spacing, seconds, seed, one_way, tilt, threads, tries, early_stop : see :func:`core.marker.nest`;
-        the numbers are checked before any work (:func:`core.marker.check_options`); ``tries`` None: as many
-        nesters (seeds ``seed``, ``seed + 1``, ...) as the machine's cores hold ``threads`` each, in the same
-        wall time
+        the numbers are checked before any work (:func:`core.marker.check_options`); ``threads`` and ``tries``
+        None: one nester with a worker thread a core (:func:`core.marker.default_split`); ``tries`` alone None:
+        as many nesters (seeds ``seed``, ``seed + 1``, ...) as the machine's cores hold ``threads`` each, in the
+        same wall time
     spread : ``"single"`` (one ply) or ``"pairs"`` (two plies face to face, :func:`core.marker.marker_items`)
 
     Returns
     -------
     core.marker.Marker
     """
-    from ..marker import check_options, default_tries, marker_items, nest
+    from ..marker import check_options, default_split, marker_items, nest
 
-    if tries is None:
-        tries = default_tries(threads)
+    threads, tries = default_split(threads, tries)
     check_options(width, seconds, seed, threads, tries)
     items = []
     for size, pattern, garments in runs:
