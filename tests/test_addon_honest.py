@@ -307,7 +307,7 @@ def test_x_mirror_on_while_live_runs_resolves(blender):
         field = live._field(s.body, bpy.context.scene)
         assert np.abs(field[has] - field[fs[has]]).max() < 1e-9  # symmetric now
         session = live.session_for(bpy.context)
-        cold = session.cold_pattern(field)
+        cold = session.cold_pattern(*live.targets(s.body, bpy.context.scene))
         stored = data.stored_pattern(bpy.context.scene)
         for p, q in zip(cold.panels, stored.panels):
             assert np.allclose(np.asarray(q.uv), p.uv, rtol=0, atol=1e-9)
