@@ -158,8 +158,7 @@ def _case(bpy, live, ease_ops, data, template: str, strokes: int, seed: int) -> 
         time.sleep(nxt)
         clock += nxt
     paint_cpu = (time.process_time() - c_paint) / (time.perf_counter() - w_paint)
-    field = live._field(obj, ctx.scene)
-    cold = session.cold_pattern(field)
+    cold = session.cold_pattern(*live.targets(obj, ctx.scene))
     cold_c = float(cold.report["metrics"]["compliance"]["mean"])
     within_s, good_s, trace = None, None, []
     for t, res in shown:

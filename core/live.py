@@ -110,7 +110,9 @@ class LiveSession:
         cfg = self.solver.config
         self.preview_config = dataclasses.replace(cfg, guard=dataclasses.replace(cfg.guard, guard_scale=0.0))
         self.K = self.solver.ref_offsets[0]
-        self.ease = self.solver.design_ease.copy()
+        #: (f,) the design's own weft ease per cut triangle: the target wherever the field is not painted
+        self.design_ease = self.solver.design_ease.copy()
+        self.ease = self.design_ease.copy()
         self._start = None if pattern is None else self.solver.start_from(pattern)
         self.state = None
         self._cold = None
@@ -131,10 +133,19 @@ class LiveSession:
     def n_body_triangles(self) -> int:
         return len(self.prep.body.faces)
 
-    def cut_ease(self, body_ease) -> np.ndarray:
-        """The per-cut-triangle ease (f,) of a painted field ``body_ease`` (F_body,), checked."""
+    def cut_ease(self, body_ease=None, painted=None) -> np.ndarray:
+        """The per-cut-triangle ease (f,) of a painted field ``body_ease`` (F_body,), checked.
+
+        ``painted`` (F_body,) bool: the body triangles whose paint differs from what the design's
+        ease was made from or written to (a stroke since); the cut triangles on the others keep
+        the design's own ease (:attr:`design_ease`), so a field nobody painted gives the design's
+        pattern exactly (a vertex layer cannot hold a per-panel ease where the cut crosses the
+        body's triangles). None: every triangle reads the field. ``body_ease`` None: the design's.
+        """
         from .design.checks import EASE_MAX, EASE_MIN
 
+        if body_ease is None:
+            return self.design_ease.copy()
         e = np.asarray(body_ease, dtype=np.float64).reshape(-1)
         if len(e) != self.n_body_triangles:
             raise PatternError(
@@ -144,16 +155,32 @@ class LiveSession:
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
             raise PatternError(f"live ease: triangle {i}: expected an ease in {EASE_MIN}..{EASE_MAX}, got {e[i]}")
-        return e[self.triangles]
+        if painted is None:
+            return e[self.triangles]
+        painted = np.asarray(painted, dtype=bool).reshape(-1)
+        if len(painted) != self.n_body_triangles:
+            raise PatternError(
+                f"live ease: expected {self.n_body_triangles} painted flags (one per body triangle), got {len(painted)}"
+            )
+        return np.where(painted[self.triangles], e[self.triangles], self.design_ease)
 
-    def set_ease(self, body_ease) -> bool:
-        """Aim at a new painted field (F_body,); False (nothing to do) when the garment's ease is unchanged.
+    def set_design_ease(self, design_ease) -> None:
+        """The design's own ease (f,) changed (*Ease to Design*), its cut did not: the unpainted
+        triangles aim at it from the next :meth:`set_ease`."""
+        ease = np.asarray(design_ease, dtype=np.float64).reshape(-1)
+        if ease.shape != self.design_ease.shape:
+            raise PatternError(f"live ease: expected {len(self.design_ease)} design values, got {len(ease)}")
+        self.design_ease = ease.copy()
+
+    def set_ease(self, body_ease=None, painted=None) -> bool:
+        """Aim at a new painted field (F_body,) (:meth:`cut_ease`: ``painted``, None for the
+        design's own); False (nothing to do) when the garment's ease is unchanged.
 
         The next :meth:`run` then takes one warm slice from the current
         pattern. The seam plan follows the new targets; a plan not met before
         costs one factorisation (cached by the solver for the session).
         """
-        ease = self.cut_ease(body_ease)
+        ease = self.cut_ease(body_ease, painted)
         if self.state is not None and np.array_equal(ease, self.ease):
             return False
         ones = np.ones_like(ease)
@@ -195,7 +222,7 @@ class LiveSession:
         its expected time still fits the slice.
         """
         if self.state is None:
-            self.set_ease(self._design_field())
+            self.set_ease(None)
         if self.converged:
             return 0
         if self._warm:
@@ -239,12 +266,6 @@ class LiveSession:
             self.iterations_since_change += 1
         return done
 
-    def _design_field(self) -> np.ndarray:
-        """A body field (F_body,) that gives the design's own ease on the garment (1.0 elsewhere)."""
-        field = np.ones(self.n_body_triangles)
-        field[self.triangles] = self.solver.design_ease
-        return field
-
     def pattern(self, figures: bool = True):
         """The current pattern (core.pattern.Pattern, mode ``reference``); with ``figures``, its
         metrics in ``report["metrics"]``; ``report["live"]``: iterations since the change, converged."""
@@ -264,12 +285,13 @@ class LiveSession:
         """The key figures of a measured ``pattern`` of this session (as the workflows give them)."""
         return wf.pattern_figures(pattern)
 
-    def cold_pattern(self, body_ease):
+    def cold_pattern(self, body_ease=None, painted=None):
         """A cold solve (the configuration's iterations from the stretched flattening) of the
-        field ``body_ease`` (F_body,) on this session's solver: what live mode converges towards."""
+        field ``body_ease`` (F_body,) on this session's solver (``painted``: :meth:`cut_ease`):
+        what live mode converges towards."""
         from .pattern.build import build_pattern
 
-        ease = self.cut_ease(body_ease)
+        ease = self.cut_ease(body_ease, painted)
         ones = np.ones_like(ease)
         res = self.solver.solve(self.K, ease, ones, plan=self.solver.plan_seams(self.K, ease, ones))
         pat = build_pattern(self.prep.cut, res, style=self.prep.design.name, mode="reference")

@@ -225,7 +225,7 @@ class EASE_OT_ease_to_design(EaseOperator):
         if mirror:
             tri = data.symmetrised(obj, tri)
         sync.set_design(context, design_with_triangle_ease(context, design, tri, mirror), recut=True)
-        sync.remember_layer(obj, context.scene)
+        sync.remember_layer(obj, context.scene, design=True)
         how = "X-mirror: symmetric" if mirror else "each side as painted"
         self.report({"INFO"}, f"ease {tri.min():.3f} .. {tri.max():.3f} written into the design ({how})")
 
@@ -245,7 +245,7 @@ class EASE_OT_ease_from_design(EaseOperator):
             s = context.scene.ease
             s.ease_min, s.ease_max = min(lo, float(v.min())), max(hi, float(v.max()))
         write_vertex_ease(obj, context.scene, v)
-        sync.remember_layer(obj, context.scene)
+        sync.remember_layer(obj, context.scene, design=True)
 
 
 CLASSES = (

@@ -144,7 +144,9 @@ def _of_cut(pattern, cut) -> bool:
 
 
 def session_for(context):
-    """The live session of the scene's design on its body (built once per topology)."""
+    """The live session of the scene's design on its body (built once per topology and solver
+    configuration: Optimize Pattern's, so that a converged pattern is the one it gives)."""
+    from ..core import workflows as wf
     from ..core.live import LiveSession, topology_key
 
     s = context.scene.ease
@@ -156,6 +158,7 @@ def session_for(context):
             data.body_spec(obj),
             s.gather_auto,
             round(s.gather_above_pct, 6),
+            s.solver_config,
             obj.name,
             len(obj.data.polygons),
         ],
@@ -164,33 +167,54 @@ def session_for(context):
     if quick == _LIVE.get("inputs") and _LIVE["session"] is not None:
         return _LIVE["session"]
     prep = data.prepared(context, lambda design: pattern_ops.gather_settings(context.scene, design))
-    key = topology_key(prep.design, data.body_spec(obj))
+    config = wf.config_name(prep, data.solver_choice(context.scene))
+    key = json.dumps([topology_key(prep.design, data.body_spec(obj)), config])
     _LIVE["inputs"] = quick
     _LIVE["faces"] = convert.get_triangles(obj.data)
+    _LIVE["colors"] = None  # the design's ease may have changed: the field is taken again
     if _LIVE["key"] != key or _LIVE["session"] is None:
         start = data.stored_pattern(context.scene)
         _LIVE.update(
             key=key,
-            session=LiveSession(prep, pattern=start if _of_cut(start, prep.cut) else None),
-            colors=None,
+            session=LiveSession(prep, config=config, pattern=start if _of_cut(start, prep.cut) else None),
             builds=_LIVE["builds"] + 1,
             final=None,
         )
+    else:  # the same cut: the design's own ease may differ (Ease to Design)
+        _LIVE["session"].set_design_ease(np.concatenate([np.asarray(p.ease, float) for p in prep.cut.panels]))
     return _LIVE["session"]
+
+
+def _per_triangle(obj, values) -> np.ndarray:
+    """Per body triangle (F,) mean of per-element values of the ease layer (its vertices or corners)."""
+    if obj.data.color_attributes[convert.EASE_LAYER].domain == "CORNER":
+        return np.asarray(values, dtype=np.float64).reshape(-1, 3).mean(axis=1)
+    faces = _LIVE.get("faces")
+    if faces is None or len(faces) != len(obj.data.polygons):
+        faces = convert.get_triangles(obj.data)
+    return ramp.vertex_to_triangle(values, faces)
 
 
 def _field(obj, scene) -> np.ndarray:
     """The painted field per body triangle (F,) as *Ease to Design* reads it (symmetrised with X-mirror)."""
-    faces = _LIVE.get("faces")
-    if (
-        faces is None
-        or len(faces) != len(obj.data.polygons)
-        or obj.data.color_attributes[convert.EASE_LAYER].domain != "POINT"
-    ):
-        tri = data.triangle_ease(obj, scene)
-    else:  # the same mean of the vertex values, with the body's triangles kept (its topology is fixed)
-        tri = ramp.vertex_to_triangle(data.vertex_ease(obj, scene), faces)
+    tri = _per_triangle(obj, data.layer_ease(obj, scene))
     return data.symmetrised(obj, tri) if data.x_mirror(obj) else tri
+
+
+def targets(obj, scene) -> tuple:
+    """``(field, painted)``: what Live solves for (:meth:`core.live.LiveSession.cut_ease`): the
+    painted field (:func:`_field`) and the body triangles painted since the design's ease was
+    written into the layer or taken from it (the others keep the design's own ease, so that Live
+    switched on over an optimized pattern keeps it); ``painted`` None (all painted) without a
+    record of the design's ease (:func:`.sync.design_record`)."""
+    field = _field(obj, scene)
+    base = sync.design_record(obj)
+    if base is None:
+        return field, None
+    base = _per_triangle(obj, base)
+    if data.x_mirror(obj):
+        base = data.symmetrised(obj, base)
+    return field, np.abs(field - base) > sync.MIRROR_TOL
 
 
 def _estimate(kind: str, size: int):
@@ -305,7 +329,7 @@ def _step(context, budget_s: float, t0: float) -> dict:
             restored = data.stored_pattern(scene)
             if _of_cut(restored, session.prep.cut):  # (not one of another cut: a parameter undone)
                 session.restart_from(restored)
-        changed = session.set_ease(_field(obj, scene))
+        changed = session.set_ease(*targets(obj, scene))
         sync.remember_layer(obj, scene)
         _LIVE["colors"], _LIVE["mirror"] = raw, mirror
         if changed:

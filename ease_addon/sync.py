@@ -222,18 +222,39 @@ def mirror_stroke(obj, scene, before) -> int:
     return int(one.sum())
 
 
-def remember_layer(obj, scene) -> None:
+DESIGN_LAYER = "ease_design"  # FLOAT layer beside "ease": its values when the design's ease was last
+# written into it (Ease from Design, a template load) or taken from it (Ease to Design)
+
+
+def remember_layer(obj, scene, design: bool = False) -> None:
     """Record the ease layer's values as taken now (:func:`.data.seen_ease`): strokes are what
-    differs from them later."""
+    differs from them later. With ``design``, also as the design's ease (:func:`design_record`):
+    what Live paints on is what differs from that."""
     me = obj.data
     e = data.layer_ease(obj, scene).astype(np.float32)
     layer = me.color_attributes[convert.EASE_LAYER]
-    seen = me.attributes.get(data.SEEN_LAYER)
-    if seen is None or seen.domain != layer.domain or seen.data_type != "FLOAT":
-        if seen is not None:
-            me.attributes.remove(seen)
-        seen = me.attributes.new(data.SEEN_LAYER, "FLOAT", layer.domain)
-    seen.data.foreach_set("value", e)
+    for name in (data.SEEN_LAYER, DESIGN_LAYER) if design else (data.SEEN_LAYER,):
+        rec = me.attributes.get(name)
+        if rec is None or rec.domain != layer.domain or rec.data_type != "FLOAT":
+            if rec is not None:
+                me.attributes.remove(rec)
+            rec = me.attributes.new(name, "FLOAT", layer.domain)
+        rec.data.foreach_set("value", e)
+
+
+def design_record(obj):
+    """The ease layer's values (per element, float64) when the design's ease was last written into
+    it or taken from it (:func:`remember_layer` with ``design``); None without such a record of
+    this layer's shape (a layer painted before the design, an older file)."""
+    me = obj.data
+    rec, layer = me.attributes.get(DESIGN_LAYER), me.color_attributes.get(convert.EASE_LAYER)
+    if rec is None or layer is None or rec.domain != layer.domain or rec.data_type != "FLOAT":
+        return None
+    if len(rec.data) != len(layer.data):
+        return None
+    v = np.empty(len(rec.data), dtype=np.float32)
+    rec.data.foreach_get("value", v)
+    return v.astype(np.float64)
 
 
 def mirrored_paint(obj, scene) -> int:

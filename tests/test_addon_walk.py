@@ -312,7 +312,7 @@ class Walk:
         if not self.full and self.rng.random() < 0.7:
             return  # CI: the cold solve now and then
         session = live.session_for(self.bpy.context)
-        cold = session.cold_pattern(live._field(body, self.bpy.context.scene))
+        cold = session.cold_pattern(*live.targets(body, self.bpy.context.scene))
         stored = data.stored_pattern(self.bpy.context.scene)
         assert stored is not None
         for p, q in zip(cold.panels, stored.panels):
