@@ -88,6 +88,12 @@ class DrapeOptions:
     self_interval : int, substeps
         Substeps between searches for self-collision candidates (a hash grid
         over the particles); every substep resolves the candidates found.
+    refine_edge : float, m, or None
+        The drape's own mesh: where the cloth hangs free (its pattern triangle
+        larger than its skintight image), the pattern's triangles are bisected
+        until no edge is longer than this (:mod:`core.drape.refine`; the rest
+        shape is the flat pattern's, subdivided, and seams stay sewn); None
+        drapes the pattern solve's mesh as it is.
     """
 
     device: str = "cpu"
@@ -114,6 +120,7 @@ class DrapeOptions:
     self_radius: Optional[float] = None  # m
     self_exclude: float = 1.5  # self-collision diameters
     self_interval: int = 5  # substeps
+    refine_edge: Optional[float] = 0.01  # m
 
     @staticmethod
     def coerce(options: Union[None, "DrapeOptions", Mapping]) -> "DrapeOptions":
@@ -170,6 +177,7 @@ RANGES = {
     "self_radius": (float, 0.0, True, 0.05, True),
     "self_exclude": (float, 0.0, True, 100.0, False),
     "self_interval": (int, 1, True, 1000, False),
+    "refine_edge": (float, 0.001, True, 0.1, True),
 }
 
 
