@@ -1,0 +1,757 @@
+"""Pleats and tucks on the flat pattern: placed on the piece as worn, then opened.
+
+A pleat is solved closed: the pattern is flattened as the garment is worn, with
+the pleat's cloth folded away, so the ease compliance of ``report["metrics"]``
+is the cloth as worn. The pleat is then a post-flattening insertion
+(:func:`open_pattern`): the piece is cut along the placement line's image (a
+straight chord of the flat piece, from the ``from`` point on a hem or opening
+to where the line leaves the piece) and a strip of ``intake`` = 2 x depth
+(knife, tuck) or 4 x depth (box, inverted box) is inserted; the part of the
+piece beyond the line moves across by the intake, rigidly, so the depth is
+kept exactly. A box pleat is two knife folds, one depth either side of its
+placement line, turned under towards it.
+
+What each stage reads:
+
+- the pattern: ``report["pleats"]`` (:func:`attach_pleats`), per pleat its site on the cut
+  panel (valid on every size: the start as a hem edge and a fraction, the aim as a triangle
+  and barycentric weights or a body axis), its settings and what the opened piece measures
+  (intake, depth error, extra cloth);
+- export and drape: :func:`open_pattern`, the pattern with every pleated piece opened; its
+  ``report["opened_pleats"]`` holds per piece the fold, placement and stitch lines as local
+  vertex ids and 2D end points (:class:`OpenedLine`).
+
+Refused with the pleat's JSON path (exit 2 through the CLI): a start that is not on a hem or
+opening of its panel, a line that leaves its panel or ends on a seam, a depth larger than the
+panel can take (the folded cloth must lie under the piece), pleats whose folds cross or
+overlap, a pleat over a dart.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+from typing import Dict, List
+
+import numpy as np
+
+from ..errors import DesignError
+from ..geom.mesh import boundary_loops
+
+#: m, a ``from`` point this far from its panel's hems and openings is refused
+START_TOL = 0.03
+#: fraction of the mean edge length: a vertex this close to the placement line is moved onto it
+SNAP = 0.2
+#: m, the strip's columns are at most this far apart (the fold lines are columns)
+STRIP_EDGE = 0.006
+#: m, the drape's start lifts each layer of folded cloth this far off the one below it
+LAYER_GAP = 0.003
+#: m, over this width beyond the folded cloth the lift of the cloth above it falls to 0
+LIFT_FALLOFF = 0.015
+#: share of the line's length at each end left out of the room check (the hem may slant there)
+END_MARGIN = 0.1
+_AXES = {
+    "x": (1, 0, 0),
+    "+x": (1, 0, 0),
+    "-x": (-1, 0, 0),
+    "y": (0, 1, 0),
+    "+y": (0, 1, 0),
+    "-y": (0, -1, 0),
+    "z": (0, 0, 1),
+    "+z": (0, 0, 1),
+    "-z": (0, 0, -1),
+}
+#: the wearer's left on the body (Anny: +x)
+LEFT = np.array([1.0, 0.0, 0.0])
+
+
+# ----------------------------------------------------------------- sites (design -> cut panel)
+
+
+def pleat_sites(prep) -> List[dict]:
+    """Every pleat of ``prep.design`` placed on its cut panel (JSON-able dicts, see the module
+    docs), checked against the panel: its start on a hem or opening."""
+    from ..design.checks import parameter_value
+    from ..design.geometry import SurfaceLocator
+    from ..design.pleats import KINDS, design_pleats
+    from ..design.resolve import Resolver
+
+    design, cut = prep.design, prep.cut
+    found = design_pleats(design)
+    if not found:
+        return []
+    resolver = Resolver(design, prep.body, prep.reference)
+    panels = {p.name: p for p in cut.panels}
+    out = []
+    for full, path, pleat in found:
+        if full not in panels:
+            raise DesignError(path, f"pleat {pleat.name!r}: panel {full!r} is not in the cut")
+        panel = panels[full]
+        xyz = np.asarray(cut.panel_positions(panel, prep.reference), float)
+        faces = np.asarray(panel.faces, int)
+        start = resolver.position(resolver.point(pleat.start, f"{path}.from"))
+        edge, lam, dist = _nearest_hem_point(cut.hems.get(full, []), xyz, start)
+        if edge is None or dist > START_TOL:
+            far = "" if edge is None else f" ({dist * 1000:.0f} mm away)"
+            raise DesignError(
+                f"{path}.from", f"pleat {pleat.name!r}: {pleat.start!r} is not on a hem or opening of {full!r}{far}"
+            )
+        site = {
+            "name": pleat.name,
+            "panel": full,
+            "path": path,
+            "kind": pleat.kind,
+            "depth": parameter_value(pleat.depth, design.parameters),
+            "direction": pleat.direction,
+            "pressed": bool(pleat.pressed),
+            "stitched_length": parameter_value(pleat.stitched_length, design.parameters),
+            "start": [int(edge[0]), int(edge[1]), float(lam)],
+            "intake_per_depth": KINDS[pleat.kind],
+        }
+        if pleat.towards is not None:
+            aim = resolver.position(resolver.point(pleat.towards, f"{path}.towards"))
+            _, tri, bary = SurfaceLocator(xyz, faces).closest(aim[None])
+            site["towards"] = [int(tri[0])] + [float(b) for b in bary[0]]
+        else:
+            site["along"] = list(_AXES[pleat.along])
+        out.append(site)
+    return out
+
+
+def _nearest_hem_point(hems, xyz, p):
+    """The hem edge ``(u, w)``, the fraction along it and the distance (m) of the point of the
+    panel's hems and openings nearest to ``p`` (3,); ``(None, 0, inf)`` without hems."""
+    best = (None, 0.0, np.inf)
+    for h in hems:
+        h = np.asarray(h, int)
+        a, b = xyz[h[:-1]], xyz[h[1:]]
+        ab = b - a
+        lam = np.clip(np.einsum("ij,ij->i", p - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300), 0, 1)
+        d = np.linalg.norm(a + lam[:, None] * ab - p, axis=1)
+        k = int(np.argmin(d)) if len(d) else -1
+        if k >= 0 and d[k] < best[2]:
+            best = ((int(h[k]), int(h[k + 1])), float(lam[k]), float(d[k]))
+    return best
+
+
+# ----------------------------------------------------------------- chords on a flat piece
+
+
+@dataclass
+class Strip:
+    """One strip of folded cloth inserted along a chord of the closed piece.
+
+    a, b : (2,) the chord's ends in the closed piece's uv (a at the pleat's start);
+    side : +1 or -1, the side of the chord (along its left normal) that keeps its place (``A``);
+    the other side moves by ``width`` away from it. breaks : the strip's breakpoints sigma (m
+    from side A's edge) with ``x`` (m, the worn offset from the chord along its left normal) and
+    the layer of each segment between them (1: right under the top cloth); folds : the sigma of
+    each fold line, placements : of each placement line; stitch : (sigma, sigma) welded over
+    ``stitched`` m from the start (for the drape).
+    """
+
+    pleat: str
+    path: str
+    a: np.ndarray
+    b: np.ndarray
+    side: int
+    width: float
+    breaks: List[float]
+    x: List[float]
+    layers: List[int]
+    folds: List[float]
+    placements: List[float]
+    stitch: tuple
+    stitched: float
+    lift_bands: List[tuple] = field(default_factory=list)  # (side, reach m) of the top cloth lifted
+
+
+def _left(d):
+    return np.array([-d[1], d[0]])
+
+
+def _piece_jacobian_dir(uv, xyz, faces, tri, d3):
+    """The 2D direction on the piece of the 3D direction ``d3`` at triangle ``tri``."""
+    f = faces[tri]
+    E2 = np.stack([uv[f[1]] - uv[f[0]], uv[f[2]] - uv[f[0]]], axis=1)  # 2x2
+    E3 = np.stack([xyz[f[1]] - xyz[f[0]], xyz[f[2]] - xyz[f[0]]], axis=1)  # 3x2
+    coef, *_ = np.linalg.lstsq(E3, d3, rcond=None)
+    return E2 @ coef
+
+
+def _push_3d(uv, xyz, faces, tri, d2):
+    """The 3D image of the 2D direction ``d2`` at triangle ``tri``."""
+    f = faces[tri]
+    E2 = np.stack([uv[f[1]] - uv[f[0]], uv[f[2]] - uv[f[0]]], axis=1)
+    E3 = np.stack([xyz[f[1]] - xyz[f[0]], xyz[f[2]] - xyz[f[0]]], axis=1)
+    return E3 @ np.linalg.solve(E2, d2)
+
+
+def locate_2d(uv, faces, q):
+    """Triangle and barycentric weights (k,), (k, 3) of 2D points ``q`` (k, 2) in a flat mesh
+    (the nearest triangle, weights clipped, for a point just outside)."""
+    q = np.atleast_2d(q)
+    A, B, C = uv[faces[:, 0]], uv[faces[:, 1]], uv[faces[:, 2]]
+    v0, v1 = B - A, C - A
+    den = v0[:, 0] * v1[:, 1] - v0[:, 1] * v1[:, 0]
+    tris = np.empty(len(q), int)
+    bary = np.empty((len(q), 3))
+    for k in range(0, len(q), 256):
+        Q = q[k : k + 256, None, :] - A[None]
+        l1 = (Q[..., 0] * v1[:, 1] - Q[..., 1] * v1[:, 0]) / den
+        l2 = (v0[:, 0] * Q[..., 1] - v0[:, 1] * Q[..., 0]) / den
+        l0 = 1 - l1 - l2
+        worst = np.minimum(np.minimum(l0, l1), l2)
+        t = np.argmax(worst, axis=1)
+        r = np.arange(len(t))
+        b = np.clip(np.stack([l0[r, t], l1[r, t], l2[r, t]], axis=1), 0, None)
+        tris[k : k + 256], bary[k : k + 256] = t, b / b.sum(axis=1, keepdims=True)
+    return tris, bary
+
+
+def _inside(loop_xy, pts):
+    from matplotlib.path import Path
+
+    return Path(loop_xy).contains_points(pts)
+
+
+def _chord(uv, loops, p, d):
+    """The chord of the piece on the line ``p + t d``: the inside stretch of the line that holds
+    ``p`` (or starts nearest to it), as ``((point, hem edge key), (point, edge key))``, start
+    first; None when the line misses the piece."""
+    hits = []
+    for loop in loops:
+        a, b = uv[loop], uv[np.roll(loop, -1)]
+        e = b - a
+        den = d[0] * e[:, 1] - d[1] * e[:, 0]
+        w = a - p
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (w[:, 0] * e[:, 1] - w[:, 1] * e[:, 0]) / den
+            s = (w[:, 0] * d[1] - w[:, 1] * d[0]) / den
+        for k in np.flatnonzero((np.abs(den) > 1e-14) & (s >= 0) & (s <= 1)):
+            hits.append((float(t[k]), frozenset((int(loop[k]), int(loop[(k + 1) % len(loop)])))))
+    hits.sort(key=lambda h: h[0])
+    best = None
+    for (t0, e0), (t1, e1) in zip(hits[:-1], hits[1:]):
+        if t1 - t0 < 1e-9 or not _inside(uv[loops[0]], [p + 0.5 * (t0 + t1) * d])[0]:
+            continue
+        gap = 0.0 if t0 <= 1e-6 <= t1 else min(abs(t0), abs(t1))
+        if best is None or gap < best[0]:
+            best = (gap, ((p + t0 * d, e0), (p + t1 * d, e1)))
+    return None if best is None else best[1]
+
+
+def _hem_edges(hems) -> set:
+    out = set()
+    for h in hems:
+        h = [int(v) for v in h]
+        out.update(frozenset(e) for e in zip(h[:-1], h[1:]))
+    return out
+
+
+def piece_strips(piece, sites: List[dict], darts=()) -> List[Strip]:
+    """The strips of the pleats ``sites`` on the closed ``piece`` (a PatternPanel), checked:
+    each chord inside the piece and ending on a hem or opening, room for the folded cloth under
+    the piece, no two pleats' cloth overlapping, no pleat over a dart (``darts``: the piece's
+    dart seams)."""
+    uv, xyz, faces = np.asarray(piece.uv, float), np.asarray(piece.xyz, float), np.asarray(piece.faces, int)
+    loops = [np.asarray(b, int) for b in boundary_loops(faces)]
+    hem_edges = _hem_edges(piece.hems)
+    out, bands = [], []
+    for site in sites:
+        path, name = site["path"], site["name"]
+        u, w, lam = site["start"]
+        a = (1 - lam) * uv[u] + lam * uv[w]
+        tri0 = _faces_of(faces, u, w)
+        if "towards" in site:
+            t = site["towards"]
+            aim = np.asarray(t[1:]) @ uv[faces[t[0]]]
+            d = aim - a
+            if np.linalg.norm(d) < 1e-4:
+                raise DesignError(f"{path}.towards", f"pleat {name!r}: its towards point is its start")
+        else:
+            d = _piece_jacobian_dir(uv, xyz, faces, tri0, np.asarray(site["along"], float))
+        d = d / max(np.linalg.norm(d), 1e-300)
+        if not _inside(uv[loops[0]], [a + 1e-4 * d])[0]:
+            raise DesignError(f"{path}.from", f"pleat {name!r}: its line runs out of its panel {site['panel']!r}")
+        n = _left(d)
+        depth = float(site["depth"])
+        # the wearer's side of the line's left normal: which way the folded cloth lies
+        mid_t, _ = locate_2d(uv, faces, [a + 0.05 * d])
+        toward_left = float(_push_3d(uv, xyz, faces, int(mid_t[0]), n) @ LEFT) > 0
+        s_dir = 1 if toward_left == (site["direction"] == "left") else -1
+        kind = site["kind"]
+        if kind == "box":
+            lines = [(a + depth * n, -1), (a - depth * n, +1)]  # two knife folds turned under towards the line
+        else:
+            lines = [(a, s_dir)]
+        for p0, side in lines:
+            ends = _chord(uv, loops, p0, d)
+            if ends is None:
+                raise DesignError(f"{path}.from", f"pleat {name!r}: its line does not cross {site['panel']!r}")
+            (pa, edge_a), (pb, edge_b) = ends
+            for edge, field_ in ((edge_a, "from"), (edge_b, "towards" if "towards" in site else "along")):
+                if edge not in hem_edges:
+                    raise DesignError(
+                        f"{path}.{field_}",
+                        f"pleat {name!r}: its line meets a seam of {site['panel']!r}; a pleat runs between hems or openings",
+                    )
+            L = float(np.linalg.norm(pb - pa))
+            ts = np.linspace(0.0, 1.0, 41)
+            if not _inside(uv[loops[0]], pa + np.outer(ts[1:-1], pb - pa)).all() or any(
+                _inside(uv[h], pa + np.outer(ts[1:-1], pb - pa)).any() for h in loops[1:]
+            ):
+                raise DesignError(f"{path}.from", f"pleat {name!r}: its line leaves its panel {site['panel']!r}")
+            strip = _strip(name, path, kind, pa, pb, side, depth, float(site["stitched_length"]))
+            # room: the folded cloth lies under the piece on each band's side
+            inner = ts[(ts >= END_MARGIN) & (ts <= 1 - END_MARGIN)]
+            for bside, reach in strip.lift_bands:
+                q = pa + np.outer(inner, pb - pa) + bside * reach * _left((pb - pa) / L)
+                if not _inside(uv[loops[0]], q).all():
+                    raise DesignError(
+                        f"{path}.depth",
+                        f"pleat {name!r}: depth {depth * 1000:.1f} mm is more than panel {site['panel']!r} can take "
+                        f"(the folded cloth would reach past its edge)",
+                    )
+                band = np.array(
+                    [pa, pb, pb + bside * reach * _left((pb - pa) / L), pa + bside * reach * _left((pb - pa) / L)]
+                )
+                for other_name, other in bands:
+                    if other_name != name and _overlap(band, other):
+                        raise DesignError(
+                            f"{path}.depth", f"pleat {name!r}: its folds cross or overlap pleat {other_name!r}"
+                        )
+                for s in darts:
+                    legs = np.concatenate([uv[np.asarray(s.verts_a, int)], uv[np.asarray(s.verts_b, int)]])
+                    if _inside(band, legs).any() or _segments_cross(pa, pb, legs):
+                        raise DesignError(f"{path}.from", f"pleat {name!r} lies on dart {s.name!r}")
+                bands.append((name, band))
+            out.append(strip)
+    return out
+
+
+def _faces_of(faces, u, w):
+    hit = np.flatnonzero(np.isin(faces, [u, w]).sum(axis=1) == 2)
+    return int(hit[0]) if len(hit) else int(np.flatnonzero((faces == u).any(axis=1))[0])
+
+
+def _overlap(p, q) -> bool:
+    """Two convex quadrilaterals (4, 2) overlap (more than touching along an edge)."""
+    shrink = lambda r: r.mean(0) + 0.999 * (r - r.mean(0))  # noqa: E731
+    p, q = shrink(p), shrink(q)
+    for poly in (p, q):
+        for i in range(4):
+            e = poly[(i + 1) % 4] - poly[i]
+            nrm = _left(e)
+            pp, qq = p @ nrm, q @ nrm
+            if pp.max() <= qq.min() or qq.max() <= pp.min():
+                return False
+    return True
+
+
+def _segments_cross(a, b, pts) -> bool:
+    """The segment a-b crosses the polyline ``pts`` (k, 2) anywhere."""
+    n = _left(b - a)
+    s = (pts - a) @ n
+    d = b - a
+    t = (pts - a) @ d / max(d @ d, 1e-300)
+    sign = np.sign(s)
+    for i in range(len(pts) - 1):
+        if sign[i] * sign[i + 1] < 0:
+            lam = s[i] / (s[i] - s[i + 1])
+            tt = t[i] + lam * (t[i + 1] - t[i])
+            if 0 <= tt <= 1:
+                return True
+    return False
+
+
+def _strip(name, path, kind, a, b, side, depth, stitched) -> Strip:
+    """The strip of one fold set (see :class:`Strip`): a knife fold (knife, tuck, each half of a
+    box pleat) or an inverted box pleat (two knife folds meeting on the line)."""
+    d = depth
+    if kind == "inverted_box":
+        s = side
+        return Strip(
+            name,
+            path,
+            a,
+            b,
+            s,
+            4 * d,
+            [0, d, 2 * d, 3 * d, 4 * d],
+            [0, s * d, 0, -s * d, 0],
+            [1, 2, 2, 1],
+            [0, d, 3 * d, 4 * d],
+            [2 * d],
+            (0, 4 * d),
+            stitched,
+            [(s, d), (-s, d)],
+        )
+    return Strip(
+        name,
+        path,
+        a,
+        b,
+        side,
+        2 * d,
+        [0, d, 2 * d],
+        [0, side * d, 0],
+        [1, 2],
+        [0, d],
+        [2 * d],
+        (0, 2 * d),
+        stitched,
+        [(side, d)],
+    )
+
+
+# ----------------------------------------------------------------- opening a piece
+
+
+@dataclass
+class OpenedLine:
+    """A line drawn on an opened piece: ``kind`` ``"fold"`` or ``"placement"``, its vertices
+    (local ids, start to end) and the pleat's name."""
+
+    pleat: str
+    kind: str
+    ids: List[int]
+    strip: int = 0
+
+
+def _split_along(uv, attrs, faces, a, b, tol):
+    """Split the triangles of a flat mesh crossed by the chord a-b (its ends on the boundary).
+
+    ``attrs``: per-vertex arrays (n, k) interpolated like ``uv`` at each new vertex. Returns uv,
+    attrs, faces, the parent (closed) face of each face, the signed distance of every vertex
+    from the chord (0 on it), its fraction along the chord, and the split edges
+    ``{(p, q): new vertex}``."""
+    d = b - a
+    L = float(np.linalg.norm(d))
+    e, n = d / L, _left(d / L)
+    s = (uv - a) @ n
+    t = (uv - a) @ e / L
+    near = (np.abs(s) < tol) & (t > -1e-9) & (t < 1 + 1e-9)
+    uv = uv.copy()
+    uv[near] -= s[near, None] * n
+    s = np.where(near, 0.0, s)
+    uv_l, s_l, t_l = list(uv), list(s), list(t)
+    at_l = [list(x) for x in attrs]
+    cache: Dict[tuple, int] = {}
+
+    def cross(p, q):
+        key = (min(p, q), max(p, q))
+        if key not in cache:
+            lam = s_l[p] / (s_l[p] - s_l[q])
+            x = uv_l[p] + lam * (uv_l[q] - uv_l[p])
+            x = x - ((x - a) @ n) * n
+            uv_l.append(x)
+            for arr in at_l:
+                arr.append(arr[p] + lam * (arr[q] - arr[p]))
+            s_l.append(0.0)
+            t_l.append(float((x - a) @ e / L))
+            cache[key] = len(uv_l) - 1
+        return cache[key]
+
+    def crossing_t(p, q):
+        lam = s_l[p] / (s_l[p] - s_l[q])
+        return t_l[p] + lam * (t_l[q] - t_l[p])
+
+    out, parent = [], []
+    for fi, f in enumerate(np.asarray(faces, int)):
+        sg = np.sign([s_l[v] for v in f])
+        f = [int(v) for v in f]
+        new = [f]
+        if (sg > 0).any() and (sg < 0).any():
+            if (sg == 0).any():
+                k = int(np.flatnonzero(sg == 0)[0])
+                v0, v1, v2 = f[k], f[(k + 1) % 3], f[(k + 2) % 3]
+                if -1e-6 <= crossing_t(v1, v2) <= 1 + 1e-6:
+                    q = cross(v1, v2)
+                    new = [[v0, v1, q], [v0, q, v2]]
+            else:
+                k = [i for i in range(3) if sg[i] != sg[(i + 1) % 3] and sg[i] != sg[(i + 2) % 3]][0]
+                v0, v1, v2 = f[k], f[(k + 1) % 3], f[(k + 2) % 3]
+                if -1e-6 <= crossing_t(v0, v1) <= 1 + 1e-6:
+                    q1, q2 = cross(v0, v1), cross(v0, v2)
+                    new = [[v0, q1, q2], [q1, v1, v2], [q1, v2, q2]]
+        out += new
+        parent += [fi] * len(new)
+    attrs = [np.array(x) for x in at_l]
+    return np.array(uv_l), attrs, np.asarray(out, int), np.asarray(parent, int), np.array(s_l), np.array(t_l), cache
+
+
+def _vertex_normals(xyz, faces):
+    fn = np.cross(xyz[faces[:, 1]] - xyz[faces[:, 0]], xyz[faces[:, 2]] - xyz[faces[:, 0]])
+    vn = np.zeros_like(xyz)
+    for k in range(3):
+        np.add.at(vn, faces[:, k], fn)
+    return vn / np.maximum(np.linalg.norm(vn, axis=1, keepdims=True), 1e-300)
+
+
+def _columns(strip: Strip) -> np.ndarray:
+    """The strip's column positions sigma (m): its breakpoints, each segment split into columns at
+    most :data:`STRIP_EDGE` apart."""
+    cols = [0.0]
+    for lo, hi in zip(strip.breaks[:-1], strip.breaks[1:]):
+        k = max(int(np.ceil((hi - lo) / STRIP_EDGE - 1e-9)), 1)
+        cols += list(np.linspace(lo, hi, k + 1)[1:])
+    return np.asarray(cols)
+
+
+def _layer_lift(strip: Strip, sigma: float) -> float:
+    """The drape's start lift (m) of the strip's column at ``sigma``: the layer under the top
+    cloth highest; a fold between two layers half way."""
+    lifts = [(2 - k) * LAYER_GAP for k in strip.layers]
+    for i, (lo, hi) in enumerate(zip(strip.breaks[:-1], strip.breaks[1:])):
+        if abs(sigma - lo) < 1e-12 and i > 0:
+            return 0.5 * (lifts[i - 1] + lifts[i])
+        if lo - 1e-12 <= sigma <= hi + 1e-12:
+            return lifts[i]
+    return 0.0
+
+
+def open_piece(piece, strips: List[Strip], next_id: int, inside: np.ndarray):
+    """The piece opened along every strip (see the module docs): a copy of the PatternPanel with the
+    strips' vertices and faces, its hems carried through the strips, and the lines drawn on it.
+
+    ``next_id``: the first free global vertex id; ``inside``: a point inside the garment (the xyz of
+    the opened piece is its drape start: the folded layers lifted off one another, away from it).
+    Returns ``(piece, lines, stitches, next_id)``: lines a list of :class:`OpenedLine`, stitches
+    ``(pleat, ids_a, ids_b)`` welded by the drape."""
+    closed_uv = np.asarray(piece.uv, float)
+    closed_xyz = np.asarray(piece.xyz, float)
+    closed_faces = np.asarray(piece.faces, int)
+    normals = _vertex_normals(closed_xyz, closed_faces)
+    if np.mean(np.einsum("ij,ij->i", normals, closed_xyz - inside)) < 0:
+        normals = -normals
+    mean_edge = float(np.mean(np.linalg.norm(closed_uv[closed_faces[:, 1]] - closed_uv[closed_faces[:, 0]], axis=1)))
+    uv, faces = closed_uv.copy(), closed_faces.copy()
+    # per vertex: body position, closed-piece position, normal, global id (-1: new), drape lift
+    xyz, cl, nrm = closed_xyz.copy(), closed_uv.copy(), normals.copy()
+    vids = np.asarray(piece.vertex_ids, int).copy()
+    parent = np.arange(len(faces))
+    hems = [list(map(int, h)) for h in piece.hems]
+    lines: List[OpenedLine] = []
+    stitches = []
+    lifts = []  # (vertex ids, lift) of the cloth above folded layers, applied at the end (max)
+    strip_lift = {}  # strip vertex -> lift
+    for n_strip, strip in enumerate(strips):
+        # the chord in the current (partly opened) piece: the closed chord moved with its side
+        flat = faces[parent >= 0]  # the strips' faces lie folded in the closed frame: not those
+        a_cur, b_cur = _moved_point(strip.a, cl, uv, flat), _moved_point(strip.b, cl, uv, flat)
+        n0 = len(uv)
+        uv, (xyz, cl, nrm, vf), faces, par, s, t, cut = _split_along(
+            uv, [xyz, cl, nrm, vids[:, None].astype(float)], faces, a_cur, b_cur, SNAP * mean_edge
+        )
+        parent = parent[par]
+        vids = np.r_[vids, -np.ones(len(uv) - n0, int)]
+        for (p, q), m in cut.items():  # a hem edge split by the line gets the new vertex
+            for h in hems:
+                for i in range(len(h) - 1):
+                    if {h[i], h[i + 1]} == {p, q}:
+                        h.insert(i + 1, m)
+                        break
+        on_line = np.flatnonzero((s == 0) & (t > -1e-3) & (t < 1 + 1e-3))
+        on_line = on_line[np.argsort(t[on_line])]
+        if len(on_line) < 2 or t[on_line[0]] > 1e-3 or t[on_line[-1]] < 1 - 1e-3:
+            raise DesignError(strip.path, f"pleat {strip.pleat!r}: its line does not cross its piece")
+        a_faces = np.sign(s[faces].sum(axis=1)) == strip.side
+        b_set = set(np.unique(faces[~a_faces]).tolist())
+        # side A keeps its place and gets copies of the line's vertices
+        copy_of = {int(v): len(uv) + k for k, v in enumerate(on_line)}
+        uv, xyz, cl, nrm = (np.vstack([x, x[on_line]]) for x in (uv, xyz, cl, nrm))
+        vids = np.r_[vids, -np.ones(len(on_line), int)]
+        fa = faces[a_faces]
+        remap = np.arange(len(uv))
+        for v, c in copy_of.items():
+            remap[v] = c
+        faces = faces.copy()
+        faces[a_faces] = remap[fa]
+        a_set = set(np.unique(faces[a_faces]).tolist())
+        if a_set & b_set:
+            raise DesignError(
+                strip.path, f"pleat {strip.pleat!r}: its line leaves its piece (the piece is not cut in two)"
+            )
+        # side B moves across by the strip's width
+        cn = _left((b_cur - a_cur) / np.linalg.norm(b_cur - a_cur))
+        uv[sorted(b_set)] += -strip.side * strip.width * cn
+        # the strip: rows along the line, columns across it
+        sig = _columns(strip)
+        grid = np.empty((len(on_line), len(sig)), int)
+        grid[:, 0] = [copy_of[int(v)] for v in on_line]
+        grid[:, -1] = on_line
+        ccn = _left((strip.b - strip.a) / np.linalg.norm(strip.b - strip.a))
+        for j in range(1, len(sig) - 1):
+            grid[:, j] = np.arange(len(uv), len(uv) + len(on_line))
+            q = strip.a + np.outer(t[on_line], strip.b - strip.a) + np.interp(sig[j], strip.breaks, strip.x) * ccn
+            tri, bary = locate_2d(closed_uv, closed_faces, q)
+            uv = np.vstack([uv, uv[grid[:, 0]] - strip.side * sig[j] * cn])
+            xyz = np.vstack([xyz, np.einsum("ij,ijk->ik", bary, closed_xyz[closed_faces[tri]])])
+            nrm = np.vstack([nrm, np.einsum("ij,ijk->ik", bary, normals[closed_faces[tri]])])
+            cl = np.vstack([cl, q])
+            vids = np.r_[vids, -np.ones(len(on_line), int)]
+            strip_lift.update({int(v): _layer_lift(strip, sig[j]) for v in grid[:, j]})
+        new_faces = []
+        for i in range(len(on_line) - 1):
+            for j in range(len(sig) - 1):
+                p, q, r, w = grid[i, j], grid[i + 1, j], grid[i + 1, j + 1], grid[i, j + 1]
+                for tri in ([p, q, r], [p, r, w]):
+                    e1, e2 = uv[tri[1]] - uv[tri[0]], uv[tri[2]] - uv[tri[0]]
+                    new_faces.append(tri if e1[0] * e2[1] - e1[1] * e2[0] > 0 else [tri[0], tri[2], tri[1]])
+        faces = np.vstack([faces, np.asarray(new_faces, int)])
+        parent = np.r_[parent, -np.ones(len(new_faces), int)]
+        # the cloth over the folded layers (within reach of the line, on the band's side) is lifted
+        for bside, reach in strip.lift_bands:
+            verts = np.asarray(sorted(a_set if bside == strip.side else b_set), int)
+            dd = (cl[verts] - strip.a) @ ccn * bside
+            w = np.clip((reach + LIFT_FALLOFF - dd) / LIFT_FALLOFF, 0, 1) * (dd >= -1e-9)
+            lifts.append((verts, 2 * LAYER_GAP * w))
+        # hems crossing the line run through the strip's columns
+        row = {int(v): i for i, v in enumerate(on_line)}
+        hems = [_through_strip(h, grid, row, a_set) for h in hems]
+        for j, sg in enumerate(sig):
+            if any(abs(sg - f) < 1e-12 for f in strip.folds):
+                lines.append(OpenedLine(strip.pleat, "fold", [int(v) for v in grid[:, j]], n_strip))
+            elif any(abs(sg - f) < 1e-12 for f in strip.placements):
+                lines.append(OpenedLine(strip.pleat, "placement", [int(v) for v in grid[:, j]], n_strip))
+        j0, j1 = (int(np.argmin(np.abs(sig - x))) for x in strip.stitch)
+        arc = np.r_[0, np.cumsum(np.linalg.norm(np.diff(uv[grid[:, 0]], axis=0), axis=1))]
+        held = max(int(np.searchsorted(arc, strip.stitched + 1e-9, side="right")), 1)
+        stitches.append((strip.pleat, [int(v) for v in grid[:held, j0]], [int(v) for v in grid[:held, j1]]))
+    lift = np.zeros(len(uv))
+    for verts, w in lifts:
+        lift[verts] = np.maximum(lift[verts], w)
+    for v, w in strip_lift.items():
+        lift[v] = w
+    new = vids < 0
+    vids[new] = np.arange(next_id, next_id + int(new.sum()))
+    nrm = nrm / np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300)
+    opened = copy.copy(piece)
+    opened.uv, opened.faces, opened.vertex_ids = uv, faces, vids
+    opened.xyz = xyz + lift[:, None] * nrm
+    opened.hems = [np.asarray(h, int) for h in hems]
+    opened.boundary = [np.asarray(x, int) for x in boundary_loops(faces)]
+    tw, tg = np.asarray(piece.target_weft, float), np.asarray(piece.target_warp, float)
+    inherit = np.where(parent >= 0, parent, 0)
+    opened.target_weft = np.where(parent >= 0, tw[inherit], 1.0)
+    opened.target_warp = np.where(parent >= 0, tg[inherit], 1.0)
+    opened._scales = None
+    opened.achieved_weft, opened.achieved_warp, _ = opened.scales()
+    return opened, lines, stitches, next_id + int(new.sum())
+
+
+def _moved_point(p, cl, uv, faces):
+    """Where the closed-piece point ``p`` (2,) lies in the current (partly opened) piece: through the
+    triangle of the closed positions ``cl`` that holds it."""
+    tri, bary = locate_2d(cl, faces, [p])
+    return bary[0] @ uv[faces[tri[0]]]
+
+
+def _through_strip(h, grid, row, a_set) -> list:
+    """A hem polyline with each vertex on the line replaced by the strip's row there, from the
+    side the hem comes from to the side it goes to."""
+    out = []
+    for k, v in enumerate(h):
+        if v not in row:
+            out.append(v)
+            continue
+        chain = [int(x) for x in grid[row[v]]]  # side A's copy ... side B's vertex
+        prev = h[k - 1] if k > 0 else None
+        nxt = h[k + 1] if k + 1 < len(h) else None
+        from_a = (prev in a_set) if prev is not None else (nxt not in a_set)
+        out += chain if from_a else chain[::-1]
+    return out
+
+
+# ----------------------------------------------------------------- the pattern
+
+
+def attach_pleats(pattern, prep) -> None:
+    """Place the pleats of ``prep.design`` on ``pattern`` (solved closed, as worn) and record them in
+    ``pattern.report["pleats"]``: per pleat its site, settings and what the opened piece measures
+    (:func:`measure_pleats`). Raises DesignError (the pleat's JSON path) for a pleat the pattern
+    cannot take. A design without pleats leaves the pattern as it is."""
+    sites = getattr(prep, "_pleat_sites", None)
+    if sites is None:
+        sites = pleat_sites(prep)
+        try:
+            prep._pleat_sites = sites
+        except AttributeError:  # a frozen container: compute again next time
+            pass
+    if not sites:
+        return
+    pattern.report["pleats"] = [dict(s) for s in sites]
+    measure_pleats(pattern)
+
+
+def open_pattern(pattern, stitch: bool = False):
+    """``pattern`` with every pleated piece opened (:func:`open_piece`); the pattern itself when it
+    has no pleats. ``stitch``: add each pleat's stitching as a seam of the piece with itself (the
+    drape welds it; export leaves it out). The copy's ``report["opened_pleats"]`` holds per piece
+    the lines drawn on it: ``{"pleat", "kind", "ids"}``."""
+    from ..pattern.types import Pattern, PatternSeam
+
+    sites = pattern.report.get("pleats") or []
+    if not sites:
+        return pattern
+    next_id = 1 + max(int(np.max(p.vertex_ids)) for p in pattern.panels if len(p.vertex_ids))
+    panels, seams, drawn = [], list(pattern.seams), {}
+    for piece in pattern.panels:
+        mine = [s for s in sites if s["panel"] == piece.name]
+        if not mine:
+            panels.append(piece)
+            continue
+        darts = [s for s in pattern.seams if s.kind == "dart" and s.panel_a == piece.name]
+        strips = piece_strips(piece, mine, darts)
+        garment = np.concatenate([np.asarray(p.xyz) for p in pattern.panels if p.garment == piece.garment])
+        opened, lines, stitches, next_id = open_piece(piece, strips, next_id, garment.mean(axis=0))
+        panels.append(opened)
+        drawn[piece.name] = [{"pleat": x.pleat, "kind": x.kind, "ids": x.ids, "strip": x.strip} for x in lines]
+        if stitch:
+            for k, (name, ia, ib) in enumerate(stitches):
+                seams.append(PatternSeam(f"{name}#stitch{k}", piece.name, piece.name, np.asarray(ia), np.asarray(ib)))
+    report = dict(pattern.report)
+    report["opened_pleats"] = drawn
+    return Pattern(
+        style=pattern.style,
+        body=pattern.body,
+        garments=pattern.garments,
+        panels=panels,
+        seams=seams,
+        pins=pattern.pins,
+        materials=pattern.materials,
+        mode=pattern.mode,
+        report=report,
+    )
+
+
+def measure_pleats(pattern) -> List[dict]:
+    """Open ``pattern`` and measure each pleat on the opened piece into its ``report["pleats"]``
+    entry: ``intake_mm`` (set), ``depth_mm`` (the mean width between its fold and placement lines
+    as opened), ``depth_error_mm`` (their largest difference from the set depth, over the line),
+    ``line_mm`` (the placement line's length), ``extra_cloth_m2`` (the strips' area: the pleat's
+    cloth beside the pattern's own, which the ease figures leave out)."""
+    opened = open_pattern(pattern)
+    sites = pattern.report["pleats"]
+    for site in sites:
+        uv = np.asarray(opened.panel(site["panel"]).uv)
+        lines = [x for x in opened.report["opened_pleats"][site["panel"]] if x["pleat"] == site["name"]]
+        gaps, extra = [], 0.0
+        for k in sorted({x["strip"] for x in lines}):
+            cols = [uv[x["ids"]] for x in lines if x["strip"] == k]
+            gaps += [np.linalg.norm(g - f, axis=1) for f, g in zip(cols[:-1], cols[1:])]
+            extra += float(np.linalg.norm(cols[-1][0] - cols[0][0])) * float(np.linalg.norm(cols[0][-1] - cols[0][0]))
+        g = np.concatenate(gaps)
+        depth = float(site["depth"])
+        first = uv[lines[0]["ids"]]
+        site.update(
+            {
+                "intake_mm": round(1000 * site["intake_per_depth"] * depth, 3),
+                "depth_mm": round(1000 * float(np.mean(g)), 4),
+                "depth_error_mm": round(1000 * float(np.max(np.abs(g - depth))), 6),
+                "line_mm": round(1000 * float(np.linalg.norm(first[-1] - first[0])), 2),
+                "extra_cloth_m2": round(extra, 6),
+            }
+        )
+    return sites
