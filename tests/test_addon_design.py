@@ -160,3 +160,24 @@ def test_parameter_recut(bpy_session, blender):
     assert np.abs(blender.verts(seams) - v1).max() < 1e-6 if blender.verts(seams).shape == v1.shape else False
     item.value = old
     assert json.loads(s.design_json)["parameters"][item.name]["value"] == pytest.approx(old)
+
+
+def test_a_design_that_would_drop_right_side_paint_is_refused(bpy_session, blender, anny, tmp_path):
+    """Load File of a mirrored design whose per-triangle ease differs on the right side from the
+    mirror of the left: refused in one line naming the field (the generated right panels would
+    drop that paint without a word), the scene left as it was."""
+    from test_mirror_ease import PATH, mirrored_sleeve_design
+
+    bpy = bpy_session["bpy"]
+    assert bpy.ops.ease.load_template(template=DESIGN) == {"FINISHED"}
+    s = bpy.context.scene.ease
+    before = s.design_json
+    bad = tmp_path / "asym.json"
+    bad.write_text(json.dumps(mirrored_sleeve_design(anny, 1.8)))
+    out = blender.run(bpy.ops.ease.load_design_file, filepath=str(bad))
+    assert "ERROR" in out and PATH in out["ERROR"] and "sleeve_front_right" in out["ERROR"], out
+    assert "\n" not in out["ERROR"].strip()
+    assert s.design_json == before
+    ok = tmp_path / "sym.json"
+    ok.write_text(json.dumps(mirrored_sleeve_design(anny, 1.5)))
+    assert bpy.ops.ease.load_design_file(filepath=str(ok)) == {"FINISHED"}

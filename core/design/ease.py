@@ -136,6 +136,8 @@ def apply_ease(cut, design, body, body_vertices: np.ndarray, resolver: Optional[
     for panel in cut.panels:
         ease, path, generated = _panel_field(design, panel.name)
         panel.ease = panel_ease(cut, panel, ease, resolver, path)
+        if generated and "per_triangle" in ease:
+            _check_right_side(cut, panel, ease["per_triangle"], resolver, path)
         if panel.mirror_of is not None and not generated and not _is_mirror_ease(cut, design, panel, resolver):
             # a right panel with ease of its own (painted without X-mirror) is a piece of
             # its own: the export must not cut it as the mirror of the left one
@@ -160,3 +162,46 @@ def _is_mirror_ease(cut, design, panel, resolver) -> bool:
         return True
     mirrored = panel_ease(cut, panel, mirror_ease(source), resolver, path)
     return bool(np.allclose(mirrored, panel.ease, rtol=0.0, atol=1e-6))
+
+
+def _check_right_side(cut, panel, pt: dict, resolver, path: str) -> None:
+    """Refuse a per-triangle field that a generated ``*_right`` panel would drop: one with values
+    of its own on the body triangles under that panel (listed, as their mirror triangles are, and
+    not under the ``*_left`` source panel) that differ from the mirror of the left side. The
+    generated panel reads the field at the mirror triangles only (a mirror piece), so that paint
+    would be lost without a word."""
+    nbody = len(resolver.faces)
+    if "triangles" in pt:
+        listed = np.zeros(nbody, dtype=bool)
+        listed[np.asarray(pt["triangles"], dtype=np.int64)] = True
+        table = np.full(nbody, float(pt.get("default", 1.0)))
+        table[np.asarray(pt["triangles"], dtype=np.int64)] = np.asarray(pt["values"], dtype=float)
+    else:
+        listed, table = np.ones(nbody, dtype=bool), np.asarray(pt["values"], dtype=float)
+
+    def under(p) -> np.ndarray:
+        if not len(p.faces):
+            return np.zeros(0, dtype=np.int64)
+        return np.asarray(resolver.locator.closest(_centroids(cut, p, resolver.vertices))[1], dtype=np.int64)
+
+    try:
+        source = cut.panel(panel.mirror_of) if panel.mirror_of else None
+    except KeyError:
+        source = None
+    own = np.unique(under(panel))
+    if source is not None:
+        own = np.setdiff1d(own, under(source))
+    mirror = resolver.face_sym[own]
+    keep = (mirror >= 0) & listed[own] & listed[np.maximum(mirror, 0)]
+    t, m = own[keep], mirror[keep]
+    diff = np.abs(table[t] - table[m])
+    bad = diff > 1e-6
+    if bad.any():
+        left = panel.mirror_of.partition(".")[2] if panel.mirror_of else "its *_left panel"
+        right = panel.name.partition(".")[2]
+        raise DesignError(
+            f"{path}.per_triangle",
+            f"the field differs on the right side ({int(bad.sum())} triangles under the generated panel "
+            f"{right!r}, by up to {float(diff.max()):.3f}) from the mirror of {left!r}'s, which {right!r} "
+            f"would take instead: make the field symmetric, or give {right!r} a panel and ease of its own",
+        )
