@@ -93,7 +93,8 @@ class DrapeOptions:
         larger than its skintight image), the pattern's triangles are bisected
         until no edge is longer than this (:mod:`core.drape.refine`; the rest
         shape is the flat pattern's, subdivided, and seams stay sewn); None
-        drapes the pattern solve's mesh as it is.
+        (the default here) drapes the pattern solve's mesh as it is. ``ease
+        drape`` refines to 0.01 m unless told otherwise (``--refine-edge``).
     """
 
     device: str = "cpu"
@@ -120,7 +121,7 @@ class DrapeOptions:
     self_radius: Optional[float] = None  # m
     self_exclude: float = 1.5  # self-collision diameters
     self_interval: int = 5  # substeps
-    refine_edge: Optional[float] = 0.01  # m
+    refine_edge: Optional[float] = None  # m
 
     @staticmethod
     def coerce(options: Union[None, "DrapeOptions", Mapping]) -> "DrapeOptions":
