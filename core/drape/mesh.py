@@ -4,18 +4,21 @@ The particles are the garment vertices with seams welded: one particle per
 global vertex id, and ids that a seam pairs are merged too (union-find), so a
 pattern whose seam sides carry different ids still closes. Rest shapes come
 from the 2D pattern in each panel's grain frame (weft, warp), start positions
-from the skintight embedding ``xyz``.
+from the skintight embedding ``xyz``. Optionally the pattern is first refined
+for the drape (:mod:`core.drape.refine`) and its gathered seams sewn as gathers
+(:mod:`core.drape.gathers`: the long side stitched along the short one).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Dict, List
+from typing import Dict, List, Optional
 
 import numpy as np
 
 from ..errors import DrapeError
 from ..geom.strain import weft_of
+from .gathers import Stitches, stitches, to_particles, unweld_gathers
 
 
 @dataclass
@@ -50,7 +53,13 @@ class Cloth:
     sliver : (T,) bool, pattern triangles too thin for a deformation-gradient constraint
         (quality below :data:`SLIVER_QUALITY`); their edges are kept as distance constraints.
     bend_rest : (B,) float, rest dihedral angle (radians): 0 inside a panel, the skintight angle across a seam.
-    edges : (E, 2) int, the sliver edges (particles); edge_rest : (E,) float, their pattern lengths.
+    edges : (E, 2) int, distance constraints (particles): the sliver edges, then two per stitch of a
+        gathered seam (:meth:`core.drape.gathers.Stitches.edges`); edge_rest : (E,) float, their rest lengths.
+    stitches : :class:`core.drape.gathers.Stitches` (particles), the gathered seams' stitches.
+    n_pattern : int, the pattern's own global ids (``0 .. n_pattern - 1``); ids from there on were
+        made for the drape (a gathered long side's own vertices, refinement midpoints).
+    pattern_faces : (T0, 3) int, the pattern's own triangles as its global ids (panel order).
+    refinement : dict, :func:`core.drape.refine.refine_pattern`'s report; empty when not refined.
     """
 
     n_global: int
@@ -76,6 +85,10 @@ class Cloth:
     bend_rest: np.ndarray = field(default_factory=lambda: np.zeros(0))
     edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), int))
     edge_rest: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    stitches: Stitches = field(default_factory=Stitches.none)
+    n_pattern: int = 0
+    pattern_faces: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), int))
+    refinement: dict = field(default_factory=dict)
 
     @property
     def n_particles(self) -> int:
@@ -235,14 +248,42 @@ def interior_edges(faces: np.ndarray) -> tuple:
     return bends[keep].astype(np.int64), pair[keep].astype(np.int64)
 
 
-def build_cloth(pattern) -> Cloth:
+def build_cloth(pattern, refine_edge: Optional[float] = None, gathers: bool = False) -> Cloth:
     """Weld a :class:`core.pattern.types.Pattern` into a :class:`Cloth`.
+
+    Parameters
+    ----------
+    pattern : the pattern.
+    refine_edge : float, metres, or None: refine the free-hanging cloth to edges at most this long
+        (:func:`core.drape.refine.refine_pattern`); None keeps the pattern's mesh.
+    gathers : sew gathered seams as gathers (the long side stitched along the short one,
+        :mod:`core.drape.gathers`) instead of welding them vertex by vertex.
 
     Raises
     ------
     DrapeError for a pattern without panels, mismatched arrays, or degenerate
     pattern triangles (naming the panel and triangle).
     """
+    n_pattern = _check_panels(pattern)
+    pattern_faces = np.concatenate(
+        [np.asarray(p.vertex_ids, np.int64)[np.asarray(p.faces, np.int64).reshape(-1, 3)] for p in pattern.panels]
+    )
+    refinement: dict = {}
+    if gathers:
+        pattern = unweld_gathers(pattern)
+    if refine_edge is not None:
+        from .refine import refine_pattern
+
+        pattern, refinement = refine_pattern(pattern, refine_edge)
+    panels = list(pattern.panels)
+    n_global = max((int(np.max(p.vertex_ids)) + 1 for p in panels if len(p.vertex_ids)), default=0)
+    cloth = _weld(pattern, panels, n_global, gathers)
+    cloth.n_pattern, cloth.pattern_faces, cloth.refinement = n_pattern, pattern_faces, refinement
+    return cloth
+
+
+def _check_panels(pattern) -> int:
+    """Check the panels' arrays; the number of global ids (max id + 1)."""
     panels = list(pattern.panels)
     if not panels:
         raise DrapeError("pattern has no panels to drape")
@@ -261,20 +302,31 @@ def build_cloth(pattern) -> Cloth:
             n_global = max(n_global, int(np.max(p.vertex_ids)) + 1)
     if any(int(np.min(p.vertex_ids)) < 0 for p in panels if len(p.vertex_ids)):
         raise DrapeError("pattern: negative global vertex id")
+    names = {p.name for p in panels}
+    for s in pattern.seams:
+        if s.panel_a not in names or s.panel_b not in names:
+            raise DrapeError(f"seam {s.name!r}: unknown panel {s.panel_a!r} or {s.panel_b!r}")
+        if np.shape(s.verts_a) != np.shape(s.verts_b) and not getattr(s, "gathered", False):
+            raise DrapeError(f"seam {s.name!r}: sides have {len(s.verts_a)} and {len(s.verts_b)} vertices")
+    return n_global
 
+
+def _weld(pattern, panels: list, n_global: int, gathers: bool) -> Cloth:
+    """The cloth of checked panels: welded seams (gathered ones stitched when ``gathers``)."""
     # Weld: one particle per global id, plus ids paired by a seam.
     by_name: Dict[str, object] = {p.name: p for p in panels}
     seam_pairs = []
     for s in pattern.seams:
-        if s.panel_a not in by_name or s.panel_b not in by_name:
-            raise DrapeError(f"seam {s.name!r}: unknown panel {s.panel_a!r} or {s.panel_b!r}")
+        if gathers and getattr(s, "gathered", False):
+            continue  # stitched below
         va, vb = np.asarray(s.verts_a), np.asarray(s.verts_b)
         if va.shape != vb.shape:
             raise DrapeError(f"seam {s.name!r}: sides have {len(va)} and {len(vb)} vertices")
         ga = np.asarray(by_name[s.panel_a].vertex_ids)[va]
         gb = np.asarray(by_name[s.panel_b].vertex_ids)[vb]
         seam_pairs.append(np.stack([ga, gb], axis=1))
-    pairs = np.concatenate(seam_pairs) if seam_pairs else np.zeros((0, 2), np.int64)
+    stitched, welds = stitches(pattern) if gathers else (Stitches.none(), np.zeros((0, 2), np.int64))
+    pairs = np.concatenate(seam_pairs + [welds]) if seam_pairs or len(welds) else np.zeros((0, 2), np.int64)
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
@@ -317,6 +369,11 @@ def build_cloth(pattern) -> Cloth:
         inv_l.append(inv)
         area_l.append(area)
     x0 = x_sum / np.maximum(x_cnt, 1)[:, None]
+    # a gathered long side starts on its stitch points (where the skintight welding had put it, up to the
+    # arc-length shift), so the stitches hold from the first frame
+    stitched = to_particles(stitched, particle_of)
+    if len(stitched):
+        x0[stitched.long] = stitched.points(x0)
     faces = np.concatenate(faces_l)
     rest_area = np.concatenate(area_l)
     mass_area = np.zeros(n_part)
@@ -331,6 +388,7 @@ def build_cloth(pattern) -> Cloth:
     edges, edge_rest = (
         rest_edges(faces[sliver], inv_all[sliver]) if sliver.any() else (np.zeros((0, 2), np.int64), np.zeros(0))
     )
+    stitch_edges, stitch_rest = stitched.edges()
 
     pinned = np.zeros(n_part, bool)
     for garment, ids in (pattern.pins or {}).items():
@@ -351,7 +409,7 @@ def build_cloth(pattern) -> Cloth:
     else:
         bend_weight = np.zeros(0)
 
-    anchor, length = tethers(faces, inv_all, pinned, bends, bend_faces)
+    anchor, length = tethers(faces, inv_all, pinned, bends, bend_faces, extra=(stitch_edges, stitch_rest))
     # the dihedral angle of a thin triangle is ill-defined (it flips with any tiny motion): no bending there
     thin = pattern_quality(inv_all, rest_area) < BEND_QUALITY
     flat_ok = ~thin[bend_faces].any(axis=1) if len(bends) else np.zeros(0, bool)
@@ -365,8 +423,9 @@ def build_cloth(pattern) -> Cloth:
         tether_length=length,
         sliver=sliver,
         bend_rest=bend_rest,
-        edges=edges,
-        edge_rest=edge_rest,
+        edges=np.concatenate([edges, stitch_edges]).astype(np.int64),
+        edge_rest=np.concatenate([edge_rest, stitch_rest]),
+        stitches=stitched,
         n_global=n_global,
         particle_of=particle_of,
         x0=x0,
@@ -456,7 +515,12 @@ def across_lengths(faces: np.ndarray, rest_inv: np.ndarray, bends: np.ndarray, b
 
 
 def tethers(
-    faces: np.ndarray, rest_inv: np.ndarray, pinned: np.ndarray, bends: np.ndarray = None, bend_faces: np.ndarray = None
+    faces: np.ndarray,
+    rest_inv: np.ndarray,
+    pinned: np.ndarray,
+    bends: np.ndarray = None,
+    bend_faces: np.ndarray = None,
+    extra: tuple = None,
 ) -> tuple:
     """Long-range attachments (Kim et al. 2012): each free particle's nearest pin.
 
@@ -467,6 +531,9 @@ def tethers(
     the shortest path along rest mesh edges and the unfolded diagonals across
     them (never shorter than the geodesic, so the tether is never tighter than
     the true bound; a few percent longer on irregular meshes).
+
+    ``extra``: optional ((k, 2) int particle pairs, (k,) lengths m), more fabric
+    links (the stitches of a gathered seam).
 
     Returns
     -------
@@ -485,8 +552,17 @@ def tethers(
     if bends is not None and len(bends):
         edges = np.concatenate([edges, bends[:, :2]])
         lens = np.concatenate([lens, across_lengths(faces, rest_inv, bends, bend_faces)])
+    if extra is not None and len(extra[0]):
+        edges = np.concatenate([edges, np.asarray(extra[0], np.int64).reshape(-1, 2)])
+        lens = np.concatenate([lens, np.asarray(extra[1], float)])
     keep = lens > 0
-    graph = coo_matrix((lens[keep], (edges[keep, 0], edges[keep, 1])), shape=(n, n)).tocsr()
+    edges, lens = np.sort(edges[keep], axis=1), lens[keep]
+    # a link met twice (a stitch along a mesh edge) counts once, at its shorter length (coo would add them)
+    order = np.lexsort((lens, edges[:, 1], edges[:, 0]))
+    edges, lens = edges[order], lens[order]
+    first = np.ones(len(edges), bool)
+    first[1:] = np.any(edges[1:] != edges[:-1], axis=1)
+    graph = coo_matrix((lens[first], (edges[first, 0], edges[first, 1])), shape=(n, n)).tocsr()
     dist, _, source = dijkstra(graph, directed=False, indices=pins, min_only=True, return_predecessors=True)
     ok = np.isfinite(dist) & ~pinned & (source >= 0)
     anchor[ok] = source[ok]

@@ -76,7 +76,10 @@ def ply_bytes(result, vertex_gap: np.ndarray) -> bytes:
 
 
 def npz_bytes(result, vertex_gap: np.ndarray) -> bytes:
-    """``drape.npz``: positions (N, 3) by global vertex id, faces (T, 3) and the per-vertex maps (gap (N,) m)."""
+    """``drape.npz``: positions (N, 3) by global vertex id, faces (T, 3) and the per-vertex maps (gap (N,) m).
+
+    ``faces`` are the draped (refined) triangles; ``pattern_faces`` the pattern's own, whose
+    vertices are ids ``0 .. pattern_vertices - 1``."""
     buf = io.BytesIO()
     np.savez_compressed(
         buf,
@@ -90,13 +93,23 @@ def npz_bytes(result, vertex_gap: np.ndarray) -> bytes:
         face_garment=result.face_garment,
         garment_names=np.asarray(result.garment_names),
         seam_pairs=result.seam_pairs,
+        pattern_faces=_pattern_faces(result),
+        pattern_vertices=np.int64(getattr(result, "pattern_vertices", 0) or len(result.positions)),
     )
     return buf.getvalue()
+
+
+def _pattern_faces(result) -> np.ndarray:
+    """The pattern's own triangles of a drape (its draped ones when it was not refined)."""
+    f = getattr(result, "pattern_faces", None)
+    return np.asarray(result.faces if f is None else f)
 
 
 def report_dict(result, fit: dict, pattern=None) -> dict:
     """The JSON report: times, settling, material, and the fit figures.
 
+    ``refinement``: the drape mesh's refinement (target edge, edge lengths in mm and
+    triangle counts before and after), ``gathers``: each gathered seam's stitches.
     ``fit`` is the JSON-ready summary of the fit measurements
     (:func:`core.metrics.drape.summary`): ``"all"`` with ``gap_mm``,
     ``penetration_pct``, ``seam_gap_mm``, ``folds`` (mean dihedral angle, share of
@@ -108,6 +121,9 @@ def report_dict(result, fit: dict, pattern=None) -> dict:
         "garments": list(result.garment_names),
         "vertices": int(result.used.sum()),
         "triangles": int(len(result.faces)),
+        "pattern_triangles": int(len(_pattern_faces(result))),
+        "refinement": dict(getattr(result, "refinement", None) or {}),
+        "gathers": dict(getattr(result, "gathers", None) or {}),
         "device": result.device,
         "material": result.material,
         "options": result.options,
@@ -219,7 +235,8 @@ def read_drape(path) -> tuple:
     Returns
     -------
     positions : (N, 3) float, metres, by global garment vertex id.
-    faces : (F, 3) int or None.
+    faces : (F, 3) int or None: the pattern's own triangles (``pattern_faces``, a refined drape),
+        else the draped ones.
     """
     from ..errors import ExportError
 
@@ -230,7 +247,8 @@ def read_drape(path) -> tuple:
         raise ExportError(f"--drape: no draped garment at {path} (run `ease drape PATTERN_DIR --out DIR` first)")
     try:
         with np.load(path, allow_pickle=False) as data:
-            faces = np.asarray(data["faces"]) if "faces" in data.files else None
+            key = "pattern_faces" if "pattern_faces" in data.files else "faces"
+            faces = np.asarray(data[key]) if key in data.files else None
             for key in ("positions", "vertices", "x"):
                 if key in data.files:
                     return np.asarray(data[key], float), faces

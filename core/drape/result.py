@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from typing import Optional
 
 import numpy as np
@@ -18,8 +18,17 @@ class DrapeResult:
     Attributes
     ----------
     positions : (N, 3) float, draped position of every global garment vertex id, metres
-        (ids no panel uses, if any, stay at 0; see ``used``).
-    faces : (T, 3) int, triangles as global vertex ids (panel order).
+        (ids no panel uses, if any, stay at 0; see ``used``). The pattern's own ids come
+        first (``0 .. pattern_vertices - 1``, the pattern's vertices as draped); the ids after
+        them are the drape mesh's own vertices (refinement midpoints, a gathered seam's long side).
+    faces : (T, 3) int, the draped (refined) triangles as global vertex ids (panel order).
+    pattern_vertices : int, the pattern's own global ids (N when the mesh was not refined).
+    pattern_faces : (T0, 3) int, the pattern's own triangles (what an export of the pattern checks).
+    refinement : dict, the drape mesh's refinement (:func:`core.drape.refine.refine_pattern`'s
+        report: target edge, edge lengths and triangle counts before and after); empty if not refined.
+    gathers : dict, seam name -> ``{"ratio", "stitches", "stitch_gap_mm": {"max", "mean"}}``, each
+        gathered seam sewn as a gather: long / short rest length, its stitches, and how far the long
+        side's vertices lie from their stitch points on the short side.
     used : (N,) bool, ids that some panel uses.
     strain_weft, strain_warp : (N,) float, per-vertex stretch relative to the pattern
         (0 = pattern size, 0.02 = 2 % longer, negative = compressed), area-weighted from the faces.
@@ -65,6 +74,10 @@ class DrapeResult:
     self_radius: float = 0.0
     face_valid: Optional[np.ndarray] = None
     speed: Optional[np.ndarray] = None
+    pattern_vertices: int = 0
+    pattern_faces: Optional[np.ndarray] = None
+    refinement: dict = field(default_factory=dict)
+    gathers: dict = field(default_factory=dict)
 
 
 def collect(
@@ -124,4 +137,26 @@ def collect(
         device=device,
         self_collision=self_radius > 0.0,
         self_radius=self_radius,
+        pattern_vertices=int(cloth.n_pattern or cloth.n_global),
+        pattern_faces=(cloth.pattern_faces if len(cloth.pattern_faces) else cloth.faces_global).copy(),
+        refinement=dict(cloth.refinement),
+        gathers=gather_report(cloth, xp),
     )
+
+
+def gather_report(cloth: Cloth, x: np.ndarray) -> dict:
+    """Per gathered seam of ``cloth``: long / short rest length, stitch count and stitch gaps (mm) at ``x``."""
+    st = cloth.stitches
+    gaps = st.gaps(x) if len(st) else np.zeros(0)
+    out = {}
+    for k, name in enumerate(st.names):
+        g = gaps[st.seam == k]
+        out[name] = {
+            "ratio": round(float(st.ratio[k]), 4),
+            "stitches": int(len(g)),
+            "stitch_gap_mm": {
+                "max": float(g.max(initial=0.0) * 1e3),
+                "mean": float(g.mean() * 1e3) if len(g) else 0.0,
+            },
+        }
+    return out
