@@ -62,7 +62,8 @@ def drape(
     # the body is checked before the pattern is welded (the solver checks it again at its own door)
     body_v, body_f = check_body(body_vertices, body_faces)
     report(progress, 0.0, "drape: welding the pattern")
-    cloth = build_cloth(pattern)
+    # the drape's own mesh (refined where the cloth hangs free), gathered seams stitched as gathers
+    cloth = build_cloth(pattern, refine_edge=opts.refine_edge, gathers=True)
     t_cloth = time.perf_counter()
     solver = DrapeSolver(cloth, body_v, body_f, mat, opts)
     state = solver.state()
