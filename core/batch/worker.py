@@ -191,7 +191,7 @@ def _write(folder: Path, item: Item, run, arun, drun, preview: bool, marker=None
                 run.pattern,
                 tmp / "export",
                 opts.export,
-                drape=(drun.result.positions, drun.result.faces) if drun is not None else None,
+                drape=(drun.result.positions, drun.result.pattern_faces) if drun is not None else None,
             )
         if marker is not None:
             wf.write_marker(tmp / "marker", marker, f"{run.pattern.style or 'pattern'} marker")
