@@ -11,6 +11,10 @@ from __future__ import annotations
 
 from .common import add_quiet, console_progress, subcommand
 
+#: m, ``--refine-edge``'s default: the drape mesh's longest edge where the cloth hangs free
+#: (:attr:`core.drape.options.DrapeOptions.refine_edge`; the Python API's default is the pattern's mesh)
+REFINE_EDGE = 0.01
+
 
 def add_parser(sub) -> None:
     p = subcommand(
@@ -39,6 +43,14 @@ def add_parser(sub) -> None:
         action="store_true",
         help="keep the garment's own layers apart (particle self-collision; slower)",
     )
+    p.add_argument(
+        "--refine-edge",
+        type=float,
+        default=REFINE_EDGE,
+        metavar="M",
+        help="the drape's own mesh: where the cloth hangs free, bisect the pattern's triangles until no "
+        f"edge is longer than M metres (default {REFINE_EDGE:g}; 0: drape the pattern's mesh as solved)",
+    )
     p.add_argument("--no-preview", action="store_true", help="skip preview.png")
     p.add_argument(
         "--animation",
@@ -64,7 +76,10 @@ def _options(args) -> dict:
     for flag, name in (("frames", "max_frames"), ("substeps", "substeps")):
         if getattr(args, flag) is not None:
             check_option(name, getattr(args, flag), f"--{flag}")
-    options = {"device": args.device}
+    refine = getattr(args, "refine_edge", None)
+    if refine is not None and refine != 0:
+        check_option("refine_edge", refine, "--refine-edge")
+    options = {"device": args.device, "refine_edge": refine or None}
     if args.frames is not None:
         options["max_frames"] = args.frames
         options["min_frames"] = min(10, args.frames)
