@@ -11,13 +11,13 @@ layer  content
 4      notches (slit notches, LINE from the boundary inward)
 6      mirror line (a fold edge)
 7      grain line (LINE, pointing along the warp)
-8      internal lines: a dart's legs and its fold arrow
-13     drill holes (POINT: a dart's drill hole)
+8      internal lines: a dart's legs and its fold arrow; a pleat's fold and placement lines
+13     drill holes (POINT: a dart's drill hole, where a tuck's stitching ends)
 14     sew line
 15     annotation (text: cut on fold, mirror, allowance, units; the grain line's arrow heads)
 ====== ==========================================================
 
-(layers 8 and 13 only in a pattern with darts, so files without darts stay as they were)
+(layers 8 and 13 only in a pattern with darts or pleats, so files without them stay as they were)
 
 in millimetres; the grain line is one LINE, alone on layer 7; its arrow heads
 are two open polylines on the annotation layer 15. :func:`astm_document` is DXF R2000 with
@@ -55,7 +55,7 @@ DART_LAYERS = {"internal": "8", "drill": "13"}
 
 def _layers(pieces) -> dict:
     """The ASTM layers a drawing uses: the dart layers only where a piece has a dart."""
-    return {**ASTM_LAYERS, **DART_LAYERS} if any(p.darts for p in pieces) else dict(ASTM_LAYERS)
+    return {**ASTM_LAYERS, **DART_LAYERS} if any(p.darts or p.pleats for p in pieces) else dict(ASTM_LAYERS)
 
 
 def _ezdxf():
@@ -178,6 +178,11 @@ def astm_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str, si
             for line in dart.legs + [dart.fold, dart.fold_head]:
                 add_poly(blk, _mm(line), close=False, dxfattribs={"layer": L["internal"]})
             blk.add_point(_mm(dart.drill[None])[0], dxfattribs={"layer": L["drill"]})
+        for pleat in piece.pleats:  # fold and placement lines are internal lines, a tuck's stitch end a drill hole
+            for line in pleat.lines():
+                add_poly(blk, _mm(line), close=False, dxfattribs={"layer": L["internal"]})
+            for q in pleat.stitch_ends:
+                blk.add_point(_mm(q[None])[0], dxfattribs={"layer": L["drill"]})
         g0, g1 = _mm(piece.grain)
         blk.add_line(g0, g1, dxfattribs={"layer": L["grain"]})
         # the arrow heads as open polylines (barb, tip, barb) on the annotation layer: the grain layer holds
@@ -323,7 +328,9 @@ def plain_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str):
     ezdxf = _ezdxf()
     doc = ezdxf.new("R2010", units=INSUNITS_MM)
     doc.header["$MEASUREMENT"] = 1
-    plain = {**PLAIN_LAYERS, "DART": 4} if any(p.darts for p in pieces) else PLAIN_LAYERS
+    plain = {**PLAIN_LAYERS, "DART": 4} if any(p.darts for p in pieces) else dict(PLAIN_LAYERS)
+    if any(p.pleats for p in pieces):
+        plain["PLEAT"] = 4
     for name, colour in plain.items():
         doc.layers.add(name, color=colour)
     msp = doc.modelspace()
@@ -341,6 +348,11 @@ def plain_document(pieces: Sequence[PieceDrawing], layout: Layout, style: str):
             for line in dart.legs + [dart.fold, dart.fold_head]:
                 msp.add_lwpolyline(_mm(line, off), dxfattribs={"layer": "DART"})
             msp.add_circle(_mm(dart.drill[None], off)[0], 0.5 * DRILL_DIAMETER * 1000.0, dxfattribs={"layer": "DART"})
+        for pleat in piece.pleats:
+            for line in pleat.lines():
+                msp.add_lwpolyline(_mm(line, off), dxfattribs={"layer": "PLEAT"})
+            for q in pleat.stitch_ends:
+                msp.add_circle(_mm(q[None], off)[0], 0.5 * DRILL_DIAMETER * 1000.0, dxfattribs={"layer": "PLEAT"})
         msp.add_lwpolyline(_mm(piece.grain, off), dxfattribs={"layer": "GRAIN"})
         for a in piece.arrows:
             msp.add_lwpolyline(_mm(a, off), dxfattribs={"layer": "GRAIN"})

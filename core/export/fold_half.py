@@ -101,6 +101,16 @@ def _grain(sew: np.ndarray, x0: float):
     return np.stack([start, end]), grain_arrows(start, end)
 
 
+def half_pleat(pleat, keep):
+    """A pleat's drawing with the lines ``keep`` (a test on points) keeps."""
+    return dataclasses.replace(
+        pleat,
+        folds=[f for f in pleat.folds if keep(f)],
+        placements=[f for f in pleat.placements if keep(f)],
+        stitch_ends=np.asarray([q for q in pleat.stitch_ends if keep(q)]).reshape(-1, 2),
+    )
+
+
 def fold_half(piece: PieceDrawing, x0: float, tol: float) -> PieceDrawing:
     """The half of ``piece`` with x >= ``x0`` (from :func:`fold_axis`), to cut on the fold; the label is the piece's
     own (the caller says how to cut it, :func:`core.export.pieces.relabel`).
@@ -130,6 +140,7 @@ def fold_half(piece: PieceDrawing, x0: float, tol: float) -> PieceDrawing:
         fold=[fold],
         notches=[m for m in piece.notches if keep(m.point)],
         darts=[d for d in piece.darts if keep(np.concatenate([np.asarray(l, float) for l in d.legs]))],
+        pleats=[half_pleat(p, keep) for p in piece.pleats],
         grain=grain,
         arrows=arrows,
     )

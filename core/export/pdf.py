@@ -157,6 +157,15 @@ def _define_forms(c, pieces: Sequence[PieceDrawing], labels=None, grains=None, f
             _poly(c, dart.fold_head, False)
             x, y = _pt(dart.drill[None])[0]
             c.circle(x, y, 0.5 * DRILL_DIAMETER * PT_PER_M, stroke=1, fill=0)
+        for pleat in piece.pleats:
+            c.setStrokeColorRGB(*COLOURS["mark"])
+            for lines, dash in ((pleat.folds, [6, 2]), (pleat.placements, [2, 2])):
+                c.setDash([x * 72 / 25.4 for x in dash])
+                for x in lines:
+                    _poly(c, x, False)
+            c.setDash()
+            for x, y in _pt(pleat.stitch_ends) if len(pleat.stitch_ends) else []:
+                c.circle(x, y, 0.5 * DRILL_DIAMETER * PT_PER_M, stroke=1, fill=0)
         c.setStrokeColorRGB(*COLOURS["notch"])
         for n in piece.notches:
             _poly(c, n.segment, False)

@@ -32,6 +32,7 @@ from .boundary import edge_table, piece_loops
 from .darts import DartDrawing, bridge_darts, dart_drawing, piece_darts
 from .mirror_check import MIRROR_TOL, declared_pairs, mirror_gap
 from .notches import DEFAULT_NOTCH_SPACING, Notch, check_notch_spacing, piece_notches, slit
+from .pleats import PleatDrawing, piece_pleats, pleat_notches
 
 CHAR_WIDTH = 0.6  # Helvetica's mean advance is ~0.55 em: a safe width estimate per character
 TEXT_MIN = 0.0025  # m, smallest label text
@@ -87,6 +88,7 @@ class PieceDrawing:
     quantity: int
     bbox: np.ndarray = field(default_factory=lambda: np.zeros((2, 2)))
     darts: List[DartDrawing] = field(default_factory=list)
+    pleats: List[PleatDrawing] = field(default_factory=list)
     mirror_gaps: Dict[str, float] = field(default_factory=dict)
     turn_points: Optional[np.ndarray] = None
 
@@ -252,6 +254,7 @@ def build_piece(
     notches = piece_notches(pattern, panel, xy, loops, table, edge_w, cut, notch_spacing, grade_from)
     drawn = [dart_drawing(panel, s, xy) for s in darts]
     notches += _mouth_notches(darts, mouths, xy, loops, cut, edge_w)
+    notches += pleat_notches(pattern, panel, xy, loops, cut, edge_w)
     # xy is already in the grain frame: the grain is +y there
     start, end = grain_line(xy, np.asarray(panel.faces, int), loops, np.array([0.0, 1.0]))
     grain, arrows = np.stack([start, end]), grain_arrows(start, end)
@@ -275,6 +278,7 @@ def build_piece(
         text_height=0.0,
         quantity=quantity,
         darts=drawn,
+        pleats=piece_pleats(pattern, panel, xy),
     )
     _set_label(piece, label)
     return piece
@@ -371,6 +375,9 @@ def build_pieces(
         the problems instead (lenient export).
     grade_from : see :func:`build_piece`.
     """
+    from ..pattern.pleats import open_pattern
+
+    pattern = open_pattern(pattern)  # pleats: the pieces are cut with their pleats' cloth
     widths = resolve_allowance(allowance, pattern)
     notch_spacing = resolve_notch_spacing(notch_spacing, pattern)
     out = []

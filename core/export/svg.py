@@ -97,6 +97,19 @@ def svg_document(pieces: Sequence[PieceDrawing], layout: Layout, title: str = "p
                 f'<circle class="drill" cx="{svg_number(x)}" cy="{svg_number(y)}" r="{svg_number(500 * DRILL_DIAMETER)}" '
                 f'stroke="{COLOURS["mark"]}" {line}/>'
             )
+        for pleat in piece.pleats:
+            for kind, lines in (("pleat-fold", pleat.folds), ("pleat-placement", pleat.placements)):
+                d = " ".join(svg_path(mm(x, off), False) for x in lines)
+                dash = "6,2" if kind == "pleat-fold" else "2,2"
+                out.append(
+                    f'<path class="{kind}" data-pleat={quoteattr(pleat.name)} d="{d}" stroke="{COLOURS["mark"]}" '
+                    f'stroke-dasharray="{dash}" {line}/>'
+                )
+            for x, y in mm(pleat.stitch_ends, off) if len(pleat.stitch_ends) else []:
+                out.append(
+                    f'<circle class="drill" cx="{svg_number(x)}" cy="{svg_number(y)}" r="{svg_number(500 * DRILL_DIAMETER)}" '
+                    f'stroke="{COLOURS["mark"]}" {line}/>'
+                )
         if piece.notches:
             d = " ".join(svg_path(mm(n.segment, off), False) for n in piece.notches)
             out.append(f'<path class="notch" d="{d}" stroke="{COLOURS["notch"]}" {line}/>')
