@@ -111,6 +111,14 @@ def measure_pattern(pattern, checks: Optional[Sequence[str]] = None) -> dict:
     return metrics
 
 
+def _attach_pleats(pattern, prep) -> None:
+    """The design's pleats placed on the pattern solved closed, measured opened (``report["pleats"]``,
+    :func:`core.pattern.pleats.attach_pleats`)."""
+    from ..pattern.pleats import attach_pleats
+
+    attach_pleats(pattern, prep)
+
+
 def pattern_figures(pattern) -> Dict[str, object]:
     """The key figures of a measured pattern (label -> rounded value), for the CLI and the add-on:
     weft compliance with the warp deviation and shear beside it, flipped and collapsed counts
@@ -152,6 +160,7 @@ def reference(
     optimize = time.perf_counter() - t0
     pattern.report["config"] = config
     measure_pattern(pattern)
+    _attach_pleats(pattern, prep)
     return PatternRun(pattern, pattern_figures(pattern), {**prep.timings, "optimize": optimize})
 
 
@@ -235,6 +244,7 @@ def transfer(
     label = size if isinstance(size, str) else "custom"
     pattern.report.update({"config": config, "size": label, "transfer_deviation": dev, "reference_compliance": refc})
     pattern.report["metrics"] = metrics
+    _attach_pleats(pattern, prep)
     figures = {
         "size": label,
         **pattern_figures(pattern),
@@ -327,6 +337,7 @@ def adapt(
         {"config": config, "poses": names, "eps_weft": eps_w, "eps_warp": eps_g, "residual_stretch": stretch}
     )
     measure_pattern(pattern)
+    _attach_pleats(pattern, prep)
     figures.update(pattern_figures(pattern))
     return PatternRun(pattern, figures, {**prep.timings, "optimize": optimize})
 
