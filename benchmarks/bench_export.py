@@ -6,9 +6,7 @@ default body. For each: milliseconds to build the pieces and to render each
 format, and what the files say read back: SVG piece sizes vs the pattern (mm),
 DXF sew-line lengths vs the pattern (mm), the PDF test square (mm), measured
 allowance width vs requested (mm), notch arc-length mismatch across seams (mm).
-Marker efficiency of the teaser's size run XS-XL on 150 cm fabric at 10, 30
-and 60 s, on one nester thread, on all cores as threads, and on all cores as
-side-by-side tries (with the load average: the nester stops on wall time).
+The marker's efficiency is benchmarks/bench_marker.py's (``ease bench --only marker``).
 Writes ``export.md`` and ``export.json`` into ``out_dir``.
 """
 
@@ -16,7 +14,6 @@ from __future__ import annotations
 
 import importlib.util
 import io
-import os
 import re
 import sys
 import time
@@ -116,142 +113,6 @@ def _accuracy(pattern, pieces, texts: dict) -> dict:
         len_err = max(len_err, abs(polyline_length(pts, closed=True) - want))
     out["dxf_sew_length_err_mm"] = len_err
     return out
-
-
-MARKER_SIZES = ("XS", "S", "M", "L", "XL")
-MARKER_WIDTH = 1.5  # m of fabric
-MARKER_BUDGETS = (10, 30, 60)  # nester seconds; quick: the first two, shorter
-MARKER_SEEDS = (0, 1, 2)  # the all-core rows: one run per seed (seeds differ by about as much as settings do)
-MARKER_TILT = 2.0  # degrees each side of 0/180 in the tilt-tolerance row (the default is no tilt)
-STRIP_EFFICIENCY_NOTE = (
-    "the export's sheet layout of the same pieces (skyline of bounding boxes 2 cm apart, 1.5 m wide)"
-)
-
-
-def _child_cpu() -> float:
-    """CPU seconds of the finished nester processes so far (they run as children)."""
-    import resource
-
-    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return ru.ru_utime + ru.ru_stime
-
-
-def _marker_rows(quick: bool = False) -> dict:
-    """Marker efficiency against nesting time: the teaser's size run XS-XL, one garment each, 150 cm fabric."""
-    from core import workflows as wf
-    from core.design.templates import template_path
-    from core.geom.layout import layout_pieces
-    from core.marker import marker_items, nest
-
-    prep = wf.prepare(template_path("teaser_shirt_pants"))
-    solver = wf.make_solver(prep)
-    ref = wf.reference(prep, solver=solver).pattern
-    runs = [(s, wf.transfer(prep, s, solver=solver, start=ref).pattern, 1) for s in MARKER_SIZES]
-    items = marker_items(runs)
-    area = sum(it.area * it.count for it in items)
-    # the export's own sheet layout: bounding boxes, grain along the length, 2 cm apart
-    strip = layout_pieces(
-        [np.stack([it.outline.min(0), it.outline.max(0)]) for it in items for _ in range(it.count)], MARKER_WIDTH, 0.02
-    )
-    rows = [
-        {
-            "method": "strip layout",
-            "seconds": 0.0,
-            "length_m": round(float(strip.size[1]), 3),
-            "efficiency_pct": round(100 * area / (MARKER_WIDTH * float(strip.size[1])), 2),
-        }
-    ]
-    cores = os.cpu_count() or 1
-    runs = [(1, 1, b, (0,), 0.0) for b in ((5, 10) if quick else MARKER_BUDGETS)]
-    if cores > 1 and not quick:
-        runs += [(cores, 1, b, MARKER_SEEDS, 0.0) for b in MARKER_BUDGETS]
-        runs += [(1, cores, MARKER_BUDGETS[-1], (0,), 0.0)]
-        # the issue allows a small tilt tolerance beside 0/180; not the default (`ease marker --tilt DEG`)
-        runs += [(cores, 1, MARKER_BUDGETS[-1], (0,), MARKER_TILT)]
-    load = [round(os.getloadavg()[0], 2)]
-    for threads, tries, budget, seeds, tilt in runs:
-        got = []
-        for seed in seeds:
-            cpu0 = _child_cpu()
-            m = nest(items, MARKER_WIDTH, seconds=budget, seed=seed, threads=threads, tries=tries, tilt=tilt)
-            got.append(
-                {
-                    "efficiency_pct": 100 * m.efficiency,
-                    "length_m": m.length,
-                    "stopped": m.stopped,
-                    "wall_s": m.seconds,
-                    "cpu_s": _child_cpu() - cpu0,
-                    "load": os.getloadavg()[0],
-                }
-            )
-        eff = [g["efficiency_pct"] for g in got]
-        rows.append(
-            {
-                "method": "spyrrow" if not tilt else f"spyrrow, tilt +-{tilt:g} deg",
-                "tilt_deg": tilt,
-                "threads": threads,
-                "tries": tries,
-                "seconds": budget,
-                "seeds": list(seeds),
-                "length_m": round(float(np.mean([g["length_m"] for g in got])), 3),
-                "efficiency_pct": round(float(np.mean(eff)), 2),
-                "efficiency_pct_min": round(min(eff), 2),
-                "efficiency_pct_max": round(max(eff), 2),
-                "efficiency_pct_by_seed": [round(e, 2) for e in eff],
-                "stopped": sorted({g["stopped"] for g in got}),
-                "wall_s": round(float(np.mean([g["wall_s"] for g in got])), 1),
-                "cpu_s": round(float(np.mean([g["cpu_s"] for g in got])), 1),
-                "load": [round(g["load"], 2) for g in got],
-            }
-        )
-    load.append(round(os.getloadavg()[0], 2))
-    return {
-        "pieces": sum(it.count for it in items),
-        "sizes": list(MARKER_SIZES),
-        "width_m": MARKER_WIDTH,
-        "cores": cores,
-        "load_start_end": load,
-        "rows": rows,
-    }
-
-
-def _marker_md(marker: dict) -> list:
-    lines = [
-        "",
-        "## Marker efficiency",
-        "",
-        f"Teaser shirt + pants, sizes {', '.join(marker.get('sizes', []))} (one garment each, "
-        f"{marker.get('pieces', '-')} pieces), {marker.get('width_m', 0) * 100:.0f} cm fabric, grain along the "
-        "selvage (0/180 degrees). Efficiency = the true cut lines' area (allowance included) / marker "
-        "area (width x length to the farthest true cut line). Threads: the nester's worker threads (one "
-        "search); tries: nesters side by side in the same wall time (seeds 0, 1, ...), the shortest kept; "
-        f"cores used = threads x tries, of {marker.get('cores', '-')} on this machine. Rows with several seeds "
-        "are one run per seed: efficiency, length, wall and cpu s are their means, min-max the spread. Load "
-        f"average (1 min) at the start and end: {marker.get('load_start_end', '-')}, and after each run in the "
-        "load column (the nester stops on wall time: a loaded machine gives it less work; cpu s is the CPU time "
-        "the nesters got, budget x cores used on an idle machine). The tilt row is a tilt-tolerance run: "
-        f"each piece may also lie {MARKER_TILT:g} degrees either side of 0/180 (`ease marker --tilt "
-        f"{MARKER_TILT:g}`, which the issue allows as an option; every other row and the default keep the grain "
-        "at 0/180 exactly). "
-        f"The strip layout row is {STRIP_EFFICIENCY_NOTE}.",
-        "",
-    ]
-    if "error" in marker:
-        return lines + [f"not run: {marker['error']}"]
-    lines += [
-        "| method | threads | tries | budget s | seeds | wall s | cpu s | length m | efficiency % | min-max % | load |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
-    ]
-    for r in marker["rows"]:
-        seeds = ", ".join(str(s) for s in r.get("seeds", [])) or "-"
-        spread = f"{r['efficiency_pct_min']}-{r['efficiency_pct_max']}" if len(r.get("seeds", [])) > 1 else "-"
-        load = ", ".join(str(x) for x in r["load"]) if isinstance(r.get("load"), list) else r.get("load", "-")
-        lines.append(
-            f"| {r['method']} | {r.get('threads', '-')} | {r.get('tries', '-')} | {r['seconds']:g} | "
-            f"{seeds} | {r.get('wall_s', '-')} | {r.get('cpu_s', '-')} | {r['length_m']} | "
-            f"{r['efficiency_pct']} | {spread} | {load} |"
-        )
-    return lines
 
 
 def run(out_dir, quick: bool = False) -> dict:
@@ -364,13 +225,9 @@ def run(out_dir, quick: bool = False) -> dict:
             continue
         cells = [f"{r[k]:.3g}" if isinstance(r[k], float) else str(r[k]) for k in keys]
         lines.append(f"| {r['pattern']} | " + " | ".join(cells) + " |")
-    try:
-        marker = _marker_rows(quick)
-    except Exception as exc:  # the benchmark reports what it could not run (e.g. spyrrow missing)
-        marker = {"error": f"{type(exc).__name__}: {exc}"}
-    lines += _marker_md(marker)
+    lines += ["", "Marker efficiency: `ease bench --only marker` (benchmarks/bench_marker.py, marker.md)."]
     write_text(out_dir / "export.md", "\n".join(lines) + "\n")
-    summary = {"results": results, "marker": marker}
+    summary = {"results": results}
     write_json(out_dir / "export.json", summary)
     return summary
 
