@@ -7,6 +7,7 @@ Examples::
     ease body --size men:L --pose T --out man_l.obj
     ease body --measure chest=96,waist=80,hip=100,height=175 --out me.obj
     ease body --measurements me.json --out me.obj      # tape measures, made-to-measure
+    ease body --scan scan.ply --out me.obj             # fit pose, shape and local changes to a scan
     ease body --shape height=0.7,weight=0.6 --out tall.obj
     ease body --model SMPL_NEUTRAL.npz --shape beta0=1.5 --pose T --out smpl.obj
     ease body --all --out bodies/
@@ -92,6 +93,12 @@ def run(args) -> int:
         raise BodyError(
             "--measurements fits the body to a table of tape measures; it takes no --shape, --size, --measure or --all"
         )
+    if args.scan is not None and (
+        args.shape is not None or args.measure is not None or args.measurements is not None or args.all
+    ):
+        raise BodyError(
+            "--scan fits the body to a scan; it takes no --shape, --size, --measure, --measurements or --all"
+        )
     if args.all and (args.shape is not None or args.measure is not None or args.pose is not None):
         raise BodyError("--all writes every size and pose; it takes no --shape, --measure or --pose")
     if args.measure is not None:
@@ -100,6 +107,8 @@ def run(args) -> int:
     out = Path(args.out)
     if args.all:
         return _write_all(body, out, progress)
+    if args.scan is not None:
+        return _fit_scan(args, body, out, progress)
     if args.measurements is not None:
         from ..body.made_to_measure import fit_tape, read_tape_file
 
@@ -121,6 +130,35 @@ def run(args) -> int:
     if args.measure is None:
         print(f"measured (A-pose): {measures_text(m_std)}")
     print("shape: " + ", ".join(f"{k}={val:.4g}" for k, val in shape.items()))
+    print(f"wrote {out}")
+    return 0
+
+
+def _fit_scan(args, body, out: Path, progress) -> int:
+    import json
+
+    from ..body.output import write_obj
+    from ..body.scan import fit_scan, read_scan
+
+    points = read_scan(args.scan, up=args.up, units=args.scan_units)
+    fit = fit_scan(body, points, progress=progress)
+    print(fit.summary())
+    if args.pose is None:  # the body as scanned: its pose, placed on the scan
+        v = body.vertices(fit.shape, fit.pose) @ fit.rotation.T + fit.translation
+        label = "the scan's pose, placed on the scan"
+    else:
+        v = body.vertices(fit.shape, args.pose)
+        label = f"pose {args.pose}"
+    d = fit.distance_mm
+    write_obj(
+        out,
+        v,
+        body.faces,
+        f"model {body.name} fitted to {args.scan} ({label}); scan to body mean {d['mean']:.1f} mm, p95 {d['p95']:.1f} mm",
+    )
+    rounded = {k: round(val, 4) for k, val in fit.shape.items()}
+    pose = {j: [round(a, 4) for a in r] for j, r in fit.pose.items()}
+    print('design body: {"shape": ' + json.dumps(rounded) + ', "pose": ' + json.dumps(pose) + "}")
     print(f"wrote {out}")
     return 0
 
@@ -193,6 +231,20 @@ def add_parser(subparsers) -> None:
         "upper_arm, wrist, arm_length, back_waist_length, inseam, thigh; optional gender 0..1; "
         "docs/measurements.md)",
     )
+    p.add_argument(
+        "--scan",
+        default=None,
+        metavar="SCAN.obj|SCAN.ply",
+        help="fit Anny's pose, shape and local changes to a 3D scan or point cloud (OBJ or PLY vertices); "
+        "prints the scan-to-body distance and the tape measures of both; writes the body as scanned "
+        "(or in --pose)",
+    )
+    p.add_argument(
+        "--scan-units",
+        default="auto",
+        choices=("auto", "m", "cm", "mm"),
+        help="units of --scan (default: read from the scan's height)",
+    )
     p.add_argument("--pose", default=None, help=f"pose preset: {', '.join(POSE_PRESETS)} (default A)")
     p.add_argument(
         "--all", action="store_true", help="write all five sizes and all five poses and bodies.png to --out DIR"
@@ -202,5 +254,7 @@ def add_parser(subparsers) -> None:
         "--blendshapes", default=None, help="OBJ models: .npz of blend shapes (names, deltas, optional skeleton)"
     )
     p.add_argument("--landmarks", default=None, help="OBJ models: landmark JSON")
-    p.add_argument("--up", default="z", choices=("z", "y"), help="OBJ models: up axis of the file (default z)")
+    p.add_argument(
+        "--up", default="z", choices=("z", "y"), help="OBJ models and --scan: up axis of the file (default z)"
+    )
     add_quiet(p, "no progress lines")
