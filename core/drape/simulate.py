@@ -15,6 +15,7 @@ from __future__ import annotations
 import time
 from typing import Mapping, Optional, Union
 
+from ..pattern.pleats import open_pattern
 from ..progress import Progress, report
 from .materials import Material, get_material
 from .mesh import build_cloth
@@ -63,6 +64,7 @@ def drape(
     body_v, body_f = check_body(body_vertices, body_faces)
     report(progress, 0.0, "drape: welding the pattern")
     # the drape's own mesh (refined where the cloth hangs free), gathered seams stitched as gathers
+    pattern = open_pattern(pattern, stitch=True)  # pleats: their cloth inserted, pre-folded and stitched
     cloth = build_cloth(pattern, refine_edge=opts.refine_edge, gathers=True)
     t_cloth = time.perf_counter()
     solver = DrapeSolver(cloth, body_v, body_f, mat, opts)

@@ -170,7 +170,10 @@ def export_pattern(
     found = validate_pattern(pattern, strict=strict)
     positions = None
     if "glb" in formats or "obj" in formats:
-        positions = validate_drape(pattern, drape_positions, drape_faces)
+        from ..pattern.pleats import open_pattern
+
+        worn = open_pattern(pattern)  # a pleated pattern is draped opened (core.drape.simulate)
+        positions = validate_drape(worn, drape_positions, drape_faces)
         if body is not None:
             body = validate_body(body)
         if origin == "floor":
@@ -200,7 +203,7 @@ def export_pattern(
     if "glb" in formats or "obj" in formats:
         from . import mesh
 
-        meshes = mesh.piece_meshes(pattern, positions, [p.rotation for p in pieces])
+        meshes = mesh.piece_meshes(worn, positions, [p.rotation for p in pieces])
         body_mesh = None if body is None else mesh.body_mesh(*body)
     steps = len(formats)
     for k, fmt in enumerate(formats):
