@@ -17,44 +17,61 @@ from . import build, data, state, sync
 from .objects import window_progress
 from .operators_base import EaseOperator
 
-_JOBS: list = []  # drape jobs running (cancelled on unregister)
+_JOBS: list = []  # worker jobs running (cancelled on unregister)
 
 
-class DrapeJob:
-    """The core's drape in a worker thread; the main thread polls it.
+class WorkerJob:
+    """A core computation in a worker thread; the main thread polls it (:func:`step_job`) and
+    applies its result. The drape and Drape Animation (``motion_ops``) are two.
 
     ``progress`` state (fraction, message) is written by the worker and read by
     the modal operator; :meth:`cancel` makes the worker's next progress call
-    raise ``Cancelled``, so the core stops and nothing is applied.
+    raise ``Cancelled``, so the core stops and nothing is applied. A subclass
+    gives :meth:`compute` (worker thread: no Blender data) and :meth:`apply`
+    (main thread), ``label`` (what the status bar says) and ``status`` (the
+    ``scene.ease`` property that shows the outcome).
     """
 
-    def __init__(self, pattern, body_v, body_f, frames: int, device: str = "cpu", digest=None):
+    label = "drape"
+    status = "drape_status"
+
+    def __init__(self, digest=None):
         self.fraction, self.message = 0.0, "starting"
-        self.digest = digest  # the stored pattern's digest when the drape started
+        self.digest = digest  # the stored pattern's digest when the job started
         self.result = None
         self.error = None
         self._cancel = threading.Event()
-        self._args = (pattern, body_v, body_f, frames)
-        self._device = device
         self._thread = threading.Thread(target=self._work, daemon=True)
+
+    def compute(self, progress):  # pragma: no cover - overridden
+        raise NotImplementedError
+
+    def apply(self, context) -> None:  # pragma: no cover - overridden
+        raise NotImplementedError
 
     def _progress(self, fraction, message):
         from ..core.errors import Cancelled
 
         self.fraction, self.message = fraction, message
         if self._cancel.is_set():
-            raise Cancelled("drape cancelled")
+            raise Cancelled(f"{self.label} cancelled")
 
     def _work(self):
         try:
-            self.result = _compute(*self._args, self._progress, self._device)
+            self.result = self.compute(self._progress)
         except BaseException as exc:  # handed to the main thread
             self.error = exc
         finally:
             if self in _JOBS:
                 _JOBS.remove(self)
 
-    def start(self) -> "DrapeJob":
+    def run_here(self, context) -> None:
+        """Compute in this thread (scripts, tests: ``execute``) with the window's progress bar, then apply."""
+        with window_progress(context) as progress:
+            self.result = self.compute(progress)
+        self.apply(context)
+
+    def start(self) -> "WorkerJob":
         _JOBS.append(self)
         self._thread.start()
         return self
@@ -71,6 +88,21 @@ class DrapeJob:
 
     def join(self, timeout=None) -> None:
         self._thread.join(timeout)
+
+
+class DrapeJob(WorkerJob):
+    """The core's drape of ``pattern`` on the body (V, F) for at most ``frames`` frames."""
+
+    def __init__(self, pattern, body_v, body_f, frames: int, device: str = "cpu", digest=None):
+        super().__init__(digest)
+        self._args = (pattern, body_v, body_f, frames)
+        self._device = device
+
+    def compute(self, progress):
+        return _compute(*self._args, progress, self._device)
+
+    def apply(self, context) -> None:
+        apply_drape(context, self.result, digest=self.digest)
 
 
 def cancel_running() -> None:
@@ -98,41 +130,35 @@ def _compute(pattern, body_v, body_f, frames, progress, device="cpu"):
     )
 
 
-class EASE_OT_drape(EaseOperator):
-    """Drape the pattern on the body (Esc cancels)"""
-
-    bl_idname = "ease.drape"
-    bl_label = "Drape"
-    needs = ("pattern",)
+class JobOperator(EaseOperator):
+    """An operator whose work is a :class:`WorkerJob` (:meth:`make_job`): from a script or test
+    (``execute``) it runs in the main thread; from the interface (``invoke``) it runs modal, the
+    job in a worker thread, its progress in the status bar and the progress bar, Esc cancels."""
 
     _job = None
     _timer = None
 
-    def _prepare(self, context):
-        pattern = data.required_pattern(context.scene, "to drape")
-        body_v, body_f = _pattern_body(pattern)
-        return pattern, body_v, body_f
+    def make_job(self, context) -> WorkerJob:  # pragma: no cover - overridden
+        """The job, not started (main thread: reads the scene; raises a user error to refuse)."""
+        raise NotImplementedError
+
+    def finished(self, context, job: WorkerJob) -> None:
+        """Report a finished job (both paths)."""
+        self.report({"INFO"}, getattr(context.scene.ease, job.status))
 
     # -- synchronous (scripts, tests): execute
     def run(self, context):
-        pattern, body_v, body_f = self._prepare(context)
-        s = context.scene.ease
-        with window_progress(context) as progress:
-            run = _compute(pattern, body_v, body_f, s.drape_frames, progress, s.drape_device)
-        apply_drape(context, run)
-        self.report({"INFO"}, s.drape_status)
+        job = self.make_job(context)
+        job.run_here(context)
+        self.finished(context, job)
 
     # -- interactive: invoke + modal, the core in a worker thread
     def invoke(self, context, event):
         try:
-            pattern, body_v, body_f = self._prepare(context)
+            self._job = self.make_job(context).start()
         except state.USER_ERRORS as exc:
             self.report({"ERROR"}, str(exc))
             return {"CANCELLED"}
-        s = context.scene.ease
-        # the pattern may change while the drape runs: the garment records the one it was draped from
-        digest = data.pattern_digest(context.scene.get(data.PATTERN_KEY, ""))
-        self._job = DrapeJob(pattern, body_v, body_f, s.drape_frames, s.drape_device, digest).start()
         wm = context.window_manager
         wm.progress_begin(0, 100)
         self._timer = wm.event_timer_add(0.2, window=context.window)
@@ -149,12 +175,28 @@ class EASE_OT_drape(EaseOperator):
         wm.progress_end()
         if context.workspace is not None:
             context.workspace.status_text_set(None)
-        s = context.scene.ease
         if status == "FINISHED":
-            self.report({"INFO"}, s.drape_status)
+            state.changed(context.scene)
+            self.finished(context, self._job)
             return {"FINISHED"}
-        self.report({"WARNING" if self._job.cancelled else "ERROR"}, s.drape_status)
+        self.report({"WARNING" if self._job.cancelled else "ERROR"}, getattr(context.scene.ease, self._job.status))
         return {"CANCELLED"}
+
+
+class EASE_OT_drape(JobOperator):
+    """Drape the pattern on the body (Esc cancels)"""
+
+    bl_idname = "ease.drape"
+    bl_label = "Drape"
+    needs = ("pattern",)
+
+    def make_job(self, context) -> DrapeJob:
+        pattern = data.required_pattern(context.scene, "to drape")
+        body_v, body_f = _pattern_body(pattern)
+        s = context.scene.ease
+        # the pattern may change while the drape runs: the garment records the one it was draped from
+        digest = data.pattern_digest(context.scene.get(data.PATTERN_KEY, ""))
+        return DrapeJob(pattern, body_v, body_f, s.drape_frames, s.drape_device, digest)
 
 
 def apply_drape(context, run, digest=None) -> None:
@@ -213,14 +255,15 @@ def show_body(scene, obj, model, pspec: dict) -> None:
         s.pose = spec["pose"]
 
 
-def step_job(context, job: DrapeJob, event_type: str) -> str:
+def step_job(context, job: WorkerJob, event_type: str) -> str:
     """One modal step for ``event_type``: Esc cancels; a timer tick shows the
     progress and, once the worker is done, applies the result (main thread).
-    Returns ``"RUNNING"``, ``"FINISHED"`` or ``"CANCELLED"``."""
+    Returns ``"RUNNING"``, ``"FINISHED"`` or ``"CANCELLED"``; the job's ``status``
+    property says what happened."""
     s = context.scene.ease
     if event_type == "ESC":
         job.cancel()
-        s.drape_status = "cancelling..."
+        setattr(s, job.status, "cancelling...")
     if event_type != "TIMER":
         return "RUNNING"
     try:
@@ -228,13 +271,13 @@ def step_job(context, job: DrapeJob, event_type: str) -> str:
     except Exception:
         pass
     if context.workspace is not None:
-        context.workspace.status_text_set(f"EASE drape {100 * job.fraction:.0f}%: {job.message} (Esc cancels)")
+        context.workspace.status_text_set(f"EASE {job.label} {100 * job.fraction:.0f}%: {job.message} (Esc cancels)")
     if not job.done():
         return "RUNNING"
     if job.error is not None:
-        s.drape_status = f"drape {'cancelled' if job.cancelled else 'stopped'}: {job.error}"
+        setattr(s, job.status, f"{job.label} {'cancelled' if job.cancelled else 'stopped'}: {job.error}")
         return "CANCELLED"
-    apply_drape(context, job.result, digest=job.digest)
+    job.apply(context)
     return "FINISHED"
 
 

@@ -1,20 +1,35 @@
-"""Drape Animation: the garment carried through a pose sequence on the moving body
-(:func:`core.drape.animate.drape_motion`), and its Alembic export.
+"""Drape Animation: the garment carried through the body's motion
+(:func:`core.drape.animate.drape_motion`), the body's rig, and the Alembic export.
 
-*Drape Animation* (Drape panel, Animation box) takes the poses named in *Poses*
-(``A, P1, P3``: presets; the first is the pattern's own pose) with *In-betweens*
-frames from each to the next, drapes the scene's pattern on the first and carries
-it through the others, and keeps the result as two objects, ``EASE Motion Body``
-and ``EASE Motion Garment`` (role ``motion``): one shape key a frame, keyed so the
-timeline (frames 1..K, set on the scene) plays the motion. The static body and
+*Drape Animation* (Drape panel, Animation box) takes the motion from *Motion*:
+
+- *Poses*: the presets named in *Poses* (``A, P1, P3``; the first the pattern's
+  own pose) with *In-betweens* frames from each to the next;
+- *Rig Action*: the body rig's bones (*Add Rig*: an armature whose bones are the
+  body's joints, deforming the body through an Armature modifier with the model's
+  own skinning weights) over the scene's frame range, as an artist keyframed
+  them: each frame's bone rotations (and the root bone's move) become an EASE
+  pose (:func:`core.drape.animate.pose_from_bone_rotations`) that the model
+  skins. The garment settles on the pattern's own pose first, then moves to the
+  first frame (split into small steps) and through the others.
+
+With *Adapt to Poses* the pattern is first adapted to the motion's poses (the
+presets after the first, or the rig's keyframed poses) within the design's
+stretch tolerances (:func:`core.workflows.adapt`); that pattern replaces the
+pieces beside the body and is the one draped.
+
+The drape runs as the static one does (``drape_ops.JobOperator``): in a worker
+thread, its progress per frame in the status bar, Esc cancels. The result is two
+objects, ``EASE Motion Body`` and ``EASE Motion Garment`` (role ``motion``): one
+shape key a frame, keyed so the timeline plays the motion. The static body and
 garment are hidden in the viewport and the render; the studio renders the motion
 objects while they are shown in the viewport (hide them to render the static ones).
-The figures per frame (penetration, seconds) are kept in the scene
-(``ease_motion_json``) and the worst frame is shown in the panel.
+The figures per frame (penetration, residual stretch, seconds) are kept in the
+scene (``ease_motion_json``) and the worst frame is shown in the panel.
 
 *Export Alembic* writes the motion objects (the garment, and the body when *With
-body* is on) with Blender's own Alembic exporter over frames 1..K: an ``.abc``
-other DCC tools read.
+body* is on) with Blender's own Alembic exporter over the motion's frames: an
+``.abc`` other DCC tools read.
 """
 
 from __future__ import annotations
@@ -25,34 +40,39 @@ import os
 import bpy
 import numpy as np
 
-from . import build, convert, data, materials, state
-from .objects import objects_with_role, select_only, window_progress
+from . import build, convert, data, materials, state, sync
+from .drape_ops import JobOperator, WorkerJob
+from .objects import objects_with_role, remove_object, role_object, select_only
 from .operators_base import EaseOperator
 
 MOTION_BODY = "EASE Motion Body"
 MOTION_GARMENT = data.MOTION_GARMENT
 MOTION_KEY = "ease_motion_json"
+RIG = "EASE Body Rig"
+RIG_MODIFIER = "EASE Rig"
+FRAME_START = "ease_frame_start"  # on a motion object: the timeline frame of its first shape key
 
 
-def motion_object(scene, name: str, frames: np.ndarray, faces: np.ndarray, material):
+def motion_object(scene, name: str, frames: np.ndarray, faces: np.ndarray, material, start: int = 1):
     """The object ``name`` (role ``motion``) with a shape key per frame of ``frames`` (K, V, 3),
-    keyed so that frame k (1-based) of the timeline shows ``frames[k - 1]``."""
+    keyed so that frame ``start + k`` of the timeline shows ``frames[k]``."""
     me = convert.mesh_from_arrays(name, frames[0], faces)
     me.materials.append(material)
     for poly in me.polygons:
         poly.use_smooth = True
     obj = build.put_object(scene, name, me, "motion")
+    obj[FRAME_START] = int(start)
     obj.shape_key_add(name="Basis", from_mix=False)
     keys = []
     for k, f in enumerate(frames):
-        key = obj.shape_key_add(name=f"frame {k + 1:04d}", from_mix=False)
+        key = obj.shape_key_add(name=f"frame {start + k:04d}", from_mix=False)
         key.data.foreach_set("co", np.ascontiguousarray(f, dtype=np.float32).ravel())
         keys.append(key)
     for k, key in enumerate(keys):
-        for frame in (k, k + 1, k + 2):
-            if 1 <= frame <= len(keys):
-                key.value = 1.0 if frame == k + 1 else 0.0
-                key.keyframe_insert("value", frame=frame)
+        for i in (k - 1, k, k + 1):
+            if 0 <= i < len(keys):
+                key.value = 1.0 if i == k else 0.0
+                key.keyframe_insert("value", frame=start + i)
     action = obj.data.shape_keys.animation_data.action if obj.data.shape_keys.animation_data else None
     for fc in _fcurves(action):
         for kp in fc.keyframe_points:
@@ -74,67 +94,345 @@ def _fcurves(action) -> list:
     return out
 
 
-def _motion(context):
-    """(body frames (K, V, 3), body faces, MotionResult, poses) of the scene's pattern through the Poses."""
-    from ..core.body import load_body
-    from ..core.body.instance import spec_instance
-    from ..core.drape.animate import drape_motion, parse_poses, pose_frames
+# ----------------------------------------------------------------------------- the body's rig
+
+
+def rig_object(context, required: bool = False):
+    """The body's rig (the armature its Armature modifier names), else None (or AddonError)."""
+    body = data.body_object(context, required=required)
+    mod = body.modifiers.get(RIG_MODIFIER) if body is not None else None
+    rig = mod.object if mod is not None else None
+    if rig is None or rig.name not in context.scene.objects:
+        if required:
+            raise state.AddonError("Motion: Rig Action needs the body's rig: press Add Rig (EASE > Drape, Animation)")
+        return None
+    return rig
+
+
+def _bone_tails(heads: np.ndarray, parents: np.ndarray) -> np.ndarray:
+    """A tail per joint: toward its first child (the limb's direction), else along its parent's bone."""
+    tails = np.empty_like(heads)
+    children = {}
+    for j, p in enumerate(parents):
+        if p >= 0:
+            children.setdefault(int(p), []).append(j)
+    for j in range(len(heads)):
+        kids = [c for c in children.get(j, []) if np.linalg.norm(heads[c] - heads[j]) > 0.005]
+        if kids:
+            tails[j] = heads[kids[0]]
+            continue
+        p = parents[j]
+        d = heads[j] - heads[p] if p >= 0 else np.array([0.0, 0.0, 1.0])
+        n = np.linalg.norm(d)
+        d = d / n if n > 1e-6 else np.array([0.0, 0.0, 1.0])
+        tails[j] = heads[j] + 0.03 * d
+    return tails
+
+
+def build_rig(context, body):
+    """The armature of ``body`` (an EASE body of the default model in pose A): a bone per joint at
+    the model's joints, and on the body an Armature modifier with the model's skinning weights
+    (a vertex group per joint). Replaces the body's earlier rig."""
+    from ..core.body.instance import instance_shape
+
+    spec = data.body_spec(body)
+    model = state.body_model(spec["model"])
+    if not hasattr(model, "joint_names") or not hasattr(model, "data"):
+        raise state.AddonError(f"Add Rig: the body model {spec['model']} has no skeleton (the default body, Anny, has)")
+    if spec["pose"] not in ("A", None):
+        raise state.AddonError(
+            f"Add Rig: the rig is built on the body's rest pose A, the body stands in {spec['pose']}: "
+            "set Pose to A first (EASE > Body)"
+        )
+    names = list(model.joint_names)
+    parents = np.asarray(model.data.parents)
+    heads = np.asarray(model.joints(instance_shape(model, spec["shape"]), None), dtype=float)
+    tails = _bone_tails(heads, parents)
+    weights = model.data.sparse_weights.tocsc()
+    scene = context.scene
+    old = rig_object(context)
+    if old is not None:
+        arm = old.data
+        remove_object(old)
+        if arm is not None and arm.users == 0:
+            bpy.data.armatures.remove(arm)
+    arm = bpy.data.armatures.new(RIG)
+    rig = role_object(scene, RIG, arm, "rig")
+    rig.matrix_world = body.matrix_world.copy()
+    rig.show_in_front = True
+    arm.display_type = "STICK"
+    view = context.view_layer
+    active, mode_before = view.objects.active, None
+    view.objects.active = rig
+    try:
+        mode_before = rig.mode
+        bpy.ops.object.mode_set(mode="EDIT")
+        bones = []
+        for j, name in enumerate(names):
+            eb = arm.edit_bones.new(name)
+            eb.head, eb.tail = heads[j].tolist(), tails[j].tolist()
+            bones.append(eb)
+        for j, p in enumerate(parents):
+            if p >= 0:
+                bones[j].parent = bones[p]
+                bones[j].use_connect = False
+        bpy.ops.object.mode_set(mode=mode_before or "OBJECT")
+    finally:
+        view.objects.active = active
+    for pb in rig.pose.bones:
+        pb.rotation_mode = "QUATERNION"
+    for name in names:
+        vg = body.vertex_groups.get(name)
+        if vg is not None:
+            body.vertex_groups.remove(vg)
+    for j, name in enumerate(names):
+        vg = body.vertex_groups.new(name=name)
+        lo, hi = weights.indptr[j], weights.indptr[j + 1]
+        for v, w in zip(weights.indices[lo:hi].tolist(), weights.data[lo:hi].tolist()):
+            if w > 0:
+                vg.add([v], w, "REPLACE")
+    mod = body.modifiers.get(RIG_MODIFIER) or body.modifiers.new(RIG_MODIFIER, "ARMATURE")
+    mod.object = rig
+    mod.use_vertex_groups, mod.use_bone_envelopes = True, False
+    mod.use_deform_preserve_volume = False  # linear blend skinning: the model's own
+    return rig
+
+
+def action_poses(context, rig, frames) -> tuple:
+    """(JSON poses, root moves (K, 3)) of the rig at the timeline's ``frames``: each bone's
+    posed orientation against its rest one (constraints and IK included), in the body's frame."""
+    from ..core.drape.animate import pose_from_bone_rotations
+
+    scene = context.scene
+    names = [b.name for b in rig.data.bones]
+    index = {n: i for i, n in enumerate(names)}
+    parents = np.array([index[b.parent.name] if b.parent else -1 for b in rig.data.bones])
+    rest = np.array([np.array(b.matrix_local) for b in rig.data.bones])
+    root = int(np.flatnonzero(parents < 0)[0])
+    before = scene.frame_current
+    poses, moves = [], []
+    try:
+        for f in frames:
+            scene.frame_set(int(f))
+            posed = np.array([np.array(pb.matrix) for pb in (rig.pose.bones[n] for n in names)])
+            world = posed[:, :3, :3] @ np.swapaxes(rest[:, :3, :3], 1, 2)
+            poses.append(pose_from_bone_rotations(names, parents, world))
+            moves.append(posed[root, :3, 3] - rest[root, :3, 3])
+    finally:
+        scene.frame_set(before)
+    return poses, np.array(moves)
+
+
+def _key_frames(rig, first: int, last: int) -> list:
+    """The frames within first..last where the rig's action has a key (the poses an artist set)."""
+    anim = rig.animation_data
+    keys = {round(kp.co[0]) for fc in _fcurves(anim.action if anim else None) for kp in fc.keyframe_points}
+    return sorted(f for f in keys if first <= f <= last)
+
+
+class EASE_OT_add_rig(EaseOperator):
+    """Give the body an armature (a bone per joint, the model's skinning weights) to keyframe"""
+
+    bl_idname = "ease.add_rig"
+    bl_label = "Add Rig"
+    needs = ("body",)
+
+    def run(self, context):
+        body = data.body_object(context)
+        rig = build_rig(context, body)
+        context.scene.ease.motion_source = "ACTION"
+        self.report(
+            {"INFO"},
+            f"{rig.name}: {len(rig.data.bones)} bones deform {body.name}; keyframe them in Pose Mode, "
+            "then Drape Animation (Motion: Rig Action)",
+        )
+
+
+# ----------------------------------------------------------------------------- Drape Animation
+
+
+class MotionJob(WorkerJob):
+    """The body's frames, the pattern (adapted to the motion's poses when asked) and its drape
+    through them, in the worker; the motion objects from them on the main thread."""
+
+    label = "drape animation"
+    status = "motion_status"
+
+    def __init__(self, pattern, model, shape, motion: dict, device: str, prep=None, adapt_to=()):
+        super().__init__()
+        self.pattern, self.model, self.shape, self.motion = pattern, model, shape, motion
+        self.device, self.prep, self.adapt_to = device, prep, list(adapt_to)
+
+    def compute(self, progress):
+        from ..core import workflows as wf
+        from ..core.drape.animate import drape_motion, pose_frames, posed_frames
+        from ..core.progress import sub
+
+        m = self.motion
+        if m["source"] == "POSES":
+            frames = pose_frames(self.model, self.shape, m["poses"], m["between"])
+        else:  # the pattern's own pose, then the rig's frames
+            frames = posed_frames(self.model, self.shape, [m["own"]] + m["poses"], [np.zeros(3)] + list(m["moves"]))
+        pattern, adapted = self.pattern, None
+        if self.adapt_to:
+            adapted = wf.adapt(self.prep, self.adapt_to, start=self.pattern, progress=sub(progress, 0.0, 0.1))
+            pattern = adapted.pattern
+        faces = self.model.faces
+        result = drape_motion(
+            pattern,
+            frames,
+            faces,
+            options={"device": self.device},
+            progress=sub(progress, 0.1 if adapted else 0.0, 1.0),
+        )
+        if m["source"] == "ACTION":
+            frames, result = frames[1:], _without_first(result)
+        return np.stack(frames), faces, result, adapted
+
+    def apply(self, context) -> None:
+        from ..core.drape.animate import motion_report
+
+        scene, s = context.scene, context.scene.ease
+        frames, faces, r, adapted = self.result
+        m = self.motion
+        if adapted is not None:  # the adapted pattern is the scene's pattern now, beside the body
+            sync.show_pattern(context, adapted.pattern)
+            s.fit_json = json.dumps(adapted.figures)
+        used = np.asarray(r.used, dtype=bool)
+        remap = -np.ones(len(used), dtype=np.int64)
+        remap[used] = np.arange(int(used.sum()))
+        start = m["start"]
+        motion_object(scene, MOTION_BODY, frames, faces, materials.skin(), start)
+        garment = motion_object(
+            scene, MOTION_GARMENT, r.positions[:, used], remap[np.asarray(r.faces)], materials.fabric(), start
+        )
+        # the pattern vertex of each vertex: the studio dresses it in its fabric as the static garment
+        vid = garment.data.attributes.new(data.VERTEX_ID, "INT", "POINT")
+        vid.data.foreach_set("value", np.flatnonzero(used).astype(np.int32))
+        scene.frame_start, scene.frame_end = start, start + len(frames) - 1
+        scene.frame_set(start)
+        hide = objects_with_role(scene, "body") + objects_with_role(scene, "garment")
+        rig = bpy.data.objects.get(RIG)
+        if rig is not None and rig.get("ease_role") == "rig":
+            hide.append(rig)
+        for o in hide:
+            o.hide_set(True)
+            o.hide_render = True
+        report = motion_report(r, m["label"], m["between"])
+        report["source"] = "rig action" if m["source"] == "ACTION" else "poses"
+        report["first_frame"] = start
+        report["pattern"] = _pattern_label(adapted.pattern if adapted is not None else self.pattern)
+        if adapted is not None:
+            report["adaptation"] = adapted.pattern.report.get("residual_stretch")
+        scene[MOTION_KEY] = json.dumps(report)
+        worst = report["worst_penetration_pct"]
+        s.motion_status = (
+            f"{len(frames)} frames ({m['title']}, {report['pattern']}), worst penetration {worst:.2f} %, "
+            f"stretch p95 up to {max(report['stretch_p95_pct']):.1f} %, "
+            f"{np.mean(r.frame_seconds) if len(r.frame_seconds) else 0:.2f} s a frame"
+        )
+
+
+def _without_first(result):
+    """``result`` without its first frame (the settle on the pattern's own pose before a rig's frames)."""
+    import dataclasses
+
+    return dataclasses.replace(
+        result,
+        positions=result.positions[1:],
+        penetration=result.penetration[1:],
+        stretch=result.stretch[1:],
+        frame_seconds=result.frame_seconds[1:],
+    )
+
+
+def _pattern_label(pattern) -> str:
+    poses = (pattern.report or {}).get("poses") if pattern.mode == "adapt" else None
+    return f"pattern adapted to {', '.join(map(str, poses))}" if poses else f"{pattern.mode} pattern"
+
+
+def motion_input(context) -> dict:
+    """What Drape Animation moves the body through (main thread: reads the scene), checked:
+    ``source``, ``poses`` (names, or JSON poses of the rig's frames), ``between``, the timeline
+    ``start``, ``label`` (for the report), ``title`` (for the status) and ``adapt_to``."""
+    from ..core.drape.animate import parse_poses
 
     scene, s = context.scene, context.scene.ease
-    poses = parse_poses(s.motion_poses, "Poses")
     pattern = data.required_pattern(scene, "to animate")
+    own = (pattern.body or {}).get("pose") or "A"
+    if s.motion_source == "POSES":
+        poses = parse_poses(s.motion_poses, "Poses")
+        if poses[0] != own:
+            raise state.AddonError(
+                f"Poses: the sequence starts at the pattern's own pose {own} (its garment was cut there), "
+                f"not {poses[0]}"
+            )
+        return {
+            "source": "POSES",
+            "poses": poses,
+            "between": int(s.motion_between),
+            "start": 1,
+            "label": poses,
+            "title": " -> ".join(poses),
+            "adapt_to": [p for p in dict.fromkeys(poses[1:]) if p != own],
+        }
+    rig = rig_object(context, required=True)
+    first, last = int(scene.frame_start), int(scene.frame_end)
+    if last <= first:
+        raise state.AddonError(f"Motion: the scene's frame range {first}-{last} has one frame; set End after Start")
+    frames = list(range(first, last + 1))
+    poses, moves = action_poses(context, rig, frames)
+    keyed = [frames.index(f) for f in _key_frames(rig, first, last)]
+    adapt_to = [poses[i] for i in keyed if poses[i]]
+    return {
+        "source": "ACTION",
+        "own": own,
+        "poses": poses,
+        "moves": moves,
+        "between": 0,
+        "start": first,
+        "label": [f"frame {f}" for f in (first, last)],
+        "title": f"{rig.name} frames {first}-{last}",
+        "adapt_to": adapt_to,
+    }
+
+
+def motion_job(context) -> MotionJob:
+    """Drape Animation's job, not started (main thread: reads the scene; refuses bad input)."""
+    from ..core.body import load_body
+
+    s = context.scene.ease
+    pattern = data.required_pattern(context.scene, "to animate")
+    motion = motion_input(context)
     spec = dict(pattern.body or {})
-    own = spec.get("pose") or "A"
-    if poses[0] != own:
-        raise state.AddonError(
-            f"Poses: the sequence starts at the pattern's own pose {own} (its garment was cut there), not {poses[0]}"
-        )
     model = load_body(spec.get("model", "anny"))
-    frames = pose_frames(model, spec.get("shape"), poses, int(s.motion_between))
-    _, faces = spec_instance(spec, model)
-    with window_progress(context) as progress:
-        result = drape_motion(pattern, frames, faces, options={"device": s.drape_device}, progress=progress)
-    return np.stack(frames), faces, result, poses
+    prep, adapt_to = None, ()
+    if s.motion_adapt:
+        adapt_to = motion["adapt_to"]
+        if not adapt_to:
+            raise state.AddonError(
+                "Adapt to Poses: the motion has no pose but the pattern's own to adapt to "
+                "(name poses after the first, or keyframe the rig's bones)"
+            )
+        prep = data.prepared(context)
+    return MotionJob(pattern, model, spec.get("shape"), motion, s.drape_device, prep, adapt_to)
 
 
-class EASE_OT_drape_animation(EaseOperator):
-    """Drape the garment through the pose sequence (Poses, In-betweens): shape-keyed motion objects"""
+class EASE_OT_drape_animation(JobOperator):
+    """Drape the garment through the motion (Poses, or the rig's action): shape-keyed motion objects (Esc cancels)"""
 
     bl_idname = "ease.drape_animation"
     bl_label = "Drape Animation"
     needs = ("pattern",)
 
-    def run(self, context):
-        from ..core.drape.animate import motion_report
+    def make_job(self, context) -> MotionJob:
+        return motion_job(context)
 
-        scene, s = context.scene, context.scene.ease
-        frames, faces, r, poses = _motion(context)
-        used = np.asarray(r.used, dtype=bool)
-        remap = -np.ones(len(used), dtype=np.int64)
-        remap[used] = np.arange(int(used.sum()))
-        body = motion_object(scene, MOTION_BODY, frames, faces, materials.skin())
-        garment = motion_object(
-            scene, MOTION_GARMENT, r.positions[:, used], remap[np.asarray(r.faces)], materials.fabric()
-        )
-        # the pattern vertex of each vertex: the studio dresses it in its fabric as the static garment
-        vid = garment.data.attributes.new(data.VERTEX_ID, "INT", "POINT")
-        vid.data.foreach_set("value", np.flatnonzero(used).astype(np.int32))
-        scene.frame_start, scene.frame_end = 1, len(frames)
-        scene.frame_set(1)
-        for o in objects_with_role(scene, "body") + objects_with_role(scene, "garment"):
-            o.hide_set(True)
-            o.hide_render = True
-        report = motion_report(r, poses, int(s.motion_between))
-        scene[MOTION_KEY] = json.dumps(report)
-        worst = report["worst_penetration_pct"]
-        s.motion_status = (
-            f"{len(frames)} frames ({' -> '.join(poses)}), worst penetration {worst:.2f} %, "
-            f"stretch p95 up to {max(report['stretch_p95_pct']):.1f} %, "
-            f"{np.mean(r.frame_seconds) if len(r.frame_seconds) else 0:.2f} s a frame"
-        )
+    def finished(self, context, job) -> None:
         self.report(
             {"INFO"},
-            f"{body.name}, {garment.name}: {s.motion_status}; the static body and garment are hidden in the viewport",
+            f"{MOTION_BODY}, {MOTION_GARMENT}: {context.scene.ease.motion_status}; "
+            "the static body and garment are hidden in the viewport",
         )
 
 
@@ -155,7 +453,8 @@ class EASE_OT_export_alembic(EaseOperator):
         if s.motion_with_body and bpy.data.objects.get(MOTION_BODY) is not None:
             objs.append(bpy.data.objects[MOTION_BODY])
         keys = objs[0].data.shape_keys
-        end = len(keys.key_blocks) - 1 if keys else 1
+        start = int(objs[0].get(FRAME_START, 1))
+        end = start + (len(keys.key_blocks) - 2 if keys else 0)
         before = [o for o in context.view_layer.objects if o.select_get()]
         active = context.view_layer.objects.active
         try:
@@ -164,7 +463,7 @@ class EASE_OT_export_alembic(EaseOperator):
                 o.select_set(True)
             r = bpy.ops.wm.alembic_export(
                 filepath=path,
-                start=1,
+                start=start,
                 end=end,
                 selected=True,
                 uvs=False,
@@ -178,7 +477,7 @@ class EASE_OT_export_alembic(EaseOperator):
             context.view_layer.objects.active = active
         if r != {"FINISHED"} or not os.path.exists(path):
             raise state.AddonError(f"Blender's Alembic exporter wrote nothing to {path}")
-        self.report({"INFO"}, f"wrote {path}: {', '.join(o.name for o in objs)}, frames 1-{end}")
+        self.report({"INFO"}, f"wrote {path}: {', '.join(o.name for o in objs)}, frames {start}-{end}")
 
 
-CLASSES = (EASE_OT_drape_animation, EASE_OT_export_alembic)
+CLASSES = (EASE_OT_add_rig, EASE_OT_drape_animation, EASE_OT_export_alembic)

@@ -106,6 +106,46 @@ def pose_frames(model, shape=None, poses: Sequence = ("A", "P1", "P3"), between:
     return frames
 
 
+def pose_from_bone_rotations(names: Sequence[str], parents, world) -> dict:
+    """A JSON pose (joint -> axis-angle, radians; :mod:`core.body.poses`) from each joint's world
+    rotation away from the reference pose.
+
+    ``world`` (J, 3, 3): joint j's rotation from its orientation at the reference pose to its
+    posed orientation, in the body's frame (a rig's posed bone orientation times the inverse
+    of its rest orientation). The pose's rotations are 'local-ref' (a joint's world rotation is
+    its parent's times its own), so each is the parent's inverse times the joint's.
+    """
+    from scipy.spatial.transform import Rotation
+
+    G = np.asarray(world, dtype=float)
+    parents = np.asarray(parents)
+    if G.shape != (len(names), 3, 3) or parents.shape != (len(names),):
+        raise DrapeError(f"bone rotations: expected ({len(names)}, 3, 3) and {len(names)} parents, got {G.shape}")
+    local = np.array([G[j] if parents[j] < 0 else G[parents[j]].T @ G[j] for j in range(len(names))])
+    aa = Rotation.from_matrix(local).as_rotvec()
+    return {n: aa[j] for j, n in enumerate(names) if np.linalg.norm(aa[j]) > 1e-9}
+
+
+def posed_frames(model, shape, poses: Sequence, root_moves=None) -> list:
+    """The body's vertices (V, 3), metres, at each of ``poses`` (presets or JSON poses).
+
+    ``root_moves`` (K, 3), optional: how far each frame's root joint moved from where it stands
+    at the reference pose (a rig's root bone moved: the body carried as a whole).
+    """
+    from ..body.instance import instance_pose, instance_shape
+
+    inst = instance_shape(model, shape)
+    rest_root = np.asarray(model.joints(inst, None), dtype=np.float64)[0]
+    frames = []
+    for k, pose in enumerate(poses):
+        v, j = model.vertices_and_joints(inst, instance_pose(pose))
+        v = np.asarray(v, dtype=np.float64)
+        if root_moves is not None:
+            v = v + (np.asarray(root_moves[k], dtype=np.float64) - (np.asarray(j[0]) - rest_root))
+        frames.append(v)
+    return frames
+
+
 def drape_motion(
     pattern,
     body_frames: Sequence[np.ndarray],
