@@ -133,6 +133,8 @@ def shape_changed(item, context) -> None:
     if obj is None:
         return
     shape = {i.name: float(min(max(i.value, i.min), i.max)) for i in context.scene.ease.shape}
+    # the local changes a made-to-measure fit gave (no slider of their own) stay
+    shape = {**{k: v for k, v in data.body_spec(obj)["shape"].items() if k not in shape}, **shape}
     try:
         update_body(context, obj, shape=shape)
     except Exception as exc:  # a slider must never leave a traceback in the UI
