@@ -33,6 +33,7 @@ from . import (
     fit_ops,
     live,
     marker_ops,
+    measure_ops,
     motion_ops,
     panels,
     pattern_ops,
@@ -53,7 +54,9 @@ CLASSES = (
     + render_ops.CLASSES
     + export_ops.CLASSES
     + marker_ops.CLASSES
+    + measure_ops.CLASSES
     + panels.CLASSES
+    + measure_ops.PANELS
 )
 
 _register_classes, _unregister_classes = bpy.utils.register_classes_factory(CLASSES)
@@ -62,6 +65,7 @@ _register_classes, _unregister_classes = bpy.utils.register_classes_factory(CLAS
 def register():
     _register_classes()
     properties.register_props()
+    measure_ops.register_props()
     if live.on_load not in bpy.app.handlers.load_post:
         bpy.app.handlers.load_post.append(live.on_load)
     # a file already open (the add-on enabled after it was read): Live follows its toggle once
@@ -76,6 +80,7 @@ def unregister():
     if bpy.app.timers.is_registered(live.resume):
         bpy.app.timers.unregister(live.resume)
     live.stop()
+    measure_ops.unregister_props()
     properties.unregister_props()
     _unregister_classes()
     state.clear()
