@@ -32,6 +32,9 @@ OPENINGS = {
     "blouse_fitted": {"blouse": 4},  # neckline, hem, two armholes
     "blouse_four_darts": {"blouse": 4},
     "skirt_darted": {"skirt": 2},  # waist, hem
+    "skirt_knife_pleats": {"skirt": 2},
+    "skirt_box_pleats": {"skirt": 2},
+    "shirt_box_pleat": {"shirt": 4},
     "teaser_shirt_pants": {"shirt": 4, "pants": 3},
 }
 PANELS = {
@@ -48,6 +51,9 @@ PANELS = {
     "blouse_fitted": 2,
     "blouse_four_darts": 2,
     "skirt_darted": 2,
+    "skirt_knife_pleats": 2,
+    "skirt_box_pleats": 2,
+    "shirt_box_pleat": 6,
 }
 
 

@@ -30,6 +30,7 @@ from .garments import (
     top_short_sleeve,
     top_sleeveless,
 )
+from .pleated import shirt_box_pleat, skirt_box_pleats, skirt_knife_pleats
 
 
 def template_dir() -> Path:
@@ -58,6 +59,9 @@ TEMPLATES: Dict[str, Callable[[], dict]] = {
     "blouse_fitted": blouse_fitted,
     "blouse_four_darts": blouse_four_darts,
     "skirt_darted": skirt_darted,
+    "skirt_knife_pleats": skirt_knife_pleats,
+    "skirt_box_pleats": skirt_box_pleats,
+    "shirt_box_pleat": shirt_box_pleat,
 }
 
 

@@ -170,13 +170,23 @@ def _left(d):
     return np.array([-d[1], d[0]])
 
 
-def _piece_jacobian_dir(uv, xyz, faces, tri, d3):
-    """The 2D direction on the piece of the 3D direction ``d3`` at triangle ``tri``."""
-    f = faces[tri]
-    E2 = np.stack([uv[f[1]] - uv[f[0]], uv[f[2]] - uv[f[0]]], axis=1)  # 2x2
-    E3 = np.stack([xyz[f[1]] - xyz[f[0]], xyz[f[2]] - xyz[f[0]]], axis=1)  # 3x2
-    coef, *_ = np.linalg.lstsq(E3, d3, rcond=None)
-    return E2 @ coef
+def _mean_direction(uv, xyz, faces, d3):
+    """The 2D direction on the piece of the body axis ``d3``: each triangle's image of it (unit),
+    averaged over the piece weighted by area (a straight line across the piece, not the local
+    direction at its start)."""
+    e2a, e2b = uv[faces[:, 1]] - uv[faces[:, 0]], uv[faces[:, 2]] - uv[faces[:, 0]]
+    e3a, e3b = xyz[faces[:, 1]] - xyz[faces[:, 0]], xyz[faces[:, 2]] - xyz[faces[:, 0]]
+    # least squares coefficients of d3 in the triangle's 3D edge basis, then the same combination in 2D
+    g = np.stack([np.einsum("ij,ij->i", e3a, e3a), np.einsum("ij,ij->i", e3a, e3b), np.einsum("ij,ij->i", e3b, e3b)], 1)
+    r = np.stack([e3a @ d3, e3b @ d3], 1)
+    det = g[:, 0] * g[:, 2] - g[:, 1] ** 2
+    ok = det > 1e-30
+    c0 = np.where(ok, (g[:, 2] * r[:, 0] - g[:, 1] * r[:, 1]) / np.where(ok, det, 1), 0)
+    c1 = np.where(ok, (g[:, 0] * r[:, 1] - g[:, 1] * r[:, 0]) / np.where(ok, det, 1), 0)
+    v = c0[:, None] * e2a + c1[:, None] * e2b
+    v /= np.maximum(np.linalg.norm(v, axis=1, keepdims=True), 1e-300)
+    area = 0.5 * np.abs(e2a[:, 0] * e2b[:, 1] - e2a[:, 1] * e2b[:, 0])
+    return (area[:, None] * v).sum(axis=0)
 
 
 def _push_3d(uv, xyz, faces, tri, d2):
@@ -262,7 +272,6 @@ def piece_strips(piece, sites: List[dict], darts=()) -> List[Strip]:
         path, name = site["path"], site["name"]
         u, w, lam = site["start"]
         a = (1 - lam) * uv[u] + lam * uv[w]
-        tri0 = _faces_of(faces, u, w)
         if "towards" in site:
             t = site["towards"]
             aim = np.asarray(t[1:]) @ uv[faces[t[0]]]
@@ -270,7 +279,7 @@ def piece_strips(piece, sites: List[dict], darts=()) -> List[Strip]:
             if np.linalg.norm(d) < 1e-4:
                 raise DesignError(f"{path}.towards", f"pleat {name!r}: its towards point is its start")
         else:
-            d = _piece_jacobian_dir(uv, xyz, faces, tri0, np.asarray(site["along"], float))
+            d = _mean_direction(uv, xyz, faces, np.asarray(site["along"], float))
         d = d / max(np.linalg.norm(d), 1e-300)
         if not _inside(uv[loops[0]], [a + 1e-4 * d])[0]:
             raise DesignError(f"{path}.from", f"pleat {name!r}: its line runs out of its panel {site['panel']!r}")
@@ -328,11 +337,6 @@ def piece_strips(piece, sites: List[dict], darts=()) -> List[Strip]:
                 bands.append((name, band))
             out.append(strip)
     return out
-
-
-def _faces_of(faces, u, w):
-    hit = np.flatnonzero(np.isin(faces, [u, w]).sum(axis=1) == 2)
-    return int(hit[0]) if len(hit) else int(np.flatnonzero((faces == u).any(axis=1))[0])
 
 
 def _overlap(p, q) -> bool:
@@ -672,13 +676,7 @@ def attach_pleats(pattern, prep) -> None:
     ``pattern.report["pleats"]``: per pleat its site, settings and what the opened piece measures
     (:func:`measure_pleats`). Raises DesignError (the pleat's JSON path) for a pleat the pattern
     cannot take. A design without pleats leaves the pattern as it is."""
-    sites = getattr(prep, "_pleat_sites", None)
-    if sites is None:
-        sites = pleat_sites(prep)
-        try:
-            prep._pleat_sites = sites
-        except AttributeError:  # a frozen container: compute again next time
-            pass
+    sites = pleat_sites(prep)
     if not sites:
         return
     pattern.report["pleats"] = [dict(s) for s in sites]
@@ -707,7 +705,11 @@ def open_pattern(pattern, stitch: bool = False):
         garment = np.concatenate([np.asarray(p.xyz) for p in pattern.panels if p.garment == piece.garment])
         opened, lines, stitches, next_id = open_piece(piece, strips, next_id, garment.mean(axis=0))
         panels.append(opened)
-        drawn[piece.name] = [{"pleat": x.pleat, "kind": x.kind, "ids": x.ids, "strip": x.strip} for x in lines]
+        gids = np.asarray(opened.vertex_ids, int)
+        drawn[piece.name] = [
+            {"pleat": x.pleat, "kind": x.kind, "ids": x.ids, "gids": gids[x.ids].tolist(), "strip": x.strip}
+            for x in lines
+        ]
         if stitch:
             for k, (name, ia, ib) in enumerate(stitches):
                 seams.append(PatternSeam(f"{name}#stitch{k}", piece.name, piece.name, np.asarray(ia), np.asarray(ib)))
