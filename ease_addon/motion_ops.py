@@ -318,12 +318,10 @@ class MotionJob(WorkerJob):
         for o in hide:
             o.hide_set(True)
             o.hide_render = True
-        report = motion_report(r, m["label"], m["between"])
+        pattern = adapted.pattern if adapted is not None else self.pattern
+        report = motion_report(r, m["label"], m["between"], pattern)
         report["source"] = "rig action" if m["source"] == "ACTION" else "poses"
         report["first_frame"] = start
-        report["pattern"] = _pattern_label(adapted.pattern if adapted is not None else self.pattern)
-        if adapted is not None:
-            report["adaptation"] = adapted.pattern.report.get("residual_stretch")
         scene[MOTION_KEY] = json.dumps(report)
         worst = report["worst_penetration_pct"]
         s.motion_status = (
@@ -344,11 +342,6 @@ def _without_first(result):
         stretch=result.stretch[1:],
         frame_seconds=result.frame_seconds[1:],
     )
-
-
-def _pattern_label(pattern) -> str:
-    poses = (pattern.report or {}).get("poses") if pattern.mode == "adapt" else None
-    return f"pattern adapted to {', '.join(map(str, poses))}" if poses else f"{pattern.mode} pattern"
 
 
 def motion_input(context) -> dict:

@@ -271,3 +271,32 @@ def test_rig_action_drives_the_motion(scene, bpy_session):
     finally:
         s.motion_source = "POSES"
         sc.frame_start, sc.frame_end = 1, BETWEEN + 2
+
+
+def test_drape_animation_adapts_the_pattern_to_the_poses(scene, bpy_session):
+    """Adapt to Poses (Animation box): the pattern is adapted to the motion's poses after the
+    first, becomes the scene's pattern, and is the one draped; the report says so and gives
+    the adaptation's residual stretch before and after, and each frame's stretch."""
+    bpy = scene.bpy
+    sc = bpy.context.scene
+    s = sc.ease
+    data = scene.mod("data")
+    assert data.stored_pattern(sc).mode == "reference"
+    old = s.motion_poses, s.motion_between
+    try:
+        s.motion_poses, s.motion_between, s.motion_adapt = "A, P1", 1, True
+        assert bpy.ops.ease.drape_animation() == {"FINISHED"}
+        rep = json.loads(sc["ease_motion_json"])
+        assert rep["pattern"] == "pattern adapted to P1" and "pattern adapted to P1" in s.motion_status
+        stretch = rep["adaptation_residual_stretch_pct"]["P1"]["top"]
+        assert stretch["after"] < stretch["before"]
+        assert rep["frames"] == 3 and len(rep["stretch_p95_pct"]) == 3 and max(rep["penetration_pct"]) <= 0.5
+        pattern = data.stored_pattern(sc)
+        assert pattern.mode == "adapt" and pattern.report["poses"] == ["P1"]
+        # nothing to adapt to: refused, naming the setting
+        s.motion_poses = "A, A"
+        r = scene.run(bpy.ops.ease.drape_animation)
+        assert "ERROR" in r and "Adapt to Poses" in r["ERROR"], r
+    finally:
+        s.motion_poses, s.motion_between = old
+        s.motion_adapt = False

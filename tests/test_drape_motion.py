@@ -142,6 +142,34 @@ def test_ease_drape_animation_on_the_default_body(tmp_path, anny):
     assert np.array_equal(k, pos[:, used].astype(np.float32))
 
 
+def test_ease_drape_animation_adapts_the_pattern_to_the_motion(tmp_path, capsys):
+    """``--adapt DESIGN``: the design's reference pattern adapted to the motion's poses (P1) within
+    its stretch tolerances, then draped through A -> P1; the report names the pattern and gives
+    the adaptation's residual stretch before and after, and each frame's stretch."""
+    from core import workflows
+    from core.cli import main
+    from core.design import load_design
+    from core.design.templates import template_path
+    from core.pattern.io import load_pattern, save_pattern
+
+    design = template_path("top_sleeveless")
+    prep = workflows.prepare(load_design(design))
+    save_pattern(workflows.reference(prep).pattern, tmp_path / "pattern")
+    out = tmp_path / "motion"
+    argv = ["drape", str(tmp_path / "pattern"), "--out", str(out), "--animation", "A,P1", "--between", "1"]
+    assert main(argv + ["--frames", "40", "--adapt", str(design), "--quiet"]) == 0
+    rep = json.loads((out / "motion_report.json").read_text())
+    assert rep["pattern"] == "pattern adapted to P1" and rep["frames"] == 3
+    stretch = rep["adaptation_residual_stretch_pct"]["P1"]["top"]
+    assert stretch["after"] < stretch["before"]  # the adapted pattern stretches less in P1
+    assert len(rep["stretch_p95_pct"]) == 3 and rep["worst_penetration_pct"] <= 0.5
+    adapted = load_pattern(out / "pattern.json")
+    assert adapted.mode == "adapt" and adapted.report["poses"] == ["P1"]
+    # the pattern of another design is refused, naming the flag
+    assert main(argv + ["--adapt", str(template_path("skirt")), "--quiet"]) == 2
+    assert "--adapt: PATTERN_DIR is a pattern of the design" in capsys.readouterr().err
+
+
 def _pc2(path):
     """(frames (K, V, 3) float32, V) of a Point Cache 2 file, read from its documented layout."""
     import struct
@@ -159,6 +187,8 @@ def _pc2(path):
         (["--animation", "A,Q9"], "--animation: 'Q9' is not a pose"),
         (["--animation", "A"], "--animation: name two poses"),
         (["--animation", "A,P1", "--between", "-1"], "--between"),
+        (["--adapt", "design.json"], "--adapt: adapts the pattern to the poses of --animation"),
+        (["--animation", "A,P1", "--adapt", "no_such_design.json"], "--adapt: no design file"),
     ],
 )
 def test_ease_drape_animation_refuses_bad_flags_first(tmp_path, capsys, argv, words):

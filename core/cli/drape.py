@@ -66,6 +66,15 @@ def add_parser(sub) -> None:
         default=10,
         help="with --animation: in-between frames from each pose to the next (default 10)",
     )
+    p.add_argument(
+        "--adapt",
+        metavar="DESIGN",
+        default=None,
+        help="with --animation: first adapt the pattern to the motion's poses after the first (pose "
+        "adaptation within DESIGN's stretch tolerances, PATTERN_DIR being DESIGN's reference pattern), "
+        "then drape the adapted pattern; writes its pattern.json too, and the report has the residual "
+        "stretch per pose before and after adaptation",
+    )
     add_quiet(p)
 
 
@@ -100,27 +109,54 @@ def _motion(args, options, pattern, prog) -> int:
 
     poses = args.poses
     spec = dict(pattern.body or {})
-    if poses[0] != (spec.get("pose") or "A"):
+    own = spec.get("pose") or "A"
+    if poses[0] != own:
         raise DrapeError(
-            f"--animation: the sequence starts at the pattern's own pose {spec.get('pose') or 'A'} "
+            f"--animation: the sequence starts at the pattern's own pose {own} "
             f"(its garment was cut there), not {poses[0]}"
         )
+    start = 0.0
+    if args.adapt is not None:
+        pattern = _adapted(args.adapt, pattern, [p for p in dict.fromkeys(poses[1:]) if p != own], prog)
+        start = 0.2
     model = load_body(spec.get("model", "anny"))
     frames = pose_frames(model, spec.get("shape"), poses, args.between)
     _, faces = spec_instance(spec, model)
     result = drape_motion(
-        pattern, frames, faces, material=args.material, options=options, progress=sub(prog, 0.0, 0.95)
+        pattern, frames, faces, material=args.material, options=options, progress=sub(prog, start, 0.95)
     )
-    write_motion(args.out, result, frames, faces, poses, args.between)
+    write_motion(args.out, result, frames, faces, poses, args.between, pattern=pattern)
     report(prog, 1.0, "drape: done")
-    rep = motion_report(result, poses, args.between)
+    rep = motion_report(result, poses, args.between, pattern)
+    for pose, garments in (rep.get("adaptation_residual_stretch_pct") or {}).items():
+        for g, v in garments.items():
+            print(f"adapted to {pose}, {g}: residual stretch {v['before']:.1f} % before, {v['after']:.1f} % after")
     print(
-        f"motion {' -> '.join(poses)}: {rep['frames']} frames, "
+        f"motion {' -> '.join(poses)} ({rep['pattern']}): {rep['frames']} frames, "
         f"worst penetration {rep['worst_penetration_pct']:.2f} %, "
         f"residual stretch p95 up to {max(rep['stretch_p95_pct']):.1f} %, "
         f"{sum(rep['frame_seconds']) / max(len(rep['frame_seconds']), 1):.2f} s a frame -> {args.out}"
     )
     return 0
+
+
+def _adapted(design, pattern, poses, prog):
+    """``--adapt``: ``pattern`` (the reference pattern of ``design``) adapted to ``poses``."""
+    from .. import workflows as wf
+    from ..errors import DrapeError
+    from ..progress import sub
+
+    if not poses:
+        raise DrapeError("--adapt: the motion has no pose but the pattern's own to adapt to")
+    prep = wf.prepare(design, progress=sub(prog, 0.0, 0.1))
+    if pattern.style != prep.design.name:
+        raise DrapeError(f"--adapt: PATTERN_DIR is a pattern of the design {pattern.style!r}, not of {design}")
+    if (pattern.body or {}).get("shape") != prep.cut.body.get("shape"):
+        raise DrapeError(
+            f"--adapt: PATTERN_DIR was solved on another body ({(pattern.body or {}).get('shape')!r}) "
+            f"than {design}'s reference ({prep.cut.body.get('shape')!r}); adapt the design's reference pattern"
+        )
+    return wf.adapt(prep, poses, start=pattern, progress=sub(prog, 0.1, 0.2)).pattern
 
 
 def _cmd(args) -> int:
@@ -136,6 +172,15 @@ def _cmd(args) -> int:
         args.poses = parse_poses(args.animation, "--animation")
         if args.between < 0:
             raise DrapeError(f"--between: expected 0 or more in-between frames, got {args.between}")
+    if args.adapt is not None:
+        from pathlib import Path
+
+        from ..errors import DrapeError
+
+        if args.animation is None:
+            raise DrapeError("--adapt: adapts the pattern to the poses of --animation; give --animation too")
+        if not Path(args.adapt).is_file():
+            raise DrapeError(f"--adapt: no design file {args.adapt}")
     prog = console_progress(args)
     pattern = load_pattern(args.pattern)
     if args.animation is not None:

@@ -288,9 +288,18 @@ def _obj_bytes(vertices: np.ndarray, faces: np.ndarray, name: str) -> bytes:
     return ("\n".join(lines) + "\n").encode("utf-8")
 
 
-def motion_report(result: MotionResult, poses, between: int) -> dict:
-    """The figures of a motion, per frame: penetration and residual stretch (%) and seconds."""
-    return {
+def pattern_label(pattern) -> str:
+    """What pattern a motion drapes: ``"pattern adapted to P1, P3"``, ``"reference pattern"`` ..."""
+    poses = (pattern.report or {}).get("poses") if pattern.mode == "adapt" else None
+    return f"pattern adapted to {', '.join(map(str, poses))}" if poses else f"{pattern.mode} pattern"
+
+
+def motion_report(result: MotionResult, poses, between: int, pattern=None) -> dict:
+    """The figures of a motion, per frame: penetration and residual stretch (%) and seconds.
+    With the draped ``pattern``: which it is (:func:`pattern_label`) and, for an adapted one,
+    its adaptation's residual stretch per pose before and after (% of the area stretched beyond
+    the tolerance, :func:`core.workflows.adapt`)."""
+    out = {
         "poses": list(poses),
         "in_betweens": int(between),
         "frames": int(len(result.positions)),
@@ -303,13 +312,20 @@ def motion_report(result: MotionResult, poses, between: int) -> dict:
         "material": result.material.get("name"),
         "device": result.device,
     }
+    if pattern is not None:
+        out["pattern"] = pattern_label(pattern)
+        if pattern.mode == "adapt" and (pattern.report or {}).get("residual_stretch") is not None:
+            out["adaptation_residual_stretch_pct"] = pattern.report["residual_stretch"]
+    return out
 
 
-def write_motion(out, result: MotionResult, body_frames, body_faces, poses, between: int) -> list:
+def write_motion(out, result: MotionResult, body_frames, body_faces, poses, between: int, pattern=None) -> list:
     """The motion's files into the folder ``out`` at once: ``motion.npz`` (garment positions by
     global vertex id, faces, used; body frames and faces), ``motion_report.json``
     (:func:`motion_report`), and for other tools ``garment_motion.obj`` / ``.pc2`` and
-    ``body_motion.obj`` / ``.pc2`` (each OBJ is frame 1, its point cache the K frames)."""
+    ``body_motion.obj`` / ``.pc2`` (each OBJ is frame 1, its point cache the K frames).
+    With ``pattern`` (the one draped) the report names it, and an adapted one is written
+    too (``pattern.json``: what the garment was cut from)."""
     import io
 
     from ..fileio import write_files
@@ -332,10 +348,14 @@ def write_motion(out, result: MotionResult, body_frames, body_faces, poses, betw
     )
     files = {
         "motion.npz": buf.getvalue(),
-        "motion_report.json": (dumps_json(motion_report(result, poses, between)) + "\n").encode("utf-8"),
+        "motion_report.json": (dumps_json(motion_report(result, poses, between, pattern)) + "\n").encode("utf-8"),
         "garment_motion.obj": _obj_bytes(garment[0], gfaces, "garment_motion"),
         "garment_motion.pc2": pc2_bytes(garment),
         "body_motion.obj": _obj_bytes(body[0], body_faces, "body_motion"),
         "body_motion.pc2": pc2_bytes(body),
     }
+    if pattern is not None and pattern.mode == "adapt":
+        from ..pattern.io import pattern_text
+
+        files["pattern.json"] = pattern_text(pattern).encode("utf-8")
     return write_files(out, files)
