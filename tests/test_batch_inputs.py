@@ -42,7 +42,7 @@ def test_sizes_of_a_chart(tmp_path):
     "text, words",
     [
         ("height,waist\n170,80\n180,eighty\n", ["bodies.csv", "row 2", "'waist'", "'eighty'"]),
-        ("height,inseam\n170,80\n", ["bodies.csv", "column 2", "'inseam'"]),
+        ("height,knee\n170,80\n", ["bodies.csv", "column 2", "'knee'"]),
         ("height,size\n170,XXL\n", ["row 1", "'size'", "XXL"]),
         ("height,size\n170,M\n", ["row 1", "not both"]),
         ("size,chart\n5XL,women\n", ["row 1", "'size/chart'", "S, M, L"]),

@@ -53,8 +53,9 @@ class BodySource:
     ----------
     label : str, the row's name or ``"row 3"`` / ``"sample 17"`` / ``"betas 4"``.
     kind : ``"size"`` (chart size name), ``"shape"`` (shape parameters of the
-        model) or ``"measurements"`` (targets in cm, fitted by
-        :func:`core.body.sizes.fit_measurements` on the worker).
+        model), ``"measurements"`` (chart measures in cm, fitted by
+        :func:`core.body.sizes.fit_measurements` on the worker) or ``"tape"`` (tape measures in
+        cm, and optionally gender, made-to-measure: :func:`core.body.made_to_measure.fit_tape`).
     value : the size name, or a dict parameter -> value, or measure -> cm.
     origin : where it came from (``"bodies.csv row 3"``), for error messages.
     """
@@ -89,12 +90,19 @@ def read_measurements(path) -> List[BodySource]:
     ``chart`` column naming the chart; used as such where given), and optionally
     ``name``. Empty cells are "not given".
 
+    A table with a column of the tape measures beyond those four (``neck``, ``underbust``,
+    ``inseam``, ... :data:`core.body.tape.TAPE_MEASURES` and their aliases) or a ``gender``
+    column (0 male .. 1 female) is a made-to-measure table: each of its rows is fitted as
+    ``ease body --measurements`` fits a table (kind ``"tape"``, docs/measurements.md).
+
     Raises
     ------
     BodySourceError naming the file, row (1 = the first body) and column.
     """
+    from ..body.made_to_measure import RANGES
     from ..body.measure import MEASUREMENTS
     from ..body.sizes import TARGET_RANGES, check_size
+    from ..body.tape import ALIASES, TAPE_MEASURES
 
     path = Path(path)
     try:
@@ -109,15 +117,22 @@ def read_measurements(path) -> List[BodySource]:
             f"({', '.join(MEASUREMENTS)}, bust, size, name) and one row per body"
         )
     header = [h.strip().lower() for h in rows[0]]
-    allowed = set(MEASUREMENTS) | {"bust"} | set(SIZE_COLUMNS) | set(NAME_COLUMNS) | set(CHART_COLUMNS)
+    tape_names = set(TAPE_MEASURES) | set(ALIASES) | {"gender"}
+    allowed = set(MEASUREMENTS) | {"bust"} | set(SIZE_COLUMNS) | set(NAME_COLUMNS) | set(CHART_COLUMNS) | tape_names
     for j, h in enumerate(header):
         if h not in allowed:
             raise BodySourceError(
                 f"{path}: header column {j + 1} {h!r} is not a measurement; allowed: "
-                f"{', '.join(MEASUREMENTS)}, bust (cm), size, chart, name"
+                f"{', '.join(MEASUREMENTS)}, bust (cm), size, chart, name, or the tape measures "
+                f"{', '.join(m for m in TAPE_MEASURES if m not in MEASUREMENTS)} (cm) and gender"
             )
     if "chest" in header and "bust" in header:
         raise BodySourceError(f"{path}: header has both 'chest' and 'bust' (the same girth); keep one")
+    # a made-to-measure table: a tape measure the chart fit does not take, or gender
+    tape = any(h in tape_names and h not in MEASUREMENTS + ("bust",) for h in header)
+    canonical = {h: ALIASES.get(h, h) for h in header if h in tape_names}
+    if tape and len({canonical[h] for h in header if h in canonical}) < len([h for h in header if h in canonical]):
+        raise BodySourceError(f"{path}: header names one tape measure twice (a name and its alias); keep one")
     out = []
     for i, row in enumerate(rows[1:], start=1):
         if len(row) > len(header):
@@ -127,9 +142,9 @@ def read_measurements(path) -> List[BodySource]:
         origin = f"{path.name} row {i}"
         size = next((cells[c] for c in SIZE_COLUMNS if cells.get(c)), "")
         targets = {
-            ("chest" if h == "bust" else h): _number(v, f"{path}: row {i}, column {h!r}")
+            (canonical[h] if tape else "chest" if h == "bust" else h): _number(v, f"{path}: row {i}, column {h!r}")
             for h, v in cells.items()
-            if v and h in MEASUREMENTS + ("bust",)
+            if v and (h in canonical if tape else h in MEASUREMENTS + ("bust",))
         }
         chart = next((cells[c] for c in CHART_COLUMNS if cells.get(c)), "") or None
         if chart and not size:
@@ -146,7 +161,15 @@ def read_measurements(path) -> List[BodySource]:
             if targets:
                 raise BodySourceError(f"{path}: row {i}: give a size or measurements, not both")
             out.append(BodySource(name, "size", size, origin))
-        elif targets:
+        elif tape and set(targets) - {"gender"}:
+            for h, v in cells.items():  # each measure's plausible range, checked before the batch starts
+                if v and h in canonical:
+                    lo, hi = (0.0, 1.0) if h == "gender" else RANGES[canonical[h]]
+                    if not lo <= targets[canonical[h]] <= hi:
+                        unit = "" if h == "gender" else " cm"
+                        raise BodySourceError(f"{path}: row {i}, column {h!r}: expected {lo:g}..{hi:g}{unit}, got {v}")
+            out.append(BodySource(name, "tape", targets, origin))
+        elif targets and not tape:
             for h, v in targets.items():  # the chart's range, checked here so the batch never starts
                 lo, hi = TARGET_RANGES[h]
                 if not lo <= v <= hi:

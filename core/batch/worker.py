@@ -88,6 +88,17 @@ def _target(ctx: Context, item: Item, check) -> Tuple[object, Dict[str, object]]
         # a bare size is of the design's chart (as the transfer reads it): named so here, or the
         # item's body instance, girths and shape would be the default chart's size
         return wf.size_name(ctx.prep, body.value), {}
+    if body.kind == "tape":  # made-to-measure, the fit of ease body --measurements
+        from ..body.made_to_measure import fit_tape
+
+        fit = fit_tape(ctx.prep.body, body.value, progress=check)
+        missed = [
+            f"{k} {fit.achieved[k]:.1f} cm for {fit.targets[k]:g}" for k, s in fit.status.items() if s[:6] != "within"
+        ]
+        if missed or fit.collisions:
+            why = f"not reachable by this model: {'; '.join(missed)}" if missed else "the fitted body cuts into itself"
+            raise EaseError(f"{body.origin}: {why}" + (f" ({', '.join(fit.collisions)})" if fit.collisions else ""))
+        return fit.shape, {f"tape.{k}_cm": fit.achieved[k] for k in fit.targets}
     if body.kind != "measurements":
         return body.value, {}
     fit = fit_measurements(ctx.prep.body, body.value, progress=check)
@@ -251,7 +262,7 @@ def run_item(item: Item, out_root, time_limit: Optional[float] = None) -> dict:
             timings["setup"] = time.perf_counter() - t
         check = deadline(time_limit)
         t = time.perf_counter()
-        if item.body.kind == "measurements":  # what was asked, also on a row whose fit fails
+        if item.body.kind in ("measurements", "tape"):  # what was asked, also on a row whose fit fails
             row.update({f"targets.{k}": v for k, v in item.body.value.items()})
         target, entries = _target(ctx, item, check)
         row.update(entries)
