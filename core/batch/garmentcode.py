@@ -135,11 +135,18 @@ def _anchors(pattern, loops: Dict[str, np.ndarray]) -> Tuple[Dict[str, set], Dic
         sides = [(s.panel_a, np.asarray(s.verts_a, int)), (s.panel_b, np.asarray(s.verts_b, int))]
         lengths = [polyline_length(np.asarray(pattern.panel(p).uv, float)[ids]) for p, ids in sides]
         arcs = notch_positions(lengths[0], lengths[1], spacing, gathered=bool(getattr(s, "gathered", False)))
-        for (p, ids), arc in zip(sides, arcs):
+        along = []
+        for p, ids in sides:
             must[p] |= {int(ids[0]), int(ids[-1])}
             xy = np.asarray(pattern.panel(p).uv, float)[ids]
-            along = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(xy, axis=0), axis=1))])
-            soft[p] |= {int(ids[int(np.argmin(np.abs(along - a)))]) for a in arc}
+            along.append(np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(xy, axis=0), axis=1))]))
+        # one seam vertex pair per notch, nearest to it on both sides together: the nearest on each side alone
+        # can be neighbours (a notch between two vertices), and with their partners kept too the outline got
+        # stitched segments under a millimetre, where GarmentCode's mesher makes degenerate triangles
+        for ta, tb in zip(*arcs):
+            i = int(np.argmin(np.abs(along[0] - ta) + np.abs(along[1] - tb)))
+            soft[sides[0][0]].add(int(sides[0][1][i]))
+            soft[sides[1][0]].add(int(sides[1][1][i]))
     return must, soft
 
 
@@ -161,12 +168,42 @@ def simplified_outlines(pattern, tol: float = TOLERANCE, min_edge: float = MIN_E
             keep |= {run[i] for i in _douglas_peucker(uv[run], tol)}
         kept[name] = keep
     # a vertex kept on one side of a seam keeps its partner on the other (same index along the seam)
+    partners: Dict[Tuple[str, int], List[Tuple[str, int]]] = {}
     for s in pattern.seams:
         a, b = np.asarray(s.verts_a, int), np.asarray(s.verts_b, int)
         both = [i for i in range(len(a)) if int(a[i]) in kept[s.panel_a] or int(b[i]) in kept[s.panel_b]]
         kept[s.panel_a] |= {int(a[i]) for i in both}
         kept[s.panel_b] |= {int(b[i]) for i in both}
+        for u, v in zip(a.tolist(), b.tolist()):
+            partners.setdefault((s.panel_a, u), []).append((s.panel_b, v))
+            partners.setdefault((s.panel_b, v), []).append((s.panel_a, u))
+    _drop_close(pattern, loops, kept, must, partners, min_edge)
     return {name: np.array([int(v) for v in loop if int(v) in kept[name]]) for name, loop in loops.items()}
+
+
+def _drop_close(pattern, loops, kept, must, partners, min_edge: float) -> None:
+    """Leave out (in place) a kept vertex closer than ``min_edge`` to the kept vertex before it, with its seam
+    partners: the simplified outlines of a seam's two sides keep the same seam indices, and neither has an edge
+    under ``min_edge`` (Douglas-Peucker or a corner on one side and its partner kept for the other side can make
+    neighbours a fraction of a millimetre apart, and GarmentCode's mesher makes degenerate triangles there).
+    Seam ends stay."""
+    uv = {p.name: np.asarray(p.uv, float) for p in pattern.panels}
+    changed = True
+    while changed:
+        changed = False
+        for name, loop in loops.items():
+            ids = [int(v) for v in loop if int(v) in kept[name]]
+            for u, v in zip(ids, ids[1:] + ids[:1]):
+                if np.linalg.norm(uv[name][u] - uv[name][v]) >= min_edge:
+                    continue
+                victim = v if v not in must[name] else (u if u not in must[name] else None)
+                if victim is None:
+                    continue
+                kept[name].discard(victim)
+                for other, w in partners.get((name, victim), []):
+                    kept[other].discard(w)
+                changed = True
+                break
 
 
 def _floor(pattern) -> float:
