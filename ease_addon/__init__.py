@@ -9,7 +9,8 @@ Modules, one per concern:
 - :mod:`.build`: Blender objects from the core's results, written in one pass;
 - :mod:`.materials`, :mod:`.objects` (collection, roles, removal, progress bar),
   :mod:`.convert` (Blender data <-> numpy), :mod:`.ramp` (the ease colour ramp, pure
-  numpy), :mod:`.state` (session caches, the add-on's errors);
+  numpy), :mod:`.state` (session caches, the add-on's errors), :mod:`.jobs` (heavy work
+  off the main thread);
 - one ``*_ops`` module per workflow stage (body, design, ease, pattern, fit, drape,
   render, export), none importing another: what they share lives in the modules above;
 - :mod:`.panels`: the "EASE" sidebar tab.
@@ -31,6 +32,7 @@ from . import (
     ease_ops,
     export_ops,
     fit_ops,
+    jobs,
     live,
     marker_ops,
     measure_ops,
@@ -55,6 +57,7 @@ CLASSES = (
     + export_ops.CLASSES
     + marker_ops.CLASSES
     + measure_ops.CLASSES
+    + jobs.CLASSES
     + panels.CLASSES
     + measure_ops.PANELS
 )
@@ -75,6 +78,7 @@ def register():
 
 def unregister():
     drape_ops.cancel_running()
+    jobs.unregister()
     while live.on_load in bpy.app.handlers.load_post:
         bpy.app.handlers.load_post.remove(live.on_load)
     if bpy.app.timers.is_registered(live.resume):

@@ -57,12 +57,22 @@ def _figures(layout, text: str) -> None:
         col.label(text=f"{k}: {v}")
 
 
+def _job_row(layout, s) -> None:
+    """The background work's "updating: ..." line with its Cancel button (Esc cancels too)."""
+    if s.job_status:
+        row = layout.row(align=True)
+        row.label(text=s.job_status, icon="TIME" if s.job_status.startswith("updating") else "INFO")
+        if s.job_status.startswith("updating"):
+            row.operator("ease.cancel_jobs", text="", icon="CANCEL")
+
+
 class EASE_PT_body(_EasePanel, bpy.types.Panel):
     bl_label = "Body"
     bl_idname = "EASE_PT_body"
 
     def draw(self, context):
         layout, s = self.layout, context.scene.ease
+        _job_row(layout, s)
         row = layout.row(align=True)
         row.operator("ease.add_body", text="Default Body", icon="OUTLINER_OB_ARMATURE").source = "DEFAULT"
         row.operator("ease.add_body", text="From File", icon="FILE").source = "FILE"
@@ -143,6 +153,7 @@ class EASE_PT_ease(_EasePanel, bpy.types.Panel):
         row.prop(s, "live", toggle=True, icon="PLAY" if not s.live else "PAUSE")
         if s.live_status:
             row.label(text=s.live_status)
+        _job_row(box, s)
         if s.live:
             box.label(text="ease_fit layer: achieved / painted - 1 (%)")
             legend = box.row(align=True)

@@ -177,6 +177,9 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
     )
     live_status: StringProperty(name="Live status")
     live_legend: CollectionProperty(type=EASE_PG_legend)
+    job_status: StringProperty(
+        name="Background work", description="What the add-on computes off the main thread (updating: ...)"
+    )
     # Pattern / fit
     pattern_json: StringProperty(name="Pattern report", description="Key figures of the last pattern (JSON)")
     fit_size: EnumProperty(name="Target size", items=SIZES, default="L")

@@ -1,0 +1,276 @@
+"""Heavy work off the main thread: the viewport keeps drawing while the core computes.
+
+A :class:`Job` runs its ``compute(progress)`` (the core's work: a cut, a flattening and
+factorisation, a body fit; no ``bpy``) in a Python thread (numpy, scipy's factorisations and
+Warp release the GIL in their heavy parts), and its ``apply(result)`` on the main thread, from a
+``bpy.app.timers`` poll, in one short pass that writes the result into Blender's data. Meanwhile
+the panel (``scene.ease.job_status``) and, with a window, the status bar say "updating: ..."
+with the core's progress; *Cancel* (or Esc while :class:`EASE_OT_watch_jobs` runs) stops it: the
+core's progress callback raises :class:`core.errors.Cancelled` at its next report, and a result
+that still arrives is dropped.
+
+A job of a name replaces a running one of the same name (the newer request wins; the older
+result is dropped). Headless runs (``bpy.app.background``: tests, scripts, the CLI's Blender
+runs) compute in line (:data:`SYNCHRONOUS`), so their results are deterministic and there when
+the call returns; a test of the threaded path sets it to False and calls :func:`wait`.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+import traceback
+
+import bpy
+
+from ..core.errors import Cancelled
+from . import state
+
+#: compute in line (headless); False: in a worker thread
+SYNCHRONOUS = bool(bpy.app.background)
+POLL_S = 0.02  # seconds between the main thread's looks at the running jobs
+
+_JOBS: dict = {}  # name -> Job (running)
+
+
+class Job:
+    """One piece of heavy work: ``compute(progress)`` in a thread, ``apply(result)`` on the main thread.
+
+    Attributes
+    ----------
+    name, label : the job's key and what the status says it does
+    fraction, message : the core's last progress report
+    cancelled : set by :func:`cancel`; the next progress report raises Cancelled
+    result, error : what ``compute`` returned or raised (``error``: the exception, ``trace``: its text)
+    seconds : the compute's wall time; cpu_seconds: its thread's CPU time
+    """
+
+    def __init__(self, name: str, label: str, compute, apply, fail=None, cancelled=None):
+        self.name, self.label = name, label
+        self.compute, self.apply, self.fail, self.on_cancel = compute, apply, fail, cancelled
+        self.fraction, self.message = 0.0, label
+        self.cancelled = False
+        self.done = threading.Event()
+        self.result = self.error = self.trace = None
+        self.seconds = self.cpu_seconds = 0.0
+
+    def progress(self, fraction: float, message: str) -> None:
+        """The core's Progress callback (in the worker): records, or raises Cancelled."""
+        if self.cancelled:
+            raise Cancelled(f"{self.label}: cancelled")
+        self.fraction, self.message = float(fraction), str(message)
+
+    def run(self) -> None:
+        t0, c0 = time.perf_counter(), time.thread_time()
+        try:
+            self.result = self.compute(self.progress)
+        except BaseException as exc:  # kept for the main thread, which reports it
+            self.error, self.trace = exc, traceback.format_exc()
+        finally:
+            self.seconds, self.cpu_seconds = time.perf_counter() - t0, time.thread_time() - c0
+            self.done.set()
+
+    def status(self) -> str:
+        return f"updating: {self.label} {100 * self.fraction:.0f} % ({self.message})"
+
+
+def start(name: str, label: str, compute, apply, fail=None, sync=None, cancelled=None) -> Job:
+    """Run ``compute(progress)`` off the main thread, then ``apply(result)`` on it.
+
+    ``fail(exc)`` (main thread) is told of an error of ``compute`` (default: the status says
+    it); ``cancelled()`` (main thread) is told when the designer cancels it (not when a newer job
+    of its name replaces it); ``sync``: compute in line (default :data:`SYNCHRONOUS`; an error then raises here, as
+    the work would without a job). Returns the job (done already when in line).
+    """
+    drop(name)
+    job = Job(name, label, compute, apply, fail, cancelled)
+    if SYNCHRONOUS if sync is None else sync:
+        job.run()
+        if job.error is not None:  # in line: the caller meets the error as it would without a job
+            raise job.error
+        job.apply(job.result)
+        return job
+    _JOBS[name] = job
+    threading.Thread(target=job.run, name=f"ease-{name}", daemon=True).start()
+    if not bpy.app.timers.is_registered(poll):
+        bpy.app.timers.register(poll, first_interval=POLL_S)
+    _show_status()
+    _watch()
+    return job
+
+
+def running(name: str = None):
+    """The running job ``name`` (any job: the first), or None."""
+    if name is None:
+        return next(iter(_JOBS.values()), None)
+    return _JOBS.get(name)
+
+
+def drop(name: str):
+    """Stop the running job ``name`` quietly (a newer one replaces it); the job, or None."""
+    job = _JOBS.pop(name, None)
+    if job is not None:
+        job.cancelled = True
+    return job
+
+
+def cancel(name: str = None) -> int:
+    """Cancel the running job ``name`` (None: all): its result is dropped, its ``cancelled``
+    callback told. How many were cancelled."""
+    n = 0
+    for k in [name] if name is not None else list(_JOBS):
+        job = drop(k)
+        if job is not None:
+            n += 1
+            if job.on_cancel is not None:
+                job.on_cancel()
+    if n:
+        _show_status()
+    return n
+
+
+def _finish(job: Job) -> None:
+    """The main thread's part of a finished job: apply its result, or say its error."""
+    if job.cancelled:
+        return
+    if job.error is not None:
+        if isinstance(job.error, state.USER_ERRORS):
+            if job.fail is not None:
+                job.fail(job.error)
+            else:
+                _say(f"{job.label}: {job.error}")
+            return
+        state.BUGS.append((f"job {job.name}", job.trace))
+        print(job.trace)
+        if job.fail is not None:
+            job.fail(job.error)
+        else:
+            _say(f"{job.label}: {type(job.error).__name__}: {job.error}")
+        return
+    job.apply(job.result)
+
+
+def poll():
+    """Timer: finished jobs are applied (in the order they started); the status follows. Returns
+    the next interval, or None when nothing runs."""
+    for name, job in list(_JOBS.items()):
+        if job.done.is_set() and _JOBS.get(name) is job:
+            del _JOBS[name]
+            try:
+                _finish(job)
+            except Exception:  # a bug in an apply: never a traceback from a timer
+                state.BUGS.append((f"job {name}", traceback.format_exc()))
+                traceback.print_exc()
+    _show_status()
+    return POLL_S if _JOBS else None
+
+
+def wait(timeout: float = 600.0) -> None:
+    """Wait for every running job and apply it (tests and scripts of the threaded path)."""
+    end = time.perf_counter() + timeout
+    while _JOBS and time.perf_counter() < end:
+        for job in list(_JOBS.values()):
+            job.done.wait(max(0.0, end - time.perf_counter()))
+        poll()
+
+
+def _say(text: str) -> None:
+    scene = getattr(bpy.context, "scene", None)
+    if scene is not None and hasattr(scene, "ease"):
+        scene.ease.job_status = text
+
+
+def _show_status() -> None:
+    """The panel's and the status bar's "updating" line (cleared when nothing runs)."""
+    job = running()
+    text = job.status() if job is not None else ""
+    scene = getattr(bpy.context, "scene", None)
+    if scene is not None and hasattr(scene, "ease") and scene.ease.job_status != text:
+        if text or scene.ease.job_status.startswith("updating"):
+            scene.ease.job_status = text
+    ws = getattr(bpy.context, "workspace", None)
+    if ws is not None and getattr(bpy.context, "window", None) is not None:
+        try:
+            ws.status_text_set(text or None)
+        except (AttributeError, RuntimeError, TypeError):
+            pass
+
+
+def _watch() -> None:
+    """With a window: the modal watcher that cancels on Esc."""
+    if bpy.app.background or getattr(bpy.context, "window", None) is None or EASE_OT_watch_jobs.active:
+        return
+    try:
+        bpy.ops.ease.watch_jobs("INVOKE_DEFAULT")
+    except RuntimeError:  # no window to run a modal operator in
+        pass
+
+
+def _busy(cls) -> bool:
+    """``poll`` of the job operators: something runs (else greyed out, saying where work starts)."""
+    if not _JOBS:
+        cls.poll_message_set("nothing is running in the background (EASE > Ease > Live prepares there)")
+        return False
+    return True
+
+
+class EASE_OT_watch_jobs(bpy.types.Operator):
+    """Watch the running EASE jobs: Esc cancels them"""
+
+    bl_idname = "ease.watch_jobs"
+    bl_label = "Watch EASE Jobs"
+    bl_options = {"INTERNAL"}
+    active = False  # class-wide: one watcher at a time
+
+    @classmethod
+    def poll(cls, context):
+        return _busy(cls)
+
+    def invoke(self, context, event):
+        type(self).active = True
+        self._timer = context.window_manager.event_timer_add(0.1, window=context.window)
+        context.window_manager.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def _end(self, context):
+        type(self).active = False
+        context.window_manager.event_timer_remove(self._timer)
+
+    def modal(self, context, event):
+        if event.type == "ESC" and event.value == "PRESS" and _JOBS:
+            cancel()
+            self._end(context)
+            return {"CANCELLED"}
+        if not _JOBS:
+            self._end(context)
+            return {"FINISHED"}
+        return {"PASS_THROUGH"}
+
+
+class EASE_OT_cancel_jobs(bpy.types.Operator):
+    """Cancel the EASE work running in the background (Esc does too)"""
+
+    bl_idname = "ease.cancel_jobs"
+    bl_label = "Cancel"
+    bl_options = {"INTERNAL"}
+
+    @classmethod
+    def poll(cls, context):
+        return _busy(cls)
+
+    def execute(self, context):
+        n = cancel()
+        context.scene.ease.job_status = "cancelled"
+        self.report({"INFO"}, f"cancelled {n} job(s)")
+        return {"FINISHED"}
+
+
+def unregister() -> None:
+    """The add-on goes: every job dropped, the poll stopped."""
+    for name in list(_JOBS):
+        drop(name)
+    if bpy.app.timers.is_registered(poll):
+        bpy.app.timers.unregister(poll)
+
+
+CLASSES = (EASE_OT_watch_jobs, EASE_OT_cancel_jobs)
