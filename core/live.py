@@ -124,6 +124,13 @@ class LiveSession:
         #: the stored pattern's text, made a piece at a time (:class:`PatternText`)
         self.text = PatternText()
 
+    def prime(self) -> None:
+        """Factorise the system of the design's own seam plan now (what the first :meth:`set_ease`
+        of an unpainted field needs): a caller that builds the session off the main thread does
+        the heavy part there."""
+        ones = np.ones_like(self.design_ease)
+        self.solver.factorisation(self.preview_config, self.solver.plan_seams(self.K, self.design_ease, ones))
+
     @property
     def warming(self) -> bool:
         """The next :meth:`run` iterates the warm (shown) state, not the cold solve."""

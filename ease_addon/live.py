@@ -22,7 +22,10 @@ viewport waits at most one slice, or one indivisible unit (one iteration and
 the showing of its result, or the metrics) where that is longer.
 
 A design whose topology changed (a keypoint moved, a parameter changed, a seam
-added) gets a new session once (:func:`core.live.topology_key`).
+added) gets a new session once (:func:`core.live.topology_key`). A session is built off the
+main thread (:mod:`.jobs`: the cut, the flattening and the factorisation of the design's seam
+plan): until it lands the ticks only say "updating: Live: preparing the solver n %" and the
+pieces shown stay; the pieces of a new cut are made once, from its converged pattern.
 
 Undo: one step per stroke, the stroke's own (Blender's paint stroke, or the
 EASE operator that wrote the layer, pushes it); live mode pushes none, which
@@ -51,8 +54,10 @@ from collections import deque
 import bpy
 import numpy as np
 
-from . import build, convert, data, pattern_ops, ramp, state, sync
+from . import build, convert, data, jobs, pattern_ops, ramp, state, sync
 
+JOB = "live"  # the name of the session's build in :mod:`.jobs`
+BUILD_TICK_S = 0.05  # seconds between ticks while the session is built off the main thread
 SLICE_S = 0.03  # seconds of work per tick: the longest the viewport waits for the pattern
 IDLE_TICK_S = 0.005  # seconds between ticks while converging (the UI handles its events in between)
 FIT_LAYER = "ease_fit"  # CORNER colour layer on the body: achieved / painted ease - 1
@@ -70,6 +75,7 @@ _LIVE = {
     "faces": None,
     "final": None,
     "stored": None,
+    "failed": None,
 }
 # running estimates, seconds per cut triangle of each kind of work (show, measure, encode, store)
 _RATES = {}
@@ -143,16 +149,11 @@ def _of_cut(pattern, cut) -> bool:
     )
 
 
-def session_for(context):
-    """The live session of the scene's design on its body (built once per topology and solver
-    configuration: Optimize Pattern's, so that a converged pattern is the one it gives)."""
-    from ..core import workflows as wf
-    from ..core.live import LiveSession, topology_key
-
+def _inputs(context) -> str:
+    """What the session's inputs are read from (unchanged: nothing is re-read, a tick stays cheap)."""
     s = context.scene.ease
     obj = data.body_object(context)
-    # what the session's inputs are read from: unchanged, nothing is re-read (a tick stays cheap)
-    quick = json.dumps(
+    return json.dumps(
         [
             s.design_json,
             data.body_spec(obj),
@@ -164,25 +165,78 @@ def session_for(context):
         ],
         sort_keys=True,
     )
+
+
+def session_for(context):
+    """The live session of the scene's design on its body (built once per topology and solver
+    configuration: Optimize Pattern's, so that a converged pattern is the one it gives); None
+    while it is being built off the main thread (:mod:`.jobs`: the cut, the flattening and the
+    factorisation; headless, in line)."""
+    from ..core import workflows as wf
+    from ..core.live import LiveSession, topology_key
+
+    quick = _inputs(context)
     if quick == _LIVE.get("inputs") and _LIVE["session"] is not None:
         return _LIVE["session"]
-    prep = data.prepared(context, lambda design: pattern_ops.gather_settings(context.scene, design))
-    config = wf.config_name(prep, data.solver_choice(context.scene))
-    key = json.dumps([topology_key(prep.design, data.body_spec(obj)), config])
-    _LIVE["inputs"] = quick
-    _LIVE["faces"] = convert.get_triangles(obj.data)
-    _LIVE["colors"] = None  # the design's ease may have changed: the field is taken again
-    if _LIVE["key"] != key or _LIVE["session"] is None:
-        start = data.stored_pattern(context.scene)
-        _LIVE.update(
-            key=key,
-            session=LiveSession(prep, config=config, pattern=start if _of_cut(start, prep.cut) else None),
-            builds=_LIVE["builds"] + 1,
-            final=None,
+    failed = _LIVE.get("failed")
+    if failed is not None and failed[0] == quick:
+        raise failed[1]  # the same inputs failed before: say it again, build nothing
+    job = jobs.running(JOB)
+    if job is not None and getattr(job, "inputs", None) == quick:
+        return None  # being built
+    # what the worker needs, read here (the worker touches no Blender data)
+    scene = context.scene
+    obj = data.body_object(context)
+    spec = data.body_spec(obj)
+    design = pattern_ops.gather_settings(scene, data.current_design(context))
+    model = state.body_model(spec["model"])
+    choice = data.solver_choice(scene)
+    start = data.stored_pattern(scene)
+    faces = convert.get_triangles(obj.data)
+    key_now, session_now = _LIVE["key"], _LIVE["session"]
+
+    def compute(progress):
+        cut = data.cut_on(design, spec["model"], spec["shape"])
+        prep = wf.prepare(design, body=model, cut=cut)
+        config = wf.config_name(prep, choice)
+        key = json.dumps([topology_key(prep.design, spec), config])
+        if key == key_now and session_now is not None:
+            return key, prep, None
+        session = LiveSession(
+            prep, config=config, pattern=start if _of_cut(start, prep.cut) else None, progress=progress
         )
-    else:  # the same cut: the design's own ease may differ (Ease to Design)
-        _LIVE["session"].set_design_ease(np.concatenate([np.asarray(p.ease, float) for p in prep.cut.panels]))
-    return _LIVE["session"]
+        session.prime()
+        return key, prep, session
+
+    def apply(result):
+        key, prep, session = result
+        _LIVE.update(inputs=quick, faces=faces, failed=None)
+        _LIVE["colors"] = None  # the design's ease may have changed: the field is taken again
+        if session is not None:
+            _LIVE.update(key=key, session=session, builds=_LIVE["builds"] + 1, final=None)
+        else:  # the same cut: the design's own ease may differ (Ease to Design)
+            _LIVE["session"].set_design_ease(np.concatenate([np.asarray(p.ease, float) for p in prep.cut.panels]))
+        wake()
+
+    def fail(exc):
+        _LIVE["failed"] = (quick, exc)
+        wake()  # the next tick says it (and stops)
+
+    try:
+        job = jobs.start(JOB, "Live: preparing the solver", compute, apply, fail, cancelled=_cancelled)
+    except state.USER_ERRORS as exc:
+        _LIVE["failed"] = (quick, exc)
+        raise
+    job.inputs = quick
+    return _LIVE["session"] if _LIVE.get("inputs") == quick else None
+
+
+def _cancelled() -> None:
+    """The designer cancelled the session's build (Esc, Cancel): Live goes off."""
+    scene = getattr(bpy.context, "scene", None)
+    if scene is not None and scene.ease.live:
+        scene.ease.live = False
+        scene.ease.live_status = "off: its preparation was cancelled"
 
 
 def _per_triangle(obj, values) -> np.ndarray:
@@ -234,27 +288,21 @@ def _timed(kind: str, size: int, work):
 
 
 def _show(context, session) -> None:
-    """Write the session's (warm) pattern into the scene: objects in place (rebuilt, stored and
-    measured when they are not its pieces: a new cut), the overlay."""
+    """Write the session's (warm) pattern into the scene: objects in place, the overlay. The
+    pieces of a new cut (a parameter or keypoint changed, no pieces yet) are not shown warm: they
+    are made once, from the converged pattern, in the final work's last unit."""
     pattern = session.pattern(figures=False)
     if build.same_pieces(context.scene, pattern):
         sync.show_pieces(context, pattern)
-    else:
-        _rebuild(context, session)
-    write_overlay(data.body_object(context), pattern, session)
-
-
-def _rebuild(context, session) -> None:
-    """The pieces of a new cut (a parameter or keypoint changed): rebuilt, measured and stored (the
-    tick then pushes an undo step: :func:`step`)."""
-    sync.show_pattern(context, session.pattern(figures=True))
+        write_overlay(data.body_object(context), pattern, session)
 
 
 def _final_units(context, session) -> deque:
     """The work after the cold solve completed, as a queue of ``(kind, size, work)`` units each
     well within a slice: show the pattern (objects in place, overlay), measure it, encode it a
     piece at a time, then store it with its key figures (together: the panel never shows
-    figures of another pattern than the stored one)."""
+    figures of another pattern than the stored one). The pieces of a new cut are made in the
+    store unit, in one pass (they then replace the old cut's pieces, with the new figures)."""
     from ..core import workflows as wf
 
     scene = context.scene
@@ -264,14 +312,11 @@ def _final_units(context, session) -> deque:
 
     def show():
         box["pattern"] = pattern = session.pattern(figures=False)
-        if build.same_pieces(scene, pattern):
+        box["same"] = build.same_pieces(scene, pattern)
+        if box["same"]:
             sync.show_pieces(context, pattern)
-            queue.append(("measure", n, measure))
-        else:
-            # not this pattern's pieces (a new cut): rebuilt, measured and stored at once
-            _rebuild(context, session)
-            _LIVE["stored"] = scene.get(data.PATTERN_KEY)
-        write_overlay(data.body_object(context), pattern, session)
+            write_overlay(data.body_object(context), pattern, session)
+        queue.append(("measure", n, measure))
 
     def measure():
         wf.measure_pattern(box["pattern"])
@@ -281,8 +326,12 @@ def _final_units(context, session) -> deque:
 
     def store(join):
         pattern = box["pattern"]
-        sync.store_pattern(scene, pattern, text=join())
-        scene.ease.pattern_json = json.dumps(data.key_figures(pattern))
+        if box["same"]:
+            sync.store_pattern(scene, pattern, text=join())
+            scene.ease.pattern_json = json.dumps(data.key_figures(pattern))
+        else:  # the pieces of a new cut: made, stored and figured at once
+            sync.show_pattern(context, pattern, text=join())
+            write_overlay(data.body_object(context), pattern, session)
         _LIVE["stored"] = scene.get(data.PATTERN_KEY)
 
     queue.append(("show", n, show))
@@ -315,6 +364,10 @@ def _step(context, budget_s: float, t0: float) -> dict:
     scene = context.scene
     obj = data.body_object(context)
     session = session_for(context)
+    if session is None:  # being built off the main thread: the panel says so, the tick returns
+        job = jobs.running(JOB)
+        scene.ease.live_status = job.status() if job is not None else "updating"
+        return {"changed": False, "iterations": 0, "units": [], "converged": False, "seconds": time.perf_counter() - t0}
     raw = _colors(obj)
     changed = False
     mirror = data.x_mirror(obj)
@@ -382,7 +435,9 @@ def _tick():
         state.BUGS.append(("live", traceback.format_exc()))
         scene.ease.live_status = f"live: {type(exc).__name__}: {exc}"
         return None
-    return None if out["converged"] and not out["changed"] else IDLE_TICK_S
+    if out["converged"] and not out["changed"]:
+        return None
+    return BUILD_TICK_S if jobs.running(JOB) is not None else IDLE_TICK_S
 
 
 def touched(scene) -> None:
@@ -445,7 +500,9 @@ def stop() -> None:
             lst.remove(fn)
     if bpy.app.timers.is_registered(_tick):
         bpy.app.timers.unregister(_tick)
+    jobs.drop(JOB)
     _LIVE.update(
+        failed=None,
         key=None,
         session=None,
         colors=None,

@@ -416,15 +416,16 @@ def show_pieces(context, pattern) -> None:
     build.update_pattern_objects(context.scene, pattern, lo, hi, pieces_x0(context.scene))
 
 
-def show_pattern(context, pattern, store_as: str = data.PATTERN_KEY) -> None:
-    """Make ``pattern`` the scene's pattern: its pieces beside the body, its key figures."""
+def show_pattern(context, pattern, store_as: str = data.PATTERN_KEY, text=None) -> None:
+    """Make ``pattern`` the scene's pattern: its pieces beside the body, its key figures
+    (``text``: its stored text, when the caller encoded it already)."""
     lo, hi = data.ramp_range(context.scene)
     # widen the display range to the achieved scales (robust percentiles; degenerate slivers aside)
     w = np.concatenate([np.asarray(p.achieved_weft, dtype=float) for p in pattern.panels])
     lo = max(ramp.EASE_LIMITS[0], min(lo, float(np.percentile(w, 1))))
     hi = min(ramp.EASE_LIMITS[1], max(hi, float(np.percentile(w, 99))))
     build.update_pattern_objects(context.scene, pattern, lo, hi, pieces_x0(context.scene))
-    store_pattern(context.scene, pattern, store_as)
+    store_pattern(context.scene, pattern, store_as, text=text)
     context.scene.ease.pattern_json = json.dumps(data.key_figures(pattern))
 
 

@@ -302,3 +302,79 @@ def test_live_on_keeps_the_optimized_pattern(blender, design, piecewise):
         bpy.context.scene.ease.live = False
         blender.reset(body=True, design=DESIGN, piecewise_ease=True, pattern=True)
         bpy.context.scene.ease.live = True
+
+
+def _threaded(blender):
+    """The jobs' threaded path, as in Blender's UI (headless runs compute in line)."""
+    jobs = blender.mod("jobs")
+
+    class _On:
+        def __enter__(self):
+            jobs.SYNCHRONOUS = False
+
+        def __exit__(self, *exc):
+            jobs.wait()
+            jobs.SYNCHRONOUS = True
+
+    return _On()
+
+
+@pytest.mark.parametrize("pattern", [True, False])
+def test_live_builds_its_session_off_the_main_thread(blender, pattern):
+    """Live switched on (over a pattern, or with none yet): the tick that finds no session starts
+    its build (cut, flattening, factorisation) in a worker thread and returns at once, with no
+    iteration; the panel says "updating" and the pieces stay as they are until the build lands;
+    then the loop converges to what it converges to in line (the optimized pattern kept; with no
+    pattern, pieces made once from the converged pattern)."""
+    bpy = blender.bpy
+    live, jobs = blender.mod("live"), blender.mod("jobs")
+    bpy.context.scene.ease.live = False
+    try:
+        blender.reset(body=True, design=DESIGN, pattern=pattern)
+        s = bpy.context.scene.ease
+        before = _figures_and_uv(blender) if pattern else None
+        names = _names(bpy)
+        with _threaded(blender):
+            s.live = True
+            out = live.step(bpy.context)
+            assert out["iterations"] == 0 and not out["changed"] and not out["converged"]
+            assert s.live_status.startswith("updating: Live: preparing the solver")
+            assert s.job_status.startswith("updating") and jobs.running(live.JOB) is not None
+            assert _names(bpy) == names  # nothing shown before the build lands
+            jobs.wait()
+            assert jobs.running() is None and s.job_status == ""
+            _converge(blender)
+            _converge(blender)  # (the tick after the body's overlay update: nothing to do)
+        assert s.live_status.startswith("converged")
+        if pattern:
+            assert _figures_and_uv(blender)[0] == before[0]
+            assert all(np.array_equal(before[1][k], v) for k, v in _stored_uv(blender).items())
+        else:
+            assert len(blender.objects("pattern_panel")) == 2
+            cold = _cold_uv(blender)
+            assert all(np.array_equal(v, cold[k]) for k, v in _stored_uv(blender).items())
+    finally:
+        bpy.context.scene.ease.live = False
+        blender.reset(body=True, design=DESIGN, piecewise_ease=True, pattern=True)
+        bpy.context.scene.ease.live = True
+
+
+def test_cancelling_the_build_turns_live_off(blender):
+    """Cancel (the panel's button; Esc does the same) while Live prepares: the build's result is
+    dropped, Live goes off and says why; nothing is left running."""
+    bpy = blender.bpy
+    live, jobs = blender.mod("live"), blender.mod("jobs")
+    s = bpy.context.scene.ease
+    s.live = False
+    live.stop()
+    try:
+        with _threaded(blender):
+            s.live = True
+            live.step(bpy.context)
+            assert jobs.running(live.JOB) is not None
+            assert bpy.ops.ease.cancel_jobs() == {"FINISHED"}
+            assert not s.live and "cancelled" in s.live_status
+            assert jobs.running() is None and not bpy.ops.ease.cancel_jobs.poll()
+        assert live._LIVE["session"] is None and not bpy.app.timers.is_registered(live._tick)
+    finally:
+        s.live = True
