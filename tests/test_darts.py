@@ -229,6 +229,52 @@ def test_auto_darts_are_placed_written_back_and_reduce_the_error(anny, blouse_ru
     assert with_darts < without - 0.2
 
 
+def test_auto_darts_on_sided_panels_mirror_without_a_name_clash(anny):
+    """Issue 30: ``"darts": "auto"`` on the pants (and a shirt's sleeves) was refused: a sided panel's dart
+    ``front_left_auto_dart_1_left`` got a ``*_right`` twin in its own panel and another in the mirror
+    panel (``... the name is taken by a line``). Now a sided panel's automatic darts carry the side in
+    the panel's name, and its mirror panel alone gets their counterparts."""
+    from core.cut import cut_design
+    from core.cut.auto_darts import place_darts
+
+    d = TEMPLATES["pants"]()
+    for p in d["garments"][0]["panels"]:
+        p["darts"] = "auto"
+    placed = place_darts(load_design(d), body=anny)
+    names = sorted(dd.name for p in placed.garments[0].panels for dd in p.darts)
+    assert names and all(n.startswith(("front_left_auto_dart_", "back_left_auto_dart_")) for n in names), names
+    cut = cut_design(placed, body=anny)
+    mirrored = {n.replace("_left_", "_right_", 1) for n in names}
+    assert sorted(cut.darts) == sorted(f"pants.{n}" for n in set(names) | mirrored)
+    for name, rec in cut.darts.items():
+        assert rec["panel"] == "pants." + ("front" if ".front" in name else "back") + (
+            "_left" if "_left_" in name else "_right"
+        ), name
+
+
+def test_auto_darts_skip_an_apex_too_near_every_line():
+    """A curvature peak whose nearest line would leave a dart under the cut's least length is opened
+    from the next line, or left to the flattening: the skirt's front peak 35 mm above the hem was
+    refused (``a dart needs 20 mm after the apex offset``)."""
+    import numpy as np
+
+    from core.cut.auto_darts import APEX_OFFSET, MIN_LENGTH, _mouth_line
+
+    t = np.linspace(0.0, 1.0, 11)[:, None]
+    hem = np.hstack([t * 0.2, np.zeros_like(t), np.zeros_like(t)])
+    side = np.hstack([np.full_like(t, 0.2), np.zeros_like(t), t * 0.3])
+    lines = [("hem", hem, np.ones(len(t), bool)), ("side", side, np.ones(len(t), bool))]
+    near_hem = np.array([0.05, 0.0, APEX_OFFSET + MIN_LENGTH - 0.005])
+    assert _mouth_line(lines, near_hem)[0] == "side"
+    far = np.array([0.06, 0.0, 0.1])  # above a point of the hem
+    name, length = _mouth_line(lines, far)
+    assert name == "hem" and abs(length - (0.1 - APEX_OFFSET)) < 1e-12
+    # the nearest point off the panel (along another piece): not this line
+    lines[0] = ("hem", hem, np.zeros(len(t), bool))
+    assert _mouth_line(lines, far)[0] == "side"
+    assert _mouth_line([lines[0]], far) is None
+
+
 def test_auto_darts_request_is_checked():
     for bad, field in (
         ({"auto": {"max_count": 0}}, "max_count"),

@@ -31,7 +31,8 @@ from typing import List
 
 import numpy as np
 
-from ..design.darts import APEX_OFFSET, Dart
+from ..design.darts import APEX_OFFSET, MIN_DART_LENGTH, Dart
+from ..design.naming import side_of
 from ..errors import DesignError
 
 #: m, the radius the curvature is summed over (a bust is about 6 cm round)
@@ -50,6 +51,10 @@ INSIDE = 0.06
 MIDLINE = 0.03
 #: m, a line point this near the panel's boundary runs along it
 ON_LINE = 0.004
+#: m, the least length of an automatic dart after its apex offset: the cut's least
+#: (:data:`core.design.darts.MIN_DART_LENGTH`) with 1 cm to spare, as the mouth is placed on the
+#: line's geodesics, not at the nearest of its points measured here
+MIN_LENGTH = MIN_DART_LENGTH + 0.01
 
 
 def angle_defect(xyz: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -147,34 +152,66 @@ def place_darts(design, body=None, vertices=None, progress=None):
             if not lines:
                 raise DesignError(path, f"panel {p.name!r}: no seam or hem line to open a dart on")
             darts: List[Dart] = list(p.darts)
-            for k, (i, theta) in enumerate(curvature_peaks(xyz, panel.faces, int(req["max_count"]), keep)):
+            n_own = len(darts)
+            for i, theta in curvature_peaks(xyz, panel.faces, int(req["max_count"]), keep):
                 q = xyz[i]
                 names = [n for n in APEX_LANDMARKS if n in lm and (n.endswith("_left") or not out.mirror)]
                 dist = [np.linalg.norm(lm[n].position(vertices, BF) - q) for n in names]
                 if dist and min(dist) <= SNAP_LANDMARK:
                     apex = names[int(np.argmin(dist))]
                     q = lm[apex].position(vertices, BF)
-                else:
+                found = _mouth_line(lines, q)
+                if found is None:  # every line too near: the flattening takes this curvature
+                    continue
+                line, length = found
+                if not dist or min(dist) > SNAP_LANDMARK:
                     n_kp += 1
-                    apex = f"auto_dart_{n_kp}_apex"
+                    # a mirrored design's *_left keypoint: its *_right mirror image is the mirrored dart's apex
+                    apex = f"auto_dart_{n_kp}_apex" + ("_left" if out.mirror else "")
                     sp = resolver.locator.locate(q[None])[0]
                     out.set_keypoint(apex, {"triangle": int(sp.triangle), "bary": [float(b) for b in sp.bary]})
-                line, mouth = min(lines, key=lambda lm_: float(np.min(np.linalg.norm(lm_[1] - q, axis=1))))
-                length = float(np.min(np.linalg.norm(mouth - q, axis=1))) - APEX_OFFSET
-                wedge = 2 * max(length, 0.0) * np.sin(theta / 2)
+                wedge = 2 * length * np.sin(theta / 2)
                 intake = float(req["max_intake"]) if wedge > req["max_intake"] else None
-                suffix = "_left" if out.mirror else ""
-                name = f"{p.name}_auto_dart_{k + 1}{suffix}"
-                darts.append(Dart(name, line, apex, intake, APEX_OFFSET))
+                darts.append(
+                    Dart(_dart_name(p.name, len(darts) + 1 - n_own, out.mirror), line, apex, intake, APEX_OFFSET)
+                )
             p.darts = darts
             p.auto_darts = None
     return out
 
 
+def _mouth_line(lines: list, q: np.ndarray):
+    """``(line name, dart length in m after the apex offset)``: the line of ``lines`` (see
+    :func:`_mouth_lines`) nearest to the apex ``q`` whose nearest point, where the cut puts the
+    mouth (:func:`core.design.darts.resolve_darts`: the whole line is searched), runs along the
+    panel and leaves the dart at least :data:`MIN_LENGTH` long (the cut refuses a shorter one, or
+    one whose mouth is off its panel); None when no line does."""
+    near = []
+    for name, poly, along in lines:
+        d = np.linalg.norm(poly - q, axis=1)
+        j = int(np.argmin(d))
+        if along[j] and d[j] - APEX_OFFSET >= MIN_LENGTH:
+            near.append((float(d[j]), name))
+    if not near:
+        return None
+    d, name = min(near)
+    return name, d - APEX_OFFSET
+
+
+def _dart_name(panel: str, k: int, mirror: bool) -> str:
+    """The ``k``-th automatic dart's name in ``panel``. In a mirrored design a panel spanning both
+    sides names it ``*_left`` (its ``*_right`` counterpart is cut in the same panel); a sided panel
+    (``sleeve_back_left``) carries the side in its own name, which the mirror panel's dart swaps
+    (``sleeve_back_right_auto_dart_1``)."""
+    if mirror and side_of(panel) is None:
+        return f"{panel}_auto_dart_{k}_left"
+    return f"{panel}_auto_dart_{k}"
+
+
 def _mouth_lines(resolver, design, panel, xyz, garment: str) -> list:
-    """``(line name as the design names it, (k, 3) its points along the panel)`` for every seam and
-    hem line of ``garment`` (or shared) running along the panel's boundary (:data:`ON_LINE`); in a
-    mirrored design its ``*_left`` and midline lines only."""
+    """``(line name as the design names it, (k, 3) its points, (k,) bool: the points along the
+    panel's boundary, :data:`ON_LINE`)`` for every seam and hem line of ``garment`` (or shared)
+    running along the panel; in a mirrored design its ``*_left`` and midline lines only."""
     from scipy.spatial import cKDTree
 
     edge = np.unique(np.concatenate(panel.boundary)) if panel.boundary else np.arange(len(xyz))
@@ -185,7 +222,6 @@ def _mouth_lines(resolver, design, panel, xyz, garment: str) -> list:
         if gname not in ("", garment) or (design.mirror and name.endswith("_right")):
             continue
         d, _ = tree.query(poly)
-        along = poly[d < ON_LINE]
-        if len(along) >= 3:
-            out.append((name, along))
+        if np.count_nonzero(d < ON_LINE) >= 3:
+            out.append((name, poly, d < ON_LINE))
     return out

@@ -39,7 +39,7 @@ from ..errors import DesignError
 from ..geom.polyline import point_at_length, polyline_length
 from .checks import check_name, check_number, expect_dict, expect_keys, fmt, keypoint_ref
 from .dart_tips import spread_tip
-from .naming import mirrored_name, swap_side
+from .naming import mirrored_name, side_of, swap_side
 
 #: m, default distance the sewn dart point stops short of the true apex
 APEX_OFFSET = 0.02
@@ -178,9 +178,10 @@ def mirror_dart(d: Dart) -> Dart:
 def panel_darts(panel, mirrored: bool, design_mirror: bool) -> List[Dart]:
     """The darts a panel of the cut gets: its own (mirrored for a generated ``*_right``
     panel) and, in a mirrored design, the ``*_right`` counterpart of every ``*_left`` dart
-    the panel does not define itself (a front that spans both sides)."""
+    the panel does not define itself, when the panel spans both sides (a front; a sided panel,
+    ``sleeve_back_left``, has its mirror panel for the counterparts)."""
     own = [mirror_dart(d) for d in panel.darts] if mirrored else list(panel.darts)
-    if not design_mirror:
+    if not design_mirror or side_of(panel.name) is not None:
         return own
     names = {d.name for d in own}
     extra = [mirror_dart(d) for d in own if mirrored_name(d.name) and mirrored_name(d.name) not in names]
