@@ -7,7 +7,8 @@ The teaser (shirt and pants) draped on the default body through the add-on
 and Render PNG for the front, three-quarter and back views at the preset's
 defaults: 1080 x 1440, 32 samples, adaptive sampling, OpenImageDenoise
 (``quick``: 34 %, 367 x 489). Cycles runs on the GPU that Blender's
-preferences enable, else the CPU: the table says which device, the CPU's
+preferences enable, else the CPU: the table says which device (and, on the
+CPU, whether Cycles sees any GPU at all), the CPU's
 thread count and the process's CPU seconds beside the wall seconds (on a
 machine shared with other jobs the wall time grows, the CPU time much less).
 """
@@ -41,6 +42,12 @@ assert bpy.ops.ease.drape() == {"FINISHED"}
 s.render_resolution = pct
 t = time.perf_counter(); bpy.ops.ease.studio_setup(); setup = time.perf_counter() - t
 prefs = bpy.context.preferences.addons["cycles"].preferences
+avail = []  # every GPU Cycles can see, enabled or not
+for kind in ("OPTIX", "CUDA", "HIP", "ONEAPI", "METAL"):
+    try:
+        avail += [f"{d.name} ({kind})" for d in prefs.get_devices_for_type(kind) if d.type != "CPU"]
+    except Exception:
+        pass
 rows = []
 for view in ("FRONT", "THREE_QUARTER", "BACK"):
     s.render_view, s.render_path = view, os.path.join(out, f"{view.lower()}.png")
@@ -51,7 +58,7 @@ for view in ("FRONT", "THREE_QUARTER", "BACK"):
                  "cpu_s": round(c1.ru_utime + c1.ru_stime - c0.ru_utime - c0.ru_stime, 1)})
 sc = bpy.context.scene
 print("RESULT " + json.dumps({"setup_s": round(setup, 2), "views": rows, "device": sc.cycles.device,
-      "gpu": [d.name for d in getattr(prefs, "devices", []) if d.use and d.type != "CPU"],
+      "gpu": [d.name for d in getattr(prefs, "devices", []) if d.use and d.type != "CPU"], "gpus_available": avail,
       "threads": sc.render.threads, "samples": sc.cycles.samples,
       "size": [sc.render.resolution_x * pct // 100, sc.render.resolution_y * pct // 100]}))
 """
@@ -81,6 +88,13 @@ def run(out_dir, quick: bool = False) -> dict:
     out = Path(out_dir)
     write_json(out / "render.json", res)
     device = "GPU " + ", ".join(res["gpu"]) if res["device"] == "GPU" else f"CPU, {os.cpu_count()} cores"
+    if res["device"] != "GPU":
+        seen = res.get("gpus_available") or []
+        device += (
+            f" (GPUs Cycles sees but Blender's preferences do not enable: {', '.join(seen)})"
+            if seen
+            else " (no GPU on this machine: Cycles sees no CUDA, OptiX, HIP, oneAPI or Metal device)"
+        )
     md = [
         f"# Render: the studio preset on {DESIGN}",
         "",
