@@ -98,6 +98,27 @@ def test_pose_in_betweens_keep_the_limbs(anny):
         pose_frames(anny, "M", ["A"], between=3)
 
 
+def test_pose_from_bone_rotations_round_trips_the_model_poses(anny):
+    """A rig's bones turned as the model turns its joints in P3 (world rotations: each joint's
+    carried by its parent's) give back P3: the same body, to rounding; a root move carries
+    the body as a whole, and posed_frames poses JSON poses as the model does."""
+    from core.drape.animate import pose_from_bone_rotations, posed_frames
+
+    names, parents = list(anny.joint_names), np.asarray(anny.data.parents)
+    D = anny.pose_rotations("P3", instance_shape(anny, "M"))
+    G = np.empty_like(D)
+    for j, p in enumerate(parents):  # parents come before their children
+        G[j] = D[j] if p < 0 else G[p] @ D[j]
+    pose = pose_from_bone_rotations(names, parents, G)
+    assert "lowerleg01.L" in pose and "head" not in pose  # turned joints only
+    want = body_instance(anny, "M", "P3")
+    got = posed_frames(anny, "M", [pose, "A"], root_moves=[[0.0, 0.0, 0.0], [0.1, 0.0, -0.02]])
+    assert np.abs(got[0] - want).max() < 1e-9
+    assert np.abs(got[1] - body_instance(anny, "M", "A") - [0.1, 0.0, -0.02]).max() < 1e-12
+    with pytest.raises(DrapeError, match="bone rotations"):
+        pose_from_bone_rotations(names, parents, G[:-1])
+
+
 def test_ease_drape_animation_on_the_default_body(tmp_path, anny):
     """The real body through the CLI: a top draped in A, carried to P1 (arms forward) over 4 frames;
     no frame lets more than 0.5 % of the garment through the body, the top stays on the torso, the

@@ -134,6 +134,11 @@ def posed_frames(model, shape, poses: Sequence, root_moves=None) -> list:
     """
     from ..body.instance import instance_pose, instance_shape
 
+    if not hasattr(model, "vertices_and_joints"):
+        raise DrapeError(
+            f"posing frames needs a body model with joints (Anny); "
+            f"{getattr(model, 'name', type(model).__name__)} has none"
+        )
     inst = instance_shape(model, shape)
     rest_root = np.asarray(model.joints(inst, None), dtype=np.float64)[0]
     frames = []
