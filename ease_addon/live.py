@@ -57,6 +57,7 @@ import numpy as np
 from . import build, convert, data, jobs, pattern_ops, ramp, state, sync
 
 JOB = "live"  # the name of the session's build in :mod:`.jobs`
+FINAL_JOB = "live-final"  # the converged pattern's measuring and encoding, off the main thread
 BUILD_TICK_S = 0.05  # seconds between ticks while the session is built off the main thread
 SLICE_S = 0.03  # seconds of work per tick: the longest the viewport waits for the pattern
 IDLE_TICK_S = 0.005  # seconds between ticks while converging (the UI handles its events in between)
@@ -316,13 +317,32 @@ def _final_units(context, session) -> deque:
         if box["same"]:
             sync.show_pieces(context, pattern)
             write_overlay(data.body_object(context), pattern, session)
-        queue.append(("measure", n, measure))
+        if jobs.SYNCHRONOUS:
+            queue.append(("measure", n, measure))
+        else:
+            off_thread()
 
     def measure():
         wf.measure_pattern(box["pattern"])
         units = session.text.units(box["pattern"])
         queue.extend(("encode", size, work) for size, work in units[:-1])
         queue.append(("store", units[-1][0], lambda: store(units[-1][1])))
+
+    def off_thread():
+        """Measure and encode in a worker (the viewport draws meanwhile); store when it lands."""
+        pattern = box["pattern"]
+
+        def compute(progress):
+            wf.measure_pattern(pattern)
+            return session.text.text(pattern)
+
+        def apply(text):
+            box["text"] = text
+            wake()
+
+        jobs.start(FINAL_JOB, "Live: measuring the pattern", compute, apply)
+        queue.append(("wait", 0, lambda: "text" in box))
+        queue.append(("store", n, lambda: store(lambda: box["text"])))
 
     def store(join):
         pattern = box["pattern"]
@@ -387,6 +407,7 @@ def _step(context, budget_s: float, t0: float) -> dict:
         _LIVE["colors"], _LIVE["mirror"] = raw, mirror
         if changed:
             _LIVE["final"] = None  # the pattern it would have stored is superseded
+            jobs.drop(FINAL_JOB)
     was, warm = session.converged, session.warming
     n_tri = len(session.triangles)
     show_s = (_estimate("show", n_tri) or 0.0) if warm else 0.0
@@ -401,6 +422,11 @@ def _step(context, budget_s: float, t0: float) -> dict:
     final, units = _LIVE["final"], []
     while final:
         kind, size, work = final[0]
+        if kind == "wait":  # the measuring and encoding run off the main thread: done yet?
+            if not work():
+                break
+            final.popleft()
+            continue
         est = _estimate(kind, size)
         if (n or units) and (est is None or time.perf_counter() - t0 + est > budget_s):
             break
@@ -437,7 +463,8 @@ def _tick():
         return None
     if out["converged"] and not out["changed"]:
         return None
-    return BUILD_TICK_S if jobs.running(JOB) is not None else IDLE_TICK_S
+    waiting = jobs.running(JOB) is not None or jobs.running(FINAL_JOB) is not None
+    return BUILD_TICK_S if waiting else IDLE_TICK_S
 
 
 def touched(scene) -> None:
@@ -475,6 +502,7 @@ def _on_depsgraph(scene, depsgraph) -> None:
 @bpy.app.handlers.persistent
 def _on_undo(scene, *_args) -> None:
     _LIVE.update(colors=None, restart=True, final=None)
+    jobs.drop(FINAL_JOB)
     touched(scene)  # the restored status is the pushed one: not "converged" until a tick has seen it
 
 
@@ -501,6 +529,7 @@ def stop() -> None:
     if bpy.app.timers.is_registered(_tick):
         bpy.app.timers.unregister(_tick)
     jobs.drop(JOB)
+    jobs.drop(FINAL_JOB)
     _LIVE.update(
         failed=None,
         key=None,

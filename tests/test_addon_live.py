@@ -38,10 +38,11 @@ def _stroke(blender, ease: float, seed: int):
 
 
 def _converge(blender, limit=500):
-    live = blender.mod("live")
+    live, jobs = blender.mod("live"), blender.mod("jobs")
     for _ in range(limit):
         if live.step(blender.bpy.context)["converged"]:
             return
+        jobs.wait()  # (threaded: the work a tick started off the main thread lands)
     raise AssertionError("live mode did not converge")
 
 
@@ -325,7 +326,11 @@ def test_live_builds_its_session_off_the_main_thread(blender, pattern):
     its build (cut, flattening, factorisation) in a worker thread and returns at once, with no
     iteration; the panel says "updating" and the pieces stay as they are until the build lands;
     then the loop converges to what it converges to in line (the optimized pattern kept; with no
-    pattern, pieces made once from the converged pattern)."""
+    pattern, pieces made once from the converged pattern); a stroke's converged pattern, measured
+    and encoded in a worker, is stored as in line."""
+    from core.fileio import dumps_json
+    from core.pattern.io import pattern_to_json
+
     bpy = blender.bpy
     live, jobs = blender.mod("live"), blender.mod("jobs")
     bpy.context.scene.ease.live = False
@@ -343,13 +348,20 @@ def test_live_builds_its_session_off_the_main_thread(blender, pattern):
             assert _names(bpy) == names  # nothing shown before the build lands
             jobs.wait()
             assert jobs.running() is None and s.job_status == ""
-            _converge(blender)
+            _converge(blender)  # (the measuring and encoding of the converged pattern: off the main thread too)
             _converge(blender)  # (the tick after the body's overlay update: nothing to do)
-        assert s.live_status.startswith("converged")
-        if pattern:
-            assert _figures_and_uv(blender)[0] == before[0]
-            assert all(np.array_equal(before[1][k], v) for k, v in _stored_uv(blender).items())
-        else:
+            assert s.live_status.startswith("converged")
+            if pattern:
+                assert _figures_and_uv(blender)[0] == before[0]
+                assert all(np.array_equal(before[1][k], v) for k, v in _stored_uv(blender).items())
+                # a stroke: the stored pattern (measured and encoded in a worker) is the cold solve
+                _stroke(blender, 1.65, seed=51)
+                _converge(blender)
+                cold = _cold_uv(blender)
+                stored = blender.mod("data").stored_pattern(bpy.context.scene)
+                assert all(np.array_equal(p.uv, cold[p.name]) for p in stored.panels)
+                assert bpy.context.scene["ease_pattern_json"] == dumps_json(pattern_to_json(stored), indent=None)
+        if not pattern:
             assert len(blender.objects("pattern_panel")) == 2
             cold = _cold_uv(blender)
             assert all(np.array_equal(v, cold[k]) for k, v in _stored_uv(blender).items())
