@@ -1,76 +1,32 @@
-"""Gathered seams sewn as gathers: the long side keeps its length and is stitched along the short one.
+"""Gathered seams sewn as gathers: the long side keeps its length and ruffles between stitches.
 
 A gathered seam (:attr:`core.pattern.types.PatternSeam.gathered`) has a longer
-side that is eased into a shorter one. Welding the two sides vertex by vertex
-(what the pattern's shared vertex ids do) ties each long-side vertex to one
-short-side vertex. Here instead, as GarmentCode sews ruffles, the long side
-gets its own particles (:func:`unweld_gathers`; its two ends stay welded to the
-short side's), is refined on its own rest lengths, and each of its vertices is
-stitched to the point of the short side at the same fraction of the arc length
-(:func:`stitches`): the long side keeps its rest length, lies along the short
-one, and the cloth behind it has to fold (ruffle) to fit.
-
-A stitch to the point at fraction ``t`` of the short segment (i, j) of rest
-length ``s`` is a pair of distance constraints, to i at ``t s`` and to j at
-``(1 - t) s``: both hold only on the segment, at ``t``.
+side that is eased into a shorter one. The pattern pairs the two sides vertex
+by vertex (shared vertex ids), and welding them so presses every long-side
+vertex into the seam line: the long side's first row of fabric is squeezed
+along the seam, and a membrane that resists compression as it resists stretch
+pushes the short side open instead of buckling. Here instead the long side
+gets its own vertices (:func:`unweld_gathers`; its two ends stay welded to the
+short side's), is refined for the drape on its own rest lengths, and is sewn
+to the short side at stitches (:func:`sew_gathers`): each short-side vertex is
+sewn to the long side's point at the same fraction of the rest arc length, as
+GarmentCode sews a ruffle at matching fractions of both edges. That point
+becomes a vertex of the long side (its edge split there, the triangle behind
+it fanned: rest shapes unchanged) and the stitch is a weld, so it holds
+exactly (a distance-constraint stitch lets the long side's fabric pull it off
+the seam by millimetres in a one-pass XPBD step). Between stitches the long
+side keeps its own, free vertices: its extra length bunches there. The long
+side keeps its rest length, lies along the short one, and ruffles.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-from typing import List
+from dataclasses import replace
 
 import numpy as np
 
-#: A long-side vertex closer than this fraction of a short segment to one of its ends is welded to that end.
-WELD_FRACTION = 1e-6
-
-
-@dataclass
-class Stitches:
-    """The stitches of the gathered seams, as particles.
-
-    Attributes
-    ----------
-    long : (S,) int, the long-side particle of each stitch.
-    short : (S, 2) int, the ends (i, j) of the short-side segment it is sewn to.
-    t : (S,) float in (0, 1), the stitch point ``(1 - t) x_i + t x_j``.
-    seg : (S,) float, rest length of that short segment, metres.
-    seam : (S,) int, index of the gathered seam in ``names``.
-    names : list of str, the gathered seams' names.
-    ratio : list of float, each seam's long / short rest length.
-    """
-
-    long: np.ndarray
-    short: np.ndarray
-    t: np.ndarray
-    seg: np.ndarray
-    seam: np.ndarray
-    names: List[str]
-    ratio: List[float]
-
-    @staticmethod
-    def none() -> "Stitches":
-        return Stitches(
-            np.zeros(0, np.int64), np.zeros((0, 2), np.int64), np.zeros(0), np.zeros(0), np.zeros(0, np.int64), [], []
-        )
-
-    def __len__(self) -> int:
-        return int(len(self.long))
-
-    def edges(self) -> tuple:
-        """The stitches as distance constraints: (2S, 2) int particle pairs and (2S,) rest lengths (m)."""
-        e = np.concatenate([np.stack([self.long, self.short[:, 0]], 1), np.stack([self.long, self.short[:, 1]], 1)])
-        r = np.concatenate([self.t * self.seg, (1.0 - self.t) * self.seg])
-        return e.astype(np.int64).reshape(-1, 2), r
-
-    def points(self, x: np.ndarray) -> np.ndarray:
-        """(S, 3) the stitch points on the short side for particle positions ``x``."""
-        return (1.0 - self.t)[:, None] * x[self.short[:, 0]] + self.t[:, None] * x[self.short[:, 1]]
-
-    def gaps(self, x: np.ndarray) -> np.ndarray:
-        """(S,) distance (m) of each long-side particle from its stitch point."""
-        return np.linalg.norm(x[self.long] - self.points(x), axis=1)
+#: Points of a seam closer than this fraction of its side's arc length are one point.
+SNAP_FRACTION = 1e-6
 
 
 def arc(uv: np.ndarray) -> np.ndarray:
@@ -79,9 +35,14 @@ def arc(uv: np.ndarray) -> np.ndarray:
 
 
 def long_side(pattern, seam) -> int:
-    """0 when side a of ``seam`` is the longer in the pattern (rest) shape, else 1."""
+    """0 when side a of ``seam`` is the longer in the pattern (rest) shape, else 1 (a tie: side a)."""
     ua, ub = pattern.seam_polylines(seam)
-    return 0 if arc(ua)[-1] >= arc(ub)[-1] else 1
+    return longer(arc(ua)[-1], arc(ub)[-1])
+
+
+def longer(length_a: float, length_b: float) -> int:
+    """0 when side a is the longer (a tie, up to rounding: side a), else 1."""
+    return 0 if length_a >= length_b * (1.0 - 1e-9) else 1
 
 
 def unweld_gathers(pattern):
@@ -122,69 +83,152 @@ def unweld_gathers(pattern):
     return replace(pattern, panels=out_panels, pins=pins)
 
 
-def stitches(pattern) -> tuple:
-    """Stitches of the gathered seams of ``pattern`` (already unwelded, possibly refined).
+def _fan(faces: np.ndarray, a: int, b: int, inner: list) -> np.ndarray:
+    """``faces`` with the triangle on edge (a, b) fanned through the points ``inner`` (in order from a to b)."""
+    f = np.asarray(faces)
+    for k in range(3):
+        p, q = f[:, k], f[:, (k + 1) % 3]
+        hit = np.nonzero(((p == a) & (q == b)) | ((p == b) & (q == a)))[0]
+        if len(hit):
+            t = int(hit[0])
+            r = int(f[t, (k + 2) % 3])
+            seq = [a, *inner, b] if f[t, k] == a else [b, *inner[::-1], a]
+            new = np.array([[seq[i], seq[i + 1], r] for i in range(len(seq) - 1)], dtype=np.int64)
+            return np.concatenate([f[:t], new, f[t + 1 :]])
+    raise ValueError(f"no triangle on edge ({a}, {b})")
 
-    Each long-side vertex is sewn to the point of the short side at the same
-    fraction of the rest arc length (both sides run from index 0, where they
-    meet). Vertices at a fraction that falls on a short-side vertex (the seam's
-    ends, at least) are welded to it instead.
 
-    Parameters
-    ----------
-    pattern : the pattern, whose gathered seams' sides may have different vertex counts.
+def _carry(panel, verts: np.ndarray, where: np.ndarray, next_id: int) -> tuple:
+    """Give one side of a seam a vertex at each arc position of ``where``.
+
+    ``where`` (ascending, metres along the side's rest arc, 0 and the side's length included):
+    a position within ``SNAP_FRACTION`` of the seam of a vertex of the side is that vertex;
+    any other becomes a new vertex on its segment (new global id from ``next_id``, 2D and 3D
+    interpolated, the panel's triangle on that edge fanned through it).
 
     Returns
     -------
-    :class:`Stitches` in global vertex ids (:func:`to_particles` maps them), and the (W, 2) int
-    global id pairs to weld (the ends).
+    panel (a copy when vertices were added), path (len(where),) int local vertex ids, next_id.
     """
-    names, ratio, rows, welds = [], [], [], []
-    for s in pattern.seams:
-        if not getattr(s, "gathered", False):
-            continue
-        pa, pb = pattern.panel(s.panel_a), pattern.panel(s.panel_b)
-        side = long_side(pattern, s)
-        (pl, vl), (ps, vs) = ((pa, s.verts_a), (pb, s.verts_b)) if side == 0 else ((pb, s.verts_b), (pa, s.verts_a))
-        vl, vs = np.asarray(vl, np.int64), np.asarray(vs, np.int64)
-        al, as_ = arc(pl.uv[vl]), arc(ps.uv[vs])
-        if al[-1] <= 0 or as_[-1] <= 0:
-            continue
-        k = len(names)
-        names.append(s.name)
-        ratio.append(float(al[-1] / as_[-1]))
-        gl = np.asarray(pl.vertex_ids, np.int64)[vl]
-        gs = np.asarray(ps.vertex_ids, np.int64)[vs]
-        where = al / al[-1] * as_[-1]  # the arc position of each long vertex, carried to the short side
-        seg = np.clip(np.searchsorted(as_, where, side="right") - 1, 0, len(as_) - 2)
-        length = as_[seg + 1] - as_[seg]
-        t = np.where(length > 0, (where - as_[seg]) / np.maximum(length, 1e-300), 0.0)
-        for n in range(len(vl)):
-            if t[n] <= WELD_FRACTION:
-                welds.append((gl[n], gs[seg[n]]))
-            elif t[n] >= 1.0 - WELD_FRACTION:
-                welds.append((gl[n], gs[seg[n] + 1]))
-            else:
-                rows.append((gl[n], gs[seg[n]], gs[seg[n] + 1], t[n], length[n], k))
-    welds = np.array(welds, np.int64).reshape(-1, 2)
-    if not rows:
-        return replace(Stitches.none(), names=names, ratio=ratio), welds
-    r = np.array(rows, dtype=float)
-    g = r[:, :3].astype(np.int64)
-    return (
-        Stitches(
-            long=g[:, 0],
-            short=g[:, 1:3],
-            t=r[:, 3],
-            seg=r[:, 4],
-            seam=r[:, 5].astype(np.int64),
-            names=names,
-            ratio=ratio,
-        ),
-        welds,
+    uv, xyz, ids = panel.uv, panel.xyz, panel.vertex_ids
+    a_s = arc(uv[verts])
+    tol = SNAP_FRACTION * a_s[-1]
+    seg = np.clip(np.searchsorted(a_s, where, side="right") - 1, 0, len(a_s) - 2)
+    new_uv, new_xyz, inner, path = [], [], {}, []
+    for w, j in zip(where.tolist(), seg.tolist()):
+        if abs(w - a_s[j]) <= tol:
+            path.append(int(verts[j]))
+        elif abs(a_s[j + 1] - w) <= tol:
+            path.append(int(verts[j + 1]))
+        else:
+            t = (w - a_s[j]) / (a_s[j + 1] - a_s[j])
+            a, b = verts[j], verts[j + 1]
+            local = len(uv) + len(new_uv)
+            new_uv.append((1 - t) * uv[a] + t * uv[b])
+            new_xyz.append((1 - t) * xyz[a] + t * xyz[b])
+            inner.setdefault(j, []).append(local)
+            path.append(local)
+    if not new_uv:
+        return panel, np.asarray(path, np.int64), next_id
+    faces = np.asarray(panel.faces, np.int64)
+    for j, pts in sorted(inner.items()):
+        faces = _fan(faces, int(verts[j]), int(verts[j + 1]), pts)
+    split = {(int(verts[j]), int(verts[j + 1])): pts for j, pts in inner.items()}
+    fresh = np.arange(next_id, next_id + len(new_uv), dtype=np.int64)
+    panel = replace(
+        panel,
+        uv=np.concatenate([uv, np.asarray(new_uv)]),
+        xyz=np.concatenate([xyz, np.asarray(new_xyz)]),
+        vertex_ids=np.concatenate([ids, fresh]),
+        faces=faces,
+        boundary=[insert_points(b, split, closed=True) for b in panel.boundary],
+        hems=[insert_points(h, split, closed=False) for h in panel.hems],
     )
+    return panel, np.asarray(path, np.int64), next_id + len(new_uv)
 
 
-def to_particles(st: Stitches, particle_of: np.ndarray) -> Stitches:
-    """The stitches with global ids mapped to particles (after welding)."""
-    return replace(st, long=particle_of[st.long], short=particle_of[st.short].reshape(-1, 2))
+def sew_gathers(pattern) -> tuple:
+    """Sew each gathered seam's long side to its short side at the short side's vertices.
+
+    The stitches are the short side's vertices: each is sewn to the point of
+    the long side (already unwelded, and refined on its own length) at the same
+    fraction of the rest arc length (both sides run from index 0, where they
+    meet); a long side with no vertex there gets one on its segment
+    (:func:`_carry`: rest shapes unchanged). The sides then pair stitch for
+    stitch and weld as any seam. Between two stitches the long side keeps its
+    own vertices, free: its extra length bunches there (the ruffle) instead of
+    being pressed into the seam line, where a membrane that resists
+    compression as it resists stretch would push the short side open (sewing
+    every long-side vertex to the seam stretches a yoke's lower edge 20-25 %,
+    these stitches 1.5 %, as a flat seam). The long side starts on the short
+    side's skintight positions at the stitches.
+
+    Returns
+    -------
+    pattern : a copy with the gathered seams' long panels split at the stitches, the seams' sides of
+        equal length (the stitches).
+    report : dict, seam name -> ``{"ratio": long / short rest length, "long_vertices",
+        "short_vertices"`` (each side's own), ``"stitches"``, ``"free_long_vertices"`` (long-side
+        vertices between stitches)``}``.
+    """
+    if not any(getattr(s, "gathered", False) for s in pattern.seams):
+        return pattern, {}
+    panels = {p.name: p for p in pattern.panels}
+    next_id = max((int(np.max(p.vertex_ids)) + 1 for p in pattern.panels if len(p.vertex_ids)), default=0)
+    seams, report = [], {}
+    for s in pattern.seams:
+        va, vb = np.asarray(s.verts_a, np.int64), np.asarray(s.verts_b, np.int64)
+        if not getattr(s, "gathered", False) or min(len(va), len(vb)) < 2:
+            seams.append(s)
+            continue
+        aa, ab = arc(panels[s.panel_a].uv[va]), arc(panels[s.panel_b].uv[vb])
+        if aa[-1] <= 0 or ab[-1] <= 0:
+            seams.append(s)
+            continue
+        side = longer(aa[-1], ab[-1])
+        # the stitches: at the short side's own vertices (their fractions), carried to the long side
+        frac = np.unique(ab / ab[-1] if side == 0 else aa / aa[-1])
+        keep = np.concatenate([[True], np.diff(frac) > SNAP_FRACTION])
+        keep[-1] = True
+        frac = frac[keep & np.concatenate([frac[:-1] < 1.0 - SNAP_FRACTION, [True]])]
+        frac[0], frac[-1] = 0.0, 1.0
+        pa, path_a, next_id = _carry(panels[s.panel_a], va, frac * aa[-1], next_id)
+        panels[s.panel_a] = pa
+        pb, path_b, next_id = _carry(panels[s.panel_b], vb, frac * ab[-1], next_id)
+        panels[s.panel_b] = pb
+        # the long side starts on the short side's skintight positions (as the welded pattern had them)
+        (nl, pl), (ns, ps) = ((s.panel_a, path_a), (s.panel_b, path_b))[:: 1 if side == 0 else -1]
+        long_xyz = np.array(panels[nl].xyz, dtype=float, copy=True)
+        long_xyz[pl] = panels[ns].xyz[ps]
+        panels[nl] = replace(panels[nl], xyz=long_xyz)
+        seams.append(replace(s, verts_a=path_a, verts_b=path_b))
+        (vl, pl_), n_short = ((va, path_a), len(vb)) if side == 0 else ((vb, path_b), len(va))
+        report[s.name] = {
+            "ratio": round(float(max(aa[-1], ab[-1]) / min(aa[-1], ab[-1])), 4),
+            "long_vertices": int(len(vl)),
+            "short_vertices": int(n_short),
+            "stitches": int(len(frac)),
+            "free_long_vertices": len(set(vl.tolist()) - set(pl_.tolist())),
+        }
+    out = [panels[p.name] for p in pattern.panels]
+    return replace(pattern, panels=out, seams=seams), report
+
+
+def insert_points(poly, split: dict, closed: bool) -> np.ndarray:
+    """A polyline of vertex ids with points inserted on its split edges.
+
+    ``split`` maps an edge (a, b) to the points on it, in order from a to b (an
+    edge walked from b to a takes them reversed); ``closed``: the polyline is a loop.
+    """
+    poly = [int(v) for v in np.asarray(poly).reshape(-1)]
+    out = []
+    n = len(poly)
+    for k, v in enumerate(poly):
+        out.append(v)
+        if k + 1 < n or (closed and n > 1):
+            w = poly[(k + 1) % n]
+            if (v, w) in split:
+                out.extend(split[(v, w)])
+            elif (w, v) in split:
+                out.extend(split[(w, v)][::-1])
+    return np.asarray(out, np.int64)

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import DrapeError
 from ..geom.strain import weft_of
-from .gathers import Stitches, stitches, to_particles, unweld_gathers
+from .gathers import sew_gathers, unweld_gathers
 from .pleats import fold_rest
 
 
@@ -54,9 +54,8 @@ class Cloth:
     sliver : (T,) bool, pattern triangles too thin for a deformation-gradient constraint
         (quality below :data:`SLIVER_QUALITY`); their edges are kept as distance constraints.
     bend_rest : (B,) float, rest dihedral angle (radians): 0 inside a panel, the skintight angle across a seam.
-    edges : (E, 2) int, distance constraints (particles): the sliver edges, then two per stitch of a
-        gathered seam (:meth:`core.drape.gathers.Stitches.edges`); edge_rest : (E,) float, their rest lengths.
-    stitches : :class:`core.drape.gathers.Stitches` (particles), the gathered seams' stitches.
+    edges : (E, 2) int, the sliver edges (particles); edge_rest : (E,) float, their pattern lengths.
+    gathers : dict, each gathered seam sewn as a gather (:func:`core.drape.gathers.sew_gathers`'s report).
     n_pattern : int, the pattern's own global ids (``0 .. n_pattern - 1``); ids from there on were
         made for the drape (a gathered long side's own vertices, refinement midpoints).
     pattern_faces : (T0, 3) int, the pattern's own triangles as its global ids (panel order).
@@ -86,7 +85,7 @@ class Cloth:
     bend_rest: np.ndarray = field(default_factory=lambda: np.zeros(0))
     edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), int))
     edge_rest: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    stitches: Stitches = field(default_factory=Stitches.none)
+    gathers: dict = field(default_factory=dict)
     n_pattern: int = 0
     pattern_faces: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), int))
     refinement: dict = field(default_factory=dict)
@@ -257,8 +256,9 @@ def build_cloth(pattern, refine_edge: Optional[float] = None, gathers: bool = Fa
     pattern : the pattern.
     refine_edge : float, metres, or None: refine the free-hanging cloth to edges at most this long
         (:func:`core.drape.refine.refine_pattern`); None keeps the pattern's mesh.
-    gathers : sew gathered seams as gathers (the long side stitched along the short one,
-        :mod:`core.drape.gathers`) instead of welding them vertex by vertex.
+    gathers : sew gathered seams as gathers (the long side, sampled on its own, sewn along the
+        short one at matching arc-length fractions, :mod:`core.drape.gathers`) instead of welding
+        them vertex by vertex as the pattern pairs them.
 
     Raises
     ------
@@ -269,18 +269,20 @@ def build_cloth(pattern, refine_edge: Optional[float] = None, gathers: bool = Fa
     pattern_faces = np.concatenate(
         [np.asarray(p.vertex_ids, np.int64)[np.asarray(p.faces, np.int64).reshape(-1, 3)] for p in pattern.panels]
     )
-    refinement: dict = {}
+    refinement, sewn = {}, {}
     if gathers:
         pattern = unweld_gathers(pattern)
     if refine_edge is not None:
         from .refine import refine_pattern
 
         pattern, refinement = refine_pattern(pattern, refine_edge)
+    if gathers:
+        pattern, sewn = sew_gathers(pattern)
     panels = list(pattern.panels)
     n_global = max((int(np.max(p.vertex_ids)) + 1 for p in panels if len(p.vertex_ids)), default=0)
-    cloth = _weld(pattern, panels, n_global, gathers)
+    cloth = _weld(pattern, panels, n_global)
     fold_rest(cloth, pattern)  # a pressed pleat's fold lines keep their crease (core.drape.pleats)
-    cloth.n_pattern, cloth.pattern_faces, cloth.refinement = n_pattern, pattern_faces, refinement
+    cloth.n_pattern, cloth.pattern_faces, cloth.refinement, cloth.gathers = n_pattern, pattern_faces, refinement, sewn
     return cloth
 
 
@@ -313,22 +315,19 @@ def _check_panels(pattern) -> int:
     return n_global
 
 
-def _weld(pattern, panels: list, n_global: int, gathers: bool) -> Cloth:
-    """The cloth of checked panels: welded seams (gathered ones stitched when ``gathers``)."""
+def _weld(pattern, panels: list, n_global: int) -> Cloth:
+    """The cloth of checked panels, seams welded."""
     # Weld: one particle per global id, plus ids paired by a seam.
     by_name: Dict[str, object] = {p.name: p for p in panels}
     seam_pairs = []
     for s in pattern.seams:
-        if gathers and getattr(s, "gathered", False):
-            continue  # stitched below
         va, vb = np.asarray(s.verts_a), np.asarray(s.verts_b)
         if va.shape != vb.shape:
             raise DrapeError(f"seam {s.name!r}: sides have {len(va)} and {len(vb)} vertices")
         ga = np.asarray(by_name[s.panel_a].vertex_ids)[va]
         gb = np.asarray(by_name[s.panel_b].vertex_ids)[vb]
         seam_pairs.append(np.stack([ga, gb], axis=1))
-    stitched, welds = stitches(pattern) if gathers else (Stitches.none(), np.zeros((0, 2), np.int64))
-    pairs = np.concatenate(seam_pairs + [welds]) if seam_pairs or len(welds) else np.zeros((0, 2), np.int64)
+    pairs = np.concatenate(seam_pairs) if seam_pairs else np.zeros((0, 2), np.int64)
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
@@ -371,11 +370,6 @@ def _weld(pattern, panels: list, n_global: int, gathers: bool) -> Cloth:
         inv_l.append(inv)
         area_l.append(area)
     x0 = x_sum / np.maximum(x_cnt, 1)[:, None]
-    # a gathered long side starts on its stitch points (where the skintight welding had put it, up to the
-    # arc-length shift), so the stitches hold from the first frame
-    stitched = to_particles(stitched, particle_of)
-    if len(stitched):
-        x0[stitched.long] = stitched.points(x0)
     faces = np.concatenate(faces_l)
     rest_area = np.concatenate(area_l)
     mass_area = np.zeros(n_part)
@@ -390,7 +384,6 @@ def _weld(pattern, panels: list, n_global: int, gathers: bool) -> Cloth:
     edges, edge_rest = (
         rest_edges(faces[sliver], inv_all[sliver]) if sliver.any() else (np.zeros((0, 2), np.int64), np.zeros(0))
     )
-    stitch_edges, stitch_rest = stitched.edges()
 
     pinned = np.zeros(n_part, bool)
     for garment, ids in (pattern.pins or {}).items():
@@ -411,7 +404,7 @@ def _weld(pattern, panels: list, n_global: int, gathers: bool) -> Cloth:
     else:
         bend_weight = np.zeros(0)
 
-    anchor, length = tethers(faces, inv_all, pinned, bends, bend_faces, extra=(stitch_edges, stitch_rest))
+    anchor, length = tethers(faces, inv_all, pinned, bends, bend_faces)
     # the dihedral angle of a thin triangle is ill-defined (it flips with any tiny motion): no bending there
     thin = pattern_quality(inv_all, rest_area) < BEND_QUALITY
     flat_ok = ~thin[bend_faces].any(axis=1) if len(bends) else np.zeros(0, bool)
@@ -425,9 +418,8 @@ def _weld(pattern, panels: list, n_global: int, gathers: bool) -> Cloth:
         tether_length=length,
         sliver=sliver,
         bend_rest=bend_rest,
-        edges=np.concatenate([edges, stitch_edges]).astype(np.int64),
-        edge_rest=np.concatenate([edge_rest, stitch_rest]),
-        stitches=stitched,
+        edges=edges,
+        edge_rest=edge_rest,
         n_global=n_global,
         particle_of=particle_of,
         x0=x0,
@@ -517,12 +509,7 @@ def across_lengths(faces: np.ndarray, rest_inv: np.ndarray, bends: np.ndarray, b
 
 
 def tethers(
-    faces: np.ndarray,
-    rest_inv: np.ndarray,
-    pinned: np.ndarray,
-    bends: np.ndarray = None,
-    bend_faces: np.ndarray = None,
-    extra: tuple = None,
+    faces: np.ndarray, rest_inv: np.ndarray, pinned: np.ndarray, bends: np.ndarray = None, bend_faces: np.ndarray = None
 ) -> tuple:
     """Long-range attachments (Kim et al. 2012): each free particle's nearest pin.
 
@@ -533,9 +520,6 @@ def tethers(
     the shortest path along rest mesh edges and the unfolded diagonals across
     them (never shorter than the geodesic, so the tether is never tighter than
     the true bound; a few percent longer on irregular meshes).
-
-    ``extra``: optional ((k, 2) int particle pairs, (k,) lengths m), more fabric
-    links (the stitches of a gathered seam).
 
     Returns
     -------
@@ -554,12 +538,10 @@ def tethers(
     if bends is not None and len(bends):
         edges = np.concatenate([edges, bends[:, :2]])
         lens = np.concatenate([lens, across_lengths(faces, rest_inv, bends, bend_faces)])
-    if extra is not None and len(extra[0]):
-        edges = np.concatenate([edges, np.asarray(extra[0], np.int64).reshape(-1, 2)])
-        lens = np.concatenate([lens, np.asarray(extra[1], float)])
     keep = lens > 0
     edges, lens = np.sort(edges[keep], axis=1), lens[keep]
-    # a link met twice (a stitch along a mesh edge) counts once, at its shorter length (coo would add them)
+    # a link met twice (an across-edge shortcut that is also an edge) counts once, at its shorter length
+    # (coo would add them)
     order = np.lexsort((lens, edges[:, 1], edges[:, 0]))
     edges, lens = edges[order], lens[order]
     first = np.ones(len(edges), bool)

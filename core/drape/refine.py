@@ -22,7 +22,11 @@ vertices is pinned.
 
 Where the cloth hangs free: a pattern triangle whose rest area is larger than
 its skintight image on the body by more than ``free_ease`` (the cloth there has
-room to fall and fold). Where the pattern is no larger than the body, the
+room to fall and fold), or that touches a gathered seam. The long side of a
+gather ruffles between the stitches (:func:`core.drape.gathers.sew_gathers`:
+the short side's vertices, at most the target apart), so its triangles are
+refined to :data:`GATHER_EDGE` times the target: it has vertices to bunch at
+between two stitches. Where the pattern is no larger than the body, the
 cloth clings and keeps the solve's mesh (unless a free neighbour's split runs
 into it).
 """
@@ -30,16 +34,18 @@ into it).
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Dict, List, Tuple
 
 import numpy as np
 
 from ..errors import DrapeError
+from .gathers import arc, insert_points, longer
 
 #: A triangle whose pattern area exceeds its skintight area by at least this fraction hangs free.
 FREE_EASE = 0.01
+#: The long side of a gathered seam is refined to this fraction of the target edge.
+GATHER_EDGE = 0.25
 #: Bisection rounds at most (each halves the longest edges): 25 mm pattern edges reach 5 mm in three.
-MAX_LEVELS = 6
+MAX_LEVELS = 12
 
 
 def _weld_roots(pattern, n_ids: int) -> np.ndarray:
@@ -94,21 +100,6 @@ def _stats_mm(lengths: np.ndarray) -> dict:
     }
 
 
-def _insert_midpoints(poly: np.ndarray, mid: Dict[Tuple[int, int], int], closed: bool) -> np.ndarray:
-    """A polyline of (concatenated) local vertex ids with the midpoints of its split edges inserted."""
-    poly = [int(v) for v in np.asarray(poly).reshape(-1)]
-    out: List[int] = []
-    n = len(poly)
-    for k, v in enumerate(poly):
-        out.append(v)
-        if k + 1 < n or (closed and n > 1):
-            w = poly[(k + 1) % n]
-            m = mid.get((min(v, w), max(v, w)))
-            if m is not None:
-                out.append(m)
-    return np.asarray(out, np.int64)
-
-
 def refine_pattern(pattern, edge: float, free_ease: float = FREE_EASE, max_levels: int = MAX_LEVELS) -> tuple:
     """The pattern with its free-hanging triangles bisected until no edge there is longer than ``edge``.
 
@@ -146,7 +137,23 @@ def refine_pattern(pattern, edge: float, free_ease: float = FREE_EASE, max_level
     with np.errstate(divide="ignore", invalid="ignore"):
         ease = _areas(uv, faces) / _areas(xyz, faces) - 1.0
     free = np.nan_to_num(ease, nan=0.0, posinf=1.0) > free_ease
+    # a gathered seam ruffles: the triangles on its sides hang free, its long side's refined to
+    # GATHER_EDGE x the target, so that its extra length has vertices to bunch at between two
+    # stitches (the short side's vertices, core.drape.gathers.sew_gathers)
+    on_long, on_short = np.zeros(len(uv), bool), np.zeros(len(uv), bool)
+    index = {p.name: k for k, p in enumerate(panels)}
+    for s in pattern.seams:
+        if getattr(s, "gathered", False):
+            ua, ub = pattern.seam_polylines(s)
+            sides = ((s.panel_a, s.verts_a), (s.panel_b, s.verts_b))[
+                :: 1 if longer(arc(ua)[-1], arc(ub)[-1]) == 0 else -1
+            ]
+            for mark, (name, verts) in zip((on_long, on_short), sides):
+                mark[off[index[name]] + np.asarray(verts, np.int64)] = True
+    gather = on_long[faces].any(axis=1)
+    free |= gather | on_short[faces].any(axis=1)
     before = unique_edge_lengths(uv, faces)
+    free_before = free.copy()
     tris_before, verts_before = len(faces), int(len(np.unique(root[gid])))
     # polylines (concatenated local ids) that must take the new midpoints: seam sides, boundaries, hems
     seams = [
@@ -161,7 +168,7 @@ def refine_pattern(pattern, edge: float, free_ease: float = FREE_EASE, max_level
     for _ in range(max_levels):
         lens = edge_lengths(uv, faces)
         longest = np.argmax(lens, axis=1)
-        need = free & (lens.max(axis=1) > edge * (1.0 + 1e-9))
+        need = free & (lens.max(axis=1) > np.where(gather, GATHER_EDGE, 1.0) * edge * (1.0 + 1e-9))
         if not need.any():
             break
         levels += 1
@@ -220,11 +227,11 @@ def refine_pattern(pattern, edge: float, free_ease: float = FREE_EASE, max_level
         kids = np.concatenate([faces[~split]] + [np.stack([v[m] for v in corners], 1) for m, corners in kinds])
         # the children of a triangle stay together, in the parents' order (a repeatable layout)
         order = np.argsort(src, kind="stable")
-        faces, parent, free = kids[order], parent[src[order]], free[src[order]]
-        mids = {(int(p), int(q)): base + k for k, (p, q) in enumerate(lkeys.tolist())}
-        seams = [(_insert_midpoints(sa, mids, False), _insert_midpoints(sb, mids, False)) for sa, sb in seams]
-        loops = [[_insert_midpoints(lp, mids, True) for lp in ls] for ls in loops]
-        hems = [[_insert_midpoints(h, mids, False) for h in hs] for hs in hems]
+        faces, parent, free, gather = kids[order], parent[src[order]], free[src[order]], gather[src[order]]
+        mids = {(int(p), int(q)): [base + k] for k, (p, q) in enumerate(lkeys.tolist())}
+        seams = [(insert_points(sa, mids, False), insert_points(sb, mids, False)) for sa, sb in seams]
+        loops = [[insert_points(lp, mids, True) for lp in ls] for ls in loops]
+        hems = [[insert_points(h, mids, False) for h in hs] for hs in hems]
 
     after = unique_edge_lengths(uv, faces)
     # back to panels: each panel's old vertices first, then its new ones in the order they were made
@@ -265,7 +272,7 @@ def refine_pattern(pattern, edge: float, free_ease: float = FREE_EASE, max_level
     report = {
         "target_edge_m": float(edge),
         "free_ease": float(free_ease),
-        "free_pct": round(100.0 * float(np.mean(_free_of(pattern, free_ease))) if tris_before else 0.0, 2),
+        "free_pct": round(100.0 * float(np.mean(free_before)) if tris_before else 0.0, 2),
         "rounds": levels,
         "edge_mm_before": _stats_mm(before),
         "edge_mm_after": _stats_mm(after),
@@ -275,14 +282,3 @@ def refine_pattern(pattern, edge: float, free_ease: float = FREE_EASE, max_level
         "vertices_after": int(len(np.unique(root[gid]))),
     }
     return refined, report
-
-
-def _free_of(pattern, free_ease: float) -> np.ndarray:
-    """(T,) bool over the pattern's triangles (panel order): hangs free."""
-    out = []
-    for p in pattern.panels:
-        f = np.asarray(p.faces, np.int64).reshape(-1, 3)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            e = _areas(np.asarray(p.uv, float), f) / _areas(np.asarray(p.xyz, float), f) - 1.0
-        out.append(np.nan_to_num(e, nan=0.0, posinf=1.0) > free_ease)
-    return np.concatenate(out) if out else np.zeros(0, bool)

@@ -26,9 +26,9 @@ class DrapeResult:
     pattern_faces : (T0, 3) int, the pattern's own triangles (what an export of the pattern checks).
     refinement : dict, the drape mesh's refinement (:func:`core.drape.refine.refine_pattern`'s
         report: target edge, edge lengths and triangle counts before and after); empty if not refined.
-    gathers : dict, seam name -> ``{"ratio", "stitches", "stitch_gap_mm": {"max", "mean"}}``, each
-        gathered seam sewn as a gather: long / short rest length, its stitches, and how far the long
-        side's vertices lie from their stitch points on the short side.
+    gathers : dict, seam name -> ``{"ratio", "long_vertices", "short_vertices", "stitch_points"}``,
+        each gathered seam sewn as a gather (:func:`core.drape.gathers.sew_gathers`): long / short
+        rest length, the long side's vertices, the short side's before and the points added to it.
     used : (N,) bool, ids that some panel uses.
     strain_weft, strain_warp : (N,) float, per-vertex stretch relative to the pattern
         (0 = pattern size, 0.02 = 2 % longer, negative = compressed), area-weighted from the faces.
@@ -140,23 +140,5 @@ def collect(
         pattern_vertices=int(cloth.n_pattern or cloth.n_global),
         pattern_faces=(cloth.pattern_faces if len(cloth.pattern_faces) else cloth.faces_global).copy(),
         refinement=dict(cloth.refinement),
-        gathers=gather_report(cloth, xp),
+        gathers=dict(cloth.gathers),
     )
-
-
-def gather_report(cloth: Cloth, x: np.ndarray) -> dict:
-    """Per gathered seam of ``cloth``: long / short rest length, stitch count and stitch gaps (mm) at ``x``."""
-    st = cloth.stitches
-    gaps = st.gaps(x) if len(st) else np.zeros(0)
-    out = {}
-    for k, name in enumerate(st.names):
-        g = gaps[st.seam == k]
-        out[name] = {
-            "ratio": round(float(st.ratio[k]), 4),
-            "stitches": int(len(g)),
-            "stitch_gap_mm": {
-                "max": float(g.max(initial=0.0) * 1e3),
-                "mean": float(g.mean() * 1e3) if len(g) else 0.0,
-            },
-        }
-    return out

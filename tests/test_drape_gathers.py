@@ -1,0 +1,193 @@
+"""Gathered seams sewn as gathers (core.drape.gathers): a yoke with a gathered skirt on the body of revolution."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from drape_synth import revolution_body, tube_skirt
+
+from core.drape import DrapeSolver
+from core.drape.gathers import arc, sew_gathers, unweld_gathers
+from core.drape.materials import get_material
+from core.drape.mesh import build_cloth, rest_edges
+from core.drape.result import collect
+from core.drape.schedule import run
+from core.metrics.drape import fold_measures
+from core.pattern.types import PatternSeam
+
+YOKE_BOTTOM = 0.88  # m, where the skirt is gathered into the yoke
+
+
+def yoke_skirt(ratio: float = 1.6, n_cols: int = 12, n_rows: int = 8):
+    """A tight yoke (hips, 0.95-0.88 m, pinned at the top) and a skirt gathered into its lower edge.
+
+    The skirt's top edge is ``ratio`` times the yoke's lower edge; the two share vertex ids
+    along that seam, the way the pattern solve sews a gathered seam.
+    """
+    yoke = tube_skirt(1.0, n_rows=2, n_cols=n_cols, top=0.95, bottom=YOKE_BOTTOM)
+    skirt = tube_skirt(ratio, n_rows=n_rows, n_cols=n_cols, top=YOKE_BOTTOM, bottom=0.62)
+    n_around = 2 * n_cols
+    offset = 3 * n_around
+    panels = list(yoke.panels)
+    for p in skirt.panels:
+        ids = p.vertex_ids + offset
+        top = p.vertex_ids < n_around  # the skirt's top row: the yoke's bottom row ids
+        ids[top] = 2 * n_around + p.vertex_ids[top]
+        panels.append(replace(p, name="skirt_" + p.name, vertex_ids=ids))
+    top_row = np.arange(n_cols + 1)
+    bottom_row = 2 * (n_cols + 1) + top_row
+    seams = [replace(s, name="yoke_" + s.name) for s in yoke.seams]
+    seams += [
+        replace(s, name="skirt_" + s.name, panel_a="skirt_" + s.panel_a, panel_b="skirt_" + s.panel_b)
+        for s in skirt.seams
+    ]
+    seams += [
+        PatternSeam(f"gather_{side}", side, "skirt_" + side, bottom_row, top_row, gathered=True)
+        for side in ("back", "front")
+    ]
+    return replace(yoke, style="yoke_skirt", panels=panels, seams=seams, pins=yoke.pins)
+
+
+@pytest.fixture(scope="module")
+def body():
+    return revolution_body(48, 60)
+
+
+@pytest.fixture(scope="module")
+def pattern():
+    return yoke_skirt()
+
+
+def drape_cloth(cloth, body, frames: int):
+    """A short drape of a built cloth: the result and the final particle positions."""
+    mat = get_material("cotton")
+    opts = {"max_frames": frames, "min_frames": frames}
+    solver = DrapeSolver(cloth, *body, mat, opts)
+    state = solver.state()
+    settling = run(solver, state)
+    x = state.x.numpy().astype(float)
+    return collect(cloth, x, state.v.numpy(), settling, {}, mat, solver.options, "cpu", 0.0), x
+
+
+def side_arcs(pattern, seam):
+    """Rest arc lengths (m) along the seam's sides a and b."""
+    ua, ub = pattern.seam_polylines(seam)
+    return arc(ua), arc(ub)
+
+
+def test_unweld_gives_the_long_side_its_own_vertices(pattern):
+    out = unweld_gathers(pattern)
+    for s in pattern.seams:
+        ga = out.panel(s.panel_a).vertex_ids[s.verts_a]
+        gb = out.panel(s.panel_b).vertex_ids[s.verts_b]
+        if not s.gathered:
+            assert np.array_equal(ga, pattern.panel(s.panel_a).vertex_ids[s.verts_a])
+            continue
+        # side b (the skirt) is the long one: its inner vertices are new, its ends still the yoke's
+        assert ga[0] == gb[0] and ga[-1] == gb[-1]
+        assert not np.isin(gb[1:-1], np.concatenate([q.vertex_ids for q in pattern.panels])).any()
+        assert np.array_equal(ga, pattern.panel(s.panel_a).vertex_ids[s.verts_a])  # the yoke keeps its ids
+
+
+@pytest.mark.parametrize("refine", [None, 0.02])
+def test_stitches_at_matching_arc_fractions(pattern, refine):
+    cloth_pattern = unweld_gathers(pattern)
+    if refine:
+        from core.drape.refine import refine_pattern
+
+        cloth_pattern, _ = refine_pattern(cloth_pattern, refine)
+    sewn, report = sew_gathers(cloth_pattern)
+    for s0, s1, s in zip(pattern.seams, cloth_pattern.seams, sewn.seams):
+        if not s.gathered:
+            continue
+        a0, b0 = side_arcs(pattern, s0)
+        a1, b1 = side_arcs(cloth_pattern, s1)
+        a, b = side_arcs(sewn, s)
+        r = report[s.name]
+        # the stitches are the short side's (yoke's) own vertices, one for one
+        assert np.array_equal(s.verts_a, s1.verts_a) and len(s.verts_b) == len(s.verts_a) == r["stitches"]
+        # each sewn to the long side's point at the same fraction of the rest arc length
+        assert np.allclose(a / a[-1], b / b[-1], atol=1e-9)
+        # each side keeps its rest length: the long one 1.6 x the short one
+        assert a[-1] == pytest.approx(a0[-1], rel=1e-12) and b[-1] == pytest.approx(b0[-1], rel=1e-12)
+        assert b[-1] / a[-1] == pytest.approx(1.6, rel=1e-9) and r["ratio"] == pytest.approx(1.6)
+        # the long side's own vertices all stay on its edge: the stitched ones and the free ones between
+        skirt = sewn.panel(s.panel_b)
+        assert r["long_vertices"] == len(s1.verts_b)
+        assert r["free_long_vertices"] == len(set(s1.verts_b.tolist()) - set(s.verts_b.tolist()))
+        if refine:
+            # both sides refined, the long side on its own length to half the target: free vertices
+            # between two stitches
+            assert r["short_vertices"] > len(s0.verts_a) and r["long_vertices"] > 1.8 * r["short_vertices"]
+            assert r["free_long_vertices"] == r["long_vertices"] - r["stitches"]
+        assert len(skirt.uv) >= len(cloth_pattern.panel(s.panel_b).uv)
+
+
+def test_gathered_cloth_keeps_the_long_side_rest_length(pattern):
+    """In the drape's rest state the skirt's triangles hold its top edge at 1.6 x the yoke's lower edge."""
+    cloth = build_cloth(pattern, refine_edge=0.02, gathers=True)
+    skirt = np.isin(cloth.face_panel, [cloth.panel_names.index("skirt_back"), cloth.panel_names.index("skirt_front")])
+    for sel, ratio in ((skirt, 1.6), (~skirt, 1.0)):
+        edges, rest = rest_edges(cloth.faces[sel], cloth.rest_inv[sel])
+        on_seam = np.all(np.abs(cloth.x0[edges, 2] - YOKE_BOTTOM) < 1e-9, axis=1)
+        # each panel's seam edge is the hip half-circumference, scaled by the panel's ease, subdivided
+        assert rest[on_seam].sum() == pytest.approx(2 * ratio * np.pi * 0.165, rel=1e-9)
+
+
+def sewn_sides(pattern, cloth, edge):
+    """Per gathered seam of ``build_cloth(pattern, edge, True)``: the particles of the yoke's side
+    and of the skirt's at the stitches, and the skirt side's free particles between them."""
+    from core.drape.refine import refine_pattern
+
+    refined = refine_pattern(unweld_gathers(pattern), edge)[0]
+    sewn, _ = sew_gathers(refined)
+    out = []
+    for s0, s in zip(refined.seams, sewn.seams):
+        if s.gathered:
+            ga = sewn.panel(s.panel_a).vertex_ids[s.verts_a]
+            gb = sewn.panel(s.panel_b).vertex_ids[s.verts_b]
+            own = sewn.panel(s.panel_b).vertex_ids[s0.verts_b]
+            free = np.setdiff1d(own, gb)
+            out.append((cloth.particle_of[ga], cloth.particle_of[gb], cloth.particle_of[free]))
+    return out
+
+
+def yoke_edge_length(cloth, x) -> float:
+    """Draped length (m) of the yoke's lower edge, all round."""
+    yoke = np.unique(cloth.faces[cloth.face_panel < 2])
+    ring = yoke[np.abs(cloth.x0[yoke, 2] - YOKE_BOTTOM) < 1e-9]
+    ring = ring[np.argsort(np.arctan2(cloth.x0[ring, 1], cloth.x0[ring, 0]))]
+    return float(np.linalg.norm(np.diff(x[np.r_[ring, ring[:1]]], axis=0), axis=1).sum())
+
+
+def test_a_gather_ruffles_below_the_seam_and_leaves_the_yoke_closed(body, pattern):
+    """A short drape, sewn as a gather and welded vertex by vertex (the same refinement): the gather
+    holds its stitches exactly, leaves the yoke's lower edge near its rest length where welding
+    stretches it open, and the skirt below the seam folds more."""
+    edge, rest = 0.04, 2 * np.pi * 0.165
+    out = {}
+    for gathers in (True, False):
+        cloth = build_cloth(pattern, refine_edge=edge, gathers=gathers)
+        r, x = drape_cloth(cloth, body, 30)
+        near = (cloth.face_panel >= 2) & (x[cloth.faces].mean(axis=1)[:, 2] > YOKE_BOTTOM - 0.08)
+        out[gathers] = (fold_measures(x, cloth.faces[near]), yoke_edge_length(cloth, x) / rest - 1.0)
+        if gathers:
+            assert set(r.gathers) == {"gather_back", "gather_front"}
+            for yoke_side, skirt_side, free in sewn_sides(pattern, cloth, edge):
+                assert np.array_equal(yoke_side, skirt_side)  # the stitches hold exactly
+                # the long side's free vertices ruffle close to the seam: within a stitch spacing of it
+                spacing = np.linalg.norm(np.diff(x[yoke_side], axis=0), axis=1).max()
+                assert len(free) > 2 * len(yoke_side) and seam_distance(x[free], x[yoke_side]).max() < spacing
+    (folds, stretch), (welded_folds, welded_stretch) = out[True], out[False]
+    assert welded_stretch > 0.15  # welded, the skirt's first row pushes the yoke open
+    assert stretch < 0.08 and stretch < welded_stretch / 3
+    assert folds["edges_over_30_pct"] > 1.1 * welded_folds["edges_over_30_pct"]
+    assert folds["mean_curvature_per_m"] > 1.05 * welded_folds["mean_curvature_per_m"]
+
+
+def seam_distance(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
+    """Distance (n,) of points (n, 3) to a polyline (k, 3)."""
+    a, ab = poly[:-1], np.diff(poly, axis=0)
+    t = np.clip(np.einsum("nkj,kj->nk", points[:, None] - a[None], ab) / np.einsum("kj,kj->k", ab, ab), 0.0, 1.0)
+    near = a[None] + t[..., None] * ab[None]
+    return np.linalg.norm(points[:, None] - near, axis=2).min(axis=1)
