@@ -13,12 +13,12 @@ from __future__ import annotations
 
 import bpy
 
-from . import convert, data, state, sync
+from . import convert, data, jobs, state, sync
 from .operators_base import EaseOperator, poll_needs
 
 
 def load_design_into_scene(context, source) -> str:
-    """Load a design (path or dict) onto the scene body, shaping the body as the design says.
+    """Load a design (path or dict) onto the body, shaping the body as the design says.
 
     The design is validated and cut on the body it asks for before anything
     in the scene changes, so a bad design leaves the scene as it was. The Body
@@ -26,19 +26,47 @@ def load_design_into_scene(context, source) -> str:
     measurements). Returns what happened to the body, for the report ("" when
     it kept its shape).
     """
+    return _place_design(context, _load_design(source, *_body_now(context)))
+
+
+def _body_now(context) -> tuple:
+    """(body model name or None, its shape) of the scene body: what a design is loaded onto."""
+    obj = data.body_object(context, required=False)
+    if obj is None:
+        return None, {}
+    spec = data.body_spec(obj)
+    return spec["model"], spec["shape"]
+
+
+def _load_design(source, model_name, before) -> tuple:
+    """The heavy half of a load, no Blender data touched (a worker may run it): the design read,
+    validated and cut (cached) on the body it asks for. ``(design, model name, its shape name or
+    dict, the body's full shape)``; raises (DesignError/CutError) on a bad design."""
     from ..core.body.instance import instance_shape
     from ..core.design import load_design
 
     design = load_design(source)
-    obj = data.body_object(context, required=False)
-    model_name = data.body_spec(obj)["model"] if obj is not None else design.body.get("model", "anny")
+    model_name = model_name or design.body.get("model", "anny")
     model = state.body_model(model_name)
     named = design.body.get("shape")
     shape = instance_shape(model, named)
-    before = data.body_spec(obj)["shape"] if obj is not None else {}
     full = dict(model.default_shape())
     full.update({k: float(v) for k, v in (shape or before).items()})
-    data.cut_on(design, model_name, full)  # raises (DesignError/CutError) before any change
+    data.cut_on(design, model_name, full)  # raises before any change
+    return design, model_name, named, full
+
+
+def _place_design(context, loaded) -> str:
+    """The scene's half of a load (main thread, one pass): the body shaped, the design set."""
+    from ..core.body.instance import instance_shape
+
+    design, model_name, named, full = loaded
+    obj = data.body_object(context, required=False)
+    if obj is not None and data.body_spec(obj)["model"] != model_name:
+        raise state.AddonError("the body changed while the design was loading: load it again")
+    model = state.body_model(model_name)
+    shape = instance_shape(model, named)
+    before = data.body_spec(obj)["shape"] if obj is not None else {}
     # -- the scene changes from here on
     if obj is None:
         obj = sync.new_body(context, model_name, shape=full)
@@ -77,8 +105,30 @@ class _LoadDesign(EaseOperator):
 
     def run(self, context):
         path, shown = self.source(context)
-        body = load_design_into_scene(context, path)
-        self.report({"INFO"}, f"loaded {shown}" + (f"; {body}" if body else ""))
+        model_name, before = _body_now(context)
+        said = []
+
+        def place(loaded):
+            body = _place_design(bpy.context, loaded)
+            said.append(f"loaded {shown}" + (f"; {body}" if body else ""))
+            if threaded:  # it landed after the operator returned: say so, and make it one undo step
+                bpy.context.scene.ease.job_status = said[-1]
+                state.changed(bpy.context.scene)
+                if bpy.ops.ed.undo_push.poll():
+                    bpy.ops.ed.undo_push(message=f"EASE: {self.bl_label}")
+
+        threaded = not jobs.SYNCHRONOUS
+        jobs.start(
+            "design",
+            f"loading {shown}",
+            lambda progress: _load_design(path, model_name, before),
+            place,
+            fail=lambda exc: setattr(bpy.context.scene.ease, "design_status", f"{shown}: {exc}"),
+        )
+        if said:  # in line: done
+            self.report({"INFO"}, said[-1])
+        else:
+            self.report({"INFO"}, f"loading {shown} in the background")
 
 
 class EASE_OT_load_template(_LoadDesign):

@@ -147,7 +147,13 @@ def _finish(job: Job) -> None:
         else:
             _say(f"{job.label}: {type(job.error).__name__}: {job.error}")
         return
-    job.apply(job.result)
+    try:
+        job.apply(job.result)
+    except state.USER_ERRORS as exc:  # the scene changed under it (the body removed, ...): say it
+        if job.fail is not None:
+            job.fail(exc)
+        else:
+            _say(f"{job.label}: {exc}")
 
 
 def poll():

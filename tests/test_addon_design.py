@@ -181,3 +181,38 @@ def test_a_design_that_would_drop_right_side_paint_is_refused(bpy_session, blend
     ok = tmp_path / "sym.json"
     ok.write_text(json.dumps(mirrored_sleeve_design(anny, 1.5)))
     assert bpy.ops.ease.load_design_file(filepath=str(ok)) == {"FINISHED"}
+
+
+def test_loading_runs_off_the_main_thread(bpy_session, blender, anny, tmp_path):
+    """In Blender's UI a design is read and cut in a worker: Load returns at once with the scene
+    as it was ("updating: loading ..."), and the design lands in one pass on the main thread, the
+    same as in line; a refused design says why under the Design panel and changes nothing."""
+    from test_mirror_ease import PATH, mirrored_sleeve_design
+
+    bpy = bpy_session["bpy"]
+    jobs = blender.mod("jobs")
+    blender.reset(body=True)
+    assert bpy.ops.ease.load_template(template=DESIGN) == {"FINISHED"}
+    want = bpy.context.scene.ease.design_json
+    blender.reset(body=True)
+    s = bpy.context.scene.ease
+    jobs.SYNCHRONOUS = False
+    try:
+        assert bpy.ops.ease.load_template(template=DESIGN) == {"FINISHED"}
+        assert s.design_json == "" and s.job_status.startswith("updating: loading")
+        assert not blender.objects("seamlines")
+        jobs.wait()
+        assert s.design_json == want and s.job_status.startswith(f"loaded {DESIGN}")
+        assert blender.objects("seamlines") and convert_keypoints(blender)
+        bad = tmp_path / "asym.json"
+        bad.write_text(json.dumps(mirrored_sleeve_design(anny, 1.8)))
+        assert bpy.ops.ease.load_design_file(filepath=str(bad)) == {"FINISHED"}
+        jobs.wait()
+        assert s.design_json == want and PATH in s.design_status
+    finally:
+        jobs.wait()
+        jobs.SYNCHRONOUS = True
+
+
+def convert_keypoints(blender):
+    return blender.mod("convert").read_keypoints(blender.scene.ease.body.data)
