@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 #: m, a bending stencil's edge whose ends both lie this close to a fold line (at the start) is on it
-ON_FOLD = 0.001
+ON_FOLD = 0.0002
 #: a pressed crease bends this many times stiffer than the cloth around it (pressing sets the fold)
 PRESSED_STIFFNESS = 50.0
 #: rad, the largest rest angle of a crease: a fold held at 180 degrees would flip sign with any motion

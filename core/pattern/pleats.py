@@ -197,26 +197,43 @@ def _push_3d(uv, xyz, faces, tri, d2):
     return E3 @ np.linalg.solve(E2, d2)
 
 
+class FlatLocator:
+    """Point location in a flat triangle mesh: the triangle holding each 2D point, among the
+    :data:`CANDIDATES` triangles whose centroids are nearest to it (a k-d tree, built once)."""
+
+    CANDIDATES = 16
+
+    def __init__(self, uv, faces):
+        from scipy.spatial import cKDTree
+
+        self.uv, self.faces = np.asarray(uv, float), np.asarray(faces, int)
+        self.tree = cKDTree(self.uv[self.faces].mean(axis=1))
+
+    def locate(self, q):
+        """Triangle and barycentric weights (k,), (k, 3) of points ``q`` (k, 2) (the best candidate,
+        weights clipped, for a point just outside the mesh)."""
+        q = np.atleast_2d(np.asarray(q, float))
+        k = min(self.CANDIDATES, len(self.faces))
+        _, cand = self.tree.query(q, k=k)
+        cand = np.asarray(cand).reshape(len(q), k)
+        T = self.uv[self.faces[cand]]  # (m, k, 3, 2)
+        v0, v1 = T[:, :, 1] - T[:, :, 0], T[:, :, 2] - T[:, :, 0]
+        w = q[:, None, :] - T[:, :, 0]
+        den = v0[..., 0] * v1[..., 1] - v0[..., 1] * v1[..., 0]
+        den = np.where(np.abs(den) > 1e-300, den, 1e-300)
+        l1 = (w[..., 0] * v1[..., 1] - w[..., 1] * v1[..., 0]) / den
+        l2 = (v0[..., 0] * w[..., 1] - v0[..., 1] * w[..., 0]) / den
+        lam = np.stack([1 - l1 - l2, l1, l2], axis=-1)
+        best = np.argmax(lam.min(axis=-1), axis=1)
+        r = np.arange(len(q))
+        b = np.clip(lam[r, best], 0, None)
+        return cand[r, best], b / b.sum(axis=1, keepdims=True)
+
+
 def locate_2d(uv, faces, q):
     """Triangle and barycentric weights (k,), (k, 3) of 2D points ``q`` (k, 2) in a flat mesh
-    (the nearest triangle, weights clipped, for a point just outside)."""
-    q = np.atleast_2d(q)
-    A, B, C = uv[faces[:, 0]], uv[faces[:, 1]], uv[faces[:, 2]]
-    v0, v1 = B - A, C - A
-    den = v0[:, 0] * v1[:, 1] - v0[:, 1] * v1[:, 0]
-    tris = np.empty(len(q), int)
-    bary = np.empty((len(q), 3))
-    for k in range(0, len(q), 256):
-        Q = q[k : k + 256, None, :] - A[None]
-        l1 = (Q[..., 0] * v1[:, 1] - Q[..., 1] * v1[:, 0]) / den
-        l2 = (v0[:, 0] * Q[..., 1] - v0[:, 1] * Q[..., 0]) / den
-        l0 = 1 - l1 - l2
-        worst = np.minimum(np.minimum(l0, l1), l2)
-        t = np.argmax(worst, axis=1)
-        r = np.arange(len(t))
-        b = np.clip(np.stack([l0[r, t], l1[r, t], l2[r, t]], axis=1), 0, None)
-        tris[k : k + 256], bary[k : k + 256] = t, b / b.sum(axis=1, keepdims=True)
-    return tris, bary
+    (:class:`FlatLocator`, for one query)."""
+    return FlatLocator(uv, faces).locate(q)
 
 
 def _inside(loop_xy, pts):
@@ -436,8 +453,15 @@ def _split_along(uv, attrs, faces, a, b, tol):
     s = (uv - a) @ n
     t = (uv - a) @ e / L
     near = (np.abs(s) < tol) & (t > -1e-9) & (t < 1 + 1e-9)
-    uv = uv.copy()
-    uv[near] -= s[near, None] * n
+    faces = np.asarray(faces, int)
+    area0 = _areas(uv, faces)
+    for _ in range(3):  # a triangle the snap would flatten or turn over keeps its vertices where they were
+        moved = uv - np.where(near, s, 0.0)[:, None] * n
+        bad = near[faces].any(axis=1) & (_areas(moved, faces) <= 0.05 * area0)
+        if not bad.any():
+            break
+        near[faces[bad].ravel()] = False
+    uv = uv - np.where(near, s, 0.0)[:, None] * n
     s = np.where(near, 0.0, s)
     uv_l, s_l, t_l = list(uv), list(s), list(t)
     at_l = [list(x) for x in attrs]
@@ -461,28 +485,33 @@ def _split_along(uv, attrs, faces, a, b, tol):
         lam = s_l[p] / (s_l[p] - s_l[q])
         return t_l[p] + lam * (t_l[q] - t_l[p])
 
-    out, parent = [], []
-    for fi, f in enumerate(np.asarray(faces, int)):
-        sg = np.sign([s_l[v] for v in f])
-        f = [int(v) for v in f]
+    sgn = np.sign(np.asarray(s_l)[faces])
+    crossed = (sgn > 0).any(axis=1) & (sgn < 0).any(axis=1)
+    out, parent = [faces[~crossed]], [np.flatnonzero(~crossed)]
+    for fi in np.flatnonzero(crossed):
+        f, sg = [int(v) for v in faces[fi]], sgn[fi]
         new = [f]
-        if (sg > 0).any() and (sg < 0).any():
-            if (sg == 0).any():
-                k = int(np.flatnonzero(sg == 0)[0])
-                v0, v1, v2 = f[k], f[(k + 1) % 3], f[(k + 2) % 3]
-                if -1e-6 <= crossing_t(v1, v2) <= 1 + 1e-6:
-                    q = cross(v1, v2)
-                    new = [[v0, v1, q], [v0, q, v2]]
-            else:
-                k = [i for i in range(3) if sg[i] != sg[(i + 1) % 3] and sg[i] != sg[(i + 2) % 3]][0]
-                v0, v1, v2 = f[k], f[(k + 1) % 3], f[(k + 2) % 3]
-                if -1e-6 <= crossing_t(v0, v1) <= 1 + 1e-6:
-                    q1, q2 = cross(v0, v1), cross(v0, v2)
-                    new = [[v0, q1, q2], [q1, v1, v2], [q1, v2, q2]]
-        out += new
-        parent += [fi] * len(new)
+        if (sg == 0).any():
+            k = int(np.flatnonzero(sg == 0)[0])
+            v0, v1, v2 = f[k], f[(k + 1) % 3], f[(k + 2) % 3]
+            if -1e-6 <= crossing_t(v1, v2) <= 1 + 1e-6:
+                q = cross(v1, v2)
+                new = [[v0, v1, q], [v0, q, v2]]
+        else:
+            k = [i for i in range(3) if sg[i] != sg[(i + 1) % 3] and sg[i] != sg[(i + 2) % 3]][0]
+            v0, v1, v2 = f[k], f[(k + 1) % 3], f[(k + 2) % 3]
+            if -1e-6 <= crossing_t(v0, v1) <= 1 + 1e-6:
+                q1, q2 = cross(v0, v1), cross(v0, v2)
+                new = [[v0, q1, q2], [q1, v1, v2], [q1, v2, q2]]
+        out.append(np.asarray(new, int))
+        parent.append(np.full(len(new), fi))
     attrs = [np.array(x) for x in at_l]
-    return np.array(uv_l), attrs, np.asarray(out, int), np.asarray(parent, int), np.array(s_l), np.array(t_l), cache
+    return np.array(uv_l), attrs, np.concatenate(out), np.concatenate(parent), np.array(s_l), np.array(t_l), cache
+
+
+def _areas(uv, faces):
+    a, b = uv[faces[:, 1]] - uv[faces[:, 0]], uv[faces[:, 2]] - uv[faces[:, 0]]
+    return 0.5 * (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
 
 
 def _vertex_normals(xyz, faces):
@@ -530,6 +559,7 @@ def open_piece(piece, strips: List[Strip], next_id: int, inside: np.ndarray):
     if np.mean(np.einsum("ij,ij->i", normals, closed_xyz - inside)) < 0:
         normals = -normals
     mean_edge = float(np.mean(np.linalg.norm(closed_uv[closed_faces[:, 1]] - closed_uv[closed_faces[:, 0]], axis=1)))
+    closed_locator = FlatLocator(closed_uv, closed_faces)
     uv, faces = closed_uv.copy(), closed_faces.copy()
     # per vertex: body position, closed-piece position, normal, global id (-1: new), drape lift
     xyz, cl, nrm = closed_xyz.copy(), closed_uv.copy(), normals.copy()
@@ -589,7 +619,7 @@ def open_piece(piece, strips: List[Strip], next_id: int, inside: np.ndarray):
         for j in range(1, len(sig) - 1):
             grid[:, j] = np.arange(len(uv), len(uv) + len(on_line))
             q = strip.a + np.outer(t[on_line], strip.b - strip.a) + np.interp(sig[j], strip.breaks, strip.x) * ccn
-            tri, bary = locate_2d(closed_uv, closed_faces, q)
+            tri, bary = closed_locator.locate(q)
             uv = np.vstack([uv, uv[grid[:, 0]] - strip.side * sig[j] * cn])
             xyz = np.vstack([xyz, np.einsum("ij,ijk->ik", bary, closed_xyz[closed_faces[tri]])])
             nrm = np.vstack([nrm, np.einsum("ij,ijk->ik", bary, normals[closed_faces[tri]])])

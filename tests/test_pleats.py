@@ -1,0 +1,286 @@
+"""Pleats and tucks (issue 37): design -> pattern (solved closed, opened as strips) -> export -> drape.
+
+On a flat synthetic piece (no body): the opened strip keeps the depth exactly, the piece's area
+grows by the intake times the line, the outline stays one simple loop with its hems carried
+through the strip, a tuck's stitching is as long as set, and bad pleats are refused with the
+pleat's JSON path. On the real body: the knife-pleated skirt template keeps every depth within
+0.1 mm and its ease figures are those of the closed pattern; its SVG, DXF-AAMA and tiled PDF
+carry the fold and placement lines and a notch at both ends of each; the drape mesh starts
+with the pleats folded, a pressed crease at rest on its fold angle, and each pleat stitched at
+its start.
+"""
+
+import copy
+import re
+
+import numpy as np
+import pytest
+
+from core.design import load_design
+from core.design.pleated import skirt_knife_pleats
+from core.design.pleats import KINDS, mirror_pleat, parse_pleat
+from core.errors import DesignError
+from core.geom.mesh import boundary_loops, signed_areas_2d
+from core.pattern.pleats import open_piece, piece_strips
+from core.pattern.types import PatternPanel, PatternSeam
+
+# ------------------------------------------------------------------ design
+
+
+def _pleat(**kw):
+    base = {"name": "p_left", "kind": "knife", "from": "waist_front", "along": "-z", "depth": 0.02}
+    base.update(kw)
+    return base
+
+
+@pytest.mark.parametrize(
+    "bad, field",
+    [
+        ({"depth": 0}, "depth"),
+        ({"depth": -0.01}, "depth"),
+        ({"depth": 0.2}, "depth"),
+        ({"depth": "deep"}, "depth"),
+        ({"kind": "accordion"}, "kind"),
+        ({"direction": "up"}, "direction"),
+        ({"pressed": "yes"}, "pressed"),
+        ({"kind": "tuck"}, "stitched_length"),
+        ({"stitched_length": -1}, "stitched_length"),
+        ({"towards": "hem_front_left"}, "towards"),  # both towards and along
+        ({"along": "down"}, "along"),
+        ({"colour": 1}, "colour"),
+    ],
+)
+def test_bad_pleat_values_are_refused_naming_the_field(bad, field):
+    with pytest.raises(DesignError) as e:
+        parse_pleat("garments[0].panels[0].pleats[0]", _pleat(**bad), {})
+    assert e.value.path == f"garments[0].panels[0].pleats[0].{field}"
+    assert "\n" not in str(e.value)
+
+
+def test_a_pleat_round_trips_and_mirrors():
+    d = skirt_knife_pleats()
+    design = load_design(d)
+    again = load_design(design.to_json())
+    assert again.to_json() == design.to_json()
+    p = design.garments[0].panels[0].pleats[0]
+    m = mirror_pleat(p)
+    assert (m.name, m.start, m.direction) == (
+        p.name.replace("_left", "_right"),
+        p.start.replace("_left", "_right"),
+        "right",
+    )
+
+
+# ------------------------------------------------------------------ a flat piece
+
+W, H, E = 0.40, 0.50, 0.02  # width, height, edge length of the synthetic piece (m)
+
+
+def _flat_piece(nx=int(W / E), ny=int(H / E), jitter=0.3, seed=0):
+    """A rectangle of triangles in the plane (xyz = (x, 0, y): upright, like a skirt panel's front),
+    its top and bottom edges hems, its vertices jittered so lines cross triangles at random."""
+    rng = np.random.default_rng(seed)
+    xs, ys = np.linspace(0, W, nx + 1), np.linspace(0, H, ny + 1)
+    X, Y = np.meshgrid(xs, ys)
+    uv = np.stack([X.ravel(), Y.ravel()], 1)
+    inner = (uv[:, 0] > 0) & (uv[:, 0] < W) & (uv[:, 1] > 0) & (uv[:, 1] < H)
+    uv[inner] += rng.uniform(-jitter, jitter, (int(inner.sum()), 2)) * E
+    idx = np.arange(len(uv)).reshape(ny + 1, nx + 1)
+    faces = []
+    for j in range(ny):
+        for i in range(nx):
+            a, b, c, d = idx[j, i], idx[j, i + 1], idx[j + 1, i + 1], idx[j + 1, i]
+            faces += [[a, b, c], [a, c, d]]
+    faces = np.asarray(faces)
+    xyz = np.stack([uv[:, 0], np.zeros(len(uv)), uv[:, 1]], 1)
+    hems = [idx[0, :], idx[-1, ::-1]]
+    n = len(uv)
+    return PatternPanel(
+        name="g.front",
+        garment="g",
+        uv=uv,
+        faces=faces,
+        vertex_ids=np.arange(n),
+        xyz=xyz,
+        grain=np.array([0.0, 1.0]),
+        target_weft=np.ones(len(faces)),
+        target_warp=np.ones(len(faces)),
+        achieved_weft=np.ones(len(faces)),
+        achieved_warp=np.ones(len(faces)),
+        boundary=boundary_loops(faces),
+        hems=hems,
+    )
+
+
+def _site(x, kind="knife", depth=0.02, direction="left", stitched=0.0, name="p", along=(0, 0, -1)):
+    """A pleat starting on the top hem at x (m), running down the piece."""
+    nx = int(W / E)
+    top = (int(H / E)) * (nx + 1)
+    i = int(x // E)
+    lam = (x - i * E) / E
+    return {
+        "name": name,
+        "panel": "g.front",
+        "path": f"pleats.{name}",
+        "kind": kind,
+        "depth": depth,
+        "direction": direction,
+        "pressed": True,
+        "stitched_length": stitched,
+        "start": [top + i, top + i + 1, lam],
+        "intake_per_depth": KINDS[kind],
+        "along": list(along),
+    }
+
+
+def _area(uv, faces):
+    return float(signed_areas_2d(uv, faces).sum())
+
+
+@pytest.mark.parametrize("kind", list(KINDS))
+def test_an_opened_piece_keeps_the_depth_and_adds_the_intake(kind):
+    piece = _flat_piece()
+    site = _site(0.203, kind=kind, depth=0.02, stitched=0.1 if kind == "tuck" else 0.0)
+    strips = piece_strips(piece, [site])
+    opened, lines, stitches, next_id = open_piece(piece, strips, len(piece.uv), np.array([0.2, 1.0, 0.25]))
+    uv, faces = opened.uv, opened.faces
+    assert (signed_areas_2d(uv, faces) > 0).all()
+    loops = boundary_loops(faces)
+    assert len(loops) == 1
+    intake = KINDS[kind] * 0.02
+    assert _area(uv, faces) == pytest.approx(_area(piece.uv, piece.faces) + intake * H, rel=1e-9)
+    assert np.ptp(uv[:, 0]) == pytest.approx(W + intake, abs=1e-9)
+    # fold and placement lines: straight, one depth apart within each strip, to far below 0.1 mm
+    for k in {x.strip for x in lines}:
+        cols = [uv[x.ids] for x in lines if x.strip == k]
+        assert len(cols) == (3 if kind != "inverted_box" else 5)
+        for f, g in zip(cols[:-1], cols[1:]):
+            assert np.abs(np.linalg.norm(g - f, axis=1) - 0.02).max() < 1e-7
+    # notch ends lie on the outline, and every vertex has its own new global id
+    on_loop = set(int(v) for v in loops[0])
+    assert all(x.ids[0] in on_loop and x.ids[-1] in on_loop for x in lines)
+    assert len(set(opened.vertex_ids.tolist())) == len(uv) and next_id == len(uv)
+    # the hems run through the strip: they still span the opened width
+    for h in opened.hems:
+        assert np.ptp(uv[h][:, 0]) == pytest.approx(W + intake, abs=1e-9)
+    # stitched: the start only, a tuck over its stitched length
+    for _, ia, ib in stitches:
+        reach = np.linalg.norm(uv[ia[-1]] - uv[ia[0]])
+        assert len(ia) == len(ib) and (reach <= 0.1 + E if kind == "tuck" else len(ia) == 1)
+        if kind == "tuck":
+            assert reach > 0.1 - E
+    # the drape's start: the cloth over the folded layers lifted away from the inside (+y here), two layers' worth
+    assert opened.xyz[:, 1].max() == 0.0 and opened.xyz[:, 1].min() == pytest.approx(-2 * 0.003, abs=1e-9)
+
+
+def test_the_fold_side_follows_the_wearer():
+    """A left-pressed knife pleat folds its cloth under the wearer's left (+x on this piece), a
+    right-pressed one under the right."""
+    piece = _flat_piece()
+    for direction, sign in (("left", 1), ("right", -1)):
+        (strip,) = piece_strips(piece, [_site(0.2, direction=direction)])
+        x_under = np.interp(0.5 * strip.width, strip.breaks, strip.x)
+        n = np.array([-(strip.b - strip.a)[1], (strip.b - strip.a)[0]])
+        assert np.sign(x_under * n[0]) == sign
+
+
+@pytest.mark.parametrize(
+    "sites, field, words",
+    [
+        ([_site(0.36, depth=0.05, direction="left")], "depth", "can take"),
+        ([_site(0.15, depth=0.04), _site(0.18, depth=0.04, name="q")], "depth", "cross or overlap"),
+        ([_site(0.3, along=(1, 0, -1))], "along", "seam"),
+    ],
+)
+def test_pleats_the_piece_cannot_take_are_refused(sites, field, words):
+    piece = _flat_piece()
+    piece.hems = piece.hems[:1] + [piece.hems[1]]
+    with pytest.raises(DesignError) as e:
+        piece_strips(piece, sites)
+    assert e.value.path.endswith(f".{field}") and words in e.value.message
+
+
+def test_a_pleat_on_a_dart_is_refused():
+    piece = _flat_piece()
+    nx = int(W / E) + 1
+    legs = PatternSeam(
+        "dart", "g.front", "g.front", np.array([5 * nx + 10, 6 * nx + 10]), np.array([5 * nx + 11, 6 * nx + 10])
+    )
+    with pytest.raises(DesignError, match="lies on dart 'dart'"):
+        piece_strips(piece, [_site(0.205, depth=0.02)], darts=[legs])
+
+
+# ------------------------------------------------------------------ the real body
+
+
+@pytest.fixture(scope="module")
+def pleated(anny):
+    from core import workflows
+
+    d = skirt_knife_pleats()
+    for panel in d["garments"][0]["panels"]:  # one pleat a side of each panel: the same code, half the time
+        panel["pleats"] = panel["pleats"][1:2]
+    prep = workflows.prepare(d, body=anny)
+    plain = copy.deepcopy(d)
+    for panel in plain["garments"][0]["panels"]:
+        del panel["pleats"]
+    return workflows.reference(prep).pattern, workflows.reference(workflows.prepare(plain, body=anny)).pattern
+
+
+def test_the_pattern_is_solved_closed_and_keeps_every_depth(pleated):
+    pattern, plain = pleated
+    sites = pattern.report["pleats"]
+    assert len(sites) == 4 and {s["panel"] for s in sites} == {"skirt.front", "skirt.back"}
+    for s in sites:
+        assert s["depth_error_mm"] <= 0.1 and s["intake_mm"] == pytest.approx(40.0)
+        assert s["extra_cloth_m2"] == pytest.approx(0.04 * s["line_mm"] / 1000, rel=1e-3)
+    # compliance is measured on the cloth as worn: the closed pattern is the plain skirt's
+    assert pattern.report["metrics"]["compliance"]["mean"] == pytest.approx(
+        plain.report["metrics"]["compliance"]["mean"], abs=1e-6
+    )
+
+
+def test_export_draws_folds_placements_and_notches(pleated, tmp_path):
+    from core.export import export_pattern
+
+    pattern, plain = pleated
+    export_pattern(pattern, tmp_path / "p", formats=("svg", "dxf", "pdf"))
+    export_pattern(plain, tmp_path / "q", formats=("svg",))
+    svg = (tmp_path / "p" / "pattern.svg").read_text()
+    assert len(re.findall(r'class="pleat-fold"', svg)) == 4 and len(re.findall(r'class="pleat-placement"', svg)) == 4
+    import json
+
+    ours = json.loads((tmp_path / "p" / "export.json").read_text())["pieces"]
+    theirs = json.loads((tmp_path / "q" / "export.json").read_text())["pieces"]
+    for a, b in zip(ours, theirs):
+        # a notch at both ends of each fold and placement line: 2 lines x 2 ends x ... per pleat
+        assert sum(len(v) for k, v in a["notches_mm"].items() if "pleat" in k) == 2 * 3 * 2
+        assert a["size_mm"][0] == pytest.approx(b["size_mm"][0] + 2 * 40.0, abs=3.0)  # the pleats' cloth
+    import ezdxf
+
+    doc = ezdxf.readfile(tmp_path / "p" / "pattern_astm.dxf")
+    internal = [e for blk in doc.blocks for e in blk if e.dxf.layer == "8"]
+    assert len(internal) == 4 * 3  # 4 pleats x (2 folds + 1 placement), one polyline a line
+    assert (tmp_path / "p" / "pattern_a4.pdf").stat().st_size > 0
+
+
+def test_the_drape_starts_folded_with_creases_held(pleated):
+    from core.drape.mesh import build_cloth, dihedral_angles
+    from core.drape.pleats import fold_edges
+    from core.pattern.pleats import open_pattern
+
+    pattern, _ = pleated
+    opened = open_pattern(pattern, stitch=True)
+    cloth = build_cloth(opened)
+    on = fold_edges(cloth, opened)
+    # every pressed fold line's edges are creases at rest on their start angle
+    n_fold_edges = sum(
+        len(x["ids"]) - 1 for v in opened.report["opened_pleats"].values() for x in v if x["kind"] == "fold"
+    )
+    assert on.sum() >= 0.8 * n_fold_edges
+    assert np.mean(np.abs(cloth.bend_rest[on]) > 1.0) > 0.95  # folded (a few stencils along a fold lie flat)
+    assert np.allclose(cloth.bend_rest[on], np.clip(dihedral_angles(cloth.x0, cloth.bends[on]), -2.6, 2.6))
+    # each pleat's edges welded at its start: one particle fewer per pleat than the opened ids
+    n_ids = len({int(i) for p in opened.panels for i in p.vertex_ids})
+    welded = n_ids - cloth.n_particles
+    assert welded >= 4
