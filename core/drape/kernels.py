@@ -178,6 +178,29 @@ def zero(values: wp.array(dtype=float)):
     values[wp.tid()] = 0.0
 
 
+@wp.func
+def dihedral(x1: wp.vec3, x2: wp.vec3, x3: wp.vec3, x4: wp.vec3):
+    """Signed dihedral angle of the stencil (a, b, e0, e1) = (x1, x2, x3, x4), with the pieces of its
+    gradients: the face normals n1, n2 (unnormalised), their squared lengths, the edge length and
+    direction; ``ok`` 0 where a face or the edge is degenerate (theta 0 then)."""
+    n1 = wp.cross(x3 - x1, x4 - x1)
+    n2 = wp.cross(x4 - x2, x3 - x2)
+    e = x4 - x3
+    l1 = wp.length_sq(n1)
+    l2 = wp.length_sq(n2)
+    le = wp.length(e)
+    theta = float(0.0)
+    eh = wp.vec3(0.0)
+    ok = int(0)
+    if l1 >= 1.0e-20 and l2 >= 1.0e-20 and le >= 1.0e-10:
+        ok = 1
+        eh = e / le
+        n1h = n1 / wp.sqrt(l1)
+        n2h = n2 / wp.sqrt(l2)
+        theta = wp.atan2(wp.dot(wp.cross(n1h, n2h), eh), wp.dot(n1h, n2h))
+    return theta, n1, n2, l1, l2, le, eh, ok
+
+
 @wp.kernel
 def solve_bending(
     x: wp.array(dtype=wp.vec3),
@@ -202,18 +225,9 @@ def solve_bending(
     x2 = x[j]
     x3 = x[k]
     x4 = x[l]
-    n1 = wp.cross(x3 - x1, x4 - x1)
-    n2 = wp.cross(x4 - x2, x3 - x2)
-    e = x4 - x3
-    l1 = wp.length_sq(n1)
-    l2 = wp.length_sq(n2)
-    le = wp.length(e)
-    if l1 < 1.0e-20 or l2 < 1.0e-20 or le < 1.0e-10:
+    theta, n1, n2, l1, l2, le, eh, ok = dihedral(x1, x2, x3, x4)
+    if ok == 0:
         return
-    eh = e / le
-    n1h = n1 / wp.sqrt(l1)
-    n2h = n2 / wp.sqrt(l2)
-    theta = wp.atan2(wp.dot(wp.cross(n1h, n2h), eh), wp.dot(n1h, n2h))
     # exact dihedral-angle gradients (Bridson et al. 2003), signed to match theta
     g1 = n1 * (-le / l1)
     g2 = n2 * (-le / l2)

@@ -22,13 +22,29 @@ class DrapeOptions:
     ----------
     device : str
         ``"cpu"`` (default, bitwise repeatable) or ``"cuda"`` / ``"cuda:0"``.
+    solver : str
+        ``"xpbd"`` (one XPBD pass per iteration over the constraints; its
+        stiffness is set by the step and the mesh) or ``"vbd"`` (Vertex Block
+        Descent, :mod:`core.drape.vbd`: per-vertex Newton steps on the implicit
+        step's potential; a settled drape is the fabric's own equilibrium)
+        or ``"pd"`` (projective dynamics, :mod:`core.drape.pd`: the same
+        potential minimised with a prefactored global solve, host side).
     fps : float, 1/s
         Frames per second of simulated time.
     substeps : int, per frame
         XPBD substeps per frame (each projects every constraint once).
-    iterations : int, per substep
-        Passes over the stretch, sliver-edge and bending constraints in each
-        substep (XPBD iterations; the bending multipliers accumulate over them).
+    iterations : int, per substep, or None
+        XPBD: passes over the stretch, sliver-edge and bending constraints in
+        each substep (the bending multipliers accumulate over them); VBD:
+        Gauss-Seidel sweeps over the vertices; projective dynamics: the most
+        global iterations (fewer once ``tolerance`` is met). None: the
+        solver's default (:data:`ITERATIONS`).
+    tolerance : float, m
+        ``solver="pd"``: a substep's iterations stop once no particle moved more
+        than this in the last one (``iterations`` is then the most it takes).
+    vbd_damping : float, s
+        ``solver="vbd"``: stiffness-proportional (Rayleigh) damping k_d, the
+        elastic forces' response to the substep's motion times k_d / dt.
     max_frames : int, frames
         Frame limit.
     min_frames : int, frames
@@ -98,9 +114,12 @@ class DrapeOptions:
     """
 
     device: str = "cpu"
+    solver: str = "xpbd"
     fps: float = 30.0  # 1/s
     substeps: int = 20  # per frame
-    iterations: int = 1  # per substep
+    iterations: Optional[int] = None  # per substep; None: ITERATIONS[solver]
+    tolerance: float = 1.0e-6  # m
+    vbd_damping: float = 3.0e-5  # s
     max_frames: int = 120  # frames
     min_frames: int = 10  # frames
     settle_speed: float = 0.01  # m/s
@@ -122,6 +141,10 @@ class DrapeOptions:
     self_exclude: float = 1.5  # self-collision diameters
     self_interval: int = 5  # substeps
     refine_edge: Optional[float] = None  # m
+
+    def __post_init__(self):
+        if self.iterations is None:
+            self.iterations = ITERATIONS.get(self.solver, 1)
 
     @staticmethod
     def coerce(options: Union[None, "DrapeOptions", Mapping]) -> "DrapeOptions":
@@ -147,9 +170,16 @@ class DrapeOptions:
             check_option(name, getattr(self, name))
         if not isinstance(self.device, str):
             raise DrapeError(f"drape option device = {self.device!r}: expected 'cpu' or 'cuda'")
+        if self.solver not in SOLVERS:
+            raise DrapeError(f"drape option solver = {self.solver!r}: expected one of {', '.join(SOLVERS)}")
         if not isinstance(self.self_collision, (bool, np.bool_)):
             raise DrapeError(f"drape option self_collision = {self.self_collision!r}: expected true or false")
 
+
+#: the drape solvers (:attr:`DrapeOptions.solver`)
+SOLVERS = ("xpbd", "vbd", "pd")
+#: each solver's iterations per substep when none are given
+ITERATIONS = {"xpbd": 1, "vbd": 2, "pd": 30}
 
 #: name -> (kind, low, low included, high, None allowed) of every numeric option.
 #: The upper bounds are far beyond any useful drape; they exist so a typo
@@ -158,7 +188,9 @@ class DrapeOptions:
 RANGES = {
     "fps": (float, 0.0, False, 1000.0, False),
     "substeps": (int, 1, True, 1000, False),
-    "iterations": (int, 1, True, 100, False),
+    "iterations": (int, 1, True, 1000, True),
+    "tolerance": (float, 0.0, True, 0.01, False),
+    "vbd_damping": (float, 0.0, True, 1.0, False),
     "max_frames": (int, 1, True, 10000, False),
     "min_frames": (int, 0, True, 10000, False),
     "settle_speed": (float, 0.0, False, 10.0, False),

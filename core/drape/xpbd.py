@@ -81,6 +81,7 @@ class DrapeState:
     substeps : int, substeps taken so far (times the self-collision search).
     frames : int, frames taken so far.
     self_grid, self_dx, self_partner, self_count : self-collision buffers (None when off).
+    y, acc : (P,) wp.vec3 arrays, VBD's inertial target and last acceleration (None for XPBD).
     launches : the kernel launches recorded on these arrays (see :meth:`DrapeSolver.state`).
     """
 
@@ -99,6 +100,9 @@ class DrapeState:
     self_partner: Any = None
     self_count: Any = None
     launches: Optional["_Launches"] = None
+    y: Any = None
+    acc: Any = None
+    x64: Any = None
 
 
 @dataclass
@@ -110,6 +114,8 @@ class _Launches:
     self_pairs: Any  # the self-collision candidate search (None when off)
     self_collide: List[Any]  # self-collision resolve and apply
     finish: List[Any]  # body contact and friction, velocity update
+    tethers: List[Any] = None  # after the constraints (and the host step)
+    host: Any = None  # the projective-dynamics solve, ``host(state)`` (None: all on the device)
 
 
 class DrapeSolver:
@@ -183,6 +189,10 @@ class DrapeSolver:
         self._upload(cloth, inv_mass, tri_order, bend_order, edge_order, body_v, body_f)
         wp.load_module(K, device=self.device)
         wp.load_module(Q, device=self.device)
+        if opts.solver in ("vbd", "pd"):
+            self._upload_vbd(cloth, mass, tri_order, bend_order, edge_order)
+        if opts.solver == "pd":
+            self._upload_pd(cloth, mass)
         t_compile = time.perf_counter()
         self.timings = {"prepare": t_prep - t0, "compile": t_compile - t_prep}
 
@@ -240,6 +250,59 @@ class DrapeSolver:
         )
         self._body = self._Q.warp_mesh(body_v, body_f, device=dev)
 
+    def _upload_vbd(self, cloth: Cloth, mass, tri_order, bend_order, edge_order) -> None:
+        """VBD's arrays: particle masses, the vertex colouring, each particle's triangles, hinges and edges."""
+        from . import vbd as V
+
+        wp, dev, n = self._wp, self.device, cloth.n_particles
+        tris = cloth.faces[tri_order]
+        bends = cloth.bends[bend_order].reshape(-1, 4)
+        edges = cloth.edges[edge_order].reshape(-1, 2)
+        # the vertex colouring (VBD's Gauss-Seidel order; projective dynamics gathers all at once)
+        colours = V.vertex_colouring(n, [tris, bends, edges]) if self.options.solver == "vbd" else np.zeros(n, int)
+        order = np.argsort(colours, kind="stable")
+        self._vbd_off = np.concatenate([[0], np.cumsum(np.bincount(colours))])
+        self._mass = wp.array(mass.astype(np.float32), dtype=float, device=dev)
+        self._vbd_order = wp.array(order.astype(np.int32), dtype=int, device=dev)
+        self._vbd_adj = [
+            tuple(wp.array(a.astype(np.int32), dtype=int, device=dev) for a in V.incidence(n, els))
+            for els in (tris, bends, edges)
+        ]
+        wp.load_module(V, device=dev)
+        self._V = V
+
+    def _upload_pd(self, cloth: Cloth, mass) -> None:
+        """Projective dynamics: the constant matrix, factored (:class:`core.drape.pd.ProjectiveStep`)."""
+        from . import pd as P
+
+        fw0, fg0, _ = face_strains(cloth.x0, cloth)
+        start = np.clip(np.stack([fw0, fg0], axis=1) + 1.0, 0.2, 5.0)
+        e = cloth.edges.reshape(-1, 2)
+        edge_start = np.linalg.norm(cloth.x0[e[:, 1]] - cloth.x0[e[:, 0]], axis=1)
+        dt = 1.0 / (self.options.fps * self.options.substeps)
+        self._pd = P.ProjectiveStep(cloth, self.material, dt, mass, start, edge_start)
+        self._pd_iterations = []  # iterations per substep (the residual-based stop's record)
+
+    def _pd_solve(self, s: DrapeState) -> None:
+        """One implicit step on the host, in float64: x from the device, the iterations, x back."""
+        # the substep's start in float64: the host's own positions where the device's float32 copy still
+        # holds them (contact, tethers or self-collision may have moved some since), plus the device's
+        # start guess and inertial target as increments on it
+        prev = s.x_prev.numpy()
+        base = prev.astype(np.float64)
+        if s.x64 is not None:
+            same = np.all(s.x64.astype(np.float32) == prev, axis=1)
+            base[same] = s.x64[same]
+        x = base + (s.x.numpy().astype(np.float64) - prev)
+        y = base + (s.y.numpy().astype(np.float64) - prev)
+        contact = (s.contact_point.numpy(), s.contact_normal.numpy(), s.contact_active.numpy())
+        opts = self.options
+        grow = float(s.grow.numpy()[0])
+        it, _ = self._pd.solve(x, y, grow, contact, self.thickness, int(opts.iterations), float(opts.tolerance))
+        self._pd_iterations.append(it)
+        s.x64 = x
+        s.x.assign(x.astype(np.float32))
+
     def state(self) -> DrapeState:
         """A fresh state: the garment skintight on the body, at rest, its rest shape not yet grown."""
         wp, dev, n = self._wp, self.device, self.cloth.n_particles
@@ -253,6 +316,9 @@ class DrapeSolver:
             contact_active=wp.zeros(n, dtype=int, device=dev),
             bend_lambda=wp.zeros(max(len(self.cloth.bends), 1), dtype=float, device=dev),
         )
+        if self.options.solver in ("vbd", "pd"):
+            s.y = wp.zeros(n, dtype=wp.vec3, device=dev)
+            s.acc = wp.zeros(n, dtype=wp.vec3, device=dev)
         if self.self_radius > 0.0:
             s.self_grid = wp.HashGrid(48, 48, 48, device=dev)
             s.self_dx = wp.zeros(n, dtype=wp.vec3, device=dev)
@@ -270,10 +336,21 @@ class DrapeSolver:
         inv_dt2 = 1.0 / (self.dt * self.dt)
         keep = float(np.exp(-opts.damping * self.dt))
         gravity = self._wp.vec3(0.0, 0.0, -float(opts.gravity))
-        cmds = [self._launch(K.predict, n, [s.x, s.v, s.x_prev, self._w, gravity, self.dt, keep])]
+        vbd = opts.solver in ("vbd", "pd")  # both predict the inertial target y
+        if vbd:
+            predict = self._launch(
+                self._V.predict, n, [s.x, s.v, s.x_prev, s.y, s.acc, self._w, gravity, self.dt, keep]
+            )
+        else:
+            predict = self._launch(K.predict, n, [s.x, s.v, s.x_prev, self._w, gravity, self.dt, keep])
+        cmds = [predict]
         grow_step = growth_per_substep(opts)
         if grow_step is not None:
             cmds.append(self._launch(K.advance_grow, 1, [s.grow, grow_step]))
+        if vbd:
+            if opts.solver == "vbd":
+                cmds.extend(self._vbd_sweeps(s) * int(opts.iterations))
+            return self._finish_record(s, cmds, self._V.update_velocity, [s.x, s.x_prev, s.v, s.acc, 1.0 / self.dt])
         if mat.bending > 0 and len(self.cloth.bends):
             cmds.append(self._launch(K.zero, len(self.cloth.bends), [s.bend_lambda]))
         block = []  # the constraint block, projected opts.iterations times per substep
@@ -340,8 +417,55 @@ class DrapeSolver:
                     )
                 )
         cmds.extend(block * int(opts.iterations))
+        return self._finish_record(s, cmds, K.update_velocity, [s.x, s.x_prev, s.v, 1.0 / self.dt])
+
+    def _element_args(self, s: DrapeState) -> list:
+        """The arguments of :func:`core.drape.vbd.vertex_forces` after ``x``: elements, incidence, moduli."""
+        mat = self.material
+        (t0, t1), (b0, b1), (e0, e1) = self._vbd_adj
+        return [
+            self._tri,
+            self._rest_inv,
+            self._area,
+            self._tri_start,
+            t0,
+            t1,
+            mat.stretch_weft,
+            mat.stretch_warp,
+            mat.shear,
+            self._bends,
+            self._bend_w,
+            self._bend_rest,
+            b0,
+            b1,
+            mat.bending,
+            self._edges,
+            self._edge_rest,
+            self._edge_start,
+            e0,
+            e1,
+            0.5 * (mat.stretch_weft + mat.stretch_warp),
+            s.grow,
+        ]
+
+    def _vbd_sweeps(self, s: DrapeState) -> list:
+        """One VBD iteration: a Newton step of every free vertex, colour by colour."""
+        off = self._vbd_off
+        head = [s.x, s.y, s.x_prev, self._mass, self._w, self._vbd_order]
+        inv_dt2 = 1.0 / (self.dt * self.dt)
+        damp = float(self.options.vbd_damping) / self.dt
+        tail = self._element_args(s) + [s.contact_point, s.contact_normal, s.contact_active, self.thickness]
+        return [
+            self._launch(self._V.solve_vertices, int(off[c + 1] - off[c]), head + [int(off[c]), inv_dt2, damp] + tail)
+            for c in range(len(off) - 1)
+        ]
+
+    def _finish_record(self, s: DrapeState, cmds: list, update_velocity, velocity_inputs: list) -> _Launches:
+        """The launches after the constraints (tethers, contact, self-collision, velocities), recorded."""
+        K, opts, n = self._K, self.options, self.cloth.n_particles
+        tethers = []
         if opts.tether_slack is not None and np.any(self.cloth.tether_anchor >= 0):
-            cmds.append(
+            tethers.append(
                 self._launch(K.solve_tethers, n, [s.x, self._anchor, self._tether_len, 1.0 + float(opts.tether_slack)])
             )
         finish = [
@@ -350,7 +474,7 @@ class DrapeSolver:
                 n,
                 [s.x, s.x_prev, s.contact_point, s.contact_normal, s.contact_active, self.thickness, self.friction],
             ),
-            self._launch(K.update_velocity, n, [s.x, s.x_prev, s.v, 1.0 / self.dt]),
+            self._launch(update_velocity, n, velocity_inputs),
         ]
         contacts = self._launch(
             K.closest_contact,
@@ -391,7 +515,16 @@ class DrapeSolver:
                 self._launch(K.self_collide, n, [s.x, self._w, s.self_partner, s.self_count, r, s.self_dx]),
                 self._launch(K.apply_delta, n, [s.x, s.self_dx]),
             ]
-        return _Launches(contacts=contacts, constraints=cmds, self_pairs=pairs, self_collide=collide, finish=finish)
+        host = self._pd_solve if opts.solver == "pd" else None
+        return _Launches(
+            contacts=contacts,
+            constraints=cmds,
+            self_pairs=pairs,
+            self_collide=collide,
+            finish=finish,
+            tethers=tethers,
+            host=host,
+        )
 
     def move_body(self, vertices) -> None:
         """Move the body to ``vertices`` (V, 3), same triangles (an animated body): its BVH refitted."""
@@ -424,6 +557,10 @@ class DrapeSolver:
             if before_substep is not None or sub % opts.contact_interval == 0:
                 L.contacts.launch()
             for cmd in L.constraints:
+                cmd.launch()
+            if L.host is not None:
+                L.host(state)
+            for cmd in L.tethers:
                 cmd.launch()
             if L.self_pairs is not None:
                 if state.substeps % opts.self_interval == 0:
