@@ -355,3 +355,99 @@ def test_regulariser_energy_is_the_weighted_sum_of_squared_offsets():
     assert regulariser_energy(a, M, RT, W2) == pytest.approx(want, rel=1e-12)
     assert all(np.array_equal(x, y) for x, y in zip(M + RT, keep))
     assert regulariser_energy(a, RT, RT, W2) == 0.0
+
+
+def _converging(**kw):
+    # the paper preset: no feedback moving the targets, so the solve has a fixed point to converge to
+    return SolverConfig.paper(convergence={"energy_rtol": 1e-3, "max_move": 0.01, "window": 5, "cap": 200, **kw})
+
+
+def test_the_convergence_rule_stops_where_a_fixed_count_would_be_the_same_pattern():
+    from core.pattern.optimizer.solver import converged
+
+    cut, body = two_panels(ease=(1.1, 1.4), bulge=0.2)
+    solver = PatternSolver(cut, body)
+    K, cw, cg = solver.targets_reference()
+    cfg = _converging()
+    state = solver.begin(K, cw, cg, config=cfg)
+    solver.iterate(state, state.planned)
+    while True:
+        more = solver.extra_iterations(state)
+        if not more:
+            break
+        solver.iterate(state, more)
+    n = state.iteration
+    # it ran rounds past its 20 iterations, stopped converged under the cap, and not a round later than that
+    assert cfg.iterations < n < cfg.convergence.cap and converged(state), n
+    E = state.energies
+    assert abs(E[-1] - E[-6]) / (5 * E[-1]) < 1e-3 and state.max_move < 0.01
+    # the same pattern as a fixed count of those iterations (the rule only chooses the count)
+    res = solver.solve(K, cw, cg, config=cfg)
+    fixed = solver.solve(K, cw, cg, config=SolverConfig.paper(iterations=n))
+    assert res.iterations == n
+    for name in res.uv:
+        assert np.allclose(res.uv[name], fixed.uv[name], rtol=0, atol=1e-12)
+
+
+def test_the_convergence_rule_is_off_by_default_and_capped():
+    cut, body = two_panels(ease=(1.1, 1.4), bulge=0.2)
+    solver = PatternSolver(cut, body)
+    K, cw, cg = solver.targets_reference()
+    assert SolverConfig().convergence.energy_rtol == 0.0
+    assert solver.solve(K, cw, cg, config=SolverConfig.paper()).iterations == 20
+    tight = _converging(energy_rtol=1e-300, cap=45)
+    assert solver.solve(K, cw, cg, config=tight).iterations == 45
+    # an adaptation with its feedback on the poses' demands keeps its own schedule
+    adapting = SolverConfig.improved(convergence={"energy_rtol": 1e-300, "cap": 45})
+    pat = adapt_pattern(cut, body, [body * np.array([1.1, 1.1, 1.0])], eps_weft=1.05, solver=solver, config=adapting)
+    assert pat.report["iterations"] == max(adapting.iterations, adapting.adaptation.min_iterations)
+
+
+@pytest.mark.parametrize(
+    "kw, field",
+    [
+        ({"energy_rtol": -1.0}, "convergence.energy_rtol"),
+        ({"energy_rtol": np.nan}, "convergence.energy_rtol"),
+        ({"max_move": 0.0}, "convergence.max_move"),
+        ({"window": 0}, "convergence.window"),
+        ({"cap": 5000}, "convergence.cap"),
+    ],
+)
+def test_bad_convergence_settings_are_refused(kw, field):
+    with pytest.raises(PatternError, match=field.replace(".", r"\.")):
+        SolverConfig.improved(convergence=kw).check()
+
+
+def test_the_convergence_rule_stops_alike_on_numpy_and_the_kernels(numpy_steps):
+    # numpy_steps: this solve on the numpy path; the kernels' run is the module's other tests' (same bits):
+    # the stop is read from the iterate and the energies, which both paths compute alike
+    from core.pattern.accel import compiled
+
+    cut, body = two_panels(ease=(1.1, 1.4), bulge=0.2)
+    counts = {}
+    for use in (False, None):
+        compiled.use(use)
+        solver = PatternSolver(cut, body)
+        K, cw, cg = solver.targets_reference()
+        counts[use] = solver.solve(K, cw, cg, config=_converging()).iterations
+    assert counts[False] == counts[None], counts
+
+
+def test_a_transfer_from_the_flattening_is_the_reference_solve_on_its_body():
+    # transfer_from "flattening": the reference solve's own start stretched to the target, so a transfer
+    # to the reference body is the reference pattern, and wider bodies give wider pieces in order
+    cut, body = two_panels(ease=(1.2, 1.5), bulge=0.1)
+    cfg = SolverConfig.improved(transfer_from="flattening")
+    solver = PatternSolver(cut, body, cfg)
+    ref = solve_pattern(cut, body, solver=solver)
+    same = transfer_pattern(cut, body, body, solver=solver, start=ref)
+    for a, b in zip(ref.panels, same.panels):
+        assert np.allclose(a.uv, b.uv, rtol=0, atol=1e-12)
+    widths = [
+        [np.ptp(p.uv[:, 0]) for p in transfer_pattern(cut, body, body * [s, s, 1.0], solver=solver).panels]
+        for s in (0.9, 0.95, 1.05, 1.1)
+    ]
+    widths.insert(2, [np.ptp(p.uv[:, 0]) for p in ref.panels])
+    assert np.all(np.diff(np.array(widths), axis=0) > 0), widths
+    with pytest.raises(PatternError, match="transfer_from"):
+        SolverConfig.improved(transfer_from="nowhere").check()

@@ -9,7 +9,8 @@ plain numbers. Groups:
 - :class:`SeamOptions` -- the seam terms' targets and which seams are sewn gathered;
 - :class:`Feedback` -- the per-iteration correction of the targets by the achieved scales;
 - :class:`Adaptation` -- what pose adaptation solves do differently;
-- :class:`CollapseGuard` -- the targets of triangles near collapse raised until they open.
+- :class:`CollapseGuard` -- the targets of triangles near collapse raised until they open;
+- :class:`Convergence` -- when a solve stops (its iterations, or until converged).
 
 Precedence, for every setting the design can also give (``materials``): the
 caller's value over the design's over the default. Only the gathering
@@ -236,6 +237,39 @@ class CollapseGuard:
     guard_release: float = 0.5
 
 
+@dataclass(frozen=True)
+class Convergence:
+    """When a reference or transfer solve has converged: it runs its ``iterations``, then rounds of
+    ``window`` more while it has not, up to ``cap`` iterations in all.
+
+    Converged: over the last ``window`` iterations the regulariser energy (the local step's ARAP
+    residual, :func:`~core.pattern.optimizer.steps.regulariser_energy`) changed by under
+    ``energy_rtol`` of itself per iteration, and the last iteration moved no vertex by more than
+    ``max_move`` mean edge lengths. ``energy_rtol`` 0 turns the rule off: the solve runs its
+    ``iterations`` (with the collapse guard's extra rounds). A solve with a fixed iteration count
+    stops short by however far its start was (a transfer starts from the reference pattern, so it
+    converges further in the same count than the reference itself: the teaser's front sleeve on
+    women:L sewed 0.4 mm shorter than on M); the rule stops every size equally converged.
+    Adaptation solves with a feedback on the poses' demands (``Adaptation.gain`` > 0) keep their own
+    schedule (:class:`Adaptation`).
+
+    ``transfer_from``: where a transfer starts. ``"reference"``: the reference pattern stretched to the
+    target body (it has run the reference's iterations already, so the transfer ends further converged
+    than the reference itself). ``"flattening"``: the reference solve's own start (the flattening
+    stretched by the targets) stretched to the target body, so that with the same iterations every
+    size, the design's own included, is solved alike and the grade follows the bodies (the teaser's
+    front sleeve XS..XL 1290 < 1316 < 1351 < 1364 < 1381 mm, where from the reference L's 1350.6 was
+    under M's 1350.6). Measured in docs/darts.md ("Convergence").
+
+    """
+
+    energy_rtol: float = 0.0
+    max_move: float = 0.002
+    window: int = 10
+    cap: int = 300
+    transfer_from: str = "reference"
+
+
 _GROUPS = {
     "weights": Weights,
     "rest_shape": RestShape,
@@ -243,6 +277,7 @@ _GROUPS = {
     "feedback": Feedback,
     "adaptation": Adaptation,
     "guard": CollapseGuard,
+    "convergence": Convergence,
 }
 
 
@@ -264,6 +299,7 @@ class SolverConfig:
     feedback: Feedback = field(default_factory=Feedback)
     adaptation: Adaptation = field(default_factory=Adaptation)
     guard: CollapseGuard = field(default_factory=CollapseGuard)
+    convergence: Convergence = field(default_factory=Convergence)
 
     @classmethod
     def paper(cls, **overrides) -> "SolverConfig":
@@ -427,6 +463,16 @@ class SolverConfig:
             if getattr(ad, k) is not None:
                 _finite(f"adaptation.{k}", getattr(ad, k), 1.0, ">=")
         check_iterations("solver configuration feedback.from_iteration", fb.from_iteration, low=0)
+        cv = self.convergence
+        _finite("convergence.energy_rtol", cv.energy_rtol, 0.0, ">=")
+        _finite("convergence.max_move", cv.max_move, 0.0, ">")
+        check_iterations("solver configuration convergence.window", cv.window)
+        check_iterations("solver configuration convergence.cap", cv.cap)
+        if cv.transfer_from not in ("reference", "flattening"):
+            raise PatternError(
+                "solver configuration convergence.transfer_from: expected 'reference' or 'flattening', "
+                f"got {cv.transfer_from!r}"
+            )
         if s.straight_target not in ("zero", "smooth"):
             raise PatternError(
                 f"solver configuration seams.straight_target: expected 'zero' or 'smooth', got {s.straight_target!r}"

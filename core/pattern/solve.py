@@ -83,15 +83,21 @@ def transfer_pattern(
 
     The reference flattening and factorisation are reused; the solve starts
     from the reference pattern when ``start`` is given, each piece stretched
-    to the target body (:meth:`PatternSolver.start_from`). ``body``: the target
-    body's spec, recorded in the pattern.
+    to the target body (:meth:`PatternSolver.start_from`), or, with the
+    configuration's ``convergence.transfer_from`` ``"flattening"``, from the
+    reference solve's own start so stretched (:meth:`PatternSolver.flattening_start`;
+    ``start`` unused). ``body``: the target body's spec, recorded in the pattern.
     """
     solver = _solver(cut, ref_vertices, solver, config, progress)
     tgt = solver.positions(target_vertices, "target body")
     offsets = solver.offsets(tgt)
     K, cw, cg = solver.targets_reference(tgt, offsets=offsets)
-    # the reference pattern stretched by how much longer the target body is under each piece
-    U0 = None if start is None else solver.start_from(start, offsets)
+    # the reference pattern stretched by how much longer the target body is under each piece, or the
+    # reference solve's own start so stretched (config.Convergence.transfer_from: every size solved alike)
+    if (config or solver.config).convergence.transfer_from == "flattening":
+        U0 = solver.flattening_start(cw, cg, offsets)
+    else:
+        U0 = None if start is None else solver.start_from(start, offsets)
     res = solver.solve(
         K,
         cw,

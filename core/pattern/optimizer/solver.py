@@ -336,6 +336,15 @@ class PatternSolver:
         own = None if offsets is None else self._own_offsets(pattern)
         return pattern_start(self.blocks, uv, self.uv0, offsets, own)
 
+    def flattening_start(self, c_weft: np.ndarray, c_warp: np.ndarray, offsets) -> np.ndarray:
+        """The unknowns (n, 2) a reference solve of targets ``c_weft``, ``c_warp`` starts from (the
+        flattening stretched by them, :func:`.steps.scaled_start`), each piece stretched further to the
+        body of ``offsets`` (:meth:`offsets`) as :meth:`start_from` stretches a pattern: a transfer
+        started here runs the reference's own course on its body."""
+        U = scaled_start(self.blocks, c_weft, c_warp)
+        uv = [U[self.blocks.panel_slices(pd)[0]] for pd in self.blocks.panels]
+        return pattern_start(self.blocks, uv, self.uv0, offsets, self.ref_offsets)
+
     def _own_offsets(self, pattern):
         """:meth:`offsets` of the body ``pattern`` lies on (its pieces' ``xyz``): the reference's when it is it."""
         xyz = [np.asarray(pattern.panel(pd.name).xyz, float) for pd in self.panels]
@@ -551,6 +560,7 @@ class PatternSolver:
                 U, M = realign_grain(self.blocks, U, M)
             d = (U - U_prev).ravel()
             state.step = float(np.sqrt(np.einsum("i,i->", d, d) / len(U))) / self.mean_edge  # not BLAS: steps.py
+            state.max_move = float(np.sqrt(np.max(d[0::2] * d[0::2] + d[1::2] * d[1::2]))) / self.mean_edge
             state.iteration += 1
         state.U, state.M, state.s_cur, state.tg = U, M, s_cur, tg
         state.seconds += time.perf_counter() - t0
@@ -573,9 +583,22 @@ class PatternSolver:
         extra = state.iteration - state.planned
         if extra < 0:
             return -extra
+        if extra == 0 and self.converging(state):
+            # not yet converged (config.Convergence): a round more, counted as planned
+            more = min(state.config.convergence.window, state.config.convergence.cap - state.planned)
+            state.planned += more
+            return more
         if rescuing(extra, state.planned):
             return COLLAPSE_ROUNDS if extra < state.planned + RESCUE_ITERATIONS and refused(state) else 0
         return COLLAPSE_ROUNDS if self.collapsing(state) else 0
+
+    @staticmethod
+    def converging(state: "SolveState") -> bool:
+        """Whether ``state``, at the end of its planned iterations, runs a round more to converge
+        (:class:`~core.pattern.config.Convergence`: the rule on, a reference or transfer solve, under
+        its cap, not :func:`converged`)."""
+        cv = state.config.convergence
+        return cv.energy_rtol > 0 and state.poses is None and state.planned < cv.cap and not converged(state)
 
     def collapsing(self, state: "SolveState") -> bool:
         """Whether ``state``'s iterate has a collapsed triangle (:func:`.steps.any_collapsed`) while its
@@ -588,3 +611,16 @@ class PatternSolver:
     def result(self, state: "SolveState") -> SolveResult:
         """The :class:`SolveResult` of ``state``'s current iterate (:func:`.build.solve_result`)."""
         return solve_result(self.panels, state)
+
+
+def converged(state: "SolveState") -> bool:
+    """Whether ``state`` has converged by its configuration's :class:`~core.pattern.config.Convergence`:
+    over the last ``window`` iterations the regulariser energy changed by under ``energy_rtol`` of
+    itself per iteration, and the last iteration moved no vertex more than ``max_move`` mean edges."""
+    cv = state.config.convergence
+    E = state.energies
+    if len(E) <= cv.window:
+        return False
+    now, before = E[-1], E[-1 - cv.window]
+    rate = abs(now - before) / (cv.window * max(abs(now), 1e-300))
+    return rate < cv.energy_rtol and state.max_move < cv.max_move

@@ -31,7 +31,8 @@ class SolveState:
     iteration : iterations run so far (a resumed solve carries the earlier one's on); started : ``iteration``
     when this solve began (0, or the resumed solve's count); energies : energy per iteration; backtracks :
     flip-guard halvings.
-    step : RMS vertex move of the last iteration over the mean edge length (inf before the first).
+    step : RMS vertex move of the last iteration over the mean edge length (inf before the first);
+    max_move : the largest vertex move of the last iteration over the mean edge length.
     seconds : wall time spent in :meth:`~PatternSolver.begin` and :meth:`~PatternSolver.iterate`.
     """
 
@@ -59,4 +60,5 @@ class SolveState:
     energies: List[float] = field(default_factory=list)
     backtracks: int = 0
     step: float = float("inf")
+    max_move: float = float("inf")
     seconds: float = 0.0
