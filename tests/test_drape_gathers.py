@@ -177,12 +177,14 @@ def test_a_gather_ruffles_below_the_seam_and_leaves_the_yoke_closed(body, patter
                 assert np.array_equal(yoke_side, skirt_side)  # the stitches hold exactly
                 # the long side's free vertices ruffle close to the seam: within a stitch spacing of it
                 spacing = np.linalg.norm(np.diff(x[yoke_side], axis=0), axis=1).max()
-                assert len(free) > 2 * len(yoke_side) and seam_distance(x[free], x[yoke_side]).max() < spacing
+                # (refined to half the target edge, the long side has a free vertex between any two stitches)
+                assert len(free) >= len(yoke_side) - 1 and seam_distance(x[free], x[yoke_side]).max() < spacing
     (folds, stretch), (welded_folds, welded_stretch) = out[True], out[False]
-    assert welded_stretch > 0.15  # welded, the skirt's first row pushes the yoke open
-    assert stretch < 0.08 and stretch < welded_stretch / 3
-    assert folds["edges_over_30_pct"] > 1.1 * welded_folds["edges_over_30_pct"]
-    assert folds["mean_curvature_per_m"] > 1.05 * welded_folds["mean_curvature_per_m"]
+    # measured: stretch 7.8 % vs 38.1 % welded; edges over 30 deg 36.7 % vs 32.7 %, curvature 50.7 vs 41.3 1/m
+    assert welded_stretch > 0.2  # welded, the skirt's first row pushes the yoke open
+    assert stretch < 0.1 and stretch < welded_stretch / 3
+    assert folds["edges_over_30_pct"] > 1.05 * welded_folds["edges_over_30_pct"]
+    assert folds["mean_curvature_per_m"] > 1.1 * welded_folds["mean_curvature_per_m"]
 
 
 def seam_distance(points: np.ndarray, poly: np.ndarray) -> np.ndarray:

@@ -43,7 +43,7 @@ from .gathers import arc, insert_points, longer
 #: A triangle whose pattern area exceeds its skintight area by at least this fraction hangs free.
 FREE_EASE = 0.01
 #: The long side of a gathered seam is refined to this fraction of the target edge.
-GATHER_EDGE = 0.25
+GATHER_EDGE = 0.5
 #: Bisection rounds at most (each halves the longest edges): 25 mm pattern edges reach 5 mm in three.
 MAX_LEVELS = 12
 
