@@ -216,6 +216,17 @@ def _set(getter, key, value):
     return edit
 
 
+def _traced_sleeve(length):
+    """The long sleeve's cuff placed by a traced length (m), not by its share of the way to the wrist."""
+
+    def edit(d):
+        d["parameters"]["sleeve_length"] = {"value": length, "kind": "length"}
+        trace = {"from": "armhole_top_left", "along": "arm_left", "length": "$sleeve_length"}
+        d["keypoints"]["cuff_level_left"] = {"trace": trace}
+
+    return edit
+
+
 # issue 3's error list, each through `ease cut` on the long-sleeve shirt: (edit, error, JSON path or
 # None, words the message must contain - the design element it names)
 ERROR_CASES = {
@@ -263,7 +274,7 @@ ERROR_CASES = {
         ["1.5"],
     ),
     "length leaves the body part": (
-        _set(lambda d: d["parameters"], "sleeve_length", {"value": 0.9, "kind": "length"}),
+        _traced_sleeve(0.9),
         DesignError,
         "parameters.sleeve_length",
         ["leaves the body part", "arm_left"],

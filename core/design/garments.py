@@ -114,19 +114,23 @@ def _top_parts(sleeves: str = "long", hem: str = "hem", ease=None):
         # The declared ranges are the lengths that cut and flatten on the template's body
         # (tests/test_template_ranges.py sweeps them), with about 2 cm to spare for other sizes:
         if sleeves == "long":
-            # a long sleeve's seams pass the elbow guide ring, so its cuff must lie past the
-            # elbow: up to 0.35 m (0.33 on XS, 0.35 on XL) the cuff ring crosses the sleeve seams
-            params["sleeve_length"] = {"value": 0.52, "kind": "length", "min": 0.38, "max": 0.57}
+            # A long sleeve ends by the wrist on every body: its cuff is placed at a share of the
+            # way (along the arm) from the armhole's top to the wrist, 0.89 (0.52 m on the default
+            # M, whose wrist is 0.583 m away; women's wrists are 0.508-0.517 m away, men's
+            # 0.536-0.609). Its seams pass the elbow guide ring, so the cuff must lie past the
+            # elbow: up to 0.35 m (0.6 of the way) the cuff ring crosses the sleeve seams.
+            params["sleeve_end"] = {"value": 0.89, "kind": "placement", "min": 0.65, "max": 0.97}
+            kps["cuff_level_left"] = {"between": ["armhole_top_left", "wrist_left"], "t": "$sleeve_end"}
             normal = ["elbow_left", "wrist_left"]
         else:
             # the cuff must lie below the armhole's underside (1 cm down the arm from the
-            # armpit): up to 0.11 m (0.13 on XL) the cuff ring crosses the armhole ring
+            # armpit): up to 0.11 m (0.13 on XL) the cuff ring crosses the armhole ring; a short
+            # sleeve's length is the same on every body (a traced length)
             params["sleeve_length"] = {"value": 0.2, "kind": "length", "min": 0.15, "max": 0.3}
+            kps["cuff_level_left"] = {
+                "trace": {"from": "armhole_top_left", "along": "arm_left", "length": "$sleeve_length"}
+            }
             normal = ["shoulder_left", "elbow_left"]
-        # the cuff ring is placed by a traced length; its top/under points split the sleeve
-        kps["cuff_level_left"] = {
-            "trace": {"from": "armhole_top_left", "along": "arm_left", "length": "$sleeve_length"}
-        }
         kps["sleeve_front_mid_left"] = {"between": ["armhole_front_left", "cuff_front_left"], "t": 0.5}
         kps["sleeve_back_mid_left"] = {"between": ["armhole_back_left", "cuff_back_left"], "t": 0.5}
         lines += [
@@ -248,11 +252,20 @@ def jacket():
 # ---------------------------------------------------------------- lower body
 
 
-def _pants_parts(length_value, length_range, ease=None, name="pants"):
+def _pants_parts(length_value, length_range, ease=None, name="pants", to_ankle=False):
+    """``to_ankle``: the leg's length is a share of the way (along the leg) from the waist's side
+    to the ankle (``leg_end``), so full-length legs end by the ankle on every body; else a
+    length in metres from the waist's side (``leg_length``), the same on every body."""
     ease = ease or {}
-    params = {"leg_length": {"value": length_value, "kind": "length", "min": length_range[0], "max": length_range[1]}}
+    kind, key = ("placement", "leg_end") if to_ankle else ("length", "leg_length")
+    params = {key: {"value": length_value, "kind": kind, "min": length_range[0], "max": length_range[1]}}
+    hem = (
+        {"between": ["waist_side_left", "ankle_left"], "t": "$leg_end"}
+        if to_ankle
+        else {"trace": {"from": "waist_side_left", "along": "leg_left", "length": "$leg_length"}}
+    )
     kps = {
-        "leg_hem_out_left": {"trace": {"from": "waist_side_left", "along": "leg_left", "length": "$leg_length"}},
+        "leg_hem_out_left": hem,
         "thigh_front_left": {"between": ["waist_front", "leg_hem_front_left"], "t": 0.45},
         "thigh_back_left": {"between": ["waist_back", "leg_hem_back_left"], "t": 0.45},
     }
@@ -305,15 +318,17 @@ def _waist_ring(name="waist", role="opening"):
     }
 
 
-def _lower(name, description, length_value, length_range, garment_name):
-    params, kps, lines, panels = _pants_parts(length_value, length_range)
+def _lower(name, description, length_value, length_range, garment_name, to_ankle=False):
+    params, kps, lines, panels = _pants_parts(length_value, length_range, to_ankle=to_ankle)
     lines.insert(0, _waist_ring())
     g = {"name": garment_name, "kind": "lower", "pin": "waist", "lines": lines, "panels": panels}
     return _design(name, description, [g], params, kps)
 
 
 def pants():
-    return _lower("pants", "Four panels (front/back, left/right); ease 1.2.", 0.98, (0.5, 1.05), "pants")
+    # the hem at 0.9 of the way from the waist's side to the ankle (0.98 m on the default M, whose
+    # ankle is 1.083 m away; women's ankles are 0.947-0.988 m away, men's 0.963-1.058)
+    return _lower("pants", "Four panels (front/back, left/right); ease 1.2.", 0.9, (0.46, 0.97), "pants", to_ankle=True)
 
 
 def shorts():
@@ -339,7 +354,7 @@ def teaser_shirt_pants():
             l["points"] = ["armhole_under_left", "waist_side_left"]
     shirt = {"name": "shirt", "kind": "upper", "pin": "neckline", "lines": lines, "panels": panels}
     pparams, pkps, plines, ppanels = _pants_parts(
-        0.98, (0.5, 1.05), ease={"front_left": {"value": 1.1}, "back_left": {"value": 1.25}}
+        0.9, (0.46, 0.97), ease={"front_left": {"value": 1.1}, "back_left": {"value": 1.25}}, to_ankle=True
     )
     params.update(pparams)
     kps.update(pkps)
