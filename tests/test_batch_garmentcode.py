@@ -169,3 +169,38 @@ def test_outlines_simplified_within_tolerance(teaser):
             # the chords of a simplified run are at most the run's length, and within the tolerance of it
             assert 0.99 * full[k] <= stitched[key][k] <= full[k] + 1e-6, key
     assert MIN_EDGE > TOLERANCE
+
+
+BOXMESH = r"""
+import json, sys
+sys.path.insert(0, sys.argv[1])
+from pygarment.meshgen.boxmeshgen import BoxMesh
+m = BoxMesh(sys.argv[2], res=1.0)
+m.load()
+print("RESULT " + json.dumps({"panels": len(m.panels), "vertices": len(m.vertices), "stitches": len(m.stitches)}))
+"""
+
+
+def test_garmentcodes_own_mesher_meshes_every_panel(teaser, tmp_path):
+    """GarmentCode's BoxMesh at its default 1 cm resolution meshes the file (it stopped with "panel contains
+    degenerate triangles" on sub-millimetre edges). GarmentCode is no dependency and its 2.0.2 wheel cannot be
+    imported (docs/batch.md): set EASE_GARMENTCODE to a GarmentCode checkout and EASE_GARMENTCODE_PYTHON to a
+    Python with its mesher's packages (cgal, libigl, numpy<2, scipy, svgpathtools, svgwrite, matplotlib, pyyaml,
+    cairosvg, psutil) to run it."""
+    import json
+    import os
+    import subprocess
+
+    root, python = os.environ.get("EASE_GARMENTCODE"), os.environ.get("EASE_GARMENTCODE_PYTHON")
+    if not (root and python):
+        pytest.skip("GarmentCode not configured (EASE_GARMENTCODE, EASE_GARMENTCODE_PYTHON)")
+    _, spec, _ = teaser
+    path = tmp_path / "specification.json"
+    path.write_text(json.dumps(spec))
+    env = dict(os.environ, MPLBACKEND="Agg")
+    r = subprocess.run([python, "-c", BOXMESH, root, str(path)], capture_output=True, text=True, env=env, timeout=600)
+    line = next((ln for ln in r.stdout.splitlines() if ln.startswith("RESULT ")), None)
+    assert r.returncode == 0 and line, r.stdout[-2000:] + r.stderr[-2000:]
+    got = json.loads(line[len("RESULT ") :])
+    assert got["panels"] == len(spec["pattern"]["panels"]) and got["stitches"] == len(spec["pattern"]["stitches"])
+    assert got["vertices"] > 1000
