@@ -63,9 +63,11 @@ def drape(
     # the body is checked before the pattern is welded (the solver checks it again at its own door)
     body_v, body_f = check_body(body_vertices, body_faces)
     report(progress, 0.0, "drape: welding the pattern")
-    # the drape's own mesh (refined where the cloth hangs free), gathered seams stitched as gathers
     pattern = open_pattern(pattern, stitch=True)  # pleats: their cloth inserted, pre-folded and stitched
-    cloth = build_cloth(pattern, refine_edge=opts.refine_edge, gathers=True)
+    # the drape's own mesh (refined where the cloth hangs free), on which gathered seams are sewn as
+    # gathers (their long side refined on its own); on the pattern's mesh they stay welded as paired
+    refine = opts.refine_edge
+    cloth = build_cloth(pattern, refine_edge=refine, gathers=refine is not None)
     t_cloth = time.perf_counter()
     solver = DrapeSolver(cloth, body_v, body_f, mat, opts)
     state = solver.state()
