@@ -127,3 +127,15 @@ def test_bending_weight_stores_the_continuum_energy(edge):
         energy = 0.5 * np.sum(cloth.bend_weight * dihedral_angles(x, cloth.bends) ** 2)
         continuum = 0.5 * cloth.rest_area.sum() / radius**2
         assert energy / continuum == pytest.approx(1.0, abs=0.15)
+
+
+def test_tethers_count_a_link_met_twice_once_at_its_shorter_length():
+    # a fan of three triangles round vertex 0: the across-edge shortcut of edge 0-1 joins 2 and 3,
+    # which are also an edge; the two links must not add up (a sparse matrix sums duplicates)
+    uv = np.array([[0.0, 0.0], [1.0, 0.0], [0.5, 0.8], [0.5, -0.8]])
+    faces = np.array([[0, 1, 2], [0, 2, 3], [0, 3, 1]])
+    inv, _, _ = rest_matrices(uv, faces, [0.0, 1.0])
+    bends, bend_faces = interior_edges(faces)
+    assert any(set(b[:2]) == {2, 3} for b in bends.tolist())
+    anchor, length = tethers(faces, inv, np.array([False, False, False, True]), bends, bend_faces)
+    assert anchor[2] == 3 and length[2] == pytest.approx(1.6)
