@@ -107,6 +107,7 @@ class _LoadDesign(EaseOperator):
         path, shown = self.source(context)
         model_name, before = _body_now(context)
         said = []
+        label = self.bl_label  # (the operator is gone when a threaded load lands)
 
         def place(loaded):
             body = _place_design(bpy.context, loaded)
@@ -115,7 +116,7 @@ class _LoadDesign(EaseOperator):
                 bpy.context.scene.ease.job_status = said[-1]
                 state.changed(bpy.context.scene)
                 if bpy.ops.ed.undo_push.poll():
-                    bpy.ops.ed.undo_push(message=f"EASE: {self.bl_label}")
+                    bpy.ops.ed.undo_push(message=f"EASE: {label}")
 
         threaded = not jobs.SYNCHRONOUS
         jobs.start(

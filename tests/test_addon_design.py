@@ -196,12 +196,14 @@ def test_loading_runs_off_the_main_thread(bpy_session, blender, anny, tmp_path):
     want = bpy.context.scene.ease.design_json
     blender.reset(body=True)
     s = bpy.context.scene.ease
+    blender.mod("state").BUGS.clear()
     jobs.SYNCHRONOUS = False
     try:
         assert bpy.ops.ease.load_template(template=DESIGN) == {"FINISHED"}
         assert s.design_json == "" and s.job_status.startswith("updating: loading")
         assert not blender.objects("seamlines")
         jobs.wait()
+        assert not blender.mod("state").BUGS
         assert s.design_json == want and s.job_status.startswith(f"loaded {DESIGN}")
         assert blender.objects("seamlines") and convert_keypoints(blender)
         bad = tmp_path / "asym.json"
