@@ -6,7 +6,7 @@ from drape_synth import revolution_body, tube_skirt
 
 from core.drape import drape
 from core.drape.mesh import build_cloth
-from core.drape.output import report_dict
+from core.drape.output import obj_text, report_dict
 from core.drape.refine import edge_lengths, refine_pattern
 from core.errors import DrapeError
 from core.metrics.drape import drape_metrics, summary
@@ -111,6 +111,8 @@ def test_refined_drape_reports_its_mesh_and_folds(skirt):
     report = report_dict(r, summary(fit), skirt)
     assert report["triangles"] == len(r.faces) and report["pattern_triangles"] == len(r.pattern_faces)
     assert report["refinement"]["edge_mm_after"]["max"] <= 40.0 and report["folds"]["edges"] > 0
+    obj = obj_text(r)
+    assert f"# vertices 1..{n0}: the pattern's" in obj and obj.count("\nv ") == len(r.positions)
 
 
 @pytest.mark.parametrize("edge", [0.0, -0.01, float("nan"), 1.0])

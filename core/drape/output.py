@@ -23,6 +23,9 @@ def obj_text(result) -> str:
     """Wavefront OBJ: vertex k is global garment vertex id k (1-based in the file); one group per garment."""
     out = io.StringIO()
     out.write("# EASE drape: vertex k = global garment vertex id k-1\n")
+    n0 = int(getattr(result, "pattern_vertices", 0) or 0)
+    if 0 < n0 < len(result.positions):
+        out.write(f"# vertices 1..{n0}: the pattern's; after them the drape mesh's own (refinement, gathers)\n")
     # the frame of every 3D file of the project (body OBJs, ease export garment.obj by default)
     out.write(f"# frame: {FRAME}, as draped\n")
     np.savetxt(out, result.positions, fmt="v %.6f %.6f %.6f")
