@@ -271,8 +271,10 @@ class MotionJob(WorkerJob):
         m = self.motion
         if m["source"] == "POSES":
             frames = pose_frames(self.model, self.shape, m["poses"], m["between"])
-        else:  # the pattern's own pose, then the rig's frames
-            frames = posed_frames(self.model, self.shape, [m["own"]] + m["poses"], [np.zeros(3)] + list(m["moves"]))
+        else:  # the pattern's own pose, then the rig's frames (bones the model lacks, e.g. IK targets, left out)
+            joints = set(self.model.joint_names)
+            poses = [{k: v for k, v in pose.items() if k in joints} for pose in m["poses"]]
+            frames = posed_frames(self.model, self.shape, [m["own"]] + poses, [np.zeros(3)] + list(m["moves"]))
         pattern, adapted = self.pattern, None
         if self.adapt_to:
             adapted = wf.adapt(self.prep, self.adapt_to, start=self.pattern, progress=sub(progress, 0.0, 0.1))
