@@ -266,12 +266,13 @@ def test_export_draws_folds_placements_and_notches(pleated, tmp_path):
 
 def test_the_drape_starts_folded_with_creases_held(pleated):
     from core.drape.mesh import build_cloth, dihedral_angles
-    from core.drape.pleats import CREASE_MAX, fold_edges
+    from core.drape.pleats import CREASE_MAX, fold_edges, fold_rest
     from core.pattern.pleats import open_pattern
 
     pattern, _ = pleated
     opened = open_pattern(pattern, stitch=True)
     cloth = build_cloth(opened)
+    fold_rest(cloth, opened)  # as core.drape.simulate.drape does
     on = fold_edges(cloth, opened)
     # every pressed fold line's edges are creases at rest on their start angle
     n_fold_edges = sum(

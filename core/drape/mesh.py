@@ -19,7 +19,6 @@ import numpy as np
 from ..errors import DrapeError
 from ..geom.strain import weft_of
 from .gathers import sew_gathers, unweld_gathers
-from .pleats import fold_rest
 
 
 @dataclass
@@ -281,7 +280,6 @@ def build_cloth(pattern, refine_edge: Optional[float] = None, gathers: bool = Fa
     panels = list(pattern.panels)
     n_global = max((int(np.max(p.vertex_ids)) + 1 for p in panels if len(p.vertex_ids)), default=0)
     cloth = _weld(pattern, panels, n_global)
-    fold_rest(cloth, pattern)  # a pressed pleat's fold lines keep their crease (core.drape.pleats)
     cloth.n_pattern, cloth.pattern_faces, cloth.refinement, cloth.gathers = n_pattern, pattern_faces, refinement, sewn
     return cloth
 

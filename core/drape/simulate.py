@@ -20,6 +20,7 @@ from ..progress import Progress, report
 from .materials import Material, get_material
 from .mesh import build_cloth
 from .options import DrapeOptions
+from .pleats import fold_rest
 from .result import DrapeResult, collect
 from .schedule import run
 from .xpbd import DrapeSolver, check_body
@@ -68,6 +69,7 @@ def drape(
     # gathers (their long side refined on its own); on the pattern's mesh they stay welded as paired
     refine = opts.refine_edge
     cloth = build_cloth(pattern, refine_edge=refine, gathers=refine is not None)
+    fold_rest(cloth, pattern)  # a pressed pleat's fold lines keep their crease
     t_cloth = time.perf_counter()
     solver = DrapeSolver(cloth, body_v, body_f, mat, opts)
     state = solver.state()
