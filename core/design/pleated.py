@@ -36,18 +36,24 @@ def _pleat(name, kind, start, direction="left", pressed=True):
     }
 
 
+def _pleated_skirt(name, description):
+    """The skirt renamed, with the ``pleat_depth`` parameter; its front and back panel dicts."""
+    d = skirt()
+    d["name"], d["description"] = name, description
+    d["parameters"]["pleat_depth"] = _depth()
+    front, back = d["garments"][0]["panels"]
+    return d, ((front, "waist_front"), (back, "waist_back"))
+
+
 def skirt_knife_pleats():
     """Template ``skirt_knife_pleats``: the skirt with three knife pleats either side of the front and
     of the back (12 in all), pressed towards the sides, 20 mm deep."""
-    d = skirt()
-    d["name"] = "skirt_knife_pleats"
-    d["description"] = (
+    d, panels = _pleated_skirt(
+        "skirt_knife_pleats",
         "The two-panel skirt with knife pleats: three either side of the front and of the back, pressed "
-        "towards the sides, waist to hem (depth $pleat_depth, 20 mm); ease 1.3 as worn."
+        "towards the sides, waist to hem (depth $pleat_depth, 20 mm); ease 1.3 as worn.",
     )
-    d["parameters"]["pleat_depth"] = _depth()
-    front, back = d["garments"][0]["panels"]
-    for panel, centre in ((front, "waist_front"), (back, "waist_back")):
+    for panel, centre in panels:
         pleats = []
         for k, t in enumerate((0.2, 0.45, 0.7), start=1):
             start = f"waist_{panel['name']}_pleat_{k}_left"
@@ -60,15 +66,12 @@ def skirt_knife_pleats():
 def skirt_box_pleats():
     """Template ``skirt_box_pleats``: the skirt with a box pleat at the centre front and the centre back
     and one more either side of each (6 in all), 20 mm deep."""
-    d = skirt()
-    d["name"] = "skirt_box_pleats"
-    d["description"] = (
+    d, panels = _pleated_skirt(
+        "skirt_box_pleats",
         "The two-panel skirt with box pleats: at the centre front and back and one either side of each, "
-        "waist to hem (depth $pleat_depth, 20 mm; each takes in 4 x depth); ease 1.3 as worn."
+        "waist to hem (depth $pleat_depth, 20 mm; each takes in 4 x depth); ease 1.3 as worn.",
     )
-    d["parameters"]["pleat_depth"] = _depth()
-    front, back = d["garments"][0]["panels"]
-    for panel, centre in ((front, "waist_front"), (back, "waist_back")):
+    for panel, centre in panels:
         start = f"waist_{panel['name']}_box_left"
         d["keypoints"].update(_waist_point(start, centre, 0.55))
         panel["pleats"] = [

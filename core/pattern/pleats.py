@@ -50,17 +50,6 @@ LAYER_GAP = 0.003
 LIFT_FALLOFF = 0.015
 #: share of the line's length at each end left out of the room check (the hem may slant there)
 END_MARGIN = 0.1
-_AXES = {
-    "x": (1, 0, 0),
-    "+x": (1, 0, 0),
-    "-x": (-1, 0, 0),
-    "y": (0, 1, 0),
-    "+y": (0, 1, 0),
-    "-y": (0, -1, 0),
-    "z": (0, 0, 1),
-    "+z": (0, 0, 1),
-    "-z": (0, 0, -1),
-}
 #: the wearer's left on the body (Anny: +x)
 LEFT = np.array([1.0, 0.0, 0.0])
 
@@ -74,7 +63,7 @@ def pleat_sites(prep) -> List[dict]:
     from ..design.checks import parameter_value
     from ..design.geometry import SurfaceLocator
     from ..design.pleats import KINDS, design_pleats
-    from ..design.resolve import Resolver
+    from ..design.resolve import AXIS_VECTORS, Resolver
 
     design, cut = prep.design, prep.cut
     found = design_pleats(design)
@@ -113,7 +102,7 @@ def pleat_sites(prep) -> List[dict]:
             _, tri, bary = SurfaceLocator(xyz, faces).closest(aim[None])
             site["towards"] = [int(tri[0])] + [float(b) for b in bary[0]]
         else:
-            site["along"] = list(_AXES[pleat.along])
+            site["along"] = list(AXIS_VECTORS[pleat.along])
         out.append(site)
     return out
 
