@@ -69,6 +69,16 @@ def drape_cloth(cloth, body, frames: int):
     return collect(cloth, x, state.v.numpy(), settling, {}, mat, solver.options, "cpu", 0.0), x
 
 
+def signed_area(uv, faces) -> float:
+    a, b = uv[faces[:, 1]] - uv[faces[:, 0]], uv[faces[:, 2]] - uv[faces[:, 0]]
+    return float(np.sum(0.5 * (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])))
+
+
+def _uv_faces(pattern, name):
+    p = pattern.panel(name)
+    return p.uv, p.faces
+
+
 def side_arcs(pattern, seam):
     """Rest arc lengths (m) along the seam's sides a and b."""
     ua, ub = pattern.seam_polylines(seam)
@@ -121,6 +131,8 @@ def test_stitches_at_matching_arc_fractions(pattern, refine):
             assert r["short_vertices"] > len(s0.verts_a) and r["long_vertices"] > 1.8 * r["short_vertices"]
             assert r["free_long_vertices"] == r["long_vertices"] - r["stitches"]
         assert len(skirt.uv) >= len(cloth_pattern.panel(s.panel_b).uv)
+        assert len(skirt.target_weft) == len(skirt.faces)  # per-triangle records follow the split triangles
+        assert signed_area(skirt.uv, skirt.faces) == pytest.approx(signed_area(*_uv_faces(cloth_pattern, s.panel_b)))
 
 
 def test_gathered_cloth_keeps_the_long_side_rest_length(pattern):

@@ -83,8 +83,9 @@ def unweld_gathers(pattern):
     return replace(pattern, panels=out_panels, pins=pins)
 
 
-def _fan(faces: np.ndarray, a: int, b: int, inner: list) -> np.ndarray:
-    """``faces`` with the triangle on edge (a, b) fanned through the points ``inner`` (in order from a to b)."""
+def _fan(faces: np.ndarray, parent: np.ndarray, a: int, b: int, inner: list) -> tuple:
+    """``faces`` with the triangle on edge (a, b) fanned through the points ``inner`` (in order from a to b),
+    and ``parent`` (the original face of each face) carried along."""
     f = np.asarray(faces)
     for k in range(3):
         p, q = f[:, k], f[:, (k + 1) % 3]
@@ -94,7 +95,8 @@ def _fan(faces: np.ndarray, a: int, b: int, inner: list) -> np.ndarray:
             r = int(f[t, (k + 2) % 3])
             seq = [a, *inner, b] if f[t, k] == a else [b, *inner[::-1], a]
             new = np.array([[seq[i], seq[i + 1], r] for i in range(len(seq) - 1)], dtype=np.int64)
-            return np.concatenate([f[:t], new, f[t + 1 :]])
+            kids = np.full(len(new), parent[t])
+            return np.concatenate([f[:t], new, f[t + 1 :]]), np.concatenate([parent[:t], kids, parent[t + 1 :]])
     raise ValueError(f"no triangle on edge ({a}, {b})")
 
 
@@ -131,8 +133,14 @@ def _carry(panel, verts: np.ndarray, where: np.ndarray, next_id: int) -> tuple:
     if not new_uv:
         return panel, np.asarray(path, np.int64), next_id
     faces = np.asarray(panel.faces, np.int64)
+    parent = np.arange(len(faces))
     for j, pts in sorted(inner.items()):
-        faces = _fan(faces, int(verts[j]), int(verts[j + 1]), pts)
+        faces, parent = _fan(faces, parent, int(verts[j]), int(verts[j + 1]), pts)
+    per_face = {
+        name: np.asarray(getattr(panel, name))[parent]
+        for name in ("target_weft", "target_warp", "achieved_weft", "achieved_warp")
+        if getattr(panel, name) is not None and len(np.asarray(getattr(panel, name))) == len(panel.faces)
+    }
     split = {(int(verts[j]), int(verts[j + 1])): pts for j, pts in inner.items()}
     fresh = np.arange(next_id, next_id + len(new_uv), dtype=np.int64)
     panel = replace(
@@ -143,6 +151,7 @@ def _carry(panel, verts: np.ndarray, where: np.ndarray, next_id: int) -> tuple:
         faces=faces,
         boundary=[insert_points(b, split, closed=True) for b in panel.boundary],
         hems=[insert_points(h, split, closed=False) for h in panel.hems],
+        **per_face,
     )
     return panel, np.asarray(path, np.int64), next_id + len(new_uv)
 
