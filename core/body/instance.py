@@ -46,10 +46,11 @@ def instance_pose(pose: Pose):
     One spelling per pose, so every caller gets the same instance: the
     reference preset ``"A"`` and ``None`` are both the reference pose (None);
     another preset name stays a name; a JSON pose ``{joint: [rx, ry, rz]}``
-    (radians, see :mod:`core.body.poses`) becomes arrays.
+    (radians, see :mod:`core.body.poses`) becomes arrays; the preset a JSON pose
+    starts from (``"preset": "P1"``) stays a name.
     """
     if isinstance(pose, Mapping):
-        return {k: np.asarray(v, dtype=float) for k, v in pose.items()}
+        return {k: v if k == "preset" else np.asarray(v, dtype=float) for k, v in pose.items()}
     return None if pose == REFERENCE_POSE else pose
 
 
