@@ -224,11 +224,11 @@ def pleated(anny):
     plain = copy.deepcopy(d)
     for panel in plain["garments"][0]["panels"]:
         del panel["pleats"]
-    return workflows.reference(prep).pattern, workflows.reference(workflows.prepare(plain, body=anny)).pattern
+    return workflows.reference(prep).pattern, workflows.reference(workflows.prepare(plain, body=anny)).pattern, prep
 
 
 def test_the_pattern_is_solved_closed_and_keeps_every_depth(pleated):
-    pattern, plain = pleated
+    pattern, plain, _ = pleated
     sites = pattern.report["pleats"]
     assert len(sites) == 4 and {s["panel"] for s in sites} == {"skirt.front", "skirt.back"}
     for s in sites:
@@ -243,7 +243,7 @@ def test_the_pattern_is_solved_closed_and_keeps_every_depth(pleated):
 def test_export_draws_folds_placements_and_notches(pleated, tmp_path):
     from core.export import export_pattern
 
-    pattern, plain = pleated
+    pattern, plain, _ = pleated
     export_pattern(pattern, tmp_path / "p", formats=("svg", "dxf", "pdf"))
     export_pattern(plain, tmp_path / "q", formats=("svg",))
     svg = (tmp_path / "p" / "pattern.svg").read_text()
@@ -269,7 +269,7 @@ def test_the_drape_starts_folded_with_creases_held(pleated):
     from core.drape.pleats import CREASE_MAX, fold_edges, fold_rest
     from core.pattern.pleats import open_pattern
 
-    pattern, _ = pleated
+    pattern, _, prep = pleated
     opened = open_pattern(pattern, stitch=True)
     cloth = build_cloth(opened)
     fold_rest(cloth, opened)  # as core.drape.simulate.drape does
@@ -288,3 +288,18 @@ def test_the_drape_starts_folded_with_creases_held(pleated):
     n_ids = len({int(i) for p in opened.panels for i in p.vertex_ids})
     welded = n_ids - cloth.n_particles
     assert welded >= 4
+
+
+def test_every_size_opens_to_the_same_outline(pleated):
+    """A transfer keeps each pleat's hem points (the cut's edges): every size's opened piece has the
+    same outline vertices, so a graded nest can stack them, and the depth stays exact."""
+    from core import workflows
+    from core.export.pieces import build_pieces
+
+    pattern, _, prep = pleated
+    large = workflows.transfer(prep, "L", start=pattern).pattern
+    assert max(s["depth_error_mm"] for s in large.report["pleats"]) <= 0.1
+    assert [s["ends"] for s in large.report["pleats"]] == [s["ends"] for s in pattern.report["pleats"]]
+    for a, b in zip(build_pieces(pattern), build_pieces(large)):
+        assert [x.tolist() for x in a.sew_ids] == [x.tolist() for x in b.sew_ids]
+        assert len(a.pleats) == len(b.pleats) == 2

@@ -300,11 +300,14 @@ def piece_strips(piece, sites: List[dict], darts=()) -> List[Strip]:
             lines = [(a + depth * n, -1), (a - depth * n, +1)]  # two knife folds turned under towards the line
         else:
             lines = [(a, s_dir)]
-        for p0, side in lines:
-            ends = _chord(uv, loops, p0, d)
+        fixed = site.get("ends") if len(site.get("ends") or ()) == len(lines) else None
+        found = []
+        for k, (p0, side) in enumerate(lines):
+            ends = _fixed_ends(uv, fixed[k]) if fixed else _chord(uv, loops, p0, d)
             if ends is None:
                 raise DesignError(f"{path}.from", f"pleat {name!r}: its line does not cross {site['panel']!r}")
             (pa, edge_a), (pb, edge_b) = ends
+            found.append([_edge_point(uv, pa, edge_a), _edge_point(uv, pb, edge_b)])
             for edge, field_ in ((edge_a, "from"), (edge_b, "towards" if "towards" in site else "along")):
                 if edge not in hem_edges:
                     raise DesignError(
@@ -342,7 +345,20 @@ def piece_strips(piece, sites: List[dict], darts=()) -> List[Strip]:
                         raise DesignError(f"{path}.from", f"pleat {name!r} lies on dart {s.name!r}")
                 bands.append((name, band))
             out.append(strip)
+        site["ends"] = fixed or found  # the same hem points on every size (graded files share their outlines)
     return out
+
+
+def _edge_point(uv, p, edge) -> list:
+    """``[u, w, fraction]`` of the point ``p`` on the edge ``{u, w}`` (u < w)."""
+    u, w = sorted(int(v) for v in edge)
+    e = uv[w] - uv[u]
+    return [u, w, float(np.clip((p - uv[u]) @ e / max(e @ e, 1e-300), 0.0, 1.0))]
+
+
+def _fixed_ends(uv, ends):
+    """The chord between two recorded hem points ``[[u, w, fraction], [u, w, fraction]]``."""
+    return tuple(((1 - f) * uv[u] + f * uv[w], frozenset((u, w))) for u, w, f in ends)
 
 
 def _overlap(p, q) -> bool:
@@ -441,8 +457,13 @@ def _split_along(uv, attrs, faces, a, b, tol):
     e, n = d / L, _left(d / L)
     s = (uv - a) @ n
     t = (uv - a) @ e / L
-    near = (np.abs(s) < tol) & (t > -1e-9) & (t < 1 + 1e-9)
     faces = np.asarray(faces, int)
+    # the outline keeps its vertices: the line always meets it at a new vertex (the same on every size)
+    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    key, count = np.unique(edges[:, 0] * len(uv) + edges[:, 1], return_counts=True)
+    outline = np.zeros(len(uv), bool)
+    outline[np.concatenate([key[count == 1] // len(uv), key[count == 1] % len(uv)])] = True
+    near = (np.abs(s) < tol) & (t > -1e-9) & (t < 1 + 1e-9) & ~outline
     area0 = _areas(uv, faces)
     for _ in range(3):  # a triangle the snap would flatten or turn over keeps its vertices where they were
         moved = uv - np.where(near, s, 0.0)[:, None] * n
@@ -559,6 +580,7 @@ def open_piece(piece, strips: List[Strip], next_id: int, inside: np.ndarray):
     stitches = []
     lifts = []  # (vertex ids, lift) of the cloth above folded layers, applied at the end (max)
     strip_lift = {}  # strip vertex -> lift
+    canon = []  # per strip the new vertices on the outline, in a fixed order
     for n_strip, strip in enumerate(strips):
         # the chord in the current (partly opened) piece: the closed chord moved with its side
         flat = faces[parent >= 0]  # the strips' faces lie folded in the closed frame: not those
@@ -642,11 +664,27 @@ def open_piece(piece, strips: List[Strip], next_id: int, inside: np.ndarray):
         arc = np.r_[0, np.cumsum(np.linalg.norm(np.diff(uv[grid[:, 0]], axis=0), axis=1))]
         held = max(int(np.searchsorted(arc, strip.stitched + 1e-9, side="right")), 1)
         stitches.append((strip.pleat, [int(v) for v in grid[:held, j0]], [int(v) for v in grid[:held, j1]]))
+        canon.append([grid[0, -1], grid[-1, -1], grid[0, 0], grid[-1, 0], *grid[0, 1:-1], *grid[-1, 1:-1]])
     lift = np.zeros(len(uv))
     for verts, w in lifts:
         lift[verts] = np.maximum(lift[verts], w)
     for v, w in strip_lift.items():
         lift[v] = w
+    # new vertices numbered outline first, strip by strip: the outline's ids are the same on every size
+    order = list(range(len(closed_uv)))
+    seen = set(order)
+    for v in [int(x) for c in canon for x in c] + list(range(len(closed_uv), len(uv))):
+        if v not in seen:
+            seen.add(v)
+            order.append(v)
+    order = np.asarray(order)
+    index = np.empty(len(order), int)
+    index[order] = np.arange(len(order))
+    uv, xyz, nrm, vids, lift = uv[order], xyz[order], nrm[order], vids[order], lift[order]
+    faces = index[faces]
+    hems = [[int(index[v]) for v in h] for h in hems]
+    lines = [OpenedLine(x.pleat, x.kind, [int(index[v]) for v in x.ids], x.strip) for x in lines]
+    stitches = [(n, [int(index[v]) for v in a], [int(index[v]) for v in b]) for n, a, b in stitches]
     new = vids < 0
     vids[new] = np.arange(next_id, next_id + int(new.sum()))
     nrm = nrm / np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300)
@@ -654,7 +692,7 @@ def open_piece(piece, strips: List[Strip], next_id: int, inside: np.ndarray):
     opened.uv, opened.faces, opened.vertex_ids = uv, faces, vids
     opened.xyz = xyz + lift[:, None] * nrm
     opened.hems = [np.asarray(h, int) for h in hems]
-    opened.boundary = [np.asarray(x, int) for x in boundary_loops(faces)]
+    opened.boundary = [_rotated(np.asarray(x, int), piece.boundary) for x in boundary_loops(faces)]
     tw, tg = np.asarray(piece.target_weft, float), np.asarray(piece.target_warp, float)
     inherit = np.where(parent >= 0, parent, 0)
     opened.target_weft = np.where(parent >= 0, tw[inherit], 1.0)
@@ -662,6 +700,14 @@ def open_piece(piece, strips: List[Strip], next_id: int, inside: np.ndarray):
     opened._scales = None
     opened.achieved_weft, opened.achieved_warp, _ = opened.scales()
     return opened, lines, stitches, next_id + int(new.sum())
+
+
+def _rotated(loop, closed_loops):
+    """``loop`` turned to start where the closed piece's outline starts (else at its smallest id)."""
+    firsts = [int(b[0]) for b in closed_loops if len(b)]
+    hit = [k for k, v in enumerate(loop) if int(v) in firsts]
+    k = hit[0] if hit else int(np.argmin(loop))
+    return np.roll(loop, -k)
 
 
 def _moved_point(p, cl, uv, faces):
@@ -698,8 +744,27 @@ def attach_pleats(pattern, prep) -> None:
     sites = pleat_sites(prep)
     if not sites:
         return
-    pattern.report["pleats"] = [dict(s) for s in sites]
+    # the hem points each line ends at, found on the first pattern of this preparation, are kept for
+    # every other size (graded files need the same outline vertices)
+    known = getattr(prep, "_pleat_ends", None)
+    known = known if isinstance(known, dict) else {}
+    for s in sites:
+        if _site_key(s) in known:
+            s["ends"] = copy.deepcopy(known[_site_key(s)])
+    pattern.report["pleats"] = sites
     measure_pleats(pattern)
+    known.update({_site_key(s): copy.deepcopy(s["ends"]) for s in sites if "ends" in s})
+    try:
+        prep._pleat_ends = known
+    except AttributeError:  # a container without attributes: each size finds its own ends
+        pass
+
+
+def _site_key(site) -> str:
+    import json
+
+    fields = ("name", "panel", "kind", "depth", "direction", "start", "towards", "along")
+    return json.dumps({k: site.get(k) for k in fields}, sort_keys=True)
 
 
 def open_pattern(pattern, stitch: bool = False):
