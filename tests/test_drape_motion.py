@@ -120,7 +120,8 @@ def test_pose_from_bone_rotations_round_trips_the_model_poses(anny):
 
 
 def test_ease_drape_animation_on_the_default_body(tmp_path, anny):
-    """The real body through the CLI: a top draped in A, carried to P1 (arms forward) over 4 frames;
+    """The real body through the CLI: a top draped in A, carried to P1 (arms forward, a JSON pose from
+    a file) over 4 frames;
     no frame lets more than 0.5 % of the garment through the body, the top stays on the torso, the
     files say so and the point caches hold the frames."""
     from core import workflows
@@ -132,35 +133,44 @@ def test_ease_drape_animation_on_the_default_body(tmp_path, anny):
     prep = workflows.prepare(load_design(template_path("top_sleeveless")))
     save_pattern(workflows.reference(prep).pattern, tmp_path / "pattern")
     out = tmp_path / "motion"
-    assert (
-        main(
-            [
-                "drape",
-                str(tmp_path / "pattern"),
-                "--out",
-                str(out),
-                "--animation",
-                "A, P1",
-                "--between",
-                "2",
-                "--frames",
-                "40",
-                "--quiet",
-            ]
-        )
-        == 0
-    )
+    # the poses from a file: a preset, then P1 with the left elbow bent a little more (a JSON pose)
+    p1 = {"preset": "P1", "lowerarm01.L": [0.0, 0.0, 0.3]}
+    (tmp_path / "poses.json").write_text(json.dumps(["A", p1]))
+    argv = ["drape", str(tmp_path / "pattern"), "--out", str(out), "--between", "2", "--frames", "40", "--quiet"]
+    assert main(argv + ["--animation", str(tmp_path / "poses.json")]) == 0
     rep = json.loads((out / "motion_report.json").read_text())
-    assert rep["poses"] == ["A", "P1"] and rep["frames"] == 4 and len(rep["stretch_p95_pct"]) == 4
+    assert rep["poses"] == ["A", p1] and rep["frames"] == 4 and len(rep["stretch_p95_pct"]) == 4
     assert rep["worst_penetration_pct"] <= 0.5 and len(rep["frame_seconds"]) == 3
     z = np.load(out / "motion.npz")
     pos, used = z["positions"], z["used"]
     assert pos.shape[0] == 4 and np.all(np.isfinite(pos))
     assert abs(pos[-1][used][:, 2].mean() - pos[0][used][:, 2].mean()) < 0.03
-    assert np.abs(z["body_vertices"][-1] - body_instance(anny, "M", "P1")).max() < 1e-5
+    assert np.abs(z["body_vertices"][-1] - body_instance(anny, "M", p1)).max() < 1e-5
+    assert np.abs(z["body_vertices"][-1] - body_instance(anny, "M", "P1")).max() > 0.01  # the elbow too
     k, v = _pc2(out / "garment_motion.pc2")
     assert k.shape == (4, int(used.sum()), 3) and v == int(used.sum())
     assert np.array_equal(k, pos[:, used].astype(np.float32))
+    # a joint the body lacks is refused before the drape, naming the file's entry
+    (tmp_path / "bad.json").write_text(json.dumps(["A", {"elbow": [0.0, 0.0, 1.0]}]))
+    assert main(argv + ["--animation", str(tmp_path / "bad.json")]) == 2
+
+
+def test_ease_drape_animation_refuses_a_bad_pose_file(tmp_path, capsys):
+    from core.cli import main
+
+    path = tmp_path / "poses.json"
+    for text, words in (
+        (json.dumps(["A", "Q9"]), "poses.json[1]: 'Q9' is not a pose"),
+        (json.dumps(["A", {"preset": "Q9"}]), "poses.json[1]: 'Q9' is not a pose"),
+        (json.dumps(["A", 3]), "poses.json[1]: expected a preset name"),
+        (json.dumps({"A": 1}), "must hold a list of two poses or more"),
+        ("[", "is not JSON"),
+    ):
+        path.write_text(text)
+        argv = ["drape", str(tmp_path / "no_such_pattern"), "--out", str(tmp_path / "o"), "--animation", str(path)]
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert words in err and "--animation" in err and err.count("\n") == 1, err
 
 
 def test_ease_drape_animation_adapts_the_pattern_to_the_motion(tmp_path, capsys):
@@ -210,6 +220,7 @@ def _pc2(path):
         (["--animation", "A,P1", "--between", "-1"], "--between"),
         (["--adapt", "design.json"], "--adapt: adapts the pattern to the poses of --animation"),
         (["--animation", "A,P1", "--adapt", "no_such_design.json"], "--adapt: no design file"),
+        (["--animation", "no_such_poses.json"], "--animation: cannot read no_such_poses.json"),
     ],
 )
 def test_ease_drape_animation_refuses_bad_flags_first(tmp_path, capsys, argv, words):

@@ -57,7 +57,7 @@ def add_parser(sub) -> None:
         metavar="POSES",
         default=None,
         help="drape through a pose sequence instead, e.g. 'A,P1,P3' (the first the pattern's own "
-        "pose): writes motion.npz, motion_report.json (penetration, residual stretch, seconds "
+        "pose), or a .json file listing the poses (preset names or {joint: [rx, ry, rz]} rotations): writes motion.npz, motion_report.json (penetration, residual stretch, seconds "
         "per frame) and garment_motion / body_motion .obj + .pc2 point caches",
     )
     p.add_argument(
@@ -103,7 +103,15 @@ def _motion(args, options, pattern, prog) -> int:
     """``--animation``: the drape through the poses (:mod:`core.drape.animate`), its files."""
     from ..body import load_body
     from ..body.instance import spec_instance
-    from ..drape.animate import drape_motion, motion_report, pose_frames, write_motion
+    from ..drape.animate import (
+        check_poses,
+        distinct_poses,
+        drape_motion,
+        motion_report,
+        pose_frames,
+        pose_label,
+        write_motion,
+    )
     from ..errors import DrapeError
     from ..progress import report, sub
 
@@ -113,13 +121,14 @@ def _motion(args, options, pattern, prog) -> int:
     if poses[0] != own:
         raise DrapeError(
             f"--animation: the sequence starts at the pattern's own pose {own} "
-            f"(its garment was cut there), not {poses[0]}"
+            f"(its garment was cut there), not {pose_label(poses[0], 0)}"
         )
+    model = load_body(spec.get("model", "anny"))
+    check_poses(model, poses, f"--animation: {args.animation}")
     start = 0.0
     if args.adapt is not None:
-        pattern = _adapted(args.adapt, pattern, [p for p in dict.fromkeys(poses[1:]) if p != own], prog)
+        pattern = _adapted(args.adapt, pattern, distinct_poses(poses[1:], own), prog)
         start = 0.2
-    model = load_body(spec.get("model", "anny"))
     frames = pose_frames(model, spec.get("shape"), poses, args.between)
     _, faces = spec_instance(spec, model)
     result = drape_motion(
@@ -132,7 +141,8 @@ def _motion(args, options, pattern, prog) -> int:
         for g, v in garments.items():
             print(f"adapted to {pose}, {g}: residual stretch {v['before']:.1f} % before, {v['after']:.1f} % after")
     print(
-        f"motion {' -> '.join(poses)} ({rep['pattern']}): {rep['frames']} frames, "
+        f"motion {' -> '.join(pose_label(p, i) for i, p in enumerate(poses))} ({rep['pattern']}): "
+        f"{rep['frames']} frames, "
         f"worst penetration {rep['worst_penetration_pct']:.2f} %, "
         f"residual stretch p95 up to {max(rep['stretch_p95_pct']):.1f} %, "
         f"{sum(rep['frame_seconds']) / max(len(rep['frame_seconds']), 1):.2f} s a frame -> {args.out}"
@@ -166,10 +176,13 @@ def _cmd(args) -> int:
 
     options = _options(args)
     if args.animation is not None:  # refused before the pattern is read
-        from ..drape.animate import parse_poses
+        from ..drape.animate import load_poses, parse_poses
         from ..errors import DrapeError
 
-        args.poses = parse_poses(args.animation, "--animation")
+        if args.animation.strip().lower().endswith(".json"):
+            args.poses = load_poses(args.animation.strip(), "--animation")
+        else:
+            args.poses = parse_poses(args.animation, "--animation")
         if args.between < 0:
             raise DrapeError(f"--between: expected 0 or more in-between frames, got {args.between}")
     if args.adapt is not None:

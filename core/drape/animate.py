@@ -276,6 +276,70 @@ def parse_poses(text: str, label: str = "poses") -> list:
     return names
 
 
+def load_poses(path, label: str = "--animation") -> list:
+    """The poses of the JSON file ``path``: a list of two or more, each a preset name or a JSON pose
+    ``{joint: [rx, ry, rz]}`` (radians, :mod:`core.body.poses`; ``"preset"`` names the preset it
+    starts from), e.g. ``["A", {"preset": "P1", "lowerarm01.L": [0, 0, 0.5]}, "P3"]``.
+    DrapeError naming ``label``, the file and the entry at fault (joints: :func:`check_poses`)."""
+    import json
+    from pathlib import Path
+
+    from ..choices import POSE_PRESETS
+
+    try:
+        poses = json.loads(Path(path).read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise DrapeError(f"{label}: cannot read {path}: {exc.strerror or exc}") from None
+    except ValueError as exc:
+        raise DrapeError(f"{label}: {path} is not JSON: {exc}") from None
+    if not isinstance(poses, list) or len(poses) < 2:
+        raise DrapeError(f"{label}: {path} must hold a list of two poses or more (preset names or joint rotations)")
+    for i, pose in enumerate(poses):
+        preset = pose if isinstance(pose, str) else pose.get("preset") if isinstance(pose, dict) else None
+        if not isinstance(pose, (str, dict)):
+            raise DrapeError(
+                f"{label}: {path}[{i}]: expected a preset name or {{joint: [rx, ry, rz]}}, got {type(pose).__name__}"
+            )
+        if preset is not None and preset not in POSE_PRESETS:
+            raise DrapeError(f"{label}: {path}[{i}]: {preset!r} is not a pose ({', '.join(POSE_PRESETS)})")
+    return poses
+
+
+def check_poses(model, poses, where: str) -> None:
+    """Each JSON pose's joints and angles checked against ``model``; DrapeError naming ``where[i]``."""
+    from ..body.model import check_axis_angle
+    from ..errors import BodyError
+
+    names = list(getattr(model, "joint_names", []))
+    for i, pose in enumerate(poses):
+        if isinstance(pose, dict):
+            for joint, aa in pose.items():
+                if joint == "preset":
+                    continue
+                try:
+                    check_axis_angle(aa, joint, names, getattr(model, "name", ""))
+                except BodyError as exc:
+                    raise DrapeError(f"{where}[{i}]: {exc}") from None
+
+
+def pose_label(pose, i: int) -> str:
+    """A pose's name in a sequence: the preset's, else ``pose <i>`` (a JSON pose)."""
+    return pose if isinstance(pose, str) else f"pose {i}"
+
+
+def distinct_poses(poses, own) -> list:
+    """The different poses of ``poses`` other than ``own`` (the pattern's), in order: what to adapt to."""
+    import json
+
+    seen, out = {json.dumps(own, sort_keys=True)}, []
+    for p in poses:
+        key = json.dumps(p, sort_keys=True)
+        if key not in seen:
+            seen.add(key)
+            out.append(p)
+    return out
+
+
 def pc2_bytes(frames: np.ndarray) -> bytes:
     """A Point Cache 2 file (``.pc2``: Blender's Mesh Cache modifier, 3ds Max, Maya and others read it)
     of ``frames`` (K, V, 3): the header (start frame 1, one sample a frame), then K x V x 3
