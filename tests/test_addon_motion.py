@@ -223,6 +223,12 @@ def test_rig_action_drives_the_motion(scene, bpy_session):
     model = scene.mod("state").body_model("anny")
     assert [b.name for b in rig.data.bones] == list(model.joint_names)
     assert body.modifiers["EASE Rig"].object == rig and s.motion_source == "ACTION"
+    # Add Rig again (after a change of shape): the rig is replaced, nothing piles up
+    assert bpy.ops.ease.add_rig() == {"FINISHED"}
+    rig = bpy.data.objects["EASE Body Rig"]
+    assert len(scene.objects("rig")) == 1 and len(bpy.data.armatures) == 1
+    assert [m.type for m in body.modifiers].count("ARMATURE") == 1 and body.modifiers["EASE Rig"].object == rig
+    assert len(body.vertex_groups) == len(model.joint_names)
     try:
         sc.frame_start, sc.frame_end = 1, 7  # moves over frames 1-4, then holds
         root = rig.pose.bones["root"]
