@@ -117,6 +117,7 @@ def four_darts_configs():
 def four_darts_sizes(body=None, sizes=("XS", "S", "M", "L", "XL"), eases=(1.1, 1.3), configs=None) -> dict:
     """``{"<size> @ <ease>" | "P1": {config: figures, "missed": ..., "frontier": [...]}}`` (see the module)."""
     from core.body.instance import body_instance, instance_shape
+    from core.cut.darts import follow_cups
     from core.errors import EaseError
     from core.pattern.solve import adapt_pattern, build_pattern
 
@@ -143,7 +144,8 @@ def four_darts_sizes(body=None, sizes=("XS", "S", "M", "L", "XL"), eases=(1.1, 1
                     if size == "M":  # the design's own body: its reference
                         pat = refs[name]
                     else:
-                        tgt = solver.positions(X, "target body")
+                        # the darts' apexes follow the cup, as every transfer's (core.pattern.solve.transfer_pattern)
+                        tgt = follow_cups(cut, prep.reference, X)
                         off = solver.offsets(tgt)
                         K, cw, cg = solver.targets_reference(tgt, ease=ease, offsets=off)
                         res = solver.solve(

@@ -300,3 +300,103 @@ def test_cut_and_pattern_files_keep_the_darts(blouse_run, tmp_path):
     assert [s.kind for s in cut.seams] == [s.kind for s in prep.cut.seams]
     pattern = load_pattern(save_pattern(run.pattern, tmp_path / "p"))
     assert [s.apex for s in pattern.seams] == [s.apex for s in run.pattern.seams]
+
+
+# ----------------------------------------------------------------------------- darts that grade
+
+
+@pytest.fixture(scope="module")
+def four_darts(anny):
+    """The four-dart blouse on women:M (its fitted reference) and the body instances of other sizes."""
+    from core import workflows as wf
+    from core.body.instance import body_instance, instance_shape
+
+    prep = wf.prepare(TEMPLATES["blouse_four_darts"](), body=anny)
+    solver = wf.make_solver(prep)
+    ref = wf.reference(prep, solver=solver).pattern
+    pose = prep.cut.body.get("pose")
+    bodies = {s: body_instance(anny, instance_shape(anny, f"women:{s}"), pose) for s in ("XS", "S", "L")}
+    return prep, solver, ref, bodies
+
+
+def _cup(X, faces, landmark, near):
+    """Where the bust landmark's rule (most anterior vertex) lies within 5 cm of ``near``."""
+    ids = np.flatnonzero(np.linalg.norm(X - near, axis=1) < 0.05)
+    return X[ids[np.argmin(X[ids, 1])]]
+
+
+def test_a_darts_apex_follows_the_cup_onto_another_body(four_darts, anny):
+    """On women:L the bust point the cut's embedding carries from M lies 30 mm medial of L's most anterior
+    bust vertex (the landmark's own rule); the darts' sewn points move with the cloth around them to end
+    their apex offset from the latter. Both legs of every dart stay on one body point; XS (whose cup is the
+    carried point) keeps the embedding's positions; the other panels do not move."""
+    from core.cut.darts import follow_cups
+
+    prep, _, _, bodies = four_darts
+    cut, faces = prep.cut, np.asarray(anny.faces)
+    for size, X in bodies.items():
+        plain, moved = cut.positions(X), follow_cups(cut, prep.reference, X)
+        back = cut.panel("blouse.back").vertex_ids
+        assert np.array_equal(moved[back], plain[back])
+        for s in cut.seams:
+            if s.kind != "dart":
+                continue
+            ids = cut.panel(s.panel_a).vertex_ids
+            assert np.abs(moved[ids[s.verts_a]] - moved[ids[s.verts_b]]).max() < 1e-12, (size, s.name)
+        if size == "XS":
+            assert np.array_equal(moved, plain)
+            continue
+        for side in ("left", "right"):
+            carried = anny.landmarks[f"bust_{side}"].position(X, faces)
+            cup = _cup(X, faces, f"bust_{side}", carried)
+            tips = [
+                cut.panel(s.panel_a).vertex_ids[s.apex]
+                for s in cut.seams
+                if s.kind == "dart" and s.name.endswith(f"_dart_{side}")
+            ]
+            assert len(tips) == 4
+            now = np.linalg.norm(moved[tips] - cup, axis=1)
+            before = np.linalg.norm(plain[tips] - cup, axis=1)
+            # measured: the sewn points end 4.7-5.2 mm from the cup on S (the apex offset: 5 mm; 9-15 mm with
+            # the embedding's points, its cup 12 mm from the carried point), 7.7-8.8 mm on L (27-35 mm: the move
+            # is capped where the map would not stay one-to-one)
+            assert now.max() < 0.01 and now.max() < 0.6 * before.min(), (size, side, now, before)
+
+
+def test_four_darts_graded_to_s_holds_every_target(four_darts):
+    """Issue 30's targets on women:S (the reference on M transferred): with the apexes following the cup
+    the front piece's shear p95 is 5.7 deg and warp 2.86 % (7.5 deg and 3.01 % with the darts where
+    the embedding carried them)."""
+    from benchmarks.measure_darts import TARGETS, four_dart_figures, missed
+
+    prep, solver, ref, _ = four_darts
+    from core import workflows as wf
+
+    fig = four_dart_figures(wf.transfer(prep, "S", solver=solver, start=ref).pattern, prep.body)
+    assert not missed(fig), (fig, TARGETS)
+
+
+def test_four_darts_graded_to_l_follows_the_bigger_cup(four_darts):
+    """Measured (women:M -> L, fitted): bust region 3.22 -> 2.24 %, front shear p95 16.5 -> 9.9 deg, legs
+    0.41 -> 0.11 mm with the apexes following the cup; issue 30 asks the bust region within M's + 0.5 point
+    (1.80 %): see the next test."""
+    from benchmarks.measure_darts import four_dart_figures
+
+    prep, solver, ref, _ = four_darts
+    from core import workflows as wf
+
+    fig = four_dart_figures(wf.transfer(prep, "L", solver=solver, start=ref).pattern, prep.body)
+    assert fig["crossings"] == 0 and fig["flipped"] == 0 and fig["collapsed"] == 0
+    assert fig["bust region %"] < 2.5 and fig["front shear p95 deg"] < 11.0 and fig["legs mm"] < 0.2, fig
+
+
+@pytest.mark.xfail(strict=True, reason="issue 30: women:L reads bust region 2.24 % against M's 1.30 % + 0.5")
+def test_four_darts_graded_to_l_keeps_the_bust_region_of_m(four_darts):
+    from benchmarks.measure_darts import four_dart_figures
+
+    prep, solver, ref, _ = four_darts
+    from core import workflows as wf
+
+    m = four_dart_figures(ref, prep.body)["bust region %"]
+    fig = four_dart_figures(wf.transfer(prep, "L", solver=solver, start=ref).pattern, prep.body)
+    assert fig["bust region %"] <= m + 0.5

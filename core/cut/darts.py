@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import Dict, List
 
 import numpy as np
+from scipy.sparse import csr_matrix as sp_csr
 
 from ..errors import DesignError
 from .types import Seam, seam_kind
@@ -45,11 +46,177 @@ def dart_records(spec, seams: List[Seam], body_vertices: np.ndarray, body_faces:
                 f"dart {d.name!r} is off its panel {d.panel!r}: {where}; a dart runs from "
                 "a seam or hem of its panel to an apex inside it, crossing no other line",
             )
+        apex = np.asarray(d.apex.position(body_vertices, body_faces), float)
         out[line.name] = {
             "panel": d.panel,
             "intake": d.intake,
             "apex_offset": float(d.apex_offset),
-            "apex": np.asarray(d.apex.position(body_vertices, body_faces), float),
+            "apex": apex,
             "line": d.host,
+            **_cup_record(getattr(d, "towards", None), apex, body_vertices, body_faces),
         }
     return out
+
+
+# ---------------------------------------------------------------- the apex follows the cup
+
+#: The landmarks a dart's apex follows onto another body, with the direction their rule picks the
+#: vertex along (core.body.landmarks: a bust point is the torso's most anterior vertex on its side,
+#: a seat or shoulder blade the most posterior one; -y is the front).
+CUP_AXES = {
+    "bust_left": (0.0, -1.0, 0.0),
+    "bust_right": (0.0, -1.0, 0.0),
+    "seat_left": (0.0, 1.0, 0.0),
+    "seat_right": (0.0, 1.0, 0.0),
+    "shoulder_blade_left": (0.0, 1.0, 0.0),
+    "shoulder_blade_right": (0.0, 1.0, 0.0),
+}
+#: m, the body region (on the reference) whose surface carries the move: the body faces within this
+#: distance of the apex (measured on the four-dart blouse transferred to women:L: 0.07 / 0.10 / 0.14 /
+#: 0.18 / 0.24 m read bust region 4.19 / 2.61 / 2.23 / 2.36 / 12.7 %)
+CUP_REACH = 0.14
+#: m, the landmark's rule re-applied within this distance of the apex carried onto the other body
+CUP_SEARCH = 0.05
+
+
+def _cup_record(towards, apex, X, BF) -> dict:
+    """``{"cup_axis", "cup_disk"}`` of a dart towards a landmark of :data:`CUP_AXES`: the direction of
+    its rule and the body faces (k, 3) within :data:`CUP_REACH` of the apex, one disk around it; ``{}``
+    for any other dart (it stays where the cut's embedding carries it)."""
+    if towards not in CUP_AXES:
+        return {}
+    F = np.asarray(BF)
+    inside = np.flatnonzero(np.all(np.linalg.norm(X[F] - apex, axis=2) < CUP_REACH, axis=1))
+    if not len(inside):
+        return {}
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    # the faces around the apex joined through their vertices: the component of the apex's nearest face
+    vids, local = np.unique(F[inside], return_inverse=True)
+    local = local.reshape(-1, 3)
+    rows = np.repeat(np.arange(len(inside)), 3)
+    incidence = sp.csr_matrix((np.ones(rows.size), (rows, local.ravel())), shape=(len(inside), len(vids)))
+    _, label = connected_components(incidence @ incidence.T, directed=False)
+    near = int(np.argmin(np.linalg.norm(X[F[inside]].mean(axis=1) - apex, axis=1)))
+    disk = F[inside[label == label[near]]]
+    if _boundary_loop(disk) is None:  # not one disk (a hole, a pinch): no move
+        return {}
+    return {"cup_axis": np.asarray(CUP_AXES[towards], float), "cup_disk": disk}
+
+
+def _boundary_loop(F: np.ndarray):
+    """The boundary vertices of the triangle mesh ``F`` (k, 3) in order, when it is one loop; else None."""
+    e = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    _, inv, count = np.unique(np.sort(e, axis=1), axis=0, return_inverse=True, return_counts=True)
+    half = e[count[inv.ravel()] == 1]
+    nxt = dict(zip(half[:, 0].tolist(), half[:, 1].tolist()))
+    if not len(half) or len(nxt) != len(half):
+        return None
+    loop = [int(half[0, 0])]
+    while len(loop) <= len(half):
+        v = nxt[loop[-1]]
+        if v == loop[0]:
+            break
+        loop.append(v)
+    return np.array(loop) if len(loop) == len(half) else None
+
+
+def follow_cups(cut, ref_vertices: np.ndarray, target_vertices: np.ndarray) -> np.ndarray:
+    """The cut's positions (N, 3) on ``target_vertices`` with each dart's apex region moved to follow
+    the cup: a dart towards a landmark of :data:`CUP_AXES` ends where that landmark's rule puts it on the
+    target body (the most anterior vertex of the bust within :data:`CUP_SEARCH` of the carried apex),
+    as it ends at the landmark on the reference. The embedding carries the landmark's mesh vertex, which
+    on another body can lie off the cup (women:L: the carried bust point 30 mm medial of L's most
+    anterior point; women:M, XS: on it). The move is smooth and stays on the body: the apex's disk
+    (``cup_disk``) is mapped to the unit disk (harmonic, cotangent weights), the panel's vertices in it
+    are shifted there by the apex's move times a weight falling from 1 at the apex to 0 (C1) before the
+    panel's outer edges, and mapped back to the body. Both legs of a dart share their body points, so
+    they move alike. Other darts, and the cut's other panels, keep the embedding's positions."""
+    X0 = np.asarray(ref_vertices, float)
+    X1 = np.asarray(target_vertices, float)
+    pos = cut.positions(X1)
+    done = set()
+    for rec in (getattr(cut, "darts", None) or {}).values():
+        if "cup_disk" not in rec:
+            continue
+        key = (rec["panel"], tuple(np.round(np.asarray(rec["apex"], float), 9)))
+        if key in done:  # darts sharing an apex move together, once
+            continue
+        done.add(key)
+        moved = _cup_move(cut, rec, X0, X1)
+        if moved is not None:
+            ids, P = moved
+            pos[ids] = P
+    return pos
+
+
+def _cup_move(cut, rec: dict, X0: np.ndarray, X1: np.ndarray):
+    """``(global vertex ids, (k, 3) positions)`` of the panel's vertices :func:`follow_cups` moves for the
+    apex of ``rec``, or None when the cup is where the embedding carries the apex."""
+    import igl
+
+    from ..design.geometry import SurfaceLocator
+
+    F = np.asarray(rec["cup_disk"], dtype=np.int64)  # lists when the cut was read from its file
+    vids, local = np.unique(F, return_inverse=True)
+    local = local.reshape(-1, 3)
+    axis, apex = np.asarray(rec["cup_axis"], float), np.asarray(rec["apex"], float)
+    # the landmark's rule on each body, near the apex (on the target: near the vertex nearest it on the reference)
+    near0 = np.flatnonzero(np.linalg.norm(X0[vids] - apex, axis=1) < CUP_SEARCH)
+    if not len(near0):
+        return None
+    at = X1[vids[near0[np.argmin(np.linalg.norm(X0[vids[near0]] - apex, axis=1))]]]
+    near1 = np.flatnonzero(np.linalg.norm(X1[vids] - at, axis=1) < CUP_SEARCH)
+    cup0 = int(near0[np.argmax(X0[vids[near0]] @ axis)])
+    cup1 = int(near1[np.argmax(X1[vids[near1]] @ axis)])
+    if cup0 == cup1:
+        return None
+    loop = _boundary_loop(local)
+    arc = np.cumsum(np.r_[0.0, np.linalg.norm(np.diff(X1[vids[np.r_[loop, loop[0]]]], axis=0), axis=1)])
+    t = 2 * np.pi * arc[:-1] / arc[-1]
+    U = igl.harmonic(
+        np.ascontiguousarray(X1[vids]),
+        np.ascontiguousarray(local, dtype=np.int64),
+        np.ascontiguousarray(loop, dtype=np.int64),
+        np.ascontiguousarray(np.c_[np.cos(t), np.sin(t)]),
+        1,
+    )
+    c0, shift = U[cup0], U[cup1] - U[cup0]
+    panel = cut.panel(rec["panel"])
+    ids = np.asarray(panel.vertex_ids)
+    # the panel's vertices in the disk, at their images there (rows of the embedding inside the disk)
+    to_disk = np.full(X1.shape[0], -1)
+    to_disk[vids] = np.arange(len(vids))
+    E = cut.embedding[ids].tocsr()
+    row = np.repeat(np.arange(len(ids)), np.diff(E.indptr))
+    inside = (np.bincount(row, to_disk[E.indices] < 0, minlength=len(ids)) == 0) & (np.diff(E.indptr) > 0)
+    if not inside.any():
+        return None
+    D = E[inside]
+    img = np.asarray(sp_csr((D.data, to_disk[D.indices], D.indptr), shape=(D.shape[0], len(vids))) @ U)
+    # the weight falls to 0 before the panel's edges other than its darts' legs (they stay where they are)
+    legs = {int(v) for s in cut.seams if s.kind == "dart" and s.panel_a == panel.name for v in (*s.verts_a, *s.verts_b)}
+    edge = np.array([v for v in np.unique(np.concatenate(panel.boundary)) if int(v) not in legs], int)
+    pos_in = np.full(len(ids), -1)
+    pos_in[np.flatnonzero(inside)] = np.arange(int(inside.sum()))
+    edge_img = img[pos_in[edge[pos_in[edge] >= 0]]] if len(edge) else np.zeros((0, 2))
+    rho = 0.9 * min(
+        1.0 - float(np.linalg.norm(c0)), float(np.min(np.linalg.norm(edge_img - c0, axis=1))) if len(edge_img) else 1.0
+    )
+    if rho <= 0:
+        return None
+    # a shift under rho / 1.5 keeps the map one-to-one (|grad w| <= 1.5 / rho): at most 0.8 of that
+    size = float(np.linalg.norm(shift))
+    shift = shift * min(1.0, 0.8 * rho / (1.5 * size))
+    s = np.linalg.norm(img - c0, axis=1) / rho
+    w = np.where(s < 1.0, (1.0 - s) ** 2 * (1.0 + 2.0 * s), 0.0)
+    move = w > 0
+    if not move.any():
+        return None
+    flat = np.c_[U, np.zeros(len(U))]
+    _, tri, bary = SurfaceLocator(flat, local).closest(
+        np.c_[img[move] + w[move, None] * shift, np.zeros(int(move.sum()))]
+    )
+    P = np.einsum("ij,ijk->ik", bary, X1[vids[local[tri]]])
+    return ids[np.flatnonzero(inside)[move]], P

@@ -84,7 +84,7 @@ class DartSpec:
     panel : the full name of the panel it lies in; path : its JSON path (for errors);
     apex : the true apex on the body (SurfacePoint); the line ends ``apex_offset`` m short of it;
     intake : m at the mouth in the pattern, or None (``"auto"``); host : the full name of the line
-    the mouth lies on.
+    the mouth lies on; towards : the name the design gives the apex (a keypoint or landmark), or None.
     """
 
     name: str
@@ -94,6 +94,7 @@ class DartSpec:
     intake: Optional[float]
     apex_offset: float
     host: str
+    towards: Optional[str] = None
 
 
 #: what ``"darts": "auto"`` asks for: at most this many darts, at most this intake (m) each
@@ -250,7 +251,8 @@ def resolve_darts(resolver, design, lines: list, panels) -> list:
                 end = spread_tip(resolver, apex, end, placed.get(f"{g.name}.{panel.name}", []), f"{dp}.apex", d.name)
             done[full] = (mouth, end)
             placed.setdefault(f"{g.name}.{panel.name}", []).append(resolver.position(end))
-            spec = DartSpec(full, f"{g.name}.{panel.name}", dp, apex, d.intake, d.apex_offset, host.name)
+            towards = d.apex if isinstance(d.apex, str) else None
+            spec = DartSpec(full, f"{g.name}.{panel.name}", dp, apex, d.intake, d.apex_offset, host.name, towards)
             out.append(CutLine(full, [mouth, end], closed=False, role="seam", dart=spec))
     return out
 

@@ -87,9 +87,19 @@ def transfer_pattern(
     configuration's ``convergence.transfer_from`` ``"flattening"``, from the
     reference solve's own start so stretched (:meth:`PatternSolver.flattening_start`;
     ``start`` unused). ``body``: the target body's spec, recorded in the pattern.
+
+    Darts follow the body: the apex of a dart towards a bust point, seat or shoulder blade is moved,
+    with the cloth around it, to where that landmark's rule puts it on the target body
+    (:func:`core.cut.darts.follow_cups`); its intake is re-derived (``"auto"``) or held (a set one) by
+    the transfer's own solve (docs/darts.md).
     """
     solver = _solver(cut, ref_vertices, solver, config, progress)
     tgt = solver.positions(target_vertices, "target body")
+    if any("cup_disk" in r for r in (getattr(cut, "darts", None) or {}).values()):
+        from ..cut.darts import follow_cups
+
+        # a dart towards a bust point, seat or shoulder blade ends where that point is on the target body
+        tgt = follow_cups(cut, ref_vertices, target_vertices)
     offsets = solver.offsets(tgt)
     K, cw, cg = solver.targets_reference(tgt, offsets=offsets)
     # the reference pattern stretched by how much longer the target body is under each piece, or the
