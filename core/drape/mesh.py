@@ -452,12 +452,19 @@ def rest_edges(faces: np.ndarray, rest_inv: np.ndarray) -> tuple:
     e12 = np.linalg.norm(dm[:, :, 1] - dm[:, :, 0], axis=1)
     pairs = np.concatenate([faces[:, [0, 1]], faces[:, [0, 2]], faces[:, [1, 2]]])
     lens = np.concatenate([e01, e02, e12])
-    pairs = np.sort(pairs, axis=1)
-    edges, inverse = np.unique(pairs, axis=0, return_inverse=True)
-    inverse = inverse.reshape(-1)
+    edges, inverse = unique_pairs(np.sort(pairs, axis=1))
     total = np.bincount(inverse, weights=lens, minlength=len(edges))
     count = np.bincount(inverse, minlength=len(edges))
     return edges, total / count
+
+
+def unique_pairs(pairs: np.ndarray) -> tuple:
+    """``np.unique(pairs, axis=0, return_inverse=True)`` for (k, 2) non-negative int pairs, through one
+    int64 key per pair (the same lexicographic order, several times faster than the axis form)."""
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    n = int(pairs.max()) + 1 if len(pairs) else 1
+    keys, inverse = np.unique(pairs[:, 0] * n + pairs[:, 1], return_inverse=True)
+    return np.stack([keys // n, keys % n], axis=1), inverse.reshape(-1)
 
 
 def _rest_corners(faces: np.ndarray, rest_inv: np.ndarray) -> np.ndarray:

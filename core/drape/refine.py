@@ -39,6 +39,7 @@ import numpy as np
 
 from ..errors import DrapeError
 from .gathers import arc, insert_points, longer
+from .mesh import unique_pairs
 
 #: A triangle whose pattern area exceeds its skintight area by at least this fraction hangs free.
 FREE_EASE = 0.01
@@ -85,8 +86,7 @@ def edge_lengths(uv: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 def unique_edge_lengths(uv: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Rest lengths of the distinct edges of a (local-index) mesh."""
-    pairs = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
-    e = np.unique(pairs, axis=0)
+    e, _ = unique_pairs(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1))
     return np.linalg.norm(uv[e[:, 1]] - uv[e[:, 0]], axis=1)
 
 
@@ -191,8 +191,9 @@ def refine_pattern(pattern, edge: float, free_ease: float = FREE_EASE, max_level
         # new local vertices, one per split local edge (two panels sharing a seam edge get one each)
         hit = marked[eid]
         lk = np.stack([np.minimum(la, lb)[hit], np.maximum(la, lb)[hit]], 1)
-        lkeys, first, linv = np.unique(lk, axis=0, return_index=True, return_inverse=True)
-        linv = linv.reshape(-1)
+        lkeys, linv = unique_pairs(lk)
+        first = np.full(len(lkeys), len(linv), np.int64)
+        np.minimum.at(first, linv, np.arange(len(linv)))  # the first occurrence of each
         base = len(uv)
         mid = -np.ones(faces.shape, np.int64)
         mid[hit] = base + linv
