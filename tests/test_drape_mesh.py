@@ -139,3 +139,14 @@ def test_tethers_count_a_link_met_twice_once_at_its_shorter_length():
     assert any(set(b[:2]) == {2, 3} for b in bends.tolist())
     anchor, length = tethers(faces, inv, np.array([False, False, False, True]), bends, bend_faces)
     assert anchor[2] == 3 and length[2] == pytest.approx(1.6)
+
+
+def test_unique_pairs_is_numpys_unique_over_rows():
+    from core.drape.mesh import unique_pairs
+
+    pairs = np.random.default_rng(3).integers(0, 40, size=(500, 2))
+    edges, inverse = unique_pairs(pairs)
+    ref, ref_inv = np.unique(pairs, axis=0, return_inverse=True)
+    assert np.array_equal(edges, ref) and np.array_equal(inverse, ref_inv.reshape(-1))
+    assert np.array_equal(edges[inverse], pairs)
+    assert unique_pairs(np.zeros((0, 2), int))[0].shape == (0, 2)
