@@ -111,6 +111,10 @@ def test_refined_drape_reports_its_mesh_and_folds(skirt):
     report = report_dict(r, summary(fit), skirt)
     assert report["triangles"] == len(r.faces) and report["pattern_triangles"] == len(r.pattern_faces)
     assert report["refinement"]["edge_mm_after"]["max"] <= 40.0 and report["folds"]["edges"] > 0
+    # the pattern as draped: its panels' triangles are the draped ones, corner for corner
+    mesh = r.mesh_pattern
+    assert np.array_equal(np.concatenate([p.vertex_ids[p.faces] for p in mesh.panels]), r.faces)
+    assert sum(len(p.faces) for p in mesh.panels) == rep["triangles_after"]
     obj = obj_text(r)
     assert f"# vertices 1..{n0}: the pattern's" in obj and obj.count("\nv ") == len(r.positions)
 

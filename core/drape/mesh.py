@@ -59,6 +59,9 @@ class Cloth:
         made for the drape (a gathered long side's own vertices, refinement midpoints).
     pattern_faces : (T0, 3) int, the pattern's own triangles as its global ids (panel order).
     refinement : dict, :func:`core.drape.refine.refine_pattern`'s report; empty when not refined.
+    mesh_pattern : the pattern as draped (refined, gathers sewn; the pattern itself when neither): its
+        panels' triangles, as global ids in panel order, are ``faces_global``, so per-corner data of the
+        pattern (fabric UVs, seam distances) can be laid on the drape mesh from it.
     """
 
     n_global: int
@@ -88,6 +91,7 @@ class Cloth:
     n_pattern: int = 0
     pattern_faces: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), int))
     refinement: dict = field(default_factory=dict)
+    mesh_pattern: object = None
 
     @property
     def n_particles(self) -> int:
@@ -281,6 +285,7 @@ def build_cloth(pattern, refine_edge: Optional[float] = None, gathers: bool = Fa
     n_global = max((int(np.max(p.vertex_ids)) + 1 for p in panels if len(p.vertex_ids)), default=0)
     cloth = _weld(pattern, panels, n_global)
     cloth.n_pattern, cloth.pattern_faces, cloth.refinement, cloth.gathers = n_pattern, pattern_faces, refinement, sewn
+    cloth.mesh_pattern = pattern
     return cloth
 
 

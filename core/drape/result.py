@@ -24,6 +24,8 @@ class DrapeResult:
     faces : (T, 3) int, the draped (refined) triangles as global vertex ids (panel order).
     pattern_vertices : int, the pattern's own global ids (N when the mesh was not refined).
     pattern_faces : (T0, 3) int, the pattern's own triangles (what an export of the pattern checks).
+    mesh_pattern : the pattern as draped (:attr:`core.drape.mesh.Cloth.mesh_pattern`): its panels'
+        triangles are ``faces``, for laying the pattern's per-corner data (fabric UVs) on the drape mesh.
     refinement : dict, the drape mesh's refinement (:func:`core.drape.refine.refine_pattern`'s
         report: target edge, edge lengths and triangle counts before and after); empty if not refined.
     gathers : dict, seam name -> ``{"ratio", "long_vertices", "short_vertices", "stitch_points"}``,
@@ -77,6 +79,7 @@ class DrapeResult:
     pattern_vertices: int = 0
     pattern_faces: Optional[np.ndarray] = None
     refinement: dict = field(default_factory=dict)
+    mesh_pattern: object = None
     gathers: dict = field(default_factory=dict)
 
 
@@ -140,5 +143,6 @@ def collect(
         pattern_vertices=int(cloth.n_pattern or cloth.n_global),
         pattern_faces=(cloth.pattern_faces if len(cloth.pattern_faces) else cloth.faces_global).copy(),
         refinement=dict(cloth.refinement),
+        mesh_pattern=cloth.mesh_pattern,
         gathers=dict(cloth.gathers),
     )
