@@ -49,7 +49,8 @@ def add_parser(sub) -> None:
         default=REFINE_EDGE,
         metavar="M",
         help="the drape's own mesh: where the cloth hangs free, bisect the pattern's triangles until no "
-        f"edge is longer than M metres (default {REFINE_EDGE:g}; 0: drape the pattern's mesh as solved)",
+        f"edge is longer than M metres (default {REFINE_EDGE:g}; 0: drape the pattern's mesh as solved); "
+        "gathered seams are sewn as gathers on it. --animation drapes the pattern's mesh",
     )
     p.add_argument("--no-preview", action="store_true", help="skip preview.png")
     p.add_argument(
