@@ -169,8 +169,7 @@ def cut_on(design, model_name: str, shape: dict):
     own = instance_shape(model, design.body.get("shape"))
     same = model_name == design.body.get("model", "anny") and full_shape(model, own) == full_shape(model, shape)
     cut = cut_design(design, body=model, shape=None if same else (dict(shape) if shape else None))
-    state.CUTS.clear()  # one cut per session is plenty; keeps memory bounded
-    state.CUTS[key] = cut
+    state.keep_cut(key, cut)
     return cut
 
 
@@ -187,7 +186,7 @@ def design_digest(text: str) -> str:
 def cached_cut(text: str, model_name: str):
     """The cached cut of the design ``text`` (:func:`design_text`) on body model ``model_name``, on
     any shape (the cut's embedding holds for every shape and pose); None when there is none."""
-    for (d, m, _shape), cut in state.CUTS.items():
+    for (d, m, _shape), cut in list(state.CUTS.items()):  # (a snapshot: a worker may add one)
         if d == text and m == model_name:
             return cut
     return None

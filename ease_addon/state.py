@@ -17,7 +17,8 @@ class AddonError(EaseError):
 USER_ERRORS = (EaseError, Cancelled, KeyError, ValueError, OSError)
 
 _MODELS: dict = {}
-CUTS: dict = {}  # (design text, body model, shape json) -> GarmentCut (data.cut_on)
+CUTS: dict = {}  # (design text, body model, shape json) -> GarmentCut (data.cut_on), the newest last
+CUTS_KEPT = 3  # a design being replaced, the new one and Live's: a switch never cuts one twice
 PATTERNS: dict = {}  # (scene name, key) -> (pattern json text, Pattern)
 BUGS: list = []  # (operator, traceback) of every exception an operator caught that is no user error
 
@@ -31,6 +32,15 @@ def changed(scene) -> None:
     """Tell the :data:`ON_CHANGE` callbacks that ``scene`` may have changed."""
     for f in ON_CHANGE:
         f(scene)
+
+
+def keep_cut(key, cut) -> None:
+    """Keep ``cut`` under ``key`` in :data:`CUTS`, the oldest dropped beyond :data:`CUTS_KEPT`
+    (memory stays bounded). Safe beside a reader on another thread (one dict operation each)."""
+    CUTS.pop(key, None)
+    CUTS[key] = cut
+    while len(CUTS) > CUTS_KEPT:
+        CUTS.pop(next(iter(list(CUTS))), None)
 
 
 def clear() -> None:
