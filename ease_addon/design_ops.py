@@ -30,18 +30,22 @@ def load_design_into_scene(context, source) -> str:
 
 
 def _body_now(context) -> tuple:
-    """(body model name or None, its shape) of the scene body: what a design is loaded onto."""
+    """(body model name or None, its shape, its pose) of the scene body: what a design is loaded onto."""
     obj = data.body_object(context, required=False)
     if obj is None:
-        return None, {}
+        return None, {}, "A"
     spec = data.body_spec(obj)
-    return spec["model"], spec["shape"]
+    return spec["model"], spec["shape"], spec["pose"]
 
 
-def _load_design(source, model_name, before) -> tuple:
+def _load_design(source, model_name, before, pose) -> tuple:
     """The heavy half of a load, no Blender data touched (a worker may run it): the design read,
-    validated and cut (cached) on the body it asks for. ``(design, model name, its shape name or
-    dict, the body's full shape)``; raises (DesignError/CutError) on a bad design."""
+    validated and cut (cached) on the body it asks for, the body's vertices at that shape (in
+    ``pose``) and the design's keypoints on them. ``(design, model name, its shape name or dict,
+    the body's full shape, pose, vertices, keypoints)``; raises (DesignError/CutError) on a bad
+    design."""
+    import numpy as np
+
     from ..core.body.instance import instance_shape
     from ..core.design import load_design
 
@@ -53,16 +57,20 @@ def _load_design(source, model_name, before) -> tuple:
     full = dict(model.default_shape())
     full.update({k: float(v) for k, v in (shape or before).items()})
     data.cut_on(design, model_name, full)  # raises before any change
-    return design, model_name, named, full
+    verts = sync.body_vertices({"model": model_name, "shape": full, "pose": pose})
+    # the keypoints on the vertices as the mesh will hold them (float32), as set_design resolves them
+    mesh = np.asarray(verts, dtype=np.float32).astype(np.float64)
+    return design, model_name, named, full, pose, verts, data.resolved_keypoints(design, model, mesh)
 
 
 def _place_design(context, loaded) -> str:
     """The scene's half of a load (main thread, one pass): the body shaped, the design set."""
     from ..core.body.instance import instance_shape
 
-    design, model_name, named, full = loaded
+    design, model_name, named, full, pose, verts, kps = loaded
     obj = data.body_object(context, required=False)
-    if obj is not None and data.body_spec(obj)["model"] != model_name:
+    spec = data.body_spec(obj) if obj is not None else {"model": model_name, "pose": "A"}
+    if spec["model"] != model_name or spec["pose"] != pose:
         raise state.AddonError("the body changed while the design was loading: load it again")
     model = state.body_model(model_name)
     shape = instance_shape(model, named)
@@ -73,11 +81,11 @@ def _place_design(context, loaded) -> str:
         reshaped = False
     else:
         reshaped = data.full_shape(model, before) != full
-        sync.update_body(context, obj, shape=full)
+        sync.update_body(context, obj, shape=full, verts=verts)
         sync.fill_shape_props(context.scene, model, full)
     if shape:
         sync.show_size(context.scene, obj, named if isinstance(named, str) else None)
-    sync.set_design(context, design)
+    sync.set_design(context, design, keypoints=kps)
     sync.fill_design_props(context.scene, design)  # its gathering, tolerance, allowance and notches
     bpy.ops.ease.ease_from_design()
     if not reshaped:
@@ -105,7 +113,7 @@ class _LoadDesign(EaseOperator):
 
     def run(self, context):
         path, shown = self.source(context)
-        model_name, before = _body_now(context)
+        body_now = _body_now(context)
         said = []
         label = self.bl_label  # (the operator is gone when a threaded load lands)
 
@@ -122,7 +130,7 @@ class _LoadDesign(EaseOperator):
         jobs.start(
             "design",
             f"loading {shown}",
-            lambda progress: _load_design(path, model_name, before),
+            lambda progress: _load_design(path, *body_now),
             place,
             fail=lambda exc: setattr(bpy.context.scene.ease, "design_status", f"{shown}: {exc}"),
         )

@@ -80,16 +80,17 @@ def body_vertices(spec: dict) -> np.ndarray:
     return body_instance(state.body_model(spec["model"]), spec["shape"] or None, spec["pose"])
 
 
-def update_body(context, obj, shape=None, pose=None) -> None:
+def update_body(context, obj, shape=None, pose=None, verts=None) -> None:
     """Set the body's shape and/or pose: vertices move in place, attached
     objects (seamlines, keypoint markers) follow. Computes first, so a bad
-    shape/pose raises before the scene changes."""
+    shape/pose raises before the scene changes (``verts``: the new spec's
+    :func:`body_vertices` when the caller computed them, in a worker)."""
     spec = data.body_spec(obj)
     if shape is not None:
         spec["shape"] = {k: float(v) for k, v in shape.items()}
     if pose is not None:
         spec["pose"] = pose
-    verts = body_vertices(spec)
+    verts = body_vertices(spec) if verts is None else verts
     convert.set_vertices(obj.data, verts)
     convert.store_json(obj, "ease_shape", spec["shape"])
     obj["ease_pose"] = spec["pose"]
@@ -297,9 +298,11 @@ def fill_params(scene, design) -> None:
             item.value = p.value
 
 
-def set_design(context, design, recut: bool = True, fill_params_too: bool = True) -> None:
+def set_design(context, design, recut: bool = True, fill_params_too: bool = True, keypoints=None) -> None:
     """Make ``design`` the scene's design: cut it on the body (errors raise
-    before anything changes), store its JSON, redraw seamlines and keypoints."""
+    before anything changes), store its JSON, redraw seamlines and keypoints
+    (``keypoints``: :func:`.data.resolved_keypoints` on the body as it is, when
+    the caller resolved them, in a worker)."""
     from ..core.design import load_design
 
     design = load_design(design.to_json() if hasattr(design, "to_json") else design)
@@ -307,7 +310,7 @@ def set_design(context, design, recut: bool = True, fill_params_too: bool = True
     cut = data.cut_for(design, obj) if recut else None
     model = state.body_model(data.body_spec(obj)["model"])
     verts = convert.get_vertices(obj.data)
-    kps = data.resolved_keypoints(design, model, verts)
+    kps = data.resolved_keypoints(design, model, verts) if keypoints is None else keypoints
     # -- the scene changes from here on
     scene = context.scene
     scene.ease.design_json = data.design_text(design)
