@@ -132,7 +132,7 @@ class Settling:
         return "settled" if self.settled else "frame limit"
 
 
-def run(solver, state, progress: Optional[Progress] = None) -> Settling:
+def run(solver, state, progress: Optional[Progress] = None, on_frame=None) -> Settling:
     """Step ``state`` frame by frame until it settles or reaches the frame limit.
 
     A frame is still when its trimmed RMS speed is under ``settle_speed`` and
@@ -144,6 +144,8 @@ def run(solver, state, progress: Optional[Progress] = None) -> Settling:
     solver : :class:`core.drape.xpbd.DrapeSolver`.
     state : its :class:`core.drape.xpbd.DrapeState`, advanced in place.
     progress : optional ``progress(fraction, message)``; may raise Cancelled.
+    on_frame : optional ``on_frame(frame, positions (P, 3), still)`` after every frame (``still``:
+        the frames in a row so far that count as still; the layered drape measures each one).
 
     Raises
     ------
@@ -163,6 +165,8 @@ def run(solver, state, progress: Optional[Progress] = None) -> Settling:
         speeds.append(rms)
         still = still + 1 if (rms < opts.settle_speed and frame > opts.grow_frames) else 0
         report(progress, frame / opts.max_frames, f"drape: frame {frame}, rms speed {rms * 1000:.1f} mm/s")
+        if on_frame is not None:
+            on_frame(frame, xs, still)
         if frame >= max(opts.min_frames, opts.grow_frames) and still >= opts.settle_frames:
             settled = True
             break

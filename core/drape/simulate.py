@@ -33,6 +33,7 @@ def drape(
     material: Union[None, str, Material, Mapping] = None,
     options: Union[None, DrapeOptions, Mapping] = None,
     progress: Optional[Progress] = None,
+    on_frame=None,
 ) -> DrapeResult:
     """Drape a sewing pattern on a body with XPBD.
 
@@ -46,6 +47,8 @@ def drape(
         ``materials["fabric"]``, else cotton.
     options : :class:`DrapeOptions` or a dict of its fields.
     progress : optional ``progress(fraction, message)``; may raise Cancelled.
+    on_frame : optional ``on_frame(frame, particle positions (P, 3), still frames in a row)``
+        after every frame (:func:`core.drape.schedule.run`).
 
     Returns
     -------
@@ -74,7 +77,7 @@ def drape(
     solver = DrapeSolver(cloth, body_v, body_f, mat, opts)
     state = solver.state()
     t_ready = time.perf_counter()
-    settling = run(solver, state, progress)
+    settling = run(solver, state, progress, on_frame=on_frame)
     t_sim = time.perf_counter()
     x, v = state.x.numpy(), state.v.numpy()
     report(progress, 1.0, "drape: settled" if settling.settled else "drape: frame limit reached")
