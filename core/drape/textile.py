@@ -11,10 +11,14 @@
   platform edge. The strip is clamped on the platform (the test's slide) and the
   overhang found by bisection.
 
-Both run the ordinary :class:`~core.drape.xpbd.DrapeSolver` (the garment's
-solver, options and contact) on a flat specimen over a static support body,
-and stop with :func:`settle`: kinetic energy per unit mass and the largest
-displacement of a particle over one frame both below stated thresholds.
+* A sheet hanging from its top edge without tethers (:func:`hanging_sheet`):
+  how far the membrane stretches under the fabric's own weight.
+
+All run the ordinary :class:`~core.drape.xpbd.DrapeSolver` (the garment's
+solver, options and contact; ``options={"solver": "newton"}`` for the implicit
+step solved to a residual) on a flat specimen over a static support body, and stop with
+:func:`settle`: kinetic energy per unit mass and the largest displacement of a
+particle over one frame both below stated thresholds.
 """
 
 from __future__ import annotations
@@ -256,6 +260,21 @@ def count_nodes(rim: np.ndarray, bins: int = 360, prominence: float = 0.004) -> 
     return int(len(mid)), outline
 
 
+def cusick_setup(material=None, edge: float = 0.01, options=None, seed: int = 0) -> tuple:
+    """The Cusick specimen on its support, ready to step: (solver, state, the disc's pattern uv)."""
+    from .xpbd import DrapeSolver
+
+    mat = get_material(material)
+    opts = DrapeOptions.coerce(options)
+    uv, faces = disc_mesh(SPECIMEN_RADIUS, edge, SUPPORT_RADIUS, seed)
+    clamp = np.hypot(uv[:, 0], uv[:, 1]) <= SUPPORT_RADIUS + 1e-9
+    thickness = mat.thickness if opts.thickness is None else opts.thickness
+    pattern = sheet_pattern(uv, faces, 1.01 * thickness, clamp, mat.name)
+    body_v, body_f = cylinder_body(SUPPORT_RADIUS, 0.3)
+    solver = DrapeSolver(build_cloth(pattern), body_v, body_f, mat, opts)
+    return solver, solver.state(), uv
+
+
 def cusick(
     material: Union[None, str, Material] = None, edge: float = 0.01, options=None, max_frames: int = 400, seed: int = 0
 ) -> dict:
@@ -275,18 +294,8 @@ def cusick(
     ``triangles``, ``seconds`` (simulation wall time), ``ms_per_frame``, ``positions`` ((n, 3) m),
     ``faces``, ``outline_mm`` (rim radius per degree).
     """
-    from .xpbd import DrapeSolver
-
-    mat = get_material(material)
-    opts = DrapeOptions.coerce(options)
-    uv, faces = disc_mesh(SPECIMEN_RADIUS, edge, SUPPORT_RADIUS, seed)
-    clamp = np.hypot(uv[:, 0], uv[:, 1]) <= SUPPORT_RADIUS + 1e-9
-    thickness = mat.thickness if opts.thickness is None else opts.thickness
-    pattern = sheet_pattern(uv, faces, 1.01 * thickness, clamp, mat.name)
-    cloth = build_cloth(pattern)
-    body_v, body_f = cylinder_body(SUPPORT_RADIUS, 0.3)
-    solver = DrapeSolver(cloth, body_v, body_f, mat, opts)
-    state = solver.state()
+    solver, state, uv = cusick_setup(material, edge, options, seed)
+    mat, opts, cloth = solver.material, solver.options, solver.cloth
     st = settle(solver, state, max_frames)
     x = state.x.numpy().astype(float)
     a_shadow = shadow_area(x[:, :2], cloth.faces)
@@ -296,6 +305,7 @@ def cusick(
     return {
         "material": mat.name,
         "edge_mm": edge * 1e3,
+        "solver": opts.solver,
         "substeps": opts.substeps,
         "iterations": opts.iterations,
         "dc_pct": 100.0 * (a_shadow - a_sup) / (a_spec - a_sup),
@@ -390,6 +400,69 @@ def cantilever(
     }
 
 
+def hanging_sheet(
+    material: Union[None, str, Material] = None,
+    width: float = 0.3,
+    height: float = 0.5,
+    edge: float = 0.01,
+    options=None,
+    max_frames: int = 60,
+) -> dict:
+    """A sheet hanging from its clamped top edge, warp (grain) vertical, without tethers: how far the
+    membrane stretches under the fabric's own weight.
+
+    The sheet starts flat and vertical at its pattern size (no growth); the top edge is pinned.
+    In equilibrium the warp tension at depth d below the clamp is rho g (height - d) per unit
+    width, so the largest warp strain is ``expected_pct`` = rho g height / k_warp (at the clamp).
+
+    Returns
+    -------
+    dict: ``warp_p50_pct``, ``warp_p95_pct``, ``warp_max_pct`` (the triangles' warp strain),
+    ``expected_pct``, ``frames``, ``settled``, ``seconds``, ``particles``.
+    """
+    from .xpbd import DrapeSolver
+
+    mat = get_material(material)
+    opts = DrapeOptions.coerce({"tether_slack": None, "grow_frames": 0, **_as_dict(options)})
+    uv, faces = strip_mesh([-height, 0.0], width, edge)  # x: down the sheet (warp), y: across
+    uv = np.column_stack([uv[:, 1], uv[:, 0]])  # (weft, warp): the grain is +Y, the top edge at 0
+    faces = faces[:, [0, 2, 1]]  # counter-clockwise after the swap
+    pattern = sheet_pattern(uv, faces, 0.0, uv[:, 1] >= -1e-9, mat.name)
+    pattern.panels[0].xyz = np.column_stack([uv[:, 0], np.zeros(len(uv)), uv[:, 1]])  # vertical, in x-z
+    cloth = build_cloth(pattern)
+    body_v, body_f = box_body((-0.05, 0.5, -0.05), (0.05, 0.6, 0.05))  # out of reach
+    solver = DrapeSolver(cloth, body_v, body_f, mat, opts)
+    state = solver.state()
+    st = settle(solver, state, max_frames)
+    from .strain import face_strains
+
+    _, warp, _ = face_strains(state.x.numpy().astype(float), cloth)
+    return {
+        "material": mat.name,
+        "solver": opts.solver,
+        "edge_mm": edge * 1e3,
+        "warp_p50_pct": float(np.percentile(warp, 50) * 100),
+        "warp_p95_pct": float(np.percentile(warp, 95) * 100),
+        "warp_max_pct": float(warp.max() * 100),
+        "expected_pct": 100.0 * mat.density * opts.gravity * height / mat.stretch_warp,
+        "frames": st.frames,
+        "settled": st.settled,
+        "seconds": st.seconds,
+        "particles": cloth.n_particles,
+    }
+
+
+def _as_dict(options) -> dict:
+    """Options as a dict of fields (None: none)."""
+    if options is None:
+        return {}
+    if isinstance(options, DrapeOptions):
+        from dataclasses import asdict
+
+        return asdict(options)
+    return dict(options)
+
+
 def cantilever_expected(material: Union[None, str, Material] = None, gravity: float = 9.81) -> float:
     """The bending length (cm) the preset itself implies, (G / (rho g))^(1/3): what a heavy elastica
     with the preset's bending stiffness G and weight per area rho g gives at the 41.5 degree line."""
@@ -399,8 +472,10 @@ def cantilever_expected(material: Union[None, str, Material] = None, gravity: fl
 
 __all__ = [
     "cusick",
+    "cusick_setup",
     "cantilever",
     "cantilever_expected",
+    "hanging_sheet",
     "settle",
     "shadow_area",
     "count_nodes",

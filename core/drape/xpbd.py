@@ -115,7 +115,7 @@ class _Launches:
     self_collide: List[Any]  # self-collision resolve and apply
     finish: List[Any]  # body contact and friction, velocity update
     tethers: List[Any] = None  # after the constraints (and the host step)
-    host: Any = None  # the projective-dynamics solve, ``host(state)`` (None: all on the device)
+    host: Any = None  # the newton solver's host step, ``host(state)`` (None: all on the device)
 
 
 class DrapeSolver:
@@ -189,10 +189,10 @@ class DrapeSolver:
         self._upload(cloth, inv_mass, tri_order, bend_order, edge_order, body_v, body_f)
         wp.load_module(K, device=self.device)
         wp.load_module(Q, device=self.device)
-        if opts.solver in ("vbd", "pd"):
+        if opts.solver in ("vbd", "newton"):
             self._upload_vbd(cloth, mass, tri_order, bend_order, edge_order)
-        if opts.solver == "pd":
-            self._upload_pd(cloth, mass)
+        if opts.solver == "newton":
+            self._upload_newton(cloth, mass)
         t_compile = time.perf_counter()
         self.timings = {"prepare": t_prep - t0, "compile": t_compile - t_prep}
 
@@ -258,7 +258,7 @@ class DrapeSolver:
         tris = cloth.faces[tri_order]
         bends = cloth.bends[bend_order].reshape(-1, 4)
         edges = cloth.edges[edge_order].reshape(-1, 2)
-        # the vertex colouring (VBD's Gauss-Seidel order; projective dynamics gathers all at once)
+        # the vertex colouring (VBD's Gauss-Seidel order; the newton solver does not need it)
         colours = V.vertex_colouring(n, [tris, bends, edges]) if self.options.solver == "vbd" else np.zeros(n, int)
         order = np.argsort(colours, kind="stable")
         self._vbd_off = np.concatenate([[0], np.cumsum(np.bincount(colours))])
@@ -271,19 +271,38 @@ class DrapeSolver:
         wp.load_module(V, device=dev)
         self._V = V
 
-    def _upload_pd(self, cloth: Cloth, mass) -> None:
+    def _upload_newton(self, cloth: Cloth, mass) -> None:
         """Projective dynamics: the constant matrix, factored (:class:`core.drape.pd.ProjectiveStep`)."""
-        from . import pd as P
+        from . import newton as N
 
         fw0, fg0, _ = face_strains(cloth.x0, cloth)
         start = np.clip(np.stack([fw0, fg0], axis=1) + 1.0, 0.2, 5.0)
         e = cloth.edges.reshape(-1, 2)
         edge_start = np.linalg.norm(cloth.x0[e[:, 1]] - cloth.x0[e[:, 0]], axis=1)
         dt = 1.0 / (self.options.fps * self.options.substeps)
-        self._pd = P.ProjectiveStep(cloth, self.material, dt, mass, start, edge_start)
-        self._pd_iterations = []  # iterations per substep (the residual-based stop's record)
+        self._newton = N.NewtonStep(cloth, self.material, dt, mass, start, edge_start)
+        self._weight = mass * max(float(self.options.gravity), 1e-3)  # N (a floor without gravity)
+        self._newton_iterations = []  # iterations per substep (the residual-based stop's record)
 
-    def _pd_solve(self, s: DrapeState) -> None:
+    def residual(self, state: DrapeState) -> float:
+        """The largest net force (elastic + gravity) on a free particle off the body, over its weight:
+        0 in a static equilibrium of the fabric's own energy (:mod:`core.drape.pd`), whatever the
+        solver. Particles within twice the contact offset of the body are left out (friction holds them)."""
+        if getattr(self, "_newton", None) is None:
+            self._upload_newton(self.cloth, self.material.density * self.cloth.mass_area)
+        x = state.x64 if state.x64 is not None else state.x.numpy().astype(np.float64)
+        y = x.copy()
+        y[:, 2] -= float(self.options.gravity) * self.dt * self.dt
+        self._newton.contact = None
+        _, g = self._newton.energy(x, y, float(state.grow.numpy()[0]))
+        keep = self.free.copy()
+        active = state.contact_active.numpy() != 0
+        height = np.einsum("ij,ij->i", x - state.contact_point.numpy(), state.contact_normal.numpy())
+        keep &= ~(active & (height < 2.0 * self.thickness))
+        ratio = np.linalg.norm(g, axis=1)[keep] / np.maximum(self._weight[keep], 1e-30)
+        return float(ratio.max(initial=0.0))
+
+    def _newton_solve(self, s: DrapeState) -> None:
         """One implicit step on the host, in float64: x from the device, the iterations, x back."""
         # the substep's start in float64: the host's own positions where the device's float32 copy still
         # holds them (contact, tethers or self-collision may have moved some since), plus the device's
@@ -295,11 +314,13 @@ class DrapeSolver:
             base[same] = s.x64[same]
         x = base + (s.x.numpy().astype(np.float64) - prev)
         y = base + (s.y.numpy().astype(np.float64) - prev)
-        contact = (s.contact_point.numpy(), s.contact_normal.numpy(), s.contact_active.numpy())
         opts = self.options
         grow = float(s.grow.numpy()[0])
-        it, _ = self._pd.solve(x, y, grow, contact, self.thickness, int(opts.iterations), float(opts.tolerance))
-        self._pd_iterations.append(it)
+        self._newton.set_contact(
+            s.contact_point.numpy(), s.contact_normal.numpy(), s.contact_active.numpy(), self.thickness
+        )
+        it, _ = self._newton.solve(x, y, grow, int(opts.iterations), float(opts.tolerance), self._weight)
+        self._newton_iterations.append(it)
         s.x64 = x
         s.x.assign(x.astype(np.float32))
 
@@ -316,7 +337,7 @@ class DrapeSolver:
             contact_active=wp.zeros(n, dtype=int, device=dev),
             bend_lambda=wp.zeros(max(len(self.cloth.bends), 1), dtype=float, device=dev),
         )
-        if self.options.solver in ("vbd", "pd"):
+        if self.options.solver in ("vbd", "newton"):
             s.y = wp.zeros(n, dtype=wp.vec3, device=dev)
             s.acc = wp.zeros(n, dtype=wp.vec3, device=dev)
         if self.self_radius > 0.0:
@@ -336,7 +357,7 @@ class DrapeSolver:
         inv_dt2 = 1.0 / (self.dt * self.dt)
         keep = float(np.exp(-opts.damping * self.dt))
         gravity = self._wp.vec3(0.0, 0.0, -float(opts.gravity))
-        vbd = opts.solver in ("vbd", "pd")  # both predict the inertial target y
+        vbd = opts.solver in ("vbd", "newton")  # both predict the inertial target y
         if vbd:
             predict = self._launch(
                 self._V.predict, n, [s.x, s.v, s.x_prev, s.y, s.acc, self._w, gravity, self.dt, keep]
@@ -515,7 +536,7 @@ class DrapeSolver:
                 self._launch(K.self_collide, n, [s.x, self._w, s.self_partner, s.self_count, r, s.self_dx]),
                 self._launch(K.apply_delta, n, [s.x, s.self_dx]),
             ]
-        host = self._pd_solve if opts.solver == "pd" else None
+        host = self._newton_solve if opts.solver == "newton" else None
         return _Launches(
             contacts=contacts,
             constraints=cmds,
