@@ -6,14 +6,17 @@ For every fabric preset (:data:`core.drape.materials.PRESETS`):
 
 1. Cusick drape test (BS 5058 / ISO 9073-9, SPEC item 11): 30 cm disc clamped on
    an 18 cm support; drape coefficient DC (shadow rasterised at 1 mm) and nodes.
-   Run at 10 mm and 5 mm mesh edges, each with the default XPBD iterations per
-   substep and 4x them: the spread of these four is the convergence figure
-   (target +-3 points).
+   Run with each solver of :data:`SOLVERS` (XPBD, the garment default, and
+   newton) at 10 mm and 5 mm mesh edges, each with the solver's default
+   iterations per substep and 4x them (newton: 4x at 10 mm only): the spread
+   of these is the convergence figure (target +-3 points).
 2. Cantilever bending length (ASTM D1388): 2.5 cm strip, the overhang whose tip
    reaches the 41.5 degree line, halved; on a strip meshed at half the Cusick
    edge (5 and 2.5 mm; at 4x iterations the 5 mm strip only), beside the preset's own
    (G / (rho g))^(1/3) (what an exact heavy elastica gives at 41.5 degrees).
-3. Blender's cloth presets (bpy, in a subprocess) on the same 10 mm Cusick disc
+3. Woven cotton hanging from its top edge without tethers: warp strain
+   (target < 1 %), beside the equilibrium's rho g H / k_warp.
+4. Blender's cloth presets (bpy, in a subprocess) on the same 10 mm Cusick disc
    and support, 250 frames: DC and nodes, measured the same way.
 
 Every EASE run stops on :func:`core.drape.textile.settle` (kinetic energy per mass
@@ -44,19 +47,28 @@ BLENDER_FRAMES = 250
 BLENDER_PRESETS = ("Cotton", "Denim", "Leather", "Rubber")
 
 
-def ease_rows(quick: bool) -> list:
+#: the solvers benchmarked (DrapeOptions.solver) and their substeps: XPBD the garment default; newton
+#: (the implicit step solved to a residual) at 3 substeps (30 fps: 3.7 ms, within every preset's contact
+#: offset of free fall per substep)
+SOLVERS = {"xpbd": 20, "newton": 3}
+
+
+def ease_rows(quick: bool, solver: str = "xpbd") -> list:
     from core.drape import DrapeOptions
     from core.drape import textile as T
     from core.drape.materials import PRESETS
 
-    base = DrapeOptions().iterations
+    substeps = SOLVERS[solver]
+    base = DrapeOptions(solver=solver).iterations
     edges = EDGES[:1] if quick else EDGES
     factors = ITERATION_FACTORS[:1] if quick else ITERATION_FACTORS
     rows = []
     for name in PRESETS:
         for edge in edges:
             for f in factors:
-                opts = {"iterations": base * f}
+                if solver == "newton" and f > 1 and edge != edges[0]:
+                    continue  # 5 mm at 4x the newton iterations: tens of minutes a fabric
+                opts = {"solver": solver, "substeps": substeps, "iterations": base * f}
                 t0 = time.perf_counter()
                 c = T.cusick(name, edge=edge, options=opts, max_frames=400)
                 # the cantilever at 2.5 mm and 4x iterations takes minutes a fabric: left out
@@ -67,8 +79,9 @@ def ease_rows(quick: bool) -> list:
                 )
                 row = {
                     "material": name,
+                    "solver": solver,
                     "edge_mm": edge * 1e3,
-                    "substeps": DrapeOptions().substeps,
+                    "substeps": substeps,
                     "iterations": base * f,
                     "dc_pct": c["dc_pct"],
                     "nodes": c["nodes"],
@@ -86,12 +99,30 @@ def ease_rows(quick: bool) -> list:
                 }
                 rows.append(row)
                 print(
-                    f"[bench fabric] {name} {edge * 1e3:.0f} mm, {base * f} iterations: DC {row['dc_pct']:.1f} %, "
+                    f"[bench fabric] {solver} {name} {edge * 1e3:.0f} mm, {base * f} iterations: DC {row['dc_pct']:.1f} %, "
                     f"{row['nodes']} nodes, c {row['bending_length_cm']:.2f} cm "
                     f"({row['frames']} frames, settled {row['settled']}; {row['wall_s']:.0f} s)",
                     file=sys.stderr,
                     flush=True,
                 )
+    return rows
+
+
+def hanging_rows(quick: bool) -> list:
+    """Woven cotton hanging from its top edge without tethers (30 x 50 cm): warp strain per solver."""
+    from core.drape import textile as T
+
+    rows = []
+    for solver, substeps in SOLVERS.items():
+        for edge in EDGES[:1] if quick else EDGES:
+            r = T.hanging_sheet("cotton", edge=edge, options={"solver": solver, "substeps": substeps}, max_frames=120)
+            rows.append(r)
+            print(
+                f"[bench fabric] hanging cotton, {solver}, {edge * 1e3:.0f} mm: warp p95 {r['warp_p95_pct']:.3f} % "
+                f"(equilibrium {r['expected_pct']:.3f} % at the clamp)",
+                file=sys.stderr,
+                flush=True,
+            )
     return rows
 
 
@@ -205,8 +236,8 @@ def _cm(value) -> str:
     return "–" if value is None or not np.isfinite(value) else f"{value:.2f}"
 
 
-def _spread(rows, material, key):
-    vals = [r[key] for r in rows if r["material"] == material and np.isfinite(r[key])]
+def _spread(rows, material, key, solver):
+    vals = [r[key] for r in rows if r["material"] == material and r["solver"] == solver and np.isfinite(r[key])]
     return (max(vals) - min(vals)) if vals else float("nan")
 
 
@@ -217,17 +248,18 @@ def _markdown(res: dict) -> str:
     lines = [
         "# Fabric benchmarks",
         "",
-        f"Machine: CPU, {res['cpu']}. EASE's drape solver (`DrapeSolver`, its default options but the "
-        "XPBD iterations per substep) on the textile tests of SPEC item 11: Cusick drape coefficient "
+        f"Machine: CPU, {res['cpu']}. EASE's drape solvers (`DrapeSolver`: XPBD, the garment default, "
+        "and newton, the implicit step solved to a residual; their default options but the substeps "
+        "and iterations per substep) on the textile tests of SPEC item 11: Cusick drape coefficient "
         "(30 cm disc on an 18 cm support, shadow rasterised at 1 mm) and nodes; ASTM D1388 cantilever "
         "bending length (2.5 cm strip, 41.5 degrees, on a strip meshed at half the Cusick edge: 5 and "
         "2.5 mm). Settle test: kinetic energy per mass < "
         f"{res['settle']['energy_J_per_kg']:g} J/kg and largest particle move per frame < "
         f"{res['settle']['move_mm']:g} mm, {res['settle']['frames']} frames running.",
         "",
-        "| fabric | edge (mm) | iterations | DC (%) | target DC (%) | nodes | target nodes | settled (frames) | "
+        "| solver | fabric | edge (mm) | iterations | DC (%) | target DC (%) | nodes | target nodes | settled (frames) | "
         "bending length (cm) | preset's (G/W)^1/3 (cm) | target (cm) | ms/frame (Cusick) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         t = TARGETS.get(r["material"], {})
@@ -235,7 +267,7 @@ def _markdown(res: dict) -> str:
         nd_t = "–".join(f"{v:g}" for v in t.get("nodes", ())) or "-"
         c_t = "–".join(f"{v:g}" for v in t.get("bending_length_cm", ())) or "-"
         lines.append(
-            f"| {r['material']} | {r['edge_mm']:.0f} | {r['iterations']} | {r['dc_pct']:.1f} | {dc_t} | "
+            f"| {r['solver']} ({r['substeps']} substeps) | {r['material']} | {r['edge_mm']:.0f} | {r['iterations']} | {r['dc_pct']:.1f} | {dc_t} | "
             f"{r['nodes']} | {nd_t} | {'yes' if r['settled'] else 'NO'} ({r['frames']}) | "
             f"{_cm(r['bending_length_cm'])} | {r['bending_expected_cm']:.2f} | {c_t} | "
             f"{r['ms_per_frame']:.1f} |"
@@ -244,11 +276,26 @@ def _markdown(res: dict) -> str:
         "",
         "Convergence (target: DC within +-3 points across mesh edge and iterations, i.e. a spread <= 6):",
         "",
-        "| fabric | DC spread (points) | bending length spread (cm) |",
-        "|---|---|---|",
+        "| solver | fabric | DC spread (points) | bending length spread (cm) |",
+        "|---|---|---|---|",
     ]
-    for m in dict.fromkeys(r["material"] for r in rows):
-        lines.append(f"| {m} | {_spread(rows, m, 'dc_pct'):.1f} | {_spread(rows, m, 'bending_length_cm'):.2f} |")
+    for v, m in dict.fromkeys((r["solver"], r["material"]) for r in rows):
+        lines.append(
+            f"| {v} | {m} | {_spread(rows, m, 'dc_pct', v):.1f} | {_spread(rows, m, 'bending_length_cm', v):.2f} |"
+        )
+    lines += [
+        "",
+        "Woven cotton (30 x 50 cm, warp vertical) hanging from its top edge without tethers (target: < 1 % "
+        "stretch; in equilibrium the warp strain at the clamp is rho g H / k_warp):",
+        "",
+        "| solver | edge (mm) | warp strain p50 / p95 / max (%) | equilibrium at the clamp (%) | settled (frames) |",
+        "|---|---|---|---|---|",
+    ]
+    for r in res.get("hanging", []):
+        lines.append(
+            f"| {r['solver']} | {r['edge_mm']:.0f} | {r['warp_p50_pct']:.3f} / {r['warp_p95_pct']:.3f} / "
+            f"{r['warp_max_pct']:.3f} | {r['expected_pct']:.3f} | {'yes' if r['settled'] else 'NO'} ({r['frames']}) |"
+        )
     lines += [
         "",
         f"## Blender cloth presets (bpy {res.get('bpy', '?')}), same 10 mm disc and support, {BLENDER_FRAMES} frames",
@@ -296,7 +343,8 @@ def run(out_dir, quick: bool = False) -> dict:
         "quick": bool(quick),
         "settle": {"energy_J_per_kg": T.SETTLE_ENERGY, "move_mm": T.SETTLE_MOVE * 1e3, "frames": T.SETTLE_FRAMES},
     }
-    res["ease"] = ease_rows(quick)
+    res["ease"] = [r for solver in SOLVERS for r in ease_rows(quick, solver)]
+    res["hanging"] = hanging_rows(quick)
     res["blender"] = blender_rows()
     res["bpy"] = next((r["bpy"] for r in res["blender"] if "bpy" in r), None)
     write_json(out / "fabric.json", _finite(res))
