@@ -1,0 +1,146 @@
+"""Garment over garment: the inner layers as a collider, the outer's start outside them, and the
+measure of one layer against another.
+
+A layered drape (:func:`core.workflows.drape_outfit`) drapes the garments inner first; each outer
+garment drapes against the body plus the inner garments' draped surfaces, each offset outward by
+its fabric thickness (:func:`layer_collider`), with the outer fabric's contact thickness and
+friction on top (friction between layers is the outer fabric's Coulomb friction, as against the
+body). The outer garment starts from its skintight embedding pushed out over the inner surfaces
+(:func:`push_outside`), so contact, which pushes a particle out along the nearest surface's
+normal, starts on the right side of every layer.
+
+:func:`layer_distance` is the measure: the signed distance of points to a draped garment along its
+own (outward) face normals, counted only where the closest point lies inside the surface, not on
+its open edges (a trouser leg below a shirt's hem is not "inside" the shirt).
+"""
+
+from __future__ import annotations
+
+from typing import Sequence, Tuple
+
+import numpy as np
+
+from ..errors import DrapeError
+
+#: An outer point more than this inside the inner surface is a penetration (issue 37: 2 mm).
+PENETRATION_DEPTH = 0.002
+#: Points farther than this from the inner surface (either side) do not overlap it (another body part).
+OVERLAP_BAND = 0.05
+
+
+def _face_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
+    n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    return n / np.where(length > 0, length, 1.0)
+
+
+def vertex_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """Area-weighted unit vertex normals of a triangle mesh (zero where a vertex has no face)."""
+    n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    out = np.zeros_like(v, dtype=float)
+    for k in range(3):
+        np.add.at(out, f[:, k], n)
+    length = np.linalg.norm(out, axis=1, keepdims=True)
+    return out / np.where(length > 0, length, 1.0)
+
+
+def open_edges(f: np.ndarray) -> np.ndarray:
+    """(k, 2) int, the edges of the triangles ``f`` used by one triangle only (hems, necklines, cuffs)."""
+    e = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+    key, count = np.unique(e, axis=0, return_counts=True)
+    return key[count == 1]
+
+
+def layer_distance(points, v, f) -> Tuple[np.ndarray, np.ndarray]:
+    """Signed distance (m) of ``points`` to the surface (v, f), positive on its normals' side, and
+    whether each point's closest point lies inside the surface (not on an open edge).
+
+    Returns ``(distance (n,), over (n,) bool)``.
+    """
+    import igl
+
+    p = np.ascontiguousarray(points, dtype=np.float64)
+    v = np.ascontiguousarray(v, dtype=np.float64)
+    f = np.ascontiguousarray(f, dtype=np.int64)
+    sq, face, closest = igl.point_mesh_squared_distance(p, v, f)
+    face = np.asarray(face, dtype=np.int64)
+    d = p - closest
+    sign = np.where(np.einsum("ij,ij->i", d, _face_normals(v, f)[face]) < 0, -1.0, 1.0)
+    dist = sign * np.sqrt(np.maximum(sq, 0.0))
+    # barycentrics of the closest point: on a boundary edge (a ~ 0 opposite it) the point is off the edge
+    a, b, c = v[f[face, 0]], v[f[face, 1]], v[f[face, 2]]
+    v0, v1, v2 = b - a, c - a, closest - a
+    d00, d01, d11 = (v0 * v0).sum(1), (v0 * v1).sum(1), (v1 * v1).sum(1)
+    d20, d21 = (v2 * v0).sum(1), (v2 * v1).sum(1)
+    den = np.where(np.abs(d00 * d11 - d01 * d01) > 1e-30, d00 * d11 - d01 * d01, 1e-30)
+    bb = (d11 * d20 - d01 * d21) / den
+    bc = (d00 * d21 - d01 * d20) / den
+    bary = np.stack([1.0 - bb - bc, bb, bc], axis=1)
+    boundary = {tuple(k) for k in open_edges(f)}
+    over = np.ones(len(p), dtype=bool)
+    tol = 1e-6
+    for k, (i, j) in enumerate(((1, 2), (2, 0), (0, 1))):  # edge opposite corner k
+        on_edge = bary[:, k] < tol
+        if not on_edge.any():
+            continue
+        idx = np.nonzero(on_edge)[0]
+        ends = np.sort(np.stack([f[face[idx], i], f[face[idx], j]], axis=1), axis=1)
+        hit = np.array([tuple(e) in boundary for e in ends], dtype=bool)
+        over[idx[hit]] = False
+    return dist, over
+
+
+def layer_measure(points, v, f, depth: float = PENETRATION_DEPTH, band: float = OVERLAP_BAND) -> dict:
+    """Penetration and gap of an outer layer's ``points`` over an inner layer's surface (v, f).
+
+    Only points over the inner surface and within ``band`` of it count (``overlap`` of them): the
+    penetration share is of those more than ``depth`` inside it; the gap is their signed distance.
+    """
+    dist, over = layer_distance(points, v, f)
+    near = over & (np.abs(dist) <= band)
+    n = int(near.sum())
+    inside = near & (dist < -depth)
+    gap = dist[near] * 1000.0
+    return {
+        "overlap": n,
+        "points": int(len(dist)),
+        "penetrating": int(inside.sum()),
+        "penetration_pct": 100.0 * float(inside.sum()) / n if n else 0.0,
+        "gap_mm": {
+            "mean": float(gap.mean()) if n else 0.0,
+            "p95": float(np.percentile(gap, 95)) if n else 0.0,
+            "min": float(gap.min()) if n else 0.0,
+        },
+    }
+
+
+def layer_collider(body_v, body_f, inner: Sequence[Tuple[np.ndarray, np.ndarray, float]]):
+    """One collider mesh: the body plus every inner garment's surface (vertices, faces, offset m),
+    each moved outward along its vertex normals by its offset (the inner fabric's thickness)."""
+    vs = [np.asarray(body_v, dtype=np.float64)]
+    fs = [np.asarray(body_f, dtype=np.int64)]
+    base = len(vs[0])
+    for v, f, offset in inner:
+        v = np.asarray(v, dtype=np.float64)
+        f = np.asarray(f, dtype=np.int64)
+        if not np.all(np.isfinite(v)):
+            raise DrapeError("an inner layer's draped surface holds NaN/inf")
+        vs.append(v + vertex_normals(v, f) * float(offset))
+        fs.append(f + base)
+        base += len(v)
+    return np.concatenate(vs), np.concatenate(fs)
+
+
+def push_outside(points, v, f, clearance: float, band: float = OVERLAP_BAND) -> Tuple[np.ndarray, int]:
+    """``points`` moved out of the surface (v, f) to ``clearance`` outside it where they lie over it,
+    within ``band``, closer than ``clearance``; returns (moved points, how many moved)."""
+    p = np.array(points, dtype=np.float64)
+    dist, over = layer_distance(p, v, f)
+    move = over & (dist < clearance) & (dist > -band)
+    if move.any():
+        import igl
+
+        _, face, closest = igl.point_mesh_squared_distance(p[move], np.asarray(v, float), np.asarray(f, np.int64))
+        n = _face_normals(np.asarray(v, float), np.asarray(f, np.int64))[np.asarray(face, np.int64)]
+        p[move] = closest + n * clearance
+    return p, int(move.sum())

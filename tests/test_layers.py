@@ -1,0 +1,151 @@
+"""Layered outfits (issue 37): the outfit format, the layer measure, a tucked shirt draped under
+trousers (no interpenetration, the hem inside the waistband) and the outfit's files."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from core.design.outfit import load_outfit
+from core.drape.layers import layer_collider, layer_distance, layer_measure, push_outside
+from core.errors import DesignError
+
+TUCKED = {
+    "format": "ease-outfit",
+    "version": 1,
+    "name": "tucked",
+    "layers": [{"design": "shirt_long_sleeve", "tucked": True}, {"design": "pants"}],
+}
+
+
+def _sheet(n=11, size=0.2):
+    """A flat open grid in z = 0, normals +z."""
+    t = np.linspace(-size / 2, size / 2, n)
+    x, y = np.meshgrid(t, t, indexing="ij")
+    v = np.column_stack([x.ravel(), y.ravel(), np.zeros(n * n)])
+    f = []
+    for i in range(n - 1):
+        for j in range(n - 1):
+            a, b, c, d = i * n + j, (i + 1) * n + j, (i + 1) * n + j + 1, i * n + j + 1
+            f += [(a, b, c), (a, c, d)]
+    return v, np.array(f)
+
+
+def test_outfit_loads_in_layer_order():
+    outfit = load_outfit(TUCKED)
+    assert [ly.name for ly in outfit.layers] == ["long-sleeve shirt", "pants"]
+    assert outfit.layers[0].tucked and not outfit.layers[1].tucked
+    assert outfit.layers[0].kinds == ["upper"] and outfit.layers[1].kinds == ["lower"]
+    assert outfit.body == outfit.layers[1].design.body
+    over = load_outfit({**TUCKED, "layers": [{"design": "pants"}, {"design": "shirt_long_sleeve"}]})
+    assert [ly.tucked for ly in over.layers] == [False, False]
+
+
+def test_outfit_file_relative_design(tmp_path):
+    from core.design.templates import template_path
+
+    (tmp_path / "mine.json").write_text(template_path("skirt").read_text())
+    (tmp_path / "o.json").write_text(
+        json.dumps({**TUCKED, "layers": [{"design": "top_short_sleeve", "tucked": True}, {"design": "mine.json"}]})
+    )
+    outfit = load_outfit(tmp_path / "o.json")
+    assert outfit.layers[1].kinds == ["lower"]
+
+
+BAD = [
+    ({"format": "ease-design"}, "format"),
+    ({"version": 2}, "version"),
+    ({"layers": []}, "layers"),
+    ({"layers": [{"design": "pants", "tucked": "yes"}]}, "layers[0].tucked"),
+    ({"layers": [{"design": "pants", "tucked": True}]}, "layers[0].tucked"),
+    ({"layers": [{"design": "shirt_long_sleeve", "tucked": True}]}, "layers[0].tucked"),
+    ({"layers": [{"design": "shirt_long_sleeve"}, {"design": "pants"}]}, "layers[0].tucked"),
+    ({"layers": [{"design": "no_such_garment"}]}, "layers[0].design"),
+    ({"layers": [{"design": "pants", "colour": 1}]}, "layers[0].colour"),
+    ({"layers": [{"design": "pants"}, {"design": "pants"}]}, "layers[1].name"),
+    ({"layers": ["pants"]}, "layers[0]"),
+    ({"body": "M"}, "body"),
+    ({"body": {"model": "anny", "shape": "XXXL", "pose": "A"}}, "layers[0].design"),
+]
+
+
+@pytest.mark.parametrize("change,path", BAD, ids=[p for _, p in BAD])
+def test_bad_outfit_is_refused_naming_the_field(change, path):
+    with pytest.raises(DesignError) as exc:
+        load_outfit({**TUCKED, **change})
+    assert str(exc.value).startswith(f"{path}: "), str(exc.value)
+    assert "\n" not in str(exc.value)
+
+
+def test_cli_bad_outfit_exits_2_with_one_line(tmp_path, capsys):
+    from core.cli import main
+
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({**TUCKED, "layers": [{"design": "pants", "tucked": True}]}))
+    assert main(["outfit", str(bad), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "layers[0].tucked" in err and str(bad) in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_layer_distance_signs_and_open_edges():
+    v, f = _sheet()
+    pts = np.array([[0.01, 0.02, 0.01], [0.0, 0.0, -0.005], [0.3, 0.0, -0.01], [0.03, -0.04, -0.0015]])
+    dist, over = layer_distance(pts, v, f)
+    assert dist[:2] == pytest.approx([0.01, -0.005], abs=1e-9)
+    assert over.tolist() == [True, True, False, True]  # past the open edge: not over the surface
+    m = layer_measure(pts, v, f)
+    assert m["overlap"] == 3 and m["penetrating"] == 1  # -1.5 mm is within the 2 mm tolerance
+    assert m["penetration_pct"] == pytest.approx(100 / 3)
+    moved, k = push_outside(pts, v, f, clearance=0.004)
+    assert k == 2  # the point 1 cm outside stays, the one past the edge too
+    assert moved[1] == pytest.approx([0.0, 0.0, 0.004]) and moved[2] == pytest.approx(pts[2])
+    cv, cf = layer_collider(v[:4] + 1.0, np.array([[0, 1, 2]]), [(v, f, 0.003)])
+    assert len(cv) == 4 + len(v) and cf.max() == len(cv) - 1
+    assert cv[4:, 2] == pytest.approx(0.003)  # the inner surface offset by its thickness
+
+
+@pytest.fixture(scope="module")
+def tucked_run():
+    from core.workflows import drape_outfit
+
+    return drape_outfit(TUCKED, options={"max_frames": 30, "min_frames": 5}, refine_edge_length=0.04)
+
+
+def test_tucked_shirt_stays_inside_the_trousers(tucked_run):
+    shirt, pants = tucked_run.layers
+    assert pants.pushed > 100  # the trousers start outside the draped shirt
+    m = pants.over["long-sleeve shirt"]
+    assert m["overlap"] > 200
+    assert m["penetration_pct"] <= 0.5
+    last = [p for (fr, still, p) in pants.frame_penetration_pct if still > 0 or fr > 25]
+    assert last and max(last) <= 0.5
+    assert 0.0 < m["gap_mm"]["mean"] < 30.0
+    hem = shirt.tucked
+    assert hem["under"] == "pants" and hem["edge_vertices"] >= 20
+    assert hem["inside_pct"] >= 95.0 and hem["below_waistband_mm"] > 30.0
+    assert pants.tucked is None
+
+
+def test_outfit_files_every_garment_its_mesh_and_material(tucked_run, tmp_path):
+    from core.export.mesh import read_glb
+    from core.workflows import write_outfit
+
+    out = write_outfit(tmp_path / "o", tucked_run, formats=("svg", "glb", "obj"), preview=False)
+    for name in ("long-sleeve_shirt", "pants"):
+        assert (out / name / "pattern" / "pattern.json").is_file()
+        assert (out / name / "export" / "pattern.svg").is_file()
+        assert (out / name / "drape" / "drape.npz").is_file()
+    doc, _ = read_glb((out / "outfit.glb").read_bytes())
+    assert [m["name"] for m in doc["meshes"]] == ["long-sleeve shirt", "pants"]
+    assert [m["primitives"][0]["material"] for m in doc["meshes"]] == [0, 1]
+    assert [m["name"] for m in doc["materials"]] == ["long-sleeve shirt", "pants"]
+    obj = (out / "outfit.obj").read_text()
+    assert obj.count("\no ") == 2 and "usemtl long-sleeve_shirt" in obj and "usemtl pants" in obj
+    assert "newmtl pants" in (out / "outfit.mtl").read_text()
+    rep = json.loads((out / "outfit_report.json").read_text())
+    assert [ly["name"] for ly in rep["layers"]] == ["long-sleeve shirt", "pants"]
+    assert rep["layers"][1]["over"]["long-sleeve shirt"]["penetration_pct"] <= 0.5
+    assert rep["layers"][1]["pattern_measured_on"] == "body"
