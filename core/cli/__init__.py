@@ -19,10 +19,10 @@ import sys
 from .. import __version__
 from ..errors import Cancelled, EaseError
 from ..paths import default_warp_cache
-from . import batch, bench, body, cut, demo, drape, export, marker, pattern, templates
+from . import batch, bench, body, cut, demo, drape, export, marker, outfit, pattern, templates
 
 # Order = order in --help = order of the data flow.
-SUBCOMMANDS = (body, templates, cut, pattern, drape, export, marker, batch, bench)
+SUBCOMMANDS = (body, templates, cut, pattern, drape, outfit, export, marker, batch, bench)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -18,13 +18,15 @@ Progress: every function takes ``progress(fraction, message)`` for its own
 span 0..1 (compose spans with :func:`core.progress.sub`); the callback may
 raise :class:`core.errors.Cancelled` to stop.
 
-One module a stage (``_prepare``, ``_pattern``, ``_drape``, ``_export``, ``_marker``); this
+One module a stage (``_prepare``, ``_pattern``, ``_drape``, ``_export``, ``_marker``; ``_outfit``:
+layered garments draped inner first); this
 package is their public interface.
 """
 
 from ._drape import DrapeRun, drape, drape_summary, write_drape
 from ._export import export, export_allowance
 from ._marker import marker, write_marker
+from ._outfit import LayerRun, OutfitRun, drape_outfit, outfit_summary, write_outfit
 from ._pattern import (
     CONFIGS,
     DEFAULT_CONFIG,
@@ -71,4 +73,9 @@ __all__ = [
     "export",
     "marker",
     "write_marker",
+    "LayerRun",
+    "OutfitRun",
+    "drape_outfit",
+    "outfit_summary",
+    "write_outfit",
 ]
