@@ -142,7 +142,7 @@ def test_tethers_count_a_link_met_twice_once_at_its_shorter_length():
 
 
 def test_unique_pairs_is_numpys_unique_over_rows():
-    from core.drape.mesh import unique_pairs
+    from core.geom.mesh import unique_pairs
 
     pairs = np.random.default_rng(3).integers(0, 40, size=(500, 2))
     edges, inverse = unique_pairs(pairs)

@@ -17,6 +17,7 @@ from typing import Dict, List, Optional
 import numpy as np
 
 from ..errors import DrapeError
+from ..geom.mesh import unique_pairs
 from ..geom.strain import weft_of
 from .gathers import sew_gathers, unweld_gathers
 
@@ -461,15 +462,6 @@ def rest_edges(faces: np.ndarray, rest_inv: np.ndarray) -> tuple:
     total = np.bincount(inverse, weights=lens, minlength=len(edges))
     count = np.bincount(inverse, minlength=len(edges))
     return edges, total / count
-
-
-def unique_pairs(pairs: np.ndarray) -> tuple:
-    """``np.unique(pairs, axis=0, return_inverse=True)`` for (k, 2) non-negative int pairs, through one
-    int64 key per pair (the same lexicographic order, several times faster than the axis form)."""
-    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
-    n = int(pairs.max()) + 1 if len(pairs) else 1
-    keys, inverse = np.unique(pairs[:, 0] * n + pairs[:, 1], return_inverse=True)
-    return np.stack([keys // n, keys % n], axis=1), inverse.reshape(-1)
 
 
 def _rest_corners(faces: np.ndarray, rest_inv: np.ndarray) -> np.ndarray:

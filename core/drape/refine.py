@@ -38,8 +38,8 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import DrapeError
+from ..geom.mesh import unique_pairs
 from .gathers import arc, insert_points, longer
-from .mesh import unique_pairs
 
 #: A triangle whose pattern area exceeds its skintight area by at least this fraction hangs free.
 FREE_EASE = 0.01

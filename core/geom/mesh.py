@@ -31,6 +31,15 @@ def row_cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
+def unique_pairs(pairs: np.ndarray) -> tuple:
+    """``np.unique(pairs, axis=0, return_inverse=True)`` for (k, 2) non-negative int pairs, through one
+    int64 key per pair (the same lexicographic order, several times faster than the axis form)."""
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    n = int(pairs.max()) + 1 if len(pairs) else 1
+    keys, inverse = np.unique(pairs[:, 0] * n + pairs[:, 1], return_inverse=True)
+    return np.stack([keys // n, keys % n], axis=1), inverse.reshape(-1)
+
+
 def triangle_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Unsigned triangle areas.
 
