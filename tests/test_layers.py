@@ -102,9 +102,24 @@ def test_layer_distance_signs_and_open_edges():
     moved, k = push_outside(pts, v, f, clearance=0.004)
     assert k == 2  # the point 1 cm outside stays, the one past the edge too
     assert moved[1] == pytest.approx([0.0, 0.0, 0.004]) and moved[2] == pytest.approx(pts[2])
-    cv, cf = layer_collider(v[:4] + 1.0, np.array([[0, 1, 2]]), [(v, f, 0.003)])
+    cv, cf = layer_collider(v[:4] + 1.0, np.array([[0, 1, 2]]), [(v, f, 0.003)], strips=False)
     assert len(cv) == 4 + len(v) and cf.max() == len(cv) - 1
     assert cv[4:, 2] == pytest.approx(0.003)  # the inner surface offset by its thickness
+
+
+def test_collider_strips_join_open_edges_to_the_body():
+    v, f = _sheet(n=5)
+    body_v = np.array([[-1.0, -1.0, -0.05], [1.0, -1.0, -0.05], [1.0, 1.0, -0.05], [-1.0, 1.0, -0.05]])
+    body_f = np.array([[0, 1, 2], [0, 2, 3]])
+    cv, cf = layer_collider(body_v, body_f, [(v, f, 0.0)])
+    ring = 16  # the 5 x 5 grid's border
+    assert len(cv) == 4 + len(v) + ring and len(cf) == 2 + len(f) + 2 * ring
+    assert cv[4 + len(v) :, 2] == pytest.approx(-0.052)  # each border vertex's foot, 2 mm into the body
+    # the strips continue the sheet's orientation: every edge of the sheet + strips is run once each way
+    g = cf[2:] - 4
+    d = np.concatenate([g[:, [0, 1]], g[:, [1, 2]], g[:, [2, 0]]])
+    interior = {tuple(e) for e in d.tolist()}
+    assert all((b, a) in interior for a, b in d.tolist() if b < len(v) and a < len(v))
 
 
 @pytest.fixture(scope="module")

@@ -114,18 +114,56 @@ def layer_measure(points, v, f, depth: float = PENETRATION_DEPTH, band: float = 
     }
 
 
-def layer_collider(body_v, body_f, inner: Sequence[Tuple[np.ndarray, np.ndarray, float]]):
+def _directed_open_edges(f: np.ndarray) -> np.ndarray:
+    """(k, 2) the open edges as their one triangle runs them (a -> b)."""
+    d = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+    key, inv, count = np.unique(np.sort(d, axis=1), axis=0, return_inverse=True, return_counts=True)
+    return d[count[inv.ravel()] == 1]
+
+
+def hem_strips(v, f, body_v, body_f, sink: float = 0.002) -> Tuple[np.ndarray, np.ndarray]:
+    """The open edges of the surface (v, f) joined to the body by a strip of triangles, oriented as
+    the surface (its normals turn with it towards the body): each open-edge vertex goes to its
+    closest body point, ``sink`` past it. Returns (new vertices (k, 3), triangles (2e, 3) indexing
+    ``v`` then the new vertices). A collider with these strips has no free edge under which an outer
+    layer could be caught (contact past an open edge would push it round the edge)."""
+    import igl
+
+    edges = _directed_open_edges(np.asarray(f, np.int64))
+    if not len(edges):
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64)
+    ring = np.unique(edges)
+    _, _, foot = igl.point_mesh_squared_distance(
+        np.asarray(v, np.float64)[ring], np.asarray(body_v, np.float64), np.asarray(body_f, np.int64)
+    )
+    d = foot - np.asarray(v, float)[ring]
+    length = np.linalg.norm(d, axis=1, keepdims=True)
+    foot = foot + d / np.where(length > 0, length, 1.0) * sink
+    new_id = np.full(len(v), -1, np.int64)
+    new_id[ring] = len(v) + np.arange(len(ring))
+    a, b = edges[:, 0], edges[:, 1]
+    tris = np.concatenate([np.column_stack([b, a, new_id[a]]), np.column_stack([b, new_id[a], new_id[b]])])
+    return foot, tris
+
+
+def layer_collider(body_v, body_f, inner: Sequence[Tuple[np.ndarray, np.ndarray, float]], strips: bool = True):
     """One collider mesh: the body plus every inner garment's surface (vertices, faces, offset m),
-    each moved outward along its vertex normals by its offset (the inner fabric's thickness)."""
-    vs = [np.asarray(body_v, dtype=np.float64)]
-    fs = [np.asarray(body_f, dtype=np.int64)]
-    base = len(vs[0])
+    each moved outward along its vertex normals by its offset (the inner fabric's thickness), and
+    with ``strips`` its open edges joined to the body (:func:`hem_strips`)."""
+    body_v = np.asarray(body_v, dtype=np.float64)
+    body_f = np.asarray(body_f, dtype=np.int64)
+    vs, fs = [body_v], [body_f]
+    base = len(body_v)
     for v, f, offset in inner:
         v = np.asarray(v, dtype=np.float64)
         f = np.asarray(f, dtype=np.int64)
         if not np.all(np.isfinite(v)):
             raise DrapeError("an inner layer's draped surface holds NaN/inf")
-        vs.append(v + vertex_normals(v, f) * float(offset))
+        v = v + vertex_normals(v, f) * float(offset)
+        if strips:
+            foot, tris = hem_strips(v, f, body_v, body_f)
+            v, f = np.concatenate([v, foot]), np.concatenate([f, tris])
+        vs.append(v)
         fs.append(f + base)
         base += len(v)
     return np.concatenate(vs), np.concatenate(fs)

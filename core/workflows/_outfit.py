@@ -26,8 +26,11 @@ class LayerRun:
         draped vertices against that layer's draped surface (the final frame).
     settled_penetration_pct : float, the largest penetration share (%) into any inner layer over the
         frames that counted as still (the settled frames); 0 for the innermost layer.
-    frame_penetration_pct : list of (frame, still frames in a row, largest penetration share %).
+    frame_penetration_pct : list of (frame, still frames in a row, largest penetration share %), for
+        every frame after the fabric's growth (``grow_frames``) and every still frame.
     pushed : int, start vertices moved out over the inner layers.
+    measure_s : float, s of the drape's wall time spent measuring the penetration frame by frame
+        (left out of :attr:`time_per_frame`).
     tucked : dict or None, for a tucked garment: its hem's vertices (its longest open edge loop) that
         lie over a later lower garment (``edge_vertices``), how many of them are inside it or less than
         2 mm out (``inside``, ``inside_pct``), the farthest out (``most_outside_mm``) and how far the
@@ -42,6 +45,7 @@ class LayerRun:
     frame_penetration_pct: list = field(default_factory=list)
     pushed: int = 0
     tucked: Optional[dict] = None
+    measure_s: float = 0.0
 
     @property
     def surface(self):
@@ -57,7 +61,7 @@ class LayerRun:
     @property
     def time_per_frame(self) -> float:
         r = self.drape.result
-        return float(r.timings["simulate"]) / max(int(r.frames), 1)
+        return (float(r.timings["simulate"]) - self.measure_s) / max(int(r.frames), 1)
 
 
 @dataclass
@@ -205,12 +209,16 @@ def drape_outfit(
         start, pushed = _pushed(pattern, runs, thick)
         coll_v, coll_f = layer_collider(body_v, body_f, [(*lr.surface, lr.thickness) for lr in runs])
         frames: list = []
+        spent = [0.0]
 
-        def on_frame(frame, x, still, _inner=tuple(runs), _frames=frames):
-            if not _inner:
+        def on_frame(frame, x, still, _inner=tuple(runs), _frames=frames, _spent=spent):
+            # every frame once the fabric has grown (the settled frames among them); not counted as drape time
+            if not _inner or (frame <= opts.grow_frames and still == 0):
                 return
+            t = time.perf_counter()
             pct = max(layer_measure(x, *lr.surface)["penetration_pct"] for lr in _inner)
             _frames.append((int(frame), int(still), pct))
+            _spent[0] += time.perf_counter() - t
 
         report(span, 0.35, f"outfit: {layer.name}: drape over {i} layer(s)")
         result = _drape(
@@ -218,7 +226,7 @@ def drape_outfit(
         )
         metrics = drape_metrics(result, body_v, body_f, pattern=pattern)
         run = DrapeRun(result, metrics, body_v, body_f, _drape_figures(result, metrics))
-        lr = LayerRun(layer, prun, run, pushed=pushed, frame_penetration_pct=frames)
+        lr = LayerRun(layer, prun, run, pushed=pushed, frame_penetration_pct=frames, measure_s=spent[0])
         x = np.asarray(result.positions, float)[np.unique(result.faces)]
         lr.over = {inner.layer.name: layer_measure(x, *inner.surface) for inner in runs}
         still = [p for (_, s, p) in frames if s > 0]
