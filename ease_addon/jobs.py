@@ -53,6 +53,7 @@ class Job:
         self.done = threading.Event()
         self.result = self.error = self.trace = None
         self.seconds = self.cpu_seconds = 0.0
+        self.thread = None  # the worker (None: computed in line)
 
     def progress(self, fraction: float, message: str) -> None:
         """The core's Progress callback (in the worker): records, or raises Cancelled."""
@@ -91,7 +92,8 @@ def start(name: str, label: str, compute, apply, fail=None, sync=None, cancelled
         job.apply(job.result)
         return job
     _JOBS[name] = job
-    threading.Thread(target=job.run, name=f"ease-{name}", daemon=True).start()
+    job.thread = threading.Thread(target=job.run, name=f"ease-{name}", daemon=True)
+    job.thread.start()
     if not bpy.app.timers.is_registered(poll):
         bpy.app.timers.register(poll, first_interval=POLL_S)
     _show_status()
@@ -271,12 +273,60 @@ class EASE_OT_cancel_jobs(bpy.types.Operator):
         return {"FINISHED"}
 
 
-def unregister() -> None:
-    """The add-on goes: every job dropped, the poll stopped."""
-    for name in list(_JOBS):
-        drop(name)
+def start_step(name: str, label: str, compute, apply, status: str, undo: str, sync=None) -> Job:
+    """:func:`start` for an operator's work whose outcome the ``scene.ease`` property ``status``
+    says: "*label* stopped: *error*", or "*label* cancelled: the scene is as it was" (nothing
+    applied). A result that lands after the operator returned (computed in a worker) is one undo
+    step of its own, named ``undo``, and Live sees the change."""
+    threaded = not (SYNCHRONOUS if sync is None else sync)
+
+    def apply_step(result):
+        apply(result)
+        if threaded:
+            state.changed(bpy.context.scene)
+            if bpy.ops.ed.undo_push.poll():
+                bpy.ops.ed.undo_push(message=f"EASE: {undo}")
+
+    def say(text: str) -> None:
+        setattr(bpy.context.scene.ease, status, text)
+
+    return start(
+        name,
+        label,
+        compute,
+        apply_step,
+        fail=lambda exc: say(f"{label} stopped: {exc}"),
+        sync=sync,
+        cancelled=lambda: say(f"{label} cancelled: the scene is as it was"),
+    )
+
+
+class Background:
+    """Mixin of an operator whose work is a job (list it before the operator's base class).
+
+    Pressed in the interface (``invoke``) the job runs in the background (in line headless, see
+    :data:`SYNCHRONOUS`): progress in the status bar, Esc cancels; run from a script
+    (``execute``) it runs in line, its result there when the call returns. ``run`` passes
+    :meth:`job_sync` as :func:`start`'s ``sync``."""
+
+    def invoke(self, context, event):
+        self.ease_background = True
+        return self.execute(context)
+
+    def job_sync(self):
+        return None if getattr(self, "ease_background", False) else True
+
+
+def unregister(join_s: float = 10.0) -> None:
+    """The add-on goes: every job dropped, the poll stopped; the workers are given ``join_s``
+    seconds in all to stop (at their next progress report), so none is left behind."""
+    dropped = [drop(name) for name in list(_JOBS)]
     if bpy.app.timers.is_registered(poll):
         bpy.app.timers.unregister(poll)
+    end = time.perf_counter() + join_s
+    for job in dropped:
+        if job.thread is not None:
+            job.thread.join(max(0.0, end - time.perf_counter()))
 
 
 CLASSES = (EASE_OT_watch_jobs, EASE_OT_cancel_jobs)
