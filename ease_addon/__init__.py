@@ -77,7 +77,6 @@ def register():
 
 
 def unregister():
-    drape_ops.cancel_running()
     jobs.unregister()
     while live.on_load in bpy.app.handlers.load_post:
         bpy.app.handlers.load_post.remove(live.on_load)

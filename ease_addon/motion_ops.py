@@ -18,8 +18,9 @@ presets after the first, or the rig's keyframed poses) within the design's
 stretch tolerances (:func:`core.workflows.adapt`); that pattern replaces the
 pieces beside the body and is the one draped.
 
-The drape runs as the static one does (``drape_ops.JobOperator``): in a worker
-thread, its progress per frame in the status bar, Esc cancels. The result is two
+The drape runs as the static one does, as a background job (:mod:`.jobs`): in a
+worker thread, its progress per frame in the status bar, Esc cancels (nothing is
+applied); in line from a script or headless. The result is two
 objects, ``EASE Motion Body`` and ``EASE Motion Garment`` (role ``motion``): one
 shape key a frame, keyed so the timeline plays the motion. The static body and
 garment are hidden in the viewport and the render; the studio renders the motion
@@ -40,8 +41,7 @@ import os
 import bpy
 import numpy as np
 
-from . import build, convert, data, materials, state, sync
-from .drape_ops import JobOperator, WorkerJob
+from . import build, convert, data, jobs, materials, state, sync
 from .objects import objects_with_role, remove_object, role_object, select_only
 from .operators_base import EaseOperator
 
@@ -251,15 +251,15 @@ class EASE_OT_add_rig(EaseOperator):
 # ----------------------------------------------------------------------------- Drape Animation
 
 
-class MotionJob(WorkerJob):
-    """The body's frames, the pattern (adapted to the motion's poses when asked) and its drape
-    through them, in the worker; the motion objects from them on the main thread."""
+JOB = "drape animation"  # the job's name (a new Drape Animation replaces a running one)
 
-    label = "drape animation"
-    status = "motion_status"
+
+class Motion:
+    """The body's frames, the pattern (adapted to the motion's poses when asked) and its drape
+    through them (:meth:`compute`, in the worker); the motion objects from them (:meth:`apply`,
+    on the main thread)."""
 
     def __init__(self, pattern, model, shape, motion: dict, device: str, prep=None, adapt_to=()):
-        super().__init__()
         self.pattern, self.model, self.shape, self.motion = pattern, model, shape, motion
         self.device, self.prep, self.adapt_to = device, prep, list(adapt_to)
 
@@ -291,14 +291,14 @@ class MotionJob(WorkerJob):
             frames, result = frames[1:], _without_first(result)
         return np.stack(frames), faces, result, adapted
 
-    def apply(self, context) -> None:
+    def apply(self, result) -> None:
         from ..core.drape.animate import motion_report
 
-        scene, s = context.scene, context.scene.ease
-        frames, faces, r, adapted = self.result
+        scene, s = bpy.context.scene, bpy.context.scene.ease
+        frames, faces, r, adapted = result
         m = self.motion
         if adapted is not None:  # the adapted pattern is the scene's pattern now, beside the body
-            sync.show_pattern(context, adapted.pattern)
+            sync.show_pattern(bpy.context, adapted.pattern)
             s.fit_json = json.dumps(adapted.figures)
         used = np.asarray(r.used, dtype=bool)
         remap = -np.ones(len(used), dtype=np.int64)
@@ -392,8 +392,8 @@ def motion_input(context) -> dict:
     }
 
 
-def motion_job(context) -> MotionJob:
-    """Drape Animation's job, not started (main thread: reads the scene; refuses bad input)."""
+def motion_job(context) -> Motion:
+    """Drape Animation's work, not started (main thread: reads the scene; refuses bad input)."""
     from ..core.body import load_body
 
     s = context.scene.ease
@@ -410,20 +410,30 @@ def motion_job(context) -> MotionJob:
                 "(name poses after the first, or keyframe the rig's bones)"
             )
         prep = data.prepared(context)
-    return MotionJob(pattern, model, spec.get("shape"), motion, s.drape_device, prep, adapt_to)
+    return Motion(pattern, model, spec.get("shape"), motion, s.drape_device, prep, adapt_to)
 
 
-class EASE_OT_drape_animation(JobOperator):
+def start_motion(context, sync=None) -> jobs.Job:
+    """Drape Animation as the job :data:`JOB` (``sync``: :func:`.jobs.start`'s); the motion
+    objects are made when it lands."""
+    work = motion_job(context)
+    return jobs.start_step(
+        JOB, "drape animation", work.compute, work.apply, "motion_status", "Drape Animation", sync=sync
+    )
+
+
+class EASE_OT_drape_animation(jobs.Background, EaseOperator):
     """Drape the garment through the motion (Poses, or the rig's action): shape-keyed motion objects (Esc cancels)"""
 
     bl_idname = "ease.drape_animation"
     bl_label = "Drape Animation"
     needs = ("pattern",)
 
-    def make_job(self, context) -> MotionJob:
-        return motion_job(context)
-
-    def finished(self, context, job) -> None:
+    def run(self, context):
+        job = start_motion(context, sync=self.job_sync())
+        if job.thread is not None:
+            self.report({"INFO"}, "Drape Animation runs in the background (Esc cancels)")
+            return
         self.report(
             {"INFO"},
             f"{MOTION_BODY}, {MOTION_GARMENT}: {context.scene.ease.motion_status}; "

@@ -4,6 +4,7 @@ progress, Esc, a failing core, a pattern changed meanwhile, disabling mid-drape.
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -56,26 +57,50 @@ def test_drape_garment_and_fit_map(bpy_session, blender):
     assert g.data.materials[0].name == "EASE Fabric cotton"  # the design's fabric preset
 
 
-def test_drape_modal_progress_and_esc(bpy_session, blender, addon):
-    """The interactive drape: a worker thread runs the core; the modal step
-    shows progress, applies the result on the main thread when done, and Esc
-    cancels leaving the scene as it was. Headless there is no event loop (an
-    INVOKE call falls back to execute), so the test drives the modal step."""
+@pytest.fixture
+def threaded(addon):
+    """The add-on's jobs in worker threads, as in Blender's window (headless they run in line)."""
+    jobs = addon("jobs")
+    before, jobs.SYNCHRONOUS = jobs.SYNCHRONOUS, False
+    try:
+        yield jobs
+    finally:
+        jobs.cancel()
+        jobs.SYNCHRONOUS = before
+
+
+def _landed(jobs, job) -> None:
+    """Wait for ``job``'s worker, then the main thread's poll (what Blender's timer does)."""
+    job.thread.join(120)
+    assert not job.thread.is_alive()
+    jobs.poll()
+
+
+def test_drape_in_the_background_progress_and_esc(bpy_session, blender, addon, threaded):
+    """The interactive drape (one job mechanism, :mod:`ease_addon.jobs`): the core runs in a
+    worker thread, its progress per frame is the status line, the result lands on the main
+    thread's poll, and Esc (cancel) leaves the scene as it was; a failing core, a pattern
+    changed meanwhile and disabling the add-on mid-drape too."""
     bpy = bpy_session["bpy"]
+    jobs = threaded
     s = bpy.context.scene.ease
     drape_ops = addon("drape_ops")
     garment = next(o for o in bpy.data.objects if o.get("ease_role") == "garment")
     g_name, g_verts = garment.data.name, blender.verts(garment).copy()
     pattern = addon("data").stored_pattern(bpy.context.scene)
     body_v, body_f = drape_ops._pattern_body(pattern)
-    job = drape_ops.DrapeJob(pattern, body_v, body_f, frames=400).start()
-    assert drape_ops.step_job(bpy.context, job, "ESC") == "RUNNING"
-    job.join(120)
-    assert drape_ops.step_job(bpy.context, job, "TIMER") == "CANCELLED"
-    assert "cancelled" in s.drape_status
+    # the Drape button's job (headless bpy has no window to invoke in): back at once, the job running
+    job = drape_ops.start_drape(pattern, body_v, body_f, frames=400)
+    assert jobs.running(drape_ops.JOB) is job and job.thread.is_alive()
+    jobs.poll()
+    assert s.job_status.startswith("updating: drape")
+    # Esc (the watcher's cancel): the worker stops at its next progress report, nothing is applied
+    assert jobs.cancel() == 1
+    _landed(jobs, job)
+    assert job.cancelled and job.result is None and "cancelled" in s.drape_status
     garment = next(o for o in bpy.data.objects if o.get("ease_role") == "garment")
     assert garment.data.name == g_name and np.array_equal(blender.verts(garment), g_verts)
-    assert not drape_ops._JOBS
+    assert jobs.running() is None
     # the core fails mid-drape: its message in the status, the garment as it was
     from core.errors import EaseError
 
@@ -87,33 +112,48 @@ def test_drape_modal_progress_and_esc(bpy_session, blender, addon):
 
     drape_ops._compute = failing
     try:
-        job = drape_ops.DrapeJob(pattern, body_v, body_f, frames=400).start()
-        job.join(60)
-        assert drape_ops.step_job(bpy.context, job, "TIMER") == "CANCELLED"
+        job = drape_ops.start_drape(pattern, body_v, body_f, frames=400)
+        _landed(jobs, job)
     finally:
         drape_ops._compute = real
     assert "diverged at frame 12" in s.drape_status and "stopped" in s.drape_status
     garment = next(o for o in bpy.data.objects if o.get("ease_role") == "garment")
     assert garment.data.name == g_name and np.array_equal(blender.verts(garment), g_verts)
-    # a run to the end
+    # a run to the end: a progress report per frame, shown in the status line, applied on the poll
     data = addon("data")
     key = addon("data").PATTERN_KEY
     digest = data.pattern_digest(bpy.context.scene[key])
-    job = drape_ops.DrapeJob(pattern, body_v, body_f, frames=4, digest=digest).start()
-    assert drape_ops.step_job(bpy.context, job, "MOUSEMOVE") == "RUNNING"
-    job.join(120)
+    seen = []  # every progress report of the worker, as the status line shows it
+
+    def recording(*a, **k):
+        shown = a[4]
+
+        def progress(fraction, message):
+            shown(fraction, message)
+            seen.append(jobs.running(drape_ops.JOB).status())
+
+        return real(*a[:4], progress, *a[5:], **k)
+
+    drape_ops._compute = recording
+    try:
+        job = drape_ops.start_drape(pattern, body_v, body_f, frames=4, digest=digest)
+        job.thread.join(120)
+    finally:
+        drape_ops._compute = real
+    frames = [re.match(r"updating: drape (\d+) % \(drape: frame (\d+),", t) for t in seen]
+    frames = [(int(m[1]), int(m[2])) for m in frames if m]
+    assert [k for _, k in frames] == [1, 2, 3, 4] and [f for f, _ in frames] == sorted({f for f, _ in frames}), seen
     assert job.fraction >= 0.9 and job.error is None
-    assert drape_ops.step_job(bpy.context, job, "TIMER") == "FINISHED"
-    assert json.loads(s.drape_json)["frames"] <= 4
+    jobs.poll()
+    assert json.loads(s.drape_json)["frames"] <= 4 and s.drape_status.startswith("draped")
     garment = next(o for o in bpy.data.objects if o.get("ease_role") == "garment")
     assert garment["ease_pattern"] == digest and data.garment_positions(bpy.context.scene)[0] is not None
     # the pattern changed while a drape ran: the garment says which pattern it fits, and
     # is not exported as the new one's
-    job = drape_ops.DrapeJob(pattern, body_v, body_f, frames=2, digest=digest).start()
+    job = drape_ops.start_drape(pattern, body_v, body_f, frames=2, digest=digest)
     text = bpy.context.scene[key]
     bpy.context.scene[key] = json.dumps(dict(json.loads(text), style="re-optimized meanwhile"))
-    job.join(120)
-    assert drape_ops.step_job(bpy.context, job, "TIMER") == "FINISHED"
+    _landed(jobs, job)
     garment = next(o for o in bpy.data.objects if o.get("ease_role") == "garment")
     assert garment["ease_pattern"] == digest
     pos, why = data.garment_positions(bpy.context.scene)
@@ -122,9 +162,9 @@ def test_drape_modal_progress_and_esc(bpy_session, blender, addon):
     assert data.garment_positions(bpy.context.scene)[0] is not None
     # disabling the add-on while a drape runs stops the worker (no thread left behind)
     module = bpy_session["module"]
-    job = drape_ops.DrapeJob(pattern, body_v, body_f, frames=5000).start()
-    assert job._thread.is_alive()
+    job = drape_ops.start_drape(pattern, body_v, body_f, frames=5000)
+    assert job.thread.is_alive()
     bpy.ops.preferences.addon_disable(module=module)
-    assert job.cancelled and not job._thread.is_alive() and job.result is None
+    assert job.cancelled and not job.thread.is_alive() and job.result is None
     assert bpy.ops.preferences.addon_enable(module=module) == {"FINISHED"}
     assert bpy.context.scene.ease.drape_json  # the scene's EASE data is still there

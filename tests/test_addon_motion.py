@@ -161,42 +161,59 @@ def test_studio_renders_the_motion_while_it_is_shown(scene, bpy_session):
 
 
 def test_drape_animation_reports_frames_and_esc_cancels(scene, bpy_session):
-    """The interactive Drape Animation: the shared worker job (drape_ops.WorkerJob) reports each
-    motion frame as it goes, applies at the tick after it finished; Esc cancels leaving the motion
-    as it was. Headless there is no event loop (INVOKE falls back to execute): the test drives the
-    modal step."""
+    """The interactive Drape Animation runs as a job of :mod:`ease_addon.jobs` (the one job
+    mechanism, as Drape): the worker reports each motion frame in the status line, the result
+    lands on the main thread's poll; Esc (cancel) leaves the motion as it was. Headless jobs run
+    in line: the test switches them to worker threads as in Blender's window."""
     bpy = scene.bpy
     sc = bpy.context.scene
     s = sc.ease
-    motion_ops, drape_ops = scene.mod("motion_ops"), scene.mod("drape_ops")
-    old = s.motion_poses, s.motion_between
+    motion_ops, jobs = scene.mod("motion_ops"), scene.mod("jobs")
+    old = s.motion_poses, s.motion_between, jobs.SYNCHRONOUS
+    real = motion_ops.Motion.compute
+    seen = []  # every progress report of the worker, as the status line shows it
+
+    def recording(self, progress):
+        def shown(fraction, message):
+            progress(fraction, message)
+            seen.append(jobs.running(motion_ops.JOB).status())
+
+        return real(self, shown)
+
     try:
         s.motion_poses, s.motion_between = "A, P1", 1
-        # Esc: the worker stops at its next progress report, nothing is applied
+        jobs.SYNCHRONOUS = False
+        # the button's job (headless bpy has no window to invoke in): back at once, the job
+        # running; Esc: nothing is applied
         garment = bpy.data.objects["EASE Motion Garment"]
         keys, before = len(garment.data.shape_keys.key_blocks), sc["ease_motion_json"]
-        job = motion_ops.motion_job(bpy.context).start()
-        assert drape_ops.step_job(bpy.context, job, "ESC") == "RUNNING"
-        job.join()
-        assert drape_ops.step_job(bpy.context, job, "TIMER") == "CANCELLED"
+        job = motion_ops.start_motion(bpy.context)
+        assert jobs.running(motion_ops.JOB) is job and job.thread.is_alive()
+        assert jobs.cancel() == 1
+        job.thread.join(120)
+        jobs.poll()
+        assert job.cancelled and job.result is None
         assert s.motion_status.startswith("drape animation cancelled")
         garment = bpy.data.objects["EASE Motion Garment"]
         assert len(garment.data.shape_keys.key_blocks) == keys and sc["ease_motion_json"] == before
-        assert not drape_ops._JOBS
-        # a run to the end: one progress message a motion frame, applied on the main thread
-        job = motion_ops.motion_job(bpy.context).start()
-        seen = set()
-        while not job.done():
-            job.join(0.01)
-            if job.message.startswith("motion: frame"):
-                seen.add(job.message.split(",")[0])
+        assert jobs.running() is None
+        # a run to the end: one progress report a motion frame, applied on the main thread's poll
+        motion_ops.Motion.compute = recording
+        job = motion_ops.start_motion(bpy.context)
+        job.thread.join(300)
+        motion_ops.Motion.compute = real
         assert job.error is None and job.fraction == pytest.approx(1.0)
-        assert "motion: frame 2/2" in seen, seen  # "motion: frame k/K, penetration p %"
-        assert drape_ops.step_job(bpy.context, job, "TIMER") == "FINISHED"
+        frames = [t.split(",")[0] for t in seen if "motion: frame" in t]
+        assert all(f.startswith("updating: drape animation") for f in frames), seen
+        assert {f.split("(")[1] for f in frames} >= {"motion: frame 1/2", "motion: frame 2/2"}, seen
+        assert json.loads(sc["ease_motion_json"]) == json.loads(before)  # not yet: the poll applies it
+        jobs.poll()
         assert json.loads(sc["ease_motion_json"])["frames"] == 3
         assert len(bpy.data.objects["EASE Motion Garment"].data.shape_keys.key_blocks) == 4
     finally:
-        s.motion_poses, s.motion_between = old
+        motion_ops.Motion.compute = real
+        jobs.cancel()
+        s.motion_poses, s.motion_between, jobs.SYNCHRONOUS = old
 
 
 def _key_rotation(pb, frame: int, axis, degrees: float) -> None:
