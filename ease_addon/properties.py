@@ -200,6 +200,18 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
         items=[("cpu", "CPU", "bitwise repeatable"), ("cuda", "CUDA", "NVIDIA GPU through Warp")],
         default="cpu",
     )
+    # the drape mesh's longest edge where the cloth hangs free (mm; 0: the pattern's mesh as it is);
+    # the default is `ease drape --refine-edge`'s (core.cli.drape.REFINE_EDGE, 10 mm)
+    drape_refine_mm: FloatProperty(
+        name="Refine (mm)",
+        description="Refine the drape mesh where the cloth hangs free to edges at most this long "
+        "(finer folds, slower; 0: drape the pattern's mesh as it is)",
+        default=10.0,
+        min=0.0,
+        max=100.0,
+        step=100,
+        precision=1,
+    )
     # Drape Animation (Drape panel): the pose sequence, its in-betweens, the Alembic file
     motion_poses: StringProperty(
         name="Poses",
