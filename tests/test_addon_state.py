@@ -39,7 +39,7 @@ NEEDS_DESIGN = (
     "adapt_poses",
 )
 NEEDS_PATTERN = ("drape", "export_pattern", "marker")
-RUN_ANYWHERE = ("add_body", "load_template", "load_design_file", "studio_setup")
+RUN_ANYWHERE = ("add_body", "load_template", "load_design_file", "studio_setup", "tape_load")
 
 
 @pytest.fixture
