@@ -231,7 +231,7 @@ def _baselines(cut, ref, solver_time, ours):
     """Plain LSCM and libigl ARAP (20 iterations) on the same panels at rho = 1."""
     import igl
 
-    from core.pattern import init as I
+    from core.pattern.optimizer import init as I
     from core.pattern.solve import SolveResult, build_pattern
 
     X = cut.positions(ref)
