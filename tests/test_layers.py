@@ -114,7 +114,10 @@ def test_collider_strips_join_open_edges_to_the_body():
     cv, cf = layer_collider(body_v, body_f, [(v, f, 0.0)])
     ring = 16  # the 5 x 5 grid's border
     assert len(cv) == 4 + len(v) + ring and len(cf) == 2 + len(f) + 2 * ring
-    assert cv[4 + len(v) :, 2] == pytest.approx(-0.052)  # each border vertex's foot, 2 mm into the body
+    foot = cv[4 + len(v) :]
+    assert np.all((foot[:, 2] < -0.050) & (foot[:, 2] > -0.0521))  # each border vertex's foot sunk into the body
+    # ... carried on past the border by twice its 5 cm height: a ramp, not a step
+    assert np.all(np.linalg.norm(foot[:, :2], axis=1) > 0.19)
     # the strips continue the sheet's orientation: every edge of the sheet + strips is run once each way
     g = cf[2:] - 4
     d = np.concatenate([g[:, [0, 1]], g[:, [1, 2]], g[:, [2, 0]]])
@@ -163,4 +166,37 @@ def test_outfit_files_every_garment_its_mesh_and_material(tucked_run, tmp_path):
     rep = json.loads((out / "outfit_report.json").read_text())
     assert [ly["name"] for ly in rep["layers"]] == ["long-sleeve shirt", "pants"]
     assert rep["layers"][1]["over"]["long-sleeve shirt"]["penetration_pct"] <= 0.5
-    assert rep["layers"][1]["pattern_measured_on"] == "body"
+    assert rep["layers"][0]["pattern_measured_on"] == {"surface": "body", "offset_mm": 0.0}
+    over = rep["layers"][1]["pattern_measured_on"]
+    assert over["surface"] == "skintight over" and over["layers"] == ["long-sleeve shirt"]
+    assert over["offset_mm"] == pytest.approx(6.0)  # twice the cotton shirt's 3 mm
+    pants_report = json.loads((out / "pants" / "pattern" / "report.json").read_text())
+    assert pants_report["measured_on"] == over
+
+
+def test_outer_pattern_is_cut_over_the_inner_skintight_surface():
+    from types import SimpleNamespace
+
+    from core.design import load_design
+    from core.design.templates import template
+    from core.workflows import prepare, reference
+    from core.workflows._outfit import _over_inner
+
+    data = template("shorts").to_json()
+    data["refine_edge_length"] = 0.04
+    areas = {}
+    for over in ("body", "skintight"):
+        prep = prepare(load_design(data))
+        inner = [SimpleNamespace(thickness=0.004, layer=SimpleNamespace(name="tights"))]
+        rec = _over_inner(prep, prep.body, inner, over)
+        pattern = reference(prep).pattern
+        areas[over] = sum(
+            0.5
+            * np.abs(
+                np.cross(p.uv[p.faces[:, 1]] - p.uv[p.faces[:, 0]], p.uv[p.faces[:, 2]] - p.uv[p.faces[:, 0]])
+            ).sum()
+            for p in pattern.panels
+        )
+    assert rec == {"surface": "skintight over", "layers": ["tights"], "offset_mm": pytest.approx(8.0)}
+    # 8 mm more girth round a thigh of ~ 9 cm radius: the cloth grows by several per cent
+    assert 1.03 < areas["skintight"] / areas["body"] < 1.3

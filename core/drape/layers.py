@@ -121,24 +121,42 @@ def _directed_open_edges(f: np.ndarray) -> np.ndarray:
     return d[count[inv.ravel()] == 1]
 
 
-def hem_strips(v, f, body_v, body_f, sink: float = 0.002) -> Tuple[np.ndarray, np.ndarray]:
+def hem_strips(v, f, body_v, body_f, sink: float = 0.002, ramp: float = 2.0) -> Tuple[np.ndarray, np.ndarray]:
     """The open edges of the surface (v, f) joined to the body by a strip of triangles, oriented as
-    the surface (its normals turn with it towards the body): each open-edge vertex goes to its
-    closest body point, ``sink`` past it. Returns (new vertices (k, 3), triangles (2e, 3) indexing
-    ``v`` then the new vertices). A collider with these strips has no free edge under which an outer
-    layer could be caught (contact past an open edge would push it round the edge)."""
+    the surface (its normals turn with it towards the body). Each open-edge vertex goes to the body
+    point closest to it carried on past the edge, in the surface's direction, by ``ramp`` times its
+    distance to the body (a ramp, not a step, for the outer layer to slide over), ``sink`` into the
+    body. Returns (new vertices (k, 3), triangles (2e, 3) indexing ``v`` then the new vertices). A
+    collider with these strips has no free edge under which an outer layer could be caught (contact
+    past an open edge would push it round the edge)."""
     import igl
 
-    edges = _directed_open_edges(np.asarray(f, np.int64))
+    v = np.asarray(v, np.float64)
+    f = np.asarray(f, np.int64)
+    body_v = np.asarray(body_v, np.float64)
+    body_f = np.asarray(body_f, np.int64)
+    edges = _directed_open_edges(f)
     if not len(edges):
         return np.zeros((0, 3)), np.zeros((0, 3), np.int64)
+    # each open edge's direction away from the surface, in its triangle's plane
+    tri_normal = _face_normals(v, f)
+    d = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+    owner = np.tile(np.arange(len(f)), 3)
+    key = {tuple(e): k for k, e in enumerate(d.tolist())}
+    tri = owner[[key[tuple(e)] for e in edges.tolist()]]
+    along = v[edges[:, 1]] - v[edges[:, 0]]
+    away = np.cross(along, tri_normal[tri])  # a -> b runs counter-clockwise: along x n points out
+    away /= np.maximum(np.linalg.norm(away, axis=1, keepdims=True), 1e-12)
+    out = np.zeros_like(v)
+    np.add.at(out, edges[:, 0], away)
+    np.add.at(out, edges[:, 1], away)
     ring = np.unique(edges)
-    _, _, foot = igl.point_mesh_squared_distance(
-        np.asarray(v, np.float64)[ring], np.asarray(body_v, np.float64), np.asarray(body_f, np.int64)
-    )
-    d = foot - np.asarray(v, float)[ring]
-    length = np.linalg.norm(d, axis=1, keepdims=True)
-    foot = foot + d / np.where(length > 0, length, 1.0) * sink
+    out = out[ring] / np.maximum(np.linalg.norm(out[ring], axis=1, keepdims=True), 1e-12)
+    gap, _, _ = igl.point_mesh_squared_distance(v[ring], body_v, body_f)
+    _, _, foot = igl.point_mesh_squared_distance(v[ring] + out * ramp * np.sqrt(gap)[:, None], body_v, body_f)
+    inward = foot - v[ring]
+    length = np.linalg.norm(inward, axis=1, keepdims=True)
+    foot = foot + inward / np.where(length > 0, length, 1.0) * sink
     new_id = np.full(len(v), -1, np.int64)
     new_id[ring] = len(v) + np.arange(len(ring))
     a, b = edges[:, 0], edges[:, 1]
@@ -146,14 +164,28 @@ def hem_strips(v, f, body_v, body_f, sink: float = 0.002) -> Tuple[np.ndarray, n
     return foot, tris
 
 
+def covered_faces(body_v, body_f, v, f, band: float = OVERLAP_BAND) -> np.ndarray:
+    """(F,) bool, the body triangles under the garment surface (v, f): their centre inside it, over
+    it (not past its open edges) and within ``band`` of it."""
+    body_v = np.asarray(body_v, np.float64)
+    body_f = np.asarray(body_f, np.int64)
+    dist, over = layer_distance(body_v[body_f].mean(axis=1), v, f)
+    return over & (dist < 0) & (dist > -band)
+
+
 def layer_collider(body_v, body_f, inner: Sequence[Tuple[np.ndarray, np.ndarray, float]], strips: bool = True):
     """One collider mesh: the body plus every inner garment's surface (vertices, faces, offset m),
-    each moved outward along its vertex normals by its offset (the inner fabric's thickness), and
-    with ``strips`` its open edges joined to the body (:func:`hem_strips`)."""
+    each moved outward along its vertex normals by its offset (the inner fabric's thickness).
+
+    With ``strips`` each inner garment's open edges are joined to the body (:func:`hem_strips`) and
+    the body under it is left out (:func:`covered_faces`): the collider is one closed skin, so an
+    outer particle pressed through an inner garment finds that garment, not the body under it, as
+    its closest surface and is pushed back out (with the body there it would stay caught between).
+    """
     body_v = np.asarray(body_v, dtype=np.float64)
     body_f = np.asarray(body_f, dtype=np.int64)
-    vs, fs = [body_v], [body_f]
-    base = len(body_v)
+    keep = np.ones(len(body_f), bool)
+    vs, fs, base = [body_v], [], len(body_v)
     for v, f, offset in inner:
         v = np.asarray(v, dtype=np.float64)
         f = np.asarray(f, dtype=np.int64)
@@ -161,12 +193,13 @@ def layer_collider(body_v, body_f, inner: Sequence[Tuple[np.ndarray, np.ndarray,
             raise DrapeError("an inner layer's draped surface holds NaN/inf")
         v = v + vertex_normals(v, f) * float(offset)
         if strips:
+            keep &= ~covered_faces(body_v, body_f, v, f)
             foot, tris = hem_strips(v, f, body_v, body_f)
             v, f = np.concatenate([v, foot]), np.concatenate([f, tris])
         vs.append(v)
         fs.append(f + base)
         base += len(v)
-    return np.concatenate(vs), np.concatenate(fs)
+    return np.concatenate(vs), np.concatenate([body_f[keep], *fs])
 
 
 def push_outside(points, v, f, clearance: float, band: float = OVERLAP_BAND) -> Tuple[np.ndarray, int]:

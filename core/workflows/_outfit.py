@@ -29,6 +29,8 @@ class LayerRun:
     frame_penetration_pct : list of (frame, still frames in a row, largest penetration share %), for
         every frame after the fabric's growth (``grow_frames``) and every still frame.
     pushed : int, start vertices moved out over the inner layers.
+    measured_on : dict, the surface its pattern was solved and its ease measured on: ``{"surface":
+        "body"}`` or ``{"surface": "skintight over", "layers": [inner names], "offset_mm"}``.
     measure_s : float, s of the drape's wall time spent measuring the penetration frame by frame
         (left out of :attr:`time_per_frame`).
     tucked : dict or None, for a tucked garment: its hem's vertices (its longest open edge loop) that
@@ -46,6 +48,7 @@ class LayerRun:
     pushed: int = 0
     tucked: Optional[dict] = None
     measure_s: float = 0.0
+    measured_on: dict = field(default_factory=lambda: {"surface": "body", "offset_mm": 0.0})
 
     @property
     def surface(self):
@@ -90,7 +93,7 @@ class OutfitRun:
                     "settled_penetration_pct": lr.settled_penetration_pct,
                     "start_vertices_pushed_out": lr.pushed,
                     "tucked_hem": lr.tucked,
-                    "pattern_measured_on": "body",
+                    "pattern_measured_on": lr.measured_on,
                 }
             )
         return out
@@ -155,10 +158,28 @@ def _tucked_hem(lr: LayerRun, outer: List[LayerRun]) -> Optional[dict]:
     }
 
 
+def _over_inner(prep, body, inner: List[LayerRun], over: str) -> dict:
+    """Move ``prep``'s reference body out over the inner layers' skintight surface (``over`` "skintight");
+    returns the record of the surface the pattern is solved and measured on."""
+    from ..body.instance import spec_instance
+    from ..drape.layers import vertex_normals
+    from ..errors import DrapeError
+
+    if over not in ("skintight", "body"):
+        raise DrapeError(f'over: expected "skintight" or "body", got {over!r}')
+    if over == "body" or not inner:
+        return {"surface": "body", "offset_mm": 0.0}
+    offset = sum(2.0 * lr.thickness for lr in inner)
+    _, faces = spec_instance(prep.cut.body, model=body)
+    prep.reference = prep.reference + vertex_normals(prep.reference, faces) * offset
+    return {"surface": "skintight over", "layers": [lr.layer.name for lr in inner], "offset_mm": offset * 1000.0}
+
+
 def drape_outfit(
     outfit,
     options=None,
     refine_edge_length: Optional[float] = None,
+    over: str = "skintight",
     progress: Optional[Progress] = None,
 ) -> OutfitRun:
     """Pattern every layer of ``outfit`` on its body and drape them inner first, each against the body
@@ -169,6 +190,9 @@ def drape_outfit(
     outfit : core.design.outfit.Outfit, or a path / dict for :func:`core.design.outfit.load_outfit`
     options : DrapeOptions or mapping, for every layer's drape
     refine_edge_length : float m or None: overrides every design's cut refinement (coarser: faster)
+    over : ``"skintight"`` (default): an outer garment's pattern is solved, and its ease measured, over
+        the inner layers' skintight surface: the body moved out along its normals by twice each inner
+        fabric's thickness (its contact offset and its own); ``"body"``: over the body, as if worn alone
     """
     from ..body.registry import load_spec
     from ..design import load_design
@@ -198,7 +222,9 @@ def drape_outfit(
             design = load_design(data)
         report(span, 0.0, f"outfit: {layer.name}: cut and pattern")
         prep = prepare(design, body=body, progress=sub(span, 0.0, 0.2))
+        surface = _over_inner(prep, body, runs, over)
         prun = reference(prep, progress=sub(span, 0.2, 0.35))
+        prun.pattern.report["measured_on"] = surface
         pattern = prun.pattern
         if body_v is None:
             body_v, body_f = pattern_body(pattern, "ease outfit")
@@ -227,6 +253,7 @@ def drape_outfit(
         metrics = drape_metrics(result, body_v, body_f, pattern=pattern)
         run = DrapeRun(result, metrics, body_v, body_f, _drape_figures(result, metrics))
         lr = LayerRun(layer, prun, run, pushed=pushed, frame_penetration_pct=frames, measure_s=spent[0])
+        lr.measured_on = surface
         x = np.asarray(result.positions, float)[np.unique(result.faces)]
         lr.over = {inner.layer.name: layer_measure(x, *inner.surface) for inner in runs}
         still = [p for (_, s, p) in frames if s > 0]
