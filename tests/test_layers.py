@@ -200,3 +200,13 @@ def test_outer_pattern_is_cut_over_the_inner_skintight_surface():
     assert rec == {"surface": "skintight over", "layers": ["tights"], "offset_mm": pytest.approx(8.0)}
     # 8 mm more girth round a thigh of ~ 9 cm radius: the cloth grows by several per cent
     assert 1.03 < areas["skintight"] / areas["body"] < 1.3
+
+
+def test_example_outfits_load():
+    from pathlib import Path
+
+    files = sorted((Path(__file__).parent.parent / "examples" / "outfits").glob("*.json"))
+    assert len(files) == 4
+    for p in files:
+        outfit = load_outfit(p)
+        assert len(outfit.layers) == 2 and outfit.name

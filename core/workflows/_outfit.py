@@ -271,9 +271,10 @@ def outfit_summary(run: OutfitRun) -> str:
     for lr in run.layers:
         r = lr.drape.result
         line = f"  {lr.layer.name}: {r.frames} frames ({r.settle_reason}), {lr.time_per_frame * 1000:.0f} ms/frame"
+        settled = any(still > 0 for _, still, _ in lr.frame_penetration_pct)
         for name, m in lr.over.items():
             line += (
-                f"; over {name}: penetration {m['penetration_pct']:.2f} % (settled max "
+                f"; over {name}: penetration {m['penetration_pct']:.2f} % ({'settled max' if settled else 'last frame'} "
                 f"{lr.settled_penetration_pct:.2f} %), gap {m['gap_mm']['mean']:.1f} mm mean, "
                 f"{m['gap_mm']['p95']:.1f} mm p95"
             )
