@@ -33,6 +33,7 @@ from . import (
     export_ops,
     fit_ops,
     jobs,
+    layers_ops,
     live,
     marker_ops,
     measure_ops,
@@ -60,6 +61,8 @@ CLASSES = (
     + jobs.CLASSES
     + panels.CLASSES
     + measure_ops.PANELS
+    + layers_ops.CLASSES
+    + layers_ops.PANELS
 )
 
 _register_classes, _unregister_classes = bpy.utils.register_classes_factory(CLASSES)
@@ -69,6 +72,7 @@ def register():
     _register_classes()
     properties.register_props()
     measure_ops.register_props()
+    layers_ops.register_props()
     if live.on_load not in bpy.app.handlers.load_post:
         bpy.app.handlers.load_post.append(live.on_load)
     # a file already open (the add-on enabled after it was read): Live follows its toggle once
@@ -83,6 +87,7 @@ def unregister():
     if bpy.app.timers.is_registered(live.resume):
         bpy.app.timers.unregister(live.resume)
     live.stop()
+    layers_ops.unregister_props()
     measure_ops.unregister_props()
     properties.unregister_props()
     _unregister_classes()

@@ -107,6 +107,12 @@ class _Recorder:
         assert name in data.bl_rna.properties, f"{type(data).__name__} has no property {name!r}"
         self.seen.append(("prop", name))
 
+    def template_list(self, list_type, list_id, data, name, active_data, active_name, **k):
+        assert hasattr(self.bpy.types, list_type), f"no UIList {list_type}"
+        assert name in data.bl_rna.properties, f"{type(data).__name__} has no property {name!r}"
+        assert active_name in active_data.bl_rna.properties, f"{type(active_data).__name__} has no {active_name!r}"
+        self.seen.append(("prop", name))
+
     def prop_enum(self, data, name, value, **k):
         assert name in data.bl_rna.properties, f"{type(data).__name__} has no property {name!r}"
         items = {i.identifier for i in data.bl_rna.properties[name].enum_items}
