@@ -221,6 +221,33 @@ class TapeFit:
         return "\n".join(lines)
 
 
+# Thigh separation: the band under the crotch where the inner thighs face each other (m), and the
+# weight (per cm of overlap) of the fit's penalty on thighs that pass through each other.
+THIGH_BAND = 0.12
+THIGH_WEIGHT = 20.0
+# The gap the penalty keeps (cm): the solver stops a little inside a penalty's kink, so aiming at
+# half a centimetre leaves the thighs apart, not a fraction of a millimetre through each other.
+THIGH_MARGIN_CM = 0.2
+
+
+def thigh_gap(body, vertices: np.ndarray) -> float:
+    """The gap (cm) between the inner thighs within :data:`THIGH_BAND` under the crotch: for each leg
+    (Anny's ``leg_left``/``leg_right`` regions) the distance of its innermost vertex in the band from
+    the body's mid-plane (x = 0), the two added. Negative: the thighs pass through each other (a
+    self-intersection a real body never has; touching thighs press flat at 0)."""
+    v = np.asarray(vertices, dtype=float)
+    z = body.landmark_position("crotch", v)[2]
+    gap = 0.0
+    for region in ("leg_left", "leg_right"):
+        p = v[np.asarray(body.regions[region], dtype=np.int64)]
+        side = np.sign(p[:, 0].mean())
+        band = p[(p[:, 2] <= z) & (p[:, 2] >= z - THIGH_BAND)]
+        if not len(band):
+            raise BodyError(f"thigh gap: no {region} vertices within {THIGH_BAND * 100:g} cm under the crotch")
+        gap += float((side * band[:, 0]).min())
+    return 100.0 * gap
+
+
 def collisions(body, shape) -> list:
     """Parts of the body at ``shape`` that cut into each other: the thighs' sections 3 cm under the
     crotch overlapping, or the upper arm's section (square to the bone, at its middle) reaching
@@ -335,6 +362,7 @@ def fit_tape(
     start: Optional[Mapping[str, float]] = None,
     local: bool = True,
     parameters: Optional[Sequence[str]] = None,
+    apart: bool = True,
 ) -> TapeFit:
     """Fit ``body`` (Anny) to tape measures (cm) of :data:`TAPE_MEASURES`.
 
@@ -344,6 +372,9 @@ def fit_tape(
         held there; without it the fit moves gender too, from 0.5).
     start : a start shape (default the reference shape); local : whether local changes move.
     parameters : the phenotypes to move (default :data:`PHENOTYPES`, gender where not given).
+    apart : penalise thighs that pass through each other (:func:`thigh_gap` below 0, weighted
+        :data:`THIGH_WEIGHT` per cm under :data:`THIGH_MARGIN_CM`), so the fit trades a millimetre of target for a body that does
+        not cut into itself; False fits the targets alone (the collision is still reported).
     """
     t = check_tape_targets(targets)
     own = getattr(body, "local_change_parameters", None)
@@ -385,20 +416,26 @@ def fit_tape(
         if count[0] % 10 == 1:
             report(progress, min(0.95, count[0] / 400.0), f"fitting {len(keys)} measures ({count[0]} evaluations)")
         s = shape_of(x)
-        got = tape_measures(body, None, keys, shape=s)
-        return np.concatenate([scale * (np.array([got[k] for k in keys]) - want), pull * (x - prior)])
+        v, joints = body.vertices_and_joints(s)
+        got = tape_measures(body, v, keys, shape=s, joints=joints)
+        overlap = [THIGH_WEIGHT * max(0.0, THIGH_MARGIN_CM - thigh_gap(body, v))] if apart else []
+        return np.concatenate([scale * (np.array([got[k] for k in keys]) - want), pull * (x - prior), overlap])
+
+    def within(r, cm):
+        # every measure within ``cm`` (lengths 1.5 times that), and the thighs apart
+        return bool(np.all(np.abs(r[: len(keys)]) <= cm) and (not apart or r[-1] <= THIGH_WEIGHT * THIGH_MARGIN_CM))
 
     def landed(r):
-        return bool(np.all(np.abs(r[: len(keys)]) <= GIRTH_TOLERANCE_CM))
+        return within(r, GIRTH_TOLERANCE_CM)
 
-    x = solve(residual, x0, lo, hi, step=FD_STEP, done=lambda r: bool(np.all(np.abs(r[: len(keys)]) <= 0.3)))
+    x = solve(residual, x0, lo, hi, step=FD_STEP, done=lambda r: within(r, 0.3))
     # A fit that stops short (a level that jumps, such as a second waist, can stall a step) goes
     # on from where it stopped with a fresh Jacobian, up to RESTARTS times, the best kept.
     best, best_r = x, residual(x)
     for _ in range(RESTARTS):
         if landed(best_r):
             break
-        x = solve(residual, best, lo, hi, step=FD_STEP, done=lambda r: bool(np.all(np.abs(r[: len(keys)]) <= 0.3)))
+        x = solve(residual, best, lo, hi, step=FD_STEP, done=lambda r: within(r, 0.3))
         r = residual(x)
         gained = r @ r < 0.99 * (best_r @ best_r)
         if r @ r < best_r @ best_r:

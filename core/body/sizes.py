@@ -417,6 +417,41 @@ def chart_fit(body, size: str, chart: Optional[str] = None, progress: Optional[P
     return best
 
 
+# The local change a chart fit moves besides those of the girths the chart gives: the thighs' girth,
+# so that a plus size's thighs are kept apart (fit_tape's thigh penalty) by slimmer thighs rather
+# than by a narrower hip.
+CHART_EXTRA_LOCAL = ("measure-thigh-circ-incr",)
+
+
+def chart_tape_fit(
+    body,
+    size: str,
+    chart: Optional[str] = None,
+    progress: Optional[Progress] = None,
+    start: Optional[Mapping[str, float]] = None,
+):
+    """Fit ``body`` (Anny) to a chart size measured as a tailor measures (:mod:`core.body.tape`,
+    ISO 8559-1: the bust at the bust points, the natural waist, the hip at the buttocks), by
+    :func:`core.body.made_to_measure.fit_tape`: the chart's gender held, its parameters and
+    ``assist`` moving (adult ages), with the local change of each girth the chart gives and
+    :data:`CHART_EXTRA_LOCAL`, pulled towards the population; the thighs kept apart.
+
+    ``start`` defaults to the stored fit of the size (else the chart's start phenotype). Returns
+    the :class:`~core.body.made_to_measure.TapeFit` (its ``ok``: every target within 1 cm, no
+    self-intersection); these fits are the chart's stored ``fitted`` shapes for Anny.
+    """
+    from .made_to_measure import fit_tape
+
+    c, key = split_size(size, chart)
+    own = body.shape_parameters()
+    targets = {**c.sizes[key], **{k: v for k, v in c.start.items() if k == "gender"}}
+    params = [n for n in tuple(c.parameters) + tuple(c.assist) if n in own]
+    params += [n for n in CHART_EXTRA_LOCAL if n in local_parameters(body)]
+    if start is None:
+        start = c.fitted.get(getattr(body, "name", ""), {}).get(key, c.start)
+    return fit_tape(body, targets, progress=progress, start=start, parameters=params)
+
+
 def size_shape(body, size: str, progress: Optional[Progress] = None, chart: Optional[str] = None) -> Dict[str, float]:
     """Shape dict of chart size ``size`` (``"M"``, or ``"women:M"``; ``chart`` names the
     chart of an unqualified name, default the default chart) for ``body``.

@@ -292,7 +292,7 @@ def levels(body, v: np.ndarray) -> Dict[str, float]:
 
 
 def tape_measures(
-    body, vertices: Optional[np.ndarray] = None, which: Iterable[str] = TAPE_MEASURES, shape=None
+    body, vertices: Optional[np.ndarray] = None, which: Iterable[str] = TAPE_MEASURES, shape=None, joints=None
 ) -> Dict[str, float]:
     """The tape measures (cm) of a standing instance of ``body`` (default its reference shape).
 
@@ -302,6 +302,7 @@ def tape_measures(
     vertices : (V, 3) the instance (A-pose); default ``body.vertices(shape)``.
     which : names of :data:`TAPE_MEASURES` (aliases accepted).
     shape : the instance's shape, for its joints (default the reference shape).
+    joints : the instance's joints where the caller has them with ``vertices`` (else from ``shape``).
     """
     _check_model(body)
     names = [canonical(n) for n in which]
@@ -312,7 +313,8 @@ def tape_measures(
             else (body.vertices(shape), body.joints(shape))
         )
     else:
-        v, joints = np.asarray(vertices, dtype=float), body.joints(shape)
+        v = np.asarray(vertices, dtype=float)
+        joints = body.joints(shape) if joints is None else np.asarray(joints, dtype=float)
     if v.shape != (body.n_vertices, 3):
         raise BodyError(f"tape measures: vertices have shape {v.shape}, expected ({body.n_vertices}, 3)")
     parts = _parts(body)
