@@ -302,10 +302,20 @@ def _map_colors(values, lo, hi) -> np.ndarray:
     return ramp.ease_to_color(np.clip(values, lo, hi) + 1.0, lo + 1.0, hi + 1.0)
 
 
+REFINE_EDGE = "ease_refine_edge"  # on the garment: the drape mesh's refinement edge (m; 0: the pattern's mesh)
+PATTERN_VERTICES = "ease_pattern_vertices"  # on the garment: ids below this are the pattern's own
+_MESH_PATTERNS: dict = {}  # (pattern digest, refine edge) -> the pattern as draped (the last drape's)
+
+
 def garment(scene, result, gap, digest: str):
     """The garment object of a DrapeResult (replacing an earlier one): fabric material, the
-    fit-map colour layers (strain, gap) with their values, and the pattern vertex id of each
-    vertex (layer :data:`.data.VERTEX_ID`); ``digest`` names the pattern it was draped from."""
+    fit-map colour layers (strain, gap) with their values, and the global vertex id of each
+    vertex (layer :data:`.data.VERTEX_ID`); ``digest`` names the pattern it was draped from.
+
+    On a refined drape mesh (``DrapeOptions.refine_edge``) the object is the drape's own mesh:
+    its ids below :data:`PATTERN_VERTICES` are the pattern's vertices (what the export reads
+    back), those above them the refinement's; the pattern as draped (``result.mesh_pattern``,
+    whose panels' triangles are the object's faces) is kept for :func:`drape_pattern`."""
     used = np.asarray(result.used, dtype=bool)
     ids = np.flatnonzero(used)
     remap = -np.ones(len(used), dtype=np.int64)
@@ -330,5 +340,30 @@ def garment(scene, result, gap, digest: str):
         poly.use_smooth = True
     obj = put_object(scene, GARMENT, me, "garment")
     obj["ease_pattern"] = digest  # draped from this pattern
+    edge = float((getattr(result, "options", None) or {}).get("refine_edge") or 0.0)
+    obj[REFINE_EDGE] = edge
+    obj[PATTERN_VERTICES] = int(getattr(result, "pattern_vertices", 0) or len(used))
+    if edge and getattr(result, "mesh_pattern", None) is not None:
+        _MESH_PATTERNS.clear()
+        _MESH_PATTERNS[(digest, edge)] = result.mesh_pattern
     _remove_others(scene, ["garment"], [obj])
     return obj
+
+
+def drape_pattern(obj, pattern):
+    """The pattern whose panels' triangles are the faces of the garment ``obj`` draped from
+    ``pattern``: ``pattern`` itself, or on a refined drape mesh the pattern as draped (the
+    core's own refinement of ``pattern``, :func:`core.drape.mesh.build_cloth`: the same
+    triangles; kept from the drape, else made again), with ``pattern``'s materials."""
+    from dataclasses import replace
+
+    edge = float(obj.get(REFINE_EDGE, 0.0) or 0.0)
+    if pattern is None or not edge:
+        return pattern
+    key = (obj.get("ease_pattern"), edge)
+    mesh = _MESH_PATTERNS.get(key)
+    if mesh is None:  # (a file opened again): the core refines as the drape did
+        from ..core.drape.mesh import build_cloth
+
+        mesh = build_cloth(pattern, refine_edge=edge, gathers=True).mesh_pattern
+    return replace(mesh, materials=pattern.materials)

@@ -25,24 +25,35 @@ def _pattern_body(pattern):
     return spec_instance(spec, model=state.body_model(spec.get("model", "anny")))
 
 
-def _compute(pattern, body_v, body_f, frames, progress, device="cpu"):
-    """The core's drape of ``pattern`` on the body (V, F) and its fit measurements (a DrapeRun)."""
+def _compute(pattern, body_v, body_f, frames, progress, device="cpu", refine_edge=None):
+    """The core's drape of ``pattern`` on the body (V, F) and its fit measurements (a DrapeRun);
+    ``refine_edge`` (m, or None): the drape mesh's longest edge where the cloth hangs free."""
     from ..core import workflows as wf
 
-    return wf.drape(
-        pattern, options={"max_frames": int(frames), "device": device}, body=(body_v, body_f), progress=progress
-    )
+    options = {"max_frames": int(frames), "device": device, "refine_edge": refine_edge}
+    return wf.drape(pattern, options=options, body=(body_v, body_f), progress=progress)
 
 
-def start_drape(pattern, body_v, body_f, frames: int, device: str = "cpu", digest=None, sync=None) -> jobs.Job:
+def refine_edge(mm: float):
+    """The core's ``refine_edge`` (m, or None for 0) of the Drape panel's *Refine (mm)*, checked."""
+    if not mm:
+        return None
+    if not 1.0 <= mm <= 100.0:
+        raise state.AddonError(f"Refine (mm) = {mm:g}: expected 0 (the pattern's mesh) or 1 to 100 mm")
+    return mm / 1000.0
+
+
+def start_drape(
+    pattern, body_v, body_f, frames: int, device: str = "cpu", digest=None, sync=None, refine=None
+) -> jobs.Job:
     """The drape of ``pattern`` on the body (V, F) for at most ``frames`` frames as the job
     :data:`JOB` (``sync``: :func:`.jobs.start`'s); the garment is made when it lands.
-    ``digest``: the pattern it drapes (the scene's may change meanwhile)."""
-
+    ``digest``: the pattern it drapes (the scene's may change meanwhile); ``refine``: the drape
+    mesh's refinement edge (m, or None: the pattern's mesh)."""
     return jobs.start_step(
         JOB,
         "drape",
-        lambda progress: _compute(pattern, body_v, body_f, frames, progress, device),
+        lambda progress: _compute(pattern, body_v, body_f, frames, progress, device, refine),
         lambda run: apply_drape(bpy.context, run, digest=digest),
         "drape_status",
         "Drape",
@@ -63,7 +74,10 @@ class EASE_OT_drape(jobs.Background, EaseOperator):
         s = context.scene.ease
         # the pattern may change while the drape runs: the garment records the one it was draped from
         digest = data.pattern_digest(context.scene.get(data.PATTERN_KEY, ""))
-        job = start_drape(pattern, body_v, body_f, s.drape_frames, s.drape_device, digest, sync=self.job_sync())
+        refine = refine_edge(s.drape_refine_mm)
+        job = start_drape(
+            pattern, body_v, body_f, s.drape_frames, s.drape_device, digest, sync=self.job_sync(), refine=refine
+        )
         self.report({"INFO"}, s.drape_status if job.thread is None else "draping in the background (Esc cancels)")
 
 

@@ -26,7 +26,7 @@ import itertools
 
 import numpy as np
 
-from . import data, materials
+from . import build, data, materials
 from .objects import objects_with_role
 
 THICKNESS = "EASE Thickness"
@@ -163,6 +163,7 @@ def dress_garment(scene, obj, pattern=None) -> bool:
             me.materials[0] = mat
         else:
             me.materials.append(mat)
+    pattern = build.drape_pattern(obj, pattern)  # a refined drape mesh's: the pattern as draped
     if pattern is None:
         return False
     layers = _corner_layers(pattern, preset)

@@ -168,3 +168,67 @@ def test_drape_in_the_background_progress_and_esc(bpy_session, blender, addon, t
     assert job.cancelled and not job.thread.is_alive() and job.result is None
     assert bpy.ops.preferences.addon_enable(module=module) == {"FINISHED"}
     assert bpy.context.scene.ease.drape_json  # the scene's EASE data is still there
+
+
+def test_refined_drape_mesh(bpy_session, blender, addon, tmp_path):
+    """Refine (mm): the garment is the drape's refined mesh (more vertices than the pattern's);
+    its fit maps, ``ease_vertex_id`` (the pattern's ids, then the refinement's), fabric UVs
+    (the pattern as draped, laid corner by corner) are the refined mesh's; the export reads the
+    pattern's vertices back from it. The default is ``ease drape``'s; a bad value is refused."""
+    from core.cli.drape import REFINE_EDGE
+
+    bpy = bpy_session["bpy"]
+    sc = bpy.context.scene
+    s = sc.ease
+    build, fabric, data = addon("build"), addon("render_fabric"), addon("data")
+    assert s.bl_rna.properties["drape_refine_mm"].default == pytest.approx(1000 * REFINE_EDGE)
+    pattern = data.stored_pattern(sc)
+    n_pattern = max(int(np.max(p.vertex_ids)) for p in pattern.panels) + 1
+    s.drape_frames, s.drape_device = 3, "cpu"
+    s.drape_refine_mm = 0.0
+    assert bpy.ops.ease.drape() == {"FINISHED"}
+    coarse = next(o for o in bpy.data.objects if o.get("ease_role") == "garment")
+    n_coarse = len(coarse.data.vertices)
+    assert coarse[build.REFINE_EDGE] == 0.0 and build.drape_pattern(coarse, pattern) is pattern
+    s.drape_refine_mm = 8.0
+    assert bpy.ops.ease.drape() == {"FINISHED"}
+    g = next(o for o in bpy.data.objects if o.get("ease_role") == "garment")
+    me = g.data
+    n = len(me.vertices)
+    assert n > n_coarse and g[build.REFINE_EDGE] == pytest.approx(0.008) and g[build.PATTERN_VERTICES] == n_pattern
+    ids = np.empty(n, dtype=np.int32)
+    me.attributes[data.VERTEX_ID].data.foreach_get("value", ids)
+    assert len(np.unique(ids)) == n and set(range(n_pattern)) <= set(ids.tolist())  # the pattern's, then new ones
+    for layer in ("fit_strain", "fit_gap"):
+        values = np.empty(n, dtype=np.float32)
+        me.attributes[layer + "_value"].data.foreach_get("value", values)
+        assert np.all(np.isfinite(values)) and len(me.color_attributes[layer].data) == n
+    # the pattern as draped: its triangles are the garment's faces (corner by corner, by id)
+    mesh = build.drape_pattern(g, pattern)
+    corners = np.concatenate([np.asarray(p.vertex_ids)[np.asarray(p.faces).ravel()] for p in mesh.panels])
+    loop_vertex = np.empty(len(me.loops), dtype=np.int32)
+    me.loops.foreach_get("vertex_index", loop_vertex)
+    assert np.array_equal(ids[loop_vertex], corners)
+    # the fabric's UVs on the refined mesh: each edge's UV length is its length in the pattern
+    build._MESH_PATTERNS.clear()  # as after reopening the file: the core refines the same way again
+    assert fabric.dress_garment(sc, g) is True
+    uv = np.empty(len(me.loops) * 2, dtype=np.float32)
+    me.uv_layers[addon("materials").FABRIC_UV].data.foreach_get("uv", uv)
+    uv = uv.reshape(-1, 3, 2)
+    flat = np.concatenate([np.asarray(p.uv)[np.asarray(p.faces)] for p in mesh.panels])
+    got = np.linalg.norm(uv[:, 1] - uv[:, 0], axis=1)
+    assert np.allclose(got, np.linalg.norm(flat[:, 1] - flat[:, 0], axis=1), atol=1e-6)
+    # the export reads the pattern's own vertices back from the refined garment
+    pos, why = data.garment_positions(sc)
+    assert why is None and np.all(np.isfinite(pos[:n_pattern]))
+    s.export_dir = str(tmp_path)
+    for f in ("svg", "dxf", "pdf", "glb"):
+        setattr(s, f"export_{f}", False)
+    s.export_obj = True
+    assert bpy.ops.ease.export_pattern() == {"FINISHED"}
+    assert list(tmp_path.glob("*.obj"))
+    # a refinement the core cannot make: refused in one line naming the setting, nothing draped
+    s.drape_refine_mm = 0.5
+    r = blender.run(bpy.ops.ease.drape)
+    assert "ERROR" in r and "Refine (mm)" in r["ERROR"], r
+    s.drape_refine_mm = 10.0
