@@ -141,7 +141,8 @@ def test_garment_wears_its_fabric(scene, bpy_session):
     assert g.modifiers["EASE Thickness"].thickness == pytest.approx(core.PRESETS["cotton"].thickness)
     # the weave's UV map is the pattern in metres with V along the grain: each garment edge's UV
     # length is its pattern length (the weave's mm are the cloth's mm)
-    pattern = scene.mod("data").stored_pattern(bpy.context.scene)
+    # (on a refined drape mesh, the Drape panel's default, the pattern as draped: its triangles are the garment's)
+    pattern = scene.mod("build").drape_pattern(g, scene.mod("data").stored_pattern(bpy.context.scene))
     uv = np.empty(len(g.data.loops) * 2, dtype=np.float32)
     g.data.uv_layers[mats.FABRIC_UV].data.foreach_get("uv", uv)
     uv = uv.reshape(-1, 3, 2)
