@@ -8,9 +8,12 @@ import pytest
 from test_body_sizes import N, TubeBody, ellipse_polygon_perimeter
 
 from core.body.made_to_measure import (
+    PHENOTYPES,
     check_tape_targets,
+    collisions,
     fit_tape,
     sample_body,
+    thigh_gap,
     tolerance,
 )
 from core.body.measure import measure
@@ -173,6 +176,45 @@ def test_made_to_measure_recovers_a_hidden_body(anny):
     v = anny.vertices(fit.shape)
     assert np.abs(v[anny.symmetry] * np.array([-1.0, 1.0, 1.0]) - v).max() < 1e-3
     assert any(k in anny.local_change_parameters() for k in fit.shape)
+
+
+# A heavy woman's shape whose thighs pass through each other (the women's XXL fitted by the chart
+# measures before the tape refit): the thigh penalty's test input.
+CROSSED_THIGHS = {
+    "gender": 1.0,
+    "age": 0.7475,
+    "muscle": 0.0,
+    "weight": 0.9314,
+    "height": 0.4087,
+    "proportions": 0.4189,
+    "cupsize": 1.0,
+    "measure-bust-circ-incr": 0.1252,
+    "measure-waist-circ-incr": -0.1537,
+    "measure-hips-circ-incr": 0.4002,
+}
+
+
+def test_thigh_gap_says_when_thighs_cross(anny):
+    """thigh_gap is below 0 exactly where the section check finds the thighs overlapping, and
+    grows with a slimmer thigh."""
+    crossed = {**anny.default_shape(), **CROSSED_THIGHS}
+    assert thigh_gap(anny, anny.vertices(crossed)) < 0 and "thighs" in collisions(anny, crossed)
+    slim = {**crossed, "measure-thigh-circ-incr": -0.5}
+    assert thigh_gap(anny, anny.vertices(slim)) > thigh_gap(anny, anny.vertices(crossed))
+    assert thigh_gap(anny, anny.vertices()) > 1.0 and collisions(anny, anny.default_shape()) == []
+
+
+def test_fit_keeps_the_thighs_apart(anny):
+    """Targets taken on a body whose thighs cross: without the penalty the fit stays on that body
+    (it meets the targets); with it the fit moves the thighs apart and still lands within 1 cm."""
+    targets = tape_measures(anny, None, ["height", "chest", "waist", "hip"], shape=CROSSED_THIGHS)
+    table = {**targets, "gender": 1.0}
+    params = list(PHENOTYPES) + ["measure-thigh-circ-incr"]
+    plain = fit_tape(anny, table, start=CROSSED_THIGHS, parameters=params, apart=False)
+    assert "thighs" in plain.collisions and not plain.ok
+    fit = fit_tape(anny, table, start=CROSSED_THIGHS, parameters=params)
+    assert fit.ok, fit.summary()
+    assert fit.collisions == [] and thigh_gap(anny, anny.vertices(fit.shape)) > 0
 
 
 def test_an_unreachable_measure_is_reported_with_the_closest_value(anny):
