@@ -9,8 +9,9 @@
 - size table: each chart size re-fitted with ``fit_measurements`` from the
   reference shape (parameters, achieved measurements, status, evaluations,
   seconds), and the stored chart shapes measured;
-- charts: every size of the women's and men's charts, its stored Anny shape measured: each
-  girth the chart gives and the height, with the error (cm; all within 1 cm);
+- charts: every size of the women's and men's charts, its stored Anny shape measured as a tailor
+  measures (``core.body.tape``): each girth the chart gives and the height, with the error (cm;
+  all within 1 cm), and the same body by the old chart definitions (``core.body.measure``);
 - made-to-measure: ``made_to_measure`` sets of the 14 tape measures of hidden bodies of the
   population (``core.body.made_to_measure.sample_body``, seeded), each fitted with ``fit_tape``:
   the errors on girths and on lengths, how many land (girths 1 cm, lengths 1.5 cm), the fit time;
@@ -43,18 +44,25 @@ def _median_ms(fn, repeats):
 
 
 def charts_table(body) -> dict:
-    """Every size of the published charts, its stored shape measured: {chart: {size: {measure:
-    [target, measured, error]}}} (cm)."""
+    """Every size of the published charts, its stored shape measured as a tailor measures
+    (``core.body.tape``, the definitions the sizes are fitted by): {chart: {size: {measure:
+    [target, measured, error, old]}}} (cm), ``old`` the same body's measure by the chart
+    definitions the sizes were fitted by before (``core.body.measure``: girths at landmark heights)."""
     from core.body.charts import PUBLISHED
     from core.body.measure import measure
     from core.body.sizes import size_shape
+    from core.body.tape import tape_measures
 
     out = {}
     for name, chart in PUBLISHED.items():
         out[name] = {}
         for size, targets in chart.sizes.items():
-            got = measure(body, body.vertices(size_shape(body, size, chart=name)))
-            out[name][size] = {k: [v, round(got[k], 2), round(got[k] - v, 2)] for k, v in targets.items()}
+            shape = size_shape(body, size, chart=name)
+            got = tape_measures(body, None, list(targets), shape=shape)
+            old = measure(body, body.vertices(shape), list(targets))
+            out[name][size] = {
+                k: [v, round(got[k], 2), round(got[k] - v, 2), round(old[k], 2)] for k, v in targets.items()
+            }
     return out
 
 
@@ -275,8 +283,10 @@ def run(out_dir, quick: bool = False) -> dict:
     lines += [
         "## Published charts",
         "",
-        "Each size's stored Anny shape measured (chart measures, `core.body.measure`): target / "
-        "measured (error), cm. Sizes beyond the phenotypes' reach carry Anny's local changes.",
+        "Each size's stored Anny shape (fitted by `sizes.chart_tape_fit`) measured as a tailor measures "
+        "(`core.body.tape`, ISO 8559-1: bust at the bust points, natural waist, hip at the buttocks): "
+        "target / measured (error), cm; in brackets after it, where it differs by 0.5 cm or more, the same "
+        "body by the old chart definitions (`core.body.measure`, girths at landmark heights).",
         "",
     ]
     for name, table in charts.items():
@@ -284,7 +294,11 @@ def run(out_dir, quick: bool = False) -> dict:
         lines += [f"**{name}**", "", "| size | " + " | ".join(keys) + " | worst |", "|---|" + "---|" * (len(keys) + 1)]
         for size, rec in table.items():
             worst = max(abs(v[2]) for v in rec.values())
-            cells = " | ".join(f"{rec[k][0]:g} / {rec[k][1]:.1f} ({rec[k][2]:+.1f})" for k in keys)
+            cells = " | ".join(
+                f"{rec[k][0]:g} / {rec[k][1]:.1f} ({rec[k][2]:+.1f})"
+                + (f" [old {rec[k][3]:.1f}]" if len(rec[k]) > 3 and abs(rec[k][3] - rec[k][1]) >= 0.5 else "")
+                for k in keys
+            )
             lines.append(f"| {size} | {cells} | {worst:.2f} |")
         lines.append("")
     g, ln, fs = mtm["girth_error_cm"], mtm["length_error_cm"], mtm["fit_seconds"]

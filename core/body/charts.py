@@ -57,9 +57,12 @@ not read):
   the men's sizes have no hip target, and the fit holds the hip near the
   starting body's (see :func:`core.body.sizes.fit_measurements`).
 
-Every size of both charts is fitted within 1 cm of each target (the stored fits below;
-:func:`core.body.sizes.chart_fit` makes them, from :data:`RESTARTS` where the first fit
-misses). The women's fits may move Anny's ``cupsize`` (0 .. 1 moves a women's M bust
+Every size of both charts is fitted within 1 cm of each target and of its height, the girths
+measured as a tailor measures (:mod:`core.body.tape`, ISO 8559-1: bust at the bust points, natural
+waist, hip at the buttocks): the stored fits below are made by :func:`core.body.sizes.chart_tape_fit`
+(phenotypes, the local change of each girth given and the thigh's, the thighs kept apart). The
+history below (:func:`core.body.sizes.chart_fit`, :data:`RESTARTS`) is that of the earlier fits by
+the chart measures of :mod:`core.body.measure`, which other body models are still fitted by. The women's fits may move Anny's ``cupsize`` (0 .. 1 moves a women's M bust
 89.8 .. 103.4 cm, waist and hip still) where the average cup (0.5) cannot reach a size
 (the chart's ``assist``): XS needs the smallest cup (0), L the largest (1); S and M keep
 0.5 (with the cup free from the start, the least-squares fit drifts: M ended at cup 0.65,
