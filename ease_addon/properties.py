@@ -323,8 +323,7 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
         items=SOLVER_CONFIGS,
         default=data.DESIGN_SOLVER,
         description="Solver configuration of Optimize Pattern, Transfer to Size and Adapt "
-        "to Poses: the design's own, or one chosen here over it (live "
-        "painting keeps Improved: it must answer within a stroke)",
+        "to Poses: the design's own, or one chosen here over it (Live solves with it too)",
     )
     # seam gathering: kept in the design (materials.gather_above) by Optimize Pattern
     gather_auto: BoolProperty(
