@@ -208,6 +208,8 @@ class EASE_PT_drape(_EasePanel, bpy.types.Panel):
         row.prop(s, "drape_device", text="")
         layout.prop(s, "drape_refine_mm")
         layout.operator("ease.drape", icon="MOD_CLOTH")
+        if s.job_status.startswith("updating: drape"):  # a Drape or Drape Animation running: Cancel beside it
+            _job_row(layout, s)
         if s.drape_status:
             layout.label(text=s.drape_status)
         _props(layout, s, "fitmap", expand=True)

@@ -94,6 +94,11 @@ def test_drape_in_the_background_progress_and_esc(bpy_session, blender, addon, t
     assert jobs.running(drape_ops.JOB) is job and job.thread.is_alive()
     jobs.poll()
     assert s.job_status.startswith("updating: drape")
+    from test_addon_honest import _draw  # the Drape panel shows the line and its Cancel button
+
+    log = _draw(blender, "EASE_PT_drape")
+    assert any(t.startswith("updating: drape") for t in log["labels"]) and "ease.cancel_jobs" in log["operators"]
+    assert "drape_refine_mm" in log["props"]
     # Esc (the watcher's cancel): the worker stops at its next progress report, nothing is applied
     assert jobs.cancel() == 1
     _landed(jobs, job)
