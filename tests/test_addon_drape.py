@@ -237,3 +237,19 @@ def test_refined_drape_mesh(bpy_session, blender, addon, tmp_path):
     r = blender.run(bpy.ops.ease.drape)
     assert "ERROR" in r and "Refine (mm)" in r["ERROR"], r
     s.drape_refine_mm = 10.0
+
+
+def test_pressed_drapes_in_the_background_scripts_in_line(addon):
+    """jobs.Background: an operator pressed in the interface (invoke) runs its job in the
+    background (start's default: a worker with a window, in line headless); one run from a
+    script (execute) always in line, its result there when the call returns."""
+    jobs = addon("jobs")
+
+    class Op(jobs.Background):
+        def execute(self, context):
+            return self.job_sync()
+
+    assert Op().execute(None) is True
+    assert Op().invoke(None, None) is None
+    assert issubclass(addon("drape_ops").EASE_OT_drape, jobs.Background)
+    assert issubclass(addon("motion_ops").EASE_OT_drape_animation, jobs.Background)
