@@ -400,3 +400,32 @@ def test_four_darts_graded_to_l_keeps_the_bust_region_of_m(four_darts):
     m = four_dart_figures(ref, prep.body)["bust region %"]
     fig = four_dart_figures(wf.transfer(prep, "L", solver=solver, start=ref).pattern, prep.body)
     assert fig["bust region %"] <= m + 0.5
+
+
+def test_a_solve_whose_dart_legs_cross_runs_rounds_more(blouse_run, monkeypatch):
+    """A solve that ends its planned iterations with a dart's legs crossed (a pattern refused for it) runs
+    collapse-guard rounds more, as many again as planned at most (PatternSolver.extra_iterations). Before
+    the charts' refit of 2026-12-07 blouse_fitted at one interior point of its ranges
+    (tests/test_template_ranges.py's interior5) ended its 20 iterations with each waist dart's leg hooked
+    past the apex (2 crossings) and was refused; 30 iterations cleared it."""
+    from core.pattern.optimizer import solver as S
+    from core.pattern.optimizer.guard import COLLAPSE_ROUNDS
+
+    prep, _ = blouse_run
+    solver = S.PatternSolver(prep.cut, prep.reference)
+    K, cw, cg = solver.targets_reference()
+    state = solver.begin(K, cw, cg)
+    solver.iterate(state, state.planned)
+    # the collapse guard's own rounds and rescue out of the way: only the crossing rule asks
+    monkeypatch.setattr(solver, "collapsing", lambda st: False)
+    monkeypatch.setattr(S, "refused", lambda st: False)
+    assert not solver.gaps.crossed(state.U) and solver.extra_iterations(state) == 0
+    legs = solver.gaps.legs
+    k = np.flatnonzero(legs.prev_a == legs.a)[0] + 1  # a dart's second pair from its mouth
+    state.U[[legs.a[k], legs.b[k]]] = state.U[[legs.b[k], legs.a[k]]]  # swapped: its legs cross
+    assert solver.gaps.crossed(state.U)
+    assert solver.extra_iterations(state) == COLLAPSE_ROUNDS
+    state.iteration = 2 * state.planned - 1
+    assert solver.extra_iterations(state) == COLLAPSE_ROUNDS
+    state.iteration = 2 * state.planned  # as many again as planned: no more
+    assert solver.extra_iterations(state) == 0

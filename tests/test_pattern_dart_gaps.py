@@ -83,3 +83,16 @@ def test_a_deep_crossing_opens_at_most_a_legs_edge_an_iteration():
     gap = D.leg_gaps(legs, D.GapCorrection(legs).correct(_base(n), U))
     raised = gap - width
     assert np.all(raised > 0) and np.all(raised <= D.STEP_CAP * legs.edge * 1.001)
+
+
+def test_crossed_legs_are_told_from_legs_apart():
+    """GapCorrection.crossed: the solver's check for the extra rounds (issue 30): an edge of one leg touching
+    or crossing one of the other leg, the two edges that meet at the apex left out."""
+    legs, n = _legs()
+    gaps = D.GapCorrection(legs)
+    assert not gaps.crossed(_positions(5, np.full(5, 0.02)))  # apart; they meet at the apex only
+    assert gaps.crossed(_positions(5, np.array([0.02, 0.02, -0.01, 0.02, 0.02])))  # crossed in the middle
+    U = _positions(5, np.full(5, 0.02))
+    U[3] = (0.02, 0.07)  # leg a's fourth vertex hooked over to leg b's side: its edge meets leg b
+    assert gaps.crossed(U)
+    assert not D.GapCorrection(D.dart_legs([], [], [])).crossed(np.zeros((3, 2)))

@@ -53,9 +53,10 @@ def _cases():
 CASES = _cases()
 
 #: Cases refused today where the range promises a pattern: each a real defect, kept visible (strict xfail:
-#: a fix makes the run say so). Both crossed before the crossings check (issue 30) and were written then.
+#: a fix makes the run say so). It crossed before the crossings check (issue 30) and was written then;
+#: blouse_fitted-interior5 (a waist dart's leg hooking past the apex after 20 iterations) solves since a
+#: solve whose dart legs still cross runs extra rounds (PatternSolver.extra_iterations).
 KNOWN_REFUSED = {
-    "blouse_fitted-interior5": "the waist dart's legs hook past the apex (a crossing; 60 iterations clear it)",
     "blouse_four_darts-refine": "at 5 mm edges the dart gap step leaves 222 flipped triangles (4 crossings without it)",
 }
 

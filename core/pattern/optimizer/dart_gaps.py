@@ -143,3 +143,26 @@ class GapCorrection:
         np.add.at(rhs, legs.a, w * r)
         np.add.at(rhs, legs.b, -w * r)
         return U + factor.solve(rhs)
+
+    def crossed(self, U: np.ndarray) -> bool:
+        """Whether an edge of one leg of a dart touches or crosses an edge of its other leg in ``U`` (the
+        edges ending at the apex, which meet there, left out): the check a pattern is refused for
+        (:func:`core.metrics.injectivity.dart_gaps`), on the solver's iterate. A pair can be apart
+        across the dart while a leg hooks past the apex (``blouse_fitted`` at one interior point of its
+        parameter ranges: two crossings per waist dart after 20 iterations, none after 30)."""
+        from ...metrics.injectivity import CONTACT, segment_gaps
+
+        legs = self.legs
+        if not len(legs.a):
+            return False
+        first = np.flatnonzero(legs.prev_a == legs.a)  # each dart's first pair (at the mouth)
+        for lo, hi in zip(first, np.r_[first[1:], len(legs.a)]):
+            # the pairs' edges towards the apex, the last (ending at it) left out
+            a0, a1 = legs.a[lo : hi - 1], legs.next_a[lo : hi - 1]
+            b0, b1 = legs.b[lo : hi - 1], legs.next_b[lo : hi - 1]
+            if not len(a0):
+                continue
+            i, j = (x.ravel() for x in np.meshgrid(np.arange(len(a0)), np.arange(len(b0)), indexing="ij"))
+            if np.any(segment_gaps(U[a0[i]], U[a1[i]], U[b0[j]], U[b1[j]]) <= CONTACT):
+                return True
+        return False

@@ -578,6 +578,9 @@ class PatternSolver:
         A solve far from its start (high ease, a strong pose) may still hold a triangle the collapse
         guard is opening: :data:`COLLAPSE_ROUNDS` more at a time, as many again as planned, then up to
         :data:`RESCUE_ITERATIONS` rescue iterations while it would be refused (:func:`.guard.rescuing`).
+        A solve whose darts' legs still cross (:meth:`.dart_gaps.GapCorrection.crossed`) runs the same
+        rounds, as many again as planned at most; one run to :class:`~core.pattern.config.Convergence`
+        does its rounds first.
         Every driver of a solve (:meth:`solve`, the live loop) ends it by this rule: the same pattern.
         """
         extra = state.iteration - state.planned
@@ -590,7 +593,10 @@ class PatternSolver:
             return more
         if rescuing(extra, state.planned):
             return COLLAPSE_ROUNDS if extra < state.planned + RESCUE_ITERATIONS and refused(state) else 0
-        return COLLAPSE_ROUNDS if self.collapsing(state) else 0
+        if self.collapsing(state):
+            return COLLAPSE_ROUNDS
+        # a dart's legs still crossed (a pattern refused for it): rounds more, as many again as planned at most
+        return COLLAPSE_ROUNDS if extra < state.planned and self.gaps.crossed(state.U) else 0
 
     @staticmethod
     def converging(state: "SolveState") -> bool:
