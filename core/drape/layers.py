@@ -202,16 +202,30 @@ def layer_collider(body_v, body_f, inner: Sequence[Tuple[np.ndarray, np.ndarray,
     return np.concatenate(vs), np.concatenate([body_f[keep], *fs])
 
 
-def push_outside(points, v, f, clearance: float, band: float = OVERLAP_BAND) -> Tuple[np.ndarray, int]:
+def push_outside(points, v, f, clearance: float, band: float = OVERLAP_BAND, movable=None) -> Tuple[np.ndarray, int]:
     """``points`` moved out of the surface (v, f) to ``clearance`` outside it where they lie over it,
-    within ``band``, closer than ``clearance``; returns (moved points, how many moved)."""
+    within ``band``, closer than ``clearance``; returns (moved points, how many moved).
+
+    ``movable`` ((F,) bool) instead: (v, f) is a closed skin (:func:`layer_collider`) and a point moves
+    where its closest triangle is a movable one (an inner garment's or a strip's, not the body's)."""
+    import igl
+
     p = np.array(points, dtype=np.float64)
-    dist, over = layer_distance(p, v, f)
+    v = np.asarray(v, np.float64)
+    f = np.asarray(f, np.int64)
+    if movable is None:
+        dist, over = layer_distance(p, v, f)
+        face = closest = None
+    else:
+        sq, face, closest = igl.point_mesh_squared_distance(p, v, f)
+        face = np.asarray(face, np.int64)
+        normal = _face_normals(v, f)[face]
+        dist = np.where(np.einsum("ij,ij->i", p - closest, normal) < 0, -1.0, 1.0) * np.sqrt(np.maximum(sq, 0))
+        over = np.asarray(movable, bool)[face]
     move = over & (dist < clearance) & (dist > -band)
     if move.any():
-        import igl
-
-        _, face, closest = igl.point_mesh_squared_distance(p[move], np.asarray(v, float), np.asarray(f, np.int64))
-        n = _face_normals(np.asarray(v, float), np.asarray(f, np.int64))[np.asarray(face, np.int64)]
-        p[move] = closest + n * clearance
+        if face is None:
+            _, face, closest = igl.point_mesh_squared_distance(p, v, f)
+            face = np.asarray(face, np.int64)
+        p[move] = closest[move] + _face_normals(v, f)[face[move]] * clearance
     return p, int(move.sum())

@@ -99,21 +99,28 @@ class OutfitRun:
         return out
 
 
-def _pushed(pattern, inner: List[LayerRun], thickness: float):
-    """``pattern`` with every panel's skintight embedding moved out over the inner layers' surfaces."""
+def _pushed(pattern, collider, n_body: int, inner: List[LayerRun], thickness: float):
+    """``pattern`` with every panel's skintight embedding moved out over the inner layers: onto the
+    collider's inner-garment and strip faces (those not on the body's ``n_body`` vertices), ``thickness``
+    + 1 mm outside them (the strips make the push continuous down to the body past an inner hem);
+    then what still lies over an inner garment and inside it (where the body under a loose garment
+    is nearer than the garment) onto that garment, as far out."""
     from ..drape.layers import push_outside
 
     if not inner:
         return pattern, 0
-    panels, moved = [], 0
+    v, f = collider
+    movable = np.asarray(f).min(axis=1) >= n_body
+    panels, moved = [], np.zeros(0, bool)
     for p in pattern.panels:
         xyz = np.asarray(p.xyz, float)
+        start = xyz.copy()
+        xyz, _ = push_outside(xyz, v, f, clearance=thickness + 0.001, movable=movable)
         for lr in inner:
-            v, f = lr.surface
-            xyz, k = push_outside(xyz, v, f, clearance=lr.thickness + thickness + 0.001)
-            moved += k
+            xyz, _ = push_outside(xyz, *lr.surface, clearance=lr.thickness + thickness + 0.001)
+        moved = np.concatenate([moved, np.any(xyz != start, axis=1)])
         panels.append(replace(p, xyz=xyz))
-    return replace(pattern, panels=panels), moved
+    return replace(pattern, panels=panels), int(moved.sum())
 
 
 def _hem(v: np.ndarray, f: np.ndarray) -> np.ndarray:
@@ -232,8 +239,8 @@ def drape_outfit(
 
         mat = get_material((pattern.materials or {}).get("fabric"))
         thick = float(opts.thickness if opts.thickness is not None else mat.thickness)
-        start, pushed = _pushed(pattern, runs, thick)
         coll_v, coll_f = layer_collider(body_v, body_f, [(*lr.surface, lr.thickness) for lr in runs])
+        start, pushed = _pushed(pattern, (coll_v, coll_f), len(body_v), runs, thick)
         frames: list = []
         spent = [0.0]
 
