@@ -114,7 +114,14 @@ def apply_drape(context, run, digest=None) -> None:
     sync.apply_fitmap(scene)
     s = scene.ease
     s.drape_json = json.dumps(run.figures)
-    s.drape_status = f"draped: {run.figures['frames']} frames, {run.figures['settled']}" + (
+    ref = run.result.refinement or {}
+    refined = (
+        f", mesh refined to {1000 * ref['target_edge_m']:g} mm "
+        f"({ref['triangles_before']} -> {len(run.result.faces)} triangles)"
+        if ref
+        else ""
+    )
+    s.drape_status = f"draped: {run.figures['frames']} frames, {run.figures['settled']}{refined}" + (
         f"; the body takes the pattern's {', '.join(moved)}" if moved else ""
     )
 

@@ -201,6 +201,9 @@ def test_refined_drape_mesh(bpy_session, blender, addon, tmp_path):
     me = g.data
     n = len(me.vertices)
     assert n > n_coarse and g[build.REFINE_EDGE] == pytest.approx(0.008) and g[build.PATTERN_VERTICES] == n_pattern
+    assert "mesh refined to 8 mm" in s.drape_status and len(me.polygons) == int(
+        s.drape_status.split("-> ")[1].split()[0]
+    )
     ids = np.empty(n, dtype=np.int32)
     me.attributes[data.VERTEX_ID].data.foreach_get("value", ids)
     assert len(np.unique(ids)) == n and set(range(n_pattern)) <= set(ids.tolist())  # the pattern's, then new ones
