@@ -432,8 +432,8 @@ def chart_tape_fit(
 ):
     """Fit ``body`` (Anny) to a chart size measured as a tailor measures (:mod:`core.body.tape`,
     ISO 8559-1: the bust at the bust points, the natural waist, the hip at the buttocks), by
-    :func:`core.body.made_to_measure.fit_tape`: the chart's gender held, its parameters and
-    ``assist`` moving (adult ages), with the local change of each girth the chart gives and
+    :func:`core.body.made_to_measure.fit_tape`: the chart's gender held, its parameters moving
+    (adult ages; its ``assist`` too where they miss), with the local change of each girth the chart gives and
     :data:`CHART_EXTRA_LOCAL`, pulled towards the population; the thighs kept apart.
 
     ``start`` defaults to the stored fit of the size (else the chart's start phenotype). Returns
@@ -445,11 +445,17 @@ def chart_tape_fit(
     c, key = split_size(size, chart)
     own = body.shape_parameters()
     targets = {**c.sizes[key], **{k: v for k, v in c.start.items() if k == "gender"}}
-    params = [n for n in tuple(c.parameters) + tuple(c.assist) if n in own]
-    params += [n for n in CHART_EXTRA_LOCAL if n in local_parameters(body)]
+    params = [n for n in c.parameters if n in own]
+    extra = [n for n in CHART_EXTRA_LOCAL if n in local_parameters(body)]
+    helpers = [n for n in c.assist if n in own and n not in params]
     if start is None:
         start = c.fitted.get(getattr(body, "name", ""), {}).get(key, c.start)
-    return fit_tape(body, targets, progress=progress, start=start, parameters=params)
+    # The assist parameters (the women's cup) move only where the fit without them misses, so the
+    # chart's bodies differ by the girths it gives (the four-dart blouse's darts follow the cup).
+    fit = fit_tape(body, targets, progress=progress, start=start, parameters=params + extra)
+    if fit.ok or not helpers:
+        return fit
+    return fit_tape(body, targets, progress=progress, start=fit.shape, parameters=params + helpers + extra)
 
 
 def size_shape(body, size: str, progress: Optional[Progress] = None, chart: Optional[str] = None) -> Dict[str, float]:
