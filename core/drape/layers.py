@@ -26,6 +26,8 @@ from ..errors import DrapeError
 PENETRATION_DEPTH = 0.002
 #: Points farther than this from the inner surface (either side) do not overlap it (another body part).
 OVERLAP_BAND = 0.05
+#: How far inside an inner garment the body is still under it (a loose garment's hem hangs this far off).
+COVER_BAND = 0.15
 
 
 def _face_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
@@ -164,7 +166,7 @@ def hem_strips(v, f, body_v, body_f, sink: float = 0.002, ramp: float = 2.0) -> 
     return foot, tris
 
 
-def covered_faces(body_v, body_f, v, f, band: float = OVERLAP_BAND) -> np.ndarray:
+def covered_faces(body_v, body_f, v, f, band: float = COVER_BAND) -> np.ndarray:
     """(F,) bool, the body triangles under the garment surface (v, f): their centre inside it, over
     it (not past its open edges) and within ``band`` of it."""
     body_v = np.asarray(body_v, np.float64)

@@ -99,27 +99,48 @@ class OutfitRun:
         return out
 
 
-def _pushed(pattern, collider, n_body: int, inner: List[LayerRun], thickness: float):
+def _pushed(pattern, collider, n_body: int, inner: List[LayerRun], thickness: float, rings: int = 40):
     """``pattern`` with every panel's skintight embedding moved out over the inner layers: onto the
     collider's inner-garment and strip faces (those not on the body's ``n_body`` vertices), ``thickness``
     + 1 mm outside them (the strips make the push continuous down to the body past an inner hem);
     then what still lies over an inner garment and inside it (where the body under a loose garment
-    is nearer than the garment) onto that garment, as far out."""
+    is nearer than the garment) onto that garment, as far out. The vertices left where they were
+    then follow their moved neighbours over up to ``rings`` mesh rings (the displacement averaged
+    outward), so the start has no step for the drape's first frame to tear."""
     from ..drape.layers import push_outside
 
     if not inner:
         return pattern, 0
     v, f = collider
     movable = np.asarray(f).min(axis=1) >= n_body
-    panels, moved = [], np.zeros(0, bool)
+    n = 1 + max(int(np.max(p.vertex_ids)) for p in pattern.panels)
+    shift = np.zeros((n, 3))
+    moved = np.zeros(n, bool)
     for p in pattern.panels:
         xyz = np.asarray(p.xyz, float)
-        start = xyz.copy()
-        xyz, _ = push_outside(xyz, v, f, clearance=thickness + 0.001, movable=movable)
+        new, _ = push_outside(xyz, v, f, clearance=thickness + 0.001, movable=movable)
         for lr in inner:
-            xyz, _ = push_outside(xyz, *lr.surface, clearance=lr.thickness + thickness + 0.001)
-        moved = np.concatenate([moved, np.any(xyz != start, axis=1)])
-        panels.append(replace(p, xyz=xyz))
+            new, _ = push_outside(new, *lr.surface, clearance=lr.thickness + thickness + 0.001)
+        ids = np.asarray(p.vertex_ids, int)
+        hit = np.any(new != xyz, axis=1)
+        shift[ids[hit]] = new[hit] - xyz[hit]
+        moved[ids[hit]] = True
+    # the unmoved vertices take the mean displacement of their neighbours, ring by ring
+    edges = np.concatenate(
+        [
+            np.asarray(p.vertex_ids, int)[np.asarray(p.faces, int)][:, [a, b]]
+            for p in pattern.panels
+            for a, b in ((0, 1), (1, 2), (2, 0))
+        ]
+    )
+    edges = np.concatenate([edges, edges[:, ::-1]])
+    free = ~moved
+    for _ in range(rings):
+        total = np.zeros((n, 3))
+        np.add.at(total, edges[:, 0], shift[edges[:, 1]])
+        count = np.bincount(edges[:, 0], minlength=n)[:, None]
+        shift[free] = (total / np.maximum(count, 1))[free]
+    panels = [replace(p, xyz=np.asarray(p.xyz, float) + shift[np.asarray(p.vertex_ids, int)]) for p in pattern.panels]
     return replace(pattern, panels=panels), int(moved.sum())
 
 
