@@ -7,11 +7,12 @@ import pytest
 from drape_synth import revolution_body, tube_skirt
 
 from core.drape import DrapeSolver
-from core.drape.gathers import arc, sew_gathers, unweld_gathers
+from core.drape.gathers import sew_gathers, unweld_gathers
 from core.drape.materials import get_material
 from core.drape.mesh import build_cloth, rest_edges
 from core.drape.result import collect
 from core.drape.schedule import run
+from core.geom.polyline import cumulative_lengths as arc
 from core.metrics.drape import fold_measures
 from core.pattern.types import PatternSeam
 

@@ -25,19 +25,16 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..geom.polyline import cumulative_lengths
+
 #: Points of a seam closer than this fraction of its side's arc length are one point.
 SNAP_FRACTION = 1e-6
-
-
-def arc(uv: np.ndarray) -> np.ndarray:
-    """Cumulative arc length (k,) of a polyline (k, 2), 0 at its start."""
-    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(uv, axis=0), axis=1))])
 
 
 def long_side(pattern, seam) -> int:
     """0 when side a of ``seam`` is the longer in the pattern (rest) shape, else 1 (a tie: side a)."""
     ua, ub = pattern.seam_polylines(seam)
-    return longer(arc(ua)[-1], arc(ub)[-1])
+    return longer(cumulative_lengths(ua)[-1], cumulative_lengths(ub)[-1])
 
 
 def longer(length_a: float, length_b: float) -> int:
@@ -113,7 +110,7 @@ def _carry(panel, verts: np.ndarray, where: np.ndarray, next_id: int) -> tuple:
     panel (a copy when vertices were added), path (len(where),) int local vertex ids, next_id.
     """
     uv, xyz, ids = panel.uv, panel.xyz, panel.vertex_ids
-    a_s = arc(uv[verts])
+    a_s = cumulative_lengths(uv[verts])
     tol = SNAP_FRACTION * a_s[-1]
     seg = np.clip(np.searchsorted(a_s, where, side="right") - 1, 0, len(a_s) - 2)
     new_uv, new_xyz, inner, path = [], [], {}, []
@@ -190,7 +187,7 @@ def sew_gathers(pattern) -> tuple:
         if not getattr(s, "gathered", False) or min(len(va), len(vb)) < 2:
             seams.append(s)
             continue
-        aa, ab = arc(panels[s.panel_a].uv[va]), arc(panels[s.panel_b].uv[vb])
+        aa, ab = cumulative_lengths(panels[s.panel_a].uv[va]), cumulative_lengths(panels[s.panel_b].uv[vb])
         if aa[-1] <= 0 or ab[-1] <= 0:
             seams.append(s)
             continue

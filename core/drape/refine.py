@@ -38,8 +38,9 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import DrapeError
-from ..geom.mesh import unique_pairs
-from .gathers import arc, insert_points, longer
+from ..geom.mesh import signed_areas_2d, triangle_areas, unique_pairs
+from ..geom.polyline import cumulative_lengths
+from .gathers import insert_points, longer
 
 #: A triangle whose pattern area exceeds its skintight area by at least this fraction hangs free.
 FREE_EASE = 0.01
@@ -69,13 +70,6 @@ def _weld_roots(pattern, n_ids: int) -> np.ndarray:
     first = np.full(label.max() + 1 if n_ids else 0, n_ids, dtype=np.int64)
     np.minimum.at(first, label, np.arange(n_ids))
     return first[label]
-
-
-def _areas(p: np.ndarray, f: np.ndarray) -> np.ndarray:
-    a, b = p[f[:, 1]] - p[f[:, 0]], p[f[:, 2]] - p[f[:, 0]]
-    if p.shape[1] == 2:
-        return 0.5 * np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
-    return 0.5 * np.linalg.norm(np.cross(a, b), axis=1)
 
 
 def edge_lengths(uv: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -135,7 +129,7 @@ def refine_pattern(pattern, edge: float, free_ease: float = FREE_EASE, max_level
         ids = np.asarray(ids, np.int64).reshape(-1)
         pinned[ids[(ids >= 0) & (ids < n_ids)]] = True
     with np.errstate(divide="ignore", invalid="ignore"):
-        ease = _areas(uv, faces) / _areas(xyz, faces) - 1.0
+        ease = np.abs(signed_areas_2d(uv, faces)) / triangle_areas(xyz, faces) - 1.0
     free = np.nan_to_num(ease, nan=0.0, posinf=1.0) > free_ease
     # a gathered seam ruffles: the triangles on its sides hang free, its long side's refined to
     # GATHER_EDGE x the target, so that its extra length has vertices to bunch at between two
@@ -146,7 +140,7 @@ def refine_pattern(pattern, edge: float, free_ease: float = FREE_EASE, max_level
         if getattr(s, "gathered", False):
             ua, ub = pattern.seam_polylines(s)
             sides = ((s.panel_a, s.verts_a), (s.panel_b, s.verts_b))[
-                :: 1 if longer(arc(ua)[-1], arc(ub)[-1]) == 0 else -1
+                :: 1 if longer(cumulative_lengths(ua)[-1], cumulative_lengths(ub)[-1]) == 0 else -1
             ]
             for mark, (name, verts) in zip((on_long, on_short), sides):
                 mark[off[index[name]] + np.asarray(verts, np.int64)] = True
