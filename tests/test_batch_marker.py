@@ -37,7 +37,7 @@ def test_each_item_gets_the_marker_of_workflows_marker_with_the_exports_allowanc
     assert marker["pieces"] == row["marker.pieces"] == len(export["pieces"])
     assert row["marker.efficiency_pct"] == pytest.approx(marker["efficiency_pct"], abs=1e-3)
     assert 30 < row["marker.efficiency_pct"] < 100 and row["marker.length_mm"] == pytest.approx(marker["length_mm"])
-    assert marker["threads"] == 1 and marker["tries"] == 1 and row["timings.marker"] < 10
+    assert marker["threads"] == 1 and marker["tries"] == 1 and row["timings.marker"] > 0
     # the batch's marker is the workflows' entry, the function the CLI and the add-on call
     from core.batch.worker import _marker
     from core.pattern.io import load_pattern

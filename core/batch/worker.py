@@ -163,7 +163,10 @@ def _drape(ctx: Context, item: Item, run, vertices, check):
 
 def _marker(item: Item, run, check):
     """The item's pieces nested on the batch's fabric width (:func:`core.workflows.marker`, one garment, one
-    nester on this worker's core; the export's allowance rule: the design's table) and its row entries."""
+    nester on this worker's core; the export's allowance rule: the design's table) and its row entries.
+
+    The nester ends its search when it stops improving (``early_stop``), so an item's marker does not depend on
+    how much time a loaded worker gave it within ``marker_seconds``."""
     from .. import workflows as wf
     from ..marker import size_label
 
@@ -175,6 +178,7 @@ def _marker(item: Item, run, check):
         threads=1,
         tries=1,
         spread=opts.marker_spread,
+        early_stop=True,
         progress=check,
     )
     return marker, {
