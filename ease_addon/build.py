@@ -316,11 +316,9 @@ def garment(scene, result, gap, digest: str):
     its ids below :data:`PATTERN_VERTICES` are the pattern's vertices (what the export reads
     back), those above them the refinement's; the pattern as draped (``result.mesh_pattern``,
     whose panels' triangles are the object's faces) is kept for :func:`drape_pattern`."""
-    used = np.asarray(result.used, dtype=bool)
-    ids = np.flatnonzero(used)
-    remap = -np.ones(len(used), dtype=np.int64)
-    remap[ids] = np.arange(len(ids))
-    faces = remap[np.asarray(result.faces)]
+    from ..core.geom.mesh import compact_vertices
+
+    ids, faces = compact_vertices(result.faces, result.used)
     me = convert.mesh_from_arrays(GARMENT, np.asarray(result.positions)[ids], faces)
     for layer, values, (lo, hi) in (
         (STRAIN_LAYER, np.asarray(result.strain_weft)[ids], STRAIN_RANGE),
@@ -342,7 +340,7 @@ def garment(scene, result, gap, digest: str):
     obj["ease_pattern"] = digest  # draped from this pattern
     edge = float((getattr(result, "options", None) or {}).get("refine_edge") or 0.0)
     obj[REFINE_EDGE] = edge
-    obj[PATTERN_VERTICES] = int(getattr(result, "pattern_vertices", 0) or len(used))
+    obj[PATTERN_VERTICES] = int(getattr(result, "pattern_vertices", 0) or len(result.used))
     if edge and getattr(result, "mesh_pattern", None) is not None:
         _MESH_PATTERNS.clear()
         _MESH_PATTERNS[(digest, edge)] = result.mesh_pattern
@@ -352,18 +350,18 @@ def garment(scene, result, gap, digest: str):
 
 def drape_pattern(obj, pattern):
     """The pattern whose panels' triangles are the faces of the garment ``obj`` draped from
-    ``pattern``: ``pattern`` itself, or on a refined drape mesh the pattern as draped (the
-    core's own refinement of ``pattern``, :func:`core.drape.mesh.build_cloth`: the same
-    triangles; kept from the drape, else made again), with ``pattern``'s materials."""
+    ``pattern``: ``pattern`` itself, or the pattern as draped where the drape's mesh is not the
+    pattern's (pleats opened, a refined drape mesh): the core's own
+    (:func:`core.drape.pleats.draped_cloth`: the same triangles; kept from the drape, else made
+    again), with ``pattern``'s materials."""
     from dataclasses import replace
 
     edge = float(obj.get(REFINE_EDGE, 0.0) or 0.0)
-    if pattern is None or not edge:
+    if pattern is None or not (edge or pattern.report.get("pleats")):
         return pattern
-    key = (obj.get("ease_pattern"), edge)
-    mesh = _MESH_PATTERNS.get(key)
-    if mesh is None:  # (a file opened again): the core refines as the drape did
-        from ..core.drape.mesh import build_cloth
+    mesh = _MESH_PATTERNS.get((obj.get("ease_pattern"), edge)) if edge else None
+    if mesh is None:  # (a file opened again, a pleated pattern): the core builds it as the drape did
+        from ..core.drape.pleats import draped_cloth
 
-        mesh = build_cloth(pattern, refine_edge=edge, gathers=True).mesh_pattern
+        mesh = draped_cloth(pattern, edge or None).mesh_pattern
     return replace(mesh, materials=pattern.materials)

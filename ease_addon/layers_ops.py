@@ -136,14 +136,14 @@ def apply_outfit(context, run) -> None:
     the report in the scene; the status line."""
     import numpy as np
 
+    from ..core.geom.mesh import compact_vertices
+
     scene = context.scene
     objects.remove_objects(objects.objects_with_role(scene, ROLE))
     for k, lr in enumerate(run.layers):
         r = lr.drape.result
-        used = np.unique(r.faces)
-        remap = -np.ones(len(r.positions), dtype=np.int64)
-        remap[used] = np.arange(len(used))
-        me = convert.mesh_from_arrays(f"EASE {lr.layer.name}", np.asarray(r.positions)[used], remap[r.faces])
+        used, faces = compact_vertices(r.faces)
+        me = convert.mesh_from_arrays(f"EASE {lr.layer.name}", np.asarray(r.positions)[used], faces)
         obj = objects.role_object(scene, f"EASE {lr.layer.name}", me, ROLE)
         obj["ease_layer"] = k
         me.materials.append(materials.surface(f"EASE layer {k + 1}", COLOURS[k % len(COLOURS)], 0.9))

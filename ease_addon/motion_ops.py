@@ -293,6 +293,7 @@ class Motion:
 
     def apply(self, result) -> None:
         from ..core.drape.animate import motion_report
+        from ..core.geom.mesh import compact_vertices
 
         scene, s = bpy.context.scene, bpy.context.scene.ease
         frames, faces, r, adapted = result
@@ -300,17 +301,13 @@ class Motion:
         if adapted is not None:  # the adapted pattern is the scene's pattern now, beside the body
             sync.show_pattern(bpy.context, adapted.pattern)
             s.fit_json = json.dumps(adapted.figures)
-        used = np.asarray(r.used, dtype=bool)
-        remap = -np.ones(len(used), dtype=np.int64)
-        remap[used] = np.arange(int(used.sum()))
+        ids, gfaces = compact_vertices(r.faces, r.used)
         start = m["start"]
         motion_object(scene, MOTION_BODY, frames, faces, materials.skin(), start)
-        garment = motion_object(
-            scene, MOTION_GARMENT, r.positions[:, used], remap[np.asarray(r.faces)], materials.fabric(), start
-        )
+        garment = motion_object(scene, MOTION_GARMENT, r.positions[:, ids], gfaces, materials.fabric(), start)
         # the pattern vertex of each vertex: the studio dresses it in its fabric as the static garment
         vid = garment.data.attributes.new(data.VERTEX_ID, "INT", "POINT")
-        vid.data.foreach_set("value", np.flatnonzero(used).astype(np.int32))
+        vid.data.foreach_set("value", ids.astype(np.int32))
         scene.frame_start, scene.frame_end = start, start + len(frames) - 1
         scene.frame_set(start)
         hide = objects_with_role(scene, "body") + objects_with_role(scene, "garment")

@@ -69,3 +69,27 @@ def test_boundary_loops_longest_first_oriented_like_the_faces():
     assert area[0] == pytest.approx(25.0) and area[1] == pytest.approx(-1.0)
     assert boundary_loops(TET_F) == []
     assert boundary_loops(np.zeros((0, 3), int)) == []
+
+
+def test_compact_vertices_drops_unused_and_renumbers_faces():
+    from core.geom.mesh import compact_vertices
+
+    # vertices 0, 3, 5 in no face (of 7): the kept ones in order, the faces on them
+    v = np.arange(21, dtype=float).reshape(7, 3)
+    f = np.array([[1, 2, 4], [4, 2, 6]])
+    ids, g = compact_vertices(f)
+    assert ids.tolist() == [1, 2, 4, 6] and g.tolist() == [[0, 1, 2], [2, 1, 3]]
+    assert np.array_equal(v[ids][g], v[f])  # the same triangles
+    # a mask keeps what it says, also a vertex in no face
+    used = np.zeros(7, bool)
+    used[[0, 1, 2, 4, 6]] = True
+    ids, g = compact_vertices(f, used)
+    assert ids.tolist() == [0, 1, 2, 4, 6] and np.array_equal(v[ids][g], v[f])
+    # a face on a dropped vertex, or an id outside the mask: an error, never a face on -1
+    used[6] = False
+    with pytest.raises(ValueError, match=r"face 1 \[4, 2, 6\]"):
+        compact_vertices(f, used)
+    with pytest.raises(ValueError, match="outside"):
+        compact_vertices(f, used[:5])
+    ids, g = compact_vertices(np.zeros((0, 3), int))
+    assert len(ids) == 0 and g.shape == (0, 3)

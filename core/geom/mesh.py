@@ -145,3 +145,41 @@ def boundary_loops(faces: np.ndarray) -> List[np.ndarray]:
     loops = igl.boundary_loop_all(f) if hasattr(igl, "boundary_loop_all") else [igl.boundary_loop(f)]
     loops = [np.asarray(loop, dtype=np.int64) for loop in loops if len(loop) > 0]
     return sorted(loops, key=len, reverse=True)
+
+
+def compact_vertices(faces: np.ndarray, used=None) -> tuple:
+    """Drop the vertices a mesh does not keep and renumber its faces onto the ones it does.
+
+    Parameters
+    ----------
+    faces : (F, 3) int, vertex ids.
+    used : (V,) bool, the vertices kept; default: those some face uses.
+
+    Returns
+    -------
+    ids : (K,) int64, the kept vertices' old ids in ascending order (new id ``k`` is old
+        ``ids[k]``: ``vertices[ids]`` are the compacted vertices).
+    faces : (F, 3) int64, the faces on the new ids.
+
+    Raises
+    ------
+    ValueError
+        A face uses a vertex that ``used`` drops (or an id outside it).
+    """
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    if used is None:
+        ids = np.unique(f)
+        n = int(ids[-1]) + 1 if len(ids) else 0
+    else:
+        used = np.asarray(used, dtype=bool).reshape(-1)
+        ids, n = np.flatnonzero(used), len(used)
+    if len(f) and (f.min() < 0 or f.max() >= n):
+        raise ValueError(f"compact_vertices: face vertex ids {f.min()}..{f.max()} outside 0..{n - 1}")
+    remap = np.full(n, -1, dtype=np.int64)
+    remap[ids] = np.arange(len(ids))
+    out = remap[f]
+    dropped = np.flatnonzero((out < 0).any(axis=1))
+    if len(dropped):
+        i = int(dropped[0])
+        raise ValueError(f"compact_vertices: face {i} {f[i].tolist()} uses a vertex that is not kept")
+    return ids, out
