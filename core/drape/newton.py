@@ -240,9 +240,10 @@ class NewtonStep:
     def solve(self, x, y, grow: float, iterations: int, tolerance: float, weight: np.ndarray, history: int = 8):
         """Minimise G from ``x`` (in place, (P, 3) float64) by L-BFGS with the factored Hessian at ``x`` as
         its initial inverse (without history, a Newton step) and a backtracking (Armijo) line search. Stops when every free particle's residual force |grad G| is
-        under ``tolerance`` times its ``weight`` (N, (P,)), or after ``iterations``; particles within
-        twice the contact offset of the body are left out of that test (the friction applied after the
-        solve holds them where G alone would not).
+        under ``tolerance`` times its ``weight`` (N, (P,)) (at least one iteration), or after
+        ``iterations``, or when the line search finds no decrease; particles within twice the contact
+        offset of the body are left out of that test (the friction applied after the solve holds them
+        where G alone would not).
 
         Returns (iterations done, the largest residual over weight at the end).
         """
@@ -268,7 +269,7 @@ class NewtonStep:
 
         hist_s, hist_y = [], []
         it, res = 0, float(np.max(np.linalg.norm(g, axis=1) / w, initial=0.0))
-        while it < iterations and res >= tolerance:
+        while it < iterations and (it == 0 or res >= tolerance):
             it += 1
             q = g.copy()
             alphas = []
@@ -286,17 +287,24 @@ class NewtonStep:
                 step = -h0(g)
                 slope = float(np.sum(g * step))
             x0f = x[fi].copy()
-            alpha = 1.0
-            for _ in range(12):
+            alpha, ok = 1.0, False
+            for _ in range(20):
                 x[fi] = x0f + alpha * step
                 e1, _ = self.energy(x, y, grow, gradient=False)
                 if e1 <= e + 1e-4 * alpha * slope:
+                    ok = True
                     break
                 alpha *= 0.5
+            if not ok:  # no decrease along the step: keep the last iterate
+                x[fi] = x0f
+                if not hist_s:
+                    break
+                hist_s, hist_y = [], []
+                continue
             e1, g1 = self.energy(x, y, grow)
             g1 = g1[fi]
             sv, yv = x[fi] - x0f, g1 - g
-            if np.sum(sv * yv) > 1e-30:
+            if np.sum(sv * yv) > 1e-8 * np.sqrt(np.sum(sv * sv) * np.sum(yv * yv)):  # curvature safeguard
                 hist_s.append(sv)
                 hist_y.append(yv)
                 if len(hist_s) > history:
