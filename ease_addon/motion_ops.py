@@ -109,31 +109,12 @@ def rig_object(context, required: bool = False):
     return rig
 
 
-def _bone_tails(heads: np.ndarray, parents: np.ndarray) -> np.ndarray:
-    """A tail per joint: toward its first child (the limb's direction), else along its parent's bone."""
-    tails = np.empty_like(heads)
-    children = {}
-    for j, p in enumerate(parents):
-        if p >= 0:
-            children.setdefault(int(p), []).append(j)
-    for j in range(len(heads)):
-        kids = [c for c in children.get(j, []) if np.linalg.norm(heads[c] - heads[j]) > 0.005]
-        if kids:
-            tails[j] = heads[kids[0]]
-            continue
-        p = parents[j]
-        d = heads[j] - heads[p] if p >= 0 else np.array([0.0, 0.0, 1.0])
-        n = np.linalg.norm(d)
-        d = d / n if n > 1e-6 else np.array([0.0, 0.0, 1.0])
-        tails[j] = heads[j] + 0.03 * d
-    return tails
-
-
 def build_rig(context, body):
     """The armature of ``body`` (an EASE body of the default model in pose A): a bone per joint at
     the model's joints, and on the body an Armature modifier with the model's skinning weights
     (a vertex group per joint). Replaces the body's earlier rig."""
     from ..core.body.instance import instance_shape
+    from ..core.body.lbs import bone_tails
 
     spec = data.body_spec(body)
     model = state.body_model(spec["model"])
@@ -147,7 +128,7 @@ def build_rig(context, body):
     names = list(model.joint_names)
     parents = np.asarray(model.data.parents)
     heads = np.asarray(model.joints(instance_shape(model, spec["shape"]), None), dtype=float)
-    tails = _bone_tails(heads, parents)
+    tails = bone_tails(heads, parents)
     weights = model.data.sparse_weights.tocsc()
     scene = context.scene
     old = rig_object(context)

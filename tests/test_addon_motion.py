@@ -246,6 +246,15 @@ def test_rig_action_drives_the_motion(scene, bpy_session):
     assert len(scene.objects("rig")) == 1 and len(bpy.data.armatures) == 1
     assert [m.type for m in body.modifiers].count("ARMATURE") == 1 and body.modifiers["EASE Rig"].object == rig
     assert len(body.vertex_groups) == len(model.joint_names)
+    # the bones are the core's (core.body.lbs.bone_tails): heads at the joints, tails toward the limbs
+    from core.body.instance import instance_shape
+    from core.body.lbs import bone_tails
+
+    shape = instance_shape(model, scene.mod("data").body_spec(body)["shape"])
+    heads = np.asarray(model.joints(shape, None), dtype=float)
+    tails = bone_tails(heads, model.data.parents)
+    got = np.array([[*b.head_local, *b.tail_local] for b in rig.data.bones])
+    assert np.allclose(got, np.hstack([heads, tails]), atol=1e-5)
     try:
         sc.frame_start, sc.frame_end = 1, 7  # moves over frames 1-4, then holds
         root = rig.pose.bones["root"]

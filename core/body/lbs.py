@@ -118,3 +118,41 @@ def pose_feature(rotations: np.ndarray) -> np.ndarray:
     """
     R = np.asarray(rotations, dtype=float)
     return (R[1:] - np.eye(3)).reshape(-1)
+
+
+def bone_tails(heads: np.ndarray, parents: np.ndarray, min_length: float = 0.005, stub: float = 0.03) -> np.ndarray:
+    """A bone's tail per joint, for a rig drawn from joint positions (a bone's head is its joint).
+
+    Parameters
+    ----------
+    heads : (J, 3) float, the joints' positions (metres).
+    parents : (J,) int, the kinematic tree (root -1, parents before children; see :func:`check_parents`).
+    min_length : a child closer than this (metres) to its joint does not give the bone its direction.
+    stub : the length (metres) of a bone with no such child.
+
+    Returns
+    -------
+    (J, 3) float: a joint's tail is its first child's joint farther than ``min_length`` (the
+    limb's direction); else (an end joint) ``stub`` along its parent's bone, the root's (or a
+    joint on its parent) ``stub`` up +z.
+    """
+    heads = np.asarray(heads, dtype=float)
+    parents = check_parents(parents)
+    if heads.shape != (len(parents), 3):
+        raise BodyError(f"bone_tails: heads has shape {heads.shape}, expected ({len(parents)}, 3)")
+    up = np.array([0.0, 0.0, 1.0])
+    tails = np.empty_like(heads)
+    children: dict = {}
+    for j, p in enumerate(parents):
+        if p >= 0:
+            children.setdefault(int(p), []).append(j)
+    for j in range(len(heads)):
+        kids = [c for c in children.get(j, []) if np.linalg.norm(heads[c] - heads[j]) > min_length]
+        if kids:
+            tails[j] = heads[kids[0]]
+            continue
+        p = parents[j]
+        d = heads[j] - heads[p] if p >= 0 else up
+        n = np.linalg.norm(d)
+        tails[j] = heads[j] + stub * (d / n if n > 1e-6 else up)
+    return tails
