@@ -275,13 +275,13 @@ class LiveSession:
 
     def pattern(self, figures: bool = True):
         """The current pattern (core.pattern.Pattern, mode ``reference``); with ``figures``, its
-        metrics in ``report["metrics"]``; ``report["live"]``: iterations since the change, converged."""
-        from .pattern.build import build_pattern
-
+        metrics in ``report["metrics"]``; ``report["live"]``: iterations since the change, converged;
+        converged (or with ``figures``), the design's pleats in ``report["pleats"]``."""
         if self.state is None:
             self.run(0.0)
-        res = self.solver.result(self.state)
-        pat = build_pattern(self.prep.cut, res, style=self.prep.design.name, mode="reference")
+        # a warm preview is shown, never stored: the pleats (half a second to open and measure on a
+        # pleated skirt) are attached to the converged pattern, the one the add-on stores
+        pat = self._reference(self.solver.result(self.state), pleats=self.converged or figures)
         pat.report["config"] = self.config
         pat.report["live"] = {"iterations": int(self.iterations_since_change), "converged": bool(self.converged)}
         if figures:
@@ -296,13 +296,23 @@ class LiveSession:
         """A cold solve (the configuration's iterations from the stretched flattening) of the
         field ``body_ease`` (F_body,) on this session's solver (``painted``: :meth:`cut_ease`):
         what live mode converges towards."""
-        from .pattern.build import build_pattern
-
         ease = self.cut_ease(body_ease, painted)
         ones = np.ones_like(ease)
-        res = self.solver.solve(self.K, ease, ones, plan=self.solver.plan_seams(self.K, ease, ones))
-        pat = build_pattern(self.prep.cut, res, style=self.prep.design.name, mode="reference")
+        pat = self._reference(self.solver.solve(self.K, ease, ones, plan=self.solver.plan_seams(self.K, ease, ones)))
         wf.measure_pattern(pat)
+        return pat
+
+    def _reference(self, result, pleats: bool = True):
+        """The reference pattern of a solve ``result`` of this session; with ``pleats`` the design's
+        pleats attached as every workflow attaches them (:func:`core.pattern.pleats.attach_pleats`):
+        what Live stores over Optimize's pattern keeps ``report["pleats"]``, so drape, export and
+        marker open them."""
+        from .pattern.build import build_pattern
+        from .pattern.pleats import attach_pleats
+
+        pat = build_pattern(self.prep.cut, result, style=self.prep.design.name, mode="reference")
+        if pleats:
+            attach_pleats(pat, self.prep)
         return pat
 
 
