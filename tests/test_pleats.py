@@ -265,14 +265,14 @@ def test_export_draws_folds_placements_and_notches(pleated, tmp_path):
 
 
 def test_the_drape_starts_folded_with_creases_held(pleated):
-    from core.drape.mesh import build_cloth, dihedral_angles
-    from core.drape.pleats import CREASE_MAX, fold_edges, fold_rest
-    from core.pattern.pleats import open_pattern
+    from core.drape.mesh import dihedral_angles
+    from core.drape.pleats import CREASE_MAX, draped_cloth, fold_edges
 
     pattern, _, prep = pleated
-    opened = open_pattern(pattern, stitch=True)
-    cloth = build_cloth(opened)
-    fold_rest(cloth, opened)  # as core.drape.simulate.drape does
+    cloth = draped_cloth(pattern)  # what core.drape.simulate.drape and drape_motion simulate
+    opened = cloth.mesh_pattern
+    assert len(opened.report["opened_pleats"]) == 2  # both pieces opened, stitched
+    assert any("#stitch" in s.name for s in opened.seams)
     on = fold_edges(cloth, opened)
     # every pressed fold line's edges are creases at rest on their start angle
     n_fold_edges = sum(
@@ -303,3 +303,41 @@ def test_every_size_opens_to_the_same_outline(pleated):
     for a, b in zip(build_pieces(pattern), build_pieces(large)):
         assert [x.tolist() for x in a.sew_ids] == [x.tolist() for x in b.sew_ids]
         assert len(a.pleats) == len(b.pleats) == 2
+
+
+def test_the_motion_drapes_the_pleats_opened(pleated, anny):
+    """Drape Animation moves the cloth the static drape settles: the pleats opened (their strips'
+    triangles), not the pattern as solved closed."""
+    from core.body.instance import spec_instance
+    from core.drape.animate import drape_motion
+    from core.drape.pleats import draped_cloth
+
+    pattern, _, _ = pleated
+    v, f = spec_instance(pattern.body, anny)
+    result = drape_motion(pattern, [v, v + [0.0, 0.0, 0.002]], f, options={"max_frames": 1, "device": "cpu"})
+    cloth = draped_cloth(pattern)
+    closed = sum(len(p.faces) for p in pattern.panels)
+    assert len(result.faces) == len(cloth.faces_global) > closed
+    assert np.array_equal(result.faces, cloth.faces_global)
+    assert result.positions.shape[:2] == (2, len(cloth.particle_of))
+
+
+def test_live_keeps_the_pleats(pleated):
+    """Switching Live on: the pattern it converges to (stored over Optimize's) carries the design's
+    pleats as every workflow's pattern does, so drape, export and marker open them."""
+    from core.live import LiveSession
+    from core.pattern.pleats import open_pattern
+
+    pattern, _, prep = pleated
+    session = LiveSession(prep, pattern=pattern)
+    session.set_ease(None)
+    while not session.converged:
+        session.run(1.0)
+    for live in (session.pattern(figures=False), session.cold_pattern()):
+        sites = live.report["pleats"]
+        assert [(s["name"], s["panel"], s["ends"]) for s in sites] == [
+            (s["name"], s["panel"], s["ends"]) for s in pattern.report["pleats"]
+        ]
+        assert max(s["depth_error_mm"] for s in sites) <= 0.1
+        opened = open_pattern(live)
+        assert sum(len(p.faces) for p in opened.panels) > sum(len(p.faces) for p in live.panels)

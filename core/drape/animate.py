@@ -28,8 +28,8 @@ import numpy as np
 from ..errors import DrapeError
 from ..progress import Progress, report
 from .materials import Material, get_material
-from .mesh import build_cloth
 from .options import DrapeOptions
+from .pleats import draped_cloth
 from .schedule import check_divergence, run
 from .strain import face_strains
 from .xpbd import DrapeSolver, check_body
@@ -190,7 +190,8 @@ def drape_motion(
                 f"frame's vertex count ({first.shape[0]}, 3)"
             )
     frames = [first] + [check_body(v, faces)[0] for v in body_frames[1:]]
-    cloth = build_cloth(pattern)
+    # the static drape's cloth (pleats opened, stitched and creased) on the pattern's own mesh
+    cloth = draped_cloth(pattern)
     solver = DrapeSolver(cloth, first, faces, mat, opts)
     state = solver.state()
     K = len(frames)

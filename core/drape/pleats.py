@@ -10,6 +10,10 @@ lines the rest angle :data:`CREASE_MAX`, folded the way the strip starts, and
 :data:`PRESSED_STIFFNESS` times the cloth's bending: the crease is held as pressed. An
 open pleat (``"pressed": false``) keeps the flat rest angle of any cloth and falls into
 soft folds.
+
+:func:`draped_cloth` is the one way a pattern becomes the cloth that is draped (the static drape,
+the drape through a motion, the add-on's fabric UVs on a draped garment all read it): pleats
+opened and stitched, the mesh refined and gathers sewn where asked, pressed creases held.
 """
 
 from __future__ import annotations
@@ -58,9 +62,11 @@ def fold_edges(cloth, pattern) -> np.ndarray:
             poly = cloth.x0[part[part >= 0]]
             if len(poly) < 2:
                 continue
-            near = _distance_to_polyline(e0, poly) < ON_FOLD
-            near[near] &= _distance_to_polyline(e1[near], poly) < ON_FOLD
-            on |= near
+            # only the stencils whose edge lies in the line's box (grown by ON_FOLD) can be on it
+            lo, hi = poly.min(axis=0) - ON_FOLD, poly.max(axis=0) + ON_FOLD
+            near = np.flatnonzero(np.all((e0 >= lo) & (e0 <= hi) & (e1 >= lo) & (e1 <= hi), axis=1))
+            near = near[_distance_to_polyline(e0[near], poly) < ON_FOLD]
+            on[near[_distance_to_polyline(e1[near], poly) < ON_FOLD]] = True
     return on
 
 
@@ -78,3 +84,19 @@ def fold_rest(cloth, pattern) -> None:
         cloth.bend_rest[on] = np.sign(start) * CREASE_MAX
         cloth.bend_weight = np.asarray(cloth.bend_weight, float).copy()
         cloth.bend_weight[on] *= PRESSED_STIFFNESS
+
+
+def draped_cloth(pattern, refine_edge=None):
+    """The :class:`core.drape.mesh.Cloth` a drape of ``pattern`` simulates: its pleats opened with
+    their stitching (:func:`core.pattern.pleats.open_pattern`), welded by
+    :func:`core.drape.mesh.build_cloth` (``refine_edge``, m or None: the free-hanging cloth
+    refined to that edge, gathered seams sewn as gathers; None: the pattern's mesh, gathers
+    welded as paired), pressed creases at rest on their fold (:func:`fold_rest`). Its
+    ``mesh_pattern`` is the pattern as draped: its panels' triangles are the drape's faces."""
+    from ..pattern.pleats import open_pattern
+    from .mesh import build_cloth
+
+    opened = open_pattern(pattern, stitch=True)
+    cloth = build_cloth(opened, refine_edge=refine_edge, gathers=refine_edge is not None)
+    fold_rest(cloth, opened)
+    return cloth

@@ -15,12 +15,10 @@ from __future__ import annotations
 import time
 from typing import Mapping, Optional, Union
 
-from ..pattern.pleats import open_pattern
 from ..progress import Progress, report
 from .materials import Material, get_material
-from .mesh import build_cloth
 from .options import DrapeOptions
-from .pleats import fold_rest
+from .pleats import draped_cloth
 from .result import DrapeResult, collect
 from .schedule import run
 from .xpbd import DrapeSolver, check_body
@@ -67,12 +65,10 @@ def drape(
     # the body is checked before the pattern is welded (the solver checks it again at its own door)
     body_v, body_f = check_body(body_vertices, body_faces)
     report(progress, 0.0, "drape: welding the pattern")
-    pattern = open_pattern(pattern, stitch=True)  # pleats: their cloth inserted, pre-folded and stitched
-    # the drape's own mesh (refined where the cloth hangs free), on which gathered seams are sewn as
-    # gathers (their long side refined on its own); on the pattern's mesh they stay welded as paired
-    refine = opts.refine_edge
-    cloth = build_cloth(pattern, refine_edge=refine, gathers=refine is not None)
-    fold_rest(cloth, pattern)  # a pressed pleat's fold lines keep their crease
+    # pleats opened (their cloth inserted, pre-folded and stitched, pressed creases held); the drape's
+    # own mesh (refined where the cloth hangs free), on which gathered seams are sewn as gathers
+    # (their long side refined on its own); on the pattern's mesh they stay welded as paired
+    cloth = draped_cloth(pattern, opts.refine_edge)
     t_cloth = time.perf_counter()
     solver = DrapeSolver(cloth, body_v, body_f, mat, opts)
     state = solver.state()
