@@ -3,7 +3,9 @@
 Each of the tape measures (docs/measurements.md) has a tick (give it), a target (cm) and, beside
 it, the value the body reaches with its status once fitted or measured. **Fit Body** runs the
 same core fit as ``ease body --measurements`` and a design's ``"body": {"measurements": ...}``
-(:func:`core.body.made_to_measure.fit_tape`) and shapes the body in place. **Measure** takes the
+(:func:`core.body.made_to_measure.fit_tape`) and shapes the body in place; pressed in the
+interface it runs in the background (:mod:`.jobs`: a worker thread, its progress in the status
+bar, Esc or Cancel stops it and leaves the body as it was; in line from a script). **Measure** takes the
 body's tape measures; **Use Body's** copies them into the targets; **Load** reads a table
 (JSON or CSV, as ``--measurements``).
 """
@@ -14,7 +16,7 @@ import bpy
 from bpy.props import BoolProperty, FloatProperty, PointerProperty, StringProperty
 
 from ..core.body.tape import TAPE_MEASURES
-from . import data, state, sync
+from . import data, jobs, state, sync
 from .operators_base import EaseOperator
 
 
@@ -65,16 +67,58 @@ def _show(tape, achieved: dict, status: dict) -> None:
         setattr(tape, f"status_{n}", status.get(n, ""))
 
 
-class EASE_OT_tape_fit(EaseOperator):
+JOB = "tape_fit"  # the job's name (a new Fit Body replaces a running one)
+
+
+def start_fit(model, table: dict, sync=None):
+    """The core's fit of ``model`` (Anny) to the tape measures ``table`` as the job :data:`JOB`
+    (``sync``: :func:`.jobs.start`'s); the body is shaped when it lands (:func:`apply_fit`)."""
+    from ..core.body.made_to_measure import fit_tape
+
+    return jobs.start_step(
+        JOB,
+        "fit body",
+        lambda progress: fit_tape(model, table, progress=progress),
+        lambda fit: apply_fit(bpy.context, fit),
+        "job_status",
+        "Fit Body",
+        sync=sync,
+    )
+
+
+def _missed(fit) -> list:
+    """The measures a fit does not bring within tolerance."""
+    return [k for k, s in fit.status.items() if not s.startswith("within")]
+
+
+def apply_fit(context, fit) -> None:
+    """Shape the scene's body as the fit (a :class:`core.body.made_to_measure.TapeFit`) says, show
+    each value reached beside its target and the fit's report (main thread)."""
+    obj = data.body_object(context)
+    model = _anny(obj)  # the body may have changed while the fit ran: still Anny
+    tape = context.scene.ease_tape
+    sync.update_body(context, obj, shape=fit.shape)
+    sync.fill_shape_props(context.scene, model, fit.shape)
+    _show(tape, fit.achieved, fit.status)
+    missed = _missed(fit)
+    parts = [f"{len(fit.status) - len(missed)} of {len(fit.status)} within tolerance"]
+    parts += [f"{k}: {fit.status[k]}" for k in missed]
+    if fit.collisions:
+        parts.append(f"the body cuts into itself: {', '.join(fit.collisions)}")
+    tape.report = "; ".join(parts)
+
+
+class EASE_OT_tape_fit(jobs.Background, EaseOperator):
     """Fit the body to the ticked tape measures (Anny's phenotypes and local changes, the fit of
-    ease body --measurements); each value reached is shown beside its target"""
+    ease body --measurements), in the background (Esc cancels); each value reached is shown
+    beside its target"""
 
     bl_idname = "ease.tape_fit"
     bl_label = "Fit Body"
     needs = ("body",)
 
     def run(self, context):
-        from ..core.body.made_to_measure import fit_tape
+        from ..core.body.made_to_measure import check_tape_targets
 
         obj = data.body_object(context)
         tape = context.scene.ease_tape
@@ -82,17 +126,13 @@ class EASE_OT_tape_fit(EaseOperator):
         if not set(table) - {"gender"}:
             raise state.AddonError("tick at least one measurement to fit")
         model = _anny(obj)
-        fit = fit_tape(model, table)
-        sync.update_body(context, obj, shape=fit.shape)
-        sync.fill_shape_props(context.scene, model, fit.shape)
-        _show(tape, fit.achieved, fit.status)
-        missed = [k for k, s in fit.status.items() if not s.startswith("within")]
-        parts = [f"{len(fit.status) - len(missed)} of {len(fit.status)} within tolerance"]
-        parts += [f"{k}: {fit.status[k]}" for k in missed]
-        if fit.collisions:
-            parts.append(f"the body cuts into itself: {', '.join(fit.collisions)}")
-        tape.report = "; ".join(parts)
-        self.report({"WARNING"} if missed or fit.collisions else {"INFO"}, tape.report)
+        check_tape_targets(table)  # bad input is said at once, not from the worker
+        job = start_fit(model, table, sync=self.job_sync())
+        if job.thread is not None:
+            self.report({"INFO"}, "fitting the body in the background (Esc cancels)")
+            return
+        fit = job.result
+        self.report({"WARNING"} if _missed(fit) or fit.collisions else {"INFO"}, tape.report)
 
 
 class EASE_OT_tape_measure(EaseOperator):

@@ -91,3 +91,56 @@ def test_slider_keeps_the_fitted_local_changes(bpy_session, blender, anny):
     item.value = 0.9
     shape = {**fitted, "muscle": 0.9}
     assert np.allclose(blender.verts(obj), anny.vertices(shape), atol=1e-5)
+
+
+def test_fit_in_the_background_progress_and_esc(bpy_session, blender, addon, anny):
+    """Fit Body pressed in the interface (:mod:`ease_addon.jobs`, as the Drape): the core's fit runs
+    in a worker thread, its progress is the status line, Esc (cancel) leaves the body as it was, a
+    failing fit says why, and a fit run to the end lands on the main thread's poll."""
+    import time
+
+    bpy = bpy_session["bpy"]
+    jobs, measure_ops = addon("jobs"), addon("measure_ops")
+    assert issubclass(measure_ops.EASE_OT_tape_fit, jobs.Background)  # pressed: in the background
+    s, tape = bpy.context.scene.ease, bpy.context.scene.ease_tape
+    obj = s.body
+    v0 = blender.verts(obj).copy()
+    model = measure_ops._anny(obj)
+    table = {"waist": 80.0, "gender": 1.0}
+    before, jobs.SYNCHRONOUS = jobs.SYNCHRONOUS, False
+    try:
+        # back at once, the job running; Esc: the worker stops at its next report, nothing applied
+        job = measure_ops.start_fit(model, table)
+        assert jobs.running(measure_ops.JOB) is job and job.thread.is_alive()
+        jobs.poll()
+        assert s.job_status.startswith("updating: fit body")
+        assert jobs.cancel() == 1
+        job.thread.join(120)
+        jobs.poll()
+        assert job.cancelled and job.result is None and type(job.error).__name__ == "Cancelled"
+        assert s.job_status == "fit body cancelled: the scene is as it was"
+        assert np.array_equal(blender.verts(obj), v0) and jobs.running() is None
+        # the core fails in the worker: its message in the status line, the body as it was
+        job = measure_ops.start_fit(type("Plain", (), {"name": "plain"})(), table)
+        job.thread.join(120)
+        jobs.poll()
+        assert s.job_status.startswith("fit body stopped: made-to-measure: body 'plain' has no local changes")
+        assert np.array_equal(blender.verts(obj), v0)
+        # a fit to the end: the status line follows the core's progress, the poll shapes the body
+        job = measure_ops.start_fit(model, table)
+        seen = set()
+        while job.thread.is_alive():
+            seen.add(job.status())
+            time.sleep(0.01)
+        assert any("fitting 1 measures (" in t and t.startswith("updating: fit body") for t in seen), seen
+        assert job.error is None and job.fraction == 1.0
+        assert np.array_equal(blender.verts(obj), v0)  # not yet: the poll applies it
+        jobs.poll()
+        fit = job.result
+        assert np.allclose(blender.verts(obj), anny.vertices(fit.shape), atol=1e-5)
+        assert tape.reached_waist == pytest.approx(fit.achieved["waist"], abs=1e-3)
+        assert abs(fit.achieved["waist"] - 80.0) <= tolerance("waist")
+        assert tape.status_waist == fit.status["waist"] and tape.report.startswith("1 of 1 within tolerance")
+    finally:
+        jobs.cancel()
+        jobs.SYNCHRONOUS = before
