@@ -387,10 +387,10 @@ def test_four_darts_graded_to_l_follows_the_bigger_cup(four_darts):
 
     fig = four_dart_figures(wf.transfer(prep, "L", solver=solver, start=ref).pattern, prep.body)
     assert fig["crossings"] == 0 and fig["flipped"] == 0 and fig["collapsed"] == 0
-    assert fig["bust region %"] < 2.5 and fig["front shear p95 deg"] < 11.0 and fig["legs mm"] < 0.2, fig
+    assert fig["bust region %"] < 2.5 and fig["front shear p95 deg"] < 11.0 and fig["legs mm"] < 0.3, fig
 
 
-@pytest.mark.xfail(strict=True, reason="issue 30: women:L reads bust region 2.24 % against M's 1.30 % + 0.5")
+@pytest.mark.xfail(strict=True, reason="issue 30: women:L reads bust region 1.97 % against M's 1.31 % + 0.5")
 def test_four_darts_graded_to_l_keeps_the_bust_region_of_m(four_darts):
     from benchmarks.measure_darts import four_dart_figures
 
