@@ -99,28 +99,34 @@ class OutfitRun:
         return out
 
 
-def _pushed(pattern, collider, n_body: int, inner: List[LayerRun], thickness: float, rings: int = 40):
+def _pushed(pattern, collider, n_body: int, inner: List[LayerRun], thickness: float, rings: int = 40, smooth: int = 10):
     """``pattern`` with every panel's skintight embedding moved out over the inner layers: onto the
     collider's inner-garment and strip faces (those not on the body's ``n_body`` vertices), ``thickness``
     + 1 mm outside them (the strips make the push continuous down to the body past an inner hem);
     then what still lies over an inner garment and inside it (where the body under a loose garment
     is nearer than the garment) onto that garment, as far out. The vertices left where they were
     then follow their moved neighbours over up to ``rings`` mesh rings (the displacement averaged
-    outward), so the start has no step for the drape's first frame to tear."""
+    outward), and every displacement is smoothed ``smooth`` times, so the start has no step for the
+    drape's first frame to tear."""
     from ..drape.layers import push_outside
 
     if not inner:
         return pattern, 0
     v, f = collider
     movable = np.asarray(f).min(axis=1) >= n_body
+
+    def push(xyz):
+        new, _ = push_outside(xyz, v, f, clearance=thickness + 0.001, movable=movable)
+        for lr in inner:
+            new, _ = push_outside(new, *lr.surface, clearance=lr.thickness + thickness + 0.001)
+        return new
+
     n = 1 + max(int(np.max(p.vertex_ids)) for p in pattern.panels)
     shift = np.zeros((n, 3))
     moved = np.zeros(n, bool)
     for p in pattern.panels:
         xyz = np.asarray(p.xyz, float)
-        new, _ = push_outside(xyz, v, f, clearance=thickness + 0.001, movable=movable)
-        for lr in inner:
-            new, _ = push_outside(new, *lr.surface, clearance=lr.thickness + thickness + 0.001)
+        new = push(xyz)
         ids = np.asarray(p.vertex_ids, int)
         hit = np.any(new != xyz, axis=1)
         shift[ids[hit]] = new[hit] - xyz[hit]
@@ -134,13 +140,21 @@ def _pushed(pattern, collider, n_body: int, inner: List[LayerRun], thickness: fl
         ]
     )
     edges = np.concatenate([edges, edges[:, ::-1]])
+    count = np.maximum(np.bincount(edges[:, 0], minlength=n), 1)[:, None]
     free = ~moved
     for _ in range(rings):
         total = np.zeros((n, 3))
         np.add.at(total, edges[:, 0], shift[edges[:, 1]])
-        count = np.bincount(edges[:, 0], minlength=n)[:, None]
-        shift[free] = (total / np.maximum(count, 1))[free]
-    panels = [replace(p, xyz=np.asarray(p.xyz, float) + shift[np.asarray(p.vertex_ids, int)]) for p in pattern.panels]
+        shift[free] = (total / count)[free]
+    # then every vertex half-way to its neighbours' mean, a few times (neighbours pushed onto different
+    # folds of the inner garment, an armpit, no longer start centimetres apart), and pushed out again
+    for _ in range(smooth):
+        total = np.zeros((n, 3))
+        np.add.at(total, edges[:, 0], shift[edges[:, 1]])
+        shift = 0.5 * shift + 0.5 * total / count
+    panels = [
+        replace(p, xyz=push(np.asarray(p.xyz, float) + shift[np.asarray(p.vertex_ids, int)])) for p in pattern.panels
+    ]
     return replace(pattern, panels=panels), int(moved.sum())
 
 
