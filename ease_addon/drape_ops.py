@@ -17,14 +17,6 @@ from .operators_base import EaseOperator
 JOB = "drape"  # the job's name (a new Drape replaces a running one)
 
 
-def _pattern_body(pattern):
-    """(vertices, faces) of the body instance the pattern was solved on."""
-    from ..core.body.instance import spec_instance
-
-    spec = pattern.body or {}
-    return spec_instance(spec, model=state.body_model(spec.get("model", "anny")))
-
-
 def _compute(pattern, body_v, body_f, frames, progress, device="cpu", refine_edge=None):
     """The core's drape of ``pattern`` on the body (V, F) and its fit measurements (a DrapeRun);
     ``refine_edge`` (m, or None): the drape mesh's longest edge where the cloth hangs free."""
@@ -49,12 +41,15 @@ def start_drape(
     """The drape of ``pattern`` on the body (V, F) for at most ``frames`` frames as the job
     :data:`JOB` (``sync``: :func:`.jobs.start`'s); the garment is made when it lands.
     ``digest``: the pattern it drapes (the scene's may change meanwhile); ``refine``: the drape
-    mesh's refinement edge (m, or None: the pattern's mesh)."""
+    mesh's refinement edge (m, or None: the pattern's mesh). ``pattern``'s body record goes with
+    the job: the body takes the draped pattern's size and pose when the garment lands, whatever
+    pattern the scene holds by then (a Transfer landing meanwhile)."""
+    body = dict(pattern.body or {})
     return jobs.start_step(
         JOB,
         "drape",
         lambda progress: _compute(pattern, body_v, body_f, frames, progress, device, refine),
-        lambda run: apply_drape(bpy.context, run, digest=digest),
+        lambda run: apply_drape(bpy.context, run, digest=digest, body=body),
         "drape_status",
         "Drape",
         sync=sync,
@@ -69,8 +64,10 @@ class EASE_OT_drape(jobs.Background, EaseOperator):
     needs = ("pattern",)
 
     def run(self, context):
+        from ..core.workflows._drape import pattern_body
+
         pattern = data.required_pattern(context.scene, "to drape")
-        body_v, body_f = _pattern_body(pattern)
+        body_v, body_f = pattern_body(pattern, "Drape", state.AddonError)  # the body it was solved on
         s = context.scene.ease
         # the pattern may change while the drape runs: the garment records the one it was draped from
         digest = data.pattern_digest(context.scene.get(data.PATTERN_KEY, ""))
@@ -81,15 +78,16 @@ class EASE_OT_drape(jobs.Background, EaseOperator):
         self.report({"INFO"}, s.drape_status if job.thread is None else "draping in the background (Esc cancels)")
 
 
-def apply_drape(context, run, digest=None) -> None:
+def apply_drape(context, run, digest=None, body=None) -> None:
     """Show a finished drape (a :class:`core.workflows.DrapeRun`): the body it was draped on,
     the garment object with its fit maps, the report (main thread). ``digest``: the pattern
-    it was draped from (default: the scene's pattern now)."""
+    it was draped from (default: the scene's pattern now); ``body``: that pattern's body
+    record (default: the scene's pattern's now)."""
     from ..core.body.instance import instance_shape
 
     scene = context.scene
     obj = data.body_object(context, required=False)
-    pspec = data.stored_pattern(scene).body or {}
+    pspec = (body if body is not None else data.stored_pattern(scene).body) or {}
     moved = []  # what of the body changed: said in the status line
     if obj is not None:
         spec = data.body_spec(obj)

@@ -9,6 +9,8 @@ import re
 import numpy as np
 import pytest
 
+from core.workflows._drape import pattern_body
+
 DESIGN = "top_sleeveless.json"  # cheapest template: two panels
 
 
@@ -88,7 +90,7 @@ def test_drape_in_the_background_progress_and_esc(bpy_session, blender, addon, t
     garment = next(o for o in bpy.data.objects if o.get("ease_role") == "garment")
     g_name, g_verts = garment.data.name, blender.verts(garment).copy()
     pattern = addon("data").stored_pattern(bpy.context.scene)
-    body_v, body_f = drape_ops._pattern_body(pattern)
+    body_v, body_f = pattern_body(pattern, "the test")
     # the Drape button's job (headless bpy has no window to invoke in): back at once, the job running
     job = drape_ops.start_drape(pattern, body_v, body_f, frames=400)
     assert jobs.running(drape_ops.JOB) is job and job.thread.is_alive()
@@ -256,3 +258,70 @@ def test_pressed_drapes_in_the_background_scripts_in_line(addon):
     assert Op().invoke(None, None) is None
     assert issubclass(addon("drape_ops").EASE_OT_drape, jobs.Background)
     assert issubclass(addon("motion_ops").EASE_OT_drape_animation, jobs.Background)
+
+
+def test_the_body_takes_the_draped_patterns_size(bpy_session, addon, threaded):
+    """A drape lands on the body of the pattern it draped (its record goes with the job), not of
+    the scene's pattern by then: a Transfer landing meanwhile does not move the body under the
+    old garment."""
+    bpy = bpy_session["bpy"]
+    sc, jobs = bpy.context.scene, threaded
+    data, drape_ops, state = addon("data"), addon("drape_ops"), addon("state")
+    pattern = data.stored_pattern(sc)
+    body = data.body_object(bpy.context)
+    from core.body.instance import instance_shape
+
+    model = state.body_model(data.body_spec(body)["model"])
+    draped = pattern.body.get("shape")  # None: the body stays as it is
+    draped = data.full_shape(model, instance_shape(model, draped) if draped else data.body_spec(body)["shape"])
+    assert draped != data.full_shape(model, instance_shape(model, "XL"))
+    text = sc[data.PATTERN_KEY]
+    job = drape_ops.start_drape(pattern, *pattern_body(pattern, "the test"), frames=2)
+    other = json.loads(text)
+    other["body"] = dict(other["body"], shape="XL", size="XL")  # a transfer to XL lands meanwhile
+    sc[data.PATTERN_KEY] = json.dumps(other)
+    try:
+        _landed(jobs, job)
+        assert job.error is None and sc.ease.drape_status.startswith("draped")
+        assert data.full_shape(model, data.body_spec(body)["shape"]) == draped
+        assert "XL" not in sc.ease.drape_status
+    finally:
+        sc[data.PATTERN_KEY] = text
+
+
+def test_a_pattern_without_its_body_is_not_draped(bpy_session, blender, addon):
+    """Drape refuses a pattern with no body record in one line (the core's
+    :func:`core.workflows._drape.pattern_body`), as ``ease drape`` does: no default body is assumed."""
+    bpy = bpy_session["bpy"]
+    sc, data = bpy.context.scene, addon("data")
+    text = sc[data.PATTERN_KEY]
+    sc[data.PATTERN_KEY] = json.dumps({k: v for k, v in json.loads(text).items() if k != "body"})
+    garments = [o.name for o in bpy.data.objects if o.get("ease_role") == "garment"]
+    try:
+        r = blender.run(bpy.ops.ease.drape)
+    finally:
+        sc[data.PATTERN_KEY] = text
+    assert "ERROR" in r and "body: missing" in r["ERROR"] and "\n" not in r["ERROR"].strip(), r
+    assert [o.name for o in bpy.data.objects if o.get("ease_role") == "garment"] == garments
+
+
+def test_a_pleated_garment_gets_its_fabric(bpy_session, addon, anny):
+    """A pleated pattern is draped opened (its pleats' cloth inserted): the garment's fabric UVs are
+    laid on the pattern as draped, so Studio and Render dress it (they skipped it: the closed
+    pattern's corners are not the garment's)."""
+    from core import workflows as wf
+    from core.design.pleated import skirt_knife_pleats
+
+    bpy = bpy_session["bpy"]
+    sc = bpy.context.scene
+    build, fabric, materials = addon("build"), addon("render_fabric"), addon("materials")
+    d = skirt_knife_pleats()
+    for panel in d["garments"][0]["panels"]:  # one pleat a side of each panel
+        panel["pleats"] = panel["pleats"][1:2]
+    pattern = wf.reference(wf.prepare(d, body=anny)).pattern
+    run = wf.drape(pattern, options={"max_frames": 1, "device": "cpu"})
+    g = build.garment(sc, run.result, run.metrics["vertex_gap"], "pleated")
+    closed = sum(len(p.faces) for p in pattern.panels)
+    assert len(g.data.polygons) > closed
+    assert fabric.dress_garment(sc, g, pattern) is True
+    assert len(g.data.uv_layers[materials.FABRIC_UV].data) == 3 * len(g.data.polygons)
