@@ -210,3 +210,20 @@ def test_example_outfits_load():
     for p in files:
         outfit = load_outfit(p)
         assert len(outfit.layers) == 2 and outfit.name
+
+
+@pytest.mark.slow
+def test_cli_outfit_writes_every_garment(tmp_path, capsys):
+    from core.cli import main
+
+    src = tmp_path / "o.json"
+    src.write_text(json.dumps({**TUCKED, "layers": [{"design": "skirt"}, {"design": "top_sleeveless"}]}))
+    out = tmp_path / "out"
+    args = ["outfit", str(src), "--out", str(out), "--edge", "0.05", "--frames", "8", "--formats", "svg,obj", "--quiet"]
+    assert main([*args, "--no-preview"]) == 0
+    said = capsys.readouterr().out
+    assert "sleeveless top: 8 frames" in said and "over skirt: penetration" in said
+    assert {"skirt", "sleeveless_top", "outfit.obj", "outfit.mtl", "outfit_report.json"} <= {
+        p.name for p in out.iterdir()
+    }
+    assert (out / "skirt" / "export" / "pattern.svg").is_file() and not (out / "outfit.glb").exists()
