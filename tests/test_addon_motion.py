@@ -102,7 +102,8 @@ def test_poses_field_is_checked(scene, bpy_session):
 
 def test_point_cache_plays_in_blender(scene, bpy_session):
     """``ease drape --animation``'s garment_motion.obj + .pc2 (core.drape.animate.write_motion), read
-    by Blender's OBJ importer and its Mesh Cache modifier: every frame's vertices as written."""
+    by Blender's OBJ importer (default axes: the files are Y-up) and its Mesh Cache modifier: every frame's
+    vertices back in Blender's frame where they were draped."""
     from drape_synth import revolution_body, tube_skirt
 
     from core.drape.animate import drape_motion, write_motion
@@ -115,9 +116,8 @@ def test_point_cache_plays_in_blender(scene, bpy_session):
     out = scene.tmp / "pc2"
     write_motion(out, r, frames, bf, ["A", "T"], 2)
     before = set(bpy.data.objects)
-    assert bpy.ops.wm.obj_import(filepath=str(out / "garment_motion.obj"), forward_axis="Y", up_axis="Z") == {
-        "FINISHED"
-    }
+    # Y-up by default (OBJ readers' convention): Blender's importer with its default axes, the cache alike
+    assert bpy.ops.wm.obj_import(filepath=str(out / "garment_motion.obj")) == {"FINISHED"}
     obj = next(o for o in bpy.data.objects if o not in before)
     mod = obj.modifiers.new("cache", "MESH_CACHE")
     mod.cache_format, mod.filepath = "PC2", str(out / "garment_motion.pc2")

@@ -11,6 +11,7 @@ from test_body_obj import horse, write_obj
 from core.body.output import render_bodies
 from core.cli import body as body_cli
 from core.errors import BodyError
+from core.geom.frame import from_frame
 
 
 def ease_body(argv):
@@ -47,9 +48,40 @@ def test_writes_posed_smpl_body(stick, tmp_path, capsys):
     from core.body.smpl import load_smpl
 
     body = load_smpl(stick)
-    np.testing.assert_allclose(read_obj_vertices(out), body.vertices({"beta0": 0.5}, "P2"), atol=2e-6)
+    want = body.vertices({"beta0": 0.5}, "P2")
+    # Y-up by default, (x, z, -y) of the core frame: the header says so
+    np.testing.assert_allclose(from_frame(read_obj_vertices(out), "y"), want, atol=2e-6)
+    assert "# frame: metres, +Y up" in out.read_text()
     text = capsys.readouterr().out
     assert "height" in text and f"wrote {out}" in text
+    # --out-up z: the core frame, as computed
+    assert (
+        ease_body(["--model", str(stick), "--shape", "beta0=0.5", "--pose", "P2", "--out", str(out), "--out-up", "z"])
+        == 0
+    )
+    np.testing.assert_allclose(read_obj_vertices(out), want, atol=2e-6)
+    assert "# frame: metres, +Z up" in out.read_text()
+
+
+def test_out_up_is_the_written_file_up_is_the_read_one(horse_obj, tmp_path, capsys):
+    """``--up`` is the axis of the OBJ model read, ``--out-up`` that of the OBJ written: a Y-up
+    template read with ``--up y`` and written Z-up is the Z-up template's body."""
+    from core.body.obj_model import load_obj_body
+
+    ref = load_obj_body(horse_obj).vertices(None, None)
+    out = tmp_path / "z.obj"
+    assert ease_body(["--model", str(horse_obj), "--out", str(out), "--out-up", "z"]) == 0
+    np.testing.assert_allclose(read_obj_vertices(out), ref, atol=2e-6)
+    # the default output (Y-up) read back as a Y-up model gives the same body
+    y = tmp_path / "y.obj"
+    assert ease_body(["--model", str(horse_obj), "--out", str(y)]) == 0
+    back = tmp_path / "back.obj"
+    assert ease_body(["--model", str(y), "--up", "y", "--out", str(back), "--out-up", "z"]) == 0
+    np.testing.assert_allclose(read_obj_vertices(back), ref, atol=2e-5)
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as exc:
+        ease_body(["--model", str(horse_obj), "--out", str(out), "--out-up", "x"])
+    assert exc.value.code == 2 and "--out-up" in capsys.readouterr().err
 
 
 def test_obj_model_reference_pose(horse_obj, tmp_path):

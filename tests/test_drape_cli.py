@@ -8,6 +8,7 @@ from drape_synth import tube_skirt
 
 from core.cli import main
 from core.drape.output import FILES, read_ply_vertices
+from core.geom.frame import from_frame, to_y_up
 from core.pattern.io import save_pattern
 
 
@@ -54,8 +55,13 @@ def test_npz_obj_ply_agree(drape_dir):
     obj = (drape_dir / "garment.obj").read_text().splitlines()
     v = np.array([[float(t) for t in line.split()[1:]] for line in obj if line.startswith("v ")])
     faces = np.array([[int(t) for t in line.split()[1:]] for line in obj if line.startswith("f ")]) - 1
-    assert np.allclose(v, x, atol=1e-6)
+    # garment.obj is Y-up by default ((x, z, -y) of the drape's core frame), its header says so
+    assert np.allclose(from_frame(v, "y"), x, atol=1e-6) and np.allclose(v, to_y_up(x), atol=1e-6)
+    assert any(line.startswith("# frame:") and "+Y up" in line for line in obj[:4])
     assert np.array_equal(np.sort(faces, axis=0), np.sort(f, axis=0))
+    # its materials beside it
+    assert "mtllib garment.mtl" in obj and "usemtl fabric" in obj
+    assert "newmtl fabric" in (drape_dir / "garment.mtl").read_text()
     ply = read_ply_vertices(drape_dir / "garment.ply")
     assert set(ply) == {"x", "y", "z", "strain_weft", "strain_warp", "gap"}
     assert np.allclose(ply["x"], x[:, 0], atol=1e-6)

@@ -14,6 +14,7 @@ from core.drape import DrapeSolver
 from core.drape.animate import drape_motion, pose_frames
 from core.drape.mesh import build_cloth
 from core.errors import DrapeError
+from core.geom.frame import to_y_up
 
 
 @pytest.fixture(scope="module")
@@ -60,10 +61,25 @@ def test_a_body_jumping_20_cm_in_one_frame_keeps_the_skirt(body):
     assert r.stretch.max() < 0.15
 
 
-def test_a_still_body_keeps_the_settled_drape(body):
+def test_a_still_body_keeps_the_settled_drape(body, tmp_path):
     bv, bf = body
     r = drape_motion(tube_skirt(), [bv] * 4, bf, options={"max_frames": 60})
     assert np.abs(r.positions[-1] - r.positions[0]).max() < 0.005
+    # its files: Y-up by default, up="z" the core frame; the OBJ's faces on the used vertices
+    from core.drape.animate import write_motion
+
+    for up, frame in (("y", to_y_up), ("z", np.asarray)):
+        write_motion(tmp_path / up, r, [bv] * 4, bf, ["A", "A"], 2, up=up)
+        k, n = _pc2(tmp_path / up / "garment_motion.pc2")
+        assert n == int(r.used.sum()) and np.allclose(k, frame(r.positions[:, r.used]), atol=1e-6)
+        kb, _ = _pc2(tmp_path / up / "body_motion.pc2")
+        assert np.allclose(kb[0], frame(bv), atol=1e-6)
+        lines = (tmp_path / up / "garment_motion.obj").read_text().splitlines()
+        assert f"+{up.upper()} up" in lines[1]
+        v = np.array([ln.split()[1:] for ln in lines if ln.startswith("v ")], float)
+        f = np.array([ln.split()[1:] for ln in lines if ln.startswith("f ")], int) - 1
+        assert np.allclose(v, k[0], atol=1e-6) and f.min() == 0 and f.max() == len(v) - 1
+        assert np.allclose(v[f], frame(r.positions[0][r.faces]), atol=1e-6)
 
 
 def test_moved_body_must_keep_its_vertices(body):
@@ -149,7 +165,10 @@ def test_ease_drape_animation_on_the_default_body(tmp_path, anny):
     assert np.abs(z["body_vertices"][-1] - body_instance(anny, "M", "P1")).max() > 0.01  # the elbow too
     k, v = _pc2(out / "garment_motion.pc2")
     assert k.shape == (4, int(used.sum()), 3) and v == int(used.sum())
-    assert np.array_equal(k, pos[:, used].astype(np.float32))
+    # the caches and OBJs are Y-up by default, (x, z, -y) of motion.npz's core frame
+    assert np.array_equal(k, to_y_up(pos[:, used]).astype(np.float32))
+    head = (out / "garment_motion.obj").read_text().splitlines()[:3]
+    assert "+Y up" in head[1] and head[2] == "o garment_motion"
     # a joint the body lacks is refused before the drape, naming the file's entry
     (tmp_path / "bad.json").write_text(json.dumps(["A", {"elbow": [0.0, 0.0, 1.0]}]))
     assert main(argv + ["--animation", str(tmp_path / "bad.json")]) == 2

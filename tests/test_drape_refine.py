@@ -9,6 +9,7 @@ from core.drape.mesh import build_cloth
 from core.drape.output import obj_text, report_dict
 from core.drape.refine import edge_lengths, refine_pattern
 from core.errors import DrapeError
+from core.geom.frame import to_y_up
 from core.metrics.drape import drape_metrics, summary
 
 
@@ -117,6 +118,10 @@ def test_refined_drape_reports_its_mesh_and_folds(skirt):
     assert sum(len(p.faces) for p in mesh.panels) == rep["triangles_after"]
     obj = obj_text(r)
     assert f"# vertices 1..{n0}: the pattern's" in obj and obj.count("\nv ") == len(r.positions)
+    # Y-up by default; up="z" keeps the core frame, vertex for vertex
+    for up, want in (("y", to_y_up(r.positions)), ("z", r.positions)):
+        v = np.array([line.split()[1:] for line in obj_text(r, up).splitlines() if line.startswith("v ")], float)
+        assert np.allclose(v, want, atol=1e-6), up
 
 
 @pytest.mark.parametrize("edge", [0.0, -0.01, float("nan"), 1.0])

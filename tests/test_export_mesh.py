@@ -91,3 +91,25 @@ def test_obj_has_vertices_uvs_normals_and_faces(made):
     faces = [l.split()[1:] for l in lines if l.startswith("f ")]
     last = faces[-1]
     assert max(int(c.split("/")[0]) for c in last) <= n  # 1-based, within range
+
+
+def test_one_frame_helper_for_every_mesh_file():
+    """core.geom.frame: Y-up is (x, z, -y), a right-handed turn (no mirror) that from_frame undoes; the
+    body's up (+Z) becomes +Y and its front (-Y) +Z, as glTF/OBJ readers expect; bad axes are refused."""
+    from core.geom import frame
+
+    rng = np.random.default_rng(3)
+    v = rng.normal(size=(20, 3))
+    y = frame.to_frame(v, "y")
+    assert np.allclose(y[:, 1], v[:, 2]) and np.allclose(y[:, 2], -v[:, 1]) and np.allclose(y[:, 0], v[:, 0])
+    assert np.allclose(frame.from_frame(y, "y"), v) and np.allclose(frame.to_frame(v, "z"), v)
+    turn = frame.to_frame(np.eye(3), "y")  # rows: the images of +X, +Y, +Z
+    assert np.isclose(np.linalg.det(turn), 1.0) and np.allclose(turn[2], [0, 1, 0]) and np.allclose(turn[1], [0, 0, -1])
+    # (K, V, 3) point caches too, frame by frame
+    k = rng.normal(size=(3, 5, 3))
+    assert np.allclose(frame.to_frame(k, "y")[1], frame.to_y_up(k[1]))
+    assert "+Y up" in frame.frame_text("y") and "+Z up" in frame.frame_text("z", "root", "the body")
+    with pytest.raises(ValueError, match="up"):
+        frame.to_frame(v, "x")
+    # the export's names are the same helpers
+    assert mesh.to_frame is frame.to_frame and mesh.frame_text is frame.frame_text

@@ -29,12 +29,11 @@ from typing import Dict, Mapping, Optional, Union
 import numpy as np
 
 from ..choices import POSE_PRESETS, REFERENCE_POSE  # noqa: F401  (re-exported: the model's interface)
+from ..geom.frame import FRAME  # noqa: F401  (re-exported: the core frame, core.geom.frame)
 
 Shape = Mapping[str, float]
 Pose = Union[str, Mapping[str, np.ndarray], None]
 
-#: The frame of every 3D file the project writes (body OBJs, drapes, exported garments by default).
-FRAME = "metres, +Z up, the body facing -Y, +X the body's left (EASE/Blender frame)"
 
 REQUIRED_LANDMARKS = (
     "neck_front",

@@ -11,24 +11,26 @@ import numpy as np
 
 from ..errors import BodyError
 from ..fileio import write_bytes, write_text
+from ..geom.frame import frame_text, to_frame
 from ..geom.mesh import face_normals
 
 
-def write_obj(path, vertices: np.ndarray, faces: np.ndarray, comment: str = "") -> Path:
+def write_obj(path, vertices: np.ndarray, faces: np.ndarray, comment: str = "", up: str = "y") -> Path:
     """Write a triangle mesh as OBJ atomically.
 
     Parameters
     ----------
-    vertices : (V, 3) float, metres, +Z up, the body facing -Y.
+    vertices : (V, 3) float, metres, the core frame (+Z up, the body facing -Y).
     faces : (F, 3) int.
     comment : lines written as ``#`` comments at the top.
+    up : the file's up axis: ``"y"`` (default, OBJ readers' convention: ``(x, z, -y)``) or ``"z"``
+        (the core frame); the header says which (:mod:`core.geom.frame`).
     """
     lines = [f"# {line}" for line in comment.splitlines()] + [
         "# EASE body",
-        "# frame: metres, +Z up, the body facing -Y, +X the body's left (EASE/Blender frame; "
-        "`ease export --with-body` writes the same body in this frame)",
+        f"# frame: {frame_text(up, 'root', 'the body')}",
     ]
-    lines += [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in vertices]
+    lines += [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in to_frame(vertices, up)]
     lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces]
     return write_text(path, "\n".join(lines) + "\n")
 
@@ -111,9 +113,9 @@ def measures_text(m: dict) -> str:
     return ", ".join(f"{k} {v:.1f} cm" for k, v in m.items())
 
 
-def write_all_bodies(body, out, progress=None) -> dict:
-    """Every chart size (A pose) and every pose preset (size M) as OBJ, with ``bodies.png``
-    and ``bodies.json``, into the folder ``out`` atomically.
+def write_all_bodies(body, out, progress=None, up: str = "y") -> dict:
+    """Every chart size (A pose) and every pose preset (size M) as OBJ (up axis ``up``,
+    :func:`write_obj`), with ``bodies.png`` and ``bodies.json``, into the folder ``out`` atomically.
 
     Returns
     -------
@@ -134,7 +136,7 @@ def write_all_bodies(body, out, progress=None) -> dict:
             shape = size_shape(body, size, progress=sub(progress, 0.6 * i / 5, 0.6 * (i + 1) / 5))
             v = body.vertices(shape, None)
             m = safe_measure(body, v)
-            write_obj(tmp / f"size_{size}.obj", v, body.faces, f"size {size}, A-pose\n{measures_text(m)}")
+            write_obj(tmp / f"size_{size}.obj", v, body.faces, f"size {size}, A-pose\n{measures_text(m)}", up)
             summary["sizes"][size] = {"shape": shape, "measured_cm": m, "chart_cm": SIZE_CHART[size]}
             girths = "/".join(f"{m[k]:.0f}" for k in ("chest", "waist", "hip") if k in m)
             sizes.append((f"{size}\n{girths}" if girths else size, v))
@@ -142,7 +144,7 @@ def write_all_bodies(body, out, progress=None) -> dict:
         for i, pose in enumerate(POSE_PRESETS):
             report(progress, 0.6 + 0.2 * i / len(POSE_PRESETS), f"pose {pose}")
             v = body.vertices(shape_m, pose)
-            write_obj(tmp / f"pose_{pose}.obj", v, body.faces, f"size M, pose {pose}")
+            write_obj(tmp / f"pose_{pose}.obj", v, body.faces, f"size M, pose {pose}", up)
             summary["poses"][pose] = {"file": f"pose_{pose}.obj"}
             poses.append((pose, v))
         report(progress, 0.85, "rendering bodies.png")

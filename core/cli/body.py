@@ -61,10 +61,10 @@ def resolve_shape(body, text, progress=None, chart=None):
     return check_shape(body.shape_parameters(), parse_assignments(text, "--shape"), f"--shape ({body.name})")
 
 
-def _write_all(body, out: Path, progress) -> int:
+def _write_all(body, out: Path, progress, up: str) -> int:
     from ..body.output import measures_text, write_all_bodies
 
-    summary = write_all_bodies(body, out, progress)
+    summary = write_all_bodies(body, out, progress, up)
     for size, rec in summary["sizes"].items():
         print(f"size {size:>2}: {measures_text(rec['measured_cm'])}")
     print_files((p for p in sorted(out.iterdir()) if p.name.startswith(("size_", "pose_", "bodies."))), prefix="wrote ")
@@ -106,7 +106,7 @@ def run(args) -> int:
     body = load_model(args.model, args.blendshapes, args.landmarks, args.up)
     out = Path(args.out)
     if args.all:
-        return _write_all(body, out, progress)
+        return _write_all(body, out, progress, args.out_up)
     if args.scan is not None:
         return _fit_scan(args, body, out, progress)
     if args.measurements is not None:
@@ -126,7 +126,7 @@ def run(args) -> int:
     v = body.vertices(shape, pose)
     m_std = safe_measure(body, body.vertices(shape, None))
     label = args.shape or args.measure or "reference"
-    write_obj(out, v, body.faces, f"model {body.name}, shape {label}, pose {pose}\n{measures_text(m_std)}")
+    write_obj(out, v, body.faces, f"model {body.name}, shape {label}, pose {pose}\n{measures_text(m_std)}", args.out_up)
     if args.measure is None:
         print(f"measured (A-pose): {measures_text(m_std)}")
     print("shape: " + ", ".join(f"{k}={val:.4g}" for k, val in shape.items()))
@@ -155,6 +155,7 @@ def _fit_scan(args, body, out: Path, progress) -> int:
         v,
         body.faces,
         f"model {body.name} fitted to {args.scan} ({label}); scan to body mean {d['mean']:.1f} mm, p95 {d['p95']:.1f} mm",
+        args.out_up,
     )
     rounded = {k: round(val, 4) for k, val in fit.shape.items()}
     pose = {j: [round(a, 4) for a in r] for j, r in fit.pose.items()}
@@ -191,7 +192,8 @@ def add_parser(subparsers) -> None:
         "body",
         run,
         help="write a body of a given size/measurements and pose as OBJ",
-        description="Write a posed body as OBJ (metres, +Z up, facing -Y) and print its measurements "
+        description="Write a posed body as OBJ (metres, +Y up by default, facing +Z; --out-up z: +Z up, "
+        "facing -Y) and print its measurements "
         "(height, chest, waist, hip in cm). --all writes sizes XS..XL and poses A, T, P1, P2, P3 "
         "and a PNG of them side by side.",
         formatter_class=_ChartsHelp,
@@ -255,6 +257,13 @@ def add_parser(subparsers) -> None:
     )
     p.add_argument("--landmarks", default=None, help="OBJ models: landmark JSON")
     p.add_argument(
-        "--up", default="z", choices=("z", "y"), help="OBJ models and --scan: up axis of the file (default z)"
+        "--up", default="z", choices=("z", "y"), help="OBJ models and --scan: up axis of the file read (default z)"
+    )
+    p.add_argument(
+        "--out-up",
+        default="y",
+        choices=("y", "z"),
+        help="up axis of the OBJ written: y (default; OBJ readers' convention, Blender's OBJ import brings the body "
+        "in standing: (x, z, -y)) or z (the core frame, body facing -Y; import into Blender with Up: Z, Forward: Y)",
     )
     add_quiet(p, "no progress lines")

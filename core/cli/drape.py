@@ -1,7 +1,7 @@
 """``ease drape``: drape a pattern on its body with our XPBD and measure the fit.
 
 Writes into ``--out`` atomically, through :mod:`core.workflows`:
-``garment.obj``, ``garment.ply`` (per-vertex weft/warp strain and gap),
+``garment.obj`` (+ ``garment.mtl``; Y-up by default, ``--up z``: the core frame), ``garment.ply`` (per-vertex weft/warp strain and gap),
 ``drape.npz`` (positions by global vertex id, faces: what the export stage
 reads), ``drape_report.json`` (times, settling, gap, penetration, seam gap)
 and ``preview.png``. Warp is imported inside the command.
@@ -53,6 +53,15 @@ def add_parser(sub) -> None:
         "gathered seams are sewn as gathers on it. --animation drapes the pattern's mesh",
     )
     p.add_argument("--no-preview", action="store_true", help="skip preview.png")
+    p.add_argument(
+        "--up",
+        default="y",
+        choices=("y", "z"),  # core.geom.frame.UP_AXES (numpy-free parser)
+        help="up axis of the OBJ files (garment.obj, and the motion OBJs + .pc2 caches of --animation): y "
+        "(default; OBJ readers' convention, Blender's OBJ import brings it in standing: (x, z, -y)) or z "
+        "(the core frame, body facing -Y; import into Blender with Up: Z, Forward: Y). "
+        "garment.ply and the .npz files keep the core frame",
+    )
     p.add_argument(
         "--animation",
         metavar="POSES",
@@ -135,7 +144,7 @@ def _motion(args, options, pattern, prog) -> int:
     result = drape_motion(
         pattern, frames, faces, material=args.material, options=options, progress=sub(prog, start, 0.95)
     )
-    write_motion(args.out, result, frames, faces, poses, args.between, pattern=pattern)
+    write_motion(args.out, result, frames, faces, poses, args.between, pattern=pattern, up=args.up)
     report(prog, 1.0, "drape: done")
     rep = motion_report(result, poses, args.between, pattern)
     for pose, garments in (rep.get("adaptation_residual_stretch_pct") or {}).items():
@@ -201,7 +210,7 @@ def _cmd(args) -> int:
         return _motion(args, options, pattern, prog)
     run = wf.drape(pattern, material=args.material, options=options, progress=sub(prog, 0.0, 0.9))
     report(prog, 0.95, "drape: writing")
-    wf.write_drape(args.out, run, pattern=pattern, preview=not args.no_preview)
+    wf.write_drape(args.out, run, pattern=pattern, preview=not args.no_preview, up=args.up)
     report(prog, 1.0, "drape: done")
     print(f"{wf.drape_summary(run, pattern)} -> {args.out}")
     return 0

@@ -351,8 +351,15 @@ def pc2_bytes(frames: np.ndarray) -> bytes:
     return struct.pack("<12siiffi", b"POINTCACHE2\0", 1, f.shape[1], 1.0, 1.0, f.shape[0]) + f.tobytes()
 
 
-def _obj_bytes(vertices: np.ndarray, faces: np.ndarray, name: str) -> bytes:
-    lines = [f"# EASE motion: the mesh {name}.pc2 moves (its vertex order)", f"o {name}"]
+def _obj_bytes(vertices: np.ndarray, faces: np.ndarray, name: str, up: str = "y") -> bytes:
+    """The OBJ of frame 1 (``vertices`` already in the file frame ``up``)."""
+    from ..geom.frame import frame_text
+
+    lines = [
+        f"# EASE motion: the mesh {name}.pc2 moves (its vertex order)",
+        f"# frame: {frame_text(up, 'root', 'frame 1 of the motion; the .pc2 in the same frame')}",
+        f"o {name}",
+    ]
     lines += [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in np.asarray(vertices, dtype=float)]
     lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in np.asarray(faces, dtype=np.int64)]
     return ("\n".join(lines) + "\n").encode("utf-8")
@@ -389,23 +396,27 @@ def motion_report(result: MotionResult, poses, between: int, pattern=None) -> di
     return out
 
 
-def write_motion(out, result: MotionResult, body_frames, body_faces, poses, between: int, pattern=None) -> list:
+def write_motion(
+    out, result: MotionResult, body_frames, body_faces, poses, between: int, pattern=None, up: str = "y"
+) -> list:
     """The motion's files into the folder ``out`` at once: ``motion.npz`` (garment positions by
     global vertex id, faces, used; body frames and faces), ``motion_report.json``
     (:func:`motion_report`), and for other tools ``garment_motion.obj`` / ``.pc2`` and
     ``body_motion.obj`` / ``.pc2`` (each OBJ is frame 1, its point cache the K frames).
     With ``pattern`` (the one draped) the report names it, and an adapted one is written
-    too (``pattern.json``: what the garment was cut from)."""
+    too (``pattern.json``: what the garment was cut from). ``up``: the frame of the OBJs and
+    point caches, ``"y"`` (default, OBJ readers' convention: ``(x, z, -y)``) or ``"z"`` (the core
+    frame, that of ``motion.npz``)."""
     import io
 
     from ..fileio import write_files
+    from ..geom.frame import to_frame
+    from ..geom.mesh import compact_vertices
     from ..jsontext import dumps_json
 
     used = np.asarray(result.used, dtype=bool)
-    remap = -np.ones(len(used), dtype=np.int64)
-    remap[used] = np.arange(int(used.sum()))
-    garment = np.asarray(result.positions)[:, used]
-    gfaces = remap[np.asarray(result.faces)]
+    ids, gfaces = compact_vertices(result.faces, used)
+    garment = np.asarray(result.positions)[:, ids]
     body = np.stack([np.asarray(b, dtype=np.float64) for b in body_frames])
     buf = io.BytesIO()
     np.savez_compressed(
@@ -419,10 +430,10 @@ def write_motion(out, result: MotionResult, body_frames, body_faces, poses, betw
     files = {
         "motion.npz": buf.getvalue(),
         "motion_report.json": (dumps_json(motion_report(result, poses, between, pattern)) + "\n").encode("utf-8"),
-        "garment_motion.obj": _obj_bytes(garment[0], gfaces, "garment_motion"),
-        "garment_motion.pc2": pc2_bytes(garment),
-        "body_motion.obj": _obj_bytes(body[0], body_faces, "body_motion"),
-        "body_motion.pc2": pc2_bytes(body),
+        "garment_motion.obj": _obj_bytes(to_frame(garment[0], up), gfaces, "garment_motion", up),
+        "garment_motion.pc2": pc2_bytes(to_frame(garment, up)),
+        "body_motion.obj": _obj_bytes(to_frame(body[0], up), body_faces, "body_motion", up),
+        "body_motion.pc2": pc2_bytes(to_frame(body, up)),
     }
     if pattern is not None and pattern.mode == "adapt":
         from ..pattern.io import pattern_text

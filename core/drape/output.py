@@ -1,4 +1,9 @@
-"""Files of a drape: OBJ, PLY (strain and gap per vertex), NPZ, report, preview PNG.
+"""Files of a drape: OBJ (+ its MTL), PLY (strain and gap per vertex), NPZ, report, preview PNG.
+
+``garment.obj`` is Y-up by default, the convention of OBJ readers (Blender's importer with its
+defaults brings it in standing), ``up="z"`` keeps the core frame (:mod:`core.geom.frame`; the
+header says which); its origin is the body's root. ``garment.ply`` and ``drape.npz`` hold the
+core frame (+Z up), the one every reader of a drape (``ease export --drape``) takes.
 
 Every writer returns bytes or writes through :mod:`core.fileio`, so a folder
 is filled atomically by :func:`write_drape`. The fit measurements are the
@@ -13,24 +18,26 @@ from pathlib import Path
 
 import numpy as np
 
-from ..body.model import FRAME
 from ..fileio import output_dir, write_bytes, write_json, write_text
+from ..geom.frame import MTL_NAME, frame_text, mtl_text, to_frame
 
-FILES = ("garment.obj", "garment.ply", "drape.npz", "drape_report.json", "preview.png")
+FILES = ("garment.obj", MTL_NAME, "garment.ply", "drape.npz", "drape_report.json", "preview.png")
 
 
-def obj_text(result) -> str:
-    """Wavefront OBJ: vertex k is global garment vertex id k (1-based in the file); one group per garment."""
+def obj_text(result, up: str = "y") -> str:
+    """Wavefront OBJ: vertex k is global garment vertex id k (1-based in the file); one group per garment.
+
+    ``up``: ``"y"`` (default, OBJ readers' convention: ``(x, z, -y)``) or ``"z"`` (the core frame)."""
     out = io.StringIO()
     out.write("# EASE drape: vertex k = global garment vertex id k-1\n")
     n0 = int(getattr(result, "pattern_vertices", 0) or 0)
     if 0 < n0 < len(result.positions):
         out.write(f"# vertices 1..{n0}: the pattern's; after them the drape mesh's own (refinement, gathers)\n")
-    # the frame of every 3D file of the project (body OBJs, ease export garment.obj by default)
-    out.write(f"# frame: {FRAME}, as draped\n")
-    np.savetxt(out, result.positions, fmt="v %.6f %.6f %.6f")
+    out.write(f"# frame: {frame_text(up, 'root')}\n")
+    out.write(f"mtllib {MTL_NAME}\n")
+    np.savetxt(out, to_frame(result.positions, up), fmt="v %.6f %.6f %.6f")
     for g, name in enumerate(result.garment_names):
-        out.write(f"g {name}\n")
+        out.write(f"g {name}\nusemtl fabric\n")
         np.savetxt(out, result.faces[np.asarray(result.face_garment) == g] + 1, fmt="f %d %d %d")
     return out.getvalue()
 
@@ -198,7 +205,16 @@ def preview_png(result, body_vertices: np.ndarray, body_faces: np.ndarray, path,
 
 
 def write_drape(
-    out, result, body_vertices, body_faces, *, fit: dict, vertex_gap: np.ndarray, pattern=None, preview: bool = True
+    out,
+    result,
+    body_vertices,
+    body_faces,
+    *,
+    fit: dict,
+    vertex_gap: np.ndarray,
+    pattern=None,
+    preview: bool = True,
+    up: str = "y",
 ) -> Path:
     """Write every drape file (:data:`FILES`) into ``out`` atomically.
 
@@ -211,6 +227,7 @@ def write_drape(
     vertex_gap : (N,) float, m, per global vertex id, its distance outside the body (PLY and NPZ).
     pattern : the pattern draped (its style and body record go into the report).
     preview : write ``preview.png``.
+    up : the up axis of ``garment.obj``: ``"y"`` (default) or ``"z"`` (:func:`obj_text`).
 
     Returns
     -------
@@ -218,7 +235,8 @@ def write_drape(
     """
     report = report_dict(result, fit, pattern)
     with output_dir(out) as tmp:
-        write_text(tmp / "garment.obj", obj_text(result))
+        write_text(tmp / "garment.obj", obj_text(result, up))
+        write_text(tmp / MTL_NAME, mtl_text())
         write_bytes(tmp / "garment.ply", ply_bytes(result, vertex_gap))
         write_bytes(tmp / "drape.npz", npz_bytes(result, vertex_gap))
         write_json(tmp / "drape_report.json", report)

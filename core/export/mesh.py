@@ -9,8 +9,8 @@ piece (their uv differ).
 
 Frames, one convention for every 3D file of the project: metres, the garment
 where it was draped (the drape's own coordinates, the body's frame: +Z up,
-the body facing -Y, +X the body's left, as in Blender). The body OBJs of
-``ease body`` and ``drape/garment.obj`` are written in it unchanged. glTF
+the body facing -Y, +X the body's left, as in Blender). Every mesh file says
+its frame in its header (:mod:`core.geom.frame`, one helper for all writers). glTF
 requires +Y up, so ``garment.glb`` is always written as ``(x, z, -y)``
 (Blender's glTF importer turns it back); the exported ``garment.obj`` is
 written that way too by default (``up="y"``: OBJ readers, Blender's importer
@@ -35,7 +35,17 @@ from typing import List, Sequence, Tuple
 
 import numpy as np
 
-from ..body.model import FRAME
+from ..geom.frame import (  # noqa: F401 (re-exported: the frame helpers of every mesh file)
+    FRAME_Y,
+    MTL_NAME,
+    ORIGIN_TEXT,
+    ORIGINS,
+    UP_AXES,
+    frame_text,
+    mtl_text,
+    to_frame,
+    to_y_up,
+)
 from ..geom.mesh import vertex_normals
 from ..pattern.types import Pattern
 
@@ -59,53 +69,6 @@ def smooth_normals(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
     vn = vertex_normals(positions, faces)
     vn[np.linalg.norm(vn, axis=1) < 0.5] = (0.0, 0.0, 1.0)
     return vn
-
-
-UP_AXES = ("y", "z")
-FRAME_Z = f"{FRAME}, as draped"
-FRAME_Y = "metres, +Y up, the body facing +Z, +X the body's left (glTF frame: EASE (x, y, z) -> (x, z, -y)), as draped"
-#: where a mesh file's origin is: ``"floor"`` (default: under the body's root, at the height of the body's lowest
-#: point, so the body stands on the floor as glTF/OBJ viewers expect) or ``"root"`` (the body's root, the core frame)
-ORIGINS = ("floor", "root")
-ORIGIN_TEXT = {
-    "floor": "origin on the floor: under the body's root, at the body's lowest point",
-    "root": "origin at the body's root (the pelvis)",
-}
-#: the OBJ's material library, written beside it
-MTL_NAME = "garment.mtl"
-
-
-def frame_text(up: str, origin: str = "root") -> str:
-    """What a mesh file says about its frame: axes (``up``) and origin."""
-    return f"{FRAME_Y if up == 'y' else FRAME_Z}; {ORIGIN_TEXT[origin]}"
-
-
-def mtl_text(meshes, body=None) -> str:
-    """The OBJ's material library: ``fabric`` (the garment, its uv the pattern's) and ``body``, as in the GLB."""
-    lines = [
-        "# EASE materials for garment.obj",
-        "newmtl fabric",
-        "Kd 0.800 0.800 0.800",
-        "Ka 0 0 0",
-        "Ks 0 0 0",
-        "Ns 10",
-        "d 1",
-        "illum 1",
-    ]
-    if body is not None:
-        lines += ["", "newmtl body", "Kd 0.930 0.780 0.660", "Ka 0 0 0", "Ks 0 0 0", "Ns 10", "d 1", "illum 1"]
-    return "\n".join(lines) + "\n"
-
-
-def to_y_up(v: np.ndarray) -> np.ndarray:
-    """(x, y, z) in the core's Z-up frame -> (x, z, -y) in glTF/OBJ Y-up."""
-    v = np.asarray(v, float)
-    return np.column_stack([v[:, 0], v[:, 2], -v[:, 1]])
-
-
-def to_frame(v: np.ndarray, up: str) -> np.ndarray:
-    """Core-frame points or normals (n, 3) in the file frame ``up`` (``"z"``: unchanged, ``"y"``: :func:`to_y_up`)."""
-    return to_y_up(v) if up == "y" else np.asarray(v, float)
 
 
 def body_mesh(vertices: np.ndarray, faces: np.ndarray):

@@ -95,8 +95,10 @@ def _drape_figures(result, metrics) -> Dict[str, object]:
     return out
 
 
-def write_drape(out, run: DrapeRun, pattern=None, preview: bool = True):
-    """Every drape file into ``out`` atomically (see :func:`core.drape.output.write_drape`); returns the folder."""
+def write_drape(out, run: DrapeRun, pattern=None, preview: bool = True, up: str = "y"):
+    """Every drape file into ``out`` atomically (see :func:`core.drape.output.write_drape`); returns the folder.
+
+    ``up``: the up axis of ``garment.obj``, ``"y"`` (default, OBJ readers' convention) or ``"z"``."""
     from ..drape.output import write_drape as _write
     from ..metrics.drape import summary as fit_summary
 
@@ -109,6 +111,7 @@ def write_drape(out, run: DrapeRun, pattern=None, preview: bool = True):
         vertex_gap=run.metrics["vertex_gap"],
         pattern=pattern,
         preview=preview,
+        up=up,
     )
 
 
