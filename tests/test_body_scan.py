@@ -19,6 +19,7 @@ from core.body.scan import (
 )
 from core.body.tape import LENGTHS, TAPE_MEASURES, tape_measures
 from core.errors import BodyError
+from core.geom.frame import from_frame
 
 GIRTHS = [m for m in TAPE_MEASURES if m not in LENGTHS]
 
@@ -140,6 +141,7 @@ def test_fit_synthetic_scan_ci(anny, tmp_path, capsys):
     written = np.array(
         [[float(c) for c in ln.split()[1:4]] for ln in (tmp_path / "me.obj").read_text().splitlines() if ln[:2] == "v "]
     )
+    written = from_frame(written, "y")  # the OBJ is Y-up by default (ease body --out-up)
     assert np.mean(scan_distance(scan, written, anny.faces)) * 1000 == pytest.approx(mean, abs=0.06)
 
 
