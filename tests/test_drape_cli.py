@@ -128,3 +128,19 @@ def test_absurd_time_step_writes_nothing(pattern_dir, tmp_path, capsys):
     assert main(["drape", str(pattern_dir), "--out", str(out), "--quiet", "--substeps", "1"]) == 2
     assert "time step" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_up_z_keeps_the_core_frame(pattern_dir, drape_dir, tmp_path, capsys):
+    """``--up z``: garment.obj in the drape's own frame (drape.npz's positions, vertex for vertex);
+    any other axis is refused before any work."""
+    out = tmp_path / "z"
+    argv = ["drape", str(pattern_dir), "--out", str(out), "--quiet", "--frames", "2", "--no-preview"]
+    assert main(argv + ["--up", "z"]) == 0
+    obj = (out / "garment.obj").read_text().splitlines()
+    v = np.array([line.split()[1:] for line in obj if line.startswith("v ")], float)
+    assert np.allclose(v, np.load(out / "drape.npz")["positions"], atol=1e-6)
+    assert any(line.startswith("# frame:") and "+Z up" in line for line in obj[:4])
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as exc:  # argparse's choices: exit 2, one line naming --up
+        main(argv[:3] + [str(tmp_path / "x"), "--up", "x"])
+    assert exc.value.code == 2 and "--up" in capsys.readouterr().err and not (tmp_path / "x").exists()
