@@ -160,6 +160,12 @@ def test_all_writes_sizes_poses_and_picture(anny_available, tmp_path):
     summary = json.loads((out / "bodies.json").read_text())
     chest = [summary["sizes"][s]["measured_cm"]["chest"] for s in ("XS", "S", "M", "L", "XL")]
     assert chest == sorted(chest)
+    # every OBJ Y-up (the default): standing along +Y, the body's front towards +Z
+    v = read_obj_vertices(out / "pose_A.obj")
+    assert "+Y up" in (out / "pose_A.obj").read_text() and np.ptp(v[:, 1]) > 1.4 and np.ptp(v[:, 2]) < 0.6
+    np.testing.assert_allclose(
+        from_frame(v, "y"), anny_available.vertices(summary["sizes"]["M"]["shape"], "A"), atol=2e-6
+    )
 
 
 def test_measure_fits_anny(anny_available, tmp_path, capsys):
