@@ -366,3 +366,33 @@ def ray_hit(origin: np.ndarray, direction: np.ndarray, loop: np.ndarray) -> Opti
     if not np.any(hit):
         return None
     return float(t[hit].min())
+
+
+#: m: two boundary edges of a piece that share no vertex and come closer than this touch (1 um,
+#: far below a cutter's line and far above the solver's rounding on a 2 m body)
+CONTACT = 1e-6
+
+
+def point_segment_distances(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance (k,) from points p (k, 2) to segments a->b (k, 2), row by row (metres in, metres out)."""
+    d = b - a
+    t = np.clip(np.einsum("ij,ij->i", p - a, d) / np.maximum(np.einsum("ij,ij->i", d, d), 1e-300), 0.0, 1.0)
+    q = a + t[:, None] * d - p
+    return np.sqrt(np.einsum("ij,ij->i", q, q))
+
+
+def segment_gaps(a0, b0, a1, b1) -> np.ndarray:
+    """Distance (k,) between 2D segments a0->b0 and a1->b1 (each (k, 2), metres), row by row; 0 where they cross."""
+    d0, d1 = b0 - a0, b1 - a1
+    c1, c2 = cross2(d0, a1 - a0), cross2(d0, b1 - a0)
+    c3, c4 = cross2(d1, a0 - a1), cross2(d1, b0 - a1)
+    cross = (c1 * c2 < 0) & (c3 * c4 < 0)
+    gap = np.minimum.reduce(
+        [
+            point_segment_distances(a0, a1, b1),
+            point_segment_distances(b0, a1, b1),
+            point_segment_distances(a1, a0, b0),
+            point_segment_distances(b1, a0, b0),
+        ]
+    )
+    return np.where(cross, 0.0, gap)

@@ -19,11 +19,7 @@ from typing import Dict, List, Mapping, Optional, Tuple
 import numpy as np
 
 from ..geom.mesh import boundary_loops
-from ..geom.polygon import cross2
-
-#: m: two boundary edges of a piece that share no vertex and come closer than this touch (1 um,
-#: far below a cutter's line and far above the solver's rounding on a 2 m body)
-CONTACT = 1e-6
+from ..geom.polygon import CONTACT, segment_gaps
 
 
 def piece_edges(panel) -> np.ndarray:
@@ -57,25 +53,6 @@ def _candidates(a: np.ndarray, b: np.ndarray, pad: float) -> Tuple[np.ndarray, n
     i, j = order[si], order[sj]
     keep = (lo[j, 1] <= hi[i, 1]) & (hi[j, 1] >= lo[i, 1])
     return i[keep], j[keep]
-
-
-def _point_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    d = b - a
-    t = np.clip(np.einsum("ij,ij->i", p - a, d) / np.maximum(np.einsum("ij,ij->i", d, d), 1e-300), 0.0, 1.0)
-    q = a + t[:, None] * d - p
-    return np.sqrt(np.einsum("ij,ij->i", q, q))
-
-
-def segment_gaps(a0, b0, a1, b1) -> np.ndarray:
-    """Distance (k,) between segments a0->b0 and a1->b1, row by row; 0 where they cross."""
-    d0, d1 = b0 - a0, b1 - a1
-    c1, c2 = cross2(d0, a1 - a0), cross2(d0, b1 - a0)
-    c3, c4 = cross2(d1, a0 - a1), cross2(d1, b0 - a1)
-    cross = (c1 * c2 < 0) & (c3 * c4 < 0)
-    gap = np.minimum.reduce(
-        [_point_segment(a0, a1, b1), _point_segment(b0, a1, b1), _point_segment(a1, a0, b0), _point_segment(b1, a0, b0)]
-    )
-    return np.where(cross, 0.0, gap)
 
 
 def crossing_pairs(uv: np.ndarray, edges: np.ndarray, contact: float = CONTACT) -> np.ndarray:

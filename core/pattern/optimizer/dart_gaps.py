@@ -153,7 +153,7 @@ class GapCorrection:
         (:func:`core.metrics.injectivity.dart_gaps`), on the solver's iterate. A pair can be apart
         across the dart while a leg hooks past the apex (``blouse_fitted`` at one interior point of its
         parameter ranges: two crossings per waist dart after 20 iterations, none after 30)."""
-        from ...metrics.injectivity import CONTACT, segment_gaps
+        from ...geom.polygon import CONTACT, segment_gaps
 
         legs = self.legs
         if not len(legs.a):
