@@ -357,10 +357,18 @@ def test_a_darts_apex_follows_the_cup_onto_another_body(four_darts, anny):
             assert len(tips) == 4
             now = np.linalg.norm(moved[tips] - cup, axis=1)
             before = np.linalg.norm(plain[tips] - cup, axis=1)
-            # measured: the sewn points end 4.7-5.2 mm from the cup on S (the apex offset: 5 mm; 9-15 mm with
-            # the embedding's points, its cup 12 mm from the carried point), 7.7-8.8 mm on L (27-35 mm: the move
-            # is capped where the map would not stay one-to-one)
-            assert now.max() < 0.01 and now.max() < 0.6 * before.min(), (size, side, now, before)
+            # measured: the sewn points end their apex offset from the cup on S (5 mm, the neckline dart 7.5 mm;
+            # 9-16 mm with the embedding's points, its cup 12 mm from the carried point), 2.7-5.2 mm past it on L
+            # (22-30 mm: the move is capped where the map would not stay one-to-one)
+            offset = np.array(
+                [
+                    cut.darts[s.name]["apex_offset"]
+                    for s in cut.seams
+                    if s.kind == "dart" and s.name.endswith(f"_dart_{side}")
+                ]
+            )
+            past, was = now - offset, before - offset
+            assert past.max() < 0.006 and past.max() < 0.6 * was.min(), (size, side, now, before)
 
 
 def test_four_darts_graded_to_s_holds_every_target(four_darts):
