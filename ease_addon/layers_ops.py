@@ -96,6 +96,7 @@ class EASE_OT_layer_remove(EaseOperator):
 
     bl_idname = "ease.layer_remove"
     bl_label = "Remove Layer"
+    needs = ("layers",)
 
     def run(self, context):
         layers = context.scene.ease_layers
@@ -110,6 +111,7 @@ class EASE_OT_layer_move(EaseOperator):
 
     bl_idname = "ease.layer_move"
     bl_label = "Move Layer"
+    needs = ("layers",)
     direction: EnumProperty(
         items=(("UP", "Inward", "one layer further in"), ("DOWN", "Outward", "one layer further out"))
     )
@@ -160,6 +162,7 @@ class EASE_OT_drape_all(jobs.Background, EaseOperator):
 
     bl_idname = "ease.drape_all"
     bl_label = "Drape All"
+    needs = ("layers",)
 
     def run(self, context):
         from ..core.design.outfit import load_outfit

@@ -76,6 +76,11 @@ REQUIREMENTS = {
         lambda c: not _output_problem(c.scene.ease.render_path, "Render to"),
         lambda c: _output_problem(c.scene.ease.render_path, "Render to"),
     ),
+    # Drape All's outfit: the Layers list holds a garment (the scene property exists once the add-on registered)
+    "layers": (
+        lambda c: bool(getattr(c.scene, "ease_layers", None) and c.scene.ease_layers.items),
+        "needs layers: add a garment in EASE > Design > Layers",
+    ),
     "motion": (
         lambda c: bpy.data.objects.get(data.MOTION_GARMENT) is not None,
         "needs a motion: press Drape Animation in EASE > Drape",

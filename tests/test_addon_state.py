@@ -39,7 +39,7 @@ NEEDS_DESIGN = (
     "adapt_poses",
 )
 NEEDS_PATTERN = ("drape", "export_pattern", "marker")
-RUN_ANYWHERE = ("add_body", "load_template", "load_design_file", "studio_setup", "tape_load")
+RUN_ANYWHERE = ("add_body", "load_template", "load_design_file", "studio_setup", "tape_load", "layer_add")
 
 
 @pytest.fixture
@@ -77,6 +77,9 @@ def test_every_operator_says_what_it_needs(bpy_session, blender, empty):
             "marker": "pattern",
             "fitmap": "garment",
             "render": "render",
+            "drape_all": "layers",
+            "layer_remove": "layers",
+            "layer_move": "layers",
         }.get(name, "body" if name in NEEDS_BODY + NEEDS_DESIGN else "")
         assert want in msg.lower() and "EASE >" in msg, (name, msg)
     blender.reset(body=True)
