@@ -48,12 +48,14 @@ def test_a_body_refused_for_the_guards_cycle_is_rescued(shirt, monkeypatch):
 
 
 def test_a_body_that_passed_is_unchanged_by_the_rescue(shirt, monkeypatch):
-    """Sample 40 ends its extra rounds with a sheared triangle under the guard's bound (its smaller
-    relative scale under 0.5) but none collapsed by the rule a pattern is refused for: it runs every
-    extra round and no rescue iteration, and its file is the same bytes with or without them."""
+    """Sample 40 runs extra rounds (a triangle the collapse guard is opening) but is never refused: it
+    runs no rescue iteration, and its file is the same bytes with or without them. (It ran every extra
+    round, 2 x 20 iterations, until this session's solver and body changes; it now ends after 30.)"""
     run = _transfer(shirt, 40)
     with monkeypatch.context() as m:
         m.setattr(S, "RESCUE_ITERATIONS", 0)
         before = _transfer(shirt, 40)
-    assert run.pattern.report["iterations"] == before.pattern.report["iterations"] == 2 * shirt[1].config.iterations
+    planned = shirt[1].config.iterations
+    assert run.pattern.report["iterations"] == before.pattern.report["iterations"]
+    assert planned < run.pattern.report["iterations"] <= 2 * planned
     assert pattern_text(run.pattern) == pattern_text(before.pattern)
