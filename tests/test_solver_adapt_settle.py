@@ -185,6 +185,12 @@ def _assert_adaptation_targets(prep, ref, pose, ap, stretched):
     assert sum(flips(ap).values()) == 0 and sum(v["count"] for v in collapse(ap).values()) == 0
 
 
+@pytest.mark.xfail(
+    raises=PatternError,
+    strict=True,
+    reason="on the tape-fitted women:M (issue 33's chart refit) the four-dart blouse's P1 adaptation flips "
+    "(2643-5206 flipped in the front): issue 30, docs/darts.md",
+)
 def test_adapted_four_dart_blouse_meets_the_targets(anny):
     """Issue 14's adaptation targets on the four-dart blouse in P1 with the fitted configuration it names;
     with its feedback running through all 300 iterations (feedback_until None) the raising-only
