@@ -272,7 +272,7 @@ class DrapeSolver:
         self._V = V
 
     def _upload_newton(self, cloth: Cloth, mass) -> None:
-        """Projective dynamics: the constant matrix, factored (:class:`core.drape.pd.ProjectiveStep`)."""
+        """The implicit solver's step (:class:`core.drape.newton.NewtonStep`): the substep's Hessian factored once."""
         from . import newton as N
 
         fw0, fg0, _ = face_strains(cloth.x0, cloth)
@@ -286,7 +286,7 @@ class DrapeSolver:
 
     def residual(self, state: DrapeState) -> float:
         """The largest net force (elastic + gravity) on a free particle off the body, over its weight:
-        0 in a static equilibrium of the fabric's own energy (:mod:`core.drape.pd`), whatever the
+        0 in a static equilibrium of the fabric's own energy (:mod:`core.drape.newton`), whatever the
         solver. Particles within twice the contact offset of the body are left out (friction holds them)."""
         if getattr(self, "_newton", None) is None:
             self._upload_newton(self.cloth, self.material.density * self.cloth.mass_area)
