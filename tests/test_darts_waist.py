@@ -58,7 +58,7 @@ def test_four_darts_close_and_fit_the_bust_better_than_three(anny, waist_run):
     converged, every dart closes and the bust region (within 6 cm of the bust points) is nearer its
     ease than with three darts ending 2 cm short (1.3 % against 2.3 % on women:M at ease 1.1)."""
     from core import workflows as wf
-    from core.design.blouse_variants import FOUR_DART_APEX_OFFSET, NECK_DART_INTAKE, blouse_four_darts
+    from core.design.blouse_variants import NECK_DART_APEX_OFFSET, NECK_DART_INTAKE, blouse_four_darts
 
     prep = wf.prepare(blouse_four_darts(), body=anny)
     assert sorted(k.split(".")[1] for k in prep.cut.darts) == sorted(
@@ -74,7 +74,7 @@ def test_four_darts_close_and_fit_the_bust_better_than_three(anny, waist_run):
     for side in ("left", "right"):
         rec = prep.cut.darts[f"blouse.neck_dart_{side}"]
         bust = anny.landmark_position(f"bust_{side}", prep.reference)
-        assert np.linalg.norm(rec["apex"] - bust) < 1e-6 and rec["apex_offset"] == FOUR_DART_APEX_OFFSET
+        assert np.linalg.norm(rec["apex"] - bust) < 1e-6 and rec["apex_offset"] == NECK_DART_APEX_OFFSET
 
     def bust(r):
         regions = r.pattern.report["metrics"]["regions"]
