@@ -21,6 +21,7 @@ from typing import Sequence, Tuple
 import numpy as np
 
 from ..errors import DrapeError
+from ..geom.mesh import face_normals, vertex_normals
 
 #: An outer point more than this inside the inner surface is a penetration (issue 37: 2 mm).
 PENETRATION_DEPTH = 0.002
@@ -28,22 +29,6 @@ PENETRATION_DEPTH = 0.002
 OVERLAP_BAND = 0.05
 #: How far inside an inner garment the body is still under it (a loose garment's hem hangs this far off).
 COVER_BAND = 0.15
-
-
-def _face_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
-    n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
-    length = np.linalg.norm(n, axis=1, keepdims=True)
-    return n / np.where(length > 0, length, 1.0)
-
-
-def vertex_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
-    """Area-weighted unit vertex normals of a triangle mesh (zero where a vertex has no face)."""
-    n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
-    out = np.zeros_like(v, dtype=float)
-    for k in range(3):
-        np.add.at(out, f[:, k], n)
-    length = np.linalg.norm(out, axis=1, keepdims=True)
-    return out / np.where(length > 0, length, 1.0)
 
 
 def open_edges(f: np.ndarray) -> np.ndarray:
@@ -67,7 +52,7 @@ def layer_distance(points, v, f) -> Tuple[np.ndarray, np.ndarray]:
     sq, face, closest = igl.point_mesh_squared_distance(p, v, f)
     face = np.asarray(face, dtype=np.int64)
     d = p - closest
-    sign = np.where(np.einsum("ij,ij->i", d, _face_normals(v, f)[face]) < 0, -1.0, 1.0)
+    sign = np.where(np.einsum("ij,ij->i", d, face_normals(v, f)[face]) < 0, -1.0, 1.0)
     dist = sign * np.sqrt(np.maximum(sq, 0.0))
     # barycentrics of the closest point: on a boundary edge (a ~ 0 opposite it) the point is off the edge
     a, b, c = v[f[face, 0]], v[f[face, 1]], v[f[face, 2]]
@@ -141,7 +126,7 @@ def hem_strips(v, f, body_v, body_f, sink: float = 0.002, ramp: float = 2.0) -> 
     if not len(edges):
         return np.zeros((0, 3)), np.zeros((0, 3), np.int64)
     # each open edge's direction away from the surface, in its triangle's plane
-    tri_normal = _face_normals(v, f)
+    tri_normal = face_normals(v, f)
     d = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
     owner = np.tile(np.arange(len(f)), 3)
     key = {tuple(e): k for k, e in enumerate(d.tolist())}
@@ -221,7 +206,7 @@ def push_outside(points, v, f, clearance: float, band: float = OVERLAP_BAND, mov
     else:
         sq, face, closest = igl.point_mesh_squared_distance(p, v, f)
         face = np.asarray(face, np.int64)
-        normal = _face_normals(v, f)[face]
+        normal = face_normals(v, f)[face]
         dist = np.where(np.einsum("ij,ij->i", p - closest, normal) < 0, -1.0, 1.0) * np.sqrt(np.maximum(sq, 0))
         over = np.asarray(movable, bool)[face]
     move = over & (dist < clearance) & (dist > -band)
@@ -229,5 +214,5 @@ def push_outside(points, v, f, clearance: float, band: float = OVERLAP_BAND, mov
         if face is None:
             _, face, closest = igl.point_mesh_squared_distance(p, v, f)
             face = np.asarray(face, np.int64)
-        p[move] = closest[move] + _face_normals(v, f)[face[move]] * clearance
+        p[move] = closest[move] + face_normals(v, f)[face[move]] * clearance
     return p, int(move.sum())

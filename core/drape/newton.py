@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..geom.mesh import row_cross
 from .mesh import Cloth
 
 
@@ -47,21 +48,12 @@ def _rows(n_rows: int, n_cols: int, cols: np.ndarray, vals: np.ndarray):
     )
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise cross product (n, 3) (np.cross is several times slower on small rows)."""
-    out = np.empty_like(a)
-    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
-    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
-    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    return out
-
-
 def hinge_gradients(x: np.ndarray, bends: np.ndarray) -> tuple:
     """Signed dihedral angles (B,) and their gradients (B, 4, 3) at the stencils (a, b, e0, e1)
     (Bridson et al. 2003; the convention of :func:`core.drape.mesh.dihedral_angles`); zero where degenerate."""
     x1, x2, x3, x4 = (x[bends[:, k]] for k in range(4))
-    n1 = _cross(x3 - x1, x4 - x1)
-    n2 = _cross(x4 - x2, x3 - x2)
+    n1 = row_cross(x3 - x1, x4 - x1)
+    n2 = row_cross(x4 - x2, x3 - x2)
     e = x4 - x3
     l1 = np.einsum("ij,ij->i", n1, n1)
     l2 = np.einsum("ij,ij->i", n2, n2)
@@ -70,7 +62,7 @@ def hinge_gradients(x: np.ndarray, bends: np.ndarray) -> tuple:
     l1, l2, le = np.where(ok, l1, 1.0), np.where(ok, l2, 1.0), np.where(ok, le, 1.0)
     eh = e / le[:, None]
     n1h, n2h = n1 / np.sqrt(l1)[:, None], n2 / np.sqrt(l2)[:, None]
-    theta = np.arctan2(np.einsum("ij,ij->i", _cross(n1h, n2h), eh), np.einsum("ij,ij->i", n1h, n2h))
+    theta = np.arctan2(np.einsum("ij,ij->i", row_cross(n1h, n2h), eh), np.einsum("ij,ij->i", n1h, n2h))
     a1, a2 = n1 / l1[:, None], n2 / l2[:, None]
     g = np.stack(
         [

@@ -204,8 +204,8 @@ def _over_inner(prep, body, inner: List[LayerRun], over: str) -> dict:
     """Move ``prep``'s reference body out over the inner layers' skintight surface (``over`` "skintight");
     returns the record of the surface the pattern is solved and measured on."""
     from ..body.instance import spec_instance
-    from ..drape.layers import vertex_normals
     from ..errors import DrapeError
+    from ..geom.mesh import vertex_normals
 
     if over not in ("skintight", "body"):
         raise DrapeError(f'over: expected "skintight" or "body", got {over!r}')
