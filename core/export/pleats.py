@@ -16,6 +16,7 @@ from typing import List
 
 import numpy as np
 
+from ..geom.polyline import point_at_length
 from ..pattern.types import Pattern, PatternPanel
 from .notches import Notch, slit
 
@@ -61,19 +62,11 @@ def piece_pleats(pattern: Pattern, panel: PatternPanel, xy: np.ndarray) -> List[
         site = _site(pattern, p.name)
         stitched = float(site.get("stitched_length") or 0.0)
         if stitched > 0 and p.folds:
-            ends = [_point_at(f, stitched) for f in (p.folds[0], p.placements[-1] if p.placements else p.folds[-1])]
+            ends = [
+                point_at_length(f, stitched)[0] for f in (p.folds[0], p.placements[-1] if p.placements else p.folds[-1])
+            ]
             p.stitch_ends = np.asarray(ends)
     return out
-
-
-def _point_at(poly: np.ndarray, s: float) -> np.ndarray:
-    """The point ``s`` m along the polyline (its end beyond it)."""
-    seg = np.linalg.norm(np.diff(poly, axis=0), axis=1)
-    acc = np.r_[0.0, np.cumsum(seg)]
-    if s >= acc[-1]:
-        return poly[-1].copy()
-    k = int(np.searchsorted(acc, s, side="right") - 1)
-    return poly[k] + (s - acc[k]) / max(seg[k], 1e-300) * (poly[k + 1] - poly[k])
 
 
 def pleat_notches(pattern: Pattern, panel: PatternPanel, xy, loops, cut, edge_w) -> List[Notch]:

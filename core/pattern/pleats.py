@@ -36,7 +36,9 @@ from typing import Dict, List
 import numpy as np
 
 from ..errors import DesignError
-from ..geom.mesh import boundary_loops
+from ..geom.mesh import boundary_loops, signed_areas_2d, vertex_normals
+from ..geom.polygon import points_in_polygon
+from ..geom.polyline import cumulative_lengths
 
 #: m, a ``from`` point this far from its panel's hems and openings is refused
 START_TOL = 0.03
@@ -226,9 +228,7 @@ def locate_2d(uv, faces, q):
 
 
 def _inside(loop_xy, pts):
-    from matplotlib.path import Path
-
-    return Path(loop_xy).contains_points(pts)
+    return points_in_polygon(np.atleast_2d(np.asarray(pts, float)), loop_xy)
 
 
 def _chord(uv, loops, p, d):
@@ -464,10 +464,10 @@ def _split_along(uv, attrs, faces, a, b, tol):
     outline = np.zeros(len(uv), bool)
     outline[np.concatenate([key[count == 1] // len(uv), key[count == 1] % len(uv)])] = True
     near = (np.abs(s) < tol) & (t > -1e-9) & (t < 1 + 1e-9) & ~outline
-    area0 = _areas(uv, faces)
+    area0 = signed_areas_2d(uv, faces)
     for _ in range(3):  # a triangle the snap would flatten or turn over keeps its vertices where they were
         moved = uv - np.where(near, s, 0.0)[:, None] * n
-        bad = near[faces].any(axis=1) & (_areas(moved, faces) <= 0.05 * area0)
+        bad = near[faces].any(axis=1) & (signed_areas_2d(moved, faces) <= 0.05 * area0)
         if not bad.any():
             break
         near[faces[bad].ravel()] = False
@@ -519,19 +519,6 @@ def _split_along(uv, attrs, faces, a, b, tol):
     return np.array(uv_l), attrs, np.concatenate(out), np.concatenate(parent), np.array(s_l), np.array(t_l), cache
 
 
-def _areas(uv, faces):
-    a, b = uv[faces[:, 1]] - uv[faces[:, 0]], uv[faces[:, 2]] - uv[faces[:, 0]]
-    return 0.5 * (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
-
-
-def _vertex_normals(xyz, faces):
-    fn = np.cross(xyz[faces[:, 1]] - xyz[faces[:, 0]], xyz[faces[:, 2]] - xyz[faces[:, 0]])
-    vn = np.zeros_like(xyz)
-    for k in range(3):
-        np.add.at(vn, faces[:, k], fn)
-    return vn / np.maximum(np.linalg.norm(vn, axis=1, keepdims=True), 1e-300)
-
-
 def _columns(strip: Strip) -> np.ndarray:
     """The strip's column positions sigma (m): its breakpoints, each segment split into columns at
     most :data:`STRIP_EDGE` apart."""
@@ -565,7 +552,7 @@ def open_piece(piece, strips: List[Strip], next_id: int, inside: np.ndarray):
     closed_uv = np.asarray(piece.uv, float)
     closed_xyz = np.asarray(piece.xyz, float)
     closed_faces = np.asarray(piece.faces, int)
-    normals = _vertex_normals(closed_xyz, closed_faces)
+    normals = vertex_normals(closed_xyz, closed_faces)
     if np.mean(np.einsum("ij,ij->i", normals, closed_xyz - inside)) < 0:
         normals = -normals
     mean_edge = float(np.mean(np.linalg.norm(closed_uv[closed_faces[:, 1]] - closed_uv[closed_faces[:, 0]], axis=1)))
@@ -661,7 +648,7 @@ def open_piece(piece, strips: List[Strip], next_id: int, inside: np.ndarray):
             elif any(abs(sg - f) < 1e-12 for f in strip.placements):
                 lines.append(OpenedLine(strip.pleat, "placement", [int(v) for v in grid[:, j]], n_strip))
         j0, j1 = (int(np.argmin(np.abs(sig - x))) for x in strip.stitch)
-        arc = np.r_[0, np.cumsum(np.linalg.norm(np.diff(uv[grid[:, 0]], axis=0), axis=1))]
+        arc = cumulative_lengths(uv[grid[:, 0]])
         held = max(int(np.searchsorted(arc, strip.stitched + 1e-9, side="right")), 1)
         stitches.append((strip.pleat, [int(v) for v in grid[:held, j0]], [int(v) for v in grid[:held, j1]]))
         canon.append([grid[0, -1], grid[-1, -1], grid[0, 0], grid[-1, 0], *grid[0, 1:-1], *grid[-1, 1:-1]])
