@@ -200,6 +200,17 @@ def test_pleats_the_piece_cannot_take_are_refused(sites, field, words):
     assert e.value.path.endswith(f".{field}") and words in e.value.message
 
 
+def test_a_line_ending_on_a_seam_names_the_seam():
+    piece = _flat_piece()
+    nx, ny = int(W / E), int(H / E)
+    right = np.arange(ny + 1) * (nx + 1) + nx
+    side = PatternSeam("g.side", "g.front", "g.back", right, np.arange(ny + 1))
+    with pytest.raises(DesignError) as e:
+        piece_strips(piece, [_site(0.3, along=(1, 0, -1))], seams=[side])
+    assert e.value.path.endswith(".along") and "seam 'g.side' of 'g.front'" in e.value.message
+    assert "\n" not in str(e.value)
+
+
 def test_a_pleat_on_a_dart_is_refused():
     piece = _flat_piece()
     nx = int(W / E) + 1
@@ -288,6 +299,24 @@ def test_the_drape_starts_folded_with_creases_held(pleated):
     n_ids = len({int(i) for p in opened.panels for i in p.vertex_ids})
     welded = n_ids - cloth.n_particles
     assert welded >= 4
+
+
+def test_a_pleat_from_a_seam_is_refused_naming_the_seam(pleated):
+    """A pleat whose line starts on a seam (the skirt's side seam) is refused at its ``from``, the
+    seam named, in one line (docs/pleats.md, Limits: why)."""
+    from core.pattern.pleats import pleat_sites
+
+    _, _, prep = pleated
+    d = skirt_knife_pleats()
+    d["keypoints"]["side_mid_left"] = {"between": ["waist_side_left", "hem_out_left"], "t": 0.4}
+    front = d["garments"][0]["panels"][0]
+    front["pleats"] = [dict(front["pleats"][0], name="side_left", **{"from": "side_mid_left", "along": "x"})]
+    other = copy.copy(prep)
+    other.design = load_design(d)
+    with pytest.raises(DesignError) as e:
+        pleat_sites(other)
+    assert e.value.path == "garments[0].panels[0].pleats[0].from"
+    assert "is on seam 'skirt.side_left' of 'skirt.front'" in e.value.message and "\n" not in str(e.value)
 
 
 def test_every_size_opens_to_the_same_outline(pleated):

@@ -52,6 +52,11 @@ LAYER_GAP = 0.003
 LIFT_FALLOFF = 0.015
 #: share of the line's length at each end left out of the room check (the hem may slant there)
 END_MARGIN = 0.1
+#: why a pleat may not start or end on a seam (one line, after the seam's name)
+SEAM_REASON = (
+    "a pleat runs between hems or openings (a pleat sewn into a seam is not made: its folded layers "
+    "would be sewn to the other piece at their worn places, points the other piece does not have)"
+)
 #: the wearer's left on the body (Anny: +x)
 LEFT = np.array([1.0, 0.0, 0.0])
 
@@ -83,6 +88,12 @@ def pleat_sites(prep) -> List[dict]:
         start = resolver.position(resolver.point(pleat.start, f"{path}.from"))
         edge, lam, dist = _nearest_hem_point(cut.hems.get(full, []), xyz, start)
         if edge is None or dist > START_TOL:
+            seam, seam_dist = _nearest_seam(cut.seams, full, xyz, start)
+            if seam is not None and seam_dist <= START_TOL:
+                raise DesignError(
+                    f"{path}.from",
+                    f"pleat {pleat.name!r}: {pleat.start!r} is on seam {seam!r} of {full!r}; {SEAM_REASON}",
+                )
             far = "" if edge is None else f" ({dist * 1000:.0f} mm away)"
             raise DesignError(
                 f"{path}.from", f"pleat {pleat.name!r}: {pleat.start!r} is not on a hem or opening of {full!r}{far}"
@@ -107,6 +118,21 @@ def pleat_sites(prep) -> List[dict]:
             site["along"] = list(AXIS_VECTORS[pleat.along])
         out.append(site)
     return out
+
+
+def _nearest_seam(seams, panel, xyz, p):
+    """The name of the seam (not a dart) of ``panel`` nearest to the point ``p`` (3,) and its
+    distance (m); ``(None, inf)`` without seams."""
+    best = (None, np.inf)
+    for s in seams:
+        if s.kind == "dart":
+            continue
+        for name, verts in ((s.panel_a, s.verts_a), (s.panel_b, s.verts_b)):
+            if name == panel and len(verts) > 1:
+                _, _, d = _nearest_hem_point([verts], xyz, p)
+                if d < best[1]:
+                    best = (s.name, d)
+    return best
 
 
 def _nearest_hem_point(hems, xyz, p):
@@ -265,14 +291,19 @@ def _hem_edges(hems) -> set:
     return out
 
 
-def piece_strips(piece, sites: List[dict], darts=()) -> List[Strip]:
+def piece_strips(piece, sites: List[dict], darts=(), seams=()) -> List[Strip]:
     """The strips of the pleats ``sites`` on the closed ``piece`` (a PatternPanel), checked:
-    each chord inside the piece and ending on a hem or opening, room for the folded cloth under
-    the piece, no two pleats' cloth overlapping, no pleat over a dart (``darts``: the piece's
-    dart seams)."""
+    each chord inside the piece and ending on a hem or opening (``seams``: the pattern's seams,
+    to name one a line ends on), room for the folded cloth under the piece, no two pleats' cloth
+    overlapping, no pleat over a dart (``darts``: the piece's dart seams)."""
     uv, xyz, faces = np.asarray(piece.uv, float), np.asarray(piece.xyz, float), np.asarray(piece.faces, int)
     loops = [np.asarray(b, int) for b in boundary_loops(faces)]
     hem_edges = _hem_edges(piece.hems)
+    seam_of = {}  # boundary edge -> the seam along it
+    for sm in seams:
+        for name, verts in ((sm.panel_a, sm.verts_a), (sm.panel_b, sm.verts_b)):
+            if name == piece.name:
+                seam_of.update({e: sm.name for e in _hem_edges([verts])})
     out, bands = [], []
     for site in sites:
         path, name = site["path"], site["name"]
@@ -310,9 +341,9 @@ def piece_strips(piece, sites: List[dict], darts=()) -> List[Strip]:
             found.append([_edge_point(uv, pa, edge_a), _edge_point(uv, pb, edge_b)])
             for edge, field_ in ((edge_a, "from"), (edge_b, "towards" if "towards" in site else "along")):
                 if edge not in hem_edges:
+                    seam = f"seam {seam_of[edge]!r}" if edge in seam_of else "a seam"
                     raise DesignError(
-                        f"{path}.{field_}",
-                        f"pleat {name!r}: its line meets a seam of {site['panel']!r}; a pleat runs between hems or openings",
+                        f"{path}.{field_}", f"pleat {name!r}: its line meets {seam} of {site['panel']!r}; {SEAM_REASON}"
                     )
             L = float(np.linalg.norm(pb - pa))
             ts = np.linspace(0.0, 1.0, 41)
@@ -772,7 +803,7 @@ def open_pattern(pattern, stitch: bool = False):
             panels.append(piece)
             continue
         darts = [s for s in pattern.seams if s.kind == "dart" and s.panel_a == piece.name]
-        strips = piece_strips(piece, mine, darts)
+        strips = piece_strips(piece, mine, darts, [s for s in pattern.seams if s.kind != "dart"])
         garment = np.concatenate([np.asarray(p.xyz) for p in pattern.panels if p.garment == piece.garment])
         opened, lines, stitches, next_id = open_piece(piece, strips, next_id, garment.mean(axis=0))
         panels.append(opened)
