@@ -1,4 +1,4 @@
-"""Polylines: length, cumulative length, point at arc length.
+"""Polylines: length, cumulative length, point at arc length, simplification.
 
 A polyline is a ``(k, d)`` float array of points (d = 2 or 3, metres), open
 unless ``closed=True`` adds the edge from the last point back to the first.
@@ -78,3 +78,34 @@ def point_at_length(points: np.ndarray, s) -> Tuple[np.ndarray, np.ndarray, np.n
     if scalar:
         return xy[0], int(edge[0]), tangent[0]
     return xy, edge, tangent
+
+
+def simplify_indices(points: np.ndarray, tol: float) -> np.ndarray:
+    """Douglas-Peucker on an open polyline: the indices of the points that keep it within ``tol``.
+
+    Parameters
+    ----------
+    points : (k, 2) float, metres, k >= 1.
+    tol : float, metres, the largest distance of a left-out point from the chord that replaces it
+        (from the chord's end where the chord has no length).
+
+    Returns
+    -------
+    (m,) int, increasing; the first and the last point always kept.
+    """
+    p = np.asarray(points, float)
+    keep = np.zeros(len(p), bool)
+    keep[[0, -1]] = True
+    stack = [(0, len(p) - 1)]
+    while stack:
+        a, b = stack.pop()
+        if b - a < 2:
+            continue
+        d, q = p[b] - p[a], p[a + 1 : b] - p[a]
+        n = float(np.linalg.norm(d))
+        dist = np.abs(d[0] * q[:, 1] - d[1] * q[:, 0]) / n if n > 1e-15 else np.linalg.norm(q, axis=1)
+        k = int(np.argmax(dist))
+        if dist[k] > tol:
+            keep[a + 1 + k] = True
+            stack += [(a, a + 1 + k), (a + 1 + k, b)]
+    return np.flatnonzero(keep)
