@@ -75,3 +75,21 @@ def test_marker_curved_pieces_true_cut_lines_apart():
     for p in m.placements:
         assert min(abs(p.angle - a) for a in (0.0, 180.0, -180.0)) < 1e-6
     assert m.efficiency == pytest.approx(sum(signed_area(a) for a in loops) / (width * m.length), rel=1e-9)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_one_douglas_peucker_for_open_and_closed_outlines(seed):
+    """core.geom.polyline.simplify_indices (the GarmentCode panels') keeps both ends and every left-out point
+    within the tolerance; the nesting outline's closed loop is its two halves."""
+    from core.geom.polyline import simplify_indices as simplify_polyline
+
+    loop, tol = _blob(seed), 0.0005
+    half = loop[: len(loop) // 2 + 1]
+    idx = simplify_polyline(half, tol)
+    assert idx[0] == 0 and idx[-1] == len(half) - 1 and np.all(np.diff(idx) > 0) and len(idx) < len(half) / 2
+    assert distance_to_polyline(half, half[idx], closed=False).max() <= tol + 1e-12
+    # a chord of no length (the polyline comes back to its start): the farthest point is kept
+    back = np.vstack([half, half[:1]])
+    assert len(simplify_polyline(back, tol)) > 2
+    closed = simplify_indices(loop, tol)
+    assert closed[0] == 0 and distance_to_polyline(loop, loop[closed]).max() <= tol + 1e-12

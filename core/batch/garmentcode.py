@@ -92,25 +92,6 @@ def left_corner(vertices: np.ndarray) -> int:
     return int(np.argmin(np.linalg.norm(v - v.min(axis=0), axis=1)))
 
 
-def _douglas_peucker(points: np.ndarray, tol: float) -> List[int]:
-    """Indices (first and last included) of an open polyline's vertices that keep it within ``tol``."""
-    keep = {0, len(points) - 1}
-    stack = [(0, len(points) - 1)]
-    while stack:
-        a, b = stack.pop()
-        if b - a < 2:
-            continue
-        p, d = points[a], points[b] - points[a]
-        q = points[a + 1 : b] - p
-        n = float(np.linalg.norm(d))
-        dist = np.abs(d[0] * q[:, 1] - d[1] * q[:, 0]) / n if n > 1e-15 else np.linalg.norm(q, axis=1)
-        k = int(np.argmax(dist))
-        if dist[k] > tol:
-            keep.add(a + 1 + k)
-            stack += [(a, a + 1 + k), (a + 1 + k, b)]
-    return sorted(keep)
-
-
 def _outlines(pattern) -> Dict[str, np.ndarray]:
     from ..export.boundary import piece_loops
 
@@ -123,7 +104,7 @@ def _anchors(pattern, loops: Dict[str, np.ndarray]) -> Tuple[Dict[str, set], Dic
     from ..export.notches import notch_positions
     from ..export.pieces import resolve_notch_spacing
     from ..geom.polygon import turn_points
-    from ..geom.polyline import polyline_length
+    from ..geom.polyline import cumulative_lengths, polyline_length
 
     spacing = resolve_notch_spacing(None, pattern)
     must = {name: set() for name in loops}
@@ -138,8 +119,7 @@ def _anchors(pattern, loops: Dict[str, np.ndarray]) -> Tuple[Dict[str, set], Dic
         along = []
         for p, ids in sides:
             must[p] |= {int(ids[0]), int(ids[-1])}
-            xy = np.asarray(pattern.panel(p).uv, float)[ids]
-            along.append(np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(xy, axis=0), axis=1))]))
+            along.append(cumulative_lengths(np.asarray(pattern.panel(p).uv, float)[ids]))
         # one seam vertex pair per notch, nearest to it on both sides together: the nearest on each side alone
         # can be neighbours (a notch between two vertices), and with their partners kept too the outline got
         # stitched segments under a millimetre, where GarmentCode's mesher makes degenerate triangles
@@ -152,6 +132,8 @@ def _anchors(pattern, loops: Dict[str, np.ndarray]) -> Tuple[Dict[str, set], Dic
 
 def simplified_outlines(pattern, tol: float = TOLERANCE, min_edge: float = MIN_EDGE) -> Dict[str, np.ndarray]:
     """Per panel, the outline's local vertex ids kept (in loop order, see the module docstring)."""
+    from ..geom.polyline import simplify_indices
+
     loops = _outlines(pattern)
     must, soft = _anchors(pattern, loops)
     kept: Dict[str, set] = {}
@@ -165,7 +147,7 @@ def simplified_outlines(pattern, tol: float = TOLERANCE, min_edge: float = MIN_E
         keep = set()
         for a, b in zip(pos, pos[1:] + [pos[0] + len(loop)]):
             run = [int(loop[i % len(loop)]) for i in range(a, b + 1)]
-            keep |= {run[i] for i in _douglas_peucker(uv[run], tol)}
+            keep |= {run[i] for i in simplify_indices(uv[run], tol)}
         kept[name] = keep
     # a vertex kept on one side of a seam keeps its partner on the other (same index along the seam)
     partners: Dict[Tuple[str, int], List[Tuple[str, int]]] = {}

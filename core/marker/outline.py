@@ -22,6 +22,7 @@ import numpy as np
 
 from ..errors import ExportError
 from ..geom.polygon import cross2, offset_loop, points_in_polygon, remove_loops, segments_cross, signed_area
+from ..geom.polyline import simplify_indices as simplify_polyline
 
 NEST_TOLERANCE = 0.0003  # m: simplified outlines stay within this of the cut line (plus CLEARANCE)
 CLEARANCE = 0.00002  # m: every nesting outline lies at least this far outside its cut line
@@ -31,6 +32,9 @@ MIN_TOLERANCE = 0.00002  # m: below this the tolerance is not halved again (the 
 
 def simplify_indices(loop: np.ndarray, tol: float) -> np.ndarray:
     """Douglas–Peucker on a closed loop: the indices of the vertices that keep it within ``tol``.
+
+    The loop is cut at its first vertex and the vertex farthest from it; each half is simplified as an open
+    polyline (:func:`core.geom.polyline.simplify_indices`).
 
     Parameters
     ----------
@@ -42,23 +46,10 @@ def simplify_indices(loop: np.ndarray, tol: float) -> np.ndarray:
     (m,) int, increasing indices into ``loop`` (m >= 2).
     """
     loop = np.asarray(loop, float)
-    keep = np.zeros(len(loop), bool)
     far = int(np.argmax(np.linalg.norm(loop - loop[0], axis=1)))
-    keep[[0, far]] = True
-    stack = [(0, far), (far, len(loop))]
-    while stack:
-        a, b = stack.pop()
-        idx = np.arange(a + 1, b)
-        if not len(idx):
-            continue
-        p, q = loop[a], loop[b % len(loop)]
-        d = q - p
-        dist = np.abs(cross2(d, loop[idx] - p)) / max(float(np.linalg.norm(d)), 1e-12)
-        k = int(np.argmax(dist))
-        if dist[k] > tol:
-            keep[idx[k]] = True
-            stack += [(a, int(idx[k])), (int(idx[k]), b)]
-    return np.flatnonzero(keep)
+    first = simplify_polyline(loop[: far + 1], tol)
+    second = far + simplify_polyline(np.vstack([loop[far:], loop[:1]]), tol)
+    return np.concatenate([first, second[1:-1]])
 
 
 def _outer_polygon(loop: np.ndarray, idx: np.ndarray, tol: float, clearance: float) -> np.ndarray:
