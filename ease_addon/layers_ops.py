@@ -22,8 +22,6 @@ from .operators_base import EaseOperator
 JOB = "outfit"
 ROLE = "outfit_garment"
 REPORT_KEY = "ease_outfit_report"
-#: base colours of the layers' materials, inner first (cycled)
-COLOURS = ((0.85, 0.85, 0.80, 1.0), (0.12, 0.17, 0.32, 1.0), (0.45, 0.27, 0.15, 1.0), (0.25, 0.35, 0.22, 1.0))
 
 
 class EASE_PG_layer(bpy.types.PropertyGroup):
@@ -138,6 +136,7 @@ def apply_outfit(context, run) -> None:
     the report in the scene; the status line."""
     import numpy as np
 
+    from ..core.export.outfit import LAYER_COLOURS  # the exported outfit's colours: one palette
     from ..core.geom.mesh import compact_vertices
 
     scene = context.scene
@@ -148,7 +147,8 @@ def apply_outfit(context, run) -> None:
         me = convert.mesh_from_arrays(f"EASE {lr.layer.name}", np.asarray(r.positions)[used], faces)
         obj = objects.role_object(scene, f"EASE {lr.layer.name}", me, ROLE)
         obj["ease_layer"] = k
-        me.materials.append(materials.surface(f"EASE layer {k + 1}", COLOURS[k % len(COLOURS)], 0.9))
+        rgb = LAYER_COLOURS[k % len(LAYER_COLOURS)]
+        me.materials.append(materials.surface(f"EASE layer {k + 1}", (*rgb, 1.0), 0.9))
     report = run.report()
     convert.store_json(scene, REPORT_KEY, report)
     worst = max((lr.settled_penetration_pct for lr in run.layers), default=0.0)

@@ -113,3 +113,32 @@ def test_one_frame_helper_for_every_mesh_file():
         frame.to_frame(v, "x")
     # the export's names are the same helpers
     assert mesh.to_frame is frame.to_frame and mesh.frame_text is frame.frame_text
+
+
+def test_outfit_files_are_the_mesh_writers_with_one_material_a_garment(made):
+    from core.export.outfit import LAYER_COLOURS, OUTFIT_MTL, outfit_glb, outfit_obj
+
+    _, _, _, meshes = made
+    garments = [("shirt layer", "shirt layer", *m[2:]) for m in meshes[:1]] + [("coat", "coat", *meshes[1][2:])]
+    doc, binary = mesh.read_glb(outfit_glb(garments, ["cotton", "wool"]))
+    assert doc["scenes"][0]["name"] == "outfit" and "origin on the floor" in doc["asset"]["extras"]["frame"]
+    assert [m["name"] for m in doc["materials"]] == ["shirt layer", "coat"]
+    assert [m["extras"]["fabric"] for m in doc["materials"]] == ["cotton", "wool"]
+    for k, m in enumerate(doc["materials"]):
+        assert m["pbrMetallicRoughness"]["baseColorFactor"] == [*LAYER_COLOURS[k], 1.0]
+    assert [m["primitives"][0]["material"] for m in doc["meshes"]] == [0, 1]
+    plain, _ = mesh.read_glb(mesh.glb_bytes(garments, origin="floor"))
+    # the same writer: only the materials and the scene's name differ
+    for key in ("accessors", "bufferViews", "nodes"):
+        assert doc[key] == plain[key]
+    files = outfit_obj(garments, ["cotton", "wool"], "outfit")
+    text, mtl = files["outfit.obj"].decode(), files[OUTFIT_MTL].decode()
+    assert text.splitlines()[3] == f"mtllib {OUTFIT_MTL}"
+    assert [ln for ln in text.splitlines() if ln.startswith("usemtl")] == ["usemtl shirt_layer", "usemtl coat"]
+    assert text.replace("usemtl shirt_layer", "usemtl fabric").replace("usemtl coat", "usemtl fabric") == mesh.obj_text(
+        garments, "outfit", origin="floor", mtllib=OUTFIT_MTL
+    )
+    assert "newmtl shirt_layer" in mtl and "# fabric: wool" in mtl
+    assert "Kd {:.3f} {:.3f} {:.3f}".format(*LAYER_COLOURS[1]) in mtl
+    with pytest.raises(ValueError, match="one material per mesh"):
+        mesh.glb_bytes(garments, materials=[])

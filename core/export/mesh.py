@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import json
 import struct
-from typing import List, Sequence, Tuple
+from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -89,13 +89,51 @@ def piece_meshes(pattern: Pattern, positions: np.ndarray, rotations: Sequence[np
     return out
 
 
-def glb_bytes(meshes, generator: str = "EASE", body=None, origin: str = "root") -> bytes:
+FABRIC_RGB = (0.8, 0.8, 0.8)  # the garment's material, "fabric"
+BODY_RGB = (0.93, 0.78, 0.66)  # the body's material, "body"
+
+
+def gltf_material(name: str, rgb, roughness: float = 0.9, double_sided: bool = True, extras=None) -> dict:
+    """A glTF PBR material: base colour ``rgb`` (linear), not metallic; ``extras`` (a dict) when given."""
+    mat = {"name": name}
+    if double_sided:
+        mat["doubleSided"] = True
+    mat["pbrMetallicRoughness"] = {
+        "baseColorFactor": [float(c) for c in rgb] + [1.0],
+        "metallicFactor": 0.0,
+        "roughnessFactor": float(roughness),
+    }
+    if extras:
+        mat["extras"] = dict(extras)
+    return mat
+
+
+def mtl_material(name: str, rgb, comment: str = "") -> List[str]:
+    """The lines of one ``newmtl`` of an OBJ material library (diffuse ``rgb``), after a ``# comment``."""
+    r, g, b = rgb
+    head = [f"# {comment}"] if comment else []
+    return head + [f"newmtl {name}", f"Kd {r:.3f} {g:.3f} {b:.3f}", "Ka 0 0 0", "Ks 0 0 0", "Ns 10", "d 1", "illum 1"]
+
+
+def glb_bytes(
+    meshes,
+    generator: str = "EASE",
+    body=None,
+    origin: str = "root",
+    materials: Optional[Sequence[dict]] = None,
+    scene: str = "garment",
+) -> bytes:
     """A GLB file from :func:`piece_meshes` output (+Y up, as glTF requires).
 
     One node + mesh + primitive per piece, grouped under one node per garment;
     float32 attributes, uint32 indices, one buffer. ``body``: :func:`body_mesh`
     output or None; written as the node ``body`` with its own material.
+    ``materials``: glTF materials (:func:`gltf_material`), one per mesh, mesh ``k`` with
+    ``materials[k]``; None: every mesh the one material ``fabric``. ``scene``: the scene's name.
     """
+    own = list(materials) if materials is not None else [gltf_material("fabric", FABRIC_RGB)]
+    if materials is not None and len(own) != len(meshes):
+        raise ValueError(f"glb_bytes: expected one material per mesh ({len(meshes)}), got {len(own)}")
     blob = bytearray()
     views, accessors, gl_meshes, nodes = [], [], [], []
     garments = {}
@@ -124,7 +162,7 @@ def glb_bytes(meshes, generator: str = "EASE", body=None, origin: str = "root") 
         accessors.append(acc)
         return len(accessors) - 1
 
-    for name, garment, xyz, nrm, uv, faces in meshes:
+    for k, (name, garment, xyz, nrm, uv, faces) in enumerate(meshes):
         pos = to_y_up(xyz).astype(np.float32)
         attrs = {
             "POSITION": add_accessor(pos, "VEC3", 34962, minmax=True),
@@ -133,7 +171,12 @@ def glb_bytes(meshes, generator: str = "EASE", body=None, origin: str = "root") 
         }
         idx = add_accessor(faces.reshape(-1).astype(np.uint32), "SCALAR", 34963)
         gl_meshes.append(
-            {"name": name, "primitives": [{"attributes": attrs, "indices": idx, "mode": 4, "material": 0}]}
+            {
+                "name": name,
+                "primitives": [
+                    {"attributes": attrs, "indices": idx, "mode": 4, "material": k if materials is not None else 0}
+                ],
+            }
         )
         nodes.append({"name": name, "mesh": len(gl_meshes) - 1})
         garments.setdefault(garment or "garment", []).append(len(nodes) - 1)
@@ -149,7 +192,7 @@ def glb_bytes(meshes, generator: str = "EASE", body=None, origin: str = "root") 
         }
         idx = add_accessor(faces.reshape(-1).astype(np.uint32), "SCALAR", 34963)
         gl_meshes.append(
-            {"name": name, "primitives": [{"attributes": attrs, "indices": idx, "mode": 4, "material": 1}]}
+            {"name": name, "primitives": [{"attributes": attrs, "indices": idx, "mode": 4, "material": len(own)}]}
         )
         nodes.append({"name": name, "mesh": len(gl_meshes) - 1})
         roots.append(len(nodes) - 1)
@@ -158,28 +201,10 @@ def glb_bytes(meshes, generator: str = "EASE", body=None, origin: str = "root") 
     doc = {
         "asset": {"version": "2.0", "generator": generator, "extras": {"frame": frame_text("y", origin)}},
         "scene": 0,
-        "scenes": [{"name": "garment", "nodes": roots}],
+        "scenes": [{"name": scene, "nodes": roots}],
         "nodes": nodes,
         "meshes": gl_meshes,
-        "materials": [
-            {
-                "name": "fabric",
-                "doubleSided": True,
-                "pbrMetallicRoughness": {
-                    "baseColorFactor": [0.8, 0.8, 0.8, 1.0],
-                    "metallicFactor": 0.0,
-                    "roughnessFactor": 0.9,
-                },
-            },
-            {
-                "name": "body",
-                "pbrMetallicRoughness": {
-                    "baseColorFactor": [0.93, 0.78, 0.66, 1.0],
-                    "metallicFactor": 0.0,
-                    "roughnessFactor": 0.8,
-                },
-            },
-        ],
+        "materials": own + ([gltf_material("body", BODY_RGB, 0.8, double_sided=False)] if body is not None else []),
         "accessors": accessors,
         "bufferViews": views,
         "buffers": [{"byteLength": len(blob)}],
@@ -226,21 +251,32 @@ def glb_accessor(doc: dict, binary: bytes, index: int) -> np.ndarray:
     return arr.reshape(acc["count"], comps) if comps > 1 else arr
 
 
-def obj_text(meshes, style: str = "garment", up: str = "y", body=None, origin: str = "root") -> str:
+def obj_text(
+    meshes,
+    style: str = "garment",
+    up: str = "y",
+    body=None,
+    origin: str = "root",
+    materials: Optional[Sequence[str]] = None,
+    mtllib: str = MTL_NAME,
+) -> str:
     """Wavefront OBJ (metres, ``up`` = ``"y"``: the OBJ readers' convention, or ``"z"``: the core frame) with
     ``vt`` from the pattern and ``vn``; one ``o`` per piece, and ``o body`` (no ``vt``) when ``body``
-    (:func:`body_mesh` output) is given; materials from :data:`MTL_NAME` (:func:`mtl_text`). ``origin`` is only
-    stated (the positions are given in it)."""
+    (:func:`body_mesh` output) is given; materials from the library ``mtllib`` (:data:`MTL_NAME`:
+    :func:`mtl_text`), ``materials`` the ``usemtl`` name of each mesh (None: ``fabric`` for every one).
+    ``origin`` is only stated (the positions are given in it)."""
+    if materials is not None and len(materials) != len(meshes):
+        raise ValueError(f"obj_text: expected one material per mesh ({len(meshes)}), got {len(materials)}")
     lines: List[str] = [
         f"# EASE draped garment: {style}",
         f"# frame: {frame_text(up, origin)}",
         "# vt = pattern uv in metres, grain along +v",
-        f"mtllib {MTL_NAME}",
+        f"mtllib {mtllib}",
     ]
     base = 1
-    for name, garment, xyz, nrm, uv, faces in meshes:
+    for k, (name, garment, xyz, nrm, uv, faces) in enumerate(meshes):
         lines.append(f"o {name.replace(' ', '_')}")
-        lines.append("usemtl fabric")
+        lines.append(f"usemtl {materials[k] if materials is not None else 'fabric'}")
         lines.extend(f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in to_frame(xyz, up))
         lines.extend(f"vt {u:.6f} {v:.6f}" for u, v in uv)
         lines.extend(f"vn {x:.6f} {y:.6f} {z:.6f}" for x, y, z in to_frame(nrm, up))

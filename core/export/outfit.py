@@ -8,17 +8,16 @@ material's ``extras`` and in the MTL comment); texture coordinates are the patte
 
 from __future__ import annotations
 
-import json
-import struct
-from typing import Dict, List, Sequence, Tuple
+from typing import Dict, Sequence
 
 import numpy as np
 
 from ..geom.layout import grain_rotation
 from . import mesh
 
-#: Base colours of the layers' materials, inner first (cycled).
+#: Base colours (RGB, linear) of the layers' materials, inner first (cycled): the files' and the add-on's.
 LAYER_COLOURS = ((0.92, 0.92, 0.88), (0.20, 0.27, 0.42), (0.55, 0.35, 0.22), (0.35, 0.45, 0.30))
+OUTFIT_MTL = "outfit.mtl"
 
 
 def garment_mesh(name: str, pattern, positions: np.ndarray, floor: float):
@@ -39,61 +38,30 @@ def garment_mesh(name: str, pattern, positions: np.ndarray, floor: float):
     return (name, name, np.concatenate(xyz), np.concatenate(nrm), np.concatenate(uv), np.concatenate(faces))
 
 
-def _materials(garments: Sequence[Tuple[str, str]]) -> List[dict]:
-    out = []
-    for k, (name, fabric) in enumerate(garments):
-        r, g, b = LAYER_COLOURS[k % len(LAYER_COLOURS)]
-        out.append(
-            {
-                "name": name,
-                "doubleSided": True,
-                "pbrMetallicRoughness": {
-                    "baseColorFactor": [r, g, b, 1.0],
-                    "metallicFactor": 0.0,
-                    "roughnessFactor": 0.9,
-                },
-                "extras": {"fabric": fabric},
-            }
-        )
-    return out
+def _layer_rgb(k: int):
+    return LAYER_COLOURS[k % len(LAYER_COLOURS)]
+
+
+def _mtl_name(name: str) -> str:
+    return name.replace(" ", "_")
 
 
 def outfit_glb(meshes, fabrics: Sequence[str]) -> bytes:
     """GLB of the garment meshes (:func:`garment_mesh`), mesh ``k`` with material ``k`` (its fabric in extras)."""
-    doc, blob = mesh.read_glb(mesh.glb_bytes(meshes, generator="EASE outfit", origin="floor"))
-    doc["materials"] = _materials([(m[0], f) for m, f in zip(meshes, fabrics)])
-    for k, m in enumerate(doc["meshes"]):
-        for prim in m["primitives"]:
-            prim["material"] = k
-    doc["scenes"][0]["name"] = "outfit"
-    js = json.dumps(doc, separators=(",", ":"), allow_nan=False).encode("utf-8")
-    js += b" " * ((4 - len(js) % 4) % 4)
-    blob = bytes(blob) + b"\0" * ((4 - len(blob) % 4) % 4)
-    total = 12 + 8 + len(js) + 8 + len(blob)
-    return (
-        struct.pack("<III", mesh.GLB_MAGIC, 2, total)
-        + struct.pack("<II", len(js), mesh.CHUNK_JSON)
-        + js
-        + struct.pack("<II", len(blob), mesh.CHUNK_BIN)
-        + blob
-    )
+    materials = [
+        mesh.gltf_material(m[0], _layer_rgb(k), extras={"fabric": f}) for k, (m, f) in enumerate(zip(meshes, fabrics))
+    ]
+    return mesh.glb_bytes(meshes, generator="EASE outfit", origin="floor", materials=materials, scene="outfit")
 
 
 def outfit_obj(meshes, fabrics: Sequence[str], title: str) -> Dict[str, bytes]:
     """``outfit.obj`` and ``outfit.mtl``: one ``o`` per garment, each ``usemtl`` its own material."""
-    text = mesh.obj_text(meshes, title, up="y", origin="floor").replace(f"mtllib {mesh.MTL_NAME}", "mtllib outfit.mtl")
-    lines, k = [], 0
-    for line in text.split("\n"):
-        if line == "usemtl fabric":
-            line = f"usemtl {meshes[k][0].replace(' ', '_')}"
-            k += 1
-        lines.append(line)
+    names = [_mtl_name(m[0]) for m in meshes]
+    text = mesh.obj_text(meshes, title, up="y", origin="floor", materials=names, mtllib=OUTFIT_MTL)
     mtl = ["# EASE materials for outfit.obj, one per garment"]
-    for j, (m, fabric) in enumerate(zip(meshes, fabrics)):
-        r, g, b = LAYER_COLOURS[j % len(LAYER_COLOURS)]
-        mtl += ["", f"# fabric: {fabric}", f"newmtl {m[0].replace(' ', '_')}", f"Kd {r:.3f} {g:.3f} {b:.3f}"]
-        mtl += ["Ka 0 0 0", "Ks 0 0 0", "Ns 10", "d 1", "illum 1"]
-    return {"outfit.obj": "\n".join(lines).encode("utf-8"), "outfit.mtl": ("\n".join(mtl) + "\n").encode("utf-8")}
+    for k, (name, fabric) in enumerate(zip(names, fabrics)):
+        mtl += [""] + mesh.mtl_material(name, _layer_rgb(k), f"fabric: {fabric}")
+    return {"outfit.obj": text.encode("utf-8"), OUTFIT_MTL: ("\n".join(mtl) + "\n").encode("utf-8")}
 
 
 def outfit_files(garments, floor: float, formats=("glb", "obj"), title: str = "outfit") -> Dict[str, bytes]:
