@@ -1,14 +1,59 @@
 """Body stage: add the default body (or an SMPL/OBJ file), shape it by
 phenotype sliders, measurements or size presets, pose it. Shape and pose
 changes move the vertices in place (:func:`.sync.update_body`), so the ease
-layer, the keypoint layers and everything attached to the body stay."""
+layer, the keypoint layers and everything attached to the body stay. *Apply Size*
+and *Apply Pose* are jobs (:mod:`.jobs`, as Drape): the body's vertices are computed in a
+worker (progress in the status bar, Esc cancels) and written in one pass when they land."""
 
 from __future__ import annotations
 
 import bpy
 
-from . import data, state, sync
+from . import data, jobs, state, sync
 from .operators_base import EaseOperator
+
+JOB = "body"  # the job of Apply Size / Apply Pose (a newer one replaces a running one)
+
+
+def start_body(context, shape=None, pose=None, size=None, sync_=None) -> jobs.Job:
+    """Reshape (``shape``, with its chart ``size`` or None) and/or repose (``pose``) the scene's
+    body as the job :data:`JOB`: its vertices computed off the main thread (``sync_``:
+    :func:`.jobs.start`'s ``sync``), then the body, its attachments and the Body panel updated
+    in one pass. Landing on a body that changed meanwhile (removed, another model, another
+    shape or pose than the one it was computed from) it says so and changes nothing."""
+    obj = data.body_object(context)
+    spec = data.body_spec(obj)
+    model_name, base = spec["model"], dict(spec)
+    want = dict(spec)
+    if shape is not None:
+        want["shape"] = {k: float(v) for k, v in shape.items()}
+    if pose is not None:
+        want["pose"] = pose
+    what = (f"size {size}" if size else "shape") if shape is not None else f"pose {pose}"
+    threaded = not (jobs.SYNCHRONOUS if sync_ is None else sync_)
+
+    def compute(progress):
+        progress(0.0, f"the body in {what}")
+        return sync.body_vertices(want)
+
+    def apply(verts):
+        ctx = bpy.context
+        body = data.body_object(ctx)
+        now = data.body_spec(body)
+        if now["model"] != model_name or now["shape"] != base["shape"] or now["pose"] != base["pose"]:
+            raise state.AddonError(f"the body changed while its {what} was computed: apply it again")
+        sync.update_body(ctx, body, shape=shape, pose=pose, verts=verts)
+        s = ctx.scene.ease
+        if shape is not None:
+            model = state.body_model(model_name)
+            sync.fill_shape_props(ctx.scene, model, want["shape"])
+            sync.show_size(ctx.scene, body, size)
+        if pose is not None:
+            s.pose = pose  # the panel shows the body's pose
+        if threaded:  # it landed after the operator returned: the panel says what changed
+            s.job_status = what + (f": {s.measurements_report}" if shape is not None else "")
+
+    return jobs.start_step(JOB, f"the body in {what}", compute, apply, "job_status", f"Apply {what}", sync=sync_)
 
 
 class EASE_OT_add_body(EaseOperator):
@@ -46,8 +91,8 @@ class EASE_OT_add_body(EaseOperator):
         self.report({"INFO"}, f"added body {name} ({len(obj.data.vertices)} vertices)")
 
 
-class EASE_OT_set_size(EaseOperator):
-    """Shape the body to a size preset of the chosen size chart (default XS..XL, women's, men's)"""
+class EASE_OT_set_size(jobs.Background, EaseOperator):
+    """Shape the body to a size preset of the chosen size chart (default XS..XL, women's, men's; in the background: Esc cancels)"""
 
     bl_idname = "ease.set_size"
     bl_label = "Apply Size"
@@ -64,10 +109,13 @@ class EASE_OT_set_size(EaseOperator):
         size = size_of(size, s.chart)  # "women:M" on the women's chart
         model = state.body_model(data.body_spec(obj)["model"])
         shape = size_shape(model, size)
-        sync.update_body(context, obj, shape=shape)
-        sync.fill_shape_props(context.scene, model, shape)
-        sync.show_size(context.scene, obj, size)
-        self.report({"INFO"}, f"size {size}: {s.measurements_report}")
+        job = start_body(context, shape=shape, size=size, sync_=self.job_sync())
+        self.report(
+            {"INFO"},
+            f"size {size}: {s.measurements_report}"
+            if job.thread is None
+            else f"size {size} in the background (Esc cancels)",
+        )
 
 
 class EASE_OT_fit_measurements(EaseOperator):
@@ -108,8 +156,8 @@ class EASE_OT_measure(EaseOperator):
         self.report({"INFO"}, context.scene.ease.measurements_report)
 
 
-class EASE_OT_set_pose(EaseOperator):
-    """Pose the body (A, T, P1-P3); the design stays attached"""
+class EASE_OT_set_pose(jobs.Background, EaseOperator):
+    """Pose the body (A, T, P1-P3); the design stays attached (in the background: Esc cancels)"""
 
     bl_idname = "ease.set_pose"
     bl_label = "Apply Pose"
@@ -118,11 +166,9 @@ class EASE_OT_set_pose(EaseOperator):
     pose: bpy.props.StringProperty(default="")
 
     def run(self, context):
-        obj = data.body_object(context)
         pose = self.pose or context.scene.ease.pose
-        sync.update_body(context, obj, pose=pose)
-        context.scene.ease.pose = pose  # the panel shows the body's pose
-        self.report({"INFO"}, f"pose {pose}")
+        job = start_body(context, pose=pose, sync_=self.job_sync())
+        self.report({"INFO"}, f"pose {pose}" if job.thread is None else f"pose {pose} in the background (Esc cancels)")
 
 
 class EASE_OT_apply_shape(EaseOperator):

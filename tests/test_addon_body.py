@@ -60,6 +60,59 @@ def test_add_body_and_shape_in_place(bpy_session, blender, anny):
     assert np.allclose(blender.verts(obj), v0, atol=1e-5)
 
 
+def test_size_and_pose_run_in_the_background(bpy_session, blender, anny):
+    """Apply Size / Apply Pose pressed in Blender's UI (the buttons' job, as Drape's): the body's
+    vertices are computed in a worker, the operator returns at once with the body as it was and
+    the status saying "updating"; the result lands in one pass (the body, the Body panel); Esc
+    (cancel) leaves the body as it was; a result landing on a body changed meanwhile is refused
+    with the reason; from a script the operators run in line even where jobs are threaded."""
+    from core.body.sizes import size_shape
+
+    bpy = bpy_session["bpy"]
+    jobs, body_ops = blender.mod("jobs"), blender.mod("body_ops")
+    blender.reset(body=True)
+    s = bpy.context.scene.ease
+    obj = s.body
+    v0 = blender.verts(obj).copy()
+    jobs.SYNCHRONOUS = False
+    try:
+        job = body_ops.start_body(bpy.context, shape=size_shape(anny, "L"), size="L")
+        assert job.thread is not None
+        assert s.job_status.startswith("updating: the body in size L")
+        jobs.wait()
+        assert np.allclose(blender.verts(obj), anny.vertices(size_shape(anny, "L")), atol=1e-5)
+        assert s.size == "L" and obj["ease_size"] == "L" and s.job_status.startswith("size L: ")
+        assert "chest" in s.measurements_report
+        v1 = blender.verts(obj).copy()
+        # Esc: nothing applied
+        job = body_ops.start_body(bpy.context, pose="P1")
+        assert jobs.cancel() == 1
+        job.thread.join(60)
+        jobs.poll()
+        assert np.array_equal(blender.verts(obj), v1) and obj["ease_pose"] == "A"
+        assert "cancelled" in s.job_status and s.pose == "A"
+        # the body changed while a pose was computed: refused, said, the newer body kept
+        job = body_ops.start_body(bpy.context, pose="P2")
+        job.thread.join(60)
+        next(i for i in s.shape if i.name == "weight").value = 0.7  # a slider moves the body meanwhile
+        v2 = blender.verts(obj).copy()
+        jobs.wait()
+        assert "changed" in s.job_status and obj["ease_pose"] == "A" and np.array_equal(blender.verts(obj), v2)
+        # a script's call: in line (a job of the same name running meanwhile is replaced: the newer wins)
+        job = body_ops.start_body(bpy.context, pose="P3")
+        assert bpy.ops.ease.set_size(size="S") == {"FINISHED"} and s.size == "S"
+        assert jobs.running() is None and job.cancelled
+        assert np.allclose(blender.verts(obj), anny.vertices(size_shape(anny, "S")), atol=1e-5)
+        assert bpy.ops.ease.set_pose(pose="T") == {"FINISHED"} and jobs.running() is None
+        assert np.allclose(blender.verts(obj), anny.vertices(size_shape(anny, "S"), "T"), atol=1e-5)
+        assert not blender.mod("state").BUGS
+    finally:
+        jobs.wait()
+        jobs.SYNCHRONOUS = True
+        blender.reset(body=True)  # (the next tests start from the default body)
+    assert not np.array_equal(v0, v1)
+
+
 def test_bad_input_reports_and_leaves_scene(bpy_session, blender):
     bpy = bpy_session["bpy"]
     obj = bpy.context.scene.ease.body
