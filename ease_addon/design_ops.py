@@ -104,8 +104,38 @@ def _design_file(op, context, missing: str) -> str:
     return path
 
 
-class _LoadDesign(EaseOperator):
-    """Load the design :meth:`source` names onto the body."""
+def start_load(path: str, shown: str, body_now: tuple, label: str, sync=None) -> tuple:
+    """Load the design file ``path`` (the report's ``shown``) onto the body ``body_now``
+    (:func:`_body_now`) as the job ``"design"``: read, validated and cut in a worker (``sync``:
+    :func:`.jobs.start`'s), placed in one pass when it lands (then, threaded, the panel says
+    "loaded ..." and it is one undo step named ``label``). ``(job, said)``: ``said`` holds the
+    report once placed (at once when in line)."""
+    said = []
+    threaded = not (jobs.SYNCHRONOUS if sync is None else sync)
+
+    def place(loaded):
+        body = _place_design(bpy.context, loaded)
+        said.append(f"loaded {shown}" + (f"; {body}" if body else ""))
+        if threaded:  # it landed after the operator returned: say so, and make it one undo step
+            bpy.context.scene.ease.job_status = said[-1]
+            state.changed(bpy.context.scene)
+            if bpy.ops.ed.undo_push.poll():
+                bpy.ops.ed.undo_push(message=f"EASE: {label}")
+
+    job = jobs.start(
+        "design",
+        f"loading {shown}",
+        lambda progress: _load_design(path, *body_now),
+        place,
+        fail=lambda exc: setattr(bpy.context.scene.ease, "design_status", f"{shown}: {exc}"),
+        sync=sync,
+    )
+    return job, said
+
+
+class _LoadDesign(jobs.Background, EaseOperator):
+    """Load the design :meth:`source` names onto the body (pressed: in the background, Esc
+    cancels; from a script: in line, as Drape)."""
 
     def source(self, context) -> tuple:  # pragma: no cover - overridden
         """(path of the design file, how the report names it)."""
@@ -113,27 +143,7 @@ class _LoadDesign(EaseOperator):
 
     def run(self, context):
         path, shown = self.source(context)
-        body_now = _body_now(context)
-        said = []
-        label = self.bl_label  # (the operator is gone when a threaded load lands)
-
-        def place(loaded):
-            body = _place_design(bpy.context, loaded)
-            said.append(f"loaded {shown}" + (f"; {body}" if body else ""))
-            if threaded:  # it landed after the operator returned: say so, and make it one undo step
-                bpy.context.scene.ease.job_status = said[-1]
-                state.changed(bpy.context.scene)
-                if bpy.ops.ed.undo_push.poll():
-                    bpy.ops.ed.undo_push(message=f"EASE: {label}")
-
-        threaded = not jobs.SYNCHRONOUS
-        jobs.start(
-            "design",
-            f"loading {shown}",
-            lambda progress: _load_design(path, *body_now),
-            place,
-            fail=lambda exc: setattr(bpy.context.scene.ease, "design_status", f"{shown}: {exc}"),
-        )
+        _, said = start_load(path, shown, _body_now(context), self.bl_label, sync=self.job_sync())
         if said:  # in line: done
             self.report({"INFO"}, said[-1])
         else:

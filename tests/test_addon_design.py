@@ -184,33 +184,46 @@ def test_a_design_that_would_drop_right_side_paint_is_refused(bpy_session, blend
 
 
 def test_loading_runs_off_the_main_thread(bpy_session, blender, anny, tmp_path):
-    """In Blender's UI a design is read and cut in a worker: Load returns at once with the scene
-    as it was ("updating: loading ..."), and the design lands in one pass on the main thread, the
-    same as in line; a refused design says why under the Design panel and changes nothing."""
+    """In Blender's UI a design is read and cut in a worker (the button's job, as Drape's): Load
+    returns at once with the scene as it was ("updating: loading ..."), and the design lands in
+    one pass on the main thread, the same as in line; a refused design says why under the Design
+    panel and changes nothing. From a script (``execute``) a load runs in line even where jobs
+    are threaded (Blender's UI), as Drape does: its result is there when the call returns."""
     from test_mirror_ease import PATH, mirrored_sleeve_design
 
     bpy = bpy_session["bpy"]
-    jobs = blender.mod("jobs")
+    jobs, design_ops = blender.mod("jobs"), blender.mod("design_ops")
     blender.reset(body=True)
     assert bpy.ops.ease.load_template(template=DESIGN) == {"FINISHED"}
     want = bpy.context.scene.ease.design_json
+    template = str(blender.mod("data").template_dir() / DESIGN)
     blender.reset(body=True)
     s = bpy.context.scene.ease
     blender.mod("state").BUGS.clear()
     jobs.SYNCHRONOUS = False
     try:
-        assert bpy.ops.ease.load_template(template=DESIGN) == {"FINISHED"}
+        # the button (invoke): the job in a worker
+        job, said = design_ops.start_load(template, DESIGN, design_ops._body_now(bpy.context), "Load Template")
+        assert job.thread is not None and not said
         assert s.design_json == "" and s.job_status.startswith("updating: loading")
         assert not blender.objects("seamlines")
         jobs.wait()
         assert not blender.mod("state").BUGS
-        assert s.design_json == want and s.job_status.startswith(f"loaded {DESIGN}")
+        assert s.design_json == want and s.job_status.startswith(f"loaded {DESIGN}") and said
         assert blender.objects("seamlines") and convert_keypoints(blender)
         bad = tmp_path / "asym.json"
         bad.write_text(json.dumps(mirrored_sleeve_design(anny, 1.8)))
-        assert bpy.ops.ease.load_design_file(filepath=str(bad)) == {"FINISHED"}
+        design_ops.start_load(str(bad), str(bad), design_ops._body_now(bpy.context), "Load File")
         jobs.wait()
         assert s.design_json == want and PATH in s.design_status
+        # a script's call: in line, no job left running, the design there on return
+        blender.reset(body=True)
+        s = bpy.context.scene.ease  # (a new scene)
+        assert bpy.ops.ease.load_template(template=DESIGN) == {"FINISHED"}
+        assert jobs.running() is None and s.design_json == want
+        out = blender.run(bpy.ops.ease.load_design_file, filepath=str(bad))
+        assert PATH in out["ERROR"]
+        assert jobs.running() is None and s.design_json == want
     finally:
         jobs.wait()
         jobs.SYNCHRONOUS = True
