@@ -277,7 +277,7 @@ def test_export_draws_folds_placements_and_notches(pleated, tmp_path):
 
 def test_the_drape_starts_folded_with_creases_held(pleated):
     from core.drape.mesh import dihedral_angles
-    from core.drape.pleats import CREASE_MAX, draped_cloth, fold_edges
+    from core.drape.pleats import CREASE_MAX, TIE_REST, draped_cloth, fold_edges
 
     pattern, _, prep = pleated
     cloth = draped_cloth(pattern)  # what core.drape.simulate.drape and drape_motion simulate
@@ -299,6 +299,24 @@ def test_the_drape_starts_folded_with_creases_held(pleated):
     n_ids = len({int(i) for p in opened.panels for i in p.vertex_ids})
     welded = n_ids - cloth.n_particles
     assert welded >= 4
+    # a pressed pleat's visible fold is tied, row by row but the welded start, to its placement line
+    want = set()
+    for lines in opened.report["opened_pleats"].values():
+        for name in {x["pleat"] for x in lines}:
+            mine = [x for x in lines if x["pleat"] == name]
+            fold, place = mine[0], next(x for x in mine if x["kind"] == "placement")
+            a, b = cloth.particle_of[fold["gids"]], cloth.particle_of[place["gids"]]
+            apart = np.linalg.norm(cloth.x0[a] - cloth.x0[b], axis=1) > 1e-6
+            want |= {tuple(sorted(e)) for e in zip(a[apart].tolist(), b[apart].tolist())}
+    ties = {tuple(sorted(e)) for e in cloth.edges[-len(want) :].tolist()}
+    assert len(want) > 4 * 10 and ties == want
+    assert np.all(cloth.edge_rest[-len(want) :] <= TIE_REST + 1e-12) and np.all(cloth.edge_rest[-len(want) :] > 0)
+    # left open, the pleats fall into soft folds: neither creases nor ties
+    loose = copy.deepcopy(pattern)
+    for site in loose.report["pleats"]:
+        site["pressed"] = False
+    soft = draped_cloth(loose)
+    assert not fold_edges(soft, soft.mesh_pattern).any() and len(soft.edges) == len(cloth.edges) - len(want)
 
 
 def test_a_pleat_from_a_seam_is_refused_naming_the_seam(pleated):

@@ -28,6 +28,9 @@ PRESSED_STIFFNESS = 50.0
 #: 180 degrees the angle would flip sign with any motion; at 149 degrees (2.6) the knife-pleated skirt's
 #: folds stood 12.5 mm off their placement lines after 40 frames (median), at 172 degrees 9 mm
 CREASE_MAX = 3.0
+#: m, a pressed pleat's visible fold is tied this far from its placement line (one layer of the drape's
+#: start, :data:`LAYER_GAP <core.pattern.pleats.LAYER_GAP>`; less where it starts closer)
+TIE_REST = 0.003
 #: rad, a stencil on a fold line is a crease where it starts folded by more than this
 FOLDED = 1.0
 
@@ -86,6 +89,40 @@ def fold_rest(cloth, pattern) -> None:
         cloth.bend_weight[on] *= PRESSED_STIFFNESS
 
 
+def fold_ties(cloth, pattern) -> int:
+    """Pressed pleats stay closed: each visible fold of a pressed pleat (a strip's first line, and its
+    last where that is a fold: an inverted box pleat's second visible fold) is tied, row by row, to
+    the strip's placement line by a distance constraint (the cloth's stretch stiffness, like a sliver
+    edge: ``cloth.edges``) at its start distance, at most :data:`TIE_REST`. Rows already welded (the
+    stitching at the start) or starting on the placement line are left out. Returns the number of
+    ties added."""
+    drawn = (getattr(pattern, "report", None) or {}).get("opened_pleats") or {}
+    pressed = {s["name"]: bool(s.get("pressed", True)) for s in pattern.report.get("pleats") or []}
+    pairs = []
+    for lines in drawn.values():
+        by_strip = {}
+        for line in lines:
+            if pressed.get(line["pleat"], True):
+                by_strip.setdefault((line["pleat"], line["strip"]), []).append(line)
+        for strip in by_strip.values():  # lines in their order across the strip
+            place = [x for x in strip if x["kind"] == "placement"]
+            if not place:
+                continue
+            visible = [strip[0]] + ([strip[-1]] if strip[-1]["kind"] == "fold" and len(strip) > 1 else [])
+            for fold in visible:
+                a = cloth.particle_of[np.asarray(fold["gids"], np.int64)]
+                b = cloth.particle_of[np.asarray(place[0]["gids"], np.int64)]
+                ok = (a >= 0) & (b >= 0) & (a != b)
+                pairs.append(np.stack([a[ok], b[ok]], axis=1))
+    pairs = np.concatenate(pairs) if pairs else np.zeros((0, 2), np.int64)
+    start = np.linalg.norm(cloth.x0[pairs[:, 1]] - cloth.x0[pairs[:, 0]], axis=1)
+    pairs, start = pairs[start > 1e-6], start[start > 1e-6]  # a row starting on its placement: no direction to hold
+    if len(pairs):
+        cloth.edges = np.concatenate([np.asarray(cloth.edges, np.int64).reshape(-1, 2), pairs])
+        cloth.edge_rest = np.concatenate([np.asarray(cloth.edge_rest, float), np.minimum(start, TIE_REST)])
+    return len(pairs)
+
+
 def draped_cloth(pattern, refine_edge=None):
     """The :class:`core.drape.mesh.Cloth` a drape of ``pattern`` simulates: its pleats opened with
     their stitching (:func:`core.pattern.pleats.open_pattern`), welded by
@@ -99,4 +136,5 @@ def draped_cloth(pattern, refine_edge=None):
     opened = open_pattern(pattern, stitch=True)
     cloth = build_cloth(opened, refine_edge=refine_edge, gathers=refine_edge is not None)
     fold_rest(cloth, opened)
+    fold_ties(cloth, opened)
     return cloth
