@@ -28,7 +28,7 @@ from . import state
 
 #: compute in line (headless); False: in a worker thread
 SYNCHRONOUS = bool(bpy.app.background)
-POLL_S = 0.02  # seconds between the main thread's looks at the running jobs
+POLL_S = 0.01  # seconds between the main thread's looks at the running jobs
 
 _JOBS: dict = {}  # name -> Job (running)
 

@@ -17,9 +17,15 @@ most one slice (:data:`SLICE_S`: solving, writing the objects, the final work):
   time, store it with the key figures), and then the timer stops: no CPU is
   used until the next update of the body.
 
-A tick plans its work with running estimates of each kind of work, so the
-viewport waits at most one slice, or one indivisible unit (one iteration and
-the showing of its result, or the metrics) where that is longer.
+That is the loop in line (headless: :data:`.jobs.SYNCHRONOUS`), where a tick plans its work
+with running estimates of each kind of work, so that it takes at most one slice, or one
+indivisible unit (one iteration and the showing of its result, or the metrics) where that is
+longer. In Blender's window the solve runs in a worker (:func:`_solve_in_worker`, the job
+:data:`SOLVE_JOB`): a tick only reads the layer and, when it changed, hands the field to a new
+job (the running one is dropped: the newer paint wins); the worker takes one iteration from
+the current pattern and returns its pattern and overlay values (shown when the jobs' poll
+lands it), then the next job runs the cold solve to its end and returns the converged pattern
+measured and encoded, stored with its figures in one pass. The main thread never iterates.
 
 A design whose topology changed (a keypoint moved, a parameter changed, a seam
 added) gets a new session once (:func:`core.live.topology_key`). A session is built off the
@@ -47,6 +53,7 @@ with it off opens with no handler and no timer of a previous file.
 from __future__ import annotations
 
 import json
+import threading
 import time
 import traceback
 from collections import deque
@@ -57,8 +64,8 @@ import numpy as np
 from . import build, convert, data, jobs, pattern_ops, ramp, state, sync
 
 JOB = "live"  # the name of the session's build in :mod:`.jobs`
-FINAL_JOB = "live-final"  # the converged pattern's measuring and encoding, off the main thread
-BUILD_TICK_S = 0.05  # seconds between ticks while the session is built off the main thread
+SOLVE_JOB = "live-solve"  # the solve (warm slice, cold solve, the converged pattern's figures), in a worker
+BUILD_TICK_S = 0.05  # seconds between ticks while a job works off the main thread
 SLICE_S = 0.03  # seconds of work per tick: the longest the viewport waits for the pattern
 IDLE_TICK_S = 0.005  # seconds between ticks while converging (the UI handles its events in between)
 FIT_LAYER = "ease_fit"  # CORNER colour layer on the body: achieved / painted ease - 1
@@ -77,7 +84,15 @@ _LIVE = {
     "final": None,
     "stored": None,
     "failed": None,
+    "landed": False,  # threaded: the converged pattern of the session's current field is in the scene
+    "iterations": 0,  # threaded: iterations of the solve results applied since the last tick
+    "shown": 0,  # threaded: solve results applied (the live bench's latency: a stroke until it grows)
+    "pattern": None,  # threaded: the pattern of the last result applied (the pieces show it)
+    "solve_failed": None,  # threaded: the solve's error, said by the next tick (which stops)
 }
+# the session is iterated by one worker at a time (a newer stroke's job waits for the dropped one to
+# stop at its next iteration): the main thread never iterates it while jobs run threaded
+_SOLVING = threading.Lock()
 # running estimates, seconds per cut triangle of each kind of work (show, measure, encode, store)
 _RATES = {}
 
@@ -115,8 +130,12 @@ def write_overlay(obj, pattern, session) -> None:
     """The body's :data:`FIT_LAYER` (per face, on its corners) from ``pattern``; the painting layer stays active."""
     from ..core.live import achieved_over_painted
 
+    _write_fit(obj, achieved_over_painted(pattern, session.triangles, len(obj.data.polygons), session.areas))
+
+
+def _write_fit(obj, ratio) -> None:
+    """The body's :data:`FIT_LAYER` from per-face ``ratio`` (achieved / painted - 1, F_body,)."""
     me = obj.data
-    ratio = achieved_over_painted(pattern, session.triangles, len(me.polygons), session.areas)
     attr = me.color_attributes.get(FIT_LAYER)
     if attr is None or attr.domain != "CORNER":
         active = me.color_attributes.active_color_name
@@ -214,7 +233,7 @@ def session_for(context):
         _LIVE.update(inputs=quick, faces=faces, failed=None)
         _LIVE["colors"] = None  # the design's ease may have changed: the field is taken again
         if session is not None:
-            _LIVE.update(key=key, session=session, builds=_LIVE["builds"] + 1, final=None)
+            _LIVE.update(key=key, session=session, builds=_LIVE["builds"] + 1, final=None, landed=False)
         else:  # the same cut: the design's own ease may differ (Ease to Design)
             _LIVE["session"].set_design_ease(np.concatenate([np.asarray(p.ease, float) for p in prep.cut.panels]))
         wake()
@@ -232,12 +251,12 @@ def session_for(context):
     return _LIVE["session"] if _LIVE.get("inputs") == quick else None
 
 
-def _cancelled() -> None:
-    """The designer cancelled the session's build (Esc, Cancel): Live goes off."""
+def _cancelled(what: str = "preparation") -> None:
+    """The designer cancelled the session's build or its solve (Esc, Cancel): Live goes off."""
     scene = getattr(bpy.context, "scene", None)
     if scene is not None and scene.ease.live:
         scene.ease.live = False
-        scene.ease.live_status = "off: its preparation was cancelled"
+        scene.ease.live_status = f"off: its {what} was cancelled"
 
 
 def _per_triangle(obj, values) -> np.ndarray:
@@ -317,32 +336,13 @@ def _final_units(context, session) -> deque:
         if box["same"]:
             sync.show_pieces(context, pattern)
             write_overlay(data.body_object(context), pattern, session)
-        if jobs.SYNCHRONOUS:
-            queue.append(("measure", n, measure))
-        else:
-            off_thread()
+        queue.append(("measure", n, measure))
 
     def measure():
         wf.measure_pattern(box["pattern"])
         units = session.text.units(box["pattern"])
         queue.extend(("encode", size, work) for size, work in units[:-1])
         queue.append(("store", units[-1][0], lambda: store(units[-1][1])))
-
-    def off_thread():
-        """Measure and encode in a worker (the viewport draws meanwhile); store when it lands."""
-        pattern = box["pattern"]
-
-        def compute(progress):
-            wf.measure_pattern(pattern)
-            return session.text.text(pattern)
-
-        def apply(text):
-            box["text"] = text
-            wake()
-
-        jobs.start(FINAL_JOB, "Live: measuring the pattern", compute, apply)
-        queue.append(("wait", 0, lambda: "text" in box))
-        queue.append(("store", n, lambda: store(lambda: box["text"])))
 
     def store(join):
         pattern = box["pattern"]
@@ -361,53 +361,82 @@ def _final_units(context, session) -> deque:
 def step(context, budget_s: float = SLICE_S) -> dict:
     """One tick of the live loop (what the timer runs; tests call it directly).
 
-    The tick plans its work to fit ``budget_s``: iterations, the showing of a warm state,
-    the units of the final work (:func:`_final_units`), each started only when its running
-    estimate still fits; at least one unit of work is done, so a tick is longer than the
-    slice only when that one unit is.
+    In line (headless: :data:`.jobs.SYNCHRONOUS`) the tick plans its work to fit ``budget_s``:
+    iterations, the showing of a warm state, the units of the final work
+    (:func:`_final_units`), each started only when its running estimate still fits; at least
+    one unit of work is done, so a tick is longer than the slice only when that one unit is.
+    Threaded (Blender's window) the tick only reads the painted field and hands it to the
+    solve's job (:func:`_step_threaded`): the iterations run in a worker, whose results the
+    jobs' poll writes into the scene in one pass.
 
-    Returns ``{"changed": a new field was taken, "iterations": run, "units": the final units
-    done (kinds), "converged": the pattern is the cold solve and stored, "seconds": wall time}``.
+    Returns ``{"changed": a new field was taken, "iterations": run (threaded: those whose
+    results landed since the last tick), "units": the final units done (kinds), "converged":
+    the pattern is the cold solve and stored, "seconds": wall time}``.
     """
     t0 = time.perf_counter()
-    changes = build.DATABLOCK_CHANGES[0]
-    try:
+    with _UndoIfRebuilt():
         return _step(context, budget_s, t0)
-    finally:
-        if build.DATABLOCK_CHANGES[0] != changes and bpy.ops.ed.undo_push.poll():
-            # datablocks made, swapped or removed outside an undo step leave Blender's memfile undo
-            # restoring objects whose data it freed: the next Ctrl+Z crashed (segfault)
+
+
+class _UndoIfRebuilt:
+    """Around work that may make the pieces of a new cut: an undo step after it did (datablocks
+    made, swapped or removed outside an undo step leave Blender's memfile undo restoring objects
+    whose data it freed: the next Ctrl+Z crashed, a segfault)."""
+
+    def __enter__(self):
+        self.changes = build.DATABLOCK_CHANGES[0]
+
+    def __exit__(self, *exc):
+        if build.DATABLOCK_CHANGES[0] != self.changes and bpy.ops.ed.undo_push.poll():
             bpy.ops.ed.undo_push(message="EASE Live: pieces of the new cut")
+        return False
+
+
+def _take_field(context, session):
+    """The painted field when it differs from the one taken last (a stroke, X-mirror toggled, an
+    undo): ``(field, painted, restart)`` (:func:`targets`; ``restart``: the restored pattern to
+    continue from after an undo, or None), the layer remembered; None when unchanged."""
+    scene = context.scene
+    obj = data.body_object(context)
+    raw = _colors(obj)
+    mirror = data.x_mirror(obj)
+    if raw is None:
+        return None
+    if _LIVE["colors"] is not None and np.array_equal(raw, _LIVE["colors"]) and mirror == _LIVE["mirror"]:
+        return None
+    if sync.mirrored_paint(obj, scene):  # X-mirror: a one-sided stroke painted on both sides
+        raw = _colors(obj)
+    restart = None
+    if _LIVE["restart"]:
+        # after an undo/redo: continue from the restored pattern
+        _LIVE["restart"] = False
+        restored = data.stored_pattern(scene)
+        if _of_cut(restored, session.prep.cut):  # (not one of another cut: a parameter undone)
+            restart = restored
+    field, painted = targets(obj, scene)
+    sync.remember_layer(obj, scene)
+    _LIVE["colors"], _LIVE["mirror"] = raw, mirror
+    return field, painted, restart
 
 
 def _step(context, budget_s: float, t0: float) -> dict:
     scene = context.scene
-    obj = data.body_object(context)
     session = session_for(context)
     if session is None:  # being built off the main thread: the panel says so, the tick returns
         job = jobs.running(JOB)
         scene.ease.live_status = job.status() if job is not None else "updating"
         return {"changed": False, "iterations": 0, "units": [], "converged": False, "seconds": time.perf_counter() - t0}
-    raw = _colors(obj)
+    if not jobs.SYNCHRONOUS:
+        return _step_threaded(context, session, t0)
     changed = False
-    mirror = data.x_mirror(obj)
-    if raw is not None and (
-        _LIVE["colors"] is None or not np.array_equal(raw, _LIVE["colors"]) or mirror != _LIVE["mirror"]
-    ):
-        if sync.mirrored_paint(obj, scene):  # X-mirror: a one-sided stroke painted on both sides
-            raw = _colors(obj)
-        if _LIVE["restart"]:
-            # after an undo/redo: continue from the restored pattern
-            _LIVE["restart"] = False
-            restored = data.stored_pattern(scene)
-            if _of_cut(restored, session.prep.cut):  # (not one of another cut: a parameter undone)
-                session.restart_from(restored)
-        changed = session.set_ease(*targets(obj, scene))
-        sync.remember_layer(obj, scene)
-        _LIVE["colors"], _LIVE["mirror"] = raw, mirror
+    taken = _take_field(context, session)
+    if taken is not None:
+        field, painted, restart = taken
+        if restart is not None:
+            session.restart_from(restart)
+        changed = session.set_ease(field, painted)
         if changed:
             _LIVE["final"] = None  # the pattern it would have stored is superseded
-            jobs.drop(FINAL_JOB)
     was, warm = session.converged, session.warming
     n_tri = len(session.triangles)
     show_s = (_estimate("show", n_tri) or 0.0) if warm else 0.0
@@ -422,11 +451,6 @@ def _step(context, budget_s: float, t0: float) -> dict:
     final, units = _LIVE["final"], []
     while final:
         kind, size, work = final[0]
-        if kind == "wait":  # the measuring and encoding run off the main thread: done yet?
-            if not work():
-                break
-            final.popleft()
-            continue
         est = _estimate(kind, size)
         if (n or units) and (est is None or time.perf_counter() - t0 + est > budget_s):
             break
@@ -434,6 +458,11 @@ def _step(context, budget_s: float, t0: float) -> dict:
         _timed(kind, size, work)
         units.append(kind)
     done = session.converged and not final
+    _say_status(scene, session, done)
+    return {"changed": changed, "iterations": n, "units": units, "converged": done, "seconds": time.perf_counter() - t0}
+
+
+def _say_status(scene, session, done: bool) -> None:
     if not done:
         status = "converging"
     elif scene.get(data.PATTERN_KEY) == _LIVE["stored"]:
@@ -443,7 +472,107 @@ def _step(context, budget_s: float, t0: float) -> dict:
     scene.ease.live_status = (
         status if status.startswith("idle") else f"{status} ({session.iterations_since_change} iterations)"
     )
-    return {"changed": changed, "iterations": n, "units": units, "converged": done, "seconds": time.perf_counter() - t0}
+
+
+def _step_threaded(context, session, t0: float) -> dict:
+    """A tick with the solve in a worker (Blender's window): a new field (a stroke) starts the
+    solve's job (a running one is dropped: the newer paint wins); with none, a solve that is not
+    done yet (a warm slice shown, the cold solve not complete, or its pattern not in the scene)
+    goes on in a new job. The tick reads the layer and hands it over; it never iterates."""
+    scene = context.scene
+    taken = _take_field(context, session)
+    if taken is not None:
+        _LIVE["solve_failed"] = None
+        _solve_in_worker(context, session, *taken)
+    elif _LIVE["solve_failed"] is not None:
+        raise _LIVE["solve_failed"]  # said by the tick, which stops (a new stroke tries again)
+    elif jobs.running(SOLVE_JOB) is None and not (session.converged and _LIVE["landed"]):
+        _solve_in_worker(context, session)
+    done = jobs.running(SOLVE_JOB) is None and session.converged and _LIVE["landed"]
+    _say_status(scene, session, done)
+    n, _LIVE["iterations"] = _LIVE["iterations"], 0
+    return {
+        "changed": taken is not None,
+        "iterations": n,
+        "units": [],
+        "converged": done,
+        "seconds": time.perf_counter() - t0,
+    }
+
+
+def _solve_in_worker(context, session, field=None, painted=None, restart=None) -> None:
+    """The solve as the job :data:`SOLVE_JOB`: in a worker, the new field ``field`` (F_body,)
+    with ``painted`` (:func:`targets`; None: the one set) taken (from ``restart`` after an undo),
+    then either one warm slice from the current pattern (after a change: its pattern and fit
+    overlay, shown when it lands) or the cold solve to its end with the converged pattern's
+    figures and stored text (stored with its figures when it lands). Everything that costs
+    (iterations, building, measuring and encoding the pattern, the overlay's values) is the
+    worker's; the main thread writes the result into the objects in one pass."""
+    from ..core import workflows as wf
+    from ..core.live import achieved_over_painted
+
+    n_body = len(data.body_object(context).data.polygons)
+    landed = _LIVE["landed"]
+
+    def overlay(pattern):
+        return achieved_over_painted(pattern, session.triangles, n_body, session.areas)
+
+    def compute(progress):
+        with _SOLVING:  # (a dropped job of this session stops at its next iteration)
+            if restart is not None:
+                session.restart_from(restart)
+            changed = session.set_ease(field, painted) if field is not None else False
+            if field is not None and not changed and session.converged and landed:
+                return "same", 0, None, None, None  # (X-mirror toggled on a symmetric field, ...)
+            if session.state is None:
+                session.set_ease(None)
+            n = 0
+            if session.warming:
+                n = session.run(0.0)  # one iteration: the stroke's first result, shown at once
+                if not session.converged:
+                    session.end_warm()  # one warm slice shown per stroke, then the cold solve
+                    pattern = session.pattern(figures=False)
+                    return "warm", n, pattern, overlay(pattern), None
+            while not session.converged:
+                progress(0.5, f"converging ({session.iterations_since_change} iterations)")
+                n += session.run(SLICE_S)
+            progress(0.9, "measuring the pattern")
+            pattern = session.pattern(figures=False)
+            wf.measure_pattern(pattern)
+            return "final", n, pattern, overlay(pattern), session.text.text(pattern)
+
+    def apply(out):
+        kind, n, pattern, ratio, text = out
+        if _LIVE["session"] is not session:  # a new session replaced it meanwhile
+            return
+        _LIVE["iterations"] += n
+        ctx = bpy.context
+        scene, obj = ctx.scene, data.body_object(ctx, required=False)
+        if kind != "same" and obj is not None:
+            with _UndoIfRebuilt():
+                same = build.same_pieces(scene, pattern)
+                if same:
+                    sync.show_pieces(ctx, pattern)
+                if kind == "final":
+                    if same:
+                        sync.store_pattern(scene, pattern, text=text)
+                        scene.ease.pattern_json = json.dumps(data.key_figures(pattern))
+                    else:  # the pieces of a new cut: made, stored and figured at once
+                        sync.show_pattern(ctx, pattern, text=text)
+                    _LIVE["stored"] = scene.get(data.PATTERN_KEY)
+                if same or kind == "final":
+                    _write_fit(obj, ratio)
+        if kind != "same":
+            _LIVE["landed"] = kind == "final"
+            _LIVE["pattern"] = pattern
+        _LIVE["shown"] += 1
+        wake()
+
+    def fail(exc):
+        _LIVE["solve_failed"] = exc
+        wake()  # the next tick says it (and stops)
+
+    jobs.start(SOLVE_JOB, "Live: solving", compute, apply, fail, sync=False, cancelled=lambda: _cancelled("solve"))
 
 
 def _tick():
@@ -463,7 +592,7 @@ def _tick():
         return None
     if out["converged"] and not out["changed"]:
         return None
-    waiting = jobs.running(JOB) is not None or jobs.running(FINAL_JOB) is not None
+    waiting = jobs.running(JOB) is not None or jobs.running(SOLVE_JOB) is not None
     return BUILD_TICK_S if waiting else IDLE_TICK_S
 
 
@@ -502,7 +631,7 @@ def _on_depsgraph(scene, depsgraph) -> None:
 @bpy.app.handlers.persistent
 def _on_undo(scene, *_args) -> None:
     _LIVE.update(colors=None, restart=True, final=None)
-    jobs.drop(FINAL_JOB)
+    jobs.drop(SOLVE_JOB)
     touched(scene)  # the restored status is the pushed one: not "converged" until a tick has seen it
 
 
@@ -529,7 +658,7 @@ def stop() -> None:
     if bpy.app.timers.is_registered(_tick):
         bpy.app.timers.unregister(_tick)
     jobs.drop(JOB)
-    jobs.drop(FINAL_JOB)
+    jobs.drop(SOLVE_JOB)
     _LIVE.update(
         failed=None,
         key=None,
@@ -541,6 +670,10 @@ def stop() -> None:
         faces=None,
         final=None,
         stored=None,
+        landed=False,
+        iterations=0,
+        solve_failed=None,
+        pattern=None,
     )
 
 

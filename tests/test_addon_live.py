@@ -393,3 +393,65 @@ def test_cancelling_the_build_turns_live_off(blender):
         assert live._LIVE["session"] is None and not bpy.app.timers.is_registered(live._tick)
     finally:
         s.live = True
+
+
+def test_threaded_ticks_never_iterate(blender):
+    """In Blender's window the solve runs in a worker (issue 32: no tick may block the viewport
+    for the solve): every iteration of the session's solver runs off the main thread; a stroke's
+    tick only hands the field over (the pieces stay until its warm slice lands, then move in
+    place); a stroke while the previous one's solve runs drops it (the newer paint wins); the
+    loop converges to the cold solve of the last paint, stored with its text; Cancel (Esc) while
+    it solves turns Live off and says so."""
+    import threading
+
+    from core.fileio import dumps_json
+    from core.pattern.io import pattern_to_json
+
+    bpy = blender.bpy
+    live, jobs = blender.mod("live"), blender.mod("jobs")
+    s = bpy.context.scene.ease
+    _converge(blender)
+    session = live.session_for(bpy.context)
+    threads = []
+    real = session.solver.iterate
+
+    def iterate(*a, **k):
+        threads.append(threading.current_thread() is threading.main_thread())
+        return real(*a, **k)
+
+    session.solver.iterate = iterate
+    try:
+        with _threaded(blender):
+            before, names = _pieces(blender), _names(bpy)
+            _stroke(blender, 1.7, seed=61)
+            out = live.step(bpy.context)
+            assert out["changed"] and out["iterations"] == 0 and not out["converged"]
+            job = jobs.running(live.SOLVE_JOB)
+            assert job is not None and s.live_status.startswith("converging")
+            shown = live._LIVE["shown"]
+            jobs.wait()  # the warm slice lands: the pieces move in place, no new datablock
+            assert live._LIVE["shown"] == shown + 1 and _names(bpy) == names
+            assert any(not np.array_equal(before[k], v) for k, v in _pieces(blender).items())
+            assert live.step(bpy.context)["iterations"] > 0 and jobs.running(live.SOLVE_JOB) is not None
+            # a new stroke while the cold solve runs: that job is dropped, the new field solved
+            _stroke(blender, 1.3, seed=62)
+            assert live.step(bpy.context)["changed"]
+            assert job.cancelled or job is not jobs.running(live.SOLVE_JOB)
+            _converge(blender)
+            assert s.live_status.startswith("converged")
+            assert threads and not any(threads), "an iteration ran on the main thread"
+            stored = blender.mod("data").stored_pattern(bpy.context.scene)
+            cold = _cold_uv(blender)  # (the test's cold solve: on the main thread)
+            assert all(np.array_equal(p.uv, cold[p.name]) for p in stored.panels)
+            assert bpy.context.scene["ease_pattern_json"] == dumps_json(pattern_to_json(stored), indent=None)
+            # Esc while it solves: Live off, nothing applied
+            _stroke(blender, 1.5, seed=63)
+            live.step(bpy.context)
+            assert jobs.running(live.SOLVE_JOB) is not None
+            assert bpy.ops.ease.cancel_jobs() == {"FINISHED"}
+            assert not s.live and "solve was cancelled" in s.live_status
+    finally:
+        session.solver.iterate = real
+        s.live = False
+        blender.reset(body=True, design=DESIGN, piecewise_ease=True, pattern=True)
+        bpy.context.scene.ease.live = True
