@@ -41,6 +41,16 @@ class EASE_PG_layers(bpy.types.PropertyGroup):
         min=0.0,
         max=100.0,
     )
+    over: EnumProperty(
+        name="Cut over",
+        description="The surface an outer garment's pattern is solved and its ease measured on",
+        items=[
+            ("skintight", "Skintight", "The inner garments' skintight surface: the body out by their thickness"),
+            ("draped", "Draped", "The inner garments as draped, with their folds"),
+            ("body", "Body", "The body, as if each garment were worn alone"),
+        ],
+        default="skintight",
+    )
 
 
 def outfit_of(scene) -> dict:
@@ -124,11 +134,11 @@ class EASE_OT_layer_move(EaseOperator):
         layers.index = j
 
 
-def _compute(outfit: dict, frames: int, device: str, edge_m, progress):
+def _compute(outfit: dict, frames: int, device: str, edge_m, progress, over: str = "skintight"):
     from ..core import workflows as wf
 
     options = {"max_frames": int(frames), "min_frames": min(10, int(frames)), "device": device}
-    return wf.drape_outfit(outfit, options=options, refine_edge_length=edge_m, progress=progress)
+    return wf.drape_outfit(outfit, options=options, refine_edge_length=edge_m, over=over, progress=progress)
 
 
 def apply_outfit(context, run) -> None:
@@ -177,11 +187,11 @@ class EASE_OT_drape_all(jobs.Background, EaseOperator):
         edge = layers.edge_mm / 1000.0 if layers.edge_mm else None
         if edge is not None and not 0.005 <= edge <= 0.1:
             raise state.AddonError(f"Drape All: Edge (mm) = {layers.edge_mm:g}: expected 0 or 5 to 100 mm")
-        frames, device = s.drape_frames, s.drape_device
+        frames, device, over = s.drape_frames, s.drape_device, layers.over
         jobs.start_step(
             JOB,
             "drape all",
-            lambda progress: _compute(checked, frames, device, edge, progress),
+            lambda progress: _compute(checked, frames, device, edge, progress, over),
             lambda run: apply_outfit(bpy.context, run),
             "drape_status",
             "Drape All",
@@ -216,6 +226,7 @@ class EASE_PT_layers(bpy.types.Panel):
         col.operator("ease.layer_move", icon="TRIA_UP", text="").direction = "UP"
         col.operator("ease.layer_move", icon="TRIA_DOWN", text="").direction = "DOWN"
         layout.prop(layers, "edge_mm")
+        layout.prop(layers, "over")
         layout.operator("ease.drape_all")
         report = convert.load_json(context.scene, REPORT_KEY)
         for ly in (report or {}).get("layers", [])[1:]:

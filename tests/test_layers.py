@@ -10,7 +10,7 @@ import pytest
 
 from core.design.outfit import load_outfit
 from core.drape.layers import layer_collider, layer_distance, layer_measure, push_outside
-from core.errors import DesignError
+from core.errors import DesignError, DrapeError
 
 TUCKED = {
     "format": "ease-outfit",
@@ -200,6 +200,33 @@ def test_outer_pattern_is_cut_over_the_inner_skintight_surface():
     assert rec == {"surface": "skintight over", "layers": ["tights"], "offset_mm": pytest.approx(8.0)}
     # 8 mm more girth round a thigh of ~ 9 cm radius: the cloth grows by several per cent
     assert 1.03 < areas["skintight"] / areas["body"] < 1.3
+
+
+def test_outer_pattern_is_cut_over_the_inner_draped_surface(tucked_run):
+    """``over="draped"``: the body under the draped shirt moves out onto it (its fabric's thickness
+    outside, as the drape meets it), the body it does not cover stays, and the record says so."""
+    from core.design import load_design
+    from core.design.templates import template
+    from core.workflows import prepare
+    from core.workflows._outfit import _over_inner
+
+    shirt = tucked_run.layers[0]
+    data = template("pants").to_json()
+    data["refine_edge_length"] = 0.04
+    prep = prepare(load_design(data))
+    body = prep.reference.copy()
+    rec = _over_inner(prep, prep.body, [shirt], "draped")
+    assert rec["surface"] == "draped over" and rec["layers"] == ["long-sleeve shirt"]
+    assert 10.0 < rec["covered_pct"] < 60.0  # the pants' top, under the tucked shirt
+    assert 6.0 < rec["offset_mm"] < rec["offset_p95_mm"] <= rec["offset_max_mm"] < 150.0
+    moved = np.linalg.norm(prep.reference - body, axis=1) > 0
+    v, f = shirt.surface
+    dist, over = layer_distance(prep.reference[moved], v, f)
+    near = over & (np.abs(dist) < 0.05)
+    assert near.sum() > 500 and np.mean(dist[near] > shirt.thickness - 0.001) > 0.95  # none left inside it
+    assert not moved[body[:, 2] < body[:, 2].min() + 0.4].any()  # the shins and feet: no shirt there
+    with pytest.raises(DrapeError, match="over: expected one of skintight, draped, body"):
+        _over_inner(prep, prep.body, [shirt], "folded")
 
 
 def test_example_outfits_load():

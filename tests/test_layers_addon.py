@@ -34,6 +34,7 @@ def test_layers_list_and_drape_all(bpy_session, blender):
     assert "ERROR" in blender.run(ops.ease.layer_add, design="no_such_garment")
     assert len(layers.items) == 2
     sc.ease.drape_frames, sc.ease.drape_device, layers.edge_mm = 12, "cpu", 40.0
+    layers.over = "draped"  # the pants cut over the shirt as draped
     assert ops.ease.drape_all() == {"FINISHED"}
     objs = sorted(blender.objects("outfit_garment"), key=lambda o: o["ease_layer"])
     assert [o.name for o in objs] == ["EASE long-sleeve shirt", "EASE pants"]
@@ -42,6 +43,7 @@ def test_layers_list_and_drape_all(bpy_session, blender):
     rep = json.loads(sc["ease_outfit_report"])
     assert [ly["name"] for ly in rep["layers"]] == ["long-sleeve shirt", "pants"]
     assert rep["layers"][0]["tucked"] and "long-sleeve shirt" in rep["layers"][1]["over"]
+    assert rep["layers"][1]["pattern_measured_on"]["surface"] == "draped over"
     assert "outfit draped: 2 layers" in sc.ease.drape_status
     # a second Drape All replaces the garments, nothing piles up
     assert ops.ease.layer_remove() == {"FINISHED"} and len(layers.items) == 1

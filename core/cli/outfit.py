@@ -32,6 +32,13 @@ def add_parser(sub) -> None:
         metavar="M",
         help="cut every garment at this mean edge length (m, 0.005..0.1; default each design's): coarser is faster",
     )
+    p.add_argument(
+        "--over",
+        choices=("skintight", "draped", "body"),
+        default="skintight",
+        help="the surface an outer garment's pattern is solved and its ease measured on: the inner garments' "
+        "skintight surface (default), their draped surface (with its folds), or the body",
+    )
     p.add_argument("--device", default="cpu", help="cpu (default; bitwise repeatable) or cuda")
     p.add_argument(
         "--formats",
@@ -58,7 +65,9 @@ def _cmd(args) -> int:
         raise DesignError("--edge", f"expected a mean edge length in 0.005..0.1 m, got {args.edge}")
     formats = parse_formats(args.formats)
     outfit = load_outfit(args.outfit)
-    run = drape_outfit(outfit, options=options, refine_edge_length=args.edge, progress=console_progress(args))
+    run = drape_outfit(
+        outfit, options=options, refine_edge_length=args.edge, over=args.over, progress=console_progress(args)
+    )
     write_outfit(args.out, run, formats=formats, preview=not args.no_preview)
     print(outfit_summary(run))
     print(f"wrote {args.out}")

@@ -200,21 +200,67 @@ def _tucked_hem(lr: LayerRun, outer: List[LayerRun]) -> Optional[dict]:
     }
 
 
+#: the surfaces an outer garment's pattern can be solved over (:func:`drape_outfit`'s ``over``)
+OVER = ("skintight", "draped", "body")
+#: times the draped offset is averaged with its body neighbours' (a fold of the inner garment, a
+#: hem's ramp: no step in the surface the pattern is solved on)
+DRAPED_SMOOTHING = 3
+
+
 def _over_inner(prep, body, inner: List[LayerRun], over: str) -> dict:
-    """Move ``prep``'s reference body out over the inner layers' skintight surface (``over`` "skintight");
-    returns the record of the surface the pattern is solved and measured on."""
+    """Move ``prep``'s reference body out over the inner layers: their skintight surface (``over``
+    "skintight") or their draped one ("draped"); returns the record of the surface the pattern is
+    solved and measured on."""
     from ..body.instance import spec_instance
     from ..errors import DrapeError
     from ..geom.mesh import vertex_normals
 
-    if over not in ("skintight", "body"):
-        raise DrapeError(f'over: expected "skintight" or "body", got {over!r}')
+    if over not in OVER:
+        raise DrapeError(f"over: expected one of {', '.join(OVER)}, got {over!r}")
     if over == "body" or not inner:
         return {"surface": "body", "offset_mm": 0.0}
-    offset = sum(2.0 * lr.thickness for lr in inner)
     _, faces = spec_instance(prep.cut.body, model=body)
-    prep.reference = prep.reference + vertex_normals(prep.reference, faces) * offset
-    return {"surface": "skintight over", "layers": [lr.layer.name for lr in inner], "offset_mm": offset * 1000.0}
+    normals = vertex_normals(prep.reference, faces)
+    names = [lr.layer.name for lr in inner]
+    if over == "skintight":
+        offset = sum(2.0 * lr.thickness for lr in inner)
+        prep.reference = prep.reference + normals * offset
+        return {"surface": "skintight over", "layers": names, "offset_mm": offset * 1000.0}
+    offset = _draped_offset(prep.reference, np.asarray(faces, np.int64), normals, inner)
+    prep.reference = prep.reference + normals * offset[:, None]
+    on_cut = np.asarray(prep.cut.embedding @ offset).ravel() * 1000.0  # the garment's own vertices
+    moved = on_cut[on_cut > 1e-6]
+    return {
+        "surface": "draped over",
+        "layers": names,
+        "offset_mm": float(moved.mean()) if len(moved) else 0.0,
+        "offset_p95_mm": float(np.percentile(moved, 95)) if len(moved) else 0.0,
+        "offset_max_mm": float(moved.max()) if len(moved) else 0.0,
+        "covered_pct": 100.0 * len(moved) / max(len(on_cut), 1),
+    }
+
+
+def _draped_offset(body_v, body_f, normals, inner: List[LayerRun]) -> np.ndarray:
+    """(V,) m, how far each body vertex moves out along its normal onto the inner layers' draped
+    surfaces as the outer garment's drape meets them (:func:`core.drape.layers.layer_collider`: each
+    moved out by its fabric's thickness, open edges joined to the body by a ramp): the first hit of
+    the normal's ray within :data:`COVER_BAND <core.drape.layers.COVER_BAND>` on an inner garment or a
+    ramp, 0 where it meets none; then averaged :data:`DRAPED_SMOOTHING` times with the vertex's
+    neighbours (never below the hit where the ray met a garment)."""
+    from ..drape.layers import COVER_BAND, layer_collider
+    from ..geom.queries import ray_hit_distance
+
+    coll_v, coll_f = layer_collider(body_v, body_f, [(*lr.surface, lr.thickness) for lr in inner])
+    garment = coll_f[coll_f.min(axis=1) >= len(body_v)]  # the inner garments' and their ramps' triangles
+    hit = ray_hit_distance(body_v, normals, coll_v, garment, max_t=COVER_BAND)
+    edges = np.concatenate([body_f[:, [0, 1]], body_f[:, [1, 2]], body_f[:, [2, 0]]])
+    edges = np.concatenate([edges, edges[:, ::-1]])
+    count = np.maximum(np.bincount(edges[:, 0], minlength=len(body_v)), 1)
+    offset = hit.copy()
+    for _ in range(DRAPED_SMOOTHING):
+        total = np.bincount(edges[:, 0], weights=offset[edges[:, 1]], minlength=len(body_v))
+        offset = np.maximum(0.5 * offset + 0.5 * total / count, hit)
+    return offset
 
 
 def drape_outfit(
@@ -234,7 +280,9 @@ def drape_outfit(
     refine_edge_length : float m or None: overrides every design's cut refinement (coarser: faster)
     over : ``"skintight"`` (default): an outer garment's pattern is solved, and its ease measured, over
         the inner layers' skintight surface: the body moved out along its normals by twice each inner
-        fabric's thickness (its contact offset and its own); ``"body"``: over the body, as if worn alone
+        fabric's thickness (its contact offset and its own); ``"draped"``: over the inner layers' draped
+        surfaces (each out by its thickness, as the drape meets them: :func:`_draped_offset`);
+        ``"body"``: over the body, as if worn alone
     """
     from ..body.registry import load_spec
     from ..design import load_design
