@@ -234,7 +234,23 @@ def _label_place(piece, box: np.ndarray, layout: Layout, i: int, grid: PageGrid,
     if not len(r):
         return None
     at = np.stack([lo[0] + c * cell, hi[1] - r * cell], axis=1)
-    for j in np.argsort(np.linalg.norm(at - piece.label_at, axis=1), kind="stable")[:LABEL_TRIES]:
+    nearest = np.argsort(np.linalg.norm(at - piece.label_at, axis=1), kind="stable")[:LABEL_TRIES]
+    if whole:  # the exact check only where the label can lie whole on a printed page
+        boxes = at[nearest][:, None, :] + label_box(piece, (0.0, 0.0))[None]
+        nearest = nearest[_within_a_printed_window(place(layout, i, boxes.reshape(-1, 2)).reshape(-1, 4, 2), grid, ink)]
+    for j in nearest:
         if _label_on(label_box(piece, at[j]), layout, i, grid, ink, whole):
             return at[j]
     return None
+
+
+def _within_a_printed_window(corners: np.ndarray, grid: PageGrid, ink: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+    """(m,) bool: whether each box (``corners`` (m, 4, 2), sheet m) lies within a printed window (``tol`` m
+    to spare): what :func:`_label_on` with ``whole`` needs (the window holding the box is one it reaches, so
+    one printed), checked for many boxes at once."""
+    lo, hi = corners.min(axis=1) + tol, corners.max(axis=1) - tol
+    ok = np.zeros(len(corners), bool)
+    for r, c in zip(*np.nonzero(ink)):
+        win = grid.window(r, c)
+        ok |= np.all(lo >= win[0], axis=1) & np.all(hi <= win[1], axis=1)
+    return ok
