@@ -119,20 +119,21 @@ def test_settle_stops_only_when_still():
 def test_bending_iterations_converge_the_cantilever():
     # one XPBD pass a substep under-delivers the bending where its compliance is not large against the
     # mass term (a 5 mm strip droops 49 degrees at 2.5 cm); iterated with the multiplier accumulated it
-    # converges (36.3 degrees at 4 passes, 35.5 at 8)
+    # converges (36.3 degrees at 4 passes, 35.5 at 8). Shirting at 0.05 gf cm^2/cm, the cotton preset's
+    # bending before its Cusick calibration: at the preset's 0.10 the passes converge more slowly
+    # (24.1 degrees at 4, 20.6 at 8)
     from core.drape import DrapeOptions
     from core.drape.materials import get_material
 
-    angle = {
-        it: T.tip_angle(get_material("cotton"), 0.025, 0.005, DrapeOptions(iterations=it), 300)[0] for it in (1, 4, 8)
-    }
+    shirting = get_material("cotton", {"bending": 5.0e-6})
+    angle = {it: T.tip_angle(shirting, 0.025, 0.005, DrapeOptions(iterations=it), 300)[0] for it in (1, 4, 8)}
     assert angle[1] > angle[4] + 8.0
     assert abs(angle[4] - angle[8]) < 2.0
 
 
 def test_cantilever_orders_the_fabrics():
     # the bisection brackets the 41.5 degree overhang; denim (stiff, heavy) has a longer bending length
-    # than silk (the presets' own (G/W)^(1/3): 1.72 and 0.66 cm)
+    # than silk (the presets' own (G/W)^(1/3): 2.48 and 0.66 cm)
     denim = T.cantilever("denim", edge=0.005, bisections=3)
     silk = T.cantilever("silk", edge=0.005, bisections=3)
     for r in (denim, silk):
@@ -140,7 +141,7 @@ def test_cantilever_orders_the_fabrics():
         angles = sorted((q["overhang_cm"], q["angle_deg"]) for q in r["runs"])
         assert all(a0 <= a1 for (_, a0), (_, a1) in zip(angles[:-1], angles[1:]))  # longer droops more
     assert denim["bending_length_cm"] > 1.5 * silk["bending_length_cm"]
-    assert T.cantilever_expected("denim") == pytest.approx(1.72, abs=0.01)
+    assert T.cantilever_expected("denim") == pytest.approx(2.48, abs=0.01)
 
 
 # ----------------------------------------------------------------------------- the solvers (issue 35)
