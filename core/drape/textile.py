@@ -292,7 +292,9 @@ def cusick(
     -------
     dict: ``dc_pct``, ``nodes``, ``frames``, ``settled``, ``energy`` (J/kg), ``move_mm``, ``particles``,
     ``triangles``, ``seconds`` (simulation wall time), ``ms_per_frame``, ``positions`` ((n, 3) m),
-    ``faces``, ``outline_mm`` (rim radius per degree).
+    ``faces``, ``outline_mm`` (rim radius per degree); with ``solver="newton"``
+    ``unconverged_substeps`` (of ``substeps_done``: solves that stopped at the iteration limit above
+    the tolerance) and ``max_residual`` (the largest residual force over weight a solve left), else None.
     """
     solver, state, uv = cusick_setup(material, edge, options, seed)
     mat, opts, cloth = solver.material, solver.options, solver.cloth
@@ -302,6 +304,9 @@ def cusick(
     a_sup, a_spec = np.pi * SUPPORT_RADIUS**2, np.pi * SPECIMEN_RADIUS**2
     rim = cloth.particle_of[np.nonzero(np.hypot(uv[:, 0], uv[:, 1]) >= SPECIMEN_RADIUS - 1e-9)[0]]
     nodes, outline = count_nodes(x[rim, :2])
+    # newton: how many substeps' solves ended above the tolerance (at the iteration limit), and the
+    # largest residual over weight they left: the fall is the implicit-Euler path only where they converged
+    res = np.asarray(getattr(solver, "_newton_residuals", []), float)
     return {
         "material": mat.name,
         "edge_mm": edge * 1e3,
@@ -321,6 +326,9 @@ def cusick(
         "positions": x,
         "faces": cloth.faces,
         "outline_mm": outline * 1e3,
+        "unconverged_substeps": int(np.sum(res >= opts.tolerance)) if len(res) else None,
+        "substeps_done": int(st.frames * opts.substeps),
+        "max_residual": float(res.max()) if len(res) else None,
     }
 
 

@@ -283,6 +283,7 @@ class DrapeSolver:
         self._newton = N.NewtonStep(cloth, self.material, dt, mass, start, edge_start)
         self._weight = mass * max(float(self.options.gravity), 1e-3)  # N (a floor without gravity)
         self._newton_iterations = []  # iterations per substep (the residual-based stop's record)
+        self._newton_residuals = []  # the largest residual over weight at the end of each substep's solve
 
     def residual(self, state: DrapeState) -> float:
         """The largest net force (elastic + gravity) on a free particle off the body, over its weight:
@@ -319,8 +320,9 @@ class DrapeSolver:
         self._newton.set_contact(
             s.contact_point.numpy(), s.contact_normal.numpy(), s.contact_active.numpy(), self.thickness
         )
-        it, _ = self._newton.solve(x, y, grow, int(opts.iterations), float(opts.tolerance), self._weight)
+        it, res = self._newton.solve(x, y, grow, int(opts.iterations), float(opts.tolerance), self._weight)
         self._newton_iterations.append(it)
+        self._newton_residuals.append(res)
         s.x64 = x
         s.x.assign(x.astype(np.float32))
 
