@@ -97,7 +97,7 @@ def test_the_four_dart_blouse_solves_at_the_finest_refinement(anny, monkeypatch)
     gap step between dart legs (issue 30) is off here, and so is the crossings check (at this refinement
     the bust and shoulder darts' legs cross without the step, and with it the flip guard holds the ring's
     triangles against it: 222 flipped, refused; docs/darts.md)."""
-    monkeypatch.setattr("core.pattern.optimizer.dart_gaps.GapCorrection.correct", lambda self, base, U: U)
+    monkeypatch.setattr("core.pattern.optimizer.dart_gaps.GapCorrection.correct", lambda self, base, U, prev=None: U)
     monkeypatch.setattr("core.metrics.checks.REFUSED", ("flipped", "collapsed"))
     run = wf.reference(_finest(anny))  # the design's fitted configuration
     f = run.figures

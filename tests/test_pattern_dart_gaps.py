@@ -85,6 +85,42 @@ def test_a_deep_crossing_opens_at_most_a_legs_edge_an_iteration():
     assert np.all(raised > 0) and np.all(raised <= D.STEP_CAP * legs.edge * 1.001)
 
 
+def test_legs_the_step_closes_again_go_back_to_their_bound():
+    """The cap counts from the previous iterate's gap: legs apart there that the global step crosses by 5 cm
+    are put back near their bound in one correction (capped from the step's gap alone, they opened by half a
+    leg's edge an iteration and the next step closed them again: the four-dart blouse in P1)."""
+    legs, n = _legs()
+    width = np.array([-0.05, -0.05, -0.04, -0.02, -0.01])
+    U, before = _positions(5, width), _positions(5, np.full(5, 0.01))
+    gap = D.leg_gaps(legs, D.GapCorrection(legs).correct(_base(n), U, before))
+    # opened by 1-5 cm to within the correction's stiffness of the bound (a 5 cm push: 86-91 % of it)
+    assert np.all(gap >= 0.8 * legs.min_gap), (gap, legs.min_gap)
+    # a deep crossing in the previous iterate too still opens by at most the cap
+    gap = D.leg_gaps(legs, D.GapCorrection(legs).correct(_base(n), U, _positions(5, width)))
+    assert np.all(gap - width > 0) and np.all(gap - width <= D.STEP_CAP * legs.edge * 1.001)
+
+
+def test_the_correction_solves_the_matrix_it_is_given():
+    """A stiffened matrix (the collapse guard's) is factorised with the legs' term in place of the last one:
+    the correction of a guarded step follows its stiffness (on the solver's own matrix it stretched the
+    guarded triangles: the four-dart blouse on women:XL diverged)."""
+    legs, n = _legs()
+    gaps = D.GapCorrection(legs)
+    U = _positions(5, np.array([0.01, 0.004, -0.003, -0.002, 0.0005]))
+    soft = _base(n)
+    held = np.r_[np.full(5, 50.0), np.zeros(n - 5)]  # leg a's vertices stiffened
+    stiff = SymmetricFactor((soft.matrix + sp.diags(held)).tocsc())
+    moved = lambda V: np.abs(V - U).max(axis=1)
+    a = gaps.correct(soft, U)
+    b = gaps.correct(stiff, U)
+    assert gaps._held[0] is stiff.matrix
+    # the stiffened leg moves less, the other one more
+    assert moved(b)[:5].max() < 0.5 * moved(a)[:5].max() and moved(b)[5:10].max() > moved(a)[5:10].max()
+    # a factorisation refactorised in place (the same object, a new matrix) is factorised again
+    again = soft.with_values(soft.matrix.data, reuse=stiff)
+    assert again is stiff and np.allclose(gaps.correct(again, U), a)
+
+
 def test_crossed_legs_are_told_from_legs_apart():
     """GapCorrection.crossed: the solver's check for the extra rounds (issue 30): an edge of one leg touching
     or crossing one of the other leg, the two edges that meet at the apex left out."""

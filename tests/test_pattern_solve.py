@@ -64,6 +64,35 @@ def test_compliance_does_not_rise_with_rho(seams):
     assert out[2.0]["mean"] < 2.5 and out[2.0]["shear_p95"] < out[1.0]["shear_p95"] + 1.0
 
 
+def test_a_diverged_solve_is_refused_in_one_line():
+    """A solve whose iterate ran away (a triangle over DIVERGED_SCALE x its targets, or not finite) is refused
+    by the solver, never reported as a pattern (issue 30: the four-dart blouse on women:XL read 1.8e10 mm
+    legs and 11989 crossings, with every triangle keeping its orientation); one in bounds is not."""
+    from core.pattern.optimizer.guard import DIVERGED_SCALE, runaway
+
+    cut, body = two_panels()
+    solver = PatternSolver(cut, body)
+    K, cw, cg = solver.targets_reference()
+    st = solver.begin(K, cw, cg)
+    solver.iterate(st, 3)
+    assert not runaway(st).any()
+    solver.result(st)  # in bounds: a result
+    second = solver.panels[1]
+    U = st.U.copy()
+    U[second.offset : second.offset + second.n] *= 1.5 * DIVERGED_SCALE  # a whole piece blown up
+    st.U, st.M = U, solver.jacobians(U)
+    assert runaway(st).sum() == len(second.faces)
+    assert solver.extra_iterations(st) == 0  # no round brings it back
+    with pytest.raises(PatternError) as e:
+        solver.result(st)
+    msg = str(e.value)
+    assert "\n" not in msg and msg.startswith(f"panel {second.name!r}: the solve diverged after 3 iterations")
+    U[0] = np.nan
+    st.U, st.M = U, solver.jacobians(U)
+    with pytest.raises(PatternError, match="diverged"):
+        solver.result(st)
+
+
 def test_factorisation_is_reused_across_solves():
     cut, body = two_panels()
     solver = PatternSolver(cut, body)

@@ -36,6 +36,11 @@ RESCUE_ITERATIONS = 40
 REFUSED_AREA = 0.25
 #: ... or a weft or warp scale under this share of its target.
 REFUSED_SCALE = 0.5
+#: A solve has diverged when a triangle's weft or warp scale exceeds this multiple of its target (or a
+#: position is not finite): no solve that converges stretches a triangle past 3 x (the feedback's and the
+#: adaptation's ceilings are 1.25 and 2); the four-dart blouse transferred to women:XL with the warp lengths
+#: kept (warp slack 0, 200 iterations) ran to 1e10 mm with every triangle keeping its orientation.
+DIVERGED_SCALE = 10.0
 #: Spare guarded factorisations kept per system matrix (one per thread solving at once is enough).
 GUARD_POOL = 4
 #: The collapse guard's stiffened matrix is refactorised when a triangle is guarded that it does not
@@ -115,6 +120,14 @@ def refused_mask(M: list, Kc: list, c_weft: np.ndarray, c_warp: np.ndarray) -> n
         small = det < REFUSED_AREA * np.abs(Kc[0] * Kc[3] - Kc[1] * Kc[2]) * c_weft * c_warp
         thin = (rw < REFUSED_SCALE * c_weft) | (rg < REFUSED_SCALE * c_warp)
     return (det > 0) & (small | thin)
+
+
+def runaway(state) -> np.ndarray:
+    """(f,) bool: the triangles of a solve's iterate (:class:`.state.SolveState`) that have diverged, a weft or
+    warp scale over :data:`DIVERGED_SCALE` times its target or not finite."""
+    rw, rg = scales_of_offsets(state.M, components(state.K))
+    with np.errstate(invalid="ignore"):
+        return ~((rw <= DIVERGED_SCALE * state.c_weft) & (rg <= DIVERGED_SCALE * state.c_warp))
 
 
 def renew_guard(gain: np.ndarray, held: np.ndarray, ratio: Optional[float] = None) -> bool:

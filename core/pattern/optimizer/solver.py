@@ -40,6 +40,7 @@ from typing import Dict, Optional, Sequence, Tuple
 import numpy as np
 import scipy.sparse as sp
 
+from ...errors import PatternError
 from ...geom.strain import components, intrinsic_offsets
 from ...progress import Progress, report
 from .. import accel
@@ -51,7 +52,17 @@ from ..validate import body_positions, validate_cut
 from .dart_gaps import GapCorrection, dart_legs
 from .factor import SymmetricFactor
 from .feedback import feedback_gains, move_corrections
-from .guard import COLLAPSE_ROUNDS, RESCUE_ITERATIONS, GuardedFactors, refused, renew_guard, rescuing, round_guard
+from .guard import (
+    COLLAPSE_ROUNDS,
+    DIVERGED_SCALE,
+    RESCUE_ITERATIONS,
+    GuardedFactors,
+    refused,
+    renew_guard,
+    rescuing,
+    round_guard,
+    runaway,
+)
 from .panels import flatten_panels
 from .seams import SeamPlan, plan_seams, seam_layout, seam_matrix, seam_rhs
 from .start import pattern_start
@@ -548,7 +559,7 @@ class PatternSolver:
                 np.multiply(aw_k[j % 2], B[j], out=B[j])
             self._products.add_rhs(rhs, B)  # rhs[:, 0] += GxT B0 + GyT B1, rhs[:, 1] += GxT B2 + GyT B3
             rhs[pinned] += pin[pinned] * U[pinned]
-            U_new = self.gaps.correct(lu, solve_k(rhs))  # darts' legs kept apart (dart_gaps)
+            U_new = self.gaps.correct(solve_k, solve_k(rhs), U)  # darts' legs kept apart, on the step's matrix
             # the step's rigid part per panel carries no strain: remove it so that the flip
             # guard only ever pulls back the local part of the step
             U_new = rigid_align(self.blocks, U_new, U)
@@ -581,8 +592,11 @@ class PatternSolver:
         A solve whose darts' legs still cross (:meth:`.dart_gaps.GapCorrection.crossed`) runs the same
         rounds, as many again as planned at most; one run to :class:`~core.pattern.config.Convergence`
         does its rounds first.
+        A diverged solve (:func:`.guard.runaway`) ends at once (:meth:`result` refuses it).
         Every driver of a solve (:meth:`solve`, the live loop) ends it by this rule: the same pattern.
         """
+        if np.any(runaway(state)):
+            return 0  # diverged, refused by :meth:`result`: no round brings it back
         extra = state.iteration - state.planned
         if extra < 0:
             return -extra
@@ -615,7 +629,16 @@ class PatternSolver:
 
     @_with_solvers_choice
     def result(self, state: "SolveState") -> SolveResult:
-        """The :class:`SolveResult` of ``state``'s current iterate (:func:`.build.solve_result`)."""
+        """The :class:`SolveResult` of ``state``'s current iterate (:func:`.build.solve_result`); a diverged
+        one (:func:`.guard.runaway`) is refused with one line (PatternError) naming the piece that ran away."""
+        over = runaway(state)
+        if np.any(over):
+            per_piece = np.add.reduceat(over, self.blocks.face_offsets)
+            k = int(np.argmax(per_piece))
+            raise PatternError(
+                f"panel {self.panels[k].name!r}: the solve diverged after {state.iteration} iterations "
+                f"({int(per_piece[k])} triangles stretched over {DIVERGED_SCALE:g} x their targets)"
+            )
         return solve_result(self.panels, state)
 
 
