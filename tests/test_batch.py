@@ -42,7 +42,7 @@ def scheduler():
         yield cluster.scheduler_address
 
 
-def test_small_batch_on_a_local_cluster_then_resume(tmp_path):
+def test_small_batch_on_a_local_cluster_then_resume(tmp_path, scheduler):
     (tmp_path / "bodies.csv").write_text(TABLE)
     bodies = read_measurements(tmp_path / "bodies.csv")
     out = tmp_path / "set"
@@ -88,8 +88,9 @@ def test_small_batch_on_a_local_cluster_then_resume(tmp_path):
     assert abs(rows["measured"]["body.waist_cm"] - 80) < 1.0 and rows["measured"]["targets.waist"] == 80
     before = (out / "items" / rows["large"]["folder"] / "pattern.json").stat().st_mtime_ns
 
-    again = run_batch(DESIGN, bodies, out, options=Options(export=("svg",), garmentcode=True), workers=2)
-    # the failed body is tried again; nothing complete is redone
+    # resumed on the module's cluster (a second local cluster would prove nothing more): the failed body is tried
+    # again; nothing complete is redone
+    again = run_batch(DESIGN, bodies, out, options=Options(export=("svg",), garmentcode=True), scheduler=scheduler)
     assert (again.made, again.failed, again.skipped) == (0, 1, 2)
     assert (out / "items" / rows["large"]["folder"] / "pattern.json").stat().st_mtime_ns == before
 
@@ -406,15 +407,15 @@ def test_a_body_refused_for_collapse_keeps_its_shape_in_the_row(tmp_path, schedu
     assert {k[len("shape.") :]: v for k, v in row.items() if k.startswith("shape.")} == bodies[0].value
 
 
-def test_the_summary_lists_this_commands_failures_only(tmp_path, capsys):
+def test_the_summary_lists_this_commands_failures_only(tmp_path, capsys, scheduler):
     """A dataset folder reused with other bodies or options: the summary's failure lines are those of
     this command's items (seed 0's sample 0 is refused on this design; seed 5's is made)."""
     from core.cli import main
 
-    out = str(tmp_path / "set")
-    assert main(["batch", str(DESIGN), "--sample", "1", "--seed", "0", "--workers", "1", "--quiet", "--out", out]) == 1
+    out, on = str(tmp_path / "set"), ["--scheduler", scheduler, "--quiet", "--out"]
+    assert main(["batch", str(DESIGN), "--sample", "1", "--seed", "0", *on, out]) == 1
     assert "sample 0: error:" in capsys.readouterr().out
-    assert main(["batch", str(DESIGN), "--sample", "1", "--seed", "5", "--workers", "1", "--quiet", "--out", out]) == 0
+    assert main(["batch", str(DESIGN), "--sample", "1", "--seed", "5", *on, out]) == 0
     said = capsys.readouterr().out
     assert "1 made, 0 failed" in said and ": error:" not in said
     assert len(read_rows(tmp_path / "set" / "manifest.jsonl")) == 2
