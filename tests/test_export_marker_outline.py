@@ -62,7 +62,7 @@ def test_marker_curved_pieces_true_cut_lines_apart():
     pytest.importorskip("spyrrow")
     width = 0.6
     items = marker_items([("M", wavy_pattern(3), 2)])
-    m = nest(items, width, seconds=6, seed=0, early_stop=True)
+    m = nest(items, width, seconds=3, seed=0, early_stop=True)  # packed against each other from the first marker
     loops = [placed_outline(m, p) for p in m.placements]
     assert len(loops) == 6
     closest = np.inf
