@@ -42,7 +42,9 @@ def _pleated_skirt(name, description):
     d["name"], d["description"] = name, description
     d["parameters"]["pleat_depth"] = _depth()
     front, back = d["garments"][0]["panels"]
-    return d, ((front, "waist_front"), (back, "waist_back"))
+    # the back's centre is the waist ring's back midpoint, not the waist_back landmark: on other
+    # bodies that landmark is a little off the ring (men:L 32 mm, off the back's hem)
+    return d, ((front, "waist_front"), (back, "waist_back_mid"))
 
 
 def skirt_knife_pleats():
@@ -55,7 +57,9 @@ def skirt_knife_pleats():
     )
     for panel, centre in panels:
         pleats = []
-        for k, t in enumerate((0.2, 0.45, 0.7), start=1):
+        # the third pleat at 0.65 of the way to the side: at 0.7 its fold reached past the back's
+        # side seam on women:3XL and 4XL
+        for k, t in enumerate((0.2, 0.45, 0.65), start=1):
             start = f"waist_{panel['name']}_pleat_{k}_left"
             d["keypoints"].update(_waist_point(start, centre, t))
             pleats.append(_pleat(f"{panel['name']}_pleat_{k}_left", "knife", start))
