@@ -28,20 +28,23 @@ ORIGIN_TEXT = {
 MTL_NAME = "garment.mtl"
 
 
+#: base colours (RGB, linear) of the garment's material ``fabric`` and the body's ``body``, in every mesh file
+FABRIC_RGB = (0.8, 0.8, 0.8)
+BODY_RGB = (0.93, 0.78, 0.66)
+
+
+def mtl_material(name: str, rgb, comment: str = "") -> list:
+    """The lines of one ``newmtl`` of an OBJ material library (diffuse ``rgb``), after a ``# comment``."""
+    r, g, b = rgb
+    head = [f"# {comment}"] if comment else []
+    return head + [f"newmtl {name}", f"Kd {r:.3f} {g:.3f} {b:.3f}", "Ka 0 0 0", "Ks 0 0 0", "Ns 10", "d 1", "illum 1"]
+
+
 def mtl_text(meshes=None, body=None) -> str:
     """The OBJ's material library: ``fabric`` (the garment, its uv the pattern's) and ``body``, as in the GLB."""
-    lines = [
-        "# EASE materials for garment.obj",
-        "newmtl fabric",
-        "Kd 0.800 0.800 0.800",
-        "Ka 0 0 0",
-        "Ks 0 0 0",
-        "Ns 10",
-        "d 1",
-        "illum 1",
-    ]
+    lines = ["# EASE materials for garment.obj"] + mtl_material("fabric", FABRIC_RGB)
     if body is not None:
-        lines += ["", "newmtl body", "Kd 0.930 0.780 0.660", "Ka 0 0 0", "Ks 0 0 0", "Ns 10", "d 1", "illum 1"]
+        lines += [""] + mtl_material("body", BODY_RGB)
     return "\n".join(lines) + "\n"
 
 
@@ -90,4 +93,7 @@ __all__ = [
     "from_frame",
     "MTL_NAME",
     "mtl_text",
+    "mtl_material",
+    "FABRIC_RGB",
+    "BODY_RGB",
 ]
