@@ -36,12 +36,15 @@ from typing import List, Optional, Sequence, Tuple
 import numpy as np
 
 from ..geom.frame import (  # noqa: F401 (re-exported: the frame helpers of every mesh file)
+    BODY_RGB,
+    FABRIC_RGB,
     FRAME_Y,
     MTL_NAME,
     ORIGIN_TEXT,
     ORIGINS,
     UP_AXES,
     frame_text,
+    mtl_material,
     mtl_text,
     to_frame,
     to_y_up,
@@ -89,10 +92,6 @@ def piece_meshes(pattern: Pattern, positions: np.ndarray, rotations: Sequence[np
     return out
 
 
-FABRIC_RGB = (0.8, 0.8, 0.8)  # the garment's material, "fabric"
-BODY_RGB = (0.93, 0.78, 0.66)  # the body's material, "body"
-
-
 def gltf_material(name: str, rgb, roughness: float = 0.9, double_sided: bool = True, extras=None) -> dict:
     """A glTF PBR material: base colour ``rgb`` (linear), not metallic; ``extras`` (a dict) when given."""
     mat = {"name": name}
@@ -106,13 +105,6 @@ def gltf_material(name: str, rgb, roughness: float = 0.9, double_sided: bool = T
     if extras:
         mat["extras"] = dict(extras)
     return mat
-
-
-def mtl_material(name: str, rgb, comment: str = "") -> List[str]:
-    """The lines of one ``newmtl`` of an OBJ material library (diffuse ``rgb``), after a ``# comment``."""
-    r, g, b = rgb
-    head = [f"# {comment}"] if comment else []
-    return head + [f"newmtl {name}", f"Kd {r:.3f} {g:.3f} {b:.3f}", "Ka 0 0 0", "Ks 0 0 0", "Ns 10", "d 1", "illum 1"]
 
 
 def glb_bytes(
