@@ -37,7 +37,7 @@ from ..errors import BodyError
 from ..geom.mesh import vertex_normals
 from ..progress import Progress, report
 from .made_to_measure import ADULT_AGE, LOCAL_FOR, PHENOTYPES
-from .tape import TAPE_MEASURES, tape_measures
+from .tape import LIMB_PLANES, TAPE_MEASURES, _basis, levels, limb_plane, tape_measures
 
 # The fewest points a scan may have: fewer cannot pin down 60-odd parameters.
 MIN_POINTS = 500
@@ -353,8 +353,9 @@ class ScanFit:
     shape : phenotypes and local changes; pose : joint -> axis-angle (radians) on the A-pose.
     rotation (3,3), translation (3,) : the body's placement onto the scan (scan = R v + t).
     distance_mm : mean, p95 and max of the scan-to-body distance (every scan point).
-    body_cm : the fitted body's tape measures (A-pose); scan_cm : the scan's torso girths and
-    height at the fitted body's levels (None where the scan has too few points there).
+    body_cm : the fitted body's tape measures (A-pose); scan_cm : the scan's girths (torso, thigh,
+    neck, upper arm, wrist) and height at the fitted body's levels and planes (None where the
+    scan has too few points there).
     """
 
     shape: Dict[str, float]
@@ -646,13 +647,15 @@ def _scan_loop_girth(points_2d: np.ndarray) -> Optional[float]:
 
 
 def scan_girths(body, shape, pose, points: np.ndarray) -> Dict[str, Optional[float]]:
-    """The scan's own torso girths and height (cm): its points within :data:`SCAN_SLAB` of each
+    """The scan's own girths and height (cm): its points within :data:`SCAN_SLAB` of each
     level the tape measures use on the fitted body (found on it in the scan's pose), those the
     fitted body's torso and legs are nearest (arms left out; the thigh: the left leg's), as a
-    tape around them. ``points`` are in the fitted body's frame. None where too few points."""
+    tape around them; the neck, upper arm and wrist in their tilted planes
+    (:func:`core.body.tape.limb_plane`), the points within :data:`LIMB_REACH` of the plane's
+    centre that the neck (no arm) or the left arm is nearest. ``points`` are in the fitted body's
+    frame. None where too few points (:func:`_scan_loop_girth`: 27 of 36 angular bins; the small
+    neck and arm loops need a scan of some 50,000 points)."""
     from scipy.spatial import cKDTree
-
-    from .tape import levels
 
     v = body.vertices(shape, pose)
     lv = levels(body, v)
@@ -663,6 +666,9 @@ def scan_girths(body, shape, pose, points: np.ndarray) -> Dict[str, Optional[flo
         arm[np.asarray(regions.get(n, ()), dtype=np.int64)] = True
     left_leg = np.zeros(len(v), dtype=bool)
     left_leg[np.asarray(regions.get("leg_left", ()), dtype=np.int64)] = True
+    arm_left = np.zeros(len(v), dtype=bool)
+    for n in ("arm_left", "hands"):
+        arm_left[np.asarray(regions.get(n, ()), dtype=np.int64)] = True
     out: Dict[str, Optional[float]] = {n: None for n in TAPE_MEASURES}
     out["height"] = 100.0 * float(np.ptp(points[:, 2]))
     for name, level in (("chest", "bust"), ("underbust", "underbust"), ("waist", "waist")):
@@ -670,7 +676,30 @@ def scan_girths(body, shape, pose, points: np.ndarray) -> Dict[str, Optional[flo
     for name in ("high_hip", "hip"):
         out[name] = _girth_near(points, ~arm[owner] & (points[:, 2] > lv["crotch"]), lv[name])
     out["thigh"] = _girth_near(points, left_leg[owner], lv["thigh"])
+    # The neck and the left arm, each in its tilted plane (tape.limb_plane) on the posed body: the
+    # points within SCAN_SLAB of it, near its centre, owned by the part the tape goes around.
+    J = dict(zip(body.joint_names, body.joints(shape, pose)))
+    lm = {n: body.landmark_position(n, v) for n in body.landmarks}
+    for name in LIMB_PLANES:
+        point, normal, near = limb_plane(name, lm, J)
+        part = ~arm[owner] if name == "neck" else arm_left[owner]
+        close = np.linalg.norm(points - near, axis=1) <= LIMB_REACH[name]
+        out[name] = _girth_in_plane(points, part & close, point, normal)
     return out
+
+
+# How far from a limb plane's centre its scan points are taken (m): past a neck's or arm's radius,
+# short of the shoulders, the chest or the hand.
+LIMB_REACH = {"neck": 0.1, "upper_arm": 0.08, "wrist": 0.05}
+
+
+def _girth_in_plane(points, mask, point, normal) -> Optional[float]:
+    """:func:`_scan_loop_girth` of the ``mask`` points within :data:`SCAN_SLAB` of the plane
+    (``point``, ``normal``), in the plane's own coordinates."""
+    n, u, w = _basis(normal)
+    d = points - np.asarray(point, dtype=float)
+    sel = mask & (np.abs(d @ n) <= SCAN_SLAB)
+    return _scan_loop_girth(np.stack([d[sel] @ u, d[sel] @ w], axis=1))
 
 
 def _girth_near(points, mask, z) -> Optional[float]:

@@ -15,7 +15,7 @@ results are in centimetres; the left side is measured (the fitted bodies are sym
 
 from __future__ import annotations
 
-from typing import Dict, Iterable, Optional
+from typing import Dict, Iterable, Mapping, Optional
 
 import numpy as np
 
@@ -129,6 +129,30 @@ def section_loops(vertices: np.ndarray, faces: np.ndarray, point, normal) -> lis
     used = np.zeros(m, dtype=bool)
     used[pairs.ravel()] = True
     return [pts[(label == c) & used] for c in range(count) if np.count_nonzero((label == c) & used) >= 3]
+
+
+# The girths taken in a plane that is not horizontal: the neck's and the left arm's.
+LIMB_PLANES = ("neck", "upper_arm", "wrist")
+
+
+def limb_plane(name: str, lm: Mapping[str, np.ndarray], J: Mapping[str, np.ndarray]):
+    """(point, normal, near) of the plane a girth of :data:`LIMB_PLANES` is taken in, from the
+    landmarks ``lm`` and joints ``J`` of the instance: the neck's through its four base landmarks
+    (their least-squares plane), the upper arm's square to the bone half way from shoulder to
+    elbow, the wrist's square to the forearm through the wrist landmark (the loop nearest the
+    wrist joint)."""
+    if name == "neck":
+        p = np.array([lm[k] for k in ("neck_front", "neck_back", "neck_left", "neck_right")])
+        centre = p.mean(axis=0)
+        normal = np.linalg.svd(p - centre)[2][2]
+        return centre, (normal if normal[2] > 0 else -normal), centre
+    if name == "upper_arm":
+        a, b = J["upperarm01.L"], J["lowerarm01.L"]
+        return 0.5 * (a + b), b - a, 0.5 * (a + b)
+    if name == "wrist":
+        a, b = J["lowerarm01.L"], J["wrist.L"]
+        return lm["wrist_left"], b - a, b
+    raise ValueError(f"limb_plane: {name!r} is not one of {LIMB_PLANES}")
 
 
 def loop_girth(vertices: np.ndarray, faces: np.ndarray, point, normal, near=None) -> float:
@@ -328,19 +352,11 @@ def tape_measures(
             m = float(v[:, 2].max() - v[:, 2].min())
         elif name in ("chest", "underbust", "waist", "high_hip", "hip"):
             m = _torso_girth(v, parts, lv["bust" if name == "chest" else name])
-        elif name == "neck":
-            p = np.array([lm[k] for k in ("neck_front", "neck_back", "neck_left", "neck_right")])
-            centre = p.mean(axis=0)
-            normal = np.linalg.svd(p - centre)[2][2]
-            m = loop_girth(v, parts.no_arms, centre, normal if normal[2] > 0 else -normal)
+        elif name in LIMB_PLANES:
+            point, normal, near = limb_plane(name, lm, J)
+            m = loop_girth(v, parts.no_arms if name == "neck" else parts.arm_left, point, normal, near=near)
         elif name == "shoulder_width":
             m = float(np.linalg.norm(lm["shoulder_left"] - lm["shoulder_right"]))
-        elif name == "upper_arm":
-            a, b = J["upperarm01.L"], J["lowerarm01.L"]
-            m = loop_girth(v, parts.arm_left, 0.5 * (a + b), b - a)
-        elif name == "wrist":
-            a, b = J["lowerarm01.L"], J["wrist.L"]
-            m = loop_girth(v, parts.arm_left, lm["wrist_left"], b - a, near=b)
         elif name == "arm_length":
             m = float(
                 np.linalg.norm(lm["elbow_left"] - lm["shoulder_left"])
