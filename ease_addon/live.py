@@ -352,7 +352,7 @@ def _final_units(context, session) -> deque:
         else:  # the pieces of a new cut: made, stored and figured at once
             sync.show_pattern(context, pattern, text=join())
             write_overlay(data.body_object(context), pattern, session)
-        _LIVE["stored"] = scene.get(data.PATTERN_KEY)
+        _LIVE.update(stored=scene.get(data.PATTERN_KEY), landed=True)
 
     queue.append(("show", n, show))
     return queue
@@ -436,8 +436,8 @@ def _step(context, budget_s: float, t0: float) -> dict:
             session.restart_from(restart)
         changed = session.set_ease(field, painted)
         if changed:
-            _LIVE["final"] = None  # the pattern it would have stored is superseded
-    was, warm = session.converged, session.warming
+            _LIVE.update(final=None, landed=False)  # the pattern it would have stored is superseded
+    warm = session.warming
     n_tri = len(session.triangles)
     show_s = (_estimate("show", n_tri) or 0.0) if warm else 0.0
     n = session.run(max(budget_s - show_s, 0.0))
@@ -446,7 +446,9 @@ def _step(context, budget_s: float, t0: float) -> dict:
         # one warm slice is shown per stroke: the next ticks go to the cold solve (another warm
         # slice would cost another showing, and converging is what the designer waits for)
         session.end_warm()
-    if session.converged and (not was or changed):
+    if session.converged and not _LIVE["landed"] and not _LIVE["final"]:
+        # the converged pattern is not stored yet (or no longer: an undo restored another one, or
+        # dropped the final work under way): store it
         _LIVE["final"] = _final_units(context, session)
     final, units = _LIVE["final"], []
     while final:
@@ -457,7 +459,7 @@ def _step(context, budget_s: float, t0: float) -> dict:
         final.popleft()
         _timed(kind, size, work)
         units.append(kind)
-    done = session.converged and not final
+    done = session.converged and not final and _LIVE["landed"]
     _say_status(scene, session, done)
     return {"changed": changed, "iterations": n, "units": units, "converged": done, "seconds": time.perf_counter() - t0}
 
@@ -630,7 +632,10 @@ def _on_depsgraph(scene, depsgraph) -> None:
 
 @bpy.app.handlers.persistent
 def _on_undo(scene, *_args) -> None:
-    _LIVE.update(colors=None, restart=True, final=None)
+    # the restored scene holds the pattern stored when its step was pushed: the loop stores the
+    # converged pattern of the restored paint again before it says "converged" (a pending final
+    # work dropped here, over a session already converged, left another cut's pattern "converged")
+    _LIVE.update(colors=None, restart=True, final=None, landed=False)
     jobs.drop(SOLVE_JOB)
     touched(scene)  # the restored status is the pushed one: not "converged" until a tick has seen it
 

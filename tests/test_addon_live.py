@@ -455,3 +455,35 @@ def test_threaded_ticks_never_iterate(blender):
         s.live = False
         blender.reset(body=True, design=DESIGN, piecewise_ease=True, pattern=True)
         bpy.context.scene.ease.live = True
+
+
+def test_an_undo_over_pending_final_work_stores_the_converged_pattern(blender):
+    """Seed 16 of the --full walk: a template loaded with Live on converges (its cold solve
+    complete) while its final work (show, measure, store) is still pending; an undo that keeps
+    that design drops the pending work. Live must store the converged pattern before it says
+    "converged" (it said "converged" over the previous design's stored pattern, of another cut)."""
+    bpy = blender.bpy
+    live, data = blender.mod("live"), blender.mod("data")
+    try:
+        _converge(blender)
+        assert bpy.ops.ease.load_template(template="blouse_fitted.json") == {"FINISHED"}
+        for _ in range(2000):
+            live.step(bpy.context, budget_s=0.0)  # (one iteration a tick: no final unit beside it)
+            if live.session_for(bpy.context).converged:
+                break
+        assert live._LIVE["final"]  # converged, the final work pending: the old design's pattern stored
+        cut = [p.name for p in live.session_for(bpy.context).prep.cut.panels]
+        assert [p.name for p in data.stored_pattern(bpy.context.scene).panels] != cut
+        bpy.ops.ed.undo_push(message="pending")
+        assert bpy.ops.ease.measure("EXEC_DEFAULT", True) == {"FINISHED"}  # another undo step
+        bpy.ops.ed.undo()  # back to the pending state: same design, same paint
+        _converge(blender)
+        _converge(blender)  # (the tick after the new pieces' update: nothing to do)
+        assert bpy.context.scene.ease.live_status.startswith("converged")
+        stored, cold = data.stored_pattern(bpy.context.scene), _cold_uv(blender)
+        assert [p.name for p in stored.panels] == cut
+        assert all(np.array_equal(p.uv, cold[p.name]) for p in stored.panels)
+    finally:
+        bpy.context.scene.ease.live = False
+        blender.reset(body=True, design=DESIGN, piecewise_ease=True, pattern=True)
+        bpy.context.scene.ease.live = True
