@@ -14,6 +14,7 @@ import numpy as np
 from scipy.sparse import csr_matrix as sp_csr
 
 from ..errors import DesignError
+from ..geom.polyline import cumulative_lengths
 from .types import Seam, seam_kind
 
 
@@ -173,7 +174,7 @@ def _cup_move(cut, rec: dict, X0: np.ndarray, X1: np.ndarray):
     if cup0 == cup1:
         return None
     loop = _boundary_loop(local)
-    arc = np.cumsum(np.r_[0.0, np.linalg.norm(np.diff(X1[vids[np.r_[loop, loop[0]]]], axis=0), axis=1)])
+    arc = cumulative_lengths(X1[vids[loop]], closed=True)  # back at the first point: the loop's length last
     t = 2 * np.pi * arc[:-1] / arc[-1]
     U = igl.harmonic(
         np.ascontiguousarray(X1[vids]),
