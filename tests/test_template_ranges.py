@@ -53,12 +53,11 @@ def _cases():
 CASES = _cases()
 
 #: Cases refused today where the range promises a pattern: each a real defect, kept visible (strict xfail:
-#: a fix makes the run say so). It crossed before the crossings check (issue 30) and was written then;
-#: blouse_fitted-interior5 (a waist dart's leg hooking past the apex after 20 iterations) solves since a
-#: solve whose dart legs still cross runs extra rounds (PatternSolver.extra_iterations).
-KNOWN_REFUSED = {
-    "blouse_four_darts-refine": "at 5 mm edges the dart gap step leaves 222 flipped triangles (4 crossings without it)",
-}
+#: a fix makes the run say so). blouse_fitted-interior5 (a waist dart's leg hooking past the apex after 20
+#: iterations) solves since a solve whose dart legs still cross runs extra rounds
+#: (PatternSolver.extra_iterations); blouse_four_darts-refine (222 flipped at 5 mm edges) since its front's
+#: LSCM start is polished by SLIM (core.pattern.optimizer.init.COLLAPSED_START).
+KNOWN_REFUSED: dict = {}
 
 
 def _known(cases, key):
