@@ -125,6 +125,18 @@ def test_collider_strips_join_open_edges_to_the_body():
     assert all((b, a) in interior for a, b in d.tolist() if b < len(v) and a < len(v))
 
 
+def test_the_body_under_a_garment_is_what_faces_it():
+    """A body triangle inside and near an inner garment leaves the collider only where the garment
+    lies out along its normal: one facing away (between the legs, below a tucked shirt) stays."""
+    from core.drape.layers import covered_faces
+
+    v, f = _sheet()
+    body_v = np.array([[-0.02, -0.02, -0.05], [0.02, -0.02, -0.05], [0.0, 0.02, -0.05]])
+    body_f = np.array([[0, 1, 2], [0, 2, 1]])  # the same triangle facing the sheet (+z), then away (-z)
+    assert covered_faces(body_v, body_f, v, f).tolist() == [True, False]
+    assert covered_faces(body_v - [0, 0, 0.2], body_f, v, f).tolist() == [False, False]  # beyond the band
+
+
 @pytest.fixture(scope="module")
 def tucked_run():
     from core.workflows import drape_outfit

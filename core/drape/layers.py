@@ -153,11 +153,21 @@ def hem_strips(v, f, body_v, body_f, sink: float = 0.002, ramp: float = 2.0) -> 
 
 def covered_faces(body_v, body_f, v, f, band: float = COVER_BAND) -> np.ndarray:
     """(F,) bool, the body triangles under the garment surface (v, f): their centre inside it, over
-    it (not past its open edges) and within ``band`` of it."""
+    it (not past its open edges), within ``band`` of it, and the garment met by the ray out along
+    the triangle's normal within ``band`` (the body between the legs, below a tucked shirt's tails,
+    is inside and near the shirt but faces away from it: it is kept, or the trousers' crotch would
+    find no body there)."""
+    from ..geom.queries import ray_hit_distance
+
     body_v = np.asarray(body_v, np.float64)
     body_f = np.asarray(body_f, np.int64)
-    dist, over = layer_distance(body_v[body_f].mean(axis=1), v, f)
-    return over & (dist < 0) & (dist > -band)
+    centre = body_v[body_f].mean(axis=1)
+    dist, over = layer_distance(centre, v, f)
+    out = over & (dist < 0) & (dist > -band)
+    if out.any():
+        idx = np.flatnonzero(out)
+        out[idx] = ray_hit_distance(centre[idx], face_normals(body_v, body_f[idx]), v, f, max_t=band) > 0
+    return out
 
 
 def layer_collider(body_v, body_f, inner: Sequence[Tuple[np.ndarray, np.ndarray, float]], strips: bool = True):
