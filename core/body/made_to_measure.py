@@ -363,6 +363,7 @@ def fit_tape(
     local: bool = True,
     parameters: Optional[Sequence[str]] = None,
     apart: bool = True,
+    gap: float = THIGH_MARGIN_CM,
 ) -> TapeFit:
     """Fit ``body`` (Anny) to tape measures (cm) of :data:`TAPE_MEASURES`.
 
@@ -373,8 +374,11 @@ def fit_tape(
     start : a start shape (default the reference shape); local : whether local changes move.
     parameters : the phenotypes to move (default :data:`PHENOTYPES`, gender where not given).
     apart : penalise thighs that pass through each other (:func:`thigh_gap` below 0, weighted
-        :data:`THIGH_WEIGHT` per cm under :data:`THIGH_MARGIN_CM`), so the fit trades a millimetre of target for a body that does
+        :data:`THIGH_WEIGHT` per cm under ``gap``), so the fit trades a millimetre of target for a body that does
         not cut into itself; False fits the targets alone (the collision is still reported).
+    gap : the gap (cm) between the inner thighs the penalty aims at (default
+        :data:`THIGH_MARGIN_CM`; the chart fits keep :data:`core.body.sizes.CHART_THIGH_GAP_CM`).
+        A fit whose thighs are apart (gap >= 0) has landed whatever this is.
     """
     t = check_tape_targets(targets)
     own = getattr(body, "local_change_parameters", None)
@@ -418,12 +422,12 @@ def fit_tape(
         s = shape_of(x)
         v, joints = body.vertices_and_joints(s)
         got = tape_measures(body, v, keys, shape=s, joints=joints)
-        overlap = [THIGH_WEIGHT * max(0.0, THIGH_MARGIN_CM - thigh_gap(body, v))] if apart else []
+        overlap = [THIGH_WEIGHT * max(0.0, gap - thigh_gap(body, v))] if apart else []
         return np.concatenate([scale * (np.array([got[k] for k in keys]) - want), pull * (x - prior), overlap])
 
     def within(r, cm):
         # every measure within ``cm`` (lengths 1.5 times that), and the thighs apart
-        return bool(np.all(np.abs(r[: len(keys)]) <= cm) and (not apart or r[-1] <= THIGH_WEIGHT * THIGH_MARGIN_CM))
+        return bool(np.all(np.abs(r[: len(keys)]) <= cm) and (not apart or r[-1] <= THIGH_WEIGHT * gap))
 
     def landed(r):
         return within(r, GIRTH_TOLERANCE_CM)

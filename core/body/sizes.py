@@ -417,10 +417,19 @@ def chart_fit(body, size: str, chart: Optional[str] = None, progress: Optional[P
     return best
 
 
-# The local change a chart fit moves besides those of the girths the chart gives: the thighs' girth,
+# The local changes a chart fit moves besides those of the girths the chart gives: the thighs' girth,
 # so that a plus size's thighs are kept apart (fit_tape's thigh penalty) by slimmer thighs rather
-# than by a narrower hip.
-CHART_EXTRA_LOCAL = ("measure-thigh-circ-incr",)
+# than by a narrower hip; and the underbust girth, so that a plus size's bust may come from a wider
+# ribcage rather than a larger cup (the assist). The cup drives the side seams of the tops: on
+# women:4XL at Anny's cup 0.75 (its bust local at +1) they sewed 3.4-6.4 mm apart, on the same body
+# at cup 0.5 1.0-1.1 mm; the 4XL refitted with the underbust at cup 0.5: 0.4-1.7 mm.
+CHART_EXTRA_LOCAL = ("measure-thigh-circ-incr", "measure-underbust-circ-incr")
+
+# The gap (cm) a chart fit keeps between the inner thighs (fit_tape's ``gap``): thighs 2 mm apart
+# leave a crease under the crotch the pants' back panels collapse in (women:3XL at 0.18 cm: 24 and
+# 78 collapsed triangles; refitted 0.6-1.0 cm apart the pants, shorts and teaser solve). A fit with
+# its thighs apart at all has landed, so a stored fit refitted from itself stays as it is.
+CHART_THIGH_GAP_CM = 0.7
 
 
 def chart_tape_fit(
@@ -434,7 +443,8 @@ def chart_tape_fit(
     ISO 8559-1: the bust at the bust points, the natural waist, the hip at the buttocks), by
     :func:`core.body.made_to_measure.fit_tape`: the chart's gender held, its parameters moving
     (adult ages; its ``assist`` too where they miss), with the local change of each girth the chart gives and
-    :data:`CHART_EXTRA_LOCAL`, pulled towards the population; the thighs kept apart.
+    :data:`CHART_EXTRA_LOCAL`, pulled towards the population; the thighs kept apart
+    (:data:`CHART_THIGH_GAP_CM`).
 
     ``start`` defaults to the stored fit of the size (else the chart's start phenotype). Returns
     the :class:`~core.body.made_to_measure.TapeFit` (its ``ok``: every target within 1 cm, no
@@ -452,10 +462,11 @@ def chart_tape_fit(
         start = c.fitted.get(getattr(body, "name", ""), {}).get(key, c.start)
     # The assist parameters (the women's cup) move only where the fit without them misses, so the
     # chart's bodies differ by the girths it gives (the four-dart blouse's darts follow the cup).
-    fit = fit_tape(body, targets, progress=progress, start=start, parameters=params + extra)
+    gap = CHART_THIGH_GAP_CM
+    fit = fit_tape(body, targets, progress=progress, start=start, parameters=params + extra, gap=gap)
     if fit.ok or not helpers:
         return fit
-    return fit_tape(body, targets, progress=progress, start=fit.shape, parameters=params + helpers + extra)
+    return fit_tape(body, targets, progress=progress, start=fit.shape, parameters=params + helpers + extra, gap=gap)
 
 
 def size_shape(body, size: str, progress: Optional[Progress] = None, chart: Optional[str] = None) -> Dict[str, float]:
