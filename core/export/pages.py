@@ -91,6 +91,25 @@ class PageGrid:
         y1 = self.height - r * sy
         return np.array([[c * sx, y1 - self.tile[1]], [c * sx + self.tile[0], y1]])
 
+    def windows(self, which: np.ndarray) -> np.ndarray:
+        """(k, 2, 2) float: :meth:`window` of each cell set in the (rows, cols) bool ``which``, in
+        ``np.nonzero`` order (the same numbers, all at once)."""
+        r, c = np.nonzero(which)
+        sx, sy = self.step
+        y1 = self.height - r * sy
+        lo = np.stack([c * sx, y1 - self.tile[1]], axis=-1)
+        hi = np.stack([c * sx + self.tile[0], y1], axis=-1)
+        return np.stack([lo, hi], axis=1)
+
+    def holding(self, which: np.ndarray, lo: np.ndarray, hi: np.ndarray, pad: float = 0.0) -> np.ndarray:
+        """(m,) bool: whether the box ``lo[j]``..``hi[j]`` ((m, 2) each) lies within a window set in ``which``
+        (each window widened by ``pad`` m on every side)."""
+        w = self.windows(which)
+        if pad:
+            w = np.stack([w[:, 0] - pad, w[:, 1] + pad], axis=1)
+        inside = (lo[:, None, :] >= w[None, :, 0, :]) & (hi[:, None, :] <= w[None, :, 1, :])
+        return inside.all(axis=2).any(axis=1)
+
 
 def grid_for(size: Sequence[float], tile: Sequence[float], overlap: float) -> PageGrid:
     """The fewest windows of ``tile`` (m, overlapping by ``overlap``) that cover a sheet of ``size`` (m)."""
@@ -180,18 +199,35 @@ def sample_open(line, spacing: float) -> np.ndarray:
 
 
 def fill_cells(mask: np.ndarray, poly: np.ndarray, x0: float, y1: float, cell: float) -> None:
-    """Set the cells of ``mask`` (row 0 at y1, column 0 at x0) whose centre lies inside ``poly`` (scanlines)."""
-    a, b = poly, np.roll(poly, -1, axis=0)
-    for i in range(mask.shape[0]):
-        y = y1 - (i + 0.5) * cell
-        s = (a[:, 1] > y) != (b[:, 1] > y)
-        if not s.any():
-            continue
-        xs = np.sort(a[s, 0] + (y - a[s, 1]) * (b[s, 0] - a[s, 0]) / (b[s, 1] - a[s, 1]))
-        for xa, xb in zip(xs[0::2], xs[1::2]):
-            j0 = max(int(math.ceil((xa - x0) / cell - 0.5)), 0)
-            j1 = min(int(math.floor((xb - x0) / cell - 0.5)), mask.shape[1] - 1)
-            mask[i, j0 : j1 + 1] = True
+    """Set the cells of ``mask`` (row 0 at y1, column 0 at x0) whose centre lies inside ``poly`` (scanlines).
+
+    All rows at once: the crossings of each row's centre line with the edges, sorted along the row, taken in
+    pairs (even-odd rule); each pair fills the cells whose centres lie between them.
+    """
+    a, b = np.asarray(poly, float), np.roll(np.asarray(poly, float), -1, axis=0)
+    h, w = mask.shape
+    if not h or not len(a):
+        return
+    y = y1 - (np.arange(h) + 0.5) * cell
+    cross = (a[None, :, 1] > y[:, None]) != (b[None, :, 1] > y[:, None])
+    rows, edges = np.nonzero(cross)
+    if not len(rows):
+        return
+    xs = np.full(cross.shape, np.inf)
+    e0, e1 = a[edges], b[edges]
+    xs[rows, edges] = e0[:, 0] + (y[rows] - e0[:, 1]) * (e1[:, 0] - e0[:, 0]) / (e1[:, 1] - e0[:, 1])
+    xs = np.sort(xs, axis=1)[:, : 2 * (int(cross.sum(axis=1).max()) // 2)]
+    xa, xb = xs[:, 0::2], xs[:, 1::2]
+    ok = np.isfinite(xb)
+    r = np.broadcast_to(np.arange(h)[:, None], xa.shape)[ok]
+    j0 = np.maximum(np.ceil((xa[ok] - x0) / cell - 0.5), 0).astype(np.int64)
+    j1 = np.minimum(np.floor((xb[ok] - x0) / cell - 0.5), w - 1).astype(np.int64)
+    keep = j0 <= j1
+    r, j0, j1 = r[keep], j0[keep], j1[keep]
+    diff = np.zeros((h, w + 1), np.int64)
+    np.add.at(diff, (r, j0), 1)
+    np.add.at(diff, (r, j1 + 1), -1)
+    mask |= np.cumsum(diff[:, :w], axis=1) > 0
 
 
 def sample_loops(loops: Sequence[np.ndarray], spacing: float) -> np.ndarray:

@@ -89,10 +89,7 @@ def _shown(seg: np.ndarray, grid: PageGrid, ink: np.ndarray, spacing: float = 0.
     """Length (m, to ``spacing``) of the segment ``seg`` (2, 2) that lies on printed windows."""
     n = max(2, int(math.ceil(np.linalg.norm(seg[1] - seg[0]) / spacing)) + 1)
     q = seg[0] + np.linspace(0.0, 1.0, n)[:, None] * (seg[1] - seg[0])
-    seen = np.zeros(n, bool)
-    for r, c in zip(*np.nonzero(ink)):
-        w = grid.window(r, c)
-        seen |= np.all((q >= w[0]) & (q <= w[1]), axis=1)
+    seen = grid.holding(ink, q, q)
     return float(seen.mean() * np.linalg.norm(seg[1] - seg[0]))
 
 
@@ -221,10 +218,7 @@ def _label_place(piece, box: np.ndarray, layout: Layout, i: int, grid: PageGrid,
     # cell centres on the sheet, off every page left out (its window widened by a cell)
     yc, xc = hi[1] - (np.arange(h) + 0.5) * cell, lo[0] + (np.arange(w) + 0.5) * cell
     centres = place(layout, i, np.stack(np.meshgrid(xc, yc), axis=-1).reshape(-1, 2))
-    off = np.zeros(len(centres), bool)
-    for r, c in zip(*np.nonzero(~ink)):
-        win = grid.window(r, c)
-        off |= np.all((centres >= win[0] - cell) & (centres <= win[1] + cell), axis=1)
+    off = grid.holding(~ink, centres, centres, pad=cell)  # a centre within a window left out, widened by a cell
     free &= ~off.reshape(h, w)
     # label top-left at cell corner (r, c): cells r .. r + nh - 1, c .. c + nw - 1 all free
     sat = np.zeros((h + 1, w + 1), int)
@@ -248,9 +242,4 @@ def _within_a_printed_window(corners: np.ndarray, grid: PageGrid, ink: np.ndarra
     """(m,) bool: whether each box (``corners`` (m, 4, 2), sheet m) lies within a printed window (``tol`` m
     to spare): what :func:`_label_on` with ``whole`` needs (the window holding the box is one it reaches, so
     one printed), checked for many boxes at once."""
-    lo, hi = corners.min(axis=1) + tol, corners.max(axis=1) - tol
-    ok = np.zeros(len(corners), bool)
-    for r, c in zip(*np.nonzero(ink)):
-        win = grid.window(r, c)
-        ok |= np.all(lo >= win[0], axis=1) & np.all(hi <= win[1], axis=1)
-    return ok
+    return grid.holding(ink, corners.min(axis=1) + tol, corners.max(axis=1) - tol)
