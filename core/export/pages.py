@@ -140,20 +140,23 @@ def _piece_segments(piece) -> Tuple[np.ndarray, np.ndarray]:
     return segments(piece_lines(piece), [leg for d in piece.darts for leg in d.legs])
 
 
-def _hits_box(a: np.ndarray, b: np.ndarray, box: np.ndarray) -> bool:
-    """Whether any segment a[i]-b[i] meets the closed box (Liang-Barsky clipping, vectorised)."""
+def _hits_boxes(a: np.ndarray, b: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+    """(k,) bool: whether any segment a[i]-b[i] meets each closed box ``boxes`` (k, 2, 2) (Liang-Barsky clipping,
+    vectorised over segments and boxes)."""
     d = b - a
-    t0 = np.zeros(len(a))
-    t1 = np.ones(len(a))
-    ok = np.ones(len(a), bool)
+    shape = (len(boxes), len(a))
+    t0, t1, ok = np.zeros(shape), np.ones(shape), np.ones(shape, bool)
     for k in range(2):
-        for p, q in ((-d[:, k], a[:, k] - box[0, k]), (d[:, k], box[1, k] - a[:, k])):
+        for p, q in (
+            (-d[:, k], a[None, :, k] - boxes[:, None, 0, k]),
+            (d[:, k], boxes[:, None, 1, k] - a[None, :, k]),
+        ):
             par = np.abs(p) < 1e-15
             ok &= ~(par & (q < 0))
             r = q / np.where(par, 1.0, p)
             t0 = np.where(~par & (p < 0), np.maximum(t0, r), t0)
             t1 = np.where(~par & (p > 0), np.minimum(t1, r), t1)
-    return bool(np.any(ok & (t0 <= t1)))
+    return np.any(ok & (t0 <= t1), axis=1)
 
 
 def windows_hit(a: np.ndarray, b: np.ndarray, grid: PageGrid, out: np.ndarray) -> None:
@@ -168,12 +171,18 @@ def windows_hit(a: np.ndarray, b: np.ndarray, grid: PageGrid, out: np.ndarray) -
     c1 = min(grid.cols - 1, int(math.floor(hi[0] / sx)) + 1)
     r0 = max(0, int(math.ceil((grid.height - hi[1] - grid.tile[1]) / sy)) - 1)
     r1 = min(grid.rows - 1, int(math.floor((grid.height - lo[1]) / sy)) + 1)
-    for r in range(r0, r1 + 1):
-        for c in range(c0, c1 + 1):
-            if out[r, c]:
-                continue
-            w = grid.window(r, c)
-            out[r, c] = bool(np.all(hi >= w[0]) and np.all(lo <= w[1]) and _hits_box(a, b, w))
+    if r1 < r0 or c1 < c0:
+        return
+    todo = np.zeros(out.shape, bool)
+    todo[r0 : r1 + 1, c0 : c1 + 1] = True
+    todo &= ~out
+    w = grid.windows(todo)
+    near = np.flatnonzero(np.all(hi >= w[:, 0], axis=1) & np.all(lo <= w[:, 1], axis=1))
+    if not len(near):
+        return
+    rows, cols = np.nonzero(todo)
+    hit = near[_hits_boxes(a, b, w[near])]
+    out[rows[hit], cols[hit]] = True
 
 
 def line_pages(pieces, layout: Layout, grid: PageGrid) -> np.ndarray:
