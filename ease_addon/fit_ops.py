@@ -8,23 +8,26 @@ from __future__ import annotations
 
 import json
 
-from . import data, state, sync
-from .objects import window_progress
+from . import data, jobs, state, sync
 from .operators_base import EaseOperator
+from .pattern_ops import start_pattern_job
 
 
-def _fit(context, workflow) -> None:
+def _fit(op, context, label: str, workflow, done: str) -> None:
     """Run ``workflow(prep, progress)`` (a :mod:`core.workflows` pattern run) on the scene's
-    design; its pattern replaces the pieces beside the body, its figures show in the Fit panel."""
-    prep = data.prepared(context)
-    with window_progress(context) as progress:
-        run = workflow(prep, progress)
-    sync.show_pattern(context, run.pattern)
-    context.scene.ease.fit_json = json.dumps(run.figures)
+    design as a job (:func:`.pattern_ops.start_pattern_job`: pressed, in the background); its
+    pattern replaces the pieces beside the body, its figures show in the Fit panel."""
+
+    def show(ctx, prep, run):
+        sync.show_pattern(ctx, run.pattern)
+        ctx.scene.ease.fit_json = json.dumps(run.figures)
+
+    job = start_pattern_job(context, label, workflow, show, sync_=op.job_sync())
+    op.report({"INFO"}, done if job.thread is None else f"{label} in the background (Esc cancels)")
 
 
-class EASE_OT_transfer_size(EaseOperator):
-    """Transfer the design to the chosen size, preserving its ease"""
+class EASE_OT_transfer_size(jobs.Background, EaseOperator):
+    """Transfer the design to the chosen size, preserving its ease (in the background: Esc cancels)"""
 
     bl_idname = "ease.transfer_size"
     bl_label = "Transfer to Size"
@@ -35,12 +38,17 @@ class EASE_OT_transfer_size(EaseOperator):
 
         size = context.scene.ease.fit_size
         config = data.solver_choice(context.scene)
-        _fit(context, lambda prep, progress: wf.transfer(prep, size, config=config, progress=progress))
-        self.report({"INFO"}, f"transferred to {size}")
+        _fit(
+            self,
+            context,
+            "Transfer to Size",
+            lambda prep, progress: wf.transfer(prep, size, config=config, progress=progress),
+            f"transferred to {size}",
+        )
 
 
-class EASE_OT_adapt_poses(EaseOperator):
-    """Adapt the design to the chosen poses within the stretch tolerance"""
+class EASE_OT_adapt_poses(jobs.Background, EaseOperator):
+    """Adapt the design to the chosen poses within the stretch tolerance (in the background: Esc cancels)"""
 
     bl_idname = "ease.adapt_poses"
     bl_label = "Adapt to Poses"
@@ -54,16 +62,16 @@ class EASE_OT_adapt_poses(EaseOperator):
         if not poses:
             raise state.AddonError("choose at least one pose to adapt to")
         tol = round(float(s.tolerance), 6)  # the property is single precision: 1.1 reads 1.10000002
+        config = data.solver_choice(context.scene)
 
         def adapt(prep, progress):
             # the panel's tolerance is the caller's where it differs from the design's weft
             # tolerance; where it shows the design's, the design decides both (weft and warp)
             own = prep.cut.materials.get("eps_weft")
             mine = None if own is not None and abs(tol - float(own)) < 1e-6 else tol
-            return wf.adapt(prep, poses, eps_weft=mine, config=data.solver_choice(context.scene), progress=progress)
+            return wf.adapt(prep, poses, eps_weft=mine, config=config, progress=progress)
 
-        _fit(context, adapt)
-        self.report({"INFO"}, f"adapted to {', '.join(poses)}")
+        _fit(self, context, "Adapt to Poses", adapt, f"adapted to {', '.join(poses)}")
 
 
 CLASSES = (EASE_OT_transfer_size, EASE_OT_adapt_poses)

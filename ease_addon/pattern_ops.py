@@ -2,15 +2,52 @@
 reference workflow) and lay it out beside the body as flat panel objects
 (mesh coloured by achieved ease, boundary curve, grain-line arrow, piece
 name; see :func:`.build.update_pattern_objects`). The whole pattern is kept in a
-scene property (pattern.json) so it survives a save."""
+scene property (pattern.json) so it survives a save. *Optimize Pattern* (and the Fit
+stage's Transfer and Adapt, :func:`start_pattern_job`) are jobs (:mod:`.jobs`, as Drape):
+the cut and the solve run in a worker (progress in the status bar, Esc cancels) and the
+pattern is shown in one pass when it lands."""
 
 from __future__ import annotations
 
 import json
 
-from . import data, sync
-from .objects import window_progress
+import bpy
+
+from . import data, jobs, state, sync
 from .operators_base import EaseOperator
+
+JOB = "pattern"  # the job of Optimize Pattern, Transfer and Adapt (a newer one replaces a running one)
+
+
+def start_pattern_job(context, label: str, workflow, apply, edit=None, sync_=None) -> jobs.Job:
+    """Run ``workflow(prep, progress)`` (a :mod:`core.workflows` pattern run) on the scene's
+    design (``edit(design)``: the panels' settings) cut on the scene body, as the job
+    :data:`JOB`: the cut and the workflow in a worker (``sync_``: :func:`.jobs.start`'s
+    ``sync``), then ``apply(context, prep, result)`` on the main thread in one pass. A result
+    landing on a scene whose design or body changed meanwhile is refused with the reason."""
+    from ..core import workflows as wf
+
+    obj = data.body_object(context)
+    spec = data.body_spec(obj)
+    design = data.current_design(context)
+    if edit is not None:
+        design = edit(design)
+    model = state.body_model(spec["model"])
+    before = (context.scene.ease.design_json, json.dumps(spec, sort_keys=True))
+
+    def compute(progress):
+        progress(0.0, "cutting the design")
+        prep = wf.prepare(design, body=model, cut=data.cut_on(design, spec["model"], spec["shape"]))
+        return prep, workflow(prep, progress)
+
+    def landed(result):
+        ctx = bpy.context
+        body = data.body_object(ctx)
+        if (ctx.scene.ease.design_json, json.dumps(data.body_spec(body), sort_keys=True)) != before:
+            raise state.AddonError(f"the design or the body changed while {label} ran: run it again")
+        apply(ctx, *result)
+
+    return jobs.start_step(JOB, label, compute, landed, "job_status", label, sync=sync_)
 
 
 def gather_settings(scene, design):
@@ -21,25 +58,43 @@ def gather_settings(scene, design):
     return data.design_with_materials(design, gather_above=want)
 
 
-class EASE_OT_optimize_pattern(EaseOperator):
-    """Optimize the sewing pattern of the design and lay it out beside the body"""
+class EASE_OT_optimize_pattern(jobs.Background, EaseOperator):
+    """Optimize the sewing pattern of the design and lay it out beside the body (in the background: Esc cancels)"""
 
     bl_idname = "ease.optimize_pattern"
     bl_label = "Optimize Pattern"
     needs = ("body", "design")
 
     def run(self, context):
-        from ..core import workflows as wf
+        job, said = start_optimize(context, sync_=self.job_sync())
+        self.report({"INFO"}, said[-1] if said else "optimizing in the background (Esc cancels)")
 
-        prep = data.prepared(context, lambda design: gather_settings(context.scene, design))
-        with window_progress(context) as progress:
-            pattern = wf.reference(prep, config=data.solver_choice(context.scene), progress=progress).pattern
-        # -- the scene changes from here on: the design keeps the gathering it was solved with
+
+def start_optimize(context, sync_=None) -> tuple:
+    """*Optimize Pattern*'s job (:func:`start_pattern_job`): the reference workflow with the
+    panel's solver and gathering. ``(job, said)``: ``said`` holds the report once shown."""
+    from ..core import workflows as wf
+
+    config = data.solver_choice(context.scene)
+    said = []
+
+    def show(ctx, prep, run):
+        # the design keeps the gathering it was solved with
         text = json.dumps(prep.design.to_json(), sort_keys=True)
-        if text != context.scene.ease.design_json:
-            context.scene.ease.design_json = text
-        sync.show_pattern(context, pattern)
-        self.report({"INFO"}, f"pattern: {len(pattern.panels)} pieces")
+        if text != ctx.scene.ease.design_json:
+            ctx.scene.ease.design_json = text
+        sync.show_pattern(ctx, run.pattern)
+        said.append(f"pattern: {len(run.pattern.panels)} pieces")
+
+    job = start_pattern_job(
+        context,
+        "Optimize Pattern",
+        lambda prep, progress: wf.reference(prep, config=config, progress=progress),
+        show,
+        edit=lambda design: gather_settings(context.scene, design),
+        sync_=sync_,
+    )
+    return job, said
 
 
 CLASSES = (EASE_OT_optimize_pattern,)

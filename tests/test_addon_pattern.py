@@ -140,3 +140,50 @@ def test_the_designs_solver_is_the_default_and_a_choice_overrides_it(bpy_session
         s.solver_config = data.DESIGN_SOLVER
         s.design_json = before
     assert data.design_solver(scene) == "improved"
+
+
+def test_optimize_runs_in_the_background(bpy_session, blender, addon):
+    """Optimize Pattern pressed in Blender's UI (its job, as Drape's): the cut and the solve run in
+    a worker, the operator returns with the scene as it was and the status "updating"; the pattern
+    lands in one pass, the same pattern as in line; Esc leaves the scene as it was; a result
+    landing on a design changed meanwhile is refused with the reason; from a script it runs in
+    line even where jobs are threaded."""
+    bpy = bpy_session["bpy"]
+    jobs, pattern_ops, data = addon("jobs"), addon("pattern_ops"), addon("data")
+    blender.reset(body=True, design=DESIGN, piecewise_ease=True)
+    s = bpy.context.scene.ease
+    assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
+    want = {p.name: p.uv for p in data.stored_pattern(bpy.context.scene).panels}
+    blender.reset(body=True, design=DESIGN, piecewise_ease=True)
+    s = bpy.context.scene.ease
+    jobs.SYNCHRONOUS = False
+    try:
+        job, said = pattern_ops.start_optimize(bpy.context)
+        assert job.thread is not None and not said and not blender.objects("pattern_panel")
+        assert s.job_status.startswith("updating: Optimize Pattern")
+        jobs.wait()
+        got = data.stored_pattern(bpy.context.scene)
+        assert said and blender.objects("pattern_panel") and sorted(want) == sorted(p.name for p in got.panels)
+        assert all(np.array_equal(p.uv, want[p.name]) for p in got.panels)  # (the same solve, its wall clock aside)
+        # Esc: nothing applied
+        blender.reset(body=True, design=DESIGN, piecewise_ease=True)
+        s = bpy.context.scene.ease
+        job, said = pattern_ops.start_optimize(bpy.context)
+        assert jobs.cancel() == 1
+        job.thread.join(120)
+        jobs.poll()
+        assert not said and data.PATTERN_KEY not in bpy.context.scene and "cancelled" in s.job_status
+        # the design changed while it ran: refused, said
+        job, said = pattern_ops.start_optimize(bpy.context)
+        job.thread.join(120)
+        assert bpy.ops.ease.set_parameter(name=s.design_params[0].name, value=s.design_params[0].value * 1.01) == {
+            "FINISHED"
+        }
+        jobs.wait()
+        assert not said and "changed" in s.job_status and data.PATTERN_KEY not in bpy.context.scene
+        # a script's call: in line
+        assert bpy.ops.ease.optimize_pattern() == {"FINISHED"} and jobs.running() is None
+        assert blender.objects("pattern_panel") and not addon("state").BUGS
+    finally:
+        jobs.wait()
+        jobs.SYNCHRONOUS = True
