@@ -178,6 +178,8 @@ class EASE_PT_pattern(_EasePanel, bpy.types.Panel):
         if s.solver_config == data.DESIGN_SOLVER and s.design_json:
             layout.label(text=f"Design's solver: {data.design_solver(context.scene).capitalize()}")
         layout.operator("ease.optimize_pattern", icon="MESH_GRID")
+        if "Optimize Pattern" in s.job_status:  # running in the background (or stopped): Cancel beside it
+            _job_row(layout, s)
         _figures(layout, s.pattern_json)
 
 
@@ -195,6 +197,8 @@ class EASE_PT_fit(_EasePanel, bpy.types.Panel):
         _props(layout, s, *(f"adapt_{p}" for p in ("T", "P1", "P2", "P3")), toggle=True)
         layout.prop(s, "tolerance")
         layout.operator("ease.adapt_poses")
+        if "Transfer to Size" in s.job_status or "Adapt to Poses" in s.job_status:
+            _job_row(layout, s)
         _figures(layout, s.fit_json)
 
 

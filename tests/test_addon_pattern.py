@@ -161,6 +161,10 @@ def test_optimize_runs_in_the_background(bpy_session, blender, addon):
         job, said = pattern_ops.start_optimize(bpy.context)
         assert job.thread is not None and not said and not blender.objects("pattern_panel")
         assert s.job_status.startswith("updating: Optimize Pattern")
+        from test_addon_honest import _draw  # the Pattern panel shows the line and its Cancel button
+
+        log = _draw(blender, "EASE_PT_pattern")
+        assert any(t.startswith("updating: Optimize") for t in log["labels"]) and "ease.cancel_jobs" in log["operators"]
         jobs.wait()
         got = data.stored_pattern(bpy.context.scene)
         assert said and blender.objects("pattern_panel") and sorted(want) == sorted(p.name for p in got.panels)
