@@ -23,6 +23,6 @@ export WARP_CACHE_PATH="${WARP_CACHE_PATH:-$ROOT/.cache/warp}"
 cmd="${1:-demo}"; shift || true
 case "$cmd" in
     demo) exec "$VENV/bin/ease" demo "$@" ;;
-    test) exec "$VENV/bin/python" -m pytest "$@" ;;
+    test) exec "$VENV/bin/python" -m pytest -n "${EASE_TEST_WORKERS:-auto}" --maxprocesses 8 --dist loadfile "$@" ;;
     *)    exec "$VENV/bin/ease" "$cmd" "$@" ;;
 esac

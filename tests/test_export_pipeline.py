@@ -69,9 +69,10 @@ def test_build_extension_needs_an_output_folder_outside_the_checkout(tmp_path, c
 
 
 def test_the_extension_bundles_no_test_or_lint_tools():
-    """The wheels bundled per platform are the add-on's runtime: not pytest, ruff, setuptools, nor dask."""
+    """The wheels bundled per platform are the add-on's runtime: not pytest (nor xdist), ruff, setuptools, nor dask."""
     build = _build_module()
     bundled, _ = build.requirements()
     names = {r.split("==")[0].split(">")[0].split("<")[0].strip().lower() for r in bundled}
-    assert names and not names & {"pytest", "ruff", "setuptools", "dask", "distributed", "numpy", "bpy"}
+    tools = {"pytest", "pytest-xdist", "execnet", "ruff", "setuptools", "dask", "distributed", "numpy", "bpy"}
+    assert names and not names & tools
     assert {"scipy", "warp-lang", "spyrrow"} <= names

@@ -56,7 +56,7 @@ PLATFORM_TAGS = {
 # Not bundled: Blender ships numpy; bpy is Blender itself; pytest, ruff and setuptools are for tests, lint and
 # builds (ruff's wheel alone is 10.6 MB); dask/distributed run `ease batch` (command line only: the add-on has no
 # batch).
-NOT_BUNDLED = {"numpy", "bpy", "pytest", "ruff", "setuptools", "dask", "distributed"}
+NOT_BUNDLED = {"numpy", "bpy", "pytest", "pytest-xdist", "execnet", "ruff", "setuptools", "dask", "distributed"}
 # examples/designs is a link to core/data/designs in the checkout: the templates ship once, as package data.
 SOURCES = ("__init__.py", "blender_manifest.toml", "ease_addon", "core")
 SKIP = shutil.ignore_patterns("__pycache__", "*.pyc", "*.pyo", ".DS_Store", "*.egg-info", "cli.py.orig")
