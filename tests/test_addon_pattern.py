@@ -144,16 +144,12 @@ def test_the_designs_solver_is_the_default_and_a_choice_overrides_it(bpy_session
 
 def test_optimize_runs_in_the_background(bpy_session, blender, addon):
     """Optimize Pattern pressed in Blender's UI (its job, as Drape's): the cut and the solve run in
-    a worker, the operator returns with the scene as it was and the status "updating"; the pattern
-    lands in one pass, the same pattern as in line; Esc leaves the scene as it was; a result
-    landing on a design changed meanwhile is refused with the reason; from a script it runs in
-    line even where jobs are threaded."""
+    a worker, the operator returns with the scene as it was and the status "updating" (the
+    Pattern panel shows it with Cancel); the pattern lands in one pass, the same pattern as in
+    line; Esc leaves the scene as it was; a result landing on a design changed meanwhile is
+    refused with the reason; from a script it runs in line even where jobs are threaded."""
     bpy = bpy_session["bpy"]
     jobs, pattern_ops, data = addon("jobs"), addon("pattern_ops"), addon("data")
-    blender.reset(body=True, design=DESIGN, piecewise_ease=True)
-    s = bpy.context.scene.ease
-    assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
-    want = {p.name: p.uv for p in data.stored_pattern(bpy.context.scene).panels}
     blender.reset(body=True, design=DESIGN, piecewise_ease=True)
     s = bpy.context.scene.ease
     jobs.SYNCHRONOUS = False
@@ -166,17 +162,20 @@ def test_optimize_runs_in_the_background(bpy_session, blender, addon):
         log = _draw(blender, "EASE_PT_pattern")
         assert any(t.startswith("updating: Optimize") for t in log["labels"]) and "ease.cancel_jobs" in log["operators"]
         jobs.wait()
-        got = data.stored_pattern(bpy.context.scene)
-        assert said and blender.objects("pattern_panel") and sorted(want) == sorted(p.name for p in got.panels)
-        assert all(np.array_equal(p.uv, want[p.name]) for p in got.panels)  # (the same solve, its wall clock aside)
+        got = {p.name: p.uv for p in data.stored_pattern(bpy.context.scene).panels}
+        assert said and blender.objects("pattern_panel")
+        # a script's call: in line, the same pattern (its wall clock aside)
+        assert bpy.ops.ease.optimize_pattern() == {"FINISHED"} and jobs.running() is None
+        want = data.stored_pattern(bpy.context.scene)
+        assert sorted(got) == sorted(p.name for p in want.panels)
+        assert all(np.array_equal(p.uv, got[p.name]) for p in want.panels)
+        text = bpy.context.scene[data.PATTERN_KEY]
         # Esc: nothing applied
-        blender.reset(body=True, design=DESIGN, piecewise_ease=True)
-        s = bpy.context.scene.ease
         job, said = pattern_ops.start_optimize(bpy.context)
         assert jobs.cancel() == 1
         job.thread.join(120)
         jobs.poll()
-        assert not said and data.PATTERN_KEY not in bpy.context.scene and "cancelled" in s.job_status
+        assert not said and bpy.context.scene[data.PATTERN_KEY] == text and "cancelled" in s.job_status
         # the design changed while it ran: refused, said
         job, said = pattern_ops.start_optimize(bpy.context)
         job.thread.join(120)
@@ -184,10 +183,8 @@ def test_optimize_runs_in_the_background(bpy_session, blender, addon):
             "FINISHED"
         }
         jobs.wait()
-        assert not said and "changed" in s.job_status and data.PATTERN_KEY not in bpy.context.scene
-        # a script's call: in line
-        assert bpy.ops.ease.optimize_pattern() == {"FINISHED"} and jobs.running() is None
-        assert blender.objects("pattern_panel") and not addon("state").BUGS
+        assert not said and "changed" in s.job_status and bpy.context.scene[data.PATTERN_KEY] == text
+        assert not addon("state").BUGS
     finally:
         jobs.wait()
         jobs.SYNCHRONOUS = True
