@@ -18,6 +18,9 @@ After every step:
 Headless there is no hypothesis in the environment: the walk is a seeded random walk. CI runs the
 seeds of :data:`CI_SEEDS` (:data:`CI_STEPS` steps each); ``pytest --full`` runs
 :data:`FULL_SEEDS` walks of :data:`FULL_STEPS` steps (the designer's afternoon), every template.
+The threaded walks (:data:`THREADED_CI_SEEDS`, :data:`THREADED_FULL_SEEDS`) run the add-on's jobs
+in worker threads, as Blender's window does, and let them land (the jobs' poll) before half of
+the checks.
 """
 
 from __future__ import annotations
@@ -33,6 +36,9 @@ import pytest
 # on undo after Live rebuilt the pieces and "converged" over a re-cut's pattern (4), "converged"
 # restored by an undo (8)
 CI_SEEDS, CI_STEPS = (2, 4, 8), 40
+# walks with the jobs threaded as in Blender's window (Live's build and solve in workers, landing
+# on the jobs' poll between the designer's moves); the CI seed and the --full ones
+THREADED_CI_SEEDS, THREADED_FULL_SEEDS = (21,), tuple(range(30, 35))
 FULL_SEEDS, FULL_STEPS = tuple(range(10, 20)), 500
 CHEAP = ("top_sleeveless.json", "blouse_fitted.json")  # two-panel designs: CI's templates
 POSES = ("A", "T", "P1", "P2", "P3")
@@ -319,16 +325,25 @@ class Walk:
             assert np.allclose(np.asarray(q.uv), p.uv, rtol=0, atol=1e-9), p.name
 
 
-def _walk(blender, seed: int, steps: int, full: bool):
+def _walk(blender, seed: int, steps: int, full: bool, threaded: bool = False):
     blender.reset()
     blender.mod("state").BUGS.clear()
+    jobs = blender.mod("jobs")
     walk = Walk(blender, random.Random(seed), full)
+    jobs.SYNCHRONOUS = not threaded
     try:
         for _ in range(steps):
             walk.step()
+            if threaded and walk.rng.random() < 0.5:
+                jobs.wait()  # the jobs started meanwhile land (Blender's poll), then the scene is checked
+                walk.check()
     except BaseException as exc:
-        raise AssertionError(f"seed {seed}, after {walk.log[-12:]} (step {len(walk.log)}): {exc}") from exc
+        raise AssertionError(
+            f"seed {seed}{' (threaded)' if threaded else ''}, after {walk.log[-12:]} (step {len(walk.log)}): {exc}"
+        ) from exc
     finally:
+        jobs.wait()
+        jobs.SYNCHRONOUS = True
         blender.scene.ease.live = False
     from collections import Counter
 
@@ -336,11 +351,13 @@ def _walk(blender, seed: int, steps: int, full: bool):
 
 
 def _cases():
-    ci = [(seed, CI_STEPS, False) for seed in CI_SEEDS]
-    full = [pytest.param(seed, FULL_STEPS, True, marks=pytest.mark.slow) for seed in FULL_SEEDS]
+    ci = [(seed, CI_STEPS, False, False) for seed in CI_SEEDS]
+    ci += [(seed, CI_STEPS, False, True) for seed in THREADED_CI_SEEDS]
+    full = [pytest.param(seed, FULL_STEPS, True, False, marks=pytest.mark.slow) for seed in FULL_SEEDS]
+    full += [pytest.param(seed, FULL_STEPS, True, True, marks=pytest.mark.slow) for seed in THREADED_FULL_SEEDS]
     return ci + full
 
 
-@pytest.mark.parametrize("seed, steps, full", _cases())
-def test_designer_walk(blender, seed, steps, full):
-    _walk(blender, seed, steps, full)
+@pytest.mark.parametrize("seed, steps, full, threaded", _cases())
+def test_designer_walk(blender, seed, steps, full, threaded):
+    _walk(blender, seed, steps, full, threaded)
