@@ -93,6 +93,21 @@ def test_a_diverged_solve_is_refused_in_one_line():
         solver.result(st)
 
 
+def test_the_guard_limit_rises_at_most_guard_levels_times():
+    """A long solve's extra rounds raise the collapse guard's limit as a 20-iteration solve's do, no further
+    (one raise a round let a 200-iteration transfer reach gains of 1e13 and run away); in rescue too."""
+    from core.pattern.optimizer import guard as S
+
+    g = SolverConfig.fitted().guard
+    top = g.guard_limit * S.GUARD_ESCALATION**S.GUARD_LEVELS
+    assert S.round_guard(g, S.GUARD_LEVELS * S.COLLAPSE_ROUNDS, 300).guard_limit == top
+    assert S.round_guard(g, 150, 300).guard_limit == top
+    assert S.round_guard(g, 300, 300).guard_limit == top and S.rescuing(300, 300)
+    # a 20-iteration solve's schedule is unchanged: it reaches the same top in its last rounds
+    assert S.round_guard(g, 20, 20).guard_limit == top
+    assert S.round_guard(g, 2 * S.COLLAPSE_ROUNDS, 20).guard_limit == g.guard_limit * S.GUARD_ESCALATION**2
+
+
 def test_factorisation_is_reused_across_solves():
     cut, body = two_panels()
     solver = PatternSolver(cut, body)

@@ -27,6 +27,12 @@ from .factor import SymmetricFactor
 COLLAPSE_ROUNDS = 5
 #: Each round of extra iterations after the first multiplies the collapse guard's stiffening limit by this.
 GUARD_ESCALATION = 4.0
+#: Rounds of extra iterations that raise the collapse guard's limit at most: 4, the rounds a solve of the
+#: default 20 iterations has (its extra iterations are at most as many as planned), so its limit reaches
+#: 4^4 = 256 x. A longer solve raised it on, one level a round: the four-dart blouse transferred to women:XL
+#: with 200 iterations (warp slack 0) reached gains of 1e13 in its extra rounds, the stiffened matrix lost
+#: its conditioning and the solve ran away (refused as diverged after 280 iterations).
+GUARD_LEVELS = 4
 #: Rescue iterations at most (rounds of :data:`COLLAPSE_ROUNDS`) after a solve's extra ones, for a solve
 #: that would be refused for collapse when they end (:func:`rescuing`, :func:`refused`).
 RESCUE_ITERATIONS = 40
@@ -60,7 +66,8 @@ def round_guard(guard, extra: int, planned: int):
     same solve ended just above 0.5). Each round of :data:`COLLAPSE_ROUNDS` extra iterations
     after the first raises the limit by :data:`GUARD_ESCALATION`, so such a triangle opens
     (0.60 five iterations later) instead of the pattern being refused; a solve that ends
-    within its planned iterations or its first extra round never sees a higher limit.
+    within its planned iterations or its first extra round never sees a higher limit, and none
+    sees more than :data:`GUARD_LEVELS` raises.
     In rescue iterations (:func:`rescuing`) the guard keeps every gain it has raised
     (``guard_release`` 1) under the limit of the first rescue round, held there (raised on, the
     shirt's four sampled bodies that stay refused kept 2-37 collapsed triangles after 40 rescue
@@ -69,7 +76,7 @@ def round_guard(guard, extra: int, planned: int):
     rescue = rescuing(extra, planned)
     # the rescue holds the limit of its first round: the cycle it breaks is not one held at the limit,
     # and a limit raised on (x4 a round: 1e18 after 120 rescue iterations) lets the solve run away
-    level = min(extra, planned) // COLLAPSE_ROUNDS if extra > 0 else 0
+    level = min(extra, planned, GUARD_LEVELS * COLLAPSE_ROUNDS) // COLLAPSE_ROUNDS if extra > 0 else 0
     if level == 0 and not rescue:
         return guard
     return replace(
