@@ -10,11 +10,12 @@ from conftest import sample
 from test_body_obj import horse, write_obj
 
 from core.body.charts import PUBLISHED
-from core.body.made_to_measure import collisions
+from core.body.made_to_measure import THIGH_MARGIN_CM, collisions, thigh_gap
 from core.body.measure import measure
 from core.body.registry import load_spec, resolve_body_files
 from core.body.sizes import (
     CHART_NAMES,
+    CHART_THIGH_GAP_CM,
     TOLERANCE_CM,
     chart_fit,
     chart_sizes,
@@ -83,6 +84,19 @@ def test_stored_fits_measure_within_1cm(anny, chart, size):
     # the fit uses are symmetric and add nothing to it.
     v = anny.vertices(shape)
     assert np.abs(v[anny.symmetry] * np.array([-1.0, 1.0, 1.0]) - v).max() < 1.5e-3
+
+
+@pytest.mark.parametrize("size", ["3XL", "4XL"])
+def test_plus_sizes_keep_their_thighs_apart_at_the_average_cup(anny, size):
+    """The women's 3XL and 4XL, refitted with the chart fit's thigh gap (CHART_THIGH_GAP_CM, above
+    made-to-measure's THIGH_MARGIN_CM) and the underbust local, keep their inner thighs at least
+    0.6 cm apart (1.8 mm before: the pants' back legs collapsed in that crease) and Anny's average
+    cup (4XL's cup 0.75 pulled the tops' side seams 3.4-6.4 mm apart); tests/test_templates_charts.py
+    solves every template on them."""
+    assert CHART_THIGH_GAP_CM > THIGH_MARGIN_CM
+    shape = size_shape(anny, size, chart="women")
+    assert thigh_gap(anny, anny.vertices(shape)) >= 0.6
+    assert shape["cupsize"] == 0.5
 
 
 def test_old_waist_definition_differs_where_documented(anny):
