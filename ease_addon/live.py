@@ -211,7 +211,7 @@ def session_for(context):
     design = pattern_ops.gather_settings(scene, data.current_design(context))
     model = state.body_model(spec["model"])
     choice = data.solver_choice(scene)
-    start = data.stored_pattern(scene)
+    start = _stored_lazily(scene)
     faces = convert.get_triangles(obj.data)
     key_now, session_now = _LIVE["key"], _LIVE["session"]
 
@@ -222,8 +222,9 @@ def session_for(context):
         key = json.dumps([topology_key(prep.design, spec), config])
         if key == key_now and session_now is not None:
             return key, prep, None
+        pattern = start()
         session = LiveSession(
-            prep, config=config, pattern=start if _of_cut(start, prep.cut) else None, progress=progress
+            prep, config=config, pattern=pattern if _of_cut(pattern, prep.cut) else None, progress=progress
         )
         session.prime()
         return key, prep, session
@@ -249,6 +250,36 @@ def session_for(context):
         raise
     job.inputs = quick
     return _LIVE["session"] if _LIVE.get("inputs") == quick else None
+
+
+def _restart(session, restored) -> None:
+    """After an undo: continue from the restored pattern (``restored()``, :func:`_stored_lazily`)
+    when it is one of the session's cut (not one of another cut: a parameter undone)."""
+    if restored is None:
+        return
+    pattern = restored()
+    if _of_cut(pattern, session.prep.cut):
+        session.restart_from(pattern)
+
+
+def _stored_lazily(scene):
+    """The scene's stored pattern as a call that returns it, for a worker: parsed there unless the
+    add-on parsed this text already (the main thread only reads the text)."""
+    from . import state as st
+
+    text = scene.get(data.PATTERN_KEY)
+    if not text:
+        return lambda: None
+    cached = st.PATTERNS.get((scene.name, data.PATTERN_KEY))
+    if cached is not None and cached[0] == text:
+        return lambda: cached[1]
+
+    def parse():
+        from ..core.pattern.io import pattern_from_json
+
+        return pattern_from_json(json.loads(text))
+
+    return parse
 
 
 def _cancelled(what: str = "preparation") -> None:
@@ -394,8 +425,9 @@ class _UndoIfRebuilt:
 
 def _take_field(context, session):
     """The painted field when it differs from the one taken last (a stroke, X-mirror toggled, an
-    undo): ``(field, painted, restart)`` (:func:`targets`; ``restart``: the restored pattern to
-    continue from after an undo, or None), the layer remembered; None when unchanged."""
+    undo): ``(field, painted, restart)`` (:func:`targets`; ``restart``: after an undo, a call
+    giving the restored pattern, :func:`_restart`; else None), the layer remembered; None when
+    unchanged."""
     scene = context.scene
     obj = data.body_object(context)
     raw = _colors(obj)
@@ -410,9 +442,7 @@ def _take_field(context, session):
     if _LIVE["restart"]:
         # after an undo/redo: continue from the restored pattern
         _LIVE["restart"] = False
-        restored = data.stored_pattern(scene)
-        if _of_cut(restored, session.prep.cut):  # (not one of another cut: a parameter undone)
-            restart = restored
+        restart = _stored_lazily(scene)  # (parsed by the solve: a worker when threaded)
     field, painted = targets(obj, scene)
     sync.remember_layer(obj, scene)
     _LIVE["colors"], _LIVE["mirror"] = raw, mirror
@@ -432,8 +462,7 @@ def _step(context, budget_s: float, t0: float) -> dict:
     taken = _take_field(context, session)
     if taken is not None:
         field, painted, restart = taken
-        if restart is not None:
-            session.restart_from(restart)
+        _restart(session, restart)
         changed = session.set_ease(field, painted)
         if changed:
             _LIVE.update(final=None, landed=False)  # the pattern it would have stored is superseded
@@ -521,8 +550,7 @@ def _solve_in_worker(context, session, field=None, painted=None, restart=None) -
 
     def compute(progress):
         with _SOLVING:  # (a dropped job of this session stops at its next iteration)
-            if restart is not None:
-                session.restart_from(restart)
+            _restart(session, restart)
             changed = session.set_ease(field, painted) if field is not None else False
             if field is not None and not changed and session.converged and landed:
                 return "same", 0, None, None, None  # (X-mirror toggled on a symmetric field, ...)
