@@ -3,7 +3,8 @@ add-on's operators and properties, with the scene checked after every step (issu
 
 Steps: add the body (every chart and size), load templates, move keypoints, set parameters in and
 out of range, paint (attribute writes, as a stroke leaves them) with X-mirror on and off, Live on
-and off and its ticks, undo and redo, optimize, transfer, adapt, drape (a few frames), export.
+and off and its ticks, undo and redo, optimize, transfer, adapt, drape (a few frames), export;
+with ``--full`` also marker (one second of nesting) and a tiny render (5 %, one sample).
 
 After every step:
 
@@ -226,6 +227,17 @@ class Walk:
         self.s.export_glb = self.s.export_obj = False
         self.op("export_pattern")
 
+    def marker(self):
+        self.s.export_dir = str(self.b.tmp / "walk_export")
+        self.s.marker_seconds, self.s.marker_sizes = 1, ""
+        self.op("marker")
+
+    def render(self):
+        s = self.s
+        s.render_path = str(self.b.tmp / "walk_render.png")
+        s.render_resolution, s.render_samples, s.render_view = 5, 1, "FRONT"
+        self.op("render")
+
     MOVES = {  # move: (weight in CI, weight with --full)
         "add_body": (2, 2),
         "set_size": (4, 4),
@@ -244,6 +256,8 @@ class Walk:
         "adapt": (0, 1),
         "drape": (1, 1),
         "export": (1, 1),
+        "marker": (0, 1),  # (CI weight 0: the CI seeds' sequences stay the ones that found bugs)
+        "render": (0, 1),
     }
 
     def step(self):
