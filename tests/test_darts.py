@@ -203,6 +203,30 @@ def test_skirt_back_dart_starts_on_the_waist_seam_across_its_range(anny, place, 
     assert all(r["panel"] == "skirt.back" for r in cut.darts.values())
 
 
+def test_mirrored_neckline_darts_from_one_mouth_touch_only_there(anny):
+    """On men:XXL the four-dart blouse's neckline darts both start at the neckline's centre front
+    and pass 0.4-0.5 mm from the sternum's midline vertex 1.5 mm below it. The tracer snapped the
+    left dart to that vertex, the mirrored right half then passed it too, and the cut refused the
+    dart ("it gives 2 stretches"). A mirrored dart never snaps to the midline
+    (core.cut.darts.midline_guards): each dart is one seam, the two meet only at their mouth."""
+    from core.cut import cut_design
+
+    d = load_design(TEMPLATES["blouse_four_darts"]())
+    d.refine_edge_length = None
+    cut = cut_design(d, body=anny, shape="men:XXL")
+    panel = next(p for p in cut.panels if p.name == "blouse.front")
+    by_name = {s.name: s for s in cut.seams}
+    ids = {}
+    for side in ("left", "right"):
+        name = f"blouse.neck_dart_{side}"
+        assert name in cut.darts and name in by_name, sorted(by_name)
+        s = by_name[name]
+        ids[side] = (set(panel.vertex_ids[s.verts_a[1:]]) | set(panel.vertex_ids[s.verts_b[1:]]), s)
+    mouth_l, mouth_r = (ids[k][1] for k in ("left", "right"))
+    assert mouth_l.verts_a[0] != mouth_l.verts_b[0] and mouth_r.verts_a[0] != mouth_r.verts_b[0]
+    assert not ids["left"][0] & ids["right"][0]
+
+
 def test_auto_darts_are_placed_written_back_and_reduce_the_error(anny, blouse_run):
     from core import workflows as wf
     from core.cut.auto_darts import place_darts

@@ -26,10 +26,9 @@ CASES = [(name, size) for name in TEMPLATES for size in SIZES]
 # sizes are fitted by the tape measures (docs/bodies.md) every template cuts on every size: the four-dart
 # blouse's neckline and shoulder darts crossed on women:L, XXL and 3XL until its neckline dart stopped
 # 7.5 mm short of the bust point (core.design.blouse_variants.NECK_DART_APEX_OFFSET); on men's XXL that
-# dart's line then leaves the front.
-KNOWN_REFUSED = {
-    ("blouse_four_darts", "men:XXL"): "the neckline dart's line leaves the front (it gives 2 stretches)",
-}
+# dart's line then gave two stretches until a mirrored dart no longer snapped to the body's midline
+# (core.cut.darts.midline_guards).
+KNOWN_REFUSED = {}
 
 # Cases the solve (the reference pattern on the size's own body) refuses today besides those the cut
 # refuses, each with its reason (a --full run). The women's 3XL and 4XL are fitted with their thighs

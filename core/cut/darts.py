@@ -13,6 +13,7 @@ from typing import Dict, List
 import numpy as np
 from scipy.sparse import csr_matrix as sp_csr
 
+from ..design.naming import swap_side
 from ..errors import DesignError
 from ..geom.polyline import cumulative_lengths
 from .types import Seam, seam_kind
@@ -56,6 +57,32 @@ def dart_records(spec, seams: List[Seam], body_vertices: np.ndarray, body_faces:
             "line": d.host,
             **_cup_record(getattr(d, "towards", None), apex, body_vertices, body_faces),
         }
+    return out
+
+
+def midline_guards(lines, mirror) -> Dict[int, frozenset]:
+    """``{line index: body vertices}`` the tracer must not snap the line to: for every dart line of a
+    mirrored cut with its mirror dart (``*_left`` / ``*_right``), the body's midline vertices (their own
+    mirror images). The cut rebuilds a mirrored garment's right half as the reflection of its left
+    (:mod:`.symmetric`), so a left dart through a midline vertex meets its mirror there and the line
+    gives two stretches: on men:XXL the four-dart blouse's neckline darts, from one mouth at the centre
+    front, passed 0.4-0.5 mm from the sternum's midline vertex 1.5 mm below it, within the tracer's
+    sliver snap (:data:`core.cut.trace.SNAP_ABS`). Only such a snap is refused (a crossing still
+    splits its edge there), so a cut where no dart snaps to the midline is unchanged.
+
+    ``mirror``: ``(body symmetry (V,), body triangle sides)`` as the cut engine has it, or None."""
+    if mirror is None:
+        return {}
+    S = np.asarray(mirror[0], dtype=np.int64)
+    mid = frozenset(np.flatnonzero(S == np.arange(len(S))).tolist())
+    names = {line.name for line in lines}
+    out = {}
+    for i, line in enumerate(lines):
+        if getattr(line, "dart", None) is None:
+            continue
+        other = swap_side(line.name)
+        if other != line.name and other in names:
+            out[i] = mid
     return out
 
 

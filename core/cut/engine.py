@@ -47,6 +47,7 @@ from scipy.sparse.csgraph import connected_components
 from ..design.spec import CutLine, CutSpec, PanelSpec
 from ..errors import CutError
 from ..progress import report
+from .darts import midline_guards
 from .geodesic import GeodesicPaths, check_surface_point, insert_keypoints
 from .grain import body_part_axis
 from .panels import build_panels, halfedges
@@ -246,6 +247,7 @@ def cut_surface(
         # bridge lies across the midline, no mirrored rebuild)
         sides = None if bridge_sides is None else np.concatenate([sides, bridge_sides])
     mirror = None if sides is None else (np.asarray(body.symmetry, dtype=np.int64), sides)
+    guards = midline_guards(spec.lines, mirror)
     clock.lap("axes")
     gnames = [g.name for g in spec.garments]
     garment_lines = {g: [i for i, l in enumerate(spec.lines) if g in line_garments(l, gnames)] for g in gnames}
@@ -271,7 +273,9 @@ def cut_surface(
                 base + 0.2 * k / max(len(todo), 1) / len(spec.garments),
                 f"cutting garment {g.name}: line {names[li]}",
             )
+            gm.avoid = guards.get(li, frozenset())  # vertices the line may not snap to
             seqs[li] = _insert_line(gm, li, line_kv[li], paths[li], spec.lines[li].closed, names)
+            gm.avoid = frozenset()
         clock.lap("splitting")
         report(progress, base + 0.2 / len(spec.garments), f"cutting garment {g.name}: panels")
         out = _garment_panels(gm, spec, g, gpanels, seqs, forbidden, BF, X, axes, offset, clock, seed_names, mirror)

@@ -6,7 +6,8 @@ incidence, and splits through its public operations), kept apart because the wal
 its own operation. Tolerances are relative: a crossing within :data:`SNAP` of an edge
 end (as a fraction of the edge) is snapped to that vertex, and one no more than
 :data:`SNAP_SLIVER` of the edge and :data:`SNAP_ABS` metres from a free vertex snaps to
-it too (no sliver triangles), unless that vertex lies on another cut line.
+it too (no sliver triangles), unless that vertex lies on another cut line or is one the
+line must avoid (:attr:`LineTracer.avoid`).
 """
 
 from __future__ import annotations
@@ -27,6 +28,10 @@ _MAX_STEPS = 100000  # guard against a walk that does not progress
 
 class LineTracer:
     """The tracing half of :class:`~core.cut.split.CutMesh` (see the module docstring)."""
+
+    #: vertices the line being traced may not snap to (a mirrored dart: the body's midline,
+    #: :func:`core.cut.darts.midline_guards`); set by the cut engine per line
+    avoid: frozenset = frozenset()
 
     def _frame(self, P: int):
         fr = self._frames.get(P)
@@ -183,8 +188,9 @@ class LineTracer:
         return None
 
     def _free(self, v: int, allowed: set) -> bool:
-        """A vertex a line may snap to: not on another cut line (unless a keypoint of this one)."""
-        return v in allowed or not self.cut_verts.get(v)
+        """A vertex a line may snap to: not on another cut line (unless a keypoint of this one) nor
+        one of :attr:`avoid`."""
+        return v in allowed or not (self.cut_verts.get(v) or v in self.avoid)
 
     def _finish(self, f, cur, u, w, b, line, allowed, names) -> int:
         b = np.clip(b, 0.0, None)
