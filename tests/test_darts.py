@@ -465,3 +465,33 @@ def test_a_solve_whose_dart_legs_cross_runs_rounds_more(blouse_run, monkeypatch)
     assert solver.extra_iterations(state) == COLLAPSE_ROUNDS
     state.iteration = 2 * state.planned  # as many again as planned: no more
     assert solver.extra_iterations(state) == 0
+
+
+def test_a_solve_ends_with_its_dart_legs_sewn_equal(blouse_run):
+    """A solve stopped with its darts' legs of different lengths (here after 10 iterations) gives a pattern
+    whose legs are sewn equal (PatternSolver.result: dart_gaps.equal_legs, the smallest move in the system
+    matrix's norm), flip-free and uncrossed; the solve's own iterate is left as it is, so a solve that goes
+    on goes on from it; legs already within the tolerance give the iterate itself (the same bits)."""
+    from core.pattern.optimizer import solver as S
+    from core.pattern.optimizer.dart_gaps import LEG_TARGET, LEG_TOLERANCE, leg_differences
+
+    prep, run = blouse_run
+    solver = S.PatternSolver(prep.cut, prep.reference)
+    K, cw, cg = solver.targets_reference()
+    state = solver.begin(K, cw, cg)
+    solver.iterate(state, 10)
+    legs = solver.gaps.legs
+    before = state.U.copy()
+    apart = np.abs(leg_differences(legs, before)).max()
+    assert apart > 0.1e-3  # unequal after 10 iterations (0.89 mm)
+    equal = solver.legs_sewn_equal(state)
+    assert equal is not state and np.array_equal(state.U, before)
+    assert np.abs(leg_differences(legs, equal.U)).max() <= LEG_TARGET
+    assert not solver.gaps.crossed(equal.U)
+    moved = np.linalg.norm(equal.U - before, axis=1)
+    assert 0 < moved.max() < apart  # a correction of the legs, not a new solve (0.44 mm)
+    uv = solver.result(state).uv
+    assert all(np.array_equal(uv[pd.name], equal.U[pd.offset : pd.offset + pd.n]) for pd in solver.panels)
+    assert solver.legs_sewn_equal(equal) is equal  # within the tolerance: untouched
+    # the written pattern's own figure (build.dart_report), on the reference's full solve
+    assert all(r["leg_difference_mm"] <= 1000 * LEG_TOLERANCE for r in run.pattern.report["darts"].values())

@@ -33,6 +33,7 @@ solver's) and seam plan, so no call changes a later one's result.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import time
 from typing import Dict, Optional, Sequence, Tuple
@@ -49,7 +50,7 @@ from ..accel.products import GradientProducts
 from ..build import SolveResult, solve_result
 from ..config import SolverConfig, check_tolerance
 from ..validate import body_positions, validate_cut
-from .dart_gaps import GapCorrection, dart_legs
+from .dart_gaps import GapCorrection, dart_legs, equal_legs
 from .factor import SymmetricFactor
 from .feedback import feedback_gains, move_corrections
 from .guard import (
@@ -639,7 +640,22 @@ class PatternSolver:
                 f"panel {self.panels[k].name!r}: the solve diverged after {state.iteration} iterations "
                 f"({int(per_piece[k])} triangles stretched over {DIVERGED_SCALE:g} x their targets)"
             )
-        return solve_result(self.panels, state)
+        return solve_result(self.panels, self.legs_sewn_equal(state))
+
+    def legs_sewn_equal(self, state: "SolveState") -> "SolveState":
+        """``state`` with its darts' legs made equal in length (:func:`.dart_gaps.equal_legs`, on the solver's
+        matrix; a copy), or ``state`` itself where they are within :data:`.dart_gaps.LEG_TOLERANCE` or the
+        move would flip a triangle or cross a dart's legs (then the iterate is kept as it is). The state's
+        iterate is not changed: a solve that goes on goes on from it."""
+        lu, _ = self.factorisation(state.config, state.plan)
+        U = equal_legs(self.gaps.legs, lu, state.U)
+        if U is state.U:
+            return state
+        s_old = state.s_cur if state.s_cur is not None else None
+        kept, cut, _ = flip_guard(self.blocks, state.U, U, s_old)
+        if cut or self.gaps.crossed(kept):
+            return state
+        return dataclasses.replace(state, U=kept)
 
 
 def converged(state: "SolveState") -> bool:
