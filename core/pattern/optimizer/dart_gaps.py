@@ -242,10 +242,12 @@ def equal_legs(legs: DartLegs, factor, U: np.ndarray) -> np.ndarray:
         J = [_difference_gradient(legs, out, lo, hi) for lo, hi in pairs]
         Y = [factor.solve(j) for j in J]
         S = np.array([[np.vdot(j, y) for y in Y] for j in J])
-        lam = np.linalg.solve(S, -c)
+        lam = np.linalg.lstsq(S, -c, rcond=None)[0]  # a degenerate dart (no gradient) gets no move
         for k, y in enumerate(Y):
             out += lam[k] * y
         c = leg_differences(legs, out)
+        if not np.all(np.isfinite(out)):
+            return U
         if np.max(np.abs(c)) <= LEG_TARGET:
             break
     return out
