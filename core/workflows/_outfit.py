@@ -132,26 +132,16 @@ def _pushed(pattern, collider, n_body: int, inner: List[LayerRun], thickness: fl
         shift[ids[hit]] = new[hit] - xyz[hit]
         moved[ids[hit]] = True
     # the unmoved vertices take the mean displacement of their neighbours, ring by ring
-    edges = np.concatenate(
-        [
-            np.asarray(p.vertex_ids, int)[np.asarray(p.faces, int)][:, [a, b]]
-            for p in pattern.panels
-            for a, b in ((0, 1), (1, 2), (2, 0))
-        ]
+    edges = _directed_edges(
+        np.concatenate([np.asarray(p.vertex_ids, int)[np.asarray(p.faces, int)] for p in pattern.panels])
     )
-    edges = np.concatenate([edges, edges[:, ::-1]])
-    count = np.maximum(np.bincount(edges[:, 0], minlength=n), 1)[:, None]
     free = ~moved
     for _ in range(rings):
-        total = np.zeros((n, 3))
-        np.add.at(total, edges[:, 0], shift[edges[:, 1]])
-        shift[free] = (total / count)[free]
+        shift[free] = _neighbour_mean(shift, edges)[free]
     # then every vertex half-way to its neighbours' mean, a few times (neighbours pushed onto different
     # folds of the inner garment, an armpit, no longer start centimetres apart), and pushed out again
     for _ in range(smooth):
-        total = np.zeros((n, 3))
-        np.add.at(total, edges[:, 0], shift[edges[:, 1]])
-        shift = 0.5 * shift + 0.5 * total / count
+        shift = 0.5 * shift + 0.5 * _neighbour_mean(shift, edges)
     panels = [
         replace(p, xyz=push(np.asarray(p.xyz, float) + shift[np.asarray(p.vertex_ids, int)])) for p in pattern.panels
     ]
@@ -253,14 +243,28 @@ def _draped_offset(body_v, body_f, normals, inner: List[LayerRun]) -> np.ndarray
     coll_v, coll_f = layer_collider(body_v, body_f, [(*lr.surface, lr.thickness) for lr in inner])
     garment = coll_f[coll_f.min(axis=1) >= len(body_v)]  # the inner garments' and their ramps' triangles
     hit = ray_hit_distance(body_v, normals, coll_v, garment, max_t=COVER_BAND)
-    edges = np.concatenate([body_f[:, [0, 1]], body_f[:, [1, 2]], body_f[:, [2, 0]]])
-    edges = np.concatenate([edges, edges[:, ::-1]])
-    count = np.maximum(np.bincount(edges[:, 0], minlength=len(body_v)), 1)
+    edges = _directed_edges(np.asarray(body_f, int))
     offset = hit.copy()
     for _ in range(DRAPED_SMOOTHING):
-        total = np.bincount(edges[:, 0], weights=offset[edges[:, 1]], minlength=len(body_v))
-        offset = np.maximum(0.5 * offset + 0.5 * total / count, hit)
+        offset = np.maximum(0.5 * offset + 0.5 * _neighbour_mean(offset, edges), hit)
     return offset
+
+
+def _directed_edges(faces: np.ndarray) -> np.ndarray:
+    """(6F, 2) int, every triangle edge of ``faces`` (F, 3) in both directions (shared edges repeat:
+    a neighbour across two triangles counts twice, as before)."""
+    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    return np.concatenate([edges, edges[:, ::-1]])
+
+
+def _neighbour_mean(values: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """(N,) or (N, k), each vertex's mean of ``values`` over its neighbours along ``edges``
+    (:func:`_directed_edges`); 0 for a vertex with none."""
+    n = len(values)
+    count = np.maximum(np.bincount(edges[:, 0], minlength=n), 1).reshape((n,) + (1,) * (values.ndim - 1))
+    total = np.zeros_like(values, dtype=float)
+    np.add.at(total, edges[:, 0], values[edges[:, 1]])
+    return total / count
 
 
 def drape_outfit(
