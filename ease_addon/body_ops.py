@@ -30,7 +30,7 @@ def start_body(context, shape=None, pose=None, size=None, sync_=None) -> jobs.Jo
     if pose is not None:
         want["pose"] = pose
     what = (f"size {size}" if size else "shape") if shape is not None else f"pose {pose}"
-    threaded = not (jobs.SYNCHRONOUS if sync_ is None else sync_)
+    threaded = not jobs.in_line(sync_)
 
     def compute(progress):
         progress(0.0, f"the body in {what}")

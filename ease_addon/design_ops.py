@@ -111,7 +111,7 @@ def start_load(path: str, shown: str, body_now: tuple, label: str, sync=None) ->
     "loaded ..." and it is one undo step named ``label``). ``(job, said)``: ``said`` holds the
     report once placed (at once when in line)."""
     said = []
-    threaded = not (jobs.SYNCHRONOUS if sync is None else sync)
+    threaded = not jobs.in_line(sync)
 
     def place(loaded):
         body = _place_design(bpy.context, loaded)

@@ -76,6 +76,12 @@ class Job:
         return f"updating: {self.label} {100 * self.fraction:.0f} % ({self.message})"
 
 
+def in_line(sync=None) -> bool:
+    """Whether a job computes in line: ``sync`` when given, else :data:`SYNCHRONOUS` (read at call
+    time, so a test may switch it)."""
+    return SYNCHRONOUS if sync is None else bool(sync)
+
+
 def start(name: str, label: str, compute, apply, fail=None, sync=None, cancelled=None) -> Job:
     """Run ``compute(progress)`` off the main thread, then ``apply(result)`` on it.
 
@@ -86,7 +92,7 @@ def start(name: str, label: str, compute, apply, fail=None, sync=None, cancelled
     """
     drop(name)
     job = Job(name, label, compute, apply, fail, cancelled)
-    if SYNCHRONOUS if sync is None else sync:
+    if in_line(sync):
         job.run()
         if job.error is not None:  # in line: the caller meets the error as it would without a job
             raise job.error
@@ -279,7 +285,7 @@ def start_step(name: str, label: str, compute, apply, status: str, undo: str, sy
     says: "*label* stopped: *error*", or "*label* cancelled: the scene is as it was" (nothing
     applied). A result that lands after the operator returned (computed in a worker) is one undo
     step of its own, named ``undo``, and Live sees the change."""
-    threaded = not (SYNCHRONOUS if sync is None else sync)
+    threaded = not in_line(sync)
 
     def apply_step(result):
         apply(result)
