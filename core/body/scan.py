@@ -37,7 +37,7 @@ from ..errors import BodyError
 from ..geom.mesh import vertex_normals
 from ..progress import Progress, report
 from .made_to_measure import ADULT_AGE, LOCAL_FOR, PHENOTYPES
-from .tape import LIMB_PLANES, TAPE_MEASURES, _basis, levels, limb_plane, tape_measures
+from .tape import LIMB_PLANES, TAPE_MEASURES, levels, limb_plane, plane_basis, tape_measures
 
 # The fewest points a scan may have: fewer cannot pin down 60-odd parameters.
 MIN_POINTS = 500
@@ -696,7 +696,7 @@ LIMB_REACH = {"neck": 0.1, "upper_arm": 0.08, "wrist": 0.05}
 def _girth_in_plane(points, mask, point, normal) -> Optional[float]:
     """:func:`_scan_loop_girth` of the ``mask`` points within :data:`SCAN_SLAB` of the plane
     (``point``, ``normal``), in the plane's own coordinates."""
-    n, u, w = _basis(normal)
+    n, u, w = plane_basis(normal)
     d = points - np.asarray(point, dtype=float)
     sel = mask & (np.abs(d @ n) <= SCAN_SLAB)
     return _scan_loop_girth(np.stack([d[sel] @ u, d[sel] @ w], axis=1))

@@ -83,7 +83,9 @@ def canonical(name: str) -> str:
 
 
 # -- sections ---------------------------------------------------------------------------------
-def _basis(normal):
+def plane_basis(normal):
+    """``(n, u, w)``: the unit ``normal`` (3,) and two unit vectors (3,) spanning its plane, so that
+    ``(u, w, n)`` is right-handed; ``u`` is taken across x (across y where the normal is near x)."""
     n = np.asarray(normal, dtype=float)
     n = n / np.linalg.norm(n)
     a = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
@@ -163,7 +165,7 @@ def loop_girth(vertices: np.ndarray, faces: np.ndarray, point, normal, near=None
         raise BodyError("tape: the plane misses the body part it should cut")
     c = np.asarray(point if near is None else near, dtype=float)
     loop = min(loops, key=lambda p: float(np.linalg.norm(p - c, axis=1).min() + np.linalg.norm(p.mean(0) - c)))
-    _, u, w = _basis(normal)
+    _, u, w = plane_basis(normal)
     return hull_perimeter(np.stack([loop @ u, loop @ w], axis=1))
 
 
