@@ -19,9 +19,12 @@ After every step:
 Headless there is no hypothesis in the environment: the walk is a seeded random walk. CI runs the
 seeds of :data:`CI_SEEDS` (:data:`CI_STEPS` steps each); ``pytest --full`` runs
 :data:`FULL_SEEDS` walks of :data:`FULL_STEPS` steps (the designer's afternoon), every template.
-The threaded walks (:data:`THREADED_CI_SEEDS`, :data:`THREADED_FULL_SEEDS`) run the add-on's jobs
-in worker threads, as Blender's window does, and let them land (the jobs' poll) before half of
-the checks.
+The threaded walks (:data:`THREADED_CI_SEEDS`, :data:`THREADED_FULL_SEEDS`) run Live's build and
+solve in worker threads, as Blender's window does, and let them land (the jobs' poll) before half
+of the checks; the operators are still called as a script calls them (EXEC_DEFAULT), so Apply
+Size/Pose, Load, Optimize, Transfer, Adapt and Drape compute in line there (threaded paths are
+tested on their own: Optimize in test_addon_pattern, whose job Transfer and Adapt share untested,
+Apply Size/Pose in test_addon_body, Load in test_addon_design, Drape in test_addon_drape).
 """
 
 from __future__ import annotations
