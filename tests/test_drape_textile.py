@@ -239,3 +239,29 @@ def test_newton_cotton_cusick_meets_the_published_range_at_any_iteration_count()
         assert r["settled"]
         assert 60.0 <= r["dc_pct"] <= 76.0 and 5 <= r["nodes"] <= 10
     assert abs(runs[0]["dc_pct"] - runs[1]["dc_pct"]) <= 3.0
+
+
+def test_a_stiff_hinge_turns_at_most_its_reach_a_pass():
+    # two 1 mm triangles of cotton, folded 1.5 rad off their flat rest: against their tiny masses the
+    # hinge is as good as rigid, and one full Gauss-Seidel step turned it all the way at once (the
+    # knife-pleated skirt at 5 mm tore at frame 1); a pass turns it by at most BEND_REACH, and the
+    # passes with their multiplier still reach the rest angle
+    from core.drape import kernels as K
+    from core.drape.mesh import dihedral_angles
+
+    wp = K.wp
+    fold = 1.5
+    x = np.array([[5e-4, 1e-3 * np.cos(fold), 1e-3 * np.sin(fold)], [5e-4, -1e-3, 0.0], [0, 0, 0], [1e-3, 0, 0]])
+    bend = np.array([[0, 1, 2, 3]])
+    start = dihedral_angles(x, bend)[0]
+    assert abs(start) == pytest.approx(fold, abs=1e-6)
+    xs = wp.array(x, dtype=wp.vec3, device="cpu")
+    lam = wp.zeros(1, dtype=float, device="cpu")
+    args = [wp.full(4, 5e7, dtype=float, device="cpu"), wp.array(bend.astype(np.int32), dtype=int, device="cpu")]
+    args += [wp.ones(1, dtype=float, device="cpu"), wp.zeros(1, dtype=float, device="cpu"), 1.0e-5, 600.0**2, 0, lam]
+    angles = []
+    for _ in range(12):
+        wp.launch(K.solve_bending, 1, inputs=[xs, *args], device="cpu")
+        angles.append(dihedral_angles(xs.numpy().astype(float), bend)[0])
+    assert abs(start) - abs(angles[0]) == pytest.approx(K.BEND_REACH, abs=0.1)
+    assert abs(angles[-1]) < 0.01

@@ -20,6 +20,12 @@ from __future__ import annotations
 
 from ..geom.queries import wp  # Warp, set up once for the package (kernel cache, log level)
 
+#: rad, the most one bending pass turns a hinge (its linearised angle change): where both triangles are
+#: millimetres across (a refined mesh's pieces along pleat lines and seams) the hinge is as good as rigid
+#: against their tiny masses, and the full Gauss-Seidel step against body contact overshoots and tears the
+#: cloth (the knife-pleated skirt at 5 mm: 0.6 % of its area stretched past 300 % at frame 1)
+BEND_REACH = wp.constant(0.5)
+
 
 @wp.kernel
 def predict(
@@ -248,6 +254,12 @@ def solve_bending(
     if c < -wp.pi:
         c = c + 2.0 * wp.pi
     dl = -(c + alpha * lam[b]) / denom
+    # a trust region: one pass turns the hinge by at most BEND_REACH (linearised); the fixed point
+    # (dl = 0) is the same, but a stiff hinge between millimetre triangles no longer overshoots
+    lin = denom - alpha
+    if lin > 0.0:
+        reach = BEND_REACH / lin
+        dl = wp.clamp(dl, -reach, reach)
     lam[b] = lam[b] + dl
     x[i] = x1 + g1 * (w1 * dl)
     x[j] = x2 + g2 * (w2 * dl)
