@@ -15,6 +15,7 @@ from core.body.made_to_measure import (
     sample_body,
     thigh_gap,
     tolerance,
+    waist_steer,
 )
 from core.body.measure import measure
 from core.body.sizes import size_shape
@@ -293,3 +294,57 @@ def test_design_body_measurements(anny):
         d["body"] = body
         with pytest.raises(DesignError, match=re.escape(words)):
             load_design(d)
+
+
+# A man's shape fitted (before the steered restart) to the tape measures of the bench's set 37
+# (sample_body seed [33, 37], 212.7 cm): its natural waist in the upper of two hollows, 9 cm above
+# the hidden body's, the back waist length 3.4 cm short.
+UPPER_HOLLOW = {
+    "gender": 0.0,
+    "age": 0.8,
+    "muscle": 0.092,
+    "weight": 0.716,
+    "height": 0.648,
+    "proportions": 0.666,
+    "measure-neck-circ-incr": -0.208,
+    "measure-shoulder-dist-incr": 0.289,
+    "measure-bust-circ-incr": 0.177,
+    "measure-underbust-circ-incr": -0.079,
+    "measure-waist-circ-incr": -0.353,
+    "hip-scale-horiz-incr": -0.532,
+    "measure-hips-circ-incr": -0.199,
+    "measure-upperarm-circ-incr": -0.097,
+    "measure-wrist-circ-incr": 0.076,
+    "measure-upperarm-length-incr": 0.566,
+    "measure-lowerarm-length-incr": 0.431,
+    "measure-napetowaist-dist-incr": 0.767,
+    "measure-upperleg-height-incr": -0.029,
+    "measure-lowerleg-height-incr": 0.271,
+    "measure-thigh-circ-incr": 0.147,
+}
+
+
+def test_waist_steer_says_which_hollow_a_back_length_names(anny):
+    """At a body's own back waist length the level it names is the natural waist (the two girths
+    agree); a back 3.4 cm longer on the body stuck in the upper hollow names a level more than
+    half a centimetre wider than its waist, and on the hidden body it came from, none."""
+    hidden = sample_body(np.random.default_rng([33, 37]))
+    want = tape_measures(anny, shape=hidden, which=["back_waist_length"])["back_waist_length"]
+    for shape in (hidden, UPPER_HOLLOW):
+        v = anny.vertices(shape)
+        own = tape_measures(anny, v, ["back_waist_length"], shape=shape)["back_waist_length"]
+        there, narrowest = waist_steer(anny, v, own)
+        assert there == pytest.approx(narrowest, abs=0.05)
+    there, narrowest = waist_steer(anny, anny.vertices(UPPER_HOLLOW), want)
+    assert there > narrowest + 0.5
+    there, narrowest = waist_steer(anny, anny.vertices(hidden), want)
+    assert there == pytest.approx(narrowest, abs=0.05)
+
+
+@pytest.mark.slow
+def test_made_to_measure_finds_the_lower_waist(anny):
+    """The bench's set 37 (a 212.7 cm man whose natural waist is the lower of two hollows): the fit
+    stalls in the upper one, its back waist length short; the steered restart lands all 14."""
+    hidden = sample_body(np.random.default_rng([33, 37]))
+    fit = fit_tape(anny, {**tape_measures(anny, shape=hidden), "gender": hidden["gender"]})
+    assert fit.ok, fit.summary()

@@ -278,9 +278,10 @@ def _band(v, edges, lo, hi):
     return edges[(np.maximum(za, zb) >= lo) & (np.minimum(za, zb) <= hi)]
 
 
-def back_profile_length(v, edges, top_z: float, bottom_z: float) -> float:
-    """Length (m) down the back's midline from ``top_z`` to ``bottom_z``: in horizontal slices 5 mm
-    apart, the most posterior point within 2 cm of the midline, joined (a tape laid down the spine)."""
+def back_profile(v, edges, top_z: float, bottom_z: float) -> np.ndarray:
+    """The back's midline from ``bottom_z`` up to ``top_z``: (k, 2) points (y, z) (m), in horizontal
+    slices 5 mm apart the most posterior point within 2 cm of the midline (where a tape laid down
+    the spine lies)."""
     band = _band(v, edges, bottom_z, top_z)
     prof = []
     for z in np.linspace(bottom_z, top_z, max(2, int(np.ceil((top_z - bottom_z) / 0.005)) + 1)):
@@ -290,10 +291,22 @@ def back_profile_length(v, edges, top_z: float, bottom_z: float) -> float:
             prof.append((p[:, 1].max(), z))
     if len(prof) < 2:
         raise BodyError("tape: no back profile between the neck and the waist")
-    return float(np.linalg.norm(np.diff(np.array(prof), axis=0), axis=1).sum())
+    return np.array(prof)
+
+
+def back_profile_length(v, edges, top_z: float, bottom_z: float) -> float:
+    """Length (m) down the back's midline from ``top_z`` to ``bottom_z``: the :func:`back_profile`
+    points joined (a tape laid down the spine)."""
+    return float(np.linalg.norm(np.diff(back_profile(v, edges, top_z, bottom_z), axis=0), axis=1).sum())
 
 
 # -- the measures -----------------------------------------------------------------------------
+def waist_band(crotch_z: float, bust_z: float):
+    """(lo, hi), the heights (m) the natural waist is searched between: from a point 35 % of the way
+    from the crotch to the bust (below it the section widens into the hips) to 3 cm under the bust."""
+    return crotch_z + 0.35 * (bust_z - crotch_z), bust_z - 0.03
+
+
 def levels(body, v: np.ndarray) -> Dict[str, float]:
     """The heights (m) the torso girths are taken at, searched on this body: bust, underbust,
     waist, high hip, hip, thigh."""
@@ -302,9 +315,7 @@ def levels(body, v: np.ndarray) -> Dict[str, float]:
     bust_z = 0.5 * (lm["bust_left"][2] + lm["bust_right"][2])
     bust_x = 0.5 * (abs(lm["bust_left"][0]) + abs(lm["bust_right"][0]))
     crotch_z = float(lm["crotch"][2])
-    # The natural waist: narrowest torso section between the bust and a point 35 % of the way from
-    # the crotch to the bust (below it the section widens into the hips).
-    waist_z = natural_waist_height(v, parts, crotch_z + 0.35 * (bust_z - crotch_z), bust_z - 0.03)
+    waist_z = natural_waist_height(v, parts, *waist_band(crotch_z, bust_z))
     hip_z = buttock_height(v, body, parts, crotch_z, waist_z)
     return {
         "bust": float(bust_z),
