@@ -14,6 +14,10 @@ body's phenotypes and, for each measure given, the Anny local change that moves 
   sections at the thigh level may not overlap) and the upper arms and the torso (the upper
   arm's section may not reach inside the chest's); a fitted body that does is reported.
 
+A fit whose back waist length misses is fitted again with its natural waist steered to the level
+that length names (:func:`waist_steer`): a torso of two hollows of about the same girth otherwise
+keeps the waist in the hollow it started in.
+
 A measure the fit cannot bring within its tolerance (1 cm on girths, 1.5 cm on lengths) is
 reported with the value reached (:attr:`TapeFit.status`), never silently.
 """
