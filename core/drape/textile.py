@@ -306,7 +306,7 @@ def cusick(
     nodes, outline = count_nodes(x[rim, :2])
     # newton: how many substeps' solves ended above the tolerance (at the iteration limit), and the
     # largest residual over weight they left: the fall is the implicit-Euler path only where they converged
-    res = np.asarray(getattr(solver, "_newton_residuals", []), float)
+    res = solver.newton_residuals
     return {
         "material": mat.name,
         "edge_mm": edge * 1e3,

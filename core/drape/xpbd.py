@@ -285,6 +285,13 @@ class DrapeSolver:
         self._newton_iterations = []  # iterations per substep (the residual-based stop's record)
         self._newton_residuals = []  # the largest residual over weight at the end of each substep's solve
 
+    @property
+    def newton_residuals(self) -> np.ndarray:
+        """(S,) the largest residual over weight each substep's implicit solve ended with so far
+        (``solver="newton"``; empty for the other solvers): above the tolerance, that solve stopped
+        at its iteration limit."""
+        return np.asarray(getattr(self, "_newton_residuals", []), float)
+
     def residual(self, state: DrapeState) -> float:
         """The largest net force (elastic + gravity) on a free particle off the body, over its weight:
         0 in a static equilibrium of the fabric's own energy (:mod:`core.drape.newton`), whatever the
