@@ -348,6 +348,18 @@ def _show(context, session) -> None:
         write_overlay(data.body_object(context), pattern, session)
 
 
+def _store_final(context, pattern, text: str, same: bool) -> None:
+    """Store Live's converged ``pattern`` (its stored ``text``): into the pieces shown where they
+    are the same pieces (``same``), with the key figures; else the pieces of a new cut are made,
+    stored and figured at once."""
+    scene = context.scene
+    if same:
+        sync.store_pattern(scene, pattern, text=text)
+        scene.ease.pattern_json = json.dumps(data.key_figures(pattern))
+    else:
+        sync.show_pattern(context, pattern, text=text)
+
+
 def _final_units(context, session) -> deque:
     """The work after the cold solve completed, as a queue of ``(kind, size, work)`` units each
     well within a slice: show the pattern (objects in place, overlay), measure it, encode it a
@@ -377,11 +389,8 @@ def _final_units(context, session) -> deque:
 
     def store(join):
         pattern = box["pattern"]
-        if box["same"]:
-            sync.store_pattern(scene, pattern, text=join())
-            scene.ease.pattern_json = json.dumps(data.key_figures(pattern))
-        else:  # the pieces of a new cut: made, stored and figured at once
-            sync.show_pattern(context, pattern, text=join())
+        _store_final(context, pattern, join(), box["same"])
+        if not box["same"]:
             write_overlay(data.body_object(context), pattern, session)
         _LIVE.update(stored=scene.get(data.PATTERN_KEY), landed=True)
 
@@ -584,11 +593,7 @@ def _solve_in_worker(context, session, field=None, painted=None, restart=None) -
                 if same:
                     sync.show_pieces(ctx, pattern)
                 if kind == "final":
-                    if same:
-                        sync.store_pattern(scene, pattern, text=text)
-                        scene.ease.pattern_json = json.dumps(data.key_figures(pattern))
-                    else:  # the pieces of a new cut: made, stored and figured at once
-                        sync.show_pattern(ctx, pattern, text=text)
+                    _store_final(ctx, pattern, text, same)
                     _LIVE["stored"] = scene.get(data.PATTERN_KEY)
                 if same or kind == "final":
                     _write_fit(obj, ratio)
