@@ -167,12 +167,7 @@ def _label_on(box: np.ndarray, layout: Layout, i: int, grid: PageGrid, ink: np.n
         return False
     if not whole:
         return True
-    lo, hi = placed.min(axis=0), placed.max(axis=0)
-    for r, c in zip(*np.nonzero(here)):
-        win = grid.window(r, c)
-        if np.all(lo >= win[0]) and np.all(hi <= win[1]):
-            return True
-    return False
+    return bool(grid.holding(here, placed.min(axis=0)[None], placed.max(axis=0)[None])[0])
 
 
 def _label_place(piece, box: np.ndarray, layout: Layout, i: int, grid: PageGrid, ink: np.ndarray, whole: bool = True):
