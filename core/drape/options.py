@@ -29,7 +29,10 @@ class DrapeOptions:
         step's potential; a settled drape is the fabric's own equilibrium)
         or ``"newton"`` (:mod:`core.drape.newton`: the same potential
         minimised to a residual with the substep's factored Hessian and L-BFGS,
-        float64 on the host; the fabric's stiffness at any step).
+        float64 on the host; the fabric's stiffness at any step) or ``"pd"``
+        (:mod:`core.drape.pd`: projective dynamics, the same energy to second
+        order minimised by local projections and one back-substitution of a
+        matrix factored once per cloth, float64 on the host).
     fps : float, 1/s
         Frames per second of simulated time.
     substeps : int, per frame
@@ -37,11 +40,11 @@ class DrapeOptions:
     iterations : int, per substep, or None
         XPBD: passes over the stretch, sliver-edge and bending constraints in
         each substep (the bending multipliers accumulate over them); VBD:
-        Gauss-Seidel sweeps over the vertices; newton: the most iterations
+        Gauss-Seidel sweeps over the vertices; newton, pd: the most iterations
         (fewer once ``tolerance`` is met). None: the
         solver's default (:data:`ITERATIONS`).
     tolerance : float, fraction of a particle's weight
-        ``solver="newton"``: a substep's iterations stop once the residual force on
+        ``solver="newton"`` or ``"pd"``: a substep's iterations stop once the residual force on
         every free particle (the gradient of the step's potential) is under this
         fraction of its weight (``iterations`` is then the most it takes).
     vbd_damping : float, s
@@ -179,9 +182,9 @@ class DrapeOptions:
 
 
 #: the drape solvers (:attr:`DrapeOptions.solver`)
-SOLVERS = ("xpbd", "vbd", "newton")
+SOLVERS = ("xpbd", "vbd", "newton", "pd")
 #: each solver's iterations per substep when none are given
-ITERATIONS = {"xpbd": 1, "vbd": 2, "newton": 30}
+ITERATIONS = {"xpbd": 1, "vbd": 2, "newton": 30, "pd": 10}
 
 #: name -> (kind, low, low included, high, None allowed) of every numeric option.
 #: The upper bounds are far beyond any useful drape; they exist so a typo

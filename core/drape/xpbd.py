@@ -56,6 +56,15 @@ def check_body(body_vertices, body_faces) -> tuple:
     return v, f.astype(np.int32)
 
 
+def _start(cloth: Cloth) -> tuple:
+    """The skintight start the rest shape grows from: (T, 2) weft / warp stretch of every triangle,
+    (E,) the start lengths of the sliver edges."""
+    fw0, fg0, _ = face_strains(cloth.x0, cloth)
+    e = cloth.edges.reshape(-1, 2)
+    edge_start = np.linalg.norm(cloth.x0[e[:, 1]] - cloth.x0[e[:, 0]], axis=1)
+    return np.clip(np.stack([fw0, fg0], axis=1) + 1.0, 0.2, 5.0), edge_start
+
+
 def _device(wp, name: str):
     try:
         dev = wp.get_device(name)
@@ -189,9 +198,9 @@ class DrapeSolver:
         self._upload(cloth, inv_mass, tri_order, bend_order, edge_order, body_v, body_f)
         wp.load_module(K, device=self.device)
         wp.load_module(Q, device=self.device)
-        if opts.solver in ("vbd", "newton"):
+        if opts.solver in ("vbd", "newton", "pd"):
             self._upload_vbd(cloth, mass, tri_order, bend_order, edge_order)
-        if opts.solver == "newton":
+        if opts.solver in ("newton", "pd"):
             self._upload_newton(cloth, mass)
         t_compile = time.perf_counter()
         self.timings = {"prepare": t_prep - t0, "compile": t_compile - t_prep}
@@ -271,16 +280,26 @@ class DrapeSolver:
         wp.load_module(V, device=dev)
         self._V = V
 
-    def _upload_newton(self, cloth: Cloth, mass) -> None:
-        """The implicit solver's step (:class:`core.drape.newton.NewtonStep`): the substep's Hessian factored once."""
+    def _newton_step(self, cloth: Cloth, mass):
+        """The newton solver's host step (:class:`core.drape.newton.NewtonStep`) for this cloth: its energy
+        and the substep's Hessian (the rest shape growing from the skintight start's stretch)."""
         from . import newton as N
 
-        fw0, fg0, _ = face_strains(cloth.x0, cloth)
-        start = np.clip(np.stack([fw0, fg0], axis=1) + 1.0, 0.2, 5.0)
-        e = cloth.edges.reshape(-1, 2)
-        edge_start = np.linalg.norm(cloth.x0[e[:, 1]] - cloth.x0[e[:, 0]], axis=1)
-        dt = 1.0 / (self.options.fps * self.options.substeps)
-        self._newton = N.NewtonStep(cloth, self.material, dt, mass, start, edge_start)
+        return N.NewtonStep(
+            cloth, self.material, 1.0 / (self.options.fps * self.options.substeps), mass, *_start(cloth)
+        )
+
+    def _upload_newton(self, cloth: Cloth, mass) -> None:
+        """The implicit solver's step on the host: :class:`core.drape.newton.NewtonStep` (the substep's
+        Hessian factored once per substep) or, for ``solver="pd"``, :class:`core.drape.pd.ProjectiveStep`
+        (its constant matrix factored once per cloth)."""
+        if self.options.solver == "pd":
+            from .pd import ProjectiveStep
+
+            dt = 1.0 / (self.options.fps * self.options.substeps)
+            self._implicit = ProjectiveStep(cloth, self.material, dt, mass, *_start(cloth))
+        else:
+            self._newton = self._implicit = self._newton_step(cloth, mass)
         self._weight = mass * max(float(self.options.gravity), 1e-3)  # N (a floor without gravity)
         self._newton_iterations = []  # iterations per substep (the residual-based stop's record)
         self._newton_residuals = []  # the largest residual over weight at the end of each substep's solve
@@ -288,7 +307,7 @@ class DrapeSolver:
     @property
     def newton_residuals(self) -> np.ndarray:
         """(S,) the largest residual over weight each substep's implicit solve ended with so far
-        (``solver="newton"``; empty for the other solvers): above the tolerance, that solve stopped
+        (``solver="newton"`` or ``"pd"``; empty for the other solvers): above the tolerance, that solve stopped
         at its iteration limit."""
         return np.asarray(getattr(self, "_newton_residuals", []), float)
 
@@ -297,7 +316,7 @@ class DrapeSolver:
         0 in a static equilibrium of the fabric's own energy (:mod:`core.drape.newton`), whatever the
         solver. Particles within twice the contact offset of the body are left out (friction holds them)."""
         if getattr(self, "_newton", None) is None:
-            self._upload_newton(self.cloth, self.material.density * self.cloth.mass_area)
+            self._newton = self._newton_step(self.cloth, self.material.density * self.cloth.mass_area)
         x = state.x64 if state.x64 is not None else state.x.numpy().astype(np.float64)
         y = x.copy()
         y[:, 2] -= float(self.options.gravity) * self.dt * self.dt
@@ -324,10 +343,10 @@ class DrapeSolver:
         y = base + (s.y.numpy().astype(np.float64) - prev)
         opts = self.options
         grow = float(s.grow.numpy()[0])
-        self._newton.set_contact(
+        self._implicit.set_contact(
             s.contact_point.numpy(), s.contact_normal.numpy(), s.contact_active.numpy(), self.thickness
         )
-        it, res = self._newton.solve(x, y, grow, int(opts.iterations), float(opts.tolerance), self._weight)
+        it, res = self._implicit.solve(x, y, grow, int(opts.iterations), float(opts.tolerance), self._weight)
         self._newton_iterations.append(it)
         self._newton_residuals.append(res)
         s.x64 = x
@@ -346,7 +365,7 @@ class DrapeSolver:
             contact_active=wp.zeros(n, dtype=int, device=dev),
             bend_lambda=wp.zeros(max(len(self.cloth.bends), 1), dtype=float, device=dev),
         )
-        if self.options.solver in ("vbd", "newton"):
+        if self.options.solver in ("vbd", "newton", "pd"):
             s.y = wp.zeros(n, dtype=wp.vec3, device=dev)
             s.acc = wp.zeros(n, dtype=wp.vec3, device=dev)
         if self.self_radius > 0.0:
@@ -366,7 +385,7 @@ class DrapeSolver:
         inv_dt2 = 1.0 / (self.dt * self.dt)
         keep = float(np.exp(-opts.damping * self.dt))
         gravity = self._wp.vec3(0.0, 0.0, -float(opts.gravity))
-        vbd = opts.solver in ("vbd", "newton")  # both predict the inertial target y
+        vbd = opts.solver in ("vbd", "newton", "pd")  # all predict the inertial target y
         if vbd:
             predict = self._launch(
                 self._V.predict, n, [s.x, s.v, s.x_prev, s.y, s.acc, self._w, gravity, self.dt, keep]
@@ -545,7 +564,7 @@ class DrapeSolver:
                 self._launch(K.self_collide, n, [s.x, self._w, s.self_partner, s.self_count, r, s.self_dx]),
                 self._launch(K.apply_delta, n, [s.x, s.self_dx]),
             ]
-        host = self._newton_solve if opts.solver == "newton" else None
+        host = self._newton_solve if opts.solver in ("newton", "pd") else None
         return _Launches(
             contacts=contacts,
             constraints=cmds,
