@@ -346,7 +346,8 @@ class DrapeSolver:
         self._implicit.set_contact(
             s.contact_point.numpy(), s.contact_normal.numpy(), s.contact_active.numpy(), self.thickness
         )
-        it, res = self._implicit.solve(x, y, grow, int(opts.iterations), float(opts.tolerance), self._weight)
+        start = {"previous": base} if opts.solver == "newton" else {}  # newton: from the lower G of x_n and x
+        it, res = self._implicit.solve(x, y, grow, int(opts.iterations), float(opts.tolerance), self._weight, **start)
         self._newton_iterations.append(it)
         self._newton_residuals.append(res)
         s.x64 = x
