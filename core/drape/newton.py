@@ -48,10 +48,11 @@ def _rows(n_rows: int, n_cols: int, cols: np.ndarray, vals: np.ndarray):
     )
 
 
-def hinge_gradients(x: np.ndarray, bends: np.ndarray) -> tuple:
+def hinge_gradients(x: np.ndarray, bends: np.ndarray, gradient: bool = True) -> tuple:
     """Signed dihedral angles (B,) and their gradients (B, 4, 3) at the stencils (a, b, e0, e1)
-    (Bridson et al. 2003; the convention of :func:`core.drape.mesh.dihedral_angles`); zero where degenerate."""
-    x1, x2, x3, x4 = (x[bends[:, k]] for k in range(4))
+    (Bridson et al. 2003; the convention of :func:`core.drape.mesh.dihedral_angles`); zero where degenerate.
+    ``gradient=False``: the angles and None."""
+    x1, x2, x3, x4 = x[bends].transpose(1, 0, 2)
     n1 = row_cross(x3 - x1, x4 - x1)
     n2 = row_cross(x4 - x2, x3 - x2)
     e = x4 - x3
@@ -63,6 +64,8 @@ def hinge_gradients(x: np.ndarray, bends: np.ndarray) -> tuple:
     eh = e / le[:, None]
     n1h, n2h = n1 / np.sqrt(l1)[:, None], n2 / np.sqrt(l2)[:, None]
     theta = np.arctan2(np.einsum("ij,ij->i", row_cross(n1h, n2h), eh), np.einsum("ij,ij->i", n1h, n2h))
+    if not gradient:
+        return np.where(ok, theta, 0.0), None
     a1, a2 = n1 / l1[:, None], n2 / l2[:, None]
     g = np.stack(
         [
@@ -124,6 +127,9 @@ class NewtonStep:
         self.contact_k = np.asarray(diag).ravel() + self.inertia
         self.contact = None
         self.free_idx = np.nonzero(self.free)[0]
+        self._bending = bool(len(self.bends) and np.any(self.kb > 0))
+        self._pattern = None  # the free Hessian's fixed sparsity pattern (free_hessian)
+        self._ldl = None  # its factorisation (factor)
 
     def energy(self, x: np.ndarray, y: np.ndarray, grow: float, gradient: bool = True) -> tuple:
         """G and grad G (P, 3) at ``x``, in float64 (float32 positions put a strain noise of ~1e-6 on a
@@ -159,8 +165,8 @@ class NewtonStep:
             energy += 0.5 * float(np.sum(k * depth * depth))
             if gradient:
                 g[idx] -= (k * depth)[:, None] * normal
-        if len(self.bends) and np.any(self.kb > 0):
-            theta, gh = hinge_gradients(x, self.bends)
+        if self._bending:
+            theta, gh = hinge_gradients(x, self.bends, gradient)
             c = np.mod(theta - self.bend_rest + np.pi, 2.0 * np.pi) - np.pi
             energy += 0.5 * float(np.sum(self.kb * c * c))
             if gradient:
@@ -168,58 +174,106 @@ class NewtonStep:
                 g += self.S @ gh.reshape(-1, 3)
         return energy, g
 
-    def hessian(self, x: np.ndarray, grow: float):
-        """The Hessian of G at ``x``, (3P, 3P) sparse, each element's block made positive semi-definite:
-        a compressed spring keeps only its stiffness along itself, shear and bending are Gauss-Newton,
-        the contact penalty k n n^T where a particle is below its contact offset."""
-        from scipy.sparse import coo_matrix
-
+    def _blocks(self, x: np.ndarray, grow: float) -> list:
+        """The Hessian's element blocks at ``x``, each made positive semi-definite, as (particles (m, k),
+        blocks (m, 3k, 3k)) in a fixed order (triangles, edges, hinges, each particle's own 3 x 3: its
+        mass term plus the contact penalty k n n^T where it is below its contact offset), so that the
+        sparsity pattern does not change between substeps. A compressed spring keeps only its
+        stiffness along itself; shear and bending are Gauss-Newton."""
         n = self.n
         back = 1.0 - grow
         eye = np.eye(3)
-        rows, cols, vals = [], [], []
-
-        def add(dofs, blocks):  # dofs (m, k) particle indices, blocks (m, 3k, 3k)
-            d = (3 * dofs[:, :, None] + np.arange(3)).reshape(len(dofs), -1)
-            k = d.shape[1]
-            rows.append(np.repeat(d, k, axis=1).ravel())
-            cols.append(np.tile(d, (1, k)).ravel())
-            vals.append(blocks.ravel())
+        out = []
 
         def spring(f, rest, w):  # (m, 3, 3) Hessian of w/2 (|f| - rest)^2 in f
-            l = np.maximum(np.linalg.norm(f, axis=1), 1e-12)
-            nn = np.einsum("mi,mj->mij", f / l[:, None], f / l[:, None])
+            l = np.maximum(np.sqrt(np.einsum("mi,mi->m", f, f)), 1e-12)
+            fh = f / l[:, None]
             t = np.maximum(1.0 - rest / l, 0.0)[:, None, None]
-            return w[:, None, None] * (nn * (1.0 - t) + eye * t)
+            return w[:, None, None] * (fh[:, :, None] * fh[:, None, :] * (1.0 - t) + eye * t)
 
         ra = 1.0 + (self.stretch0[:, 0] - 1.0) * back
         rb = 1.0 + (self.stretch0[:, 1] - 1.0) * back
         fa, fb = self.Ga @ x, self.Gb @ x
         m = len(self.tri)
-        h = np.einsum("tu,tv,tab->tuavb", self.ca, self.ca, spring(fa, ra, self.wa))
-        h += np.einsum("tu,tv,tab->tuavb", self.cb, self.cb, spring(fb, rb, self.wb))
+        ka, kb = spring(fa, ra, self.wa), spring(fb, rb, self.wb)
+        h = (self.ca[:, :, None] * self.ca[:, None, :])[:, :, None, :, None] * ka[:, None, :, None, :]
+        h += (self.cb[:, :, None] * self.cb[:, None, :])[:, :, None, :, None] * kb[:, None, :, None, :]
         u = (self.ca[:, :, None] * fb[:, None, :] + self.cb[:, :, None] * fa[:, None, :]).reshape(m, 9)
-        add(self.tri, h.reshape(m, 9, 9) + self.ws[:, None, None] * np.einsum("ti,tj->tij", u, u))
+        out.append((self.tri, h.reshape(m, 9, 9) + self.ws[:, None, None] * (u[:, :, None] * u[:, None, :])))
         if self.Ge.shape[0]:
             e = self.edges
             rest = self.edge_rest + (self.edge_start - self.edge_rest) * back
-            c = np.array([-1.0, 1.0])
             k = spring(x[e[:, 1]] - x[e[:, 0]], rest, np.full(len(e), self.we))
-            add(e, np.einsum("u,v,tab->tuavb", c, c, k).reshape(len(e), 6, 6))
-        if len(self.bends) and np.any(self.kb > 0):
+            c = np.array([-1.0, 1.0])
+            out.append(
+                (e, ((c[:, None] * c[None, :])[None, :, None, :, None] * k[:, None, :, None, :]).reshape(-1, 6, 6))
+            )
+        if self._bending:
             _, gh = hinge_gradients(x, self.bends)
             gh = gh.reshape(len(gh), 12)
-            add(self.bends, self.kb[:, None, None] * np.einsum("bi,bj->bij", gh, gh))
-        add(np.arange(n)[:, None], self.inertia[:, None, None] * eye)
+            out.append((self.bends, self.kb[:, None, None] * (gh[:, :, None] * gh[:, None, :])))
+        own = self.inertia[:, None, None] * eye
         if self.contact is not None:
             idx, point, normal, thickness = self.contact
             below = thickness - np.einsum("ij,ij->i", x[idx] - point, normal) > 0
             if np.any(below):
-                nrm = normal[below]
-                add(idx[below, None], self.contact_k[idx[below]][:, None, None] * np.einsum("mi,mj->mij", nrm, nrm))
-        return coo_matrix(
-            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(3 * n, 3 * n)
-        ).tocsr()
+                nrm, at = normal[below], idx[below]
+                own[at] += self.contact_k[at][:, None, None] * (nrm[:, :, None] * nrm[:, None, :])
+        out.append((np.arange(n)[:, None], own))
+        return out
+
+    def hessian(self, x: np.ndarray, grow: float):
+        """The Hessian of G at ``x``, (3P, 3P) sparse CSR, each element's block made positive
+        semi-definite (:meth:`_blocks`)."""
+        from scipy.sparse import coo_matrix
+
+        rows, cols, vals = [], [], []
+        for dofs, blocks in self._blocks(x, grow):
+            d = (3 * dofs[:, :, None] + np.arange(3)).reshape(len(dofs), -1)
+            k = d.shape[1]
+            rows.append(np.repeat(d, k, axis=1).ravel())
+            cols.append(np.tile(d, (1, k)).ravel())
+            vals.append(blocks.ravel())
+        n3 = 3 * self.n
+        return coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n3, n3)).tocsr()
+
+    def free_hessian(self, x: np.ndarray, grow: float):
+        """The Hessian's free rows and columns (the particles that are not pinned), their upper triangle as
+        a CSC matrix whose sparsity pattern is the same at every call (what :meth:`factor` needs)."""
+        from scipy.sparse import csc_matrix
+
+        blocks = self._blocks(x, grow)
+        if self._pattern is None:
+            nf3 = 3 * len(self.free_idx)
+            fmap = np.full(3 * self.n, -1, np.int64)
+            fmap[(3 * self.free_idx[:, None] + np.arange(3)).ravel()] = np.arange(nf3)
+            rows, cols = [], []
+            for dofs, _ in blocks:
+                d = fmap[(3 * dofs[:, :, None] + np.arange(3)).reshape(len(dofs), -1)]
+                k = d.shape[1]
+                rows.append(np.repeat(d, k, axis=1).ravel())
+                cols.append(np.tile(d, (1, k)).ravel())
+            r, c = np.concatenate(rows), np.concatenate(cols)
+            keep = (r >= 0) & (c >= 0) & (r <= c)
+            key, slot = np.unique(c[keep] * nf3 + r[keep], return_inverse=True)  # column-major order
+            indptr = np.concatenate([[0], np.cumsum(np.bincount(key // nf3, minlength=nf3))])
+            self._pattern = (keep, slot.ravel(), (key % nf3).astype(np.int32), indptr.astype(np.int32), nf3)
+        keep, slot, indices, indptr, nf3 = self._pattern
+        vals = np.concatenate([b.ravel() for _, b in blocks])[keep]
+        data = np.bincount(slot, weights=vals, minlength=len(indices))
+        return csc_matrix((data, indices, indptr), shape=(nf3, nf3))
+
+    def factor(self, x: np.ndarray, grow: float):
+        """The free Hessian at ``x`` factored (LDL^T, qdldl with its AMD ordering; the symbolic
+        factorisation is kept and only the values refactored after the first call): ``solve(b)``."""
+        import qdldl
+
+        a = self.free_hessian(x, grow)
+        if self._ldl is None:
+            self._ldl = qdldl.Solver(a, upper=True)
+        else:
+            self._ldl.update(a, upper=True)
+        return self._ldl
 
     def set_contact(self, point: np.ndarray, normal: np.ndarray, active: np.ndarray, thickness: float) -> None:
         """Body contact for the next solves: a penalty k/2 d^2 on each active free particle whose depth d
@@ -229,31 +283,50 @@ class NewtonStep:
             (idx, point[idx].astype(float), normal[idx].astype(float), float(thickness)) if len(idx) else None
         )
 
-    def solve(self, x, y, grow: float, iterations: int, tolerance: float, weight: np.ndarray, history: int = 8):
+    def solve(
+        self,
+        x,
+        y,
+        grow: float,
+        iterations: int,
+        tolerance: float,
+        weight: np.ndarray,
+        history: int = 8,
+        previous=None,
+    ):
         """Minimise G from ``x`` (in place, (P, 3) float64) by L-BFGS with the factored Hessian at ``x`` as
-        its initial inverse (without history, a Newton step) and a backtracking (Armijo) line search. Stops when every free particle's residual force |grad G| is
-        under ``tolerance`` times its ``weight`` (N, (P,)) (at least one iteration), or after
-        ``iterations``, or when the line search finds no decrease; particles within twice the contact
-        offset of the body are left out of that test (the friction applied after the solve holds them
-        where G alone would not).
+        its initial inverse (without history, a Newton step) and a backtracking (Armijo) line search.
+        Stops when every free particle's residual force |grad G| is under ``tolerance`` times its
+        ``weight`` (N, (P,)) (at least one iteration), or after ``iterations``, or when the line search
+        finds no decrease; particles within twice the contact offset of the body are left out of that
+        test (the friction applied after the solve holds them where G alone would not).
+
+        ``previous``: the substep's start positions x_n. Where G is lower there than at the guess
+        ``x``, the solve starts from x_n, so that it ends no higher in G than x_n, the condition for a
+        stable implicit step (Gast, Schroeder, Stomakhin, Jiang, Teran, "Optimization integrator for
+        large time steps", IEEE TVCG 21(10), 2015). From the inertial guess, a solve stopped at its
+        iteration limit can end with the stiff grain springs still stretched, energy the next steps
+        turn into motion: the silk Cusick disc flapped 4-10 mm a frame at its rim for 400 frames;
+        starting from the lower of the two it settles in about 40 (``docs/drape.md``).
 
         Returns (iterations done, the largest residual over weight at the end).
         """
         fi = self.free_idx
         if len(fi) == 0:
             return 0, 0.0
+        if previous is not None:
+            e_guess = self.energy(x, y, grow, gradient=False)[0]
+            if self.energy(previous, y, grow, gradient=False)[0] < e_guess:
+                x[...] = previous
         # the stop test leaves out the particles on the body: friction (applied after the solve) holds them
         w = np.maximum(weight[fi], 1e-30).copy()
         if self.contact is not None:
             idx, point, normal, thickness = self.contact
             near = idx[np.einsum("ij,ij->i", x[idx] - point, normal) < 2.0 * thickness]
             w[np.searchsorted(fi, near)] = np.inf
-        from scipy.sparse.linalg import splu
-
         e, g = self.energy(x, y, grow)
         g = g[fi]
-        dof = (3 * fi[:, None] + np.arange(3)).ravel()
-        lu = splu(self.hessian(x, grow)[dof][:, dof].tocsc(), permc_spec="MMD_AT_PLUS_A")
+        lu = self.factor(x, grow)
         nf = len(fi)
 
         def h0(v):  # the substep's Hessian, factored once, as L-BFGS's initial inverse
@@ -280,9 +353,10 @@ class NewtonStep:
                 slope = float(np.sum(g * step))
             x0f = x[fi].copy()
             alpha, ok = 1.0, False
-            for _ in range(20):
+            for trial in range(20):
                 x[fi] = x0f + alpha * step
-                e1, _ = self.energy(x, y, grow, gradient=False)
+                # the full step (most often taken) with its gradient, to be kept; the shorter ones without
+                e1, g1 = self.energy(x, y, grow, gradient=trial == 0)
                 if e1 <= e + 1e-4 * alpha * slope:
                     ok = True
                     break
@@ -293,7 +367,8 @@ class NewtonStep:
                     break
                 hist_s, hist_y = [], []
                 continue
-            e1, g1 = self.energy(x, y, grow)
+            if g1 is None:
+                e1, g1 = self.energy(x, y, grow)
             g1 = g1[fi]
             sv, yv = x[fi] - x0f, g1 - g
             if np.sum(sv * yv) > 1e-8 * np.sqrt(np.sum(sv * sv) * np.sum(yv * yv)):  # curvature safeguard
