@@ -140,11 +140,13 @@ def warp_mesh(vertices: np.ndarray, faces: np.ndarray, device="cpu") -> "wp.Mesh
 
     Returns
     -------
-    wp.Mesh, its ``points`` and ``indices`` arrays attached (they must outlive it).
+    wp.Mesh, its ``points`` and ``indices`` arrays attached (they must outlive it), built with
+    winding-number support (``wp.mesh_query_point_sign_winding_number``: the drape's contact checks
+    an "inside" answer with it on a layered collider that is not one closed surface).
     """
     points = wp.array(np.asarray(vertices, dtype=np.float32), dtype=wp.vec3, device=device)
     idx = wp.array(np.asarray(faces, dtype=np.int32).reshape(-1), dtype=wp.int32, device=device)
-    return wp.Mesh(points=points, indices=idx)
+    return wp.Mesh(points=points, indices=idx, support_winding_number=True)
 
 
 def _query(
