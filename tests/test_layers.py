@@ -266,3 +266,37 @@ def test_cli_outfit_writes_every_garment(tmp_path, capsys):
         p.name for p in out.iterdir()
     }
     assert (out / "skirt" / "export" / "pattern.svg").is_file() and not (out / "outfit.glb").exists()
+
+
+def test_contact_inside_is_checked_by_the_winding_number():
+    """A layered collider is not one closed surface: behind a fold's far side (here a loose sheet
+    over a closed box) the closest face's normal says inside. Contact must not throw such a particle
+    through to the other side: the winding number says it is outside; a point in the box stays in."""
+    from core.drape import kernels as K
+    from core.geom import queries as Q
+
+    box = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]], float)
+    box_f = [[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4]]
+    box_f += [[1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]]
+    sheet = np.array([[0.2, 0.2, 1.5], [0.8, 0.2, 1.5], [0.8, 0.8, 1.5], [0.2, 0.8, 1.5]])  # faces +z
+    v = np.concatenate([box, sheet])
+    f = np.array(box_f + [[8, 9, 10], [8, 10, 11]])
+    pts = np.array([[0.5, 0.5, 1.4], [0.5, 0.5, 0.95], [0.5, 0.5, 1.55]])
+    # the closest face's normal alone: the point under the sheet reads 0.1 inside
+    assert Q.distance_to_mesh(pts[:1], v, f, signed=True, max_dist=1.0)[0] == pytest.approx(-0.1, abs=1e-6)
+    K.wp.init()
+    mesh = Q.warp_mesh(v, f)
+    n = len(pts)
+    point, normal = (K.wp.zeros(n, dtype=K.wp.vec3, device="cpu") for _ in range(2))
+    hit = K.wp.zeros(n, dtype=int, device="cpu")
+    x = K.wp.array(pts.astype(np.float32), dtype=K.wp.vec3, device="cpu")
+    weight = K.wp.array(np.ones(n, np.float32), dtype=float, device="cpu")
+    K.wp.launch(K.closest_contact, n, [x, weight, mesh.id, 1.0, 1e-4, point, normal, hit], device="cpu")
+    assert hit.numpy().tolist() == [1, 1, 1]
+    outside = np.einsum("ij,ij->i", pts - point.numpy(), normal.numpy())
+    assert outside == pytest.approx([0.1, -0.05, 0.05], abs=1e-5)  # under the sheet: outside, 0.1 off it
+    # contact 3 mm thick leaves the particle under the sheet where it is (it threw it 0.1 m up before)
+    K.wp.launch(K.collide_body, n, [x, K.wp.clone(x), point, normal, hit, 0.003, 0.4], device="cpu")
+    moved = x.numpy() - pts
+    assert np.abs(moved[0]).max() < 1e-6 and np.abs(moved[2]).max() < 1e-6
+    assert moved[1] == pytest.approx([0.0, 0.0, 0.053], abs=1e-5)  # the point in the box goes out of it

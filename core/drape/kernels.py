@@ -397,6 +397,14 @@ def closest_contact(
     last triangle. Within ``flat`` of the surface (where that direction is
     float noise) the face normal is taken. ``hit[i]`` is 0 where the body is
     farther than ``max_dist`` or the particle is pinned (``weight[i]`` 0).
+
+    Inside or outside is the closest point's pseudo-normal's answer, and where that says inside,
+    the mesh's winding number's (the mesh built with winding-number support,
+    :func:`core.geom.queries.warp_mesh`). On a closed body the two agree. A layered collider
+    (:func:`core.drape.layers.layer_collider`: an inner garment's offset surface with its folds,
+    ramps sunk into the body) is not one closed surface, and there the pseudo-normal of a fold's
+    far side says inside for a particle centimetres outside: contact threw it through the
+    collider, and the jacket's sleeve ends over a shirt's cuffs never settled.
     """
     i = wp.tid()
     hit[i] = 0
@@ -406,12 +414,15 @@ def closest_contact(
     q = wp.mesh_query_point_sign_normal(mesh, p, max_dist)
     if not q.result:
         return
+    sign = q.sign
+    if sign < 0.0:
+        sign = wp.mesh_query_point_sign_winding_number(mesh, p, max_dist, 2.0, 0.5).sign
     c = wp.mesh_eval_position(mesh, q.face, q.u, q.v)
     n = wp.mesh_eval_face_normal(mesh, q.face)
     d = p - c
     dist = wp.length(d)
     if dist > flat:
-        n = d * (q.sign / dist)
+        n = d * (sign / dist)
     point[i] = c
     normal[i] = n
     hit[i] = 1
