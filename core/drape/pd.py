@@ -16,20 +16,24 @@ the fabric's energy is a squared distance from a linear image of the positions
   form), weight ``2 k_shear A``: ``k_shear A (f_a . f_b)^2 / 2`` for small shear;
 * the sliver edges' springs: the edge vector onto the sphere of its rest length;
 * bending: the hinge vector ``v = sum_i alpha_i x_i`` (``alpha_i`` the flat
-  rest hinge's dihedral-angle gradients, so ``|v| = 2 sin(theta / 2)`` for an
-  isometric bend) onto ``2 sin(theta_0 / 2)`` along the hinge normal, weight
+  rest hinge's dihedral-angle gradients, so ``v = 2 sin(theta / 2) n`` for an
+  isometric bend, n the hinge normal; Bergou et al. 2006's quadratic bending)
+  with its normal component projected onto ``2 sin(theta_0 / 2)`` and its
+  in-plane part (a non-isometric stretch of the hinge, large where the rest
+  shape grows from the skintight start, not a bend) left free, weight
   ``bending * |e|^2 / (A_a + A_b)``: the discrete-shell energy of
-  :mod:`core.drape.newton` to second order in the angle (flat hinges: a
-  constant quadratic form, Bergou et al. 2006).
+  :mod:`core.drape.newton` to second order in the angle.
 
 So, to second order in strain and angle, it is the energy :mod:`core.drape.newton`
 minimises (the preset's physical stiffness), and the system matrix
 ``M / dt^2 + sum_c w_c A_c^T A_c`` does not change: it is factored once per
 cloth (a sparse LU on the free particles, the same matrix for x, y and z) and
 each iteration is the projections (numpy, vectorised) plus one back-substitution
-(the global step). Body contact is a projection onto each active particle's
-contact plane after every global step (off the matrix); friction, tethers and
-self-collision are the Warp kernels the other solvers use after the solve.
+(the global step). Body contact stays off the matrix: after each substep's
+solve, as with the other solvers, the Warp kernels keep the particles on their
+contact planes' offset with friction (a projection inside the iterations fought
+the stiff membrane where neighbouring contact planes diverge, at the armpits, and
+tore the shirt), then tethers and self-collision.
 
 Each iteration lowers G; the iterations stop when every free particle off the
 body has a residual force ``|grad G|`` under ``tolerance`` times its weight, or
@@ -43,8 +47,85 @@ from __future__ import annotations
 import numpy as np
 
 from ..geom.mesh import row_cross
+from ..geom.queries import wp  # Warp, set up once for the package (kernel cache, log level)
 from .mesh import Cloth, inv22
 from .newton import NewtonStep, _rows
+
+F64 = wp.float64
+V64 = wp.vec3d
+
+
+@wp.kernel
+def project_triangles(
+    fa: wp.array(dtype=V64),
+    fb: wp.array(dtype=V64),
+    ra: wp.array(dtype=F64),
+    rb: wp.array(dtype=F64),
+    wa: wp.array(dtype=F64),
+    wb: wp.array(dtype=F64),
+    ws: wp.array(dtype=F64),
+    ta: wp.array(dtype=V64),
+    tb: wp.array(dtype=V64),
+    energy: wp.array(dtype=F64),
+):
+    """Each triangle's weft / warp images onto their rest stretch's sphere and, as a pair, onto the
+    nearest orthogonal pair (:func:`orthogonal_pair`): the weighted targets and the energy (float64)."""
+    i = wp.tid()
+    zero = F64(0.0)
+    tiny = F64(1.0e-15)
+    a = fa[i]
+    b = fb[i]
+    la = wp.length(a)
+    lb = wp.length(b)
+    sa = V64(ra[i], zero, zero)
+    sb = V64(rb[i], zero, zero)
+    if la > tiny:
+        sa = a * (ra[i] / la)
+    if lb > tiny:
+        sb = b * (rb[i] / lb)
+    s = wp.dot(a, b)
+    t = la * la + lb * lb
+    disc = wp.sqrt(wp.max(t * t - F64(4.0) * s * s, zero))
+    mu = zero
+    if t > zero:
+        mu = F64(2.0) * s / (t + disc)
+    den = F64(1.0) - mu * mu
+    if wp.abs(den) < F64(1.0e-12):
+        den = F64(1.0e-12)
+    p = (a - b * mu) / den
+    q = (b - a * mu) / den
+    ta[i] = sa * wa[i] + p * ws[i]
+    tb[i] = sb * wb[i] + q * ws[i]
+    e = wa[i] * wp.length_sq(a - sa) + wb[i] * wp.length_sq(b - sb)
+    energy[i] = F64(0.5) * (e + ws[i] * (wp.length_sq(a - p) + wp.length_sq(b - q)))
+
+
+@wp.kernel
+def project_hinges(
+    x: wp.array(dtype=V64),
+    bends: wp.array(dtype=int, ndim=2),
+    v: wp.array(dtype=V64),
+    kb: wp.array(dtype=F64),
+    rest_len: wp.array(dtype=F64),
+    target: wp.array(dtype=V64),
+    energy: wp.array(dtype=F64),
+):
+    """Each hinge vector's normal component onto its rest value (:func:`hinge_normals`): the weighted
+    target and the energy (float64)."""
+    i = wp.tid()
+    tiny = F64(1.0e-30)
+    x1 = x[bends[i, 0]]
+    x2 = x[bends[i, 1]]
+    x3 = x[bends[i, 2]]
+    x4 = x[bends[i, 3]]
+    n1 = wp.cross(x3 - x1, x4 - x1)
+    n2 = wp.cross(x4 - x2, x3 - x2)
+    n = n1 / wp.max(wp.length(n1), tiny) + n2 / wp.max(wp.length(n2), tiny)
+    n = n / wp.max(wp.length(n), tiny)
+    h = v[i]
+    c = wp.dot(h, n) - rest_len[i]
+    target[i] = (h - n * c) * kb[i]
+    energy[i] = F64(0.5) * kb[i] * c * c
 
 
 def hinge_coefficients(cloth: Cloth) -> np.ndarray:
@@ -127,6 +208,16 @@ def orthogonal_pair(a: np.ndarray, b: np.ndarray) -> tuple:
     return (a - mu[:, None] * b) / den[:, None], (b - mu[:, None] * a) / den[:, None]
 
 
+def _vec(a: np.ndarray):
+    """A Warp view (no copy) of a contiguous (n, 3) float64 array on the host."""
+    return wp.array(np.ascontiguousarray(a), dtype=V64, device="cpu", copy=False)
+
+
+def _num(a: np.ndarray):
+    """A Warp view (no copy) of a contiguous (n,) float64 array on the host."""
+    return wp.array(np.ascontiguousarray(a), dtype=F64, device="cpu", copy=False)
+
+
 def _onto_sphere(f: np.ndarray, radius: np.ndarray) -> np.ndarray:
     """Rows of ``f`` scaled to length ``radius`` (a zero row: ``radius`` along x)."""
     length = np.sqrt(np.einsum("ij,ij->i", f, f))
@@ -155,7 +246,7 @@ class ProjectiveStep:
     def __init__(
         self, cloth: Cloth, material, dt: float, mass: np.ndarray, start_stretch, edge_start, history: int = 5
     ):
-        from scipy.sparse import diags
+        from scipy.sparse import diags, vstack
         from scipy.sparse.linalg import splu
 
         el = NewtonStep(cloth, material, dt, mass, start_stretch, edge_start)
@@ -163,15 +254,11 @@ class ProjectiveStep:
         self.free, self.free_idx = el.free, el.free_idx
         self.fixed_idx = np.nonzero(~el.free)[0]
         self.inertia = el.inertia
-        self.GaT, self.GbT, self.GeT = el.Ga.T.tocsr(), el.Gb.T.tocsr(), el.Ge.T.tocsr()
         self.ws = 2.0 * el.ws  # the orthogonal pair's distance^2 is (f_a . f_b)^2 / 2
         bends = el.bends
         self.Gh = _rows(len(bends), self.n, bends, hinge_coefficients(cloth))
-        self.GhT = self.Gh.T.tocsr()
-        # the bent hinges (seams sewn at an angle) project onto 2 sin(theta_0 / 2) along their normal;
-        # the flat ones onto 0, a constant quadratic term with no right-hand side
-        self.bent = np.nonzero((np.abs(el.bend_rest) > 1e-9) & (el.kb > 0))[0]
-        self.bent_len = 2.0 * np.sin(0.5 * el.bend_rest[self.bent])
+        # each hinge vector's normal component at rest: 2 sin(theta_0 / 2) (0 inside a panel)
+        self.rest_len = 2.0 * np.sin(0.5 * el.bend_rest)
 
         def gram(g, w):
             return (g.T @ diags(w) @ g) if g.shape[0] else 0.0
@@ -181,12 +268,29 @@ class ProjectiveStep:
         self.matrix = A.tocsr()
         fi = self.free_idx
         self.A_fp = self.matrix[fi][:, self.fixed_idx].tocsr()
-        self.lu = splu(self.matrix[fi][:, fi].tocsc(), permc_spec="MMD_AT_PLUS_A") if len(fi) else None
+        # SPD: no pivoting, a symmetric ordering (about 3x faster back-substitutions than a pivoted LU)
+        opts = {"SymmetricMode": True}
+        self.lu = (
+            splu(self.matrix[fi][:, fi].tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options=opts)
+            if len(fi)
+            else None
+        )
+        # every linear image at once: weft, warp, sliver edges, hinges (rows in that order), and its transpose
+        self.D = vstack([el.Ga, el.Gb, el.Ge, self.Gh]).tocsr()
+        self.DT = self.D.T.tocsr()
+        t, e = len(el.tri), el.Ge.shape[0]
+        self._blocks = np.cumsum([0, t, t, e, len(bends)])
+        # the local step's constant inputs, for its Warp kernels (on the host, float64)
+        # (the float64 arrays kept here, since the Warp views share their memory)
+        self._host = [np.ascontiguousarray(a, dtype=float) for a in (el.wa, el.wb, self.ws, el.kb, self.rest_len)]
+        self._wa, self._wb, self._ws, self._kb, self._rest_len = (_num(a) for a in self._host)
+        self._bends = wp.array(bends.astype(np.int32).reshape(-1, 4), dtype=int, device="cpu")
         self.contact = None
 
     def set_contact(self, point: np.ndarray, normal: np.ndarray, active: np.ndarray, thickness: float) -> None:
-        """Body contact for the next solves: each active free particle is kept at least ``thickness``
-        above its contact plane (through ``point``, facing along ``normal``) after every global step."""
+        """Body contact for the next solves' stop test: an active free particle within twice ``thickness``
+        of its contact plane (through ``point``, facing along ``normal``) is left out of it (friction,
+        applied after the solve, holds it where G alone would not)."""
         idx = np.nonzero((np.asarray(active) != 0) & self.free)[0]
         self.contact = (
             (idx, point[idx].astype(float), normal[idx].astype(float), float(thickness)) if len(idx) else None
@@ -201,47 +305,64 @@ class ProjectiveStep:
         back = 1.0 - grow
         ra = 1.0 + (el.stretch0[:, 0] - 1.0) * back
         rb = 1.0 + (el.stretch0[:, 1] - 1.0) * back
-        fa, fb = el.Ga @ x, el.Gb @ x
-        sa, sb = _onto_sphere(fa, ra), _onto_sphere(fb, rb)
-        pa, pb = orthogonal_pair(fa, fb)
-        energy += 0.5 * float(np.sum(el.wa * sq(fa - sa) + el.wb * sq(fb - sb) + self.ws * (sq(fa - pa) + sq(fb - pb))))
-        rhs = self.GaT @ (el.wa[:, None] * sa + self.ws[:, None] * pa)
-        rhs += self.GbT @ (el.wb[:, None] * sb + self.ws[:, None] * pb)
-        if el.Ge.shape[0]:
-            de = el.Ge @ x
+        o = self._blocks
+        images = self.D @ x
+        target = np.empty_like(images)  # each image's projection times its weight
+        part = np.zeros(len(images))  # each constraint's energy
+        wp.launch(
+            project_triangles,
+            int(o[1] - o[0]),
+            inputs=[
+                _vec(images[o[0] : o[1]]),
+                _vec(images[o[1] : o[2]]),
+                _num(ra),
+                _num(rb),
+                self._wa,
+                self._wb,
+                self._ws,
+                _vec(target[o[0] : o[1]]),
+                _vec(target[o[1] : o[2]]),
+                _num(part[o[0] : o[1]]),
+            ],
+            device="cpu",
+        )
+        if o[3] > o[2]:
+            de = images[o[2] : o[3]]
             se = _onto_sphere(de, el.edge_rest + (el.edge_start - el.edge_rest) * back)
-            energy += 0.5 * el.we * float(np.sum(sq(de - se)))
-            rhs += self.GeT @ (el.we * se)
-        if len(el.bends):
-            v = self.Gh @ x
-            if len(self.bent):
-                ph = np.zeros_like(v)
-                ph[self.bent] = self.bent_len[:, None] * hinge_normals(x, el.bends[self.bent])
-                v = v - ph
-                rhs += self.GhT @ (el.kb[:, None] * ph)
-            energy += 0.5 * float(np.sum(el.kb * sq(v)))
+            part[o[2] : o[3]] = 0.5 * el.we * sq(de - se)
+            target[o[2] : o[3]] = el.we * se
+        if o[4] > o[3]:
+            # the hinge vector's normal component onto 2 sin(theta_0 / 2); its in-plane part (a
+            # non-isometric stretch of the hinge, not a bend) is left where it is
+            wp.launch(
+                project_hinges,
+                int(o[4] - o[3]),
+                inputs=[
+                    _vec(x),
+                    self._bends,
+                    _vec(images[o[3] : o[4]]),
+                    self._kb,
+                    self._rest_len,
+                    _vec(target[o[3] : o[4]]),
+                    _num(part[o[3] : o[4]]),
+                ],
+                device="cpu",
+            )
+        energy += float(part.sum())
+        rhs = self.DT @ target
         return rhs, energy
 
     def energy(self, x: np.ndarray, y: np.ndarray, grow: float) -> float:
         """G at ``x`` (float64): inertia plus every constraint's weighted squared distance, halved."""
         return self.local(x, y, grow)[1]
 
-    def _contact(self, x: np.ndarray) -> None:
-        """Each active particle lifted onto its contact plane's offset where it lies below it (in place)."""
-        if self.contact is None:
-            return
-        idx, point, normal, thickness = self.contact
-        depth = thickness - np.einsum("ij,ij->i", x[idx] - point, normal)
-        below = depth > 0.0
-        x[idx[below]] += depth[below, None] * normal[below]
-
     def solve(self, x, y, grow: float, iterations: int, tolerance: float, weight: np.ndarray):
         """Local-global iterations from ``x`` (in place, (P, 3) float64) towards the minimiser of G.
 
         Each iteration: the projections at ``x``, the residual ``grad G = A x - M y / dt^2 -
         sum_c w_c A_c^T p_c(x)`` (stop once every free particle off the body has it under ``tolerance``
-        times its ``weight``, N (P,)), the global step (one back-substitution of the factored matrix)
-        and the contact projection. With ``history`` > 0 the iterates are Anderson-accelerated (Peng,
+        times its ``weight``, N (P,)) and the global step (one back-substitution of the factored
+        matrix). With ``history`` > 0 the iterates are Anderson-accelerated (Peng,
         Deng, Zhang, Liu, "Anderson acceleration for geometry optimization and physics simulation", ACM
         TOG 37(4), 2018): the next iterate mixes the last ``history`` steps, and is kept only where it
         lowers G (else the plain step is taken and the history dropped).
@@ -270,7 +391,6 @@ class ProjectiveStep:
             it += 1
             xf = x[fi].reshape(-1)
             x[fi] = self.lu.solve(np.ascontiguousarray(rhs[fi] - fixed))
-            self._contact(x)
             g = x[fi].reshape(-1)
             hist_g.append(g)
             hist_f.append(g - xf)
@@ -282,7 +402,6 @@ class ProjectiveStep:
                 dg = np.stack([hist_g[k + 1] - hist_g[k] for k in range(len(hist_g) - 1)], axis=1)
                 theta = np.linalg.lstsq(df, hist_f[-1], rcond=None)[0]
                 x[fi] = (g - dg @ theta).reshape(-1, 3)
-                self._contact(x)
                 rhs_a, e_a = self.local(x, y, grow)
                 if np.isfinite(e_a) and e_a < e:
                     rhs, e = rhs_a, e_a
