@@ -419,6 +419,34 @@ def _skirt_lines(top_point_front="waist_front"):
     return [hem, side]
 
 
+#: the skirt's back waist darts: the mouth this fraction of the way along the waist from the centre back
+#: to the side, sewn to the seat point (``seat_left``; apex offset 0)
+SKIRT_BACK_DART_PLACE = 0.4
+
+
+def _skirt_back_darts(kps):
+    """The skirt's back waist darts (``*_right`` mirrored), their mouth keypoint added to ``kps``.
+
+    Without them the back is the skirt's compliance miss: a flat piece cannot follow the seat's
+    dome from the waist, so the solve leaves the waist loose (+3.8 % weft) and the seat tight
+    (-5.7 %), 2.23 % mean on M against the front's 1.10 %. A dart from the waist to the seat point
+    takes that curvature, as a pattern maker's back darts do: the closed skirt reads 0.84-1.17 %
+    from XS to XL (1.20-1.84 % without), darts of about 80 mm at the waist (``"auto"``: as wide as
+    the flattening opens them). Ended 20 mm short of the seat point the XL read 1.24 %; mouths at
+    0.3 / 0.35 of the way 1.20 / 1.18 % (0.4: 1.17); two darts a side (0.3 and 0.6) 1.21 %."""
+    kps["back_dart_top_left"] = {"between": ["waist_back_mid", "waist_side_left"], "t": SKIRT_BACK_DART_PLACE}
+    return [
+        {
+            "name": "back_dart_left",
+            "line": "waist",
+            "apex": "seat_left",
+            "at": "back_dart_top_left",
+            "intake": "auto",
+            "apex_offset": 0.0,
+        }
+    ]
+
+
 def skirt():
     params, kps, guides = _skirt_hem_parts(0.45, (SKIRT_LENGTH_MIN, 0.7))
     kps["skirt_front_mid"] = {"between": ["waist_front", "crotch"], "t": 0.5}
@@ -431,10 +459,23 @@ def skirt():
         "lines": lines,
         "panels": [
             {"name": "front", "seed": "skirt_front_mid", "body_part": "torso", "ease": {"value": 1.3}},
-            {"name": "back", "seed": "skirt_back_mid", "body_part": "torso", "ease": {"value": 1.3}},
+            {
+                "name": "back",
+                "seed": "skirt_back_mid",
+                "body_part": "torso",
+                "ease": {"value": 1.3},
+                "darts": _skirt_back_darts(kps),
+            },
         ],
     }
-    return _design("skirt", "A two-panel skirt on the skirt topology; ease 1.3.", [g], params, kps, skirt=True)
+    return _design(
+        "skirt",
+        "A two-panel skirt on the skirt topology, a waist dart either side of the back to the seat; ease 1.3.",
+        [g],
+        params,
+        kps,
+        skirt=True,
+    )
 
 
 def _dress(name, description, ease, length_range=(SKIRT_LENGTH_MIN, 0.8)):

@@ -3,7 +3,8 @@
 Each is a shipped garment with pleats added (:mod:`core.design.pleats`): the pleats start
 on the waist (skirts) or the back neckline (shirt), run straight down the flat piece
 (``"along": "-z"``) to the hem, and take their depth from the parameter ``pleat_depth``.
-The ``*_left`` pleats are mirrored to the right, so both sides are pleated alike.
+The ``*_left`` pleats are mirrored to the right, so both sides are pleated alike. The skirts keep
+the skirt's back waist darts (:func:`core.design.garments.skirt`), which lie between the pleats.
 """
 
 from __future__ import annotations
