@@ -268,6 +268,31 @@ def test_cli_outfit_writes_every_garment(tmp_path, capsys):
     assert (out / "skirt" / "export" / "pattern.svg").is_file() and not (out / "outfit.glb").exists()
 
 
+def _box_and_sheet():
+    """A closed unit box (outward) and a loose square sheet 0.5 over its top, facing up; points under
+    the sheet, in the box, over the sheet."""
+    box = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]], float)
+    box_f = [[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4]]
+    box_f += [[1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]]
+    sheet = np.array([[0.2, 0.2, 1.5], [0.8, 0.2, 1.5], [0.8, 0.8, 1.5], [0.2, 0.8, 1.5]])  # faces +z
+    v = np.concatenate([box, sheet])
+    f = np.array(box_f + [[8, 9, 10], [8, 10, 11]])
+    return v, f, np.array([[0.5, 0.5, 1.4], [0.5, 0.5, 0.95], [0.5, 0.5, 1.55]])
+
+
+def test_layer_measure_tells_inside_by_the_skin():
+    """A point the closest face's normal puts inside an inner layer (under a fold's far side, here the
+    loose sheet) but outside the layer's skin is not a penetration; one inside the skin is."""
+    v, f, pts = _box_and_sheet()
+    dist, over = layer_distance(pts, v, f)
+    assert dist == pytest.approx([-0.1, -0.05, 0.05], abs=1e-9) and over.all()
+    dist, _ = layer_distance(pts, v, f, skin=(v, f))
+    assert dist == pytest.approx([0.1, -0.05, 0.05], abs=1e-6)
+    assert layer_measure(pts, v, f, band=0.2)["penetrating"] == 2
+    m = layer_measure(pts, v, f, band=0.2, skin=(v, f))
+    assert m["penetrating"] == 1 and m["gap_mm"]["min"] == pytest.approx(-50.0, abs=1e-3)
+
+
 def test_contact_inside_is_checked_by_the_winding_number():
     """A layered collider is not one closed surface: behind a fold's far side (here a loose sheet
     over a closed box) the closest face's normal says inside. Contact must not throw such a particle
@@ -275,13 +300,7 @@ def test_contact_inside_is_checked_by_the_winding_number():
     from core.drape import kernels as K
     from core.geom import queries as Q
 
-    box = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]], float)
-    box_f = [[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4]]
-    box_f += [[1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]]
-    sheet = np.array([[0.2, 0.2, 1.5], [0.8, 0.2, 1.5], [0.8, 0.8, 1.5], [0.2, 0.8, 1.5]])  # faces +z
-    v = np.concatenate([box, sheet])
-    f = np.array(box_f + [[8, 9, 10], [8, 10, 11]])
-    pts = np.array([[0.5, 0.5, 1.4], [0.5, 0.5, 0.95], [0.5, 0.5, 1.55]])
+    v, f, pts = _box_and_sheet()
     # the closest face's normal alone: the point under the sheet reads 0.1 inside
     assert Q.distance_to_mesh(pts[:1], v, f, signed=True, max_dist=1.0)[0] == pytest.approx(-0.1, abs=1e-6)
     K.wp.init()

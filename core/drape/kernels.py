@@ -429,6 +429,17 @@ def closest_contact(
 
 
 @wp.kernel
+def inside_winding(points: wp.array(dtype=wp.vec3), mesh: wp.uint64, inside: wp.array(dtype=int)):
+    """``inside[i]`` 1 where the mesh's winding number at the point is over 1/2 (the mesh built with
+    winding-number support, :func:`core.geom.queries.warp_mesh`), else 0."""
+    i = wp.tid()
+    inside[i] = 0
+    q = wp.mesh_query_point_sign_winding_number(mesh, points[i], 1.0e6, 2.0, 0.5)
+    if q.result and q.sign < 0.0:
+        inside[i] = 1
+
+
+@wp.kernel
 def collide_body(
     x: wp.array(dtype=wp.vec3),
     x_prev: wp.array(dtype=wp.vec3),

@@ -38,9 +38,32 @@ def open_edges(f: np.ndarray) -> np.ndarray:
     return key[count == 1]
 
 
-def layer_distance(points, v, f) -> Tuple[np.ndarray, np.ndarray]:
+def inside_skin(points, skin_v, skin_f) -> np.ndarray:
+    """(n,) bool, the points inside the closed skin (skin_v, skin_f) (:func:`layer_collider`): its
+    winding number over 1/2. Robust where the skin is not one clean closed surface (an inner
+    garment's folds, its ramps sunk into the body), where the closest face's normal is not."""
+    from ..geom.queries import warp_mesh
+    from .kernels import inside_winding, wp
+
+    p = np.asarray(points, dtype=np.float32).reshape(-1, 3)
+    if not len(p):
+        return np.zeros(0, bool)
+    wp.init()
+    mesh = warp_mesh(skin_v, skin_f, device="cpu")
+    out = wp.zeros(len(p), dtype=int, device="cpu")
+    wp.launch(inside_winding, len(p), inputs=[wp.array(p, dtype=wp.vec3, device="cpu"), mesh.id, out], device="cpu")
+    return out.numpy().astype(bool)
+
+
+def layer_distance(points, v, f, skin=None) -> Tuple[np.ndarray, np.ndarray]:
     """Signed distance (m) of ``points`` to the surface (v, f), positive on its normals' side, and
     whether each point's closest point lies inside the surface (not on an open edge).
+
+    The side is the closest face's normal's. With ``skin`` ((V, 3), (F, 3): the inner surface as a
+    closed skin with the body, :func:`measure_skin`), a point that normal puts inside counts inside
+    only where it lies inside the skin (:func:`inside_skin`): past a fold's far side, or a ridge
+    where the closest point is on an edge and the face picked faces away, the normal says inside
+    for a point centimetres outside.
 
     Returns ``(distance (n,), over (n,) bool)``.
     """
@@ -53,6 +76,9 @@ def layer_distance(points, v, f) -> Tuple[np.ndarray, np.ndarray]:
     face = np.asarray(face, dtype=np.int64)
     d = p - closest
     sign = np.where(np.einsum("ij,ij->i", d, face_normals(v, f)[face]) < 0, -1.0, 1.0)
+    if skin is not None and (sign < 0).any():
+        idx = np.flatnonzero(sign < 0)
+        sign[idx[~inside_skin(p[idx], *skin)]] = 1.0
     dist = sign * np.sqrt(np.maximum(sq, 0.0))
     # barycentrics of the closest point: on a boundary edge (a ~ 0 opposite it) the point is off the edge
     a, b, c = v[f[face, 0]], v[f[face, 1]], v[f[face, 2]]
@@ -77,13 +103,15 @@ def layer_distance(points, v, f) -> Tuple[np.ndarray, np.ndarray]:
     return dist, over
 
 
-def layer_measure(points, v, f, depth: float = PENETRATION_DEPTH, band: float = OVERLAP_BAND) -> dict:
+def layer_measure(points, v, f, depth: float = PENETRATION_DEPTH, band: float = OVERLAP_BAND, skin=None) -> dict:
     """Penetration and gap of an outer layer's ``points`` over an inner layer's surface (v, f).
 
     Only points over the inner surface and within ``band`` of it count (``overlap`` of them): the
     penetration share is of those more than ``depth`` inside it; the gap is their signed distance.
+    ``skin``: the inner surface closed with the body (:func:`measure_skin`), which decides inside
+    where the closest face's normal says so (:func:`layer_distance`).
     """
-    dist, over = layer_distance(points, v, f)
+    dist, over = layer_distance(points, v, f, skin=skin)
     near = over & (np.abs(dist) <= band)
     n = int(near.sum())
     inside = near & (dist < -depth)
@@ -197,6 +225,12 @@ def layer_collider(body_v, body_f, inner: Sequence[Tuple[np.ndarray, np.ndarray,
         fs.append(f + base)
         base += len(v)
     return np.concatenate(vs), np.concatenate([body_f[keep], *fs])
+
+
+def measure_skin(body_v, body_f, v, f) -> Tuple[np.ndarray, np.ndarray]:
+    """The inner surface (v, f) as it lies, closed with the body (:func:`layer_collider` at offset 0):
+    the skin :func:`layer_measure` tells inside from outside by."""
+    return layer_collider(body_v, body_f, [(v, f, 0.0)])
 
 
 def push_outside(points, v, f, clearance: float, band: float = OVERLAP_BAND, movable=None) -> Tuple[np.ndarray, int]:

@@ -33,6 +33,9 @@ class LayerRun:
         "body"}`` or ``{"surface": "skintight over", "layers": [inner names], "offset_mm"}``.
     measure_s : float, s of the drape's wall time spent measuring the penetration frame by frame
         (left out of :attr:`time_per_frame`).
+    skin : ((V, 3), (F, 3)) or None, its draped surface closed with the body
+        (:func:`core.drape.layers.measure_skin`): the measure of an outer layer over it tells inside
+        from outside by it.
     tucked : dict or None, for a tucked garment: its hem's vertices (its longest open edge loop) that
         lie over a later lower garment (``edge_vertices``), how many of them are inside it or less than
         2 mm out (``inside``, ``inside_pct``), the farthest out (``most_outside_mm``) and how far the
@@ -48,6 +51,7 @@ class LayerRun:
     pushed: int = 0
     tucked: Optional[dict] = None
     measure_s: float = 0.0
+    skin: Optional[tuple] = None
     measured_on: dict = field(default_factory=lambda: {"surface": "body", "offset_mm": 0.0})
 
     @property
@@ -175,7 +179,7 @@ def _tucked_hem(lr: LayerRun, outer: List[LayerRun]) -> Optional[dict]:
     v, f = lr.surface
     hem = _hem(v, f)
     lv, lf = lowers[0].surface
-    dist, over = layer_distance(v[hem], lv, lf)
+    dist, over = layer_distance(v[hem], lv, lf, skin=lowers[0].skin)
     near = over & (np.abs(dist) <= OVERLAP_BAND)
     inside = near & (dist < PENETRATION_DEPTH)  # the hem's edge may poke 2 mm through, as in the penetration share
     n = int(near.sum())
@@ -292,7 +296,7 @@ def drape_outfit(
     from ..design import load_design
     from ..design.outfit import Outfit, load_outfit
     from ..drape import drape as _drape
-    from ..drape.layers import layer_collider, layer_measure
+    from ..drape.layers import layer_collider, layer_measure, measure_skin
     from ..drape.options import DrapeOptions
     from ..metrics.drape import drape_metrics
     from ._drape import DrapeRun, _drape_figures, pattern_body
@@ -336,7 +340,7 @@ def drape_outfit(
             if not _inner or (frame <= opts.grow_frames and still == 0):
                 return
             t = time.perf_counter()
-            pct = max(layer_measure(x, *lr.surface)["penetration_pct"] for lr in _inner)
+            pct = max(layer_measure(x, *lr.surface, skin=lr.skin)["penetration_pct"] for lr in _inner)
             _frames.append((int(frame), int(still), pct))
             _spent[0] += time.perf_counter() - t
 
@@ -349,11 +353,17 @@ def drape_outfit(
         lr = LayerRun(layer, prun, run, pushed=pushed, frame_penetration_pct=frames, measure_s=spent[0])
         lr.measured_on = surface
         x = np.asarray(result.positions, float)[np.unique(result.faces)]
-        lr.over = {inner.layer.name: layer_measure(x, *inner.surface) for inner in runs}
+        lr.over = {inner.layer.name: layer_measure(x, *inner.surface, skin=inner.skin) for inner in runs}
         still = [p for (_, s, p) in frames if s > 0]
         lr.settled_penetration_pct = max(still) if still else (frames[-1][2] if frames else 0.0)
+        if i < n - 1:  # an outer layer's measure over this one tells inside from outside by its skin
+            lr.skin = measure_skin(body_v, body_f, *lr.surface)
         runs.append(lr)
     for i, lr in enumerate(runs):
+        if lr.layer.tucked:  # the hem is measured over the lower garment's skin
+            for lower in runs[i + 1 :]:
+                if lower.skin is None and "lower" in lower.layer.kinds:
+                    lower.skin = measure_skin(body_v, body_f, *lower.surface)
         lr.tucked = _tucked_hem(lr, runs[i + 1 :])
     report(progress, 1.0, "outfit: draped")
     return OutfitRun(outfit, runs, body_v, body_f, {"total": time.perf_counter() - t0})
