@@ -34,9 +34,14 @@ def start_body(context, shape=None, pose=None, size=None, sync_=None) -> jobs.Jo
 
     def compute(progress):
         progress(0.0, f"the body in {what}")
-        return sync.body_vertices(want)
+        verts = sync.body_vertices(want)
+        if shape is None:
+            return verts, None
+        progress(0.5, "measuring the body")
+        return verts, sync.measurements_report(want)
 
-    def apply(verts):
+    def apply(result):
+        verts, report = result
         ctx = bpy.context
         body = data.body_object(ctx)
         now = data.body_spec(body)
@@ -47,7 +52,7 @@ def start_body(context, shape=None, pose=None, size=None, sync_=None) -> jobs.Jo
         if shape is not None:
             model = state.body_model(model_name)
             sync.fill_shape_props(ctx.scene, model, want["shape"])
-            sync.show_size(ctx.scene, body, size)
+            sync.show_size(ctx.scene, body, size, report)
         if pose is not None:
             s.pose = pose  # the panel shows the body's pose
         if threaded:  # it landed after the operator returned: the panel says what changed

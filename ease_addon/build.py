@@ -129,35 +129,57 @@ def _same_topology(me, n_vertices: int, faces: np.ndarray, digest: str) -> bool:
     return bool(np.array_equal(vi, np.asarray(faces, dtype=np.int32).ravel()))
 
 
-def _piece_mesh(scene, name: str, p, lo: float, hi: float, role: str, mat):
-    """The piece object ``name`` of pattern panel ``p``: its vertices moved and its colours
-    rewritten in place where the topology is the one it has, a new mesh otherwise."""
-    v3 = _xz(np.asarray(p.uv, dtype=np.float64))
-    digest = _faces_digest(p.faces)
+def _piece_object(scene, name: str, plan, role: str):
+    """The existing piece object ``name`` that can take the planned piece ``plan`` in place (its
+    topology), or None."""
     obj = bpy.data.objects.get(name)
     if (
         obj is not None
         and obj.get("ease_role") == role
         and obj.name in scene.objects
         and isinstance(obj.data, bpy.types.Mesh)
-        and _same_topology(obj.data, len(v3), p.faces, digest)
+        and _same_topology(obj.data, plan.n_vertices, plan.faces, plan.digest)
     ):
-        me = obj.data
-        me.vertices.foreach_set("co", v3.astype(np.float32).ravel())  # (updated below, once)
-    else:
-        me = convert.mesh_from_arrays(name, v3, p.faces)
-        me.color_attributes.new(ACHIEVED, "FLOAT_COLOR", "CORNER")
-        me.attributes.new("achieved_weft", "FLOAT", "FACE")
-        me.materials.append(mat)
-        obj = put_object(scene, name, me, role)
-    me["ease_faces"] = digest
+        return obj
+    return None
+
+
+def _piece_mesh(scene, name: str, plan, lo: float, hi: float, role: str, made=None):
+    """The piece object ``name`` of the planned piece ``plan`` (:class:`PiecePlan`): its vertices
+    moved and its colours rewritten in place where the topology is the one it has, else a new
+    mesh (``made``: :func:`piece_mesh` made already, in an earlier tick)."""
+    obj = _piece_object(scene, name, plan, role)
+    if obj is not None:
+        obj.data.vertices.foreach_set("co", plan.co)  # (updated below, once)
+        _color_piece(obj.data, plan, lo, hi)
+        return obj
+    return put_object(scene, name, made if made is not None else piece_mesh(name, plan, lo, hi), role)
+
+
+def piece_mesh(name: str, plan, lo: float, hi: float):
+    """A new mesh of the planned piece ``plan``, coloured on the ramp ``lo`` .. ``hi`` (no object
+    holds it yet: :func:`update_pattern_objects` puts it in place)."""
+    me = convert.mesh_from_arrays(name, plan.co, plan.faces, checked=plan.checked)
+    me.color_attributes.new(ACHIEVED, "FLOAT_COLOR", "CORNER")
+    me.attributes.new("achieved_weft", "FLOAT", "FACE")
+    me.materials.append(materials.attribute("EASE Achieved Ease", ACHIEVED))
+    _color_piece(me, plan, lo, hi)
+    return me
+
+
+def _color_piece(me, plan, lo: float, hi: float) -> None:
+    me["ease_faces"] = plan.digest
     # colour layers live on points or corners: every corner of a triangle gets its achieved ease
-    rgba = ramp.ease_to_color(np.clip(p.achieved_weft, lo, hi), lo, hi)
-    me.color_attributes[ACHIEVED].data.foreach_set("color", np.repeat(rgba, 3, axis=0).ravel())
-    me.attributes["achieved_weft"].data.foreach_set("value", np.asarray(p.achieved_weft, dtype=np.float32))
+    me.color_attributes[ACHIEVED].data.foreach_set("color", plan.corner_colors(lo, hi))
+    me.attributes["achieved_weft"].data.foreach_set("value", plan.achieved)
     me["ease_ramp"] = (float(lo), float(hi))  # the colours' ramp range (legend, read-back)
     me.update()
-    return obj
+
+
+def pieces_to_make(scene, plan, role: str = "pattern_panel") -> list:
+    """The planned pieces (:class:`PiecePlan`) whose object cannot take them in place (a new
+    topology, or no object yet): those :func:`update_pattern_objects` makes a new mesh for."""
+    return [pp for pp in plan.pieces if _piece_object(scene, f"EASE piece {pp.name}", pp, role) is None]
 
 
 def same_pieces(scene, pattern, role: str = "pattern_panel") -> bool:
@@ -185,10 +207,10 @@ def _part(name: str, part: str):
     return obj if obj is not None and obj.get("ease_role") == part else None
 
 
-def _outline(scene, name: str, uv: np.ndarray, boundary, parent, part: str):
-    """The piece's boundary curve(s), just in front of its mesh: the points moved where the
-    curve has these loops' point counts, a new curve otherwise."""
-    loops = [_xz(uv[np.asarray(loop)], -0.001) for loop in boundary]
+def _outline(scene, name: str, loops, parent, part: str):
+    """The piece's boundary curve(s) (``loops``: (k, 4) float32 curve points each, just in front of
+    its mesh): the points moved where the curve has these loops' point counts, a new curve
+    otherwise."""
     obj = _part(name, part)
     if (
         obj is not None
@@ -197,7 +219,7 @@ def _outline(scene, name: str, uv: np.ndarray, boundary, parent, part: str):
         and [len(sp.points) for sp in obj.data.splines] == [len(l) for l in loops]
     ):
         for sp, pts in zip(obj.data.splines, loops):
-            sp.points.foreach_set("co", np.hstack([pts, np.ones((len(pts), 1))]).astype(np.float32).ravel())
+            sp.points.foreach_set("co", pts.ravel())
         obj.data.update_tag()
         obj.parent = parent
         return obj
@@ -206,19 +228,15 @@ def _outline(scene, name: str, uv: np.ndarray, boundary, parent, part: str):
     for pts in loops:
         sp = cd.splines.new("POLY")
         sp.points.add(len(pts) - 1)
-        sp.points.foreach_set("co", np.hstack([pts, np.ones((len(pts), 1))]).astype(np.float32).ravel())
+        sp.points.foreach_set("co", pts.ravel())
         sp.use_cyclic_u = True
     cd.bevel_depth = 0.002
     return put_object(scene, name, cd, part, parent=parent)
 
 
-def _grain(scene, name: str, start, end, parent, part: str):
-    """The core's grain line with its arrow heads (a wire mesh): moved in place where it is one."""
-    from ..core.geom.layout import grain_arrows
-
-    v, e = convert.polyline_edges(
-        [_xz(l, -0.002) for l in [np.array([start, end])] + grain_arrows(start, end)], closed=False
-    )
+def _grain(scene, name: str, v, e, parent, part: str):
+    """The grain line with its arrow heads (a wire mesh of vertices ``v``, edges ``e``): moved in
+    place where it is one."""
     obj = _part(name, part)
     if (
         obj is not None
@@ -232,8 +250,9 @@ def _grain(scene, name: str, start, end, parent, part: str):
     return put_object(scene, name, convert.mesh_edges_from_arrays(name, v, e), part, parent=parent)
 
 
-def _label(scene, name: str, text: str, start, end, parent, part: str):
-    """The piece's name above the grain line's middle (the text object kept where it is one)."""
+def _label(scene, name: str, text: str, at, parent, part: str):
+    """The piece's name at ``at`` (x, z: above the grain line's middle; the text object kept where
+    it is one)."""
     obj = _part(name, part)
     if obj is None or obj.name not in scene.objects or not isinstance(obj.data, bpy.types.TextCurve):
         fd = bpy.data.curves.new(name, "FONT")
@@ -244,12 +263,90 @@ def _label(scene, name: str, text: str, start, end, parent, part: str):
     if obj.data.body != text:
         obj.data.body = text
     obj.parent = parent
-    c = 0.5 * (start + end)
-    obj.location = (float(c[0]), -0.003, float(c[1]) + 0.03)
+    obj.location = (float(at[0]), -0.003, float(at[1]) + 0.03)
     return obj
 
 
-def update_pattern_objects(scene, pattern, lo: float, hi: float, x0: float, role: str = "pattern_panel") -> list:
+class PiecePlan:
+    """What the objects of one pattern piece are made of, computed off the main thread (no
+    ``bpy``: :class:`PatternPlan`); :func:`update_pattern_objects` only writes it.
+
+    Attributes
+    ----------
+    name : the panel's name; label: the text beside its grain line
+    co : (V * 3,) float32 mesh vertices (the pattern's 2D metres in the XZ plane); n_vertices: V
+    faces : (F, 3) int32 triangles; digest: their hash; checked: in range, three distinct vertices
+        each (Blender's validation of a new mesh is then skipped)
+    achieved : (F,) float32 achieved weft ease (the colours: the ramp range is the writer's)
+    offset : (2,) the piece's place on the sheet from its bottom-left corner (x, z)
+    outline : (k, 4) float32 curve points of each boundary loop
+    grain : (vertices (n, 3), edges (m, 2)) of the grain line and its arrow heads
+    label_at : (2,) where the label goes (x, z)
+    """
+
+    def __init__(self, p, offset):
+        from ..core.geom.layout import grain_arrows, grain_line
+
+        uv = np.asarray(p.uv, dtype=np.float64)
+        faces = np.ascontiguousarray(p.faces, dtype=np.int32).reshape(-1, 3)
+        self.checked = not faces.size or not (
+            faces.min() < 0
+            or faces.max() >= len(uv)
+            or ((faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 0] == faces[:, 2])).any()
+        )
+        self.name = p.name
+        self.n_vertices = len(uv)
+        self.co = _xz(uv).astype(np.float32).ravel()
+        self.faces, self.digest = faces, _faces_digest(faces)
+        self.achieved = np.asarray(p.achieved_weft, dtype=np.float32)
+        self.offset = np.asarray(offset, dtype=np.float64)
+        self.outline = [
+            np.hstack([pts, np.ones((len(pts), 1))]).astype(np.float32)
+            for pts in (_xz(uv[np.asarray(loop)], -0.001) for loop in p.boundary)
+        ]
+        start, end = grain_line(uv, p.faces, p.boundary, p.grain)
+        self.grain = convert.polyline_edges(
+            [_xz(l, -0.002) for l in [np.array([start, end])] + grain_arrows(start, end)], closed=False
+        )
+        self.label = p.name.split(".", 1)[-1] + (" (mirror)" if p.mirror_of else "")
+        self.label_at = 0.5 * (start + end)
+        self._colors = {}
+
+    def corner_colors(self, lo: float, hi: float) -> np.ndarray:
+        """(3 F * 4,) float32 colours of the triangles' corners, achieved ease on the ramp
+        ``lo`` .. ``hi`` (kept: a worker makes those of the range it expects)."""
+        key = (float(lo), float(hi))
+        if key not in self._colors:
+            rgba = ramp.ease_to_color(np.clip(self.achieved, lo, hi), lo, hi)
+            self._colors[key] = np.repeat(rgba, 3, axis=0).ravel()
+        return self._colors[key]
+
+
+class PatternPlan:
+    """The objects of a whole pattern's pieces (:class:`PiecePlan` each) and the sheet's height
+    (no ``bpy``: a worker may make it)."""
+
+    def __init__(self, pattern):
+        from ..core.geom.layout import layout_pieces
+
+        layout = layout_pieces(
+            [np.array([p.uv.min(axis=0), p.uv.max(axis=0)]) for p in pattern.panels], width=SHEET_WIDTH, margin=GAP
+        )
+        self.height = float(layout.size[1])
+        self.pieces = [PiecePlan(p, off) for p, off in zip(pattern.panels, layout.offsets)]
+
+    def colored(self, *ranges) -> PatternPlan:
+        """The pieces' colours made for each ramp range ``(lo, hi)`` of ``ranges`` (those the
+        writer is expected to use); the plan."""
+        for lo, hi in ranges:
+            for pp in self.pieces:
+                pp.corner_colors(lo, hi)
+        return self
+
+
+def update_pattern_objects(
+    scene, pattern, lo: float, hi: float, x0: float, role: str = "pattern_panel", plan=None, made=None
+) -> list:
     """The pattern's pieces beside the body, updated in place (objects reused by name;
     pieces the pattern no longer has are removed). Returns the piece objects.
 
@@ -259,32 +356,27 @@ def update_pattern_objects(scene, pattern, lo: float, hi: float, x0: float, role
     out by the core's sheet layout, its top-left corner at (``x0``, 1.8 m).
     Where a piece's topology is unchanged (a re-solve of the same cut: transfer,
     adaptation, a live update) its mesh, outline, grain line and label are the
-    ones it had, their points moved: no datablock is made or removed.
+    ones it had, their points moved: no datablock is made or removed. ``plan``:
+    :class:`PatternPlan` of ``pattern`` when a worker made it (else it is made here); what
+    is left here is writing arrays into Blender's data. ``made``: piece name -> a new mesh
+    (:func:`piece_mesh`, made in earlier ticks) for the pieces of a new topology.
     """
-    from ..core.geom.layout import grain_line, layout_pieces
-
-    layout = layout_pieces(
-        [np.array([p.uv.min(axis=0), p.uv.max(axis=0)]) for p in pattern.panels], width=SHEET_WIDTH, margin=GAP
-    )
-    corner = np.array([x0 - GAP, SHEET_TOP + GAP - layout.size[1]])  # the sheet's bottom-left
-    mat = materials.attribute("EASE Achieved Ease", ACHIEVED)
-    made, parts = [], []
+    plan = PatternPlan(pattern) if plan is None else plan
+    corner = np.array([x0 - GAP, SHEET_TOP + GAP - plan.height])  # the sheet's bottom-left
+    kept, parts = [], []
     part = role + "_part"
-    for p, off in zip(pattern.panels, layout.offsets):
-        uv = np.asarray(p.uv, dtype=np.float64)
-        obj = _piece_mesh(scene, f"EASE piece {p.name}", p, lo, hi, role, mat)
-        ox, oz = corner + off
+    for pp in plan.pieces:
+        obj = _piece_mesh(scene, f"EASE piece {pp.name}", pp, lo, hi, role, (made or {}).get(pp.name))
+        ox, oz = corner + pp.offset
         obj.location = (float(ox), 0.0, float(oz))
-        obj["ease_panel"] = p.name
-        obj["ease_mean_achieved_weft"] = float(np.mean(p.achieved_weft))
-        made.append(obj)
-        parts.append(_outline(scene, f"EASE outline {p.name}", uv, p.boundary, obj, part))
-        start, end = grain_line(uv, p.faces, p.boundary, p.grain)
-        parts.append(_grain(scene, f"EASE grain {p.name}", start, end, obj, part))
-        text = p.name.split(".", 1)[-1] + (" (mirror)" if p.mirror_of else "")
-        parts.append(_label(scene, f"EASE label {p.name}", text, start, end, obj, part))
-    _remove_others(scene, [part, role], made + parts)
-    return made
+        obj["ease_panel"] = pp.name
+        obj["ease_mean_achieved_weft"] = float(np.mean(pp.achieved))
+        kept.append(obj)
+        parts.append(_outline(scene, f"EASE outline {pp.name}", pp.outline, obj, part))
+        parts.append(_grain(scene, f"EASE grain {pp.name}", *pp.grain, obj, part))
+        parts.append(_label(scene, f"EASE label {pp.name}", pp.label, pp.label_at, obj, part))
+    _remove_others(scene, [part, role], kept + parts)
+    return kept
 
 
 # ----------------------------------------------------------------------------- draped garment

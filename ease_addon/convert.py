@@ -30,8 +30,10 @@ def _mesh_with_vertices(name: str, vertices: np.ndarray) -> bpy.types.Mesh:
     return me
 
 
-def mesh_from_arrays(name: str, vertices: np.ndarray, faces: np.ndarray) -> bpy.types.Mesh:
-    """A new mesh with ``vertices`` (V, 3) metres and triangles ``faces`` (F, 3)."""
+def mesh_from_arrays(name: str, vertices: np.ndarray, faces: np.ndarray, checked: bool = False) -> bpy.types.Mesh:
+    """A new mesh with ``vertices`` (V, 3) metres and triangles ``faces`` (F, 3); ``checked``: the
+    caller checked the triangles (in range, three distinct vertices each), so Blender's
+    ``validate`` pass is skipped."""
     faces = np.ascontiguousarray(faces, dtype=np.int32).reshape(-1, 3)
     me = _mesh_with_vertices(name, vertices)
     me.loops.add(faces.size)
@@ -40,7 +42,8 @@ def mesh_from_arrays(name: str, vertices: np.ndarray, faces: np.ndarray) -> bpy.
     me.polygons.foreach_set("loop_start", np.arange(0, faces.size, 3, dtype=np.int32))
     me.polygons.foreach_set("loop_total", np.full(len(faces), 3, dtype=np.int32))
     me.update(calc_edges=True)
-    me.validate(clean_customdata=False)
+    if not checked:
+        me.validate(clean_customdata=False)
     return me
 
 

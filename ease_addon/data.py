@@ -49,7 +49,8 @@ def keypoint_positions(obj, verts) -> tuple:
     from ..core.body.model import SurfacePoint
 
     kps = convert.read_keypoints(obj.data)
-    faces = convert.get_triangles(obj.data)
+    polys = obj.data.polygons
+    faces = {t: np.array(polys[t].vertices) for t, _ in kps.values()}  # (only the keypoints' triangles)
     pts = np.array([SurfacePoint(t, b).position(verts, faces) for t, b in kps.values()]).reshape(-1, 3)
     return list(kps), pts
 
@@ -178,9 +179,19 @@ def design_text(design) -> str:
     return json.dumps(design.to_json(), sort_keys=True)
 
 
+_DIGESTS: list = []  # [(text, digest)] of the last design texts fingerprinted (the newest last)
+
+
 def design_digest(text: str) -> str:
-    """Fingerprint of a design text: which design the seamlines on the body were drawn for."""
-    return hashlib.sha1((text or "").encode("utf-8")).hexdigest()
+    """Fingerprint of a design text: which design the seamlines on the body were drawn for (the
+    last few kept: a body update compares its text, megabytes, without hashing it again)."""
+    text = text or ""
+    for known, digest in reversed(_DIGESTS):
+        if known == text:
+            return digest
+    digest = hashlib.sha1(text.encode("utf-8")).hexdigest()
+    _DIGESTS[:] = _DIGESTS[-2:] + [(text, digest)]
+    return digest
 
 
 def cached_cut(text: str, model_name: str):

@@ -119,8 +119,7 @@ def start_load(path: str, shown: str, body_now: tuple, label: str, sync=None) ->
         if threaded:  # it landed after the operator returned: say so, and make it one undo step
             bpy.context.scene.ease.job_status = said[-1]
             state.changed(bpy.context.scene)
-            if bpy.ops.ed.undo_push.poll():
-                bpy.ops.ed.undo_push(message=f"EASE: {label}")
+            jobs.undo_push(f"EASE: {label}")
 
     job = jobs.start(
         "design",

@@ -280,6 +280,22 @@ class EASE_OT_cancel_jobs(bpy.types.Operator):
         return {"FINISHED"}
 
 
+def undo_push(message: str) -> bool:
+    """Push an undo step named ``message`` from a timer (a job's result written, Live's pieces of a
+    new cut): Blender's ``ed.undo_push`` without the view-layer updates ``bpy.ops`` wraps every call
+    in (the undo step stores the scene's data, not its evaluation: the depsgraph is evaluated at the
+    next redraw, as after any edit, not inside the timer's call). Whether a step was pushed."""
+    if not bpy.ops.ed.undo_push.poll():
+        return False
+    try:
+        from _bpy import ops as _ops  # the call bpy.ops wraps
+    except ImportError:  # pragma: no cover - every Blender has it
+        bpy.ops.ed.undo_push(message=message)
+        return True
+    _ops.call("ed.undo_push", {"message": message})
+    return True
+
+
 def start_step(name: str, label: str, compute, apply, status: str, undo: str, sync=None) -> Job:
     """:func:`start` for an operator's work whose outcome the ``scene.ease`` property ``status``
     says: "*label* stopped: *error*", or "*label* cancelled: the scene is as it was" (nothing
@@ -291,8 +307,7 @@ def start_step(name: str, label: str, compute, apply, status: str, undo: str, sy
         apply(result)
         if threaded:
             state.changed(bpy.context.scene)
-            if bpy.ops.ed.undo_push.poll():
-                bpy.ops.ed.undo_push(message=f"EASE: {undo}")
+            undo_push(f"EASE: {undo}")
 
     def say(text: str) -> None:
         setattr(bpy.context.scene.ease, status, text)

@@ -89,6 +89,7 @@ _LIVE = {
     "shown": 0,  # threaded: solve results applied (the live bench's latency: a stroke until it grows)
     "pattern": None,  # threaded: the pattern of the last result applied (the pieces show it)
     "solve_failed": None,  # threaded: the solve's error, said by the next tick (which stops)
+    "writing": None,  # threaded: the converged pattern of a new cut being written (_write_new_cut)
 }
 # the session is iterated by one worker at a time (a newer stroke's job waits for the dropped one to
 # stop at its next iteration): the main thread never iterates it while jobs run threaded
@@ -348,16 +349,18 @@ def _show(context, session) -> None:
         write_overlay(data.body_object(context), pattern, session)
 
 
-def _store_final(context, pattern, text: str, same: bool) -> None:
+def _store_final(context, pattern, text: str, same: bool, plan=None, made=None, range_=None) -> None:
     """Store Live's converged ``pattern`` (its stored ``text``): into the pieces shown where they
-    are the same pieces (``same``), with the key figures; else the pieces of a new cut are made,
-    stored and figured at once."""
+    are the same pieces (``same``), with the key figures; else the pieces of a new cut are made
+    (from ``plan``, its :class:`.build.PatternPlan` when a worker made it, and ``made``, the new
+    meshes made in earlier ticks: :func:`_write_new_cut`, coloured on ``range_``), stored and
+    figured at once."""
     scene = context.scene
     if same:
         sync.store_pattern(scene, pattern, text=text)
         scene.ease.pattern_json = json.dumps(data.key_figures(pattern))
     else:
-        sync.show_pattern(context, pattern, text=text)
+        sync.show_pattern(context, pattern, text=text, plan=plan, made=made, range_=range_)
 
 
 def _final_units(context, session) -> deque:
@@ -427,8 +430,8 @@ class _UndoIfRebuilt:
         self.changes = build.DATABLOCK_CHANGES[0]
 
     def __exit__(self, *exc):
-        if build.DATABLOCK_CHANGES[0] != self.changes and bpy.ops.ed.undo_push.poll():
-            bpy.ops.ed.undo_push(message="EASE Live: pieces of the new cut")
+        if build.DATABLOCK_CHANGES[0] != self.changes:
+            jobs.undo_push("EASE Live: pieces of the new cut")
         return False
 
 
@@ -514,12 +517,67 @@ def _say_status(scene, session, done: bool) -> None:
     )
 
 
+WRITE_S = 0.01  # seconds of a tick spent making the meshes of a new cut's pieces (at least one)
+
+
+def _write_new_cut(context, session, t0: float) -> str:
+    """One tick's share of writing the converged pattern of a new cut (:data:`_LIVE` ``writing``,
+    left by the solve's result): the pieces' new meshes made, one or more per tick within
+    :data:`WRITE_S` (datablocks no object holds yet), then, in a tick of its own, the pieces put
+    in place with the stored pattern, its figures and the fit overlay (one undo step, pushed by
+    :func:`step`). The tick's status line."""
+    w = _LIVE["writing"]
+    if w["session"] is not session:  # a new session replaced it meanwhile: its solve writes anew
+        _discard_writing()
+        return "updating"
+    _, _, pattern, ratio, text, plan = w["out"]
+    lo, hi = w["range"]
+    n = len(plan.pieces)
+    if w["todo"]:
+        first = True
+        while w["todo"] and (first or time.perf_counter() - t0 < WRITE_S):
+            pp, first = w["todo"].pop(0), False
+            w["made"][pp.name] = build.piece_mesh(f"EASE piece {pp.name}", pp, lo, hi)
+        return f"updating: Live: writing the pieces {len(w['made'])}/{n}"
+    _LIVE["writing"] = None
+    try:
+        made = {k: me for k, me in w["made"].items() if me.users == 0}
+    except ReferenceError:  # an undo freed them (the undo handler drops the writing too)
+        return "updating"
+    _store_final(context, pattern, text, False, plan, made, (lo, hi))
+    _forget(w["made"].values())
+    _write_fit(data.body_object(context), ratio)
+    _LIVE.update(stored=context.scene.get(data.PATTERN_KEY), landed=True, pattern=pattern)
+    _LIVE["shown"] += 1
+    return "updating"  # (the next tick says "converged" once it has seen the scene as it is)
+
+
+def _forget(meshes) -> None:
+    """Remove the meshes of ``meshes`` no object took (an unfinished writing of a new cut)."""
+    for me in meshes:
+        try:
+            if me.users == 0:
+                bpy.data.meshes.remove(me)
+        except ReferenceError:  # freed already (an undo)
+            pass
+
+
+def _discard_writing() -> None:
+    """Drop an unfinished writing of a new cut's pieces (its meshes made so far removed)."""
+    w, _LIVE["writing"] = _LIVE.get("writing"), None
+    if w is not None:
+        _forget(w["made"].values())
+
+
 def _step_threaded(context, session, t0: float) -> dict:
     """A tick with the solve in a worker (Blender's window): a new field (a stroke) starts the
     solve's job (a running one is dropped: the newer paint wins); with none, a solve that is not
     done yet (a warm slice shown, the cold solve not complete, or its pattern not in the scene)
     goes on in a new job. The tick reads the layer and hands it over; it never iterates."""
     scene = context.scene
+    if _LIVE["writing"] is not None:  # a new cut's pieces being written: nothing else this tick
+        scene.ease.live_status = _write_new_cut(context, session, t0)
+        return {"changed": False, "iterations": 0, "units": [], "converged": False, "seconds": time.perf_counter() - t0}
     taken = _take_field(context, session)
     if taken is not None:
         _LIVE["solve_failed"] = None
@@ -546,13 +604,17 @@ def _solve_in_worker(context, session, field=None, painted=None, restart=None) -
     then either one warm slice from the current pattern (after a change: its pattern and fit
     overlay, shown when it lands) or the cold solve to its end with the converged pattern's
     figures and stored text (stored with its figures when it lands). Everything that costs
-    (iterations, building, measuring and encoding the pattern, the overlay's values) is the
-    worker's; the main thread writes the result into the objects in one pass."""
+    (iterations, building, measuring and encoding the pattern, the overlay's values, the pieces'
+    arrays: :class:`.build.PatternPlan`) is the worker's; the main thread writes the result into
+    the objects in one pass."""
     from ..core import workflows as wf
     from ..core.live import achieved_over_painted
 
     n_body = len(data.body_object(context).data.polygons)
     landed = _LIVE["landed"]
+    # the ramp ranges the pieces will be coloured with (the pieces shown, or a new cut's)
+    shown, ramp_range = sync.shown_range(context.scene), data.ramp_range(context.scene)
+    new_range = []  # the worker's: a new cut's range (:func:`.sync.pattern_range`)
 
     def overlay(pattern):
         return achieved_over_painted(pattern, session.triangles, n_body, session.areas)
@@ -562,7 +624,7 @@ def _solve_in_worker(context, session, field=None, painted=None, restart=None) -
             _restart(session, restart)
             changed = session.set_ease(field, painted) if field is not None else False
             if field is not None and not changed and session.converged and landed:
-                return "same", 0, None, None, None  # (X-mirror toggled on a symmetric field, ...)
+                return "same", 0, None, None, None, None  # (X-mirror toggled on a symmetric field, ...)
             if session.state is None:
                 session.set_ease(None)
             n = 0
@@ -571,29 +633,39 @@ def _solve_in_worker(context, session, field=None, painted=None, restart=None) -
                 if not session.converged:
                     session.end_warm()  # one warm slice shown per stroke, then the cold solve
                     pattern = session.pattern(figures=False)
-                    return "warm", n, pattern, overlay(pattern), None
+                    return "warm", n, pattern, overlay(pattern), None, build.PatternPlan(pattern).colored(shown)
             while not session.converged:
                 progress(0.5, f"converging ({session.iterations_since_change} iterations)")
                 n += session.run(SLICE_S)
             progress(0.9, "measuring the pattern")
             pattern = session.pattern(figures=False)
             wf.measure_pattern(pattern)
-            return "final", n, pattern, overlay(pattern), session.text.text(pattern)
+            new_range[:] = sync.pattern_range(ramp_range, pattern)
+            plan = build.PatternPlan(pattern).colored(shown, new_range)
+            return "final", n, pattern, overlay(pattern), session.text.text(pattern), plan
 
     def apply(out):
-        kind, n, pattern, ratio, text = out
+        kind, n, pattern, ratio, text, plan = out
         if _LIVE["session"] is not session:  # a new session replaced it meanwhile
             return
         _LIVE["iterations"] += n
         ctx = bpy.context
         scene, obj = ctx.scene, data.body_object(ctx, required=False)
         if kind != "same" and obj is not None:
+            same = build.same_pieces(scene, pattern)
+            if kind == "final" and not same:  # the pieces of a new cut: written over the next ticks
+                lo_hi = tuple(new_range) if data.ramp_range(scene) == ramp_range else None
+                lo_hi = lo_hi or sync.pattern_range(data.ramp_range(scene), pattern)
+                todo = build.pieces_to_make(scene, plan)
+                _LIVE["writing"] = {"session": session, "out": out, "range": lo_hi, "todo": todo, "made": {}}
+                _LIVE.update(landed=False, pattern=None)
+                wake()
+                return
             with _UndoIfRebuilt():
-                same = build.same_pieces(scene, pattern)
                 if same:
-                    sync.show_pieces(ctx, pattern)
+                    sync.show_pieces(ctx, pattern, plan)
                 if kind == "final":
-                    _store_final(ctx, pattern, text, same)
+                    _store_final(ctx, pattern, text, same, plan)
                     _LIVE["stored"] = scene.get(data.PATTERN_KEY)
                 if same or kind == "final":
                     _write_fit(obj, ratio)
@@ -669,6 +741,7 @@ def _on_undo(scene, *_args) -> None:
     # converged pattern of the restored paint again before it says "converged" (a pending final
     # work dropped here, over a session already converged, left another cut's pattern "converged")
     _LIVE.update(colors=None, restart=True, final=None, landed=False)
+    _discard_writing()
     jobs.drop(SOLVE_JOB)
     touched(scene)  # the restored status is the pushed one: not "converged" until a tick has seen it
 
@@ -697,6 +770,7 @@ def stop() -> None:
         bpy.app.timers.unregister(_tick)
     jobs.drop(JOB)
     jobs.drop(SOLVE_JOB)
+    _discard_writing()
     _LIVE.update(
         failed=None,
         key=None,

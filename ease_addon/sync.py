@@ -47,10 +47,11 @@ def fill_shape_props(scene, model, shape: dict) -> None:
             item.value = float(shape.get(name, default))
 
 
-def show_size(scene, obj, size) -> None:
+def show_size(scene, obj, size, report=None) -> None:
     """The Body panel and the body say which chart size the body has: ``size`` (``"M"``,
     ``"women:M"``) sets the chart selector, the size preset and the body's ``ease_size``;
-    None (a shape of no chart size) clears the body's record. The measurements follow."""
+    None (a shape of no chart size) clears the body's record. The measurements follow
+    (``report``: their line, :func:`measurements_report`, when a worker measured them)."""
     from ..core.body.sizes import split_size
 
     s = scene.ease
@@ -63,7 +64,13 @@ def show_size(scene, obj, size) -> None:
         s.size = key
         obj["ease_size"] = size
     spec = data.body_spec(obj)
-    s.measurements_report = data.format_measurements(data.measurements(state.body_model(spec["model"]), spec["shape"]))
+    s.measurements_report = measurements_report(spec) if report is None else report
+
+
+def measurements_report(spec: dict) -> str:
+    """The Body panel's measurements line of the body spec ``spec`` (no ``bpy``: a worker may
+    measure)."""
+    return data.format_measurements(data.measurements(state.body_model(spec["model"]), spec["shape"]))
 
 
 def chart_changed(scene) -> None:
@@ -408,26 +415,40 @@ def pieces_x0(scene) -> float:
     return float(world_bounds(body)[1][0]) + PIECES_GAP if body is not None else PIECES_X0
 
 
-def show_pieces(context, pattern) -> None:
-    """Move the scene's piece objects onto ``pattern`` (a re-solve of their cut: a live update),
-    coloured in the range they were shown with; the stored pattern and its figures stay."""
-    pieces = objects_with_role(context.scene, "pattern_panel")
+def shown_range(scene) -> tuple:
+    """The ramp range ``(lo, hi)`` the scene's pieces are coloured with (the panel's without pieces)."""
+    pieces = objects_with_role(scene, "pattern_panel")
     shown = pieces[0].data.get("ease_ramp") if pieces else None
-    lo, hi = (
-        (float(shown[0]), float(shown[1])) if shown is not None and len(shown) == 2 else data.ramp_range(context.scene)
-    )
-    build.update_pattern_objects(context.scene, pattern, lo, hi, pieces_x0(context.scene))
+    return (float(shown[0]), float(shown[1])) if shown is not None and len(shown) == 2 else data.ramp_range(scene)
 
 
-def show_pattern(context, pattern, store_as: str = data.PATTERN_KEY, text=None) -> None:
-    """Make ``pattern`` the scene's pattern: its pieces beside the body, its key figures
-    (``text``: its stored text, when the caller encoded it already)."""
-    lo, hi = data.ramp_range(context.scene)
-    # widen the display range to the achieved scales (robust percentiles; degenerate slivers aside)
+def show_pieces(context, pattern, plan=None) -> None:
+    """Move the scene's piece objects onto ``pattern`` (a re-solve of their cut: a live update),
+    coloured in the range they were shown with; the stored pattern and its figures stay (``plan``:
+    its :class:`.build.PatternPlan`, when a worker made it)."""
+    lo, hi = shown_range(context.scene)
+    build.update_pattern_objects(context.scene, pattern, lo, hi, pieces_x0(context.scene), plan=plan)
+
+
+def pattern_range(ramp_range, pattern) -> tuple:
+    """The ramp range a new pattern's pieces are coloured with: the panel's ``ramp_range``
+    widened to the achieved scales (robust percentiles; degenerate slivers aside). No ``bpy``."""
+    lo, hi = ramp_range
     w = np.concatenate([np.asarray(p.achieved_weft, dtype=float) for p in pattern.panels])
     lo = max(ramp.EASE_LIMITS[0], min(lo, float(np.percentile(w, 1))))
     hi = min(ramp.EASE_LIMITS[1], max(hi, float(np.percentile(w, 99))))
-    build.update_pattern_objects(context.scene, pattern, lo, hi, pieces_x0(context.scene))
+    return lo, hi
+
+
+def show_pattern(
+    context, pattern, store_as: str = data.PATTERN_KEY, text=None, plan=None, made=None, range_=None
+) -> None:
+    """Make ``pattern`` the scene's pattern: its pieces beside the body, its key figures
+    (``text``: its stored text, ``plan``: its :class:`.build.PatternPlan`, ``range_``: its
+    :func:`pattern_range`, when the caller made them already, in a worker; ``made``: new piece
+    meshes made in earlier ticks, :func:`.build.update_pattern_objects`)."""
+    lo, hi = pattern_range(data.ramp_range(context.scene), pattern) if range_ is None else range_
+    build.update_pattern_objects(context.scene, pattern, lo, hi, pieces_x0(context.scene), plan=plan, made=made)
     store_pattern(context.scene, pattern, store_as, text=text)
     context.scene.ease.pattern_json = json.dumps(data.key_figures(pattern))
 

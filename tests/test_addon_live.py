@@ -487,3 +487,57 @@ def test_an_undo_over_pending_final_work_stores_the_converged_pattern(blender):
         bpy.context.scene.ease.live = False
         blender.reset(body=True, design=DESIGN, piecewise_ease=True, pattern=True)
         bpy.context.scene.ease.live = True
+
+
+def test_a_new_cuts_pieces_are_written_over_several_ticks(blender):
+    """Issue 32 (no tick over 50 ms): with the solve in a worker, the converged pattern of a new
+    cut (Live on before any pattern) lands as arrays made in the worker; the ticks after it make
+    the pieces' meshes a few at a time (no object changes, the panel says "updating: Live: writing
+    the pieces k/n"), then one tick puts them in place with the stored pattern, its figures and one
+    undo step. An undo while they are written drops them (no mesh left behind, no ``.001``) and
+    Live converges again to the cold solve."""
+    bpy = blender.bpy
+    live, jobs, data = blender.mod("live"), blender.mod("jobs"), blender.mod("data")
+    bpy.context.scene.ease.live = False
+    write_s = live.WRITE_S
+    try:
+        for undo in (False, True):
+            blender.reset(body=True, design=DESIGN, pattern=False)
+            s = bpy.context.scene.ease
+            names = _names(bpy)
+            live.WRITE_S = 0.0  # one mesh a tick
+            with _threaded(blender):
+                bpy.ops.ed.undo_push(message="Live off")
+                s.live = True
+                bpy.ops.ed.undo_push(message="Live on")
+                for _ in range(500):
+                    live.step(bpy.context)
+                    jobs.wait()
+                    if live._LIVE["writing"] is not None:
+                        break
+                assert live._LIVE["writing"] is not None and _names(bpy) == names
+                n = len(live._LIVE["writing"]["todo"])
+                assert n == 2
+                live.step(bpy.context)  # the first mesh made: no object yet
+                assert s.live_status == f"updating: Live: writing the pieces 1/{n}"
+                assert _names(bpy)[0] == names[0] and not live._LIVE["landed"]
+                if undo:  # Ctrl+Z: back to the step before Live on
+                    bpy.ops.ed.undo()
+                    s = bpy.context.scene.ease
+                    assert live._LIVE["writing"] is None and not s.live
+                    assert not [m for m in bpy.data.meshes if m.name.startswith("EASE piece")]
+                    s.live = True
+                _converge(blender)
+                _converge(blender)
+            assert s.live_status.startswith("converged")
+            meshes = [m.name for m in bpy.data.meshes if m.name.startswith("EASE piece")]
+            assert sorted(meshes) == sorted(o.data.name for o in blender.objects("pattern_panel"))
+            assert not any(n.endswith(".001") for group in _names(bpy) for n in group)
+            stored, cold = data.stored_pattern(bpy.context.scene), _cold_uv(blender)
+            assert all(np.array_equal(p.uv, cold[p.name]) for p in stored.panels)
+            s.live = False
+    finally:
+        live.WRITE_S = write_s
+        bpy.context.scene.ease.live = False
+        blender.reset(body=True, design=DESIGN, piecewise_ease=True, pattern=True)
+        bpy.context.scene.ease.live = True
