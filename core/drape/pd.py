@@ -286,11 +286,13 @@ class ProjectiveStep:
         self._wa, self._wb, self._ws, self._kb, self._rest_len = (_num(a) for a in self._host)
         self._bends = wp.array(bends.astype(np.int32).reshape(-1, 4), dtype=int, device="cpu")
         self.contact = None
+        self.friction = 0.0  # the Coulomb coefficient the stop test allows on the body (the drape's)
 
     def set_contact(self, point: np.ndarray, normal: np.ndarray, active: np.ndarray, thickness: float) -> None:
-        """Body contact for the next solves' stop test: an active free particle within twice ``thickness``
-        of its contact plane (through ``point``, facing along ``normal``) is left out of it (friction,
-        applied after the solve, holds it where G alone would not)."""
+        """Body contact for the next solves' stop test: on an active free particle within twice
+        ``thickness`` of its contact plane (through ``point``, facing along ``normal``), the part of the
+        residual force that presses it into the body, and up to :attr:`friction` times that along the
+        body, is the body's to hold (the contact and friction are applied after the solve)."""
         idx = np.nonzero((np.asarray(active) != 0) & self.free)[0]
         self.contact = (
             (idx, point[idx].astype(float), normal[idx].astype(float), float(thickness)) if len(idx) else None
@@ -361,7 +363,7 @@ class ProjectiveStep:
 
         Each iteration: the projections at ``x``, the residual ``grad G = A x - M y / dt^2 -
         sum_c w_c A_c^T p_c(x)`` (stop once every free particle off the body has it under ``tolerance``
-        times its ``weight``, N (P,)) and the global step (one back-substitution of the factored
+        times its ``weight``, N (P,), less what the body holds: :meth:`set_contact`) and the global step (one back-substitution of the factored
         matrix). With ``history`` > 0 the iterates are Anderson-accelerated (Peng,
         Deng, Zhang, Liu, "Anderson acceleration for geometry optimization and physics simulation", ACM
         TOG 37(4), 2018): the next iterate mixes the last ``history`` steps, and is kept only where it
@@ -372,41 +374,56 @@ class ProjectiveStep:
         fi = self.free_idx
         if len(fi) == 0:
             return 0, 0.0
-        w = np.maximum(weight[fi], 1e-30).copy()
+        w2 = np.maximum(weight[fi], 1e-30) ** 2
+        near, nrm = np.zeros(0, int), np.zeros((0, 3))
         if self.contact is not None:
-            # the stop test leaves out the particles on the body: friction (applied after the solve) holds them
+            # on the body (within twice the contact offset) the body's reaction and friction take the part
+            # of the force that presses the particle into the body and up to mu times that along it
             idx, point, normal, thickness = self.contact
-            near = idx[np.einsum("ij,ij->i", x[idx] - point, normal) < 2.0 * thickness]
-            w[np.searchsorted(fi, near)] = np.inf
+            on = np.einsum("ij,ij->i", x[idx] - point, normal) < 2.0 * thickness
+            near, nrm = np.searchsorted(fi, idx[on]), normal[on]
         inert = self.inertia[:, None] * y
         fixed = self.A_fp @ x[self.fixed_idx] if len(self.fixed_idx) else 0.0
-        hist_g, hist_f = [], []  # the plain steps G(x_k) and their increments G(x_k) - x_k (free dofs)
+        m = max(self.history, 0)
+        # Anderson's history, rows in a ring: the plain steps G(x_k) and their increments G(x_k) - x_k
+        ring_g = np.empty((m + 1, 3 * len(fi)))
+        ring_f = np.empty_like(ring_g)
+        count = 0
         rhs, e = self.local(x, y, grow)
         it, res = 0, np.inf
         while True:
-            rhs = inert + rhs
-            res = float(np.max(np.linalg.norm((self.matrix @ x - rhs)[fi], axis=1) / w, initial=0.0))
+            rhs += inert
+            grad = (self.matrix @ x - rhs)[fi]
+            left = np.einsum("ij,ij->i", grad, grad)
+            if len(near):
+                press = np.einsum("ij,ij->i", grad[near], nrm)  # > 0: the net force presses into the body
+                slide = np.maximum(left[near] - press * press, 0.0)
+                held = np.maximum(np.sqrt(slide) - self.friction * np.maximum(press, 0.0), 0.0) ** 2
+                left[near] = np.where(press > 0.0, held, left[near])
+            res = float(np.sqrt(np.max(left / w2, initial=0.0)))
             if res < tolerance or it >= iterations:
                 break
             it += 1
             xf = x[fi].reshape(-1)
-            x[fi] = self.lu.solve(np.ascontiguousarray(rhs[fi] - fixed))
-            g = x[fi].reshape(-1)
-            hist_g.append(g)
-            hist_f.append(g - xf)
-            if len(hist_g) > self.history + 1:
-                hist_g.pop(0)
-                hist_f.pop(0)
-            if len(hist_g) > 1:
-                df = np.stack([hist_f[k + 1] - hist_f[k] for k in range(len(hist_f) - 1)], axis=1)
-                dg = np.stack([hist_g[k + 1] - hist_g[k] for k in range(len(hist_g) - 1)], axis=1)
-                theta = np.linalg.lstsq(df, hist_f[-1], rcond=None)[0]
-                x[fi] = (g - dg @ theta).reshape(-1, 3)
+            g = self.lu.solve(np.ascontiguousarray(rhs[fi] - fixed)).reshape(-1)
+            k = count % (m + 1)
+            ring_g[k], ring_f[k] = g, g - xf
+            count += 1
+            x[fi] = g.reshape(-1, 3)
+            if m and count > 1:
+                order = [(count - 1 - j) % (m + 1) for j in range(min(count, m + 1))]  # newest first
+                df = ring_f[order[:-1]] - ring_f[order[1:]]
+                dg = ring_g[order[:-1]] - ring_g[order[1:]]
+                gram = df @ df.T
+                gram.flat[:: len(gram) + 1] += 1e-12 * max(float(np.trace(gram)), 1e-300)
+                theta = np.linalg.solve(gram, df @ ring_f[order[0]])
+                x[fi] = (g - theta @ dg).reshape(-1, 3)
                 rhs_a, e_a = self.local(x, y, grow)
                 if np.isfinite(e_a) and e_a < e:
                     rhs, e = rhs_a, e_a
                     continue
                 x[fi] = g.reshape(-1, 3)  # the mix did not lower G: the plain step, a fresh history
-                hist_g, hist_f = [g], [hist_f[-1]]
+                ring_g[0], ring_f[0] = g, ring_f[k]
+                count = 1
             rhs, e = self.local(x, y, grow)
         return it, res
