@@ -8,7 +8,10 @@ the pattern bench's women's-wear table.
 on every size of the women's chart at ease 1.1 and 1.3 (the reference on M transferred) and
 adapted to P1, with issue 30's targets per size (0 crossings, legs equal within 0.1 mm, weft <=
 1.0 %, warp <= 3 %, shear p95 <= 6 deg on the front piece, bust region <= 1.5 %) under a few
-solver configurations, and the frontier where no configuration holds them all."""
+solver configurations, and the frontier where no configuration holds them all.
+
+:func:`where_sizes` (``python -m benchmarks.measure_darts --where M,L``): where the bust region's error and
+the front piece's warp and shear lie on each size (:func:`bust_breakdown`; docs/darts.md, "Graded to L")."""
 
 import dataclasses
 import json
@@ -82,6 +85,108 @@ def four_dart_figures(pattern, body) -> dict:
         "shear p95 deg": round(m["compliance"]["shear_p95"], 2),
         "flipped": m["flipped_triangles"],
         "collapsed": m["collapsed_triangles"],
+    }
+
+
+#: the zones of :func:`bust_breakdown`: (name, distance from the cup m, lo, hi) rings and the leg bands
+RINGS = (0.0, 0.01, 0.02, 0.03, 0.04, 0.06)
+LEG_BANDS = (0.0, 0.005, 0.01, 0.02, 0.04)
+
+
+def _cups(body, X) -> dict:
+    """``{"left"|"right": (3,)}`` the bust points by the landmark's own rule on the body ``X`` (the most
+    anterior vertex within 5 cm of the template's landmark, as :func:`core.cut.darts.follow_cups` finds it)."""
+    import numpy as np
+
+    out = {}
+    for side in ("left", "right"):
+        lm = body.landmark_position(f"bust_{side}", X)
+        near = np.flatnonzero(np.linalg.norm(X - lm, axis=1) < 0.05)
+        out[side] = X[near[np.argmin(X[near, 1])]]
+    return out
+
+
+def bust_breakdown(pattern, body, piece: str = "blouse.front") -> dict:
+    """Where the four-dart blouse's figures come from on one body (the left side; the design is mirrored).
+
+    ``region``: the bust region (weft compliance within 6 cm of the template's ``bust_left``, the figure of
+    :func:`four_dart_figures`) split by the distance of each triangle from the darts' sewn point
+    (``by_apex`` mm rings) and from the nearest dart leg (``by_leg``): each ``[area %, mean |weft| %,
+    contribution to the region's mean, signed weft %]``. ``front``: the piece's warp deviation and its
+    triangles over 6 deg of shear by zone (``cups``: within 6 cm of either cup, :func:`_cups`; ``centre
+    front``, ``lateral``: beside them, within 8 cm of the cups' height; ``above``, ``below``): each
+    ``[area %, mean |warp| %, contribution to the piece's mean, % of the zone over 6 deg, % of all
+    triangles over 6 deg]``. ``cup_offset_mm``: the template landmark's distance from the cup."""
+    import numpy as np
+
+    from core.body.instance import spec_instance
+    from core.metrics.regions import REGION_RADIUS, body_landmarks
+    from core.metrics.strains import panel_strain
+
+    P = next(q for q in pattern.panels if q.name == piece)
+    X, F = np.asarray(P.xyz, float), np.asarray(P.faces)
+    st = panel_strain(P)
+    weft = 100.0 * (st.weft - P.target_weft) / P.target_weft
+    warp = 100.0 * np.abs(st.warp - P.target_warp) / P.target_warp
+    a, c = st.area, X[F].mean(axis=1)
+    lm = body_landmarks(pattern, body)["bust_left"]
+    cups = _cups(body, spec_instance(pattern.body, model=body)[0])
+    legs, tip = [], None
+    for s in pattern.seams:
+        if s.kind == "dart" and s.panel_a == piece and s.name.endswith("_left"):
+            legs += [*s.verts_a, *s.verts_b]
+            tip = X[s.verts_a[-1]] if tip is None else tip
+    inside = np.linalg.norm(c - lm, axis=1) < REGION_RADIUS
+    total = a[inside].sum()
+
+    def split(key, edges):
+        out = {}
+        for lo, hi in zip(edges, (*edges[1:], np.inf)):
+            m = inside & (key >= lo) & (key < hi)
+            if m.any():
+                w = a[m]
+                out[f"{1000 * lo:g}-{1000 * hi:g}"] = [
+                    round(100 * w.sum() / total, 1),
+                    round(float((np.abs(weft[m]) * w).sum() / w.sum()), 2),
+                    round(float((np.abs(weft[m]) * w).sum() / total), 2),
+                    round(float((weft[m] * w).sum() / w.sum()), 2),
+                ]
+        return out
+
+    to_leg = np.min(np.linalg.norm(c[:, None] - X[legs][None], axis=2), axis=1) if legs else np.full(len(c), np.inf)
+    region = {
+        "mean": round(float((np.abs(weft[inside]) * a[inside]).sum() / total), 2),
+        "by_apex": split(np.linalg.norm(c - tip, axis=1), RINGS) if tip is not None else {},
+        "by_leg": split(to_leg, LEG_BANDS),
+    }
+    d_cup = np.minimum(np.linalg.norm(c - cups["left"], axis=1), np.linalg.norm(c - cups["right"], axis=1))
+    level = np.abs(c[:, 2] - cups["left"][2]) < 0.08
+    side = np.abs(c[:, 0]) >= abs(cups["left"][0])
+    away = d_cup >= REGION_RADIUS
+    zones = {
+        "cups": ~away,
+        "centre front": away & level & ~side,
+        "lateral": away & level & side,
+        "above": away & ~level & (c[:, 2] > cups["left"][2]),
+        "below": away & ~level & (c[:, 2] < cups["left"][2]),
+    }
+    sheared = st.shear > 6.0
+    A, As = a.sum(), max(a[sheared].sum(), 1e-300)
+    front = {
+        k: [
+            round(100 * a[m].sum() / A, 1),
+            round(float((warp[m] * a[m]).sum() / a[m].sum()), 2),
+            round(float((warp[m] * a[m]).sum() / A), 2),
+            round(100 * a[m & sheared].sum() / a[m].sum(), 1),
+            round(100 * a[m & sheared].sum() / As, 1),
+        ]
+        for k, m in zones.items()
+        if m.any()
+    }
+    return {
+        "region": region,
+        "front": front,
+        "cup_offset_mm": round(1000 * float(np.linalg.norm(cups["left"] - lm)), 1),
     }
 
 
@@ -220,7 +325,26 @@ def four_darts_markdown(rows: dict) -> list:
     return L
 
 
+def where_sizes(sizes=("M", "L")) -> dict:
+    """``{size: {"figures": four_dart_figures, **bust_breakdown}}`` of ``blouse_four_darts`` (its ``fitted``
+    reference on women:M, transferred to the other ``sizes`` as ``ease transfer`` does)."""
+    prep = wf.prepare(TEMPLATES["blouse_four_darts"]())
+    solver = wf.make_solver(prep)
+    ref = wf.reference(prep, solver=solver).pattern
+    out = {}
+    for size in sizes:
+        pat = ref if size == "M" else wf.transfer(prep, size, solver=solver, start=ref).pattern
+        out[size] = {"figures": four_dart_figures(pat, prep.body), **bust_breakdown(pat, prep.body)}
+    return out
+
+
 def main() -> int:
+    if "--where" in sys.argv[1:]:
+        i = sys.argv.index("--where")
+        sizes = sys.argv[i + 1].split(",") if len(sys.argv) > i + 1 else ["M", "L"]
+        for size, row in where_sizes(sizes).items():
+            print(json.dumps({"size": size, **row}))
+        return 0
     if "--sizes" in sys.argv[1:]:
         for key, row in four_darts_sizes().items():
             print(json.dumps({"case": key, **row}))
