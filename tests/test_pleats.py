@@ -21,7 +21,7 @@ from core.design.pleated import skirt_knife_pleats
 from core.design.pleats import KINDS, mirror_pleat, parse_pleat
 from core.errors import DesignError
 from core.geom.mesh import boundary_loops, signed_areas_2d
-from core.pattern.pleats import open_piece, piece_strips
+from core.pattern.pleats import open_piece, piece_strips, split_seams
 from core.pattern.types import PatternPanel, PatternSeam
 
 # ------------------------------------------------------------------ design
@@ -200,15 +200,60 @@ def test_pleats_the_piece_cannot_take_are_refused(sites, field, words):
     assert e.value.path.endswith(f".{field}") and words in e.value.message
 
 
-def test_a_line_ending_on_a_seam_names_the_seam():
-    piece = _flat_piece()
+def _side_seam(other, gathered=False):
+    """The flat piece's right edge (top to bottom) sewn to the left edge of ``other`` (a second flat
+    piece, ids from :data:`BACK_IDS`), or to the piece itself when ``other`` is ``"g.front"``."""
     nx, ny = int(W / E), int(H / E)
-    right = np.arange(ny + 1) * (nx + 1) + nx
-    side = PatternSeam("g.side", "g.front", "g.back", right, np.arange(ny + 1))
-    with pytest.raises(DesignError) as e:
-        piece_strips(piece, [_site(0.3, along=(1, 0, -1))], seams=[side])
-    assert e.value.path.endswith(".along") and "seam 'g.side' of 'g.front'" in e.value.message
-    assert "\n" not in str(e.value)
+    right = np.arange(ny, -1, -1) * (nx + 1) + nx
+    left = np.arange(ny, -1, -1) * (nx + 1)
+    return PatternSeam("g.side", "g.front", other, right, left, gathered=gathered)
+
+
+BACK_IDS = 10_000  # the second flat piece's first global id
+
+
+def test_a_line_ending_on_a_seam_of_the_piece_with_itself_names_the_seam():
+    """A line may end on a seam to another piece (sewn through it, below); on a seam that sews the
+    piece to itself, or a gathered one, it is refused at its end, the seam named, in one line."""
+    piece = _flat_piece()
+    assert (
+        len(piece_strips(piece, [_site(0.25, along=(1, 0, -1), direction="right")], seams=[_side_seam("g.back")])) == 1
+    )
+    for seam in (_side_seam("g.front"), _side_seam("g.back", gathered=True)):
+        with pytest.raises(DesignError) as e:
+            piece_strips(piece, [_site(0.25, along=(1, 0, -1), direction="right")], seams=[seam])
+        assert e.value.path.endswith(".along") and "seam 'g.side' of 'g.front'" in e.value.message
+        assert "\n" not in str(e.value)
+
+
+def test_a_line_ending_on_a_seam_is_sewn_through_it():
+    """The line from the top hem down and right ends on the side seam: the seam is split where the
+    strip meets it, the other piece gets a vertex at the same place of its edge, and both parts of
+    the seam keep equal sides (the pleat sewn closed into the seam: both ends of the strip's edge
+    sew to that one vertex)."""
+    front, back = _flat_piece(), _flat_piece(seed=1)
+    back.name, back.vertex_ids = "g.back", back.vertex_ids + BACK_IDS
+    seam = _side_seam("g.back")
+    strips = piece_strips(front, [_site(0.25, along=(1, 0, -1), direction="right")], seams=[seam])
+    ends = []
+    opened, lines, _, next_id = open_piece(front, strips, 2 * BACK_IDS, np.array([0.2, 1.0, 0.25]), ends)
+    assert len(ends) == 2  # the start on the top hem, the end on the seam
+    panels, seams, last = split_seams([opened, back], [seam], {"g.front": ends}, next_id)
+    assert [s.name for s in seams] == ["g.side#p0", "g.side#p1"] and last == next_id + 1
+    new_back = panels[1]
+    assert len(new_back.uv) == len(back.uv) + 1 and len(new_back.faces) == len(back.faces) + 1
+    assert (signed_areas_2d(new_back.uv, new_back.faces) > 0).all() and len(boundary_loops(new_back.faces)) == 1
+    m = len(back.uv)
+    assert seams[0].verts_b[-1] == seams[1].verts_b[0] == m and new_back.vertex_ids[m] == next_id
+    for s in seams:  # each part: a path along both outlines, the two sides equally long
+        la = np.linalg.norm(np.diff(opened.uv[s.verts_a], axis=0), axis=1)
+        lb = np.linalg.norm(np.diff(new_back.uv[s.verts_b], axis=0), axis=1)
+        assert len(s.verts_a) == len(s.verts_b) and la.sum() == pytest.approx(lb.sum(), abs=1e-9)
+    # the strip's edge on the seam runs between the two parts' ends on the front: the visible fold's
+    # and the placement line's ends
+    fold, place = lines[0].ids[-1], next(x for x in lines if x.kind == "placement").ids[-1]
+    assert {int(seams[0].verts_a[-1]), int(seams[1].verts_a[0])} == {fold, place}
+    assert np.linalg.norm(opened.uv[fold] - opened.uv[place]) == pytest.approx(2 * 0.02, abs=1e-9)
 
 
 def test_a_pleat_on_a_dart_is_refused():
@@ -321,22 +366,58 @@ def test_the_drape_starts_folded_with_creases_held(pleated):
     assert not fold_edges(soft, soft.mesh_pattern).any() and len(soft.edges) == len(cloth.edges) - len(want)
 
 
-def test_a_pleat_from_a_seam_is_refused_naming_the_seam(pleated):
-    """A pleat whose line starts on a seam (the skirt's side seam) is refused at its ``from``, the
-    seam named, in one line (docs/pleats.md, Limits: why)."""
-    from core.pattern.pleats import pleat_sites
+def test_a_pleat_from_a_seam_is_sewn_through_it_at_every_stage(pleated, tmp_path):
+    """A tuck across the skirt's front, from a point of its left side seam to the right side seam:
+    placed on the seam, opened with both side seams split where it meets them and the back given a
+    vertex at each (the parts' sides as long as closed), exported with the split seams' notches on
+    both pieces, and draped with the tuck's fold and placement ends sewn to the back's vertex."""
+    from core import workflows
+    from core.drape.pleats import draped_cloth
+    from core.export import export_pattern
+    from core.metrics.pattern import seam_mismatch
+    from core.pattern.pleats import attach_pleats, open_pattern
 
-    _, _, prep = pleated
+    pattern, _, prep = pleated
     d = skirt_knife_pleats()
     d["keypoints"]["side_mid_left"] = {"between": ["waist_side_left", "hem_out_left"], "t": 0.4}
     front = d["garments"][0]["panels"][0]
-    front["pleats"] = [dict(front["pleats"][0], name="side_left", **{"from": "side_mid_left", "along": "x"})]
+    tuck = dict(front["pleats"][0], name="front_tuck", kind="tuck", stitched_length=0.05, along="-x")
+    front["pleats"] = [dict(tuck, **{"from": "side_mid_left"})]
+    back = d["garments"][0]["panels"][1]
+    back["pleats"] = back["pleats"][1:2]  # as the fixture's
     other = copy.copy(prep)
     other.design = load_design(d)
-    with pytest.raises(DesignError) as e:
-        pleat_sites(other)
-    assert e.value.path == "garments[0].panels[0].pleats[0].from"
-    assert "is on seam 'skirt.side_left' of 'skirt.front'" in e.value.message and "\n" not in str(e.value)
+    tucked = copy.deepcopy(pattern)
+    attach_pleats(tucked, other)  # the closed pattern is the same: only the pleats are placed again
+    site = next(s for s in tucked.report["pleats"] if s["name"] == "front_tuck")
+    assert site["depth_error_mm"] <= 0.1 and site["intake_mm"] == pytest.approx(40.0)
+    opened = open_pattern(tucked, stitch=True)
+    names = {s.name for s in opened.seams}
+    assert {"skirt.side_left#p0", "skirt.side_left#p1", "skirt.side_right#p0", "skirt.side_right#p1"} <= names
+    assert not {"skirt.side_left", "skirt.side_right"} & names
+    per = seam_mismatch(opened)["per_seam"]
+    assert max(per[n]["mm"] for n in names if "side_" in n) < 1.0  # each part sews as it did closed
+    ids = np.asarray(opened.panel("skirt.back").vertex_ids)
+    assert len(ids) == len(open_pattern(pattern).panel("skirt.back").uv) + 2  # a vertex on each side seam
+    added = ids[-2:]
+    # export: the split seams' notches on both pieces, the tuck's lines on the front
+    export_pattern(tucked, tmp_path / "p", formats=("svg", "dxf"))
+    import json
+
+    pieces = {p["name"]: p for p in json.loads((tmp_path / "p" / "export.json").read_text())["pieces"]}
+    for piece in ("skirt.front", "skirt.back"):
+        assert {"skirt.side_left#p0", "skirt.side_left#p1"} <= set(pieces[piece]["notches_mm"])
+    assert len(pieces["skirt.front"]["notches_mm"]["front_tuck"]) == 2 * 3
+    # drape: each end of the tuck's fold and placement lines is the back's new vertex there
+    cloth = draped_cloth(tucked)
+    lines = [x for x in cloth.mesh_pattern.report["opened_pleats"]["skirt.front"] if x["pleat"] == "front_tuck"]
+    fold, place = lines[0], next(x for x in lines if x["kind"] == "placement")
+    seam_ends = set(cloth.particle_of[added].tolist())
+    for k in (0, -1):
+        assert cloth.particle_of[fold["gids"][k]] == cloth.particle_of[place["gids"][k]]
+        assert int(cloth.particle_of[fold["gids"][k]]) in seam_ends
+    draped = workflows.drape(tucked, options={"max_frames": 1})
+    assert draped.result.frames == 1 and draped.figures["penetration %"] < 0.5
 
 
 def test_every_size_opens_to_the_same_outline(pleated):

@@ -13,9 +13,10 @@ entry of a panel's ``pleats`` list::
   turned under towards the placement line: intake 4 x depth), ``"inverted_box"`` (two folds
   meeting on the placement line: intake 4 x depth) or ``"tuck"`` (a knife fold stitched
   through its layers over ``stitched_length`` from its start);
-- ``from``: a keypoint on a hem or opening line of the panel where the placement line starts;
+- ``from``: a keypoint on a hem, opening or seam line of the panel where the placement line starts
+  (a seam to another piece is sewn through the pleat folded closed);
 - ``towards``: a keypoint the line runs towards, or ``along``: an axis (``"-z"``: down); the
-  line runs straight across the flat piece until it leaves it (on another hem or opening);
+  line runs straight across the flat piece until it leaves it (on a hem, opening or seam);
 - ``depth``: the cloth folded under on each fold (m, 0 < depth <= :data:`DEPTH_MAX`, or a
   ``"$parameter"``);
 - ``direction``: ``"left"`` or ``"right"``, the wearer's side of the placement line the folded

@@ -4,7 +4,7 @@ A pleat is solved closed: the pattern is flattened as the garment is worn, with
 the pleat's cloth folded away, so the ease compliance of ``report["metrics"]``
 is the cloth as worn. The pleat is then a post-flattening insertion
 (:func:`open_pattern`): the piece is cut along the placement line's image (a
-straight chord of the flat piece, from the ``from`` point on a hem or opening
+straight chord of the flat piece, from the ``from`` point on a hem, opening or seam
 to where the line leaves the piece) and a strip of ``intake`` = 2 x depth
 (knife, tuck) or 4 x depth (box, inverted box) is inserted; the part of the
 piece beyond the line moves across by the intake, rigidly, so the depth is
@@ -21,10 +21,14 @@ What each stage reads:
   ``report["opened_pleats"]`` holds per piece the fold, placement and stitch lines as local
   vertex ids and 2D end points (:class:`OpenedLine`).
 
-Refused with the pleat's JSON path (exit 2 through the CLI): a start that is not on a hem or
-opening of its panel, a line that leaves its panel or ends on a seam, a depth larger than the
-panel can take (the folded cloth must lie under the piece), pleats whose folds cross or
-overlap, a pleat over a dart.
+A line that starts or ends on a seam to another piece is sewn into it closed
+(:func:`split_seams`): the seam is split where the strip meets it and the other piece gets a
+vertex there, so the pleat's visible fold and placement line are sewn to one point of it.
+
+Refused with the pleat's JSON path (exit 2 through the CLI): a start that is not on a hem,
+opening or seam of its panel, a line that leaves its panel or ends on a dart, on a seam of its
+piece with itself or on a gathered seam, a depth larger than the panel can take (the folded
+cloth must lie under the piece), pleats whose folds cross or overlap, a pleat over a dart.
 """
 
 from __future__ import annotations
@@ -54,8 +58,8 @@ LIFT_FALLOFF = 0.015
 END_MARGIN = 0.1
 #: why a pleat may not start or end on a seam (one line, after the seam's name)
 SEAM_REASON = (
-    "a pleat runs between hems or openings (a pleat sewn into a seam is not made: its folded layers "
-    "would be sewn to the other piece at their worn places, points the other piece does not have)"
+    "a pleat runs between hems, openings and seams that sew its piece to another (its folds are sewn "
+    "into the seam closed); a dart, a seam of a piece with itself or a gathered seam cannot take it"
 )
 #: the wearer's left on the body (Anny: +x)
 LEFT = np.array([1.0, 0.0, 0.0])
@@ -66,7 +70,7 @@ LEFT = np.array([1.0, 0.0, 0.0])
 
 def pleat_sites(prep) -> List[dict]:
     """Every pleat of ``prep.design`` placed on its cut panel (JSON-able dicts, see the module
-    docs), checked against the panel: its start on a hem or opening."""
+    docs), checked against the panel: its start on a hem, opening or seam to another piece."""
     from ..design.checks import parameter_value
     from ..design.geometry import SurfaceLocator
     from ..design.pleats import KINDS, design_pleats
@@ -87,16 +91,20 @@ def pleat_sites(prep) -> List[dict]:
         faces = np.asarray(panel.faces, int)
         start = resolver.position(resolver.point(pleat.start, f"{path}.from"))
         edge, lam, dist = _nearest_hem_point(cut.hems.get(full, []), xyz, start)
-        if edge is None or dist > START_TOL:
-            seam, seam_dist = _nearest_seam(cut.seams, full, xyz, start)
-            if seam is not None and seam_dist <= START_TOL:
+        seam, s_edge, s_lam, s_dist = _nearest_seam(cut.seams, full, xyz, start)
+        if seam is not None and s_dist <= START_TOL and s_dist < dist:  # from a seam: sewn through the folds
+            if seam.panel_a == seam.panel_b or getattr(seam, "gathered", False):
+                what = "sews its panel to itself" if seam.panel_a == seam.panel_b else "is gathered"
                 raise DesignError(
                     f"{path}.from",
-                    f"pleat {pleat.name!r}: {pleat.start!r} is on seam {seam!r} of {full!r}; {SEAM_REASON}",
+                    f"pleat {pleat.name!r}: {pleat.start!r} is on seam {seam.name!r}, which {what}; {SEAM_REASON}",
                 )
+            edge, lam, dist = s_edge, s_lam, s_dist
+        if edge is None or dist > START_TOL:
             far = "" if edge is None else f" ({dist * 1000:.0f} mm away)"
             raise DesignError(
-                f"{path}.from", f"pleat {pleat.name!r}: {pleat.start!r} is not on a hem or opening of {full!r}{far}"
+                f"{path}.from",
+                f"pleat {pleat.name!r}: {pleat.start!r} is not on a hem, opening or seam of {full!r}{far}",
             )
         site = {
             "name": pleat.name,
@@ -121,17 +129,17 @@ def pleat_sites(prep) -> List[dict]:
 
 
 def _nearest_seam(seams, panel, xyz, p):
-    """The name of the seam (not a dart) of ``panel`` nearest to the point ``p`` (3,) and its
-    distance (m); ``(None, inf)`` without seams."""
-    best = (None, np.inf)
+    """The seam (not a dart) of ``panel`` nearest to the point ``p`` (3,): ``(seam, edge (u, w),
+    fraction along it, distance m)``; ``(None, None, 0, inf)`` without seams."""
+    best = (None, None, 0.0, np.inf)
     for s in seams:
         if s.kind == "dart":
             continue
         for name, verts in ((s.panel_a, s.verts_a), (s.panel_b, s.verts_b)):
             if name == panel and len(verts) > 1:
-                _, _, d = _nearest_hem_point([verts], xyz, p)
-                if d < best[1]:
-                    best = (s.name, d)
+                e, lam, d = _nearest_hem_point([verts], xyz, p)
+                if d < best[3]:
+                    best = (s, e, lam, d)
     return best
 
 
@@ -293,7 +301,7 @@ def _hem_edges(hems) -> set:
 
 def piece_strips(piece, sites: List[dict], darts=(), seams=()) -> List[Strip]:
     """The strips of the pleats ``sites`` on the closed ``piece`` (a PatternPanel), checked:
-    each chord inside the piece and ending on a hem or opening (``seams``: the pattern's seams,
+    each chord inside the piece and ending on a hem, opening or seam to another piece (``seams``: the pattern's seams,
     to name one a line ends on), room for the folded cloth under the piece, no two pleats' cloth
     overlapping, no pleat over a dart (``darts``: the piece's dart seams)."""
     uv, xyz, faces = np.asarray(piece.uv, float), np.asarray(piece.xyz, float), np.asarray(piece.faces, int)
@@ -303,7 +311,7 @@ def piece_strips(piece, sites: List[dict], darts=(), seams=()) -> List[Strip]:
     for sm in seams:
         for name, verts in ((sm.panel_a, sm.verts_a), (sm.panel_b, sm.verts_b)):
             if name == piece.name:
-                seam_of.update({e: sm.name for e in _hem_edges([verts])})
+                seam_of.update({e: sm for e in _hem_edges([verts])})
     out, bands = [], []
     for site in sites:
         path, name = site["path"], site["name"]
@@ -340,8 +348,8 @@ def piece_strips(piece, sites: List[dict], darts=(), seams=()) -> List[Strip]:
             (pa, edge_a), (pb, edge_b) = ends
             found.append([_edge_point(uv, pa, edge_a), _edge_point(uv, pb, edge_b)])
             for edge, field_ in ((edge_a, "from"), (edge_b, "towards" if "towards" in site else "along")):
-                if edge not in hem_edges:
-                    seam = f"seam {seam_of[edge]!r}" if edge in seam_of else "a seam"
+                if edge not in hem_edges and not _sewn_through(seam_of.get(edge)):
+                    seam = f"seam {seam_of[edge].name!r}" if edge in seam_of else "a dart or seam"
                     raise DesignError(
                         f"{path}.{field_}", f"pleat {name!r}: its line meets {seam} of {site['panel']!r}; {SEAM_REASON}"
                     )
@@ -378,6 +386,12 @@ def piece_strips(piece, sites: List[dict], darts=(), seams=()) -> List[Strip]:
             out.append(strip)
         site["ends"] = fixed or found  # the same hem points on every size (graded files share their outlines)
     return out
+
+
+def _sewn_through(seam) -> bool:
+    """A pleat's line may end on ``seam`` (a PatternSeam or None): one that sews two pieces, not
+    gathered (the pleat is folded closed and the seam sewn through its layers, :func:`split_seams`)."""
+    return seam is not None and seam.panel_a != seam.panel_b and not getattr(seam, "gathered", False)
 
 
 def _edge_point(uv, p, edge) -> list:
@@ -572,14 +586,17 @@ def _layer_lift(strip: Strip, sigma: float) -> float:
     return 0.0
 
 
-def open_piece(piece, strips: List[Strip], next_id: int, inside: np.ndarray):
+def open_piece(piece, strips: List[Strip], next_id: int, inside: np.ndarray, ends: list = None):
     """The piece opened along every strip (see the module docs): a copy of the PatternPanel with the
     strips' vertices and faces, its hems carried through the strips, and the lines drawn on it.
 
     ``next_id``: the first free global vertex id; ``inside``: a point inside the garment (the xyz of
     the opened piece is its drape start: the folded layers lifted off one another, away from it).
     Returns ``(piece, lines, stitches, next_id)``: lines a list of :class:`OpenedLine`, stitches
-    ``(pleat, ids_a, ids_b)`` welded by the drape."""
+    ``(pleat, ids_a, ids_b)`` welded by the drape. ``ends`` (a list, optional) gets one
+    ``(pleat, p, q, lam, at_p, at_q)`` per end of a line on an edge ``p``-``q`` of the closed
+    outline (local ids): the line met it ``lam`` of the way from ``p``, and the opened piece's
+    outline runs ``p``, ``at_p``, the strip's row, ``at_q``, ``q`` (:func:`split_seams`)."""
     closed_uv = np.asarray(piece.uv, float)
     closed_xyz = np.asarray(piece.xyz, float)
     closed_faces = np.asarray(piece.faces, int)
@@ -599,6 +616,7 @@ def open_piece(piece, strips: List[Strip], next_id: int, inside: np.ndarray):
     lifts = []  # (vertex ids, lift) of the cloth above folded layers, applied at the end (max)
     strip_lift = {}  # strip vertex -> lift
     canon = []  # per strip the new vertices on the outline, in a fixed order
+    end_rec = []  # the lines' ends on the closed outline (see ``ends``)
     for n_strip, strip in enumerate(strips):
         # the chord in the current (partly opened) piece: the closed chord moved with its side
         flat = faces[parent >= 0]  # the strips' faces lie folded in the closed frame: not those
@@ -678,6 +696,14 @@ def open_piece(piece, strips: List[Strip], next_id: int, inside: np.ndarray):
                 lines.append(OpenedLine(strip.pleat, "fold", [int(v) for v in grid[:, j]], n_strip))
             elif any(abs(sg - f) < 1e-12 for f in strip.placements):
                 lines.append(OpenedLine(strip.pleat, "placement", [int(v) for v in grid[:, j]], n_strip))
+        # the line's ends on the closed outline: which side each of the split edge's ends lies on
+        for (p, q), m in cut.items():
+            r = row.get(int(m))
+            if p < len(closed_uv) and q < len(closed_uv) and r in (0, len(on_line) - 1):
+                lam = float(np.linalg.norm(cl[m] - cl[p]) / max(np.linalg.norm(cl[q] - cl[p]), 1e-300))
+                at = (int(grid[r, 0]), int(grid[r, -1]))  # side A's copy, side B's vertex
+                p_on_a = int(p) in a_set
+                end_rec.append((strip.pleat, int(p), int(q), lam, at[0 if p_on_a else 1], at[1 if p_on_a else 0]))
         j0, j1 = (int(np.argmin(np.abs(sig - x))) for x in strip.stitch)
         arc = cumulative_lengths(uv[grid[:, 0]])
         held = max(int(np.searchsorted(arc, strip.stitched + 1e-9, side="right")), 1)
@@ -703,6 +729,8 @@ def open_piece(piece, strips: List[Strip], next_id: int, inside: np.ndarray):
     hems = [[int(index[v]) for v in h] for h in hems]
     lines = [OpenedLine(x.pleat, x.kind, [int(index[v]) for v in x.ids], x.strip) for x in lines]
     stitches = [(n, [int(index[v]) for v in a], [int(index[v]) for v in b]) for n, a, b in stitches]
+    if ends is not None:
+        ends += [(n, p, q, lam, int(index[x]), int(index[y])) for n, p, q, lam, x, y in end_rec]
     new = vids < 0
     vids[new] = np.arange(next_id, next_id + int(new.sum()))
     nrm = nrm / np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300)
@@ -796,7 +824,7 @@ def open_pattern(pattern, stitch: bool = False):
     if not sites:
         return pattern
     next_id = 1 + max(int(np.max(p.vertex_ids)) for p in pattern.panels if len(p.vertex_ids))
-    panels, seams, drawn = [], list(pattern.seams), {}
+    panels, seams, drawn, ends = [], list(pattern.seams), {}, {}
     for piece in pattern.panels:
         mine = [s for s in sites if s["panel"] == piece.name]
         if not mine:
@@ -805,7 +833,8 @@ def open_pattern(pattern, stitch: bool = False):
         darts = [s for s in pattern.seams if s.kind == "dart" and s.panel_a == piece.name]
         strips = piece_strips(piece, mine, darts, [s for s in pattern.seams if s.kind != "dart"])
         garment = np.concatenate([np.asarray(p.xyz) for p in pattern.panels if p.garment == piece.garment])
-        opened, lines, stitches, next_id = open_piece(piece, strips, next_id, garment.mean(axis=0))
+        ends[piece.name] = []
+        opened, lines, stitches, next_id = open_piece(piece, strips, next_id, garment.mean(axis=0), ends[piece.name])
         panels.append(opened)
         gids = np.asarray(opened.vertex_ids, int)
         drawn[piece.name] = [
@@ -815,6 +844,7 @@ def open_pattern(pattern, stitch: bool = False):
         if stitch:
             for k, (name, ia, ib) in enumerate(stitches):
                 seams.append(PatternSeam(f"{name}#stitch{k}", piece.name, piece.name, np.asarray(ia), np.asarray(ib)))
+    panels, seams, next_id = split_seams(panels, seams, ends, next_id, {s["name"]: s["path"] for s in sites})
     report = dict(pattern.report)
     report["opened_pleats"] = drawn
     return Pattern(
@@ -828,6 +858,103 @@ def open_pattern(pattern, stitch: bool = False):
         mode=pattern.mode,
         report=report,
     )
+
+
+def split_seams(panels, seams, ends: Dict[str, list], next_id: int, paths=None):
+    """Sew a pleat into the seam it starts or ends on: the pleat folded closed, the seam sewn through it.
+
+    ``ends``: per opened piece the ends of its pleats' lines on the closed outline (``ends`` of
+    :func:`open_piece`). Where one lies on a seam to another piece, the opened piece's side of the
+    seam runs ``p``, ``at_p`` and goes on from ``at_q``, ``q``: the strip's edge between (the
+    folded layers, as long as the intake) is in no seam. The seam is split there into two (named
+    ``<seam>#p0``, ``#p1``, ... along it), and the other piece gets a vertex on its edge at the same
+    fraction, which ends both parts: the pleat's visible fold and its placement line (welded by the
+    pleat's stitching at its start) are sewn to that one point, as a pattern maker folds the pleat,
+    pins it and sews the seam through it; each part's two sides keep their closed lengths (notches
+    match), and the seam's ends there are both pieces' notches. ``paths``: pleat name -> its JSON
+    path (for the error of a seam that cannot take it). Returns ``(panels, seams, next_id)``.
+    """
+    from dataclasses import replace
+
+    if not any(ends.values()):
+        return panels, seams, next_id
+    by_name = {p.name: k for k, p in enumerate(panels)}
+    panels = list(panels)
+    out = []
+    for seam in seams:
+        cuts = []  # (index along the seam, side, pleat, p, q, lam, at_p, at_q)
+        for side, name, verts in (("a", seam.panel_a, seam.verts_a), ("b", seam.panel_b, seam.verts_b)):
+            if seam.kind == "dart" or name not in ends:
+                continue
+            v = [int(x) for x in verts]
+            pos = {frozenset((v[i], v[i + 1])): i for i in range(len(v) - 1)}
+            for pleat, p, q, lam, at_p, at_q in ends[name]:
+                i = pos.get(frozenset((p, q)))
+                if i is not None:
+                    cuts.append((i, side, pleat, p, q, lam, at_p, at_q))
+        if not cuts:
+            out.append(seam)
+            continue
+        if seam.panel_a == seam.panel_b or seam.gathered or len({c[0] for c in cuts}) < len(cuts):
+            where = (paths or {}).get(cuts[0][2], "")
+            raise DesignError(
+                f"{where}.from" if where else "",
+                f"pleat {cuts[0][2]!r} cannot be sewn into seam {seam.name!r}; {SEAM_REASON}",
+            )
+        va, vb = [int(x) for x in seam.verts_a], [int(x) for x in seam.verts_b]
+        at_edge = {c[0]: c for c in cuts}
+        parts, cur = [], ([], [])
+        for k in range(len(va)):
+            cur[0].append(va[k])
+            cur[1].append(vb[k])
+            if k not in at_edge:
+                continue
+            _, side, pleat, p, q, lam, at_p, at_q = at_edge[k]
+            mine, other = (va, vb) if side == "a" else (vb, va)
+            oname = seam.panel_b if side == "a" else seam.panel_a
+            # the other piece's vertex at the same fraction of its edge
+            y_p, y_q = (other[k], other[k + 1]) if mine[k] == p else (other[k + 1], other[k])
+            panels[by_name[oname]], m = _split_edge(panels[by_name[oname]], y_p, y_q, lam, next_id)
+            next_id += 1
+            first, second = (at_p, at_q) if mine[k] == p else (at_q, at_p)
+            ends_here, starts_next = ((first, m), (second, m)) if side == "a" else ((m, first), (m, second))
+            cur[0].append(ends_here[0])
+            cur[1].append(ends_here[1])
+            parts.append(cur)
+            cur = ([starts_next[0]], [starts_next[1]])
+        parts.append(cur)
+        parts_a, parts_b = [x[0] for x in parts], [x[1] for x in parts]
+        for k, (a, b) in enumerate(zip(parts_a, parts_b)):
+            out.append(replace(seam, name=f"{seam.name}#p{k}", verts_a=np.asarray(a, int), verts_b=np.asarray(b, int)))
+    return panels, out, next_id
+
+
+def _split_edge(piece, y_p: int, y_q: int, lam: float, gid: int):
+    """A copy of ``piece`` with a vertex on its boundary edge ``y_p``-``y_q``, ``lam`` of the way from
+    ``y_p`` (the edge's triangle split in two, targets kept), global id ``gid``; and its local id."""
+    faces = np.asarray(piece.faces, int)
+    has = (faces == y_p).any(axis=1) & (faces == y_q).any(axis=1)
+    (f,) = np.flatnonzero(has)[:1] if has.sum() == 1 else (None,)
+    if f is None:
+        raise DesignError("", f"pleat seam: edge {y_p}-{y_q} of {piece.name!r} is not on its outline")
+    m = len(piece.uv)
+    a, b, c = (int(x) for x in faces[f])
+    # the face's corners turned so that its edge between y_p and y_q runs a -> b
+    while {a, b} != {y_p, y_q}:
+        a, b, c = b, c, a
+    new = copy.copy(piece)
+    new.uv = np.vstack([piece.uv, (1 - lam) * np.asarray(piece.uv[y_p]) + lam * np.asarray(piece.uv[y_q])])
+    new.xyz = np.vstack([piece.xyz, (1 - lam) * np.asarray(piece.xyz[y_p]) + lam * np.asarray(piece.xyz[y_q])])
+    new.vertex_ids = np.r_[np.asarray(piece.vertex_ids, int), gid]
+    new.faces = np.vstack([faces[:f], [[a, m, c], [m, b, c]], faces[f + 1 :]])
+    for name in ("target_weft", "target_warp"):
+        t = np.asarray(getattr(piece, name), float)
+        setattr(new, name, np.r_[t[:f], t[f], t[f], t[f + 1 :]])
+    new.hems = [np.asarray(h, int) for h in piece.hems]
+    new.boundary = [_rotated(np.asarray(x, int), piece.boundary) for x in boundary_loops(new.faces)]
+    new._scales = None
+    new.achieved_weft, new.achieved_warp, _ = new.scales()
+    return new, m
 
 
 def measure_pleats(pattern) -> List[dict]:
