@@ -6,7 +6,7 @@ the pattern bench's women's-wear table.
 
 :func:`four_darts_sizes` (``python -m benchmarks.measure_darts --sizes``): ``blouse_four_darts``
 on every size of the women's chart at ease 1.1 and 1.3 (the reference on M transferred) and
-adapted to P1, with issue 30's targets per size (0 crossings, legs equal within 0.1 mm, weft <=
+adapted to P1 (``--into benchmarks/results``: the table written into the pattern bench's results), with issue 30's targets per size (0 crossings, legs equal within 0.1 mm, weft <=
 1.0 %, warp <= 3 %, shear p95 <= 6 deg on the front piece, bust region <= 1.5 %) under a few
 solver configurations, and the frontier where no configuration holds them all.
 
@@ -338,6 +338,27 @@ def where_sizes(sizes=("M", "L")) -> dict:
     return out
 
 
+def write_sizes(results, rows: dict, note: str) -> None:
+    """Put :func:`four_darts_sizes`' ``rows`` into the pattern bench's results in the folder ``results``: the
+    ``four_darts_sizes`` entry of ``pattern.json`` and its table in ``pattern.md`` (the section from its
+    heading to the next one), followed by ``note`` (when and how it was rerun), the rest as it was."""
+    from pathlib import Path
+
+    from core.fileio import write_json, write_text
+
+    folder = Path(results)
+    data = json.loads((folder / "pattern.json").read_text())
+    data["four_darts_sizes"] = rows
+    data["four_darts_sizes_note"] = note
+    lines = (folder / "pattern.md").read_text().split("\n")
+    table = four_darts_markdown(rows)[1:]  # its heading on, without the blank line before it
+    start = lines.index(table[0])
+    end = next(i for i in range(start + 1, len(lines)) if lines[i].startswith("#"))
+    lines[start:end] = [*table, "", note, ""]
+    write_json(folder / "pattern.json", data)
+    write_text(folder / "pattern.md", "\n".join(lines))
+
+
 def main() -> int:
     if "--where" in sys.argv[1:]:
         i = sys.argv.index("--where")
@@ -346,8 +367,20 @@ def main() -> int:
             print(json.dumps({"size": size, **row}))
         return 0
     if "--sizes" in sys.argv[1:]:
-        for key, row in four_darts_sizes().items():
+        import os
+        import time
+
+        t0, load = time.perf_counter(), os.getloadavg()[0]
+        rows = four_darts_sizes()
+        for key, row in rows.items():
             print(json.dumps({"case": key, **row}))
+        if "--into" in sys.argv[1:]:
+            when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+            note = (
+                f"This table alone rerun on {when} (`python -m benchmarks.measure_darts --sizes --into "
+                f"benchmarks/results`): {time.perf_counter() - t0:.0f} s at a load average of {load:.1f} at its start."
+            )
+            write_sizes(sys.argv[sys.argv.index("--into") + 1], rows, note)
         return 0
     for ease in (1.1, 1.3):
         for darts in VARIANTS:

@@ -4,6 +4,7 @@ notches in SVG, AAMA DXF and PDF), the drape welding the legs, and bad darts ref
 with the field named (exit status 2 through the CLI)."""
 
 import copy
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -524,3 +525,30 @@ def test_a_solve_ends_with_its_dart_legs_sewn_equal(blouse_run):
     assert solver.legs_sewn_equal(equal) is equal  # within the tolerance: untouched
     # the written pattern's own figure (build.dart_report), on the reference's full solve
     assert all(r["leg_difference_mm"] <= 1000 * LEG_TOLERANCE for r in run.pattern.report["darts"].values())
+
+
+def test_the_per_size_table_is_written_into_the_bench_results(tmp_path):
+    """benchmarks.measure_darts.write_sizes (``--sizes --into``) replaces the pattern bench's per-size table and
+    its entry in pattern.json, and nothing else; written again, its note is replaced, not repeated."""
+    import json
+    import shutil
+
+    from benchmarks.measure_darts import write_sizes
+
+    src = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+    for name in ("pattern.json", "pattern.md"):
+        shutil.copy(src / name, tmp_path / name)
+    before = (tmp_path / "pattern.md").read_text().split("\n")
+    rows = json.loads((tmp_path / "pattern.json").read_text())["four_darts_sizes"]
+    rows["XS @ 1.1"]["fitted"]["bust region %"] = 9.87
+    for note in ("first note", "second note"):
+        write_sizes(tmp_path, rows, note)
+    after = (tmp_path / "pattern.md").read_text().split("\n")
+    changed = [line for line in after if line not in before]
+    assert len(changed) == 2 and "| 9.87 |" in changed[0] and changed[1] == "second note", changed
+    assert [line for line in before if line not in after] == [
+        next(line for line in before if line.startswith("| XS @ 1.1 | fitted"))
+    ]
+    data = json.loads((tmp_path / "pattern.json").read_text())
+    assert data["four_darts_sizes"]["XS @ 1.1"]["fitted"]["bust region %"] == 9.87
+    assert data["four_darts_sizes_note"] == "second note"
