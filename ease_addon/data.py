@@ -49,8 +49,7 @@ def keypoint_positions(obj, verts) -> tuple:
     from ..core.body.model import SurfacePoint
 
     kps = convert.read_keypoints(obj.data)
-    polys = obj.data.polygons
-    faces = {t: np.array(polys[t].vertices) for t, _ in kps.values()}  # (only the keypoints' triangles)
+    faces = state.body_model(body_spec(obj)["model"]).faces  # (the body mesh keeps its model's triangles)
     pts = np.array([SurfacePoint(t, b).position(verts, faces) for t, b in kps.values()]).reshape(-1, 3)
     return list(kps), pts
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import bpy
 
-from . import convert, data, jobs, state, sync
+from . import convert, data, ease_ops, jobs, state, sync
 from .operators_base import EaseOperator, poll_needs
 
 
@@ -60,14 +60,16 @@ def _load_design(source, model_name, before, pose) -> tuple:
     verts = sync.body_vertices({"model": model_name, "shape": full, "pose": pose})
     # the keypoints on the vertices as the mesh will hold them (float32), as set_design resolves them
     mesh = np.asarray(verts, dtype=np.float32).astype(np.float64)
-    return design, model_name, named, full, pose, verts, data.resolved_keypoints(design, model, mesh)
+    kps = data.resolved_keypoints(design, model, mesh)
+    report = sync.measurements_report({"model": model_name, "shape": full}) if shape else None
+    return design, model_name, named, full, pose, verts, kps, report
 
 
 def _place_design(context, loaded) -> str:
     """The scene's half of a load (main thread, one pass): the body shaped, the design set."""
     from ..core.body.instance import instance_shape
 
-    design, model_name, named, full, pose, verts, kps = loaded
+    design, model_name, named, full, pose, verts, kps, report = loaded
     obj = data.body_object(context, required=False)
     spec = data.body_spec(obj) if obj is not None else {"model": model_name, "pose": "A"}
     if spec["model"] != model_name or spec["pose"] != pose:
@@ -84,10 +86,13 @@ def _place_design(context, loaded) -> str:
         sync.update_body(context, obj, shape=full, verts=verts)
         sync.fill_shape_props(context.scene, model, full)
     if shape:
-        sync.show_size(context.scene, obj, named if isinstance(named, str) else None)
+        sync.show_size(context.scene, obj, named if isinstance(named, str) else None, report)
     sync.set_design(context, design, keypoints=kps)
     sync.fill_design_props(context.scene, design)  # its gathering, tolerance, allowance and notches
-    bpy.ops.ease.ease_from_design()
+    try:
+        ease_ops.ease_from_design(context)
+    except state.USER_ERRORS as exc:  # (as the operator it was: said, the load kept)
+        context.scene.ease.design_status = f"Ease from Design: {exc}"
     if not reshaped:
         return ""
     return (

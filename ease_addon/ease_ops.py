@@ -238,14 +238,20 @@ class EASE_OT_ease_from_design(EaseOperator):
     needs = ("body", "design")
 
     def run(self, context):
-        obj = data.body_object(context)
-        v = data.design_vertex_ease(context)
-        lo, hi = data.ramp_range(context.scene)
-        if v.min() < lo or v.max() > hi:
-            s = context.scene.ease
-            s.ease_min, s.ease_max = min(lo, float(v.min())), max(hi, float(v.max()))
-        write_vertex_ease(obj, context.scene, v)
-        sync.remember_layer(obj, context.scene, design=True)
+        ease_from_design(context)
+
+
+def ease_from_design(context) -> None:
+    """*Ease from Design*'s work (a load calls it in its own pass: no operator call, no view-layer
+    update inside a timer's call)."""
+    obj = data.body_object(context)
+    v = data.design_vertex_ease(context)
+    lo, hi = data.ramp_range(context.scene)
+    if v.min() < lo or v.max() > hi:
+        s = context.scene.ease
+        s.ease_min, s.ease_max = min(lo, float(v.min())), max(hi, float(v.max()))
+    write_vertex_ease(obj, context.scene, v)
+    sync.remember_layer(obj, context.scene, design=True)
 
 
 CLASSES = (
