@@ -396,13 +396,22 @@ def design_with_materials(design, **edits):
 def prepared(context, edit=None):
     """The scene's design (``edit(design)`` if given: the panels' settings) cut on the
     scene body, ready for the core's pattern workflows (:class:`core.workflows.Prepared`)."""
+    return prepare(*preparing(context, edit))
+
+
+def preparing(context, edit=None) -> tuple:
+    """The main thread's half of :func:`prepared`: what it reads from the scene, ``(design, body
+    spec)``; :func:`prepare` (no ``bpy``: a worker may run it) cuts and prepares it."""
+    design = current_design(context)
+    return (design if edit is None else edit(design)), body_spec(body_object(context))
+
+
+def prepare(design, spec: dict):
+    """``design`` cut on the body ``spec`` (cached) and prepared for the core's pattern workflows
+    (:class:`core.workflows.Prepared`); no ``bpy``."""
     from ..core import workflows as wf
 
-    obj = body_object(context)
-    design = current_design(context)
-    if edit is not None:
-        design = edit(design)
-    return wf.prepare(design, body=state.body_model(body_spec(obj)["model"]), cut=cut_for(design, obj))
+    return wf.prepare(design, body=state.body_model(spec["model"]), cut=cut_on(design, spec["model"], spec["shape"]))
 
 
 # ----------------------------------------------------------------------------- the painted ease field

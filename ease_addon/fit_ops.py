@@ -8,20 +8,20 @@ from __future__ import annotations
 
 import json
 
-from . import data, jobs, state, sync
+from . import data, jobs, pattern_ops, state, sync
 from .operators_base import EaseOperator
 
 
 def _fit(op, context, label: str, workflow, done: str) -> None:
     """Run ``workflow(prep, progress)`` (a :mod:`core.workflows` pattern run) on the scene's
-    design as a job (:func:`.jobs.start_pattern`: pressed, in the background); its
+    design as a job (:func:`.pattern_ops.start_pattern`: pressed, in the background); its
     pattern replaces the pieces beside the body, its figures show in the Fit panel."""
 
     def show(ctx, prep, run):
         sync.show_pattern(ctx, run.pattern)
         ctx.scene.ease.fit_json = json.dumps(run.figures)
 
-    job = jobs.start_pattern(context, label, workflow, show, sync_=op.job_sync())
+    job = pattern_ops.start_pattern(context, label, workflow, show, sync_=op.job_sync())
     op.report({"INFO"}, done if job.thread is None else f"{label} in the background (Esc cancels)")
 
 

@@ -17,7 +17,6 @@ the call returns; a test of the threaded path sets it to False and calls :func:`
 
 from __future__ import annotations
 
-import json
 import threading
 import time
 import traceback
@@ -337,41 +336,6 @@ class Background:
 
     def job_sync(self):
         return None if getattr(self, "ease_background", False) else True
-
-
-PATTERN_JOB = "pattern"  # the job of Optimize Pattern, Transfer and Adapt (a newer one replaces a running one)
-
-
-def start_pattern(context, label: str, workflow, apply, edit=None, sync_=None) -> Job:
-    """Run ``workflow(prep, progress)`` (a :mod:`core.workflows` pattern run) on the scene's
-    design (``edit(design)``: the panels' settings) cut on the scene body, as the job
-    :data:`PATTERN_JOB`: the cut and the workflow in a worker (``sync_``: :func:`.jobs.start`'s
-    ``sync``), then ``apply(context, prep, result)`` on the main thread in one pass. A result
-    landing on a scene whose design or body changed meanwhile is refused with the reason."""
-    from ..core import workflows as wf
-    from . import data
-
-    obj = data.body_object(context)
-    spec = data.body_spec(obj)
-    design = data.current_design(context)
-    if edit is not None:
-        design = edit(design)
-    model = state.body_model(spec["model"])
-    before = (context.scene.ease.design_json, json.dumps(spec, sort_keys=True))
-
-    def compute(progress):
-        progress(0.0, "cutting the design")
-        prep = wf.prepare(design, body=model, cut=data.cut_on(design, spec["model"], spec["shape"]))
-        return prep, workflow(prep, progress)
-
-    def landed(result):
-        ctx = bpy.context
-        body = data.body_object(ctx)
-        if (ctx.scene.ease.design_json, json.dumps(data.body_spec(body), sort_keys=True)) != before:
-            raise state.AddonError(f"the design or the body changed while {label} ran: run it again")
-        apply(ctx, *result)
-
-    return start_step(PATTERN_JOB, label, compute, landed, "job_status", label, sync=sync_)
 
 
 def unregister(join_s: float = 10.0) -> None:

@@ -210,15 +210,13 @@ def session_for(context):
     obj = data.body_object(context)
     spec = data.body_spec(obj)
     design = pattern_ops.gather_settings(scene, data.current_design(context))
-    model = state.body_model(spec["model"])
     choice = data.solver_choice(scene)
     start = _stored_lazily(scene)
-    faces = convert.get_triangles(obj.data)
+    faces = np.asarray(state.body_model(spec["model"]).faces)  # (the body mesh keeps its model's triangles)
     key_now, session_now = _LIVE["key"], _LIVE["session"]
 
     def compute(progress):
-        cut = data.cut_on(design, spec["model"], spec["shape"])
-        prep = wf.prepare(design, body=model, cut=cut)
+        prep = data.prepare(design, spec)
         config = wf.config_name(prep, choice)
         key = json.dumps([topology_key(prep.design, spec), config])
         if key == key_now and session_now is not None:
