@@ -53,6 +53,7 @@ from ..validate import body_positions, validate_cut
 from .dart_gaps import GapCorrection, dart_legs, equal_legs
 from .factor import SymmetricFactor
 from .feedback import feedback_gains, move_corrections
+from .folds import bridge_folds
 from .guard import (
     COLLAPSE_ROUNDS,
     DIVERGED_SCALE,
@@ -172,13 +173,16 @@ class PatternSolver:
         ``c = (rho_weft, 1)``; ``ease``: optional override of the cut's weft
         ease, a scalar or one value per triangle of all panels in order
         (benchmarks sweep it). ``offsets``: :meth:`offsets` of ``positions``
-        when the caller has them.
+        when the caller has them. On another body a triangle's ``K`` is its
+        reference-body shape stretched by at least :data:`.folds.FOLD_FLOOR`
+        in every direction (:func:`.folds.bridge_folds`: the cloth bridges a
+        fold of the skin).
         """
         if positions is None:
             offsets = self.ref_offsets
         elif offsets is None:
             offsets = self.offsets(positions)
-        K = offsets[0]
+        K = offsets[0] if positions is None else bridge_folds(offsets[0], self.ref_offsets[0])
         ease = reference_ease(self.design_ease, ease)
         return K, ease.copy(), np.ones_like(ease)
 
