@@ -69,3 +69,54 @@ def test_addon_and_command_line_write_the_same_pattern(bpy_session, addon, tmp_p
     assert op() == {"FINISHED"}
     text = bpy.context.scene[addon("data").PATTERN_KEY]
     assert _canonical(text) == (tmp_path / "pattern.json").read_text()
+
+
+@pytest.mark.parametrize("mode", ["transfer", "adapt"])
+def test_transfer_and_adapt_run_in_the_background(bpy_session, addon, mode):
+    """Transfer to Size and Adapt to Poses pressed in Blender's UI (their job, as Optimize's): the
+    cut and the solve run in a worker, the operator returns with the scene as it was and the
+    status "updating"; the pattern and the Fit panel's figures land in one pass, the same as in
+    line; Esc (Cancel) leaves the scene as it was."""
+    import numpy as np
+
+    bpy = bpy_session["bpy"]
+    jobs, data, pattern_ops, fit_ops = addon("jobs"), addon("data"), addon("pattern_ops"), addon("fit_ops")
+    scene = bpy.context.scene
+    s = scene.ease
+    s.fit_size = "L"
+    s.adapt_P1, s.adapt_P2, s.adapt_P3, s.adapt_T = True, False, False, False
+    s.tolerance = 1.1
+    op, start, label = {
+        "transfer": (bpy.ops.ease.transfer_size, fit_ops.start_transfer, "Transfer to Size"),
+        "adapt": (bpy.ops.ease.adapt_poses, fit_ops.start_adapt, "Adapt to Poses"),
+    }[mode]
+    assert op() == {"FINISHED"} and jobs.running() is None  # a script's call: in line
+    want, want_fig = data.stored_pattern(scene), json.loads(s.fit_json)
+    assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}  # another pattern stored meanwhile
+    s.fit_json = ""
+    text = scene[data.PATTERN_KEY]
+    jobs.SYNCHRONOUS = False
+    try:
+        # the button's job (headless bpy has no window to invoke in): back at once, the job running
+        job = start(bpy.context)
+        assert jobs.running(pattern_ops.PATTERN_JOB) is job and job.thread is not None
+        assert s.job_status.startswith(f"updating: {label}")
+        assert s.fit_json == "" and scene[data.PATTERN_KEY] == text  # nothing applied yet
+        jobs.wait()
+        got = data.stored_pattern(scene)
+        assert json.loads(s.fit_json) == want_fig and s.job_status == ""
+        assert [p.name for p in got.panels] == [p.name for p in want.panels]
+        assert all(np.array_equal(a.uv, b.uv) for a, b in zip(got.panels, want.panels))
+        # Esc: nothing applied
+        assert bpy.ops.ease.optimize_pattern() == {"FINISHED"}
+        s.fit_json = ""
+        text = scene[data.PATTERN_KEY]
+        job = start(bpy.context)
+        assert jobs.cancel() == 1
+        job.thread.join(120)
+        jobs.poll()
+        assert s.fit_json == "" and scene[data.PATTERN_KEY] == text and "cancelled" in s.job_status
+        assert not addon("state").BUGS
+    finally:
+        jobs.wait()
+        jobs.SYNCHRONOUS = True
