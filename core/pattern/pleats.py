@@ -561,7 +561,58 @@ def _split_along(uv, attrs, faces, a, b, tol):
         out.append(np.asarray(new, int))
         parent.append(np.full(len(new), fi))
     attrs = [np.array(x) for x in at_l]
-    return np.array(uv_l), attrs, np.concatenate(out), np.concatenate(parent), np.array(s_l), np.array(t_l), cache
+    uv, faces, parent = np.array(uv_l), np.concatenate(out), np.concatenate(parent)
+    s, t = np.array(s_l), np.array(t_l)
+    rim = {m for (p, q), m in cache.items() if outline[p] and outline[q]}  # where the line meets the outline
+    gone = _merge_close(uv, faces, s, t, L, tol, n_in=len(outline), keep=rim)
+    if gone:
+        alive = np.ones(len(uv), bool)
+        alive[list(gone)] = False
+        into = np.arange(len(uv))
+        for v, w in gone.items():
+            into[v] = w
+        while np.any(into[into] != into):  # a vertex merged into one merged later
+            into = into[into]
+        new_id = np.cumsum(alive) - 1
+        faces = new_id[into[faces]]
+        ok = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 2] != faces[:, 0])
+        faces, parent = faces[ok], parent[ok]
+        uv, s, t, attrs = uv[alive], s[alive], t[alive], [a[alive] for a in attrs]
+        cache = {k: int(new_id[into[m]]) for k, m in cache.items()}
+    return uv, attrs, faces, parent, s, t, cache
+
+
+def _merge_close(uv, faces, s, t, length, gap, n_in, keep) -> Dict[int, int]:
+    """The new vertices on the line (s == 0, made by the split, not in ``keep``: where it meets the
+    outline) closer than ``gap`` (m) to the line vertex before them, merged into it where no
+    triangle turns over: ``{merged: kept}``. A row of the strip then never lies a sliver's width
+    from the next (at 5 mm edges 14 % of the rows were under 1 mm apart, down to 4 um: their
+    triangles tore at the drape's first frame)."""
+    on = np.flatnonzero((s == 0) & (t > -1e-9) & (t < 1 + 1e-9))
+    on = on[np.argsort(t[on], kind="stable")]
+    faces = faces.copy()
+    area0 = signed_areas_2d(uv, faces)
+    gone: Dict[int, int] = {}
+    prev = int(on[0]) if len(on) else -1
+    for v in on[1:].tolist():
+        if (t[v] - t[prev]) * length >= gap:
+            prev = v
+            continue
+        for drop, stay in ((v, prev), (prev, v)):
+            if drop < n_in or drop in keep:
+                continue
+            hit = np.flatnonzero((faces == drop).any(axis=1))
+            moved = np.where(faces[hit] == drop, stay, faces[hit])
+            live = (moved != np.roll(moved, 1, axis=1)).all(axis=1)
+            if (signed_areas_2d(uv, moved[live]) <= 0.05 * area0[hit][live]).any():
+                continue
+            faces[hit] = moved
+            gone[drop] = stay
+            break
+        prev = prev if prev not in gone else gone[prev]
+        if v not in gone:
+            prev = v
+    return gone
 
 
 def _columns(strip: Strip) -> np.ndarray:
