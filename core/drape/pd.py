@@ -234,13 +234,15 @@ class ProjectiveStep:
     Parameters
     ----------
     cloth, material, dt, mass, start_stretch, edge_start : as :class:`core.drape.newton.NewtonStep`'s.
-    history : the Anderson acceleration's depth (0: plain local-global iterations).
+    history : the acceleration's depth (0: plain local-global iterations).
 
     Attributes
     ----------
     elements : the :class:`core.drape.newton.NewtonStep` of the same cloth, whose element operators
         (grain images, edges, hinges, rest shapes) this step projects.
     matrix : (P, P) sparse, ``M / dt^2 + sum_c w_c A_c^T A_c`` (the same for x, y and z).
+    method : ``"anderson"`` (default: Anderson-accelerated local-global iterations) or ``"lbfgs"``
+        (L-BFGS with the factored matrix as its initial inverse Hessian).
     """
 
     def __init__(
@@ -287,6 +289,7 @@ class ProjectiveStep:
         self._bends = wp.array(bends.astype(np.int32).reshape(-1, 4), dtype=int, device="cpu")
         self.contact = None
         self.friction = 0.0  # the Coulomb coefficient the stop test allows on the body (the drape's)
+        self.method = "anderson"
 
     def set_contact(self, point: np.ndarray, normal: np.ndarray, active: np.ndarray, thickness: float) -> None:
         """Body contact for the next solves' stop test: on an active free particle within twice
@@ -367,7 +370,8 @@ class ProjectiveStep:
         matrix). With ``history`` > 0 the iterates are Anderson-accelerated (Peng,
         Deng, Zhang, Liu, "Anderson acceleration for geometry optimization and physics simulation", ACM
         TOG 37(4), 2018): the next iterate mixes the last ``history`` steps, and is kept only where it
-        lowers G (else the plain step is taken and the history dropped).
+        lowers G (else the plain step is taken and the history dropped). With :attr:`method`
+        ``"lbfgs"`` they are L-BFGS steps instead (:meth:`_lbfgs`).
 
         Returns (iterations done, the largest residual over weight at the last test).
         """
@@ -384,6 +388,8 @@ class ProjectiveStep:
             near, nrm = np.searchsorted(fi, idx[on]), normal[on]
         inert = self.inertia[:, None] * y
         fixed = self.A_fp @ x[self.fixed_idx] if len(self.fixed_idx) else 0.0
+        if self.method == "lbfgs":
+            return self._lbfgs(x, y, grow, iterations, tolerance, inert, fi, near, nrm, w2)
         m = max(self.history, 0)
         # Anderson's history, rows in a ring: the plain steps G(x_k) and their increments G(x_k) - x_k
         ring_g = np.empty((m + 1, 3 * len(fi)))
@@ -393,14 +399,7 @@ class ProjectiveStep:
         it, res = 0, np.inf
         while True:
             rhs += inert
-            grad = (self.matrix @ x - rhs)[fi]
-            left = np.einsum("ij,ij->i", grad, grad)
-            if len(near):
-                press = np.einsum("ij,ij->i", grad[near], nrm)  # > 0: the net force presses into the body
-                slide = np.maximum(left[near] - press * press, 0.0)
-                held = np.maximum(np.sqrt(slide) - self.friction * np.maximum(press, 0.0), 0.0) ** 2
-                left[near] = np.where(press > 0.0, held, left[near])
-            res = float(np.sqrt(np.max(left / w2, initial=0.0)))
+            res = self._residual((self.matrix @ x - rhs)[fi], near, nrm, w2)
             if res < tolerance or it >= iterations:
                 break
             it += 1
@@ -426,4 +425,75 @@ class ProjectiveStep:
                 ring_g[0], ring_f[0] = g, ring_f[k]
                 count = 1
             rhs, e = self.local(x, y, grow)
+        return it, res
+
+    def _residual(self, grad, near, nrm, w2) -> float:
+        """The largest residual force over weight, less what the body holds (:meth:`set_contact`)."""
+        left = np.einsum("ij,ij->i", grad, grad)
+        if len(near):
+            press = np.einsum("ij,ij->i", grad[near], nrm)  # > 0: the net force presses into the body
+            slide = np.maximum(left[near] - press * press, 0.0)
+            held = np.maximum(np.sqrt(slide) - self.friction * np.maximum(press, 0.0), 0.0) ** 2
+            left[near] = np.where(press > 0.0, held, left[near])
+        return float(np.sqrt(np.max(left / w2, initial=0.0)))
+
+    def _lbfgs(self, x, y, grow, iterations, tolerance, inert, fi, near, nrm, w2):
+        """L-BFGS on G with the factored matrix as its initial inverse Hessian (Liu, Bouaziz, Kavan,
+        "Quasi-Newton methods for real-time simulation of hyperelastic materials", ACM TOG 36(3), 2017):
+        without history its step is the local-global one; an Armijo line search keeps G falling."""
+        nf = len(fi)
+
+        def h0(v):
+            return self.lu.solve(np.ascontiguousarray(v.reshape(nf, 3))).reshape(-1)
+
+        def evaluate(xx):
+            rhs, e = self.local(xx, y, grow)
+            return e, (self.matrix @ xx - (rhs + inert))[fi]
+
+        e, grad = evaluate(x)
+        g = grad.reshape(-1)
+        hist_s, hist_y = [], []
+        it, res = 0, self._residual(grad, near, nrm, w2)
+        while it < iterations and res >= tolerance:
+            it += 1
+            q = g.copy()
+            alphas = []
+            for sv, yv in zip(reversed(hist_s), reversed(hist_y)):
+                a = float(sv @ q) / float(yv @ sv)
+                alphas.append(a)
+                q -= a * yv
+            r = h0(q)
+            for (sv, yv), a in zip(zip(hist_s, hist_y), reversed(alphas)):
+                r += sv * (a - float(yv @ r) / float(yv @ sv))
+            step = -r
+            slope = float(g @ step)
+            if slope >= 0.0:  # not a descent direction: the plain step, a fresh history
+                hist_s, hist_y = [], []
+                step = -h0(g)
+                slope = float(g @ step)
+            x0 = x[fi].reshape(-1).copy()
+            alpha, ok = 1.0, False
+            for _ in range(8):
+                x[fi] = (x0 + alpha * step).reshape(-1, 3)
+                e1, grad1 = evaluate(x)
+                if e1 <= e + 1e-4 * alpha * slope:
+                    ok = True
+                    break
+                alpha *= 0.5
+            if not ok:  # no decrease along the step: keep the last iterate
+                x[fi] = x0.reshape(-1, 3)
+                if not hist_s:
+                    break
+                hist_s, hist_y = [], []
+                continue
+            g1 = grad1.reshape(-1)
+            sv, yv = alpha * step, g1 - g
+            if float(sv @ yv) > 1e-10 * np.sqrt(float(sv @ sv) * float(yv @ yv)):  # curvature safeguard
+                hist_s.append(sv)
+                hist_y.append(yv)
+                if len(hist_s) > self.history:
+                    hist_s.pop(0)
+                    hist_y.pop(0)
+            e, g = e1, g1
+            res = self._residual(grad1, near, nrm, w2)
         return it, res
