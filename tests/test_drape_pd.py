@@ -180,3 +180,20 @@ def test_solve_reaches_the_implicit_step(method):
     it, res = pd.solve(x, y, 1.0, 3000, 1e-3, mass * 9.81)
     assert res < 1e-3 and 0 < it < 3000
     assert pd.energy(x, y, 1.0) < e0
+
+
+def test_cli_solver_flag():
+    # `ease drape --solver pd`: the flag names every solver and reaches the drape's options
+    import argparse
+
+    from core.cli import drape as D
+    from core.drape.options import SOLVERS, DrapeOptions
+
+    ap = argparse.ArgumentParser()
+    D.add_parser(ap.add_subparsers())
+    args = ap.parse_args(["drape", "p", "--out", "o", "--solver", "pd"])
+    options = D._options(args)
+    assert options["solver"] == "pd" and DrapeOptions.coerce(options).substeps == 3
+    flag = next(a for a in ap._subparsers._group_actions[0].choices["drape"]._actions if a.dest == "solver")
+    assert sorted(flag.choices) == sorted(SOLVERS)
+    assert "solver" not in D._options(ap.parse_args(["drape", "p", "--out", "o"]))

@@ -37,7 +37,13 @@ def add_parser(sub) -> None:
     )
     p.add_argument("--device", default="cpu", help="cpu (default; bitwise repeatable) or cuda")
     p.add_argument("--frames", type=int, default=None, help="frame limit (default 120 at 30 fps)")
-    p.add_argument("--substeps", type=int, default=None, help="XPBD substeps per frame (default 20)")
+    p.add_argument(
+        "--solver",
+        default=None,
+        choices=("xpbd", "pd", "newton", "vbd"),  # core.drape.options.SOLVERS (numpy-free parser)
+        help="cloth solver: xpbd (default), pd (projective dynamics: the fabric's own stiffness, slower)",
+    )
+    p.add_argument("--substeps", type=int, default=None, help="substeps per frame (default: the solver's, 20; pd 3)")
     p.add_argument(
         "--self-collision",
         action="store_true",
@@ -104,6 +110,8 @@ def _options(args) -> dict:
         options["min_frames"] = min(10, args.frames)
     if args.substeps is not None:
         options["substeps"] = args.substeps
+    if getattr(args, "solver", None):
+        options["solver"] = args.solver
     if args.self_collision:
         options["self_collision"] = True
     return options
