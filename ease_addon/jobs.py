@@ -295,11 +295,12 @@ def undo_push(message: str) -> bool:
     return True
 
 
-def start_step(name: str, label: str, compute, apply, status: str, undo: str, sync=None) -> Job:
+def start_step(name: str, label: str, compute, apply, status: str, undo: str, sync=None, cancelled=None) -> Job:
     """:func:`start` for an operator's work whose outcome the ``scene.ease`` property ``status``
     says: "*label* stopped: *error*", or "*label* cancelled: the scene is as it was" (nothing
-    applied). A result that lands after the operator returned (computed in a worker) is one undo
-    step of its own, named ``undo``, and Live sees the change."""
+    applied; ``cancelled()``: what follows "cancelled: " instead, for work that writes files).
+    A result that lands after the operator returned (computed in a worker) is one undo step of
+    its own, named ``undo``, and Live sees the change."""
     threaded = not in_line(sync)
 
     def apply_step(result):
@@ -318,7 +319,18 @@ def start_step(name: str, label: str, compute, apply, status: str, undo: str, sy
         apply_step,
         fail=lambda exc: say(f"{label} stopped: {exc}"),
         sync=sync,
-        cancelled=lambda: say(f"{label} cancelled: the scene is as it was"),
+        cancelled=lambda: say(f"{label} cancelled: " + (cancelled() if cancelled else "the scene is as it was")),
+    )
+
+
+def folder_cancelled(out, writing: list):
+    """The ``cancelled`` text of :func:`start_step` for work that writes the folder ``out`` at once
+    (the core's output folders: all the old files or all the new ones): ``writing`` is not empty
+    once the worker has begun writing (no cancel after)."""
+    return lambda: (
+        f"too late: {out} was being written, it holds the new files"
+        if writing
+        else f"nothing written ({out} as it was)"
     )
 
 

@@ -143,3 +143,42 @@ def test_print_every_piece_reaches_the_tiled_pdf(bpy_session):
     assert {p["cut"] for p in plans[False]["pieces"]} == {"on fold (half printed)"}
     assert {p["cut"] for p in plans[True]["pieces"]} == {"as printed"}
     assert plans[True]["pages"] > plans[False]["pages"]
+
+
+def test_export_runs_in_the_background(bpy_session, addon):
+    """Export Pattern pressed in Blender's UI (a job, as Drape's): the files are rendered and written
+    in a worker, the scene and the folder as they were until it lands; Esc (Cancel) before the
+    files are written leaves the folder all old (the core writes it at once) and says so."""
+    bpy = bpy_session["bpy"]
+    jobs, export_ops = addon("jobs"), addon("export_ops")
+    s = bpy.context.scene.ease
+    out = bpy_session["tmp"] / "export_threaded"
+    s.export_dir = str(out)
+    s.export_svg, s.export_dxf, s.export_pdf, s.export_glb, s.export_obj = True, False, False, False, False
+    s.export_allowance_cm = 1.0
+    assert bpy.ops.ease.export_pattern() == {"FINISHED"}  # a script's call: in line
+    old = (out / "pattern.svg").read_bytes()
+    s.export_allowance_cm = 2.0  # another allowance: other files
+    design = s.design_json
+    jobs.SYNCHRONOUS = False
+    try:
+        job, said = export_ops.start_export(bpy.context)
+        assert jobs.running(export_ops.JOB) is job and job.thread is not None and not said
+        assert s.job_status.startswith("updating: Export Pattern") and s.design_json == design
+        jobs.wait()
+        assert said and said[0].startswith("exported") and s.job_status == said[0]
+        new = (out / "pattern.svg").read_bytes()
+        assert new != old and json.loads(s.design_json)["materials"]["export"]["allowance"]["default"] == 0.02
+        # cancelled while it renders: nothing written, the scene as it was
+        s.export_allowance_cm = 3.0
+        design = s.design_json
+        job, said = export_ops.start_export(bpy.context)
+        assert jobs.cancel() == 1  # (the worker stops at its next report, long before the writing)
+        job.thread.join(120)
+        jobs.poll()
+        assert not said and (out / "pattern.svg").read_bytes() == new and s.design_json == design
+        assert s.job_status == f"Export Pattern cancelled: nothing written ({out} as it was)"
+        assert not addon("state").BUGS
+    finally:
+        jobs.wait()
+        jobs.SYNCHRONOUS = True

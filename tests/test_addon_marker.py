@@ -67,3 +67,39 @@ def test_marker_spread_pairs_as_the_cli(bpy_session):
     # its own mirror image once for two garments (one garment here: once)
     paired = set(rep["face_to_face"].values()) - {"itself"}
     assert paired <= names and rep["pieces"] == len(names) - len(paired)
+
+
+def test_marker_runs_in_the_background(bpy_session, addon):
+    """Marker pressed in Blender's UI (a job, as Drape's): the nesting and the files in a worker,
+    the scene and the folder as they were until it lands, then the picture and the status; Esc
+    (Cancel) while it nests leaves the marker folder all old (written at once) and says so."""
+    bpy = bpy_session["bpy"]
+    jobs, marker_ops = addon("jobs"), addon("marker_ops")
+    s = bpy.context.scene.ease
+    s.export_dir = str(bpy_session["tmp"] / "marker_threaded")
+    out = bpy_session["tmp"] / "marker_threaded" / "marker"
+    s.marker_width_mm, s.marker_sizes, s.marker_seconds, s.marker_one_way = 1400.0, "", 1, True
+    s.marker_status = ""
+    jobs.SYNCHRONOUS = False
+    try:
+        job, said = marker_ops.start_marker(bpy.context)
+        assert jobs.running(marker_ops.JOB) is job and job.thread is not None and not said
+        assert s.job_status.startswith("updating: Marker") and s.marker_status == "" and not out.exists()
+        jobs.wait()
+        assert said and "efficiency" in s.marker_status and s.job_status == said[0]
+        before = {p.name: p.read_bytes() for p in out.iterdir()}
+        assert "marker.json" in before
+        # cancelled while it nests: the folder as it was, the status says so
+        s.marker_width_mm, s.marker_seconds = 1300.0, 5
+        status = s.marker_status
+        job, said = marker_ops.start_marker(bpy.context)
+        assert jobs.cancel() == 1
+        job.thread.join(120)
+        jobs.poll()
+        assert not said and s.marker_status == status
+        assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+        assert s.job_status == f"Marker cancelled: nothing written ({out} as it was)"
+        assert not addon("state").BUGS
+    finally:
+        jobs.wait()
+        jobs.SYNCHRONOUS = True
