@@ -38,8 +38,8 @@ OUTFITS = {
 }
 #: every garment's drape (the fabric has grown to its pattern size by frame 20)
 DRAPE = {"max_frames": 90}
-#: the garments' mean edge length (m)
-EDGE = 0.02
+#: the garments' mean edge length (m): the templates' own 1 cm
+EDGE = 0.01
 #: the surfaces an outer garment's pattern is solved over (:func:`core.workflows.drape_outfit`'s ``over``)
 OVERS = ("skintight", "draped")
 TARGETS = {"penetration_pct": 0.5}
@@ -110,7 +110,8 @@ def _md(results, edge) -> str:
         "Penetration: share of the outer garment's vertices over the inner one more than 2 mm inside it, "
         "inside told by the inner garment's skin closed with the body (target <= "
         f"{TARGETS['penetration_pct']} % at every settled frame). Compliance: the outer pattern's ease "
-        "compliance (mean %). Regenerate: `ease bench --only layers`.",
+        "compliance (mean %). Regenerate: "
+        + ("`ease bench --only layers`." if edge == EDGE else f"`python benchmarks/bench_layers.py --edge {edge:g}`."),
         "",
         "| outfit | cut over | outer | inner | frames (settled?) | penetration % settled max / final "
         "| gap mm mean / p95 | s/frame layered | s/frame alone | compliance % | offset mm | triangles |",
