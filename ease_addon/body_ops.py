@@ -15,12 +15,14 @@ from .operators_base import EaseOperator
 JOB = "body"  # the job of Apply Size / Apply Pose (a newer one replaces a running one)
 
 
-def start_body(context, shape=None, pose=None, size=None, sync_=None) -> jobs.Job:
+def start_body(context, shape=None, pose=None, size=None, sync_=None, fit=None) -> jobs.Job:
     """Reshape (``shape``, with its chart ``size`` or None) and/or repose (``pose``) the scene's
     body as the job :data:`JOB`: its vertices computed off the main thread (``sync_``:
     :func:`.jobs.start`'s ``sync``), then the body, its attachments and the Body panel updated
-    in one pass. Landing on a body that changed meanwhile (removed, another model, another
-    shape or pose than the one it was computed from) it says so and changes nothing."""
+    in one pass. ``fit(progress)``: the shape is computed in the worker too, ``(shape, the
+    measurements line or None)`` (a size of a body that is not Anny's, Fit Measurements). Landing
+    on a body that changed meanwhile (removed, another model, another shape or pose than the one
+    it was computed from) it says so and changes nothing."""
     obj = data.body_object(context)
     spec = data.body_spec(obj)
     model_name, base = spec["model"], dict(spec)
@@ -29,14 +31,20 @@ def start_body(context, shape=None, pose=None, size=None, sync_=None) -> jobs.Jo
         want["shape"] = {k: float(v) for k, v in shape.items()}
     if pose is not None:
         want["pose"] = pose
-    what = (f"size {size}" if size else "shape") if shape is not None else f"pose {pose}"
+    reshape = shape is not None or fit is not None
+    what = (f"size {size}" if size else "shape") if reshape else f"pose {pose}"
     threaded = not jobs.in_line(sync_)
 
     def compute(progress):
+        report = None
+        if fit is not None:
+            progress(0.0, f"fitting the body's {what}")
+            got, report = fit(progress)
+            want["shape"] = {k: float(v) for k, v in got.items()}
         progress(0.0, f"the body in {what}")
         verts = sync.body_vertices(want)
-        if shape is None:
-            return verts, None
+        if not reshape or report is not None:
+            return verts, report
         progress(0.5, "measuring the body")
         return verts, sync.measurements_report(want)
 
@@ -47,22 +55,75 @@ def start_body(context, shape=None, pose=None, size=None, sync_=None) -> jobs.Jo
         now = data.body_spec(body)
         if now["model"] != model_name or now["shape"] != base["shape"] or now["pose"] != base["pose"]:
             raise state.AddonError(f"the body changed while its {what} was computed: apply it again")
-        sync.update_body(ctx, body, shape=shape, pose=pose, verts=verts)
+        sync.update_body(ctx, body, shape=want["shape"] if reshape else None, pose=pose, verts=verts)
         s = ctx.scene.ease
-        if shape is not None:
+        if reshape:
             model = state.body_model(model_name)
             sync.fill_shape_props(ctx.scene, model, want["shape"])
             sync.show_size(ctx.scene, body, size, report)
         if pose is not None:
             s.pose = pose  # the panel shows the body's pose
         if threaded:  # it landed after the operator returned: the panel says what changed
-            s.job_status = what + (f": {s.measurements_report}" if shape is not None else "")
+            s.job_status = what + (f": {s.measurements_report}" if reshape else "")
 
     return jobs.start_step(JOB, f"the body in {what}", compute, apply, "job_status", f"Apply {what}", sync=sync_)
 
 
-class EASE_OT_add_body(EaseOperator):
-    """Add the default body (Anny) or a body file to the scene"""
+def start_add_body(context, name: str, sync_=None) -> tuple:
+    """*Add Body*'s job: the body model ``name`` ("anny" or a file) loaded, its vertices in the
+    panel's pose and, with a design, the design's cut and keypoints on it computed in a worker;
+    then the body replaces the scene's (no ``.001``) with the design on it, in one pass.
+    ``(job, said)``: ``said`` holds ``(level, report)`` lines once done."""
+    import numpy as np
+
+    s = context.scene.ease
+    pose = s.pose
+    design = data.current_design(context) if s.design_json else None
+    said = []
+    threaded = not jobs.in_line(sync_)
+
+    def compute(progress):
+        progress(0.0, f"loading the body {name}")
+        model = state.body_model(name)
+        shape = dict(model.default_shape())
+        verts = sync.body_vertices({"model": name, "shape": shape, "pose": pose})
+        if design is None:
+            return verts, None, None
+        progress(0.6, "the design on the new body")
+        try:
+            data.cut_on(design, name, shape)  # (kept: the placing pass cuts nothing)
+            mesh = np.asarray(verts, dtype=np.float32).astype(np.float64)  # as the mesh will hold them
+            return verts, data.resolved_keypoints(design, model, mesh), None
+        except state.USER_ERRORS as exc:
+            return verts, None, exc
+
+    def apply(result):
+        from . import ease_ops
+
+        verts, kps, refused = result
+        ctx = bpy.context
+        old = data.body_object(ctx, required=False)
+        obj = sync.new_body(ctx, name, pose=pose, replaces=old, verts=verts)
+        if design is not None and refused is None:
+            # the design's keypoints, seamlines and ease on the new body, as after loading it
+            try:
+                sync.set_design(ctx, data.current_design(ctx), keypoints=kps)
+            except state.USER_ERRORS as exc:
+                refused = exc
+            else:
+                ease_ops.ease_from_design(ctx)
+        if refused is not None:
+            said.append(("WARNING", f"the design does not fit the new body, load it again: {refused}"))
+        said.append(("INFO", f"added body {name} ({len(obj.data.vertices)} vertices)"))
+        if threaded:
+            ctx.scene.ease.job_status = "; ".join(text for _, text in said)
+
+    job = jobs.start_step(JOB, f"adding the body {name}", compute, apply, "job_status", "Add Body", sync=sync_)
+    return job, said
+
+
+class EASE_OT_add_body(jobs.Background, EaseOperator):
+    """Add the default body (Anny) or a body file to the scene (in the background: Esc cancels)"""
 
     bl_idname = "ease.add_body"
     bl_label = "Add Body"
@@ -83,17 +144,11 @@ class EASE_OT_add_body(EaseOperator):
             name = bpy.path.abspath(s.body_file)
         else:
             name = "anny"
-        old = data.body_object(context, required=False)
-        obj = sync.new_body(context, name, pose=s.pose, replaces=old)
-        if s.design_json:
-            # the design's keypoints, seamlines and ease on the new body, as after loading it
-            try:
-                sync.set_design(context, data.current_design(context))
-            except state.USER_ERRORS as exc:
-                self.report({"WARNING"}, f"the design does not fit the new body, load it again: {exc}")
-            else:
-                bpy.ops.ease.ease_from_design()
-        self.report({"INFO"}, f"added body {name} ({len(obj.data.vertices)} vertices)")
+        job, said = start_add_body(context, name, sync_=self.job_sync())
+        if not said:
+            self.report({"INFO"}, f"adding the body {name} in the background (Esc cancels)")
+        for level, text in said:
+            self.report({level}, text)
 
 
 class EASE_OT_set_size(jobs.Background, EaseOperator):
@@ -113,8 +168,10 @@ class EASE_OT_set_size(jobs.Background, EaseOperator):
         size = self.size or s.size
         size = size_of(size, s.chart)  # "women:M" on the women's chart
         model = state.body_model(data.body_spec(obj)["model"])
-        shape = size_shape(model, size)
-        job = start_body(context, shape=shape, size=size, sync_=self.job_sync())
+        # (a body that is not Anny's is fitted to the size's measurements: in the worker too)
+        job = start_body(
+            context, size=size, sync_=self.job_sync(), fit=lambda progress: (size_shape(model, size), None)
+        )
         self.report(
             {"INFO"},
             f"size {size}: {s.measurements_report}"
@@ -123,28 +180,39 @@ class EASE_OT_set_size(jobs.Background, EaseOperator):
         )
 
 
-class EASE_OT_fit_measurements(EaseOperator):
-    """Fit the body's shape to the target measurements (cm)"""
+def start_fit(context, sync_=None) -> jobs.Job:
+    """*Fit Measurements*' job: the body's shape fitted to the Body panel's targets (cm), its
+    vertices and the achieved measurements computed in a worker (:func:`start_body`)."""
+    from ..core.body.sizes import fit_measurements
+
+    s = context.scene.ease
+    model = state.body_model(data.body_spec(data.body_object(context))["model"])
+    targets = {"height": s.height_cm, "chest": s.chest_cm, "waist": s.waist_cm, "hip": s.hip_cm}
+
+    def fit(progress):
+        res = fit_measurements(model, targets, progress=progress)
+        achieved = {
+            k: f"{v:.1f} cm" + (f" ({res.status[k]})" if k in res.status else "") for k, v in res.achieved.items()
+        }
+        return res.shape, data.format_measurements(achieved)
+
+    return start_body(context, sync_=sync_, fit=fit)
+
+
+class EASE_OT_fit_measurements(jobs.Background, EaseOperator):
+    """Fit the body's shape to the target measurements (cm) (in the background: Esc cancels)"""
 
     bl_idname = "ease.fit_measurements"
     bl_label = "Fit Measurements"
     needs = ("body",)
 
     def run(self, context):
-        from ..core.body.sizes import fit_measurements
-
-        obj = data.body_object(context)
+        job = start_fit(context, sync_=self.job_sync())
         s = context.scene.ease
-        model = state.body_model(data.body_spec(obj)["model"])
-        targets = {"height": s.height_cm, "chest": s.chest_cm, "waist": s.waist_cm, "hip": s.hip_cm}
-        res = fit_measurements(model, targets)
-        achieved = {
-            k: f"{v:.1f} cm" + (f" ({res.status[k]})" if k in res.status else "") for k, v in res.achieved.items()
-        }
-        sync.update_body(context, obj, shape=res.shape)
-        sync.fill_shape_props(context.scene, model, res.shape)
-        s.measurements_report = data.format_measurements(achieved)
-        self.report({"INFO"}, f"fitted: {s.measurements_report}")
+        self.report(
+            {"INFO"},
+            f"fitted: {s.measurements_report}" if job.thread is None else "fitting in the background (Esc cancels)",
+        )
 
 
 class EASE_OT_measure(EaseOperator):

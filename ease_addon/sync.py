@@ -110,13 +110,13 @@ def update_body(context, obj, shape=None, pose=None, verts=None) -> None:
     refresh_attachments(context, obj, verts)
 
 
-def new_body(context, model_name: str, shape=None, pose: str = "A", replaces=None):
+def new_body(context, model_name: str, shape=None, pose: str = "A", replaces=None, verts=None):
     """Add a body object and make it the scene's body (shape sliders, ease layer, selection);
     ``replaces``: the body it replaces, removed once the new one is computed (so the new one
-    takes its name, with no ``.001``)."""
+    takes its name, with no ``.001``); ``verts``: its vertices when a worker computed them."""
     model = state.body_model(model_name)
     shape = dict(model.default_shape() if shape is None else shape)
-    verts = body_vertices({"model": model_name, "shape": shape, "pose": pose})
+    verts = body_vertices({"model": model_name, "shape": shape, "pose": pose}) if verts is None else verts
     scene = context.scene
     if replaces is not None:
         remove_object(replaces)

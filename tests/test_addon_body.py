@@ -221,3 +221,54 @@ def test_body_from_an_smpl_file(bpy_session, blender):
     assert np.allclose(blender.verts(obj), model.vertices({"beta1": 2.0}, "P1"), atol=1e-5)
     assert obj.data.color_attributes.get("ease") is not None
     assert bpy.ops.ease.add_body(source="DEFAULT") == {"FINISHED"}
+
+
+def test_add_body_and_fit_measurements_run_in_the_background(bpy_session, blender, anny):
+    """Add Body and Fit Measurements pressed in Blender's UI (jobs, as Apply Size): the body model,
+    its vertices, the design's cut and keypoints on it (Add Body) and the fit (Fit Measurements)
+    are computed in a worker, the scene as it was until the result lands in one pass (no
+    ``.001``); Esc (cancel) leaves the scene as it was."""
+    bpy = bpy_session["bpy"]
+    jobs, body_ops = blender.mod("jobs"), blender.mod("body_ops")
+    blender.reset(body=True, design=DESIGN)
+    s = bpy.context.scene.ease
+    old = s.body
+    names = sorted(o.name for o in bpy.data.objects)
+    kps = bpy.context.scene.ease.body.data.attributes["ease_keypoint"]
+    n_kp = int(np.count_nonzero([d.value for d in kps.data]))
+    # targets the default body nearly has (a short fit: the long one is test_measurements_fit_and_manual_shape's)
+    m = blender.mod("data").measurements(anny, None)
+    s.height_cm, s.chest_cm, s.waist_cm, s.hip_cm = (round(m[k], 0) for k in ("height", "chest", "waist", "hip"))
+    jobs.SYNCHRONOUS = False
+    try:
+        job, said = body_ops.start_add_body(bpy.context, "anny")
+        assert job.thread is not None and not said and s.body == old
+        assert s.job_status.startswith("updating: adding the body anny")
+        jobs.wait()
+        obj = s.body
+        assert said[-1][1].startswith("added body anny") and s.job_status.endswith(said[-1][1])
+        assert sorted(o.name for o in bpy.data.objects) == names and obj.name == "EASE Body"
+        kps = obj.data.attributes["ease_keypoint"]
+        assert int(np.count_nonzero([d.value for d in kps.data])) == n_kp  # the design's keypoints on it
+        assert np.allclose(blender.verts(obj), anny.vertices(None), atol=1e-5)
+        # Fit Measurements: the fit in the worker, then the body and the panel
+        job = body_ops.start_fit(bpy.context)
+        assert job.thread is not None and s.job_status.startswith("updating: the body in shape")
+        before = s.measurements_report
+        jobs.wait()
+        threaded = blender.verts(obj).copy()
+        report = s.measurements_report
+        assert report != before and report.count("(within 1 cm)") == 4 and s.job_status == f"shape: {report}"
+        # Esc: nothing applied
+        s.height_cm = 160.0
+        job = body_ops.start_fit(bpy.context)
+        assert jobs.cancel() == 1
+        job.thread.join(120)
+        jobs.poll()
+        assert np.array_equal(blender.verts(obj), threaded) and s.measurements_report == report
+        assert "cancelled" in s.job_status
+        assert not blender.mod("state").BUGS
+    finally:
+        jobs.wait()
+        jobs.SYNCHRONOUS = True
+        blender.reset(body=True)  # (the next tests start from the default body)
