@@ -132,3 +132,29 @@ def test_crossed_legs_are_told_from_legs_apart():
     U[3] = (0.02, 0.07)  # leg a's fourth vertex hooked over to leg b's side: its edge meets leg b
     assert gaps.crossed(U)
     assert not D.GapCorrection(D.dart_legs([], [], [])).crossed(np.zeros((3, 2)))
+
+
+def test_a_solve_refactorises_its_own_corrected_matrix_in_place():
+    """A solve's holder keeps one corrected factorisation, refactorised in place for each new matrix of the
+    same pattern (the collapse guard's renewals): the same corrections as a factorisation made anew, and one
+    factorisation from scratch per pattern and per solve instead of one per matrix (review of issue 30)."""
+    legs, n = _legs()
+    U = _positions(5, np.array([0.01, 0.004, -0.003, -0.002, 0.0005]))
+    soft = _base(n)
+    gaps = D.GapCorrection(legs)
+    holder = {}
+    outs = []
+    for k in range(4):
+        held = np.r_[np.full(5, 10.0 * k), np.zeros(n - 5)]
+        base = soft.with_values((soft.matrix + sp.diags(held)).tocsc().data) if k else soft
+        outs.append(gaps.correct(base, U, holder=holder))
+        # the same bits as a correction that factorises this matrix from scratch
+        assert np.array_equal(outs[-1], D.GapCorrection(legs).correct(base, U))
+        assert holder["held"][0] is base.matrix
+    assert gaps.factorised == 2  # the pattern's kept one, then the solve's own (refactorised twice)
+    # the stiffer leg a moves less each time: the values followed the matrix
+    moved = [np.abs(V - U)[:5].max() for V in outs]
+    assert moved == sorted(moved, reverse=True)
+    # a second solve (its own holder) reuses the pattern's analysis: one factorisation of its own
+    gaps.correct(soft.with_values(soft.matrix.data * 2.0), U, holder={})
+    assert gaps.factorised == 3

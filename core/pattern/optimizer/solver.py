@@ -564,7 +564,8 @@ class PatternSolver:
                 np.multiply(aw_k[j % 2], B[j], out=B[j])
             self._products.add_rhs(rhs, B)  # rhs[:, 0] += GxT B0 + GyT B1, rhs[:, 1] += GxT B2 + GyT B3
             rhs[pinned] += pin[pinned] * U[pinned]
-            U_new = self.gaps.correct(solve_k, solve_k(rhs), U)  # darts' legs kept apart, on the step's matrix
+            # darts' legs kept apart, on the step's matrix
+            U_new = self.gaps.correct(solve_k, solve_k(rhs), U, state.gap_held)
             # the step's rigid part per panel carries no strain: remove it so that the flip
             # guard only ever pulls back the local part of the step
             U_new = rigid_align(self.blocks, U_new, U)

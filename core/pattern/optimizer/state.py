@@ -26,6 +26,7 @@ class SolveState:
     guard : (f,) the collapse guard's stiffening gains (:func:`.steps.collapse_guard`; 0 = not guarded);
     guard_solve : the back-substitution of the matrix with the gains ``guard_held`` (the gains when it was
     last factorised, :func:`~core.pattern.optimizer.guard.renew_guard`; None: the shared matrix is solved), or None.
+    gap_held : the gap step's own corrected factorisation (:meth:`.dart_gaps.GapCorrection.correct`'s ``holder``).
     integral : (E,) the seam length term's integral action; tg : the current rest targets.
     s_cur : (f,) signed areas of ``U`` or None; local_state : the local step's memory.
     iteration : iterations run so far (a resumed solve carries the earlier one's on); started : ``iteration``
@@ -54,6 +55,7 @@ class SolveState:
     s_cur: Optional[np.ndarray] = None
     guard_solve: Optional[Callable] = None
     guard_held: Optional[np.ndarray] = None
+    gap_held: dict = field(default_factory=dict)
     local_state: dict = field(default_factory=dict)
     iteration: int = 0
     started: int = 0
