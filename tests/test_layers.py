@@ -319,3 +319,17 @@ def test_contact_inside_is_checked_by_the_winding_number():
     moved = x.numpy() - pts
     assert np.abs(moved[0]).max() < 1e-6 and np.abs(moved[2]).max() < 1e-6
     assert moved[1] == pytest.approx([0.0, 0.0, 0.053], abs=1e-5)  # the point in the box goes out of it
+
+
+@pytest.mark.slow
+def test_jacket_over_shirt_settles_with_friction_at_1cm():
+    """The jacket's sleeve ends over the shirt's cuffs: contact that took a fold's far side for the
+    inside threw them through the collider and the jacket never settled (frame limit, 10-17 mm/s)."""
+    from core.workflows import drape_outfit
+
+    outfit = {**TUCKED, "name": "jacket", "layers": [{"design": "shirt_long_sleeve"}, {"design": "jacket"}]}
+    run = drape_outfit(outfit, options={"max_frames": 70, "min_frames": 5}, refine_edge_length=0.01)
+    jacket = run.layers[1]
+    assert jacket.drape.result.material["friction"] > 0
+    assert jacket.drape.result.settle_reason == "settled"
+    assert jacket.settled_penetration_pct <= 0.5
