@@ -333,3 +333,44 @@ def test_jacket_over_shirt_settles_with_friction_at_1cm():
     assert jacket.drape.result.material["friction"] > 0
     assert jacket.drape.result.settle_reason == "settled"
     assert jacket.settled_penetration_pct <= 0.5
+
+
+def test_friction_on_an_inner_layer_is_coulomb():
+    """A particle resting on a slope of an inner layer (a sheet tilted 20 degrees, a plane of the
+    collider) sticks where its friction coefficient is at least tan 20 degrees and slides with
+    g (sin - mu cos) below it: contact and friction once per substep, as the drape steps them."""
+    from core.drape import kernels as K
+    from core.geom import queries as Q
+
+    wp = K.wp
+    theta = np.radians(20.0)
+    down = np.array([np.cos(theta), 0.0, -np.sin(theta)])  # down the slope
+    normal = np.array([np.sin(theta), 0.0, np.cos(theta)])
+    side = np.array([0.0, 1.0, 0.0])
+    v = np.array([a * down + b * side for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1))])
+    f = np.array([[0, 1, 2], [0, 2, 3]])
+    assert np.dot(np.cross(v[1] - v[0], v[2] - v[0]), normal) > 0  # the sheet faces the particle
+    wp.init()
+    mesh = Q.warp_mesh(v, f)
+    dt, steps, thick = 1.0 / 600.0, 300, 0.003
+    slid = {}
+    for mu in (0.5, 0.2):
+        arr = {k: wp.zeros(1, dtype=wp.vec3, device="cpu") for k in ("x", "v", "prev", "point", "normal")}
+        arr["x"].assign(np.array([normal * thick], np.float32))
+        inv_mass = wp.array(np.ones(1, np.float32), dtype=float, device="cpu")
+        hit = wp.zeros(1, dtype=int, device="cpu")
+        for _ in range(steps):
+            args = [arr["x"], arr["v"], arr["prev"], inv_mass, wp.vec3(0.0, 0.0, -9.81), dt, 1.0]
+            wp.launch(K.predict, 1, args, device="cpu")
+            args = [arr["x"], inv_mass, mesh.id, 0.03, 1e-4, arr["point"], arr["normal"], hit]
+            wp.launch(K.closest_contact, 1, args, device="cpu")
+            args = [arr["x"], arr["prev"], arr["point"], arr["normal"], hit, thick, mu]
+            wp.launch(K.collide_body, 1, args, device="cpu")
+            wp.launch(K.update_velocity, 1, [arr["x"], arr["prev"], arr["v"], 1.0 / dt], device="cpu")
+        x = arr["x"].numpy()[0].astype(float)
+        assert np.dot(x, normal) == pytest.approx(thick, abs=2e-4)  # on the sheet, its thickness off
+        slid[mu] = float(np.dot(x, down))
+    t = steps * dt
+    assert abs(slid[0.5]) < 1e-4  # mu 0.5 > tan 20 deg = 0.36: it sticks
+    expected = 0.5 * 9.81 * (np.sin(theta) - 0.2 * np.cos(theta)) * t * t
+    assert slid[0.2] == pytest.approx(expected, rel=0.05)
