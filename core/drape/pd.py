@@ -269,7 +269,6 @@ class ProjectiveStep:
         A = A + gram(el.Ge, np.full(el.Ge.shape[0], el.we)) + gram(self.Gh, el.kb)
         self.matrix = A.tocsr()
         fi = self.free_idx
-        self.A_fp = self.matrix[fi][:, self.fixed_idx].tocsr()
         # SPD: no pivoting, a symmetric ordering (about 3x faster back-substitutions than a pivoted LU)
         opts = {"SymmetricMode": True}
         self.lu = (
@@ -387,7 +386,6 @@ class ProjectiveStep:
             on = np.einsum("ij,ij->i", x[idx] - point, normal) < 2.0 * thickness
             near, nrm = np.searchsorted(fi, idx[on]), normal[on]
         inert = self.inertia[:, None] * y
-        fixed = self.A_fp @ x[self.fixed_idx] if len(self.fixed_idx) else 0.0
         if self.method == "lbfgs":
             return self._lbfgs(x, y, grow, iterations, tolerance, inert, fi, near, nrm, w2)
         m = max(self.history, 0)
@@ -399,12 +397,14 @@ class ProjectiveStep:
         it, res = 0, np.inf
         while True:
             rhs += inert
-            res = self._residual((self.matrix @ x - rhs)[fi], near, nrm, w2)
+            grad = (self.matrix @ x - rhs)[fi]
+            res = self._residual(grad, near, nrm, w2)
             if res < tolerance or it >= iterations:
                 break
             it += 1
             xf = x[fi].reshape(-1)
-            g = self.lu.solve(np.ascontiguousarray(rhs[fi] - fixed)).reshape(-1)
+            # the global step: A x' = rhs on the free particles, written as x' = x - A^-1 grad G
+            g = xf - self.lu.solve(np.ascontiguousarray(grad)).reshape(-1)
             k = count % (m + 1)
             ring_g[k], ring_f[k] = g, g - xf
             count += 1
