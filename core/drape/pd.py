@@ -254,7 +254,6 @@ class ProjectiveStep:
         el = NewtonStep(cloth, material, dt, mass, start_stretch, edge_start)
         self.elements, self.n, self.history = el, el.n, int(history)
         self.free, self.free_idx = el.free, el.free_idx
-        self.fixed_idx = np.nonzero(~el.free)[0]
         self.inertia = el.inertia
         self.ws = 2.0 * el.ws  # the orthogonal pair's distance^2 is (f_a . f_b)^2 / 2
         bends = el.bends
