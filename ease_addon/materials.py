@@ -64,6 +64,7 @@ LOOKS = {
     "jersey": FabricLook("knit", 1.1, (0.20, 0.21, 0.23), 0.85, 0.55, 0.45),
     "denim": FabricLook("twill", 0.9, (0.045, 0.075, 0.17), 0.88, 0.25, 0.55, stitch=(0.55, 0.30, 0.07)),
     "silk": FabricLook("satin", 0.25, (0.72, 0.52, 0.36), 0.32, 0.85, 0.15),
+    "wool": FabricLook("twill", 0.7, (0.13, 0.13, 0.15), 0.9, 0.45, 0.4),
 }
 DEFAULT_FABRIC = "cotton"
 LOOK_VERSION = 1  # raise when the fabric shader changes: a saved file's fabric is then rebuilt

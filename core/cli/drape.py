@@ -33,7 +33,7 @@ def add_parser(sub) -> None:
     p.add_argument(
         "--material",
         default=None,
-        help="fabric preset: cotton, jersey, denim, silk (default: the design's materials.fabric, else cotton)",
+        help="fabric preset: cotton, jersey, denim, silk, wool (default: the design's materials.fabric, else cotton)",
     )
     p.add_argument("--device", default="cpu", help="cpu (default; bitwise repeatable) or cuda")
     p.add_argument("--frames", type=int, default=None, help="frame limit (default 120 at 30 fps)")
