@@ -37,6 +37,7 @@ def test_typed_view_of_a_file():
 
 def test_parser_fills_tolerances():
     assert parse_materials("materials", {}) == {"fabric": "cotton", "eps_weft": 1.1, "eps_warp": 1.1}
+    assert parse_materials("materials", {"fabric": "Wool"})["fabric"].lower() == "wool"  # a design may name wool
     assert parse_materials("materials", {"eps_weft": 1.2})["eps_warp"] == 1.2
     assert parse_materials("materials", {"eps_weft": 1.2, "eps_warp": 1.05})["eps_warp"] == 1.05
 

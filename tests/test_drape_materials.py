@@ -7,7 +7,7 @@ from core.errors import DrapeError
 
 
 def test_presets_are_valid_and_physical():
-    assert set(names()) >= {"cotton", "jersey", "denim", "silk"}
+    assert set(names()) >= {"cotton", "jersey", "denim", "silk", "wool"}
     for name in names():
         m = get_material(name)
         assert m.name == name and m.density > 0 and m.thickness > 0
@@ -36,3 +36,15 @@ def test_bad_materials():
         get_material({"fabric": "cotton", "bending": float("nan")})
     with pytest.raises(DrapeError):
         get_material(42)
+
+
+def test_wool_is_a_suiting():
+    # worsted suiting: heavier than shirting and than silk, bending between shirting and denim, and a
+    # published drape range to meet (core.drape.materials.TARGETS)
+    from core.drape.materials import TARGETS
+
+    wool, cotton, denim = get_material("wool"), get_material("cotton"), get_material("denim")
+    assert cotton.density < wool.density < denim.density
+    assert cotton.bending < wool.bending < denim.bending
+    assert wool.stretch_weft < cotton.stretch_weft  # wool gives more in the grain than poplin
+    assert TARGETS["wool"]["dc_pct"] == (55.0, 65.0)

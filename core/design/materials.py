@@ -37,7 +37,7 @@ from .naming import mirrored_name
 FABRIC = "cotton"
 # The fabric presets a design may name; their physical values are the drape's
 # (core.drape.materials.PRESETS, one per name here).
-FABRICS = ("cotton", "jersey", "denim", "silk")
+FABRICS = ("cotton", "jersey", "denim", "silk", "wool")
 EPS_WEFT = 1.1  # weft stretch tolerance: 10 % stretch
 GATHER_ABOVE = 0.2  # gather a seam whose sides' ease demands differ by more than 20 %
 ALLOWANCE = 0.01  # m, seam allowance
