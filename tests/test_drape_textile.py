@@ -181,6 +181,66 @@ def test_newton_energy_gradient_matches_finite_differences():
         assert fd == pytest.approx(g[i, k], rel=1e-4, abs=1e-9 * np.abs(g).max())
 
 
+def test_newton_buckling_caps_the_compressive_stress():
+    # the sub-element buckling option: a grain spring compressed past the element's Euler load pi^2 B /
+    # h^2 pushes back with that stress and no more; its gradient still matches G (finite differences)
+    from core.drape.newton import NewtonStep, buckling_stress
+
+    uv, faces = T.strip_mesh([0.0, 0.04], 0.03, 0.01)
+    cloth = build_cloth(T.sheet_pattern(uv, faces, 0.0, uv[:, 0] < -1.0, "silk"))
+    silk, n = get_material("silk"), cloth.n_particles
+    mass = silk.density * cloth.mass_area
+    start = np.ones((len(cloth.faces), 2))
+    steps = {b: NewtonStep(cloth, silk, 1 / 90, mass, start, np.zeros(0), buckling=b) for b in (False, True)}
+    y = cloth.x0.copy()
+    squeeze = cloth.x0 * np.array([0.9, 1.0, 1.0])  # 10 % along x: past every element's buckling strain
+    sigma = buckling_stress(silk.bending, cloth.rest_area)
+    assert np.all(0.1 * silk.stretch_weft > sigma)
+    e_free, g_free = steps[False].energy(squeeze, y, 1.0)
+    e_cap, g_cap = steps[True].energy(squeeze, y, 1.0)
+    assert e_cap < 0.1 * e_free and np.abs(g_cap).max() < 0.1 * np.abs(g_free).max()
+    # the capped energy grows linearly past the cap: the force on the strip's end is the stress times
+    # the width it carries (the end column's share), whatever the squeeze
+    end = np.nonzero(uv[:, 0] >= 0.04 - 1e-9)[0]
+    more = cloth.x0 * np.array([0.8, 1.0, 1.0])
+    _, g_more = steps[True].energy(more, y, 1.0)
+    inertia = steps[True].inertia[:, None]
+    elastic_cap, elastic_more = g_cap - inertia * (squeeze - y), g_more - inertia * (more - y)
+    assert elastic_more[end, 0].sum() == pytest.approx(elastic_cap[end, 0].sum(), rel=1e-6)
+    assert -elastic_cap[end, 0].sum() == pytest.approx(sigma.mean() * 0.03, rel=0.05)  # 3 cm wide
+    rng = np.random.default_rng(5)
+    x = squeeze + rng.normal(scale=2e-4, size=squeeze.shape)
+    e, g = steps[True].energy(x, y, 1.0)
+    h = 1e-7
+    for i, k in [(0, 0), (n // 2, 1), (n - 1, 2)]:
+        xp, xm = x.copy(), x.copy()
+        xp[i, k] += h
+        xm[i, k] -= h
+        fd = (steps[True].energy(xp, y, 1.0, False)[0] - steps[True].energy(xm, y, 1.0, False)[0]) / (2 * h)
+        assert fd == pytest.approx(g[i, k], rel=1e-4, abs=1e-9 * np.abs(g).max())
+
+
+def test_newton_step_ends_no_higher_than_its_start():
+    # a solve cut off at one iteration from a guess far up the potential (stiff springs stretched)
+    # ends no higher in G than the substep's start x_n: it starts from x_n where G is lower there
+    from core.drape.newton import NewtonStep
+
+    uv, faces = T.strip_mesh([0.0, 0.1], 0.1, 0.01)
+    cloth = build_cloth(T.sheet_pattern(uv, faces, 0.0, uv[:, 0] < 1e-9, "cotton"))
+    cotton = get_material("cotton")
+    mass = cotton.density * cloth.mass_area
+    step = NewtonStep(cloth, cotton, 1 / 90, mass, np.ones((len(cloth.faces), 2)), np.zeros(0))
+    x_n = cloth.x0.copy()
+    y = x_n - np.array([0.0, 0.0, 9.81 / 90**2])
+    guess = x_n + np.random.default_rng(2).normal(scale=2e-3, size=x_n.shape) * step.free[:, None]
+    g_start = step.energy(x_n, y, 1.0, False)[0]
+    assert step.energy(guess, y, 1.0, False)[0] > 10 * g_start
+    weight = mass * 9.81
+    cut = guess.copy()
+    step.solve(cut, y, 1.0, 1, 1e-9, weight, previous=x_n)
+    assert step.energy(cut, y, 1.0, False)[0] <= g_start
+
+
 def test_newton_holds_the_fabric_stiffness():
     # a 30 x 50 cm cotton sheet hanging from its top edge, no tethers, 2 cm mesh: in equilibrium the warp
     # tension at the clamp is rho g H per width, the largest warp strain rho g H / k_warp = 0.021 %. One XPBD
