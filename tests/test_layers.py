@@ -291,6 +291,10 @@ def test_layer_measure_tells_inside_by_the_skin():
     assert layer_measure(pts, v, f, band=0.2)["penetrating"] == 2
     m = layer_measure(pts, v, f, band=0.2, skin=(v, f))
     assert m["penetrating"] == 1 and m["gap_mm"]["min"] == pytest.approx(-50.0, abs=1e-3)
+    # the other way (a concave seam): near the surface the skin decides, also against a normal saying outside
+    tall = v[:8] * [1.0, 1.0, 1.6]  # the box raised to 1.6, over the sheet
+    dist, _ = layer_distance([[0.5, 0.5, 1.52]], v[8:], f[12:] - 8, skin=(tall, f[:12]))
+    assert dist == pytest.approx([-0.02], abs=1e-6)
 
 
 def test_contact_inside_is_checked_by_the_winding_number():

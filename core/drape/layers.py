@@ -60,10 +60,11 @@ def layer_distance(points, v, f, skin=None) -> Tuple[np.ndarray, np.ndarray]:
     whether each point's closest point lies inside the surface (not on an open edge).
 
     The side is the closest face's normal's. With ``skin`` ((V, 3), (F, 3): the inner surface as a
-    closed skin with the body, :func:`measure_skin`), a point that normal puts inside counts inside
-    only where it lies inside the skin (:func:`inside_skin`): past a fold's far side, or a ridge
-    where the closest point is on an edge and the face picked faces away, the normal says inside
-    for a point centimetres outside.
+    closed skin with the body, :func:`measure_skin`) it is the skin's (:func:`inside_skin`) for
+    every point within :data:`OVERLAP_BAND` of the surface and every point that normal puts inside:
+    past a fold's far side, or on a ridge where the closest point is on an edge and the face picked
+    faces away, the normal says inside for a point centimetres outside; in a concave seam (the
+    trousers' centre back) it says outside for a shirt's tail centimetres inside.
 
     Returns ``(distance (n,), over (n,) bool)``.
     """
@@ -76,9 +77,9 @@ def layer_distance(points, v, f, skin=None) -> Tuple[np.ndarray, np.ndarray]:
     face = np.asarray(face, dtype=np.int64)
     d = p - closest
     sign = np.where(np.einsum("ij,ij->i", d, face_normals(v, f)[face]) < 0, -1.0, 1.0)
-    if skin is not None and (sign < 0).any():
-        idx = np.flatnonzero(sign < 0)
-        sign[idx[~inside_skin(p[idx], *skin)]] = 1.0
+    if skin is not None:
+        idx = np.flatnonzero((sign < 0) | (sq <= OVERLAP_BAND**2))
+        sign[idx] = np.where(inside_skin(p[idx], *skin), -1.0, 1.0)
     dist = sign * np.sqrt(np.maximum(sq, 0.0))
     # barycentrics of the closest point: on a boundary edge (a ~ 0 opposite it) the point is off the edge
     a, b, c = v[f[face, 0]], v[f[face, 1]], v[f[face, 2]]
