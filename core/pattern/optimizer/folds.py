@@ -3,8 +3,9 @@
 A heavier body's skin folds where a curve overhangs it: under women:XL's bust (the inframammary
 crease) the cut triangles that are the cloth's shape on the reference body (women:M) lie squeezed
 to 6-9 % of their height there (the smaller stretch from their M shape: 0.085, 0.057 with the
-darts' apexes following the cup; 3XL 0.094, 4XL 0.053; XS..L at least 0.29). Cloth does not follow
-skin into such a fold: it bridges it, as the skirt's membrane spans the gluteal cleft
+darts' apexes following the cup; 3XL 0.094, 4XL 0.053; XS..L at least 0.29; every other template
+on its chart's XS..XL at least 0.448). Cloth does not follow skin into such a fold: it bridges it,
+as the skirt's membrane spans the gluteal cleft
 (:mod:`core.cut.span`). Taken literally, those targets ask the pattern to shorten a band under the
 bust by up to 16 x: the four-dart blouse transferred to women:XL at ease 1.3 with ``improved`` at
 200 iterations (and with warp slack 0) started with 10 triangles over 10 x their targets there and
@@ -19,7 +20,9 @@ So the solve's target of a triangle on another body is its reference-body shape 
 least :data:`FOLD_FLOOR` in every direction: ``K' = F' K_ref`` with ``F = K K_ref^-1`` and ``F'``
 its singular values floored. Nothing else changes: the measured figures stay those of the skin
 (:mod:`core.metrics`, from the target body's positions), and a transfer with no triangle squeezed
-that far (XS..L of both charts, the reference solve, every adaptation) is the same bits.
+that far (every template's XS..XL but the blouses' women:L and XL, the reference solve, every
+adaptation) is the same bits. The women:M reference transferred to women:3XL and 4XL still diverges
+(docs/patterns.md).
 """
 
 from __future__ import annotations
