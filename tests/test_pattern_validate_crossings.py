@@ -153,7 +153,9 @@ def test_the_four_dart_blouse_is_cut_into_a_valid_piece_and_refused_without_the_
     assert m["crossings"] == 0 and m["flipped_triangles"] == 0 and m["collapsed_triangles"] == 0
     assert all(g["min_gap_mm"] > 0 and g["crossings"] == 0 for g in m["darts"].values()), m["darts"]
     assert all(rec["leg_difference_mm"] <= 0.1 for rec in run.pattern.report["darts"].values())
-    monkeypatch.setattr("core.pattern.optimizer.dart_gaps.GapCorrection.correct", lambda self, base, U, prev=None: U)
+    monkeypatch.setattr(
+        "core.pattern.optimizer.dart_gaps.GapCorrection.correct", lambda self, base, U, prev=None, holder=None: U
+    )
     out = tmp_path / "out"
     assert main(["pattern", str(template_path("blouse_four_darts")), "--out", str(out), "--quiet"]) == 2
     assert not out.exists()
