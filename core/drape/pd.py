@@ -285,6 +285,19 @@ class ProjectiveStep:
         self._host = [np.ascontiguousarray(a, dtype=float) for a in (el.wa, el.wb, self.ws, el.kb, self.rest_len)]
         self._wa, self._wb, self._ws, self._kb, self._rest_len = (_num(a) for a in self._host)
         self._bends = wp.array(bends.astype(np.int32).reshape(-1, 4), dtype=int, device="cpu")
+        # each image row's weight W (D^T W D + M is the matrix): the gradient is M (x - y) + D^T (W D x - target)
+        self._row_w = np.concatenate([el.wa + self.ws, el.wb + self.ws, np.full(e, el.we), el.kb])[:, None]
+        # the local step's buffers and their Warp views, made once (the images, targets, energies)
+        self._images = np.zeros((self.D.shape[0], 3))
+        self._target = np.zeros_like(self._images)
+        self._part = np.zeros(self.D.shape[0])
+        o = self._blocks
+        self._views = [
+            (_vec(b[o[k] : o[k + 1]]) if b.ndim == 2 else _num(b[o[k] : o[k + 1]]))
+            for b in (self._images, self._target, self._part)
+            for k in range(4)
+        ]
+        self._grow = None
         self.contact = None
         self.friction = 0.0  # the Coulomb coefficient the stop test allows on the body (the drape's)
         self.method = "anderson"
@@ -300,38 +313,30 @@ class ProjectiveStep:
         )
 
     def local(self, x: np.ndarray, y: np.ndarray, grow: float) -> tuple:
-        """The local step at ``x``: (``sum_c w_c A_c^T p_c(x)`` (P, 3), G(x)), G the step's potential."""
+        """The local step at ``x``: (the elastic part of ``grad G``, ``sum_c w_c A_c^T (A_c x - p_c(x))``
+        (P, 3), G(x)), G the step's potential; ``grad G`` is ``M (x - y) / dt^2`` plus it."""
         el = self.elements
         sq = lambda u: np.einsum("ij,ij->i", u, u)  # noqa: E731
         d = x - y
         energy = 0.5 * float(np.sum(self.inertia * sq(d)))
-        back = 1.0 - grow
-        ra = 1.0 + (el.stretch0[:, 0] - 1.0) * back
-        rb = 1.0 + (el.stretch0[:, 1] - 1.0) * back
-        o = self._blocks
-        images = self.D @ x
-        target = np.empty_like(images)  # each image's projection times its weight
-        part = np.zeros(len(images))  # each constraint's energy
+        if self._grow != grow:  # the rest stretch, growing from the skintight start's
+            back = 1.0 - grow
+            self._rest = [1.0 + (el.stretch0[:, k] - 1.0) * back for k in (0, 1)]  # kept: the views share them
+            self._ra, self._rb = (_num(r) for r in self._rest)
+            self._edge_len = el.edge_rest + (el.edge_start - el.edge_rest) * back
+            self._grow = grow
+        o, v = self._blocks, self._views
+        images, target, part = self._images, self._target, self._part  # views v[0:4], v[4:8], v[8:12]
+        images[:] = self.D @ x
         wp.launch(
             project_triangles,
             int(o[1] - o[0]),
-            inputs=[
-                _vec(images[o[0] : o[1]]),
-                _vec(images[o[1] : o[2]]),
-                _num(ra),
-                _num(rb),
-                self._wa,
-                self._wb,
-                self._ws,
-                _vec(target[o[0] : o[1]]),
-                _vec(target[o[1] : o[2]]),
-                _num(part[o[0] : o[1]]),
-            ],
+            inputs=[v[0], v[1], self._ra, self._rb, self._wa, self._wb, self._ws, v[4], v[5], v[8]],
             device="cpu",
         )
         if o[3] > o[2]:
             de = images[o[2] : o[3]]
-            se = _onto_sphere(de, el.edge_rest + (el.edge_start - el.edge_rest) * back)
+            se = _onto_sphere(de, self._edge_len)
             part[o[2] : o[3]] = 0.5 * el.we * sq(de - se)
             target[o[2] : o[3]] = el.we * se
         if o[4] > o[3]:
@@ -340,20 +345,11 @@ class ProjectiveStep:
             wp.launch(
                 project_hinges,
                 int(o[4] - o[3]),
-                inputs=[
-                    _vec(x),
-                    self._bends,
-                    _vec(images[o[3] : o[4]]),
-                    self._kb,
-                    self._rest_len,
-                    _vec(target[o[3] : o[4]]),
-                    _num(part[o[3] : o[4]]),
-                ],
+                inputs=[_vec(x), self._bends, v[3], self._kb, self._rest_len, v[7], v[11]],
                 device="cpu",
             )
         energy += float(part.sum())
-        rhs = self.DT @ target
-        return rhs, energy
+        return self.DT @ (self._row_w * images - target), energy
 
     def energy(self, x: np.ndarray, y: np.ndarray, grow: float) -> float:
         """G at ``x`` (float64): inertia plus every constraint's weighted squared distance, halved."""
@@ -384,26 +380,25 @@ class ProjectiveStep:
             idx, point, normal, thickness = self.contact
             on = np.einsum("ij,ij->i", x[idx] - point, normal) < 2.0 * thickness
             near, nrm = np.searchsorted(fi, idx[on]), normal[on]
-        inert = self.inertia[:, None] * y
         if self.method == "lbfgs":
-            return self._lbfgs(x, y, grow, iterations, tolerance, inert, fi, near, nrm, w2)
+            return self._lbfgs(x, y, grow, iterations, tolerance, fi, near, nrm, w2)
+        if self.method == "newton":
+            return self._newton(x, y, grow, iterations, tolerance, fi, near, nrm, w2)
         m = max(self.history, 0)
         # Anderson's history, rows in a ring: the plain steps G(x_k) and their increments G(x_k) - x_k
         ring_g = np.empty((m + 1, 3 * len(fi)))
         ring_f = np.empty_like(ring_g)
         count = 0
-        rhs, e = self.local(x, y, grow)
+        e, grad = self._gradient(x, y, grow)
         it, res = 0, np.inf
         while True:
-            rhs += inert
-            grad = (self.matrix @ x - rhs)[fi]
             res = self._residual(grad, near, nrm, w2)
             if res < tolerance or it >= iterations:
                 break
             it += 1
             xf = x[fi].reshape(-1)
             # the global step: A x' = rhs on the free particles, written as x' = x - A^-1 grad G
-            g = xf - self.lu.solve(np.ascontiguousarray(grad)).reshape(-1)
+            g = xf - self._back(grad).reshape(-1)
             k = count % (m + 1)
             ring_g[k], ring_f[k] = g, g - xf
             count += 1
@@ -412,18 +407,128 @@ class ProjectiveStep:
                 order = [(count - 1 - j) % (m + 1) for j in range(min(count, m + 1))]  # newest first
                 df = ring_f[order[:-1]] - ring_f[order[1:]]
                 dg = ring_g[order[:-1]] - ring_g[order[1:]]
-                gram = df @ df.T
+                # (einsum, not BLAS: a threaded BLAS on these thin products costs more than the step on a
+                # loaded machine)
+                gram = np.einsum("ik,jk->ij", df, df)
                 gram.flat[:: len(gram) + 1] += 1e-12 * max(float(np.trace(gram)), 1e-300)
-                theta = np.linalg.solve(gram, df @ ring_f[order[0]])
-                x[fi] = (g - theta @ dg).reshape(-1, 3)
-                rhs_a, e_a = self.local(x, y, grow)
+                theta = np.linalg.solve(gram, np.einsum("ik,k->i", df, ring_f[order[0]]))
+                x[fi] = (g - np.einsum("i,ik->k", theta, dg)).reshape(-1, 3)
+                e_a, grad_a = self._gradient(x, y, grow)
                 if np.isfinite(e_a) and e_a < e:
-                    rhs, e = rhs_a, e_a
+                    e, grad = e_a, grad_a
                     continue
                 x[fi] = g.reshape(-1, 3)  # the mix did not lower G: the plain step, a fresh history
                 ring_g[0], ring_f[0] = g, ring_f[k]
                 count = 1
-            rhs, e = self.local(x, y, grow)
+            e, grad = self._gradient(x, y, grow)
+        return it, res
+
+    def _gradient(self, x, y, grow) -> tuple:
+        """(G(x), grad G on the free particles (F, 3))."""
+        elastic, e = self.local(x, y, grow)
+        fi = self.free_idx
+        return e, self.inertia[fi, None] * (x[fi] - y[fi]) + elastic[fi]
+
+    def _back(self, v: np.ndarray) -> np.ndarray:
+        """A^-1 v on the free particles ((F, 3)): one back-substitution of the factored matrix."""
+        return self.lu.solve(np.asfortranarray(v.reshape(-1, 3)))
+
+    def _stiffness(self, x: np.ndarray):
+        """The Gauss-Newton Hessian of G at ``x`` (whose images the last :meth:`local` left in the buffer),
+        as a product: each spring's stiffness along itself and ``max(0, 1 - rest / length)`` across (a
+        compressed spring's negative transverse curvature clamped to 0), the shear's ``(f_a . f_b)^2 / t``
+        as ``2 w / t J J^T`` (J = (f_b, f_a), t = |f_a|^2 + |f_b|^2) and the hinge's ``k n n^T``, so the
+        product is symmetric positive definite and below the PD matrix in every direction."""
+        el, o, img = self.elements, self._blocks, self._images.copy()
+        ra, rb = self._rest
+        fa, fb = img[o[0] : o[1]], img[o[1] : o[2]]
+
+        def spring(f, rest, w):
+            length = np.maximum(np.sqrt(np.einsum("ij,ij->i", f, f)), 1e-15)
+            across = np.maximum(1.0 - rest / length, 0.0)
+            return f / length[:, None], w * across, w * (1.0 - across)
+
+        ua, ca, cna = spring(fa, ra, el.wa)
+        ub, cb, cnb = spring(fb, rb, el.wb)
+        t = np.einsum("ij,ij->i", fa, fa) + np.einsum("ij,ij->i", fb, fb)
+        cs = 2.0 * el.ws / np.maximum(t, 1e-30)
+        parts = []
+        if o[3] > o[2]:
+            parts.append(spring(img[o[2] : o[3]], self._edge_len, np.full(o[3] - o[2], el.we)))
+        nh = hinge_normals(x, self.elements.bends.reshape(-1, 4)) if o[4] > o[3] else None
+        inertia = self.inertia[:, None]
+
+        def product(u: np.ndarray) -> np.ndarray:
+            v = self.D @ u
+            out = np.empty_like(v)
+            va, vb = v[o[0] : o[1]], v[o[1] : o[2]]
+            s = cs * (np.einsum("ij,ij->i", fb, va) + np.einsum("ij,ij->i", fa, vb))
+            out[o[0] : o[1]] = ca[:, None] * va + (cna * np.einsum("ij,ij->i", ua, va))[:, None] * ua + s[:, None] * fb
+            out[o[1] : o[2]] = cb[:, None] * vb + (cnb * np.einsum("ij,ij->i", ub, vb))[:, None] * ub + s[:, None] * fa
+            if parts:
+                ue, ce, cne = parts[0]
+                ve = v[o[2] : o[3]]
+                out[o[2] : o[3]] = ce[:, None] * ve + (cne * np.einsum("ij,ij->i", ue, ve))[:, None] * ue
+            if nh is not None:
+                vh = v[o[3] : o[4]]
+                out[o[3] : o[4]] = (el.kb * np.einsum("ij,ij->i", nh, vh))[:, None] * nh
+            return inertia * u + self.DT @ out
+
+        return product
+
+    def _newton(self, x, y, grow, iterations, tolerance, fi, near, nrm, w2):
+        """Gauss-Newton steps on G, each solved by conjugate gradients preconditioned with the factored PD
+        matrix (whose first iterate is the local-global step): the Hessian of :meth:`_stiffness` keeps the
+        soft modes soft (a stretched spring's transverse stiffness near 0, where the PD matrix holds its
+        full stiffness), so CG resolves them in a few back-substitutions where the local-global iterations
+        crawl. An Armijo line search keeps G falling. ``iterations`` bounds the back-substitutions.
+
+        Returns (back-substitutions done, the largest residual over weight at the last test)."""
+        e, grad = self._gradient(x, y, grow)
+        it, res = 0, self._residual(grad, near, nrm, w2)
+        u = np.zeros_like(x)
+        while it < iterations and res >= tolerance:
+            hess = self._stiffness(x)
+            # PCG on H d = -grad, stopped once the weighted residual of the linear system is a tenth of
+            # the gradient's (or at the budget)
+            r = -grad
+            z = self._back(r)
+            p, d = z.copy(), np.zeros_like(r)
+            rz = float(np.einsum("ij,ij->", r, z))
+            goal = 0.1 * max(res, tolerance)
+            while True:
+                it += 1
+                u[fi] = p
+                hp = hess(u)[fi]
+                php = float(np.einsum("ij,ij->", p, hp))
+                if not php > 0.0:
+                    break
+                alpha = rz / php
+                d += alpha * p
+                r -= alpha * hp
+                if it >= iterations or np.sqrt(np.max(np.einsum("ij,ij->i", r, r) / w2)) < goal:
+                    break
+                z = self._back(r)
+                rz_new = float(np.einsum("ij,ij->", r, z))
+                p = z + (rz_new / rz) * p
+                rz = rz_new
+            if not np.any(d):
+                break
+            slope = float(np.einsum("ij,ij->", grad, d))
+            x0 = x[fi].copy()
+            step, ok = 1.0, False
+            for _ in range(8):
+                x[fi] = x0 + step * d
+                e1, g1 = self._gradient(x, y, grow)
+                if np.isfinite(e1) and e1 <= e + 1e-4 * step * slope:
+                    ok = True
+                    break
+                step *= 0.5
+            if not ok:
+                x[fi] = x0
+                break
+            e, grad = e1, g1
+            res = self._residual(grad, near, nrm, w2)
         return it, res
 
     def _residual(self, grad, near, nrm, w2) -> float:
@@ -436,18 +541,17 @@ class ProjectiveStep:
             left[near] = np.where(press > 0.0, held, left[near])
         return float(np.sqrt(np.max(left / w2, initial=0.0)))
 
-    def _lbfgs(self, x, y, grow, iterations, tolerance, inert, fi, near, nrm, w2):
+    def _lbfgs(self, x, y, grow, iterations, tolerance, fi, near, nrm, w2):
         """L-BFGS on G with the factored matrix as its initial inverse Hessian (Liu, Bouaziz, Kavan,
         "Quasi-Newton methods for real-time simulation of hyperelastic materials", ACM TOG 36(3), 2017):
         without history its step is the local-global one; an Armijo line search keeps G falling."""
         nf = len(fi)
 
         def h0(v):
-            return self.lu.solve(np.ascontiguousarray(v.reshape(nf, 3))).reshape(-1)
+            return self._back(v.reshape(nf, 3)).reshape(-1)
 
         def evaluate(xx):
-            rhs, e = self.local(xx, y, grow)
-            return e, (self.matrix @ xx - (rhs + inert))[fi]
+            return self._gradient(xx, y, grow)
 
         e, grad = evaluate(x)
         g = grad.reshape(-1)
