@@ -38,10 +38,26 @@ def open_edges(f: np.ndarray) -> np.ndarray:
     return key[count == 1]
 
 
-def inside_skin(points, skin_v, skin_f) -> np.ndarray:
+class Skin(tuple):
+    """(vertices, faces) of a closed skin (:func:`measure_skin`) that keeps the Warp mesh
+    :func:`inside_skin` builds of it (a layered drape measures every frame over the same skin)."""
+
+    def __new__(cls, vertices, faces):
+        return super().__new__(cls, (np.asarray(vertices, np.float64), np.asarray(faces, np.int64)))
+
+    def mesh(self):
+        from ..geom.queries import warp_mesh
+
+        if not hasattr(self, "_mesh"):
+            self._mesh = warp_mesh(self[0], self[1], device="cpu")
+        return self._mesh
+
+
+def inside_skin(points, skin_v, skin_f, mesh=None) -> np.ndarray:
     """(n,) bool, the points inside the closed skin (skin_v, skin_f) (:func:`layer_collider`): its
     winding number over 1/2. Robust where the skin is not one clean closed surface (an inner
-    garment's folds, its ramps sunk into the body), where the closest face's normal is not."""
+    garment's folds, its ramps sunk into the body), where the closest face's normal is not.
+    ``mesh``: the skin's Warp mesh when already built (:class:`Skin`)."""
     from ..geom.queries import warp_mesh
     from .kernels import inside_winding, wp
 
@@ -49,7 +65,8 @@ def inside_skin(points, skin_v, skin_f) -> np.ndarray:
     if not len(p):
         return np.zeros(0, bool)
     wp.init()
-    mesh = warp_mesh(skin_v, skin_f, device="cpu")
+    if mesh is None:
+        mesh = warp_mesh(skin_v, skin_f, device="cpu")
     out = wp.zeros(len(p), dtype=int, device="cpu")
     wp.launch(inside_winding, len(p), inputs=[wp.array(p, dtype=wp.vec3, device="cpu"), mesh.id, out], device="cpu")
     return out.numpy().astype(bool)
@@ -79,7 +96,8 @@ def layer_distance(points, v, f, skin=None) -> Tuple[np.ndarray, np.ndarray]:
     sign = np.where(np.einsum("ij,ij->i", d, face_normals(v, f)[face]) < 0, -1.0, 1.0)
     if skin is not None:
         idx = np.flatnonzero((sign < 0) | (sq <= OVERLAP_BAND**2))
-        sign[idx] = np.where(inside_skin(p[idx], *skin), -1.0, 1.0)
+        mesh = skin.mesh() if isinstance(skin, Skin) else None
+        sign[idx] = np.where(inside_skin(p[idx], *skin, mesh=mesh), -1.0, 1.0)
     dist = sign * np.sqrt(np.maximum(sq, 0.0))
     # barycentrics of the closest point: on a boundary edge (a ~ 0 opposite it) the point is off the edge
     a, b, c = v[f[face, 0]], v[f[face, 1]], v[f[face, 2]]
@@ -228,10 +246,10 @@ def layer_collider(body_v, body_f, inner: Sequence[Tuple[np.ndarray, np.ndarray,
     return np.concatenate(vs), np.concatenate([body_f[keep], *fs])
 
 
-def measure_skin(body_v, body_f, v, f) -> Tuple[np.ndarray, np.ndarray]:
+def measure_skin(body_v, body_f, v, f) -> Skin:
     """The inner surface (v, f) as it lies, closed with the body (:func:`layer_collider` at offset 0):
     the skin :func:`layer_measure` tells inside from outside by."""
-    return layer_collider(body_v, body_f, [(v, f, 0.0)])
+    return Skin(*layer_collider(body_v, body_f, [(v, f, 0.0)]))
 
 
 def push_outside(points, v, f, clearance: float, band: float = OVERLAP_BAND, movable=None) -> Tuple[np.ndarray, int]:
