@@ -487,19 +487,25 @@ class ProjectiveStep:
         e, grad = self._gradient(x, y, grow)
         it, res = 0, self._residual(grad, near, nrm, w2)
         u = np.zeros_like(x)
+
+        def held(v):  # the body holds the particles on it along its normal: no motion there (filtered CG)
+            if len(near):
+                v[near] -= np.einsum("ij,ij->i", v[near], nrm)[:, None] * nrm
+            return v
+
         while it < iterations and res >= tolerance:
             hess = self._stiffness(x)
             # PCG on H d = -grad, stopped once the weighted residual of the linear system is a tenth of
             # the gradient's (or at the budget)
-            r = -grad
-            z = self._back(r)
+            r = held(-grad)
+            z = held(self._back(r))
             p, d = z.copy(), np.zeros_like(r)
             rz = float(np.einsum("ij,ij->", r, z))
             goal = 0.1 * max(res, tolerance)
             while True:
                 it += 1
                 u[fi] = p
-                hp = hess(u)[fi]
+                hp = held(hess(u)[fi])
                 php = float(np.einsum("ij,ij->", p, hp))
                 if not php > 0.0:
                     break
@@ -508,7 +514,7 @@ class ProjectiveStep:
                 r -= alpha * hp
                 if it >= iterations or np.sqrt(np.max(np.einsum("ij,ij->i", r, r) / w2)) < goal:
                     break
-                z = self._back(r)
+                z = held(self._back(r))
                 rz_new = float(np.einsum("ij,ij->", r, z))
                 p = z + (rz_new / rz) * p
                 rz = rz_new
