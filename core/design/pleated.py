@@ -16,6 +16,11 @@ PLEAT_DEPTH = 0.02
 PLEAT_DEPTH_RANGE = (0.01, 0.025)
 
 
+#: the knife-pleated skirt's pleats: each start's fraction of the way along the waist from the centre to the side
+FRONT_KNIFE = (0.2, 0.45, 0.65)
+BACK_KNIFE = (0.07, 0.2, 0.45)
+
+
 def _depth(value=PLEAT_DEPTH, hi=PLEAT_DEPTH_RANGE[1]):
     return {"value": value, "kind": "length", "min": PLEAT_DEPTH_RANGE[0], "max": hi}
 
@@ -58,9 +63,12 @@ def skirt_knife_pleats():
     )
     for panel, centre in panels:
         pleats = []
-        # the third pleat at 0.65 of the way to the side: at 0.7 its fold reached past the back's
-        # side seam on women:3XL and 4XL
-        for k, t in enumerate((0.2, 0.45, 0.65), start=1):
+        # the front's third pleat at 0.65 of the way to the side: at 0.7 its fold reached past the side
+        # seam on women:3XL and 4XL. The back's are between its centre and its waist dart's mouth (0.4,
+        # core.design.garments.SKIRT_BACK_DART_PLACE) and just past the dart: the dart turns the flat
+        # back's side part outwards, and a pleat at 0.55 or 0.65 ran out through the side seam on
+        # women:3XL / 4XL
+        for k, t in enumerate(BACK_KNIFE if panel["name"] == "back" else FRONT_KNIFE, start=1):
             start = f"waist_{panel['name']}_pleat_{k}_left"
             d["keypoints"].update(_waist_point(start, centre, t))
             pleats.append(_pleat(f"{panel['name']}_pleat_{k}_left", "knife", start))
