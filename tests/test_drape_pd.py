@@ -185,7 +185,7 @@ def test_solve_reaches_the_implicit_step(method):
 
 
 def test_gauss_newton_product():
-    # pd_method="newton"'s Hessian product: symmetric; on a sheet stretched without shear or bend (every
+    # ProjectiveStep.method = "newton"'s Hessian product: symmetric; on a sheet stretched without shear or bend (every
     # spring longer than its rest, so no clamp acts) it is the exact Hessian of G (central differences of
     # the gradient); on a bent, sheared sheet it leaves out only the small second-order terms
     cloth = _sheet()
@@ -205,15 +205,6 @@ def test_gauss_newton_product():
         fd = (pd.local(x + h * u, y, 1.0)[0] - pd.local(x - h * u, y, 1.0)[0]) / (2 * h) + pd.inertia[:, None] * u
         f = pd.free
         assert np.abs(fd - hu)[f].max() < tol * np.abs(fd[f]).max()
-
-
-def test_pd_method_option():
-    from core.drape.options import DrapeError, DrapeOptions
-
-    assert DrapeOptions.coerce({"solver": "pd"}).pd_method == "anderson"
-    assert DrapeOptions.coerce({"solver": "pd", "pd_method": "newton"}).pd_method == "newton"
-    with pytest.raises(DrapeError, match="pd_method"):
-        DrapeOptions.coerce({"solver": "pd", "pd_method": "cg"})
 
 
 def test_cli_solver_flag():

@@ -44,13 +44,6 @@ class DrapeOptions:
         Gauss-Seidel sweeps over the vertices; newton, pd: the most iterations
         (fewer once ``tolerance`` is met). None: the
         solver's default (:data:`ITERATIONS`).
-    pd_method : str
-        ``solver="pd"``: how a substep's implicit step is minimised
-        (:data:`PD_METHODS`): ``"anderson"`` (Anderson-accelerated local-global
-        iterations, the default), ``"lbfgs"`` (L-BFGS with the PD matrix as its
-        initial inverse Hessian) or ``"newton"`` (Gauss-Newton steps solved by
-        conjugate gradients with the PD matrix as preconditioner; ``iterations``
-        then counts back-substitutions).
     tolerance : float, fraction of a particle's weight
         ``solver="newton"`` or ``"pd"``: a substep's iterations stop once the residual force on
         every free particle (the gradient of the step's potential) is under this
@@ -132,7 +125,6 @@ class DrapeOptions:
     substeps: Optional[int] = None  # per frame; None: SUBSTEPS[solver]
     iterations: Optional[int] = None  # per substep; None: ITERATIONS[solver]
     tolerance: float = 0.01  # of a particle's weight
-    pd_method: str = "anderson"  # solver="pd": PD_METHODS
     vbd_damping: float = 3.0e-5  # s
     max_frames: int = 120  # frames
     min_frames: int = 10  # frames
@@ -188,16 +180,12 @@ class DrapeOptions:
             raise DrapeError(f"drape option device = {self.device!r}: expected 'cpu' or 'cuda'")
         if self.solver not in SOLVERS:
             raise DrapeError(f"drape option solver = {self.solver!r}: expected one of {', '.join(SOLVERS)}")
-        if self.pd_method not in PD_METHODS:
-            raise DrapeError(f"drape option pd_method = {self.pd_method!r}: expected one of {', '.join(PD_METHODS)}")
         if not isinstance(self.self_collision, (bool, np.bool_)):
             raise DrapeError(f"drape option self_collision = {self.self_collision!r}: expected true or false")
 
 
 #: the drape solvers (:attr:`DrapeOptions.solver`)
 SOLVERS = ("xpbd", "vbd", "newton", "pd")
-#: how ``solver="pd"`` minimises a substep's implicit step (:attr:`DrapeOptions.pd_method`)
-PD_METHODS = ("anderson", "lbfgs", "newton")
 #: each solver's iterations per substep when none are given
 ITERATIONS = {"xpbd": 1, "vbd": 2, "newton": 30, "pd": 10}
 #: each solver's substeps per frame when none are given: projective dynamics is an implicit step

@@ -241,8 +241,12 @@ class ProjectiveStep:
     elements : the :class:`core.drape.newton.NewtonStep` of the same cloth, whose element operators
         (grain images, edges, hinges, rest shapes) this step projects.
     matrix : (P, P) sparse, ``M / dt^2 + sum_c w_c A_c^T A_c`` (the same for x, y and z).
-    method : ``"anderson"`` (default: Anderson-accelerated local-global iterations) or ``"lbfgs"``
-        (L-BFGS with the factored matrix as its initial inverse Hessian).
+    method : ``"anderson"`` (default: Anderson-accelerated local-global iterations), ``"lbfgs"``
+        (L-BFGS with the factored matrix as its initial inverse Hessian) or ``"newton"`` (Gauss-Newton
+        steps by conjugate gradients preconditioned with the factored matrix, :meth:`_newton`; an
+        experiment: 4x fewer back-substitutions than Anderson on a clamped creased strip, but on the
+        Cusick disc it does not settle, and at 5 mm edges the specimen falls off the support, so the
+        drape's options do not offer it; benchmarks/results/drape_pd.md).
     """
 
     def __init__(

@@ -299,7 +299,6 @@ class DrapeSolver:
             dt = 1.0 / (self.options.fps * self.options.substeps)
             self._implicit = ProjectiveStep(cloth, self.material, dt, mass, *_start(cloth))
             self._implicit.friction = self.friction
-            self._implicit.method = self.options.pd_method
         else:
             self._newton = self._implicit = self._newton_step(cloth, mass)
         self._weight = mass * max(float(self.options.gravity), 1e-3)  # N (a floor without gravity)
