@@ -301,6 +301,19 @@ def test_newton_cotton_cusick_meets_the_published_range_at_any_iteration_count()
     assert abs(runs[0]["dc_pct"] - runs[1]["dc_pct"]) <= 3.0
 
 
+@pytest.mark.slow
+def test_newton_wool_meets_its_range_and_silk_settles():
+    # wool (worsted suiting, bending 0.17 gf cm^2/cm) on the 10 mm disc: inside the 55-65 % issue 35 gives,
+    # with 5-10 nodes (60.7 %, 10 nodes). Silk, whose solves all stopped at the iteration limit while its
+    # rim kept moving 4-10 mm a frame, settles once each solve starts no higher than the substep's start
+    # (49.9 %, above its 20-40 %: the mesh sets it, docs/drape.md). Minutes: --full only
+    opts = {"solver": "newton", "substeps": 3}
+    wool = T.cusick("wool", edge=0.01, options=opts, max_frames=200)
+    assert wool["settled"] and 55.0 <= wool["dc_pct"] <= 65.0 and 5 <= wool["nodes"] <= 10
+    silk = T.cusick("silk", edge=0.01, options=opts, max_frames=200)
+    assert silk["settled"] and silk["frames"] < 200
+
+
 def test_a_stiff_hinge_turns_at_most_its_reach_a_pass():
     # two 1 mm triangles of cotton, folded 1.5 rad off their flat rest: against their tiny masses the
     # hinge is as good as rigid, and one full Gauss-Seidel step turned it all the way at once (the
