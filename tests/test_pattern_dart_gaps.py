@@ -9,15 +9,19 @@ from core.pattern.optimizer.factor import SymmetricFactor
 from core.pattern.optimizer.seams import SeamSide
 
 
-def _legs(n_pairs=5, length=0.1):
-    """Two legs of ``n_pairs`` + 1 vertices each (apex shared), ids 0..n_pairs-1 (a), n_pairs.. (b), apex last."""
+def _sides(n_pairs=5, length=0.1):
+    """The two sides of a dart of ``n_pairs`` + 1 vertices each (apex shared), ids 0..n_pairs-1 (a), n_pairs..
+    (b), apex last: (sides, pairs, darts) for dart_legs."""
     k = n_pairs
-    apex = 2 * k
-    a = np.r_[np.arange(k), apex]
-    b = np.r_[np.arange(k, 2 * k), apex]
+    a = np.r_[np.arange(k), 2 * k]
+    b = np.r_[np.arange(k, 2 * k), 2 * k]
     rest = np.full(k, length / k)
-    sides = [SeamSide(0, a, rest, np.zeros(k, int)), SeamSide(0, b, rest, np.zeros(k, int))]
-    return D.dart_legs(sides, [(0, 1)], [0]), apex + 1
+    return [SeamSide(0, a, rest, np.zeros(k, int)), SeamSide(0, b, rest, np.zeros(k, int))], [(0, 1)], [0]
+
+
+def _legs(n_pairs=5, length=0.1):
+    """The legs of :func:`_sides` and the number of unknowns."""
+    return D.dart_legs(*_sides(n_pairs, length)), 2 * n_pairs + 1
 
 
 def _positions(k, width):
@@ -158,3 +162,26 @@ def test_a_solve_refactorises_its_own_corrected_matrix_in_place():
     # a second solve (its own holder) reuses the pattern's analysis: one factorisation of its own
     gaps.correct(soft.with_values(soft.matrix.data * 2.0), U, holder={})
     assert gaps.factorised == 3
+
+
+def test_legs_not_sewn_equal_are_named():
+    """unequal_legs: the darts whose legs differ by more than 0.1 mm (issue 30), named by piece and dart, the
+    largest first; a dart within the tolerance is not named."""
+    legs, n = _legs()
+    assert D.LEGS_REFUSED == pytest.approx(1e-4)
+    U = _positions(5, np.full(5, 0.02))
+    assert D.unequal_legs(legs, U) == []
+    named = D.dart_legs(*_sides(), names=[("skirt.back", "skirt.back_dart")])
+    assert named.names == (("skirt.back", "skirt.back_dart"),)
+    for shift, over in ((0.00009, False), (0.0003, True)):
+        V = U.copy()
+        V[0, 1] -= shift  # leg a's first vertex pulled away from the apex along the dart: leg a longer
+        found = D.unequal_legs(named, V)
+        assert bool(found) is over, found
+        if over:
+            (panel, dart, d), *_ = found
+            assert (panel, dart) == ("skirt.back", "skirt.back_dart") and d == pytest.approx(shift, rel=1e-3)
+    # without names a dart is numbered
+    V = U.copy()
+    V[0, 1] -= 0.001
+    assert D.unequal_legs(legs, V)[0][:2] == ("", "dart 1")

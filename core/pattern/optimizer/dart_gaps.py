@@ -64,19 +64,24 @@ class DartLegs:
     min_gap: np.ndarray
     #: m, the mean length of the legs' edges in the initial flattening
     edge: float = 0.0
+    #: ``(panel, dart)`` of each dart kept, in the order of their pairs (what a refusal names)
+    names: tuple = ()
 
 
-def dart_legs(sides: Sequence, pairs: Sequence, darts: Sequence[int]) -> DartLegs:
+def dart_legs(sides: Sequence, pairs: Sequence, darts: Sequence[int], names: Optional[Sequence] = None) -> DartLegs:
     """The legs of the seams ``darts`` (indices into ``pairs``) from their ``sides``
-    (:class:`core.pattern.optimizer.seams.SeamSide`: ``gids`` mouth to apex, ``rest_lengths``)."""
+    (:class:`core.pattern.optimizer.seams.SeamSide`: ``gids`` mouth to apex, ``rest_lengths``);
+    ``names``: ``(panel, dart)`` of each of ``darts``."""
     cols = [[] for _ in range(7)]
     rest = []
-    for si in darts:
+    kept = []
+    for n, si in enumerate(darts):
         A, B = sides[pairs[si][0]], sides[pairs[si][1]]
         ga, gb = np.asarray(A.gids, int), np.asarray(B.gids, int)
         k = len(ga) - 1  # pairs before the apex
         if k < 1 or len(gb) != len(ga):
             continue
+        kept.append(("", f"dart {n + 1}") if names is None else tuple(names[n]))
         # distance to the apex along the legs (their mean), at each pair
         la = np.r_[np.cumsum(np.asarray(A.rest_lengths)[::-1])[::-1], 0.0]
         lb = np.r_[np.cumsum(np.asarray(B.rest_lengths)[::-1])[::-1], 0.0]
@@ -88,7 +93,7 @@ def dart_legs(sides: Sequence, pairs: Sequence, darts: Sequence[int]) -> DartLeg
             col.append(v)
     a, b, pa, pb, na, nb, g = (np.concatenate(c) if c else np.zeros(0) for c in cols)
     edge = float(np.mean(np.concatenate(rest))) if rest else 0.0
-    return DartLegs(*(x.astype(int) for x in (a, b, pa, pb, na, nb)), g.astype(float), edge)
+    return DartLegs(*(x.astype(int) for x in (a, b, pa, pb, na, nb)), g.astype(float), edge, tuple(kept))
 
 
 def _legs_matrix(legs: DartLegs, weight: float, n: int) -> sp.csr_matrix:
@@ -257,6 +262,9 @@ class GapCorrection:
 #: m, the most a dart's two legs may differ in length at the end of a solve: a larger difference is
 #: projected away by :func:`equal_legs` (issue 30: legs sewn equal within 0.1 mm)
 LEG_TOLERANCE = 5e-5
+#: m, the most a dart's two legs may differ in a pattern that is written (issue 30: legs sewn equal within
+#: 0.1 mm): a solve that ends over it after :func:`equal_legs` had its go is refused (:func:`unequal_legs`)
+LEGS_REFUSED = 1e-4
 #: m, what :func:`equal_legs` aims to leave of each difference
 LEG_TARGET = 5e-6
 #: the projection's Newton steps at most (the legs' lengths are nearly linear in so small a move: 2 do)
@@ -318,3 +326,14 @@ def equal_legs(legs: DartLegs, factor, U: np.ndarray) -> np.ndarray:
         if np.max(np.abs(c)) <= LEG_TARGET:
             break
     return out
+
+
+def unequal_legs(legs: DartLegs, U: np.ndarray, tolerance: float = LEGS_REFUSED) -> list:
+    """``[(panel, dart, difference m)]``: the darts whose two legs differ in length by more than ``tolerance``
+    in ``U`` (n, 2), the largest difference first (empty: every dart's legs sewn equal)."""
+    if not len(legs.a):
+        return []
+    c = np.abs(leg_differences(legs, U))
+    names = legs.names or tuple(("", f"dart {k + 1}") for k in range(len(c)))
+    over = [(names[k][0], names[k][1], float(c[k])) for k in np.flatnonzero(~(c <= tolerance))]
+    return sorted(over, key=lambda x: -x[2] if np.isfinite(x[2]) else -np.inf)

@@ -21,8 +21,12 @@ least :data:`FOLD_FLOOR` in every direction: ``K' = F' K_ref`` with ``F = K K_re
 its singular values floored. Nothing else changes: the measured figures stay those of the skin
 (:mod:`core.metrics`, from the target body's positions), and a transfer with no triangle squeezed
 that far (every template's XS..XL but the blouses' women:L and XL, the reference solve, every
-adaptation) is the same bits. The women:M reference transferred to women:3XL and 4XL still diverges
-(docs/patterns.md).
+adaptation) is the same bits.
+
+A transfer that would still be refused (diverged, a dart's legs crossed or not sewn equal: the women:M
+reference at ease 1.3 transferred to women:3XL and 4XL) is solved again with the floor raised to each of
+:data:`RETRY_FLOORS` in turn (:meth:`.solver.PatternSolver.solve`); a floor of 0.5 for every transfer would
+move women:XS and L, which solve at 0.3 (docs/patterns.md).
 """
 
 from __future__ import annotations
@@ -35,6 +39,13 @@ import numpy as np
 #: at 0.28, held by the collapse guard at its top gain); at 0.3 every XL case solves (docs/patterns.md)
 #: and women:L has 2 triangles floored (0.293)
 FOLD_FLOOR = 0.3
+#: the floors a transfer's solve is tried again with, in turn, while it would be refused (diverged, or a
+#: dart's legs crossed or not sewn equal) and the floor changes a target (:meth:`.solver.PatternSolver.solve`):
+#: a solve that is not refused is never tried again, so every size that solves at :data:`FOLD_FLOOR` keeps its bits.
+#: The four-dart blouse's women:M reference (fitted) at ease 1.3 transferred to women:3XL diverged at 0.3, 0.5 and
+#: 0.6 and solves at 0.7; to 4XL it diverged at 0.3, ended with its legs 10.5 mm apart at 0.5 and solves at 0.6
+#: and 0.7 (2026-12-07)
+RETRY_FLOORS = (0.5, 0.7)
 
 
 def smaller_stretch(F: np.ndarray) -> np.ndarray:

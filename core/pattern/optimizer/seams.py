@@ -199,7 +199,7 @@ def seam_layout(cut, panels, uv0: np.ndarray, n: int, mean_edge: float, total_ar
         mouth_b=np.array([sides[pairs[si][1]].gids[0] for si in darts_set], int),
         mouth_apex=np.array([sides[pairs[si][0]].gids[-1] for si in darts_set], int),
         mouth_width=np.array([float(w) for w in set_w], float),
-        legs=dart_legs(sides, pairs, darts),
+        legs=dart_legs(sides, pairs, darts, [(cut.seams[si].panel_a, cut.seams[si].name) for si in darts]),
     )
 
 

@@ -50,10 +50,10 @@ from ..accel.products import GradientProducts
 from ..build import SolveResult, solve_result
 from ..config import SolverConfig, check_tolerance
 from ..validate import body_positions, validate_cut
-from .dart_gaps import GapCorrection, dart_legs, equal_legs
+from .dart_gaps import LEGS_REFUSED, GapCorrection, dart_legs, equal_legs, unequal_legs
 from .factor import SymmetricFactor
 from .feedback import feedback_gains, move_corrections
-from .folds import bridge_folds
+from .folds import RETRY_FLOORS, bridge_folds
 from .guard import (
     COLLAPSE_ROUNDS,
     DIVERGED_SCALE,
@@ -390,7 +390,10 @@ class PatternSolver:
         carried through the re-alignment's rotation, so only two sparse
         products per iteration touch the triangles. The configuration's
         ``iterations`` (adaptation: at least ``adaptation.min_iterations``) of
-        :meth:`iterate` from :meth:`begin`.
+        :meth:`iterate` from :meth:`begin`. A transfer (``positions`` given, no ``poses``) that
+        :meth:`would_refuse` is solved again from the same start with the folds of its targets bridged at
+        each of :data:`.folds.RETRY_FLOORS` in turn, while it would be refused and the floor changes a target:
+        the last try is the result (refused by :meth:`result` if it still is).
 
         Parameters
         ----------
@@ -405,16 +408,44 @@ class PatternSolver:
         plan : the seam plan (default: :meth:`plan_seams` of these targets).
         config : this call's configuration (default: the solver's).
         """
-        state = self.begin(K, c_weft, c_warp, start=start, positions=positions, poses=poses, plan=plan, config=config)
+        args = dict(start=start, positions=positions, poses=poses, plan=plan, config=config)
+        state = self._run(K, c_weft, c_warp, progress, **args)
+        if positions is not None and poses is None:
+            # a transfer that would be refused: solved again with the skin's folds bridged further (.folds)
+            for floor in RETRY_FLOORS:
+                if not self.would_refuse(state):
+                    break
+                K_up = bridge_folds(K, self.ref_offsets[0], floor)
+                if K_up is K:
+                    break  # no triangle squeezed under this floor: nothing a higher one changes
+                spent = state.seconds
+                state = self._run(K_up, c_weft, c_warp, None, **args)
+                state.seconds += spent
+                state.fold_floor = floor
+        report(progress, 1.0, "pattern optimized")
+        return self.result(state)
+
+    def _run(self, K, c_weft, c_warp, progress, **args) -> "SolveState":
+        """One solve to its end by :meth:`extra_iterations` (arguments as :meth:`solve`), its guarded
+        factorisation given back (:meth:`release`)."""
+        state = self.begin(K, c_weft, c_warp, **args)
         self.iterate(state, state.planned, progress)
         while True:
             more = self.extra_iterations(state)
             if not more:
                 break
             self.iterate(state, more)
-        report(progress, 1.0, "pattern optimized")
         self.release(state)
-        return self.result(state)
+        return state
+
+    @_with_solvers_choice
+    def would_refuse(self, state: "SolveState") -> bool:
+        """Whether :meth:`result` would refuse ``state`` (diverged, or a dart's legs not sewn equal), or
+        its darts' legs cross (:meth:`.dart_gaps.GapCorrection.crossed`: the pipeline refuses the pattern)."""
+        if np.any(runaway(state)):
+            return True
+        U = self.legs_sewn_equal(state).U
+        return bool(unequal_legs(self.gaps.legs, U)) or self.gaps.crossed(U)
 
     @_with_solvers_choice
     def begin(
@@ -645,7 +676,17 @@ class PatternSolver:
                 f"panel {self.panels[k].name!r}: the solve diverged after {state.iteration} iterations "
                 f"({int(per_piece[k])} triangles stretched over {DIVERGED_SCALE:g} x their targets)"
             )
-        return solve_result(self.panels, self.legs_sewn_equal(state))
+        done = self.legs_sewn_equal(state)
+        if done.iteration >= done.started + done.planned:
+            # a finished solve (not a live preview on its way): its darts' legs sewn equal, or refused
+            over = unequal_legs(self.gaps.legs, done.U)
+            if over:
+                panel, dart, d = over[0]
+                raise PatternError(
+                    f"panel {panel!r}: the legs of dart {dart!r} differ by {1000 * d:.2f} mm after "
+                    f"{state.iteration} iterations (sewn equal within {1000 * LEGS_REFUSED:g} mm); nothing written"
+                )
+        return solve_result(self.panels, done)
 
     def legs_sewn_equal(self, state: "SolveState") -> "SolveState":
         """``state`` with its darts' legs made equal in length (:func:`.dart_gaps.equal_legs`, on the solver's

@@ -34,7 +34,8 @@ class SolveState:
     flip-guard halvings.
     step : RMS vertex move of the last iteration over the mean edge length (inf before the first);
     max_move : the largest vertex move of the last iteration over the mean edge length.
-    seconds : wall time spent in :meth:`~PatternSolver.begin` and :meth:`~PatternSolver.iterate`.
+    seconds : wall time spent in :meth:`~PatternSolver.begin` and :meth:`~PatternSolver.iterate` (a
+    transfer's retry adds the first try's).
     """
 
     K: np.ndarray
@@ -64,3 +65,6 @@ class SolveState:
     step: float = float("inf")
     max_move: float = float("inf")
     seconds: float = 0.0
+    #: a transfer solved again with its targets' folds bridged further (:data:`.folds.RETRY_FLOORS`): that
+    #: floor; None: the solve's own targets
+    fold_floor: Optional[float] = None
