@@ -98,8 +98,6 @@ def start_add_body(context, name: str, sync_=None) -> tuple:
             return verts, None, exc
 
     def apply(result):
-        from . import ease_ops
-
         verts, kps, refused = result
         ctx = bpy.context
         old = data.body_object(ctx, required=False)
@@ -111,7 +109,7 @@ def start_add_body(context, name: str, sync_=None) -> tuple:
             except state.USER_ERRORS as exc:
                 refused = exc
             else:
-                ease_ops.ease_from_design(ctx)
+                sync.ease_from_design(ctx)
         if refused is not None:
             said.append(("WARNING", f"the design does not fit the new body, load it again: {refused}"))
         said.append(("INFO", f"added body {name} ({len(obj.data.vertices)} vertices)"))

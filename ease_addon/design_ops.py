@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import bpy
 
-from . import convert, data, ease_ops, jobs, state, sync
+from . import convert, data, jobs, state, sync
 from .operators_base import EaseOperator, poll_needs
 
 
@@ -90,7 +90,7 @@ def _place_design(context, loaded) -> str:
     sync.set_design(context, design, keypoints=kps)
     sync.fill_design_props(context.scene, design)  # its gathering, tolerance, allowance and notches
     try:
-        ease_ops.ease_from_design(context)
+        sync.ease_from_design(context)
     except state.USER_ERRORS as exc:  # (as the operator it was: said, the load kept)
         context.scene.ease.design_status = f"Ease from Design: {exc}"
     if not reshaped:

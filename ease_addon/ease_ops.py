@@ -17,33 +17,7 @@ import numpy as np
 from . import convert, data, ramp, state, sync
 from .objects import select_only
 from .operators_base import EaseOperator
-
-
-def write_vertex_ease(obj, scene, ease: np.ndarray, mask=None) -> None:
-    """Write ease (V,) into the layer (only where ``mask``), re-encoding the
-    rest if the scene's ramp range changed since the layer was painted. A
-    face-corner layer stays one: the corners outside ``mask`` keep their own values."""
-    lo, hi = data.ramp_range(scene)
-    me = obj.data
-    if me.color_attributes.get(convert.EASE_LAYER) is None:
-        convert.ensure_color_layer(me, fill=ramp.ease_to_color(1.0, lo, hi))
-    else:
-        convert.adopt_ease_layer(me)
-    colors, domain = convert.read_colors(me, convert.EASE_LAYER)
-    vi = convert.element_vertices(me, domain)
-    new = ramp.color_to_ease(colors, *data.layer_range(obj, scene))
-    ease = np.broadcast_to(np.asarray(ease, dtype=np.float64), (len(me.vertices),))
-    where = np.ones(len(vi), dtype=bool) if mask is None else np.asarray(mask)[vi]
-    new[where] = ease[vi][where]
-    if new.min() < lo - 1e-9 or new.max() > hi + 1e-9:
-        raise state.AddonError(
-            f"ease {new.min():.3f} .. {new.max():.3f} is outside the ramp {lo:g} .. {hi:g}: widen the ramp range first"
-        )
-    me.color_attributes[convert.EASE_LAYER].data.foreach_set(
-        "color", ramp.ease_to_color(new, lo, hi).astype(np.float32).ravel()
-    )
-    me.update()
-    me["ease_ramp"] = [lo, hi]
+from .sync import ease_from_design, write_vertex_ease
 
 
 def panel_vertex_mask(context, panel: str) -> np.ndarray:
@@ -239,19 +213,6 @@ class EASE_OT_ease_from_design(EaseOperator):
 
     def run(self, context):
         ease_from_design(context)
-
-
-def ease_from_design(context) -> None:
-    """*Ease from Design*'s work (a load calls it in its own pass: no operator call, no view-layer
-    update inside a timer's call)."""
-    obj = data.body_object(context)
-    v = data.design_vertex_ease(context)
-    lo, hi = data.ramp_range(context.scene)
-    if v.min() < lo or v.max() > hi:
-        s = context.scene.ease
-        s.ease_min, s.ease_max = min(lo, float(v.min())), max(hi, float(v.max()))
-    write_vertex_ease(obj, context.scene, v)
-    sync.remember_layer(obj, context.scene, design=True)
 
 
 CLASSES = (

@@ -8,20 +8,20 @@ from __future__ import annotations
 
 import json
 
-from . import data, jobs, pattern_ops, state, sync
+from . import data, jobs, pattern_job, state, sync
 from .operators_base import EaseOperator
 
 
 def _fit(context, label: str, workflow, sync_=None) -> jobs.Job:
     """Run ``workflow(prep, progress)`` (a :mod:`core.workflows` pattern run) on the scene's
-    design as a job (:func:`.pattern_ops.start_pattern`; ``sync_``: :func:`.jobs.start`'s); its
+    design as a job (:func:`.pattern_job.start_pattern`; ``sync_``: :func:`.jobs.start`'s); its
     pattern replaces the pieces beside the body, its figures show in the Fit panel."""
 
     def show(ctx, prep, run):
         sync.show_pattern(ctx, run.pattern)
         ctx.scene.ease.fit_json = json.dumps(run.figures)
 
-    return pattern_ops.start_pattern(context, label, workflow, show, sync_=sync_)
+    return pattern_job.start_pattern(context, label, workflow, show, sync_=sync_)
 
 
 def start_transfer(context, sync_=None) -> jobs.Job:

@@ -3,7 +3,7 @@ reference workflow) and lay it out beside the body as flat panel objects
 (mesh coloured by achieved ease, boundary curve, grain-line arrow, piece
 name; see :func:`.build.update_pattern_objects`). The whole pattern is kept in a
 scene property (pattern.json) so it survives a save. *Optimize Pattern* (and the Fit
-stage's Transfer and Adapt, :func:`start_pattern`) are jobs (:mod:`.jobs`, as Drape):
+stage's Transfer and Adapt, :func:`.pattern_job.start_pattern`) are jobs (:mod:`.jobs`, as Drape):
 the cut and the solve run in a worker (progress in the status bar, Esc cancels) and the
 pattern is shown in one pass when it lands."""
 
@@ -11,37 +11,9 @@ from __future__ import annotations
 
 import json
 
-import bpy
-
-from . import data, jobs, state, sync
+from . import data, jobs, sync
 from .operators_base import EaseOperator
-
-PATTERN_JOB = "pattern"  # the job of Optimize Pattern, Transfer and Adapt (a newer one replaces a running one)
-
-
-def start_pattern(context, label: str, workflow, apply, edit=None, sync_=None) -> jobs.Job:
-    """Run ``workflow(prep, progress)`` (a :mod:`core.workflows` pattern run) on the scene's
-    design (``edit(design)``: the panels' settings) cut on the scene body (:func:`.data.prepared`,
-    its scene half here, its cut in the worker), as the job :data:`PATTERN_JOB`: the cut and the
-    workflow in a worker (``sync_``: :func:`.jobs.start`'s ``sync``), then ``apply(context,
-    prep, result)`` on the main thread in one pass. A result landing on a scene whose design or
-    body changed meanwhile is refused with the reason."""
-    design, spec = data.preparing(context, edit)
-    before = (context.scene.ease.design_json, json.dumps(spec, sort_keys=True))
-
-    def compute(progress):
-        progress(0.0, "cutting the design")
-        prep = data.prepare(design, spec)
-        return prep, workflow(prep, progress)
-
-    def landed(result):
-        ctx = bpy.context
-        body = data.body_object(ctx)
-        if (ctx.scene.ease.design_json, json.dumps(data.body_spec(body), sort_keys=True)) != before:
-            raise state.AddonError(f"the design or the body changed while {label} ran: run it again")
-        apply(ctx, *result)
-
-    return jobs.start_step(PATTERN_JOB, label, compute, landed, "job_status", label, sync=sync_)
+from .pattern_job import PATTERN_JOB, start_pattern  # noqa: F401 (PATTERN_JOB: the job's name for callers)
 
 
 def gather_settings(scene, design):
