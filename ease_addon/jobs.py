@@ -17,6 +17,7 @@ the call returns; a test of the threaded path sets it to False and calls :func:`
 
 from __future__ import annotations
 
+import gc
 import threading
 import time
 import traceback
@@ -98,6 +99,7 @@ def start(name: str, label: str, compute, apply, fail=None, sync=None, cancelled
         job.apply(job.result)
         return job
     _JOBS[name] = job
+    settle_heap()
     job.thread = threading.Thread(target=job.run, name=f"ease-{name}", daemon=True)
     job.thread.start()
     if not bpy.app.timers.is_registered(poll):
@@ -105,6 +107,28 @@ def start(name: str, label: str, compute, apply, fail=None, sync=None, cancelled
     _show_status()
     _watch()
     return job
+
+
+def settle_heap() -> None:
+    """Keep Python's full garbage collections short while a worker runs (issue 32).
+
+    A collection of the oldest generation walks every tracked object of the process (Blender's,
+    numpy's, scipy's, Warp's modules and the add-on's: about 180k, 60-70 ms) holding the GIL; in a
+    worker it stalls the main thread as long, a viewport tick over 50 ms with no CPU of its own.
+    Here, on the main thread as a job starts: a young collection (a few ms: what just died in a
+    cycle is freed) and :func:`gc.freeze`, which moves every object alive now out of the
+    collector's sight, so later full collections walk only what was made since (a few ms).
+    Objects frozen are still freed when their last reference goes; only a reference cycle that
+    dies after its freeze waits for :func:`thaw_heap`.
+    """
+    gc.collect(1)
+    gc.freeze()
+
+
+def thaw_heap() -> None:
+    """Give the frozen objects back to the collector (the add-on unregistered: a later full
+    collection frees a cycle that died while frozen)."""
+    gc.unfreeze()
 
 
 def running(name: str = None):
@@ -360,6 +384,7 @@ def unregister(join_s: float = 10.0) -> None:
     for job in dropped:
         if job.thread is not None:
             job.thread.join(max(0.0, end - time.perf_counter()))
+    thaw_heap()
 
 
 CLASSES = (EASE_OT_watch_jobs, EASE_OT_cancel_jobs)

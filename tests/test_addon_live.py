@@ -541,3 +541,44 @@ def test_a_new_cuts_pieces_are_written_over_several_ticks(blender):
         bpy.context.scene.ease.live = False
         blender.reset(body=True, design=DESIGN, piecewise_ease=True, pattern=True)
         bpy.context.scene.ease.live = True
+
+
+def test_a_worker_start_freezes_the_heap(blender):
+    """Issue 32: a full garbage collection walks every tracked object (60-70 ms of the GIL at
+    Blender's size), and one in a worker stalls the viewport as long. A job started in a worker
+    first frees the young garbage (a reference cycle that just died is collected, not frozen),
+    then freezes what is alive: later full collections walk only what was made since; the
+    add-on's unregister gives the frozen objects back to the collector."""
+    import gc
+    import threading
+    import weakref
+
+    jobs = blender.mod("jobs")
+
+    class Node:
+        pass
+
+    was_enabled = gc.isenabled()
+    gc.disable()  # (no automatic collection: the cycle below dies only by the job's start)
+    jobs.thaw_heap()
+    kept = [Node()]  # alive as the job starts
+    a, b = Node(), Node()
+    a.other, b.other = b, a
+    dead = weakref.ref(a)
+    del a, b
+    assert dead() is not None and any(o is kept for o in gc.get_objects())
+    release = threading.Event()
+    try:
+        with _threaded(blender):
+            jobs.start("test-freeze", "test", lambda progress: release.wait(30.0), lambda result: None)
+            assert dead() is None, "the dead cycle was frozen, not freed"
+            assert gc.get_freeze_count() > 0
+            assert not any(o is kept for o in gc.get_objects()), "an object alive at the start is still walked"
+            release.set()
+    finally:
+        release.set()
+        jobs.wait()
+        jobs.thaw_heap()
+        if was_enabled:
+            gc.enable()
+    assert gc.get_freeze_count() == 0 and any(o is kept for o in gc.get_objects())
