@@ -26,7 +26,8 @@
    Live on a size change, a pose change and a template switch; each action is
    a tick itself, then Live's ticks and the jobs' poll run until Live has
    converged and nothing runs: the longest tick (wall and main-thread CPU, and
-   what it was), ticks over 50 ms, latency, the process's CPU (all threads);
+   what it was), ticks over 50 ms, latency, the process's CPU (all threads),
+   the longest full garbage collection (any thread: it holds the GIL);
    and per stroke the main thread's CPU of its update.
 
 Goals (issues 13, 32): median <= 50 ms, p95 <= 100 ms at 21.6k triangles,
@@ -36,9 +37,11 @@ converged <= 0.5 s after the last stroke, no CPU once converged; no tick over
 
 from __future__ import annotations
 
+import gc
 import importlib.util
 import platform
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -135,12 +138,48 @@ def _run_timers(bpy, live, until: float = None, log=None, timeout: float = 300.0
     return ticks
 
 
+class _Collections:
+    """The longest garbage collection of Python's oldest generation while it is on (any thread):
+    it holds the GIL throughout, so one in a worker stalls the main thread as long, even between
+    the timers' ticks, where no tick measures it (issue 32: 60-70 ms before the jobs froze the
+    heap)."""
+
+    def __init__(self):
+        self.longest_s, self.thread, self.n, self._t0 = 0.0, "", 0, {}
+
+    def __call__(self, phase: str, info: dict) -> None:
+        if info["generation"] != 2:
+            return
+        me = threading.current_thread().name
+        if phase == "start":
+            self._t0[me] = time.perf_counter()
+            return
+        took = time.perf_counter() - self._t0.pop(me, time.perf_counter())
+        self.n += 1
+        if took > self.longest_s:
+            self.longest_s, self.thread = took, me
+
+    def __enter__(self):
+        gc.callbacks.append(self)
+        return self
+
+    def __exit__(self, *exc):
+        gc.callbacks.remove(self)
+
+
 def _event(bpy, live, action) -> dict:
     """One designer action (an operator, a toggle) and the work it starts, timed as the UI meets
     it: the action's own call is the first tick; then the timers run until Live has converged
     and no job runs. Longest tick (what the viewport waited for at most, wall and the main
     thread's CPU), latency (the action until the result is in the scene), the process's CPU over
-    it (every thread: the workers included)."""
+    it (every thread: the workers included), the longest full garbage collection (any thread)."""
+    with _Collections() as gcs:
+        out = _event_timed(bpy, live, action)
+    out["full_gc"] = {"n": gcs.n, "longest_ms": round(1000.0 * gcs.longest_s, 1), "thread": gcs.thread}
+    return out
+
+
+def _event_timed(bpy, live, action) -> dict:
     jobs = _jobs(live)
     c0, w0 = time.process_time(), time.perf_counter()
     t0, m0 = time.perf_counter(), time.thread_time()
@@ -412,11 +451,14 @@ def run(out_dir, quick: bool = False) -> dict:
         "the scene; CPU: the process's CPU time over it (every thread, the workers included), and the "
         f"main thread's share. Goal: no tick over {EVENT_TICK_GOAL_MS} ms. Depsgraph update: the view "
         "layer's update after it (Blender's own, before its next redraw: evaluating the changed objects; "
-        "no add-on tick includes it).",
+        "no add-on tick includes it). Full GCs: Python's collections of its oldest generation during "
+        "the event, in any thread, and the longest: each holds the GIL throughout, so one in a worker "
+        "stalls the main thread as long, also between the ticks, where no tick measures it (the jobs "
+        "freeze the heap as they start, so a collection walks only the objects made since).",
         "",
         "| design | event | longest tick ms (CPU ms), of | p95 tick ms | the action's own ms (CPU ms) | "
-        "ticks over 50 ms | ticks | latency s | CPU s (main) | depsgraph update ms (CPU ms) |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "ticks over 50 ms | ticks | latency s | CPU s (main) | depsgraph update ms (CPU ms) | full GCs, longest ms |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name, r in results.items():
         for ev, e in r["events"].items():
@@ -424,7 +466,8 @@ def run(out_dir, quick: bool = False) -> dict:
                 f"| {name} | {ev} | {e['longest_tick_ms']} ({e['longest_tick_cpu_ms']}), {e['longest_tick_is']} | "
                 f"{e['p95_tick_ms']} | {e['action_ms']} ({e['action_cpu_ms']}) | {e['ticks_over_50ms']} | "
                 f"{e['ticks']} | {e['latency_s']} | {e['cpu_s']} ({e['main_cpu_s']}) | "
-                f"{e['depsgraph_update_ms']} ({e['depsgraph_update_cpu_ms']}) |"
+                f"{e['depsgraph_update_ms']} ({e['depsgraph_update_cpu_ms']}) | "
+                f"{e['full_gc']['n']}, {e['full_gc']['longest_ms']} |"
             )
     lines += [
         "",
