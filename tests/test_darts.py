@@ -552,3 +552,49 @@ def test_the_per_size_table_is_written_into_the_bench_results(tmp_path):
     data = json.loads((tmp_path / "pattern.json").read_text())
     assert data["four_darts_sizes"]["XS @ 1.1"]["fitted"]["bust region %"] == 9.87
     assert data["four_darts_sizes_note"] == "second note"
+
+
+def _tip_legs(last_a, last_b):
+    """A dart's legs (a: 0-3, b: 4-7, apex 8) as skirt_darted's back dart read on women:XL before the tip's
+    axis (mm, the apex at 0): the last pair ``last_a`` / ``last_b`` 0.6 mm from the apex."""
+    from core.pattern.optimizer.dart_gaps import MIN_OPENING, DartLegs
+
+    a = [(0.58, 28.79), (-0.56, 17.47), (-0.73, 5.97), last_a]
+    b = [(-4.72, 28.47), (-2.27, 17.37), (-0.83, 5.92), last_b]
+    U = 1e-3 * np.array([*a, *b, (0.0, 0.0)])
+    i = np.arange(4)
+    prev, nxt = np.maximum(i - 1, 0), np.r_[i[1:], 8]
+    dist = np.linalg.norm(U[:4], axis=1)
+    legs = DartLegs(i, i + 4, prev, prev + 4, nxt, np.r_[nxt[:3] + 4, 8], MIN_OPENING * dist, 0.005)
+    return legs, U
+
+
+def test_the_pair_next_to_the_apex_reads_the_tip_wedge():
+    """The pair next to the apex is measured across the line from it to the apex: skirt_darted's back darts
+    transferred to women:XL ended with that pair 0.6 mm from the apex, off the axis from the pair before, the
+    legs swapped there (one leg's last edge across the other leg: refused, 1 crossing a dart). Read across the
+    axis through the pair before, its gap was positive, so the solver neither opened it nor saw a crossing
+    (the edges ending at the apex were left out of its check); in a wedge that opens to the apex it is apart."""
+    from core.pattern.optimizer.dart_gaps import GapCorrection, leg_gaps
+
+    legs, U = _tip_legs((0.38, 0.60), (0.38, 0.57))
+    assert leg_gaps(legs, U)[-1] < 0 and leg_gaps(legs, U)[:3].min() > 0
+    assert GapCorrection(legs).crossed(U)
+    legs, U = _tip_legs((0.05, 0.60), (-0.05, 0.60))
+    assert leg_gaps(legs, U).min() > 0 and not GapCorrection(legs).crossed(U)
+
+
+def test_skirt_darted_transfers_to_xl_with_no_crossing(anny):
+    """skirt_darted (women:M) transferred to XL: refused before (the legs of each back dart crossed once near
+    the seat point, test above); now cut with its legs apart up to the apex."""
+    from core import workflows as wf
+    from core.metrics.injectivity import crossings, dart_gaps
+
+    prep = wf.prepare(template_path("skirt_darted"), body=anny)
+    solver = wf.make_solver(prep)
+    ref = wf.reference(prep, solver=solver)
+    run = wf.transfer(prep, "XL", solver=solver, start=ref.pattern)
+    assert all(c["count"] == 0 for c in crossings(run.pattern).values())
+    gaps = dart_gaps(run.pattern)
+    assert sorted(gaps) == ["skirt.back_dart_left", "skirt.back_dart_right"]
+    assert all(g["crossings"] == 0 and g["min_gap_mm"] > 0 for g in gaps.values())
