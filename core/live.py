@@ -316,6 +316,23 @@ class LiveSession:
         return pat
 
 
+#: Rows of a list encoded per ``json`` call: its C encoder holds the GIL for the whole call, so a
+#: worker encoding a large panel's field in one call stalls the main thread as long (issue 32:
+#: up to ~40 ms on the 45.7k-triangle teaser); between calls the threads switch.
+ENCODE_ROWS = 1024
+
+
+def _dumps_rows(value) -> str:
+    """``dumps_json(value, indent=None)``, byte for byte, a list encoded :data:`ENCODE_ROWS` rows
+    per call."""
+    from .fileio import dumps_json
+
+    if not isinstance(value, list) or len(value) <= ENCODE_ROWS:
+        return dumps_json(value, indent=None)
+    chunks = (dumps_json(value[i : i + ENCODE_ROWS], indent=None)[1:-1] for i in range(0, len(value), ENCODE_ROWS))
+    return "[" + ", ".join(chunks) + "]"
+
+
 class PatternText:
     """The compact ``pattern.json`` text of a session's patterns, made a piece at a time.
 
@@ -350,7 +367,6 @@ class PatternText:
         return out
 
     def _panel(self, pattern, panel) -> str:
-        from .fileio import dumps_json
         from .pattern.io import pattern_to_json
 
         arrays = {
@@ -375,7 +391,7 @@ class PatternText:
         for key, value in d.items():
             text = kept.get(key)
             if text is None:
-                text = dumps_json(value, indent=None)
+                text = _dumps_rows(value)
                 if key in arrays:
                     self._fields[(panel.name, key)] = (np.array(arrays[key]), text)
             parts.append(f"{json.dumps(key)}: {text}")
@@ -383,12 +399,11 @@ class PatternText:
 
     @staticmethod
     def _join(pattern, pieces: List[str]) -> str:
-        from .fileio import dumps_json
         from .pattern.io import pattern_to_json
 
         top = pattern_to_json(dataclasses.replace(pattern, panels=[]))
         parts = [
-            f"{json.dumps(k)}: " + ("[" + ", ".join(pieces) + "]" if k == "panels" else dumps_json(v, indent=None))
+            f"{json.dumps(k)}: " + ("[" + ", ".join(pieces) + "]" if k == "panels" else _dumps_rows(v))
             for k, v in top.items()
         ]
         return "{" + ", ".join(parts) + "}"

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import core.live as live_mod
 from core import workflows as wf
 from core.design.templates import template_dir
 from core.errors import PatternError
@@ -169,6 +170,28 @@ def test_pattern_text_is_the_stored_text_a_piece_at_a_time(prep, session):
     assert out == dumps_json(pattern_to_json(second), indent=None)
     assert text._fields[(name, "faces")][1] is faces_text  # the cut's text kept
     assert text._fields[(name, "uv")][1] != uv_text  # the moved positions re-encoded
+    assert max(len(p.faces) for p in second.panels) > live_mod.ENCODE_ROWS  # (the rows' path taken)
+
+
+def test_pattern_text_encodes_a_few_rows_per_call(monkeypatch):
+    """Issue 32: json's C encoder holds the GIL for a whole call, so a worker encoding a large
+    field in one call stalls the viewport: a list is encoded ENCODE_ROWS rows per call, and the
+    text is the one-shot text, byte for byte."""
+    import core.fileio
+
+    real, rows = core.fileio.dumps_json, []
+
+    def counting(obj, indent=1):
+        rows.append(len(obj) if isinstance(obj, list) else 0)
+        return real(obj, indent=indent)
+
+    monkeypatch.setattr(core.fileio, "dumps_json", counting)
+    monkeypatch.setattr(live_mod, "ENCODE_ROWS", 3)
+    rng = np.random.default_rng(5)
+    for value in ([], [1.5], [[1, 2, 3]] * 3, rng.normal(size=(10, 3)).tolist(), [{"a": [0.1, 2]}] * 7, "text", 4):
+        rows.clear()
+        assert live_mod._dumps_rows(value) == real(value, indent=None)
+        assert max(rows) <= 3 and len(rows) == max(1, -(-len(value) // 3) if isinstance(value, list) else 1)
 
 
 def test_topology_key(prep):
