@@ -164,3 +164,62 @@ def test_vertical_walk_goes_down_the_side():
     assert end.position(V, F)[2] == pytest.approx(start.position(V, F)[2] - 0.2, abs=1e-6)
     up, _ = vertical_walk(V, F, start, 0.05, down=False)
     assert up[-1, 2] > up[0, 2]
+
+
+def _in_worker(fn):
+    """``fn()`` run in a worker thread (its value, or its exception raised here)."""
+    import threading
+
+    out = {}
+
+    def run():
+        try:
+            out["value"] = fn()
+        except BaseException as exc:
+            out["error"] = exc
+
+    t = threading.Thread(target=run)
+    t.start()
+    t.join()
+    if "error" in out:
+        raise out["error"]
+    return out["value"]
+
+
+def test_edge_flip_solvers_are_kept_per_mesh_and_built_out_of_process(monkeypatch):
+    """A re-cut on the same mesh builds no solver; in a worker with OUT_OF_PROCESS the solver is
+    the helper process's (its constructor holds the GIL: issue 32), with the same paths; a
+    non-manifold mesh is refused there as here; a helper that ended is restarted."""
+    from core.design import geometry
+
+    V, F = capped_cylinder()
+    s1 = geometry.edge_flip_solver(V, F)
+    assert geometry.edge_flip_solver(V.copy(), F.copy()) is s1  # the same mesh: the same solver
+    moved = V.copy()
+    moved[0, 2] += 1e-3
+    assert geometry.edge_flip_solver(moved, F) is not s1
+    pairs = [(0, 700), (5, 1300), (1441, 1440), (700, 0)]
+    here = [s1.path(a, b) for a, b in pairs]
+    # a cached solver answers as a fresh one, whatever it answered before
+    fresh = geometry._LocalSolver(np.ascontiguousarray(V, float), np.ascontiguousarray(F, np.int64))
+    for (a, b), p in zip(pairs, here):
+        np.testing.assert_allclose(fresh.path(a, b), p, rtol=0, atol=1e-12)
+    monkeypatch.setattr(geometry, "OUT_OF_PROCESS", True)
+    try:
+        remote = _in_worker(lambda: geometry.edge_flip_solver(V, F))
+        assert isinstance(remote, geometry._RemoteSolver)
+        assert geometry._Helper.proc is not None and geometry._Helper.proc.poll() is None
+        for (a, b), p in zip(pairs, here):
+            np.testing.assert_allclose(_in_worker(lambda: remote.path(a, b)), p, rtol=0, atol=1e-12)
+        geometry.stop_helper()  # (the helper ends: the next path starts one and rebuilds there)
+        np.testing.assert_allclose(_in_worker(lambda: remote.path(*pairs[1])), here[1], rtol=0, atol=1e-12)
+        # the main thread builds its own (a pause there is its own, no other thread's)
+        assert isinstance(geometry.edge_flip_solver(V, F), geometry._LocalSolver)
+        bad = np.vstack([F, [[0, 1, 2], [0, 1, 2]]])  # an edge of four triangles
+        with pytest.raises(RuntimeError):
+            _in_worker(lambda: geometry.edge_flip_solver(V, bad))
+        with pytest.raises(RuntimeError):
+            geometry.edge_flip_solver(V, bad)
+    finally:
+        geometry.stop_helper()
+    assert geometry._Helper.proc is None

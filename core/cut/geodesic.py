@@ -4,7 +4,9 @@ Keypoints (:class:`core.body.model.SurfacePoint`, a body triangle and
 barycentric weights) are first inserted into the :class:`~.split.CutMesh` as
 vertices by splitting their triangle or edge; then one
 ``EdgeFlipGeodesicSolver`` is built on that mesh and every pair of
-consecutive keypoints is joined by the exact (intrinsic edge-flip) geodesic.
+consecutive keypoints is joined by the exact (intrinsic edge-flip) geodesic
+(:func:`core.design.geometry.edge_flip_solver`: kept per mesh, and in the
+add-on's workers built in a helper process).
 The returned 3D polyline crosses mesh edges; :meth:`CutMesh.trace` inserts it.
 """
 
@@ -14,6 +16,7 @@ from typing import Dict, List, Sequence, Tuple
 
 import numpy as np
 
+from ..design.geometry import edge_flip_solver
 from ..errors import CutError
 from .split import CutMesh
 
@@ -85,17 +88,15 @@ class GeodesicPaths:
     """
 
     def __init__(self, X: np.ndarray, F: np.ndarray):
-        import potpourri3d as pp3d
-
         # the solver wants every vertex referenced (the skirt topology leaves some unused)
         F = np.asarray(F, dtype=np.int64)
         used = np.unique(F)
         self.index = np.full(len(X), -1, dtype=np.int64)
         self.index[used] = np.arange(len(used))
         try:
-            self.solver = pp3d.EdgeFlipGeodesicSolver(
-                np.ascontiguousarray(X[used], dtype=float), np.ascontiguousarray(self.index[F])
-            )
+            # kept per mesh (a re-cut of the same keypoints on the same body builds none); in
+            # the add-on's workers, built in a helper process (its constructor holds the GIL)
+            self.solver = edge_flip_solver(np.asarray(X, dtype=float)[used], self.index[F])
         except Exception as e:  # potpourri raises RuntimeError on non-manifold input
             raise CutError(f"the body mesh cannot be cut (geodesic solver: {e})")
 
@@ -104,4 +105,7 @@ class GeodesicPaths:
         a, b = int(self.index[i]), int(self.index[j])
         if a < 0 or b < 0:
             raise CutError(f"internal: keypoint vertex {i if a < 0 else j} is not on the surface")
-        return np.asarray(self.solver.find_geodesic_path(a, b), dtype=float)
+        try:
+            return self.solver.path(a, b)
+        except RuntimeError as e:  # the helper process ended (out of process)
+            raise CutError(f"the geodesic path could not be found: {e}")

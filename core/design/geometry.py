@@ -9,6 +9,7 @@ template ``faces`` (F, 3).
 from __future__ import annotations
 
 import hashlib
+import threading
 from collections import OrderedDict
 from typing import List, Tuple
 
@@ -49,6 +50,180 @@ class SurfaceLocator:
         return [SurfacePoint(int(t), tuple(float(x) for x in b)) for t, b in zip(tri, bary)]
 
 
+# ---------------------------------------------------------------- edge-flip solvers
+
+#: Build the edge-flip solvers of worker threads in a helper process (the add-on sets it: its
+#: cuts run in workers while Blender's main thread draws). potpourri3d's solver constructor holds
+#: the GIL throughout (45 ms on the Anny body, 75-120 ms on a loaded machine): in a worker it
+#: stalls the main thread as long (issue 32). The helper builds and keeps the solvers; a path is
+#: one request to it (the worker waits on a pipe, GIL released). The same library on the same
+#: arrays: the same paths. On the main thread, or with this False, solvers are built here.
+OUT_OF_PROCESS = False
+SOLVERS_KEPT = 4  # solvers kept per process (here and in the helper), the latest used
+
+_SOLVERS: "OrderedDict[bytes, _LocalSolver]" = OrderedDict()
+_SOLVERS_LOCK = threading.Lock()
+
+
+def mesh_key(vertices: np.ndarray, faces: np.ndarray) -> bytes:
+    """A digest of a mesh's vertex and face arrays (float64, int64): its solvers' cache key."""
+    h = hashlib.blake2b(np.ascontiguousarray(vertices, dtype=np.float64).tobytes(), digest_size=16)
+    h.update(np.ascontiguousarray(faces, dtype=np.int64).tobytes())
+    return h.digest()
+
+
+class _LocalSolver:
+    """An ``EdgeFlipGeodesicSolver`` of this process (one path at a time: it is not thread-safe)."""
+
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray):
+        import potpourri3d as pp3d
+
+        self._solver = pp3d.EdgeFlipGeodesicSolver(vertices, faces)
+        self._lock = threading.Lock()
+
+    def path(self, a: int, b: int) -> np.ndarray:
+        with self._lock:
+            return np.asarray(self._solver.find_geodesic_path(int(a), int(b)), dtype=np.float64)
+
+
+# the helper process: reads its sys.path, then requests (op, key, arg), each answered by
+# (status, value); what it prints goes to stderr (stdout is the answers' pipe)
+_HELPER = """
+import os, pickle, sys
+from collections import OrderedDict
+inp, out = sys.stdin.buffer, os.fdopen(os.dup(1), "wb")
+os.dup2(2, 1)
+sys.path[:0] = pickle.load(inp)
+kept = pickle.load(inp)
+import numpy as np
+import potpourri3d as pp3d
+solvers = OrderedDict()
+while True:
+    try:
+        op, key, arg = pickle.load(inp)
+    except EOFError:
+        break
+    try:
+        if op == "build":
+            if key not in solvers:
+                solvers[key] = pp3d.EdgeFlipGeodesicSolver(*arg)
+            solvers.move_to_end(key)
+            while len(solvers) > kept:
+                solvers.popitem(last=False)
+            reply = ("ok", None)
+        elif key not in solvers:
+            reply = ("missing", None)
+        else:
+            reply = ("ok", np.asarray(solvers[key].find_geodesic_path(*arg), dtype=np.float64))
+    except Exception as e:
+        reply = ("error", f"{type(e).__name__}: {e}")
+    pickle.dump(reply, out, protocol=pickle.HIGHEST_PROTOCOL)
+    out.flush()
+"""
+
+
+class _Helper:
+    """The helper process of :data:`OUT_OF_PROCESS` (one per process, started at its first
+    request, one request at a time). It ends with this process (its stdin closes) or
+    :func:`stop_helper`."""
+
+    lock = threading.Lock()
+    proc = None
+
+    @classmethod
+    def request(cls, op: str, key: bytes, arg):
+        import pickle
+
+        with cls.lock:
+            if cls.proc is None or cls.proc.poll() is not None:
+                cls._start()
+            proc = cls.proc
+            try:
+                pickle.dump((op, key, arg), proc.stdin, protocol=pickle.HIGHEST_PROTOCOL)
+                proc.stdin.flush()
+                status, value = pickle.load(proc.stdout)
+            except (OSError, EOFError, pickle.UnpicklingError):
+                code = proc.poll()
+                cls._stop()
+                raise RuntimeError(f"the geodesic solver's helper process ended (exit code {code})")
+        if status == "error":
+            raise RuntimeError(value)
+        return status, value
+
+    @classmethod
+    def _start(cls) -> None:
+        import pickle
+        import subprocess
+        import sys
+
+        cls._stop()
+        cls.proc = subprocess.Popen(
+            [sys.executable, "-I", "-c", _HELPER], stdin=subprocess.PIPE, stdout=subprocess.PIPE
+        )
+        pickle.dump([p for p in sys.path if p], cls.proc.stdin)
+        pickle.dump(SOLVERS_KEPT, cls.proc.stdin)
+
+    @classmethod
+    def _stop(cls) -> None:
+        proc, cls.proc = cls.proc, None
+        if proc is not None:
+            try:
+                proc.stdin.close()
+                proc.wait(5.0)
+            except Exception:
+                proc.kill()
+                proc.wait()
+            proc.stdout.close()
+
+
+def stop_helper() -> None:
+    """End the helper process of :data:`OUT_OF_PROCESS` (a later request starts another)."""
+    with _Helper.lock:
+        _Helper._stop()
+
+
+class _RemoteSolver:
+    """An edge-flip solver built and kept in the helper process (:data:`OUT_OF_PROCESS`)."""
+
+    def __init__(self, key: bytes, vertices: np.ndarray, faces: np.ndarray):
+        self.key, self._mesh = key, (vertices, faces)
+        self._build()
+
+    def _build(self) -> None:
+        _Helper.request("build", self.key, self._mesh)
+
+    def path(self, a: int, b: int) -> np.ndarray:
+        status, value = _Helper.request("path", self.key, (int(a), int(b)))
+        if status == "missing":  # the helper restarted, or dropped it for newer meshes
+            self._build()
+            status, value = _Helper.request("path", self.key, (int(a), int(b)))
+        return value
+
+
+def edge_flip_solver(vertices: np.ndarray, faces: np.ndarray):
+    """An edge-flip geodesic solver of the mesh (``vertices`` (V, 3), ``faces`` (F, 3), every
+    vertex used), with ``path(a, b)``: the geodesic polyline (k, 3) between vertices ``a`` and
+    ``b``. Kept per mesh (:func:`mesh_key`): a re-cut on the same mesh builds none. In a worker
+    thread with :data:`OUT_OF_PROCESS`, built in the helper process. Raises RuntimeError when
+    the mesh is not manifold."""
+    V = np.ascontiguousarray(vertices, dtype=np.float64)
+    F = np.ascontiguousarray(faces, dtype=np.int64)
+    key = mesh_key(V, F)
+    if OUT_OF_PROCESS and threading.current_thread() is not threading.main_thread():
+        return _RemoteSolver(key, V, F)
+    with _SOLVERS_LOCK:
+        solver = _SOLVERS.get(key)
+        if solver is not None:
+            _SOLVERS.move_to_end(key)
+            return solver
+    solver = _LocalSolver(V, F)
+    with _SOLVERS_LOCK:
+        solver = _SOLVERS.setdefault(key, solver)
+        while len(_SOLVERS) > SOLVERS_KEPT:
+            _SOLVERS.popitem(last=False)
+    return solver
+
+
 class Geodesics:
     """Geodesic paths between surface points (potpourri3d edge flips).
 
@@ -64,10 +239,9 @@ class Geodesics:
 
     @property
     def solver(self):
+        """The mesh's :func:`edge_flip_solver` (built at the first path)."""
         if self._solver is None:
-            import potpourri3d as pp3d
-
-            self._solver = pp3d.EdgeFlipGeodesicSolver(self.vertices, self.faces)
+            self._solver = edge_flip_solver(self.vertices, self.faces)
         return self._solver
 
     def nearest_vertex(self, sp: SurfacePoint) -> int:
@@ -82,7 +256,7 @@ class Geodesics:
         va, vb = self.nearest_vertex(a), self.nearest_vertex(b)
         if va == vb:
             return np.stack([pa, pb])
-        mid = np.asarray(self.solver.find_geodesic_path(va, vb), dtype=np.float64)
+        mid = self.solver.path(va, vb)
         # Join the exact ends to the path where it passes nearest, not at the snapped
         # vertex: that would add a detour of up to an edge length at each end.
         mid = _join_start(pa, mid)
