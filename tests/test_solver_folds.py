@@ -155,7 +155,7 @@ def test_the_four_dart_blouse_transferred_to_the_heaviest_sizes_is_cuttable(case
 
 class _Tries:
     """A stand-in for the solver in :meth:`PatternSolver.solve`'s retry: each run records its targets, and
-    ``refusals`` says in turn whether :meth:`would_refuse` refuses it."""
+    ``refusals`` says in turn whether :meth:`refusal` refuses it."""
 
     def __init__(self, K_ref, refusals):
         self.ref_offsets = (K_ref,)
@@ -168,10 +168,11 @@ class _Tries:
         self.runs.append(K)
         return types.SimpleNamespace(seconds=1.0, fold_floor=None)
 
-    def would_refuse(self, state):
-        return self.refusals.pop(0)
+    def refusal(self, state):
+        return self.refusals.pop(0), state
 
-    def result(self, state):
+    def result(self, state, sewn=None):
+        assert sewn is None or sewn is state  # the sewn state weighed last, of this very state
         return state
 
 

@@ -110,10 +110,20 @@ class PatternSolver:
     body_vertices : (V, 3) the reference body instance the cut was made on, metres.
     config : SolverConfig, the default of every call (:meth:`SolverConfig.improved`).
     progress : optional progress callback of the flattening.
+    flatten_on : (N, 3) the cut's positions on another body to flatten the pieces (and so factorise the
+        system) on, or None for the reference body's: a transfer's solver made on its target body
+        (:attr:`~core.pattern.config.Convergence.transfer_solver`). The reference body stays the one the
+        cut's shape, the design's targets and the folds are measured from (``ref_positions``,
+        ``ref_offsets``, here in the target's frames).
     """
 
     def __init__(
-        self, cut, body_vertices: np.ndarray, config: Optional[SolverConfig] = None, progress: Optional[Progress] = None
+        self,
+        cut,
+        body_vertices: np.ndarray,
+        config: Optional[SolverConfig] = None,
+        progress: Optional[Progress] = None,
+        flatten_on: Optional[np.ndarray] = None,
     ):
         validate_cut(cut)
         self.cut = cut
@@ -121,7 +131,13 @@ class PatternSolver:
         self.config.check()
         t0 = time.perf_counter()
         self.ref_positions = self.positions(body_vertices, "reference body")
-        self.blocks = flatten_panels(cut, self.ref_positions, progress)
+        if flatten_on is not None:
+            flatten_on = np.asarray(flatten_on, float)
+            if flatten_on.shape != self.ref_positions.shape or not np.all(np.isfinite(flatten_on)):
+                raise PatternError(
+                    f"flatten_on: expected finite positions {self.ref_positions.shape}, got shape {flatten_on.shape}"
+                )
+        self.blocks = flatten_panels(cut, self.ref_positions if flatten_on is None else flatten_on, progress)
         b = self.blocks
         self.panels = b.panels
         self.n = b.n
@@ -410,20 +426,22 @@ class PatternSolver:
         """
         args = dict(start=start, positions=positions, poses=poses, plan=plan, config=config)
         state = self._run(K, c_weft, c_warp, progress, **args)
+        sewn = None  # the state's legs sewn equal, when its refusal was weighed: the result's (the same bits)
         if positions is not None and poses is None:
             # a transfer that would be refused: solved again with the skin's folds bridged further (.folds)
             for floor in RETRY_FLOORS:
-                if not self.would_refuse(state):
+                refuse, sewn = self.refusal(state)
+                if not refuse:
                     break
                 K_up = bridge_folds(K, self.ref_offsets[0], floor)
                 if K_up is K:
                     break  # no triangle squeezed under this floor: nothing a higher one changes
                 spent = state.seconds
-                state = self._run(K_up, c_weft, c_warp, None, **args)
+                state, sewn = self._run(K_up, c_weft, c_warp, None, **args), None
                 state.seconds += spent
                 state.fold_floor = floor
         report(progress, 1.0, "pattern optimized")
-        return self.result(state)
+        return self.result(state, sewn)
 
     def _run(self, K, c_weft, c_warp, progress, **args) -> "SolveState":
         """One solve to its end by :meth:`extra_iterations` (arguments as :meth:`solve`), its guarded
@@ -438,14 +456,19 @@ class PatternSolver:
         self.release(state)
         return state
 
-    @_with_solvers_choice
     def would_refuse(self, state: "SolveState") -> bool:
         """Whether :meth:`result` would refuse ``state`` (diverged, or a dart's legs not sewn equal), or
         its darts' legs cross (:meth:`.dart_gaps.GapCorrection.crossed`: the pipeline refuses the pattern)."""
+        return self.refusal(state)[0]
+
+    @_with_solvers_choice
+    def refusal(self, state: "SolveState") -> Tuple[bool, Optional["SolveState"]]:
+        """(:meth:`would_refuse` ``state``, ``state`` with its legs sewn equal (:meth:`legs_sewn_equal`), or None
+        when it diverged): the sewn state serves :meth:`result` too, so a solve sews its legs once."""
         if np.any(runaway(state)):
-            return True
-        U = self.legs_sewn_equal(state).U
-        return bool(unequal_legs(self.gaps.legs, U)) or self.gaps.crossed(U)
+            return True, None
+        sewn = self.legs_sewn_equal(state)
+        return bool(unequal_legs(self.gaps.legs, sewn.U)) or self.gaps.crossed(sewn.U), sewn
 
     @_with_solvers_choice
     def begin(
@@ -665,9 +688,10 @@ class PatternSolver:
         )
 
     @_with_solvers_choice
-    def result(self, state: "SolveState") -> SolveResult:
+    def result(self, state: "SolveState", sewn: Optional["SolveState"] = None) -> SolveResult:
         """The :class:`SolveResult` of ``state``'s current iterate (:func:`.build.solve_result`); a diverged
-        one (:func:`.guard.runaway`) is refused with one line (PatternError) naming the piece that ran away."""
+        one (:func:`.guard.runaway`) is refused with one line (PatternError) naming the piece that ran away.
+        ``sewn``: ``state`` with its legs sewn equal when the caller has it (:meth:`refusal`), else sewn here."""
         over = runaway(state)
         if np.any(over):
             per_piece = np.add.reduceat(over, self.blocks.face_offsets)
@@ -676,7 +700,7 @@ class PatternSolver:
                 f"panel {self.panels[k].name!r}: the solve diverged after {state.iteration} iterations "
                 f"({int(per_piece[k])} triangles stretched over {DIVERGED_SCALE:g} x their targets)"
             )
-        done = self.legs_sewn_equal(state)
+        done = self.legs_sewn_equal(state) if sewn is None else sewn
         if done.iteration >= done.started + done.planned:
             # a finished solve (not a live preview on its way): its darts' legs sewn equal, or refused
             over = unequal_legs(self.gaps.legs, done.U)
