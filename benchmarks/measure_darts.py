@@ -232,9 +232,8 @@ def four_darts_configs():
 def four_darts_sizes(body=None, sizes=("XS", "S", "M", "L", "XL"), eases=(1.1, 1.3), configs=None) -> dict:
     """``{"<size> @ <ease>" | "P1": {config: figures, "missed": ..., "frontier": [...]}}`` (see the module)."""
     from core.body.instance import body_instance, instance_shape
-    from core.cut.darts import follow_cups
     from core.errors import EaseError
-    from core.pattern.solve import adapt_pattern, build_pattern
+    from core.pattern.solve import adapt_pattern, build_pattern, transfer_pattern
 
     prep = wf.prepare(TEMPLATES["blouse_four_darts"](), body=body)
     body, cut = prep.body, prep.cut
@@ -258,21 +257,8 @@ def four_darts_sizes(body=None, sizes=("XS", "S", "M", "L", "XL"), eases=(1.1, 1
                 try:
                     if size == "M":  # the design's own body: its reference
                         pat = refs[name]
-                    else:
-                        # the darts' apexes follow the cup, as every transfer's (core.pattern.solve.transfer_pattern)
-                        tgt = follow_cups(cut, prep.reference, X)
-                        off = solver.offsets(tgt)
-                        K, cw, cg = solver.targets_reference(tgt, ease=ease, offsets=off)
-                        res = solver.solve(
-                            K,
-                            cw,
-                            cg,
-                            start=solver.start_from(refs[name], off),
-                            positions=tgt,
-                            plan=solver.design_plan(cfg),
-                            config=cfg,
-                        )
-                        pat = build_pattern(cut, res, mode="transfer")
+                    else:  # the darts' apexes follow the cup, the solver the configuration's (transfer_solver)
+                        pat = transfer_pattern(cut, prep.reference, X, cfg, solver=solver, start=refs[name], ease=ease)
                     row[name] = four_dart_figures(pat, body)
                 except EaseError as exc:  # refused by the solve itself (flipped)
                     row[name] = {"error": str(exc)}
@@ -335,6 +321,122 @@ def four_darts_markdown(rows: dict) -> list:
     return L
 
 
+#: the graded cases of :func:`transfer_solvers`: template -> the eases it is solved at (None: the design's)
+SOLVER_CASES = {
+    "shirt_long_sleeve": (None,),
+    "blouse_four_darts": (1.1, 1.3),
+    "skirt_darted": (None,),
+    "skirt": (None,),
+}
+#: the transfers :func:`transfer_solvers` compares: label -> (convergence.transfer_solver, convergence.transfer_from)
+TRANSFER_MODES = {
+    "reference solver": ("reference", "reference"),
+    "target solver, from M's pattern": ("target", "reference"),
+    "target solver, from its flattening": ("target", "flattening"),
+}
+
+
+def transfer_mode(cfg, mode: str):
+    """``cfg`` with the transfer of :data:`TRANSFER_MODES` ``mode``."""
+    solver_on, start = TRANSFER_MODES[mode]
+    return dataclasses.replace(
+        cfg, convergence=dataclasses.replace(cfg.convergence, transfer_solver=solver_on, transfer_from=start)
+    )
+
+
+def transfer_solvers(cases=None, sizes=("XS", "S", "L", "XL"), modes=None) -> dict:
+    """``{"<template> @ <ease>": {size: {mode: figures}}}``: each template's reference on M (of its chart, with
+    the configuration it names) transferred to ``sizes`` by each transfer of :data:`TRANSFER_MODES` (the
+    solver made on the reference body or on the target's; started from M's pattern or the flattening).
+    Figures: weft compliance, warp deviation, shear p95 %/deg, seam mismatch (mean, max mm), flipped,
+    collapsed, crossings, the transfer's wall and CPU seconds (flattening and factorisation on the target
+    included), and for the four-dart blouse :func:`four_dart_figures` with the targets it misses."""
+    import time
+
+    from benchmarks.bench_pattern import _metrics
+    from core.body.instance import body_instance, instance_shape
+    from core.errors import EaseError
+    from core.pattern.solve import build_pattern, transfer_pattern
+
+    cases = SOLVER_CASES if cases is None else cases
+    modes = list(TRANSFER_MODES) if modes is None else modes
+    out = {}
+    for name, eases in cases.items():
+        prep = wf.prepare(TEMPLATES[name]())
+        solver = wf.make_solver(prep)
+        cut, pose = prep.cut, prep.cut.body.get("pose")
+        for ease in eases:
+            K, cw, cg = solver.targets_reference(ease=ease)
+            ref = build_pattern(cut, solver.solve(K, cw, cg), mode="reference")
+            rows = {"M": {"reference": _figures(name, ref, prep.body, _metrics(ref))}}
+            for size in sizes:
+                try:
+                    size_name = wf.size_name(prep, size)
+                except EaseError:
+                    continue
+                X = body_instance(prep.body, instance_shape(prep.body, size_name), pose)
+                rows[size] = {}
+                for mode in modes:
+                    t0, c0 = time.perf_counter(), time.process_time()
+                    try:
+                        pat = transfer_pattern(
+                            cut,
+                            prep.reference,
+                            X,
+                            transfer_mode(solver.config, mode),
+                            solver=solver,
+                            start=ref,
+                            ease=ease,
+                        )
+                    except EaseError as exc:
+                        rows[size][mode] = {"error": str(exc)}
+                        continue
+                    secs = [round(time.perf_counter() - t0, 3), round(time.process_time() - c0, 3)]
+                    rows[size][mode] = {**_figures(name, pat, prep.body, _metrics(pat)), "seconds": secs}
+            out[f"{name} @ {'design' if ease is None else f'{ease:g}'}"] = rows
+    return out
+
+
+def _figures(name: str, pat, body, m: dict) -> dict:
+    keys = ("compliance", "warp_dev", "shear_p95", "seam_mean", "seam_max_mm", "flips", "collapsed", "crossings")
+    f = {k: round(float(m[k]), 3) for k in keys}
+    if name == "blouse_four_darts":
+        darts = four_dart_figures(pat, body)
+        f["darts"] = {**darts, "missed": missed(darts)}
+    return f
+
+
+def transfer_solvers_markdown(rows: dict) -> list:
+    """The tables of :func:`transfer_solvers` (markdown lines): one row per case, size and transfer; a
+    blouse's transfer no other one beats on every one of issue 30's targets (:func:`frontier`) marked *."""
+    L = [
+        "| case | size | transfer | weft % | warp % | shear p95 | seams mean / max mm | s (wall / CPU) | blouse: "
+        "crossings, legs mm, front shear p95, bust % (missed) |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for case, rows in rows.items():
+        for size, modes in rows.items():
+            darts = {m: f["darts"] for m, f in modes.items() if "darts" in f}
+            front = frontier(darts) if len(darts) > 1 else []
+            for mode, f in modes.items():
+                if "error" in f:
+                    L.append(f"| {case} | {size} | {mode} | refused: {f['error']} |" + " |" * 5)
+                    continue
+                d = f.get("darts")
+                dart = (
+                    f"{d['crossings']}, {d['legs mm']:.3f}, {d['front shear p95 deg']:.1f}, {d['bust region %']:.2f} "
+                    f"({', '.join(d['missed']) or 'none'}){' *' if mode in front else ''}"
+                    if d
+                    else ""
+                )
+                secs = f"{f['seconds'][0]:.2f} / {f['seconds'][1]:.2f}" if "seconds" in f else ""
+                L.append(
+                    f"| {case} | {size} | {mode} | {f['compliance']:.2f} | {f['warp_dev']:.2f} | {f['shear_p95']:.1f} | "
+                    f"{f['seam_mean']:.3f} / {f['seam_max_mm']:.2f} | {secs} | {dart} |"
+                )
+    return L
+
+
 def where_sizes(sizes=("M", "L")) -> dict:
     """``{size: {"figures": four_dart_figures, **bust_breakdown}}`` of ``blouse_four_darts`` (its ``fitted``
     reference on women:M, transferred to the other ``sizes`` as ``ease transfer`` does)."""
@@ -370,6 +472,15 @@ def write_sizes(results, rows: dict, note: str) -> None:
 
 
 def main() -> int:
+    if "--transfer-solvers" in sys.argv[1:]:
+        import os
+
+        print(f"load average {os.getloadavg()[0]:.2f}")
+        rows = transfer_solvers()
+        print(json.dumps(rows))
+        print("\n".join(transfer_solvers_markdown(rows)))
+        print(f"load average {os.getloadavg()[0]:.2f}")
+        return 0
     if "--where" in sys.argv[1:]:
         i = sys.argv.index("--where")
         sizes = sys.argv[i + 1].split(",") if len(sys.argv) > i + 1 else ["M", "L"]

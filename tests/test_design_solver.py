@@ -117,3 +117,51 @@ def test_the_designs_configuration_is_solved_not_relabelled(stretched):
     for a, b, c in zip(own.pattern.panels, named.pattern.panels, chosen.pattern.panels):
         assert a.uv.tobytes() == b.uv.tobytes()
         assert a.uv.tobytes() != c.uv.tobytes()
+
+
+# ----------------------------------------------------------------------------- a transfer's solver on the target
+
+
+def test_the_transfer_solver_is_checked_and_chosen_on_the_cli():
+    from core.cli import build_parser
+
+    assert SolverConfig.improved().convergence.transfer_solver == "reference"
+    SolverConfig.improved(transfer_solver="target").check()
+    with pytest.raises(PatternError, match="convergence.transfer_solver: expected 'reference' or 'target'"):
+        SolverConfig.improved(transfer_solver="nowhere").check()
+    with pytest.raises(PatternError, match="convergence.transfer_solver"):
+        wf.with_transfer_solver(SolverConfig.improved(), "M")
+    cmd = ["transfer", "d.json", "--out", "o", "--size", "L"]
+    assert build_parser().parse_args(cmd).transfer_solver is None
+    assert build_parser().parse_args(cmd + ["--transfer-solver", "target"]).transfer_solver == "target"
+
+
+def test_a_target_solver_made_on_the_reference_body_is_the_reference_solver(stretched):
+    """Flattened and factorised on the reference body's own positions, a transfer's target solver is the
+    reference solver: a transfer onto that body gives the same bits either way."""
+    from core.pattern.solve import transfer_pattern
+
+    solver = wf.make_solver(stretched, iterations=3)
+    cut, body = stretched.cut, stretched.reference
+    ref = wf.reference(stretched, solver=solver).pattern
+    on_ref = transfer_pattern(cut, body, body, solver=solver, start=ref)
+    cfg = wf.with_transfer_solver(solver.config, "target")
+    on_target = transfer_pattern(cut, body, body, cfg, solver=solver, start=ref)
+    for a, b in zip(on_ref.panels, on_target.panels):
+        assert a.uv.tobytes() == b.uv.tobytes()
+
+
+def test_the_shirt_graded_to_xs_on_a_solver_made_there_is_within_the_target(anny):
+    """Issue 37's closed-compliance target (1.2 %) on the shirt graded to XS, as shirt_box_pleat reads it: with the
+    solver made on M (the reference's flattening and factorisation) 1.27 %; made on XS 1.15 % (1.11 started from
+    XS's flattening; the shirt cut on XS itself 1.07), its warp and shear no worse (docs/darts.md)."""
+    prep = wf.prepare(TEMPLATES["shirt_long_sleeve"](), body=anny)
+    solver = wf.make_solver(prep)
+    ref = wf.reference(prep, solver=solver).pattern
+    runs = {s: wf.transfer(prep, "XS", solver=solver, start=ref, transfer_solver=s) for s in ("reference", "target")}
+    c = {s: r.pattern.report["metrics"]["compliance"] for s, r in runs.items()}
+    assert runs["target"].pattern.report["transfer_solver"] == "target"
+    assert c["reference"]["mean"] > 1.2 >= c["target"]["mean"], c
+    assert c["target"]["warp_mean"] <= c["reference"]["warp_mean"] + 0.05
+    assert c["target"]["shear_p95"] <= c["reference"]["shear_p95"] + 0.05
+    assert runs["target"].figures["flipped"] == 0

@@ -66,6 +66,13 @@ def add_parser(sub) -> None:
     )
     _common(p)
     p.add_argument("--size", required=True, help="target size: XS, S, M, L or XL")
+    p.add_argument(
+        "--transfer-solver",
+        choices=("reference", "target"),
+        default=None,
+        help="the body the transfer's flattening and factorisation are made on: reference (the design's body, "
+        "the default) or target (the --size body; docs/darts.md)",
+    )
 
     p = subcommand(
         sub,
@@ -132,6 +139,7 @@ def _cmd_transfer(args) -> int:
     options = _solver_options(args)
     prog = console_progress(args)
     prep = _prepare(args, prog)
+    options["transfer_solver"] = args.transfer_solver
     return _write(args, wf.transfer(prep, size, **options, progress=sub(prog, 0.4, 0.95)))
 
 

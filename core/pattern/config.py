@@ -261,6 +261,13 @@ class Convergence:
     front sleeve XS..XL 1290 < 1316 < 1351 < 1364 < 1381 mm, where from the reference L's 1350.6 was
     under M's 1350.6). Measured in docs/darts.md ("Convergence").
 
+    ``transfer_solver``: which body a transfer's flattening and factorisation are made on.
+    ``"reference"``: the reference solver's (the design's body), shared by every size. ``"target"``: the
+    target body's (the same cut, its darts' apexes following the cups; flattened and factorised again
+    for each size, 0.1-0.3 s), so that a transfer's local-global steps measure strain in the target's
+    own frames, as the reference solve does on its body. Its targets, seam plan and folds are the
+    reference's, as with ``"reference"``. Measured in docs/darts.md ("A solver made on the target body").
+
     """
 
     energy_rtol: float = 0.0
@@ -268,7 +275,11 @@ class Convergence:
     window: int = 10
     cap: int = 300
     transfer_from: str = "reference"
+    transfer_solver: str = "reference"
 
+
+#: The bodies a transfer's solver can be made on (:attr:`Convergence.transfer_solver`).
+TRANSFER_SOLVERS = ("reference", "target")
 
 _GROUPS = {
     "weights": Weights,
@@ -472,6 +483,11 @@ class SolverConfig:
             raise PatternError(
                 "solver configuration convergence.transfer_from: expected 'reference' or 'flattening', "
                 f"got {cv.transfer_from!r}"
+            )
+        if cv.transfer_solver not in TRANSFER_SOLVERS:
+            raise PatternError(
+                "solver configuration convergence.transfer_solver: expected 'reference' or 'target', "
+                f"got {cv.transfer_solver!r}"
             )
         if s.straight_target not in ("zero", "smooth"):
             raise PatternError(

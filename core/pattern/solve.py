@@ -37,6 +37,7 @@ __all__ = [
     "SeamPlan",
     "solve_pattern",
     "transfer_pattern",
+    "target_solver",
     "adapt_pattern",
     "build_pattern",
     "seam_is_gathered",
@@ -78,15 +79,21 @@ def transfer_pattern(
     progress: Optional[Progress] = None,
     solver: Optional[PatternSolver] = None,
     start: Optional[Pattern] = None,
+    ease=None,
 ) -> Pattern:
     """Shape transfer (paper Eq. transfer-scale): the ease field kept on the target body (V, 3).
 
-    The reference flattening and factorisation are reused; the solve starts
+    With the configuration's ``convergence.transfer_solver`` ``"reference"`` the reference flattening
+    and factorisation (``solver``) are reused; with ``"target"`` a solver of the same cut is made on the
+    target body (:func:`target_solver`: flattened and factorised on the target's positions) and the
+    transfer solved on it, sewing the reference's seam plan. The solve starts
     from the reference pattern when ``start`` is given, each piece stretched
     to the target body (:meth:`PatternSolver.start_from`), or, with the
     configuration's ``convergence.transfer_from`` ``"flattening"``, from the
     reference solve's own start so stretched (:meth:`PatternSolver.flattening_start`;
-    ``start`` unused). ``body``: the target body's spec, recorded in the pattern.
+    ``start`` unused; on a target solver: the target's own flattening).
+    ``body``: the target body's spec, recorded in the pattern. ``ease``: an override of the cut's weft
+    ease (:meth:`PatternSolver.targets_reference`; benchmarks sweep it).
 
     Darts follow the body: the apex of a dart towards a bust point, seat or shoulder blade is moved,
     with the cloth around it, to where that landmark's rule puts it on the target body
@@ -94,17 +101,21 @@ def transfer_pattern(
     the transfer's own solve (docs/darts.md).
     """
     solver = _solver(cut, ref_vertices, solver, config, progress)
+    cv = (config or solver.config).convergence
     tgt = solver.positions(target_vertices, "target body")
     if any("cup_disk" in r for r in (getattr(cut, "darts", None) or {}).values()):
         from ..cut.darts import follow_cups
 
         # a dart towards a bust point, seat or shoulder blade ends where that point is on the target body
         tgt = follow_cups(cut, ref_vertices, target_vertices)
+    plan = solver.design_plan(config)  # the reference pattern's seams, whichever solver sews them
+    if cv.transfer_solver == "target":
+        solver = target_solver(solver, ref_vertices, tgt, progress=sub(progress, 0.0, 0.3))
     offsets = solver.offsets(tgt)
-    K, cw, cg = solver.targets_reference(tgt, offsets=offsets)
+    K, cw, cg = solver.targets_reference(tgt, ease=ease, offsets=offsets)
     # the reference pattern stretched by how much longer the target body is under each piece, or the
     # reference solve's own start so stretched (config.Convergence.transfer_from: every size solved alike)
-    if (config or solver.config).convergence.transfer_from == "flattening":
+    if cv.transfer_from == "flattening":
         U0 = solver.flattening_start(cw, cg, offsets)
     else:
         U0 = None if start is None else solver.start_from(start, offsets)
@@ -115,10 +126,20 @@ def transfer_pattern(
         start=U0,
         positions=tgt,
         progress=sub(progress, 0.3, 1.0),
-        plan=solver.design_plan(config),
+        plan=plan,
         config=config,
     )
     return build_pattern(cut, res, style=style, body=body, mode="transfer")
+
+
+def target_solver(
+    solver: PatternSolver, ref_vertices, target_positions: np.ndarray, progress: Optional[Progress] = None
+) -> PatternSolver:
+    """A solver of ``solver``'s cut and configuration made on a transfer's target body: the pieces flattened
+    and the system factorised on ``target_positions`` (N, 3) (the cut's positions there, its darts' apexes
+    following the cups), the reference body (``ref_vertices``, (V, 3), the one ``solver`` was made on) kept
+    as the one the targets and folds are measured from (``convergence.transfer_solver`` ``"target"``)."""
+    return PatternSolver(solver.cut, ref_vertices, solver.config, progress=progress, flatten_on=target_positions)
 
 
 def adapt_pattern(

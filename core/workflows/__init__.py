@@ -42,6 +42,7 @@ from ._pattern import (
     summary,
     tolerances,
     transfer,
+    with_transfer_solver,
     write_pattern,
 )
 from ._prepare import Prepared, prepare, size_name
@@ -59,6 +60,7 @@ __all__ = [
     "make_solver",
     "reference",
     "transfer",
+    "with_transfer_solver",
     "is_own_size",
     "adapt",
     "tolerances",

@@ -174,6 +174,7 @@ def transfer(
     start=None,
     progress: Optional[Progress] = None,
     vertices=None,
+    transfer_solver: Optional[str] = None,
 ) -> PatternRun:
     """Shape transfer (paper Eq. transfer-scale): the same cut and ease field on another body shape.
 
@@ -189,6 +190,9 @@ def transfer(
     ease compliance on the target body) beside the reference's own compliance.
     ``vertices``: the target body's instance in the cut's pose when the caller
     has made it (a batch item measured it), so it is not evaluated again.
+    ``transfer_solver``: ``"reference"`` or ``"target"``, the body the transfer's flattening and
+    factorisation are made on (:attr:`core.pattern.config.Convergence.transfer_solver`); None: the
+    configuration's (``"reference"``).
 
     The design's own size (the chart size its body is, ``body.shape``) is the
     reference pattern itself, not a re-solve on the same body: one size, one
@@ -211,6 +215,7 @@ def transfer(
     t0 = time.perf_counter()
     if solver is None:
         solver = make_solver(prep, config, iterations, gather_all, progress=sub(progress, 0.0, 0.15))
+    chosen = None if transfer_solver is None else with_transfer_solver(solver.config, transfer_solver)
     ref_pat = start if start is not None else _solve_reference(prep, solver, sub(progress, 0.15, 0.5))
     pose = prep.cut.body.get("pose")
     shape = instance_shape(prep.body, size)
@@ -231,6 +236,7 @@ def transfer(
             prep.cut,
             prep.reference,
             target,
+            config=chosen,
             solver=solver,
             start=ref_pat,
             style=prep.design.name,
@@ -243,6 +249,8 @@ def transfer(
     refc = (ref_pat.report.get("metrics") or {}).get("compliance") or ease_compliance(ref_pat)
     label = size if isinstance(size, str) else "custom"
     pattern.report.update({"config": config, "size": label, "transfer_deviation": dev, "reference_compliance": refc})
+    # the body the transfer's solver was made on (config.Convergence.transfer_solver)
+    pattern.report["transfer_solver"] = (chosen or solver.config).convergence.transfer_solver
     pattern.report["metrics"] = metrics
     _attach_pleats(pattern, prep)
     figures = {
@@ -253,6 +261,18 @@ def transfer(
         "reference compliance mean %": round(float(refc["mean"]), 3),
     }
     return PatternRun(pattern, figures, {**prep.timings, "optimize": optimize})
+
+
+def with_transfer_solver(config, transfer_solver: str):
+    """``config`` (a SolverConfig) with its transfers solved on ``transfer_solver``'s body (``"reference"`` or
+    ``"target"``, :attr:`core.pattern.config.Convergence.transfer_solver`), checked."""
+    import dataclasses
+
+    cfg = dataclasses.replace(
+        config, convergence=dataclasses.replace(config.convergence, transfer_solver=transfer_solver)
+    )
+    cfg.check()
+    return cfg
 
 
 def is_own_size(prep: Prepared, size) -> bool:
