@@ -111,6 +111,57 @@ def test_residual_is_the_gradient_of_the_energy():
         assert fd == pytest.approx(g[i, k], rel=1e-2, abs=1e-9 * np.abs(g).max())
 
 
+def test_local_step_kernel_matches_the_projections():
+    # the fused kernel (images, projections, gradient, energy in one pass) against the same local step written
+    # in numpy: the grain images onto their rest sphere and the pair onto the nearest orthogonal pair, the
+    # sliver edges onto their rest length, the hinge vectors' normal part onto 2 sin(theta_0 / 2)
+    cloth = _sheet()
+    pd, _ = _steps(cloth)
+    rng = np.random.default_rng(5)
+    x = _bent(cloth, 0.3) * 1.01 + rng.normal(scale=5e-4, size=cloth.x0.shape)
+    y = x + rng.normal(scale=1e-4, size=x.shape)
+    grow = 0.6
+    elastic, energy = pd.local(x, y, grow)
+    el, o = pd.elements, pd._blocks
+    img = pd.D @ x
+    assert np.allclose(pd._images, img, rtol=1e-12, atol=1e-15)
+    fa, fb = img[o[0] : o[1]], img[o[1] : o[2]]
+    ra, rb = (1.0 + (el.stretch0[:, k] - 1.0) * (1.0 - grow) for k in (0, 1))
+    sa = fa * (ra / np.linalg.norm(fa, axis=1))[:, None]
+    sb = fb * (rb / np.linalg.norm(fb, axis=1))[:, None]
+    p, q = orthogonal_pair(fa, fb)
+    target = np.zeros_like(img)
+    target[o[0] : o[1]] = el.wa[:, None] * sa + pd.ws[:, None] * p
+    target[o[1] : o[2]] = el.wb[:, None] * sb + pd.ws[:, None] * q
+    nh = hinge_normals(x, el.bends.reshape(-1, 4))
+    h = img[o[3] : o[4]]
+    c = np.einsum("ij,ij->i", h, nh) - pd.rest_len
+    target[o[3] : o[4]] = el.kb[:, None] * (h - c[:, None] * nh)
+    rest = el.edge_rest + (el.edge_start - el.edge_rest) * (1.0 - grow)
+    e_img = img[o[2] : o[3]]
+    target[o[2] : o[3]] = el.we * e_img * (rest / np.linalg.norm(e_img, axis=1))[:, None]
+    assert np.allclose(pd._target, target, rtol=1e-10, atol=1e-12 * np.abs(target).max())
+    sq = lambda u: np.einsum("ij,ij->i", u, u)  # noqa: E731
+    expect = 0.5 * np.sum(pd.inertia * sq(x - y)) + 0.5 * np.sum(el.wa * sq(fa - sa) + el.wb * sq(fb - sb))
+    expect += 0.5 * np.sum(pd.ws * (sq(fa - p) + sq(fb - q))) + 0.5 * np.sum(el.kb * c * c)
+    expect += 0.5 * el.we * np.sum((np.linalg.norm(e_img, axis=1) - rest) ** 2)
+    assert energy == pytest.approx(expect, rel=1e-10)
+    w = pd._row_w[:, None]
+    assert np.allclose(elastic, pd.D.T @ (w * img - pd._target), rtol=1e-9, atol=1e-12 * np.abs(elastic).max())
+
+
+def test_factor_solves_three_columns():
+    # the matrix's LDL^T back-substitutes x, y and z in one pass: A^-1 b for each column
+    cloth = _sheet()
+    pd, _ = _steps(cloth)
+    fi = pd.free_idx
+    a = pd.matrix[fi][:, fi]
+    b = np.random.default_rng(6).normal(size=(len(fi), 3))
+    x = pd._back(b)
+    assert np.abs(a @ x - b).max() < 1e-10 * np.abs(b).max()
+    assert np.array_equal(pd._back(b), x)
+
+
 def test_pd_holds_the_fabric_stiffness():
     # issue 35: hanging cotton (30 x 50 cm, top edge clamped, no tethers) at its equilibrium strain
     # rho g H / k_warp = 0.021 %, where one XPBD pass a substep stretches it 3.5 % (p95) at 2 cm edges
