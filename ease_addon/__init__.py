@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import bpy
 
+from ..core.design import geometry
 from . import (
     body_ops,
     design_ops,
@@ -78,10 +79,18 @@ def register():
     # a file already open (the add-on enabled after it was read): Live follows its toggle once
     # the context is the file's (register runs with a restricted one)
     bpy.app.timers.register(live.resume, first_interval=0.0)
+    # the edge-flip geodesic solvers of the workers' cuts are built in a helper process (their
+    # constructor holds the GIL: 45-120 ms the viewport would wait, issue 32)
+    geometry.OUT_OF_PROCESS = True
+    # the modules and data loaded so far live as long as the add-on: out of the collector's
+    # sight, a full collection on the main thread (the first heavy operator's) stays short
+    jobs.settle_heap()
 
 
 def unregister():
     jobs.unregister()
+    geometry.OUT_OF_PROCESS = False
+    geometry.stop_helper()
     while live.on_load in bpy.app.handlers.load_post:
         bpy.app.handlers.load_post.remove(live.on_load)
     if bpy.app.timers.is_registered(live.resume):

@@ -87,21 +87,24 @@ def start_add_body(context, name: str, sync_=None) -> tuple:
         model = state.body_model(name)
         shape = dict(model.default_shape())
         verts = sync.body_vertices({"model": name, "shape": shape, "pose": pose})
+        # Anny's default shape is the chart's M: the Body panel's measurements line, measured
+        # here (the first measure of a model finds its torso's edges: 100 ms on the main thread)
+        report = sync.measurements_report({"model": name, "shape": shape}) if name == "anny" else None
         if design is None:
-            return verts, None, None
+            return verts, report, None, None
         progress(0.6, "the design on the new body")
         try:
             data.cut_on(design, name, shape)  # (kept: the placing pass cuts nothing)
             mesh = np.asarray(verts, dtype=np.float32).astype(np.float64)  # as the mesh will hold them
-            return verts, data.resolved_keypoints(design, model, mesh), None
+            return verts, report, data.resolved_keypoints(design, model, mesh), None
         except state.USER_ERRORS as exc:
-            return verts, None, exc
+            return verts, report, None, exc
 
     def apply(result):
-        verts, kps, refused = result
+        verts, report, kps, refused = result
         ctx = bpy.context
         old = data.body_object(ctx, required=False)
-        obj = sync.new_body(ctx, name, pose=pose, replaces=old, verts=verts)
+        obj = sync.new_body(ctx, name, pose=pose, replaces=old, verts=verts, report=report)
         if design is not None and refused is None:
             # the design's keypoints, seamlines and ease on the new body, as after loading it
             try:

@@ -68,8 +68,7 @@ def body(scene, name: str, vertices: np.ndarray, faces: np.ndarray):
     """A body object (skin material, smooth shading) with ``vertices`` (V, 3) and ``faces`` (F, 3)."""
     me = convert.mesh_from_arrays(name, vertices, faces)
     me.materials.append(materials.skin())
-    for poly in me.polygons:
-        poly.use_smooth = True
+    convert.smooth(me)
     return role_object(scene, name, me, "body")
 
 
@@ -426,8 +425,7 @@ def garment(scene, result, gap, digest: str):
     # which pattern vertex each garment vertex is: the export reads the garment back by it
     me.attributes.new(data.VERTEX_ID, "INT", "POINT").data.foreach_set("value", ids.astype(np.int32))
     me.materials.append(materials.fabric())
-    for poly in me.polygons:
-        poly.use_smooth = True
+    convert.smooth(me)
     obj = put_object(scene, GARMENT, me, "garment")
     obj["ease_pattern"] = digest  # draped from this pattern
     edge = float((getattr(result, "options", None) or {}).get("refine_edge") or 0.0)

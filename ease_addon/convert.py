@@ -47,6 +47,12 @@ def mesh_from_arrays(name: str, vertices: np.ndarray, faces: np.ndarray, checked
     return me
 
 
+def smooth(me) -> None:
+    """Smooth shading on every polygon of ``me`` (one array write: a loop over 26k polygons took
+    60 ms of the main thread)."""
+    me.polygons.foreach_set("use_smooth", np.ones(len(me.polygons), dtype=bool))
+
+
 def mesh_edges_from_arrays(name: str, vertices: np.ndarray, edges: np.ndarray) -> bpy.types.Mesh:
     """A wire mesh (no faces): ``vertices`` (V, 3), ``edges`` (E, 2)."""
     edges = np.ascontiguousarray(edges, dtype=np.int32).reshape(-1, 2)

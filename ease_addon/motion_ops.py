@@ -58,8 +58,7 @@ def motion_object(scene, name: str, frames: np.ndarray, faces: np.ndarray, mater
     keyed so that frame ``start + k`` of the timeline shows ``frames[k]``."""
     me = convert.mesh_from_arrays(name, frames[0], faces)
     me.materials.append(material)
-    for poly in me.polygons:
-        poly.use_smooth = True
+    convert.smooth(me)
     obj = build.put_object(scene, name, me, "motion")
     obj[FRAME_START] = int(start)
     obj.shape_key_add(name="Basis", from_mix=False)

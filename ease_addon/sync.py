@@ -110,10 +110,11 @@ def update_body(context, obj, shape=None, pose=None, verts=None) -> None:
     refresh_attachments(context, obj, verts)
 
 
-def new_body(context, model_name: str, shape=None, pose: str = "A", replaces=None, verts=None):
+def new_body(context, model_name: str, shape=None, pose: str = "A", replaces=None, verts=None, report=None):
     """Add a body object and make it the scene's body (shape sliders, ease layer, selection);
     ``replaces``: the body it replaces, removed once the new one is computed (so the new one
-    takes its name, with no ``.001``); ``verts``: its vertices when a worker computed them."""
+    takes its name, with no ``.001``); ``verts``, ``report``: its vertices and measurements line
+    (:func:`measurements_report`) when a worker computed them."""
     model = state.body_model(model_name)
     shape = dict(model.default_shape() if shape is None else shape)
     verts = body_vertices({"model": model_name, "shape": shape, "pose": pose}) if verts is None else verts
@@ -127,7 +128,7 @@ def new_body(context, model_name: str, shape=None, pose: str = "A", replaces=Non
     scene.ease.body = obj
     fill_shape_props(scene, model, shape)
     if shape == dict(model.default_shape()) and model_name == "anny":
-        show_size(scene, obj, "M")  # Anny's reference shape is the default chart's M
+        show_size(scene, obj, "M", report)  # Anny's reference shape is the default chart's M
     init_ease_layer(scene, obj)
     select_only(context, obj)
     return obj
