@@ -668,8 +668,13 @@ def run(out_dir, quick: bool = False) -> dict:
     # ---------------------------------------------------------------- Table 3: transfer
     t3 = {}
     sizes = ("XS", "S", "L", "XL")
-    for kind, (design, cut, ref, _, prep) in cuts.items():
-        solver = solvers[kind]
+    # each garment on the reference's solver (the default), and on a solver made on each target body, started
+    # from its flattening (convergence.transfer_solver / transfer_from: docs/darts.md)
+    on_target = SolverConfig.improved(transfer_solver="target", transfer_from="flattening")
+    runs = [(kind, kind, solvers[kind]) for kind in cuts]
+    runs += [(kind, f"{kind}, solver on the target", PatternSolver(*cuts[kind][1:3], on_target)) for kind in cuts]
+    for kind, key, solver in runs:
+        design, cut, ref, _, prep = cuts[kind]
         ref_pat, _ = _solve(solver, cut)
         floor = ease_compliance(ref_pat)["mean"]
         row = {"reference": floor}
@@ -689,7 +694,7 @@ def run(out_dir, quick: bool = False) -> dict:
                 }
             except Exception as exc:
                 row[size] = {"error": f"{type(exc).__name__}: {exc}"}
-        t3[kind] = row
+        t3[key] = row
     R["table3"] = t3
 
     # ---------------------------------------------------------------- Table 4: adaptation
@@ -905,12 +910,18 @@ def _markdown(R) -> str:
             cells.append(
                 f"{_fmt(v.get('deviation'))} (+{_fmt(v.get('above_floor'))}, warp {_fmt(v.get('warp_dev'))}, "
                 f"shear p95 {_fmt(v.get('shear_p95'), 1)}, flips {v.get('flips', '–')}, "
-                f"collapsed {v.get('collapsed', '–')})"
+                f"collapsed {v.get('collapsed', '–')}, {_fmt(v.get('seconds'))} s)"
                 if "deviation" in v
                 else v.get("error", "–")
             )
         L.append(f"| {kind} | {_fmt(row['reference'])} | " + " | ".join(cells) + " |")
     L += [
+        "",
+        "Each size re-solved from M's pattern on the reference's solver (flattening and factorisation made on M, "
+        "shared by every size: the default), and (`solver on the target`) on a solver made on the target body, "
+        'started from its flattening (`convergence.transfer_solver` `"target"`, `transfer_from` '
+        '`"flattening"`; docs/darts.md, "A solver made on the target body"). Seconds: the transfer\'s wall time, '
+        "the target's flattening and factorisation included.",
         "",
         "## Table 4: residual stretch (area % with r_weft > 1.10), before / after adaptation",
         "",

@@ -211,7 +211,9 @@ def four_darts_configs():
     regulariser at 3 (it holds some of that shear): on women:M / XS / L at ease 1.1 warp 2.21 / 1.96 / 2.80 %
     (fitted 3.17 / 2.87 / 4.12), front shear p95 7.95 / 7.75 / 9.66 deg (6.72 / 6.55 / 8.69), bust region
     1.43 / 1.51 / 2.00 % (1.32 / 1.30 / 2.13); warp gain 0.0015 alone 2.61 / 2.34 / 3.38 %, 0.02 1.04 %
-    on M for 9.5 deg."""
+    on M for 9.5 deg. ``fitted, solver on the target``: fitted with each size transferred on a solver made on
+    its body, started from its flattening (:data:`TRANSFER_MODES`; docs/darts.md, "A solver made on the target
+    body"); the same reference and adaptation as fitted."""
     from core.pattern.config import SolverConfig
 
     fitted, improved = SolverConfig.fitted(), SolverConfig.improved()
@@ -226,6 +228,7 @@ def four_darts_configs():
         "200 it., warp slack 0": dataclasses.replace(
             improved, iterations=200, rest_shape=dataclasses.replace(improved.rest_shape, warp_slack=0.0)
         ),
+        "fitted, solver on the target": transfer_mode(fitted, "target solver, from its flattening"),
     }
 
 
