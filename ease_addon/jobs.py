@@ -305,18 +305,29 @@ class EASE_OT_cancel_jobs(bpy.types.Operator):
 
 def undo_push(message: str) -> bool:
     """Push an undo step named ``message`` from a timer (a job's result written, Live's pieces of a
-    new cut): Blender's ``ed.undo_push`` without the view-layer updates ``bpy.ops`` wraps every call
-    in (the undo step stores the scene's data, not its evaluation: the depsgraph is evaluated at the
-    next redraw, as after any edit, not inside the timer's call). Whether a step was pushed."""
-    if not bpy.ops.ed.undo_push.poll():
-        return False
-    try:
-        from _bpy import ops as _ops  # the call bpy.ops wraps
-    except ImportError:  # pragma: no cover - every Blender has it
+    new cut), through Blender's public ``bpy.ops.ed.undo_push``. A timer runs with no window in its
+    context, where the operator's poll fails (and nothing was pushed, silently): the call runs in
+    the scene's window (:func:`_window`), as a button press would. ``bpy.ops`` evaluates the view
+    layer around the call: what Blender does before its next redraw anyway. Whether a step was
+    pushed (False: no window, or the undo system is off)."""
+    ctx = bpy.context
+    override = {}
+    if ctx.window is None:
+        win = _window(ctx)
+        if win is None:
+            return False
+        override = {"window": win, "screen": win.screen}
+    with ctx.temp_override(**override):
+        if not bpy.ops.ed.undo_push.poll():
+            return False
         bpy.ops.ed.undo_push(message=message)
-        return True
-    _ops.call("ed.undo_push", {"message": message})
     return True
+
+
+def _window(ctx):
+    """The window showing the context's scene (else the first), or None."""
+    wins = list(getattr(ctx.window_manager, "windows", None) or [])
+    return next((w for w in wins if w.scene == ctx.scene), wins[0] if wins else None)
 
 
 def start_step(name: str, label: str, compute, apply, status: str, undo: str, sync=None, cancelled=None) -> Job:

@@ -272,3 +272,28 @@ def test_add_body_and_fit_measurements_run_in_the_background(bpy_session, blende
         jobs.wait()
         jobs.SYNCHRONOUS = True
         blender.reset(body=True)  # (the next tests start from the default body)
+
+
+def test_a_result_landing_in_a_timer_is_one_undo_step(bpy_session, blender):
+    """A threaded job's result lands in a timer, whose context has no window: there
+    ``ed.undo_push``'s poll fails, and the step was silently not pushed (Ctrl+Z then took back the
+    designer's previous action with it). ``jobs.undo_push`` runs it in the scene's window."""
+    bpy = bpy_session["bpy"]
+    jobs, body_ops = blender.mod("jobs"), blender.mod("body_ops")
+    blender.reset(body=True)
+    pose = lambda: bpy.context.scene.ease.body["ease_pose"]  # noqa: E731  (undo rebuilds the data)
+    assert pose() == "A"
+    bpy.ops.ed.undo_push(message="before")
+    jobs.SYNCHRONOUS = False
+    try:
+        body_ops.start_body(bpy.context, pose="P1")
+        with bpy.context.temp_override(window=None):  # as Blender runs a timer (the jobs' poll)
+            assert not bpy.ops.ed.undo_push.poll()
+            jobs.wait()
+    finally:
+        jobs.SYNCHRONOUS = True
+    assert pose() == "P1"
+    assert bpy.ops.ed.undo() == {"FINISHED"}
+    assert pose() == "A"
+    assert bpy.ops.ed.redo() == {"FINISHED"}
+    assert pose() == "P1"
