@@ -106,9 +106,7 @@ def start_export(context, directory: str = "", sync=None) -> tuple:
         if threaded:
             bpy.context.scene.ease.job_status = "; ".join(said)
 
-    job = jobs.start_step(
-        JOB, "Export Pattern", compute, apply, "job_status", "Export Pattern", sync, jobs.folder_cancelled(out, writing)
-    )
+    job = jobs.start_writing(JOB, "Export Pattern", compute, apply, out, writing, sync)
     return job, said
 
 

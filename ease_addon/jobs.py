@@ -369,6 +369,13 @@ def folder_cancelled(out, writing: list):
     )
 
 
+def start_writing(name: str, label: str, compute, apply, out, writing: list, sync=None) -> Job:
+    """:func:`start_step` for an operator's work that writes the folder ``out`` (Export, Marker):
+    its outcome in ``job_status``, its result one undo step named ``label``, and a cancel that says
+    whether ``out`` was already being written (``writing``: :func:`folder_cancelled`)."""
+    return start_step(name, label, compute, apply, "job_status", label, sync, folder_cancelled(out, writing))
+
+
 class Background:
     """Mixin of an operator whose work is a job (list it before the operator's base class).
 

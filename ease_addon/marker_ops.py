@@ -131,9 +131,7 @@ def start_marker(context, sync=None) -> tuple:
         if threaded:
             ctx.scene.ease.job_status = said[-1]
 
-    job = jobs.start_step(
-        JOB, "Marker", compute, apply, "job_status", "Marker", sync, jobs.folder_cancelled(out, writing)
-    )
+    job = jobs.start_writing(JOB, "Marker", compute, apply, out, writing, sync)
     return job, said
 
 
