@@ -257,21 +257,59 @@ def test_a_line_ending_on_a_seam_is_sewn_through_it():
     opened, lines, _, next_id = open_piece(front, strips, 2 * BACK_IDS, np.array([0.2, 1.0, 0.25]), ends)
     assert len(ends) == 2  # the start on the top hem, the end on the seam
     panels, seams, last = split_seams([opened, back], [seam], {"g.front": ends}, next_id)
-    assert [s.name for s in seams] == ["g.side#p0", "g.side#p1"] and last == next_id + 1
-    new_back = panels[1]
-    assert len(new_back.uv) == len(back.uv) + 1 and len(new_back.faces) == len(back.faces) + 1
+    assert [s.name for s in seams] == ["g.side#p0", "g.side#p1", "g.side#layer0", "g.side#layer1"]
+    new_front, new_back = panels
     assert (signed_areas_2d(new_back.uv, new_back.faces) > 0).all() and len(boundary_loops(new_back.faces)) == 1
+    assert (signed_areas_2d(new_front.uv, new_front.faces) > 0).all() and len(boundary_loops(new_front.faces)) == 1
     m = len(back.uv)
     assert seams[0].verts_b[-1] == seams[1].verts_b[0] == m and new_back.vertex_ids[m] == next_id
-    for s in seams:  # each part: a path along both outlines, the two sides equally long
-        la = np.linalg.norm(np.diff(opened.uv[s.verts_a], axis=0), axis=1)
+    assert len(set(new_back.vertex_ids.tolist()) | set(new_front.vertex_ids.tolist())) == last - next_id + len(
+        back.uv
+    ) + len(opened.uv)  # each new vertex its own global id
+    for s in seams:  # each part and layer: a path along both outlines, the two sides as long
+        la = np.linalg.norm(np.diff(new_front.uv[s.verts_a], axis=0), axis=1)
         lb = np.linalg.norm(np.diff(new_back.uv[s.verts_b], axis=0), axis=1)
         assert len(s.verts_a) == len(s.verts_b) and la.sum() == pytest.approx(lb.sum(), abs=1e-9)
+        loops = {int(v): k for k, v in enumerate(boundary_loops(new_front.faces)[0])}
+        assert all(abs(loops[int(u)] - loops[int(w)]) in (1, len(loops) - 1) for u, w in zip(s.verts_a, s.verts_a[1:]))
     # the strip's edge on the seam runs between the two parts' ends on the front: the visible fold's
     # and the placement line's ends
-    fold, place = lines[0].ids[-1], next(x for x in lines if x.kind == "placement").ids[-1]
+    fold, inner = (x.ids[-1] for x in lines if x.kind == "fold")
+    place = next(x for x in lines if x.kind == "placement").ids[-1]
     assert {int(seams[0].verts_a[-1]), int(seams[1].verts_a[0])} == {fold, place}
     assert np.linalg.norm(opened.uv[fold] - opened.uv[place]) == pytest.approx(2 * 0.02, abs=1e-9)
+    # the folded layers are in the seam too: each runs from the line's point (the back's vertex m)
+    # to the inner fold, sewn to the back where it lies closed (one depth along the seam from m, on
+    # the side the cloth folds to), so every vertex of the strip's edge is sewn to the back
+    row = {int(v) for s in seams[2:] for v in s.verts_a}
+    assert {fold, inner, place} <= row and len(row) == 2 * len(seams[2].verts_a) - 1  # the inner fold shared
+    for s in seams[2:]:
+        assert int(s.verts_b[0]) == m and {int(s.verts_a[0]), int(s.verts_a[-1])} in ({fold, inner}, {place, inner})
+        along = np.linalg.norm(np.diff(new_back.uv[s.verts_b], axis=0), axis=1).sum()
+        assert along == pytest.approx(0.02, abs=1e-9)
+    # the top cloth at the inner fold's place is sewn to the same back vertex (all layers caught)
+    tip = int(seams[2].verts_b[-1])
+    part = next(s for s in seams[:2] if tip in s.verts_b.tolist())
+    top = int(part.verts_a[part.verts_b.tolist().index(tip)])
+    assert np.linalg.norm(new_front.uv[top] - new_front.uv[fold]) == pytest.approx(0.02, abs=1e-9)
+
+
+def test_a_seam_shorter_than_the_folded_cloth_is_refused():
+    """The folded layers are sewn along the seam one depth from the line: a seam that ends before
+    that (here 10 mm past the line, the depth 20 mm) is refused at the pleat's start, in one line."""
+    front, back = _flat_piece(), _flat_piece(seed=1)
+    back.name, back.vertex_ids = "g.back", back.vertex_ids + BACK_IDS
+    full = _side_seam("g.back")
+    seam = PatternSeam("g.side", "g.front", "g.back", full.verts_a[7:9], full.verts_b[7:9])  # y 0.36 .. 0.34
+    site = _site(0.25, along=(1, 0, -1), direction="right")  # meets the right edge at y = 0.35
+    ends = []
+    opened, _, _, next_id = open_piece(
+        front, piece_strips(front, [site], seams=[seam]), 2 * BACK_IDS, np.zeros(3), ends
+    )
+    with pytest.raises(DesignError) as e:
+        split_seams([opened, back], [seam], {"g.front": ends}, next_id, sites=[site])
+    assert e.value.path == "pleats.p.from" and "\n" not in str(e.value)
+    assert "seam 'g.side' ends 10.0 mm from the pleat's line, before its folded cloth (20.0 mm)" in e.value.message
 
 
 def test_a_pleat_on_a_dart_is_refused():
@@ -416,8 +454,14 @@ def test_a_pleat_from_a_seam_is_sewn_through_it_at_every_stage(pleated, tmp_path
     per = seam_mismatch(opened)["per_seam"]
     assert max(per[n]["mm"] for n in names if "side_" in n) < 1.0  # each part sews as it did closed
     ids = np.asarray(opened.panel("skirt.back").vertex_ids)
-    assert len(ids) == len(open_pattern(pattern).panel("skirt.back").uv) + 2  # a vertex on each side seam
-    added = ids[-2:]
+    assert len(ids) > len(open_pattern(pattern).panel("skirt.back").uv) + 2  # the line's points and the layers'
+    parts = {s.name: s.verts_a if s.panel_a == "skirt.back" else s.verts_b for s in opened.seams if "#p" in s.name}
+    ends = [int(parts[f"skirt.side_{x}#p0"][-1]) for x in ("left", "right")]
+    assert ends == [int(parts[f"skirt.side_{x}#p1"][0]) for x in ("left", "right")]
+    added = ids[ends]  # the back's vertex where the line meets each side seam
+    layers = [s for s in opened.seams if "#layer" in s.name]
+    assert sorted(s.name.split("#")[0] for s in layers) == ["skirt.side_left"] * 2 + ["skirt.side_right"] * 2
+    assert max(per[s.name]["mm"] for s in layers) < 1.0  # each layer as long as the stretch it is sewn to
     # export: the split seams' notches on both pieces, the tuck's lines on the front
     export_pattern(tucked, tmp_path / "p", formats=("svg", "dxf"))
     import json
@@ -425,17 +469,35 @@ def test_a_pleat_from_a_seam_is_sewn_through_it_at_every_stage(pleated, tmp_path
     pieces = {p["name"]: p for p in json.loads((tmp_path / "p" / "export.json").read_text())["pieces"]}
     for piece in ("skirt.front", "skirt.back"):
         assert {"skirt.side_left#p0", "skirt.side_left#p1"} <= set(pieces[piece]["notches_mm"])
+        # the layers' seams: a notch where the inner fold meets the seam, one depth from the line
+        for layer in ("skirt.side_left#layer0", "skirt.side_right#layer1"):
+            assert pieces[piece]["notches_mm"][layer] == pytest.approx([0.0, 20.0], abs=0.6)
     assert len(pieces["skirt.front"]["notches_mm"]["front_tuck"]) == 2 * 3
     # drape: each end of the tuck's fold and placement lines is the back's new vertex there
     cloth = draped_cloth(tucked)
     lines = [x for x in cloth.mesh_pattern.report["opened_pleats"]["skirt.front"] if x["pleat"] == "front_tuck"]
     fold, place = lines[0], next(x for x in lines if x["kind"] == "placement")
+    inner = [x for x in lines if x["kind"] == "fold"][1]
     seam_ends = set(cloth.particle_of[added].tolist())
+    back = set(cloth.particle_of[np.asarray(cloth.mesh_pattern.panel("skirt.back").vertex_ids)].tolist())
     for k in (0, -1):
         assert cloth.particle_of[fold["gids"][k]] == cloth.particle_of[place["gids"][k]]
         assert int(cloth.particle_of[fold["gids"][k]]) in seam_ends
+        # the inner fold (the folded layers' far edge) is sewn to the back too, one depth along the seam
+        tip = int(cloth.particle_of[inner["gids"][k]])
+        assert tip in back and tip not in seam_ends
+        assert np.linalg.norm(cloth.x0[tip] - cloth.x0[cloth.particle_of[fold["gids"][k]]]) == pytest.approx(
+            0.02, abs=0.006
+        )
     draped = workflows.drape(tucked, options={"max_frames": 1})
     assert draped.result.frames == 1 and draped.figures["penetration %"] < 0.5
+    # another size sews the layers at the same points: the same outline vertices (a graded nest)
+    from core.export.pieces import build_pieces
+
+    large = workflows.transfer(other, "XL", start=tucked).pattern
+    assert [s.get("sewn") for s in large.report["pleats"]] == [s.get("sewn") for s in tucked.report["pleats"]]
+    for a, b in zip(build_pieces(tucked), build_pieces(large)):
+        assert [x.tolist() for x in a.sew_ids] == [x.tolist() for x in b.sew_ids]
 
 
 def test_every_size_opens_to_the_same_outline(pleated):

@@ -52,6 +52,9 @@ SNAP = 0.2
 STRIP_EDGE = 0.006
 #: m, the drape's start lifts each layer of folded cloth this far off the one below it
 LAYER_GAP = 0.003
+#: m, a column of a pleat's folded layers this close to a vertex of the seam they are sewn into is
+#: sewn to that vertex (no sliver beside it); farther, both get a vertex
+SEAM_SNAP = 0.0006
 #: m, over this width beyond the folded cloth the lift of the cloth above it falls to 0
 LIFT_FALLOFF = 0.015
 #: share of the line's length at each end left out of the room check (the hem may slant there)
@@ -645,9 +648,12 @@ def open_piece(piece, strips: List[Strip], next_id: int, inside: np.ndarray, end
     the opened piece is its drape start: the folded layers lifted off one another, away from it).
     Returns ``(piece, lines, stitches, next_id)``: lines a list of :class:`OpenedLine`, stitches
     ``(pleat, ids_a, ids_b)`` welded by the drape. ``ends`` (a list, optional) gets one
-    ``(pleat, p, q, lam, at_p, at_q)`` per end of a line on an edge ``p``-``q`` of the closed
+    ``(pleat, p, q, lam, at_p, at_q, cols)`` per end of a line on an edge ``p``-``q`` of the closed
     outline (local ids): the line met it ``lam`` of the way from ``p``, and the opened piece's
-    outline runs ``p``, ``at_p``, the strip's row, ``at_q``, ``q`` (:func:`split_seams`)."""
+    outline runs ``p``, ``at_p``, the strip's row, ``at_q``, ``q`` (:func:`split_seams`); ``cols``
+    lists that row's vertices from side A's copy to side B's vertex as ``(id, offset, breakpoint)``:
+    where each lies along the outline as worn (the pleat closed: m from the line, positive towards
+    ``p``) and whether it is one of the strip's breakpoints (a fold or placement line)."""
     closed_uv = np.asarray(piece.uv, float)
     closed_xyz = np.asarray(piece.xyz, float)
     closed_faces = np.asarray(piece.faces, int)
@@ -743,9 +749,9 @@ def open_piece(piece, strips: List[Strip], next_id: int, inside: np.ndarray, end
         row = {int(v): i for i, v in enumerate(on_line)}
         hems = [_through_strip(h, grid, row, a_set) for h in hems]
         for j, sg in enumerate(sig):
-            if any(abs(sg - f) < 1e-12 for f in strip.folds):
+            if _on(sg, strip.folds):
                 lines.append(OpenedLine(strip.pleat, "fold", [int(v) for v in grid[:, j]], n_strip))
-            elif any(abs(sg - f) < 1e-12 for f in strip.placements):
+            elif _on(sg, strip.placements):
                 lines.append(OpenedLine(strip.pleat, "placement", [int(v) for v in grid[:, j]], n_strip))
         # the line's ends on the closed outline: which side each of the split edge's ends lies on
         for (p, q), m in cut.items():
@@ -754,7 +760,13 @@ def open_piece(piece, strips: List[Strip], next_id: int, inside: np.ndarray, end
                 lam = float(np.linalg.norm(cl[m] - cl[p]) / max(np.linalg.norm(cl[q] - cl[p]), 1e-300))
                 at = (int(grid[r, 0]), int(grid[r, -1]))  # side A's copy, side B's vertex
                 p_on_a = int(p) in a_set
-                end_rec.append((strip.pleat, int(p), int(q), lam, at[0 if p_on_a else 1], at[1 if p_on_a else 0]))
+                # each column's worn offset along the outline from the line, positive towards p
+                to_p = strip.side if p_on_a else -strip.side
+                cols = [
+                    (int(grid[r, j]), to_p * float(np.interp(sg, strip.breaks, strip.x)), _on(sg, strip.breaks))
+                    for j, sg in enumerate(sig)
+                ]
+                end_rec.append((strip.pleat, int(p), int(q), lam, at[0 if p_on_a else 1], at[1 if p_on_a else 0], cols))
         j0, j1 = (int(np.argmin(np.abs(sig - x))) for x in strip.stitch)
         arc = cumulative_lengths(uv[grid[:, 0]])
         held = max(int(np.searchsorted(arc, strip.stitched + 1e-9, side="right")), 1)
@@ -781,7 +793,10 @@ def open_piece(piece, strips: List[Strip], next_id: int, inside: np.ndarray, end
     lines = [OpenedLine(x.pleat, x.kind, [int(index[v]) for v in x.ids], x.strip) for x in lines]
     stitches = [(n, [int(index[v]) for v in a], [int(index[v]) for v in b]) for n, a, b in stitches]
     if ends is not None:
-        ends += [(n, p, q, lam, int(index[x]), int(index[y])) for n, p, q, lam, x, y in end_rec]
+        ends += [
+            (n, p, q, lam, int(index[x]), int(index[y]), [(int(index[c]), o, b) for c, o, b in cols])
+            for n, p, q, lam, x, y, cols in end_rec
+        ]
     new = vids < 0
     vids[new] = np.arange(next_id, next_id + int(new.sum()))
     nrm = nrm / np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300)
@@ -797,6 +812,11 @@ def open_piece(piece, strips: List[Strip], next_id: int, inside: np.ndarray, end
     opened._scales = None
     opened.achieved_weft, opened.achieved_warp, _ = opened.scales()
     return opened, lines, stitches, next_id + int(new.sum())
+
+
+def _on(sigma: float, marks) -> bool:
+    """The strip column at ``sigma`` is one of ``marks`` (a strip's breakpoints, folds or placements)."""
+    return any(abs(sigma - f) < 1e-12 for f in marks)
 
 
 def _rotated(loop, closed_loops):
@@ -845,12 +865,11 @@ def attach_pleats(pattern, prep) -> None:
     # every other size (graded files need the same outline vertices)
     known = getattr(prep, "_pleat_ends", None)
     known = known if isinstance(known, dict) else {}
-    for s in sites:
-        if _site_key(s) in known:
-            s["ends"] = copy.deepcopy(known[_site_key(s)])
+    for s in sites:  # with where the folds were sewn into a seam (split_seams)
+        s.update(copy.deepcopy(known.get(_site_key(s), {})))
     pattern.report["pleats"] = sites
     measure_pleats(pattern)
-    known.update({_site_key(s): copy.deepcopy(s["ends"]) for s in sites if "ends" in s})
+    known.update({_site_key(s): copy.deepcopy({k: s[k] for k in ("ends", "sewn") if k in s}) for s in sites})
     try:
         prep._pleat_ends = known
     except AttributeError:  # a container without attributes: each size finds its own ends
@@ -895,7 +914,7 @@ def open_pattern(pattern, stitch: bool = False):
         if stitch:
             for k, (name, ia, ib) in enumerate(stitches):
                 seams.append(PatternSeam(f"{name}#stitch{k}", piece.name, piece.name, np.asarray(ia), np.asarray(ib)))
-    panels, seams, next_id = split_seams(panels, seams, ends, next_id, {s["name"]: s["path"] for s in sites})
+    panels, seams, next_id = split_seams(panels, seams, ends, next_id, sites=sites, drawn=drawn)
     report = dict(pattern.report)
     report["opened_pleats"] = drawn
     return Pattern(
@@ -911,56 +930,73 @@ def open_pattern(pattern, stitch: bool = False):
     )
 
 
-def split_seams(panels, seams, ends: Dict[str, list], next_id: int, paths=None):
+def split_seams(panels, seams, ends: Dict[str, list], next_id: int, paths=None, sites=None, drawn=None):
     """Sew a pleat into the seam it starts or ends on: the pleat folded closed, the seam sewn through it.
 
     ``ends``: per opened piece the ends of its pleats' lines on the closed outline (``ends`` of
     :func:`open_piece`). Where one lies on a seam to another piece, the opened piece's side of the
-    seam runs ``p``, ``at_p`` and goes on from ``at_q``, ``q``: the strip's edge between (the
-    folded layers, as long as the intake) is in no seam. The seam is split there into two (named
-    ``<seam>#p0``, ``#p1``, ... along it), and the other piece gets a vertex on its edge at the same
-    fraction, which ends both parts: the pleat's visible fold and its placement line (welded by the
-    pleat's stitching at its start) are sewn to that one point, as a pattern maker folds the pleat,
-    pins it and sews the seam through it; each part's two sides keep their closed lengths (notches
-    match), and the seam's ends there are both pieces' notches. ``paths``: pleat name -> its JSON
-    path (for the error of a seam that cannot take it). Returns ``(panels, seams, next_id)``.
+    seam runs ``p``, ``at_p`` and goes on from ``at_q``, ``q``. The seam is split there into parts
+    (named ``<seam>#p0``, ``#p1``, ... along it), and the other piece gets a vertex on its edge at the
+    same fraction, which ends both parts: the pleat's visible fold and its placement line (welded
+    by the pleat's stitching at its start) are sewn to that one point, as a pattern maker folds the
+    pleat, pins it and sews the seam through it; each part's two sides keep their closed lengths
+    (notches match), and the seam's ends there are both pieces' notches.
+
+    The folded layers are in the seam too (:func:`_sew_layers`): each layer of the strip's edge
+    (from the line out to an inner fold, or back) is sewn to the other piece's edge over the
+    stretch of the seam it lies under when the pleat is closed, by a seam ``<seam>#layer<k>``
+    from the line's point outwards, so the seam runs through every layer of the closed pleat. The
+    stretch gets a vertex on both pieces at each of the layers' columns and each layer one at
+    each vertex of the stretch (a column within :data:`SEAM_SNAP` of one is sewn to it), and the
+    seam part beside the line takes them: the top cloth, every layer and the other piece are one
+    point at each. ``sites`` (the pattern's ``report["pleats"]``, optional) keeps under each
+    pleat's ``"sewn"`` where the stretch's points were placed, and the next call (another size)
+    places them the same way, so every size has the same outline vertices.
+
+    The vertices added to a piece are numbered after its last outline vertex (:func:`_outline_first`);
+    ``drawn`` (optional, ``report["opened_pleats"]``) gets its lines' ids renumbered with them.
+    ``paths``: pleat name -> its JSON path (for the error of a seam that cannot take it). Returns
+    ``(panels, seams, next_id)``.
     """
     from dataclasses import replace
 
     if not any(ends.values()):
         return panels, seams, next_id
+    before = [len(p.uv) for p in panels]
     by_name = {p.name: k for k, p in enumerate(panels)}
+    site_of = {x["name"]: x for x in sites or ()}
+    paths = dict(paths or {}, **{x["name"]: x["path"] for x in sites or () if "path" in x})
     panels = list(panels)
     out = []
     for seam in seams:
-        cuts = []  # (index along the seam, side, pleat, p, q, lam, at_p, at_q)
+        cuts = []  # (index along the seam, side, pleat, p, q, lam, at_p, at_q, cols)
         for side, name, verts in (("a", seam.panel_a, seam.verts_a), ("b", seam.panel_b, seam.verts_b)):
             if seam.kind == "dart" or name not in ends:
                 continue
             v = [int(x) for x in verts]
             pos = {frozenset((v[i], v[i + 1])): i for i in range(len(v) - 1)}
-            for pleat, p, q, lam, at_p, at_q in ends[name]:
+            for pleat, p, q, lam, at_p, at_q, *cols in ends[name]:
                 i = pos.get(frozenset((p, q)))
                 if i is not None:
-                    cuts.append((i, side, pleat, p, q, lam, at_p, at_q))
+                    cuts.append((i, side, pleat, p, q, lam, at_p, at_q, cols[0] if cols else []))
         if not cuts:
             out.append(seam)
             continue
         if seam.panel_a == seam.panel_b or seam.gathered or len({c[0] for c in cuts}) < len(cuts):
-            where = (paths or {}).get(cuts[0][2], "")
+            where = paths.get(cuts[0][2], "")
             raise DesignError(
                 f"{where}.from" if where else "",
                 f"pleat {cuts[0][2]!r} cannot be sewn into seam {seam.name!r}; {SEAM_REASON}",
             )
         va, vb = [int(x) for x in seam.verts_a], [int(x) for x in seam.verts_b]
         at_edge = {c[0]: c for c in cuts}
-        parts, cur = [], ([], [])
+        parts, cur, sewn = [], ([], []), []
         for k in range(len(va)):
             cur[0].append(va[k])
             cur[1].append(vb[k])
             if k not in at_edge:
                 continue
-            _, side, pleat, p, q, lam, at_p, at_q = at_edge[k]
+            _, side, pleat, p, q, lam, at_p, at_q, cols = at_edge[k]
             mine, other = (va, vb) if side == "a" else (vb, va)
             oname = seam.panel_b if side == "a" else seam.panel_a
             # the other piece's vertex at the same fraction of its edge
@@ -973,11 +1009,189 @@ def split_seams(panels, seams, ends: Dict[str, list], next_id: int, paths=None):
             cur[1].append(ends_here[1])
             parts.append(cur)
             cur = ([starts_next[0]], [starts_next[1]])
+            # the columns' offsets along the seam's direction after the line (before it: negated)
+            after = [(c, -o if mine[k] == p else o, br) for c, o, br in cols]
+            sewn.append((len(parts) - 1, side, pleat, f"{seam.name}|{p}|{q}", after))
         parts.append(cur)
+        layers = []
+        for n_part, side, pleat, key, after in sewn:
+            mi = by_name[seam.panel_a if side == "a" else seam.panel_b]
+            oi = by_name[seam.panel_b if side == "a" else seam.panel_a]
+            record = site_of.get(pleat, {}).setdefault("sewn", {}) if pleat in site_of else {}
+            for way, n, sign in (("before", n_part, -1), ("after", n_part + 1, 1)):
+                chains = _layer_chains(after, sign)
+                if not chains:
+                    continue
+                part = parts[n]
+                ms, os_ = (0, 1) if side == "a" else (1, 0)
+                flip = (lambda x: x[::-1]) if way == "before" else (lambda x: x)  # noqa: E731
+                chain_m, chain_o = flip(part[ms]), flip(part[os_])
+                where = paths.get(pleat, "")
+                panels, chain_m, chain_o, sewn_layers, next_id, record[f"{key}|{way}"] = _sew_layers(
+                    panels, mi, oi, chain_m, chain_o, chains, next_id, record.get(f"{key}|{way}"), where, seam.name
+                )
+                part[ms][:], part[os_][:] = flip(chain_m), flip(chain_o)
+                for ids_m, ids_o in sewn_layers:
+                    layers.append((ids_m, ids_o) if side == "a" else (ids_o, ids_m))
         parts_a, parts_b = [x[0] for x in parts], [x[1] for x in parts]
         for k, (a, b) in enumerate(zip(parts_a, parts_b)):
             out.append(replace(seam, name=f"{seam.name}#p{k}", verts_a=np.asarray(a, int), verts_b=np.asarray(b, int)))
+        for k, (a, b) in enumerate(layers):
+            out.append(
+                replace(seam, name=f"{seam.name}#layer{k}", verts_a=np.asarray(a, int), verts_b=np.asarray(b, int))
+            )
+    for k, n0 in enumerate(before):
+        if len(panels[k].uv) > n0:
+            panels[k], out, order = _outline_first(panels[k], n0, out)
+            if drawn is not None and panels[k].name in drawn:
+                for line in drawn[panels[k].name]:
+                    line["ids"] = [int(order[v]) for v in line["ids"]]
     return panels, out, next_id
+
+
+def _outline_first(piece, n0: int, seams):
+    """``piece`` with the vertices added to its outline (local ids from ``n0``) numbered right after
+    its last outline vertex before them (an opened piece's strips' inner vertices, whose number
+    changes from size to size, after them): every size has the same outline ids (a graded nest).
+    Returns the piece, ``seams`` renumbered and the new id of each old one."""
+    from dataclasses import replace
+
+    n = len(piece.uv)
+    faces = np.asarray(piece.faces, int)
+    on = set(int(v) for loop in boundary_loops(faces) for v in loop if v < n0)
+    pos = 1 + max(on)
+    old = np.r_[np.arange(pos), np.arange(n0, n), np.arange(pos, n0)]
+    new_id = np.empty(n, int)
+    new_id[old] = np.arange(n)
+    out = copy.copy(piece)
+    out.uv, out.xyz = np.asarray(piece.uv)[old], np.asarray(piece.xyz)[old]
+    out.vertex_ids = np.asarray(piece.vertex_ids)[old]
+    out.faces = new_id[faces]
+    out.hems = [new_id[np.asarray(h, int)] for h in piece.hems]
+    out.boundary = [new_id[np.asarray(b, int)] for b in piece.boundary]
+    out._scales = None
+    out.achieved_weft, out.achieved_warp, _ = out.scales()
+
+    def side(name, verts):
+        return new_id[np.asarray(verts, int)] if name == piece.name else verts
+
+    seams = [replace(x, verts_a=side(x.panel_a, x.verts_a), verts_b=side(x.panel_b, x.verts_b)) for x in seams]
+    return out, seams, new_id
+
+
+def _layer_chains(cols, sign) -> list:
+    """The layers of a strip's edge on a seam that lie along it in the direction ``sign`` (+1: the
+    offsets of ``cols`` as given, -1: negated) when the pleat is closed: per stretch of the edge
+    between two of its breakpoints (fold or placement lines), its vertices and their offsets, from
+    the line (offset 0) outwards."""
+    brk = [j for j, c in enumerate(cols) if c[2]]
+    out = []
+    for j0, j1 in zip(brk[:-1], brk[1:]):
+        seg = [(c[0], sign * c[1]) for c in cols[j0 : j1 + 1]]
+        if max(o for _, o in seg) <= 1e-9:
+            continue
+        if seg[0][1] > seg[-1][1]:
+            seg = seg[::-1]
+        out.append(([c for c, _ in seg], [o for _, o in seg]))
+    return out
+
+
+def _sew_layers(panels, mi, oi, chain_m, chain_o, layers, gid, record, where, seam_name):
+    """Sew the folded layers ``layers`` (:func:`_layer_chains`) of piece ``panels[mi]`` into its seam
+    with ``panels[oi]`` beside the pleat's line: ``chain_m`` / ``chain_o``, the seam part's two sides
+    from the line's point (the top cloth's vertex there and the other piece's, which the layers'
+    first vertices are already sewn to) outwards. The stretch of ``chain_m`` as long as the layers
+    gets the points listed in ``record`` (made here when None): ``["v", k, x]``, the chain's ``k``-th
+    vertex (sewn to the layers' column at offset ``x``, or None: each layer gets a vertex there)
+    and ``["c", x]``, a new vertex at the column offset ``x`` (m) on both sides of the seam. Returns
+    ``(panels, chain_m, chain_o, [(layer ids, other piece's ids)], gid, record)``."""
+    panels = list(panels)
+    uv = np.asarray(panels[mi].uv, float)
+    s_top = cumulative_lengths(uv[chain_m])
+    depth = max(max(o) for _, o in layers)
+    if s_top[-1] < depth - SEAM_SNAP:
+        raise DesignError(
+            f"{where}.from" if where else "",
+            f"seam {seam_name!r} ends {1000 * s_top[-1]:.1f} mm from the pleat's line, before its folded cloth "
+            f"({1000 * depth:.1f} mm): the folds cannot be sewn into it",
+        )
+    if record is None:
+        record = _seam_points(s_top, sorted({round(o, 12) for _, offs in layers for o in offs if o > 1e-12}))
+    # the top cloth's side and the other piece's, point by point
+    new_m, new_o = [chain_m[0]], [chain_o[0]]
+    at_top = {}  # entry index -> offset on this size
+    k_last, off_last = 0, 0.0
+    for e, entry in enumerate(record):
+        if entry[0] == "v":
+            k = int(entry[1])
+            new_m.append(chain_m[k])
+            new_o.append(chain_o[k])
+            k_last, off_last = k, float(s_top[k])
+            at_top[e] = off_last
+            continue
+        nxt = min(k_last + 1, len(chain_m) - 1)
+        x = _clamped(float(entry[1]), off_last, float(s_top[nxt]))
+        lam = (x - off_last) / max(float(s_top[nxt]) - off_last, 1e-300)
+        panels[mi], v_m = _split_edge(panels[mi], new_m[-1], chain_m[nxt], lam, gid)
+        panels[oi], v_o = _split_edge(panels[oi], new_o[-1], chain_o[nxt], lam, gid + 1)
+        gid += 2
+        new_m.append(v_m)
+        new_o.append(v_o)
+        off_last = x
+        at_top[e] = x
+    last = record[-1]
+    rest = int(last[1]) + 1 if last[0] == "v" else k_last + 1
+    chain_m, stretch_o = new_m + list(chain_m[rest:]), new_o
+    chain_o = new_o + list(chain_o[rest:])
+    # each layer: its columns where they are claimed, a new vertex at every other point
+    sewn = []
+    for ids, offs in layers:
+        col = {round(o, 9): c for c, o in zip(ids, offs)}
+        lay = [ids[0]]
+        off_l = 0.0
+        for e, entry in enumerate(record):
+            x = entry[2] if entry[0] == "v" else entry[1]
+            if x is not None and round(float(x), 9) in col:
+                lay.append(col[round(float(x), 9)])
+                off_l = float(x)
+                continue
+            nxt_x = min((o for o in offs if o > off_l + 1e-12), default=None)
+            if nxt_x is None:
+                raise DesignError(f"{where}.from" if where else "", f"pleat seam {seam_name!r}: a layer ends early")
+            w = col[round(nxt_x, 9)]
+            x = _clamped(at_top[e], off_l, nxt_x)
+            panels[mi], v = _split_edge(panels[mi], lay[-1], w, (x - off_l) / (nxt_x - off_l), gid)
+            gid += 1
+            lay.append(v)
+            off_l = x
+        sewn.append((lay, stretch_o))
+    return panels, chain_m, chain_o, sewn, gid, record
+
+
+def _seam_points(s_top, cols) -> list:
+    """The points of a seam stretch beside a pleat's line (see :func:`_sew_layers`): ``s_top`` the
+    arc length of each vertex of the top cloth's side from the line, ``cols`` the layers' column
+    offsets (> 0, sorted; the last is the layers' reach). A column within :data:`SEAM_SNAP` of a
+    vertex is sewn to it, the others get a vertex; the stretch ends at the layers' reach."""
+    reach = cols[-1]
+    cand = [k for k in range(1, len(s_top)) if s_top[k] < reach + SEAM_SNAP]
+    claimed = {}
+    for x in cols:
+        near = [k for k in cand if abs(s_top[k] - x) <= SEAM_SNAP and k not in claimed]
+        if near:
+            claimed[min(near, key=lambda k: abs(s_top[k] - x))] = x
+    end = next((k for k, x in claimed.items() if x == reach), None)
+    keep = [k for k in cand if (k <= end if end is not None else s_top[k] < reach)]
+    entries = [(float(s_top[k]), ["v", k, claimed.get(k)]) for k in keep]
+    entries += [(x, ["c", x]) for x in cols if x not in claimed.values()]
+    return [e for _, e in sorted(entries, key=lambda t: t[0])]
+
+
+def _clamped(x: float, lo: float, hi: float) -> float:
+    """``x`` kept strictly between ``lo`` and ``hi`` (a point placed on another size, where the
+    stretch's vertices lie a little elsewhere), at least a tenth of the gap from each."""
+    gap = hi - lo
+    return min(max(x, lo + 0.1 * gap), hi - 0.1 * gap)
 
 
 def _split_edge(piece, y_p: int, y_q: int, lam: float, gid: int):
