@@ -200,10 +200,11 @@ def test_edge_flip_solvers_are_kept_per_mesh_and_built_out_of_process(monkeypatc
     assert geometry.edge_flip_solver(moved, F) is not s1
     pairs = [(0, 700), (5, 1300), (1441, 1440), (700, 0)]
     here = [s1.path(a, b) for a, b in pairs]
-    # a cached solver answers as a fresh one, whatever it answered before
-    fresh = geometry._LocalSolver(np.ascontiguousarray(V, float), np.ascontiguousarray(F, np.int64))
-    for (a, b), p in zip(pairs, here):
-        np.testing.assert_allclose(fresh.path(a, b), p, rtol=0, atol=1e-12)
+    # a cached solver answers as a fresh one, whatever it answered before (here: in the other order)
+    for k in reversed(range(len(pairs))):
+        fresh = geometry._LocalSolver(np.ascontiguousarray(V, float), np.ascontiguousarray(F, np.int64))
+        np.testing.assert_allclose(fresh.path(*pairs[k]), here[k], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(s1.path(*pairs[k]), here[k], rtol=0, atol=1e-12)
     monkeypatch.setattr(geometry, "OUT_OF_PROCESS", True)
     try:
         remote = _in_worker(lambda: geometry.edge_flip_solver(V, F))
