@@ -17,8 +17,8 @@ def _fit(context, label: str, workflow, sync_=None) -> jobs.Job:
     design as a job (:func:`.pattern_job.start_pattern`; ``sync_``: :func:`.jobs.start`'s); its
     pattern replaces the pieces beside the body, its figures show in the Fit panel."""
 
-    def show(ctx, prep, run):
-        sync.show_pattern(ctx, run.pattern)
+    def show(ctx, prep, run, shown):
+        sync.show_pattern(ctx, run.pattern, **shown)
         ctx.scene.ease.fit_json = json.dumps(run.figures)
 
     return pattern_job.start_pattern(context, label, workflow, show, sync_=sync_)

@@ -9,7 +9,7 @@ import json
 
 import bpy
 
-from . import data, jobs, state
+from . import data, jobs, state, sync
 
 PATTERN_JOB = "pattern"  # the job of Optimize Pattern, Transfer and Adapt (a newer one replaces a running one)
 
@@ -19,15 +19,19 @@ def start_pattern(context, label: str, workflow, apply, edit=None, sync_=None) -
     design (``edit(design)``: the panels' settings) cut on the scene body (:func:`.data.prepared`,
     its scene half here, its cut in the worker), as the job :data:`PATTERN_JOB`: the cut and the
     workflow in a worker (``sync_``: :func:`.jobs.start`'s ``sync``), then ``apply(context,
-    prep, result)`` on the main thread in one pass. A result landing on a scene whose design or
-    body changed meanwhile is refused with the reason."""
+    prep, result, shown)`` on the main thread in one pass (``shown``: the keywords of
+    :func:`.sync.show_pattern` for the result's pattern, made in the worker too). A result
+    landing on a scene whose design or body changed meanwhile is refused with the reason."""
     design, spec = data.preparing(context, edit)
     before = (context.scene.ease.design_json, json.dumps(spec, sort_keys=True))
+    ramp_range = data.ramp_range(context.scene)
 
     def compute(progress):
         progress(0.0, "cutting the design")
         prep = data.prepare(design, spec)
-        return prep, workflow(prep, progress)
+        run = workflow(prep, progress)
+        progress(0.99, "preparing the pieces")
+        return prep, run, sync.prepared_show(run.pattern, ramp_range)
 
     def landed(result):
         ctx = bpy.context

@@ -44,12 +44,12 @@ def start_optimize(context, sync_=None) -> tuple:
     config = data.solver_choice(context.scene)
     said = []
 
-    def show(ctx, prep, run):
+    def show(ctx, prep, run, shown):
         # the design keeps the gathering it was solved with
         text = json.dumps(prep.design.to_json(), sort_keys=True)
         if text != ctx.scene.ease.design_json:
             ctx.scene.ease.design_json = text
-        sync.show_pattern(ctx, run.pattern)
+        sync.show_pattern(ctx, run.pattern, **shown)
         said.append(f"pattern: {len(run.pattern.panels)} pieces")
 
     job = start_pattern(

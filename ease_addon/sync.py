@@ -441,13 +441,40 @@ def pattern_range(ramp_range, pattern) -> tuple:
     return lo, hi
 
 
+def prepared_show(pattern, ramp_range) -> dict:
+    """What :func:`show_pattern` makes of ``pattern`` before writing Blender's data, made ahead
+    (no ``bpy``: in the worker that solved it; the main thread's tick then only writes arrays):
+    its stored text (encoded a few rows per call: the worker lets the main thread run between),
+    its :class:`.build.PatternPlan` and its ramp range for the panel's ``ramp_range``.
+    :func:`show_pattern`'s keywords."""
+    from ..core.live import PatternText
+
+    range_ = pattern_range(ramp_range, pattern)
+    return {
+        "text": PatternText().text(pattern),
+        "plan": build.PatternPlan(pattern).colored(range_),
+        "range_": range_,
+        "ramp_range": tuple(ramp_range),
+    }
+
+
 def show_pattern(
-    context, pattern, store_as: str = data.PATTERN_KEY, text=None, plan=None, made=None, range_=None
+    context,
+    pattern,
+    store_as: str = data.PATTERN_KEY,
+    text=None,
+    plan=None,
+    made=None,
+    range_=None,
+    ramp_range=None,
 ) -> None:
     """Make ``pattern`` the scene's pattern: its pieces beside the body, its key figures
     (``text``: its stored text, ``plan``: its :class:`.build.PatternPlan`, ``range_``: its
-    :func:`pattern_range`, when the caller made them already, in a worker; ``made``: new piece
-    meshes made in earlier ticks, :func:`.build.update_pattern_objects`)."""
+    :func:`pattern_range`, when the caller made them already, in a worker: :func:`prepared_show`;
+    ``ramp_range``: the panel's range ``range_`` was made for (another now: made again);
+    ``made``: new piece meshes made in earlier ticks, :func:`.build.update_pattern_objects`)."""
+    if ramp_range is not None and tuple(ramp_range) != tuple(data.ramp_range(context.scene)):
+        range_ = None
     lo, hi = pattern_range(data.ramp_range(context.scene), pattern) if range_ is None else range_
     build.update_pattern_objects(context.scene, pattern, lo, hi, pieces_x0(context.scene), plan=plan, made=made)
     store_pattern(context.scene, pattern, store_as, text=text)
