@@ -235,6 +235,49 @@ def test_solve_reaches_the_implicit_step(method):
     assert pd.energy(x, y, 1.0) < e0
 
 
+def test_default_substeps_keep_the_fall_inside_the_thickness():
+    # pd's default: the fewest substeps (at least 2) whose fall under gravity stays within the contact
+    # thickness; every other solver keeps its fixed default, and a given count is kept
+    from core.drape.options import SUBSTEPS, DrapeOptions, default_substeps
+
+    pd = DrapeOptions(solver="pd")
+    assert default_substeps(pd, 0.003) == 2  # 2.7 mm a substep at 30 fps
+    assert default_substeps(pd, 0.002) == 3  # silk: 1.2 mm
+    assert default_substeps(DrapeOptions(solver="pd", fps=60.0), 0.002) == 2
+    assert default_substeps(DrapeOptions(solver="pd", substeps=5), 0.002) == 5
+    assert default_substeps(DrapeOptions(), 0.002) == SUBSTEPS["xpbd"]
+    for thickness in (0.001, 0.002, 0.003, 0.004):
+        n = default_substeps(pd, thickness)
+        assert pd.gravity / (pd.fps * n) ** 2 <= thickness < pd.gravity / (pd.fps * (n - 1)) ** 2 or n == 2
+
+
+def test_contact_penalty_holds_the_sheet_on_the_body():
+    # body contact inside the solve (contact_weight > 0): a free sheet resting on a plane at its offset ends
+    # its step there, at an equilibrium (residual force under 0.1 % of the weight, friction holding nothing:
+    # the plane is level); without it the step falls through the offset
+    cloth = _sheet()
+    mat = get_material("cotton")
+    mass = mat.density * cloth.mass_area
+    dt, offset = 1 / 60, 0.003
+    x0 = cloth.x0.copy()
+    point = x0 - np.array([0.0, 0.0, offset])
+    normal = np.tile([0.0, 0.0, 1.0], (len(x0), 1))
+    ends = {}
+    for weight in (0.0, 1.0):
+        pd = ProjectiveStep(cloth, mat, dt, mass, np.ones((len(cloth.faces), 2)), np.zeros(0))
+        pd.contact_weight = weight * float(np.median(pd.matrix.diagonal()))
+        pd.set_contact(point, normal, np.ones(len(x0), int), offset)
+        x, y = x0.copy(), x0.copy()
+        y[:, 2] -= 9.81 * dt * dt  # 2.7 mm: through the offset
+        # (without the penalty the stop test counts the body's reaction as holding the sheet: run on)
+        it, res = pd.solve(x, y, 1.0, 200, 1e-3 if weight else 0.0, mass * 9.81)
+        ends[weight] = (x[:, 2] - point[:, 2], res, pd.refactors)
+    height, res, refactors = ends[1.0]
+    assert res < 1e-3 and refactors == 1
+    assert np.all(height > offset - 1e-5) and np.all(height < offset)  # pressed in by weight / contact_weight
+    assert ends[0.0][0].max() < offset - 1e-3 and ends[0.0][2] == 0
+
+
 def test_gauss_newton_product():
     # ProjectiveStep.method = "newton"'s Hessian product: symmetric; on a sheet stretched without shear or bend (every
     # spring longer than its rest, so no clamp acts) it is the exact Hessian of G (central differences of
@@ -269,7 +312,7 @@ def test_cli_solver_flag():
     D.add_parser(ap.add_subparsers())
     args = ap.parse_args(["drape", "p", "--out", "o", "--solver", "pd"])
     options = D._options(args)
-    assert options["solver"] == "pd" and DrapeOptions.coerce(options).substeps == 3
+    assert options["solver"] == "pd" and DrapeOptions.coerce(options).substeps is None  # set by the solver
     flag = next(a for a in ap._subparsers._group_actions[0].choices["drape"]._actions if a.dest == "solver")
     assert sorted(flag.choices) == sorted(SOLVERS)
     assert "solver" not in D._options(ap.parse_args(["drape", "p", "--out", "o"]))

@@ -55,6 +55,15 @@ from .newton import NewtonStep, _rows
 
 wp.set_module_options({"enable_backward": False})
 
+#: body contact inside the solve: the penalty's weight in units of the median diagonal entry of the step's
+#: matrix (:attr:`ProjectiveStep.contact_weight`); 0 (the default): contact only after each substep's solve.
+#: An experiment: at 1.0 the drapes end nearer an equilibrium with the body, but a frame costs about 30 %
+#: more (a refactorisation per contact search) and the Cusick figures spread as much
+#: (benchmarks/results/drape_pd.md)
+CONTACT_WEIGHT = 0.0
+#: the contact penalty holds the particles whose height over their contact plane is under this many offsets
+HELD_HEIGHT = 1.05
+
 F64 = wp.float64
 
 
@@ -320,7 +329,8 @@ class Factor3:
         import qdldl
         from scipy.sparse import triu
 
-        L, D, P = qdldl.Solver(triu(A, format="csc"), upper=True).factors()
+        self._qdldl = qdldl.Solver(triu(A, format="csc"), upper=True)
+        L, D, P = self._qdldl.factors()
         self.n = n = A.shape[0]
         i32 = np.int32
         self._host = [
@@ -340,6 +350,15 @@ class Factor3:
             record_cmd=True,
             inputs=[n, *(wp.array(a, device="cpu", copy=False) for a in arrays)],
         )
+
+    def refactor(self, A) -> None:
+        """Factorise ``A`` (same sparsity pattern, new values) in place: qdldl's numeric update."""
+        from scipy.sparse import triu
+
+        self._qdldl.update(triu(A, format="csc"), upper=True)
+        L, D, _ = self._qdldl.factors()
+        self._host[3][:] = L.data
+        self._host[4][:] = 1.0 / np.asarray(D, float)
 
     def solve(self, v: np.ndarray) -> np.ndarray:
         """A^-1 v, v (n, 3): a new (n, 3) array."""
@@ -453,6 +472,12 @@ class ProjectiveStep:
         experiment: 4x fewer back-substitutions than Anderson on a clamped creased strip, but on the
         Cusick disc it does not settle, and at 5 mm edges the specimen falls off the support, so the
         drape's options do not offer it; benchmarks/results/drape_pd.md).
+    contact_weight : N/m, the body-contact penalty inside the solve (:data:`CONTACT_WEIGHT` times the
+        matrix's median diagonal entry; 0: none). Where positive, each contact search's particles on the
+        body (within :data:`HELD_HEIGHT` times the contact offset of their plane) are held by ``contact_weight / 2 * depth^2`` (depth below
+        the offset), its weight in the matrix's diagonal (refactored when that set changes), and the stop
+        test counts the normal force and allows friction up to ``friction`` times the penalty's force.
+    refactors : int, the refactorisations the contact penalty's set changes asked for.
     """
 
     def __init__(
@@ -478,7 +503,22 @@ class ProjectiveStep:
         self.matrix = A.tocsr()
         fi = self.free_idx
         # SPD: an LDL^T with qdldl's AMD ordering, x, y and z back-substituted in one pass
-        self.lu = Factor3(self.matrix[fi][:, fi].tocsc()) if len(fi) else None
+        free_matrix = self.matrix[fi][:, fi].tocsc()
+        free_matrix.sort_indices()
+        self.lu = Factor3(free_matrix) if len(fi) else None
+        # body contact in the solve: a penalty on the particles held on their contact plane, whose weight
+        # enters the matrix's diagonal (refactored when that set changes, at most once per contact search)
+        self._free_matrix, self._base_values = free_matrix, free_matrix.data.copy()
+        cols = np.repeat(np.arange(len(fi)), np.diff(free_matrix.indptr))
+        self._diag_pos = np.zeros(len(fi), dtype=np.int64)
+        on_diag = free_matrix.indices == cols
+        self._diag_pos[cols[on_diag]] = np.nonzero(on_diag)[0]
+        diag = free_matrix.diagonal()
+        self.contact_weight = CONTACT_WEIGHT * float(np.median(diag)) if len(fi) else 0.0
+        self._held = None  # (rows into the free particles, normals, plane points, offset) of the penalty
+        self._held_key = b""
+        self._searched = True
+        self.refactors = 0
         # every linear image at once: weft, warp, sliver edges, hinges (rows in that order), and its transpose
         self.D = vstack([el.Ga, el.Gb, el.Ge, self.Gh]).tocsr()
         self.DT = self.D.T.tocsr()
@@ -556,6 +596,14 @@ class ProjectiveStep:
         residual force that presses it into the body, and up to :attr:`friction` times that along the
         body, is the body's to hold (the contact and friction are applied after the solve)."""
         idx = np.nonzero((np.asarray(active) != 0) & self.free)[0]
+        prev = self.contact
+        # the planes move only at a contact search: the penalty's set is chosen again after one
+        self._searched = (
+            prev is None
+            or not np.array_equal(prev[0], idx)
+            or not np.array_equal(prev[1], point[idx])
+            or not np.array_equal(prev[2], normal[idx])
+        )
         self.contact = (
             (idx, point[idx].astype(float), normal[idx].astype(float), float(thickness)) if len(idx) else None
         )
@@ -607,8 +655,19 @@ class ProjectiveStep:
             # on the body (within twice the contact offset) the body's reaction and friction take the part
             # of the force that presses the particle into the body and up to mu times that along it
             idx, point, normal, thickness = self.contact
-            on = np.einsum("ij,ij->i", x[idx] - point, normal) < 2.0 * thickness
+            height = np.einsum("ij,ij->i", x[idx] - point, normal)
+            on = height < 2.0 * thickness
             near, nrm = np.searchsorted(fi, idx[on]), normal[on]
+            if self.contact_weight > 0.0:
+                if self._searched or self._held is None:
+                    # held: the particles on the body (at its offset, where the last contact put them, or
+                    # below); one above it stays free to fall (its matrix term would hold it back)
+                    touch = height < HELD_HEIGHT * thickness
+                    self._hold((np.searchsorted(fi, idx[touch]), normal[touch], point[touch], thickness))
+                if self._held is not None:
+                    near, nrm = self._held[0], self._held[1]
+        elif self._held is not None:
+            self._hold(None)
         if self.method == "lbfgs":
             return self._lbfgs(x, y, grow, iterations, tolerance, fi, near, nrm, w2)
         if self.method == "newton":
@@ -657,10 +716,35 @@ class ProjectiveStep:
             e, grad = self._gradient(x, y, grow)
         return it, res
 
+    def _hold(self, held) -> None:
+        """Hold ``held`` (rows into the free particles, their normals, plane points, the offset; or None)
+        on the body by the contact penalty: the matrix's diagonal gains its weight there (refactored where
+        the rows differ from the last set's)."""
+        self._searched = False
+        key = held[0].tobytes() if held is not None and len(held[0]) else b""
+        self._held = held if key else None
+        if key == self._held_key:
+            return
+        values = self._base_values.copy()
+        if key:
+            values[self._diag_pos[held[0]]] += self.contact_weight
+        self._free_matrix.data[:] = values
+        self.lu.refactor(self._free_matrix)
+        self._held_key = key
+        self.refactors += 1
+
     def _gradient(self, x, y, grow) -> tuple:
-        """(G(x), grad G on the free particles (F, 3))."""
+        """(G(x), grad G on the free particles (F, 3)); with the contact penalty
+        ``contact_weight / 2 * depth^2`` on the held particles, depth = how far inside its plane's offset."""
         energy = self._evaluate(x, y, grow)
-        return energy, self._all[self.free_idx]
+        grad = self._all[self.free_idx]
+        if self._held is not None:
+            rows, nrm, point, offset = self._held
+            depth = np.maximum(offset - np.einsum("ij,ij->i", x[self.free_idx[rows]] - point, nrm), 0.0)
+            grad[rows] -= (self.contact_weight * depth)[:, None] * nrm
+            energy += 0.5 * self.contact_weight * float(depth @ depth)
+            self._pressure = self.contact_weight * depth
+        return energy, grad
 
     def _back(self, v: np.ndarray) -> np.ndarray:
         """A^-1 v on the free particles ((F, 3)): one back-substitution of the factored matrix."""
@@ -773,7 +857,13 @@ class ProjectiveStep:
     def _residual(self, grad, near, nrm, w2) -> float:
         """The largest residual force over weight, less what the body holds (:meth:`set_contact`)."""
         left = np.einsum("ij,ij->i", grad, grad)
-        if len(near):
+        if self._held is not None and len(near):
+            # the penalty is in the gradient: the normal part counts, friction holds up to mu times the
+            # penalty's force along the body
+            normal = np.einsum("ij,ij->i", grad[near], nrm)
+            slide = np.sqrt(np.maximum(left[near] - normal * normal, 0.0))
+            left[near] = normal * normal + np.maximum(slide - self.friction * self._pressure, 0.0) ** 2
+        elif len(near):
             press = np.einsum("ij,ij->i", grad[near], nrm)  # > 0: the net force presses into the body
             slide = np.maximum(left[near] - press * press, 0.0)
             held = np.maximum(np.sqrt(slide) - self.friction * np.maximum(press, 0.0), 0.0) ** 2

@@ -27,7 +27,7 @@ import numpy as np
 from ..errors import DrapeError
 from .materials import Material, get_material
 from .mesh import Cloth, colour_order, rest_edges, two_rings
-from .options import DrapeOptions
+from .options import DrapeOptions, default_substeps
 from .schedule import growth_per_substep, initial_growth
 from .strain import face_strains
 
@@ -172,6 +172,7 @@ class DrapeSolver:
         body_v, body_f = check_body(body_vertices, body_faces)
         self.cloth, self.material, self.options = cloth, mat, opts
         self.thickness = mat.thickness if opts.thickness is None else float(opts.thickness)
+        opts.substeps = default_substeps(opts, self.thickness)  # pd's default depends on the thickness
         self.friction = mat.friction if opts.friction is None else float(opts.friction)
 
         from ..geom import queries as Q
