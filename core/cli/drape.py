@@ -43,7 +43,7 @@ def add_parser(sub) -> None:
         choices=("xpbd", "pd", "newton", "vbd"),  # core.drape.options.SOLVERS (numpy-free parser)
         help="cloth solver: xpbd (default), pd (projective dynamics: the fabric's own stiffness, slower)",
     )
-    p.add_argument("--substeps", type=int, default=None, help="substeps per frame (default: the solver's, 20; pd 3)")
+    p.add_argument("--substeps", type=int, default=None, help="substeps per frame (default: 20; pd 2, silk 3)")
     p.add_argument(
         "--self-collision",
         action="store_true",
