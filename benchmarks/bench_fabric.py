@@ -57,6 +57,15 @@ BLENDER_PRESETS = ("Cotton", "Denim", "Leather", "Rubber")
 SOLVERS = {"xpbd": 20, "newton": 3}
 
 
+def runs(quick: bool, solver: str) -> list:
+    """The (mesh edge, iteration factor) pairs a solver's Cusick rows run: newton, the solver that meets the
+    targets, at 10 mm and 5 mm with its default iterations and at 10 mm with 4x them, quick or not (5 mm at
+    4x: tens of minutes a fabric); XPBD at 10 mm only when quick, else at both edges and both factors."""
+    if solver == "newton":
+        return [(EDGES[0], 1), (EDGES[0], ITERATION_FACTORS[1]), (EDGES[1], 1)]
+    return [(EDGES[0], 1)] if quick else [(e, f) for e in EDGES for f in ITERATION_FACTORS]
+
+
 def ease_rows(quick: bool, solver: str = "xpbd") -> list:
     from core.drape import DrapeOptions
     from core.drape import textile as T
@@ -64,54 +73,50 @@ def ease_rows(quick: bool, solver: str = "xpbd") -> list:
 
     substeps = SOLVERS[solver]
     base = DrapeOptions(solver=solver).iterations
-    edges = EDGES[:1] if quick else EDGES
-    factors = ITERATION_FACTORS[:1] if quick and solver != "newton" else ITERATION_FACTORS
     rows = []
     for name in PRESETS:
-        for edge in edges:
-            for f in factors:
-                if solver == "newton" and f > 1 and (edge != edges[0] or (quick and name != "cotton")):
-                    continue  # 5 mm at 4x the newton iterations: tens of minutes a fabric (quick: cotton's 10 mm only)
-                opts = {"solver": solver, "substeps": substeps, "iterations": base * f}
-                t0 = time.perf_counter()
-                c = T.cusick(name, edge=edge, options=opts, max_frames=400)
-                # the cantilever at 2.5 mm and 4x iterations takes minutes a fabric: left out
-                b = (
-                    T.cantilever(name, edge=edge / 2, options=opts, bisections=6)
-                    if (f == 1 or (edge == edges[0] and not quick))
-                    else None
-                )
-                row = {
-                    "material": name,
-                    "solver": solver,
-                    "edge_mm": edge * 1e3,
-                    "substeps": substeps,
-                    "iterations": base * f,
-                    "dc_pct": c["dc_pct"],
-                    "nodes": c["nodes"],
-                    "frames": c["frames"],
-                    "settled": c["settled"],
-                    "energy_J_per_kg": c["energy"],
-                    "move_mm": c["move_mm"],
-                    "particles": c["particles"],
-                    "ms_per_frame": c["ms_per_frame"],
-                    "unconverged_substeps": c["unconverged_substeps"],
-                    "substeps_done": c["substeps_done"],
-                    "max_residual": c["max_residual"],
-                    "bending_length_cm": b["bending_length_cm"] if b else float("nan"),
-                    "bending_edge_mm": edge / 2 * 1e3,
-                    "bending_expected_cm": T.cantilever_expected(name),
-                    "bending_runs_settled": all(r["settled"] for r in b["runs"]) if b else None,
-                    "wall_s": time.perf_counter() - t0,
-                }
-                rows.append(row)
-                print(
-                    f"[bench fabric] {solver} {name} {edge * 1e3:.0f} mm, {base * f} iterations: DC {row['dc_pct']:.1f} %, "
-                    f"{row['nodes']} nodes, c {row['bending_length_cm']:.2f} cm "
-                    f"({row['frames']} frames, settled {row['settled']}; {row['wall_s']:.0f} s)",
-                    file=sys.stderr,
-                    flush=True,
-                )
+        for edge, f in runs(quick, solver):
+            opts = {"solver": solver, "substeps": substeps, "iterations": base * f}
+            t0, c0 = time.perf_counter(), time.process_time()
+            c = T.cusick(name, edge=edge, options=opts, max_frames=400)
+            # the cantilever at 2.5 mm and 4x iterations takes minutes a fabric: left out
+            b = (
+                T.cantilever(name, edge=edge / 2, options=opts, bisections=6)
+                if (f == 1 or (edge == EDGES[0] and not quick))
+                else None
+            )
+            row = {
+                "material": name,
+                "solver": solver,
+                "edge_mm": edge * 1e3,
+                "substeps": substeps,
+                "iterations": base * f,
+                "dc_pct": c["dc_pct"],
+                "nodes": c["nodes"],
+                "frames": c["frames"],
+                "settled": c["settled"],
+                "energy_J_per_kg": c["energy"],
+                "move_mm": c["move_mm"],
+                "particles": c["particles"],
+                "ms_per_frame": c["ms_per_frame"],
+                "unconverged_substeps": c["unconverged_substeps"],
+                "substeps_done": c["substeps_done"],
+                "max_residual": c["max_residual"],
+                "bending_length_cm": b["bending_length_cm"] if b else float("nan"),
+                "bending_edge_mm": edge / 2 * 1e3,
+                "bending_expected_cm": T.cantilever_expected(name),
+                "bending_runs_settled": all(r["settled"] for r in b["runs"]) if b else None,
+                "wall_s": time.perf_counter() - t0,
+                "cpu_s": time.process_time() - c0,
+            }
+            rows.append(row)
+            print(
+                f"[bench fabric] {solver} {name} {edge * 1e3:.0f} mm, {base * f} iterations: DC {row['dc_pct']:.1f} %, "
+                f"{row['nodes']} nodes, c {row['bending_length_cm']:.2f} cm "
+                f"({row['frames']} frames, settled {row['settled']}; {row['wall_s']:.0f} s)",
+                file=sys.stderr,
+                flush=True,
+            )
     return rows
 
 
@@ -250,6 +255,30 @@ def _unconverged(row) -> str:
     return f"{row['unconverged_substeps']} of {row['substeps_done']} ({row['max_residual']:.3g})"
 
 
+def _verdict(mine: list, target: dict) -> str:
+    """yes / no (and what misses) for one solver's runs of one fabric against its targets; - without any."""
+    if not target:
+        return "- (no published target)"
+    miss = []
+    lo, hi = target.get("dc_pct", (-np.inf, np.inf))
+    if not all(lo <= r["dc_pct"] <= hi for r in mine):
+        miss.append("DC")
+    lo, hi = target.get("nodes", (0, np.inf))
+    if not all(lo <= r["nodes"] <= hi for r in mine):
+        miss.append("nodes")
+    dcs = [r["dc_pct"] for r in mine]
+    if max(dcs) - min(dcs) > 6.0:
+        miss.append("spread")
+    if not all(r["settled"] for r in mine):
+        miss.append("settling")
+    if "bending_length_cm" in target:
+        lo, hi = target["bending_length_cm"]
+        cs = [r["bending_length_cm"] for r in mine if np.isfinite(r["bending_length_cm"])]
+        if not cs or not all(lo <= c <= hi for c in cs):
+            miss.append("bending length")
+    return "yes" if not miss else "no: " + ", ".join(miss)
+
+
 def _spread(rows, material, key, solver):
     vals = [r[key] for r in rows if r["material"] == material and r["solver"] == solver and np.isfinite(r[key])]
     return (max(vals) - min(vals)) if vals else float("nan")
@@ -272,18 +301,25 @@ def _markdown(res: dict) -> str:
         f"{res['settle']['move_mm']:g} mm, {res['settle']['frames']} frames running.",
         "",
     ]
+    lines += [
+        f"Run on commit {res.get('commit') or '?'}; load average (1 min) {res['load'][0]:.1f} at the start, "
+        f"{res['load'][1]:.1f} at the end (ms/frame is wall time on a shared machine: compare the CPU "
+        "seconds beside it).",
+        "",
+    ]
     if res.get("quick"):
         lines += [
-            "Quick run (`--quick`): the 10 mm disc (5 mm cantilever strip) at each solver's default "
-            "iterations, and newton's cotton at 4x them; no 5 mm rows, so the spreads below are over "
-            "iterations only.",
+            "Quick run (`--quick`): newton, the solver that meets the targets, on the 10 mm and 5 mm discs "
+            "at its default iterations and on the 10 mm disc at 4x them, as in the full run; XPBD on the "
+            "10 mm disc at its default iterations only (the full run adds its 5 mm and 4x rows, the "
+            "cantilever at 4x and the 5 mm hanging sheet).",
             "",
         ]
     lines += [
         "| solver | fabric | edge (mm) | iterations | DC (%) | target DC (%) | nodes | target nodes | settled (frames) | "
-        "bending length (cm) | preset's (G/W)^1/3 (cm) | target (cm) | ms/frame (Cusick) | "
+        "bending length (cm) | preset's (G/W)^1/3 (cm) | target (cm) | ms/frame (Cusick) | CPU s (Cusick + cantilever) | "
         "newton solves left above the tolerance (largest residual / weight) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         t = TARGETS.get(r["material"], {})
@@ -294,18 +330,27 @@ def _markdown(res: dict) -> str:
             f"| {r['solver']} ({r['substeps']} substeps) | {r['material']} | {r['edge_mm']:.0f} | {r['iterations']} | {r['dc_pct']:.1f} | {dc_t} | "
             f"{r['nodes']} | {nd_t} | {'yes' if r['settled'] else 'NO'} ({r['frames']}) | "
             f"{_cm(r['bending_length_cm'])} | {r['bending_expected_cm']:.2f} | {c_t} | "
-            f"{r['ms_per_frame']:.1f} | {_unconverged(r)} |"
+            f"{r['ms_per_frame']:.1f} | {r.get('cpu_s', float('nan')):.0f} | {_unconverged(r)} |"
         )
     lines += [
         "",
-        "Convergence (target: DC within +-3 points across mesh edge and iterations, i.e. a spread <= 6):",
+        "Convergence (target: DC within +-3 points across mesh edge and iterations, i.e. a spread <= 6) "
+        "and the targets of every run (DC and nodes in range, cotton's bending length in range):",
         "",
-        "| solver | fabric | DC spread (points) | bending length spread (cm) |",
-        "|---|---|---|---|",
+        "| solver | fabric | runs (edge mm / iterations) | DC (%) | DC spread (points) | nodes | "
+        "bending length (cm) | bending length spread (cm) | meets the targets |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for v, m in dict.fromkeys((r["solver"], r["material"]) for r in rows):
+        mine = [r for r in rows if r["solver"] == v and r["material"] == m]
+        dcs, nodes = [r["dc_pct"] for r in mine], [r["nodes"] for r in mine]
+        cs = [r["bending_length_cm"] for r in mine if np.isfinite(r["bending_length_cm"])]
+        which = ", ".join("{:.0f}/{}".format(r["edge_mm"], r["iterations"]) for r in mine)
         lines.append(
-            f"| {v} | {m} | {_spread(rows, m, 'dc_pct', v):.1f} | {_spread(rows, m, 'bending_length_cm', v):.2f} |"
+            f"| {v} | {m} | {which} | "
+            f"{min(dcs):.1f}–{max(dcs):.1f} | {_spread(rows, m, 'dc_pct', v):.1f} | {min(nodes)}–{max(nodes)} | "
+            f"{(_cm(min(cs)) + '–' + _cm(max(cs))) if cs else '–'} | {_spread(rows, m, 'bending_length_cm', v):.2f} | "
+            f"{_verdict(mine, TARGETS.get(m, {}))} |"
         )
     lines += [
         "",
@@ -355,6 +400,20 @@ def _finite(obj):
     return obj
 
 
+def _commit() -> str:
+    """The checkout's commit (short hash, '+' when the working tree has changes), or None."""
+    try:
+        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=REPO, capture_output=True, text=True)
+        dirty = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no"], cwd=REPO, capture_output=True, text=True
+        )
+    except OSError:
+        return None
+    if head.returncode != 0:
+        return None
+    return head.stdout.strip() + ("+" if dirty.stdout.strip() else "")
+
+
 def run(out_dir, quick: bool = False) -> dict:
     """Run the fabric benchmarks; write fabric.md and fabric.json into ``out_dir``."""
     from core.drape import textile as T
@@ -363,6 +422,8 @@ def run(out_dir, quick: bool = False) -> dict:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     res = {
+        "commit": _commit(),
+        "load": [os.getloadavg()[0]],
         "cpu": f"{os.cpu_count()} cores",
         "quick": bool(quick),
         "settle": {"energy_J_per_kg": T.SETTLE_ENERGY, "move_mm": T.SETTLE_MOVE * 1e3, "frames": T.SETTLE_FRAMES},
@@ -371,6 +432,7 @@ def run(out_dir, quick: bool = False) -> dict:
     res["hanging"] = hanging_rows(quick)
     res["blender"] = blender_rows()
     res["bpy"] = next((r["bpy"] for r in res["blender"] if "bpy" in r), None)
+    res["load"].append(os.getloadavg()[0])
     write_json(out / "fabric.json", _finite(res))
     write_text(out / "fabric.md", _markdown(res))
     return res
