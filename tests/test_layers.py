@@ -325,6 +325,67 @@ def test_contact_inside_is_checked_by_the_winding_number():
     assert moved[1] == pytest.approx([0.0, 0.0, 0.053], abs=1e-5)  # the point in the box goes out of it
 
 
+def _sphere(centre, r, n=16):
+    """A closed UV sphere (outward), ``n`` rings from pole to pole and ``2 n`` meridians."""
+    th, ph = np.linspace(0, np.pi, n + 1)[1:-1], np.linspace(0, 2 * np.pi, 2 * n, endpoint=False)
+    T, P = np.meshgrid(th, ph, indexing="ij")
+    ring = np.column_stack(
+        [np.sin(T.ravel()) * np.cos(P.ravel()), np.sin(T.ravel()) * np.sin(P.ravel()), np.cos(T.ravel())]
+    )
+    v = np.concatenate([[[0, 0, 1]], ring, [[0, 0, -1]]]) * r + centre
+    m, last = 2 * n, len(ring) + 1
+    f = [(0, 1 + j, 1 + (j + 1) % m) for j in range(m)]
+    for i in range(n - 2):
+        for j in range(m):
+            a, b = 1 + i * m + j, 1 + i * m + (j + 1) % m
+            f += [(a, a + m, b + m), (a, b + m, b)]
+    f += [(last, 1 + (n - 2) * m + (j + 1) % m, 1 + (n - 2) * m + j) for j in range(m)]
+    return v, np.array(f)
+
+
+def test_collider_leaves_out_the_faces_buried_in_it():
+    """An inner garment that passes through itself (a shirt's sleeve into its side under the arm,
+    here two overlapping spheres) makes a collider with faces inside it: a particle of the outer
+    garment there found such a face the closest, was pushed out of its plane still inside the other
+    sheet and back at the next search (the jacket over the shirt at 2 cm chattered at the armpits and
+    never settled). The collider keeps only the faces on its outside."""
+    from core.drape.layers import measure_skin
+
+    body_v, body_f = _sphere([0.0, 0.0, 0.0], 0.05, n=6)
+    a, b = _sphere([-0.2, 0.0, 0.0], 0.3), _sphere([0.2, 0.0, 0.0], 0.3)
+    v, f = np.concatenate([a[0], b[0]]), np.concatenate([a[1], b[1] + len(a[0])])
+    everything = layer_collider(body_v, body_f, [(v, f, 0.0)], buried=False)
+    n_body = len(everything[1]) - len(f)  # the body faces not under the garment
+    assert 0 < n_body < len(body_f)
+    cv, cf = layer_collider(body_v, body_f, [(v, f, 0.0)])
+    garment = cf[n_body:] - len(body_v)
+    centre = v[garment].mean(axis=1)
+    other = np.where(np.isin(garment[:, 0], np.arange(len(a[0]))), 0.2, -0.2)  # the other sphere's centre x
+    into_other = 0.3 - np.linalg.norm(centre - np.column_stack([other, 0 * other, 0 * other]), axis=1)
+    assert (into_other < 0.002).all()  # none kept inside the other sphere
+    centre_all = v[f].mean(axis=1)
+    other_all = np.where(np.arange(len(f)) < len(a[1]), 0.2, -0.2)
+    outside = 0.3 - np.linalg.norm(centre_all - np.column_stack([other_all, 0 * other_all, 0 * other_all]), axis=1)
+    assert len(garment) == int((outside < 0).sum()) and 0 < len(garment) < len(f)  # the rest all kept
+    # the measure's skin keeps every face (it tells inside by the winding number, which counts them all)
+    assert len(measure_skin(body_v, body_f, v, f)[1]) == n_body + len(f)
+
+
+@pytest.mark.slow
+def test_jacket_over_shirt_settles_at_2cm():
+    """The jacket over the shirt cut at 2 cm: the shirt's sleeves pass into its sides under the arms
+    (no self-collision), the collider had faces buried there, and the jacket chattered at the armpits
+    (velocities up to 1.6 m/s, RMS 17 mm/s at frame 90) and never settled. It settles with no more
+    than 0.5 % of its vertices inside the shirt at any settled frame."""
+    from core.workflows import drape_outfit
+
+    outfit = {**TUCKED, "name": "jacket", "layers": [{"design": "shirt_long_sleeve"}, {"design": "jacket"}]}
+    run = drape_outfit(outfit, options={"max_frames": 90}, refine_edge_length=0.02)
+    jacket = run.layers[1]
+    assert jacket.drape.result.settle_reason == "settled"
+    assert jacket.settled_penetration_pct <= 0.5
+
+
 @pytest.mark.slow
 def test_jacket_over_shirt_settles_with_friction_at_1cm():
     """The jacket's sleeve ends over the shirt's cuffs: contact that took a fold's far side for the

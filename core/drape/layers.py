@@ -27,6 +27,8 @@ from ..geom.mesh import face_normals, vertex_normals
 PENETRATION_DEPTH = 0.002
 #: Points farther than this from the inner surface (either side) do not overlap it (another body part).
 OVERLAP_BAND = 0.05
+#: m, a collider face whose outer side this far out is inside the collider is buried (left out)
+BURIED_LIFT = 0.0005
 #: How far inside an inner garment the body is still under it (a loose garment's hem hangs this far off).
 COVER_BAND = 0.15
 
@@ -217,7 +219,9 @@ def covered_faces(body_v, body_f, v, f, band: float = COVER_BAND) -> np.ndarray:
     return out
 
 
-def layer_collider(body_v, body_f, inner: Sequence[Tuple[np.ndarray, np.ndarray, float]], strips: bool = True):
+def layer_collider(
+    body_v, body_f, inner: Sequence[Tuple[np.ndarray, np.ndarray, float]], strips: bool = True, buried: bool = True
+):
     """One collider mesh: the body plus every inner garment's surface (vertices, faces, offset m),
     each moved outward along its vertex normals by its offset (the inner fabric's thickness).
 
@@ -243,13 +247,23 @@ def layer_collider(body_v, body_f, inner: Sequence[Tuple[np.ndarray, np.ndarray,
         vs.append(v)
         fs.append(f + base)
         base += len(v)
-    return np.concatenate(vs), np.concatenate([body_f[keep], *fs])
+    v, f = np.concatenate(vs), np.concatenate([body_f[keep], *fs])
+    if strips and buried:
+        f = np.concatenate([f[: int(keep.sum())], _unburied(v, f[int(keep.sum()) :], v, f)])
+    return v, f
+
+
+def _unburied(v, faces, all_v, all_f, lift: float = BURIED_LIFT) -> np.ndarray:
+    """``faces`` of the collider (all_v, all_f) less those buried in it: their outer side (the centre
+    moved ``lift`` out along the face's normal) inside the collider (:func:`inside_skin`)."""
+    centre = v[faces].mean(axis=1) + face_normals(v, faces) * lift
+    return faces[~inside_skin(centre, all_v, all_f)]
 
 
 def measure_skin(body_v, body_f, v, f) -> Skin:
     """The inner surface (v, f) as it lies, closed with the body (:func:`layer_collider` at offset 0):
     the skin :func:`layer_measure` tells inside from outside by."""
-    return Skin(*layer_collider(body_v, body_f, [(v, f, 0.0)]))
+    return Skin(*layer_collider(body_v, body_f, [(v, f, 0.0)], buried=False))
 
 
 def push_outside(points, v, f, clearance: float, band: float = OVERLAP_BAND, movable=None) -> Tuple[np.ndarray, int]:
