@@ -547,8 +547,8 @@ def test_a_worker_start_freezes_the_heap(blender):
     """Issue 32: a full garbage collection walks every tracked object (60-70 ms of the GIL at
     Blender's size), and one in a worker stalls the viewport as long. A job started in a worker
     first frees the young garbage (a reference cycle that just died is collected, not frozen),
-    then freezes what is alive: later full collections walk only what was made since; the
-    add-on's unregister gives the frozen objects back to the collector."""
+    then freezes what is alive: later full collections walk only what was made since; so does a
+    result's landing; the add-on's unregister gives the frozen objects back to the collector."""
     import gc
     import threading
     import weakref
@@ -568,13 +568,22 @@ def test_a_worker_start_freezes_the_heap(blender):
     del a, b
     assert dead() is not None and any(o is kept for o in gc.get_objects())
     release = threading.Event()
+    landed = []
+
+    def compute(progress):
+        release.wait(30.0)
+        return [Node()]  # made in the worker, after the freeze
+
     try:
         with _threaded(blender):
-            jobs.start("test-freeze", "test", lambda progress: release.wait(30.0), lambda result: None)
+            jobs.start("test-freeze", "test", compute, landed.append)
             assert dead() is None, "the dead cycle was frozen, not freed"
             assert gc.get_freeze_count() > 0
             assert not any(o is kept for o in gc.get_objects()), "an object alive at the start is still walked"
             release.set()
+            jobs.wait()
+            # what the worker made is frozen too once its result landed (its first imports: 90k)
+            assert landed and not any(o is landed[0] for o in gc.get_objects())
     finally:
         release.set()
         jobs.wait()
