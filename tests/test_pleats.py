@@ -422,6 +422,33 @@ def test_the_drape_starts_folded_with_creases_held(pleated):
     assert not fold_edges(soft, soft.mesh_pattern).any() and len(soft.edges) == len(cloth.edges) - len(want)
 
 
+def test_the_pleats_stay_folded_through_the_drape(pleated):
+    """The last stage: after a short drape every pressed pleat is still closed (its visible fold
+    within a few mm of its placement line: the intake folded under, not opened flat to 2 x 20 mm)
+    and its fold lines are still creases (the drape's stencils along them folded past 1 rad)."""
+    from core import workflows
+    from core.drape.mesh import dihedral_angles
+    from core.drape.pleats import draped_cloth, fold_edges
+
+    pattern, _, _ = pleated
+    run = workflows.drape(pattern, options={"max_frames": 10})
+    positions = np.asarray(run.result.positions)
+    cloth = draped_cloth(pattern)
+    opened = cloth.mesh_pattern
+    assert run.figures["penetration %"] == 0.0
+    for lines in opened.report["opened_pleats"].values():
+        for name in {x["pleat"] for x in lines}:
+            mine = [x for x in lines if x["pleat"] == name]
+            fold, place = mine[0], next(x for x in mine if x["kind"] == "placement")
+            apart = np.linalg.norm(positions[fold["gids"]] - positions[place["gids"]], axis=1)
+            assert apart.max() < 0.008, name  # 5.5 mm at most measured; opened flat: 40 mm
+    x = np.zeros_like(cloth.x0)
+    used = np.flatnonzero(cloth.particle_of >= 0)
+    x[cloth.particle_of[used]] = positions[used]
+    on = fold_edges(cloth, opened)
+    assert np.mean(np.abs(dihedral_angles(x, cloth.bends[on])) > 1.0) > 0.9
+
+
 def test_a_pleat_from_a_seam_is_sewn_through_it_at_every_stage(pleated, tmp_path):
     """A tuck across the skirt's front, from a point of its left side seam to the right side seam:
     placed on the seam, opened with both side seams split where it meets them and the back given a
