@@ -57,6 +57,22 @@ def test_bad_pleat_values_are_refused_naming_the_field(bad, field):
     assert "\n" not in str(e.value)
 
 
+def test_cli_refuses_a_bad_pleat_in_one_line(tmp_path, capsys):
+    """Through the CLI a bad pleat value exits 2 with one line naming the file and the field."""
+    import json
+
+    from core.cli import main
+
+    d = skirt_knife_pleats()
+    d["garments"][0]["panels"][0]["pleats"][0]["depth"] = 0.2
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(d))
+    assert main(["pattern", str(bad), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and str(bad) in err and "garments[0].panels[0].pleats[0].depth" in err
+    assert not (tmp_path / "out").exists()
+
+
 def test_a_pleat_round_trips_and_mirrors():
     d = skirt_knife_pleats()
     design = load_design(d)
