@@ -136,6 +136,18 @@ def test_the_transfer_solver_is_checked_and_chosen_on_the_cli():
     assert build_parser().parse_args(cmd + ["--transfer-solver", "target"]).transfer_solver == "target"
 
 
+def test_ease_transfer_passes_the_transfer_solver_on(tmp_path, monkeypatch):
+    """``ease transfer --transfer-solver target`` reaches workflows.transfer (left out: None, the configuration's)."""
+    seen = []
+    monkeypatch.setattr(wf, "prepare", lambda design, progress=None: "prep")
+    monkeypatch.setattr(wf, "transfer", lambda prep, size, **options: seen.append(options["transfer_solver"]))
+    monkeypatch.setattr(wf, "write_pattern", lambda out, run, preview=True: None)
+    monkeypatch.setattr(wf, "summary", lambda run: "")
+    cmd = ["transfer", "d.json", "--out", str(tmp_path), "--size", "L", "--quiet"]
+    assert main(cmd + ["--transfer-solver", "target"]) == 0 and main(cmd) == 0
+    assert seen == ["target", None]
+
+
 def test_a_target_solver_made_on_the_reference_body_is_the_reference_solver(stretched):
     """Flattened and factorised on the reference body's own positions, a transfer's target solver is the
     reference solver: a transfer onto that body gives the same bits either way."""
