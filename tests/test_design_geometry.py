@@ -221,6 +221,12 @@ def test_edge_flip_solvers_are_kept_per_mesh_and_built_out_of_process(monkeypatc
             _in_worker(lambda: geometry.edge_flip_solver(V, bad))
         with pytest.raises(RuntimeError):
             geometry.edge_flip_solver(V, bad)
+        # no helper can start (an executable that is not Python): built here, as without one
+        geometry.stop_helper()
+        monkeypatch.setattr(geometry._Helper, "unavailable", None)
+        monkeypatch.setattr("sys.executable", "/nonexistent/python")
+        assert isinstance(_in_worker(lambda: geometry.edge_flip_solver(moved, F)), geometry._LocalSolver)
+        assert geometry._Helper.unavailable
     finally:
         geometry.stop_helper()
     assert geometry._Helper.proc is None

@@ -104,7 +104,9 @@ while True:
     except EOFError:
         break
     try:
-        if op == "build":
+        if op == "ping":
+            reply = ("ok", None)
+        elif op == "build":
             if key not in solvers:
                 solvers[key] = pp3d.EdgeFlipGeodesicSolver(*arg)
             solvers.move_to_end(key)
@@ -129,6 +131,7 @@ class _Helper:
 
     lock = threading.Lock()
     proc = None
+    unavailable = None  # why no helper could start (then solvers are built here)
 
     @classmethod
     def request(cls, op: str, key: bytes, arg):
@@ -157,11 +160,20 @@ class _Helper:
         import sys
 
         cls._stop()
-        cls.proc = subprocess.Popen(
-            [sys.executable, "-I", "-c", _HELPER], stdin=subprocess.PIPE, stdout=subprocess.PIPE
-        )
-        pickle.dump([p for p in sys.path if p], cls.proc.stdin)
-        pickle.dump(SOLVERS_KEPT, cls.proc.stdin)
+        try:
+            cls.proc = subprocess.Popen(
+                [sys.executable, "-I", "-c", _HELPER], stdin=subprocess.PIPE, stdout=subprocess.PIPE
+            )
+            pickle.dump([p for p in sys.path if p], cls.proc.stdin)
+            pickle.dump(SOLVERS_KEPT, cls.proc.stdin)
+            pickle.dump(("ping", None, None), cls.proc.stdin)
+            cls.proc.stdin.flush()
+            pickle.load(cls.proc.stdout)
+        except (OSError, EOFError, pickle.UnpicklingError) as exc:
+            # no Python to run (an executable that is not one), or it cannot import the solver
+            cls._stop()
+            cls.unavailable = f"{type(exc).__name__}: {exc}"
+            raise _Unavailable(cls.unavailable) from exc
 
     @classmethod
     def _stop(cls) -> None:
@@ -174,6 +186,10 @@ class _Helper:
                 proc.kill()
                 proc.wait()
             proc.stdout.close()
+
+
+class _Unavailable(RuntimeError):
+    """No helper process could start: solvers are built in this process."""
 
 
 def stop_helper() -> None:
@@ -209,8 +225,11 @@ def edge_flip_solver(vertices: np.ndarray, faces: np.ndarray):
     V = np.ascontiguousarray(vertices, dtype=np.float64)
     F = np.ascontiguousarray(faces, dtype=np.int64)
     key = mesh_key(V, F)
-    if OUT_OF_PROCESS and threading.current_thread() is not threading.main_thread():
-        return _RemoteSolver(key, V, F)
+    if OUT_OF_PROCESS and _Helper.unavailable is None and threading.current_thread() is not threading.main_thread():
+        try:
+            return _RemoteSolver(key, V, F)
+        except _Unavailable:
+            pass  # built here, as without a helper (why: _Helper.unavailable)
     with _SOLVERS_LOCK:
         solver = _SOLVERS.get(key)
         if solver is not None:
