@@ -330,7 +330,7 @@ def drape_outfit(
 
         mat = get_material((pattern.materials or {}).get("fabric"))
         thick = float(opts.thickness if opts.thickness is not None else mat.thickness)
-        coll_v, coll_f = layer_collider(body_v, body_f, [(*lr.surface, lr.thickness) for lr in runs])
+        coll_v, coll_f = layer_collider(body_v, body_f, [(*lr.surface, lr.thickness) for lr in runs], buried=True)
         start, pushed = _pushed(pattern, (coll_v, coll_f), len(body_v), runs, thick)
         frames: list = []
         spent = [0.0]
