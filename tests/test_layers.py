@@ -348,16 +348,16 @@ def test_collider_leaves_out_the_faces_buried_in_it():
     here two overlapping spheres) makes a collider with faces inside it: a particle of the outer
     garment there found such a face the closest, was pushed out of its plane still inside the other
     sheet and back at the next search (the jacket over the shirt at 2 cm chattered at the armpits and
-    never settled). The collider keeps only the faces on its outside."""
+    never settled). The drape's collider keeps only the faces on its outside."""
     from core.drape.layers import measure_skin
 
     body_v, body_f = _sphere([0.0, 0.0, 0.0], 0.05, n=6)
     a, b = _sphere([-0.2, 0.0, 0.0], 0.3), _sphere([0.2, 0.0, 0.0], 0.3)
     v, f = np.concatenate([a[0], b[0]]), np.concatenate([a[1], b[1] + len(a[0])])
-    everything = layer_collider(body_v, body_f, [(v, f, 0.0)], buried=False)
+    everything = layer_collider(body_v, body_f, [(v, f, 0.0)])  # as the draped cut and the measure take it
     n_body = len(everything[1]) - len(f)  # the body faces not under the garment
     assert 0 < n_body < len(body_f)
-    cv, cf = layer_collider(body_v, body_f, [(v, f, 0.0)])
+    cv, cf = layer_collider(body_v, body_f, [(v, f, 0.0)], buried=True)  # as the drape meets it
     garment = cf[n_body:] - len(body_v)
     centre = v[garment].mean(axis=1)
     other = np.where(np.isin(garment[:, 0], np.arange(len(a[0]))), 0.2, -0.2)  # the other sphere's centre x

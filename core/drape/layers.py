@@ -220,7 +220,7 @@ def covered_faces(body_v, body_f, v, f, band: float = COVER_BAND) -> np.ndarray:
 
 
 def layer_collider(
-    body_v, body_f, inner: Sequence[Tuple[np.ndarray, np.ndarray, float]], strips: bool = True, buried: bool = True
+    body_v, body_f, inner: Sequence[Tuple[np.ndarray, np.ndarray, float]], strips: bool = True, buried: bool = False
 ):
     """One collider mesh: the body plus every inner garment's surface (vertices, faces, offset m),
     each moved outward along its vertex normals by its offset (the inner fabric's thickness).
@@ -229,6 +229,10 @@ def layer_collider(
     the body under it is left out (:func:`covered_faces`): the collider is one closed skin, so an
     outer particle pressed through an inner garment finds that garment, not the body under it, as
     its closest surface and is pushed back out (with the body there it would stay caught between).
+    With ``buried`` (the layered drape's contact) the inner garments' faces buried in that skin are
+    left out (:func:`_unburied`): where an inner garment passes through itself (a sleeve into the
+    side under the arm) an outer particle would find one the closest, be pushed out of its plane
+    still inside the other sheet, and chatter.
     """
     body_v = np.asarray(body_v, dtype=np.float64)
     body_f = np.asarray(body_f, dtype=np.int64)
@@ -263,7 +267,7 @@ def _unburied(v, faces, all_v, all_f, lift: float = BURIED_LIFT) -> np.ndarray:
 def measure_skin(body_v, body_f, v, f) -> Skin:
     """The inner surface (v, f) as it lies, closed with the body (:func:`layer_collider` at offset 0):
     the skin :func:`layer_measure` tells inside from outside by."""
-    return Skin(*layer_collider(body_v, body_f, [(v, f, 0.0)], buried=False))
+    return Skin(*layer_collider(body_v, body_f, [(v, f, 0.0)]))
 
 
 def push_outside(points, v, f, clearance: float, band: float = OVERLAP_BAND, movable=None) -> Tuple[np.ndarray, int]:
