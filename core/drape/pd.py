@@ -31,11 +31,15 @@ cloth (an LDL^T on the free particles, qdldl's AMD ordering: the same n x n
 matrix for x, y and z, back-substituted for the three at once, :class:`Factor3`)
 and each iteration is one pass of a native kernel on the host (the images, the
 projections, the gradient and the energy, :func:`pd_gradient`) plus one
-back-substitution (the global step). Body contact stays off the matrix: after each substep's
-solve, as with the other solvers, the Warp kernels keep the particles on their
-contact planes' offset with friction (a projection inside the iterations fought
-the stiff membrane where neighbouring contact planes diverge, at the armpits, and
-tore the shirt), then tethers and self-collision.
+back-substitution (the global step). Body contact enters the solve as a penalty
+on the particles at their contact plane's offset (chosen at each contact search,
+its weight in the matrix's diagonal, refactored when that set changes:
+:attr:`ProjectiveStep.contact_weight`); after each substep's solve, as with the
+other solvers, the Warp kernels keep every particle on its contact plane's offset
+with friction, then tethers and self-collision. (A projection onto the planes
+inside the iterations fought the stiff membrane where neighbouring planes diverge,
+at the armpits, and tore the shirt; contact after the solve alone tore most of
+the coarse shirt's gap-curve drapes.)
 
 Each iteration lowers G; the iterations stop when every free particle off the
 body has a residual force ``|grad G|`` under ``tolerance`` times its weight, or
@@ -56,11 +60,12 @@ from .newton import NewtonStep, _rows
 wp.set_module_options({"enable_backward": False})
 
 #: body contact inside the solve: the penalty's weight in units of the median diagonal entry of the step's
-#: matrix (:attr:`ProjectiveStep.contact_weight`); 0 (the default): contact only after each substep's solve.
-#: An experiment: at 1.0 the drapes end nearer an equilibrium with the body, but a frame costs about 30 %
-#: more (a refactorisation per contact search) and the Cusick figures spread as much
-#: (benchmarks/results/drape_pd.md)
-CONTACT_WEIGHT = 0.0
+#: matrix (:attr:`ProjectiveStep.contact_weight`); 0: contact only after each substep's solve, which tore
+#: 11 of the 15 drapes of the 3 cm shirt's gap curve (the stiff membrane's solve pulls the cloth through
+#: the body, the contact pushes it back apart); with it all 30 of shirt and pants settle or run out their
+#: frames whole, for about 18 % more time a frame (a refactorisation per contact search;
+#: benchmarks/results/drape_pd.md)
+CONTACT_WEIGHT = 1.0
 #: the contact penalty holds the particles whose height over their contact plane is under this many offsets
 HELD_HEIGHT = 1.05
 
@@ -473,7 +478,7 @@ class ProjectiveStep:
         Cusick disc it does not settle, and at 5 mm edges the specimen falls off the support, so the
         drape's options do not offer it; benchmarks/results/drape_pd.md).
     contact_weight : N/m, the body-contact penalty inside the solve (:data:`CONTACT_WEIGHT` times the
-        matrix's median diagonal entry; 0: none). Where positive, each contact search's particles on the
+        matrix's median diagonal entry; 0: none, contact only after the solve). Where positive, each contact search's particles on the
         body (within :data:`HELD_HEIGHT` times the contact offset of their plane) are held by ``contact_weight / 2 * depth^2`` (depth below
         the offset), its weight in the matrix's diagonal (refactored when that set changes), and the stop
         test counts the normal force and allows friction up to ``friction`` times the penalty's force.
