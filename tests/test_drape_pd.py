@@ -160,6 +160,12 @@ def test_factor_solves_three_columns():
     x = pd._back(b)
     assert np.abs(a @ x - b).max() < 1e-10 * np.abs(b).max()
     assert np.array_equal(pd._back(b), x)
+    # refactored in place with a heavier diagonal on a few particles (the contact penalty's change)
+    m = pd._free_matrix.copy()
+    m.data[pd._diag_pos[[0, 3, len(fi) - 1]]] += 1e3
+    pd.lu.refactor(m)
+    x = pd._back(b)
+    assert np.abs(m @ x - b).max() < 1e-10 * np.abs(b).max()
 
 
 def test_pd_holds_the_fabric_stiffness():
