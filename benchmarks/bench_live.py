@@ -522,7 +522,7 @@ def run(out_dir, quick: bool = False) -> dict:
         "the scene; CPU: the process's CPU time over it (every thread, the workers included), and the "
         f"main thread's share. Goal: no tick over {EVENT_TICK_GOAL_MS} ms. Depsgraph update: the view "
         "layer's update after it (Blender's own, before its next redraw: evaluating the changed objects; "
-        "no add-on tick includes it). Full GCs: Python's collections of its oldest generation during "
+        "near 0 where a result's undo step, which evaluates the view layer first, ran in the last tick). Full GCs: Python's collections of its oldest generation during "
         "the event, in any thread, and the longest: each holds the GIL throughout, so one in a worker "
         "stalls the main thread as long, also between the ticks, where no tick measures it (the jobs "
         "freeze the heap as they start, so a collection walks only the objects made since).",
