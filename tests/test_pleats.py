@@ -310,6 +310,32 @@ def test_a_line_ending_on_a_seam_is_sewn_through_it():
     assert np.linalg.norm(new_front.uv[top] - new_front.uv[fold]) == pytest.approx(0.02, abs=1e-9)
 
 
+@pytest.mark.parametrize("kind, layers", [("box", 4), ("inverted_box", 4)])
+def test_every_layer_of_a_box_pleat_is_sewn_into_the_seam(kind, layers):
+    """A box pleat (two knife folds, each with two layers) and an inverted box pleat (four layers
+    about its placement line) ending on the side seam: each layer is sewn to the back from the
+    line's point out to one depth along the seam, so every fold and placement line's end on the
+    seam is sewn to the back."""
+    front, back = _flat_piece(), _flat_piece(seed=1)
+    back.name, back.vertex_ids = "g.back", back.vertex_ids + BACK_IDS
+    seam = _side_seam("g.back")
+    site = _site(0.25, along=(1, 0, -1), direction="right", kind=kind)
+    ends = []
+    opened, lines, _, next_id = open_piece(
+        front, piece_strips(front, [site], seams=[seam]), 2 * BACK_IDS, np.zeros(3), ends
+    )
+    panels, seams, _ = split_seams([opened, back], [seam], {"g.front": ends}, next_id, sites=[site])
+    sewn = [s for s in seams if "#layer" in s.name]
+    assert len(sewn) == layers
+    ends_on_back = {int(s.verts_b[-1]) for s in seams if "#p" in s.name}
+    for s in sewn:  # from a point where a line meets the seam, one depth along both sides
+        assert int(s.verts_b[0]) in ends_on_back
+        assert np.linalg.norm(np.diff(panels[0].uv[s.verts_a], axis=0), axis=1).sum() == pytest.approx(0.02, abs=1e-9)
+        assert np.linalg.norm(np.diff(panels[1].uv[s.verts_b], axis=0), axis=1).sum() == pytest.approx(0.02, abs=1e-3)
+    on_seam = {int(x.ids[-1]) for x in lines}  # every fold and placement line's end on the seam
+    assert on_seam <= {int(v) for s in sewn for v in s.verts_a}
+
+
 def test_a_seam_shorter_than_the_folded_cloth_is_refused():
     """The folded layers are sewn along the seam one depth from the line: a seam that ends before
     that (here 10 mm past the line, the depth 20 mm) is refused at the pleat's start, in one line."""
