@@ -61,7 +61,7 @@ wp.set_module_options({"enable_backward": False})
 
 #: body contact inside the solve: the penalty's weight in units of the median diagonal entry of the step's
 #: matrix (:attr:`ProjectiveStep.contact_weight`); 0: contact only after each substep's solve, which tore
-#: 11 of the 15 drapes of the 3 cm shirt's gap curve (the stiff membrane's solve pulls the cloth through
+#: 8 of the 15 drapes of the 3 cm shirt's gap curve (the stiff membrane's solve pulls the cloth through
 #: the body, the contact pushes it back apart); with it all 30 of shirt and pants settle or run out their
 #: frames whole, for about 18 % more time a frame (a refactorisation per contact search;
 #: benchmarks/results/drape_pd.md)
