@@ -511,10 +511,11 @@ class ProjectiveStep:
         Cusick disc it does not settle, and at 5 mm edges the specimen falls off the support, so the
         drape's options do not offer it; benchmarks/results/drape_pd.md).
     contact_weight : N/m, the body-contact penalty inside the solve (:data:`CONTACT_WEIGHT` times the
-        matrix's median diagonal entry; 0: none, contact only after the solve). Where positive, each contact search's particles on the
-        body (within :data:`HELD_HEIGHT` times the contact offset of their plane) are held by ``contact_weight / 2 * depth^2`` (depth below
-        the offset), its weight in the matrix's diagonal (refactored when that set changes), and the stop
-        test counts the normal force and allows friction up to ``friction`` times the penalty's force.
+        matrix's median diagonal entry; 0: none, contact only after the solve). Where positive, each
+        contact search's particles on the body (within :data:`HELD_HEIGHT` times the contact offset of
+        their plane) are held by ``contact_weight / 2 * depth^2`` (depth below the offset), its weight in
+        the matrix's diagonal (refactored when that set changes), and the stop test counts the normal
+        force and allows friction up to ``friction`` times the penalty's force.
     refactors : int, the refactorisations the contact penalty's set changes asked for.
     """
 
