@@ -17,7 +17,8 @@ Osaka, 1980 (the KES-F instruments and the unit); Hu, J. and Chan, Y.-F.,
 coefficient of woven fabrics). The cotton and denim values were calibrated on
 the Cusick test with the ``newton`` solver (``docs/drape.md``): cotton
 0.05 -> 0.10 gf*cm^2/cm moved its drape coefficient from 52 % to 67 % (10 mm
-mesh), denim 0.20 -> 0.61 from 57 % to 77 %. The per-fabric KES ranges quoted
+mesh), denim 0.20 -> 0.61 from 57 % to 77 % (before the solver's clamped hinges and
+sub-element buckling; with them cotton reads 66.0 % and denim 81.2 %). The per-fabric KES ranges quoted
 beside each preset are the usual orders of magnitude for the class; their
 tables were not re-checked against the sources in the session that set them.
 
@@ -75,8 +76,8 @@ class Material:
 PRESETS = {
     # Shirting poplin: stiff in both grains, warp a little stiffer than weft.
     # Bending 1.0e-5 N*m: B = 0.10 gf*cm^2/cm (KES-FB2; shirting cottons read about 0.05-0.15): the Cusick test
-    # with the newton solver gives DC 66.9 % (10 nodes) at 10 mm, the cantilever 1.73 cm (targets
-    # 60-76 %, 5-10 nodes, 1.5-2.5 cm); 0.05 gave 52.2 % and 1.35 cm.
+    # with the newton solver gives DC 66.0 % (8 nodes) at 10 mm, 71.0 % (8) at 5 mm, the cantilever 1.88 cm
+    # (targets 60-76 %, 5-10 nodes, 1.5-2.5 cm); 0.05 gave 52.2 % and 1.35 cm (before the clamped hinges).
     "cotton": Material(
         "cotton",
         density=0.13,
@@ -101,8 +102,8 @@ PRESETS = {
         max_stretch=0.4,
     ),
     # Heavy twill: stiff and heavy, bends little. 6.0e-5 N*m: B = 0.61 gf*cm^2/cm (KES-FB2; denims read about
-    # 0.3-1.5): the Cusick test with the newton solver gives DC 77.4 % (7 nodes) at 10 mm (target
-    # 70-90 %, 5-10 nodes); 0.20 gave 56.7 %.
+    # 0.3-1.5): the Cusick test with the newton solver gives DC 81.2 % (7 nodes) at 10 mm, 80.9 % (6) at
+    # 5 mm (target 70-90 %, 5-10 nodes); 0.20 gave 56.7 % (before the clamped hinges).
     "denim": Material(
         "denim",
         density=0.40,
@@ -119,9 +120,9 @@ PRESETS = {
     # 56.2 N/m per radian), 250 g/m^2: KES-F values of the men's-suiting class (Kawabata and Niwa 1989,
     # below; worsted suitings and flannels read about B 0.08-0.20, G 0.4-1.0, W 200-300 g/m^2; not
     # re-checked against the tables in the session that set them). The Cusick test with the newton
-    # solver (sub-element buckling, clamped hinges) gives DC 59.4 % (9 nodes) at 10 mm (target 55-65 %,
-    # issue 35); 1.7e-5 gave 61.1 % (8 nodes) at 10 mm, 61.9 % (8) at 4x the iterations, but 65.7 % at
-    # 5 mm, above the range.
+    # solver (sub-element buckling, clamped hinges) gives DC 59.4 % (9 nodes) at 10 mm, 58.5 % (9) at 4x the
+    # iterations, 62.7 % (8) at 5 mm (target 55-65 %, issue 35); 1.7e-5 gave 61.1 % (8 nodes) at 10 mm,
+    # 61.9 % (8) at 4x the iterations, but 65.7 % at 5 mm, above the range.
     "wool": Material(
         "wool",
         density=0.25,
@@ -174,7 +175,8 @@ DEFAULT = "cotton"
 #: and Phillips, D. G., "A study of fabric-drape behaviour with image analysis. Part II", J.
 #: Textile Inst. 89(1) (1998) 70-79; neither re-checked in the session that set the preset).
 #: Jersey: no target yet (the issue asks for a published knit measurement; none was found in the
-#: stored pages searched).
+#: stored pages searched, twice: the abstracts of Sanad 2013, Pan et al. 2019, Gider 2004 and Jeong
+#: and Phillips 1998 came back, not their tables).
 TARGETS = {
     "cotton": {"dc_pct": (60.0, 76.0), "nodes": (5, 10), "bending_length_cm": (1.5, 2.5)},
     "silk": {"dc_pct": (20.0, 40.0), "nodes": (5, 10)},
