@@ -264,7 +264,7 @@ class Convergence:
     ``transfer_solver``: which body a transfer's flattening and factorisation are made on.
     ``"reference"``: the reference solver's (the design's body), shared by every size. ``"target"``: the
     target body's (the same cut, its darts' apexes following the cups; flattened and factorised again
-    for each size, 0.1-0.3 s), so that a transfer's local-global steps measure strain in the target's
+    for each size, 0.1-0.7 s of CPU), so that a transfer's local-global steps measure strain in the target's
     own frames, as the reference solve does on its body. Its targets, seam plan and folds are the
     reference's, as with ``"reference"``. Measured in docs/darts.md ("A solver made on the target body").
 
