@@ -8,6 +8,10 @@ the pipeline's packages; the stages that own the names re-export them.
 #: --config``, the add-on's Solver): the presets of :meth:`core.pattern.config.SolverConfig.named`.
 SOLVER_CONFIGS = ("improved", "paper", "stretch", "fitted", "lengths")
 
+#: The bodies a transfer's flattening and factorisation may be made on (a design's ``"transfer_solver"``,
+#: ``ease transfer --transfer-solver``): :data:`core.pattern.config.TRANSFER_SOLVERS`.
+TRANSFER_SOLVERS = ("reference", "target")
+
 #: The pose presets every body model offers (:meth:`core.body.model.BodyModel.pose_params`).
 POSE_PRESETS = ("A", "T", "P1", "P2", "P3")
 #: The preset every body model is built in: the same instance as pose None.

@@ -9,6 +9,7 @@ commands.
 from __future__ import annotations
 
 from ..choices import SOLVER_CONFIGS as CONFIGS
+from ..choices import TRANSFER_SOLVERS
 from .common import add_quiet, console_progress, subcommand
 
 
@@ -68,7 +69,7 @@ def add_parser(sub) -> None:
     p.add_argument("--size", required=True, help="target size: XS, S, M, L or XL")
     p.add_argument(
         "--transfer-solver",
-        choices=("reference", "target"),
+        choices=TRANSFER_SOLVERS,
         default=None,
         help="the body the transfer's flattening and factorisation are made on: reference (the design's body, "
         "the default) or target (the --size body; docs/darts.md)",

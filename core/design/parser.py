@@ -30,6 +30,10 @@ Fields (metres, the body frame of :mod:`core`: +Z up, body faces -Y, +X = body's
                        (``"improved"`` | ``"paper"`` | ``"stretch"`` | ``"fitted"`` | ``"lengths"``); the
                        pattern is solved with it unless the user chooses one
                        (``--config``, the add-on's Solver); absent: ``"improved"``
+``transfer_solver``    optional: ``"target"`` makes each transfer to another size flatten and
+                       factorise on that size's body, ``"reference"`` (absent: the
+                       configuration's) reuses the reference body's (docs/darts.md, "A solver
+                       made on the target body"); ``ease transfer --transfer-solver`` overrides it
 ``parameters``         ``{name: number | {"value", "kind": "placement" (0..1) |
                        "length" (m) | "number", "min", "max"}}``; used as
                        ``"$name"`` wherever a number is expected
@@ -80,6 +84,7 @@ from pathlib import Path
 from typing import Dict, Union
 
 from ..body.model import POSE_PRESETS
+from ..choices import TRANSFER_SOLVERS
 from ..errors import BodyError, DesignError
 from .checks import (
     BODY_PARTS,
@@ -375,6 +380,7 @@ def parse_design(obj: dict) -> Design:
         "skirt",
         "refine_edge_length",
         "solver",
+        "transfer_solver",
         "parameters",
         "keypoints",
         "lines",
@@ -413,6 +419,12 @@ def parse_design(obj: dict) -> Design:
         raise DesignError(
             "solver", f"expected a solver configuration ({', '.join(SOLVER_CONFIGS)}) or null, got {fmt(solver)}"
         )
+    transfer_solver = obj.get("transfer_solver")
+    if transfer_solver is not None and transfer_solver not in TRANSFER_SOLVERS:
+        raise DesignError(
+            "transfer_solver",
+            f"expected {' or '.join(repr(t) for t in TRANSFER_SOLVERS)} or null, got {fmt(transfer_solver)}",
+        )
     params = _parse_parameters("parameters", obj.get("parameters", {}))
     kps_raw = expect_dict("keypoints", obj.get("keypoints", {}), "an object name -> keypoint")
     keypoints = {}
@@ -437,6 +449,7 @@ def parse_design(obj: dict) -> Design:
         refine_edge_length=rel,
         description=desc,
         solver=solver,
+        transfer_solver=transfer_solver,
     )
     check_names_unique(design)
     check_seam_names(design)

@@ -144,6 +144,9 @@ class Design:
     solver : str or None, the solver configuration the design is made for (one of
         :data:`core.design.checks.SOLVER_CONFIGS`); None: the default. A user's explicit choice
         overrides it (:func:`core.workflows.config_name`).
+    transfer_solver : str or None, the body a transfer to another size makes its flattening and
+        factorisation on (``"reference"`` | ``"target"``, :data:`core.choices.TRANSFER_SOLVERS`); None:
+        the configuration's (``"reference"``). A user's explicit choice overrides it.
     """
 
     name: str
@@ -158,6 +161,7 @@ class Design:
     refine_edge_length: Optional[float] = 0.01
     description: str = ""
     solver: Optional[str] = None
+    transfer_solver: Optional[str] = None
 
     # -- serialisation
     def to_json(self) -> dict:
@@ -176,6 +180,7 @@ class Design:
                 "skirt": self.skirt,
                 "refine_edge_length": self.refine_edge_length,
                 **({"solver": self.solver} if self.solver is not None else {}),
+                **({"transfer_solver": self.transfer_solver} if self.transfer_solver is not None else {}),
                 "parameters": {k: p.to_json() for k, p in self.parameters.items()},
                 "keypoints": copy.deepcopy(self.keypoints),
             }

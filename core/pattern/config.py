@@ -27,6 +27,7 @@ from typing import Mapping, Optional, Tuple
 
 import numpy as np
 
+from ..choices import TRANSFER_SOLVERS  # the bodies a transfer's solver can be made on
 from ..design.materials import EPS_WEFT, GATHER_ABOVE
 from ..errors import PatternError
 
@@ -277,9 +278,6 @@ class Convergence:
     transfer_from: str = "reference"
     transfer_solver: str = "reference"
 
-
-#: The bodies a transfer's solver can be made on (:attr:`Convergence.transfer_solver`).
-TRANSFER_SOLVERS = ("reference", "target")
 
 _GROUPS = {
     "weights": Weights,

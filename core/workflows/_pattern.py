@@ -192,7 +192,7 @@ def transfer(
     has made it (a batch item measured it), so it is not evaluated again.
     ``transfer_solver``: ``"reference"`` or ``"target"``, the body the transfer's flattening and
     factorisation are made on (:attr:`core.pattern.config.Convergence.transfer_solver`); None: the
-    configuration's (``"reference"``).
+    design's own ``transfer_solver``, else the configuration's (``"reference"``).
 
     The design's own size (the chart size its body is, ``body.shape``) is the
     reference pattern itself, not a re-solve on the same body: one size, one
@@ -215,6 +215,8 @@ def transfer(
     t0 = time.perf_counter()
     if solver is None:
         solver = make_solver(prep, config, iterations, gather_all, progress=sub(progress, 0.0, 0.15))
+    if transfer_solver is None:  # the design's own choice, where it makes one
+        transfer_solver = getattr(getattr(prep, "design", None), "transfer_solver", None)
     chosen = None if transfer_solver is None else with_transfer_solver(solver.config, transfer_solver)
     ref_pat = start if start is not None else _solve_reference(prep, solver, sub(progress, 0.15, 0.5))
     pose = prep.cut.body.get("pose")
