@@ -9,8 +9,9 @@ the pipeline's packages; the stages that own the names re-export them.
 SOLVER_CONFIGS = ("improved", "paper", "stretch", "fitted", "lengths")
 
 #: The bodies a transfer's flattening and factorisation may be made on (a design's ``"transfer_solver"``,
-#: ``ease transfer --transfer-solver``): :data:`core.pattern.config.TRANSFER_SOLVERS`.
-TRANSFER_SOLVERS = ("reference", "target")
+#: ``ease transfer --transfer-solver``): :data:`core.pattern.config.TRANSFER_SOLVERS`. ``"cup"``: the
+#: target's on a bigger cup, its darts re-derived there; the reference's elsewhere (docs/darts.md).
+TRANSFER_SOLVERS = ("reference", "target", "cup")
 
 #: The pose presets every body model offers (:meth:`core.body.model.BodyModel.pose_params`).
 POSE_PRESETS = ("A", "T", "P1", "P2", "P3")

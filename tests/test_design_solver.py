@@ -189,7 +189,7 @@ def test_a_design_names_its_transfer_solver_and_a_bad_one_is_refused_at_its_path
         with pytest.raises(DesignError) as err:
             load_design(_top(transfer_solver=value))
         assert err.value.path == "transfer_solver"
-        assert "expected 'reference' or 'target' or null" in err.value.message
+        assert "expected 'reference' or 'target' or 'cup' or null" in err.value.message
 
 
 def test_the_transfer_takes_the_designs_transfer_solver_unless_the_caller_names_one(stretched, monkeypatch):

@@ -102,4 +102,6 @@ def blouse_four_darts():
         "lengths kept)."
     )
     d["solver"] = "fitted"
+    # graded up to a bigger cup, the darts are drafted again on it (docs/darts.md, "Graded to L")
+    d["transfer_solver"] = "cup"
     return d

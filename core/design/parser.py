@@ -33,7 +33,9 @@ Fields (metres, the body frame of :mod:`core`: +Z up, body faces -Y, +X = body's
 ``transfer_solver``    optional: ``"target"`` makes each transfer to another size flatten and
                        factorise on that size's body, ``"reference"`` (absent: the
                        configuration's) reuses the reference body's (docs/darts.md, "A solver
-                       made on the target body"); ``ease transfer --transfer-solver`` overrides it
+                       made on the target body"); ``"cup"`` the target's, every dart re-derived,
+                       where the size's cups are bigger than the design's, else the reference's
+                       (docs/darts.md, "Graded to L"); ``ease transfer --transfer-solver`` overrides it
 ``parameters``         ``{name: number | {"value", "kind": "placement" (0..1) |
                        "length" (m) | "number", "min", "max"}}``; used as
                        ``"$name"`` wherever a number is expected

@@ -268,6 +268,8 @@ class Convergence:
     for each size, 0.1-0.7 s of CPU), so that a transfer's local-global steps measure strain in the target's
     own frames, as the reference solve does on its body. Its targets, seam plan and folds are the
     reference's, as with ``"reference"``. Measured in docs/darts.md ("A solver made on the target body").
+    ``"cup"``: ``"target"`` started from its flattening with every dart's intake re-derived on a target
+    whose cups are bigger than the reference's, ``"reference"`` on any other (docs/darts.md, "Graded to L").
 
     """
 
@@ -484,7 +486,7 @@ class SolverConfig:
             )
         if cv.transfer_solver not in TRANSFER_SOLVERS:
             raise PatternError(
-                "solver configuration convergence.transfer_solver: expected 'reference' or 'target', "
+                "solver configuration convergence.transfer_solver: expected 'reference' or 'target' or 'cup', "
                 f"got {cv.transfer_solver!r}"
             )
         if s.straight_target not in ("zero", "smooth"):

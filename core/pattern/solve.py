@@ -98,7 +98,12 @@ def transfer_pattern(
     Darts follow the body: the apex of a dart towards a bust point, seat or shoulder blade is moved,
     with the cloth around it, to where that landmark's rule puts it on the target body
     (:func:`core.cut.darts.follow_cups`); its intake is re-derived (``"auto"``) or held (a set one) by
-    the transfer's own solve (docs/darts.md).
+    the transfer's own solve (docs/darts.md). With ``convergence.transfer_solver`` ``"cup"``, a target
+    body whose cups are bigger than the reference's (:func:`core.cut.darts.bigger_cups`) is solved as
+    with ``"target"`` from its own flattening, every dart's intake re-derived there (a set one too:
+    the design's darts drafted again on the bigger cup); any other target as with ``"reference"``, and so
+    is a bigger cup where the re-drafted darts are refused (``darts_regrade_refused`` in the report says
+    why: men:XL's chest diverges). The pattern's report records ``darts_regraded``.
     """
     solver = _solver(cut, ref_vertices, solver, config, progress)
     cv = (config or solver.config).convergence
@@ -109,27 +114,48 @@ def transfer_pattern(
         # a dart towards a bust point, seat or shoulder blade ends where that point is on the target body
         tgt = follow_cups(cut, ref_vertices, target_vertices)
     plan = solver.design_plan(config)  # the reference pattern's seams, whichever solver sews them
+
+    def solve_on(solver, cut, start_from):
+        offsets = solver.offsets(tgt)
+        K, cw, cg = solver.targets_reference(tgt, ease=ease, offsets=offsets)
+        # the reference pattern stretched by how much longer the target body is under each piece, or the
+        # reference solve's own start so stretched (config.Convergence.transfer_from: every size solved alike)
+        if start_from == "flattening":
+            U0 = solver.flattening_start(cw, cg, offsets)
+        else:
+            U0 = None if start is None else solver.start_from(start, offsets)
+        res = solver.solve(
+            K, cw, cg, start=U0, positions=tgt, progress=sub(progress, 0.3, 1.0), plan=plan, config=config
+        )
+        return build_pattern(cut, res, style=style, body=body, mode="transfer")
+
+    if cv.transfer_solver == "cup":
+        from ..cut.darts import bigger_cups, with_auto_intakes
+
+        # on a bigger cup the darts are drafted again: every intake opened by the target's flattening
+        if bigger_cups(cut, ref_vertices, target_vertices):
+            again = with_auto_intakes(cut)
+            try:
+                regraded = PatternSolver(
+                    again, ref_vertices, solver.config, progress=sub(progress, 0.0, 0.3), flatten_on=tgt
+                )
+                pattern = solve_on(regraded, again, "flattening")
+                pattern.report["darts_regraded"] = True
+                return pattern
+            except PatternError as err:
+                # the re-drafted darts do not solve on this body (men:XL's chest): the design's own darts,
+                # graded as "reference" grades them, and the report says why
+                refused = str(err)
+        else:
+            refused = None
+        pattern = solve_on(solver, cut, cv.transfer_from)
+        pattern.report["darts_regraded"] = False
+        if refused:
+            pattern.report["darts_regrade_refused"] = refused
+        return pattern
     if cv.transfer_solver == "target":
         solver = target_solver(solver, ref_vertices, tgt, progress=sub(progress, 0.0, 0.3))
-    offsets = solver.offsets(tgt)
-    K, cw, cg = solver.targets_reference(tgt, ease=ease, offsets=offsets)
-    # the reference pattern stretched by how much longer the target body is under each piece, or the
-    # reference solve's own start so stretched (config.Convergence.transfer_from: every size solved alike)
-    if cv.transfer_from == "flattening":
-        U0 = solver.flattening_start(cw, cg, offsets)
-    else:
-        U0 = None if start is None else solver.start_from(start, offsets)
-    res = solver.solve(
-        K,
-        cw,
-        cg,
-        start=U0,
-        positions=tgt,
-        progress=sub(progress, 0.3, 1.0),
-        plan=plan,
-        config=config,
-    )
-    return build_pattern(cut, res, style=style, body=body, mode="transfer")
+    return solve_on(solver, cut, cv.transfer_from)
 
 
 def target_solver(
