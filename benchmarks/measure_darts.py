@@ -213,7 +213,8 @@ def four_darts_configs():
     1.43 / 1.51 / 2.00 % (1.32 / 1.30 / 2.13); warp gain 0.0015 alone 2.61 / 2.34 / 3.38 %, 0.02 1.04 %
     on M for 9.5 deg. ``fitted, solver on the target``: fitted with each size transferred on a solver made on
     its body, started from its flattening (:data:`TRANSFER_MODES`; docs/darts.md, "A solver made on the target
-    body"); the same reference and adaptation as fitted."""
+    body"); the same reference and adaptation as fitted. ``fitted, cup rule (the template's)``: the template's
+    grading (``"transfer_solver": "cup"``): on a bigger cup the darts drafted again there, elsewhere fitted."""
     from core.pattern.config import SolverConfig
 
     fitted, improved = SolverConfig.fitted(), SolverConfig.improved()
@@ -229,6 +230,10 @@ def four_darts_configs():
             improved, iterations=200, rest_shape=dataclasses.replace(improved.rest_shape, warp_slack=0.0)
         ),
         "fitted, solver on the target": transfer_mode(fitted, "target solver, from its flattening"),
+        # the template's own grading since the fifth session (its "transfer_solver": "cup", docs/darts.md)
+        "fitted, cup rule (the template's)": dataclasses.replace(
+            fitted, convergence=dataclasses.replace(fitted.convergence, transfer_solver="cup")
+        ),
     }
 
 
