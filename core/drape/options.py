@@ -15,7 +15,7 @@ class DrapeOptions:
     """Simulation settings.
 
     Time: a frame lasts ``1 / fps`` seconds and is the unit of the settle test
-    and of the rest-shape growth; each frame takes ``substeps`` XPBD substeps of
+    and of the rest-shape growth; each frame takes ``substeps`` substeps of
     ``1 / (fps * substeps)`` seconds.
 
     Attributes
@@ -32,7 +32,9 @@ class DrapeOptions:
         float64 on the host; the fabric's stiffness at any step) or ``"pd"``
         (:mod:`core.drape.pd`: projective dynamics, the same energy to second
         order minimised by local projections and one back-substitution of a
-        matrix factored once per cloth, float64 on the host).
+        matrix factored once per cloth, float64 on the host; the default: it
+        delivers the fabric's stiffness, where XPBD's is set by the step and
+        the mesh; ``docs/drape.md``).
     fps : float, 1/s
         Frames per second of simulated time.
     substeps : int, per frame, or None
@@ -110,9 +112,12 @@ class DrapeOptions:
         Particles that start (skintight) closer than this many diameters and lie
         within two mesh rings of each other are fabric neighbours and do not
         collide (nor do particles that start within half a radius of each other).
-    self_interval : int, substeps
+    self_interval : int, substeps, or None
         Substeps between searches for self-collision candidates (a hash grid
         over the particles); every substep resolves the candidates found.
+        None: the solver's :data:`SELF_INTERVAL` (5 XPBD substeps, 8 ms at
+        30 fps; every pd substep, 17 ms: at 5 pd substeps a sheet falling 3 cm
+        onto another passed through it between two searches).
     refine_edge : float, m, or None
         The drape's own mesh: where the cloth hangs free (its pattern triangle
         larger than its skintight image), the pattern's triangles are bisected
@@ -123,7 +128,7 @@ class DrapeOptions:
     """
 
     device: str = "cpu"
-    solver: str = "xpbd"
+    solver: str = "pd"
     fps: float = 30.0  # 1/s
     substeps: Optional[int] = None  # per frame; None: SUBSTEPS[solver]
     iterations: Optional[int] = None  # per substep; None: ITERATIONS[solver]
@@ -148,7 +153,7 @@ class DrapeOptions:
     self_collision: bool = False
     self_radius: Optional[float] = None  # m
     self_exclude: float = 1.5  # self-collision diameters
-    self_interval: int = 5  # substeps
+    self_interval: Optional[int] = None  # substeps; None: SELF_INTERVAL[solver]
     refine_edge: Optional[float] = None  # m
 
     def __post_init__(self):
@@ -156,6 +161,8 @@ class DrapeOptions:
             self.iterations = ITERATIONS.get(self.solver, 1)
         if self.substeps is None and self.solver != "pd":  # pd's depends on the fabric: default_substeps
             self.substeps = SUBSTEPS.get(self.solver, 20)
+        if self.self_interval is None:
+            self.self_interval = SELF_INTERVAL.get(self.solver, 5)
 
     @staticmethod
     def coerce(options: Union[None, "DrapeOptions", Mapping]) -> "DrapeOptions":
@@ -195,6 +202,9 @@ ITERATIONS = {"xpbd": 1, "vbd": 2, "newton": 30, "pd": 10}
 #: projective dynamics is an implicit step (stable at any step), and 2 substeps keep gravity's fall per
 #: substep (2.7 mm at 30 fps) inside a 3 mm contact thickness (one substep a frame tore the shirt's cuffs)
 SUBSTEPS = {"xpbd": 20, "vbd": 20, "newton": 20, "pd": 2}
+#: each solver's substeps between self-collision searches when none are given (the search radius's margin
+#: covers about one contact radius of motion until the next search: pd's substep is 10x XPBD's)
+SELF_INTERVAL = {"xpbd": 5, "vbd": 5, "newton": 5, "pd": 1}
 
 
 def default_substeps(options: "DrapeOptions", thickness: float) -> int:
@@ -238,7 +248,7 @@ RANGES = {
     "grow_frames": (int, 0, True, 10000, False),
     "self_radius": (float, 0.0, True, 0.05, True),
     "self_exclude": (float, 0.0, True, 100.0, False),
-    "self_interval": (int, 1, True, 1000, False),
+    "self_interval": (int, 1, True, 1000, True),
     "refine_edge": (float, 0.001, True, 0.1, True),
 }
 
