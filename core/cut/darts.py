@@ -150,7 +150,7 @@ def _boundary_loop(F: np.ndarray):
     return np.array(loop) if len(loop) == len(half) else None
 
 
-def follow_cups(cut, ref_vertices: np.ndarray, target_vertices: np.ndarray) -> np.ndarray:
+def follow_cups(cut, ref_vertices: np.ndarray, target_vertices: np.ndarray, at_offsets: bool = False) -> np.ndarray:
     """The cut's positions (N, 3) on ``target_vertices`` with each dart's apex region moved to follow
     the cup: a dart towards a landmark of :data:`CUP_AXES` ends where that landmark's rule puts it on the
     target body (the most anterior vertex of the bust within :data:`CUP_SEARCH` of the carried apex),
@@ -160,7 +160,12 @@ def follow_cups(cut, ref_vertices: np.ndarray, target_vertices: np.ndarray) -> n
     (``cup_disk``) is mapped to the unit disk (harmonic, cotangent weights), the panel's vertices in it
     are shifted there by the apex's move times a weight falling from 1 at the apex to 0 (C1) before the
     panel's outer edges, and mapped back to the body. Both legs of a dart share their body points, so
-    they move alike. Other darts, and the cut's other panels, keep the embedding's positions."""
+    they move alike. Other darts, and the cut's other panels, keep the embedding's positions.
+
+    ``at_offsets``: the darts re-drafted on the target's cup end at the design's apex offsets from its
+    bust point (:func:`_sewn_at_offsets`), as the cut ends them from the reference's; the move alone
+    leaves the sewn points short of where the cup moved (women:L: 7.7-12.7 mm from the cup, offsets
+    5 and 7.5 mm). The cup rule's regrade (:func:`core.pattern.solve.transfer_pattern`) asks for it."""
     X0 = np.asarray(ref_vertices, float)
     X1 = np.asarray(target_vertices, float)
     pos = cut.positions(X1)
@@ -172,16 +177,17 @@ def follow_cups(cut, ref_vertices: np.ndarray, target_vertices: np.ndarray) -> n
         if key in done:  # darts sharing an apex move together, once
             continue
         done.add(key)
-        moved = _cup_move(cut, rec, X0, X1)
+        moved = _cup_move(cut, rec, X0, X1, at_offsets)
         if moved is not None:
             ids, P = moved
             pos[ids] = P
     return pos
 
 
-def _cup_move(cut, rec: dict, X0: np.ndarray, X1: np.ndarray):
+def _cup_move(cut, rec: dict, X0: np.ndarray, X1: np.ndarray, at_offsets: bool = False):
     """``(global vertex ids, (k, 3) positions)`` of the panel's vertices :func:`follow_cups` moves for the
-    apex of ``rec``, or None when the cup is where the embedding carries the apex."""
+    apex of ``rec``, or None when the cup is where the embedding carries the apex (``at_offsets``: the
+    sewn points then put at their apex offsets from the cup, :func:`_sewn_at_offsets`)."""
     import igl
 
     from ..design.geometry import SurfaceLocator
@@ -239,15 +245,66 @@ def _cup_move(cut, rec: dict, X0: np.ndarray, X1: np.ndarray):
     shift = shift * min(1.0, 0.8 * rho / (1.5 * size))
     s = np.linalg.norm(img - c0, axis=1) / rho
     w = np.where(s < 1.0, (1.0 - s) ** 2 * (1.0 + 2.0 * s), 0.0)
-    move = w > 0
+    Z, move = img + w[:, None] * shift, w > 0
+    locator = SurfaceLocator(np.c_[U, np.zeros(len(U))], local)
+
+    def on_body(Q):  # disk images -> body points
+        _, tri, bary = locator.closest(np.c_[Q, np.zeros(len(Q))])
+        return np.einsum("ij,ijk->ik", bary, X1[vids[local[tri]]])
+
+    if at_offsets:
+        tips, offsets = _sewn_points(cut, panel.name, np.asarray(rec["apex"], float))
+        tips = pos_in[tips]
+        if len(tips) and (tips >= 0).all():
+            # the scaling stays short of the disk's rim and of the panel's edges other than its darts' legs
+            free = edge[pos_in[edge] >= 0] if len(edge) else edge
+            reach = 1.0 - float(np.linalg.norm(U[cup1]))
+            if len(free):
+                reach = min(reach, float(np.min(np.linalg.norm(Z[pos_in[free]] - U[cup1], axis=1))))
+            Z, within = _sewn_at_offsets(Z, U[cup1], X1[vids[cup1]], tips, offsets, on_body, 0.9 * reach)
+            move |= within
     if not move.any():
         return None
-    flat = np.c_[U, np.zeros(len(U))]
-    _, tri, bary = SurfaceLocator(flat, local).closest(
-        np.c_[img[move] + w[move, None] * shift, np.zeros(int(move.sum()))]
-    )
-    P = np.einsum("ij,ijk->ik", bary, X1[vids[local[tri]]])
-    return ids[np.flatnonzero(inside)[move]], P
+    return ids[np.flatnonzero(inside)[move]], on_body(Z[move])
+
+
+def _sewn_points(cut, panel: str, apex: np.ndarray):
+    """``(panel-local vertex ids, apex offsets m)`` of the sewn points of ``panel``'s darts towards ``apex``."""
+    tips, offsets = [], []
+    for seam in cut.seams:
+        rec = (cut.darts or {}).get(seam.name)
+        if seam.kind == "dart" and seam.panel_a == panel and rec is not None and np.allclose(rec["apex"], apex):
+            tips.append(int(seam.verts_a[-1]))
+            offsets.append(float(rec["apex_offset"]))
+    return np.asarray(tips, dtype=np.int64), np.asarray(offsets, float)
+
+
+#: the rounds of :func:`_sewn_at_offsets` (the disk map is not an isometry: each round measures again on the body)
+OFFSET_ROUNDS = 3
+#: the radial scaling of :func:`_sewn_at_offsets` fades out at this many times the sewn points' farthest image
+#: radius (women:L, bust region: 3 / 4 / 6 read 1.64 / 1.60 / 1.73 %, docs/darts.md "Graded to L")
+OFFSET_FADE = 4.0
+
+
+def _sewn_at_offsets(Z, centre, cup, tips, offsets, on_body, limit: float):
+    """The disk images ``Z`` (k, 2) scaled radially about the cup's image ``centre`` so that the sewn points
+    (rows ``tips``) end at their apex ``offsets`` (m) from the body point ``cup``: a pattern maker ends a
+    re-drafted dart its offset from the new bust point. One factor for the apex (the mean of offset over
+    distance, measured on the body through ``on_body``), :data:`OFFSET_ROUNDS` rounds; the factor fades to 1
+    (C1, monotone in the radius, so the map stays one-to-one for a factor under 2.5) at
+    :data:`OFFSET_FADE` times the sewn points' farthest radius, at most ``limit`` (short of the panel's edges
+    other than its darts' legs). Returns ``(Z, the rows moved)``."""
+    moved = np.zeros(len(Z), bool)
+    for _ in range(OFFSET_ROUNDS):
+        k = float(np.mean(offsets / np.linalg.norm(on_body(Z[tips]) - cup, axis=1)))
+        r = np.linalg.norm(Z - centre, axis=1)
+        fade = min(OFFSET_FADE * float(r[tips].max()), limit)
+        if not 0.0 < k < 2.5 or fade <= 0.0:
+            break
+        t = np.clip(r / fade, 0.0, 1.0)
+        Z = centre + (Z - centre) * (k + (1.0 - k) * t * t * (3.0 - 2.0 * t))[:, None]
+        moved |= r < fade
+    return Z, moved
 
 
 # ---------------------------------------------------------------- a bigger cup: the darts re-derived

@@ -101,7 +101,8 @@ def transfer_pattern(
     the transfer's own solve (docs/darts.md). With ``convergence.transfer_solver`` ``"cup"``, a target
     body whose cups are bigger than the reference's (:func:`core.cut.darts.bigger_cups`) is solved as
     with ``"target"`` from its own flattening, every dart's intake re-derived there (a set one too:
-    the design's darts drafted again on the bigger cup); any other target as with ``"reference"``, and so
+    the design's darts drafted again on the bigger cup, their sewn points at the design's apex offsets from
+    the target's bust points: ``follow_cups(..., at_offsets=True)``); any other target as with ``"reference"``, and so
     is a bigger cup where the re-drafted darts are refused (``darts_regrade_refused`` in the report says
     why: men:XL's chest diverges). The pattern's report records ``darts_regraded``.
     """
@@ -115,7 +116,7 @@ def transfer_pattern(
         tgt = follow_cups(cut, ref_vertices, target_vertices)
     plan = solver.design_plan(config)  # the reference pattern's seams, whichever solver sews them
 
-    def solve_on(solver, cut, start_from):
+    def solve_on(solver, cut, start_from, tgt=tgt):
         offsets = solver.offsets(tgt)
         K, cw, cg = solver.targets_reference(tgt, ease=ease, offsets=offsets)
         # the reference pattern stretched by how much longer the target body is under each piece, or the
@@ -134,12 +135,16 @@ def transfer_pattern(
 
         # on a bigger cup the darts are drafted again: every intake opened by the target's flattening
         if bigger_cups(cut, ref_vertices, target_vertices):
+            from ..cut.darts import follow_cups
+
             again = with_auto_intakes(cut)
+            # the re-drafted darts end at the design's apex offsets from the target's bust points
+            drafted = follow_cups(cut, ref_vertices, target_vertices, at_offsets=True)
             try:
                 regraded = PatternSolver(
-                    again, ref_vertices, solver.config, progress=sub(progress, 0.0, 0.3), flatten_on=tgt
+                    again, ref_vertices, solver.config, progress=sub(progress, 0.0, 0.3), flatten_on=drafted
                 )
-                pattern = solve_on(regraded, again, "flattening")
+                pattern = solve_on(regraded, again, "flattening", drafted)
                 pattern.report["darts_regraded"] = True
                 return pattern
             except PatternError as err:
