@@ -68,6 +68,14 @@ wp.set_module_options({"enable_backward": False})
 CONTACT_WEIGHT = 1.0
 #: the contact penalty holds the particles whose height over their contact plane is under this many offsets
 HELD_HEIGHT = 1.05
+#: cap each grain spring's compressive stress at its element's Euler load, as :class:`NewtonStep` does
+#: (:func:`core.drape.newton.buckling_stress`; :attr:`ProjectiveStep.buckling`). Off: with it the Cusick
+#: disc converges in the iterations (cotton 64.4 / 63.9 / 64.4 % at 10 / 40 / 160 at 10 mm, 72.2 / 70.7 % at
+#: 5 mm; silk 33.1 %, inside 20-40, where pd reads 44.8 % without it) but not in the mesh (cotton 64 % at 10
+#: mm, 71-72 % at 5 mm: the cap grows as 1 / h^2 and the disc's DC follows it), and a garment's compressed
+#: fabric gives way instead of folding: the tube skirt's fabric below its gathered waistband sits 15 % (p95)
+#: off its pattern lengths, against under 1 % without it (benchmarks/results/drape_pd.md, session 6 p10)
+BUCKLING = False
 
 F64 = wp.float64
 
@@ -83,6 +91,7 @@ const double* wsh = (const double*)w_s.data; const double* el = (const double*)e
 const int* bd = (const int*)bends.data; const double* kb = (const double*)k_bend.data;
 const double* hr = (const double*)hinge_rest.data; double* en = (double*)energy.data;
 const int* bl = (const int*)blocks.data;
+const double* cpa = (const double*)cap_a.data; const double* cpb = (const double*)cap_b.data;
 const int o1 = bl[1], o2 = bl[2], o3 = bl[3], o4 = bl[4];
 /* every linear image: D x */
 for (int r = 0; r < o4; r++) {
@@ -100,9 +109,17 @@ double e_el = 0.0;
 for (int i = 0; i < o1; i++) {
     const double* a = img + 3 * i; const double* b = img + 3 * (o1 + i);
     double la = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]), lb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
-    double sa[3] = {ra[i], 0.0, 0.0}, sb[3] = {rb[i], 0.0, 0.0};
-    if (la > 1.0e-15) { double f = ra[i] / la; sa[0] = a[0] * f; sa[1] = a[1] * f; sa[2] = a[2] * f; }
-    if (lb > 1.0e-15) { double f = rb[i] / lb; sb[0] = b[0] * f; sb[1] = b[1] * f; sb[2] = b[2] * f; }
+    /* the sphere's radius: the rest stretch, or, compressed past the buckling strain c, the length + c
+       (the stress capped at the element's Euler load: w psi(e) = min over t <= rest of
+       w / 2 (l - t)^2 + w c (rest - t), psi quadratic down to e = -c and linear past it) */
+    double ta_len = ra[i], tb_len = rb[i];
+    if (la + cpa[i] < ta_len) ta_len = la + cpa[i];
+    if (lb + cpb[i] < tb_len) tb_len = lb + cpb[i];
+    double sa[3] = {ta_len, 0.0, 0.0}, sb[3] = {tb_len, 0.0, 0.0};
+    if (la > 1.0e-15) { double f = ta_len / la; sa[0] = a[0] * f; sa[1] = a[1] * f; sa[2] = a[2] * f; }
+    if (lb > 1.0e-15) { double f = tb_len / lb; sb[0] = b[0] * f; sb[1] = b[1] * f; sb[2] = b[2] * f; }
+    if (ta_len < ra[i]) e_el += wa[i] * cpa[i] * (ra[i] - ta_len);
+    if (tb_len < rb[i]) e_el += wb[i] * cpb[i] * (rb[i] - tb_len);
     double s = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     double t = la * la + lb * lb;
     double q4 = t * t - 4.0 * s * s;
@@ -183,6 +200,8 @@ def _gradient_native(
     row_w: wp.array(dtype=F64),
     rest_a: wp.array(dtype=F64),
     rest_b: wp.array(dtype=F64),
+    cap_a: wp.array(dtype=F64),
+    cap_b: wp.array(dtype=F64),
     w_a: wp.array(dtype=F64),
     w_b: wp.array(dtype=F64),
     w_s: wp.array(dtype=F64),
@@ -211,6 +230,8 @@ def pd_gradient(
     row_w: wp.array(dtype=F64),
     rest_a: wp.array(dtype=F64),
     rest_b: wp.array(dtype=F64),
+    cap_a: wp.array(dtype=F64),
+    cap_b: wp.array(dtype=F64),
     w_a: wp.array(dtype=F64),
     w_b: wp.array(dtype=F64),
     w_s: wp.array(dtype=F64),
@@ -229,7 +250,9 @@ def pd_gradient(
 
     * ``images = D x``: every linear image, rows in blocks ``blocks`` (weft, warp, sliver edges, hinges);
     * the projections (their weighted targets into ``target``): each triangle's weft / warp images onto
-      their rest stretch's sphere (``rest_a``, ``rest_b``; weights ``w_a``, ``w_b``) and, as a pair, onto
+      their rest stretch's sphere (``rest_a``, ``rest_b``; weights ``w_a``, ``w_b``), or, compressed past
+      the buckling strain (``cap_a``, ``cap_b``; inf: none), onto the sphere ``length + cap`` (the
+      stress capped, :attr:`ProjectiveStep.buckling`), and, as a pair, onto
       the nearest orthogonal pair (:func:`orthogonal_pair`, weight ``w_s``); each sliver edge onto the
       sphere of its rest length (``edge_len``, weight ``we``); each hinge vector's normal component
       (:func:`hinge_normals`, from the stencil ``bends`` (B, 4)) onto ``hinge_rest`` (weight ``k_bend``);
@@ -250,6 +273,8 @@ def pd_gradient(
         row_w,
         rest_a,
         rest_b,
+        cap_a,
+        cap_b,
         w_a,
         w_b,
         w_s,
@@ -498,6 +523,10 @@ class ProjectiveStep:
     ----------
     cloth, material, dt, mass, start_stretch, edge_start : as :class:`core.drape.newton.NewtonStep`'s.
     history : the acceleration's depth (0: plain local-global iterations).
+    buckling : None (:data:`BUCKLING`) or bool: cap each grain spring's compressive stress at its element's
+        Euler load (NewtonStep's ``cap_a``, ``cap_b``): a grain image compressed past that strain c is
+        projected onto the sphere of its length + c instead of its rest stretch, so its force stays at the
+        cap, and the potential gains ``w c (rest - target)``: the energy NewtonStep minimises.
 
     Attributes
     ----------
@@ -520,12 +549,21 @@ class ProjectiveStep:
     """
 
     def __init__(
-        self, cloth: Cloth, material, dt: float, mass: np.ndarray, start_stretch, edge_start, history: int = 5
+        self,
+        cloth: Cloth,
+        material,
+        dt: float,
+        mass: np.ndarray,
+        start_stretch,
+        edge_start,
+        history: int = 5,
+        buckling=None,
     ):
         from scipy.sparse import diags, vstack
 
         el = NewtonStep(cloth, material, dt, mass, start_stretch, edge_start)
         self.elements, self.n, self.history = el, el.n, int(history)
+        self.buckling = BUCKLING if buckling is None else bool(buckling)
         self.free, self.free_idx = el.free, el.free_idx
         self.inertia = el.inertia
         self.ws = 2.0 * el.ws  # the orthogonal pair's distance^2 is (f_a . f_b)^2 / 2
@@ -590,9 +628,11 @@ class ProjectiveStep:
                 (bends.reshape(-1), i32),
                 (el.kb, float),
                 (self.rest_len, float),
+                (el.cap_a if self.buckling else np.full(t, np.inf), float),
+                (el.cap_b if self.buckling else np.full(t, np.inf), float),
             )
         ]
-        blocks, Dp, Di, Dx, inertia, row_w, wa, wb, ws, bd, kb, hr = (_flat(a) for a in self._host)
+        blocks, Dp, Di, Dx, inertia, row_w, wa, wb, ws, bd, kb, hr, cap_a, cap_b = (_flat(a) for a in self._host)
         self._launch = wp.launch(
             pd_gradient,
             dim=1,
@@ -610,6 +650,8 @@ class ProjectiveStep:
                 row_w,
                 _flat(self._rest[0]),
                 _flat(self._rest[1]),
+                cap_a,
+                cap_b,
                 wa,
                 wb,
                 ws,
