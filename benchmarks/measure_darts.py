@@ -214,7 +214,9 @@ def four_darts_configs():
     on M for 9.5 deg. ``fitted, solver on the target``: fitted with each size transferred on a solver made on
     its body, started from its flattening (:data:`TRANSFER_MODES`; docs/darts.md, "A solver made on the target
     body"); the same reference and adaptation as fitted. ``fitted, cup rule (the template's)``: the template's
-    grading (``"transfer_solver": "cup"``): on a bigger cup the darts drafted again there, elsewhere fitted."""
+    grading (``"transfer_solver": "cup"``): on a bigger cup the darts drafted again there, ending at the design's
+    apex offsets from the target's bust points (docs/darts.md, "Graded to L: the darts end at their apex
+    offsets"), elsewhere fitted."""
     from core.pattern.config import SolverConfig
 
     fitted, improved = SolverConfig.fitted(), SolverConfig.improved()
