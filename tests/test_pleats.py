@@ -535,9 +535,9 @@ def test_a_pleat_from_a_seam_is_sewn_through_it_at_every_stage(pleated, tmp_path
         )
     # the last stage: after a short drape every pressed pleat (the tuck and the back's) is still
     # closed, its visible fold a few mm from its placement line (the intake folded under, not opened
-    # flat to 2 x 20 mm; pd, the default: medians 4.5-4.6 mm, the back's 8.2 mm at most, the tuck,
-    # across the front, opens to 14.4 mm at the centre front; XPBD: 4.4-5.3, 5.8 and 16.5 mm), and its
-    # fold lines still creases (stencils folded past 1 rad: pd 81 %, XPBD 98 %; pd's hinge energy is
+    # flat to 2 x 20 mm; XPBD, the default: medians 4.4-5.3 mm, the back's 5.8 mm at most, the tuck,
+    # across the front, opens to 16.5 mm at the centre front; pd: 4.5-4.6, 8.2 and 14.4 mm), and its
+    # fold lines still creases (stencils folded past 1 rad: XPBD 98 %, pd 81 %; pd's hinge energy is
     # quadratic in 2 sin(theta / 2), whose slope at the crease's 172 degree rest angle is cos(86 deg) =
     # 0.07: a pressed crease holds its angle more softly than in XPBD)
     from core.drape.mesh import dihedral_angles
@@ -551,11 +551,11 @@ def test_a_pleat_from_a_seam_is_sewn_through_it_at_every_stage(pleated, tmp_path
             mine = [x for x in lines if x["pleat"] == name]
             fold, place = mine[0], next(x for x in mine if x["kind"] == "placement")
             apart = np.linalg.norm(positions[fold["gids"]] - positions[place["gids"]], axis=1)
-            assert np.median(apart) < 0.008 and apart.max() < (0.009 if "back" in name else 0.025), name
+            assert np.median(apart) < 0.008 and apart.max() < (0.008 if "back" in name else 0.025), name
     x = np.zeros_like(cloth.x0)
     used = np.flatnonzero(cloth.particle_of >= 0)
     x[cloth.particle_of[used]] = positions[used]
-    assert np.mean(np.abs(dihedral_angles(x, cloth.bends[fold_edges(cloth, cloth.mesh_pattern)])) > 1.0) > 0.8
+    assert np.mean(np.abs(dihedral_angles(x, cloth.bends[fold_edges(cloth, cloth.mesh_pattern)])) > 1.0) > 0.9
     # another size (the same cut, other lengths: placed again as a transfer places them, from what
     # the first pattern recorded) sews the layers at the same points: the same outline and seams
     large = copy.deepcopy(tucked)
