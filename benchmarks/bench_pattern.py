@@ -285,6 +285,9 @@ def _templates(body, coarse):
             solver = wf.make_solver(prep)
             pose = cut.body.get("pose")
             pats = {"M": solve_pattern(cut, ref, solver=solver, style=design.name)}
+            # each size graded as the design grades it (its "transfer_solver", as `ease transfer` does)
+            own = getattr(design, "transfer_solver", None)
+            grading = wf.with_transfer_solver(solver.config, own) if own else None
             for size in ("XS", "S", "L", "XL"):
                 try:
                     size = wf.size_name(prep, size)  # of the design's chart (a women's template: women:S)
@@ -295,6 +298,7 @@ def _templates(body, coarse):
                     cut,
                     ref,
                     body_instance(body, shape, pose),
+                    config=grading,
                     solver=solver,
                     start=pats["M"],
                     style=design.name,
@@ -1146,7 +1150,8 @@ def _templates_markdown(T) -> list:
         "Each shipped template at its design ease, solved with the configuration it names (improved unless it names "
         "another: blouse_four_darts fitted, whose adaptations move the targets in their first 30 of 300 iterations "
         "as improved's do in 60, `adaptation.feedback_until`): reference on M (of the design's chart), transferred "
-        "to XS..XL of that chart, adapted to P1 "
+        "to XS..XL of that chart as the design grades (its `transfer_solver`: shirt_box_pleat `target`, "
+        "blouse_four_darts `cup`, the others the reference's solver), adapted to P1 "
         "(the design's tolerance), each measured on the surface it lies on (the skin; for the skirt topology the "
         "membrane spanning the cleft and crotch, docs/metrics.md). "
         "Cell: weft compliance % / warp deviation % (shear p95 deg), flipped / collapsed / crossings. "
