@@ -318,20 +318,14 @@ CUP_SIZE_RADIUS = 0.10
 def _cup_defect(rec: dict, X0: np.ndarray, X: np.ndarray) -> float:
     """The angle defect (rad) of body ``X`` over the interior vertices of ``rec``'s cup disk within
     :data:`CUP_SIZE_RADIUS` of the disk vertex nearest the dart's apex on the reference body ``X0``."""
+    from .auto_darts import angle_defect
+
     F = np.asarray(rec["cup_disk"], dtype=np.int64)
     vids, local = np.unique(F, return_inverse=True)
-    local = local.reshape(-1, 3)
     P = X[vids]
-    angle = np.zeros(len(vids))
-    for c in range(3):
-        a, b, d = local[:, c], local[:, (c + 1) % 3], local[:, (c + 2) % 3]
-        u, v = P[b] - P[a], P[d] - P[a]
-        np.add.at(angle, a, np.arctan2(np.linalg.norm(np.cross(u, v), axis=1), np.einsum("ij,ij->i", u, v)))
-    interior = np.ones(len(vids), bool)
-    interior[_boundary_loop(local)] = False
+    defect = angle_defect(P, local.reshape(-1, 3))  # 0 on the disk's boundary
     centre = P[int(np.argmin(np.linalg.norm(X0[vids] - np.asarray(rec["apex"], float), axis=1)))]
-    near = interior & (np.linalg.norm(P - centre, axis=1) < CUP_SIZE_RADIUS)
-    return float((2.0 * np.pi - angle[near]).sum())
+    return float(defect[np.linalg.norm(P - centre, axis=1) < CUP_SIZE_RADIUS].sum())
 
 
 def bigger_cups(cut, ref_vertices: np.ndarray, target_vertices: np.ndarray) -> bool:

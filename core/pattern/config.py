@@ -486,8 +486,8 @@ class SolverConfig:
             )
         if cv.transfer_solver not in TRANSFER_SOLVERS:
             raise PatternError(
-                "solver configuration convergence.transfer_solver: expected 'reference' or 'target' or 'cup', "
-                f"got {cv.transfer_solver!r}"
+                "solver configuration convergence.transfer_solver: expected "
+                f"{' or '.join(repr(t) for t in TRANSFER_SOLVERS)}, got {cv.transfer_solver!r}"
             )
         if s.straight_target not in ("zero", "smooth"):
             raise PatternError(

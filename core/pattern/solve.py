@@ -131,19 +131,15 @@ def transfer_pattern(
         return build_pattern(cut, res, style=style, body=body, mode="transfer")
 
     if cv.transfer_solver == "cup":
-        from ..cut.darts import bigger_cups, with_auto_intakes
+        from ..cut.darts import bigger_cups, follow_cups, with_auto_intakes
 
         # on a bigger cup the darts are drafted again: every intake opened by the target's flattening
         if bigger_cups(cut, ref_vertices, target_vertices):
-            from ..cut.darts import follow_cups
-
             again = with_auto_intakes(cut)
             # the re-drafted darts end at the design's apex offsets from the target's bust points
             drafted = follow_cups(cut, ref_vertices, target_vertices, at_offsets=True)
             try:
-                regraded = PatternSolver(
-                    again, ref_vertices, solver.config, progress=sub(progress, 0.0, 0.3), flatten_on=drafted
-                )
+                regraded = target_solver(solver, ref_vertices, drafted, sub(progress, 0.0, 0.3), cut=again)
                 pattern = solve_on(regraded, again, "flattening", drafted)
                 pattern.report["darts_regraded"] = True
                 return pattern
@@ -164,13 +160,20 @@ def transfer_pattern(
 
 
 def target_solver(
-    solver: PatternSolver, ref_vertices, target_positions: np.ndarray, progress: Optional[Progress] = None
+    solver: PatternSolver,
+    ref_vertices,
+    target_positions: np.ndarray,
+    progress: Optional[Progress] = None,
+    cut=None,
 ) -> PatternSolver:
     """A solver of ``solver``'s cut and configuration made on a transfer's target body: the pieces flattened
     and the system factorised on ``target_positions`` (N, 3) (the cut's positions there, its darts' apexes
     following the cups), the reference body (``ref_vertices``, (V, 3), the one ``solver`` was made on) kept
-    as the one the targets and folds are measured from (``convergence.transfer_solver`` ``"target"``)."""
-    return PatternSolver(solver.cut, ref_vertices, solver.config, progress=progress, flatten_on=target_positions)
+    as the one the targets and folds are measured from (``convergence.transfer_solver`` ``"target"``).
+    ``cut``: another cut of the same mesh in its place (``"cup"``: the darts drafted again)."""
+    return PatternSolver(
+        solver.cut if cut is None else cut, ref_vertices, solver.config, progress=progress, flatten_on=target_positions
+    )
 
 
 def adapt_pattern(

@@ -190,7 +190,7 @@ def transfer(
     ease compliance on the target body) beside the reference's own compliance.
     ``vertices``: the target body's instance in the cut's pose when the caller
     has made it (a batch item measured it), so it is not evaluated again.
-    ``transfer_solver``: ``"reference"`` or ``"target"``, the body the transfer's flattening and
+    ``transfer_solver``: ``"reference"``, ``"target"`` or ``"cup"``, the body the transfer's flattening and
     factorisation are made on (:attr:`core.pattern.config.Convergence.transfer_solver`); None: the
     design's own ``transfer_solver``, else the configuration's (``"reference"``).
 
@@ -266,8 +266,8 @@ def transfer(
 
 
 def with_transfer_solver(config, transfer_solver: str):
-    """``config`` (a SolverConfig) with its transfers solved on ``transfer_solver``'s body (``"reference"`` or
-    ``"target"``, :attr:`core.pattern.config.Convergence.transfer_solver`), checked."""
+    """``config`` (a SolverConfig) with its transfers solved on ``transfer_solver``'s body (one of
+    :data:`core.choices.TRANSFER_SOLVERS`, :attr:`core.pattern.config.Convergence.transfer_solver`), checked."""
     import dataclasses
 
     cfg = dataclasses.replace(
