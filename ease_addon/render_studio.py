@@ -29,7 +29,7 @@ import math
 import bpy
 import numpy as np
 
-from . import materials
+from . import convert, materials
 from .objects import collection, world_bounds
 
 STUDIO = "EASE Studio"
@@ -196,8 +196,7 @@ def _cyclorama(name: str, radius: float, cove: float, wall: float, segments: int
             faces.append((a + j, b + j, b + k, a + k))
     me = bpy.data.meshes.new(name)
     me.from_pydata(verts.tolist(), [], faces)
-    for p in me.polygons:
-        p.use_smooth = True
+    convert.smooth(me)
     me.update()
     return me
 

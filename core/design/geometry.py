@@ -599,9 +599,7 @@ def surface_tools(vertices: np.ndarray, faces: np.ndarray, cache: int = 4) -> Su
     comes back (a live re-cut after a parameter edit re-resolves on it)."""
     V = np.ascontiguousarray(vertices, dtype=np.float64)
     F = np.ascontiguousarray(faces, dtype=np.int64)
-    h = hashlib.blake2b(V.tobytes(), digest_size=16)
-    h.update(F.tobytes())
-    key = h.digest()
+    key = mesh_key(V, F)
     tools = _TOOLS.get(key)
     if tools is None:
         tools = SurfaceTools(V, F)

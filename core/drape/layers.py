@@ -253,15 +253,16 @@ def layer_collider(
         base += len(v)
     v, f = np.concatenate(vs), np.concatenate([body_f[keep], *fs])
     if strips and buried:
-        f = np.concatenate([f[: int(keep.sum())], _unburied(v, f[int(keep.sum()) :], v, f)])
+        nb = int(keep.sum())  # the body's faces come first
+        f = np.concatenate([f[:nb], _unburied(v, f, f[nb:])])
     return v, f
 
 
-def _unburied(v, faces, all_v, all_f, lift: float = BURIED_LIFT) -> np.ndarray:
-    """``faces`` of the collider (all_v, all_f) less those buried in it: their outer side (the centre
+def _unburied(v, all_f, faces, lift: float = BURIED_LIFT) -> np.ndarray:
+    """``faces`` of the collider (v, all_f) less those buried in it: their outer side (the centre
     moved ``lift`` out along the face's normal) inside the collider (:func:`inside_skin`)."""
     centre = v[faces].mean(axis=1) + face_normals(v, faces) * lift
-    return faces[~inside_skin(centre, all_v, all_f)]
+    return faces[~inside_skin(centre, v, all_f)]
 
 
 def measure_skin(body_v, body_f, v, f) -> Skin:

@@ -252,6 +252,10 @@ def interior_edges(faces: np.ndarray) -> tuple:
     return bends[keep].astype(np.int64), pair[keep].astype(np.int64)
 
 
+#: the discrete-shell weight of a hinge is capped at ten times the equilateral value (slivers have tiny areas)
+BEND_WEIGHT_CAP = 10 * 2 / np.sqrt(3.0)
+
+
 def build_cloth(pattern, refine_edge: Optional[float] = None, gathers: bool = False) -> Cloth:
     """Weld a :class:`core.pattern.types.Pattern` into a :class:`Cloth`.
 
@@ -404,7 +408,7 @@ def _weld(pattern, panels: list, n_global: int) -> Cloth:
         e = corner(bends[:, 3], bend_faces[:, 0]) - corner(bends[:, 2], bend_faces[:, 0])
         bend_weight = np.sum(e * e, axis=1) / np.maximum(rest_area[bend_faces].sum(axis=1), 1e-16)
         # slivers give huge weights (tiny areas): cap at ten times the equilateral value
-        bend_weight = np.minimum(bend_weight, 10 * 2 / np.sqrt(3.0))
+        bend_weight = np.minimum(bend_weight, BEND_WEIGHT_CAP)
     else:
         bend_weight = np.zeros(0)
 

@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..geom.mesh import row_cross
-from .mesh import Cloth
+from .mesh import BEND_WEIGHT_CAP, Cloth
 
 
 def _rows(n_rows: int, n_cols: int, cols: np.ndarray, vals: np.ndarray):
@@ -117,7 +117,7 @@ def clamped_bend_weight(cloth: Cloth) -> np.ndarray:
             continue
         free = area[fb] if side_pinned[i, 0] else area[fa]
         w[i] *= (area[fa] + area[fb]) / max(free, 1e-16)
-    return np.minimum(w, 2 * 10 * 2 / np.sqrt(3.0))  # mesh.py's sliver cap, doubled for the clamp
+    return np.minimum(w, 2 * BEND_WEIGHT_CAP)  # mesh.py's sliver cap, doubled for the clamp
 
 
 class NewtonStep:

@@ -930,7 +930,7 @@ def open_pattern(pattern, stitch: bool = False):
     )
 
 
-def split_seams(panels, seams, ends: Dict[str, list], next_id: int, paths=None, sites=None, drawn=None):
+def split_seams(panels, seams, ends: Dict[str, list], next_id: int, sites=None, drawn=None):
     """Sew a pleat into the seam it starts or ends on: the pleat folded closed, the seam sewn through it.
 
     ``ends``: per opened piece the ends of its pleats' lines on the closed outline (``ends`` of
@@ -955,8 +955,8 @@ def split_seams(panels, seams, ends: Dict[str, list], next_id: int, paths=None, 
 
     The vertices added to a piece are numbered after its last outline vertex (:func:`_outline_first`);
     ``drawn`` (optional, ``report["opened_pleats"]``) gets its lines' ids renumbered with them.
-    ``paths``: pleat name -> its JSON path (for the error of a seam that cannot take it). Returns
-    ``(panels, seams, next_id)``.
+    A site's ``path`` (its pleat's JSON path) names the pleat in the error of a seam that cannot take it.
+    Returns ``(panels, seams, next_id)``.
     """
     from dataclasses import replace
 
@@ -965,7 +965,7 @@ def split_seams(panels, seams, ends: Dict[str, list], next_id: int, paths=None, 
     before = [len(p.uv) for p in panels]
     by_name = {p.name: k for k, p in enumerate(panels)}
     site_of = {x["name"]: x for x in sites or ()}
-    paths = dict(paths or {}, **{x["name"]: x["path"] for x in sites or () if "path" in x})
+    paths = {x["name"]: x["path"] for x in sites or () if "path" in x}
     panels = list(panels)
     out = []
     for seam in seams:

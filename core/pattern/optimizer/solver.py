@@ -407,7 +407,7 @@ class PatternSolver:
         products per iteration touch the triangles. The configuration's
         ``iterations`` (adaptation: at least ``adaptation.min_iterations``) of
         :meth:`iterate` from :meth:`begin`. A transfer (``positions`` given, no ``poses``) that
-        :meth:`would_refuse` is solved again from the same start with the folds of its targets bridged at
+        :meth:`refusal` refuses is solved again from the same start with the folds of its targets bridged at
         each of :data:`.folds.RETRY_FLOORS` in turn, while it would be refused and the floor changes a target:
         the last try is the result (refused by :meth:`result` if it still is).
 
@@ -456,15 +456,12 @@ class PatternSolver:
         self.release(state)
         return state
 
-    def would_refuse(self, state: "SolveState") -> bool:
-        """Whether :meth:`result` would refuse ``state`` (diverged, or a dart's legs not sewn equal), or
-        its darts' legs cross (:meth:`.dart_gaps.GapCorrection.crossed`: the pipeline refuses the pattern)."""
-        return self.refusal(state)[0]
-
     @_with_solvers_choice
     def refusal(self, state: "SolveState") -> Tuple[bool, Optional["SolveState"]]:
-        """(:meth:`would_refuse` ``state``, ``state`` with its legs sewn equal (:meth:`legs_sewn_equal`), or None
-        when it diverged): the sewn state serves :meth:`result` too, so a solve sews its legs once."""
+        """(whether :meth:`result` would refuse ``state`` (diverged, or a dart's legs not sewn equal) or its
+        darts' legs cross (:meth:`.dart_gaps.GapCorrection.crossed`: the pipeline refuses the pattern),
+        ``state`` with its legs sewn equal (:meth:`legs_sewn_equal`), or None when it diverged): the sewn
+        state serves :meth:`result` too, so a solve sews its legs once."""
         if np.any(runaway(state)):
             return True, None
         sewn = self.legs_sewn_equal(state)
