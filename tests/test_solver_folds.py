@@ -213,6 +213,11 @@ def test_only_a_refused_transfer_is_tried_again_with_a_higher_floor():
     flat = _maps(rng, 40, RETRY_FLOORS[-1] + 0.05, 2.0) @ K_ref
     fake, st = solve([True] * 5, K=flat, positions=X)
     assert len(fake.runs) == 1
+    # a floor that changes no target is skipped, and the next floor, which squeezes more, is still tried
+    between = _maps(rng, 40, RETRY_FLOORS[0] + 0.05, 2.0)
+    between[:4] = _maps(rng, 4, RETRY_FLOORS[0] + 0.02, RETRY_FLOORS[-1] - 0.05)
+    fake, st = solve([True, False], K=between @ K_ref, positions=X)
+    assert len(fake.runs) == 2 and st.fold_floor == RETRY_FLOORS[-1]
 
 
 def test_legs_not_sewn_equal_are_never_written(four_darts, monkeypatch):

@@ -430,12 +430,12 @@ class PatternSolver:
         if positions is not None and poses is None:
             # a transfer that would be refused: solved again with the skin's folds bridged further (.folds)
             for floor in RETRY_FLOORS:
+                K_up = bridge_folds(K, self.ref_offsets[0], floor)
+                if K_up is K:
+                    continue  # no triangle squeezed under this floor (a higher one may squeeze some)
                 refuse, sewn = self.refusal(state)
                 if not refuse:
                     break
-                K_up = bridge_folds(K, self.ref_offsets[0], floor)
-                if K_up is K:
-                    break  # no triangle squeezed under this floor: nothing a higher one changes
                 spent = state.seconds
                 state, sewn = self._run(K_up, c_weft, c_warp, None, **args), None
                 state.seconds += spent
