@@ -13,7 +13,7 @@ import json
 
 from . import data, jobs, sync
 from .operators_base import EaseOperator
-from .pattern_job import PATTERN_JOB, start_pattern  # noqa: F401 (PATTERN_JOB: the job's name for callers)
+from .pattern_job import start_pattern
 
 
 def gather_settings(scene, design):

@@ -80,7 +80,7 @@ def test_transfer_and_adapt_run_in_the_background(bpy_session, addon, mode):
     import numpy as np
 
     bpy = bpy_session["bpy"]
-    jobs, data, pattern_ops, fit_ops = addon("jobs"), addon("data"), addon("pattern_ops"), addon("fit_ops")
+    jobs, data, pattern_job, fit_ops = addon("jobs"), addon("data"), addon("pattern_job"), addon("fit_ops")
     scene = bpy.context.scene
     s = scene.ease
     s.fit_size = "L"
@@ -99,7 +99,7 @@ def test_transfer_and_adapt_run_in_the_background(bpy_session, addon, mode):
     try:
         # the button's job (headless bpy has no window to invoke in): back at once, the job running
         job = start(bpy.context)
-        assert jobs.running(pattern_ops.PATTERN_JOB) is job and job.thread is not None
+        assert jobs.running(pattern_job.PATTERN_JOB) is job and job.thread is not None
         assert s.job_status.startswith(f"updating: {label}")
         assert s.fit_json == "" and scene[data.PATTERN_KEY] == text  # nothing applied yet
         jobs.wait()
