@@ -175,8 +175,11 @@ DEFAULT = "cotton"
 #: and Phillips, D. G., "A study of fabric-drape behaviour with image analysis. Part II", J.
 #: Textile Inst. 89(1) (1998) 70-79; neither re-checked in the session that set the preset).
 #: Jersey: no target yet (the issue asks for a published knit measurement; none was found in the
-#: stored pages searched, twice: the abstracts of Sanad 2013, Pan et al. 2019, Gider 2004 and Jeong
-#: and Phillips 1998 came back, not their tables).
+#: stored pages searched, three times: the stored copies of Sanad 2013, Pan et al. 2019, Gider 2004,
+#: Jeong and Phillips 1998, Kuijpers 2017, Eryuruk and Kalaoglu 2016 (IJCST 28(4), 12 elastane
+#: single jerseys, drape measured) and Bajaj 2024 (silk/viscose knits) hold only their opening pages,
+#: no DC table). The one single-jersey figure seen, DC 18-31 % at 96.8-208.8 g/m^2, is second-hand,
+#: from a 25 cm specimen (not Cusick's 30 cm) in an uncited note on GitHub: not usable as a target.
 TARGETS = {
     "cotton": {"dc_pct": (60.0, 76.0), "nodes": (5, 10), "bending_length_cm": (1.5, 2.5)},
     "silk": {"dc_pct": (20.0, 40.0), "nodes": (5, 10)},
