@@ -140,6 +140,25 @@ def _set_corner(me, name: str, kind: str, values: np.ndarray, key: str) -> None:
     attr.data.foreach_set(key, np.ascontiguousarray(values, dtype=np.float32).ravel())
 
 
+def thicken(obj, thickness: float):
+    """The Solidify modifier :data:`THICKNESS` on ``obj`` (made once, then reused): ``thickness``
+    metres, centred on the drape's surface, every vertex moved by half of it along its normal.
+
+    No *Even Thickness*: it divides a vertex's offset by the cosine between its normal and its
+    faces' normals, which is near 0 where the cloth folds flat on itself (a pressed fold, a
+    gather's pleat: neighbouring triangles at 170-180 degrees), and turned such folds into
+    spikes tens of centimetres long."""
+    mod = obj.modifiers.get(THICKNESS)
+    if mod is None:
+        mod = obj.modifiers.new(THICKNESS, "SOLIDIFY")
+    mod.solidify_mode = "EXTRUDE"
+    mod.thickness = float(thickness)
+    mod.offset = 0.0  # centred: the drape keeps the surface this far off the body
+    mod.use_even_offset = False
+    mod.use_rim = True
+    return mod
+
+
 def dress_garment(scene, obj, pattern=None) -> bool:
     """Write the fabric's layers on the garment ``obj``, its Solidify, its preset material.
 
@@ -150,13 +169,7 @@ def dress_garment(scene, obj, pattern=None) -> bool:
     pattern = pattern if pattern is not None else data.stored_pattern(scene)
     preset = materials.scene_fabric(scene)
     me = obj.data
-    mod = obj.modifiers.get(THICKNESS)
-    if mod is None:
-        mod = obj.modifiers.new(THICKNESS, "SOLIDIFY")
-    mod.thickness = float(PRESETS[preset].thickness if preset in PRESETS else 0.003)
-    mod.offset = 0.0  # centred: the drape keeps the surface this far off the body
-    mod.use_even_offset = True
-    mod.use_rim = True
+    thicken(obj, float(PRESETS[preset].thickness if preset in PRESETS else 0.003))
     if scene.ease.fitmap == "NONE" or not me.materials:
         mat = materials.fabric(preset)
         if me.materials:

@@ -178,6 +178,58 @@ def test_garment_wears_its_fabric(scene, bpy_session):
     assert bsdf.inputs["Sheen Weight"].default_value > 0 and bsdf.inputs["Normal"].is_linked
 
 
+def _evaluated_verts(bpy, obj) -> np.ndarray:
+    """(V, 3) object-space vertices of ``obj`` with its modifiers applied."""
+    ev = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    co = np.empty(len(ev.data.vertices) * 3, dtype=np.float32)
+    ev.data.vertices.foreach_get("co", co)
+    return co.reshape(-1, 3).astype(np.float64)
+
+
+def _pressed_pleat(bpy, name: str):
+    """A strip of cloth folded flat on itself (a pressed pleat: 5 cm long, each layer 1 cm wide,
+    0.3 mm apart at the open side, its two triangle rows at 178 degrees along the fold), the
+    shape a drape takes where a fold collapses (a gather, an elbow, a neckline)."""
+    xs = np.linspace(0.0, 0.05, 6)
+    fold = [(x, 0.0, 0.0) for x in xs]
+    top = [(x, 0.01, 0.0003) for x in xs]
+    bottom = [(x, 0.01, 0.0) for x in xs]
+    verts = fold + top + bottom
+    n = len(xs)
+    faces = []
+    for i in range(n - 1):  # one orientation across the fold: the layers' normals point apart
+        faces += [(i, i + 1, n + i + 1), (i, n + i + 1, n + i)]
+        faces += [(i, 2 * n + i, 2 * n + i + 1), (i, 2 * n + i + 1, i + 1)]
+    me = bpy.data.meshes.new(name)
+    me.from_pydata(verts, [], faces)
+    obj = bpy.data.objects.new(name, me)
+    bpy.context.scene.collection.objects.link(obj)
+    return obj, np.asarray(verts, dtype=np.float64)
+
+
+def test_thickness_makes_no_spikes(scene, bpy_session):
+    """The fabric's thickness (Solidify) moves no vertex farther than half of it, on the drape and
+    where the cloth folds flat on itself: Even Thickness divided the offset by the cosine between
+    the vertex normal and its faces' (~0 at a flat fold) and drew spikes several cm long out of
+    the shoulder seams, the neckline and the gathered armholes."""
+    bpy = scene.bpy
+    fab = scene.mod("render_fabric")
+    g = scene.objects("garment")[0]
+    t = g.modifiers[fab.THICKNESS].thickness
+    src, solid = scene.verts(g).astype(np.float64), _evaluated_verts(bpy, g)
+    assert len(solid) == 2 * len(src)  # both faces of the cloth
+    assert np.abs(np.linalg.norm(solid.reshape(2, -1, 3) - src, axis=2) - 0.5 * t).max() < 1e-5
+    obj, verts = _pressed_pleat(bpy, "pleat")
+    try:
+        fab.thicken(obj, t)
+        solid = _evaluated_verts(bpy, obj)
+        assert len(solid) == 2 * len(verts)
+        move = np.linalg.norm(solid.reshape(2, -1, 3) - verts, axis=2)
+        assert move.max() < 0.5 * t * 1.001, move.max()
+    finally:
+        bpy.data.objects.remove(obj)
+
+
 def test_tiny_render_shows_body_garment_and_shadow(scene, bpy_session):
     """64 x 86 pixels, 4 samples: (1) the beauty render; (2) body and garment as holdouts on a
     transparent film: their pixels are those they project to, so nothing stands in front of
