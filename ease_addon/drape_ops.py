@@ -17,12 +17,15 @@ from .operators_base import EaseOperator
 JOB = "drape"  # the job's name (a new Drape replaces a running one)
 
 
-def _compute(pattern, body_v, body_f, frames, progress, device="cpu", refine_edge=None):
+def _compute(pattern, body_v, body_f, frames, progress, device="cpu", refine_edge=None, solver="default"):
     """The core's drape of ``pattern`` on the body (V, F) and its fit measurements (a DrapeRun);
-    ``refine_edge`` (m, or None): the drape mesh's longest edge where the cloth hangs free."""
+    ``refine_edge`` (m, or None): the drape mesh's longest edge where the cloth hangs free;
+    ``solver``: ``DrapeOptions.solver``, or ``"default"`` for the core's default."""
     from ..core import workflows as wf
 
     options = {"max_frames": int(frames), "device": device, "refine_edge": refine_edge}
+    if solver and solver != "default":
+        options["solver"] = solver
     return wf.drape(pattern, options=options, body=(body_v, body_f), progress=progress)
 
 
@@ -36,19 +39,19 @@ def refine_edge(mm: float):
 
 
 def start_drape(
-    pattern, body_v, body_f, frames: int, device: str = "cpu", digest=None, sync=None, refine=None
+    pattern, body_v, body_f, frames: int, device: str = "cpu", digest=None, sync=None, refine=None, solver="default"
 ) -> jobs.Job:
     """The drape of ``pattern`` on the body (V, F) for at most ``frames`` frames as the job
     :data:`JOB` (``sync``: :func:`.jobs.start`'s); the garment is made when it lands.
     ``digest``: the pattern it drapes (the scene's may change meanwhile); ``refine``: the drape
-    mesh's refinement edge (m, or None: the pattern's mesh). ``pattern``'s body record goes with
+    mesh's refinement edge (m, or None: the pattern's mesh); ``solver``: :func:`_compute`'s. ``pattern``'s body record goes with
     the job: the body takes the draped pattern's size and pose when the garment lands, whatever
     pattern the scene holds by then (a Transfer landing meanwhile)."""
     body = dict(pattern.body or {})
     return jobs.start_step(
         JOB,
         "drape",
-        lambda progress: _compute(pattern, body_v, body_f, frames, progress, device, refine),
+        lambda progress: _compute(pattern, body_v, body_f, frames, progress, device, refine, solver),
         lambda run: apply_drape(bpy.context, run, digest=digest, body=body),
         "drape_status",
         "Drape",
@@ -73,7 +76,15 @@ class EASE_OT_drape(jobs.Background, EaseOperator):
         digest = data.pattern_digest(context.scene.get(data.PATTERN_KEY, ""))
         refine = refine_edge(s.drape_refine_mm)
         job = start_drape(
-            pattern, body_v, body_f, s.drape_frames, s.drape_device, digest, sync=self.job_sync(), refine=refine
+            pattern,
+            body_v,
+            body_f,
+            s.drape_frames,
+            s.drape_device,
+            digest,
+            sync=self.job_sync(),
+            refine=refine,
+            solver=s.drape_solver,
         )
         self.report({"INFO"}, s.drape_status if job.thread is None else "draping in the background (Esc cancels)")
 
@@ -111,7 +122,8 @@ def apply_drape(context, run, digest=None, body=None) -> None:
     )
     sync.apply_fitmap(scene)
     s = scene.ease
-    s.drape_json = json.dumps(run.figures)
+    solver = (getattr(run.result, "options", None) or {}).get("solver")
+    s.drape_json = json.dumps({**run.figures, **({"solver": solver} if solver else {})})
     ref = run.result.refinement or {}
     refined = (
         f", mesh refined to {1000 * ref['target_edge_m']:g} mm "

@@ -200,6 +200,16 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
         items=[("cpu", "CPU", "bitwise repeatable"), ("cuda", "CUDA", "NVIDIA GPU through Warp")],
         default="cpu",
     )
+    # the drape solver (core.drape.DrapeOptions.solver); "default": the core's own default
+    drape_solver: EnumProperty(
+        name="Solver",
+        items=[
+            ("default", "Default", "the core's default drape solver (`ease drape` without --solver)"),
+            ("xpbd", "XPBD", "fast, softer than the fabric"),
+            ("pd", "PD", "projective dynamics: the fabric's own stiffness"),
+        ],
+        default="default",
+    )
     # the drape mesh's longest edge where the cloth hangs free (mm; 0: the pattern's mesh as it is);
     # the default is `ease drape --refine-edge`'s (core.cli.drape.REFINE_EDGE, 10 mm)
     drape_refine_mm: FloatProperty(

@@ -1,6 +1,6 @@
 """EASE headless: design -> body -> pattern -> drape -> .blend + Cycles PNG + pattern files, through the add-on.
 
-    blender -b --python examples/scripted_run.py -- DESIGN.json OUT_DIR [--frames N] [--samples N] [--view ALL]
+    blender -b --python examples/scripted_run.py -- DESIGN.json OUT_DIR [--frames N] [--solver pd] [--samples N] [--view ALL]
     python examples/scripted_run.py DESIGN.json OUT_DIR            # with the bpy module (the venv)
 
 Writes into OUT_DIR: ``scene.blend`` (body, ease layer, design, pattern
@@ -39,6 +39,12 @@ def _args(argv):
     ap.add_argument("design", help="design JSON (e.g. examples/designs/teaser_shirt_pants.json)")
     ap.add_argument("out", help="output folder")
     ap.add_argument("--frames", type=int, default=120, help="drape frame limit (default 120)")
+    ap.add_argument(
+        "--solver",
+        default="default",
+        choices=("default", "xpbd", "pd"),
+        help="drape solver (the Drape panel's Solver; default: the core's default)",
+    )
     ap.add_argument(
         "--samples",
         type=int,
@@ -115,6 +121,7 @@ def run(
     drape: bool = True,
     export: bool = True,
     view: str = "FRONT",
+    solver: str = "default",
 ) -> dict:
     bpy = _bpy()
     module = enable_from_checkout(bpy)
@@ -127,7 +134,7 @@ def run(
     _op(bpy, "load_design_file", filepath=str(Path(design).resolve()))
     _op(bpy, "optimize_pattern")
     if drape:
-        s.drape_frames = frames
+        s.drape_frames, s.drape_solver = frames, solver
         _op(bpy, "drape")
     if samples is not None:
         s.render_samples = samples
@@ -173,6 +180,7 @@ def main(argv=None) -> int:
         not args.no_drape,
         not args.no_export,
         args.view,
+        args.solver,
     )
     print(json.dumps(rep, indent=1))
     return 0

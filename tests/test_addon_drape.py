@@ -9,6 +9,7 @@ import re
 import numpy as np
 import pytest
 
+from core.drape import DrapeOptions
 from core.workflows._drape import pattern_body
 
 DESIGN = "top_sleeveless.json"  # cheapest template: two panels
@@ -181,7 +182,8 @@ def test_refined_drape_mesh(bpy_session, blender, addon, tmp_path):
     """Refine (mm): the garment is the drape's refined mesh (more vertices than the pattern's);
     its fit maps, ``ease_vertex_id`` (the pattern's ids, then the refinement's), fabric UVs
     (the pattern as draped, laid corner by corner) are the refined mesh's; the export reads the
-    pattern's vertices back from it. The default is ``ease drape``'s; a bad value is refused."""
+    pattern's vertices back from it. The default is ``ease drape``'s; a bad value is refused.
+    *Solver* reaches the core (default: the core's own) and the report names it."""
     from core.cli.drape import REFINE_EDGE
 
     bpy = bpy_session["bpy"]
@@ -193,7 +195,15 @@ def test_refined_drape_mesh(bpy_session, blender, addon, tmp_path):
     n_pattern = max(int(np.max(p.vertex_ids)) for p in pattern.panels) + 1
     s.drape_frames, s.drape_device = 3, "cpu"
     s.drape_refine_mm = 0.0
+    assert s.drape_solver == "default"
     assert bpy.ops.ease.drape() == {"FINISHED"}
+    assert json.loads(s.drape_json)["solver"] == DrapeOptions().solver  # the core's default
+    s.drape_solver = "pd"
+    try:
+        assert bpy.ops.ease.drape() == {"FINISHED"}
+    finally:
+        s.drape_solver = "default"
+    assert json.loads(s.drape_json)["solver"] == "pd"
     coarse = next(o for o in bpy.data.objects if o.get("ease_role") == "garment")
     n_coarse = len(coarse.data.vertices)
     assert coarse[build.REFINE_EDGE] == 0.0 and build.drape_pattern(coarse, pattern) is pattern
