@@ -206,3 +206,84 @@ def seam_distance(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
     t = np.clip(np.einsum("nkj,kj->nk", points[:, None] - a[None], ab) / np.einsum("kj,kj->k", ab, ab), 0.0, 1.0)
     near = a[None] + t[..., None] * ab[None]
     return np.linalg.norm(points[:, None] - near, axis=2).min(axis=1)
+
+
+def uneven_gather(pattern):
+    """``pattern`` with the skirt's columns spaced unevenly across each panel (up to 1.2 columns off,
+    the skirt's rest shape still a valid mesh): its top edge pairs vertex by vertex with the yoke's,
+    as the pattern solve sews it, but no longer at matching fractions of the two edges' lengths."""
+    panels = []
+    for p in pattern.panels:
+        if p.name.startswith("skirt_"):
+            u = p.uv[:, 0]
+            lo, hi = u.min(), u.max()
+            t = (u - lo) / (hi - lo)
+            uv = p.uv.copy()
+            uv[:, 0] = lo + (hi - lo) * (t + 0.1 * np.sin(2 * np.pi * t))
+            p = replace(p, uv=uv)
+        panels.append(p)
+    return replace(pattern, panels=panels)
+
+
+def dihedral_angles(x: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Angle (degrees) between the normals of each pair of triangles sharing an edge."""
+    tri = x[faces]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    e = np.sort(np.stack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]], 1).reshape(-1, 2), axis=1)
+    _, inv, count = np.unique(e, axis=0, return_inverse=True, return_counts=True)
+    inv = inv.ravel()
+    order = np.argsort(inv, kind="stable")
+    first, second = order[:-1], order[1:]
+    pair = inv[first] == inv[second]
+    fa, fb = first[pair] // 3, second[pair] // 3
+    return np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", n[fa], n[fb]), -1.0, 1.0)))
+
+
+@pytest.mark.parametrize("refine", [None, 0.02])
+def test_an_uneven_gather_starts_unfolded(refine):
+    """The long side starts on the short side's skintight positions at its points' rest fractions,
+    its panel following: paired vertex by vertex at other fractions (as the pattern solve pairs
+    them), the old start put each free long-side vertex on its old partner's position, out of
+    order with the stitches, and the skirt's first row started folded flat (here 24 edges at
+    150-180 degrees and 4 triangles of no area unrefined, 180 edges refined; on the teaser's
+    gathered sleeve caps 194 edges, and 3092 edges through the bodice) and stayed so: dark
+    pinches along the armholes."""
+    pattern = uneven_gather(yoke_skirt())
+    cloth = build_cloth(pattern, refine_edge=refine, gathers=True)
+    assert cloth.gathers  # sewn as gathers
+    # a smooth tube at the start: the skirt's first rows sheared along the seam, never folded
+    assert dihedral_angles(cloth.x0, cloth.faces).max() < 90.0
+    refined = unweld_gathers(pattern)
+    if refine:
+        from core.drape.refine import refine_pattern
+
+        refined = refine_pattern(refined, refine)[0]
+    sewn, _ = sew_gathers(refined)
+    for s0, s in zip(refined.seams, sewn.seams):
+        if not s.gathered:
+            continue
+        skirt = sewn.panel(s.panel_b)
+        own = np.union1d(s0.verts_b, s.verts_b)
+        # the long side's points in their rest order along the seam go round the tube one way
+        order = own[np.argsort(arc_position(skirt, s0.verts_b, s.verts_b, own))]
+        theta = np.unwrap(np.arctan2(skirt.xyz[order, 1], skirt.xyz[order, 0]))
+        assert np.all(np.abs(np.diff(theta)) > 0) and np.all(np.sign(np.diff(theta)) == np.sign(theta[-1] - theta[0]))
+        # and lie on the yoke's lower edge
+        yoke = sewn.panel(s.panel_a).xyz[s.verts_a]
+        assert seam_distance(skirt.xyz[own], yoke).max() < 1e-9
+
+
+def arc_position(panel, verts, path, own) -> np.ndarray:
+    """Rest arc position (m) along the long side of each of ``own`` (its vertices ``verts`` and the
+    stitch points ``path``, all on the side's rest polyline)."""
+    poly = panel.uv[verts]
+    a = arc(poly)
+    out = np.empty(len(own))
+    for k, v in enumerate(own):
+        d = np.linalg.norm(np.diff(poly, axis=0), axis=1)
+        t = np.einsum("kj,kj->k", panel.uv[v] - poly[:-1], np.diff(poly, axis=0)) / d**2
+        on = np.linalg.norm(poly[:-1] + t[:, None] * np.diff(poly, axis=0) - panel.uv[v], axis=1)
+        j = int(np.argmin(np.where((t >= -1e-9) & (t <= 1 + 1e-9), on, np.inf)))
+        out[k] = a[j] + np.clip(t[j], 0.0, 1.0) * d[j]
+    return out

@@ -153,6 +153,70 @@ def _carry(panel, verts: np.ndarray, where: np.ndarray, next_id: int) -> tuple:
     return panel, np.asarray(path, np.int64), next_id + len(new_uv)
 
 
+#: A gather's long side is moved onto the short side's skintight positions; the rest of its panel
+#: follows, the move fading to nothing this far from the seam (or 4x the largest move, if more), metres.
+EASE_IN_REACH = 0.03
+
+
+def seams_of(pattern, panel: str, exclude: str = "") -> list:
+    """The seams of ``pattern`` with a side on ``panel`` (but the one named ``exclude``)."""
+    return [s for s in pattern.seams if s.name != exclude and panel in (s.panel_a, s.panel_b)]
+
+
+def _seam_vertices(seams, panel: str) -> np.ndarray:
+    """Local ids of ``panel``'s vertices on any side of ``seams`` that lies on it."""
+    ids = [
+        np.asarray(v, np.int64)
+        for s in seams
+        for name, v in ((s.panel_a, s.verts_a), (s.panel_b, s.verts_b))
+        if name == panel
+    ]
+    return np.unique(np.concatenate(ids)) if ids else np.zeros(0, np.int64)
+
+
+def ease_in(panel, moved: np.ndarray, target: np.ndarray, held: np.ndarray) -> np.ndarray:
+    """(n, 3) start positions of ``panel`` with its vertices ``moved`` (local ids) put at ``target``
+    (k, 3) and the rest of the panel following smoothly: the move is harmonic over the panel's mesh
+    (each vertex's move the mean of its neighbours'), none at ``held`` (other seams' vertices, whose
+    partners in other panels stay) and none farther than :data:`EASE_IN_REACH` (in the pattern's 2D)
+    from the moved vertices. A move along the seam of a centimetre or two then shears the panel's
+    first rows a little instead of folding them over."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.linalg import spsolve
+
+    xyz = np.asarray(panel.xyz, dtype=float)
+    moved = np.asarray(moved, np.int64)
+    move = np.asarray(target, dtype=float) - xyz[moved]
+    size = float(np.linalg.norm(move, axis=1).max()) if len(moved) else 0.0
+    if size == 0.0:
+        return xyz
+    uv = np.asarray(panel.uv, dtype=float)
+    n = len(uv)
+    reach = max(EASE_IN_REACH, 4.0 * size)
+    near = np.zeros(n, bool)
+    for start in range(0, n, 2048):  # distance in 2D to the nearest moved vertex, bounded memory
+        d = np.linalg.norm(uv[start : start + 2048, None] - uv[moved][None], axis=2).min(axis=1)
+        near[start : start + 2048] = d < reach
+    disp = np.zeros((n, 3))
+    disp[moved] = move
+    fixed = ~near
+    fixed[np.asarray(held, np.int64)] = True
+    fixed[moved] = True
+    free = np.nonzero(~fixed)[0]
+    if len(free):
+        f = np.asarray(panel.faces, np.int64)
+        e = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+        e = np.unique(np.sort(np.concatenate([e, e[:, ::-1]]), axis=1), axis=0)
+        i, j = np.concatenate([e[:, 0], e[:, 1]]), np.concatenate([e[:, 1], e[:, 0]])
+        adj = coo_matrix((np.ones(len(i)), (i, j)), shape=(n, n)).tocsr()
+        deg = np.asarray(adj.sum(axis=1)).ravel()
+        lap = (coo_matrix((deg, (np.arange(n), np.arange(n))), shape=(n, n)) - adj).tocsr()
+        rhs = -(lap[free][:, np.nonzero(fixed)[0]] @ disp[fixed])
+        sol = spsolve(lap[free][:, free].tocsc(), rhs)
+        disp[free] = np.asarray(sol).reshape(len(free), 3)
+    return xyz + disp
+
+
 def sew_gathers(pattern) -> tuple:
     """Sew each gathered seam's long side to its short side at the short side's vertices.
 
@@ -202,11 +266,16 @@ def sew_gathers(pattern) -> tuple:
         panels[s.panel_a] = pa
         pb, path_b, next_id = _carry(panels[s.panel_b], vb, frac * ab[-1], next_id)
         panels[s.panel_b] = pb
-        # the long side starts on the short side's skintight positions (as the welded pattern had them)
-        (nl, pl), (ns, ps) = ((s.panel_a, path_a), (s.panel_b, path_b))[:: 1 if side == 0 else -1]
-        long_xyz = np.array(panels[nl].xyz, dtype=float, copy=True)
-        long_xyz[pl] = panels[ns].xyz[ps]
-        panels[nl] = replace(panels[nl], xyz=long_xyz)
+        # the long side starts on the short side's skintight positions, each of its points at the
+        # short side's point of the same rest fraction (stitches on their short-side vertex exactly)
+        sides = ((s.panel_a, path_a, va, aa), (s.panel_b, path_b, vb, ab))
+        (nl, pl, vl, al), (ns, ps, _, _) = sides[:: 1 if side == 0 else -1]
+        on_long = np.concatenate([vl, pl])
+        at = np.concatenate([al / al[-1], frac])
+        short_xyz = np.asarray(panels[ns].xyz, dtype=float)[ps]
+        target = np.stack([np.interp(at, frac, short_xyz[:, k]) for k in range(3)], axis=1)
+        held = _seam_vertices(seams_of(pattern, nl, exclude=s.name), nl)
+        panels[nl] = replace(panels[nl], xyz=ease_in(panels[nl], on_long, target, held))
         seams.append(replace(s, verts_a=path_a, verts_b=path_b))
         (vl, pl_), n_short = ((va, path_a), len(vb)) if side == 0 else ((vb, path_b), len(va))
         report[s.name] = {
