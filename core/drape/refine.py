@@ -7,9 +7,13 @@ the midpoint of its longest edge, and at the midpoints of its other edges when
 a neighbour splits them) until every edge of the free-hanging cloth is at most
 the target length. It works on the flat pattern: a new vertex lies at the
 midpoint of its edge in the panel's own 2D coordinates, so the refined
-triangles tile each pattern triangle exactly (rest areas add up to the
-parent's, rest edge lengths to the parent edge's), and the sewn garment
-realises the same ease. Its start position on the body is the midpoint of the
+triangles tile each piece exactly (rest areas add up to the piece's, rest
+edge lengths along outlines, seams and hems to the pattern's), and the sewn
+garment realises the same ease. Before and after bisection the free cloth's
+inner edges are flipped to the Delaunay diagonal where it is shorter
+(:func:`delaunay_flips`): slivers of the pattern's mesh, which bisection
+would only halve, become well-shaped triangles (the drape's bending leaves
+thin triangles out). Its start position on the body is the midpoint of the
 skintight embedding.
 
 Seams stay sewn: an edge is identified by its two welded vertices (global ids
@@ -94,6 +98,67 @@ def _stats_mm(lengths: np.ndarray) -> dict:
     }
 
 
+def delaunay_flips(uv: np.ndarray, faces: np.ndarray, parent: np.ndarray, free: np.ndarray, keep: np.ndarray) -> tuple:
+    """Flip the inner edges of the free cloth that are not locally Delaunay in the pattern's 2D.
+
+    An edge (a, b) between triangles (a, b, c) and (b, a, d) of one piece is flipped to (c, d) when
+    the angles at c and d add up to more than 180 degrees (d inside the circumcircle of a, b, c)
+    and (c, d) is the shorter diagonal: a sliver of the pattern's mesh (angles of a few degrees,
+    which bisection halves but keeps) becomes two well-shaped triangles. The pieces' rest shape is
+    unchanged (the same quadrilateral, tiled the other way) and so are its boundaries, seams and hems
+    (they are never inner edges); only edges with a triangle that hangs free (``free``) flip (both
+    triangles then hang free), no edge with both ends on a pleat line (``keep``, per vertex) does. The drape needs it: the cloth's bending
+    leaves out the hinges of thin triangles (:data:`core.drape.mesh.BEND_QUALITY`), and the cloth
+    folded flat (180 degrees) at them, the dark pinches of a render.
+
+    Returns
+    -------
+    faces (T, 3), parent (T,) (each flipped triangle keeps its own record), free (T,), flips: int.
+    """
+    faces = np.array(faces, np.int64, copy=True)
+    parent = np.array(parent, np.int64, copy=True)
+    free = np.array(free, bool, copy=True)
+    n, flips = len(uv), 0
+    for _ in range(10 * MAX_LEVELS):
+        he = np.stack([faces, np.roll(faces, -1, axis=1)], axis=2).reshape(-1, 2)  # edge k: corners k, k+1
+        opp = faces[:, [2, 0, 1]].reshape(-1)  # the corner across edge k
+        key = np.minimum(he[:, 0], he[:, 1]) * n + np.maximum(he[:, 0], he[:, 1])
+        order = np.argsort(key, kind="stable")
+        two = key[order][1:] == key[order][:-1]
+        h1, h2 = order[:-1][two], order[1:][two]
+        f1, f2 = h1 // 3, h2 // 3
+        a, b, c, d = he[h1, 0], he[h1, 1], opp[h1], opp[h2]
+        ok = (free[f1] | free[f2]) & ~(keep[a] & keep[b]) & (he[h2, 0] == b) & (he[h2, 1] == a)
+
+        def angle(p, q, r):  # at p, between p->q and p->r
+            u, v = uv[q] - uv[p], uv[r] - uv[p]
+            return np.arctan2(np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]), np.einsum("ij,ij->i", u, v))
+
+        def orient(p, q, r):
+            u, v = uv[q] - uv[p], uv[r] - uv[p]
+            return u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+
+        excess = angle(c, a, b) + angle(d, a, b) - np.pi
+        side = np.sign(orient(a, b, c))
+        ok &= (excess > 1e-9) & (np.linalg.norm(uv[d] - uv[c], axis=1) < np.linalg.norm(uv[b] - uv[a], axis=1))
+        ok &= (np.sign(orient(a, d, c)) == side) & (np.sign(orient(d, b, c)) == side)
+        cand = np.nonzero(ok)[0]
+        if not len(cand):
+            break
+        used = np.zeros(len(faces), bool)
+        chosen = []
+        for i in cand[np.argsort(-excess[cand], kind="stable")].tolist():  # worst first, no face twice
+            if not (used[f1[i]] or used[f2[i]]):
+                used[f1[i]] = used[f2[i]] = True
+                chosen.append(i)
+        ch = np.asarray(chosen, np.int64)
+        faces[f1[ch]] = np.stack([a[ch], d[ch], c[ch]], axis=1)
+        faces[f2[ch]] = np.stack([d[ch], b[ch], c[ch]], axis=1)
+        free[f1[ch]] = free[f2[ch]] = True
+        flips += len(ch)
+    return faces, parent, free, flips
+
+
 def refine_pattern(pattern, edge: float, free_ease: float = FREE_EASE, max_levels: int = MAX_LEVELS) -> tuple:
     """The pattern with its free-hanging triangles bisected until no edge there is longer than ``edge``.
 
@@ -158,6 +223,15 @@ def refine_pattern(pattern, edge: float, free_ease: float = FREE_EASE, max_level
     loops = [[off[k] + np.asarray(b, np.int64) for b in p.boundary] for k, p in enumerate(panels)]
     hems = [[off[k] + np.asarray(h, np.int64) for h in p.hems] for k, p in enumerate(panels)]
 
+    # pleat lines (folds, placements, stitches) inside a piece: their edges stay edges (no flips)
+    lines = {
+        int(g) for ls in ((pattern.report or {}).get("opened_pleats") or {}).values() for x in ls for g in x["gids"]
+    }
+    on_line = np.isin(gid, np.fromiter(lines, np.int64, len(lines)))
+
+    # slivers of the pattern's mesh flipped first: bisected, a sliver's children are slivers too
+    faces, parent, free, flips = delaunay_flips(uv, faces, parent, free, on_line)
+    gather = on_long[faces].any(axis=1)
     levels = 0
     for _ in range(max_levels):
         lens = edge_lengths(uv, faces)
@@ -206,6 +280,7 @@ def refine_pattern(pattern, edge: float, free_ease: float = FREE_EASE, max_level
         xyz = np.concatenate([xyz, 0.5 * (xyz[lkeys[:, 0]] + xyz[lkeys[:, 1]])])
         gid = np.concatenate([gid, new_gid])
         pan = np.concatenate([pan, pan[lkeys[:, 0]]])
+        on_line = np.concatenate([on_line, on_line[lkeys[:, 0]] & on_line[lkeys[:, 1]]])
         # children, corners rotated so the longest edge is (a, b); orientation kept
         split = hit.any(axis=1)
         a, b, c = faces[t_all, longest], faces[t_all, (longest + 1) % 3], faces[t_all, (longest + 2) % 3]
@@ -228,6 +303,9 @@ def refine_pattern(pattern, edge: float, free_ease: float = FREE_EASE, max_level
         loops = [[insert_points(lp, mids, True) for lp in ls] for ls in loops]
         hems = [[insert_points(h, mids, False) for h in hs] for hs in hems]
 
+    if levels:
+        faces, parent, free, more = delaunay_flips(uv, faces, parent, free, on_line)
+        flips += more
     after = unique_edge_lengths(uv, faces)
     # back to panels: each panel's old vertices first, then its new ones in the order they were made
     local = np.zeros(len(uv), np.int64)
@@ -269,6 +347,7 @@ def refine_pattern(pattern, edge: float, free_ease: float = FREE_EASE, max_level
         "free_ease": float(free_ease),
         "free_pct": round(100.0 * float(np.mean(free_before)) if tris_before else 0.0, 2),
         "rounds": levels,
+        "flips": int(flips),
         "edge_mm_before": _stats_mm(before),
         "edge_mm_after": _stats_mm(after),
         "triangles_before": int(tris_before),
