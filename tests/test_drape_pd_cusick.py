@@ -55,12 +55,13 @@ def test_buckled_projection_lowers_the_step():
 
 
 def test_pd_silk_drapes_in_its_range_with_the_cap(monkeypatch):
-    # silk (1.5e-6 N m, calibrated with NewtonStep's cap): with the cap 33.1 % with 8 nodes; without it (pd's
-    # default, BUCKLING off) pd's hoops lock and read 44.8 %, above silk's 20-40 %
+    # silk (1.5e-6 N m, calibrated with NewtonStep's cap) on the plain 10 mm disc: with the cap 31.2 % with 8
+    # nodes (33.1 % with Anderson's iterations); without it (pd's default, BUCKLING off) pd's hoops locked and
+    # read 44.8 % there (Anderson), above silk's 20-40 %
     import core.drape.pd as P
 
     monkeypatch.setattr(P, "BUCKLING", True)
-    r = T.cusick("silk", edge=0.01, options={"solver": "pd"})
+    r = T.cusick("silk", edge=0.01, options={"solver": "pd"}, band=False)  # the plain disc those figures read
     assert r["settled"]
     assert 20.0 <= r["dc_pct"] <= 40.0
     assert 5 <= r["nodes"] <= 10
