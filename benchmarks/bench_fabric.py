@@ -348,10 +348,12 @@ def _markdown(res: dict) -> str:
     lines = [
         "# Fabric benchmarks",
         "",
-        f"Machine: CPU, {res['cpu']}. EASE's drape solvers (`DrapeSolver`: XPBD, the garment default, "
-        "and newton, the implicit step solved to a residual; their default options but the substeps "
-        "and iterations per substep) on the textile tests of SPEC item 11: Cusick drape coefficient "
-        "(30 cm disc on an 18 cm support, shadow rasterised at 1 mm) and nodes; ASTM D1388 cantilever "
+        f"Machine: CPU, {res['cpu']}. EASE's drape solvers (`DrapeSolver`: XPBD, the garment default; "
+        "newton, the implicit step solved to a residual; pd, projective dynamics with L-BFGS iterations; "
+        "their default options but the substeps and iterations per substep) on the textile tests of SPEC "
+        "item 11: Cusick drape coefficient (30 cm disc on an 18 cm support, its clamp's boundary layer "
+        "meshed at half of sqrt(B / T), shadow rasterised at 1 mm; pd: the mean of "
+        f"{SPECIMENS['pd']} specimens) and nodes; ASTM D1388 cantilever "
         "bending length (2.5 cm strip, 41.5 degrees, on a strip meshed at half the Cusick edge: 5 and "
         "2.5 mm). Settle test: kinetic energy per mass < "
         f"{res['settle']['energy_J_per_kg']:g} J/kg and largest particle move per frame < "
@@ -366,16 +368,16 @@ def _markdown(res: dict) -> str:
     ]
     if res.get("quick"):
         lines += [
-            "Quick run (`--quick`): newton, the solver that meets the targets, on the 10 mm and 5 mm discs "
-            "at its default iterations and on the 10 mm disc at 4x them, as in the full run; XPBD on the "
-            "10 mm disc at its default iterations only (the full run adds its 5 mm and 4x rows, the "
-            "cantilever at 4x and the 5 mm hanging sheet).",
+            "Quick run (`--quick`): newton and pd on the 10 mm and 5 mm discs at their default iterations "
+            "and on the 10 mm disc at 4x them; XPBD on the 10 mm disc at its default iterations only (the "
+            "full run adds XPBD's 5 mm and 4x rows, pd's 5 mm disc at 4x, the cantilever at 4x and the "
+            "5 mm hanging sheet).",
             "",
         ]
     lines += [
         "| solver | fabric | edge (mm) | iterations | DC (%) | specimens (DC range) | target DC (%) | nodes | target nodes | settled (frames) | "
         "bending length (cm) | preset's (G/W)^1/3 (cm) | target (cm) | ms/frame (Cusick) | CPU s (Cusick + cantilever) | "
-        "newton solves left above the tolerance (largest residual / weight) |",
+        "newton / pd solves left above the tolerance (largest residual / weight) |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
