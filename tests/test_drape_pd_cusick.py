@@ -55,12 +55,42 @@ def test_buckled_projection_lowers_the_step():
 
 
 def test_pd_silk_drapes_in_its_range_with_the_cap(monkeypatch):
-    # silk (1.5e-6 N m, calibrated with NewtonStep's cap): with the cap 33.1 % with 8 nodes; without it (pd's
-    # default, BUCKLING off) pd's hoops lock and read 44.8 %, above silk's 20-40 %
+    # silk (1.5e-6 N m, calibrated with NewtonStep's cap) on the plain 10 mm disc: with the cap 31.2 % with 8
+    # nodes (33.1 % with Anderson's iterations); without it (pd's default, BUCKLING off) pd's hoops locked and
+    # read 44.8 % there (Anderson), above silk's 20-40 %
     import core.drape.pd as P
 
     monkeypatch.setattr(P, "BUCKLING", True)
-    r = T.cusick("silk", edge=0.01, options={"solver": "pd"})
+    r = T.cusick("silk", edge=0.01, options={"solver": "pd"}, band=False)  # the plain disc those figures read
     assert r["settled"]
     assert 20.0 <= r["dc_pct"] <= 40.0
     assert 5 <= r["nodes"] <= 10
+
+
+def test_cusick_specimens_average_their_seeds():
+    # the figure of k specimens is the mean of the seeds' runs (each its own mesh turn, so its own folds)
+    opts = {"solver": "pd"}
+    r = T.cusick_specimens("cotton", edge=0.03, options=opts, max_frames=3, specimens=2, band=False)
+    one = [T.cusick("cotton", edge=0.03, options=opts, max_frames=3, seed=s, band=False) for s in (0, 1)]
+    assert r["specimens"] == 2 and [x["seed"] for x in r["runs"]] == [0, 1]
+    assert [x["dc_pct"] for x in r["runs"]] == [x["dc_pct"] for x in one]
+    assert r["dc_pct"] == pytest.approx(np.mean([x["dc_pct"] for x in one]), rel=1e-12)
+    assert r["dc_min"] <= r["dc_pct"] <= r["dc_max"] and not r["settled"]
+    with pytest.raises(ValueError, match="specimens"):
+        T.cusick_specimens("cotton", edge=0.03, specimens=0)
+
+
+@pytest.mark.slow
+def test_pd_cotton_cusick_converges_in_the_mesh():
+    # issue 35's reading for the mesh: the mean of 4 specimens moves by at most 3 points from the 10 mm disc
+    # (with its clamp band) to the 5 mm one, inside cotton's 60-76 % with 5-10 nodes, and stays in range at 4x
+    # the iterations (measured 71.8 / 72.6 / 68.3 %, L-BFGS; drape_pd.md session 7 p2). The move to 4x the
+    # iterations is not asserted: 3.5 points with these 4 specimens, 2.9 with 8 (the fall's fold count follows
+    # the solve's error). About two minutes: --full only
+    base = {"solver": "pd"}
+    ten = T.cusick_specimens("cotton", edge=0.01, options=base)
+    five = T.cusick_specimens("cotton", edge=0.005, options=base)
+    more = T.cusick_specimens("cotton", edge=0.01, options={**base, "iterations": 4 * 10})
+    for r in (ten, five, more):
+        assert r["settled"] and 60.0 <= r["dc_pct"] <= 76.0 and 5 <= r["nodes"] <= 10, r["dc_pct"]
+    assert abs(five["dc_pct"] - ten["dc_pct"]) <= 3.0

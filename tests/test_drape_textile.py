@@ -93,6 +93,32 @@ def test_disc_mesh_has_the_clamp_ring():
     assert 0.007 < np.median(lengths) < 0.013
 
 
+def test_disc_mesh_resolves_the_clamp_band():
+    # the clamp's boundary layer (cotton: sqrt(B / T) = 9.9 mm, T the hanging annulus's weight per length of
+    # the clamp's edge) is meshed at half its width out to twice it, at any edge; past it the edge's rings
+    mat = get_material("cotton")
+    tension = mat.density * 9.81 * np.pi * (0.15**2 - 0.09**2) / (2 * np.pi * 0.09)
+    assert T.clamp_layer(mat) == pytest.approx(np.sqrt(mat.bending / tension), rel=1e-12)
+    assert 0.009 < T.clamp_layer(mat) < 0.011
+    width, step = T.clamp_band(mat)
+    assert width == pytest.approx(2 * T.clamp_layer(mat)) and step == pytest.approx(0.5 * T.clamp_layer(mat))
+    uv, faces = T.disc_mesh(0.15, 0.01, 0.09, 0, width, step)
+    r = np.hypot(uv[:, 0], uv[:, 1])
+    rings = np.unique(np.round(r, 9))
+    band = rings[(rings > 0.09) & (rings <= 0.09 + width + 1e-9)]
+    assert np.all(np.diff(np.concatenate([[0.09], band])) <= step + 1e-9) and len(band) >= 4
+    outside = rings[rings > 0.09 + width + 1e-9]
+    assert np.all(np.diff(outside) > step) and np.isclose(r.max(), 0.15)
+    assert np.sum(np.isclose(r, 0.09)) >= 50  # the clamp ring kept
+    # the band's triangles are about its spacing; without a band the disc is the plain one
+    mid = uv[faces].mean(axis=1)
+    in_band = (np.hypot(mid[:, 0], mid[:, 1]) > 0.091) & (np.hypot(mid[:, 0], mid[:, 1]) < 0.09 + width - 0.002)
+    lengths = np.linalg.norm(uv[faces[:, [1, 2, 0]]] - uv[faces], axis=2)
+    assert np.median(lengths[in_band]) < 1.3 * step
+    plain = T.disc_mesh(0.15, 0.01, 0.09, 0)
+    assert all(np.array_equal(a, b) for a, b in zip(plain, T.disc_mesh(0.15, 0.01, 0.09, 0, 0.0, None)))
+
+
 @pytest.fixture(scope="module")
 def cusick_cotton():
     return T.cusick("cotton", edge=0.01, max_frames=300)
@@ -290,7 +316,8 @@ def test_newton_holds_the_fabric_stiffness():
 
 @pytest.fixture(scope="module")
 def cusick_newton():
-    solver, state, uv = T.cusick_setup("cotton", edge=0.025, options={"solver": "newton", "substeps": 3})
+    # the plain coarse disc (no clamp band, textile.clamp_band): an equilibrium to check, not a drape figure
+    solver, state, uv = T.cusick_setup("cotton", edge=0.025, options={"solver": "newton", "substeps": 3}, band=False)
     st = T.settle(solver, state, 150)
     return solver, state, st
 
@@ -313,7 +340,7 @@ def test_vbd_runs_and_repeats():
     # Vertex Block Descent: finite, falling, and bitwise repeatable on the CPU (colour-ordered Gauss-Seidel)
     runs = []
     for _ in range(2):
-        solver, state, _ = T.cusick_setup("cotton", edge=0.025, options={"solver": "vbd", "substeps": 10})
+        solver, state, _ = T.cusick_setup("cotton", edge=0.025, options={"solver": "vbd", "substeps": 10}, band=False)
         for _ in range(15):
             solver.step(state)
         runs.append(state.x.numpy().copy())

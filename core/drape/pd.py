@@ -76,6 +76,14 @@ HELD_HEIGHT = 1.05
 #: fabric gives way instead of folding: the tube skirt's fabric below its gathered waistband sits 15 % (p95)
 #: off its pattern lengths, against under 1 % without it (benchmarks/results/drape_pd.md, session 6 p10)
 BUCKLING = False
+#: the iterations' method (:attr:`ProjectiveStep.method`): L-BFGS with the factored matrix as its initial
+#: inverse Hessian. With Anderson's acceleration the Cusick disc's folds followed the iteration count
+#: (wool 55.1 % with 4-5 nodes at 10 iterations, 59.9 % at 20, 62.1 % with 7-8 at 40, 62.7 % with 8 at
+#: 80; mean of 4 specimens, 10 mm with the clamp band): each substep's unconverged solve damps the buckling
+#: the fall starts, and picks fewer folds. L-BFGS at the default 10 iterations reads wool 61.2 %, within
+#: 3 points of 40 iterations' 62.5 and of the 5 mm disc's 63.1, for the same time a frame on the 1 cm
+#: shirt (178 against 177 ms CPU; benchmarks/results/drape_pd.md, session 7 p2)
+METHOD = "lbfgs"
 
 F64 = wp.float64
 
@@ -533,8 +541,8 @@ class ProjectiveStep:
     elements : the :class:`core.drape.newton.NewtonStep` of the same cloth, whose element operators
         (grain images, edges, hinges, rest shapes) this step projects.
     matrix : (P, P) sparse, ``M / dt^2 + sum_c w_c A_c^T A_c`` (the same for x, y and z).
-    method : ``"anderson"`` (default: Anderson-accelerated local-global iterations), ``"lbfgs"``
-        (L-BFGS with the factored matrix as its initial inverse Hessian) or ``"newton"`` (Gauss-Newton
+    method : ``"lbfgs"`` (default, :data:`METHOD`: L-BFGS with the factored matrix as its initial inverse
+        Hessian), ``"anderson"`` (Anderson-accelerated local-global iterations) or ``"newton"`` (Gauss-Newton
         steps by conjugate gradients preconditioned with the factored matrix, :meth:`_newton`; an
         experiment: 4x fewer back-substitutions than Anderson on a clamped creased strip, but on the
         Cusick disc it does not settle, and at 5 mm edges the specimen falls off the support, so the
@@ -669,7 +677,7 @@ class ProjectiveStep:
         self._grow = None
         self.contact = None
         self.friction = 0.0  # the Coulomb coefficient the stop test allows on the body (the drape's)
-        self.method = "anderson"
+        self.method = METHOD
 
     def set_contact(self, point: np.ndarray, normal: np.ndarray, active: np.ndarray, thickness: float) -> None:
         """Body contact for the next solves' stop test: on an active free particle within twice
@@ -723,7 +731,7 @@ class ProjectiveStep:
         Deng, Zhang, Liu, "Anderson acceleration for geometry optimization and physics simulation", ACM
         TOG 37(4), 2018): the next iterate mixes the last ``history`` steps, and is kept only where it
         lowers G (else the plain step is taken and the history dropped). With :attr:`method`
-        ``"lbfgs"`` they are L-BFGS steps instead (:meth:`_lbfgs`).
+        ``"lbfgs"`` (the default, :data:`METHOD`) they are L-BFGS steps instead (:meth:`_lbfgs`).
 
         Returns (iterations done, the largest residual over weight at the last test).
         """
