@@ -76,6 +76,17 @@ HELD_HEIGHT = 1.05
 #: fabric gives way instead of folding: the tube skirt's fabric below its gathered waistband sits 15 % (p95)
 #: off its pattern lengths, against under 1 % without it (benchmarks/results/drape_pd.md, session 6 p10)
 BUCKLING = False
+#: self-collision inside the solve: each candidate pair closer than its diameter is pushed apart by the
+#: penalty ``self_weight / 2 * (diameter - distance)^2``, this many median diagonal entries of the step's
+#: matrix (as the body's, :data:`CONTACT_WEIGHT`); 0: self-collision only after each substep's solve, whose
+#: projections the stiff membrane's next solve undoes: on the 1.5 cm shirt at ease 1.93 a thousand particles
+#: were pushed about 1 mm every substep, the drape never settled and the fabric stretched 6 % (p95). The
+#: penalty is not in the matrix (its pairs change every substep, and its diagonal there, in x, y and z
+#: alike, held stacked layers from sliding over each other: the loose shirts crept for 150 frames), so a
+#: plain step that raises G is halved, at most :data:`SELF_BACKTRACK` times (benchmarks/results/drape_pd.md,
+#: session 7 p1)
+SELF_WEIGHT = 1.0
+SELF_BACKTRACK = 6
 
 F64 = wp.float64
 
@@ -593,6 +604,10 @@ class ProjectiveStep:
         diag = free_matrix.diagonal()
         self.contact_weight = CONTACT_WEIGHT * float(np.median(diag)) if len(fi) else 0.0
         self._held = None  # (rows into the free particles, normals, plane points, offset) of the penalty
+        self._row_of = np.full(self.n, -1, dtype=np.int64)
+        self._row_of[fi] = np.arange(len(fi))
+        self._self = None  # (particle i, particle j, diameter) pairs kept apart by a penalty in the solve
+        self.self_weight = SELF_WEIGHT * float(np.median(diag)) if len(fi) else 0.0
         self._held_key = b""
         self._searched = True
         self.refactors = 0
@@ -794,7 +809,19 @@ class ProjectiveStep:
                 x[fi] = g.reshape(-1, 3)  # the mix did not lower G: the plain step, a fresh history
                 held, slot = 0, 0
             last = (g, f)
+            e_old = e
             e, grad = self._gradient(x, y, grow)
+            if self._self is not None and not (np.isfinite(e) and e <= e_old):
+                # the self-collision penalty is not in the matrix, so the plain step may raise G where
+                # it acts: halve the step until G falls (the local-global step alone always lowers it),
+                # and start a fresh history
+                for _ in range(SELF_BACKTRACK):
+                    g = 0.5 * (g + xf)
+                    x[fi] = g.reshape(-1, 3)
+                    e, grad = self._gradient(x, y, grow)
+                    if np.isfinite(e) and e <= e_old:
+                        break
+                held, slot, last = 0, 0, None
         return it, res
 
     def _hold(self, held) -> None:
@@ -815,11 +842,32 @@ class ProjectiveStep:
         self._held_key = key
         self.refactors += 1
 
+    def set_self(self, i: np.ndarray, j: np.ndarray, diameter: float) -> None:
+        """Self-collision candidates for the next solves: particle pairs (``i``, ``j``) kept ``diameter``
+        apart by the penalty ``self_weight / 2 * (diameter - distance)^2`` (None or empty: none)."""
+        if i is None or len(i) == 0 or self.self_weight <= 0.0:
+            self._self = None
+            return
+        self._self = (np.asarray(i, dtype=np.int64), np.asarray(j, dtype=np.int64), float(diameter))
+
     def _gradient(self, x, y, grow) -> tuple:
         """(G(x), grad G on the free particles (F, 3)); with the contact penalty
         ``contact_weight / 2 * depth^2`` on the held particles, depth = how far inside its plane's offset."""
         energy = self._evaluate(x, y, grow)
         grad = self._all[self.free_idx]
+        if self._self is not None:
+            pi, pj, dia = self._self
+            d = x[pi] - x[pj]
+            length = np.sqrt(np.einsum("ij,ij->i", d, d))
+            depth = np.maximum(dia - length, 0.0)
+            on = (depth > 0.0) & (length > 1e-12)
+            if np.any(on):
+                f = (self.self_weight * depth[on] / length[on])[:, None] * d[on]
+                ri, rj = self._row_of[pi[on]], self._row_of[pj[on]]
+                ki, kj = ri >= 0, rj >= 0
+                np.add.at(grad, ri[ki], -f[ki])
+                np.add.at(grad, rj[kj], f[kj])
+                energy += 0.5 * self.self_weight * float(depth[on] @ depth[on])
         if self._held is not None:
             rows, nrm, point, offset = self._held
             depth = np.maximum(offset - np.einsum("ij,ij->i", x[self._held_particles] - point, nrm), 0.0)
