@@ -76,15 +76,15 @@ HELD_HEIGHT = 1.05
 #: fabric gives way instead of folding: the tube skirt's fabric below its gathered waistband sits 15 % (p95)
 #: off its pattern lengths, against under 1 % without it (benchmarks/results/drape_pd.md, session 6 p10)
 BUCKLING = False
-#: self-collision inside the solve: each candidate pair closer than its diameter is pushed apart by the
-#: penalty ``self_weight / 2 * (diameter - distance)^2``, this many median diagonal entries of the step's
-#: matrix (as the body's, :data:`CONTACT_WEIGHT`); 0: self-collision only after each substep's solve, whose
-#: projections the stiff membrane's next solve undoes: on the 1.5 cm shirt at ease 1.93 a thousand particles
-#: were pushed about 1 mm every substep, the drape never settled and the fabric stretched 6 % (p95). The
-#: penalty is not in the matrix (its pairs change every substep, and its diagonal there, in x, y and z
-#: alike, held stacked layers from sliding over each other: the loose shirts crept for 150 frames), so a
-#: plain step that raises G is halved, at most :data:`SELF_BACKTRACK` times (benchmarks/results/drape_pd.md,
-#: session 7 p1)
+#: self-collision inside the solve: each candidate pair closer than its diameter along the pair's direction
+#: at the substep's start is pushed apart by the penalty ``self_weight / 2 * (diameter - separation)^2``,
+#: this many median diagonal entries of the step's matrix (as the body's, :data:`CONTACT_WEIGHT`); 0:
+#: self-collision only after each substep's solve, whose projections the stiff membrane's next solve
+#: undoes: on the 1.5 cm shirt at ease 1.93 a thousand particles were pushed about 1 mm every substep, the
+#: drape never settled and the fabric stretched 6 % (p95). The penalty is not in the matrix (its pairs
+#: change every substep, and its diagonal there, in x, y and z alike, held stacked layers from sliding over
+#: each other: the loose shirts crept for 150 frames), so a plain step that raises G is halved, at most
+#: :data:`SELF_BACKTRACK` times (benchmarks/results/drape_pd.md, session 7 p1)
 SELF_WEIGHT = 1.0
 SELF_BACKTRACK = 6
 
@@ -606,7 +606,7 @@ class ProjectiveStep:
         self._held = None  # (rows into the free particles, normals, plane points, offset) of the penalty
         self._row_of = np.full(self.n, -1, dtype=np.int64)
         self._row_of[fi] = np.arange(len(fi))
-        self._self = None  # (particle i, particle j, diameter) pairs kept apart by a penalty in the solve
+        self._self = None  # (particle i, particle j, their direction, diameter): pairs the penalty keeps apart
         self.self_weight = SELF_WEIGHT * float(np.median(diag)) if len(fi) else 0.0
         self._held_key = b""
         self._searched = True
@@ -842,13 +842,19 @@ class ProjectiveStep:
         self._held_key = key
         self.refactors += 1
 
-    def set_self(self, i: np.ndarray, j: np.ndarray, diameter: float) -> None:
+    def set_self(self, i: np.ndarray, j: np.ndarray, diameter: float, x: np.ndarray) -> None:
         """Self-collision candidates for the next solves: particle pairs (``i``, ``j``) kept ``diameter``
-        apart by the penalty ``self_weight / 2 * (diameter - distance)^2`` (None or empty: none)."""
+        apart along their direction at ``x`` (the substep's start, (P, 3)) by the penalty
+        ``self_weight / 2 * (diameter - separation)^2`` (a plane through the partner, as the body's: a
+        particle the solve carries past its partner is pushed back, not on through; None or empty: none)."""
         if i is None or len(i) == 0 or self.self_weight <= 0.0:
             self._self = None
             return
-        self._self = (np.asarray(i, dtype=np.int64), np.asarray(j, dtype=np.int64), float(diameter))
+        i, j = np.asarray(i, dtype=np.int64), np.asarray(j, dtype=np.int64)
+        d = x[i] - x[j]
+        length = np.sqrt(np.einsum("ij,ij->i", d, d))
+        ok = length > 1e-12
+        self._self = (i[ok], j[ok], d[ok] / length[ok][:, None], float(diameter)) if np.any(ok) else None
 
     def _gradient(self, x, y, grow) -> tuple:
         """(G(x), grad G on the free particles (F, 3)); with the contact penalty
@@ -856,13 +862,11 @@ class ProjectiveStep:
         energy = self._evaluate(x, y, grow)
         grad = self._all[self.free_idx]
         if self._self is not None:
-            pi, pj, dia = self._self
-            d = x[pi] - x[pj]
-            length = np.sqrt(np.einsum("ij,ij->i", d, d))
-            depth = np.maximum(dia - length, 0.0)
-            on = (depth > 0.0) & (length > 1e-12)
+            pi, pj, nrm, dia = self._self
+            depth = np.maximum(dia - np.einsum("ij,ij->i", x[pi] - x[pj], nrm), 0.0)
+            on = depth > 0.0
             if np.any(on):
-                f = (self.self_weight * depth[on] / length[on])[:, None] * d[on]
+                f = (self.self_weight * depth[on])[:, None] * nrm[on]
                 ri, rj = self._row_of[pi[on]], self._row_of[pj[on]]
                 ki, kj = ri >= 0, rj >= 0
                 np.add.at(grad, ri[ki], -f[ki])

@@ -355,7 +355,7 @@ class DrapeSolver:
             rows = np.repeat(np.arange(len(count)), count)
             cols = partner[np.arange(partner.shape[1])[None, :] < count[:, None]]
             pairs = np.unique(np.stack([np.minimum(rows, cols), np.maximum(rows, cols)], axis=1), axis=0)
-            self._implicit.set_self(pairs[:, 0], pairs[:, 1], 2.0 * self.self_radius)
+            self._implicit.set_self(pairs[:, 0], pairs[:, 1], 2.0 * self.self_radius, base)
         start = {"previous": base} if opts.solver == "newton" else {}  # newton: from the lower G of x_n and x
         it, res = self._implicit.solve(x, y, grow, int(opts.iterations), float(opts.tolerance), self._weight, **start)
         self._newton_iterations.append(it)
