@@ -9,8 +9,8 @@
    vertices under the garment. The mean must rise monotonically.
 2. Speed: wall time to a settled drape of the shirt (refined to about 10k
    triangles) on this machine's CPU. Goal <= 10 s.
-3. Side-by-side on the same pattern and body: our drape (XPBD, the default, and
-   projective dynamics) vs Newton's
+3. Side-by-side on the same pattern and body: our drape (projective dynamics, the
+   default, and XPBD) vs Newton's
    ``SolverStyle3D`` (projective dynamics, anisotropic panel-space stretch; the
    ``newton`` package, a benchmark-only dependency, ``newton==1.8.0``) vs Blender's
    cloth modifier with sewing springs (bpy). Wall time, penetration share, seam
@@ -39,8 +39,8 @@ SHIRT_EDGE = 0.015  # refinement edge length (m): about 10k triangles (shirt 10.
 NEWTON_PIN = "newton==1.8.0"
 #: our solvers in the side-by-side (DrapeOptions.solver -> row name), the garment default first
 OUR_SOLVERS = {
-    "xpbd": "EASE XPBD (ours, Warp CPU)",
-    "pd": "EASE projective dynamics (ours, solver='pd', CPU)",
+    "pd": "EASE projective dynamics (ours, the default, CPU)",
+    "xpbd": "EASE XPBD (ours, solver='xpbd', Warp CPU)",
 }
 
 
@@ -659,8 +659,8 @@ def _markdown(res: dict) -> str:
         lines += [
             "## Side-by-side on the same shirt pattern and body",
             "",
-            f"Every simulator runs the frames our default drape (XPBD) needed to settle "
-            f"({res['side_by_side'][0]['frames']}), but `solver='pd'`, which runs until it settles itself; "
+            f"Every simulator runs the frames our default drape (projective dynamics) needed to settle "
+            f"({res['side_by_side'][0]['frames']}), but `solver='xpbd'`, which runs until it settles itself; "
             "one that exceeds the time budget stops early and its time for all frames is extrapolated. "
             "Compare speed on the time per frame.",
             "",

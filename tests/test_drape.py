@@ -173,10 +173,10 @@ def test_self_collision_stacks_layers(body):
 
 
 def test_woven_cotton_barely_stretches_jersey_gives(body):
-    # a heavy load (5 g) without tethers: the warp carries the skirt's weight (pd at its own substeps,
-    # 5 at 5 g; XPBD, the default, needs 80 to deliver the stiffness)
+    # a heavy load (5 g) without tethers: the warp carries the skirt's weight (pd, the default, at its
+    # own substeps: 5 at 5 g; XPBD needed 80 to deliver the stiffness)
     p = tube_skirt(1.0, n_rows=8, n_cols=8)
-    opts = {"gravity": 50.0, "tether_slack": None, "max_frames": 20, "solver": "pd"}
+    opts = {"gravity": 50.0, "tether_slack": None, "max_frames": 20}
     cotton = drape(p, *body, material="cotton", options=opts)
     jersey = drape(p, *body, material="jersey", options=opts)
     assert np.abs(cotton.face_strain_warp).mean() < 0.05
@@ -247,8 +247,8 @@ def test_solver_steps_reproduce_drape(body, skirt, draped):
         solver.step(second)
     assert second.frames == draped.frames and second.substeps == draped.frames * solver.options.substeps
     assert np.array_equal(second.x.numpy(), first.x.numpy())
-    assert solver.options.solver == "xpbd" and solver.options.substeps == 20  # the default
-    assert solver.dt == pytest.approx(1.0 / (30.0 * 20))
+    assert solver.options.solver == "pd" and solver.options.substeps == 2  # the default: cotton's 2 substeps
+    assert solver.dt == pytest.approx(1.0 / (30.0 * 2))
 
 
 def test_solver_validates_at_the_door(body, skirt):

@@ -251,9 +251,9 @@ def test_default_substeps_keep_the_fall_inside_the_thickness():
     assert default_substeps(pd, 0.002) == 3  # silk: 1.2 mm
     assert default_substeps(DrapeOptions(solver="pd", fps=60.0), 0.002) == 2
     assert default_substeps(DrapeOptions(solver="pd", substeps=5), 0.002) == 5
-    assert DrapeOptions().solver == "xpbd"  # the garment drape's default (pd's gap curve turns down)
+    assert DrapeOptions().solver == "pd"  # the garment drape's default
     # self-collision searches every pd substep (17 ms at 2 a frame), every 5th XPBD one; a given count is kept
-    assert DrapeOptions(solver="pd").self_interval == 1 and DrapeOptions().self_interval == 5
+    assert DrapeOptions().self_interval == 1 and DrapeOptions(solver="xpbd").self_interval == 5
     assert DrapeOptions(self_interval=3).self_interval == 3
     assert default_substeps(DrapeOptions(solver="xpbd"), 0.002) == SUBSTEPS["xpbd"]
     for thickness in (0.001, 0.002, 0.003, 0.004):

@@ -41,7 +41,7 @@ def add_parser(sub) -> None:
         "--solver",
         default=None,
         choices=("xpbd", "pd", "newton", "vbd"),  # core.drape.options.SOLVERS (numpy-free parser)
-        help="cloth solver: xpbd (default; fast, softer than the fabric), pd (projective dynamics: the fabric's own stiffness)",
+        help="cloth solver: pd (default; projective dynamics: the fabric's own stiffness), xpbd (faster, softer)",
     )
     p.add_argument("--substeps", type=int, default=None, help="substeps per frame (default: pd 2, silk 3; xpbd 20)")
     p.add_argument(

@@ -32,10 +32,9 @@ class DrapeOptions:
         float64 on the host; the fabric's stiffness at any step) or ``"pd"``
         (:mod:`core.drape.pd`: projective dynamics, the same energy to second
         order minimised by local projections and one back-substitution of a
-        matrix factored once per cloth, float64 on the host: it delivers the
-        fabric's stiffness, where XPBD's is set by the step and the mesh; not
-        the default, as its loose drapes do not settle and the gap curve turns
-        down above ease 1.56 with self-collision; ``docs/drape.md``).
+        matrix factored once per cloth, float64 on the host; the default: it
+        delivers the fabric's stiffness, where XPBD's is set by the step and
+        the mesh; ``docs/drape.md``).
     fps : float, 1/s
         Frames per second of simulated time.
     substeps : int, per frame, or None
@@ -129,7 +128,7 @@ class DrapeOptions:
     """
 
     device: str = "cpu"
-    solver: str = "xpbd"
+    solver: str = "pd"
     fps: float = 30.0  # 1/s
     substeps: Optional[int] = None  # per frame; None: SUBSTEPS[solver]
     iterations: Optional[int] = None  # per substep; None: ITERATIONS[solver]

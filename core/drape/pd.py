@@ -84,6 +84,17 @@ BUCKLING = False
 #: 3 points of 40 iterations' 62.5 and of the 5 mm disc's 63.1, for the same time a frame on the 1 cm
 #: shirt (178 against 177 ms CPU; benchmarks/results/drape_pd.md, session 7 p2)
 METHOD = "lbfgs"
+#: self-collision inside the solve: each candidate pair closer than its diameter along the pair's direction
+#: at the substep's start is pushed apart by the penalty ``self_weight / 2 * (diameter - separation)^2``,
+#: this many median diagonal entries of the step's matrix (as the body's, :data:`CONTACT_WEIGHT`); 0:
+#: self-collision only after each substep's solve, whose projections the stiff membrane's next solve
+#: undoes: on the 1.5 cm shirt at ease 1.93 a thousand particles were pushed about 1 mm every substep, the
+#: drape never settled and the fabric stretched 6 % (p95). The penalty is not in the matrix (its pairs
+#: change every substep, and its diagonal there, in x, y and z alike, held stacked layers from sliding over
+#: each other: the loose shirts crept for 150 frames), so a plain step that raises G is halved, at most
+#: :data:`SELF_BACKTRACK` times (benchmarks/results/drape_pd.md, session 7 p1)
+SELF_WEIGHT = 1.0
+SELF_BACKTRACK = 6
 
 F64 = wp.float64
 
@@ -601,6 +612,10 @@ class ProjectiveStep:
         diag = free_matrix.diagonal()
         self.contact_weight = CONTACT_WEIGHT * float(np.median(diag)) if len(fi) else 0.0
         self._held = None  # (rows into the free particles, normals, plane points, offset) of the penalty
+        self._row_of = np.full(self.n, -1, dtype=np.int64)
+        self._row_of[fi] = np.arange(len(fi))
+        self._self = None  # (particle i, particle j, their direction, diameter): pairs the penalty keeps apart
+        self.self_weight = SELF_WEIGHT * float(np.median(diag)) if len(fi) else 0.0
         self._held_key = b""
         self._searched = True
         self.refactors = 0
@@ -802,7 +817,19 @@ class ProjectiveStep:
                 x[fi] = g.reshape(-1, 3)  # the mix did not lower G: the plain step, a fresh history
                 held, slot = 0, 0
             last = (g, f)
+            e_old = e
             e, grad = self._gradient(x, y, grow)
+            if self._self is not None and not (np.isfinite(e) and e <= e_old):
+                # the self-collision penalty is not in the matrix, so the plain step may raise G where
+                # it acts: halve the step until G falls (the local-global step alone always lowers it),
+                # and start a fresh history
+                for _ in range(SELF_BACKTRACK):
+                    g = 0.5 * (g + xf)
+                    x[fi] = g.reshape(-1, 3)
+                    e, grad = self._gradient(x, y, grow)
+                    if np.isfinite(e) and e <= e_old:
+                        break
+                held, slot, last = 0, 0, None
         return it, res
 
     def _hold(self, held) -> None:
@@ -823,11 +850,36 @@ class ProjectiveStep:
         self._held_key = key
         self.refactors += 1
 
+    def set_self(self, i: np.ndarray, j: np.ndarray, diameter: float, x: np.ndarray) -> None:
+        """Self-collision candidates for the next solves: particle pairs (``i``, ``j``) kept ``diameter``
+        apart along their direction at ``x`` (the substep's start, (P, 3)) by the penalty
+        ``self_weight / 2 * (diameter - separation)^2`` (a plane through the partner, as the body's: a
+        particle the solve carries past its partner is pushed back, not on through; None or empty: none)."""
+        if i is None or len(i) == 0 or self.self_weight <= 0.0:
+            self._self = None
+            return
+        i, j = np.asarray(i, dtype=np.int64), np.asarray(j, dtype=np.int64)
+        d = x[i] - x[j]
+        length = np.sqrt(np.einsum("ij,ij->i", d, d))
+        ok = length > 1e-12
+        self._self = (i[ok], j[ok], d[ok] / length[ok][:, None], float(diameter)) if np.any(ok) else None
+
     def _gradient(self, x, y, grow) -> tuple:
         """(G(x), grad G on the free particles (F, 3)); with the contact penalty
         ``contact_weight / 2 * depth^2`` on the held particles, depth = how far inside its plane's offset."""
         energy = self._evaluate(x, y, grow)
         grad = self._all[self.free_idx]
+        if self._self is not None:
+            pi, pj, nrm, dia = self._self
+            depth = np.maximum(dia - np.einsum("ij,ij->i", x[pi] - x[pj], nrm), 0.0)
+            on = depth > 0.0
+            if np.any(on):
+                f = (self.self_weight * depth[on])[:, None] * nrm[on]
+                ri, rj = self._row_of[pi[on]], self._row_of[pj[on]]
+                ki, kj = ri >= 0, rj >= 0
+                np.add.at(grad, ri[ki], -f[ki])
+                np.add.at(grad, rj[kj], f[kj])
+                energy += 0.5 * self.self_weight * float(depth[on] @ depth[on])
         if self._held is not None:
             rows, nrm, point, offset = self._held
             depth = np.maximum(offset - np.einsum("ij,ij->i", x[self._held_particles] - point, nrm), 0.0)

@@ -33,7 +33,7 @@ def drape(
     progress: Optional[Progress] = None,
     on_frame=None,
 ) -> DrapeResult:
-    """Drape a sewing pattern on a body with XPBD.
+    """Drape a sewing pattern on a body (``options.solver``: projective dynamics by default).
 
     Parameters
     ----------

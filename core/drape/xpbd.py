@@ -348,6 +348,14 @@ class DrapeSolver:
         self._implicit.set_contact(
             s.contact_point.numpy(), s.contact_normal.numpy(), s.contact_active.numpy(), self.thickness
         )
+        if opts.solver == "pd" and self.self_radius > 0.0 and s.self_count is not None:
+            # the self-collision candidates (the last search's) kept apart inside the solve too
+            count = s.self_count.numpy()
+            partner = s.self_partner.numpy()
+            rows = np.repeat(np.arange(len(count)), count)
+            cols = partner[np.arange(partner.shape[1])[None, :] < count[:, None]]
+            pairs = np.unique(np.stack([np.minimum(rows, cols), np.maximum(rows, cols)], axis=1), axis=0)
+            self._implicit.set_self(pairs[:, 0], pairs[:, 1], 2.0 * self.self_radius, base)
         start = {"previous": base} if opts.solver == "newton" else {}  # newton: from the lower G of x_n and x
         it, res = self._implicit.solve(x, y, grow, int(opts.iterations), float(opts.tolerance), self._weight, **start)
         self._newton_iterations.append(it)
