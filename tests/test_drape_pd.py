@@ -114,8 +114,14 @@ def test_hinge_stiffness_is_newtons_at_any_rest_angle(fold):
     k_nt = curvature(lambda x: nt.energy(x, x, 1.0, gradient=False)[0])
     assert k_nt == pytest.approx(np.sum(nt.kb[on]), rel=1e-3)
     assert k_pd == pytest.approx(k_nt, rel=1e-3)
-    # and at rest it is at rest: no energy, no force
+    # at rest it is at rest (no energy); turned off it, the kernel's gradient is the energy's slope
     assert pd.energy(_creased(cloth, fold), _creased(cloth, fold), 1.0) < 1e-12 * k_nt
+    x = _creased(cloth, fold + 0.1)
+    slope = (
+        pd.energy(_creased(cloth, fold + 0.1 + h), x, 1.0) - pd.energy(_creased(cloth, fold + 0.1 - h), x, 1.0)
+    ) / (2 * h)
+    dx = (_creased(cloth, fold + 0.1 + h) - _creased(cloth, fold + 0.1 - h)) / (2 * h)
+    assert np.sum(pd.local(x, x, 1.0)[0] * dx) == pytest.approx(slope, rel=1e-4)
 
 
 def test_residual_is_the_gradient_of_the_energy():
