@@ -8,6 +8,7 @@ from core.drape.materials import get_material
 from core.drape.mesh import build_cloth, dihedral_angles
 from core.drape.newton import NewtonStep
 from core.drape.pd import ProjectiveStep, hinge_coefficients, hinge_normals, orthogonal_pair
+from core.drape.pleats import CREASE_MAX
 
 
 def _sheet(edge=0.01):
@@ -91,6 +92,38 @@ def test_pd_energy_is_newtons_to_second_order():
     assert e_pd == pytest.approx(e_nt, rel=0.03)
 
 
+@pytest.mark.parametrize("fold", [0.0, np.pi / 2, -2.0, CREASE_MAX, -CREASE_MAX, -3.12])
+def test_hinge_stiffness_is_newtons_at_any_rest_angle(fold):
+    # the hinges on the crease line rest folded by |fold| (a seam's skintight angle, a pressed crease's 172
+    # degrees, either way): d^2E/dtheta^2 there is the preset's stiffness, as in NewtonStep (the chord
+    # 2 sin(theta / 2) alone gave cos^2(theta_0 / 2) of it: 0.5 % at 172 degrees), and a flat hinge's weight
+    # is unchanged
+    cloth = _sheet()
+    theta = dihedral_angles(_creased(cloth, fold if fold else 0.5), cloth.bends)
+    on = np.abs(theta) > 1e-6
+    cloth.bend_rest = np.where(on, np.sign(theta) * abs(fold), 0.0)
+    pd, nt = _steps(cloth)
+    assert on.sum() >= 3 and np.array_equal(pd.kb[~on], nt.kb[~on])
+    h = 1e-3
+
+    def curvature(energy):
+        e = [energy(_creased(cloth, fold + d)) for d in (-h, 0.0, h)]
+        return (e[0] - 2 * e[1] + e[2]) / h**2
+
+    k_pd = curvature(lambda x: pd.energy(x, x, 1.0))
+    k_nt = curvature(lambda x: nt.energy(x, x, 1.0, gradient=False)[0])
+    assert k_nt == pytest.approx(np.sum(nt.kb[on]), rel=1e-3)
+    assert k_pd == pytest.approx(k_nt, rel=1e-3)
+    # at rest it is at rest (no energy); turned off it, the kernel's gradient is the energy's slope
+    assert pd.energy(_creased(cloth, fold), _creased(cloth, fold), 1.0) < 1e-12 * k_nt
+    x = _creased(cloth, fold + 0.1)
+    slope = (
+        pd.energy(_creased(cloth, fold + 0.1 + h), x, 1.0) - pd.energy(_creased(cloth, fold + 0.1 - h), x, 1.0)
+    ) / (2 * h)
+    dx = (_creased(cloth, fold + 0.1 + h) - _creased(cloth, fold + 0.1 - h)) / (2 * h)
+    assert np.sum(pd.local(x, x, 1.0)[0] * dx) == pytest.approx(slope, rel=1e-4)
+
+
 def test_residual_is_the_gradient_of_the_energy():
     # grad G = M (x - y) / dt^2 + sum w A^T (A x - p(x)) (the projections are the nearest points): the stop test's
     # force.
@@ -133,17 +166,17 @@ def test_local_step_kernel_matches_the_projections():
     target = np.zeros_like(img)
     target[o[0] : o[1]] = el.wa[:, None] * sa + pd.ws[:, None] * p
     target[o[1] : o[2]] = el.wb[:, None] * sb + pd.ws[:, None] * q
-    nh = hinge_normals(x, el.bends.reshape(-1, 4))
+    nh = hinge_normals(x, el.bends.reshape(-1, 4), pd.folded)
     h = img[o[3] : o[4]]
     c = np.einsum("ij,ij->i", h, nh) - pd.rest_len
-    target[o[3] : o[4]] = el.kb[:, None] * (h - c[:, None] * nh)
+    target[o[3] : o[4]] = pd.kb[:, None] * (h - c[:, None] * nh)
     rest = el.edge_rest + (el.edge_start - el.edge_rest) * (1.0 - grow)
     e_img = img[o[2] : o[3]]
     target[o[2] : o[3]] = el.we * e_img * (rest / np.linalg.norm(e_img, axis=1))[:, None]
     assert np.allclose(pd._target, target, rtol=1e-10, atol=1e-12 * np.abs(target).max())
     sq = lambda u: np.einsum("ij,ij->i", u, u)  # noqa: E731
     expect = 0.5 * np.sum(pd.inertia * sq(x - y)) + 0.5 * np.sum(el.wa * sq(fa - sa) + el.wb * sq(fb - sb))
-    expect += 0.5 * np.sum(pd.ws * (sq(fa - p) + sq(fb - q))) + 0.5 * np.sum(el.kb * c * c)
+    expect += 0.5 * np.sum(pd.ws * (sq(fa - p) + sq(fb - q))) + 0.5 * np.sum(pd.kb * c * c)
     expect += 0.5 * el.we * np.sum((np.linalg.norm(e_img, axis=1) - rest) ** 2)
     assert energy == pytest.approx(expect, rel=1e-10)
     w = pd._row_w[:, None]

@@ -21,8 +21,11 @@ the fabric's energy is a squared distance from a linear image of the positions
   with its normal component projected onto ``2 sin(theta_0 / 2)`` and its
   in-plane part (a non-isometric stretch of the hinge, large where the rest
   shape grows from the skintight start, not a bend) left free, weight
-  ``bending * |e|^2 / (A_a + A_b)``: the discrete-shell energy of
-  :mod:`core.drape.newton` to second order in the angle.
+  ``bending * |e|^2 / (A_a + A_b) / cos^2(theta_0 / 2)``: the discrete-shell
+  energy of :mod:`core.drape.newton` to second order in the angle. A hinge
+  resting folded past 90 degrees (a pressed crease) takes the difference of its
+  two sides instead, ``2 cos(theta / 2)`` along the difference of the normals,
+  weight ``/ sin^2(theta_0 / 2)``: the same stiffness at any rest angle.
 
 So, to second order in strain and angle, it is the energy :mod:`core.drape.newton`
 minimises (the preset's physical stiffness), and the system matrix
@@ -109,6 +112,7 @@ const double* wa = (const double*)w_a.data; const double* wb = (const double*)w_
 const double* wsh = (const double*)w_s.data; const double* el = (const double*)edge_len.data;
 const int* bd = (const int*)bends.data; const double* kb = (const double*)k_bend.data;
 const double* hr = (const double*)hinge_rest.data; double* en = (double*)energy.data;
+const double* hs = (const double*)hinge_side.data;
 const int* bl = (const int*)blocks.data;
 const double* cpa = (const double*)cap_a.data; const double* cpb = (const double*)cap_b.data;
 const int o1 = bl[1], o2 = bl[2], o3 = bl[3], o4 = bl[4];
@@ -180,7 +184,7 @@ for (int r = o3; r < o4; r++) {
     double l1 = sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]);
     double l2 = sqrt(n2[0] * n2[0] + n2[1] * n2[1] + n2[2] * n2[2]);
     l1 = l1 > 1.0e-30 ? l1 : 1.0e-30; l2 = l2 > 1.0e-30 ? l2 : 1.0e-30;
-    for (int k = 0; k < 3; k++) nn[k] = n1[k] / l1 + n2[k] / l2;
+    for (int k = 0; k < 3; k++) nn[k] = n1[k] / l1 + hs[r - o3] * n2[k] / l2;
     double ln = sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
     ln = ln > 1.0e-30 ? ln : 1.0e-30;
     for (int k = 0; k < 3; k++) nn[k] /= ln;
@@ -229,6 +233,7 @@ def _gradient_native(
     bends: wp.array(dtype=wp.int32),
     k_bend: wp.array(dtype=F64),
     hinge_rest: wp.array(dtype=F64),
+    hinge_side: wp.array(dtype=F64),
     images: wp.array(dtype=F64),
     target: wp.array(dtype=F64),
     out: wp.array(dtype=F64),
@@ -259,6 +264,7 @@ def pd_gradient(
     bends: wp.array(dtype=wp.int32),
     k_bend: wp.array(dtype=F64),
     hinge_rest: wp.array(dtype=F64),
+    hinge_side: wp.array(dtype=F64),
     images: wp.array(dtype=F64),
     target: wp.array(dtype=F64),
     out: wp.array(dtype=F64),
@@ -274,7 +280,8 @@ def pd_gradient(
       stress capped, :attr:`ProjectiveStep.buckling`), and, as a pair, onto
       the nearest orthogonal pair (:func:`orthogonal_pair`, weight ``w_s``); each sliver edge onto the
       sphere of its rest length (``edge_len``, weight ``we``); each hinge vector's normal component
-      (:func:`hinge_normals`, from the stencil ``bends`` (B, 4)) onto ``hinge_rest`` (weight ``k_bend``);
+      (:func:`hinge_normals`, from the stencil ``bends`` (B, 4); ``hinge_side`` -1 where it is folded,
+      :func:`folded_hinges`) onto ``hinge_rest`` (weight ``k_bend``);
     * ``out = inertia (x - y) + D^T (W images - target)``, W = ``row_w``, scattered row by row;
     * ``energy[0]`` the inertial part of G, ``energy[1]`` the constraints' (each weighted squared
       distance, halved).
@@ -302,6 +309,7 @@ def pd_gradient(
         bends,
         k_bend,
         hinge_rest,
+        hinge_side,
         images,
         target,
         out,
@@ -452,7 +460,8 @@ class Factor3:
 def hinge_coefficients(cloth: Cloth) -> np.ndarray:
     """(B, 4) the flat rest hinge's dihedral-angle gradients along its normal, per stencil particle
     (a, b, e0, e1): ``theta ~ n . sum_i alpha_i x_i`` near the rest shape (Bridson et al. 2003's gradients
-    on the hinge unfolded flat from its two pattern triangles); zero where a triangle is degenerate."""
+    on the hinge unfolded flat from its two pattern triangles); zero where a triangle is degenerate. A
+    folded hinge (:func:`folded_hinges`) takes side b's away instead of adding it."""
     bends = cloth.bends.reshape(-1, 4)
     out = np.zeros((len(bends), 4))
     if len(bends) == 0:
@@ -495,22 +504,32 @@ def hinge_coefficients(cloth: Cloth) -> np.ndarray:
     xb, yb, lb = side(b, tb)
     ok = oka & okb & (ya > 1e-12 * la) & (yb > 1e-12 * lb)
     ya, yb = np.where(ok, ya, 1.0), np.where(ok, yb, 1.0)
+    sb = np.where(folded_hinges(cloth.bend_rest), -1.0, 1.0)  # a folded hinge: side b's vector taken away
     out[:, 0] = -1.0 / ya
-    out[:, 1] = -1.0 / yb
-    out[:, 2] = (la - xa) / (la * ya) + (lb - xb) / (lb * yb)
-    out[:, 3] = xa / (la * ya) + xb / (lb * yb)
+    out[:, 1] = -sb / yb
+    out[:, 2] = (la - xa) / (la * ya) + sb * (lb - xb) / (lb * yb)
+    out[:, 3] = xa / (la * ya) + sb * xb / (lb * yb)
     out[~ok] = 0.0
     return out
 
 
-def hinge_normals(x: np.ndarray, bends: np.ndarray) -> np.ndarray:
+def folded_hinges(bend_rest: np.ndarray) -> np.ndarray:
+    """(B,) bool: the hinges resting folded past 90 degrees, whose hinge vector is the difference of its two
+    sides' (:func:`hinge_coefficients`, :func:`hinge_normals`)."""
+    return np.abs(np.asarray(bend_rest, float)) > 0.5 * np.pi
+
+
+def hinge_normals(x: np.ndarray, bends: np.ndarray, folded=None) -> np.ndarray:
     """(B, 3) unit normal of each hinge (a, b, e0, e1): the mean of its two triangles' unit normals. The
-    hinge vector of :func:`hinge_coefficients` is ``2 sin(theta / 2)`` times it for an isometric bend."""
+    hinge vector of :func:`hinge_coefficients` is ``2 sin(theta / 2)`` times it for an isometric bend.
+    ``folded`` (B,) bool (:func:`folded_hinges`): there the difference of the two unit normals, along
+    which a folded hinge's vector is ``2 cos(theta / 2)`` (signed: through 180 degrees it turns over)."""
     x1, x2, x3, x4 = (x[bends[:, k]] for k in range(4))
     n1 = row_cross(x3 - x1, x4 - x1)
     n2 = row_cross(x4 - x2, x3 - x2)
     nrm = n1 / np.maximum(np.linalg.norm(n1, axis=1), 1e-30)[:, None]
-    nrm += n2 / np.maximum(np.linalg.norm(n2, axis=1), 1e-30)[:, None]
+    sb = 1.0 if folded is None else np.where(folded, -1.0, 1.0)[:, None]
+    nrm += sb * n2 / np.maximum(np.linalg.norm(n2, axis=1), 1e-30)[:, None]
     return nrm / np.maximum(np.linalg.norm(nrm, axis=1), 1e-30)[:, None]
 
 
@@ -588,14 +607,24 @@ class ProjectiveStep:
         self.ws = 2.0 * el.ws  # the orthogonal pair's distance^2 is (f_a . f_b)^2 / 2
         bends = el.bends
         self.Gh = _rows(len(bends), self.n, bends, hinge_coefficients(cloth))
-        # each hinge vector's normal component at rest: 2 sin(theta_0 / 2) (0 inside a panel)
-        self.rest_len = 2.0 * np.sin(0.5 * el.bend_rest)
+        # each hinge vector's normal component at rest: 2 sin(theta_0 / 2) (0 inside a panel); a hinge resting
+        # folded past 90 degrees (a pressed crease, a seam sewn folded) measures 2 cos(theta / 2) instead, along
+        # the normals' difference (:func:`folded_hinges`): 2 sin(theta / 2) stops turning towards 180 degrees
+        # (a pressed crease's 172: slope cos(86 deg) = 0.07), 2 cos(theta / 2) turns on through it
+        half = 0.5 * el.bend_rest
+        self.folded = folded_hinges(el.bend_rest)
+        self.rest_len = np.where(self.folded, -np.sign(half) * 2.0 * np.cos(half), 2.0 * np.sin(half))
+        # its weight: w / 2 (f(theta) - f(theta_0))^2 turns by w f'(theta_0)^2 per rad^2 at the rest angle, so
+        # w = k / f'(theta_0)^2 (cos^2 or sin^2 of theta_0 / 2, at least 1/2) holds the preset's stiffness k
+        # (NewtonStep's) at any rest angle; a flat hinge's k exactly (cos 0 = 1)
+        slope = np.where(self.folded, np.sin(half), np.cos(half))
+        self.kb = el.kb / (slope * slope)
 
         def gram(g, w):
             return (g.T @ diags(w) @ g) if g.shape[0] else 0.0
 
         A = diags(self.inertia) + gram(el.Ga, el.wa + self.ws) + gram(el.Gb, el.wb + self.ws)
-        A = A + gram(el.Ge, np.full(el.Ge.shape[0], el.we)) + gram(self.Gh, el.kb)
+        A = A + gram(el.Ge, np.full(el.Ge.shape[0], el.we)) + gram(self.Gh, self.kb)
         self.matrix = A.tocsr()
         fi = self.free_idx
         # SPD: an LDL^T with qdldl's AMD ordering, x, y and z back-substituted in one pass
@@ -625,7 +654,7 @@ class ProjectiveStep:
         t, e = len(el.tri), el.Ge.shape[0]
         self._blocks = np.cumsum([0, t, t, e, len(bends)])
         # each image row's weight W (D^T W D + M is the matrix): the gradient is M (x - y) + D^T (W D x - target)
-        self._row_w = np.concatenate([el.wa + self.ws, el.wb + self.ws, np.full(e, el.we), el.kb])
+        self._row_w = np.concatenate([el.wa + self.ws, el.wb + self.ws, np.full(e, el.we), self.kb])
         # the local step's buffers (positions and target in, images, targets, gradient and energy out) and
         # the rest lengths that grow (updated in place), all float64 on the host, and the kernel's launch
         # on them, recorded once
@@ -649,13 +678,14 @@ class ProjectiveStep:
                 (el.wb, float),
                 (self.ws, float),
                 (bends.reshape(-1), i32),
-                (el.kb, float),
+                (self.kb, float),
                 (self.rest_len, float),
+                (np.where(self.folded, -1.0, 1.0), float),
                 (el.cap_a if self.buckling else np.full(t, np.inf), float),
                 (el.cap_b if self.buckling else np.full(t, np.inf), float),
             )
         ]
-        blocks, Dp, Di, Dx, inertia, row_w, wa, wb, ws, bd, kb, hr, cap_a, cap_b = (_flat(a) for a in self._host)
+        blocks, Dp, Di, Dx, inertia, row_w, wa, wb, ws, bd, kb, hr, hs, cap_a, cap_b = (_flat(a) for a in self._host)
         self._launch = wp.launch(
             pd_gradient,
             dim=1,
@@ -683,6 +713,7 @@ class ProjectiveStep:
                 bd,
                 kb,
                 hr,
+                hs,
                 _flat(self._images),
                 _flat(self._target),
                 _flat(self._all),
@@ -914,7 +945,7 @@ class ProjectiveStep:
         parts = []
         if o[3] > o[2]:
             parts.append(spring(img[o[2] : o[3]], self._edge_len, np.full(o[3] - o[2], el.we)))
-        nh = hinge_normals(x, self.elements.bends.reshape(-1, 4)) if o[4] > o[3] else None
+        nh = hinge_normals(x, self.elements.bends.reshape(-1, 4), self.folded) if o[4] > o[3] else None
         inertia = self.inertia[:, None]
 
         def product(u: np.ndarray) -> np.ndarray:
@@ -930,7 +961,7 @@ class ProjectiveStep:
                 out[o[2] : o[3]] = ce[:, None] * ve + (cne * np.einsum("ij,ij->i", ue, ve))[:, None] * ue
             if nh is not None:
                 vh = v[o[3] : o[4]]
-                out[o[3] : o[4]] = (el.kb * np.einsum("ij,ij->i", nh, vh))[:, None] * nh
+                out[o[3] : o[4]] = (self.kb * np.einsum("ij,ij->i", nh, vh))[:, None] * nh
             return inertia * u + self.DT @ out
 
         return product
