@@ -382,3 +382,40 @@ def test_cli_solver_flag():
     flag = next(a for a in ap._subparsers._group_actions[0].choices["drape"]._actions if a.dest == "solver")
     assert sorted(flag.choices) == sorted(SOLVERS)
     assert "solver" not in D._options(ap.parse_args(["drape", "p", "--out", "o"]))
+
+
+def test_friction_on_a_tilted_body_is_coulomb():
+    # a free sheet resting on a body plane tilted 20 degrees, stepped as the drape steps pd (the inertial
+    # target, the solve at the default 10 iterations from the substep's start as friction's anchor, the
+    # contact offset after it): it sticks where mu >= tan 20 deg (0.36) and slides with g (sin - mu cos)
+    # below it. (Before, the penalty's weight in the matrix held every particle on the body where the
+    # substep began: the sheet stuck at any mu.)
+    cloth = _sheet()
+    mat = get_material("cotton")
+    mass = mat.density * cloth.mass_area
+    dt, offset, steps = 1 / 60, 0.003, 60
+    theta = np.radians(20.0)
+    normal = np.array([np.sin(theta), 0.0, np.cos(theta)])
+    down = np.array([np.cos(theta), 0.0, -np.sin(theta)])
+    flat = cloth.x0 - cloth.x0.mean(axis=0)
+    x0 = flat[:, :1] * down + flat[:, 1:2] * np.array([0.0, 1.0, 0.0]) + offset * normal
+    slid = {}
+    for mu in (0.5, 0.2):
+        pd = ProjectiveStep(cloth, mat, dt, mass, np.ones((len(cloth.faces), 2)), np.zeros(0))
+        pd.friction = mu
+        x, v = x0.copy(), np.zeros_like(x0)
+        for _ in range(steps):
+            start = x.copy()
+            y = x + v * dt
+            y[:, 2] -= 9.81 * dt * dt
+            x = x + v * dt
+            pd.set_contact(x - np.outer(x @ normal, normal), np.tile(normal, (len(x), 1)), np.ones(len(x), int), offset)
+            pd.anchor = start
+            pd.solve(x, y, 1.0, 10, 1e-2, mass * 9.81)
+            x += np.outer(np.maximum(offset - x @ normal, 0.0), normal)
+            v = (x - start) / dt
+        assert np.allclose(x @ normal, offset, atol=1e-4)  # on the body, at its offset
+        slid[mu] = float(np.mean((x - x0) @ down))
+    t = steps * dt
+    assert abs(slid[0.5]) < 1e-4  # sticks
+    assert slid[0.2] == pytest.approx(0.5 * 9.81 * (np.sin(theta) - 0.2 * np.cos(theta)) * t * t, rel=0.05)

@@ -357,6 +357,12 @@ class DrapeSolver:
             pairs = np.unique(np.stack([np.minimum(rows, cols), np.maximum(rows, cols)], axis=1), axis=0)
             self._implicit.set_self(pairs[:, 0], pairs[:, 1], 2.0 * self.self_radius, base)
         start = {"previous": base} if opts.solver == "newton" else {}  # newton: from the lower G of x_n and x
+        if opts.solver == "pd":
+            from .pd import FRICTION
+
+            # Coulomb friction in the solve (core.drape.pd.FRICTION): the body's particles held to where
+            # the substep began
+            self._implicit.anchor = base if FRICTION else None
         it, res = self._implicit.solve(x, y, grow, int(opts.iterations), float(opts.tolerance), self._weight, **start)
         self._newton_iterations.append(it)
         self._newton_residuals.append(res)
