@@ -11,6 +11,7 @@ from drape_synth import revolution_body, tube_skirt
 
 from core.body.instance import body_instance, instance_shape
 from core.drape import DrapeSolver
+from core.drape import textile as T
 from core.drape.animate import drape_motion, pose_frames
 from core.drape.mesh import build_cloth
 from core.errors import DrapeError
@@ -80,6 +81,31 @@ def test_a_still_body_keeps_the_settled_drape(body, tmp_path):
         f = np.array([ln.split()[1:] for ln in lines if ln.startswith("f ")], int) - 1
         assert np.allclose(v, k[0], atol=1e-6) and f.min() == 0 and f.max() == len(v) - 1
         assert np.allclose(v[f], frame(r.positions[0][r.faces]), atol=1e-6)
+
+
+def test_pd_carries_the_cloth_a_body_slides_under():
+    """pd: a sheet resting on a box that slides along under it, 1 cm a frame for 10 frames, rides on
+    it (its held particles keep their velocity relative to the body, as on a still body their own)
+    and stops with it, on the box at its offset. (Before, pd's contact penalty held the sheet where it
+    was in the world: the box slid out from under it.)"""
+    uv, faces = T.strip_mesh([0.0, 0.06], 0.06, 0.01)
+    cloth = build_cloth(T.sheet_pattern(uv - [0.03, 0.0], faces, 0.0, np.zeros(len(uv), bool), "cotton"))
+    bv, bf = T.box_body([-0.2, -0.2, -0.1], [0.2, 0.2, -0.003])
+    solver = DrapeSolver(cloth, bv, bf, "cotton", {"solver": "pd"})
+    state = solver.state()
+    n = solver.options.substeps
+
+    def frames(count, at):
+        for k in range(count):
+            solver.step(state, before_substep=lambda i, k=k: solver.move_body(bv + [at(k + (i + 1) / n), 0.0, 0.0]))
+        return state.x.numpy().astype(float)
+
+    x0 = frames(3, lambda t: 0.0)
+    moved = frames(10, lambda t: 0.01 * t)
+    held = frames(5, lambda t: 0.1)
+    assert (moved - x0).mean(axis=0) == pytest.approx([0.1, 0.0, 0.0], abs=2e-3)
+    assert np.abs(held - moved).max() < 1e-3  # stopped with the body
+    assert np.abs(held[:, 2] - x0[:, 2]).max() < 1e-4  # on the box, at its offset
 
 
 def test_moved_body_must_keep_its_vertices(body):

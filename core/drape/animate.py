@@ -151,12 +151,11 @@ def posed_frames(model, shape, poses: Sequence, root_moves=None) -> list:
     return frames
 
 
-#: the solver of a drape through a motion where the options name none (the static drape's default is pd):
-#: pd's body contact holds each particle on the body by a penalty in every direction, at its place in the
-#: world, so a body that moves under the cloth leaves it behind (the add-on's rig test: the garment moved
-#: 4.76 cm with the body's 5.96, XPBD within 1 cm), and Coulomb friction inside pd's solve, which would
-#: carry the cloth along, still stretches a static shirt 15 % (``core.drape.pd.FRICTION``, off)
-MOTION_SOLVER = "xpbd"
+#: the solver of a drape through a motion where the options name none: pd, as for the static drape. A body
+#: that moves carries the cloth its contact holds (:meth:`core.drape.xpbd.DrapeSolver._carry`, pd's
+#: ``ProjectiveStep.carry``: the held particles keep their velocity relative to the body); before that pd
+#: left the cloth behind a body moving under it (the add-on's rig test: 4.76 cm with the body's 5.96)
+MOTION_SOLVER = "pd"
 
 
 def drape_motion(

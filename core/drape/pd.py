@@ -116,6 +116,32 @@ FRICTION = False
 F64 = wp.float64
 
 
+@wp.kernel
+def contact_motion(
+    points: wp.array(dtype=wp.vec3),
+    active: wp.array(dtype=int),
+    mesh: wp.uint64,
+    max_dist: float,
+    indices: wp.array(dtype=int),
+    moved: wp.array(dtype=wp.vec3),
+    carry: wp.array(dtype=wp.vec3),
+):
+    """A field ``moved`` (V, 3) on the body's vertices (their displacement over a substep) at each
+    particle's closest point on the body (its contact search's: the same query from the same ``points``),
+    interpolated on the face; 0 where the particle has no contact (``active[i]`` 0)."""
+    i = wp.tid()
+    carry[i] = wp.vec3(0.0, 0.0, 0.0)
+    if active[i] == 0:
+        return
+    q = wp.mesh_query_point_no_sign(mesh, points[i], max_dist)
+    if not q.result:
+        return
+    f = q.face
+    carry[i] = (
+        moved[indices[3 * f]] * q.u + moved[indices[3 * f + 1]] * q.v + moved[indices[3 * f + 2]] * (1.0 - q.u - q.v)
+    )
+
+
 _GRADIENT = r"""
 const int* ip = (const int*)Dp.data; const int* ci = (const int*)Di.data; const double* dv = (const double*)Dx.data;
 const double* xx = (const double*)x.data; const double* yy = (const double*)y.data;
@@ -665,6 +691,10 @@ class ProjectiveStep:
         # friction in the solve) and the held particles' friction bound (N, set at each solve)
         self.anchor = None
         self._cap = None
+        # a moving body: how far it carries each particle over the substep beyond the particle's own velocity,
+        # at its contact point ((P, 3), set by the drape where the body moved; None: a still body); the held
+        # particles' start guess and inertial target move by it along the body
+        self.carry = None
         self.refactors = 0
         # every linear image at once: weft, warp, sliver edges, hinges (rows in that order), and its transpose
         self.D = vstack([el.Ga, el.Gb, el.Ge, self.Gh]).tocsr()
@@ -821,6 +851,16 @@ class ProjectiveStep:
                     near, nrm = self._held[0], self._held[1]
         elif self._held is not None:
             self._hold(None)
+        if self._held is not None and self.carry is not None:
+            # a moving body carries the particles it holds: their start guess and inertial target move
+            # with the body's surface along it (the penalty's weight in every direction of the matrix
+            # keeps a held particle near its start guess; at its place in the world the body slid under
+            # the cloth and left it behind). Along the normal the penalty keeps them on the body.
+            p, nrm = self._held_particles, self._held[1]
+            d = self.carry[p]
+            d = d - np.einsum("ij,ij->i", d, nrm)[:, None] * nrm
+            x[p] += d
+            y[p] += d
         if self._held is not None and self.anchor is not None and self.friction > 0.0:
             # Coulomb's choice for the held particles' start guess: stuck at the anchor where the net force
             # along the body there (inertia, gravity, the fabric's) is within mu F_n, F_n the force that

@@ -259,6 +259,8 @@ class DrapeSolver:
             device=dev,
         )
         self._body = self._Q.warp_mesh(body_v, body_f, device=dev)
+        # the body's displacement (V, 3) since the last substep (:meth:`move_body`), and over the last substep
+        self._body_moved = self._body_last = None
 
     def _upload_vbd(self, cloth: Cloth, mass, tri_order, bend_order, edge_order) -> None:
         """VBD's arrays: particle masses, the vertex colouring, each particle's triangles, hinges and edges."""
@@ -362,12 +364,47 @@ class DrapeSolver:
 
             # Coulomb friction in the solve (core.drape.pd.FRICTION): the body's particles held to where
             # the substep began
-            self._implicit.anchor = base if FRICTION else None
+            self._implicit.carry, moved = self._carry(s)
+            # (with friction, on a moving body: held where the body carried the substep's start)
+            self._implicit.anchor = None if not FRICTION else base if moved is None else base + moved
         it, res = self._implicit.solve(x, y, grow, int(opts.iterations), float(opts.tolerance), self._weight, **start)
         self._newton_iterations.append(it)
         self._newton_residuals.append(res)
         s.x64 = x
         s.x.assign(x.astype(np.float32))
+
+    def _carry(self, s: DrapeState) -> tuple:
+        """(carry, moved): how far the body carries each particle this substep beyond its own (damped)
+        velocity, at its contact point ((P, 3) float64: the body's displacement this substep less the damped
+        share of its last substep's, which the particle's velocity already holds where it moved with the
+        body; :meth:`move_body`), and with :data:`core.drape.pd.FRICTION` the body's displacement this
+        substep there; (None, None) where the body has not moved in either substep (a still body's drape
+        is left as it was). With ``carry`` a held particle keeps its velocity relative to the body, as on
+        a still body it keeps its own."""
+        from .pd import FRICTION
+
+        moved, last = self._body_moved, self._body_last
+        self._body_moved, self._body_last = None, moved
+        if moved is None and last is None:
+            return None, None
+        zero = np.zeros_like(moved if moved is not None else last)
+        moved = zero if moved is None else moved
+        keep = float(np.exp(-self.options.damping * self.dt))  # the predicted velocity's damping (_record)
+        change = moved - keep * (zero if last is None else last)
+        return self._at_contacts(s, change), self._at_contacts(s, moved) if FRICTION else None
+
+    def _at_contacts(self, s: DrapeState, per_vertex: np.ndarray) -> np.ndarray:
+        """A body vertex field (V, 3) at each particle's contact point ((P, 3) float64; 0 off the body)."""
+        from .pd import contact_motion
+
+        wp, dev = self._wp, self.device
+        n = self.cloth.n_particles
+        out = wp.zeros(n, dtype=wp.vec3, device=dev)
+        field = wp.array(np.asarray(per_vertex, dtype=np.float32), dtype=wp.vec3, device=dev)
+        # from the contact search's points (the substep's start): the same closest face
+        inputs = [s.x_prev, s.contact_active, self._body.id, self.options.search_distance, self._body.indices]
+        wp.launch(contact_motion, dim=n, inputs=inputs + [field, out], device=dev)
+        return out.numpy().astype(np.float64)
 
     def state(self) -> DrapeState:
         """A fresh state: the garment skintight on the body, at rest, its rest shape not yet grown."""
@@ -599,6 +636,10 @@ class DrapeSolver:
             raise DrapeError(
                 f"the moved body has {pts.shape[0]} vertices, the drape's body {self._body.points.shape[0]}"
             )
+        # pd: its displacement since the last substep (the body carries the cloth it holds: _carry)
+        if self.options.solver == "pd":
+            moved = pts - self._body.points.numpy()
+            self._body_moved = moved if self._body_moved is None else self._body_moved + moved
         self._body.points.assign(pts)
         self._body.refit()
 
