@@ -83,11 +83,14 @@ def test_a_still_body_keeps_the_settled_drape(body, tmp_path):
         assert np.allclose(v[f], frame(r.positions[0][r.faces]), atol=1e-6)
 
 
-def test_pd_carries_the_cloth_a_body_slides_under():
+@pytest.mark.parametrize("friction", [False, True])
+def test_pd_carries_the_cloth_a_body_slides_under(friction, monkeypatch):
     """pd: a sheet resting on a box that slides along under it, 1 cm a frame for 10 frames, rides on
     it (its held particles keep their velocity relative to the body, as on a still body their own)
-    and stops with it, on the box at its offset. (Before, pd's contact penalty held the sheet where it
-    was in the world: the box slid out from under it.)"""
+    and stops with it, on the box at its offset; with Coulomb friction in the solve too (pd.FRICTION:
+    anchored where the body carried the substep's start). (Before, pd's contact penalty held the sheet
+    where it was in the world: the box slid out from under it.)"""
+    monkeypatch.setattr("core.drape.pd.FRICTION", friction)
     uv, faces = T.strip_mesh([0.0, 0.06], 0.06, 0.01)
     cloth = build_cloth(T.sheet_pattern(uv - [0.03, 0.0], faces, 0.0, np.zeros(len(uv), bool), "cotton"))
     bv, bf = T.box_body([-0.2, -0.2, -0.1], [0.2, 0.2, -0.003])
