@@ -536,9 +536,12 @@ def test_a_pleat_from_a_seam_is_sewn_through_it_at_every_stage(pleated, tmp_path
     # the last stage: after a short drape every pressed pleat (the tuck and the back's) is still
     # closed, its visible fold a few mm from its placement line (the intake folded under, not opened
     # flat to 2 x 20 mm; pd, the default: medians 4.5 mm, the back's 7.9 mm at most, the tuck, across
-    # the front, opens to 22.6 mm at the centre front; XPBD: 4.4-5.3, 5.8 and 16.5 mm), and its fold
-    # lines still creases (stencils folded past 1 rad: pd 98 %, XPBD 98 %; pd's hinge held its crease
-    # with cos^2(86 deg) = 0.5 % of the stiffness until a folded hinge measured 2 cos(theta / 2): 84 %)
+    # the front, stands off to 25.7 mm at the centre front (22.6 with L-BFGS iterations; before its
+    # crease held at the fabric's stiffness, 14.4: a pressed tuck that keeps its fold bridges the body's
+    # curve there instead of lying into it); XPBD: 4.4-5.3, 5.8 and 16.5 mm; the bound: 3/4 of flat),
+    # and its fold lines still creases (stencils folded past 1 rad: pd 98 %, XPBD 98 %; pd's hinge held
+    # its crease with cos^2(86 deg) = 0.5 % of the stiffness until a folded hinge measured 2 cos(theta / 2):
+    # 84 %)
     from core.drape.mesh import dihedral_angles
     from core.drape.pleats import fold_edges
 
@@ -550,7 +553,7 @@ def test_a_pleat_from_a_seam_is_sewn_through_it_at_every_stage(pleated, tmp_path
             mine = [x for x in lines if x["pleat"] == name]
             fold, place = mine[0], next(x for x in mine if x["kind"] == "placement")
             apart = np.linalg.norm(positions[fold["gids"]] - positions[place["gids"]], axis=1)
-            assert np.median(apart) < 0.008 and apart.max() < (0.008 if "back" in name else 0.025), name
+            assert np.median(apart) < 0.008 and apart.max() < (0.008 if "back" in name else 0.03), name
     x = np.zeros_like(cloth.x0)
     used = np.flatnonzero(cloth.particle_of >= 0)
     x[cloth.particle_of[used]] = positions[used]

@@ -79,14 +79,16 @@ HELD_HEIGHT = 1.05
 #: fabric gives way instead of folding: the tube skirt's fabric below its gathered waistband sits 15 % (p95)
 #: off its pattern lengths, against under 1 % without it (benchmarks/results/drape_pd.md, session 6 p10)
 BUCKLING = False
-#: the iterations' method (:attr:`ProjectiveStep.method`): L-BFGS with the factored matrix as its initial
-#: inverse Hessian. With Anderson's acceleration the Cusick disc's folds followed the iteration count
-#: (wool 55.1 % with 4-5 nodes at 10 iterations, 59.9 % at 20, 62.1 % with 7-8 at 40, 62.7 % with 8 at
-#: 80; mean of 4 specimens, 10 mm with the clamp band): each substep's unconverged solve damps the buckling
-#: the fall starts, and picks fewer folds. L-BFGS at the default 10 iterations reads wool 61.2 %, within
-#: 3 points of 40 iterations' 62.5 and of the 5 mm disc's 63.1, for the same time a frame on the 1 cm
-#: shirt (178 against 177 ms CPU; benchmarks/results/drape_pd.md, session 7 p2)
-METHOD = "lbfgs"
+#: the iterations' method (:attr:`ProjectiveStep.method`): Anderson-accelerated local-global steps, or
+#: "lbfgs" (L-BFGS with the factored matrix as its initial inverse Hessian). A frontier, measured (session 7,
+#: benchmarks/results/drape_pd.md): on the Cusick disc (10 mm with the clamp band, mean of 4 specimens)
+#: Anderson's fold count follows the iteration count for wool (55.1 % at 10 iterations, 62.1 % at 40) where
+#: L-BFGS reads 61.2 / 62.5 %, but L-BFGS moves silk -3.3 points at 4x the iterations (8 specimens; Anderson
+#: -2.9 with 4), and on the garments L-BFGS leaves the loose drapes unsettled: the full gap curve (1.5 cm,
+#: self-collision, 17 levels x 3 growths) settled 47 of 51 shirt and 51 of 51 pants drapes with Anderson,
+#: 29 and 41 with L-BFGS, with one step down of 0.4 mm (shirt, ease 2.119 -> 2.212) against four of up to
+#: 2.9 mm. The garment is what a user drapes, so Anderson is the default.
+METHOD = "anderson"
 #: self-collision inside the solve: each candidate pair closer than its diameter along the pair's direction
 #: at the substep's start is pushed apart by the penalty ``self_weight / 2 * (diameter - separation)^2``,
 #: this many median diagonal entries of the step's matrix (as the body's, :data:`CONTACT_WEIGHT`); 0:
@@ -611,8 +613,8 @@ class ProjectiveStep:
     elements : the :class:`core.drape.newton.NewtonStep` of the same cloth, whose element operators
         (grain images, edges, hinges, rest shapes) this step projects.
     matrix : (P, P) sparse, ``M / dt^2 + sum_c w_c A_c^T A_c`` (the same for x, y and z).
-    method : ``"lbfgs"`` (default, :data:`METHOD`: L-BFGS with the factored matrix as its initial inverse
-        Hessian), ``"anderson"`` (Anderson-accelerated local-global iterations) or ``"newton"`` (Gauss-Newton
+    method : ``"anderson"`` (default, :data:`METHOD`: Anderson-accelerated local-global iterations),
+        ``"lbfgs"`` (L-BFGS with the factored matrix as its initial inverse Hessian) or ``"newton"`` (Gauss-Newton
         steps by conjugate gradients preconditioned with the factored matrix, :meth:`_newton`; an
         experiment: 4x fewer back-substitutions than Anderson on a clamped creased strip, but on the
         Cusick disc it does not settle, and at 5 mm edges the specimen falls off the support, so the
@@ -825,7 +827,7 @@ class ProjectiveStep:
         Deng, Zhang, Liu, "Anderson acceleration for geometry optimization and physics simulation", ACM
         TOG 37(4), 2018): the next iterate mixes the last ``history`` steps, and is kept only where it
         lowers G (else the plain step is taken and the history dropped). With :attr:`method`
-        ``"lbfgs"`` (the default, :data:`METHOD`) they are L-BFGS steps instead (:meth:`_lbfgs`).
+        ``"lbfgs"`` (not the default, :data:`METHOD`) they are L-BFGS steps instead (:meth:`_lbfgs`).
 
         Returns (iterations done, the largest residual over weight at the last test).
         """
