@@ -348,8 +348,8 @@ def _markdown(res: dict) -> str:
     lines = [
         "# Fabric benchmarks",
         "",
-        f"Machine: CPU, {res['cpu']}. EASE's drape solvers (`DrapeSolver`: XPBD, the garment default; "
-        "newton, the implicit step solved to a residual; pd, projective dynamics with L-BFGS iterations; "
+        f"Machine: CPU, {res['cpu']}. EASE's drape solvers (`DrapeSolver`: pd, projective dynamics, the garment "
+        "default; XPBD, the default before; newton, the implicit step solved to a residual; "
         "their default options but the substeps and iterations per substep) on the textile tests of SPEC "
         "item 11: Cusick drape coefficient (30 cm disc on an 18 cm support, its clamp's boundary layer "
         "meshed at half of sqrt(B / T), shadow rasterised at 1 mm; pd: the mean of "
