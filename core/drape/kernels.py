@@ -378,6 +378,32 @@ def apply_delta(x: wp.array(dtype=wp.vec3), dx: wp.array(dtype=wp.vec3)):
 
 
 @wp.kernel
+def contact_motion(
+    points: wp.array(dtype=wp.vec3),
+    active: wp.array(dtype=int),
+    mesh: wp.uint64,
+    max_dist: float,
+    indices: wp.array(dtype=int),
+    moved: wp.array(dtype=wp.vec3),
+    carry: wp.array(dtype=wp.vec3),
+):
+    """A field ``moved`` (V, 3) on the body's vertices (their displacement over a substep) at each
+    particle's closest point on the body (its contact search's: the same query from the same ``points``),
+    interpolated on the face; 0 where the particle has no contact (``active[i]`` 0)."""
+    i = wp.tid()
+    carry[i] = wp.vec3(0.0, 0.0, 0.0)
+    if active[i] == 0:
+        return
+    q = wp.mesh_query_point_no_sign(mesh, points[i], max_dist)
+    if not q.result:
+        return
+    f = q.face
+    carry[i] = (
+        moved[indices[3 * f]] * q.u + moved[indices[3 * f + 1]] * q.v + moved[indices[3 * f + 2]] * (1.0 - q.u - q.v)
+    )
+
+
+@wp.kernel
 def closest_contact(
     points: wp.array(dtype=wp.vec3),
     weight: wp.array(dtype=float),

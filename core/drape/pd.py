@@ -118,32 +118,6 @@ FRICTION = False
 F64 = wp.float64
 
 
-@wp.kernel
-def contact_motion(
-    points: wp.array(dtype=wp.vec3),
-    active: wp.array(dtype=int),
-    mesh: wp.uint64,
-    max_dist: float,
-    indices: wp.array(dtype=int),
-    moved: wp.array(dtype=wp.vec3),
-    carry: wp.array(dtype=wp.vec3),
-):
-    """A field ``moved`` (V, 3) on the body's vertices (their displacement over a substep) at each
-    particle's closest point on the body (its contact search's: the same query from the same ``points``),
-    interpolated on the face; 0 where the particle has no contact (``active[i]`` 0)."""
-    i = wp.tid()
-    carry[i] = wp.vec3(0.0, 0.0, 0.0)
-    if active[i] == 0:
-        return
-    q = wp.mesh_query_point_no_sign(mesh, points[i], max_dist)
-    if not q.result:
-        return
-    f = q.face
-    carry[i] = (
-        moved[indices[3 * f]] * q.u + moved[indices[3 * f + 1]] * q.v + moved[indices[3 * f + 2]] * (1.0 - q.u - q.v)
-    )
-
-
 _GRADIENT = r"""
 const int* ip = (const int*)Dp.data; const int* ci = (const int*)Di.data; const double* dv = (const double*)Dx.data;
 const double* xx = (const double*)x.data; const double* yy = (const double*)y.data;
@@ -497,6 +471,11 @@ class Factor3:
         self.b[:] = v
         self._cmd.launch()
         return self.x.copy()
+
+
+def _tangential(v: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """(k, 3) ``v`` less its component along the unit ``normal`` (k, 3): its part along the body."""
+    return v - np.einsum("ij,ij->i", v, normal)[:, None] * normal
 
 
 def hinge_coefficients(cloth: Cloth) -> np.ndarray:
@@ -860,10 +839,10 @@ class ProjectiveStep:
             # the cloth and left it behind). Along the normal the penalty keeps them on the body.
             p, nrm = self._held_particles, self._held[1]
             d = self.carry[p]
-            d = d - np.einsum("ij,ij->i", d, nrm)[:, None] * nrm
+            d = _tangential(d, nrm)
             x[p] += d
             y[p] += d
-        if self._held is not None and self.anchor is not None and self.friction > 0.0:
+        if self._held is not None and self._solve_friction:
             # Coulomb's choice for the held particles' start guess: stuck at the anchor where the net force
             # along the body there (inertia, gravity, the fabric's) is within mu F_n, F_n the force that
             # stops the inertial target's depth inside the offset over the substep; elsewhere the given
@@ -877,25 +856,23 @@ class ProjectiveStep:
             )
             guess = x[p].copy()
             t = guess - self.anchor[p]
-            x[p] -= t - np.einsum("ij,ij->i", t, nrm)[:, None] * nrm
+            x[p] -= _tangential(t, nrm)
             cap, self._cap = self._cap, None  # the force along the body without friction
             grad = self._gradient(x, y, grow)[1][rows]
             self._cap = cap
-            along = grad - np.einsum("ij,ij->i", grad, nrm)[:, None] * nrm
+            along = _tangential(grad, nrm)
             slide = np.einsum("ij,ij->i", along, along) > cap * cap
             x[p[slide]] = guess[slide]
             # a slide the inertial target carries past friction's stop: that motion less the stop (the
             # fabric's pull is left to the solve)
             d = y[p] - self.anchor[p]
-            d -= np.einsum("ij,ij->i", d, nrm)[:, None] * nrm
+            d = _tangential(d, nrm)
             length = np.sqrt(np.einsum("ij,ij->i", d, d))
             stop = cap / self.inertia[p]
             carry = slide & (length > stop)
             keep = 1.0 - stop[carry] / length[carry]
             t = guess[carry] - self.anchor[p[carry]]
-            x[p[carry]] = (
-                guess[carry] - t + np.einsum("ij,ij->i", t, nrm[carry])[:, None] * nrm[carry] + keep[:, None] * d[carry]
-            )
+            x[p[carry]] = guess[carry] - _tangential(t, nrm[carry]) + keep[:, None] * d[carry]
         if self.method == "lbfgs":
             return self._lbfgs(x, y, grow, iterations, tolerance, fi, near, nrm, w2)
         if self.method == "newton":
@@ -974,6 +951,11 @@ class ProjectiveStep:
         self._held_key = key
         self.refactors += 1
 
+    @property
+    def _solve_friction(self) -> bool:
+        """Coulomb friction against the body inside the solve (:data:`FRICTION`: an anchor set, a coefficient)."""
+        return self.anchor is not None and self.friction > 0.0
+
     def set_self(self, i: np.ndarray, j: np.ndarray, diameter: float, x: np.ndarray) -> None:
         """Self-collision candidates for the next solves: particle pairs (``i``, ``j``) kept ``diameter``
         apart along their direction at ``x`` (the substep's start, (P, 3)) by the penalty
@@ -1011,14 +993,14 @@ class ProjectiveStep:
             grad[rows] -= (self.contact_weight * depth)[:, None] * nrm
             energy += 0.5 * self.contact_weight * float(depth @ depth)
             self._pressure = self.contact_weight * depth
-            if self.anchor is not None and self.friction > 0.0 and self._cap is not None:
+            if self._solve_friction and self._cap is not None:
                 # Coulomb friction as the penalty's tangential part (the matrix's diagonal already holds
                 # its weight in every direction): a spring of the same weight to the particle's anchor
                 # along the body, its force capped at mu F_n (a Huber energy: it sticks below the cap
                 # and slides against mu F_n above it)
                 p = self._held_particles
                 t = x[p] - self.anchor[p]
-                t -= np.einsum("ij,ij->i", t, nrm)[:, None] * nrm
+                t = _tangential(t, nrm)
                 slide = np.sqrt(np.einsum("ij,ij->i", t, t))
                 cap = self._cap
                 k = np.minimum(self.contact_weight, cap / np.maximum(slide, 1e-300))
@@ -1089,7 +1071,7 @@ class ProjectiveStep:
 
         def held(v):  # the body holds the particles on it along its normal: no motion there (filtered CG)
             if len(near):
-                v[near] -= np.einsum("ij,ij->i", v[near], nrm)[:, None] * nrm
+                v[near] = _tangential(v[near], nrm)
             return v
 
         while it < iterations and res >= tolerance:
@@ -1139,15 +1121,15 @@ class ProjectiveStep:
     def _residual(self, grad, near, nrm, w2) -> float:
         """The largest residual force over weight, less what the body holds (:meth:`set_contact`)."""
         left = np.einsum("ij,ij->i", grad, grad)
-        if self._held is not None and len(near) and self.anchor is not None and self.friction > 0.0:
-            pass  # the penalty and its friction are in the gradient: all of it counts
-        elif self._held is not None and len(near):
+        # with friction in the solve (:attr:`_solve_friction`) the penalty and its friction are both in the
+        # gradient: all of it counts
+        if self._held is not None and len(near) and not self._solve_friction:
             # the penalty is in the gradient: the normal part counts, friction holds up to mu times the
             # penalty's force along the body
             normal = np.einsum("ij,ij->i", grad[near], nrm)
             slide = np.sqrt(np.maximum(left[near] - normal * normal, 0.0))
             left[near] = normal * normal + np.maximum(slide - self.friction * self._pressure, 0.0) ** 2
-        elif len(near):
+        elif self._held is None and len(near):
             press = np.einsum("ij,ij->i", grad[near], nrm)  # > 0: the net force presses into the body
             slide = np.maximum(left[near] - press * press, 0.0)
             held = np.maximum(np.sqrt(slide) - self.friction * np.maximum(press, 0.0), 0.0) ** 2

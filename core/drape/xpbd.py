@@ -364,7 +364,7 @@ class DrapeSolver:
 
             # Coulomb friction in the solve (core.drape.pd.FRICTION): the body's particles held to where
             # the substep began
-            self._implicit.carry, moved = self._carry(s)
+            self._implicit.carry, moved = self._carry(s, FRICTION)
             # (with friction, on a moving body: held where the body carried the substep's start)
             self._implicit.anchor = None if not FRICTION else base if moved is None else base + moved
         it, res = self._implicit.solve(x, y, grow, int(opts.iterations), float(opts.tolerance), self._weight, **start)
@@ -373,16 +373,14 @@ class DrapeSolver:
         s.x64 = x
         s.x.assign(x.astype(np.float32))
 
-    def _carry(self, s: DrapeState) -> tuple:
+    def _carry(self, s: DrapeState, friction: bool) -> tuple:
         """(carry, moved): how far the body carries each particle this substep beyond its own (damped)
         velocity, at its contact point ((P, 3) float64: the body's displacement this substep less the damped
         share of its last substep's, which the particle's velocity already holds where it moved with the
-        body; :meth:`move_body`), and with :data:`core.drape.pd.FRICTION` the body's displacement this
-        substep there; (None, None) where the body has not moved in either substep (a still body's drape
-        is left as it was). With ``carry`` a held particle keeps its velocity relative to the body, as on
-        a still body it keeps its own."""
-        from .pd import FRICTION
-
+        body; :meth:`move_body`), and with ``friction`` (:data:`core.drape.pd.FRICTION`) the body's
+        displacement this substep there; (None, None) where the body has not moved in either substep (a
+        still body's drape is left as it was). With ``carry`` a held particle keeps its velocity relative
+        to the body, as on a still body it keeps its own."""
         moved, last = self._body_moved, self._body_last
         self._body_moved, self._body_last = None, moved
         if moved is None and last is None:
@@ -391,19 +389,17 @@ class DrapeSolver:
         moved = zero if moved is None else moved
         keep = float(np.exp(-self.options.damping * self.dt))  # the predicted velocity's damping (_record)
         change = moved - keep * (zero if last is None else last)
-        return self._at_contacts(s, change), self._at_contacts(s, moved) if FRICTION else None
+        return self._at_contacts(s, change), self._at_contacts(s, moved) if friction else None
 
     def _at_contacts(self, s: DrapeState, per_vertex: np.ndarray) -> np.ndarray:
         """A body vertex field (V, 3) at each particle's contact point ((P, 3) float64; 0 off the body)."""
-        from .pd import contact_motion
-
         wp, dev = self._wp, self.device
         n = self.cloth.n_particles
         out = wp.zeros(n, dtype=wp.vec3, device=dev)
         field = wp.array(np.asarray(per_vertex, dtype=np.float32), dtype=wp.vec3, device=dev)
         # from the contact search's points (the substep's start): the same closest face
         inputs = [s.x_prev, s.contact_active, self._body.id, self.options.search_distance, self._body.indices]
-        wp.launch(contact_motion, dim=n, inputs=inputs + [field, out], device=dev)
+        wp.launch(self._K.contact_motion, dim=n, inputs=inputs + [field, out], device=dev)
         return out.numpy().astype(np.float64)
 
     def state(self) -> DrapeState:
