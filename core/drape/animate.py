@@ -151,13 +151,6 @@ def posed_frames(model, shape, poses: Sequence, root_moves=None) -> list:
     return frames
 
 
-#: the solver of a drape through a motion where the options name none: pd, as for the static drape. A body
-#: that moves carries the cloth its contact holds (:meth:`core.drape.xpbd.DrapeSolver._carry`, pd's
-#: ``ProjectiveStep.carry``: the held particles keep their velocity relative to the body); before that pd
-#: left the cloth behind a body moving under it (the add-on's rig test: 4.76 cm with the body's 5.96)
-MOTION_SOLVER = "pd"
-
-
 def drape_motion(
     pattern,
     body_frames: Sequence[np.ndarray],
@@ -174,7 +167,8 @@ def drape_motion(
     body_frames : K >= 1 arrays (V, 3), metres, one body's vertices per frame (same triangles).
     body_faces : (F, 3) int, outward-oriented.
     material, options : as for :func:`core.drape.simulate.drape` (the options' ``max_frames``
-        bounds the first drape only; options that name no ``solver`` use :data:`MOTION_SOLVER`).
+        bounds the first drape only; the default solver, pd, carries the cloth a moving body holds:
+        :meth:`core.drape.xpbd.DrapeSolver._carry`).
     progress : optional ``progress(fraction, message)``; may raise Cancelled.
 
     Raises
@@ -183,8 +177,6 @@ def drape_motion(
     """
     from ..geom.queries import distance_to_mesh
 
-    if options is None or (isinstance(options, Mapping) and "solver" not in options):
-        options = {**(options or {}), "solver": MOTION_SOLVER}
     opts = DrapeOptions.coerce(options)
     if material is None:
         material = (getattr(pattern, "materials", None) or {}).get("fabric")
