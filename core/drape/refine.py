@@ -43,6 +43,7 @@ import numpy as np
 
 from ..errors import DrapeError
 from ..geom.mesh import signed_areas_2d, triangle_areas, unique_pairs
+from ..geom.polygon import cross2
 from ..geom.polyline import cumulative_lengths
 from .gathers import insert_points, longer
 
@@ -98,7 +99,7 @@ def _stats_mm(lengths: np.ndarray) -> dict:
     }
 
 
-def delaunay_flips(uv: np.ndarray, faces: np.ndarray, parent: np.ndarray, free: np.ndarray, keep: np.ndarray) -> tuple:
+def delaunay_flips(uv: np.ndarray, faces: np.ndarray, free: np.ndarray, keep: np.ndarray) -> tuple:
     """Flip the inner edges of the free cloth that are not locally Delaunay in the pattern's 2D.
 
     An edge (a, b) between triangles (a, b, c) and (b, a, d) of one piece is flipped to (c, d) when
@@ -113,12 +114,19 @@ def delaunay_flips(uv: np.ndarray, faces: np.ndarray, parent: np.ndarray, free: 
 
     Returns
     -------
-    faces (T, 3), parent (T,) (each flipped triangle keeps its own record), free (T,), flips: int.
+    faces (T, 3) (a flipped triangle keeps its row, so its parent record), free (T,), flips: int.
     """
     faces = np.array(faces, np.int64, copy=True)
-    parent = np.array(parent, np.int64, copy=True)
     free = np.array(free, bool, copy=True)
     n, flips = len(uv), 0
+
+    def orient(p, q, r):  # twice the signed area of each (p, q, r)
+        return cross2(uv[q] - uv[p], uv[r] - uv[p])
+
+    def angle(p, q, r):  # at p, between p->q and p->r
+        u, v = uv[q] - uv[p], uv[r] - uv[p]
+        return np.arctan2(np.abs(cross2(u, v)), np.einsum("ij,ij->i", u, v))
+
     for _ in range(10 * MAX_LEVELS):
         he = np.stack([faces, np.roll(faces, -1, axis=1)], axis=2).reshape(-1, 2)  # edge k: corners k, k+1
         opp = faces[:, [2, 0, 1]].reshape(-1)  # the corner across edge k
@@ -129,15 +137,6 @@ def delaunay_flips(uv: np.ndarray, faces: np.ndarray, parent: np.ndarray, free: 
         f1, f2 = h1 // 3, h2 // 3
         a, b, c, d = he[h1, 0], he[h1, 1], opp[h1], opp[h2]
         ok = (free[f1] | free[f2]) & ~(keep[a] & keep[b]) & (he[h2, 0] == b) & (he[h2, 1] == a)
-
-        def angle(p, q, r):  # at p, between p->q and p->r
-            u, v = uv[q] - uv[p], uv[r] - uv[p]
-            return np.arctan2(np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]), np.einsum("ij,ij->i", u, v))
-
-        def orient(p, q, r):
-            u, v = uv[q] - uv[p], uv[r] - uv[p]
-            return u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
-
         excess = angle(c, a, b) + angle(d, a, b) - np.pi
         side = np.sign(orient(a, b, c))
         ok &= (excess > 1e-9) & (np.linalg.norm(uv[d] - uv[c], axis=1) < np.linalg.norm(uv[b] - uv[a], axis=1))
@@ -156,7 +155,7 @@ def delaunay_flips(uv: np.ndarray, faces: np.ndarray, parent: np.ndarray, free: 
         faces[f2[ch]] = np.stack([d[ch], b[ch], c[ch]], axis=1)
         free[f1[ch]] = free[f2[ch]] = True
         flips += len(ch)
-    return faces, parent, free, flips
+    return faces, free, flips
 
 
 def refine_pattern(pattern, edge: float, free_ease: float = FREE_EASE, max_levels: int = MAX_LEVELS) -> tuple:
@@ -230,7 +229,7 @@ def refine_pattern(pattern, edge: float, free_ease: float = FREE_EASE, max_level
     on_line = np.isin(gid, np.fromiter(lines, np.int64, len(lines)))
 
     # slivers of the pattern's mesh flipped first: bisected, a sliver's children are slivers too
-    faces, parent, free, flips = delaunay_flips(uv, faces, parent, free, on_line)
+    faces, free, flips = delaunay_flips(uv, faces, free, on_line)
     gather = on_long[faces].any(axis=1)
     levels = 0
     for _ in range(max_levels):
@@ -304,7 +303,7 @@ def refine_pattern(pattern, edge: float, free_ease: float = FREE_EASE, max_level
         hems = [[insert_points(h, mids, False) for h in hs] for hs in hems]
 
     if levels:
-        faces, parent, free, more = delaunay_flips(uv, faces, parent, free, on_line)
+        faces, free, more = delaunay_flips(uv, faces, free, on_line)
         flips += more
     after = unique_edge_lengths(uv, faces)
     # back to panels: each panel's old vertices first, then its new ones in the order they were made
