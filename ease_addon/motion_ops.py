@@ -41,7 +41,7 @@ import os
 import bpy
 import numpy as np
 
-from . import build, convert, data, jobs, materials, state, sync
+from . import build, convert, data, drape_ops, jobs, materials, state, sync
 from .objects import objects_with_role, remove_object, role_object, select_only
 from .operators_base import EaseOperator
 
@@ -239,9 +239,9 @@ class Motion:
     through them (:meth:`compute`, in the worker); the motion objects from them (:meth:`apply`,
     on the main thread)."""
 
-    def __init__(self, pattern, model, shape, motion: dict, device: str, prep=None, adapt_to=()):
+    def __init__(self, pattern, model, shape, motion: dict, device: str, prep=None, adapt_to=(), solver="default"):
         self.pattern, self.model, self.shape, self.motion = pattern, model, shape, motion
-        self.device, self.prep, self.adapt_to = device, prep, list(adapt_to)
+        self.device, self.prep, self.adapt_to, self.solver = device, prep, list(adapt_to), solver
 
     def compute(self, progress):
         from ..core import workflows as wf
@@ -264,7 +264,7 @@ class Motion:
             pattern,
             frames,
             faces,
-            options={"device": self.device},
+            options=drape_ops.solver_options(self.device, self.solver),
             progress=sub(progress, 0.1 if adapted else 0.0, 1.0),
         )
         if m["source"] == "ACTION":
@@ -387,7 +387,7 @@ def motion_job(context) -> Motion:
                 "(name poses after the first, or keyframe the rig's bones)"
             )
         prep = data.prepared(context)
-    return Motion(pattern, model, spec.get("shape"), motion, s.drape_device, prep, adapt_to)
+    return Motion(pattern, model, spec.get("shape"), motion, s.drape_device, prep, adapt_to, s.drape_solver)
 
 
 def start_motion(context, sync=None) -> jobs.Job:

@@ -203,6 +203,7 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
     # the drape solver (core.drape.DrapeOptions.solver); "default": the core's own default
     drape_solver: EnumProperty(
         name="Solver",
+        description="The drape solver of Drape and Drape Animation",
         items=[
             ("default", "Default", "the core's default drape solver (`ease drape` without --solver)"),
             ("xpbd", "XPBD", "fast, softer than the fabric"),

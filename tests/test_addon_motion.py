@@ -9,6 +9,8 @@ import json
 import numpy as np
 import pytest
 
+from core.drape.options import DrapeOptions
+
 DESIGN = "top_sleeveless.json"  # cheapest template: two panels
 BETWEEN = 2  # A, 2 in-betweens, P1: 4 frames
 
@@ -42,6 +44,7 @@ def test_motion_objects_play_the_frames(scene, bpy_session):
         assert [k.name for k in o.data.shape_keys.key_blocks][1:] == [f"frame {k:04d}" for k in range(1, n + 1)]
     rep = json.loads(sc["ease_motion_json"])
     assert rep["poses"] == ["A", "P1"] and rep["frames"] == n and len(rep["penetration_pct"]) == n
+    assert sc.ease.drape_solver == "default" and rep["solver"] == DrapeOptions().solver  # the core's default
     assert max(rep["penetration_pct"]) <= 0.5
     assert "worst penetration" in sc.ease.motion_status
     # the timeline shows each frame's shape; the body really moves (arms forward in P1)
@@ -169,7 +172,7 @@ def test_drape_animation_reports_frames_and_esc_cancels(scene, bpy_session):
     sc = bpy.context.scene
     s = sc.ease
     motion_ops, jobs = scene.mod("motion_ops"), scene.mod("jobs")
-    old = s.motion_poses, s.motion_between, jobs.SYNCHRONOUS
+    old = s.motion_poses, s.motion_between, jobs.SYNCHRONOUS, s.drape_solver
     real = motion_ops.Motion.compute
     seen = []  # every progress report of the worker, as the status line shows it
 
@@ -197,8 +200,10 @@ def test_drape_animation_reports_frames_and_esc_cancels(scene, bpy_session):
         garment = bpy.data.objects["EASE Motion Garment"]
         assert len(garment.data.shape_keys.key_blocks) == keys and sc["ease_motion_json"] == before
         assert jobs.running() is None
-        # a run to the end: one progress report a motion frame, applied on the main thread's poll
+        # a run to the end: one progress report a motion frame, applied on the main thread's poll;
+        # the Drape panel's Solver reaches the motion's drape too
         motion_ops.Motion.compute = recording
+        s.drape_solver = "xpbd"
         job = motion_ops.start_motion(bpy.context)
         job.thread.join(300)
         motion_ops.Motion.compute = real
@@ -209,11 +214,12 @@ def test_drape_animation_reports_frames_and_esc_cancels(scene, bpy_session):
         assert json.loads(sc["ease_motion_json"]) == json.loads(before)  # not yet: the poll applies it
         jobs.poll()
         assert json.loads(sc["ease_motion_json"])["frames"] == 3
+        assert json.loads(sc["ease_motion_json"])["solver"] == "xpbd"
         assert len(bpy.data.objects["EASE Motion Garment"].data.shape_keys.key_blocks) == 4
     finally:
         motion_ops.Motion.compute = real
         jobs.cancel()
-        s.motion_poses, s.motion_between, jobs.SYNCHRONOUS = old
+        s.motion_poses, s.motion_between, jobs.SYNCHRONOUS, s.drape_solver = old
 
 
 def _key_rotation(pb, frame: int, axis, degrees: float) -> None:

@@ -53,7 +53,7 @@ class MotionResult:
         of their weft and warp strain (0.02 = 2 % longer than the pattern).
     frame_seconds : (K - 1,) float, wall time of each moving frame.
     settle_frames : int, frames the first drape took; settled : bool.
-    material : dict; device : str.
+    material : dict; device : str; solver : str, the drape solver (``DrapeOptions.solver``).
     """
 
     positions: np.ndarray
@@ -66,6 +66,7 @@ class MotionResult:
     settled: bool
     material: dict
     device: str
+    solver: str = ""
 
 
 def pose_frames(model, shape=None, poses: Sequence = ("A", "P1", "P3"), between: int = 10) -> list:
@@ -261,6 +262,7 @@ def drape_motion(
         settled=bool(settling.settled),
         material=mat.to_json(),
         device=str(solver.device),
+        solver=str(opts.solver),
     )
 
 
@@ -389,6 +391,7 @@ def motion_report(result: MotionResult, poses, between: int, pattern=None) -> di
         "settled": result.settled,
         "material": result.material.get("name"),
         "device": result.device,
+        "solver": result.solver,
     }
     if pattern is not None:
         out["pattern"] = pattern_label(pattern)
