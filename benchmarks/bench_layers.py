@@ -3,7 +3,7 @@
 ``run(out_dir)`` writes ``layers.md`` and ``layers.json``. Outfits (templates on the default body,
 size M, pose A): a long-sleeve shirt tucked into pants, the shirt worn over the pants, a short-sleeve
 top over a skirt, a jacket over the shirt. Each garment is patterned on the body and draped
-(:func:`core.workflows.drape_outfit`, XPBD on the CPU, :data:`DRAPE`) against the body plus the
+(:func:`core.workflows.drape_outfit`, the default solver on the CPU, :data:`DRAPE`) against the body plus the
 layers under it. Per outfit, for the outer garment(s):
 
 - inter-layer penetration: the share of the outer garment's vertices over the inner one (within
@@ -99,11 +99,13 @@ def _case(name, layers, edge, over="skintight") -> dict:
 
 
 def _md(results, edge) -> str:
+    from core.drape import DrapeOptions
+
     lines = [
         "# Layers (issue 37): garments draped one over another",
         "",
         f"Templates on the default body (M, pose A), every garment cut at {edge * 100:g} cm mean edge, "
-        f"XPBD on the CPU, frame limit {DRAPE['max_frames']}; inner garment draped first, the outer against "
+        f"the default drape solver ({DrapeOptions().solver}) on the CPU, frame limit {DRAPE['max_frames']}; inner garment draped first, the outer against "
         "the body + the inner garment's draped surface offset by its thickness. The outer garment's pattern "
         "is solved over the inner one's skintight surface (default) or its draped surface (`--over draped`; "
         "offset: how far its own vertices moved out, mean / p95, on the share of them that moved). "
