@@ -79,6 +79,7 @@ def _case(workflows, prep, solver, ref, size):
     row["drape_s"] = round(time.perf_counter() - t0, 1)
     row["penetration_pct"] = float(d.figures.get("penetration %", np.nan))
     row["settled"] = str(d.figures.get("settled"))
+    row["solver"] = str((getattr(d.result, "options", None) or {}).get("solver", ""))
     closure = np.concatenate([np.asarray(v) for v in pleat_closure(pattern, np.asarray(d.result.positions)).values()])
     row["closure_median_mm"] = round(1000 * float(np.median(closure)), 2)
     row["closure_p95_mm"] = round(1000 * float(np.percentile(closure, 95)), 2)
@@ -107,13 +108,14 @@ def run(out_dir, quick: bool = False) -> dict:
     load.append(os.getloadavg()[0])
     results["load_average_1min"] = {"before": load[0], "after": load[1], "cores": os.cpu_count()}
 
+    solvers = ", ".join(sorted({r["solver"] for rec in results["templates"].values() for r in rec["rows"]}))
     md = [
         "# Pleats: every pleated template at XS..XL",
         "",
         "`ease bench --only pleats` (`benchmarks/bench_pleats.py`, issue 37). The pattern is solved closed "
         "(the cloth as worn), each pleat opened as a strip of 2 x depth (knife) or 4 x depth (box) along its "
         "line; the drape is of the opened pattern, pre-folded, pressed creases held, "
-        f"{DRAPE['max_frames']} frames on the CPU. Targets: depth within {TARGETS['depth_error_mm']} mm, "
+        f"{DRAPE['max_frames']} frames on the CPU (solver {solvers}). Targets: depth within {TARGETS['depth_error_mm']} mm, "
         f"0 flipped / collapsed / crossings, closed compliance <= {TARGETS['compliance_pct']} %, "
         "0 % body penetration. Closure: the distance between each pleat's visible fold and its placement "
         "line after the drape (0: closed as pressed; 2 x depth: opened flat).",
