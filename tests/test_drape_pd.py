@@ -419,3 +419,22 @@ def test_friction_on_a_tilted_body_is_coulomb():
     t = steps * dt
     assert abs(slid[0.5]) < 1e-4  # sticks
     assert slid[0.2] == pytest.approx(0.5 * 9.81 * (np.sin(theta) - 0.2 * np.cos(theta)) * t * t, rel=0.05)
+
+
+def test_onset_frames_multiply_the_first_frames_iterations():
+    # DrapeOptions.onset_frames: the first frames' solves take onset_factor x the iterations (a falling
+    # cloth picks its folds there), the later ones the iterations; off by default. Tolerance 0: every solve
+    # runs its limit
+    from core.errors import DrapeError
+
+    opts = {"solver": "pd", "iterations": 2, "tolerance": 0.0, "onset_frames": 2, "onset_factor": 3}
+    solver, state, _ = T.cusick_setup("cotton", 0.03, opts, band=False)
+    for _ in range(3):
+        solver.step(state)
+    sub = solver.options.substeps
+    assert solver._newton_iterations == [6] * (2 * sub) + [2] * sub
+    solver, state, _ = T.cusick_setup("cotton", 0.03, {**opts, "onset_frames": 0}, band=False)
+    solver.step(state)
+    assert solver._newton_iterations == [2] * sub
+    with pytest.raises(DrapeError, match="drape option onset_factor = 0"):
+        T.cusick_setup("cotton", 0.03, {**opts, "onset_factor": 0})

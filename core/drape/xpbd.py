@@ -367,7 +367,8 @@ class DrapeSolver:
             self._implicit.carry, moved = self._carry(s, FRICTION)
             # (with friction, on a moving body: held where the body carried the substep's start)
             self._implicit.anchor = None if not FRICTION else base if moved is None else base + moved
-        it, res = self._implicit.solve(x, y, grow, int(opts.iterations), float(opts.tolerance), self._weight, **start)
+        iterations = int(opts.iterations) * (int(opts.onset_factor) if s.frames < opts.onset_frames else 1)
+        it, res = self._implicit.solve(x, y, grow, iterations, float(opts.tolerance), self._weight, **start)
         self._newton_iterations.append(it)
         self._newton_residuals.append(res)
         s.x64 = x
