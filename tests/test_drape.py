@@ -172,6 +172,15 @@ def test_self_collision_stacks_layers(body):
     assert np.array_equal(again.positions, on.positions)  # still bitwise repeatable
 
 
+def test_self_collision_holds_at_many_iterations(body):
+    # pd's self-collision penalty is not in the step's matrix: where no halved step lowers G the solve
+    # stops there (before, iterating on from a raised G diverged at 80 iterations a substep)
+    p = _sheets()
+    r = drape(p, *body, options={"max_frames": 20, "tether_slack": None, "self_collision": True, "iterations": 80})
+    z = r.positions[p.panel("upper").vertex_ids, 2] - 0.5
+    assert z.min() > 0.8 * 2 * r.self_radius and z.max() < 1.2 * 2 * r.self_radius
+
+
 def test_woven_cotton_barely_stretches_jersey_gives(body):
     # a heavy load (5 g) without tethers: the warp carries the skirt's weight (pd, the default, at its
     # own substeps: 5 at 5 g; XPBD needed 80 to deliver the stiffness)

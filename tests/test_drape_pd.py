@@ -438,3 +438,21 @@ def test_onset_frames_multiply_the_first_frames_iterations():
     assert solver._newton_iterations == [2] * sub
     with pytest.raises(DrapeError, match="drape option onset_factor = 0"):
         T.cusick_setup("cotton", 0.03, {**opts, "onset_factor": 0})
+
+
+def test_onset_by_default_where_the_cloth_is_released_at_rest():
+    # onset_frames None (the default): a cloth that starts at its rest shape (the Cusick specimen) or grows
+    # to it at once falls free and takes ONSET_FRAMES; a garment grown from its skintight start takes none
+    from drape_synth import revolution_body, tube_skirt
+
+    from core.drape.options import ONSET_FRAMES, DrapeOptions
+    from core.drape.xpbd import DrapeSolver
+
+    assert DrapeOptions().onset_frames is None and ONSET_FRAMES > 0
+    solver, _, _ = T.cusick_setup("cotton", 0.03, {"solver": "pd"}, band=False)
+    assert solver.onset == ONSET_FRAMES
+    body, skirt = revolution_body(48, 60), tube_skirt(1.2, n_rows=8, n_cols=8)
+    grown = DrapeSolver(build_cloth(skirt), *body, "cotton", {"solver": "pd"})
+    assert grown.onset == 0
+    assert DrapeSolver(build_cloth(skirt), *body, "cotton", {"solver": "pd", "grow_frames": 0}).onset == ONSET_FRAMES
+    assert DrapeSolver(build_cloth(skirt), *body, "cotton", {"solver": "pd", "onset_frames": 2}).onset == 2

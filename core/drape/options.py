@@ -97,15 +97,20 @@ class DrapeOptions:
         pattern size (the rest stretch of every triangle goes linearly from its
         start value to 1, substep by substep): a loose garment unfolds
         quasi-statically instead of springing off the body; 0: at once.
-    onset_frames : int, frames
+    onset_frames : int, frames, or None
         ``solver="pd"`` or ``"newton"``: the first this many frames take
-        ``onset_factor`` times ``iterations`` a substep (0, the default: none).
-        A falling cloth picks its fold count in its first frames, from the
-        error of those frames' solves: on the Cusick disc (10 mm, pd) 5 frames
-        at 8x give wool 62.9 % and cotton 71.1 % with 8 nodes on every
-        specimen, where the default reads 55.1 % (4-5 nodes) and 69.5 % (5-7),
-        for 63 % more CPU on the 1.5 cm shirt (benchmarks/results/drape_pd.md,
-        session 8 p1).
+        ``onset_factor`` times ``iterations`` a substep. A cloth released at
+        its rest shape falls free and picks its fold count in its first
+        frames, from the error of those frames' solves: on the Cusick disc
+        (10 mm, pd, 8 specimens) 5 frames at 8x give wool 63.1 % and cotton
+        71.5 % with 8 nodes, within 2.2 points at 4x the iterations and at
+        5 mm, where none read 55.0 % (4 nodes; +7.4 at 4x) and 68.1 % (6).
+        None (the default): :data:`ONSET_FRAMES` for a cloth that starts at
+        its rest shape or grows to it at once (``grow_frames`` 0: a specimen,
+        a sheet), 0 for one that grows from a skintight start over
+        ``grow_frames`` (a garment: it buckles as it grows, and 5 frames at
+        8x change the 1.5 cm shirt's mean dihedral angle 13.3 -> 13.8 deg
+        for 63 % more CPU; benchmarks/results/drape_pd.md, session 8 p1).
     onset_factor : int
         The iterations' multiple over the first ``onset_frames`` frames.
     self_collision : bool
@@ -161,7 +166,7 @@ class DrapeOptions:
     max_extent: float = 6.0  # m
     max_strain: float = 3.0  # fraction
     grow_frames: int = 20  # frames
-    onset_frames: int = 0  # frames
+    onset_frames: Optional[int] = None  # frames; None: ONSET_FRAMES for a cloth released at rest, else 0
     onset_factor: int = 8  # x iterations
     self_collision: bool = False
     self_radius: Optional[float] = None  # m
@@ -207,6 +212,10 @@ class DrapeOptions:
             raise DrapeError(f"drape option self_collision = {self.self_collision!r}: expected true or false")
 
 
+#: frames of ``onset_factor`` x the iterations for a cloth released at its rest shape
+#: (:attr:`DrapeOptions.onset_frames` None): the Cusick disc's fold count is picked in its first
+#: 3-5 frames (2 at 8x: wool 63.1 % with 8 nodes but cotton 68.2 % with 5-6; 5: 71.1 % with 8)
+ONSET_FRAMES = 5
 #: the drape solvers (:attr:`DrapeOptions.solver`)
 SOLVERS = ("xpbd", "vbd", "newton", "pd")
 #: each solver's iterations per substep when none are given
@@ -259,7 +268,7 @@ RANGES = {
     "max_extent": (float, 0.0, False, 1e3, False),
     "max_strain": (float, 0.0, False, 1e3, False),
     "grow_frames": (int, 0, True, 10000, False),
-    "onset_frames": (int, 0, True, 10000, False),
+    "onset_frames": (int, 0, True, 10000, True),
     "onset_factor": (int, 1, True, 100, False),
     "self_radius": (float, 0.0, True, 0.05, True),
     "self_exclude": (float, 0.0, True, 100.0, False),

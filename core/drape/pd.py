@@ -750,6 +750,7 @@ class ProjectiveStep:
             ],
         )
         self._grow = None
+        self.stalls = 0  # solves stopped where no halved step lowered G (self-collision, :meth:`solve`)
         self.contact = None
         self.friction = 0.0  # the Coulomb coefficient the stop test allows on the body (the drape's)
         self.method = METHOD
@@ -930,6 +931,13 @@ class ProjectiveStep:
                     e, grad = self._gradient(x, y, grow)
                     if np.isfinite(e) and e <= e_old:
                         break
+                else:
+                    # no step along this one lowers G: stay where it was lowest and stop (iterating on from
+                    # a raised G let the penalty's overshoot grow until the cloth blew up at 80 iterations)
+                    self.stalls += 1
+                    x[fi] = xf.reshape(-1, 3)
+                    e, grad = self._gradient(x, y, grow)
+                    break
                 held, slot, last = 0, 0, None
         return it, res
 

@@ -27,7 +27,7 @@ import numpy as np
 from ..errors import DrapeError
 from .materials import Material, get_material
 from .mesh import Cloth, colour_order, rest_edges, two_rings
-from .options import DrapeOptions, default_substeps
+from .options import ONSET_FRAMES, DrapeOptions, default_substeps
 from .schedule import growth_per_substep, initial_growth
 from .strain import face_strains
 
@@ -149,6 +149,9 @@ class DrapeSolver:
     thickness : float, m; friction : float; the body contact's (options over material).
     self_radius : float, m, the self-collision radius; 0 when self-collision is off.
     free : (P,) bool, particles that move (not pinned).
+    onset : int, frames, the first frames whose pd / newton solves take ``onset_factor`` x the
+        iterations (:attr:`DrapeOptions.onset_frames`; where None, :data:`ONSET_FRAMES` for a cloth
+        that starts at its rest shape or grows to it at once, else 0).
     timings : dict of seconds: ``prepare`` (colouring, masses) and ``compile`` (upload, kernels).
 
     Raises
@@ -249,6 +252,11 @@ class DrapeSolver:
         # the skintight start's stretch, where the rest shape grows from
         fw0, fg0, _ = face_strains(cloth.x0, cloth)
         start_stretch = np.clip(np.stack([fw0, fg0], axis=1) + 1.0, 0.2, 5.0)
+        # released at rest (a specimen, a sheet) it falls free and picks its folds in the first frames;
+        # grown from a skintight start (a garment) it buckles as it grows
+        opts = self.options
+        at_rest = opts.grow_frames == 0 or float(np.max(np.abs(start_stretch - 1.0), initial=0.0)) < 1e-4
+        self.onset = int(opts.onset_frames if opts.onset_frames is not None else ONSET_FRAMES * at_rest)
         self._tri_start = wp.array(start_stretch[tri_order].astype(f32), dtype=wp.vec2, device=dev)
         e_sorted = cloth.edges[edge_order]
         self._edge_start = wp.array(
@@ -367,7 +375,7 @@ class DrapeSolver:
             self._implicit.carry, moved = self._carry(s, FRICTION)
             # (with friction, on a moving body: held where the body carried the substep's start)
             self._implicit.anchor = None if not FRICTION else base if moved is None else base + moved
-        iterations = int(opts.iterations) * (int(opts.onset_factor) if s.frames < opts.onset_frames else 1)
+        iterations = int(opts.iterations) * (int(opts.onset_factor) if s.frames < self.onset else 1)
         it, res = self._implicit.solve(x, y, grow, iterations, float(opts.tolerance), self._weight, **start)
         self._newton_iterations.append(it)
         self._newton_residuals.append(res)
