@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from core.drape import textile as T
-from core.drape.materials import get_material
+from core.drape.materials import TARGETS, get_material
 from core.drape.mesh import build_cloth
 from core.drape.newton import NewtonStep
 from core.drape.pd import ProjectiveStep
@@ -81,16 +81,19 @@ def test_cusick_specimens_average_their_seeds():
 
 
 @pytest.mark.slow
-def test_pd_cotton_cusick_converges_in_the_mesh():
-    # issue 35's reading for the mesh: the mean of 4 specimens moves by at most 3 points from the 10 mm disc
-    # (with its clamp band) to the 5 mm one, inside cotton's 60-76 % with 5-10 nodes, and stays in range at 4x
-    # the iterations (measured with 8 specimens, Anderson, the default: 68.1 / 68.6 / 69.7 %; L-BFGS 71.5 /
-    # 72.3 / 68.6 %, fabric.md). The move to 4x the iterations is not asserted: L-BFGS moved 3.5 points with
-    # these 4 specimens, 2.9 with 8 (the fall's fold count follows the solve's error; wool's by 7.4 points). About two minutes: --full only
+@pytest.mark.parametrize("fabric", ["cotton", "wool"])
+def test_pd_cusick_converges_in_the_mesh_and_the_iterations(fabric):
+    # issue 35's reading: the mean of 4 specimens moves by at most 3 points from the 10 mm disc (with its
+    # clamp band) to the 5 mm one and from the default iterations to 4x them, inside the fabric's range with
+    # 5-10 nodes. The released disc takes 8x the iterations in its first 5 frames (DrapeOptions.onset_frames,
+    # where its fold count is picked): without them wool read 55.0 % with 4 nodes and moved +7.4 points at
+    # 4x (8 specimens, fabric.md of session 6). Minutes a fabric: --full only
+    lo, hi = TARGETS[fabric]["dc_pct"]
     base = {"solver": "pd"}
-    ten = T.cusick_specimens("cotton", edge=0.01, options=base)
-    five = T.cusick_specimens("cotton", edge=0.005, options=base)
-    more = T.cusick_specimens("cotton", edge=0.01, options={**base, "iterations": 4 * 10})
+    ten = T.cusick_specimens(fabric, edge=0.01, options=base)
+    five = T.cusick_specimens(fabric, edge=0.005, options=base)
+    more = T.cusick_specimens(fabric, edge=0.01, options={**base, "iterations": 4 * 10})
     for r in (ten, five, more):
-        assert r["settled"] and 60.0 <= r["dc_pct"] <= 76.0 and 5 <= r["nodes"] <= 10, r["dc_pct"]
+        assert r["settled"] and lo <= r["dc_pct"] <= hi and 5 <= r["nodes"] <= 10, (r["dc_pct"], r["nodes"])
     assert abs(five["dc_pct"] - ten["dc_pct"]) <= 3.0
+    assert abs(more["dc_pct"] - ten["dc_pct"]) <= 3.0
