@@ -85,7 +85,9 @@ class DrapeState:
     x, v, x_prev : (P,) wp.vec3 arrays: positions (m), velocities (m/s), positions before the substep.
     grow : (1,) float array, the rest-shape growth from the skintight start (0) to the pattern (1).
     contact_point, contact_normal, contact_active : (P,) arrays, each particle's contact plane:
-        through its closest point on the body, facing it (refreshed every ``contact_interval`` substeps).
+        through its closest point on the body, facing it (refreshed every ``contact_interval`` substeps,
+        and sooner where the fastest particle could have come from beyond ``search_distance``).
+    searched : int, the substep of the last contact search.
     bend_lambda : (B,) float array, the bending constraints' XPBD multipliers within a substep.
     substeps : int, substeps taken so far (times the self-collision search).
     frames : int, frames taken so far.
@@ -104,6 +106,7 @@ class DrapeState:
     bend_lambda: Any = None
     substeps: int = 0
     frames: int = 0
+    searched: int = 0
     self_grid: Any = None
     self_dx: Any = None
     self_partner: Any = None
@@ -648,13 +651,24 @@ class DrapeSolver:
         self._body.points.assign(pts)
         self._body.refit()
 
+    def _outruns_contacts(self, state: DrapeState) -> bool:
+        """Whether the fastest particle may have moved half the ``search_distance`` since the last
+        contact search (by the end of this substep): one that had no contact plane then (farther from
+        the body than that) could reach it before the next search and pass through (pd's 2 substeps a
+        frame: a falling jersey strip's tip swung 4 cm through the cantilever's platform in a frame)."""
+        v = state.v.numpy()
+        fastest = float(np.sqrt(np.max(np.einsum("ij,ij->i", v, v), initial=0.0)))
+        return fastest * self.dt * (state.substeps - state.searched + 1) > 0.5 * self.options.search_distance
+
     def step(self, state: DrapeState, before_substep=None) -> None:
         """Advance ``state`` by one frame: ``options.substeps`` substeps of :attr:`dt` seconds.
 
         ``before_substep(i)``, when given, runs before substep ``i`` (it may :meth:`move_body`);
         the contacts are then searched every substep.
 
-        Each substep: the contact search (every ``contact_interval`` substeps),
+        Each substep: the contact search (every ``contact_interval`` substeps, and at any substep
+        where the fastest particle could have travelled half the ``search_distance`` since the last
+        one: :meth:`_outruns_contacts`),
         prediction, rest-shape growth, the constraints colour by colour
         (``iterations`` passes; stretch is projected afresh each pass, its compliance
         being small against the mass term for every preset, bending accumulates its
@@ -666,8 +680,9 @@ class DrapeSolver:
         for sub in range(opts.substeps):
             if before_substep is not None:
                 before_substep(sub)
-            if before_substep is not None or sub % opts.contact_interval == 0:
+            if before_substep is not None or sub % opts.contact_interval == 0 or self._outruns_contacts(state):
                 L.contacts.launch()
+                state.searched = state.substeps
             for cmd in L.constraints:
                 cmd.launch()
             if L.host is not None:
