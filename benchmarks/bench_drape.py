@@ -108,6 +108,7 @@ def gap_curve(
     drape_options: dict,
     grow_variants=GROW_VARIANTS,
     material: str = GAP_FABRIC,
+    pins: bool = True,
 ) -> list:
     """One row per ease level: gap mean/std (mm), penetration, seam gap, frames, times.
 
@@ -116,7 +117,8 @@ def gap_curve(
     growth length), as much as one ease step. Each level is therefore draped once
     per ``grow_variants`` entry and the gap mean is the mean over those drapes (each
     drape's own mean is kept in ``gap_runs_mm``); penetration and seam gap are the
-    worst of them. ``material``: the fabric preset every drape uses.
+    worst of them. ``material``: the fabric preset every drape uses; ``pins``: False drops the
+    design's pins (the shirt's collar, the pants' waistband), a diagnostic (drape_gap.md).
     """
     from core.drape import drape
 
@@ -125,6 +127,8 @@ def gap_curve(
     for ease in levels:
         t0 = time.perf_counter()
         pat = pattern_at(cut, ref, ease, garment)
+        if not pins:
+            pat.pins = {}
         t1 = time.perf_counter()
         runs = []
         for grow in grow_variants:
