@@ -23,13 +23,13 @@ beside each preset are the usual orders of magnitude for the class; their
 tables were not re-checked against the sources in the session that set them.
 
 With ``solver="pd"`` (the default: Anderson iterations; the Cusick disc's clamp band, the mean of 8
-specimens; ``benchmarks/results/fabric.md``, sixth session) the presets land in their ranges without a
-recalibration: cotton 68.1 % at 10 mm / 68.6 % at 5 mm / 69.7 % at 4x the iterations (median nodes 6-7,
-bending length 1.79-1.83 cm), denim 79.0 / 80.0 / 81.3 %, silk 37.1 / 38.2 / 34.8 %, wool 55.0 / 56.3 /
-62.5 % (4 nodes at the default iterations, 8 at 4x: its fold count follows the iteration count, so it is
-not converged); cotton solved to 1e-4 of the weight (400 iterations) reads 71.2-71.6 % with 8 nodes.
-With L-BFGS iterations cotton read 71.5 / 72.3 / 68.6 %, wool 60.7 / 63.0 / 62.6 %, silk 37.8 / 37.7 /
-34.5 % (``benchmarks/results/drape_pd.md``, session 7 p2). So the bending values stay those set above.
+specimens, the released disc's 5 onset frames at 8x the iterations, ``DrapeOptions.onset_frames``;
+``benchmarks/results/fabric.md``, seventh session) the presets land in their ranges without a
+recalibration: cotton 71.5 % at 10 mm / 72.4 % at 5 mm / 72.2 % at 4x the iterations (8 nodes, bending
+length 1.83-1.84 cm), denim 83.6 / 83.4 / 81.6 %, wool 63.1 / 63.6 / 62.8 %, silk 35.6 / 38.0 / 36.0 %, all
+with 6-8 nodes and within 2.4 points; cotton solved to 1e-4 of the weight (400 iterations) reads 71.2-71.6
+% with 8 nodes. Without the onset frames (sixth session) wool read 55.0 % with 4 nodes, 62.5 % at 4x: its
+fold count followed the iteration count (``benchmarks/results/drape_pd.md``, session 8 p1). So the bending values stay those set above.
 
 A design selects a preset by name (``materials.fabric``, one of
 :data:`core.design.materials.FABRICS`, checked when the design loads), the CLI with
