@@ -94,6 +94,15 @@ def solver_choice(scene):
     return None if choice == DESIGN_SOLVER else choice
 
 
+def drape_options(device: str, solver: str = "default") -> dict:
+    """The drape options of the Drape panel's *Device* and *Solver* (``DrapeOptions.solver``, or
+    ``"default"``: none, the core's default), as Drape and Drape Animation pass them."""
+    options = {"device": device}
+    if solver and solver != "default":
+        options["solver"] = solver
+    return options
+
+
 def design_solver(scene) -> str:
     """The configuration the scene's design names (its ``"solver"``), else the core's default: what
     the Solver choice *Design's* stands for."""

@@ -17,22 +17,13 @@ from .operators_base import EaseOperator
 JOB = "drape"  # the job's name (a new Drape replaces a running one)
 
 
-def solver_options(device: str, solver: str = "default") -> dict:
-    """The drape options of the Drape panel's *Device* and *Solver* (``DrapeOptions.solver``, or
-    ``"default"``: none, the core's default), as Drape and Drape Animation pass them."""
-    options = {"device": device}
-    if solver and solver != "default":
-        options["solver"] = solver
-    return options
-
-
 def _compute(pattern, body_v, body_f, frames, progress, device="cpu", refine_edge=None, solver="default"):
     """The core's drape of ``pattern`` on the body (V, F) and its fit measurements (a DrapeRun);
     ``refine_edge`` (m, or None): the drape mesh's longest edge where the cloth hangs free;
     ``solver``: ``DrapeOptions.solver``, or ``"default"`` for the core's default."""
     from ..core import workflows as wf
 
-    options = {**solver_options(device, solver), "max_frames": int(frames), "refine_edge": refine_edge}
+    options = {**data.drape_options(device, solver), "max_frames": int(frames), "refine_edge": refine_edge}
     return wf.drape(pattern, options=options, body=(body_v, body_f), progress=progress)
 
 

@@ -41,7 +41,7 @@ import os
 import bpy
 import numpy as np
 
-from . import build, convert, data, drape_ops, jobs, materials, state, sync
+from . import build, convert, data, jobs, materials, state, sync
 from .objects import objects_with_role, remove_object, role_object, select_only
 from .operators_base import EaseOperator
 
@@ -264,7 +264,7 @@ class Motion:
             pattern,
             frames,
             faces,
-            options=drape_ops.solver_options(self.device, self.solver),
+            options=data.drape_options(self.device, self.solver),
             progress=sub(progress, 0.1 if adapted else 0.0, 1.0),
         )
         if m["source"] == "ACTION":
