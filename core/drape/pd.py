@@ -933,10 +933,10 @@ class ProjectiveStep:
                         break
                 else:
                     # no step along this one lowers G: stay where it was lowest and stop (iterating on from
-                    # a raised G let the penalty's overshoot grow until the cloth blew up at 80 iterations)
+                    # a raised G let the penalty's overshoot grow until the cloth blew up at 80 iterations);
+                    # res is that point's, from this iteration's test
                     self.stalls += 1
                     x[fi] = xf.reshape(-1, 3)
-                    e, grad = self._gradient(x, y, grow)
                     break
                 held, slot, last = 0, 0, None
         return it, res
