@@ -527,7 +527,8 @@ def side_by_side(pattern, body_v, body_f, frames: int, budget: float = 180.0) ->
     ours = None
     for solver, name in OUR_SOLVERS.items():
         t0 = time.perf_counter()
-        res = drape(pattern, body_v, body_f, options={"max_frames": frames, "solver": solver})
+        # every pin held throughout, as Blender's and Newton's cloth hold theirs: the same setup for all three
+        res = drape(pattern, body_v, body_f, options={"max_frames": frames, "solver": solver, "hold_pins": True})
         wall = time.perf_counter() - t0
         if ours is None:  # the baselines run the frames the default solver needed
             ours = res

@@ -298,3 +298,51 @@ def test_options_name_the_field_and_unit():
     doc = DrapeOptions.__doc__
     for unit in ("m/s", "1/s", "m/s^2", "frames", "substeps"):
         assert unit in doc
+
+
+def _tube(kind: str):
+    """The tube skirt as a garment of ``kind`` (its waistband pinned either way)."""
+    p = tube_skirt(1.2, n_rows=6, n_cols=6)
+    p.garments = {"skirt": kind}
+    return p
+
+
+def test_an_upper_garments_pins_let_go_once_grown(body):
+    # the hips are a cylinder over a narrower leg column: nothing holds a loose tube there but its pins.
+    # As an upper garment its pinned band lets go after the growth and the tube slides down; as a lower
+    # garment (or with hold_pins) the band stays where it was pinned
+    opts = {"max_frames": 30, "min_frames": 30, "grow_frames": 5}
+    top = _tube("upper")
+    cloth = build_cloth(top)
+    band = cloth.pinned.copy()
+    assert band.any() and np.array_equal(cloth.pin_lets_go, band)
+    assert not build_cloth(_tube("lower")).pin_lets_go.any()
+    start = cloth.x0[band, 2].mean()
+    z = {}
+    for name, pattern, extra in (
+        ("upper", top, {}),
+        ("upper held", top, {"hold_pins": True}),
+        ("lower", _tube("lower"), {}),
+    ):
+        solver = DrapeSolver(build_cloth(pattern), *body, options={**opts, **extra})
+        state = solver.state()
+        run(solver, state)
+        assert state.released == (name == "upper")
+        assert np.array_equal(state.free, solver.free | (band & state.released))
+        z[name] = state.x.numpy()[band, 2].mean()
+        # a later state starts held again: letting go is the state's, not the solver's
+        again = solver.state()
+        assert not again.released and np.array_equal(again.free, solver.free)
+        assert np.array_equal(again.w.numpy() > 0, solver.free)
+    assert z["upper"] < start - 0.02
+    assert abs(z["upper held"] - start) < 1e-6 and abs(z["lower"] - start) < 1e-6
+
+
+def test_letting_go_recomputes_the_tethers():
+    cloth = build_cloth(_tube("upper"))
+    assert (cloth.tether_anchor >= 0).any()
+    free = cloth.let_go()
+    assert not free.pinned.any() and not free.pin_lets_go.any()
+    assert (free.tether_anchor == -1).all() and (free.tether_length == 0).all()
+    # the rest of the cloth is the same
+    assert np.array_equal(free.faces, cloth.faces) and np.array_equal(free.x0, cloth.x0)

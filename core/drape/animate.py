@@ -220,7 +220,7 @@ def drape_motion(
     positions, pens, seconds = [pos], [share], []
     n = opts.substeps
     # pinned particles (a waistband held while draping) ride on their nearest body vertex
-    pinned = np.flatnonzero(~solver.free)
+    pinned = np.flatnonzero(~state.free)
     if len(pinned):
         from scipy.spatial import cKDTree
 
@@ -245,7 +245,7 @@ def drape_motion(
             lo, hi = a + (b - a) * (j / parts), a + (b - a) * ((j + 1) / parts)
             solver.step(state, before_substep=lambda i, lo=lo, hi=hi: move(lo + (hi - lo) * ((i + 1) / n)))
         xs = state.x.numpy()
-        check_divergence(settling.frames + k, xs, state.v.numpy()[solver.free], opts, mat, solver.dt, cloth)
+        check_divergence(settling.frames + k, xs, state.v.numpy()[state.free], opts, mat, solver.dt, cloth)
         seconds.append(time.perf_counter() - t0)
         pos, share = snapshot(b)
         positions.append(pos)

@@ -11,7 +11,7 @@ for the drape (:mod:`core.drape.refine`) and its gathered seams sewn as gathers
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Dict, List, Optional
 
 import numpy as np
@@ -51,6 +51,10 @@ class Cloth:
     garment_of_particle : (P,) int, index into ``garment_names``.
     tether_anchor : (P,) int, the nearest pinned particle along the fabric (-1: none, or pinned).
     tether_length : (P,) float, pattern (rest) distance to it along mesh edges, metres.
+    pin_lets_go : (P,) bool, the pinned particles whose pin lets go once the garment has grown to its
+        pattern size (:meth:`let_go`): an upper garment's (its collar held while it is put on, as a
+        dresser's hands hold it; worn, a shirt hangs from its shoulders). A lower garment's waistband
+        stays held, as a belt holds it.
     sliver : (T,) bool, pattern triangles too thin for a deformation-gradient constraint
         (quality below :data:`SLIVER_QUALITY`); their edges are kept as distance constraints.
     bend_rest : (B,) float, rest dihedral angle (radians): 0 inside a panel, the skintight angle across a seam.
@@ -93,10 +97,27 @@ class Cloth:
     pattern_faces: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), int))
     refinement: dict = field(default_factory=dict)
     mesh_pattern: object = None
+    pin_lets_go: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
 
     @property
     def n_particles(self) -> int:
         return int(self.x0.shape[0])
+
+    def let_go(self) -> "Cloth":
+        """The same cloth with the pins of :attr:`pin_lets_go` let go: those particles free, and every
+        free particle's tether recomputed to its nearest pin that still holds (none where no pin is left
+        on its piece of fabric)."""
+        lets_go = self.pin_lets_go if len(self.pin_lets_go) else np.zeros(self.n_particles, bool)
+        pinned = self.pinned & ~lets_go
+        bends, bend_faces = interior_edges(self.faces)
+        anchor, length = tethers(self.faces, self.rest_inv, pinned, bends, bend_faces)
+        return replace(
+            self,
+            pinned=pinned,
+            pin_lets_go=np.zeros(self.n_particles, bool),
+            tether_anchor=anchor,
+            tether_length=length,
+        )
 
 
 # Triangle quality 4*sqrt(3)*A / sum(l^2): 1 equilateral, 0 degenerate. Below this the
@@ -394,11 +415,19 @@ def _weld(pattern, panels: list, n_global: int) -> Cloth:
     )
 
     pinned = np.zeros(n_part, bool)
+    lets_go = np.zeros(n_part, bool)
+    kinds = getattr(pattern, "garments", None) or {}
     for garment, ids in (pattern.pins or {}).items():
         ids = np.asarray(ids, dtype=np.int64).reshape(-1)
         if ids.size and (ids.min() < 0 or ids.max() >= n_global or np.any(particle_of[ids] < 0)):
             raise DrapeError(f"pins[{garment!r}]: ids must be global vertex ids of the pattern")
         pinned[particle_of[ids]] = True
+        if kinds.get(garment) == "upper":
+            lets_go[particle_of[ids]] = True
+    # a particle two garments pin (sewn across them) lets go only where every pin on it does
+    for garment, ids in (pattern.pins or {}).items():
+        if kinds.get(garment) != "upper":
+            lets_go[particle_of[np.asarray(ids, dtype=np.int64).reshape(-1)]] = False
 
     dm = inv22(np.concatenate(inv_l))  # rest edges x1-x0, x2-x0 per triangle
     rest_xy = np.zeros((len(faces), 3, 2))
@@ -445,6 +474,7 @@ def _weld(pattern, panels: list, n_global: int) -> Cloth:
         bend_weight=bend_weight,
         seam_pairs=pairs,
         garment_of_particle=garment_of_particle,
+        pin_lets_go=lets_go,
     )
 
 

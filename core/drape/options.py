@@ -82,6 +82,16 @@ class DrapeOptions:
     tether_slack : float, fraction, or None
         Long-range attachments let a particle stray this fraction beyond its
         fabric distance from the nearest pin (0.01 = 1 %); None disables them.
+    hold_pins : bool
+        Every pin holds for the whole drape. False (the default): an upper
+        garment's pins (its collar) let go once it has grown to its pattern
+        size (:attr:`core.drape.mesh.Cloth.pin_lets_go`), so a worn shirt
+        hangs from its shoulders; a lower garment's waistband stays held.
+        With the collar held at the skintight neck a loose shirt hangs from
+        it as from a drawstring: its torso stands out like a bell and its
+        hem rises with the ease (benchmarks/results/drape_gap.md). True
+        holds them all, as Blender's and Newton's cloth do in the
+        side-by-side comparison (``bench_drape``).
     contact_interval : int, substeps
         Substeps between contact searches (in between, contact is resolved
         against the plane found: through the particle's closest point on the
@@ -161,6 +171,7 @@ class DrapeOptions:
     friction: Optional[float] = None  # Coulomb coefficient
     search_distance: float = 0.03  # m
     tether_slack: Optional[float] = 0.01  # fraction of the fabric distance
+    hold_pins: bool = False
     contact_interval: int = 10  # substeps
     max_speed: float = 30.0  # m/s
     max_extent: float = 6.0  # m
@@ -208,8 +219,9 @@ class DrapeOptions:
             raise DrapeError(f"drape option device = {self.device!r}: expected 'cpu' or 'cuda'")
         if self.solver not in SOLVERS:
             raise DrapeError(f"drape option solver = {self.solver!r}: expected one of {', '.join(SOLVERS)}")
-        if not isinstance(self.self_collision, (bool, np.bool_)):
-            raise DrapeError(f"drape option self_collision = {self.self_collision!r}: expected true or false")
+        for name in ("self_collision", "hold_pins"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise DrapeError(f"drape option {name} = {getattr(self, name)!r}: expected true or false")
 
 
 #: frames of ``onset_factor`` x the iterations for a cloth released at its rest shape

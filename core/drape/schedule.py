@@ -159,7 +159,7 @@ def run(solver, state, progress: Optional[Progress] = None, on_frame=None) -> Se
     for frame in range(1, opts.max_frames + 1):
         solver.step(state)
         xs = state.x.numpy()
-        vs = state.v.numpy()[solver.free]
+        vs = state.v.numpy()[state.free]
         check_divergence(frame, xs, vs, opts, solver.material, solver.dt, solver.cloth)
         rms = settle_speed(vs, opts.settle_trim)
         speeds.append(rms)

@@ -115,6 +115,13 @@ class DrapeState:
     y: Any = None
     acc: Any = None
     x64: Any = None
+    # this state's pins: inverse masses (0: pinned), tethers, the free particles, and whether an upper
+    # garment's pins have let go (:meth:`DrapeSolver.step`); its own, so a later state starts held
+    w: Any = None
+    anchor: Any = None
+    tether_len: Any = None
+    free: Any = None
+    released: bool = False
 
 
 @dataclass
@@ -151,7 +158,10 @@ class DrapeSolver:
     dt : float, s, the substep, ``1 / (fps * substeps)``.
     thickness : float, m; friction : float; the body contact's (options over material).
     self_radius : float, m, the self-collision radius; 0 when self-collision is off.
-    free : (P,) bool, particles that move (not pinned).
+    free : (P,) bool, particles that move at the start (not pinned); a state's own
+        :attr:`DrapeState.free` adds those whose pins have let go.
+    lets_go : bool, whether an upper garment's pins let go once the cloth has grown
+        (:attr:`core.drape.mesh.Cloth.pin_lets_go`, unless ``options.hold_pins``).
     onset : int, frames, the first frames whose pd / newton solves take ``onset_factor`` x the
         iterations (:attr:`DrapeOptions.onset_frames`; where None, :data:`ONSET_FRAMES` for a cloth
         that starts at its rest shape or grows to it at once, else 0).
@@ -200,6 +210,9 @@ class DrapeSolver:
             raise DrapeError("pattern has a vertex that belongs to no triangle (zero mass)")
         inv_mass = np.where(cloth.pinned, 0.0, 1.0 / mass)
         self.free = inv_mass > 0
+        lets_go = cloth.pin_lets_go if len(cloth.pin_lets_go) else np.zeros(cloth.n_particles, bool)
+        self.lets_go = not opts.hold_pins and bool(np.any(lets_go & cloth.pinned))
+        self._released = None  # the cloth with those pins let go, its masses and implicit step (built once)
         t_prep = time.perf_counter()
 
         self._upload(cloth, inv_mass, tri_order, bend_order, edge_order, body_v, body_f)
@@ -330,14 +343,17 @@ class DrapeSolver:
         """The largest net force (elastic + gravity) on a free particle off the body, over its weight:
         0 in a static equilibrium of the fabric's own energy (:mod:`core.drape.newton`), whatever the
         solver. Particles within twice the contact offset of the body are left out (friction holds them)."""
-        if getattr(self, "_newton", None) is None:
-            self._newton = self._newton_step(self.cloth, self.material.density * self.cloth.mass_area)
+        cloth = self._released[0] if state.released else self.cloth
+        attr = "_newton_released" if state.released else "_newton"
+        if getattr(self, attr, None) is None:
+            setattr(self, attr, self._newton_step(cloth, self.material.density * cloth.mass_area))
+        step = getattr(self, attr)
         x = state.x64 if state.x64 is not None else state.x.numpy().astype(np.float64)
         y = x.copy()
         y[:, 2] -= float(self.options.gravity) * self.dt * self.dt
-        self._newton.contact = None
-        _, g = self._newton.energy(x, y, float(state.grow.numpy()[0]))
-        keep = self.free.copy()
+        step.contact = None
+        _, g = step.energy(x, y, float(state.grow.numpy()[0]))
+        keep = state.free.copy() if state.free is not None else self.free.copy()
         active = state.contact_active.numpy() != 0
         height = np.einsum("ij,ij->i", x - state.contact_point.numpy(), state.contact_normal.numpy())
         keep &= ~(active & (height < 2.0 * self.thickness))
@@ -358,7 +374,8 @@ class DrapeSolver:
         y = base + (s.y.numpy().astype(np.float64) - prev)
         opts = self.options
         grow = float(s.grow.numpy()[0])
-        self._implicit.set_contact(
+        implicit = self._released[2] if s.released else self._implicit
+        implicit.set_contact(
             s.contact_point.numpy(), s.contact_normal.numpy(), s.contact_active.numpy(), self.thickness
         )
         if opts.solver == "pd" and self.self_radius > 0.0 and s.self_count is not None:
@@ -368,18 +385,18 @@ class DrapeSolver:
             rows = np.repeat(np.arange(len(count)), count)
             cols = partner[np.arange(partner.shape[1])[None, :] < count[:, None]]
             pairs = np.unique(np.stack([np.minimum(rows, cols), np.maximum(rows, cols)], axis=1), axis=0)
-            self._implicit.set_self(pairs[:, 0], pairs[:, 1], 2.0 * self.self_radius, base)
+            implicit.set_self(pairs[:, 0], pairs[:, 1], 2.0 * self.self_radius, base)
         start = {"previous": base} if opts.solver == "newton" else {}  # newton: from the lower G of x_n and x
         if opts.solver == "pd":
             from .pd import FRICTION
 
             # Coulomb friction in the solve (core.drape.pd.FRICTION): the body's particles held to where
             # the substep began
-            self._implicit.carry, moved = self._carry(s, FRICTION)
+            implicit.carry, moved = self._carry(s, FRICTION)
             # (with friction, on a moving body: held where the body carried the substep's start)
-            self._implicit.anchor = None if not FRICTION else base if moved is None else base + moved
+            implicit.anchor = None if not FRICTION else base if moved is None else base + moved
         iterations = int(opts.iterations) * (int(opts.onset_factor) if s.frames < self.onset else 1)
-        it, res = self._implicit.solve(x, y, grow, iterations, float(opts.tolerance), self._weight, **start)
+        it, res = implicit.solve(x, y, grow, iterations, float(opts.tolerance), self._weight, **start)
         self._newton_iterations.append(it)
         self._newton_residuals.append(res)
         s.x64 = x
@@ -426,6 +443,10 @@ class DrapeSolver:
             contact_normal=wp.zeros(n, dtype=wp.vec3, device=dev),
             contact_active=wp.zeros(n, dtype=int, device=dev),
             bend_lambda=wp.zeros(max(len(self.cloth.bends), 1), dtype=float, device=dev),
+            w=wp.clone(self._w),
+            anchor=wp.clone(self._anchor),
+            tether_len=wp.clone(self._tether_len),
+            free=self.free.copy(),
         )
         if self.options.solver in ("vbd", "newton", "pd"):
             s.y = wp.zeros(n, dtype=wp.vec3, device=dev)
@@ -449,11 +470,9 @@ class DrapeSolver:
         gravity = self._wp.vec3(0.0, 0.0, -float(opts.gravity))
         vbd = opts.solver in ("vbd", "newton", "pd")  # all predict the inertial target y
         if vbd:
-            predict = self._launch(
-                self._V.predict, n, [s.x, s.v, s.x_prev, s.y, s.acc, self._w, gravity, self.dt, keep]
-            )
+            predict = self._launch(self._V.predict, n, [s.x, s.v, s.x_prev, s.y, s.acc, s.w, gravity, self.dt, keep])
         else:
-            predict = self._launch(K.predict, n, [s.x, s.v, s.x_prev, self._w, gravity, self.dt, keep])
+            predict = self._launch(K.predict, n, [s.x, s.v, s.x_prev, s.w, gravity, self.dt, keep])
         cmds = [predict]
         grow_step = growth_per_substep(opts)
         if grow_step is not None:
@@ -473,7 +492,7 @@ class DrapeSolver:
                     int(off[c + 1] - off[c]),
                     [
                         s.x,
-                        self._w,
+                        s.w,
                         self._tri,
                         self._rest_inv,
                         self._area,
@@ -496,7 +515,7 @@ class DrapeSolver:
                     int(off[c + 1] - off[c]),
                     [
                         s.x,
-                        self._w,
+                        s.w,
                         self._edges,
                         self._edge_rest,
                         k_edge,
@@ -516,7 +535,7 @@ class DrapeSolver:
                         int(off[c + 1] - off[c]),
                         [
                             s.x,
-                            self._w,
+                            s.w,
                             self._bends,
                             self._bend_w,
                             self._bend_rest,
@@ -562,7 +581,7 @@ class DrapeSolver:
     def _vbd_sweeps(self, s: DrapeState) -> list:
         """One VBD iteration: a Newton step of every free vertex, colour by colour."""
         off = self._vbd_off
-        head = [s.x, s.y, s.x_prev, self._mass, self._w, self._vbd_order]
+        head = [s.x, s.y, s.x_prev, self._mass, s.w, self._vbd_order]
         inv_dt2 = 1.0 / (self.dt * self.dt)
         damp = float(self.options.vbd_damping) / self.dt
         tail = self._element_args(s) + [s.contact_point, s.contact_normal, s.contact_active, self.thickness]
@@ -577,7 +596,7 @@ class DrapeSolver:
         tethers = []
         if opts.tether_slack is not None and np.any(self.cloth.tether_anchor >= 0):
             tethers.append(
-                self._launch(K.solve_tethers, n, [s.x, self._anchor, self._tether_len, 1.0 + float(opts.tether_slack)])
+                self._launch(K.solve_tethers, n, [s.x, s.anchor, s.tether_len, 1.0 + float(opts.tether_slack)])
             )
         finish = [
             self._launch(
@@ -592,7 +611,7 @@ class DrapeSolver:
             n,
             [
                 s.x,
-                self._w,
+                s.w,
                 self._body.id,
                 opts.search_distance,
                 CONTACT_FLAT,
@@ -609,7 +628,7 @@ class DrapeSolver:
                 n,
                 [
                     s.x,
-                    self._w,
+                    s.w,
                     self._x_start,
                     s.self_grid.id,
                     self._self_search,
@@ -623,7 +642,7 @@ class DrapeSolver:
                 ],
             )
             collide = [
-                self._launch(K.self_collide, n, [s.x, self._w, s.self_partner, s.self_count, r, s.self_dx]),
+                self._launch(K.self_collide, n, [s.x, s.w, s.self_partner, s.self_count, r, s.self_dx]),
                 self._launch(K.apply_delta, n, [s.x, s.self_dx]),
             ]
         host = self._newton_solve if opts.solver in ("newton", "pd") else None
@@ -651,6 +670,29 @@ class DrapeSolver:
         self._body.points.assign(pts)
         self._body.refit()
 
+    def _let_go(self, state: DrapeState) -> None:
+        """Let go of the pins of :attr:`core.drape.mesh.Cloth.pin_lets_go` in ``state``: those particles
+        take their masses, the tethers reach only the pins that still hold, and the implicit solvers
+        (pd, newton) step the let-go cloth, its matrix factored once for the solver."""
+        if self._released is None:
+            cloth = self.cloth.let_go()
+            mass = self.material.density * cloth.mass_area
+            step = None
+            if self.options.solver == "pd":
+                from .pd import ProjectiveStep
+
+                step = ProjectiveStep(cloth, self.material, self.dt, mass, *_start(cloth))
+                step.friction = self.friction
+            elif self.options.solver == "newton":
+                step = self._newton_step(cloth, mass)
+            self._released = (cloth, np.where(cloth.pinned, 0.0, 1.0 / mass), step)
+        cloth, inv_mass, _ = self._released
+        state.w.assign(inv_mass.astype(np.float32))
+        state.anchor.assign(cloth.tether_anchor.astype(np.int32))
+        state.tether_len.assign(cloth.tether_length.astype(np.float32))
+        state.free = inv_mass > 0
+        state.released = True
+
     def _outruns_contacts(self, state: DrapeState) -> bool:
         """Whether the fastest particle may have moved half the ``search_distance`` since the last
         contact search (by the end of this substep): one that had no contact plane then (farther from
@@ -666,6 +708,7 @@ class DrapeSolver:
         ``before_substep(i)``, when given, runs before substep ``i`` (it may :meth:`move_body`);
         the contacts are then searched every substep.
 
+        Before the first frame past ``grow_frames`` an upper garment's pins let go (:attr:`lets_go`).
         Each substep: the contact search (every ``contact_interval`` substeps, and at any substep
         where the fastest particle could have travelled half the ``search_distance`` since the last
         one: :meth:`_outruns_contacts`),
@@ -677,6 +720,9 @@ class DrapeSolver:
         with friction, and the velocities from the position change.
         """
         opts, L = self.options, state.launches
+        if self.lets_go and not state.released and state.frames >= opts.grow_frames:
+            # grown to its pattern size: the collar lets go and the garment settles on the body
+            self._let_go(state)
         for sub in range(opts.substeps):
             if before_substep is not None:
                 before_substep(sub)
