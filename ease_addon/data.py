@@ -94,12 +94,15 @@ def solver_choice(scene):
     return None if choice == DESIGN_SOLVER else choice
 
 
-def drape_options(device: str, solver: str = "default") -> dict:
-    """The drape options of the Drape panel's *Device* and *Solver* (``DrapeOptions.solver``, or
-    ``"default"``: none, the core's default), as Drape and Drape Animation pass them."""
+def drape_options(device: str, solver: str = "default", hold_pins: bool = False) -> dict:
+    """The drape options of the Drape panel's *Device*, *Solver* (``DrapeOptions.solver``, or
+    ``"default"``: none, the core's default) and *Hold Pins* (``DrapeOptions.hold_pins``), as Drape
+    and Drape Animation pass them."""
     options = {"device": device}
     if solver and solver != "default":
         options["solver"] = solver
+    if hold_pins:
+        options["hold_pins"] = True
     return options
 
 

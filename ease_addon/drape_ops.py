@@ -17,13 +17,16 @@ from .operators_base import EaseOperator
 JOB = "drape"  # the job's name (a new Drape replaces a running one)
 
 
-def _compute(pattern, body_v, body_f, frames, progress, device="cpu", refine_edge=None, solver="default"):
+def _compute(
+    pattern, body_v, body_f, frames, progress, device="cpu", refine_edge=None, solver="default", hold_pins=False
+):
     """The core's drape of ``pattern`` on the body (V, F) and its fit measurements (a DrapeRun);
     ``refine_edge`` (m, or None): the drape mesh's longest edge where the cloth hangs free;
-    ``solver``: ``DrapeOptions.solver``, or ``"default"`` for the core's default."""
+    ``solver``: ``DrapeOptions.solver``, or ``"default"`` for the core's default; ``hold_pins``:
+    ``DrapeOptions.hold_pins``."""
     from ..core import workflows as wf
 
-    options = {**data.drape_options(device, solver), "max_frames": int(frames), "refine_edge": refine_edge}
+    options = {**data.drape_options(device, solver, hold_pins), "max_frames": int(frames), "refine_edge": refine_edge}
     return wf.drape(pattern, options=options, body=(body_v, body_f), progress=progress)
 
 
@@ -37,19 +40,28 @@ def refine_edge(mm: float):
 
 
 def start_drape(
-    pattern, body_v, body_f, frames: int, device: str = "cpu", digest=None, sync=None, refine=None, solver="default"
+    pattern,
+    body_v,
+    body_f,
+    frames: int,
+    device: str = "cpu",
+    digest=None,
+    sync=None,
+    refine=None,
+    solver="default",
+    hold_pins=False,
 ) -> jobs.Job:
     """The drape of ``pattern`` on the body (V, F) for at most ``frames`` frames as the job
     :data:`JOB` (``sync``: :func:`.jobs.start`'s); the garment is made when it lands.
     ``digest``: the pattern it drapes (the scene's may change meanwhile); ``refine``: the drape
-    mesh's refinement edge (m, or None: the pattern's mesh); ``solver``: :func:`_compute`'s. ``pattern``'s body record goes with
+    mesh's refinement edge (m, or None: the pattern's mesh); ``solver``, ``hold_pins``: :func:`_compute`'s. ``pattern``'s body record goes with
     the job: the body takes the draped pattern's size and pose when the garment lands, whatever
     pattern the scene holds by then (a Transfer landing meanwhile)."""
     body = dict(pattern.body or {})
     return jobs.start_step(
         JOB,
         "drape",
-        lambda progress: _compute(pattern, body_v, body_f, frames, progress, device, refine, solver),
+        lambda progress: _compute(pattern, body_v, body_f, frames, progress, device, refine, solver, hold_pins),
         lambda run: apply_drape(bpy.context, run, digest=digest, body=body),
         "drape_status",
         "Drape",
@@ -83,6 +95,7 @@ class EASE_OT_drape(jobs.Background, EaseOperator):
             sync=self.job_sync(),
             refine=refine,
             solver=s.drape_solver,
+            hold_pins=s.drape_hold_pins,
         )
         self.report({"INFO"}, s.drape_status if job.thread is None else "draping in the background (Esc cancels)")
 
@@ -120,8 +133,11 @@ def apply_drape(context, run, digest=None, body=None) -> None:
     )
     sync.apply_fitmap(scene)
     s = scene.ease
-    solver = (getattr(run.result, "options", None) or {}).get("solver")
-    s.drape_json = json.dumps({**run.figures, **({"solver": solver} if solver else {})})
+    options = getattr(run.result, "options", None) or {}
+    solver = options.get("solver")
+    s.drape_json = json.dumps(
+        {**run.figures, **({"solver": solver} if solver else {}), "hold_pins": bool(options.get("hold_pins"))}
+    )
     ref = run.result.refinement or {}
     refined = (
         f", mesh refined to {1000 * ref['target_edge_m']:g} mm "

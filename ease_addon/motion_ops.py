@@ -239,9 +239,21 @@ class Motion:
     through them (:meth:`compute`, in the worker); the motion objects from them (:meth:`apply`,
     on the main thread)."""
 
-    def __init__(self, pattern, model, shape, motion: dict, device: str, prep=None, adapt_to=(), solver="default"):
+    def __init__(
+        self,
+        pattern,
+        model,
+        shape,
+        motion: dict,
+        device: str,
+        prep=None,
+        adapt_to=(),
+        solver="default",
+        hold_pins=False,
+    ):
         self.pattern, self.model, self.shape, self.motion = pattern, model, shape, motion
         self.device, self.prep, self.adapt_to, self.solver = device, prep, list(adapt_to), solver
+        self.hold_pins = bool(hold_pins)
 
     def compute(self, progress):
         from ..core import workflows as wf
@@ -264,7 +276,7 @@ class Motion:
             pattern,
             frames,
             faces,
-            options=data.drape_options(self.device, self.solver),
+            options=data.drape_options(self.device, self.solver, self.hold_pins),
             progress=sub(progress, 0.1 if adapted else 0.0, 1.0),
         )
         if m["source"] == "ACTION":
@@ -387,7 +399,9 @@ def motion_job(context) -> Motion:
                 "(name poses after the first, or keyframe the rig's bones)"
             )
         prep = data.prepared(context)
-    return Motion(pattern, model, spec.get("shape"), motion, s.drape_device, prep, adapt_to, s.drape_solver)
+    return Motion(
+        pattern, model, spec.get("shape"), motion, s.drape_device, prep, adapt_to, s.drape_solver, s.drape_hold_pins
+    )
 
 
 def start_motion(context, sync=None) -> jobs.Job:

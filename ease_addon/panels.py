@@ -211,6 +211,7 @@ class EASE_PT_drape(_EasePanel, bpy.types.Panel):
         row = _props(layout, s, "drape_frames")
         row.prop(s, "drape_device", text="")
         layout.prop(s, "drape_solver")
+        layout.prop(s, "drape_hold_pins")
         layout.prop(s, "drape_refine_mm")
         layout.operator("ease.drape", icon="MOD_CLOTH")
         if s.job_status.startswith("updating: drape"):  # a Drape or Drape Animation running: Cancel beside it

@@ -211,6 +211,14 @@ class EASE_PG_scene(bpy.types.PropertyGroup):
         ],
         default="default",
     )
+    # every pin held for the whole drape (core.drape.DrapeOptions.hold_pins); off: an upper garment's
+    # collar lets go once the garment has grown, and the shirt hangs from its shoulders
+    drape_hold_pins: BoolProperty(
+        name="Hold Pins",
+        description="Hold every pin for the whole drape (off: a shirt's collar lets go once it has grown to "
+        "its pattern size and the shirt hangs from its shoulders; a waistband stays held)",
+        default=False,
+    )
     # the drape mesh's longest edge where the cloth hangs free (mm; 0: the pattern's mesh as it is);
     # the default is `ease drape --refine-edge`'s (core.cli.drape.REFINE_EDGE, 10 mm)
     drape_refine_mm: FloatProperty(

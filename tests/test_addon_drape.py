@@ -204,6 +204,14 @@ def test_refined_drape_mesh(bpy_session, blender, addon, tmp_path):
     finally:
         s.drape_solver = "default"
     assert json.loads(s.drape_json)["solver"] == "pd"
+    # *Hold Pins* reaches the core too (off by default: an upper garment's collar lets go once grown)
+    assert json.loads(s.drape_json)["hold_pins"] is False
+    s.drape_hold_pins = True
+    try:
+        assert bpy.ops.ease.drape() == {"FINISHED"}
+    finally:
+        s.drape_hold_pins = False
+    assert json.loads(s.drape_json)["hold_pins"] is True
     coarse = next(o for o in bpy.data.objects if o.get("ease_role") == "garment")
     n_coarse = len(coarse.data.vertices)
     assert coarse[build.REFINE_EDGE] == 0.0 and build.drape_pattern(coarse, pattern) is pattern

@@ -338,3 +338,20 @@ def test_drape_animation_adapts_the_pattern_to_the_poses(scene, bpy_session):
     finally:
         s.motion_poses, s.motion_between = old
         s.motion_adapt = False
+
+
+def test_drape_animation_takes_the_drape_panels_hold_pins(scene, bpy_session):
+    # the Drape panel's Hold Pins reaches the motion's drape options, as its Solver does
+    bpy = scene.bpy
+    s = bpy.context.scene.ease
+    motion_ops, data = scene.mod("motion_ops"), scene.mod("data")
+    old = s.motion_poses, s.drape_hold_pins
+    try:
+        s.motion_poses = "A, P1"
+        for hold in (False, True):
+            s.drape_hold_pins = hold
+            job = motion_ops.motion_job(bpy.context)
+            assert job.hold_pins is hold
+            assert data.drape_options(job.device, job.solver, job.hold_pins).get("hold_pins", False) is hold
+    finally:
+        s.motion_poses, s.drape_hold_pins = old

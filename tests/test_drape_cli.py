@@ -112,6 +112,15 @@ def test_self_collision_flag(pattern_dir, tmp_path):
     assert rep["self_radius_m"] > 0
 
 
+def test_hold_pins_flag(pattern_dir, drape_dir, tmp_path):
+    # the default lets an upper garment's pins go once grown; --hold-pins keeps them all (the report says which)
+    assert json.loads((drape_dir / "drape_report.json").read_text())["options"]["hold_pins"] is False
+    out = tmp_path / "held"
+    args = ["drape", str(pattern_dir), "--out", str(out), "--quiet", "--frames", "5", "--no-preview", "--hold-pins"]
+    assert main(args) == 0
+    assert json.loads((out / "drape_report.json").read_text())["options"]["hold_pins"] is True
+
+
 def test_divergence_names_frame_and_cause_and_writes_nothing(tmp_path, capsys):
     # a pattern a fifth of the body's girth is torn apart on the first frame
     d = tmp_path / "pattern"

@@ -58,6 +58,12 @@ def add_parser(sub) -> None:
         f"edge is longer than M metres (default {REFINE_EDGE:g}; 0: drape the pattern's mesh as solved); "
         "gathered seams are sewn as gathers on it. --animation drapes the pattern's mesh",
     )
+    p.add_argument(
+        "--hold-pins",
+        action="store_true",
+        help="hold every pin for the whole drape (default: an upper garment's collar pins let go once it has "
+        "grown to its pattern size, so a shirt hangs from its shoulders; a waistband stays held)",
+    )
     p.add_argument("--no-preview", action="store_true", help="skip preview.png")
     p.add_argument(
         "--up",
@@ -114,6 +120,8 @@ def _options(args) -> dict:
         options["solver"] = args.solver
     if args.self_collision:
         options["self_collision"] = True
+    if getattr(args, "hold_pins", False):
+        options["hold_pins"] = True
     return options
 
 
