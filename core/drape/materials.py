@@ -64,8 +64,9 @@ class Material:
     bending : float, bending stiffness in N*m.
     friction : float, Coulomb friction coefficient against the body.
     thickness : float, collision offset from the body surface in metres.
-    max_stretch : float, the stretch (fraction) the fabric takes in wear; documents
-        the preset and is checked by the tests, not used by the solver.
+    max_stretch : float, the stretch (fraction) the fabric takes in wear: the drape report's
+        ``stretch_limit`` gives the share of the fabric stretched beyond it, and pd's strain limit
+        (``DrapeOptions.strain_limit``, off by default) holds the fabric there.
     """
 
     name: str

@@ -123,7 +123,10 @@ def report_dict(result, fit: dict, pattern=None) -> dict:
     ``fit`` is the JSON-ready summary of the fit measurements
     (:func:`core.metrics.drape.summary`): ``"all"`` with ``gap_mm``,
     ``penetration_pct``, ``seam_gap_mm``, ``folds`` (mean dihedral angle, share of
-    edges over 30 degrees, mean curvature), and per garment.
+    edges over 30 degrees, mean curvature), and per garment. ``stretch_limit``: where the fabric is
+    stretched beyond its material's ``max_stretch``, for all, per garment and per piece (the share of
+    its area along the weft and the warp, and the largest stretch of each;
+    :func:`core.drape.result.stretch_limit_report`).
     """
     return {
         "style": getattr(pattern, "style", ""),
@@ -148,6 +151,7 @@ def report_dict(result, fit: dict, pattern=None) -> dict:
         "penetration_pct": fit["all"]["penetration_pct"],
         "seam_gap_mm": fit["all"]["seam_gap_mm"],
         "folds": fit["all"].get("folds"),
+        "stretch_limit": dict(getattr(result, "stretch_limit", None) or {}),
         "metrics": fit,
     }
 

@@ -115,6 +115,24 @@ SELF_BACKTRACK = 6
 #: that is resolved (session 7 p7; the shirt: benchmarks.bench_drape's pattern, drape(max_frames=60))
 FRICTION = False
 
+#: the strain limit's weight where :class:`ProjectiveStep` is given none (:attr:`ProjectiveStep.limit_weight`;
+#: :attr:`DrapeOptions.strain_limit`, 0 by default: off): each grain image (weft, warp) of a triangle longer
+#: than ``1 + max_stretch`` (the material's) times its rest length is pulled back by the penalty
+#: ``w / 2 (|f| - L_max)^2`` on the excess only, ``w`` this many times the grain spring's own weight. Measured
+#: (benchmarks/results/drape_strain_limit.md, eighth session p1): a soft sheet that hangs 12.1 % stretched
+#: (warp p95) hangs at 5.64 / 5.23 / 5.07 % with 10 / 30 / 100 (1000: unsettled after 60 frames); but the
+#: body's contact after each solve keeps a garment outside the body, so the limit cannot shorten fabric that
+#: wraps a body larger than its pattern: at 30 the pants at ease 0.9 / 0.994 in cotton (1.5 cm) read weft
+#: p95 18.4 / 7.0 % against 18.1 / 6.7 % without and settle in 42 / 68 frames against 29 / 48 (at 100 they
+#: did not settle in 250), so it is off by default
+STRAIN_LIMIT = 0.0
+#: the strain limit on a triangle the body's contact penalty holds (a particle of it on the body): off. The
+#: contact after each solve keeps the cloth outside the body, so a limit there cannot shorten fabric that
+#: wraps a body larger than its pattern: it pulls the cloth into the body's concave creases, where the
+#: contact puts it back on the surface, longer; on the pants at ease 0.9 in cotton (1.5 cm) the weft
+#: stretch rose from 18.1 to 22.8 % (p95) with it (benchmarks/results/drape_strain_limit.md)
+LIMIT_ON_BODY = False
+
 F64 = wp.float64
 
 
@@ -586,6 +604,8 @@ class ProjectiveStep:
         Euler load (NewtonStep's ``cap_a``, ``cap_b``): a grain image compressed past that strain c is
         projected onto the sphere of its length + c instead of its rest stretch, so its force stays at the
         cap, and the potential gains ``w c (rest - target)``: the energy NewtonStep minimises.
+    strain_limit : None (:data:`STRAIN_LIMIT`) or float >= 0: :attr:`limit_weight` in multiples of each grain
+        spring's weight (0: no limit).
 
     Attributes
     ----------
@@ -604,7 +624,21 @@ class ProjectiveStep:
         their plane) are held by ``contact_weight / 2 * depth^2`` (depth below the offset), its weight in
         the matrix's diagonal (refactored when that set changes), and the stop test counts the normal
         force and allows friction up to ``friction`` times the penalty's force.
-    refactors : int, the refactorisations the contact penalty's set changes asked for.
+    refactors : int, the refactorisations the contact penalty's and the strain limit's set changes asked for.
+    limit_weight : the strain limit's weight, in multiples of each grain spring's (:data:`STRAIN_LIMIT`; 0:
+        none), and ``max_stretch`` the material's. The limit's set is the grains (a triangle's weft or warp
+        image) that ended the last solve longer than ``L_max = (1 + max_stretch)`` times their rest length,
+        but for a triangle the contact penalty holds on the body (:data:`LIMIT_ON_BODY`): in the next solve
+        each is a projective constraint onto the ball of radius ``L_max`` (energy ``w / 2 (|f| - L_max)^2``
+        past it, none inside), its weight ``w`` in the matrix (refactored when the set changes, on a garment
+        at its contact searches only), so the local-global step still lowers G. The set is taken from the end
+        of a solve, not from its start guess: the inertial guess and the unconverged solves of the first
+        frames of growth stretch thousands of the shirt's grains past 5 % for a substep, and a grain in the set
+        but inside its ball is held where it is by the matrix's weight (such a set, kept until a grain fell
+        under half its limit, held the 1.5 cm shirt's fabric at 4.7 % (weft p95) where it settles at 0.7 %).
+        An empty set (no grain ever ends a solve past its limit) leaves the matrix, the iterations and the
+        drape as they are without the limit, bit for bit.
+    limited : int, the grains in the limit's set at the last solve.
     """
 
     def __init__(
@@ -617,6 +651,7 @@ class ProjectiveStep:
         edge_start,
         history: int = 5,
         buckling=None,
+        strain_limit=None,
     ):
         from scipy.sparse import diags, vstack
 
@@ -754,6 +789,20 @@ class ProjectiveStep:
         self.contact = None
         self.friction = 0.0  # the Coulomb coefficient the stop test allows on the body (the drape's)
         self.method = METHOD
+        # the strain limit: its weights per grain row (weft rows, then warp rows), its set (None: empty) and
+        # the free matrix's entries in column-major order, to lay the set's A^T W A on its pattern
+        self.limit_weight = STRAIN_LIMIT if strain_limit is None else float(strain_limit)
+        self.max_stretch = float(getattr(material, "max_stretch", np.inf))
+        self._limit_w = self.limit_weight * np.concatenate([el.wa, el.wb])
+        self._limit = None  # (rows into D, their weights, D's rows transposed (P, k)) of the set
+        self._limit_in = np.zeros(2 * t, bool)
+        self._limit_want = None  # the grains past their limit at the end of the last solve
+        self._limit_pos = self._limit_coef = None  # each grain row's matrix entries (:meth:`_limit_entries`)
+        self._limit_values = None  # the set's A^T W A on the free matrix's entries
+        self._limit_dirty = False
+        self.limited = 0
+        nf = len(fi)
+        self._entry_key = cols.astype(np.int64) * max(nf, 1) + free_matrix.indices
 
     def set_contact(self, point: np.ndarray, normal: np.ndarray, active: np.ndarray, thickness: float) -> None:
         """Body contact for the next solves' stop test: on an active free particle within twice
@@ -785,7 +834,16 @@ class ProjectiveStep:
         self._x[:] = x
         self._y[:] = y
         self._launch.launch()
-        return float(self._energy[0] + self._energy[1])
+        if self._limit is None:
+            return float(self._energy[0] + self._energy[1])
+        # the strain limit's set: each grain image onto the ball of radius L_max, its weighted distance in
+        # the gradient (the kernel's buffer) and the energy
+        rows, w, dt_rows = self._limit
+        img = self._images[rows]
+        length = np.sqrt(np.einsum("ij,ij->i", img, img))
+        excess = np.maximum(length - (1.0 + self.max_stretch) * np.concatenate(self._rest)[rows], 0.0)
+        self._all += dt_rows @ ((w * excess / np.maximum(length, 1e-300))[:, None] * img)
+        return float(self._energy[0] + self._energy[1]) + 0.5 * float(np.sum(w * excess * excess))
 
     def local(self, x: np.ndarray, y: np.ndarray, grow: float) -> tuple:
         """The local step at ``x``: (the elastic part of ``grad G``, ``sum_c w_c A_c^T (A_c x - p_c(x))``
@@ -807,14 +865,22 @@ class ProjectiveStep:
         Deng, Zhang, Liu, "Anderson acceleration for geometry optimization and physics simulation", ACM
         TOG 37(4), 2018): the next iterate mixes the last ``history`` steps, and is kept only where it
         lowers G (else the plain step is taken and the history dropped). With :attr:`method`
-        ``"lbfgs"`` (not the default, :data:`METHOD`) they are L-BFGS steps instead (:meth:`_lbfgs`).
+        ``"lbfgs"`` (not the default, :data:`METHOD`) they are L-BFGS steps instead (:meth:`_lbfgs`). The strain
+        limit's set (:attr:`limit_weight`) is the grains the last solve ended past their limit.
 
         Returns (iterations done, the largest residual over weight at the last test).
         """
+        out = self._solve(x, y, grow, iterations, tolerance, weight)
+        self._limit_mark(x, grow)
+        return out
+
+    def _solve(self, x, y, grow: float, iterations: int, tolerance: float, weight: np.ndarray):
+        """:meth:`solve`'s iterations (the strain limit's set chosen from the last solve's end)."""
         fi = self.free_idx
         if len(fi) == 0:
             return 0, 0.0
         w2 = np.maximum(weight[fi], 1e-30) ** 2
+        self._limit_set()
         near, nrm = np.zeros(0, int), np.zeros((0, 3))
         if self.contact is not None:
             # on the body (within twice the contact offset) the body's reaction and friction take the part
@@ -833,6 +899,8 @@ class ProjectiveStep:
                     near, nrm = self._held[0], self._held[1]
         elif self._held is not None:
             self._hold(None)
+        if self._limit_dirty:
+            self._refactor()
         if self._held is not None and self.carry is not None:
             # a moving body carries the particles it holds: their start guess and inertial target move
             # with the body's surface along it (the penalty's weight in every direction of the matrix
@@ -949,15 +1017,83 @@ class ProjectiveStep:
         key = held[0].tobytes() if held is not None and len(held[0]) else b""
         self._held = held if key else None
         self._held_particles = self.free_idx[held[0]] if key else None
-        if key == self._held_key:
+        if key == self._held_key and not self._limit_dirty:
             return
+        self._held_key = key
+        self._refactor()
+
+    def _refactor(self) -> None:
+        """Factorise the matrix with the strain limit's set and the contact penalty's held particles."""
         values = self._base_values.copy()
-        if key:
-            values[self._diag_pos[held[0]]] += self.contact_weight
+        if self._limit_values is not None:
+            values += self._limit_values
+        if self._held is not None:
+            values[self._diag_pos[self._held[0]]] += self.contact_weight
         self._free_matrix.data[:] = values
         self.lu.refactor(self._free_matrix)
-        self._held_key = key
+        self._limit_dirty = False
         self.refactors += 1
+
+    def _limit_mark(self, x: np.ndarray, grow: float) -> None:
+        """The grains past their limit at the end of a solve (``x``): the strain limit's next set."""
+        if self.limit_weight <= 0.0 or not np.isfinite(self.max_stretch) or self.lu is None:
+            return
+        el = self.elements
+        back = 1.0 - grow
+        rest = np.concatenate([1.0 + (el.stretch0[:, 0] - 1.0) * back, 1.0 + (el.stretch0[:, 1] - 1.0) * back])
+        f = np.concatenate([el.Ga @ x, el.Gb @ x])
+        want = np.sqrt(np.einsum("ij,ij->i", f, f)) > (1.0 + self.max_stretch) * rest
+        if not LIMIT_ON_BODY and self._held is not None and np.any(want):
+            on = np.zeros(self.n, bool)
+            on[self._held_particles] = True
+            held = on[el.tri].any(axis=1)
+            want &= ~np.concatenate([held, held])
+        self._limit_want = want
+
+    def _limit_set(self) -> None:
+        """The strain limit's set for the next solve (:attr:`limit_weight`, :meth:`_limit_mark`); where it
+        changed, its matrix entries are laid out anew (refactored by the solve)."""
+        now = self._limit_want
+        if now is None or np.array_equal(now, self._limit_in):
+            return
+        if self._held is not None and not self._searched:
+            # on the body the set changes at a contact search only, where the contact's refactorisation serves
+            # both (the pants at ease 0.9, 100 frames: 128 refactorisations in 200 substeps, not one a substep)
+            return
+        self._limit_in = now
+        self._limit_dirty = True
+        rows = np.nonzero(now)[0]
+        self.limited = len(rows)
+        if not len(rows):
+            self._limit, self._limit_values = None, None
+            return
+        d_rows = self.D[rows]  # weft rows 0..t-1, warp rows t..2t-1: D's first two blocks
+        w = self._limit_w[rows]
+        self._limit = (rows, w, d_rows.T.tocsr())
+        # the set's A^T W A: each grain row's 3 x 3 block (its coefficients' products) on the free matrix's entries
+        pos, coef = self._limit_entries()
+        block = w[:, None] * (coef[rows][:, :, None] * coef[rows][:, None, :]).reshape(len(rows), 9)
+        keep = pos[rows] >= 0
+        values = np.zeros(len(self._entry_key))
+        np.add.at(values, pos[rows][keep], block[keep])
+        self._limit_values = values
+
+    def _limit_entries(self) -> tuple:
+        """Each grain row's (weft rows, then warp rows) 3 x 3 block: its entries' positions in the free
+        matrix's values ((2T, 9), -1 where a particle is pinned) and the row's coefficients ((2T, 3))."""
+        if self._limit_pos is None:
+            el = self.elements
+            tri = np.concatenate([el.tri, el.tri])
+            coef = np.concatenate([el.ca, el.cb])
+            r = self._row_of[tri]  # (2T, 3) rows of the free particles, -1 pinned
+            ri, rj = np.repeat(r, 3, axis=1), np.tile(r, (1, 3))
+            key = rj.astype(np.int64) * max(len(self.free_idx), 1) + ri
+            pos = np.minimum(np.searchsorted(self._entry_key, key), len(self._entry_key) - 1)
+            free = (ri >= 0) & (rj >= 0)
+            if not np.all(self._entry_key[pos][free] == key[free]):
+                raise RuntimeError("strain limit: a grain's entry outside the matrix's pattern")
+            self._limit_pos, self._limit_coef = np.where(free, pos, -1), coef
+        return self._limit_pos, self._limit_coef
 
     @property
     def _solve_friction(self) -> bool:

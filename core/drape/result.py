@@ -50,6 +50,9 @@ class DrapeResult:
     speed : (N,) float, m/s, each vertex's speed at the last frame (where it still moves).
     face_valid : (T,) bool, False for pattern slivers (held by edge constraints; their
         strain is not meaningful and reads 0).
+    stretch_limit : dict, where the fabric is stretched beyond its material's ``max_stretch``
+        (:func:`stretch_limit_report`): for all, per garment and per piece, the share of fabric area
+        past the limit along the weft and the warp and the largest stretch of each.
     """
 
     positions: np.ndarray
@@ -81,6 +84,59 @@ class DrapeResult:
     refinement: dict = field(default_factory=dict)
     mesh_pattern: object = None
     gathers: dict = field(default_factory=dict)
+    stretch_limit: dict = field(default_factory=dict)
+
+
+def _over(weft: np.ndarray, warp: np.ndarray, area: np.ndarray, limit: float) -> dict:
+    """The share (%) of ``area`` whose weft (warp) stretch is beyond ``limit``, and the largest stretches (%)."""
+    total = float(area.sum())
+
+    def share(strain):
+        return 100.0 * float(area[strain > limit].sum()) / total if total > 0.0 else 0.0
+
+    def largest(strain):
+        return 100.0 * float(strain.max()) if len(strain) else 0.0
+
+    return {
+        "weft_over_pct": share(weft),
+        "warp_over_pct": share(warp),
+        "weft_max_pct": largest(weft),
+        "warp_max_pct": largest(warp),
+    }
+
+
+def stretch_limit_report(
+    cloth: Cloth, weft: np.ndarray, warp: np.ndarray, valid: np.ndarray, max_stretch: float
+) -> dict:
+    """Where a drape asks the fabric for more stretch than it gives.
+
+    Parameters
+    ----------
+    cloth : the welded cloth (its faces' pattern areas, panels and garments).
+    weft, warp : (T,) float, each triangle's stretch relative to the pattern (fractions).
+    valid : (T,) bool, the triangles measured (not pattern slivers).
+    max_stretch : the material's ``max_stretch`` (fraction).
+
+    Returns
+    -------
+    dict: ``max_stretch_pct``; ``all`` and, per garment name, ``garments[name]`` with ``pieces[panel]``:
+    ``weft_over_pct`` / ``warp_over_pct`` (the share of the fabric's area, the pattern's, stretched
+    beyond ``max_stretch`` along that grain), ``weft_max_pct`` / ``warp_max_pct`` (the largest stretch,
+    %). With pd's strain limit (:attr:`DrapeOptions.strain_limit`) a grain held at its limit sits just
+    past it (by the penalty's excess), so it counts: the share is the fabric at or past its limit.
+    """
+    area = cloth.rest_area
+    limit = float(max_stretch)
+    out = {"max_stretch_pct": 100.0 * limit, "all": _over(weft[valid], warp[valid], area[valid], limit), "garments": {}}
+    for g, name in enumerate(cloth.garment_names):
+        sel = valid & (cloth.face_garment == g)
+        entry = _over(weft[sel], warp[sel], area[sel], limit)
+        entry["pieces"] = {}
+        for k in np.unique(cloth.face_panel[sel]):
+            piece = sel & (cloth.face_panel == k)
+            entry["pieces"][cloth.panel_names[int(k)]] = _over(weft[piece], warp[piece], area[piece], limit)
+        out["garments"][name] = entry
+    return out
 
 
 def collect(
@@ -145,4 +201,5 @@ def collect(
         refinement=dict(cloth.refinement),
         mesh_pattern=cloth.mesh_pattern,
         gathers=dict(cloth.gathers),
+        stretch_limit=stretch_limit_report(cloth, fw, fg, valid, getattr(material, "max_stretch", np.inf)),
     )

@@ -324,7 +324,9 @@ class DrapeSolver:
             from .pd import ProjectiveStep
 
             dt = 1.0 / (self.options.fps * self.options.substeps)
-            self._implicit = ProjectiveStep(cloth, self.material, dt, mass, *_start(cloth))
+            self._implicit = ProjectiveStep(
+                cloth, self.material, dt, mass, *_start(cloth), strain_limit=self.options.strain_limit
+            )
             self._implicit.friction = self.friction
         else:
             self._newton = self._implicit = self._newton_step(cloth, mass)
