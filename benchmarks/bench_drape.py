@@ -738,7 +738,9 @@ def _markdown(res: dict) -> str:
             f"Every simulator runs the frames our default drape (projective dynamics) needed to settle "
             f"({res['side_by_side'][0]['frames']}), but `solver='xpbd'`, which runs until it settles itself; "
             "one that exceeds the time budget stops early and its time for all frames is extrapolated. "
-            "Compare speed on the time per frame.",
+            "Compare speed on the time per frame. Every simulator holds the shirt's collar pins for the whole "
+            "drape (ours with `hold_pins`, as Blender's and Newton's cloth hold theirs): the same setup for all; "
+            "by default ours lets an upper garment's pins go once it has grown (docs/drape.md).",
             "",
             "| simulator | wall (s) | frames run | ms/frame | wall for all frames (s) | penetration (%) | "
             "seam gap (mm) | mean gap (mm) | mean dihedral (deg) | edges > 30 deg (%) | mean curvature (1/m) | note |",
