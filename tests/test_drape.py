@@ -346,3 +346,18 @@ def test_letting_go_recomputes_the_tethers():
     assert (free.tether_anchor == -1).all() and (free.tether_length == 0).all()
     # the rest of the cloth is the same
     assert np.array_equal(free.faces, cloth.faces) and np.array_equal(free.x0, cloth.x0)
+
+
+def test_the_let_go_cloth_keeps_the_drapes_options(body):
+    # pd steps the let-go cloth with its own factored matrix: built with the same strain limit and friction
+    solver = DrapeSolver(
+        build_cloth(_tube("upper")), *body, options={"max_frames": 2, "grow_frames": 1, "strain_limit": 30.0}
+    )
+    state = solver.state()
+    solver.step(state)
+    solver.step(state)
+    assert state.released
+    held, let_go = solver._implicit, solver._released[2]
+    assert let_go is not held and let_go.limit_weight == held.limit_weight == 30.0
+    assert let_go.friction == held.friction
+    assert let_go.free.all() and not held.free.all()

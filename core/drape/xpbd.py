@@ -321,18 +321,21 @@ class DrapeSolver:
         Hessian factored once per substep) or, for ``solver="pd"``, :class:`core.drape.pd.ProjectiveStep`
         (its constant matrix factored once per cloth)."""
         if self.options.solver == "pd":
-            from .pd import ProjectiveStep
-
-            dt = 1.0 / (self.options.fps * self.options.substeps)
-            self._implicit = ProjectiveStep(
-                cloth, self.material, dt, mass, *_start(cloth), strain_limit=self.options.strain_limit
-            )
-            self._implicit.friction = self.friction
+            self._implicit = self._projective_step(cloth, mass)
         else:
             self._newton = self._implicit = self._newton_step(cloth, mass)
         self._weight = mass * max(float(self.options.gravity), 1e-3)  # N (a floor without gravity)
         self._newton_iterations = []  # iterations per substep (the residual-based stop's record)
         self._newton_residuals = []  # the largest residual over weight at the end of each substep's solve
+
+    def _projective_step(self, cloth: Cloth, mass):
+        """pd's host step (:class:`core.drape.pd.ProjectiveStep`) for this cloth, with the drape's options."""
+        from .pd import ProjectiveStep
+
+        dt = 1.0 / (self.options.fps * self.options.substeps)  # (before self.dt is set, in __init__)
+        step = ProjectiveStep(cloth, self.material, dt, mass, *_start(cloth), strain_limit=self.options.strain_limit)
+        step.friction = self.friction
+        return step
 
     @property
     def newton_residuals(self) -> np.ndarray:
@@ -681,10 +684,7 @@ class DrapeSolver:
             mass = self.material.density * cloth.mass_area
             step = None
             if self.options.solver == "pd":
-                from .pd import ProjectiveStep
-
-                step = ProjectiveStep(cloth, self.material, self.dt, mass, *_start(cloth))
-                step.friction = self.friction
+                step = self._projective_step(cloth, mass)
             elif self.options.solver == "newton":
                 step = self._newton_step(cloth, mass)
             self._released = (cloth, np.where(cloth.pinned, 0.0, 1.0 / mass), step)
