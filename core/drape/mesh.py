@@ -107,8 +107,7 @@ class Cloth:
         """The same cloth with the pins of :attr:`pin_lets_go` let go: those particles free, and every
         free particle's tether recomputed to its nearest pin that still holds (none where no pin is left
         on its piece of fabric)."""
-        lets_go = self.pin_lets_go if len(self.pin_lets_go) else np.zeros(self.n_particles, bool)
-        pinned = self.pinned & ~lets_go
+        pinned = self.pinned & ~self.pin_lets_go
         bends, bend_faces = interior_edges(self.faces)
         anchor, length = tethers(self.faces, self.rest_inv, pinned, bends, bend_faces)
         return replace(
@@ -422,12 +421,7 @@ def _weld(pattern, panels: list, n_global: int) -> Cloth:
         if ids.size and (ids.min() < 0 or ids.max() >= n_global or np.any(particle_of[ids] < 0)):
             raise DrapeError(f"pins[{garment!r}]: ids must be global vertex ids of the pattern")
         pinned[particle_of[ids]] = True
-        if kinds.get(garment) == "upper":
-            lets_go[particle_of[ids]] = True
-    # a particle two garments pin (sewn across them) lets go only where every pin on it does
-    for garment, ids in (pattern.pins or {}).items():
-        if kinds.get(garment) != "upper":
-            lets_go[particle_of[np.asarray(ids, dtype=np.int64).reshape(-1)]] = False
+        lets_go[particle_of[ids]] = kinds.get(garment) == "upper"  # a particle is one garment's (its ids)
 
     dm = inv22(np.concatenate(inv_l))  # rest edges x1-x0, x2-x0 per triangle
     rest_xy = np.zeros((len(faces), 3, 2))

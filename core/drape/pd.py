@@ -825,12 +825,7 @@ class ProjectiveStep:
     def _evaluate(self, x: np.ndarray, y: np.ndarray, grow: float) -> float:
         """The local step and the gradient at ``x`` (:func:`pd_gradient`): the images, targets and
         ``grad G`` (every particle's) in the buffers; returns G(x)."""
-        if self._grow != grow:  # the rest stretch and sliver-edge lengths, growing from the skintight start's
-            el, back = self.elements, 1.0 - grow
-            for k in (0, 1):
-                self._rest[k][:] = 1.0 + (el.stretch0[:, k] - 1.0) * back
-            self._edge_len[:] = el.edge_rest + (el.edge_start - el.edge_rest) * back
-            self._grow = grow
+        self._grow_rest(grow)
         self._x[:] = x
         self._y[:] = y
         self._launch.launch()
@@ -844,6 +839,16 @@ class ProjectiveStep:
         excess = np.maximum(length - (1.0 + self.max_stretch) * np.concatenate(self._rest)[rows], 0.0)
         self._all += dt_rows @ ((w * excess / np.maximum(length, 1e-300))[:, None] * img)
         return float(self._energy[0] + self._energy[1]) + 0.5 * float(np.sum(w * excess * excess))
+
+    def _grow_rest(self, grow: float) -> None:
+        """The rest stretch (:attr:`_rest`, weft and warp) and sliver-edge lengths at ``grow``, growing from
+        the skintight start's (updated in place where ``grow`` changed)."""
+        if self._grow != grow:
+            el, back = self.elements, 1.0 - grow
+            for k in (0, 1):
+                self._rest[k][:] = 1.0 + (el.stretch0[:, k] - 1.0) * back
+            self._edge_len[:] = el.edge_rest + (el.edge_start - el.edge_rest) * back
+            self._grow = grow
 
     def local(self, x: np.ndarray, y: np.ndarray, grow: float) -> tuple:
         """The local step at ``x``: (the elastic part of ``grad G``, ``sum_c w_c A_c^T (A_c x - p_c(x))``
@@ -1039,8 +1044,8 @@ class ProjectiveStep:
         if self.limit_weight <= 0.0 or not np.isfinite(self.max_stretch) or self.lu is None:
             return
         el = self.elements
-        back = 1.0 - grow
-        rest = np.concatenate([1.0 + (el.stretch0[:, 0] - 1.0) * back, 1.0 + (el.stretch0[:, 1] - 1.0) * back])
+        self._grow_rest(grow)
+        rest = np.concatenate(self._rest)
         f = np.concatenate([el.Ga @ x, el.Gb @ x])
         want = np.sqrt(np.einsum("ij,ij->i", f, f)) > (1.0 + self.max_stretch) * rest
         if not LIMIT_ON_BODY and self._held is not None and np.any(want):

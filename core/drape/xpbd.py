@@ -210,8 +210,7 @@ class DrapeSolver:
             raise DrapeError("pattern has a vertex that belongs to no triangle (zero mass)")
         inv_mass = np.where(cloth.pinned, 0.0, 1.0 / mass)
         self.free = inv_mass > 0
-        lets_go = cloth.pin_lets_go if len(cloth.pin_lets_go) else np.zeros(cloth.n_particles, bool)
-        self.lets_go = not opts.hold_pins and bool(np.any(lets_go & cloth.pinned))
+        self.lets_go = not opts.hold_pins and bool(np.any(cloth.pin_lets_go))
         self._released = None  # the cloth with those pins let go, its masses and implicit step (built once)
         t_prep = time.perf_counter()
 
